@@ -1,0 +1,52 @@
+# Thin front end over tools/setup.sh and CMake: `make demo` and `make test` are all a newcomer
+# needs. Everything real lives in CMakeLists.txt.
+BUILD_DIR     ?= build
+SANITIZE_DIR  ?= build-sanitize
+BUILD_TYPE    ?= Release
+CMAKE         ?= /usr/bin/cmake
+CTEST         ?= /usr/bin/ctest
+PYTHON        := $(CURDIR)/.venv/bin/python
+JOBS          ?= 2
+CMAKE_FLAGS   ?=
+
+.PHONY: all setup build demo test sanitize-build test-sanitize bench-forces bench-cloth fuzz install clean
+
+all: build
+
+setup:
+	@tools/setup.sh
+
+$(BUILD_DIR)/build.ninja: | setup
+	$(CMAKE) -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
+	    -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+
+build: setup $(BUILD_DIR)/build.ninja
+	$(CMAKE) --build $(BUILD_DIR) -j $(JOBS)
+
+demo: build
+	tools/demo.sh $(BUILD_DIR)
+
+test: build
+	$(CTEST) --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
+
+$(SANITIZE_DIR)/build.ninja: | setup
+	$(CMAKE) -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
+	    -DSPRINGMASS_SANITIZE=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+
+sanitize-build: setup $(SANITIZE_DIR)/build.ninja
+	$(CMAKE) --build $(SANITIZE_DIR) -j $(JOBS)
+
+test-sanitize: sanitize-build
+	$(CTEST) --test-dir $(SANITIZE_DIR) --output-on-failure -j $(JOBS) -LE no-sanitize
+
+bench-forces: build
+	bench/bench_forces.sh $(BUILD_DIR)
+
+bench-cloth: build
+	QUICK=$(QUICK) bench/bench_cloth.sh $(BUILD_DIR)
+
+fuzz: setup
+	fuzz/run.sh $(FUZZ_SECONDS)
+
+clean:
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

@@ -1,0 +1,4 @@
+// springmass: static equilibrium and natural frequencies (GSL).
+#pragma once
+
+#include "springmass/model.h"

@@ -1,0 +1,58 @@
+// springmass: common definitions (export macro, status codes, error text).
+// SI units throughout: metres, kilograms, seconds, newtons.
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#if defined(__GNUC__) || defined(__clang__)
+#define SM_API __attribute__((visibility("default")))
+#else
+#define SM_API
+#endif
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Status returned by every fallible springmass function. SM_OK is zero; every other value
+/// names one rule that was broken. sm_status_string() gives a short generic text; the object
+/// involved (model, document, simulation) or an sm_error gives the specific message.
+typedef enum sm_status {
+	SM_OK = 0,
+	SM_ERROR_INVALID_ARGUMENT,  ///< NULL pointer, unknown enum value or inconsistent option
+	SM_ERROR_OUT_OF_MEMORY,     ///< an allocation failed; nothing was changed
+	SM_ERROR_PARTICLE_INDEX,    ///< a particle index is out of range
+	SM_ERROR_SPRING_INDEX,      ///< a spring index is out of range
+	SM_ERROR_SELF_SPRING,       ///< a spring connects a particle to itself
+	SM_ERROR_NOT_FINITE,        ///< a value is NaN or infinite where a finite one is required
+	SM_ERROR_NEGATIVE,          ///< a value is negative where it must be >= 0
+	SM_ERROR_NONPOSITIVE_MASS,  ///< a particle mass is <= 0
+	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant on a spring whose rest length is zero
+	SM_ERROR_FILE,              ///< a file cannot be read or written
+	SM_ERROR_SYNTAX,            ///< a model file is not valid JSON (line and column in the message)
+	SM_ERROR_SCHEMA,            ///< a model file breaks a rule of the format (path in the message)
+	SM_ERROR_NOT_FOUND,         ///< a named parameter, particle or port does not exist
+	SM_ERROR_SOLVER,            ///< the integrator or a linear solver failed (details in the message)
+	SM_ERROR_NOT_CONVERGED,     ///< an iterative method stopped before meeting its tolerance
+	SM_ERROR_TOPOLOGY,          ///< two models differ in particles or springs where they must match
+	SM_STATUS_COUNT
+} sm_status;
+
+/// Short, static, human-readable text for a status ("particle index out of range", ...).
+SM_API const char* sm_status_string(sm_status status);
+
+/// Capacity of the message buffer in sm_error [bytes].
+#define SM_ERROR_MESSAGE_CAPACITY 512
+
+/// Error report filled by functions that create objects (and so have no object to hold it).
+/// Pass NULL where the detail is not needed.
+typedef struct sm_error {
+	sm_status status;                         ///< same value the function returned
+	char message[SM_ERROR_MESSAGE_CAPACITY];  ///< specific message, NUL-terminated
+} sm_error;
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,261 @@
+// springmass: the model in memory (particles, springs, global forces) and its evaluation:
+// forces, energies, dissipated power and analytic Jacobians.
+//
+// Conventions used by every function here:
+// - Particles are numbered 0..n-1 in the order they were added; springs likewise.
+// - Arrays of per-particle vectors are particle-major: x[3*i + 0..2] is particle i's x, y, z.
+// - "Free" particles move under the forces; "fixed" ones stay where they are; "driven" ones
+//   follow a motion the caller prescribes (the simulation and the FMU's motion ports use them).
+//   Fixed and driven particles are "constrained": the forces reported for them are the forces
+//   the model exerts on them, which whatever holds them must balance (their reaction is minus
+//   that force).
+#pragma once
+
+#include "springmass/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// How a particle moves.
+typedef enum sm_particle_motion {
+	SM_PARTICLE_FREE = 0,  ///< moves under the forces
+	SM_PARTICLE_FIXED,     ///< stays at its position, velocity zero
+	SM_PARTICLE_DRIVEN,    ///< position and velocity prescribed by the caller over time
+} sm_particle_motion;
+
+/// Definition of a particle; get one from sm_default_particle_def().
+typedef struct sm_particle_def {
+	double mass;                ///< mass, > 0 and finite [kg]; default 1
+	double position[3];         ///< initial position [m]; default (0, 0, 0)
+	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); ignored when fixed
+	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
+} sm_particle_def;
+
+/// Force law of a spring.
+typedef enum sm_spring_kind {
+	/// f_a = ks (L - l0) u with L = |x_b - x_a|, u = (x_b - x_a) / L.
+	SM_SPRING_REST_LENGTH = 0,
+	/// f_a = ks (x_b - x_a): an ideal spring of zero rest length, linear in the positions.
+	SM_SPRING_ZERO_LENGTH,
+} sm_spring_kind;
+
+/// How a spring constant is given.
+typedef enum sm_scaling {
+	/// The constant is the spring's own: stiffness ks [N/m], damping kd [N s/m].
+	SM_ABSOLUTE = 0,
+	/// The constant is per unit strain: stiffness E [N] with ks = E / l0, damping c [N s] with
+	/// kd = c / l0. A structure discretised more finely, with shorter springs in series, then
+	/// keeps the same overall stiffness. Requires l0 > 0.
+	SM_PER_STRAIN,
+} sm_scaling;
+
+/// Rest length meaning "the distance between the two particles when the spring is added".
+#define SM_REST_LENGTH_INITIAL (-1.0)
+
+/// Definition of a spring between particles a and b; get one from sm_default_spring_def().
+///
+/// Spring damping acts along the spring: f_a = kd (u . (v_b - v_a)) u, f_b = -f_a. It only
+/// resists the rate of change of the spring's length, so it never slows down a rigid motion
+/// (translation or rotation) of the particles. Compare the model's mass damping.
+typedef struct sm_spring_def {
+	int32_t a;                     ///< first particle index
+	int32_t b;                     ///< second particle index, != a
+	sm_spring_kind kind;           ///< default SM_SPRING_REST_LENGTH
+	double rest_length;            ///< l0 >= 0 [m], or SM_REST_LENGTH_INITIAL (default); zero-length springs use 0
+	double stiffness;              ///< >= 0: ks [N/m] or, per strain, E [N]; default 0
+	sm_scaling stiffness_scaling;  ///< default SM_ABSOLUTE
+	double damping;                ///< >= 0: kd [N s/m] or, per strain, c [N s]; default 0
+	sm_scaling damping_scaling;    ///< default SM_ABSOLUTE
+	/// Strain (L - l0) / l0 [1] past which the spring breaks (the simulation detects it as an
+	/// event); > 0, or INFINITY (default) for a spring that never breaks. Requires l0 > 0.
+	double break_strain;
+} sm_spring_def;
+
+/// Global settings of a model; get one from sm_default_model_def().
+///
+/// Mass-proportional damping f = -alpha m v acts on each particle's absolute velocity: unlike
+/// spring damping it also slows down rigid motion of the whole structure (like air drag).
+typedef struct sm_model_def {
+	double gravity[3];          ///< gravitational acceleration [m/s^2]; default (0, 0, -9.81)
+	double mass_damping;        ///< alpha >= 0 [1/s]; default 0
+	int32_t particle_capacity;  ///< expected particle count, a hint for allocation; default 0
+	int32_t spring_capacity;    ///< expected spring count, a hint for allocation; default 0
+} sm_model_def;
+
+/// Jacobian variant.
+typedef enum sm_jacobian_variant {
+	/// The exact derivatives of the forces, including the position-derivative of spring damping.
+	SM_JACOBIAN_EXACT = 0,
+	/// Definiteness-preserving: the geometric factor (1 - l0/L) is clamped at zero for
+	/// compressed springs and the position-derivative of spring damping is left out, so
+	/// df/dx is symmetric negative semi-definite (df/dv always is). Implicit cloth solvers use it
+	/// because it keeps Newton's matrix M - h D - h^2 K positive definite.
+	SM_JACOBIAN_DEFINITE,
+} sm_jacobian_variant;
+
+/// Energies of a configuration.
+typedef struct sm_energies {
+	double kinetic;  ///< sum of m |v|^2 / 2 over all particles [J]
+	double elastic;  ///< sum of ks (L - l0)^2 / 2 (rest-length) or ks L^2 / 2 (zero-length) [J]
+	double gravity;  ///< gravitational potential -sum m g . x (zero at the origin) [J]
+} sm_energies;
+
+/// Opaque model: owns its particles and springs. Not thread-safe for concurrent modification;
+/// concurrent const use (evaluation) is safe. Separate models are fully independent.
+typedef struct sm_model sm_model;
+
+SM_API sm_particle_def sm_default_particle_def(void);
+SM_API sm_spring_def sm_default_spring_def(void);
+SM_API sm_model_def sm_default_model_def(void);
+
+/// Creates an empty model. Returns NULL if def is invalid (non-finite gravity, negative or
+/// non-finite mass damping, negative capacity) or memory runs out; err says which (may be NULL).
+SM_API sm_model* sm_model_create(const sm_model_def* def, sm_error* err);
+
+/// Destroys a model; accepts NULL.
+SM_API void sm_model_destroy(sm_model* model);
+
+/// Deep copy of a model (NULL if memory runs out).
+SM_API sm_model* sm_model_clone(const sm_model* model);
+
+/// Message of the last failed call on this model, naming the particle or spring and the rule
+/// it broke; "" if none. Valid until the next call that modifies the model.
+SM_API const char* sm_model_last_error(const sm_model* model);
+
+/// Adds a particle. On success writes its index to *index (may be NULL). On error the model
+/// is unchanged and the status says which rule the definition broke.
+SM_API sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int32_t* index);
+
+/// Adds a spring. A rest length of SM_REST_LENGTH_INITIAL is resolved to the current distance
+/// between the particles. On error the model is unchanged.
+SM_API sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index);
+
+SM_API int32_t sm_model_particle_count(const sm_model* model);
+SM_API int32_t sm_model_spring_count(const sm_model* model);
+
+/// The particle's definition as stored (current initial position and velocity).
+SM_API sm_status sm_model_get_particle(const sm_model* model, int32_t index, sm_particle_def* def);
+
+/// Replaces a particle's definition (same validation as adding). Rest lengths of springs
+/// already added are not changed.
+SM_API sm_status sm_model_set_particle(sm_model* model, int32_t index, const sm_particle_def* def);
+
+/// Changes only how a particle moves.
+SM_API sm_status sm_model_set_particle_motion(sm_model* model, int32_t index, sm_particle_motion motion);
+
+/// The spring's definition as stored, with rest_length resolved to metres.
+SM_API sm_status sm_model_get_spring(const sm_model* model, int32_t index, sm_spring_def* def);
+
+/// Replaces a spring's definition (same validation as adding; a rest length of
+/// SM_REST_LENGTH_INITIAL keeps the current one).
+SM_API sm_status sm_model_set_spring(sm_model* model, int32_t index, const sm_spring_def* def);
+
+/// The constants the force law uses: rest length l0 [m], stiffness ks [N/m], damping kd [N s/m].
+SM_API sm_status sm_model_spring_constants(const sm_model* model, int32_t index, double* rest_length,
+                                           double* stiffness, double* damping);
+
+/// A disabled spring exerts no force and contributes nothing to energies or Jacobians (a broken
+/// spring). The sparsity pattern of an sm_sparse_jacobian is unaffected.
+SM_API sm_status sm_model_set_spring_enabled(sm_model* model, int32_t index, bool enabled);
+SM_API bool sm_model_spring_enabled(const sm_model* model, int32_t index);
+
+SM_API sm_model_def sm_model_get_def(const sm_model* model);
+/// Changes gravity [m/s^2] and mass damping [1/s] (validated like sm_model_create).
+SM_API sm_status sm_model_set_def(sm_model* model, const sm_model_def* def);
+
+/// Copies every particle's initial position [m] and velocity [m/s] into x and v (3 per particle;
+/// either may be NULL).
+SM_API void sm_model_initial_state(const sm_model* model, double* x, double* v);
+
+/// Total mass of all particles [kg].
+SM_API double sm_model_total_mass(const sm_model* model);
+
+/// Number of free particles, and the free index of a particle (its position among the free
+/// particles in particle order, or -1 if it is constrained). Free indices number the unknowns
+/// of the sparse Jacobian (degrees of freedom 3*free_index + 0..2).
+SM_API int32_t sm_model_free_count(const sm_model* model);
+SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
+
+// ---------------------------------------------------------------------------------------------
+// Evaluation. x [m] and v [m/s] hold 3 values per particle (all particles, constrained ones
+// included); the model's stored initial state is not used. These functions do not modify the
+// model and may run concurrently on the same model.
+// ---------------------------------------------------------------------------------------------
+
+/// Total force [N] on every particle: springs, spring damping, mass damping, gravity and the
+/// optional external forces f_external [N] (3 per particle, NULL for none), written to f.
+/// For constrained particles f is the force the model exerts on them (their reaction is -f).
+///
+/// At the singular point of a rest-length spring, L < SM_DEGENERATE_LENGTH_RATIO * l0 (the two
+/// particles coincide), the direction u is undefined: the spring then exerts no force and its
+/// damping none either; its Jacobian blocks are df/dx = ks I (as if zero-length), df/dv = 0.
+/// A zero-length spring's elastic force is defined everywhere; its damping is zero at L = 0.
+/// The results are always finite for finite inputs.
+SM_API void sm_model_forces(const sm_model* model, const double* x, const double* v,
+                            const double* f_external, double* f);
+
+/// Relative length below which a rest-length spring is treated as degenerate [1].
+#define SM_DEGENERATE_LENGTH_RATIO 1e-12
+
+/// Kinetic, elastic and gravitational energies [J] of a configuration.
+SM_API sm_energies sm_model_energies(const sm_model* model, const double* x, const double* v);
+
+/// Power dissipated by spring damping and mass damping [W], >= 0.
+SM_API double sm_model_dissipated_power(const sm_model* model, const double* x, const double* v);
+
+/// Per-spring 3x3 blocks (row-major): K = d f_a / d x_b [N/m] and D = d f_a / d v_b [N s/m].
+/// Since f depends on x_b - x_a and v_b - v_a and f_b = -f_a: d f_a/d x_a = -K,
+/// d f_b/d x_b = -K, d f_b/d x_a = K, and likewise for D. Disabled springs give zero blocks.
+/// Either output may be NULL.
+SM_API sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x,
+                                          const double* v, sm_jacobian_variant variant, double K[9],
+                                          double D[9]);
+
+/// Dense Jacobians over all particles, row-major 3n x 3n: dfdx [N/m] and dfdv [N s/m] (mass
+/// damping included in dfdv). Either may be NULL. For small models and tests.
+SM_API void sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
+                                    sm_jacobian_variant variant, double* dfdx, double* dfdv);
+
+/// Jacobian-vector product without assembling: out = df/dx dx + df/dv dv [N] over all particles
+/// (3 per particle). dx [m] or dv [m/s] may be NULL (treated as zero).
+SM_API void sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
+                                      sm_jacobian_variant variant, const double* dx,
+                                      const double* dv, double* out);
+
+// ---------------------------------------------------------------------------------------------
+// Sparse Jacobian over the free particles' degrees of freedom.
+//
+// The pattern is built once from the model's springs (constrained particles excluded) in
+// compressed sparse row form with 64-bit indices, rows sorted by column, diagonal blocks always
+// present: exactly the layout of a SUNDIALS SUNMatrix_Sparse of type CSR_MAT with 64-bit
+// sunindextype, so the arrays can serve as its index arrays and the values be filled in place.
+// Because df/dx and df/dv have the same pattern, one pattern serves both.
+// ---------------------------------------------------------------------------------------------
+
+typedef struct sm_sparse_jacobian sm_sparse_jacobian;
+
+/// Builds the pattern for the model's current springs and free particles (NULL on OOM).
+/// The pattern stays valid while the particles' motions and the springs' endpoints are
+/// unchanged (enabling or disabling springs, changing constants are fine).
+SM_API sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model);
+SM_API void sm_sparse_jacobian_destroy(sm_sparse_jacobian* jacobian);
+
+/// Dimension (3 * free particles) and number of stored entries.
+SM_API int64_t sm_sparse_jacobian_dimension(const sm_sparse_jacobian* jacobian);
+SM_API int64_t sm_sparse_jacobian_nonzeros(const sm_sparse_jacobian* jacobian);
+/// Row pointers (dimension + 1 entries) and column indices (nonzeros entries), owned by the
+/// jacobian.
+SM_API const int64_t* sm_sparse_jacobian_row_pointers(const sm_sparse_jacobian* jacobian);
+SM_API const int64_t* sm_sparse_jacobian_column_indices(const sm_sparse_jacobian* jacobian);
+
+/// Fills the values (nonzeros entries each, in pattern order) of df/dx [N/m] and df/dv [N s/m]
+/// (mass damping included) at (x, v). Either may be NULL. Fails with SM_ERROR_TOPOLOGY if the
+/// model no longer matches the pattern.
+SM_API sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_model* model,
+                                         const double* x, const double* v,
+                                         sm_jacobian_variant variant, double* dfdx, double* dfdv);
+
+#ifdef __cplusplus
+}
+#endif

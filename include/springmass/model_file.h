@@ -1,0 +1,91 @@
+// springmass: model files (JSON, format documented in docs/model-format.md).
+//
+// A document is a parsed model file: named parameters, particles, springs, structures, ports
+// and default settings. Building it gives an sm_model with the parameters' current values;
+// changing a parameter and building again gives a model of the same topology with new
+// constants (this is how the FMU's tunable parameters work).
+#pragma once
+
+#include "springmass/model.h"
+#include "springmass/simulation.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Current version of the format (the "springmass" key of a file).
+#define SM_FORMAT_VERSION 1
+
+/// How a port meets the outside world.
+typedef enum sm_port_kind {
+	SM_PORT_FORCE = 0,  ///< the outside applies a force [N]; reads position [m] and velocity [m/s]
+	SM_PORT_MOTION,     ///< the outside prescribes position and velocity; reads the reaction force [N]
+	SM_PORT_PROBE,      ///< read only: position and velocity
+} sm_port_kind;
+
+/// A named particle through which the model meets the outside world.
+typedef struct sm_port {
+	const char* name;   ///< owned by the document
+	int32_t particle;   ///< particle index in the built model
+	sm_port_kind kind;
+} sm_port;
+
+/// Settings a file may carry for simulations and FMUs ("simulation" and "fmu" objects).
+typedef struct sm_document_settings {
+	double stop_time;            ///< default end of a run [s]; default 1
+	double output_interval;      ///< default output interval [s]; default 0.01
+	sm_simulation_def solver;    ///< integrator options
+	bool particle_variables;     ///< FMU exposes every particle's position and velocity; default true
+} sm_document_settings;
+
+typedef struct sm_document sm_document;
+
+/// Loads and validates a model file. On error returns NULL and fills err: a syntax error names
+/// the file, line and column; a rule broken names the path in the document
+/// (e.g. `springs[3].b: no particle named "bobb"`), the value and the rule.
+SM_API sm_document* sm_document_load(const char* path, sm_error* err);
+
+/// Same from text in memory; `source_name` is used in messages in place of a file name.
+SM_API sm_document* sm_document_parse(const char* text, size_t length, const char* source_name, sm_error* err);
+
+SM_API void sm_document_destroy(sm_document* doc);
+
+/// Model name ("name"), a C identifier-safe string, and one-line description ("" if none).
+SM_API const char* sm_document_name(const sm_document* doc);
+SM_API const char* sm_document_description(const sm_document* doc);
+
+/// Builds the model with the parameters' current values. The caller owns the result.
+SM_API sm_status sm_document_build(const sm_document* doc, sm_model** model, sm_error* err);
+
+/// Named parameters, in file order.
+SM_API int32_t sm_document_parameter_count(const sm_document* doc);
+SM_API const char* sm_document_parameter_name(const sm_document* doc, int32_t index);
+SM_API double sm_document_parameter_value(const sm_document* doc, int32_t index);
+/// Index of a parameter by name, or -1.
+SM_API int32_t sm_document_parameter_index(const sm_document* doc, const char* name);
+/// Sets a parameter's value; fails (document unchanged) if the model built with it would be
+/// invalid, with the message naming the element that breaks a rule.
+SM_API sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err);
+
+SM_API int32_t sm_document_port_count(const sm_document* doc);
+SM_API sm_port sm_document_port(const sm_document* doc, int32_t index);
+
+/// Name of a particle ("anchor", or "cloth[3,4]" for structure particles), NULL if unnamed.
+SM_API const char* sm_document_particle_name(const sm_document* doc, int32_t particle);
+
+SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
+
+/// Replaces the initial positions [m] and velocities [m/s] of all particles (3 per particle;
+/// v may be NULL for zero), e.g. with a static equilibrium, so that saving gives a model that
+/// starts there.
+SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err);
+
+/// Writes the document in canonical form (structures expanded into explicit particles and
+/// springs, parameter references kept) to a file, or to a malloc'ed string the caller frees.
+/// Loading the result builds the same model.
+SM_API sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err);
+SM_API char* sm_document_to_json(const sm_document* doc, sm_error* err);
+
+#ifdef __cplusplus
+}
+#endif

@@ -1,0 +1,137 @@
+// springmass: time integration of a model with SUNDIALS CVODE.
+//
+// The state is the positions and velocities of the free particles; fixed particles stay put and
+// driven particles follow the motion the caller prescribes. Each simulation owns a copy of the
+// model, its own SUNDIALS context and all solver memory: separate simulations are independent
+// and may run in separate threads.
+#pragma once
+
+#include "springmass/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Linear multistep method.
+typedef enum sm_method {
+	SM_METHOD_BDF = 0,  ///< backward differentiation formulas with Newton iteration (stiff; default)
+	SM_METHOD_ADAMS,    ///< Adams-Moulton with fixed-point iteration (non-stiff)
+} sm_method;
+
+/// Linear solver for Newton's method (BDF only).
+typedef enum sm_linear_solver {
+	SM_SOLVER_AUTO = 0,  ///< picked by model size (see the README's benchmark table)
+	SM_SOLVER_DENSE,     ///< dense LU of the full 6n system with the analytic Jacobian (small models)
+	SM_SOLVER_KLU,       ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
+	SM_SOLVER_REDUCED_PCG,  ///< second-order reduction to a 3n SPD system solved by preconditioned CG (large models)
+	SM_SOLVER_REDUCED_CHOLMOD,  ///< second-order reduction to a 3n SPD system solved by sparse Cholesky
+	SM_SOLVER_COUNT
+} sm_linear_solver;
+
+/// Integration options; get them from sm_default_simulation_def().
+typedef struct sm_simulation_def {
+	sm_method method;               ///< default SM_METHOD_BDF
+	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
+	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
+	double relative_tolerance;      ///< > 0 [1]; default 1e-6
+	double absolute_tolerance_position;  ///< > 0 [m]; default 1e-8
+	double absolute_tolerance_velocity;  ///< > 0 [m/s]; default 1e-6
+	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
+	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
+} sm_simulation_def;
+
+/// Counters since creation or the last reset.
+typedef struct sm_statistics {
+	int64_t steps;
+	int64_t rhs_evaluations;
+	int64_t jacobian_evaluations;
+	int64_t linear_iterations;
+	int64_t error_test_failures;
+	int64_t convergence_failures;
+	int64_t restarts;              ///< solver re-initialisations (events, state changes, jumps in inputs)
+	double force_seconds;          ///< wall time in force evaluation [s]
+	double jacobian_seconds;       ///< wall time in Jacobian evaluation and matrix setup [s]
+	double linear_solve_seconds;   ///< wall time in linear solves [s]
+} sm_statistics;
+
+/// A spring that broke.
+typedef struct sm_break_event {
+	double time;     ///< when its strain crossed the break strain [s]
+	int32_t spring;  ///< spring index
+} sm_break_event;
+
+typedef struct sm_simulation sm_simulation;
+
+SM_API sm_simulation_def sm_default_simulation_def(void);
+
+/// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod") and the reverse lookup
+/// (SM_SOLVER_COUNT if unknown).
+SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
+SM_API sm_linear_solver sm_linear_solver_from_name(const char* name);
+
+/// Creates a simulation of a copy of the model, starting at time 0 from the model's initial
+/// state. Returns NULL with err filled on invalid options or solver set-up failure.
+SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err);
+
+/// Destroys the simulation and everything it owns; accepts NULL.
+SM_API void sm_simulation_destroy(sm_simulation* sim);
+
+/// Integrates to exactly t_end [s] (never past it), handling spring breaks on the way.
+/// On failure returns SM_ERROR_SOLVER with the message in sm_simulation_last_error(); the
+/// state is then the last one the solver reached (sm_simulation_time() tells when) and the
+/// simulation remains usable (advance again, set a state, or reset).
+SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
+
+/// Current time [s].
+SM_API double sm_simulation_time(const sm_simulation* sim);
+
+/// Positions [m] and velocities [m/s] of all particles (3 per particle) at the current time.
+/// The pointer stays valid until the simulation is destroyed; its contents change on advance.
+SM_API const double* sm_simulation_positions(const sm_simulation* sim);
+SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
+
+/// Forces [N] on all particles at the current state (external forces included); for
+/// constrained particles, the force the model exerts on them.
+SM_API void sm_simulation_forces(const sm_simulation* sim, double* f);
+
+SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
+/// Energy dissipated by damping since the start [J] (integrated with the state).
+SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
+
+/// Prescribes a driven particle's motion from the current time t0 on: x(t) = position +
+/// velocity (t - t0) [m, m/s]. Error if the particle is not driven.
+SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
+                                          const double velocity[3]);
+
+/// Sets the external force [N] on a particle, held constant until changed.
+SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3]);
+
+/// Replaces the state at the current time: positions [m] and velocities [m/s] of all particles
+/// (constrained entries are ignored for fixed particles). Re-initialises the solver.
+SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
+
+/// Back to time 0, the model's initial state, no external forces, all springs intact,
+/// statistics and break events cleared.
+SM_API sm_status sm_simulation_reset(sm_simulation* sim);
+
+/// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
+/// model of the same topology (same particle count and motions, same spring endpoints);
+/// keeps the state and broken springs; re-initialises the solver. SM_ERROR_TOPOLOGY otherwise.
+SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model);
+
+/// The simulation's own model (springs that broke are disabled in it).
+SM_API const sm_model* sm_simulation_model(const sm_simulation* sim);
+
+SM_API sm_statistics sm_simulation_statistics(const sm_simulation* sim);
+SM_API int32_t sm_simulation_break_count(const sm_simulation* sim);
+SM_API sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t index);
+
+/// Linear solver actually in use (AUTO resolved).
+SM_API sm_linear_solver sm_simulation_solver(const sm_simulation* sim);
+
+/// Message of the last failure, "" if none.
+SM_API const char* sm_simulation_last_error(const sm_simulation* sim);
+
+#ifdef __cplusplus
+}
+#endif
