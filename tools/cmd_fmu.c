@@ -1,11 +1,367 @@
-// springmass fmu: placeholder until the subcommand lands.
+// springmass fmu: packages a model file as an FMI 2.0 Co-Simulation FMU.
+//
+// The FMU is a zip archive of
+//   modelDescription.xml                       written from the FMU's variable table
+//   binaries/linux64/<modelIdentifier>.so      the generic FMU binary
+//   binaries/linux64/lib*.so*                  the shared libraries it needs (RUNPATH $ORIGIN)
+//   resources/model.json                       the model file, byte for byte (its hash is the GUID)
+//   resources/reference.csv                    a reference result, when one is given
+// The binary and its libraries come from the FMU runtime folder the build assembles
+// (<build>/fmu/runtime, installed as <prefix>/lib/springmass/fmu).
+#define _XOPEN_SOURCE 700
 #include "commands.h"
 
 #include <stdio.h>
+#include <string.h>
+
+#ifndef SPRINGMASS_HAVE_FMU
 
 int sm_cmd_fmu(int argc, char** argv)
 {
 	(void)argc;
-	fprintf(stderr, "springmass %s: not available in this build\n", argv[0]);
+	fprintf(stderr, "springmass %s: this build has no FMU support (configure with SPRINGMASS_BUILD_FMU=ON and "
+	                "SPRINGMASS_PYTHON set)\n", argv[0]);
 	return 2;
 }
+
+#else
+
+#include "fmu_model.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <ftw.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static void usage(FILE* out)
+{
+	fprintf(out,
+	        "usage: springmass fmu MODEL -o NAME.fmu [--reference RESULT.csv] [--runtime DIR]\n"
+	        "\n"
+	        "Packages the model file MODEL as a self-contained FMI 2.0 Co-Simulation FMU.\n"
+	        "Parameters of the file become FMU parameters, ports become inputs and outputs; see\n"
+	        "docs/fmu.md for the variables.\n"
+	        "\n"
+	        "options:\n"
+	        "  -o, --output FILE    the FMU to write (required)\n"
+	        "  --reference FILE     a reference result to include as resources/reference.csv\n"
+	        "  --runtime DIR        folder holding binaries/linux64/springmass_fmu.so and its libraries\n"
+	        "                       (default: the one of this build or installation)\n"
+	        "  -h, --help           this text\n");
+}
+
+static char* read_all(const char* path, size_t* length)
+{
+	FILE* f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	char* data = NULL;
+	size_t size = 0, capacity = 0;
+	for (;;) {
+		if (size + 65536 + 1 > capacity) {
+			capacity = capacity ? 2 * capacity : 1 << 20;
+			char* grown = realloc(data, capacity);
+			if (!grown) {
+				free(data);
+				fclose(f);
+				return NULL;
+			}
+			data = grown;
+		}
+		size_t got = fread(data + size, 1, 65536, f);
+		size += got;
+		if (got < 65536)
+			break;
+	}
+	bool failed = ferror(f) != 0;
+	fclose(f);
+	if (failed) {
+		free(data);
+		return NULL;
+	}
+	data[size] = '\0';
+	*length = size;
+	return data;
+}
+
+static bool write_all(const char* path, const char* data, size_t length)
+{
+	FILE* f = fopen(path, "wb");
+	if (!f)
+		return false;
+	bool ok = fwrite(data, 1, length, f) == length;
+	ok = (fclose(f) == 0) && ok;
+	return ok;
+}
+
+static bool copy_file(const char* from, const char* to)
+{
+	size_t length = 0;
+	char* data = read_all(from, &length);
+	if (!data)
+		return false;
+	bool ok = write_all(to, data, length);
+	free(data);
+	if (ok) {
+		struct stat st;
+		if (stat(from, &st) == 0)
+			chmod(to, st.st_mode & 0777);
+	}
+	return ok;
+}
+
+static bool is_file(const char* path)
+{
+	struct stat st;
+	return stat(path, &st) == 0 && S_ISREG(st.st_mode);
+}
+
+static bool has_runtime(const char* dir)
+{
+	char path[PATH_MAX];
+	snprintf(path, sizeof path, "%s/binaries/linux64/springmass_fmu.so", dir);
+	return is_file(path);
+}
+
+// The runtime folder: the option, then SPRINGMASS_FMU_RUNTIME, then the installed one beside
+// this executable, then the one of the build tree this tool was built in.
+static bool find_runtime(const char* option, char* dir, size_t size)
+{
+	if (option) {
+		snprintf(dir, size, "%s", option);
+		return has_runtime(dir);
+	}
+	const char* env = getenv("SPRINGMASS_FMU_RUNTIME");
+	if (env && *env) {
+		snprintf(dir, size, "%s", env);
+		return has_runtime(dir);
+	}
+	char exe[PATH_MAX];
+	ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+	if (n > 0) {
+		exe[n] = '\0';
+		char* slash = strrchr(exe, '/');
+		if (slash) {
+			*slash = '\0';
+			snprintf(dir, size, "%s/../lib/springmass/fmu", exe);
+			if (has_runtime(dir))
+				return true;
+		}
+	}
+	snprintf(dir, size, "%s", SPRINGMASS_FMU_RUNTIME_BUILD_DIR);
+	return has_runtime(dir);
+}
+
+static int remove_entry(const char* path, const struct stat* st, int flag, struct FTW* ftw)
+{
+	(void)st;
+	(void)flag;
+	(void)ftw;
+	return remove(path);
+}
+
+// Runs a command in a directory and waits for it; true if it exited with status 0.
+static bool run_in(const char* dir, char* const argv[])
+{
+	pid_t pid = fork();
+	if (pid < 0)
+		return false;
+	if (pid == 0) {
+		if (chdir(dir) != 0)
+			_exit(127);
+		execvp(argv[0], argv);
+		_exit(127);
+	}
+	int status = 0;
+	while (waitpid(pid, &status, 0) < 0) {
+		if (errno != EINTR)
+			return false;
+	}
+	return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+typedef struct options {
+	const char* model;
+	const char* output;
+	const char* reference;
+	const char* runtime;
+} options;
+
+static int package(const options* opt)
+{
+	int result = 1;
+	char* text = NULL;
+	char* xml = NULL;
+	sm_document* doc = NULL;
+	fmu_table table;
+	memset(&table, 0, sizeof table);
+	char staging[PATH_MAX] = "";
+	char path[PATH_MAX], runtime[PATH_MAX], output[PATH_MAX];
+
+	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
+		fprintf(stderr, "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s; give one with "
+		                "--runtime\n", runtime);
+		return 1;
+	}
+	size_t length = 0;
+	text = read_all(opt->model, &length);
+	if (!text) {
+		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, strerror(errno));
+		goto done;
+	}
+	sm_error err = {SM_OK, ""};
+	doc = sm_document_parse(text, length, opt->model, &err);
+	if (!doc) {
+		fprintf(stderr, "springmass fmu: %s\n", err.message);
+		goto done;
+	}
+	if (fmu_table_create(doc, text, length, &table, &err) != SM_OK) {
+		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
+		goto done;
+	}
+	xml = fmu_model_description(&table, NULL);
+	if (!xml) {
+		fprintf(stderr, "springmass fmu: out of memory\n");
+		goto done;
+	}
+
+	// The output's absolute path (zip runs in the staging folder).
+	if (opt->output[0] == '/') {
+		snprintf(output, sizeof output, "%s", opt->output);
+	} else {
+		char cwd[PATH_MAX];
+		if (!getcwd(cwd, sizeof cwd)) {
+			fprintf(stderr, "springmass fmu: cannot get the current folder\n");
+			goto done;
+		}
+		snprintf(output, sizeof output, "%s/%s", cwd, opt->output);
+	}
+
+	const char* tmp = getenv("TMPDIR");
+	snprintf(staging, sizeof staging, "%s/springmass-fmu-XXXXXX", tmp && *tmp ? tmp : "/tmp");
+	if (!mkdtemp(staging)) {
+		fprintf(stderr, "springmass fmu: cannot create a staging folder: %s\n", strerror(errno));
+		staging[0] = '\0';
+		goto done;
+	}
+	const char* folders[] = {"binaries", "binaries/linux64", "resources"};
+	for (size_t i = 0; i < sizeof folders / sizeof folders[0]; ++i) {
+		snprintf(path, sizeof path, "%s/%s", staging, folders[i]);
+		if (mkdir(path, 0755) != 0) {
+			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+			goto done;
+		}
+	}
+	snprintf(path, sizeof path, "%s/modelDescription.xml", staging);
+	if (!write_all(path, xml, strlen(xml)))
+		goto write_failed;
+	snprintf(path, sizeof path, "%s/resources/model.json", staging);
+	if (!write_all(path, text, length))
+		goto write_failed;
+	if (opt->reference) {
+		snprintf(path, sizeof path, "%s/resources/reference.csv", staging);
+		if (!copy_file(opt->reference, path)) {
+			fprintf(stderr, "springmass fmu: cannot copy the reference result %s\n", opt->reference);
+			goto done;
+		}
+	}
+
+	// The binary under the model's identifier, and every bundled library as it is.
+	char binaries[PATH_MAX];
+	snprintf(binaries, sizeof binaries, "%s/binaries/linux64", runtime);
+	DIR* d = opendir(binaries);
+	if (!d) {
+		fprintf(stderr, "springmass fmu: cannot read %s\n", binaries);
+		goto done;
+	}
+	struct dirent* entry;
+	bool copied = true;
+	while ((entry = readdir(d)) != NULL && copied) {
+		if (entry->d_name[0] == '.')
+			continue;
+		char from[PATH_MAX];
+		snprintf(from, sizeof from, "%s/%s", binaries, entry->d_name);
+		if (!is_file(from))
+			continue;
+		if (strcmp(entry->d_name, "springmass_fmu.so") == 0)
+			snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", staging, table.model_identifier);
+		else
+			snprintf(path, sizeof path, "%s/binaries/linux64/%s", staging, entry->d_name);
+		copied = copy_file(from, path);
+	}
+	closedir(d);
+	if (!copied)
+		goto write_failed;
+
+	remove(output);
+	char* zip_argv[] = {"zip", "-q", "-r", "-X", output, "modelDescription.xml", "binaries", "resources", NULL};
+	if (!run_in(staging, zip_argv)) {
+		fprintf(stderr, "springmass fmu: zip failed to write %s (is zip installed?)\n", output);
+		goto done;
+	}
+	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output, table.model_identifier,
+	       (int)table.count, table.guid);
+	result = 0;
+	goto done;
+
+write_failed:
+	fprintf(stderr, "springmass fmu: cannot write %s: %s\n", path, strerror(errno));
+done:
+	if (staging[0])
+		nftw(staging, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+	free(xml);
+	fmu_table_destroy(&table);
+	sm_document_destroy(doc);
+	free(text);
+	return result;
+}
+
+int sm_cmd_fmu(int argc, char** argv)
+{
+	options opt = {NULL, NULL, NULL, NULL};
+	for (int i = 1; i < argc; ++i) {
+		const char* a = argv[i];
+		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+			usage(stdout);
+			return 0;
+		}
+		const char** slot = NULL;
+		if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0)
+			slot = &opt.output;
+		else if (strcmp(a, "--reference") == 0)
+			slot = &opt.reference;
+		else if (strcmp(a, "--runtime") == 0)
+			slot = &opt.runtime;
+		if (slot) {
+			if (i + 1 >= argc) {
+				fprintf(stderr, "springmass fmu: %s needs a value\n\n", a);
+				usage(stderr);
+				return 2;
+			}
+			*slot = argv[++i];
+		} else if (a[0] == '-' && a[1] != '\0') {
+			fprintf(stderr, "springmass fmu: unknown option %s\n\n", a);
+			usage(stderr);
+			return 2;
+		} else if (!opt.model) {
+			opt.model = a;
+		} else {
+			fprintf(stderr, "springmass fmu: one model file only (got %s and %s)\n\n", opt.model, a);
+			usage(stderr);
+			return 2;
+		}
+	}
+	if (!opt.model || !opt.output) {
+		fprintf(stderr, "springmass fmu: %s\n\n", !opt.model ? "no model file given" : "no output given (-o NAME.fmu)");
+		usage(stderr);
+		return 2;
+	}
+	return package(&opt);
+}
+
+#endif

@@ -1,0 +1,1606 @@
+// springmass FMU: the FMI 2.0 Co-Simulation entry points of the generic FMU binary.
+//
+// One binary serves every model: fmi2Instantiate reads resources/model.json, checks that its
+// content hash is the GUID the importer passes, and builds the same variable table
+// (fmu_model.c) the packager wrote modelDescription.xml from. The glue uses the public
+// springmass API only (model files and simulations) and knows nothing of force laws.
+//
+// Every entry point checks the states in which FMI 2.0 allows it ("illegal call sequence"
+// otherwise), its pointers and value references, and returns fmi2Error with a logged message
+// rather than ever crashing the importer. There is no global state: each instance owns its
+// document, its simulation and its buffers.
+#include "fmu_model.h"
+
+#include "fmi2Functions.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+// ---------------------------------------------------------------------------------------------
+// Instance
+// ---------------------------------------------------------------------------------------------
+
+// States of the FMI 2.0 Co-Simulation state machine, as bits so that each function states the
+// set in which it is allowed.
+enum {
+	ST_INSTANTIATED = 1 << 0,
+	ST_INITIALIZATION = 1 << 1,
+	ST_STEP_COMPLETE = 1 << 2,
+	ST_STEP_FAILED = 1 << 3,
+	ST_TERMINATED = 1 << 4,
+	ST_ERROR = 1 << 5,
+};
+#define ST_ANY (ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
+#define ST_RUNNING (ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
+
+// Log categories, as bits.
+enum {
+	LOG_EVENTS = 1 << 0,
+	LOG_WARNING = 1 << 1,
+	LOG_DISCARD = 1 << 2,
+	LOG_ERROR = 1 << 3,
+	LOG_SOLVER = 1 << 4,
+};
+static const char* const category_names[] = {"logEvents", "logStatusWarning", "logStatusDiscard", "logStatusError",
+                                             "logSolver"};
+#define LOG_CATEGORY_COUNT 5
+// Warnings, discards and errors are reported unless switched off explicitly; events and solver
+// statistics are debug output, on when logging is.
+#define LOG_ALWAYS (LOG_WARNING | LOG_DISCARD | LOG_ERROR)
+
+// Held values of a port: prescribed or read position [m], velocity [m/s], force [N].
+typedef struct port_values {
+	double position[3];
+	double velocity[3];
+	double force[3];
+} port_values;
+
+typedef struct instance {
+	char* name;
+	fmi2CallbackLogger logger;
+	fmi2ComponentEnvironment environment;
+	unsigned log_mask;
+	int state;
+
+	char* text;  // resources/model.json as read
+	size_t length;
+	sm_document* doc;
+	fmu_table table;
+	int32_t particle_count;
+	int32_t spring_count;
+	int32_t port_count;
+	sm_port* ports;  // particle indices of the ports (names stay in doc)
+
+	// Settings and inputs.
+	sm_simulation_def solver;
+	bool rtol_set;  // solver.rtol set explicitly: the experiment's tolerance does not override it
+	double start_time;
+	bool stop_time_defined;
+	double stop_time;
+	port_values* held;  // per port: the inputs as set, the start values until then
+	bool* port_dirty;   // inputs changed since they were last given to the simulation
+
+	// The running simulation (created when first needed in initialisation mode).
+	sm_simulation* sim;
+	bool sim_dirty;  // fixed parameters or settings changed: create it again
+	double time;     // the FMU's time: start_time + the simulation's time [s]
+	double last_successful_time;
+	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
+	int32_t breaks_logged;
+	double* forces;   // 3 per particle, valid while forces_valid
+	bool forces_valid;
+	double* scratch;  // 5 * 3 per particle for directional derivatives
+} instance;
+
+// ---------------------------------------------------------------------------------------------
+// Logging
+// ---------------------------------------------------------------------------------------------
+
+// Logs a message in a category if that category is on. The text is formatted here and handed to
+// the importer's logger with '%' doubled, since FMI loggers treat the message as a format.
+static void logf_(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
+{
+	if (!inst || !inst->logger || !(inst->log_mask & category))
+		return;
+	char text[1024];
+	va_list args;
+	va_start(args, fmt);
+	vsnprintf(text, sizeof text, fmt, args);
+	va_end(args);
+	char escaped[2 * sizeof text];
+	size_t k = 0;
+	for (size_t i = 0; text[i] && k + 2 < sizeof escaped; ++i) {
+		if (text[i] == '%')
+			escaped[k++] = '%';
+		escaped[k++] = text[i];
+	}
+	escaped[k] = '\0';
+	int index = 0;
+	while (index < LOG_CATEGORY_COUNT && (1u << index) != category)
+		++index;
+	inst->logger(inst->environment, inst->name, status, index < LOG_CATEGORY_COUNT ? category_names[index] : "logAll",
+	             escaped);
+}
+
+#define log_error(inst, ...) logf_((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)
+
+// Checks the state machine: logs and returns false if `function` is not allowed now.
+static bool allowed(instance* inst, const char* function, int states)
+{
+	if (!inst)
+		return false;
+	if (!(inst->state & states)) {
+		log_error(inst, "%s: illegal call sequence (not allowed in the FMU's current state: %s)", function,
+		          inst->state == ST_INSTANTIATED      ? "instantiated"
+		          : inst->state == ST_INITIALIZATION  ? "initialization mode"
+		          : inst->state == ST_STEP_COMPLETE   ? "step complete"
+		          : inst->state == ST_STEP_FAILED     ? "step failed"
+		          : inst->state == ST_TERMINATED      ? "terminated"
+		                                              : "error");
+		return false;
+	}
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Resources
+// ---------------------------------------------------------------------------------------------
+
+static int hex_value(char c)
+{
+	if (c >= '0' && c <= '9')
+		return c - '0';
+	if (c >= 'a' && c <= 'f')
+		return c - 'a' + 10;
+	if (c >= 'A' && c <= 'F')
+		return c - 'A' + 10;
+	return -1;
+}
+
+// The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir, or a
+// plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL.
+static char* resource_path(const char* uri)
+{
+	const char* p = uri;
+	if (strncmp(p, "file://localhost/", 17) == 0)
+		p += 16;
+	else if (strncmp(p, "file:///", 8) == 0)
+		p += 7;
+	else if (strncmp(p, "file:/", 6) == 0)
+		p += 5;
+	else if (strncmp(p, "file:", 5) == 0)
+		return NULL;  // file://host/... on another host
+	size_t n = strlen(p);
+	char* path = malloc(n + 1);
+	if (!path)
+		return NULL;
+	size_t k = 0;
+	for (size_t i = 0; i < n; ++i) {
+		if (p[i] == '%' && i + 2 < n + 0 + 1 && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
+			path[k++] = (char)(hex_value(p[i + 1]) * 16 + hex_value(p[i + 2]));
+			i += 2;
+		} else {
+			path[k++] = p[i];
+		}
+	}
+	while (k > 1 && path[k - 1] == '/')
+		--k;
+	path[k] = '\0';
+	return path;
+}
+
+// Reads a whole file into a malloc'ed buffer (NUL-terminated); NULL if it cannot be read.
+static char* read_file(const char* path, size_t* length)
+{
+	FILE* f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	char* data = NULL;
+	size_t size = 0, capacity = 0;
+	for (;;) {
+		if (size + 4096 + 1 > capacity) {
+			capacity = capacity ? 2 * capacity : 65536;
+			char* grown = realloc(data, capacity);
+			if (!grown) {
+				free(data);
+				fclose(f);
+				return NULL;
+			}
+			data = grown;
+		}
+		size_t got = fread(data + size, 1, 4096, f);
+		size += got;
+		if (got < 4096)
+			break;
+	}
+	bool failed = ferror(f) != 0;
+	fclose(f);
+	if (failed) {
+		free(data);
+		return NULL;
+	}
+	data[size] = '\0';
+	*length = size;
+	return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Model and simulation
+// ---------------------------------------------------------------------------------------------
+
+// Start values of inputs and settings from the document and the table.
+static void load_start_values(instance* inst)
+{
+	sm_document_settings settings = sm_document_get_settings(inst->doc);
+	inst->solver = settings.solver;
+	inst->rtol_set = false;
+	for (int32_t p = 0; p < inst->port_count; ++p) {
+		memset(&inst->held[p], 0, sizeof inst->held[p]);
+		inst->port_dirty[p] = true;
+	}
+	for (int32_t i = 0; i < inst->table.count; ++i) {
+		const fmu_variable* v = &inst->table.variables[i];
+		if (v->causality != FMU_INPUT)
+			continue;
+		port_values* h = &inst->held[v->index];
+		if (v->source == FMU_SRC_PORT_POSITION)
+			h->position[v->component] = v->start_real;
+		else if (v->source == FMU_SRC_PORT_VELOCITY)
+			h->velocity[v->component] = v->start_real;
+		else if (v->source == FMU_SRC_PORT_FORCE)
+			h->force[v->component] = v->start_real;
+	}
+}
+
+// Builds the model with the current parameter values, motion ports' particles driven.
+static sm_status build_model(instance* inst, sm_model** out)
+{
+	sm_error err = {SM_OK, ""};
+	sm_model* model = NULL;
+	sm_status st = sm_document_build(inst->doc, &model, &err);
+	if (st != SM_OK) {
+		log_error(inst, "cannot build the model: %s", err.message);
+		return st;
+	}
+	for (int32_t p = 0; p < inst->port_count; ++p) {
+		if (inst->ports[p].kind != SM_PORT_MOTION)
+			continue;
+		sm_particle_def def;
+		sm_model_get_particle(model, inst->ports[p].particle, &def);
+		if (def.motion != SM_PARTICLE_DRIVEN) {
+			st = sm_model_set_particle_motion(model, inst->ports[p].particle, SM_PARTICLE_DRIVEN);
+			if (st != SM_OK) {
+				log_error(inst, "cannot drive the particle of motion port %s: %s", inst->ports[p].name,
+				          sm_model_last_error(model));
+				sm_model_destroy(model);
+				return st;
+			}
+		}
+	}
+	*out = model;
+	return SM_OK;
+}
+
+// Gives the inputs that changed to the simulation. Only changed inputs are passed on, so CVODE
+// keeps its history over communication points where nothing jumped.
+static fmi2Status apply_inputs(instance* inst)
+{
+	for (int32_t p = 0; p < inst->port_count; ++p) {
+		if (!inst->port_dirty[p])
+			continue;
+		sm_status st = SM_OK;
+		const port_values* h = &inst->held[p];
+		if (inst->ports[p].kind == SM_PORT_MOTION)
+			st = sm_simulation_set_driven(inst->sim, inst->ports[p].particle, h->position, h->velocity);
+		else if (inst->ports[p].kind == SM_PORT_FORCE)
+			st = sm_simulation_set_external_force(inst->sim, inst->ports[p].particle, h->force);
+		if (st != SM_OK) {
+			log_error(inst, "port %s: cannot apply its inputs: %s", inst->ports[p].name,
+			          sm_simulation_last_error(inst->sim));
+			return fmi2Error;
+		}
+		inst->port_dirty[p] = false;
+		inst->forces_valid = false;
+	}
+	return fmi2OK;
+}
+
+static void mark_inputs_dirty(instance* inst)
+{
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		inst->port_dirty[p] = true;
+	inst->forces_valid = false;
+}
+
+// Creates the simulation from a model at time start_time + sim_time with the given state (or the
+// model's initial state when x is NULL).
+static fmi2Status create_simulation(instance* inst, sm_model* model, double sim_time, const double* x,
+                                    const double* v)
+{
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = sm_simulation_create(model, &inst->solver, &err);
+	if (!sim) {
+		log_error(inst, "cannot create the simulation: %s", err.message);
+		return fmi2Error;
+	}
+	if (x) {
+		sm_status st = sm_simulation_set_state(sim, sim_time, x, v);
+		if (st != SM_OK) {
+			log_error(inst, "cannot restore the state: %s", sm_simulation_last_error(sim));
+			sm_simulation_destroy(sim);
+			return fmi2Error;
+		}
+	}
+	sm_simulation_destroy(inst->sim);
+	inst->sim = sim;
+	inst->sim_dirty = false;
+	inst->breaks_logged = 0;
+	inst->dissipated_offset = 0.0;
+	mark_inputs_dirty(inst);
+	return apply_inputs(inst);
+}
+
+// Makes sure a simulation with the current settings exists (initialisation mode and later).
+static fmi2Status ensure_simulation(instance* inst)
+{
+	if (inst->sim && !inst->sim_dirty)
+		return apply_inputs(inst);
+	sm_model* model = NULL;
+	if (build_model(inst, &model) != SM_OK)
+		return fmi2Error;
+	fmi2Status status = create_simulation(inst, model, 0.0, NULL, NULL);
+	sm_model_destroy(model);
+	if (status == fmi2OK)
+		inst->time = inst->start_time;
+	return status;
+}
+
+static const double* current_forces(instance* inst)
+{
+	if (!inst->forces_valid) {
+		sm_simulation_forces(inst->sim, inst->forces);
+		inst->forces_valid = true;
+	}
+	return inst->forces;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Value references
+// ---------------------------------------------------------------------------------------------
+
+static const char* type_name(fmu_type t)
+{
+	return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "String";
+}
+
+// The variable of a value reference if it exists and has the type asked for.
+static const fmu_variable* lookup(instance* inst, const char* function, fmi2ValueReference vr, fmu_type type)
+{
+	if (vr >= (fmi2ValueReference)inst->table.count) {
+		log_error(inst, "%s: unknown value reference %u (this FMU has %d variables)", function, (unsigned)vr,
+		          (int)inst->table.count);
+		return NULL;
+	}
+	const fmu_variable* v = &inst->table.variables[vr];
+	if (v->type != type) {
+		log_error(inst, "%s: value reference %u (%s) is a %s variable, not %s", function, (unsigned)vr, v->name,
+		          type_name(v->type), type_name(type));
+		return NULL;
+	}
+	return v;
+}
+
+static bool check_arrays(instance* inst, const char* function, const void* vr, size_t nvr, const void* value)
+{
+	if (nvr > 0 && (!vr || !value)) {
+		log_error(inst, "%s: NULL array with nvr = %zu", function, nvr);
+		return false;
+	}
+	return true;
+}
+
+// Whether a variable may be set now: parameters before initialisation ends (tunable ones also
+// after), inputs always; nothing else ever.
+static bool settable(instance* inst, const char* function, const fmu_variable* v)
+{
+	if (v->causality == FMU_INPUT) {
+		if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE))
+			return true;
+	} else if (v->causality == FMU_PARAMETER) {
+		if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))
+			return true;
+		if (v->variability == FMU_TUNABLE && inst->state == ST_STEP_COMPLETE)
+			return true;
+		if (inst->state == ST_STEP_COMPLETE) {
+			log_error(inst, "%s: %s is a fixed parameter: set it before fmi2ExitInitializationMode", function, v->name);
+			return false;
+		}
+	} else {
+		log_error(inst, "%s: %s is %s and cannot be set", function, v->name,
+		          v->causality == FMU_OUTPUT ? "an output" : "a local variable");
+		return false;
+	}
+	log_error(inst, "%s: %s cannot be set in the FMU's current state (illegal call sequence)", function, v->name);
+	return false;
+}
+
+// Sets a model-file parameter. Before initialisation ends the simulation is made again when
+// next needed; afterwards (tunable parameters) the running simulation takes the new constants
+// and keeps its state.
+static fmi2Status set_model_parameter(instance* inst, const fmu_variable* v, double value)
+{
+	double old = sm_document_parameter_value(inst->doc, v->index);
+	if (old == value)
+		return fmi2OK;
+	sm_error err = {SM_OK, ""};
+	if (sm_document_set_parameter(inst->doc, v->index, value, &err) != SM_OK) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: %s", v->name, value, err.message);
+		return fmi2Error;
+	}
+	if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION)) {
+		inst->sim_dirty = true;
+		return fmi2OK;
+	}
+	sm_model* model = NULL;
+	sm_status st = build_model(inst, &model);
+	if (st == SM_OK) {
+		st = sm_simulation_update_model(inst->sim, model);
+		if (st != SM_OK)
+			log_error(inst, "fmi2SetReal: %s = %g: the simulation cannot take the new model: %s", v->name, value,
+			          sm_simulation_last_error(inst->sim));
+	}
+	sm_model_destroy(model);
+	if (st != SM_OK) {
+		sm_document_set_parameter(inst->doc, v->index, old, NULL);
+		return fmi2Error;
+	}
+	inst->forces_valid = false;
+	logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: parameter %s = %.17g (solver restarted)", inst->time, v->name, value);
+	return fmi2OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0: inquiry, logging, instantiation
+// ---------------------------------------------------------------------------------------------
+
+const char* fmi2GetTypesPlatform(void)
+{
+	return fmi2TypesPlatform;
+}
+
+const char* fmi2GetVersion(void)
+{
+	return fmi2Version;
+}
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetDebugLogging", ST_ANY))
+		return fmi2Error;
+	if (nCategories > 0 && !categories) {
+		log_error(inst, "fmi2SetDebugLogging: NULL categories with nCategories = %zu", nCategories);
+		return fmi2Error;
+	}
+	unsigned mask = 0;
+	if (nCategories == 0) {
+		mask = (1u << LOG_CATEGORY_COUNT) - 1u;
+	}
+	for (size_t i = 0; i < nCategories; ++i) {
+		int k = 0;
+		while (k < LOG_CATEGORY_COUNT && !(categories[i] && strcmp(categories[i], category_names[k]) == 0))
+			++k;
+		if (k == LOG_CATEGORY_COUNT) {
+			log_error(inst, "fmi2SetDebugLogging: unknown log category \"%s\" (known: logEvents, logStatusWarning, "
+			                "logStatusDiscard, logStatusError, logSolver)",
+			          categories[i] ? categories[i] : "(null)");
+			return fmi2Error;
+		}
+		mask |= 1u << k;
+	}
+	if (loggingOn)
+		inst->log_mask |= mask;
+	else if (nCategories == 0)
+		inst->log_mask = LOG_ALWAYS;  // debug output off; problems are still reported
+	else
+		inst->log_mask &= ~mask;
+	return fmi2OK;
+}
+
+static void free_instance(instance* inst)
+{
+	if (!inst)
+		return;
+	sm_simulation_destroy(inst->sim);
+	fmu_table_destroy(&inst->table);
+	sm_document_destroy(inst->doc);
+	free(inst->text);
+	free(inst->ports);
+	free(inst->held);
+	free(inst->port_dirty);
+	free(inst->forces);
+	free(inst->scratch);
+	free(inst->name);
+	free(inst);
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn)
+{
+	(void)visible;
+	instance* inst = calloc(1, sizeof *inst);
+	if (!inst)
+		return NULL;
+	inst->logger = functions ? functions->logger : NULL;
+	inst->environment = functions ? functions->componentEnvironment : NULL;
+	inst->log_mask = LOG_ALWAYS | (loggingOn ? (unsigned)((1u << LOG_CATEGORY_COUNT) - 1u) : 0u);
+	inst->state = ST_INSTANTIATED;
+	const char* name = instanceName && *instanceName ? instanceName : "springmass";
+	inst->name = malloc(strlen(name) + 1);
+	if (!inst->name) {
+		free(inst);
+		return NULL;
+	}
+	strcpy(inst->name, name);
+
+	if (!instanceName || !*instanceName) {
+		log_error(inst, "fmi2Instantiate: missing instance name");
+		goto fail;
+	}
+	if (fmuType != fmi2CoSimulation) {
+		log_error(inst, "fmi2Instantiate: this FMU supports Co-Simulation only (fmuType = %d)", (int)fmuType);
+		goto fail;
+	}
+	if (!fmuGUID) {
+		log_error(inst, "fmi2Instantiate: missing GUID");
+		goto fail;
+	}
+	if (!fmuResourceLocation) {
+		log_error(inst, "fmi2Instantiate: missing resource location (the FMU's resources folder holds the model file)");
+		goto fail;
+	}
+	char* dir = resource_path(fmuResourceLocation);
+	if (!dir) {
+		log_error(inst, "fmi2Instantiate: resource location \"%s\" is not a local file URI", fmuResourceLocation);
+		goto fail;
+	}
+	size_t n = strlen(dir);
+	char* path = malloc(n + sizeof "/model.json");
+	if (!path) {
+		free(dir);
+		goto fail;
+	}
+	memcpy(path, dir, n);
+	memcpy(path + n, "/model.json", sizeof "/model.json");
+	free(dir);
+	inst->text = read_file(path, &inst->length);
+	if (!inst->text) {
+		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\")", path,
+		          fmuResourceLocation);
+		free(path);
+		goto fail;
+	}
+	free(path);
+
+	char guid[40];
+	fmu_guid(inst->text, inst->length, guid);
+	if (strcmp(guid, fmuGUID) != 0) {
+		log_error(inst,
+		          "fmi2Instantiate: GUID %s does not match the model file resources/model.json, whose GUID is %s: "
+		          "the importer passed another FMU's GUID, or the model file was changed after packaging",
+		          fmuGUID, guid);
+		goto fail;
+	}
+	sm_error err = {SM_OK, ""};
+	inst->doc = sm_document_parse(inst->text, inst->length, "resources/model.json", &err);
+	if (!inst->doc) {
+		log_error(inst, "fmi2Instantiate: %s", err.message);
+		goto fail;
+	}
+	if (fmu_table_create(inst->doc, inst->text, inst->length, &inst->table, &err) != SM_OK) {
+		log_error(inst, "fmi2Instantiate: %s", err.message);
+		goto fail;
+	}
+	sm_model* model = NULL;
+	if (sm_document_build(inst->doc, &model, &err) != SM_OK) {
+		log_error(inst, "fmi2Instantiate: %s", err.message);
+		goto fail;
+	}
+	inst->particle_count = sm_model_particle_count(model);
+	inst->spring_count = sm_model_spring_count(model);
+	sm_model_destroy(model);
+	inst->port_count = sm_document_port_count(inst->doc);
+	size_t np = inst->port_count > 0 ? (size_t)inst->port_count : 1;
+	size_t n3 = 3 * (size_t)(inst->particle_count > 0 ? inst->particle_count : 1);
+	inst->ports = calloc(np, sizeof *inst->ports);
+	inst->held = calloc(np, sizeof *inst->held);
+	inst->port_dirty = calloc(np, sizeof *inst->port_dirty);
+	inst->forces = calloc(n3, sizeof *inst->forces);
+	inst->scratch = calloc(5 * n3, sizeof *inst->scratch);
+	if (!inst->ports || !inst->held || !inst->port_dirty || !inst->forces || !inst->scratch) {
+		log_error(inst, "fmi2Instantiate: out of memory");
+		goto fail;
+	}
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		inst->ports[p] = sm_document_port(inst->doc, p);
+	load_start_values(inst);
+	return inst;
+
+fail:
+	free_instance(inst);
+	return NULL;
+}
+
+void fmi2FreeInstance(fmi2Component c)
+{
+	free_instance(c);
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0: initialisation, termination, reset
+// ---------------------------------------------------------------------------------------------
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetupExperiment", ST_INSTANTIATED))
+		return fmi2Error;
+	if (!isfinite(startTime) || (stopTimeDefined && (!isfinite(stopTime) || stopTime < startTime))) {
+		log_error(inst, "fmi2SetupExperiment: start time %g and stop time %g must be finite with start <= stop",
+		          startTime, stopTime);
+		return fmi2Error;
+	}
+	if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
+		log_error(inst, "fmi2SetupExperiment: tolerance %g must be > 0", tolerance);
+		return fmi2Error;
+	}
+	if (toleranceDefined && !inst->rtol_set)
+		inst->solver.relative_tolerance = tolerance;
+	inst->start_time = startTime;
+	inst->time = startTime;
+	inst->stop_time_defined = stopTimeDefined;
+	inst->stop_time = stopTime;
+	inst->sim_dirty = true;
+	return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2EnterInitializationMode", ST_INSTANTIATED))
+		return fmi2Error;
+	inst->state = ST_INITIALIZATION;
+	inst->time = inst->start_time;
+	return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2ExitInitializationMode", ST_INITIALIZATION))
+		return fmi2Error;
+	if (ensure_simulation(inst) != fmi2OK) {
+		inst->state = ST_ERROR;
+		return fmi2Error;
+	}
+	inst->last_successful_time = inst->time;
+	inst->state = ST_STEP_COMPLETE;
+	return fmi2OK;
+}
+
+fmi2Status fmi2Terminate(fmi2Component c)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2Terminate", ST_STEP_COMPLETE | ST_STEP_FAILED))
+		return fmi2Error;
+	inst->state = ST_TERMINATED;
+	return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component c)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2Reset", ST_ANY))
+		return fmi2Error;
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = sm_document_parse(inst->text, inst->length, "resources/model.json", &err);
+	if (!doc) {
+		log_error(inst, "fmi2Reset: %s", err.message);
+		inst->state = ST_ERROR;
+		return fmi2Error;
+	}
+	sm_document_destroy(inst->doc);
+	inst->doc = doc;
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		inst->ports[p] = sm_document_port(inst->doc, p);
+	sm_simulation_destroy(inst->sim);
+	inst->sim = NULL;
+	inst->sim_dirty = true;
+	inst->start_time = 0.0;
+	inst->time = 0.0;
+	inst->last_successful_time = 0.0;
+	inst->stop_time_defined = false;
+	inst->dissipated_offset = 0.0;
+	inst->breaks_logged = 0;
+	inst->forces_valid = false;
+	load_start_values(inst);
+	inst->state = ST_INSTANTIATED;
+	return fmi2OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0: getting and setting values
+// ---------------------------------------------------------------------------------------------
+
+static double real_value(instance* inst, const fmu_variable* v)
+{
+	const double* x = inst->sim ? sm_simulation_positions(inst->sim) : NULL;
+	const double* u = inst->sim ? sm_simulation_velocities(inst->sim) : NULL;
+	switch (v->source) {
+	case FMU_SRC_MODEL_PARAMETER: return sm_document_parameter_value(inst->doc, v->index);
+	case FMU_SRC_SOLVER_RTOL: return inst->solver.relative_tolerance;
+	case FMU_SRC_SOLVER_ATOL_POSITION: return inst->solver.absolute_tolerance_position;
+	case FMU_SRC_SOLVER_ATOL_VELOCITY: return inst->solver.absolute_tolerance_velocity;
+	case FMU_SRC_SOLVER_MAX_STEP: return inst->solver.max_step;
+	case FMU_SRC_PORT_POSITION:
+		if (v->causality == FMU_INPUT)
+			return inst->held[v->index].position[v->component];
+		return x[3 * inst->ports[v->index].particle + v->component];
+	case FMU_SRC_PORT_VELOCITY:
+		if (v->causality == FMU_INPUT)
+			return inst->held[v->index].velocity[v->component];
+		return u[3 * inst->ports[v->index].particle + v->component];
+	case FMU_SRC_PORT_FORCE:
+		if (v->causality == FMU_INPUT)
+			return inst->held[v->index].force[v->component];
+		return current_forces(inst)[3 * inst->ports[v->index].particle + v->component];
+	case FMU_SRC_PARTICLE_POSITION: return x[3 * v->index + v->component];
+	case FMU_SRC_PARTICLE_VELOCITY: return u[3 * v->index + v->component];
+	case FMU_SRC_ENERGY_KINETIC: return sm_simulation_energies(inst->sim).kinetic;
+	case FMU_SRC_ENERGY_ELASTIC: return sm_simulation_energies(inst->sim).elastic;
+	case FMU_SRC_ENERGY_GRAVITY: return sm_simulation_energies(inst->sim).gravity;
+	case FMU_SRC_ENERGY_DISSIPATED: return sm_simulation_dissipated_energy(inst->sim) + inst->dissipated_offset;
+	default: return NAN;
+	}
+}
+
+// Whether a variable's value needs the simulation (everything but parameters and inputs).
+static bool needs_simulation(const fmu_variable* v)
+{
+	return v->causality == FMU_OUTPUT || v->causality == FMU_LOCAL;
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
+		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
+		if (!v)
+			return fmi2Error;
+		if (needs_simulation(v) && (!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)) {
+			if (ensure_simulation(inst) != fmi2OK)
+				return fmi2Error;
+		} else if (needs_simulation(v) && apply_inputs(inst) != fmi2OK) {
+			return fmi2Error;
+		}
+		value[i] = real_value(inst, v);
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetInteger", ST_RUNNING) || !check_arrays(inst, "fmi2GetInteger", vr, nvr, value))
+		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2GetInteger", vr[i], FMU_INTEGER);
+		if (!v)
+			return fmi2Error;
+		value[i] = inst->solver.max_steps;
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetBoolean", ST_RUNNING) || !check_arrays(inst, "fmi2GetBoolean", vr, nvr, value))
+		return fmi2Error;
+	if (nvr > 0) {
+		log_error(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean variables", (unsigned)vr[0]);
+		return fmi2Error;
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetString", ST_RUNNING) || !check_arrays(inst, "fmi2GetString", vr, nvr, value))
+		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2GetString", vr[i], FMU_STRING);
+		if (!v)
+			return fmi2Error;
+		switch (v->source) {
+		case FMU_SRC_SOLVER_METHOD: value[i] = fmu_method_name(inst->solver.method); break;
+		case FMU_SRC_SOLVER_LINEAR_SOLVER: value[i] = sm_linear_solver_name(inst->solver.solver); break;
+		default: value[i] = fmu_jacobian_name(inst->solver.jacobian); break;
+		}
+	}
+	return fmi2OK;
+}
+
+static fmi2Status set_real(instance* inst, const fmu_variable* v, double value)
+{
+	if (!isfinite(value)) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: values must be finite", v->name, value);
+		return fmi2Error;
+	}
+	if (!settable(inst, "fmi2SetReal", v))
+		return fmi2Error;
+	switch (v->source) {
+	case FMU_SRC_MODEL_PARAMETER: return set_model_parameter(inst, v, value);
+	case FMU_SRC_SOLVER_RTOL:
+	case FMU_SRC_SOLVER_ATOL_POSITION:
+	case FMU_SRC_SOLVER_ATOL_VELOCITY:
+		if (!(value > 0.0)) {
+			log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0", v->name, value);
+			return fmi2Error;
+		}
+		if (v->source == FMU_SRC_SOLVER_RTOL) {
+			inst->solver.relative_tolerance = value;
+			inst->rtol_set = true;
+		} else if (v->source == FMU_SRC_SOLVER_ATOL_POSITION) {
+			inst->solver.absolute_tolerance_position = value;
+		} else {
+			inst->solver.absolute_tolerance_velocity = value;
+		}
+		inst->sim_dirty = true;
+		return fmi2OK;
+	case FMU_SRC_SOLVER_MAX_STEP:
+		if (value < 0.0) {
+			log_error(inst, "fmi2SetReal: %s = %g rejected: must be >= 0 (0: unlimited)", v->name, value);
+			return fmi2Error;
+		}
+		inst->solver.max_step = value;
+		inst->sim_dirty = true;
+		return fmi2OK;
+	case FMU_SRC_PORT_POSITION:
+	case FMU_SRC_PORT_VELOCITY:
+	case FMU_SRC_PORT_FORCE: {
+		port_values* h = &inst->held[v->index];
+		double* slot = v->source == FMU_SRC_PORT_POSITION   ? &h->position[v->component]
+		               : v->source == FMU_SRC_PORT_VELOCITY ? &h->velocity[v->component]
+		                                                    : &h->force[v->component];
+		if (*slot != value) {
+			*slot = value;
+			inst->port_dirty[v->index] = true;
+			inst->forces_valid = false;
+		}
+		return fmi2OK;
+	}
+	default: break;
+	}
+	log_error(inst, "fmi2SetReal: %s cannot be set", v->name);
+	return fmi2Error;
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetReal", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	    !check_arrays(inst, "fmi2SetReal", vr, nvr, value))
+		return fmi2Error;
+	// All values are checked before any is set: a rejected call changes nothing.
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2SetReal", vr[i], FMU_REAL);
+		if (!v)
+			return fmi2Error;
+		if (!isfinite(value[i])) {
+			log_error(inst, "fmi2SetReal: %s = %g rejected: values must be finite", v->name, value[i]);
+			return fmi2Error;
+		}
+		if (!settable(inst, "fmi2SetReal", v))
+			return fmi2Error;
+	}
+	for (size_t i = 0; i < nvr; ++i) {
+		if (set_real(inst, &inst->table.variables[vr[i]], value[i]) != fmi2OK)
+			return fmi2Error;
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetInteger", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	    !check_arrays(inst, "fmi2SetInteger", vr, nvr, value))
+		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2SetInteger", vr[i], FMU_INTEGER);
+		if (!v || !settable(inst, "fmi2SetInteger", v))
+			return fmi2Error;
+		if (value[i] < 1) {
+			log_error(inst, "fmi2SetInteger: %s = %d rejected: must be >= 1", v->name, (int)value[i]);
+			return fmi2Error;
+		}
+	}
+	for (size_t i = 0; i < nvr; ++i) {
+		inst->solver.max_steps = value[i];
+		inst->sim_dirty = true;
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetBoolean", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	    !check_arrays(inst, "fmi2SetBoolean", vr, nvr, value))
+		return fmi2Error;
+	if (nvr > 0) {
+		log_error(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean variables", (unsigned)vr[0]);
+		return fmi2Error;
+	}
+	return fmi2OK;
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetString", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	    !check_arrays(inst, "fmi2SetString", vr, nvr, value))
+		return fmi2Error;
+	sm_simulation_def solver = inst->solver;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = lookup(inst, "fmi2SetString", vr[i], FMU_STRING);
+		if (!v || !settable(inst, "fmi2SetString", v))
+			return fmi2Error;
+		int bad = 0;
+		if (!value[i]) {
+			bad = 1;
+		} else if (v->source == FMU_SRC_SOLVER_METHOD) {
+			bad = fmu_method_from_name(value[i], &solver.method);
+		} else if (v->source == FMU_SRC_SOLVER_LINEAR_SOLVER) {
+			sm_linear_solver s = sm_linear_solver_from_name(value[i]);
+			bad = s == SM_SOLVER_COUNT;
+			if (!bad)
+				solver.solver = s;
+		} else {
+			bad = fmu_jacobian_from_name(value[i], &solver.jacobian);
+		}
+		if (bad) {
+			log_error(inst, "fmi2SetString: %s = \"%s\" rejected: %s", v->name, value[i] ? value[i] : "(null)",
+			          v->description);
+			return fmi2Error;
+		}
+	}
+	inst->solver = solver;
+	if (nvr > 0)
+		inst->sim_dirty = true;
+	return fmi2OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0: FMU state. The saved state is the model's state, not solver memory: time, every
+// particle's position and velocity, which springs are broken, the inputs, the parameters and
+// settings, the dissipated energy. Restoring creates the simulation from it, so CVODE starts
+// afresh; getting a state does the same to the running instance, so that continuing after
+// fmi2GetFMUstate and continuing after fmi2SetFMUstate of that state are the same computation
+// (bit for bit, in this or another process).
+// ---------------------------------------------------------------------------------------------
+
+#define STATE_MAGIC "SMFMUST1"
+
+// Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
+// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports].
+enum {
+	I_SIZE,
+	I_STATE,
+	I_PARTICLES,
+	I_SPRINGS,
+	I_PARAMETERS,
+	I_PORTS,
+	I_HAS_SIM,
+	I_METHOD,
+	I_LINEAR_SOLVER,
+	I_JACOBIAN,
+	I_MAX_STEPS,
+	I_RTOL_SET,
+	I_STOP_DEFINED,
+	I_COUNT
+};
+enum {
+	D_TIME,
+	D_START,
+	D_LAST_SUCCESSFUL,
+	D_STOP,
+	D_DISSIPATED,
+	D_RTOL,
+	D_ATOL_POSITION,
+	D_ATOL_VELOCITY,
+	D_MAX_STEP,
+	D_COUNT
+};
+#define HEADER_BYTES (8 + 40 + 8 * I_COUNT + 8 * D_COUNT)
+
+typedef struct saved_state {
+	size_t size;
+	unsigned char* bytes;
+} saved_state;
+
+static size_t state_size(const instance* inst)
+{
+	size_t n = (size_t)inst->particle_count, m = (size_t)inst->spring_count;
+	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
+	return HEADER_BYTES + 8 * (6 * n + m + np + 9 * nports);
+}
+
+static void put_i(unsigned char* b, int k, int64_t v)
+{
+	memcpy(b + 48 + 8 * k, &v, 8);
+}
+static int64_t get_i(const unsigned char* b, int k)
+{
+	int64_t v;
+	memcpy(&v, b + 48 + 8 * k, 8);
+	return v;
+}
+static void put_d(unsigned char* b, int k, double v)
+{
+	memcpy(b + 48 + 8 * I_COUNT + 8 * k, &v, 8);
+}
+static double get_d(const unsigned char* b, int k)
+{
+	double v;
+	memcpy(&v, b + 48 + 8 * I_COUNT + 8 * k, 8);
+	return v;
+}
+
+static saved_state* save_state(instance* inst)
+{
+	saved_state* s = malloc(sizeof *s);
+	if (!s)
+		return NULL;
+	s->size = state_size(inst);
+	s->bytes = calloc(1, s->size);
+	if (!s->bytes) {
+		free(s);
+		return NULL;
+	}
+	unsigned char* b = s->bytes;
+	memcpy(b, STATE_MAGIC, 8);
+	memcpy(b + 8, inst->table.guid, 40);
+	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
+	bool has_sim = inst->sim && !inst->sim_dirty && !(inst->state & ST_INSTANTIATED);
+	put_i(b, I_SIZE, (int64_t)s->size);
+	put_i(b, I_STATE, inst->state);
+	put_i(b, I_PARTICLES, n);
+	put_i(b, I_SPRINGS, m);
+	put_i(b, I_PARAMETERS, np);
+	put_i(b, I_PORTS, inst->port_count);
+	put_i(b, I_HAS_SIM, has_sim);
+	put_i(b, I_METHOD, inst->solver.method);
+	put_i(b, I_LINEAR_SOLVER, inst->solver.solver);
+	put_i(b, I_JACOBIAN, inst->solver.jacobian);
+	put_i(b, I_MAX_STEPS, inst->solver.max_steps);
+	put_i(b, I_RTOL_SET, inst->rtol_set);
+	put_i(b, I_STOP_DEFINED, inst->stop_time_defined);
+	put_d(b, D_TIME, inst->time);
+	put_d(b, D_START, inst->start_time);
+	put_d(b, D_LAST_SUCCESSFUL, inst->last_successful_time);
+	put_d(b, D_STOP, inst->stop_time);
+	put_d(b, D_DISSIPATED, has_sim ? sm_simulation_dissipated_energy(inst->sim) + inst->dissipated_offset : 0.0);
+	put_d(b, D_RTOL, inst->solver.relative_tolerance);
+	put_d(b, D_ATOL_POSITION, inst->solver.absolute_tolerance_position);
+	put_d(b, D_ATOL_VELOCITY, inst->solver.absolute_tolerance_velocity);
+	put_d(b, D_MAX_STEP, inst->solver.max_step);
+	double* d = (double*)(void*)(b + HEADER_BYTES);  // HEADER_BYTES is a multiple of 8
+	if (has_sim) {
+		memcpy(d, sm_simulation_positions(inst->sim), 3 * (size_t)n * sizeof(double));
+		memcpy(d + 3 * n, sm_simulation_velocities(inst->sim), 3 * (size_t)n * sizeof(double));
+		const sm_model* model = sm_simulation_model(inst->sim);
+		for (int32_t k = 0; k < m; ++k)
+			d[6 * n + k] = sm_model_spring_enabled(model, k) ? 1.0 : 0.0;
+	} else {
+		for (int32_t k = 0; k < m; ++k)
+			d[6 * n + k] = 1.0;
+	}
+	for (int32_t k = 0; k < np; ++k)
+		d[6 * n + m + k] = sm_document_parameter_value(inst->doc, k);
+	memcpy(d + 6 * n + m + np, inst->held, 9 * (size_t)inst->port_count * sizeof(double));
+	return s;
+}
+
+// Checks that bytes are a state of this model; logs and returns false otherwise.
+static bool valid_state(instance* inst, const char* function, const unsigned char* b, size_t size)
+{
+	if (size < HEADER_BYTES || memcmp(b, STATE_MAGIC, 8) != 0) {
+		log_error(inst, "%s: not a springmass FMU state", function);
+		return false;
+	}
+	if (memcmp(b + 8, inst->table.guid, 40) != 0) {
+		log_error(inst, "%s: the state belongs to another model (GUID %.39s, this FMU's is %s)", function,
+		          (const char*)b + 8, inst->table.guid);
+		return false;
+	}
+	if (get_i(b, I_SIZE) != (int64_t)size || size != state_size(inst) || get_i(b, I_PARTICLES) != inst->particle_count ||
+	    get_i(b, I_SPRINGS) != inst->spring_count || get_i(b, I_PORTS) != inst->port_count ||
+	    get_i(b, I_PARAMETERS) != sm_document_parameter_count(inst->doc)) {
+		log_error(inst, "%s: the state's size or counts do not match this model", function);
+		return false;
+	}
+	return true;
+}
+
+static fmi2Status restore_state(instance* inst, const unsigned char* b)
+{
+	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
+	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
+	for (int32_t k = 0; k < np; ++k) {
+		double value = d[6 * n + m + k];
+		if (sm_document_parameter_value(inst->doc, k) != value &&
+		    sm_document_set_parameter(inst->doc, k, value, NULL) != SM_OK) {
+			log_error(inst, "fmi2SetFMUstate: parameter %s = %g of the state is rejected by the model",
+			          sm_document_parameter_name(inst->doc, k), value);
+			return fmi2Error;
+		}
+	}
+	inst->solver.method = (sm_method)get_i(b, I_METHOD);
+	inst->solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
+	inst->solver.jacobian = (sm_jacobian_variant)get_i(b, I_JACOBIAN);
+	inst->solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
+	inst->solver.relative_tolerance = get_d(b, D_RTOL);
+	inst->solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
+	inst->solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);
+	inst->solver.max_step = get_d(b, D_MAX_STEP);
+	inst->rtol_set = get_i(b, I_RTOL_SET) != 0;
+	inst->stop_time_defined = get_i(b, I_STOP_DEFINED) != 0;
+	inst->stop_time = get_d(b, D_STOP);
+	inst->start_time = get_d(b, D_START);
+	inst->time = get_d(b, D_TIME);
+	inst->last_successful_time = get_d(b, D_LAST_SUCCESSFUL);
+	memcpy(inst->held, d + 6 * n + m + np, 9 * (size_t)inst->port_count * sizeof(double));
+	mark_inputs_dirty(inst);
+	if (!get_i(b, I_HAS_SIM)) {
+		sm_simulation_destroy(inst->sim);
+		inst->sim = NULL;
+		inst->sim_dirty = true;
+		inst->state = (int)get_i(b, I_STATE);
+		return fmi2OK;
+	}
+	sm_model* model = NULL;
+	if (build_model(inst, &model) != SM_OK)
+		return fmi2Error;
+	for (int32_t k = 0; k < m; ++k) {
+		if (d[6 * n + k] == 0.0)
+			sm_model_set_spring_enabled(model, k, false);
+	}
+	fmi2Status status = create_simulation(inst, model, inst->time - inst->start_time, d, d + 3 * n);
+	sm_model_destroy(model);
+	if (status != fmi2OK)
+		return status;
+	inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
+	inst->state = (int)get_i(b, I_STATE);
+	return fmi2OK;
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetFMUstate", ST_ANY & ~ST_ERROR))
+		return fmi2Error;
+	if (!FMUstate) {
+		log_error(inst, "fmi2GetFMUstate: NULL FMUstate");
+		return fmi2Error;
+	}
+	if (inst->state == ST_INITIALIZATION && ensure_simulation(inst) != fmi2OK)
+		return fmi2Error;
+	saved_state* s = save_state(inst);
+	if (!s) {
+		log_error(inst, "fmi2GetFMUstate: out of memory");
+		return fmi2Error;
+	}
+	// Continue from exactly what a restore would give (see above).
+	if (get_i(s->bytes, I_HAS_SIM) && restore_state(inst, s->bytes) != fmi2OK) {
+		free(s->bytes);
+		free(s);
+		return fmi2Error;
+	}
+	if (*FMUstate) {
+		saved_state* old = *FMUstate;
+		free(old->bytes);
+		free(old);
+	}
+	*FMUstate = s;
+	return fmi2OK;
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SetFMUstate", ST_ANY & ~ST_ERROR))
+		return fmi2Error;
+	if (!FMUstate) {
+		log_error(inst, "fmi2SetFMUstate: NULL FMUstate");
+		return fmi2Error;
+	}
+	const saved_state* s = FMUstate;
+	if (!valid_state(inst, "fmi2SetFMUstate", s->bytes, s->size))
+		return fmi2Error;
+	return restore_state(inst, s->bytes);
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2FreeFMUstate", ST_ANY))
+		return fmi2Error;
+	if (!FMUstate)
+		return fmi2OK;
+	saved_state* s = *FMUstate;
+	if (s) {
+		free(s->bytes);
+		free(s);
+	}
+	*FMUstate = NULL;
+	return fmi2OK;
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SerializedFMUstateSize", ST_ANY))
+		return fmi2Error;
+	if (!FMUstate || !size) {
+		log_error(inst, "fmi2SerializedFMUstateSize: NULL argument");
+		return fmi2Error;
+	}
+	*size = ((const saved_state*)FMUstate)->size;
+	return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2SerializeFMUstate", ST_ANY))
+		return fmi2Error;
+	if (!FMUstate || !serializedState) {
+		log_error(inst, "fmi2SerializeFMUstate: NULL argument");
+		return fmi2Error;
+	}
+	const saved_state* s = FMUstate;
+	if (size < s->size) {
+		log_error(inst, "fmi2SerializeFMUstate: buffer of %zu bytes, the state needs %zu", size, s->size);
+		return fmi2Error;
+	}
+	memcpy(serializedState, s->bytes, s->size);
+	return fmi2OK;
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate* FMUstate)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2DeSerializeFMUstate", ST_ANY))
+		return fmi2Error;
+	if (!serializedState || !FMUstate) {
+		log_error(inst, "fmi2DeSerializeFMUstate: NULL argument");
+		return fmi2Error;
+	}
+	if (!valid_state(inst, "fmi2DeSerializeFMUstate", (const unsigned char*)serializedState, size))
+		return fmi2Error;
+	saved_state* s = malloc(sizeof *s);
+	unsigned char* bytes = malloc(size);
+	if (!s || !bytes) {
+		free(s);
+		free(bytes);
+		log_error(inst, "fmi2DeSerializeFMUstate: out of memory");
+		return fmi2Error;
+	}
+	memcpy(bytes, serializedState, size);
+	s->size = size;
+	s->bytes = bytes;
+	if (*FMUstate) {
+		saved_state* old = *FMUstate;
+		free(old->bytes);
+		free(old);
+	}
+	*FMUstate = s;
+	return fmi2OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0: directional derivatives of outputs with respect to inputs at the current
+// communication point (the direct feed-through a master needs). With dx and dv the seeds of the
+// motion ports' prescribed positions and velocities and g the seeds of the force inputs:
+//   d(force on a driven particle)  = (df/dx dx + df/dv dv)_p + g_p   (analytic Jacobian product)
+//   d(kinetic energy)              = sum m_i v_i . dv_i
+//   d(gravitational energy)        = -sum m_i g . dx_i
+//   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g (the forces at
+//                                    zero velocity are elastic plus weight only)
+// Positions and velocities of free particles and the dissipated energy are states: their
+// derivatives with respect to the current inputs are zero.
+// ---------------------------------------------------------------------------------------------
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[])
+{
+	instance* inst = c;
+	const char* fn = "fmi2GetDirectionalDerivative";
+	if (!allowed(inst, fn, ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+		return fmi2Error;
+	if ((nUnknown > 0 && (!vUnknown_ref || !dvUnknown)) || (nKnown > 0 && (!vKnown_ref || !dvKnown))) {
+		log_error(inst, "%s: NULL array", fn);
+		return fmi2Error;
+	}
+	size_t n3 = 3 * (size_t)inst->particle_count;
+	double* dx = inst->scratch;
+	double* dv = dx + n3;
+	double* df = dv + n3;
+	double* work = df + n3;
+	double* zero = work + n3;
+	memset(dx, 0, 2 * n3 * sizeof(double));
+	for (size_t k = 0; k < nKnown; ++k) {
+		if (vKnown_ref[k] >= (fmi2ValueReference)inst->table.count) {
+			log_error(inst, "%s: unknown value reference %u", fn, (unsigned)vKnown_ref[k]);
+			return fmi2Error;
+		}
+		const fmu_variable* v = &inst->table.variables[vKnown_ref[k]];
+		if (v->causality != FMU_INPUT) {
+			log_error(inst, "%s: known %s is not an input", fn, v->name);
+			return fmi2Error;
+		}
+		if (!isfinite(dvKnown[k])) {
+			log_error(inst, "%s: seed of %s is not finite", fn, v->name);
+			return fmi2Error;
+		}
+	}
+	for (size_t k = 0; k < nUnknown; ++k) {
+		if (vUnknown_ref[k] >= (fmi2ValueReference)inst->table.count) {
+			log_error(inst, "%s: unknown value reference %u", fn, (unsigned)vUnknown_ref[k]);
+			return fmi2Error;
+		}
+		const fmu_variable* v = &inst->table.variables[vUnknown_ref[k]];
+		if (v->causality != FMU_OUTPUT && v->causality != FMU_LOCAL) {
+			log_error(inst, "%s: unknown %s is not an output", fn, v->name);
+			return fmi2Error;
+		}
+	}
+	if ((!inst->sim || inst->sim_dirty) ? ensure_simulation(inst) != fmi2OK : apply_inputs(inst) != fmi2OK)
+		return fmi2Error;
+	for (size_t k = 0; k < nKnown; ++k) {
+		const fmu_variable* v = &inst->table.variables[vKnown_ref[k]];
+		size_t i = 3 * (size_t)inst->ports[v->index].particle + (size_t)v->component;
+		if (v->source == FMU_SRC_PORT_POSITION)
+			dx[i] += dvKnown[k];
+		else if (v->source == FMU_SRC_PORT_VELOCITY)
+			dv[i] += dvKnown[k];
+	}
+	const sm_model* model = sm_simulation_model(inst->sim);
+	const double* x = sm_simulation_positions(inst->sim);
+	const double* u = sm_simulation_velocities(inst->sim);
+	bool have_product = false, have_elastic = false;
+	sm_model_def def = sm_model_get_def(model);
+	for (size_t k = 0; k < nUnknown; ++k) {
+		const fmu_variable* v = &inst->table.variables[vUnknown_ref[k]];
+		double result = 0.0;
+		if (v->source == FMU_SRC_PORT_FORCE) {
+			if (!have_product) {
+				sm_model_jacobian_product(model, x, u, SM_JACOBIAN_EXACT, dx, dv, df);
+				have_product = true;
+			}
+			int32_t particle = inst->ports[v->index].particle;
+			result = df[3 * (size_t)particle + (size_t)v->component];
+			for (size_t j = 0; j < nKnown; ++j) {
+				const fmu_variable* w = &inst->table.variables[vKnown_ref[j]];
+				if (w->source == FMU_SRC_PORT_FORCE && inst->ports[w->index].particle == particle &&
+				    w->component == v->component)
+					result += dvKnown[j];
+			}
+		} else if (v->source == FMU_SRC_ENERGY_KINETIC || v->source == FMU_SRC_ENERGY_GRAVITY ||
+		           v->source == FMU_SRC_ENERGY_ELASTIC) {
+			if (v->source == FMU_SRC_ENERGY_ELASTIC && !have_elastic) {
+				memset(zero, 0, n3 * sizeof(double));
+				sm_model_forces(model, x, zero, NULL, work);
+				have_elastic = true;
+			}
+			for (int32_t p = 0; p < inst->particle_count; ++p) {
+				sm_particle_def pd;
+				sm_model_get_particle(model, p, &pd);
+				for (int c3 = 0; c3 < 3; ++c3) {
+					size_t i = 3 * (size_t)p + (size_t)c3;
+					if (v->source == FMU_SRC_ENERGY_KINETIC)
+						result += pd.mass * u[i] * dv[i];
+					else if (v->source == FMU_SRC_ENERGY_GRAVITY)
+						result -= pd.mass * def.gravity[c3] * dx[i];
+					else
+						result -= (work[i] - pd.mass * def.gravity[c3]) * dx[i];
+				}
+			}
+		}
+		dvUnknown[k] = result;
+	}
+	return fmi2OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// FMI 2.0 Co-Simulation: stepping and status
+// ---------------------------------------------------------------------------------------------
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[])
+{
+	instance* inst = c;
+	(void)vr;
+	(void)order;
+	(void)value;
+	if (!allowed(inst, "fmi2SetRealInputDerivatives", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE))
+		return fmi2Error;
+	if (nvr == 0)
+		return fmi2OK;
+	log_error(inst, "fmi2SetRealInputDerivatives: this FMU holds its inputs over a step (canInterpolateInputs is "
+	                "false); a motion port takes its velocity as an input instead");
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[])
+{
+	instance* inst = c;
+	(void)vr;
+	(void)order;
+	(void)value;
+	if (!allowed(inst, "fmi2GetRealOutputDerivatives", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+		return fmi2Error;
+	if (nvr == 0)
+		return fmi2OK;
+	log_error(inst, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder is 0); read the "
+	                "velocity outputs instead");
+	return fmi2Error;
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint)
+{
+	instance* inst = c;
+	(void)noSetFMUStatePriorToCurrentPoint;
+	if (!allowed(inst, "fmi2DoStep", ST_STEP_COMPLETE))
+		return fmi2Error;
+	double t = currentCommunicationPoint, h = communicationStepSize;
+	if (!isfinite(t) || !isfinite(h) || !(h > 0.0)) {
+		log_error(inst, "fmi2DoStep: communication step size %g at t = %g must be finite and > 0", h, t);
+		return fmi2Error;
+	}
+	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
+	if (fabs(t - inst->time) > tolerance) {
+		log_error(inst, "fmi2DoStep: communication point %.17g does not match the FMU's time %.17g", t, inst->time);
+		return fmi2Error;
+	}
+	double t_end = t + h;
+	if (inst->stop_time_defined && t_end > inst->stop_time * (1.0 + 1e3 * DBL_EPSILON) + 1e3 * DBL_EPSILON) {
+		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment", t_end,
+		          inst->stop_time);
+		return fmi2Error;
+	}
+	if (apply_inputs(inst) != fmi2OK)
+		return fmi2Error;
+	sm_statistics before = sm_simulation_statistics(inst->sim);
+	sm_status st = sm_simulation_advance(inst->sim, t_end - inst->start_time);
+	inst->forces_valid = false;
+
+	int32_t breaks = sm_simulation_break_count(inst->sim);
+	for (; inst->breaks_logged < breaks; ++inst->breaks_logged) {
+		sm_break_event e = sm_simulation_break(inst->sim, inst->breaks_logged);
+		sm_spring_def s;
+		sm_model_get_spring(sm_simulation_model(inst->sim), e.spring, &s);
+		const char* a = sm_document_particle_name(inst->doc, s.a);
+		const char* b = sm_document_particle_name(inst->doc, s.b);
+		logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: spring %d between %s and %s broke", e.time + inst->start_time,
+		      (int)e.spring, a ? a : "(unnamed)", b ? b : "(unnamed)");
+	}
+	sm_statistics after = sm_simulation_statistics(inst->sim);
+	logf_(inst, fmi2OK, LOG_SOLVER,
+	      "step %.17g -> %.17g: %lld internal steps, %lld right-hand sides, %lld Jacobians, %lld restarts, "
+	      "%lld error-test and %lld convergence failures",
+	      t, t_end, (long long)(after.steps - before.steps), (long long)(after.rhs_evaluations - before.rhs_evaluations),
+	      (long long)(after.jacobian_evaluations - before.jacobian_evaluations),
+	      (long long)(after.restarts - before.restarts),
+	      (long long)(after.error_test_failures - before.error_test_failures),
+	      (long long)(after.convergence_failures - before.convergence_failures));
+	if (st != SM_OK) {
+		inst->time = inst->start_time + sm_simulation_time(inst->sim);
+		inst->last_successful_time = inst->time;
+		inst->state = ST_STEP_FAILED;
+		logf_(inst, fmi2Discard, LOG_DISCARD,
+		      "fmi2DoStep: the step from %.17g to %.17g stopped at %.17g (readable as fmi2LastSuccessfulTime): %s", t,
+		      t_end, inst->time, sm_simulation_last_error(inst->sim));
+		return fmi2Discard;
+	}
+	inst->time = t_end;
+	inst->last_successful_time = t_end;
+	return fmi2OK;
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2CancelStep", ST_STEP_COMPLETE | ST_STEP_FAILED))
+		return fmi2Error;
+	log_error(inst, "fmi2CancelStep: fmi2DoStep is synchronous and never returns fmi2Pending");
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+		return fmi2Error;
+	if (s == fmi2DoStepStatus) {
+		*value = inst->state == ST_STEP_FAILED ? fmi2Discard : fmi2OK;
+		return fmi2OK;
+	}
+	log_error(inst, "fmi2GetStatus: status kind %d is not provided", (int)s);
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetRealStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+		return fmi2Error;
+	if (s == fmi2LastSuccessfulTime) {
+		*value = inst->last_successful_time;
+		return fmi2OK;
+	}
+	log_error(inst, "fmi2GetRealStatus: status kind %d is not provided", (int)s);
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value)
+{
+	instance* inst = c;
+	(void)value;
+	if (!allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+		return fmi2Error;
+	log_error(inst, "fmi2GetIntegerStatus: status kind %d is not provided", (int)s);
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+		return fmi2Error;
+	if (s == fmi2Terminated) {
+		*value = fmi2False;  // the model never asks to stop the simulation
+		return fmi2OK;
+	}
+	log_error(inst, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);
+	return fmi2Error;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
+{
+	instance* inst = c;
+	if (!allowed(inst, "fmi2GetStringStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+		return fmi2Error;
+	if (s == fmi2PendingStatus) {
+		*value = "";
+		return fmi2OK;
+	}
+	log_error(inst, "fmi2GetStringStatus: status kind %d is not provided", (int)s);
+	return fmi2Error;
+}

@@ -1,0 +1,771 @@
+// springmass FMU: variable table, GUID and modelDescription.xml (see fmu_model.h).
+#include "fmu_model.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+// ---------------------------------------------------------------------------------------------
+// GUID: FNV-1a with 128-bit state. The FNV-128 prime is 2^88 + 2^8 + 0x3b = 2^88 + 0x13b, so
+// h * prime = h * 0x13b + (h << 88), done on two 64-bit halves (hi, lo) modulo 2^128.
+// ---------------------------------------------------------------------------------------------
+
+static void multiply_small(uint64_t hi, uint64_t lo, uint32_t factor, uint64_t* out_hi, uint64_t* out_lo)
+{
+	// lo * factor as a 96-bit number: split lo into 32-bit halves.
+	uint64_t lo_lo = (lo & 0xffffffffu) * factor;
+	uint64_t lo_hi = (lo >> 32) * factor;
+	uint64_t low = lo_lo + (lo_hi << 32);
+	uint64_t carry = (lo_hi >> 32) + (low < lo_lo ? 1u : 0u);
+	*out_lo = low;
+	*out_hi = hi * factor + carry;
+}
+
+void fmu_guid(const char* text, size_t length, char guid[40])
+{
+	uint64_t hi = 0x6c62272e07bb0142u;  // FNV-128 offset basis
+	uint64_t lo = 0x62b821756295c58du;
+	for (size_t i = 0; i < length; ++i) {
+		lo ^= (uint8_t)text[i];
+		uint64_t p_hi, p_lo;
+		multiply_small(hi, lo, 0x13bu, &p_hi, &p_lo);
+		p_hi += lo << 24;  // (lo << 88) contributes lo << 24 to the high half
+		hi = p_hi;
+		lo = p_lo;
+	}
+	snprintf(guid, 40, "{%08x-%04x-%04x-%04x-%04x%08x}", (unsigned)(hi >> 32), (unsigned)((hi >> 16) & 0xffffu),
+	         (unsigned)(hi & 0xffffu), (unsigned)(lo >> 48), (unsigned)((lo >> 32) & 0xffffu),
+	         (unsigned)(lo & 0xffffffffu));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Names
+// ---------------------------------------------------------------------------------------------
+
+static char* duplicate(const char* s)
+{
+	size_t n = strlen(s) + 1;
+	char* copy = malloc(n);
+	if (copy)
+		memcpy(copy, s, n);
+	return copy;
+}
+
+static char* format(const char* fmt, ...)
+{
+	va_list args;
+	va_start(args, fmt);
+	int n = vsnprintf(NULL, 0, fmt, args);
+	va_end(args);
+	if (n < 0)
+		return NULL;
+	char* s = malloc((size_t)n + 1);
+	if (!s)
+		return NULL;
+	va_start(args, fmt);
+	vsnprintf(s, (size_t)n + 1, fmt, args);
+	va_end(args);
+	return s;
+}
+
+char* fmu_identifier(const char* name)
+{
+	size_t n = name ? strlen(name) : 0;
+	bool prefix = n == 0 || isdigit((unsigned char)name[0]);
+	char* id = malloc(n + 7);
+	if (!id)
+		return NULL;
+	size_t k = 0;
+	if (prefix) {
+		memcpy(id, "model_", 6);
+		k = 6;
+	}
+	for (size_t i = 0; i < n; ++i) {
+		unsigned char c = (unsigned char)name[i];
+		id[k++] = (char)(isalnum(c) ? c : '_');
+	}
+	id[k] = '\0';
+	return id;
+}
+
+// A name usable as one part of a structured name: an identifier as is, anything else quoted
+// ('...' with ' and \ escaped), as the structured naming convention of FMI 2.0 allows.
+static bool is_identifier(const char* s)
+{
+	if (!s || !*s || !(isalpha((unsigned char)s[0]) || s[0] == '_'))
+		return false;
+	for (const char* c = s; *c; ++c) {
+		if (!(isalnum((unsigned char)*c) || *c == '_'))
+			return false;
+	}
+	return true;
+}
+
+static char* name_part(const char* s)
+{
+	if (is_identifier(s))
+		return duplicate(s);
+	size_t n = strlen(s);
+	char* q = malloc(2 * n + 3);
+	if (!q)
+		return NULL;
+	size_t k = 0;
+	q[k++] = '\'';
+	for (size_t i = 0; i < n; ++i) {
+		if (s[i] == '\'' || s[i] == '\\')
+			q[k++] = '\\';
+		q[k++] = s[i];
+	}
+	q[k++] = '\'';
+	q[k] = '\0';
+	return q;
+}
+
+const char* fmu_method_name(sm_method method)
+{
+	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
+}
+
+int fmu_method_from_name(const char* name, sm_method* method)
+{
+	if (name && strcmp(name, "bdf") == 0) {
+		*method = SM_METHOD_BDF;
+		return 0;
+	}
+	if (name && strcmp(name, "adams") == 0) {
+		*method = SM_METHOD_ADAMS;
+		return 0;
+	}
+	return -1;
+}
+
+const char* fmu_jacobian_name(sm_jacobian_variant variant)
+{
+	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
+}
+
+int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant)
+{
+	if (name && strcmp(name, "exact") == 0) {
+		*variant = SM_JACOBIAN_EXACT;
+		return 0;
+	}
+	if (name && strcmp(name, "definite") == 0) {
+		*variant = SM_JACOBIAN_DEFINITE;
+		return 0;
+	}
+	return -1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tunability of parameters
+// ---------------------------------------------------------------------------------------------
+
+// Whether two models have the same particles (count, motion, initial state) and the same
+// springs (count and endpoints).
+static bool same_structure(const sm_model* a, const sm_model* b)
+{
+	int32_t n = sm_model_particle_count(a);
+	int32_t m = sm_model_spring_count(a);
+	if (n != sm_model_particle_count(b) || m != sm_model_spring_count(b))
+		return false;
+	for (int32_t i = 0; i < n; ++i) {
+		sm_particle_def pa, pb;
+		if (sm_model_get_particle(a, i, &pa) != SM_OK || sm_model_get_particle(b, i, &pb) != SM_OK)
+			return false;
+		if (pa.motion != pb.motion)
+			return false;
+		for (int c = 0; c < 3; ++c) {
+			if (pa.position[c] != pb.position[c] || pa.velocity[c] != pb.velocity[c])
+				return false;
+		}
+	}
+	for (int32_t s = 0; s < m; ++s) {
+		sm_spring_def sa, sb;
+		if (sm_model_get_spring(a, s, &sa) != SM_OK || sm_model_get_spring(b, s, &sb) != SM_OK)
+			return false;
+		if (sa.a != sb.a || sa.b != sb.b || sa.kind != sb.kind)
+			return false;
+		// A break strain that appears or disappears changes the events, not the topology.
+	}
+	return true;
+}
+
+// Perturbs the parameter in a scratch document and compares the models. A perturbation that
+// makes the model invalid means the parameter feeds something with rules of its own (a
+// count, an index): fixed.
+static bool parameter_is_tunable(sm_document* scratch, const sm_model* reference, int32_t parameter)
+{
+	double value = sm_document_parameter_value(scratch, parameter);
+	double perturbed = value + 1.0 + 0.25 * fabs(value);
+	bool tunable = false;
+	if (sm_document_set_parameter(scratch, parameter, perturbed, NULL) == SM_OK) {
+		sm_model* model = NULL;
+		if (sm_document_build(scratch, &model, NULL) == SM_OK && model) {
+			tunable = same_structure(reference, model);
+		}
+		sm_model_destroy(model);
+		sm_document_set_parameter(scratch, parameter, value, NULL);
+	}
+	return tunable;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The table
+// ---------------------------------------------------------------------------------------------
+
+typedef struct builder {
+	fmu_table* table;
+	int32_t capacity;
+	bool failed;
+} builder;
+
+static fmu_variable* add(builder* b, char* name, char* description, fmu_type type, fmu_causality causality,
+                         fmu_variability variability, const char* unit, fmu_source source, int32_t index,
+                         int32_t component)
+{
+	if (b->failed || !name || !description) {
+		free(name);
+		free(description);
+		b->failed = true;
+		return NULL;
+	}
+	fmu_table* t = b->table;
+	if (t->count == b->capacity) {
+		int32_t capacity = b->capacity ? 2 * b->capacity : 64;
+		fmu_variable* grown = realloc(t->variables, (size_t)capacity * sizeof *grown);
+		if (!grown) {
+			free(name);
+			free(description);
+			b->failed = true;
+			return NULL;
+		}
+		t->variables = grown;
+		b->capacity = capacity;
+	}
+	fmu_variable* v = &t->variables[t->count++];
+	memset(v, 0, sizeof *v);
+	v->name = name;
+	v->description = description;
+	v->type = type;
+	v->causality = causality;
+	v->variability = variability;
+	v->unit = unit;
+	v->source = source;
+	v->index = index;
+	v->component = component;
+	return v;
+}
+
+static void add_real_parameter(builder* b, const char* name, const char* description, const char* unit,
+                               fmu_source source, double start)
+{
+	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_REAL, FMU_PARAMETER, FMU_FIXED, unit,
+	                      source, 0, 0);
+	if (v) {
+		v->has_start = true;
+		v->start_real = start;
+	}
+}
+
+static void add_string_parameter(builder* b, const char* name, const char* description, fmu_source source,
+                                 const char* start)
+{
+	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_STRING, FMU_PARAMETER, FMU_FIXED, NULL,
+	                      source, 0, 0);
+	if (v) {
+		v->has_start = true;
+		v->start_string = start;
+	}
+}
+
+static const char* const axis[3] = {"x", "y", "z"};
+static const char* const velocity_axis[3] = {"vx", "vy", "vz"};
+static const char* const force_axis[3] = {"fx", "fy", "fz"};
+
+static void add_port(builder* b, const sm_document* doc, const sm_model* model, int32_t port_index)
+{
+	sm_port port = sm_document_port(doc, port_index);
+	char* part = name_part(port.name);
+	if (!part) {
+		b->failed = true;
+		return;
+	}
+	sm_particle_def particle = sm_default_particle_def();
+	sm_model_get_particle(model, port.particle, &particle);
+	const char* particle_name = sm_document_particle_name(doc, port.particle);
+	char particle_label[64];
+	if (!particle_name) {
+		snprintf(particle_label, sizeof particle_label, "particle %d", (int)port.particle);
+		particle_name = particle_label;
+	}
+	bool motion = port.kind == SM_PORT_MOTION;
+	fmu_causality kinematic = motion ? FMU_INPUT : FMU_OUTPUT;
+	for (int c = 0; c < 3; ++c) {
+		fmu_variable* v = add(b, format("%s.%s", part, axis[c]),
+		                      format("%s of %s, %s port at particle %s", axis[c], port.name,
+		                             motion ? "position prescribed at the motion" : "position at the",
+		                             particle_name),
+		                      FMU_REAL, kinematic, FMU_CONTINUOUS, "m", FMU_SRC_PORT_POSITION, port_index, c);
+		if (v && motion) {
+			v->has_start = true;
+			v->start_real = particle.position[c];
+		}
+	}
+	for (int c = 0; c < 3; ++c) {
+		fmu_variable* v = add(b, format("%s.%s", part, velocity_axis[c]),
+		                      format("%s-velocity of %s, %s port at particle %s", axis[c], port.name,
+		                             motion ? "prescribed at the motion" : "at the", particle_name),
+		                      FMU_REAL, kinematic, FMU_CONTINUOUS, "m/s", FMU_SRC_PORT_VELOCITY, port_index, c);
+		if (v && motion) {
+			v->has_start = true;
+			v->start_real = particle.velocity[c];
+		}
+	}
+	if (port.kind != SM_PORT_PROBE) {
+		for (int c = 0; c < 3; ++c) {
+			fmu_variable* v = add(
+			    b, format("%s.%s", part, force_axis[c]),
+			    motion ? format("%s-force the model exerts on whatever drives %s (particle %s)", axis[c], port.name,
+			                    particle_name)
+			           : format("%s-force applied from outside at %s (particle %s)", axis[c], port.name, particle_name),
+			    FMU_REAL, motion ? FMU_OUTPUT : FMU_INPUT, FMU_CONTINUOUS, "N", FMU_SRC_PORT_FORCE, port_index, c);
+			if (v && !motion) {
+				v->has_start = true;
+				v->start_real = 0.0;
+			}
+		}
+	}
+	free(part);
+}
+
+static sm_status check_unique_names(const fmu_table* t, sm_error* err)
+{
+	// Quadratic in the number of non-particle variables only: particle variables are
+	// "p[i]..." and cannot collide with each other.
+	for (int32_t i = 0; i < t->count; ++i) {
+		if (t->variables[i].source == FMU_SRC_PARTICLE_POSITION || t->variables[i].source == FMU_SRC_PARTICLE_VELOCITY)
+			continue;
+		for (int32_t j = 0; j < t->count; ++j) {
+			if (j != i && strcmp(t->variables[i].name, t->variables[j].name) == 0) {
+				if (err) {
+					err->status = SM_ERROR_SCHEMA;
+					snprintf(err->message, sizeof err->message,
+					         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
+					         t->variables[i].name);
+				}
+				return SM_ERROR_SCHEMA;
+			}
+		}
+	}
+	return SM_OK;
+}
+
+static sm_status fail(sm_error* err, sm_status status, const char* message)
+{
+	if (err) {
+		err->status = status;
+		snprintf(err->message, sizeof err->message, "%s", message);
+	}
+	return status;
+}
+
+sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table, sm_error* err)
+{
+	memset(table, 0, sizeof *table);
+	if (!doc || !text)
+		return fail(err, SM_ERROR_INVALID_ARGUMENT, "no model file");
+	sm_error build_err = {SM_OK, ""};
+	sm_model* model = NULL;
+	sm_status st = sm_document_build(doc, &model, &build_err);
+	if (st != SM_OK) {
+		if (err)
+			*err = build_err;
+		return st;
+	}
+	sm_document* scratch = sm_document_parse(text, length, "model.json", NULL);
+	if (!scratch) {
+		sm_model_destroy(model);
+		return fail(err, SM_ERROR_INVALID_ARGUMENT, "the model file's text does not parse as the document given");
+	}
+
+	fmu_guid(text, length, table->guid);
+	sm_document_settings settings = sm_document_get_settings(doc);
+	table->model_identifier = fmu_identifier(sm_document_name(doc));
+	table->model_name = duplicate(sm_document_name(doc) ? sm_document_name(doc) : "");
+	table->description = duplicate(sm_document_description(doc) ? sm_document_description(doc) : "");
+	table->stop_time = settings.stop_time;
+	table->step_size = settings.output_interval;
+	table->tolerance = settings.solver.relative_tolerance;
+
+	builder b = {table, 0, !table->model_identifier || !table->model_name || !table->description};
+
+	// Model-file parameters.
+	int32_t np = sm_document_parameter_count(doc);
+	for (int32_t i = 0; i < np && !b.failed; ++i) {
+		const char* pname = sm_document_parameter_name(doc, i);
+		bool tunable = parameter_is_tunable(scratch, model, i);
+		fmu_variable* v = add(&b, name_part(pname),
+		                      format("model-file parameter %s (%s)", pname,
+		                             tunable ? "tunable: feeds constants only" : "fixed: feeds the structure or initial state"),
+		                      FMU_REAL, FMU_PARAMETER, tunable ? FMU_TUNABLE : FMU_FIXED, NULL, FMU_SRC_MODEL_PARAMETER,
+		                      i, 0);
+		if (v) {
+			v->has_start = true;
+			v->start_real = sm_document_parameter_value(doc, i);
+		}
+	}
+
+	// Integrator settings.
+	const sm_simulation_def* s = &settings.solver;
+	add_real_parameter(&b, "solver.rtol", "relative tolerance of CVODE [1]", NULL, FMU_SRC_SOLVER_RTOL,
+	                   s->relative_tolerance);
+	add_real_parameter(&b, "solver.atol_position", "absolute tolerance of positions", "m",
+	                   FMU_SRC_SOLVER_ATOL_POSITION, s->absolute_tolerance_position);
+	add_real_parameter(&b, "solver.atol_velocity", "absolute tolerance of velocities", "m/s",
+	                   FMU_SRC_SOLVER_ATOL_VELOCITY, s->absolute_tolerance_velocity);
+	add_real_parameter(&b, "solver.max_step", "largest internal step (0: unlimited)", "s", FMU_SRC_SOLVER_MAX_STEP,
+	                   s->max_step);
+	fmu_variable* max_steps = add(&b, duplicate("solver.max_steps"),
+	                              duplicate("internal steps allowed per communication step"), FMU_INTEGER,
+	                              FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_MAX_STEPS, 0, 0);
+	if (max_steps) {
+		max_steps->has_start = true;
+		max_steps->start_integer = s->max_steps;
+	}
+	add_string_parameter(&b, "solver.method", "multistep method: bdf or adams", FMU_SRC_SOLVER_METHOD,
+	                     fmu_method_name(s->method));
+	add_string_parameter(&b, "solver.linear_solver", "linear solver: auto, dense, klu, pcg or cholmod",
+	                     FMU_SRC_SOLVER_LINEAR_SOLVER, sm_linear_solver_name(s->solver));
+	add_string_parameter(&b, "solver.jacobian", "Jacobian: exact or definite (definiteness-preserving)",
+	                     FMU_SRC_SOLVER_JACOBIAN, fmu_jacobian_name(s->jacobian));
+
+	// Ports.
+	int32_t nports = sm_document_port_count(doc);
+	for (int32_t i = 0; i < nports && !b.failed; ++i)
+		add_port(&b, doc, model, i);
+
+	// Energies.
+	add(&b, duplicate("energy.kinetic"), duplicate("kinetic energy of all particles"), FMU_REAL, FMU_OUTPUT,
+	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_KINETIC, 0, 0);
+	add(&b, duplicate("energy.elastic"), duplicate("elastic energy stored in the springs"), FMU_REAL, FMU_OUTPUT,
+	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_ELASTIC, 0, 0);
+	add(&b, duplicate("energy.gravity"), duplicate("gravitational potential energy (zero at the origin)"), FMU_REAL,
+	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
+	add(&b, duplicate("energy.dissipated"), duplicate("energy dissipated by damping since the start"), FMU_REAL,
+	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
+
+	// Every particle's position and velocity, unless the model file switches them off.
+	if (settings.particle_variables) {
+		int32_t n = sm_model_particle_count(model);
+		for (int32_t i = 0; i < n && !b.failed; ++i) {
+			const char* pname = sm_document_particle_name(doc, i);
+			for (int c = 0; c < 3; ++c) {
+				add(&b, format("p[%d].%s", (int)i, axis[c]),
+				    pname ? format("%s-position of particle %s", axis[c], pname)
+				          : format("%s-position of particle %d", axis[c], (int)i),
+				    FMU_REAL, FMU_LOCAL, FMU_CONTINUOUS, "m", FMU_SRC_PARTICLE_POSITION, i, c);
+			}
+			for (int c = 0; c < 3; ++c) {
+				add(&b, format("p[%d].%s", (int)i, velocity_axis[c]),
+				    pname ? format("%s-velocity of particle %s", axis[c], pname)
+				          : format("%s-velocity of particle %d", axis[c], (int)i),
+				    FMU_REAL, FMU_LOCAL, FMU_CONTINUOUS, "m/s", FMU_SRC_PARTICLE_VELOCITY, i, c);
+			}
+		}
+	}
+	sm_document_destroy(scratch);
+	sm_model_destroy(model);
+
+	if (b.failed) {
+		fmu_table_destroy(table);
+		return fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while building the FMU's variable table");
+	}
+	st = check_unique_names(table, err);
+	if (st != SM_OK) {
+		fmu_table_destroy(table);
+		return st;
+	}
+	return SM_OK;
+}
+
+void fmu_table_destroy(fmu_table* table)
+{
+	if (!table)
+		return;
+	for (int32_t i = 0; i < table->count; ++i) {
+		free(table->variables[i].name);
+		free(table->variables[i].description);
+	}
+	free(table->variables);
+	free(table->model_identifier);
+	free(table->model_name);
+	free(table->description);
+	memset(table, 0, sizeof *table);
+}
+
+// ---------------------------------------------------------------------------------------------
+// modelDescription.xml
+// ---------------------------------------------------------------------------------------------
+
+typedef struct text_buffer {
+	char* data;
+	size_t length;
+	size_t capacity;
+	bool failed;
+} text_buffer;
+
+static void append(text_buffer* t, const char* s, size_t n)
+{
+	if (t->failed)
+		return;
+	if (t->length + n + 1 > t->capacity) {
+		size_t capacity = t->capacity ? t->capacity : 4096;
+		while (capacity < t->length + n + 1)
+			capacity *= 2;
+		char* grown = realloc(t->data, capacity);
+		if (!grown) {
+			t->failed = true;
+			return;
+		}
+		t->data = grown;
+		t->capacity = capacity;
+	}
+	memcpy(t->data + t->length, s, n);
+	t->length += n;
+	t->data[t->length] = '\0';
+}
+
+static void append_text(text_buffer* t, const char* s)
+{
+	append(t, s, strlen(s));
+}
+
+static void appendf(text_buffer* t, const char* fmt, ...)
+{
+	char small[512];
+	va_list args;
+	va_start(args, fmt);
+	int n = vsnprintf(small, sizeof small, fmt, args);
+	va_end(args);
+	if (n < 0) {
+		t->failed = true;
+		return;
+	}
+	if ((size_t)n < sizeof small) {
+		append(t, small, (size_t)n);
+		return;
+	}
+	char* big = malloc((size_t)n + 1);
+	if (!big) {
+		t->failed = true;
+		return;
+	}
+	va_start(args, fmt);
+	vsnprintf(big, (size_t)n + 1, fmt, args);
+	va_end(args);
+	append(t, big, (size_t)n);
+	free(big);
+}
+
+// Text escaped for an XML attribute value.
+static void append_escaped(text_buffer* t, const char* s)
+{
+	for (; s && *s; ++s) {
+		switch (*s) {
+		case '&': append_text(t, "&amp;"); break;
+		case '<': append_text(t, "&lt;"); break;
+		case '>': append_text(t, "&gt;"); break;
+		case '"': append_text(t, "&quot;"); break;
+		case '\'': append_text(t, "&apos;"); break;
+		case '\n': append_text(t, " "); break;
+		default:
+			if ((unsigned char)*s >= 0x20 || *s == '\t')
+				append(t, s, 1);
+			break;
+		}
+	}
+}
+
+static const char* causality_name(fmu_causality c)
+{
+	switch (c) {
+	case FMU_PARAMETER: return "parameter";
+	case FMU_INPUT: return "input";
+	case FMU_OUTPUT: return "output";
+	case FMU_LOCAL: return "local";
+	}
+	return "local";
+}
+
+static const char* variability_name(fmu_variability v)
+{
+	switch (v) {
+	case FMU_FIXED: return "fixed";
+	case FMU_TUNABLE: return "tunable";
+	case FMU_CONTINUOUS: return "continuous";
+	}
+	return "continuous";
+}
+
+// Units with their exponents of the SI base units kg, m, s.
+typedef struct unit_definition {
+	const char* name;
+	int kg, m, s;
+} unit_definition;
+
+static const unit_definition units[] = {
+    {"m", 0, 1, 0}, {"m/s", 0, 1, -1}, {"N", 1, 1, -2}, {"J", 1, 2, -2}, {"s", 0, 0, 1},
+};
+
+static bool unit_used(const fmu_table* t, const char* unit)
+{
+	for (int32_t i = 0; i < t->count; ++i) {
+		if (t->variables[i].unit && strcmp(t->variables[i].unit, unit) == 0)
+			return true;
+	}
+	return false;
+}
+
+// Indices (1-based, as in ModelVariables) of the inputs an output depends on directly at a
+// communication point. Positions and velocities of force and probe ports and the dissipated
+// energy are states: no direct dependence. A motion port's force depends on the prescribed
+// positions and velocities of the motion ports; kinetic energy on their velocities; elastic and
+// gravitational energy on their positions.
+static void append_dependencies(text_buffer* out, const fmu_table* t, const fmu_variable* v)
+{
+	bool position = false, velocity = false;
+	switch (v->source) {
+	case FMU_SRC_PORT_FORCE: position = velocity = true; break;
+	case FMU_SRC_ENERGY_KINETIC: velocity = true; break;
+	case FMU_SRC_ENERGY_ELASTIC:
+	case FMU_SRC_ENERGY_GRAVITY: position = true; break;
+	default: break;
+	}
+	append_text(out, " dependencies=\"");
+	bool first = true;
+	for (int32_t i = 0; i < t->count; ++i) {
+		const fmu_variable* w = &t->variables[i];
+		if (w->causality != FMU_INPUT)
+			continue;
+		if ((position && w->source == FMU_SRC_PORT_POSITION) || (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
+			appendf(out, first ? "%d" : " %d", (int)i + 1);
+			first = false;
+		}
+	}
+	append_text(out, "\"");
+}
+
+char* fmu_model_description(const fmu_table* t, const char* generation_date)
+{
+	text_buffer out = {NULL, 0, 0, false};
+	append_text(&out, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+	append_text(&out, "<fmiModelDescription\n  fmiVersion=\"2.0\"\n  modelName=\"");
+	append_escaped(&out, t->model_name);
+	appendf(&out, "\"\n  guid=\"%s\"\n  description=\"", t->guid);
+	append_escaped(&out, t->description);
+	appendf(&out, "\"\n  generationTool=\"springmass %s\"\n", SPRINGMASS_VERSION_STRING);
+	if (generation_date)
+		appendf(&out, "  generationDateAndTime=\"%s\"\n", generation_date);
+	append_text(&out, "  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n");
+
+	appendf(&out,
+	        "  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
+	        "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
+	        "    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
+	        "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
+	        "    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
+	        "    providesDirectionalDerivative=\"true\"/>\n",
+	        t->model_identifier);
+
+	append_text(&out, "  <UnitDefinitions>\n");
+	for (size_t u = 0; u < sizeof units / sizeof units[0]; ++u) {
+		if (!unit_used(t, units[u].name))
+			continue;
+		appendf(&out, "    <Unit name=\"%s\"><BaseUnit", units[u].name);
+		if (units[u].kg)
+			appendf(&out, " kg=\"%d\"", units[u].kg);
+		if (units[u].m)
+			appendf(&out, " m=\"%d\"", units[u].m);
+		if (units[u].s)
+			appendf(&out, " s=\"%d\"", units[u].s);
+		append_text(&out, "/></Unit>\n");
+	}
+	append_text(&out, "  </UnitDefinitions>\n");
+
+	append_text(&out,
+	       "  <LogCategories>\n"
+	       "    <Category name=\"logEvents\" description=\"springs that break, solver restarts\"/>\n"
+	       "    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
+	       "    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
+	       "    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
+	       "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
+	       "  </LogCategories>\n");
+
+	appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%.17g\" stepSize=\"%.17g\" tolerance=\"%.17g\"/>\n",
+	        t->stop_time, t->step_size, t->tolerance);
+
+	append_text(&out, "  <ModelVariables>\n");
+	for (int32_t i = 0; i < t->count; ++i) {
+		const fmu_variable* v = &t->variables[i];
+		append_text(&out, "    <ScalarVariable name=\"");
+		append_escaped(&out, v->name);
+		appendf(&out, "\" valueReference=\"%d\" description=\"", (int)i);
+		append_escaped(&out, v->description);
+		appendf(&out, "\" causality=\"%s\" variability=\"%s\"", causality_name(v->causality),
+		        variability_name(v->variability));
+		if (v->causality == FMU_PARAMETER)
+			append_text(&out, " initial=\"exact\"");
+		else if (v->causality == FMU_OUTPUT || v->causality == FMU_LOCAL)
+			append_text(&out, " initial=\"calculated\"");
+		append_text(&out, ">\n      ");
+		switch (v->type) {
+		case FMU_REAL:
+			append_text(&out, "<Real");
+			if (v->unit)
+				appendf(&out, " unit=\"%s\"", v->unit);
+			if (v->has_start)
+				appendf(&out, " start=\"%.17g\"", v->start_real);
+			break;
+		case FMU_INTEGER:
+			append_text(&out, "<Integer");
+			if (v->has_start)
+				appendf(&out, " start=\"%d\"", (int)v->start_integer);
+			break;
+		case FMU_STRING:
+			append_text(&out, "<String");
+			if (v->has_start) {
+				append_text(&out, " start=\"");
+				append_escaped(&out, v->start_string);
+				append_text(&out, "\"");
+			}
+			break;
+		}
+		append_text(&out, "/>\n    </ScalarVariable>\n");
+	}
+	append_text(&out, "  </ModelVariables>\n");
+
+	append_text(&out, "  <ModelStructure>\n    <Outputs>\n");
+	for (int32_t i = 0; i < t->count; ++i) {
+		if (t->variables[i].causality != FMU_OUTPUT)
+			continue;
+		appendf(&out, "      <Unknown index=\"%d\"", (int)i + 1);
+		append_dependencies(&out, t, &t->variables[i]);
+		append_text(&out, "/>\n");
+	}
+	append_text(&out, "    </Outputs>\n    <InitialUnknowns>\n");
+	for (int32_t i = 0; i < t->count; ++i) {
+		if (t->variables[i].causality == FMU_OUTPUT)
+			appendf(&out, "      <Unknown index=\"%d\"/>\n", (int)i + 1);
+	}
+	append_text(&out, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+
+	if (out.failed) {
+		free(out.data);
+		return NULL;
+	}
+	return out.data;
+}

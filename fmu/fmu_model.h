@@ -1,0 +1,129 @@
+// springmass FMU: the variable table of a model file, its GUID and its modelDescription.xml.
+//
+// One table is the single source of truth for the FMU's interface: the packager writes
+// modelDescription.xml from it and the runtime (fmu_cosim.c) resolves value references with
+// it. Value references are the indices into the table, so both sides agree by construction.
+// This layer knows only the public model-file API (sm_document), never a force law.
+#pragma once
+
+#include "springmass/model_file.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// FMI base type of a variable.
+typedef enum fmu_type {
+	FMU_REAL = 0,
+	FMU_INTEGER,
+	FMU_STRING,
+} fmu_type;
+
+/// FMI causality.
+typedef enum fmu_causality {
+	FMU_PARAMETER = 0,
+	FMU_INPUT,
+	FMU_OUTPUT,
+	FMU_LOCAL,
+} fmu_causality;
+
+/// FMI variability.
+typedef enum fmu_variability {
+	FMU_FIXED = 0,
+	FMU_TUNABLE,
+	FMU_CONTINUOUS,
+} fmu_variability;
+
+/// What a variable reads or writes in the runtime.
+typedef enum fmu_source {
+	FMU_SRC_MODEL_PARAMETER = 0,  ///< index = parameter index of the document
+	FMU_SRC_SOLVER_RTOL,          ///< relative tolerance [1]
+	FMU_SRC_SOLVER_ATOL_POSITION, ///< absolute tolerance of positions [m]
+	FMU_SRC_SOLVER_ATOL_VELOCITY, ///< absolute tolerance of velocities [m/s]
+	FMU_SRC_SOLVER_MAX_STEP,      ///< largest internal step [s], 0 = unlimited
+	FMU_SRC_SOLVER_MAX_STEPS,     ///< internal steps allowed per communication step
+	FMU_SRC_SOLVER_METHOD,        ///< "bdf" or "adams"
+	FMU_SRC_SOLVER_LINEAR_SOLVER, ///< "auto", "dense", "klu", "pcg", "cholmod"
+	FMU_SRC_SOLVER_JACOBIAN,      ///< "exact" or "definite"
+	FMU_SRC_PORT_POSITION,        ///< index = port, component 0..2 [m]
+	FMU_SRC_PORT_VELOCITY,        ///< index = port, component 0..2 [m/s]
+	FMU_SRC_PORT_FORCE,           ///< index = port, component 0..2 [N]
+	FMU_SRC_PARTICLE_POSITION,    ///< index = particle, component 0..2 [m]
+	FMU_SRC_PARTICLE_VELOCITY,    ///< index = particle, component 0..2 [m/s]
+	FMU_SRC_ENERGY_KINETIC,       ///< [J]
+	FMU_SRC_ENERGY_ELASTIC,       ///< [J]
+	FMU_SRC_ENERGY_GRAVITY,       ///< [J]
+	FMU_SRC_ENERGY_DISSIPATED,    ///< [J]
+} fmu_source;
+
+/// One scalar variable. Its value reference is its index in the table.
+typedef struct fmu_variable {
+	char* name;         ///< structured name ("tip.fx", "p[3].vz", "solver.rtol")
+	char* description;  ///< one line
+	fmu_type type;
+	fmu_causality causality;
+	fmu_variability variability;
+	const char* unit;   ///< static unit name ("m", "N", ...) or NULL
+	fmu_source source;
+	int32_t index;      ///< parameter, port or particle index (see fmu_source)
+	int32_t component;  ///< 0..2 for vector quantities
+	bool has_start;     ///< parameters and inputs have a start value
+	double start_real;
+	int32_t start_integer;
+	const char* start_string;  ///< static string
+} fmu_variable;
+
+/// The interface of one model file.
+typedef struct fmu_table {
+	fmu_variable* variables;
+	int32_t count;
+	char guid[40];             ///< "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" from the file's bytes
+	char* model_identifier;    ///< C identifier from the model's name
+	char* model_name;
+	char* description;
+	double stop_time;          ///< default experiment [s]
+	double step_size;          ///< default communication step [s]
+	double tolerance;          ///< default relative tolerance [1]
+} fmu_table;
+
+/// Builds the table of a parsed model file. `text`/`length` are the file's bytes (hashed for
+/// the GUID).
+///
+/// A model-file parameter is tunable (changeable between communication steps) when changing
+/// it leaves the particles, the springs' endpoints, the particles' motions and the initial
+/// state as they are: it then feeds only constants (stiffness, damping, masses, rest lengths
+/// given as numbers, gravity, mass damping), which a running simulation can take over. It is
+/// fixed (settable only before initialisation) when it feeds the structure or the initial
+/// state (counts, positions, velocities). This is decided by building the model with the
+/// parameter perturbed, through the public API only. Returns SM_OK, or an error with the message in err (e.g. two variables with the
+/// same name); on error *table is zeroed and nothing is leaked.
+sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table,
+                           sm_error* err);
+
+/// Frees what the table owns; accepts a zeroed table.
+void fmu_table_destroy(fmu_table* table);
+
+/// The GUID of a model file's bytes: a 128-bit FNV-1a hash written as
+/// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL).
+void fmu_guid(const char* text, size_t length, char guid[40]);
+
+/// modelDescription.xml of the table, as a malloc'ed NUL-terminated string (NULL on OOM).
+/// `generation_date` is an ISO 8601 UTC time stamp or NULL to leave it out.
+char* fmu_model_description(const fmu_table* table, const char* generation_date);
+
+/// Writes a C identifier made from `name` (letters, digits and '_'; a leading digit or an empty
+/// name gets a "model_" prefix) into a malloc'ed string.
+char* fmu_identifier(const char* name);
+
+/// Linear solver, method and Jacobian names used by the string parameters.
+const char* fmu_method_name(sm_method method);
+int fmu_method_from_name(const char* name, sm_method* method);
+const char* fmu_jacobian_name(sm_jacobian_variant variant);
+int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant);
+
+#ifdef __cplusplus
+}
+#endif
