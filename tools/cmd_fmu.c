@@ -115,6 +115,17 @@ static bool copy_file(const char* from, const char* to)
 	return ok;
 }
 
+// out = a + "/" + b; false (and a message) if it does not fit.
+static bool join(char* out, size_t size, const char* a, const char* b)
+{
+	int n = snprintf(out, size, "%s/%s", a, b);
+	if (n < 0 || (size_t)n >= size) {
+		fprintf(stderr, "springmass fmu: path too long: %s/%s\n", a, b);
+		return false;
+	}
+	return true;
+}
+
 static bool is_file(const char* path)
 {
 	struct stat st;
@@ -124,8 +135,7 @@ static bool is_file(const char* path)
 static bool has_runtime(const char* dir)
 {
 	char path[PATH_MAX];
-	snprintf(path, sizeof path, "%s/binaries/linux64/springmass_fmu.so", dir);
-	return is_file(path);
+	return join(path, sizeof path, dir, "binaries/linux64/springmass_fmu.so") && is_file(path);
 }
 
 // The runtime folder: the option, then SPRINGMASS_FMU_RUNTIME, then the installed one beside
@@ -148,8 +158,7 @@ static bool find_runtime(const char* option, char* dir, size_t size)
 		char* slash = strrchr(exe, '/');
 		if (slash) {
 			*slash = '\0';
-			snprintf(dir, size, "%s/../lib/springmass/fmu", exe);
-			if (has_runtime(dir))
+			if (join(dir, size, exe, "../lib/springmass/fmu") && has_runtime(dir))
 				return true;
 		}
 	}
@@ -239,7 +248,8 @@ static int package(const options* opt)
 			fprintf(stderr, "springmass fmu: cannot get the current folder\n");
 			goto done;
 		}
-		snprintf(output, sizeof output, "%s/%s", cwd, opt->output);
+		if (!join(output, sizeof output, cwd, opt->output))
+			goto done;
 	}
 
 	const char* tmp = getenv("TMPDIR");
@@ -251,20 +261,24 @@ static int package(const options* opt)
 	}
 	const char* folders[] = {"binaries", "binaries/linux64", "resources"};
 	for (size_t i = 0; i < sizeof folders / sizeof folders[0]; ++i) {
-		snprintf(path, sizeof path, "%s/%s", staging, folders[i]);
+		if (!join(path, sizeof path, staging, folders[i]))
+			goto done;
 		if (mkdir(path, 0755) != 0) {
 			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
 			goto done;
 		}
 	}
-	snprintf(path, sizeof path, "%s/modelDescription.xml", staging);
+	if (!join(path, sizeof path, staging, "modelDescription.xml"))
+		goto done;
 	if (!write_all(path, xml, strlen(xml)))
 		goto write_failed;
-	snprintf(path, sizeof path, "%s/resources/model.json", staging);
+	if (!join(path, sizeof path, staging, "resources/model.json"))
+		goto done;
 	if (!write_all(path, text, length))
 		goto write_failed;
 	if (opt->reference) {
-		snprintf(path, sizeof path, "%s/resources/reference.csv", staging);
+		if (!join(path, sizeof path, staging, "resources/reference.csv"))
+			goto done;
 		if (!copy_file(opt->reference, path)) {
 			fprintf(stderr, "springmass fmu: cannot copy the reference result %s\n", opt->reference);
 			goto done;
@@ -273,7 +287,10 @@ static int package(const options* opt)
 
 	// The binary under the model's identifier, and every bundled library as it is.
 	char binaries[PATH_MAX];
-	snprintf(binaries, sizeof binaries, "%s/binaries/linux64", runtime);
+	char target[PATH_MAX];
+	if (!join(binaries, sizeof binaries, runtime, "binaries/linux64") ||
+	    !join(target, sizeof target, staging, "binaries/linux64"))
+		goto done;
 	DIR* d = opendir(binaries);
 	if (!d) {
 		fprintf(stderr, "springmass fmu: cannot read %s\n", binaries);
@@ -284,15 +301,23 @@ static int package(const options* opt)
 	while ((entry = readdir(d)) != NULL && copied) {
 		if (entry->d_name[0] == '.')
 			continue;
-		char from[PATH_MAX];
-		snprintf(from, sizeof from, "%s/%s", binaries, entry->d_name);
+		char from[PATH_MAX], name[NAME_MAX + 1];
+		if (!join(from, sizeof from, binaries, entry->d_name)) {
+			copied = false;
+			break;
+		}
 		if (!is_file(from))
 			continue;
-		if (strcmp(entry->d_name, "springmass_fmu.so") == 0)
-			snprintf(path, sizeof path, "%s/binaries/linux64/%s.so", staging, table.model_identifier);
-		else
-			snprintf(path, sizeof path, "%s/binaries/linux64/%s", staging, entry->d_name);
-		copied = copy_file(from, path);
+		if (strcmp(entry->d_name, "springmass_fmu.so") == 0) {
+			int n = snprintf(name, sizeof name, "%s.so", table.model_identifier);
+			if (n < 0 || (size_t)n >= sizeof name) {
+				copied = false;
+				break;
+			}
+		} else {
+			snprintf(name, sizeof name, "%s", entry->d_name);
+		}
+		copied = join(path, sizeof path, target, name) && copy_file(from, path);
 	}
 	closedir(d);
 	if (!copied)
