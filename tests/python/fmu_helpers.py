@@ -1,0 +1,69 @@
+"""Low-level access to an FMU with fmpy's FMU2Slave, with the log messages collected."""
+import ctypes
+import shutil
+import tempfile
+
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE
+from fmpy.fmi2 import fmi2CallbackFreeMemoryTYPE
+
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+
+
+class Instance:
+    """An instantiated FMU: .slave (FMU2Slave), .vr[name], .messages [(status, category, text)]."""
+
+    def __init__(self, fmu, name="instance", guid=None, unzipdir=None, logging_on=False, instantiate=True):
+        self.md = read_model_description(str(fmu))
+        self.own_dir = unzipdir is None
+        self.unzipdir = unzipdir or extract(str(fmu), unzipdir=tempfile.mkdtemp(prefix="smfmu-"))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.variables = {v.name: v for v in self.md.modelVariables}
+        self.messages = []
+        self.slave = FMU2Slave(guid=guid or self.md.guid, unzipDirectory=self.unzipdir,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=name)
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+        if instantiate:
+            self.slave.instantiate(callbacks=self.callbacks, loggingOn=logging_on)
+
+    def _log(self, env, name, status, category, message):
+        self.messages.append((status, category.decode(), message.decode()))
+
+    def log_text(self):
+        return "\n".join(m[2] for m in self.messages)
+
+    def start(self, start_values=None, start_time=0.0):
+        s = self.slave
+        s.setupExperiment(startTime=start_time)
+        s.enterInitializationMode()
+        for name, value in (start_values or {}).items():
+            self.set(name, value)
+        s.exitInitializationMode()
+        return self
+
+    def set(self, name, value):
+        v = self.variables[name]
+        if v.type == "Real":
+            self.slave.setReal([v.valueReference], [float(value)])
+        elif v.type == "Integer":
+            self.slave.setInteger([v.valueReference], [int(value)])
+        else:
+            self.slave.setString([v.valueReference], [value])
+
+    def get(self, *names):
+        values = self.slave.getReal([self.vr[n] for n in names])
+        return values[0] if len(names) == 1 else values
+
+    def free(self):
+        try:
+            self.slave.freeInstance()
+        finally:
+            self.slave.freeLibrary()
+            if self.own_dir:
+                shutil.rmtree(self.unzipdir, ignore_errors=True)

@@ -1,0 +1,152 @@
+"""Misuse of the FMU: each an error with a clear message, never a crash; usable after reset."""
+import math
+
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from fmu_helpers import Instance
+
+FMI2_ERROR = 3
+
+
+def expect_error(inst, call, *words):
+    """Runs call(), which must fail with fmi2Error and log a message containing all words."""
+    before = len(inst.messages)
+    with pytest.raises(FMICallException) as info:
+        call()
+    assert info.value.status == FMI2_ERROR
+    text = "\n".join(m[2] for m in inst.messages[before:])
+    for word in words:
+        assert word in text, (word, text)
+    assert all(m[1] == "logStatusError" for m in inst.messages[before:])
+
+
+def test_wrong_guid_is_refused_with_a_message(test_fmu):
+    inst = Instance(test_fmu("driven_oscillator"), guid="{00000000-0000-0000-0000-000000000000}",
+                    instantiate=False)
+    try:
+        with pytest.raises(Exception):
+            inst.slave.instantiate(callbacks=inst.callbacks)
+        assert "does not match the model file" in inst.log_text()
+    finally:
+        inst.slave.freeLibrary()
+
+
+def test_changed_model_file_is_refused(test_fmu, tmp_path):
+    inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
+    try:
+        model = f"{inst.unzipdir}/resources/model.json"
+        with open(model, "a") as f:
+            f.write("\n")
+        with pytest.raises(Exception):
+            inst.slave.instantiate(callbacks=inst.callbacks)
+        assert "does not match the model file" in inst.log_text()
+    finally:
+        inst.free()
+
+
+def test_model_exchange_is_refused(test_fmu):
+    inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
+    try:
+        comp = inst.slave.fmi2Instantiate(b"me", 0, inst.md.guid.encode(),
+                                         f"file://{inst.unzipdir}/resources".encode(), inst.callbacks, 0, 0)
+        assert comp is None
+        assert "Co-Simulation only" in inst.log_text()
+    finally:
+        inst.free()
+
+
+def test_call_sequence_and_arguments_are_checked(test_fmu):
+    inst = Instance(test_fmu("driven_oscillator"))
+    s, vr = inst.slave, inst.vr
+    try:
+        expect_error(inst, lambda: s.doStep(0.0, 0.1), "fmi2DoStep", "illegal call sequence")
+        expect_error(inst, lambda: s.getReal([vr["tip.x"]]), "illegal call sequence")
+        expect_error(inst, lambda: s.exitInitializationMode(), "illegal call sequence")
+        inst.start()
+        expect_error(inst, lambda: s.setupExperiment(startTime=0.0), "illegal call sequence")
+        expect_error(inst, lambda: s.doStep(0.5, 0.1), "communication point", "does not match")
+        expect_error(inst, lambda: s.doStep(0.0, -0.1), "must be finite and > 0")
+        expect_error(inst, lambda: s.doStep(0.0, 0.0), "must be finite and > 0")
+        expect_error(inst, lambda: s.setReal([vr["tip.fx"]], [math.nan]), "tip.fx", "finite")
+        expect_error(inst, lambda: s.setReal([vr["base.x"]], [math.inf]), "base.x", "finite")
+        expect_error(inst, lambda: s.getReal([100000]), "unknown value reference 100000")
+        expect_error(inst, lambda: s.setReal([100000], [1.0]), "unknown value reference 100000")
+        expect_error(inst, lambda: s.getInteger([vr["tip.x"]]), "is a Real variable")
+        expect_error(inst, lambda: s.getBoolean([0]), "no Boolean variables")
+        expect_error(inst, lambda: s.setReal([vr["tip.x"]], [1.0]), "tip.x", "output")
+        expect_error(inst, lambda: s.setReal([vr["solver.rtol"]], [1e-3]), "fixed parameter")
+        expect_error(inst, lambda: s.setReal([vr["m"]], [-1.0]), "m = -1")
+        expect_error(inst, lambda: s.setString([vr["solver.linear_solver"]], ["fast"]), "illegal call sequence")
+        expect_error(inst, lambda: s.getDirectionalDerivative([vr["base.fx"]], [vr["m"]], [1.0]), "not an input")
+        expect_error(inst, lambda: s.setDebugLogging(True, ["logNothing"]), "unknown log category")
+        expect_error(inst, lambda: s.cancelStep() if hasattr(s, "cancelStep") else s.fmi2CancelStep(s.component),
+                     "synchronous")
+        # NULL arrays through the raw API.
+        expect_error(inst, lambda: s.fmi2GetReal(s.component, None, 1, None), "NULL array")
+        # After all that the instance still steps, and a rejected value left nothing behind.
+        s.doStep(0.0, 0.1)
+        assert inst.get("tip.fx") == 0.0
+        assert inst.get("m") == 2.0
+    finally:
+        inst.free()
+
+
+def test_solver_failure_is_a_discard_with_the_time_reached(test_fmu):
+    # Two internal steps cannot cover 1 s of a 5 rad/s oscillation at rtol 1e-10: the step is
+    # discarded, the time reached is readable, and only reset or terminate are allowed then.
+    inst = Instance(test_fmu("driven_oscillator")).start({"solver.max_steps": 2, "solver.rtol": 1e-10})
+    s = inst.slave
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 1.0)
+        assert info.value.status == 2  # fmi2Discard
+        reached = s.getRealStatus(2)  # fmi2LastSuccessfulTime
+        assert 0.0 <= reached < 1.0
+        assert any(m[1] == "logStatusDiscard" for m in inst.messages)
+        expect_error(inst, lambda: s.doStep(reached, 0.1), "illegal call sequence")
+        s.reset()
+        inst.start()
+        s.doStep(0.0, 0.1)
+    finally:
+        inst.free()
+
+
+def test_reset_equals_a_fresh_instance(test_fmu):
+    fmu = test_fmu("driven_oscillator")
+    a = Instance(fmu, "a")
+    b = Instance(fmu, "b")
+    try:
+        a.start({"k": 80.0, "tip.fx": 1.0})
+        for n in range(10):
+            a.slave.doStep(0.05 * n, 0.05)
+        a.slave.reset()
+        a.start()
+        b.start()
+        for n in range(20):
+            a.slave.doStep(0.05 * n, 0.05)
+            b.slave.doStep(0.05 * n, 0.05)
+            names = ["tip.x", "tip.vx", "base.fx", "energy.kinetic", "energy.elastic"]
+            assert a.get(*names) == b.get(*names)
+        assert a.get("k") == 50.0
+    finally:
+        a.free()
+        b.free()
+
+
+def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
+    # The resources folder in a path with a space, passed as file:/ (one slash) and with %20.
+    import shutil
+    from fmpy import extract
+    folder = tmp_path / "with space"
+    extract(str(test_fmu("driven_oscillator")), unzipdir=str(folder))
+    for uri in (f"file:{folder}/resources", f"file://{str(folder).replace(' ', '%20')}/resources/",
+                f"file://localhost{str(folder).replace(' ', '%20')}/resources"):
+        inst = Instance(test_fmu("driven_oscillator"), unzipdir=str(folder), instantiate=False)
+        try:
+            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
+            assert comp, (uri, inst.log_text())
+            inst.slave.fmi2FreeInstance(comp)
+        finally:
+            inst.slave.freeLibrary()
+    shutil.rmtree(folder)

@@ -1,0 +1,167 @@
+"""The FMU against physics: closed forms, scaling laws and statics, through fmpy."""
+import math
+
+import numpy as np
+from fmpy import simulate_fmu
+
+from fmu_helpers import Instance
+
+# driven_oscillator.json: bob of mass m = 2 kg on a spring k = 50 N/m, rest length 0.5 m,
+# anchor (motion port "base") held at the origin, bob (force port "tip") released at x = 0.7 m.
+M, K, L0, X0 = 2.0, 50.0, 0.5, 0.7
+
+
+def test_oscillator_matches_closed_form(test_fmu):
+    # Undamped: x(t) = l0 + (x0 - l0) cos(w t), w = sqrt(k/m). rtol 1e-10 in CVODE keeps the
+    # global error over 2 s (about 3 periods) far below 1e-6 m.
+    r = simulate_fmu(str(test_fmu("driven_oscillator")), stop_time=2.0, output_interval=0.01,
+                     start_values={"solver.rtol": 1e-10, "solver.atol_position": 1e-12,
+                                   "solver.atol_velocity": 1e-10})
+    w = math.sqrt(K / M)
+    t = r["time"]
+    assert np.max(np.abs(r["tip.x"] - (L0 + (X0 - L0) * np.cos(w * t)))) < 1e-6
+    assert np.max(np.abs(r["tip.vx"] + (X0 - L0) * w * np.sin(w * t))) < 1e-5
+    # Energy is conserved (no damping): kinetic + elastic stays at k (x0 - l0)^2 / 2.
+    total = r["energy.kinetic"] + r["energy.elastic"]
+    assert np.max(np.abs(total - 0.5 * K * (X0 - L0) ** 2)) < 1e-6
+    # The motion port carries the spring force: the model pulls the anchor towards the bob.
+    assert np.max(np.abs(r["base.fx"] - K * (r["tip.x"] - L0))) < 1e-6
+
+
+def test_frequency_scales_with_sqrt_k_over_m(test_fmu):
+    # Four times the stiffness halves the period: x(t; 4k) = x(2t; k) exactly, and so does a
+    # quarter of the mass. Both runs are compared at matching phases within the integrator's
+    # tolerance (rtol 1e-10, amplitude 0.2 m: 1e-6 m is generous).
+    fmu = str(test_fmu("driven_oscillator"))
+    tight = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
+    slow = simulate_fmu(fmu, stop_time=2.0, output_interval=0.02, start_values=tight)
+    stiff = simulate_fmu(fmu, stop_time=1.0, output_interval=0.01, start_values=dict(tight, k=4 * K))
+    light = simulate_fmu(fmu, stop_time=1.0, output_interval=0.01, start_values=dict(tight, m=M / 4))
+    assert np.max(np.abs(stiff["tip.x"] - slow["tip.x"])) < 1e-6
+    assert np.max(np.abs(light["tip.x"] - slow["tip.x"])) < 1e-6
+
+
+def test_force_port_driven_by_input_signal(test_fmu):
+    # A constant force F on the bob from t = 0 moves the centre of oscillation to l0 + F/k:
+    # x(t) = l0 + F/k + (x0 - l0 - F/k) cos(w t).
+    F = 3.0
+    fmu = str(test_fmu("driven_oscillator"))
+    signal = np.array([(0.0, F), (2.0, F)], dtype=[("time", np.float64), ("tip.fx", np.float64)])
+    r = simulate_fmu(fmu, stop_time=2.0, output_interval=0.01, input=signal,
+                     start_values={"solver.rtol": 1e-10, "solver.atol_position": 1e-12,
+                                   "solver.atol_velocity": 1e-10})
+    w = math.sqrt(K / M)
+    expected = L0 + F / K + (X0 - L0 - F / K) * np.cos(w * r["time"])
+    assert np.max(np.abs(r["tip.x"] - expected)) < 1e-6
+
+
+def test_force_step_changes_result_from_that_point(test_fmu):
+    # A force switched on at t1 leaves the motion before t1 untouched and shifts the centre of
+    # oscillation afterwards (checked against the closed form of the piecewise problem).
+    F, t1 = 2.0, 0.5
+    inst = Instance(test_fmu("driven_oscillator")).start(
+        {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10})
+    w = math.sqrt(K / M)
+    h, t = 0.01, 0.0
+    try:
+        for n in range(100):
+            if abs(t - t1) < 1e-12:
+                inst.set("tip.fx", F)
+            inst.slave.doStep(t, h)
+            t = (n + 1) * h
+            x = inst.get("tip.x")
+            if t <= t1 + 1e-12:
+                expected = L0 + (X0 - L0) * math.cos(w * t)
+            else:
+                x1 = L0 + (X0 - L0) * math.cos(w * t1)
+                v1 = -(X0 - L0) * w * math.sin(w * t1)
+                c = L0 + F / K
+                expected = c + (x1 - c) * math.cos(w * (t - t1)) + v1 / w * math.sin(w * (t - t1))
+            assert abs(x - expected) < 1e-6, (t, x, expected)
+    finally:
+        inst.free()
+
+
+def test_motion_port_reaction_matches_statics(test_fmu):
+    # hanging.json: a bob of m = 0.5 kg on a damped spring (k = 200 N/m, d = 20 N s/m) under a hook
+    # that is a motion port. The hook moves at a constant velocity along a slanted line; once the
+    # transient has decayed (time constant 2m/d = 0.05 s, 3 s is 60 of them) the bob moves with
+    # the same constant velocity, so the spring carries exactly the weight: the force on the hook
+    # is (0, 0, -m g), and the spring is stretched by m g / k below the hook.
+    m, k, g, l0 = 0.5, 200.0, 9.81, 0.3
+    velocity = np.array([0.05, -0.02, 0.1])
+    inst = Instance(test_fmu("hanging")).start()
+    h, t = 0.01, 0.0
+    try:
+        for n in range(300):
+            position = velocity * t
+            for c, axis in enumerate("xyz"):
+                inst.set(f"hook.{axis}", position[c])
+                inst.set(f"hook.v{axis}", velocity[c])
+            inst.slave.doStep(t, h)
+            t = (n + 1) * h
+        force = np.array(inst.get("hook.fx", "hook.fy", "hook.fz"))
+        hook = np.array(inst.get("hook.x", "hook.y", "hook.z"))
+        bob = np.array(inst.get("bob.x", "bob.y", "bob.z"))
+        bob_velocity = np.array(inst.get("bob.vx", "bob.vy", "bob.vz"))
+        # Tolerances: the residual transient is below e^-60 of the initial one; what is left is
+        # the integrator's error (default rtol 1e-6 on forces of about 5 N).
+        assert np.allclose(force, [0.0, 0.0, -m * g], atol=1e-4)
+        assert np.allclose(hook, velocity * t, atol=1e-12)
+        assert np.allclose(bob - hook, [0.0, 0.0, -(l0 + m * g / k)], atol=1e-6)
+        assert np.allclose(bob_velocity, velocity, atol=1e-5)
+    finally:
+        inst.free()
+
+
+def test_directional_derivative_is_the_stiffness_seen_by_the_port(test_fmu):
+    # d(base.fx)/d(base.x) from the analytic Jacobian equals a central finite difference of the
+    # output, and for a spring along x it is -k: moving the anchor towards the bob shortens the
+    # spring and reduces the pull on the anchor. Finite differences with h = 1e-6 m are exact to
+    # about 1e-8 relative for this quadratic-free (linear in x) force.
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    try:
+        vr = inst.vr
+        known = [vr["base.x"], vr["base.y"], vr["base.vx"]]
+        unknown = [vr["base.fx"], vr["base.fy"], vr["energy.elastic"], vr["tip.x"]]
+        d = inst.slave.getDirectionalDerivative(unknown, [vr["base.x"]], [1.0])
+        assert abs(d[0] - (-K)) < 1e-9 * K
+        assert abs(d[1]) < 1e-12
+        # Elastic energy k (L - l0)^2 / 2 with L = x_bob - x_anchor: dE/dx_anchor = -k (L - l0).
+        assert abs(d[2] - (-K * (X0 - L0))) < 1e-9
+        assert d[3] == 0.0  # the bob's position is a state: no direct feed-through
+        # Against finite differences of the outputs, for every known.
+        for kv in known:
+            name = inst.md.modelVariables[kv].name
+            x = inst.slave.getReal([kv])[0]
+            h = 1e-6
+            inst.slave.setReal([kv], [x + h])
+            up = np.array(inst.slave.getReal(unknown[:3]))
+            inst.slave.setReal([kv], [x - h])
+            down = np.array(inst.slave.getReal(unknown[:3]))
+            inst.slave.setReal([kv], [x])
+            fd = (up - down) / (2 * h)
+            analytic = np.array(inst.slave.getDirectionalDerivative(unknown[:3], [kv], [1.0]))
+            assert np.allclose(analytic, fd, rtol=1e-6, atol=1e-6), (name, analytic, fd)
+    finally:
+        inst.free()
+
+
+def test_tunable_parameter_between_steps(test_fmu):
+    # Changing k between steps takes effect from that point on, with the state kept: after the
+    # change at t1 the bob oscillates with the new frequency about the same rest length.
+    inst = Instance(test_fmu("driven_oscillator")).start(
+        {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10})
+    assert inst.variables["k"].variability == "tunable"
+    try:
+        w1, w2, t1 = math.sqrt(K / M), math.sqrt(4 * K / M), 0.3
+        inst.slave.doStep(0.0, t1)
+        x1 = L0 + (X0 - L0) * math.cos(w1 * t1)
+        v1 = -(X0 - L0) * w1 * math.sin(w1 * t1)
+        inst.set("k", 4 * K)
+        inst.slave.doStep(t1, 0.4)
+        t = 0.4
+        expected = L0 + (x1 - L0) * math.cos(w2 * t) + v1 / w2 * math.sin(w2 * t)
+        assert abs(inst.get("tip.x") - expected) < 1e-6
+    finally:
+        inst.free()

@@ -1,0 +1,61 @@
+"""The FMU is self-contained: loading it resolves every library other than the C library
+(libc, libm and glibc's other parts) and the loader from the FMU's own binaries/linux64/."""
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+from fmpy import extract, read_model_description
+
+from conftest import SANITIZED
+
+GLIBC = re.compile(r"^(libc|libm|libpthread|libdl|librt|ld-linux[-\w]*)\.so")
+
+
+@pytest.mark.skipif(SANITIZED, reason="an instrumented FMU needs the sanitizer runtimes of the machine")
+def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path):
+    fmu = test_fmu("driven_oscillator")
+    folder = extract(str(fmu), unzipdir=str(tmp_path / "unzipped"))
+    md = read_model_description(str(fmu))
+    binaries = os.path.realpath(os.path.join(folder, "binaries", "linux64"))
+    binary = os.path.join(binaries, md.coSimulation.modelIdentifier + ".so")
+    # A bare process that only dlopens the binary and looks up fmi2Instantiate.
+    # It also lists what the dlopen mapped (from /proc/self/maps), which catches libraries
+    # without initialisers that the trace's "calling init" lines would miss.
+    script = ("import ctypes, sys\n"
+              "def mapped():\n"
+              "    return {l.split()[-1] for l in open('/proc/self/maps') if '.so' in l}\n"
+              "before = mapped()\n"
+              "lib = ctypes.CDLL(sys.argv[1], mode=ctypes.RTLD_LOCAL)\n"
+              "lib.fmi2Instantiate\n"
+              "print('loaded', ' '.join(sorted(mapped() - before)))\n")
+    env = dict(os.environ, LD_DEBUG="libs")
+    env.pop("LD_LIBRARY_PATH", None)
+    out = subprocess.run([sys.executable, "-c", script, binary], env=env, capture_output=True, text=True)
+    assert out.returncode == 0 and "loaded" in out.stdout, out.stderr[-2000:]
+    # Only what is loaded after the dlopen: the Python interpreter's own libraries come first.
+    trace = out.stderr[out.stderr.find(binary):]
+    loaded = re.findall(r"calling init: (\S+)", trace)
+    assert any(path.endswith(md.coSimulation.modelIdentifier + ".so") for path in loaded), trace[-2000:]
+    loaded += out.stdout.split()[1:]
+    outside = [p for p in loaded
+               if os.path.dirname(os.path.realpath(p)) != binaries and not GLIBC.match(os.path.basename(p))]
+    assert not outside, f"loaded from outside the FMU: {outside}"
+    bundled = [p for p in loaded if os.path.dirname(os.path.realpath(p)) == binaries]
+    names = " ".join(os.path.basename(p) for p in bundled)
+    assert "libjansson" in names and "libklu" in names, names
+
+
+@pytest.mark.skipif(SANITIZED, reason="an instrumented FMU exports the sanitizer's symbols too")
+def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
+    fmu = test_fmu("driven_oscillator")
+    folder = extract(str(fmu), unzipdir=str(tmp_path / "unzipped"))
+    md = read_model_description(str(fmu))
+    binary = os.path.join(folder, "binaries", "linux64", md.coSimulation.modelIdentifier + ".so")
+    out = subprocess.run(["nm", "-D", "--defined-only", binary], check=True, capture_output=True, text=True)
+    symbols = [line.split()[-1] for line in out.stdout.splitlines() if line.strip()]
+    assert symbols and all(s.startswith("fmi2") for s in symbols), symbols
+    assert "fmi2DoStep" in symbols and "fmi2GetDirectionalDerivative" in symbols
+    dynamic = subprocess.run(["readelf", "-d", binary], check=True, capture_output=True, text=True).stdout
+    assert "RUNPATH" in dynamic and "[$ORIGIN]" in dynamic
