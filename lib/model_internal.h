@@ -6,6 +6,8 @@
 
 #include "springmass/model.h"
 
+#include <math.h>
+
 struct sm_model {
 	sm_model_def def;  // gravity [m/s^2], mass damping [1/s]
 
@@ -25,7 +27,7 @@ struct sm_model {
 	sm_spring_def* spring_def;       // as given, rest length resolved to metres
 	int32_t* spring_a;               // first particle
 	int32_t* spring_b;               // second particle
-	double* rest_length;             // l0 [m]
+	double* rest_length;             // l0 [m] (0 for zero-length springs)
 	double* stiffness;               // ks [N/m], 0 while disabled
 	double* damping;                 // kd [N s/m], 0 while disabled
 	uint8_t* zero_length;            // 1 for SM_SPRING_ZERO_LENGTH
@@ -47,3 +49,49 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 	__attribute__((format(printf, 3, 4)))
 #endif
 	;
+
+// Geometry of one spring at a configuration, shared by every force law and Jacobian.
+//
+// Both spring kinds are evaluated by the same formulas: a zero-length spring is a rest-length
+// spring with l0 = 0, since ks (L - 0) u = ks d (see law_zero_length.h). The only special point
+// is where u = d / L is undefined: inv_length is then 0, which makes u = 0 and so removes the
+// elastic force of a degenerate rest-length spring and every damping force, as model.h states.
+typedef struct spring_geometry {
+	double d[3];        // x_b - x_a [m]
+	double length;      // L = |d| [m]
+	double inv_length;  // 1 / L, or 0 when L < SM_DEGENERATE_LENGTH_RATIO * l0 or L = 0 [1/m]
+	double u[3];        // d / L, or 0 at the degenerate point [1]
+	double dv[3];       // v_b - v_a [m/s]
+	double rate;        // r = u . dv, rate of change of the length [m/s]
+} spring_geometry;
+
+static inline void spring_geometry_eval(const double* x, const double* v, int32_t a, int32_t b,
+                                        double rest_length, spring_geometry* g)
+{
+	const double* xa = x + 3 * (size_t)a;
+	const double* xb = x + 3 * (size_t)b;
+	g->d[0] = xb[0] - xa[0];
+	g->d[1] = xb[1] - xa[1];
+	g->d[2] = xb[2] - xa[2];
+	g->length = sqrt(g->d[0] * g->d[0] + g->d[1] * g->d[1] + g->d[2] * g->d[2]);
+	const int regular = g->length > 0.0 && !(g->length < SM_DEGENERATE_LENGTH_RATIO * rest_length);
+	const double inv = 1.0 / (regular ? g->length : 1.0);
+	g->inv_length = regular ? inv : 0.0;
+	for (int k = 0; k < 3; k++)
+		g->u[k] = g->d[k] * g->inv_length;
+	if (v != NULL) {
+		const double* va = v + 3 * (size_t)a;
+		const double* vb = v + 3 * (size_t)b;
+		g->dv[0] = vb[0] - va[0];
+		g->dv[1] = vb[1] - va[1];
+		g->dv[2] = vb[2] - va[2];
+	} else {
+		g->dv[0] = g->dv[1] = g->dv[2] = 0.0;
+	}
+	g->rate = g->u[0] * g->dv[0] + g->u[1] * g->dv[1] + g->u[2] * g->dv[2];
+}
+
+// Per-spring Jacobian blocks K = d f_a / d x_b and D = d f_a / d v_b (row-major), the sum of
+// the laws in law_rest_length.h (both kinds) and law_spring_damping.h. Defined in jacobian.c.
+void spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
+                   sm_jacobian_variant variant, double K[9], double D[9]);

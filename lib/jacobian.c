@@ -1,0 +1,121 @@
+// Analytic Jacobians: per-spring blocks, dense matrices and the Jacobian-vector product.
+//
+// Every spring force depends only on d = x_b - x_a and dv = v_b - v_a, and f_b = -f_a, so one
+// pair of 3x3 blocks K = d f_a / d x_b and D = d f_a / d v_b describes a spring completely:
+//
+//   d f_a / d x_a = -K,  d f_a / d x_b = K,  d f_b / d x_a = K,  d f_b / d x_b = -K
+//
+// and likewise for D. K is the sum of the elastic block (law_rest_length.h; zero-length
+// springs are the case l0 = 0, see law_zero_length.h) and the position-derivative of the
+// damping (law_spring_damping.h); D is the damping block. Mass damping adds -alpha m I to the
+// diagonal of df/dv (law_body_forces.h).
+#include "law_body_forces.h"
+#include "law_rest_length.h"
+#include "law_spring_damping.h"
+#include "model_internal.h"
+
+#include <string.h>
+
+void spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
+                   sm_jacobian_variant variant, double K[9], double D[9])
+{
+	spring_geometry g;
+	spring_geometry_eval(x, v, model->spring_a[spring], model->spring_b[spring], model->rest_length[spring], &g);
+	for (int k = 0; k < 9; k++)
+		K[k] = D[k] = 0.0;
+	rest_length_add_block(model->stiffness[spring], model->rest_length[spring], &g, variant, K);
+	spring_damping_add_blocks(model->damping[spring], &g, variant, K, D);
+}
+
+sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x, const double* v,
+                                   sm_jacobian_variant variant, double K[9], double D[9])
+{
+	if (model == NULL || x == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (variant != SM_JACOBIAN_EXACT && variant != SM_JACOBIAN_DEFINITE)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (spring < 0 || spring >= model->spring_count)
+		return SM_ERROR_SPRING_INDEX;
+	double k[9], d[9];
+	spring_blocks(model, spring, x, v, variant, k, d);
+	if (K != NULL)
+		memcpy(K, k, sizeof k);
+	if (D != NULL)
+		memcpy(D, d, sizeof d);
+	return SM_OK;
+}
+
+// Adds sign * block to the 3x3 block (row particle p, column particle q) of a dense
+// row-major matrix with `columns` columns.
+static void add_dense_block(double* matrix, size_t columns, int32_t p, int32_t q, double sign,
+                            const double block[9])
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			matrix[(3 * (size_t)p + i) * columns + 3 * (size_t)q + j] += sign * block[3 * i + j];
+}
+
+void sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
+                             sm_jacobian_variant variant, double* dfdx, double* dfdv)
+{
+	if (model == NULL || x == NULL)
+		return;
+	const size_t dim = 3 * (size_t)model->particle_count;
+	if (dfdx != NULL)
+		memset(dfdx, 0, dim * dim * sizeof(double));
+	if (dfdv != NULL) {
+		memset(dfdv, 0, dim * dim * sizeof(double));
+		for (size_t r = 0; r < dim; r++)
+			dfdv[r * dim + r] = mass_damping_derivative(model->mass[r / 3], model->def.mass_damping);
+	}
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		double K[9], D[9];
+		spring_blocks(model, s, x, v, variant, K, D);
+		const int32_t a = model->spring_a[s], b = model->spring_b[s];
+		if (dfdx != NULL) {
+			add_dense_block(dfdx, dim, a, b, 1.0, K);
+			add_dense_block(dfdx, dim, a, a, -1.0, K);
+			add_dense_block(dfdx, dim, b, a, 1.0, K);
+			add_dense_block(dfdx, dim, b, b, -1.0, K);
+		}
+		if (dfdv != NULL) {
+			add_dense_block(dfdv, dim, a, b, 1.0, D);
+			add_dense_block(dfdv, dim, a, a, -1.0, D);
+			add_dense_block(dfdv, dim, b, a, 1.0, D);
+			add_dense_block(dfdv, dim, b, b, -1.0, D);
+		}
+	}
+}
+
+void sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
+                               sm_jacobian_variant variant, const double* dx, const double* dv, double* out)
+{
+	if (model == NULL || x == NULL || out == NULL)
+		return;
+	const int32_t n = model->particle_count;
+	for (int32_t i = 0; i < n; i++) {
+		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
+		for (int k = 0; k < 3; k++)
+			out[3 * (size_t)i + k] = dv != NULL ? c * dv[3 * (size_t)i + k] : 0.0;
+	}
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		double K[9], D[9];
+		spring_blocks(model, s, x, v, variant, K, D);
+		const size_t a = 3 * (size_t)model->spring_a[s], b = 3 * (size_t)model->spring_b[s];
+		// The spring sees only relative motion: d f_a = K (dx_b - dx_a) + D (dv_b - dv_a).
+		double rx[3] = {0.0, 0.0, 0.0}, rv[3] = {0.0, 0.0, 0.0};
+		for (int k = 0; k < 3; k++) {
+			if (dx != NULL)
+				rx[k] = dx[b + k] - dx[a + k];
+			if (dv != NULL)
+				rv[k] = dv[b + k] - dv[a + k];
+		}
+		for (int i = 0; i < 3; i++) {
+			double df = 0.0;
+			for (int j = 0; j < 3; j++)
+				df += K[3 * i + j] * rx[j] + D[3 * i + j] * rv[j];
+			out[a + i] += df;
+			out[b + i] -= df;
+		}
+	}
+}
