@@ -1,0 +1,492 @@
+// Forces and energies of the physics core against the laws they implement: closed forms,
+// conservation laws (Newton's third law, zero damping for rigid motion), the energy gradient
+// by finite differences, and the strain-based stiffness of a discretised rope.
+#include "physics_fixtures.h"
+#include "springmass/model.h"
+#include "test_harness.h"
+
+#include <stdlib.h>
+
+// Sum of |f| components, the scale against which rounding in sums of forces is measured.
+static double force_scale(const double* f, size_t n)
+{
+	double s = 0.0;
+	for (size_t i = 0; i < n; i++)
+		s += fabs(f[i]);
+	return fmax(s, 1.0);
+}
+
+static sm_model* model_without_gravity(double mass_damping)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	md.mass_damping = mass_damping;
+	return sm_model_create(&md, NULL);
+}
+
+static int add_particle_at(sm_model* m, double x, double y, double z, double mass)
+{
+	sm_particle_def p = sm_default_particle_def();
+	p.position[0] = x;
+	p.position[1] = y;
+	p.position[2] = z;
+	p.mass = mass;
+	return sm_model_add_particle(m, &p, NULL) == SM_OK;
+}
+
+// One rest-length spring and one zero-length spring against their closed forms, stretched and
+// compressed, with damping along the spring. Same formulas evaluated in another order: equal to
+// a few ulps, 1e-13 relative.
+static int test_single_springs_match_closed_forms(void)
+{
+	const double ks = 40.0, kd = 0.8, l0 = 0.5;
+	const double cases[3] = {0.9, 0.3, 0.5};  // stretched, compressed, at rest length
+	for (int c = 0; c < 3; c++) {
+		for (int kind = 0; kind < 2; kind++) {
+			sm_model* m = model_without_gravity(0.0);
+			ENSURE(add_particle_at(m, 0, 0, 0, 1.0) && add_particle_at(m, 0, 0, 0, 1.0));
+			sm_spring_def d = sm_default_spring_def();
+			d.a = 0;
+			d.b = 1;
+			d.kind = kind ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+			d.rest_length = kind ? 0.0 : l0;
+			d.stiffness = ks;
+			d.damping = kd;
+			ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+			// b along the direction (2, -1, 2)/3 at distance L, with a relative velocity.
+			const double L = cases[c], u[3] = {2.0 / 3, -1.0 / 3, 2.0 / 3};
+			const double x[6] = {0.1, 0.2, 0.3, 0.1 + L * u[0], 0.2 + L * u[1], 0.3 + L * u[2]};
+			const double v[6] = {0.5, 0.1, -0.2, -0.3, 0.4, 0.6};
+			double dv[3], rate = 0.0, f[6];
+			for (int k = 0; k < 3; k++) {
+				dv[k] = v[3 + k] - v[k];
+				rate += u[k] * dv[k];
+			}
+			sm_model_forces(m, x, v, NULL, f);
+			for (int k = 0; k < 3; k++) {
+				const double elastic = kind ? ks * L * u[k] : ks * (L - l0) * u[k];
+				const double expect = elastic + kd * rate * u[k];
+				ENSURE_NEAR(f[k], expect, 1e-13 * fmax(1.0, fabs(expect)));
+				ENSURE_NEAR(f[3 + k], -expect, 1e-13 * fmax(1.0, fabs(expect)));
+			}
+			const sm_energies e = sm_model_energies(m, x, v);
+			const double stretch = kind ? L : L - l0;
+			ENSURE_NEAR(e.elastic, 0.5 * ks * stretch * stretch, 1e-14);
+			ENSURE_NEAR(e.gravity, 0.0, 0.0);
+			double kinetic = 0.0;
+			for (int k = 0; k < 6; k++)
+				kinetic += 0.5 * v[k] * v[k];
+			ENSURE_NEAR(e.kinetic, kinetic, 1e-14);
+			ENSURE_NEAR(sm_model_dissipated_power(m, x, v), kd * rate * rate, 1e-14);
+			sm_model_destroy(m);
+		}
+	}
+	return 0;
+}
+
+// Gravity m g and mass damping -alpha m v on particles without springs, plus external forces,
+// for free and constrained particles alike (constrained ones report the force on them).
+static int test_gravity_mass_damping_and_external_forces(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[0] = 1.5;
+	md.gravity[2] = -9.81;
+	md.mass_damping = 0.3;
+	sm_model* m = sm_model_create(&md, NULL);
+	const double mass[3] = {0.5, 2.0, 3.0};
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = mass[i];
+		p.position[1] = i;
+		p.motion = i == 2 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	}
+	const double x[9] = {0, 0, 0, 0, 1, 0, 0, 2, 0};
+	const double v[9] = {1, -2, 3, 0.5, 0.25, -4, 0, 0, 0};
+	const double ext[9] = {10, 0, 0, 0, -1, 0, 0, 0, 7};
+	double f[9];
+	sm_model_forces(m, x, v, ext, f);
+	for (int i = 0; i < 3; i++)
+		for (int k = 0; k < 3; k++) {
+			const double expect = mass[i] * (md.gravity[k] - md.mass_damping * v[3 * i + k]) + ext[3 * i + k];
+			ENSURE_NEAR(f[3 * i + k], expect, 1e-14 * fmax(1.0, fabs(expect)));
+		}
+	// Gravitational energy -sum m g . x and mass-damping power alpha m |v|^2.
+	const sm_energies e = sm_model_energies(m, x, v);
+	ENSURE_NEAR(e.gravity, 0.0, 1e-15);  // g has no y component and all x, z are zero
+	double power = 0.0;
+	for (int i = 0; i < 3; i++)
+		for (int k = 0; k < 3; k++)
+			power += md.mass_damping * mass[i] * v[3 * i + k] * v[3 * i + k];
+	ENSURE_NEAR(sm_model_dissipated_power(m, x, v), power, 1e-13);
+	const double x2[9] = {1, 0, 2, 0, 0, -1, 0, 0, 0};
+	ENSURE_NEAR(sm_model_energies(m, x2, v).gravity, -(0.5 * (1.5 * 1 - 9.81 * 2) + 2.0 * (9.81)), 1e-13);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Newton's third law: without gravity, mass damping and external forces the internal forces
+// sum to zero and exert zero net torque. Each spring adds f and -f along d, so the sums cancel
+// up to rounding: 1e-13 of the sum of |f| (torque: times the O(1) m lever arms).
+static int test_internal_forces_have_no_net_force_or_torque(void)
+{
+	rng r = {17};
+	for (int trial = 0; trial < 50; trial++) {
+		enum { N = 12 };
+		double x[3 * N], v[3 * N], f[3 * N];
+		sm_model* m = random_model(&r, N, 30, 0, x, v);
+		ENSURE(m != NULL);
+		sm_model_def md = sm_model_get_def(m);
+		md.gravity[0] = md.gravity[1] = md.gravity[2] = 0.0;
+		md.mass_damping = 0.0;
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		sm_model_forces(m, x, v, NULL, f);
+		const double scale = force_scale(f, 3 * N);
+		double sum[3] = {0, 0, 0}, torque[3] = {0, 0, 0};
+		for (int i = 0; i < N; i++) {
+			const double* xi = x + 3 * i;
+			const double* fi = f + 3 * i;
+			for (int k = 0; k < 3; k++)
+				sum[k] += fi[k];
+			torque[0] += xi[1] * fi[2] - xi[2] * fi[1];
+			torque[1] += xi[2] * fi[0] - xi[0] * fi[2];
+			torque[2] += xi[0] * fi[1] - xi[1] * fi[0];
+		}
+		for (int k = 0; k < 3; k++) {
+			ENSURE_NEAR(sum[k], 0.0, 1e-13 * scale);
+			ENSURE_NEAR(torque[k], 0.0, 1e-13 * scale);
+		}
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// Spring damping does not resist rigid motion: with v_i = w + omega x x_i every rate
+// u . (v_b - v_a) = u . (omega x d) is zero, so with zero stiffness the forces vanish (up to
+// rounding of the rates: 1e-13 times kd |omega| |d|, with kd <= 3, |omega| <= 2, |d| <= 2), and
+// with mass damping alpha the force is exactly -alpha m v.
+static int test_spring_damping_ignores_rigid_motion(void)
+{
+	rng r = {8080};
+	for (int trial = 0; trial < 50; trial++) {
+		enum { N = 10 };
+		double x[3 * N], v[3 * N], f[3 * N];
+		sm_model* m = random_model(&r, N, 25, 0, x, v);
+		ENSURE(m != NULL);
+		// Zero stiffness everywhere: only spring damping and mass damping remain.
+		for (int32_t s = 0; s < sm_model_spring_count(m); s++) {
+			sm_spring_def d;
+			sm_model_get_spring(m, s, &d);
+			d.stiffness = 0.0;
+			ENSURE_STATUS(sm_model_set_spring(m, s, &d), SM_OK);
+		}
+		sm_model_def md = sm_model_get_def(m);
+		md.gravity[0] = md.gravity[1] = md.gravity[2] = 0.0;
+		md.mass_damping = trial % 2 ? 0.0 : 0.25;
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		double w[3], omega[3];
+		for (int k = 0; k < 3; k++) {
+			w[k] = rng_uniform(&r, -3, 3);
+			omega[k] = rng_uniform(&r, -2, 2);
+		}
+		for (int i = 0; i < N; i++) {
+			const double* p = x + 3 * i;
+			v[3 * i + 0] = w[0] + omega[1] * p[2] - omega[2] * p[1];
+			v[3 * i + 1] = w[1] + omega[2] * p[0] - omega[0] * p[2];
+			v[3 * i + 2] = w[2] + omega[0] * p[1] - omega[1] * p[0];
+		}
+		sm_model_forces(m, x, v, NULL, f);
+		for (int i = 0; i < N; i++) {
+			sm_particle_def p;
+			sm_model_get_particle(m, i, &p);
+			for (int k = 0; k < 3; k++)
+				ENSURE_NEAR(f[3 * i + k], -md.mass_damping * p.mass * v[3 * i + k], 1e-12);
+		}
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// Damping only removes energy: for random velocities the power of the damping forces
+// sum f . v is <= 0 and equals minus the reported dissipated power (the same terms summed in
+// another order: 1e-12 relative).
+static int test_damping_power_is_never_positive(void)
+{
+	rng r = {6060};
+	for (int trial = 0; trial < 100; trial++) {
+		enum { N = 9 };
+		double x[3 * N], v[3 * N], f[3 * N];
+		sm_model* m = random_model(&r, N, 20, 0, x, v);
+		ENSURE(m != NULL);
+		for (int32_t s = 0; s < sm_model_spring_count(m); s++) {
+			sm_spring_def d;
+			sm_model_get_spring(m, s, &d);
+			d.stiffness = 0.0;
+			ENSURE_STATUS(sm_model_set_spring(m, s, &d), SM_OK);
+		}
+		sm_model_def md = sm_model_get_def(m);
+		md.gravity[0] = md.gravity[1] = md.gravity[2] = 0.0;
+		md.mass_damping = trial % 3 == 0 ? 0.0 : 0.5;
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		for (int k = 0; k < 3 * N; k++)
+			v[k] = rng_uniform(&r, -2, 2);
+		sm_model_forces(m, x, v, NULL, f);
+		double power = 0.0;
+		for (int k = 0; k < 3 * N; k++)
+			power += f[k] * v[k];
+		const double dissipated = sm_model_dissipated_power(m, x, v);
+		ENSURE(power <= 1e-12 * fmax(1.0, dissipated));
+		ENSURE(dissipated >= 0.0);
+		ENSURE_REL(-power, dissipated, 1e-12, 1e-12);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// The elastic force is minus the gradient of the elastic energy. Central differences with
+// h = 1e-6 m: truncation h^2/6 |E'''| <= 1e-12 * 1e5 ~ 1e-7 N for the springs of random_model,
+// rounding eps |E| / h ~ 2e-16 * 10 / 1e-6 ~ 2e-9 N; allowed: 1e-6 of the largest force (>= 1 N).
+static int test_elastic_force_is_minus_energy_gradient(void)
+{
+	rng r = {111};
+	for (int trial = 0; trial < 10; trial++) {
+		enum { N = 8 };
+		double x[3 * N], v[3 * N], zero_v[3 * N] = {0}, f[3 * N];
+		sm_model* m = random_model(&r, N, 16, 0, x, v);
+		ENSURE(m != NULL);
+		sm_model_def md = sm_model_get_def(m);
+		md.gravity[0] = md.gravity[1] = md.gravity[2] = 0.0;
+		md.mass_damping = 0.0;
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		sm_model_forces(m, x, zero_v, NULL, f);
+		double scale = 1.0;
+		for (int k = 0; k < 3 * N; k++)
+			scale = fmax(scale, fabs(f[k]));
+		const double h = 1e-6;
+		for (int k = 0; k < 3 * N; k++) {
+			const double keep = x[k];
+			x[k] = keep + h;
+			const double ep = sm_model_energies(m, x, NULL).elastic;
+			x[k] = keep - h;
+			const double em = sm_model_energies(m, x, NULL).elastic;
+			x[k] = keep;
+			ENSURE_NEAR(f[k], -(ep - em) / (2 * h), 1e-6 * scale);
+		}
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// Gravity's energy gradient is likewise minus the gravity force (linear: exact up to rounding).
+static int test_gravity_force_is_minus_energy_gradient(void)
+{
+	rng r = {222};
+	enum { N = 5 };
+	double x[3 * N], v[3 * N], zero_v[3 * N] = {0}, f[3 * N];
+	sm_model* m = random_model(&r, N, 0, 0, x, v);
+	ENSURE(m != NULL);
+	sm_model_forces(m, x, zero_v, NULL, f);
+	const double h = 1e-3;
+	for (int k = 0; k < 3 * N; k++) {
+		const double keep = x[k];
+		x[k] = keep + h;
+		const double ep = sm_model_energies(m, x, NULL).gravity;
+		x[k] = keep - h;
+		const double em = sm_model_energies(m, x, NULL).gravity;
+		x[k] = keep;
+		ENSURE_NEAR(f[k], -(ep - em) / (2 * h), 1e-9);  // rounding eps * 10 J / 1e-3 m ~ 2e-12
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A zero-length spring is f_a = ks (x_b - x_a) everywhere, including L = 0 and with the
+// particles far apart (no rest length involved). Exact: one multiplication per component,
+// which the model computes as ks L (d / L): 1e-14 relative.
+static int test_zero_length_spring_is_linear(void)
+{
+	rng r = {333};
+	sm_model* m = model_without_gravity(0.0);
+	ENSURE(add_particle_at(m, 0, 0, 0, 1.0) && add_particle_at(m, 1, 0, 0, 1.0));
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.kind = SM_SPRING_ZERO_LENGTH;
+	d.stiffness = 25.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	sm_spring_def stored;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &stored), SM_OK);
+	ENSURE(stored.rest_length == 0.0);  // SM_REST_LENGTH_INITIAL means 0 for this kind
+	const double v[6] = {0};
+	for (int trial = 0; trial < 100; trial++) {
+		double x[6], f[6];
+		const double spread = trial < 5 ? 0.0 : pow(10.0, rng_uniform(&r, -8, 3));
+		for (int k = 0; k < 6; k++)
+			x[k] = spread * rng_uniform(&r, -1, 1);
+		sm_model_forces(m, x, v, NULL, f);
+		for (int k = 0; k < 3; k++) {
+			const double expect = 25.0 * (x[3 + k] - x[k]);
+			ENSURE_NEAR(f[k], expect, 1e-14 * 25.0 * spread * 2 + 1e-300);
+			ENSURE(f[3 + k] == -f[k]);
+		}
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// The singular point L = 0: a rest-length spring exerts no force and no damping, a
+// zero-length spring's damping is zero; energies stay finite; just above the threshold
+// SM_DEGENERATE_LENGTH_RATIO * l0 the force is the regular -ks l0 u.
+static int test_degenerate_length_gives_finite_values(void)
+{
+	for (int kind = 0; kind < 2; kind++) {
+		sm_model* m = model_without_gravity(0.0);
+		ENSURE(add_particle_at(m, 1, 1, 1, 1.0) && add_particle_at(m, 1, 1, 1, 1.0));
+		sm_spring_def d = sm_default_spring_def();
+		d.a = 0;
+		d.b = 1;
+		d.kind = kind ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		d.rest_length = kind ? 0.0 : 0.2;
+		d.stiffness = 100.0;
+		d.damping = 5.0;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		const double x[6] = {1, 1, 1, 1, 1, 1}, v[6] = {1, -2, 0.5, 3, 4, -5};
+		double f[6];
+		sm_model_forces(m, x, v, NULL, f);
+		for (int k = 0; k < 6; k++)
+			ENSURE(f[k] == 0.0);
+		const sm_energies e = sm_model_energies(m, x, v);
+		ENSURE(isfinite(e.elastic) && isfinite(e.kinetic));
+		ENSURE(isfinite(sm_model_dissipated_power(m, x, v)));
+		// Just above the threshold: regular law, f_a = ks (L - l0) u with u = +x.
+		const double L = 1e-10;
+		const double x2[6] = {1, 1, 1, 1 + L, 1, 1}, v0[6] = {0};
+		sm_model_forces(m, x2, v0, NULL, f);
+		const double expect = 100.0 * (L - d.rest_length);
+		ENSURE_NEAR(f[0], expect, 1e-6 * fabs(expect) + 1e-12);  // 1 + L rounds L to ~1e-6 relative
+		ENSURE(f[1] == 0.0 && f[2] == 0.0);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// A disabled spring exerts nothing and stores nothing; enabling it restores the same forces.
+static int test_disabled_spring_exerts_no_force(void)
+{
+	rng r = {444};
+	enum { N = 6 };
+	double x[3 * N], v[3 * N], f0[3 * N], f1[3 * N], f2[3 * N], f3[3 * N];
+	sm_model* m = random_model(&r, N, 8, 0, x, v);
+	ENSURE(m != NULL);
+	sm_model_forces(m, x, v, NULL, f0);
+	// Forces without spring 3 = forces of a model in which spring 3 has zero constants.
+	sm_model* reference = sm_model_clone(m);
+	ENSURE(reference != NULL);
+	sm_spring_def d;
+	sm_model_get_spring(reference, 3, &d);
+	d.stiffness = 0.0;
+	d.damping = 0.0;
+	ENSURE_STATUS(sm_model_set_spring(reference, 3, &d), SM_OK);
+	sm_model_forces(reference, x, v, NULL, f3);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 3, false), SM_OK);
+	ENSURE(!sm_model_spring_enabled(m, 3));
+	sm_model_forces(m, x, v, NULL, f1);
+	for (int k = 0; k < 3 * N; k++)
+		ENSURE(f1[k] == f3[k]);
+	ENSURE(sm_model_energies(m, x, v).elastic == sm_model_energies(reference, x, v).elastic);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 3, true), SM_OK);
+	sm_model_forces(m, x, v, NULL, f2);
+	for (int k = 0; k < 3 * N; k++)
+		ENSURE(f2[k] == f0[k]);
+	sm_model_destroy(reference);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A straight rope along x of total length 1 m, particle 0 fixed, pulled at the tip by F.
+// In static balance every segment carries the tension F, so segment i stretches by
+// F / ks_i. The balance is computed directly along the rope from the model's constants, then
+// checked with the model's own forces (every free particle's net force zero). Per-strain
+// stiffness E gives ks = E / l0, so the total stretch F * sum(l0_i) / E = F / E * 1 m does not
+// depend on N; a constant ks gives N F / ks, ten times more for N = 100 than for N = 10.
+static double rope_stretch(int32_t segments, sm_scaling scaling, double stiffness, double load, double* residual)
+{
+	sm_model* m = model_without_gravity(0.0);
+	for (int32_t i = 0; i <= segments; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = (double)i / segments;
+		p.mass = 1.0 / (segments + 1);
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		sm_model_add_particle(m, &p, NULL);
+	}
+	for (int32_t i = 0; i < segments; i++) {
+		sm_spring_def d = sm_default_spring_def();
+		d.a = i;
+		d.b = i + 1;
+		d.stiffness = stiffness;
+		d.stiffness_scaling = scaling;
+		sm_model_add_spring(m, &d, NULL);
+	}
+	const size_t n = (size_t)segments + 1;
+	double* x = calloc(3 * n, sizeof(double));
+	double* v = calloc(3 * n, sizeof(double));
+	double* ext = calloc(3 * n, sizeof(double));
+	double* f = calloc(3 * n, sizeof(double));
+	// Static balance from the root outward: x_{i+1} = x_i + l0_i + F / ks_i.
+	for (int32_t i = 0; i < segments; i++) {
+		double l0, ks;
+		sm_model_spring_constants(m, i, &l0, &ks, NULL);
+		x[3 * (i + 1)] = x[3 * i] + l0 + load / ks;
+	}
+	ext[3 * segments] = load;
+	sm_model_forces(m, x, v, ext, f);
+	*residual = 0.0;
+	for (size_t i = 1; i < n; i++)
+		*residual = fmax(*residual, fabs(f[3 * i]) + fabs(f[3 * i + 1]) + fabs(f[3 * i + 2]));
+	const double stretch = x[3 * segments] - 1.0;
+	free(x);
+	free(v);
+	free(ext);
+	free(f);
+	sm_model_destroy(m);
+	return stretch;
+}
+
+static int test_per_strain_rope_stretch_is_independent_of_discretisation(void)
+{
+	const double E = 500.0, F = 20.0;  // [N], [N]: strain F / E = 4 %
+	double res10, res100;
+	const double s10 = rope_stretch(10, SM_PER_STRAIN, E, F, &res10);
+	const double s100 = rope_stretch(100, SM_PER_STRAIN, E, F, &res100);
+	// Balance: each residual is a difference of two tensions F computed as ks (L - l0) from
+	// positions near 1 m: rounding ~ ks * eps * 1 m = (E / l0) * 2e-16 <= 1e-10 N.
+	ENSURE_NEAR(res10, 0.0, 1e-9);
+	ENSURE_NEAR(res100, 0.0, 1e-9);
+	ENSURE_REL(s10, F / E, 1e-9, 0.0);  // closed form, rounding of 100 sums of O(1) m
+	ENSURE_REL(s100, s10, 1e-9, 0.0);
+	// Constant ks = E: stretch N F / ks, so ten times more with ten times the segments.
+	const double a10 = rope_stretch(10, SM_ABSOLUTE, E, F, &res10);
+	const double a100 = rope_stretch(100, SM_ABSOLUTE, E, F, &res100);
+	ENSURE_NEAR(res10, 0.0, 1e-9);
+	ENSURE_NEAR(res100, 0.0, 1e-9);
+	ENSURE_REL(a10, 10 * F / E, 1e-9, 0.0);
+	ENSURE_REL(a100 / a10, 10.0, 1e-9, 0.0);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_single_springs_match_closed_forms);
+	RUN_TEST(test_gravity_mass_damping_and_external_forces);
+	RUN_TEST(test_internal_forces_have_no_net_force_or_torque);
+	RUN_TEST(test_spring_damping_ignores_rigid_motion);
+	RUN_TEST(test_damping_power_is_never_positive);
+	RUN_TEST(test_elastic_force_is_minus_energy_gradient);
+	RUN_TEST(test_gravity_force_is_minus_energy_gradient);
+	RUN_TEST(test_zero_length_spring_is_linear);
+	RUN_TEST(test_degenerate_length_gives_finite_values);
+	RUN_TEST(test_disabled_spring_exerts_no_force);
+	RUN_TEST(test_per_strain_rope_stretch_is_independent_of_discretisation);
+	return TEST_SUMMARY();
+}

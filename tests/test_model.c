@@ -1,0 +1,329 @@
+// The model in memory: definitions with defaults, validation of every field (each rule its
+// own status and a message naming the element), accessors, per-strain constants, enabling
+// springs, cloning, and "no partial state after a failed call".
+#include "springmass/model.h"
+#include "test_harness.h"
+
+#include <stdlib.h>
+
+// The message must name the element and the rule: it contains both substrings.
+#define ENSURE_MESSAGE(model, part1, part2)                                                         \
+	do {                                                                                            \
+		const char* msg_ = sm_model_last_error(model);                                              \
+		if (strstr(msg_, part1) == NULL || strstr(msg_, part2) == NULL) {                           \
+			printf("  %s:%d: message \"%s\" lacks \"%s\" or \"%s\"\n", __FILE__, __LINE__, msg_,     \
+			       part1, part2);                                                               \
+			return 1;                                                                               \
+		}                                                                                           \
+	} while (0)
+
+static sm_model* three_particles(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* m = sm_model_create(&md, NULL);
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = 0.5 * i;  // 0, 0.5, 1 m
+		if (sm_model_add_particle(m, &p, NULL) != SM_OK)
+			return NULL;
+	}
+	return m;
+}
+
+static int test_defaults(void)
+{
+	const sm_particle_def p = sm_default_particle_def();
+	ENSURE(p.mass == 1.0 && p.motion == SM_PARTICLE_FREE && p.position[0] == 0.0 && p.velocity[2] == 0.0);
+	const sm_spring_def s = sm_default_spring_def();
+	ENSURE(s.kind == SM_SPRING_REST_LENGTH && s.rest_length == SM_REST_LENGTH_INITIAL);
+	ENSURE(s.stiffness == 0.0 && s.damping == 0.0 && isinf(s.break_strain) && s.break_strain > 0);
+	ENSURE(s.stiffness_scaling == SM_ABSOLUTE && s.damping_scaling == SM_ABSOLUTE);
+	const sm_model_def md = sm_default_model_def();
+	ENSURE(md.gravity[0] == 0.0 && md.gravity[1] == 0.0 && md.gravity[2] == -9.81 && md.mass_damping == 0.0);
+	sm_model_destroy(NULL);
+	return 0;
+}
+
+static int test_invalid_model_definitions(void)
+{
+	sm_error err;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[1] = NAN;
+	ENSURE(sm_model_create(&md, &err) == NULL);
+	ENSURE(err.status == SM_ERROR_NOT_FINITE && strstr(err.message, "gravity y") != NULL);
+	md = sm_default_model_def();
+	md.mass_damping = -0.1;
+	ENSURE(sm_model_create(&md, &err) == NULL);
+	ENSURE(err.status == SM_ERROR_NEGATIVE && strstr(err.message, "mass damping") != NULL);
+	md = sm_default_model_def();
+	md.mass_damping = INFINITY;
+	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_NOT_FINITE);
+	md = sm_default_model_def();
+	md.spring_capacity = -1;
+	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_NEGATIVE);
+	ENSURE(sm_model_create(NULL, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
+	md = sm_default_model_def();
+	md.particle_capacity = 100;
+	sm_model* m = sm_model_create(&md, &err);
+	ENSURE(m != NULL && err.status == SM_OK && err.message[0] == '\0');
+	// sm_model_set_def validates the same way and leaves the model unchanged on error.
+	md.mass_damping = -1.0;
+	ENSURE_STATUS(sm_model_set_def(m, &md), SM_ERROR_NEGATIVE);
+	ENSURE(sm_model_get_def(m).mass_damping == 0.0);
+	md.mass_damping = 0.5;
+	md.gravity[2] = -1.62;
+	ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+	ENSURE(sm_model_get_def(m).mass_damping == 0.5 && sm_model_get_def(m).gravity[2] == -1.62);
+	sm_model_destroy(m);
+	return 0;
+}
+
+static int test_invalid_particles(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	struct {
+		sm_particle_def def;
+		sm_status status;
+		const char* rule;
+	} cases[8];
+	for (int i = 0; i < 8; i++)
+		cases[i].def = sm_default_particle_def();
+	cases[0].def.mass = 0.0, cases[0].status = SM_ERROR_NONPOSITIVE_MASS, cases[0].rule = "mass = 0 must be > 0";
+	cases[1].def.mass = -2.0, cases[1].status = SM_ERROR_NONPOSITIVE_MASS, cases[1].rule = "must be > 0";
+	cases[2].def.mass = NAN, cases[2].status = SM_ERROR_NOT_FINITE, cases[2].rule = "mass";
+	cases[3].def.position[2] = INFINITY, cases[3].status = SM_ERROR_NOT_FINITE, cases[3].rule = "position z";
+	cases[4].def.velocity[0] = NAN, cases[4].status = SM_ERROR_NOT_FINITE, cases[4].rule = "velocity x";
+	cases[5].def.motion = (sm_particle_motion)7, cases[5].status = SM_ERROR_INVALID_ARGUMENT, cases[5].rule = "motion";
+	cases[6].def.mass = INFINITY, cases[6].status = SM_ERROR_NOT_FINITE, cases[6].rule = "not finite";
+	cases[7].def.position[1] = -INFINITY, cases[7].status = SM_ERROR_NOT_FINITE, cases[7].rule = "position y";
+	for (int i = 0; i < 8; i++) {
+		int32_t index = -5;
+		ENSURE_STATUS(sm_model_add_particle(m, &cases[i].def, &index), cases[i].status);
+		ENSURE(index == -5);
+		ENSURE(sm_model_particle_count(m) == 3);
+		ENSURE_MESSAGE(m, "particle 3", cases[i].rule);
+		// Replacing particle 1 with the same bad definition fails the same way, changing nothing.
+		ENSURE_STATUS(sm_model_set_particle(m, 1, &cases[i].def), cases[i].status);
+		ENSURE_MESSAGE(m, "particle 1", cases[i].rule);
+		sm_particle_def now;
+		ENSURE_STATUS(sm_model_get_particle(m, 1, &now), SM_OK);
+		ENSURE(now.mass == 1.0 && now.position[0] == 0.5 && now.motion == SM_PARTICLE_FREE);
+	}
+	ENSURE_STATUS(sm_model_add_particle(m, NULL, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_set_particle(m, 3, &cases[0].def), SM_ERROR_PARTICLE_INDEX);
+	ENSURE_MESSAGE(m, "particle 3", "out of range (model has 3 particles)");
+	ENSURE_STATUS(sm_model_set_particle_motion(m, -1, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE_STATUS(sm_model_set_particle_motion(m, 0, (sm_particle_motion)-3), SM_ERROR_INVALID_ARGUMENT);
+	sm_particle_def out;
+	ENSURE_STATUS(sm_model_get_particle(m, 3, &out), SM_ERROR_PARTICLE_INDEX);
+	sm_model_destroy(m);
+	return 0;
+}
+
+static int test_invalid_springs(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def good = sm_default_spring_def();
+	good.a = 0;
+	good.b = 1;
+	good.stiffness = 10.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &good, NULL), SM_OK);
+	enum { CASES = 17 };
+	struct {
+		sm_spring_def def;
+		sm_status status;
+		const char* rule;
+	} c[CASES];
+	for (int i = 0; i < CASES; i++)
+		c[i].def = good;
+	c[0].def.b = 7, c[0].status = SM_ERROR_PARTICLE_INDEX,
+	c[0].rule = "particle b = 7 out of range (model has 3 particles)";
+	c[1].def.a = -1, c[1].status = SM_ERROR_PARTICLE_INDEX, c[1].rule = "particle a = -1 out of range";
+	c[2].def.b = 0, c[2].status = SM_ERROR_SELF_SPRING, c[2].rule = "to itself";
+	c[3].def.stiffness = -1.0, c[3].status = SM_ERROR_NEGATIVE, c[3].rule = "stiffness = -1 must be >= 0";
+	c[4].def.stiffness = NAN, c[4].status = SM_ERROR_NOT_FINITE, c[4].rule = "stiffness";
+	c[5].def.damping = -0.5, c[5].status = SM_ERROR_NEGATIVE, c[5].rule = "damping = -0.5 must be >= 0";
+	c[6].def.damping = INFINITY, c[6].status = SM_ERROR_NOT_FINITE, c[6].rule = "damping";
+	c[7].def.rest_length = -0.25, c[7].status = SM_ERROR_NEGATIVE, c[7].rule = "rest length = -0.25";
+	c[8].def.rest_length = NAN, c[8].status = SM_ERROR_NOT_FINITE, c[8].rule = "rest length";
+	c[9].def.rest_length = 0.0, c[9].def.stiffness_scaling = SM_PER_STRAIN, c[9].status = SM_ERROR_ZERO_REST_LENGTH,
+	c[9].rule = "per-strain stiffness needs a rest length > 0";
+	c[10].def.kind = SM_SPRING_ZERO_LENGTH, c[10].def.damping_scaling = SM_PER_STRAIN,
+	c[10].status = SM_ERROR_ZERO_REST_LENGTH, c[10].rule = "per-strain damping";
+	c[11].def.break_strain = 0.0, c[11].status = SM_ERROR_NEGATIVE, c[11].rule = "break strain = 0 must be > 0";
+	c[12].def.break_strain = NAN, c[12].status = SM_ERROR_NOT_FINITE, c[12].rule = "break strain";
+	c[13].def.rest_length = 0.0, c[13].def.break_strain = 0.1, c[13].status = SM_ERROR_ZERO_REST_LENGTH,
+	c[13].rule = "break strain needs a rest length > 0";
+	c[14].def.kind = (sm_spring_kind)9, c[14].status = SM_ERROR_INVALID_ARGUMENT, c[14].rule = "kind";
+	c[15].def.stiffness_scaling = (sm_scaling)4, c[15].status = SM_ERROR_INVALID_ARGUMENT, c[15].rule = "scaling";
+	c[16].def.kind = SM_SPRING_ZERO_LENGTH, c[16].def.rest_length = 0.3, c[16].status = SM_ERROR_INVALID_ARGUMENT,
+	c[16].rule = "zero-length spring must have rest length 0";
+	for (int i = 0; i < CASES; i++) {
+		int32_t index = -5;
+		ENSURE_STATUS(sm_model_add_spring(m, &c[i].def, &index), c[i].status);
+		ENSURE(index == -5 && sm_model_spring_count(m) == 1);
+		ENSURE_MESSAGE(m, "spring 1", c[i].rule);
+		ENSURE_STATUS(sm_model_set_spring(m, 0, &c[i].def), c[i].status);
+		ENSURE_MESSAGE(m, "spring 0", c[i].rule);
+		sm_spring_def now;
+		ENSURE_STATUS(sm_model_get_spring(m, 0, &now), SM_OK);
+		ENSURE(now.a == 0 && now.b == 1 && now.stiffness == 10.0 && now.rest_length == 0.5);
+	}
+	// Two particles at the same place: the initial rest length is 0, which per-strain forbids.
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 3 at the origin, like 0
+	sm_spring_def coincident = good;
+	coincident.b = 3;
+	coincident.stiffness_scaling = SM_PER_STRAIN;
+	ENSURE_STATUS(sm_model_add_spring(m, &coincident, NULL), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE_MESSAGE(m, "spring 1", "rest length is 0");
+	ENSURE_STATUS(sm_model_add_spring(m, NULL, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_set_spring(m, 1, &good), SM_ERROR_SPRING_INDEX);
+	ENSURE_MESSAGE(m, "spring 1", "out of range (model has 1 springs)");
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 5, false), SM_ERROR_SPRING_INDEX);
+	ENSURE(!sm_model_spring_enabled(m, 5));
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Stored definitions: rest length resolved to the initial distance; per-strain constants
+// ks = E / l0 and kd = c / l0 (exact divisions); fixed particles store zero velocity.
+static int test_accessors_and_per_strain_constants(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 2;
+	d.stiffness = 300.0;
+	d.stiffness_scaling = SM_PER_STRAIN;
+	d.damping = 2.0;
+	d.damping_scaling = SM_PER_STRAIN;
+	d.break_strain = 0.2;
+	int32_t index = -1;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, &index), SM_OK);
+	ENSURE(index == 0);
+	sm_spring_def stored;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &stored), SM_OK);
+	ENSURE(stored.rest_length == 1.0 && stored.stiffness == 300.0 && stored.break_strain == 0.2);
+	double l0, ks, kd;
+	ENSURE_STATUS(sm_model_spring_constants(m, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE(l0 == 1.0 && ks == 300.0 && kd == 2.0);
+	// An explicit rest length changes the constants: ks = 300 / 0.25, kd = 2 / 0.25.
+	d.rest_length = 0.25;
+	ENSURE_STATUS(sm_model_set_spring(m, 0, &d), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(m, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE(l0 == 0.25 && ks == 1200.0 && kd == 8.0);
+	// SM_REST_LENGTH_INITIAL in set_spring keeps the current rest length.
+	d.rest_length = SM_REST_LENGTH_INITIAL;
+	d.stiffness = 600.0;
+	ENSURE_STATUS(sm_model_set_spring(m, 0, &d), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(m, 0, &l0, &ks, NULL), SM_OK);
+	ENSURE(l0 == 0.25 && ks == 2400.0);
+	// Disabled: constants still reported; forces zero (checked in test_forces).
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, false), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(m, 0, &l0, &ks, NULL), SM_OK);
+	ENSURE(ks == 2400.0);
+	// Particles: fixed ones store zero velocity, motion changes renumber the free particles.
+	sm_particle_def p = sm_default_particle_def();
+	p.mass = 2.5;
+	p.velocity[1] = 3.0;
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_set_particle(m, 1, &p), SM_OK);
+	sm_particle_def q;
+	ENSURE_STATUS(sm_model_get_particle(m, 1, &q), SM_OK);
+	ENSURE(q.mass == 2.5 && q.velocity[1] == 0.0 && q.motion == SM_PARTICLE_FIXED);
+	ENSURE(sm_model_free_count(m) == 2);
+	ENSURE(sm_model_free_index(m, 0) == 0 && sm_model_free_index(m, 1) == -1 && sm_model_free_index(m, 2) == 1);
+	ENSURE(sm_model_free_index(m, 3) == -1);
+	ENSURE_STATUS(sm_model_set_particle_motion(m, 0, SM_PARTICLE_DRIVEN), SM_OK);
+	ENSURE(sm_model_free_count(m) == 1 && sm_model_free_index(m, 2) == 0);
+	ENSURE_NEAR(sm_model_total_mass(m), 4.5, 1e-15);
+	double x[9], v[9];
+	sm_model_initial_state(m, x, v);
+	ENSURE(x[3] == 0.0 && x[6] == 1.0 && v[4] == 0.0);  // particle 1 was replaced at the origin
+	sm_model_initial_state(m, NULL, NULL);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A clone is deep: changing it leaves the original as it was.
+static int test_clone_is_independent(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 1;
+	d.b = 2;
+	d.stiffness = 5.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	sm_model* c = sm_model_clone(m);
+	ENSURE(c != NULL);
+	ENSURE(sm_model_particle_count(c) == 3 && sm_model_spring_count(c) == 1);
+	d.stiffness = 7.0;
+	ENSURE_STATUS(sm_model_set_spring(c, 0, &d), SM_OK);
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(c, &p, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_spring(c, &d, NULL), SM_OK);
+	sm_spring_def orig;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &orig), SM_OK);
+	ENSURE(orig.stiffness == 5.0 && sm_model_particle_count(m) == 3 && sm_model_spring_count(m) == 1);
+	ENSURE(sm_model_clone(NULL) == NULL);
+	sm_model_destroy(c);
+	// Clone of an empty model.
+	sm_model_def md = sm_default_model_def();
+	sm_model* e = sm_model_create(&md, NULL);
+	sm_model* ec = sm_model_clone(e);
+	ENSURE(ec != NULL && sm_model_particle_count(ec) == 0);
+	sm_model_destroy(ec);
+	sm_model_destroy(e);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Many particles and springs (several reallocations) keep every stored value.
+static int test_growth_keeps_values(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* m = sm_model_create(&md, NULL);
+	for (int i = 0; i < 1000; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = 1.0 + i;
+		p.position[0] = i;
+		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+		if (i > 0) {
+			sm_spring_def d = sm_default_spring_def();
+			d.a = i - 1;
+			d.b = i;
+			d.stiffness = i;
+			ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		}
+	}
+	for (int i = 0; i < 1000; i += 97) {
+		sm_particle_def p;
+		ENSURE_STATUS(sm_model_get_particle(m, i, &p), SM_OK);
+		ENSURE(p.mass == 1.0 + i && p.position[0] == i);
+	}
+	for (int s = 0; s < 999; s += 101) {
+		sm_spring_def d;
+		ENSURE_STATUS(sm_model_get_spring(m, s, &d), SM_OK);
+		ENSURE(d.a == s && d.b == s + 1 && d.stiffness == s + 1 && d.rest_length == 1.0);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_defaults);
+	RUN_TEST(test_invalid_model_definitions);
+	RUN_TEST(test_invalid_particles);
+	RUN_TEST(test_invalid_springs);
+	RUN_TEST(test_accessors_and_per_strain_constants);
+	RUN_TEST(test_clone_is_independent);
+	RUN_TEST(test_growth_keeps_values);
+	return TEST_SUMMARY();
+}
