@@ -341,6 +341,22 @@ static fmi2Status create_simulation(instance* inst, sm_model* model, double sim_
 	inst->breaks_logged = 0;
 	inst->dissipated_offset = 0.0;
 	mark_inputs_dirty(inst);
+	if (x) {
+		// A restored motion port continues from where its particle is, with the held velocity:
+		// the prescribed motion of a port whose inputs were set some steps before the state was
+		// saved has moved on since (the held position is still what the input reads).
+		for (int32_t p = 0; p < inst->port_count; ++p) {
+			if (inst->ports[p].kind != SM_PORT_MOTION)
+				continue;
+			const double* position = x + 3 * (size_t)inst->ports[p].particle;
+			if (sm_simulation_set_driven(sim, inst->ports[p].particle, position, inst->held[p].velocity) != SM_OK) {
+				log_error(inst, "port %s: cannot restore its motion: %s", inst->ports[p].name,
+				          sm_simulation_last_error(sim));
+				return fmi2Error;
+			}
+			inst->port_dirty[p] = false;
+		}
+	}
 	return apply_inputs(inst);
 }
 
