@@ -3,7 +3,8 @@
 //
 // Each builder appends particles and springs to a model and reports the index ranges it
 // created in an sm_structure, so callers can fix, drive or probe particles of the structure.
-// On error the model is left exactly as it was (nothing half-built).
+// On error the model is left exactly as it was (nothing half-built) and sm_model_last_error()
+// names the field and the rule it broke.
 #pragma once
 
 #include "springmass/model.h"
@@ -12,12 +13,16 @@
 extern "C" {
 #endif
 
+/// Largest number of particles, and of springs, one builder call may create. Larger requests
+/// fail with SM_ERROR_INVALID_ARGUMENT before anything is allocated.
+#define SM_STRUCTURE_MAX_ELEMENTS (1 << 24)
+
 /// Constants of one group of springs (structural, shear, bend, ...). A group whose stiffness
 /// and damping are both zero is not created.
 typedef struct sm_spring_material {
-	double stiffness;              ///< ks [N/m] or, per strain, E [N]
+	double stiffness;              ///< ks [N/m] or, per strain, E [N]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
-	double damping;                ///< kd [N s/m] or, per strain, c [N s]
+	double damping;                ///< kd [N s/m] or, per strain, c [N s]; default 0
 	sm_scaling damping_scaling;    ///< default SM_PER_STRAIN
 	double break_strain;           ///< [1]; INFINITY (default) = never breaks
 } sm_spring_material;
@@ -26,7 +31,7 @@ typedef struct sm_spring_material {
 typedef struct sm_structure {
 	int32_t first_particle;  ///< index of the structure's first particle
 	int32_t particle_count;  ///< its particles are first_particle .. first_particle + particle_count - 1
-	int32_t first_spring;    ///< likewise for springs
+	int32_t first_spring;    ///< its springs are first_spring .. first_spring + spring_count - 1
 	int32_t spring_count;
 	int32_t shape[3];        ///< grid points per axis (rope: segments + 1, 1, 1; mesh: vertices, 1, 1)
 } sm_structure;
@@ -34,34 +39,41 @@ typedef struct sm_structure {
 /// Index of the particle at grid coordinate (i, j, k) of a structure, or -1 if outside the grid.
 /// Column j runs along the first axis (shape[0] points), row i along the second (shape[1]),
 /// layer k along the third (shape[2]): index first_particle + (k * shape[1] + i) * shape[0] + j.
-/// For a rope or a mesh, j is the point's position along the rope or the vertex index.
+/// For a rope or a mesh (one row), use i = k = 0 and j = the point's position along the rope or
+/// the vertex index.
 SM_API int32_t sm_structure_particle(const sm_structure* structure, int32_t i, int32_t j, int32_t k);
 
+/// Zero constants (no springs), per-strain scaling, never breaks.
 SM_API sm_spring_material sm_default_spring_material(void);
 
-/// Rope or chain: a straight polyline of `segments` springs from start to end.
+/// Rope or chain: a straight polyline of `segments` springs from start to end. Particle p
+/// (0 <= p <= segments) sits at start + p / segments (end - start) and has index
+/// first_particle + p. Springs, in order: for each p, the structural spring (p, p + 1), then the
+/// bending spring (p, p + 2) where it exists.
 typedef struct sm_rope_def {
-	double start[3];                ///< first particle's position [m]
-	double end[3];                  ///< last particle's position [m]
-	int32_t segments;               ///< number of structural springs, >= 1
-	double mass;                    ///< total mass [kg], spread evenly over segments + 1 particles; used if mass_per_length is 0
-	double mass_per_length;         ///< [kg/m]; > 0 overrides mass
+	double start[3];                ///< first particle's position [m]; default (0, 0, 0)
+	double end[3];                  ///< last particle's position [m]; default (1, 0, 0)
+	int32_t segments;               ///< number of structural springs, >= 1; default 10
+	double mass;                    ///< total mass [kg] > 0, spread evenly over segments + 1 particles; default 1
+	double mass_per_length;         ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
 	sm_spring_material structural;  ///< springs between neighbours
 	sm_spring_material bending;     ///< springs to the second neighbour; zero constants = none
 } sm_rope_def;
 
-/// Sheet (cloth): shape[0] x shape[1] particles on the parallelogram origin + s edge_u + t edge_v,
+/// Sheet (cloth): nu x nv particles on the parallelogram origin + s edge_u + t edge_v,
 /// s, t in [0, 1]. Particle (i, j) sits at origin + j/(nu-1) edge_u + i/(nv-1) edge_v and has
 /// index i * nu + j. For each particle in index order, springs to (i, j+1), (i+1, j) [structural],
-/// (i+1, j+1), (i+1, j-1) [shear], (i, j+2), (i+2, j) [bend], where they exist: the same
-/// particles and springs, in the same order, as the benchmark cloth.
+/// (i+1, j+1), (i+1, j-1) [shear], (i, j+2), (i+2, j) [bend], where they exist and their group
+/// has constants: the same particles and springs, in the same order, as the benchmark cloth.
+/// The default definition is the benchmark cloth with n = 16 (1 m x 1 m in the z = 0 plane,
+/// 1 kg, E = 1000 N structural and shear, 50 N bend, c = 2 N s for all, per strain).
 typedef struct sm_sheet_def {
-	double origin[3];               ///< [m]
+	double origin[3];               ///< [m]; default (0, 0, 0)
 	double edge_u[3];               ///< first edge [m]; default (1, 0, 0)
 	double edge_v[3];               ///< second edge [m]; default (0, 1, 0)
-	int32_t nu;                     ///< particles along edge_u, >= 2
-	int32_t nv;                     ///< particles along edge_v, >= 2
-	double mass;                    ///< total mass [kg], spread evenly
+	int32_t nu;                     ///< particles along edge_u, >= 2; default 16
+	int32_t nv;                     ///< particles along edge_v, >= 2; default 16
+	double mass;                    ///< total mass [kg] > 0, spread evenly; default 1
 	sm_spring_material structural;
 	sm_spring_material shear;
 	sm_spring_material bend;
@@ -71,27 +83,37 @@ typedef struct sm_sheet_def {
 /// with edge springs (lattice neighbours), face-diagonal springs (both diagonals of every
 /// lattice square face) and body-diagonal springs (all four diagonals of every cell), so it
 /// resists shear in every direction. Particle (i, j, k) at origin + (j/(nu-1) size[0],
-/// i/(nv-1) size[1], k/(nw-1) size[2]) has index (k * nv + i) * nu + j.
+/// i/(nv-1) size[1], k/(nw-1) size[2]) has index (k * nv + i) * nu + j. For each particle in
+/// index order, springs to the neighbours (i, j+1, k), (i+1, j, k), (i, j, k+1) [edge],
+/// (i+1, j+1, k), (i+1, j-1, k), (i, j+1, k+1), (i, j-1, k+1), (i+1, j, k+1), (i-1, j, k+1)
+/// [face diagonal], (i+1, j+1, k+1), (i+1, j-1, k+1), (i-1, j+1, k+1), (i-1, j-1, k+1)
+/// [body diagonal], where they exist and their group has constants.
+/// The default is a 1 m cube of 4 x 4 x 4 particles, 1 kg, E = 1000 N in every group.
 typedef struct sm_block_def {
-	double origin[3];  ///< [m]
-	double size[3];    ///< edge lengths along x, y, z [m], > 0
-	int32_t nu, nv, nw;  ///< particles along x, y, z, each >= 2
-	double mass;       ///< total mass [kg], spread evenly
+	double origin[3];    ///< [m]; default (0, 0, 0)
+	double size[3];      ///< edge lengths along x, y, z [m], > 0; default (1, 1, 1)
+	int32_t nu, nv, nw;  ///< particles along x, y, z, each >= 2; default 4
+	double mass;         ///< total mass [kg] > 0, spread evenly; default 1
 	sm_spring_material edge;
 	sm_spring_material face_diagonal;
 	sm_spring_material body_diagonal;
 } sm_block_def;
 
-/// Triangle mesh: a spring on every edge (each edge once, in order of first appearance) and a
-/// bending spring across every interior edge (between the two vertices opposite it). Each
-/// particle gets a third of the mass of every triangle it belongs to, the triangle's mass being
-/// its area times the density.
+/// Triangle mesh: a spring on every edge (each edge once, in order of first appearance, edges
+/// of a triangle (v0, v1), (v1, v2), (v2, v0), each spring from the lower vertex index to the
+/// higher) and then a bending spring across every interior
+/// edge (between the two vertices opposite it, in the order of the edges). Each vertex gets a
+/// third of the mass of every triangle it belongs to, the triangle's mass being its area times
+/// the density; vertex v becomes particle first_particle + v.
+/// Errors: a vertex index out of range, a triangle with a repeated vertex or zero area, an edge
+/// shared by more than two triangles, two triangles on the same three vertices, a vertex that
+/// belongs to no triangle (it would have no mass).
 typedef struct sm_mesh_def {
-	const double* vertices;    ///< 3 per vertex [m]
+	const double* vertices;    ///< 3 per vertex [m]; not copied, read during the call only
 	int32_t vertex_count;
 	const int32_t* triangles;  ///< 3 vertex indices per triangle
 	int32_t triangle_count;
-	double density;            ///< areal density [kg/m^2], > 0
+	double density;            ///< areal density [kg/m^2], > 0; default 1
 	sm_spring_material edge;
 	sm_spring_material bend;
 } sm_mesh_def;
@@ -101,17 +123,27 @@ SM_API sm_sheet_def sm_default_sheet_def(void);
 SM_API sm_block_def sm_default_block_def(void);
 SM_API sm_mesh_def sm_default_mesh_def(void);
 
-/// Builders: append the structure to the model. On error the model is unchanged and
-/// sm_model_last_error() names the field and the rule.
+/// Builders: append the structure to the model and describe it in *out (may be NULL). On error
+/// the model is unchanged and sm_model_last_error() names the field and the rule.
 SM_API sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out);
 SM_API sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* out);
 SM_API sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* out);
 SM_API sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out);
 
-/// Sets the motion of every particle whose position lies in the closed box [lo, hi] [m];
-/// writes how many were changed to *count (may be NULL).
+/// Sets the motion of every particle whose initial position lies in the closed box [lo, hi]
+/// [m]; writes how many were changed to *count (may be NULL). An empty box is not an error.
 SM_API sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double hi[3],
                                       sm_particle_motion motion, int32_t* count);
+
+/// Sets the motion of the particle at grid coordinate (i, j, k) of a structure (see
+/// sm_structure_particle); SM_ERROR_PARTICLE_INDEX if the coordinate is outside the grid.
+SM_API sm_status sm_set_motion_at(sm_model* model, const sm_structure* structure, int32_t i, int32_t j,
+                                  int32_t k, sm_particle_motion motion);
+
+/// Sets the motion of `count` particles given by index; all indices are checked first, so on
+/// error nothing changed.
+SM_API sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t count,
+                                  sm_particle_motion motion);
 
 #ifdef __cplusplus
 }

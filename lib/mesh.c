@@ -1,0 +1,222 @@
+// Triangle meshes: a spring on every edge, a bending spring across every interior edge, masses
+// lumped from the triangles' areas.
+//
+// Lumped mass: a triangle of area A = |(x1 - x0) x (x2 - x0)| / 2 and areal density rho has
+// mass rho A; each of its three vertices takes a third, so the total mass is rho times the
+// mesh's area exactly, and a uniformly refined mesh keeps the same mass distribution.
+//
+// Edges are found with an open-addressing hash table keyed by the sorted vertex pair; each
+// entry remembers how many triangles share the edge and the vertex opposite it in the first
+// two, which are the ends of the bending spring across an interior edge.
+#include "structures_internal.h"
+
+#include <math.h>
+#include <string.h>
+
+sm_mesh_def sm_default_mesh_def(void)
+{
+	sm_mesh_def d;
+	memset(&d, 0, sizeof d);
+	d.density = 1.0;
+	d.edge = sm_default_spring_material();
+	d.edge.stiffness = 1000.0;
+	d.bend = sm_default_spring_material();
+	return d;
+}
+
+typedef struct edge_entry {
+	uint64_t key;         // (low vertex << 32) | high vertex, or UINT64_MAX when empty
+	int32_t triangles;    // triangles sharing the edge
+	int32_t opposite[2];  // the vertex opposite the edge in the first two triangles
+	int32_t order;        // order of first appearance
+} edge_entry;
+
+typedef struct edge_table {
+	edge_entry* slots;
+	size_t mask;
+	int32_t* in_order;  // slot index of each edge in order of first appearance
+	int32_t count;
+} edge_table;
+
+static uint64_t edge_key(int32_t a, int32_t b)
+{
+	const uint32_t lo = (uint32_t)(a < b ? a : b), hi = (uint32_t)(a < b ? b : a);
+	return ((uint64_t)lo << 32) | hi;
+}
+
+static size_t edge_hash(uint64_t key, size_t mask)
+{
+	key ^= key >> 33;
+	key *= 0xff51afd7ed558ccdULL;
+	key ^= key >> 33;
+	return (size_t)key & mask;
+}
+
+// Finds or inserts the edge; returns its entry.
+static edge_entry* edge_find(edge_table* t, uint64_t key)
+{
+	size_t s = edge_hash(key, t->mask);
+	while (t->slots[s].key != UINT64_MAX && t->slots[s].key != key)
+		s = (s + 1) & t->mask;
+	edge_entry* e = &t->slots[s];
+	if (e->key == UINT64_MAX) {
+		e->key = key;
+		e->triangles = 0;
+		e->order = t->count;
+		t->in_order[t->count++] = (int32_t)s;
+	}
+	return e;
+}
+
+static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
+{
+	static const char what[] = "mesh";
+	sm_status st;
+	if ((st = structure_check_material(model, what, "edge", &def->edge)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bend", &def->bend)) != SM_OK)
+		return st;
+	if (!isfinite(def->density) || !(def->density > 0.0))
+		return sm_model_fail(model, isfinite(def->density) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
+		                     "mesh: density = %g must be finite and > 0", def->density);
+	if (def->vertex_count < 3 || def->triangle_count < 1)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "mesh: %d vertices and %d triangles; a mesh needs at least 3 vertices and 1 triangle",
+		                     (int)def->vertex_count, (int)def->triangle_count);
+	if (def->vertices == NULL || def->triangles == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL");
+	if (def->triangle_count > SM_STRUCTURE_MAX_ELEMENTS / 3)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "mesh: %d triangles exceed the limit of %d per structure", (int)def->triangle_count,
+		                     SM_STRUCTURE_MAX_ELEMENTS / 3);
+	for (int32_t v = 0; v < def->vertex_count; v++)
+		for (int c = 0; c < 3; c++)
+			if (!isfinite(def->vertices[3 * (size_t)v + c]))
+				return sm_model_fail(model, SM_ERROR_NOT_FINITE, "mesh: vertex %d coordinate %d = %g is not finite",
+				                     (int)v, c, def->vertices[3 * (size_t)v + c]);
+	for (int32_t t = 0; t < def->triangle_count; t++) {
+		const int32_t* tri = def->triangles + 3 * (size_t)t;
+		for (int c = 0; c < 3; c++)
+			if (tri[c] < 0 || tri[c] >= def->vertex_count)
+				return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
+				                     "mesh: triangle %d vertex %d = %d is out of range (mesh has %d vertices)", (int)t,
+				                     c, (int)tri[c], (int)def->vertex_count);
+		if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+			return sm_model_fail(model, SM_ERROR_SELF_SPRING, "mesh: triangle %d (%d, %d, %d) repeats a vertex",
+			                     (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+	}
+	return SM_OK;
+}
+
+static double triangle_area(const double* vertices, const int32_t* tri)
+{
+	const double* a = vertices + 3 * (size_t)tri[0];
+	const double* b = vertices + 3 * (size_t)tri[1];
+	const double* c = vertices + 3 * (size_t)tri[2];
+	const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+	const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+	const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out)
+{
+	static const char what[] = "mesh";
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (def == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: definition is NULL");
+	sm_status st = check_mesh(model, def);
+	if (st != SM_OK)
+		return st;
+
+	const int32_t nv = def->vertex_count, nt = def->triangle_count;
+	size_t capacity = 16;
+	while (capacity < 6 * (size_t)nt)
+		capacity *= 2;
+	edge_table table = {malloc(capacity * sizeof(edge_entry)), capacity - 1, malloc(3 * (size_t)nt * sizeof(int32_t)),
+	                    0};
+	double* mass = calloc((size_t)nv, sizeof(double));
+	if (table.slots == NULL || table.in_order == NULL || mass == NULL) {
+		st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "mesh: out of memory for %d triangles", (int)nt);
+		goto done;
+	}
+	for (size_t s = 0; s < capacity; s++)
+		table.slots[s].key = UINT64_MAX;
+
+	for (int32_t t = 0; t < nt && st == SM_OK; t++) {
+		const int32_t* tri = def->triangles + 3 * (size_t)t;
+		const double area = triangle_area(def->vertices, tri);
+		if (!(area > 0.0)) {
+			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle %d (%d, %d, %d) has zero area",
+			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			break;
+		}
+		for (int c = 0; c < 3; c++)
+			mass[tri[c]] += def->density * area / 3.0;
+		for (int c = 0; c < 3; c++) {
+			const int32_t a = tri[c], b = tri[(c + 1) % 3], opposite = tri[(c + 2) % 3];
+			edge_entry* e = edge_find(&table, edge_key(a, b));
+			if (e->triangles >= 2) {
+				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+				                   "mesh: edge (%d, %d) of triangle %d is shared by more than two triangles", (int)a,
+				                   (int)b, (int)t);
+				break;
+			}
+			if (e->triangles == 1 && e->opposite[0] == opposite) {
+				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+				                   "mesh: triangle %d repeats the vertices of an earlier triangle (%d, %d, %d)", (int)t,
+				                   (int)tri[0], (int)tri[1], (int)tri[2]);
+				break;
+			}
+			e->opposite[e->triangles++] = opposite;
+		}
+	}
+	for (int32_t v = 0; v < nv && st == SM_OK; v++)
+		if (!(mass[v] > 0.0) || !isfinite(mass[v]))
+			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS,
+			                   "mesh: vertex %d belongs to no triangle (or its mass %g is not finite and > 0)", (int)v,
+			                   mass[v]);
+	if (st != SM_OK)
+		goto done;
+
+	const bool has_edge = structure_material_present(&def->edge), has_bend = structure_material_present(&def->bend);
+	int64_t interior = 0;
+	for (int32_t e = 0; e < table.count; e++)
+		interior += table.slots[table.in_order[e]].triangles == 2;
+	const int64_t springs = (has_edge ? table.count : 0) + (has_bend ? interior : 0);
+	if ((st = structure_check_size(model, what, nv, springs)) != SM_OK ||
+	    (st = structure_reserve(model, what, nv, springs)) != SM_OK)
+		goto done;
+
+	const int32_t p0 = model->particle_count, s0 = model->spring_count;
+	for (int32_t v = 0; v < nv && st == SM_OK; v++)
+		st = structure_add_particle(model, what, mass[v], def->vertices + 3 * (size_t)v);
+	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
+		const edge_entry* entry = &table.slots[table.in_order[e]];
+		st = structure_add_spring(model, what, "edge", p0 + (int32_t)(entry->key >> 32),
+		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge);
+	}
+	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
+		const edge_entry* entry = &table.slots[table.in_order[e]];
+		if (entry->triangles == 2)
+			st = structure_add_spring(model, what, "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend);
+	}
+	if (st != SM_OK) {
+		structure_truncate(model, p0, s0);
+		goto done;
+	}
+	if (out != NULL) {
+		out->first_particle = p0;
+		out->particle_count = nv;
+		out->first_spring = s0;
+		out->spring_count = model->spring_count - s0;
+		out->shape[0] = nv;
+		out->shape[1] = 1;
+		out->shape[2] = 1;
+	}
+done:
+	free(table.slots);
+	free(table.in_order);
+	free(mass);
+	return st;
+}

@@ -1,0 +1,509 @@
+// Structures built from particles and springs: ropes, sheets and blocks (meshes live in
+// mesh.c), and the helpers that select their particles.
+//
+// Every builder first checks its definition and the sizes it will create, then reserves room
+// and appends. If appending fails half-way (a spring the model rejects, memory), the model is
+// cut back to the particle and spring counts it had before the call: nothing half-built stays.
+#include "structures_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+sm_spring_material sm_default_spring_material(void)
+{
+	sm_spring_material m;
+	memset(&m, 0, sizeof m);
+	m.stiffness_scaling = SM_PER_STRAIN;
+	m.damping_scaling = SM_PER_STRAIN;
+	m.break_strain = INFINITY;
+	return m;
+}
+
+static sm_spring_material strain_material(double stiffness, double damping)
+{
+	sm_spring_material m = sm_default_spring_material();
+	m.stiffness = stiffness;
+	m.damping = damping;
+	return m;
+}
+
+sm_rope_def sm_default_rope_def(void)
+{
+	sm_rope_def d;
+	memset(&d, 0, sizeof d);
+	d.end[0] = 1.0;
+	d.segments = 10;
+	d.mass = 1.0;
+	d.structural = strain_material(1000.0, 0.0);
+	d.bending = sm_default_spring_material();
+	return d;
+}
+
+sm_sheet_def sm_default_sheet_def(void)
+{
+	sm_sheet_def d;
+	memset(&d, 0, sizeof d);
+	d.edge_u[0] = 1.0;
+	d.edge_v[1] = 1.0;
+	d.nu = 16;
+	d.nv = 16;
+	d.mass = 1.0;
+	d.structural = strain_material(1000.0, 2.0);
+	d.shear = strain_material(1000.0, 2.0);
+	d.bend = strain_material(50.0, 2.0);
+	return d;
+}
+
+sm_block_def sm_default_block_def(void)
+{
+	sm_block_def d;
+	memset(&d, 0, sizeof d);
+	d.size[0] = d.size[1] = d.size[2] = 1.0;
+	d.nu = d.nv = d.nw = 4;
+	d.mass = 1.0;
+	d.edge = strain_material(1000.0, 0.0);
+	d.face_diagonal = strain_material(1000.0, 0.0);
+	d.body_diagonal = strain_material(1000.0, 0.0);
+	return d;
+}
+
+int32_t sm_structure_particle(const sm_structure* s, int32_t i, int32_t j, int32_t k)
+{
+	if (s == NULL || i < 0 || j < 0 || k < 0 || j >= s->shape[0] || i >= s->shape[1] || k >= s->shape[2])
+		return -1;
+	const int64_t index = (int64_t)s->first_particle + ((int64_t)k * s->shape[1] + i) * s->shape[0] + j;
+	return index <= INT32_MAX ? (int32_t)index : -1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shared steps of every builder.
+// ---------------------------------------------------------------------------------------------
+
+bool structure_material_present(const sm_spring_material* m)
+{
+	return m->stiffness != 0.0 || m->damping != 0.0;
+}
+
+sm_status structure_check_material(sm_model* model, const char* what, const char* group,
+                                   const sm_spring_material* m)
+{
+	if (!isfinite(m->stiffness) || m->stiffness < 0.0)
+		return sm_model_fail(model, isfinite(m->stiffness) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
+		                     "%s: %s stiffness = %g must be finite and >= 0", what, group, m->stiffness);
+	if (!isfinite(m->damping) || m->damping < 0.0)
+		return sm_model_fail(model, isfinite(m->damping) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
+		                     "%s: %s damping = %g must be finite and >= 0", what, group, m->damping);
+	if (m->stiffness_scaling != SM_ABSOLUTE && m->stiffness_scaling != SM_PER_STRAIN)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s stiffness scaling = %d is not known", what,
+		                     group, (int)m->stiffness_scaling);
+	if (m->damping_scaling != SM_ABSOLUTE && m->damping_scaling != SM_PER_STRAIN)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s damping scaling = %d is not known", what,
+		                     group, (int)m->damping_scaling);
+	if (isnan(m->break_strain) || !(m->break_strain > 0.0))
+		return sm_model_fail(model, isnan(m->break_strain) ? SM_ERROR_NOT_FINITE : SM_ERROR_NEGATIVE,
+		                     "%s: %s break strain = %g must be > 0 (INFINITY for never)", what, group,
+		                     m->break_strain);
+	return SM_OK;
+}
+
+sm_status structure_check_vector(sm_model* model, const char* what, const char* field, const double v[3])
+{
+	for (int c = 0; c < 3; c++)
+		if (!isfinite(v[c]))
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "%s: %s[%d] = %g is not finite", what, field, c, v[c]);
+	return SM_OK;
+}
+
+sm_status structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs)
+{
+	if (particles > SM_STRUCTURE_MAX_ELEMENTS || springs > SM_STRUCTURE_MAX_ELEMENTS)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "%s: %lld particles and %lld springs exceed the limit of %d of each per structure",
+		                     what, (long long)particles, (long long)springs, SM_STRUCTURE_MAX_ELEMENTS);
+	if ((int64_t)model->particle_count + particles > SM_STRUCTURE_MAX_ELEMENTS * 4LL ||
+	    (int64_t)model->spring_count + springs > SM_STRUCTURE_MAX_ELEMENTS * 4LL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: the model would grow past %lld elements",
+		                     what, SM_STRUCTURE_MAX_ELEMENTS * 4LL);
+	return SM_OK;
+}
+
+// Room for everything up front: adding particles and springs then never reallocates half-way.
+sm_status structure_reserve(sm_model* model, const char* what, int64_t particles, int64_t springs)
+{
+	if (!structure_reserve_arrays(model, model->particle_count + particles, model->spring_count + springs))
+		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for %lld particles and %lld springs",
+		                     what, (long long)particles, (long long)springs);
+	return SM_OK;
+}
+
+static int grow(void** array, size_t capacity, size_t size)
+{
+	void* p = realloc(*array, capacity * size);
+	if (p == NULL)
+		return 0;
+	*array = p;
+	return 1;
+}
+
+// Grows the model's arrays to hold at least the given counts. Arrays that already grew keep
+// their larger size with their contents intact, so a failure changes nothing observable.
+int structure_reserve_arrays(sm_model* m, int64_t particles, int64_t springs)
+{
+	if (particles > m->particle_capacity) {
+		const size_t c = (size_t)particles;
+		if (!grow((void**)&m->mass, c, sizeof(double)) || !grow((void**)&m->position, 3 * c, sizeof(double)) ||
+		    !grow((void**)&m->velocity, 3 * c, sizeof(double)) ||
+		    !grow((void**)&m->motion, c, sizeof(sm_particle_motion)) ||
+		    !grow((void**)&m->free_index, c, sizeof(int32_t)))
+			return 0;
+		m->particle_capacity = (int32_t)particles;
+	}
+	if (springs > m->spring_capacity) {
+		const size_t c = (size_t)springs;
+		if (!grow((void**)&m->spring_def, c, sizeof(sm_spring_def)) ||
+		    !grow((void**)&m->spring_a, c, sizeof(int32_t)) || !grow((void**)&m->spring_b, c, sizeof(int32_t)) ||
+		    !grow((void**)&m->rest_length, c, sizeof(double)) || !grow((void**)&m->stiffness, c, sizeof(double)) ||
+		    !grow((void**)&m->damping, c, sizeof(double)) || !grow((void**)&m->zero_length, c, sizeof(uint8_t)) ||
+		    !grow((void**)&m->enabled, c, sizeof(uint8_t)))
+			return 0;
+		m->spring_capacity = (int32_t)springs;
+	}
+	return 1;
+}
+
+void structure_truncate(sm_model* m, int32_t particles, int32_t springs)
+{
+	m->particle_count = particles;
+	m->spring_count = springs;
+	int32_t count = 0;
+	for (int32_t i = 0; i < m->particle_count; i++)
+		m->free_index[i] = m->motion[i] == SM_PARTICLE_FREE ? count++ : -1;
+	m->free_count = count;
+}
+
+sm_status structure_add_particle(sm_model* model, const char* what, double mass, const double position[3])
+{
+	sm_particle_def p = sm_default_particle_def();
+	p.mass = mass;
+	memcpy(p.position, position, sizeof p.position);
+	sm_status st = sm_model_add_particle(model, &p, NULL);
+	if (st != SM_OK) {
+		char inner[SM_ERROR_MESSAGE_CAPACITY];
+		snprintf(inner, sizeof inner, "%s", sm_model_last_error(model));
+		sm_model_fail(model, st, "%s: %s", what, inner);
+	}
+	return st;
+}
+
+sm_status structure_add_spring(sm_model* model, const char* what, const char* group, int32_t a, int32_t b,
+                               const sm_spring_material* m)
+{
+	sm_spring_def s = sm_default_spring_def();
+	s.a = a;
+	s.b = b;
+	s.stiffness = m->stiffness;
+	s.stiffness_scaling = m->stiffness_scaling;
+	s.damping = m->damping;
+	s.damping_scaling = m->damping_scaling;
+	s.break_strain = m->break_strain;
+	sm_status st = sm_model_add_spring(model, &s, NULL);
+	if (st != SM_OK) {
+		char inner[SM_ERROR_MESSAGE_CAPACITY];
+		snprintf(inner, sizeof inner, "%s", sm_model_last_error(model));
+		sm_model_fail(model, st, "%s: %s spring between particles %d and %d: %s", what, group, (int)a, (int)b,
+		              inner);
+	}
+	return st;
+}
+
+static sm_status check_mass(sm_model* model, const char* what, double mass)
+{
+	if (!isfinite(mass))
+		return sm_model_fail(model, SM_ERROR_NOT_FINITE, "%s: mass = %g is not finite", what, mass);
+	if (!(mass > 0.0))
+		return sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS, "%s: mass = %g must be > 0", what, mass);
+	return SM_OK;
+}
+
+static void fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
+                     int32_t n2)
+{
+	if (out == NULL)
+		return;
+	out->first_particle = p0;
+	out->particle_count = model->particle_count - p0;
+	out->first_spring = s0;
+	out->spring_count = model->spring_count - s0;
+	out->shape[0] = n0;
+	out->shape[1] = n1;
+	out->shape[2] = n2;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rope.
+// ---------------------------------------------------------------------------------------------
+
+sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out)
+{
+	static const char what[] = "rope";
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (def == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: definition is NULL");
+	sm_status st;
+	if ((st = structure_check_vector(model, what, "start", def->start)) != SM_OK ||
+	    (st = structure_check_vector(model, what, "end", def->end)) != SM_OK ||
+	    (st = structure_check_material(model, what, "structural", &def->structural)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bending", &def->bending)) != SM_OK)
+		return st;
+	if (def->segments < 1)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: segments = %d must be >= 1",
+		                     (int)def->segments);
+	const double dx = def->end[0] - def->start[0], dy = def->end[1] - def->start[1], dz = def->end[2] - def->start[2];
+	const double length = sqrt(dx * dx + dy * dy + dz * dz);
+	double total = def->mass;
+	if (isnan(def->mass_per_length) || def->mass_per_length < 0.0 || isinf(def->mass_per_length))
+		return sm_model_fail(model, SM_ERROR_NEGATIVE, "rope: mass per length = %g must be finite and >= 0",
+		                     def->mass_per_length);
+	if (def->mass_per_length > 0.0)
+		total = def->mass_per_length * length;
+	if ((st = check_mass(model, what, total)) != SM_OK)
+		return st;
+
+	const int64_t n = (int64_t)def->segments + 1;
+	const bool has_structural = structure_material_present(&def->structural);
+	const bool has_bending = structure_material_present(&def->bending);
+	const int64_t springs = (has_structural ? n - 1 : 0) + (has_bending ? n - 2 : 0);
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
+	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+		return st;
+
+	const int32_t p0 = model->particle_count, s0 = model->spring_count;
+	const double m = total / (double)n;
+	for (int64_t p = 0; p < n && st == SM_OK; p++) {
+		const double t = (double)p / (double)def->segments;
+		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
+		st = structure_add_particle(model, what, m, x);
+	}
+	for (int64_t p = 0; p < n && st == SM_OK; p++) {
+		const int32_t a = p0 + (int32_t)p;
+		if (has_structural && p + 1 < n)
+			st = structure_add_spring(model, what, "structural", a, a + 1, &def->structural);
+		if (st == SM_OK && has_bending && p + 2 < n)
+			st = structure_add_spring(model, what, "bending", a, a + 2, &def->bending);
+	}
+	if (st != SM_OK) {
+		structure_truncate(model, p0, s0);
+		return st;
+	}
+	fill_out(out, p0, s0, model, (int32_t)n, 1, 1);
+	return SM_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sheet.
+// ---------------------------------------------------------------------------------------------
+
+sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* out)
+{
+	static const char what[] = "sheet";
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (def == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "sheet: definition is NULL");
+	sm_status st;
+	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
+	    (st = structure_check_vector(model, what, "edge_u", def->edge_u)) != SM_OK ||
+	    (st = structure_check_vector(model, what, "edge_v", def->edge_v)) != SM_OK ||
+	    (st = structure_check_material(model, what, "structural", &def->structural)) != SM_OK ||
+	    (st = structure_check_material(model, what, "shear", &def->shear)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bend", &def->bend)) != SM_OK ||
+	    (st = check_mass(model, what, def->mass)) != SM_OK)
+		return st;
+	if (def->nu < 2 || def->nv < 2)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "sheet: nu = %d and nv = %d must both be >= 2",
+		                     (int)def->nu, (int)def->nv);
+
+	const int64_t nu = def->nu, nv = def->nv, n = nu * nv;
+	const bool has[3] = {structure_material_present(&def->structural), structure_material_present(&def->shear),
+	                     structure_material_present(&def->bend)};
+	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) + (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +
+	                        (has[2] ? (nu - 2) * nv + nu * (nv - 2) : 0);
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
+	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+		return st;
+
+	const int32_t p0 = model->particle_count, s0 = model->spring_count;
+	const double m = def->mass / (double)n;
+	for (int64_t i = 0; i < nv && st == SM_OK; i++) {
+		for (int64_t j = 0; j < nu && st == SM_OK; j++) {
+			const double s = (double)j / (double)(nu - 1), t = (double)i / (double)(nv - 1);
+			double x[3];
+			for (int c = 0; c < 3; c++)
+				x[c] = def->origin[c] + s * def->edge_u[c] + t * def->edge_v[c];
+			st = structure_add_particle(model, what, m, x);
+		}
+	}
+	// Neighbour offsets (di, dj) and their group, in the benchmark cloth's order.
+	static const int offsets[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 1, 1}, {1, -1, 1}, {0, 2, 2}, {2, 0, 2}};
+	const sm_spring_material* groups[3] = {&def->structural, &def->shear, &def->bend};
+	static const char* const group_names[3] = {"structural", "shear", "bend"};
+	for (int64_t i = 0; i < nv && st == SM_OK; i++) {
+		for (int64_t j = 0; j < nu && st == SM_OK; j++) {
+			for (int o = 0; o < 6 && st == SM_OK; o++) {
+				const int g = offsets[o][2];
+				const int64_t a = i + offsets[o][0], b = j + offsets[o][1];
+				if (!has[g] || a >= nv || b < 0 || b >= nu)
+					continue;
+				st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)(i * nu + j),
+				                          p0 + (int32_t)(a * nu + b), groups[g]);
+			}
+		}
+	}
+	if (st != SM_OK) {
+		structure_truncate(model, p0, s0);
+		return st;
+	}
+	fill_out(out, p0, s0, model, def->nu, def->nv, 1);
+	return SM_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Block.
+// ---------------------------------------------------------------------------------------------
+
+sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* out)
+{
+	static const char what[] = "block";
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (def == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "block: definition is NULL");
+	sm_status st;
+	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
+	    (st = structure_check_vector(model, what, "size", def->size)) != SM_OK ||
+	    (st = structure_check_material(model, what, "edge", &def->edge)) != SM_OK ||
+	    (st = structure_check_material(model, what, "face_diagonal", &def->face_diagonal)) != SM_OK ||
+	    (st = structure_check_material(model, what, "body_diagonal", &def->body_diagonal)) != SM_OK ||
+	    (st = check_mass(model, what, def->mass)) != SM_OK)
+		return st;
+	for (int c = 0; c < 3; c++)
+		if (!(def->size[c] > 0.0))
+			return sm_model_fail(model, SM_ERROR_NEGATIVE, "block: size[%d] = %g must be > 0", c, def->size[c]);
+	if (def->nu < 2 || def->nv < 2 || def->nw < 2)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "block: nu = %d, nv = %d and nw = %d must all be >= 2",
+		                     (int)def->nu, (int)def->nv, (int)def->nw);
+
+	const int64_t nu = def->nu, nv = def->nv, nw = def->nw;
+	if (nu * nv > SM_STRUCTURE_MAX_ELEMENTS || nu * nv * nw > SM_STRUCTURE_MAX_ELEMENTS)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "block: %d x %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
+		                     (int)nw, SM_STRUCTURE_MAX_ELEMENTS);
+	const int64_t n = nu * nv * nw;
+	const bool has[3] = {structure_material_present(&def->edge), structure_material_present(&def->face_diagonal),
+	                     structure_material_present(&def->body_diagonal)};
+	const int64_t edges = (nu - 1) * nv * nw + nu * (nv - 1) * nw + nu * nv * (nw - 1);
+	const int64_t faces = 2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
+	const int64_t bodies = 4 * (nu - 1) * (nv - 1) * (nw - 1);
+	const int64_t springs = (has[0] ? edges : 0) + (has[1] ? faces : 0) + (has[2] ? bodies : 0);
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
+	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+		return st;
+
+	const int32_t p0 = model->particle_count, s0 = model->spring_count;
+	const double m = def->mass / (double)n;
+	for (int64_t k = 0; k < nw && st == SM_OK; k++)
+		for (int64_t i = 0; i < nv && st == SM_OK; i++)
+			for (int64_t j = 0; j < nu && st == SM_OK; j++) {
+				const double x[3] = {def->origin[0] + (double)j / (double)(nu - 1) * def->size[0],
+				                     def->origin[1] + (double)i / (double)(nv - 1) * def->size[1],
+				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
+				st = structure_add_particle(model, what, m, x);
+			}
+	// Neighbour offsets (di, dj, dk) and their group, in creation order.
+	static const int offsets[13][4] = {
+	    {0, 1, 0, 0},  {1, 0, 0, 0},  {0, 0, 1, 0},                                              // edges
+	    {1, 1, 0, 1},  {1, -1, 0, 1}, {0, 1, 1, 1},  {0, -1, 1, 1}, {1, 0, 1, 1}, {-1, 0, 1, 1},  // faces
+	    {1, 1, 1, 2},  {1, -1, 1, 2}, {-1, 1, 1, 2}, {-1, -1, 1, 2},                              // bodies
+	};
+	const sm_spring_material* groups[3] = {&def->edge, &def->face_diagonal, &def->body_diagonal};
+	static const char* const group_names[3] = {"edge", "face diagonal", "body diagonal"};
+	for (int64_t k = 0; k < nw && st == SM_OK; k++)
+		for (int64_t i = 0; i < nv && st == SM_OK; i++)
+			for (int64_t j = 0; j < nu && st == SM_OK; j++)
+				for (int o = 0; o < 13 && st == SM_OK; o++) {
+					const int g = offsets[o][3];
+					const int64_t bi = i + offsets[o][0], bj = j + offsets[o][1], bk = k + offsets[o][2];
+					if (!has[g] || bi < 0 || bi >= nv || bj < 0 || bj >= nu || bk >= nw)
+						continue;
+					st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)((k * nv + i) * nu + j),
+					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g]);
+				}
+	if (st != SM_OK) {
+		structure_truncate(model, p0, s0);
+		return st;
+	}
+	fill_out(out, p0, s0, model, def->nu, def->nv, def->nw);
+	return SM_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Selection.
+// ---------------------------------------------------------------------------------------------
+
+sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double hi[3], sm_particle_motion motion,
+                               int32_t* count)
+{
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (lo == NULL || hi == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "box selection: corner is NULL");
+	for (int c = 0; c < 3; c++)
+		if (isnan(lo[c]) || isnan(hi[c]))
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "box selection: corner coordinate %d is NaN", c);
+	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "box selection: motion = %d is not known", (int)motion);
+	int32_t changed = 0;
+	for (int32_t p = 0; p < model->particle_count; p++) {
+		const double* x = model->position + 3 * (size_t)p;
+		if (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2]) {
+			sm_model_set_particle_motion(model, p, motion);
+			changed++;
+		}
+	}
+	if (count != NULL)
+		*count = changed;
+	return SM_OK;
+}
+
+sm_status sm_set_motion_at(sm_model* model, const sm_structure* structure, int32_t i, int32_t j, int32_t k,
+                           sm_particle_motion motion)
+{
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	const int32_t p = sm_structure_particle(structure, i, j, k);
+	if (p < 0 || p >= model->particle_count)
+		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX, "grid coordinate (%d, %d, %d) is outside the structure",
+		                     (int)i, (int)j, (int)k);
+	return sm_model_set_particle_motion(model, p, motion);
+}
+
+sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t count, sm_particle_motion motion)
+{
+	if (model == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (count < 0 || (count > 0 && particles == NULL))
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: %d particles given without a list",
+		                     (int)count);
+	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: motion = %d is not known", (int)motion);
+	for (int32_t n = 0; n < count; n++)
+		if (particles[n] < 0 || particles[n] >= model->particle_count)
+			return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
+			                     "selection: entry %d, particle %d, is out of range (model has %d particles)", (int)n,
+			                     (int)particles[n], (int)model->particle_count);
+	for (int32_t n = 0; n < count; n++)
+		sm_model_set_particle_motion(model, particles[n], motion);
+	return SM_OK;
+}
