@@ -15,8 +15,18 @@
 #include "law_spring_damping.h"
 #include "model_internal.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+// Where one spring's four blocks go.
+typedef struct spring_slots {
+	int64_t block[4];  // value offsets of blocks (a,a), (a,b), (b,a), (b,b); -1 if absent
+	int32_t stride_a;  // row stride of a's block row (0 if a is constrained)
+	int32_t stride_b;  // likewise for b
+	int32_t assign;    // 1: first spring of its pair, assigns the off-diagonal blocks; 0: adds
+	int32_t unused;
+} spring_slots;
 
 struct sm_sparse_jacobian {
 	int64_t dimension;
@@ -33,7 +43,7 @@ struct sm_sparse_jacobian {
 
 	int64_t* row_stride;       // per free particle: 3 * blocks in its block row
 	int64_t* diagonal_offset;  // per free particle: value offset of its diagonal block
-	int64_t* spring_offset;    // 4 per spring: blocks (a,a), (a,b), (b,a), (b,b); -1 if absent
+	spring_slots* slots;       // per spring
 };
 
 void sm_sparse_jacobian_destroy(sm_sparse_jacobian* jacobian)
@@ -47,7 +57,7 @@ void sm_sparse_jacobian_destroy(sm_sparse_jacobian* jacobian)
 	free(jacobian->spring_b);
 	free(jacobian->row_stride);
 	free(jacobian->diagonal_offset);
-	free(jacobian->spring_offset);
+	free(jacobian->slots);
 	free(jacobian);
 }
 
@@ -93,10 +103,10 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 		J->spring_b = malloc(((size_t)S + 1) * sizeof(int32_t));
 		J->row_stride = malloc(((size_t)F + 1) * sizeof(int64_t));
 		J->diagonal_offset = malloc(((size_t)F + 1) * sizeof(int64_t));
-		J->spring_offset = malloc((4 * (size_t)S + 1) * sizeof(int64_t));
+		J->slots = malloc(((size_t)S + 1) * sizeof(spring_slots));
 		J->row_pointers = malloc(((size_t)J->dimension + 1) * sizeof(int64_t));
 		ok = J->free_index && J->spring_a && J->spring_b && J->row_stride && J->diagonal_offset &&
-		     J->spring_offset && J->row_pointers;
+		     J->slots && J->row_pointers;
 	}
 	if (ok) {
 		if (n > 0)
@@ -158,21 +168,35 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 			}
 		}
 		J->row_pointers[J->dimension] = J->nonzeros;
-		for (int32_t s = 0; s < S; s++) {
+		// The first spring of each free pair assigns its off-diagonal blocks, later ones add:
+		// every stored value is then written without clearing the arrays first.
+		uint8_t* claimed = calloc((size_t)block_start[F] + 1, 1);
+		ok = claimed != NULL;
+		for (int32_t s = 0; ok && s < S; s++) {
 			const int32_t fa = model->free_index[model->spring_a[s]], fb = model->free_index[model->spring_b[s]];
-			int64_t* o = J->spring_offset + 4 * (size_t)s;
+			spring_slots* slot = J->slots + s;
+			int64_t* o = slot->block;
 			o[0] = o[1] = o[2] = o[3] = -1;
-			if (fa >= 0) {
+			slot->stride_a = fa >= 0 ? (int32_t)J->row_stride[fa] : 0;
+			slot->stride_b = fb >= 0 ? (int32_t)J->row_stride[fb] : 0;
+			slot->assign = 0;
+			slot->unused = 0;
+			if (fa >= 0)
 				o[0] = J->diagonal_offset[fa];
-				if (fb >= 0)
-					o[1] = 9 * block_start[fa] + 3 * find_block(neighbours + start[fa], count[fa], fb);
-			}
-			if (fb >= 0) {
+			if (fb >= 0)
 				o[3] = J->diagonal_offset[fb];
-				if (fa >= 0)
-					o[2] = 9 * block_start[fb] + 3 * find_block(neighbours + start[fb], count[fb], fa);
+			if (fa >= 0 && fb >= 0) {
+				const int64_t ka = find_block(neighbours + start[fa], count[fa], fb);
+				const int64_t kb = find_block(neighbours + start[fb], count[fb], fa);
+				o[1] = 9 * block_start[fa] + 3 * ka;
+				o[2] = 9 * block_start[fb] + 3 * kb;
+				// Claim both blocks: a later spring may join the pair in the other direction.
+				slot->assign = !claimed[block_start[fa] + ka];
+				claimed[block_start[fa] + ka] = 1;
+				claimed[block_start[fb] + kb] = 1;
 			}
 		}
+		free(claimed);
 	}
 	free(count);
 	free(start);
@@ -205,15 +229,134 @@ const int64_t* sm_sparse_jacobian_column_indices(const sm_sparse_jacobian* jacob
 	return jacobian != NULL ? jacobian->column_indices : NULL;
 }
 
-// Adds sign * block into the values at block offset `offset` with row stride `stride`.
-static inline void scatter(double* restrict values, int64_t offset, int64_t stride, double sign,
-                           const double block[9])
+// Block writers: the three rows of a block are `stride` values apart.
+static inline void block_set(double* restrict values, int64_t offset, int64_t stride, const double b[9])
 {
 	double* row = values + offset;
 	for (int i = 0; i < 3; i++, row += stride) {
-		row[0] += sign * block[3 * i];
-		row[1] += sign * block[3 * i + 1];
-		row[2] += sign * block[3 * i + 2];
+		row[0] = b[3 * i];
+		row[1] = b[3 * i + 1];
+		row[2] = b[3 * i + 2];
+	}
+}
+
+static inline void block_add(double* restrict values, int64_t offset, int64_t stride, const double b[9])
+{
+	double* row = values + offset;
+	for (int i = 0; i < 3; i++, row += stride) {
+		row[0] += b[3 * i];
+		row[1] += b[3 * i + 1];
+		row[2] += b[3 * i + 2];
+	}
+}
+
+static inline void block_subtract(double* restrict values, int64_t offset, int64_t stride, const double b[9])
+{
+	double* row = values + offset;
+	for (int i = 0; i < 3; i++, row += stride) {
+		row[0] -= b[3 * i];
+		row[1] -= b[3 * i + 1];
+		row[2] -= b[3 * i + 2];
+	}
+}
+
+// Scatters one spring's block into the four places of one matrix: -B on the diagonal blocks,
+// +B on the off-diagonal ones.
+static inline void scatter_spring(double* restrict values, const spring_slots* slot, const double B[9])
+{
+	const int64_t* o = slot->block;
+	if (o[0] >= 0)
+		block_subtract(values, o[0], slot->stride_a, B);
+	if (o[3] >= 0)
+		block_subtract(values, o[3], slot->stride_b, B);
+	if (o[1] >= 0) {
+		if (slot->assign) {
+			block_set(values, o[1], slot->stride_a, B);
+			block_set(values, o[2], slot->stride_b, B);
+		} else {
+			block_add(values, o[1], slot->stride_a, B);
+			block_add(values, o[2], slot->stride_b, B);
+		}
+	}
+}
+
+// The fill loop, specialised by the compiler for each combination of the constant flags.
+//
+// The blocks of law_rest_length.h and law_spring_damping.h are expanded here into
+//   K = (ks g + c r) I + (ks (1 - g) - c r) u u^T + c u (P dv)^T,   D = kd u u^T,
+// with g = 1 - l0/L (clamped at 0 for the definite variant) and c = kd / L (0 for the
+// definite variant), using P = I - u u^T.
+static inline void fill_loop(const sm_sparse_jacobian* J, const sm_model* model, const double* restrict x,
+                             const double* restrict v, double* restrict dfdx, double* restrict dfdv,
+                             const int want_x, const int want_v, const int clamp, const int damping_position)
+{
+	// Diagonal blocks first: zero for df/dx, mass damping for df/dv.
+	for (int32_t i = 0; i < model->particle_count; i++) {
+		const int32_t p = model->free_index[i];
+		if (p < 0)
+			continue;
+		const int64_t o = J->diagonal_offset[p], stride = J->row_stride[p];
+		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
+		for (int r = 0; r < 3; r++)
+			for (int k = 0; k < 3; k++) {
+				if (want_x)
+					dfdx[o + r * stride + k] = 0.0;
+				if (want_v)
+					dfdv[o + r * stride + k] = r == k ? c : 0.0;
+			}
+	}
+	const int32_t* restrict first = J->spring_a;
+	const int32_t* restrict second = J->spring_b;
+	const double* restrict rest_length = model->rest_length;
+	const double* restrict stiffness = model->stiffness;
+	const double* restrict damping = model->damping;
+	for (int32_t s = 0; s < J->spring_count; s++) {
+		const spring_slots* slot = J->slots + s;
+		if (slot->block[0] < 0 && slot->block[3] < 0)
+			continue;  // both ends constrained: no free degree of freedom involved
+		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
+		const double d0 = x[b] - x[a], d1 = x[b + 1] - x[a + 1], d2 = x[b + 2] - x[a + 2];
+		const double l0 = rest_length[s], ks = stiffness[s], kd = damping[s];
+		const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+		const int regular = length > 0.0 && length >= SM_DEGENERATE_LENGTH_RATIO * l0;
+		const double inv = 1.0 / (regular ? length : 1.0);
+		const double inv_length = regular ? inv : 0.0;
+		const double u[3] = {d0 * inv_length, d1 * inv_length, d2 * inv_length};
+		double uu[9];
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++)
+				uu[3 * i + j] = u[i] * u[j];
+		if (want_x) {
+			double g = 1.0 - l0 * inv_length;
+			if (clamp)
+				g = g < 0.0 ? 0.0 : g;
+			double K[9];
+			double diagonal = ks * g, axial = ks - ks * g;
+			if (damping_position) {
+				const double dv[3] = {v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]};
+				const double r = u[0] * dv[0] + u[1] * dv[1] + u[2] * dv[2];
+				const double c = kd * inv_length;
+				const double cp[3] = {c * (dv[0] - r * u[0]), c * (dv[1] - r * u[1]), c * (dv[2] - r * u[2])};
+				diagonal += c * r;
+				axial -= c * r;
+				for (int i = 0; i < 3; i++)
+					for (int j = 0; j < 3; j++)
+						K[3 * i + j] = axial * uu[3 * i + j] + u[i] * cp[j];
+			} else {
+				for (int k = 0; k < 9; k++)
+					K[k] = axial * uu[k];
+			}
+			K[0] += diagonal;
+			K[4] += diagonal;
+			K[8] += diagonal;
+			scatter_spring(dfdx, slot, K);
+		}
+		if (want_v) {
+			double D[9];
+			for (int k = 0; k < 9; k++)
+				D[k] = kd * uu[k];
+			scatter_spring(dfdv, slot, D);
+		}
 	}
 }
 
@@ -237,54 +380,21 @@ sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_m
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (!same_topology(jacobian, model))
 		return SM_ERROR_TOPOLOGY;  // springs or free particles changed since the pattern was built
-	const sm_sparse_jacobian* J = jacobian;
-	const size_t nnz = (size_t)J->nonzeros;
-	if (dfdx != NULL && nnz > 0)
-		memset(dfdx, 0, nnz * sizeof(double));
-	if (dfdv != NULL) {
-		if (nnz > 0)
-			memset(dfdv, 0, nnz * sizeof(double));
-		for (int32_t i = 0; i < model->particle_count; i++) {
-			const int32_t p = model->free_index[i];
-			if (p < 0)
-				continue;
-			const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
-			const int64_t o = J->diagonal_offset[p], stride = J->row_stride[p];
-			for (int k = 0; k < 3; k++)
-				dfdv[o + k * stride + k] += c;
-		}
-	}
-	for (int32_t s = 0; s < J->spring_count; s++) {
-		const int64_t* o = J->spring_offset + 4 * (size_t)s;
-		if (o[0] < 0 && o[3] < 0)
-			continue;  // both ends constrained: no free degree of freedom involved
-		spring_geometry g;
-		spring_geometry_eval(x, v, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
-		double K[9] = {0}, D[9] = {0};
-		rest_length_add_block(model->stiffness[s], model->rest_length[s], &g, variant, K);
-		spring_damping_add_blocks(model->damping[s], &g, variant, K, D);
-		const int32_t fa = model->free_index[model->spring_a[s]], fb = model->free_index[model->spring_b[s]];
-		const int64_t sa = fa >= 0 ? J->row_stride[fa] : 0, sb = fb >= 0 ? J->row_stride[fb] : 0;
-		if (dfdx != NULL) {
-			if (o[0] >= 0)
-				scatter(dfdx, o[0], sa, -1.0, K);
-			if (o[1] >= 0)
-				scatter(dfdx, o[1], sa, 1.0, K);
-			if (o[2] >= 0)
-				scatter(dfdx, o[2], sb, 1.0, K);
-			if (o[3] >= 0)
-				scatter(dfdx, o[3], sb, -1.0, K);
-		}
-		if (dfdv != NULL) {
-			if (o[0] >= 0)
-				scatter(dfdv, o[0], sa, -1.0, D);
-			if (o[1] >= 0)
-				scatter(dfdv, o[1], sa, 1.0, D);
-			if (o[2] >= 0)
-				scatter(dfdv, o[2], sb, 1.0, D);
-			if (o[3] >= 0)
-				scatter(dfdv, o[3], sb, -1.0, D);
-		}
+	// Exact: no clamp, with the damping-position term (which needs v; without v it is zero).
+	const int clamp = variant == SM_JACOBIAN_DEFINITE;
+	const int damping_position = !clamp && v != NULL;
+	if (dfdx != NULL && dfdv != NULL) {
+		if (damping_position)
+			fill_loop(jacobian, model, x, v, dfdx, dfdv, 1, 1, 0, 1);
+		else
+			fill_loop(jacobian, model, x, v, dfdx, dfdv, 1, 1, clamp, 0);
+	} else if (dfdx != NULL) {
+		if (damping_position)
+			fill_loop(jacobian, model, x, v, dfdx, NULL, 1, 0, 0, 1);
+		else
+			fill_loop(jacobian, model, x, v, dfdx, NULL, 1, 0, clamp, 0);
+	} else if (dfdv != NULL) {
+		fill_loop(jacobian, model, x, v, NULL, dfdv, 0, 1, 0, 0);
 	}
 	return SM_OK;
 }
