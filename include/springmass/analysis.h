@@ -1,4 +1,141 @@
-// springmass: static equilibrium and natural frequencies (GSL).
+// springmass: static equilibrium and natural frequencies (GSL, and CHOLMOD for large models).
+//
+// Both analyses look at the model at rest (zero velocity): velocities and damping play no part
+// in the equilibrium, and the modes are those of the undamped system, with modal damping
+// ratios computed afterwards from the damping matrix. Fixed and driven particles are held at
+// their positions; only the free particles' degrees of freedom are unknowns. See
+// docs/analysis.md for the methods and their limits.
 #pragma once
 
 #include "springmass/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---------------------------------------------------------------------------------------------
+// Static equilibrium: the free particles' positions x where the force balance
+// f(x) = springs + gravity + external forces = 0 holds, found by Newton's method on f with the
+// exact Jacobian and a line search on the total potential energy
+//   U(x) = elastic energy - sum m g . x - sum f_ext . x   [J].
+// ---------------------------------------------------------------------------------------------
+
+/// Linear algebra used by the Newton iteration.
+typedef enum sm_statics_solver {
+	SM_STATICS_AUTO = 0,  ///< dense up to SM_STATICS_DENSE_LIMIT degrees of freedom, sparse above
+	SM_STATICS_DENSE,     ///< dense modified Cholesky (GSL); cost grows with the cube of the size
+	SM_STATICS_SPARSE,    ///< sparse Cholesky (CHOLMOD) of the sparse Jacobian
+} sm_statics_solver;
+
+/// Degrees of freedom (3 per free particle) up to which SM_STATICS_AUTO solves densely.
+#define SM_STATICS_DENSE_LIMIT 600
+
+/// Options of sm_statics_solve(); get them from sm_default_statics_def().
+typedef struct sm_statics_def {
+	/// Starting positions of all particles, 3 per particle [m]; NULL (default) = the model's
+	/// initial positions. Fixed and driven particles are held where this puts them.
+	const double* start;
+	/// Constant external forces, 3 per particle [N]; NULL (default) = none. Entries of
+	/// constrained particles add to the force their supports must take.
+	const double* external_forces;
+	/// Convergence: largest force component on a free particle [N]; default 1e-9. The
+	/// tolerance actually used is never below 1e3 machine epsilons times the largest force
+	/// magnitude at a particle (the round-off floor of the force sum, see docs/analysis.md).
+	double residual_tolerance;
+	int32_t max_iterations;    ///< Newton iterations allowed, >= 1; default 200
+	sm_statics_solver solver;  ///< default SM_STATICS_AUTO
+} sm_statics_def;
+
+/// What sm_statics_solve() found. Filled on success and, as far as it got, on failure.
+typedef struct sm_statics_result {
+	int32_t iterations;        ///< Newton iterations taken
+	double residual;           ///< largest force component on a free particle at the end [N]
+	double tolerance;          ///< residual tolerance actually used [N]
+	double potential_energy;   ///< U at the end, as defined above [J]
+	double reaction_total[3];  ///< sum of the reactions at the constrained particles [N]
+	/// True if the exact stiffness -df/dx over the free degrees of freedom is positive definite
+	/// at the equilibrium (a local minimum of U, not a saddle or a mechanism).
+	bool stable;
+	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
+} sm_statics_result;
+
+SM_API sm_statics_def sm_default_statics_def(void);
+
+/// Finds the static equilibrium of the model. On success writes the positions of all particles
+/// to x (3 per particle [m]; constrained particles stay at their start) and, if `reactions` is
+/// not NULL, the reaction force on every particle (3 per particle [N]): for a constrained
+/// particle the force its support exerts on it, minus the force the model exerts there;
+/// zero for free particles. The reactions and the model's forces then balance exactly.
+///
+/// Errors (x and reactions are not touched, err says which element and rule):
+/// - SM_ERROR_INVALID_ARGUMENT: NULL model or x, bad options;
+/// - SM_ERROR_NOT_FINITE: non-finite start positions or external forces;
+/// - SM_ERROR_NOT_CONVERGED: no equilibrium exists (a group of free particles not held by any
+///   constrained particle, with a non-zero net force on it, such as a free body under gravity),
+///   or the iteration limit was reached; the message names the particles or gives the residual;
+/// - SM_ERROR_SOLVER: the sparse factorisation failed;
+/// - SM_ERROR_OUT_OF_MEMORY.
+SM_API sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x,
+                                  double* reactions, sm_statics_result* result, sm_error* err);
+
+// ---------------------------------------------------------------------------------------------
+// Natural frequencies and mode shapes: the model linearised about a configuration x0 at zero
+// velocity, M u'' + C u' + K u = 0 over the free degrees of freedom, with K = -df/dx (exact,
+// symmetric at zero velocity) [N/m], C = -df/dv [N s/m] and M the lumped masses [kg].
+// The undamped problem K phi = omega^2 M phi is solved densely (GSL, after mass scaling), so
+// the cost grows with the cube of the degrees of freedom: a few thousand at most.
+// ---------------------------------------------------------------------------------------------
+
+/// Options of sm_modes_compute(); get them from sm_default_modes_def().
+typedef struct sm_modes_def {
+	/// Configuration to linearise about, 3 per particle [m]; NULL (default) = the model's
+	/// initial positions (pass a static equilibrium from sm_statics_solve() to get the
+	/// vibrations about the rest shape).
+	const double* configuration;
+	/// Number of modes kept, lowest first; 0 (default) = all.
+	int32_t mode_count;
+	/// An eigenvalue omega^2 with |omega^2| <= zero_tolerance * max |omega^2| is a rigid-body
+	/// mode and is set to exactly 0 [1]; default 1e-9 (round-off of the eigensolver is about
+	/// 1e-15 relative, physical modes of any sane model are far above 1e-9).
+	double zero_tolerance;
+	/// Damping counts as proportional if every off-diagonal entry of Phi^T C Phi, divided by
+	/// the geometric mean of its two diagonal entries, is below this [1]; default 1e-6.
+	double proportional_tolerance;
+} sm_modes_def;
+
+/// Modes found by sm_modes_compute(); the arrays are owned by it until sm_modes_release().
+typedef struct sm_modes {
+	int32_t dof;             ///< degrees of freedom: 3 * free particles
+	int32_t particle_count;  ///< particles of the model (length of a shape / 3)
+	int32_t count;           ///< modes kept (lowest first)
+	double* omega_squared;   ///< count eigenvalues omega^2, ascending; < 0 = unstable [1/s^2]
+	double* frequency;       ///< natural frequencies omega / (2 pi), 0 for rigid or unstable modes [Hz]
+	double* modal_damping;   ///< phi^T C phi = 2 zeta omega for mass-normalised phi [1/s]
+	/// zeta = phi^T C phi / (2 omega) [1]; INFINITY for a damped zero-frequency mode, 0 for an
+	/// undamped one.
+	double* damping_ratio;
+	/// count shapes, each 3 per particle (constrained particles 0), mass-normalised:
+	/// phi^T M phi = 1 [1/sqrt(kg)]. Shape i starts at shapes + i * 3 * particle_count.
+	double* shapes;
+	int32_t zero_count;      ///< rigid-body (zero-frequency) modes among all dof modes
+	int32_t unstable_count;  ///< modes with omega^2 < 0 beyond the tolerance (not at a stable rest)
+	double omega_max;        ///< highest angular frequency over all modes [rad/s]
+	double damping_coupling; ///< largest normalised off-diagonal entry of Phi^T C Phi (kept modes) [1]
+	bool proportional;       ///< damping_coupling <= proportional_tolerance
+} sm_modes;
+
+SM_API sm_modes_def sm_default_modes_def(void);
+
+/// Computes the natural frequencies, damping ratios and mode shapes. On success fills *modes,
+/// which the caller releases with sm_modes_release(). On error *modes is zeroed and err says
+/// why (SM_ERROR_INVALID_ARGUMENT, SM_ERROR_NOT_FINITE, SM_ERROR_OUT_OF_MEMORY, SM_ERROR_SOLVER).
+/// A model with no free particle has no modes: success with count = 0.
+SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes, sm_error* err);
+
+/// Frees the arrays of a result of sm_modes_compute() and zeroes it; accepts NULL and a zeroed
+/// result.
+SM_API void sm_modes_release(sm_modes* modes);
+
+#ifdef __cplusplus
+}
+#endif

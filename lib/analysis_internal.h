@@ -1,0 +1,21 @@
+// Helpers shared by the static equilibrium (statics.c) and the modal analysis (modes.c).
+#pragma once
+
+#include "springmass/analysis.h"
+
+#include <stddef.h>
+
+// Dense symmetric stiffness K = -df/dx at (x, zero velocity) over the free degrees of freedom,
+// row-major dof x dof, assembled from the exact per-spring blocks (constrained particles
+// dropped). free_index[p] is the free index of particle p or -1. Adds nothing for disabled
+// springs (their blocks are zero).
+void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
+                              double* K);
+
+// Free index of every particle (-1 for constrained ones) and the mass of every free degree of
+// freedom; returns the number of free particles. free_index has particle_count entries,
+// dof_mass 3 * free count (may be NULL).
+int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
+
+// True if all count values are finite.
+int analysis_all_finite(const double* values, size_t count);

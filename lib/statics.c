@@ -1,0 +1,726 @@
+// Static equilibrium: Newton's method on the force balance with a line search on the potential
+// energy.
+//
+// Unknowns are the positions x of the free particles (3 nf degrees of freedom). At zero
+// velocity the force on the free particles is the negative gradient of the total potential
+//
+//   U(x) = sum_springs ks (L - l0)^2 / 2  -  sum_i (m_i g + f_ext,i) . x_i        [J]
+//
+// so f = -grad U and the exact Jacobian df/dx = -H, with H the Hessian of U (symmetric: the
+// per-spring blocks of law_rest_length.h). Equilibrium is f(x) = 0.
+//
+// Newton step. p solves (H + mu M) p = f, with M the lumped masses and mu >= 0 [1/s^2] a shift:
+// mu = 0 is Newton's method (quadratic convergence near a stable equilibrium); mu > 0 is an
+// implicit dynamic-relaxation step with time step 1/sqrt(mu), which moves along the forces when
+// H is indefinite or singular (a flat cloth has no transverse stiffness at its start; a
+// pendulum-like rope may start far from hanging). The dense path factors with GSL's modified
+// Cholesky (gsl_linalg_mcholesky), which also perturbs an indefinite matrix into a positive
+// definite one, so p is always a descent direction of U; the sparse path (CHOLMOD) raises mu
+// until the factorisation succeeds.
+//
+// Line search. The step x + alpha p is accepted when U decreases enough (Armijo:
+// dU <= 1e-4 alpha grad U . p). Near the solution the change of U is far below the round-off of
+// U itself, so dU is computed directly as a sum of per-spring differences,
+//   ks/2 [(L' - l0)^2 - (L - l0)^2] = ks/2 (L' - L)(L' + L - 2 l0),
+//   L' - L = (d' - d) . (d' + d) / (L' + L),
+// which keeps its relative accuracy down to the last step. mu shrinks after full steps and
+// grows after short ones (a Levenberg-Marquardt rule), and grows tenfold when no step is found.
+//
+// No equilibrium. A group of free particles connected by springs but to no constrained particle
+// is a free body; unless the net constant force on it is zero it accelerates for ever. That is
+// checked first (union-find over the springs) and reported with the particles' indices, so the
+// iteration never starts on a hopeless problem. Every loop is bounded by max_iterations.
+#include "analysis_internal.h"
+#include "model_internal.h"
+
+#include <float.h>
+#include <gsl/gsl_linalg.h>
+#include <gsl/gsl_permutation.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+#include <cholmod.h>
+#endif
+
+sm_statics_def sm_default_statics_def(void)
+{
+	sm_statics_def def;
+	memset(&def, 0, sizeof def);
+	def.start = NULL;
+	def.external_forces = NULL;
+	def.residual_tolerance = 1e-9;
+	def.max_iterations = 200;
+	def.solver = SM_STATICS_AUTO;
+	return def;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shared helpers (also used by modes.c).
+// ---------------------------------------------------------------------------------------------
+
+int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass)
+{
+	const int32_t n = sm_model_particle_count(model);
+	int32_t nf = 0;
+	for (int32_t p = 0; p < n; p++) {
+		sm_particle_def def;
+		sm_model_get_particle(model, p, &def);
+		if (def.motion == SM_PARTICLE_FREE) {
+			if (dof_mass != NULL)
+				dof_mass[3 * (size_t)nf] = dof_mass[3 * (size_t)nf + 1] = dof_mass[3 * (size_t)nf + 2] = def.mass;
+			free_index[p] = nf++;
+		} else {
+			free_index[p] = -1;
+		}
+	}
+	return nf;
+}
+
+int analysis_all_finite(const double* values, size_t count)
+{
+	for (size_t k = 0; k < count; k++)
+		if (!isfinite(values[k]))
+			return 0;
+	return 1;
+}
+
+// K = -df/dx: the block K_s = d f_a / d x_b of spring s enters as
+//   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
+// (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
+void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
+                              double* K)
+{
+	memset(K, 0, dof * dof * sizeof(double));
+	const int32_t ns = sm_model_spring_count(model);
+	for (int32_t s = 0; s < ns; s++) {
+		if (!sm_model_spring_enabled(model, s))
+			continue;
+		sm_spring_def sd;
+		sm_model_get_spring(model, s, &sd);
+		const int32_t fa = free_index[sd.a], fb = free_index[sd.b];
+		if (fa < 0 && fb < 0)
+			continue;
+		double block[9];
+		sm_model_spring_jacobian(model, s, x, NULL, SM_JACOBIAN_EXACT, block, NULL);
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++) {
+				const double k = block[3 * i + j];
+				if (fa >= 0)
+					K[(3 * (size_t)fa + i) * dof + 3 * (size_t)fa + j] += k;
+				if (fb >= 0)
+					K[(3 * (size_t)fb + i) * dof + 3 * (size_t)fb + j] += k;
+				if (fa >= 0 && fb >= 0) {
+					K[(3 * (size_t)fa + i) * dof + 3 * (size_t)fb + j] -= k;
+					K[(3 * (size_t)fb + i) * dof + 3 * (size_t)fa + j] -= k;
+				}
+			}
+	}
+}
+
+// ---------------------------------------------------------------------------------------------
+// Work space of one solve.
+// ---------------------------------------------------------------------------------------------
+
+typedef struct statics_work {
+	const sm_model* model;
+	int32_t n, nf, ns;
+	size_t dof;
+	int32_t* free_index;    // n
+	int32_t* free_particle; // nf: particle of each free index
+	double* dof_mass;       // dof [kg]
+	int32_t* spring_a;      // ns
+	int32_t* spring_b;
+	double* rest_length;    // [m]
+	double* stiffness;      // [N/m], 0 for disabled springs
+	double* constant_force; // 3 n: m g + f_ext [N]
+	const double* external; // 3 n or NULL
+	double* x;              // 3 n current positions
+	double* y;              // 3 n trial positions
+	double* f;              // 3 n forces
+	double* rhs;            // dof
+	double* step;           // dof
+	// Dense path.
+	double* matrix;         // dof x dof
+	double* perturbation;   // dof
+	size_t* permutation;    // dof
+	// Sparse path.
+	sm_sparse_jacobian* jacobian;
+	double* values;         // nonzeros of H + mu M
+	int64_t* diagonal;      // dof positions of the diagonal entries
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+	cholmod_common common;
+	int common_started;
+	cholmod_factor* factor;
+#endif
+} statics_work;
+
+static void work_free(statics_work* w)
+{
+	free(w->free_index);
+	free(w->free_particle);
+	free(w->dof_mass);
+	free(w->spring_a);
+	free(w->spring_b);
+	free(w->rest_length);
+	free(w->stiffness);
+	free(w->constant_force);
+	free(w->x);
+	free(w->y);
+	free(w->f);
+	free(w->rhs);
+	free(w->step);
+	free(w->matrix);
+	free(w->perturbation);
+	free(w->permutation);
+	sm_sparse_jacobian_destroy(w->jacobian);
+	free(w->values);
+	free(w->diagonal);
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+	if (w->common_started) {
+		if (w->factor != NULL)
+			cholmod_l_free_factor(&w->factor, &w->common);
+		cholmod_l_finish(&w->common);
+	}
+#endif
+}
+
+// Largest force component on a free particle [N].
+static double residual_norm(const statics_work* w, const double* f)
+{
+	double r = 0.0;
+	for (int32_t i = 0; i < w->nf; i++) {
+		const double* fi = f + 3 * (size_t)w->free_particle[i];
+		for (int k = 0; k < 3; k++) {
+			const double a = fabs(fi[k]);
+			r = (a > r || isnan(a)) ? a : r;
+		}
+	}
+	return r;
+}
+
+// Largest sum of force magnitudes meeting at a particle [N]: the scale of the round-off in the
+// computed force balance.
+static double force_scale(const statics_work* w, const double* x)
+{
+	double* s = w->rhs;  // reused as scratch: one value per free particle fits in dof entries
+	for (int32_t i = 0; i < w->nf; i++) {
+		const double* c = w->constant_force + 3 * (size_t)w->free_particle[i];
+		s[i] = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+	}
+	for (int32_t k = 0; k < w->ns; k++) {
+		const double* xa = x + 3 * (size_t)w->spring_a[k];
+		const double* xb = x + 3 * (size_t)w->spring_b[k];
+		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+		const double t = fabs(w->stiffness[k] * (sqrt(dx * dx + dy * dy + dz * dz) - w->rest_length[k]));
+		const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
+		if (fa >= 0)
+			s[fa] += t;
+		if (fb >= 0)
+			s[fb] += t;
+	}
+	double m = 0.0;
+	for (int32_t i = 0; i < w->nf; i++)
+		m = fmax(m, s[i]);
+	return m;
+}
+
+// U(y) - U(x) [J], computed from differences so that it stays accurate when tiny; *roundoff
+// gets the sum of the magnitudes of its terms [J].
+static double energy_change(const statics_work* w, const double* x, const double* y, double* roundoff)
+{
+	double du = 0.0, mag = 0.0;
+	for (int32_t k = 0; k < w->ns; k++) {
+		if (w->stiffness[k] == 0.0)
+			continue;
+		const size_t a = 3 * (size_t)w->spring_a[k], b = 3 * (size_t)w->spring_b[k];
+		double dd = 0.0, lx2 = 0.0, ly2 = 0.0;
+		for (int c = 0; c < 3; c++) {
+			const double dxc = x[b + c] - x[a + c];
+			const double dyc = y[b + c] - y[a + c];
+			const double change = (y[b + c] - x[b + c]) - (y[a + c] - x[a + c]);
+			dd += change * (dyc + dxc);
+			lx2 += dxc * dxc;
+			ly2 += dyc * dyc;
+		}
+		const double lx = sqrt(lx2), ly = sqrt(ly2);
+		const double dl = lx + ly > 0.0 ? dd / (lx + ly) : 0.0;
+		const double term = 0.5 * w->stiffness[k] * dl * (ly + lx - 2.0 * w->rest_length[k]);
+		du += term;
+		mag += fabs(term);
+	}
+	for (int32_t i = 0; i < w->nf; i++) {
+		const size_t p = 3 * (size_t)w->free_particle[i];
+		for (int c = 0; c < 3; c++) {
+			const double term = -w->constant_force[p + c] * (y[p + c] - x[p + c]);
+			du += term;
+			mag += fabs(term);
+		}
+	}
+	*roundoff = mag;
+	return du;
+}
+
+static double potential_energy(const statics_work* w, const double* x)
+{
+	sm_energies e = sm_model_energies(w->model, x, NULL);
+	double u = e.elastic + e.gravity;
+	if (w->external != NULL)
+		for (size_t k = 0; k < 3 * (size_t)w->n; k++)
+			u -= w->external[k] * x[k];
+	return u;
+}
+
+// Free bodies: groups of particles joined by springs of non-zero stiffness that contain no
+// constrained particle. Returns SM_OK, or SM_ERROR_NOT_CONVERGED with a message when the net
+// constant force on such a group is not zero.
+static int32_t find_root(int32_t* parent, int32_t i)
+{
+	while (parent[i] != i) {
+		parent[i] = parent[parent[i]];
+		i = parent[i];
+	}
+	return i;
+}
+
+static sm_status check_free_bodies(const statics_work* w, sm_error* err)
+{
+	const int32_t n = w->n;
+	int32_t* parent = malloc((size_t)n * sizeof *parent);
+	double* net = calloc(3 * (size_t)n, sizeof *net);
+	double* scale = calloc((size_t)n, sizeof *scale);
+	int32_t* members = calloc((size_t)n, sizeof *members);
+	unsigned char* held = calloc((size_t)n, 1);
+	sm_status st = SM_OK;
+	if (parent == NULL || net == NULL || scale == NULL || members == NULL || held == NULL) {
+		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)n);
+		goto done;
+	}
+	for (int32_t i = 0; i < n; i++)
+		parent[i] = i;
+	for (int32_t k = 0; k < w->ns; k++) {
+		if (w->stiffness[k] == 0.0)
+			continue;
+		const int32_t ra = find_root(parent, w->spring_a[k]), rb = find_root(parent, w->spring_b[k]);
+		if (ra != rb)
+			parent[ra] = rb;
+	}
+	for (int32_t i = 0; i < n; i++) {
+		const int32_t r = find_root(parent, i);
+		members[r]++;
+		if (w->free_index[i] < 0)
+			held[r] = 1;
+		const double* c = w->constant_force + 3 * (size_t)i;
+		for (int k = 0; k < 3; k++)
+			net[3 * (size_t)r + k] += c[k];
+		scale[r] += sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+	}
+	for (int32_t i = 0; i < n; i++) {
+		if (parent[i] != i || held[i])
+			continue;
+		const double* F = net + 3 * (size_t)i;
+		const double magnitude = sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]);
+		// The net force is a sum of members' forces: anything above its round-off is real.
+		if (magnitude > 1e-12 * scale[i] && magnitude > 0.0) {
+			int32_t first = -1;
+			for (int32_t p = 0; p < n && first < 0; p++)
+				if (find_root(parent, p) == i)
+					first = p;
+			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+			                  "statics: no static equilibrium: particle %d and the %d particle(s) joined to it by "
+			                  "springs are held by no fixed or driven particle, yet feel a net force (%g, %g, %g) N "
+			                  "(gravity and external forces); fix or drive one of them",
+			                  (int)first, (int)members[i], F[0], F[1], F[2]);
+			goto done;
+		}
+	}
+done:
+	free(parent);
+	free(net);
+	free(scale);
+	free(members);
+	free(held);
+	return st;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Linear algebra: factor H + mu M and solve for the step. Returns 1 if the factorisation of
+// the unmodified matrix succeeded (it was positive definite), 0 if it had to be modified
+// (dense) or failed (sparse: no step), -1 on an internal failure.
+// ---------------------------------------------------------------------------------------------
+
+static int dense_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+{
+	const size_t dof = w->dof;
+	analysis_dense_stiffness(w->model, w->free_index, x, dof, w->matrix);
+	for (size_t i = 0; i < dof; i++)
+		w->matrix[i * dof + i] += mu * w->dof_mass[i];
+	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, dof, dof);
+	gsl_permutation perm = {dof, w->permutation};
+	gsl_vector_view E = gsl_vector_view_array(w->perturbation, dof);
+	if (gsl_linalg_mcholesky_decomp(&A.matrix, &perm, &E.vector) != GSL_SUCCESS)
+		return -1;
+	int definite = 1;
+	for (size_t i = 0; i < dof; i++)
+		if (w->perturbation[i] != 0.0)
+			definite = 0;
+	if (step != NULL) {
+		gsl_vector_const_view b = gsl_vector_const_view_array(rhs, dof);
+		gsl_vector_view s = gsl_vector_view_array(step, dof);
+		if (gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) != GSL_SUCCESS)
+			return -1;
+	}
+	return definite;
+}
+
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+static int sparse_prepare(statics_work* w)
+{
+	w->jacobian = sm_sparse_jacobian_create(w->model);
+	if (w->jacobian == NULL)
+		return -1;
+	const int64_t nnz = sm_sparse_jacobian_nonzeros(w->jacobian);
+	const int64_t dim = sm_sparse_jacobian_dimension(w->jacobian);
+	if ((size_t)dim != w->dof)
+		return -1;
+	w->values = malloc((size_t)(nnz > 0 ? nnz : 1) * sizeof(double));
+	w->diagonal = malloc(w->dof * sizeof(int64_t));
+	if (w->values == NULL || w->diagonal == NULL)
+		return -1;
+	const int64_t* rows = sm_sparse_jacobian_row_pointers(w->jacobian);
+	const int64_t* cols = sm_sparse_jacobian_column_indices(w->jacobian);
+	for (int64_t r = 0; r < dim; r++) {
+		w->diagonal[r] = -1;
+		for (int64_t k = rows[r]; k < rows[r + 1]; k++)
+			if (cols[k] == r)
+				w->diagonal[r] = k;
+		if (w->diagonal[r] < 0)
+			return -1;
+	}
+	cholmod_l_start(&w->common);
+	w->common_started = 1;
+	w->common.print = 0;
+	w->common.error_handler = NULL;
+	// Supernodal LL' stops at the first non-positive pivot, which is how an indefinite H + mu M
+	// is detected (a simplicial LDL' would factor it with negative pivots).
+	w->common.supernodal = CHOLMOD_SUPERNODAL;
+	return 0;
+}
+
+// The sparse pattern in CSR with a symmetric pattern is also its own CSC; CHOLMOD reads only
+// the upper triangle (stype = 1).
+static cholmod_sparse sparse_view(statics_work* w)
+{
+	cholmod_sparse A;
+	memset(&A, 0, sizeof A);
+	A.nrow = A.ncol = w->dof;
+	A.nzmax = (size_t)sm_sparse_jacobian_nonzeros(w->jacobian);
+	A.p = (void*)sm_sparse_jacobian_row_pointers(w->jacobian);
+	A.i = (void*)sm_sparse_jacobian_column_indices(w->jacobian);
+	A.x = w->values;
+	A.stype = 1;
+	A.itype = CHOLMOD_LONG;
+	A.xtype = CHOLMOD_REAL;
+	A.dtype = CHOLMOD_DOUBLE;
+	A.sorted = 1;
+	A.packed = 1;
+	return A;
+}
+
+static int sparse_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+{
+	if (sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, SM_JACOBIAN_EXACT, w->values, NULL) != SM_OK)
+		return -1;
+	const int64_t nnz = sm_sparse_jacobian_nonzeros(w->jacobian);
+	for (int64_t k = 0; k < nnz; k++)
+		w->values[k] = -w->values[k];
+	for (size_t i = 0; i < w->dof; i++)
+		w->values[w->diagonal[i]] += mu * w->dof_mass[i];
+	cholmod_sparse A = sparse_view(w);
+	if (w->factor == NULL) {
+		w->factor = cholmod_l_analyze(&A, &w->common);
+		if (w->factor == NULL)
+			return -1;
+	}
+	cholmod_l_factorize(&A, w->factor, &w->common);
+	if (w->common.status == CHOLMOD_NOT_POSDEF || w->factor->minor < w->factor->n)
+		return 0;
+	if (w->common.status < CHOLMOD_OK)
+		return -1;
+	if (step == NULL)
+		return 1;
+	cholmod_dense b;
+	memset(&b, 0, sizeof b);
+	b.nrow = b.d = w->dof;
+	b.ncol = 1;
+	b.nzmax = w->dof;
+	b.x = (void*)rhs;
+	b.xtype = CHOLMOD_REAL;
+	b.dtype = CHOLMOD_DOUBLE;
+	cholmod_dense* s = cholmod_l_solve(CHOLMOD_A, w->factor, &b, &w->common);
+	if (s == NULL)
+		return -1;
+	memcpy(step, s->x, w->dof * sizeof(double));
+	cholmod_l_free_dense(&s, &w->common);
+	return 1;
+}
+#endif
+
+static int factor_and_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+{
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+	if (w->jacobian != NULL)
+		return sparse_step(w, x, mu, rhs, step);
+#endif
+	return dense_step(w, x, mu, rhs, step);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+static sm_status work_init(statics_work* w, const sm_model* model, const sm_statics_def* def, sm_error* err)
+{
+	memset(w, 0, sizeof *w);
+	w->model = model;
+	w->n = sm_model_particle_count(model);
+	w->ns = sm_model_spring_count(model);
+	w->external = def->external_forces;
+	const size_t n3 = 3 * (size_t)w->n;
+	w->free_index = malloc(((size_t)w->n + 1) * sizeof(int32_t));
+	w->dof_mass = malloc((n3 + 1) * sizeof(double));
+	if (w->free_index == NULL || w->dof_mass == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)w->n);
+	w->nf = analysis_free_map(model, w->free_index, w->dof_mass);
+	w->dof = 3 * (size_t)w->nf;
+	const size_t ns = (size_t)w->ns + 1, dof = w->dof + 1;
+	w->free_particle = malloc(((size_t)w->nf + 1) * sizeof(int32_t));
+	w->spring_a = malloc(ns * sizeof(int32_t));
+	w->spring_b = malloc(ns * sizeof(int32_t));
+	w->rest_length = malloc(ns * sizeof(double));
+	w->stiffness = malloc(ns * sizeof(double));
+	w->constant_force = malloc((n3 + 1) * sizeof(double));
+	w->x = malloc((n3 + 1) * sizeof(double));
+	w->y = malloc((n3 + 1) * sizeof(double));
+	w->f = malloc((n3 + 1) * sizeof(double));
+	w->rhs = malloc(dof * sizeof(double));
+	w->step = malloc(dof * sizeof(double));
+	if (w->free_particle == NULL || w->spring_a == NULL || w->spring_b == NULL || w->rest_length == NULL ||
+	    w->stiffness == NULL || w->constant_force == NULL || w->x == NULL || w->y == NULL || w->f == NULL ||
+	    w->rhs == NULL || w->step == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)w->n);
+	for (int32_t p = 0; p < w->n; p++)
+		if (w->free_index[p] >= 0)
+			w->free_particle[w->free_index[p]] = p;
+	for (int32_t k = 0; k < w->ns; k++) {
+		sm_spring_def sd;
+		double l0 = 0.0, ks = 0.0, kd = 0.0;
+		sm_model_get_spring(model, k, &sd);
+		sm_model_spring_constants(model, k, &l0, &ks, &kd);
+		w->spring_a[k] = sd.a;
+		w->spring_b[k] = sd.b;
+		w->rest_length[k] = l0;
+		w->stiffness[k] = sm_model_spring_enabled(model, k) ? ks : 0.0;
+	}
+	const sm_model_def md = sm_model_get_def(model);
+	for (int32_t p = 0; p < w->n; p++) {
+		sm_particle_def pd;
+		sm_model_get_particle(model, p, &pd);
+		for (int c = 0; c < 3; c++)
+			w->constant_force[3 * (size_t)p + c] =
+			    pd.mass * md.gravity[c] + (w->external != NULL ? w->external[3 * (size_t)p + c] : 0.0);
+	}
+	if (def->start != NULL)
+		memcpy(w->x, def->start, n3 * sizeof(double));
+	else
+		sm_model_initial_state(model, w->x, NULL);
+	return SM_OK;
+}
+
+static sm_status setup_solver(statics_work* w, sm_statics_solver* solver, sm_error* err)
+{
+	if (*solver == SM_STATICS_AUTO)
+		*solver = w->dof <= SM_STATICS_DENSE_LIMIT ? SM_STATICS_DENSE : SM_STATICS_SPARSE;
+#ifndef SPRINGMASS_HAVE_CHOLMOD
+	if (*solver == SM_STATICS_SPARSE) {
+		if (w->dof > 3 * SM_STATICS_DENSE_LIMIT)
+			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+			                    "statics: %zu degrees of freedom need the sparse solver, which this build lacks "
+			                    "(CHOLMOD)",
+			                    w->dof);
+		*solver = SM_STATICS_DENSE;
+	}
+#endif
+	if (*solver == SM_STATICS_DENSE) {
+		const size_t dof = w->dof + 1;
+		if (dof > 0 && dof > SIZE_MAX / sizeof(double) / dof)
+			return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: dense matrix of %zu unknowns too large",
+			                    w->dof);
+		w->matrix = malloc(dof * dof * sizeof(double));
+		w->perturbation = malloc(dof * sizeof(double));
+		w->permutation = malloc(dof * sizeof(size_t));
+		if (w->matrix == NULL || w->perturbation == NULL || w->permutation == NULL)
+			return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
+			                    "statics: out of memory for a dense %zu x %zu matrix (use the sparse solver)",
+			                    w->dof, w->dof);
+	}
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+	if (*solver == SM_STATICS_SPARSE && sparse_prepare(w) != 0)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: cannot set up the sparse factorisation");
+#endif
+	return SM_OK;
+}
+
+sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x, double* reactions,
+                           sm_statics_result* result, sm_error* err)
+{
+	sm_statics_result res;
+	memset(&res, 0, sizeof res);
+	if (result != NULL)
+		*result = res;
+	sm_statics_def d = def != NULL ? *def : sm_default_statics_def();
+	if (model == NULL || x == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: model and x must not be NULL");
+	if (!(d.residual_tolerance > 0.0) || !isfinite(d.residual_tolerance))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "statics: residual_tolerance must be finite and > 0 N, got %g", d.residual_tolerance);
+	if (d.max_iterations < 1)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: max_iterations must be >= 1, got %d",
+		                    (int)d.max_iterations);
+	if (d.solver != SM_STATICS_AUTO && d.solver != SM_STATICS_DENSE && d.solver != SM_STATICS_SPARSE)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: unknown solver %d", (int)d.solver);
+	const size_t n3 = 3 * (size_t)sm_model_particle_count(model);
+	if (d.start != NULL)
+		for (size_t k = 0; k < n3; k++)
+			if (!isfinite(d.start[k]))
+				return sm_error_set(err, SM_ERROR_NOT_FINITE,
+				                    "statics: start position of particle %zu is not finite", k / 3);
+	if (d.external_forces != NULL)
+		for (size_t k = 0; k < n3; k++)
+			if (!isfinite(d.external_forces[k]))
+				return sm_error_set(err, SM_ERROR_NOT_FINITE,
+				                    "statics: external force on particle %zu is not finite", k / 3);
+
+	statics_work w;
+	sm_status st = work_init(&w, model, &d, err);
+	if (st == SM_OK)
+		st = check_free_bodies(&w, err);
+	if (st == SM_OK)
+		st = setup_solver(&w, &d.solver, err);
+	if (st != SM_OK) {
+		work_free(&w);
+		return st;
+	}
+	res.solver = d.solver;
+
+	// Reference for the shift: the largest spring stiffness per unit mass at a particle,
+	// sum ks / m [1/s^2] (the square of the stiffest local frequency).
+	double mu_ref = 0.0;
+	{
+		double* s = w.rhs;
+		memset(s, 0, w.dof * sizeof(double));
+		for (int32_t k = 0; k < w.ns; k++) {
+			const int32_t fa = w.free_index[w.spring_a[k]], fb = w.free_index[w.spring_b[k]];
+			if (fa >= 0)
+				s[fa] += w.stiffness[k];
+			if (fb >= 0)
+				s[fb] += w.stiffness[k];
+		}
+		for (int32_t i = 0; i < w.nf; i++)
+			mu_ref = fmax(mu_ref, s[i] / w.dof_mass[3 * (size_t)i]);
+		if (!(mu_ref > 0.0))
+			mu_ref = 1.0;
+	}
+
+	double mu = 0.0;
+	int converged = 0;
+	const double armijo = 1e-4;
+	for (;;) {
+		sm_model_forces(model, w.x, NULL, w.external, w.f);
+		res.residual = residual_norm(&w, w.f);
+		res.tolerance = fmax(d.residual_tolerance, 1e3 * DBL_EPSILON * force_scale(&w, w.x));
+		if (!isfinite(res.residual)) {
+			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "statics: the forces became non-finite at iteration %d",
+			                  (int)res.iterations);
+			break;
+		}
+		if (res.residual <= res.tolerance) {
+			converged = 1;
+			break;
+		}
+		if (res.iterations >= d.max_iterations) {
+			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+			                  "statics: no equilibrium after %d iterations: largest force on a free particle "
+			                  "%.3g N > tolerance %.3g N",
+			                  (int)res.iterations, res.residual, res.tolerance);
+			break;
+		}
+		res.iterations++;
+		for (int32_t i = 0; i < w.nf; i++)
+			memcpy(w.rhs + 3 * (size_t)i, w.f + 3 * (size_t)w.free_particle[i], 3 * sizeof(double));
+		const int factored = factor_and_step(&w, w.x, mu, w.rhs, w.step);
+		if (factored < 0) {
+			st = sm_error_set(err, SM_ERROR_SOLVER, "statics: the linear solver failed at iteration %d",
+			                  (int)res.iterations);
+			break;
+		}
+		double slope = 0.0;  // grad U . p = -f . p
+		if (factored > 0 || w.jacobian == NULL)
+			for (size_t k = 0; k < w.dof; k++)
+				slope -= w.rhs[k] * w.step[k];
+		int accepted = 0;
+		double alpha = 1.0;
+		if ((factored > 0 || w.jacobian == NULL) && slope < 0.0 && analysis_all_finite(w.step, w.dof)) {
+			for (int tries = 0; tries < 40 && !accepted; tries++, alpha *= 0.5) {
+				memcpy(w.y, w.x, n3 * sizeof(double));
+				for (int32_t i = 0; i < w.nf; i++)
+					for (int c = 0; c < 3; c++)
+						w.y[3 * (size_t)w.free_particle[i] + c] += alpha * w.step[3 * (size_t)i + c];
+				double roundoff = 0.0;
+				const double du = energy_change(&w, w.x, w.y, &roundoff);
+				if (isfinite(du) && du <= armijo * alpha * slope + 64.0 * DBL_EPSILON * roundoff)
+					accepted = 1;
+			}
+			alpha *= 2.0;  // undo the last halving
+		}
+		if (accepted) {
+			memcpy(w.x, w.y, n3 * sizeof(double));
+			if (alpha == 1.0)
+				mu = mu < 1e-9 * mu_ref ? 0.0 : 0.25 * mu;
+			else if (alpha < 0.25)
+				mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
+		} else {
+			mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
+			if (mu > 1e12 * mu_ref) {
+				st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+				                  "statics: no descent step found at iteration %d (largest force %.3g N)",
+				                  (int)res.iterations, res.residual);
+				break;
+			}
+		}
+	}
+
+	for (int c = 0; c < 3; c++)
+		res.reaction_total[c] = 0.0;
+	for (int32_t p = 0; p < w.n; p++)
+		if (w.free_index[p] < 0)
+			for (int c = 0; c < 3; c++)
+				res.reaction_total[c] -= w.f[3 * (size_t)p + c];
+	res.potential_energy = potential_energy(&w, w.x);
+	if (converged) {
+		res.stable = w.nf == 0 ? true : factor_and_step(&w, w.x, 0.0, NULL, NULL) == 1;
+		memcpy(x, w.x, n3 * sizeof(double));
+		if (reactions != NULL)
+			for (int32_t p = 0; p < w.n; p++)
+				for (int c = 0; c < 3; c++)
+					reactions[3 * (size_t)p + c] = w.free_index[p] < 0 ? -w.f[3 * (size_t)p + c] : 0.0;
+		st = SM_OK;
+		if (err != NULL) {
+			err->status = SM_OK;
+			err->message[0] = '\0';
+		}
+	}
+	if (result != NULL)
+		*result = res;
+	work_free(&w);
+	return st;
+}
