@@ -6,10 +6,17 @@
 // pattern is made of 3x3 blocks: block row p (free particle p) holds one block per distinct
 // free neighbour q (a spring between p and q) plus its own diagonal block, in increasing q.
 // If block row p holds `blocks` blocks, each of its three scalar rows holds 3 * blocks entries,
-// so the entry (i, j) of the block whose (0, 0) entry sits at value offset o is at
-// o + i * 3 * blocks + j. For every spring the offsets of its four blocks (a,a), (a,b), (b,a),
-// (b,b) are precomputed (-1 where an endpoint is constrained), which makes the fill a
-// streaming loop over springs with no search.
+// so the entry (i, j) of the k-th block of the row is at base_p + i * 3 * blocks + 3 * k + j,
+// where base_p is the row's first value.
+//
+// The fill works block row by block row, so that the values are written in storage order (a
+// stream, which is what the memory system does fastest; the values are the bulk of the data
+// for large models). For each free particle it visits its incident springs, precomputed with
+// the block each one lands in: d f_p / d x_q = +K of the spring for the neighbour q (for p = a
+// that is K; for p = b it is d f_b / d x_a = K too), and -K summed on the diagonal. The blocks
+// K and D of a spring do not change when its ends are swapped (d, u and dv change sign, r does
+// not), so either end may compute them. A spring between two free particles is thus evaluated
+// twice, once per row, which costs less than scattering into rows far apart.
 #include "law_body_forces.h"
 #include "law_rest_length.h"
 #include "law_spring_damping.h"
@@ -18,15 +25,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-// Where one spring's four blocks go.
-typedef struct spring_slots {
-	int64_t block[4];  // value offsets of blocks (a,a), (a,b), (b,a), (b,b); -1 if absent
-	int32_t stride_a;  // row stride of a's block row (0 if a is constrained)
-	int32_t stride_b;  // likewise for b
-	int32_t assign;    // 1: first spring of its pair, assigns the off-diagonal blocks; 0: adds
-	int32_t unused;
-} spring_slots;
 
 struct sm_sparse_jacobian {
 	int64_t dimension;
@@ -41,9 +39,16 @@ struct sm_sparse_jacobian {
 	int32_t* spring_a;
 	int32_t* spring_b;
 
-	int64_t* row_stride;       // per free particle: 3 * blocks in its block row
-	int64_t* diagonal_offset;  // per free particle: value offset of its diagonal block
-	spring_slots* slots;       // per spring
+	// Per free particle p: its particle index, its first block (values start at 9 * block_start),
+	// its block count, and the position of its diagonal block in the row.
+	int32_t* row_particle;
+	int64_t* block_start;  // F + 1
+	int32_t* diagonal_block;
+	// Incident springs of each free particle (CSR over free particles): spring index and the
+	// block of the other end in this row, or -1 if the other end is constrained.
+	int64_t* incident_start;  // F + 1
+	int32_t* incident_spring;
+	int32_t* incident_block;
 };
 
 void sm_sparse_jacobian_destroy(sm_sparse_jacobian* jacobian)
@@ -55,9 +60,12 @@ void sm_sparse_jacobian_destroy(sm_sparse_jacobian* jacobian)
 	free(jacobian->free_index);
 	free(jacobian->spring_a);
 	free(jacobian->spring_b);
-	free(jacobian->row_stride);
-	free(jacobian->diagonal_offset);
-	free(jacobian->slots);
+	free(jacobian->row_particle);
+	free(jacobian->block_start);
+	free(jacobian->diagonal_block);
+	free(jacobian->incident_start);
+	free(jacobian->incident_spring);
+	free(jacobian->incident_block);
 	free(jacobian);
 }
 
@@ -67,12 +75,12 @@ static int compare_int32(const void* p, const void* q)
 	return (a > b) - (a < b);
 }
 
-// Position of `column` in the sorted list [begin, begin + count).
-static int64_t find_block(const int32_t* list, int64_t count, int32_t column)
+// Position of `column` in the sorted list of `count` entries (-1 if absent).
+static int32_t find_block(const int32_t* list, int32_t count, int32_t column)
 {
-	int64_t lo = 0, hi = count - 1;
+	int32_t lo = 0, hi = count - 1;
 	while (lo <= hi) {
-		const int64_t mid = lo + (hi - lo) / 2;
+		const int32_t mid = lo + (hi - lo) / 2;
 		if (list[mid] < column)
 			lo = mid + 1;
 		else if (list[mid] > column)
@@ -80,7 +88,7 @@ static int64_t find_block(const int32_t* list, int64_t count, int32_t column)
 		else
 			return mid;
 	}
-	return -1;  // not reached for a consistent pattern
+	return -1;
 }
 
 sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
@@ -88,12 +96,12 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 	if (model == NULL)
 		return NULL;
 	const int32_t n = model->particle_count, S = model->spring_count, F = model->free_count;
+	const int32_t* fi = model->free_index;
 	sm_sparse_jacobian* J = calloc(1, sizeof *J);
-	int32_t* count = calloc((size_t)F + 1, sizeof(int32_t));        // neighbours per free particle
-	int64_t* start = calloc((size_t)F + 1, sizeof(int64_t));        // list start per free particle
+	int32_t* count = calloc((size_t)F + 1, sizeof(int32_t));  // neighbours per free particle
+	int64_t* start = calloc((size_t)F + 1, sizeof(int64_t));  // neighbour list start
 	int32_t* neighbours = malloc(((size_t)2 * S + (size_t)F + 1) * sizeof(int32_t));
-	int64_t* block_start = calloc((size_t)F + 1, sizeof(int64_t));  // first block of each row
-	int ok = J != NULL && count != NULL && start != NULL && neighbours != NULL && block_start != NULL;
+	int ok = J != NULL && count != NULL && start != NULL && neighbours != NULL;
 	if (ok) {
 		J->particle_count = n;
 		J->spring_count = S;
@@ -101,38 +109,52 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 		J->free_index = malloc(((size_t)n + 1) * sizeof(int32_t));
 		J->spring_a = malloc(((size_t)S + 1) * sizeof(int32_t));
 		J->spring_b = malloc(((size_t)S + 1) * sizeof(int32_t));
-		J->row_stride = malloc(((size_t)F + 1) * sizeof(int64_t));
-		J->diagonal_offset = malloc(((size_t)F + 1) * sizeof(int64_t));
-		J->slots = malloc(((size_t)S + 1) * sizeof(spring_slots));
+		J->row_particle = malloc(((size_t)F + 1) * sizeof(int32_t));
+		J->block_start = calloc((size_t)F + 1, sizeof(int64_t));
+		J->diagonal_block = malloc(((size_t)F + 1) * sizeof(int32_t));
+		J->incident_start = calloc((size_t)F + 1, sizeof(int64_t));
+		J->incident_spring = malloc(((size_t)2 * S + 1) * sizeof(int32_t));
+		J->incident_block = malloc(((size_t)2 * S + 1) * sizeof(int32_t));
 		J->row_pointers = malloc(((size_t)J->dimension + 1) * sizeof(int64_t));
-		ok = J->free_index && J->spring_a && J->spring_b && J->row_stride && J->diagonal_offset &&
-		     J->slots && J->row_pointers;
+		ok = J->free_index && J->spring_a && J->spring_b && J->row_particle && J->block_start &&
+		     J->diagonal_block && J->incident_start && J->incident_spring && J->incident_block &&
+		     J->row_pointers;
 	}
 	if (ok) {
 		if (n > 0)
-			memcpy(J->free_index, model->free_index, (size_t)n * sizeof(int32_t));
+			memcpy(J->free_index, fi, (size_t)n * sizeof(int32_t));
 		if (S > 0) {
 			memcpy(J->spring_a, model->spring_a, (size_t)S * sizeof(int32_t));
 			memcpy(J->spring_b, model->spring_b, (size_t)S * sizeof(int32_t));
 		}
-		// Neighbour lists (self included), by counting sort on the row.
+		for (int32_t i = 0; i < n; i++)
+			if (fi[i] >= 0)
+				J->row_particle[fi[i]] = i;
+		// Neighbour lists (self included) and incident springs, by counting sort on the row.
+		int64_t* incident_count = J->incident_start;  // counts first, turned into starts below
 		for (int32_t p = 0; p < F; p++)
 			count[p] = 1;
 		for (int32_t s = 0; s < S; s++) {
-			const int32_t fa = model->free_index[model->spring_a[s]], fb = model->free_index[model->spring_b[s]];
+			const int32_t fa = fi[model->spring_a[s]], fb = fi[model->spring_b[s]];
 			if (fa >= 0 && fb >= 0) {
 				count[fa]++;
 				count[fb]++;
 			}
+			if (fa >= 0)
+				incident_count[fa + 1]++;
+			if (fb >= 0)
+				incident_count[fb + 1]++;
 		}
-		for (int32_t p = 0; p < F; p++)
+		for (int32_t p = 0; p < F; p++) {
 			start[p + 1] = start[p] + count[p];
+			J->incident_start[p + 1] += J->incident_start[p];
+		}
 		for (int32_t p = 0; p < F; p++) {
 			neighbours[start[p]] = p;
 			count[p] = 1;
 		}
 		for (int32_t s = 0; s < S; s++) {
-			const int32_t fa = model->free_index[model->spring_a[s]], fb = model->free_index[model->spring_b[s]];
+			const int32_t fa = fi[model->spring_a[s]], fb = fi[model->spring_b[s]];
 			if (fa >= 0 && fb >= 0) {
 				neighbours[start[fa] + count[fa]++] = fb;
 				neighbours[start[fb] + count[fb]++] = fa;
@@ -147,18 +169,35 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 				if (unique == 0 || list[k] != list[unique - 1])
 					list[unique++] = list[k];
 			count[p] = unique;
-			block_start[p + 1] = block_start[p] + unique;
+			J->block_start[p + 1] = J->block_start[p] + unique;
+			J->diagonal_block[p] = find_block(list, unique, p);
 		}
-		J->nonzeros = 9 * block_start[F];
+		// Incident springs in spring order within each row, with their blocks.
+		int64_t* fill = malloc(((size_t)F + 1) * sizeof(int64_t));
+		ok = fill != NULL;
+		if (ok) {
+			memcpy(fill, J->incident_start, ((size_t)F + 1) * sizeof(int64_t));
+			for (int32_t s = 0; s < S; s++) {
+				const int32_t fa = fi[model->spring_a[s]], fb = fi[model->spring_b[s]];
+				if (fa >= 0) {
+					J->incident_spring[fill[fa]] = s;
+					J->incident_block[fill[fa]++] = fb >= 0 ? find_block(neighbours + start[fa], count[fa], fb) : -1;
+				}
+				if (fb >= 0) {
+					J->incident_spring[fill[fb]] = s;
+					J->incident_block[fill[fb]++] = fa >= 0 ? find_block(neighbours + start[fb], count[fb], fa) : -1;
+				}
+			}
+			free(fill);
+		}
+		J->nonzeros = 9 * J->block_start[F];
 		J->column_indices = malloc(((size_t)J->nonzeros + 1) * sizeof(int64_t));
-		ok = J->column_indices != NULL;
+		ok = ok && J->column_indices != NULL;
 	}
 	if (ok) {
 		for (int32_t p = 0; p < F; p++) {
 			const int32_t* list = neighbours + start[p];
-			const int64_t blocks = count[p], base = 9 * block_start[p];
-			J->row_stride[p] = 3 * blocks;
-			J->diagonal_offset[p] = base + 3 * find_block(list, blocks, p);
+			const int64_t blocks = count[p], base = 9 * J->block_start[p];
 			for (int i = 0; i < 3; i++) {
 				const int64_t row = 3 * (int64_t)p + i, first = base + i * 3 * blocks;
 				J->row_pointers[row] = first;
@@ -168,40 +207,10 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 			}
 		}
 		J->row_pointers[J->dimension] = J->nonzeros;
-		// The first spring of each free pair assigns its off-diagonal blocks, later ones add:
-		// every stored value is then written without clearing the arrays first.
-		uint8_t* claimed = calloc((size_t)block_start[F] + 1, 1);
-		ok = claimed != NULL;
-		for (int32_t s = 0; ok && s < S; s++) {
-			const int32_t fa = model->free_index[model->spring_a[s]], fb = model->free_index[model->spring_b[s]];
-			spring_slots* slot = J->slots + s;
-			int64_t* o = slot->block;
-			o[0] = o[1] = o[2] = o[3] = -1;
-			slot->stride_a = fa >= 0 ? (int32_t)J->row_stride[fa] : 0;
-			slot->stride_b = fb >= 0 ? (int32_t)J->row_stride[fb] : 0;
-			slot->assign = 0;
-			slot->unused = 0;
-			if (fa >= 0)
-				o[0] = J->diagonal_offset[fa];
-			if (fb >= 0)
-				o[3] = J->diagonal_offset[fb];
-			if (fa >= 0 && fb >= 0) {
-				const int64_t ka = find_block(neighbours + start[fa], count[fa], fb);
-				const int64_t kb = find_block(neighbours + start[fb], count[fb], fa);
-				o[1] = 9 * block_start[fa] + 3 * ka;
-				o[2] = 9 * block_start[fb] + 3 * kb;
-				// Claim both blocks: a later spring may join the pair in the other direction.
-				slot->assign = !claimed[block_start[fa] + ka];
-				claimed[block_start[fa] + ka] = 1;
-				claimed[block_start[fb] + kb] = 1;
-			}
-		}
-		free(claimed);
 	}
 	free(count);
 	free(start);
 	free(neighbours);
-	free(block_start);
 	if (!ok) {
 		sm_sparse_jacobian_destroy(J);
 		return NULL;
@@ -229,137 +238,6 @@ const int64_t* sm_sparse_jacobian_column_indices(const sm_sparse_jacobian* jacob
 	return jacobian != NULL ? jacobian->column_indices : NULL;
 }
 
-// Block writers: the three rows of a block are `stride` values apart.
-static inline void block_set(double* restrict values, int64_t offset, int64_t stride, const double b[9])
-{
-	double* row = values + offset;
-	for (int i = 0; i < 3; i++, row += stride) {
-		row[0] = b[3 * i];
-		row[1] = b[3 * i + 1];
-		row[2] = b[3 * i + 2];
-	}
-}
-
-static inline void block_add(double* restrict values, int64_t offset, int64_t stride, const double b[9])
-{
-	double* row = values + offset;
-	for (int i = 0; i < 3; i++, row += stride) {
-		row[0] += b[3 * i];
-		row[1] += b[3 * i + 1];
-		row[2] += b[3 * i + 2];
-	}
-}
-
-static inline void block_subtract(double* restrict values, int64_t offset, int64_t stride, const double b[9])
-{
-	double* row = values + offset;
-	for (int i = 0; i < 3; i++, row += stride) {
-		row[0] -= b[3 * i];
-		row[1] -= b[3 * i + 1];
-		row[2] -= b[3 * i + 2];
-	}
-}
-
-// Scatters one spring's block into the four places of one matrix: -B on the diagonal blocks,
-// +B on the off-diagonal ones.
-static inline void scatter_spring(double* restrict values, const spring_slots* slot, const double B[9])
-{
-	const int64_t* o = slot->block;
-	if (o[0] >= 0)
-		block_subtract(values, o[0], slot->stride_a, B);
-	if (o[3] >= 0)
-		block_subtract(values, o[3], slot->stride_b, B);
-	if (o[1] >= 0) {
-		if (slot->assign) {
-			block_set(values, o[1], slot->stride_a, B);
-			block_set(values, o[2], slot->stride_b, B);
-		} else {
-			block_add(values, o[1], slot->stride_a, B);
-			block_add(values, o[2], slot->stride_b, B);
-		}
-	}
-}
-
-// The fill loop, specialised by the compiler for each combination of the constant flags.
-//
-// The blocks of law_rest_length.h and law_spring_damping.h are expanded here into
-//   K = (ks g + c r) I + (ks (1 - g) - c r) u u^T + c u (P dv)^T,   D = kd u u^T,
-// with g = 1 - l0/L (clamped at 0 for the definite variant) and c = kd / L (0 for the
-// definite variant), using P = I - u u^T.
-static inline void fill_loop(const sm_sparse_jacobian* J, const sm_model* model, const double* restrict x,
-                             const double* restrict v, double* restrict dfdx, double* restrict dfdv,
-                             const int want_x, const int want_v, const int clamp, const int damping_position)
-{
-	// Diagonal blocks first: zero for df/dx, mass damping for df/dv.
-	for (int32_t i = 0; i < model->particle_count; i++) {
-		const int32_t p = model->free_index[i];
-		if (p < 0)
-			continue;
-		const int64_t o = J->diagonal_offset[p], stride = J->row_stride[p];
-		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
-		for (int r = 0; r < 3; r++)
-			for (int k = 0; k < 3; k++) {
-				if (want_x)
-					dfdx[o + r * stride + k] = 0.0;
-				if (want_v)
-					dfdv[o + r * stride + k] = r == k ? c : 0.0;
-			}
-	}
-	const int32_t* restrict first = J->spring_a;
-	const int32_t* restrict second = J->spring_b;
-	const double* restrict rest_length = model->rest_length;
-	const double* restrict stiffness = model->stiffness;
-	const double* restrict damping = model->damping;
-	for (int32_t s = 0; s < J->spring_count; s++) {
-		const spring_slots* slot = J->slots + s;
-		if (slot->block[0] < 0 && slot->block[3] < 0)
-			continue;  // both ends constrained: no free degree of freedom involved
-		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
-		const double d0 = x[b] - x[a], d1 = x[b + 1] - x[a + 1], d2 = x[b + 2] - x[a + 2];
-		const double l0 = rest_length[s], ks = stiffness[s], kd = damping[s];
-		const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-		const int regular = length > 0.0 && length >= SM_DEGENERATE_LENGTH_RATIO * l0;
-		const double inv = 1.0 / (regular ? length : 1.0);
-		const double inv_length = regular ? inv : 0.0;
-		const double u[3] = {d0 * inv_length, d1 * inv_length, d2 * inv_length};
-		double uu[9];
-		for (int i = 0; i < 3; i++)
-			for (int j = 0; j < 3; j++)
-				uu[3 * i + j] = u[i] * u[j];
-		if (want_x) {
-			double g = 1.0 - l0 * inv_length;
-			if (clamp)
-				g = g < 0.0 ? 0.0 : g;
-			double K[9];
-			double diagonal = ks * g, axial = ks - ks * g;
-			if (damping_position) {
-				const double dv[3] = {v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]};
-				const double r = u[0] * dv[0] + u[1] * dv[1] + u[2] * dv[2];
-				const double c = kd * inv_length;
-				const double cp[3] = {c * (dv[0] - r * u[0]), c * (dv[1] - r * u[1]), c * (dv[2] - r * u[2])};
-				diagonal += c * r;
-				axial -= c * r;
-				for (int i = 0; i < 3; i++)
-					for (int j = 0; j < 3; j++)
-						K[3 * i + j] = axial * uu[3 * i + j] + u[i] * cp[j];
-			} else {
-				for (int k = 0; k < 9; k++)
-					K[k] = axial * uu[k];
-			}
-			K[0] += diagonal;
-			K[4] += diagonal;
-			K[8] += diagonal;
-			scatter_spring(dfdx, slot, K);
-		}
-		if (want_v) {
-			double D[9];
-			for (int k = 0; k < 9; k++)
-				D[k] = kd * uu[k];
-			scatter_spring(dfdv, slot, D);
-		}
-	}
-}
-
 static int same_topology(const sm_sparse_jacobian* J, const sm_model* model)
 {
 	if (J->particle_count != model->particle_count || J->spring_count != model->spring_count ||
@@ -369,6 +247,109 @@ static int same_topology(const sm_sparse_jacobian* J, const sm_model* model)
 	return (n == 0 || memcmp(J->free_index, model->free_index, n * sizeof(int32_t)) == 0) &&
 	       (S == 0 || (memcmp(J->spring_a, model->spring_a, S * sizeof(int32_t)) == 0 &&
 	                   memcmp(J->spring_b, model->spring_b, S * sizeof(int32_t)) == 0));
+}
+
+// Adds sign * B to the block at `block` (row stride `stride`).
+static inline void block_add(double* restrict block, int64_t stride, double sign, const double B[9])
+{
+	for (int i = 0; i < 3; i++, block += stride) {
+		block[0] += sign * B[3 * i];
+		block[1] += sign * B[3 * i + 1];
+		block[2] += sign * B[3 * i + 2];
+	}
+}
+
+// The fill loop, specialised by the compiler for each combination of the constant flags.
+//
+// The blocks of law_rest_length.h and law_spring_damping.h are expanded here into
+//   K = (ks g + c r) I + (ks (1 - g) - c r) u u^T + u (c P dv)^T,   D = kd u u^T,
+// with g = 1 - l0/L (clamped at 0 when `clamp`) and c = kd / L (0 without
+// `damping_position`), using P = I - u u^T.
+static inline void fill_loop(const sm_sparse_jacobian* J, const sm_model* model, const double* restrict x,
+                             const double* restrict v, double* restrict dfdx, double* restrict dfdv,
+                             const int want_x, const int want_v, const int clamp, const int damping_position)
+{
+	const int32_t* restrict first = J->spring_a;
+	const int32_t* restrict second = J->spring_b;
+	const double* restrict rest_length = model->rest_length;
+	const double* restrict stiffness = model->stiffness;
+	const double* restrict damping = model->damping;
+	const int32_t F = model->free_count;
+	for (int32_t p = 0; p < F; p++) {
+		const int64_t base = 9 * J->block_start[p];
+		const int64_t blocks = J->block_start[p + 1] - J->block_start[p], stride = 3 * blocks;
+		double* restrict row_x = want_x ? dfdx + base : NULL;
+		double* restrict row_v = want_v ? dfdv + base : NULL;
+		if (want_x)
+			memset(row_x, 0, 9 * (size_t)blocks * sizeof(double));
+		if (want_v)
+			memset(row_v, 0, 9 * (size_t)blocks * sizeof(double));
+		const int64_t diagonal = 3 * (int64_t)J->diagonal_block[p];
+		if (want_v) {
+			const int32_t i = J->row_particle[p];
+			const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
+			for (int k = 0; k < 3; k++)
+				row_v[diagonal + k * stride + k] = c;
+		}
+		// Diagonal blocks accumulate here and are added once at the end of the row.
+		double diag_x[9] = {0}, diag_v[9] = {0};
+		for (int64_t e = J->incident_start[p]; e < J->incident_start[p + 1]; e++) {
+			const int32_t s = J->incident_spring[e], other = J->incident_block[e];
+			const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
+			const double d0 = x[b] - x[a], d1 = x[b + 1] - x[a + 1], d2 = x[b + 2] - x[a + 2];
+			const double l0 = rest_length[s], ks = stiffness[s], kd = damping[s];
+			const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+			const int regular = length > 0.0 && length >= SM_DEGENERATE_LENGTH_RATIO * l0;
+			const double inv = 1.0 / (regular ? length : 1.0);
+			const double inv_length = regular ? inv : 0.0;
+			const double u[3] = {d0 * inv_length, d1 * inv_length, d2 * inv_length};
+			double uu[9];
+			for (int i = 0; i < 3; i++)
+				for (int j = 0; j < 3; j++)
+					uu[3 * i + j] = u[i] * u[j];
+			if (want_x) {
+				double g = 1.0 - l0 * inv_length;
+				if (clamp)
+					g = g < 0.0 ? 0.0 : g;
+				double K[9];
+				double diagonal_term = ks * g, axial = ks - ks * g;
+				if (damping_position) {
+					const double dv[3] = {v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]};
+					const double r = u[0] * dv[0] + u[1] * dv[1] + u[2] * dv[2];
+					const double c = kd * inv_length;
+					const double cp[3] = {c * (dv[0] - r * u[0]), c * (dv[1] - r * u[1]), c * (dv[2] - r * u[2])};
+					diagonal_term += c * r;
+					axial -= c * r;
+					for (int i = 0; i < 3; i++)
+						for (int j = 0; j < 3; j++)
+							K[3 * i + j] = axial * uu[3 * i + j] + u[i] * cp[j];
+				} else {
+					for (int k = 0; k < 9; k++)
+						K[k] = axial * uu[k];
+				}
+				K[0] += diagonal_term;
+				K[4] += diagonal_term;
+				K[8] += diagonal_term;
+				for (int k = 0; k < 9; k++)
+					diag_x[k] -= K[k];
+				if (other >= 0)
+					block_add(row_x + 3 * (int64_t)other, stride, 1.0, K);
+			}
+			if (want_v) {
+				double D[9];
+				for (int k = 0; k < 9; k++) {
+					D[k] = kd * uu[k];
+					diag_v[k] -= D[k];
+				}
+				if (other >= 0)
+					block_add(row_v + 3 * (int64_t)other, stride, 1.0, D);
+			}
+		}
+		if (want_x)
+			block_add(row_x + diagonal, stride, 1.0, diag_x);
+		if (want_v)
+			block_add(row_v + diagonal, stride, 1.0, diag_v);
+	}
 }
 
 sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_model* model, const double* x,
