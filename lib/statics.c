@@ -51,7 +51,7 @@ sm_statics_def sm_default_statics_def(void)
 	def.start = NULL;
 	def.external_forces = NULL;
 	def.residual_tolerance = 1e-9;
-	def.max_iterations = 200;
+	def.max_iterations = 500;
 	def.solver = SM_STATICS_AUTO;
 	return def;
 }
@@ -200,8 +200,10 @@ static double residual_norm(const statics_work* w, const double* f)
 	return r;
 }
 
-// Largest sum of force magnitudes meeting at a particle [N]: the scale of the round-off in the
-// computed force balance.
+// Round-off scale of the force balance at each free particle: every spring force is computed as
+// ks (L - l0), whose error is about eps ks max(L, l0), not eps |ks (L - l0)|; so the sum over
+// the springs at a particle of ks max(L, l0), plus the constant force, bounds what round-off
+// can leave in the balance. Returns the largest over the free particles [N].
 static double force_scale(const statics_work* w, const double* x)
 {
 	double* s = w->rhs;  // reused as scratch: one value per free particle fits in dof entries
@@ -213,7 +215,7 @@ static double force_scale(const statics_work* w, const double* x)
 		const double* xa = x + 3 * (size_t)w->spring_a[k];
 		const double* xb = x + 3 * (size_t)w->spring_b[k];
 		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
-		const double t = fabs(w->stiffness[k] * (sqrt(dx * dx + dy * dy + dz * dz) - w->rest_length[k]));
+		const double t = w->stiffness[k] * fmax(sqrt(dx * dx + dy * dy + dz * dz), w->rest_length[k]);
 		const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
 		if (fa >= 0)
 			s[fa] += t;
@@ -476,6 +478,216 @@ static int factor_and_step(statics_work* w, const double* x, double mu, const do
 	return dense_step(w, x, mu, rhs, step);
 }
 
+// Newton's method from w->x on w->model (whose spring stiffnesses are in w->stiffness), for at
+// most `budget` iterations (counted in res->iterations). Returns 1 when converged, 0 when the
+// budget ran out or no descent step was found (the caller may try another way), -1 on a fatal
+// error (*st and err set).
+static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_result* res, sm_status* st,
+                  sm_error* err)
+{
+	const sm_model* model = w->model;
+	const size_t n3 = 3 * (size_t)w->n;
+	// Reference for the shift: the largest spring stiffness per unit mass at a particle,
+	// sum ks / m [1/s^2] (the square of the stiffest local frequency).
+	double mu_ref = 0.0;
+	{
+		double* s = w->rhs;
+		memset(s, 0, w->dof * sizeof(double));
+		for (int32_t k = 0; k < w->ns; k++) {
+			const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
+			if (fa >= 0)
+				s[fa] += w->stiffness[k];
+			if (fb >= 0)
+				s[fb] += w->stiffness[k];
+		}
+		for (int32_t i = 0; i < w->nf; i++)
+			mu_ref = fmax(mu_ref, s[i] / w->dof_mass[3 * (size_t)i]);
+		if (!(mu_ref > 0.0))
+			mu_ref = 1.0;
+	}
+	const int32_t last = res->iterations + budget;
+	double mu = 0.0;
+	const double armijo = 1e-4;
+	for (;;) {
+		sm_model_forces(model, w->x, NULL, w->external, w->f);
+		res->residual = residual_norm(w, w->f);
+		res->tolerance = fmax(tolerance, SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * force_scale(w, w->x));
+		if (!isfinite(res->residual)) {
+			*st = sm_error_set(err, SM_ERROR_NOT_FINITE, "statics: the forces became non-finite at iteration %d",
+			                   (int)res->iterations);
+			return -1;
+		}
+		if (res->residual <= res->tolerance)
+			return 1;
+		if (res->iterations >= last)
+			return 0;
+		res->iterations++;
+		for (int32_t i = 0; i < w->nf; i++)
+			memcpy(w->rhs + 3 * (size_t)i, w->f + 3 * (size_t)w->free_particle[i], 3 * sizeof(double));
+		const int factored = factor_and_step(w, w->x, mu, w->rhs, w->step);
+		if (factored < 0) {
+			*st = sm_error_set(err, SM_ERROR_SOLVER, "statics: the linear solver failed at iteration %d",
+			                   (int)res->iterations);
+			return -1;
+		}
+		const int have_step = factored > 0 || w->jacobian == NULL;
+		double slope = 0.0;  // grad U . p = -f . p
+		if (have_step)
+			for (size_t k = 0; k < w->dof; k++)
+				slope -= w->rhs[k] * w->step[k];
+		int accepted = 0;
+		double alpha = 1.0;
+		if (have_step && slope < 0.0 && analysis_all_finite(w->step, w->dof)) {
+			for (int tries = 0; tries < 40 && !accepted; tries++, alpha *= 0.5) {
+				memcpy(w->y, w->x, n3 * sizeof(double));
+				for (int32_t i = 0; i < w->nf; i++)
+					for (int c = 0; c < 3; c++)
+						w->y[3 * (size_t)w->free_particle[i] + c] += alpha * w->step[3 * (size_t)i + c];
+				double roundoff = 0.0;
+				const double du = energy_change(w, w->x, w->y, &roundoff);
+				if (isfinite(du) && du <= armijo * alpha * slope + 64.0 * DBL_EPSILON * roundoff)
+					accepted = 1;
+			}
+			alpha *= 2.0;  // undo the last halving
+			if (!accepted) {
+				// At the round-off level of U the Armijo test is blind; the full Newton step is
+				// still taken if it shrinks the force residual decisively.
+				memcpy(w->y, w->x, n3 * sizeof(double));
+				for (int32_t i = 0; i < w->nf; i++)
+					for (int c = 0; c < 3; c++)
+						w->y[3 * (size_t)w->free_particle[i] + c] += w->step[3 * (size_t)i + c];
+				sm_model_forces(model, w->y, NULL, w->external, w->f);
+				if (residual_norm(w, w->f) < 0.5 * res->residual) {
+					accepted = 1;
+					alpha = 1.0;
+				}
+			}
+		}
+		if (accepted) {
+			memcpy(w->x, w->y, n3 * sizeof(double));
+			if (alpha == 1.0)
+				mu = mu < 1e-9 * mu_ref ? 0.0 : 0.25 * mu;
+			else if (alpha < 0.25)
+				mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
+		} else {
+			mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
+			if (mu > 1e12 * mu_ref)
+				return 0;
+		}
+	}
+}
+
+// Sets the stiffness of every spring of w->model (a clone) to scale times the original's.
+static sm_status scale_stiffness(statics_work* w, sm_model* clone, const sm_model* original, double scale)
+{
+	for (int32_t k = 0; k < w->ns; k++) {
+		sm_spring_def sd;
+		sm_model_get_spring(original, k, &sd);
+		sd.stiffness *= scale;
+		const sm_status st = sm_model_set_spring(clone, k, &sd);
+		if (st != SM_OK)
+			return st;
+		double l0 = 0.0, ks = 0.0, kd = 0.0;
+		sm_model_spring_constants(clone, k, &l0, &ks, &kd);
+		w->stiffness[k] = sm_model_spring_enabled(clone, k) ? ks : 0.0;
+	}
+	return SM_OK;
+}
+
+// Newton's method, and if it does not converge within 50 iterations, continuation
+// in the stiffness: nearly inextensible cables and stiff cloth make U a narrow curved valley in
+// which Newton's steps stay short for hundreds of iterations. Softened by a factor s, the same
+// structure sags into a shape with strains of order one, where Newton converges at once; s then
+// grows tenfold per stage, each stage starting from the previous equilibrium, up to s = 1 (the
+// real model). A stage that fails is retried from the last good shape with a smaller growth.
+static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* d, sm_statics_result* res,
+                                         int* converged, sm_error* err)
+{
+	sm_status st = SM_OK;
+	const int32_t first_budget = d->max_iterations < 100 ? d->max_iterations : 50;
+	const int r = newton(w, first_budget, d->residual_tolerance, res, &st, err);
+	if (r != 0 || w->ns == 0 || res->iterations >= d->max_iterations) {
+		*converged = r == 1;
+		return r < 0 ? st : SM_OK;
+	}
+	const sm_model* original = w->model;
+	const size_t n3 = 3 * (size_t)w->n;
+	sm_model* clone = sm_model_clone(original);
+	double* saved = malloc((n3 + 1) * sizeof(double));
+	double* original_stiffness = malloc(((size_t)w->ns + 1) * sizeof(double));
+	if (clone == NULL || saved == NULL || original_stiffness == NULL) {
+		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for the continuation");
+		goto done;
+	}
+	memcpy(original_stiffness, w->stiffness, (size_t)w->ns * sizeof(double));
+	if (d->start != NULL)
+		memcpy(w->x, d->start, n3 * sizeof(double));
+	else
+		sm_model_initial_state(original, w->x, NULL);
+	// Softest stage: spring forces ks l at the scale of the constant load.
+	double load = 0.0, spring = 0.0;
+	for (int32_t i = 0; i < w->nf; i++) {
+		const double* c = w->constant_force + 3 * (size_t)w->free_particle[i];
+		load += sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+	}
+	for (int32_t k = 0; k < w->ns; k++) {
+		const double* xa = w->x + 3 * (size_t)w->spring_a[k];
+		const double* xb = w->x + 3 * (size_t)w->spring_b[k];
+		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+		const double length = fmax(w->rest_length[k], sqrt(dx * dx + dy * dy + dz * dz));
+		spring = fmax(spring, w->stiffness[k] * length);
+	}
+	double scale = spring > 0.0 ? fmin(0.1, fmax(1e-12, load / spring)) : 1.0;
+	double good = 0.0, growth = 10.0;
+	memcpy(saved, w->x, n3 * sizeof(double));
+	for (;;) {
+		const int final_stage = scale >= 1.0;
+		if (final_stage) {
+			w->model = original;
+			memcpy(w->stiffness, original_stiffness, (size_t)w->ns * sizeof(double));
+		} else {
+			if ((st = scale_stiffness(w, clone, original, scale)) != SM_OK) {
+				sm_error_set(err, st, "statics: cannot soften the springs: %s", sm_model_last_error(clone));
+				goto done;
+			}
+			w->model = clone;
+		}
+		const int32_t remaining = d->max_iterations - res->iterations;
+		if (remaining <= 0)
+			break;
+		const int c = newton(w, remaining < 60 ? remaining : 60, d->residual_tolerance, res, &st, err);
+		if (c < 0)
+			goto done;
+		if (c == 1) {
+			if (final_stage) {
+				*converged = 1;
+				break;
+			}
+			good = scale;
+			memcpy(saved, w->x, n3 * sizeof(double));
+			scale = fmin(1.0, scale * growth);
+		} else {
+			memcpy(w->x, saved, n3 * sizeof(double));
+			growth = sqrt(growth);
+			if (good == 0.0 || growth < 1.01)
+				break;
+			scale = fmin(1.0, good * growth);
+		}
+	}
+done:
+	w->model = original;
+	if (original_stiffness != NULL)
+		memcpy(w->stiffness, original_stiffness, (size_t)w->ns * sizeof(double));
+	if (st == SM_OK && !*converged) {
+		sm_model_forces(original, w->x, NULL, w->external, w->f);
+		res->residual = residual_norm(w, w->f);
+	}
+	sm_model_destroy(clone);
+	free(saved);
+	free(original_stiffness);
+	return st;
+}
+
 // ---------------------------------------------------------------------------------------------
 
 static sm_status work_init(statics_work* w, const sm_model* model, const sm_statics_def* def, sm_error* err)
@@ -612,92 +824,13 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	}
 	res.solver = d.solver;
 
-	// Reference for the shift: the largest spring stiffness per unit mass at a particle,
-	// sum ks / m [1/s^2] (the square of the stiffest local frequency).
-	double mu_ref = 0.0;
-	{
-		double* s = w.rhs;
-		memset(s, 0, w.dof * sizeof(double));
-		for (int32_t k = 0; k < w.ns; k++) {
-			const int32_t fa = w.free_index[w.spring_a[k]], fb = w.free_index[w.spring_b[k]];
-			if (fa >= 0)
-				s[fa] += w.stiffness[k];
-			if (fb >= 0)
-				s[fb] += w.stiffness[k];
-		}
-		for (int32_t i = 0; i < w.nf; i++)
-			mu_ref = fmax(mu_ref, s[i] / w.dof_mass[3 * (size_t)i]);
-		if (!(mu_ref > 0.0))
-			mu_ref = 1.0;
-	}
-
-	double mu = 0.0;
 	int converged = 0;
-	const double armijo = 1e-4;
-	for (;;) {
-		sm_model_forces(model, w.x, NULL, w.external, w.f);
-		res.residual = residual_norm(&w, w.f);
-		res.tolerance = fmax(d.residual_tolerance, 1e3 * DBL_EPSILON * force_scale(&w, w.x));
-		if (!isfinite(res.residual)) {
-			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "statics: the forces became non-finite at iteration %d",
-			                  (int)res.iterations);
-			break;
-		}
-		if (res.residual <= res.tolerance) {
-			converged = 1;
-			break;
-		}
-		if (res.iterations >= d.max_iterations) {
-			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                  "statics: no equilibrium after %d iterations: largest force on a free particle "
-			                  "%.3g N > tolerance %.3g N",
-			                  (int)res.iterations, res.residual, res.tolerance);
-			break;
-		}
-		res.iterations++;
-		for (int32_t i = 0; i < w.nf; i++)
-			memcpy(w.rhs + 3 * (size_t)i, w.f + 3 * (size_t)w.free_particle[i], 3 * sizeof(double));
-		const int factored = factor_and_step(&w, w.x, mu, w.rhs, w.step);
-		if (factored < 0) {
-			st = sm_error_set(err, SM_ERROR_SOLVER, "statics: the linear solver failed at iteration %d",
-			                  (int)res.iterations);
-			break;
-		}
-		double slope = 0.0;  // grad U . p = -f . p
-		if (factored > 0 || w.jacobian == NULL)
-			for (size_t k = 0; k < w.dof; k++)
-				slope -= w.rhs[k] * w.step[k];
-		int accepted = 0;
-		double alpha = 1.0;
-		if ((factored > 0 || w.jacobian == NULL) && slope < 0.0 && analysis_all_finite(w.step, w.dof)) {
-			for (int tries = 0; tries < 40 && !accepted; tries++, alpha *= 0.5) {
-				memcpy(w.y, w.x, n3 * sizeof(double));
-				for (int32_t i = 0; i < w.nf; i++)
-					for (int c = 0; c < 3; c++)
-						w.y[3 * (size_t)w.free_particle[i] + c] += alpha * w.step[3 * (size_t)i + c];
-				double roundoff = 0.0;
-				const double du = energy_change(&w, w.x, w.y, &roundoff);
-				if (isfinite(du) && du <= armijo * alpha * slope + 64.0 * DBL_EPSILON * roundoff)
-					accepted = 1;
-			}
-			alpha *= 2.0;  // undo the last halving
-		}
-		if (accepted) {
-			memcpy(w.x, w.y, n3 * sizeof(double));
-			if (alpha == 1.0)
-				mu = mu < 1e-9 * mu_ref ? 0.0 : 0.25 * mu;
-			else if (alpha < 0.25)
-				mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
-		} else {
-			mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
-			if (mu > 1e12 * mu_ref) {
-				st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-				                  "statics: no descent step found at iteration %d (largest force %.3g N)",
-				                  (int)res.iterations, res.residual);
-				break;
-			}
-		}
-	}
+	st = solve_with_continuation(&w, &d, &res, &converged, err);
+	if (st == SM_OK && !converged)
+		st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+		                  "statics: no equilibrium found in %d iterations: largest force on a free particle "
+		                  "%.3g N > tolerance %.3g N",
+		                  (int)res.iterations, res.residual, res.tolerance);
 
 	for (int c = 0; c < 3; c++)
 		res.reaction_total[c] = 0.0;

@@ -30,6 +30,9 @@ typedef enum sm_statics_solver {
 /// Degrees of freedom (3 per free particle) up to which SM_STATICS_AUTO solves densely.
 #define SM_STATICS_DENSE_LIMIT 600
 
+/// Factor of the round-off floor of the residual tolerance [1].
+#define SM_STATICS_ROUNDOFF_FACTOR 32.0
+
 /// Options of sm_statics_solve(); get them from sm_default_statics_def().
 typedef struct sm_statics_def {
 	/// Starting positions of all particles, 3 per particle [m]; NULL (default) = the model's
@@ -39,10 +42,11 @@ typedef struct sm_statics_def {
 	/// constrained particles add to the force their supports must take.
 	const double* external_forces;
 	/// Convergence: largest force component on a free particle [N]; default 1e-9. The
-	/// tolerance actually used is never below 1e3 machine epsilons times the largest force
-	/// magnitude at a particle (the round-off floor of the force sum, see docs/analysis.md).
+	/// tolerance actually used is never below SM_STATICS_ROUNDOFF_FACTOR machine epsilons times
+	/// the largest sum, over a particle's springs, of ks max(L, l0) plus its constant force: the
+	/// round-off floor of the computed force balance (see docs/analysis.md).
 	double residual_tolerance;
-	int32_t max_iterations;    ///< Newton iterations allowed, >= 1; default 200
+	int32_t max_iterations;    ///< Newton iterations allowed in all, >= 1; default 500
 	sm_statics_solver solver;  ///< default SM_STATICS_AUTO
 } sm_statics_def;
 

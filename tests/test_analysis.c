@@ -1,0 +1,669 @@
+// Analysis tests: static equilibrium and natural frequencies against closed forms.
+#include "springmass/analysis.h"
+#include "springmass/structures.h"
+#include "test_harness.h"
+
+#include <float.h>
+#include <stdlib.h>
+
+static const double pi = 3.14159265358979323846;
+
+// A straight chain of n free particles of mass m between two fixed ends, along x, springs of
+// stiffness k at their rest length a; kind and damping as given.
+static sm_model* chain_model(int32_t n, double m, double k, double a, sm_spring_kind kind, double kd,
+                             double alpha)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	md.mass_damping = alpha;
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	for (int32_t i = 0; i < n + 2; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = m;
+		p.position[0] = a * i;
+		p.motion = (i == 0 || i == n + 1) ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		if (sm_model_add_particle(model, &p, NULL) != SM_OK)
+			goto fail;
+	}
+	for (int32_t i = 0; i < n + 1; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = i + 1;
+		s.kind = kind;
+		s.stiffness = k;
+		s.damping = kd;
+		if (sm_model_add_spring(model, &s, NULL) != SM_OK)
+			goto fail;
+	}
+	return model;
+fail:
+	sm_model_destroy(model);
+	return NULL;
+}
+
+// omega_j = 2 sqrt(k/m) sin(j pi / (2 (N + 1))), j = 1..N: the modes of a fixed-fixed chain.
+static double chain_omega(int32_t n, double m, double k, int32_t j)
+{
+	return 2.0 * sqrt(k / m) * sin(j * pi / (2.0 * (n + 1)));
+}
+
+// Rest-length springs at rest length have stiffness only along the chain: the N axial modes
+// follow the closed form, the 2N transverse ones are zero (no tension, no transverse stiffness).
+static int test_chain_axial_frequencies(void)
+{
+	const int32_t n = 12;
+	const double m = 0.5, k = 200.0;
+	sm_model* model = chain_model(n, m, k, 0.1, SM_SPRING_REST_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.dof == 3 * n && modes.count == 3 * n);
+	ENSURE(modes.zero_count == 2 * n);
+	ENSURE(modes.unstable_count == 0);
+	for (int32_t j = 1; j <= n; j++) {
+		// The eigensolver's error in omega^2 is about eps * max omega^2 (backward stable), which
+		// relative to the lowest omega^2 = 4k/m sin^2(pi/26) is ~1e-14: 1e-9 has a wide margin.
+		const double omega = sqrt(modes.omega_squared[2 * n + j - 1]);
+		ENSURE_REL(omega, chain_omega(n, m, k, j), 1e-9, 0.0);
+		ENSURE_REL(modes.frequency[2 * n + j - 1], omega / (2.0 * pi), 1e-12, 0.0);
+	}
+	ENSURE_REL(modes.omega_max, chain_omega(n, m, k, n), 1e-9, 0.0);
+	sm_modes_release(&modes);
+	sm_modes_release(&modes);  // released twice: a zeroed result is fine
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Zero-length springs are linear and isotropic: every frequency appears once per direction.
+static int test_chain_zero_length_frequencies(void)
+{
+	const int32_t n = 9;
+	const double m = 2.0, k = 50.0;
+	sm_model* model = chain_model(n, m, k, 0.3, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.zero_count == 0);
+	for (int32_t j = 1; j <= n; j++)
+		for (int c = 0; c < 3; c++)
+			ENSURE_REL(sqrt(modes.omega_squared[3 * (j - 1) + c]), chain_omega(n, m, k, j), 1e-9, 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Mode shapes: K phi = omega^2 M phi with K from the model's own dense Jacobian (an independent
+// assembly), and Phi^T M Phi = I. A random, stretched structure with gravity, one fixed corner.
+static int test_mode_shapes_solve_the_eigenproblem(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = 3;
+	bd.nv = 2;
+	bd.nw = 2;
+	bd.size[0] = 0.3;
+	bd.size[1] = 0.2;
+	bd.size[2] = 0.25;
+	bd.mass = 1.7;
+	bd.edge.stiffness = 300.0;
+	bd.face_diagonal.stiffness = 150.0;
+	bd.body_diagonal.stiffness = 90.0;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_block(model, &bd, &st), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, 0, SM_PARTICLE_FIXED), SM_OK);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(model, x, NULL);
+	// Stretch the block unevenly so that the geometric stiffness is not zero.
+	for (int32_t i = 0; i < np; i++) {
+		x[3 * i] *= 1.0 + 0.05 * sin(i);
+		x[3 * i + 2] *= 1.1;
+	}
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	const size_t n3 = 3 * (size_t)np;
+	double* J = malloc(n3 * n3 * sizeof(double));
+	ENSURE(J != NULL);
+	sm_model_jacobian_dense(model, x, NULL, SM_JACOBIAN_EXACT, J, NULL);
+	double kmax = 0.0;
+	for (size_t i = 0; i < n3 * n3; i++)
+		kmax = fmax(kmax, fabs(J[i]));
+	for (int32_t a = 0; a < modes.count; a++) {
+		const double* phi = modes.shapes + (size_t)a * n3;
+		for (int32_t p = 1; p < np; p++) {
+			sm_particle_def pd;
+			sm_model_get_particle(model, p, &pd);
+			for (int c = 0; c < 3; c++) {
+				const size_t r = 3 * (size_t)p + c;
+				double kphi = 0.0;
+				for (size_t q = 3; q < n3; q++)
+					kphi -= J[r * n3 + q] * phi[q];
+				// Residual of a backward-stable eigensolver: ~eps * |K| * |phi| * sqrt(dof).
+				ENSURE_NEAR(kphi, modes.omega_squared[a] * pd.mass * phi[r], 1e-11 * kmax);
+			}
+		}
+		for (int32_t b = 0; b <= a; b++) {
+			const double* psi = modes.shapes + (size_t)b * n3;
+			double mm = 0.0;
+			for (int32_t p = 0; p < np; p++) {
+				sm_particle_def pd;
+				sm_model_get_particle(model, p, &pd);
+				for (int c = 0; c < 3; c++)
+					mm += pd.mass * phi[3 * p + c] * psi[3 * p + c];
+			}
+			// Orthonormal eigenvectors to round-off.
+			ENSURE_NEAR(mm, a == b ? 1.0 : 0.0, 1e-12);
+		}
+		ENSURE(phi[0] == 0.0 && phi[1] == 0.0 && phi[2] == 0.0);
+	}
+	free(J);
+	free(x);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A free block has six rigid-body modes (three translations, three rotations) at zero frequency,
+// also when stretched: its rotations are then still free because the springs' tension acts
+// between its own particles.
+static int test_free_block_six_zero_frequencies(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = bd.nv = bd.nw = 3;
+	bd.size[0] = bd.size[1] = bd.size[2] = 0.2;
+	bd.mass = 2.0;
+	bd.edge.stiffness = 500.0;
+	bd.face_diagonal.stiffness = 300.0;
+	bd.body_diagonal.stiffness = 200.0;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_block(model, &bd, &st), SM_OK);
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.dof == 81);
+	ENSURE(modes.zero_count == 6);
+	ENSURE(modes.unstable_count == 0);
+	for (int i = 0; i < 6; i++)
+		ENSURE(modes.omega_squared[i] == 0.0 && modes.frequency[i] == 0.0);
+	// The first elastic mode is well separated from the rigid ones.
+	ENSURE(modes.omega_squared[6] > 1e-3 * modes.omega_max * modes.omega_max);
+	sm_modes_release(&modes);
+
+	// Uniformly stretched by 10 % (not an equilibrium): the three translations stay zero modes,
+	// but the rotations do not, because the unbalanced forces on the boundary particles turn with
+	// the body (d^2 U / d theta^2 = phi^T K phi + f . (d^2 x / d theta^2) and U is invariant,
+	// so phi^T K phi = -f . (d^2 x / d theta^2) != 0).
+	const int32_t np = sm_model_particle_count(model);
+	double x[81];
+	sm_model_initial_state(model, x, NULL);
+	for (int32_t i = 0; i < 3 * np; i++)
+		x[i] *= 1.1;
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.zero_count == 3);
+	sm_modes_release(&modes);
+
+	// Rotated rigidly by 0.7 rad about z: still unstressed, still an equilibrium, six zero modes.
+	sm_model_initial_state(model, x, NULL);
+	const double c = cos(0.7), s = sin(0.7);
+	for (int32_t i = 0; i < np; i++) {
+		const double x0 = x[3 * i], y0 = x[3 * i + 1];
+		x[3 * i] = c * x0 - s * y0;
+		x[3 * i + 1] = s * x0 + c * y0;
+	}
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.zero_count == 6);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Rayleigh damping C = alpha M + beta K (mass damping alpha, spring damping kd = beta ks on
+// rest-length springs at rest length, whose stiffness and damping both act along the chain
+// only) is proportional: zeta_j = alpha / (2 omega_j) + beta omega_j / 2 for the N axial modes;
+// the 2N transverse modes have zero frequency and decay by mass damping alone.
+static int test_proportional_damping_ratios(void)
+{
+	const int32_t n = 8;
+	const double m = 0.25, k = 400.0, alpha = 0.3, beta = 2e-3;
+	sm_model* model = chain_model(n, m, k, 0.05, SM_SPRING_REST_LENGTH, beta * k, alpha);
+	ENSURE(model != NULL);
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.proportional);
+	// Off-diagonal entries are round-off of sums of O(1) terms.
+	ENSURE(modes.damping_coupling < 1e-9);
+	ENSURE(modes.zero_count == 2 * n);
+	for (int32_t a = 0; a < modes.count; a++) {
+		if (a < 2 * n) {
+			ENSURE_REL(modes.modal_damping[a], alpha, 1e-12, 0.0);
+			ENSURE(isinf(modes.damping_ratio[a]));
+			continue;
+		}
+		const double omega = sqrt(modes.omega_squared[a]);
+		// zeta from the closed form; the only error is round-off in phi^T C phi (~1e-15).
+		ENSURE_REL(modes.damping_ratio[a], alpha / (2.0 * omega) + beta * omega / 2.0, 1e-9, 0.0);
+		ENSURE_REL(modes.modal_damping[a], alpha + beta * omega * omega, 1e-9, 0.0);
+	}
+	sm_modes_release(&modes);
+
+	// One spring damped ten times more: the modes couple through the damping.
+	sm_spring_def s;
+	ENSURE_STATUS(sm_model_get_spring(model, 3, &s), SM_OK);
+	s.damping *= 10.0;
+	ENSURE_STATUS(sm_model_set_spring(model, 3, &s), SM_OK);
+	sm_modes_def def = sm_default_modes_def();
+	def.mode_count = 2 * n + 4;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.count == 2 * n + 4);
+	ENSURE(!modes.proportional);
+	ENSURE(modes.damping_coupling > 1e-2);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A hanging rope of strain stiffness E, mass m, rest length L under its own weight: the
+// continuous rope stretches by m g L / (2 E). With the mass lumped evenly on N + 1 particles
+// (top one held) segment j from the bottom carries j m g / (N + 1), and the total is exactly
+// m g L / (2 E) for every N; the stretch profile converges with error
+// max |u_i - u(s_i)| = m g L / (8 E (N + 1)) at mid-rope (worked out in docs/analysis.md).
+static int test_hanging_rope_elongation(void)
+{
+	const double mass = 0.8, length = 2.0, E = 400.0, g = 9.81;
+	const double stretch = mass * g * length / (2.0 * E);
+	double previous_error = INFINITY;
+	const int32_t sizes[] = {4, 16, 64};
+	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
+		const int32_t n = sizes[t];
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = -g;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_rope_def rd = sm_default_rope_def();
+		rd.end[0] = 0.0;
+		rd.end[2] = -length;
+		rd.segments = n;
+		rd.mass = mass;
+		rd.structural.stiffness = E;
+		rd.structural.stiffness_scaling = SM_PER_STRAIN;
+		sm_structure st;
+		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
+		ENSURE_STATUS(sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED), SM_OK);
+		const int32_t np = sm_model_particle_count(model);
+		double* x = malloc(3 * (size_t)np * sizeof(double));
+		double* reactions = malloc(3 * (size_t)np * sizeof(double));
+		ENSURE(x != NULL && reactions != NULL);
+		sm_statics_result res;
+		sm_error err;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, reactions, &res, &err), SM_OK);
+		ENSURE(res.residual <= 1e-9);
+		ENSURE(res.stable);
+		const double bottom = -x[3 * (size_t)(np - 1) + 2];
+		// Exact for every N; the solution is converged to 1e-9 N, i.e. to ~1e-9 / (E / l0) m.
+		ENSURE_REL(bottom - length, stretch, 1e-9, 0.0);
+		double error = 0.0;
+		for (int32_t i = 0; i <= n; i++) {
+			const double s = length * i / n;
+			const double u = mass * g / (E * length) * (length * s - 0.5 * s * s);
+			error = fmax(error, fabs(-x[3 * (size_t)i + 2] - s - u));
+		}
+		// The discrete profile error has a closed form too (to the solution's accuracy).
+		ENSURE_REL(error, mass * g * length / (8.0 * E * (n + 1)), 1e-7, 0.0);
+		ENSURE(error < previous_error);
+		previous_error = error;
+		// The support carries the whole weight, straight up.
+		ENSURE_REL(res.reaction_total[2], mass * g, 1e-12, 0.0);
+		ENSURE_REL(reactions[2], mass * g, 1e-12, 0.0);
+		printf("  hanging rope N=%-3d stretch %.12f m (closed form %.12f), profile error %.3e m, %d iterations\n",
+		       (int)n, bottom - length, stretch, error, (int)res.iterations);
+		free(x);
+		free(reactions);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// Catenary y(x) = a cosh((x - S/2)/a) - a cosh(S/(2a)) of length 2 a sinh(S/(2a)) = Lc over the
+// span S: the parameter a by bisection (the length decreases monotonically in a).
+static double catenary_parameter(double span, double length)
+{
+	double lo = 1e-3 * span, hi = 1e6 * span;
+	for (int i = 0; i < 200; i++) {
+		const double mid = sqrt(lo * hi);
+		if (2.0 * mid * sinh(span / (2.0 * mid)) > length)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	return sqrt(lo * hi);
+}
+
+// A nearly inextensible cable of length Lc between two supports a span S apart sags into a
+// catenary; the lumped discretisation approaches it as N grows. The start is the worst case:
+// the cable straight between the supports, every spring compressed.
+static int test_sagging_cable_catenary(void)
+{
+	const double span = 1.0, cable = 1.3, mass = 0.5, E = 1e6, g = 9.81;
+	const double a = catenary_parameter(span, cable);
+	double previous_error = INFINITY;
+	const int32_t sizes[] = {8, 16, 32, 64};
+	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
+		const int32_t n = sizes[t];
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = -g;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_rope_def rd = sm_default_rope_def();
+		rd.end[0] = cable;
+		rd.segments = n;
+		rd.mass = mass;
+		rd.structural.stiffness = E;
+		rd.structural.stiffness_scaling = SM_PER_STRAIN;
+		sm_structure st;
+		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
+		const int32_t np = sm_model_particle_count(model);
+		// Squeeze the cable onto the span (rest lengths stay), then hold both ends.
+		for (int32_t i = 0; i < np; i++) {
+			sm_particle_def pd;
+			sm_model_get_particle(model, i, &pd);
+			pd.position[0] *= span / cable;
+			pd.motion = (i == 0 || i == np - 1) ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+			ENSURE_STATUS(sm_model_set_particle(model, i, &pd), SM_OK);
+		}
+		double* x = malloc(3 * (size_t)np * sizeof(double));
+		ENSURE(x != NULL);
+		sm_statics_result res;
+		sm_error err;
+		sm_status status = sm_statics_solve(model, NULL, x, NULL, &res, &err);
+		if (status != SM_OK)
+			printf("  %s\n", err.message);
+		ENSURE_STATUS(status, SM_OK);
+		// Springs of ks = E N / Lc up to 6.4e7 N/m: the round-off of ks (L - l0) alone is
+		// ~eps ks L ~ 1e-9 N, so the solver's own round-off floor (res.tolerance) applies here.
+		ENSURE(res.residual <= res.tolerance && res.tolerance < 1e-7);
+		ENSURE(res.stable);
+		double error = 0.0;
+		for (int32_t i = 0; i < np; i++) {
+			const double xi = x[3 * (size_t)i], zi = x[3 * (size_t)i + 2];
+			const double z = a * cosh((xi - 0.5 * span) / a) - a * cosh(span / (2.0 * a));
+			error = fmax(error, fabs(zi - z));
+			ENSURE(fabs(x[3 * (size_t)i + 1]) < 1e-12);  // stays in its vertical plane
+		}
+		printf("  cable N=%-3d max distance from the catenary %.3e m, sag %.6f m, %d iterations\n", (int)n,
+		       error, -x[3 * (size_t)(np / 2) + 2], (int)res.iterations);
+		// The polygon of lumped masses approaches the catenary to second order in 1/N: the error
+		// falls about fourfold per doubling (measured 0.25). The elastic stretch (weight / E
+		// ~ 5e-6) adds only ~2e-6 m, far below the errors compared here.
+		ENSURE(error < 0.3 * previous_error);
+		previous_error = error;
+		// Total weight on the two supports, shared equally by symmetry.
+		ENSURE_REL(res.reaction_total[2], mass * g, 1e-10, 0.0);
+		free(x);
+		sm_model_destroy(model);
+	}
+	// The finest cable lies within 0.1 mm of the catenary (the sag is about 0.37 m).
+	ENSURE(previous_error < 1e-4);
+	return 0;
+}
+
+// A cloth sheet held at two corners, starting flat and horizontal (no transverse stiffness at
+// all: Newton's matrix is singular there), hangs with the reactions carrying its weight.
+static int test_hanging_cloth_reactions(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = sd.nv = 10;
+	sd.mass = 0.4;
+	sd.structural.stiffness = 2000.0;
+	sd.shear.stiffness = 500.0;
+	sd.bend.stiffness = 100.0;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_sheet(model, &sd, &st), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 0, 0), SM_PARTICLE_FIXED), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 9, 0), SM_PARTICLE_FIXED), SM_OK);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	double* r = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL && r != NULL);
+	sm_statics_result res;
+	sm_error err;
+	sm_status status = sm_statics_solve(model, NULL, x, r, &res, &err);
+	if (status != SM_OK)
+		printf("  %s\n", err.message);
+	ENSURE_STATUS(status, SM_OK);
+	printf("  cloth 10x10: %d iterations, residual %.3e N, stable %d\n", (int)res.iterations, res.residual,
+	       (int)res.stable);
+	ENSURE(res.residual <= 1e-9);
+	// Sum of reactions = -(total weight) + sum of the residual forces: within 98 * 1e-9 N.
+	const double weight = 0.4 * 9.81;
+	ENSURE_NEAR(res.reaction_total[0], 0.0, 98 * 1e-9);
+	ENSURE_NEAR(res.reaction_total[1], 0.0, 98 * 1e-9);
+	ENSURE_NEAR(res.reaction_total[2], weight, 98 * 1e-9);
+	// The reactions balance the model's forces at the supports; free particles get none.
+	double* f = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(f != NULL);
+	sm_model_forces(model, x, NULL, NULL, f);
+	double sum_z = 0.0;
+	for (int32_t i = 0; i < np; i++) {
+		const int held = i == 0 || i == 9;
+		for (int c = 0; c < 3; c++)
+			ENSURE_NEAR(r[3 * i + c], held ? -f[3 * i + c] : 0.0, 0.0);
+		sum_z += r[3 * i + 2];
+	}
+	ENSURE_NEAR(sum_z, res.reaction_total[2], 1e-12);
+	// Symmetric cloth, symmetric supports: each corner takes half the weight.
+	ENSURE_NEAR(r[2], 0.5 * weight, 1e-8);
+	// The cloth hangs below its supports.
+	for (int32_t i = 10; i < np; i++)
+		ENSURE(x[3 * i + 2] < 0.0);
+	free(f);
+	free(x);
+	free(r);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A mass on a zero-length spring under a constant external force: k x = F + m g exactly.
+// Both the dense and the sparse solver agree.
+static int test_external_force_on_a_spring(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.mass = 0.3;
+	p.position[0] = 0.1;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.stiffness = 25.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	const double F[6] = {0, 0, 0, 1.5, -2.0, 0.5};
+	for (int solver = SM_STATICS_DENSE; solver <= SM_STATICS_SPARSE; solver++) {
+		sm_statics_def def = sm_default_statics_def();
+		def.external_forces = F;
+		def.solver = (sm_statics_solver)solver;
+		double x[6];
+		sm_statics_result res;
+		ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
+		// Linear problem: one Newton step, exact to round-off.
+		ENSURE(res.iterations <= 2);
+		ENSURE_NEAR(x[3], 1.5 / 25.0, 1e-14);
+		ENSURE_NEAR(x[4], -2.0 / 25.0, 1e-14);
+		ENSURE_NEAR(x[5], (0.5 - 0.3 * 9.81) / 25.0, 1e-14);
+		// U = k|x|^2/2 - (F + m g) . x = -|F + m g|^2 / (2k) at the minimum.
+		const double fz = 0.5 - 0.3 * 9.81;
+		ENSURE_NEAR(res.potential_energy, -(1.5 * 1.5 + 2.0 * 2.0 + fz * fz) / 50.0, 1e-13);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A particle on a rest-length spring directly above its fixed anchor, gravity pulling it down
+// the spring's axis: Newton converges to the inverted equilibrium (a saddle of U), which is
+// reported unstable, and the modes there show the two unstable sideways directions. Below the
+// anchor the same equilibrium is stable.
+static int test_inverted_pendulum_is_unstable(void)
+{
+	for (int below = 0; below <= 1; below++) {
+		sm_model_def md = sm_default_model_def();
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		p.mass = 1.0;
+		p.position[2] = below ? -1.0 : 1.0;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 100.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		double x[6];
+		sm_statics_result res;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+		// |z| = l0 -/+ m g / k.
+		ENSURE_NEAR(x[5], below ? -(1.0 + 9.81 / 100.0) : 1.0 - 9.81 / 100.0, 1e-11);
+		ENSURE(res.stable == (below == 1));
+		sm_modes_def def = sm_default_modes_def();
+		def.configuration = x;
+		sm_modes modes;
+		ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+		ENSURE(modes.unstable_count == (below ? 0 : 2));
+		// Sideways: omega^2 = (k / m) (1 - l0 / L) = -/+ g / L, a pendulum of length L.
+		const double L = fabs(x[5]);
+		ENSURE_REL(modes.omega_squared[below ? 0 : 0], below ? 9.81 / L : -9.81 / L, 1e-9, 0.0);
+		ENSURE_REL(modes.omega_squared[2], 100.0, 1e-9, 0.0);
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// A free body under gravity has no equilibrium: a clear error naming a particle, no hang, and
+// the output untouched. Without gravity it is its own equilibrium.
+static int test_free_body_has_no_equilibrium(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = bd.nv = bd.nw = 2;
+	bd.mass = 1.0;
+	bd.edge.stiffness = 100.0;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_block(model, &bd, &st), SM_OK);
+	double x[24];
+	for (int i = 0; i < 24; i++)
+		x[i] = -7.0;
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
+	ENSURE(err.status == SM_ERROR_NOT_CONVERGED);
+	ENSURE(strstr(err.message, "no static equilibrium") != NULL);
+	ENSURE(strstr(err.message, "particle 0") != NULL);
+	for (int i = 0; i < 24; i++)
+		ENSURE(x[i] == -7.0);
+
+	md.gravity[2] = 0.0;
+	ENSURE_STATUS(sm_model_set_def(model, &md), SM_OK);
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+	ENSURE(res.iterations == 0);
+	ENSURE(!res.stable);  // six rigid-body modes: not a strict minimum
+	sm_model_destroy(model);
+	return 0;
+}
+
+static int test_invalid_arguments(void)
+{
+	sm_model* model = chain_model(3, 1.0, 10.0, 0.1, SM_SPRING_REST_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	double x[15];
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(NULL, NULL, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_statics_solve(model, NULL, NULL, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	sm_statics_def def = sm_default_statics_def();
+	def.residual_tolerance = -1.0;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "residual_tolerance") != NULL);
+	def = sm_default_statics_def();
+	def.max_iterations = 0;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	double start[15];
+	sm_model_initial_state(model, start, NULL);
+	start[7] = NAN;
+	def = sm_default_statics_def();
+	def.start = start;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "particle 2") != NULL);
+	double force[15] = {0};
+	force[14] = INFINITY;
+	def = sm_default_statics_def();
+	def.external_forces = force;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "particle 4") != NULL);
+
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_modes_compute(NULL, NULL, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(modes.count == 0 && modes.shapes == NULL);
+	sm_modes_def mdef = sm_default_modes_def();
+	mdef.mode_count = -1;
+	ENSURE_STATUS(sm_modes_compute(model, &mdef, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	mdef = sm_default_modes_def();
+	mdef.configuration = start;
+	ENSURE_STATUS(sm_modes_compute(model, &mdef, &modes, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(modes.shapes == NULL);
+
+	// Everything held: nothing to solve, no modes.
+	for (int32_t i = 0; i < 5; i++)
+		ENSURE_STATUS(sm_model_set_particle_motion(model, i, SM_PARTICLE_FIXED), SM_OK);
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+	ENSURE(res.iterations == 0 && res.residual == 0.0);
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.count == 0 && modes.dof == 0);
+	sm_modes_release(&modes);
+	sm_modes_release(NULL);
+	sm_model_destroy(model);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_chain_axial_frequencies);
+	RUN_TEST(test_chain_zero_length_frequencies);
+	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
+	RUN_TEST(test_free_block_six_zero_frequencies);
+	RUN_TEST(test_proportional_damping_ratios);
+	RUN_TEST(test_hanging_rope_elongation);
+	RUN_TEST(test_sagging_cable_catenary);
+	RUN_TEST(test_hanging_cloth_reactions);
+	RUN_TEST(test_external_force_on_a_spring);
+	RUN_TEST(test_inverted_pendulum_is_unstable);
+	RUN_TEST(test_free_body_has_no_equilibrium);
+	RUN_TEST(test_invalid_arguments);
+	return TEST_SUMMARY();
+}
