@@ -41,8 +41,9 @@ typedef struct sm_document_settings {
 typedef struct sm_document sm_document;
 
 /// Loads and validates a model file. On error returns NULL and fills err: a syntax error names
-/// the file, line and column; a rule broken names the path in the document
-/// (e.g. `springs[3].b: no particle named "bobb"`), the value and the rule.
+/// the file, line and column (`model.json:3:14: ...`); a rule broken names the path in the
+/// document, the value and the rule (`model.json: springs[3].b: no particle named "bobb"`).
+/// Files larger than 1 GiB, and models of more than 2^22 particles or springs, are refused.
 SM_API sm_document* sm_document_load(const char* path, sm_error* err);
 
 /// Same from text in memory; `source_name` is used in messages in place of a file name.
@@ -64,25 +65,37 @@ SM_API double sm_document_parameter_value(const sm_document* doc, int32_t index)
 /// Index of a parameter by name, or -1.
 SM_API int32_t sm_document_parameter_index(const sm_document* doc, const char* name);
 /// Sets a parameter's value; fails (document unchanged) if the model built with it would be
-/// invalid, with the message naming the element that breaks a rule.
+/// invalid, with the message naming the element that breaks a rule. A parameter may feed any
+/// number of the file, counts included; a value that changes the number of particles fails if
+/// an initial state was set with sm_document_set_initial_state.
 SM_API sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err);
 
+/// Ports, in file order. A port's name stays valid as long as the document.
 SM_API int32_t sm_document_port_count(const sm_document* doc);
 SM_API sm_port sm_document_port(const sm_document* doc, int32_t index);
+/// Index of a port by name, or -1.
+SM_API int32_t sm_document_port_index(const sm_document* doc, const char* name);
 
-/// Name of a particle ("anchor", or "cloth[3,4]" for structure particles), NULL if unnamed.
+/// Name of a particle ("anchor", or "cloth[3,4]" for structure particles: "name[row,column]"
+/// for a sheet, "name[row,column,layer]" for a block, "name[i]" for a rope or a mesh), NULL if
+/// unnamed or out of range. Valid until the next sm_document_set_parameter or destroy.
 SM_API const char* sm_document_particle_name(const sm_document* doc, int32_t particle);
+/// Index of a particle by its name (as sm_document_particle_name gives it), or -1.
+SM_API int32_t sm_document_particle_index(const sm_document* doc, const char* name);
 
 SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
 
 /// Replaces the initial positions [m] and velocities [m/s] of all particles (3 per particle;
-/// v may be NULL for zero), e.g. with a static equilibrium, so that saving gives a model that
-/// starts there.
+/// v may be NULL for zero), e.g. with a static equilibrium, so that building or saving gives a
+/// model that starts there. Rest lengths stay those of the file's own positions (a hanging
+/// cloth keeps its stretch).
 SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err);
 
-/// Writes the document in canonical form (structures expanded into explicit particles and
-/// springs, parameter references kept) to a file, or to a malloc'ed string the caller frees.
-/// Loading the result builds the same model.
+/// Writes the document in canonical form to a file, or to a malloc'ed string the caller frees
+/// (NULL on error). Structures are expanded into explicit particles and springs (keeping their
+/// particles' names), rest lengths are written out, and every value that was a parameter
+/// reference stays one (values a structure derives from a parameter, such as a particle's share
+/// of a total mass, are written as numbers). Loading the result builds the same model.
 SM_API sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err);
 SM_API char* sm_document_to_json(const sm_document* doc, sm_error* err);
 

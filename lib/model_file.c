@@ -1,0 +1,1530 @@
+// Model files: parsing with jansson, validation and evaluation into a model (the format is
+// documented in docs/model-format.md).
+//
+// Loading parses the text into a JSON tree, reads the parameters, then evaluates the tree
+// ("expands" it) into a model, the particles' names, the ports and the settings. Every value is
+// checked where it is read, so a message can name its path in the document
+// (`springs[3].b: no particle named "bobb"`), the value and the rule. Unknown keys are errors.
+// Every failure frees what was made so far; nothing is left half-built.
+#include "model_file_internal.h"
+
+#include "model_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+// Largest model file read from disk [bytes].
+#define MAX_FILE_BYTES ((long)1 << 30)
+// Room for a path in the document such as `structures[2].edge.strain_stiffness`.
+#define PATH_CAPACITY 160
+// Longest particle, port, parameter or structure name [bytes].
+#define MAX_NAME_BYTES 200
+
+typedef struct parser {
+	const sm_document* doc;
+	const double* parameter_values;
+	sm_error* err;
+	expansion* ex;
+} parser;
+
+// Records the first failure: "<source>: <path>: <message>".
+static bool fail(parser* p, sm_status status, const char* path, const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static bool fail(parser* p, sm_status status, const char* path, const char* format, ...)
+{
+	char message[SM_ERROR_MESSAGE_CAPACITY];
+	va_list args;
+	va_start(args, format);
+	vsnprintf(message, sizeof message, format, args);
+	va_end(args);
+	if (path != NULL && path[0] != '\0')
+		sm_error_set(p->err, status, "%s: %s: %s", p->doc->source, path, message);
+	else
+		sm_error_set(p->err, status, "%s: %s", p->doc->source, message);
+	return false;
+}
+
+static void child_key(char* out, const char* path, const char* key)
+{
+	if (path[0] == '\0')
+		snprintf(out, PATH_CAPACITY, "%.100s", key);
+	else
+		snprintf(out, PATH_CAPACITY, "%.100s.%.50s", path, key);
+}
+
+static void child_index(char* out, const char* path, size_t index)
+{
+	snprintf(out, PATH_CAPACITY, "%.120s[%zu]", path, index);
+}
+
+static const char* type_name(const json_t* value)
+{
+	switch (json_typeof(value)) {
+	case JSON_OBJECT: return "an object";
+	case JSON_ARRAY: return "an array";
+	case JSON_STRING: return "a string";
+	case JSON_INTEGER:
+	case JSON_REAL: return "a number";
+	case JSON_TRUE:
+	case JSON_FALSE: return "a boolean";
+	case JSON_NULL: return "null";
+	}
+	return "a value";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading values.
+// ---------------------------------------------------------------------------------------------
+
+static bool expect_object(parser* p, const json_t* value, const char* path)
+{
+	if (!json_is_object(value))
+		return fail(p, SM_ERROR_SCHEMA, path, "must be an object, not %s", type_name(value));
+	return true;
+}
+
+// Every key of obj must be one of `allowed` (NULL-terminated).
+static bool check_keys(parser* p, const json_t* obj, const char* path, const char* const* allowed)
+{
+	const char* key;
+	json_t* value;
+	json_object_foreach((json_t*)obj, key, value)
+	{
+		bool known = false;
+		for (const char* const* a = allowed; *a != NULL && !known; a++)
+			known = strcmp(*a, key) == 0;
+		if (!known) {
+			char list[256] = "";
+			size_t used = 0;
+			for (const char* const* a = allowed; *a != NULL; a++) {
+				int n = snprintf(list + used, sizeof list - used, "%s%s", a == allowed ? "" : ", ", *a);
+				if (n < 0 || (size_t)n >= sizeof list - used)
+					break;
+				used += (size_t)n;
+			}
+			return fail(p, SM_ERROR_SCHEMA, path, "unknown key \"%.60s\" (allowed here: %s)", key, list);
+		}
+	}
+	return true;
+}
+
+static int32_t find_parameter(const sm_document* doc, const char* name)
+{
+	for (int32_t i = 0; i < doc->parameter_count; i++)
+		if (strcmp(doc->parameter_names[i], name) == 0)
+			return i;
+	return -1;
+}
+
+// A number, or the name of a parameter standing for one. *source gets the parameter's index or
+// -1 (source may be NULL).
+static bool read_number(parser* p, const json_t* value, const char* path, double* out, int32_t* source)
+{
+	if (source != NULL)
+		*source = -1;
+	if (json_is_number(value)) {
+		*out = json_number_value(value);
+		return true;
+	}
+	if (json_is_string(value)) {
+		const int32_t k = find_parameter(p->doc, json_string_value(value));
+		if (k < 0)
+			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named \"%.80s\"", json_string_value(value));
+		*out = p->parameter_values[k];
+		if (source != NULL)
+			*source = k;
+		return true;
+	}
+	return fail(p, SM_ERROR_SCHEMA, path, "must be a number or a parameter name, not %s", type_name(value));
+}
+
+// Describes where a value came from, for messages: "5" or "parameter k = 5".
+static const char* describe(parser* p, char* buffer, size_t size, double value, int32_t source)
+{
+	if (source >= 0)
+		snprintf(buffer, size, "parameter %s = %g", p->doc->parameter_names[source], value);
+	else
+		snprintf(buffer, size, "%g", value);
+	return buffer;
+}
+
+typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE } number_rule;
+
+// Optional number at obj[key] (keeps *out when absent) that must obey `rule`.
+static bool read_field(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule, double* out,
+                       int32_t* source)
+{
+	int32_t dummy;
+	if (source == NULL)
+		source = &dummy;
+	*source = -1;
+	const json_t* value = json_object_get(obj, key);
+	if (value == NULL)
+		return true;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	double v = 0.0;
+	if (!read_number(p, value, sub, &v, source))
+		return false;
+	char text[128];
+	if (!isfinite(v))
+		return fail(p, SM_ERROR_NOT_FINITE, sub, "%s is not finite", describe(p, text, sizeof text, v, *source));
+	if (rule == NON_NEGATIVE && v < 0.0)
+		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be >= 0", describe(p, text, sizeof text, v, *source));
+	if (rule == POSITIVE && !(v > 0.0))
+		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be > 0", describe(p, text, sizeof text, v, *source));
+	*out = v;
+	return true;
+}
+
+static bool require(parser* p, const json_t* obj, const char* path, const char* key)
+{
+	if (json_object_get(obj, key) == NULL)
+		return fail(p, SM_ERROR_SCHEMA, path, "missing required key \"%s\"", key);
+	return true;
+}
+
+// A whole number in [lo, hi] (a count or an index), possibly given by a parameter.
+static bool read_count(parser* p, const json_t* value, const char* path, int64_t lo, int64_t hi, int64_t* out)
+{
+	double v = 0.0;
+	int32_t source;
+	if (!read_number(p, value, path, &v, &source))
+		return false;
+	char text[128];
+	if (!(v == floor(v)) || !(v >= (double)lo) || !(v <= (double)hi))
+		return fail(p, SM_ERROR_SCHEMA, path, "%s must be a whole number from %lld to %lld",
+		            describe(p, text, sizeof text, v, source), (long long)lo, (long long)hi);
+	*out = (int64_t)v;
+	return true;
+}
+
+static bool read_count_field(parser* p, const json_t* obj, const char* path, const char* key, int64_t lo, int64_t hi,
+                             int64_t* out)
+{
+	if (!require(p, obj, path, key))
+		return false;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	return read_count(p, json_object_get(obj, key), sub, lo, hi, out);
+}
+
+// Optional 3-vector at obj[key] (keeps out when absent); sources may be NULL.
+static bool read_vector(parser* p, const json_t* obj, const char* path, const char* key, double out[3],
+                        int32_t sources[3])
+{
+	if (sources != NULL)
+		sources[0] = sources[1] = sources[2] = -1;
+	const json_t* value = json_object_get(obj, key);
+	if (value == NULL)
+		return true;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	if (!json_is_array(value) || json_array_size(value) != 3)
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of 3 numbers [x, y, z], not %s%s", type_name(value),
+		            json_is_array(value) ? " of another length" : "");
+	for (size_t c = 0; c < 3; c++) {
+		char element[PATH_CAPACITY];
+		child_index(element, sub, c);
+		int32_t source;
+		double v = 0.0;
+		if (!read_number(p, json_array_get(value, c), element, &v, &source))
+			return false;
+		char text[128];
+		if (!isfinite(v))
+			return fail(p, SM_ERROR_NOT_FINITE, element, "%s is not finite", describe(p, text, sizeof text, v, source));
+		out[c] = v;
+		if (sources != NULL)
+			sources[c] = source;
+	}
+	return true;
+}
+
+static bool read_bool(parser* p, const json_t* obj, const char* path, const char* key, bool* out)
+{
+	const json_t* value = json_object_get(obj, key);
+	if (value == NULL)
+		return true;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	if (!json_is_boolean(value))
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be true or false, not %s", type_name(value));
+	*out = json_is_true(value);
+	return true;
+}
+
+// A name: a non-empty string of printable characters, at most MAX_NAME_BYTES long;
+// `identifier` also asks for a C identifier (letters, digits, '_', not starting with a digit).
+static bool check_name_text(parser* p, const char* s, size_t n, const char* path, bool identifier)
+{
+	if (n == 0 || n > MAX_NAME_BYTES)
+		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d characters (this one has %zu)", MAX_NAME_BYTES,
+		            n);
+	for (size_t i = 0; i < n; i++) {
+		const unsigned char c = (unsigned char)s[i];
+		const bool letter = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
+		const bool digit = c >= '0' && c <= '9';
+		if (c < 0x20 || c == 0x7f)
+			return fail(p, SM_ERROR_SCHEMA, path, "name \"%.60s\" contains a control character", s);
+		if (identifier && !(letter || (digit && i > 0)))
+			return fail(p, SM_ERROR_SCHEMA, path,
+			            "name \"%.60s\" must be an identifier (letters, digits and '_', not starting with a digit)",
+			            s);
+	}
+	return true;
+}
+
+static bool check_name(parser* p, const json_t* value, const char* path, bool identifier, const char** out)
+{
+	if (!json_is_string(value))
+		return fail(p, SM_ERROR_SCHEMA, path, "must be a string, not %s", type_name(value));
+	if (!check_name_text(p, json_string_value(value), json_string_length(value), path, identifier))
+		return false;
+	*out = json_string_value(value);
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Expansion storage: per-particle and per-spring sources, particle names.
+// ---------------------------------------------------------------------------------------------
+
+static void expansion_free(expansion* ex)
+{
+	if (ex == NULL)
+		return;
+	sm_model_destroy(ex->model);
+	free(ex->particle_sources);
+	free(ex->spring_sources);
+	free(ex->name_offset);
+	free(ex->names);
+	free(ex->name_table);
+	free(ex->structures);
+	free(ex->ports);
+	free(ex);
+}
+
+static bool grow_array(void** array, int64_t* capacity, int64_t needed, size_t size)
+{
+	if (needed <= *capacity)
+		return true;
+	int64_t c = *capacity > 0 ? *capacity : 16;
+	while (c < needed)
+		c *= 2;
+	void* q = realloc(*array, (size_t)c * size);
+	if (q == NULL)
+		return false;
+	*array = q;
+	*capacity = c;
+	return true;
+}
+
+// Room for the sources and names of `particles` and `springs` in all.
+static bool reserve(parser* p, int64_t particles, int64_t springs)
+{
+	expansion* ex = p->ex;
+	int64_t pc = ex->particle_capacity;
+	if (!grow_array((void**)&ex->particle_sources, &pc, particles, sizeof(particle_source)))
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld particles", (long long)particles);
+	pc = ex->particle_capacity;
+	if (!grow_array((void**)&ex->name_offset, &pc, particles, sizeof(int64_t)))
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld particles", (long long)particles);
+	ex->particle_capacity = pc;
+	if (!grow_array((void**)&ex->spring_sources, &ex->spring_capacity, springs, sizeof(spring_source)))
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld springs", (long long)springs);
+	return true;
+}
+
+static uint64_t hash_name(const char* s)
+{
+	uint64_t h = 1469598103934665603ULL;  // FNV-1a
+	for (; *s; s++) {
+		h ^= (unsigned char)*s;
+		h *= 1099511628211ULL;
+	}
+	return h;
+}
+
+static int32_t lookup_name(const expansion* ex, const char* name)
+{
+	if (ex->name_table_size == 0)
+		return -1;
+	const uint64_t mask = (uint64_t)ex->name_table_size - 1;
+	for (uint64_t s = hash_name(name) & mask;; s = (s + 1) & mask) {
+		const int32_t i = ex->name_table[s];
+		if (i < 0)
+			return -1;
+		if (strcmp(ex->names + ex->name_offset[i], name) == 0)
+			return i;
+	}
+}
+
+static void table_put(int32_t* table, int64_t size, const expansion* ex, int32_t particle)
+{
+	const uint64_t mask = (uint64_t)size - 1;
+	uint64_t s = hash_name(ex->names + ex->name_offset[particle]) & mask;
+	while (table[s] >= 0)
+		s = (s + 1) & mask;
+	table[s] = particle;
+}
+
+// Gives particle `index` the name (formatted); fails if the name is taken.
+static bool name_particle(parser* p, const char* path, int32_t index, const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static bool name_particle(parser* p, const char* path, int32_t index, const char* format, ...)
+{
+	expansion* ex = p->ex;
+	char name[MAX_NAME_BYTES + 64];
+	va_list args;
+	va_start(args, format);
+	vsnprintf(name, sizeof name, format, args);
+	va_end(args);
+	const int32_t other = lookup_name(ex, name);
+	if (other >= 0)
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name \"%.80s\" is already used by particle %d", name,
+		            (int)other);
+	const int64_t length = (int64_t)strlen(name) + 1;
+	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
+	memcpy(ex->names + ex->names_length, name, (size_t)length);
+	ex->name_offset[index] = ex->names_length;
+	ex->names_length += length;
+	if (2 * (ex->named_count + 1) > ex->name_table_size) {
+		const int64_t size = ex->name_table_size > 0 ? 2 * ex->name_table_size : 64;
+		int32_t* table = malloc((size_t)size * sizeof(int32_t));
+		if (table == NULL)
+			return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
+		for (int64_t s = 0; s < size; s++)
+			table[s] = -1;
+		for (int64_t s = 0; s < ex->name_table_size; s++)
+			if (ex->name_table[s] >= 0)
+				table_put(table, size, ex, ex->name_table[s]);
+		free(ex->name_table);
+		ex->name_table = table;
+		ex->name_table_size = size;
+	}
+	table_put(ex->name_table, ex->name_table_size, ex, index);
+	ex->named_count++;
+	return true;
+}
+
+static const document_structure* find_structure(const expansion* ex, const char* name, size_t length)
+{
+	for (int32_t s = 0; s < ex->structure_count; s++)
+		if (strlen(ex->structures[s].name) == length && strncmp(ex->structures[s].name, name, length) == 0)
+			return &ex->structures[s];
+	return NULL;
+}
+
+// A particle reference: an index, a particle's name, or "structure[i, j, k]" with one to three
+// whole numbers (one: the particle's position in the structure; two: row and column of a sheet;
+// three: row, column and layer of a block).
+static bool resolve_particle(parser* p, const json_t* value, const char* path, int32_t* out)
+{
+	const int32_t n = sm_model_particle_count(p->ex->model);
+	if (json_is_integer(value)) {
+		const json_int_t i = json_integer_value(value);
+		if (i < 0 || i >= n)
+			return fail(p, SM_ERROR_PARTICLE_INDEX, path, "particle index %lld is out of range (the model has %d particles)",
+			            (long long)i, (int)n);
+		*out = (int32_t)i;
+		return true;
+	}
+	if (!json_is_string(value))
+		return fail(p, SM_ERROR_SCHEMA, path, "must be a particle name or index, not %s", type_name(value));
+	const char* name = json_string_value(value);
+	const int32_t found = lookup_name(p->ex, name);
+	if (found >= 0) {
+		*out = found;
+		return true;
+	}
+	// "structure[a, b, c]" written with other spacing than the generated names.
+	const char* open = strchr(name, '[');
+	const size_t length = strlen(name);
+	if (open != NULL && length > 0 && name[length - 1] == ']') {
+		const document_structure* s = find_structure(p->ex, name, (size_t)(open - name));
+		if (s != NULL) {
+			long long c[3];
+			int count = 0;
+			const char* q = open + 1;
+			while (count < 3) {
+				char* end;
+				errno = 0;
+				c[count] = strtoll(q, &end, 10);
+				if (end == q || errno != 0)
+					break;
+				count++;
+				while (*end == ' ')
+					end++;
+				if (*end == ',')
+					q = end + 1;
+				else {
+					q = end;
+					break;
+				}
+			}
+			if (count == 0 || *q != ']' || q[1] != '\0')
+				return fail(p, SM_ERROR_SCHEMA, path,
+				            "\"%.80s\": a structure reference is name[i], name[row, column] or name[row, column, layer]",
+				            name);
+			const sm_structure* r = &s->range;
+			int64_t index = -1;
+			if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
+				index = r->first_particle + c[0];
+			else if (count == 2 && r->shape[2] == 1 && c[0] >= 0 && c[1] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0])
+				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], 0);
+			else if (count == 3 && c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0] &&
+			         c[2] < r->shape[2])
+				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
+			if (index < 0)
+				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
+				            "\"%.80s\" is outside structure %s (%d columns x %d rows x %d layers, %d particles)", name,
+				            s->name, (int)r->shape[0], (int)r->shape[1], (int)r->shape[2], (int)r->particle_count);
+			*out = (int32_t)index;
+			return true;
+		}
+	}
+	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named \"%.80s\"", name);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Particles.
+// ---------------------------------------------------------------------------------------------
+
+static bool read_particles(parser* p, const json_t* list)
+{
+	static const char* const keys[] = {"name", "position", "velocity", "mass", "fixed", NULL};
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "particles", "must be an array of particles, not %s", type_name(list));
+	const size_t n = json_array_size(list);
+	if ((int64_t)n > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, "particles", "%zu particles exceed the limit of %lld", n,
+		            (long long)p->doc->max_elements);
+	if (!reserve(p, (int64_t)n, 0))
+		return false;
+	for (size_t k = 0; k < n; k++) {
+		char path[PATH_CAPACITY];
+		child_index(path, "particles", k);
+		const json_t* obj = json_array_get(list, k);
+		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys))
+			return false;
+		sm_particle_def def = sm_default_particle_def();
+		particle_source src;
+		bool fixed = false;
+		if (!require(p, obj, path, "position") || !read_vector(p, obj, path, "position", def.position, src.position) ||
+		    !read_vector(p, obj, path, "velocity", def.velocity, src.velocity) ||
+		    !read_field(p, obj, path, "mass", POSITIVE, &def.mass, &src.mass) ||
+		    !read_bool(p, obj, path, "fixed", &fixed))
+			return false;
+		def.motion = fixed ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		int32_t index;
+		if (sm_model_add_particle(p->ex->model, &def, &index) != SM_OK)
+			return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "%s", sm_model_last_error(p->ex->model));
+		p->ex->particle_sources[index] = src;
+		p->ex->name_offset[index] = -1;
+		const json_t* name = json_object_get(obj, "name");
+		if (name != NULL) {
+			char sub[PATH_CAPACITY];
+			child_key(sub, path, "name");
+			const char* s;
+			if (!check_name(p, name, sub, false, &s) || !name_particle(p, sub, index, "%s", s))
+				return false;
+		}
+	}
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Springs.
+// ---------------------------------------------------------------------------------------------
+
+// Stiffness and damping, each absolute ("stiffness" [N/m], "damping" [N s/m]) or per unit
+// strain ("strain_stiffness" [N], "strain_damping" [N s]), and "break_strain".
+static bool read_constants(parser* p, const json_t* obj, const char* path, sm_spring_material* m, spring_source* src)
+{
+	const bool absolute_k = json_object_get(obj, "stiffness") != NULL;
+	const bool strain_k = json_object_get(obj, "strain_stiffness") != NULL;
+	const bool absolute_d = json_object_get(obj, "damping") != NULL;
+	const bool strain_d = json_object_get(obj, "strain_damping") != NULL;
+	if (absolute_k && strain_k)
+		return fail(p, SM_ERROR_SCHEMA, path, "give \"stiffness\" [N/m] or \"strain_stiffness\" [N], not both");
+	if (absolute_d && strain_d)
+		return fail(p, SM_ERROR_SCHEMA, path, "give \"damping\" [N s/m] or \"strain_damping\" [N s], not both");
+	m->stiffness_scaling = strain_k ? SM_PER_STRAIN : SM_ABSOLUTE;
+	m->damping_scaling = strain_d ? SM_PER_STRAIN : SM_ABSOLUTE;
+	m->stiffness = 0.0;
+	m->damping = 0.0;
+	m->break_strain = INFINITY;
+	if (!read_field(p, obj, path, strain_k ? "strain_stiffness" : "stiffness", NON_NEGATIVE, &m->stiffness,
+	                &src->stiffness) ||
+	    !read_field(p, obj, path, strain_d ? "strain_damping" : "damping", NON_NEGATIVE, &m->damping, &src->damping))
+		return false;
+	const json_t* brk = json_object_get(obj, "break_strain");
+	src->break_strain = -1;
+	if (brk != NULL && !read_field(p, obj, path, "break_strain", POSITIVE, &m->break_strain, &src->break_strain))
+		return false;
+	return true;
+}
+
+static bool read_springs(parser* p, const json_t* list)
+{
+	static const char* const keys[] = {"a",       "b",      "kind",           "rest_length", "stiffness", "strain_stiffness",
+	                                   "damping", "strain_damping", "break_strain", NULL};
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "springs", "must be an array of springs, not %s", type_name(list));
+	const size_t n = json_array_size(list);
+	sm_model* model = p->ex->model;
+	if ((int64_t)n + sm_model_spring_count(model) > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, "springs", "%zu more springs exceed the limit of %lld", n,
+		            (long long)p->doc->max_elements);
+	if (!reserve(p, sm_model_particle_count(model), sm_model_spring_count(model) + (int64_t)n))
+		return false;
+	for (size_t k = 0; k < n; k++) {
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
+		child_index(path, "springs", k);
+		const json_t* obj = json_array_get(list, k);
+		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys) || !require(p, obj, path, "a") ||
+		    !require(p, obj, path, "b"))
+			return false;
+		sm_spring_def def = sm_default_spring_def();
+		child_key(sub, path, "a");
+		if (!resolve_particle(p, json_object_get(obj, "a"), sub, &def.a))
+			return false;
+		child_key(sub, path, "b");
+		if (!resolve_particle(p, json_object_get(obj, "b"), sub, &def.b))
+			return false;
+		if (def.a == def.b)
+			return fail(p, SM_ERROR_SELF_SPRING, path, "connects particle %d to itself (a and b are the same particle)",
+			            (int)def.a);
+		spring_source src = {-1, -1, -1, -1};
+		sm_spring_material m;
+		if (!read_constants(p, obj, path, &m, &src))
+			return false;
+		def.stiffness = m.stiffness;
+		def.stiffness_scaling = m.stiffness_scaling;
+		def.damping = m.damping;
+		def.damping_scaling = m.damping_scaling;
+		def.break_strain = m.break_strain;
+		const json_t* rest = json_object_get(obj, "rest_length");
+		if (rest != NULL && !read_field(p, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
+			return false;
+		// "kind" defaults to zero-length for "rest_length": 0 and rest-length otherwise.
+		def.kind = rest != NULL && def.rest_length == 0.0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		const json_t* kind = json_object_get(obj, "kind");
+		if (kind != NULL) {
+			child_key(sub, path, "kind");
+			const char* s = json_is_string(kind) ? json_string_value(kind) : "";
+			if (strcmp(s, "zero_length") == 0)
+				def.kind = SM_SPRING_ZERO_LENGTH;
+			else if (strcmp(s, "rest_length") == 0)
+				def.kind = SM_SPRING_REST_LENGTH;
+			else
+				return fail(p, SM_ERROR_SCHEMA, sub, "must be \"rest_length\" or \"zero_length\"");
+			if (def.kind == SM_SPRING_ZERO_LENGTH && rest != NULL && def.rest_length != 0.0)
+				return fail(p, SM_ERROR_SCHEMA, path, "a zero-length spring cannot have rest_length %g",
+				            def.rest_length);
+		}
+		if (def.kind == SM_SPRING_ZERO_LENGTH)
+			def.rest_length = 0.0;
+		int32_t index;
+		const sm_status st = sm_model_add_spring(model, &def, &index);
+		if (st != SM_OK)
+			return fail(p, st, path, "%s", sm_model_last_error(model));
+		p->ex->spring_sources[index] = src;
+	}
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Structures.
+// ---------------------------------------------------------------------------------------------
+
+// A group of springs; absent means no springs of that group.
+static bool read_material(parser* p, const json_t* obj, const char* path, const char* key, sm_spring_material* m,
+                          spring_source* src)
+{
+	static const char* const keys[] = {"stiffness", "strain_stiffness", "damping", "strain_damping", "break_strain",
+	                                   NULL};
+	*m = sm_default_spring_material();
+	*src = (spring_source){-1, -1, -1, -1};
+	const json_t* value = json_object_get(obj, key);
+	if (value == NULL)
+		return true;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	return expect_object(p, value, sub) && check_keys(p, value, sub, keys) && read_constants(p, value, sub, m, src);
+}
+
+static bool check_budget(parser* p, const char* path, int64_t particles, int64_t springs)
+{
+	const sm_model* model = p->ex->model;
+	const int64_t np = sm_model_particle_count(model) + particles, ns = sm_model_spring_count(model) + springs;
+	if (np > p->doc->max_elements || ns > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, path,
+		            "the model would have %lld particles and %lld springs, more than the limit of %lld of each",
+		            (long long)np, (long long)ns, (long long)p->doc->max_elements);
+	return reserve(p, np, ns);
+}
+
+// Mesh vertices [[x, y, z], ...] and triangles [[a, b, c], ...], copied into arrays.
+static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, double** vertices, int32_t* vertex_count,
+                             int32_t** triangles, int32_t* triangle_count)
+{
+	char sub[PATH_CAPACITY];
+	const json_t* vs = json_object_get(obj, "vertices");
+	const json_t* ts = json_object_get(obj, "triangles");
+	child_key(sub, path, "vertices");
+	if (!json_is_array(vs))
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of [x, y, z] vertices, not %s", type_name(vs));
+	child_key(sub, path, "triangles");
+	if (!json_is_array(ts))
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of [a, b, c] vertex index triples, not %s",
+		            type_name(ts));
+	const size_t nv = json_array_size(vs), nt = json_array_size(ts);
+	if (!check_budget(p, path, (int64_t)nv, 6 * (int64_t)nt))
+		return false;
+	*vertices = malloc((nv > 0 ? nv : 1) * 3 * sizeof(double));
+	*triangles = malloc((nt > 0 ? nt : 1) * 3 * sizeof(int32_t));
+	if (*vertices == NULL || *triangles == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for %zu vertices", nv);
+	for (size_t v = 0; v < nv; v++) {
+		char element[PATH_CAPACITY];
+		snprintf(element, sizeof element, "%.100s.vertices[%zu]", path, v);
+		const json_t* vector = json_array_get(vs, v);
+		if (!json_is_array(vector) || json_array_size(vector) != 3)
+			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 numbers [x, y, z], not %s",
+			            type_name(vector));
+		for (size_t c = 0; c < 3; c++) {
+			char coordinate[PATH_CAPACITY];
+			child_index(coordinate, element, c);
+			double x = 0.0;
+			int32_t source;
+			if (!read_number(p, json_array_get(vector, c), coordinate, &x, &source))
+				return false;
+			if (!isfinite(x))
+				return fail(p, SM_ERROR_NOT_FINITE, coordinate, "%g is not finite", x);
+			(*vertices)[3 * v + c] = x;
+		}
+	}
+	for (size_t t = 0; t < nt; t++) {
+		char element[PATH_CAPACITY];
+		snprintf(element, sizeof element, "%.100s.triangles[%zu]", path, t);
+		const json_t* triple = json_array_get(ts, t);
+		if (!json_is_array(triple) || json_array_size(triple) != 3)
+			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 vertex indices, not %s", type_name(triple));
+		for (size_t c = 0; c < 3; c++) {
+			char corner[PATH_CAPACITY];
+			child_index(corner, element, c);
+			int64_t index;
+			if (!read_count(p, json_array_get(triple, c), corner, 0, nv > 0 ? (int64_t)nv - 1 : 0, &index))
+				return false;
+			(*triangles)[3 * t + c] = (int32_t)index;
+		}
+	}
+	*vertex_count = (int32_t)nv;
+	*triangle_count = (int32_t)nt;
+	return true;
+}
+
+// Group of spring s of a structure, from the offset between its particles (see structures.h).
+static int spring_group(const document_structure* s, const sm_model* model, int32_t spring, int32_t mesh_edges)
+{
+	sm_spring_def def;
+	sm_model_get_spring(model, spring, &def);
+	const sm_structure* r = &s->range;
+	const int32_t a = def.a - r->first_particle, b = def.b - r->first_particle;
+	switch (s->type) {
+	case STRUCTURE_ROPE: return b - a == 1 ? 0 : 1;
+	case STRUCTURE_SHEET: {
+		const int32_t nu = r->shape[0];
+		const int32_t di = b / nu - a / nu;
+		const int32_t dj = b % nu - a % nu;
+		if ((di == 0 && dj == 1) || (di == 1 && dj == 0))
+			return 0;
+		return di == 1 ? 1 : 2;
+	}
+	case STRUCTURE_BLOCK: {
+		const int32_t nu = r->shape[0], nv = r->shape[1];
+		const int32_t dk = b / (nu * nv) - a / (nu * nv);
+		const int32_t di = (b / nu) % nv - (a / nu) % nv;
+		const int32_t dj = b % nu - a % nu;
+		const int nonzero = (di != 0) + (dj != 0) + (dk != 0);
+		return nonzero - 1;
+	}
+	case STRUCTURE_MESH: return spring - r->first_spring < mesh_edges ? 0 : 1;
+	}
+	return 0;
+}
+
+static int compare_keys(const void* x, const void* y)
+{
+	const uint64_t a = *(const uint64_t*)x, b = *(const uint64_t*)y;
+	return (a > b) - (a < b);
+}
+
+// Number of distinct edges of a triangle list (the mesh builder's edge springs come first).
+static int32_t count_edges(const int32_t* triangles, int32_t count)
+{
+	uint64_t* keys = malloc((size_t)(count > 0 ? count : 1) * 3 * sizeof(uint64_t));
+	if (keys == NULL)
+		return 0;
+	for (int32_t t = 0; t < count; t++)
+		for (int c = 0; c < 3; c++) {
+			const uint32_t a = (uint32_t)triangles[3 * t + c], b = (uint32_t)triangles[3 * t + (c + 1) % 3];
+			keys[3 * t + c] = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
+		}
+	qsort(keys, 3 * (size_t)count, sizeof(uint64_t), compare_keys);
+	int32_t distinct = 0;
+	for (size_t k = 0; k < 3 * (size_t)count; k++)
+		distinct += k == 0 || keys[k] != keys[k - 1];
+	free(keys);
+	return distinct;
+}
+
+static bool read_structure(parser* p, const json_t* obj, const char* path)
+{
+	static const char* const rope_keys[] = {"type", "name",          "start",      "end",     "segments",
+	                                        "mass", "mass_per_length", "structural", "bending", NULL};
+	static const char* const sheet_keys[] = {"type", "name", "origin",     "edge_u", "edge_v", "nu",
+	                                         "nv",   "mass", "structural", "shear",  "bend",   NULL};
+	static const char* const block_keys[] = {"type", "name", "origin", "size",          "nu",            "nv",
+	                                         "nw",   "mass", "edge",   "face_diagonal", "body_diagonal", NULL};
+	static const char* const mesh_keys[] = {"type", "name", "vertices", "triangles", "density", "edge", "bend", NULL};
+	char sub[PATH_CAPACITY];
+	if (!expect_object(p, obj, path) || !require(p, obj, path, "type") || !require(p, obj, path, "name"))
+		return false;
+	const json_t* type = json_object_get(obj, "type");
+	const char* t = json_is_string(type) ? json_string_value(type) : "";
+	child_key(sub, path, "type");
+	document_structure s;
+	if (strcmp(t, "rope") == 0)
+		s.type = STRUCTURE_ROPE;
+	else if (strcmp(t, "sheet") == 0)
+		s.type = STRUCTURE_SHEET;
+	else if (strcmp(t, "block") == 0)
+		s.type = STRUCTURE_BLOCK;
+	else if (strcmp(t, "mesh") == 0)
+		s.type = STRUCTURE_MESH;
+	else
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be \"rope\", \"sheet\", \"block\" or \"mesh\"");
+	const char* const* keys[] = {rope_keys, sheet_keys, block_keys, mesh_keys};
+	if (!check_keys(p, obj, path, keys[s.type]))
+		return false;
+	child_key(sub, path, "name");
+	if (!check_name(p, json_object_get(obj, "name"), sub, true, &s.name))
+		return false;
+	if (find_structure(p->ex, s.name, strlen(s.name)) != NULL)
+		return fail(p, SM_ERROR_SCHEMA, sub, "structure name \"%s\" is already used", s.name);
+
+	sm_model* model = p->ex->model;
+	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
+	const int64_t limit = p->doc->max_elements;
+	spring_source groups[3] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
+	sm_status st = SM_OK;
+	int32_t mesh_edges = 0;
+	switch (s.type) {
+	case STRUCTURE_ROPE: {
+		sm_rope_def d = sm_default_rope_def();
+		int64_t segments;
+		if (!require(p, obj, path, "start") || !require(p, obj, path, "end") ||
+		    !read_vector(p, obj, path, "start", d.start, NULL) || !read_vector(p, obj, path, "end", d.end, NULL) ||
+		    !read_count_field(p, obj, path, "segments", 1, limit, &segments) ||
+		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		    !read_field(p, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length, NULL) ||
+		    !read_material(p, obj, path, "structural", &d.structural, &groups[0]) ||
+		    !read_material(p, obj, path, "bending", &d.bending, &groups[1]))
+			return false;
+		if (json_object_get(obj, "mass") != NULL && json_object_get(obj, "mass_per_length") != NULL)
+			return fail(p, SM_ERROR_SCHEMA, path, "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
+		d.segments = (int32_t)segments;
+		if (!check_budget(p, path, segments + 1, 2 * segments))
+			return false;
+		st = sm_add_rope(model, &d, &s.range);
+		break;
+	}
+	case STRUCTURE_SHEET: {
+		sm_sheet_def d = sm_default_sheet_def();
+		d.structural = d.shear = d.bend = sm_default_spring_material();
+		int64_t nu, nv;
+		if (!read_vector(p, obj, path, "origin", d.origin, NULL) ||
+		    !read_vector(p, obj, path, "edge_u", d.edge_u, NULL) ||
+		    !read_vector(p, obj, path, "edge_v", d.edge_v, NULL) ||
+		    !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
+		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
+		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		    !read_material(p, obj, path, "structural", &d.structural, &groups[0]) ||
+		    !read_material(p, obj, path, "shear", &d.shear, &groups[1]) ||
+		    !read_material(p, obj, path, "bend", &d.bend, &groups[2]))
+			return false;
+		if (!check_budget(p, path, nu * nv, 6 * nu * nv))
+			return false;
+		d.nu = (int32_t)nu;
+		d.nv = (int32_t)nv;
+		st = sm_add_sheet(model, &d, &s.range);
+		break;
+	}
+	case STRUCTURE_BLOCK: {
+		sm_block_def d = sm_default_block_def();
+		d.edge = d.face_diagonal = d.body_diagonal = sm_default_spring_material();
+		int64_t nu, nv, nw;
+		if (!require(p, obj, path, "size") || !read_vector(p, obj, path, "origin", d.origin, NULL) ||
+		    !read_vector(p, obj, path, "size", d.size, NULL) || !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
+		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
+		    !read_count_field(p, obj, path, "nw", 2, limit, &nw) ||
+		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		    !read_material(p, obj, path, "edge", &d.edge, &groups[0]) ||
+		    !read_material(p, obj, path, "face_diagonal", &d.face_diagonal, &groups[1]) ||
+		    !read_material(p, obj, path, "body_diagonal", &d.body_diagonal, &groups[2]))
+			return false;
+		if (nu * nv > limit || nu * nv * nw > limit)
+			return check_budget(p, path, limit + 1, 0);
+		if (!check_budget(p, path, nu * nv * nw, 13 * nu * nv * nw))
+			return false;
+		d.nu = (int32_t)nu;
+		d.nv = (int32_t)nv;
+		d.nw = (int32_t)nw;
+		st = sm_add_block(model, &d, &s.range);
+		break;
+	}
+	case STRUCTURE_MESH: {
+		sm_mesh_def d = sm_default_mesh_def();
+		d.edge = sm_default_spring_material();
+		double* vertices = NULL;
+		int32_t* triangles = NULL;
+		if (!require(p, obj, path, "vertices") || !require(p, obj, path, "triangles") ||
+		    !read_field(p, obj, path, "density", POSITIVE, &d.density, NULL) ||
+		    !read_material(p, obj, path, "edge", &d.edge, &groups[0]) ||
+		    !read_material(p, obj, path, "bend", &d.bend, &groups[1]) ||
+		    !read_mesh_arrays(p, obj, path, &vertices, &d.vertex_count, &triangles, &d.triangle_count)) {
+			free(vertices);
+			free(triangles);
+			return false;
+		}
+		d.vertices = vertices;
+		d.triangles = triangles;
+		st = sm_add_mesh(model, &d, &s.range);
+		if (st == SM_OK && (d.edge.stiffness != 0.0 || d.edge.damping != 0.0))
+			mesh_edges = count_edges(triangles, d.triangle_count);
+		free(vertices);
+		free(triangles);
+		break;
+	}
+	}
+	if (st != SM_OK)
+		return fail(p, st, path, "%s", sm_model_last_error(model));
+
+	// Record the structure, name its particles and note the sources of its springs' constants.
+	document_structure* grown = realloc(p->ex->structures, (size_t)(p->ex->structure_count + 1) * sizeof *grown);
+	if (grown == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
+	p->ex->structures = grown;
+	p->ex->structures[p->ex->structure_count++] = s;
+	const sm_structure* r = &s.range;
+	for (int32_t k = 0; k < r->particle_count; k++) {
+		const int32_t index = p0 + k;
+		p->ex->particle_sources[index] = (particle_source){-1, {-1, -1, -1}, {-1, -1, -1}};
+		p->ex->name_offset[index] = -1;
+		const int32_t column = k % r->shape[0], row = (k / r->shape[0]) % r->shape[1];
+		const int32_t layer = k / (r->shape[0] * r->shape[1]);
+		bool ok;
+		if (s.type == STRUCTURE_SHEET)
+			ok = name_particle(p, sub, index, "%s[%d,%d]", s.name, (int)row, (int)column);
+		else if (s.type == STRUCTURE_BLOCK)
+			ok = name_particle(p, sub, index, "%s[%d,%d,%d]", s.name, (int)row, (int)column, (int)layer);
+		else
+			ok = name_particle(p, sub, index, "%s[%d]", s.name, (int)k);
+		if (!ok)
+			return false;
+	}
+	for (int32_t k = 0; k < r->spring_count; k++)
+		p->ex->spring_sources[s0 + k] = groups[spring_group(&s, model, s0 + k, mesh_edges)];
+	return true;
+}
+
+static bool read_structures(parser* p, const json_t* list)
+{
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "structures", "must be an array of structures, not %s", type_name(list));
+	for (size_t k = 0; k < json_array_size(list); k++) {
+		char path[PATH_CAPACITY];
+		child_index(path, "structures", k);
+		if (!read_structure(p, json_array_get(list, k), path))
+			return false;
+	}
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Fixed particles, ports, settings.
+// ---------------------------------------------------------------------------------------------
+
+// "fixed": [reference, ..., {"min": [x, y, z], "max": [x, y, z]}, ...]
+static bool read_fixed(parser* p, const json_t* list)
+{
+	static const char* const box_keys[] = {"min", "max", NULL};
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "fixed", "must be an array of particle references and boxes, not %s",
+		            type_name(list));
+	sm_model* model = p->ex->model;
+	for (size_t k = 0; k < json_array_size(list); k++) {
+		char path[PATH_CAPACITY];
+		child_index(path, "fixed", k);
+		const json_t* item = json_array_get(list, k);
+		if (json_is_object(item)) {
+			double lo[3], hi[3];
+			if (!check_keys(p, item, path, box_keys) || !require(p, item, path, "min") ||
+			    !require(p, item, path, "max") || !read_vector(p, item, path, "min", lo, NULL) ||
+			    !read_vector(p, item, path, "max", hi, NULL))
+				return false;
+			int32_t count = 0;
+			sm_set_motion_in_box(model, lo, hi, SM_PARTICLE_FIXED, &count);
+			if (count == 0)
+				return fail(p, SM_ERROR_SCHEMA, path,
+				            "the box from (%g, %g, %g) to (%g, %g, %g) contains no particle", lo[0], lo[1], lo[2],
+				            hi[0], hi[1], hi[2]);
+		} else {
+			int32_t index;
+			if (!resolve_particle(p, item, path, &index))
+				return false;
+			sm_model_set_particle_motion(model, index, SM_PARTICLE_FIXED);
+		}
+	}
+	return true;
+}
+
+static bool read_ports(parser* p, const json_t* list)
+{
+	static const char* const keys[] = {"name", "particle", "kind", NULL};
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "ports", "must be an array of ports, not %s", type_name(list));
+	const size_t n = json_array_size(list);
+	if ((int64_t)n > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, "ports", "too many ports (%zu)", n);
+	p->ex->ports = calloc(n > 0 ? n : 1, sizeof(sm_port));
+	if (p->ex->ports == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
+	for (size_t k = 0; k < n; k++) {
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
+		child_index(path, "ports", k);
+		const json_t* obj = json_array_get(list, k);
+		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys) || !require(p, obj, path, "name") ||
+		    !require(p, obj, path, "particle") || !require(p, obj, path, "kind"))
+			return false;
+		sm_port port;
+		child_key(sub, path, "name");
+		if (!check_name(p, json_object_get(obj, "name"), sub, true, &port.name))
+			return false;
+		for (int32_t q = 0; q < p->ex->port_count; q++)
+			if (strcmp(p->ex->ports[q].name, port.name) == 0)
+				return fail(p, SM_ERROR_SCHEMA, sub, "port name \"%s\" is already used by ports[%d]", port.name, (int)q);
+		child_key(sub, path, "particle");
+		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
+			return false;
+		const json_t* kind = json_object_get(obj, "kind");
+		const char* k_name = json_is_string(kind) ? json_string_value(kind) : "";
+		child_key(sub, path, "kind");
+		if (strcmp(k_name, "force") == 0)
+			port.kind = SM_PORT_FORCE;
+		else if (strcmp(k_name, "motion") == 0)
+			port.kind = SM_PORT_MOTION;
+		else if (strcmp(k_name, "probe") == 0)
+			port.kind = SM_PORT_PROBE;
+		else
+			return fail(p, SM_ERROR_SCHEMA, sub, "must be \"force\", \"motion\" or \"probe\"");
+		sm_particle_def def;
+		sm_model_get_particle(p->ex->model, port.particle, &def);
+		if (port.kind == SM_PORT_FORCE && def.motion != SM_PARTICLE_FREE)
+			return fail(p, SM_ERROR_SCHEMA, path,
+			            "a force port needs a free particle, and particle %d is fixed (use a motion or probe port)",
+			            (int)port.particle);
+		for (int32_t q = 0; q < p->ex->port_count; q++)
+			if (p->ex->ports[q].particle == port.particle &&
+			    (p->ex->ports[q].kind != SM_PORT_PROBE || port.kind != SM_PORT_PROBE))
+				return fail(p, SM_ERROR_SCHEMA, path,
+				            "particle %d already has port %s; only probe ports may share a particle",
+				            (int)port.particle, p->ex->ports[q].name);
+		p->ex->ports[p->ex->port_count++] = port;
+	}
+	return true;
+}
+
+const char* document_method_name(sm_method method)
+{
+	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
+}
+
+const char* document_jacobian_name(sm_jacobian_variant variant)
+{
+	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
+}
+
+static bool read_choice(parser* p, const json_t* obj, const char* path, const char* key, const char* const* names,
+                        int count, int* out)
+{
+	const json_t* value = json_object_get(obj, key);
+	if (value == NULL)
+		return true;
+	char sub[PATH_CAPACITY];
+	child_key(sub, path, key);
+	const char* s = json_is_string(value) ? json_string_value(value) : NULL;
+	for (int k = 0; k < count && s != NULL; k++)
+		if (names[k] != NULL && strcmp(names[k], s) == 0) {
+			*out = k;
+			return true;
+		}
+	char list[160] = "";
+	size_t used = 0;
+	for (int k = 0; k < count; k++) {
+		if (names[k] == NULL)
+			continue;
+		int n = snprintf(list + used, sizeof list - used, "%s\"%s\"", used ? ", " : "", names[k]);
+		if (n < 0 || (size_t)n >= sizeof list - used)
+			break;
+		used += (size_t)n;
+	}
+	return fail(p, SM_ERROR_SCHEMA, sub, "must be one of %s", list);
+}
+
+static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu)
+{
+	static const char* const keys[] = {"stop_time", "output_interval", "rtol",   "atol",     "atol_position",
+	                                   "atol_velocity", "method",      "solver", "jacobian", "max_step",
+	                                   "max_steps",     NULL};
+	static const char* const fmu_keys[] = {"particle_variables", NULL};
+	sm_document_settings* s = &p->ex->settings;
+	s->stop_time = 1.0;
+	s->output_interval = 0.01;
+	s->solver = sm_default_simulation_def();
+	s->particle_variables = true;
+	if (simulation != NULL) {
+		const char* path = "simulation";
+		if (!expect_object(p, simulation, path) || !check_keys(p, simulation, path, keys))
+			return false;
+		sm_simulation_def* d = &s->solver;
+		double atol = -1.0;
+		if (!read_field(p, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
+		    !read_field(p, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
+		    !read_field(p, simulation, path, "rtol", POSITIVE, &d->relative_tolerance, NULL) ||
+		    !read_field(p, simulation, path, "atol", POSITIVE, &atol, NULL) ||
+		    !read_field(p, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
+			return false;
+		if (atol > 0.0)
+			d->absolute_tolerance_position = d->absolute_tolerance_velocity = atol;
+		if (!read_field(p, simulation, path, "atol_position", POSITIVE, &d->absolute_tolerance_position, NULL) ||
+		    !read_field(p, simulation, path, "atol_velocity", POSITIVE, &d->absolute_tolerance_velocity, NULL))
+			return false;
+		if (json_object_get(simulation, "max_steps") != NULL) {
+			int64_t steps;
+			if (!read_count(p, json_object_get(simulation, "max_steps"), "simulation.max_steps", 1, INT32_MAX, &steps))
+				return false;
+			d->max_steps = (int32_t)steps;
+		}
+		static const char* const methods[] = {"bdf", "adams"};
+		static const char* const jacobians[] = {"exact", "definite"};
+		const char* solvers[SM_SOLVER_COUNT];
+		for (int k = 0; k < SM_SOLVER_COUNT; k++)
+			solvers[k] = sm_linear_solver_name((sm_linear_solver)k);
+		int method = (int)d->method, jacobian = (int)d->jacobian, solver = (int)d->solver;
+		if (!read_choice(p, simulation, path, "method", methods, 2, &method) ||
+		    !read_choice(p, simulation, path, "jacobian", jacobians, 2, &jacobian) ||
+		    !read_choice(p, simulation, path, "solver", solvers, SM_SOLVER_COUNT, &solver))
+			return false;
+		d->method = (sm_method)method;
+		d->jacobian = (sm_jacobian_variant)jacobian;
+		d->solver = (sm_linear_solver)solver;
+	}
+	if (fmu != NULL) {
+		if (!expect_object(p, fmu, "fmu") || !check_keys(p, fmu, "fmu", fmu_keys) ||
+		    !read_bool(p, fmu, "fmu", "particle_variables", &s->particle_variables))
+			return false;
+	}
+	return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Evaluation of the whole document.
+// ---------------------------------------------------------------------------------------------
+
+// Evaluates the document's tree with the given parameter values into a new expansion.
+static expansion* expand(const sm_document* doc, const double* parameter_values, sm_error* err)
+{
+	parser p = {doc, parameter_values, err, calloc(1, sizeof(expansion))};
+	if (p.ex == NULL) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
+		return NULL;
+	}
+	const json_t* root = doc->root;
+	sm_model_def def = sm_default_model_def();
+	int32_t gravity_source[3];
+	bool ok = read_vector(&p, root, "", "gravity", def.gravity, gravity_source) &&
+	          read_field(&p, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
+	if (ok) {
+		sm_error model_err;
+		p.ex->model = sm_model_create(&def, &model_err);
+		if (p.ex->model == NULL)
+			ok = fail(&p, model_err.status, "", "%s", model_err.message);
+	}
+	ok = ok && read_particles(&p, json_object_get(root, "particles")) &&
+	     read_structures(&p, json_object_get(root, "structures")) && read_springs(&p, json_object_get(root, "springs")) &&
+	     read_fixed(&p, json_object_get(root, "fixed")) && read_ports(&p, json_object_get(root, "ports")) &&
+	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
+	if (ok && sm_model_particle_count(p.ex->model) == 0)
+		ok = fail(&p, SM_ERROR_SCHEMA, "", "the model has no particles (give \"particles\" or \"structures\")");
+	if (ok && doc->initial_position != NULL) {
+		sm_model* model = p.ex->model;
+		const int32_t n = sm_model_particle_count(model);
+		if (n != doc->initial_count)
+			ok = fail(&p, SM_ERROR_TOPOLOGY, "",
+			          "the model now has %d particles but its initial state was set for %d", (int)n,
+			          (int)doc->initial_count);
+		for (int32_t i = 0; ok && i < n; i++) {
+			sm_particle_def d;
+			sm_model_get_particle(model, i, &d);
+			memcpy(d.position, doc->initial_position + 3 * (size_t)i, sizeof d.position);
+			memcpy(d.velocity, doc->initial_velocity + 3 * (size_t)i, sizeof d.velocity);
+			if (sm_model_set_particle(model, i, &d) != SM_OK)
+				ok = fail(&p, SM_ERROR_NOT_FINITE, "", "initial state: %s", sm_model_last_error(model));
+		}
+	}
+	if (!ok) {
+		expansion_free(p.ex);
+		return NULL;
+	}
+	return p.ex;
+}
+
+static bool read_header(sm_document* doc, sm_error* err)
+{
+	static const char* const keys[] = {"springmass", "name",      "description", "parameters", "gravity",
+	                                   "mass_damping", "particles", "springs",     "structures", "fixed",
+	                                   "ports",        "simulation", "fmu",        NULL};
+	parser p = {doc, NULL, err, NULL};
+	const json_t* root = doc->root;
+	if (!json_is_object(root))
+		return fail(&p, SM_ERROR_SCHEMA, "", "a model file is a JSON object, not %s", type_name(root));
+	if (!check_keys(&p, root, "", keys))
+		return false;
+	const json_t* version = json_object_get(root, "springmass");
+	if (version == NULL)
+		return fail(&p, SM_ERROR_SCHEMA, "",
+		            "missing \"springmass\": %d (the format version; is this a springmass model file?)",
+		            SM_FORMAT_VERSION);
+	if (!json_is_integer(version) || json_integer_value(version) != SM_FORMAT_VERSION)
+		return fail(&p, SM_ERROR_SCHEMA, "springmass", "format version must be %d (this build reads version %d)",
+		            SM_FORMAT_VERSION, SM_FORMAT_VERSION);
+	if (!require(&p, root, "", "name") || !check_name(&p, json_object_get(root, "name"), "name", true, &doc->name))
+		return false;
+	const json_t* description = json_object_get(root, "description");
+	doc->description = "";
+	if (description != NULL) {
+		if (!json_is_string(description))
+			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s", type_name(description));
+		doc->description = json_string_value(description);
+		if (strpbrk(doc->description, "\r\n") != NULL)
+			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line");
+	}
+	const json_t* parameters = json_object_get(root, "parameters");
+	if (parameters == NULL)
+		return true;
+	if (!expect_object(&p, parameters, "parameters"))
+		return false;
+	const size_t n = json_object_size(parameters);
+	doc->parameter_names = calloc(n > 0 ? n : 1, sizeof(char*));
+	doc->parameter_values = calloc(n > 0 ? n : 1, sizeof(double));
+	if (doc->parameter_names == NULL || doc->parameter_values == NULL)
+		return fail(&p, SM_ERROR_OUT_OF_MEMORY, "parameters", "out of memory");
+	const char* key;
+	json_t* value;
+	json_object_foreach((json_t*)parameters, key, value)
+	{
+		char path[PATH_CAPACITY];
+		child_key(path, "parameters", key);
+		if (!check_name_text(&p, key, strlen(key), path, true))
+			return false;
+		if (!json_is_number(value))
+			return fail(&p, SM_ERROR_SCHEMA, path, "a parameter's value must be a number, not %s", type_name(value));
+		const double v = json_number_value(value);
+		if (!isfinite(v))
+			return fail(&p, SM_ERROR_NOT_FINITE, path, "%g is not finite", v);
+		doc->parameter_names[doc->parameter_count] = key;
+		doc->parameter_values[doc->parameter_count] = v;
+		doc->parameter_count++;
+	}
+	return true;
+}
+
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
+                                       sm_error* err)
+{
+	if (source_name == NULL)
+		source_name = "<model>";
+	if (text == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "%s: no text to parse", source_name);
+		return NULL;
+	}
+	sm_document* doc = calloc(1, sizeof *doc);
+	if (doc == NULL || (doc->source = malloc(strlen(source_name) + 1)) == NULL) {
+		free(doc);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", source_name);
+		return NULL;
+	}
+	strcpy(doc->source, source_name);
+	doc->max_elements = max_elements;
+	json_error_t error;
+	doc->root = json_loadb(text, length, JSON_REJECT_DUPLICATES, &error);
+	if (doc->root == NULL) {
+		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, error.line, error.column, error.text);
+		sm_document_destroy(doc);
+		return NULL;
+	}
+	if (!read_header(doc, err) || (doc->current = expand(doc, doc->parameter_values, err)) == NULL) {
+		sm_document_destroy(doc);
+		return NULL;
+	}
+	return doc;
+}
+
+sm_document* sm_document_parse(const char* text, size_t length, const char* source_name, sm_error* err)
+{
+	return sm_document_parse_limited(text, length, source_name, SM_DOCUMENT_MAX_ELEMENTS, err);
+}
+
+sm_document* sm_document_load(const char* path, sm_error* err)
+{
+	if (path == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "no model file given");
+		return NULL;
+	}
+	FILE* f = fopen(path, "rb");
+	if (f == NULL) {
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot open: %s", path, strerror(errno));
+		return NULL;
+	}
+	char* text = NULL;
+	long size = -1;
+	if (fseek(f, 0, SEEK_END) == 0)
+		size = ftell(f);
+	if (size < 0 || size > MAX_FILE_BYTES || fseek(f, 0, SEEK_SET) != 0) {
+		fclose(f);
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read (not a regular file, or larger than %ld bytes)", path,
+		             MAX_FILE_BYTES);
+		return NULL;
+	}
+	text = malloc((size_t)size + 1);
+	if (text == NULL) {
+		fclose(f);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for %ld bytes", path, size);
+		return NULL;
+	}
+	const size_t got = fread(text, 1, (size_t)size, f);
+	const int failed = ferror(f);
+	fclose(f);
+	if (failed || got != (size_t)size) {
+		free(text);
+		sm_error_set(err, SM_ERROR_FILE, "%s: read error", path);
+		return NULL;
+	}
+	sm_document* doc = sm_document_parse(text, got, path, err);
+	free(text);
+	return doc;
+}
+
+void sm_document_destroy(sm_document* doc)
+{
+	if (doc == NULL)
+		return;
+	expansion_free(doc->current);
+	json_decref(doc->root);
+	free(doc->parameter_names);
+	free(doc->parameter_values);
+	free(doc->initial_position);
+	free(doc->initial_velocity);
+	free(doc->source);
+	free(doc);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Accessors.
+// ---------------------------------------------------------------------------------------------
+
+const char* sm_document_name(const sm_document* doc)
+{
+	return doc != NULL ? doc->name : NULL;
+}
+
+const char* sm_document_description(const sm_document* doc)
+{
+	return doc != NULL ? doc->description : NULL;
+}
+
+sm_status sm_document_build(const sm_document* doc, sm_model** model, sm_error* err)
+{
+	if (model == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_build: no place for the model");
+	*model = NULL;
+	if (doc == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_build: no document");
+	*model = sm_model_clone(doc->current->model);
+	if (*model == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for the model", doc->source);
+	return SM_OK;
+}
+
+int32_t sm_document_parameter_count(const sm_document* doc)
+{
+	return doc != NULL ? doc->parameter_count : 0;
+}
+
+const char* sm_document_parameter_name(const sm_document* doc, int32_t index)
+{
+	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->parameter_names[index] : NULL;
+}
+
+double sm_document_parameter_value(const sm_document* doc, int32_t index)
+{
+	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->parameter_values[index] : NAN;
+}
+
+int32_t sm_document_parameter_index(const sm_document* doc, const char* name)
+{
+	return doc != NULL && name != NULL ? find_parameter(doc, name) : -1;
+}
+
+sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err)
+{
+	if (doc == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_parameter: no document");
+	if (index < 0 || index >= doc->parameter_count)
+		return sm_error_set(err, SM_ERROR_NOT_FOUND, "%s: parameter index %d is out of range (%d parameters)",
+		                    doc->source, (int)index, (int)doc->parameter_count);
+	if (!isfinite(value))
+		return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: parameters.%s: %g is not finite", doc->source,
+		                    doc->parameter_names[index], value);
+	if (value == doc->parameter_values[index])
+		return SM_OK;
+	double* values = malloc((size_t)doc->parameter_count * sizeof(double));
+	if (values == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
+	memcpy(values, doc->parameter_values, (size_t)doc->parameter_count * sizeof(double));
+	values[index] = value;
+	sm_error local = {SM_OK, ""};
+	expansion* ex = expand(doc, values, &local);
+	if (ex == NULL) {
+		free(values);
+		return sm_error_set(err, local.status, "%s (with parameter %s = %g)", local.message,
+		                    doc->parameter_names[index], value);
+	}
+	expansion_free(doc->current);
+	doc->current = ex;
+	free(doc->parameter_values);
+	doc->parameter_values = values;
+	return SM_OK;
+}
+
+int32_t sm_document_port_count(const sm_document* doc)
+{
+	return doc != NULL ? doc->current->port_count : 0;
+}
+
+sm_port sm_document_port(const sm_document* doc, int32_t index)
+{
+	if (doc == NULL || index < 0 || index >= doc->current->port_count) {
+		sm_port none = {NULL, -1, SM_PORT_PROBE};
+		return none;
+	}
+	return doc->current->ports[index];
+}
+
+int32_t sm_document_port_index(const sm_document* doc, const char* name)
+{
+	if (doc == NULL || name == NULL)
+		return -1;
+	for (int32_t k = 0; k < doc->current->port_count; k++)
+		if (strcmp(doc->current->ports[k].name, name) == 0)
+			return k;
+	return -1;
+}
+
+const char* sm_document_particle_name(const sm_document* doc, int32_t particle)
+{
+	if (doc == NULL || particle < 0 || particle >= sm_model_particle_count(doc->current->model))
+		return NULL;
+	const int64_t offset = doc->current->name_offset[particle];
+	return offset >= 0 ? doc->current->names + offset : NULL;
+}
+
+int32_t sm_document_particle_index(const sm_document* doc, const char* name)
+{
+	return doc != NULL && name != NULL ? lookup_name(doc->current, name) : -1;
+}
+
+sm_document_settings sm_document_get_settings(const sm_document* doc)
+{
+	if (doc == NULL) {
+		sm_document_settings s;
+		memset(&s, 0, sizeof s);
+		s.stop_time = 1.0;
+		s.output_interval = 0.01;
+		s.solver = sm_default_simulation_def();
+		s.particle_variables = true;
+		return s;
+	}
+	return doc->current->settings;
+}
+
+sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err)
+{
+	if (doc == NULL || x == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: no document or positions");
+	const int32_t n = sm_model_particle_count(doc->current->model);
+	for (size_t k = 0; k < 3 * (size_t)n; k++)
+		if (!isfinite(x[k]) || (v != NULL && !isfinite(v[k])))
+			return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: initial state of particle %zu is not finite",
+			                    doc->source, k / 3);
+	double* position = malloc(3 * (size_t)n * sizeof(double) + 1);
+	double* velocity = calloc(3 * (size_t)n + 1, sizeof(double));
+	if (position == NULL || velocity == NULL) {
+		free(position);
+		free(velocity);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
+	}
+	memcpy(position, x, 3 * (size_t)n * sizeof(double));
+	if (v != NULL)
+		memcpy(velocity, v, 3 * (size_t)n * sizeof(double));
+	// Positions and velocities replace the model's initial state; rest lengths stay as loaded.
+	sm_model* model = doc->current->model;
+	for (int32_t i = 0; i < n; i++) {
+		sm_particle_def d;
+		sm_model_get_particle(model, i, &d);
+		memcpy(d.position, position + 3 * (size_t)i, sizeof d.position);
+		memcpy(d.velocity, velocity + 3 * (size_t)i, sizeof d.velocity);
+		sm_model_set_particle(model, i, &d);
+	}
+	free(doc->initial_position);
+	free(doc->initial_velocity);
+	doc->initial_position = position;
+	doc->initial_velocity = velocity;
+	doc->initial_count = n;
+	return SM_OK;
+}

@@ -1,0 +1,94 @@
+// Internal layout of sm_document, shared by the loader (model_file.c) and the writer
+// (model_file_save.c).
+//
+// A document keeps the parsed JSON tree and the parameters' current values. Everything else is
+// an "expansion": the tree evaluated with those values into a model, the particles' names,
+// the ports and the settings, plus where each constant came from (which parameter, if any) so
+// that saving can keep parameter references. Changing a parameter evaluates the tree again
+// into a new expansion and swaps it in only if it is valid.
+#pragma once
+
+#include "springmass/model_file.h"
+#include "springmass/structures.h"
+
+#include <jansson.h>
+
+// Default limit on particles and on springs of one document (each).
+#define SM_DOCUMENT_MAX_ELEMENTS (1 << 22)
+
+// Where a particle's values came from: a parameter index, or -1 for a number.
+typedef struct particle_source {
+	int32_t mass;
+	int32_t position[3];
+	int32_t velocity[3];
+} particle_source;
+
+// Where a spring's constants came from: a parameter index, or -1 for a number (or a value the
+// loader derived, such as a rest length taken from the initial distance).
+typedef struct spring_source {
+	int32_t rest_length;
+	int32_t stiffness;
+	int32_t damping;
+	int32_t break_strain;
+} spring_source;
+
+typedef enum structure_type { STRUCTURE_ROPE, STRUCTURE_SHEET, STRUCTURE_BLOCK, STRUCTURE_MESH } structure_type;
+
+typedef struct document_structure {
+	const char* name;  // points into the JSON tree
+	structure_type type;
+	sm_structure range;
+} document_structure;
+
+typedef struct expansion {
+	sm_model* model;
+	particle_source* particle_sources;  // one per particle
+	spring_source* spring_sources;      // one per spring
+	int64_t particle_capacity, spring_capacity;
+
+	// Particle names: offsets into `names` (-1 for an unnamed particle), and an open-addressing
+	// table from name to particle index (-1 = empty slot).
+	int64_t* name_offset;
+	char* names;
+	int64_t names_length, names_capacity;
+	int32_t* name_table;
+	int64_t name_table_size;  // a power of two
+	int64_t named_count;
+
+	document_structure* structures;
+	int32_t structure_count;
+
+	sm_port* ports;  // names point into the JSON tree
+	int32_t port_count;
+
+	sm_document_settings settings;
+} expansion;
+
+struct sm_document {
+	json_t* root;
+	char* source;  // file name used in messages
+	const char* name;
+	const char* description;
+
+	int32_t parameter_count;
+	const char** parameter_names;  // point into the JSON tree
+	double* parameter_values;
+
+	expansion* current;
+
+	// Initial state set by sm_document_set_initial_state (NULL if none): 3 per particle.
+	double* initial_position;
+	double* initial_velocity;
+	int32_t initial_count;
+
+	int64_t max_elements;
+};
+
+// sm_document_parse with a limit on particles and springs (each) other than the default, for
+// the fuzz target, which must not spend its time building enormous grids.
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
+                                       int64_t max_elements, sm_error* err);
+
+// Names used by the file format.
+const char* document_method_name(sm_method method);
+const char* document_jacobian_name(sm_jacobian_variant variant);

@@ -1,0 +1,296 @@
+// Model files: the canonical writer.
+//
+// The canonical form lists every particle and spring explicitly, one per line, in model order,
+// with rest lengths written out and parameter references kept, so that loading it builds the
+// same model. Numbers are written with the fewest digits that read back to the same double.
+#include "model_file_internal.h"
+
+#include "model_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct text {
+	char* data;
+	size_t length, capacity;
+	bool failed;
+} text;
+
+static void put(text* t, const char* s, size_t n)
+{
+	if (t->failed)
+		return;
+	if (t->length + n + 1 > t->capacity) {
+		size_t c = t->capacity > 0 ? t->capacity : 4096;
+		while (c < t->length + n + 1)
+			c *= 2;
+		char* grown = realloc(t->data, c);
+		if (grown == NULL) {
+			t->failed = true;
+			return;
+		}
+		t->data = grown;
+		t->capacity = c;
+	}
+	memcpy(t->data + t->length, s, n);
+	t->length += n;
+	t->data[t->length] = '\0';
+}
+
+static void puts_(text* t, const char* s)
+{
+	put(t, s, strlen(s));
+}
+
+// The shortest of %.15g, %.16g and %.17g that reads back to exactly x.
+static void put_number(text* t, double x)
+{
+	char buffer[40];
+	for (int digits = 15; digits <= 17; digits++) {
+		snprintf(buffer, sizeof buffer, "%.*g", digits, x);
+		if (strtod(buffer, NULL) == x)
+			break;
+	}
+	if (strcmp(buffer, "-0") == 0)
+		strcpy(buffer, "0");
+	puts_(t, buffer);
+}
+
+// A JSON string with jansson's escaping.
+static void put_string(text* t, const char* s)
+{
+	json_t* value = json_string(s);
+	char* encoded = value != NULL ? json_dumps(value, JSON_ENCODE_ANY) : NULL;
+	if (encoded == NULL)
+		t->failed = true;
+	else
+		puts_(t, encoded);
+	free(encoded);
+	json_decref(value);
+}
+
+static void put_json(text* t, const json_t* value)
+{
+	char* encoded = json_dumps(value, JSON_ENCODE_ANY);
+	if (encoded == NULL)
+		t->failed = true;
+	else
+		puts_(t, encoded);
+	free(encoded);
+}
+
+// A number, or the parameter it came from.
+static void put_value(text* t, const sm_document* doc, double x, int32_t source)
+{
+	if (source >= 0)
+		put_string(t, doc->parameter_names[source]);
+	else
+		put_number(t, x);
+}
+
+static void put_vector(text* t, const sm_document* doc, const double x[3], const int32_t sources[3])
+{
+	puts_(t, "[");
+	for (int c = 0; c < 3; c++) {
+		if (c > 0)
+			puts_(t, ", ");
+		put_value(t, doc, x[c], sources != NULL ? sources[c] : -1);
+	}
+	puts_(t, "]");
+}
+
+static void put_particle_reference(text* t, const sm_document* doc, int32_t particle)
+{
+	const char* name = sm_document_particle_name(doc, particle);
+	if (name != NULL) {
+		put_string(t, name);
+	} else {
+		char buffer[16];
+		snprintf(buffer, sizeof buffer, "%d", (int)particle);
+		puts_(t, buffer);
+	}
+}
+
+static void put_particle(text* t, const sm_document* doc, int32_t i)
+{
+	const expansion* ex = doc->current;
+	sm_particle_def def;
+	sm_model_get_particle(ex->model, i, &def);
+	const particle_source* src = &ex->particle_sources[i];
+	// Positions and velocities set with sm_document_set_initial_state replace parameters.
+	const bool replaced = doc->initial_position != NULL;
+	puts_(t, "    {");
+	const char* name = sm_document_particle_name(doc, i);
+	if (name != NULL) {
+		puts_(t, "\"name\": ");
+		put_string(t, name);
+		puts_(t, ", ");
+	}
+	puts_(t, "\"position\": ");
+	put_vector(t, doc, def.position, replaced ? NULL : src->position);
+	const bool moving = def.velocity[0] != 0.0 || def.velocity[1] != 0.0 || def.velocity[2] != 0.0;
+	const bool velocity_parameter = !replaced && (src->velocity[0] >= 0 || src->velocity[1] >= 0 || src->velocity[2] >= 0);
+	if (moving || velocity_parameter) {
+		puts_(t, ", \"velocity\": ");
+		put_vector(t, doc, def.velocity, replaced ? NULL : src->velocity);
+	}
+	puts_(t, ", \"mass\": ");
+	put_value(t, doc, def.mass, src->mass);
+	if (def.motion == SM_PARTICLE_FIXED)
+		puts_(t, ", \"fixed\": true");
+	puts_(t, "}");
+}
+
+static void put_spring(text* t, const sm_document* doc, int32_t s)
+{
+	const expansion* ex = doc->current;
+	sm_spring_def def;
+	sm_model_get_spring(ex->model, s, &def);
+	const spring_source* src = &ex->spring_sources[s];
+	puts_(t, "    {\"a\": ");
+	put_particle_reference(t, doc, def.a);
+	puts_(t, ", \"b\": ");
+	put_particle_reference(t, doc, def.b);
+	// The loader reads "rest_length": 0 as a zero-length spring; say so only when it is not.
+	if (def.kind == SM_SPRING_REST_LENGTH && def.rest_length == 0.0)
+		puts_(t, ", \"kind\": \"rest_length\"");
+	puts_(t, ", \"rest_length\": ");
+	put_value(t, doc, def.kind == SM_SPRING_ZERO_LENGTH ? 0.0 : def.rest_length, src->rest_length);
+	if (def.stiffness != 0.0 || src->stiffness >= 0) {
+		puts_(t, def.stiffness_scaling == SM_PER_STRAIN ? ", \"strain_stiffness\": " : ", \"stiffness\": ");
+		put_value(t, doc, def.stiffness, src->stiffness);
+	}
+	if (def.damping != 0.0 || src->damping >= 0) {
+		puts_(t, def.damping_scaling == SM_PER_STRAIN ? ", \"strain_damping\": " : ", \"damping\": ");
+		put_value(t, doc, def.damping, src->damping);
+	}
+	if (isfinite(def.break_strain) || src->break_strain >= 0) {
+		puts_(t, ", \"break_strain\": ");
+		put_value(t, doc, def.break_strain, src->break_strain);
+	}
+	puts_(t, "}");
+}
+
+static const char* port_kind_name(sm_port_kind kind)
+{
+	switch (kind) {
+	case SM_PORT_FORCE: return "force";
+	case SM_PORT_MOTION: return "motion";
+	case SM_PORT_PROBE: return "probe";
+	}
+	return "probe";
+}
+
+char* sm_document_to_json(const sm_document* doc, sm_error* err)
+{
+	if (doc == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_to_json: no document");
+		return NULL;
+	}
+	const expansion* ex = doc->current;
+	const sm_model_def def = sm_model_get_def(ex->model);
+	text t = {NULL, 0, 0, false};
+	char buffer[64];
+	snprintf(buffer, sizeof buffer, "{\n  \"springmass\": %d,\n  \"name\": ", SM_FORMAT_VERSION);
+	puts_(&t, buffer);
+	put_string(&t, doc->name);
+	if (doc->description[0] != '\0') {
+		puts_(&t, ",\n  \"description\": ");
+		put_string(&t, doc->description);
+	}
+	if (doc->parameter_count > 0) {
+		puts_(&t, ",\n  \"parameters\": {");
+		for (int32_t k = 0; k < doc->parameter_count; k++) {
+			puts_(&t, k > 0 ? ", " : "");
+			put_string(&t, doc->parameter_names[k]);
+			puts_(&t, ": ");
+			put_number(&t, doc->parameter_values[k]);
+		}
+		puts_(&t, "}");
+	}
+	// Gravity and mass damping as the file gave them (they may name parameters).
+	puts_(&t, ",\n  \"gravity\": ");
+	const json_t* gravity = json_object_get(doc->root, "gravity");
+	if (gravity != NULL)
+		put_json(&t, gravity);
+	else
+		put_vector(&t, doc, def.gravity, NULL);
+	puts_(&t, ",\n  \"mass_damping\": ");
+	const json_t* mass_damping = json_object_get(doc->root, "mass_damping");
+	if (mass_damping != NULL)
+		put_json(&t, mass_damping);
+	else
+		put_number(&t, def.mass_damping);
+
+	const int32_t n = sm_model_particle_count(ex->model), m = sm_model_spring_count(ex->model);
+	puts_(&t, ",\n  \"particles\": [\n");
+	for (int32_t i = 0; i < n && !t.failed; i++) {
+		put_particle(&t, doc, i);
+		puts_(&t, i + 1 < n ? ",\n" : "\n");
+	}
+	puts_(&t, "  ]");
+	if (m > 0) {
+		puts_(&t, ",\n  \"springs\": [\n");
+		for (int32_t s = 0; s < m && !t.failed; s++) {
+			put_spring(&t, doc, s);
+			puts_(&t, s + 1 < m ? ",\n" : "\n");
+		}
+		puts_(&t, "  ]");
+	}
+	if (ex->port_count > 0) {
+		puts_(&t, ",\n  \"ports\": [\n");
+		for (int32_t k = 0; k < ex->port_count; k++) {
+			puts_(&t, "    {\"name\": ");
+			put_string(&t, ex->ports[k].name);
+			puts_(&t, ", \"particle\": ");
+			put_particle_reference(&t, doc, ex->ports[k].particle);
+			puts_(&t, ", \"kind\": \"");
+			puts_(&t, port_kind_name(ex->ports[k].kind));
+			puts_(&t, k + 1 < ex->port_count ? "\"},\n" : "\"}\n");
+		}
+		puts_(&t, "  ]");
+	}
+	static const char* const copied[] = {"simulation", "fmu"};
+	for (int k = 0; k < 2; k++) {
+		const json_t* value = json_object_get(doc->root, copied[k]);
+		if (value == NULL)
+			continue;
+		puts_(&t, ",\n  \"");
+		puts_(&t, copied[k]);
+		puts_(&t, "\": ");
+		put_json(&t, value);
+	}
+	puts_(&t, "\n}\n");
+	if (t.failed) {
+		free(t.data);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory while writing the model", doc->source);
+		return NULL;
+	}
+	return t.data;
+}
+
+sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err)
+{
+	if (path == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_save: no file name");
+	char* data = sm_document_to_json(doc, err);
+	if (data == NULL)
+		return err != NULL ? err->status : SM_ERROR_OUT_OF_MEMORY;
+	FILE* f = fopen(path, "wb");
+	if (f == NULL) {
+		const int code = errno;
+		free(data);
+		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path, strerror(code));
+	}
+	const size_t length = strlen(data);
+	const bool written = fwrite(data, 1, length, f) == length;
+	const bool closed = fclose(f) == 0;
+	free(data);
+	if (!written || !closed)
+		return sm_error_set(err, SM_ERROR_FILE, "%s: write error", path);
+	return SM_OK;
+}

@@ -1,0 +1,593 @@
+// Model files: every bundled model loads and has the physics its description promises, saving
+// and loading gives the same model, parameters feed the constants, and a table of broken and
+// hostile files gives exactly the expected errors.
+#include "springmass/model_file.h"
+#include "springmass/structures.h"
+#include "test_harness.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef SPRINGMASS_MODELS_DIR
+#error "SPRINGMASS_MODELS_DIR must name the directory of the bundled models"
+#endif
+
+static const char* const bundled[] = {"oscillator",    "two_mass_chain", "hanging_rope", "cloth",
+                                      "tearing_cloth", "jelly_block",    "flag"};
+enum { BUNDLED_COUNT = sizeof bundled / sizeof bundled[0] };
+
+static sm_document* load_bundled(const char* name, sm_error* err)
+{
+	char path[512];
+	snprintf(path, sizeof path, "%s/%s.json", SPRINGMASS_MODELS_DIR, name);
+	return sm_document_load(path, err);
+}
+
+static sm_document* parse(const char* text, sm_error* err)
+{
+	return sm_document_parse(text, strlen(text), "test.json", err);
+}
+
+static int32_t count_fixed(const sm_model* m)
+{
+	int32_t fixed = 0;
+	for (int32_t i = 0; i < sm_model_particle_count(m); i++) {
+		sm_particle_def p;
+		sm_model_get_particle(m, i, &p);
+		fixed += p.motion == SM_PARTICLE_FIXED;
+	}
+	return fixed;
+}
+
+// Two models are the same: particles (mass, position, velocity, motion), springs (ends, kind,
+// scaling, constants as given and as resolved, break strain), gravity and mass damping; all
+// bit for bit, since saving writes numbers that read back exactly.
+static int same_model(const sm_model* a, const sm_model* b)
+{
+	ENSURE(sm_model_particle_count(a) == sm_model_particle_count(b));
+	ENSURE(sm_model_spring_count(a) == sm_model_spring_count(b));
+	for (int32_t i = 0; i < sm_model_particle_count(a); i++) {
+		sm_particle_def p, q;
+		sm_model_get_particle(a, i, &p);
+		sm_model_get_particle(b, i, &q);
+		ENSURE(p.mass == q.mass && p.motion == q.motion);
+		for (int c = 0; c < 3; c++)
+			ENSURE(p.position[c] == q.position[c] && p.velocity[c] == q.velocity[c]);
+	}
+	for (int32_t s = 0; s < sm_model_spring_count(a); s++) {
+		sm_spring_def p, q;
+		sm_model_get_spring(a, s, &p);
+		sm_model_get_spring(b, s, &q);
+		ENSURE(p.a == q.a && p.b == q.b && p.kind == q.kind);
+		ENSURE(p.stiffness == q.stiffness && p.stiffness_scaling == q.stiffness_scaling);
+		ENSURE(p.damping == q.damping && p.damping_scaling == q.damping_scaling);
+		ENSURE(p.rest_length == q.rest_length);
+		ENSURE(p.break_strain == q.break_strain || (isinf(p.break_strain) && isinf(q.break_strain)));
+		double l0a, ksa, kda, l0b, ksb, kdb;
+		sm_model_spring_constants(a, s, &l0a, &ksa, &kda);
+		sm_model_spring_constants(b, s, &l0b, &ksb, &kdb);
+		ENSURE(l0a == l0b && ksa == ksb && kda == kdb);
+	}
+	const sm_model_def da = sm_model_get_def(a), db = sm_model_get_def(b);
+	for (int c = 0; c < 3; c++)
+		ENSURE(da.gravity[c] == db.gravity[c]);
+	ENSURE(da.mass_damping == db.mass_damping);
+	return 0;
+}
+
+static int same_document(const sm_document* a, const sm_document* b)
+{
+	ENSURE(strcmp(sm_document_name(a), sm_document_name(b)) == 0);
+	ENSURE(strcmp(sm_document_description(a), sm_document_description(b)) == 0);
+	ENSURE(sm_document_parameter_count(a) == sm_document_parameter_count(b));
+	for (int32_t k = 0; k < sm_document_parameter_count(a); k++) {
+		ENSURE(strcmp(sm_document_parameter_name(a, k), sm_document_parameter_name(b, k)) == 0);
+		ENSURE(sm_document_parameter_value(a, k) == sm_document_parameter_value(b, k));
+	}
+	ENSURE(sm_document_port_count(a) == sm_document_port_count(b));
+	for (int32_t k = 0; k < sm_document_port_count(a); k++) {
+		const sm_port p = sm_document_port(a, k), q = sm_document_port(b, k);
+		ENSURE(strcmp(p.name, q.name) == 0 && p.particle == q.particle && p.kind == q.kind);
+	}
+	sm_model *ma = NULL, *mb = NULL;
+	ENSURE_STATUS(sm_document_build(a, &ma, NULL), SM_OK);
+	ENSURE_STATUS(sm_document_build(b, &mb, NULL), SM_OK);
+	const int result = same_model(ma, mb);
+	sm_model_destroy(ma);
+	sm_model_destroy(mb);
+	ENSURE(result == 0);
+	for (int32_t i = 0; i < sm_document_port_count(a); i++) {
+		const char* na = sm_document_particle_name(a, sm_document_port(a, i).particle);
+		const char* nb = sm_document_particle_name(b, sm_document_port(b, i).particle);
+		ENSURE((na == NULL && nb == NULL) || (na && nb && strcmp(na, nb) == 0));
+	}
+	const sm_document_settings sa = sm_document_get_settings(a), sb = sm_document_get_settings(b);
+	ENSURE(memcmp(&sa, &sb, sizeof sa) == 0);
+	return 0;
+}
+
+// Every bundled model loads, has a one-line description, builds, and its canonical form loads
+// to the same model; saving that again gives the same text (the canonical form is a fixed point).
+static int test_bundled_models_round_trip(void)
+{
+	for (int k = 0; k < BUNDLED_COUNT; k++) {
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = load_bundled(bundled[k], &err);
+		if (doc == NULL) {
+			printf("  %s: %s\n", bundled[k], err.message);
+			return 1;
+		}
+		ENSURE(strcmp(sm_document_name(doc), bundled[k]) == 0);
+		ENSURE(strlen(sm_document_description(doc)) > 20);
+		char* text = sm_document_to_json(doc, &err);
+		ENSURE(text != NULL);
+		sm_document* again = sm_document_parse(text, strlen(text), "saved.json", &err);
+		if (again == NULL) {
+			printf("  %s saved: %s\n", bundled[k], err.message);
+			return 1;
+		}
+		const int same = same_document(doc, again);
+		char* text2 = sm_document_to_json(again, &err);
+		ENSURE(text2 != NULL);
+		const int fixed_point = strcmp(text, text2) == 0;
+		free(text);
+		free(text2);
+		sm_document_destroy(again);
+		sm_document_destroy(doc);
+		if (same != 0 || !fixed_point) {
+			printf("  %s: round trip differs%s\n", bundled[k], fixed_point ? "" : " (text)");
+			return 1;
+		}
+	}
+	return 0;
+}
+
+// The oscillator's spring and mass give the closed-form frequency sqrt(k/m), and the model's
+// force on the bob is -k (x - l0) - d v along the spring (checked at a displaced state).
+static int test_oscillator(void)
+{
+	sm_document* doc = load_bundled("oscillator", NULL);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 2 && sm_model_spring_count(m) == 1);
+	ENSURE(sm_document_port_count(doc) == 1);
+	const sm_port port = sm_document_port(doc, 0);
+	ENSURE(port.kind == SM_PORT_FORCE && strcmp(sm_document_particle_name(doc, port.particle), "bob") == 0);
+	const double x[6] = {0, 0, 0, 0.7, 0, 0}, v[6] = {0, 0, 0, 0.3, 0, 0};
+	double f[6];
+	sm_model_forces(m, x, v, NULL, f);
+	// k = 40 N/m, l0 = 0.5 m, d = 0.4 N s/m: f = -40 * 0.2 - 0.4 * 0.3 = -8.12 N (exact in
+	// binary to rounding of the products).
+	ENSURE_NEAR(f[3], -8.12, 1e-12);
+	ENSURE_NEAR(f[0], 8.12, 1e-12);
+	const sm_model_def def = sm_model_get_def(m);
+	ENSURE(def.gravity[0] == 0.0 && def.gravity[1] == 0.0 && def.gravity[2] == 0.0);
+	const sm_document_settings settings = sm_document_get_settings(doc);
+	ENSURE(settings.stop_time == 5.0 && settings.solver.relative_tolerance == 1e-8);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// The bundled cloth is exactly the default sheet (the benchmark cloth) with its two corners at
+// y = 1 fixed.
+static int test_cloth_is_the_benchmark_cloth(void)
+{
+	sm_document* doc = load_bundled("cloth", NULL);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_model_def md = sm_default_model_def();
+	sm_model* reference = sm_model_create(&md, NULL);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(reference, &sheet, &s), SM_OK);
+	ENSURE_STATUS(sm_set_motion_at(reference, &s, 15, 0, 0, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE_STATUS(sm_set_motion_at(reference, &s, 15, 15, 0, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE(same_model(m, reference) == 0);
+	ENSURE(count_fixed(m) == 2);
+	ENSURE(strcmp(sm_document_particle_name(doc, 15 * 16 + 3), "cloth[15,3]") == 0);
+	ENSURE(sm_document_particle_index(doc, "cloth[2,7]") == 2 * 16 + 7);
+	sm_model_destroy(reference);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// Facts of the other bundled models that their descriptions state.
+static int test_bundled_model_facts(void)
+{
+	sm_model* m = NULL;
+	// Flag: mass lumped from the triangles, density x area = 0.2 kg/m^2 x 1.5 m^2; the pole's
+	// five vertices fixed.
+	sm_document* doc = load_bundled("flag", NULL);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE_NEAR(sm_model_total_mass(m), 0.2 * 1.5, 1e-12);
+	ENSURE(sm_model_particle_count(m) == 35 && count_fixed(m) == 5);
+	// 7 x 5 grid, two triangles per cell: 6*5 + 7*4 + 24 = 82 edges; interior edges: all but
+	// the 2*6 + 2*4 = 20 boundary ones, 62 bending springs.
+	ENSURE(sm_model_spring_count(m) == 82 + 62);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+
+	// Jelly block: 125 particles on four pins.
+	doc = load_bundled("jelly_block", NULL);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 125 && count_fixed(m) == 4);
+	ENSURE_NEAR(sm_model_total_mass(m), 1.0, 1e-12);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+
+	// Tearing cloth: every structural and shear spring of the sheet can break, the hook cannot.
+	doc = load_bundled("tearing_cloth", NULL);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	int breakable = 0;
+	for (int32_t s = 0; s < sm_model_spring_count(m); s++) {
+		sm_spring_def def;
+		sm_model_get_spring(m, s, &def);
+		breakable += isfinite(def.break_strain);
+	}
+	// 12 x 12: structural 2*11*12 = 264, shear 2*11*11 = 242.
+	ENSURE(breakable == 264 + 242);
+	ENSURE(count_fixed(m) == 12);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+
+	// Hanging rope: pinned at its first particle, 21 particles of 0.5 kg / 21.
+	doc = load_bundled("hanging_rope", NULL);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 21 && sm_model_spring_count(m) == 20 && count_fixed(m) == 1);
+	ENSURE_NEAR(sm_model_get_def(m).mass_damping, 0.1, 0.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A parameter feeds every value that names it; an invalid value is refused with the path of
+// the element it breaks, and the document stays as it was.
+static int test_parameters(void)
+{
+	sm_document* doc = load_bundled("cloth", NULL);
+	ENSURE(doc != NULL);
+	const int32_t E = sm_document_parameter_index(doc, "E");
+	ENSURE(E >= 0 && sm_document_parameter_value(doc, E) == 1000.0);
+	ENSURE(sm_document_parameter_index(doc, "nothing") == -1);
+	ENSURE_STATUS(sm_document_set_parameter(doc, E, 2000.0, NULL), SM_OK);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	double l0, ks;
+	sm_model_spring_constants(m, 0, &l0, &ks, NULL);
+	ENSURE_REL(ks, 2000.0 / l0, 1e-15, 0.0);
+	sm_model_destroy(m);
+
+	sm_error err = {SM_OK, ""};
+	ENSURE_STATUS(sm_document_set_parameter(doc, E, -1.0, &err), SM_ERROR_NEGATIVE);
+	ENSURE(strstr(err.message, "cloth.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0 "
+	                           "(with parameter E = -1)") != NULL);
+	ENSURE_STATUS(sm_document_set_parameter(doc, E, NAN, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(sm_document_parameter_value(doc, E) == 2000.0);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 99, 1.0, &err), SM_ERROR_NOT_FOUND);
+	sm_document_destroy(doc);
+
+	// A parameter may set a count: the topology follows it.
+	const char* text = "{\"springmass\": 1, \"name\": \"r\", \"parameters\": {\"n\": 4},"
+	                   " \"structures\": [{\"type\": \"rope\", \"name\": \"rope\", \"start\": [0,0,0],"
+	                   " \"end\": [1,0,0], \"segments\": \"n\", \"structural\": {\"strain_stiffness\": 10}}]}";
+	doc = parse(text, &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 9.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 10 && sm_model_spring_count(m) == 9);
+	ENSURE(strcmp(sm_document_particle_name(doc, 9), "rope[9]") == 0);
+	sm_model_destroy(m);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 2.5, &err), SM_ERROR_SCHEMA);
+	ENSURE(strcmp(err.message, "test.json: structures[0].segments: parameter n = 2.5 must be a whole number from 1 to "
+	                           "4194304 (with parameter n = 2.5)") == 0);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// An initial state (e.g. a static equilibrium) replaces positions but keeps rest lengths, and
+// survives saving and loading.
+static int test_initial_state_and_save_to_file(void)
+{
+	sm_document* doc = load_bundled("hanging_rope", NULL);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	const int32_t n = sm_model_particle_count(m);
+	double* x = malloc(3 * (size_t)n * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(m, x, NULL);
+	// Hang the rope straight down, each segment stretched by 10 %.
+	for (int32_t i = 0; i < n; i++) {
+		x[3 * i + 0] = 0.0;
+		x[3 * i + 2] = -0.055 * i;
+	}
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, NULL, NULL), SM_OK);
+	const char* path = "test_model_file_saved.json";
+	sm_error err = {SM_OK, ""};
+	ENSURE_STATUS(sm_document_save(doc, path, &err), SM_OK);
+	sm_document* again = sm_document_load(path, &err);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	sm_model* m2 = NULL;
+	ENSURE_STATUS(sm_document_build(again, &m2, NULL), SM_OK);
+	sm_particle_def p;
+	sm_model_get_particle(m2, 20, &p);
+	ENSURE(p.position[2] == -0.055 * 20 && p.position[0] == 0.0);
+	double l0;
+	sm_model_spring_constants(m2, 0, &l0, NULL, NULL);
+	ENSURE_NEAR(l0, 0.05, 1e-15);
+	// The elastic energy of the stretched rope: 20 springs of ks = E / l0 stretched by 10 % of
+	// l0 store (E / l0) (0.1 l0)^2 / 2 = E l0 0.01 / 2 each (relative rounding ~1e-15; 1e-9
+	// leaves room for the positions -0.055 i not being exact in binary).
+	double* x2 = malloc(3 * (size_t)n * sizeof(double));
+	ENSURE(x2 != NULL);
+	sm_model_initial_state(m2, x2, NULL);
+	const sm_energies e = sm_model_energies(m2, x2, NULL);
+	ENSURE_REL(e.elastic, 20 * 2000.0 * 0.05 * 0.01 / 2.0, 1e-9, 0.0);
+	free(x);
+	free(x2);
+	remove(path);
+	sm_model_destroy(m);
+	sm_model_destroy(m2);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// References: by name, by index, into a structure's grid with any spacing.
+static int test_references(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"refs\", \"gravity\": [0, 0, 0],"
+	    " \"particles\": [{\"name\": \"hook\", \"position\": [0, 0, 2], \"fixed\": true}],"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": 3, \"nv\": 2,"
+	    "   \"structural\": {\"stiffness\": 5}},"
+	    "  {\"type\": \"block\", \"name\": \"b\", \"origin\": [5, 0, 0], \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2,"
+	    "   \"nw\": 2, \"edge\": {\"stiffness\": 1}}],"
+	    " \"springs\": [{\"a\": \"hook\", \"b\": \"s[ 1 , 2 ]\", \"stiffness\": 7, \"rest_length\": 0},"
+	    "  {\"a\": 0, \"b\": \"b[1,0,1]\", \"strain_stiffness\": 7},"
+	    "  {\"a\": \"s[5]\", \"b\": \"b[0]\", \"damping\": 3}],"
+	    " \"ports\": [{\"name\": \"p\", \"particle\": \"s[0,0]\", \"kind\": \"probe\"},"
+	    "  {\"name\": \"q\", \"particle\": \"s[0,0]\", \"kind\": \"probe\"}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(text, &err);
+	if (doc == NULL) {
+		printf("  %s\n", err.message);
+		return 1;
+	}
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	// hook 0, sheet 1..6 (row 1 column 2 is 1 + 1*3 + 2 = 6), block 7..14.
+	ENSURE(sm_model_particle_count(m) == 1 + 6 + 8);
+	const int32_t first = sm_model_spring_count(m) - 3;
+	sm_spring_def s;
+	sm_model_get_spring(m, first, &s);
+	ENSURE(s.a == 0 && s.b == 6 && s.kind == SM_SPRING_ZERO_LENGTH);
+	sm_model_get_spring(m, first + 1, &s);
+	// b[1,0,1]: row 1, column 0, layer 1 of a 2 x 2 x 2 block: 7 + (1*2 + 1)*2 + 0 = 13.
+	ENSURE(s.a == 0 && s.b == 13 && s.stiffness_scaling == SM_PER_STRAIN);
+	ENSURE_NEAR(s.rest_length, sqrt(25.0 + 1.0 + 1.0), 1e-12);
+	sm_model_get_spring(m, first + 2, &s);
+	ENSURE(s.a == 6 && s.b == 7 && s.damping == 3.0 && s.stiffness == 0.0);
+	ENSURE(strcmp(sm_document_particle_name(doc, 13), "b[1,0,1]") == 0);
+	ENSURE(sm_document_port(doc, 1).particle == 1);
+	ENSURE(sm_document_port_index(doc, "q") == 1);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// Broken files, each with the exact error: status and message.
+static int test_broken_files(void)
+{
+	static const struct {
+		const char* text;
+		sm_status status;
+		const char* message;
+	} cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [}", SM_ERROR_SYNTAX,
+	     "test.json:2:16: unexpected token near '}'"},
+	    {"{\"springmass\": 1, \"springmass\": 1}", SM_ERROR_SYNTAX, "test.json:1:30: duplicate object key near '\"springmass\"'"},
+	    {"[1, 2]", SM_ERROR_SCHEMA, "test.json: a model file is a JSON object, not an array"},
+	    {"{\"name\": \"x\"}", SM_ERROR_SCHEMA,
+	     "test.json: missing \"springmass\": 1 (the format version; is this a springmass model file?)"},
+	    {"{\"springmass\": 2, \"name\": \"x\"}", SM_ERROR_SCHEMA,
+	     "test.json: springmass: format version must be 1 (this build reads version 1)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gravty\": [0, 0, 0]}", SM_ERROR_SCHEMA,
+	     "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
+	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+	    {"{\"springmass\": 1, \"name\": \"my model\"}", SM_ERROR_SCHEMA,
+	     "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
+	     "digit)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"two\\nlines\"}", SM_ERROR_SCHEMA,
+	     "test.json: description: must be one line"},
+	    {"{\"springmass\": 1, \"name\": \"x\"}", SM_ERROR_SCHEMA,
+	     "test.json: the model has no particles (give \"particles\" or \"structures\")"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0]}]}", SM_ERROR_SCHEMA,
+	     "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mas\": 1}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: particles[0]: unknown key \"mas\" (allowed here: name, position, velocity, mass, fixed)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": 0}]}",
+	     SM_ERROR_NEGATIVE, "test.json: particles[0].mass: 0 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
+	     " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"a\"}, {\"a\": \"a\","
+	     " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
+	     SM_ERROR_SELF_SPRING, "test.json: springs[0]: connects particle 0 to itself (a and b are the same particle)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
+	     " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\","
+	     " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
+	     SM_ERROR_NOT_FOUND, "test.json: springs[3].b: no particle named \"bobb\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 2}]}",
+	     SM_ERROR_PARTICLE_INDEX, "test.json: springs[0].b: particle index 2 is out of range (the model has 2 particles)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+	     " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"kk\"}]}",
+	     SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"kk\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
+	     SM_ERROR_SCHEMA, "test.json: springs[0]: give \"stiffness\" [N/m] or \"strain_stiffness\" [N], not both"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 1, \"rest_length\": 0}]}",
+	     SM_ERROR_ZERO_REST_LENGTH,
+	     "test.json: springs[0]: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"break_strain\": -0.1}]}",
+	     SM_ERROR_NEGATIVE, "test.json: springs[0].break_strain: -0.1 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"kind\": \"cubic\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: springs[0].kind: must be \"rest_length\" or \"zero_length\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
+	     " \"nv\": 4}], \"fixed\": [\"c[4,0]\"]}",
+	     SM_ERROR_PARTICLE_INDEX,
+	     "test.json: fixed[0]: \"c[4,0]\" is outside structure c (4 columns x 4 rows x 1 layers, 16 particles)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
+	     " \"nv\": 4}], \"fixed\": [{\"min\": [5, 5, 5], \"max\": [6, 6, 6]}]}",
+	     SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (5, 5, 5) to (6, 6, 6) contains no particle"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
+	     " \"nv\": 4}, {\"type\": \"rope\", \"name\": \"c\", \"start\": [0, 0, 0], \"end\": [1, 0, 0],"
+	     " \"segments\": 2}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[1].name: structure name \"c\" is already used"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[0,0]\", \"position\": [0, 0, 0]}],"
+	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4, \"nv\": 4}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].name: particle name \"c[0,0]\" is already used by particle 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"cube\", \"name\": \"c\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].type: must be \"rope\", \"sheet\", \"block\" or \"mesh\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
+	     " \"nv\": 4, \"bend\": {\"strain_stiffnes\": 1}}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0].bend: unknown key \"strain_stiffnes\" (allowed here: stiffness, strain_stiffness, "
+	     "damping, strain_damping, break_strain)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 1e9,"
+	     " \"nv\": 4}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1e+09 must be a whole number from 2 to 4194304"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 40000,"
+	     " \"nv\": 40000}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: the model would have 1600000000 particles and 9600000000 springs, more than the "
+	     "limit of 4194304 of each"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
+	     " \"nu\": -3, \"nv\": 4, \"nw\": 4}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: -3 must be a whole number from 2 to 4194304"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 3]]}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].triangles[0][2]: 3 must be a whole number from 0 to 2"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
+	     SM_ERROR_INVALID_ARGUMENT, "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"position\":"
+	     " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
+	     " \"big\"}]}",
+	     SM_ERROR_NOT_FINITE, "test.json: springs[0]: spring 0: stiffness E / l0 = 1e+308 / 1e-10 is not finite"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
+	     "test.json:1:56: real number overflow near '1e400'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaN}}", SM_ERROR_SYNTAX,
+	     "test.json:1:54: invalid token near 'NaN'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 99999999999999999999}}", SM_ERROR_SYNTAX,
+	     "test.json:1:71: too big integer near '99999999999999999999'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"2k\": 1}}", SM_ERROR_SCHEMA,
+	     "test.json: parameters.2k: name \"2k\" must be an identifier (letters, digits and '_', not starting with a "
+	     "digit)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": \"m\"}}", SM_ERROR_SCHEMA,
+	     "test.json: parameters.k: a parameter's value must be a number, not a string"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"fixed\": true}],"
+	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"force\"}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: ports[0]: a force port needs a free particle, and particle 0 is fixed (use a motion or probe port)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"push\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: ports[0].kind: must be \"force\", \"motion\" or \"probe\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"probe\"}, {\"name\": \"p\", \"particle\": 1,"
+	     " \"kind\": \"probe\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: ports[1].name: port name \"p\" is already used by ports[0]"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+	     " \"simulation\": {\"solver\": \"gauss\"}}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: simulation.solver: must be one of \"auto\", \"dense\", \"klu\", \"pcg\", \"cholmod\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+	     " \"simulation\": {\"rtol\": 0}}",
+	     SM_ERROR_NEGATIVE, "test.json: simulation.rtol: 0 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+	     " \"fmu\": {\"particle_variables\": 0}}",
+	     SM_ERROR_SCHEMA, "test.json: fmu.particle_variables: must be true or false, not a number"},
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(cases[c].text, &err);
+		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, cases[c].message) != 0) {
+			printf("  case %zu: status %d, message\n    \"%s\"\n  expected %d,\n    \"%s\"\n", c, (int)err.status,
+			       err.message, (int)cases[c].status, cases[c].message);
+			sm_document_destroy(doc);
+			failures++;
+		}
+	}
+	return failures > 0;
+}
+
+// Hostile input fails cleanly: deep nesting, a file that is not there, binary junk, a file cut
+// short at every length (each prefix of a valid file is refused or loads, never crashes).
+static int test_hostile_input(void)
+{
+	sm_error err = {SM_OK, ""};
+	const size_t depth = 100000;
+	char* deep = malloc(2 * depth + 1);
+	ENSURE(deep != NULL);
+	memset(deep, '[', depth);
+	memset(deep + depth, ']', depth);
+	deep[2 * depth] = '\0';
+	ENSURE(sm_document_parse(deep, 2 * depth, "deep.json", &err) == NULL);
+	ENSURE(err.status == SM_ERROR_SYNTAX && strstr(err.message, "maximum parsing depth") != NULL);
+	free(deep);
+
+	ENSURE(sm_document_load("no/such/model.json", &err) == NULL);
+	ENSURE(err.status == SM_ERROR_FILE &&
+	       strcmp(err.message, "no/such/model.json: cannot open: No such file or directory") == 0);
+	const char junk[] = {'{', 0, 1, 2, '"', (char)0xff, '}'};
+	ENSURE(sm_document_parse(junk, sizeof junk, "junk", &err) == NULL && err.status == SM_ERROR_SYNTAX);
+	ENSURE(sm_document_parse(NULL, 0, "none", &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
+
+	char path[512];
+	snprintf(path, sizeof path, "%s/two_mass_chain.json", SPRINGMASS_MODELS_DIR);
+	FILE* f = fopen(path, "rb");
+	ENSURE(f != NULL);
+	char text[8192];
+	const size_t length = fread(text, 1, sizeof text, f);
+	fclose(f);
+	int loaded = 0;
+	for (size_t n = 0; n <= length; n++) {
+		sm_document* doc = sm_document_parse(text, n, "cut.json", &err);
+		loaded += doc != NULL;
+		sm_document_destroy(doc);
+	}
+	// Only the whole file (and the whole file without its final newline) is a document.
+	ENSURE(loaded == 2);
+	sm_document_destroy(NULL);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_bundled_models_round_trip);
+	RUN_TEST(test_oscillator);
+	RUN_TEST(test_cloth_is_the_benchmark_cloth);
+	RUN_TEST(test_bundled_model_facts);
+	RUN_TEST(test_parameters);
+	RUN_TEST(test_initial_state_and_save_to_file);
+	RUN_TEST(test_references);
+	RUN_TEST(test_broken_files);
+	RUN_TEST(test_hostile_input);
+	return TEST_SUMMARY();
+}

@@ -1,0 +1,414 @@
+// Structures: rope, sheet, block and mesh builders against hand-counted particles and springs,
+// rest lengths and masses, the exact match with the benchmark cloth, the shear resistance of a
+// block (only rigid-body modes have zero stiffness), edges of a mesh counted once, roll-back
+// on error, and the selection helpers.
+#include "springmass/structures.h"
+#include "test_harness.h"
+
+#include <gsl/gsl_eigen.h>
+#include <gsl/gsl_matrix.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static const double PI = 3.14159265358979323846;
+
+#ifndef SPRINGMASS_TEST_DATA_DIR
+#error "SPRINGMASS_TEST_DATA_DIR must name the directory of tests/data"
+#endif
+
+static sm_model* new_model(void)
+{
+	sm_model_def def = sm_default_model_def();
+	return sm_model_create(&def, NULL);
+}
+
+static double distance(const sm_model* m, int32_t a, int32_t b)
+{
+	sm_particle_def pa, pb;
+	sm_model_get_particle(m, a, &pa);
+	sm_model_get_particle(m, b, &pb);
+	const double d[3] = {pb.position[0] - pa.position[0], pb.position[1] - pa.position[1],
+	                     pb.position[2] - pa.position[2]};
+	return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+// The default sheet is the benchmark cloth: the same particles, springs (in the same order),
+// rest lengths and constants as the reference peer script builds (tests/data, generated from
+// its cloth() function).
+static int test_sheet_matches_benchmark_cloth(void)
+{
+	FILE* f = fopen(SPRINGMASS_TEST_DATA_DIR "/benchmark_cloth_16.txt", "r");
+	ENSURE(f != NULL);
+	char line[256];
+	int n = 0, springs = 0, pin_a = -1, pin_b = -1;
+	while (fgets(line, sizeof line, f) && line[0] == '#') {
+	}
+	ENSURE(sscanf(line, "%d %d %d %d", &n, &springs, &pin_a, &pin_b) == 4);
+
+	sm_model* m = new_model();
+	sm_sheet_def def = sm_default_sheet_def();
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
+	ENSURE(sm_model_particle_count(m) == n && s.particle_count == n);
+	ENSURE(sm_model_spring_count(m) == springs && s.spring_count == springs);
+	// The peer pins particles (n-1, 0) and (n-1, n-1): the grid addressing must name them.
+	ENSURE(sm_structure_particle(&s, 15, 0, 0) == pin_a);
+	ENSURE(sm_structure_particle(&s, 15, 15, 0) == pin_b);
+	for (int k = 0; k < springs; k++) {
+		int a, b;
+		double l0, ks, kd;
+		ENSURE(fscanf(f, "%d %d %lf %lf %lf", &a, &b, &l0, &ks, &kd) == 5);
+		sm_spring_def sd;
+		ENSURE_STATUS(sm_model_get_spring(m, k, &sd), SM_OK);
+		ENSURE(sd.a == a && sd.b == b);
+		double rest, stiffness, damping;
+		ENSURE_STATUS(sm_model_spring_constants(m, k, &rest, &stiffness, &damping), SM_OK);
+		// Positions are j / (n - 1) here and j * (1 / (n - 1)) in the peer: equal to an ulp or
+		// two, so the derived constants agree to a few ulps.
+		ENSURE_REL(rest, l0, 1e-14, 0.0);
+		ENSURE_REL(stiffness, ks, 1e-14, 0.0);
+		ENSURE_REL(damping, kd, 1e-14, 0.0);
+	}
+	fclose(f);
+	// Total mass 1 kg spread evenly; positions (j h, i h, 0).
+	ENSURE_NEAR(sm_model_total_mass(m), 1.0, 1e-12);
+	sm_particle_def p;
+	sm_model_get_particle(m, 3 * 16 + 5, &p);
+	ENSURE_NEAR(p.mass, 1.0 / 256.0, 1e-18);
+	ENSURE_NEAR(p.position[0], 5.0 / 15.0, 1e-15);
+	ENSURE_NEAR(p.position[1], 3.0 / 15.0, 1e-15);
+	ENSURE(p.position[2] == 0.0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Hand-counted springs of a 3 x 5 sheet on a parallelogram, group by group.
+static int test_sheet_counts_and_rest_lengths(void)
+{
+	sm_model* m = new_model();
+	sm_sheet_def def = sm_default_sheet_def();
+	def.nu = 3;
+	def.nv = 5;
+	def.edge_u[0] = 2.0;  // columns 1 m apart
+	def.edge_v[1] = 2.0;  // rows 0.5 m apart
+	def.bend = sm_default_spring_material();  // no bend springs
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
+	// structural: (nu-1) nv + nu (nv-1) = 10 + 12; shear: 2 (nu-1)(nv-1) = 16.
+	ENSURE(s.spring_count == 22 + 16);
+	ENSURE(s.shape[0] == 3 && s.shape[1] == 5 && s.shape[2] == 1);
+	int horizontal = 0, vertical = 0, diagonal = 0;
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		double l0;
+		sm_model_spring_constants(m, k, &l0, NULL, NULL);
+		if (fabs(l0 - 1.0) < 1e-12)
+			horizontal++;
+		else if (fabs(l0 - 0.5) < 1e-12)
+			vertical++;
+		else if (fabs(l0 - sqrt(1.25)) < 1e-12)
+			diagonal++;
+	}
+	ENSURE(horizontal == 10 && vertical == 12 && diagonal == 16);
+	// With bend springs: (nu-2) nv + nu (nv-2) = 5 + 9 more, of rest length 2 m and 1 m.
+	def.bend = def.structural;
+	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
+	ENSURE(s.first_particle == 15 && s.first_spring == 38 && s.spring_count == 38 + 14);
+	sm_model_destroy(m);
+	return 0;
+}
+
+static int test_rope(void)
+{
+	sm_model* m = new_model();
+	sm_rope_def def = sm_default_rope_def();
+	def.start[2] = 1.0;
+	def.end[0] = 3.0;
+	def.end[2] = 5.0;  // length 5 m
+	def.segments = 10;
+	def.mass_per_length = 0.2;  // 1 kg in all
+	def.bending = def.structural;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_rope(m, &def, &s), SM_OK);
+	ENSURE(s.particle_count == 11 && s.spring_count == 10 + 9);
+	ENSURE_NEAR(sm_model_total_mass(m), 1.0, 1e-12);
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		sm_spring_def sd;
+		double l0, ks;
+		sm_model_get_spring(m, k, &sd);
+		sm_model_spring_constants(m, k, &l0, &ks, NULL);
+		const int span = sd.b - sd.a;
+		ENSURE(span == 1 || span == 2);
+		ENSURE_NEAR(l0, 0.5 * span, 1e-12);
+		// Per-strain stiffness: ks = E / l0.
+		ENSURE_REL(ks, 1000.0 / (0.5 * span), 1e-12, 0.0);
+	}
+	// Per strain: the rope's end-to-end stiffness (springs in series) is E / L for any number of
+	// segments: N springs of E / (L / N) in series give E / L.
+	double series = 0.0;
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		sm_spring_def sd;
+		double ks;
+		sm_model_get_spring(m, k, &sd);
+		sm_model_spring_constants(m, k, NULL, &ks, NULL);
+		if (sd.b - sd.a == 1)
+			series += 1.0 / ks;
+	}
+	ENSURE_REL(1.0 / series, 1000.0 / 5.0, 1e-12, 0.0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Lowest eigenvalues of -df/dx over all particles of a free model: rigid-body modes are zero.
+static int count_zero_modes(const sm_model* m, int* zero, double* lowest_nonzero)
+{
+	const int32_t n = sm_model_particle_count(m);
+	const size_t dim = 3 * (size_t)n;
+	double* x = malloc(dim * sizeof(double));
+	double* K = malloc(dim * dim * sizeof(double));
+	ENSURE(x && K);
+	sm_model_initial_state(m, x, NULL);
+	sm_model_jacobian_dense(m, x, NULL, SM_JACOBIAN_EXACT, K, NULL);
+	gsl_matrix* A = gsl_matrix_alloc(dim, dim);
+	for (size_t r = 0; r < dim; r++)
+		for (size_t c = 0; c < dim; c++)
+			gsl_matrix_set(A, r, c, -K[r * dim + c]);
+	gsl_vector* eval = gsl_vector_alloc(dim);
+	gsl_eigen_symm_workspace* w = gsl_eigen_symm_alloc(dim);
+	gsl_eigen_symm(A, eval, w);
+	double largest = 0.0;
+	for (size_t k = 0; k < dim; k++)
+		largest = fmax(largest, fabs(gsl_vector_get(eval, k)));
+	*zero = 0;
+	*lowest_nonzero = INFINITY;
+	for (size_t k = 0; k < dim; k++) {
+		const double e = gsl_vector_get(eval, k);
+		// At rest every spring is at its rest length, so K is positive semi-definite; zeros
+		// are zero to rounding of the largest eigenvalue.
+		if (fabs(e) < 1e-9 * largest)
+			(*zero)++;
+		else
+			*lowest_nonzero = fmin(*lowest_nonzero, e);
+	}
+	gsl_eigen_symm_free(w);
+	gsl_vector_free(eval);
+	gsl_matrix_free(A);
+	free(K);
+	free(x);
+	return 0;
+}
+
+static int test_block_counts_and_shear_resistance(void)
+{
+	sm_model* m = new_model();
+	sm_block_def def = sm_default_block_def();
+	def.nu = def.nv = def.nw = 3;
+	def.size[0] = def.size[1] = def.size[2] = 0.5;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_block(m, &def, &s), SM_OK);
+	// 27 particles; edges 3 * (2 * 3 * 3) = 54; face diagonals 2 * 3 * (2 * 2 * 3) = 72; body
+	// diagonals 4 * 2 * 2 * 2 = 32.
+	ENSURE(s.particle_count == 27 && s.spring_count == 54 + 72 + 32);
+	int edge = 0, face = 0, body = 0;
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		double l0;
+		sm_model_spring_constants(m, k, &l0, NULL, NULL);
+		edge += fabs(l0 - 0.25) < 1e-12;
+		face += fabs(l0 - 0.25 * sqrt(2.0)) < 1e-12;
+		body += fabs(l0 - 0.25 * sqrt(3.0)) < 1e-12;
+	}
+	ENSURE(edge == 54 && face == 72 && body == 32);
+	ENSURE(sm_structure_particle(&s, 1, 2, 2) == (2 * 3 + 1) * 3 + 2);
+	// A free block resists every deformation: exactly six zero-stiffness modes (three
+	// translations, three rotations), every other mode stiff.
+	int zero;
+	double lowest;
+	ENSURE(count_zero_modes(m, &zero, &lowest) == 0);
+	ENSURE(zero == 6);
+	ENSURE(lowest > 0.0);
+	sm_model_destroy(m);
+
+	// Without diagonals a cubic lattice shears freely: many more zero modes.
+	m = new_model();
+	def.face_diagonal = sm_default_spring_material();
+	def.body_diagonal = sm_default_spring_material();
+	ENSURE_STATUS(sm_add_block(m, &def, &s), SM_OK);
+	ENSURE(s.spring_count == 54);
+	ENSURE(count_zero_modes(m, &zero, &lowest) == 0);
+	ENSURE(zero > 6);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A fan of triangles around a centre (a disc): N spokes and N rim edges, each once; the N
+// spokes are interior, each with one bending spring between its two rim neighbours.
+static int test_mesh_disc(void)
+{
+	enum { N = 12 };
+	double vertices[3 * (N + 1)] = {0, 0, 0};
+	int32_t triangles[3 * N];
+	for (int k = 0; k < N; k++) {
+		vertices[3 * (k + 1) + 0] = cos(2 * PI * k / N);
+		vertices[3 * (k + 1) + 1] = sin(2 * PI * k / N);
+		vertices[3 * (k + 1) + 2] = 0.0;
+		triangles[3 * k + 0] = 0;
+		triangles[3 * k + 1] = 1 + k;
+		triangles[3 * k + 2] = 1 + (k + 1) % N;
+	}
+	sm_model* m = new_model();
+	sm_mesh_def def = sm_default_mesh_def();
+	def.vertices = vertices;
+	def.vertex_count = N + 1;
+	def.triangles = triangles;
+	def.triangle_count = N;
+	def.density = 2.0;
+	def.bend = def.edge;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_mesh(m, &def, &s), SM_OK);
+	ENSURE(s.particle_count == N + 1);
+	ENSURE(s.spring_count == 2 * N + N);
+	// Lumped masses: the total is density x area of the polygon, N/2 sin(2 pi/N); the centre
+	// has a third of every triangle.
+	const double area = 0.5 * N * sin(2 * PI / N);
+	ENSURE_NEAR(sm_model_total_mass(m), 2.0 * area, 1e-12);
+	sm_particle_def centre;
+	sm_model_get_particle(m, 0, &centre);
+	ENSURE_NEAR(centre.mass, 2.0 * area / 3.0, 1e-12);
+	// Every edge once: no two springs join the same pair.
+	for (int32_t a = 0; a < s.spring_count; a++)
+		for (int32_t b = a + 1; b < s.spring_count; b++) {
+			sm_spring_def sa, sb;
+			sm_model_get_spring(m, a, &sa);
+			sm_model_get_spring(m, b, &sb);
+			ENSURE(!((sa.a == sb.a && sa.b == sb.b) || (sa.a == sb.b && sa.b == sb.a)));
+		}
+	// Bending springs (the last N) join rim vertices k and k + 2 across spoke k + 1.
+	for (int32_t k = 2 * N; k < 3 * N; k++) {
+		sm_spring_def sd;
+		sm_model_get_spring(m, k, &sd);
+		ENSURE(sd.a != 0 && sd.b != 0);
+		ENSURE_NEAR(distance(m, sd.a, sd.b), 2.0 * sin(2 * PI / N), 1e-12);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Every mesh error leaves the model as it was and names the triangle or vertex.
+static int test_mesh_errors(void)
+{
+	const double v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 2, 2, 0};
+	struct {
+		int32_t triangles[9];
+		int32_t count;
+		int32_t vertex_count;
+		sm_status status;
+		const char* message;
+	} cases[] = {
+	    {{0, 1, 7}, 1, 4, SM_ERROR_PARTICLE_INDEX, "mesh: triangle 0 vertex 2 = 7 is out of range (mesh has 4 vertices)"},
+	    {{0, 1, 1}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (0, 1, 1) repeats a vertex"},
+	    {{0, 1, 2, 2, 1, 0}, 2, 3, SM_ERROR_INVALID_ARGUMENT,
+	     "mesh: triangle 1 repeats the vertices of an earlier triangle (2, 1, 0)"},
+	    {{0, 1, 2, 0, 1, 3, 1, 0, 4}, 3, 5, SM_ERROR_INVALID_ARGUMENT,
+	     "mesh: edge (1, 0) of triangle 2 is shared by more than two triangles"},
+	    {{0, 3, 4}, 1, 5, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle 0 (0, 3, 4) has zero area"},
+	    {{0, 1, 2}, 1, 4, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex 3 belongs to no triangle"},
+	};
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		sm_mesh_def def = sm_default_mesh_def();
+		def.vertices = v;
+		def.vertex_count = cases[c].vertex_count;
+		def.triangles = cases[c].triangles;
+		def.triangle_count = cases[c].count;
+		ENSURE_STATUS(sm_add_mesh(m, &def, NULL), cases[c].status);
+		if (strncmp(sm_model_last_error(m), cases[c].message, strlen(cases[c].message)) != 0) {
+			printf("  case %zu: message \"%s\", expected \"%s\"\n", c, sm_model_last_error(m), cases[c].message);
+			return 1;
+		}
+		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A builder that fails half-way (particles added, then a spring rejected) leaves nothing.
+static int test_failed_builder_leaves_model_unchanged(void)
+{
+	sm_model* m = new_model();
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 3;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_OK);
+	sm_model_set_particle_motion(m, 0, SM_PARTICLE_FIXED);
+	const int32_t np = sm_model_particle_count(m), ns = sm_model_spring_count(m), nf = sm_model_free_count(m);
+	// A rope whose ends coincide: particles are valid, but its per-strain springs have zero
+	// rest length.
+	sm_rope_def rope = sm_default_rope_def();
+	rope.end[0] = 0.0;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE(strstr(sm_model_last_error(m), "rope: structural spring between particles 9 and 10") != NULL);
+	ENSURE(sm_model_particle_count(m) == np && sm_model_spring_count(m) == ns && sm_model_free_count(m) == nf);
+	// Invalid definitions are refused before anything is added.
+	sheet.nu = 1;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: nu = 1 and nv = 3 must both be >= 2") == 0);
+	sheet.nu = 3;
+	sheet.mass = -1.0;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	sheet.mass = 1.0;
+	sheet.shear.stiffness = NAN;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: shear stiffness = nan must be finite and >= 0") == 0);
+	sm_block_def block = sm_default_block_def();
+	block.nu = block.nv = block.nw = 1 << 12;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(sm_model_particle_count(m) == np && sm_model_spring_count(m) == ns);
+	sm_model_destroy(m);
+	return 0;
+}
+
+static int test_selection(void)
+{
+	sm_model* m = new_model();
+	sm_sheet_def def = sm_default_sheet_def();
+	def.nu = def.nv = 5;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
+	// The top row (y = 1) by a box.
+	const double lo[3] = {-1, 0.99, -1}, hi[3] = {2, 1.01, 1};
+	int32_t count = 0;
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 5 && sm_model_free_count(m) == 20);
+	for (int32_t j = 0; j < 5; j++)
+		ENSURE(sm_model_free_index(m, sm_structure_particle(&s, 4, j, 0)) == -1);
+	// By grid coordinate, and outside the grid.
+	ENSURE_STATUS(sm_set_motion_at(m, &s, 0, 0, 0, SM_PARTICLE_DRIVEN), SM_OK);
+	sm_particle_def p;
+	sm_model_get_particle(m, 0, &p);
+	ENSURE(p.motion == SM_PARTICLE_DRIVEN);
+	ENSURE_STATUS(sm_set_motion_at(m, &s, 5, 0, 0, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(sm_structure_particle(&s, 0, 0, 1) == -1);
+	// By index list: one bad index and nothing changes.
+	const int32_t list[] = {1, 2, 99};
+	ENSURE_STATUS(sm_set_motion_of(m, list, 3, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(sm_model_free_count(m) == 19);
+	ENSURE_STATUS(sm_set_motion_of(m, list, 2, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE(sm_model_free_count(m) == 17);
+	sm_model_destroy(m);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_sheet_matches_benchmark_cloth);
+	RUN_TEST(test_sheet_counts_and_rest_lengths);
+	RUN_TEST(test_rope);
+	RUN_TEST(test_block_counts_and_shear_resistance);
+	RUN_TEST(test_mesh_disc);
+	RUN_TEST(test_mesh_errors);
+	RUN_TEST(test_failed_builder_leaves_model_unchanged);
+	RUN_TEST(test_selection);
+	return TEST_SUMMARY();
+}
