@@ -135,7 +135,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	}
 
 	// A = M^(-1/2) K M^(-1/2), symmetrised against round-off in the assembly.
-	analysis_dense_stiffness(model, free_index, x0, dof, K);
+	analysis_dense_stiffness(model, free_index, x0, dof, SM_JACOBIAN_EXACT, K);
 	for (size_t i = 0; i < dof; i++)
 		for (size_t j = 0; j <= i; j++) {
 			const double a = 0.5 * (K[i * dof + j] + K[j * dof + i]) / sqrt(dof_mass[i] * dof_mass[j]);

@@ -90,7 +90,7 @@ int analysis_all_finite(const double* values, size_t count)
 //   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
 // (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
 void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
-                              double* K)
+                              sm_jacobian_variant variant, double* K)
 {
 	memset(K, 0, dof * dof * sizeof(double));
 	const int32_t ns = sm_model_spring_count(model);
@@ -103,7 +103,7 @@ void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, 
 		if (fa < 0 && fb < 0)
 			continue;
 		double block[9];
-		sm_model_spring_jacobian(model, s, x, NULL, SM_JACOBIAN_EXACT, block, NULL);
+		sm_model_spring_jacobian(model, s, x, NULL, variant, block, NULL);
 		for (int i = 0; i < 3; i++)
 			for (int j = 0; j < 3; j++) {
 				const double k = block[3 * i + j];
@@ -352,10 +352,11 @@ done:
 // (dense) or failed (sparse: no step), -1 on an internal failure.
 // ---------------------------------------------------------------------------------------------
 
-static int dense_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
+                      double* step)
 {
 	const size_t dof = w->dof;
-	analysis_dense_stiffness(w->model, w->free_index, x, dof, w->matrix);
+	analysis_dense_stiffness(w->model, w->free_index, x, dof, variant, w->matrix);
 	for (size_t i = 0; i < dof; i++)
 		w->matrix[i * dof + i] += mu * w->dof_mass[i];
 	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, dof, dof);
@@ -430,9 +431,10 @@ static cholmod_sparse sparse_view(statics_work* w)
 	return A;
 }
 
-static int sparse_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
+                       double* step)
 {
-	if (sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, SM_JACOBIAN_EXACT, w->values, NULL) != SM_OK)
+	if (sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, variant, w->values, NULL) != SM_OK)
 		return -1;
 	const int64_t nnz = sm_sparse_jacobian_nonzeros(w->jacobian);
 	for (int64_t k = 0; k < nnz; k++)
@@ -469,13 +471,14 @@ static int sparse_step(statics_work* w, const double* x, double mu, const double
 }
 #endif
 
-static int factor_and_step(statics_work* w, const double* x, double mu, const double* rhs, double* step)
+static int factor_and_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant,
+                           const double* rhs, double* step)
 {
 #ifdef SPRINGMASS_HAVE_CHOLMOD
 	if (w->jacobian != NULL)
-		return sparse_step(w, x, mu, rhs, step);
+		return sparse_step(w, x, mu, variant, rhs, step);
 #endif
-	return dense_step(w, x, mu, rhs, step);
+	return dense_step(w, x, mu, variant, rhs, step);
 }
 
 // Newton's method from w->x on w->model (whose spring stiffnesses are in w->stiffness), for at
@@ -524,7 +527,13 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 		res->iterations++;
 		for (int32_t i = 0; i < w->nf; i++)
 			memcpy(w->rhs + 3 * (size_t)i, w->f + 3 * (size_t)w->free_particle[i], 3 * sizeof(double));
-		const int factored = factor_and_step(w, w->x, mu, w->rhs, w->step);
+		int factored = factor_and_step(w, w->x, mu, SM_JACOBIAN_EXACT, w->rhs, w->step);
+		if (factored == 0) {
+			// Indefinite (compressed springs, a shape far from the rest shape): the
+			// definiteness-preserving stiffness, with compressive geometric terms dropped, is
+			// positive semi-definite, and with the shift a descent direction of U.
+			factored = factor_and_step(w, w->x, fmax(mu, 1e-9 * mu_ref), SM_JACOBIAN_DEFINITE, w->rhs, w->step);
+		}
 		if (factored < 0) {
 			*st = sm_error_set(err, SM_ERROR_SOLVER, "statics: the linear solver failed at iteration %d",
 			                   (int)res->iterations);
@@ -639,6 +648,7 @@ static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* 
 	}
 	double scale = spring > 0.0 ? fmin(0.1, fmax(1e-12, load / spring)) : 1.0;
 	double good = 0.0, growth = 10.0;
+	int softenings = 0;
 	memcpy(saved, w->x, n3 * sizeof(double));
 	for (;;) {
 		const int final_stage = scale >= 1.0;
@@ -666,10 +676,16 @@ static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* 
 			good = scale;
 			memcpy(saved, w->x, n3 * sizeof(double));
 			scale = fmin(1.0, scale * growth);
+		} else if (good == 0.0) {
+			// Even the softest stage failed: soften further, at most three times.
+			memcpy(w->x, saved, n3 * sizeof(double));
+			if (++softenings > 3)
+				break;
+			scale *= 0.01;
 		} else {
 			memcpy(w->x, saved, n3 * sizeof(double));
 			growth = sqrt(growth);
-			if (good == 0.0 || growth < 1.01)
+			if (growth < 1.01)
 				break;
 			scale = fmin(1.0, good * growth);
 		}
@@ -840,7 +856,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 				res.reaction_total[c] -= w.f[3 * (size_t)p + c];
 	res.potential_energy = potential_energy(&w, w.x);
 	if (converged) {
-		res.stable = w.nf == 0 ? true : factor_and_step(&w, w.x, 0.0, NULL, NULL) == 1;
+		res.stable = w.nf == 0 ? true : factor_and_step(&w, w.x, 0.0, SM_JACOBIAN_EXACT, NULL, NULL) == 1;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)

@@ -1,11 +1,311 @@
-// springmass modes: placeholder until the subcommand lands.
+// springmass modes: natural frequencies, damping ratios and mode shapes of a model file.
 #include "commands.h"
 
+#include "springmass/analysis.h"
+#include "springmass/model_file.h"
+
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static void usage(FILE* out)
+{
+	fprintf(out,
+	        "usage: springmass modes MODEL [options]\n"
+	        "\n"
+	        "Linearises the model about its initial configuration (or its static equilibrium) with\n"
+	        "fixed and driven particles held, and solves K phi = omega^2 M phi: natural frequencies,\n"
+	        "modal damping ratios (from the damping matrix; exact when the damping is proportional,\n"
+	        "which is reported) and mass-normalised mode shapes. Rigid-body modes have frequency 0.\n"
+	        "Also prints the largest communication step suggested for co-simulation (a fraction of\n"
+	        "the period of the highest mode listed) and the stability limit 2/omega_max of explicit\n"
+	        "integrators. Dense eigensolver: practical up to a few thousand degrees of freedom.\n"
+	        "\n"
+	        "options:\n"
+	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all)\n"
+	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics)\n"
+	        "  --steps-per-period K   communication steps per period of the highest mode listed\n"
+	        "                         (default 10)\n"
+	        "  -o, --output FILE      write the listed mode shapes as CSV: particle, name, then x, y, z\n"
+	        "                         of every mode [1/sqrt(kg), mass-normalised]\n"
+	        "  --vtk DIR              write DIR/mode_<k>.vtk per listed mode (ParaView: the shape as\n"
+	        "                         the vector field 'shape'; animate with Warp By Vector)\n"
+	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
+	        "  -h, --help             this text\n");
+}
+
+static int make_directory(const char* dir)
+{
+	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
+		return 0;
+	fprintf(stderr, "springmass modes: cannot create directory %s: %s\n", dir, strerror(errno));
+	return -1;
+}
+
+// Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
+// mode shape as a vector field.
+static int write_mode_vtk(const char* path, const sm_model* model, const double* x, const double* shape,
+                          int index, double frequency)
+{
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		fprintf(stderr, "springmass modes: cannot write %s: %s\n", path, strerror(errno));
+		return -1;
+	}
+	const int32_t n = sm_model_particle_count(model), ns = sm_model_spring_count(model);
+	fprintf(f, "# vtk DataFile Version 3.0\nspringmass mode %d, %.9g Hz\nASCII\nDATASET POLYDATA\nPOINTS %d double\n",
+	        index, frequency, (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.17g %.17g %.17g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	fprintf(f, "LINES %d %d\n", (int)ns, 3 * (int)ns);
+	for (int32_t s = 0; s < ns; s++) {
+		sm_spring_def sd;
+		sm_model_get_spring(model, s, &sd);
+		fprintf(f, "2 %d %d\n", (int)sd.a, (int)sd.b);
+	}
+	fprintf(f, "POINT_DATA %d\nVECTORS shape double\n", (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.17g %.17g %.17g\n", shape[3 * i], shape[3 * i + 1], shape[3 * i + 2]);
+	const int failed = ferror(f);
+	if (fclose(f) != 0 || failed) {
+		fprintf(stderr, "springmass modes: error writing %s\n", path);
+		return -1;
+	}
+	return 0;
+}
+
+static int write_csv(const char* path, const sm_document* doc, const sm_modes* modes)
+{
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		fprintf(stderr, "springmass modes: cannot write %s: %s\n", path, strerror(errno));
+		return -1;
+	}
+	fprintf(f, "particle,name");
+	for (int32_t m = 0; m < modes->count; m++)
+		fprintf(f, ",mode%d_x,mode%d_y,mode%d_z", (int)m + 1, (int)m + 1, (int)m + 1);
+	fprintf(f, "\n");
+	const size_t n3 = 3 * (size_t)modes->particle_count;
+	for (int32_t i = 0; i < modes->particle_count; i++) {
+		const char* name = sm_document_particle_name(doc, i);
+		fprintf(f, "%d,%s", (int)i, name != NULL ? name : "");
+		for (int32_t m = 0; m < modes->count; m++)
+			for (int c = 0; c < 3; c++)
+				fprintf(f, ",%.17g", modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
+		fprintf(f, "\n");
+	}
+	const int failed = ferror(f);
+	if (fclose(f) != 0 || failed) {
+		fprintf(stderr, "springmass modes: error writing %s\n", path);
+		return -1;
+	}
+	return 0;
+}
+
+static int apply_setting(sm_document* doc, const char* setting)
+{
+	const char* eq = strchr(setting, '=');
+	if (eq == NULL || eq == setting) {
+		fprintf(stderr, "springmass modes: --set expects NAME=VALUE, got '%s'\n", setting);
+		return -1;
+	}
+	char name[256];
+	const size_t len = (size_t)(eq - setting);
+	if (len >= sizeof name) {
+		fprintf(stderr, "springmass modes: parameter name too long in '%s'\n", setting);
+		return -1;
+	}
+	memcpy(name, setting, len);
+	name[len] = '\0';
+	char* end = NULL;
+	const double value = strtod(eq + 1, &end);
+	if (end == eq + 1 || *end != '\0') {
+		fprintf(stderr, "springmass modes: '%s' is not a number in --set %s\n", eq + 1, setting);
+		return -1;
+	}
+	const int32_t index = sm_document_parameter_index(doc, name);
+	if (index < 0) {
+		fprintf(stderr, "springmass modes: the model has no parameter named '%s'\n", name);
+		return -1;
+	}
+	sm_error err;
+	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
+		fprintf(stderr, "springmass modes: %s\n", err.message);
+		return -1;
+	}
+	return 0;
+}
 
 int sm_cmd_modes(int argc, char** argv)
 {
-	(void)argc;
-	fprintf(stderr, "springmass %s: not available in this build\n", argv[0]);
-	return 2;
+	const char* model_path = NULL;
+	const char* csv_path = NULL;
+	const char* vtk_dir = NULL;
+	const char** settings = calloc((size_t)argc + 1, sizeof *settings);
+	int setting_count = 0;
+	int at_equilibrium = 0;
+	long count = 10;
+	double steps_per_period = 10.0;
+	if (settings == NULL)
+		return 1;
+	for (int i = 1; i < argc; i++) {
+		const char* a = argv[i];
+		const int has_value = i + 1 < argc;
+		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+			usage(stdout);
+			free(settings);
+			return 0;
+		} else if ((strcmp(a, "-n") == 0 || strcmp(a, "--count") == 0) && has_value) {
+			char* end = NULL;
+			count = strtol(argv[++i], &end, 10);
+			if (*end != '\0' || count < 0 || count > 100000000) {
+				fprintf(stderr, "springmass modes: -n needs a count >= 0\n");
+				free(settings);
+				return 2;
+			}
+		} else if (strcmp(a, "--at-equilibrium") == 0) {
+			at_equilibrium = 1;
+		} else if (strcmp(a, "--steps-per-period") == 0 && has_value) {
+			char* end = NULL;
+			steps_per_period = strtod(argv[++i], &end);
+			if (*end != '\0' || !(steps_per_period >= 1.0) || !isfinite(steps_per_period)) {
+				fprintf(stderr, "springmass modes: --steps-per-period needs a number >= 1\n");
+				free(settings);
+				return 2;
+			}
+		} else if ((strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) && has_value) {
+			csv_path = argv[++i];
+		} else if (strcmp(a, "--vtk") == 0 && has_value) {
+			vtk_dir = argv[++i];
+		} else if (strcmp(a, "--set") == 0 && has_value) {
+			settings[setting_count++] = argv[++i];
+		} else if (a[0] == '-' && a[1] != '\0') {
+			fprintf(stderr, "springmass modes: unknown option or missing value: %s\n\n", a);
+			usage(stderr);
+			free(settings);
+			return 2;
+		} else if (model_path == NULL) {
+			model_path = a;
+		} else {
+			fprintf(stderr, "springmass modes: more than one model file given ('%s')\n", a);
+			free(settings);
+			return 2;
+		}
+	}
+	if (model_path == NULL) {
+		usage(stderr);
+		free(settings);
+		return 2;
+	}
+
+	int status = 1;
+	sm_error err;
+	sm_model* model = NULL;
+	double* x = NULL;
+	sm_modes modes;
+	memset(&modes, 0, sizeof modes);
+	sm_document* doc = sm_document_load(model_path, &err);
+	if (doc == NULL) {
+		fprintf(stderr, "springmass modes: %s\n", err.message);
+		goto done;
+	}
+	for (int i = 0; i < setting_count; i++)
+		if (apply_setting(doc, settings[i]) != 0)
+			goto done;
+	if (sm_document_build(doc, &model, &err) != SM_OK) {
+		fprintf(stderr, "springmass modes: %s\n", err.message);
+		goto done;
+	}
+	const int32_t n = sm_model_particle_count(model);
+	x = malloc((3 * (size_t)n + 1) * sizeof(double));
+	if (x == NULL) {
+		fprintf(stderr, "springmass modes: out of memory\n");
+		goto done;
+	}
+	if (at_equilibrium) {
+		sm_statics_result res;
+		if (sm_statics_solve(model, NULL, x, NULL, &res, &err) != SM_OK) {
+			fprintf(stderr, "springmass modes: %s: %s\n", model_path, err.message);
+			goto done;
+		}
+		printf("linearised about the static equilibrium (%d iterations, residual %.3e N)\n", (int)res.iterations,
+		       res.residual);
+	} else {
+		sm_model_initial_state(model, x, NULL);
+		printf("linearised about the initial configuration\n");
+	}
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	def.mode_count = (int32_t)count;
+	if (sm_modes_compute(model, &def, &modes, &err) != SM_OK) {
+		fprintf(stderr, "springmass modes: %s: %s\n", model_path, err.message);
+		goto done;
+	}
+	printf("model             %s (%d particles, %d degrees of freedom)\n", sm_document_name(doc), (int)n,
+	       (int)modes.dof);
+	if (modes.dof == 0) {
+		printf("no free particle: nothing vibrates\n");
+		status = 0;
+		goto done;
+	}
+	printf("rigid-body modes  %d\n", (int)modes.zero_count);
+	if (modes.unstable_count > 0)
+		printf("unstable modes    %d (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
+		       (int)modes.unstable_count, at_equilibrium ? "" : "; try --at-equilibrium");
+	printf("damping           %s (largest normalised coupling %.3g among the modes listed)\n",
+	       modes.proportional ? "proportional: the modal damping ratios are exact"
+	                          : "not proportional: the damping ratios are the diagonal approximation",
+	       modes.damping_coupling);
+	printf("\n%6s %16s %16s %16s %14s\n", "mode", "frequency [Hz]", "period [s]", "omega^2 [1/s^2]", "damping ratio");
+	double highest = 0.0;
+	for (int32_t m = 0; m < modes.count; m++) {
+		const double fr = modes.frequency[m];
+		highest = fmax(highest, fr);
+		char period[32];
+		if (fr > 0.0)
+			snprintf(period, sizeof period, "%.9g", 1.0 / fr);
+		else
+			snprintf(period, sizeof period, "%s", modes.omega_squared[m] < 0.0 ? "unstable" : "rigid");
+		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes.omega_squared[m],
+		       modes.damping_ratio[m]);
+	}
+	printf("\nhighest frequency        %.9g Hz (omega_max = %.9g rad/s, of all %d modes)\n",
+	       modes.omega_max / (2.0 * 3.14159265358979323846), modes.omega_max, (int)modes.dof);
+	if (modes.omega_max > 0.0)
+		printf("explicit stability limit 2/omega_max = %.6g s (largest step of explicit Euler-type integrators)\n",
+		       2.0 / modes.omega_max);
+	if (highest > 0.0)
+		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
+		       1.0 / (highest * steps_per_period), steps_per_period, highest);
+	if (csv_path != NULL) {
+		if (write_csv(csv_path, doc, &modes) != 0)
+			goto done;
+		printf("mode shapes written to %s\n", csv_path);
+	}
+	if (vtk_dir != NULL) {
+		if (make_directory(vtk_dir) != 0)
+			goto done;
+		for (int32_t m = 0; m < modes.count; m++) {
+			char path[4096];
+			if ((size_t)snprintf(path, sizeof path, "%s/mode_%d.vtk", vtk_dir, (int)m + 1) >= sizeof path) {
+				fprintf(stderr, "springmass modes: path too long: %s\n", vtk_dir);
+				goto done;
+			}
+			if (write_mode_vtk(path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
+			                   modes.frequency[m]) != 0)
+				goto done;
+		}
+		printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
+	}
+	status = 0;
+done:
+	sm_modes_release(&modes);
+	free(x);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	free(settings);
+	return status;
 }

@@ -1,11 +1,334 @@
-// springmass statics: placeholder until the subcommand lands.
+// springmass statics: the static equilibrium of a model file.
 #include "commands.h"
 
+#include "springmass/analysis.h"
+#include "springmass/model_file.h"
+
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+static void usage(FILE* out)
+{
+	fprintf(out,
+	        "usage: springmass statics MODEL [options]\n"
+	        "\n"
+	        "Finds where the model comes to rest under gravity, its constant loads and its fixed\n"
+	        "and driven particles (held at their initial positions): Newton's method on the force\n"
+	        "balance with the exact stiffness and a line search on the potential energy.\n"
+	        "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
+	        "reaction force at every fixed or driven particle.\n"
+	        "\n"
+	        "options:\n"
+	        "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
+	        "                         displacement from the initial position [m], reaction [N]\n"
+	        "  --vtk DIR              write DIR/statics.vtk (ParaView: particles, springs as lines,\n"
+	        "                         displacement and reaction vectors)\n"
+	        "  --save-model FILE      save the model with the rest shape as its initial positions\n"
+	        "                         (a cloth that starts hanging at rest)\n"
+	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
+	        "  --tolerance F          largest force left on a free particle [N] (default 1e-9)\n"
+	        "  --max-iterations N     Newton iterations allowed (default 500)\n"
+	        "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
+	        "  -q, --quiet            print the summary only, not every reaction\n"
+	        "  -h, --help             this text\n");
+}
+
+static int make_directory(const char* dir)
+{
+	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
+		return 0;
+	fprintf(stderr, "springmass statics: cannot create directory %s: %s\n", dir, strerror(errno));
+	return -1;
+}
+
+// Legacy VTK polydata: particles as points, springs as lines, two vector fields.
+static int write_vtk(const char* path, const sm_model* model, const char* title, const double* x,
+                     const double* displacement, const double* reactions)
+{
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		fprintf(stderr, "springmass statics: cannot write %s: %s\n", path, strerror(errno));
+		return -1;
+	}
+	const int32_t n = sm_model_particle_count(model), ns = sm_model_spring_count(model);
+	fprintf(f, "# vtk DataFile Version 3.0\n%s\nASCII\nDATASET POLYDATA\nPOINTS %d double\n", title, (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.17g %.17g %.17g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	fprintf(f, "LINES %d %d\n", (int)ns, 3 * (int)ns);
+	for (int32_t s = 0; s < ns; s++) {
+		sm_spring_def sd;
+		sm_model_get_spring(model, s, &sd);
+		fprintf(f, "2 %d %d\n", (int)sd.a, (int)sd.b);
+	}
+	fprintf(f, "POINT_DATA %d\nVECTORS displacement double\n", (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.17g %.17g %.17g\n", displacement[3 * i], displacement[3 * i + 1], displacement[3 * i + 2]);
+	fprintf(f, "VECTORS reaction double\n");
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.17g %.17g %.17g\n", reactions[3 * i], reactions[3 * i + 1], reactions[3 * i + 2]);
+	const int failed = ferror(f);
+	if (fclose(f) != 0 || failed) {
+		fprintf(stderr, "springmass statics: error writing %s\n", path);
+		return -1;
+	}
+	return 0;
+}
+
+static int write_csv(const char* path, const sm_document* doc, int32_t n, const double* x, const double* x0,
+                     const double* reactions)
+{
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		fprintf(stderr, "springmass statics: cannot write %s: %s\n", path, strerror(errno));
+		return -1;
+	}
+	fprintf(f, "particle,name,x,y,z,dx,dy,dz,reaction_x,reaction_y,reaction_z\n");
+	for (int32_t i = 0; i < n; i++) {
+		const char* name = sm_document_particle_name(doc, i);
+		fprintf(f, "%d,%s", (int)i, name != NULL ? name : "");
+		for (int c = 0; c < 3; c++)
+			fprintf(f, ",%.17g", x[3 * i + c]);
+		for (int c = 0; c < 3; c++)
+			fprintf(f, ",%.17g", x[3 * i + c] - x0[3 * i + c]);
+		for (int c = 0; c < 3; c++)
+			fprintf(f, ",%.17g", reactions[3 * i + c]);
+		fprintf(f, "\n");
+	}
+	const int failed = ferror(f);
+	if (fclose(f) != 0 || failed) {
+		fprintf(stderr, "springmass statics: error writing %s\n", path);
+		return -1;
+	}
+	return 0;
+}
+
+// Applies "NAME=VALUE" to the document; 0 on success.
+static int apply_setting(sm_document* doc, const char* setting)
+{
+	const char* eq = strchr(setting, '=');
+	if (eq == NULL || eq == setting) {
+		fprintf(stderr, "springmass statics: --set expects NAME=VALUE, got '%s'\n", setting);
+		return -1;
+	}
+	char name[256];
+	const size_t len = (size_t)(eq - setting);
+	if (len >= sizeof name) {
+		fprintf(stderr, "springmass statics: parameter name too long in '%s'\n", setting);
+		return -1;
+	}
+	memcpy(name, setting, len);
+	name[len] = '\0';
+	char* end = NULL;
+	const double value = strtod(eq + 1, &end);
+	if (end == eq + 1 || *end != '\0') {
+		fprintf(stderr, "springmass statics: '%s' is not a number in --set %s\n", eq + 1, setting);
+		return -1;
+	}
+	const int32_t index = sm_document_parameter_index(doc, name);
+	if (index < 0) {
+		fprintf(stderr, "springmass statics: the model has no parameter named '%s'\n", name);
+		return -1;
+	}
+	sm_error err;
+	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
+		fprintf(stderr, "springmass statics: %s\n", err.message);
+		return -1;
+	}
+	return 0;
+}
 
 int sm_cmd_statics(int argc, char** argv)
 {
-	(void)argc;
-	fprintf(stderr, "springmass %s: not available in this build\n", argv[0]);
-	return 2;
+	const char* model_path = NULL;
+	const char* csv_path = NULL;
+	const char* vtk_dir = NULL;
+	const char* save_path = NULL;
+	const char** settings = calloc((size_t)argc + 1, sizeof *settings);
+	int setting_count = 0;
+	int quiet = 0;
+	sm_statics_def def = sm_default_statics_def();
+	if (settings == NULL)
+		return 1;
+	for (int i = 1; i < argc; i++) {
+		const char* a = argv[i];
+		const int has_value = i + 1 < argc;
+		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+			usage(stdout);
+			free(settings);
+			return 0;
+		} else if ((strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0) && has_value) {
+			csv_path = argv[++i];
+		} else if (strcmp(a, "--vtk") == 0 && has_value) {
+			vtk_dir = argv[++i];
+		} else if (strcmp(a, "--save-model") == 0 && has_value) {
+			save_path = argv[++i];
+		} else if (strcmp(a, "--set") == 0 && has_value) {
+			settings[setting_count++] = argv[++i];
+		} else if (strcmp(a, "--tolerance") == 0 && has_value) {
+			char* end = NULL;
+			def.residual_tolerance = strtod(argv[++i], &end);
+			if (*end != '\0' || !(def.residual_tolerance > 0.0)) {
+				fprintf(stderr, "springmass statics: --tolerance needs a positive number of newtons\n");
+				free(settings);
+				return 2;
+			}
+		} else if (strcmp(a, "--max-iterations") == 0 && has_value) {
+			char* end = NULL;
+			const long v = strtol(argv[++i], &end, 10);
+			if (*end != '\0' || v < 1 || v > 1000000) {
+				fprintf(stderr, "springmass statics: --max-iterations needs a count from 1 to 1000000\n");
+				free(settings);
+				return 2;
+			}
+			def.max_iterations = (int32_t)v;
+		} else if (strcmp(a, "--solver") == 0 && has_value) {
+			const char* s = argv[++i];
+			if (strcmp(s, "auto") == 0)
+				def.solver = SM_STATICS_AUTO;
+			else if (strcmp(s, "dense") == 0)
+				def.solver = SM_STATICS_DENSE;
+			else if (strcmp(s, "sparse") == 0)
+				def.solver = SM_STATICS_SPARSE;
+			else {
+				fprintf(stderr, "springmass statics: unknown solver '%s' (auto, dense, sparse)\n", s);
+				free(settings);
+				return 2;
+			}
+		} else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
+			quiet = 1;
+		} else if (a[0] == '-' && a[1] != '\0') {
+			fprintf(stderr, "springmass statics: unknown option or missing value: %s\n\n", a);
+			usage(stderr);
+			free(settings);
+			return 2;
+		} else if (model_path == NULL) {
+			model_path = a;
+		} else {
+			fprintf(stderr, "springmass statics: more than one model file given ('%s')\n", a);
+			free(settings);
+			return 2;
+		}
+	}
+	if (model_path == NULL) {
+		usage(stderr);
+		free(settings);
+		return 2;
+	}
+
+	int status = 1;
+	sm_error err;
+	sm_model* model = NULL;
+	double *x0 = NULL, *x = NULL, *reactions = NULL, *displacement = NULL;
+	sm_document* doc = sm_document_load(model_path, &err);
+	if (doc == NULL) {
+		fprintf(stderr, "springmass statics: %s\n", err.message);
+		goto done;
+	}
+	for (int i = 0; i < setting_count; i++)
+		if (apply_setting(doc, settings[i]) != 0)
+			goto done;
+	if (sm_document_build(doc, &model, &err) != SM_OK) {
+		fprintf(stderr, "springmass statics: %s\n", err.message);
+		goto done;
+	}
+	const int32_t n = sm_model_particle_count(model);
+	const size_t n3 = 3 * (size_t)n + 1;
+	x0 = malloc(n3 * sizeof(double));
+	x = malloc(n3 * sizeof(double));
+	reactions = malloc(n3 * sizeof(double));
+	displacement = malloc(n3 * sizeof(double));
+	if (x0 == NULL || x == NULL || reactions == NULL || displacement == NULL) {
+		fprintf(stderr, "springmass statics: out of memory\n");
+		goto done;
+	}
+	sm_model_initial_state(model, x0, NULL);
+	sm_statics_result res;
+	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
+	if (st != SM_OK) {
+		fprintf(stderr, "springmass statics: %s: %s\n", model_path, err.message);
+		goto done;
+	}
+	for (size_t k = 0; k + 1 < n3; k++)
+		displacement[k] = x[k] - x0[k];
+
+	const sm_model_def md = sm_model_get_def(model);
+	const double mass = sm_model_total_mass(model);
+	double largest = 0.0;
+	int32_t largest_at = -1;
+	for (int32_t i = 0; i < n; i++) {
+		const double* d = displacement + 3 * i;
+		const double m = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+		if (m > largest) {
+			largest = m;
+			largest_at = i;
+		}
+	}
+	printf("model            %s (%d particles, %d free, %d springs)\n", sm_document_name(doc), (int)n,
+	       (int)sm_model_free_count(model), (int)sm_model_spring_count(model));
+	printf("solver           %s, %d iterations\n", res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)"
+	                                                                                 : "dense modified Cholesky (GSL)",
+	       (int)res.iterations);
+	printf("residual         %.3e N (tolerance %.3e N)\n", res.residual, res.tolerance);
+	printf("stable           %s\n", res.stable ? "yes (a minimum of the potential energy)"
+	                                          : "no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)");
+	printf("potential energy %.9g J\n", res.potential_energy);
+	if (largest_at >= 0)
+		printf("largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
+	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1], mass * md.gravity[2]);
+	printf("reactions, sum   (%.9g, %.9g, %.9g) N\n", res.reaction_total[0], res.reaction_total[1],
+	       res.reaction_total[2]);
+	if (!quiet) {
+		int header = 0;
+		for (int32_t i = 0; i < n; i++) {
+			if (sm_model_free_index(model, i) >= 0)
+				continue;
+			if (!header) {
+				printf("\n%-10s %-20s %16s %16s %16s\n", "particle", "name", "reaction x [N]", "reaction y [N]",
+				       "reaction z [N]");
+				header = 1;
+			}
+			const char* name = sm_document_particle_name(doc, i);
+			printf("%-10d %-20s %16.9g %16.9g %16.9g\n", (int)i, name != NULL ? name : "", reactions[3 * i],
+			       reactions[3 * i + 1], reactions[3 * i + 2]);
+		}
+	}
+	if (csv_path != NULL) {
+		if (write_csv(csv_path, doc, n, x, x0, reactions) != 0)
+			goto done;
+		printf("\nrest shape written to %s\n", csv_path);
+	}
+	if (vtk_dir != NULL) {
+		char path[4096];
+		if (make_directory(vtk_dir) != 0)
+			goto done;
+		if ((size_t)snprintf(path, sizeof path, "%s/statics.vtk", vtk_dir) >= sizeof path) {
+			fprintf(stderr, "springmass statics: path too long: %s\n", vtk_dir);
+			goto done;
+		}
+		if (write_vtk(path, model, "springmass static equilibrium", x, displacement, reactions) != 0)
+			goto done;
+		printf("rest shape written to %s (open it in ParaView)\n", path);
+	}
+	if (save_path != NULL) {
+		if (sm_document_set_initial_state(doc, x, NULL, &err) != SM_OK ||
+		    sm_document_save(doc, save_path, &err) != SM_OK) {
+			fprintf(stderr, "springmass statics: %s\n", err.message);
+			goto done;
+		}
+		printf("model starting at rest saved to %s\n", save_path);
+	}
+	status = 0;
+done:
+	free(x0);
+	free(x);
+	free(reactions);
+	free(displacement);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	free(settings);
+	return status;
 }

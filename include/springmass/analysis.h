@@ -28,7 +28,7 @@ typedef enum sm_statics_solver {
 } sm_statics_solver;
 
 /// Degrees of freedom (3 per free particle) up to which SM_STATICS_AUTO solves densely.
-#define SM_STATICS_DENSE_LIMIT 600
+#define SM_STATICS_DENSE_LIMIT 300
 
 /// Factor of the round-off floor of the residual tolerance [1].
 #define SM_STATICS_ROUNDOFF_FACTOR 32.0
