@@ -1,11 +1,166 @@
-// springmass check: placeholder until the subcommand lands.
+// springmass check: validates a model file and prints a summary of what it builds.
 #include "commands.h"
 
+#include "springmass/model_file.h"
+
+#include <math.h>
 #include <stdio.h>
+#include <string.h>
+
+static void usage(FILE* out)
+{
+	fprintf(out,
+	        "usage: springmass check MODEL\n"
+	        "\n"
+	        "Validates the model file MODEL (JSON, see docs/model-format.md) and prints a summary:\n"
+	        "particles (free, fixed), springs by kind, total mass, ports, parameters, the stiffest\n"
+	        "spring and the highest natural frequency estimate, sqrt(k/m) over every spring with m the\n"
+	        "smaller mass of its free ends, with the explicit-stability step 2/omega it implies.\n"
+	        "\n"
+	        "Exit status: 0 if the file is valid, 1 if not (the error names the line and column or the\n"
+	        "element of the file and the rule it breaks), 2 on a usage error.\n");
+}
+
+static const char* port_kind(sm_port_kind kind)
+{
+	return kind == SM_PORT_FORCE ? "force" : kind == SM_PORT_MOTION ? "motion" : "probe";
+}
+
+static void print_particle(const sm_document* doc, int32_t particle)
+{
+	const char* name = sm_document_particle_name(doc, particle);
+	if (name != NULL)
+		printf("%s (particle %d)", name, (int)particle);
+	else
+		printf("particle %d", (int)particle);
+}
 
 int sm_cmd_check(int argc, char** argv)
 {
-	(void)argc;
-	fprintf(stderr, "springmass %s: not available in this build\n", argv[0]);
-	return 2;
+	const char* path = NULL;
+	for (int i = 1; i < argc; i++) {
+		if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+			usage(stdout);
+			return 0;
+		}
+		if (argv[i][0] == '-' && argv[i][1] != '\0') {
+			fprintf(stderr, "springmass check: unknown option '%s'\n\n", argv[i]);
+			usage(stderr);
+			return 2;
+		}
+		if (path != NULL) {
+			fprintf(stderr, "springmass check: one model file at a time ('%s' and '%s' given)\n\n", path, argv[i]);
+			usage(stderr);
+			return 2;
+		}
+		path = argv[i];
+	}
+	if (path == NULL) {
+		usage(stderr);
+		return 2;
+	}
+
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = sm_document_load(path, &err);
+	sm_model* model = NULL;
+	if (doc == NULL || sm_document_build(doc, &model, &err) != SM_OK) {
+		fprintf(stderr, "springmass check: %s\n", err.message);
+		sm_document_destroy(doc);
+		return 1;
+	}
+
+	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
+	int32_t fixed = 0, driven = 0;
+	for (int32_t i = 0; i < n; i++) {
+		sm_particle_def p;
+		sm_model_get_particle(model, i, &p);
+		fixed += p.motion == SM_PARTICLE_FIXED;
+		driven += p.motion == SM_PARTICLE_DRIVEN;
+	}
+	int32_t rest_length = 0, zero_length = 0, per_strain = 0, breakable = 0;
+	int32_t stiffest = -1, fastest = -1;
+	double max_stiffness = -1.0, max_omega = 0.0;
+	for (int32_t s = 0; s < m; s++) {
+		sm_spring_def def;
+		double ks;
+		sm_model_get_spring(model, s, &def);
+		sm_model_spring_constants(model, s, NULL, &ks, NULL);
+		if (def.kind == SM_SPRING_ZERO_LENGTH)
+			zero_length++;
+		else
+			rest_length++;
+		per_strain += def.stiffness_scaling == SM_PER_STRAIN;
+		breakable += isfinite(def.break_strain);
+		if (ks > max_stiffness) {
+			max_stiffness = ks;
+			stiffest = s;
+		}
+		// A spring's own frequency sqrt(ks / m) with m the lighter of its free ends (a fixed or
+		// driven end does not move); an upper estimate of how fast the model can vibrate.
+		sm_particle_def pa, pb;
+		sm_model_get_particle(model, def.a, &pa);
+		sm_model_get_particle(model, def.b, &pb);
+		double mass = INFINITY;
+		if (pa.motion == SM_PARTICLE_FREE)
+			mass = pa.mass;
+		if (pb.motion == SM_PARTICLE_FREE)
+			mass = fmin(mass, pb.mass);
+		if (isfinite(mass) && sqrt(ks / mass) > max_omega) {
+			max_omega = sqrt(ks / mass);
+			fastest = s;
+		}
+	}
+
+	printf("model        %s\n", sm_document_name(doc));
+	if (sm_document_description(doc)[0] != '\0')
+		printf("description  %s\n", sm_document_description(doc));
+	printf("particles    %d: %d free, %d fixed", (int)n, (int)(n - fixed - driven), (int)fixed);
+	if (driven > 0)
+		printf(", %d driven", (int)driven);
+	printf("\n");
+	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, %d breakable\n", (int)m,
+	       (int)rest_length, (int)zero_length, (int)per_strain, (int)breakable);
+	printf("total mass   %.6g kg\n", sm_model_total_mass(model));
+	const sm_model_def def = sm_model_get_def(model);
+	printf("gravity      (%g, %g, %g) m/s^2, mass damping %g 1/s\n", def.gravity[0], def.gravity[1], def.gravity[2],
+	       def.mass_damping);
+	const int32_t ports = sm_document_port_count(doc);
+	printf("ports        %d\n", (int)ports);
+	for (int32_t k = 0; k < ports; k++) {
+		const sm_port port = sm_document_port(doc, k);
+		printf("  %-12s %-6s at ", port.name, port_kind(port.kind));
+		print_particle(doc, port.particle);
+		printf("\n");
+	}
+	const int32_t parameters = sm_document_parameter_count(doc);
+	printf("parameters   %d\n", (int)parameters);
+	for (int32_t k = 0; k < parameters; k++)
+		printf("  %-12s = %g\n", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
+	if (stiffest >= 0) {
+		sm_spring_def s;
+		sm_model_get_spring(model, stiffest, &s);
+		printf("stiffest     spring %d, %.6g N/m, between ", (int)stiffest, max_stiffness);
+		print_particle(doc, s.a);
+		printf(" and ");
+		print_particle(doc, s.b);
+		printf("\n");
+	}
+	if (fastest >= 0) {
+		sm_spring_def s;
+		sm_model_get_spring(model, fastest, &s);
+		printf("fastest      sqrt(k/m) = %.6g rad/s (%.6g Hz) at spring %d, between ", max_omega,
+		       max_omega / (2.0 * 3.14159265358979323846), (int)fastest);
+		print_particle(doc, s.a);
+		printf(" and ");
+		print_particle(doc, s.b);
+		printf("\n");
+		printf("             explicit-stability step 2/omega = %.3g s\n", 2.0 / max_omega);
+	}
+	const sm_document_settings settings = sm_document_get_settings(doc);
+	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
+	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
+	printf("ok\n");
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return 0;
 }
