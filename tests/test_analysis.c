@@ -1,5 +1,6 @@
 // Analysis tests: static equilibrium and natural frequencies against closed forms.
 #include "springmass/analysis.h"
+#include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
 
@@ -650,6 +651,54 @@ static int test_invalid_arguments(void)
 	return 0;
 }
 
+// The equilibrium from statics is where a damped simulation comes to rest: a short rope of
+// five segments, held at one end and released horizontally, swings down and settles under mass
+// damping. After 60 s with alpha = 2 /s the slowest mode (about 1 rad/s, pendulum-like) has
+// decayed by exp(-alpha t / 2) = exp(-60) ~ 1e-26, so only the integrator's tolerance is left.
+static int test_statics_matches_a_long_damped_simulation(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 2.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.segments = 5;
+	rd.mass = 0.5;
+	rd.structural.stiffness = 200.0;
+	rd.structural.damping = 0.5;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED), SM_OK);
+	const int32_t np = sm_model_particle_count(model);
+	double x[18];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.stable);
+	sm_simulation_def sd = sm_default_simulation_def();
+	sd.relative_tolerance = 1e-9;
+	sd.absolute_tolerance_position = 1e-11;
+	sd.absolute_tolerance_velocity = 1e-10;
+	sm_error err;
+	sm_simulation* sim = sm_simulation_create(model, &sd, &err);
+	if (sim == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(sim != NULL);
+	const sm_status status = sm_simulation_advance(sim, 60.0);
+	if (status != SM_OK)
+		printf("  %s\n", sm_simulation_last_error(sim));
+	ENSURE_STATUS(status, SM_OK);
+	const double* y = sm_simulation_positions(sim);
+	double difference = 0.0;
+	for (int32_t i = 0; i < 3 * np; i++)
+		difference = fmax(difference, fabs(y[i] - x[i]));
+	printf("  largest distance between the simulated rest and statics: %.3e m\n", difference);
+	// Integration error at rtol 1e-9 on positions of order 1 m, plus the decayed remainder.
+	ENSURE(difference < 1e-6);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -665,5 +714,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_inverted_pendulum_is_unstable);
 	RUN_TEST(test_free_body_has_no_equilibrium);
 	RUN_TEST(test_invalid_arguments);
+	RUN_TEST(test_statics_matches_a_long_damped_simulation);
 	return TEST_SUMMARY();
 }
