@@ -38,6 +38,10 @@ typedef struct sm_simulation_def {
 	double absolute_tolerance_velocity;  ///< > 0 [m/s]; default 1e-6
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
+	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
+	/// changes an input (default false: CVODE keeps its history and its error control absorbs
+	/// the jump; see "Inputs between calls" below).
+	bool restart_on_input_change;
 } sm_simulation_def;
 
 /// Counters since creation or the last reset.

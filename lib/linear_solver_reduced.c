@@ -1,0 +1,448 @@
+// The reduced second-order linear solver: a custom SUNLinearSolver for CVODE's BDF Newton
+// systems of a spring-mass model.
+//
+// Derivation. With y = [x; v; e] and J = [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]]
+// (K = df/dx, D = df/dv over the free degrees of freedom, M the diagonal of masses), Newton's
+// system (I - gamma J) [dx; dv; de] = [bx; bv; be] reads
+//     dx - gamma dv = bx
+//     -gamma M^-1 K dx + dv - gamma M^-1 D dv = bv
+//     de = be.
+// Substituting dx = bx + gamma dv into the second row and multiplying by M:
+//     (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,    dx = bx + gamma dv.
+// With the definiteness-preserving Jacobian, K and D are symmetric negative semi-definite, so
+// A = M - gamma D - gamma^2 K is symmetric positive definite: half the unknowns of the full
+// system, and conjugate gradients or a Cholesky factorisation apply.
+//
+// Residuals. The residual of the full system's velocity rows is M^-1 (M bv + gamma K bx - A dv)
+// (the position rows hold exactly), so conjugate gradients stop when the error-weighted norm of
+// M^-1 r falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers
+// make.
+//
+// Preconditioned conjugate gradients: A is assembled in the sparse Jacobian's pattern with the
+// current gamma at every solve (one pass over the entries), and preconditioned by the inverses
+// of its 3x3 diagonal blocks (block Jacobi).
+// Cholesky (CHOLMOD): the symbolic factorisation is computed once, the numeric one at every
+// setup with that setup's gamma; a solve at another gamma scales the correction by
+// 2 / (1 + gamma / gamma_setup), as CVODE does for its own direct solvers.
+#define _POSIX_C_SOURCE 200809L
+
+#include "model_internal.h"
+#include "simulation_internal.h"
+
+#include <cvode/cvode.h>
+#include <cvode/cvode_ls.h>
+#include <suitesparse/cholmod.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+// Conjugate-gradient iterations allowed per solve, beyond which the solve counts as failed
+// (CVODE then reduces the step or refreshes the Jacobian).
+#define PCG_MAX_ITERATIONS 400
+
+typedef struct reduced {
+	sm_simulation* sim;
+	bool use_cholmod;
+	int64_t n;            // free degrees of freedom
+	int64_t nonzeros;
+	const int64_t* rows;  // pattern (owned by the simulation's sparse Jacobian)
+	const int64_t* cols;
+	int64_t* diagonal;    // per dof i: entry index of (i, 3 floor(i/3)), its diagonal block's first column
+	double gamma_setup;
+	N_Vector weights;     // error weights CVODE gives (not owned)
+	double* values;       // A in pattern order
+	double* block_inverse;  // 9 per free particle
+	double *r, *z, *p, *q, *rhs;
+	long last_flag;
+	int last_iterations;
+	SUNPSetupFn psetup;   // CVODE's preconditioner set-up hook: leads to reduced_pset
+	void* psetup_data;
+	// CHOLMOD
+	cholmod_common common;
+	bool common_started;
+	cholmod_sparse* matrix;
+	cholmod_factor* factor;
+	cholmod_dense *b, *x, *y_work, *e_work;
+} reduced;
+
+// The solver presents itself to CVODE as an iterative one whose "preconditioner set-up" is the
+// Jacobian evaluation and factorisation: CVODE then calls it with its own reuse heuristics
+// (every 20 steps, on large changes of gamma, after a convergence failure) and says through
+// `jok` whether the Jacobian may be reused. (A matrix-embedded solver is never set up by CVODE
+// 6: it would have to guess when to refresh.)
+static SUNLinearSolver_Type reduced_type(SUNLinearSolver ls)
+{
+	(void)ls;
+	return SUNLINEARSOLVER_ITERATIVE;
+}
+
+static int reduced_set_atimes(SUNLinearSolver ls, void* data, SUNATimesFn atimes)
+{
+	(void)ls, (void)data, (void)atimes;  // products are formed from the reduced matrix
+	return SUNLS_SUCCESS;
+}
+
+static int reduced_set_preconditioner(SUNLinearSolver ls, void* data, SUNPSetupFn setup, SUNPSolveFn solve)
+{
+	(void)solve;
+	reduced* r = ls->content;
+	r->psetup = setup;
+	r->psetup_data = data;
+	return SUNLS_SUCCESS;
+}
+
+static int reduced_num_iterations(SUNLinearSolver ls)
+{
+	return ((reduced*)ls->content)->last_iterations;
+}
+
+static SUNLinearSolver_ID reduced_id(SUNLinearSolver ls)
+{
+	(void)ls;
+	return SUNLINEARSOLVER_CUSTOM;
+}
+
+static int reduced_initialize(SUNLinearSolver ls)
+{
+	((reduced*)ls->content)->last_flag = SUNLS_SUCCESS;
+	return SUNLS_SUCCESS;
+}
+
+static int reduced_set_scaling(SUNLinearSolver ls, N_Vector s1, N_Vector s2)
+{
+	(void)s2;
+	((reduced*)ls->content)->weights = s1;
+	return SUNLS_SUCCESS;
+}
+
+static sunindextype reduced_last_flag(SUNLinearSolver ls)
+{
+	return ((reduced*)ls->content)->last_flag;
+}
+
+// values = M - gamma D - gamma^2 K in the pattern's order.
+static void assemble(reduced* r, double gamma)
+{
+	const double* K = r->sim->dfdx;
+	const double* D = r->sim->dfdv;
+	const double g2 = gamma * gamma;
+	for (int64_t e = 0; e < r->nonzeros; e++)
+		r->values[e] = -gamma * D[e] - g2 * K[e];
+	for (int64_t i = 0; i < r->n; i++)
+		r->values[r->diagonal[i] + (i % 3)] += r->sim->mass_dof[i];
+}
+
+// Inverts the 3x3 diagonal blocks of the assembled matrix (block Jacobi preconditioner).
+// Returns false if a block is not invertible.
+static bool invert_blocks(reduced* r)
+{
+	for (int64_t k = 0; k < r->n / 3; k++) {
+		double a[9];
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++)
+				a[3 * i + j] = r->values[r->diagonal[3 * k + i] + j];
+		double* inv = r->block_inverse + 9 * k;
+		inv[0] = a[4] * a[8] - a[5] * a[7];
+		inv[1] = a[2] * a[7] - a[1] * a[8];
+		inv[2] = a[1] * a[5] - a[2] * a[4];
+		inv[3] = a[5] * a[6] - a[3] * a[8];
+		inv[4] = a[0] * a[8] - a[2] * a[6];
+		inv[5] = a[2] * a[3] - a[0] * a[5];
+		inv[6] = a[3] * a[7] - a[4] * a[6];
+		inv[7] = a[1] * a[6] - a[0] * a[7];
+		inv[8] = a[0] * a[4] - a[1] * a[3];
+		const double det = a[0] * inv[0] + a[1] * inv[3] + a[2] * inv[6];
+		if (!(fabs(det) > 0.0) || !isfinite(det))
+			return false;
+		for (int i = 0; i < 9; i++)
+			inv[i] /= det;
+	}
+	return true;
+}
+
+static void multiply(const reduced* r, const double* values, const double* in, double* out)
+{
+	for (int64_t i = 0; i < r->n; i++) {
+		double s = 0.0;
+		for (int64_t e = r->rows[i]; e < r->rows[i + 1]; e++)
+			s += values[e] * in[r->cols[e]];
+		out[i] = s;
+	}
+}
+
+static void precondition(const reduced* r, const double* in, double* out)
+{
+	for (int64_t k = 0; k < r->n / 3; k++) {
+		const double* m = r->block_inverse + 9 * k;
+		const double* a = in + 3 * k;
+		double* o = out + 3 * k;
+		o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
+		o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
+		o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
+	}
+}
+
+static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
+{
+	(void)unused;
+	reduced* r = ls->content;
+	if (r->psetup == NULL)
+		return r->last_flag = SUNLS_SUCCESS;
+	int flag = r->psetup(r->psetup_data);
+	r->last_flag = flag == 0 ? SUNLS_SUCCESS : flag > 0 ? SUNLS_PSET_FAIL_REC : SUNLS_PSET_FAIL_UNREC;
+	return (int)r->last_flag;
+}
+
+int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
+                    sunrealtype gamma, void* user_data)
+{
+	(void)fy;
+	sm_simulation* sim = user_data;
+	reduced* r = sim->linear_solver->content;
+	r->gamma_setup = gamma;
+	*jcur = SUNFALSE;
+	if (r->n == 0)
+		return 0;
+	if (!jok) {
+		if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(y), SM_JACOBIAN_DEFINITE) != 0)
+			return -1;
+		*jcur = SUNTRUE;
+	}
+	if (!r->use_cholmod)
+		return 0;
+	const double start = sm_simulation_clock();
+	assemble(r, gamma);
+	memcpy(r->matrix->x, r->values, (size_t)r->nonzeros * sizeof(double));
+	if (r->factor == NULL)
+		r->factor = cholmod_l_analyze(r->matrix, &r->common);
+	int ok = r->factor != NULL && cholmod_l_factorize(r->matrix, r->factor, &r->common);
+	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
+	if (!ok || r->common.status == CHOLMOD_OUT_OF_MEMORY)
+		return -1;
+	// Not positive definite (a state far from any physical one): recoverable, CVODE retries
+	// with a smaller step.
+	return r->common.status == CHOLMOD_OK ? 0 : 1;
+}
+
+int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector rv, N_Vector z, sunrealtype gamma,
+                      sunrealtype delta, int lr, void* user_data)
+{
+	(void)t, (void)y, (void)fy, (void)gamma, (void)delta, (void)lr, (void)user_data;
+	N_VScale(1.0, rv, z);  // never called: the reduced solver preconditions internally
+	return 0;
+}
+
+// Error-weighted 2-norm of the velocity rows' residual M^-1 res.
+static double residual_norm(const reduced* r, const double* res)
+{
+	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + r->n : NULL;
+	double s = 0.0;
+	for (int64_t i = 0; i < r->n; i++) {
+		const double t = res[i] / r->sim->mass_dof[i] * (w ? w[i] : 1.0);
+		s += t * t;
+	}
+	return sqrt(s);
+}
+
+// Preconditioned conjugate gradients on A dv = rhs from dv = 0. Returns a SUNLS flag.
+static int conjugate_gradients(reduced* r, double* dv, double tol)
+{
+	const int64_t n = r->n;
+	double *res = r->r, *z = r->z, *p = r->p, *q = r->q;
+	memset(dv, 0, (size_t)n * sizeof(double));
+	memcpy(res, r->rhs, (size_t)n * sizeof(double));
+	r->last_iterations = 0;
+	const double initial = residual_norm(r, res);
+	double norm = initial;
+	if (norm <= tol)
+		return SUNLS_SUCCESS;
+	precondition(r, res, z);
+	memcpy(p, z, (size_t)n * sizeof(double));
+	double rz = 0.0;
+	for (int64_t i = 0; i < n; i++)
+		rz += res[i] * z[i];
+	for (int iteration = 1; iteration <= PCG_MAX_ITERATIONS; iteration++) {
+		multiply(r, r->values, p, q);
+		double pq = 0.0;
+		for (int64_t i = 0; i < n; i++)
+			pq += p[i] * q[i];
+		if (!(pq > 0.0) || !isfinite(pq))
+			return SUNLS_PACKAGE_FAIL_REC;
+		const double alpha = rz / pq;
+		for (int64_t i = 0; i < n; i++) {
+			dv[i] += alpha * p[i];
+			res[i] -= alpha * q[i];
+		}
+		r->sim->linear_iterations++;
+		r->last_iterations++;
+		norm = residual_norm(r, res);
+		if (norm <= tol)
+			return SUNLS_SUCCESS;
+		precondition(r, res, z);
+		double rz_next = 0.0;
+		for (int64_t i = 0; i < n; i++)
+			rz_next += res[i] * z[i];
+		const double beta = rz_next / rz;
+		rz = rz_next;
+		for (int64_t i = 0; i < n; i++)
+			p[i] = z[i] + beta * p[i];
+	}
+	return norm < initial ? SUNLS_RES_REDUCED : SUNLS_CONV_FAIL;
+}
+
+static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Vector bv, sunrealtype tol)
+{
+	(void)unused;
+	reduced* r = ls->content;
+	sm_simulation* sim = r->sim;
+	const int64_t n = r->n;
+	const double* b = N_VGetArrayPointer(bv);
+	double* x = N_VGetArrayPointer(xv);
+	double gamma;
+	if (CVodeGetCurrentGamma(sim->cvode, &gamma) != CV_SUCCESS)
+		return r->last_flag = SUNLS_MEM_FAIL;
+	x[2 * n] = b[2 * n];
+	if (n == 0)
+		return r->last_flag = SUNLS_SUCCESS;
+	const double start = sm_simulation_clock();
+	// The Cholesky factor holds the setup's gamma; conjugate gradients use the current one.
+	const double g = r->use_cholmod ? r->gamma_setup : gamma;
+	multiply(r, sim->dfdx, b, r->rhs);
+	for (int64_t i = 0; i < n; i++)
+		r->rhs[i] = sim->mass_dof[i] * b[n + i] + g * r->rhs[i];
+	double* dv = x + n;
+	int flag = SUNLS_SUCCESS;
+	if (r->use_cholmod) {
+		memcpy(r->b->x, r->rhs, (size_t)n * sizeof(double));
+		if (!cholmod_l_solve2(CHOLMOD_A, r->factor, r->b, NULL, &r->x, NULL, &r->y_work, &r->e_work, &r->common))
+			flag = SUNLS_MEM_FAIL;
+		else
+			memcpy(dv, r->x->x, (size_t)n * sizeof(double));
+		sim->linear_iterations++;
+	} else {
+		assemble(r, gamma);
+		flag = invert_blocks(r) ? conjugate_gradients(r, dv, tol) : SUNLS_PACKAGE_FAIL_REC;
+	}
+	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED) {
+		for (int64_t i = 0; i < n; i++)
+			x[i] = b[i] + g * dv[i];
+		if (r->use_cholmod && gamma != r->gamma_setup) {
+			const double scale = 2.0 / (1.0 + gamma / r->gamma_setup);
+			for (int64_t i = 0; i <= 2 * n; i++)
+				x[i] *= scale;
+		}
+	}
+	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
+	return r->last_flag = flag;
+}
+
+static void reduced_content_free(reduced* r)
+{
+	if (r == NULL)
+		return;
+	if (r->common_started) {
+		cholmod_l_free_sparse(&r->matrix, &r->common);
+		cholmod_l_free_factor(&r->factor, &r->common);
+		cholmod_l_free_dense(&r->b, &r->common);
+		cholmod_l_free_dense(&r->x, &r->common);
+		cholmod_l_free_dense(&r->y_work, &r->common);
+		cholmod_l_free_dense(&r->e_work, &r->common);
+		cholmod_l_finish(&r->common);
+	}
+	free(r->diagonal);
+	free(r->values);
+	free(r->block_inverse);
+	free(r->r);
+	free(r->z);
+	free(r->p);
+	free(r->q);
+	free(r->rhs);
+	free(r);
+}
+
+static int reduced_free(SUNLinearSolver ls)
+{
+	if (ls == NULL)
+		return 0;
+	reduced_content_free(ls->content);
+	ls->content = NULL;
+	SUNLinSolFreeEmpty(ls);
+	return 0;
+}
+
+SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
+{
+	reduced* r = calloc(1, sizeof *r);
+	if (r == NULL)
+		return NULL;
+	r->sim = sim;
+	r->use_cholmod = use_cholmod;
+	r->n = sim->dofs;
+	r->nonzeros = sm_sparse_jacobian_nonzeros(sim->pattern);
+	r->rows = sm_sparse_jacobian_row_pointers(sim->pattern);
+	r->cols = sm_sparse_jacobian_column_indices(sim->pattern);
+	const size_t n = (size_t)r->n + 1;
+	r->diagonal = malloc(n * sizeof(int64_t));
+	r->values = malloc(((size_t)r->nonzeros + 1) * sizeof(double));
+	r->block_inverse = malloc(3 * n * sizeof(double));
+	r->r = malloc(n * sizeof(double));
+	r->z = malloc(n * sizeof(double));
+	r->p = malloc(n * sizeof(double));
+	r->q = malloc(n * sizeof(double));
+	r->rhs = malloc(n * sizeof(double));
+	if (!r->diagonal || !r->values || !r->block_inverse || !r->r || !r->z || !r->p || !r->q || !r->rhs) {
+		reduced_content_free(r);
+		return NULL;
+	}
+	for (int64_t i = 0; i < r->n; i++) {
+		const int64_t first = 3 * (i / 3);
+		r->diagonal[i] = -1;
+		for (int64_t e = r->rows[i]; e < r->rows[i + 1]; e++)
+			if (r->cols[e] == first) {
+				r->diagonal[i] = e;
+				break;
+			}
+		if (r->diagonal[i] < 0) {  // the pattern always holds the diagonal blocks
+			reduced_content_free(r);
+			return NULL;
+		}
+	}
+	if (use_cholmod && r->n > 0) {
+		if (!cholmod_l_start(&r->common)) {
+			reduced_content_free(r);
+			return NULL;
+		}
+		r->common_started = true;
+		r->common.print = 0;  // failures are reported through the simulation, never printed
+		// A symmetric matrix whose upper triangle CHOLMOD reads: the CSR arrays of a symmetric
+		// pattern are also its CSC arrays.
+		r->matrix = cholmod_l_allocate_sparse((size_t)r->n, (size_t)r->n, (size_t)r->nonzeros, 1, 1, 1, CHOLMOD_REAL,
+		                                      &r->common);
+		r->b = cholmod_l_allocate_dense((size_t)r->n, 1, (size_t)r->n, CHOLMOD_REAL, &r->common);
+		if (!r->matrix || !r->b) {
+			reduced_content_free(r);
+			return NULL;
+		}
+		memcpy(r->matrix->p, r->rows, n * sizeof(int64_t));
+		memcpy(r->matrix->i, r->cols, (size_t)r->nonzeros * sizeof(int64_t));
+	}
+	SUNLinearSolver ls = SUNLinSolNewEmpty(sim->context);
+	if (ls == NULL) {
+		reduced_content_free(r);
+		return NULL;
+	}
+	ls->content = r;
+	ls->ops->gettype = reduced_type;
+	ls->ops->getid = reduced_id;
+	ls->ops->initialize = reduced_initialize;
+	ls->ops->setup = reduced_setup;
+	ls->ops->solve = reduced_solve;
+	ls->ops->setscalingvectors = reduced_set_scaling;
+	ls->ops->setatimes = reduced_set_atimes;
+	ls->ops->setpreconditioner = reduced_set_preconditioner;
+	ls->ops->numiters = reduced_num_iterations;
+	ls->ops->lastflag = reduced_last_flag;
+	ls->ops->free = reduced_free;
+	return ls;
+}

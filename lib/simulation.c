@@ -1,0 +1,1087 @@
+// Time integration of a model with SUNDIALS CVODE.
+//
+// State, right-hand side and Jacobian:
+//   y = [x; v; e] over the free particles, x' = v, v' = M^-1 f(x, v, t), e' = P_dissipated(x, v).
+//   The Newton matrix of BDF is I - gamma J with
+//     J = [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]],  K = df/dx, D = df/dv;
+//   the dissipated energy e feeds back into nothing, so its row and column of J are left out
+//   (zero): Newton's iteration still converges, and e is integrated to the same tolerance.
+// Linear solvers: dense LU of the full system (SUNDenseMatrix), sparse LU (KLU) of the full
+// system in CSR form, and the reduced second-order solver of linear_solver_reduced.c.
+// Breaking springs are root functions g = L - l0 (1 + break_strain), one per breakable spring.
+#define _POSIX_C_SOURCE 200809L
+
+#include "model_internal.h"
+#include "simulation_internal.h"
+
+#include <cvode/cvode.h>
+#include <cvode/cvode_ls.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+// Free degrees of freedom up to which SM_SOLVER_AUTO picks the dense solver, and above which it
+// picks the reduced Cholesky solver rather than KLU (from bench/bench_cloth.sh, see
+// bench/README.md).
+#define AUTO_DENSE_MAX_DOFS 120
+#define AUTO_KLU_MAX_DOFS 0
+
+double sm_simulation_clock(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static sm_status fail(sm_simulation* sim, sm_status status, const char* format, ...)
+#if defined(__GNUC__)
+	__attribute__((format(printf, 3, 4)))
+#endif
+	;
+
+static sm_status fail(sm_simulation* sim, sm_status status, const char* format, ...)
+{
+	va_list args;
+	va_start(args, format);
+	vsnprintf(sim->last_error, sizeof sim->last_error, format, args);
+	va_end(args);
+	return status;
+}
+
+sm_simulation_def sm_default_simulation_def(void)
+{
+	sm_simulation_def def;
+	memset(&def, 0, sizeof def);
+	def.method = SM_METHOD_BDF;
+	def.solver = SM_SOLVER_AUTO;
+	def.jacobian = SM_JACOBIAN_EXACT;
+	def.relative_tolerance = 1e-6;
+	def.absolute_tolerance_position = 1e-8;
+	def.absolute_tolerance_velocity = 1e-6;
+	def.max_step = 0.0;
+	def.max_steps = 100000;
+	def.restart_on_input_change = false;
+	return def;
+}
+
+static const char* const solver_names[SM_SOLVER_COUNT] = {"auto", "dense", "klu", "pcg", "cholmod"};
+
+const char* sm_linear_solver_name(sm_linear_solver solver)
+{
+	if ((int)solver < 0 || solver >= SM_SOLVER_COUNT)
+		return "unknown";
+	return solver_names[solver];
+}
+
+sm_linear_solver sm_linear_solver_from_name(const char* name)
+{
+	if (name == NULL)
+		return SM_SOLVER_COUNT;
+	for (int i = 0; i < SM_SOLVER_COUNT; i++)
+		if (strcmp(name, solver_names[i]) == 0)
+			return (sm_linear_solver)i;
+	return SM_SOLVER_COUNT;
+}
+
+// ---------------------------------------------------------------------------------------------
+// State packing
+// ---------------------------------------------------------------------------------------------
+
+void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v)
+{
+	const int64_t nd = sim->dofs;
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		const size_t q = 3 * (size_t)k;
+		x[p] = y[q];
+		x[p + 1] = y[q + 1];
+		x[p + 2] = y[q + 2];
+		v[p] = y[nd + q];
+		v[p + 1] = y[nd + q + 1];
+		v[p + 2] = y[nd + q + 2];
+	}
+	const sm_model* m = sim->model;
+	for (int32_t k = 0; k < sim->constrained_count; k++) {
+		const int32_t i = sim->constrained[k];
+		const size_t p = 3 * (size_t)i;
+		if (m->motion[i] == SM_PARTICLE_DRIVEN) {
+			const double dt = t - sim->drive_time[i];
+			for (int c = 0; c < 3; c++) {
+				x[p + c] = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
+				v[p + c] = sim->drive_velocity[p + c];
+			}
+		} else {
+			for (int c = 0; c < 3; c++) {
+				x[p + c] = m->position[p + c];
+				v[p + c] = 0.0;
+			}
+		}
+	}
+}
+
+// Writes the free particles' entries of x and v into y (e untouched).
+static void pack(const sm_simulation* sim, const double* x, const double* v, double* y)
+{
+	const int64_t nd = sim->dofs;
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		const size_t q = 3 * (size_t)k;
+		for (int c = 0; c < 3; c++) {
+			y[q + c] = x[p + c];
+			y[nd + q + c] = v[p + c];
+		}
+	}
+}
+
+static void refresh_outputs(sm_simulation* sim)
+{
+	sm_simulation_unpack(sim, sim->time, N_VGetArrayPointer(sim->y), sim->position, sim->velocity);
+}
+
+// ---------------------------------------------------------------------------------------------
+// CVODE callbacks
+// ---------------------------------------------------------------------------------------------
+
+// y' = [v; M^-1 f; P]. A non-finite state is a recoverable failure (> 0): CVODE retries with
+// a smaller step.
+static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
+{
+	sm_simulation* sim = user_data;
+	const double* y = N_VGetArrayPointer(yv);
+	double* ydot = N_VGetArrayPointer(ydotv);
+	const int64_t nd = sim->dofs;
+	for (int64_t i = 0; i < 2 * nd; i++)
+		if (!isfinite(y[i]))
+			return 1;
+	double* x = sim->work_position;
+	double* v = sim->work_velocity;
+	double* f = sim->work_force;
+	sm_simulation_unpack(sim, t, y, x, v);
+	const double start = sm_simulation_clock();
+	sm_model_forces(sim->model, x, v, sim->external_force, f);
+	const double power = sm_model_dissipated_power(sim->model, x, v);
+	sim->base.force_seconds += sm_simulation_clock() - start;
+	sim->rhs_evaluations++;
+	memcpy(ydot, y + nd, (size_t)nd * sizeof(double));
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		const size_t q = 3 * (size_t)k;
+		const double w = sim->inverse_mass[k];
+		ydot[nd + q] = f[p] * w;
+		ydot[nd + q + 1] = f[p + 1] * w;
+		ydot[nd + q + 2] = f[p + 2] * w;
+	}
+	ydot[2 * nd] = power;
+	for (int64_t i = nd; i <= 2 * nd; i++)
+		if (!isfinite(ydot[i]))
+			return 1;
+	return 0;
+}
+
+// g_i = L - l0 (1 + break_strain) for each breakable spring still intact; -1 once broken.
+static int roots(sunrealtype t, N_Vector yv, sunrealtype* g, void* user_data)
+{
+	sm_simulation* sim = user_data;
+	double* x = sim->work_position;
+	double* v = sim->work_velocity;
+	sm_simulation_unpack(sim, t, N_VGetArrayPointer(yv), x, v);
+	for (int32_t r = 0; r < sim->root_count; r++) {
+		const int32_t s = sim->root_spring[r];
+		if (!sim->model->enabled[s]) {
+			g[r] = -1.0;
+			continue;
+		}
+		const double* a = x + 3 * (size_t)sim->model->spring_a[s];
+		const double* b = x + 3 * (size_t)sim->model->spring_b[s];
+		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
+		g[r] = sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sim->root_limit[r];
+	}
+	return 0;
+}
+
+int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant)
+{
+	double* x = sim->work_position;
+	double* v = sim->work_velocity;
+	sm_simulation_unpack(sim, t, y, x, v);
+	const double start = sm_simulation_clock();
+	sm_status st = sm_sparse_jacobian_fill(sim->pattern, sim->model, x, v, variant, sim->dfdx, sim->dfdv);
+	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	sim->jacobian_evaluations++;
+	return st == SM_OK ? 0 : -1;
+}
+
+// Dense J: [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]], scattered from the sparse fill.
+static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
+                          N_Vector tmp2, N_Vector tmp3)
+{
+	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
+	sm_simulation* sim = user_data;
+	if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(yv), sim->def.jacobian) != 0)
+		return -1;
+	const double start = sm_simulation_clock();
+	const int64_t nd = sim->dofs;
+	SUNMatZero(J);
+	for (int64_t i = 0; i < nd; i++)
+		SM_ELEMENT_D(J, i, nd + i) = 1.0;
+	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
+	const int64_t* cols = sm_sparse_jacobian_column_indices(sim->pattern);
+	for (int64_t i = 0; i < nd; i++) {
+		const double w = 1.0 / sim->mass_dof[i];
+		for (int64_t e = rows[i]; e < rows[i + 1]; e++) {
+			SM_ELEMENT_D(J, nd + i, cols[e]) = w * sim->dfdx[e];
+			SM_ELEMENT_D(J, nd + i, nd + cols[e]) = w * sim->dfdv[e];
+		}
+	}
+	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	return 0;
+}
+
+// Pattern of the (6nf + 1) CSR matrix for KLU, every diagonal entry present (CVODE adds the
+// identity in place): x row i: (i, i) = 0 and (i, nd + i) = 1; v row i: the pattern row of K
+// then the same columns shifted by nd for D; e row: (2nd, 2nd) = 0.
+static sm_status build_klu_pattern(sm_simulation* sim)
+{
+	const int64_t nd = sim->dofs;
+	const int64_t nnz = sm_sparse_jacobian_nonzeros(sim->pattern);
+	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
+	const int64_t* cols = sm_sparse_jacobian_column_indices(sim->pattern);
+	sim->klu_row_pointers = malloc((size_t)(2 * nd + 2) * sizeof(int64_t));
+	sim->klu_column_indices = malloc((size_t)(2 * nd + 2 * nnz + 1) * sizeof(int64_t));
+	if (!sim->klu_row_pointers || !sim->klu_column_indices)
+		return SM_ERROR_OUT_OF_MEMORY;
+	int64_t e = 0;
+	for (int64_t i = 0; i < nd; i++) {
+		sim->klu_row_pointers[i] = e;
+		sim->klu_column_indices[e++] = i;
+		sim->klu_column_indices[e++] = nd + i;
+	}
+	for (int64_t i = 0; i < nd; i++) {
+		sim->klu_row_pointers[nd + i] = e;
+		for (int64_t k = rows[i]; k < rows[i + 1]; k++)
+			sim->klu_column_indices[e++] = cols[k];
+		for (int64_t k = rows[i]; k < rows[i + 1]; k++)
+			sim->klu_column_indices[e++] = nd + cols[k];
+	}
+	sim->klu_row_pointers[2 * nd] = e;
+	sim->klu_column_indices[e++] = 2 * nd;
+	sim->klu_row_pointers[2 * nd + 1] = e;
+	return SM_OK;
+}
+
+static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
+                           N_Vector tmp2, N_Vector tmp3)
+{
+	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
+	sm_simulation* sim = user_data;
+	if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(yv), sim->def.jacobian) != 0)
+		return -1;
+	const double start = sm_simulation_clock();
+	const int64_t nd = sim->dofs;
+	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
+	const int64_t total = sim->klu_row_pointers[2 * nd + 1];
+	if (SUNSparseMatrix_NNZ(J) < total && SUNSparseMatrix_Reallocate(J, total) != 0)
+		return -1;
+	// CVODE zeroes the matrix, index arrays included, before each call: restore the pattern.
+	memcpy(SUNSparseMatrix_IndexPointers(J), sim->klu_row_pointers, (size_t)(2 * nd + 2) * sizeof(int64_t));
+	memcpy(SUNSparseMatrix_IndexValues(J), sim->klu_column_indices, (size_t)total * sizeof(int64_t));
+	double* val = SUNSparseMatrix_Data(J);
+	int64_t e = 0;
+	for (int64_t i = 0; i < nd; i++) {
+		val[e++] = 0.0;
+		val[e++] = 1.0;
+	}
+	for (int64_t i = 0; i < nd; i++) {
+		const double w = 1.0 / sim->mass_dof[i];
+		const int64_t len = rows[i + 1] - rows[i];
+		const double* kx = sim->dfdx + rows[i];
+		const double* kv = sim->dfdv + rows[i];
+		for (int64_t k = 0; k < len; k++)
+			val[e + k] = w * kx[k];
+		e += len;
+		for (int64_t k = 0; k < len; k++)
+			val[e + k] = w * kv[k];
+		e += len;
+	}
+	val[e] = 0.0;
+	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	return 0;
+}
+
+static void error_handler(int error_code, const char* module, const char* function, char* msg, void* user_data)
+{
+	(void)error_code, (void)module;
+	sm_simulation* sim = user_data;
+	snprintf(sim->solver_message, sizeof sim->solver_message, "%s: %s", function, msg);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Timed wrapper around a matrix-based linear solver (dense LU, KLU)
+// ---------------------------------------------------------------------------------------------
+
+typedef struct timed_content {
+	sm_simulation* sim;
+	SUNLinearSolver inner;
+} timed_content;
+
+static SUNLinearSolver_Type timed_type(SUNLinearSolver ls)
+{
+	return SUNLinSolGetType(((timed_content*)ls->content)->inner);
+}
+
+static SUNLinearSolver_ID timed_id(SUNLinearSolver ls)
+{
+	return SUNLinSolGetID(((timed_content*)ls->content)->inner);
+}
+
+static int timed_initialize(SUNLinearSolver ls)
+{
+	return SUNLinSolInitialize(((timed_content*)ls->content)->inner);
+}
+
+static int timed_setup(SUNLinearSolver ls, SUNMatrix A)
+{
+	timed_content* c = ls->content;
+	const double start = sm_simulation_clock();
+	int r = SUNLinSolSetup(c->inner, A);
+	c->sim->base.linear_solve_seconds += sm_simulation_clock() - start;
+	return r;
+}
+
+static int timed_solve(SUNLinearSolver ls, SUNMatrix A, N_Vector x, N_Vector b, sunrealtype tol)
+{
+	timed_content* c = ls->content;
+	const double start = sm_simulation_clock();
+	int r = SUNLinSolSolve(c->inner, A, x, b, tol);
+	c->sim->base.linear_solve_seconds += sm_simulation_clock() - start;
+	c->sim->linear_iterations++;
+	return r;
+}
+
+static sunindextype timed_last_flag(SUNLinearSolver ls)
+{
+	return SUNLinSolLastFlag(((timed_content*)ls->content)->inner);
+}
+
+static int timed_free(SUNLinearSolver ls)
+{
+	if (ls == NULL)
+		return 0;
+	timed_content* c = ls->content;
+	if (c != NULL) {
+		SUNLinSolFree(c->inner);
+		free(c);
+		ls->content = NULL;
+	}
+	SUNLinSolFreeEmpty(ls);
+	return 0;
+}
+
+SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner)
+{
+	if (inner == NULL)
+		return NULL;
+	SUNLinearSolver ls = SUNLinSolNewEmpty(sim->context);
+	timed_content* c = malloc(sizeof *c);
+	if (ls == NULL || c == NULL) {
+		free(c);
+		if (ls)
+			SUNLinSolFreeEmpty(ls);
+		SUNLinSolFree(inner);
+		return NULL;
+	}
+	c->sim = sim;
+	c->inner = inner;
+	ls->content = c;
+	ls->ops->gettype = timed_type;
+	ls->ops->getid = timed_id;
+	ls->ops->initialize = timed_initialize;
+	ls->ops->setup = timed_setup;
+	ls->ops->solve = timed_solve;
+	ls->ops->lastflag = timed_last_flag;
+	ls->ops->free = timed_free;
+	return ls;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Creation
+// ---------------------------------------------------------------------------------------------
+
+static sm_status check_def(const sm_simulation_def* def, sm_error* err)
+{
+	if ((int)def->method < 0 || def->method > SM_METHOD_ADAMS)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown method %d", (int)def->method);
+	if ((int)def->solver < 0 || def->solver >= SM_SOLVER_COUNT)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown linear solver %d", (int)def->solver);
+	if ((int)def->jacobian < 0 || def->jacobian > SM_JACOBIAN_DEFINITE)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown Jacobian variant %d",
+		                    (int)def->jacobian);
+	const struct {
+		const char* name;
+		double value;
+	} positive[] = {{"relative_tolerance", def->relative_tolerance},
+	                {"absolute_tolerance_position", def->absolute_tolerance_position},
+	                {"absolute_tolerance_velocity", def->absolute_tolerance_velocity}};
+	for (size_t i = 0; i < sizeof positive / sizeof positive[0]; i++)
+		if (!(isfinite(positive[i].value) && positive[i].value > 0.0))
+			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
+			                    positive[i].name, positive[i].value);
+	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_step = %g must be finite and >= 0",
+		                    def->max_step);
+	if (def->max_steps <= 0)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_steps = %d must be > 0",
+		                    (int)def->max_steps);
+	return SM_OK;
+}
+
+static sm_linear_solver resolve_solver(const sm_simulation_def* def, int64_t dofs)
+{
+	if (def->solver != SM_SOLVER_AUTO)
+		return def->solver;
+	if (dofs <= AUTO_DENSE_MAX_DOFS)
+		return SM_SOLVER_DENSE;
+	if (dofs <= AUTO_KLU_MAX_DOFS)
+		return SM_SOLVER_KLU;
+	return SM_SOLVER_REDUCED_CHOLMOD;
+}
+
+// Root functions for the model's breakable springs (recomputed when the model changes).
+static sm_status build_roots(sm_simulation* sim)
+{
+	free(sim->root_spring);
+	free(sim->root_limit);
+	free(sim->roots_found);
+	sim->root_spring = NULL;
+	sim->root_limit = NULL;
+	sim->roots_found = NULL;
+	sim->root_count = 0;
+	const sm_model* m = sim->model;
+	int32_t count = 0;
+	for (int32_t s = 0; s < m->spring_count; s++)
+		if (isfinite(m->spring_def[s].break_strain))
+			count++;
+	if (count > 0) {
+		sim->root_spring = malloc((size_t)count * sizeof(int32_t));
+		sim->root_limit = malloc((size_t)count * sizeof(double));
+		sim->roots_found = malloc((size_t)count * sizeof(int));
+		if (!sim->root_spring || !sim->root_limit || !sim->roots_found)
+			return SM_ERROR_OUT_OF_MEMORY;
+		for (int32_t s = 0; s < m->spring_count; s++) {
+			if (!isfinite(m->spring_def[s].break_strain))
+				continue;
+			sim->root_spring[sim->root_count] = s;
+			sim->root_limit[sim->root_count] = m->rest_length[s] * (1.0 + m->spring_def[s].break_strain);
+			sim->root_count++;
+		}
+	}
+	if (sim->cvode != NULL) {
+		if (CVodeRootInit(sim->cvode, sim->root_count, sim->root_count > 0 ? roots : NULL) != CV_SUCCESS)
+			return SM_ERROR_SOLVER;
+		if (sim->root_count > 0) {
+			// Only a strain rising through the limit breaks a spring.
+			int* direction = malloc((size_t)sim->root_count * sizeof(int));
+			if (!direction)
+				return SM_ERROR_OUT_OF_MEMORY;
+			for (int32_t r = 0; r < sim->root_count; r++)
+				direction[r] = 1;
+			int flag = CVodeSetRootDirection(sim->cvode, direction);
+			free(direction);
+			if (flag != CV_SUCCESS)
+				return SM_ERROR_SOLVER;
+			CVodeSetNoInactiveRootWarn(sim->cvode);
+		}
+	}
+	return SM_OK;
+}
+
+// Masses of the free particles, from the simulation's model.
+static void refresh_masses(sm_simulation* sim)
+{
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const double m = sim->model->mass[sim->free_particles[k]];
+		sim->inverse_mass[k] = 1.0 / m;
+		sim->mass_dof[3 * k] = sim->mass_dof[3 * k + 1] = sim->mass_dof[3 * k + 2] = m;
+	}
+}
+
+// Everything from the model's stored initial state: positions, velocities, driven motion,
+// no external forces, e = 0.
+static void load_initial_state(sm_simulation* sim)
+{
+	const sm_model* m = sim->model;
+	const size_t n3 = 3 * (size_t)sim->particle_count;
+	memcpy(sim->drive_position, m->position, n3 * sizeof(double));
+	memcpy(sim->drive_velocity, m->velocity, n3 * sizeof(double));
+	for (int32_t i = 0; i < sim->particle_count; i++)
+		sim->drive_time[i] = 0.0;
+	memset(sim->external_force, 0, n3 * sizeof(double));
+	double* y = N_VGetArrayPointer(sim->y);
+	pack(sim, m->position, m->velocity, y);
+	y[2 * sim->dofs] = 0.0;
+	sim->time = 0.0;
+	refresh_outputs(sim);
+}
+
+static sm_status attach_linear_solver(sm_simulation* sim)
+{
+	if (sim->def.method == SM_METHOD_ADAMS) {
+		SUNNonlinearSolver nls = SUNNonlinSol_FixedPoint(sim->y, 0, sim->context);
+		if (!nls)
+			return SM_ERROR_OUT_OF_MEMORY;
+		// CVODE does not take ownership of the nonlinear solver: the simulation frees it.
+		int flag = CVodeSetNonlinearSolver(sim->cvode, nls);
+		if (flag != CV_SUCCESS) {
+			SUNNonlinSolFree(nls);
+			return SM_ERROR_SOLVER;
+		}
+		sim->fixed_point = nls;
+		return SM_OK;
+	}
+	const int64_t n = 2 * sim->dofs + 1;
+	switch (sim->solver) {
+	case SM_SOLVER_DENSE: {
+		sim->matrix = SUNDenseMatrix(n, n, sim->context);
+		if (!sim->matrix)
+			return SM_ERROR_OUT_OF_MEMORY;
+		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_Dense(sim->y, sim->matrix, sim->context));
+		if (!sim->linear_solver)
+			return SM_ERROR_OUT_OF_MEMORY;
+		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, sim->matrix) != CVLS_SUCCESS ||
+		    CVodeSetJacFn(sim->cvode, jacobian_dense) != CVLS_SUCCESS)
+			return SM_ERROR_SOLVER;
+		return SM_OK;
+	}
+	case SM_SOLVER_KLU: {
+		if (build_klu_pattern(sim) != SM_OK)
+			return SM_ERROR_OUT_OF_MEMORY;
+		sim->matrix = SUNSparseMatrix(n, n, sim->klu_row_pointers[n], CSR_MAT, sim->context);
+		if (!sim->matrix)
+			return SM_ERROR_OUT_OF_MEMORY;
+		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_KLU(sim->y, sim->matrix, sim->context));
+		if (!sim->linear_solver)
+			return SM_ERROR_OUT_OF_MEMORY;
+		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, sim->matrix) != CVLS_SUCCESS ||
+		    CVodeSetJacFn(sim->cvode, jacobian_sparse) != CVLS_SUCCESS)
+			return SM_ERROR_SOLVER;
+		return SM_OK;
+	}
+	case SM_SOLVER_REDUCED_PCG:
+	case SM_SOLVER_REDUCED_CHOLMOD: {
+		sim->linear_solver = sm_reduced_solver_create(sim, sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
+		if (!sim->linear_solver)
+			return SM_ERROR_OUT_OF_MEMORY;
+		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, NULL) != CVLS_SUCCESS ||
+		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS)
+			return SM_ERROR_SOLVER;
+		return SM_OK;
+	}
+	case SM_SOLVER_AUTO:
+	case SM_SOLVER_COUNT:
+		break;
+	}
+	return SM_ERROR_INVALID_ARGUMENT;
+}
+
+static sm_status setup_cvode(sm_simulation* sim)
+{
+	const int64_t nd = sim->dofs;
+	double* tol = N_VGetArrayPointer(sim->tolerances);
+	for (int64_t i = 0; i < nd; i++) {
+		tol[i] = sim->def.absolute_tolerance_position;
+		tol[nd + i] = sim->def.absolute_tolerance_velocity;
+	}
+	// The dissipated energy [J] shares the velocities' absolute tolerance.
+	tol[2 * nd] = sim->def.absolute_tolerance_velocity;
+	sim->cvode = CVodeCreate(sim->def.method == SM_METHOD_ADAMS ? CV_ADAMS : CV_BDF, sim->context);
+	if (!sim->cvode)
+		return SM_ERROR_OUT_OF_MEMORY;
+	if (CVodeSetErrHandlerFn(sim->cvode, error_handler, sim) != CV_SUCCESS ||
+	    CVodeInit(sim->cvode, rhs, sim->time, sim->y) != CV_SUCCESS ||
+	    CVodeSVtolerances(sim->cvode, sim->def.relative_tolerance, sim->tolerances) != CV_SUCCESS ||
+	    CVodeSetUserData(sim->cvode, sim) != CV_SUCCESS ||
+	    CVodeSetMaxNumSteps(sim->cvode, sim->def.max_steps) != CV_SUCCESS ||
+	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS)
+		return SM_ERROR_SOLVER;
+	// A step size that rounds to nothing is reported as a failure, not printed.
+	CVodeSetMaxHnilWarns(sim->cvode, -1);
+	sm_status st = build_roots(sim);
+	if (st != SM_OK)
+		return st;
+	return attach_linear_solver(sim);
+}
+
+sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err)
+{
+	if (model == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: model is NULL");
+		return NULL;
+	}
+	sm_simulation_def d = def ? *def : sm_default_simulation_def();
+	if (check_def(&d, err) != SM_OK)
+		return NULL;
+	sm_simulation* sim = calloc(1, sizeof *sim);
+	if (!sim) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "simulation: out of memory");
+		return NULL;
+	}
+	sim->def = d;
+	sim->model = sm_model_clone(model);
+	if (!sim->model)
+		goto out_of_memory;
+	const sm_model* m = sim->model;
+	const int32_t n = m->particle_count;
+	sim->particle_count = n;
+	sim->spring_count = m->spring_count;
+	sim->free_count = m->free_count;
+	sim->dofs = 3 * (int64_t)m->free_count;
+	sim->constrained_count = n - m->free_count;
+	sim->solver = resolve_solver(&d, sim->dofs);
+	const size_t n3 = 3 * (size_t)n + 1;
+	sim->initial_enabled = malloc((size_t)m->spring_count + 1);
+	sim->free_particles = malloc(((size_t)sim->free_count + 1) * sizeof(int32_t));
+	sim->constrained = malloc(((size_t)sim->constrained_count + 1) * sizeof(int32_t));
+	sim->inverse_mass = malloc(((size_t)sim->free_count + 1) * sizeof(double));
+	sim->mass_dof = malloc(((size_t)sim->dofs + 1) * sizeof(double));
+	double** arrays[] = {&sim->position,       &sim->velocity,   &sim->external_force, &sim->drive_position,
+	                     &sim->drive_velocity, &sim->drive_time, &sim->work_position,  &sim->work_velocity,
+	                     &sim->work_force};
+	for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+		if (!(*arrays[i] = calloc(n3, sizeof(double))))
+			goto out_of_memory;
+	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass || !sim->mass_dof)
+		goto out_of_memory;
+	memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
+	for (int32_t i = 0, kf = 0, kc = 0; i < n; i++) {
+		if (m->motion[i] == SM_PARTICLE_FREE)
+			sim->free_particles[kf++] = i;
+		else
+			sim->constrained[kc++] = i;
+	}
+	refresh_masses(sim);
+	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU || sim->solver == SM_SOLVER_REDUCED_PCG ||
+	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
+		sim->pattern = sm_sparse_jacobian_create(m);
+		if (!sim->pattern)
+			goto out_of_memory;
+		const size_t nnz = (size_t)sm_sparse_jacobian_nonzeros(sim->pattern) + 1;
+		sim->dfdx = malloc(nnz * sizeof(double));
+		sim->dfdv = malloc(nnz * sizeof(double));
+		if (!sim->dfdx || !sim->dfdv)
+			goto out_of_memory;
+	}
+	if (SUNContext_Create(NULL, &sim->context) != 0) {
+		sim->context = NULL;
+		goto out_of_memory;
+	}
+	sim->y = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
+	sim->y_saved = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
+	sim->tolerances = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
+	if (!sim->y || !sim->y_saved || !sim->tolerances)
+		goto out_of_memory;
+	load_initial_state(sim);
+	sm_status st = setup_cvode(sim);
+	if (st != SM_OK) {
+		sm_error_set(err, st, "simulation: cannot set up CVODE with the %s linear solver%s%s",
+		             sm_linear_solver_name(sim->solver), sim->solver_message[0] ? ": " : "",
+		             sim->solver_message);
+		sm_simulation_destroy(sim);
+		return NULL;
+	}
+	return sim;
+
+out_of_memory:
+	sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "simulation: out of memory for a model of %d particles",
+	             (int)model->particle_count);
+	sm_simulation_destroy(sim);
+	return NULL;
+}
+
+void sm_simulation_destroy(sm_simulation* sim)
+{
+	if (sim == NULL)
+		return;
+	if (sim->cvode)
+		CVodeFree(&sim->cvode);
+	SUNLinSolFree(sim->linear_solver);
+	if (sim->fixed_point)
+		SUNNonlinSolFree(sim->fixed_point);
+	SUNMatDestroy(sim->matrix);
+	N_VDestroy(sim->y);
+	N_VDestroy(sim->y_saved);
+	N_VDestroy(sim->tolerances);
+	if (sim->context)
+		SUNContext_Free(&sim->context);
+	sm_model_destroy(sim->model);
+	sm_sparse_jacobian_destroy(sim->pattern);
+	free(sim->dfdx);
+	free(sim->dfdv);
+	free(sim->klu_row_pointers);
+	free(sim->klu_column_indices);
+	free(sim->initial_enabled);
+	free(sim->free_particles);
+	free(sim->constrained);
+	free(sim->inverse_mass);
+	free(sim->mass_dof);
+	free(sim->position);
+	free(sim->velocity);
+	free(sim->external_force);
+	free(sim->drive_position);
+	free(sim->drive_velocity);
+	free(sim->drive_time);
+	free(sim->work_position);
+	free(sim->work_velocity);
+	free(sim->work_force);
+	free(sim->root_spring);
+	free(sim->root_limit);
+	free(sim->roots_found);
+	free(sim->breaks);
+	free(sim);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Advancing
+// ---------------------------------------------------------------------------------------------
+
+// Adds CVODE's counters (which CVodeReInit clears) to the base.
+static void fold_counters(sm_simulation* sim)
+{
+	long steps = 0, error_fails = 0, conv_fails = 0;
+	CVodeGetNumSteps(sim->cvode, &steps);
+	CVodeGetNumErrTestFails(sim->cvode, &error_fails);
+	CVodeGetNumNonlinSolvConvFails(sim->cvode, &conv_fails);
+	sim->base.steps += steps;
+	sim->base.error_test_failures += error_fails;
+	sim->base.convergence_failures += conv_fails;
+}
+
+static sm_status reinit(sm_simulation* sim, bool count)
+{
+	fold_counters(sim);
+	if (count)
+		sim->base.restarts++;
+	sim->need_restart = false;
+	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS)
+		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %.17g s: %s", sim->time,
+		            sim->solver_message);
+	return SM_OK;
+}
+
+static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
+{
+	if (sim->break_count == sim->break_capacity) {
+		int32_t cap = sim->break_capacity ? 2 * sim->break_capacity : 16;
+		sm_break_event* b = realloc(sim->breaks, (size_t)cap * sizeof *b);
+		if (!b)
+			return SM_ERROR_OUT_OF_MEMORY;
+		sim->breaks = b;
+		sim->break_capacity = cap;
+	}
+	sim->breaks[sim->break_count].time = t;
+	sim->breaks[sim->break_count].spring = spring;
+	sim->break_count++;
+	return sm_model_set_spring_enabled(sim->model, spring, false);
+}
+
+sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (!isfinite(t_end) || t_end < sim->time)
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		            "advance: end time %.17g s must be finite and not before the current time %.17g s", t_end,
+		            sim->time);
+	sim->last_error[0] = '\0';
+	while (sim->time < t_end) {
+		if (sim->need_restart) {
+			sm_status st = reinit(sim, true);
+			if (st != SM_OK)
+				return st;
+		}
+		CVodeSetStopTime(sim->cvode, t_end);
+		N_VScale(1.0, sim->y, sim->y_saved);
+		sim->solver_message[0] = '\0';
+		double reached = sim->time;
+		int flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL);
+		if (flag < 0) {
+			// CVODE leaves the last state it reached in y; keep the state from before the call
+			// if that is not usable.
+			const double* y = N_VGetArrayPointer(sim->y);
+			bool usable = isfinite(reached) && reached >= sim->time && reached <= t_end;
+			for (int64_t i = 0; usable && i <= 2 * sim->dofs; i++)
+				usable = isfinite(y[i]);
+			if (usable)
+				sim->time = reached;
+			else
+				N_VScale(1.0, sim->y_saved, sim->y);
+			// After too much work CVODE may simply go on; after any other failure it starts
+			// afresh from the last good state.
+			sim->need_restart = flag != CV_TOO_MUCH_WORK || !usable;
+			refresh_outputs(sim);
+			char* name = CVodeGetReturnFlagName(flag);
+			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s",
+			     name ? name : "an unknown flag", sim->time, t_end, sim->solver_message[0] ? ": " : "",
+			     sim->solver_message);
+			free(name);
+			return SM_ERROR_SOLVER;
+		}
+		sim->time = (flag == CV_ROOT_RETURN) ? fmin(reached, t_end) : t_end;
+		if (flag == CV_ROOT_RETURN) {
+			CVodeGetRootInfo(sim->cvode, sim->roots_found);
+			for (int32_t r = 0; r < sim->root_count; r++) {
+				if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
+					continue;
+				if (record_break(sim, sim->time, sim->root_spring[r]) != SM_OK) {
+					refresh_outputs(sim);
+					return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
+				}
+			}
+			sim->need_restart = true;
+		}
+	}
+	refresh_outputs(sim);
+	return SM_OK;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Access
+// ---------------------------------------------------------------------------------------------
+
+double sm_simulation_time(const sm_simulation* sim)
+{
+	return sim ? sim->time : NAN;
+}
+
+const double* sm_simulation_positions(const sm_simulation* sim)
+{
+	return sim ? sim->position : NULL;
+}
+
+const double* sm_simulation_velocities(const sm_simulation* sim)
+{
+	return sim ? sim->velocity : NULL;
+}
+
+void sm_simulation_forces(const sm_simulation* sim, double* f)
+{
+	if (sim == NULL || f == NULL)
+		return;
+	sm_model_forces(sim->model, sim->position, sim->velocity, sim->external_force, f);
+}
+
+sm_energies sm_simulation_energies(const sm_simulation* sim)
+{
+	if (sim == NULL) {
+		sm_energies e = {NAN, NAN, NAN};
+		return e;
+	}
+	return sm_model_energies(sim->model, sim->position, sim->velocity);
+}
+
+double sm_simulation_dissipated_energy(const sm_simulation* sim)
+{
+	return sim ? N_VGetArrayPointer(sim->y)[2 * sim->dofs] : NAN;
+}
+
+const sm_model* sm_simulation_model(const sm_simulation* sim)
+{
+	return sim ? sim->model : NULL;
+}
+
+sm_statistics sm_simulation_statistics(const sm_simulation* sim)
+{
+	sm_statistics s;
+	memset(&s, 0, sizeof s);
+	if (sim == NULL)
+		return s;
+	s = sim->base;
+	long steps = 0, error_fails = 0, conv_fails = 0;
+	CVodeGetNumSteps(sim->cvode, &steps);
+	CVodeGetNumErrTestFails(sim->cvode, &error_fails);
+	CVodeGetNumNonlinSolvConvFails(sim->cvode, &conv_fails);
+	s.steps += steps;
+	s.error_test_failures += error_fails;
+	s.convergence_failures += conv_fails;
+	s.rhs_evaluations = sim->rhs_evaluations;
+	s.jacobian_evaluations = sim->jacobian_evaluations;
+	s.linear_iterations = sim->linear_iterations;
+	return s;
+}
+
+int32_t sm_simulation_break_count(const sm_simulation* sim)
+{
+	return sim ? sim->break_count : 0;
+}
+
+sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t index)
+{
+	sm_break_event e = {NAN, -1};
+	if (sim && index >= 0 && index < sim->break_count)
+		e = sim->breaks[index];
+	return e;
+}
+
+sm_linear_solver sm_simulation_solver(const sm_simulation* sim)
+{
+	return sim ? sim->solver : SM_SOLVER_COUNT;
+}
+
+const char* sm_simulation_last_error(const sm_simulation* sim)
+{
+	return sim ? sim->last_error : "simulation is NULL";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Changes between calls
+// ---------------------------------------------------------------------------------------------
+
+static bool finite3(const double* a)
+{
+	return a && isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
+}
+
+sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
+                                   const double velocity[3])
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (particle < 0 || particle >= sim->particle_count)
+		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_driven: particle %d is out of range (0..%d)", (int)particle,
+		            (int)sim->particle_count - 1);
+	if (sim->model->motion[particle] != SM_PARTICLE_DRIVEN)
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven", (int)particle);
+	if (!finite3(position) || !finite3(velocity))
+		return fail(sim, SM_ERROR_NOT_FINITE,
+		            "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
+	const size_t p = 3 * (size_t)particle;
+	const double dt = sim->time - sim->drive_time[particle];
+	bool jump = false;
+	for (int c = 0; c < 3; c++) {
+		jump = jump || position[c] != sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt ||
+		       velocity[c] != sim->drive_velocity[p + c];
+		sim->drive_position[p + c] = position[c];
+		sim->drive_velocity[p + c] = velocity[c];
+	}
+	sim->drive_time[particle] = sim->time;
+	if (jump && sim->def.restart_on_input_change)
+		sim->need_restart = true;
+	refresh_outputs(sim);
+	return SM_OK;
+}
+
+sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3])
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (particle < 0 || particle >= sim->particle_count)
+		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_external_force: particle %d is out of range (0..%d)",
+		            (int)particle, (int)sim->particle_count - 1);
+	if (!finite3(force))
+		return fail(sim, SM_ERROR_NOT_FINITE, "set_external_force: particle %d: force must be 3 finite numbers",
+		            (int)particle);
+	double* f = sim->external_force + 3 * (size_t)particle;
+	const bool jump = f[0] != force[0] || f[1] != force[1] || f[2] != force[2];
+	f[0] = force[0];
+	f[1] = force[1];
+	f[2] = force[2];
+	if (jump && sim->def.restart_on_input_change)
+		sim->need_restart = true;
+	return SM_OK;
+}
+
+sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
+{
+	if (sim == NULL || x == NULL || v == NULL)
+		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_state: positions and velocities are required")
+		           : SM_ERROR_INVALID_ARGUMENT;
+	if (!isfinite(time))
+		return fail(sim, SM_ERROR_NOT_FINITE, "set_state: time %g is not finite", time);
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		if (!finite3(x + p) || !finite3(v + p))
+			return fail(sim, SM_ERROR_NOT_FINITE, "set_state: particle %d: position or velocity is not finite",
+			            (int)sim->free_particles[k]);
+	}
+	pack(sim, x, v, N_VGetArrayPointer(sim->y));
+	sim->time = time;
+	sim->need_restart = true;
+	refresh_outputs(sim);
+	return SM_OK;
+}
+
+sm_status sm_simulation_reset(sm_simulation* sim)
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	for (int32_t s = 0; s < sim->spring_count; s++)
+		if (sm_model_spring_enabled(sim->model, s) != (sim->initial_enabled[s] != 0))
+			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
+	load_initial_state(sim);
+	sim->break_count = 0;
+	sim->last_error[0] = '\0';
+	sm_status st = reinit(sim, false);
+	memset(&sim->base, 0, sizeof sim->base);
+	sim->rhs_evaluations = sim->jacobian_evaluations = sim->linear_iterations = 0;
+	return st;
+}
+
+sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
+{
+	if (sim == NULL || model == NULL)
+		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "update_model: model is NULL") : SM_ERROR_INVALID_ARGUMENT;
+	const sm_model* old = sim->model;
+	if (model->particle_count != old->particle_count || model->spring_count != old->spring_count)
+		return fail(sim, SM_ERROR_TOPOLOGY,
+		            "update_model: the new model has %d particles and %d springs, the simulation %d and %d",
+		            (int)model->particle_count, (int)model->spring_count, (int)old->particle_count,
+		            (int)old->spring_count);
+	for (int32_t i = 0; i < model->particle_count; i++)
+		if (model->motion[i] != old->motion[i])
+			return fail(sim, SM_ERROR_TOPOLOGY, "update_model: particle %d moves differently in the new model",
+			            (int)i);
+	for (int32_t s = 0; s < model->spring_count; s++)
+		if (model->spring_a[s] != old->spring_a[s] || model->spring_b[s] != old->spring_b[s] ||
+		    model->zero_length[s] != old->zero_length[s])
+			return fail(sim, SM_ERROR_TOPOLOGY,
+			            "update_model: spring %d connects other particles or has another kind in the new model",
+			            (int)s);
+	sm_model* copy = sm_model_clone(model);
+	uint8_t* enabled = malloc((size_t)model->spring_count + 1);
+	if (!copy || !enabled) {
+		sm_model_destroy(copy);
+		free(enabled);
+		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "update_model: out of memory");
+	}
+	memcpy(enabled, model->enabled, (size_t)model->spring_count);
+	// Springs that broke stay broken.
+	for (int32_t b = 0; b < sim->break_count; b++)
+		sm_model_set_spring_enabled(copy, sim->breaks[b].spring, false);
+	sm_model* previous = sim->model;
+	sim->model = copy;
+	sm_status st = build_roots(sim);
+	if (st != SM_OK) {
+		sim->model = previous;
+		sm_model_destroy(copy);
+		free(enabled);
+		build_roots(sim);
+		return fail(sim, st, "update_model: cannot set up the break events");
+	}
+	sm_model_destroy(previous);
+	free(sim->initial_enabled);
+	sim->initial_enabled = enabled;
+	refresh_masses(sim);
+	sim->need_restart = true;
+	refresh_outputs(sim);
+	return SM_OK;
+}

@@ -1,0 +1,105 @@
+// Internal layout of sm_simulation, shared by simulation.c and the linear solvers
+// (linear_solver_*.c).
+//
+// The CVODE state vector holds the free particles only, followed by the dissipated energy:
+//   y = [x_free (3 nf) ; v_free (3 nf) ; e (1)],  y' = [v ; M^-1 f(x, v) ; P_dissipated(x, v)].
+// Constrained particles take their positions from the simulation's own arrays: fixed ones
+// from the model, driven ones from x(t) = drive_position + drive_velocity (t - drive_time).
+#pragma once
+
+#include "springmass/simulation.h"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_linearsolver.h>
+#include <sundials/sundials_matrix.h>
+
+struct sm_simulation {
+	sm_simulation_def def;
+	sm_linear_solver solver;  // resolved (never AUTO)
+	SUNContext context;
+	void* cvode;
+	N_Vector y;          // state at `time`
+	N_Vector y_saved;    // state before the last CVode call (restored if a failure spoils y)
+	N_Vector tolerances; // absolute tolerance per component
+	SUNMatrix matrix;    // NULL for the matrix-embedded solvers
+	SUNLinearSolver linear_solver;
+	SUNNonlinearSolver fixed_point;  // Adams only
+	bool need_restart;   // something requires CVodeReInit before the next step
+
+	sm_model* model;          // own copy; broken springs disabled in it
+	uint8_t* initial_enabled; // per spring: enabled in the model given to create/update
+	int32_t particle_count;
+	int32_t spring_count;
+	int32_t free_count;
+	int64_t dofs;              // 3 * free_count
+	int32_t* free_particles;   // particle index of each free particle
+	int32_t constrained_count;
+	int32_t* constrained;      // particle indices of fixed and driven particles
+	double* inverse_mass;      // per free particle [1/kg]
+	double* mass_dof;          // per free degree of freedom [kg]
+
+	double time;               // [s]
+	double* position;          // all particles at `time` [m]
+	double* velocity;          // [m/s]
+	double* external_force;    // per particle [N], held until changed
+	double* drive_position;    // per particle [m]
+	double* drive_velocity;    // [m/s]
+	double* drive_time;        // [s]
+
+	// Work arrays of the right-hand side and the Jacobian (all particles).
+	double* work_position;
+	double* work_velocity;
+	double* work_force;
+
+	// Breakable springs: one root function each.
+	int32_t root_count;
+	int32_t* root_spring;
+	double* root_limit;        // l0 (1 + break_strain) [m]
+	int* roots_found;
+
+	sm_break_event* breaks;
+	int32_t break_count;
+	int32_t break_capacity;
+
+	// Sparse Jacobian over the free degrees of freedom (KLU and the reduced solvers).
+	sm_sparse_jacobian* pattern;
+	double* dfdx;  // values in the pattern's order [N/m]
+	double* dfdv;  // [N s/m]
+	int64_t* klu_row_pointers;    // pattern of the 6nf+1 KLU matrix, rewritten on every fill
+	int64_t* klu_column_indices;
+
+	// Counters; CVODE's own counters restart with every CVodeReInit, so what they had reached
+	// is folded into `base` first.
+	sm_statistics base;
+	int64_t rhs_evaluations;
+	int64_t jacobian_evaluations;
+	int64_t linear_iterations;
+
+	char last_error[SM_ERROR_MESSAGE_CAPACITY];
+	char solver_message[SM_ERROR_MESSAGE_CAPACITY];  // CVODE's last error text
+};
+
+// Seconds on a monotonic clock [s].
+double sm_simulation_clock(void);
+
+// Fills work_position / work_velocity for all particles from a CVODE state at time t.
+void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v);
+
+// Fills sim->dfdx and sim->dfdv at the CVODE state y (time t) with the given variant.
+int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant);
+
+// The reduced second-order linear solver (linear_solver_reduced.c): a SUNLinearSolver that
+// solves (M - gamma D - gamma^2 K) dv = M bv + gamma K bx by
+// preconditioned conjugate gradients (use_cholmod false) or sparse Cholesky (true).
+SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
+// Its set-up, given to CVodeSetPreconditioner (user data: the simulation): evaluates the
+// Jacobian unless CVODE allows reuse (jok) and factorises; psolve is a formality.
+int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
+                    sunrealtype gamma, void* user_data);
+int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
+                      sunrealtype delta, int lr, void* user_data);
+
+// Wraps a matrix-based SUNLinearSolver so that its setup and solve are timed into the
+// simulation's statistics; takes ownership of inner.
+SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner);
