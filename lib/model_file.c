@@ -52,17 +52,40 @@ static bool fail(parser* p, sm_status status, const char* path, const char* form
 	return false;
 }
 
+// Paths are built on every element read, so without printf: `path.key` and `path[index]`,
+// cut to fit PATH_CAPACITY (100 + 1 + 50 + 1 and 120 + 1 + 20 + 2 bytes at most).
+// Copies at most `most` characters of s (up to its end) to out; returns how many.
+static size_t copy_bounded(char* out, const char* s, size_t most)
+{
+	size_t n = 0;
+	for (; n < most && s[n] != '\0'; n++)
+		out[n] = s[n];
+	return n;
+}
+
 static void child_key(char* out, const char* path, const char* key)
 {
-	if (path[0] == '\0')
-		snprintf(out, PATH_CAPACITY, "%.100s", key);
-	else
-		snprintf(out, PATH_CAPACITY, "%.100s.%.50s", path, key);
+	size_t n = copy_bounded(out, path, 100);
+	if (n > 0)
+		out[n++] = '.';
+	n += copy_bounded(out + n, key, 50);
+	out[n] = '\0';
 }
 
 static void child_index(char* out, const char* path, size_t index)
 {
-	snprintf(out, PATH_CAPACITY, "%.120s[%zu]", path, index);
+	size_t n = copy_bounded(out, path, 120);
+	out[n++] = '[';
+	char digits[24];
+	int d = 0;
+	do {
+		digits[d++] = (char)('0' + index % 10);
+		index /= 10;
+	} while (index > 0);
+	while (d > 0)
+		out[n++] = digits[--d];
+	out[n++] = ']';
+	out[n] = '\0';
 }
 
 static const char* type_name(const json_t* value)
@@ -892,7 +915,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		    !read_material(p, obj, path, "body_diagonal", &d.body_diagonal, &groups[2]))
 			return false;
 		if (nu * nv > limit || nu * nv * nw > limit)
-			return check_budget(p, path, limit + 1, 0);
+			return fail(p, SM_ERROR_SCHEMA, path, "%lld x %lld x %lld particles exceed the limit of %lld",
+			            (long long)nu, (long long)nv, (long long)nw, (long long)limit);
 		if (!check_budget(p, path, nu * nv * nw, 13 * nu * nv * nw))
 			return false;
 		d.nu = (int32_t)nu;

@@ -50,27 +50,39 @@ static void puts_(text* t, const char* s)
 static void put_number(text* t, double x)
 {
 	char buffer[40];
-	for (int digits = 15; digits <= 17; digits++) {
-		snprintf(buffer, sizeof buffer, "%.*g", digits, x);
-		if (strtod(buffer, NULL) == x)
-			break;
+	snprintf(buffer, sizeof buffer, "%.15g", x);
+	if (strtod(buffer, NULL) != x) {
+		snprintf(buffer, sizeof buffer, "%.16g", x);
+		if (strtod(buffer, NULL) != x)
+			snprintf(buffer, sizeof buffer, "%.17g", x);
 	}
 	if (strcmp(buffer, "-0") == 0)
 		strcpy(buffer, "0");
 	puts_(t, buffer);
 }
 
-// A JSON string with jansson's escaping.
+// A JSON string. Names and descriptions hold no control characters (the loader refuses them
+// in names; a description may hold tabs), so only quotes, backslashes and control characters
+// need escaping; UTF-8 passes through.
 static void put_string(text* t, const char* s)
 {
-	json_t* value = json_string(s);
-	char* encoded = value != NULL ? json_dumps(value, JSON_ENCODE_ANY) : NULL;
-	if (encoded == NULL)
-		t->failed = true;
-	else
-		puts_(t, encoded);
-	free(encoded);
-	json_decref(value);
+	puts_(t, "\"");
+	const char* run = s;
+	for (; *s != '\0'; s++) {
+		const unsigned char c = (unsigned char)*s;
+		if (c == '"' || c == '\\' || c < 0x20) {
+			put(t, run, (size_t)(s - run));
+			char escaped[8];
+			if (c == '"' || c == '\\')
+				snprintf(escaped, sizeof escaped, "\\%c", c);
+			else
+				snprintf(escaped, sizeof escaped, "\\u%04x", c);
+			puts_(t, escaped);
+			run = s + 1;
+		}
+	}
+	put(t, run, (size_t)(s - run));
+	puts_(t, "\"");
 }
 
 static void put_json(text* t, const json_t* value)

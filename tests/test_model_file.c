@@ -477,6 +477,10 @@ static int test_broken_files(void)
 	     "test.json: structures[0]: the model would have 1600000000 particles and 9600000000 springs, more than the "
 	     "limit of 4194304 of each"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
+	     " \"nu\": 4000000, \"nv\": 4000000, \"nw\": 4000000}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: 4000000 x 4000000 x 4000000 particles exceed the limit of 4194304"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
 	     " \"nu\": -3, \"nv\": 4, \"nw\": 4}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: -3 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
