@@ -510,10 +510,19 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 			else if (count == 3 && c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0] &&
 			         c[2] < r->shape[2])
 				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
-			if (index < 0)
+			if (index < 0 && s->type == STRUCTURE_SHEET)
 				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-				            "\"%.80s\" is outside structure %s (%d columns x %d rows x %d layers, %d particles)", name,
-				            s->name, (int)r->shape[0], (int)r->shape[1], (int)r->shape[2], (int)r->particle_count);
+				            "\"%.80s\" is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])", name,
+				            s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
+			if (index < 0 && s->type == STRUCTURE_BLOCK)
+				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
+				            "\"%.80s\" is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] "
+				            "to [%d])",
+				            name, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1,
+				            (int)r->particle_count - 1);
+			if (index < 0)
+				return fail(p, SM_ERROR_PARTICLE_INDEX, path, "\"%.80s\" is outside structure %s ([0] to [%d])", name,
+				            s->name, (int)r->particle_count - 1);
 			*out = (int32_t)index;
 			return true;
 		}

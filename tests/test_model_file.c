@@ -450,7 +450,7 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
 	     " \"nv\": 4}], \"fixed\": [\"c[4,0]\"]}",
 	     SM_ERROR_PARTICLE_INDEX,
-	     "test.json: fixed[0]: \"c[4,0]\" is outside structure c (4 columns x 4 rows x 1 layers, 16 particles)"},
+	     "test.json: fixed[0]: \"c[4,0]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
 	     " \"nv\": 4}], \"fixed\": [{\"min\": [5, 5, 5], \"max\": [6, 6, 6]}]}",
 	     SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (5, 5, 5) to (6, 6, 6) contains no particle"},
