@@ -2,6 +2,7 @@
 // and loading gives the same model, parameters feed the constants, and a table of broken and
 // hostile files gives exactly the expected errors.
 #include "springmass/model_file.h"
+#include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
 
@@ -245,6 +246,64 @@ static int test_bundled_model_facts(void)
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
 	ENSURE(sm_model_particle_count(m) == 21 && sm_model_spring_count(m) == 20 && count_fixed(m) == 1);
 	ENSURE_NEAR(sm_model_get_def(m).mass_damping, 0.1, 0.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// The oscillator's description promises a closed form: x(t) = l0 + A e^(-g t) (cos(wd t) +
+// g / wd sin(wd t)) with g = d / (2 m), wd = sqrt(k / m - g^2), A = 0.1 m, simulated with the
+// file's own settings (rtol 1e-8).
+static int test_oscillator_follows_its_closed_form(void)
+{
+	sm_document* doc = load_bundled("oscillator", NULL);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	const sm_document_settings settings = sm_document_get_settings(doc);
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = sm_simulation_create(m, &settings.solver, &err);
+	ENSURE(sim != NULL);
+	const double g = 0.4 / 2.0, wd = sqrt(40.0 - g * g);
+	double worst = 0.0;
+	for (int k = 1; k <= 50; k++) {
+		const double t = 0.05 * k;
+		ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		const double exact = 0.5 + 0.1 * exp(-g * t) * (cos(wd * t) + g / wd * sin(wd * t));
+		worst = fmax(worst, fabs(sm_simulation_positions(sim)[3] - exact));
+	}
+	// rtol 1e-8 and atol 1e-10 m on a 0.5 m position: a global error of a few 1e-8 m over 2.5 s;
+	// 1e-6 m leaves a factor of ten for error growth.
+	ENSURE(worst < 1e-6);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// The tearing cloth tears: springs break within the first 0.3 s, all of them springs of the
+// sheet that carry a break strain, never the weight's hooks.
+static int test_tearing_cloth_tears(void)
+{
+	sm_document* doc = load_bundled("tearing_cloth", NULL);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	const sm_document_settings settings = sm_document_get_settings(doc);
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = sm_simulation_create(m, &settings.solver, &err);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.3), SM_OK);
+	const int32_t breaks = sm_simulation_break_count(sim);
+	ENSURE(breaks >= 3);
+	for (int32_t k = 0; k < breaks; k++) {
+		const sm_break_event e = sm_simulation_break(sim, k);
+		sm_spring_def def;
+		sm_model_get_spring(m, e.spring, &def);
+		ENSURE(isfinite(def.break_strain));
+		ENSURE(e.time > 0.0 && e.time <= 0.3);
+	}
+	sm_simulation_destroy(sim);
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
 	return 0;
@@ -586,6 +645,8 @@ int main(int argc, char** argv)
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_bundled_models_round_trip);
 	RUN_TEST(test_oscillator);
+	RUN_TEST(test_oscillator_follows_its_closed_form);
+	RUN_TEST(test_tearing_cloth_tears);
 	RUN_TEST(test_cloth_is_the_benchmark_cloth);
 	RUN_TEST(test_bundled_model_facts);
 	RUN_TEST(test_parameters);
