@@ -675,8 +675,12 @@ static bool read_springs(parser* p, const json_t* list)
 			def.rest_length = 0.0;
 		int32_t index;
 		const sm_status st = sm_model_add_spring(model, &def, &index);
-		if (st != SM_OK)
-			return fail(p, st, path, "%s", sm_model_last_error(model));
+		if (st != SM_OK) {
+			// The model numbers springs from structures first; the path already names this one.
+			const char* message = sm_model_last_error(model);
+			const char* rule = strncmp(message, "spring ", 7) == 0 ? strstr(message, ": ") : NULL;
+			return fail(p, st, path, "%s", rule != NULL ? rule + 2 : message);
+		}
 		p->ex->spring_sources[index] = src;
 	}
 	return true;

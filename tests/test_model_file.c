@@ -499,7 +499,7 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 1, \"rest_length\": 0}]}",
 	     SM_ERROR_ZERO_REST_LENGTH,
-	     "test.json: springs[0]: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0)"},
+	     "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"break_strain\": -0.1}]}",
 	     SM_ERROR_NEGATIVE, "test.json: springs[0].break_strain: -0.1 must be > 0"},
@@ -551,7 +551,7 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"position\":"
 	     " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
 	     " \"big\"}]}",
-	     SM_ERROR_NOT_FINITE, "test.json: springs[0]: spring 0: stiffness E / l0 = 1e+308 / 1e-10 is not finite"},
+	     SM_ERROR_NOT_FINITE, "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
 	     "test.json:1:56: real number overflow near '1e400'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaN}}", SM_ERROR_SYNTAX,
