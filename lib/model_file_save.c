@@ -85,14 +85,38 @@ static void put_string(text* t, const char* s)
 	puts_(t, "\"");
 }
 
+// A JSON value copied from the file (gravity, mass damping, simulation and FMU settings, all
+// validated and shallow), with numbers written like every other number.
 static void put_json(text* t, const json_t* value)
 {
-	char* encoded = json_dumps(value, JSON_ENCODE_ANY);
-	if (encoded == NULL)
-		t->failed = true;
-	else
-		puts_(t, encoded);
-	free(encoded);
+	if (json_is_number(value)) {
+		put_number(t, json_number_value(value));
+	} else if (json_is_string(value)) {
+		put_string(t, json_string_value(value));
+	} else if (json_is_array(value)) {
+		puts_(t, "[");
+		for (size_t k = 0; k < json_array_size(value); k++) {
+			puts_(t, k > 0 ? ", " : "");
+			put_json(t, json_array_get(value, k));
+		}
+		puts_(t, "]");
+	} else if (json_is_object(value)) {
+		const char* key;
+		json_t* item;
+		bool first = true;
+		puts_(t, "{");
+		json_object_foreach((json_t*)value, key, item)
+		{
+			puts_(t, first ? "" : ", ");
+			first = false;
+			put_string(t, key);
+			puts_(t, ": ");
+			put_json(t, item);
+		}
+		puts_(t, "}");
+	} else {
+		puts_(t, json_is_true(value) ? "true" : json_is_false(value) ? "false" : "null");
+	}
 }
 
 // A number, or the parameter it came from.
