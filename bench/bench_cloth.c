@@ -1,0 +1,161 @@
+// Cloth simulation benchmark: the benchmark cloth (bench/README.md) simulated with CVODE.
+//
+//   bench_cloth N SOLVER [REPEATS] [T_END]
+//
+// Builds the n x n benchmark cloth (sm_add_sheet's default materials, the corners (n-1, 0) and
+// (n-1, n-1) fixed), integrates it from rest to T_END (default 1 s) at the peer's tolerances
+// (rtol 1e-4, atol 1e-6) with the given linear solver ("auto", "dense", "klu", "pcg",
+// "cholmod"), REPEATS times (default 3), and prints the median wall time of create + advance:
+//   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> lin_iters=<v>
+//         restarts=<v> z_corner=<v> force_s=<v> jacobian_s=<v> linear_s=<v>
+// (one line; the free corner is particle 0). With RESTART_EVERY=<dt> in the environment the
+// run advances in steps of dt with an external force on the free corner that changes at every
+// step (what an FMU sees with small communication steps), once keeping CVODE's history and once
+// re-initialising at every change, and prints both.
+#define _POSIX_C_SOURCE 200809L
+
+#include "springmass/simulation.h"
+#include "springmass/structures.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int compare(const void* a, const void* b)
+{
+	const double x = *(const double*)a, y = *(const double*)b;
+	return (x > y) - (x < y);
+}
+
+static sm_model* benchmark_cloth(int32_t n)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = sd.nv = n;
+	sm_structure st;
+	if (!model || sm_add_sheet(model, &sd, &st) != SM_OK ||
+	    sm_set_motion_at(model, &st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
+	    sm_set_motion_at(model, &st, n - 1, n - 1, 0, SM_PARTICLE_FIXED) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+typedef struct run_result {
+	double wall;
+	sm_statistics stats;
+	double z_corner;
+	sm_linear_solver solver;
+} run_result;
+
+// One run; interval > 0 advances in steps of `interval` with a force on the free corner that
+// changes at every step.
+static int run(const sm_model* model, sm_linear_solver solver, double t_end, double interval, bool restart,
+               run_result* out)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = solver;
+	d.relative_tolerance = 1e-4;
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-6;
+	d.restart_on_input_change = restart;
+	const double start = now();
+	sm_error err;
+	sm_simulation* sim = sm_simulation_create(model, &d, &err);
+	if (!sim) {
+		fprintf(stderr, "bench_cloth: %s\n", err.message);
+		return 1;
+	}
+	sm_status st = SM_OK;
+	if (interval > 0.0) {
+		const int steps = (int)lround(t_end / interval);
+		for (int k = 1; k <= steps && st == SM_OK; k++) {
+			// A smooth input sampled at the communication points: 0.05 N sin(2 pi t).
+			const double t = (k - 1) * interval;
+			const double force[3] = {0.0, 0.0, 0.05 * sin(6.283185307179586 * t)};
+			sm_simulation_set_external_force(sim, 0, force);
+			st = sm_simulation_advance(sim, k * interval);
+		}
+	} else {
+		st = sm_simulation_advance(sim, t_end);
+	}
+	out->wall = now() - start;
+	if (st != SM_OK) {
+		fprintf(stderr, "bench_cloth: %s\n", sm_simulation_last_error(sim));
+		sm_simulation_destroy(sim);
+		return 1;
+	}
+	out->stats = sm_simulation_statistics(sim);
+	out->z_corner = sm_simulation_positions(sim)[2];
+	out->solver = sm_simulation_solver(sim);
+	sm_simulation_destroy(sim);
+	return 0;
+}
+
+static int measure(const sm_model* model, sm_linear_solver solver, int repeats, double t_end, double interval,
+                   bool restart, run_result* result)
+{
+	double* walls = malloc(sizeof(double) * (size_t)repeats);
+	if (!walls)
+		return 1;
+	for (int r = 0; r < repeats; r++) {
+		if (run(model, solver, t_end, interval, restart, result) != 0) {
+			free(walls);
+			return 1;
+		}
+		walls[r] = result->wall;
+	}
+	qsort(walls, (size_t)repeats, sizeof(double), compare);
+	result->wall = repeats % 2 ? walls[repeats / 2] : 0.5 * (walls[repeats / 2 - 1] + walls[repeats / 2]);
+	free(walls);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	if (argc < 3) {
+		fprintf(stderr, "usage: bench_cloth N SOLVER [REPEATS] [T_END]\n");
+		return 2;
+	}
+	const int32_t n = (int32_t)atoi(argv[1]);
+	const sm_linear_solver solver = sm_linear_solver_from_name(argv[2]);
+	const int repeats = argc > 3 ? atoi(argv[3]) : 3;
+	const double t_end = argc > 4 ? atof(argv[4]) : 1.0;
+	if (n < 2 || solver == SM_SOLVER_COUNT || repeats < 1 || !(t_end > 0.0)) {
+		fprintf(stderr, "bench_cloth: bad arguments\n");
+		return 2;
+	}
+	sm_model* model = benchmark_cloth(n);
+	if (!model)
+		return 1;
+	const char* every = getenv("RESTART_EVERY");
+	const double interval = every ? atof(every) : 0.0;
+	for (int pass = 0; pass < (interval > 0.0 ? 2 : 1); pass++) {
+		run_result r;
+		if (measure(model, solver, repeats, t_end, interval, pass == 1, &r) != 0) {
+			sm_model_destroy(model);
+			return 1;
+		}
+		printf("cloth n=%d solver=%s wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld restarts=%lld etf=%lld ncf=%lld "
+		       "z_corner=%.6f force_s=%.3g jacobian_s=%.3g linear_s=%.3g",
+		       (int)n, sm_linear_solver_name(r.solver), r.wall, (long long)r.stats.steps,
+		       (long long)r.stats.rhs_evaluations, (long long)r.stats.jacobian_evaluations,
+		       (long long)r.stats.linear_iterations, (long long)r.stats.restarts, (long long)r.stats.error_test_failures, (long long)r.stats.convergence_failures, r.z_corner, r.stats.force_seconds,
+		       r.stats.jacobian_seconds, r.stats.linear_solve_seconds);
+		if (interval > 0.0)
+			printf(" interval=%g inputs=%s", interval, pass == 1 ? "restart" : "keep-history");
+		printf("\n");
+	}
+	sm_model_destroy(model);
+	return 0;
+}

@@ -1,0 +1,77 @@
+#!/usr/bin/env bash
+# Cloth simulation benchmark: springmass's linear solvers on the benchmark cloth, beside the
+# peer (../shared/bench/scipy_cloth.py, SciPy solve_ivp BDF) in the same run.
+#
+#   bench/bench_cloth.sh BUILD_DIR          (QUICK=1: up to n = 64, peer for n = 8 only)
+#
+# Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
+# atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 128):
+#   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> ...
+# a `skip` line for the combinations that would take minutes, then for the peer
+#   peer n=<n> wall_s=<v> z_corner=<v>
+#   speedup n=<n> <peer wall / springmass wall with the default solver>
+set -euo pipefail
+
+build_dir=${1:?usage: bench_cloth.sh BUILD_DIR}
+repeats=${REPEATS:-3}
+top=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
+peer="$top/../shared/bench/scipy_cloth.py"
+bench="$build_dir/bench/bench_cloth"
+python="$top/.venv/bin/python"
+
+if [[ ! -x "$bench" ]]; then
+	echo "bench_cloth.sh: $bench not found; build first (make build)" >&2
+	exit 1
+fi
+
+sizes=(16 32 64 128 256)
+peer_sizes=(8 16)
+if [[ "${QUICK:-}" == 1 ]]; then
+	sizes=(16 32 64)
+	peer_sizes=(8)
+fi
+
+# Combinations measured to take minutes (bench/README.md): SUNDIALS' dense LU above n = 8,
+# KLU on the full 6n system above n = 32, the reduced solvers above n = 64.
+too_slow() {
+	local n=$1 solver=$2
+	case $solver in
+	dense) ((n > 8)) ;;
+	klu) ((n > 32)) ;;
+	pcg | cholmod) ((n > 64)) ;;
+	*) false ;;
+	esac
+}
+
+declare -A ours
+for n in 8 "${sizes[@]}"; do
+	for solver in auto dense klu pcg cholmod; do
+		if [[ $n == 8 && $solver != auto ]]; then
+			continue  # n = 8 only for the speedup against the peer
+		fi
+		if too_slow "$n" "$solver" || { [[ $solver == auto ]] && too_slow "$n" cholmod; }; then
+			echo "skip n=$n solver=$solver (would take minutes)"
+			continue
+		fi
+		r=$repeats
+		((n >= 128)) && r=1
+		line=$("$bench" "$n" "$solver" "$r")
+		if [[ $solver == auto ]]; then
+			ours[$n]=$(sed -n 's/.*wall_s=\([^ ]*\).*/\1/p' <<<"$line")
+			line=${line/solver=/solver=auto:}
+		fi
+		[[ $n == 8 ]] || echo "$line"
+	done
+done
+
+for n in "${peer_sizes[@]}"; do
+	if [[ ! -f "$peer" ]]; then
+		echo "peer not found at $peer: skipped"
+		break
+	fi
+	read -r _ _ _ _ _ wall z _ < <("$python" "$peer" "$n" 1)
+	echo "peer n=$n wall_s=$wall z_corner=$z"
+	if [[ -n "${ours[$n]:-}" ]]; then
+		awk -v n="$n" -v p="$wall" -v o="${ours[$n]}" 'BEGIN { printf "speedup n=%d %.1f\n", n, p / o }'
+	fi
+done
