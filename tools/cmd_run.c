@@ -1,11 +1,423 @@
-// springmass run: placeholder until the subcommand lands.
+// springmass run: simulates a model file with CVODE and writes a CSV of its ports and energies,
+// optionally every particle's position and a ParaView series (VTK polydata + .pvd index).
+#define _POSIX_C_SOURCE 200809L
+
 #include "commands.h"
 
+#include "springmass/model_file.h"
+#include "springmass/simulation.h"
+
+#include <errno.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+static void usage(FILE* out)
+{
+	fprintf(out,
+	        "usage: springmass run MODEL [options]\n"
+	        "\n"
+	        "Simulates the model file MODEL from its initial state and writes one CSV row per output\n"
+	        "time: time [s], every port's quantities (force port P: P.x P.y P.z [m] P.vx P.vy P.vz [m/s];\n"
+	        "motion port P: P.fx P.fy P.fz [N], the force the model exerts on what drives it; probe P:\n"
+	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity and energy.dissipated [J].\n"
+	        "Force ports get no force and motion ports hold their initial motion. Defaults come from\n"
+	        "the file's \"simulation\" settings.\n"
+	        "\n"
+	        "options:\n"
+	        "  --t-end T              end time [s]\n"
+	        "  --output-interval DT   time between rows [s]\n"
+	        "  --output FILE          CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
+	        "  --positions            also every particle's position (columns NAME.x NAME.y NAME.z)\n"
+	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk (points, intact springs as\n"
+	        "                         lines) per row and the index DIR/NAME.pvd\n"
+	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
+	        "  --method NAME          bdf (default) or adams\n"
+	        "  --rtol R               relative tolerance [1]\n"
+	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s]\n"
+	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
+	        "  --quiet                no progress line and no statistics on stderr\n"
+	        "\n"
+	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
+	        "solver's statistics at the end. Exit status: 0 success, 1 bad model or solver failure,\n"
+	        "2 usage error.\n");
+}
+
+static double wall_clock(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int parse_number(const char* option, const char* text, double* value)
+{
+	char* end = NULL;
+	errno = 0;
+	double v = strtod(text, &end);
+	if (end == text || *end != '\0' || errno != 0 || !isfinite(v)) {
+		fprintf(stderr, "springmass run: %s expects a number, got '%s'\n", option, text);
+		return 1;
+	}
+	*value = v;
+	return 0;
+}
+
+typedef struct run_options {
+	const char* model;
+	const char* output;
+	const char* vtk_dir;
+	double t_end;
+	double interval;
+	double rtol;
+	double atol;
+	const char* solver;
+	const char* method;
+	bool positions;
+	bool quiet;
+	int set_count;
+	const char** sets;
+} run_options;
+
+// Column header: ports, energies, positions.
+static void write_header(FILE* csv, const sm_document* doc, const sm_model* model, bool positions)
+{
+	fprintf(csv, "time");
+	for (int32_t p = 0; p < sm_document_port_count(doc); p++) {
+		const sm_port port = sm_document_port(doc, p);
+		if (port.kind == SM_PORT_MOTION)
+			fprintf(csv, ",%s.fx,%s.fy,%s.fz", port.name, port.name, port.name);
+		else
+			fprintf(csv, ",%s.x,%s.y,%s.z,%s.vx,%s.vy,%s.vz", port.name, port.name, port.name, port.name, port.name,
+			        port.name);
+	}
+	fprintf(csv, ",energy.kinetic,energy.elastic,energy.gravity,energy.dissipated");
+	if (positions)
+		for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
+			const char* name = sm_document_particle_name(doc, i);
+			char fallback[32];
+			if (name == NULL) {
+				snprintf(fallback, sizeof fallback, "p[%d]", (int)i);
+				name = fallback;
+			}
+			fprintf(csv, ",%s.x,%s.y,%s.z", name, name, name);
+		}
+	fprintf(csv, "\n");
+}
+
+static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* sim, double* forces, bool positions)
+{
+	const double* x = sm_simulation_positions(sim);
+	const double* v = sm_simulation_velocities(sim);
+	const int32_t n = sm_model_particle_count(sm_simulation_model(sim));
+	fprintf(csv, "%.17g", sm_simulation_time(sim));
+	bool have_forces = false;
+	for (int32_t p = 0; p < sm_document_port_count(doc); p++) {
+		const sm_port port = sm_document_port(doc, p);
+		const size_t i = 3 * (size_t)port.particle;
+		if (port.kind == SM_PORT_MOTION) {
+			if (!have_forces) {
+				sm_simulation_forces(sim, forces);
+				have_forces = true;
+			}
+			fprintf(csv, ",%.17g,%.17g,%.17g", forces[i], forces[i + 1], forces[i + 2]);
+		} else {
+			fprintf(csv, ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", x[i], x[i + 1], x[i + 2], v[i], v[i + 1], v[i + 2]);
+		}
+	}
+	const sm_energies e = sm_simulation_energies(sim);
+	fprintf(csv, ",%.17g,%.17g,%.17g,%.17g", e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim));
+	if (positions)
+		for (int32_t i = 0; i < n; i++)
+			fprintf(csv, ",%.17g,%.17g,%.17g", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	fprintf(csv, "\n");
+}
+
+// One legacy VTK polydata file: the particles as points, the intact springs as lines.
+static int write_vtk(const char* path, const sm_simulation* sim)
+{
+	FILE* f = fopen(path, "w");
+	if (!f)
+		return 1;
+	const sm_model* model = sm_simulation_model(sim);
+	const int32_t n = sm_model_particle_count(model);
+	const int32_t springs = sm_model_spring_count(model);
+	const double* x = sm_simulation_positions(sim);
+	int32_t intact = 0;
+	for (int32_t s = 0; s < springs; s++)
+		intact += sm_model_spring_enabled(model, s);
+	fprintf(f, "# vtk DataFile Version 3.0\nspringmass t = %.17g s\nASCII\nDATASET POLYDATA\n", sm_simulation_time(sim));
+	fprintf(f, "POINTS %d double\n", (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.9g %.9g %.9g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	fprintf(f, "LINES %d %d\n", (int)intact, (int)(3 * intact));
+	for (int32_t s = 0; s < springs; s++) {
+		if (!sm_model_spring_enabled(model, s))
+			continue;
+		sm_spring_def d;
+		sm_model_get_spring(model, s, &d);
+		fprintf(f, "2 %d %d\n", (int)d.a, (int)d.b);
+	}
+	const int bad = ferror(f);
+	return (fclose(f) != 0 || bad) ? 1 : 0;
+}
+
+static int parse_arguments(int argc, char** argv, run_options* o)
+{
+	for (int i = 1; i < argc; i++) {
+		const char* a = argv[i];
+		const bool has_value = i + 1 < argc;
+		if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+			usage(stdout);
+			return -1;
+		} else if (strcmp(a, "--positions") == 0) {
+			o->positions = true;
+		} else if (strcmp(a, "--quiet") == 0) {
+			o->quiet = true;
+		} else if (a[0] == '-' && a[1] == '-') {
+			if (!has_value) {
+				fprintf(stderr, "springmass run: %s needs a value\n\n", a);
+				return 2;
+			}
+			const char* value = argv[++i];
+			if (strcmp(a, "--t-end") == 0) {
+				if (parse_number(a, value, &o->t_end) || !(o->t_end > 0.0)) {
+					fprintf(stderr, "springmass run: --t-end must be > 0\n");
+					return 2;
+				}
+			} else if (strcmp(a, "--output-interval") == 0) {
+				if (parse_number(a, value, &o->interval) || !(o->interval > 0.0)) {
+					fprintf(stderr, "springmass run: --output-interval must be > 0\n");
+					return 2;
+				}
+			} else if (strcmp(a, "--rtol") == 0) {
+				if (parse_number(a, value, &o->rtol) || !(o->rtol > 0.0))
+					return 2;
+			} else if (strcmp(a, "--atol") == 0) {
+				if (parse_number(a, value, &o->atol) || !(o->atol > 0.0))
+					return 2;
+			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
+				o->output = value;
+			} else if (strcmp(a, "--vtk") == 0) {
+				o->vtk_dir = value;
+			} else if (strcmp(a, "--solver") == 0) {
+				o->solver = value;
+			} else if (strcmp(a, "--method") == 0) {
+				o->method = value;
+			} else if (strcmp(a, "--set") == 0) {
+				o->sets[o->set_count++] = value;
+			} else {
+				fprintf(stderr, "springmass run: unknown option '%s'\n\n", a);
+				return 2;
+			}
+		} else if (o->model == NULL) {
+			o->model = a;
+		} else {
+			fprintf(stderr, "springmass run: one model file at a time ('%s' and '%s' given)\n\n", o->model, a);
+			return 2;
+		}
+	}
+	if (o->model == NULL)
+		return 2;
+	return 0;
+}
 
 int sm_cmd_run(int argc, char** argv)
 {
-	(void)argc;
-	fprintf(stderr, "springmass %s: not available in this build\n", argv[0]);
-	return 2;
+	run_options o;
+	memset(&o, 0, sizeof o);
+	o.sets = calloc((size_t)argc + 1, sizeof(char*));
+	if (!o.sets)
+		return 1;
+	int st = parse_arguments(argc, argv, &o);
+	if (st != 0) {
+		free(o.sets);
+		if (st > 0)
+			usage(stderr);
+		return st < 0 ? 0 : st;
+	}
+
+	int status = 1;
+	sm_document* doc = NULL;
+	sm_model* model = NULL;
+	sm_simulation* sim = NULL;
+	FILE* csv = NULL;
+	FILE* pvd = NULL;
+	double* forces = NULL;
+	char* path = NULL;
+	sm_error err = {SM_OK, ""};
+
+	doc = sm_document_load(o.model, &err);
+	if (!doc) {
+		fprintf(stderr, "springmass run: %s\n", err.message);
+		goto done;
+	}
+	for (int k = 0; k < o.set_count; k++) {
+		const char* eq = strchr(o.sets[k], '=');
+		char name[256];
+		double value;
+		if (!eq || (size_t)(eq - o.sets[k]) >= sizeof name || eq == o.sets[k]) {
+			fprintf(stderr, "springmass run: --set expects PARAM=VALUE, got '%s'\n", o.sets[k]);
+			status = 2;
+			goto done;
+		}
+		memcpy(name, o.sets[k], (size_t)(eq - o.sets[k]));
+		name[eq - o.sets[k]] = '\0';
+		if (parse_number("--set", eq + 1, &value)) {
+			status = 2;
+			goto done;
+		}
+		const int32_t index = sm_document_parameter_index(doc, name);
+		if (index < 0) {
+			fprintf(stderr, "springmass run: --set %s: the model has no parameter named \"%s\"\n", o.sets[k], name);
+			goto done;
+		}
+		if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
+			fprintf(stderr, "springmass run: --set %s: %s\n", o.sets[k], err.message);
+			goto done;
+		}
+	}
+	if (sm_document_build(doc, &model, &err) != SM_OK) {
+		fprintf(stderr, "springmass run: %s\n", err.message);
+		goto done;
+	}
+	sm_document_settings settings = sm_document_get_settings(doc);
+	const double t_end = o.t_end > 0.0 ? o.t_end : settings.stop_time;
+	const double interval = o.interval > 0.0 ? o.interval : settings.output_interval;
+	sm_simulation_def def = settings.solver;
+	if (o.rtol > 0.0)
+		def.relative_tolerance = o.rtol;
+	if (o.atol > 0.0)
+		def.absolute_tolerance_position = def.absolute_tolerance_velocity = o.atol;
+	if (o.solver) {
+		def.solver = sm_linear_solver_from_name(o.solver);
+		if (def.solver == SM_SOLVER_COUNT) {
+			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n", o.solver);
+			status = 2;
+			goto done;
+		}
+	}
+	if (o.method) {
+		if (strcmp(o.method, "bdf") == 0)
+			def.method = SM_METHOD_BDF;
+		else if (strcmp(o.method, "adams") == 0)
+			def.method = SM_METHOD_ADAMS;
+		else {
+			fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n", o.method);
+			status = 2;
+			goto done;
+		}
+	}
+	sim = sm_simulation_create(model, &def, &err);
+	if (!sim) {
+		fprintf(stderr, "springmass run: %s\n", err.message);
+		goto done;
+	}
+	const char* name = sm_document_name(doc);
+	const size_t path_capacity = strlen(name) + (o.vtk_dir ? strlen(o.vtk_dir) : 0) + 64;
+	path = malloc(path_capacity);
+	forces = malloc(sizeof(double) * (3 * (size_t)sm_model_particle_count(model) + 1));
+	if (!path || !forces)
+		goto done;
+	if (o.output && strcmp(o.output, "-") == 0) {
+		csv = stdout;
+	} else {
+		if (!o.output)
+			snprintf(path, path_capacity, "%s.csv", name);
+		const char* csv_path = o.output ? o.output : path;
+		csv = fopen(csv_path, "w");
+		if (!csv) {
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_path, strerror(errno));
+			goto done;
+		}
+	}
+	if (o.vtk_dir) {
+		if (mkdir(o.vtk_dir, 0777) != 0 && errno != EEXIST) {
+			fprintf(stderr, "springmass run: cannot create %s: %s\n", o.vtk_dir, strerror(errno));
+			goto done;
+		}
+		snprintf(path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
+		pvd = fopen(path, "w");
+		if (!pvd) {
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", path, strerror(errno));
+			goto done;
+		}
+		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
+	}
+	write_header(csv, doc, model, o.positions);
+
+	const double start = wall_clock();
+	double last_progress = start;
+	bool progress_shown = false;
+	const long rows = (long)ceil(t_end / interval - 1e-9);
+	for (long k = 0; k <= rows; k++) {
+		const double t = k == rows ? t_end : (double)k * interval;
+		if (k > 0 && sm_simulation_advance(sim, t) != SM_OK) {
+			if (progress_shown)
+				fprintf(stderr, "\n");
+			fprintf(stderr, "springmass run: %s\n", sm_simulation_last_error(sim));
+			goto done;
+		}
+		write_row(csv, doc, sim, forces, o.positions);
+		if (o.vtk_dir) {
+			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
+			if (write_vtk(path, sim) != 0) {
+				fprintf(stderr, "springmass run: cannot write %s\n", path);
+				goto done;
+			}
+			fprintf(pvd, "<DataSet timestep=\"%.17g\" file=\"%s_%06ld.vtk\"/>\n", t, name, k);
+		}
+		const double now = wall_clock();
+		if (!o.quiet && now - start > 1.0 && (now - last_progress > 0.5 || k == rows)) {
+			fprintf(stderr, "\rspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s", t, t_end, 100.0 * t / t_end,
+			        now - start);
+			last_progress = now;
+			progress_shown = true;
+		}
+	}
+	if (progress_shown)
+		fprintf(stderr, "\n");
+	if (pvd)
+		fprintf(pvd, "</Collection>\n</VTKFile>\n");
+	if (csv != stdout && fflush(csv) != 0) {
+		fprintf(stderr, "springmass run: cannot write the CSV file\n");
+		goto done;
+	}
+	if (!o.quiet) {
+		const sm_statistics s = sm_simulation_statistics(sim);
+		fprintf(stderr,
+		        "springmass run: %s to t = %g s with the %s solver: %lld steps, %lld right-hand sides, %lld "
+		        "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
+		        "restarts, %d springs broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
+		        name, t_end, sm_linear_solver_name(sm_simulation_solver(sim)), (long long)s.steps,
+		        (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations, (long long)s.linear_iterations,
+		        (long long)s.error_test_failures, (long long)s.convergence_failures, (long long)s.restarts,
+		        (int)sm_simulation_break_count(sim), wall_clock() - start, s.force_seconds, s.jacobian_seconds,
+		        s.linear_solve_seconds);
+		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
+			const sm_break_event e = sm_simulation_break(sim, b);
+			fprintf(stderr, "  spring %d broke at t = %.9g s\n", (int)e.spring, e.time);
+		}
+	}
+	status = 0;
+
+done:
+	if (csv && csv != stdout && fclose(csv) != 0 && status == 0) {
+		fprintf(stderr, "springmass run: cannot write the CSV file\n");
+		status = 1;
+	}
+	if (pvd && fclose(pvd) != 0 && status == 0) {
+		fprintf(stderr, "springmass run: cannot write the .pvd index\n");
+		status = 1;
+	}
+	free(path);
+	free(forces);
+	free(o.sets);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return status;
 }
