@@ -184,8 +184,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	for (int32_t e = 0; e < table.count; e++)
 		interior += table.slots[table.in_order[e]].triangles == 2;
 	const int64_t springs = (has_edge ? table.count : 0) + (has_bend ? interior : 0);
-	if ((st = structure_check_size(model, what, nv, springs)) != SM_OK ||
-	    (st = structure_reserve(model, what, nv, springs)) != SM_OK)
+	if ((st = structure_check_size(model, what, nv, springs)) != SM_OK)
 		goto done;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;

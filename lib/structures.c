@@ -1,9 +1,9 @@
 // Structures built from particles and springs: ropes, sheets and blocks (meshes live in
 // mesh.c), and the helpers that select their particles.
 //
-// Every builder first checks its definition and the sizes it will create, then reserves room
-// and appends. If appending fails half-way (a spring the model rejects, memory), the model is
-// cut back to the particle and spring counts it had before the call: nothing half-built stays.
+// Every builder first checks its definition and the sizes it will create, then appends. If
+// appending fails half-way (a spring the model rejects, memory), the model is cut back to the
+// particle and spring counts it had before the call: nothing half-built stays.
 #include "structures_internal.h"
 
 #include <math.h>
@@ -128,50 +128,9 @@ sm_status structure_check_size(sm_model* model, const char* what, int64_t partic
 	return SM_OK;
 }
 
-// Room for everything up front: adding particles and springs then never reallocates half-way.
-sm_status structure_reserve(sm_model* model, const char* what, int64_t particles, int64_t springs)
-{
-	if (!structure_reserve_arrays(model, model->particle_count + particles, model->spring_count + springs))
-		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for %lld particles and %lld springs",
-		                     what, (long long)particles, (long long)springs);
-	return SM_OK;
-}
-
-static int grow(void** array, size_t capacity, size_t size)
-{
-	void* p = realloc(*array, capacity * size);
-	if (p == NULL)
-		return 0;
-	*array = p;
-	return 1;
-}
-
-// Grows the model's arrays to hold at least the given counts. Arrays that already grew keep
-// their larger size with their contents intact, so a failure changes nothing observable.
-int structure_reserve_arrays(sm_model* m, int64_t particles, int64_t springs)
-{
-	if (particles > m->particle_capacity) {
-		const size_t c = (size_t)particles;
-		if (!grow((void**)&m->mass, c, sizeof(double)) || !grow((void**)&m->position, 3 * c, sizeof(double)) ||
-		    !grow((void**)&m->velocity, 3 * c, sizeof(double)) ||
-		    !grow((void**)&m->motion, c, sizeof(sm_particle_motion)) ||
-		    !grow((void**)&m->free_index, c, sizeof(int32_t)))
-			return 0;
-		m->particle_capacity = (int32_t)particles;
-	}
-	if (springs > m->spring_capacity) {
-		const size_t c = (size_t)springs;
-		if (!grow((void**)&m->spring_def, c, sizeof(sm_spring_def)) ||
-		    !grow((void**)&m->spring_a, c, sizeof(int32_t)) || !grow((void**)&m->spring_b, c, sizeof(int32_t)) ||
-		    !grow((void**)&m->rest_length, c, sizeof(double)) || !grow((void**)&m->stiffness, c, sizeof(double)) ||
-		    !grow((void**)&m->damping, c, sizeof(double)) || !grow((void**)&m->zero_length, c, sizeof(uint8_t)) ||
-		    !grow((void**)&m->enabled, c, sizeof(uint8_t)))
-			return 0;
-		m->spring_capacity = (int32_t)springs;
-	}
-	return 1;
-}
-
+// Cuts the model back to the counts it had before a failed builder call. Arrays only ever grow
+// and earlier entries are never moved, so the particles and springs below the counts are
+// intact; only the free-particle numbering must follow the particle count.
 void structure_truncate(sm_model* m, int32_t particles, int32_t springs)
 {
 	m->particle_count = particles;
@@ -275,8 +234,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	const bool has_structural = structure_material_present(&def->structural);
 	const bool has_bending = structure_material_present(&def->bending);
 	const int64_t springs = (has_structural ? n - 1 : 0) + (has_bending ? n - 2 : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
-	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
@@ -330,8 +288,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	                     structure_material_present(&def->bend)};
 	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) + (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +
 	                        (has[2] ? (nu - 2) * nv + nu * (nv - 2) : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
-	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
@@ -407,8 +364,7 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	const int64_t faces = 2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
 	const int64_t bodies = 4 * (nu - 1) * (nv - 1) * (nw - 1);
 	const int64_t springs = (has[0] ? edges : 0) + (has[1] ? faces : 0) + (has[2] ? bodies : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK ||
-	    (st = structure_reserve(model, what, n, springs)) != SM_OK)
+	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;

@@ -1,6 +1,5 @@
-// Steps shared by the structure builders (structures.c, mesh.c): checks, reservation,
-// appending with messages that name the structure, and the roll-back to the counts before a
-// failed call.
+// Steps shared by the structure builders (structures.c, mesh.c): checks, appending with
+// messages that name the structure, and the roll-back to the counts before a failed call.
 #pragma once
 
 #include "model_internal.h"
@@ -14,9 +13,6 @@ sm_status structure_check_material(sm_model* model, const char* what, const char
 sm_status structure_check_vector(sm_model* model, const char* what, const char* field, const double v[3]);
 // Fails if the structure or the grown model would exceed SM_STRUCTURE_MAX_ELEMENTS.
 sm_status structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs);
-// Reserves room for this many more particles and springs (SM_ERROR_OUT_OF_MEMORY otherwise).
-sm_status structure_reserve(sm_model* model, const char* what, int64_t particles, int64_t springs);
-int structure_reserve_arrays(sm_model* m, int64_t particles, int64_t springs);
 // Cuts the model back to the given counts (the counts it had before a failed builder call).
 void structure_truncate(sm_model* m, int32_t particles, int32_t springs);
 sm_status structure_add_particle(sm_model* model, const char* what, double mass, const double position[3]);
