@@ -4,6 +4,16 @@
 // driven particles follow the motion the caller prescribes. Each simulation owns a copy of the
 // model, its own SUNDIALS context and all solver memory: separate simulations are independent
 // and may run in separate threads.
+//
+// Inputs between calls. sm_simulation_set_driven and sm_simulation_set_external_force change
+// what the right-hand side sees from the current time on; by default CVODE keeps its history
+// (step size, order) over such changes and its error control absorbs the jump. Measured on the
+// 8 x 8 benchmark cloth with a force input changed at every communication step
+// (bench_cloth with RESTART_EVERY, bench/README.md): re-initialising at every change cost 5.2
+// times the steps and 6 times the wall time per simulated second with 1 ms steps, 1.6 and 1.9
+// times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
+// with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
+// (restart_on_input_change = true restores a restart at every changed input).
 #pragma once
 
 #include "springmass/model.h"
@@ -20,11 +30,17 @@ typedef enum sm_method {
 
 /// Linear solver for Newton's method (BDF only).
 typedef enum sm_linear_solver {
-	SM_SOLVER_AUTO = 0,  ///< picked by model size (see the README's benchmark table)
+	SM_SOLVER_AUTO = 0,  ///< dense up to 8 free particles, reduced Cholesky above (bench/README.md)
 	SM_SOLVER_DENSE,     ///< dense LU of the full 6n system with the analytic Jacobian (small models)
 	SM_SOLVER_KLU,       ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
-	SM_SOLVER_REDUCED_PCG,  ///< second-order reduction to a 3n SPD system solved by preconditioned CG (large models)
-	SM_SOLVER_REDUCED_CHOLMOD,  ///< second-order reduction to a 3n SPD system solved by sparse Cholesky
+	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
+	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
+	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner.
+	SM_SOLVER_REDUCED_PCG,
+	/// The same reduced system factorised by CHOLMOD (symbolic analysis once, numeric
+	/// factorisation whenever CVODE refreshes its Newton matrix). What AUTO picks above tiny
+	/// models.
+	SM_SOLVER_REDUCED_CHOLMOD,
 	SM_SOLVER_COUNT
 } sm_linear_solver;
 
@@ -35,7 +51,7 @@ typedef struct sm_simulation_def {
 	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
 	double relative_tolerance;      ///< > 0 [1]; default 1e-6
 	double absolute_tolerance_position;  ///< > 0 [m]; default 1e-8
-	double absolute_tolerance_velocity;  ///< > 0 [m/s]; default 1e-6
+	double absolute_tolerance_velocity;  ///< > 0 [m/s], also for the dissipated energy [J]; default 1e-6
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
@@ -49,7 +65,7 @@ typedef struct sm_statistics {
 	int64_t steps;
 	int64_t rhs_evaluations;
 	int64_t jacobian_evaluations;
-	int64_t linear_iterations;
+	int64_t linear_iterations;     ///< conjugate-gradient iterations, or one per solve for direct solvers
 	int64_t error_test_failures;
 	int64_t convergence_failures;
 	int64_t restarts;              ///< solver re-initialisations (events, state changes, jumps in inputs)
