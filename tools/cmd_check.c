@@ -118,6 +118,19 @@ int sm_cmd_check(int argc, char** argv)
 	if (driven > 0)
 		printf(", %d driven", (int)driven);
 	printf("\n");
+	// Which particles are held, by name, when there are few of them.
+	if (fixed + driven > 0 && fixed + driven <= 8) {
+		printf("  held      ");
+		for (int32_t i = 0, shown = 0; i < n; i++) {
+			sm_particle_def p;
+			sm_model_get_particle(model, i, &p);
+			if (p.motion == SM_PARTICLE_FREE)
+				continue;
+			printf("%s", shown++ > 0 ? ", " : " ");
+			print_particle(doc, i);
+		}
+		printf("\n");
+	}
 	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, %d breakable\n", (int)m,
 	       (int)rest_length, (int)zero_length, (int)per_strain, (int)breakable);
 	printf("total mass   %.6g kg\n", sm_model_total_mass(model));
