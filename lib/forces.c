@@ -14,27 +14,55 @@
 #include "model_internal.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
+// Factored per-spring Jacobian (model.h, sm_spring_jacobians), evaluated in the same pass.
+//
+// Derivation. law_rest_length.h and law_spring_damping.h give, with g = 1 - l0/L,
+// c = kd / L, r = u . dv and P = I - u u^T,
+//
+//   K = ks [u u^T + g P] + c [r P + u (P dv)^T]
+//     = (ks g + c r) I + (ks (1 - g) - c r) u u^T + c u (dv - r u)^T
+//     = beta I + u z^T
+//
+// with beta = ks g + c r and z = (ks - beta - c r) u + c dv, since ks (1 - g) - 2 c r
+// = ks - beta - c r. The definiteness-preserving variant clamps g at zero and drops the
+// damping-position term (c = 0): beta = ks g, z = (ks - beta) u, K = beta I + (ks - beta) u u^T,
+// symmetric. At the degenerate point the geometry has u = 0 and 1/L = 0, so g = 1, c = 0 and
+// K = ks I, as model.h states. D = kd u u^T needs only u and kd. Under a swap of the ends
+// u, dv and z change sign and r does not, so u z^T and u u^T, hence K and D, are the same seen
+// from either end (sparse_jacobian.c relies on it).
+//
+// The loop, specialised by the compiler for each combination of the constant flags:
+// `with_velocity` (v given), `jacobian` (store the records), `clamp` (definite variant's clamp),
+// `damping_position` (exact variant's c). The force is computed by the same expressions in
+// every specialisation, so sm_model_forces and sm_model_forces_and_jacobians agree bit for bit.
 static inline void spring_loop(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
                                const double* restrict rest_length, const double* restrict stiffness,
                                const double* restrict damping, const double* restrict x,
-                               const double* restrict v, double* restrict f, const int with_velocity)
+                               const double* restrict v, double* restrict f, double* restrict jacobian,
+                               const int with_velocity, const int with_jacobian, const int clamp,
+                               const int damping_position)
 {
 	for (int32_t s = 0; s < count; s++) {
 		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
 		const double dx = x[b] - x[a], dy = x[b + 1] - x[a + 1], dz = x[b + 2] - x[a + 2];
-		const double l0 = rest_length[s];
+		const double l0 = rest_length[s], ks = stiffness[s], kd = damping[s];
 		const double length = sqrt(dx * dx + dy * dy + dz * dz);
 		// Regular unless L = 0 or L < ratio * l0 (see model_internal.h, spring_geometry).
 		const int regular = length > 0.0 && length >= SM_DEGENERATE_LENGTH_RATIO * l0;
 		const double inv = 1.0 / (regular ? length : 1.0);
 		const double inv_length = regular ? inv : 0.0;
 		const double ux = dx * inv_length, uy = dy * inv_length, uz = dz * inv_length;
-		double magnitude = stiffness[s] * (length - l0);
+		double magnitude = ks * (length - l0);
+		double dvx = 0.0, dvy = 0.0, dvz = 0.0, rate = 0.0;
 		if (with_velocity) {
-			const double rate = ux * (v[b] - v[a]) + uy * (v[b + 1] - v[a + 1]) + uz * (v[b + 2] - v[a + 2]);
-			magnitude += damping[s] * rate;
+			dvx = v[b] - v[a];
+			dvy = v[b + 1] - v[a + 1];
+			dvz = v[b + 2] - v[a + 2];
+			rate = ux * dvx + uy * dvy + uz * dvz;
+			magnitude += kd * rate;
 		}
 		const double fx = magnitude * ux, fy = magnitude * uy, fz = magnitude * uz;
 		f[a] += fx;
@@ -43,14 +71,30 @@ static inline void spring_loop(int32_t count, const int32_t* restrict first, con
 		f[b] -= fx;
 		f[b + 1] -= fy;
 		f[b + 2] -= fz;
+		if (with_jacobian) {
+			double g = 1.0 - l0 * inv_length;
+			if (clamp)
+				g = g < 0.0 ? 0.0 : g;
+			const double c = damping_position ? kd * inv_length : 0.0;
+			const double cr = c * rate;
+			const double beta = ks * g + cr;
+			const double axial = ks - beta - cr;
+			double* restrict out = jacobian + SPRING_JACOBIAN_STRIDE * (size_t)s;
+			out[0] = ux;
+			out[1] = uy;
+			out[2] = uz;
+			out[3] = axial * ux + c * dvx;
+			out[4] = axial * uy + c * dvy;
+			out[5] = axial * uz + c * dvz;
+			out[6] = beta;
+			out[7] = kd;
+		}
 	}
 }
 
-void sm_model_forces(const sm_model* model, const double* x, const double* v, const double* f_external,
-                     double* f)
+// Gravity, mass damping and external forces: the starting value of f before the springs add.
+static void body_forces(const sm_model* model, const double* v, const double* f_external, double* f)
 {
-	if (model == NULL || x == NULL || f == NULL)
-		return;
 	const int32_t n = model->particle_count;
 	static const double zero[3] = {0.0, 0.0, 0.0};
 	for (int32_t i = 0; i < n; i++) {
@@ -60,12 +104,79 @@ void sm_model_forces(const sm_model* model, const double* x, const double* v, co
 	if (f_external != NULL)
 		for (size_t k = 0; k < 3 * (size_t)n; k++)
 			f[k] += f_external[k];
+}
+
+void sm_model_forces(const sm_model* model, const double* x, const double* v, const double* f_external,
+                     double* f)
+{
+	if (model == NULL || x == NULL || f == NULL)
+		return;
+	body_forces(model, v, f_external, f);
+	const sm_model* m = model;
 	if (v != NULL)
-		spring_loop(model->spring_count, model->spring_a, model->spring_b, model->rest_length,
-		            model->stiffness, model->damping, x, v, f, 1);
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
+		            f, NULL, 1, 0, 0, 0);
 	else
-		spring_loop(model->spring_count, model->spring_a, model->spring_b, model->rest_length,
-		            model->stiffness, model->damping, x, NULL, f, 0);
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
+		            NULL, f, NULL, 0, 0, 0, 0);
+}
+
+sm_spring_jacobians* sm_spring_jacobians_create(const sm_model* model)
+{
+	if (model == NULL)
+		return NULL;
+	sm_spring_jacobians* j = calloc(1, sizeof *j);
+	if (j == NULL)
+		return NULL;
+	j->particle_count = model->particle_count;
+	j->spring_count = model->spring_count;
+	// One 64-byte record per spring; aligned_alloc wants a size that is a multiple of 64.
+	const size_t records = (size_t)model->spring_count + 1;
+	j->data = aligned_alloc(64, records * SPRING_JACOBIAN_STRIDE * sizeof(double));
+	if (j->data == NULL) {
+		free(j);
+		return NULL;
+	}
+	return j;
+}
+
+void sm_spring_jacobians_destroy(sm_spring_jacobians* jacobians)
+{
+	if (jacobians == NULL)
+		return;
+	free(jacobians->data);
+	free(jacobians);
+}
+
+sm_status sm_model_forces_and_jacobians(const sm_model* model, const double* x, const double* v,
+                                        const double* f_external, sm_jacobian_variant variant, double* f,
+                                        sm_spring_jacobians* jacobians)
+{
+	if (model == NULL || x == NULL || f == NULL || jacobians == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (variant != SM_JACOBIAN_EXACT && variant != SM_JACOBIAN_DEFINITE)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (jacobians->particle_count != model->particle_count || jacobians->spring_count != model->spring_count)
+		return SM_ERROR_TOPOLOGY;
+	body_forces(model, v, f_external, f);
+	const sm_model* m = model;
+	double* out = jacobians->data;
+	// Exact: no clamp, the damping-position term (zero without v). Definite: clamp, no term.
+	if (variant == SM_JACOBIAN_EXACT && v != NULL)
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
+		            f, out, 1, 1, 0, 1);
+	else if (variant == SM_JACOBIAN_EXACT)
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
+		            NULL, f, out, 0, 1, 0, 0);
+	else if (v != NULL)
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
+		            f, out, 1, 1, 1, 0);
+	else
+		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
+		            NULL, f, out, 0, 1, 1, 0);
+	jacobians->variant = variant;
+	jacobians->evaluated = 1;
+	return SM_OK;
 }
 
 sm_energies sm_model_energies(const sm_model* model, const double* x, const double* v)

@@ -119,3 +119,75 @@ void sm_model_jacobian_product(const sm_model* model, const double* x, const dou
 		}
 	}
 }
+
+// From the factored records (model_internal.h; derivation in forces.c):
+// K = u z^T + beta I, D = kd u u^T.
+sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians, int32_t spring, double K[9], double D[9])
+{
+	if (jacobians == NULL || !jacobians->evaluated)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (spring < 0 || spring >= jacobians->spring_count)
+		return SM_ERROR_SPRING_INDEX;
+	const double* q = jacobians->data + SPRING_JACOBIAN_STRIDE * (size_t)spring;
+	const double *u = q, *z = q + 3, beta = q[6], kd = q[7];
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++) {
+			if (K != NULL)
+				K[3 * i + j] = u[i] * z[j] + (i == j ? beta : 0.0);
+			if (D != NULL)
+				D[3 * i + j] = kd * u[i] * u[j];
+		}
+	return SM_OK;
+}
+
+// The product of one spring: d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, with
+// rx = dx_b - dx_a, rv = dv_b - dv_a; d f_b = -d f_a. Specialised for the NULL cases.
+static inline void factored_product(const sm_spring_jacobians* J, const sm_model* model, const double* restrict dx,
+                                    const double* restrict dv, double* restrict out, const int with_x,
+                                    const int with_v)
+{
+	const int32_t* restrict first = model->spring_a;
+	const int32_t* restrict second = model->spring_b;
+	const double* restrict data = J->data;
+	for (int32_t s = 0; s < J->spring_count; s++) {
+		const double* restrict q = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
+		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
+		double rx[3] = {0.0, 0.0, 0.0}, coefficient = 0.0;
+		if (with_x) {
+			rx[0] = dx[b] - dx[a];
+			rx[1] = dx[b + 1] - dx[a + 1];
+			rx[2] = dx[b + 2] - dx[a + 2];
+			coefficient = q[3] * rx[0] + q[4] * rx[1] + q[5] * rx[2];
+		}
+		if (with_v)
+			coefficient += q[7] * (q[0] * (dv[b] - dv[a]) + q[1] * (dv[b + 1] - dv[a + 1]) +
+			                       q[2] * (dv[b + 2] - dv[a + 2]));
+		for (int k = 0; k < 3; k++) {
+			const double df = q[k] * coefficient + (with_x ? q[6] * rx[k] : 0.0);
+			out[a + k] += df;
+			out[b + k] -= df;
+		}
+	}
+}
+
+sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model, const double* dx,
+                                      const double* dv, double* out)
+{
+	if (jacobians == NULL || model == NULL || out == NULL || !jacobians->evaluated)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (jacobians->particle_count != model->particle_count || jacobians->spring_count != model->spring_count)
+		return SM_ERROR_TOPOLOGY;
+	const int32_t n = model->particle_count;
+	for (int32_t i = 0; i < n; i++) {
+		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
+		for (int k = 0; k < 3; k++)
+			out[3 * (size_t)i + k] = dv != NULL ? c * dv[3 * (size_t)i + k] : 0.0;
+	}
+	if (dx != NULL && dv != NULL)
+		factored_product(jacobians, model, dx, dv, out, 1, 1);
+	else if (dx != NULL)
+		factored_product(jacobians, model, dx, NULL, out, 1, 0);
+	else if (dv != NULL)
+		factored_product(jacobians, model, NULL, dv, out, 0, 1);
+	return SM_OK;
+}

@@ -36,6 +36,20 @@ struct sm_model {
 	char last_error[SM_ERROR_MESSAGE_CAPACITY];
 };
 
+// Every spring's Jacobian in factored form (model.h, sm_spring_jacobians; derivation in
+// forces.c): per spring, SPRING_JACOBIAN_STRIDE doubles in spring order, one 64-byte record
+//   u[3] (unit direction, 0 at the degenerate point) [1], z[3] [N/m], beta [N/m], kd [N s/m]
+// with K = d f_a / d x_b = u z^T + beta I and D = d f_a / d v_b = kd u u^T.
+#define SPRING_JACOBIAN_STRIDE 8
+
+struct sm_spring_jacobians {
+	int32_t particle_count;       // of the model the storage was made for
+	int32_t spring_count;
+	int evaluated;                // 0 until the first sm_model_forces_and_jacobians
+	sm_jacobian_variant variant;  // of the last evaluation
+	double* data;                 // SPRING_JACOBIAN_STRIDE per spring, 64-byte aligned
+};
+
 // Formats a message into model->last_error and returns status.
 sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, ...)
 #if defined(__GNUC__)

@@ -379,3 +379,78 @@ sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_m
 	}
 	return SM_OK;
 }
+
+// The fill from the factored records (model_internal.h; derivation in forces.c): the same
+// block-row order as fill_loop, with K = u z^T + beta I and D = kd u u^T read instead of
+// evaluated. Both ends of a spring read the same record (K and D do not depend on the order of
+// the ends).
+static inline void fill_from_records(const sm_sparse_jacobian* J, const sm_model* model,
+                                     const double* restrict records, double* restrict dfdx,
+                                     double* restrict dfdv, const int want_x, const int want_v)
+{
+	const int32_t F = model->free_count;
+	for (int32_t p = 0; p < F; p++) {
+		const int64_t base = 9 * J->block_start[p];
+		const int64_t blocks = J->block_start[p + 1] - J->block_start[p], stride = 3 * blocks;
+		double* restrict row_x = want_x ? dfdx + base : NULL;
+		double* restrict row_v = want_v ? dfdv + base : NULL;
+		if (want_x)
+			memset(row_x, 0, 9 * (size_t)blocks * sizeof(double));
+		if (want_v)
+			memset(row_v, 0, 9 * (size_t)blocks * sizeof(double));
+		double diag_x[9] = {0}, diag_v[9] = {0};
+		if (want_v) {
+			const double c = mass_damping_derivative(model->mass[J->row_particle[p]], model->def.mass_damping);
+			diag_v[0] = diag_v[4] = diag_v[8] = c;
+		}
+		for (int64_t e = J->incident_start[p]; e < J->incident_start[p + 1]; e++) {
+			const int32_t other = J->incident_block[e];
+			const double* restrict q = records + SPRING_JACOBIAN_STRIDE * (size_t)J->incident_spring[e];
+			if (want_x) {
+				double K[9];
+				for (int i = 0; i < 3; i++)
+					for (int j = 0; j < 3; j++)
+						K[3 * i + j] = q[i] * q[3 + j];
+				K[0] += q[6];
+				K[4] += q[6];
+				K[8] += q[6];
+				for (int k = 0; k < 9; k++)
+					diag_x[k] -= K[k];
+				if (other >= 0)
+					block_add(row_x + 3 * (int64_t)other, stride, 1.0, K);
+			}
+			if (want_v) {
+				double D[9];
+				for (int i = 0; i < 3; i++)
+					for (int j = 0; j < 3; j++) {
+						D[3 * i + j] = q[7] * q[i] * q[j];
+						diag_v[3 * i + j] -= D[3 * i + j];
+					}
+				if (other >= 0)
+					block_add(row_v + 3 * (int64_t)other, stride, 1.0, D);
+			}
+		}
+		const int64_t diagonal = 3 * (int64_t)J->diagonal_block[p];
+		if (want_x)
+			block_add(row_x + diagonal, stride, 1.0, diag_x);
+		if (want_v)
+			block_add(row_v + diagonal, stride, 1.0, diag_v);
+	}
+}
+
+sm_status sm_sparse_jacobian_fill_from_springs(const sm_sparse_jacobian* jacobian, const sm_model* model,
+                                               const sm_spring_jacobians* jacobians, double* dfdx, double* dfdv)
+{
+	if (jacobian == NULL || model == NULL || jacobians == NULL || !jacobians->evaluated)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (!same_topology(jacobian, model) || jacobians->particle_count != model->particle_count ||
+	    jacobians->spring_count != model->spring_count)
+		return SM_ERROR_TOPOLOGY;
+	if (dfdx != NULL && dfdv != NULL)
+		fill_from_records(jacobian, model, jacobians->data, dfdx, dfdv, 1, 1);
+	else if (dfdx != NULL)
+		fill_from_records(jacobian, model, jacobians->data, dfdx, NULL, 1, 0);
+	else if (dfdv != NULL)
+		fill_from_records(jacobian, model, jacobians->data, NULL, dfdv, 0, 1);
+	return SM_OK;
+}

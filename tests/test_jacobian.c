@@ -393,6 +393,333 @@ static int test_disabled_spring_has_zero_blocks(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Forces and per-spring Jacobians in one pass (sm_model_forces_and_jacobians and what applies
+// its factored records).
+// ---------------------------------------------------------------------------------------------
+
+// The fused pass computes the forces with the same expressions as sm_model_forces, so they are
+// the same numbers bit for bit, whichever variant, with or without velocities and external forces.
+static int test_fused_forces_equal_forces_exactly(void)
+{
+	rng r = {8080};
+	enum { N = 9 };
+	double x[3 * N], v[3 * N], ext[3 * N], f[3 * N], g[3 * N];
+	for (int trial = 0; trial < 6; trial++) {
+		sm_model* m = random_model(&r, N, 20, trial % 2, x, v);
+		ENSURE(m != NULL);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (size_t k = 0; k < 3 * N; k++)
+			ext[k] = rng_uniform(&r, -2.0, 2.0);
+		for (int variant = 0; variant < 2; variant++)
+			for (int with_v = 0; with_v < 2; with_v++)
+				for (int with_ext = 0; with_ext < 2; with_ext++) {
+					const double* pv = with_v ? v : NULL;
+					const double* pe = with_ext ? ext : NULL;
+					sm_model_forces(m, x, pv, pe, f);
+					ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, pv, pe, (sm_jacobian_variant)variant, g, sj),
+					              SM_OK);
+					for (size_t k = 0; k < 3 * N; k++)
+						ENSURE(f[k] == g[k]);
+				}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// Each spring's blocks rebuilt from its record against central finite differences of the force
+// of that spring alone (exact variant; same tolerance argument as the file's header), and both
+// variants against sm_model_spring_jacobian: the two evaluate K = beta I + u z^T and
+// ks [u u^T + g P] + ... with different groupings of the same O(|K|) terms, so they agree to a
+// few rounding errors of the largest entry; 1e-12 of it leaves a margin of ~50 over 2.2e-16 * 9.
+static int test_fused_spring_blocks_match_finite_differences(void)
+{
+	rng r = {2468};
+	for (int trial = 0; trial < 20; trial++) {
+		double x[3 * 8], v[3 * 8], f[3 * 8];
+		sm_model* m = random_model(&r, 8, 14, trial % 2, x, v);
+		ENSURE(m != NULL);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			for (int32_t s = 0; s < sm_model_spring_count(m); s++) {
+				double K[9], D[9], K0[9], D0[9];
+				ENSURE_STATUS(sm_spring_jacobians_block(sj, s, K, D), SM_OK);
+				ENSURE_STATUS(sm_model_spring_jacobian(m, s, x, v, (sm_jacobian_variant)variant, K0, D0), SM_OK);
+				const double scale_k = max_abs(K0, 9), scale_d = max_abs(D0, 9);
+				for (int k = 0; k < 9; k++) {
+					ENSURE_NEAR(K[k], K0[k], 1e-12 * scale_k);
+					ENSURE_NEAR(D[k], D0[k], 1e-12 * scale_d);
+				}
+				if (variant != SM_JACOBIAN_EXACT)
+					continue;
+				double x2[6], v2[6], col[6];
+				sm_model* one = single_spring(m, s, x, v, x2, v2);
+				ENSURE(one != NULL);
+				for (int j = 0; j < 3; j++) {
+					fd_column(one, x2, v2, 0, 3 + (size_t)j, col);
+					for (int i = 0; i < 3; i++)
+						ENSURE_NEAR(K[3 * i + j], col[i], FD_RELATIVE * scale_k);
+					fd_column(one, x2, v2, 1, 3 + (size_t)j, col);
+					for (int i = 0; i < 3; i++)
+						ENSURE_NEAR(D[3 * i + j], col[i], FD_RELATIVE * scale_d);
+				}
+				sm_model_destroy(one);
+			}
+		}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// The product from the records against a central difference of the forces along the direction
+// itself: (f(x + h dx, v + h dv) - f(x - h dx, v - h dv)) / 2h. Each spring sees a relative
+// displacement of at most 2 sqrt(3) per unit h, which multiplies the single-column truncation
+// error of the header (2e-8) by at most 3.5^3 ~ 43 per spring, and a particle has a few springs:
+// ~ 5e-6 absolute. The product is bounded by dim times the largest Jacobian entry (>= 1), so
+// 1e-6 of that (>= 2.7e-5) leaves a margin of ~5, while a missing term of O(1..100) fails.
+// The definite variant is checked against the dense matrix applied to the vectors (rounding
+// only: 1e-12 of the same bound).
+static int test_fused_product_matches_finite_differences(void)
+{
+	rng r = {1357};
+	enum { N = 9 };
+	const size_t dim = 3 * N;
+	double x[3 * N], v[3 * N], dx[3 * N], dv[3 * N], out[3 * N], f[3 * N], fp[3 * N], fm[3 * N];
+	double xp[3 * N], vp[3 * N], xm[3 * N], vm[3 * N];
+	double* dfdx = malloc(dim * dim * sizeof(double));
+	double* dfdv = malloc(dim * dim * sizeof(double));
+	ENSURE(dfdx != NULL && dfdv != NULL);
+	for (int trial = 0; trial < 10; trial++) {
+		sm_model* m = random_model(&r, N, 20, trial % 2, x, v);
+		ENSURE(m != NULL);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (size_t k = 0; k < dim; k++) {
+			dx[k] = rng_uniform(&r, -1, 1);
+			dv[k] = rng_uniform(&r, -1, 1);
+		}
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv);
+			const double bound = fmax(max_abs(dfdx, dim * dim), max_abs(dfdv, dim * dim)) * (double)dim;
+			for (int which = 0; which < 3; which++) {  // both, dx only, dv only
+				const double* px = which == 2 ? NULL : dx;
+				const double* pv = which == 1 ? NULL : dv;
+				ENSURE_STATUS(sm_spring_jacobians_product(sj, m, px, pv, out), SM_OK);
+				if (variant == SM_JACOBIAN_EXACT) {
+					for (size_t k = 0; k < dim; k++) {
+						xp[k] = x[k] + (px ? FD_STEP * px[k] : 0.0);
+						xm[k] = x[k] - (px ? FD_STEP * px[k] : 0.0);
+						vp[k] = v[k] + (pv ? FD_STEP * pv[k] : 0.0);
+						vm[k] = v[k] - (pv ? FD_STEP * pv[k] : 0.0);
+					}
+					sm_model_forces(m, xp, vp, NULL, fp);
+					sm_model_forces(m, xm, vm, NULL, fm);
+					for (size_t k = 0; k < dim; k++)
+						ENSURE_NEAR(out[k], (fp[k] - fm[k]) / (2.0 * FD_STEP), FD_RELATIVE * bound);
+				} else {
+					for (size_t i = 0; i < dim; i++) {
+						double expect = 0.0;
+						for (size_t j = 0; j < dim; j++)
+							expect += (px ? dfdx[i * dim + j] * px[j] : 0.0) + (pv ? dfdv[i * dim + j] * pv[j] : 0.0);
+						ENSURE_NEAR(out[i], expect, 1e-12 * bound);
+					}
+				}
+			}
+		}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	free(dfdx);
+	free(dfdv);
+	return 0;
+}
+
+// The sparse matrices filled from the records against central finite differences over the free
+// degrees of freedom (exact variant, tolerance of the header), and equal to
+// sm_sparse_jacobian_fill to rounding for both variants (the same few terms summed in another
+// order: 1e-12 of the largest entry).
+static int test_fill_from_springs_matches_finite_differences(void)
+{
+	rng r = {97531};
+	enum { N = 10 };
+	double x[3 * N], v[3 * N], f[3 * N], col[3 * N];
+	for (int trial = 0; trial < 6; trial++) {
+		sm_model* m = random_model(&r, N, 18, 1, x, v);
+		ENSURE(m != NULL);
+		sm_spring_def d = sm_default_spring_def();  // a duplicate pair and a second fixed particle
+		d.a = 1;
+		d.b = 0;
+		d.stiffness = 33.0;
+		d.damping = 0.4;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		ENSURE_STATUS(sm_model_set_particle_motion(m, 5, SM_PARTICLE_FIXED), SM_OK);
+		v[15] = v[16] = v[17] = 0.0;
+		sm_sparse_jacobian* J = sm_sparse_jacobian_create(m);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(J != NULL && sj != NULL);
+		const int64_t dim = sm_sparse_jacobian_dimension(J), nnz = sm_sparse_jacobian_nonzeros(J);
+		const int64_t* rows = sm_sparse_jacobian_row_pointers(J);
+		const int64_t* cols = sm_sparse_jacobian_column_indices(J);
+		double* sx = malloc((size_t)nnz * sizeof(double));
+		double* sv = malloc((size_t)nnz * sizeof(double));
+		double* rx = malloc((size_t)nnz * sizeof(double));
+		double* rv = malloc((size_t)nnz * sizeof(double));
+		double* ax = malloc((size_t)(dim * dim) * sizeof(double));
+		double* av = malloc((size_t)(dim * dim) * sizeof(double));
+		ENSURE(sx && sv && rx && rv && ax && av);
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, sx, sv), SM_OK);
+			ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, (sm_jacobian_variant)variant, rx, rv), SM_OK);
+			const double scale_x = max_abs(rx, (size_t)nnz), scale_v = max_abs(rv, (size_t)nnz);
+			for (int64_t k = 0; k < nnz; k++) {
+				ENSURE_NEAR(sx[k], rx[k], 1e-12 * scale_x);
+				ENSURE_NEAR(sv[k], rv[k], 1e-12 * scale_v);
+			}
+			// One matrix at a time gives the same values.
+			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, rx, NULL), SM_OK);
+			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, NULL, rv), SM_OK);
+			for (int64_t k = 0; k < nnz; k++)
+				ENSURE(rx[k] == sx[k] && rv[k] == sv[k]);
+		}
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
+		ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, sx, sv), SM_OK);
+		csr_to_dense(dim, rows, cols, sx, ax);
+		csr_to_dense(dim, rows, cols, sv, av);
+		const double scale_x = max_abs(ax, (size_t)(dim * dim)), scale_v = max_abs(av, (size_t)(dim * dim));
+		for (int32_t q = 0; q < N; q++) {
+			const int32_t fq = sm_model_free_index(m, q);
+			if (fq < 0)
+				continue;
+			for (int c = 0; c < 3; c++)
+				for (int wrt = 0; wrt < 2; wrt++) {
+					fd_column(m, x, v, wrt, 3 * (size_t)q + c, col);
+					const double* a = wrt ? av : ax;
+					for (int32_t p = 0; p < N; p++) {
+						const int32_t fp = sm_model_free_index(m, p);
+						if (fp < 0)
+							continue;
+						for (int i = 0; i < 3; i++)
+							ENSURE_NEAR(a[(3 * fp + i) * dim + 3 * fq + c], col[3 * p + i],
+							            FD_RELATIVE * (wrt ? scale_v : scale_x));
+					}
+				}
+		}
+		free(sx);
+		free(sv);
+		free(rx);
+		free(rv);
+		free(ax);
+		free(av);
+		sm_spring_jacobians_destroy(sj);
+		sm_sparse_jacobian_destroy(J);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// At L = 0 the records give the documented blocks, ks I and D = 0, for both kinds and variants;
+// a disabled spring gives zero blocks.
+static int test_fused_degenerate_and_disabled_springs(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* m = sm_model_create(&md, NULL);
+	ENSURE(m != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.position[0] = 0.3;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	p.position[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.rest_length = 0.5;
+	d.stiffness = 10.0;
+	d.damping = 2.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	d.kind = SM_SPRING_ZERO_LENGTH;
+	d.rest_length = 0.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	d.kind = SM_SPRING_REST_LENGTH;
+	d.b = 2;
+	d.rest_length = 0.4;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 2, false), SM_OK);
+	const double x[9] = {0.3, 0, 0, 0.3, 0, 0, 1.0, 0.2, 0}, v[9] = {1, 2, 3, -1, 0, 4, 0, 1, 0};
+	double f[9], K[9], D[9];
+	sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+	ENSURE(sj != NULL);
+	for (int variant = 0; variant < 2; variant++) {
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+		for (int k = 0; k < 9; k++)
+			ENSURE(isfinite(f[k]));
+		for (int32_t s = 0; s < 3; s++) {
+			ENSURE_STATUS(sm_spring_jacobians_block(sj, s, K, D), SM_OK);
+			for (int k = 0; k < 9; k++) {
+				ENSURE(K[k] == (s < 2 && k % 4 == 0 ? 10.0 : 0.0));
+				ENSURE(D[k] == 0.0);
+			}
+		}
+	}
+	sm_spring_jacobians_destroy(sj);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Misuse is an error, never a crash, and leaves the outputs untouched.
+static int test_fused_errors(void)
+{
+	rng r = {11};
+	double x[3 * 5], v[3 * 5], f[3 * 5], out[3 * 5], K[9];
+	sm_model* m = random_model(&r, 5, 6, 0, x, v);
+	ENSURE(m != NULL);
+	sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+	ENSURE(sj != NULL);
+	ENSURE(sm_spring_jacobians_create(NULL) == NULL);
+	sm_spring_jacobians_destroy(NULL);
+	// Nothing evaluated yet.
+	ENSURE_STATUS(sm_spring_jacobians_block(sj, 0, K, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_spring_jacobians_product(sj, m, x, v, out), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(NULL, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, NULL, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)7, f, sj),
+	              SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
+	ENSURE_STATUS(sm_spring_jacobians_block(sj, 6, K, NULL), SM_ERROR_SPRING_INDEX);
+	ENSURE_STATUS(sm_spring_jacobians_block(sj, -1, K, NULL), SM_ERROR_SPRING_INDEX);
+	ENSURE_STATUS(sm_spring_jacobians_product(sj, NULL, x, v, out), SM_ERROR_INVALID_ARGUMENT);
+	// A model with another spring count no longer matches the storage.
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.stiffness = 5.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	for (int k = 0; k < 15; k++)
+		f[k] = out[k] = 42.0;
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_ERROR_TOPOLOGY);
+	ENSURE_STATUS(sm_spring_jacobians_product(sj, m, x, v, out), SM_ERROR_TOPOLOGY);
+	for (int k = 0; k < 15; k++)
+		ENSURE(f[k] == 42.0 && out[k] == 42.0);
+	sm_sparse_jacobian* J = sm_sparse_jacobian_create(m);
+	ENSURE(J != NULL);
+	double values[1024];
+	ENSURE((size_t)sm_sparse_jacobian_nonzeros(J) <= sizeof values / sizeof values[0]);
+	ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, values, NULL), SM_ERROR_TOPOLOGY);
+	ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, NULL, values, NULL), SM_ERROR_INVALID_ARGUMENT);
+	sm_sparse_jacobian_destroy(J);
+	sm_spring_jacobians_destroy(sj);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -404,5 +731,11 @@ int main(int argc, char** argv)
 	RUN_TEST(test_definite_equals_exact_for_stretched_springs_at_rest);
 	RUN_TEST(test_degenerate_blocks_are_finite);
 	RUN_TEST(test_disabled_spring_has_zero_blocks);
+	RUN_TEST(test_fused_forces_equal_forces_exactly);
+	RUN_TEST(test_fused_spring_blocks_match_finite_differences);
+	RUN_TEST(test_fused_product_matches_finite_differences);
+	RUN_TEST(test_fill_from_springs_matches_finite_differences);
+	RUN_TEST(test_fused_degenerate_and_disabled_springs);
+	RUN_TEST(test_fused_errors);
 	return TEST_SUMMARY();
 }
