@@ -14,6 +14,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 static void usage(FILE* out)
 {
@@ -352,11 +353,14 @@ int sm_cmd_run(int argc, char** argv)
 	const double start = wall_clock();
 	double last_progress = start;
 	bool progress_shown = false;
+	// On a terminal the progress line rewrites itself; in a log it is one line every few seconds.
+	const bool terminal = isatty(fileno(stderr));
+	const double progress_period = terminal ? 0.5 : 5.0;
 	const long rows = (long)ceil(t_end / interval - 1e-9);
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		if (k > 0 && sm_simulation_advance(sim, t) != SM_OK) {
-			if (progress_shown)
+			if (progress_shown && terminal)
 				fprintf(stderr, "\n");
 			fprintf(stderr, "springmass run: %s\n", sm_simulation_last_error(sim));
 			goto done;
@@ -371,14 +375,14 @@ int sm_cmd_run(int argc, char** argv)
 			fprintf(pvd, "<DataSet timestep=\"%.17g\" file=\"%s_%06ld.vtk\"/>\n", t, name, k);
 		}
 		const double now = wall_clock();
-		if (!o.quiet && now - start > 1.0 && (now - last_progress > 0.5 || k == rows)) {
-			fprintf(stderr, "\rspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s", t, t_end, 100.0 * t / t_end,
-			        now - start);
+		if (!o.quiet && now - start > 1.0 && (now - last_progress > progress_period || k == rows)) {
+			fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", terminal ? "\r" : "", t,
+			        t_end, 100.0 * t / t_end, now - start, terminal ? "" : "\n");
 			last_progress = now;
 			progress_shown = true;
 		}
 	}
-	if (progress_shown)
+	if (progress_shown && terminal)
 		fprintf(stderr, "\n");
 	if (pvd)
 		fprintf(pvd, "</Collection>\n</VTKFile>\n");
