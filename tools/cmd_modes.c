@@ -1,4 +1,5 @@
 // springmass modes: natural frequencies, damping ratios and mode shapes of a model file.
+#include "cli_common.h"
 #include "commands.h"
 
 #include "springmass/analysis.h"
@@ -37,44 +38,18 @@ static void usage(FILE* out)
 	        "  -h, --help             this text\n");
 }
 
-static int make_directory(const char* dir)
-{
-	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
-		return 0;
-	fprintf(stderr, "springmass modes: cannot create directory %s: %s\n", dir, strerror(errno));
-	return -1;
-}
-
 // Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
 // mode shape as a vector field.
 static int write_mode_vtk(const char* path, const sm_model* model, const double* x, const double* shape,
                           int index, double frequency)
 {
-	FILE* f = fopen(path, "w");
-	if (f == NULL) {
-		fprintf(stderr, "springmass modes: cannot write %s: %s\n", path, strerror(errno));
+	char title[128];
+	snprintf(title, sizeof title, "springmass mode %d, %.9g Hz", index, frequency);
+	FILE* f = cli_vtk_open("modes", path, title, model, x);
+	if (f == NULL)
 		return -1;
-	}
-	const int32_t n = sm_model_particle_count(model), ns = sm_model_spring_count(model);
-	fprintf(f, "# vtk DataFile Version 3.0\nspringmass mode %d, %.9g Hz\nASCII\nDATASET POLYDATA\nPOINTS %d double\n",
-	        index, frequency, (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.17g %.17g %.17g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-	fprintf(f, "LINES %d %d\n", (int)ns, 3 * (int)ns);
-	for (int32_t s = 0; s < ns; s++) {
-		sm_spring_def sd;
-		sm_model_get_spring(model, s, &sd);
-		fprintf(f, "2 %d %d\n", (int)sd.a, (int)sd.b);
-	}
-	fprintf(f, "POINT_DATA %d\nVECTORS shape double\n", (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.17g %.17g %.17g\n", shape[3 * i], shape[3 * i + 1], shape[3 * i + 2]);
-	const int failed = ferror(f);
-	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass modes: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
+	cli_vtk_vectors(f, "shape", sm_model_particle_count(model), shape, true);
+	return cli_close("modes", path, f);
 }
 
 static int write_csv(const char* path, const sm_document* doc, const sm_modes* modes)
@@ -100,40 +75,6 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 	const int failed = ferror(f);
 	if (fclose(f) != 0 || failed) {
 		fprintf(stderr, "springmass modes: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
-}
-
-static int apply_setting(sm_document* doc, const char* setting)
-{
-	const char* eq = strchr(setting, '=');
-	if (eq == NULL || eq == setting) {
-		fprintf(stderr, "springmass modes: --set expects NAME=VALUE, got '%s'\n", setting);
-		return -1;
-	}
-	char name[256];
-	const size_t len = (size_t)(eq - setting);
-	if (len >= sizeof name) {
-		fprintf(stderr, "springmass modes: parameter name too long in '%s'\n", setting);
-		return -1;
-	}
-	memcpy(name, setting, len);
-	name[len] = '\0';
-	char* end = NULL;
-	const double value = strtod(eq + 1, &end);
-	if (end == eq + 1 || *end != '\0') {
-		fprintf(stderr, "springmass modes: '%s' is not a number in --set %s\n", eq + 1, setting);
-		return -1;
-	}
-	const int32_t index = sm_document_parameter_index(doc, name);
-	if (index < 0) {
-		fprintf(stderr, "springmass modes: the model has no parameter named '%s'\n", name);
-		return -1;
-	}
-	sm_error err;
-	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
-		fprintf(stderr, "springmass modes: %s\n", err.message);
 		return -1;
 	}
 	return 0;
@@ -213,7 +154,7 @@ int sm_cmd_modes(int argc, char** argv)
 		goto done;
 	}
 	for (int i = 0; i < setting_count; i++)
-		if (apply_setting(doc, settings[i]) != 0)
+		if (cli_set_parameter("modes", doc, settings[i]) != 0)
 			goto done;
 	if (sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass modes: %s\n", err.message);
@@ -286,7 +227,7 @@ int sm_cmd_modes(int argc, char** argv)
 		printf("mode shapes written to %s\n", csv_path);
 	}
 	if (vtk_dir != NULL) {
-		if (make_directory(vtk_dir) != 0)
+		if (cli_make_directory("modes", vtk_dir) != 0)
 			goto done;
 		for (int32_t m = 0; m < modes.count; m++) {
 			char path[4096];

@@ -2,6 +2,7 @@
 // optionally every particle's position and a ParaView series (VTK polydata + .pvd index).
 #define _POSIX_C_SOURCE 200809L
 
+#include "cli_common.h"
 #include "commands.h"
 
 #include "springmass/model_file.h"
@@ -140,30 +141,10 @@ static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* si
 // One legacy VTK polydata file: the particles as points, the intact springs as lines.
 static int write_vtk(const char* path, const sm_simulation* sim)
 {
-	FILE* f = fopen(path, "w");
-	if (!f)
-		return 1;
-	const sm_model* model = sm_simulation_model(sim);
-	const int32_t n = sm_model_particle_count(model);
-	const int32_t springs = sm_model_spring_count(model);
-	const double* x = sm_simulation_positions(sim);
-	int32_t intact = 0;
-	for (int32_t s = 0; s < springs; s++)
-		intact += sm_model_spring_enabled(model, s);
-	fprintf(f, "# vtk DataFile Version 3.0\nspringmass t = %.17g s\nASCII\nDATASET POLYDATA\n", sm_simulation_time(sim));
-	fprintf(f, "POINTS %d double\n", (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.9g %.9g %.9g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-	fprintf(f, "LINES %d %d\n", (int)intact, (int)(3 * intact));
-	for (int32_t s = 0; s < springs; s++) {
-		if (!sm_model_spring_enabled(model, s))
-			continue;
-		sm_spring_def d;
-		sm_model_get_spring(model, s, &d);
-		fprintf(f, "2 %d %d\n", (int)d.a, (int)d.b);
-	}
-	const int bad = ferror(f);
-	return (fclose(f) != 0 || bad) ? 1 : 0;
+	char title[64];
+	snprintf(title, sizeof title, "springmass t = %.17g s", sm_simulation_time(sim));
+	FILE* f = cli_vtk_open("run", path, title, sm_simulation_model(sim), sm_simulation_positions(sim));
+	return f == NULL ? 1 : cli_close("run", path, f) != 0;
 }
 
 static int parse_arguments(int argc, char** argv, run_options* o)
@@ -257,27 +238,9 @@ int sm_cmd_run(int argc, char** argv)
 		goto done;
 	}
 	for (int k = 0; k < o.set_count; k++) {
-		const char* eq = strchr(o.sets[k], '=');
-		char name[256];
-		double value;
-		if (!eq || (size_t)(eq - o.sets[k]) >= sizeof name || eq == o.sets[k]) {
-			fprintf(stderr, "springmass run: --set expects PARAM=VALUE, got '%s'\n", o.sets[k]);
-			status = 2;
-			goto done;
-		}
-		memcpy(name, o.sets[k], (size_t)(eq - o.sets[k]));
-		name[eq - o.sets[k]] = '\0';
-		if (parse_number("--set", eq + 1, &value)) {
-			status = 2;
-			goto done;
-		}
-		const int32_t index = sm_document_parameter_index(doc, name);
-		if (index < 0) {
-			fprintf(stderr, "springmass run: --set %s: the model has no parameter named \"%s\"\n", o.sets[k], name);
-			goto done;
-		}
-		if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
-			fprintf(stderr, "springmass run: --set %s: %s\n", o.sets[k], err.message);
+		const int set_status = cli_set_parameter("run", doc, o.sets[k]);
+		if (set_status != 0) {
+			status = set_status;
 			goto done;
 		}
 	}
@@ -336,10 +299,8 @@ int sm_cmd_run(int argc, char** argv)
 		}
 	}
 	if (o.vtk_dir) {
-		if (mkdir(o.vtk_dir, 0777) != 0 && errno != EEXIST) {
-			fprintf(stderr, "springmass run: cannot create %s: %s\n", o.vtk_dir, strerror(errno));
+		if (cli_make_directory("run", o.vtk_dir) != 0)
 			goto done;
-		}
 		snprintf(path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
 		pvd = fopen(path, "w");
 		if (!pvd) {
@@ -368,10 +329,8 @@ int sm_cmd_run(int argc, char** argv)
 		write_row(csv, doc, sim, forces, o.positions);
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
-			if (write_vtk(path, sim) != 0) {
-				fprintf(stderr, "springmass run: cannot write %s\n", path);
+			if (write_vtk(path, sim) != 0)
 				goto done;
-			}
 			fprintf(pvd, "<DataSet timestep=\"%.17g\" file=\"%s_%06ld.vtk\"/>\n", t, name, k);
 		}
 		const double now = wall_clock();

@@ -1,4 +1,5 @@
 // springmass statics: the static equilibrium of a model file.
+#include "cli_common.h"
 #include "commands.h"
 
 #include "springmass/analysis.h"
@@ -37,45 +38,17 @@ static void usage(FILE* out)
 	        "  -h, --help             this text\n");
 }
 
-static int make_directory(const char* dir)
+// Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
+static int write_vtk(const char* path, const sm_model* model, const double* x, const double* displacement,
+                     const double* reactions)
 {
-	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
-		return 0;
-	fprintf(stderr, "springmass statics: cannot create directory %s: %s\n", dir, strerror(errno));
-	return -1;
-}
-
-// Legacy VTK polydata: particles as points, springs as lines, two vector fields.
-static int write_vtk(const char* path, const sm_model* model, const char* title, const double* x,
-                     const double* displacement, const double* reactions)
-{
-	FILE* f = fopen(path, "w");
-	if (f == NULL) {
-		fprintf(stderr, "springmass statics: cannot write %s: %s\n", path, strerror(errno));
+	FILE* f = cli_vtk_open("statics", path, "springmass static equilibrium", model, x);
+	if (f == NULL)
 		return -1;
-	}
-	const int32_t n = sm_model_particle_count(model), ns = sm_model_spring_count(model);
-	fprintf(f, "# vtk DataFile Version 3.0\n%s\nASCII\nDATASET POLYDATA\nPOINTS %d double\n", title, (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.17g %.17g %.17g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-	fprintf(f, "LINES %d %d\n", (int)ns, 3 * (int)ns);
-	for (int32_t s = 0; s < ns; s++) {
-		sm_spring_def sd;
-		sm_model_get_spring(model, s, &sd);
-		fprintf(f, "2 %d %d\n", (int)sd.a, (int)sd.b);
-	}
-	fprintf(f, "POINT_DATA %d\nVECTORS displacement double\n", (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.17g %.17g %.17g\n", displacement[3 * i], displacement[3 * i + 1], displacement[3 * i + 2]);
-	fprintf(f, "VECTORS reaction double\n");
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.17g %.17g %.17g\n", reactions[3 * i], reactions[3 * i + 1], reactions[3 * i + 2]);
-	const int failed = ferror(f);
-	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass statics: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
+	const int32_t n = sm_model_particle_count(model);
+	cli_vtk_vectors(f, "displacement", n, displacement, true);
+	cli_vtk_vectors(f, "reaction", n, reactions, false);
+	return cli_close("statics", path, f);
 }
 
 static int write_csv(const char* path, const sm_document* doc, int32_t n, const double* x, const double* x0,
@@ -101,41 +74,6 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 	const int failed = ferror(f);
 	if (fclose(f) != 0 || failed) {
 		fprintf(stderr, "springmass statics: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
-}
-
-// Applies "NAME=VALUE" to the document; 0 on success.
-static int apply_setting(sm_document* doc, const char* setting)
-{
-	const char* eq = strchr(setting, '=');
-	if (eq == NULL || eq == setting) {
-		fprintf(stderr, "springmass statics: --set expects NAME=VALUE, got '%s'\n", setting);
-		return -1;
-	}
-	char name[256];
-	const size_t len = (size_t)(eq - setting);
-	if (len >= sizeof name) {
-		fprintf(stderr, "springmass statics: parameter name too long in '%s'\n", setting);
-		return -1;
-	}
-	memcpy(name, setting, len);
-	name[len] = '\0';
-	char* end = NULL;
-	const double value = strtod(eq + 1, &end);
-	if (end == eq + 1 || *end != '\0') {
-		fprintf(stderr, "springmass statics: '%s' is not a number in --set %s\n", eq + 1, setting);
-		return -1;
-	}
-	const int32_t index = sm_document_parameter_index(doc, name);
-	if (index < 0) {
-		fprintf(stderr, "springmass statics: the model has no parameter named '%s'\n", name);
-		return -1;
-	}
-	sm_error err;
-	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
-		fprintf(stderr, "springmass statics: %s\n", err.message);
 		return -1;
 	}
 	return 0;
@@ -229,7 +167,7 @@ int sm_cmd_statics(int argc, char** argv)
 		goto done;
 	}
 	for (int i = 0; i < setting_count; i++)
-		if (apply_setting(doc, settings[i]) != 0)
+		if (cli_set_parameter("statics", doc, settings[i]) != 0)
 			goto done;
 	if (sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass statics: %s\n", err.message);
@@ -303,13 +241,13 @@ int sm_cmd_statics(int argc, char** argv)
 	}
 	if (vtk_dir != NULL) {
 		char path[4096];
-		if (make_directory(vtk_dir) != 0)
+		if (cli_make_directory("statics", vtk_dir) != 0)
 			goto done;
 		if ((size_t)snprintf(path, sizeof path, "%s/statics.vtk", vtk_dir) >= sizeof path) {
 			fprintf(stderr, "springmass statics: path too long: %s\n", vtk_dir);
 			goto done;
 		}
-		if (write_vtk(path, model, "springmass static equilibrium", x, displacement, reactions) != 0)
+		if (write_vtk(path, model, x, displacement, reactions) != 0)
 			goto done;
 		printf("rest shape written to %s (open it in ParaView)\n", path);
 	}

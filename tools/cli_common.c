@@ -1,0 +1,99 @@
+// Helpers shared by the subcommands.
+#define _POSIX_C_SOURCE 200809L
+
+#include "cli_common.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+int cli_set_parameter(const char* command, sm_document* doc, const char* setting)
+{
+	const char* eq = strchr(setting, '=');
+	if (eq == NULL || eq == setting) {
+		fprintf(stderr, "springmass %s: --set expects NAME=VALUE, got '%s'\n", command, setting);
+		return 2;
+	}
+	char name[256];
+	const size_t length = (size_t)(eq - setting);
+	if (length >= sizeof name) {
+		fprintf(stderr, "springmass %s: parameter name too long in '%s'\n", command, setting);
+		return 2;
+	}
+	memcpy(name, setting, length);
+	name[length] = '\0';
+	char* end = NULL;
+	errno = 0;
+	const double value = strtod(eq + 1, &end);
+	if (end == eq + 1 || *end != '\0' || errno == ERANGE) {
+		fprintf(stderr, "springmass %s: --set %s: '%s' is not a number\n", command, setting, eq + 1);
+		return 2;
+	}
+	const int32_t index = sm_document_parameter_index(doc, name);
+	if (index < 0) {
+		fprintf(stderr, "springmass %s: --set %s: the model has no parameter named \"%s\"\n", command, setting,
+		        name);
+		return 1;
+	}
+	sm_error err;
+	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
+		fprintf(stderr, "springmass %s: --set %s: %s\n", command, setting, err.message);
+		return 1;
+	}
+	return 0;
+}
+
+int cli_make_directory(const char* command, const char* dir)
+{
+	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
+		return 0;
+	fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command, dir, strerror(errno));
+	return -1;
+}
+
+FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,
+                   const double* x)
+{
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path, strerror(errno));
+		return NULL;
+	}
+	const int32_t n = sm_model_particle_count(model);
+	const int32_t springs = sm_model_spring_count(model);
+	int32_t intact = 0;
+	for (int32_t s = 0; s < springs; s++)
+		intact += sm_model_spring_enabled(model, s);
+	fprintf(f, "# vtk DataFile Version 3.0\n%s\nASCII\nDATASET POLYDATA\nPOINTS %d double\n", title, (int)n);
+	for (int32_t i = 0; i < n; i++)
+		fprintf(f, "%.9g %.9g %.9g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	fprintf(f, "LINES %d %d\n", (int)intact, 3 * (int)intact);
+	for (int32_t s = 0; s < springs; s++) {
+		if (!sm_model_spring_enabled(model, s))
+			continue;
+		sm_spring_def d;
+		sm_model_get_spring(model, s, &d);
+		fprintf(f, "2 %d %d\n", (int)d.a, (int)d.b);
+	}
+	return f;
+}
+
+void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first)
+{
+	if (first)
+		fprintf(f, "POINT_DATA %d\n", (int)count);
+	fprintf(f, "VECTORS %s double\n", name);
+	for (int32_t i = 0; i < count; i++)
+		fprintf(f, "%.9g %.9g %.9g\n", values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+}
+
+int cli_close(const char* command, const char* path, FILE* f)
+{
+	const int failed = ferror(f);
+	if (fclose(f) != 0 || failed) {
+		fprintf(stderr, "springmass %s: error writing %s\n", command, path);
+		return -1;
+	}
+	return 0;
+}

@@ -1,0 +1,27 @@
+// Helpers shared by the subcommands: parameter overrides, directories and VTK output.
+#pragma once
+
+#include "springmass/model_file.h"
+
+#include <stdbool.h>
+#include <stdio.h>
+
+/// Applies "NAME=VALUE" (a --set option) to the document's parameters. Returns 0 on success;
+/// otherwise prints the error with the command's name and returns the exit status: 2 for a
+/// malformed setting (a usage error), 1 for a setting the model refuses.
+int cli_set_parameter(const char* command, sm_document* doc, const char* setting);
+
+/// Creates a directory if it does not exist; prints the error and returns -1 on failure.
+int cli_make_directory(const char* command, const char* dir);
+
+/// Opens a legacy VTK polydata file and writes the particles at x [m] as points and the springs
+/// as lines (only the enabled ones, so that broken springs disappear). Follow with
+/// cli_vtk_vectors for point data, then cli_close. Prints the error and returns NULL on failure.
+FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,
+                   const double* x);
+
+/// Writes one vector field of point data (3 values per particle); `first` for the first field.
+void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
+
+/// Closes a file written by a subcommand; prints the error and returns -1 if anything failed.
+int cli_close(const char* command, const char* path, FILE* f);
