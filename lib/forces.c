@@ -17,6 +17,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+// The loops below take constant flags and are expanded into each caller, so that the compiler
+// makes one specialised loop per combination (without forcing it, it keeps one generic loop that
+// tests the flags inside and runs short of registers).
+#if defined(__GNUC__)
+#define SPECIALISED static inline __attribute__((always_inline))
+#else
+#define SPECIALISED static inline
+#endif
+
 // Factored per-spring Jacobian (model.h, sm_spring_jacobians), evaluated in the same pass.
 //
 // Derivation. law_rest_length.h and law_spring_damping.h give, with g = 1 - l0/L,
@@ -38,14 +51,14 @@
 // `with_velocity` (v given), `jacobian` (store the records), `clamp` (definite variant's clamp),
 // `damping_position` (exact variant's c). The force is computed by the same expressions in
 // every specialisation, so sm_model_forces and sm_model_forces_and_jacobians agree bit for bit.
-static inline void spring_loop(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
-                               const double* restrict rest_length, const double* restrict stiffness,
-                               const double* restrict damping, const double* restrict x,
-                               const double* restrict v, double* restrict f, double* restrict jacobian,
-                               const int with_velocity, const int with_jacobian, const int clamp,
-                               const int damping_position)
+SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t* restrict first,
+                                      const int32_t* restrict second, const double* restrict rest_length,
+                                      const double* restrict stiffness, const double* restrict damping,
+                                      const double* restrict x, const double* restrict v, double* restrict f,
+                                      double* restrict jacobian, const int with_velocity, const int with_jacobian,
+                                      const int clamp, const int damping_position)
 {
-	for (int32_t s = 0; s < count; s++) {
+	for (int32_t s = begin; s < count; s++) {
 		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
 		const double dx = x[b] - x[a], dy = x[b + 1] - x[a + 1], dz = x[b + 2] - x[a + 2];
 		const double l0 = rest_length[s], ks = stiffness[s], kd = damping[s];
@@ -90,6 +103,106 @@ static inline void spring_loop(int32_t count, const int32_t* restrict first, con
 			out[7] = kd;
 		}
 	}
+}
+
+#if defined(__SSE2__)
+// The same loop, two springs at a time in the two lanes of SSE2 registers (part of every x86-64
+// processor). Each lane performs exactly the scalar loop's IEEE operations in the same order
+// (no fused multiply-add, no reassociation), so the results are the same bits; the square root
+// and the division, the costliest operations, then serve two springs at once. The forces are
+// added to f spring after spring, in the scalar loop's order, so that two springs of a pair
+// sharing a particle accumulate as they would one at a time. Returns where the scalar loop
+// takes over (the odd last spring).
+SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
+                                        const double* restrict rest_length, const double* restrict stiffness,
+                                        const double* restrict damping, const double* restrict x,
+                                        const double* restrict v, double* restrict f, double* restrict jacobian,
+                                        const int with_velocity, const int with_jacobian, const int clamp,
+                                        const int damping_position)
+{
+	const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+	const __m128d ratio = _mm_set1_pd(SM_DEGENERATE_LENGTH_RATIO);
+	int32_t s = 0;
+	for (; s + 1 < count; s += 2) {
+		const size_t a0 = 3 * (size_t)first[s], b0 = 3 * (size_t)second[s];
+		const size_t a1 = 3 * (size_t)first[s + 1], b1 = 3 * (size_t)second[s + 1];
+		// Component k of p at particle offsets i0 (low lane) and i1 (high lane).
+#define PAIR(p, i0, i1, k) _mm_loadh_pd(_mm_load_sd((p) + (i0) + (k)), (p) + (i1) + (k))
+		const __m128d dx = _mm_sub_pd(PAIR(x, b0, b1, 0), PAIR(x, a0, a1, 0));
+		const __m128d dy = _mm_sub_pd(PAIR(x, b0, b1, 1), PAIR(x, a0, a1, 1));
+		const __m128d dz = _mm_sub_pd(PAIR(x, b0, b1, 2), PAIR(x, a0, a1, 2));
+		const __m128d l0 = _mm_loadu_pd(rest_length + s), ks = _mm_loadu_pd(stiffness + s);
+		const __m128d kd = _mm_loadu_pd(damping + s);
+		const __m128d length =
+			_mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
+		const __m128d regular = _mm_and_pd(_mm_cmpgt_pd(length, zero), _mm_cmpge_pd(length, _mm_mul_pd(ratio, l0)));
+		const __m128d inv = _mm_div_pd(one, _mm_or_pd(_mm_and_pd(regular, length), _mm_andnot_pd(regular, one)));
+		const __m128d inv_length = _mm_and_pd(regular, inv);
+		const __m128d ux = _mm_mul_pd(dx, inv_length), uy = _mm_mul_pd(dy, inv_length);
+		const __m128d uz = _mm_mul_pd(dz, inv_length);
+		__m128d magnitude = _mm_mul_pd(ks, _mm_sub_pd(length, l0));
+		__m128d dvx = zero, dvy = zero, dvz = zero, rate = zero;
+		if (with_velocity) {
+			dvx = _mm_sub_pd(PAIR(v, b0, b1, 0), PAIR(v, a0, a1, 0));
+			dvy = _mm_sub_pd(PAIR(v, b0, b1, 1), PAIR(v, a0, a1, 1));
+			dvz = _mm_sub_pd(PAIR(v, b0, b1, 2), PAIR(v, a0, a1, 2));
+			rate = _mm_add_pd(_mm_add_pd(_mm_mul_pd(ux, dvx), _mm_mul_pd(uy, dvy)), _mm_mul_pd(uz, dvz));
+			magnitude = _mm_add_pd(magnitude, _mm_mul_pd(kd, rate));
+		}
+#undef PAIR
+		const __m128d fx = _mm_mul_pd(magnitude, ux), fy = _mm_mul_pd(magnitude, uy);
+		const __m128d fz = _mm_mul_pd(magnitude, uz);
+		const __m128d fxy0 = _mm_unpacklo_pd(fx, fy), fxy1 = _mm_unpackhi_pd(fx, fy);
+		const __m128d fz1 = _mm_unpackhi_pd(fz, fz);
+		_mm_storeu_pd(f + a0, _mm_add_pd(_mm_loadu_pd(f + a0), fxy0));
+		_mm_store_sd(f + a0 + 2, _mm_add_sd(_mm_load_sd(f + a0 + 2), fz));
+		_mm_storeu_pd(f + b0, _mm_sub_pd(_mm_loadu_pd(f + b0), fxy0));
+		_mm_store_sd(f + b0 + 2, _mm_sub_sd(_mm_load_sd(f + b0 + 2), fz));
+		_mm_storeu_pd(f + a1, _mm_add_pd(_mm_loadu_pd(f + a1), fxy1));
+		_mm_store_sd(f + a1 + 2, _mm_add_sd(_mm_load_sd(f + a1 + 2), fz1));
+		_mm_storeu_pd(f + b1, _mm_sub_pd(_mm_loadu_pd(f + b1), fxy1));
+		_mm_store_sd(f + b1 + 2, _mm_sub_sd(_mm_load_sd(f + b1 + 2), fz1));
+		if (with_jacobian) {
+			__m128d g = _mm_sub_pd(one, _mm_mul_pd(l0, inv_length));
+			if (clamp)
+				g = _mm_andnot_pd(_mm_cmplt_pd(g, zero), g);  // g < 0 ? 0 : g
+			const __m128d c = damping_position ? _mm_mul_pd(kd, inv_length) : zero;
+			const __m128d cr = _mm_mul_pd(c, rate);
+			const __m128d beta = _mm_add_pd(_mm_mul_pd(ks, g), cr);
+			const __m128d axial = _mm_sub_pd(_mm_sub_pd(ks, beta), cr);
+			const __m128d zx = _mm_add_pd(_mm_mul_pd(axial, ux), _mm_mul_pd(c, dvx));
+			const __m128d zy = _mm_add_pd(_mm_mul_pd(axial, uy), _mm_mul_pd(c, dvy));
+			const __m128d zz = _mm_add_pd(_mm_mul_pd(axial, uz), _mm_mul_pd(c, dvz));
+			double* out = jacobian + SPRING_JACOBIAN_STRIDE * (size_t)s;  // 64-byte aligned records
+			_mm_store_pd(out, _mm_unpacklo_pd(ux, uy));
+			_mm_store_pd(out + 2, _mm_unpacklo_pd(uz, zx));
+			_mm_store_pd(out + 4, _mm_unpacklo_pd(zy, zz));
+			_mm_store_pd(out + 6, _mm_unpacklo_pd(beta, kd));
+			_mm_store_pd(out + 8, _mm_unpackhi_pd(ux, uy));
+			_mm_store_pd(out + 10, _mm_unpackhi_pd(uz, zx));
+			_mm_store_pd(out + 12, _mm_unpackhi_pd(zy, zz));
+			_mm_store_pd(out + 14, _mm_unpackhi_pd(beta, kd));
+		}
+	}
+	return s;
+}
+#endif
+
+// The whole loop: pairs where SSE2 is available, the scalar loop for the rest.
+SPECIALISED void spring_loop(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
+                               const double* restrict rest_length, const double* restrict stiffness,
+                               const double* restrict damping, const double* restrict x,
+                               const double* restrict v, double* restrict f, double* restrict jacobian,
+                               const int with_velocity, const int with_jacobian, const int clamp,
+                               const int damping_position)
+{
+	int32_t begin = 0;
+#if defined(__SSE2__)
+	begin = spring_loop_pairs(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
+	                          with_velocity, with_jacobian, clamp, damping_position);
+#endif
+	spring_loop_scalar(begin, count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
+	                   with_velocity, with_jacobian, clamp, damping_position);
 }
 
 // Gravity, mass damping and external forces: the starting value of f before the springs add.

@@ -673,6 +673,74 @@ static int test_fused_degenerate_and_disabled_springs(void)
 	return 0;
 }
 
+// Springs are evaluated two at a time where the processor allows it (forces.c), the odd last one
+// alone. Both must be the same IEEE operations: the forces of a model equal, bit for bit, its
+// body forces plus each spring's force evaluated alone (a two-particle model, in spring order),
+// and so do the stored Jacobian records, for both variants. The model includes a spring whose
+// ends coincide (degenerate), a disabled one and springs sharing particles within a pair.
+static int test_springs_in_pairs_equal_springs_alone_bit_for_bit(void)
+{
+	rng r = {6060};
+	enum { N = 9, S = 21 };
+	double x[3 * N], v[3 * N], f[3 * N], expect[3 * N], fa[6], x2[6], v2[6];
+	for (int trial = 0; trial < 4; trial++) {
+		sm_model* m = random_model(&r, N, S, trial % 2, x, v);
+		ENSURE(m != NULL);
+		x[3 * 4] = x[3 * 5];  // particles 4 and 5 coincide: spring 4-5 is degenerate
+		x[3 * 4 + 1] = x[3 * 5 + 1];
+		x[3 * 4 + 2] = x[3 * 5 + 2];
+		sm_spring_def d = sm_default_spring_def();
+		d.a = 4;
+		d.b = 5;
+		d.rest_length = 0.3;
+		d.stiffness = 50.0;
+		d.damping = 1.0;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		ENSURE_STATUS(sm_model_set_spring_enabled(m, 7, false), SM_OK);
+		const int32_t springs = sm_model_spring_count(m);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			// Body forces alone: the same model with every spring disabled (zero constants).
+			sm_model* body = sm_model_clone(m);
+			ENSURE(body != NULL);
+			for (int32_t s = 0; s < springs; s++)
+				ENSURE_STATUS(sm_model_set_spring_enabled(body, s, false), SM_OK);
+			sm_model_forces(body, x, v, NULL, expect);
+			sm_model_destroy(body);
+			for (int32_t s = 0; s < springs; s++) {
+				sm_spring_def def;
+				ENSURE_STATUS(sm_model_get_spring(m, s, &def), SM_OK);
+				sm_model* one = single_spring(m, s, x, v, x2, v2);
+				ENSURE(one != NULL);
+				if (!sm_model_spring_enabled(m, s))
+					ENSURE_STATUS(sm_model_set_spring_enabled(one, 0, false), SM_OK);
+				sm_spring_jacobians* alone = sm_spring_jacobians_create(one);
+				ENSURE(alone != NULL);
+				ENSURE_STATUS(sm_model_forces_and_jacobians(one, x2, v2, NULL, (sm_jacobian_variant)variant, fa, alone),
+				              SM_OK);
+				for (int k = 0; k < 3; k++) {
+					expect[3 * def.a + k] += fa[k];
+					expect[3 * def.b + k] -= fa[k];
+				}
+				double K[9], D[9], K1[9], D1[9];
+				ENSURE_STATUS(sm_spring_jacobians_block(sj, s, K, D), SM_OK);
+				ENSURE_STATUS(sm_spring_jacobians_block(alone, 0, K1, D1), SM_OK);
+				for (int k = 0; k < 9; k++)
+					ENSURE(K[k] == K1[k] && D[k] == D1[k]);
+				sm_spring_jacobians_destroy(alone);
+				sm_model_destroy(one);
+			}
+			for (size_t k = 0; k < 3 * N; k++)
+				ENSURE(f[k] == expect[k]);
+		}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
 // Misuse is an error, never a crash, and leaves the outputs untouched.
 static int test_fused_errors(void)
 {
@@ -736,6 +804,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_product_matches_finite_differences);
 	RUN_TEST(test_fill_from_springs_matches_finite_differences);
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
+	RUN_TEST(test_springs_in_pairs_equal_springs_alone_bit_for_bit);
 	RUN_TEST(test_fused_errors);
 	return TEST_SUMMARY();
 }
