@@ -8,7 +8,9 @@
 # springmass's bench_forces (median of 7 trials), and prints
 #   forces n=<n> springs_per_s=<v> ceiling_springs_per_s=<v> ratio=<v>
 #   forces+jacobian n=<n> springs_per_s=<v> ceiling_springs_per_s=<v> ratio=<v>
-# where the ceiling is the median over the kernel's runs and ratio = springs_per_s / ceiling.
+# where the ceiling is the median over the kernel's runs and ratio = springs_per_s / ceiling;
+# then the same for the two ways of filling the assembled sparse matrices as well
+# (forces+csr, forces+fill; bench/README.md says what each kind evaluates).
 set -euo pipefail
 
 build_dir=${1:?usage: bench_forces.sh BUILD_DIR [REPEATS]}
@@ -39,7 +41,7 @@ for n in 32 128 256; do
 	done >"$work/ceiling"
 	ceiling=$(median <"$work/ceiling")
 	"$bench" "$n" 7 2>/dev/null >"$work/ours"
-	for kind in forces forces+jacobian; do
+	for kind in forces forces+jacobian forces+csr forces+fill; do
 		ours=$(grep "^$kind n=" "$work/ours" | field springs_per_s)
 		awk -v k="$kind" -v n="$n" -v o="$ours" -v c="$ceiling" \
 			'BEGIN { printf "%s n=%d springs_per_s=%.4g ceiling_springs_per_s=%.4g ratio=%.3f\n", k, n, o, c, o / c }'
