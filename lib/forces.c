@@ -7,7 +7,10 @@
 //   f_a = [ks (L - l0) + kd r] u,   f_b = -f_a,
 //
 // streams through the structure-of-arrays springs with no branch (disabled springs have zero
-// constants; the degenerate point is a select, not a branch) and accumulates into f.
+// constants; the degenerate point is a select, not a branch), two springs at a time where SSE2
+// is available, and accumulates into f. The same pass can also store every spring's Jacobian in
+// factored form (sm_model_forces_and_jacobians), for the product in jacobian.c and the sparse
+// fill in sparse_jacobian.c. bench/README.md has the measurements behind these choices.
 #include "law_body_forces.h"
 #include "law_rest_length.h"
 #include "law_spring_damping.h"
