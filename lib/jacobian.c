@@ -87,6 +87,9 @@ void sm_model_jacobian_dense(const sm_model* model, const double* x, const doubl
 	}
 }
 
+// Without storage, each spring's factored form (forces.c: K = beta I + u z^T, D = kd u u^T) is
+// computed on the fly and applied at once, instead of building its two 3x3 blocks:
+// d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, d f_b = -d f_a.
 void sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
                                sm_jacobian_variant variant, const double* dx, const double* dv, double* out)
 {
@@ -98,24 +101,32 @@ void sm_model_jacobian_product(const sm_model* model, const double* x, const dou
 		for (int k = 0; k < 3; k++)
 			out[3 * (size_t)i + k] = dv != NULL ? c * dv[3 * (size_t)i + k] : 0.0;
 	}
+	const int exact = variant != SM_JACOBIAN_DEFINITE;
 	for (int32_t s = 0; s < model->spring_count; s++) {
-		double K[9], D[9];
-		spring_blocks(model, s, x, v, variant, K, D);
+		spring_geometry g;
+		const double l0 = model->rest_length[s], ks = model->stiffness[s], kd = model->damping[s];
+		spring_geometry_eval(x, v, model->spring_a[s], model->spring_b[s], l0, &g);
+		double geometric = 1.0 - l0 * g.inv_length;
+		if (!exact && geometric < 0.0)
+			geometric = 0.0;
+		const double c = exact ? kd * g.inv_length : 0.0;
+		const double cr = c * g.rate;
+		const double beta = ks * geometric + cr;
+		const double axial = ks - beta - cr;
 		const size_t a = 3 * (size_t)model->spring_a[s], b = 3 * (size_t)model->spring_b[s];
-		// The spring sees only relative motion: d f_a = K (dx_b - dx_a) + D (dv_b - dv_a).
-		double rx[3] = {0.0, 0.0, 0.0}, rv[3] = {0.0, 0.0, 0.0};
+		double rx[3] = {0.0, 0.0, 0.0}, coefficient = 0.0;
 		for (int k = 0; k < 3; k++) {
-			if (dx != NULL)
+			if (dx != NULL) {
 				rx[k] = dx[b + k] - dx[a + k];
+				coefficient += (axial * g.u[k] + c * g.dv[k]) * rx[k];
+			}
 			if (dv != NULL)
-				rv[k] = dv[b + k] - dv[a + k];
+				coefficient += kd * g.u[k] * (dv[b + k] - dv[a + k]);
 		}
-		for (int i = 0; i < 3; i++) {
-			double df = 0.0;
-			for (int j = 0; j < 3; j++)
-				df += K[3 * i + j] * rx[j] + D[3 * i + j] * rv[j];
-			out[a + i] += df;
-			out[b + i] -= df;
+		for (int k = 0; k < 3; k++) {
+			const double df = g.u[k] * coefficient + beta * rx[k];
+			out[a + k] += df;
+			out[b + k] -= df;
 		}
 	}
 }
