@@ -541,9 +541,10 @@ static int test_fused_product_matches_finite_differences(void)
 }
 
 // The sparse matrices filled from the records against central finite differences over the free
-// degrees of freedom (exact variant, tolerance of the header), and equal to
-// sm_sparse_jacobian_fill to rounding for both variants (the same few terms summed in another
-// order: 1e-12 of the largest entry).
+// degrees of freedom (exact variant, tolerance of the header), and, for both variants, against
+// the dense matrices (built from sm_model_spring_jacobian's blocks, an independent expansion of
+// the same few terms: equal to 1e-12 of the largest entry, a few rounding errors with a margin);
+// sm_sparse_jacobian_fill gives the same numbers.
 static int test_fill_from_springs_matches_finite_differences(void)
 {
 	rng r = {97531};
@@ -577,11 +578,32 @@ static int test_fill_from_springs_matches_finite_differences(void)
 			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, sx, sv), SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, (sm_jacobian_variant)variant, rx, rv), SM_OK);
-			const double scale_x = max_abs(rx, (size_t)nnz), scale_v = max_abs(rv, (size_t)nnz);
-			for (int64_t k = 0; k < nnz; k++) {
-				ENSURE_NEAR(sx[k], rx[k], 1e-12 * scale_x);
-				ENSURE_NEAR(sv[k], rv[k], 1e-12 * scale_v);
-			}
+			for (int64_t k = 0; k < nnz; k++)
+				ENSURE(sx[k] == rx[k] && sv[k] == rv[k]);
+			// Against the dense matrices over the free degrees of freedom.
+			const size_t full = 3 * (size_t)N;
+			double* dx_dense = malloc(full * full * sizeof(double));
+			double* dv_dense = malloc(full * full * sizeof(double));
+			ENSURE(dx_dense != NULL && dv_dense != NULL);
+			sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dx_dense, dv_dense);
+			csr_to_dense(dim, rows, cols, sx, ax);
+			csr_to_dense(dim, rows, cols, sv, av);
+			const double scale_x = max_abs(dx_dense, full * full), scale_v = max_abs(dv_dense, full * full);
+			for (int32_t p = 0; p < N; p++)
+				for (int32_t q = 0; q < N; q++) {
+					const int32_t fp = sm_model_free_index(m, p), fq = sm_model_free_index(m, q);
+					if (fp < 0 || fq < 0)
+						continue;
+					for (int i = 0; i < 3; i++)
+						for (int j = 0; j < 3; j++) {
+							const size_t dense = (3 * (size_t)p + i) * full + 3 * (size_t)q + j;
+							const int64_t sparse = (3 * fp + i) * dim + 3 * fq + j;
+							ENSURE_NEAR(ax[sparse], dx_dense[dense], 1e-12 * scale_x);
+							ENSURE_NEAR(av[sparse], dv_dense[dense], 1e-12 * scale_v);
+						}
+				}
+			free(dx_dense);
+			free(dv_dense);
 			// One matrix at a time gives the same values.
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, rx, NULL), SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, NULL, rv), SM_OK);

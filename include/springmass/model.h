@@ -251,7 +251,11 @@ SM_API const int64_t* sm_sparse_jacobian_column_indices(const sm_sparse_jacobian
 
 /// Fills the values (nonzeros entries each, in pattern order) of df/dx [N/m] and df/dv [N s/m]
 /// (mass damping included) at (x, v). Either may be NULL. Fails with SM_ERROR_TOPOLOGY if the
-/// model no longer matches the pattern.
+/// model no longer matches the pattern, SM_ERROR_OUT_OF_MEMORY if the call's scratch (64 bytes
+/// per spring, 24 per particle; freed before returning) cannot be allocated; the values are then
+/// untouched. Concurrent fills with the same pattern into different arrays are independent.
+/// Equivalent to sm_model_forces_and_jacobians followed by sm_sparse_jacobian_fill_from_springs,
+/// which a caller that needs the forces too should use instead.
 SM_API sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_model* model,
                                          const double* x, const double* v,
                                          sm_jacobian_variant variant, double* dfdx, double* dfdv);
