@@ -1469,6 +1469,11 @@ sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double valu
 	expansion* ex = expand(doc, values, &local);
 	if (ex == NULL) {
 		free(values);
+		// Name the parameter unless the message already does (it names the one a value came from).
+		char named[300];
+		snprintf(named, sizeof named, "parameter %s = ", doc->parameter_names[index]);
+		if (strstr(local.message, named) != NULL)
+			return sm_error_set(err, local.status, "%s", local.message);
 		return sm_error_set(err, local.status, "%s (with parameter %s = %g)", local.message,
 		                    doc->parameter_names[index], value);
 	}

@@ -328,8 +328,9 @@ static int test_parameters(void)
 
 	sm_error err = {SM_OK, ""};
 	ENSURE_STATUS(sm_document_set_parameter(doc, E, -1.0, &err), SM_ERROR_NEGATIVE);
-	ENSURE(strstr(err.message, "cloth.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0 "
-	                           "(with parameter E = -1)") != NULL);
+	ENSURE(strstr(err.message, "cloth.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0") !=
+	       NULL);
+	ENSURE(strstr(err.message, "(with parameter") == NULL);  // the parameter is named once
 	ENSURE_STATUS(sm_document_set_parameter(doc, E, NAN, &err), SM_ERROR_NOT_FINITE);
 	ENSURE(sm_document_parameter_value(doc, E) == 2000.0);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 99, 1.0, &err), SM_ERROR_NOT_FOUND);
