@@ -53,7 +53,8 @@ static sm_model* cloth(int n)
 	sm_sheet_def sheet = sm_default_sheet_def();
 	sheet.nu = sheet.nv = n;
 	sm_structure st;
-	if (sm_add_sheet(m, &sheet, &st) != SM_OK || sm_set_motion_at(m, &st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
+	if (sm_add_sheet(m, &sheet, &st) != SM_OK ||
+	    sm_set_motion_at(m, &st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
 	    sm_set_motion_at(m, &st, n - 1, n - 1, 0, SM_PARTICLE_FIXED) != SM_OK) {
 		fprintf(stderr, "bench_forces: %s\n", sm_model_last_error(m));
 		sm_model_destroy(m);

@@ -58,8 +58,8 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
                                       const int32_t* restrict second, const double* restrict rest_length,
                                       const double* restrict stiffness, const double* restrict damping,
                                       const double* restrict x, const double* restrict v, double* restrict f,
-                                      double* restrict jacobian, const int with_velocity, const int with_jacobian,
-                                      const int clamp, const int damping_position)
+                                      double* restrict jacobian, const int with_velocity,
+                                      const int with_jacobian, const int clamp, const int damping_position)
 {
 	for (int32_t s = begin; s < count; s++) {
 		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
@@ -116,12 +116,12 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
 // added to f spring after spring, in the scalar loop's order, so that two springs of a pair
 // sharing a particle accumulate as they would one at a time. Returns where the scalar loop
 // takes over (the odd last spring).
-SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
-                                        const double* restrict rest_length, const double* restrict stiffness,
-                                        const double* restrict damping, const double* restrict x,
-                                        const double* restrict v, double* restrict f, double* restrict jacobian,
-                                        const int with_velocity, const int with_jacobian, const int clamp,
-                                        const int damping_position)
+SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict first,
+                                        const int32_t* restrict second, const double* restrict rest_length,
+                                        const double* restrict stiffness, const double* restrict damping,
+                                        const double* restrict x, const double* restrict v, double* restrict f,
+                                        double* restrict jacobian, const int with_velocity,
+                                        const int with_jacobian, const int clamp, const int damping_position)
 {
 	const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
 	const __m128d ratio = _mm_set1_pd(SM_DEGENERATE_LENGTH_RATIO);
@@ -138,8 +138,10 @@ SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict fir
 		const __m128d kd = _mm_loadu_pd(damping + s);
 		const __m128d length =
 			_mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
-		const __m128d regular = _mm_and_pd(_mm_cmpgt_pd(length, zero), _mm_cmpge_pd(length, _mm_mul_pd(ratio, l0)));
-		const __m128d inv = _mm_div_pd(one, _mm_or_pd(_mm_and_pd(regular, length), _mm_andnot_pd(regular, one)));
+		const __m128d regular =
+			_mm_and_pd(_mm_cmpgt_pd(length, zero), _mm_cmpge_pd(length, _mm_mul_pd(ratio, l0)));
+		const __m128d denominator = _mm_or_pd(_mm_and_pd(regular, length), _mm_andnot_pd(regular, one));
+		const __m128d inv = _mm_div_pd(one, denominator);
 		const __m128d inv_length = _mm_and_pd(regular, inv);
 		const __m128d ux = _mm_mul_pd(dx, inv_length), uy = _mm_mul_pd(dy, inv_length);
 		const __m128d uz = _mm_mul_pd(dz, inv_length);

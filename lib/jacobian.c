@@ -133,7 +133,8 @@ void sm_model_jacobian_product(const sm_model* model, const double* x, const dou
 
 // From the factored records (model_internal.h; derivation in forces.c):
 // K = u z^T + beta I, D = kd u u^T.
-sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians, int32_t spring, double K[9], double D[9])
+sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians, int32_t spring, double K[9],
+                                    double D[9])
 {
 	if (jacobians == NULL || !jacobians->evaluated)
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -153,9 +154,9 @@ sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians, int32_
 
 // The product of one spring: d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, with
 // rx = dx_b - dx_a, rv = dv_b - dv_a; d f_b = -d f_a. Specialised for the NULL cases.
-static inline void factored_product(const sm_spring_jacobians* J, const sm_model* model, const double* restrict dx,
-                                    const double* restrict dv, double* restrict out, const int with_x,
-                                    const int with_v)
+static inline void factored_product(const sm_spring_jacobians* J, const sm_model* model,
+                                    const double* restrict dx, const double* restrict dv, double* restrict out,
+                                    const int with_x, const int with_v)
 {
 	const int32_t* restrict first = model->spring_a;
 	const int32_t* restrict second = model->spring_b;
@@ -181,8 +182,8 @@ static inline void factored_product(const sm_spring_jacobians* J, const sm_model
 	}
 }
 
-sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model, const double* dx,
-                                      const double* dv, double* out)
+sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model,
+                                      const double* dx, const double* dv, double* out)
 {
 	if (jacobians == NULL || model == NULL || out == NULL || !jacobians->evaluated)
 		return SM_ERROR_INVALID_ARGUMENT;

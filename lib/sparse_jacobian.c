@@ -278,7 +278,8 @@ static inline void fill_from_records(const sm_sparse_jacobian* J, const sm_model
 			memset(row_v, 0, 9 * (size_t)blocks * sizeof(double));
 		double diag_x[9] = {0}, diag_v[9] = {0};
 		if (want_v) {
-			const double c = mass_damping_derivative(model->mass[J->row_particle[p]], model->def.mass_damping);
+			const int32_t i = J->row_particle[p];
+			const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
 			diag_v[0] = diag_v[4] = diag_v[8] = c;
 		}
 		for (int64_t e = J->incident_start[p]; e < J->incident_start[p + 1]; e++) {
@@ -317,7 +318,8 @@ static inline void fill_from_records(const sm_sparse_jacobian* J, const sm_model
 }
 
 sm_status sm_sparse_jacobian_fill_from_springs(const sm_sparse_jacobian* jacobian, const sm_model* model,
-                                               const sm_spring_jacobians* jacobians, double* dfdx, double* dfdv)
+                                               const sm_spring_jacobians* jacobians, double* dfdx,
+                                               double* dfdv)
 {
 	if (jacobian == NULL || model == NULL || jacobians == NULL || !jacobians->evaluated)
 		return SM_ERROR_INVALID_ARGUMENT;

@@ -317,7 +317,8 @@ SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobian
 /// evaluated state and variant, to rounding. Either output may be NULL. SM_ERROR_TOPOLOGY if
 /// the model no longer matches the pattern or the storage, SM_ERROR_INVALID_ARGUMENT if nothing
 /// was evaluated yet.
-SM_API sm_status sm_sparse_jacobian_fill_from_springs(const sm_sparse_jacobian* jacobian, const sm_model* model,
+SM_API sm_status sm_sparse_jacobian_fill_from_springs(const sm_sparse_jacobian* jacobian,
+                                                      const sm_model* model,
                                                       const sm_spring_jacobians* jacobians, double* dfdx,
                                                       double* dfdv);
 
