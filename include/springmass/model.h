@@ -314,7 +314,7 @@ SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobian
 
 /// Fills the sparse df/dx [N/m] and df/dv [N s/m] (mass damping from the model) from the stored
 /// data, without evaluating any spring again: the same values as sm_sparse_jacobian_fill at the
-/// evaluated state and variant, to rounding. Either output may be NULL. SM_ERROR_TOPOLOGY if
+/// evaluated state and variant (which works this way). Either output may be NULL. SM_ERROR_TOPOLOGY if
 /// the model no longer matches the pattern or the storage, SM_ERROR_INVALID_ARGUMENT if nothing
 /// was evaluated yet.
 SM_API sm_status sm_sparse_jacobian_fill_from_springs(const sm_sparse_jacobian* jacobian,
