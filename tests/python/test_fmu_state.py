@@ -95,9 +95,16 @@ def test_instances_in_threads_match_a_lone_instance(test_fmu):
     # results of the same FMU run alone: no state is shared between instances.
     oscillator, hanging = test_fmu("driven_oscillator"), test_fmu("hanging")
 
+    # fmpy changes the process's working directory while it loads an FMU's binary, and an
+    # instance's free removes its unpacked folder: both are serialised; setting up, stepping and
+    # reading the instances run in parallel.
+    loader = threading.Lock()
+
     def simulate(fmu, name, k, results):
-        inst = Instance(fmu, name).start({"k": k})
+        with loader:
+            inst = Instance(fmu, name)
         try:
+            inst.start({"k": k})
             names = ["tip.x", "energy.elastic"] if "oscillator" in str(fmu) else ["bob.z", "hook.fz"]
             rows = []
             for n in range(100):
@@ -105,7 +112,8 @@ def test_instances_in_threads_match_a_lone_instance(test_fmu):
                 rows.append(inst.get(*names))
             results[name] = np.array(rows)
         finally:
-            inst.free()
+            with loader:
+                inst.free()
 
     cases = [(oscillator if i % 2 == 0 else hanging, f"i{i}", 40.0 + 10 * i) for i in range(8)]
     alone = {}
