@@ -18,12 +18,24 @@
 // M^-1 r falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers
 // make.
 //
-// Preconditioned conjugate gradients: A is assembled in the sparse Jacobian's pattern with the
-// current gamma at every solve (one pass over the entries), and preconditioned by the inverses
-// of its 3x3 diagonal blocks (block Jacobi).
-// Cholesky (CHOLMOD): the symbolic factorisation is computed once, the numeric one at every
-// setup with that setup's gamma; a solve at another gamma scales the correction by
-// 2 / (1 + gamma / gamma_setup), as CVODE does for its own direct solvers.
+// Both solvers use the Newton matrix of the current step exactly: CVODE is asked to refresh the
+// Jacobian at every step (see sm_reduced_solver_cvode_settings), and A is assembled from it with
+// the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a Jacobian and a
+// factorisation kept for up to 20 steps, as CVODE does by default for its direct solvers, made
+// the Newton iteration fail about once in 15 steps (each failure cuts the step by 4) and
+// doubled the number of steps (n = 16: 1263 against 684; n = 32: 2175 against 1103) for no gain
+// in accuracy; the fresh Jacobian costs one pass over the springs per step.
+//
+// Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, preconditioned by
+// - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), or
+// - (cholmod) a sparse Cholesky factorisation (CHOLMOD) of the Newton matrix of an earlier step:
+//   while J and gamma have changed little, one or two iterations (one triangular solve pair and
+//   one product each) reach CVODE's tolerance, so the factorisation, by far the costliest
+//   operation, is repeated only when the iterations it saves no longer pay for it (a
+//   deterministic count of floating-point operations, never a clock, decides: the same inputs
+//   give the same trajectory on every machine). A factorisation at the current J and gamma makes
+//   the first iterate the exact Newton correction.
+// The symbolic analysis (fill-reducing ordering) is computed once.
 #define _POSIX_C_SOURCE 200809L
 
 #include "model_internal.h"
@@ -37,9 +49,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-// Conjugate-gradient iterations allowed per solve, beyond which the solve counts as failed
-// (CVODE then reduces the step or refreshes the Jacobian).
+// Conjugate-gradient iterations allowed per solve with the block-Jacobi preconditioner, beyond
+// which the solve counts as failed (CVODE then reduces the step).
 #define PCG_MAX_ITERATIONS 400
+
+// Iterations allowed per solve with an older Cholesky factor as the preconditioner; beyond, the
+// current matrix is factorised and the solve restarted (it then converges in one iteration).
+#define CHOLESKY_MAX_ITERATIONS 12
 
 // Unknowns from which CHOLMOD's supernodal factorisation is used (simplicial below).
 #define SUPERNODAL_MIN_DOFS 2000
@@ -52,9 +68,18 @@ typedef struct reduced {
 	const int64_t* rows;  // pattern (owned by the simulation's sparse Jacobian)
 	const int64_t* cols;
 	int64_t* diagonal;    // per dof i: entry index of (i, 3 floor(i/3)), its diagonal block's first column
-	double gamma_setup;
 	N_Vector weights;     // error weights CVODE gives (not owned)
 	double* values;       // A in pattern order
+	double values_gamma;  // gamma that `values` was assembled with; NAN after a Jacobian refresh
+	bool blocks_valid;    // block_inverse holds the inverses of the assembled diagonal blocks
+	// Cholesky preconditioner: floating-point operations of one factorisation and of one
+	// iteration (a product with A and a triangular solve pair), and those spent on iterations
+	// beyond the first since the last factorisation.
+	bool factor_valid;
+	bool refactor;        // factorise at the next set-up
+	double factor_flops;
+	double iteration_flops;
+	double extra_flops;
 	double* block_inverse;  // 9 per free particle
 	double *r, *z, *p, *q, *rhs;
 	long last_flag;
@@ -197,35 +222,57 @@ static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
 	return (int)r->last_flag;
 }
 
+// Factorises A as assembled in r->values (at r->values_gamma). Returns 0, > 0 if A is not
+// positive definite (recoverable: a state far from any physical one, CVODE retries with a
+// smaller step), < 0 on failure.
+static int factorize(reduced* r)
+{
+	memcpy(r->matrix->x, r->values, (size_t)r->nonzeros * sizeof(double));
+	if (r->factor == NULL) {
+		r->factor = cholmod_l_analyze(r->matrix, &r->common);
+		if (r->factor == NULL)
+			return -1;
+	}
+	r->factor_valid = false;
+	const int ok = cholmod_l_factorize(r->matrix, r->factor, &r->common);
+	if (!ok || r->common.status == CHOLMOD_OUT_OF_MEMORY)
+		return -1;
+	if (r->common.status != CHOLMOD_OK)
+		return 1;
+	r->sim->factorizations++;
+	r->factor_valid = true;
+	r->refactor = false;
+	r->extra_flops = 0.0;
+	// CHOLMOD counts the factorisation's operations (common.fl) and the factor's entries
+	// (common.lnz): a solve pair reads L twice (4 lnz operations), the product A p 2 nnz(A).
+	r->factor_flops = r->common.fl > 0.0 ? r->common.fl : 1.0;
+	r->iteration_flops = 4.0 * r->common.lnz + 2.0 * (double)r->nonzeros;
+	return 0;
+}
+
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data)
 {
 	(void)fy;
 	sm_simulation* sim = user_data;
 	reduced* r = sim->linear_solver->content;
-	r->gamma_setup = gamma;
 	*jcur = SUNFALSE;
 	if (r->n == 0)
 		return 0;
 	if (!jok) {
 		if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(y), SM_JACOBIAN_DEFINITE) != 0)
 			return -1;
+		r->values_gamma = NAN;
 		*jcur = SUNTRUE;
 	}
-	if (!r->use_cholmod)
+	if (!r->use_cholmod || (r->factor_valid && !r->refactor))
 		return 0;
 	const double start = sm_simulation_clock();
 	assemble(r, gamma);
-	memcpy(r->matrix->x, r->values, (size_t)r->nonzeros * sizeof(double));
-	if (r->factor == NULL)
-		r->factor = cholmod_l_analyze(r->matrix, &r->common);
-	int ok = r->factor != NULL && cholmod_l_factorize(r->matrix, r->factor, &r->common);
+	r->values_gamma = gamma;
+	const int flag = factorize(r);
 	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
-	if (!ok || r->common.status == CHOLMOD_OUT_OF_MEMORY)
-		return -1;
-	// Not positive definite (a state far from any physical one): recoverable, CVODE retries
-	// with a smaller step.
-	return r->common.status == CHOLMOD_OK ? 0 : 1;
+	return flag;
 }
 
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector rv, N_Vector z, sunrealtype gamma,
@@ -248,8 +295,23 @@ static double residual_norm(const reduced* r, const double* res)
 	return sqrt(s);
 }
 
-// Preconditioned conjugate gradients on A dv = rhs from dv = 0. Returns a SUNLS flag.
-static int conjugate_gradients(reduced* r, double* dv, double tol)
+// Applies the preconditioner: block Jacobi, or a solve with the Cholesky factor.
+static bool apply_preconditioner(reduced* r, const double* in, double* out)
+{
+	if (!r->use_cholmod) {
+		precondition(r, in, out);
+		return true;
+	}
+	memcpy(r->b->x, in, (size_t)r->n * sizeof(double));
+	if (!cholmod_l_solve2(CHOLMOD_A, r->factor, r->b, NULL, &r->x, NULL, &r->y_work, &r->e_work, &r->common))
+		return false;
+	memcpy(out, r->x->x, (size_t)r->n * sizeof(double));
+	return true;
+}
+
+// Preconditioned conjugate gradients on A dv = rhs from dv = 0, at most max_iterations.
+// Returns a SUNLS flag.
+static int conjugate_gradients(reduced* r, double* dv, double tol, int max_iterations)
 {
 	const int64_t n = r->n;
 	double *res = r->r, *z = r->z, *p = r->p, *q = r->q;
@@ -260,12 +322,13 @@ static int conjugate_gradients(reduced* r, double* dv, double tol)
 	double norm = initial;
 	if (norm <= tol)
 		return SUNLS_SUCCESS;
-	precondition(r, res, z);
+	if (!apply_preconditioner(r, res, z))
+		return SUNLS_MEM_FAIL;
 	memcpy(p, z, (size_t)n * sizeof(double));
 	double rz = 0.0;
 	for (int64_t i = 0; i < n; i++)
 		rz += res[i] * z[i];
-	for (int iteration = 1; iteration <= PCG_MAX_ITERATIONS; iteration++) {
+	for (int iteration = 1; iteration <= max_iterations; iteration++) {
 		multiply(r, r->values, p, q);
 		double pq = 0.0;
 		for (int64_t i = 0; i < n; i++)
@@ -282,7 +345,8 @@ static int conjugate_gradients(reduced* r, double* dv, double tol)
 		norm = residual_norm(r, res);
 		if (norm <= tol)
 			return SUNLS_SUCCESS;
-		precondition(r, res, z);
+		if (!apply_preconditioner(r, res, z))
+			return SUNLS_MEM_FAIL;
 		double rz_next = 0.0;
 		for (int64_t i = 0; i < n; i++)
 			rz_next += res[i] * z[i];
@@ -292,6 +356,28 @@ static int conjugate_gradients(reduced* r, double* dv, double tol)
 			p[i] = z[i] + beta * p[i];
 	}
 	return norm < initial ? SUNLS_RES_REDUCED : SUNLS_CONV_FAIL;
+}
+
+// Conjugate gradients preconditioned by the Cholesky factor of an earlier Newton matrix; if they
+// do not converge in CHOLESKY_MAX_ITERATIONS, the current A is factorised and they start again.
+// Iterations beyond the first are counted against the cost of a factorisation: once they have
+// cost as much as one, the next set-up factorises afresh.
+static int cholesky_solve(reduced* r, double* dv, double tol)
+{
+	int flag = SUNLS_CONV_FAIL;
+	if (r->factor_valid)
+		flag = conjugate_gradients(r, dv, tol, CHOLESKY_MAX_ITERATIONS);
+	if (flag != SUNLS_SUCCESS && flag != SUNLS_MEM_FAIL) {
+		const int f = factorize(r);
+		if (f != 0)
+			return f > 0 ? SUNLS_PACKAGE_FAIL_REC : SUNLS_MEM_FAIL;
+		flag = conjugate_gradients(r, dv, tol, CHOLESKY_MAX_ITERATIONS);
+	}
+	if (r->last_iterations > 1)
+		r->extra_flops += (double)(r->last_iterations - 1) * r->iteration_flops;
+	if (r->extra_flops > r->factor_flops)
+		r->refactor = true;
+	return flag;
 }
 
 static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Vector bv, sunrealtype tol)
@@ -309,33 +395,23 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (n == 0)
 		return r->last_flag = SUNLS_SUCCESS;
 	const double start = sm_simulation_clock();
-	// The Cholesky factor holds the setup's gamma; conjugate gradients use the current one.
-	const double g = r->use_cholmod ? r->gamma_setup : gamma;
 	multiply(r, sim->dfdx, b, r->rhs);
 	for (int64_t i = 0; i < n; i++)
-		r->rhs[i] = sim->mass_dof[i] * b[n + i] + g * r->rhs[i];
-	double* dv = x + n;
-	int flag = SUNLS_SUCCESS;
-	if (r->use_cholmod) {
-		memcpy(r->b->x, r->rhs, (size_t)n * sizeof(double));
-		if (!cholmod_l_solve2(CHOLMOD_A, r->factor, r->b, NULL, &r->x, NULL, &r->y_work, &r->e_work, &r->common))
-			flag = SUNLS_MEM_FAIL;
-		else
-			memcpy(dv, r->x->x, (size_t)n * sizeof(double));
-		sim->linear_iterations++;
-	} else {
+		r->rhs[i] = sim->mass_dof[i] * b[n + i] + gamma * r->rhs[i];
+	if (!(r->values_gamma == gamma)) {
 		assemble(r, gamma);
-		flag = invert_blocks(r) ? conjugate_gradients(r, dv, tol) : SUNLS_PACKAGE_FAIL_REC;
+		r->values_gamma = gamma;
+		r->blocks_valid = !r->use_cholmod && invert_blocks(r);
 	}
-	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED) {
+	double* dv = x + n;
+	int flag;
+	if (r->use_cholmod)
+		flag = cholesky_solve(r, dv, tol);
+	else
+		flag = r->blocks_valid ? conjugate_gradients(r, dv, tol, PCG_MAX_ITERATIONS) : SUNLS_PACKAGE_FAIL_REC;
+	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED)
 		for (int64_t i = 0; i < n; i++)
-			x[i] = b[i] + g * dv[i];
-		if (r->use_cholmod && gamma != r->gamma_setup) {
-			const double scale = 2.0 / (1.0 + gamma / r->gamma_setup);
-			for (int64_t i = 0; i <= 2 * n; i++)
-				x[i] *= scale;
-		}
-	}
+			x[i] = b[i] + gamma * dv[i];
 	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
 	return r->last_flag = flag;
 }
@@ -382,6 +458,7 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 	r->sim = sim;
 	r->use_cholmod = use_cholmod;
 	r->n = sim->dofs;
+	r->values_gamma = NAN;
 	r->nonzeros = sm_sparse_jacobian_nonzeros(sim->pattern);
 	r->rows = sm_sparse_jacobian_row_pointers(sim->pattern);
 	r->cols = sm_sparse_jacobian_column_indices(sim->pattern);

@@ -358,6 +358,7 @@ static int timed_setup(SUNLinearSolver ls, SUNMatrix A)
 	const double start = sm_simulation_clock();
 	int r = SUNLinSolSetup(c->inner, A);
 	c->sim->base.linear_solve_seconds += sm_simulation_clock() - start;
+	c->sim->factorizations++;
 	return r;
 }
 
@@ -584,8 +585,11 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		sim->linear_solver = sm_reduced_solver_create(sim, sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
 		if (!sim->linear_solver)
 			return SM_ERROR_OUT_OF_MEMORY;
+		// A fresh Jacobian and set-up at every step (linear_solver_reduced.c explains why).
 		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, NULL) != CVLS_SUCCESS ||
-		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS)
+		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS ||
+		    CVodeSetLSetupFrequency(sim->cvode, 1) != CV_SUCCESS ||
+		    CVodeSetJacEvalFrequency(sim->cvode, 1) != CVLS_SUCCESS)
 			return SM_ERROR_SOLVER;
 		return SM_OK;
 	}
@@ -918,6 +922,7 @@ sm_statistics sm_simulation_statistics(const sm_simulation* sim)
 	s.rhs_evaluations = sim->rhs_evaluations;
 	s.jacobian_evaluations = sim->jacobian_evaluations;
 	s.linear_iterations = sim->linear_iterations;
+	s.factorizations = sim->factorizations;
 	return s;
 }
 
@@ -1034,7 +1039,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 	sim->last_error[0] = '\0';
 	sm_status st = reinit(sim, false);
 	memset(&sim->base, 0, sizeof sim->base);
-	sim->rhs_evaluations = sim->jacobian_evaluations = sim->linear_iterations = 0;
+	sim->rhs_evaluations = sim->jacobian_evaluations = sim->linear_iterations = sim->factorizations = 0;
 	return st;
 }
 

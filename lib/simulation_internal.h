@@ -75,6 +75,7 @@ struct sm_simulation {
 	int64_t rhs_evaluations;
 	int64_t jacobian_evaluations;
 	int64_t linear_iterations;
+	int64_t factorizations;
 
 	char last_error[SM_ERROR_MESSAGE_CAPACITY];
 	char solver_message[SM_ERROR_MESSAGE_CAPACITY];  // CVODE's last error text

@@ -72,6 +72,9 @@ typedef struct sm_statistics {
 	double force_seconds;          ///< wall time in force evaluation [s]
 	double jacobian_seconds;       ///< wall time in Jacobian evaluation and matrix setup [s]
 	double linear_solve_seconds;   ///< wall time in linear solves [s]
+	/// Numeric factorisations of a Newton matrix: the set-ups of the dense and KLU solvers,
+	/// CHOLMOD's factorisations for the reduced Cholesky solver, none for conjugate gradients.
+	int64_t factorizations;
 } sm_statistics;
 
 /// A spring that broke.
