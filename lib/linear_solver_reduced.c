@@ -70,18 +70,25 @@ typedef struct reduced {
 	int64_t* diagonal;    // per dof i: entry index of (i, 3 floor(i/3)), its diagonal block's first column
 	N_Vector weights;     // error weights CVODE gives (not owned)
 	double* values;       // A in pattern order
-	double values_gamma;  // gamma that `values` was assembled with; NAN after a Jacobian refresh
-	bool blocks_valid;    // block_inverse holds the inverses of the assembled diagonal blocks
+	bool blocks_valid;    // block_inverse holds the inverses of A's diagonal blocks at blocks_gamma
 	// Cholesky preconditioner: floating-point operations of one factorisation and of one
 	// iteration (a product with A and a triangular solve pair), and those spent on iterations
 	// beyond the first since the last factorisation.
 	bool factor_valid;
-	bool refactor;        // factorise at the next set-up
+	bool refactor;        // factorise at the next solve
 	double factor_flops;
 	double iteration_flops;
 	double extra_flops;
 	double* block_inverse;  // 9 per free particle
 	double *r, *z, *p, *q, *rhs;
+	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
+	// at every set-up; products with A are formed from it without assembling A.
+	sm_spring_jacobians* springs;
+	double gamma;           // of the current solve
+	double mass_damping;    // alpha [1/s] of the model at the last set-up
+	double *full_dx, *full_dv, *full_out, *full_force;  // 3 per particle; constrained entries stay 0
+	double* diagonal_sums;  // per free particle: sum of the K blocks (9), then of the D blocks (9)
+	double blocks_gamma;    // gamma of block_inverse; NAN after a Jacobian refresh
 	long last_flag;
 	int last_iterations;
 	SUNPSetupFn psetup;   // CVODE's preconditioner set-up hook: leads to reduced_pset
@@ -161,15 +168,20 @@ static void assemble(reduced* r, double gamma)
 		r->values[r->diagonal[i] + (i % 3)] += r->sim->mass_dof[i];
 }
 
-// Inverts the 3x3 diagonal blocks of the assembled matrix (block Jacobi preconditioner).
-// Returns false if a block is not invertible.
-static bool invert_blocks(reduced* r)
+// Block-Jacobi preconditioner: A's diagonal blocks at gamma,
+//   A_ii = m_i (1 + gamma alpha) I + gamma sum D_s + gamma^2 sum K_s
+// over the springs s at particle i (d f_i / d x_i = -sum K_s, d f_i / d v_i = -sum D_s - alpha m_i I),
+// inverted in place. Returns false if a block is not invertible.
+static bool invert_blocks(reduced* r, double gamma)
 {
+	const double g2 = gamma * gamma;
 	for (int64_t k = 0; k < r->n / 3; k++) {
+		const double* ks = r->diagonal_sums + 18 * k;
+		const double* ds = ks + 9;
+		const double m = r->sim->mass_dof[3 * k] * (1.0 + gamma * r->mass_damping);
 		double a[9];
-		for (int i = 0; i < 3; i++)
-			for (int j = 0; j < 3; j++)
-				a[3 * i + j] = r->values[r->diagonal[3 * k + i] + j];
+		for (int i = 0; i < 9; i++)
+			a[i] = gamma * ds[i] + g2 * ks[i] + (i % 4 == 0 ? m : 0.0);
 		double* inv = r->block_inverse + 9 * k;
 		inv[0] = a[4] * a[8] - a[5] * a[7];
 		inv[1] = a[2] * a[7] - a[1] * a[8];
@@ -189,14 +201,56 @@ static bool invert_blocks(reduced* r)
 	return true;
 }
 
-static void multiply(const reduced* r, const double* values, const double* in, double* out)
+// Sums every spring's blocks into its free end particles' diagonal sums.
+static void sum_diagonal_blocks(reduced* r)
 {
-	for (int64_t i = 0; i < r->n; i++) {
-		double s = 0.0;
-		for (int64_t e = r->rows[i]; e < r->rows[i + 1]; e++)
-			s += values[e] * in[r->cols[e]];
-		out[i] = s;
+	const sm_model* m = r->sim->model;
+	memset(r->diagonal_sums, 0, (size_t)(6 * r->n) * sizeof(double));
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		if (!m->enabled[s])
+			continue;
+		double K[9], D[9];
+		if (sm_spring_jacobians_block(r->springs, s, K, D) != SM_OK)
+			continue;
+		const int32_t ends[2] = {m->free_index[m->spring_a[s]], m->free_index[m->spring_b[s]]};
+		for (int e = 0; e < 2; e++) {
+			if (ends[e] < 0)
+				continue;
+			double* sum = r->diagonal_sums + 18 * (size_t)ends[e];
+			for (int i = 0; i < 9; i++) {
+				sum[i] += K[i];
+				sum[9 + i] += D[i];
+			}
+		}
 	}
+}
+
+// out = K in over the free degrees of freedom (scale_x = 1, scale_v = 0: the right-hand side), or
+// out = A in = M in - gamma D in - gamma^2 K in (the Newton matrix), from the spring records.
+static void apply_jacobian(reduced* r, const double* in, double scale_x, double scale_v, double* out)
+{
+	sm_simulation* sim = r->sim;
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		for (int c = 0; c < 3; c++) {
+			r->full_dx[p + c] = scale_x * in[3 * k + c];
+			r->full_dv[p + c] = scale_v * in[3 * k + c];
+		}
+	}
+	sm_spring_jacobians_product(r->springs, sim->model, r->full_dx, scale_v != 0.0 ? r->full_dv : NULL, r->full_out);
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t p = 3 * (size_t)sim->free_particles[k];
+		for (int c = 0; c < 3; c++)
+			out[3 * k + c] = r->full_out[p + c];
+	}
+}
+
+static void multiply(reduced* r, const double* in, double* out)
+{
+	const double g = r->gamma;
+	apply_jacobian(r, in, g * g, g, out);
+	for (int64_t i = 0; i < r->n; i++)
+		out[i] = r->sim->mass_dof[i] * in[i] - out[i];
 }
 
 static void precondition(const reduced* r, const double* in, double* out)
@@ -222,11 +276,19 @@ static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
 	return (int)r->last_flag;
 }
 
-// Factorises A as assembled in r->values (at r->values_gamma). Returns 0, > 0 if A is not
+// Assembles A at the current Jacobian and gamma and factorises it. Returns 0, > 0 if A is not
 // positive definite (recoverable: a state far from any physical one, CVODE retries with a
 // smaller step), < 0 on failure.
 static int factorize(reduced* r)
 {
+	sm_simulation* sim = r->sim;
+	const double start = sm_simulation_clock();
+	const sm_status st =
+		sm_sparse_jacobian_fill_from_springs(sim->pattern, sim->model, r->springs, sim->dfdx, sim->dfdv);
+	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	if (st != SM_OK)
+		return -1;
+	assemble(r, r->gamma);
 	memcpy(r->matrix->x, r->values, (size_t)r->nonzeros * sizeof(double));
 	if (r->factor == NULL) {
 		r->factor = cholmod_l_analyze(r->matrix, &r->common);
@@ -253,26 +315,28 @@ static int factorize(reduced* r)
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data)
 {
-	(void)fy;
+	(void)fy, (void)gamma;
 	sm_simulation* sim = user_data;
 	reduced* r = sim->linear_solver->content;
 	*jcur = SUNFALSE;
-	if (r->n == 0)
+	if (r->n == 0 || jok)
 		return 0;
-	if (!jok) {
-		if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(y), SM_JACOBIAN_DEFINITE) != 0)
-			return -1;
-		r->values_gamma = NAN;
-		*jcur = SUNTRUE;
-	}
-	if (!r->use_cholmod || (r->factor_valid && !r->refactor))
-		return 0;
+	double* x = sim->work_position;
+	double* v = sim->work_velocity;
+	sm_simulation_unpack(sim, t, N_VGetArrayPointer(y), x, v);
 	const double start = sm_simulation_clock();
-	assemble(r, gamma);
-	r->values_gamma = gamma;
-	const int flag = factorize(r);
-	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
-	return flag;
+	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
+	                                             r->full_force, r->springs);
+	r->mass_damping = sm_model_get_def(sim->model).mass_damping;  // may change with update_model
+	if (st == SM_OK && !r->use_cholmod)
+		sum_diagonal_blocks(r);
+	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	sim->jacobian_evaluations++;
+	if (st != SM_OK)
+		return -1;
+	r->blocks_gamma = NAN;
+	*jcur = SUNTRUE;
+	return 0;
 }
 
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector rv, N_Vector z, sunrealtype gamma,
@@ -329,7 +393,7 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 	for (int64_t i = 0; i < n; i++)
 		rz += res[i] * z[i];
 	for (int iteration = 1; iteration <= max_iterations; iteration++) {
-		multiply(r, r->values, p, q);
+		multiply(r, p, q);
 		double pq = 0.0;
 		for (int64_t i = 0; i < n; i++)
 			pq += p[i] * q[i];
@@ -365,9 +429,9 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 static int cholesky_solve(reduced* r, double* dv, double tol)
 {
 	int flag = SUNLS_CONV_FAIL;
-	if (r->factor_valid)
+	if (r->factor_valid && !r->refactor)
 		flag = conjugate_gradients(r, dv, tol, CHOLESKY_MAX_ITERATIONS);
-	if (flag != SUNLS_SUCCESS && flag != SUNLS_MEM_FAIL) {
+	if (r->refactor || (flag != SUNLS_SUCCESS && flag != SUNLS_MEM_FAIL)) {
 		const int f = factorize(r);
 		if (f != 0)
 			return f > 0 ? SUNLS_PACKAGE_FAIL_REC : SUNLS_MEM_FAIL;
@@ -395,13 +459,13 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (n == 0)
 		return r->last_flag = SUNLS_SUCCESS;
 	const double start = sm_simulation_clock();
-	multiply(r, sim->dfdx, b, r->rhs);
+	r->gamma = gamma;
+	apply_jacobian(r, b, 1.0, 0.0, r->rhs);
 	for (int64_t i = 0; i < n; i++)
 		r->rhs[i] = sim->mass_dof[i] * b[n + i] + gamma * r->rhs[i];
-	if (!(r->values_gamma == gamma)) {
-		assemble(r, gamma);
-		r->values_gamma = gamma;
-		r->blocks_valid = !r->use_cholmod && invert_blocks(r);
+	if (!r->use_cholmod && !(r->blocks_gamma == gamma)) {
+		r->blocks_valid = invert_blocks(r, gamma);
+		r->blocks_gamma = gamma;
 	}
 	double* dv = x + n;
 	int flag;
@@ -437,6 +501,12 @@ static void reduced_content_free(reduced* r)
 	free(r->p);
 	free(r->q);
 	free(r->rhs);
+	sm_spring_jacobians_destroy(r->springs);
+	free(r->full_dx);
+	free(r->full_dv);
+	free(r->full_out);
+	free(r->full_force);
+	free(r->diagonal_sums);
 	free(r);
 }
 
@@ -458,34 +528,49 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 	r->sim = sim;
 	r->use_cholmod = use_cholmod;
 	r->n = sim->dofs;
-	r->values_gamma = NAN;
-	r->nonzeros = sm_sparse_jacobian_nonzeros(sim->pattern);
-	r->rows = sm_sparse_jacobian_row_pointers(sim->pattern);
-	r->cols = sm_sparse_jacobian_column_indices(sim->pattern);
+	r->blocks_gamma = NAN;
 	const size_t n = (size_t)r->n + 1;
-	r->diagonal = malloc(n * sizeof(int64_t));
-	r->values = malloc(((size_t)r->nonzeros + 1) * sizeof(double));
+	const size_t full = 3 * (size_t)sim->particle_count + 1;
+	r->springs = sm_spring_jacobians_create(sim->model);
+	r->full_dx = calloc(full, sizeof(double));
+	r->full_dv = calloc(full, sizeof(double));
+	r->full_out = calloc(full, sizeof(double));
+	r->full_force = calloc(full, sizeof(double));
 	r->block_inverse = malloc(3 * n * sizeof(double));
+	r->diagonal_sums = malloc(6 * n * sizeof(double));
 	r->r = malloc(n * sizeof(double));
 	r->z = malloc(n * sizeof(double));
 	r->p = malloc(n * sizeof(double));
 	r->q = malloc(n * sizeof(double));
 	r->rhs = malloc(n * sizeof(double));
-	if (!r->diagonal || !r->values || !r->block_inverse || !r->r || !r->z || !r->p || !r->q || !r->rhs) {
+	if (!r->springs || !r->full_dx || !r->full_dv || !r->full_out || !r->full_force || !r->block_inverse ||
+	    !r->diagonal_sums || !r->r || !r->z || !r->p || !r->q || !r->rhs) {
 		reduced_content_free(r);
 		return NULL;
 	}
-	for (int64_t i = 0; i < r->n; i++) {
-		const int64_t first = 3 * (i / 3);
-		r->diagonal[i] = -1;
-		for (int64_t e = r->rows[i]; e < r->rows[i + 1]; e++)
-			if (r->cols[e] == first) {
-				r->diagonal[i] = e;
-				break;
-			}
-		if (r->diagonal[i] < 0) {  // the pattern always holds the diagonal blocks
+	if (use_cholmod) {
+		// The assembled matrix, for the factorisations only.
+		r->nonzeros = sm_sparse_jacobian_nonzeros(sim->pattern);
+		r->rows = sm_sparse_jacobian_row_pointers(sim->pattern);
+		r->cols = sm_sparse_jacobian_column_indices(sim->pattern);
+		r->diagonal = malloc(n * sizeof(int64_t));
+		r->values = malloc(((size_t)r->nonzeros + 1) * sizeof(double));
+		if (!r->diagonal || !r->values) {
 			reduced_content_free(r);
 			return NULL;
+		}
+		for (int64_t i = 0; i < r->n; i++) {
+			const int64_t first = 3 * (i / 3);
+			r->diagonal[i] = -1;
+			for (int64_t e = r->rows[i]; e < r->rows[i + 1]; e++)
+				if (r->cols[e] == first) {
+					r->diagonal[i] = e;
+					break;
+				}
+			if (r->diagonal[i] < 0) {  // the pattern always holds the diagonal blocks
+				reduced_content_free(r);
+				return NULL;
+			}
 		}
 	}
 	if (use_cholmod && r->n > 0) {

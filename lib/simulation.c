@@ -676,8 +676,8 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 			sim->constrained[kc++] = i;
 	}
 	refresh_masses(sim);
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU || sim->solver == SM_SOLVER_REDUCED_PCG ||
-	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
+	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
+	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU || sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
 		sim->pattern = sm_sparse_jacobian_create(m);
 		if (!sim->pattern)
 			goto out_of_memory;
