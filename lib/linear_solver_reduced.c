@@ -89,6 +89,7 @@ typedef struct reduced {
 	double *full_dx, *full_dv, *full_out, *full_force;  // 3 per particle; constrained entries stay 0
 	double* diagonal_sums;  // per free particle: sum of the K blocks (9), then of the D blocks (9)
 	double blocks_gamma;    // gamma of block_inverse; NAN after a Jacobian refresh
+	double jacobian_time;   // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
 	long last_flag;
 	int last_iterations;
 	SUNPSetupFn psetup;   // CVODE's preconditioner set-up hook: leads to reduced_pset
@@ -312,18 +313,13 @@ static int factorize(reduced* r)
 	return 0;
 }
 
-int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
-                    sunrealtype gamma, void* user_data)
+// Evaluates the forces and every spring's Jacobian blocks at the CVODE state y (time t).
+static int evaluate_jacobian(reduced* r, double t, const double* y)
 {
-	(void)fy, (void)gamma;
-	sm_simulation* sim = user_data;
-	reduced* r = sim->linear_solver->content;
-	*jcur = SUNFALSE;
-	if (r->n == 0 || jok)
-		return 0;
+	sm_simulation* sim = r->sim;
 	double* x = sim->work_position;
 	double* v = sim->work_velocity;
-	sm_simulation_unpack(sim, t, N_VGetArrayPointer(y), x, v);
+	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
 	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
 	                                             r->full_force, r->springs);
@@ -332,9 +328,23 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 		sum_diagonal_blocks(r);
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	sim->jacobian_evaluations++;
-	if (st != SM_OK)
-		return -1;
 	r->blocks_gamma = NAN;
+	r->jacobian_time = st == SM_OK ? t : NAN;
+	return st == SM_OK ? 0 : -1;
+}
+
+int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
+                    sunrealtype gamma, void* user_data)
+{
+	(void)fy, (void)gamma, (void)jok;
+	sm_simulation* sim = user_data;
+	reduced* r = sim->linear_solver->content;
+	*jcur = SUNFALSE;
+	if (r->n == 0)
+		return 0;
+	// Always a fresh Jacobian: it costs one pass over the springs.
+	if (evaluate_jacobian(r, t, N_VGetArrayPointer(y)) != 0)
+		return -1;
 	*jcur = SUNTRUE;
 	return 0;
 }
@@ -458,6 +468,15 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	x[2 * n] = b[2 * n];
 	if (n == 0)
 		return r->last_flag = SUNLS_SUCCESS;
+	// A new step (or a new attempt at one) since the Jacobian was evaluated: evaluate it at the
+	// current iterate, the predicted state at the first Newton iteration.
+	double t_current;
+	N_Vector y_current;
+	if (CVodeGetCurrentTime(sim->cvode, &t_current) != CV_SUCCESS ||
+	    CVodeGetCurrentState(sim->cvode, &y_current) != CV_SUCCESS)
+		return r->last_flag = SUNLS_MEM_FAIL;
+	if (!(t_current == r->jacobian_time) && evaluate_jacobian(r, t_current, N_VGetArrayPointer(y_current)) != 0)
+		return r->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
 	const double start = sm_simulation_clock();
 	r->gamma = gamma;
 	apply_jacobian(r, b, 1.0, 0.0, r->rhs);
@@ -529,6 +548,7 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 	r->use_cholmod = use_cholmod;
 	r->n = sim->dofs;
 	r->blocks_gamma = NAN;
+	r->jacobian_time = NAN;
 	const size_t n = (size_t)r->n + 1;
 	const size_t full = 3 * (size_t)sim->particle_count + 1;
 	r->springs = sm_spring_jacobians_create(sim->model);

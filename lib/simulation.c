@@ -585,11 +585,8 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		sim->linear_solver = sm_reduced_solver_create(sim, sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
 		if (!sim->linear_solver)
 			return SM_ERROR_OUT_OF_MEMORY;
-		// A fresh Jacobian and set-up at every step (linear_solver_reduced.c explains why).
 		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, NULL) != CVLS_SUCCESS ||
-		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS ||
-		    CVodeSetLSetupFrequency(sim->cvode, 1) != CV_SUCCESS ||
-		    CVodeSetJacEvalFrequency(sim->cvode, 1) != CVLS_SUCCESS)
+		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS)
 			return SM_ERROR_SOLVER;
 		return SM_OK;
 	}
