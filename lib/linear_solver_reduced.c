@@ -18,13 +18,16 @@
 // M^-1 r falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers
 // make.
 //
-// Both solvers use the Newton matrix of the current step exactly: CVODE is asked to refresh the
-// Jacobian at every step (see sm_reduced_solver_cvode_settings), and A is assembled from it with
-// the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a Jacobian and a
-// factorisation kept for up to 20 steps, as CVODE does by default for its direct solvers, made
-// the Newton iteration fail about once in 15 steps (each failure cuts the step by 4) and
-// doubled the number of steps (n = 16: 1263 against 684; n = 32: 2175 against 1103) for no gain
-// in accuracy; the fresh Jacobian costs one pass over the springs per step.
+// Both solvers use the Newton matrix of the current step exactly: the Jacobian is evaluated at
+// the first solve of every step attempt (at the predicted state), and products with A are formed
+// from it with the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a
+// Jacobian and a factorisation kept for up to 20 steps, as CVODE does by default for its direct
+// solvers, made the Newton iteration fail about once in 15 steps (each failure cuts the step by
+// 4) and doubled the number of steps (n = 16: 1263 against 684; n = 32: 2175 against 1103) for
+// no gain in accuracy; the fresh Jacobian costs one fused pass over the springs per step. The
+// refresh happens inside the solve, not through a CVODE set-up at every step, because each set-up
+// resets CVODE's estimate of the Newton convergence rate to 1, which alone cost half a Newton
+// iteration more per step (1.5 instead of 1.1 right-hand sides per step).
 //
 // Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, preconditioned by
 // - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), or
@@ -102,11 +105,10 @@ typedef struct reduced {
 	cholmod_dense *b, *x, *y_work, *e_work;
 } reduced;
 
-// The solver presents itself to CVODE as an iterative one whose "preconditioner set-up" is the
-// Jacobian evaluation and factorisation: CVODE then calls it with its own reuse heuristics
-// (every 20 steps, on large changes of gamma, after a convergence failure) and says through
-// `jok` whether the Jacobian may be reused. (A matrix-embedded solver is never set up by CVODE
-// 6: it would have to guess when to refresh.)
+// The solver presents itself to CVODE as an iterative one with a "preconditioner set-up",
+// which CVODE calls with its own heuristics (every 20 steps, on large changes of gamma, after a
+// convergence failure): it evaluates the Jacobian and tells CVODE that it is current. (A
+// matrix-embedded solver is never set up by CVODE 6.)
 static SUNLinearSolver_Type reduced_type(SUNLinearSolver ls)
 {
 	(void)ls;

@@ -32,12 +32,12 @@
 #include <time.h>
 
 // Free degrees of freedom up to which SM_SOLVER_AUTO picks the dense solver; above, it picks
-// the reduced Cholesky solver. Measured with bench/bench_cloth.sh (bench/README.md): SUNDIALS'
-// dense LU (no BLAS) costs O(n^3) per set-up and is 50 times slower than CHOLMOD already for
-// the 8 x 8 cloth (186 unknowns), while the reduced Cholesky solver beat KLU on the full
-// system by 1.5 to 2 times from n = 8 to n = 32 and conjugate gradients from n = 8 to 64.
+// the reduced conjugate-gradient solver. Measured with bench/bench_cloth.sh (bench/README.md):
+// SUNDIALS' dense LU (no BLAS) costs O(n^3) per set-up and is 50 times slower than the reduced
+// solvers already for the 8 x 8 cloth (186 unknowns); on the benchmark cloth from n = 8 to 64
+// block-Jacobi conjugate gradients beat the CHOLMOD-preconditioned ones by 1.3 to 1.7 times and
+// KLU on the full system by more.
 #define AUTO_DENSE_MAX_DOFS 24
-#define AUTO_KLU_MAX_DOFS 0
 
 double sm_simulation_clock(void)
 {
@@ -455,9 +455,7 @@ static sm_linear_solver resolve_solver(const sm_simulation_def* def, int64_t dof
 		return def->solver;
 	if (dofs <= AUTO_DENSE_MAX_DOFS)
 		return SM_SOLVER_DENSE;
-	if (dofs <= AUTO_KLU_MAX_DOFS)
-		return SM_SOLVER_KLU;
-	return SM_SOLVER_REDUCED_CHOLMOD;
+	return SM_SOLVER_REDUCED_PCG;
 }
 
 // Root functions for the model's breakable springs (recomputed when the model changes).

@@ -30,16 +30,20 @@ typedef enum sm_method {
 
 /// Linear solver for Newton's method (BDF only).
 typedef enum sm_linear_solver {
-	SM_SOLVER_AUTO = 0,  ///< dense up to 8 free particles, reduced Cholesky above (bench/README.md)
+	SM_SOLVER_AUTO = 0,  ///< dense up to 8 free particles, reduced conjugate gradients above (bench/README.md)
 	SM_SOLVER_DENSE,     ///< dense LU of the full 6n system with the analytic Jacobian (small models)
 	SM_SOLVER_KLU,       ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
 	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner.
+	/// The Jacobian is evaluated afresh at every step, and products with the matrix are formed
+	/// from the springs' factored Jacobian blocks without assembling it. What AUTO picks above
+	/// tiny models.
 	SM_SOLVER_REDUCED_PCG,
-	/// The same reduced system factorised by CHOLMOD (symbolic analysis once, numeric
-	/// factorisation whenever CVODE refreshes its Newton matrix). What AUTO picks above tiny
-	/// models.
+	/// The same reduced system, by conjugate gradients preconditioned with a CHOLMOD Cholesky
+	/// factorisation of the Newton matrix of an earlier step (symbolic analysis once; a new
+	/// numeric factorisation when the extra iterations have cost as much as one). Fewer
+	/// iterations than block Jacobi, each dearer; more robust for badly conditioned models.
 	SM_SOLVER_REDUCED_CHOLMOD,
 	SM_SOLVER_COUNT
 } sm_linear_solver;
