@@ -30,7 +30,14 @@
 // iteration more per step (1.5 instead of 1.1 right-hand sides per step).
 //
 // Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, preconditioned by
-// - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), or
+// - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), from TWO_LEVEL_MIN_PARTICLES
+//   free particles on plus a coarse correction: the free particles are grouped into aggregates
+//   (a particle and its spring neighbours), the Galerkin coarse matrix P^T A P (P moves each
+//   aggregate as one body) is summed from the springs' blocks and factorised by CHOLMOD (it is
+//   small: about a tenth of the unknowns on the cloth), and the preconditioner is block Jacobi
+//   plus P A_c^-1 P^T (additive, so symmetric positive definite). Block Jacobi alone smooths
+//   the short waves; the coarse correction takes the long ones, whose slow convergence made the
+//   iterations grow with the model's size; or
 // - (cholmod) a sparse Cholesky factorisation (CHOLMOD) of the Newton matrix of an earlier step:
 //   while J and gamma have changed little, one or two iterations (one triangular solve pair and
 //   one product each) reach CVODE's tolerance, so the factorisation, by far the costliest
@@ -235,11 +242,16 @@ static size_t coarse_entry(const reduced* r, int32_t I, int32_t k, int i, int j)
 	return (size_t)(9 * first + 3 * degree * i + 3 * k + j);
 }
 
-static void coarse_add(reduced* r, double* values, int32_t I, int32_t k, const double* block, double sign)
+// Adds sign K to the coarse K sums and sign D to the coarse D sums at block (I, k-th neighbour).
+static void coarse_add(reduced* r, int32_t I, int32_t k, const double* K, const double* D, double sign)
 {
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 3; j++)
-			values[coarse_entry(r, I, k, i, j)] += sign * block[3 * i + j];
+	for (int i = 0; i < 3; i++) {
+		const size_t e = coarse_entry(r, I, k, i, 0);
+		for (int j = 0; j < 3; j++) {
+			r->coarse_k[e + j] += sign * K[3 * i + j];
+			r->coarse_d[e + j] += sign * D[3 * i + j];
+		}
+	}
 }
 
 // Sums every spring's blocks into its free end particles' diagonal sums and, for the two-level
@@ -254,6 +266,10 @@ static void sum_diagonal_blocks(reduced* r)
 	if (r->two_level) {
 		memset(r->coarse_k, 0, coarse_nonzeros * sizeof(double));
 		memset(r->coarse_d, 0, coarse_nonzeros * sizeof(double));
+		// Masses too: sm_simulation_update_model may change them.
+		memset(r->coarse_mass, 0, (size_t)r->aggregate_count * sizeof(double));
+		for (int64_t q = 0; q < r->n / 3; q++)
+			r->coarse_mass[r->aggregate[q]] += r->sim->mass_dof[3 * q];
 	}
 	for (int32_t s = 0; s < m->spring_count; s++) {
 		if (!m->enabled[s])
@@ -277,20 +293,14 @@ static void sum_diagonal_blocks(reduced* r)
 		const int32_t J = ends[1] >= 0 ? r->aggregate[ends[1]] : -1;
 		if (I == J)
 			continue;  // inside an aggregate (or between two constrained particles)
-		if (I >= 0) {
-			coarse_add(r, r->coarse_k, I, r->coarse_self[I], K, 1.0);
-			coarse_add(r, r->coarse_d, I, r->coarse_self[I], D, 1.0);
-		}
-		if (J >= 0) {
-			coarse_add(r, r->coarse_k, J, r->coarse_self[J], K, 1.0);
-			coarse_add(r, r->coarse_d, J, r->coarse_self[J], D, 1.0);
-		}
+		if (I >= 0)
+			coarse_add(r, I, r->coarse_self[I], K, D, 1.0);
+		if (J >= 0)
+			coarse_add(r, J, r->coarse_self[J], K, D, 1.0);
 		if (I >= 0 && J >= 0) {
 			// K and D are symmetric (the definite variant): the (J, I) block is the same.
-			coarse_add(r, r->coarse_k, I, r->spring_link[2 * s], K, -1.0);
-			coarse_add(r, r->coarse_d, I, r->spring_link[2 * s], D, -1.0);
-			coarse_add(r, r->coarse_k, J, r->spring_link[2 * s + 1], K, -1.0);
-			coarse_add(r, r->coarse_d, J, r->spring_link[2 * s + 1], D, -1.0);
+			coarse_add(r, I, r->spring_link[2 * s], K, D, -1.0);
+			coarse_add(r, J, r->spring_link[2 * s + 1], K, D, -1.0);
 		}
 	}
 }
@@ -682,10 +692,8 @@ static bool build_two_level(reduced* r)
 		free(member_first), free(member), free(seen), free(list);
 		goto done;
 	}
-	for (int32_t q = 0; q < nf; q++) {
+	for (int32_t q = 0; q < nf; q++)
 		member_first[r->aggregate[q] + 1]++;
-		r->coarse_mass[r->aggregate[q]] += sim->mass_dof[3 * q];
-	}
 	for (int32_t I = 0; I < count; I++)
 		member_first[I + 1] += member_first[I];
 	for (int32_t I = 0; I <= count; I++)

@@ -9,8 +9,8 @@
 // what the right-hand side sees from the current time on; by default CVODE keeps its history
 // (step size, order) over such changes and its error control absorbs the jump. Measured on the
 // 8 x 8 benchmark cloth with a force input changed at every communication step
-// (bench_cloth with RESTART_EVERY, bench/README.md): re-initialising at every change cost 5.2
-// times the steps and 6 times the wall time per simulated second with 1 ms steps, 1.6 and 1.9
+// (bench_cloth with RESTART_EVERY, bench/README.md): re-initialising at every change cost 5.9
+// times the steps and 6.4 times the wall time per simulated second with 1 ms steps, 2.3 and 2.2
 // times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
 // with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
 // (restart_on_input_change = true restores a restart at every changed input).
@@ -35,8 +35,9 @@ typedef enum sm_linear_solver {
 	SM_SOLVER_KLU,       ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
-	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner.
-	/// The Jacobian is evaluated afresh at every step, and products with the matrix are formed
+	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner
+	/// (from 500 free particles on, plus a coarse correction over aggregates of neighbouring
+	/// particles). The Jacobian is evaluated afresh at every step, and products with the matrix are formed
 	/// from the springs' factored Jacobian blocks without assembling it. What AUTO picks above
 	/// tiny models.
 	SM_SOLVER_REDUCED_PCG,
