@@ -6,8 +6,8 @@
 // (n-1, n-1) fixed), integrates it from rest to T_END (default 1 s) at the peer's tolerances
 // (rtol 1e-4, atol 1e-6) with the given linear solver ("auto", "dense", "klu", "pcg",
 // "cholmod"), REPEATS times (default 3), and prints the median wall time of create + advance:
-//   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> lin_iters=<v>
-//         restarts=<v> z_corner=<v> force_s=<v> jacobian_s=<v> linear_s=<v>
+//   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> lin_iters=<v> fact=<v>
+//         restarts=<v> etf=<v> ncf=<v> z_corner=<v> force_s=<v> jacobian_s=<v> linear_s=<v>
 // (one line; the free corner is particle 0). With RESTART_EVERY=<dt> in the environment the
 // run advances in steps of dt with an external force on the free corner that changes at every
 // step (what an FMU sees with small communication steps), once keeping CVODE's history and once
