@@ -799,6 +799,15 @@ done:
 	return ok;
 }
 
+void sm_reduced_solver_invalidate(SUNLinearSolver ls)
+{
+	if (ls == NULL || ls->content == NULL)
+		return;
+	reduced* r = ls->content;
+	r->jacobian_time = NAN;
+	r->blocks_gamma = NAN;
+}
+
 static void reduced_content_free(reduced* r)
 {
 	if (r == NULL)

@@ -98,6 +98,9 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
 // Jacobian unless CVODE allows reuse (jok) and factorises; psolve is a formality.
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data);
+// Forgets the Jacobian the reduced solver holds, so that it evaluates one at its next solve
+// (after a re-initialisation: a new state may come with the same CVODE time).
+void sm_reduced_solver_invalidate(SUNLinearSolver ls);
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
                       sunrealtype delta, int lr, void* user_data);
 
