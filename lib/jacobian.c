@@ -203,3 +203,64 @@ sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, cons
 		factored_product(jacobians, model, NULL, dv, out, 0, 1);
 	return SM_OK;
 }
+
+// One spring of the combined product: with r = p_b - p_a,
+//   (a K + b D) r = u (a z . r + b kd u . r) + a beta r = u (w . r) + a beta r,
+// w = a z + b kd u, added to out at a and subtracted at b.
+sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobians, const sm_model* model,
+                                               double scale_k, double scale_d, const double* restrict p,
+                                               double* restrict out)
+{
+	if (jacobians == NULL || model == NULL || p == NULL || out == NULL || !jacobians->evaluated)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (jacobians->particle_count != model->particle_count || jacobians->spring_count != model->spring_count)
+		return SM_ERROR_TOPOLOGY;
+	const int32_t n = model->particle_count;
+	const double alpha = model->def.mass_damping;
+	for (int32_t i = 0; i < n; i++) {
+		const double c = scale_d * mass_damping_derivative(model->mass[i], alpha);
+		const size_t k = 3 * (size_t)i;
+		out[k] = c * p[k];
+		out[k + 1] = c * p[k + 1];
+		out[k + 2] = c * p[k + 2];
+	}
+	const int32_t* restrict first = model->spring_a;
+	const int32_t* restrict second = model->spring_b;
+	const double* restrict data = jacobians->data;
+	const int32_t count = jacobians->spring_count;
+	// Structures list their springs particle by particle, so consecutive springs often share
+	// their first particle: its sum is kept in registers until the particle changes, which
+	// spares a chain of additions through memory.
+	size_t held = count > 0 ? 3 * (size_t)first[0] : 0;
+	double hx = 0.0, hy = 0.0, hz = 0.0;
+	for (int32_t s = 0; s < count; s++) {
+		const double* restrict q = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
+		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
+		if (a != held) {
+			out[held] += hx;
+			out[held + 1] += hy;
+			out[held + 2] += hz;
+			hx = hy = hz = 0.0;
+			held = a;
+		}
+		const double rx = p[b] - p[a], ry = p[b + 1] - p[a + 1], rz = p[b + 2] - p[a + 2];
+		const double along = q[0] * rx + q[1] * ry + q[2] * rz;
+		const double coefficient = scale_k * (q[3] * rx + q[4] * ry + q[5] * rz) + scale_d * q[7] * along;
+		const double diagonal = scale_k * q[6];
+		const double fx = q[0] * coefficient + diagonal * rx;
+		const double fy = q[1] * coefficient + diagonal * ry;
+		const double fz = q[2] * coefficient + diagonal * rz;
+		hx += fx;
+		hy += fy;
+		hz += fz;
+		out[b] -= fx;
+		out[b + 1] -= fy;
+		out[b + 2] -= fz;
+	}
+	if (count > 0) {
+		out[held] += hx;
+		out[held + 1] += hy;
+		out[held + 2] += hz;
+	}
+	return SM_OK;
+}

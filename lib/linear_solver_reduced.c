@@ -29,12 +29,15 @@
 // resets CVODE's estimate of the Newton convergence rate to 1, which alone cost half a Newton
 // iteration more per step (1.5 instead of 1.1 right-hand sides per step).
 //
-// Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, preconditioned by
+// Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, over all particles (3 entries
+// each, the constrained particles' entries kept at zero, so that the products with A read and
+// write the particles' own arrays without gathering the free ones), preconditioned by
 // - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), from TWO_LEVEL_MIN_PARTICLES
 //   free particles on plus a coarse correction: the free particles are grouped into aggregates
 //   (a particle and its spring neighbours), the Galerkin coarse matrix P^T A P (P moves each
-//   aggregate as one body) is summed from the springs' blocks and factorised by CHOLMOD (it is
-//   small: about a tenth of the unknowns on the cloth), and the preconditioner is block Jacobi
+//   aggregate as one body) is summed from the springs' blocks at the solve's gamma, in the same
+//   pass as the diagonal blocks, and factorised by CHOLMOD (it is small: about a tenth of the
+//   unknowns on the cloth), and the preconditioner is block Jacobi
 //   plus P A_c^-1 P^T (additive, so symmetric positive definite). Block Jacobi alone smooths
 //   the short waves; the coarse correction takes the long ones, whose slow convergence made the
 //   iterations grow with the model's size; or
@@ -80,6 +83,7 @@ typedef struct reduced {
 	sm_simulation* sim;
 	bool use_cholmod;
 	int64_t n;            // free degrees of freedom
+	int64_t full;         // 3 per particle: the conjugate gradients' vectors, constrained entries 0
 	int64_t nonzeros;
 	const int64_t* rows;  // pattern (owned by the simulation's sparse Jacobian)
 	const int64_t* cols;
@@ -95,32 +99,33 @@ typedef struct reduced {
 	double factor_flops;
 	double iteration_flops;
 	double extra_flops;
-	double* block_inverse;  // 9 per free particle
-	double *r, *z, *p, *q, *rhs;
+	// Per particle (3 or 9 entries each, zero for constrained particles): A's inverted diagonal
+	// blocks, the mass, the residual's weight (CVODE's error weight over the mass), and the
+	// conjugate gradients' vectors.
+	double* block_inverse;
+	double* mass;
+	double* weight;
+	double *r, *z, *p, *q, *rhs, *dv;
 	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
-	// at every set-up; products with A are formed from it without assembling A.
+	// at every step; products with A are formed from it without assembling A.
 	sm_spring_jacobians* springs;
 	double gamma;           // of the current solve
-	double mass_damping;    // alpha [1/s] of the model at the last set-up
-	double *full_dx, *full_dv, *full_out, *full_force;  // 3 per particle; constrained entries stay 0
-	double* diagonal_sums;  // per free particle: sum of the K blocks (9), then of the D blocks (9)
+	double* full_force;     // forces of the fused pass (unused)
 	double blocks_gamma;    // gamma of block_inverse; NAN after a Jacobian refresh
 	// Two-level block-Jacobi preconditioner (pcg): aggregates of neighbouring free particles,
 	// the Galerkin coarse matrix P^T A P (P: each aggregate moves as one) in 3x3 blocks,
 	// factorised by CHOLMOD.
 	bool two_level;
 	int32_t aggregate_count;
-	int32_t* aggregate;        // per free particle
+	int32_t* aggregate;        // per particle, -1 for constrained ones
 	int64_t* coarse_first;     // per aggregate: first index into coarse_neighbour (aggregate_count + 1)
 	int32_t* coarse_neighbour; // neighbouring aggregates (itself included), sorted
 	int32_t* coarse_self;      // per aggregate: position of itself in its neighbour list
-	int32_t* spring_link;      // per spring: position of J in I's list and of I in J's list, or -1
-	double *coarse_k, *coarse_d;  // sums of K and D blocks in the coarse pattern [N/m, N s/m]
+	int64_t* spring_coarse;    // per spring: first entries of its blocks (I,I), (J,J), (I,J), (J,I), or -1
 	double* coarse_mass;       // per aggregate [kg]
 	cholmod_sparse* coarse;
 	cholmod_factor* coarse_factor;
 	cholmod_dense *coarse_b, *coarse_x, *coarse_y, *coarse_e;
-	bool coarse_valid;
 	double jacobian_time;   // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
 	long last_flag;
 	int last_iterations;
@@ -200,122 +205,115 @@ static void assemble(reduced* r, double gamma)
 		r->values[r->diagonal[i] + (i % 3)] += r->sim->mass_dof[i];
 }
 
-// Block-Jacobi preconditioner: A's diagonal blocks at gamma,
-//   A_ii = m_i (1 + gamma alpha) I + gamma sum D_s + gamma^2 sum K_s
-// over the springs s at particle i (d f_i / d x_i = -sum K_s, d f_i / d v_i = -sum D_s - alpha m_i I),
-// inverted in place. Returns false if a block is not invertible.
-static bool invert_blocks(reduced* r, double gamma)
-{
-	const double g2 = gamma * gamma;
-	for (int64_t k = 0; k < r->n / 3; k++) {
-		const double* ks = r->diagonal_sums + 18 * k;
-		const double* ds = ks + 9;
-		const double m = r->sim->mass_dof[3 * k] * (1.0 + gamma * r->mass_damping);
-		double a[9];
-		for (int i = 0; i < 9; i++)
-			a[i] = gamma * ds[i] + g2 * ks[i] + (i % 4 == 0 ? m : 0.0);
-		double* inv = r->block_inverse + 9 * k;
-		inv[0] = a[4] * a[8] - a[5] * a[7];
-		inv[1] = a[2] * a[7] - a[1] * a[8];
-		inv[2] = a[1] * a[5] - a[2] * a[4];
-		inv[3] = a[5] * a[6] - a[3] * a[8];
-		inv[4] = a[0] * a[8] - a[2] * a[6];
-		inv[5] = a[2] * a[3] - a[0] * a[5];
-		inv[6] = a[3] * a[7] - a[4] * a[6];
-		inv[7] = a[1] * a[6] - a[0] * a[7];
-		inv[8] = a[0] * a[4] - a[1] * a[3];
-		const double det = a[0] * inv[0] + a[1] * inv[3] + a[2] * inv[6];
-		if (!(fabs(det) > 0.0) || !isfinite(det))
-			return false;
-		for (int i = 0; i < 9; i++)
-			inv[i] /= det;
-	}
-	return true;
-}
-
 // Entry of the coarse matrix at row 3 I + i, column 3 J + j, J the k-th neighbour of I: each
 // block row I stores 3 rows of 3 deg(I) entries.
-static size_t coarse_entry(const reduced* r, int32_t I, int32_t k, int i, int j)
+static int64_t coarse_entry(const reduced* r, int32_t I, int32_t k, int i, int j)
 {
 	const int64_t first = r->coarse_first[I];
 	const int64_t degree = r->coarse_first[I + 1] - first;
-	return (size_t)(9 * first + 3 * degree * i + 3 * k + j);
+	return 9 * first + 3 * degree * i + 3 * k + j;
 }
 
-// Adds sign K to the coarse K sums and sign D to the coarse D sums at block (I, k-th neighbour).
-static void coarse_add(reduced* r, int32_t I, int32_t k, const double* K, const double* D, double sign)
+// Adds sign B (row-major 3x3) to the coarse block whose first entry is `entry`, in block row I.
+static void coarse_add(double* values, const reduced* r, int32_t I, int64_t entry, const double* B, double sign)
 {
-	for (int i = 0; i < 3; i++) {
-		const size_t e = coarse_entry(r, I, k, i, 0);
-		for (int j = 0; j < 3; j++) {
-			r->coarse_k[e + j] += sign * K[3 * i + j];
-			r->coarse_d[e + j] += sign * D[3 * i + j];
-		}
-	}
+	const int64_t stride = 3 * (r->coarse_first[I + 1] - r->coarse_first[I]);
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++)
+			values[entry + stride * i + j] += sign * B[3 * i + j];
 }
 
-// Sums every spring's blocks into its free end particles' diagonal sums and, for the two-level
-// preconditioner, into the coarse matrix: a spring between particles of aggregates I and J adds
-// its block to (I, I) and (J, J) and subtracts it from (I, J) and (J, I) (nothing if I = J); a
-// spring to a constrained particle adds it to its free end's (I, I).
-static void sum_diagonal_blocks(reduced* r)
+// Inverts the 3x3 block a into inv; false if it is singular.
+static bool invert3(const double* a, double* inv)
+{
+	inv[0] = a[4] * a[8] - a[5] * a[7];
+	inv[1] = a[2] * a[7] - a[1] * a[8];
+	inv[2] = a[1] * a[5] - a[2] * a[4];
+	inv[3] = a[5] * a[6] - a[3] * a[8];
+	inv[4] = a[0] * a[8] - a[2] * a[6];
+	inv[5] = a[2] * a[3] - a[0] * a[5];
+	inv[6] = a[3] * a[7] - a[4] * a[6];
+	inv[7] = a[1] * a[6] - a[0] * a[7];
+	inv[8] = a[0] * a[4] - a[1] * a[3];
+	const double det = a[0] * inv[0] + a[1] * inv[3] + a[2] * inv[6];
+	if (!(fabs(det) > 0.0) || !isfinite(det))
+		return false;
+	const double scale = 1.0 / det;
+	for (int i = 0; i < 9; i++)
+		inv[i] *= scale;
+	return true;
+}
+
+// The preconditioner at gamma, in one pass over the springs. Each spring's share of A is
+//   B = gamma^2 K + gamma D = gamma^2 beta I + u w^T,  w = gamma^2 z + gamma kd u
+// (the factored records, forces.c); A's diagonal block at a free particle i is
+//   A_ii = m_i (1 + gamma alpha) I + sum of B over its springs,
+// inverted for block Jacobi. For the two-level preconditioner, a spring between aggregates I != J
+// adds B to the coarse blocks (I, I) and (J, J) and subtracts it from (I, J) and (J, I); a spring
+// to a constrained particle adds it to its free end's (I, I); one inside an aggregate adds
+// nothing (P^T A P sums the aggregate's rows and columns, where +B and -B cancel). Then the
+// coarse matrix M_c (1 + gamma alpha) + sums is factorised. Returns false if a block is
+// singular or the coarse matrix is not positive definite.
+static bool prepare_preconditioner(reduced* r, double gamma)
 {
 	const sm_model* m = r->sim->model;
-	memset(r->diagonal_sums, 0, (size_t)(6 * r->n) * sizeof(double));
-	const size_t coarse_nonzeros = r->two_level ? 9 * (size_t)r->coarse_first[r->aggregate_count] : 0;
-	if (r->two_level) {
-		memset(r->coarse_k, 0, coarse_nonzeros * sizeof(double));
-		memset(r->coarse_d, 0, coarse_nonzeros * sizeof(double));
-		// Masses too: sm_simulation_update_model may change them.
-		memset(r->coarse_mass, 0, (size_t)r->aggregate_count * sizeof(double));
-		for (int64_t q = 0; q < r->n / 3; q++)
-			r->coarse_mass[r->aggregate[q]] += r->sim->mass_dof[3 * q];
-	}
+	const int32_t np = m->particle_count;
+	const double g2 = gamma * gamma, damping = 1.0 + gamma * m->def.mass_damping;
+	double* diag = r->block_inverse + 9 * (size_t)np;  // sums, after the inverses' storage
+	memset(diag, 0, 9 * (size_t)np * sizeof(double));
+	double* coarse = r->two_level ? r->coarse->x : NULL;
+	if (r->two_level)
+		memset(coarse, 0, 9 * (size_t)r->coarse_first[r->aggregate_count] * sizeof(double));
+	const double* data = r->springs->data;
 	for (int32_t s = 0; s < m->spring_count; s++) {
-		if (!m->enabled[s])
-			continue;
-		double K[9], D[9];
-		if (sm_spring_jacobians_block(r->springs, s, K, D) != SM_OK)
-			continue;
-		const int32_t ends[2] = {m->free_index[m->spring_a[s]], m->free_index[m->spring_b[s]]};
+		const double* q = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
+		const double w[3] = {g2 * q[3] + gamma * q[7] * q[0], g2 * q[4] + gamma * q[7] * q[1],
+		                     g2 * q[5] + gamma * q[7] * q[2]};
+		const double d = g2 * q[6];
+		const double B[9] = {q[0] * w[0] + d, q[0] * w[1],     q[0] * w[2],
+		                     q[1] * w[0],     q[1] * w[1] + d, q[1] * w[2],
+		                     q[2] * w[0],     q[2] * w[1],     q[2] * w[2] + d};
+		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
 		for (int e = 0; e < 2; e++) {
-			if (ends[e] < 0)
-				continue;
-			double* sum = r->diagonal_sums + 18 * (size_t)ends[e];
-			for (int i = 0; i < 9; i++) {
-				sum[i] += K[i];
-				sum[9 + i] += D[i];
-			}
+			double* sum = diag + 9 * (size_t)ends[e];
+			for (int i = 0; i < 9; i++)
+				sum[i] += B[i];
 		}
-		if (!r->two_level)
+		const int64_t* entry = r->two_level ? r->spring_coarse + 4 * (size_t)s : NULL;
+		if (entry == NULL || (entry[0] < 0 && entry[1] < 0))
 			continue;
-		const int32_t I = ends[0] >= 0 ? r->aggregate[ends[0]] : -1;
-		const int32_t J = ends[1] >= 0 ? r->aggregate[ends[1]] : -1;
-		if (I == J)
-			continue;  // inside an aggregate (or between two constrained particles)
-		if (I >= 0)
-			coarse_add(r, I, r->coarse_self[I], K, D, 1.0);
-		if (J >= 0)
-			coarse_add(r, J, r->coarse_self[J], K, D, 1.0);
-		if (I >= 0 && J >= 0) {
-			// K and D are symmetric (the definite variant): the (J, I) block is the same.
-			coarse_add(r, I, r->spring_link[2 * s], K, D, -1.0);
-			coarse_add(r, J, r->spring_link[2 * s + 1], K, D, -1.0);
+		const int32_t I = r->aggregate[ends[0]], J = r->aggregate[ends[1]];
+		if (entry[0] >= 0)
+			coarse_add(coarse, r, I, entry[0], B, 1.0);
+		if (entry[1] >= 0)
+			coarse_add(coarse, r, J, entry[1], B, 1.0);
+		if (entry[2] >= 0) {
+			// B is symmetric (the definite variant): the (J, I) block is the same.
+			coarse_add(coarse, r, I, entry[2], B, -1.0);
+			coarse_add(coarse, r, J, entry[3], B, -1.0);
 		}
 	}
-}
-
-// Assembles the coarse matrix at gamma, M_c (1 + gamma alpha) + gamma D_c + gamma^2 K_c, and
-// factorises it. Returns false if it is not positive definite or CHOLMOD fails.
-static bool factorize_coarse(reduced* r, double gamma)
-{
-	const size_t count = 9 * (size_t)r->coarse_first[r->aggregate_count];
-	double* values = r->coarse->x;
-	for (size_t e = 0; e < count; e++)
-		values[e] = gamma * r->coarse_d[e] + gamma * gamma * r->coarse_k[e];
+	for (int32_t i = 0; i < np; i++) {
+		double* inv = r->block_inverse + 9 * (size_t)i;
+		if (m->free_index[i] < 0) {
+			memset(inv, 0, 9 * sizeof(double));
+			continue;
+		}
+		double* a = diag + 9 * (size_t)i;
+		const double mass = m->mass[i] * damping;
+		a[0] += mass, a[4] += mass, a[8] += mass;
+		if (!invert3(a, inv))
+			return false;
+	}
+	if (!r->two_level)
+		return true;
+	memset(r->coarse_mass, 0, (size_t)r->aggregate_count * sizeof(double));
+	for (int32_t i = 0; i < np; i++)
+		if (r->aggregate[i] >= 0)
+			r->coarse_mass[r->aggregate[i]] += m->mass[i];
 	for (int32_t I = 0; I < r->aggregate_count; I++)
 		for (int i = 0; i < 3; i++)
-			values[coarse_entry(r, I, r->coarse_self[I], i, i)] += r->coarse_mass[I] * (1.0 + gamma * r->mass_damping);
+			coarse[coarse_entry(r, I, r->coarse_self[I], i, i)] += r->coarse_mass[I] * damping;
 	if (r->coarse_factor == NULL) {
 		r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
 		if (r->coarse_factor == NULL)
@@ -324,37 +322,27 @@ static bool factorize_coarse(reduced* r, double gamma)
 	return cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) && r->common.status == CHOLMOD_OK;
 }
 
-// out = K in over the free degrees of freedom (scale_x = 1, scale_v = 0: the right-hand side), or
-// out = A in = M in - gamma D in - gamma^2 K in (the Newton matrix), from the spring records.
-static void apply_jacobian(reduced* r, const double* in, double scale_x, double scale_v, double* out)
-{
-	sm_simulation* sim = r->sim;
-	for (int32_t k = 0; k < sim->free_count; k++) {
-		const size_t p = 3 * (size_t)sim->free_particles[k];
-		for (int c = 0; c < 3; c++) {
-			r->full_dx[p + c] = scale_x * in[3 * k + c];
-			r->full_dv[p + c] = scale_v * in[3 * k + c];
-		}
-	}
-	sm_spring_jacobians_product(r->springs, sim->model, r->full_dx, scale_v != 0.0 ? r->full_dv : NULL, r->full_out);
-	for (int32_t k = 0; k < sim->free_count; k++) {
-		const size_t p = 3 * (size_t)sim->free_particles[k];
-		for (int c = 0; c < 3; c++)
-			out[3 * k + c] = r->full_out[p + c];
-	}
-}
-
-static void multiply(reduced* r, const double* in, double* out)
+// q = A p = M (1 + gamma alpha) p - gamma D p - gamma^2 K p over all particles (p is zero at the
+// constrained ones, whose entries of q are set to zero); returns p . q.
+static double multiply(reduced* r, const double* p, double* q)
 {
 	const double g = r->gamma;
-	apply_jacobian(r, in, g * g, g, out);
-	for (int64_t i = 0; i < r->n; i++)
-		out[i] = r->sim->mass_dof[i] * in[i] - out[i];
+	const sm_simulation* sim = r->sim;
+	sm_spring_jacobians_combined_product(r->springs, sim->model, g * g, g, p, q);
+	for (int32_t k = 0; k < sim->constrained_count; k++)
+		memset(q + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
+	double pq = 0.0;
+	for (int64_t i = 0; i < r->full; i++) {
+		q[i] = r->mass[i] * p[i] - q[i];
+		pq += p[i] * q[i];
+	}
+	return pq;
 }
 
+// Block Jacobi: out_i = A_ii^-1 in_i (zero blocks at constrained particles).
 static void precondition(const reduced* r, const double* in, double* out)
 {
-	for (int64_t k = 0; k < r->n / 3; k++) {
+	for (int64_t k = 0; k < r->full / 3; k++) {
 		const double* m = r->block_inverse + 9 * k;
 		const double* a = in + 3 * k;
 		double* o = out + 3 * k;
@@ -421,9 +409,12 @@ static int evaluate_jacobian(reduced* r, double t, const double* y)
 	const double start = sm_simulation_clock();
 	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
 	                                             r->full_force, r->springs);
-	r->mass_damping = sm_model_get_def(sim->model).mass_damping;  // may change with update_model
-	if (st == SM_OK && !r->use_cholmod)
-		sum_diagonal_blocks(r);
+	// Masses: sm_simulation_update_model may change them. Mass damping enters A as
+	// M (1 + gamma alpha) through the combined product.
+	const sm_model* m = sim->model;
+	for (int32_t i = 0; i < m->particle_count; i++)
+		for (int c = 0; c < 3; c++)
+			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	sim->jacobian_evaluations++;
 	r->blocks_gamma = NAN;
@@ -455,21 +446,23 @@ int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector rv, N_Vec
 	return 0;
 }
 
-// Error-weighted 2-norm of the velocity rows' residual M^-1 res.
+// Error-weighted 2-norm of the velocity rows' residual M^-1 res (weight = CVODE's error weight
+// over the mass, zero at constrained particles).
 static double residual_norm(const reduced* r, const double* res)
 {
-	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + r->n : NULL;
 	double s = 0.0;
-	for (int64_t i = 0; i < r->n; i++) {
-		const double t = res[i] / r->sim->mass_dof[i] * (w ? w[i] : 1.0);
+	for (int64_t i = 0; i < r->full; i++) {
+		const double t = res[i] * r->weight[i];
 		s += t * t;
 	}
 	return sqrt(s);
 }
 
-// Applies the preconditioner: block Jacobi, or a solve with the Cholesky factor.
+// Applies the preconditioner: block Jacobi (with the coarse correction), or a solve with the
+// Cholesky factor (over the free degrees of freedom).
 static bool apply_preconditioner(reduced* r, const double* in, double* out)
 {
+	const sm_simulation* sim = r->sim;
 	if (!r->use_cholmod) {
 		precondition(r, in, out);
 		if (!r->two_level)
@@ -477,34 +470,45 @@ static bool apply_preconditioner(reduced* r, const double* in, double* out)
 		// Additive coarse correction: out += P A_c^-1 P^T in.
 		double* rc = r->coarse_b->x;
 		memset(rc, 0, 3 * (size_t)r->aggregate_count * sizeof(double));
-		for (int64_t q = 0; q < r->n / 3; q++)
-			for (int c = 0; c < 3; c++)
-				rc[3 * (size_t)r->aggregate[q] + c] += in[3 * q + c];
+		for (int64_t i = 0; i < r->full / 3; i++) {
+			const int32_t I = r->aggregate[i];
+			if (I >= 0)
+				for (int c = 0; c < 3; c++)
+					rc[3 * (size_t)I + c] += in[3 * i + c];
+		}
 		if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL, &r->coarse_y,
 		                      &r->coarse_e, &r->common))
 			return false;
 		const double* yc = r->coarse_x->x;
-		for (int64_t q = 0; q < r->n / 3; q++)
-			for (int c = 0; c < 3; c++)
-				out[3 * q + c] += yc[3 * (size_t)r->aggregate[q] + c];
+		for (int64_t i = 0; i < r->full / 3; i++) {
+			const int32_t I = r->aggregate[i];
+			if (I >= 0)
+				for (int c = 0; c < 3; c++)
+					out[3 * i + c] += yc[3 * (size_t)I + c];
+		}
 		return true;
 	}
-	memcpy(r->b->x, in, (size_t)r->n * sizeof(double));
+	double* b = r->b->x;
+	for (int32_t k = 0; k < sim->free_count; k++)
+		memcpy(b + 3 * (size_t)k, in + 3 * (size_t)sim->free_particles[k], 3 * sizeof(double));
 	if (!cholmod_l_solve2(CHOLMOD_A, r->factor, r->b, NULL, &r->x, NULL, &r->y_work, &r->e_work, &r->common))
 		return false;
-	memcpy(out, r->x->x, (size_t)r->n * sizeof(double));
+	const double* x = r->x->x;
+	memset(out, 0, (size_t)r->full * sizeof(double));
+	for (int32_t k = 0; k < sim->free_count; k++)
+		memcpy(out + 3 * (size_t)sim->free_particles[k], x + 3 * (size_t)k, 3 * sizeof(double));
 	return true;
 }
 
-// Preconditioned conjugate gradients on A dv = rhs from dv = 0, at most max_iterations.
-// Returns a SUNLS flag.
+// Preconditioned conjugate gradients on A dv = rhs from dv = 0, at most max_iterations, over
+// all particles (the constrained entries stay zero). Returns a SUNLS flag.
 static int conjugate_gradients(reduced* r, double* dv, double tol, int max_iterations)
 {
-	const int64_t n = r->n;
+	const int64_t n = r->full;
 	double *res = r->r, *z = r->z, *p = r->p, *q = r->q;
-	memset(dv, 0, (size_t)n * sizeof(double));
 	memcpy(res, r->rhs, (size_t)n * sizeof(double));
 	r->last_iterations = 0;
+	memset(dv, 0, (size_t)n * sizeof(double));
 	const double initial = residual_norm(r, res);
 	double norm = initial;
 	if (norm <= tol)
@@ -516,20 +520,20 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 	for (int64_t i = 0; i < n; i++)
 		rz += res[i] * z[i];
 	for (int iteration = 1; iteration <= max_iterations; iteration++) {
-		multiply(r, p, q);
-		double pq = 0.0;
-		for (int64_t i = 0; i < n; i++)
-			pq += p[i] * q[i];
+		const double pq = multiply(r, p, q);
 		if (!(pq > 0.0) || !isfinite(pq))
 			return SUNLS_PACKAGE_FAIL_REC;
 		const double alpha = rz / pq;
+		double squares = 0.0;
 		for (int64_t i = 0; i < n; i++) {
 			dv[i] += alpha * p[i];
 			res[i] -= alpha * q[i];
+			const double t = res[i] * r->weight[i];
+			squares += t * t;
 		}
 		r->sim->linear_iterations++;
 		r->last_iterations++;
-		norm = residual_norm(r, res);
+		norm = sqrt(squares);
 		if (norm <= tol)
 			return SUNLS_SUCCESS;
 		if (!apply_preconditioner(r, res, z))
@@ -592,22 +596,43 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 		return r->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
 	const double start = sm_simulation_clock();
 	r->gamma = gamma;
-	apply_jacobian(r, b, 1.0, 0.0, r->rhs);
-	for (int64_t i = 0; i < n; i++)
-		r->rhs[i] = sim->mass_dof[i] * b[n + i] + gamma * r->rhs[i];
+	// Over all particles: p = bx (zero at constrained particles), rhs = M bv + gamma K bx, and
+	// the residual's weights.
+	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + n : NULL;
+	memset(r->p, 0, (size_t)r->full * sizeof(double));
+	memset(r->weight, 0, (size_t)r->full * sizeof(double));
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
+		for (int c = 0; c < 3; c++) {
+			r->p[i + c] = b[f + c];
+			r->weight[i + c] = (w ? w[f + c] : 1.0) / r->mass[i + c];
+		}
+	}
+	sm_spring_jacobians_combined_product(r->springs, sim->model, 1.0, 0.0, r->p, r->rhs);
+	for (int32_t k = 0; k < sim->constrained_count; k++)
+		memset(r->rhs + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
+		for (int c = 0; c < 3; c++)
+			r->rhs[i + c] = r->mass[i + c] * b[n + f + c] + gamma * r->rhs[i + c];
+	}
 	if (!r->use_cholmod && !(r->blocks_gamma == gamma)) {
-		r->blocks_valid = invert_blocks(r, gamma) && (!r->two_level || factorize_coarse(r, gamma));
+		r->blocks_valid = prepare_preconditioner(r, gamma);
 		r->blocks_gamma = gamma;
 	}
-	double* dv = x + n;
 	int flag;
 	if (r->use_cholmod)
-		flag = cholesky_solve(r, dv, tol);
+		flag = cholesky_solve(r, r->dv, tol);
 	else
-		flag = r->blocks_valid ? conjugate_gradients(r, dv, tol, PCG_MAX_ITERATIONS) : SUNLS_PACKAGE_FAIL_REC;
+		flag = r->blocks_valid ? conjugate_gradients(r, r->dv, tol, PCG_MAX_ITERATIONS) : SUNLS_PACKAGE_FAIL_REC;
 	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED)
-		for (int64_t i = 0; i < n; i++)
-			x[i] = b[i] + gamma * dv[i];
+		for (int32_t k = 0; k < sim->free_count; k++) {
+			const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
+			for (int c = 0; c < 3; c++) {
+				x[n + f + c] = r->dv[i + c];
+				x[f + c] = b[f + c] + gamma * r->dv[i + c];
+			}
+		}
 	sim->base.linear_solve_seconds += sm_simulation_clock() - start;
 	return r->last_flag = flag;
 }
@@ -626,9 +651,10 @@ static bool build_two_level(reduced* r)
 	int32_t* neighbour = malloc(2 * (size_t)m->spring_count * sizeof(int32_t) + sizeof(int32_t));
 	int64_t* fill = malloc(((size_t)nf + 1) * sizeof(int64_t));
 	int32_t* mark = malloc(((size_t)nf + 1) * sizeof(int32_t));
-	r->aggregate = malloc(((size_t)nf + 1) * sizeof(int32_t));
-	r->spring_link = malloc(2 * (size_t)m->spring_count * sizeof(int32_t) + sizeof(int32_t));
-	if (!first || !neighbour || !fill || !mark || !r->aggregate || !r->spring_link)
+	int32_t* group = malloc(((size_t)nf + 1) * sizeof(int32_t));  // aggregate per free particle
+	r->aggregate = malloc(((size_t)m->particle_count + 1) * sizeof(int32_t));
+	r->spring_coarse = malloc(4 * (size_t)m->spring_count * sizeof(int64_t) + sizeof(int64_t));
+	if (!first || !neighbour || !fill || !mark || !group || !r->aggregate || !r->spring_coarse)
 		goto done;
 	for (int32_t s = 0; s < m->spring_count; s++) {
 		const int32_t a = m->free_index[m->spring_a[s]], b = m->free_index[m->spring_b[s]];
@@ -650,31 +676,31 @@ static bool build_two_level(reduced* r)
 	// Pass 1: a particle whose neighbours are all free of aggregates starts one with them.
 	int32_t count = 0;
 	for (int32_t q = 0; q < nf; q++)
-		r->aggregate[q] = -1;
+		group[q] = -1;
 	for (int32_t q = 0; q < nf; q++) {
-		if (r->aggregate[q] >= 0)
+		if (group[q] >= 0)
 			continue;
 		bool all_free = true;
 		for (int64_t e = first[q]; e < first[q + 1] && all_free; e++)
-			all_free = r->aggregate[neighbour[e]] < 0;
+			all_free = group[neighbour[e]] < 0;
 		if (!all_free)
 			continue;
-		r->aggregate[q] = count;
+		group[q] = count;
 		for (int64_t e = first[q]; e < first[q + 1]; e++)
-			r->aggregate[neighbour[e]] = count;
+			group[neighbour[e]] = count;
 		count++;
 	}
 	// Pass 2: the others join a neighbour's aggregate (from pass 1), or start their own.
 	for (int32_t q = 0; q < nf; q++)
-		mark[q] = r->aggregate[q];
+		mark[q] = group[q];
 	for (int32_t q = 0; q < nf; q++) {
-		if (r->aggregate[q] >= 0)
+		if (group[q] >= 0)
 			continue;
-		for (int64_t e = first[q]; e < first[q + 1] && r->aggregate[q] < 0; e++)
+		for (int64_t e = first[q]; e < first[q + 1] && group[q] < 0; e++)
 			if (mark[neighbour[e]] >= 0)
-				r->aggregate[q] = mark[neighbour[e]];
-		if (r->aggregate[q] < 0)
-			r->aggregate[q] = count++;
+				group[q] = mark[neighbour[e]];
+		if (group[q] < 0)
+			group[q] = count++;
 	}
 	r->aggregate_count = count;
 	// Coarse pattern: the aggregates linked by springs, each list sorted, itself included.
@@ -693,13 +719,13 @@ static bool build_two_level(reduced* r)
 		goto done;
 	}
 	for (int32_t q = 0; q < nf; q++)
-		member_first[r->aggregate[q] + 1]++;
+		member_first[group[q] + 1]++;
 	for (int32_t I = 0; I < count; I++)
 		member_first[I + 1] += member_first[I];
 	for (int32_t I = 0; I <= count; I++)
 		fill[I] = member_first[I];
 	for (int32_t q = 0; q < nf; q++)
-		member[fill[r->aggregate[q]]++] = q;
+		member[fill[group[q]]++] = q;
 	for (int32_t I = 0; I < count; I++)
 		seen[I] = -1;
 	// Two passes over the aggregates: count the neighbour lists, then fill them.
@@ -713,7 +739,7 @@ static bool build_two_level(reduced* r)
 			for (int64_t k = member_first[I]; k < member_first[I + 1]; k++) {
 				const int32_t q = member[k];
 				for (int64_t e = first[q]; e < first[q + 1]; e++) {
-					const int32_t J = r->aggregate[neighbour[e]];
+					const int32_t J = group[neighbour[e]];
 					if (seen[J] != I) {
 						seen[J] = I;
 						list[degree++] = J;
@@ -752,30 +778,38 @@ static bool build_two_level(reduced* r)
 	r->coarse_neighbour = lists;
 	if (!lists)
 		goto done;
-	// Each spring between two aggregates: where each finds the other in its list.
+	// Per particle: its aggregate (-1 if constrained). Per spring between aggregates I != J:
+	// the first entries of its blocks (I, I), (J, J) (-1 for a constrained end), (I, J), (J, I)
+	// (-1 unless both ends are free).
+	for (int32_t i = 0; i < m->particle_count; i++)
+		r->aggregate[i] = m->free_index[i] >= 0 ? group[m->free_index[i]] : -1;
 	for (int32_t s = 0; s < m->spring_count; s++) {
-		const int32_t a = m->free_index[m->spring_a[s]], b = m->free_index[m->spring_b[s]];
-		r->spring_link[2 * s] = r->spring_link[2 * s + 1] = -1;
-		if (a < 0 || b < 0)
+		const int32_t I = r->aggregate[m->spring_a[s]], J = r->aggregate[m->spring_b[s]];
+		int64_t* entry = r->spring_coarse + 4 * (size_t)s;
+		entry[0] = entry[1] = entry[2] = entry[3] = -1;
+		if (I == J)
+			continue;  // inside an aggregate (or between two constrained particles)
+		if (I >= 0)
+			entry[0] = coarse_entry(r, I, r->coarse_self[I], 0, 0);
+		if (J >= 0)
+			entry[1] = coarse_entry(r, J, r->coarse_self[J], 0, 0);
+		if (I < 0 || J < 0)
 			continue;
-		const int32_t I = r->aggregate[a], J = r->aggregate[b];
 		for (int64_t k = r->coarse_first[I]; k < r->coarse_first[I + 1]; k++)
 			if (lists[k] == J)
-				r->spring_link[2 * s] = (int32_t)(k - r->coarse_first[I]);
+				entry[2] = coarse_entry(r, I, (int32_t)(k - r->coarse_first[I]), 0, 0);
 		for (int64_t k = r->coarse_first[J]; k < r->coarse_first[J + 1]; k++)
 			if (lists[k] == I)
-				r->spring_link[2 * s + 1] = (int32_t)(k - r->coarse_first[J]);
+				entry[3] = coarse_entry(r, J, (int32_t)(k - r->coarse_first[J]), 0, 0);
 	}
 	// The coarse matrix: 3 rows per aggregate, 3 deg(I) entries each, symmetric storage.
 	const size_t nc = 3 * (size_t)count;
 	if (nc < SUPERNODAL_MIN_DOFS)
 		r->common.supernodal = CHOLMOD_SIMPLICIAL;
 	const size_t nonzeros = 9 * (size_t)r->coarse_first[count];
-	r->coarse_k = malloc(nonzeros * sizeof(double));
-	r->coarse_d = malloc(nonzeros * sizeof(double));
 	r->coarse = cholmod_l_allocate_sparse(nc, nc, nonzeros, 1, 1, 1, CHOLMOD_REAL, &r->common);
 	r->coarse_b = cholmod_l_allocate_dense(nc, 1, nc, CHOLMOD_REAL, &r->common);
-	if (!r->coarse_k || !r->coarse_d || !r->coarse || !r->coarse_b)
+	if (!r->coarse || !r->coarse_b)
 		goto done;
 	int64_t* p = r->coarse->p;
 	int64_t* col = r->coarse->i;
@@ -796,6 +830,7 @@ done:
 	free(neighbour);
 	free(fill);
 	free(mark);
+	free(group);
 	return ok;
 }
 
@@ -836,18 +871,15 @@ static void reduced_content_free(reduced* r)
 	free(r->q);
 	free(r->rhs);
 	sm_spring_jacobians_destroy(r->springs);
-	free(r->full_dx);
-	free(r->full_dv);
-	free(r->full_out);
 	free(r->full_force);
-	free(r->diagonal_sums);
 	free(r->aggregate);
 	free(r->coarse_first);
 	free(r->coarse_neighbour);
 	free(r->coarse_self);
-	free(r->spring_link);
-	free(r->coarse_k);
-	free(r->coarse_d);
+	free(r->spring_coarse);
+	free(r->mass);
+	free(r->weight);
+	free(r->dv);
 	free(r->coarse_mass);
 	free(r);
 }
@@ -873,21 +905,21 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 	r->blocks_gamma = NAN;
 	r->jacobian_time = NAN;
 	const size_t n = (size_t)r->n + 1;
-	const size_t full = 3 * (size_t)sim->particle_count + 1;
+	r->full = 3 * (int64_t)sim->particle_count;
+	const size_t full = (size_t)r->full + 1;
 	r->springs = sm_spring_jacobians_create(sim->model);
-	r->full_dx = calloc(full, sizeof(double));
-	r->full_dv = calloc(full, sizeof(double));
-	r->full_out = calloc(full, sizeof(double));
 	r->full_force = calloc(full, sizeof(double));
-	r->block_inverse = malloc(3 * n * sizeof(double));
-	r->diagonal_sums = malloc(6 * n * sizeof(double));
-	r->r = malloc(n * sizeof(double));
-	r->z = malloc(n * sizeof(double));
-	r->p = malloc(n * sizeof(double));
-	r->q = malloc(n * sizeof(double));
-	r->rhs = malloc(n * sizeof(double));
-	if (!r->springs || !r->full_dx || !r->full_dv || !r->full_out || !r->full_force || !r->block_inverse ||
-	    !r->diagonal_sums || !r->r || !r->z || !r->p || !r->q || !r->rhs) {
+	r->block_inverse = calloc(6 * full, sizeof(double));  // inverses, then the sums (9 each)
+	r->mass = calloc(full, sizeof(double));
+	r->weight = calloc(full, sizeof(double));
+	r->r = calloc(full, sizeof(double));
+	r->z = calloc(full, sizeof(double));
+	r->p = calloc(full, sizeof(double));
+	r->q = calloc(full, sizeof(double));
+	r->rhs = calloc(full, sizeof(double));
+	r->dv = calloc(full, sizeof(double));
+	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->r || !r->z || !r->p ||
+	    !r->q || !r->rhs || !r->dv) {
 		reduced_content_free(r);
 		return NULL;
 	}

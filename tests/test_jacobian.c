@@ -540,6 +540,53 @@ static int test_fused_product_matches_finite_differences(void)
 	return 0;
 }
 
+// The combined product (scale_k K + scale_d D) p against the dense matrices (built from
+// sm_model_spring_jacobian's blocks, an independent expansion), both variants, with mass damping
+// and gamma-like scales: equal to 1e-12 of the largest term (a few rounding errors, with a margin).
+static int test_combined_product_matches_dense(void)
+{
+	rng r = {2468};
+	enum { N = 9 };
+	const size_t dim = 3 * N;
+	double x[3 * N], v[3 * N], p[3 * N], out[3 * N], f[3 * N];
+	double* dfdx = malloc(dim * dim * sizeof(double));
+	double* dfdv = malloc(dim * dim * sizeof(double));
+	ENSURE(dfdx != NULL && dfdv != NULL);
+	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
+	for (int trial = 0; trial < 10; trial++) {
+		sm_model* m = random_model(&r, N, 20, trial % 2, x, v);
+		ENSURE(m != NULL);
+		sm_model_def md = sm_model_get_def(m);
+		md.mass_damping = 0.5 * (double)(trial % 3);
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (size_t k = 0; k < dim; k++)
+			p[k] = rng_uniform(&r, -1, 1);
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv);
+			for (int s = 0; s < 3; s++) {
+				const double a = scales[s][0], b = scales[s][1];
+				ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
+				const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
+				for (size_t i = 0; i < dim; i++) {
+					double expect = 0.0;
+					for (size_t j = 0; j < dim; j++)
+						expect += (a * dfdx[i * dim + j] + b * dfdv[i * dim + j]) * p[j];
+					ENSURE_NEAR(out[i], expect, 1e-12 * bound);
+				}
+			}
+		}
+		ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, 1.0, 1.0, NULL, out), SM_ERROR_INVALID_ARGUMENT);
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	free(dfdx);
+	free(dfdv);
+	return 0;
+}
+
 // The sparse matrices filled from the records against central finite differences over the free
 // degrees of freedom (exact variant, tolerance of the header), and, for both variants, against
 // the dense matrices (built from sm_model_spring_jacobian's blocks, an independent expansion of
@@ -824,6 +871,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_forces_equal_forces_exactly);
 	RUN_TEST(test_fused_spring_blocks_match_finite_differences);
 	RUN_TEST(test_fused_product_matches_finite_differences);
+	RUN_TEST(test_combined_product_matches_dense);
 	RUN_TEST(test_fill_from_springs_matches_finite_differences);
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
 	RUN_TEST(test_springs_in_pairs_equal_springs_alone_bit_for_bit);

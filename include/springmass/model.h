@@ -312,6 +312,16 @@ SM_API sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians,
 SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model,
                                              const double* dx, const double* dv, double* out);
 
+/// The product with the Jacobian scaled two ways, out = (scale_k df/dx + scale_d df/dv) p [N]
+/// over all particles (3 per particle; p in m, with scale_k in 1 and scale_d in 1/s, or any
+/// consistent units), mass damping included. An implicit step of the second-order system needs
+/// it with scale_k = gamma^2, scale_d = gamma [s^2, s]: the same numbers as
+/// sm_spring_jacobians_product(gamma^2 p, gamma p) to rounding, without scaling p twice. p and
+/// out must not overlap. Errors as sm_spring_jacobians_product (and NULL p).
+SM_API sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobians, const sm_model* model,
+                                                      double scale_k, double scale_d, const double* p,
+                                                      double* out);
+
 /// Fills the sparse df/dx [N/m] and df/dv [N s/m] (mass damping from the model) from the stored
 /// data, without evaluating any spring again: the same values as sm_sparse_jacobian_fill at the
 /// evaluated state and variant (which works this way). Either output may be NULL. SM_ERROR_TOPOLOGY if
