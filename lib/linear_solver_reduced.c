@@ -71,10 +71,11 @@
 #define CHOLESKY_MAX_ITERATIONS 12
 
 // Free particles from which conjugate gradients use the two-level preconditioner. Measured on
-// the benchmark cloth (bench/README.md): it cut the iterations by 1.4 times at n = 16 (254 free
-// particles) for the same wall time, by 2.1 times at n = 32 (1022; 1.3 times faster) and by 2.7
-// times at n = 64 (1.5 times faster); at n = 8 it was slower.
-#define TWO_LEVEL_MIN_PARTICLES 500
+// the benchmark cloth (bench/README.md): it cut the iterations by 1.3 times at n = 16 (254 free
+// particles; 1.2 to 1.8 times faster once the coarse factor was kept across set-ups), by 2.1
+// times at n = 32 (1022) and by 2.7 times at n = 64; at n = 8 (62) it cut them by 7% for the
+// same run time.
+#define TWO_LEVEL_MIN_PARTICLES 100
 
 // The coarse matrix is summed and factorised again after COARSE_MAX_AGE preconditioner set-ups
 // or when gamma has changed by more than COARSE_GAMMA_CHANGE (relative) since; in between the
