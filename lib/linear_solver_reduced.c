@@ -622,11 +622,9 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 		return r->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
 	const double start = sm_simulation_clock();
 	r->gamma = gamma;
-	// Over all particles: p = bx (zero at constrained particles), rhs = M bv + gamma K bx, and
-	// the residual's weights.
+	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the residual's weights (p and
+	// weight stay zero at constrained particles from their allocation on).
 	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + n : NULL;
-	memset(r->p, 0, (size_t)r->full * sizeof(double));
-	memset(r->weight, 0, (size_t)r->full * sizeof(double));
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++) {
