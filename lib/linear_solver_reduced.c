@@ -365,19 +365,6 @@ static double multiply(reduced* r, const double* p, double* q)
 	return pq;
 }
 
-// Block Jacobi: out_i = A_ii^-1 in_i (zero blocks at constrained particles).
-static void precondition(const reduced* r, const double* in, double* out)
-{
-	for (int64_t k = 0; k < r->full / 3; k++) {
-		const double* m = r->block_inverse + 9 * k;
-		const double* a = in + 3 * k;
-		double* o = out + 3 * k;
-		o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
-		o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
-		o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
-	}
-}
-
 static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
 {
 	(void)unused;
@@ -484,34 +471,56 @@ static double residual_norm(const reduced* r, const double* res)
 	return sqrt(s);
 }
 
-// Applies the preconditioner: block Jacobi (with the coarse correction), or a solve with the
-// Cholesky factor (over the free degrees of freedom).
-static bool apply_preconditioner(reduced* r, const double* in, double* out)
+// Applies the preconditioner, out = B in, and returns in . out in *dot: block Jacobi
+// (out_i = A_ii^-1 in_i, zero blocks at constrained particles) plus the coarse correction
+// P A_c^-1 P^T in (additive), or a solve with the Cholesky factor (over the free degrees of
+// freedom). The restriction P^T in is summed in the block-Jacobi pass and the dot product in
+// the prolongation's, so that each pass over the particles does all it can.
+static bool apply_preconditioner(reduced* r, const double* in, double* out, double* dot)
 {
 	const sm_simulation* sim = r->sim;
+	const int64_t particles = r->full / 3;
+	double sum = 0.0;
 	if (!r->use_cholmod) {
-		precondition(r, in, out);
-		if (!r->two_level)
+		double* rc = r->two_level ? r->coarse_b->x : NULL;
+		if (rc != NULL)
+			memset(rc, 0, 3 * (size_t)r->aggregate_count * sizeof(double));
+		for (int64_t k = 0; k < particles; k++) {
+			const double* m = r->block_inverse + 9 * k;
+			const double* a = in + 3 * k;
+			double* o = out + 3 * k;
+			o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
+			o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
+			o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
+			const int32_t I = rc != NULL ? r->aggregate[k] : -1;
+			if (I >= 0) {
+				rc[3 * (size_t)I] += a[0];
+				rc[3 * (size_t)I + 1] += a[1];
+				rc[3 * (size_t)I + 2] += a[2];
+			} else if (rc == NULL) {
+				sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
+			}
+		}
+		if (rc == NULL) {
+			*dot = sum;
 			return true;
-		// Additive coarse correction: out += P A_c^-1 P^T in.
-		double* rc = r->coarse_b->x;
-		memset(rc, 0, 3 * (size_t)r->aggregate_count * sizeof(double));
-		for (int64_t i = 0; i < r->full / 3; i++) {
-			const int32_t I = r->aggregate[i];
-			if (I >= 0)
-				for (int c = 0; c < 3; c++)
-					rc[3 * (size_t)I + c] += in[3 * i + c];
 		}
 		if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL, &r->coarse_y,
 		                      &r->coarse_e, &r->common))
 			return false;
 		const double* yc = r->coarse_x->x;
-		for (int64_t i = 0; i < r->full / 3; i++) {
-			const int32_t I = r->aggregate[i];
-			if (I >= 0)
-				for (int c = 0; c < 3; c++)
-					out[3 * i + c] += yc[3 * (size_t)I + c];
+		for (int64_t k = 0; k < particles; k++) {
+			const int32_t I = r->aggregate[k];
+			if (I < 0)
+				continue;
+			const double* a = in + 3 * k;
+			double* o = out + 3 * k;
+			o[0] += yc[3 * (size_t)I];
+			o[1] += yc[3 * (size_t)I + 1];
+			o[2] += yc[3 * (size_t)I + 2];
+			sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
 		}
+		*dot = sum;
 		return true;
 	}
 	double* b = r->b->x;
@@ -521,8 +530,12 @@ static bool apply_preconditioner(reduced* r, const double* in, double* out)
 		return false;
 	const double* x = r->x->x;
 	memset(out, 0, (size_t)r->full * sizeof(double));
-	for (int32_t k = 0; k < sim->free_count; k++)
-		memcpy(out + 3 * (size_t)sim->free_particles[k], x + 3 * (size_t)k, 3 * sizeof(double));
+	for (int32_t k = 0; k < sim->free_count; k++) {
+		const size_t i = 3 * (size_t)sim->free_particles[k];
+		memcpy(out + i, x + 3 * (size_t)k, 3 * sizeof(double));
+		sum += in[i] * out[i] + in[i + 1] * out[i + 1] + in[i + 2] * out[i + 2];
+	}
+	*dot = sum;
 	return true;
 }
 
@@ -539,12 +552,10 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 	double norm = initial;
 	if (norm <= tol)
 		return SUNLS_SUCCESS;
-	if (!apply_preconditioner(r, res, z))
+	double rz;
+	if (!apply_preconditioner(r, res, z, &rz))
 		return SUNLS_MEM_FAIL;
 	memcpy(p, z, (size_t)n * sizeof(double));
-	double rz = 0.0;
-	for (int64_t i = 0; i < n; i++)
-		rz += res[i] * z[i];
 	for (int iteration = 1; iteration <= max_iterations; iteration++) {
 		const double pq = multiply(r, p, q);
 		if (!(pq > 0.0) || !isfinite(pq))
@@ -562,11 +573,9 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 		norm = sqrt(squares);
 		if (norm <= tol)
 			return SUNLS_SUCCESS;
-		if (!apply_preconditioner(r, res, z))
+		double rz_next;
+		if (!apply_preconditioner(r, res, z, &rz_next))
 			return SUNLS_MEM_FAIL;
-		double rz_next = 0.0;
-		for (int64_t i = 0; i < n; i++)
-			rz_next += res[i] * z[i];
 		const double beta = rz_next / rz;
 		rz = rz_next;
 		for (int64_t i = 0; i < n; i++)
