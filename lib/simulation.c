@@ -691,6 +691,10 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	sim->tolerances = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
 	if (!sim->y || !sim->y_saved || !sim->tolerances)
 		goto out_of_memory;
+	// Before CVodeInit: every vector CVODE and the solvers clone from y inherits the operations.
+	sm_vector_ops_install(sim->y);
+	sm_vector_ops_install(sim->y_saved);
+	sm_vector_ops_install(sim->tolerances);
 	load_initial_state(sim);
 	sm_status st = setup_cvode(sim);
 	if (st != SM_OK) {

@@ -104,6 +104,12 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls);
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
                       sunrealtype delta, int lr, void* user_data);
 
+// Replaces the arithmetic operations in a serial N_Vector's table of operations (vector_ops.c)
+// by loops compiled with the project's flags: Debian's SUNDIALS is built without optimisation.
+// Clones copy the table, so install before CVodeInit clones the state vector. A vector of
+// another kind is left as it is.
+void sm_vector_ops_install(N_Vector v);
+
 // Wraps a matrix-based SUNLinearSolver so that its setup and solve are timed into the
 // simulation's statistics; takes ownership of inner.
 SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner);
