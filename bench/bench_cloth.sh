@@ -7,7 +7,8 @@
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
 #   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> ...
-# a `skip` line for the combinations that would take minutes, then for the peer
+# a `skip` line for the combinations that would take too long, a `same` line for the solver auto
+# chose (measured once, on auto's line), then for the peer
 #   peer n=<n> wall_s=<v> z_corner=<v>
 #   speedup n=<n> <peer wall / springmass wall with the default solver>
 set -euo pipefail
@@ -31,16 +32,17 @@ if [[ "${QUICK:-}" == 1 ]]; then
 	peer_sizes=(8)
 fi
 
-# Combinations measured to take minutes (bench/README.md): SUNDIALS' dense LU above n = 8,
+# Combinations measured to take many minutes (bench/README.md): SUNDIALS' dense LU above n = 8,
 # KLU on the full 6n system above n = 16 (100 s at n = 32), the CHOLMOD-preconditioned solver
-# above n = 32, block-Jacobi conjugate gradients (auto) above n = 64.
+# above n = 32, conjugate gradients (auto) above n = 128 (n = 128 takes minutes, n = 256 would
+# take about an hour: its step count and its cost per step both grow).
 too_slow() {
 	local n=$1 solver=$2
 	case $solver in
 	dense) ((n > 8)) ;;
 	klu) ((n > 16)) ;;
 	cholmod) ((n > 32)) ;;
-	pcg | auto) ((n > 64)) ;;
+	pcg | auto) ((n > 128)) ;;
 	*) false ;;
 	esac
 }
@@ -52,12 +54,17 @@ blas_threads=${OPENBLAS_NUM_THREADS:-1}
 
 declare -A ours
 for n in 8 "${sizes[@]}"; do
+	auto_choice=
 	for solver in auto dense klu pcg cholmod; do
 		if [[ $n == 8 && $solver != auto ]]; then
 			continue  # n = 8 only for the speedup against the peer
 		fi
 		if too_slow "$n" "$solver"; then
-			echo "skip n=$n solver=$solver (would take minutes)"
+			echo "skip n=$n solver=$solver (would take too long: bench/README.md)"
+			continue
+		fi
+		if [[ $solver == "${auto_choice:-}" ]]; then
+			echo "same n=$n solver=$solver (auto's choice: the line above)"
 			continue
 		fi
 		r=$repeats
@@ -65,6 +72,7 @@ for n in 8 "${sizes[@]}"; do
 		line=$(OPENBLAS_NUM_THREADS=$blas_threads "$bench" "$n" "$solver" "$r")
 		if [[ $solver == auto ]]; then
 			ours[$n]=$(sed -n 's/.*wall_s=\([^ ]*\).*/\1/p' <<<"$line")
+			auto_choice=$(sed -n 's/.*solver=\([^ ]*\).*/\1/p' <<<"$line")
 			line=${line/solver=/solver=auto:}
 		fi
 		[[ $n == 8 ]] || echo "$line"
