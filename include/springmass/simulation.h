@@ -36,10 +36,10 @@ typedef enum sm_linear_solver {
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
 	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner
-	/// (from 500 free particles on, plus a coarse correction over aggregates of neighbouring
-	/// particles). The Jacobian is evaluated afresh at every step, and products with the matrix are formed
-	/// from the springs' factored Jacobian blocks without assembling it. What AUTO picks above
-	/// tiny models.
+	/// (from 100 free particles on, plus a coarse correction over aggregates of neighbouring
+	/// particles). The Jacobian is evaluated afresh at every step, and products with the matrix
+	/// are formed from the springs' factored Jacobian blocks without assembling it. What AUTO
+	/// picks above tiny models.
 	SM_SOLVER_REDUCED_PCG,
 	/// The same reduced system, by conjugate gradients preconditioned with a CHOLMOD Cholesky
 	/// factorisation of the Newton matrix of an earlier step (symbolic analysis once; a new
