@@ -58,9 +58,10 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
                                       const int32_t* restrict second, const double* restrict rest_length,
                                       const double* restrict stiffness, const double* restrict damping,
                                       const double* restrict x, const double* restrict v, double* restrict f,
-                                      double* restrict jacobian, const int with_velocity,
+                                      double* restrict jacobian, double* restrict power, const int with_velocity,
                                       const int with_jacobian, const int clamp, const int damping_position)
 {
+	double dissipated = 0.0;
 	for (int32_t s = begin; s < count; s++) {
 		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
 		const double dx = x[b] - x[a], dy = x[b + 1] - x[a + 1], dz = x[b + 2] - x[a + 2];
@@ -79,6 +80,8 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
 			dvz = v[b + 2] - v[a + 2];
 			rate = ux * dvx + uy * dvy + uz * dvz;
 			magnitude += kd * rate;
+			if (power != NULL)
+				dissipated += spring_damping_dissipation(kd, rate);
 		}
 		const double fx = magnitude * ux, fy = magnitude * uy, fz = magnitude * uz;
 		f[a] += fx;
@@ -106,6 +109,8 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
 			out[7] = kd;
 		}
 	}
+	if (power != NULL)
+		*power += dissipated;
 }
 
 #if defined(__SSE2__)
@@ -120,10 +125,11 @@ SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict fir
                                         const int32_t* restrict second, const double* restrict rest_length,
                                         const double* restrict stiffness, const double* restrict damping,
                                         const double* restrict x, const double* restrict v, double* restrict f,
-                                        double* restrict jacobian, const int with_velocity,
+                                        double* restrict jacobian, double* restrict power, const int with_velocity,
                                         const int with_jacobian, const int clamp, const int damping_position)
 {
 	const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+	__m128d dissipated = zero;
 	const __m128d ratio = _mm_set1_pd(SM_DEGENERATE_LENGTH_RATIO);
 	int32_t s = 0;
 	for (; s + 1 < count; s += 2) {
@@ -153,6 +159,8 @@ SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict fir
 			dvz = _mm_sub_pd(PAIR(v, b0, b1, 2), PAIR(v, a0, a1, 2));
 			rate = _mm_add_pd(_mm_add_pd(_mm_mul_pd(ux, dvx), _mm_mul_pd(uy, dvy)), _mm_mul_pd(uz, dvz));
 			magnitude = _mm_add_pd(magnitude, _mm_mul_pd(kd, rate));
+			if (power != NULL)  // kd r^2 (law_spring_damping.h), lane by lane
+				dissipated = _mm_add_pd(dissipated, _mm_mul_pd(_mm_mul_pd(kd, rate), rate));
 		}
 #undef PAIR
 		const __m128d fx = _mm_mul_pd(magnitude, ux), fy = _mm_mul_pd(magnitude, uy);
@@ -189,6 +197,8 @@ SPECIALISED int32_t spring_loop_pairs(int32_t count, const int32_t* restrict fir
 			_mm_store_pd(out + 14, _mm_unpackhi_pd(beta, kd));
 		}
 	}
+	if (power != NULL)
+		*power += _mm_cvtsd_f64(dissipated) + _mm_cvtsd_f64(_mm_unpackhi_pd(dissipated, dissipated));
 	return s;
 }
 #endif
@@ -198,15 +208,15 @@ SPECIALISED void spring_loop(int32_t count, const int32_t* restrict first, const
                                const double* restrict rest_length, const double* restrict stiffness,
                                const double* restrict damping, const double* restrict x,
                                const double* restrict v, double* restrict f, double* restrict jacobian,
-                               const int with_velocity, const int with_jacobian, const int clamp,
-                               const int damping_position)
+                               double* restrict power, const int with_velocity, const int with_jacobian,
+                               const int clamp, const int damping_position)
 {
 	int32_t begin = 0;
 #if defined(__SSE2__)
-	begin = spring_loop_pairs(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
+	begin = spring_loop_pairs(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian, power,
 	                          with_velocity, with_jacobian, clamp, damping_position);
 #endif
-	spring_loop_scalar(begin, count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
+	spring_loop_scalar(begin, count, first, second, rest_length, stiffness, damping, x, v, f, jacobian, power,
 	                   with_velocity, with_jacobian, clamp, damping_position);
 }
 
@@ -233,10 +243,28 @@ void sm_model_forces(const sm_model* model, const double* x, const double* v, co
 	const sm_model* m = model;
 	if (v != NULL)
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
-		            f, NULL, 1, 0, 0, 0);
+		            f, NULL, NULL, 1, 0, 0, 0);
 	else
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
-		            NULL, f, NULL, 0, 0, 0, 0);
+		            NULL, f, NULL, NULL, 0, 0, 0, 0);
+}
+
+double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
+                                 double* f)
+{
+	body_forces(model, v, f_external, f);
+	const sm_model* m = model;
+	double power = 0.0;
+	spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v, f,
+	            NULL, &power, 1, 0, 0, 0);
+	// Mass damping: alpha m |v|^2 per particle (law_body_forces.h).
+	const double alpha = m->def.mass_damping;
+	if (alpha != 0.0)
+		for (int32_t i = 0; i < m->particle_count; i++) {
+			const double* vi = v + 3 * (size_t)i;
+			power += alpha * m->mass[i] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
+		}
+	return power;
 }
 
 sm_spring_jacobians* sm_spring_jacobians_create(const sm_model* model)
@@ -282,16 +310,16 @@ sm_status sm_model_forces_and_jacobians(const sm_model* model, const double* x, 
 	// Exact: no clamp, the damping-position term (zero without v). Definite: clamp, no term.
 	if (variant == SM_JACOBIAN_EXACT && v != NULL)
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
-		            f, out, 1, 1, 0, 1);
+		            f, out, NULL, 1, 1, 0, 1);
 	else if (variant == SM_JACOBIAN_EXACT)
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
-		            NULL, f, out, 0, 1, 0, 0);
+		            NULL, f, out, NULL, 0, 1, 0, 0);
 	else if (v != NULL)
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v,
-		            f, out, 1, 1, 1, 0);
+		            f, out, NULL, 1, 1, 1, 0);
 	else
 		spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x,
-		            NULL, f, out, 0, 1, 1, 0);
+		            NULL, f, out, NULL, 0, 1, 1, 0);
 	jacobians->variant = variant;
 	jacobians->evaluated = 1;
 	return SM_OK;

@@ -109,3 +109,9 @@ static inline void spring_geometry_eval(const double* x, const double* v, int32_
 // the laws in law_rest_length.h (both kinds) and law_spring_damping.h. Defined in jacobian.c.
 void spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
                    sm_jacobian_variant variant, double K[9], double D[9]);
+
+// sm_model_forces (the same numbers, bit for bit) and, from the same pass, the power the model
+// dissipates, as sm_model_dissipated_power computes it but summed in another order [W]. x, v
+// and f must be given. Defined in forces.c.
+double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
+                                 double* f);

@@ -171,8 +171,7 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	double* f = sim->work_force;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
-	sm_model_forces(sim->model, x, v, sim->external_force, f);
-	const double power = sm_model_dissipated_power(sim->model, x, v);
+	const double power = sm_model_forces_and_power(sim->model, x, v, sim->external_force, f);
 	sim->base.force_seconds += sm_simulation_clock() - start;
 	sim->rhs_evaluations++;
 	memcpy(ydot, y + nd, (size_t)nd * sizeof(double));

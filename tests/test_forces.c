@@ -1,11 +1,13 @@
 // Forces and energies of the physics core against the laws they implement: closed forms,
 // conservation laws (Newton's third law, zero damping for rigid motion), the energy gradient
 // by finite differences, and the strain-based stiffness of a discretised rope.
+#include "model_internal.h"
 #include "physics_fixtures.h"
 #include "springmass/model.h"
 #include "test_harness.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 // Sum of |f| components, the scale against which rounding in sums of forces is measured.
 static double force_scale(const double* f, size_t n)
@@ -238,6 +240,36 @@ static int test_damping_power_is_never_positive(void)
 		ENSURE(power <= 1e-12 * fmax(1.0, dissipated));
 		ENSURE(dissipated >= 0.0);
 		ENSURE_REL(-power, dissipated, 1e-12, 1e-12);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// The simulation's right-hand side: forces and dissipated power from one pass. The forces are
+// sm_model_forces' bit for bit; the power is sm_model_dissipated_power's summed in another order
+// (two SSE2 lanes), so equal to a few rounding errors of the sum of its positive terms: 1e-12
+// relative. An even and an odd spring count (the odd last spring takes the scalar loop).
+static int test_forces_and_power_match_separate_evaluations(void)
+{
+	rng r = {7070};
+	for (int trial = 0; trial < 40; trial++) {
+		enum { N = 9 };
+		double x[3 * N], v[3 * N], f[3 * N], g[3 * N], fe[3 * N];
+		sm_model* m = random_model(&r, N, 20 + trial % 2, trial % 4 == 0, x, v);
+		ENSURE(m != NULL);
+		sm_model_def md = sm_model_get_def(m);
+		md.mass_damping = trial % 3 == 0 ? 0.0 : 0.7;
+		ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+		for (int k = 0; k < 3 * N; k++) {
+			v[k] = rng_uniform(&r, -2, 2);
+			fe[k] = rng_uniform(&r, -1, 1);
+		}
+		sm_model_forces(m, x, v, fe, f);
+		const double power = sm_model_forces_and_power(m, x, v, fe, g);
+		ENSURE(memcmp(f, g, sizeof f) == 0);
+		const double expected = sm_model_dissipated_power(m, x, v);
+		ENSURE(expected > 0.0);
+		ENSURE_REL(power, expected, 1e-12, 0.0);
 		sm_model_destroy(m);
 	}
 	return 0;
@@ -482,6 +514,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_internal_forces_have_no_net_force_or_torque);
 	RUN_TEST(test_spring_damping_ignores_rigid_motion);
 	RUN_TEST(test_damping_power_is_never_positive);
+	RUN_TEST(test_forces_and_power_match_separate_evaluations);
 	RUN_TEST(test_elastic_force_is_minus_energy_gradient);
 	RUN_TEST(test_gravity_force_is_minus_energy_gradient);
 	RUN_TEST(test_zero_length_spring_is_linear);
