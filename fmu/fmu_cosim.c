@@ -193,41 +193,6 @@ static char* resource_path(const char* uri)
 	return path;
 }
 
-// Reads a whole file into a malloc'ed buffer (NUL-terminated); NULL if it cannot be read.
-static char* read_file(const char* path, size_t* length)
-{
-	FILE* f = fopen(path, "rb");
-	if (!f)
-		return NULL;
-	char* data = NULL;
-	size_t size = 0, capacity = 0;
-	for (;;) {
-		if (size + 4096 + 1 > capacity) {
-			capacity = capacity ? 2 * capacity : 65536;
-			char* grown = realloc(data, capacity);
-			if (!grown) {
-				free(data);
-				fclose(f);
-				return NULL;
-			}
-			data = grown;
-		}
-		size_t got = fread(data + size, 1, 4096, f);
-		size += got;
-		if (got < 4096)
-			break;
-	}
-	bool failed = ferror(f) != 0;
-	fclose(f);
-	if (failed) {
-		free(data);
-		return NULL;
-	}
-	data[size] = '\0';
-	*length = size;
-	return data;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Model and simulation
 // ---------------------------------------------------------------------------------------------
@@ -600,7 +565,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	memcpy(path, dir, n);
 	memcpy(path + n, "/model.json", sizeof "/model.json");
 	free(dir);
-	inst->text = read_file(path, &inst->length);
+	inst->text = fmu_read_file(path, &inst->length);
 	if (!inst->text) {
 		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\")", path,
 		          fmuResourceLocation);

@@ -769,3 +769,37 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	}
 	return out.data;
 }
+
+char* fmu_read_file(const char* path, size_t* length)
+{
+	FILE* f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	char* data = NULL;
+	size_t size = 0, capacity = 0;
+	for (;;) {
+		if (size + 65536 + 1 > capacity) {
+			capacity = capacity ? 2 * capacity : 1 << 20;
+			char* grown = realloc(data, capacity);
+			if (!grown) {
+				free(data);
+				fclose(f);
+				return NULL;
+			}
+			data = grown;
+		}
+		size_t got = fread(data + size, 1, 65536, f);
+		size += got;
+		if (got < 65536)
+			break;
+	}
+	bool failed = ferror(f) != 0;
+	fclose(f);
+	if (failed) {
+		free(data);
+		return NULL;
+	}
+	data[size] = '\0';
+	*length = size;
+	return data;
+}

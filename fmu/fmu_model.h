@@ -118,6 +118,11 @@ char* fmu_model_description(const fmu_table* table, const char* generation_date)
 /// name gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);
 
+/// Reads a whole file into a malloc'ed NUL-terminated buffer and its length (without the NUL);
+/// NULL if it cannot be opened or read, or on OOM. Shared by the FMU runtime (its model file)
+/// and `springmass fmu` (files it packs).
+char* fmu_read_file(const char* path, size_t* length);
+
 /// Linear solver, method and Jacobian names used by the string parameters.
 const char* fmu_method_name(sm_method method);
 int fmu_method_from_name(const char* name, sm_method* method);

@@ -55,40 +55,6 @@ static void usage(FILE* out)
 	        "  -h, --help           this text\n");
 }
 
-static char* read_all(const char* path, size_t* length)
-{
-	FILE* f = fopen(path, "rb");
-	if (!f)
-		return NULL;
-	char* data = NULL;
-	size_t size = 0, capacity = 0;
-	for (;;) {
-		if (size + 65536 + 1 > capacity) {
-			capacity = capacity ? 2 * capacity : 1 << 20;
-			char* grown = realloc(data, capacity);
-			if (!grown) {
-				free(data);
-				fclose(f);
-				return NULL;
-			}
-			data = grown;
-		}
-		size_t got = fread(data + size, 1, 65536, f);
-		size += got;
-		if (got < 65536)
-			break;
-	}
-	bool failed = ferror(f) != 0;
-	fclose(f);
-	if (failed) {
-		free(data);
-		return NULL;
-	}
-	data[size] = '\0';
-	*length = size;
-	return data;
-}
-
 static bool write_all(const char* path, const char* data, size_t length)
 {
 	FILE* f = fopen(path, "wb");
@@ -102,7 +68,7 @@ static bool write_all(const char* path, const char* data, size_t length)
 static bool copy_file(const char* from, const char* to)
 {
 	size_t length = 0;
-	char* data = read_all(from, &length);
+	char* data = fmu_read_file(from, &length);
 	if (!data)
 		return false;
 	bool ok = write_all(to, data, length);
@@ -218,7 +184,7 @@ static int package(const options* opt)
 		return 1;
 	}
 	size_t length = 0;
-	text = read_all(opt->model, &length);
+	text = fmu_read_file(opt->model, &length);
 	if (!text) {
 		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, strerror(errno));
 		goto done;
