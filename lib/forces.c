@@ -249,6 +249,15 @@ void sm_model_forces(const sm_model* model, const double* x, const double* v, co
 		            NULL, f, NULL, NULL, 0, 0, 0, 0);
 }
 
+// Power dissipated by mass damping over all particles [W].
+static double mass_damping_power(const sm_model* model, const double* v)
+{
+	double power = 0.0;
+	for (int32_t i = 0; i < model->particle_count; i++)
+		power += mass_damping_dissipation(model->mass[i], model->def.mass_damping, v + 3 * (size_t)i);
+	return power;
+}
+
 double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
                                  double* f)
 {
@@ -257,14 +266,7 @@ double sm_model_forces_and_power(const sm_model* model, const double* x, const d
 	double power = 0.0;
 	spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v, f,
 	            NULL, &power, 1, 0, 0, 0);
-	// Mass damping: alpha m |v|^2 per particle (law_body_forces.h).
-	const double alpha = m->def.mass_damping;
-	if (alpha != 0.0)
-		for (int32_t i = 0; i < m->particle_count; i++) {
-			const double* vi = v + 3 * (size_t)i;
-			power += alpha * m->mass[i] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
-		}
-	return power;
+	return power + mass_damping_power(m, v);
 }
 
 sm_spring_jacobians* sm_spring_jacobians_create(const sm_model* model)
@@ -356,12 +358,7 @@ double sm_model_dissipated_power(const sm_model* model, const double* x, const d
 {
 	if (model == NULL || x == NULL || v == NULL)
 		return 0.0;
-	double power = 0.0;
-	const double alpha = model->def.mass_damping;
-	for (int32_t i = 0; i < model->particle_count; i++) {
-		const double* vi = v + 3 * (size_t)i;
-		power += alpha * model->mass[i] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
-	}
+	double power = mass_damping_power(model, v);
 	for (int32_t s = 0; s < model->spring_count; s++) {
 		spring_geometry geo;
 		spring_geometry_eval(x, v, model->spring_a[s], model->spring_b[s], model->rest_length[s], &geo);

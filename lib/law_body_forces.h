@@ -20,6 +20,12 @@ static inline void body_force(double mass, const double gravity[3], double mass_
 		f[k] = mass * (gravity[k] - mass_damping * v[k]);
 }
 
+// Power dissipated by mass damping on one particle, alpha m |v|^2 >= 0 [W].
+static inline double mass_damping_dissipation(double mass, double mass_damping, const double v[3])
+{
+	return mass_damping * mass * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
 // Diagonal of d f / d v from mass damping, -alpha m [N s/m].
 static inline double mass_damping_derivative(double mass, double mass_damping)
 {

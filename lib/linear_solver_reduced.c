@@ -343,22 +343,18 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 	for (int32_t I = 0; I < r->aggregate_count; I++)
 		for (int i = 0; i < 3; i++)
 			coarse[coarse_entry(r, I, r->coarse_self[I], i, i)] += r->coarse_mass[I] * damping;
-	r->coarse_age = COARSE_MAX_AGE;  // until the factorisation succeeds
+	bool ok;
 	if (r->multilevel != NULL) {
-		if (!sm_multilevel_refresh(r->multilevel, coarse, &r->common))
-			return false;
-		r->coarse_age = 0;
-		return true;
-	}
-	if (r->coarse_factor == NULL) {
-		r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
+		ok = sm_multilevel_refresh(r->multilevel, coarse, &r->common);
+	} else {
 		if (r->coarse_factor == NULL)
-			return false;
+			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
+		ok = r->coarse_factor != NULL && cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) &&
+		     r->common.status == CHOLMOD_OK;
 	}
-	if (!cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) || r->common.status != CHOLMOD_OK)
-		return false;
-	r->coarse_age = 0;
-	return true;
+	// A failed refresh is retried at the next set-up.
+	r->coarse_age = ok ? 0 : COARSE_MAX_AGE;
+	return ok;
 }
 
 // q = A p = M (1 + gamma alpha) p - gamma D p - gamma^2 K p over all particles (p is zero at the
@@ -425,6 +421,17 @@ static int factorize(reduced* r)
 	return 0;
 }
 
+// The masses per degree of freedom, zero at constrained particles: at creation and at every
+// re-initialisation, which follows sm_simulation_update_model (the only way they change). Mass
+// damping enters A as M (1 + gamma alpha) through the combined product.
+static void load_masses(reduced* r)
+{
+	const sm_model* m = r->sim->model;
+	for (int32_t i = 0; i < m->particle_count; i++)
+		for (int c = 0; c < 3; c++)
+			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
+}
+
 // Evaluates the forces and every spring's Jacobian blocks at the CVODE state y (time t).
 static int evaluate_jacobian(reduced* r, double t, const double* y)
 {
@@ -435,12 +442,6 @@ static int evaluate_jacobian(reduced* r, double t, const double* y)
 	const double start = sm_simulation_clock();
 	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
 	                                             r->full_force, r->springs);
-	// Masses: sm_simulation_update_model may change them. Mass damping enters A as
-	// M (1 + gamma alpha) through the combined product.
-	const sm_model* m = sim->model;
-	for (int32_t i = 0; i < m->particle_count; i++)
-		for (int c = 0; c < 3; c++)
-			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	sim->jacobian_evaluations++;
 	r->blocks_gamma = NAN;
@@ -907,6 +908,7 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls)
 	r->jacobian_time = NAN;
 	r->blocks_gamma = NAN;
 	r->coarse_age = COARSE_MAX_AGE;  // masses or springs may have changed
+	load_masses(r);
 }
 
 static void reduced_content_free(reduced* r)
@@ -990,6 +992,7 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 		reduced_content_free(r);
 		return NULL;
 	}
+	load_masses(r);
 	if (use_cholmod) {
 		// The assembled matrix, for the factorisations only.
 		r->nonzeros = sm_sparse_jacobian_nonzeros(sim->pattern);

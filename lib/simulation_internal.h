@@ -95,7 +95,7 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 // preconditioned conjugate gradients (use_cholmod false) or sparse Cholesky (true).
 SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
 // Its set-up, given to CVodeSetPreconditioner (user data: the simulation): evaluates the
-// Jacobian unless CVODE allows reuse (jok) and factorises; psolve is a formality.
+// Jacobian afresh (always, whatever CVODE allows); psolve is a formality.
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data);
 // Forgets the Jacobian the reduced solver holds, so that it evaluates one at its next solve

@@ -429,7 +429,7 @@ static int test_small_cloth_against_gsl(void)
 }
 
 // A 24 x 24 benchmark cloth (574 free particles: conjugate gradients use the two-level
-// preconditioner from 500) falling for 0.02 s, both reduced solvers at tight tolerances against
+// preconditioner, from 100 on) falling for 0.02 s, both reduced solvers at tight tolerances against
 // GSL's explicit rk8pd: the preconditioner changes how fast conjugate gradients converge, never
 // what they converge to, so the trajectory agrees with the independent integrator to 1e-6 m
 // (CVODE at rtol 1e-8 over 2 mm of motion: measured differences about 1e-9 m).
