@@ -651,6 +651,272 @@ static int test_invalid_arguments(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Sparse path (shift-invert Lanczos) against independent truths.
+
+// Mass of every degree of freedom of all particles (3 per particle) [kg].
+static double* particle_masses(const sm_model* model)
+{
+	const int32_t np = sm_model_particle_count(model);
+	double* mass = malloc(3 * (size_t)np * sizeof(double));
+	if (mass == NULL)
+		return NULL;
+	for (int32_t p = 0; p < np; p++) {
+		sm_particle_def pd;
+		sm_model_get_particle(model, p, &pd);
+		mass[3 * p] = mass[3 * p + 1] = mass[3 * p + 2] = pd.mass;
+	}
+	return mass;
+}
+
+static double mass_product(const double* mass, const double* a, const double* b, size_t n3)
+{
+	double s = 0.0;
+	for (size_t k = 0; k < n3; k++)
+		s += mass[k] * a[k] * b[k];
+	return s;
+}
+
+// The lowest `count` modes by the forced sparse path against all modes by the forced dense path
+// (an independent method: Householder + QR on the full matrix). Frequencies: the dense
+// eigenvalues carry an absolute error of about eps max|omega^2| (1e-16 of omega_max^2), the
+// Lanczos ones are Rayleigh quotients whose error is the square of the shape error: 1e-8 of
+// max(omega^2, 1e-6 omega_max^2) covers both with a wide margin. Shapes: a multiple eigenvalue
+// has no unique shape, so each sparse shape is projected onto the dense shapes of its cluster
+// (eigenvalues within 1e-6 omega_max^2 of its own): sum (phi_s^T M phi_d)^2 = 1 to 1e-8 (the
+// squared sine of the angle between the spaces, of the order of (residual / gap)^2).
+static int compare_sparse_to_dense(const sm_model* model, const double* x, int32_t count, int32_t expected_zero)
+{
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	def.solver = SM_MODES_DENSE;
+	sm_modes dense, sparse;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, &err), SM_OK);
+	ENSURE(dense.solver == SM_MODES_DENSE);
+	def.solver = SM_MODES_SPARSE;
+	def.mode_count = count;
+	const sm_status st = sm_modes_compute(model, &def, &sparse, &err);
+	if (st != SM_OK)
+		printf("  %s\n", err.message);
+	ENSURE_STATUS(st, SM_OK);
+	ENSURE(sparse.solver == SM_MODES_SPARSE);
+	ENSURE(sparse.count == count && sparse.dof == dense.dof);
+	printf("  sparse residual %.2e (dense %.2e), lowest omega^2 %.6g, highest kept %.6g\n", sparse.residual,
+	       dense.residual, sparse.omega_squared[0], sparse.omega_squared[count - 1]);
+	ENSURE(sparse.residual <= def.residual_tolerance);
+	ENSURE(sparse.zero_count == expected_zero);
+	ENSURE(sparse.unstable_count == (dense.unstable_count < count ? dense.unstable_count : count));
+	// Upper bound on omega_max (Gershgorin), tight for lattices: within a factor 2 here.
+	ENSURE(sparse.omega_max >= dense.omega_max * (1.0 - 1e-12) && sparse.omega_max <= 2.0 * dense.omega_max);
+	const double top = dense.omega_max * dense.omega_max;
+	const size_t n3 = 3 * (size_t)dense.particle_count;
+	double* mass = particle_masses(model);
+	ENSURE(mass != NULL);
+	for (int32_t i = 0; i < count; i++) {
+		ENSURE_REL(sparse.omega_squared[i], dense.omega_squared[i], 1e-8, 1e-6 * top);
+		ENSURE(sparse.omega_squared[i] != 0.0 || sparse.frequency[i] == 0.0);
+		const double* phi = sparse.shapes + (size_t)i * n3;
+		double projection = 0.0;
+		for (int32_t j = 0; j < dense.count; j++)
+			if (fabs(dense.omega_squared[j] - sparse.omega_squared[i]) <= 1e-6 * top) {
+				const double c = mass_product(mass, phi, dense.shapes + (size_t)j * n3, n3);
+				projection += c * c;
+			}
+		ENSURE_NEAR(projection, 1.0, 1e-8);
+		// M-orthonormal among themselves.
+		for (int32_t j = 0; j <= i; j++)
+			ENSURE_NEAR(mass_product(mass, phi, sparse.shapes + (size_t)j * n3, n3), i == j ? 1.0 : 0.0, 1e-10);
+		for (int32_t p = 0; p < dense.particle_count; p++) {
+			sm_particle_def pd;
+			sm_model_get_particle(model, p, &pd);
+			if (pd.motion != SM_PARTICLE_FREE)
+				ENSURE(phi[3 * p] == 0.0 && phi[3 * p + 1] == 0.0 && phi[3 * p + 2] == 0.0);
+		}
+		// Modal damping over the kept modes: the same diagonal as the dense path's.
+		ENSURE_NEAR(sparse.modal_damping[i], dense.modal_damping[i], 1e-6 * (fabs(dense.modal_damping[i]) + 1e-9));
+	}
+	free(mass);
+	sm_modes_release(&dense);
+	sm_modes_release(&sparse);
+	return 0;
+}
+
+// A 9 x 7 cloth with its boundary held, stretched unevenly (a membrane under tension, no
+// symmetry left) and a free block of 4 x 3 x 3 particles (six rigid-body modes, then elastic
+// ones): the lowest ten modes by Lanczos equal the dense ones.
+static int test_sparse_modes_match_dense(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = 9;
+	sd.nv = 7;
+	sd.shear.damping = 0.0;  // structural and bend springs damped, shear not: damping not proportional
+	sm_structure cloth;
+	ENSURE_STATUS(sm_add_sheet(model, &sd, &cloth), SM_OK);
+	for (int32_t i = 0; i < sd.nv; i++)
+		for (int32_t j = 0; j < sd.nu; j++)
+			if (i == 0 || j == 0 || i == sd.nv - 1 || j == sd.nu - 1)
+				ENSURE_STATUS(sm_set_motion_at(model, &cloth, i, j, 0, SM_PARTICLE_FIXED), SM_OK);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(model, x, NULL);
+	for (int32_t i = 0; i < np; i++) {
+		x[3 * i] *= 1.05 + 0.002 * sin(3.0 * i);
+		x[3 * i + 1] *= 1.03 + 0.002 * cos(5.0 * i);
+	}
+	if (compare_sparse_to_dense(model, x, 10, 0) != 0)
+		return 1;
+	free(x);
+	sm_model_destroy(model);
+
+	model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = 4;
+	bd.nv = 3;
+	bd.nw = 3;
+	bd.size[0] = 0.3;
+	bd.size[1] = 0.2;
+	bd.size[2] = 0.25;
+	bd.edge.damping = 1.0;
+	sm_structure block;
+	ENSURE_STATUS(sm_add_block(model, &bd, &block), SM_OK);
+	if (compare_sparse_to_dense(model, NULL, 12, 6) != 0)
+		return 1;
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The lowest ten modes with the automatic choice, which must be the sparse path for the large
+// models that use this; the status and the residual test checked.
+static int lowest_ten_by_auto_choice(const sm_model* model, sm_modes* modes)
+{
+	sm_modes_def def = sm_default_modes_def();
+	def.mode_count = 10;
+	sm_error err;
+	const sm_status st = sm_modes_compute(model, &def, modes, &err);
+	if (st != SM_OK)
+		printf("  %s\n", err.message);
+	ENSURE_STATUS(st, SM_OK);
+	ENSURE(modes->solver == SM_MODES_SPARSE);
+	ENSURE(modes->residual <= def.residual_tolerance);
+	printf("  residual %.2e\n", modes->residual);
+	return 0;
+}
+
+// 2000 particles on zero-length springs between fixed ends (6000 degrees of freedom, so the
+// automatic choice is the sparse path): the closed form omega_j = 2 sqrt(k/m) sin(j pi / (2 (N +
+// 1))) holds in each direction, so every frequency is threefold (x, y and z decouple exactly):
+// the lowest ten are j = 1, 1, 1, 2, 2, 2, 3, 3, 3, 4. One Lanczos run sees one vector of each
+// threefold eigenspace, so this also checks the runs with locked modes. Tolerance 1e-8
+// relative: the Rayleigh quotient's round-off is about eps omega_max^2 / omega_1^2 ~ 1e-10 of
+// omega_1^2 here (omega_1^2 is 6e-7 of omega_max^2).
+static int test_sparse_long_chain_closed_form(void)
+{
+	const int32_t n = 2000;
+	const double m = 0.01, k = 500.0;
+	sm_model* model = chain_model(n, m, k, 0.01, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	sm_modes modes;
+	if (lowest_ten_by_auto_choice(model, &modes) != 0)
+		return 1;
+	ENSURE(modes.count == 10 && modes.dof == 3 * n);
+	ENSURE(modes.zero_count == 0 && modes.unstable_count == 0);
+	for (int32_t i = 0; i < 10; i++)
+		ENSURE_REL(sqrt(modes.omega_squared[i]), chain_omega(n, m, k, 1 + i / 3), 1e-8, 0.0);
+	// Gershgorin: 4 k / m, the limit of the highest chain mode (2 sqrt(k/m) sin(N pi/(2N + 2))).
+	ENSURE_REL(modes.omega_max, 2.0 * sqrt(k / m), 1e-12, 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A chain compressed to 0.8 of its springs' rest length has negative transverse stiffness
+// k (1 - l0/L) < 0: K is indefinite, the Cholesky factorisation of K - sigma M fails at the
+// first shift and sigma is lowered until it succeeds. The unstable modes come first, as on the
+// dense path, and are counted.
+static int test_sparse_unstable_configuration(void)
+{
+	const int32_t n = 60;
+	sm_model* model = chain_model(n, 0.1, 100.0, 0.1, SM_SPRING_REST_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(model, x, NULL);
+	for (int32_t i = 0; i < np; i++)
+		x[3 * i] *= 0.8;
+	if (compare_sparse_to_dense(model, x, 10, 0) != 0)
+		return 1;
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	def.mode_count = 10;
+	def.solver = SM_MODES_SPARSE;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.unstable_count == 10);
+	ENSURE(modes.omega_squared[0] < 0.0 && modes.frequency[0] == 0.0);
+	sm_modes_release(&modes);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A free block of 8 x 8 x 8 particles (1536 degrees of freedom: the automatic choice is
+// sparse): K is singular, the shift makes K - sigma M definite, and the six rigid-body modes
+// come out as exact zeros, each a rigid motion (K phi = 0 within the residual), the seventh
+// mode elastic.
+static int test_sparse_free_block_zero_modes(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = bd.nv = bd.nw = 8;
+	sm_structure block;
+	ENSURE_STATUS(sm_add_block(model, &bd, &block), SM_OK);
+	sm_modes modes;
+	if (lowest_ten_by_auto_choice(model, &modes) != 0)
+		return 1;
+	ENSURE(modes.zero_count == 6);
+	for (int i = 0; i < 6; i++)
+		ENSURE(modes.omega_squared[i] == 0.0 && modes.frequency[i] == 0.0);
+	ENSURE(modes.omega_squared[6] > 1e-4 * modes.omega_max * modes.omega_max);
+	sm_modes_release(&modes);
+
+	// Bad input still gives a clear error on this path: a non-finite position.
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(model, x, NULL);
+	x[3 * 100 + 1] = NAN;
+	sm_modes_def def = sm_default_modes_def();
+	def.mode_count = 10;
+	def.configuration = x;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "particle 100") != NULL);
+	ENSURE(modes.shapes == NULL && modes.count == 0);
+	// The sparse path asked for all modes, or too many: an argument error naming the limit.
+	def.configuration = NULL;
+	def.solver = SM_MODES_SPARSE;
+	def.mode_count = 0;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "mode_count") != NULL);
+	def.mode_count = 1536;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	def.mode_count = 10;
+	def.solver = (sm_modes_solver)7;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The equilibrium from statics is where a damped simulation comes to rest: a short rope of
 // five segments, held at one end and released horizontally, swings down and settles under mass
 // damping. After 60 s with alpha = 2 /s the slowest mode (about 1 rad/s, pendulum-like) has
@@ -715,5 +981,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_free_body_has_no_equilibrium);
 	RUN_TEST(test_invalid_arguments);
 	RUN_TEST(test_statics_matches_a_long_damped_simulation);
+	RUN_TEST(test_sparse_modes_match_dense);
+	RUN_TEST(test_sparse_long_chain_closed_form);
+	RUN_TEST(test_sparse_unstable_configuration);
+	RUN_TEST(test_sparse_free_block_zero_modes);
 	return TEST_SUMMARY();
 }

@@ -23,7 +23,9 @@ static void usage(FILE* out)
 	        "which is reported) and mass-normalised mode shapes. Rigid-body modes have frequency 0.\n"
 	        "Also prints the largest communication step suggested for co-simulation (a fraction of\n"
 	        "the period of the highest mode listed) and the stability limit 2/omega_max of explicit\n"
-	        "integrators. Dense eigensolver: practical up to a few thousand degrees of freedom.\n"
+	        "integrators. Small models (or -n 0) are solved densely, all modes; large ones by\n"
+	        "shift-invert Lanczos on the sparse matrices, the lowest N modes only (then the rigid-body\n"
+	        "and unstable counts are among those, and omega_max is an upper bound).\n"
 	        "\n"
 	        "options:\n"
 	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all)\n"
@@ -34,8 +36,11 @@ static void usage(FILE* out)
 	        "                         of every mode [1/sqrt(kg), mass-normalised]\n"
 	        "  --vtk DIR              write DIR/mode_<k>.vtk per listed mode (ParaView: the shape as\n"
 	        "                         the vector field 'shape'; animate with Warp By Vector)\n"
+	        "  --solver NAME          auto (default: dense up to %d degrees of freedom or with -n 0),\n"
+	        "                         dense (GSL, all modes) or sparse (CHOLMOD + Lanczos, lowest N)\n"
 	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
-	        "  -h, --help             this text\n");
+	        "  -h, --help             this text\n",
+	        SM_MODES_DENSE_LIMIT);
 }
 
 // Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
@@ -89,6 +94,7 @@ int sm_cmd_modes(int argc, char** argv)
 	int setting_count = 0;
 	int at_equilibrium = 0;
 	long count = 10;
+	sm_modes_solver solver = SM_MODES_AUTO;
 	double steps_per_period = 10.0;
 	if (settings == NULL)
 		return 1;
@@ -121,6 +127,19 @@ int sm_cmd_modes(int argc, char** argv)
 			csv_path = argv[++i];
 		} else if (strcmp(a, "--vtk") == 0 && has_value) {
 			vtk_dir = argv[++i];
+		} else if (strcmp(a, "--solver") == 0 && has_value) {
+			const char* name = argv[++i];
+			if (strcmp(name, "auto") == 0) {
+				solver = SM_MODES_AUTO;
+			} else if (strcmp(name, "dense") == 0) {
+				solver = SM_MODES_DENSE;
+			} else if (strcmp(name, "sparse") == 0) {
+				solver = SM_MODES_SPARSE;
+			} else {
+				fprintf(stderr, "springmass modes: unknown solver '%s' (auto, dense, sparse)\n", name);
+				free(settings);
+				return 2;
+			}
 		} else if (strcmp(a, "--set") == 0 && has_value) {
 			settings[setting_count++] = argv[++i];
 		} else if (a[0] == '-' && a[1] != '\0') {
@@ -181,6 +200,7 @@ int sm_cmd_modes(int argc, char** argv)
 	sm_modes_def def = sm_default_modes_def();
 	def.configuration = x;
 	def.mode_count = (int32_t)count;
+	def.solver = solver;
 	if (sm_modes_compute(model, &def, &modes, &err) != SM_OK) {
 		fprintf(stderr, "springmass modes: %s: %s\n", model_path, err.message);
 		goto done;
@@ -192,10 +212,17 @@ int sm_cmd_modes(int argc, char** argv)
 		status = 0;
 		goto done;
 	}
-	printf("rigid-body modes  %d\n", (int)modes.zero_count);
+	const bool sparse = modes.solver == SM_MODES_SPARSE;
+	if (sparse)
+		printf("eigensolver       shift-invert Lanczos (CHOLMOD), the lowest %d modes; largest residual %.2e\n",
+		       (int)modes.count, modes.residual);
+	else
+		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes.dof, modes.residual);
+	printf("rigid-body modes  %d%s\n", (int)modes.zero_count, sparse ? " (among the modes listed)" : "");
 	if (modes.unstable_count > 0)
-		printf("unstable modes    %d (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
-		       (int)modes.unstable_count, at_equilibrium ? "" : "; try --at-equilibrium");
+		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
+		       (int)modes.unstable_count, sparse ? " among the modes listed" : "",
+		       at_equilibrium ? "" : "; try --at-equilibrium");
 	printf("damping           %s (largest normalised coupling %.3g among the modes listed)\n",
 	       modes.proportional ? "proportional: the modal damping ratios are exact"
 	                          : "not proportional: the damping ratios are the diagonal approximation",
@@ -213,8 +240,9 @@ int sm_cmd_modes(int argc, char** argv)
 		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes.omega_squared[m],
 		       modes.damping_ratio[m]);
 	}
-	printf("\nhighest frequency        %.9g Hz (omega_max = %.9g rad/s, of all %d modes)\n",
-	       modes.omega_max / (2.0 * 3.14159265358979323846), modes.omega_max, (int)modes.dof);
+	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
+	       modes.omega_max / (2.0 * 3.14159265358979323846), modes.omega_max,
+	       sparse ? "Gershgorin bound over all" : "of all", (int)modes.dof);
 	if (modes.omega_max > 0.0)
 		printf("explicit stability limit 2/omega_max = %.6g s (largest step of explicit Euler-type integrators)\n",
 		       2.0 / modes.omega_max);
