@@ -5,6 +5,13 @@
 // ratios computed afterwards from the damping matrix. Fixed and driven particles are held at
 // their positions; only the free particles' degrees of freedom are unknowns. See
 // docs/analysis.md for the methods and their limits.
+//
+// GSL's error handler. The functions below check their inputs and read GSL's return codes, so a
+// failure inside GSL (out of memory, a factorisation of a reduced matrix that round-off made
+// indefinite) comes back as an sm_status with a message. GSL's default handler, however, aborts
+// the program before the code is returned, and the handler is GSL's process-wide setting, which
+// the library leaves to the program: call gsl_set_error_handler_off() once at start-up (as the
+// `springmass` tool does) to get the status instead of the abort.
 #pragma once
 
 #include "springmass/model.h"
