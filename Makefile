@@ -48,5 +48,10 @@ bench-cloth: build
 fuzz: setup
 	fuzz/run.sh $(FUZZ_SECONDS)
 
+# Installs headers, library, tool, FMU runtime and CMake package under PREFIX (default /usr/local).
+PREFIX ?= /usr/local
+install: build
+	$(CMAKE) --install $(BUILD_DIR) --prefix $(PREFIX)
+
 clean:
 	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)

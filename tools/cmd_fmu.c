@@ -7,7 +7,7 @@
 //   resources/model.json                       the model file, byte for byte (its hash is the GUID)
 //   resources/reference.csv                    a reference result, when one is given
 // The binary and its libraries come from the FMU runtime folder the build assembles
-// (<build>/fmu/runtime, installed as <prefix>/lib/springmass/fmu).
+// (<build>/fmu/runtime, installed as <prefix>/<libdir>/springmass/fmu).
 #define _XOPEN_SOURCE 700
 #include "commands.h"
 
@@ -124,7 +124,7 @@ static bool find_runtime(const char* option, char* dir, size_t size)
 		char* slash = strrchr(exe, '/');
 		if (slash) {
 			*slash = '\0';
-			if (join(dir, size, exe, "../lib/springmass/fmu") && has_runtime(dir))
+			if (join(dir, size, exe, SPRINGMASS_FMU_RUNTIME_FROM_BIN) && has_runtime(dir))
 				return true;
 		}
 	}

@@ -26,13 +26,13 @@ static void usage(FILE* out)
 	        "time: time [s], every port's quantities (force port P: P.x P.y P.z [m] P.vx P.vy P.vz [m/s];\n"
 	        "motion port P: P.fx P.fy P.fz [N], the force the model exerts on what drives it; probe P:\n"
 	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity and energy.dissipated [J].\n"
-	        "Force ports get no force and motion ports hold their initial motion. Defaults come from\n"
-	        "the file's \"simulation\" settings.\n"
+	        "Force ports get no force, and a motion port's particle moves as the file says (mark it\n"
+	        "fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
 	        "  --output-interval DT   time between rows [s]\n"
-	        "  --output FILE          CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
+	        "  -o, --output FILE      CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
 	        "  --positions            also every particle's position (columns NAME.x NAME.y NAME.z)\n"
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk (points, intact springs as\n"
 	        "                         lines) per row and the index DIR/NAME.pvd\n"
@@ -41,7 +41,7 @@ static void usage(FILE* out)
 	        "  --rtol R               relative tolerance [1]\n"
 	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s]\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
-	        "  --quiet                no progress line and no statistics on stderr\n"
+	        "  -q, --quiet            no progress line and no statistics on stderr\n"
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
 	        "solver's statistics at the end. Exit status: 0 success, 1 bad model or solver failure,\n"
@@ -157,9 +157,18 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			return -1;
 		} else if (strcmp(a, "--positions") == 0) {
 			o->positions = true;
-		} else if (strcmp(a, "--quiet") == 0) {
+		} else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
 			o->quiet = true;
-		} else if (a[0] == '-' && a[1] == '-') {
+		} else if (a[0] == '-' && a[1] != '\0') {
+			static const char* const with_value[] = {"--t-end", "--output-interval", "--rtol", "--atol", "--output",
+			                                         "-o", "--vtk", "--solver", "--method", "--set"};
+			bool known = false;
+			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
+				known = known || strcmp(a, with_value[k]) == 0;
+			if (!known) {
+				fprintf(stderr, "springmass run: unknown option '%s'\n\n", a);
+				return 2;
+			}
 			if (!has_value) {
 				fprintf(stderr, "springmass run: %s needs a value\n\n", a);
 				return 2;
@@ -189,11 +198,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->solver = value;
 			} else if (strcmp(a, "--method") == 0) {
 				o->method = value;
-			} else if (strcmp(a, "--set") == 0) {
+			} else {  // --set, the last of with_value
 				o->sets[o->set_count++] = value;
-			} else {
-				fprintf(stderr, "springmass run: unknown option '%s'\n\n", a);
-				return 2;
 			}
 		} else if (o->model == NULL) {
 			o->model = a;
