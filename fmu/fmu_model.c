@@ -421,7 +421,7 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 
 	// Integrator settings.
 	const sm_simulation_def* s = &settings.solver;
-	add_real_parameter(&b, "solver.rtol", "relative tolerance of CVODE [1]", NULL, FMU_SRC_SOLVER_RTOL,
+	add_real_parameter(&b, "solver.rtol", "relative tolerance of CVODE", "1", FMU_SRC_SOLVER_RTOL,
 	                   s->relative_tolerance);
 	add_real_parameter(&b, "solver.atol_position", "absolute tolerance of positions", "m",
 	                   FMU_SRC_SOLVER_ATOL_POSITION, s->absolute_tolerance_position);
@@ -618,7 +618,7 @@ typedef struct unit_definition {
 } unit_definition;
 
 static const unit_definition units[] = {
-    {"m", 0, 1, 0}, {"m/s", 0, 1, -1}, {"N", 1, 1, -2}, {"J", 1, 2, -2}, {"s", 0, 0, 1},
+    {"m", 0, 1, 0}, {"m/s", 0, 1, -1}, {"N", 1, 1, -2}, {"J", 1, 2, -2}, {"s", 0, 0, 1}, {"1", 0, 0, 0},
 };
 
 static bool unit_used(const fmu_table* t, const char* unit)

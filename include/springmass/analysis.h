@@ -70,9 +70,10 @@ typedef struct sm_statics_result {
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 } sm_statics_result;
 
+/// The default options (the values documented in sm_statics_def).
 SM_API sm_statics_def sm_default_statics_def(void);
 
-/// Finds the static equilibrium of the model. On success writes the positions of all particles
+/// Finds the static equilibrium of the model (def NULL means the defaults). On success writes the positions of all particles
 /// to x (3 per particle [m]; constrained particles stay at their start) and, if `reactions` is
 /// not NULL, the reaction force on every particle (3 per particle [N]): for a constrained
 /// particle the force its support exerts on it, minus the force the model exerts there;
@@ -172,9 +173,11 @@ typedef struct sm_modes {
 	double residual;
 } sm_modes;
 
+/// The default options (the values documented in sm_modes_def).
 SM_API sm_modes_def sm_default_modes_def(void);
 
-/// Computes the natural frequencies, damping ratios and mode shapes. On success fills *modes,
+/// Computes the natural frequencies, damping ratios and mode shapes (def NULL means the
+/// defaults). On success fills *modes,
 /// which the caller releases with sm_modes_release(). On error *modes is zeroed and err says
 /// why (SM_ERROR_INVALID_ARGUMENT, SM_ERROR_NOT_FINITE, SM_ERROR_OUT_OF_MEMORY, SM_ERROR_SOLVER,
 /// and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).

@@ -105,6 +105,7 @@ typedef struct sm_energies {
 /// concurrent const use (evaluation) is safe. Separate models are fully independent.
 typedef struct sm_model sm_model;
 
+/// Definitions with the defaults documented in their structs.
 SM_API sm_particle_def sm_default_particle_def(void);
 SM_API sm_spring_def sm_default_spring_def(void);
 SM_API sm_model_def sm_default_model_def(void);
@@ -131,6 +132,7 @@ SM_API sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* d
 /// between the particles. On error the model is unchanged.
 SM_API sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index);
 
+/// Numbers of particles and springs (disabled springs included); 0 for a NULL model.
 SM_API int32_t sm_model_particle_count(const sm_model* model);
 SM_API int32_t sm_model_spring_count(const sm_model* model);
 
@@ -160,6 +162,7 @@ SM_API sm_status sm_model_spring_constants(const sm_model* model, int32_t index,
 SM_API sm_status sm_model_set_spring_enabled(sm_model* model, int32_t index, bool enabled);
 SM_API bool sm_model_spring_enabled(const sm_model* model, int32_t index);
 
+/// Gravity [m/s^2] and mass damping [1/s] as stored.
 SM_API sm_model_def sm_model_get_def(const sm_model* model);
 /// Changes gravity [m/s^2] and mass damping [1/s] (validated like sm_model_create).
 SM_API sm_status sm_model_set_def(sm_model* model, const sm_model_def* def);

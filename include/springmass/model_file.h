@@ -49,6 +49,7 @@ SM_API sm_document* sm_document_load(const char* path, sm_error* err);
 /// Same from text in memory; `source_name` is used in messages in place of a file name.
 SM_API sm_document* sm_document_parse(const char* text, size_t length, const char* source_name, sm_error* err);
 
+/// Frees a document; accepts NULL.
 SM_API void sm_document_destroy(sm_document* doc);
 
 /// Model name ("name"), a C identifier-safe string, and one-line description ("" if none).
@@ -83,6 +84,7 @@ SM_API const char* sm_document_particle_name(const sm_document* doc, int32_t par
 /// Index of a particle by its name (as sm_document_particle_name gives it), or -1.
 SM_API int32_t sm_document_particle_index(const sm_document* doc, const char* name);
 
+/// The file's "simulation" settings, with the defaults for those it leaves out.
 SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
 
 /// Replaces the initial positions [m] and velocities [m/s] of all particles (3 per particle;

@@ -10,7 +10,7 @@
 // (step size, order) over such changes and its error control absorbs the jump. Measured on the
 // 8 x 8 benchmark cloth with a force input changed at every communication step
 // (bench_cloth with RESTART_EVERY, bench/README.md): re-initialising at every change cost 5.9
-// times the steps and 6.4 times the wall time per simulated second with 1 ms steps, 2.3 and 2.2
+// times the steps and 6.2 times the wall time per simulated second with 1 ms steps, 2.3 and 2.1
 // times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
 // with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
 // (restart_on_input_change = true restores a restart at every changed input).
@@ -90,6 +90,7 @@ typedef struct sm_break_event {
 
 typedef struct sm_simulation sm_simulation;
 
+/// The default options (the values documented in sm_simulation_def).
 SM_API sm_simulation_def sm_default_simulation_def(void);
 
 /// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod") and the reverse lookup
@@ -98,7 +99,8 @@ SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
 SM_API sm_linear_solver sm_linear_solver_from_name(const char* name);
 
 /// Creates a simulation of a copy of the model, starting at time 0 from the model's initial
-/// state. Returns NULL with err filled on invalid options or solver set-up failure.
+/// state; def NULL means the defaults. Returns NULL with err filled on invalid options or
+/// solver set-up failure.
 SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err);
 
 /// Destroys the simulation and everything it owns; accepts NULL.
@@ -122,6 +124,7 @@ SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
 /// constrained particles, the force the model exerts on them.
 SM_API void sm_simulation_forces(const sm_simulation* sim, double* f);
 
+/// Kinetic, elastic and gravitational energy at the current state [J].
 SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
 /// Energy dissipated by damping since the start [J] (integrated with the state).
 SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
@@ -134,7 +137,7 @@ SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, 
 /// Sets the external force [N] on a particle, held constant until changed.
 SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3]);
 
-/// Replaces the state at the current time: positions [m] and velocities [m/s] of all particles
+/// Replaces the time [s] and the state: positions [m] and velocities [m/s] of all particles
 /// (constrained entries are ignored for fixed particles). Re-initialises the solver.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
@@ -150,7 +153,10 @@ SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* 
 /// The simulation's own model (springs that broke are disabled in it).
 SM_API const sm_model* sm_simulation_model(const sm_simulation* sim);
 
+/// Solver statistics since creation or the last reset (sm_statistics).
 SM_API sm_statistics sm_simulation_statistics(const sm_simulation* sim);
+/// Springs broken so far, and the index-th of them in the order they broke ({NaN, -1} for an
+/// index out of range).
 SM_API int32_t sm_simulation_break_count(const sm_simulation* sim);
 SM_API sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t index);
 

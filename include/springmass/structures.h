@@ -13,8 +13,9 @@
 extern "C" {
 #endif
 
-/// Largest number of particles, and of springs, one builder call may create. Larger requests
-/// fail with SM_ERROR_INVALID_ARGUMENT before anything is allocated.
+/// Largest number of particles, and of springs, one builder call may create (a mesh: at most a
+/// third of it in triangles), and a builder refuses to grow the model past 4 times it in all.
+/// Larger requests fail with SM_ERROR_INVALID_ARGUMENT before anything is allocated.
 #define SM_STRUCTURE_MAX_ELEMENTS (1 << 24)
 
 /// Constants of one group of springs (structural, shear, bend, ...). A group whose stiffness
@@ -118,6 +119,7 @@ typedef struct sm_mesh_def {
 	sm_spring_material bend;
 } sm_mesh_def;
 
+/// Definitions with the defaults documented in their structs.
 SM_API sm_rope_def sm_default_rope_def(void);
 SM_API sm_sheet_def sm_default_sheet_def(void);
 SM_API sm_block_def sm_default_block_def(void);
