@@ -43,7 +43,7 @@ bench-forces: build
 	bench/bench_forces.sh $(BUILD_DIR)
 
 bench-cloth: build
-	QUICK=$(QUICK) bench/bench_cloth.sh $(BUILD_DIR)
+	QUICK=$(QUICK) LONG=$(LONG) bench/bench_cloth.sh $(BUILD_DIR)
 
 fuzz: setup
 	fuzz/run.sh $(FUZZ_SECONDS)

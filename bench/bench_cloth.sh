@@ -2,7 +2,8 @@
 # Cloth simulation benchmark: springmass's linear solvers on the benchmark cloth, beside the
 # peer (../shared/bench/scipy_cloth.py, SciPy solve_ivp BDF) in the same run.
 #
-#   bench/bench_cloth.sh BUILD_DIR          (QUICK=1: up to n = 64, peer for n = 8 only)
+#   bench/bench_cloth.sh BUILD_DIR          (QUICK=1: up to n = 64, peer for n = 8 only;
+#                                            LONG=1: also n = 256 with auto, about 1.5 hours)
 #
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
@@ -42,7 +43,7 @@ too_slow() {
 	dense) ((n > 8)) ;;
 	klu) ((n > 16)) ;;
 	cholmod) ((n > 32)) ;;
-	pcg | auto) ((n > 128)) ;;
+	pcg | auto) ((n > 128)) && ! [[ ${LONG:-} == 1 && $solver == auto ]] ;;
 	*) false ;;
 	esac
 }
