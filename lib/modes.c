@@ -19,7 +19,9 @@
 // The y are orthonormal, so the phi are mass-normalised: phi_i^T M phi_j = delta_ij.
 //
 // Rigid-body modes have omega^2 = 0 in exact arithmetic and about 1e-15 max|omega^2| after
-// round-off, of either sign: eigenvalues within zero_tolerance * max|omega^2| are set to 0.
+// round-off, of either sign: eigenvalues within zero_tolerance * max|omega^2| are set to 0
+// (default 1e-12: physical modes can lie far below 1e-9 of the largest, e.g. a long rope's
+// pendulum modes, whose ratio to its axial modes falls as N^-3).
 // An eigenvalue below that is a true instability (x0 is not a stable rest shape).
 //
 // Damping: with mass-normalised phi, the modal damping matrix is Phi^T C Phi. When it is
@@ -81,7 +83,7 @@ sm_modes_def sm_default_modes_def(void)
 	memset(&def, 0, sizeof def);
 	def.configuration = NULL;
 	def.mode_count = 0;
-	def.zero_tolerance = 1e-9;
+	def.zero_tolerance = 1e-12;
 	def.proportional_tolerance = 1e-6;
 	def.solver = SM_MODES_AUTO;
 	def.residual_tolerance = 1e-9;

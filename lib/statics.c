@@ -201,9 +201,12 @@ static double residual_norm(const statics_work* w, const double* f)
 }
 
 // Round-off scale of the force balance at each free particle: every spring force is computed as
-// ks (L - l0), whose error is about eps ks max(L, l0), not eps |ks (L - l0)|; so the sum over
-// the springs at a particle of ks max(L, l0), plus the constant force, bounds what round-off
-// can leave in the balance. Returns the largest over the free particles [N].
+// ks (L - l0) from d = x_b - x_a, whose error is about eps ks max(L, l0, |x_a| + |x_b|), not
+// eps |ks (L - l0)|: L and l0 are rounded relative to themselves, and d inherits the rounding
+// of the positions, which are stored relative to the origin (a rope of 1 cm segments hanging
+// 1 m below it: |x| is 100 times L). So the sum over the springs at a particle of
+// ks max(L, l0, |x_a| + |x_b|), plus the constant force, bounds what round-off can leave in
+// the balance. Returns the largest over the free particles [N].
 static double force_scale(const statics_work* w, const double* x)
 {
 	double* s = w->rhs;  // reused as scratch: one value per free particle fits in dof entries
@@ -215,7 +218,10 @@ static double force_scale(const statics_work* w, const double* x)
 		const double* xa = x + 3 * (size_t)w->spring_a[k];
 		const double* xb = x + 3 * (size_t)w->spring_b[k];
 		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
-		const double t = w->stiffness[k] * fmax(sqrt(dx * dx + dy * dy + dz * dz), w->rest_length[k]);
+		const double ra = sqrt(xa[0] * xa[0] + xa[1] * xa[1] + xa[2] * xa[2]);
+		const double rb = sqrt(xb[0] * xb[0] + xb[1] * xb[1] + xb[2] * xb[2]);
+		const double length = sqrt(dx * dx + dy * dy + dz * dz);
+		const double t = w->stiffness[k] * fmax(fmax(length, w->rest_length[k]), ra + rb);
 		const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
 		if (fa >= 0)
 			s[fa] += t;
