@@ -280,6 +280,29 @@ static int test_proportional_damping_ratios(void)
 // (top one held) segment j from the bottom carries j m g / (N + 1), and the total is exactly
 // m g L / (2 E) for every N; the stretch profile converges with error
 // max |u_i - u(s_i)| = m g L / (8 E (N + 1)) at mid-rope (worked out in docs/analysis.md).
+// A rope of `segments` springs hanging straight down from its fixed top at the origin, at rest
+// length (per-strain stiffness E [N], total mass [kg], gravity g [m/s^2] down).
+static sm_model* hanging_rope(double length, double mass, double E, double g, int32_t segments)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = -g;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.end[0] = 0.0;
+	rd.end[2] = -length;
+	rd.segments = segments;
+	rd.mass = mass;
+	rd.structural.stiffness = E;
+	rd.structural.stiffness_scaling = SM_PER_STRAIN;
+	sm_structure st;
+	if (model == NULL || sm_add_rope(model, &rd, &st) != SM_OK ||
+	    sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 static int test_hanging_rope_elongation(void)
 {
 	const double mass = 0.8, length = 2.0, E = 400.0, g = 9.81;
@@ -288,20 +311,8 @@ static int test_hanging_rope_elongation(void)
 	const int32_t sizes[] = {4, 16, 64};
 	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
 		const int32_t n = sizes[t];
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = -g;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = hanging_rope(length, mass, E, g, n);
 		ENSURE(model != NULL);
-		sm_rope_def rd = sm_default_rope_def();
-		rd.end[0] = 0.0;
-		rd.end[2] = -length;
-		rd.segments = n;
-		rd.mass = mass;
-		rd.structural.stiffness = E;
-		rd.structural.stiffness_scaling = SM_PER_STRAIN;
-		sm_structure st;
-		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
-		ENSURE_STATUS(sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED), SM_OK);
 		const int32_t np = sm_model_particle_count(model);
 		double* x = malloc(3 * (size_t)np * sizeof(double));
 		double* reactions = malloc(3 * (size_t)np * sizeof(double));
@@ -849,20 +860,8 @@ static int test_sparse_hanging_chain_bessel(void)
 {
 	const double length = 1.0, mass = 0.5, E = 1e5, g = 9.81;
 	const double zeros[2] = {2.404825557695773, 5.520078110286311};  // j_0,1 and j_0,2
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = -g;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = hanging_rope(length, mass, E, g, 500);
 	ENSURE(model != NULL);
-	sm_rope_def rd = sm_default_rope_def();
-	rd.end[0] = 0.0;
-	rd.end[2] = -length;
-	rd.segments = 500;
-	rd.mass = mass;
-	rd.structural.stiffness = E;
-	rd.structural.stiffness_scaling = SM_PER_STRAIN;
-	sm_structure st;
-	ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
-	ENSURE_STATUS(sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED), SM_OK);
 	double* x = malloc(3 * (size_t)sm_model_particle_count(model) * sizeof(double));
 	ENSURE(x != NULL);
 	sm_statics_result res;
