@@ -662,7 +662,8 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 			goto out_of_memory;
 	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass || !sim->mass_dof)
 		goto out_of_memory;
-	memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
+	if (m->spring_count > 0)  // no array to copy from in a model without springs
+		memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
 	for (int32_t i = 0, kf = 0, kc = 0; i < n; i++) {
 		if (m->motion[i] == SM_PARTICLE_FREE)
 			sim->free_particles[kf++] = i;
@@ -1070,7 +1071,8 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		free(enabled);
 		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "update_model: out of memory");
 	}
-	memcpy(enabled, model->enabled, (size_t)model->spring_count);
+	if (model->spring_count > 0)
+		memcpy(enabled, model->enabled, (size_t)model->spring_count);
 	// Springs that broke stay broken.
 	for (int32_t b = 0; b < sim->break_count; b++)
 		sm_model_set_spring_enabled(copy, sim->breaks[b].spring, false);
