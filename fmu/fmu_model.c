@@ -455,8 +455,8 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_ELASTIC, 0, 0);
 	add(&b, duplicate("energy.gravity"), duplicate("gravitational potential energy (zero at the origin)"), FMU_REAL,
 	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
-	add(&b, duplicate("energy.dissipated"), duplicate("energy dissipated by damping since the start"), FMU_REAL,
-	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
+	add(&b, duplicate("energy.dissipated"), duplicate("energy dissipated since the start (damping, broken springs)"),
+	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
 
 	// Every particle's position and velocity, unless the model file switches them off.
 	if (settings.particle_variables) {

@@ -846,6 +846,11 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		sim->time = (flag == CV_ROOT_RETURN) ? fmin(reached, t_end) : t_end;
 		if (flag == CV_ROOT_RETURN) {
 			CVodeGetRootInfo(sim->cvode, sim->roots_found);
+			// A broken spring takes its elastic energy with it, out of the mechanical system: it
+			// is added to the dissipated energy, so that kinetic + elastic + gravitational +
+			// dissipated energy stays constant across breaks as between them.
+			refresh_outputs(sim);
+			const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
 			for (int32_t r = 0; r < sim->root_count; r++) {
 				if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
 					continue;
@@ -854,6 +859,8 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 					return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
 				}
 			}
+			const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
+			N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
 			sim->need_restart = true;
 		}
 	}

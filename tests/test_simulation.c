@@ -502,6 +502,50 @@ static int test_benchmark_cloth_every_solver(void)
 	return 0;
 }
 
+// A mass on an undamped spring from a fixed point, no gravity, released stretched by 0.05 m and
+// moving outward at 1 m/s: its spring breaks at 10 % strain and it flies on. The spring's
+// elastic energy at the break (ks (0.1 l0)^2 / 2 = 0.5 J) leaves with it and is counted as
+// dissipated, so kinetic + elastic + dissipated stays at its initial value (1 + 0.125 J);
+// tolerance 1e-6 J, ten times the solver's rtol 1e-8 applied to that total.
+static int test_energy_balance_across_a_break(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.mass = 2.0;
+	p.position[0] = 1.05;
+	p.velocity[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def sd = sm_default_spring_def();
+	sd.a = 0;
+	sd.b = 1;
+	sd.stiffness = 100.0;
+	sd.rest_length = 1.0;
+	sd.break_strain = 0.1;
+	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	d.relative_tolerance = 1e-8;
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-10;
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const double total = 0.5 * 2.0 * 1.0 + 0.5 * 100.0 * 0.05 * 0.05;
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1);
+	const sm_energies e = sm_simulation_energies(sim);
+	const double dissipated = sm_simulation_dissipated_energy(sim);
+	ENSURE_NEAR(e.elastic, 0.0, 1e-15);
+	ENSURE_NEAR(dissipated, 0.5 * 100.0 * 0.1 * 0.1, 1e-6);
+	ENSURE_NEAR(e.kinetic + e.elastic + dissipated, total, 1e-6);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A spring from a fixed particle to a driven one pulled at constant speed s breaks when
 // l0 + s t = l0 (1 + strain), at t = l0 strain / s. A free particle hangs beside it so that the
 // solver has work to do.
@@ -757,6 +801,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_benchmark_cloth_every_solver);
 	RUN_TEST(test_large_cloth_reduced_solvers_against_gsl);
 	RUN_TEST(test_break_at_analytic_time);
+	RUN_TEST(test_energy_balance_across_a_break);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);

@@ -126,7 +126,9 @@ SM_API void sm_simulation_forces(const sm_simulation* sim, double* f);
 
 /// Kinetic, elastic and gravitational energy at the current state [J].
 SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
-/// Energy dissipated by damping since the start [J] (integrated with the state).
+/// Energy dissipated since the start [J]: by damping (integrated with the state) and by broken
+/// springs (the elastic energy each held when it broke), so that kinetic + elastic +
+/// gravitational + dissipated energy is constant without external forces or driven particles.
 SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 
 /// Prescribes a driven particle's motion from the current time t0 on: x(t) = position +
