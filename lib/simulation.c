@@ -801,6 +801,51 @@ static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
 	return sm_model_set_spring_enabled(sim->model, spring, false);
 }
 
+// Breaks, at the current time, the intact springs marked in roots_found (> 0). A broken spring
+// takes its elastic energy with it, out of the mechanical system: it is added to the dissipated
+// energy, so that kinetic + elastic + gravitational + dissipated energy stays constant across
+// breaks as between them.
+static sm_status break_springs(sm_simulation* sim)
+{
+	refresh_outputs(sim);
+	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
+	bool broke = false;
+	for (int32_t r = 0; r < sim->root_count; r++) {
+		if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
+			continue;
+		if (record_break(sim, sim->time, sim->root_spring[r]) != SM_OK) {
+			refresh_outputs(sim);
+			return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
+		}
+		broke = true;
+	}
+	if (broke) {
+		const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
+		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
+		sim->need_restart = true;
+	}
+	return SM_OK;
+}
+
+// CVODE's root functions see a strain rise through a spring's limit; a spring already beyond it
+// when an advance begins (placed there by the model's start, a new state, a moved driven
+// particle or a lowered break strain) breaks at once.
+static sm_status break_overstretched_springs(sm_simulation* sim)
+{
+	if (sim->root_count == 0)
+		return SM_OK;
+	refresh_outputs(sim);
+	const sm_model* m = sim->model;
+	for (int32_t r = 0; r < sim->root_count; r++) {
+		const int32_t s = sim->root_spring[r];
+		const double* a = sim->position + 3 * (size_t)m->spring_a[s];
+		const double* b = sim->position + 3 * (size_t)m->spring_b[s];
+		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
+		sim->roots_found[r] = sqrt(d0 * d0 + d1 * d1 + d2 * d2) > sim->root_limit[r] ? 1 : 0;
+	}
+	return break_springs(sim);
+}
+
 sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 {
 	if (sim == NULL)
@@ -810,6 +855,8 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		            "advance: end time %.17g s must be finite and not before the current time %.17g s", t_end,
 		            sim->time);
 	sim->last_error[0] = '\0';
+	if (sim->time < t_end && break_overstretched_springs(sim) != SM_OK)
+		return SM_ERROR_OUT_OF_MEMORY;
 	while (sim->time < t_end) {
 		if (sim->need_restart) {
 			sm_status st = reinit(sim, true);
@@ -846,22 +893,8 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		sim->time = (flag == CV_ROOT_RETURN) ? fmin(reached, t_end) : t_end;
 		if (flag == CV_ROOT_RETURN) {
 			CVodeGetRootInfo(sim->cvode, sim->roots_found);
-			// A broken spring takes its elastic energy with it, out of the mechanical system: it
-			// is added to the dissipated energy, so that kinetic + elastic + gravitational +
-			// dissipated energy stays constant across breaks as between them.
-			refresh_outputs(sim);
-			const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
-			for (int32_t r = 0; r < sim->root_count; r++) {
-				if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
-					continue;
-				if (record_break(sim, sim->time, sim->root_spring[r]) != SM_OK) {
-					refresh_outputs(sim);
-					return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
-				}
-			}
-			const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
-			N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
-			sim->need_restart = true;
+			if (break_springs(sim) != SM_OK)
+				return SM_ERROR_OUT_OF_MEMORY;
 		}
 	}
 	refresh_outputs(sim);

@@ -546,6 +546,51 @@ static int test_energy_balance_across_a_break(void)
 	return 0;
 }
 
+// A spring already beyond its break strain when an advance begins breaks at once, at the current
+// time: at the start (released at 20 % strain, limit 10 %), and after its break strain is lowered
+// below the strain it holds (update_model). Afterwards the particle feels no force.
+static int test_overstretched_spring_breaks_at_once(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[0] = 1.2;
+	p.mass = 1e9;  // so heavy that in 0.25 s the spring moves it by 2e-10 m only
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def sd = sm_default_spring_def();
+	sd.a = 0;
+	sd.b = 1;
+	sd.stiffness = 100.0;
+	sd.rest_length = 1.0;
+	sd.break_strain = 0.1;
+	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).time == 0.0);
+	ENSURE(sm_simulation_positions(sim)[3] == 1.2);  // no force from t = 0 on: it stays put
+	// Whole again, at rest at 5 % strain: it holds; a break strain lowered to 4 % breaks it at the
+	// time of the change.
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	const double stretched[6] = {0.0, 0.0, 0.0, 1.05, 0.0, 0.0}, still[6] = {0};
+	ENSURE_STATUS(sm_simulation_set_state(sim, 0.0, stretched, still), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.25), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 0);
+	sd.break_strain = 0.04;
+	ENSURE_STATUS(sm_model_set_spring(model, 0, &sd), SM_OK);
+	ENSURE_STATUS(sm_simulation_update_model(sim, model), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).time == 0.25);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A spring from a fixed particle to a driven one pulled at constant speed s breaks when
 // l0 + s t = l0 (1 + strain), at t = l0 strain / s. A free particle hangs beside it so that the
 // solver has work to do.
@@ -802,6 +847,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_large_cloth_reduced_solvers_against_gsl);
 	RUN_TEST(test_break_at_analytic_time);
 	RUN_TEST(test_energy_balance_across_a_break);
+	RUN_TEST(test_overstretched_spring_breaks_at_once);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
