@@ -643,8 +643,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 		          startTime, stopTime);
 		return fmi2Error;
 	}
-	if (toleranceDefined && !(tolerance > 0.0 && isfinite(tolerance))) {
-		log_error(inst, "fmi2SetupExperiment: tolerance %g must be > 0", tolerance);
+	if (toleranceDefined && !(tolerance > 0.0 && tolerance < 1.0)) {
+		log_error(inst, "fmi2SetupExperiment: tolerance %g must lie in (0, 1)", tolerance);
 		return fmi2Error;
 	}
 	if (toleranceDefined && !inst->rtol_set)
@@ -840,8 +840,9 @@ static fmi2Status set_real(instance* inst, const fmu_variable* v, double value)
 	case FMU_SRC_SOLVER_RTOL:
 	case FMU_SRC_SOLVER_ATOL_POSITION:
 	case FMU_SRC_SOLVER_ATOL_VELOCITY:
-		if (!(value > 0.0)) {
-			log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0", v->name, value);
+		if (!(value > 0.0) || (v->source == FMU_SRC_SOLVER_RTOL && !(value < 1.0))) {
+			log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name,
+			          value);
 			return fmi2Error;
 		}
 		if (v->source == FMU_SRC_SOLVER_RTOL) {

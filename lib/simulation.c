@@ -439,6 +439,10 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		if (!(isfinite(positive[i].value) && positive[i].value > 0.0))
 			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
 			                    positive[i].name, positive[i].value);
+	if (!(def->relative_tolerance < 1.0))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
+		                    def->relative_tolerance);
 	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_step = %g must be finite and >= 0",
 		                    def->max_step);

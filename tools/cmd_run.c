@@ -366,10 +366,12 @@ int sm_cmd_run(int argc, char** argv)
 	if (!o.quiet) {
 		const sm_statistics s = sm_simulation_statistics(sim);
 		fprintf(stderr,
-		        "springmass run: %s to t = %g s with the %s solver: %lld steps, %lld right-hand sides, %lld "
+		        "springmass run: %s to t = %g s with %s%s: %lld steps, %lld right-hand sides, %lld "
 		        "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
 		        "restarts, %d springs broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
-		        name, t_end, sm_linear_solver_name(sm_simulation_solver(sim)), (long long)s.steps,
+		        name, t_end, def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
+		        def.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(sm_simulation_solver(sim)),
+		        (long long)s.steps,
 		        (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations, (long long)s.linear_iterations,
 		        (long long)s.error_test_failures, (long long)s.convergence_failures, (long long)s.restarts,
 		        (int)sm_simulation_break_count(sim), wall_clock() - start, s.force_seconds, s.jacobian_seconds,

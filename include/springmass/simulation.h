@@ -54,7 +54,7 @@ typedef struct sm_simulation_def {
 	sm_method method;               ///< default SM_METHOD_BDF
 	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
 	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
-	double relative_tolerance;      ///< > 0 [1]; default 1e-6
+	double relative_tolerance;      ///< in (0, 1) [1]; default 1e-6
 	double absolute_tolerance_position;  ///< > 0 [m]; default 1e-8
 	double absolute_tolerance_velocity;  ///< > 0 [m/s], also for the dissipated energy [J]; default 1e-6
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited

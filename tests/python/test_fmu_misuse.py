@@ -92,6 +92,23 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         inst.free()
 
 
+def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
+    # A relative tolerance of 1 allows a 100 % error: refused at set-up and as a parameter, and
+    # the instance goes on with its own.
+    inst = Instance(test_fmu("driven_oscillator"))
+    s, vr = inst.slave, inst.vr
+    try:
+        expect_error(inst, lambda: s.setupExperiment(tolerance=10.0, startTime=0.0), "tolerance 10", "(0, 1)")
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        expect_error(inst, lambda: s.setReal([vr["solver.rtol"]], [1.0]), "solver.rtol = 1", "< 1")
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.1)
+        assert inst.get("solver.rtol") < 1.0
+    finally:
+        inst.free()
+
+
 def test_solver_failure_is_a_discard_with_the_time_reached(test_fmu):
     # Two internal steps cannot cover 1 s of a 5 rad/s oscillation at rtol 1e-10: the step is
     # discarded, the time reached is readable, and only reset or terminate are allowed then.
