@@ -35,8 +35,8 @@ fi
 
 # Combinations measured to take many minutes (bench/README.md): SUNDIALS' dense LU above n = 8,
 # KLU on the full 6n system above n = 16 (100 s at n = 32), the CHOLMOD-preconditioned solver
-# above n = 32, conjugate gradients (auto) above n = 128 (n = 128 takes minutes, n = 256 would
-# take about an hour: its step count and its cost per step both grow).
+# above n = 32, conjugate gradients (auto) above n = 128 (n = 128 takes minutes, n = 256 about
+# an hour, 3457 s once: its step count and its cost per step both grow; LONG=1 runs it).
 too_slow() {
 	local n=$1 solver=$2
 	case $solver in
