@@ -216,6 +216,31 @@ int sm_cmd_statics(int argc, char** argv)
 	printf("potential energy %.9g J\n", res.potential_energy);
 	if (largest_at >= 0)
 		printf("largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
+	// Statics treats every spring as intact; say so when the equilibrium stretches one beyond its
+	// break strain (a simulation would break it).
+	int32_t beyond = 0, worst = -1;
+	double worst_ratio = 1.0;
+	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
+		sm_spring_def sd;
+		if (sm_model_get_spring(model, k, &sd) != SM_OK || !isfinite(sd.break_strain) ||
+		    !sm_model_spring_enabled(model, k) || !(sd.rest_length > 0.0))
+			continue;
+		const double* a = x + 3 * (size_t)sd.a;
+		const double* b = x + 3 * (size_t)sd.b;
+		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
+		const double strain = sqrt(d0 * d0 + d1 * d1 + d2 * d2) / sd.rest_length - 1.0;
+		if (strain > sd.break_strain) {
+			beyond++;
+			if (strain / sd.break_strain > worst_ratio) {
+				worst_ratio = strain / sd.break_strain;
+				worst = k;
+			}
+		}
+	}
+	if (beyond > 0)
+		printf("break strains    %d spring(s) beyond theirs, which a simulation would break (spring %d: %.3g "
+		       "times its break strain)\n",
+		       (int)beyond, (int)worst, worst_ratio);
 	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1], mass * md.gravity[2]);
 	printf("reactions, sum   (%.9g, %.9g, %.9g) N\n", res.reaction_total[0], res.reaction_total[1],
 	       res.reaction_total[2]);
