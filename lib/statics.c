@@ -212,7 +212,7 @@ static double force_scale(const statics_work* w, const double* x)
 	double* s = w->rhs;  // reused as scratch: one value per free particle fits in dof entries
 	for (int32_t i = 0; i < w->nf; i++) {
 		const double* c = w->constant_force + 3 * (size_t)w->free_particle[i];
-		s[i] = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+		s[i] = hypot(hypot(c[0], c[1]), c[2]);
 	}
 	for (int32_t k = 0; k < w->ns; k++) {
 		const double* xa = x + 3 * (size_t)w->spring_a[k];
@@ -322,13 +322,13 @@ static sm_status check_free_bodies(const statics_work* w, sm_error* err)
 		const double* c = w->constant_force + 3 * (size_t)i;
 		for (int k = 0; k < 3; k++)
 			net[3 * (size_t)r + k] += c[k];
-		scale[r] += sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+		scale[r] += hypot(hypot(c[0], c[1]), c[2]);
 	}
 	for (int32_t i = 0; i < n; i++) {
 		if (parent[i] != i || held[i])
 			continue;
 		const double* F = net + 3 * (size_t)i;
-		const double magnitude = sqrt(F[0] * F[0] + F[1] * F[1] + F[2] * F[2]);
+		const double magnitude = hypot(hypot(F[0], F[1]), F[2]);  // no overflow for huge forces
 		// The net force is a sum of members' forces: anything above its round-off is real.
 		if (magnitude > 1e-12 * scale[i] && magnitude > 0.0) {
 			int32_t first = -1;
@@ -336,10 +336,10 @@ static sm_status check_free_bodies(const statics_work* w, sm_error* err)
 				if (find_root(parent, p) == i)
 					first = p;
 			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                  "statics: no static equilibrium: particle %d and the %d particle(s) joined to it by "
-			                  "springs are held by no fixed or driven particle, yet feel a net force (%g, %g, %g) N "
-			                  "(gravity and external forces); fix or drive one of them",
-			                  (int)first, (int)members[i], F[0], F[1], F[2]);
+			                  "statics: no static equilibrium: particle %d and the %d other particle(s) joined to it "
+			                  "by springs of nonzero stiffness are held by no fixed or driven particle, yet feel a "
+			                  "net force (%g, %g, %g) N (gravity and external forces); fix or drive one of them",
+			                  (int)first, (int)members[i] - 1, F[0], F[1], F[2]);
 			goto done;
 		}
 	}
