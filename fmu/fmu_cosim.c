@@ -1471,6 +1471,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		log_error(inst, "fmi2DoStep: communication step size %g at t = %g must be finite and > 0", h, t);
 		return fmi2Error;
 	}
+	// Time is resolved to a few units of round-off of max(1 s, |t|): a shorter step could not
+	// advance it (t + h == t) or would leave CVODE nothing to integrate.
+	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
+	if (h < resolution) {
+		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
+		          resolution);
+		return fmi2Error;
+	}
 	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
 	if (fabs(t - inst->time) > tolerance) {
 		log_error(inst, "fmi2DoStep: communication point %.17g does not match the FMU's time %.17g", t, inst->time);
