@@ -805,6 +805,29 @@ static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
 	return sm_model_set_spring_enabled(sim->model, spring, false);
 }
 
+// What a failure of CVODE means for the model, in its terms.
+static const char* failure_hint(const sm_simulation* sim, int flag)
+{
+	switch (flag) {
+	case CV_TOO_MUCH_WORK:
+		return sim->def.max_steps > 0 ? " (the max_steps internal steps allowed per advance were not enough: raise "
+		                                 "max_steps, or look for a spring much stiffer than the others)"
+		                               : "";
+	case CV_RHSFUNC_FAIL:
+	case CV_FIRST_RHSFUNC_ERR:
+	case CV_REPTD_RHSFUNC_ERR:
+	case CV_UNREC_RHSFUNC_ERR:
+		return " (the state or the forces became non-finite: look for huge or tiny masses, stiffnesses, "
+		       "velocities, positions or inputs)";
+	case CV_ERR_FAILURE:
+	case CV_CONV_FAILURE:
+		return " (the step size fell to round-off: the model moves faster than the tolerances can follow, or "
+		       "its forces jump)";
+	default:
+		return "";
+	}
+}
+
 // Breaks, at the current time, the intact springs marked in roots_found (> 0). A broken spring
 // takes its elastic energy with it, out of the mechanical system: it is added to the dissipated
 // energy, so that kinetic + elastic + gravitational + dissipated energy stays constant across
@@ -888,9 +911,9 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			sim->need_restart = flag != CV_TOO_MUCH_WORK || !usable;
 			refresh_outputs(sim);
 			char* name = CVodeGetReturnFlagName(flag);
-			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s",
-			     name ? name : "an unknown flag", sim->time, t_end, sim->solver_message[0] ? ": " : "",
-			     sim->solver_message);
+			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s%s",
+			     name ? name : "an unknown flag", sim->time, t_end, failure_hint(sim, flag),
+			     sim->solver_message[0] ? ": " : "", sim->solver_message);
 			free(name);
 			return SM_ERROR_SOLVER;
 		}

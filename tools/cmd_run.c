@@ -40,6 +40,7 @@ static void usage(FILE* out)
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
 	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s]\n"
+	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no statistics on stderr\n"
 	        "\n"
@@ -76,6 +77,7 @@ typedef struct run_options {
 	double interval;
 	double rtol;
 	double atol;
+	double max_steps;
 	const char* solver;
 	const char* method;
 	bool positions;
@@ -160,8 +162,9 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 		} else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
 			o->quiet = true;
 		} else if (a[0] == '-' && a[1] != '\0') {
-			static const char* const with_value[] = {"--t-end", "--output-interval", "--rtol", "--atol", "--output",
-			                                         "-o", "--vtk", "--solver", "--method", "--set"};
+			static const char* const with_value[] = {"--t-end", "--output-interval", "--rtol",   "--atol",
+			                                         "--max-steps", "--output",        "-o",       "--vtk",
+			                                         "--solver",    "--method",        "--set"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -187,6 +190,12 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			} else if (strcmp(a, "--rtol") == 0) {
 				if (parse_number(a, value, &o->rtol) || !(o->rtol > 0.0))
 					return 2;
+			} else if (strcmp(a, "--max-steps") == 0) {
+				if (parse_number(a, value, &o->max_steps) || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
+				    o->max_steps != floor(o->max_steps)) {
+					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9\n");
+					return 2;
+				}
 			} else if (strcmp(a, "--atol") == 0) {
 				if (parse_number(a, value, &o->atol) || !(o->atol > 0.0))
 					return 2;
@@ -271,6 +280,8 @@ int sm_cmd_run(int argc, char** argv)
 		def.relative_tolerance = o.rtol;
 	if (o.atol > 0.0)
 		def.absolute_tolerance_position = def.absolute_tolerance_velocity = o.atol;
+	if (o.max_steps > 0.0)
+		def.max_steps = (int32_t)o.max_steps;
 	if (o.solver) {
 		def.solver = sm_linear_solver_from_name(o.solver);
 		if (def.solver == SM_SOLVER_COUNT) {
