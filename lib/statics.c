@@ -671,7 +671,10 @@ static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* 
 		const int32_t remaining = d->max_iterations - res->iterations;
 		if (remaining <= 0)
 			break;
-		const int c = newton(w, remaining < 60 ? remaining : 60, d->residual_tolerance, res, &st, err);
+		// A stage gets 60 iterations, or a quarter of a larger budget the caller allows (a slack
+		// chain of 2000 segments started straight took 273 in all, which 60 per stage did not allow).
+		const int32_t stage = d->max_iterations / 4 > 60 ? d->max_iterations / 4 : 60;
+		const int c = newton(w, remaining < stage ? remaining : stage, d->residual_tolerance, res, &st, err);
 		if (c < 0)
 			goto done;
 		if (c == 1) {
