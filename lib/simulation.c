@@ -894,7 +894,18 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		N_VScale(1.0, sim->y, sim->y_saved);
 		sim->solver_message[0] = '\0';
 		double reached = sim->time;
-		int flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL);
+		int flag;
+		if (sim->def.on_step == NULL) {
+			flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL);
+		} else {
+			// One internal step per call: the same steps as CV_NORMAL, which loops over them
+			// inside CVODE up to the stop time, with the caller told of each.
+			do {
+				flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_ONE_STEP);
+				if (flag >= 0)
+					sim->def.on_step(sim->def.on_step_context, reached);
+			} while (flag == CV_SUCCESS && reached < t_end);
+		}
 		if (flag < 0) {
 			// CVODE leaves the last state it reached in y; keep the state from before the call
 			// if that is not usable.

@@ -149,6 +149,42 @@ static int write_vtk(const char* path, const sm_simulation* sim)
 	return f == NULL ? 1 : cli_close("run", path, f) != 0;
 }
 
+// The progress line on stderr, from one second into the run on: on a terminal it rewrites itself
+// every half second; in a log it is one line every five seconds. Shown after output rows and,
+// through the simulation's on_step hook, after internal steps, so that a long output interval
+// does not look like a hang.
+typedef struct progress {
+	double start;   // wall-clock time of the start [s]; 0 until the run begins
+	double last;    // when the line was last shown [s]
+	double period;  // [s]
+	double t_end;   // [s]
+	bool terminal;
+	bool shown;
+} progress;
+
+static void show_progress(progress* p, double t, bool last_row)
+{
+	const double now = wall_clock();
+	if (p->start == 0.0 || now - p->start <= 1.0 || (now - p->last <= p->period && !last_row))
+		return;
+	fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", p->terminal ? "\r" : "", t, p->t_end,
+	        100.0 * t / p->t_end, now - p->start, p->terminal ? "" : "\n");
+	p->last = now;
+	p->shown = true;
+}
+
+static void progress_on_step(void* context, double t)
+{
+	show_progress(context, t, false);
+}
+
+// Ends a progress line that rewrites itself, before other output.
+static void end_progress(const progress* p)
+{
+	if (p->shown && p->terminal)
+		fprintf(stderr, "\n");
+}
+
 static int parse_arguments(int argc, char** argv, run_options* o)
 {
 	for (int i = 1; i < argc; i++) {
@@ -301,6 +337,12 @@ int sm_cmd_run(int argc, char** argv)
 			goto done;
 		}
 	}
+	const bool terminal = isatty(fileno(stderr));
+	progress prog = {0.0, 0.0, terminal ? 0.5 : 5.0, t_end, terminal, false};
+	if (!o.quiet) {
+		def.on_step = progress_on_step;
+		def.on_step_context = &prog;
+	}
 	sim = sm_simulation_create(model, &def, &err);
 	if (!sim) {
 		fprintf(stderr, "springmass run: %s\n", err.message);
@@ -338,16 +380,11 @@ int sm_cmd_run(int argc, char** argv)
 	write_header(csv, doc, model, o.positions);
 
 	const double start = wall_clock();
-	double last_progress = start;
-	bool progress_shown = false;
-	// On a terminal the progress line rewrites itself; in a log it is one line every few seconds.
-	const bool terminal = isatty(fileno(stderr));
-	const double progress_period = terminal ? 0.5 : 5.0;
+	prog.start = prog.last = start;
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		if (k > 0 && sm_simulation_advance(sim, t) != SM_OK) {
-			if (progress_shown && terminal)
-				fprintf(stderr, "\n");
+			end_progress(&prog);
 			fprintf(stderr, "springmass run: %s\n", sm_simulation_last_error(sim));
 			goto done;
 		}
@@ -358,16 +395,10 @@ int sm_cmd_run(int argc, char** argv)
 				goto done;
 			fprintf(pvd, "<DataSet timestep=\"%.17g\" file=\"%s_%06ld.vtk\"/>\n", t, name, k);
 		}
-		const double now = wall_clock();
-		if (!o.quiet && now - start > 1.0 && (now - last_progress > progress_period || k == rows)) {
-			fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", terminal ? "\r" : "", t,
-			        t_end, 100.0 * t / t_end, now - start, terminal ? "" : "\n");
-			last_progress = now;
-			progress_shown = true;
-		}
+		if (!o.quiet)
+			show_progress(&prog, t, k == rows);
 	}
-	if (progress_shown && terminal)
-		fprintf(stderr, "\n");
+	end_progress(&prog);
 	if (pvd)
 		fprintf(pvd, "</Collection>\n</VTKFile>\n");
 	if (csv != stdout && fflush(csv) != 0) {

@@ -63,6 +63,12 @@ typedef struct sm_simulation_def {
 	/// changes an input (default false: CVODE keeps its history and its error control absorbs
 	/// the jump; see "Inputs between calls" below).
 	bool restart_on_input_change;
+	/// Called after every internal step of sm_simulation_advance with the time it reached [s]
+	/// and `on_step_context` (default NULL: not called), e.g. to show progress during a long
+	/// advance. The steps and results are the same with or without it. It must not call back
+	/// into the simulation.
+	void (*on_step)(void* context, double time);
+	void* on_step_context;
 } sm_simulation_def;
 
 /// Counters since creation or the last reset.
