@@ -466,9 +466,11 @@ static sm_status build_roots(sm_simulation* sim)
 {
 	free(sim->root_spring);
 	free(sim->root_limit);
+	free(sim->root_values);
 	free(sim->roots_found);
 	sim->root_spring = NULL;
 	sim->root_limit = NULL;
+	sim->root_values = NULL;
 	sim->roots_found = NULL;
 	sim->root_count = 0;
 	const sm_model* m = sim->model;
@@ -479,8 +481,9 @@ static sm_status build_roots(sm_simulation* sim)
 	if (count > 0) {
 		sim->root_spring = malloc((size_t)count * sizeof(int32_t));
 		sim->root_limit = malloc((size_t)count * sizeof(double));
+		sim->root_values = malloc((size_t)count * sizeof(double));
 		sim->roots_found = malloc((size_t)count * sizeof(int));
-		if (!sim->root_spring || !sim->root_limit || !sim->roots_found)
+		if (!sim->root_spring || !sim->root_limit || !sim->root_values || !sim->roots_found)
 			return SM_ERROR_OUT_OF_MEMORY;
 		for (int32_t s = 0; s < m->spring_count; s++) {
 			if (!isfinite(m->spring_def[s].break_strain))
@@ -754,6 +757,7 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->work_force);
 	free(sim->root_spring);
 	free(sim->root_limit);
+	free(sim->root_values);
 	free(sim->roots_found);
 	free(sim->breaks);
 	free(sim);
@@ -806,13 +810,12 @@ static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
 }
 
 // What a failure of CVODE means for the model, in its terms.
-static const char* failure_hint(const sm_simulation* sim, int flag)
+static const char* failure_hint(int flag)
 {
 	switch (flag) {
 	case CV_TOO_MUCH_WORK:
-		return sim->def.max_steps > 0 ? " (the max_steps internal steps allowed per advance were not enough: raise "
-		                                 "max_steps, or look for a spring much stiffer than the others)"
-		                               : "";
+		return " (the max_steps internal steps allowed per advance were not enough: raise max_steps, or look "
+		       "for a spring much stiffer than the others)";
 	case CV_RHSFUNC_FAIL:
 	case CV_FIRST_RHSFUNC_ERR:
 	case CV_REPTD_RHSFUNC_ERR:
@@ -861,16 +864,13 @@ static sm_status break_overstretched_springs(sm_simulation* sim)
 {
 	if (sim->root_count == 0)
 		return SM_OK;
-	refresh_outputs(sim);
-	const sm_model* m = sim->model;
+	roots(sim->time, sim->y, sim->root_values, sim);
+	bool any = false;
 	for (int32_t r = 0; r < sim->root_count; r++) {
-		const int32_t s = sim->root_spring[r];
-		const double* a = sim->position + 3 * (size_t)m->spring_a[s];
-		const double* b = sim->position + 3 * (size_t)m->spring_b[s];
-		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
-		sim->roots_found[r] = sqrt(d0 * d0 + d1 * d1 + d2 * d2) > sim->root_limit[r] ? 1 : 0;
+		sim->roots_found[r] = sim->root_values[r] > 0.0;  // broken springs give -1
+		any = any || sim->roots_found[r];
 	}
-	return break_springs(sim);
+	return any ? break_springs(sim) : SM_OK;
 }
 
 sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
@@ -923,7 +923,7 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			refresh_outputs(sim);
 			char* name = CVodeGetReturnFlagName(flag);
 			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s%s",
-			     name ? name : "an unknown flag", sim->time, t_end, failure_hint(sim, flag),
+			     name ? name : "an unknown flag", sim->time, t_end, failure_hint(flag),
 			     sim->solver_message[0] ? ": " : "", sim->solver_message);
 			free(name);
 			return SM_ERROR_SOLVER;

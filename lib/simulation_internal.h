@@ -56,6 +56,7 @@ struct sm_simulation {
 	int32_t root_count;
 	int32_t* root_spring;
 	double* root_limit;        // l0 (1 + break_strain) [m]
+	double* root_values;       // the root functions at the start of an advance [m]
 	int* roots_found;
 
 	sm_break_event* breaks;
