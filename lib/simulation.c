@@ -815,7 +815,7 @@ static const char* failure_hint(int flag)
 	switch (flag) {
 	case CV_TOO_MUCH_WORK:
 		return " (the max_steps internal steps allowed per advance were not enough: raise max_steps, or look "
-		       "for a spring much stiffer than the others)";
+		       "for a spring much stiffer than the others or a huge force)";
 	case CV_RHSFUNC_FAIL:
 	case CV_FIRST_RHSFUNC_ERR:
 	case CV_REPTD_RHSFUNC_ERR:
@@ -899,12 +899,20 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL);
 		} else {
 			// One internal step per call: the same steps as CV_NORMAL, which loops over them
-			// inside CVODE up to the stop time, with the caller told of each.
+			// inside CVODE up to the stop time, with the caller told of each. CVODE counts
+			// max_steps within one call, so the limit is kept here, as CV_NORMAL would.
+			int32_t steps = 0;
 			do {
 				flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_ONE_STEP);
 				if (flag >= 0)
 					sim->def.on_step(sim->def.on_step_context, reached);
-			} while (flag == CV_SUCCESS && reached < t_end);
+				steps++;
+			} while (flag == CV_SUCCESS && reached < t_end && steps < sim->def.max_steps);
+			if (flag == CV_SUCCESS && reached < t_end) {
+				flag = CV_TOO_MUCH_WORK;
+				snprintf(sim->solver_message, sizeof sim->solver_message,
+				         "CVode: At t = %g, mxstep steps taken before reaching tout.", reached);
+			}
 		}
 		if (flag < 0) {
 			// CVODE leaves the last state it reached in y; keep the state from before the call

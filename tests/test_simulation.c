@@ -605,6 +605,16 @@ static void log_step(void* context, double time)
 	log->calls++;
 }
 
+// Two simulations of one model and definition, the second with log_step as its on_step hook.
+static void create_with_and_without_hook(const sm_model* model, sm_simulation_def d, step_log* log,
+                                         sm_simulation** plain, sm_simulation** hooked)
+{
+	*plain = sm_simulation_create(model, &d, NULL);
+	d.on_step = log_step;
+	d.on_step_context = log;
+	*hooked = sm_simulation_create(model, &d, NULL);
+}
+
 // The on_step hook sees every internal step, in order, and changes nothing: the 12 x 12 cloth
 // (reduced solver) with springs that break on the way gives bit-identical states and the same
 // counters with and without it.
@@ -619,12 +629,10 @@ static int test_on_step_sees_every_step_and_changes_nothing(void)
 		sd.break_strain = 2e-3;
 		ENSURE_STATUS(sm_model_set_spring(model, k, &sd), SM_OK);
 	}
-	sm_simulation_def d = sm_default_simulation_def();
-	sm_simulation* plain = sm_simulation_create(model, &d, NULL);
 	step_log log = {0, -1.0, true};
-	d.on_step = log_step;
-	d.on_step_context = &log;
-	sm_simulation* hooked = sm_simulation_create(model, &d, NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation *plain, *hooked;
+	create_with_and_without_hook(model, d, &log, &plain, &hooked);
 	ENSURE(plain != NULL && hooked != NULL);
 	for (int k = 1; k <= 4; k++) {
 		ENSURE_STATUS(sm_simulation_advance(plain, 0.05 * k), SM_OK);
@@ -640,6 +648,34 @@ static int test_on_step_sees_every_step_and_changes_nothing(void)
 	ENSURE(memcmp(sm_simulation_velocities(plain), sm_simulation_velocities(hooked), n3 * sizeof(double)) == 0);
 	printf("  %lld steps, each reported once; %d springs broke\n", (long long)log.calls,
 	       (int)sm_simulation_break_count(hooked));
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(hooked);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// max_steps holds with the hook too: a 12 x 12 cloth allowed 20 steps per advance stops where
+// it would without the hook, with the same message, and both go on alike from there.
+static int test_on_step_keeps_max_steps(void)
+{
+	sm_model* model = benchmark_cloth(12, 0.0);
+	ENSURE(model != NULL);
+	step_log log = {0, -1.0, true};
+	sm_simulation_def d = sm_default_simulation_def();
+	d.max_steps = 20;
+	sm_simulation *plain, *hooked;
+	create_with_and_without_hook(model, d, &log, &plain, &hooked);
+	ENSURE(plain != NULL && hooked != NULL);
+	const size_t n3 = 3 * (size_t)sm_model_particle_count(model);
+	for (int attempt = 0; attempt < 2; attempt++) {
+		ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_ERROR_SOLVER);
+		ENSURE_STATUS(sm_simulation_advance(hooked, 1.0), SM_ERROR_SOLVER);
+		ENSURE(strstr(sm_simulation_last_error(hooked), "max_steps") != NULL);
+		ENSURE(strcmp(sm_simulation_last_error(plain), sm_simulation_last_error(hooked)) == 0);
+		ENSURE(sm_simulation_time(plain) == sm_simulation_time(hooked) && sm_simulation_time(hooked) < 1.0);
+		ENSURE(memcmp(sm_simulation_positions(plain), sm_simulation_positions(hooked), n3 * sizeof(double)) == 0);
+	}
+	ENSURE(log.calls == 40 && sm_simulation_statistics(hooked).steps == 40);
 	sm_simulation_destroy(plain);
 	sm_simulation_destroy(hooked);
 	sm_model_destroy(model);
@@ -904,6 +940,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_energy_balance_across_a_break);
 	RUN_TEST(test_overstretched_spring_breaks_at_once);
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
+	RUN_TEST(test_on_step_keeps_max_steps);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
