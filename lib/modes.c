@@ -65,6 +65,7 @@
 #include "analysis_internal.h"
 #include "model_internal.h"
 
+#include <float.h>
 #include <gsl/gsl_eigen.h>
 #include <math.h>
 #include <stdint.h>
@@ -130,6 +131,21 @@ static void scatter_shape(const modes_problem* p, const double* y, size_t stride
 	}
 }
 
+// Error for an omega^2 beyond the doubles: row r of M^(-1/2) K M^(-1/2) (entries K_rc /
+// sqrt(m_r m_c) [1/s^2]) overflowed, e.g. ks = 1e200 N/m on m = 1e-200 kg (omega^2 = 1e400).
+// Left alone, the infinities came out of the eigensolver as rigid-body modes.
+static sm_status overflow_error(const modes_problem* p, size_t r, sm_error* err)
+{
+	int32_t particle = -1;
+	for (int32_t q = 0; q < p->particle_count && particle < 0; q++)
+		if (p->free_index[q] == (int32_t)(r / 3))
+			particle = q;
+	return sm_error_set(err, SM_ERROR_NOT_FINITE,
+	                    "modes: omega^2 overflows at particle %d (mass %g kg): its stiffness over its mass "
+	                    "exceeds %g 1/s^2; the stiffnesses are out of range for the masses",
+	                    (int)particle, p->dof_mass[r], DBL_MAX);
+}
+
 // Sets eigenvalues within zero_level of 0 to exactly 0 and counts the zero and unstable ones.
 static void classify(double* omega_squared, size_t count, double zero_level, sm_modes* modes)
 {
@@ -180,6 +196,16 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 			const double a = 0.5 * (K[i * dof + j] + K[j * dof + i]) * scale[i] * scale[j];
 			K[i * dof + j] = K[j * dof + i] = a;
 		}
+	// Every eigenvalue is bounded by a row sum of |A| (Gershgorin): finite sums, finite omega^2.
+	for (size_t i = 0; i < dof; i++) {
+		double row = 0.0;
+		for (size_t j = 0; j < dof; j++)
+			row += fabs(K[i * dof + j]);
+		if (!isfinite(row)) {
+			st = overflow_error(p, i, err);
+			goto done;
+		}
+	}
 	ws = gsl_eigen_symmv_alloc(dof);
 	if (ws == NULL) {
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the eigensolver");
@@ -536,6 +562,8 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 		}
 		if (w->diagonal[r] < 0)
 			return sm_error_set(err, SM_ERROR_SOLVER, "modes: the sparse pattern lacks a diagonal entry");
+		if (!isfinite(scaled))
+			return overflow_error(p, r, err);
 		*gershgorin = fmax(*gershgorin, scaled);
 		p->stiffness_norm = fmax(p->stiffness_norm, row);
 	}

@@ -1019,6 +1019,40 @@ static int test_statics_matches_a_long_damped_simulation(void)
 	return 0;
 }
 
+// omega^2 beyond the doubles: a chain of 15 particles of 1e-200 kg on zero-length springs of
+// 1e200 N/m has omega^2 of order k / m = 1e400 1/s^2. Both eigensolvers refuse it, naming a
+// particle, instead of reporting the overflowed modes as rigid-body ones (omega^2 = 0, as
+// before); the same chain at 1e-50 kg and 1e50 N/m (omega^2 about 1e100) is solved.
+static int test_modes_overflow_is_refused(void)
+{
+	const int32_t n = 15;  // 45 degrees of freedom: room for one sparse mode
+	for (int big = 0; big < 2; big++) {
+		const double scale = big ? 1e200 : 1e50;
+		sm_model* model = chain_model(n, 1.0 / scale, scale, 0.1, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+		ENSURE(model != NULL);
+		for (int sparse = 0; sparse < 2; sparse++) {
+			sm_modes_def def = sm_default_modes_def();
+			def.solver = sparse ? SM_MODES_SPARSE : SM_MODES_DENSE;
+			def.mode_count = 1;
+			sm_modes modes;
+			sm_error err;
+			const sm_status st = sm_modes_compute(model, &def, &modes, &err);
+			if (big) {
+				ENSURE_STATUS(st, SM_ERROR_NOT_FINITE);
+				ENSURE(strstr(err.message, "overflows at particle") != NULL);
+				ENSURE(modes.count == 0 && modes.shapes == NULL);
+			} else {
+				ENSURE_STATUS(st, SM_OK);
+				ENSURE(modes.count == 1 && modes.zero_count == 0);
+				ENSURE_REL(sqrt(modes.omega_squared[0]), chain_omega(n, 1.0 / scale, scale, 1), 1e-8, 0.0);
+			}
+			sm_modes_release(&modes);
+		}
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1040,5 +1074,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sparse_hanging_chain_bessel);
 	RUN_TEST(test_sparse_unstable_configuration);
 	RUN_TEST(test_sparse_free_block_zero_modes);
+	RUN_TEST(test_modes_overflow_is_refused);
 	return TEST_SUMMARY();
 }
