@@ -1328,10 +1328,30 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	}
 	strcpy(doc->source, source_name);
 	doc->max_elements = max_elements;
+	// A UTF-8 byte-order mark may open the text (RFC 8259, section 8.1, lets a parser ignore
+	// it). Editors do not show it, so skipping it keeps line 1's columns as they see them.
+	if (length >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) {
+		text += 3;
+		length -= 3;
+	}
+	size_t blank = 0;
+	while (blank < length && strchr(" \t\r\n", text[blank]) != NULL && text[blank] != '\0')
+		blank++;
+	if (blank == length) {
+		sm_error_set(err, SM_ERROR_SYNTAX, "%s: the model file is empty (a model file is one JSON object)",
+		             source_name);
+		sm_document_destroy(doc);
+		return NULL;
+	}
 	json_error_t error;
 	doc->root = json_loadb(text, length, JSON_REJECT_DUPLICATES, &error);
 	if (doc->root == NULL) {
-		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, error.line, error.column, error.text);
+		const enum json_error_code code = json_error_code(&error);
+		if (code == json_error_null_character || code == json_error_null_byte_in_key)
+			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: strings in a model file may not contain \\u0000",
+			             source_name, error.line, error.column);
+		else
+			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, error.line, error.column, error.text);
 		sm_document_destroy(doc);
 		return NULL;
 	}
@@ -1356,6 +1376,14 @@ sm_document* sm_document_load(const char* path, sm_error* err)
 	FILE* f = fopen(path, "rb");
 	if (f == NULL) {
 		sm_error_set(err, SM_ERROR_FILE, "%s: cannot open: %s", path, strerror(errno));
+		return NULL;
+	}
+	// A directory opens but cannot be read: its first read says why (EISDIR).
+	errno = 0;
+	if (fgetc(f) == EOF && ferror(f)) {
+		const int error = errno;
+		fclose(f);
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(error));
 		return NULL;
 	}
 	char* text = NULL;

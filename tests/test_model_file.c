@@ -555,6 +555,15 @@ static int test_broken_files(void)
 	     SM_ERROR_NOT_FINITE, "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
 	     "test.json:1:56: real number overflow near '1e400'"},
+	    {"\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
+	     "test.json:1:56: real number overflow near '1e400'"},
+	    {"{\"springmass\": 1, \"name\": \"x\\u0000y\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:36: strings in a model file may not contain \\u0000"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u0000\": 1}}", SM_ERROR_SYNTAX,
+	     "test.json:1:55: strings in a model file may not contain \\u0000"},
+	    {"", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
+	    {" \r\n\t\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
+	    {"\xef\xbb\xbf\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaN}}", SM_ERROR_SYNTAX,
 	     "test.json:1:54: invalid token near 'NaN'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 99999999999999999999}}", SM_ERROR_SYNTAX,
@@ -598,6 +607,30 @@ static int test_broken_files(void)
 		}
 	}
 	return failures > 0;
+}
+
+// A UTF-8 byte-order mark before the document is ignored (RFC 8259, section 8.1), and line and
+// column numbers stay those an editor shows; one anywhere else is an error. A directory given as
+// the model file says so.
+static int test_byte_order_mark_and_directories(void)
+{
+	sm_error err = {SM_OK, ""};
+	const char text[] =
+	    "\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}]}";
+	sm_document* doc = parse(text, &err);
+	if (doc == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(doc != NULL && strcmp(sm_document_name(doc), "x") == 0);
+	sm_document_destroy(doc);
+	const char late[] = "{\"springmass\": 1,\n\xef\xbb\xbf\"name\": \"x\"}";
+	ENSURE(parse(late, &err) == NULL && err.status == SM_ERROR_SYNTAX);
+	ENSURE(strncmp(err.message, "test.json:2:1: ", 15) == 0);
+
+	ENSURE(sm_document_load(SPRINGMASS_MODELS_DIR, &err) == NULL);
+	char expected[600];
+	snprintf(expected, sizeof expected, "%s: cannot read: Is a directory", SPRINGMASS_MODELS_DIR);
+	ENSURE(err.status == SM_ERROR_FILE && strcmp(err.message, expected) == 0);
+	return 0;
 }
 
 // Hostile input fails cleanly: deep nesting, a file that is not there, binary junk, a file cut
@@ -655,5 +688,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_references);
 	RUN_TEST(test_broken_files);
 	RUN_TEST(test_hostile_input);
+	RUN_TEST(test_byte_order_mark_and_directories);
 	return TEST_SUMMARY();
 }
