@@ -199,6 +199,32 @@ static void fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* 
 	out->shape[2] = n2;
 }
 
+// Two grid neighbours at the same position: a grid spacing below the rounding of the
+// coordinates (a 1e-10 m spacing 1e10 m from the origin) collapses the grid, and its springs
+// would have no length. The grid has shape[0] x shape[1] x shape[2] points from particle p0 on,
+// numbered as in sm_structure_particle. Fails naming the first such pair.
+static sm_status check_grid_distinct(sm_model* model, const char* what, int32_t p0, const int64_t shape[3])
+{
+	const int64_t stride[3] = {1, shape[0], shape[0] * shape[1]};
+	for (int64_t k = 0; k < shape[2]; k++)
+		for (int64_t i = 0; i < shape[1]; i++)
+			for (int64_t j = 0; j < shape[0]; j++) {
+				const int64_t at[3] = {j, i, k}, p = p0 + j + i * stride[1] + k * stride[2];
+				for (int axis = 0; axis < 3; axis++) {
+					if (at[axis] + 1 >= shape[axis])
+						continue;
+					const double* x = model->position + 3 * p;
+					const double* y = model->position + 3 * (p + stride[axis]);
+					if (x[0] == y[0] && x[1] == y[1] && x[2] == y[2])
+						return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+						                     "%s: particles %lld and %lld coincide at (%g, %g, %g) m: the grid "
+						                     "spacing is below the resolution of the coordinates there",
+						                     what, (long long)p, (long long)(p + stride[axis]), x[0], x[1], x[2]);
+				}
+			}
+	return SM_OK;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Rope.
 // ---------------------------------------------------------------------------------------------
@@ -220,13 +246,25 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: segments = %d must be >= 1",
 		                     (int)def->segments);
 	const double dx = def->end[0] - def->start[0], dy = def->end[1] - def->start[1], dz = def->end[2] - def->start[2];
+	if (!isfinite(dx) || !isfinite(dy) || !isfinite(dz))
+		return sm_model_fail(model, SM_ERROR_NOT_FINITE,
+		                     "rope: end - start = (%g, %g, %g) m is not finite (start and end too far apart)", dx,
+		                     dy, dz);
 	const double length = sqrt(dx * dx + dy * dy + dz * dz);
 	double total = def->mass;
 	if (isnan(def->mass_per_length) || def->mass_per_length < 0.0 || isinf(def->mass_per_length))
 		return sm_model_fail(model, SM_ERROR_NEGATIVE, "rope: mass per length = %g must be finite and >= 0",
 		                     def->mass_per_length);
-	if (def->mass_per_length > 0.0)
+	if (def->mass_per_length > 0.0) {
 		total = def->mass_per_length * length;
+		// A rope whose start is its end is legitimate (with absolute stiffness its springs pull
+		// like zero-length springs), but it has no length to spread a mass per length over.
+		if (!(total > 0.0) || !isfinite(total))
+			return sm_model_fail(model, isfinite(total) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
+			                     "rope: mass per length %g kg/m over the length %g m from start to end gives a "
+			                     "mass of %g kg, which must be finite and > 0 (give the mass instead)",
+			                     def->mass_per_length, length, total);
+	}
 	if ((st = check_mass(model, what, total)) != SM_OK)
 		return st;
 
@@ -282,6 +320,32 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	if (def->nu < 2 || def->nv < 2)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "sheet: nu = %d and nv = %d must both be >= 2",
 		                     (int)def->nu, (int)def->nv);
+	// The edges must span an area: |u x v| > 1e-12 |u| |v|, the sine of the angle between them
+	// above 1e-12. Each edge is first divided by its largest component, so that neither the
+	// cross product nor the lengths overflow or underflow (edges of 1e200 m or 1e-300 m).
+	double u[3], v[3], u_max = 0.0, v_max = 0.0;
+	for (int c = 0; c < 3; c++) {
+		u_max = fmax(u_max, fabs(def->edge_u[c]));
+		v_max = fmax(v_max, fabs(def->edge_v[c]));
+	}
+	if (u_max == 0.0 || v_max == 0.0)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "sheet: %s = (0, 0, 0) m is zero: the sheet spans no area and its particles would "
+		                     "coincide",
+		                     u_max == 0.0 ? "edge_u" : "edge_v");
+	for (int c = 0; c < 3; c++) {
+		u[c] = def->edge_u[c] / u_max;
+		v[c] = def->edge_v[c] / v_max;
+	}
+	const double normal[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+	const double area = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+	if (!(area > 1e-12 * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "sheet: edge_u = (%g, %g, %g) m and edge_v = (%g, %g, %g) m are parallel "
+		                     "(|edge_u x edge_v| <= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its "
+		                     "particles would coincide",
+		                     def->edge_u[0], def->edge_u[1], def->edge_u[2], def->edge_v[0], def->edge_v[1],
+		                     def->edge_v[2]);
 
 	const int64_t nu = def->nu, nv = def->nv, n = nu * nv;
 	const bool has[3] = {structure_material_present(&def->structural), structure_material_present(&def->shear),
@@ -302,6 +366,9 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 			st = structure_add_particle(model, what, m, x);
 		}
 	}
+	const int64_t sheet_shape[3] = {nu, nv, 1};
+	if (st == SM_OK)
+		st = check_grid_distinct(model, what, p0, sheet_shape);
 	// Neighbour offsets (di, dj) and their group, in the benchmark cloth's order.
 	static const int offsets[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 1, 1}, {1, -1, 1}, {0, 2, 2}, {2, 0, 2}};
 	const sm_spring_material* groups[3] = {&def->structural, &def->shear, &def->bend};
@@ -377,6 +444,9 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
 				st = structure_add_particle(model, what, m, x);
 			}
+	const int64_t block_shape[3] = {nu, nv, nw};
+	if (st == SM_OK)
+		st = check_grid_distinct(model, what, p0, block_shape);
 	// Neighbour offsets (di, dj, dk) and their group, in creation order.
 	static const int offsets[13][4] = {
 	    {0, 1, 0, 0},  {1, 0, 0, 0},  {0, 0, 1, 0},                                              // edges

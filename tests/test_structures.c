@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static const double PI = 3.14159265358979323846;
 
@@ -333,6 +334,91 @@ static int test_mesh_errors(void)
 	return 0;
 }
 
+// Degenerate geometry. A sheet whose edges are parallel or zero spans no area: refused, with or
+// without springs, whatever their constants. A sheet or block whose grid spacing is below the
+// rounding of its coordinates collapses: refused. A rope whose start is its end is legitimate
+// (with absolute stiffness its springs pull like zero-length springs), but not with a mass per
+// length; one whose end - start overflows is refused by name.
+static int test_degenerate_geometry(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	const sm_spring_material none = sm_default_spring_material();
+	sm_spring_material absolute = none;
+	absolute.stiffness = 10.0;
+	absolute.stiffness_scaling = absolute.damping_scaling = SM_ABSOLUTE;
+
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 3;
+	sheet.edge_v[0] = 2.0;
+	sheet.edge_v[1] = 0.0;
+	const char parallel[] = "sheet: edge_u = (1, 0, 0) m and edge_v = (2, 0, 0) m are parallel (|edge_u x edge_v| "
+	                        "<= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide";
+	for (int constants = 0; constants < 3; constants++) {
+		const sm_spring_material group = constants == 0 ? none : constants == 1 ? absolute : sheet.shear;
+		sheet.structural = sheet.bend = group;
+		sheet.shear = constants == 2 ? sm_default_sheet_def().shear : group;
+		ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strcmp(sm_model_last_error(m), parallel) == 0);
+	}
+	sheet.edge_v[0] = 1.0;
+	sheet.edge_v[1] = 1e-13;  // sin(angle) = 7e-14
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	sheet.edge_v[0] = 0.0;
+	sheet.edge_v[1] = 0.0;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: edge_v = (0, 0, 0) m is zero: the sheet spans no area and its "
+	                                      "particles would coincide") == 0);
+	sheet.origin[0] = 1e10;
+	sheet.edge_u[0] = 1e-10;
+	sheet.edge_v[1] = 1.0;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is "
+	                                      "below the resolution of the coordinates there") == 0);
+	sm_block_def block = sm_default_block_def();
+	block.origin[2] = -1e12;
+	block.size[2] = 1e-6;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(m), "block: particles 1 and 17 coincide at") != NULL);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	// Nearly parallel but above the limit, and edges of very different sizes, are sheets.
+	sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 2;
+	sheet.edge_v[0] = 1.0;
+	sheet.edge_v[1] = 1e-11;  // sin(angle) = 7e-12
+	sheet.structural = sheet.shear = sheet.bend = none;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_OK);
+	sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 2;
+	sheet.edge_u[0] = 1e200;
+	sheet.edge_v[1] = 1e-200;
+	sheet.structural = sheet.shear = sheet.bend = none;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 9);
+
+	sm_rope_def rope = sm_default_rope_def();
+	rope.end[0] = 0.0;
+	rope.segments = 3;
+	rope.structural = absolute;
+	sm_structure r;
+	ENSURE_STATUS(sm_add_rope(m, &rope, &r), SM_OK);
+	ENSURE(r.particle_count == 4 && r.spring_count == 3 && distance(m, r.first_particle, r.first_particle + 3) == 0.0);
+	rope.mass_per_length = 2.0;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	ENSURE(strcmp(sm_model_last_error(m), "rope: mass per length 2 kg/m over the length 0 m from start to end gives a "
+	                                      "mass of 0 kg, which must be finite and > 0 (give the mass instead)") == 0);
+	rope.mass_per_length = 0.0;
+	rope.start[0] = -1e308;
+	rope.end[0] = 1e308;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "rope: end - start = (inf, 0, 0) m is not finite (start and end too far apart)") == 0);
+	ENSURE(sm_model_particle_count(m) == 13 && sm_model_spring_count(m) == 3);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // A builder that fails half-way (particles added, then a spring rejected) leaves nothing.
 static int test_failed_builder_leaves_model_unchanged(void)
 {
@@ -409,6 +495,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mesh_disc);
 	RUN_TEST(test_mesh_errors);
 	RUN_TEST(test_failed_builder_leaves_model_unchanged);
+	RUN_TEST(test_degenerate_geometry);
 	RUN_TEST(test_selection);
 	return TEST_SUMMARY();
 }
