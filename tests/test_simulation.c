@@ -864,6 +864,38 @@ static int test_failures_are_reported_and_recoverable(void)
 	return 0;
 }
 
+// An interval below the time resolution 4 eps max(1 s, |t|) is one explicit Euler step; before,
+// CVODE's first step after a (re)start failed on it as a solver error (at t = 0 and 1e-200 s
+// with "tstop behind current t", at t = 1 s and 4e-16 s with CV_TOO_CLOSE). The bob's y starts
+// at 0 with velocity 0.5 m/s, so after 1e-200 s it is 5e-201 m; the run then goes on as one
+// without the short steps.
+static int test_advance_below_time_resolution(void)
+{
+	sm_model* model = two_mass_chain();
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	sm_simulation* reference = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL && reference != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1e-200), SM_OK);
+	ENSURE(sm_simulation_time(sim) == 1e-200);
+	ENSURE_REL(sm_simulation_positions(sim)[4], 0.5e-200, 1e-12, 0.0);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(reference, 1.0), SM_OK);
+	double x[9], v[9];
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	memcpy(v, sm_simulation_velocities(sim), sizeof v);
+	ENSURE_STATUS(sm_simulation_set_state(sim, 1.0, x, v), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0 + 4e-16), SM_OK);
+	ENSURE(sm_simulation_time(sim) == 1.0 + 4e-16);
+	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(reference, 2.0), SM_OK);
+	ENSURE(max_difference(sm_simulation_positions(sim), sm_simulation_positions(reference), 9) <= 1e-5);
+	sm_simulation_destroy(sim);
+	sm_simulation_destroy(reference);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // set_state and continue equals an uninterrupted run (same state, CVODE restarted); statistics
 // count the restart.
 static int test_set_state_continues(void)
@@ -944,6 +976,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
+	RUN_TEST(test_advance_below_time_resolution);
 	RUN_TEST(test_set_state_continues);
 	RUN_TEST(test_update_model);
 	RUN_TEST(test_adams_method);

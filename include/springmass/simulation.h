@@ -112,7 +112,11 @@ SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simul
 /// Destroys the simulation and everything it owns; accepts NULL.
 SM_API void sm_simulation_destroy(sm_simulation* sim);
 
-/// Integrates to exactly t_end [s] (never past it), handling spring breaks on the way.
+/// Integrates to exactly t_end [s] (never past it), handling spring breaks on the way; t_end
+/// equal to the current time t does nothing, and an interval below the time resolution
+/// 4 eps max(1 s, |t|) (about 9e-16 s at t = 1 s), too short for CVODE, is one explicit Euler
+/// step (exact to round-off). SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that
+/// is not finite or lies before t.
 /// On failure returns SM_ERROR_SOLVER with the message in sm_simulation_last_error(); the
 /// state is then the last one the solver reached (sm_simulation_time() tells when) and the
 /// simulation remains usable (advance again, set a state, or reset).
