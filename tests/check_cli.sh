@@ -50,5 +50,21 @@ out=$("$cli" run "$tmp/falling.json" --t-end 0.1 --output-interval 0.1 -q -o - 2
 awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7) }' <<< "$out" ||
   fail "a falling particle without springs: $out"
 
+# `springmass fmu` only ever writes its output: a directory named by mistake stays (it was
+# removed when empty, and the archive went to DIR.zip), and a name without an extension is the
+# file written (zip alone would add ".zip"). A stand-in runtime keeps the archives small.
+mkdir -p "$tmp/runtime/binaries/linux64"
+echo "stand-in" > "$tmp/runtime/binaries/linux64/springmass_fmu.so"
+if "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/oscillator" > /dev/null 2>&1; then
+  [ -f "$tmp/oscillator" ] && [ ! -e "$tmp/oscillator.zip" ] ||
+    fail "fmu -o NAME without an extension did not write NAME"
+  mkdir "$tmp/folder"
+  out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/folder" 2>&1)
+  status=$?
+  [ $status -eq 1 ] && [ -d "$tmp/folder" ] && [ ! -e "$tmp/folder.zip" ] &&
+    [ "$out" = "springmass fmu: cannot write $tmp/folder: Is a directory" ] ||
+    fail "fmu -o DIR exited with $status and printed '$out'"
+fi
+
 [ $failures -eq 0 ] && echo "check_cli: all passed"
 exit $((failures > 0))

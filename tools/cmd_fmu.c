@@ -289,10 +289,27 @@ static int package(const options* opt)
 	if (!copied)
 		goto write_failed;
 
-	remove(output);
-	char* zip_argv[] = {"zip", "-q", "-r", "-X", output, "modelDescription.xml", "binaries", "resources", NULL};
-	if (!run_in(staging, zip_argv)) {
-		fprintf(stderr, "springmass fmu: zip failed to write %s (is zip installed?)\n", output);
+	// zip writes into the staging folder, under a name with an extension (zip adds ".zip" to one
+	// without), and the archive is then copied to the output: the output is only ever opened for
+	// writing, never removed first, so that a directory or a device named by mistake is reported
+	// and left as it was.
+	char* zip_argv[] = {"zip", "-q", "-r", "-X", "model.fmu", "modelDescription.xml", "binaries", "resources", NULL};
+	if (!run_in(staging, zip_argv) || !join(path, sizeof path, staging, "model.fmu")) {
+		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
+		goto done;
+	}
+	size_t archive_length = 0;
+	char* archive = fmu_read_file(path, &archive_length);
+	if (!archive) {
+		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", strerror(errno));
+		goto done;
+	}
+	errno = 0;
+	const bool written = write_all(output, archive, archive_length);
+	free(archive);
+	if (!written) {
+		fprintf(stderr, "springmass fmu: cannot write %s: %s\n", opt->output,
+		        errno != 0 ? strerror(errno) : "write error");
 		goto done;
 	}
 	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output, table.model_identifier,
