@@ -287,47 +287,52 @@ static void mark_inputs_dirty(instance* inst)
 }
 
 // Creates the simulation from a model at time start_time + sim_time with the given state (or the
-// model's initial state when x is NULL).
-static fmi2Status create_simulation(instance* inst, sm_model* model, double sim_time, const double* x,
-                                    const double* v)
+// model's initial state when x is NULL), the solver settings and the port inputs given, and
+// makes it the instance's only when all of that succeeded: a failure changes nothing.
+static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
+                                    const port_values* held, double sim_time, const double* x, const double* v)
 {
 	sm_error err = {SM_OK, ""};
-	sm_simulation* sim = sm_simulation_create(model, &inst->solver, &err);
+	sm_simulation* sim = sm_simulation_create(model, solver, &err);
 	if (!sim) {
 		log_error(inst, "cannot create the simulation: %s", err.message);
 		return fmi2Error;
 	}
-	if (x) {
-		sm_status st = sm_simulation_set_state(sim, sim_time, x, v);
+	if (x && sm_simulation_set_state(sim, sim_time, x, v) != SM_OK) {
+		log_error(inst, "cannot restore the state: %s", sm_simulation_last_error(sim));
+		sm_simulation_destroy(sim);
+		return fmi2Error;
+	}
+	for (int32_t p = 0; p < inst->port_count; ++p) {
+		// A restored motion port continues from where its particle is, with the held velocity:
+		// the prescribed motion of a port whose inputs were set some steps before the state was
+		// saved has moved on since (the held position is still what the input reads).
+		sm_status st = SM_OK;
+		int32_t particle = inst->ports[p].particle;
+		if (inst->ports[p].kind == SM_PORT_MOTION)
+			st = sm_simulation_set_driven(sim, particle, x ? x + 3 * (size_t)particle : held[p].position,
+			                              held[p].velocity);
+		else if (inst->ports[p].kind == SM_PORT_FORCE)
+			st = sm_simulation_set_external_force(sim, particle, held[p].force);
 		if (st != SM_OK) {
-			log_error(inst, "cannot restore the state: %s", sm_simulation_last_error(sim));
+			log_error(inst, "port %s: cannot apply its inputs: %s", inst->ports[p].name, sm_simulation_last_error(sim));
 			sm_simulation_destroy(sim);
 			return fmi2Error;
 		}
 	}
 	sm_simulation_destroy(inst->sim);
 	inst->sim = sim;
+	if (solver != &inst->solver)
+		inst->solver = *solver;
+	if (held != inst->held)
+		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		inst->port_dirty[p] = false;
+	inst->forces_valid = false;
 	inst->sim_dirty = false;
 	inst->breaks_logged = 0;
 	inst->dissipated_offset = 0.0;
-	mark_inputs_dirty(inst);
-	if (x) {
-		// A restored motion port continues from where its particle is, with the held velocity:
-		// the prescribed motion of a port whose inputs were set some steps before the state was
-		// saved has moved on since (the held position is still what the input reads).
-		for (int32_t p = 0; p < inst->port_count; ++p) {
-			if (inst->ports[p].kind != SM_PORT_MOTION)
-				continue;
-			const double* position = x + 3 * (size_t)inst->ports[p].particle;
-			if (sm_simulation_set_driven(sim, inst->ports[p].particle, position, inst->held[p].velocity) != SM_OK) {
-				log_error(inst, "port %s: cannot restore its motion: %s", inst->ports[p].name,
-				          sm_simulation_last_error(sim));
-				return fmi2Error;
-			}
-			inst->port_dirty[p] = false;
-		}
-	}
-	return apply_inputs(inst);
+	return fmi2OK;
 }
 
 // Makes sure a simulation with the current settings exists (initialisation mode and later).
@@ -338,7 +343,7 @@ static fmi2Status ensure_simulation(instance* inst)
 	sm_model* model = NULL;
 	if (build_model(inst, &model) != SM_OK)
 		return fmi2Error;
-	fmi2Status status = create_simulation(inst, model, 0.0, NULL, NULL);
+	fmi2Status status = create_simulation(inst, model, &inst->solver, inst->held, 0.0, NULL, NULL);
 	sm_model_destroy(model);
 	if (status == fmi2OK)
 		inst->time = inst->start_time;
@@ -988,12 +993,15 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // (bit for bit, in this or another process).
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST1"
+#define STATE_MAGIC "SMFMUST2"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
-// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports].
+// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports]. The checksum
+// is a 64-bit FNV-1a hash of all other bytes: a serialised state that was truncated, extended or
+// changed in transit is refused before anything of it is used.
 enum {
 	I_SIZE,
+	I_CHECKSUM,
 	I_STATE,
 	I_PARTICLES,
 	I_SPRINGS,
@@ -1021,6 +1029,7 @@ enum {
 	D_COUNT
 };
 #define HEADER_BYTES (8 + 40 + 8 * I_COUNT + 8 * D_COUNT)
+#define CHECKSUM_OFFSET (48 + 8 * I_CHECKSUM)
 
 typedef struct saved_state {
 	size_t size;
@@ -1052,6 +1061,21 @@ static double get_d(const unsigned char* b, int k)
 {
 	double v;
 	memcpy(&v, b + 48 + 8 * I_COUNT + 8 * k, 8);
+	return v;
+}
+
+// 64-bit FNV-1a of a state's bytes except its checksum field.
+static int64_t state_checksum(const unsigned char* b, size_t size)
+{
+	uint64_t hash = 0xcbf29ce484222325u;  // FNV-64 offset basis
+	for (size_t i = 0; i < size; ++i) {
+		if (i == CHECKSUM_OFFSET)
+			i += 8;
+		if (i < size)
+			hash = (hash ^ b[i]) * 0x100000001b3u;  // FNV-64 prime
+	}
+	int64_t v;
+	memcpy(&v, &hash, 8);
 	return v;
 }
 
@@ -1107,78 +1131,152 @@ static saved_state* save_state(instance* inst)
 	for (int32_t k = 0; k < np; ++k)
 		d[6 * n + m + k] = sm_document_parameter_value(inst->doc, k);
 	memcpy(d + 6 * n + m + np, inst->held, 9 * (size_t)inst->port_count * sizeof(double));
+	put_i(b, I_CHECKSUM, state_checksum(b, s->size));
 	return s;
 }
 
-// Checks that bytes are a state of this model; logs and returns false otherwise.
+static bool all_finite(const double* a, size_t count)
+{
+	for (size_t i = 0; i < count; ++i)
+		if (!isfinite(a[i]))
+			return false;
+	return true;
+}
+
+// Checks that bytes are a state of this model with values the instance can take; logs and
+// returns false otherwise. The checksum catches damage; the checks after it, states written by
+// something else than save_state.
 static bool valid_state(instance* inst, const char* function, const unsigned char* b, size_t size)
 {
 	if (size < HEADER_BYTES || memcmp(b, STATE_MAGIC, 8) != 0) {
-		log_error(inst, "%s: not a springmass FMU state", function);
+		log_error(inst, "%s: not a springmass FMU state (or one of another springmass version)", function);
 		return false;
 	}
 	if (memcmp(b + 8, inst->table.guid, 40) != 0) {
-		log_error(inst, "%s: the state belongs to another model (GUID %.39s, this FMU's is %s)", function,
-		          (const char*)b + 8, inst->table.guid);
+		char guid[40];  // printable characters only: the bytes may be anything
+		for (int i = 0; i < 39; ++i)
+			guid[i] = b[8 + i] >= 0x20 && b[8 + i] < 0x7f ? (char)b[8 + i] : '?';
+		guid[39] = '\0';
+		log_error(inst, "%s: the state belongs to another model (GUID %s, this FMU's is %s)", function, guid,
+		          inst->table.guid);
 		return false;
 	}
 	if (get_i(b, I_SIZE) != (int64_t)size || size != state_size(inst) || get_i(b, I_PARTICLES) != inst->particle_count ||
 	    get_i(b, I_SPRINGS) != inst->spring_count || get_i(b, I_PORTS) != inst->port_count ||
 	    get_i(b, I_PARAMETERS) != sm_document_parameter_count(inst->doc)) {
-		log_error(inst, "%s: the state's size or counts do not match this model", function);
+		log_error(inst, "%s: the state's size or counts do not match this model (%zu bytes, this model's take %zu)",
+		          function, size, state_size(inst));
 		return false;
+	}
+	if (get_i(b, I_CHECKSUM) != state_checksum(b, size)) {
+		log_error(inst, "%s: the state's checksum does not match its bytes: it was damaged", function);
+		return false;
+	}
+	size_t n3 = 3 * (size_t)inst->particle_count, m = (size_t)inst->spring_count;
+	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
+	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
+	int64_t state = get_i(b, I_STATE), has_sim = get_i(b, I_HAS_SIM);
+	bool ok = (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
+	           state == ST_STEP_FAILED || state == ST_TERMINATED) &&
+	          has_sim == (state != ST_INSTANTIATED);
+	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS && get_i(b, I_LINEAR_SOLVER) >= 0 &&
+	     get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT && get_i(b, I_JACOBIAN) >= 0 &&
+	     get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE && get_i(b, I_MAX_STEPS) >= 1 &&
+	     get_i(b, I_MAX_STEPS) <= INT32_MAX && (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
+	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
+	double max_step = get_d(b, D_MAX_STEP);
+	ok = ok && rtol > 0.0 && rtol < 1.0 && atol_x > 0.0 && isfinite(atol_x) && atol_v > 0.0 && isfinite(atol_v) &&
+	     max_step >= 0.0 && isfinite(max_step);
+	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
+	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP))) && !isnan(get_d(b, D_DISSIPATED));
+	ok = ok && all_finite(d, 2 * n3) && all_finite(d + 2 * n3 + m, np + 9 * nports);
+	for (size_t k = 0; ok && k < m; ++k)
+		ok = d[2 * n3 + k] == 0.0 || d[2 * n3 + k] == 1.0;
+	if (!ok)
+		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
+		                "velocities, parameters or inputs)",
+		          function);
+	return ok;
+}
+
+// Sets the model-file parameters to values, recording the previous ones in old; on a rejected
+// value puts back those already set and returns false.
+static bool set_parameters(instance* inst, const char* function, const double* values, double* old)
+{
+	int32_t np = sm_document_parameter_count(inst->doc);
+	for (int32_t k = 0; k < np; ++k) {
+		old[k] = sm_document_parameter_value(inst->doc, k);
+		sm_error err = {SM_OK, ""};
+		if (old[k] != values[k] && sm_document_set_parameter(inst->doc, k, values[k], &err) != SM_OK) {
+			log_error(inst, "%s: parameter %s = %g of the state is rejected by the model: %s", function,
+			          sm_document_parameter_name(inst->doc, k), values[k], err.message);
+			while (k-- > 0)
+				sm_document_set_parameter(inst->doc, k, old[k], NULL);
+			return false;
+		}
 	}
 	return true;
 }
 
-static fmi2Status restore_state(instance* inst, const unsigned char* b)
+// Makes a checked state the instance's. All or nothing: a state the model refuses (a parameter
+// out of its range, a simulation that cannot start from it) leaves the instance as it was.
+static fmi2Status restore_state(instance* inst, const char* function, const unsigned char* b)
 {
 	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
 	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
-	for (int32_t k = 0; k < np; ++k) {
-		double value = d[6 * n + m + k];
-		if (sm_document_parameter_value(inst->doc, k) != value &&
-		    sm_document_set_parameter(inst->doc, k, value, NULL) != SM_OK) {
-			log_error(inst, "fmi2SetFMUstate: parameter %s = %g of the state is rejected by the model",
-			          sm_document_parameter_name(inst->doc, k), value);
-			return fmi2Error;
-		}
+	double* old = malloc(((size_t)np + 1) * sizeof *old);
+	port_values* held = malloc(((size_t)inst->port_count + 1) * sizeof *held);
+	if (!old || !held) {
+		free(old);
+		free(held);
+		log_error(inst, "%s: out of memory", function);
+		return fmi2Error;
 	}
-	inst->solver.method = (sm_method)get_i(b, I_METHOD);
-	inst->solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
-	inst->solver.jacobian = (sm_jacobian_variant)get_i(b, I_JACOBIAN);
-	inst->solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
-	inst->solver.relative_tolerance = get_d(b, D_RTOL);
-	inst->solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
-	inst->solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);
-	inst->solver.max_step = get_d(b, D_MAX_STEP);
+	memcpy(held, d + 6 * n + m + np, (size_t)inst->port_count * sizeof *held);
+	sm_simulation_def solver = inst->solver;
+	solver.method = (sm_method)get_i(b, I_METHOD);
+	solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
+	solver.jacobian = (sm_jacobian_variant)get_i(b, I_JACOBIAN);
+	solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
+	solver.relative_tolerance = get_d(b, D_RTOL);
+	solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
+	solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);
+	solver.max_step = get_d(b, D_MAX_STEP);
+	fmi2Status status = set_parameters(inst, function, d + 6 * n + m, old) ? fmi2OK : fmi2Error;
+	if (status == fmi2OK && get_i(b, I_HAS_SIM)) {
+		sm_model* model = NULL;
+		status = build_model(inst, &model) == SM_OK ? fmi2OK : fmi2Error;
+		for (int32_t k = 0; status == fmi2OK && k < m; ++k) {
+			if (d[6 * n + k] == 0.0)
+				sm_model_set_spring_enabled(model, k, false);
+		}
+		if (status == fmi2OK)
+			status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
+		sm_model_destroy(model);
+		if (status != fmi2OK) {
+			for (int32_t k = 0; k < np; ++k)
+				sm_document_set_parameter(inst->doc, k, old[k], NULL);
+		} else {
+			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
+		}
+	} else if (status == fmi2OK) {
+		sm_simulation_destroy(inst->sim);
+		inst->sim = NULL;
+		inst->sim_dirty = true;
+		inst->solver = solver;
+		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
+		mark_inputs_dirty(inst);
+	}
+	free(old);
+	free(held);
+	if (status != fmi2OK)
+		return status;
 	inst->rtol_set = get_i(b, I_RTOL_SET) != 0;
 	inst->stop_time_defined = get_i(b, I_STOP_DEFINED) != 0;
 	inst->stop_time = get_d(b, D_STOP);
 	inst->start_time = get_d(b, D_START);
 	inst->time = get_d(b, D_TIME);
 	inst->last_successful_time = get_d(b, D_LAST_SUCCESSFUL);
-	memcpy(inst->held, d + 6 * n + m + np, 9 * (size_t)inst->port_count * sizeof(double));
-	mark_inputs_dirty(inst);
-	if (!get_i(b, I_HAS_SIM)) {
-		sm_simulation_destroy(inst->sim);
-		inst->sim = NULL;
-		inst->sim_dirty = true;
-		inst->state = (int)get_i(b, I_STATE);
-		return fmi2OK;
-	}
-	sm_model* model = NULL;
-	if (build_model(inst, &model) != SM_OK)
-		return fmi2Error;
-	for (int32_t k = 0; k < m; ++k) {
-		if (d[6 * n + k] == 0.0)
-			sm_model_set_spring_enabled(model, k, false);
-	}
-	fmi2Status status = create_simulation(inst, model, inst->time - inst->start_time, d, d + 3 * n);
-	sm_model_destroy(model);
-	if (status != fmi2OK)
-		return status;
-	inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
 	inst->state = (int)get_i(b, I_STATE);
 	return fmi2OK;
 }
@@ -1200,7 +1298,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 		return fmi2Error;
 	}
 	// Continue from exactly what a restore would give (see above).
-	if (get_i(s->bytes, I_HAS_SIM) && restore_state(inst, s->bytes) != fmi2OK) {
+	if (get_i(s->bytes, I_HAS_SIM) && restore_state(inst, "fmi2GetFMUstate", s->bytes) != fmi2OK) {
 		free(s->bytes);
 		free(s);
 		return fmi2Error;
@@ -1226,7 +1324,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 	const saved_state* s = FMUstate;
 	if (!valid_state(inst, "fmi2SetFMUstate", s->bytes, s->size))
 		return fmi2Error;
-	return restore_state(inst, s->bytes);
+	return restore_state(inst, "fmi2SetFMUstate", s->bytes);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)

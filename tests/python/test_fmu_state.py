@@ -1,15 +1,20 @@
 """FMU state: get/set round trips, serialisation into another process, reset, threads."""
 import json
+import math
 import pathlib
+import struct
 import subprocess
 import sys
 import threading
 
 import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
 
 from fmu_helpers import Instance
 
 HERE = pathlib.Path(__file__).resolve().parent
+FMI2_ERROR = 3
 OUTPUTS = ["tip.x", "tip.vx", "base.fx", "energy.kinetic", "energy.elastic", "energy.dissipated"]
 
 
@@ -127,3 +132,93 @@ def test_instances_in_threads_match_a_lone_instance(test_fmu):
         t.join()
     for _, name, _ in cases:
         assert np.array_equal(alone[name], together[name]), name
+
+
+def test_damaged_serialised_state_is_refused_and_changes_nothing(test_fmu):
+    # A serialised state cut short, extended or with any one bit flipped is refused by
+    # fmi2DeSerializeFMUstate with a message; the instance that refused it goes on unchanged.
+    fmu = test_fmu("driven_oscillator")
+    a = Instance(fmu, "a").start({"k": 60.0})
+    b = Instance(fmu, "b").start()
+    try:
+        run(a, 0.0, 10)
+        blob = a.slave.serializeFMUstate(a.slave.getFMUstate())
+        run(b, 0.0, 5)
+        before = b.get(*OUTPUTS)
+        damaged = [blob[:0], blob[:7], blob[:48], blob[:-8], blob[:-1], blob + b"\0"]
+        for k in range(len(blob)):
+            flipped = bytearray(blob)
+            flipped[k] ^= 1 << (k % 8)
+            damaged.append(bytes(flipped))
+        for bad in damaged:
+            n = len(b.messages)
+            with pytest.raises(FMICallException) as info:
+                b.slave.deSerializeFMUstate(bad)
+            assert info.value.status == FMI2_ERROR
+            assert any("fmi2DeSerializeFMUstate" in m[2] for m in b.messages[n:])
+        assert b.get(*OUTPUTS) == before and b.get("k") == 50.0
+        run(b, 0.05, 5)
+        # The intact state still restores.
+        b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
+        assert b.get("k") == 60.0 and b.slave.getRealStatus(2) == a.slave.getRealStatus(2)
+    finally:
+        a.free()
+        b.free()
+
+
+def checksummed(blob):
+    """The serialised state with its checksum (64-bit FNV-1a of all other bytes, int64 at byte 56)
+    made valid again after an edit: a state written by something other than the FMU."""
+    h = 0xcbf29ce484222325
+    for i, byte in enumerate(blob):
+        if not 56 <= i < 64:
+            h = ((h ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return blob[:56] + struct.pack("<Q", h) + blob[64:]
+
+
+def edited(blob, word, fmt, value):
+    """blob with its 8-byte word `word` replaced by value (struct format fmt), checksum valid."""
+    out = bytearray(blob)
+    out[8 * word:8 * word + 8] = struct.pack(fmt, value)
+    return checksummed(bytes(out))
+
+
+def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu):
+    # States with a valid checksum but values the instance cannot take: an FMU state that is no
+    # state (0 would leave no call allowed, not even fmi2Reset), the error state, a non-finite
+    # time or position, an unknown solver, and parameters the model rejects after others that it
+    # takes. Each is refused with a message, and the instance steps on as before.
+    fmu = test_fmu("driven_oscillator")
+    a = Instance(fmu, "a").start({"k": 60.0, "m": 2.5})
+    b = Instance(fmu, "b").start()
+    try:
+        run(a, 0.0, 10)
+        blob = a.slave.serializeFMUstate(a.slave.getFMUstate())
+        assert checksummed(blob) == blob
+        # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 13; time 20;
+        # then positions from word 29; the parameters follow the positions, velocities and springs.
+        params = blob.index(struct.pack("<d", 2.5)) // 8
+        assert struct.unpack_from("<d", blob, 8 * params + 8)[0] == 60.0
+        cases = [edited(blob, 8, "<q", 0), edited(blob, 8, "<q", 32), edited(blob, 8, "<q", 3),
+                 edited(blob, 13, "<q", 7), edited(blob, 20, "<d", math.nan), edited(blob, 29 + 3, "<d", math.inf),
+                 edited(edited(blob, params + 1, "<d", 70.0), params + 2, "<d", -1.0)]
+        run(b, 0.0, 5)
+        before = b.get(*OUTPUTS)
+        for bad in cases:
+            n = len(b.messages)
+            try:
+                state = b.slave.deSerializeFMUstate(bad)
+                b.slave.setFMUstate(state)
+                raise AssertionError("a state out of range was accepted")
+            except FMICallException as e:
+                assert e.status == FMI2_ERROR
+            assert b.messages[n:], "refused without a message"
+            assert b.get(*OUTPUTS) == before and b.get("k") == 50.0 and b.get("d") == 0.0
+            assert b.slave.getRealStatus(2) == pytest.approx(0.05)
+        run(b, 0.05, 5)
+        b.slave.reset()
+        b.start()
+        run(b, 0.0, 5)
+    finally:
+        a.free()
+        b.free()
