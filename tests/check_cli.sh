@@ -50,6 +50,40 @@ out=$("$cli" run "$tmp/falling.json" --t-end 0.1 --output-interval 0.1 -q -o - 2
 awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7) }' <<< "$out" ||
   fail "a falling particle without springs: $out"
 
+# Options: each line is the exit status, the first line the command prints on stderr (empty for
+# none) and its arguments. Numbers below the smallest normal double are numbers (as in a model
+# file); a malformed --set is a usage error in every command.
+touch "$tmp/a_file"
+osc="$root/models/oscillator.json"
+while IFS='|' read -r expected_status expected args; do
+  out=$(eval "\"$cli\" $args" 2>&1 > /dev/null)
+  status=$?
+  expected=${expected//\$tmp/$tmp}
+  [ $status -eq "$expected_status" ] && [ "$(head -1 <<< "$out")" = "$expected" ] ||
+    fail "$args: exit status $status (expected $expected_status), printed '$(head -1 <<< "$out")', expected '$expected'"
+done << 'CASES'
+2|springmass run: --t-end expects a finite number, got 'nan'|run "$osc" -q -o - --t-end nan
+2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
+2|springmass run: --atol must be > 0, got '-1'|run "$osc" -q -o - --atol -1
+0||run "$osc" -q -o - --t-end 1e-320
+0||run "$osc" -q -o - --t-end 0.01 --set k=1e-400
+2|springmass run: --set k=1e999: '1e999' is not a finite number|run "$osc" -q -o - --set k=1e999
+1|springmass run: cannot create directory $tmp/a_file: a file of that name exists|run "$osc" -q -o - --vtk "$tmp/a_file"
+2|springmass statics: --set expects NAME=VALUE, got 'k'|statics "$osc" --set k
+2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
+1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
+2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
+CASES
+# A particle name with a comma or a quote is one quoted CSV field (RFC 4180).
+cat > "$tmp/comma.json" << 'JSON'
+{"springmass": 1, "name": "comma", "particles": [{"name": "a,\"b\"", "position": [0, 0, 0], "fixed": true}]}
+JSON
+out=$("$cli" run "$tmp/comma.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
+[ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,"a,""b"".x","a,""b"".y","a,""b"".z"' ] ||
+  fail "run --positions with a comma in a particle's name: $out"
+out=$("$cli" statics "$tmp/comma.json" -q -o "$tmp/comma.csv" 2>&1 > /dev/null; tail -1 "$tmp/comma.csv")
+[ "${out%%,-0,-0,9.81*}" = '0,"a,""b""",0,0,0,0,0,0' ] || fail "statics -o with a comma in a particle's name: $out"
+
 # `springmass fmu` only ever writes its output: a directory named by mistake stays (it was
 # removed when empty, and the archive went to DIR.zip), and a name without an extension is the
 # file written (zip alone would add ".zip"). A stand-in runtime keeps the archives small.

@@ -4,6 +4,7 @@
 #include "cli_common.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -23,11 +24,11 @@ int cli_set_parameter(const char* command, sm_document* doc, const char* setting
 	}
 	memcpy(name, setting, length);
 	name[length] = '\0';
+	// A number below the smallest normal double is taken as strtod rounds it, as in a model file.
 	char* end = NULL;
-	errno = 0;
 	const double value = strtod(eq + 1, &end);
-	if (end == eq + 1 || *end != '\0' || errno == ERANGE) {
-		fprintf(stderr, "springmass %s: --set %s: '%s' is not a number\n", command, setting, eq + 1);
+	if (end == eq + 1 || *end != '\0' || !isfinite(value)) {
+		fprintf(stderr, "springmass %s: --set %s: '%s' is not a finite number\n", command, setting, eq + 1);
 		return 2;
 	}
 	const int32_t index = sm_document_parameter_index(doc, name);
@@ -44,12 +45,45 @@ int cli_set_parameter(const char* command, sm_document* doc, const char* setting
 	return 0;
 }
 
+int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count)
+{
+	for (int k = 0; k < count; k++) {
+		const int status = cli_set_parameter(command, doc, settings[k]);
+		if (status != 0)
+			return status;
+	}
+	return 0;
+}
+
 int cli_make_directory(const char* command, const char* dir)
 {
-	if (mkdir(dir, 0777) == 0 || errno == EEXIST)
+	if (mkdir(dir, 0777) == 0)
 		return 0;
-	fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command, dir, strerror(errno));
+	const int error = errno;
+	struct stat st;
+	if (error == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode))
+		return 0;
+	if (error == EEXIST)
+		fprintf(stderr, "springmass %s: cannot create directory %s: a file of that name exists\n", command, dir);
+	else
+		fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command, dir, strerror(error));
 	return -1;
+}
+
+void cli_csv_field(FILE* f, const char* text, const char* suffix)
+{
+	if (strpbrk(text, ",\"") == NULL && strpbrk(suffix, ",\"") == NULL) {
+		fprintf(f, "%s%s", text, suffix);
+		return;
+	}
+	fputc('"', f);
+	for (int part = 0; part < 2; part++)
+		for (const char* c = part == 0 ? text : suffix; *c != '\0'; c++) {
+			if (*c == '"')
+				fputc('"', f);
+			fputc(*c, f);
+		}
+	fputc('"', f);
 }
 
 FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,

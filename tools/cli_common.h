@@ -11,8 +11,16 @@
 /// malformed setting (a usage error), 1 for a setting the model refuses.
 int cli_set_parameter(const char* command, sm_document* doc, const char* setting);
 
-/// Creates a directory if it does not exist; prints the error and returns -1 on failure.
+/// Applies `count` settings in order; stops at the first that fails and returns its status.
+int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count);
+
+/// Creates a directory if it does not exist; prints the error and returns -1 on failure (also
+/// when a file that is not a directory has its name).
 int cli_make_directory(const char* command, const char* dir);
+
+/// Writes text followed by suffix as one CSV field: quoted, with quotes doubled, when either
+/// holds a comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
+void cli_csv_field(FILE* f, const char* text, const char* suffix);
 
 /// Opens a legacy VTK polydata file and writes the particles at x [m] as points and the springs
 /// as lines (only the enabled ones, so that broken springs disappear). Follow with

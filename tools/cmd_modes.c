@@ -71,7 +71,8 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 	const size_t n3 = 3 * (size_t)modes->particle_count;
 	for (int32_t i = 0; i < modes->particle_count; i++) {
 		const char* name = sm_document_particle_name(doc, i);
-		fprintf(f, "%d,%s", (int)i, name != NULL ? name : "");
+		fprintf(f, "%d,", (int)i);
+		cli_csv_field(f, name != NULL ? name : "", "");
 		for (int32_t m = 0; m < modes->count; m++)
 			for (int c = 0; c < 3; c++)
 				fprintf(f, ",%.17g", modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
@@ -172,9 +173,9 @@ int sm_cmd_modes(int argc, char** argv)
 		fprintf(stderr, "springmass modes: %s\n", err.message);
 		goto done;
 	}
-	for (int i = 0; i < setting_count; i++)
-		if (cli_set_parameter("modes", doc, settings[i]) != 0)
-			goto done;
+	if ((status = cli_set_parameters("modes", doc, settings, setting_count)) != 0)
+		goto done;
+	status = 1;
 	if (sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass modes: %s\n", err.message);
 		goto done;

@@ -56,13 +56,18 @@ static double wall_clock(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int parse_number(const char* option, const char* text, double* value)
+// A finite number > 0 (one below the smallest normal double, such as 1e-320, is taken as
+// strtod rounds it, like a number in a model file); prints what is wrong and returns 1 if not.
+static int parse_positive(const char* option, const char* text, double* value)
 {
 	char* end = NULL;
-	errno = 0;
-	double v = strtod(text, &end);
-	if (end == text || *end != '\0' || errno != 0 || !isfinite(v)) {
-		fprintf(stderr, "springmass run: %s expects a number, got '%s'\n", option, text);
+	const double v = strtod(text, &end);
+	if (end == text || *end != '\0' || !isfinite(v)) {
+		fprintf(stderr, "springmass run: %s expects a finite number, got '%s'\n", option, text);
+		return 1;
+	}
+	if (!(v > 0.0)) {
+		fprintf(stderr, "springmass run: %s must be > 0, got '%s'\n", option, text);
 		return 1;
 	}
 	*value = v;
@@ -107,7 +112,10 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 				snprintf(fallback, sizeof fallback, "p[%d]", (int)i);
 				name = fallback;
 			}
-			fprintf(csv, ",%s.x,%s.y,%s.z", name, name, name);
+			for (int c = 0; c < 3; c++) {
+				fputc(',', csv);
+				cli_csv_field(csv, name, c == 0 ? ".x" : c == 1 ? ".y" : ".z");
+			}
 		}
 	fprintf(csv, "\n");
 }
@@ -214,26 +222,24 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			}
 			const char* value = argv[++i];
 			if (strcmp(a, "--t-end") == 0) {
-				if (parse_number(a, value, &o->t_end) || !(o->t_end > 0.0)) {
-					fprintf(stderr, "springmass run: --t-end must be > 0\n");
+				if (parse_positive(a, value, &o->t_end))
 					return 2;
-				}
 			} else if (strcmp(a, "--output-interval") == 0) {
-				if (parse_number(a, value, &o->interval) || !(o->interval > 0.0)) {
-					fprintf(stderr, "springmass run: --output-interval must be > 0\n");
+				if (parse_positive(a, value, &o->interval))
 					return 2;
-				}
 			} else if (strcmp(a, "--rtol") == 0) {
-				if (parse_number(a, value, &o->rtol) || !(o->rtol > 0.0))
+				if (parse_positive(a, value, &o->rtol))
 					return 2;
 			} else if (strcmp(a, "--max-steps") == 0) {
-				if (parse_number(a, value, &o->max_steps) || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
+				char* end = NULL;
+				o->max_steps = strtod(value, &end);
+				if (end == value || *end != '\0' || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
 				    o->max_steps != floor(o->max_steps)) {
-					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9\n");
+					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n", value);
 					return 2;
 				}
 			} else if (strcmp(a, "--atol") == 0) {
-				if (parse_number(a, value, &o->atol) || !(o->atol > 0.0))
+				if (parse_positive(a, value, &o->atol))
 					return 2;
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
@@ -288,13 +294,9 @@ int sm_cmd_run(int argc, char** argv)
 		fprintf(stderr, "springmass run: %s\n", err.message);
 		goto done;
 	}
-	for (int k = 0; k < o.set_count; k++) {
-		const int set_status = cli_set_parameter("run", doc, o.sets[k]);
-		if (set_status != 0) {
-			status = set_status;
-			goto done;
-		}
-	}
+	if ((status = cli_set_parameters("run", doc, o.sets, o.set_count)) != 0)
+		goto done;
+	status = 1;
 	if (sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass run: %s\n", err.message);
 		goto done;

@@ -62,7 +62,8 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 	fprintf(f, "particle,name,x,y,z,dx,dy,dz,reaction_x,reaction_y,reaction_z\n");
 	for (int32_t i = 0; i < n; i++) {
 		const char* name = sm_document_particle_name(doc, i);
-		fprintf(f, "%d,%s", (int)i, name != NULL ? name : "");
+		fprintf(f, "%d,", (int)i);
+		cli_csv_field(f, name != NULL ? name : "", "");
 		for (int c = 0; c < 3; c++)
 			fprintf(f, ",%.17g", x[3 * i + c]);
 		for (int c = 0; c < 3; c++)
@@ -109,7 +110,7 @@ int sm_cmd_statics(int argc, char** argv)
 		} else if (strcmp(a, "--tolerance") == 0 && has_value) {
 			char* end = NULL;
 			def.residual_tolerance = strtod(argv[++i], &end);
-			if (*end != '\0' || !(def.residual_tolerance > 0.0)) {
+			if (*end != '\0' || !(def.residual_tolerance > 0.0) || !isfinite(def.residual_tolerance)) {
 				fprintf(stderr, "springmass statics: --tolerance needs a positive number of newtons\n");
 				free(settings);
 				return 2;
@@ -166,9 +167,9 @@ int sm_cmd_statics(int argc, char** argv)
 		fprintf(stderr, "springmass statics: %s\n", err.message);
 		goto done;
 	}
-	for (int i = 0; i < setting_count; i++)
-		if (cli_set_parameter("statics", doc, settings[i]) != 0)
-			goto done;
+	if ((status = cli_set_parameters("statics", doc, settings, setting_count)) != 0)
+		goto done;
+	status = 1;
 	if (sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass statics: %s\n", err.message);
 		goto done;
