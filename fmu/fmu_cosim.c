@@ -94,6 +94,7 @@ typedef struct instance {
 	double* forces;   // 3 per particle, valid while forces_valid
 	bool forces_valid;
 	double* scratch;  // 5 * 3 per particle for directional derivatives
+	double* parameter_backup;  // the model-file parameters' values before a change that may fail
 } instance;
 
 // ---------------------------------------------------------------------------------------------
@@ -419,38 +420,59 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 	return false;
 }
 
-// Sets a model-file parameter. Before initialisation ends the simulation is made again when
-// next needed; afterwards (tunable parameters) the running simulation takes the new constants
-// and keeps its state.
-static fmi2Status set_model_parameter(instance* inst, const fmu_variable* v, double value)
+// Sets the model-file parameters among vr[] (all or none). Before initialisation ends the
+// simulation is made again when next needed; afterwards (tunable parameters) the running
+// simulation takes the new constants, built into one model, and keeps its state. A value the
+// model rejects, alone or together with the others, puts every parameter back.
+static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
 {
-	double old = sm_document_parameter_value(inst->doc, v->index);
-	if (old == value)
-		return fmi2OK;
-	sm_error err = {SM_OK, ""};
-	if (sm_document_set_parameter(inst->doc, v->index, value, &err) != SM_OK) {
-		log_error(inst, "fmi2SetReal: %s = %g rejected: %s", v->name, value, err.message);
+	int32_t np = sm_document_parameter_count(inst->doc);
+	double* old = inst->parameter_backup;
+	for (int32_t k = 0; k < np; ++k)
+		old[k] = sm_document_parameter_value(inst->doc, k);
+	bool changed = false;
+	sm_status st = SM_OK;
+	for (size_t i = 0; i < nvr && st == SM_OK; ++i) {
+		const fmu_variable* v = &inst->table.variables[vr[i]];
+		if (v->source != FMU_SRC_MODEL_PARAMETER || sm_document_parameter_value(inst->doc, v->index) == value[i])
+			continue;
+		sm_error err = {SM_OK, ""};
+		st = sm_document_set_parameter(inst->doc, v->index, value[i], &err);
+		if (st != SM_OK)
+			log_error(inst, "fmi2SetReal: %s = %g rejected: %s", v->name, value[i], err.message);
+		changed = true;
+	}
+	if (st == SM_OK && changed && !(inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))) {
+		sm_model* model = NULL;
+		st = build_model(inst, &model);
+		if (st == SM_OK) {
+			st = sm_simulation_update_model(inst->sim, model);
+			if (st != SM_OK)
+				log_error(inst, "fmi2SetReal: the simulation cannot take the new parameters: %s",
+				          sm_simulation_last_error(inst->sim));
+		}
+		sm_model_destroy(model);
+	}
+	if (st != SM_OK) {
+		for (int32_t k = 0; k < np; ++k) {
+			if (sm_document_parameter_value(inst->doc, k) != old[k])
+				sm_document_set_parameter(inst->doc, k, old[k], NULL);
+		}
 		return fmi2Error;
 	}
+	if (!changed)
+		return fmi2OK;
 	if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION)) {
 		inst->sim_dirty = true;
 		return fmi2OK;
 	}
-	sm_model* model = NULL;
-	sm_status st = build_model(inst, &model);
-	if (st == SM_OK) {
-		st = sm_simulation_update_model(inst->sim, model);
-		if (st != SM_OK)
-			log_error(inst, "fmi2SetReal: %s = %g: the simulation cannot take the new model: %s", v->name, value,
-			          sm_simulation_last_error(inst->sim));
-	}
-	sm_model_destroy(model);
-	if (st != SM_OK) {
-		sm_document_set_parameter(inst->doc, v->index, old, NULL);
-		return fmi2Error;
-	}
 	inst->forces_valid = false;
-	logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: parameter %s = %.17g (solver restarted)", inst->time, v->name, value);
+	for (int32_t k = 0; k < np; ++k) {
+		double now = sm_document_parameter_value(inst->doc, k);
+		if (now != old[k])
+			logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: parameter %s = %.17g (solver restarted)", inst->time,
+			      sm_document_parameter_name(inst->doc, k), now);
+	}
 	return fmi2OK;
 }
 
@@ -516,6 +538,7 @@ static void free_instance(instance* inst)
 	free(inst->port_dirty);
 	free(inst->forces);
 	free(inst->scratch);
+	free(inst->parameter_backup);
 	free(inst->name);
 	free(inst);
 }
@@ -614,7 +637,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	inst->port_dirty = calloc(np, sizeof *inst->port_dirty);
 	inst->forces = calloc(n3, sizeof *inst->forces);
 	inst->scratch = calloc(5 * n3, sizeof *inst->scratch);
-	if (!inst->ports || !inst->held || !inst->port_dirty || !inst->forces || !inst->scratch) {
+	inst->parameter_backup = calloc((size_t)sm_document_parameter_count(inst->doc) + 1, sizeof(double));
+	if (!inst->ports || !inst->held || !inst->port_dirty || !inst->forces || !inst->scratch ||
+	    !inst->parameter_backup) {
 		log_error(inst, "fmi2Instantiate: out of memory");
 		goto fail;
 	}
@@ -832,42 +857,50 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 	return fmi2OK;
 }
 
-static fmi2Status set_real(instance* inst, const fmu_variable* v, double value)
+// Whether value may be given to v now: finite, settable in this state, and in the range of a
+// solver setting. Model-file parameters are checked by the model when they are set.
+static bool check_real(instance* inst, const fmu_variable* v, double value)
 {
 	if (!isfinite(value)) {
 		log_error(inst, "fmi2SetReal: %s = %g rejected: values must be finite", v->name, value);
-		return fmi2Error;
+		return false;
 	}
 	if (!settable(inst, "fmi2SetReal", v))
-		return fmi2Error;
+		return false;
+	bool tolerance = v->source == FMU_SRC_SOLVER_RTOL || v->source == FMU_SRC_SOLVER_ATOL_POSITION ||
+	                 v->source == FMU_SRC_SOLVER_ATOL_VELOCITY;
+	if (tolerance && (!(value > 0.0) || (v->source == FMU_SRC_SOLVER_RTOL && !(value < 1.0)))) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name, value);
+		return false;
+	}
+	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value < 0.0) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: must be >= 0 (0: unlimited)", v->name, value);
+		return false;
+	}
+	return true;
+}
+
+// Sets a checked value of anything but a model-file parameter.
+static void set_real(instance* inst, const fmu_variable* v, double value)
+{
 	switch (v->source) {
-	case FMU_SRC_MODEL_PARAMETER: return set_model_parameter(inst, v, value);
 	case FMU_SRC_SOLVER_RTOL:
-	case FMU_SRC_SOLVER_ATOL_POSITION:
-	case FMU_SRC_SOLVER_ATOL_VELOCITY:
-		if (!(value > 0.0) || (v->source == FMU_SRC_SOLVER_RTOL && !(value < 1.0))) {
-			log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name,
-			          value);
-			return fmi2Error;
-		}
-		if (v->source == FMU_SRC_SOLVER_RTOL) {
-			inst->solver.relative_tolerance = value;
-			inst->rtol_set = true;
-		} else if (v->source == FMU_SRC_SOLVER_ATOL_POSITION) {
-			inst->solver.absolute_tolerance_position = value;
-		} else {
-			inst->solver.absolute_tolerance_velocity = value;
-		}
+		inst->solver.relative_tolerance = value;
+		inst->rtol_set = true;
 		inst->sim_dirty = true;
-		return fmi2OK;
+		break;
+	case FMU_SRC_SOLVER_ATOL_POSITION:
+		inst->solver.absolute_tolerance_position = value;
+		inst->sim_dirty = true;
+		break;
+	case FMU_SRC_SOLVER_ATOL_VELOCITY:
+		inst->solver.absolute_tolerance_velocity = value;
+		inst->sim_dirty = true;
+		break;
 	case FMU_SRC_SOLVER_MAX_STEP:
-		if (value < 0.0) {
-			log_error(inst, "fmi2SetReal: %s = %g rejected: must be >= 0 (0: unlimited)", v->name, value);
-			return fmi2Error;
-		}
 		inst->solver.max_step = value;
 		inst->sim_dirty = true;
-		return fmi2OK;
+		break;
 	case FMU_SRC_PORT_POSITION:
 	case FMU_SRC_PORT_VELOCITY:
 	case FMU_SRC_PORT_FORCE: {
@@ -880,12 +913,10 @@ static fmi2Status set_real(instance* inst, const fmu_variable* v, double value)
 			inst->port_dirty[v->index] = true;
 			inst->forces_valid = false;
 		}
-		return fmi2OK;
+		break;
 	}
 	default: break;
 	}
-	log_error(inst, "fmi2SetReal: %s cannot be set", v->name);
-	return fmi2Error;
 }
 
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
@@ -894,22 +925,17 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	if (!allowed(inst, "fmi2SetReal", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetReal", vr, nvr, value))
 		return fmi2Error;
-	// All values are checked before any is set: a rejected call changes nothing.
+	// A rejected call changes nothing: every value is checked first, then the model-file
+	// parameters are set together (and put back if the model rejects them), then the rest.
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2SetReal", vr[i], FMU_REAL);
-		if (!v)
-			return fmi2Error;
-		if (!isfinite(value[i])) {
-			log_error(inst, "fmi2SetReal: %s = %g rejected: values must be finite", v->name, value[i]);
-			return fmi2Error;
-		}
-		if (!settable(inst, "fmi2SetReal", v))
+		if (!v || !check_real(inst, v, value[i]))
 			return fmi2Error;
 	}
-	for (size_t i = 0; i < nvr; ++i) {
-		if (set_real(inst, &inst->table.variables[vr[i]], value[i]) != fmi2OK)
-			return fmi2Error;
-	}
+	if (set_model_parameters(inst, vr, nvr, value) != fmi2OK)
+		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i)
+		set_real(inst, &inst->table.variables[vr[i]], value[i]);
 	return fmi2OK;
 }
 
@@ -1224,11 +1250,9 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 {
 	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
 	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
-	double* old = malloc(((size_t)np + 1) * sizeof *old);
+	double* old = inst->parameter_backup;
 	port_values* held = malloc(((size_t)inst->port_count + 1) * sizeof *held);
-	if (!old || !held) {
-		free(old);
-		free(held);
+	if (!held) {
 		log_error(inst, "%s: out of memory", function);
 		return fmi2Error;
 	}
@@ -1267,7 +1291,6 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
 		mark_inputs_dirty(inst);
 	}
-	free(old);
 	free(held);
 	if (status != fmi2OK)
 		return status;
@@ -1636,10 +1659,18 @@ fmi2Status fmi2CancelStep(fmi2Component c)
 	return fmi2Error;
 }
 
+static bool check_status_value(instance* inst, const char* function, const void* value)
+{
+	if (!value)
+		log_error(inst, "%s: NULL value", function);
+	return value != NULL;
+}
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+	if (!allowed(inst, "fmi2GetStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	    !check_status_value(inst, "fmi2GetStatus", value))
 		return fmi2Error;
 	if (s == fmi2DoStepStatus) {
 		*value = inst->state == ST_STEP_FAILED ? fmi2Discard : fmi2OK;
@@ -1652,7 +1683,8 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* va
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetRealStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+	if (!allowed(inst, "fmi2GetRealStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	    !check_status_value(inst, "fmi2GetRealStatus", value))
 		return fmi2Error;
 	if (s == fmi2LastSuccessfulTime) {
 		*value = inst->last_successful_time;
@@ -1675,7 +1707,8 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+	if (!allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	    !check_status_value(inst, "fmi2GetBooleanStatus", value))
 		return fmi2Error;
 	if (s == fmi2Terminated) {
 		*value = fmi2False;  // the model never asks to stop the simulation
@@ -1688,7 +1721,8 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetStringStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) || !value)
+	if (!allowed(inst, "fmi2GetStringStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	    !check_status_value(inst, "fmi2GetStringStatus", value))
 		return fmi2Error;
 	if (s == fmi2PendingStatus) {
 		*value = "";

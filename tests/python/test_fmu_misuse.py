@@ -168,3 +168,54 @@ def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
         finally:
             inst.slave.freeLibrary()
     shutil.rmtree(folder)
+
+
+def test_a_rejected_set_real_changes_nothing(test_fmu):
+    # One value of a call rejected: none of the others is taken, in every state where values can be
+    # set. Running on gives bit for bit what an instance that never saw the call gives (a tunable
+    # parameter taken and put back would have restarted the solver).
+    fmu = test_fmu("driven_oscillator")
+    inst, reference = Instance(fmu, "a"), Instance(fmu, "b")
+    s, vr = inst.slave, inst.vr
+    names = ["solver.rtol", "k", "tip.fx", "base.x"]
+    try:
+        s.setupExperiment(startTime=0.0)
+        expect_error(inst, lambda: s.setReal([vr[n] for n in names] + [vr["solver.atol_position"]],
+                                             [1e-8, 70.0, 1.0, 0.1, -1.0]), "solver.atol_position = -1")
+        s.enterInitializationMode()
+        expect_error(inst, lambda: s.setReal([vr[n] for n in names] + [vr["m"]], [1e-8, 70.0, 1.0, 0.1, -1.0]),
+                     "m = -1")
+        s.exitInitializationMode()
+        reference.start()
+        assert inst.get(*names) == reference.get(*names)
+        for n in range(5):
+            s.doStep(0.02 * n, 0.02)
+            reference.slave.doStep(0.02 * n, 0.02)
+        expect_error(inst, lambda: s.setReal([vr["k"], vr["tip.fx"], vr["d"]], [70.0, 1.0, -1.0]), "d = -1")
+        expect_error(inst, lambda: s.setReal([vr["k"], vr["tip.fx"], vr["solver.rtol"]], [70.0, 1.0, 1e-3]),
+                     "fixed parameter")
+        for n in range(5, 20):
+            s.doStep(0.02 * n, 0.02)
+            reference.slave.doStep(0.02 * n, 0.02)
+            assert inst.get("tip.x", "tip.vx", "base.fx") == reference.get("tip.x", "tip.vx", "base.fx")
+        assert inst.get("k", "d", "tip.fx") == [50.0, 0.0, 0.0]
+    finally:
+        inst.free()
+        reference.free()
+
+
+def test_status_queries_with_null_pointers_and_unknown_kinds(test_fmu):
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    s = inst.slave
+    try:
+        for function in (s.fmi2GetStatus, s.fmi2GetRealStatus, s.fmi2GetBooleanStatus, s.fmi2GetStringStatus):
+            expect_error(inst, lambda: function(s.component, 0, None), "NULL value")
+        expect_error(inst, lambda: s.getStatus(99), "status kind 99")
+        expect_error(inst, lambda: s.getRealStatus(0), "status kind 0")
+        expect_error(inst, lambda: s.getIntegerStatus(2), "status kind 2")
+        assert s.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime
+        assert s.getStatus(0) == 0  # fmi2DoStepStatus: fmi2OK
+        assert s.getBooleanStatus(3) == 0  # fmi2Terminated: false
+        s.doStep(0.0, 0.1)
+    finally:
+        inst.free()
