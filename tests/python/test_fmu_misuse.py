@@ -219,3 +219,38 @@ def test_status_queries_with_null_pointers_and_unknown_kinds(test_fmu):
         s.doStep(0.0, 0.1)
     finally:
         inst.free()
+
+
+def test_extreme_inputs_end_in_a_prompt_discard_and_the_instance_recovers(test_fmu):
+    # 1e300 N on the force port, 1e300 m and 1e300 m/s on the motion port: each step is discarded
+    # with a message within the internal step limit (well under a second here), and the instance
+    # goes on after restoring a state saved before, or after a reset.
+    import time
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    s = inst.slave
+    try:
+        s.doStep(0.0, 0.1)
+        saved = s.getFMUstate()
+        for name in ("tip.fx", "base.x", "base.vx"):
+            inst.set(name, 1e300)
+            n = len(inst.messages)
+            began = time.monotonic()
+            with pytest.raises(FMICallException) as info:
+                s.doStep(0.1, 0.1)
+            assert info.value.status == 2  # fmi2Discard
+            assert time.monotonic() - began < 10.0
+            assert any(m[1] == "logStatusDiscard" for m in inst.messages[n:])
+            s.setFMUstate(saved)
+            inst.set(name, 0.0)
+            s.doStep(0.1, 0.1)
+            s.setFMUstate(saved)
+        inst.set("tip.fx", 1e300)
+        with pytest.raises(FMICallException):
+            s.doStep(0.1, 0.1)
+        s.reset()
+        inst.start()
+        s.doStep(0.0, 0.1)
+        assert math.isfinite(inst.get("tip.x"))
+        s.freeFMUstate(saved)
+    finally:
+        inst.free()
