@@ -74,6 +74,18 @@ done << 'CASES'
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 CASES
+# All the modes of a model above CLI_DENSE_LIMIT (2000) degrees of freedom would take the dense
+# eigensolver minutes (2100 here; hours at 10000): refused at once unless --solver dense is given.
+cat > "$tmp/long_rope.json" << 'JSON'
+{"springmass": 1, "name": "long_rope", "fixed": ["r[0]"], "structures": [{"type": "rope", "name": "r",
+ "start": [0, 0, 0], "end": [7, 0, 0], "segments": 700, "structural": {"strain_stiffness": 1000}}]}
+JSON
+out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 0 2>&1 > /dev/null)
+[ $? -eq 2 ] && [[ "$out" == "springmass modes: all the modes of 2100 degrees of freedom need the dense eigensolver,"* ]] ||
+  fail "modes -n 0 of 2100 degrees of freedom: $out"
+out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 3 2>&1 > /dev/null)
+[ $? -eq 0 ] && [ -z "$out" ] || fail "modes -n 3 of 2100 degrees of freedom: $out"
+
 # A particle name with a comma or a quote is one quoted CSV field (RFC 4180).
 cat > "$tmp/comma.json" << 'JSON'
 {"springmass": 1, "name": "comma", "particles": [{"name": "a,\"b\"", "position": [0, 0, 0], "fixed": true}]}

@@ -55,6 +55,15 @@ int cli_set_parameters(const char* command, sm_document* doc, const char* const*
 	return 0;
 }
 
+void cli_note_dense(const char* command, size_t dof)
+{
+	if (dof > CLI_DENSE_LIMIT)
+		fprintf(stderr,
+		        "springmass %s: note: a dense solve of %zu degrees of freedom takes long (its time grows as the "
+		        "cube of their number: minutes above %d, hours at 10000)\n",
+		        command, dof, CLI_DENSE_LIMIT);
+}
+
 int cli_make_directory(const char* command, const char* dir)
 {
 	if (mkdir(dir, 0777) == 0)

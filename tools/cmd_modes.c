@@ -28,7 +28,9 @@ static void usage(FILE* out)
 	        "and unstable counts are among those, and omega_max is an upper bound).\n"
 	        "\n"
 	        "options:\n"
-	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all)\n"
+	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all; all or\n"
+	        "                         more than the sparse solver gives need --solver dense above %d\n"
+	        "                         degrees of freedom, where the dense solver takes minutes)\n"
 	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics)\n"
 	        "  --steps-per-period K   communication steps per period of the highest mode listed\n"
 	        "                         (default 10)\n"
@@ -40,7 +42,7 @@ static void usage(FILE* out)
 	        "                         dense (GSL, all modes) or sparse (CHOLMOD + Lanczos, lowest N)\n"
 	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
 	        "  -h, --help             this text\n",
-	        SM_MODES_DENSE_LIMIT);
+	        CLI_DENSE_LIMIT, SM_MODES_DENSE_LIMIT);
 }
 
 // Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
@@ -181,6 +183,22 @@ int sm_cmd_modes(int argc, char** argv)
 		goto done;
 	}
 	const int32_t n = sm_model_particle_count(model);
+	// The library's automatic choice falls back to the dense eigensolver for all modes or more
+	// than the sparse one can give; above CLI_DENSE_LIMIT that runs for minutes to hours, so the
+	// tool asks for fewer modes or an explicit --solver dense instead.
+	const size_t dof = 3 * (size_t)sm_model_free_count(model);
+	const size_t sparse_most = dof >= SM_MODES_SPARSE_MARGIN ? (dof - SM_MODES_SPARSE_MARGIN) / 4 : 0;
+	if (solver == SM_MODES_AUTO && dof > CLI_DENSE_LIMIT && (count == 0 || (size_t)count > sparse_most)) {
+		fprintf(stderr,
+		        "springmass modes: %s of %zu degrees of freedom need the dense eigensolver, whose time grows as "
+		        "the cube of their number (minutes above %d, hours at 10000): ask for the lowest N modes with "
+		        "-n N (the sparse solver, N <= %zu here), or give --solver dense to wait for it\n",
+		        count == 0 ? "all the modes" : "that many modes", dof, CLI_DENSE_LIMIT, sparse_most);
+		status = 2;
+		goto done;
+	}
+	if (solver == SM_MODES_DENSE)
+		cli_note_dense("modes", dof);
 	x = malloc((3 * (size_t)n + 1) * sizeof(double));
 	if (x == NULL) {
 		fprintf(stderr, "springmass modes: out of memory\n");

@@ -185,6 +185,8 @@ int sm_cmd_statics(int argc, char** argv)
 		goto done;
 	}
 	sm_model_initial_state(model, x0, NULL);
+	if (def.solver == SM_STATICS_DENSE)
+		cli_note_dense("statics", 3 * (size_t)sm_model_free_count(model));
 	sm_statics_result res;
 	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
