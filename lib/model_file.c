@@ -464,6 +464,17 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 		*out = (int32_t)i;
 		return true;
 	}
+	if (json_is_real(value)) {
+		// 3.0 is index 3, as a count may be written 3.0; 2.5 is no index.
+		const double v = json_real_value(value);
+		if (!(v == floor(v)))
+			return fail(p, SM_ERROR_SCHEMA, path, "a particle index must be a whole number, not %.17g", v);
+		if (!(v >= 0.0 && v < (double)n))
+			return fail(p, SM_ERROR_PARTICLE_INDEX, path,
+			            "particle index %.17g is out of range (the model has %d particles)", v, (int)n);
+		*out = (int32_t)v;
+		return true;
+	}
 	if (!json_is_string(value))
 		return fail(p, SM_ERROR_SCHEMA, path, "must be a particle name or index, not %s", type_name(value));
 	const char* name = json_string_value(value);
@@ -485,8 +496,10 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 				char* end;
 				errno = 0;
 				c[count] = strtoll(q, &end, 10);
-				if (end == q || errno != 0)
+				if (end == q || errno != 0) {
+					count = 0;  // a comma not followed by a number ("r[1,]") or an overflow
 					break;
+				}
 				count++;
 				while (*end == ' ')
 					end++;

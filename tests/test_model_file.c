@@ -571,6 +571,14 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"2k\": 1}}", SM_ERROR_SCHEMA,
 	     "test.json: parameters.2k: name \"2k\" must be an identifier (letters, digits and '_', not starting with a "
 	     "digit)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,]\"]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: fixed[0]: \"r[1,]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [0.5]}",
+	     SM_ERROR_SCHEMA, "test.json: fixed[0]: a particle index must be a whole number, not 0.5"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [1e300]}",
+	     SM_ERROR_PARTICLE_INDEX, "test.json: fixed[0]: particle index 1.0000000000000001e+300 is out of range (the model has 1 particles)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": \"m\"}}", SM_ERROR_SCHEMA,
 	     "test.json: parameters.k: a parameter's value must be a number, not a string"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"fixed\": true}],"
@@ -607,6 +615,27 @@ static int test_broken_files(void)
 		}
 	}
 	return failures > 0;
+}
+
+// A particle index written as a whole real number (3.0, as a count may be written) is that index.
+static int test_whole_real_index(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]},"
+	                         " {\"position\": [1, 0, 0]}], \"fixed\": [1.0]}",
+	                         &err);
+	if (doc == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_particle_def p0, p1;
+	sm_model_get_particle(m, 0, &p0);
+	sm_model_get_particle(m, 1, &p1);
+	ENSURE(p0.motion == SM_PARTICLE_FREE && p1.motion == SM_PARTICLE_FIXED);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
 }
 
 // A UTF-8 byte-order mark before the document is ignored (RFC 8259, section 8.1), and line and
@@ -689,5 +718,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_broken_files);
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
+	RUN_TEST(test_whole_real_index);
 	return TEST_SUMMARY();
 }
