@@ -1606,7 +1606,14 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		return fmi2Error;
 	}
 	double t_end = t + h;
-	if (inst->stop_time_defined && t_end > inst->stop_time * (1.0 + 1e3 * DBL_EPSILON) + 1e3 * DBL_EPSILON) {
+	if (!isfinite(t_end) || !isfinite(t_end - inst->start_time)) {
+		log_error(inst, "fmi2DoStep: the step from %g by %g s ends beyond the largest representable time", t, h);
+		return fmi2Error;
+	}
+	// The stop time is resolved like the communication point, 1000 ulps of max(1 s, |stop|), on
+	// either side of zero.
+	if (inst->stop_time_defined &&
+	    t_end > inst->stop_time + 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->stop_time))) {
 		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment", t_end,
 		          inst->stop_time);
 		return fmi2Error;

@@ -254,3 +254,27 @@ def test_extreme_inputs_end_in_a_prompt_discard_and_the_instance_recovers(test_f
         s.freeFMUstate(saved)
     finally:
         inst.free()
+
+
+def test_steps_up_to_a_negative_stop_time_and_beyond_the_largest_time(test_fmu):
+    # A step that ends exactly at a negative stop time is taken (the stop time's round-off margin
+    # was applied as a factor, which tightens it below zero); a step whose end overflows is an
+    # fmi2Error that changes nothing, not a discarded step.
+    fmu = test_fmu("driven_oscillator")
+    inst = Instance(fmu)
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=-1001.0, stopTime=-1000.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(-1001.0, 0.5)
+        s.doStep(-1000.5, 0.5)
+        assert s.getRealStatus(2) == -1000.0
+        expect_error(inst, lambda: s.doStep(-1000.0, 0.5), "goes past the stop time")
+        s.reset()
+        inst.start(start_time=1e308)
+        expect_error(inst, lambda: s.doStep(1e308, 1e308), "largest representable time")
+        assert s.getStatus(0) == 0  # fmi2DoStepStatus: still fmi2OK
+        assert s.getRealStatus(2) == 1e308
+    finally:
+        inst.free()
