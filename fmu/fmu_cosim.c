@@ -163,7 +163,8 @@ static int hex_value(char c)
 }
 
 // The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir, or a
-// plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL.
+// plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL
+// for a URI of another host or scheme and for an escaped NUL (which would cut the path short).
 static char* resource_path(const char* uri)
 {
 	const char* p = uri;
@@ -171,18 +172,24 @@ static char* resource_path(const char* uri)
 		p += 16;
 	else if (strncmp(p, "file:///", 8) == 0)
 		p += 7;
+	else if (strncmp(p, "file://", 7) == 0)
+		return NULL;  // file://host/... on another host
 	else if (strncmp(p, "file:/", 6) == 0)
 		p += 5;
-	else if (strncmp(p, "file:", 5) == 0)
-		return NULL;  // file://host/... on another host
+	else if (strncmp(p, "file:", 5) == 0 || strstr(p, "://"))
+		return NULL;  // a relative file URI, or another scheme
 	size_t n = strlen(p);
 	char* path = malloc(n + 1);
 	if (!path)
 		return NULL;
 	size_t k = 0;
 	for (size_t i = 0; i < n; ++i) {
-		if (p[i] == '%' && i + 2 < n + 0 + 1 && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
-			path[k++] = (char)(hex_value(p[i + 1]) * 16 + hex_value(p[i + 2]));
+		if (p[i] == '%' && i + 2 < n && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
+			path[k] = (char)(hex_value(p[i + 1]) * 16 + hex_value(p[i + 2]));
+			if (path[k++] == '\0') {
+				free(path);
+				return NULL;
+			}
 			i += 2;
 		} else {
 			path[k++] = p[i];
@@ -581,7 +588,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	}
 	char* dir = resource_path(fmuResourceLocation);
 	if (!dir) {
-		log_error(inst, "fmi2Instantiate: resource location \"%s\" is not a local file URI", fmuResourceLocation);
+		log_error(inst, "fmi2Instantiate: resource location \"%s\" is not a local file URI (file:///dir, file:/dir, "
+		          "file://localhost/dir or a path, without an escaped NUL)",
+		          fmuResourceLocation);
 		goto fail;
 	}
 	size_t n = strlen(dir);

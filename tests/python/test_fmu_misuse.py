@@ -278,3 +278,18 @@ def test_steps_up_to_a_negative_stop_time_and_beyond_the_largest_time(test_fmu):
         assert s.getRealStatus(2) == 1e308
     finally:
         inst.free()
+
+
+def test_resource_locations_of_other_hosts_and_schemes_are_refused(test_fmu):
+    # file://host/dir names another machine (it was read as the local path //host/dir), http://
+    # is no file at all, and an escaped NUL would cut the path short at a folder that exists.
+    inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
+    try:
+        for uri in ("file://otherhost/resources", "http://localhost/resources",
+                    f"file://{inst.unzipdir}/resources%00/elsewhere"):
+            n = len(inst.messages)
+            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
+            assert not comp, uri
+            assert "not a local file URI" in "\n".join(m[2] for m in inst.messages[n:]), uri
+    finally:
+        inst.free()
