@@ -172,6 +172,10 @@ typedef struct sm_modes {
 	sm_modes_solver solver;  ///< the eigensolver actually used (AUTO resolved)
 	/// Largest ||K phi - omega^2 M phi|| / (||K|| ||phi||) over the kept modes [1].
 	double residual;
+	/// Sparse path: the shift sigma < 0 of the factorisation K - sigma M that gave the modes,
+	/// -1e-6 of the Gershgorin bound or, when the wanted modes lie far below that, nearer to
+	/// them (docs/analysis.md); 0 on the dense path [1/s^2].
+	double shift;
 } sm_modes;
 
 /// The default options (the values documented in sm_modes_def).
