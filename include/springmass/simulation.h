@@ -150,7 +150,9 @@ SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, 
 SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3]);
 
 /// Replaces the time [s] and the state: positions [m] and velocities [m/s] of all particles
-/// (constrained entries are ignored for fixed particles). Re-initialises the solver.
+/// (3 each; the entries of fixed and driven particles are ignored: they stay at their
+/// positions or follow their prescribed motion, see sm_simulation_set_driven). Re-initialises
+/// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
 /// Back to time 0, the model's initial state, no external forces, all springs intact,
@@ -172,7 +174,8 @@ SM_API sm_statistics sm_simulation_statistics(const sm_simulation* sim);
 SM_API int32_t sm_simulation_break_count(const sm_simulation* sim);
 SM_API sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t index);
 
-/// Linear solver actually in use (AUTO resolved).
+/// Linear solver actually in use (AUTO resolved). With SM_METHOD_ADAMS, which uses none, the
+/// one the options name, resolved as for BDF.
 SM_API sm_linear_solver sm_simulation_solver(const sm_simulation* sim);
 
 /// Message of the last failure, "" if none.
