@@ -537,8 +537,10 @@ static void load_initial_state(sm_simulation* sim)
 {
 	const sm_model* m = sim->model;
 	const size_t n3 = 3 * (size_t)sim->particle_count;
-	memcpy(sim->drive_position, m->position, n3 * sizeof(double));
-	memcpy(sim->drive_velocity, m->velocity, n3 * sizeof(double));
+	if (n3 > 0) {  // a model without particles has no arrays to copy from
+		memcpy(sim->drive_position, m->position, n3 * sizeof(double));
+		memcpy(sim->drive_velocity, m->velocity, n3 * sizeof(double));
+	}
 	for (int32_t i = 0; i < sim->particle_count; i++)
 		sim->drive_time[i] = 0.0;
 	memset(sim->external_force, 0, n3 * sizeof(double));
