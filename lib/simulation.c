@@ -1189,9 +1189,14 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	}
 	if (model->spring_count > 0)
 		memcpy(enabled, model->enabled, (size_t)model->spring_count);
-	// Springs that broke stay broken.
-	for (int32_t b = 0; b < sim->break_count; b++)
-		sm_model_set_spring_enabled(copy, sim->breaks[b].spring, false);
+	// Springs that broke stay broken. A model made from the simulation's own (cloned, a constant
+	// changed) has them disabled too, by the simulation, not by its maker: their state at the
+	// start stays as it was, so that a reset restores them.
+	for (int32_t b = 0; b < sim->break_count; b++) {
+		const int32_t s = sim->breaks[b].spring;
+		sm_model_set_spring_enabled(copy, s, false);
+		enabled[s] = sim->initial_enabled[s];
+	}
 	sm_model* previous = sim->model;
 	sim->model = copy;
 	sm_status st = build_roots(sim);

@@ -162,6 +162,9 @@ SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
 /// model of the same topology (same particle count and motions, same spring endpoints);
 /// keeps the state and broken springs; re-initialises the solver. SM_ERROR_TOPOLOGY otherwise.
+/// Springs disabled in the new model are disabled from the start (a reset keeps them so),
+/// except those that broke in this simulation: a copy of sm_simulation_model() has them
+/// disabled, and a reset still restores them.
 SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model);
 
 /// The simulation's own model (springs that broke are disabled in it).
