@@ -901,6 +901,22 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	return SM_OK;
 }
 
+// CVODE's first step comes out as 0 when the weighted norms of the accelerations overflow
+// (about 1e302 m/s^2 at atol 1e-6 m/s); CVODE then reports success at the stop time, having
+// moved nothing (it interpolates with h = 0). A step of size 0 is a failure; *reached becomes
+// NaN so that the state from before the call is kept.
+static int check_step_size(sm_simulation* sim, int flag, double* reached)
+{
+	double h = 0.0;
+	if (flag < 0 || flag == CV_ROOT_RETURN || (CVodeGetLastStep(sim->cvode, &h) == CV_SUCCESS && h > 0.0))
+		return flag;
+	*reached = NAN;
+	snprintf(sim->solver_message, sizeof sim->solver_message,
+	         "the step size is 0 s at t = %g s: the accelerations are too large to measure against the tolerances",
+	         sim->time);
+	return CV_ERR_FAILURE;
+}
+
 sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 {
 	if (sim == NULL)
@@ -926,14 +942,14 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		double reached = sim->time;
 		int flag;
 		if (sim->def.on_step == NULL) {
-			flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL);
+			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
 		} else {
 			// One internal step per call: the same steps as CV_NORMAL, which loops over them
 			// inside CVODE up to the stop time, with the caller told of each. CVODE counts
 			// max_steps within one call, so the limit is kept here, as CV_NORMAL would.
 			int32_t steps = 0;
 			do {
-				flag = CVode(sim->cvode, t_end, sim->y, &reached, CV_ONE_STEP);
+				flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_ONE_STEP), &reached);
 				if (flag >= 0)
 					sim->def.on_step(sim->def.on_step_context, reached);
 				steps++;

@@ -881,6 +881,41 @@ static int test_failures_are_reported_and_recoverable(void)
 	return 0;
 }
 
+// A force so large that the weighted norms of the accelerations overflow (1e300 N on 0.01 kg
+// against atol 1e-6 m/s) made CVODE's first step 0 s, and the advance reported success at the
+// end time with nothing moved. It is a solver failure, with and without the on_step hook, and
+// the simulation goes on once the force is sane.
+static int test_overflowing_force_is_a_failure(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.mass = 0.01;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	step_log log = {0, -1.0, true};
+	sm_simulation *plain, *hooked;
+	create_with_and_without_hook(model, sm_default_simulation_def(), &log, &plain, &hooked);
+	ENSURE(plain != NULL && hooked != NULL);
+	sm_simulation* both[2] = {plain, hooked};
+	for (int k = 0; k < 2; k++) {
+		sm_simulation* sim = both[k];
+		const double huge[3] = {1e300, 0.0, 0.0}, sane[3] = {1.0, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, huge), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 0.01), SM_ERROR_SOLVER);
+		ENSURE(strstr(sm_simulation_last_error(sim), "step size is 0") != NULL);
+		ENSURE(sm_simulation_time(sim) == 0.0 && sm_simulation_positions(sim)[0] == 0.0);
+		// x = F t^2 / (2 m) with 1 N on 0.01 kg from rest: 5e-3 m at 0.01 s (the default rtol
+		// 1e-6 allows about 1e-8 m).
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, sane), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 0.01), SM_OK);
+		ENSURE(fabs(sm_simulation_positions(sim)[0] - 5e-3) < 1e-7);
+	}
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(hooked);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // An interval below the time resolution 4 eps max(1 s, |t|) is one explicit Euler step; before,
 // CVODE's first step after a (re)start failed on it as a solver error (at t = 0 and 1e-200 s
 // with "tstop behind current t", at t = 1 s and 4e-16 s with CV_TOO_CLOSE). The bob's y starts
@@ -1049,6 +1084,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
+	RUN_TEST(test_overflowing_force_is_a_failure);
 	RUN_TEST(test_advance_below_time_resolution);
 	RUN_TEST(test_reduced_solver_huge_mass);
 	RUN_TEST(test_empty_model);
