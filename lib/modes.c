@@ -948,11 +948,16 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	if (solver == SM_MODES_AUTO)
 		solver = dof > SM_MODES_DENSE_LIMIT && sparse_fits ? SM_MODES_SPARSE : SM_MODES_DENSE;
 	if (solver == SM_MODES_SPARSE && !sparse_fits) {
-		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                  "modes: the sparse solver needs 1 <= mode_count <= (dof - %d) / 4 = %zu, got %d",
-		                  SM_MODES_SPARSE_MARGIN,
-		                  dof >= SM_MODES_SPARSE_MARGIN ? (dof - SM_MODES_SPARSE_MARGIN) / 4 : (size_t)0,
-		                  (int)d.mode_count);
+		if (dof < SM_MODES_SPARSE_MARGIN + 4)
+			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+			                  "modes: the sparse solver needs at least %d free degrees of freedom, the model has %zu: "
+			                  "use the dense solver",
+			                  SM_MODES_SPARSE_MARGIN + 4, dof);
+		else
+			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+			                  "modes: the sparse solver gives 1 to (dof - %d) / 4 = %zu modes of this model (%zu free "
+			                  "degrees of freedom), not %d: use the dense solver for more",
+			                  SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof, (int)d.mode_count);
 		goto done;
 	}
 #ifndef SPRINGMASS_HAVE_CHOLMOD

@@ -649,6 +649,19 @@ static int test_invalid_arguments(void)
 	mdef.configuration = start;
 	ENSURE_STATUS(sm_modes_compute(model, &mdef, &modes, &err), SM_ERROR_NOT_FINITE);
 	ENSURE(modes.shapes == NULL);
+	// The sparse solver needs room for its Krylov space: 9 degrees of freedom are too few, and a
+	// 20-particle chain (60) gives at most (60 - 40) / 4 = 5 modes; both say to use the dense one.
+	mdef = sm_default_modes_def();
+	mdef.solver = SM_MODES_SPARSE;
+	mdef.mode_count = 1;
+	ENSURE_STATUS(sm_modes_compute(model, &mdef, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "has 9") != NULL && strstr(err.message, "dense solver") != NULL);
+	sm_model* chain = chain_model(20, 1.0, 10.0, 0.1, SM_SPRING_REST_LENGTH, 0.0, 0.0);
+	ENSURE(chain != NULL);
+	mdef.mode_count = 6;
+	ENSURE_STATUS(sm_modes_compute(chain, &mdef, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "= 5 modes") != NULL && strstr(err.message, "not 6") != NULL);
+	sm_model_destroy(chain);
 
 	// Everything held: nothing to solve, no modes.
 	for (int32_t i = 0; i < 5; i++)
