@@ -94,7 +94,8 @@ typedef struct instance {
 	double* forces;   // 3 per particle, valid while forces_valid
 	bool forces_valid;
 	double* scratch;  // 5 * 3 per particle for directional derivatives
-	double* parameter_backup;  // the model-file parameters' values before a change that may fail
+	double* parameter_old;  // the model-file parameters' values before a change that may fail
+	double* parameter_new;  // the values such a change sets, one per parameter
 } instance;
 
 // ---------------------------------------------------------------------------------------------
@@ -427,6 +428,37 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 	return false;
 }
 
+// Puts back the parameter values old[] that set_parameters recorded, last parameter first
+// (see there).
+static void put_back_parameters(instance* inst, const double* old)
+{
+	for (int32_t k = sm_document_parameter_count(inst->doc); k-- > 0;) {
+		if (sm_document_parameter_value(inst->doc, k) != old[k])
+			sm_document_set_parameter(inst->doc, k, old[k], NULL);
+	}
+}
+
+// Sets the model-file parameters to values[] (one per parameter, in file order) and records the
+// previous ones in old[]. The model checks each value as it is set, against the others as they
+// are then, so a rejected one (logged) is undone in the reverse order: every document on the way
+// back is one that was valid on the way there. Returns false after such an undo.
+static bool set_parameters(instance* inst, const char* function, const double* values, double* old)
+{
+	int32_t np = sm_document_parameter_count(inst->doc);
+	for (int32_t k = 0; k < np; ++k)
+		old[k] = sm_document_parameter_value(inst->doc, k);
+	for (int32_t k = 0; k < np; ++k) {
+		sm_error err = {SM_OK, ""};
+		if (old[k] != values[k] && sm_document_set_parameter(inst->doc, k, values[k], &err) != SM_OK) {
+			log_error(inst, "%s: %s = %g rejected by the model: %s", function, sm_document_parameter_name(inst->doc, k),
+			          values[k], err.message);
+			put_back_parameters(inst, old);
+			return false;
+		}
+	}
+	return true;
+}
+
 // Sets the model-file parameters among vr[] (all or none). Before initialisation ends the
 // simulation is made again when next needed; afterwards (tunable parameters) the running
 // simulation takes the new constants, built into one model, and keeps its state. A value the
@@ -434,51 +466,41 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
 {
 	int32_t np = sm_document_parameter_count(inst->doc);
-	double* old = inst->parameter_backup;
+	double* values = inst->parameter_new;
 	for (int32_t k = 0; k < np; ++k)
-		old[k] = sm_document_parameter_value(inst->doc, k);
-	bool changed = false;
-	sm_status st = SM_OK;
-	for (size_t i = 0; i < nvr && st == SM_OK; ++i) {
+		values[k] = sm_document_parameter_value(inst->doc, k);
+	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = &inst->table.variables[vr[i]];
-		if (v->source != FMU_SRC_MODEL_PARAMETER || sm_document_parameter_value(inst->doc, v->index) == value[i])
-			continue;
-		sm_error err = {SM_OK, ""};
-		st = sm_document_set_parameter(inst->doc, v->index, value[i], &err);
-		if (st != SM_OK)
-			log_error(inst, "fmi2SetReal: %s = %g rejected: %s", v->name, value[i], err.message);
-		changed = true;
+		if (v->source == FMU_SRC_MODEL_PARAMETER)
+			values[v->index] = value[i];
 	}
-	if (st == SM_OK && changed && !(inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))) {
-		sm_model* model = NULL;
-		st = build_model(inst, &model);
-		if (st == SM_OK) {
-			st = sm_simulation_update_model(inst->sim, model);
-			if (st != SM_OK)
-				log_error(inst, "fmi2SetReal: the simulation cannot take the new parameters: %s",
-				          sm_simulation_last_error(inst->sim));
-		}
-		sm_model_destroy(model);
-	}
-	if (st != SM_OK) {
-		for (int32_t k = 0; k < np; ++k) {
-			if (sm_document_parameter_value(inst->doc, k) != old[k])
-				sm_document_set_parameter(inst->doc, k, old[k], NULL);
-		}
+	const double* old = inst->parameter_old;
+	if (!set_parameters(inst, "fmi2SetReal", values, inst->parameter_old))
 		return fmi2Error;
-	}
-	if (!changed)
+	if (memcmp(values, old, (size_t)np * sizeof *values) == 0)
 		return fmi2OK;
 	if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION)) {
 		inst->sim_dirty = true;
 		return fmi2OK;
 	}
+	sm_model* model = NULL;
+	sm_status st = build_model(inst, &model);
+	if (st == SM_OK) {
+		st = sm_simulation_update_model(inst->sim, model);
+		if (st != SM_OK)
+			log_error(inst, "fmi2SetReal: the simulation cannot take the new parameters: %s",
+			          sm_simulation_last_error(inst->sim));
+	}
+	sm_model_destroy(model);
+	if (st != SM_OK) {
+		put_back_parameters(inst, old);
+		return fmi2Error;
+	}
 	inst->forces_valid = false;
 	for (int32_t k = 0; k < np; ++k) {
-		double now = sm_document_parameter_value(inst->doc, k);
-		if (now != old[k])
+		if (values[k] != old[k])
 			logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: parameter %s = %.17g (solver restarted)", inst->time,
-			      sm_document_parameter_name(inst->doc, k), now);
+			      sm_document_parameter_name(inst->doc, k), values[k]);
 	}
 	return fmi2OK;
 }
@@ -545,7 +567,8 @@ static void free_instance(instance* inst)
 	free(inst->port_dirty);
 	free(inst->forces);
 	free(inst->scratch);
-	free(inst->parameter_backup);
+	free(inst->parameter_old);
+	free(inst->parameter_new);
 	free(inst->name);
 	free(inst);
 }
@@ -646,9 +669,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	inst->port_dirty = calloc(np, sizeof *inst->port_dirty);
 	inst->forces = calloc(n3, sizeof *inst->forces);
 	inst->scratch = calloc(5 * n3, sizeof *inst->scratch);
-	inst->parameter_backup = calloc((size_t)sm_document_parameter_count(inst->doc) + 1, sizeof(double));
+	inst->parameter_old = calloc((size_t)sm_document_parameter_count(inst->doc) + 1, sizeof(double));
+	inst->parameter_new = calloc((size_t)sm_document_parameter_count(inst->doc) + 1, sizeof(double));
 	if (!inst->ports || !inst->held || !inst->port_dirty || !inst->forces || !inst->scratch ||
-	    !inst->parameter_backup) {
+	    !inst->parameter_old || !inst->parameter_new) {
 		log_error(inst, "fmi2Instantiate: out of memory");
 		goto fail;
 	}
@@ -1234,32 +1258,13 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	return ok;
 }
 
-// Sets the model-file parameters to values, recording the previous ones in old; on a rejected
-// value puts back those already set and returns false.
-static bool set_parameters(instance* inst, const char* function, const double* values, double* old)
-{
-	int32_t np = sm_document_parameter_count(inst->doc);
-	for (int32_t k = 0; k < np; ++k) {
-		old[k] = sm_document_parameter_value(inst->doc, k);
-		sm_error err = {SM_OK, ""};
-		if (old[k] != values[k] && sm_document_set_parameter(inst->doc, k, values[k], &err) != SM_OK) {
-			log_error(inst, "%s: parameter %s = %g of the state is rejected by the model: %s", function,
-			          sm_document_parameter_name(inst->doc, k), values[k], err.message);
-			while (k-- > 0)
-				sm_document_set_parameter(inst->doc, k, old[k], NULL);
-			return false;
-		}
-	}
-	return true;
-}
-
 // Makes a checked state the instance's. All or nothing: a state the model refuses (a parameter
 // out of its range, a simulation that cannot start from it) leaves the instance as it was.
 static fmi2Status restore_state(instance* inst, const char* function, const unsigned char* b)
 {
 	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
 	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
-	double* old = inst->parameter_backup;
+	double* old = inst->parameter_old;
 	port_values* held = malloc(((size_t)inst->port_count + 1) * sizeof *held);
 	if (!held) {
 		log_error(inst, "%s: out of memory", function);
@@ -1286,12 +1291,10 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 		if (status == fmi2OK)
 			status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
 		sm_model_destroy(model);
-		if (status != fmi2OK) {
-			for (int32_t k = 0; k < np; ++k)
-				sm_document_set_parameter(inst->doc, k, old[k], NULL);
-		} else {
+		if (status != fmi2OK)
+			put_back_parameters(inst, old);
+		else
 			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
-		}
 	} else if (status == fmi2OK) {
 		sm_simulation_destroy(inst->sim);
 		inst->sim = NULL;

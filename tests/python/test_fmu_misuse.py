@@ -204,6 +204,24 @@ def test_a_rejected_set_real_changes_nothing(test_fmu):
         reference.free()
 
 
+
+def test_a_rejected_set_real_puts_the_parameters_back_in_reverse_order(test_fmu):
+    # xa = xb is refused (the spring's rest length would be 0). xa = 5 then xb = 0 are both valid
+    # steps, k = -1 is not: putting xa back first would pass through xa = xb = 0, which the model
+    # refuses, and leave xa at 5; undone last first, every step back is one taken on the way.
+    inst = Instance(test_fmu("two_ends"))
+    s, vr = inst.slave, inst.vr
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        expect_error(inst, lambda: s.setReal([vr["xa"], vr["xb"], vr["k"]], [5.0, 0.0, -1.0]), "k = -1")
+        assert inst.get("xa", "xb", "k") == [0.0, 1.0, 50.0]
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.1)
+        assert inst.get("p[1].x") == 1.0
+    finally:
+        inst.free()
+
 def test_status_queries_with_null_pointers_and_unknown_kinds(test_fmu):
     inst = Instance(test_fmu("driven_oscillator")).start()
     s = inst.slave
