@@ -110,6 +110,15 @@ if "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/o
   [ $status -eq 1 ] && [ -d "$tmp/folder" ] && [ ! -e "$tmp/folder.zip" ] &&
     [ "$out" = "springmass fmu: cannot write $tmp/folder: Is a directory" ] ||
     fail "fmu -o DIR exited with $status and printed '$out'"
+  # An earlier output is replaced whole (written beside it, then renamed over it: a full disk
+  # leaves it as it was) and keeps its permissions; a link keeps pointing at the file it names.
+  echo "earlier" > "$tmp/earlier.fmu"
+  chmod 640 "$tmp/earlier.fmu"
+  ln -s earlier.fmu "$tmp/link.fmu"
+  "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/link.fmu" > /dev/null 2>&1 &&
+    [ -L "$tmp/link.fmu" ] && [ "$(stat -c %a "$tmp/earlier.fmu")" = 640 ] &&
+    [ "$(head -c 2 "$tmp/earlier.fmu")" = PK ] && ! ls "$tmp" | grep -q partial ||
+    fail "fmu -o LINK to an earlier output: not replaced in place with its permissions"
 fi
 
 [ $failures -eq 0 ] && echo "check_cli: all passed"

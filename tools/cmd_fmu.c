@@ -30,6 +30,7 @@ int sm_cmd_fmu(int argc, char** argv)
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <ftw.h>
 #include <limits.h>
 #include <stdlib.h>
@@ -62,6 +63,51 @@ static bool write_all(const char* path, const char* data, size_t length)
 		return false;
 	bool ok = fwrite(data, 1, length, f) == length;
 	ok = (fclose(f) == 0) && ok;
+	return ok;
+}
+
+// Writes data to the output. A regular file, or a new one, is written beside it under a
+// temporary name that then replaces it, so that a failed write (a full disk) leaves no partial
+// archive and an earlier output as it was; the file keeps the earlier one's permissions, or gets
+// 0666 less the umask like any new file. A write-protected file is refused as fopen would refuse
+// it. Anything else is only opened for writing, never removed: a device is written (/dev/full
+// fails with 'No space left on device'), a directory fails with 'Is a directory'.
+static bool write_output(const char* output, const char* data, size_t length)
+{
+	struct stat st;
+	char target[PATH_MAX];
+	const bool exists = stat(output, &st) == 0;
+	if (exists && !S_ISREG(st.st_mode))
+		return write_all(output, data, length);
+	if (exists && (access(output, W_OK) != 0 || !realpath(output, target)))
+		return false;  // a link is followed to the file it names, as fopen follows it
+	if (!exists && snprintf(target, sizeof target, "%s", output) >= (int)sizeof target) {
+		errno = ENAMETOOLONG;
+		return false;
+	}
+	char temporary[PATH_MAX];
+	if (snprintf(temporary, sizeof temporary, "%s.partial-%ld", target, (long)getpid()) >= (int)sizeof temporary) {
+		errno = ENAMETOOLONG;
+		return false;
+	}
+	const int fd = open(temporary, O_WRONLY | O_CREAT | O_EXCL, 0666);
+	if (fd < 0)
+		return false;
+	FILE* f = fdopen(fd, "wb");
+	if (!f) {
+		close(fd);
+		unlink(temporary);
+		return false;
+	}
+	bool ok = fwrite(data, 1, length, f) == length && fflush(f) == 0;
+	ok = ok && (!exists || fchmod(fd, st.st_mode & 07777) == 0);
+	ok = (fclose(f) == 0) && ok;
+	ok = ok && rename(temporary, target) == 0;
+	if (!ok) {
+		const int error = errno;
+		unlink(temporary);
+		errno = error;
+	}
 	return ok;
 }
 
@@ -176,7 +222,7 @@ static int package(const options* opt)
 	fmu_table table;
 	memset(&table, 0, sizeof table);
 	char staging[PATH_MAX] = "";
-	char path[PATH_MAX], runtime[PATH_MAX], output[PATH_MAX];
+	char path[PATH_MAX], runtime[PATH_MAX];
 
 	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
 		fprintf(stderr, "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s; give one with "
@@ -203,19 +249,6 @@ static int package(const options* opt)
 	if (!xml) {
 		fprintf(stderr, "springmass fmu: out of memory\n");
 		goto done;
-	}
-
-	// The output's absolute path (zip runs in the staging folder).
-	if (opt->output[0] == '/') {
-		snprintf(output, sizeof output, "%s", opt->output);
-	} else {
-		char cwd[PATH_MAX];
-		if (!getcwd(cwd, sizeof cwd)) {
-			fprintf(stderr, "springmass fmu: cannot get the current folder\n");
-			goto done;
-		}
-		if (!join(output, sizeof output, cwd, opt->output))
-			goto done;
 	}
 
 	const char* tmp = getenv("TMPDIR");
@@ -290,9 +323,7 @@ static int package(const options* opt)
 		goto write_failed;
 
 	// zip writes into the staging folder, under a name with an extension (zip adds ".zip" to one
-	// without), and the archive is then copied to the output: the output is only ever opened for
-	// writing, never removed first, so that a directory or a device named by mistake is reported
-	// and left as it was.
+	// without), and the archive is then copied to the output (see write_output).
 	char* zip_argv[] = {"zip", "-q", "-r", "-X", "model.fmu", "modelDescription.xml", "binaries", "resources", NULL};
 	if (!run_in(staging, zip_argv) || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
@@ -305,7 +336,7 @@ static int package(const options* opt)
 		goto done;
 	}
 	errno = 0;
-	const bool written = write_all(output, archive, archive_length);
+	const bool written = write_output(opt->output, archive, archive_length);
 	free(archive);
 	if (!written) {
 		fprintf(stderr, "springmass fmu: cannot write %s: %s\n", opt->output,
