@@ -1123,14 +1123,12 @@ static double get_d(const unsigned char* b, int k)
 	return v;
 }
 
-// 64-bit FNV-1a of a state's bytes except its checksum field.
+// 64-bit FNV-1a of a state's bytes except its checksum field (size >= HEADER_BYTES).
 static int64_t state_checksum(const unsigned char* b, size_t size)
 {
 	uint64_t hash = 0xcbf29ce484222325u;  // FNV-64 offset basis
 	for (size_t i = 0; i < size; ++i) {
-		if (i == CHECKSUM_OFFSET)
-			i += 8;
-		if (i < size)
+		if (i < CHECKSUM_OFFSET || i >= CHECKSUM_OFFSET + 8)
 			hash = (hash ^ b[i]) * 0x100000001b3u;  // FNV-64 prime
 	}
 	int64_t v;
@@ -1207,8 +1205,15 @@ static bool all_finite(const double* a, size_t count)
 // something else than save_state.
 static bool valid_state(instance* inst, const char* function, const unsigned char* b, size_t size)
 {
+	// The magic's last character is the layout's version: a state of another version is named as
+	// such, since its fields would be read at the wrong places.
+	if (size >= 8 && memcmp(b, STATE_MAGIC, 7) == 0 && b[7] != (unsigned char)STATE_MAGIC[7]) {
+		log_error(inst, "%s: a state of another springmass version (layout %c, this FMU reads %c): save it again "
+		          "with this FMU", function, b[7] >= 0x20 && b[7] < 0x7f ? (char)b[7] : '?', STATE_MAGIC[7]);
+		return false;
+	}
 	if (size < HEADER_BYTES || memcmp(b, STATE_MAGIC, 8) != 0) {
-		log_error(inst, "%s: not a springmass FMU state (or one of another springmass version)", function);
+		log_error(inst, "%s: not a springmass FMU state", function);
 		return false;
 	}
 	if (memcmp(b + 8, inst->table.guid, 40) != 0) {

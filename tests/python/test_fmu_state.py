@@ -156,6 +156,11 @@ def test_damaged_serialised_state_is_refused_and_changes_nothing(test_fmu):
                 b.slave.deSerializeFMUstate(bad)
             assert info.value.status == FMI2_ERROR
             assert any("fmi2DeSerializeFMUstate" in m[2] for m in b.messages[n:])
+        # A state of another layout version (the magic's last character) is named as such.
+        n = len(b.messages)
+        with pytest.raises(FMICallException):
+            b.slave.deSerializeFMUstate(checksummed(blob[:7] + b"1" + blob[8:]))
+        assert any("another springmass version (layout 1" in m[2] for m in b.messages[n:])
         assert b.get(*OUTPUTS) == before and b.get("k") == 50.0
         run(b, 0.05, 5)
         # The intact state still restores.
