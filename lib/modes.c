@@ -953,6 +953,11 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 			                  "modes: the sparse solver needs at least %d free degrees of freedom, the model has %zu: "
 			                  "use the dense solver",
 			                  SM_MODES_SPARSE_MARGIN + 4, dof);
+		else if (d.mode_count == 0)
+			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+			                  "modes: the sparse solver gives the lowest modes, 1 to (dof - %d) / 4 = %zu of this "
+			                  "model's %zu, not all (mode_count = 0): use the dense solver for all",
+			                  SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof);
 		else
 			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 			                  "modes: the sparse solver gives 1 to (dof - %d) / 4 = %zu modes of this model (%zu free "

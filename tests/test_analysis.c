@@ -973,9 +973,10 @@ static int test_sparse_free_block_zero_modes(void)
 	def.solver = SM_MODES_SPARSE;
 	def.mode_count = 0;
 	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strstr(err.message, "mode_count") != NULL);
+	ENSURE(strstr(err.message, "mode_count = 0") != NULL && strstr(err.message, "dense solver") != NULL);
 	def.mode_count = 1536;
 	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "not 1536") != NULL);
 	def.mode_count = 10;
 	def.solver = (sm_modes_solver)7;
 	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
