@@ -13,6 +13,7 @@
 
 #include "fmi2Functions.h"
 
+#include <ctype.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
@@ -163,6 +164,18 @@ static int hex_value(char c)
 	return -1;
 }
 
+// Whether text starts with a URI scheme and an authority, "scheme://" (RFC 3986 3.1: a letter,
+// then letters, digits, '+', '-' or '.'). A path may contain "://" further on.
+static bool starts_with_scheme(const char* text)
+{
+	if (!isalpha((unsigned char)text[0]))
+		return false;
+	size_t i = 1;
+	while (isalnum((unsigned char)text[i]) || text[i] == '+' || text[i] == '-' || text[i] == '.')
+		i++;
+	return strncmp(text + i, "://", 3) == 0;
+}
+
 // The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir, or a
 // plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL
 // for a URI of another host or scheme and for an escaped NUL (which would cut the path short).
@@ -177,7 +190,7 @@ static char* resource_path(const char* uri)
 		return NULL;  // file://host/... on another host
 	else if (strncmp(p, "file:/", 6) == 0)
 		p += 5;
-	else if (strncmp(p, "file:", 5) == 0 || strstr(p, "://"))
+	else if (strncmp(p, "file:", 5) == 0 || starts_with_scheme(p))
 		return NULL;  // a relative file URI, or another scheme
 	size_t n = strlen(p);
 	char* path = malloc(n + 1);

@@ -153,13 +153,14 @@ def test_reset_equals_a_fresh_instance(test_fmu):
 
 
 def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
-    # The resources folder in a path with a space, passed as file:/ (one slash) and with %20.
+    # The resources folder in a path with a space, passed as file:/ (one slash) and with %20, and
+    # as a plain path that contains "://" (a folder "a:" and a doubled slash), which is no scheme.
     import shutil
     from fmpy import extract
-    folder = tmp_path / "with space"
+    folder = tmp_path / "with space" / "a:"
     extract(str(test_fmu("driven_oscillator")), unzipdir=str(folder))
     for uri in (f"file:{folder}/resources", f"file://{str(folder).replace(' ', '%20')}/resources/",
-                f"file://localhost{str(folder).replace(' ', '%20')}/resources"):
+                f"file://localhost{str(folder).replace(' ', '%20')}/resources", f"{folder}//resources"):
         inst = Instance(test_fmu("driven_oscillator"), unzipdir=str(folder), instantiate=False)
         try:
             comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
