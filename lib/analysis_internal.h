@@ -19,3 +19,16 @@ int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* do
 
 // True if all count values are finite.
 int analysis_all_finite(const double* values, size_t count);
+
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+#include <cholmod.h>
+
+// A CHOLMOD view (no copy) of the symmetric dof x dof matrix with the pattern of a sparse
+// Jacobian and the given values: the CSR arrays of a symmetric pattern are also its CSC arrays,
+// and stype = 1 reads one half.
+cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values);
+
+// Factors A, the symbolic analysis done once into *factor: 1 if A is positive definite, 0 if not,
+// -1 on failure.
+int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common);
+#endif

@@ -349,30 +349,10 @@ static int factor_shifted(lanczos_work* w, double shift)
 	memcpy(w->shifted, w->stiffness, (size_t)nnz * sizeof(double));
 	for (size_t i = 0; i < w->dof; i++)
 		w->shifted[w->diagonal[i]] += shift * w->mass[i];
-	// The CSR arrays of a symmetric pattern are also its CSC arrays; stype = 1 reads one half.
-	cholmod_sparse A;
-	memset(&A, 0, sizeof A);
-	A.nrow = A.ncol = w->dof;
-	A.nzmax = (size_t)nnz;
-	A.p = (void*)w->rows;
-	A.i = (void*)w->cols;
-	A.x = w->shifted;
-	A.stype = 1;
-	A.itype = CHOLMOD_LONG;
-	A.xtype = CHOLMOD_REAL;
-	A.dtype = CHOLMOD_DOUBLE;
-	A.sorted = 1;
-	A.packed = 1;
-	if (w->factor == NULL) {
-		w->factor = cholmod_l_analyze(&A, &w->common);
-		if (w->factor == NULL)
-			return -1;
-	}
-	cholmod_l_factorize(&A, w->factor, &w->common);
-	if (w->common.status == CHOLMOD_NOT_POSDEF || w->factor->minor < w->factor->n)
-		return 0;
-	if (w->common.status < CHOLMOD_OK)
-		return -1;
+	cholmod_sparse A = analysis_cholmod_view(w->pattern, w->dof, w->shifted);
+	const int factored = analysis_cholmod_factor(&A, &w->factor, &w->common);
+	if (factored != 1)
+		return factored;
 	w->shift = -shift;
 	return 1;
 }

@@ -86,6 +86,39 @@ int analysis_all_finite(const double* values, size_t count)
 	return 1;
 }
 
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values)
+{
+	cholmod_sparse A;
+	memset(&A, 0, sizeof A);
+	A.nrow = A.ncol = dof;
+	A.nzmax = (size_t)sm_sparse_jacobian_nonzeros(pattern);
+	A.p = (void*)sm_sparse_jacobian_row_pointers(pattern);
+	A.i = (void*)sm_sparse_jacobian_column_indices(pattern);
+	A.x = values;
+	A.stype = 1;
+	A.itype = CHOLMOD_LONG;
+	A.xtype = CHOLMOD_REAL;
+	A.dtype = CHOLMOD_DOUBLE;
+	A.sorted = 1;
+	A.packed = 1;
+	return A;
+}
+
+int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common)
+{
+	if (*factor == NULL) {
+		*factor = cholmod_l_analyze(A, common);
+		if (*factor == NULL)
+			return -1;
+	}
+	cholmod_l_factorize(A, *factor, common);
+	if (common->status == CHOLMOD_NOT_POSDEF || (*factor)->minor < (*factor)->n)
+		return 0;
+	return common->status < CHOLMOD_OK ? -1 : 1;
+}
+#endif
+
 // K = -df/dx: the block K_s = d f_a / d x_b of spring s enters as
 //   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
 // (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
@@ -419,24 +452,6 @@ static int sparse_prepare(statics_work* w)
 
 // The sparse pattern in CSR with a symmetric pattern is also its own CSC; CHOLMOD reads only
 // the upper triangle (stype = 1).
-static cholmod_sparse sparse_view(statics_work* w)
-{
-	cholmod_sparse A;
-	memset(&A, 0, sizeof A);
-	A.nrow = A.ncol = w->dof;
-	A.nzmax = (size_t)sm_sparse_jacobian_nonzeros(w->jacobian);
-	A.p = (void*)sm_sparse_jacobian_row_pointers(w->jacobian);
-	A.i = (void*)sm_sparse_jacobian_column_indices(w->jacobian);
-	A.x = w->values;
-	A.stype = 1;
-	A.itype = CHOLMOD_LONG;
-	A.xtype = CHOLMOD_REAL;
-	A.dtype = CHOLMOD_DOUBLE;
-	A.sorted = 1;
-	A.packed = 1;
-	return A;
-}
-
 static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
                        double* step)
 {
@@ -447,19 +462,10 @@ static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_
 		w->values[k] = -w->values[k];
 	for (size_t i = 0; i < w->dof; i++)
 		w->values[w->diagonal[i]] += mu * w->dof_mass[i];
-	cholmod_sparse A = sparse_view(w);
-	if (w->factor == NULL) {
-		w->factor = cholmod_l_analyze(&A, &w->common);
-		if (w->factor == NULL)
-			return -1;
-	}
-	cholmod_l_factorize(&A, w->factor, &w->common);
-	if (w->common.status == CHOLMOD_NOT_POSDEF || w->factor->minor < w->factor->n)
-		return 0;
-	if (w->common.status < CHOLMOD_OK)
-		return -1;
-	if (step == NULL)
-		return 1;
+	cholmod_sparse A = analysis_cholmod_view(w->jacobian, w->dof, w->values);
+	const int factored = analysis_cholmod_factor(&A, &w->factor, &w->common);
+	if (factored != 1 || step == NULL)
+		return factored;
 	cholmod_dense b;
 	memset(&b, 0, sizeof b);
 	b.nrow = b.d = w->dof;

@@ -969,7 +969,8 @@ static int test_reduced_solver_huge_mass(void)
 		const sm_statistics stats = sm_simulation_statistics(sim);
 		if (solver == SM_SOLVER_DENSE)
 			dense_steps = stats.steps;
-		printf("  %s: %ld steps, %ld convergence failures\n", sm_linear_solver_name((sm_linear_solver)solver), (long)stats.steps, (long)stats.convergence_failures);
+		printf("  %s: %ld steps, %ld convergence failures\n", sm_linear_solver_name((sm_linear_solver)solver),
+		       (long)stats.steps, (long)stats.convergence_failures);
 		ENSURE(stats.convergence_failures == 0 && stats.steps <= dense_steps + dense_steps / 10);
 		ENSURE_NEAR(sm_simulation_positions(sim)[5], -0.5 * 9.81, 1e-5);
 		sm_simulation_destroy(sim);

@@ -223,6 +223,7 @@ def test_a_rejected_set_real_puts_the_parameters_back_in_reverse_order(test_fmu)
     finally:
         inst.free()
 
+
 def test_status_queries_with_null_pointers_and_unknown_kinds(test_fmu):
     inst = Instance(test_fmu("driven_oscillator")).start()
     s = inst.slave
