@@ -1334,6 +1334,8 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	return fmi2OK;
 }
 
+// Not in the error state: there is no consistent state to save then (FMI 2.0, 2.1.3: a state for
+// a restart is one saved before, in a non-erroneous state).
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 {
 	instance* inst = c;
@@ -1365,10 +1367,13 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 	return fmi2OK;
 }
 
+// Allowed in the error state too: FMI 2.0 (2.1.3) names restoring a state saved before as the
+// way to continue after fmi2Error. If the state cannot be restored, the instance stays in the
+// error state.
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetFMUstate", ST_ANY & ~ST_ERROR))
+	if (!allowed(inst, "fmi2SetFMUstate", ST_ANY))
 		return fmi2Error;
 	if (!FMUstate) {
 		log_error(inst, "fmi2SetFMUstate: NULL FMUstate");
