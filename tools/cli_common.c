@@ -64,6 +64,14 @@ void cli_note_dense(const char* command, size_t dof)
 		        command, dof, CLI_DENSE_LIMIT);
 }
 
+long cli_output_rows(double t_end, double interval)
+{
+	const double ratio = t_end / interval;
+	if (!(ratio <= CLI_MAX_ROWS))
+		return -1;
+	return ratio < 1.0 ? 1 : (long)ceil(ratio * (1.0 - 1e-9));
+}
+
 int cli_make_directory(const char* command, const char* dir)
 {
 	if (mkdir(dir, 0777) == 0)

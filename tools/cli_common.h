@@ -23,6 +23,15 @@ int cli_set_parameters(const char* command, sm_document* doc, const char* const*
 /// dof is above CLI_DENSE_LIMIT.
 void cli_note_dense(const char* command, size_t dof);
 
+/// Most output rows `springmass run` writes: an interval given by mistake in the wrong unit
+/// would otherwise fill the disk.
+#define CLI_MAX_ROWS 1e9
+
+/// Output rows of a run to t_end [s] every interval [s]: one at each k * interval and the last at
+/// t_end (within a relative 1e-9, k * interval is t_end itself), at least that one; -1 when that
+/// is more than CLI_MAX_ROWS.
+long cli_output_rows(double t_end, double interval);
+
 /// Creates a directory if it does not exist; prints the error and returns -1 on failure (also
 /// when a file that is not a directory has its name).
 int cli_make_directory(const char* command, const char* dir);

@@ -1,4 +1,5 @@
 // springmass check: validates a model file and prints a summary of what it builds.
+#include "cli_common.h"
 #include "commands.h"
 
 #include "springmass/model_file.h"
@@ -65,6 +66,18 @@ int sm_cmd_check(int argc, char** argv)
 	sm_model* model = NULL;
 	if (doc == NULL || sm_document_build(doc, &model, &err) != SM_OK) {
 		fprintf(stderr, "springmass check: %s\n", err.message);
+		sm_document_destroy(doc);
+		return 1;
+	}
+
+	// The settings must also suit `springmass run MODEL`, which writes a row every interval.
+	const sm_document_settings settings = sm_document_get_settings(doc);
+	if (cli_output_rows(settings.stop_time, settings.output_interval) < 0) {
+		fprintf(stderr,
+		        "springmass check: %s: simulation: stop_time / output_interval = %g s / %g s would make more than %g "
+		        "output rows in springmass run\n",
+		        path, settings.stop_time, settings.output_interval, CLI_MAX_ROWS);
+		sm_model_destroy(model);
 		sm_document_destroy(doc);
 		return 1;
 	}
@@ -169,7 +182,6 @@ int sm_cmd_check(int argc, char** argv)
 		printf("\n");
 		printf("             explicit-stability step 2/omega = %.3g s\n", 2.0 / max_omega);
 	}
-	const sm_document_settings settings = sm_document_get_settings(doc);
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
 	printf("ok\n");

@@ -304,15 +304,12 @@ int sm_cmd_run(int argc, char** argv)
 	sm_document_settings settings = sm_document_get_settings(doc);
 	const double t_end = o.t_end > 0.0 ? o.t_end : settings.stop_time;
 	const double interval = o.interval > 0.0 ? o.interval : settings.output_interval;
-	// Rows at k * interval and a last one at t_end (within a relative 1e-9, k * interval is
-	// t_end itself); at least the one at t_end.
-	const double ratio = t_end / interval;
-	if (!(ratio <= 1e9)) {
-		fprintf(stderr, "springmass run: %.17g s / %.17g s would make more than 1e9 output rows: give a larger interval\n",
-		        t_end, interval);
+	const long rows = cli_output_rows(t_end, interval);
+	if (rows < 0) {
+		fprintf(stderr, "springmass run: %.17g s / %.17g s would make more than %g output rows: give a larger interval\n",
+		        t_end, interval, CLI_MAX_ROWS);
 		goto done;
 	}
-	const long rows = ratio < 1.0 ? 1 : (long)ceil(ratio * (1.0 - 1e-9));
 	sm_simulation_def def = settings.solver;
 	if (o.rtol > 0.0)
 		def.relative_tolerance = o.rtol;
