@@ -1,5 +1,13 @@
-// Text of the status codes.
+// Text of the status codes and of the version.
 #include "springmass/base.h"
+
+#define SM_STRINGIFY_(x) #x
+#define SM_STRINGIFY(x) SM_STRINGIFY_(x)
+
+const char* sm_version(void)
+{
+	return SM_STRINGIFY(SM_VERSION_MAJOR) "." SM_STRINGIFY(SM_VERSION_MINOR) "." SM_STRINGIFY(SM_VERSION_PATCH);
+}
 
 const char* sm_status_string(sm_status status)
 {

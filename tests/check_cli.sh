@@ -25,6 +25,8 @@ while IFS='|' read -r file expected; do
   [ "$out" = "springmass check: $expected" ] || fail "check $file printed '$out', expected 'springmass check: $expected'"
 done < expected.txt
 
+version=$(sed -n 's/^#define SM_VERSION_\(MAJOR\|MINOR\|PATCH\) \([0-9]*\)$/\2/p' "$root/include/springmass/base.h" | paste -sd.)
+[ "$("$cli" --version)" = "springmass $version" ] || fail "--version printed '$("$cli" --version)', expected 'springmass $version'"
 "$cli" check --help | grep -q "^usage: springmass check MODEL" || fail "check --help printed no usage"
 "$cli" check > /dev/null 2>&1; [ $? -eq 2 ] || fail "check without a file did not exit with 2"
 "$cli" check a.json b.json > /dev/null 2>&1; [ $? -eq 2 ] || fail "check with two files did not exit with 2"

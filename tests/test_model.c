@@ -4,7 +4,9 @@
 #include "springmass/model.h"
 #include "test_harness.h"
 
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 // The message must name the element and the rule: it contains both substrings.
 #define ENSURE_MESSAGE(model, part1, part2)                                                         \
@@ -315,6 +317,16 @@ static int test_growth_keeps_values(void)
 	return 0;
 }
 
+// The library reports the version of the headers it was built with (the consumer test compiles
+// against the installed headers of the same build).
+static int test_version(void)
+{
+	char expected[64];
+	snprintf(expected, sizeof expected, "%d.%d.%d", SM_VERSION_MAJOR, SM_VERSION_MINOR, SM_VERSION_PATCH);
+	ENSURE(strcmp(sm_version(), expected) == 0);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -325,5 +337,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_accessors_and_per_strain_constants);
 	RUN_TEST(test_clone_is_independent);
 	RUN_TEST(test_growth_keeps_values);
+	RUN_TEST(test_version);
 	return TEST_SUMMARY();
 }

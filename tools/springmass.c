@@ -3,6 +3,8 @@
 
 #include "commands.h"
 
+#include "springmass/base.h"
+
 #include <dlfcn.h>
 #include <gsl/gsl_errno.h>
 #include <stdio.h>
@@ -29,7 +31,7 @@ static void usage(FILE* out)
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
 		fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
 	}
-	fprintf(out, "\n`springmass <command> --help` explains a command.\n");
+	fprintf(out, "\n`springmass <command> --help` explains a command; `springmass --version` prints the version.\n");
 }
 
 // CHOLMOD's supernodal factorisations call BLAS, and Debian's OpenBLAS starts a thread per core
@@ -61,6 +63,10 @@ int main(int argc, char** argv)
 	}
 	if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
 		usage(stdout);
+		return 0;
+	}
+	if (strcmp(argv[1], "--version") == 0) {
+		printf("springmass %s\n", sm_version());
 		return 0;
 	}
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {

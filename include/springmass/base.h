@@ -12,9 +12,19 @@
 #define SM_API
 #endif
 
+/// Version of these headers, major.minor.patch (CMakeLists.txt reads it from here). Before 1.0
+/// a new minor version may change the API; a new patch version does not.
+#define SM_VERSION_MAJOR 0
+#define SM_VERSION_MINOR 1
+#define SM_VERSION_PATCH 0
+
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+/// Version of the library linked, "major.minor.patch": the SM_VERSION_* of the headers it was
+/// built with, to compare with those a program was compiled against.
+SM_API const char* sm_version(void);
 
 /// Status returned by every fallible springmass function. SM_OK is zero; every other value
 /// names one rule that was broken. sm_status_string() gives a short generic text; the object
