@@ -37,9 +37,10 @@ typedef enum sm_linear_solver {
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
 	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner
 	/// (from 100 free particles on, plus a coarse correction over aggregates of neighbouring
-	/// particles). The Jacobian is evaluated afresh at every step, and products with the matrix
-	/// are formed from the springs' factored Jacobian blocks without assembling it. What AUTO
-	/// picks above tiny models.
+	/// particles, solved exactly or, from 40 000 free particles on, by a multilevel cycle). The
+	/// Jacobian is evaluated afresh at every step, and products with the matrix are formed from
+	/// the springs' factored Jacobian blocks without assembling it. What AUTO picks above tiny
+	/// models.
 	SM_SOLVER_REDUCED_PCG,
 	/// The same reduced system, by conjugate gradients preconditioned with a CHOLMOD Cholesky
 	/// factorisation of the Newton matrix of an earlier step (symbolic analysis once; a new
@@ -155,12 +156,14 @@ SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t pa
 /// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
-/// Back to time 0, the model's initial state, no external forces, all springs intact,
-/// statistics and break events cleared.
+/// Back to time 0 and the model's initial state (driven particles at their initial position
+/// and velocity again), no external forces, springs as at the start (those that broke restored;
+/// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
+/// energy, statistics and break events cleared.
 SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
-/// model of the same topology (same particle count and motions, same spring endpoints);
+/// model of the same topology (same particle count and motions, same spring endpoints and kinds);
 /// keeps the state and broken springs; re-initialises the solver. SM_ERROR_TOPOLOGY otherwise.
 /// Springs disabled in the new model are disabled from the start (a reset keeps them so),
 /// except those that broke in this simulation: a copy of sm_simulation_model() has them
