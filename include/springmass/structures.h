@@ -57,8 +57,8 @@ typedef struct sm_rope_def {
 	int32_t segments;               ///< number of structural springs, >= 1; default 10
 	double mass;                    ///< total mass [kg] > 0, spread evenly over segments + 1 particles; default 1
 	double mass_per_length;         ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
-	sm_spring_material structural;  ///< springs between neighbours
-	sm_spring_material bending;     ///< springs to the second neighbour; zero constants = none
+	sm_spring_material structural;  ///< springs between neighbours; default E = 1000 N per strain, no damping
+	sm_spring_material bending;     ///< springs to the second neighbour; zero constants (default) = none
 } sm_rope_def;
 
 /// Sheet (cloth): nu x nv particles on the parallelogram origin + s edge_u + t edge_v,
@@ -115,8 +115,8 @@ typedef struct sm_mesh_def {
 	const int32_t* triangles;  ///< 3 vertex indices per triangle
 	int32_t triangle_count;
 	double density;            ///< areal density [kg/m^2], > 0; default 1
-	sm_spring_material edge;
-	sm_spring_material bend;
+	sm_spring_material edge;   ///< default E = 1000 N per strain, no damping
+	sm_spring_material bend;   ///< default none (zero constants)
 } sm_mesh_def;
 
 /// Definitions with the defaults documented in their structs.
