@@ -184,8 +184,9 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// Computes the natural frequencies, damping ratios and mode shapes (def NULL means the
 /// defaults). On success fills *modes,
 /// which the caller releases with sm_modes_release(). On error *modes is zeroed and err says
-/// why (SM_ERROR_INVALID_ARGUMENT, SM_ERROR_NOT_FINITE, SM_ERROR_OUT_OF_MEMORY, SM_ERROR_SOLVER,
-/// and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
+/// why (SM_ERROR_INVALID_ARGUMENT; SM_ERROR_NOT_FINITE for a non-finite configuration or
+/// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
+/// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
 /// A model with no free particle has no modes: success with count = 0. Deterministic: the same
 /// model and options give the same numbers (the Lanczos start vectors are fixed).
 SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes, sm_error* err);
