@@ -196,21 +196,26 @@ static bool same_structure(const sm_model* a, const sm_model* b)
 
 // Perturbs the parameter in a scratch document and compares the models. A perturbation that
 // makes the model invalid means the parameter feeds something with rules of its own (a
-// count, an index): fixed.
-static bool parameter_is_tunable(sm_document* scratch, const sm_model* reference, int32_t parameter)
+// count, an index): fixed. Sets *tunable; SM_ERROR_OUT_OF_MEMORY when an allocation failed on
+// the way, so that the answer is unknown (and the scratch document may keep the perturbed value).
+static sm_status parameter_is_tunable(sm_document* scratch, const sm_model* reference, int32_t parameter,
+                                      bool* tunable)
 {
 	double value = sm_document_parameter_value(scratch, parameter);
 	double perturbed = value + 1.0 + 0.25 * fabs(value);
-	bool tunable = false;
-	if (sm_document_set_parameter(scratch, parameter, perturbed, NULL) == SM_OK) {
-		sm_model* model = NULL;
-		if (sm_document_build(scratch, &model, NULL) == SM_OK && model) {
-			tunable = same_structure(reference, model);
-		}
-		sm_model_destroy(model);
-		sm_document_set_parameter(scratch, parameter, value, NULL);
-	}
-	return tunable;
+	*tunable = false;
+	sm_status st = sm_document_set_parameter(scratch, parameter, perturbed, NULL);
+	if (st != SM_OK)
+		return st == SM_ERROR_OUT_OF_MEMORY ? st : SM_OK;
+	sm_model* model = NULL;
+	st = sm_document_build(scratch, &model, NULL);
+	if (st == SM_OK && model)
+		*tunable = same_structure(reference, model);
+	sm_model_destroy(model);
+	sm_status back = sm_document_set_parameter(scratch, parameter, value, NULL);
+	if (back != SM_OK)
+		return back;
+	return st == SM_ERROR_OUT_OF_MEMORY ? st : SM_OK;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -386,9 +391,15 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 			*err = build_err;
 		return st;
 	}
-	sm_document* scratch = sm_document_parse(text, length, "model.json", NULL);
+	sm_error parse_err = {SM_OK, ""};
+	sm_document* scratch = sm_document_parse(text, length, "model.json", &parse_err);
 	if (!scratch) {
 		sm_model_destroy(model);
+		if (parse_err.status == SM_ERROR_OUT_OF_MEMORY) {
+			if (err)
+				*err = parse_err;
+			return parse_err.status;
+		}
 		return fail(err, SM_ERROR_INVALID_ARGUMENT, "the model file's text does not parse as the document given");
 	}
 
@@ -407,7 +418,11 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	int32_t np = sm_document_parameter_count(doc);
 	for (int32_t i = 0; i < np && !b.failed; ++i) {
 		const char* pname = sm_document_parameter_name(doc, i);
-		bool tunable = parameter_is_tunable(scratch, model, i);
+		bool tunable = false;
+		if (parameter_is_tunable(scratch, model, i, &tunable) != SM_OK) {
+			b.failed = true;
+			break;
+		}
 		fmu_variable* v = add(&b, name_part(pname),
 		                      format("model-file parameter %s (%s)", pname,
 		                             tunable ? "tunable: feeds constants only" : "fixed: feeds the structure or initial state"),
@@ -698,7 +713,8 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 
 	append_text(&out,
 	       "  <LogCategories>\n"
-	       "    <Category name=\"logEvents\" description=\"springs that break, solver restarts\"/>\n"
+	       "    <Category name=\"logEvents\"\n"
+	       "      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
 	       "    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
 	       "    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
 	       "    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
