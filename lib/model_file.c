@@ -179,7 +179,8 @@ static const char* describe(parser* p, char* buffer, size_t size, double value, 
 	return buffer;
 }
 
-typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE } number_rule;
+// FRACTION: > 0 and < 1 (a relative tolerance).
+typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION } number_rule;
 
 // Optional number at obj[key] (keeps *out when absent) that must obey `rule`.
 static bool read_field(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule, double* out,
@@ -202,8 +203,10 @@ static bool read_field(parser* p, const json_t* obj, const char* path, const cha
 		return fail(p, SM_ERROR_NOT_FINITE, sub, "%s is not finite", describe(p, text, sizeof text, v, *source));
 	if (rule == NON_NEGATIVE && v < 0.0)
 		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be >= 0", describe(p, text, sizeof text, v, *source));
-	if (rule == POSITIVE && !(v > 0.0))
+	if ((rule == POSITIVE || rule == FRACTION) && !(v > 0.0))
 		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be > 0", describe(p, text, sizeof text, v, *source));
+	if (rule == FRACTION && !(v < 1.0))
+		return fail(p, SM_ERROR_SCHEMA, sub, "%s must be < 1", describe(p, text, sizeof text, v, *source));
 	*out = v;
 	return true;
 }
@@ -1175,7 +1178,7 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		double atol = -1.0;
 		if (!read_field(p, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
 		    !read_field(p, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
-		    !read_field(p, simulation, path, "rtol", POSITIVE, &d->relative_tolerance, NULL) ||
+		    !read_field(p, simulation, path, "rtol", FRACTION, &d->relative_tolerance, NULL) ||
 		    !read_field(p, simulation, path, "atol", POSITIVE, &atol, NULL) ||
 		    !read_field(p, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
 			return false;
