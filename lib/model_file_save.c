@@ -3,11 +3,14 @@
 // The canonical form lists every particle and spring explicitly, one per line, in model order,
 // with rest lengths written out and parameter references kept, so that loading it builds the
 // same model. Numbers are written with the fewest digits that read back to the same double.
+#define _POSIX_C_SOURCE 200809L
+
 #include "model_file_internal.h"
 
 #include "model_internal.h"
 
 #include <errno.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -221,7 +224,7 @@ static const char* port_kind_name(sm_port_kind kind)
 	return "probe";
 }
 
-char* sm_document_to_json(const sm_document* doc, sm_error* err)
+static char* document_text(const sm_document* doc, sm_error* err)
 {
 	if (doc == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_to_json: no document");
@@ -307,6 +310,24 @@ char* sm_document_to_json(const sm_document* doc, sm_error* err)
 		return NULL;
 	}
 	return t.data;
+}
+
+// The text is written in the C locale whatever LC_NUMERIC the program chose: setlocale() is
+// process-wide, and under a locale with a decimal comma (de_DE) printf wrote a gravity of
+// 9.81 m/s^2 as "9,81", which is not JSON. uselocale() switches the calling thread only, for the
+// call; glibc's "C" locale object is static (no allocation, freelocale does nothing).
+char* sm_document_to_json(const sm_document* doc, sm_error* err)
+{
+	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+	if (c_locale == (locale_t)0) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "sm_document_to_json: out of memory for the C locale");
+		return NULL;
+	}
+	const locale_t previous = uselocale(c_locale);
+	char* text = document_text(doc, err);
+	uselocale(previous);
+	freelocale(c_locale);
+	return text;
 }
 
 sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err)

@@ -23,6 +23,7 @@
 #include "springmass/springmass.h"
 #include "test_harness.h"
 
+#include <locale.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -721,6 +722,34 @@ static int test_mixed(void)
 	return 0;
 }
 
+// The program's locale is process-wide state the library must not depend on: saving in a thread
+// whose locale has a decimal comma gives the same text (it was "9,81" for 9.81, not JSON), and
+// leaves that thread's locale as it was. Skipped where no such locale is installed.
+static int test_save_in_a_decimal_comma_locale(void)
+{
+	ENSURE(reference_failed == 0);
+	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8", "nl_NL.UTF-8"};
+	locale_t comma = (locale_t)0;
+	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
+		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);
+	if (comma == (locale_t)0) {
+		printf("  no locale with a decimal comma is installed: skipped\n");
+		return 0;
+	}
+	const locale_t previous = uselocale(comma);
+	char check[16];
+	snprintf(check, sizeof check, "%.2f", 9.81);
+	uint64_t hash;
+	const int failed = run_work(WORK_SAVE, 0, &hash);
+	const locale_t after = uselocale(previous);
+	freelocale(comma);
+	ENSURE(strcmp(check, "9,81") == 0);
+	ENSURE(after == comma);
+	ENSURE(failed == 0);
+	ENSURE(hash == reference[WORK_SAVE]);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -749,6 +778,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_copies_sparse_jacobian);
 	RUN_TEST(test_copies_save);
 	RUN_TEST(test_mixed);
+	RUN_TEST(test_save_in_a_decimal_comma_locale);
 	free_inputs();
 	return TEST_SUMMARY();
 }
