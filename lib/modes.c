@@ -85,6 +85,32 @@
 
 static const double two_pi = 6.283185307179586476925287;
 
+// GSL's workspace allocators report a failed allocation to GSL's error handler, whose default
+// aborts the process (and the handler is process-wide, so the library leaves it alone). The
+// workspaces are plain structs of gsl_eigen.h: symmv's holds four arrays of n doubles (diagonal,
+// subdiagonal, Givens cosines and sines) and gensymmv's one symmv workspace. They are allocated
+// here instead, a failure returned as NULL.
+static gsl_eigen_symmv_workspace* symmv_workspace_create(size_t n)
+{
+	gsl_eigen_symmv_workspace* w = malloc(sizeof *w);
+	double* arrays = n <= SIZE_MAX / 4 / sizeof(double) ? malloc(4 * n * sizeof(double)) : NULL;
+	if (w == NULL || arrays == NULL) {
+		free(w);
+		free(arrays);
+		return NULL;
+	}
+	*w = (gsl_eigen_symmv_workspace){n, arrays, arrays + n, arrays + 2 * n, arrays + 3 * n};
+	return w;
+}
+
+static void symmv_workspace_destroy(gsl_eigen_symmv_workspace* w)
+{
+	if (w != NULL) {
+		free(w->d);
+		free(w);
+	}
+}
+
 sm_modes_def sm_default_modes_def(void)
 {
 	sm_modes_def def;
@@ -213,7 +239,7 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 			goto done;
 		}
 	}
-	ws = gsl_eigen_symmv_alloc(dof);
+	ws = symmv_workspace_create(dof);
 	if (ws == NULL) {
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the eigensolver");
 		goto done;
@@ -238,8 +264,7 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 		modes->omega_squared[m] = eval[m];
 	}
 done:
-	if (ws != NULL)
-		gsl_eigen_symmv_free(ws);
+	symmv_workspace_destroy(ws);
 	free(K);
 	free(evec);
 	free(eval);
@@ -314,8 +339,7 @@ static void lanczos_free(lanczos_work* w)
 	free(w->coefficients);
 	free(w->products);
 	free(w->rhs);
-	if (w->eigen != NULL)
-		gsl_eigen_symmv_free(w->eigen);
+	symmv_workspace_destroy(w->eigen);
 }
 
 // y = K x with the lower triangle of the CSR pattern (the half CHOLMOD factors), so that K is
@@ -563,6 +587,29 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 	return SM_OK;
 }
 
+// The generalised eigensolver's workspace, allocated here for the reason given at
+// symmv_workspace_create.
+static gsl_eigen_gensymmv_workspace* gensymmv_workspace_create(size_t n)
+{
+	gsl_eigen_gensymmv_workspace* w = malloc(sizeof *w);
+	gsl_eigen_symmv_workspace* inner = symmv_workspace_create(n);
+	if (w == NULL || inner == NULL) {
+		free(w);
+		symmv_workspace_destroy(inner);
+		return NULL;
+	}
+	*w = (gsl_eigen_gensymmv_workspace){n, inner};
+	return w;
+}
+
+static void gensymmv_workspace_destroy(gsl_eigen_gensymmv_workspace* w)
+{
+	if (w != NULL) {
+		symmv_workspace_destroy(w->symmv_workspace_p);
+		free(w);
+	}
+}
+
 // Buffers of the Lanczos runs and the final Rayleigh-Ritz step, want the kept modes.
 typedef struct lanczos_pairs {
 	size_t want;
@@ -721,13 +768,13 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	w.coefficients = malloc((m + 1) * sizeof(double));
 	w.products = malloc(m * dof * sizeof(double));
 	w.rhs = malloc(dof * sizeof(double));
-	w.eigen = gsl_eigen_symmv_alloc(m);
+	w.eigen = symmv_workspace_create(m);
 	pairs.lambda = malloc(2 * want * sizeof(double));
 	pairs.found = malloc(2 * want * dof * sizeof(double));
 	pairs.nu = malloc(want * sizeof(double));
 	pairs.fresh = malloc(want * dof * sizeof(double));
 	pairs.reduced = malloc(4 * want * want * sizeof(double));
-	pairs.general = gsl_eigen_gensymmv_alloc(want);
+	pairs.general = gensymmv_workspace_create(want);
 	if (w.basis == NULL || w.projected == NULL || w.eigen_input == NULL || w.ritz == NULL || w.theta == NULL ||
 	    w.coefficients == NULL || w.products == NULL || w.rhs == NULL || w.eigen == NULL || pairs.lambda == NULL ||
 	    pairs.found == NULL || pairs.nu == NULL || pairs.fresh == NULL || pairs.reduced == NULL ||
@@ -790,8 +837,7 @@ done:
 	free(pairs.nu);
 	free(pairs.fresh);
 	free(pairs.reduced);
-	if (pairs.general != NULL)
-		gsl_eigen_gensymmv_free(pairs.general);
+	gensymmv_workspace_destroy(pairs.general);
 	return st;
 }
 #endif
