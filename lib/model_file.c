@@ -829,12 +829,13 @@ static int compare_keys(const void* x, const void* y)
 	return (a > b) - (a < b);
 }
 
-// Number of distinct edges of a triangle list (the mesh builder's edge springs come first).
+// Number of distinct edges of a triangle list (the mesh builder's edge springs come first); -1
+// when out of memory.
 static int32_t count_edges(const int32_t* triangles, int32_t count)
 {
 	uint64_t* keys = malloc((size_t)(count > 0 ? count : 1) * 3 * sizeof(uint64_t));
 	if (keys == NULL)
-		return 0;
+		return -1;
 	for (int32_t t = 0; t < count; t++)
 		for (int c = 0; c < 3; c++) {
 			const uint32_t a = (uint32_t)triangles[3 * t + c], b = (uint32_t)triangles[3 * t + (c + 1) % 3];
@@ -975,6 +976,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 			mesh_edges = count_edges(triangles, d.triangle_count);
 		free(vertices);
 		free(triangles);
+		if (mesh_edges < 0)
+			return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
 		break;
 	}
 	}
