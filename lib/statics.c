@@ -455,8 +455,9 @@ static int sparse_prepare(statics_work* w)
 static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
                        double* step)
 {
-	if (sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, variant, w->values, NULL) != SM_OK)
-		return -1;
+	const sm_status fill = sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, variant, w->values, NULL);
+	if (fill != SM_OK)
+		return fill == SM_ERROR_OUT_OF_MEMORY ? -2 : -1;
 	const int64_t nnz = sm_sparse_jacobian_nonzeros(w->jacobian);
 	for (int64_t k = 0; k < nnz; k++)
 		w->values[k] = -w->values[k];
@@ -483,6 +484,9 @@ static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_
 }
 #endif
 
+// Factors H + mu M and, if step is not NULL, solves for the step. Returns 1 if H + mu M is
+// positive definite, 0 if not, -1 if the factorisation failed, -2 if the sparse Jacobian ran out
+// of memory.
 static int factor_and_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant,
                            const double* rhs, double* step)
 {
@@ -545,6 +549,11 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 			// definiteness-preserving stiffness, with compressive geometric terms dropped, is
 			// positive semi-definite, and with the shift a descent direction of U.
 			factored = factor_and_step(w, w->x, fmax(mu, 1e-9 * mu_ref), SM_JACOBIAN_DEFINITE, w->rhs, w->step);
+		}
+		if (factored == -2) {
+			*st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory at iteration %d",
+			                   (int)res->iterations);
+			return -1;
 		}
 		if (factored < 0) {
 			*st = sm_error_set(err, SM_ERROR_SOLVER, "statics: the linear solver failed at iteration %d",
@@ -870,8 +879,18 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 			for (int c = 0; c < 3; c++)
 				res.reaction_total[c] -= w.f[3 * (size_t)p + c];
 	res.potential_energy = potential_energy(&w, w.x);
+	// Stable if the exact stiffness factors as positive definite; out of memory for the sparse
+	// Jacobian, it cannot be told.
+	int definite = 1;
+	if (converged && w.nf > 0)
+		definite = factor_and_step(&w, w.x, 0.0, SM_JACOBIAN_EXACT, NULL, NULL);
+	if (definite == -2) {
+		converged = 0;
+		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
+		                  "statics: out of memory for the Jacobian of the stability test");
+	}
 	if (converged) {
-		res.stable = w.nf == 0 ? true : factor_and_step(&w, w.x, 0.0, SM_JACOBIAN_EXACT, NULL, NULL) == 1;
+		res.stable = definite == 1;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)
