@@ -14,6 +14,7 @@
 #include "fmi2Functions.h"
 
 #include <ctype.h>
+#include <errno.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
@@ -178,9 +179,11 @@ static bool starts_with_scheme(const char* text)
 
 // The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir, or a
 // plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL
-// for a URI of another host or scheme and for an escaped NUL (which would cut the path short).
-static char* resource_path(const char* uri)
+// for a URI of another host or scheme and for an escaped NUL (which would cut the path short),
+// or with *out_of_memory set when the path cannot be allocated.
+static char* resource_path(const char* uri, bool* out_of_memory)
 {
+	*out_of_memory = false;
 	const char* p = uri;
 	if (strncmp(p, "file://localhost/", 17) == 0)
 		p += 16;
@@ -194,8 +197,10 @@ static char* resource_path(const char* uri)
 		return NULL;  // a relative file URI, or another scheme
 	size_t n = strlen(p);
 	char* path = malloc(n + 1);
-	if (!path)
+	if (!path) {
+		*out_of_memory = true;
 		return NULL;
+	}
 	size_t k = 0;
 	for (size_t i = 0; i < n; ++i) {
 		if (p[i] == '%' && i + 2 < n && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
@@ -586,14 +591,26 @@ static void free_instance(instance* inst)
 	free(inst);
 }
 
+// An error of fmi2Instantiate before the instance can log (its own allocation failed): straight
+// to the importer's logger, if there is one.
+static void log_instantiate_error(const fmi2CallbackFunctions* functions, fmi2String instanceName,
+                                  const char* message)
+{
+	if (functions && functions->logger)
+		functions->logger(functions->componentEnvironment, instanceName ? instanceName : "springmass",
+		                  fmi2Error, "logStatusError", message);
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn)
 {
 	(void)visible;
 	instance* inst = calloc(1, sizeof *inst);
-	if (!inst)
+	if (!inst) {
+		log_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
 		return NULL;
+	}
 	inst->logger = functions ? functions->logger : NULL;
 	inst->environment = functions ? functions->componentEnvironment : NULL;
 	inst->log_mask = LOG_ALWAYS | (loggingOn ? (unsigned)((1u << LOG_CATEGORY_COUNT) - 1u) : 0u);
@@ -602,6 +619,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	inst->name = malloc(strlen(name) + 1);
 	if (!inst->name) {
 		free(inst);
+		log_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");
 		return NULL;
 	}
 	strcpy(inst->name, name);
@@ -622,7 +640,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		log_error(inst, "fmi2Instantiate: missing resource location (the FMU's resources folder holds the model file)");
 		goto fail;
 	}
-	char* dir = resource_path(fmuResourceLocation);
+	bool out_of_memory = false;
+	char* dir = resource_path(fmuResourceLocation, &out_of_memory);
+	if (out_of_memory) {
+		log_error(inst, "fmi2Instantiate: out of memory");
+		goto fail;
+	}
 	if (!dir) {
 		log_error(inst, "fmi2Instantiate: resource location \"%s\" is not a local file URI (file:///dir, file:/dir, "
 		          "file://localhost/dir or a path, without an escaped NUL)",
@@ -633,6 +656,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	char* path = malloc(n + sizeof "/model.json");
 	if (!path) {
 		free(dir);
+		log_error(inst, "fmi2Instantiate: out of memory");
 		goto fail;
 	}
 	memcpy(path, dir, n);
@@ -640,8 +664,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	free(dir);
 	inst->text = fmu_read_file(path, &inst->length);
 	if (!inst->text) {
-		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\")", path,
-		          fmuResourceLocation);
+		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\"): %s",
+		          path, fmuResourceLocation, strerror(errno));
 		free(path);
 		goto fail;
 	}
