@@ -12,6 +12,12 @@
 // the program before the code is returned, and the handler is GSL's process-wide setting, which
 // the library leaves to the program: call gsl_set_error_handler_off() once at start-up (as the
 // `springmass` tool does) to get the status instead of the abort.
+//
+// BLAS threads. CHOLMOD factorises large sparse matrices supernodally, with BLAS, whose sums
+// may be split differently for another number of BLAS threads (another process-wide setting,
+// e.g. OPENBLAS_NUM_THREADS): the sparse paths give the same bits run after run and in
+// concurrent threads for a given BLAS thread count, and may differ in the last bits between
+// counts (measured on a 40 x 40 hanging cloth, statics and modes, 1 and 2 threads).
 #pragma once
 
 #include "springmass/model.h"
@@ -188,7 +194,8 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
 /// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
 /// A model with no free particle has no modes: success with count = 0. Deterministic: the same
-/// model and options give the same numbers (the Lanczos start vectors are fixed).
+/// model and options give the same numbers (the Lanczos start vectors are fixed; on the sparse
+/// path, for a given BLAS thread count: see "BLAS threads" above).
 SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes, sm_error* err);
 
 /// Frees the arrays of a result of sm_modes_compute() and zeroes it; accepts NULL and a zeroed

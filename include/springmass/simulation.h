@@ -14,6 +14,12 @@
 // times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
 // with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
 // (restart_on_input_change = true restores a restart at every changed input).
+//
+// Reproducibility. On one machine the same model, options and calls give the same trajectory
+// bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced Cholesky
+// solver, and the coarse system of conjugate gradients on large models) use BLAS for large
+// matrices, whose sums may depend on the number of BLAS threads (a process-wide setting, e.g.
+// OPENBLAS_NUM_THREADS); keep it fixed to reproduce a run to the last bit.
 #pragma once
 
 #include "springmass/model.h"
