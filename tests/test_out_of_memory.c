@@ -1,0 +1,839 @@
+// Out-of-memory fault injection. The executable is linked with
+// -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc, so that every allocation of the library, the FMU
+// glue and the static SUNDIALS and GSL archives goes through the wrappers below (shared libraries
+// such as jansson and CHOLMOD allocate unwrapped). Each scenario runs once per allocation it
+// makes, with exactly that allocation failing: k = 1, 2, 3, ... until a run completes without
+// reaching the failure. Every run must end in a clear error (a status other than SM_OK and a
+// message, or fmi2Error and a logged error), leave no partial state, and leave its objects
+// usable or at least freeable; in the sanitizer build the leak checker then shows that no failure
+// path leaks. Runs in which every call succeeds must give the results of a run without failures.
+//
+// SPRINGMASS_OOM_VERBOSE=1 prints every run's allocation number and the error it ended in;
+// SPRINGMASS_OOM_FIRST=k starts each scenario at allocation k (to debug one failure).
+#define _XOPEN_SOURCE 700
+#include "springmass/springmass.h"
+#include "test_harness.h"
+
+#ifdef SPRINGMASS_OOM_FMU
+#include "fmi2Functions.h"
+#include "fmu_model.h"
+#endif
+
+#include <cvode/cvode.h>
+#include <sundials/sundials_context.h>
+#include <sundials/sundials_matrix.h>
+#include <sundials/sundials_nvector.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+// ---------------------------------------------------------------------------------------------
+// The allocator wrappers
+// ---------------------------------------------------------------------------------------------
+
+void* __real_malloc(size_t size);
+void* __real_calloc(size_t count, size_t size);
+void* __real_realloc(void* p, size_t size);
+void* __wrap_malloc(size_t size);
+void* __wrap_calloc(size_t count, size_t size);
+void* __wrap_realloc(void* p, size_t size);
+
+// The linker's wrappers take no context, so the injector is the one piece of process state this
+// test keeps: allocations counted since the scenario started, the one to fail (0: none), and
+// whether it was reached.
+typedef struct injector {
+	long count;
+	long fail_at;
+	bool reached;
+} injector;
+
+static injector oom_;
+
+static bool fail_this_allocation(void)
+{
+	if (oom_.fail_at <= 0 || ++oom_.count != oom_.fail_at)
+		return false;
+	oom_.reached = true;
+	errno = ENOMEM;  // as malloc sets it
+	return true;
+}
+
+void* __wrap_malloc(size_t size)
+{
+	return fail_this_allocation() ? NULL : __real_malloc(size);
+}
+
+void* __wrap_calloc(size_t count, size_t size)
+{
+	return fail_this_allocation() ? NULL : __real_calloc(count, size);
+}
+
+void* __wrap_realloc(void* p, size_t size)
+{
+	return fail_this_allocation() ? NULL : __real_realloc(p, size);
+}
+
+// SUNDIALS 6.4.1 crashes on some failed allocations of its own: SUNHashMap_New (for the logger
+// SUNContext_Create makes) tests the address it stores the new map at instead of the map malloc
+// returned and then writes through NULL; N_VClone and SUNMatClone store the context into the
+// clone without checking that the clone operation returned one; CVodeInit's cvAllocVectors destroys
+// the vectors it made when a later clone fails but leaves their pointers in the CVODE memory, so
+// that CVodeFree destroys them again; CVodeSVtolerances copies the tolerances into its clone
+// without checking it. Each of these functions counts as one allocation here: when
+// it is the one to fail, it returns what it returns when its own allocation fails, without being
+// called, and nothing inside it is failed otherwise.
+static long suspend_failures(void)
+{
+	long fail_at = oom_.fail_at;
+	oom_.fail_at = 0;
+	return fail_at;
+}
+
+#define AS_ONE_ALLOCATION(type, name, failed, parameters, arguments)                                \
+	type __real_##name parameters;                                                                  \
+	type __wrap_##name parameters;                                                                  \
+	type __wrap_##name parameters                                                                   \
+	{                                                                                               \
+		if (fail_this_allocation())                                                                 \
+			return failed;                                                                          \
+		long fail_at_ = suspend_failures();                                                         \
+		type result_ = __real_##name arguments;                                                     \
+		oom_.fail_at = fail_at_;                                                                    \
+		return result_;                                                                             \
+	}
+
+AS_ONE_ALLOCATION(int, SUNContext_Create, (*context = NULL, -1), (void* comm, SUNContext* context),
+                  (comm, context))
+AS_ONE_ALLOCATION(N_Vector, N_VClone, NULL, (N_Vector w), (w))
+AS_ONE_ALLOCATION(SUNMatrix, SUNMatClone, NULL, (SUNMatrix A), (A))
+AS_ONE_ALLOCATION(int, CVodeInit, CV_MEM_FAIL, (void* cvode, CVRhsFn f, sunrealtype t0, N_Vector y0),
+                  (cvode, f, t0, y0))
+AS_ONE_ALLOCATION(int, CVodeSVtolerances, CV_MEM_FAIL, (void* cvode, sunrealtype rtol, N_Vector atol),
+                  (cvode, rtol, atol))
+
+// A call that failed must have failed because of the injected allocation, with an error status
+// and a message.
+#define ENSURE_CLEAR_FAILURE(status, message)                                                       \
+	do {                                                                                            \
+		int s_ = (int)(status);                                                                     \
+		const char* m_ = (message);                                                                 \
+		if (!oom_.reached || s_ == SM_OK || m_ == NULL || m_[0] == '\0') {                          \
+			printf("  %s:%d: failure without an injected allocation failure, status or message: "  \
+			       "status %d, reached %d, message \"%s\"\n",                                       \
+			       __FILE__, __LINE__, s_, (int)oom_.reached, m_ ? m_ : "(null)");                  \
+			return 1;                                                                               \
+		}                                                                                           \
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                       \
+			printf("    [%ld] %d %s\n", oom_.fail_at, s_, m_);                                      \
+	} while (0)
+
+// Runs fn(context) with allocation k failing, for k = 1, 2, ... until a run reaches no failure.
+static int inject_every_failure(const char* name, int (*fn)(void*), void* context)
+{
+	const char* first = getenv("SPRINGMASS_OOM_FIRST");
+	for (long k = first ? atol(first) : 1;; ++k) {
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))
+			printf("    [%ld] ...\n", k);
+		fflush(stdout);
+		oom_ = (injector){0, k, false};
+		int result = fn(context);
+		bool reached = oom_.reached;
+		oom_ = (injector){0, 0, false};
+		if (result != 0) {
+			printf("  %s: the run with allocation %ld failing went wrong\n", name, k);
+			return 1;
+		}
+		if (!reached) {
+			printf("  %-44s %5ld allocations, each failed once\n", name, k - 1);
+			return 0;
+		}
+	}
+}
+
+// ---------------------------------------------------------------------------------------------
+// Models
+// ---------------------------------------------------------------------------------------------
+
+// Every structure, named particles and springs, a spring that breaks under the falling weight
+// (2 kg on 400 N/m at rest length 0.1 m: strain 0.2 within about 0.05 s), ports and parameters;
+// everything held, so that the statics converge. 17 free particles (51 degrees of freedom).
+static const char model_all[] =
+    "{\n"
+    "  \"springmass\": 1,\n"
+    "  \"name\": \"oom_all\",\n"
+    "  \"description\": \"Every structure, a spring that breaks and ports.\",\n"
+    "  \"parameters\": { \"k\": 400.0, \"weight\": 2.0, \"E\": 200.0 },\n"
+    "  \"gravity\": [0, 0, -9.81],\n"
+    "  \"mass_damping\": 0.1,\n"
+    "  \"structures\": [\n"
+    "    { \"type\": \"rope\", \"name\": \"rope\", \"start\": [0, 0, 0], \"end\": [0, 0, -0.6],\n"
+    "      \"segments\": 3,\n"
+    "      \"mass\": 0.3, \"structural\": { \"strain_stiffness\": \"E\", \"strain_damping\": 0.5 },\n"
+    "      \"bending\": { \"strain_stiffness\": 2 } },\n"
+    "    { \"type\": \"sheet\", \"name\": \"cloth\", \"origin\": [1, 0, 0], \"edge_u\": [0.4, 0, 0],\n"
+    "      \"edge_v\": [0, 0, -0.4], \"nu\": 3, \"nv\": 3, \"mass\": 0.2,\n"
+    "      \"structural\": { \"strain_stiffness\": \"E\", \"strain_damping\": 0.2 },\n"
+    "      \"shear\": { \"strain_stiffness\": 50 }, \"bend\": { \"strain_stiffness\": 5 } },\n"
+    "    { \"type\": \"block\", \"name\": \"jelly\", \"origin\": [2, 0, -0.4], \"size\": [0.3, 0.3, 0.3],\n"
+    "      \"nu\": 2, \"nv\": 2, \"nw\": 2, \"mass\": 0.5, \"edge\": { \"strain_stiffness\": \"E\" },\n"
+    "      \"face_diagonal\": { \"strain_stiffness\": \"E\" },\n"
+    "      \"body_diagonal\": { \"strain_stiffness\": \"E\" } },\n"
+    "    { \"type\": \"mesh\", \"name\": \"flag\", \"density\": 0.5,\n"
+    "      \"vertices\": [[3, 0, 0], [3.5, 0, 0], [3, 0, -0.5], [3.5, 0, -0.5]],\n"
+    "      \"triangles\": [[0, 1, 3], [0, 3, 2]],\n"
+    "      \"edge\": { \"strain_stiffness\": \"E\", \"strain_damping\": 0.1 },\n"
+    "      \"bend\": { \"strain_stiffness\": 1 } }\n"
+    "  ],\n"
+    "  \"particles\": [ { \"name\": \"weight\", \"position\": [0, 0, -0.7], \"mass\": \"weight\" } ],\n"
+    "  \"springs\": [\n"
+    "    { \"a\": \"rope[3]\", \"b\": \"weight\", \"stiffness\": \"k\", \"damping\": 0.2,\n"
+    "      \"break_strain\": 0.2 },\n"
+    "    { \"a\": \"cloth[2,1]\", \"b\": \"jelly[1,1,1]\", \"stiffness\": 30 }\n"
+    "  ],\n"
+    "  \"fixed\": [\"rope[0]\", \"cloth[0,0]\", \"cloth[0,2]\", \"flag[0]\", \"flag[1]\",\n"
+    "            { \"min\": [1.99, -0.01, -0.11], \"max\": [2.31, 0.31, -0.09] }],\n"
+    "  \"ports\": [ { \"name\": \"tip\", \"particle\": \"weight\", \"kind\": \"force\" },\n"
+    "             { \"name\": \"corner\", \"particle\": \"cloth[2,2]\", \"kind\": \"probe\" } ],\n"
+    "  \"simulation\": { \"stop_time\": 1.0, \"output_interval\": 0.01 }\n"
+    "}\n";
+
+// 10 x 11 cloth hanging from its top row: 100 free particles, the size from which conjugate
+// gradients use the two-level preconditioner (and, in this test's build of the reduced solver,
+// the multilevel coarse solve).
+static const char model_cloth[] =
+    "{ \"springmass\": 1, \"name\": \"oom_cloth\", \"gravity\": [0, 0, -9.81],\n"
+    "  \"structures\": [ { \"type\": \"sheet\", \"name\": \"cloth\", \"edge_u\": [1, 0, 0],\n"
+    "    \"edge_v\": [0, 0, -1],\n"
+    "    \"nu\": 10, \"nv\": 11, \"mass\": 1.0,\n"
+    "    \"structural\": { \"strain_stiffness\": 1000, \"strain_damping\": 2 },\n"
+    "    \"shear\": { \"strain_stiffness\": 1000, \"strain_damping\": 2 },\n"
+    "    \"bend\": { \"strain_stiffness\": 50, \"strain_damping\": 2 } } ],\n"
+    "  \"fixed\": [{ \"min\": [-0.01, -0.01, -0.01], \"max\": [1.01, 0.01, 0.01] }] }\n";
+
+// A bob on a spring that breaks (2 kg on 400 N/m at rest length 0.1 m, dropped), with a force
+// port and a parameter: the FMU's model, small so that its runs stay few.
+static const char model_small[] =
+    "{ \"springmass\": 1, \"name\": \"oom_small\", \"parameters\": { \"k\": 400.0 },\n"
+    "  \"gravity\": [0, 0, -9.81],\n"
+    "  \"particles\": [ { \"name\": \"anchor\", \"position\": [0, 0, 0], \"fixed\": true },\n"
+    "                  { \"name\": \"weight\", \"position\": [0, 0, -0.1], \"mass\": 2.0 } ],\n"
+    "  \"springs\": [ { \"a\": \"anchor\", \"b\": \"weight\", \"stiffness\": \"k\", \"damping\": 0.2,\n"
+    "                 \"break_strain\": 0.2 } ],\n"
+    "  \"ports\": [ { \"name\": \"tip\", \"particle\": \"weight\", \"kind\": \"force\" } ] }\n";
+
+static sm_model* build(const char* text)
+{
+	sm_error err;
+	sm_document* doc = sm_document_parse(text, strlen(text), "oom.json", &err);
+	sm_model* model = NULL;
+	if (doc && sm_document_build(doc, &model, &err) != SM_OK)
+		model = NULL;
+	if (!model)
+		printf("  %s\n", err.message);
+	sm_document_destroy(doc);
+	return model;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Model files: parse, build, change a parameter, serialise, save
+// ---------------------------------------------------------------------------------------------
+
+typedef struct file_case {
+	const char* text;
+	const char* save_path;
+	int32_t particles, springs;  // of the built model
+	char* json;                  // sm_document_to_json of the unchanged document
+	char* json_changed;          // and after setting parameter k to 500 N/m
+} file_case;
+
+static int file_scenario(void* context)
+{
+	file_case* c = context;
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = sm_document_parse(c->text, strlen(c->text), "oom.json", &err);
+	if (!doc) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	int result = 1;
+	sm_model* model = NULL;
+	char* json = NULL;
+	sm_status st = sm_document_build(doc, &model, &err);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, err.message);
+		ENSURE(model == NULL);
+		sm_document_destroy(doc);
+		return 0;
+	}
+	if (sm_model_particle_count(model) != c->particles || sm_model_spring_count(model) != c->springs)
+		goto done;
+	json = sm_document_to_json(doc, &err);
+	if (!json) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+	} else if (c->json && strcmp(json, c->json) != 0) {
+		printf("  the serialised document differs from the one without failures\n");
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))
+			printf("%s\n----\n%s\n", json, c->json);
+		goto done;
+	}
+	int32_t k = sm_document_parameter_index(doc, "k");
+	st = sm_document_set_parameter(doc, k, 500.0, &err);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, err.message);
+		if (sm_document_parameter_value(doc, k) != 400.0) {
+			printf("  a failed sm_document_set_parameter changed the parameter\n");
+			goto done;
+		}
+	}
+	free(json);
+	json = sm_document_to_json(doc, &err);
+	if (!json) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+	} else if (st == SM_OK && c->json_changed && strcmp(json, c->json_changed) != 0) {
+		printf("  the serialised changed document differs from the one without failures\n");
+		goto done;
+	}
+	st = sm_document_save(doc, c->save_path, &err);
+	if (st != SM_OK)
+		ENSURE_CLEAR_FAILURE(st, err.message);
+	if (oom_.fail_at == 0) {
+		c->json = json;
+		json = NULL;
+		c->json_changed = sm_document_to_json(doc, &err);
+		sm_document_set_parameter(doc, k, 400.0, &err);
+		free(c->json);
+		c->json = sm_document_to_json(doc, &err);
+	}
+	result = 0;
+done:
+	free(json);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return result;
+}
+
+static int test_model_file(void)
+{
+	char path[1024];
+	snprintf(path, sizeof path, "%s/oom_saved_%ld.json", SPRINGMASS_OOM_WORK_DIR, (long)getpid());
+	file_case c = {model_all, path, 0, 0, NULL, NULL};
+	sm_model* model = build(model_all);
+	ENSURE(model != NULL);
+	c.particles = sm_model_particle_count(model);
+	c.springs = sm_model_spring_count(model);
+	sm_model_destroy(model);
+	ENSURE(file_scenario(&c) == 0);  // the reference, without failures
+	ENSURE(c.json != NULL && c.json_changed != NULL);
+	int result = inject_every_failure("model file", file_scenario, &c);
+	free(c.json);
+	free(c.json_changed);
+	remove(path);
+	return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The model API: create, add particles and springs (arrays grow), clone, sparse Jacobian
+// ---------------------------------------------------------------------------------------------
+
+static int model_scenario(void* context)
+{
+	(void)context;
+	sm_error err = {SM_OK, ""};
+	sm_model_def world = sm_default_model_def();
+	sm_model* model = sm_model_create(&world, &err);
+	if (!model) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	int result = 1;
+	sm_model* copy = NULL;
+	sm_sparse_jacobian* jacobian = NULL;
+	double* values = NULL;
+	// A chain of 40 particles, the first fixed; a failed addition changes nothing and the same
+	// addition then succeeds.
+	for (int32_t i = 0; i < 40; ++i) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = 0.1 * i;
+		p.position[2] = 0.01 * (i % 3);
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		int32_t index = -1;
+		sm_status st = sm_model_add_particle(model, &p, &index);
+		if (st != SM_OK) {
+			ENSURE_CLEAR_FAILURE(st, sm_model_last_error(model));
+			ENSURE(sm_model_particle_count(model) == i);
+			ENSURE_STATUS(sm_model_add_particle(model, &p, &index), SM_OK);
+		}
+		ENSURE(index == i);
+		for (int32_t back = 1; back <= 2 && back <= i; ++back) {
+			sm_spring_def s = sm_default_spring_def();
+			s.a = i - back;
+			s.b = i;
+			s.stiffness = 100.0 / back;
+			s.damping = 0.1;
+			int32_t before = sm_model_spring_count(model);
+			st = sm_model_add_spring(model, &s, NULL);
+			if (st != SM_OK) {
+				ENSURE_CLEAR_FAILURE(st, sm_model_last_error(model));
+				ENSURE(sm_model_spring_count(model) == before);
+				ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+			}
+		}
+	}
+	ENSURE(sm_model_particle_count(model) == 40 && sm_model_spring_count(model) == 77);
+	copy = sm_model_clone(model);  // NULL on failure: nothing to report but the NULL
+	if (copy && (sm_model_particle_count(copy) != 40 || sm_model_spring_count(copy) != 77))
+		goto done;
+	jacobian = sm_sparse_jacobian_create(model);
+	if (jacobian) {
+		int64_t nnz = sm_sparse_jacobian_nonzeros(jacobian);
+		values = malloc((size_t)(nnz > 0 ? nnz : 1) * sizeof(double));
+		double* dfdv = malloc((size_t)(nnz > 0 ? nnz : 1) * sizeof(double));
+		double x[3 * 40], v[3 * 40];
+		sm_model_initial_state(model, x, v);
+		if (values && dfdv) {
+			sm_status st = sm_sparse_jacobian_fill(jacobian, model, x, v, SM_JACOBIAN_EXACT, values, dfdv);
+			if (st != SM_OK)
+				ENSURE_CLEAR_FAILURE(st, sm_status_string(st));
+		}
+		free(dfdv);
+	}
+	result = 0;
+done:
+	free(values);
+	sm_sparse_jacobian_destroy(jacobian);
+	sm_model_destroy(copy);
+	sm_model_destroy(model);
+	return result;
+}
+
+static int test_model_api(void)
+{
+	return inject_every_failure("model API", model_scenario, NULL);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Simulation: create, advance through a break, reset, advance again
+// ---------------------------------------------------------------------------------------------
+
+typedef struct simulation_case {
+	const sm_model* model;
+	sm_simulation_def def;
+	double t_end;
+	int32_t n3;
+	int32_t breaks;       // of the run without failures
+	// Positions at t_end without failures, before and after the reset (which need not repeat the
+	// first run bit for bit: the cholmod solver keeps its factorisation over a reset).
+	double* reference;
+	double tolerance;     // on positions after a restart caused by a failure [m]
+} simulation_case;
+
+static double largest_difference(const double* a, const double* b, int32_t n)
+{
+	double d = 0.0;
+	for (int32_t i = 0; i < n; ++i)
+		d = fmax(d, fabs(a[i] - b[i]));
+	return d;
+}
+
+// Advances to t_end; a failed advance must leave a usable simulation that then gets there.
+static int advance_or_recover(simulation_case* c, sm_simulation* sim, bool* restarted)
+{
+	sm_status st = sm_simulation_advance(sim, c->t_end);
+	if (st == SM_OK)
+		return 0;
+	ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+	ENSURE(sm_simulation_time(sim) >= 0.0 && sm_simulation_time(sim) <= c->t_end);
+	*restarted = true;
+	ENSURE_STATUS(sm_simulation_advance(sim, c->t_end), SM_OK);
+	return 0;
+}
+
+static int check_result(simulation_case* c, sm_simulation* sim, int pass, bool restarted)
+{
+	ENSURE(sm_simulation_time(sim) == c->t_end);
+	const double* x = sm_simulation_positions(sim);
+	double* reference = c->reference + pass * c->n3;
+	if (oom_.fail_at == 0) {
+		c->breaks = sm_simulation_break_count(sim);
+		memcpy(reference, x, (size_t)c->n3 * sizeof(double));
+		return 0;
+	}
+	ENSURE(sm_simulation_break_count(sim) == c->breaks);
+	double d = largest_difference(x, reference, c->n3);
+	if (restarted ? !(d <= c->tolerance) : d != 0.0) {
+		printf("  positions differ from the run without failures by %g m (restarted: %d, reached: %d)\n", d,
+		       (int)restarted, (int)oom_.reached);
+		return 1;
+	}
+	return 0;
+}
+
+static int simulation_scenario(void* context)
+{
+	simulation_case* c = context;
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = sm_simulation_create(c->model, &c->def, &err);
+	if (!sim) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	int result = 1;
+	bool restarted = false;
+	if (advance_or_recover(c, sim, &restarted) != 0 || check_result(c, sim, 0, restarted) != 0)
+		goto done;
+	sm_status st = sm_simulation_reset(sim);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (sm_simulation_reset(sim) != SM_OK) {
+			printf("  a reset after a failed reset failed: %s\n", sm_simulation_last_error(sim));
+			goto done;
+		}
+	}
+	if (sm_simulation_time(sim) != 0.0 || sm_simulation_break_count(sim) != 0)
+		goto done;
+	restarted = false;
+	if (advance_or_recover(c, sim, &restarted) != 0 || check_result(c, sim, 1, restarted) != 0)
+		goto done;
+	result = 0;
+done:
+	sm_simulation_destroy(sim);
+	return result;
+}
+
+static int run_simulation(const char* name, const char* text, sm_linear_solver solver, double t_end,
+                          int32_t breaks)
+{
+	sm_model* model = build(text);
+	ENSURE(model != NULL);
+	int32_t n3 = 3 * sm_model_particle_count(model);
+	simulation_case c = {model, sm_default_simulation_def(), t_end, n3, 0, NULL, 1e-3};
+	c.def.solver = solver;
+	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
+	ENSURE(c.reference != NULL);
+	int result = simulation_scenario(&c);
+	if (result == 0 && c.breaks != breaks) {
+		printf("  %s: %d breaks without failures, expected %d\n", name, c.breaks, breaks);
+		result = 1;
+	}
+	if (result == 0)
+		result = inject_every_failure(name, simulation_scenario, &c);
+	free(c.reference);
+	sm_model_destroy(model);
+	return result;
+}
+
+static int test_simulation_dense(void)
+{
+	return run_simulation("simulation, dense", model_all, SM_SOLVER_DENSE, 0.2, 1);
+}
+
+static int test_simulation_klu(void)
+{
+	return run_simulation("simulation, klu", model_all, SM_SOLVER_KLU, 0.2, 1);
+}
+
+static int test_simulation_pcg(void)
+{
+	return run_simulation("simulation, pcg", model_all, SM_SOLVER_REDUCED_PCG, 0.2, 1);
+}
+
+static int test_simulation_cholmod(void)
+{
+	return run_simulation("simulation, cholmod", model_all, SM_SOLVER_REDUCED_CHOLMOD, 0.2, 1);
+}
+
+static int test_simulation_pcg_multilevel(void)
+{
+	return run_simulation("simulation, pcg, multilevel", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0);
+}
+
+static int test_simulation_adams(void)
+{
+	sm_model* model = build(model_all);
+	ENSURE(model != NULL);
+	int32_t n3 = 3 * sm_model_particle_count(model);
+	simulation_case c = {model, sm_default_simulation_def(), 0.2, n3, 0, NULL, 1e-3};
+	c.def.method = SM_METHOD_ADAMS;
+	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
+	int result = c.reference ? simulation_scenario(&c) : 1;
+	if (result == 0)
+		result = inject_every_failure("simulation, adams", simulation_scenario, &c);
+	free(c.reference);
+	sm_model_destroy(model);
+	return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Analysis: statics and modes, dense and sparse
+// ---------------------------------------------------------------------------------------------
+
+typedef struct analysis_case {
+	const sm_model* model;
+	sm_statics_solver statics_solver;
+	sm_modes_solver modes_solver;
+	int32_t n3;
+	double* x;
+	double* reference_x;
+	sm_statics_result reference_result;
+	double reference_frequency[2];
+} analysis_case;
+
+static int statics_scenario(void* context)
+{
+	analysis_case* c = context;
+	sm_statics_def def = sm_default_statics_def();
+	def.solver = c->statics_solver;
+	sm_statics_result result;
+	sm_error err = {SM_OK, ""};
+	for (int32_t i = 0; i < c->n3; ++i)
+		c->x[i] = -1.0;
+	sm_status st = sm_statics_solve(c->model, &def, c->x, NULL, &result, &err);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, err.message);
+		for (int32_t i = 0; i < c->n3; ++i)
+			ENSURE(c->x[i] == -1.0);  // not touched
+		return 0;
+	}
+	if (oom_.fail_at == 0) {
+		memcpy(c->reference_x, c->x, (size_t)c->n3 * sizeof(double));
+		c->reference_result = result;
+		ENSURE(result.stable);
+	}
+	ENSURE(largest_difference(c->x, c->reference_x, c->n3) == 0.0);
+	ENSURE(result.stable == c->reference_result.stable);
+	ENSURE(result.iterations == c->reference_result.iterations);
+	return 0;
+}
+
+static int modes_scenario(void* context)
+{
+	analysis_case* c = context;
+	sm_modes_def def = sm_default_modes_def();
+	def.solver = c->modes_solver;
+	def.mode_count = 2;
+	sm_modes modes;
+	memset(&modes, 0, sizeof modes);
+	sm_error err = {SM_OK, ""};
+	sm_status st = sm_modes_compute(c->model, &def, &modes, &err);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, err.message);
+		sm_modes_release(&modes);
+		return 0;
+	}
+	ENSURE(modes.count == 2);
+	if (oom_.fail_at == 0)
+		memcpy(c->reference_frequency, modes.frequency, sizeof c->reference_frequency);
+	for (int i = 0; i < 2; ++i)
+		ENSURE_REL(modes.frequency[i], c->reference_frequency[i], 1e-10, 1e-12);
+	sm_modes_release(&modes);
+	return 0;
+}
+
+static int run_analysis(const char* name, sm_statics_solver statics_solver, sm_modes_solver modes_solver)
+{
+	sm_model* model = build(model_all);
+	ENSURE(model != NULL);
+	analysis_case c;
+	memset(&c, 0, sizeof c);
+	c.model = model;
+	c.statics_solver = statics_solver;
+	c.modes_solver = modes_solver;
+	c.n3 = 3 * sm_model_particle_count(model);
+	c.x = malloc((size_t)c.n3 * sizeof(double));
+	c.reference_x = malloc((size_t)c.n3 * sizeof(double));
+	int result = c.x && c.reference_x ? 0 : 1;
+	char label[80];
+	if (result == 0)
+		result = statics_scenario(&c) || modes_scenario(&c);
+	if (result == 0) {
+		snprintf(label, sizeof label, "statics, %s", name);
+		result = inject_every_failure(label, statics_scenario, &c);
+	}
+	if (result == 0) {
+		snprintf(label, sizeof label, "modes, %s", name);
+		result = inject_every_failure(label, modes_scenario, &c);
+	}
+	free(c.x);
+	free(c.reference_x);
+	sm_model_destroy(model);
+	return result;
+}
+
+static int test_analysis_dense(void)
+{
+	return run_analysis("dense", SM_STATICS_DENSE, SM_MODES_DENSE);
+}
+
+static int test_analysis_sparse(void)
+{
+	return run_analysis("sparse", SM_STATICS_SPARSE, SM_MODES_SPARSE);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The FMU's entry points
+// ---------------------------------------------------------------------------------------------
+
+#ifdef SPRINGMASS_OOM_FMU
+
+typedef struct fmu_case {
+	fmu_table table;
+	char resources[1100];
+	char directory[1024];
+	int errors;  // errors and discards logged
+	char last[1024];
+	fmi2CallbackFunctions callbacks;
+} fmu_case;
+
+static void fmu_logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                       fmi2String message, ...)
+{
+	(void)name;
+	(void)category;
+	fmu_case* c = env;
+	if (status >= fmi2Discard)
+		c->errors++;
+	snprintf(c->last, sizeof c->last, "%s", message);
+}
+
+static fmi2ValueReference fmu_reference(const fmu_case* c, const char* name)
+{
+	for (int32_t i = 0; i < c->table.count; ++i)
+		if (strcmp(c->table.variables[i].name, name) == 0)
+			return (fmi2ValueReference)i;
+	return 0xffffffffu;
+}
+
+// A call that returned something else than fmi2OK must have returned fmi2Error and logged an
+// error, because of the injected failure; or, for fmi2DoStep, fmi2Discard with the reason logged
+// (the FMU's answer to any failed step: the instance stays at its last successful time).
+#define ENSURE_FMU_FAILURE(status, c, errors_before)                                                \
+	do {                                                                                            \
+		if (!oom_.reached || ((status) != fmi2Error && (status) != fmi2Discard) ||                  \
+		    (c)->errors <= (errors_before)) {                                                       \
+			printf("  %s:%d: FMU call returned %d (reached %d) with %d errors logged: \"%s\"\n",     \
+			       __FILE__, __LINE__, (int)(status), (int)oom_.reached,                            \
+			       (c)->errors - (errors_before), (c)->last);                                       \
+			return 1;                                                                               \
+		}                                                                                           \
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                       \
+			printf("    [%ld] %s\n", oom_.fail_at, (c)->last);                                      \
+	} while (0)
+
+// The call must succeed, or fail clearly; on failure the instance is freed and the run ends.
+#define FMU_CALL(call)                                                                              \
+	do {                                                                                            \
+		int before_ = c->errors;                                                                    \
+		fmi2Status st_ = (call);                                                                    \
+		if (st_ != fmi2OK) {                                                                        \
+			ENSURE_FMU_FAILURE(st_, c, before_);                                                    \
+			goto end;                                                                               \
+		}                                                                                           \
+	} while (0)
+
+static int fmu_scenario(void* context)
+{
+	fmu_case* c = context;
+	int before = c->errors;
+	fmi2Component inst = fmi2Instantiate("oom", fmi2CoSimulation, c->table.guid, c->resources, &c->callbacks,
+	                                     fmi2False, fmi2False);
+	if (!inst) {
+		ENSURE_FMU_FAILURE(fmi2Error, c, before);
+		return 0;
+	}
+	int result = 1;
+	fmi2FMUstate state = NULL, copy = NULL;
+	fmi2Byte* bytes = NULL;
+	fmi2ValueReference force = fmu_reference(c, "tip.fx"), k = fmu_reference(c, "k");
+	double one = 1.0, stiffer = 450.0, stiffest = 480.0;
+	FMU_CALL(fmi2SetupExperiment(inst, fmi2False, 0.0, 0.0, fmi2False, 0.0));
+	FMU_CALL(fmi2EnterInitializationMode(inst));
+	FMU_CALL(fmi2SetReal(inst, &k, 1, &stiffer));
+	FMU_CALL(fmi2ExitInitializationMode(inst));
+	FMU_CALL(fmi2SetReal(inst, &force, 1, &one));
+	for (int n = 0; n < 3; ++n)
+		FMU_CALL(fmi2DoStep(inst, 0.02 * n, 0.02, fmi2True));
+	FMU_CALL(fmi2GetFMUstate(inst, &state));
+	size_t size = 0;
+	FMU_CALL(fmi2SerializedFMUstateSize(inst, state, &size));
+	bytes = __real_malloc(size);
+	ENSURE(bytes != NULL);
+	FMU_CALL(fmi2SerializeFMUstate(inst, state, bytes, size));
+	FMU_CALL(fmi2DeSerializeFMUstate(inst, bytes, size, &copy));
+	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
+	FMU_CALL(fmi2SetFMUstate(inst, copy));
+	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
+	FMU_CALL(fmi2SetReal(inst, &k, 1, &stiffest));
+	FMU_CALL(fmi2DoStep(inst, 0.08, 0.02, fmi2True));
+	FMU_CALL(fmi2Reset(inst));
+	FMU_CALL(fmi2EnterInitializationMode(inst));
+	FMU_CALL(fmi2ExitInitializationMode(inst));
+	FMU_CALL(fmi2DoStep(inst, 0.0, 0.02, fmi2True));
+	FMU_CALL(fmi2Terminate(inst));
+end:
+	result = 0;
+	if (state)
+		fmi2FreeFMUstate(inst, &state);
+	if (copy)
+		fmi2FreeFMUstate(inst, &copy);
+	free(bytes);
+	fmi2FreeInstance(inst);
+	return result;
+}
+
+static int test_fmu(void)
+{
+	fmu_case c;
+	memset(&c, 0, sizeof c);
+	snprintf(c.directory, sizeof c.directory, "%s/oom-fmu-XXXXXX", SPRINGMASS_OOM_WORK_DIR);
+	ENSURE(mkdtemp(c.directory) != NULL);
+	char path[1100];
+	snprintf(path, sizeof path, "%s/model.json", c.directory);
+	FILE* out = fopen(path, "wb");
+	ENSURE(out != NULL);
+	fwrite(model_small, 1, strlen(model_small), out);
+	fclose(out);
+	snprintf(c.resources, sizeof c.resources, "file://%s", c.directory);
+	sm_error err;
+	sm_document* doc = sm_document_parse(model_small, strlen(model_small), "oom.json", &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(fmu_table_create(doc, model_small, strlen(model_small), &c.table, &err), SM_OK);
+	sm_document_destroy(doc);
+	c.callbacks.logger = fmu_logger;
+	c.callbacks.componentEnvironment = &c;
+	int result = fmu_scenario(&c) != 0 || c.errors != 0;  // no failures: no errors
+	if (result)
+		printf("  the FMU run without failures failed: %s\n", c.last);
+	else
+		result = inject_every_failure("FMU", fmu_scenario, &c);
+	fmu_table_destroy(&c.table);
+	remove(path);
+	remove(c.directory);
+	return result;
+}
+
+#endif
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_model_api);
+	RUN_TEST(test_model_file);
+	RUN_TEST(test_simulation_dense);
+	RUN_TEST(test_simulation_klu);
+	RUN_TEST(test_simulation_pcg);
+	RUN_TEST(test_simulation_cholmod);
+	RUN_TEST(test_simulation_pcg_multilevel);
+	RUN_TEST(test_simulation_adams);
+	RUN_TEST(test_analysis_dense);
+	RUN_TEST(test_analysis_sparse);
+#ifdef SPRINGMASS_OOM_FMU
+	RUN_TEST(test_fmu);
+#endif
+	return TEST_SUMMARY();
+}
