@@ -228,6 +228,7 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 	sm_status st = sm_sparse_jacobian_fill(sim->pattern, sim->model, x, v, variant, sim->dfdx, sim->dfdv);
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	sim->jacobian_evaluations++;
+	sim->jacobian_out_of_memory = st == SM_ERROR_OUT_OF_MEMORY;
 	return st == SM_OK ? 0 : -1;
 }
 
@@ -939,6 +940,7 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		CVodeSetStopTime(sim->cvode, t_end);
 		N_VScale(1.0, sim->y, sim->y_saved);
 		sim->solver_message[0] = '\0';
+		sim->jacobian_out_of_memory = false;
 		double reached = sim->time;
 		int flag;
 		if (sim->def.on_step == NULL) {
@@ -975,6 +977,9 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			// afresh from the last good state.
 			sim->need_restart = flag != CV_TOO_MUCH_WORK || !usable;
 			refresh_outputs(sim);
+			if (flag == CV_LSETUP_FAIL && sim->jacobian_out_of_memory)
+				snprintf(sim->solver_message, sizeof sim->solver_message,
+				         "out of memory evaluating the Jacobian");
 			char* name = CVodeGetReturnFlagName(flag);
 			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s%s",
 			     name ? name : "an unknown flag", sim->time, t_end, failure_hint(flag),

@@ -80,6 +80,9 @@ struct sm_simulation {
 
 	char last_error[SM_ERROR_MESSAGE_CAPACITY];
 	char solver_message[SM_ERROR_MESSAGE_CAPACITY];  // CVODE's last error text
+	// The last Jacobian evaluation ran out of memory: CVODE reports only that the linear
+	// solver's set-up failed.
+	bool jacobian_out_of_memory;
 };
 
 // Seconds on a monotonic clock [s].

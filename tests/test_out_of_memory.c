@@ -472,6 +472,10 @@ static int advance_or_recover(simulation_case* c, sm_simulation* sim, bool* rest
 	if (st == SM_OK)
 		return 0;
 	ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+	// The message names the cause, except where CVODE reports only that its linear solver's
+	// initialisation failed (the matrix it clones there).
+	const char* message = sm_simulation_last_error(sim);
+	ENSURE(strstr(message, "memory") != NULL || strstr(message, "CV_LINIT_FAIL") != NULL);
 	ENSURE(sm_simulation_time(sim) >= 0.0 && sm_simulation_time(sim) <= c->t_end);
 	*restarted = true;
 	ENSURE_STATUS(sm_simulation_advance(sim, c->t_end), SM_OK);
