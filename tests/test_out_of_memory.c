@@ -828,6 +828,7 @@ static int fmu_scenario(void* context)
 	fmi2Byte* bytes = NULL;
 	fmi2ValueReference force = fmu_reference(c, "tip.fx"), k = fmu_reference(c, "k");
 	double one = 1.0, stiffer = 450.0, stiffest = 480.0;
+	int errors_before = c->errors;
 	FMU_CALL(fmi2SetupExperiment(inst, fmi2False, 0.0, 0.0, fmi2False, 0.0));
 	FMU_CALL(fmi2EnterInitializationMode(inst));
 	FMU_CALL(fmi2SetReal(inst, &k, 1, &stiffer));
@@ -843,9 +844,29 @@ static int fmu_scenario(void* context)
 	FMU_CALL(fmi2SerializeFMUstate(inst, state, bytes, size));
 	FMU_CALL(fmi2DeSerializeFMUstate(inst, bytes, size, &copy));
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
-	FMU_CALL(fmi2SetFMUstate(inst, copy));
+	// A state that cannot be taken leaves the instance as it was.
+	fmi2ValueReference tip_x = fmu_reference(c, "tip.x");
+	double x_before = 0.0, x_after = 0.0;
+	ENSURE_STATUS(fmi2GetReal(inst, &tip_x, 1, &x_before), fmi2OK);
+	errors_before = c->errors;
+	fmi2Status restored = fmi2SetFMUstate(inst, copy);
+	if (restored != fmi2OK) {
+		ENSURE_FMU_FAILURE(restored, c, errors_before);
+		ENSURE_STATUS(fmi2GetReal(inst, &tip_x, 1, &x_after), fmi2OK);
+		ENSURE(x_after == x_before);
+		goto end;
+	}
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
-	FMU_CALL(fmi2SetReal(inst, &k, 1, &stiffest));
+	// A parameter the simulation cannot take is undone: k keeps its value.
+	errors_before = c->errors;
+	fmi2Status set = fmi2SetReal(inst, &k, 1, &stiffest);
+	if (set != fmi2OK) {
+		ENSURE_FMU_FAILURE(set, c, errors_before);
+		double now = 0.0;
+		ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
+		ENSURE(now == stiffer);
+		goto end;
+	}
 	FMU_CALL(fmi2DoStep(inst, 0.08, 0.02, fmi2True));
 	FMU_CALL(fmi2Reset(inst));
 	FMU_CALL(fmi2EnterInitializationMode(inst));
