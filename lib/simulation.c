@@ -821,6 +821,42 @@ static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
 }
 
 // What a failure of CVODE means for the model, in its terms.
+// The name of a CVode failure flag. CVodeGetReturnFlagName would allocate it, and SUNDIALS 6.4.1
+// writes into that allocation without checking it: out of memory, a failed advance crashed there.
+#define FLAG_CASE(flag) \
+	case flag: return #flag
+static const char* failure_name(int flag)
+{
+	switch (flag) {
+		FLAG_CASE(CV_TOO_MUCH_WORK);
+		FLAG_CASE(CV_TOO_MUCH_ACC);
+		FLAG_CASE(CV_ERR_FAILURE);
+		FLAG_CASE(CV_CONV_FAILURE);
+		FLAG_CASE(CV_LINIT_FAIL);
+		FLAG_CASE(CV_LSETUP_FAIL);
+		FLAG_CASE(CV_LSOLVE_FAIL);
+		FLAG_CASE(CV_RHSFUNC_FAIL);
+		FLAG_CASE(CV_FIRST_RHSFUNC_ERR);
+		FLAG_CASE(CV_REPTD_RHSFUNC_ERR);
+		FLAG_CASE(CV_UNREC_RHSFUNC_ERR);
+		FLAG_CASE(CV_RTFUNC_FAIL);
+		FLAG_CASE(CV_NLS_INIT_FAIL);
+		FLAG_CASE(CV_NLS_SETUP_FAIL);
+		FLAG_CASE(CV_CONSTR_FAIL);
+		FLAG_CASE(CV_NLS_FAIL);
+		FLAG_CASE(CV_MEM_FAIL);
+		FLAG_CASE(CV_MEM_NULL);
+		FLAG_CASE(CV_ILL_INPUT);
+		FLAG_CASE(CV_NO_MALLOC);
+		FLAG_CASE(CV_BAD_T);
+		FLAG_CASE(CV_TOO_CLOSE);
+		FLAG_CASE(CV_VECTOROP_ERR);
+		FLAG_CASE(CV_CONTEXT_ERR);
+	default: return "an unknown flag";
+	}
+}
+#undef FLAG_CASE
+
 static const char* failure_hint(int flag)
 {
 	switch (flag) {
@@ -980,11 +1016,9 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			if (flag == CV_LSETUP_FAIL && sim->jacobian_out_of_memory)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory evaluating the Jacobian");
-			char* name = CVodeGetReturnFlagName(flag);
 			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s%s",
-			     name ? name : "an unknown flag", sim->time, t_end, failure_hint(flag),
-			     sim->solver_message[0] ? ": " : "", sim->solver_message);
-			free(name);
+			     failure_name(flag), sim->time, t_end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			     sim->solver_message);
 			return SM_ERROR_SOLVER;
 		}
 		sim->time = (flag == CV_ROOT_RETURN) ? fmin(reached, t_end) : t_end;
