@@ -447,12 +447,21 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 }
 
 // Puts back the parameter values old[] that set_parameters recorded, last parameter first
-// (see there).
-static void put_back_parameters(instance* inst, const double* old)
+// (see there). Setting a value takes memory: if one cannot be put back, the document and the
+// simulation disagree, and the instance goes to the error state, from which fmi2SetFMUstate or
+// fmi2Reset lead back.
+static void put_back_parameters(instance* inst, const char* function, const double* old)
 {
+	bool restored = true;
 	for (int32_t k = sm_document_parameter_count(inst->doc); k-- > 0;) {
-		if (sm_document_parameter_value(inst->doc, k) != old[k])
-			sm_document_set_parameter(inst->doc, k, old[k], NULL);
+		if (sm_document_parameter_value(inst->doc, k) != old[k] &&
+		    sm_document_set_parameter(inst->doc, k, old[k], NULL) != SM_OK)
+			restored = false;
+	}
+	if (!restored) {
+		log_error(inst, "%s: the earlier parameter values cannot be put back (out of memory): the instance "
+		          "is in the error state (fmi2SetFMUstate or fmi2Reset lead back)", function);
+		inst->state = ST_ERROR;
 	}
 }
 
@@ -470,7 +479,7 @@ static bool set_parameters(instance* inst, const char* function, const double* v
 		if (old[k] != values[k] && sm_document_set_parameter(inst->doc, k, values[k], &err) != SM_OK) {
 			log_error(inst, "%s: %s = %g rejected by the model: %s", function, sm_document_parameter_name(inst->doc, k),
 			          values[k], err.message);
-			put_back_parameters(inst, old);
+			put_back_parameters(inst, function, old);
 			return false;
 		}
 	}
@@ -511,7 +520,7 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	}
 	sm_model_destroy(model);
 	if (st != SM_OK) {
-		put_back_parameters(inst, old);
+		put_back_parameters(inst, "fmi2SetReal", old);
 		return fmi2Error;
 	}
 	inst->forces_valid = false;
@@ -1334,7 +1343,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 			status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
 		sm_model_destroy(model);
 		if (status != fmi2OK)
-			put_back_parameters(inst, old);
+			put_back_parameters(inst, function, old);
 		else
 			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
 	} else if (status == fmi2OK) {
