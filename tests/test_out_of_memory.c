@@ -3,10 +3,12 @@
 // glue and the static SUNDIALS and GSL archives goes through the wrappers below (shared libraries
 // such as jansson and CHOLMOD allocate unwrapped). Each scenario runs once per allocation it
 // makes, with exactly that allocation failing: k = 1, 2, 3, ... until a run completes without
-// reaching the failure. Every run must end in a clear error (a status other than SM_OK and a
-// message, or fmi2Error and a logged error), leave no partial state, and leave its objects
-// usable or at least freeable; in the sanitizer build the leak checker then shows that no failure
-// path leaks. Runs in which every call succeeds must give the results of a run without failures.
+// reaching the failure; then again with allocation k and every later one failing (memory that
+// stays exhausted: error paths, clean-ups and undos that allocate). Every run must end in a
+// clear error (a status other than SM_OK and a message, or fmi2Error and a logged error), leave
+// no partial state, and leave its objects usable (when memory is back) or at least freeable; in
+// the sanitizer build the leak checker then shows that no failure path leaks. Runs in which
+// every call succeeds must give the results of a run without failures.
 //
 // SPRINGMASS_OOM_VERBOSE=1 prints every run's allocation number and the error it ended in;
 // SPRINGMASS_OOM_FIRST=k starts each scenario at allocation k (to debug one failure).
@@ -45,11 +47,12 @@ void* __wrap_calloc(size_t count, size_t size);
 void* __wrap_realloc(void* p, size_t size);
 
 // The linker's wrappers take no context, so the injector is the one piece of process state this
-// test keeps: allocations counted since the scenario started, the one to fail (0: none), and
-// whether it was reached.
+// test keeps: allocations counted since the scenario started, the one to fail (0: none), whether
+// every later one fails too (memory that stays exhausted), and whether it was reached.
 typedef struct injector {
 	long count;
 	long fail_at;
+	bool persistent;
 	bool reached;
 } injector;
 
@@ -57,7 +60,10 @@ static injector oom_;
 
 static bool fail_this_allocation(void)
 {
-	if (oom_.fail_at <= 0 || ++oom_.count != oom_.fail_at)
+	if (oom_.fail_at <= 0)
+		return false;
+	++oom_.count;
+	if (oom_.count < oom_.fail_at || (oom_.count > oom_.fail_at && !oom_.persistent))
 		return false;
 	oom_.reached = true;
 	errno = ENOMEM;  // as malloc sets it
@@ -133,27 +139,35 @@ AS_ONE_ALLOCATION(int, CVodeSVtolerances, CV_MEM_FAIL, (void* cvode, sunrealtype
 			printf("    [%ld] %d %s\n", oom_.fail_at, s_, m_);                                      \
 	} while (0)
 
-// Runs fn(context) with allocation k failing, for k = 1, 2, ... until a run reaches no failure.
+// Runs fn(context) with allocation k failing, for k = 1, 2, ... until a run reaches no failure:
+// first with that allocation alone failing, then with it and every later one failing (where the
+// scenarios stop after the first failed call, since nothing can be retried).
 static int inject_every_failure(const char* name, int (*fn)(void*), void* context)
 {
 	const char* first = getenv("SPRINGMASS_OOM_FIRST");
-	for (long k = first ? atol(first) : 1;; ++k) {
-		if (getenv("SPRINGMASS_OOM_VERBOSE"))
-			printf("    [%ld] ...\n", k);
-		fflush(stdout);
-		oom_ = (injector){0, k, false};
-		int result = fn(context);
-		bool reached = oom_.reached;
-		oom_ = (injector){0, 0, false};
-		if (result != 0) {
-			printf("  %s: the run with allocation %ld failing went wrong\n", name, k);
-			return 1;
-		}
-		if (!reached) {
-			printf("  %-44s %5ld allocations, each failed once\n", name, k - 1);
-			return 0;
+	long counts[2] = {0, 0};
+	for (int persistent = 0; persistent < 2; ++persistent) {
+		for (long k = first ? atol(first) : 1;; ++k) {
+			if (getenv("SPRINGMASS_OOM_VERBOSE"))
+				printf("    [%ld%s] ...\n", k, persistent ? " on" : "");
+			fflush(stdout);
+			oom_ = (injector){0, k, persistent, false};
+			int result = fn(context);
+			bool reached = oom_.reached;
+			oom_ = (injector){0, 0, false, false};
+			if (result != 0) {
+				printf("  %s: the run with allocation %ld%s failing went wrong\n", name, k,
+				       persistent ? " and every later one" : "");
+				return 1;
+			}
+			if (!reached) {
+				counts[persistent] = k - 1;
+				break;
+			}
 		}
 	}
+	printf("  %-36s %5ld allocations, each failed alone and from it on\n", name, counts[0]);
+	return counts[0] == counts[1] ? 0 : 1;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -391,6 +405,10 @@ static int model_scenario(void* context)
 		if (st != SM_OK) {
 			ENSURE_CLEAR_FAILURE(st, sm_model_last_error(model));
 			ENSURE(sm_model_particle_count(model) == i);
+			if (oom_.persistent) {
+				result = 0;
+				goto done;
+			}
 			ENSURE_STATUS(sm_model_add_particle(model, &p, &index), SM_OK);
 		}
 		ENSURE(index == i);
@@ -405,6 +423,10 @@ static int model_scenario(void* context)
 			if (st != SM_OK) {
 				ENSURE_CLEAR_FAILURE(st, sm_model_last_error(model));
 				ENSURE(sm_model_spring_count(model) == before);
+				if (oom_.persistent) {
+					result = 0;
+					goto done;
+				}
 				ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 			}
 		}
@@ -465,7 +487,8 @@ static double largest_difference(const double* a, const double* b, int32_t n)
 	return d;
 }
 
-// Advances to t_end; a failed advance must leave a usable simulation that then gets there.
+// Advances to t_end; a failed advance must leave a usable simulation that then gets there (when
+// memory is back). Returns 0, 1 on a defect, 2 when the run is to stop (memory stays exhausted).
 static int advance_or_recover(simulation_case* c, sm_simulation* sim, bool* restarted)
 {
 	sm_status st = sm_simulation_advance(sim, c->t_end);
@@ -477,6 +500,8 @@ static int advance_or_recover(simulation_case* c, sm_simulation* sim, bool* rest
 	const char* message = sm_simulation_last_error(sim);
 	ENSURE(strstr(message, "memory") != NULL || strstr(message, "CV_LINIT_FAIL") != NULL);
 	ENSURE(sm_simulation_time(sim) >= 0.0 && sm_simulation_time(sim) <= c->t_end);
+	if (oom_.persistent)
+		return 2;
 	*restarted = true;
 	ENSURE_STATUS(sm_simulation_advance(sim, c->t_end), SM_OK);
 	return 0;
@@ -513,11 +538,20 @@ static int simulation_scenario(void* context)
 	}
 	int result = 1;
 	bool restarted = false;
-	if (advance_or_recover(c, sim, &restarted) != 0 || check_result(c, sim, 0, restarted) != 0)
+	int advanced = advance_or_recover(c, sim, &restarted);
+	if (advanced == 2) {
+		result = 0;
+		goto done;
+	}
+	if (advanced != 0 || check_result(c, sim, 0, restarted) != 0)
 		goto done;
 	sm_status st = sm_simulation_reset(sim);
 	if (st != SM_OK) {
 		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (oom_.persistent) {
+			result = 0;
+			goto done;
+		}
 		if (sm_simulation_reset(sim) != SM_OK) {
 			printf("  a reset after a failed reset failed: %s\n", sm_simulation_last_error(sim));
 			goto done;
@@ -526,7 +560,8 @@ static int simulation_scenario(void* context)
 	if (sm_simulation_time(sim) != 0.0 || sm_simulation_break_count(sim) != 0)
 		goto done;
 	restarted = false;
-	if (advance_or_recover(c, sim, &restarted) != 0 || check_result(c, sim, 1, restarted) != 0)
+	advanced = advance_or_recover(c, sim, &restarted);
+	if (advanced == 1 || (advanced == 0 && check_result(c, sim, 1, restarted) != 0))
 		goto done;
 	result = 0;
 done:
@@ -857,14 +892,19 @@ static int fmu_scenario(void* context)
 		goto end;
 	}
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
-	// A parameter the simulation cannot take is undone: k keeps its value.
+	// A parameter the simulation cannot take is undone: k keeps its value; or, when memory stays
+	// exhausted so that the old value cannot be put back, the instance is in the error state.
 	errors_before = c->errors;
 	fmi2Status set = fmi2SetReal(inst, &k, 1, &stiffest);
 	if (set != fmi2OK) {
 		ENSURE_FMU_FAILURE(set, c, errors_before);
 		double now = 0.0;
 		ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
-		ENSURE(now == stiffer);
+		if (now != stiffer) {
+			ENSURE(oom_.persistent);
+			ENSURE_STATUS(fmi2DoStep(inst, 0.08, 0.02, fmi2True), fmi2Error);
+			ENSURE(strstr(c->last, "illegal call sequence") != NULL);
+		}
 		goto end;
 	}
 	FMU_CALL(fmi2DoStep(inst, 0.08, 0.02, fmi2True));
