@@ -477,6 +477,9 @@ typedef struct simulation_case {
 	// first run bit for bit: the cholmod solver keeps its factorisation over a reset).
 	double* reference;
 	double tolerance;     // on positions after a restart caused by a failure [m]
+	// Then new constants and a state set anew (independent of the linear solver: done with one
+	// or two of them only, to keep the test short).
+	bool update;
 } simulation_case;
 
 static double largest_difference(const double* a, const double* b, int32_t n)
@@ -527,6 +530,49 @@ static int check_result(simulation_case* c, sm_simulation* sim, int pass, bool r
 	return 0;
 }
 
+// New constants (spring 0 twice as stiff), all or nothing; then the initial state set anew at
+// t_end and a further advance.
+static int update_and_set_state(simulation_case* c, sm_simulation* sim)
+{
+	sm_model* stiffer = sm_model_clone(c->model);
+	if (!stiffer) {
+		ENSURE(oom_.reached);  // the clone's failure, NULL its only sign
+		return 0;
+	}
+	sm_spring_def spring;
+	ENSURE_STATUS(sm_model_get_spring(stiffer, 0, &spring), SM_OK);
+	spring.stiffness *= 2.0;
+	ENSURE_STATUS(sm_model_set_spring(stiffer, 0, &spring), SM_OK);
+	double l0, ks_before, ks_after, kd;
+	ENSURE_STATUS(sm_model_spring_constants(sm_simulation_model(sim), 0, &l0, &ks_before, &kd), SM_OK);
+	sm_status st = sm_simulation_update_model(sim, stiffer);
+	sm_model_destroy(stiffer);
+	ENSURE_STATUS(sm_model_spring_constants(sm_simulation_model(sim), 0, &l0, &ks_after, &kd), SM_OK);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		ENSURE(ks_after == ks_before);
+		if (oom_.persistent)
+			return 0;
+	} else {
+		ENSURE(ks_after == 2.0 * ks_before);
+	}
+	double* x = __real_malloc(2 * (size_t)c->n3 * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(c->model, x, x + c->n3);
+	st = sm_simulation_set_state(sim, c->t_end, x, x + c->n3);
+	free(x);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (oom_.persistent)
+			return 0;
+	}
+	ENSURE(sm_simulation_time(sim) == c->t_end);
+	st = sm_simulation_advance(sim, c->t_end + 0.01);
+	if (st != SM_OK)
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+	return 0;
+}
+
 static int simulation_scenario(void* context)
 {
 	simulation_case* c = context;
@@ -563,6 +609,8 @@ static int simulation_scenario(void* context)
 	advanced = advance_or_recover(c, sim, &restarted);
 	if (advanced == 1 || (advanced == 0 && check_result(c, sim, 1, restarted) != 0))
 		goto done;
+	if (advanced == 0 && c->update && update_and_set_state(c, sim) != 0)
+		goto done;
 	result = 0;
 done:
 	sm_simulation_destroy(sim);
@@ -575,7 +623,8 @@ static int run_simulation(const char* name, const char* text, sm_linear_solver s
 	sm_model* model = build(text);
 	ENSURE(model != NULL);
 	int32_t n3 = 3 * sm_model_particle_count(model);
-	simulation_case c = {model, sm_default_simulation_def(), t_end, n3, 0, NULL, 1e-3};
+	bool update = solver == SM_SOLVER_REDUCED_CHOLMOD;
+	simulation_case c = {model, sm_default_simulation_def(), t_end, n3, 0, NULL, 1e-3, update};
 	c.def.solver = solver;
 	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
 	ENSURE(c.reference != NULL);
@@ -621,7 +670,7 @@ static int test_simulation_adams(void)
 	sm_model* model = build(model_all);
 	ENSURE(model != NULL);
 	int32_t n3 = 3 * sm_model_particle_count(model);
-	simulation_case c = {model, sm_default_simulation_def(), 0.2, n3, 0, NULL, 1e-3};
+	simulation_case c = {model, sm_default_simulation_def(), 0.2, n3, 0, NULL, 1e-3, true};
 	c.def.method = SM_METHOD_ADAMS;
 	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
 	int result = c.reference ? simulation_scenario(&c) : 1;
