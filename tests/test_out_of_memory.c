@@ -230,17 +230,6 @@ static const char model_cloth[] =
     "    \"bend\": { \"strain_stiffness\": 50, \"strain_damping\": 2 } } ],\n"
     "  \"fixed\": [{ \"min\": [-0.01, -0.01, -0.01], \"max\": [1.01, 0.01, 0.01] }] }\n";
 
-// A bob on a spring that breaks (2 kg on 400 N/m at rest length 0.1 m, dropped), with a force
-// port and a parameter: the FMU's model, small so that its runs stay few.
-static const char model_small[] =
-    "{ \"springmass\": 1, \"name\": \"oom_small\", \"parameters\": { \"k\": 400.0 },\n"
-    "  \"gravity\": [0, 0, -9.81],\n"
-    "  \"particles\": [ { \"name\": \"anchor\", \"position\": [0, 0, 0], \"fixed\": true },\n"
-    "                  { \"name\": \"weight\", \"position\": [0, 0, -0.1], \"mass\": 2.0 } ],\n"
-    "  \"springs\": [ { \"a\": \"anchor\", \"b\": \"weight\", \"stiffness\": \"k\", \"damping\": 0.2,\n"
-    "                 \"break_strain\": 0.2 } ],\n"
-    "  \"ports\": [ { \"name\": \"tip\", \"particle\": \"weight\", \"kind\": \"force\" } ] }\n";
-
 static sm_model* build(const char* text)
 {
 	sm_error err;
@@ -841,6 +830,17 @@ static int test_analysis_sparse(void)
 // ---------------------------------------------------------------------------------------------
 
 #ifdef SPRINGMASS_OOM_FMU
+
+// A bob on a spring that breaks (2 kg on 400 N/m at rest length 0.1 m, dropped), with a force
+// port and a parameter: the FMU's model, small so that its runs stay few.
+static const char model_small[] =
+    "{ \"springmass\": 1, \"name\": \"oom_small\", \"parameters\": { \"k\": 400.0 },\n"
+    "  \"gravity\": [0, 0, -9.81],\n"
+    "  \"particles\": [ { \"name\": \"anchor\", \"position\": [0, 0, 0], \"fixed\": true },\n"
+    "                  { \"name\": \"weight\", \"position\": [0, 0, -0.1], \"mass\": 2.0 } ],\n"
+    "  \"springs\": [ { \"a\": \"anchor\", \"b\": \"weight\", \"stiffness\": \"k\", \"damping\": 0.2,\n"
+    "                 \"break_strain\": 0.2 } ],\n"
+    "  \"ports\": [ { \"name\": \"tip\", \"particle\": \"weight\", \"kind\": \"force\" } ] }\n";
 
 typedef struct fmu_case {
 	fmu_table table;
