@@ -900,7 +900,7 @@ done:
 	return ok;
 }
 
-void sm_reduced_solver_invalidate(SUNLinearSolver ls)
+void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor)
 {
 	if (ls == NULL || ls->content == NULL)
 		return;
@@ -908,6 +908,11 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls)
 	r->jacobian_time = NAN;
 	r->blocks_gamma = NAN;
 	r->coarse_age = COARSE_MAX_AGE;  // masses or springs may have changed
+	if (forget_factor) {
+		r->factor_valid = false;
+		r->refactor = false;
+		r->extra_flops = 0.0;
+	}
 	load_masses(r);
 }
 

@@ -796,8 +796,9 @@ static sm_status reinit(sm_simulation* sim, bool count)
 	if (count)
 		sim->base.restarts++;
 	sim->need_restart = false;
+	// A reset (the only re-initialisation not counted as a restart) starts the solver as new.
 	if (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD)
-		sm_reduced_solver_invalidate(sim->linear_solver);
+		sm_reduced_solver_invalidate(sim->linear_solver, !count);
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS)
 		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %.17g s: %s", sim->time,
 		            sim->solver_message);

@@ -103,8 +103,11 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data);
 // Forgets the Jacobian the reduced solver holds, so that it evaluates one at its next solve
-// (after a re-initialisation: a new state may come with the same CVODE time).
-void sm_reduced_solver_invalidate(SUNLinearSolver ls);
+// (after a re-initialisation: a new state may come with the same CVODE time). With
+// `forget_factor` also the Cholesky factor of an earlier Newton matrix (the cholmod solver's
+// preconditioner), so that a reset simulation repeats its first run bit for bit; after other
+// restarts the earlier factor stays a good preconditioner.
+void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor);
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
                       sunrealtype delta, int lr, void* user_data);
 

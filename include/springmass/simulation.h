@@ -124,9 +124,11 @@ SM_API void sm_simulation_destroy(sm_simulation* sim);
 /// 4 eps max(1 s, |t|) (about 9e-16 s at t = 1 s), too short for CVODE, is one explicit Euler
 /// step (exact to round-off). SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that
 /// is not finite or lies before t.
-/// On failure returns SM_ERROR_SOLVER with the message in sm_simulation_last_error(); the
-/// state is then the last one the solver reached (sm_simulation_time() tells when) and the
-/// simulation remains usable (advance again, set a state, or reset).
+/// On failure returns SM_ERROR_SOLVER (SM_ERROR_OUT_OF_MEMORY when a spring break cannot be
+/// recorded) with the message in sm_simulation_last_error(), which names a lack of memory as
+/// the cause where there was one; the state is then the last one the solver reached
+/// (sm_simulation_time() tells when) and the simulation remains usable (advance again, set a
+/// state, or reset).
 SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 
 /// Current time [s].
@@ -165,7 +167,8 @@ SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const 
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
-/// energy, statistics and break events cleared.
+/// energy, statistics and break events cleared. The solver starts as new: the same calls as
+/// after creation repeat that run bit for bit.
 SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
