@@ -821,7 +821,6 @@ static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
 	return sm_model_set_spring_enabled(sim->model, spring, false);
 }
 
-// What a failure of CVODE means for the model, in its terms.
 // The name of a CVode failure flag. CVodeGetReturnFlagName would allocate it, and SUNDIALS 6.4.1
 // writes into that allocation without checking it: out of memory, a failed advance crashed there.
 #define FLAG_CASE(flag) \
@@ -858,6 +857,7 @@ static const char* failure_name(int flag)
 }
 #undef FLAG_CASE
 
+// What a failure of CVODE means for the model, in its terms.
 static const char* failure_hint(int flag)
 {
 	switch (flag) {
