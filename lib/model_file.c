@@ -9,6 +9,7 @@
 #include "model_file_internal.h"
 
 #include "model_internal.h"
+#include "structures_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -706,7 +707,9 @@ static bool read_springs(parser* p, const json_t* list)
 // Structures.
 // ---------------------------------------------------------------------------------------------
 
-// A group of springs; absent means no springs of that group.
+// A group of springs; absent means no springs of that group, and so do literal zero constants.
+// A group whose stiffness or damping is a parameter is created whatever values they take, so
+// that changing parameters never changes the model's topology (an FMU's tunable parameters).
 static bool read_material(parser* p, const json_t* obj, const char* path, const char* key, sm_spring_material* m,
                           spring_source* src)
 {
@@ -719,7 +722,10 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 		return true;
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
-	return expect_object(p, value, sub) && check_keys(p, value, sub, keys) && read_constants(p, value, sub, m, src);
+	if (!expect_object(p, value, sub) || !check_keys(p, value, sub, keys) || !read_constants(p, value, sub, m, src))
+		return false;
+	m->keep_when_zero = src->stiffness >= 0 || src->damping >= 0;
+	return true;
 }
 
 static bool check_budget(parser* p, const char* path, int64_t particles, int64_t springs)
@@ -972,7 +978,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		d.vertices = vertices;
 		d.triangles = triangles;
 		st = sm_add_mesh(model, &d, &s.range);
-		if (st == SM_OK && (d.edge.stiffness != 0.0 || d.edge.damping != 0.0))
+		if (st == SM_OK && structure_material_present(&d.edge))
 			mesh_edges = count_edges(triangles, d.triangle_count);
 		free(vertices);
 		free(triangles);

@@ -82,7 +82,7 @@ int32_t sm_structure_particle(const sm_structure* s, int32_t i, int32_t j, int32
 
 bool structure_material_present(const sm_spring_material* m)
 {
-	return m->stiffness != 0.0 || m->damping != 0.0;
+	return m->keep_when_zero || m->stiffness != 0.0 || m->damping != 0.0;
 }
 
 sm_status structure_check_material(sm_model* model, const char* what, const char* group,

@@ -351,6 +351,29 @@ static int test_parameters(void)
 	ENSURE(strcmp(err.message, "test.json: structures[0].segments: parameter n = 2.5 must be a whole number from 1 to "
 	                           "4194304") == 0);
 	sm_document_destroy(doc);
+
+	// A group whose constants are parameters keeps its springs when they are all zero, so that
+	// parameters never change the topology (an FMU's tunable parameters); literal zeros make
+	// no springs. 4 x 3 sheet: 17 structural, 12 shear, 10 bend springs.
+	text = "{\"springmass\": 1, \"name\": \"s\", \"parameters\": {\"E\": 0, \"c\": 0},"
+	       " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": 4, \"nv\": 3,"
+	       " \"structural\": {\"strain_stiffness\": 100}, \"shear\": {\"strain_stiffness\": \"E\","
+	       " \"strain_damping\": \"c\"}, \"bend\": {\"strain_stiffness\": 0}}]}";
+	doc = parse(text, &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 17 + 12);
+	sm_model_destroy(m);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 50.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 17 + 12);
+	sm_spring_def shear;  // particle 0's springs: to (0, 1) and (1, 0) structural, to (1, 1) shear
+	ENSURE_STATUS(sm_model_get_spring(m, 2, &shear), SM_OK);
+	ENSURE(shear.a == 0 && shear.b == 5);
+	sm_model_spring_constants(m, 2, &l0, &ks, NULL);
+	ENSURE_REL(ks, 50.0 / l0, 1e-15, 0.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
 	return 0;
 }
 

@@ -19,13 +19,17 @@ extern "C" {
 #define SM_STRUCTURE_MAX_ELEMENTS (1 << 24)
 
 /// Constants of one group of springs (structural, shear, bend, ...). A group whose stiffness
-/// and damping are both zero is not created.
+/// and damping are both zero is not created, unless keep_when_zero is set.
 typedef struct sm_spring_material {
 	double stiffness;              ///< ks [N/m] or, per strain, E [N]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
 	double damping;                ///< kd [N s/m] or, per strain, c [N s]; default 0
 	sm_scaling damping_scaling;    ///< default SM_PER_STRAIN
 	double break_strain;           ///< [1]; INFINITY (default) = never breaks
+	/// Create the group's springs even when stiffness and damping are both zero (default false),
+	/// so that the model keeps its topology when they are given values later (through
+	/// sm_simulation_update_model, or a model file's parameters: see docs/model-format.md).
+	bool keep_when_zero;
 } sm_spring_material;
 
 /// Index ranges created by a builder, and the grid shape for grid addressing.

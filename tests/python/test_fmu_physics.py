@@ -4,6 +4,7 @@ import math
 import numpy as np
 from fmpy import simulate_fmu
 
+from conftest import BUNDLED_FMUS
 from fmu_helpers import Instance
 
 # driven_oscillator.json: bob of mass m = 2 kg on a spring k = 50 N/m, rest length 0.5 m,
@@ -170,5 +171,26 @@ def test_tunable_parameter_between_steps(test_fmu):
         t = 0.4
         expected = L0 + (x1 - L0) * math.cos(w2 * t) + v1 / w2 * math.sin(w2 * t)
         assert abs(inst.get("tip.x") - expected) < 1e-6
+    finally:
+        inst.free()
+
+
+def test_tunable_parameters_that_empty_a_spring_group():
+    # The rope's springs take their constants from E and c, both tunable: set to 0 together
+    # between steps, the springs stay (the topology cannot change) but pull nothing, so without
+    # mass damping the tip falls freely from where it was: z = z1 + vz1 t - g t^2 / 2, which BDF
+    # integrates exactly up to the tolerances (rtol 1e-10). Set back, the rope pulls again.
+    inst = Instance(BUNDLED_FMUS / "hanging_rope.fmu").start(
+        {"alpha": 0.0, "solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10})
+    try:
+        inst.slave.doStep(0.0, 0.2)
+        inst.slave.setReal([inst.vr["E"], inst.vr["c"]], [0.0, 0.0])
+        z1, vz1 = inst.get("tip.z", "tip.vz")
+        inst.slave.doStep(0.2, 0.1)
+        assert inst.get("energy.elastic") == 0.0
+        assert abs(inst.get("tip.z") - (z1 + vz1 * 0.1 - 9.81 * 0.1**2 / 2)) < 1e-8
+        inst.slave.setReal([inst.vr["E"], inst.vr["c"]], [2000.0, 0.5])
+        inst.slave.doStep(0.3, 0.1)
+        assert inst.get("energy.elastic") > 0.0
     finally:
         inst.free()
