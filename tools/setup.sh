@@ -6,7 +6,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 
 packages=(build-essential cmake ninja-build pkg-config git
-          libsundials-dev libgsl-dev libsuitesparse-dev libjansson-dev
+          libsundials-dev libgsl-dev libsuitesparse-dev libjansson-dev libblas3 liblapack3
           python3 python3-venv patchelf zip unzip)
 missing=()
 for p in "${packages[@]}"; do

@@ -26,25 +26,32 @@ def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path):
     script = ("import ctypes, sys\n"
               "def mapped():\n"
               "    return {l.split()[-1] for l in open('/proc/self/maps') if '.so' in l}\n"
-              "before = mapped()\n"
+              "def threads():\n"
+              "    return len(__import__('os').listdir('/proc/self/task'))\n"
+              "before, started = mapped(), threads()\n"
               "lib = ctypes.CDLL(sys.argv[1], mode=ctypes.RTLD_LOCAL)\n"
               "lib.fmi2Instantiate\n"
+              "print('threads', threads() - started)\n"
               "print('loaded', ' '.join(sorted(mapped() - before)))\n")
     env = dict(os.environ, LD_DEBUG="libs")
     env.pop("LD_LIBRARY_PATH", None)
     out = subprocess.run([sys.executable, "-c", script, binary], env=env, capture_output=True, text=True)
     assert out.returncode == 0 and "loaded" in out.stdout, out.stderr[-2000:]
+    # Loading starts no thread in the importer's process (OpenBLAS would start one per core:
+    # the FMU carries the reference BLAS instead, fmu/bundle_runtime.cmake).
+    assert "threads 0" in out.stdout, out.stdout
     # Only what is loaded after the dlopen: the Python interpreter's own libraries come first.
     trace = out.stderr[out.stderr.find(binary):]
     loaded = re.findall(r"calling init: (\S+)", trace)
     assert any(path.endswith(md.coSimulation.modelIdentifier + ".so") for path in loaded), trace[-2000:]
-    loaded += out.stdout.split()[1:]
+    loaded += out.stdout.split("loaded", 1)[1].split()
     outside = [p for p in loaded
                if os.path.dirname(os.path.realpath(p)) != binaries and not GLIBC.match(os.path.basename(p))]
     assert not outside, f"loaded from outside the FMU: {outside}"
     bundled = [p for p in loaded if os.path.dirname(os.path.realpath(p)) == binaries]
     names = " ".join(os.path.basename(p) for p in bundled)
-    assert "libjansson" in names and "libklu" in names, names
+    assert "libjansson" in names and "libklu" in names and "libblas" in names, names
+    assert "openblas" not in names, names
 
 
 @pytest.mark.skipif(SANITIZED, reason="an instrumented FMU exports the sanitizer's symbols too")
