@@ -790,15 +790,16 @@ static void fold_counters(sm_simulation* sim)
 	sim->base.convergence_failures += conv_fails;
 }
 
-static sm_status reinit(sm_simulation* sim, bool count)
+// Re-initialises CVODE at the current state: a restart (counted in the statistics), or for a
+// reset, which is not counted and starts the linear solver as new.
+static sm_status reinit(sm_simulation* sim, bool reset)
 {
 	fold_counters(sim);
-	if (count)
+	if (!reset)
 		sim->base.restarts++;
 	sim->need_restart = false;
-	// A reset (the only re-initialisation not counted as a restart) starts the solver as new.
 	if (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD)
-		sm_reduced_solver_invalidate(sim->linear_solver, !count);
+		sm_reduced_solver_invalidate(sim->linear_solver, reset);
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS)
 		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %.17g s: %s", sim->time,
 		            sim->solver_message);
@@ -970,7 +971,7 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 		return short_step(sim, t_end);
 	while (sim->time < t_end) {
 		if (sim->need_restart) {
-			sm_status st = reinit(sim, true);
+			sm_status st = reinit(sim, false);
 			if (st != SM_OK)
 				return st;
 		}
@@ -1210,7 +1211,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 	load_initial_state(sim);
 	sim->break_count = 0;
 	sim->last_error[0] = '\0';
-	sm_status st = reinit(sim, false);
+	sm_status st = reinit(sim, true);
 	memset(&sim->base, 0, sizeof sim->base);
 	sim->rhs_evaluations = sim->jacobian_evaluations = sim->linear_iterations = sim->factorizations = 0;
 	return st;
