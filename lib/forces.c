@@ -269,6 +269,19 @@ double sm_model_forces_and_power(const sm_model* model, const double* x, const d
 	return power + mass_damping_power(m, v);
 }
 
+double sm_model_forces_power_and_jacobians(const sm_model* model, const double* x, const double* v,
+                                           const double* f_external, double* f, sm_spring_jacobians* jacobians)
+{
+	body_forces(model, v, f_external, f);
+	const sm_model* m = model;
+	double power = 0.0;
+	spring_loop(m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, v, f,
+	            jacobians->data, &power, 1, 1, 1, 0);
+	jacobians->variant = SM_JACOBIAN_DEFINITE;
+	jacobians->evaluated = 1;
+	return power + mass_damping_power(m, v);
+}
+
 sm_spring_jacobians* sm_spring_jacobians_create(const sm_model* model)
 {
 	if (model == NULL)

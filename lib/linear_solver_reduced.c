@@ -179,6 +179,11 @@ typedef struct reduced {
 	cholmod_dense *coarse_b, *coarse_x, *coarse_y, *coarse_e;
 	sm_multilevel* multilevel; // replaces coarse_factor from MULTILEVEL_MIN_PARTICLES on
 	double jacobian_time;   // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
+	// The state at which the right-hand side last stored the records (sm_reduced_rhs_records): a
+	// solve at that time and state adopts them instead of evaluating again.
+	bool rhs_records;
+	double rhs_time;        // [s]
+	double* rhs_state;      // the first 2 n entries of CVODE's y
 	long last_flag;
 	int last_iterations;
 	SUNPSetupFn psetup;   // CVODE's preconditioner set-up hook: leads to reduced_pset
@@ -506,7 +511,44 @@ static int evaluate_jacobian(reduced* r, double t, const double* y)
 	sim->jacobian_evaluations++;
 	r->blocks_gamma = NAN;
 	r->jacobian_time = st == SM_OK ? t : NAN;
+	r->rhs_records = false;
 	return st == SM_OK ? 0 : -1;
+}
+
+// Makes the Jacobian current at CVODE's state y (time t): adopts the records the right-hand side
+// stored if they were evaluated at exactly this time and state, evaluates them otherwise.
+static int current_jacobian(reduced* r, double t, const double* y)
+{
+	if (r->rhs_records && r->rhs_time == t && memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0) {
+		r->sim->jacobian_evaluations++;
+		r->blocks_gamma = NAN;
+		r->jacobian_time = t;
+		r->rhs_records = false;
+		return 0;
+	}
+	return evaluate_jacobian(r, t, y);
+}
+
+// CVODE evaluates the right-hand side at the predicted state of every step attempt and then
+// solves at that state, where the solver evaluates the Jacobian: the right-hand side computes
+// both in one pass over the springs instead (sm_model_forces_power_and_jacobians), which
+// spares one force evaluation per step. Its records are adopted only if the solve's time and
+// state are exactly those of the evaluation, so the order of CVODE's calls decides only what
+// is spared, never the result: the trajectory is the same, bit for bit.
+sm_spring_jacobians* sm_reduced_rhs_records(SUNLinearSolver ls, double t)
+{
+	reduced* r = ls->content;
+	return r->n > 0 && !(t == r->jacobian_time) ? r->springs : NULL;
+}
+
+void sm_reduced_rhs_evaluated(SUNLinearSolver ls, double t, const double* y)
+{
+	reduced* r = ls->content;
+	memcpy(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double));
+	r->rhs_time = t;
+	r->rhs_records = true;
+	r->jacobian_time = NAN;  // the records are no longer those of the last solve
+	r->blocks_gamma = NAN;
 }
 
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
@@ -519,7 +561,7 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 	if (r->n == 0)
 		return 0;
 	// Always a fresh Jacobian: it costs one pass over the springs.
-	if (evaluate_jacobian(r, t, N_VGetArrayPointer(y)) != 0)
+	if (current_jacobian(r, t, N_VGetArrayPointer(y)) != 0)
 		return -1;
 	*jcur = SUNTRUE;
 	return 0;
@@ -717,7 +759,7 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (CVodeGetCurrentTime(sim->cvode, &t_current) != CV_SUCCESS ||
 	    CVodeGetCurrentState(sim->cvode, &y_current) != CV_SUCCESS)
 		return r->last_flag = SUNLS_MEM_FAIL;
-	if (!(t_current == r->jacobian_time) && evaluate_jacobian(r, t_current, N_VGetArrayPointer(y_current)) != 0)
+	if (!(t_current == r->jacobian_time) && current_jacobian(r, t_current, N_VGetArrayPointer(y_current)) != 0)
 		return r->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
 	const double start = sm_simulation_clock();
 	r->gamma = gamma;
@@ -966,6 +1008,7 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor)
 		return;
 	reduced* r = ls->content;
 	r->jacobian_time = NAN;
+	r->rhs_records = false;
 	r->blocks_gamma = NAN;
 	r->coarse_age = COARSE_MAX_AGE;  // masses or springs may have changed
 	if (forget_factor) {
@@ -1000,6 +1043,7 @@ static void reduced_content_free(reduced* r)
 	free(r->values);
 	free(r->block_inverse);
 	free(r->scaled);
+	free(r->rhs_state);
 	free(r->r);
 	free(r->z);
 	free(r->p);
@@ -1053,10 +1097,11 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 	r->q = calloc(full, sizeof(double));
 	r->rhs = calloc(full, sizeof(double));
 	r->dv = calloc(full, sizeof(double));
+	r->rhs_state = malloc(2 * n * sizeof(double));
 	if (!use_cholmod)
 		r->scaled = malloc(SCALED_STRIDE * ((size_t)sim->model->spring_count + 1) * sizeof(double));
 	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->r || !r->z || !r->p ||
-	    !r->q || !r->rhs || !r->dv || (!use_cholmod && !r->scaled)) {
+	    !r->q || !r->rhs || !r->dv || !r->rhs_state || (!use_cholmod && !r->scaled)) {
 		reduced_content_free(r);
 		return NULL;
 	}

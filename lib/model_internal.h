@@ -115,3 +115,10 @@ void spring_blocks(const sm_model* model, int32_t spring, const double* x, const
 // and f must be given. Defined in forces.c.
 double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
                                  double* f);
+
+// sm_model_forces_and_power and, in the same pass over the springs, every spring's record of the
+// definiteness-preserving Jacobian as sm_model_forces_and_jacobians stores it (the same numbers,
+// bit for bit, as each of the two). v must be given. The right-hand side of a simulation whose
+// linear solver will want the Jacobian at the same state (linear_solver_reduced.c).
+double sm_model_forces_power_and_jacobians(const sm_model* model, const double* x, const double* v,
+                                           const double* f_external, double* f, sm_spring_jacobians* jacobians);

@@ -179,8 +179,19 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	double* f = sim->work_force;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
-	const double power = sm_model_forces_and_power(sim->model, x, v, sim->external_force, f);
-	sim->base.force_seconds += sm_simulation_clock() - start;
+	// Adams' fixed-point iteration has no linear solver.
+	const bool reduced = sim->linear_solver != NULL &&
+	                     (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
+	sm_spring_jacobians* records = reduced ? sm_reduced_rhs_records(sim->linear_solver, t) : NULL;
+	double power;
+	if (records != NULL) {
+		power = sm_model_forces_power_and_jacobians(sim->model, x, v, sim->external_force, f, records);
+		sm_reduced_rhs_evaluated(sim->linear_solver, t, y);
+		sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	} else {
+		power = sm_model_forces_and_power(sim->model, x, v, sim->external_force, f);
+		sim->base.force_seconds += sm_simulation_clock() - start;
+	}
 	sim->rhs_evaluations++;
 	memcpy(ydot, y + nd, (size_t)nd * sizeof(double));
 	for (int32_t k = 0; k < sim->free_count; k++) {

@@ -108,6 +108,11 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 // preconditioner), so that a reset simulation repeats its first run bit for bit; after other
 // restarts the earlier factor stays a good preconditioner.
 void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor);
+// The right-hand side's share in the Jacobian evaluation: the records to fill at time t with
+// sm_model_forces_power_and_jacobians, or NULL if the solver already holds the Jacobian of the
+// step at t; after filling them, sm_reduced_rhs_evaluated with the state y (CVODE's vector).
+sm_spring_jacobians* sm_reduced_rhs_records(SUNLinearSolver ls, double t);
+void sm_reduced_rhs_evaluated(SUNLinearSolver ls, double t, const double* y);
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
                       sunrealtype delta, int lr, void* user_data);
 

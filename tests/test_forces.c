@@ -248,7 +248,10 @@ static int test_damping_power_is_never_positive(void)
 // The simulation's right-hand side: forces and dissipated power from one pass. The forces are
 // sm_model_forces' bit for bit; the power is sm_model_dissipated_power's summed in another order
 // (two SSE2 lanes), so equal to a few rounding errors of the sum of its positive terms: 1e-12
-// relative. An even and an odd spring count (the odd last spring takes the scalar loop).
+// relative. An even and an odd spring count (the odd last spring takes the scalar loop). With
+// the reduced solvers the right-hand side also stores the Jacobian's records: forces, power and
+// records must then be exactly those of the separate evaluations, or the trajectory would depend
+// on which of them computed the records.
 static int test_forces_and_power_match_separate_evaluations(void)
 {
 	rng r = {7070};
@@ -270,6 +273,20 @@ static int test_forces_and_power_match_separate_evaluations(void)
 		const double expected = sm_model_dissipated_power(m, x, v);
 		ENSURE(expected > 0.0);
 		ENSURE_REL(power, expected, 1e-12, 0.0);
+
+		double h[3 * N], e[3 * N];
+		sm_spring_jacobians* alone = sm_spring_jacobians_create(m);
+		sm_spring_jacobians* fused = sm_spring_jacobians_create(m);
+		ENSURE(alone != NULL && fused != NULL);
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, fe, SM_JACOBIAN_DEFINITE, h, alone), SM_OK);
+		const double fused_power = sm_model_forces_power_and_jacobians(m, x, v, fe, e, fused);
+		ENSURE(memcmp(&fused_power, &power, sizeof power) == 0);
+		ENSURE(memcmp(e, f, sizeof f) == 0);
+		ENSURE(fused->evaluated && fused->variant == SM_JACOBIAN_DEFINITE);
+		ENSURE(memcmp(fused->data, alone->data,
+		              SPRING_JACOBIAN_STRIDE * (size_t)sm_model_spring_count(m) * sizeof(double)) == 0);
+		sm_spring_jacobians_destroy(alone);
+		sm_spring_jacobians_destroy(fused);
 		sm_model_destroy(m);
 	}
 	return 0;
