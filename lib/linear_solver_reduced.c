@@ -18,13 +18,13 @@
 // M^-1 r falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers
 // make.
 //
-// Both solvers use the Newton matrix of the current step exactly: the Jacobian is evaluated at
-// the first solve of every step attempt (at the predicted state), and products with A are formed
-// from it with the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a
+// Both solvers use the Newton matrix of the current step exactly: the Jacobian is that of the
+// predicted state of every step attempt (evaluated by the right-hand side there, or else at the
+// first solve), and products with A are formed from it with the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a
 // Jacobian and a factorisation kept for up to 20 steps, as CVODE does by default for its direct
 // solvers, made the Newton iteration fail about once in 15 steps (each failure cuts the step by
 // 4) and doubled the number of steps (n = 16: 1263 against 684; n = 32: 2175 against 1103) for
-// no gain in accuracy; the fresh Jacobian costs one fused pass over the springs per step. The
+// no gain in accuracy; the fresh Jacobian costs no pass over the springs of its own. The
 // refresh happens inside the solve, not through a CVODE set-up at every step, because each set-up
 // resets CVODE's estimate of the Newton convergence rate to 1, which alone cost half a Newton
 // iteration more per step (1.5 instead of 1.1 right-hand sides per step).
