@@ -204,15 +204,8 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		structure_truncate(model, p0, s0);
 		goto done;
 	}
-	if (out != NULL) {
-		out->first_particle = p0;
-		out->particle_count = nv;
-		out->first_spring = s0;
-		out->spring_count = model->spring_count - s0;
-		out->shape[0] = nv;
-		out->shape[1] = 1;
-		out->shape[2] = 1;
-	}
+	const int32_t made[3] = {has_edge ? table.count : 0, has_bend ? (int32_t)interior : 0, 0};
+	structure_fill_out(out, p0, s0, model, nv, 1, 1, made);
 done:
 	free(table.slots);
 	free(table.in_order);

@@ -9,7 +9,6 @@
 #include "model_file_internal.h"
 
 #include "model_internal.h"
-#include "structures_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -800,7 +799,7 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 }
 
 // Group of spring s of a structure, from the offset between its particles (see structures.h).
-static int spring_group(const document_structure* s, const sm_model* model, int32_t spring, int32_t mesh_edges)
+static int spring_group(const document_structure* s, const sm_model* model, int32_t spring)
 {
 	sm_spring_def def;
 	sm_model_get_spring(model, spring, &def);
@@ -824,35 +823,9 @@ static int spring_group(const document_structure* s, const sm_model* model, int3
 		const int nonzero = (di != 0) + (dj != 0) + (dk != 0);
 		return nonzero - 1;
 	}
-	case STRUCTURE_MESH: return spring - r->first_spring < mesh_edges ? 0 : 1;
+	case STRUCTURE_MESH: return spring - r->first_spring < r->group_spring_count[0] ? 0 : 1;
 	}
 	return 0;
-}
-
-static int compare_keys(const void* x, const void* y)
-{
-	const uint64_t a = *(const uint64_t*)x, b = *(const uint64_t*)y;
-	return (a > b) - (a < b);
-}
-
-// Number of distinct edges of a triangle list (the mesh builder's edge springs come first); -1
-// when out of memory.
-static int32_t count_edges(const int32_t* triangles, int32_t count)
-{
-	uint64_t* keys = malloc((size_t)(count > 0 ? count : 1) * 3 * sizeof(uint64_t));
-	if (keys == NULL)
-		return -1;
-	for (int32_t t = 0; t < count; t++)
-		for (int c = 0; c < 3; c++) {
-			const uint32_t a = (uint32_t)triangles[3 * t + c], b = (uint32_t)triangles[3 * t + (c + 1) % 3];
-			keys[3 * t + c] = a < b ? ((uint64_t)a << 32 | b) : ((uint64_t)b << 32 | a);
-		}
-	qsort(keys, 3 * (size_t)count, sizeof(uint64_t), compare_keys);
-	int32_t distinct = 0;
-	for (size_t k = 0; k < 3 * (size_t)count; k++)
-		distinct += k == 0 || keys[k] != keys[k - 1];
-	free(keys);
-	return distinct;
 }
 
 static bool read_structure(parser* p, const json_t* obj, const char* path)
@@ -895,7 +868,6 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	const int64_t limit = p->doc->max_elements;
 	spring_source groups[3] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
 	sm_status st = SM_OK;
-	int32_t mesh_edges = 0;
 	switch (s.type) {
 	case STRUCTURE_ROPE: {
 		sm_rope_def d = sm_default_rope_def();
@@ -978,12 +950,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		d.vertices = vertices;
 		d.triangles = triangles;
 		st = sm_add_mesh(model, &d, &s.range);
-		if (st == SM_OK && structure_material_present(&d.edge))
-			mesh_edges = count_edges(triangles, d.triangle_count);
 		free(vertices);
 		free(triangles);
-		if (mesh_edges < 0)
-			return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
 		break;
 	}
 	}
@@ -1014,7 +982,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 			return false;
 	}
 	for (int32_t k = 0; k < r->spring_count; k++)
-		p->ex->spring_sources[s0 + k] = groups[spring_group(&s, model, s0 + k, mesh_edges)];
+		p->ex->spring_sources[s0 + k] = groups[spring_group(&s, model, s0 + k)];
 	return true;
 }
 

@@ -185,11 +185,13 @@ static sm_status check_mass(sm_model* model, const char* what, double mass)
 	return SM_OK;
 }
 
-static void fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
-                     int32_t n2)
+void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
+                        int32_t n2, const int32_t group_springs[3])
 {
 	if (out == NULL)
 		return;
+	for (int g = 0; g < 3; g++)
+		out->group_spring_count[g] = group_springs[g];
 	out->first_particle = p0;
 	out->particle_count = model->particle_count - p0;
 	out->first_spring = s0;
@@ -276,6 +278,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
+	const int32_t made[3] = {has_structural ? (int32_t)(n - 1) : 0, has_bending ? (int32_t)(n - 2) : 0, 0};
 	const double m = total / (double)n;
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const double t = (double)p / (double)def->segments;
@@ -293,7 +296,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		structure_truncate(model, p0, s0);
 		return st;
 	}
-	fill_out(out, p0, s0, model, (int32_t)n, 1, 1);
+	structure_fill_out(out, p0, s0, model, (int32_t)n, 1, 1, made);
 	return SM_OK;
 }
 
@@ -373,6 +376,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	static const int offsets[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 1, 1}, {1, -1, 1}, {0, 2, 2}, {2, 0, 2}};
 	const sm_spring_material* groups[3] = {&def->structural, &def->shear, &def->bend};
 	static const char* const group_names[3] = {"structural", "shear", "bend"};
+	int32_t made[3] = {0, 0, 0};
 	for (int64_t i = 0; i < nv && st == SM_OK; i++) {
 		for (int64_t j = 0; j < nu && st == SM_OK; j++) {
 			for (int o = 0; o < 6 && st == SM_OK; o++) {
@@ -382,6 +386,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 					continue;
 				st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)(i * nu + j),
 				                          p0 + (int32_t)(a * nu + b), groups[g]);
+				made[g]++;
 			}
 		}
 	}
@@ -389,7 +394,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		structure_truncate(model, p0, s0);
 		return st;
 	}
-	fill_out(out, p0, s0, model, def->nu, def->nv, 1);
+	structure_fill_out(out, p0, s0, model, def->nu, def->nv, 1, made);
 	return SM_OK;
 }
 
@@ -455,6 +460,7 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	};
 	const sm_spring_material* groups[3] = {&def->edge, &def->face_diagonal, &def->body_diagonal};
 	static const char* const group_names[3] = {"edge", "face diagonal", "body diagonal"};
+	int32_t made[3] = {0, 0, 0};
 	for (int64_t k = 0; k < nw && st == SM_OK; k++)
 		for (int64_t i = 0; i < nv && st == SM_OK; i++)
 			for (int64_t j = 0; j < nu && st == SM_OK; j++)
@@ -465,12 +471,13 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 						continue;
 					st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)((k * nv + i) * nu + j),
 					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g]);
+					made[g]++;
 				}
 	if (st != SM_OK) {
 		structure_truncate(model, p0, s0);
 		return st;
 	}
-	fill_out(out, p0, s0, model, def->nu, def->nv, def->nw);
+	structure_fill_out(out, p0, s0, model, def->nu, def->nv, def->nw, made);
 	return SM_OK;
 }
 

@@ -15,6 +15,10 @@ sm_status structure_check_vector(sm_model* model, const char* what, const char* 
 sm_status structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs);
 // Cuts the model back to the given counts (the counts it had before a failed builder call).
 void structure_truncate(sm_model* m, int32_t particles, int32_t springs);
+// Describes the structure just built in *out (may be NULL): particles from p0, springs from s0 to
+// the model's count, the grid shape and the springs made of each group.
+void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
+                        int32_t n2, const int32_t group_springs[3]);
 sm_status structure_add_particle(sm_model* model, const char* what, double mass, const double position[3]);
 sm_status structure_add_spring(sm_model* model, const char* what, const char* group, int32_t a, int32_t b,
                                const sm_spring_material* m);

@@ -98,6 +98,7 @@ static int test_sheet_counts_and_rest_lengths(void)
 	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
 	// structural: (nu-1) nv + nu (nv-1) = 10 + 12; shear: 2 (nu-1)(nv-1) = 16.
 	ENSURE(s.spring_count == 22 + 16);
+	ENSURE(s.group_spring_count[0] == 22 && s.group_spring_count[1] == 16 && s.group_spring_count[2] == 0);
 	ENSURE(s.shape[0] == 3 && s.shape[1] == 5 && s.shape[2] == 1);
 	int horizontal = 0, vertical = 0, diagonal = 0;
 	for (int32_t k = 0; k < s.spring_count; k++) {
@@ -115,6 +116,7 @@ static int test_sheet_counts_and_rest_lengths(void)
 	def.bend = def.structural;
 	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
 	ENSURE(s.first_particle == 15 && s.first_spring == 38 && s.spring_count == 38 + 14);
+	ENSURE(s.group_spring_count[0] == 22 && s.group_spring_count[1] == 16 && s.group_spring_count[2] == 14);
 	sm_model_destroy(m);
 	return 0;
 }
@@ -132,6 +134,7 @@ static int test_rope(void)
 	sm_structure s;
 	ENSURE_STATUS(sm_add_rope(m, &def, &s), SM_OK);
 	ENSURE(s.particle_count == 11 && s.spring_count == 10 + 9);
+	ENSURE(s.group_spring_count[0] == 10 && s.group_spring_count[1] == 9 && s.group_spring_count[2] == 0);
 	ENSURE_NEAR(sm_model_total_mass(m), 1.0, 1e-12);
 	for (int32_t k = 0; k < s.spring_count; k++) {
 		sm_spring_def sd;
@@ -210,6 +213,7 @@ static int test_block_counts_and_shear_resistance(void)
 	// 27 particles; edges 3 * (2 * 3 * 3) = 54; face diagonals 2 * 3 * (2 * 2 * 3) = 72; body
 	// diagonals 4 * 2 * 2 * 2 = 32.
 	ENSURE(s.particle_count == 27 && s.spring_count == 54 + 72 + 32);
+	ENSURE(s.group_spring_count[0] == 54 && s.group_spring_count[1] == 72 && s.group_spring_count[2] == 32);
 	int edge = 0, face = 0, body = 0;
 	for (int32_t k = 0; k < s.spring_count; k++) {
 		double l0;
@@ -268,6 +272,8 @@ static int test_mesh_disc(void)
 	ENSURE_STATUS(sm_add_mesh(m, &def, &s), SM_OK);
 	ENSURE(s.particle_count == N + 1);
 	ENSURE(s.spring_count == 2 * N + N);
+	// N spokes and N rim edges, then a bending spring across each of the N interior spokes.
+	ENSURE(s.group_spring_count[0] == 2 * N && s.group_spring_count[1] == N && s.group_spring_count[2] == 0);
 	// Lumped masses: the total is density x area of the polygon, N/2 sin(2 pi/N); the centre
 	// has a third of every triangle.
 	const double area = 0.5 * N * sin(2 * PI / N);

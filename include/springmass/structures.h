@@ -39,6 +39,11 @@ typedef struct sm_structure {
 	int32_t first_spring;    ///< its springs are first_spring .. first_spring + spring_count - 1
 	int32_t spring_count;
 	int32_t shape[3];        ///< grid points per axis (rope: segments + 1, 1, 1; mesh: vertices, 1, 1)
+	/// Springs made of each group, in the order of the definition's materials: rope structural,
+	/// bending; sheet structural, shear, bend; block edge, face_diagonal, body_diagonal; mesh
+	/// edge, bend (a mesh's edge springs come first: springs first_spring ..
+	/// first_spring + group_spring_count[0] - 1). Entries past the groups are 0.
+	int32_t group_spring_count[3];
 } sm_structure;
 
 /// Index of the particle at grid coordinate (i, j, k) of a structure, or -1 if outside the grid.
