@@ -20,12 +20,12 @@
 //
 // Both solvers use the Newton matrix of the current step exactly: the Jacobian is that of the
 // predicted state of every step attempt (evaluated by the right-hand side there, or else at the
-// first solve), and products with A are formed from it with the gamma of each solve. Measured on the benchmark cloth (bench/README.md), a
-// Jacobian and a factorisation kept for up to 20 steps, as CVODE does by default for its direct
-// solvers, made the Newton iteration fail about once in 15 steps (each failure cuts the step by
-// 4) and doubled the number of steps (n = 16: 1263 against 684; n = 32: 2175 against 1103) for
-// no gain in accuracy; the fresh Jacobian costs no pass over the springs of its own. The
-// refresh happens inside the solve, not through a CVODE set-up at every step, because each set-up
+// first solve), and products with A are formed from it with the gamma of each solve. Measured
+// on the benchmark cloth (bench/README.md), a Jacobian and a factorisation kept for up to 20
+// steps, as CVODE does by default for its direct solvers, made the Newton iteration fail about
+// once in 15 steps (each failure cuts the step by 4) and doubled the number of steps (n = 16:
+// 1263 against 684; n = 32: 2175 against 1103) for no gain in accuracy; the fresh Jacobian
+// costs no pass over the springs of its own. The refresh happens inside the solve, not through a CVODE set-up at every step, because each set-up
 // resets CVODE's estimate of the Newton convergence rate to 1, which alone cost half a Newton
 // iteration more per step (1.5 instead of 1.1 right-hand sides per step).
 //
@@ -119,10 +119,10 @@
 #define MULTILEVEL_COARSEST_DOFS 2000
 #endif
 #define COARSE_ITERATIONS 3
+#define STRONG_FRACTION 0.25
 
 // Doubles per spring of the scaled records (seven used: one 64-byte record each).
 #define SCALED_STRIDE 8
-#define STRONG_FRACTION 0.25
 
 typedef struct reduced {
 	sm_simulation* sim;
@@ -560,7 +560,8 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 	*jcur = SUNFALSE;
 	if (r->n == 0)
 		return 0;
-	// Always a fresh Jacobian: it costs one pass over the springs.
+	// Always the Jacobian at this state: the right-hand side's records, or one pass over the
+	// springs.
 	if (current_jacobian(r, t, N_VGetArrayPointer(y)) != 0)
 		return -1;
 	*jcur = SUNTRUE;
