@@ -25,9 +25,10 @@
 // steps, as CVODE does by default for its direct solvers, made the Newton iteration fail about
 // once in 15 steps (each failure cuts the step by 4) and doubled the number of steps (n = 16:
 // 1263 against 684; n = 32: 2175 against 1103) for no gain in accuracy; the fresh Jacobian
-// costs no pass over the springs of its own. The refresh happens inside the solve, not through a CVODE set-up at every step, because each set-up
-// resets CVODE's estimate of the Newton convergence rate to 1, which alone cost half a Newton
-// iteration more per step (1.5 instead of 1.1 right-hand sides per step).
+// costs no pass over the springs of its own. The refresh happens inside the solve, not through
+// a CVODE set-up at every step, because each set-up resets CVODE's estimate of the Newton
+// convergence rate to 1, which alone cost half a Newton iteration more per step (1.5 instead of
+// 1.1 right-hand sides per step).
 //
 // Conjugate gradients on A dv = M bv + gamma K bx, from dv = 0, over all particles (3 entries
 // each, the constrained particles' entries kept at zero, so that the products with A read and
