@@ -623,6 +623,27 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 	return SM_ERROR_INVALID_ARGUMENT;
 }
 
+// CVODE's error weights w_i = 1 / (rtol |y_i| + atol_i), computed as CVodeSVtolerances' own
+// function computes them (the same bits), from the simulation's absolute tolerances. Given to
+// CVodeWFtolerances because CVodeSVtolerances clones the tolerance vector and SUNDIALS 6.4.1 then
+// writes into the clone without checking that it was made: out of memory, that crashes.
+static int error_weights(N_Vector yv, N_Vector wv, void* user_data)
+{
+	const sm_simulation* sim = user_data;
+	const double* y = N_VGetArrayPointer(yv);
+	const double* atol = N_VGetArrayPointer(sim->tolerances);
+	double* w = N_VGetArrayPointer(wv);
+	const double rtol = sim->def.relative_tolerance;
+	const sunindextype n = N_VGetLength(yv);
+	for (sunindextype i = 0; i < n; i++) {
+		const double t = rtol * fabs(y[i]) + atol[i];
+		if (t <= 0.0)
+			return -1;  // as CVODE: a zero or negative weight is an error
+		w[i] = 1.0 / t;
+	}
+	return 0;
+}
+
 static sm_status setup_cvode(sm_simulation* sim)
 {
 	const int64_t nd = sim->dofs;
@@ -638,7 +659,7 @@ static sm_status setup_cvode(sm_simulation* sim)
 		return SM_ERROR_OUT_OF_MEMORY;
 	if (CVodeSetErrHandlerFn(sim->cvode, error_handler, sim) != CV_SUCCESS ||
 	    CVodeInit(sim->cvode, rhs, sim->time, sim->y) != CV_SUCCESS ||
-	    CVodeSVtolerances(sim->cvode, sim->def.relative_tolerance, sim->tolerances) != CV_SUCCESS ||
+	    CVodeWFtolerances(sim->cvode, error_weights) != CV_SUCCESS ||
 	    CVodeSetUserData(sim->cvode, sim) != CV_SUCCESS ||
 	    CVodeSetMaxNumSteps(sim->cvode, sim->def.max_steps) != CV_SUCCESS ||
 	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS)

@@ -90,8 +90,9 @@ void* __wrap_realloc(void* p, size_t size)
 // returned and then writes through NULL; N_VClone and SUNMatClone store the context into the
 // clone without checking that the clone operation returned one; CVodeInit's cvAllocVectors destroys
 // the vectors it made when a later clone fails but leaves their pointers in the CVODE memory, so
-// that CVodeFree destroys them again; CVodeSVtolerances copies the tolerances into its clone
-// without checking it. Each of these functions counts as one allocation here: when
+// that CVodeFree destroys them again (CVodeSVtolerances, which writes into a clone it does not
+// check, is not used: the simulation gives CVODE its own error weights). Each of these
+// functions counts as one allocation here: when
 // it is the one to fail, it returns what it returns when its own allocation fails, without being
 // called, and nothing inside it is failed otherwise.
 static long suspend_failures(void)
@@ -120,8 +121,6 @@ AS_ONE_ALLOCATION(N_Vector, N_VClone, NULL, (N_Vector w), (w))
 AS_ONE_ALLOCATION(SUNMatrix, SUNMatClone, NULL, (SUNMatrix A), (A))
 AS_ONE_ALLOCATION(int, CVodeInit, CV_MEM_FAIL, (void* cvode, CVRhsFn f, sunrealtype t0, N_Vector y0),
                   (cvode, f, t0, y0))
-AS_ONE_ALLOCATION(int, CVodeSVtolerances, CV_MEM_FAIL, (void* cvode, sunrealtype rtol, N_Vector atol),
-                  (cvode, rtol, atol))
 
 // A call that failed must have failed because of the injected allocation, with an error status
 // and a message.
