@@ -1,6 +1,7 @@
-# Installation: headers, the static library, the command-line tool and a CMake package so that
-# C programs use springmass with `find_package(springmass REQUIRED)` and
-# `target_link_libraries(app PRIVATE springmass::springmass)`.
+# Installation: headers, the static library, the command-line tool, a CMake package so that C
+# programs use springmass with `find_package(springmass REQUIRED)` and
+# `target_link_libraries(app PRIVATE springmass::springmass)`, and a pkg-config file for builds
+# without CMake.
 include(CMakePackageConfigHelpers)
 
 install(TARGETS springmass EXPORT springmassTargets
@@ -17,3 +18,15 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/springmassConfigVersion.c
     COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/springmassConfig.cmake ${PROJECT_BINARY_DIR}/springmassConfigVersion.cmake
         DESTINATION ${SPRINGMASS_CMAKE_DIR})
+
+# pkg-config: the prefix is found from the file's own folder (${pcfiledir}), so that the file
+# stays right whatever prefix `cmake --install --prefix` gives. SUNDIALS, KLU and CHOLMOD have no
+# pkg-config files on Debian; they are named by library (the shared ones, which pkg-config users
+# link by default).
+file(RELATIVE_PATH SPRINGMASS_PC_TO_PREFIX "/root/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/root")
+string(REGEX REPLACE "/$" "" SPRINGMASS_PC_TO_PREFIX "${SPRINGMASS_PC_TO_PREFIX}")
+set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
+string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
+string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
+configure_file(${PROJECT_SOURCE_DIR}/cmake/springmass.pc.in ${PROJECT_BINARY_DIR}/springmass.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/springmass.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
