@@ -1519,6 +1519,25 @@ sm_port sm_document_port(const sm_document* doc, int32_t index)
 	return doc->current->ports[index];
 }
 
+int32_t sm_document_structure_count(const sm_document* doc)
+{
+	return doc != NULL ? doc->current->structure_count : 0;
+}
+
+sm_structure_info sm_document_structure(const sm_document* doc, int32_t index)
+{
+	static const char* const types[] = {"rope", "sheet", "block", "mesh"};
+	sm_structure_info info;
+	memset(&info, 0, sizeof info);
+	if (doc == NULL || index < 0 || index >= doc->current->structure_count)
+		return info;
+	const document_structure* s = &doc->current->structures[index];
+	info.name = s->name;
+	info.type = types[s->type];
+	info.range = s->range;
+	return info;
+}
+
 int32_t sm_document_port_index(const sm_document* doc, const char* name)
 {
 	if (doc == NULL || name == NULL)

@@ -465,6 +465,21 @@ static int test_references(void)
 	ENSURE(strcmp(sm_document_particle_name(doc, 13), "b[1,0,1]") == 0);
 	ENSURE(sm_document_port(doc, 1).particle == 1);
 	ENSURE(sm_document_port_index(doc, "q") == 1);
+	// The structures as their builders made them: the sheet's (nu-1) nv + nu (nv-1) = 7
+	// structural springs come first, then the block's 3 * (1 * 2 * 2) = 12 edges.
+	ENSURE(sm_document_structure_count(doc) == 2);
+	const sm_structure_info sheet = sm_document_structure(doc, 0), block = sm_document_structure(doc, 1);
+	ENSURE(strcmp(sheet.name, "s") == 0 && strcmp(sheet.type, "sheet") == 0);
+	ENSURE(sheet.range.first_particle == 1 && sheet.range.particle_count == 6 && sheet.range.shape[0] == 3 &&
+	       sheet.range.shape[1] == 2 && sheet.range.first_spring == 0 && sheet.range.spring_count == 7);
+	ENSURE(sheet.range.group_spring_count[0] == 7 && sheet.range.group_spring_count[1] == 0 &&
+	       sheet.range.group_spring_count[2] == 0);
+	ENSURE(strcmp(block.name, "b") == 0 && strcmp(block.type, "block") == 0);
+	ENSURE(block.range.first_particle == 7 && block.range.particle_count == 8 && block.range.first_spring == 7 &&
+	       block.range.spring_count == 12 && block.range.group_spring_count[0] == 12);
+	ENSURE(sm_structure_particle(&block.range, 1, 0, 1) == 13);
+	ENSURE(sm_document_structure(doc, 2).name == NULL && sm_document_structure(doc, -1).name == NULL);
+	ENSURE(sm_document_structure_count(NULL) == 0);
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
 	return 0;

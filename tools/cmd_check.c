@@ -36,6 +36,40 @@ static void print_particle(const sm_document* doc, int32_t particle)
 		printf("particle %d", (int)particle);
 }
 
+// One line per structure: its kind and grid, its particles and springs, and the springs of
+// each of its groups (the groups of structures.h, in the order of their materials).
+static void print_structure(const sm_structure_info* s)
+{
+	static const char* const rope[] = {"structural", "bending", NULL};
+	static const char* const sheet[] = {"structural", "shear", "bend"};
+	static const char* const block[] = {"edge", "face diagonal", "body diagonal"};
+	static const char* const mesh[] = {"edge", "bend", NULL};
+	const char* const* groups = rope;
+	const sm_structure* r = &s->range;
+	printf("  %-12s %s ", s->name, s->type);
+	if (strcmp(s->type, "rope") == 0) {
+		printf("of %d segments", (int)r->shape[0] - 1);
+	} else if (strcmp(s->type, "sheet") == 0) {
+		printf("%d x %d", (int)r->shape[0], (int)r->shape[1]);
+		groups = sheet;
+	} else if (strcmp(s->type, "block") == 0) {
+		printf("%d x %d x %d", (int)r->shape[0], (int)r->shape[1], (int)r->shape[2]);
+		groups = block;
+	} else {
+		printf("of %d vertices", (int)r->shape[0]);
+		groups = mesh;
+	}
+	printf(": particles %d - %d, %d springs", (int)r->first_particle, (int)(r->first_particle + r->particle_count - 1),
+	       (int)r->spring_count);
+	const char* separator = " (";
+	for (int g = 0; g < 3; g++)
+		if (groups[g] != NULL && r->group_spring_count[g] > 0) {
+			printf("%s%d %s", separator, (int)r->group_spring_count[g], groups[g]);
+			separator = ", ";
+		}
+	printf("%s\n", separator[0] == ',' ? ")" : "");
+}
+
 int sm_cmd_check(int argc, char** argv)
 {
 	const char* path = NULL;
@@ -146,6 +180,14 @@ int sm_cmd_check(int argc, char** argv)
 	}
 	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, %d breakable\n", (int)m,
 	       (int)rest_length, (int)zero_length, (int)per_strain, (int)breakable);
+	const int32_t structures = sm_document_structure_count(doc);
+	if (structures > 0) {
+		printf("structures   %d\n", (int)structures);
+		for (int32_t k = 0; k < structures; k++) {
+			const sm_structure_info s = sm_document_structure(doc, k);
+			print_structure(&s);
+		}
+	}
 	printf("total mass   %.6g kg\n", sm_model_total_mass(model));
 	const sm_model_def def = sm_model_get_def(model);
 	printf("gravity      (%g, %g, %g) m/s^2, mass damping %g 1/s\n", def.gravity[0], def.gravity[1], def.gravity[2],

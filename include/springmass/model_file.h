@@ -8,6 +8,7 @@
 
 #include "springmass/model.h"
 #include "springmass/simulation.h"
+#include "springmass/structures.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -76,6 +77,18 @@ SM_API int32_t sm_document_port_count(const sm_document* doc);
 SM_API sm_port sm_document_port(const sm_document* doc, int32_t index);
 /// Index of a port by name, or -1.
 SM_API int32_t sm_document_port_index(const sm_document* doc, const char* name);
+
+/// A structure of the file (its "structures" array) as its builder made it.
+typedef struct sm_structure_info {
+	const char* name;    ///< owned by the document
+	const char* type;    ///< "rope", "sheet", "block" or "mesh"
+	sm_structure range;  ///< its particles, springs, grid shape and springs per group (structures.h)
+} sm_structure_info;
+
+/// Structures, in file order; an index out of range gives a NULL name. The ranges are valid until
+/// the next sm_document_set_parameter (a parameter may change counts) or destroy.
+SM_API int32_t sm_document_structure_count(const sm_document* doc);
+SM_API sm_structure_info sm_document_structure(const sm_document* doc, int32_t index);
 
 /// Name of a particle ("anchor", or "cloth[3,4]" for structure particles: "name[row,column]"
 /// for a sheet, "name[row,column,layer]" for a block, "name[i]" for a rope or a mesh), NULL if
