@@ -4,7 +4,12 @@
 # libpthread, libdl, librt and the loader) stay those of the machine that loads the FMU, and so
 # do the sanitizer runtimes of an instrumented build.
 #
-#   cmake -DBINARY=<springmass_fmu.so> -DDESTINATION=<dir> -DPATCHELF=<patchelf> -P bundle_runtime.cmake
+# It also gathers the licences of that software: the copyright file of the Debian package of each
+# bundled library and of the static archives linked into the binary (ARCHIVES, separated by commas),
+# in documentation/licenses/ with a README.txt that says which file covers which library.
+#
+#   cmake -DBINARY=<springmass_fmu.so> -DDESTINATION=<dir> -DPATCHELF=<patchelf>
+#         [-DARCHIVES=<a.a>,<b.a>] -P bundle_runtime.cmake
 foreach(var BINARY DESTINATION PATCHELF)
   if(NOT ${var})
     message(FATAL_ERROR "bundle_runtime.cmake: ${var} is not set")
@@ -72,3 +77,49 @@ foreach(file IN LISTS copied)
 endforeach()
 list(LENGTH resolved count)
 message(STATUS "FMU runtime: springmass_fmu.so and ${count} bundled libraries in ${dir}")
+
+# Licences. Binaries are redistributed with their authors' notices: the Debian copyright file of
+# the package that installed each one (dpkg -S), once per package. FMI 2.0 keeps documentation in
+# documentation/ (FMI 3.0 names documentation/licenses/ for exactly this).
+set(licenses "${DESTINATION}/documentation/licenses")
+file(REMOVE_RECURSE "${DESTINATION}/documentation")
+file(MAKE_DIRECTORY "${licenses}")
+find_program(DPKG dpkg)
+string(REPLACE "," ";" archives "${ARCHIVES}")
+set(readme "Licences of the software an FMU made by springmass carries\n\n")
+string(APPEND readme "The FMU's binary (binaries/linux64/, named after the model) is springmass with the static\n")
+string(APPEND readme "archives below linked in; the other files of binaries/linux64/ are shared libraries it loads.\n")
+string(APPEND readme "Each came from a Debian package, whose copyright file (its authors' notices and licences) is\n")
+string(APPEND readme "in this folder under the package's name.\n\n")
+set(missing "")
+foreach(library IN LISTS archives resolved)
+  get_filename_component(name "${library}" NAME)
+  file(REAL_PATH "${library}" real)
+  # dpkg knows a file by the path its package installed, which on a merged /usr may be the one
+  # without the /usr prefix (libgcc_s: /lib/..., found at /usr/lib/...).
+  set(package "")
+  string(REGEX REPLACE "^/usr/" "/" unmerged "${real}")
+  foreach(candidate IN ITEMS "${real}" "${library}" "${unmerged}")
+    if(DPKG AND NOT package)
+      execute_process(COMMAND "${DPKG}" -S "${candidate}" OUTPUT_VARIABLE owner ERROR_QUIET RESULT_VARIABLE rc)
+      if(rc EQUAL 0 AND owner MATCHES "^([^:,]+)")
+        set(package "${CMAKE_MATCH_1}")
+      endif()
+    endif()
+  endforeach()
+  if(package AND EXISTS "/usr/share/doc/${package}/copyright")
+    file(COPY_FILE "/usr/share/doc/${package}/copyright" "${licenses}/${package}.txt")
+    if(name MATCHES "\\.a$")
+      string(APPEND readme "  ${name} (linked in)  ${package}.txt\n")
+    else()
+      string(APPEND readme "  ${name}  ${package}.txt\n")
+    endif()
+  else()
+    list(APPEND missing "${name}")
+    string(APPEND readme "  ${name}  (no package found: its licence is not included)\n")
+  endif()
+endforeach()
+file(WRITE "${licenses}/README.txt" "${readme}")
+if(missing)
+  message(WARNING "bundle_runtime.cmake: no licence found for ${missing} (not installed from a Debian package)")
+endif()

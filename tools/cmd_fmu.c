@@ -6,8 +6,9 @@
 //   binaries/linux64/lib*.so*                  the shared libraries it needs (RUNPATH $ORIGIN)
 //   resources/model.json                       the model file, byte for byte (its hash is the GUID)
 //   resources/reference.csv                    a reference result, when one is given
-// The binary and its libraries come from the FMU runtime folder the build assembles
-// (<build>/fmu/runtime, installed as <prefix>/<libdir>/springmass/fmu).
+//   documentation/licenses/                    the licences of the libraries in binaries/
+// The binary, its libraries and their licences come from the FMU runtime folder the build
+// assembles (<build>/fmu/runtime, installed as <prefix>/<libdir>/springmass/fmu).
 #define _XOPEN_SOURCE 700
 #include "commands.h"
 
@@ -206,6 +207,28 @@ static bool run_in(const char* dir, char* const argv[])
 	return WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
+// Copies every regular file of the folder `from` into the folder `to` (both exist), the file
+// named `rename_from` (or none: NULL) under the name `rename_to`. False on failure, with errno.
+static bool copy_folder(const char* from, const char* to, const char* rename_from, const char* rename_to)
+{
+	DIR* d = opendir(from);
+	if (!d)
+		return false;
+	struct dirent* entry;
+	bool copied = true;
+	while (copied && (entry = readdir(d)) != NULL) {
+		if (entry->d_name[0] == '.')
+			continue;
+		char source[PATH_MAX], target[PATH_MAX];
+		const bool renamed = rename_from != NULL && strcmp(entry->d_name, rename_from) == 0;
+		copied = join(source, sizeof source, from, entry->d_name) &&
+		         (!is_file(source) || (join(target, sizeof target, to, renamed ? rename_to : entry->d_name) &&
+		                               copy_file(source, target)));
+	}
+	closedir(d);
+	return copied;
+}
+
 typedef struct options {
 	const char* model;
 	const char* output;
@@ -284,47 +307,42 @@ static int package(const options* opt)
 		}
 	}
 
-	// The binary under the model's identifier, and every bundled library as it is.
-	char binaries[PATH_MAX];
-	char target[PATH_MAX];
-	if (!join(binaries, sizeof binaries, runtime, "binaries/linux64") ||
-	    !join(target, sizeof target, staging, "binaries/linux64"))
+	// The binary under the model's identifier, every bundled library as it is, and their
+	// licences (a runtime assembled before they were gathered has none).
+	char binary_name[NAME_MAX + 1], from[PATH_MAX];
+	const int written_name = snprintf(binary_name, sizeof binary_name, "%s.so", table.model_identifier);
+	if (written_name < 0 || (size_t)written_name >= sizeof binary_name ||
+	    !join(from, sizeof from, runtime, "binaries/linux64") || !join(path, sizeof path, staging, "binaries/linux64"))
 		goto done;
-	DIR* d = opendir(binaries);
-	if (!d) {
-		fprintf(stderr, "springmass fmu: cannot read %s\n", binaries);
+	if (!copy_folder(from, path, "springmass_fmu.so", binary_name)) {
+		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, strerror(errno));
 		goto done;
 	}
-	struct dirent* entry;
-	bool copied = true;
-	while ((entry = readdir(d)) != NULL && copied) {
-		if (entry->d_name[0] == '.')
-			continue;
-		char from[PATH_MAX], name[NAME_MAX + 1];
-		if (!join(from, sizeof from, binaries, entry->d_name)) {
-			copied = false;
-			break;
-		}
-		if (!is_file(from))
-			continue;
-		if (strcmp(entry->d_name, "springmass_fmu.so") == 0) {
-			int n = snprintf(name, sizeof name, "%s.so", table.model_identifier);
-			if (n < 0 || (size_t)n >= sizeof name) {
-				copied = false;
-				break;
+	bool licenses = false;
+	if (!join(from, sizeof from, runtime, "documentation/licenses"))
+		goto done;
+	struct stat info;
+	if (stat(from, &info) == 0 && S_ISDIR(info.st_mode)) {
+		licenses = true;
+		const char* documentation[] = {"documentation", "documentation/licenses"};
+		for (size_t i = 0; i < 2; ++i) {
+			if (!join(path, sizeof path, staging, documentation[i]))
+				goto done;
+			if (mkdir(path, 0755) != 0) {
+				fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+				goto done;
 			}
-		} else {
-			snprintf(name, sizeof name, "%s", entry->d_name);
 		}
-		copied = join(path, sizeof path, target, name) && copy_file(from, path);
+		if (!copy_folder(from, path, NULL, NULL)) {
+			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n", from, strerror(errno));
+			goto done;
+		}
 	}
-	closedir(d);
-	if (!copied)
-		goto write_failed;
 
 	// zip writes into the staging folder, under a name with an extension (zip adds ".zip" to one
 	// without), and the archive is then copied to the output (see write_output).
-	char* zip_argv[] = {"zip", "-q", "-r", "-X", "model.fmu", "modelDescription.xml", "binaries", "resources", NULL};
+	char* zip_argv[] = {"zip",       "-q",        "-r", "-X", "model.fmu", "modelDescription.xml", "binaries",
+	                    "resources", licenses ? "documentation" : NULL, NULL};
 	if (!run_in(staging, zip_argv) || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
 		goto done;

@@ -4,6 +4,7 @@ import os
 import re
 import subprocess
 import sys
+import zipfile
 
 import pytest
 from fmpy import extract, read_model_description
@@ -66,3 +67,27 @@ def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
     assert "fmi2DoStep" in symbols and "fmi2GetDirectionalDerivative" in symbols
     dynamic = subprocess.run(["readelf", "-d", binary], check=True, capture_output=True, text=True).stdout
     assert "RUNPATH" in dynamic and "[$ORIGIN]" in dynamic
+
+
+def test_licences_of_everything_it_carries(test_fmu):
+    """Every library in binaries/linux64 and the archives linked into the binary (SUNDIALS, GSL)
+    come with their Debian copyright file in documentation/licenses/, named in its README.txt."""
+    fmu = test_fmu("driven_oscillator")
+    md = read_model_description(str(fmu))
+    with zipfile.ZipFile(fmu) as archive:
+        names = archive.namelist()
+        readme = archive.read("documentation/licenses/README.txt").decode()
+        listed = {}
+        for line in readme.splitlines():
+            fields = line.split()
+            if len(fields) >= 2 and fields[-1].endswith(".txt"):
+                listed[fields[0]] = fields[-1]
+        libraries = [os.path.basename(n) for n in names
+                     if n.startswith("binaries/linux64/") and not n.endswith("/")
+                     and os.path.basename(n) != md.coSimulation.modelIdentifier + ".so"]
+        assert libraries and "libcholmod.so.3" in libraries, names
+        for name in libraries + ["libsundials_cvode.a", "libgsl.a"]:
+            assert name in listed, f"{name} has no licence in README.txt:\n{readme}"
+            text = archive.read("documentation/licenses/" + listed[name]).decode(errors="replace")
+            assert "Copyright" in text or "copyright" in text, (name, listed[name])
+        assert "(linked in)" in readme and "no package found" not in readme, readme
