@@ -3,7 +3,7 @@
 # peer (../shared/bench/scipy_cloth.py, SciPy solve_ivp BDF) in the same run.
 #
 #   bench/bench_cloth.sh BUILD_DIR          (QUICK=1: up to n = 64, peer for n = 8 only;
-#                                            LONG=1: also n = 256 with auto, about 1.5 hours)
+#                                            LONG=1: also n = 256 with auto, about 1 hour)
 #
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
@@ -36,7 +36,7 @@ fi
 # Combinations measured to take many minutes (bench/README.md): SUNDIALS' dense LU above n = 8,
 # KLU on the full 6n system above n = 16 (100 s at n = 32), the CHOLMOD-preconditioned solver
 # above n = 32, conjugate gradients (auto) above n = 128 (n = 128 takes minutes, n = 256 about
-# an hour, 3457 s once: its step count and its cost per step both grow; LONG=1 runs it).
+# 50 minutes, 2809 s once: its step count and its cost per step both grow; LONG=1 runs it).
 too_slow() {
 	local n=$1 solver=$2
 	case $solver in
