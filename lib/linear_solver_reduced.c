@@ -501,36 +501,27 @@ static void load_masses(reduced* r)
 			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
 }
 
-// Evaluates the forces and every spring's Jacobian blocks at the CVODE state y (time t).
-static int evaluate_jacobian(reduced* r, double t, const double* y)
+// Makes the Jacobian current at CVODE's state y (time t): adopts the records the right-hand side
+// stored if they were evaluated at exactly this time and state, evaluates the forces and every
+// spring's Jacobian blocks there otherwise.
+static int current_jacobian(reduced* r, double t, const double* y)
 {
 	sm_simulation* sim = r->sim;
-	double* x = sim->work_position;
-	double* v = sim->work_velocity;
-	sm_simulation_unpack(sim, t, y, x, v);
-	const double start = sm_simulation_clock();
-	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
-	                                             r->full_force, r->springs);
-	sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	sm_status st = SM_OK;
+	if (!(r->rhs_records && r->rhs_time == t && memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0)) {
+		double* x = sim->work_position;
+		double* v = sim->work_velocity;
+		sm_simulation_unpack(sim, t, y, x, v);
+		const double start = sm_simulation_clock();
+		st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
+		                                   r->full_force, r->springs);
+		sim->base.jacobian_seconds += sm_simulation_clock() - start;
+	}
 	sim->jacobian_evaluations++;
 	r->blocks_gamma = NAN;
 	r->jacobian_time = st == SM_OK ? t : NAN;
 	r->rhs_records = false;
 	return st == SM_OK ? 0 : -1;
-}
-
-// Makes the Jacobian current at CVODE's state y (time t): adopts the records the right-hand side
-// stored if they were evaluated at exactly this time and state, evaluates them otherwise.
-static int current_jacobian(reduced* r, double t, const double* y)
-{
-	if (r->rhs_records && r->rhs_time == t && memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0) {
-		r->sim->jacobian_evaluations++;
-		r->blocks_gamma = NAN;
-		r->jacobian_time = t;
-		r->rhs_records = false;
-		return 0;
-	}
-	return evaluate_jacobian(r, t, y);
 }
 
 // CVODE evaluates the right-hand side at the predicted state of every step attempt and then
