@@ -55,6 +55,29 @@ int cli_set_parameters(const char* command, sm_document* doc, const char* const*
 	return 0;
 }
 
+int cli_load_model(const char* command, const char* path, const char* const* settings, int count,
+                   sm_document** doc, sm_model** model)
+{
+	*model = NULL;
+	sm_error err;
+	*doc = sm_document_load(path, &err);
+	if (*doc == NULL) {
+		fprintf(stderr, "springmass %s: %s\n", command, err.message);
+		return 1;
+	}
+	int status = cli_set_parameters(command, *doc, settings, count);
+	if (status == 0 && sm_document_build(*doc, model, &err) != SM_OK) {
+		fprintf(stderr, "springmass %s: %s\n", command, err.message);
+		status = 1;
+	}
+	if (status != 0) {
+		sm_document_destroy(*doc);
+		*doc = NULL;
+		*model = NULL;
+	}
+	return status;
+}
+
 void cli_note_dense(const char* command, size_t dof)
 {
 	if (dof > CLI_DENSE_LIMIT)

@@ -14,6 +14,12 @@ int cli_set_parameter(const char* command, sm_document* doc, const char* setting
 /// Applies `count` settings in order; stops at the first that fails and returns its status.
 int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count);
 
+/// Loads the model file at path, applies the settings and builds the model. Returns 0 with *doc
+/// and *model set (the caller destroys both); otherwise prints the error with the command's name,
+/// leaves both NULL and returns the exit status (as cli_set_parameter, 1 for a bad model file).
+int cli_load_model(const char* command, const char* path, const char* const* settings, int count,
+                   sm_document** doc, sm_model** model);
+
 /// Degrees of freedom above which a dense solve (modes' eigensolver, a statics Newton step)
 /// takes minutes: its time grows as their cube. Measured on a 2-core machine: all modes of
 /// 1500 degrees of freedom 12 s, of 3000 more than 2 minutes; statics 0.9 s per iteration at 1500.

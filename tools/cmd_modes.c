@@ -170,18 +170,10 @@ int sm_cmd_modes(int argc, char** argv)
 	double* x = NULL;
 	sm_modes modes;
 	memset(&modes, 0, sizeof modes);
-	sm_document* doc = sm_document_load(model_path, &err);
-	if (doc == NULL) {
-		fprintf(stderr, "springmass modes: %s\n", err.message);
-		goto done;
-	}
-	if ((status = cli_set_parameters("modes", doc, settings, setting_count)) != 0)
+	sm_document* doc = NULL;
+	if ((status = cli_load_model("modes", model_path, settings, setting_count, &doc, &model)) != 0)
 		goto done;
 	status = 1;
-	if (sm_document_build(doc, &model, &err) != SM_OK) {
-		fprintf(stderr, "springmass modes: %s\n", err.message);
-		goto done;
-	}
 	const int32_t n = sm_model_particle_count(model);
 	// The library's automatic choice falls back to the dense eigensolver for all modes or more
 	// than the sparse one can give; above CLI_DENSE_LIMIT that runs for minutes to hours, so the

@@ -289,18 +289,9 @@ int sm_cmd_run(int argc, char** argv)
 	char* path = NULL;
 	sm_error err = {SM_OK, ""};
 
-	doc = sm_document_load(o.model, &err);
-	if (!doc) {
-		fprintf(stderr, "springmass run: %s\n", err.message);
-		goto done;
-	}
-	if ((status = cli_set_parameters("run", doc, o.sets, o.set_count)) != 0)
+	if ((status = cli_load_model("run", o.model, o.sets, o.set_count, &doc, &model)) != 0)
 		goto done;
 	status = 1;
-	if (sm_document_build(doc, &model, &err) != SM_OK) {
-		fprintf(stderr, "springmass run: %s\n", err.message);
-		goto done;
-	}
 	sm_document_settings settings = sm_document_get_settings(doc);
 	const double t_end = o.t_end > 0.0 ? o.t_end : settings.stop_time;
 	const double interval = o.interval > 0.0 ? o.interval : settings.output_interval;

@@ -162,18 +162,10 @@ int sm_cmd_statics(int argc, char** argv)
 	sm_error err;
 	sm_model* model = NULL;
 	double *x0 = NULL, *x = NULL, *reactions = NULL, *displacement = NULL;
-	sm_document* doc = sm_document_load(model_path, &err);
-	if (doc == NULL) {
-		fprintf(stderr, "springmass statics: %s\n", err.message);
-		goto done;
-	}
-	if ((status = cli_set_parameters("statics", doc, settings, setting_count)) != 0)
+	sm_document* doc = NULL;
+	if ((status = cli_load_model("statics", model_path, settings, setting_count, &doc, &model)) != 0)
 		goto done;
 	status = 1;
-	if (sm_document_build(doc, &model, &err) != SM_OK) {
-		fprintf(stderr, "springmass statics: %s\n", err.message);
-		goto done;
-	}
 	const int32_t n = sm_model_particle_count(model);
 	const size_t n3 = 3 * (size_t)n + 1;
 	x0 = malloc(n3 * sizeof(double));
