@@ -93,10 +93,36 @@ cat > "$tmp/comma.json" << 'JSON'
 {"springmass": 1, "name": "comma", "particles": [{"name": "a,\"b\"", "position": [0, 0, 0], "fixed": true}]}
 JSON
 out=$("$cli" run "$tmp/comma.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
-[ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,"a,""b"".x","a,""b"".y","a,""b"".z"' ] ||
+[ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,"particle.a,""b"".x","particle.a,""b"".y","particle.a,""b"".z"' ] ||
   fail "run --positions with a comma in a particle's name: $out"
 out=$("$cli" statics "$tmp/comma.json" -q -o "$tmp/comma.csv" 2>&1 > /dev/null; tail -1 "$tmp/comma.csv")
 [ "${out%%,-0,-0,9.81*}" = '0,"a,""b""",0,0,0,0,0,0' ] || fail "statics -o with a comma in a particle's name: $out"
+
+# Column names are unique: the bundled chain names its ports after their particles.
+header=$("$cli" run "$root/models/two_mass_chain.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
+[ -z "$(tr ',' '\n' <<< "$header" | sort | uniq -d)" ] && [[ "$header" == *,m1.x,*,particle.m1.x,* ]] ||
+  fail "run --positions on two_mass_chain: repeated or missing column names: $header"
+
+# Failures of run: a relative tolerance of 1 is a usage error; output that cannot be written is an
+# error (standard output too); a refused --vtk folder leaves an existing CSV as it was; a run that
+# fails midway leaves a well-formed .pvd index of the rows it wrote.
+"$cli" run "$root/models/oscillator.json" --rtol 1 -q -o - > /dev/null 2>&1; [ $? -eq 2 ] || fail "run --rtol 1 did not exit with 2"
+if [ -w /dev/full ]; then
+  out=$("$cli" run "$root/models/oscillator.json" -q -o - 2>&1 > /dev/full)
+  [ $? -eq 1 ] && [ "$out" = "springmass run: cannot write the CSV to standard output" ] ||
+    fail "run -o - to a full device: $out"
+fi
+echo "earlier" > "$tmp/earlier.csv"
+"$cli" run "$root/models/oscillator.json" -q -o "$tmp/earlier.csv" --vtk "$tmp/earlier.csv/vtk" > /dev/null 2>&1
+[ $? -eq 1 ] && [ "$(cat "$tmp/earlier.csv")" = earlier ] || fail "run with a refused --vtk folder changed the CSV"
+cat > "$tmp/stiff.json" << 'JSON'
+{"springmass": 1, "name": "stiff", "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true},
+ {"name": "b", "position": [1, 0, 0]}], "springs": [{"a": "a", "b": "b", "stiffness": 1e308}]}
+JSON
+"$cli" run "$tmp/stiff.json" --t-end 0.05 --max-steps 100 -q -o /dev/null --vtk "$tmp/stiff_vtk" > /dev/null 2>&1
+[ $? -eq 1 ] && [ "$(tail -2 "$tmp/stiff_vtk/stiff.pvd" | paste -sd ' ')" = "</Collection> </VTKFile>" ] &&
+  grep -q 'file="stiff_000000.vtk"' "$tmp/stiff_vtk/stiff.pvd" || fail "run failing midway left a broken .pvd index"
+"$cli" modes "$root/models/oscillator.json" -n "" > /dev/null 2>&1; [ $? -eq 2 ] || fail "modes -n '' did not exit with 2"
 
 # `springmass fmu` only ever writes its output: a directory named by mistake stays (it was
 # removed when empty, and the archive went to DIR.zip), and a name without an extension is the

@@ -110,20 +110,22 @@ int cli_make_directory(const char* command, const char* dir)
 	return -1;
 }
 
-void cli_csv_field(FILE* f, const char* text, const char* suffix)
+void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* suffix)
 {
-	if (strpbrk(text, ",\"") == NULL && strpbrk(suffix, ",\"") == NULL) {
-		fprintf(f, "%s%s", text, suffix);
-		return;
-	}
-	fputc('"', f);
-	for (int part = 0; part < 2; part++)
-		for (const char* c = part == 0 ? text : suffix; *c != '\0'; c++) {
+	const char* const parts[3] = {prefix, text, suffix};
+	bool quote = false;
+	for (int k = 0; k < 3; k++)
+		quote = quote || strpbrk(parts[k], ",\"") != NULL;
+	if (quote)
+		fputc('"', f);
+	for (int k = 0; k < 3; k++)
+		for (const char* c = parts[k]; *c != '\0'; c++) {
 			if (*c == '"')
 				fputc('"', f);
 			fputc(*c, f);
 		}
-	fputc('"', f);
+	if (quote)
+		fputc('"', f);
 }
 
 FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,

@@ -42,9 +42,9 @@ long cli_output_rows(double t_end, double interval);
 /// when a file that is not a directory has its name).
 int cli_make_directory(const char* command, const char* dir);
 
-/// Writes text followed by suffix as one CSV field: quoted, with quotes doubled, when either
-/// holds a comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
-void cli_csv_field(FILE* f, const char* text, const char* suffix);
+/// Writes prefix, text and suffix as one CSV field: quoted, with quotes doubled, when any holds a
+/// comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
+void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* suffix);
 
 /// Opens a legacy VTK polydata file and writes the particles at x [m] as points and the springs
 /// as lines (only the enabled ones, so that broken springs disappear). Follow with

@@ -74,7 +74,7 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 	for (int32_t i = 0; i < modes->particle_count; i++) {
 		const char* name = sm_document_particle_name(doc, i);
 		fprintf(f, "%d,", (int)i);
-		cli_csv_field(f, name != NULL ? name : "", "");
+		cli_csv_field(f, "", name != NULL ? name : "", "");
 		for (int32_t m = 0; m < modes->count; m++)
 			for (int c = 0; c < 3; c++)
 				fprintf(f, ",%.17g", modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
@@ -109,9 +109,10 @@ int sm_cmd_modes(int argc, char** argv)
 			free(settings);
 			return 0;
 		} else if ((strcmp(a, "-n") == 0 || strcmp(a, "--count") == 0) && has_value) {
+			const char* text = argv[++i];
 			char* end = NULL;
-			count = strtol(argv[++i], &end, 10);
-			if (*end != '\0' || count < 0 || count > 100000000) {
+			count = strtol(text, &end, 10);
+			if (end == text || *end != '\0' || count < 0 || count > 100000000) {
 				fprintf(stderr, "springmass modes: -n needs a count >= 0\n");
 				free(settings);
 				return 2;

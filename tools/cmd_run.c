@@ -33,7 +33,8 @@ static void usage(FILE* out)
 	        "  --t-end T              end time [s]\n"
 	        "  --output-interval DT   time between rows [s]\n"
 	        "  -o, --output FILE      CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
-	        "  --positions            also every particle's position (columns NAME.x NAME.y NAME.z)\n"
+	        "  --positions            also every particle's position (columns particle.NAME.x,\n"
+	        "                         particle.NAME.y, particle.NAME.z [m])\n"
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk (points, intact springs as\n"
 	        "                         lines) per row and the index DIR/NAME.pvd\n"
 	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
@@ -91,7 +92,9 @@ typedef struct run_options {
 	const char** sets;
 } run_options;
 
-// Column header: ports, energies, positions.
+// Column header: ports, energies, positions. A port's columns are PORT.x and so on, with PORT a C
+// identifier; a particle's are particle.NAME.x, so that they never take a port's name (a port
+// and its particle are often named alike) whatever the particle's name.
 static void write_header(FILE* csv, const sm_document* doc, const sm_model* model, bool positions)
 {
 	fprintf(csv, "time");
@@ -114,7 +117,7 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 			}
 			for (int c = 0; c < 3; c++) {
 				fputc(',', csv);
-				cli_csv_field(csv, name, c == 0 ? ".x" : c == 1 ? ".y" : ".z");
+				cli_csv_field(csv, "particle.", name, c == 0 ? ".x" : c == 1 ? ".y" : ".z");
 			}
 		}
 	fprintf(csv, "\n");
@@ -230,6 +233,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			} else if (strcmp(a, "--rtol") == 0) {
 				if (parse_positive(a, value, &o->rtol))
 					return 2;
+				if (!(o->rtol < 1.0)) {
+					fprintf(stderr, "springmass run: --rtol must be < 1, got '%s'\n", value);
+					return 2;
+				}
 			} else if (strcmp(a, "--max-steps") == 0) {
 				char* end = NULL;
 				o->max_steps = strtod(value, &end);
@@ -344,6 +351,18 @@ int sm_cmd_run(int argc, char** argv)
 	forces = malloc(sizeof(double) * (3 * (size_t)sm_model_particle_count(model) + 1));
 	if (!path || !forces)
 		goto done;
+	// The series' folder and index first: a run refused for them leaves an existing CSV as it was.
+	if (o.vtk_dir) {
+		if (cli_make_directory("run", o.vtk_dir) != 0)
+			goto done;
+		snprintf(path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
+		pvd = fopen(path, "w");
+		if (!pvd) {
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", path, strerror(errno));
+			goto done;
+		}
+		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
+	}
 	if (o.output && strcmp(o.output, "-") == 0) {
 		csv = stdout;
 	} else {
@@ -355,17 +374,6 @@ int sm_cmd_run(int argc, char** argv)
 			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_path, strerror(errno));
 			goto done;
 		}
-	}
-	if (o.vtk_dir) {
-		if (cli_make_directory("run", o.vtk_dir) != 0)
-			goto done;
-		snprintf(path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
-		pvd = fopen(path, "w");
-		if (!pvd) {
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", path, strerror(errno));
-			goto done;
-		}
-		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
 	}
 	write_header(csv, doc, model, o.positions);
 
@@ -389,10 +397,8 @@ int sm_cmd_run(int argc, char** argv)
 			show_progress(&prog, t, k == rows);
 	}
 	end_progress(&prog);
-	if (pvd)
-		fprintf(pvd, "</Collection>\n</VTKFile>\n");
-	if (csv != stdout && fflush(csv) != 0) {
-		fprintf(stderr, "springmass run: cannot write the CSV file\n");
+	if (fflush(csv) != 0 || ferror(csv)) {
+		fprintf(stderr, "springmass run: cannot write the CSV %s\n", csv == stdout ? "to standard output" : "file");
 		goto done;
 	}
 	if (!o.quiet) {
@@ -420,6 +426,9 @@ done:
 		fprintf(stderr, "springmass run: cannot write the CSV file\n");
 		status = 1;
 	}
+	// The index is closed after a failed run too: ParaView then shows the rows up to the failure.
+	if (pvd)
+		fprintf(pvd, "</Collection>\n</VTKFile>\n");
 	if (pvd && fclose(pvd) != 0 && status == 0) {
 		fprintf(stderr, "springmass run: cannot write the .pvd index\n");
 		status = 1;

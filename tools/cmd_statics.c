@@ -63,7 +63,7 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 	for (int32_t i = 0; i < n; i++) {
 		const char* name = sm_document_particle_name(doc, i);
 		fprintf(f, "%d,", (int)i);
-		cli_csv_field(f, name != NULL ? name : "", "");
+		cli_csv_field(f, "", name != NULL ? name : "", "");
 		for (int c = 0; c < 3; c++)
 			fprintf(f, ",%.17g", x[3 * i + c]);
 		for (int c = 0; c < 3; c++)
