@@ -671,10 +671,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	memcpy(path, dir, n);
 	memcpy(path + n, "/model.json", sizeof "/model.json");
 	free(dir);
-	inst->text = fmu_read_file(path, &inst->length);
+	const char* problem = NULL;
+	inst->text = fmu_read_file(path, &inst->length, &problem);
 	if (!inst->text) {
 		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\"): %s",
-		          path, fmuResourceLocation, strerror(errno));
+		          path, fmuResourceLocation, problem);
 		free(path);
 		goto fail;
 	}

@@ -1,7 +1,13 @@
 // springmass FMU: variable table, GUID and modelDescription.xml (see fmu_model.h).
+#define _POSIX_C_SOURCE 200809L
+
 #include "fmu_model.h"
 
 #include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -786,36 +792,53 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	return out.data;
 }
 
-char* fmu_read_file(const char* path, size_t* length)
+char* fmu_read_file(const char* path, size_t* length, const char** problem)
 {
-	FILE* f = fopen(path, "rb");
-	if (!f)
+	const char* unused;
+	if (problem == NULL)
+		problem = &unused;
+	// O_NONBLOCK: opening a FIFO without a writer would otherwise wait forever; it is refused below.
+	const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	if (fd < 0) {
+		*problem = strerror(errno);
 		return NULL;
+	}
+	struct stat st;
 	char* data = NULL;
-	size_t size = 0, capacity = 0;
-	for (;;) {
-		if (size + 65536 + 1 > capacity) {
-			capacity = capacity ? 2 * capacity : 1 << 20;
-			char* grown = realloc(data, capacity);
-			if (!grown) {
-				free(data);
-				fclose(f);
-				return NULL;
-			}
-			data = grown;
+	if (fstat(fd, &st) != 0) {
+		*problem = strerror(errno);
+	} else if (!S_ISREG(st.st_mode)) {
+		*problem = S_ISDIR(st.st_mode) ? "it is a directory" : "not a regular file";
+		errno = S_ISDIR(st.st_mode) ? EISDIR : EINVAL;
+	} else if (st.st_size > FMU_MAX_FILE_BYTES) {
+		*problem = "larger than 1 GiB";
+		errno = EFBIG;
+	} else if ((data = malloc((size_t)st.st_size + 1)) == NULL) {
+		*problem = strerror(errno = ENOMEM);
+	} else {
+		// Reads st_size bytes, then one more to see that the file did not grow meanwhile.
+		const size_t size = (size_t)st.st_size;
+		size_t got = 0;
+		char extra;
+		ssize_t r = 0;
+		while (got < size && ((r = read(fd, data + got, size - got)) > 0 || (r < 0 && errno == EINTR)))
+			got += r > 0 ? (size_t)r : 0;
+		if (r >= 0 && got == size)
+			while ((r = read(fd, &extra, 1)) < 0 && errno == EINTR)
+				;
+		if (r != 0 || got != size) {
+			*problem = r < 0 ? strerror(errno) : "the file changed while it was read";
+			if (r >= 0)
+				errno = EAGAIN;
+			free(data);
+			data = NULL;
+		} else {
+			data[size] = '\0';
+			*length = size;
 		}
-		size_t got = fread(data + size, 1, 65536, f);
-		size += got;
-		if (got < 65536)
-			break;
 	}
-	bool failed = ferror(f) != 0;
-	fclose(f);
-	if (failed) {
-		free(data);
-		return NULL;
-	}
-	data[size] = '\0';
-	*length = size;
+	const int error = errno;
+	close(fd);
+	errno = error;
 	return data;
 }

@@ -118,10 +118,15 @@ char* fmu_model_description(const fmu_table* table, const char* generation_date)
 /// name gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);
 
-/// Reads a whole file into a malloc'ed NUL-terminated buffer and its length (without the NUL);
-/// NULL if it cannot be opened or read, or on OOM. Shared by the FMU runtime (its model file)
-/// and `springmass fmu` (files it packs).
-char* fmu_read_file(const char* path, size_t* length);
+/// Files larger than this are refused: the model-file loader's limit (model_file.h).
+#define FMU_MAX_FILE_BYTES ((long long)1 << 30)
+
+/// Reads a whole regular file of at most FMU_MAX_FILE_BYTES into a malloc'ed NUL-terminated
+/// buffer and its length (without the NUL). On failure returns NULL with errno set and, if problem
+/// is not NULL, *problem saying why in a few words (a static string): the system's reason, or that
+/// the path names a directory or other non-regular file (a FIFO, a device) or too large a file.
+/// Shared by the FMU runtime (its model file) and `springmass fmu` (files it packs).
+char* fmu_read_file(const char* path, size_t* length, const char** problem);
 
 /// Linear solver, method and Jacobian names used by the string parameters.
 const char* fmu_method_name(sm_method method);

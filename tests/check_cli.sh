@@ -141,6 +141,14 @@ else
   [ $status -eq 1 ] && [ -d "$tmp/folder" ] && [ ! -e "$tmp/folder.zip" ] &&
     [ "$out" = "springmass fmu: cannot write $tmp/folder: Is a directory" ] ||
     fail "fmu -o DIR exited with $status and printed '$out'"
+  # Only regular files are packed: a device would be read without end, a FIFO wait for a writer.
+  mkfifo "$tmp/fifo.json"
+  for special in /dev/zero "$tmp/fifo.json"; do
+    out=$(timeout 20 "$cli" fmu "$special" --runtime "$tmp/runtime" -o "$tmp/special.fmu" 2>&1)
+    status=$?
+    [ $status -eq 1 ] && [ "$out" = "springmass fmu: cannot read $special: not a regular file" ] ||
+      fail "fmu $special exited with $status and printed '$out'"
+  done
   # An earlier output is replaced whole (written beside it, then renamed over it: a full disk
   # leaves it as it was) and keeps its permissions; a link keeps pointing at the file it names.
   echo "earlier" > "$tmp/earlier.fmu"

@@ -115,7 +115,7 @@ static bool write_output(const char* output, const char* data, size_t length)
 static bool copy_file(const char* from, const char* to)
 {
 	size_t length = 0;
-	char* data = fmu_read_file(from, &length);
+	char* data = fmu_read_file(from, &length, NULL);
 	if (!data)
 		return false;
 	bool ok = write_all(to, data, length);
@@ -253,9 +253,10 @@ static int package(const options* opt)
 		return 1;
 	}
 	size_t length = 0;
-	text = fmu_read_file(opt->model, &length);
+	const char* problem = NULL;
+	text = fmu_read_file(opt->model, &length, &problem);
 	if (!text) {
-		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, strerror(errno));
+		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, problem);
 		goto done;
 	}
 	sm_error err = {SM_OK, ""};
@@ -348,9 +349,9 @@ static int package(const options* opt)
 		goto done;
 	}
 	size_t archive_length = 0;
-	char* archive = fmu_read_file(path, &archive_length);
+	char* archive = fmu_read_file(path, &archive_length, &problem);
 	if (!archive) {
-		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", strerror(errno));
+		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", problem);
 		goto done;
 	}
 	errno = 0;
