@@ -960,6 +960,15 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: position of particle %zu is not finite", k / 3);
 			goto done;
 		}
+	const int32_t coincident = analysis_coincident_spring(model, x0);
+	if (coincident >= 0) {
+		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                  "modes: spring %d (rest length %g m) has its particles %d and %d at one point, where its force "
+		                  "has no derivative (its energy is a maximum there): the configuration has no modes",
+		                  (int)coincident, model->rest_length[coincident], (int)model->spring_a[coincident],
+		                  (int)model->spring_b[coincident]);
+		goto done;
+	}
 	const int32_t nf = analysis_free_map(model, free_index, dof_mass);
 	const size_t dof = 3 * (size_t)nf;
 	modes->dof = (int32_t)dof;

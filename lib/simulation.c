@@ -830,6 +830,7 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	if (!reset)
 		sim->base.restarts++;
 	sim->need_restart = false;
+	sim->input_jumped = false;
 	if (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD)
 		sm_reduced_solver_invalidate(sim->linear_solver, reset);
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS)
@@ -948,7 +949,9 @@ static sm_status break_overstretched_springs(sm_simulation* sim)
 	roots(sim->time, sim->y, sim->root_values, sim);
 	bool any = false;
 	for (int32_t r = 0; r < sim->root_count; r++) {
-		sim->roots_found[r] = sim->root_values[r] > 0.0;  // broken springs give -1
+		// At the limit counts as beyond: CVODE would not report a root function that starts at 0
+		// as crossing when it rises. Broken springs give -1.
+		sim->roots_found[r] = sim->root_values[r] >= 0.0;
 		any = any || sim->roots_found[r];
 	}
 	return any ? break_springs(sim) : SM_OK;
@@ -1031,6 +1034,14 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "CVode: At t = %g, mxstep steps taken before reaching tout.", reached);
 			}
+		}
+		if (flag < 0 && flag != CV_TOO_MUCH_WORK && sim->input_jumped) {
+			// An input jumped and CVODE kept its history over it, but its error control could not
+			// absorb the jump: start afresh at the jump (the state before this call, at the
+			// input's time) and try once more, as a restart at the change would have done.
+			N_VScale(1.0, sim->y_saved, sim->y);
+			sim->need_restart = true;
+			continue;
 		}
 		if (flag < 0) {
 			// CVODE leaves the last state it reached in y; keep the state from before the call
@@ -1161,7 +1172,7 @@ const char* sm_simulation_last_error(const sm_simulation* sim)
 
 static bool finite3(const double* a)
 {
-	return a && isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
+	return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
 }
 
 sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
@@ -1174,6 +1185,9 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 		            (int)sim->particle_count - 1);
 	if (sim->model->motion[particle] != SM_PARTICLE_DRIVEN)
 		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven", (int)particle);
+	if (position == NULL || velocity == NULL)
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d: position and velocity are required",
+		            (int)particle);
 	if (!finite3(position) || !finite3(velocity))
 		return fail(sim, SM_ERROR_NOT_FINITE,
 		            "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
@@ -1187,6 +1201,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 		sim->drive_velocity[p + c] = velocity[c];
 	}
 	sim->drive_time[particle] = sim->time;
+	sim->input_jumped = sim->input_jumped || jump;
 	if (jump && sim->def.restart_on_input_change)
 		sim->need_restart = true;
 	refresh_outputs(sim);
@@ -1200,6 +1215,8 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	if (particle < 0 || particle >= sim->particle_count)
 		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_external_force: particle %d is out of range (0..%d)",
 		            (int)particle, (int)sim->particle_count - 1);
+	if (force == NULL)
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_external_force: particle %d: force is NULL", (int)particle);
 	if (!finite3(force))
 		return fail(sim, SM_ERROR_NOT_FINITE, "set_external_force: particle %d: force must be 3 finite numbers",
 		            (int)particle);
@@ -1208,6 +1225,7 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	f[0] = force[0];
 	f[1] = force[1];
 	f[2] = force[2];
+	sim->input_jumped = sim->input_jumped || jump;
 	if (jump && sim->def.restart_on_input_change)
 		sim->need_restart = true;
 	return SM_OK;

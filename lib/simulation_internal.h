@@ -26,6 +26,7 @@ struct sm_simulation {
 	SUNLinearSolver linear_solver;
 	SUNNonlinearSolver fixed_point;  // Adams only
 	bool need_restart;   // something requires CVodeReInit before the next step
+	bool input_jumped;   // an input jumped since CVODE's last (re)initialisation
 
 	sm_model* model;          // own copy; broken springs disabled in it
 	uint8_t* initial_enabled; // per spring: enabled in the model given to create/update

@@ -78,6 +78,19 @@ int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* do
 	return nf;
 }
 
+int32_t analysis_coincident_spring(const sm_model* model, const double* x)
+{
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		if (!model->enabled[s] || model->zero_length[s] || !(model->rest_length[s] > 0.0))
+			continue;
+		spring_geometry g;
+		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
+		if (g.inv_length == 0.0)
+			return s;
+	}
+	return -1;
+}
+
 int analysis_all_finite(const double* values, size_t count)
 {
 	for (size_t k = 0; k < count; k++)
@@ -890,7 +903,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		                  "statics: out of memory for the Jacobian of the stability test");
 	}
 	if (converged) {
-		res.stable = definite == 1;
+		res.stable = definite == 1 && analysis_coincident_spring(model, w.x) < 0;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)

@@ -72,8 +72,13 @@ int32_t sm_structure_particle(const sm_structure* s, int32_t i, int32_t j, int32
 {
 	if (s == NULL || i < 0 || j < 0 || k < 0 || j >= s->shape[0] || i >= s->shape[1] || k >= s->shape[2])
 		return -1;
-	const int64_t index = (int64_t)s->first_particle + ((int64_t)k * s->shape[1] + i) * s->shape[0] + j;
-	return index <= INT32_MAX ? (int32_t)index : -1;
+	// Each partial index is below INT32_MAX before it is multiplied again, so that no product
+	// overflows 64 bits even for a hand-made shape of 2^31 - 1 cubed.
+	int64_t index = (int64_t)k * s->shape[1] + i;
+	if (index > INT32_MAX)
+		return -1;
+	index = index * s->shape[0] + j + s->first_particle;
+	return index >= 0 && index <= INT32_MAX ? (int32_t)index : -1;
 }
 
 // ---------------------------------------------------------------------------------------------

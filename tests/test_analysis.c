@@ -1106,10 +1106,52 @@ static int test_modes_overflow_is_refused(void)
 	return 0;
 }
 
+// A free particle on top of a fixed one, tied by a rest-length spring (l0 = 1 m, ks = 10 N/m):
+// the convention of model.h (no force where the particles coincide) makes it a force balance, but
+// the spring's energy ks (L - l0)^2 / 2 is a maximum there: any nudge drives the particles apart
+// with a force of about ks l0. Statics must not call it stable, and modes must refuse it, naming
+// the spring, rather than report omega^2 = ks / m from the conventional K = ks I.
+static int test_coincident_rest_length_spring(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def sd = sm_default_spring_def();
+	sd.a = 0;
+	sd.b = 1;
+	sd.rest_length = 1.0;
+	sd.stiffness = 10.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	double x[6];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(!res.stable);
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "spring 0") != NULL && modes.count == 0);
+	// Apart, the same spring is an ordinary oscillator: omega^2 = ks / m along it.
+	const double apart[6] = {0.0, 0.0, 0.0, 1.0, 0.0, 0.0};
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = apart;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE_NEAR(modes.omega_squared[modes.count - 1], 10.0, 1e-12);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_chain_axial_frequencies);
+	RUN_TEST(test_coincident_rest_length_spring);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);

@@ -608,6 +608,95 @@ static int test_overstretched_spring_breaks_at_once(void)
 	return 0;
 }
 
+// A spring exactly at its break strain when an advance begins breaks at once: released at 10 %
+// strain (1.0 (1 + 0.1) is the double 1.1) and moving outward. CVODE does not report a root
+// function that starts at 0 as crossing when it rises, so without this the spring would hold
+// for ever while its strain grew.
+static int test_spring_at_its_limit_breaks_at_once(void)
+{
+	sm_model* model = tethered_mass(1.0, 1.1, 1.0);
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).time == 0.0);
+	// Free from t = 0 on: x = 1.1 + t, to the integration's tolerance (rtol 1e-6 of 2.1 m).
+	ENSURE_NEAR(sm_simulation_positions(sim)[3], 2.1, 1e-5);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A step input with the default options (CVODE keeps its history over input changes): a chain
+// of two masses (2 and 3 kg, springs 1000 N/m with 20 N s/m damping) hangs at rest after 20 s,
+// when CVODE's steps have grown long; then 1000 N pull on the lower mass, about 30 times its
+// weight. CVODE's error control cannot absorb that jump from such a long step (the advance
+// failed with CV_ERR_FAILURE with the dense solver); the simulation must restart at the jump and
+// succeed, agreeing with a run that restarts at every input change. Both runs integrate the
+// same smooth motion after t = 20 s at rtol 1e-6 over displacements of about 1 m: 1e-4 m covers
+// their different step sequences.
+static int test_step_input_with_kept_history(void)
+{
+	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_REDUCED_CHOLMOD, SM_SOLVER_KLU,
+	                                    SM_SOLVER_REDUCED_PCG};
+	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
+		double z[2][3];
+		for (int restart = 0; restart < 2; restart++) {
+			sm_model_def md = sm_default_model_def();
+			sm_model* model = sm_model_create(&md, NULL);
+			sm_particle_def p = sm_default_particle_def();
+			p.motion = SM_PARTICLE_FIXED;
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+			p.motion = SM_PARTICLE_FREE;
+			for (int i = 1; i <= 2; i++) {
+				p.mass = 1.0 + i;
+				p.position[2] = -(double)i;
+				ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+				sm_spring_def sd = sm_default_spring_def();
+				sd.a = i - 1;
+				sd.b = i;
+				sd.stiffness = 1000.0;
+				sd.damping = 20.0;
+				ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+			}
+			sm_simulation_def d = sm_default_simulation_def();
+			d.solver = solvers[k];
+			d.restart_on_input_change = restart;
+			sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+			ENSURE(sim != NULL);
+			ENSURE_STATUS(sm_simulation_advance(sim, 20.0), SM_OK);
+			const int64_t restarts = sm_simulation_statistics(sim).restarts;
+			const double pull[3] = {0.0, 0.0, -1000.0};
+			ENSURE_STATUS(sm_simulation_set_external_force(sim, 2, pull), SM_OK);
+			ENSURE_STATUS(sm_simulation_advance(sim, 21.0), SM_OK);
+			// One restart at the change (restart_on_input_change), or one after a failed attempt
+			// (the dense and cholmod solvers), or none (the jump absorbed).
+			const int64_t added = sm_simulation_statistics(sim).restarts - restarts;
+			ENSURE(restart ? added == 1 : added <= 1);
+			for (int c = 0; c < 3; c++)
+				z[restart][c] = sm_simulation_positions(sim)[3 * c + 2];
+			sm_simulation_destroy(sim);
+			sm_model_destroy(model);
+		}
+		for (int c = 0; c < 3; c++)
+			ENSURE_NEAR(z[0][c], z[1][c], 1e-4);
+	}
+	return 0;
+}
+
+// Missing arrays are invalid arguments (not non-finite values), and change nothing.
+static int test_inputs_null_arrays(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 0.0, 0.2);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_simulation_last_error(sim), "force is NULL") != NULL);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 typedef struct step_log {
 	int64_t calls;
 	double last;
@@ -1112,6 +1201,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_break_at_analytic_time);
 	RUN_TEST(test_energy_balance_across_a_break);
 	RUN_TEST(test_overstretched_spring_breaks_at_once);
+	RUN_TEST(test_spring_at_its_limit_breaks_at_once);
+	RUN_TEST(test_step_input_with_kept_history);
+	RUN_TEST(test_inputs_null_arrays);
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
 	RUN_TEST(test_on_step_keeps_max_steps);
 	RUN_TEST(test_driven_follows_prescribed_motion);

@@ -224,6 +224,11 @@ static int test_block_counts_and_shear_resistance(void)
 	}
 	ENSURE(edge == 54 && face == 72 && body == 32);
 	ENSURE(sm_structure_particle(&s, 1, 2, 2) == (2 * 3 + 1) * 3 + 2);
+	// A hand-made grid of (2^31 - 1)^3 points: indices beyond int32_t are -1, not an overflow.
+	sm_structure huge = s;
+	huge.shape[0] = huge.shape[1] = huge.shape[2] = INT32_MAX;
+	ENSURE(sm_structure_particle(&huge, 1000, 1000, 1000) == -1);
+	ENSURE(sm_structure_particle(&huge, 0, 1000, 0) == huge.first_particle + 1000);
 	// A free block resists every deformation: exactly six zero-stiffness modes (three
 	// translations, three rotations), every other mode stiff.
 	int zero;

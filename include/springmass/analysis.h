@@ -71,7 +71,9 @@ typedef struct sm_statics_result {
 	double potential_energy;   ///< U at the end, as defined above [J]
 	double reaction_total[3];  ///< sum of the reactions at the constrained particles [N]
 	/// True if the exact stiffness -df/dx over the free degrees of freedom is positive definite
-	/// at the equilibrium (a local minimum of U, not a saddle or a mechanism).
+	/// at the equilibrium (a local minimum of U, not a saddle or a mechanism). False also where
+	/// the two particles of a rest-length spring coincide: a force balance by convention there
+	/// (model.h), but a maximum of that spring's energy.
 	bool stable;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 } sm_statics_result;
@@ -190,7 +192,8 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// Computes the natural frequencies, damping ratios and mode shapes (def NULL means the
 /// defaults). On success fills *modes,
 /// which the caller releases with sm_modes_release(). On error *modes is zeroed and err says
-/// why (SM_ERROR_INVALID_ARGUMENT; SM_ERROR_NOT_FINITE for a non-finite configuration or
+/// why (SM_ERROR_INVALID_ARGUMENT, also for a configuration in which a rest-length spring's two
+/// particles coincide: its force has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
 /// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
 /// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
 /// A model with no free particle has no modes: success with count = 0. Deterministic: the same

@@ -67,8 +67,8 @@ typedef struct sm_spring_def {
 	sm_scaling stiffness_scaling;  ///< default SM_ABSOLUTE
 	double damping;                ///< >= 0: kd [N s/m] or, per strain, c [N s]; default 0
 	sm_scaling damping_scaling;    ///< default SM_ABSOLUTE
-	/// Strain (L - l0) / l0 [1] past which the spring breaks (the simulation detects it as an
-	/// event, or breaks it at once if it is already beyond when an advance begins); its elastic
+	/// Strain (L - l0) / l0 [1] at which the spring breaks (the simulation detects the crossing
+	/// as an event, or breaks it at once if it is already at or beyond when an advance begins); its elastic
 	/// energy then counts as dissipated. > 0, or INFINITY (default) for a spring that never
 	/// breaks. Requires l0 > 0.
 	double break_strain;

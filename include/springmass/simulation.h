@@ -13,7 +13,10 @@
 // times the steps and 6.2 times the wall time per simulated second with 1 ms steps, 2.3 and 2.1
 // times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
 // with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
-// (restart_on_input_change = true restores a restart at every changed input).
+// (restart_on_input_change = true restores a restart at every changed input). A jump the error
+// control cannot absorb (a step force large against the model's, a driven particle moved far)
+// makes CVODE fail; the advance then restarts at the jump and tries once more, so the caller sees
+// a restart in the statistics rather than an error.
 //
 // Reproducibility. On one machine the same model, options and calls give the same trajectory
 // bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced Cholesky
@@ -173,7 +176,9 @@ SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
 /// model of the same topology (same particle count and motions, same spring endpoints and kinds);
-/// keeps the state and broken springs; re-initialises the solver. SM_ERROR_TOPOLOGY otherwise.
+/// keeps the state of the free particles and broken springs; re-initialises the solver.
+/// SM_ERROR_TOPOLOGY otherwise. Fixed particles take the new model's positions (a fixed particle
+/// moved that way jumps, as a driven one set elsewhere does); driven ones keep their motion.
 /// Springs disabled in the new model are disabled from the start (a reset keeps them so),
 /// except those that broke in this simulation: a copy of sm_simulation_model() has them
 /// disabled, and a reset still restores them.
