@@ -253,15 +253,69 @@ static void load_start_values(instance* inst)
 	}
 }
 
-// Builds the model with the current parameter values, motion ports' particles driven.
-static sm_status build_model(instance* inst, sm_model** out)
+// How to get an FMU of another structure, for the messages that refuse one.
+#define PACKAGED_STRUCTURE                                                                                  \
+	"this FMU's variables were made for the structure at packaging: change the value in the model file and " \
+	"package that (springmass fmu MODEL -o NAME.fmu)"
+
+// Appends "name = value" of every parameter whose value differs from before[] to text (size bytes,
+// NUL-terminated), comma-separated.
+static void changed_parameters(const instance* inst, const double* before, char* text, size_t size)
+{
+	size_t k = 0;
+	text[0] = '\0';
+	for (int32_t i = 0; i < sm_document_parameter_count(inst->doc) && k < size; ++i) {
+		double value = sm_document_parameter_value(inst->doc, i);
+		if (value != before[i]) {
+			int n = snprintf(text + k, size - k, "%s%s = %.17g", k ? ", " : "", sm_document_parameter_name(inst->doc, i),
+			                 value);
+			k += n > 0 ? (size_t)n : 0;
+		}
+	}
+}
+
+// Whether a model built from the document has the structure the FMU's variables were made for at
+// packaging: the particle and spring counts of fmi2Instantiate and every port at its particle.
+// p[i].x and the ports name particles by index, and the instance's buffers are sized for those
+// counts, so a parameter value that changes them is refused (logged, naming the parameters that
+// differ from before[], which may be NULL) rather than ever taken.
+static bool packaged_structure(instance* inst, const char* function, const sm_model* model, const double* before)
+{
+	int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
+	char what[160] = "";
+	if (n != inst->particle_count || m != inst->spring_count) {
+		snprintf(what, sizeof what, "%d particles and %d springs instead of %d and %d", (int)n, (int)m,
+		         (int)inst->particle_count, (int)inst->spring_count);
+	}
+	for (int32_t p = 0; !what[0] && p < inst->port_count; ++p) {
+		if (sm_document_port(inst->doc, p).particle != inst->ports[p].particle)
+			snprintf(what, sizeof what, "port %s at particle %d instead of %d", inst->ports[p].name,
+			         (int)sm_document_port(inst->doc, p).particle, (int)inst->ports[p].particle);
+	}
+	if (!what[0])
+		return true;
+	char names[512] = "the parameters";
+	if (before)
+		changed_parameters(inst, before, names, sizeof names);
+	log_error(inst, "%s: %s would give the model %s, but " PACKAGED_STRUCTURE, function, names, what);
+	return false;
+}
+
+// Builds the model with the current parameter values, motion ports' particles driven; refuses a
+// model of another structure than the packaged one (packaged_structure, naming the parameters
+// that differ from before[], or NULL).
+static sm_status build_model(instance* inst, const char* function, const double* before, sm_model** out)
 {
 	sm_error err = {SM_OK, ""};
 	sm_model* model = NULL;
 	sm_status st = sm_document_build(inst->doc, &model, &err);
 	if (st != SM_OK) {
-		log_error(inst, "cannot build the model: %s", err.message);
+		log_error(inst, "%s: cannot build the model: %s", function, err.message);
 		return st;
+	}
+	if (!packaged_structure(inst, function, model, before)) {
+		sm_model_destroy(model);
+		return SM_ERROR_TOPOLOGY;
 	}
 	for (int32_t p = 0; p < inst->port_count; ++p) {
 		if (inst->ports[p].kind != SM_PORT_MOTION)
@@ -271,7 +325,7 @@ static sm_status build_model(instance* inst, sm_model** out)
 		if (def.motion != SM_PARTICLE_DRIVEN) {
 			st = sm_model_set_particle_motion(model, inst->ports[p].particle, SM_PARTICLE_DRIVEN);
 			if (st != SM_OK) {
-				log_error(inst, "cannot drive the particle of motion port %s: %s", inst->ports[p].name,
+				log_error(inst, "%s: cannot drive the particle of motion port %s: %s", function, inst->ports[p].name,
 				          sm_model_last_error(model));
 				sm_model_destroy(model);
 				return st;
@@ -363,12 +417,12 @@ static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_si
 }
 
 // Makes sure a simulation with the current settings exists (initialisation mode and later).
-static fmi2Status ensure_simulation(instance* inst)
+static fmi2Status ensure_simulation(instance* inst, const char* function)
 {
 	if (inst->sim && !inst->sim_dirty)
 		return apply_inputs(inst);
 	sm_model* model = NULL;
-	if (build_model(inst, &model) != SM_OK)
+	if (build_model(inst, function, NULL, &model) != SM_OK)
 		return fmi2Error;
 	fmi2Status status = create_simulation(inst, model, &inst->solver, inst->held, 0.0, NULL, NULL);
 	sm_model_destroy(model);
@@ -506,12 +560,13 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 		return fmi2Error;
 	if (memcmp(values, old, (size_t)np * sizeof *values) == 0)
 		return fmi2OK;
-	if (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION)) {
+	sm_model* model = NULL;
+	sm_status st = build_model(inst, "fmi2SetReal", old, &model);
+	if (st == SM_OK && (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))) {
+		sm_model_destroy(model);
 		inst->sim_dirty = true;
 		return fmi2OK;
 	}
-	sm_model* model = NULL;
-	sm_status st = build_model(inst, &model);
 	if (st == SM_OK) {
 		st = sm_simulation_update_model(inst->sim, model);
 		if (st != SM_OK)
@@ -782,7 +837,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 	instance* inst = c;
 	if (!allowed(inst, "fmi2ExitInitializationMode", ST_INITIALIZATION))
 		return fmi2Error;
-	if (ensure_simulation(inst) != fmi2OK) {
+	if (ensure_simulation(inst, "fmi2ExitInitializationMode") != fmi2OK) {
 		inst->state = ST_ERROR;
 		return fmi2Error;
 	}
@@ -867,10 +922,11 @@ static double real_value(instance* inst, const fmu_variable* v)
 	}
 }
 
-// Whether a variable's value needs the simulation (everything but parameters and inputs).
+// Whether a variable's value needs the simulation (everything but parameters, constants and
+// inputs).
 static bool needs_simulation(const fmu_variable* v)
 {
-	return v->causality == FMU_OUTPUT || v->causality == FMU_LOCAL;
+	return v->source >= FMU_SRC_PORT_POSITION && v->causality != FMU_INPUT;
 }
 
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
@@ -883,7 +939,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 		if (!v)
 			return fmi2Error;
 		if (needs_simulation(v) && (!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)) {
-			if (ensure_simulation(inst) != fmi2OK)
+			if (ensure_simulation(inst, "fmi2GetReal") != fmi2OK)
 				return fmi2Error;
 		} else if (needs_simulation(v) && apply_inputs(inst) != fmi2OK) {
 			return fmi2Error;
@@ -943,6 +999,15 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 {
 	if (!isfinite(value)) {
 		log_error(inst, "fmi2SetReal: %s = %g rejected: values must be finite", v->name, value);
+		return false;
+	}
+	// A constant keeps its value; setting that value (an importer passing every start value)
+	// changes nothing and is allowed.
+	if (v->variability == FMU_CONSTANT) {
+		if (value == sm_document_parameter_value(inst->doc, v->index))
+			return true;
+		log_error(inst, "fmi2SetReal: %s = %.17g refused: %s sets the model's structure, " PACKAGED_STRUCTURE, v->name,
+		          value, v->name);
 		return false;
 	}
 	if (!settable(inst, "fmi2SetReal", v))
@@ -1332,17 +1397,20 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
 	solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);
 	solver.max_step = get_d(b, D_MAX_STEP);
+	// The parameters first: a state whose parameters give another structure (only a state
+	// written by something else than this FMU can hold such values) is refused like a set.
 	fmi2Status status = set_parameters(inst, function, d + 6 * n + m, old) ? fmi2OK : fmi2Error;
+	sm_model* model = NULL;
+	if (status == fmi2OK && build_model(inst, function, old, &model) != SM_OK) {
+		put_back_parameters(inst, function, old);
+		status = fmi2Error;
+	}
 	if (status == fmi2OK && get_i(b, I_HAS_SIM)) {
-		sm_model* model = NULL;
-		status = build_model(inst, &model) == SM_OK ? fmi2OK : fmi2Error;
-		for (int32_t k = 0; status == fmi2OK && k < m; ++k) {
+		for (int32_t k = 0; k < m; ++k) {
 			if (d[6 * n + k] == 0.0)
 				sm_model_set_spring_enabled(model, k, false);
 		}
-		if (status == fmi2OK)
-			status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
-		sm_model_destroy(model);
+		status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
 		if (status != fmi2OK)
 			put_back_parameters(inst, function, old);
 		else
@@ -1355,6 +1423,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
 		mark_inputs_dirty(inst);
 	}
+	sm_model_destroy(model);
 	free(held);
 	if (status != fmi2OK)
 		return status;
@@ -1379,7 +1448,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 		log_error(inst, "fmi2GetFMUstate: NULL FMUstate");
 		return fmi2Error;
 	}
-	if (inst->state == ST_INITIALIZATION && ensure_simulation(inst) != fmi2OK)
+	if (inst->state == ST_INITIALIZATION && ensure_simulation(inst, "fmi2GetFMUstate") != fmi2OK)
 		return fmi2Error;
 	saved_state* s = save_state(inst);
 	if (!s) {
@@ -1556,7 +1625,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 			return fmi2Error;
 		}
 	}
-	if ((!inst->sim || inst->sim_dirty) ? ensure_simulation(inst) != fmi2OK : apply_inputs(inst) != fmi2OK)
+	if ((!inst->sim || inst->sim_dirty) ? ensure_simulation(inst, fn) != fmi2OK : apply_inputs(inst) != fmi2OK)
 		return fmi2Error;
 	for (size_t k = 0; k < nKnown; ++k) {
 		const fmu_variable* v = &inst->table.variables[vKnown_ref[k]];

@@ -170,58 +170,85 @@ int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant)
 // Tunability of parameters
 // ---------------------------------------------------------------------------------------------
 
-// Whether two models have the same particles (count, motion, initial state) and the same
-// springs (count and endpoints).
-static bool same_structure(const sm_model* a, const sm_model* b)
+// What a model-file parameter feeds, as far as the FMU is concerned; the larger value wins.
+typedef enum parameter_role {
+	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity: tunable
+	ROLE_STATE,          // the initial state, which particles are held, the springs' ends: fixed
+	ROLE_STRUCTURE,      // the particle or spring count, or a port's particle: constant
+} parameter_role;
+
+// What differs between the reference model of doc and the model of scratch (the same file with
+// one parameter changed): counts and ports first, then particles (motion, initial state) and
+// springs (endpoints, kind). A break strain that appears or disappears changes the events, not
+// the topology.
+static parameter_role difference(const sm_document* doc, const sm_model* a, const sm_document* scratch,
+                                 const sm_model* b)
 {
 	int32_t n = sm_model_particle_count(a);
 	int32_t m = sm_model_spring_count(a);
 	if (n != sm_model_particle_count(b) || m != sm_model_spring_count(b))
-		return false;
+		return ROLE_STRUCTURE;
+	for (int32_t p = 0; p < sm_document_port_count(doc); ++p) {
+		if (sm_document_port(doc, p).particle != sm_document_port(scratch, p).particle)
+			return ROLE_STRUCTURE;
+	}
 	for (int32_t i = 0; i < n; ++i) {
 		sm_particle_def pa, pb;
 		if (sm_model_get_particle(a, i, &pa) != SM_OK || sm_model_get_particle(b, i, &pb) != SM_OK)
-			return false;
+			return ROLE_STATE;
 		if (pa.motion != pb.motion)
-			return false;
+			return ROLE_STATE;
 		for (int c = 0; c < 3; ++c) {
 			if (pa.position[c] != pb.position[c] || pa.velocity[c] != pb.velocity[c])
-				return false;
+				return ROLE_STATE;
 		}
 	}
 	for (int32_t s = 0; s < m; ++s) {
 		sm_spring_def sa, sb;
 		if (sm_model_get_spring(a, s, &sa) != SM_OK || sm_model_get_spring(b, s, &sb) != SM_OK)
-			return false;
+			return ROLE_STATE;
 		if (sa.a != sb.a || sa.b != sb.b || sa.kind != sb.kind)
-			return false;
-		// A break strain that appears or disappears changes the events, not the topology.
+			return ROLE_STATE;
 	}
-	return true;
+	return ROLE_CONSTANTS;
 }
 
-// Perturbs the parameter in a scratch document and compares the models. A perturbation that
-// makes the model invalid means the parameter feeds something with rules of its own (a
-// count, an index): fixed. Sets *tunable; SM_ERROR_OUT_OF_MEMORY when an allocation failed on
-// the way, so that the answer is unknown (and the scratch document may keep the perturbed value).
-static sm_status parameter_is_tunable(sm_document* scratch, const sm_model* reference, int32_t parameter,
-                                      bool* tunable)
+// Sets the parameter to each probe value in a scratch document and compares the models with the
+// reference (doc's, built as `reference`). A value the model refuses says nothing of what the
+// parameter feeds (a mass cannot be negative, a count must be whole) and is skipped; a parameter
+// that takes none of them is fixed. The probes: one step up and one down (a count changes with
+// either), and a step of a quarter of the value besides. Sets *role; SM_ERROR_OUT_OF_MEMORY when
+// an allocation failed on the way, so that the answer is unknown (and the scratch document may
+// keep a probe value).
+static sm_status parameter_role_of(const sm_document* doc, const sm_model* reference, sm_document* scratch,
+                                   int32_t parameter, parameter_role* role)
 {
-	double value = sm_document_parameter_value(scratch, parameter);
-	double perturbed = value + 1.0 + 0.25 * fabs(value);
-	*tunable = false;
-	sm_status st = sm_document_set_parameter(scratch, parameter, perturbed, NULL);
-	if (st != SM_OK)
-		return st == SM_ERROR_OUT_OF_MEMORY ? st : SM_OK;
-	sm_model* model = NULL;
-	st = sm_document_build(scratch, &model, NULL);
-	if (st == SM_OK && model)
-		*tunable = same_structure(reference, model);
-	sm_model_destroy(model);
-	sm_status back = sm_document_set_parameter(scratch, parameter, value, NULL);
-	if (back != SM_OK)
-		return back;
-	return st == SM_ERROR_OUT_OF_MEMORY ? st : SM_OK;
+	const double value = sm_document_parameter_value(scratch, parameter);
+	const double probes[] = {value + 1.0 + 0.25 * fabs(value), value + 1.0, value - 1.0};
+	bool valid = false;
+	*role = ROLE_CONSTANTS;
+	sm_status st = SM_OK;
+	for (size_t k = 0; k < sizeof probes / sizeof probes[0] && *role != ROLE_STRUCTURE; ++k) {
+		st = sm_document_set_parameter(scratch, parameter, probes[k], NULL);
+		if (st == SM_ERROR_OUT_OF_MEMORY)
+			return st;
+		if (st != SM_OK)
+			continue;
+		sm_model* model = NULL;
+		st = sm_document_build(scratch, &model, NULL);
+		if (st == SM_ERROR_OUT_OF_MEMORY)
+			return st;
+		if (st == SM_OK && model) {
+			valid = true;
+			parameter_role r = difference(doc, reference, scratch, model);
+			if (r > *role)
+				*role = r;
+		}
+		sm_model_destroy(model);
+	}
+	if (!valid)
+		*role = ROLE_STATE;
+	return sm_document_set_parameter(scratch, parameter, value, NULL);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -424,16 +451,20 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	int32_t np = sm_document_parameter_count(doc);
 	for (int32_t i = 0; i < np && !b.failed; ++i) {
 		const char* pname = sm_document_parameter_name(doc, i);
-		bool tunable = false;
-		if (parameter_is_tunable(scratch, model, i, &tunable) != SM_OK) {
+		parameter_role role = ROLE_STATE;
+		if (parameter_role_of(doc, model, scratch, i, &role) != SM_OK) {
 			b.failed = true;
 			break;
 		}
-		fmu_variable* v = add(&b, name_part(pname),
-		                      format("model-file parameter %s (%s)", pname,
-		                             tunable ? "tunable: feeds constants only" : "fixed: feeds the structure or initial state"),
-		                      FMU_REAL, FMU_PARAMETER, tunable ? FMU_TUNABLE : FMU_FIXED, NULL, FMU_SRC_MODEL_PARAMETER,
-		                      i, 0);
+		static const char* const role_text[] = {
+		    "tunable: feeds constants only",
+		    "fixed: feeds the initial state or which particles are held",
+		    "constant: sets the model's structure (a count or a port's particle), fixed at packaging",
+		};
+		fmu_variable* v = add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text[role]),
+		                      FMU_REAL, role == ROLE_STRUCTURE ? FMU_LOCAL : FMU_PARAMETER,
+		                      role == ROLE_CONSTANTS ? FMU_TUNABLE : role == ROLE_STATE ? FMU_FIXED : FMU_CONSTANT,
+		                      NULL, FMU_SRC_MODEL_PARAMETER, i, 0);
 		if (v) {
 			v->has_start = true;
 			v->start_real = sm_document_parameter_value(doc, i);
@@ -625,6 +656,7 @@ static const char* causality_name(fmu_causality c)
 static const char* variability_name(fmu_variability v)
 {
 	switch (v) {
+	case FMU_CONSTANT: return "constant";
 	case FMU_FIXED: return "fixed";
 	case FMU_TUNABLE: return "tunable";
 	case FMU_CONTINUOUS: return "continuous";
@@ -739,7 +771,7 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 		append_escaped(&out, v->description);
 		appendf(&out, "\" causality=\"%s\" variability=\"%s\"", causality_name(v->causality),
 		        variability_name(v->variability));
-		if (v->causality == FMU_PARAMETER)
+		if (v->causality == FMU_PARAMETER || v->variability == FMU_CONSTANT)
 			append_text(&out, " initial=\"exact\"");
 		else if (v->causality == FMU_OUTPUT || v->causality == FMU_LOCAL)
 			append_text(&out, " initial=\"calculated\"");

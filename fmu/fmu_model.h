@@ -32,7 +32,8 @@ typedef enum fmu_causality {
 
 /// FMI variability.
 typedef enum fmu_variability {
-	FMU_FIXED = 0,
+	FMU_CONSTANT = 0,  ///< a model-file parameter that sets the structure (fmu_table_create)
+	FMU_FIXED,
 	FMU_TUNABLE,
 	FMU_CONTINUOUS,
 } fmu_variability;
@@ -96,10 +97,13 @@ typedef struct fmu_table {
 /// it leaves the particles, the springs' endpoints, the particles' motions and the initial
 /// state as they are: it then feeds only constants (stiffness, damping, masses, rest lengths
 /// given as numbers, gravity, mass damping), which a running simulation can take over. It is
-/// fixed (settable only before initialisation) when it feeds the structure or the initial
-/// state (counts, positions, velocities). This is decided by building the model with the
-/// parameter perturbed, through the public API only. Returns SM_OK, or an error with the message in err (e.g. two variables with the
-/// same name); on error *table is zeroed and nothing is leaked.
+/// fixed (settable only before initialisation) when it feeds the initial state (positions,
+/// velocities) or which particles are held. It is a constant (causality local, variability
+/// constant: not settable at all) when it sets the particle or spring count or which particle a
+/// port is at: the FMU's variables (p[i].x, the ports) are made for one structure at packaging.
+/// This is decided by building the model with the parameter perturbed, through the public API
+/// only. Returns SM_OK, or an error with the message in err (e.g. two variables with the same
+/// name); on error *table is zeroed and nothing is leaked.
 sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table,
                            sm_error* err);
 

@@ -1,8 +1,11 @@
 """Misuse of the FMU: each an error with a clear message, never a crash; usable after reset."""
 import math
+import struct
 
 import pytest
+from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
+from fmpy.validation import validate_fmu
 
 from fmu_helpers import Instance
 
@@ -220,6 +223,64 @@ def test_a_rejected_set_real_puts_the_parameters_back_in_reverse_order(test_fmu)
         s.exitInitializationMode()
         s.doStep(0.0, 0.1)
         assert inst.get("p[1].x") == 1.0
+    finally:
+        inst.free()
+
+
+def test_parameters_that_set_the_structure_are_constants_of_the_packaged_fmu(test_fmu):
+    # rope_n: n is the rope's segment count. p[i].x and the ports name particles by index, and the
+    # instance's buffers are sized at instantiation, so n = 4 is part of the FMU: n is declared a
+    # constant (causality local), and another value, larger (writes past the buffers) or smaller
+    # (reads past the simulation's arrays), is refused with the way to get such an FMU, in every
+    # state and in a state written by something else; the instance steps on as before.
+    fmu = test_fmu("rope_n")
+    assert validate_fmu(str(fmu)) == []
+    n, e = (next(v for v in read_model_description(str(fmu)).modelVariables if v.name == name) for name in "nE")
+    assert (n.causality, n.variability, n.initial, n.start) == ("local", "constant", "exact", "4")
+    assert (e.causality, e.variability) == ("parameter", "tunable")
+    inst = Instance(fmu)
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        expect_error(inst, lambda: inst.set("n", 400), "n = 400 refused", "springmass fmu")
+        s.enterInitializationMode()
+        expect_error(inst, lambda: inst.set("n", 2), "n = 2 refused", "springmass fmu")
+        inst.set("n", 4)  # its own value: an importer may pass every start value
+        s.exitInitializationMode()
+        expect_error(inst, lambda: inst.set("n", 5), "n = 5 refused")
+        s.doStep(0.0, 0.01)
+        blob = s.serializeFMUstate(s.getFMUstate())
+        params = blob.index(struct.pack("<dd", 4.0, 100.0)) // 8  # n and E, in file order
+        bad = bytearray(blob)
+        bad[8 * params:8 * params + 8] = struct.pack("<d", 400.0)
+        h = 0xcbf29ce484222325  # the checksum made valid again (test_fmu_state.checksummed)
+        for i, byte in enumerate(bad):
+            if not 56 <= i < 64:
+                h = ((h ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+        bad[56:64] = struct.pack("<Q", h)
+        before = inst.get("hook.fx", "tip.x", "p[4].z")
+        expect_error(inst, lambda: s.setFMUstate(s.deSerializeFMUstate(bytes(bad))), "n = 400", "401 particles",
+                     "springmass fmu")
+        assert inst.get("hook.fx", "tip.x", "p[4].z") == before and inst.get("n") == 4.0
+        s.doStep(0.01, 0.01)
+        assert math.isfinite(inst.get("hook.fx"))
+    finally:
+        inst.free()
+
+
+def test_a_parameter_that_moves_a_port_to_another_particle_is_refused(test_fmu):
+    # two_ropes: n segments of rope A come before rope B, whose end is the probe port: n = 10 would
+    # put the port's particle index at 14 (at another particle of the FMU's 13, or past them).
+    inst = Instance(test_fmu("two_ropes"))
+    s = inst.slave
+    try:
+        assert inst.variables["n"].variability == "constant"
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for value in (4, 10):
+            expect_error(inst, lambda: inst.set("n", value), f"n = {value} refused")
+        s.exitInitializationMode()
+        assert inst.get("end.x", "end.y", "end.z") == [0.0, 6.0, 0.0]
     finally:
         inst.free()
 
