@@ -368,10 +368,12 @@ static void mark_inputs_dirty(instance* inst)
 }
 
 // Creates the simulation from a model at time start_time + sim_time with the given state (or the
-// model's initial state when x is NULL), the solver settings and the port inputs given, and
-// makes it the instance's only when all of that succeeded: a failure changes nothing.
+// model's initial state when x is NULL), the solver settings and the port inputs given (held, and
+// pending: which ports have inputs set that no step has taken yet), and makes it the instance's
+// only when all of that succeeded: a failure changes nothing.
 static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
-                                    const port_values* held, double sim_time, const double* x, const double* v)
+                                    const port_values* held, const bool* pending, double sim_time, const double* x,
+                                    const double* v)
 {
 	sm_error err = {SM_OK, ""};
 	sm_simulation* sim = sm_simulation_create(model, solver, &err);
@@ -387,11 +389,13 @@ static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_si
 	for (int32_t p = 0; p < inst->port_count; ++p) {
 		// A restored motion port continues from where its particle is, with the held velocity:
 		// the prescribed motion of a port whose inputs were set some steps before the state was
-		// saved has moved on since (the held position is still what the input reads).
+		// saved has moved on since (the held position is still what the input reads). Inputs set
+		// since the last step (pending[p]) start from the held position, as at fmi2DoStep.
 		sm_status st = SM_OK;
 		int32_t particle = inst->ports[p].particle;
 		if (inst->ports[p].kind == SM_PORT_MOTION)
-			st = sm_simulation_set_driven(sim, particle, x ? x + 3 * (size_t)particle : held[p].position,
+			st = sm_simulation_set_driven(sim, particle,
+			                              x && !pending[p] ? x + 3 * (size_t)particle : held[p].position,
 			                              held[p].velocity);
 		else if (inst->ports[p].kind == SM_PORT_FORCE)
 			st = sm_simulation_set_external_force(sim, particle, held[p].force);
@@ -424,7 +428,7 @@ static fmi2Status ensure_simulation(instance* inst, const char* function)
 	sm_model* model = NULL;
 	if (build_model(inst, function, NULL, &model) != SM_OK)
 		return fmi2Error;
-	fmi2Status status = create_simulation(inst, model, &inst->solver, inst->held, 0.0, NULL, NULL);
+	fmi2Status status = create_simulation(inst, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
 	sm_model_destroy(model);
 	if (status == fmi2OK)
 		inst->time = inst->start_time;
@@ -1164,10 +1168,12 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // (bit for bit, in this or another process).
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST2"
+#define STATE_MAGIC "SMFMUST3"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
-// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports]. The checksum
+// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports], pending
+// ports[nports] (inputs set since the last step, as doubles 0/1: a state saved between setting
+// inputs and fmi2DoStep steps with them when restored). The checksum
 // is a 64-bit FNV-1a hash of all other bytes: a serialised state that was truncated, extended or
 // changed in transit is refused before anything of it is used.
 enum {
@@ -1211,7 +1217,7 @@ static size_t state_size(const instance* inst)
 {
 	size_t n = (size_t)inst->particle_count, m = (size_t)inst->spring_count;
 	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
-	return HEADER_BYTES + 8 * (6 * n + m + np + 9 * nports);
+	return HEADER_BYTES + 8 * (6 * n + m + np + 10 * nports);
 }
 
 static void put_i(unsigned char* b, int k, int64_t v)
@@ -1300,6 +1306,8 @@ static saved_state* save_state(instance* inst)
 	for (int32_t k = 0; k < np; ++k)
 		d[6 * n + m + k] = sm_document_parameter_value(inst->doc, k);
 	memcpy(d + 6 * n + m + np, inst->held, 9 * (size_t)inst->port_count * sizeof(double));
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		d[6 * n + m + np + 9 * inst->port_count + p] = inst->port_dirty[p] ? 1.0 : 0.0;
 	put_i(b, I_CHECKSUM, state_checksum(b, s->size));
 	return s;
 }
@@ -1368,6 +1376,8 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	ok = ok && all_finite(d, 2 * n3) && all_finite(d + 2 * n3 + m, np + 9 * nports);
 	for (size_t k = 0; ok && k < m; ++k)
 		ok = d[2 * n3 + k] == 0.0 || d[2 * n3 + k] == 1.0;
+	for (size_t k = 2 * n3 + m + np + 9 * nports; ok && k < 2 * n3 + m + np + 10 * nports; ++k)
+		ok = d[k] == 0.0 || d[k] == 1.0;
 	if (!ok)
 		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
 		                "velocities, parameters or inputs)",
@@ -1383,11 +1393,16 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
 	double* old = inst->parameter_old;
 	port_values* held = malloc(((size_t)inst->port_count + 1) * sizeof *held);
-	if (!held) {
+	bool* pending = malloc((size_t)inst->port_count + 1);
+	if (!held || !pending) {
+		free(held);
+		free(pending);
 		log_error(inst, "%s: out of memory", function);
 		return fmi2Error;
 	}
 	memcpy(held, d + 6 * n + m + np, (size_t)inst->port_count * sizeof *held);
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		pending[p] = d[6 * n + m + np + 9 * inst->port_count + p] != 0.0;
 	sm_simulation_def solver = inst->solver;
 	solver.method = (sm_method)get_i(b, I_METHOD);
 	solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
@@ -1410,7 +1425,8 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 			if (d[6 * n + k] == 0.0)
 				sm_model_set_spring_enabled(model, k, false);
 		}
-		status = create_simulation(inst, model, &solver, held, get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
+		status = create_simulation(inst, model, &solver, held, pending, get_d(b, D_TIME) - get_d(b, D_START), d,
+		                           d + 3 * n);
 		if (status != fmi2OK)
 			put_back_parameters(inst, function, old);
 		else
@@ -1425,6 +1441,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	}
 	sm_model_destroy(model);
 	free(held);
+	free(pending);
 	if (status != fmi2OK)
 		return status;
 	inst->rtol_set = get_i(b, I_RTOL_SET) != 0;
