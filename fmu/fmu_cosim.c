@@ -572,6 +572,14 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 		return fmi2OK;
 	}
 	if (st == SM_OK) {
+		// Broken springs stay broken: the simulation's model has them disabled, those that broke
+		// before a restored state included (the simulation itself knows only those that broke
+		// since), and a new value of a constant does not mend them.
+		const sm_model* running = sm_simulation_model(inst->sim);
+		for (int32_t k = 0; k < inst->spring_count; ++k) {
+			if (!sm_model_spring_enabled(running, k))
+				sm_model_set_spring_enabled(model, k, false);
+		}
 		st = sm_simulation_update_model(inst->sim, model);
 		if (st != SM_OK)
 			log_error(inst, "fmi2SetReal: the simulation cannot take the new parameters: %s",

@@ -80,6 +80,41 @@ def test_state_saved_between_setting_inputs_and_stepping_keeps_the_inputs(test_f
     assert plain[0] == 0.3 and saved == plain and restored == plain
 
 
+def test_broken_springs_stay_broken_when_a_parameter_changes_after_a_state(test_fmu):
+    # The bundled tearing cloth has torn by t = 1 s. A tunable parameter set then (E_bend by a
+    # relative 1e-7, or break_strain raised so that nothing would break) must not mend the broken
+    # springs, also after fmi2GetFMUstate or fmi2SetFMUstate, which rebuild the simulation: the
+    # energies right after the change are those of an instance that saved no state, bit for bit
+    # (the same positions, the same springs holding), and no spring breaks a second time.
+    names = ["energy.elastic", "energy.dissipated", "weight.z"]
+    fmu = BUNDLED_FMUS / "tearing_cloth.fmu"
+
+    def torn(name):
+        inst = Instance(fmu, name, logging_on=True).start()
+        for n in range(100):
+            inst.slave.doStep(0.01 * n, 0.01)
+        assert sum("broke" in m[2] for m in inst.messages) > 0
+        return inst
+
+    plain, other, saved = torn("plain"), torn("other"), torn("saved")
+    try:
+        plain.set("E_bend", 10.000001)
+        other.set("break_strain", 1000.0)
+        state = saved.slave.getFMUstate()
+        saved.set("E_bend", 10.000001)
+        assert saved.get(*names) == plain.get(*names)
+        n = len(saved.messages)
+        for k in range(100, 120):
+            saved.slave.doStep(0.01 * k, 0.01)
+        assert not any("broke" in m[2] for m in saved.messages[n:])
+        saved.slave.setFMUstate(state)
+        saved.set("break_strain", 1000.0)
+        assert saved.get(*names) == other.get(*names)
+    finally:
+        for inst in (plain, other, saved):
+            inst.free()
+
+
 def test_serialised_state_continues_identically_in_a_new_process(test_fmu, tmp_path):
     fmu = test_fmu("driven_oscillator")
     inst = Instance(fmu).start({"d": 0.3, "k": 60.0})
