@@ -84,7 +84,7 @@ typedef struct instance {
 	bool stop_time_defined;
 	double stop_time;
 	port_values* held;  // per port: the inputs as set, the start values until then
-	bool* port_dirty;   // inputs changed since they were last given to the simulation
+	bool* port_dirty;   // inputs set since they were last given to the simulation
 
 	// The running simulation (created when first needed in initialisation mode).
 	sm_simulation* sim;
@@ -229,10 +229,11 @@ static void load_start_values(instance* inst)
 {
 	sm_document_settings settings = sm_document_get_settings(inst->doc);
 	inst->solver = settings.solver;
-	// Inputs are passed on only when they change, and a change is a jump of the right-hand side
-	// (a force switched on, a drive that moves off its extrapolated path): CVODE restarts then
+	// An input set is a jump of the right-hand side when its value changes (a force switched on,
+	// a drive that moves off its extrapolated path; the simulation compares): CVODE restarts then
 	// instead of stepping its high-order history across the discontinuity, which at tight
-	// tolerances fails with repeated error-test failures. Unchanged inputs keep the history.
+	// tolerances fails with repeated error-test failures. Inputs set to what they were keep the
+	// history.
 	inst->solver.restart_on_input_change = true;
 	inst->rtol_set = false;
 	for (int32_t p = 0; p < inst->port_count; ++p) {
@@ -336,8 +337,10 @@ static sm_status build_model(instance* inst, const char* function, const double*
 	return SM_OK;
 }
 
-// Gives the inputs that changed to the simulation. Only changed inputs are passed on, so CVODE
-// keeps its history over communication points where nothing jumped.
+// Gives the inputs set since the last step to the simulation, at the current communication point:
+// a motion port set in a step moves from its held position with its held velocity from the
+// step's start, whether or not a value changed (the simulation restarts CVODE only where the
+// motion leaves its extrapolated path, or a force changes). Ports not set since keep their motion.
 static fmi2Status apply_inputs(instance* inst)
 {
 	for (int32_t p = 0; p < inst->port_count; ++p) {
@@ -1065,11 +1068,9 @@ static void set_real(instance* inst, const fmu_variable* v, double value)
 		double* slot = v->source == FMU_SRC_PORT_POSITION   ? &h->position[v->component]
 		               : v->source == FMU_SRC_PORT_VELOCITY ? &h->velocity[v->component]
 		                                                    : &h->force[v->component];
-		if (*slot != value) {
-			*slot = value;
-			inst->port_dirty[v->index] = true;
-			inst->forces_valid = false;
-		}
+		*slot = value;
+		inst->port_dirty[v->index] = true;
+		inst->forces_valid = false;
 		break;
 	}
 	default: break;

@@ -155,6 +155,27 @@ def test_directional_derivative_is_the_stiffness_seen_by_the_port(test_fmu):
         inst.free()
 
 
+def test_a_motion_input_set_in_a_step_applies_from_its_start_changed_or_not(test_fmu):
+    # A motion port set in a communication step moves from P.x with P.vx from the step's start.
+    # The master holds base.x = 0 and base.vx = 1 m/s at every 0.1 s step, so the anchor is at
+    # 0.1 m after each, whether base.x is sent as 0 every time or alternates between 0 and the
+    # smallest subnormal (a change that must not matter). A step without a set keeps the motion:
+    # 0.2 m after it. Tolerance: the step length (t_n + h) - t_n is h to the round-off of t < 1 s
+    # (ulp 1.1e-16 s), times 1 m/s.
+    for wiggle in (False, True):
+        inst = Instance(test_fmu("driven_oscillator")).start()
+        try:
+            for n in range(5):
+                inst.set("base.x", 5e-324 if wiggle and n % 2 else 0.0)
+                inst.set("base.vx", 1.0)
+                inst.slave.doStep(0.1 * n, 0.1)
+                assert abs(inst.get("p[0].x") - 0.1) < 1e-15, (wiggle, n, inst.get("p[0].x"))
+            inst.slave.doStep(0.5, 0.1)
+            assert abs(inst.get("p[0].x") - 0.2) < 1e-15
+        finally:
+            inst.free()
+
+
 def test_tunable_parameter_between_steps(test_fmu):
     # Changing k between steps takes effect from that point on, with the state kept: after the
     # change at t1 the bob oscillates with the new frequency about the same rest length.
