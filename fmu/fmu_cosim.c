@@ -642,8 +642,10 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 		}
 		mask |= 1u << k;
 	}
+	// FMI 2.0 (2.1.5): logging on with categories logs those only, with none every category;
+	// logging off with none leaves problems reported, with categories switches those off.
 	if (loggingOn)
-		inst->log_mask |= mask;
+		inst->log_mask = mask;
 	else if (nCategories == 0)
 		inst->log_mask = LOG_ALWAYS;  // debug output off; problems are still reported
 	else

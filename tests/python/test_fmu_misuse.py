@@ -96,6 +96,38 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         inst.free()
 
 
+def test_debug_logging_logs_exactly_the_categories_asked_for(test_fmu):
+    # FMI 2.0 (2.1.5): logging on with categories outputs only those, also after another list;
+    # logging on with none outputs every category; logging off with none leaves the problems
+    # reported (errors), and with categories switches those off. Each round makes a message of
+    # three categories: logSolver (a step), logEvents (a tunable parameter set), logStatusError.
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True).start()
+    s = inst.slave
+
+    def logged(t):
+        n = len(inst.messages)
+        s.doStep(t, 0.1)
+        inst.set("k", 51.0 + 10 * t)
+        with pytest.raises(FMICallException):
+            s.setReal([inst.vr["tip.x"]], [1.0])
+        return {m[1] for m in inst.messages[n:]}
+
+    try:
+        s.setDebugLogging(True, ["logEvents"])
+        assert logged(0.0) == {"logEvents"}
+        s.setDebugLogging(True, ["logSolver"])
+        s.setDebugLogging(True, ["logEvents", "logStatusError"])
+        assert logged(0.1) == {"logEvents", "logStatusError"}
+        s.setDebugLogging(True, [])
+        assert logged(0.2) == {"logEvents", "logSolver", "logStatusError"}
+        s.setDebugLogging(False, [])
+        assert logged(0.3) == {"logStatusError"}
+        s.setDebugLogging(False, ["logStatusError"])
+        assert logged(0.4) == set()
+    finally:
+        inst.free()
+
+
 def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
     # A relative tolerance of 1 allows a 100 % error: refused at set-up and as a parameter, and
     # the instance goes on with its own.
