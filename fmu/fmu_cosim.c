@@ -177,23 +177,34 @@ static bool starts_with_scheme(const char* text)
 	return strncmp(text + i, "://", 3) == 0;
 }
 
-// The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir, or a
-// plain path; percent-escapes decoded. Returns a malloc'ed path without a trailing '/', or NULL
-// for a URI of another host or scheme and for an escaped NUL (which would cut the path short),
-// or with *out_of_memory set when the path cannot be allocated.
+// Whether text starts with prefix, letters compared without case (RFC 3986 3.1 and 3.2.2: scheme
+// and host are case-insensitive).
+static bool starts_with_ci(const char* text, const char* prefix)
+{
+	for (; *prefix; ++text, ++prefix) {
+		if (tolower((unsigned char)*text) != tolower((unsigned char)*prefix))
+			return false;
+	}
+	return true;
+}
+
+// The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir (scheme
+// and host in any case), or a plain path; percent-escapes decoded. Returns a malloc'ed path
+// without a trailing '/', or NULL for a URI of another host or scheme and for an escaped NUL
+// (which would cut the path short), or with *out_of_memory set when the path cannot be allocated.
 static char* resource_path(const char* uri, bool* out_of_memory)
 {
 	*out_of_memory = false;
 	const char* p = uri;
-	if (strncmp(p, "file://localhost/", 17) == 0)
+	if (starts_with_ci(p, "file://localhost/"))
 		p += 16;
-	else if (strncmp(p, "file:///", 8) == 0)
+	else if (starts_with_ci(p, "file:///"))
 		p += 7;
-	else if (strncmp(p, "file://", 7) == 0)
+	else if (starts_with_ci(p, "file://"))
 		return NULL;  // file://host/... on another host
-	else if (strncmp(p, "file:/", 6) == 0)
+	else if (starts_with_ci(p, "file:/"))
 		p += 5;
-	else if (strncmp(p, "file:", 5) == 0 || starts_with_scheme(p))
+	else if (starts_with_ci(p, "file:") || starts_with_scheme(p))
 		return NULL;  // a relative file URI, or another scheme
 	size_t n = strlen(p);
 	char* path = malloc(n + 1);

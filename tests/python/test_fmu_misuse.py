@@ -194,8 +194,11 @@ def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
     from fmpy import extract
     folder = tmp_path / "with space" / "a:"
     extract(str(test_fmu("driven_oscillator")), unzipdir=str(folder))
+    # Scheme and host in any case (RFC 3986 3.1, 3.2.2).
     for uri in (f"file:{folder}/resources", f"file://{str(folder).replace(' ', '%20')}/resources/",
-                f"file://localhost{str(folder).replace(' ', '%20')}/resources", f"{folder}//resources"):
+                f"file://localhost{str(folder).replace(' ', '%20')}/resources", f"{folder}//resources",
+                f"FILE://{folder}/resources", f"File:{folder}/resources",
+                f"file://LOCALHOST{folder}/resources", f"FILE://LocalHost{folder}/resources"):
         inst = Instance(test_fmu("driven_oscillator"), unzipdir=str(folder), instantiate=False)
         try:
             comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
@@ -398,7 +401,7 @@ def test_resource_locations_of_other_hosts_and_schemes_are_refused(test_fmu):
     # is no file at all, and an escaped NUL would cut the path short at a folder that exists.
     inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
     try:
-        for uri in ("file://otherhost/resources", "http://localhost/resources",
+        for uri in ("file://otherhost/resources", "FILE://OtherHost/resources", "http://localhost/resources",
                     f"file://{inst.unzipdir}/resources%00/elsewhere"):
             n = len(inst.messages)
             comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
