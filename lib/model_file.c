@@ -141,10 +141,7 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 
 static int32_t find_parameter(const sm_document* doc, const char* name)
 {
-	for (int32_t i = 0; i < doc->parameter_count; i++)
-		if (strcmp(doc->parameter_names[i], name) == 0)
-			return i;
-	return -1;
+	return name_index_find(&doc->parameter_index, name, strlen(name));
 }
 
 // A number, or the name of a parameter standing for one. *source gets the parameter's index or
@@ -331,9 +328,11 @@ static void expansion_free(expansion* ex)
 	free(ex->spring_sources);
 	free(ex->name_offset);
 	free(ex->names);
-	free(ex->name_table);
+	name_index_free(&ex->particle_names);
 	free(ex->structures);
+	name_index_free(&ex->structure_names);
 	free(ex->ports);
+	name_index_free(&ex->port_names);
 	free(ex);
 }
 
@@ -368,37 +367,32 @@ static bool reserve(parser* p, int64_t particles, int64_t springs)
 	return true;
 }
 
-static uint64_t hash_name(const char* s)
+// The names of the expansion's particles, structures and ports, and of the document's
+// parameters, for their name indexes.
+static const char* particle_name(const void* owner, int32_t particle)
 {
-	uint64_t h = 1469598103934665603ULL;  // FNV-1a
-	for (; *s; s++) {
-		h ^= (unsigned char)*s;
-		h *= 1099511628211ULL;
-	}
-	return h;
+	const expansion* ex = owner;
+	return ex->names + ex->name_offset[particle];
+}
+
+static const char* structure_name(const void* owner, int32_t structure)
+{
+	return ((const expansion*)owner)->structures[structure].name;
+}
+
+static const char* port_name(const void* owner, int32_t port)
+{
+	return ((const expansion*)owner)->ports[port].name;
+}
+
+static const char* parameter_name(const void* owner, int32_t parameter)
+{
+	return ((const sm_document*)owner)->parameter_names[parameter];
 }
 
 static int32_t lookup_name(const expansion* ex, const char* name)
 {
-	if (ex->name_table_size == 0)
-		return -1;
-	const uint64_t mask = (uint64_t)ex->name_table_size - 1;
-	for (uint64_t s = hash_name(name) & mask;; s = (s + 1) & mask) {
-		const int32_t i = ex->name_table[s];
-		if (i < 0)
-			return -1;
-		if (strcmp(ex->names + ex->name_offset[i], name) == 0)
-			return i;
-	}
-}
-
-static void table_put(int32_t* table, int64_t size, const expansion* ex, int32_t particle)
-{
-	const uint64_t mask = (uint64_t)size - 1;
-	uint64_t s = hash_name(ex->names + ex->name_offset[particle]) & mask;
-	while (table[s] >= 0)
-		s = (s + 1) & mask;
-	table[s] = particle;
+	return name_index_find(&ex->particle_names, name, strlen(name));
 }
 
 // Gives particle `index` the name (formatted); fails if the name is taken.
@@ -425,32 +419,19 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
 	memcpy(ex->names + ex->names_length, name, (size_t)length);
 	ex->name_offset[index] = ex->names_length;
-	ex->names_length += length;
-	if (2 * (ex->named_count + 1) > ex->name_table_size) {
-		const int64_t size = ex->name_table_size > 0 ? 2 * ex->name_table_size : 64;
-		int32_t* table = malloc((size_t)size * sizeof(int32_t));
-		if (table == NULL)
-			return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
-		for (int64_t s = 0; s < size; s++)
-			table[s] = -1;
-		for (int64_t s = 0; s < ex->name_table_size; s++)
-			if (ex->name_table[s] >= 0)
-				table_put(table, size, ex, ex->name_table[s]);
-		free(ex->name_table);
-		ex->name_table = table;
-		ex->name_table_size = size;
+	int32_t holder;
+	if (!name_index_insert(&ex->particle_names, name, (size_t)length - 1, index, &holder)) {
+		ex->name_offset[index] = -1;
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
 	}
-	table_put(ex->name_table, ex->name_table_size, ex, index);
-	ex->named_count++;
+	ex->names_length += length;
 	return true;
 }
 
 static const document_structure* find_structure(const expansion* ex, const char* name, size_t length)
 {
-	for (int32_t s = 0; s < ex->structure_count; s++)
-		if (strlen(ex->structures[s].name) == length && strncmp(ex->structures[s].name, name, length) == 0)
-			return &ex->structures[s];
-	return NULL;
+	const int32_t s = name_index_find(&ex->structure_names, name, length);
+	return s >= 0 ? &ex->structures[s] : NULL;
 }
 
 // A particle reference: an index, a particle's name, or "structure[i, j, k]" with one to three
@@ -959,11 +940,14 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		return fail(p, st, path, "%s", sm_model_last_error(model));
 
 	// Record the structure, name its particles and note the sources of its springs' constants.
-	document_structure* grown = realloc(p->ex->structures, (size_t)(p->ex->structure_count + 1) * sizeof *grown);
-	if (grown == NULL)
+	expansion* ex = p->ex;
+	int32_t holder;
+	if (!grow_array((void**)&ex->structures, &ex->structure_capacity, ex->structure_count + 1, sizeof s))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
-	p->ex->structures = grown;
-	p->ex->structures[p->ex->structure_count++] = s;
+	ex->structures[ex->structure_count] = s;
+	if (!name_index_insert(&ex->structure_names, s.name, strlen(s.name), ex->structure_count, &holder))
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
+	ex->structure_count++;
 	const sm_structure* r = &s.range;
 	for (int32_t k = 0; k < r->particle_count; k++) {
 		const int32_t index = p0 + k;
@@ -1005,16 +989,12 @@ static bool read_structures(parser* p, const json_t* list)
 // Fixed particles, ports, settings.
 // ---------------------------------------------------------------------------------------------
 
-// "fixed": [reference, ..., {"min": [x, y, z], "max": [x, y, z]}, ...]
-static bool read_fixed(parser* p, const json_t* list)
+// "fixed": [reference, ..., {"min": [x, y, z], "max": [x, y, z]}, ...]; marks the particles
+// in fix[].
+static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 {
 	static const char* const box_keys[] = {"min", "max", NULL};
-	if (list == NULL)
-		return true;
-	if (!json_is_array(list))
-		return fail(p, SM_ERROR_SCHEMA, "fixed", "must be an array of particle references and boxes, not %s",
-		            type_name(list));
-	sm_model* model = p->ex->model;
+	const sm_model* model = p->ex->model;
 	for (size_t k = 0; k < json_array_size(list); k++) {
 		char path[PATH_CAPACITY];
 		child_index(path, "fixed", k);
@@ -1025,8 +1005,16 @@ static bool read_fixed(parser* p, const json_t* list)
 			    !require(p, item, path, "max") || !read_vector(p, item, path, "min", lo, NULL) ||
 			    !read_vector(p, item, path, "max", hi, NULL))
 				return false;
+			// Every particle whose initial position is in the box, bounds included.
 			int32_t count = 0;
-			sm_set_motion_in_box(model, lo, hi, SM_PARTICLE_FIXED, &count);
+			for (int32_t i = 0; i < model->particle_count; i++) {
+				const double* x = model->position + 3 * (size_t)i;
+				if (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] &&
+				    x[2] <= hi[2]) {
+					fix[i] = true;
+					count++;
+				}
+			}
 			if (count == 0)
 				return fail(p, SM_ERROR_SCHEMA, path,
 				            "the box from (%g, %g, %g) to (%g, %g, %g) contains no particle", lo[0], lo[1], lo[2],
@@ -1035,25 +1023,48 @@ static bool read_fixed(parser* p, const json_t* list)
 			int32_t index;
 			if (!resolve_particle(p, item, path, &index))
 				return false;
-			sm_model_set_particle_motion(model, index, SM_PARTICLE_FIXED);
+			fix[index] = true;
 		}
 	}
 	return true;
 }
 
-static bool read_ports(parser* p, const json_t* list)
+// The particles of "fixed" are marked first and then fixed together, as
+// sm_model_set_particle_motion fixes one (its stored velocity becomes zero), with the free
+// particles numbered once: that function numbers them all again at each call, which made a
+// list of n particles take time n times the size of the model.
+static bool read_fixed(parser* p, const json_t* list)
 {
-	static const char* const keys[] = {"name", "particle", "kind", NULL};
 	if (list == NULL)
 		return true;
 	if (!json_is_array(list))
-		return fail(p, SM_ERROR_SCHEMA, "ports", "must be an array of ports, not %s", type_name(list));
+		return fail(p, SM_ERROR_SCHEMA, "fixed", "must be an array of particle references and boxes, not %s",
+		            type_name(list));
+	sm_model* model = p->ex->model;
+	bool* fix = calloc((size_t)model->particle_count + 1, sizeof(bool));
+	if (fix == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "fixed", "out of memory");
+	const bool ok = read_fixed_to(p, list, fix);
+	if (ok) {
+		int32_t free_count = 0;
+		for (int32_t i = 0; i < model->particle_count; i++) {
+			if (fix[i]) {
+				model->motion[i] = SM_PARTICLE_FIXED;
+				memset(model->velocity + 3 * (size_t)i, 0, 3 * sizeof(double));
+			}
+			model->free_index[i] = model->motion[i] == SM_PARTICLE_FREE ? free_count++ : -1;
+		}
+		model->free_count = free_count;
+	}
+	free(fix);
+	return ok;
+}
+
+// Ports; port_at[i] is the first port on particle i (-1: none).
+static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
+{
+	static const char* const keys[] = {"name", "particle", "kind", NULL};
 	const size_t n = json_array_size(list);
-	if ((int64_t)n > p->doc->max_elements)
-		return fail(p, SM_ERROR_SCHEMA, "ports", "too many ports (%zu)", n);
-	p->ex->ports = calloc(n > 0 ? n : 1, sizeof(sm_port));
-	if (p->ex->ports == NULL)
-		return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
 	for (size_t k = 0; k < n; k++) {
 		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
 		child_index(path, "ports", k);
@@ -1065,9 +1076,10 @@ static bool read_ports(parser* p, const json_t* list)
 		child_key(sub, path, "name");
 		if (!check_name(p, json_object_get(obj, "name"), sub, true, &port.name))
 			return false;
-		for (int32_t q = 0; q < p->ex->port_count; q++)
-			if (strcmp(p->ex->ports[q].name, port.name) == 0)
-				return fail(p, SM_ERROR_SCHEMA, sub, "port name \"%s\" is already used by ports[%d]", port.name, (int)q);
+		const int32_t same_name = name_index_find(&p->ex->port_names, port.name, strlen(port.name));
+		if (same_name >= 0)
+			return fail(p, SM_ERROR_SCHEMA, sub, "port name \"%s\" is already used by ports[%d]", port.name,
+			            (int)same_name);
 		child_key(sub, path, "particle");
 		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
 			return false;
@@ -1088,15 +1100,45 @@ static bool read_ports(parser* p, const json_t* list)
 			return fail(p, SM_ERROR_SCHEMA, path,
 			            "a force port needs a free particle, and particle %d is fixed (use a motion or probe port)",
 			            (int)port.particle);
-		for (int32_t q = 0; q < p->ex->port_count; q++)
-			if (p->ex->ports[q].particle == port.particle &&
-			    (p->ex->ports[q].kind != SM_PORT_PROBE || port.kind != SM_PORT_PROBE))
-				return fail(p, SM_ERROR_SCHEMA, path,
-				            "particle %d already has port %s; only probe ports may share a particle",
-				            (int)port.particle, p->ex->ports[q].name);
-		p->ex->ports[p->ex->port_count++] = port;
+		// Only probe ports share a particle, so a particle has one port of another kind or probes
+		// alone, and its first port says which.
+		const int32_t q = port_at[port.particle];
+		if (q >= 0 && (p->ex->ports[q].kind != SM_PORT_PROBE || port.kind != SM_PORT_PROBE))
+			return fail(p, SM_ERROR_SCHEMA, path,
+			            "particle %d already has port %s; only probe ports may share a particle",
+			            (int)port.particle, p->ex->ports[q].name);
+		int32_t holder;
+		p->ex->ports[p->ex->port_count] = port;
+		if (!name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count, &holder))
+			return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
+		if (q < 0)
+			port_at[port.particle] = p->ex->port_count;
+		p->ex->port_count++;
 	}
 	return true;
+}
+
+static bool read_ports(parser* p, const json_t* list)
+{
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "ports", "must be an array of ports, not %s", type_name(list));
+	const size_t n = json_array_size(list);
+	if ((int64_t)n > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, "ports", "too many ports (%zu)", n);
+	const int32_t particles = sm_model_particle_count(p->ex->model);
+	p->ex->ports = calloc(n > 0 ? n : 1, sizeof(sm_port));
+	int32_t* port_at = malloc((size_t)(particles > 0 ? particles : 1) * sizeof(int32_t));
+	if (p->ex->ports == NULL || port_at == NULL) {
+		free(port_at);
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
+	}
+	for (int32_t i = 0; i < particles; i++)
+		port_at[i] = -1;
+	const bool ok = read_ports_to(p, list, port_at);
+	free(port_at);
+	return ok;
 }
 
 const char* document_method_name(sm_method method)
@@ -1204,6 +1246,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
 	}
+	name_index_init(&p.ex->particle_names, particle_name, p.ex);
+	name_index_init(&p.ex->structure_names, structure_name, p.ex);
+	name_index_init(&p.ex->port_names, port_name, p.ex);
 	const json_t* root = doc->root;
 	sm_model_def def = sm_default_model_def();
 	int32_t gravity_source[3];
@@ -1299,6 +1344,9 @@ static bool read_header(sm_document* doc, sm_error* err)
 			return fail(&p, SM_ERROR_NOT_FINITE, path, "%g is not finite", v);
 		doc->parameter_names[doc->parameter_count] = key;
 		doc->parameter_values[doc->parameter_count] = v;
+		int32_t holder;  // the JSON parser refused repeated keys
+		if (!name_index_insert(&doc->parameter_index, key, strlen(key), doc->parameter_count, &holder))
+			return fail(&p, SM_ERROR_OUT_OF_MEMORY, "parameters", "out of memory");
 		doc->parameter_count++;
 	}
 	return true;
@@ -1321,6 +1369,7 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	}
 	strcpy(doc->source, source_name);
 	doc->max_elements = max_elements;
+	name_index_init(&doc->parameter_index, parameter_name, doc);
 	// A UTF-8 byte-order mark may open the text (RFC 8259, section 8.1, lets a parser ignore
 	// it). Editors do not show it, so skipping it keeps line 1's columns as they see them.
 	if (length >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) {
@@ -1415,6 +1464,7 @@ void sm_document_destroy(sm_document* doc)
 	expansion_free(doc->current);
 	json_decref(doc->root);
 	free(doc->parameter_names);
+	name_index_free(&doc->parameter_index);
 	free(doc->parameter_values);
 	free(doc->initial_position);
 	free(doc->initial_velocity);
@@ -1542,10 +1592,7 @@ int32_t sm_document_port_index(const sm_document* doc, const char* name)
 {
 	if (doc == NULL || name == NULL)
 		return -1;
-	for (int32_t k = 0; k < doc->current->port_count; k++)
-		if (strcmp(doc->current->ports[k].name, name) == 0)
-			return k;
-	return -1;
+	return name_index_find(&doc->current->port_names, name, strlen(name));
 }
 
 const char* sm_document_particle_name(const sm_document* doc, int32_t particle)

@@ -8,6 +8,7 @@
 // into a new expansion and swaps it in only if it is valid.
 #pragma once
 
+#include "name_index.h"
 #include "springmass/model_file.h"
 #include "springmass/structures.h"
 
@@ -46,20 +47,21 @@ typedef struct expansion {
 	spring_source* spring_sources;      // one per spring
 	int64_t particle_capacity, spring_capacity;
 
-	// Particle names: offsets into `names` (-1 for an unnamed particle), and an open-addressing
-	// table from name to particle index (-1 = empty slot).
+	// Particle names: offsets into `names` (-1 for an unnamed particle), and the index from name
+	// to particle.
 	int64_t* name_offset;
 	char* names;
 	int64_t names_length, names_capacity;
-	int32_t* name_table;
-	int64_t name_table_size;  // a power of two
-	int64_t named_count;
+	name_index particle_names;
 
 	document_structure* structures;
+	int64_t structure_capacity;
 	int32_t structure_count;
+	name_index structure_names;
 
 	sm_port* ports;  // names point into the JSON tree
 	int32_t port_count;
+	name_index port_names;
 
 	sm_document_settings settings;
 } expansion;
@@ -73,6 +75,7 @@ struct sm_document {
 	int32_t parameter_count;
 	const char** parameter_names;  // point into the JSON tree
 	double* parameter_values;
+	name_index parameter_index;  // name to parameter
 
 	expansion* current;
 
