@@ -21,8 +21,14 @@
 #define MAX_FILE_BYTES ((long)1 << 30)
 // Room for a path in the document such as `structures[2].edge.strain_stiffness`.
 #define PATH_CAPACITY 160
-// Longest particle, port, parameter or structure name [bytes].
+// Longest particle, port or parameter name [bytes].
 #define MAX_NAME_BYTES 200
+// Longest structure name [bytes]. A structure's particles are named name[i], name[row,column]
+// or name[row,column,layer] (saved files name every particle so), with indices below
+// SM_DOCUMENT_MAX_ELEMENTS, at most 7 digits each: the suffix has at most 3 * 7 + 4 = 25 bytes,
+// and every particle's name stays within MAX_NAME_BYTES, as any name in a file must.
+#define MAX_STRUCTURE_NAME_BYTES (MAX_NAME_BYTES - 25)
+_Static_assert(SM_DOCUMENT_MAX_ELEMENTS <= 10000000, "the indices of a structure's particles have at most 7 digits");
 
 typedef struct parser {
 	const sm_document* doc;
@@ -405,11 +411,16 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 static bool name_particle(parser* p, const char* path, int32_t index, const char* format, ...)
 {
 	expansion* ex = p->ex;
-	char name[MAX_NAME_BYTES + 64];
+	char name[MAX_NAME_BYTES + 1];
 	va_list args;
 	va_start(args, format);
-	vsnprintf(name, sizeof name, format, args);
+	const int written = vsnprintf(name, sizeof name, format, args);
 	va_end(args);
+	// Only a limit on elements above SM_DOCUMENT_MAX_ELEMENTS (sm_document_parse_limited) can
+	// make a structure's particle names longer than MAX_STRUCTURE_NAME_BYTES allows for.
+	if (written < 0 || written > MAX_NAME_BYTES)
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name \"%.80s...\" would have more than %d bytes", name,
+		            MAX_NAME_BYTES);
 	const int32_t other = lookup_name(ex, name);
 	if (other >= 0)
 		return fail(p, SM_ERROR_SCHEMA, path, "particle name \"%.80s\" is already used by particle %d", name,
@@ -841,6 +852,12 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	child_key(sub, path, "name");
 	if (!check_name(p, json_object_get(obj, "name"), sub, true, &s.name))
 		return false;
+	const size_t name_bytes = strlen(s.name);
+	if (name_bytes > MAX_STRUCTURE_NAME_BYTES)
+		return fail(p, SM_ERROR_SCHEMA, sub,
+		            "structure name \"%.40s\"... has %zu bytes; a structure's name may have at most %d, so that "
+		            "its particles' names (name[row,column,layer]) fit in %d",
+		            s.name, name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, strlen(s.name)) != NULL)
 		return fail(p, SM_ERROR_SCHEMA, sub, "structure name \"%s\" is already used", s.name);
 

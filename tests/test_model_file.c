@@ -686,6 +686,51 @@ static void append(text* t, const char* format, ...)
 	}
 }
 
+// A structure's name has at most 175 bytes, so that the names its particles get (a block's
+// name[row,column,layer] adds up to 25 bytes) stay within the 200 bytes of any name: a model
+// whose structures have the longest names saves to a file that loads to the same model (the
+// saved file names every particle), and a longer structure name is refused naming the structure.
+static int test_longest_structure_names_round_trip(void)
+{
+	char rope[176], block[177], text[1024];
+	memset(rope, 'r', 175);
+	rope[175] = '\0';
+	memset(block, 'b', 175);
+	block[175] = '\0';
+	const char* format = "{\"springmass\": 1, \"name\": \"long\", \"structures\": [{\"type\": \"rope\", \"name\": \"%s\","
+	                     " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 10, \"structural\": {\"stiffness\": 5}},"
+	                     " {\"type\": \"block\", \"name\": \"%s\", \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 11,"
+	                     " \"edge\": {\"stiffness\": 5}}], \"fixed\": [\"%s[0]\"]}";
+	snprintf(text, sizeof text, format, rope, block, rope);
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(text, &err);
+	if (doc == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(doc != NULL);
+	const char* last = sm_document_particle_name(doc, 11 + 43);
+	ENSURE(last != NULL && strlen(last) == 175 + 8 && strcmp(last + 175, "[1,1,10]") == 0);
+	char* saved = sm_document_to_json(doc, &err);
+	ENSURE(saved != NULL);
+	sm_document* again = sm_document_parse(saved, strlen(saved), "saved.json", &err);
+	free(saved);
+	if (again == NULL)
+		printf("  saved: %s\n", err.message);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(sm_document_particle_index(again, last) == 11 + 43);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	block[175] = 'b';
+	block[176] = '\0';
+	snprintf(text, sizeof text, format, rope, block, rope);
+	ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SCHEMA);
+	ENSURE(strcmp(err.message, "test.json: structures[1].name: structure name \"bbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbb\"... "
+	                           "has 176 bytes; a structure's name may have at most 175, so that its particles' names "
+	                           "(name[row,column,layer]) fit in 200") == 0);
+	return 0;
+}
+
 // Loading takes time proportional to the size of the model: every name (parameter, structure,
 // particle, port) is found in constant time, and the fixed particles are fixed together. The
 // model has N = 100 000 ropes r<i> of one segment from (x<i>, zero, zero) to (x<i>, one, zero),
@@ -852,6 +897,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_whole_real_index);
+	RUN_TEST(test_longest_structure_names_round_trip);
 	RUN_TEST(test_large_model_loads);
 	return TEST_SUMMARY();
 }
