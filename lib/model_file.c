@@ -9,6 +9,7 @@
 #include "model_file_internal.h"
 
 #include "model_internal.h"
+#include "structures_internal.h"
 
 #include <errno.h>
 #include <math.h>
@@ -719,6 +720,8 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 	return true;
 }
 
+// Fails if `particles` and `springs` more would take the model past the document's limit;
+// otherwise makes room for their sources.
 static bool check_budget(parser* p, const char* path, int64_t particles, int64_t springs)
 {
 	const sm_model* model = p->ex->model;
@@ -744,8 +747,9 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 	if (!json_is_array(ts))
 		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of [a, b, c] vertex index triples, not %s",
 		            type_name(ts));
+	// The springs are counted once the mesh is built (its edges are known then).
 	const size_t nv = json_array_size(vs), nt = json_array_size(ts);
-	if (!check_budget(p, path, (int64_t)nv, 6 * (int64_t)nt))
+	if (!check_budget(p, path, (int64_t)nv, 0))
 		return false;
 	*vertices = malloc((nv > 0 ? nv : 1) * 3 * sizeof(double));
 	*triangles = malloc((nt > 0 ? nt : 1) * 3 * sizeof(int32_t));
@@ -820,6 +824,30 @@ static int spring_group(const document_structure* s, const sm_model* model, int3
 	return 0;
 }
 
+// Springs of a rope of nu particles (nv = nw = 1), a sheet of nu x nv or a block of nu x nv x nw
+// in the groups present, as their builders make them (structures.h): a rope joins particle p
+// to p + 1 (structural) and p + 2 (bending); a sheet joins (i, j) to (i, j + 1) and (i + 1, j)
+// (structural), to (i + 1, j + 1) and (i + 1, j - 1) (shear), to (i, j + 2) and (i + 2, j)
+// (bend); a block joins neighbours along each axis (edge), across both diagonals of every
+// lattice face (face_diagonal) and along the four diagonals of every cell (body_diagonal).
+static int64_t grid_springs(structure_type type, int64_t nu, int64_t nv, int64_t nw, const bool present[3])
+{
+	int64_t group[3] = {0, 0, 0};
+	if (type == STRUCTURE_ROPE) {
+		group[0] = nu - 1;
+		group[1] = nu - 2;
+	} else if (type == STRUCTURE_SHEET) {
+		group[0] = (nu - 1) * nv + nu * (nv - 1);
+		group[1] = 2 * (nu - 1) * (nv - 1);
+		group[2] = (nu - 2) * nv + nu * (nv - 2);
+	} else if (type == STRUCTURE_BLOCK) {
+		group[0] = (nu - 1) * nv * nw + nu * (nv - 1) * nw + nu * nv * (nw - 1);
+		group[1] = 2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
+		group[2] = 4 * (nu - 1) * (nv - 1) * (nw - 1);
+	}
+	return (present[0] ? group[0] : 0) + (present[1] ? group[1] : 0) + (present[2] ? group[2] : 0);
+}
+
 static bool read_structure(parser* p, const json_t* obj, const char* path)
 {
 	static const char* const rope_keys[] = {"type", "name",          "start",      "end",     "segments",
@@ -881,7 +909,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		if (json_object_get(obj, "mass") != NULL && json_object_get(obj, "mass_per_length") != NULL)
 			return fail(p, SM_ERROR_SCHEMA, path, "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
 		d.segments = (int32_t)segments;
-		if (!check_budget(p, path, segments + 1, 2 * segments))
+		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.bending),
+		                         false};
+		if (!check_budget(p, path, segments + 1, grid_springs(s.type, segments + 1, 1, 1, present)))
 			return false;
 		st = sm_add_rope(model, &d, &s.range);
 		break;
@@ -900,7 +930,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		    !read_material(p, obj, path, "shear", &d.shear, &groups[1]) ||
 		    !read_material(p, obj, path, "bend", &d.bend, &groups[2]))
 			return false;
-		if (!check_budget(p, path, nu * nv, 6 * nu * nv))
+		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.shear),
+		                         structure_material_present(&d.bend)};
+		if (!check_budget(p, path, nu * nv, grid_springs(s.type, nu, nv, 1, present)))
 			return false;
 		d.nu = (int32_t)nu;
 		d.nv = (int32_t)nv;
@@ -923,7 +955,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		if (nu * nv > limit || nu * nv * nw > limit)
 			return fail(p, SM_ERROR_SCHEMA, path, "%lld x %lld x %lld particles exceed the limit of %lld",
 			            (long long)nu, (long long)nv, (long long)nw, (long long)limit);
-		if (!check_budget(p, path, nu * nv * nw, 13 * nu * nv * nw))
+		const bool present[3] = {structure_material_present(&d.edge), structure_material_present(&d.face_diagonal),
+		                         structure_material_present(&d.body_diagonal)};
+		if (!check_budget(p, path, nu * nv * nw, grid_springs(s.type, nu, nv, nw, present)))
 			return false;
 		d.nu = (int32_t)nu;
 		d.nv = (int32_t)nv;
@@ -950,6 +984,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		st = sm_add_mesh(model, &d, &s.range);
 		free(vertices);
 		free(triangles);
+		// The mesh's particles are within the limit; its springs are counted now.
+		if (st == SM_OK && !check_budget(p, path, 0, 0))
+			return false;
 		break;
 	}
 	}

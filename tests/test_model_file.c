@@ -573,8 +573,32 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 40000,"
 	     " \"nv\": 40000}]}",
 	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 1600000000 particles and 9600000000 springs, more than the "
-	     "limit of 4194304 of each"},
+	     "test.json: structures[0]: the model would have 1600000000 particles and 0 springs, more than the limit of "
+	     "4194304 of each"},
+	    // The springs the groups present make, in closed form: a 2100 x 2100 sheet's structural
+	    // springs 2 * 2099 * 2100; a 161^3 block's edges 3 * 160 * 161^2 (its particles are within
+	    // the limit); a rope's bending springs, one fewer than its segments.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 2100,"
+	     " \"nv\": 2100, \"structural\": {\"stiffness\": 1}}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: the model would have 4410000 particles and 8815800 springs, more than the limit of "
+	     "4194304 of each"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
+	     " \"nu\": 161, \"nv\": 161, \"nw\": 161, \"edge\": {\"stiffness\": 1}}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: the model would have 4173281 particles and 12442080 springs, more than the limit "
+	     "of 4194304 of each"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
+	     " \"nu\": 100, \"nv\": 100, \"nw\": 419, \"face_diagonal\": {\"damping\": 1}}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: the model would have 4190000 particles and 24766038 springs, more than the limit "
+	     "of 4194304 of each"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"structures\": [{\"type\":"
+	     " \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 4194304, \"bending\":"
+	     " {\"stiffness\": 1}}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0]: the model would have 4194306 particles and 4194303 springs, more than the limit "
+	     "of 4194304 of each"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
 	     " \"nu\": 4000000, \"nv\": 4000000, \"nw\": 4000000}]}",
 	     SM_ERROR_SCHEMA,
@@ -728,6 +752,32 @@ static int test_longest_structure_names_round_trip(void)
 	ENSURE(strcmp(err.message, "test.json: structures[1].name: structure name \"bbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbb\"... "
 	                           "has 176 bytes; a structure's name may have at most 175, so that its particles' names "
 	                           "(name[row,column,layer]) fit in 200") == 0);
+	return 0;
+}
+
+// A structure is counted against the limit of 4 194 304 springs with the springs of the groups
+// it has, not of every group: a 69^3 block without springs (328 509 particles) loads, as does
+// one with edge springs only (3 * 68 * 69^2 = 971 244); with all 13 neighbours of a particle
+// counted they would have been 4.27 million springs, over the limit.
+static int test_structure_limit_counts_the_groups_present(void)
+{
+	const char* format = "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\","
+	                     " \"size\": [1, 1, 1], \"nu\": 69, \"nv\": 69, \"nw\": 69%s}]}";
+	const char* groups[] = {"", ", \"edge\": {\"stiffness\": 1}"};
+	const int32_t springs[] = {0, 971244};
+	for (int k = 0; k < 2; k++) {
+		char text[300];
+		snprintf(text, sizeof text, format, groups[k]);
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(text, &err);
+		if (doc == NULL)
+			printf("  %s\n", err.message);
+		ENSURE(doc != NULL);
+		const sm_structure_info block = sm_document_structure(doc, 0);
+		ENSURE(block.range.particle_count == 69 * 69 * 69 && block.range.spring_count == springs[k]);
+		ENSURE(block.range.group_spring_count[0] == springs[k]);
+		sm_document_destroy(doc);
+	}
 	return 0;
 }
 
@@ -898,6 +948,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_whole_real_index);
 	RUN_TEST(test_longest_structure_names_round_trip);
+	RUN_TEST(test_structure_limit_counts_the_groups_present);
 	RUN_TEST(test_large_model_loads);
 	return TEST_SUMMARY();
 }
