@@ -558,6 +558,33 @@ static bool set_parameters(instance* inst, const char* function, const double* v
 	return true;
 }
 
+// Takes the solver settings that a change of the model-file parameters changed (the file's
+// "simulation" object may name parameters: "rtol": "tol"; such parameters are fixed). Setting such
+// a parameter is setting its solver variable: "tol" as solver.rtol, which the experiment's
+// tolerance then leaves alone.
+static void take_settings(instance* inst, const sm_simulation_def* before)
+{
+	const sm_simulation_def now = sm_document_get_settings(inst->doc).solver;
+	sm_simulation_def* s = &inst->solver;
+	if (now.relative_tolerance != before->relative_tolerance) {
+		s->relative_tolerance = now.relative_tolerance;
+		inst->rtol_set = true;
+	}
+#define TAKE_CHANGED(field)            \
+	do {                               \
+		if (now.field != before->field) \
+			s->field = now.field;       \
+	} while (0)
+	TAKE_CHANGED(absolute_tolerance_position);
+	TAKE_CHANGED(absolute_tolerance_velocity);
+	TAKE_CHANGED(max_step);
+	TAKE_CHANGED(max_steps);
+	TAKE_CHANGED(method);
+	TAKE_CHANGED(solver);
+	TAKE_CHANGED(jacobian);
+#undef TAKE_CHANGED
+}
+
 // Sets the model-file parameters among vr[] (all or none). Before initialisation ends the
 // simulation is made again when next needed; afterwards (tunable parameters) the running
 // simulation takes the new constants, built into one model, and keeps its state. A value the
@@ -574,6 +601,7 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 			values[v->index] = value[i];
 	}
 	const double* old = inst->parameter_old;
+	const sm_simulation_def settings = sm_document_get_settings(inst->doc).solver;
 	if (!set_parameters(inst, "fmi2SetReal", values, inst->parameter_old))
 		return fmi2Error;
 	if (memcmp(values, old, (size_t)np * sizeof *values) == 0)
@@ -582,6 +610,7 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	sm_status st = build_model(inst, "fmi2SetReal", old, &model);
 	if (st == SM_OK && (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))) {
 		sm_model_destroy(model);
+		take_settings(inst, &settings);
 		inst->sim_dirty = true;
 		return fmi2OK;
 	}

@@ -173,14 +173,28 @@ int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant)
 // What a model-file parameter feeds, as far as the FMU is concerned; the larger value wins.
 typedef enum parameter_role {
 	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity: tunable
-	ROLE_STATE,          // the initial state, which particles are held, the springs' ends: fixed
+	ROLE_STATE,          // the initial state, which particles are held, the springs' ends, settings: fixed
 	ROLE_STRUCTURE,      // the particle or spring count, or a port's particle: constant
 } parameter_role;
 
+// Whether two documents have the same "simulation" and "fmu" settings: a parameter used there
+// sets the solver before the simulation is made (solver.rtol ...) or the default experiment.
+static bool same_settings(const sm_document* doc, const sm_document* scratch)
+{
+	sm_document_settings a = sm_document_get_settings(doc), b = sm_document_get_settings(scratch);
+	const sm_simulation_def *x = &a.solver, *y = &b.solver;
+	return a.stop_time == b.stop_time && a.output_interval == b.output_interval &&
+	       a.particle_variables == b.particle_variables && x->method == y->method && x->solver == y->solver &&
+	       x->jacobian == y->jacobian && x->relative_tolerance == y->relative_tolerance &&
+	       x->absolute_tolerance_position == y->absolute_tolerance_position &&
+	       x->absolute_tolerance_velocity == y->absolute_tolerance_velocity && x->max_step == y->max_step &&
+	       x->max_steps == y->max_steps;
+}
+
 // What differs between the reference model of doc and the model of scratch (the same file with
-// one parameter changed): counts and ports first, then particles (motion, initial state) and
-// springs (endpoints, kind). A break strain that appears or disappears changes the events, not
-// the topology.
+// one parameter changed): counts and ports first, then the settings, particles (motion, initial
+// state) and springs (endpoints, kind). A break strain that appears or disappears changes the
+// events, not the topology.
 static parameter_role difference(const sm_document* doc, const sm_model* a, const sm_document* scratch,
                                  const sm_model* b)
 {
@@ -192,6 +206,8 @@ static parameter_role difference(const sm_document* doc, const sm_model* a, cons
 		if (sm_document_port(doc, p).particle != sm_document_port(scratch, p).particle)
 			return ROLE_STRUCTURE;
 	}
+	if (!same_settings(doc, scratch))
+		return ROLE_STATE;
 	for (int32_t i = 0; i < n; ++i) {
 		sm_particle_def pa, pb;
 		if (sm_model_get_particle(a, i, &pa) != SM_OK || sm_model_get_particle(b, i, &pb) != SM_OK)
@@ -458,7 +474,7 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 		}
 		static const char* const role_text[] = {
 		    "tunable: feeds constants only",
-		    "fixed: feeds the initial state or which particles are held",
+		    "fixed: feeds the initial state, which particles are held or the simulation settings",
 		    "constant: sets the model's structure (a count or a port's particle), fixed at packaging",
 		};
 		fmu_variable* v = add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text[role]),

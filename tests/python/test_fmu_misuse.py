@@ -165,6 +165,34 @@ def test_solver_failure_is_a_discard_with_the_time_reached(test_fmu):
         inst.free()
 
 
+def test_parameters_in_the_simulation_settings_set_the_solver(test_fmu):
+    # param_settings: "rtol": "tol", "max_steps": "ms" in the file's settings. Setting tol and ms
+    # is setting solver.rtol and solver.max_steps (so tol wins over the experiment's tolerance, as
+    # solver.rtol does); the solver variables read the values, and ms = 2 makes the 1 s step fail
+    # as solver.max_steps = 2 does above. Both are fixed parameters. A reset goes back to the file.
+    inst = Instance(test_fmu("param_settings"))
+    s = inst.slave
+    max_steps = inst.vr["solver.max_steps"]
+    try:
+        assert inst.variables["tol"].variability == inst.variables["ms"].variability == "fixed"
+        s.setupExperiment(tolerance=1e-4, startTime=0.0)
+        s.enterInitializationMode()
+        inst.set("tol", 1e-10)
+        inst.set("ms", 2)
+        s.exitInitializationMode()
+        assert inst.get("solver.rtol") == 1e-10 and s.getInteger([max_steps]) == [2]
+        expect_error(inst, lambda: inst.set("ms", 3), "ms", "fixed parameter")
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 1.0)
+        assert info.value.status == 2  # fmi2Discard
+        s.reset()
+        inst.start()
+        assert inst.get("solver.rtol") == 1e-6 and s.getInteger([max_steps]) == [100000]
+        s.doStep(0.0, 1.0)
+    finally:
+        inst.free()
+
+
 def test_reset_equals_a_fresh_instance(test_fmu):
     fmu = test_fmu("driven_oscillator")
     a = Instance(fmu, "a")
