@@ -111,6 +111,102 @@ static const char* type_name(const json_t* value)
 }
 
 // ---------------------------------------------------------------------------------------------
+// Text from the file in messages.
+// ---------------------------------------------------------------------------------------------
+
+// Most bytes of a name or key shown in a message, escapes included; then QUOTED_CAPACITY holds
+// the quotes, the ellipsis after a text cut short, and the NUL.
+#define QUOTE_TEXT_BYTES 80
+#define QUOTED_CAPACITY (QUOTE_TEXT_BYTES + 6)
+
+// The UTF-8 character at s (n > 0 bytes left): its code point, and in *bytes its length. A byte
+// that begins no well-formed character (RFC 3629: no overlong forms, no surrogates, nothing
+// above U+10FFFF) gives -1 and *bytes = 1. (The JSON parser has checked the strings of a file;
+// this also serves text that has not passed through it.)
+static int32_t decode_utf8(const unsigned char* s, size_t n, size_t* bytes)
+{
+	*bytes = 1;
+	if (s[0] < 0x80)
+		return s[0];
+	const size_t length = s[0] >= 0xf0 ? 4 : s[0] >= 0xe0 ? 3 : s[0] >= 0xc0 ? 2 : 0;
+	static const int32_t least[5] = {0, 0, 0x80, 0x800, 0x10000};
+	if (length == 0 || length > n)
+		return -1;
+	int32_t c = s[0] & (0x7f >> length);
+	for (size_t k = 1; k < length; k++) {
+		if ((s[k] & 0xc0) != 0x80)
+			return -1;
+		c = (c << 6) | (s[k] & 0x3f);
+	}
+	if (c < least[length] || c > 0x10ffff || (c >= 0xd800 && c <= 0xdfff))
+		return -1;
+	*bytes = length;
+	return c;
+}
+
+// Control characters: C0, DEL and C1 (Unicode general category Cc).
+static bool is_control(int32_t c)
+{
+	return c < 0x20 || (c >= 0x7f && c < 0xa0);
+}
+
+// Characters a message shows escaped, since a terminal would act on them or show nothing:
+// control characters, the line and paragraph separators U+2028 and U+2029, the zero-width
+// characters U+200B - U+200D and U+FEFF, and the bidirectional controls (U+061C, U+200E,
+// U+200F, U+202A - U+202E, U+2066 - U+2069), which reorder the text around them.
+static bool shown_escaped(int32_t c)
+{
+	return is_control(c) || c == 0x061c || (c >= 0x200b && c <= 0x200f) || (c >= 0x2028 && c <= 0x202e) ||
+	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
+}
+
+// Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped, and the
+// characters above as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole
+// characters only, NUL-terminated (out has room for most + 1). Returns whether all of s fitted.
+static bool escape_text(char* out, size_t most, const char* s)
+{
+	const unsigned char* u = (const unsigned char*)s;
+	const size_t n = strlen(s);
+	size_t used = 0;
+	for (size_t at = 0; at < n;) {
+		size_t bytes;
+		const int32_t c = decode_utf8(u + at, n - at, &bytes);
+		char escaped[8];
+		const char* piece = escaped;
+		size_t length;
+		if (c < 0)
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\x%02x", u[at]);
+		else if (c == '"' || c == '\\')
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\%c", (char)c);
+		else if (shown_escaped(c))
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\u%04x", (unsigned)c);
+		else {
+			piece = s + at;
+			length = bytes;
+		}
+		if (used + length > most) {
+			out[used] = '\0';
+			return false;
+		}
+		memcpy(out + used, piece, length);
+		used += length;
+		at += bytes;
+	}
+	out[used] = '\0';
+	return true;
+}
+
+// "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
+// after the closing quote. Returns out.
+static const char* quoted(char out[QUOTED_CAPACITY], const char* s)
+{
+	out[0] = '"';
+	const bool whole = escape_text(out + 1, QUOTE_TEXT_BYTES, s);
+	strcat(out, whole ? "\"" : "\"...");
+	return out;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Reading values.
 // ---------------------------------------------------------------------------------------------
 
@@ -140,7 +236,8 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 					break;
 				used += (size_t)n;
 			}
-			return fail(p, SM_ERROR_SCHEMA, path, "unknown key \"%.60s\" (allowed here: %s)", key, list);
+			char text[QUOTED_CAPACITY];
+			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", quoted(text, key), list);
 		}
 	}
 	return true;
@@ -163,8 +260,9 @@ static bool read_number(parser* p, const json_t* value, const char* path, double
 	}
 	if (json_is_string(value)) {
 		const int32_t k = find_parameter(p->doc, json_string_value(value));
+		char text[QUOTED_CAPACITY];
 		if (k < 0)
-			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named \"%.80s\"", json_string_value(value));
+			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s", quoted(text, json_string_value(value)));
 		*out = p->parameter_values[k];
 		if (source != NULL)
 			*source = k;
@@ -302,12 +400,13 @@ static bool check_name_text(parser* p, const char* s, size_t n, const char* path
 		const unsigned char c = (unsigned char)s[i];
 		const bool letter = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
 		const bool digit = c >= '0' && c <= '9';
+		char text[QUOTED_CAPACITY];
 		if (c < 0x20 || c == 0x7f)
-			return fail(p, SM_ERROR_SCHEMA, path, "name \"%.60s\" contains a control character", s);
+			return fail(p, SM_ERROR_SCHEMA, path, "name %s contains a control character", quoted(text, s));
 		if (identifier && !(letter || (digit && i > 0)))
 			return fail(p, SM_ERROR_SCHEMA, path,
-			            "name \"%.60s\" must be an identifier (letters, digits and '_', not starting with a digit)",
-			            s);
+			            "name %s must be an identifier (letters, digits and '_', not starting with a digit)",
+			            quoted(text, s));
 	}
 	return true;
 }
@@ -419,12 +518,13 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 	va_end(args);
 	// Only a limit on elements above SM_DOCUMENT_MAX_ELEMENTS (sm_document_parse_limited) can
 	// make a structure's particle names longer than MAX_STRUCTURE_NAME_BYTES allows for.
+	char text[QUOTED_CAPACITY];
 	if (written < 0 || written > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name \"%.80s...\" would have more than %d bytes", name,
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", quoted(text, name),
 		            MAX_NAME_BYTES);
 	const int32_t other = lookup_name(ex, name);
 	if (other >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name \"%.80s\" is already used by particle %d", name,
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", quoted(text, name),
 		            (int)other);
 	const int64_t length = (int64_t)strlen(name) + 1;
 	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
@@ -474,6 +574,8 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	if (!json_is_string(value))
 		return fail(p, SM_ERROR_SCHEMA, path, "must be a particle name or index, not %s", type_name(value));
 	const char* name = json_string_value(value);
+	char text[QUOTED_CAPACITY];
+	quoted(text, name);
 	const int32_t found = lookup_name(p->ex, name);
 	if (found >= 0) {
 		*out = found;
@@ -508,8 +610,7 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 			}
 			if (count == 0 || *q != ']' || q[1] != '\0')
 				return fail(p, SM_ERROR_SCHEMA, path,
-				            "\"%.80s\": a structure reference is name[i], name[row, column] or name[row, column, layer]",
-				            name);
+				            "%s: a structure reference is name[i], name[row, column] or name[row, column, layer]", text);
 			const sm_structure* r = &s->range;
 			int64_t index = -1;
 			if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
@@ -521,22 +622,22 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
 			if (index < 0 && s->type == STRUCTURE_SHEET)
 				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-				            "\"%.80s\" is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])", name,
+				            "%s is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])", text,
 				            s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
 			if (index < 0 && s->type == STRUCTURE_BLOCK)
 				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-				            "\"%.80s\" is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] "
+				            "%s is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] "
 				            "to [%d])",
-				            name, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1,
+				            text, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1,
 				            (int)r->particle_count - 1);
 			if (index < 0)
-				return fail(p, SM_ERROR_PARTICLE_INDEX, path, "\"%.80s\" is outside structure %s ([0] to [%d])", name,
+				return fail(p, SM_ERROR_PARTICLE_INDEX, path, "%s is outside structure %s ([0] to [%d])", text,
 				            s->name, (int)r->particle_count - 1);
 			*out = (int32_t)index;
 			return true;
 		}
 	}
-	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named \"%.80s\"", name);
+	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named %s", text);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -881,13 +982,14 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	if (!check_name(p, json_object_get(obj, "name"), sub, true, &s.name))
 		return false;
 	const size_t name_bytes = strlen(s.name);
+	char text[QUOTED_CAPACITY];
 	if (name_bytes > MAX_STRUCTURE_NAME_BYTES)
 		return fail(p, SM_ERROR_SCHEMA, sub,
-		            "structure name \"%.40s\"... has %zu bytes; a structure's name may have at most %d, so that "
-		            "its particles' names (name[row,column,layer]) fit in %d",
-		            s.name, name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
-	if (find_structure(p->ex, s.name, strlen(s.name)) != NULL)
-		return fail(p, SM_ERROR_SCHEMA, sub, "structure name \"%s\" is already used", s.name);
+		            "structure name %s has %zu bytes; a structure's name may have at most %d, so that its "
+		            "particles' names (name[row,column,layer]) fit in %d",
+		            quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
+	if (find_structure(p->ex, s.name, name_bytes) != NULL)
+		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", quoted(text, s.name));
 
 	sm_model* model = p->ex->model;
 	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
@@ -1131,8 +1233,9 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		if (!check_name(p, json_object_get(obj, "name"), sub, true, &port.name))
 			return false;
 		const int32_t same_name = name_index_find(&p->ex->port_names, port.name, strlen(port.name));
+		char text[QUOTED_CAPACITY];
 		if (same_name >= 0)
-			return fail(p, SM_ERROR_SCHEMA, sub, "port name \"%s\" is already used by ports[%d]", port.name,
+			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", quoted(text, port.name),
 			            (int)same_name);
 		child_key(sub, path, "particle");
 		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
@@ -1387,8 +1490,12 @@ static bool read_header(sm_document* doc, sm_error* err)
 	json_t* value;
 	json_object_foreach((json_t*)parameters, key, value)
 	{
-		char path[PATH_CAPACITY];
-		child_key(path, "parameters", key);
+		// The key is escaped in the path as in the messages about it, and cut at a character
+		// before the 50 bytes child_key keeps of it.
+		char path[PATH_CAPACITY], escaped[50];
+		if (!escape_text(escaped, sizeof escaped - 4, key))
+			strcat(escaped, "...");
+		child_key(path, "parameters", escaped);
 		if (!check_name_text(&p, key, strlen(key), path, true))
 			return false;
 		if (!json_is_number(value))

@@ -749,9 +749,12 @@ static int test_longest_structure_names_round_trip(void)
 	block[176] = '\0';
 	snprintf(text, sizeof text, format, rope, block, rope);
 	ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SCHEMA);
-	ENSURE(strcmp(err.message, "test.json: structures[1].name: structure name \"bbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbbb\"... "
-	                           "has 176 bytes; a structure's name may have at most 175, so that its particles' names "
-	                           "(name[row,column,layer]) fit in 200") == 0);
+	char expected[400];
+	snprintf(expected, sizeof expected,
+	         "test.json: structures[1].name: structure name \"%.80s\"... has 176 bytes; a structure's name may have at "
+	         "most 175, so that its particles' names (name[row,column,layer]) fit in 200",
+	         block);
+	ENSURE(strcmp(err.message, expected) == 0);
 	return 0;
 }
 
@@ -842,6 +845,58 @@ static int test_large_model_loads(void)
 	ENSURE(sm_document_port_index(doc, "q") == -1 && sm_document_particle_index(doc, "r0[2]") == -1);
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
+	return 0;
+}
+
+// Names and keys from the file appear in messages quoted as a JSON string holds them: control
+// characters, line separators and the invisible characters that reorder text escaped (\u001b),
+// so that a message cannot drive the terminal it is shown on, and cut after 80 bytes at a
+// character boundary with "..." after the quote, so that it stays valid UTF-8.
+static int test_messages_quote_text(void)
+{
+	static const struct {
+		const char* text;
+		const char* message;
+	} cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\\u001b[31mred\", \"position\": [0, 0, 0]}]}",
+	     "test.json: particles[0].name: name \"\\u001b[31mred\" contains a control character"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}",
+	     "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
+	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}",
+	     "test.json: parameters.k\\u001b: name \"k\\u001b\" contains a control character"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
+	     "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,\\n]\"]}",
+	     "test.json: fixed[0]: \"r[1,\\u000a]\": a structure reference is name[i], name[row, column] or name[row, "
+	     "column, layer]"},
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(cases[c].text, &err);
+		if (doc != NULL || strcmp(err.message, cases[c].message) != 0) {
+			printf("  case %zu: \"%s\"\n  expected \"%s\"\n", c, err.message, cases[c].message);
+			sm_document_destroy(doc);
+			failures++;
+		}
+	}
+	ENSURE(failures == 0);
+	// "€" is 3 bytes: 26 of them fit in 80 bytes, and the 27th is not cut.
+	char text[512] = "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\"";
+	char expected[256] = "test.json: fixed[0]: no particle named \"";
+	for (int k = 0; k < 30; k++)
+		strcat(text, "\xe2\x82\xac");
+	for (int k = 0; k < 26; k++)
+		strcat(expected, "\xe2\x82\xac");
+	strcat(text, "\"]}");
+	strcat(expected, "\"...");
+	sm_error err = {SM_OK, ""};
+	ENSURE(parse(text, &err) == NULL);
+	if (strcmp(err.message, expected) != 0)
+		printf("  \"%s\"\n  expected \"%s\"\n", err.message, expected);
+	ENSURE(strcmp(err.message, expected) == 0);
 	return 0;
 }
 
@@ -944,6 +999,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_initial_state_and_save_to_file);
 	RUN_TEST(test_references);
 	RUN_TEST(test_broken_files);
+	RUN_TEST(test_messages_quote_text);
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_whole_real_index);
