@@ -232,19 +232,28 @@ static parameter_role difference(const sm_document* doc, const sm_model* a, cons
 // Sets the parameter to each probe value in a scratch document and compares the models with the
 // reference (doc's, built as `reference`). A value the model refuses says nothing of what the
 // parameter feeds (a mass cannot be negative, a count must be whole) and is skipped; a parameter
-// that takes none of them is fixed. The probes: one step up and one down (a count changes with
-// either), and a step of a quarter of the value besides. Sets *role; SM_ERROR_OUT_OF_MEMORY when
-// an allocation failed on the way, so that the answer is unknown (and the scratch document may
-// keep a probe value).
+// that takes none of them is fixed. Positions, velocities and settings change with any value; the
+// probes are there for what changes only at some values: a count changes with one step up or
+// down; a bound of a box or region of held particles only where it crosses a particle, which the
+// values far apart look for (v/2, 2v, 0, -v and 1000 times the scale up and down move a bound
+// across the particles on either side of it, and past all of them). A bound that crosses no
+// particle at any probe is declared tunable and refused when a value does move a particle in or
+// out (the simulation cannot take a particle that changes its motion). Sets *role;
+// SM_ERROR_OUT_OF_MEMORY when an allocation failed on the way, so that the answer is unknown (and
+// the scratch document may keep a probe value).
 static sm_status parameter_role_of(const sm_document* doc, const sm_model* reference, sm_document* scratch,
                                    int32_t parameter, parameter_role* role)
 {
 	const double value = sm_document_parameter_value(scratch, parameter);
-	const double probes[] = {value + 1.0 + 0.25 * fabs(value), value + 1.0, value - 1.0};
+	const double scale = 1.0 + fabs(value);
+	const double probes[] = {value + 1.0 + 0.25 * fabs(value), value + 1.0, value - 1.0, 0.5 * value, 2.0 * value,
+	                         0.0, -value, value + 1e3 * scale, value - 1e3 * scale};
 	bool valid = false;
 	*role = ROLE_CONSTANTS;
 	sm_status st = SM_OK;
 	for (size_t k = 0; k < sizeof probes / sizeof probes[0] && *role != ROLE_STRUCTURE; ++k) {
+		if (probes[k] == value)
+			continue;
 		st = sm_document_set_parameter(scratch, parameter, probes[k], NULL);
 		if (st == SM_ERROR_OUT_OF_MEMORY)
 			return st;
