@@ -150,6 +150,44 @@ static bool is_control(int32_t c)
 	return c < 0x20 || (c >= 0x7f && c < 0xa0);
 }
 
+// Line breaks (the mandatory breaks of Unicode's line breaking algorithm, UAX #14: LF, VT, FF,
+// CR, NEL, LINE SEPARATOR, PARAGRAPH SEPARATOR).
+static bool is_line_break(int32_t c)
+{
+	return (c >= '\n' && c <= '\r') || c == 0x85 || c == 0x2028 || c == 0x2029;
+}
+
+// What a name may not hold: control characters and line breaks.
+static bool refused_in_name(int32_t c)
+{
+	return is_control(c) || is_line_break(c);
+}
+
+// What a description (one line of text) may not hold: line breaks and control characters but
+// the tab.
+static bool refused_in_description(int32_t c)
+{
+	return (is_control(c) && c != '\t') || is_line_break(c);
+}
+
+// The first character of s that `refused` refuses, or -1 if there is none; *position gets its
+// position in s, counted in characters from 1.
+static int32_t find_refused(const char* s, bool (*refused)(int32_t), int64_t* position)
+{
+	const unsigned char* u = (const unsigned char*)s;
+	const size_t n = strlen(s);
+	*position = 0;
+	for (size_t at = 0; at < n;) {
+		size_t bytes;
+		const int32_t c = decode_utf8(u + at, n - at, &bytes);
+		++*position;
+		if (c >= 0 && refused(c))
+			return c;
+		at += bytes;
+	}
+	return -1;
+}
+
 // Characters a message shows escaped, since a terminal would act on them or show nothing:
 // control characters, the line and paragraph separators U+2028 and U+2029, the zero-width
 // characters U+200B - U+200D and U+FEFF, and the bidirectional controls (U+061C, U+200E,
@@ -389,21 +427,25 @@ static bool read_bool(parser* p, const json_t* obj, const char* path, const char
 	return true;
 }
 
-// A name: a non-empty string of printable characters, at most MAX_NAME_BYTES long;
-// `identifier` also asks for a C identifier (letters, digits, '_', not starting with a digit).
+// A name: a non-empty string without control characters or line breaks, at most
+// MAX_NAME_BYTES long; `identifier` also asks for a C identifier (letters, digits, '_', not
+// starting with a digit).
 static bool check_name_text(parser* p, const char* s, size_t n, const char* path, bool identifier)
 {
 	if (n == 0 || n > MAX_NAME_BYTES)
 		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d characters (this one has %zu)", MAX_NAME_BYTES,
 		            n);
-	for (size_t i = 0; i < n; i++) {
-		const unsigned char c = (unsigned char)s[i];
-		const bool letter = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
-		const bool digit = c >= '0' && c <= '9';
-		char text[QUOTED_CAPACITY];
-		if (c < 0x20 || c == 0x7f)
-			return fail(p, SM_ERROR_SCHEMA, path, "name %s contains a control character", quoted(text, s));
-		if (identifier && !(letter || (digit && i > 0)))
+	char text[QUOTED_CAPACITY];
+	int64_t position;
+	const int32_t c = find_refused(s, refused_in_name, &position);
+	if (c >= 0)
+		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", quoted(text, s),
+		            is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
+	for (size_t i = 0; i < n && identifier; i++) {
+		const unsigned char b = (unsigned char)s[i];
+		const bool letter = (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || b == '_';
+		const bool digit = b >= '0' && b <= '9';
+		if (!(letter || (digit && i > 0)))
 			return fail(p, SM_ERROR_SCHEMA, path,
 			            "name %s must be an identifier (letters, digits and '_', not starting with a digit)",
 			            quoted(text, s));
@@ -1473,8 +1515,15 @@ static bool read_header(sm_document* doc, sm_error* err)
 		if (!json_is_string(description))
 			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s", type_name(description));
 		doc->description = json_string_value(description);
-		if (strpbrk(doc->description, "\r\n") != NULL)
-			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line");
+		int64_t position;
+		const int32_t c = find_refused(doc->description, refused_in_description, &position);
+		if (c >= 0 && is_line_break(c))
+			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line: it has a line break, U+%04X, at character %lld",
+			            (unsigned)c, (long long)position);
+		if (c >= 0)
+			return fail(&p, SM_ERROR_SCHEMA, "description",
+			            "has a control character, U+%04X, at character %lld (a tab is the only one allowed)", (unsigned)c,
+			            (long long)position);
 	}
 	const json_t* parameters = json_object_get(root, "parameters");
 	if (parameters == NULL)

@@ -64,9 +64,9 @@ static void put_number(text* t, double x)
 	puts_(t, buffer);
 }
 
-// A JSON string. Names and descriptions hold no control characters (the loader refuses them
-// in names; a description may hold tabs), so only quotes, backslashes and control characters
-// need escaping; UTF-8 passes through.
+// A JSON string. Names and descriptions hold no control characters but a description's tabs
+// (the loader refuses the others), so only quotes, backslashes and control characters need
+// escaping; UTF-8 passes through.
 static void put_string(text* t, const char* s)
 {
 	puts_(t, "\"");

@@ -509,7 +509,7 @@ static int test_broken_files(void)
 	     "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
 	     "digit)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"two\\nlines\"}", SM_ERROR_SCHEMA,
-	     "test.json: description: must be one line"},
+	     "test.json: description: must be one line: it has a line break, U+000A, at character 4"},
 	    {"{\"springmass\": 1, \"name\": \"x\"}", SM_ERROR_SCHEMA,
 	     "test.json: the model has no particles (give \"particles\" or \"structures\")"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0]}]}", SM_ERROR_SCHEMA,
@@ -859,12 +859,12 @@ static int test_messages_quote_text(void)
 		const char* message;
 	} cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\\u001b[31mred\", \"position\": [0, 0, 0]}]}",
-	     "test.json: particles[0].name: name \"\\u001b[31mred\" contains a control character"},
+	     "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}",
 	     "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
 	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}",
-	     "test.json: parameters.k\\u001b: name \"k\\u001b\" contains a control character"},
+	     "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
 	     "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
@@ -898,6 +898,46 @@ static int test_messages_quote_text(void)
 		printf("  \"%s\"\n  expected \"%s\"\n", err.message, expected);
 	ENSURE(strcmp(err.message, expected) == 0);
 	return 0;
+}
+
+// Names hold no control characters (C0, DEL and C1) and no line breaks, and a description is
+// one line (no LF, VT, FF, CR, NEL, U+2028 or U+2029) without control characters but tabs; the
+// message names the character and its position in characters. Other characters are welcome.
+static int test_names_and_descriptions_refuse_controls_and_line_breaks(void)
+{
+	static const struct {
+		const char* name;
+		const char* description;
+		const char* message;  // NULL: loads
+	} cases[] = {
+	    {"\\u009b31mred", "", "particles[0].name: name \"\\u009b31mred\" has a control character, U+009B, at character 1"},
+	    {"\xc3\xa9\\u007f", "", "particles[0].name: name \"\xc3\xa9\\u007f\" has a control character, U+007F, at character 2"},
+	    {"a\\u2028b", "", "particles[0].name: name \"a\\u2028b\" has a line break, U+2028, at character 2"},
+	    {"a", "a\\u0085b", "description: must be one line: it has a line break, U+0085, at character 2"},
+	    {"a", "\xe2\x82\xac\xe2\x82\xac\\u2029", "description: must be one line: it has a line break, U+2029, at character 3"},
+	    {"a", "x\\u000by", "description: must be one line: it has a line break, U+000B, at character 2"},
+	    {"a", "bold \\u001b[1m", "description: has a control character, U+001B, at character 6 (a tab is the only one "
+	                            "allowed)"},
+	    {"caf\xc3\xa9 \xe2\x82\xac", "a\\tb \xe2\x80\x94 c", NULL},
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		char text[300], expected[300];
+		snprintf(text, sizeof text,
+		         "{\"springmass\": 1, \"name\": \"x\", \"description\": \"%s\", \"particles\": [{\"name\": \"%s\","
+		         " \"position\": [0, 0, 0]}]}",
+		         cases[c].description, cases[c].name);
+		snprintf(expected, sizeof expected, "test.json: %s", cases[c].message != NULL ? cases[c].message : "");
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(text, &err);
+		const bool right = cases[c].message != NULL ? doc == NULL && strcmp(err.message, expected) == 0 : doc != NULL;
+		if (!right) {
+			printf("  case %zu: \"%s\"\n  expected \"%s\"\n", c, doc != NULL ? "(loaded)" : err.message, expected);
+			failures++;
+		}
+		sm_document_destroy(doc);
+	}
+	return failures > 0;
 }
 
 // A particle index written as a whole real number (3.0, as a count may be written) is that index.
@@ -1000,6 +1040,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_references);
 	RUN_TEST(test_broken_files);
 	RUN_TEST(test_messages_quote_text);
+	RUN_TEST(test_names_and_descriptions_refuse_controls_and_line_breaks);
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_whole_real_index);
