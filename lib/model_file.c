@@ -31,11 +31,19 @@
 #define MAX_STRUCTURE_NAME_BYTES (MAX_NAME_BYTES - 25)
 _Static_assert(SM_DOCUMENT_MAX_ELEMENTS <= 10000000, "the indices of a structure's particles have at most 7 digits");
 
+// The parameters the values of one element (a structure, a spring) came from, for messages of
+// the builders, which see the values but not where they came from: the first few, and whether
+// there were more.
+#define NOTED_PARAMETERS 4
+
 typedef struct parser {
 	const sm_document* doc;
 	const double* parameter_values;
 	sm_error* err;
 	expansion* ex;
+	int32_t noted[NOTED_PARAMETERS];
+	int noted_count;
+	bool noted_more;
 } parser;
 
 // Records the first failure: "<source>: <path>: <message>".
@@ -304,6 +312,13 @@ static bool read_number(parser* p, const json_t* value, const char* path, double
 		*out = p->parameter_values[k];
 		if (source != NULL)
 			*source = k;
+		bool known = false;
+		for (int n = 0; n < p->noted_count && !known; n++)
+			known = p->noted[n] == k;
+		if (!known && p->noted_count < NOTED_PARAMETERS)
+			p->noted[p->noted_count++] = k;
+		else if (!known)
+			p->noted_more = true;
 		return true;
 	}
 	return fail(p, SM_ERROR_SCHEMA, path, "must be a number or a parameter name, not %s", type_name(value));
@@ -319,8 +334,60 @@ static const char* describe(parser* p, char* buffer, size_t size, double value, 
 	return buffer;
 }
 
+// Describes a vector so: "(parameter w = 0, 0, 0)".
+static const char* describe_vector(parser* p, char* buffer, size_t size, const double v[3], const int32_t sources[3])
+{
+	char text[3][128];
+	for (int c = 0; c < 3; c++)
+		describe(p, text[c], sizeof text[c], v[c], sources[c]);
+	snprintf(buffer, size, "(%s, %s, %s)", text[0], text[1], text[2]);
+	return buffer;
+}
+
+// Forgets the parameters noted so far (before reading an element).
+static void forget_parameters(parser* p)
+{
+	p->noted_count = 0;
+	p->noted_more = false;
+}
+
+// A builder's message on the element just read, naming the parameters its values came from:
+// "<message> (with parameter a = 0.5 and parameter b = 2)".
+static bool fail_naming_parameters(parser* p, sm_status status, const char* path, const char* message)
+{
+	char with[SM_ERROR_MESSAGE_CAPACITY] = "";
+	size_t used = 0;
+	for (int n = 0; n < p->noted_count; n++) {
+		char text[300];
+		const char* joint = n == 0 ? " (with " : n + 1 == p->noted_count && !p->noted_more ? " and " : ", ";
+		const int written = snprintf(with + used, sizeof with - used, "%s%s", joint,
+		                             describe(p, text, sizeof text, p->parameter_values[p->noted[n]], p->noted[n]));
+		if (written < 0 || (size_t)written >= sizeof with - used)
+			break;
+		used += (size_t)written;
+	}
+	if (p->noted_count > 0)
+		snprintf(with + used, sizeof with - used, "%s)", p->noted_more ? " and others" : "");
+	return fail(p, status, path, "%s%s", message, with);
+}
+
 // FRACTION: > 0 and < 1 (a relative tolerance).
 typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION } number_rule;
+
+// v (from parameter `source`, or -1) must be finite and obey `rule`.
+static bool check_rule(parser* p, const char* path, double v, int32_t source, number_rule rule)
+{
+	char text[300];
+	if (!isfinite(v))
+		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite", describe(p, text, sizeof text, v, source));
+	if (rule == NON_NEGATIVE && v < 0.0)
+		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
+	if ((rule == POSITIVE || rule == FRACTION) && !(v > 0.0))
+		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
+	if (rule == FRACTION && !(v < 1.0))
+		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
+	return true;
+}
 
 // Optional number at obj[key] (keeps *out when absent) that must obey `rule`.
 static bool read_field(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule, double* out,
@@ -336,17 +403,8 @@ static bool read_field(parser* p, const json_t* obj, const char* path, const cha
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
 	double v = 0.0;
-	if (!read_number(p, value, sub, &v, source))
+	if (!read_number(p, value, sub, &v, source) || !check_rule(p, sub, v, *source, rule))
 		return false;
-	char text[128];
-	if (!isfinite(v))
-		return fail(p, SM_ERROR_NOT_FINITE, sub, "%s is not finite", describe(p, text, sizeof text, v, *source));
-	if (rule == NON_NEGATIVE && v < 0.0)
-		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be >= 0", describe(p, text, sizeof text, v, *source));
-	if ((rule == POSITIVE || rule == FRACTION) && !(v > 0.0))
-		return fail(p, SM_ERROR_NEGATIVE, sub, "%s must be > 0", describe(p, text, sizeof text, v, *source));
-	if (rule == FRACTION && !(v < 1.0))
-		return fail(p, SM_ERROR_SCHEMA, sub, "%s must be < 1", describe(p, text, sizeof text, v, *source));
 	*out = v;
 	return true;
 }
@@ -383,9 +441,10 @@ static bool read_count_field(parser* p, const json_t* obj, const char* path, con
 	return read_count(p, json_object_get(obj, key), sub, lo, hi, out);
 }
 
-// Optional 3-vector at obj[key] (keeps out when absent); sources may be NULL.
-static bool read_vector(parser* p, const json_t* obj, const char* path, const char* key, double out[3],
-                        int32_t sources[3])
+// Optional 3-vector at obj[key] (keeps out when absent) whose components obey `rule`; sources
+// may be NULL.
+static bool read_vector(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule,
+                        double out[3], int32_t sources[3])
 {
 	if (sources != NULL)
 		sources[0] = sources[1] = sources[2] = -1;
@@ -402,11 +461,9 @@ static bool read_vector(parser* p, const json_t* obj, const char* path, const ch
 		child_index(element, sub, c);
 		int32_t source;
 		double v = 0.0;
-		if (!read_number(p, json_array_get(value, c), element, &v, &source))
+		if (!read_number(p, json_array_get(value, c), element, &v, &source) ||
+		    !check_rule(p, element, v, source, rule))
 			return false;
-		char text[128];
-		if (!isfinite(v))
-			return fail(p, SM_ERROR_NOT_FINITE, element, "%s is not finite", describe(p, text, sizeof text, v, source));
 		out[c] = v;
 		if (sources != NULL)
 			sources[c] = source;
@@ -708,8 +765,9 @@ static bool read_particles(parser* p, const json_t* list)
 		sm_particle_def def = sm_default_particle_def();
 		particle_source src;
 		bool fixed = false;
-		if (!require(p, obj, path, "position") || !read_vector(p, obj, path, "position", def.position, src.position) ||
-		    !read_vector(p, obj, path, "velocity", def.velocity, src.velocity) ||
+		if (!require(p, obj, path, "position") ||
+		    !read_vector(p, obj, path, "position", ANY_FINITE, def.position, src.position) ||
+		    !read_vector(p, obj, path, "velocity", ANY_FINITE, def.velocity, src.velocity) ||
 		    !read_field(p, obj, path, "mass", POSITIVE, &def.mass, &src.mass) ||
 		    !read_bool(p, obj, path, "fixed", &fixed))
 			return false;
@@ -786,6 +844,7 @@ static bool read_springs(parser* p, const json_t* list)
 		    !require(p, obj, path, "b"))
 			return false;
 		sm_spring_def def = sm_default_spring_def();
+		forget_parameters(p);
 		child_key(sub, path, "a");
 		if (!resolve_particle(p, json_object_get(obj, "a"), sub, &def.a))
 			return false;
@@ -831,7 +890,7 @@ static bool read_springs(parser* p, const json_t* list)
 			// The model numbers springs from structures first; the path already names this one.
 			const char* message = sm_model_last_error(model);
 			const char* rule = strncmp(message, "spring ", 7) == 0 ? strstr(message, ": ") : NULL;
-			return fail(p, st, path, "%s", rule != NULL ? rule + 2 : message);
+			return fail_naming_parameters(p, st, path, rule != NULL ? rule + 2 : message);
 		}
 		p->ex->spring_sources[index] = src;
 	}
@@ -910,10 +969,9 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 			child_index(coordinate, element, c);
 			double x = 0.0;
 			int32_t source;
-			if (!read_number(p, json_array_get(vector, c), coordinate, &x, &source))
+			if (!read_number(p, json_array_get(vector, c), coordinate, &x, &source) ||
+			    !check_rule(p, coordinate, x, source, ANY_FINITE))
 				return false;
-			if (!isfinite(x))
-				return fail(p, SM_ERROR_NOT_FINITE, coordinate, "%g is not finite", x);
 			(*vertices)[3 * v + c] = x;
 		}
 	}
@@ -1001,6 +1059,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	                                         "nw",   "mass", "edge",   "face_diagonal", "body_diagonal", NULL};
 	static const char* const mesh_keys[] = {"type", "name", "vertices", "triangles", "density", "edge", "bend", NULL};
 	char sub[PATH_CAPACITY];
+	forget_parameters(p);
 	if (!expect_object(p, obj, path) || !require(p, obj, path, "type") || !require(p, obj, path, "name"))
 		return false;
 	const json_t* type = json_object_get(obj, "type");
@@ -1043,7 +1102,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		sm_rope_def d = sm_default_rope_def();
 		int64_t segments;
 		if (!require(p, obj, path, "start") || !require(p, obj, path, "end") ||
-		    !read_vector(p, obj, path, "start", d.start, NULL) || !read_vector(p, obj, path, "end", d.end, NULL) ||
+		    !read_vector(p, obj, path, "start", ANY_FINITE, d.start, NULL) ||
+		    !read_vector(p, obj, path, "end", ANY_FINITE, d.end, NULL) ||
 		    !read_count_field(p, obj, path, "segments", 1, limit, &segments) ||
 		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
 		    !read_field(p, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length, NULL) ||
@@ -1064,9 +1124,10 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		sm_sheet_def d = sm_default_sheet_def();
 		d.structural = d.shear = d.bend = sm_default_spring_material();
 		int64_t nu, nv;
-		if (!read_vector(p, obj, path, "origin", d.origin, NULL) ||
-		    !read_vector(p, obj, path, "edge_u", d.edge_u, NULL) ||
-		    !read_vector(p, obj, path, "edge_v", d.edge_v, NULL) ||
+		int32_t edge_sources[2][3];
+		if (!read_vector(p, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
+		    !read_vector(p, obj, path, "edge_u", ANY_FINITE, d.edge_u, edge_sources[0]) ||
+		    !read_vector(p, obj, path, "edge_v", ANY_FINITE, d.edge_v, edge_sources[1]) ||
 		    !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
 		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
 		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
@@ -1074,6 +1135,17 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		    !read_material(p, obj, path, "shear", &d.shear, &groups[1]) ||
 		    !read_material(p, obj, path, "bend", &d.bend, &groups[2]))
 			return false;
+		static const char* const edge_keys[2] = {"edge_u", "edge_v"};
+		for (int e = 0; e < 2; e++) {
+			const double* edge = e == 0 ? d.edge_u : d.edge_v;
+			if (edge[0] == 0.0 && edge[1] == 0.0 && edge[2] == 0.0) {
+				char text[PATH_CAPACITY], vector[1024];
+				child_key(text, path, edge_keys[e]);
+				return fail(p, SM_ERROR_INVALID_ARGUMENT, text,
+				            "%s m is zero: the sheet spans no area and its particles would coincide",
+				            describe_vector(p, vector, sizeof vector, edge, edge_sources[e]));
+			}
+		}
 		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.shear),
 		                         structure_material_present(&d.bend)};
 		if (!check_budget(p, path, nu * nv, grid_springs(s.type, nu, nv, 1, present)))
@@ -1087,8 +1159,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		sm_block_def d = sm_default_block_def();
 		d.edge = d.face_diagonal = d.body_diagonal = sm_default_spring_material();
 		int64_t nu, nv, nw;
-		if (!require(p, obj, path, "size") || !read_vector(p, obj, path, "origin", d.origin, NULL) ||
-		    !read_vector(p, obj, path, "size", d.size, NULL) || !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
+		if (!require(p, obj, path, "size") || !read_vector(p, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
+		    !read_vector(p, obj, path, "size", POSITIVE, d.size, NULL) ||
+		    !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
 		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
 		    !read_count_field(p, obj, path, "nw", 2, limit, &nw) ||
 		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
@@ -1135,7 +1208,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	}
 	}
 	if (st != SM_OK)
-		return fail(p, st, path, "%s", sm_model_last_error(model));
+		return fail_naming_parameters(p, st, path, sm_model_last_error(model));
 
 	// Record the structure, name its particles and note the sources of its springs' constants.
 	expansion* ex = p->ex;
@@ -1199,9 +1272,10 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 		const json_t* item = json_array_get(list, k);
 		if (json_is_object(item)) {
 			double lo[3], hi[3];
+			int32_t lo_sources[3], hi_sources[3];
 			if (!check_keys(p, item, path, box_keys) || !require(p, item, path, "min") ||
-			    !require(p, item, path, "max") || !read_vector(p, item, path, "min", lo, NULL) ||
-			    !read_vector(p, item, path, "max", hi, NULL))
+			    !require(p, item, path, "max") || !read_vector(p, item, path, "min", ANY_FINITE, lo, lo_sources) ||
+			    !read_vector(p, item, path, "max", ANY_FINITE, hi, hi_sources))
 				return false;
 			// Every particle whose initial position is in the box, bounds included.
 			int32_t count = 0;
@@ -1213,10 +1287,11 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 					count++;
 				}
 			}
+			char from[1024], to[1024];
 			if (count == 0)
-				return fail(p, SM_ERROR_SCHEMA, path,
-				            "the box from (%g, %g, %g) to (%g, %g, %g) contains no particle", lo[0], lo[1], lo[2],
-				            hi[0], hi[1], hi[2]);
+				return fail(p, SM_ERROR_SCHEMA, path, "the box from %s to %s contains no particle",
+				            describe_vector(p, from, sizeof from, lo, lo_sources),
+				            describe_vector(p, to, sizeof to, hi, hi_sources));
 		} else {
 			int32_t index;
 			if (!resolve_particle(p, item, path, &index))
@@ -1440,7 +1515,7 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 // Evaluates the document's tree with the given parameter values into a new expansion.
 static expansion* expand(const sm_document* doc, const double* parameter_values, sm_error* err)
 {
-	parser p = {doc, parameter_values, err, calloc(1, sizeof(expansion))};
+	parser p = {.doc = doc, .parameter_values = parameter_values, .err = err, .ex = calloc(1, sizeof(expansion))};
 	if (p.ex == NULL) {
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
@@ -1451,7 +1526,7 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 	const json_t* root = doc->root;
 	sm_model_def def = sm_default_model_def();
 	int32_t gravity_source[3];
-	bool ok = read_vector(&p, root, "", "gravity", def.gravity, gravity_source) &&
+	bool ok = read_vector(&p, root, "", "gravity", ANY_FINITE, def.gravity, gravity_source) &&
 	          read_field(&p, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
 	if (ok) {
 		sm_error model_err;
@@ -1493,7 +1568,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 	static const char* const keys[] = {"springmass", "name",      "description", "parameters", "gravity",
 	                                   "mass_damping", "particles", "springs",     "structures", "fixed",
 	                                   "ports",        "simulation", "fmu",        NULL};
-	parser p = {doc, NULL, err, NULL};
+	parser p = {.doc = doc, .err = err};
 	const json_t* root = doc->root;
 	if (!json_is_object(root))
 		return fail(&p, SM_ERROR_SCHEMA, "", "a model file is a JSON object, not %s", type_name(root));

@@ -486,14 +486,34 @@ static int test_references(void)
 	return 0;
 }
 
+// A text that must be refused with exactly this status and message.
+typedef struct refusal {
+	const char* text;
+	sm_status status;
+	const char* message;
+} refusal;
+
+// Parses each text; prints those not refused as they must be, and returns how many.
+static int count_wrong_refusals(const refusal* cases, size_t count)
+{
+	int failures = 0;
+	for (size_t c = 0; c < count; c++) {
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(cases[c].text, &err);
+		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, cases[c].message) != 0) {
+			printf("  case %zu: status %d, message\n    \"%s\"\n  expected %d,\n    \"%s\"\n", c, (int)err.status,
+			       err.message, (int)cases[c].status, cases[c].message);
+			sm_document_destroy(doc);
+			failures++;
+		}
+	}
+	return failures;
+}
+
 // Broken files, each with the exact error: status and message.
 static int test_broken_files(void)
 {
-	static const struct {
-		const char* text;
-		sm_status status;
-		const char* message;
-	} cases[] = {
+	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [}", SM_ERROR_SYNTAX,
 	     "test.json:2:16: unexpected token near '}'"},
 	    {"{\"springmass\": 1, \"springmass\": 1}", SM_ERROR_SYNTAX, "test.json:1:30: duplicate object key near '\"springmass\"'"},
@@ -615,7 +635,8 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"position\":"
 	     " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
 	     " \"big\"}]}",
-	     SM_ERROR_NOT_FINITE, "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite"},
+	     SM_ERROR_NOT_FINITE,
+	     "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite (with parameter big = 1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
 	     "test.json:1:56: real number overflow near '1e400'"},
 	    {"\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
@@ -666,18 +687,7 @@ static int test_broken_files(void)
 	     " \"fmu\": {\"particle_variables\": 0}}",
 	     SM_ERROR_SCHEMA, "test.json: fmu.particle_variables: must be true or false, not a number"},
 	};
-	int failures = 0;
-	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-		sm_error err = {SM_OK, ""};
-		sm_document* doc = parse(cases[c].text, &err);
-		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, cases[c].message) != 0) {
-			printf("  case %zu: status %d, message\n    \"%s\"\n  expected %d,\n    \"%s\"\n", c, (int)err.status,
-			       err.message, (int)cases[c].status, cases[c].message);
-			sm_document_destroy(doc);
-			failures++;
-		}
-	}
-	return failures > 0;
+	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
 
 // A growing text for generated model files.
@@ -854,35 +864,22 @@ static int test_large_model_loads(void)
 // character boundary with "..." after the quote, so that it stays valid UTF-8.
 static int test_messages_quote_text(void)
 {
-	static const struct {
-		const char* text;
-		const char* message;
-	} cases[] = {
+	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\\u001b[31mred\", \"position\": [0, 0, 0]}]}",
-	     "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
+	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}",
-	     "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
+	     SM_ERROR_SCHEMA, "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
 	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}",
-	     "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
+	     SM_ERROR_SCHEMA, "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
-	     "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
+	     SM_ERROR_NOT_FOUND, "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
 	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,\\n]\"]}",
-	     "test.json: fixed[0]: \"r[1,\\u000a]\": a structure reference is name[i], name[row, column] or name[row, "
+	     SM_ERROR_SCHEMA, "test.json: fixed[0]: \"r[1,\\u000a]\": a structure reference is name[i], name[row, column] or name[row, "
 	     "column, layer]"},
 	};
-	int failures = 0;
-	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-		sm_error err = {SM_OK, ""};
-		sm_document* doc = parse(cases[c].text, &err);
-		if (doc != NULL || strcmp(err.message, cases[c].message) != 0) {
-			printf("  case %zu: \"%s\"\n  expected \"%s\"\n", c, err.message, cases[c].message);
-			sm_document_destroy(doc);
-			failures++;
-		}
-	}
-	ENSURE(failures == 0);
+	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	// "€" is 3 bytes: 26 of them fit in 80 bytes, and the 27th is not cut.
 	char text[512] = "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\"";
 	char expected[256] = "test.json: fixed[0]: no particle named \"";
@@ -938,6 +935,68 @@ static int test_names_and_descriptions_refuse_controls_and_line_breaks(void)
 		sm_document_destroy(doc);
 	}
 	return failures > 0;
+}
+
+// A value from a parameter names the parameter: a rule on one value at the value's own path
+// (a block's size[1], a sheet's edge_u), a rule on several (parallel edges, a rope's ends too far
+// apart, a triangle of zero area, a stiffness E / l0 that overflows, an empty box) with the
+// parameters the element's values came from, the first four of them.
+static int test_messages_name_parameters(void)
+{
+	static const refusal cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"s\": 0}, \"structures\": [{\"type\": \"block\","
+	     " \"name\": \"j\", \"size\": [1, \"s\", 1], \"nu\": 2, \"nv\": 2, \"nw\": 2}]}",
+	     SM_ERROR_NEGATIVE, "test.json: structures[0].size[1]: parameter s = 0 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"w\": 0}, \"structures\": [{\"type\": \"sheet\","
+	     " \"name\": \"c\", \"edge_u\": [\"w\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+	     SM_ERROR_INVALID_ARGUMENT,
+	     "test.json: structures[0].edge_u: (parameter w = 0, 0, 0) m is zero: the sheet spans no area and its particles would "
+	     "coincide"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 0.5}, \"structures\": [{\"type\": \"sheet\","
+	     " \"name\": \"c\", \"edge_v\": [\"h\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+	     SM_ERROR_INVALID_ARGUMENT,
+	     "test.json: structures[0]: sheet: edge_u = (1, 0, 0) m and edge_v = (0.5, 0, 0) m are parallel (|edge_u x edge_v| <= "
+	     "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter h = 0.5)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a\": 1, \"b\": 2, \"c\": 3, \"d\": 4, \"e\": 5},"
+	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"origin\": [\"a\", \"b\", \"c\"], \"edge_u\": [\"d\","
+	     " 0, 0], \"edge_v\": [\"e\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+	     SM_ERROR_INVALID_ARGUMENT,
+	     "test.json: structures[0]: sheet: edge_u = (4, 0, 0) m and edge_v = (5, 0, 0) m are parallel (|edge_u x edge_v| <= "
+	     "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter a = 1, "
+	     "parameter b = 2, parameter c = 3, parameter d = 4 and others)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"far\": 1e308, \"near\": -1e308}, \"structures\":"
+	     " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"far\", 0, 0], \"end\": [\"near\", 0, 0], \"segments\": 2}]}",
+	     SM_ERROR_NOT_FINITE,
+	     "test.json: structures[0]: rope: end - start = (-inf, 0, 0) m is not finite (start and end too far apart) (with "
+	     "parameter far = 1e+308 and parameter near = -1e+308)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
+	     " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
+	     SM_ERROR_INVALID_ARGUMENT, "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (with parameter x = 2)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
+	     " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
+	     " {\"strain_stiffness\": \"big\"}}]}",
+	     SM_ERROR_NOT_FINITE,
+	     "test.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: stiffness E / l0 = 1e+308 / "
+	     "1e-10 is not finite (with parameter big = 1e+308)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a\": 5}, \"particles\": [{\"position\": [0, 0, 0]}],"
+	     " \"fixed\": [{\"min\": [\"a\", 5, 5], \"max\": [6, 6, 6]}]}",
+	     SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (parameter a = 5, 5, 5) to (6, 6, 6) contains no particle"},
+	};
+	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
+
+	// Changing the parameter gives the same message, which names it once.
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 1}, \"structures\": [{\"type\":"
+	                         " \"sheet\", \"name\": \"c\", \"edge_v\": [0, \"h\", 0], \"nu\": 2, \"nv\": 2}]}",
+	                         &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 0.0, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(err.message, "test.json: structures[0].edge_v: (0, parameter h = 0, 0) m is zero: the sheet spans no "
+	                           "area and its particles would coincide") == 0);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 1e-300, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, -1e308, &err), SM_OK);
+	sm_document_destroy(doc);
+	return 0;
 }
 
 // A particle index written as a whole real number (3.0, as a count may be written) is that index.
@@ -1040,6 +1099,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_references);
 	RUN_TEST(test_broken_files);
 	RUN_TEST(test_messages_quote_text);
+	RUN_TEST(test_messages_name_parameters);
 	RUN_TEST(test_names_and_descriptions_refuse_controls_and_line_breaks);
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
