@@ -6,17 +6,22 @@
 // checked where it is read, so a message can name its path in the document
 // (`springs[3].b: no particle named "bobb"`), the value and the rule. Unknown keys are errors.
 // Every failure frees what was made so far; nothing is left half-built.
+#define _POSIX_C_SOURCE 200809L  // open, fstat, read
+
 #include "model_file_internal.h"
 
 #include "model_internal.h"
 #include "structures_internal.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 // Largest model file read from disk [bytes].
 #define MAX_FILE_BYTES ((long)1 << 30)
@@ -1661,8 +1666,27 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		text += 3;
 		length -= 3;
 	}
+	// A NUL byte ends the text for the JSON parser, which then reports what it misses at the
+	// end; say where the NUL is instead, in lines and characters as the parser counts them
+	// (columns count the bytes that begin a UTF-8 character).
+	const char* nul = memchr(text, '\0', length);
+	if (nul != NULL) {
+		int line = 1, column = 1;
+		for (const char* c = text; c < nul; c++) {
+			if (*c == '\n') {
+				line++;
+				column = 1;
+			} else if (((unsigned char)*c & 0xc0) != 0x80) {
+				column++;
+			}
+		}
+		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: a NUL byte (a model file is UTF-8 text without NUL bytes)",
+		             source_name, line, column);
+		sm_document_destroy(doc);
+		return NULL;
+	}
 	size_t blank = 0;
-	while (blank < length && strchr(" \t\r\n", text[blank]) != NULL && text[blank] != '\0')
+	while (blank < length && strchr(" \t\r\n", text[blank]) != NULL)
 		blank++;
 	if (blank == length) {
 		sm_error_set(err, SM_ERROR_SYNTAX, "%s: the model file is empty (a model file is one JSON object)",
@@ -1694,50 +1718,89 @@ sm_document* sm_document_parse(const char* text, size_t length, const char* sour
 	return sm_document_parse_limited(text, length, source_name, SM_DOCUMENT_MAX_ELEMENTS, err);
 }
 
+// read(), again when a signal interrupts it.
+static ssize_t read_some(int fd, char* buffer, size_t size)
+{
+	ssize_t got;
+	do
+		got = read(fd, buffer, size);
+	while (got < 0 && errno == EINTR);
+	return got;
+}
+
+// Reads the whole of the open regular file fd into *text (NUL-terminated, *length bytes). Its
+// size from fstat is only a first guess: a file in /proc says 0 and has text, and a file may
+// grow while it is read. Once the buffer is full, one byte more is asked for: none is the end,
+// one means growing the buffer, unless the text would pass MAX_FILE_BYTES.
+static sm_status read_all(int fd, off_t size, const char* path, char** text, size_t* length, sm_error* err)
+{
+	size_t capacity = (size_t)size + 1, used = 0;
+	char* data = malloc(capacity);
+	while (data != NULL) {
+		const bool full = used + 1 == capacity;
+		const ssize_t got = read_some(fd, data + used, full ? 1 : capacity - 1 - used);
+		if (got < 0) {
+			const int error = errno;
+			free(data);
+			return sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(error));
+		}
+		if (got == 0)
+			break;
+		used += (size_t)got;
+		if (!full)
+			continue;
+		// The byte read took the NUL's place: grow, unless the text is now too long.
+		if (used > (size_t)MAX_FILE_BYTES) {
+			free(data);
+			return sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", path, MAX_FILE_BYTES);
+		}
+		capacity = 2 * capacity > 4096 ? 2 * capacity : 4096;
+		if (capacity > (size_t)MAX_FILE_BYTES + 1)
+			capacity = (size_t)MAX_FILE_BYTES + 1;
+		char* grown = realloc(data, capacity);
+		if (grown == NULL)
+			free(data);
+		data = grown;
+	}
+	if (data == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for %zu bytes", path, capacity);
+	data[used] = '\0';
+	*text = data;
+	*length = used;
+	return SM_OK;
+}
+
+// Only a regular file is read. It is opened without waiting (O_NONBLOCK), so that a FIFO
+// without a writer is refused at once rather than blocking the open for ever, and its type is
+// checked before the first read: a device such as /dev/zero would be read without end.
 sm_document* sm_document_load(const char* path, sm_error* err)
 {
 	if (path == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "no model file given");
 		return NULL;
 	}
-	FILE* f = fopen(path, "rb");
-	if (f == NULL) {
+	const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	if (fd < 0) {
 		sm_error_set(err, SM_ERROR_FILE, "%s: cannot open: %s", path, strerror(errno));
 		return NULL;
 	}
-	// A directory opens but cannot be read: its first read says why (EISDIR).
-	errno = 0;
-	if (fgetc(f) == EOF && ferror(f)) {
-		const int error = errno;
-		fclose(f);
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(error));
-		return NULL;
-	}
+	struct stat st;
 	char* text = NULL;
-	long size = -1;
-	if (fseek(f, 0, SEEK_END) == 0)
-		size = ftell(f);
-	if (size < 0 || size > MAX_FILE_BYTES || fseek(f, 0, SEEK_SET) != 0) {
-		fclose(f);
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read (not a regular file, or larger than %ld bytes)", path,
-		             MAX_FILE_BYTES);
+	size_t length = 0;
+	if (fstat(fd, &st) != 0)
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(errno));
+	else if (S_ISDIR(st.st_mode))
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(EISDIR));
+	else if (!S_ISREG(st.st_mode))
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: not a regular file", path);
+	else if (st.st_size > MAX_FILE_BYTES)
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", path, MAX_FILE_BYTES);
+	else
+		read_all(fd, st.st_size, path, &text, &length, err);
+	close(fd);
+	if (text == NULL)
 		return NULL;
-	}
-	text = malloc((size_t)size + 1);
-	if (text == NULL) {
-		fclose(f);
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for %ld bytes", path, size);
-		return NULL;
-	}
-	const size_t got = fread(text, 1, (size_t)size, f);
-	const int failed = ferror(f);
-	fclose(f);
-	if (failed || got != (size_t)size) {
-		free(text);
-		sm_error_set(err, SM_ERROR_FILE, "%s: read error", path);
-		return NULL;
-	}
-	sm_document* doc = sm_document_parse(text, got, path, err);
+	sm_document* doc = sm_document_parse(text, length, path, err);
 	free(text);
 	return doc;
 }

@@ -35,6 +35,14 @@ version=$(sed -n 's/^#define SM_VERSION_\(MAJOR\|MINOR\|PATCH\) \([0-9]*\)$/\2/p
 # `springmass run` at the edges of its output grid, and a model without springs.
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# Only regular files are model files: a device would be read without end, a FIFO wait for a writer.
+mkfifo "$tmp/check_fifo.json"
+for special in /dev/zero "$tmp/check_fifo.json"; do
+  out=$(timeout 20 "$cli" check "$special" 2>&1)
+  status=$?
+  [ $status -eq 1 ] && [ "$out" = "springmass check: $special: cannot read: not a regular file" ] ||
+    fail "check $special exited with $status and printed '$out'"
+done
 out=$("$cli" run "$root/models/oscillator.json" --t-end 1e-11 -q -o - 2>&1)
 [ "$(wc -l <<< "$out")" -eq 3 ] && [ "$(tail -1 <<< "$out" | cut -d, -f1)" = "9.9999999999999994e-12" ] ||
   fail "run to 1e-11 s did not write the rows at 0 and 1e-11 s: $out"

@@ -1,6 +1,8 @@
 // Model files: every bundled model loads and has the physics its description promises, saving
 // and loading gives the same model, parameters feed the constants, and a table of broken and
 // hostile files gives exactly the expected errors.
+#define _POSIX_C_SOURCE 200809L  // mkfifo, alarm
+
 #include "springmass/model_file.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
@@ -11,6 +13,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #ifndef SPRINGMASS_MODELS_DIR
 #error "SPRINGMASS_MODELS_DIR must name the directory of the bundled models"
@@ -1044,6 +1048,39 @@ static int test_byte_order_mark_and_directories(void)
 	return 0;
 }
 
+// Only regular files are read: a device (/dev/zero was read without end) and a FIFO without a
+// writer (whose opening waited for ever) are refused at once, and a file in /proc, whose size
+// is 0, is read to its end. A NUL byte in the text is named at its line and column (columns
+// count characters): the JSON parser took it for the end of the text.
+static int test_special_files_and_nul_bytes(void)
+{
+	sm_error err = {SM_OK, ""};
+	ENSURE(sm_document_load("/dev/zero", &err) == NULL);
+	ENSURE(err.status == SM_ERROR_FILE && strcmp(err.message, "/dev/zero: cannot read: not a regular file") == 0);
+	const char* fifo = "test_model_file_fifo.json";
+	remove(fifo);
+	ENSURE(mkfifo(fifo, 0600) == 0);
+	alarm(60);  // an open that blocks ends the test (SIGALRM) rather than hanging it
+	sm_document* doc = sm_document_load(fifo, &err);
+	alarm(0);
+	remove(fifo);
+	ENSURE(doc == NULL && err.status == SM_ERROR_FILE);
+	ENSURE(strcmp(err.message, "test_model_file_fifo.json: cannot read: not a regular file") == 0);
+	if (access("/proc/self/status", R_OK) == 0) {
+		ENSURE(sm_document_load("/proc/self/status", &err) == NULL && err.status == SM_ERROR_SYNTAX);
+		ENSURE(strncmp(err.message, "/proc/self/status:1:", 20) == 0);
+	}
+
+	static const char nul_first_line[] = "{\"springmass\": 1, \"name\": \"a\"\0, \"particles\": []}";
+	ENSURE(sm_document_parse(nul_first_line, sizeof nul_first_line - 1, "test.json", &err) == NULL);
+	ENSURE(err.status == SM_ERROR_SYNTAX &&
+	       strcmp(err.message, "test.json:1:30: a NUL byte (a model file is UTF-8 text without NUL bytes)") == 0);
+	static const char nul_after_euro[] = "{\"springmass\": 1,\n \"name\": \"\xe2\x82\xac\"\0}";
+	ENSURE(sm_document_parse(nul_after_euro, sizeof nul_after_euro - 1, "test.json", &err) == NULL);
+	ENSURE(strcmp(err.message, "test.json:2:13: a NUL byte (a model file is UTF-8 text without NUL bytes)") == 0);
+	return 0;
+}
+
 // Hostile input fails cleanly: deep nesting, a file that is not there, binary junk, a file cut
 // short at every length (each prefix of a valid file is refused or loads, never crashes).
 static int test_hostile_input(void)
@@ -1103,6 +1140,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_names_and_descriptions_refuse_controls_and_line_breaks);
 	RUN_TEST(test_hostile_input);
 	RUN_TEST(test_byte_order_mark_and_directories);
+	RUN_TEST(test_special_files_and_nul_bytes);
 	RUN_TEST(test_whole_real_index);
 	RUN_TEST(test_longest_structure_names_round_trip);
 	RUN_TEST(test_structure_limit_counts_the_groups_present);
