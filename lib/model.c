@@ -486,6 +486,27 @@ sm_status sm_model_set_particle(sm_model* model, int32_t index, const sm_particl
 	return SM_OK;
 }
 
+static void store_motion(sm_model* m, int32_t i, sm_particle_motion motion)
+{
+	m->motion[i] = motion;
+	if (motion == SM_PARTICLE_FIXED)
+		memset(m->velocity + 3 * (size_t)i, 0, 3 * sizeof(double));
+}
+
+void model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
+                       sm_particle_motion motion)
+{
+	if (select != NULL) {
+		for (int32_t i = 0; i < m->particle_count; i++)
+			if (select[i])
+				store_motion(m, i, motion);
+	} else {
+		for (int32_t k = 0; k < count; k++)
+			store_motion(m, particles[k], motion);
+	}
+	renumber_free(m);
+}
+
 sm_status sm_model_set_particle_motion(sm_model* model, int32_t index, sm_particle_motion motion)
 {
 	sm_status st = check_particle_index(model, index);

@@ -495,7 +495,7 @@ static bool read_bool(parser* p, const json_t* obj, const char* path, const char
 static bool check_name_text(parser* p, const char* s, size_t n, const char* path, bool identifier)
 {
 	if (n == 0 || n > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d characters (this one has %zu)", MAX_NAME_BYTES,
+		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d bytes (this one has %zu)", MAX_NAME_BYTES,
 		            n);
 	char text[QUOTED_CAPACITY];
 	int64_t position;
@@ -1307,10 +1307,8 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 	return true;
 }
 
-// The particles of "fixed" are marked first and then fixed together, as
-// sm_model_set_particle_motion fixes one (its stored velocity becomes zero), with the free
-// particles numbered once: that function numbers them all again at each call, which made a
-// list of n particles take time n times the size of the model.
+// The particles of "fixed" are marked first and then fixed together (model_set_motions), with
+// the free particles numbered once.
 static bool read_fixed(parser* p, const json_t* list)
 {
 	if (list == NULL)
@@ -1323,17 +1321,8 @@ static bool read_fixed(parser* p, const json_t* list)
 	if (fix == NULL)
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, "fixed", "out of memory");
 	const bool ok = read_fixed_to(p, list, fix);
-	if (ok) {
-		int32_t free_count = 0;
-		for (int32_t i = 0; i < model->particle_count; i++) {
-			if (fix[i]) {
-				model->motion[i] = SM_PARTICLE_FIXED;
-				memset(model->velocity + 3 * (size_t)i, 0, 3 * sizeof(double));
-			}
-			model->free_index[i] = model->motion[i] == SM_PARTICLE_FREE ? free_count++ : -1;
-		}
-		model->free_count = free_count;
-	}
+	if (ok)
+		model_set_motions(model, fix, NULL, 0, SM_PARTICLE_FIXED);
 	free(fix);
 	return ok;
 }

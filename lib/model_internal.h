@@ -64,6 +64,13 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 #endif
 	;
 
+// Sets the motion of the particles marked in select[] (particle_count entries; NULL: those listed
+// in particles[], count of them, valid indices) as sm_model_set_particle_motion sets one (a fixed
+// particle's stored velocity becomes zero), numbering the free particles once for all: one call
+// per particle would number them all again each time, quadratic in the model's size.
+void model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
+                       sm_particle_motion motion);
+
 // Geometry of one spring at a configuration, shared by every force law and Jacobian.
 //
 // Both spring kinds are evaluated by the same formulas: a zero-length spring is a rest-length

@@ -502,14 +502,17 @@ sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double
 			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "box selection: corner coordinate %d is NaN", c);
 	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "box selection: motion = %d is not known", (int)motion);
+	bool* inside = malloc((size_t)model->particle_count + 1);
+	if (inside == NULL)
+		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "box selection: out of memory");
 	int32_t changed = 0;
 	for (int32_t p = 0; p < model->particle_count; p++) {
 		const double* x = model->position + 3 * (size_t)p;
-		if (x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2]) {
-			sm_model_set_particle_motion(model, p, motion);
-			changed++;
-		}
+		inside[p] = x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2];
+		changed += inside[p];
 	}
+	model_set_motions(model, inside, NULL, 0, motion);
+	free(inside);
 	if (count != NULL)
 		*count = changed;
 	return SM_OK;
@@ -541,7 +544,6 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 			return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
 			                     "selection: entry %d, particle %d, is out of range (model has %d particles)", (int)n,
 			                     (int)particles[n], (int)model->particle_count);
-	for (int32_t n = 0; n < count; n++)
-		sm_model_set_particle_motion(model, particles[n], motion);
+	model_set_motions(model, NULL, particles, count, motion);
 	return SM_OK;
 }

@@ -44,7 +44,9 @@ typedef struct sm_document sm_document;
 /// Loads and validates a model file. On error returns NULL and fills err: a syntax error names
 /// the file, line and column (`model.json:3:14: ...`); a rule broken names the path in the
 /// document, the value and the rule (`model.json: springs[3].b: no particle named "bobb"`).
-/// Files larger than 1 GiB, and models of more than 2^22 particles or springs, are refused.
+/// Only regular files are read (a directory, a device or a FIFO is refused at once); files larger
+/// than 1 GiB, and models of more than 2^22 particles or springs, are refused. Loading takes time
+/// in proportion to the file's size.
 SM_API sm_document* sm_document_load(const char* path, sm_error* err);
 
 /// Same from text in memory; `source_name` is used in messages in place of a file name.
