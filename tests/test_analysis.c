@@ -532,6 +532,32 @@ static int test_external_force_on_a_spring(void)
 	return 0;
 }
 
+// A 1 kg particle at (0, 0, z) [m] tied to a fixed one at the origin by a rest-length spring of
+// ks [N/m] and rest length 1 m; gravity (0, 0, gz) [m/s^2]. NULL if any step fails.
+static sm_model* anchored_mass(double gz, double z, double ks)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = gz;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.rest_length = 1.0;
+	s.stiffness = ks;
+	bool ok = model != NULL && sm_model_add_particle(model, &p, NULL) == SM_OK;
+	p.motion = SM_PARTICLE_FREE;
+	p.mass = 1.0;
+	p.position[2] = z;
+	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A particle on a rest-length spring directly above its fixed anchor, gravity pulling it down
 // the spring's axis: Newton converges to the inverted equilibrium (a saddle of U), which is
 // reported unstable, and the modes there show the two unstable sideways directions. Below the
@@ -539,21 +565,8 @@ static int test_external_force_on_a_spring(void)
 static int test_inverted_pendulum_is_unstable(void)
 {
 	for (int below = 0; below <= 1; below++) {
-		sm_model_def md = sm_default_model_def();
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = anchored_mass(-9.81, below ? -1.0 : 1.0, 100.0);
 		ENSURE(model != NULL);
-		sm_particle_def p = sm_default_particle_def();
-		p.motion = SM_PARTICLE_FIXED;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		p.motion = SM_PARTICLE_FREE;
-		p.mass = 1.0;
-		p.position[2] = below ? -1.0 : 1.0;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		sm_spring_def s = sm_default_spring_def();
-		s.a = 0;
-		s.b = 1;
-		s.stiffness = 100.0;
-		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 		double x[6];
 		sm_statics_result res;
 		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
@@ -1113,21 +1126,8 @@ static int test_modes_overflow_is_refused(void)
 // the spring, rather than report omega^2 = ks / m from the conventional K = ks I.
 static int test_coincident_rest_length_spring(void)
 {
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = anchored_mass(0.0, 0.0, 10.0);
 	ENSURE(model != NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.motion = SM_PARTICLE_FIXED;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	p.motion = SM_PARTICLE_FREE;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	sm_spring_def sd = sm_default_spring_def();
-	sd.a = 0;
-	sd.b = 1;
-	sd.rest_length = 1.0;
-	sd.stiffness = 10.0;
-	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
 	double x[6];
 	sm_statics_result res;
 	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
