@@ -9,6 +9,7 @@
 #define _POSIX_C_SOURCE 200809L  // open, fstat, read
 
 #include "model_file_internal.h"
+#include "model_file_text.h"
 
 #include "model_internal.h"
 #include "structures_internal.h"
@@ -124,140 +125,6 @@ static const char* type_name(const json_t* value)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Text from the file in messages.
-// ---------------------------------------------------------------------------------------------
-
-// Most bytes of a name or key shown in a message, escapes included; then QUOTED_CAPACITY holds
-// the quotes, the ellipsis after a text cut short, and the NUL.
-#define QUOTE_TEXT_BYTES 80
-#define QUOTED_CAPACITY (QUOTE_TEXT_BYTES + 6)
-
-// The UTF-8 character at s (n > 0 bytes left): its code point, and in *bytes its length. A byte
-// that begins no well-formed character (RFC 3629: no overlong forms, no surrogates, nothing
-// above U+10FFFF) gives -1 and *bytes = 1. (The JSON parser has checked the strings of a file;
-// this also serves text that has not passed through it.)
-static int32_t decode_utf8(const unsigned char* s, size_t n, size_t* bytes)
-{
-	*bytes = 1;
-	if (s[0] < 0x80)
-		return s[0];
-	const size_t length = s[0] >= 0xf0 ? 4 : s[0] >= 0xe0 ? 3 : s[0] >= 0xc0 ? 2 : 0;
-	static const int32_t least[5] = {0, 0, 0x80, 0x800, 0x10000};
-	if (length == 0 || length > n)
-		return -1;
-	int32_t c = s[0] & (0x7f >> length);
-	for (size_t k = 1; k < length; k++) {
-		if ((s[k] & 0xc0) != 0x80)
-			return -1;
-		c = (c << 6) | (s[k] & 0x3f);
-	}
-	if (c < least[length] || c > 0x10ffff || (c >= 0xd800 && c <= 0xdfff))
-		return -1;
-	*bytes = length;
-	return c;
-}
-
-// Control characters: C0, DEL and C1 (Unicode general category Cc).
-static bool is_control(int32_t c)
-{
-	return c < 0x20 || (c >= 0x7f && c < 0xa0);
-}
-
-// Line breaks (the mandatory breaks of Unicode's line breaking algorithm, UAX #14: LF, VT, FF,
-// CR, NEL, LINE SEPARATOR, PARAGRAPH SEPARATOR).
-static bool is_line_break(int32_t c)
-{
-	return (c >= '\n' && c <= '\r') || c == 0x85 || c == 0x2028 || c == 0x2029;
-}
-
-// What a name may not hold: control characters and line breaks.
-static bool refused_in_name(int32_t c)
-{
-	return is_control(c) || is_line_break(c);
-}
-
-// What a description (one line of text) may not hold: line breaks and control characters but
-// the tab.
-static bool refused_in_description(int32_t c)
-{
-	return (is_control(c) && c != '\t') || is_line_break(c);
-}
-
-// The first character of s that `refused` refuses, or -1 if there is none; *position gets its
-// position in s, counted in characters from 1.
-static int32_t find_refused(const char* s, bool (*refused)(int32_t), int64_t* position)
-{
-	const unsigned char* u = (const unsigned char*)s;
-	const size_t n = strlen(s);
-	*position = 0;
-	for (size_t at = 0; at < n;) {
-		size_t bytes;
-		const int32_t c = decode_utf8(u + at, n - at, &bytes);
-		++*position;
-		if (c >= 0 && refused(c))
-			return c;
-		at += bytes;
-	}
-	return -1;
-}
-
-// Characters a message shows escaped, since a terminal would act on them or show nothing:
-// control characters, the line and paragraph separators U+2028 and U+2029, the zero-width
-// characters U+200B - U+200D and U+FEFF, and the bidirectional controls (U+061C, U+200E,
-// U+200F, U+202A - U+202E, U+2066 - U+2069), which reorder the text around them.
-static bool shown_escaped(int32_t c)
-{
-	return is_control(c) || c == 0x061c || (c >= 0x200b && c <= 0x200f) || (c >= 0x2028 && c <= 0x202e) ||
-	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
-}
-
-// Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped, and the
-// characters above as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole
-// characters only, NUL-terminated (out has room for most + 1). Returns whether all of s fitted.
-static bool escape_text(char* out, size_t most, const char* s)
-{
-	const unsigned char* u = (const unsigned char*)s;
-	const size_t n = strlen(s);
-	size_t used = 0;
-	for (size_t at = 0; at < n;) {
-		size_t bytes;
-		const int32_t c = decode_utf8(u + at, n - at, &bytes);
-		char escaped[8];
-		const char* piece = escaped;
-		size_t length;
-		if (c < 0)
-			length = (size_t)snprintf(escaped, sizeof escaped, "\\x%02x", u[at]);
-		else if (c == '"' || c == '\\')
-			length = (size_t)snprintf(escaped, sizeof escaped, "\\%c", (char)c);
-		else if (shown_escaped(c))
-			length = (size_t)snprintf(escaped, sizeof escaped, "\\u%04x", (unsigned)c);
-		else {
-			piece = s + at;
-			length = bytes;
-		}
-		if (used + length > most) {
-			out[used] = '\0';
-			return false;
-		}
-		memcpy(out + used, piece, length);
-		used += length;
-		at += bytes;
-	}
-	out[used] = '\0';
-	return true;
-}
-
-// "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
-// after the closing quote. Returns out.
-static const char* quoted(char out[QUOTED_CAPACITY], const char* s)
-{
-	out[0] = '"';
-	const bool whole = escape_text(out + 1, QUOTE_TEXT_BYTES, s);
-	strcat(out, whole ? "\"" : "\"...");
-	return out;
-}
-
-// ---------------------------------------------------------------------------------------------
 // Reading values.
 // ---------------------------------------------------------------------------------------------
 
@@ -287,8 +154,8 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 					break;
 				used += (size_t)n;
 			}
-			char text[QUOTED_CAPACITY];
-			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", quoted(text, key), list);
+			char text[TEXT_QUOTED_CAPACITY];
+			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", text_quoted(text, key), list);
 		}
 	}
 	return true;
@@ -311,9 +178,9 @@ static bool read_number(parser* p, const json_t* value, const char* path, double
 	}
 	if (json_is_string(value)) {
 		const int32_t k = find_parameter(p->doc, json_string_value(value));
-		char text[QUOTED_CAPACITY];
+		char text[TEXT_QUOTED_CAPACITY];
 		if (k < 0)
-			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s", quoted(text, json_string_value(value)));
+			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s", text_quoted(text, json_string_value(value)));
 		*out = p->parameter_values[k];
 		if (source != NULL)
 			*source = k;
@@ -497,12 +364,12 @@ static bool check_name_text(parser* p, const char* s, size_t n, const char* path
 	if (n == 0 || n > MAX_NAME_BYTES)
 		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d bytes (this one has %zu)", MAX_NAME_BYTES,
 		            n);
-	char text[QUOTED_CAPACITY];
+	char text[TEXT_QUOTED_CAPACITY];
 	int64_t position;
-	const int32_t c = find_refused(s, refused_in_name, &position);
+	const int32_t c = text_find_refused(s, text_refused_in_name, &position);
 	if (c >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", quoted(text, s),
-		            is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
+		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", text_quoted(text, s),
+		            text_is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
 	for (size_t i = 0; i < n && identifier; i++) {
 		const unsigned char b = (unsigned char)s[i];
 		const bool letter = (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || b == '_';
@@ -510,7 +377,7 @@ static bool check_name_text(parser* p, const char* s, size_t n, const char* path
 		if (!(letter || (digit && i > 0)))
 			return fail(p, SM_ERROR_SCHEMA, path,
 			            "name %s must be an identifier (letters, digits and '_', not starting with a digit)",
-			            quoted(text, s));
+			            text_quoted(text, s));
 	}
 	return true;
 }
@@ -622,13 +489,13 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 	va_end(args);
 	// Only a limit on elements above SM_DOCUMENT_MAX_ELEMENTS (sm_document_parse_limited) can
 	// make a structure's particle names longer than MAX_STRUCTURE_NAME_BYTES allows for.
-	char text[QUOTED_CAPACITY];
+	char text[TEXT_QUOTED_CAPACITY];
 	if (written < 0 || written > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", quoted(text, name),
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", text_quoted(text, name),
 		            MAX_NAME_BYTES);
 	const int32_t other = lookup_name(ex, name);
 	if (other >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", quoted(text, name),
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", text_quoted(text, name),
 		            (int)other);
 	const int64_t length = (int64_t)strlen(name) + 1;
 	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
@@ -678,8 +545,8 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	if (!json_is_string(value))
 		return fail(p, SM_ERROR_SCHEMA, path, "must be a particle name or index, not %s", type_name(value));
 	const char* name = json_string_value(value);
-	char text[QUOTED_CAPACITY];
-	quoted(text, name);
+	char text[TEXT_QUOTED_CAPACITY];
+	text_quoted(text, name);
 	const int32_t found = lookup_name(p->ex, name);
 	if (found >= 0) {
 		*out = found;
@@ -1088,14 +955,14 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	if (!check_name(p, json_object_get(obj, "name"), sub, true, &s.name))
 		return false;
 	const size_t name_bytes = strlen(s.name);
-	char text[QUOTED_CAPACITY];
+	char text[TEXT_QUOTED_CAPACITY];
 	if (name_bytes > MAX_STRUCTURE_NAME_BYTES)
 		return fail(p, SM_ERROR_SCHEMA, sub,
 		            "structure name %s has %zu bytes; a structure's name may have at most %d, so that its "
 		            "particles' names (name[row,column,layer]) fit in %d",
-		            quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
+		            text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
-		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", quoted(text, s.name));
+		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", text_quoted(text, s.name));
 
 	sm_model* model = p->ex->model;
 	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
@@ -1344,9 +1211,9 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		if (!check_name(p, json_object_get(obj, "name"), sub, true, &port.name))
 			return false;
 		const int32_t same_name = name_index_find(&p->ex->port_names, port.name, strlen(port.name));
-		char text[QUOTED_CAPACITY];
+		char text[TEXT_QUOTED_CAPACITY];
 		if (same_name >= 0)
-			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", quoted(text, port.name),
+			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", text_quoted(text, port.name),
 			            (int)same_name);
 		child_key(sub, path, "particle");
 		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
@@ -1585,8 +1452,8 @@ static bool read_header(sm_document* doc, sm_error* err)
 			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s", type_name(description));
 		doc->description = json_string_value(description);
 		int64_t position;
-		const int32_t c = find_refused(doc->description, refused_in_description, &position);
-		if (c >= 0 && is_line_break(c))
+		const int32_t c = text_find_refused(doc->description, text_refused_in_description, &position);
+		if (c >= 0 && text_is_line_break(c))
 			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line: it has a line break, U+%04X, at character %lld",
 			            (unsigned)c, (long long)position);
 		if (c >= 0)
@@ -1611,7 +1478,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 		// The key is escaped in the path as in the messages about it, and cut at a character
 		// before the 50 bytes child_key keeps of it.
 		char path[PATH_CAPACITY], escaped[50];
-		if (!escape_text(escaped, sizeof escaped - 4, key))
+		if (!text_escape(escaped, sizeof escaped - 4, key))
 			strcat(escaped, "...");
 		child_key(path, "parameters", escaped);
 		if (!check_name_text(&p, key, strlen(key), path, true))

@@ -1,0 +1,119 @@
+// Text from a model file: what a name or a description may hold, and how a message shows it
+// (model_file_text.h).
+#include "model_file_text.h"
+
+#include <stdio.h>
+#include <string.h>
+
+// The UTF-8 character at s (n > 0 bytes left): its code point, and in *bytes its length. A byte
+// that begins no well-formed character (RFC 3629: no overlong forms, no surrogates, nothing
+// above U+10FFFF) gives -1 and *bytes = 1. (The JSON parser has checked the strings of a file;
+// this also serves text that has not passed through it.)
+static int32_t decode_utf8(const unsigned char* s, size_t n, size_t* bytes)
+{
+	*bytes = 1;
+	if (s[0] < 0x80)
+		return s[0];
+	const size_t length = s[0] >= 0xf0 ? 4 : s[0] >= 0xe0 ? 3 : s[0] >= 0xc0 ? 2 : 0;
+	static const int32_t least[5] = {0, 0, 0x80, 0x800, 0x10000};
+	if (length == 0 || length > n)
+		return -1;
+	int32_t c = s[0] & (0x7f >> length);
+	for (size_t k = 1; k < length; k++) {
+		if ((s[k] & 0xc0) != 0x80)
+			return -1;
+		c = (c << 6) | (s[k] & 0x3f);
+	}
+	if (c < least[length] || c > 0x10ffff || (c >= 0xd800 && c <= 0xdfff))
+		return -1;
+	*bytes = length;
+	return c;
+}
+
+// Control characters: C0, DEL and C1 (Unicode general category Cc).
+static bool is_control(int32_t c)
+{
+	return c < 0x20 || (c >= 0x7f && c < 0xa0);
+}
+
+bool text_is_line_break(int32_t c)
+{
+	return (c >= '\n' && c <= '\r') || c == 0x85 || c == 0x2028 || c == 0x2029;
+}
+
+bool text_refused_in_name(int32_t c)
+{
+	return is_control(c) || text_is_line_break(c);
+}
+
+bool text_refused_in_description(int32_t c)
+{
+	return (is_control(c) && c != '\t') || text_is_line_break(c);
+}
+
+int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position)
+{
+	const unsigned char* u = (const unsigned char*)s;
+	const size_t n = strlen(s);
+	*position = 0;
+	for (size_t at = 0; at < n;) {
+		size_t bytes;
+		const int32_t c = decode_utf8(u + at, n - at, &bytes);
+		++*position;
+		if (c >= 0 && refused(c))
+			return c;
+		at += bytes;
+	}
+	return -1;
+}
+
+// Characters a message shows escaped, since a terminal would act on them or show nothing:
+// control characters, the line and paragraph separators U+2028 and U+2029, the zero-width
+// characters U+200B - U+200D and U+FEFF, and the bidirectional controls (U+061C, U+200E,
+// U+200F, U+202A - U+202E, U+2066 - U+2069), which reorder the text around them.
+static bool shown_escaped(int32_t c)
+{
+	return is_control(c) || c == 0x061c || (c >= 0x200b && c <= 0x200f) || (c >= 0x2028 && c <= 0x202e) ||
+	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
+}
+
+bool text_escape(char* out, size_t most, const char* s)
+{
+	const unsigned char* u = (const unsigned char*)s;
+	const size_t n = strlen(s);
+	size_t used = 0;
+	for (size_t at = 0; at < n;) {
+		size_t bytes;
+		const int32_t c = decode_utf8(u + at, n - at, &bytes);
+		char escaped[8];
+		const char* piece = escaped;
+		size_t length;
+		if (c < 0)
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\x%02x", u[at]);
+		else if (c == '"' || c == '\\')
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\%c", (char)c);
+		else if (shown_escaped(c))
+			length = (size_t)snprintf(escaped, sizeof escaped, "\\u%04x", (unsigned)c);
+		else {
+			piece = s + at;
+			length = bytes;
+		}
+		if (used + length > most) {
+			out[used] = '\0';
+			return false;
+		}
+		memcpy(out + used, piece, length);
+		used += length;
+		at += bytes;
+	}
+	out[used] = '\0';
+	return true;
+}
+
+const char* text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)
+{
+	out[0] = '"';
+	const bool whole = text_escape(out + 1, QUOTE_TEXT_BYTES, s);
+	strcat(out, whole ? "\"" : "\"...");
+	return out;
+}

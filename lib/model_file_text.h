@@ -1,0 +1,38 @@
+// Text from a model file: what a name or a description may hold, and how a message shows it.
+// The text is UTF-8; a byte that begins no well-formed character counts as one character that is
+// neither a control nor a line break, and a message shows it as \xNN.
+#pragma once
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+// Most bytes of a name or key shown in a message, escapes included; then TEXT_QUOTED_CAPACITY holds
+// the quotes, the ellipsis after a text cut short, and the NUL.
+#define QUOTE_TEXT_BYTES 80
+#define TEXT_QUOTED_CAPACITY (QUOTE_TEXT_BYTES + 6)
+
+// Line breaks (the mandatory breaks of Unicode's line breaking algorithm, UAX #14: LF, VT, FF,
+// CR, NEL, LINE SEPARATOR, PARAGRAPH SEPARATOR).
+bool text_is_line_break(int32_t c);
+
+// What a name may not hold: control characters and line breaks.
+bool text_refused_in_name(int32_t c);
+
+// What a description (one line of text) may not hold: line breaks and control characters but
+// the tab.
+bool text_refused_in_description(int32_t c);
+
+// The first character of s that `refused` refuses, or -1 if there is none; *position gets its
+// position in s, counted in characters from 1.
+int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position);
+
+// Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped; control
+// characters, line separators and the zero-width and bidirectional characters, which a terminal
+// would act on or not show, as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole
+// characters only, NUL-terminated (out has room for most + 1). Returns whether all of s fitted.
+bool text_escape(char* out, size_t most, const char* s);
+
+// "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
+// after the closing quote. Returns out.
+const char* text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s);
