@@ -1075,7 +1075,11 @@ static int test_sparse_adaptive_shift_hanging_rope(void)
 	ENSURE(sparse.shift < 0.0 && -sparse.shift < 1e-7 * g && dense.shift == 0.0);
 	ENSURE(sparse.count == 50 && sparse.zero_count == 0 && sparse.unstable_count == 0);
 	ENSURE(sparse.omega_squared[0] < 1e-10 * g && sparse.omega_squared[49] < 3e-8 * g);
-	ENSURE(sparse.residual <= 1e-12);
+	// The residual depends on the BLAS kernels CHOLMOD's factorisation calls: 2.4e-16 with
+	// OpenBLAS's Haswell, Zen and SSE2 kernels, 1.8e-12 with its AVX-512 ones (SkylakeX,
+	// Cooperlake; OPENBLAS_CORETYPE selects them). 1e-11 keeps it two orders below the default
+	// residual_tolerance (1e-9) that the library enforces.
+	ENSURE(sparse.residual <= 1e-11);
 	for (int32_t i = 0; i < 50; i++)
 		ENSURE_REL(sparse.omega_squared[i], dense.omega_squared[i], 1e-6, 0.0);
 	sm_modes_release(&sparse);
