@@ -41,6 +41,9 @@ static void usage(FILE* out)
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
 	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s]\n"
+	        "  --atol-position A      absolute tolerance of positions alone [m] (wins over --atol)\n"
+	        "  --atol-velocity A      absolute tolerance of velocities and of the dissipated energy\n"
+	        "                         alone [m/s], [J] (wins over --atol)\n"
 	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no statistics on stderr\n"
@@ -83,6 +86,8 @@ typedef struct run_options {
 	double interval;
 	double rtol;
 	double atol;
+	double atol_position;
+	double atol_velocity;
 	double max_steps;
 	const char* solver;
 	const char* method;
@@ -209,9 +214,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 		} else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
 			o->quiet = true;
 		} else if (a[0] == '-' && a[1] != '\0') {
-			static const char* const with_value[] = {"--t-end", "--output-interval", "--rtol",   "--atol",
-			                                         "--max-steps", "--output",        "-o",       "--vtk",
-			                                         "--solver",    "--method",        "--set"};
+			static const char* const with_value[] = {
+			        "--t-end",  "--output-interval", "--rtol",   "--atol", "--atol-position", "--atol-velocity",
+			        "--max-steps", "--output",       "-o",       "--vtk",  "--solver",        "--method",
+			        "--set"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -247,6 +253,12 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				}
 			} else if (strcmp(a, "--atol") == 0) {
 				if (parse_positive(a, value, &o->atol))
+					return 2;
+			} else if (strcmp(a, "--atol-position") == 0) {
+				if (parse_positive(a, value, &o->atol_position))
+					return 2;
+			} else if (strcmp(a, "--atol-velocity") == 0) {
+				if (parse_positive(a, value, &o->atol_velocity))
 					return 2;
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
@@ -313,6 +325,10 @@ int sm_cmd_run(int argc, char** argv)
 		def.relative_tolerance = o.rtol;
 	if (o.atol > 0.0)
 		def.absolute_tolerance_position = def.absolute_tolerance_velocity = o.atol;
+	if (o.atol_position > 0.0)
+		def.absolute_tolerance_position = o.atol_position;
+	if (o.atol_velocity > 0.0)
+		def.absolute_tolerance_velocity = o.atol_velocity;
 	if (o.max_steps > 0.0)
 		def.max_steps = (int32_t)o.max_steps;
 	if (o.solver) {
