@@ -166,9 +166,18 @@ static int32_t find_parameter(const sm_document* doc, const char* name)
 	return name_index_find(&doc->parameter_index, name, strlen(name));
 }
 
-// A number, or the name of a parameter standing for one. *source gets the parameter's index or
-// -1 (source may be NULL).
-static bool read_number(parser* p, const json_t* value, const char* path, double* out, int32_t* source)
+// What a value read feeds (sm_parameter_use), recorded for the parameter that gave it, if any.
+typedef enum feeds {
+	FEEDS_CONSTANTS = SM_PARAMETER_CONSTANTS,
+	FEEDS_STATE = SM_PARAMETER_INITIAL_STATE,
+	FEEDS_MOTION = SM_PARAMETER_MOTION,
+	FEEDS_COUNTS = SM_PARAMETER_COUNTS,
+	FEEDS_SETTINGS = SM_PARAMETER_SETTINGS,
+} feeds;
+
+// A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
+// parameter's index or -1 (source may be NULL).
+static bool read_number(parser* p, feeds use, const json_t* value, const char* path, double* out, int32_t* source)
 {
 	if (source != NULL)
 		*source = -1;
@@ -182,6 +191,7 @@ static bool read_number(parser* p, const json_t* value, const char* path, double
 		if (k < 0)
 			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s", text_quoted(text, json_string_value(value)));
 		*out = p->parameter_values[k];
+		p->ex->parameter_uses[k] |= (uint8_t)use;
 		if (source != NULL)
 			*source = k;
 		bool known = false;
@@ -262,8 +272,8 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 }
 
 // Optional number at obj[key] (keeps *out when absent) that must obey `rule`.
-static bool read_field(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule, double* out,
-                       int32_t* source)
+static bool read_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key, number_rule rule,
+                       double* out, int32_t* source)
 {
 	int32_t dummy;
 	if (source == NULL)
@@ -275,7 +285,7 @@ static bool read_field(parser* p, const json_t* obj, const char* path, const cha
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
 	double v = 0.0;
-	if (!read_number(p, value, sub, &v, source) || !check_rule(p, sub, v, *source, rule))
+	if (!read_number(p, use, value, sub, &v, source) || !check_rule(p, sub, v, *source, rule))
 		return false;
 	*out = v;
 	return true;
@@ -289,11 +299,12 @@ static bool require(parser* p, const json_t* obj, const char* path, const char* 
 }
 
 // A whole number in [lo, hi] (a count or an index), possibly given by a parameter.
-static bool read_count(parser* p, const json_t* value, const char* path, int64_t lo, int64_t hi, int64_t* out)
+static bool read_count(parser* p, feeds use, const json_t* value, const char* path, int64_t lo, int64_t hi,
+                       int64_t* out)
 {
 	double v = 0.0;
 	int32_t source;
-	if (!read_number(p, value, path, &v, &source))
+	if (!read_number(p, use, value, path, &v, &source))
 		return false;
 	char text[128];
 	if (!(v == floor(v)) || !(v >= (double)lo) || !(v <= (double)hi))
@@ -303,19 +314,19 @@ static bool read_count(parser* p, const json_t* value, const char* path, int64_t
 	return true;
 }
 
-static bool read_count_field(parser* p, const json_t* obj, const char* path, const char* key, int64_t lo, int64_t hi,
-                             int64_t* out)
+static bool read_count_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key, int64_t lo,
+                             int64_t hi, int64_t* out)
 {
 	if (!require(p, obj, path, key))
 		return false;
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
-	return read_count(p, json_object_get(obj, key), sub, lo, hi, out);
+	return read_count(p, use, json_object_get(obj, key), sub, lo, hi, out);
 }
 
 // Optional 3-vector at obj[key] (keeps out when absent) whose components obey `rule`; sources
 // may be NULL.
-static bool read_vector(parser* p, const json_t* obj, const char* path, const char* key, number_rule rule,
+static bool read_vector(parser* p, feeds use, const json_t* obj, const char* path, const char* key, number_rule rule,
                         double out[3], int32_t sources[3])
 {
 	if (sources != NULL)
@@ -333,7 +344,7 @@ static bool read_vector(parser* p, const json_t* obj, const char* path, const ch
 		child_index(element, sub, c);
 		int32_t source;
 		double v = 0.0;
-		if (!read_number(p, json_array_get(value, c), element, &v, &source) ||
+		if (!read_number(p, use, json_array_get(value, c), element, &v, &source) ||
 		    !check_rule(p, element, v, source, rule))
 			return false;
 		out[c] = v;
@@ -410,6 +421,7 @@ static void expansion_free(expansion* ex)
 	name_index_free(&ex->structure_names);
 	free(ex->ports);
 	name_index_free(&ex->port_names);
+	free(ex->parameter_uses);
 	free(ex);
 }
 
@@ -638,9 +650,9 @@ static bool read_particles(parser* p, const json_t* list)
 		particle_source src;
 		bool fixed = false;
 		if (!require(p, obj, path, "position") ||
-		    !read_vector(p, obj, path, "position", ANY_FINITE, def.position, src.position) ||
-		    !read_vector(p, obj, path, "velocity", ANY_FINITE, def.velocity, src.velocity) ||
-		    !read_field(p, obj, path, "mass", POSITIVE, &def.mass, &src.mass) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "position", ANY_FINITE, def.position, src.position) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "velocity", ANY_FINITE, def.velocity, src.velocity) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &def.mass, &src.mass) ||
 		    !read_bool(p, obj, path, "fixed", &fixed))
 			return false;
 		def.motion = fixed ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
@@ -682,13 +694,13 @@ static bool read_constants(parser* p, const json_t* obj, const char* path, sm_sp
 	m->stiffness = 0.0;
 	m->damping = 0.0;
 	m->break_strain = INFINITY;
-	if (!read_field(p, obj, path, strain_k ? "strain_stiffness" : "stiffness", NON_NEGATIVE, &m->stiffness,
+	if (!read_field(p, FEEDS_CONSTANTS, obj, path, strain_k ? "strain_stiffness" : "stiffness", NON_NEGATIVE, &m->stiffness,
 	                &src->stiffness) ||
-	    !read_field(p, obj, path, strain_d ? "strain_damping" : "damping", NON_NEGATIVE, &m->damping, &src->damping))
+	    !read_field(p, FEEDS_CONSTANTS, obj, path, strain_d ? "strain_damping" : "damping", NON_NEGATIVE, &m->damping, &src->damping))
 		return false;
 	const json_t* brk = json_object_get(obj, "break_strain");
 	src->break_strain = -1;
-	if (brk != NULL && !read_field(p, obj, path, "break_strain", POSITIVE, &m->break_strain, &src->break_strain))
+	if (brk != NULL && !read_field(p, FEEDS_CONSTANTS, obj, path, "break_strain", POSITIVE, &m->break_strain, &src->break_strain))
 		return false;
 	return true;
 }
@@ -736,7 +748,7 @@ static bool read_springs(parser* p, const json_t* list)
 		def.damping_scaling = m.damping_scaling;
 		def.break_strain = m.break_strain;
 		const json_t* rest = json_object_get(obj, "rest_length");
-		if (rest != NULL && !read_field(p, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
+		if (rest != NULL && !read_field(p, FEEDS_CONSTANTS, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
 			return false;
 		// "kind" defaults to zero-length for "rest_length": 0 and rest-length otherwise.
 		def.kind = rest != NULL && def.rest_length == 0.0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
@@ -841,7 +853,7 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 			child_index(coordinate, element, c);
 			double x = 0.0;
 			int32_t source;
-			if (!read_number(p, json_array_get(vector, c), coordinate, &x, &source) ||
+			if (!read_number(p, FEEDS_STATE, json_array_get(vector, c), coordinate, &x, &source) ||
 			    !check_rule(p, coordinate, x, source, ANY_FINITE))
 				return false;
 			(*vertices)[3 * v + c] = x;
@@ -857,7 +869,7 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 			char corner[PATH_CAPACITY];
 			child_index(corner, element, c);
 			int64_t index;
-			if (!read_count(p, json_array_get(triple, c), corner, 0, nv > 0 ? (int64_t)nv - 1 : 0, &index))
+			if (!read_count(p, FEEDS_COUNTS, json_array_get(triple, c), corner, 0, nv > 0 ? (int64_t)nv - 1 : 0, &index))
 				return false;
 			(*triangles)[3 * t + c] = (int32_t)index;
 		}
@@ -974,11 +986,11 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		sm_rope_def d = sm_default_rope_def();
 		int64_t segments;
 		if (!require(p, obj, path, "start") || !require(p, obj, path, "end") ||
-		    !read_vector(p, obj, path, "start", ANY_FINITE, d.start, NULL) ||
-		    !read_vector(p, obj, path, "end", ANY_FINITE, d.end, NULL) ||
-		    !read_count_field(p, obj, path, "segments", 1, limit, &segments) ||
-		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
-		    !read_field(p, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length, NULL) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "start", ANY_FINITE, d.start, NULL) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "end", ANY_FINITE, d.end, NULL) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "segments", 1, limit, &segments) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length, NULL) ||
 		    !read_material(p, obj, path, "structural", &d.structural, &groups[0]) ||
 		    !read_material(p, obj, path, "bending", &d.bending, &groups[1]))
 			return false;
@@ -997,12 +1009,12 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		d.structural = d.shear = d.bend = sm_default_spring_material();
 		int64_t nu, nv;
 		int32_t edge_sources[2][3];
-		if (!read_vector(p, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
-		    !read_vector(p, obj, path, "edge_u", ANY_FINITE, d.edge_u, edge_sources[0]) ||
-		    !read_vector(p, obj, path, "edge_v", ANY_FINITE, d.edge_v, edge_sources[1]) ||
-		    !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
-		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
-		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		if (!read_vector(p, FEEDS_STATE, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "edge_u", ANY_FINITE, d.edge_u, edge_sources[0]) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "edge_v", ANY_FINITE, d.edge_v, edge_sources[1]) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nu", 2, limit, &nu) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nv", 2, limit, &nv) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
 		    !read_material(p, obj, path, "structural", &d.structural, &groups[0]) ||
 		    !read_material(p, obj, path, "shear", &d.shear, &groups[1]) ||
 		    !read_material(p, obj, path, "bend", &d.bend, &groups[2]))
@@ -1031,12 +1043,12 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		sm_block_def d = sm_default_block_def();
 		d.edge = d.face_diagonal = d.body_diagonal = sm_default_spring_material();
 		int64_t nu, nv, nw;
-		if (!require(p, obj, path, "size") || !read_vector(p, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
-		    !read_vector(p, obj, path, "size", POSITIVE, d.size, NULL) ||
-		    !read_count_field(p, obj, path, "nu", 2, limit, &nu) ||
-		    !read_count_field(p, obj, path, "nv", 2, limit, &nv) ||
-		    !read_count_field(p, obj, path, "nw", 2, limit, &nw) ||
-		    !read_field(p, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
+		if (!require(p, obj, path, "size") || !read_vector(p, FEEDS_STATE, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "size", POSITIVE, d.size, NULL) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nu", 2, limit, &nu) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nv", 2, limit, &nv) ||
+		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nw", 2, limit, &nw) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
 		    !read_material(p, obj, path, "edge", &d.edge, &groups[0]) ||
 		    !read_material(p, obj, path, "face_diagonal", &d.face_diagonal, &groups[1]) ||
 		    !read_material(p, obj, path, "body_diagonal", &d.body_diagonal, &groups[2]))
@@ -1060,7 +1072,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		double* vertices = NULL;
 		int32_t* triangles = NULL;
 		if (!require(p, obj, path, "vertices") || !require(p, obj, path, "triangles") ||
-		    !read_field(p, obj, path, "density", POSITIVE, &d.density, NULL) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "density", POSITIVE, &d.density, NULL) ||
 		    !read_material(p, obj, path, "edge", &d.edge, &groups[0]) ||
 		    !read_material(p, obj, path, "bend", &d.bend, &groups[1]) ||
 		    !read_mesh_arrays(p, obj, path, &vertices, &d.vertex_count, &triangles, &d.triangle_count)) {
@@ -1146,8 +1158,8 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 			double lo[3], hi[3];
 			int32_t lo_sources[3], hi_sources[3];
 			if (!check_keys(p, item, path, box_keys) || !require(p, item, path, "min") ||
-			    !require(p, item, path, "max") || !read_vector(p, item, path, "min", ANY_FINITE, lo, lo_sources) ||
-			    !read_vector(p, item, path, "max", ANY_FINITE, hi, hi_sources))
+			    !require(p, item, path, "max") || !read_vector(p, FEEDS_MOTION, item, path, "min", ANY_FINITE, lo, lo_sources) ||
+			    !read_vector(p, FEEDS_MOTION, item, path, "max", ANY_FINITE, hi, hi_sources))
 				return false;
 			// Every particle whose initial position is in the box, bounds included.
 			int32_t count = 0;
@@ -1330,20 +1342,20 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 			return false;
 		sm_simulation_def* d = &s->solver;
 		double atol = -1.0;
-		if (!read_field(p, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
-		    !read_field(p, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
-		    !read_field(p, simulation, path, "rtol", FRACTION, &d->relative_tolerance, NULL) ||
-		    !read_field(p, simulation, path, "atol", POSITIVE, &atol, NULL) ||
-		    !read_field(p, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
+		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "rtol", FRACTION, &d->relative_tolerance, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol", POSITIVE, &atol, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
 			return false;
 		if (atol > 0.0)
 			d->absolute_tolerance_position = d->absolute_tolerance_velocity = atol;
-		if (!read_field(p, simulation, path, "atol_position", POSITIVE, &d->absolute_tolerance_position, NULL) ||
-		    !read_field(p, simulation, path, "atol_velocity", POSITIVE, &d->absolute_tolerance_velocity, NULL))
+		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "atol_position", POSITIVE, &d->absolute_tolerance_position, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol_velocity", POSITIVE, &d->absolute_tolerance_velocity, NULL))
 			return false;
 		if (json_object_get(simulation, "max_steps") != NULL) {
 			int64_t steps;
-			if (!read_count(p, json_object_get(simulation, "max_steps"), "simulation.max_steps", 1, INT32_MAX, &steps))
+			if (!read_count(p, FEEDS_SETTINGS, json_object_get(simulation, "max_steps"), "simulation.max_steps", 1, INT32_MAX, &steps))
 				return false;
 			d->max_steps = (int32_t)steps;
 		}
@@ -1381,14 +1393,20 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
 	}
+	p.ex->parameter_uses = calloc(doc->parameter_count > 0 ? (size_t)doc->parameter_count : 1, 1);
+	if (p.ex->parameter_uses == NULL) {
+		free(p.ex);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
+		return NULL;
+	}
 	name_index_init(&p.ex->particle_names, particle_name, p.ex);
 	name_index_init(&p.ex->structure_names, structure_name, p.ex);
 	name_index_init(&p.ex->port_names, port_name, p.ex);
 	const json_t* root = doc->root;
 	sm_model_def def = sm_default_model_def();
 	int32_t gravity_source[3];
-	bool ok = read_vector(&p, root, "", "gravity", ANY_FINITE, def.gravity, gravity_source) &&
-	          read_field(&p, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
+	bool ok = read_vector(&p, FEEDS_CONSTANTS, root, "", "gravity", ANY_FINITE, def.gravity, gravity_source) &&
+	          read_field(&p, FEEDS_CONSTANTS, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
 	if (ok) {
 		sm_error model_err;
 		p.ex->model = sm_model_create(&def, &model_err);
@@ -1716,6 +1734,11 @@ const char* sm_document_parameter_name(const sm_document* doc, int32_t index)
 double sm_document_parameter_value(const sm_document* doc, int32_t index)
 {
 	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->parameter_values[index] : NAN;
+}
+
+uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index)
+{
+	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->current->parameter_uses[index] : 0;
 }
 
 int32_t sm_document_parameter_index(const sm_document* doc, const char* name)

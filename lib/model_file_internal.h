@@ -64,6 +64,8 @@ typedef struct expansion {
 	name_index port_names;
 
 	sm_document_settings settings;
+
+	uint8_t* parameter_uses;  // per parameter: sm_parameter_use flags of the places naming it
 } expansion;
 
 struct sm_document {

@@ -86,6 +86,18 @@ done << 'CASES'
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 CASES
+# check says what each parameter feeds.
+cat > "$tmp/uses.json" << 'JSON'
+{"springmass": 1, "name": "uses", "parameters": {"n": 4, "L": 1, "E": 10, "b": 0.1, "tol": 1e-6, "spare": 0},
+ "structures": [{"type": "rope", "name": "r", "start": [0, 0, 0], "end": ["L", 0, 0], "segments": "n",
+                 "structural": {"strain_stiffness": "E"}}],
+ "fixed": [{"min": [-1, -1, -1], "max": ["b", 1, 1]}], "simulation": {"rtol": "tol"}}
+JSON
+out=$("$cli" check "$tmp/uses.json" 2>&1)
+for line in "n = 4 feeds counts" "L = 1 feeds initial state" "E = 10 feeds constants" \
+            "b = 0.1 feeds held particles" "tol = 1e-06 feeds settings" "spare = 0 feeds nothing"; do
+  grep -q "^  $(sed 's/ = \([^ ]*\) / *= \1 */' <<< "$line")$" <<< "$out" || fail "check uses.json: no line '$line' in: $out"
+done
 # The absolute tolerances one at a time: --atol-position and --atol-velocity win over --atol
 # whatever the order, and a looser velocity tolerance is a different run (fewer steps on the
 # hanging rope, whose particles near the anchor move slowly: CVODE's error weights differ).

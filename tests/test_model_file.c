@@ -382,6 +382,59 @@ static int test_parameters(void)
 	return 0;
 }
 
+// What each parameter feeds, from the places the file names it: one parameter per kind of place
+// (a particle's mass and position, a spring's constants, a rope's ends, count and mass, a mesh's
+// vertices and triangles, a box of held particles, the settings, gravity), one in two kinds, one
+// unused; the uses stay when a value changes the counts.
+static int test_parameter_uses(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"u\", \"parameters\": {\"m\": 1, \"x\": 0, \"k\": 5, \"c\": 0.1,"
+	    " \"L\": 1, \"n\": 4, \"M\": 2, \"v\": 0, \"i\": 2, \"b\": 0.5, \"tol\": 1e-6, \"g\": -9.81, \"both\": 2,"
+	    " \"spare\": 3},"
+	    " \"gravity\": [0, 0, \"g\"],"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [\"x\", 0, 5], \"mass\": \"m\"},"
+	    "                 {\"name\": \"q\", \"position\": [1, 0, 5], \"mass\": \"both\"}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"stiffness\": \"k\", \"damping\": \"c\"}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [\"L\", 0, 0],"
+	    "   \"segments\": \"n\", \"mass\": \"M\", \"structural\": {\"strain_stiffness\": 10}},"
+	    "  {\"type\": \"mesh\", \"name\": \"t\", \"density\": 1, \"vertices\": [[0, 0, 2], [1, 0, 2], [0, \"both\", \"v\"]],"
+	    "   \"triangles\": [[0, 1, \"i\"]], \"edge\": {\"strain_stiffness\": 10}}],"
+	    " \"fixed\": [\"r[0]\", {\"min\": [-1, -1, -1], \"max\": [\"b\", 0.1, 0.1]}],"
+	    " \"simulation\": {\"rtol\": \"tol\"}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(text, &err);
+	if (doc == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(doc != NULL);
+	const struct {
+		const char* name;
+		uint32_t uses;
+	} expected[] = {
+	    {"m", SM_PARAMETER_CONSTANTS},    {"x", SM_PARAMETER_INITIAL_STATE}, {"k", SM_PARAMETER_CONSTANTS},
+	    {"c", SM_PARAMETER_CONSTANTS},    {"L", SM_PARAMETER_INITIAL_STATE}, {"n", SM_PARAMETER_COUNTS},
+	    {"M", SM_PARAMETER_CONSTANTS},    {"v", SM_PARAMETER_INITIAL_STATE}, {"i", SM_PARAMETER_COUNTS},
+	    {"b", SM_PARAMETER_MOTION},       {"tol", SM_PARAMETER_SETTINGS},    {"g", SM_PARAMETER_CONSTANTS},
+	    {"both", SM_PARAMETER_CONSTANTS | SM_PARAMETER_INITIAL_STATE},      {"spare", 0},
+	};
+	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
+		const int32_t k = sm_document_parameter_index(doc, expected[e].name);
+		ENSURE(k >= 0);
+		if (sm_document_parameter_uses(doc, k) != expected[e].uses)
+			printf("  parameter %s: uses %u, expected %u\n", expected[e].name, (unsigned)sm_document_parameter_uses(doc, k),
+			       (unsigned)expected[e].uses);
+		ENSURE(sm_document_parameter_uses(doc, k) == expected[e].uses);
+	}
+	ENSURE(sm_document_parameter_uses(doc, -1) == 0 && sm_document_parameter_uses(doc, 99) == 0);
+	ENSURE(sm_document_parameter_uses(NULL, 0) == 0);
+	const int32_t n = sm_document_parameter_index(doc, "n"), L = sm_document_parameter_index(doc, "L");
+	ENSURE_STATUS(sm_document_set_parameter(doc, n, 9.0, &err), SM_OK);
+	ENSURE(sm_document_parameter_uses(doc, n) == SM_PARAMETER_COUNTS);
+	ENSURE(sm_document_parameter_uses(doc, L) == SM_PARAMETER_INITIAL_STATE);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // An initial state (e.g. a static equilibrium) replaces positions but keeps rest lengths, and
 // survives saving and loading.
 static int test_initial_state_and_save_to_file(void)
@@ -1127,6 +1180,7 @@ int main(int argc, char** argv)
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_bundled_models_round_trip);
 	RUN_TEST(test_oscillator);
+	RUN_TEST(test_parameter_uses);
 	RUN_TEST(test_oscillator_follows_its_closed_form);
 	RUN_TEST(test_tearing_cloth_tears);
 	RUN_TEST(test_cloth_is_the_benchmark_cloth);

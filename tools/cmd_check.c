@@ -14,7 +14,8 @@ static void usage(FILE* out)
 	        "usage: springmass check MODEL\n"
 	        "\n"
 	        "Validates the model file MODEL (JSON, see docs/model-format.md) and prints a summary:\n"
-	        "particles (free, fixed), springs by kind, total mass, ports, parameters, the stiffest\n"
+	        "particles (free, fixed), springs by kind, total mass, ports, parameters (with what each\n"
+	        "feeds: constants, initial state, held particles, counts, settings), the stiffest\n"
 	        "spring and the highest natural frequency estimate, sqrt(k/m) over every spring with m the\n"
 	        "smaller mass of its free ends, with the explicit-stability step 2/omega it implies.\n"
 	        "\n"
@@ -202,8 +203,18 @@ int sm_cmd_check(int argc, char** argv)
 	}
 	const int32_t parameters = sm_document_parameter_count(doc);
 	printf("parameters   %d\n", (int)parameters);
-	for (int32_t k = 0; k < parameters; k++)
-		printf("  %-12s = %g\n", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
+	for (int32_t k = 0; k < parameters; k++) {
+		// What the parameter feeds, in the words of model_file.h's sm_parameter_use.
+		static const char* const uses[] = {"constants", "initial state", "held particles", "counts", "settings"};
+		const uint32_t used = sm_document_parameter_uses(doc, k);
+		printf("  %-12s = %-12g feeds ", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
+		if (used == 0)
+			printf("nothing");
+		for (int u = 0, shown = 0; u < 5; u++)
+			if (used & (1u << u))
+				printf("%s%s", shown++ ? ", " : "", uses[u]);
+		printf("\n");
+	}
 	if (stiffest >= 0) {
 		sm_spring_def s;
 		sm_model_get_spring(model, stiffest, &s);

@@ -68,6 +68,28 @@ SM_API const char* sm_document_parameter_name(const sm_document* doc, int32_t in
 SM_API double sm_document_parameter_value(const sm_document* doc, int32_t index);
 /// Index of a parameter by name, or -1.
 SM_API int32_t sm_document_parameter_index(const sm_document* doc, const char* name);
+/// What a parameter's value feeds, as flags or-ed over every place the file uses it (0 for a
+/// parameter the file never uses). A program that lets users change parameters while a model
+/// runs (the FMU does) changes in place only those that feed SM_PARAMETER_CONSTANTS alone.
+typedef enum sm_parameter_use {
+	/// masses, densities, stiffness, damping, rest lengths, break strains, gravity, mass damping
+	SM_PARAMETER_CONSTANTS = 1 << 0,
+	/// initial positions and velocities, among them a structure's geometry (which sets its
+	/// springs' rest lengths too) and a mesh's vertices
+	SM_PARAMETER_INITIAL_STATE = 1 << 1,
+	/// which particles are held: the corners of a box in "fixed"
+	SM_PARAMETER_MOTION = 1 << 2,
+	/// how many particles and springs there are and which particles springs join: a structure's
+	/// segment or grid counts, a mesh's triangles; every particle index after them moves too, and
+	/// with them the particles ports and "fixed" name
+	SM_PARAMETER_COUNTS = 1 << 3,
+	/// the "simulation" settings (stop time, tolerances, steps)
+	SM_PARAMETER_SETTINGS = 1 << 4,
+} sm_parameter_use;
+
+/// The uses (sm_parameter_use flags) of a parameter; 0 for an unused one or an index out of
+/// range. They depend on where the file names the parameter, not on its value.
+SM_API uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index);
 /// Sets a parameter's value; fails (document unchanged) if the model built with it would be
 /// invalid, with the message naming the element that breaks a rule. A parameter may feed any
 /// number of the file, counts included; a value that changes the number of particles fails if
