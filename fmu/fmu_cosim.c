@@ -1,9 +1,11 @@
 // springmass FMU: the FMI 2.0 Co-Simulation entry points of the generic FMU binary.
 //
-// One binary serves every model: fmi2Instantiate reads resources/model.json, checks that its
-// content hash is the GUID the importer passes, and builds the same variable table
-// (fmu_model.c) the packager wrote modelDescription.xml from. The glue uses the public
-// springmass API only (model files and simulations) and knows nothing of force laws.
+// One binary serves every model: fmi2Instantiate reads resources/model.json and, when the FMU
+// was packaged with parameter values (springmass fmu --set), resources/parameters.txt, checks
+// that their hash is the GUID the importer passes, applies those values to the parsed file (again
+// at every fmi2Reset) and builds the same variable table (fmu_model.c) the packager wrote
+// modelDescription.xml from. The glue uses the public springmass API only (model files and
+// simulations) and knows nothing of force laws.
 //
 // Every entry point checks the states in which FMI 2.0 allows it ("illegal call sequence"
 // otherwise), its pointers and value references, and returns fmi2Error with a logged message
@@ -70,6 +72,8 @@ typedef struct instance {
 
 	char* text;  // resources/model.json as read
 	size_t length;
+	char* parameters;  // resources/parameters.txt as read, NULL when the FMU has none
+	size_t parameters_length;
 	sm_document* doc;
 	fmu_table table;
 	int32_t particle_count;
@@ -267,8 +271,8 @@ static void load_start_values(instance* inst)
 
 // How to get an FMU of another structure, for the messages that refuse one.
 #define PACKAGED_STRUCTURE                                                                                  \
-	"this FMU's variables were made for the structure at packaging: change the value in the model file and " \
-	"package that (springmass fmu MODEL -o NAME.fmu)"
+	"this FMU's variables were made for the structure at packaging: package the model with that value "    \
+	"(springmass fmu MODEL -o NAME.fmu --set "
 
 // Appends "name = value" of every parameter whose value differs from before[] to text (size bytes,
 // NUL-terminated), comma-separated.
@@ -309,7 +313,7 @@ static bool packaged_structure(instance* inst, const char* function, const sm_mo
 	char names[512] = "the parameters";
 	if (before)
 		changed_parameters(inst, before, names, sizeof names);
-	log_error(inst, "%s: %s would give the model %s, but " PACKAGED_STRUCTURE, function, names, what);
+	log_error(inst, "%s: %s would give the model %s, but " PACKAGED_STRUCTURE "NAME=VALUE)", function, names, what);
 	return false;
 }
 
@@ -701,6 +705,7 @@ static void free_instance(instance* inst)
 	fmu_table_destroy(&inst->table);
 	sm_document_destroy(inst->doc);
 	free(inst->text);
+	free(inst->parameters);
 	free(inst->ports);
 	free(inst->held);
 	free(inst->port_dirty);
@@ -720,6 +725,42 @@ static void log_instantiate_error(const fmi2CallbackFunctions* functions, fmi2St
 	if (functions && functions->logger)
 		functions->logger(functions->componentEnvironment, instanceName ? instanceName : "springmass",
 		                  fmi2Error, "logStatusError", message);
+}
+
+// Reads the resources of the folder dir into the instance: model.json, and parameters.txt when
+// it exists. False after logging why not.
+static bool read_resources(instance* inst, const char* dir, const char* location)
+{
+	static const char* const names[2] = {"model.json", FMU_PARAMETERS_RESOURCE};
+	char** texts[2] = {&inst->text, &inst->parameters};
+	size_t* lengths[2] = {&inst->length, &inst->parameters_length};
+	const size_t n = strlen(dir);
+	for (int k = 0; k < 2; ++k) {
+		char* path = malloc(n + 2 + strlen(names[k]));
+		if (!path) {
+			log_error(inst, "fmi2Instantiate: out of memory");
+			return false;
+		}
+		sprintf(path, "%s/%s", dir, names[k]);
+		const char* problem = NULL;
+		*texts[k] = fmu_read_file(path, lengths[k], &problem);
+		if (!*texts[k] && !(k == 1 && errno == ENOENT)) {
+			log_error(inst, "fmi2Instantiate: cannot read the %s %s (from resource location \"%s\"): %s",
+			          k == 0 ? "model file" : "parameter values", path, location, problem);
+			free(path);
+			return false;
+		}
+		free(path);
+	}
+	return true;
+}
+
+// The model file parsed with the parameter values of the FMU applied: what fmi2Instantiate and
+// fmi2Reset start from.
+static sm_document* parse_document(const instance* inst, sm_error* err)
+{
+	return fmu_document_parse(inst->text, inst->length, "resources/model.json", inst->parameters,
+	                          inst->parameters_length, err);
 }
 
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
@@ -773,42 +814,29 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		          fmuResourceLocation);
 		goto fail;
 	}
-	size_t n = strlen(dir);
-	char* path = malloc(n + sizeof "/model.json");
-	if (!path) {
-		free(dir);
-		log_error(inst, "fmi2Instantiate: out of memory");
-		goto fail;
-	}
-	memcpy(path, dir, n);
-	memcpy(path + n, "/model.json", sizeof "/model.json");
+	const bool read = read_resources(inst, dir, fmuResourceLocation);
 	free(dir);
-	const char* problem = NULL;
-	inst->text = fmu_read_file(path, &inst->length, &problem);
-	if (!inst->text) {
-		log_error(inst, "fmi2Instantiate: cannot read the model file %s (from resource location \"%s\"): %s",
-		          path, fmuResourceLocation, problem);
-		free(path);
+	if (!read)
 		goto fail;
-	}
-	free(path);
 
 	char guid[40];
-	fmu_guid(inst->text, inst->length, guid);
+	fmu_package_guid(inst->text, inst->length, inst->parameters, inst->parameters_length, guid);
 	if (strcmp(guid, fmuGUID) != 0) {
 		log_error(inst,
-		          "fmi2Instantiate: GUID %s does not match the model file resources/model.json, whose GUID is %s: "
-		          "the importer passed another FMU's GUID, or the model file was changed after packaging",
-		          fmuGUID, guid);
+		          "fmi2Instantiate: GUID %s does not match the model file resources/model.json%s, whose GUID is %s: "
+		          "the importer passed another FMU's GUID, or the resources were changed after packaging",
+		          fmuGUID, inst->parameters ? " with its parameter values resources/" FMU_PARAMETERS_RESOURCE : "",
+		          guid);
 		goto fail;
 	}
 	sm_error err = {SM_OK, ""};
-	inst->doc = sm_document_parse(inst->text, inst->length, "resources/model.json", &err);
+	inst->doc = parse_document(inst, &err);
 	if (!inst->doc) {
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;
 	}
-	if (fmu_table_create(inst->doc, inst->text, inst->length, &inst->table, &err) != SM_OK) {
+	if (fmu_table_create_set(inst->doc, inst->text, inst->length, inst->parameters, inst->parameters_length,
+	                         &inst->table, &err) != SM_OK) {
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;
 	}
@@ -918,7 +946,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 	if (!allowed(inst, "fmi2Reset", ST_ANY))
 		return fmi2Error;
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = sm_document_parse(inst->text, inst->length, "resources/model.json", &err);
+	sm_document* doc = parse_document(inst, &err);
 	if (!doc) {
 		log_error(inst, "fmi2Reset: %s", err.message);
 		inst->state = ST_ERROR;
@@ -1063,8 +1091,8 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	if (v->variability == FMU_CONSTANT) {
 		if (value == sm_document_parameter_value(inst->doc, v->index))
 			return true;
-		log_error(inst, "fmi2SetReal: %s = %.17g refused: %s sets the model's structure, " PACKAGED_STRUCTURE, v->name,
-		          value, v->name);
+		log_error(inst, "fmi2SetReal: %s = %.17g refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%.17g)",
+		          v->name, value, v->name, v->name, value);
 		return false;
 	}
 	if (!settable(inst, "fmi2SetReal", v))

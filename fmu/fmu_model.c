@@ -6,6 +6,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <locale.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <math.h>
@@ -30,21 +31,40 @@ static void multiply_small(uint64_t hi, uint64_t lo, uint32_t factor, uint64_t* 
 	*out_hi = hi * factor + carry;
 }
 
-void fmu_guid(const char* text, size_t length, char guid[40])
+typedef struct fnv128 {
+	uint64_t hi, lo;
+} fnv128;
+
+static void fnv128_update(fnv128* h, const char* bytes, size_t length)
 {
-	uint64_t hi = 0x6c62272e07bb0142u;  // FNV-128 offset basis
-	uint64_t lo = 0x62b821756295c58du;
 	for (size_t i = 0; i < length; ++i) {
-		lo ^= (uint8_t)text[i];
+		h->lo ^= (uint8_t)bytes[i];
 		uint64_t p_hi, p_lo;
-		multiply_small(hi, lo, 0x13bu, &p_hi, &p_lo);
-		p_hi += lo << 24;  // (lo << 88) contributes lo << 24 to the high half
-		hi = p_hi;
-		lo = p_lo;
+		multiply_small(h->hi, h->lo, 0x13bu, &p_hi, &p_lo);
+		p_hi += h->lo << 24;  // (lo << 88) contributes lo << 24 to the high half
+		h->hi = p_hi;
+		h->lo = p_lo;
 	}
+}
+
+void fmu_package_guid(const char* text, size_t length, const char* parameters, size_t parameters_length,
+                      char guid[40])
+{
+	fnv128 h = {0x6c62272e07bb0142u, 0x62b821756295c58du};  // FNV-128 offset basis
+	fnv128_update(&h, text, length);
+	if (parameters) {
+		fnv128_update(&h, "", 1);
+		fnv128_update(&h, parameters, parameters_length);
+	}
+	const uint64_t hi = h.hi, lo = h.lo;
 	snprintf(guid, 40, "{%08x-%04x-%04x-%04x-%04x%08x}", (unsigned)(hi >> 32), (unsigned)((hi >> 16) & 0xffffu),
 	         (unsigned)(hi & 0xffffu), (unsigned)(lo >> 48), (unsigned)((lo >> 32) & 0xffffu),
 	         (unsigned)(lo & 0xffffffffu));
+}
+
+void fmu_guid(const char* text, size_t length, char guid[40])
+{
+	fmu_package_guid(text, length, NULL, 0, guid);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -436,7 +456,34 @@ static sm_status fail(sm_error* err, sm_status status, const char* message)
 	return status;
 }
 
+// Sets err to prefix and the formatted message (cut to the message's capacity); returns status.
+static sm_status fail_with(sm_error* err, sm_status status, const char* prefix, const char* fmt, va_list args)
+{
+	if (err) {
+		err->status = status;
+		int n = snprintf(err->message, sizeof err->message, "%s", prefix);
+		if (n >= 0 && (size_t)n < sizeof err->message)
+			vsnprintf(err->message + n, sizeof err->message - (size_t)n, fmt, args);
+	}
+	return status;
+}
+
+static sm_status failf(sm_error* err, sm_status status, const char* fmt, ...)
+{
+	va_list args;
+	va_start(args, fmt);
+	fail_with(err, status, "", fmt, args);
+	va_end(args);
+	return status;
+}
+
 sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table, sm_error* err)
+{
+	return fmu_table_create_set(doc, text, length, NULL, 0, table, err);
+}
+
+sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t length, const char* parameters,
+                               size_t parameters_length, fmu_table* table, sm_error* err)
 {
 	memset(table, 0, sizeof *table);
 	if (!doc || !text)
@@ -450,7 +497,7 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 		return st;
 	}
 	sm_error parse_err = {SM_OK, ""};
-	sm_document* scratch = sm_document_parse(text, length, "model.json", &parse_err);
+	sm_document* scratch = fmu_document_parse(text, length, "model.json", parameters, parameters_length, &parse_err);
 	if (!scratch) {
 		sm_model_destroy(model);
 		if (parse_err.status == SM_ERROR_OUT_OF_MEMORY) {
@@ -458,10 +505,11 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 				*err = parse_err;
 			return parse_err.status;
 		}
-		return fail(err, SM_ERROR_INVALID_ARGUMENT, "the model file's text does not parse as the document given");
+		return failf(err, SM_ERROR_INVALID_ARGUMENT, "the model file's text does not give the document given: %s",
+		             parse_err.message);
 	}
 
-	fmu_guid(text, length, table->guid);
+	fmu_package_guid(text, length, parameters, parameters_length, table->guid);
 	sm_document_settings settings = sm_document_get_settings(doc);
 	table->model_identifier = fmu_identifier(sm_document_name(doc));
 	table->model_name = duplicate(sm_document_name(doc) ? sm_document_name(doc) : "");
@@ -898,4 +946,230 @@ char* fmu_read_file(const char* path, size_t* length, const char** problem)
 	close(fd);
 	errno = error;
 	return data;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameter values set at packaging: resources/parameters.txt
+// ---------------------------------------------------------------------------------------------
+
+// Numbers are read and written in the C locale whatever LC_NUMERIC the process chose (an importer
+// may run under a decimal comma, where strtod would stop at the '.'): uselocale() switches the
+// calling thread only, for the call; glibc's "C" locale object is static (freelocale frees nothing).
+typedef struct c_numbers {
+	locale_t c;
+	locale_t previous;
+} c_numbers;
+
+static bool c_numbers_begin(c_numbers* n)
+{
+	n->c = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+	if (n->c == (locale_t)0)
+		return false;
+	n->previous = uselocale(n->c);
+	return true;
+}
+
+static void c_numbers_end(c_numbers* n)
+{
+	uselocale(n->previous);
+	freelocale(n->c);
+}
+
+// The shortest of %.15g, %.16g and %.17g that reads back to exactly the value (C locale).
+static void format_shortest(double value, char out[32])
+{
+	for (int digits = 15; digits <= 17; ++digits) {
+		snprintf(out, 32, "%.*g", digits, value);
+		if (strtod(out, NULL) == value)
+			return;
+	}
+}
+
+// A line of the file for a message: printable ASCII as it is with '"' and '\' escaped, any other
+// byte as \xNN, cut after 60 bytes with "...".
+static void quote_line(const char* line, size_t length, char* out, size_t size)
+{
+	size_t k = 0;
+	for (size_t i = 0; i < length && i < 60 && k + 5 < size; ++i) {
+		const unsigned char c = (unsigned char)line[i];
+		if (c == '"' || c == '\\')
+			k += (size_t)snprintf(out + k, size - k, "\\%c", c);
+		else if (c >= 0x20 && c < 0x7f)
+			out[k++] = (char)c;
+		else
+			k += (size_t)snprintf(out + k, size - k, "\\x%02x", c);
+	}
+	if (length > 60 && k + 4 < size) {
+		memcpy(out + k, "...", 3);
+		k += 3;
+	}
+	out[k] = '\0';
+}
+
+char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, size_t* parameters_length,
+                          sm_error* err)
+{
+	sm_document* file = sm_document_parse(text, length, "model.json", err);
+	if (!file)
+		return NULL;
+	const int32_t np = sm_document_parameter_count(set);
+	if (np != sm_document_parameter_count(file)) {
+		sm_document_destroy(file);
+		fail(err, SM_ERROR_INVALID_ARGUMENT, "the document given is not of the model file's text");
+		return NULL;
+	}
+	int32_t* pending = malloc(((size_t)np + 1) * sizeof *pending);
+	c_numbers numbers;
+	if (!pending || !c_numbers_begin(&numbers)) {
+		free(pending);
+		sm_document_destroy(file);
+		fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while writing the parameter values");
+		return NULL;
+	}
+	int32_t count = 0;
+	for (int32_t i = 0; i < np; ++i) {
+		const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
+		if (memcmp(&a, &b, sizeof a) != 0)
+			pending[count++] = i;
+	}
+	// Passes in file order: each value the model takes is written; one it refuses now is tried
+	// again after the others, until all are written or a pass takes none.
+	text_buffer out = {NULL, 0, 0, false};
+	append(&out, "", 0);
+	sm_error refusal = {SM_OK, ""};
+	bool progress = true;
+	while (count > 0 && progress && !out.failed) {
+		progress = false;
+		int32_t kept = 0;
+		for (int32_t k = 0; k < count; ++k) {
+			const int32_t i = pending[k];
+			const double value = sm_document_parameter_value(set, i);
+			sm_error e = {SM_OK, ""};
+			const sm_status st = sm_document_set_parameter(file, i, value, &e);
+			if (st == SM_OK) {
+				char number[32];
+				format_shortest(value, number);
+				appendf(&out, "%s=%s\n", sm_document_parameter_name(file, i), number);
+				progress = true;
+			} else if (st == SM_ERROR_OUT_OF_MEMORY) {
+				out.failed = true;
+				break;
+			} else {
+				if (kept == 0) {
+					char number[32];
+					format_shortest(value, number);
+					failf(&refusal, st, "parameter %s = %s: %s", sm_document_parameter_name(file, i), number,
+					      e.message);
+				}
+				pending[kept++] = i;
+			}
+		}
+		count = kept;
+	}
+	c_numbers_end(&numbers);
+	free(pending);
+	sm_document_destroy(file);
+	if (out.failed) {
+		free(out.data);
+		fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while writing the parameter values");
+		return NULL;
+	}
+	if (count > 0) {
+		free(out.data);
+		if (err)
+			*err = refusal;
+		return NULL;
+	}
+	*parameters_length = out.length;
+	return out.data;
+}
+
+// Sets err to "source:line: " and the formatted message; returns status.
+static sm_status line_error(sm_error* err, sm_status status, const char* source_name, size_t line, const char* fmt,
+                            ...)
+{
+	char prefix[SM_ERROR_MESSAGE_CAPACITY];
+	snprintf(prefix, sizeof prefix, "%s:%zu: ", source_name, line);
+	va_list args;
+	va_start(args, fmt);
+	fail_with(err, status, prefix, fmt, args);
+	va_end(args);
+	return status;
+}
+
+// Applies one line "NAME=VALUE" (line_length bytes, no line feed); first_line[i] is the line that
+// set parameter i before (0 for none).
+static sm_status apply_line(sm_document* doc, const char* line, size_t line_length, size_t number,
+                            size_t* first_line, const char* source_name, sm_error* err)
+{
+	char quoted[300];
+	quote_line(line, line_length, quoted, sizeof quoted);
+	const char* eq = memchr(line, '=', line_length);
+	char name[256], value_text[128];
+	const size_t name_length = eq ? (size_t)(eq - line) : 0;
+	const size_t value_length = eq ? line_length - name_length - 1 : 0;
+	if (!eq || name_length == 0 || memchr(line, '\0', line_length) || name_length >= sizeof name ||
+	    value_length >= sizeof value_text)
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "expected NAME=VALUE, got \"%s\"", quoted);
+	memcpy(name, line, name_length);
+	name[name_length] = '\0';
+	memcpy(value_text, eq + 1, value_length);
+	value_text[value_length] = '\0';
+	char* end = NULL;
+	const double value = strtod(value_text, &end);
+	if (value_length == 0 || end != value_text + value_length || !isfinite(value))
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the value is not a finite number",
+		                  quoted);
+	const int32_t index = sm_document_parameter_index(doc, name);
+	if (index < 0)
+		return line_error(err, SM_ERROR_NOT_FOUND, source_name, number, "\"%s\": the model has no parameter named "
+		                  "\"%s\"", quoted, name);
+	if (first_line[index] != 0)
+		return line_error(err, SM_ERROR_SCHEMA, source_name, number, "parameter %s is set again (first on line %zu)",
+		                  name, first_line[index]);
+	first_line[index] = number;
+	sm_error refusal = {SM_OK, ""};
+	const sm_status st = sm_document_set_parameter(doc, index, value, &refusal);
+	if (st != SM_OK)
+		return line_error(err, st, source_name, number, "\"%s\": %s", quoted, refusal.message);
+	return SM_OK;
+}
+
+sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t parameters_length,
+                               const char* source_name, sm_error* err)
+{
+	if (!doc || !parameters)
+		return fail(err, SM_ERROR_INVALID_ARGUMENT, "no document or no parameter values");
+	if (parameters_length == 0)
+		return line_error(err, SM_ERROR_SYNTAX, source_name, 1, "empty: the file lists the parameter values set at "
+		                  "packaging, one NAME=VALUE a line, and is left out when there are none");
+	size_t* first_line = calloc((size_t)sm_document_parameter_count(doc) + 1, sizeof *first_line);
+	c_numbers numbers;
+	if (!first_line || !c_numbers_begin(&numbers)) {
+		free(first_line);
+		return fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while reading the parameter values");
+	}
+	sm_status st = SM_OK;
+	size_t number = 1;
+	for (size_t start = 0; start < parameters_length && st == SM_OK; ++number) {
+		const char* feed = memchr(parameters + start, '\n', parameters_length - start);
+		const size_t line_length = feed ? (size_t)(feed - (parameters + start)) : parameters_length - start;
+		st = apply_line(doc, parameters + start, line_length, number, first_line, source_name, err);
+		start += line_length + 1;
+	}
+	c_numbers_end(&numbers);
+	free(first_line);
+	return st;
+}
+
+sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name, const char* parameters,
+                                size_t parameters_length, sm_error* err)
+{
+	sm_document* doc = sm_document_parse(text, length, source_name, err);
+	if (doc && parameters &&
+	    fmu_apply_parameters(doc, parameters, parameters_length, "resources/" FMU_PARAMETERS_RESOURCE, err) != SM_OK) {
+		sm_document_destroy(doc);
+		return NULL;
+	}
+	return doc;
 }

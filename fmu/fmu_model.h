@@ -1,4 +1,5 @@
-// springmass FMU: the variable table of a model file, its GUID and its modelDescription.xml.
+// springmass FMU: the variable table of a model file, its GUID and its modelDescription.xml, and
+// the parameter values an FMU carries beside the file (resources/parameters.txt).
 //
 // One table is the single source of truth for the FMU's interface: the packager writes
 // modelDescription.xml from it and the runtime (fmu_cosim.c) resolves value references with
@@ -91,7 +92,7 @@ typedef struct fmu_table {
 } fmu_table;
 
 /// Builds the table of a parsed model file. `text`/`length` are the file's bytes (hashed for
-/// the GUID).
+/// the GUID); fmu_table_create_set for an FMU that also carries parameter values.
 ///
 /// A model-file parameter is tunable (changeable between communication steps) when changing
 /// it leaves the particles, the springs' endpoints, the particles' motions and the initial
@@ -107,12 +108,56 @@ typedef struct fmu_table {
 sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table,
                            sm_error* err);
 
+/// The same for an FMU whose resources/parameters.txt holds `parameters` (NULL for none): doc is
+/// the model file with those values applied (fmu_document_parse), the parameters' start values and
+/// constants, the counts, the ports and the default experiment are the model's with them, and the
+/// GUID is fmu_package_guid of both texts.
+sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t length, const char* parameters,
+                               size_t parameters_length, fmu_table* table, sm_error* err);
+
 /// Frees what the table owns; accepts a zeroed table.
 void fmu_table_destroy(fmu_table* table);
 
 /// The GUID of a model file's bytes: a 128-bit FNV-1a hash written as
 /// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL).
 void fmu_guid(const char* text, size_t length, char guid[40]);
+
+/// The GUID of an FMU's resources: fmu_guid of the model file's bytes when `parameters` is NULL
+/// (no resources/parameters.txt), else the same hash continued over a NUL byte and the parameters'
+/// bytes. A model file holds no NUL byte (the loader refuses one), so the two parts cannot be
+/// shifted into each other: another model file or other parameter values give another GUID.
+void fmu_package_guid(const char* text, size_t length, const char* parameters, size_t parameters_length,
+                      char guid[40]);
+
+/// The resource, beside model.json, that holds the parameter values given at packaging
+/// (`springmass fmu MODEL --set NAME=VALUE`); an FMU packaged without any has none.
+#define FMU_PARAMETERS_RESOURCE "parameters.txt"
+
+/// The text of resources/parameters.txt for `set`, a document parsed from the model file `text`
+/// whose parameters were then set: one line "NAME=VALUE\n" for each parameter whose value differs
+/// from the file's (bit for bit), the value in the fewest digits that read back to the same double.
+/// The lines are in the file's order of parameters, except that a value the model refuses before
+/// others are set (a rope's end moved onto its start before the start moves away) comes after
+/// them: applied one at a time in the order written, every value is accepted. Returns a malloc'ed
+/// NUL-terminated text and its length (0 when no value differs), or NULL with err set: out of
+/// memory, or values the model refuses in every such order (naming the parameter).
+char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, size_t* parameters_length,
+                          sm_error* err);
+
+/// Applies the text of resources/parameters.txt to a document parsed from the model file: one
+/// "NAME=VALUE" a line (the last line's line feed may be missing), each a parameter of the model
+/// named once with a finite number (read in the C locale whatever the importer's), set in the order
+/// of the lines. Refuses an empty text, a malformed line, an unknown or repeated parameter and a
+/// value the model refuses, with a message "SOURCE:LINE: ..." naming it (source_name, e.g.
+/// "resources/parameters.txt"); the document may then hold the values of the lines before.
+sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t parameters_length,
+                               const char* source_name, sm_error* err);
+
+/// The document an FMU simulates: the model file `text` parsed (messages name `source_name`) with
+/// the values of resources/parameters.txt applied when `parameters` is not NULL (messages name
+/// "resources/parameters.txt"). NULL with err set on failure; the caller destroys the result.
+sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name, const char* parameters,
+                                size_t parameters_length, sm_error* err);
 
 /// modelDescription.xml of the table, as a malloc'ed NUL-terminated string (NULL on OOM).
 /// `generation_date` is an ISO 8601 UTC time stamp or NULL to leave it out.

@@ -6,8 +6,10 @@
 
 #include "fmi2Functions.h"
 
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,6 +36,8 @@ static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status sta
 typedef struct fixture {
 	fmu_table table;
 	char guid[40];
+	const char* text;  // the model file
+	size_t length;
 	char resources[1024];
 	log_record log;
 	fmi2CallbackFunctions callbacks;
@@ -61,6 +65,8 @@ static int setup(fixture* f)
 	fwrite(text, 1, n, out);
 	fclose(out);
 	snprintf(f->resources, sizeof f->resources, "file://%s", dir);
+	f->text = text;
+	f->length = n;
 	sm_error err;
 	sm_document* doc = sm_document_parse(text, n, MODEL, &err);
 	if (!doc) {
@@ -82,6 +88,8 @@ static void teardown(fixture* f)
 	char path[1100];
 	const char* dir = f->resources + strlen("file://");
 	snprintf(path, sizeof path, "%s/model.json", dir);
+	remove(path);
+	snprintf(path, sizeof path, "%s/" FMU_PARAMETERS_RESOURCE, dir);
 	remove(path);
 	remove(dir);
 	fmu_table_destroy(&f->table);
@@ -245,6 +253,100 @@ static int test_model_description_lists_every_variable_once(void)
 	return 0;
 }
 
+// Writes resources/parameters.txt (length bytes) beside the model file and sets the fixture's GUID
+// to the one of both.
+static int write_parameters(fixture* f, const char* parameters, size_t length)
+{
+	char path[1100];
+	snprintf(path, sizeof path, "%s/" FMU_PARAMETERS_RESOURCE, f->resources + strlen("file://"));
+	FILE* out = fopen(path, "wb");
+	if (!out)
+		return 1;
+	const bool written = fwrite(parameters, 1, length, out) == length;
+	if (fclose(out) != 0 || !written)
+		return 1;
+	fmu_package_guid(f->text, f->length, parameters, length, f->guid);
+	return 0;
+}
+
+// Values set at packaging (resources/parameters.txt) are the model's at instantiation and after
+// every reset: k = 200 N/m gives w = sqrt(k/m) = 10 rad/s.
+static int test_parameter_values(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	char plain[40];
+	memcpy(plain, f.guid, 40);
+	ENSURE(write_parameters(&f, "k=200\nd=0\n", 10) == 0);
+	ENSURE(strcmp(plain, f.guid) != 0);
+	ENSURE(fmi2Instantiate("plain", fmi2CoSimulation, plain, f.resources, &f.callbacks, fmi2False, fmi2False) == NULL);
+	ENSURE(strstr(f.log.last, "with its parameter values resources/parameters.txt") != NULL);
+	fmi2Component c = start(&f, "set");
+	ENSURE(c != NULL);
+	ENSURE(get(c, &f, "k") == 200.0);
+	for (int n = 0; n < 10; ++n)
+		ENSURE_STATUS(fmi2DoStep(c, n * 0.01, 0.01, fmi2True), fmi2OK);
+	ENSURE_NEAR(get(c, &f, "tip.x"), 0.5 + 0.2 * cos(1.0), 1e-6);
+	fmi2ValueReference k = vr(&f, "k");
+	double eighty = 80.0;
+	ENSURE_STATUS(fmi2SetReal(c, &k, 1, &eighty), fmi2OK);
+	ENSURE_STATUS(fmi2Reset(c), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE(get(c, &f, "k") == 200.0);
+	fmi2FreeInstance(c);
+	// Under a decimal comma (where the machine has one) the values are read as written.
+	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") != NULL) {
+		ENSURE(write_parameters(&f, "k=62.5\n", 7) == 0);
+		c = fmi2Instantiate("comma", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+		setlocale(LC_NUMERIC, "C");
+		ENSURE(c != NULL);
+		ENSURE(get(c, &f, "k") == 62.5);
+		fmi2FreeInstance(c);
+	}
+	teardown(&f);
+	return 0;
+}
+
+// A file of parameter values edited by hand (with the GUID made to match) is refused by
+// fmi2Instantiate with a message naming its line, never taken in part.
+static int test_parameter_values_refused(void)
+{
+#define TEXT(literal) literal, sizeof literal - 1
+	static const struct {
+		const char* text;
+		size_t length;
+		const char* message;
+	} cases[] = {
+	    {TEXT(""), "parameters.txt:1: empty"},
+	    {TEXT("k200\n"), "parameters.txt:1: expected NAME=VALUE, got \"k200\""},
+	    {TEXT("=5\n"), "parameters.txt:1: expected NAME=VALUE"},
+	    {TEXT("k=60\n\n"), "parameters.txt:2: expected NAME=VALUE, got \"\""},
+	    {TEXT("k=6\0\n"), "parameters.txt:1: expected NAME=VALUE, got \"k=6\\x00\""},
+	    {TEXT("k=abc\n"), "parameters.txt:1: \"k=abc\": the value is not a finite number"},
+	    {TEXT("k=1e999\n"), "not a finite number"},
+	    {TEXT("k=60\r\n"), "\"k=60\\x0d\": the value is not a finite number"},
+	    {TEXT("zz=1\n"), "parameters.txt:1: \"zz=1\": the model has no parameter named \"zz\""},
+	    {TEXT("k=60\nm=1\nk=70"), "parameters.txt:3: parameter k is set again (first on line 1)"},
+	    {TEXT("d=1\nm=-1\n"),
+	     "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
+	};
+#undef TEXT
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+		ENSURE(write_parameters(&f, cases[i].text, cases[i].length) == 0);
+		f.log.last[0] = '\0';
+		ENSURE(fmi2Instantiate("edited", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False) ==
+		       NULL);
+		if (strstr(f.log.last, cases[i].message) == NULL) {
+			printf("  case %zu: logged '%s', expected '%s'\n", i, f.log.last, cases[i].message);
+			return 1;
+		}
+	}
+	teardown(&f);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -252,5 +354,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_misuse);
 	RUN_TEST(test_state_round_trip);
 	RUN_TEST(test_model_description_lists_every_variable_once);
+	RUN_TEST(test_parameter_values);
+	RUN_TEST(test_parameter_values_refused);
 	return TEST_SUMMARY();
 }

@@ -63,15 +63,18 @@ awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7)
 # Options: each line is the exit status, the first line the command prints on stderr (empty for
 # none) and its arguments. Numbers below the smallest normal double are numbers (as in a model
 # file); a malformed --set is a usage error in every command.
+check_cases() {
+  while IFS='|' read -r expected_status expected args; do
+    out=$(eval "\"$cli\" $args" 2>&1 > /dev/null)
+    status=$?
+    expected=${expected//\$tmp/$tmp}
+    [ $status -eq "$expected_status" ] && [ "$(head -1 <<< "$out")" = "$expected" ] ||
+      fail "$args: exit status $status (expected $expected_status), printed '$(head -1 <<< "$out")', expected '$expected'"
+  done
+}
 touch "$tmp/a_file"
 osc="$root/models/oscillator.json"
-while IFS='|' read -r expected_status expected args; do
-  out=$(eval "\"$cli\" $args" 2>&1 > /dev/null)
-  status=$?
-  expected=${expected//\$tmp/$tmp}
-  [ $status -eq "$expected_status" ] && [ "$(head -1 <<< "$out")" = "$expected" ] ||
-    fail "$args: exit status $status (expected $expected_status), printed '$(head -1 <<< "$out")', expected '$expected'"
-done << 'CASES'
+check_cases << 'CASES'
 2|springmass run: --t-end expects a finite number, got 'nan'|run "$osc" -q -o - --t-end nan
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
 2|springmass run: --atol must be > 0, got '-1'|run "$osc" -q -o - --atol -1
@@ -191,6 +194,34 @@ else
     [ -L "$tmp/link.fmu" ] && [ "$(stat -c %a "$tmp/earlier.fmu")" = 640 ] &&
     [ "$(head -c 2 "$tmp/earlier.fmu")" = PK ] && ! ls "$tmp" | grep -q partial ||
     fail "fmu -o LINK to an earlier output: not replaced in place with its permissions"
+  # --set as in `springmass run`: a malformed setting is a usage error, an unknown parameter or a
+  # value the model refuses a bad model; each is refused before anything is written.
+  cp "$root/tests/python/models/rope_n.json" "$tmp/rope_n.json"
+  check_cases << 'CASES'
+2|springmass fmu: --set expects NAME=VALUE, got 'n'|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n
+2|springmass fmu: --set expects NAME=VALUE, got '=8'|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set =8
+2|springmass fmu: --set n=inf: 'inf' is not a finite number|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=inf
+2|springmass fmu: --set n=8x: '8x' is not a finite number|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=8x
+2|springmass fmu: --set needs a value|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set
+1|springmass fmu: --set zz=1: the model has no parameter named "zz"|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=8 --set zz=1
+1|springmass fmu: --set n=2.5: $tmp/rope_n.json: structures[0].segments: parameter n = 2.5 must be a whole number from 1 to 4194304|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=2.5
+1|springmass fmu: --set n=2: $tmp/rope_n.json: ports[1].particle: "rope[4]" is outside structure rope ([0] to [2]) (with parameter n = 2)|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=2
+1|springmass fmu: --set E=-1: $tmp/rope_n.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0|fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set E=-1
+CASES
+  [ ! -e "$tmp/set.fmu" ] || fail "fmu --set with a refused value wrote its output"
+  "$cli" fmu --help | grep -q -- "--set NAME=VALUE" || fail "fmu --help says nothing of --set"
+  # The values that differ from the file's go beside it into resources/parameters.txt, which the
+  # GUID hashes too; values the file has change nothing.
+  guid() { sed -n 's/.*GUID \({[-0-9a-f]*}\).*/\1/p' <<< "$1"; }
+  plain=$("$cli" fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/plain.fmu" 2>&1)
+  same=$("$cli" fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/same.fmu" --set n=4 --set E=100 2>&1)
+  with_set=$("$cli" fmu "$tmp/rope_n.json" --runtime "$tmp/runtime" -o "$tmp/set.fmu" --set n=4e0 --set n=8 --set E=150 2>&1)
+  [ -n "$(guid "$plain")" ] && [ "$(guid "$same")" = "$(guid "$plain")" ] && [ "$(guid "$with_set")" != "$(guid "$plain")" ] &&
+    [ "$(unzip -Z1 "$tmp/same.fmu" | grep -c parameters.txt)" = 0 ] &&
+    [ "$(unzip -p "$tmp/set.fmu" resources/parameters.txt)" = "$(printf 'n=8\nE=150')" ] &&
+    cmp -s "$tmp/rope_n.json" <(unzip -p "$tmp/set.fmu" resources/model.json) &&
+    unzip -p "$tmp/set.fmu" modelDescription.xml | grep -q 'name="p\[8\].vz"' ||
+    fail "fmu --set n=8 --set E=150: $with_set (without --set: $plain, with the file's values: $same)"
 fi
 
 [ $failures -eq 0 ] && echo "check_cli: all passed"

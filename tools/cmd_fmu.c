@@ -4,7 +4,9 @@
 //   modelDescription.xml                       written from the FMU's variable table
 //   binaries/linux64/<modelIdentifier>.so      the generic FMU binary
 //   binaries/linux64/lib*.so*                  the shared libraries it needs (RUNPATH $ORIGIN)
-//   resources/model.json                       the model file, byte for byte (its hash is the GUID)
+//   resources/model.json                       the model file, byte for byte
+//   resources/parameters.txt                   the values of --set that differ from the file's, if any
+//                                              (the GUID hashes this file and model.json together)
 //   resources/reference.csv                    a reference result, when one is given
 //   documentation/licenses/                    the licences of the libraries in binaries/
 // The binary, its libraries and their licences come from the FMU runtime folder the build
@@ -27,6 +29,7 @@ int sm_cmd_fmu(int argc, char** argv)
 
 #else
 
+#include "cli_common.h"
 #include "fmu_model.h"
 
 #include <dirent.h>
@@ -43,7 +46,8 @@ int sm_cmd_fmu(int argc, char** argv)
 static void usage(FILE* out)
 {
 	fprintf(out,
-	        "usage: springmass fmu MODEL -o NAME.fmu [--reference RESULT.csv] [--runtime DIR]\n"
+	        "usage: springmass fmu MODEL -o NAME.fmu [--set NAME=VALUE ...] [--reference RESULT.csv]\n"
+	        "                      [--runtime DIR]\n"
 	        "\n"
 	        "Packages the model file MODEL as a self-contained FMI 2.0 Co-Simulation FMU.\n"
 	        "Parameters of the file become FMU parameters, ports become inputs and outputs; see\n"
@@ -51,6 +55,11 @@ static void usage(FILE* out)
 	        "\n"
 	        "options:\n"
 	        "  -o, --output FILE    the FMU to write (required)\n"
+	        "  --set NAME=VALUE     packages the model as if the file gave parameter NAME this value\n"
+	        "                       (repeatable): it is the parameter's start value and, for a parameter\n"
+	        "                       that sets the structure (a rope's segment count), the FMU's constant.\n"
+	        "                       The file goes into the FMU as it is, the values beside it in\n"
+	        "                       resources/parameters.txt; the GUID hashes both\n"
 	        "  --reference FILE     a reference result to include as resources/reference.csv\n"
 	        "  --runtime DIR        folder holding binaries/linux64/springmass_fmu.so and its libraries\n"
 	        "                       (default: the one of this build or installation)\n"
@@ -234,12 +243,47 @@ typedef struct options {
 	const char* output;
 	const char* reference;
 	const char* runtime;
+	const char** sets;  // the values of --set, in order
+	int set_count;
 } options;
+
+// Applies the --set values to doc (parsed from text), as `springmass run --set` does, and makes the
+// text of resources/parameters.txt: *parameters NULL when no value differs from the file's, and
+// *doc then as it was. Otherwise *doc is replaced by the document the FMU makes of the model file
+// and that text. Returns 0 or the exit status, after printing why.
+static int apply_sets(const options* opt, const char* text, size_t length, sm_document** doc, char** parameters,
+                      size_t* parameters_length)
+{
+	*parameters = NULL;
+	const int status = cli_set_parameters("fmu", *doc, opt->sets, opt->set_count);
+	if (status != 0 || opt->set_count == 0)
+		return status;
+	sm_error err = {SM_OK, ""};
+	*parameters = fmu_parameters_text(*doc, text, length, parameters_length, &err);
+	if (!*parameters) {
+		fprintf(stderr, "springmass fmu: --set: %s\n", err.message);
+		return 1;
+	}
+	if (*parameters_length == 0) {
+		free(*parameters);
+		*parameters = NULL;
+		return 0;
+	}
+	sm_document_destroy(*doc);
+	*doc = fmu_document_parse(text, length, opt->model, *parameters, *parameters_length, &err);
+	if (!*doc) {
+		fprintf(stderr, "springmass fmu: --set: %s\n", err.message);
+		return 1;
+	}
+	return 0;
+}
 
 static int package(const options* opt)
 {
 	int result = 1;
 	char* text = NULL;
+	char* parameters = NULL;
+	size_t parameters_length = 0;
 	char* xml = NULL;
 	sm_document* doc = NULL;
 	fmu_table table;
@@ -265,7 +309,12 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: %s\n", err.message);
 		goto done;
 	}
-	if (fmu_table_create(doc, text, length, &table, &err) != SM_OK) {
+	const int set_status = apply_sets(opt, text, length, &doc, &parameters, &parameters_length);
+	if (set_status != 0) {
+		result = set_status;
+		goto done;
+	}
+	if (fmu_table_create_set(doc, text, length, parameters, parameters_length, &table, &err) != SM_OK) {
 		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
 		goto done;
 	}
@@ -299,6 +348,12 @@ static int package(const options* opt)
 		goto done;
 	if (!write_all(path, text, length))
 		goto write_failed;
+	if (parameters) {
+		if (!join(path, sizeof path, staging, "resources/" FMU_PARAMETERS_RESOURCE))
+			goto done;
+		if (!write_all(path, parameters, parameters_length))
+			goto write_failed;
+	}
 	if (opt->reference) {
 		if (!join(path, sizeof path, staging, "resources/reference.csv"))
 			goto done;
@@ -364,6 +419,12 @@ static int package(const options* opt)
 	}
 	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output, table.model_identifier,
 	       (int)table.count, table.guid);
+	if (parameters) {
+		printf("springmass fmu: parameter values of resources/" FMU_PARAMETERS_RESOURCE ":");
+		for (const char* line = parameters; *line; line = strchr(line, '\n') + 1)
+			printf(" %.*s", (int)(strchr(line, '\n') - line), line);
+		printf("\n");
+	}
 	result = 0;
 	goto done;
 
@@ -375,26 +436,31 @@ done:
 	free(xml);
 	fmu_table_destroy(&table);
 	sm_document_destroy(doc);
+	free(parameters);
 	free(text);
 	return result;
 }
 
-int sm_cmd_fmu(int argc, char** argv)
+// Reads the arguments into opt: 0 to go on, -1 after printing the help, or the exit status of a
+// usage error after printing it.
+static int parse_arguments(int argc, char** argv, options* opt)
 {
-	options opt = {NULL, NULL, NULL, NULL};
 	for (int i = 1; i < argc; ++i) {
 		const char* a = argv[i];
 		if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
 			usage(stdout);
-			return 0;
+			return -1;
 		}
+		const bool set = strcmp(a, "--set") == 0;
 		const char** slot = NULL;
 		if (strcmp(a, "-o") == 0 || strcmp(a, "--output") == 0)
-			slot = &opt.output;
+			slot = &opt->output;
 		else if (strcmp(a, "--reference") == 0)
-			slot = &opt.reference;
+			slot = &opt->reference;
 		else if (strcmp(a, "--runtime") == 0)
-			slot = &opt.runtime;
+			slot = &opt->runtime;
+		else if (set)
+			slot = &opt->sets[opt->set_count];
 		if (slot) {
 			if (i + 1 >= argc) {
 				fprintf(stderr, "springmass fmu: %s needs a value\n\n", a);
@@ -402,24 +468,40 @@ int sm_cmd_fmu(int argc, char** argv)
 				return 2;
 			}
 			*slot = argv[++i];
+			opt->set_count += set;
 		} else if (a[0] == '-' && a[1] != '\0') {
 			fprintf(stderr, "springmass fmu: unknown option %s\n\n", a);
 			usage(stderr);
 			return 2;
-		} else if (!opt.model) {
-			opt.model = a;
+		} else if (!opt->model) {
+			opt->model = a;
 		} else {
-			fprintf(stderr, "springmass fmu: one model file only (got %s and %s)\n\n", opt.model, a);
+			fprintf(stderr, "springmass fmu: one model file only (got %s and %s)\n\n", opt->model, a);
 			usage(stderr);
 			return 2;
 		}
 	}
-	if (!opt.model || !opt.output) {
-		fprintf(stderr, "springmass fmu: %s\n\n", !opt.model ? "no model file given" : "no output given (-o NAME.fmu)");
+	if (!opt->model || !opt->output) {
+		fprintf(stderr, "springmass fmu: %s\n\n",
+		        !opt->model ? "no model file given" : "no output given (-o NAME.fmu)");
 		usage(stderr);
 		return 2;
 	}
-	return package(&opt);
+	return 0;
+}
+
+int sm_cmd_fmu(int argc, char** argv)
+{
+	options opt = {NULL, NULL, NULL, NULL, NULL, 0};
+	opt.sets = calloc((size_t)argc + 1, sizeof *opt.sets);
+	if (!opt.sets) {
+		fprintf(stderr, "springmass fmu: out of memory\n");
+		return 1;
+	}
+	const int status = parse_arguments(argc, argv, &opt);
+	const int result = status > 0 ? status : status < 0 ? 0 : package(&opt);
+	free(opt.sets);
+	return result;
 }
 
 #endif

@@ -21,17 +21,20 @@ SANITIZED = os.environ.get("SPRINGMASS_SANITIZE", "") not in ("", "0", "OFF")
 
 @pytest.fixture(scope="session")
 def package(tmp_path_factory):
-    """package(model_path) -> path of an FMU made with `springmass fmu` (once per session)."""
+    """package(model_path, sets=()) -> path of an FMU made with `springmass fmu`, with `--set S` for
+    each S of sets (once per session)."""
     out = tmp_path_factory.mktemp("fmus")
     made = {}
 
-    def make(model):
+    def make(model, sets=()):
         model = pathlib.Path(model)
-        if model not in made:
-            fmu = out / (model.stem + ".fmu")
-            subprocess.run([str(CLI), "fmu", str(model), "-o", str(fmu)], check=True, capture_output=True)
-            made[model] = fmu
-        return made[model]
+        key = (model, tuple(sets))
+        if key not in made:
+            fmu = out / (f"{model.stem}_set{len(made)}.fmu" if sets else f"{model.stem}.fmu")
+            options = [word for s in sets for word in ("--set", s)]
+            subprocess.run([str(CLI), "fmu", str(model), "-o", str(fmu), *options], check=True, capture_output=True)
+            made[key] = fmu
+        return made[key]
 
     return make
 

@@ -67,3 +67,15 @@ class Instance:
             self.slave.freeLibrary()
             if self.own_dir:
                 shutil.rmtree(self.unzipdir, ignore_errors=True)
+
+
+def fmu_guid(model, parameters=None):
+    """The GUID of an FMU's resources (fmu/fmu_model.h, fmu_package_guid): the 128-bit FNV-1a hash
+    of resources/model.json's bytes, continued over a NUL byte and resources/parameters.txt's bytes
+    when the FMU has that file."""
+    data = model if parameters is None else model + b"\0" + parameters
+    h = 0x6c62272e07bb014262b821756295c58d
+    for byte in data:
+        h = ((h ^ byte) * 0x0000000001000000000000000000013b) & ((1 << 128) - 1)
+    x = f"{h:032x}"
+    return "{%s-%s-%s-%s-%s}" % (x[:8], x[8:12], x[12:16], x[16:20], x[20:])

@@ -1,16 +1,19 @@
 """Every bundled model's FMU: valid for fmpy and the fmu-manipulation-toolbox checker, and
-simulating it in fmpy gives what `springmass run` gives for the same file."""
+simulating it in fmpy gives what `springmass run` gives for the same file; a model packaged with
+`springmass fmu --set` is the model with those values, as `springmass run --set` simulates it."""
 import csv
 import pathlib
 import subprocess
 import sys
+import zipfile
 
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
-from conftest import BUNDLED_FMUS, CLI, ROOT
+from conftest import BUNDLED_FMUS, CLI, MODELS as TEST_MODELS, ROOT
+from fmu_helpers import fmu_guid
 
 MODELS = sorted((ROOT / "models").glob("*.json"))
 FMUTOOL = pathlib.Path(sys.executable).parent / "fmutool"
@@ -22,14 +25,19 @@ def bundled(model):
     return fmu
 
 
-@pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
-def test_bundled_fmu_is_valid(model):
-    fmu = bundled(model)
+def check_valid(fmu):
+    """fmpy's validation and the fmu-manipulation-toolbox checker find nothing wrong."""
     assert validate_fmu(str(fmu)) == []
     out = subprocess.run([str(FMUTOOL), "-input", str(fmu), "-check"], capture_output=True, text=True)
     text = out.stdout + out.stderr
     assert out.returncode == 0, text
     assert "No semantic error" in text and "compliant with FMI-2.0" in text, text
+
+
+@pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
+def test_bundled_fmu_is_valid(model):
+    fmu = bundled(model)
+    check_valid(fmu)
     md = read_model_description(str(fmu))
     assert md.guid and md.coSimulation.canGetAndSetFMUstate and md.coSimulation.providesDirectionalDerivative
 
@@ -73,3 +81,68 @@ def test_bundled_fmu_matches_springmass_run(model, tmp_path):
         # tolerance (default rtol 1e-6) relative to the signal's size, not bit for bit.
         scale = max(1.0, float(np.max(np.abs(theirs))))
         assert np.max(np.abs(ours - theirs)) <= 1e-3 * scale, name
+
+
+@pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
+def test_bundled_fmu_carries_its_model_file_alone_and_its_guid_is_the_file_hash(model):
+    # Packaged without --set: resources/model.json is the file byte for byte, there is no
+    # resources/parameters.txt, and the GUID is the hash of the file alone, as before --set existed.
+    fmu = bundled(model)
+    with zipfile.ZipFile(fmu) as z:
+        assert [n for n in z.namelist() if n.startswith("resources/") and not n.endswith("/")] == \
+            ["resources/model.json"]
+        assert z.read("resources/model.json") == model.read_bytes()
+    assert read_model_description(str(fmu)).guid == fmu_guid(model.read_bytes())
+
+
+# hanging_rope_n.json: a rope of n = 10 segments pinned at rope[0], E and c tunable, T the stop time.
+ROPE = TEST_MODELS / "hanging_rope_n.json"
+ROPE_SETS = ("n=40", "E=3000", "T=0.3")
+
+
+def test_set_values_package_the_model_as_if_the_file_gave_them(package, tmp_path):
+    # n = 40 segments: 41 particles in the variable table, n a constant of 40, the tunable E's start
+    # value 3000 and the DefaultExperiment's stop time T = 0.3 s. The model file travels as it is,
+    # the values beside it, and the GUID hashes both.
+    plain, changed = package(ROPE), package(ROPE, ROPE_SETS)
+    check_valid(changed)
+    text = ROPE.read_bytes()
+    with zipfile.ZipFile(changed) as z:
+        assert z.read("resources/model.json") == text
+        parameters = z.read("resources/parameters.txt")
+    assert parameters == b"n=40\nE=3000\nT=0.3\n"
+    md, md_plain = read_model_description(str(changed)), read_model_description(str(plain))
+    assert md.guid == fmu_guid(text, parameters)
+    assert md_plain.guid == fmu_guid(text) != md.guid
+    v = {x.name: x for x in md.modelVariables}
+    assert (v["n"].causality, v["n"].variability, v["n"].start) == ("local", "constant", "40")
+    assert (v["E"].causality, v["E"].variability, v["E"].start) == ("parameter", "tunable", "3000")
+    assert float(md.defaultExperiment.stopTime) == 0.3
+    assert "p[40].z" in v and "p[41].z" not in v
+    assert {x.name for x in md_plain.modelVariables} >= {"p[10].z"} and "p[11].z" not in \
+        {x.name for x in md_plain.modelVariables}
+
+    # The same as `springmass run --set` of the file, output point for output point: one library,
+    # one model, the solver stopped at the same points (measured: equal bit for bit; E = 2000
+    # instead of 3000 differs by up to 3e-2).
+    out = tmp_path / "run.csv"
+    subprocess.run([str(CLI), "run", str(ROPE), *(w for s in ROPE_SETS for w in ("--set", s)), "--positions",
+                    "--output-interval", "0.01", "-q", "-o", str(out)], check=True, capture_output=True)
+    header, data = read_csv(out)
+    columns = {f"p[{i}].{c}": f"particle.rope[{i}].{c}" for i in range(41) for c in "xyz"}
+    assert "particle.rope[40].z" in header and "particle.rope[41].z" not in header
+    columns.update({name: name for name in ("near.x", "near.z", "energy.kinetic", "energy.elastic",
+                                            "energy.gravity", "energy.dissipated")})
+    r = simulate_fmu(str(changed), output_interval=0.01, output=list(columns))  # to the default stop time
+    assert len(r) == len(data) == 31 and r["time"][-1] == pytest.approx(0.3)
+    for name, column in columns.items():
+        theirs = data[:, header.index(column)]
+        assert np.max(np.abs(r[name] - theirs)) <= 1e-9 * max(1.0, float(np.max(np.abs(theirs)))), name
+
+
+def test_set_values_the_file_has_change_nothing(package):
+    # n = 10 is the file's own value: the FMU is the one packaged without --set.
+    plain, same = package(ROPE), package(ROPE, ("n=10", "E=2000"))
+    with zipfile.ZipFile(plain) as a, zipfile.ZipFile(same) as b:
+        assert a.namelist() == b.namelist()
+        assert a.read("modelDescription.xml") == b.read("modelDescription.xml")

@@ -1,13 +1,16 @@
 """Misuse of the FMU: each an error with a clear message, never a crash; usable after reset."""
 import math
+import os
 import struct
+import zipfile
 
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from fmu_helpers import Instance
+from conftest import MODELS
+from fmu_helpers import Instance, fmu_guid
 
 FMI2_ERROR = 3
 
@@ -435,5 +438,93 @@ def test_resource_locations_of_other_hosts_and_schemes_are_refused(test_fmu):
             comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
             assert not comp, uri
             assert "not a local file URI" in "\n".join(m[2] for m in inst.messages[n:]), uri
+    finally:
+        inst.free()
+
+
+def test_values_set_at_packaging_are_the_constants_and_the_start_after_reset(package):
+    # hanging_rope_n packaged with --set n=40 --set E=3000: n is the constant 40 (its own value is
+    # accepted, the file's 10 refused with the command that packages it), E starts at 3000, and
+    # fmi2Reset goes back to those values, not to the file's.
+    inst = Instance(package(MODELS / "hanging_rope_n.json", ("n=40", "E=3000")))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        assert inst.get("n", "E") == [40.0, 3000.0]
+        inst.set("n", 40)
+        expect_error(inst, lambda: inst.set("n", 10), "n = 10 refused", "springmass fmu MODEL -o NAME.fmu --set n=10")
+        inst.set("E", 5000.0)
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.01)
+        assert inst.get("p[40].z") < 0.0
+        s.reset()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        assert inst.get("n", "E", "p[40].x", "p[40].z") == [40.0, 3000.0, 1.0, 0.0]
+    finally:
+        inst.free()
+
+
+def test_edited_parameter_values_are_refused_at_instantiation(package):
+    # resources/parameters.txt is part of the GUID: edited, removed or added by hand, the FMU is
+    # refused as one whose resources changed after packaging. With the GUID made to match, each
+    # malformed or inconsistent file is refused naming its line; nothing is ever taken in part.
+    fmu = package(MODELS / "hanging_rope_n.json", ("n=40", "E=3000"))
+    inst = Instance(fmu, instantiate=False)
+    resources = f"{inst.unzipdir}/resources"
+    model = open(f"{resources}/model.json", "rb").read()
+
+    def instantiate(text, guid=None):
+        if text is None:
+            os.remove(f"{resources}/parameters.txt")
+        else:
+            with open(f"{resources}/parameters.txt", "wb") as f:
+                f.write(text)
+        guid = guid or (fmu_guid(model) if text is None else fmu_guid(model, text))
+        before = len(inst.messages)
+        comp = inst.slave.fmi2Instantiate(b"edited", 1, guid.encode(), f"file://{resources}".encode(),
+                                         inst.callbacks, 0, 0)
+        if comp:
+            inst.slave.fmi2FreeInstance(comp)
+        return comp, "\n".join(m[2] for m in inst.messages[before:])
+
+    try:
+        comp, log = instantiate(b"n=40\nE=3000\n")
+        assert comp and log == ""
+        comp, log = instantiate(b"n=40\nE=3001\n", guid=inst.md.guid)
+        assert not comp and "does not match the model file resources/model.json with its parameter values" in log
+        for text, message in [
+                (b"n=40\nE=3000\nn=41\n", "parameters.txt:3: parameter n is set again (first on line 1)"),
+                (b"n=40\nzz=1\n", 'parameters.txt:2: "zz=1": the model has no parameter named "zz"'),
+                (b"n=forty\n", 'parameters.txt:1: "n=forty": the value is not a finite number'),
+                (b"n=nan\n", 'parameters.txt:1: "n=nan": the value is not a finite number'),
+                (b"n 40\n", 'parameters.txt:1: expected NAME=VALUE, got "n 40"'),
+                (b"", "parameters.txt:1: empty"),
+                (b"n=0\n", 'parameters.txt:1: "n=0": resources/model.json: structures[0].segments: parameter n = 0'),
+                (b"n=\xff\x1b[31m\n", 'parameters.txt:1: "n=\\xff\\x1b[31m": the value is not a finite number')]:
+            comp, log = instantiate(text)
+            assert not comp and message in log, (text, log)
+        comp, log = instantiate(None, guid=inst.md.guid)
+        assert not comp and "does not match the model file resources/model.json, whose GUID is" in log
+    finally:
+        inst.free()
+
+
+def test_set_values_are_written_in_an_order_the_model_takes(package, tmp_path):
+    # A rope from xa = 0 to xb = 1 with per-strain springs: --set xb=3 --set xa=1 ends at 1..3, but
+    # xa = 1 before xb moves would give the rope zero length, which the model refuses. The values
+    # are written in the file's order where the model takes them there, after the others where not.
+    model = tmp_path / "ends.json"
+    model.write_text('{"springmass": 1, "name": "ends", "parameters": {"xa": 0, "xb": 1}, "structures": '
+                     '[{"type": "rope", "name": "r", "start": ["xa", 0, 0], "end": ["xb", 0, 0], "segments": 2, '
+                     '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
+    fmu = package(model, ("xb=3", "xa=1"))
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/parameters.txt") == b"xb=3\nxa=1\n"
+    inst = Instance(fmu)
+    try:
+        inst.start()
+        assert inst.get("p[0].x", "p[1].x", "p[2].x") == [1.0, 2.0, 3.0]
     finally:
         inst.free()
