@@ -197,103 +197,17 @@ typedef enum parameter_role {
 	ROLE_STRUCTURE,      // the particle or spring count, or a port's particle: constant
 } parameter_role;
 
-// Whether two documents have the same "simulation" and "fmu" settings: a parameter used there
-// sets the solver before the simulation is made (solver.rtol ...) or the default experiment.
-static bool same_settings(const sm_document* doc, const sm_document* scratch)
+// What a parameter is to the FMU, from the places the model file names it
+// (sm_document_parameter_uses, which does not depend on the value): a count makes it a constant,
+// anything but constants makes it fixed. An unused parameter feeds nothing and stays tunable.
+static parameter_role parameter_role_of(const sm_document* doc, int32_t parameter)
 {
-	sm_document_settings a = sm_document_get_settings(doc), b = sm_document_get_settings(scratch);
-	const sm_simulation_def *x = &a.solver, *y = &b.solver;
-	return a.stop_time == b.stop_time && a.output_interval == b.output_interval &&
-	       a.particle_variables == b.particle_variables && x->method == y->method && x->solver == y->solver &&
-	       x->jacobian == y->jacobian && x->relative_tolerance == y->relative_tolerance &&
-	       x->absolute_tolerance_position == y->absolute_tolerance_position &&
-	       x->absolute_tolerance_velocity == y->absolute_tolerance_velocity && x->max_step == y->max_step &&
-	       x->max_steps == y->max_steps;
-}
-
-// What differs between the reference model of doc and the model of scratch (the same file with
-// one parameter changed): counts and ports first, then the settings, particles (motion, initial
-// state) and springs (endpoints, kind). A break strain that appears or disappears changes the
-// events, not the topology.
-static parameter_role difference(const sm_document* doc, const sm_model* a, const sm_document* scratch,
-                                 const sm_model* b)
-{
-	int32_t n = sm_model_particle_count(a);
-	int32_t m = sm_model_spring_count(a);
-	if (n != sm_model_particle_count(b) || m != sm_model_spring_count(b))
+	const uint32_t uses = sm_document_parameter_uses(doc, parameter);
+	if (uses & SM_PARAMETER_COUNTS)
 		return ROLE_STRUCTURE;
-	for (int32_t p = 0; p < sm_document_port_count(doc); ++p) {
-		if (sm_document_port(doc, p).particle != sm_document_port(scratch, p).particle)
-			return ROLE_STRUCTURE;
-	}
-	if (!same_settings(doc, scratch))
+	if (uses & ~(uint32_t)SM_PARAMETER_CONSTANTS)
 		return ROLE_STATE;
-	for (int32_t i = 0; i < n; ++i) {
-		sm_particle_def pa, pb;
-		if (sm_model_get_particle(a, i, &pa) != SM_OK || sm_model_get_particle(b, i, &pb) != SM_OK)
-			return ROLE_STATE;
-		if (pa.motion != pb.motion)
-			return ROLE_STATE;
-		for (int c = 0; c < 3; ++c) {
-			if (pa.position[c] != pb.position[c] || pa.velocity[c] != pb.velocity[c])
-				return ROLE_STATE;
-		}
-	}
-	for (int32_t s = 0; s < m; ++s) {
-		sm_spring_def sa, sb;
-		if (sm_model_get_spring(a, s, &sa) != SM_OK || sm_model_get_spring(b, s, &sb) != SM_OK)
-			return ROLE_STATE;
-		if (sa.a != sb.a || sa.b != sb.b || sa.kind != sb.kind)
-			return ROLE_STATE;
-	}
 	return ROLE_CONSTANTS;
-}
-
-// Sets the parameter to each probe value in a scratch document and compares the models with the
-// reference (doc's, built as `reference`). A value the model refuses says nothing of what the
-// parameter feeds (a mass cannot be negative, a count must be whole) and is skipped; a parameter
-// that takes none of them is fixed. Positions, velocities and settings change with any value; the
-// probes are there for what changes only at some values: a count changes with one step up or
-// down; a bound of a box or region of held particles only where it crosses a particle, which the
-// values far apart look for (v/2, 2v, 0, -v and 1000 times the scale up and down move a bound
-// across the particles on either side of it, and past all of them). A bound that crosses no
-// particle at any probe is declared tunable and refused when a value does move a particle in or
-// out (the simulation cannot take a particle that changes its motion). Sets *role;
-// SM_ERROR_OUT_OF_MEMORY when an allocation failed on the way, so that the answer is unknown (and
-// the scratch document may keep a probe value).
-static sm_status parameter_role_of(const sm_document* doc, const sm_model* reference, sm_document* scratch,
-                                   int32_t parameter, parameter_role* role)
-{
-	const double value = sm_document_parameter_value(scratch, parameter);
-	const double scale = 1.0 + fabs(value);
-	const double probes[] = {value + 1.0 + 0.25 * fabs(value), value + 1.0, value - 1.0, 0.5 * value, 2.0 * value,
-	                         0.0, -value, value + 1e3 * scale, value - 1e3 * scale};
-	bool valid = false;
-	*role = ROLE_CONSTANTS;
-	sm_status st = SM_OK;
-	for (size_t k = 0; k < sizeof probes / sizeof probes[0] && *role != ROLE_STRUCTURE; ++k) {
-		if (probes[k] == value)
-			continue;
-		st = sm_document_set_parameter(scratch, parameter, probes[k], NULL);
-		if (st == SM_ERROR_OUT_OF_MEMORY)
-			return st;
-		if (st != SM_OK)
-			continue;
-		sm_model* model = NULL;
-		st = sm_document_build(scratch, &model, NULL);
-		if (st == SM_ERROR_OUT_OF_MEMORY)
-			return st;
-		if (st == SM_OK && model) {
-			valid = true;
-			parameter_role r = difference(doc, reference, scratch, model);
-			if (r > *role)
-				*role = r;
-		}
-		sm_model_destroy(model);
-	}
-	if (!valid)
-		*role = ROLE_STATE;
-	return sm_document_set_parameter(scratch, parameter, value, NULL);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -496,19 +410,6 @@ sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t 
 			*err = build_err;
 		return st;
 	}
-	sm_error parse_err = {SM_OK, ""};
-	sm_document* scratch = fmu_document_parse(text, length, "model.json", parameters, parameters_length, &parse_err);
-	if (!scratch) {
-		sm_model_destroy(model);
-		if (parse_err.status == SM_ERROR_OUT_OF_MEMORY) {
-			if (err)
-				*err = parse_err;
-			return parse_err.status;
-		}
-		return failf(err, SM_ERROR_INVALID_ARGUMENT, "the model file's text does not give the document given: %s",
-		             parse_err.message);
-	}
-
 	fmu_package_guid(text, length, parameters, parameters_length, table->guid);
 	sm_document_settings settings = sm_document_get_settings(doc);
 	table->model_identifier = fmu_identifier(sm_document_name(doc));
@@ -524,11 +425,7 @@ sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t 
 	int32_t np = sm_document_parameter_count(doc);
 	for (int32_t i = 0; i < np && !b.failed; ++i) {
 		const char* pname = sm_document_parameter_name(doc, i);
-		parameter_role role = ROLE_STATE;
-		if (parameter_role_of(doc, model, scratch, i, &role) != SM_OK) {
-			b.failed = true;
-			break;
-		}
+		const parameter_role role = parameter_role_of(doc, i);
 		static const char* const role_text[] = {
 		    "tunable: feeds constants only",
 		    "fixed: feeds the initial state, which particles are held or the simulation settings",
@@ -602,7 +499,6 @@ sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t 
 			}
 		}
 	}
-	sm_document_destroy(scratch);
 	sm_model_destroy(model);
 
 	if (b.failed) {

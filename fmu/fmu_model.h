@@ -102,9 +102,10 @@ typedef struct fmu_table {
 /// velocities) or which particles are held. It is a constant (causality local, variability
 /// constant: not settable at all) when it sets the particle or spring count or which particle a
 /// port is at: the FMU's variables (p[i].x, the ports) are made for one structure at packaging.
-/// This is decided by building the model with the parameter perturbed, through the public API
-/// only. Returns SM_OK, or an error with the message in err (e.g. two variables with the same
-/// name); on error *table is zeroed and nothing is leaked.
+/// This is decided from the places the model file names the parameter
+/// (sm_document_parameter_uses), whatever its value. Returns SM_OK, or an error with the message
+/// in err (e.g. two variables with the same name); on error *table is zeroed and nothing is
+/// leaked.
 sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table,
                            sm_error* err);
 

@@ -219,6 +219,25 @@ def test_a_bound_of_held_particles_is_a_fixed_parameter(test_fmu):
         inst.free()
 
 
+def test_a_bound_that_holds_the_same_particles_at_many_values_is_still_fixed(test_fmu):
+    # far_box: the box holds the anchor (x = 0) for xmax from 0 to 5000 and the bob (x = 5000)
+    # from there on, so that every value from half to double and a thousand times the scale up
+    # holds the same particle; xmax feeds which particles are held all the same, so it is fixed:
+    # 6000 (both held) is taken before initialisation and refused after it.
+    fmu = test_fmu("far_box")
+    inst = Instance(fmu)
+    try:
+        assert inst.variables["xmax"].variability == "fixed" and inst.variables["k"].variability == "tunable"
+        inst.start({"xmax": 6000.0})
+        inst.slave.doStep(0.0, 0.1)
+        assert inst.get("tip.x") == 5000.0 and inst.get("tip.z") == 0.0  # the bob is held too
+        with pytest.raises(FMICallException):
+            inst.set("xmax", 2.0)
+        assert "xmax is a fixed parameter" in inst.messages[-1][2]
+    finally:
+        inst.free()
+
+
 def test_tunable_parameters_that_empty_a_spring_group():
     # The rope's springs take their constants from E and c, both tunable: set to 0 together
     # between steps, the springs stay (the topology cannot change) but pull nothing, so without
