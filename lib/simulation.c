@@ -459,6 +459,16 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		if (!(isfinite(positive[i].value) && positive[i].value > 0.0))
 			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
 			                    positive[i].name, positive[i].value);
+	// CVODE weighs errors by 1 / (rtol |y| + atol): below the smallest normal double that weight
+	// overflows, and every step fails as if the model moved too fast.
+	if (!(def->absolute_tolerance_position >= DBL_MIN && def->absolute_tolerance_velocity >= DBL_MIN))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "simulation: absolute_tolerance_%s = %g is below %g, the smallest normal double: "
+		                    "the error weight 1 / atol overflows",
+		                    def->absolute_tolerance_position >= DBL_MIN ? "velocity" : "position",
+		                    def->absolute_tolerance_position >= DBL_MIN ? def->absolute_tolerance_velocity
+		                                                                : def->absolute_tolerance_position,
+		                    DBL_MIN);
 	if (!(def->relative_tolerance < 1.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
