@@ -22,7 +22,11 @@
 // bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced Cholesky
 // solver, and the coarse system of conjugate gradients on large models) use BLAS for large
 // matrices, whose sums may depend on the number of BLAS threads (a process-wide setting, e.g.
-// OPENBLAS_NUM_THREADS); keep it fixed to reproduce a run to the last bit.
+// OPENBLAS_NUM_THREADS); keep it fixed to reproduce a run to the last bit. Across machines,
+// OpenBLAS chooses its kernels by processor (OPENBLAS_CORETYPE overrides the choice), so the
+// same large model may take another step sequence within the tolerances: over 0.3 s the
+// 128 x 128 benchmark cloth took 1794 steps with OpenBLAS's AVX-512 kernels and 1842 with its
+// Haswell ones, the free corner within 1e-6 m of each other.
 #pragma once
 
 #include "springmass/model.h"
@@ -65,8 +69,10 @@ typedef struct sm_simulation_def {
 	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
 	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
 	double relative_tolerance;      ///< in (0, 1) [1]; default 1e-6
-	double absolute_tolerance_position;  ///< > 0 [m]; default 1e-8
-	double absolute_tolerance_velocity;  ///< > 0 [m/s], also for the dissipated energy [J]; default 1e-6
+	/// >= DBL_MIN, 2.2e-308 (CVODE weighs errors by 1 / atol) [m]; default 1e-8
+	double absolute_tolerance_position;
+	/// >= DBL_MIN [m/s], also for the dissipated energy [J]; default 1e-6
+	double absolute_tolerance_velocity;
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
