@@ -193,8 +193,8 @@ int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant)
 // What a model-file parameter feeds, as far as the FMU is concerned; the larger value wins.
 typedef enum parameter_role {
 	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity: tunable
-	ROLE_STATE,          // the initial state, which particles are held, the springs' ends, settings: fixed
-	ROLE_STRUCTURE,      // the particle or spring count, or a port's particle: constant
+	ROLE_STATE,          // the initial state, which particles are held, settings, a spring's kind: fixed
+	ROLE_STRUCTURE,      // counts of particles and springs, which particles springs join: constant
 } parameter_role;
 
 // What a parameter is to the FMU, from the places the model file names it

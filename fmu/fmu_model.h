@@ -91,17 +91,18 @@ typedef struct fmu_table {
 	double tolerance;          ///< default relative tolerance [1]
 } fmu_table;
 
-/// Builds the table of a parsed model file. `text`/`length` are the file's bytes (hashed for
-/// the GUID); fmu_table_create_set for an FMU that also carries parameter values.
+/// Builds the table of a parsed model file. `text`/`length` are the file's bytes, used only for
+/// the GUID: the caller parses doc from them (the table is doc's); fmu_table_create_set for an
+/// FMU that also carries parameter values.
 ///
-/// A model-file parameter is tunable (changeable between communication steps) when changing
-/// it leaves the particles, the springs' endpoints, the particles' motions and the initial
-/// state as they are: it then feeds only constants (stiffness, damping, masses, rest lengths
-/// given as numbers, gravity, mass damping), which a running simulation can take over. It is
-/// fixed (settable only before initialisation) when it feeds the initial state (positions,
-/// velocities) or which particles are held. It is a constant (causality local, variability
-/// constant: not settable at all) when it sets the particle or spring count or which particle a
-/// port is at: the FMU's variables (p[i].x, the ports) are made for one structure at packaging.
+/// A model-file parameter is tunable (changeable between communication steps) when it feeds
+/// only constants (stiffness, damping, masses, rest lengths, break strains, gravity, mass
+/// damping), which a running simulation can take over. It is fixed (settable only before
+/// initialisation) when it also feeds the initial state (positions, velocities), which
+/// particles are held, a setting or a spring's kind. It is a constant (causality local,
+/// variability constant: not settable at all) when it feeds the particle or spring counts,
+/// which particles springs join, and with them the particle each port is at: the FMU's
+/// variables (p[i].x, the ports) are made for one structure at packaging.
 /// This is decided from the places the model file names the parameter
 /// (sm_document_parameter_uses), whatever its value. Returns SM_OK, or an error with the message
 /// in err (e.g. two variables with the same name); on error *table is zeroed and nothing is

@@ -173,6 +173,7 @@ typedef enum feeds {
 	FEEDS_MOTION = SM_PARAMETER_MOTION,
 	FEEDS_COUNTS = SM_PARAMETER_COUNTS,
 	FEEDS_SETTINGS = SM_PARAMETER_SETTINGS,
+	FEEDS_SPRING_KINDS = SM_PARAMETER_SPRING_KINDS,
 } feeds;
 
 // A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
@@ -747,12 +748,15 @@ static bool read_springs(parser* p, const json_t* list)
 		def.damping = m.damping;
 		def.damping_scaling = m.damping_scaling;
 		def.break_strain = m.break_strain;
+		// "kind" defaults to zero-length for "rest_length": 0 and rest-length otherwise, so that
+		// without a kind the rest length also chooses the spring's law.
 		const json_t* rest = json_object_get(obj, "rest_length");
-		if (rest != NULL && !read_field(p, FEEDS_CONSTANTS, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
-			return false;
-		// "kind" defaults to zero-length for "rest_length": 0 and rest-length otherwise.
-		def.kind = rest != NULL && def.rest_length == 0.0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
 		const json_t* kind = json_object_get(obj, "kind");
+		const feeds rest_use = kind != NULL ? FEEDS_CONSTANTS : FEEDS_CONSTANTS | FEEDS_SPRING_KINDS;
+		if (rest != NULL &&
+		    !read_field(p, rest_use, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
+			return false;
+		def.kind = rest != NULL && def.rest_length == 0.0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
 		if (kind != NULL) {
 			child_key(sub, path, "kind");
 			const char* s = json_is_string(kind) ? json_string_value(kind) : "";

@@ -384,18 +384,21 @@ static int test_parameters(void)
 
 // What each parameter feeds, from the places the file names it: one parameter per kind of place
 // (a particle's mass and position, a spring's constants, a rope's ends, count and mass, a mesh's
-// vertices and triangles, a box of held particles, the settings, gravity), one in two kinds, one
-// unused; the uses stay when a value changes the counts.
+// vertices and triangles, a box of held particles, the settings, gravity, the rest length of a
+// spring with and without a kind), one in two kinds, one unused; the uses stay when a value
+// changes the counts.
 static int test_parameter_uses(void)
 {
 	const char* text =
 	    "{\"springmass\": 1, \"name\": \"u\", \"parameters\": {\"m\": 1, \"x\": 0, \"k\": 5, \"c\": 0.1,"
 	    " \"L\": 1, \"n\": 4, \"M\": 2, \"v\": 0, \"i\": 2, \"b\": 0.5, \"tol\": 1e-6, \"g\": -9.81, \"both\": 2,"
-	    " \"spare\": 3},"
+	    " \"spare\": 3, \"l0\": 0.5, \"l1\": 0.5},"
 	    " \"gravity\": [0, 0, \"g\"],"
 	    " \"particles\": [{\"name\": \"p\", \"position\": [\"x\", 0, 5], \"mass\": \"m\"},"
 	    "                 {\"name\": \"q\", \"position\": [1, 0, 5], \"mass\": \"both\"}],"
-	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"stiffness\": \"k\", \"damping\": \"c\"}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"stiffness\": \"k\", \"damping\": \"c\"},"
+	    "             {\"a\": \"p\", \"b\": \"q\", \"rest_length\": \"l0\", \"stiffness\": 1},"
+	    "             {\"a\": \"p\", \"b\": \"q\", \"kind\": \"rest_length\", \"rest_length\": \"l1\", \"stiffness\": 1}],"
 	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [\"L\", 0, 0],"
 	    "   \"segments\": \"n\", \"mass\": \"M\", \"structural\": {\"strain_stiffness\": 10}},"
 	    "  {\"type\": \"mesh\", \"name\": \"t\", \"density\": 1, \"vertices\": [[0, 0, 2], [1, 0, 2], [0, \"both\", \"v\"]],"
@@ -416,6 +419,8 @@ static int test_parameter_uses(void)
 	    {"M", SM_PARAMETER_CONSTANTS},    {"v", SM_PARAMETER_INITIAL_STATE}, {"i", SM_PARAMETER_COUNTS},
 	    {"b", SM_PARAMETER_MOTION},       {"tol", SM_PARAMETER_SETTINGS},    {"g", SM_PARAMETER_CONSTANTS},
 	    {"both", SM_PARAMETER_CONSTANTS | SM_PARAMETER_INITIAL_STATE},      {"spare", 0},
+	    // Without a kind, a rest length of 0 makes the spring zero-length: it chooses the law.
+	    {"l0", SM_PARAMETER_CONSTANTS | SM_PARAMETER_SPRING_KINDS},        {"l1", SM_PARAMETER_CONSTANTS},
 	};
 	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
 		const int32_t k = sm_document_parameter_index(doc, expected[e].name);

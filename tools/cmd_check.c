@@ -15,9 +15,10 @@ static void usage(FILE* out)
 	        "\n"
 	        "Validates the model file MODEL (JSON, see docs/model-format.md) and prints a summary:\n"
 	        "particles (free, fixed), springs by kind, total mass, ports, parameters (with what each\n"
-	        "feeds: constants, initial state, held particles, counts, settings), the stiffest\n"
-	        "spring and the highest natural frequency estimate, sqrt(k/m) over every spring with m the\n"
-	        "smaller mass of its free ends, with the explicit-stability step 2/omega it implies.\n"
+	        "feeds: constants, initial state, held particles, counts, settings, spring kinds), the\n"
+	        "stiffest spring and the highest natural frequency estimate, sqrt(k/m) over every spring\n"
+	        "with m the smaller mass of its free ends, with the explicit-stability step 2/omega it\n"
+	        "implies.\n"
 	        "\n"
 	        "Exit status: 0 if the file is valid, 1 if not (the error names the line and column or the\n"
 	        "element of the file and the rule it breaks), 2 on a usage error.\n");
@@ -205,12 +206,13 @@ int sm_cmd_check(int argc, char** argv)
 	printf("parameters   %d\n", (int)parameters);
 	for (int32_t k = 0; k < parameters; k++) {
 		// What the parameter feeds, in the words of model_file.h's sm_parameter_use.
-		static const char* const uses[] = {"constants", "initial state", "held particles", "counts", "settings"};
+		static const char* const uses[] = {"constants", "initial state", "held particles",
+		                                   "counts",    "settings",      "spring kinds"};
 		const uint32_t used = sm_document_parameter_uses(doc, k);
 		printf("  %-12s = %-12g feeds ", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
 		if (used == 0)
 			printf("nothing");
-		for (int u = 0, shown = 0; u < 5; u++)
+		for (int u = 0, shown = 0; u < (int)(sizeof uses / sizeof uses[0]); u++)
 			if (used & (1u << u))
 				printf("%s%s", shown++ ? ", " : "", uses[u]);
 		printf("\n");

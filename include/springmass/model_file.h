@@ -85,6 +85,9 @@ typedef enum sm_parameter_use {
 	SM_PARAMETER_COUNTS = 1 << 3,
 	/// the "simulation" settings (stop time, tolerances, steps)
 	SM_PARAMETER_SETTINGS = 1 << 4,
+	/// which law a spring follows: the rest length of a spring without a "kind" (0 makes it
+	/// zero-length, any other value rest-length)
+	SM_PARAMETER_SPRING_KINDS = 1 << 5,
 } sm_parameter_use;
 
 /// The uses (sm_parameter_use flags) of a parameter; 0 for an unused one or an index out of

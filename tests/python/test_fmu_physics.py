@@ -238,6 +238,26 @@ def test_a_bound_that_holds_the_same_particles_at_many_values_is_still_fixed(tes
         inst.free()
 
 
+def test_a_rest_length_that_chooses_the_spring_law_is_fixed(test_fmu):
+    # spring_law: the first spring has no kind, so its rest length L = 0 would make it a
+    # zero-length spring, which a running simulation cannot take: L is fixed (0 is taken before
+    # initialisation, refused after it). The second spring's kind is given: L2 is a constant of
+    # the force law only and stays tunable.
+    fmu = test_fmu("spring_law")
+    inst = Instance(fmu)
+    try:
+        assert inst.variables["L"].variability == "fixed" and inst.variables["L2"].variability == "tunable"
+        inst.start({"L": 0.0})
+        inst.slave.doStep(0.0, 0.1)
+        with pytest.raises(FMICallException):
+            inst.set("L", 0.5)
+        assert "L is a fixed parameter" in inst.messages[-1][2]
+        inst.set("L2", 0.3)
+        inst.slave.doStep(0.1, 0.1)
+    finally:
+        inst.free()
+
+
 def test_tunable_parameters_that_empty_a_spring_group():
     # The rope's springs take their constants from E and c, both tunable: set to 0 together
     # between steps, the springs stay (the topology cannot change) but pull nothing, so without
