@@ -934,10 +934,14 @@ static int test_failures_are_reported_and_recoverable(void)
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
 	ENSURE(err.status == SM_ERROR_INVALID_ARGUMENT && strstr(err.message, "relative_tolerance") != NULL);
 	d = sm_default_simulation_def();
-	d.absolute_tolerance_velocity = 1e-320;  // > 0, but 1 / atol overflows
+	d.absolute_tolerance_velocity = 3e-308;  // > 0, but the error norm overflows
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
 	ENSURE(err.status == SM_ERROR_INVALID_ARGUMENT &&
-	       strstr(err.message, "absolute_tolerance_velocity = 9.99989e-321 is below") != NULL);
+	       strstr(err.message, "absolute_tolerance_velocity = 3e-308 must be at least 1e-150") != NULL);
+	d.absolute_tolerance_velocity = 1e-6;
+	d.absolute_tolerance_position = 1e-151;
+	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
+	ENSURE(strstr(err.message, "absolute_tolerance_position = 1e-151 must be at least 1e-150") != NULL);
 	d = sm_default_simulation_def();
 	d.solver = (sm_linear_solver)42;
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);

@@ -69,9 +69,9 @@ typedef struct sm_simulation_def {
 	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
 	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
 	double relative_tolerance;      ///< in (0, 1) [1]; default 1e-6
-	/// >= DBL_MIN, 2.2e-308 (CVODE weighs errors by 1 / atol) [m]; default 1e-8
+	/// >= 1e-150 (CVODE's error norm squares error / atol) [m]; default 1e-8
 	double absolute_tolerance_position;
-	/// >= DBL_MIN [m/s], also for the dissipated energy [J]; default 1e-6
+	/// >= 1e-150 [m/s], also for the dissipated energy [J]; default 1e-6
 	double absolute_tolerance_velocity;
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
