@@ -902,10 +902,48 @@ static void quote_line(const char* line, size_t length, char* out, size_t size)
 	out[k] = '\0';
 }
 
-char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, size_t* parameters_length,
-                          sm_error* err)
+// Writes the line of each parameter of `pending` (count indices) whose value in `set` the model
+// takes after those before: one pass in the order given, and with retry, further passes over the
+// values refused until a pass takes none. Returns how many are left unwritten; the first refusal's
+// message goes to *refusal. Out of memory sets out->failed.
+static int32_t write_values(sm_document* file, const sm_document* set, int32_t* pending, int32_t count, bool retry,
+                            text_buffer* out, sm_error* refusal)
 {
-	sm_document* file = sm_document_parse(text, length, "model.json", err);
+	bool progress = true;
+	bool first = true;
+	while (count > 0 && progress && !out->failed && (retry || first)) {
+		progress = false;
+		first = false;
+		int32_t kept = 0;
+		for (int32_t k = 0; k < count; ++k) {
+			const int32_t i = pending[k];
+			const double value = sm_document_parameter_value(set, i);
+			sm_error e = {SM_OK, ""};
+			const sm_status st = sm_document_set_parameter(file, i, value, &e);
+			char number[32];
+			format_shortest(value, number);
+			if (st == SM_OK) {
+				appendf(out, "%s=%s\n", sm_document_parameter_name(file, i), number);
+				progress = true;
+			} else if (st == SM_ERROR_OUT_OF_MEMORY) {
+				out->failed = true;
+				break;
+			} else {
+				if (kept == 0)
+					failf(refusal, st, "parameter %s = %s: %s", sm_document_parameter_name(file, i), number,
+					      e.message);
+				pending[kept++] = i;
+			}
+		}
+		count = kept;
+	}
+	return count;
+}
+
+char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, const char* source_name,
+                          const int32_t* order, int32_t order_count, size_t* parameters_length, sm_error* err)
+{
+	sm_document* file = sm_document_parse(text, length, source_name, err);
 	if (!file)
 		return NULL;
 	const int32_t np = sm_document_parameter_count(set);
@@ -928,39 +966,33 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 		if (memcmp(&a, &b, sizeof a) != 0)
 			pending[count++] = i;
 	}
-	// Passes in file order: each value the model takes is written; one it refuses now is tried
-	// again after the others, until all are written or a pass takes none.
+	// Passes in file order (the same values give the same text, and GUID, whatever order they
+	// were given in): each value the model takes is written; one it refuses now is tried again
+	// after the others, until all are written or a pass takes none. If some are left, the order
+	// the caller set them in, which the model took, is written instead.
 	text_buffer out = {NULL, 0, 0, false};
 	append(&out, "", 0);
 	sm_error refusal = {SM_OK, ""};
-	bool progress = true;
-	while (count > 0 && progress && !out.failed) {
-		progress = false;
-		int32_t kept = 0;
-		for (int32_t k = 0; k < count; ++k) {
-			const int32_t i = pending[k];
-			const double value = sm_document_parameter_value(set, i);
-			sm_error e = {SM_OK, ""};
-			const sm_status st = sm_document_set_parameter(file, i, value, &e);
-			if (st == SM_OK) {
-				char number[32];
-				format_shortest(value, number);
-				appendf(&out, "%s=%s\n", sm_document_parameter_name(file, i), number);
-				progress = true;
-			} else if (st == SM_ERROR_OUT_OF_MEMORY) {
-				out.failed = true;
-				break;
-			} else {
-				if (kept == 0) {
-					char number[32];
-					format_shortest(value, number);
-					failf(&refusal, st, "parameter %s = %s: %s", sm_document_parameter_name(file, i), number,
-					      e.message);
-				}
-				pending[kept++] = i;
-			}
+	count = write_values(file, set, pending, count, true, &out, &refusal);
+	if (count > 0 && order != NULL && !out.failed) {
+		sm_document_destroy(file);
+		file = sm_document_parse(text, length, source_name, err);
+		out.length = 0;
+		if (out.data)
+			out.data[0] = '\0';
+		count = 0;
+		for (int32_t k = 0; k < order_count && file && count < np; ++k) {
+			const int32_t i = order[k];
+			if (i < 0 || i >= np)
+				continue;
+			const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
+			if (memcmp(&a, &b, sizeof a) != 0)
+				pending[count++] = i;
 		}
-		count = kept;
+		if (!file)
+			out.failed = true;
+		else
+			count = write_values(file, set, pending, count, false, &out, &refusal);
 	}
 	c_numbers_end(&numbers);
 	free(pending);
@@ -1004,9 +1036,12 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	char name[256], value_text[128];
 	const size_t name_length = eq ? (size_t)(eq - line) : 0;
 	const size_t value_length = eq ? line_length - name_length - 1 : 0;
-	if (!eq || name_length == 0 || memchr(line, '\0', line_length) || name_length >= sizeof name ||
-	    value_length >= sizeof value_text)
+	if (!eq || name_length == 0 || memchr(line, '\0', line_length))
 		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "expected NAME=VALUE, got \"%s\"", quoted);
+	if (name_length >= sizeof name || value_length >= sizeof value_text)
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the %s is longer than %zu bytes",
+		                  quoted, name_length >= sizeof name ? "name" : "value",
+		                  (name_length >= sizeof name ? sizeof name : sizeof value_text) - 1);
 	memcpy(name, line, name_length);
 	name[name_length] = '\0';
 	memcpy(value_text, eq + 1, value_length);
@@ -1016,6 +1051,13 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	if (value_length == 0 || end != value_text + value_length || !isfinite(value))
 		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the value is not a finite number",
 		                  quoted);
+	// Only what the packager writes: the fewest digits that read back to the value (no sign, space,
+	// hexadecimal or trailing zero of its own, and no number that rounds to another).
+	char written[32];
+	format_shortest(value, written);
+	if (strcmp(written, value_text) != 0)
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number,
+		                  "\"%s\": the value is not written as the packager writes it (%s)", quoted, written);
 	const int32_t index = sm_document_parameter_index(doc, name);
 	if (index < 0)
 		return line_error(err, SM_ERROR_NOT_FOUND, source_name, number, "\"%s\": the model has no parameter named "

@@ -140,10 +140,13 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 /// from the file's (bit for bit), the value in the fewest digits that read back to the same double.
 /// The lines are in the file's order of parameters, except that a value the model refuses before
 /// others are set (a rope's end moved onto its start before the start moves away) comes after
-/// them: applied one at a time in the order written, every value is accepted. Returns a malloc'ed
+/// them; if no such order is found, they are in `order` (order_count distinct parameter indices,
+/// the order the caller set them in; NULL for none): applied one at a time in the order written,
+/// every value is accepted. Messages name `source_name` (the model file). Returns a malloc'ed
 /// NUL-terminated text and its length (0 when no value differs), or NULL with err set: out of
 /// memory, or values the model refuses in every such order (naming the parameter).
-char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, size_t* parameters_length,
+char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, const char* source_name,
+                          const int32_t* order, int32_t order_count, size_t* parameters_length,
                           sm_error* err);
 
 /// Applies the text of resources/parameters.txt to a document parsed from the model file: one

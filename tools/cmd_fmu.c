@@ -258,8 +258,41 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	const int status = cli_set_parameters("fmu", *doc, opt->sets, opt->set_count);
 	if (status != 0 || opt->set_count == 0)
 		return status;
+	// The parameters in the order they were last set (that order is known to be accepted), for a
+	// set of values the file's order cannot take.
+	const int32_t np = sm_document_parameter_count(*doc);
+	int32_t* order = malloc(((size_t)np + 1) * sizeof *order);
+	bool* seen = calloc((size_t)np + 1, sizeof *seen);
+	if (!order || !seen) {
+		free(order);
+		free(seen);
+		fprintf(stderr, "springmass fmu: out of memory\n");
+		return 1;
+	}
+	int32_t order_count = 0;
+	for (int k = opt->set_count - 1; k >= 0; --k) {
+		const char* equals = strchr(opt->sets[k], '=');
+		char name[256];
+		const size_t n = equals ? (size_t)(equals - opt->sets[k]) : 0;
+		if (n == 0 || n >= sizeof name)
+			continue;
+		memcpy(name, opt->sets[k], n);
+		name[n] = '\0';
+		const int32_t i = sm_document_parameter_index(*doc, name);
+		if (i >= 0 && !seen[i]) {
+			seen[i] = true;
+			order[order_count++] = i;
+		}
+	}
+	for (int32_t a = 0, b = order_count - 1; a < b; ++a, --b) {
+		const int32_t t = order[a];
+		order[a] = order[b];
+		order[b] = t;
+	}
 	sm_error err = {SM_OK, ""};
-	*parameters = fmu_parameters_text(*doc, text, length, parameters_length, &err);
+	*parameters = fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
+	free(order);
+	free(seen);
 	if (!*parameters) {
 		fprintf(stderr, "springmass fmu: --set: %s\n", err.message);
 		return 1;

@@ -528,3 +528,26 @@ def test_set_values_are_written_in_an_order_the_model_takes(package, tmp_path):
         assert inst.get("p[0].x", "p[1].x", "p[2].x") == [1.0, 2.0, 3.0]
     finally:
         inst.free()
+
+
+def test_set_values_the_file_order_cannot_take_keep_the_order_given(package, tmp_path):
+    # Two ropes start at (a, b, c) and (a, c, b), from (0, 0, 0), and end at (1, 1, 0) and
+    # (1, 5, 0). --set b=1 --set c=5 --set a=1 is taken in that order (each rope keeps a length),
+    # but the file's order takes a = 1 first, and then b = 1 would put the first rope's start on
+    # its end and c = 5 the second's, in either order: no pass over the file's order takes them
+    # all. The order given is written then, and the FMU starts there.
+    model = tmp_path / "two_starts.json"
+    model.write_text('{"springmass": 1, "name": "two_starts", "parameters": {"a": 0, "b": 0, "c": 0}, '
+                     '"structures": [{"type": "rope", "name": "r1", "start": ["a", "b", "c"], "end": [1, 1, 0], '
+                     '"segments": 1, "structural": {"strain_stiffness": 10}}, {"type": "rope", "name": "r2", '
+                     '"start": ["a", "c", "b"], "end": [1, 5, 0], "segments": 1, '
+                     '"structural": {"strain_stiffness": 10}}], "fixed": ["r1[0]", "r2[0]"]}')
+    fmu = package(model, ("b=1", "c=5", "a=1"))
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/parameters.txt") == b"b=1\nc=5\na=1\n"
+    inst = Instance(fmu)
+    try:
+        inst.start()
+        assert inst.get("p[0].x", "p[0].y", "p[0].z", "p[2].y", "p[2].z") == [1.0, 1.0, 5.0, 5.0, 1.0]
+    finally:
+        inst.free()
