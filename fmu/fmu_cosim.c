@@ -1103,6 +1103,11 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 		log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name, value);
 		return false;
 	}
+	if (tolerance && v->source != FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_ABSOLUTE_TOLERANCE)) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: an absolute tolerance must be at least %g (CVODE's error "
+		          "norm overflows below)", v->name, value, SM_MIN_ABSOLUTE_TOLERANCE);
+		return false;
+	}
 	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value < 0.0) {
 		log_error(inst, "fmi2SetReal: %s = %g rejected: must be >= 0 (0: unlimited)", v->name, value);
 		return false;

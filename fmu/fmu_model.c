@@ -1051,8 +1051,9 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	if (value_length == 0 || end != value_text + value_length || !isfinite(value))
 		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the value is not a finite number",
 		                  quoted);
-	// Only what the packager writes: the fewest digits that read back to the value (no sign, space,
-	// hexadecimal or trailing zero of its own, and no number that rounds to another).
+	// Only what the packager writes: the shortest of 15, 16 or 17 significant digits that reads
+	// back to the value (no sign, space, hexadecimal or trailing zero of its own, and no number
+	// that rounds to another).
 	char written[32];
 	format_shortest(value, written);
 	if (strcmp(written, value_text) != 0)

@@ -137,11 +137,12 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 
 /// The text of resources/parameters.txt for `set`, a document parsed from the model file `text`
 /// whose parameters were then set: one line "NAME=VALUE\n" for each parameter whose value differs
-/// from the file's (bit for bit), the value in the fewest digits that read back to the same double.
+/// from the file's (bit for bit), the value in the shortest of 15, 16 or 17 significant digits that
+/// reads back to the same double.
 /// The lines are in the file's order of parameters, except that a value the model refuses before
 /// others are set (a rope's end moved onto its start before the start moves away) comes after
 /// them; if no such order is found, they are in `order` (order_count distinct parameter indices,
-/// the order the caller set them in; NULL for none): applied one at a time in the order written,
+/// an order the caller set them in; NULL for none): applied one at a time in the order written,
 /// every value is accepted. Messages name `source_name` (the model file). Returns a malloc'ed
 /// NUL-terminated text and its length (0 when no value differs), or NULL with err set: out of
 /// memory, or values the model refuses in every such order (naming the parameter).

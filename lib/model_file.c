@@ -254,8 +254,9 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 	return fail(p, status, path, "%s%s", message, with);
 }
 
-// FRACTION: > 0 and < 1 (a relative tolerance).
-typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION } number_rule;
+// FRACTION: > 0 and < 1 (a relative tolerance); TOLERANCE: an absolute tolerance, at least
+// SM_MIN_ABSOLUTE_TOLERANCE.
+typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE } number_rule;
 
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
 static bool check_rule(parser* p, const char* path, double v, int32_t source, number_rule rule)
@@ -269,6 +270,9 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
 	if (rule == FRACTION && !(v < 1.0))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
+	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE))
+		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %g (CVODE's error norm overflows below)",
+		            describe(p, text, sizeof text, v, source), SM_MIN_ABSOLUTE_TOLERANCE);
 	return true;
 }
 
@@ -1349,13 +1353,13 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "rtol", FRACTION, &d->relative_tolerance, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol", POSITIVE, &atol, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol", TOLERANCE, &atol, NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
 			return false;
 		if (atol > 0.0)
 			d->absolute_tolerance_position = d->absolute_tolerance_velocity = atol;
-		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "atol_position", POSITIVE, &d->absolute_tolerance_position, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol_velocity", POSITIVE, &d->absolute_tolerance_velocity, NULL))
+		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "atol_position", TOLERANCE, &d->absolute_tolerance_position, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol_velocity", TOLERANCE, &d->absolute_tolerance_velocity, NULL))
 			return false;
 		if (json_object_get(simulation, "max_steps") != NULL) {
 			int64_t steps;

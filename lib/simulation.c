@@ -24,6 +24,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -45,9 +46,6 @@
 // an interval below this with an explicit step of its own. The FMU's shortest communication
 // step is the same.
 #define TIME_RESOLUTION (4.0 * DBL_EPSILON)
-
-// Smallest absolute tolerance accepted [m], [m/s] (see check_def).
-#define MIN_ABSOLUTE_TOLERANCE 1e-150
 
 double sm_simulation_clock(void)
 {
@@ -461,18 +459,15 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		if (!(isfinite(positive[i].value) && positive[i].value > 0.0))
 			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
 			                    positive[i].name, positive[i].value);
-	// CVODE's error norm sums (error / (rtol |y| + atol))^2, which overflows to infinity for an
-	// error above 1.3e154 atol where |y| = 0 (a state at rest): at MIN_ABSOLUTE_TOLERANCE that
-	// takes an error of 1.3e4 m or m/s, beyond any step's, while at 3e-308 m/s the first steps of
-	// the bundled oscillator overflowed it and every step failed as if the model moved too fast.
-	const bool position_ok = def->absolute_tolerance_position >= MIN_ABSOLUTE_TOLERANCE;
-	if (!position_ok || !(def->absolute_tolerance_velocity >= MIN_ABSOLUTE_TOLERANCE))
+	// Below SM_MIN_ABSOLUTE_TOLERANCE CVODE's error norm overflows (simulation.h).
+	const bool position_ok = def->absolute_tolerance_position >= SM_MIN_ABSOLUTE_TOLERANCE;
+	if (!position_ok || !(def->absolute_tolerance_velocity >= SM_MIN_ABSOLUTE_TOLERANCE))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: absolute_tolerance_%s = %g must be at least %g: CVODE's error norm "
 		                    "sums (error / atol)^2, which overflows for smaller tolerances",
 		                    position_ok ? "velocity" : "position",
 		                    position_ok ? def->absolute_tolerance_velocity : def->absolute_tolerance_position,
-		                    MIN_ABSOLUTE_TOLERANCE);
+		                    SM_MIN_ABSOLUTE_TOLERANCE);
 	if (!(def->relative_tolerance < 1.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",

@@ -89,6 +89,11 @@ check_cases << 'CASES'
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 CASES
+# An absolute tolerance the simulation would refuse is refused by the loader already.
+printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [0, 0, 0]}], "simulation": {"atol_velocity": 1e-200}}' > "$tmp/tiny_atol.json"
+out=$("$cli" check "$tmp/tiny_atol.json" 2>&1)
+[ "$out" = "springmass check: $tmp/tiny_atol.json: simulation.atol_velocity: 1e-200 must be at least 1e-150 (CVODE's error norm overflows below)" ] ||
+  fail "check tiny_atol.json printed '$out'"
 # check says what each parameter feeds.
 cat > "$tmp/uses.json" << 'JSON'
 {"springmass": 1, "name": "uses", "parameters": {"n": 4, "L": 1, "E": 10, "b": 0.1, "tol": 1e-6, "spare": 0},

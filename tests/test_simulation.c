@@ -942,6 +942,10 @@ static int test_failures_are_reported_and_recoverable(void)
 	d.absolute_tolerance_position = 1e-151;
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
 	ENSURE(strstr(err.message, "absolute_tolerance_position = 1e-151 must be at least 1e-150") != NULL);
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = SM_MIN_ABSOLUTE_TOLERANCE;  // the bound
+	sm_simulation* at_bound = sm_simulation_create(model, &d, &err);
+	ENSURE(at_bound != NULL);
+	sm_simulation_destroy(at_bound);
 	d = sm_default_simulation_def();
 	d.solver = (sm_linear_solver)42;
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);

@@ -258,43 +258,59 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	const int status = cli_set_parameters("fmu", *doc, opt->sets, opt->set_count);
 	if (status != 0 || opt->set_count == 0)
 		return status;
-	// The parameters in the order they were last set (that order is known to be accepted), for a
-	// set of values the file's order cannot take.
+	// For values the file's order cannot take: the parameters in the order of the --set options,
+	// which the model took one at a time. An order with each parameter once is all parameters.txt
+	// can hold: where they were last set, and failing that where first set (the same when each
+	// is set once).
 	const int32_t np = sm_document_parameter_count(*doc);
 	int32_t* order = malloc(((size_t)np + 1) * sizeof *order);
-	bool* seen = calloc((size_t)np + 1, sizeof *seen);
+	bool* seen = malloc(((size_t)np + 1) * sizeof *seen);
 	if (!order || !seen) {
 		free(order);
 		free(seen);
 		fprintf(stderr, "springmass fmu: out of memory\n");
 		return 1;
 	}
-	int32_t order_count = 0;
-	for (int k = opt->set_count - 1; k >= 0; --k) {
-		const char* equals = strchr(opt->sets[k], '=');
-		char name[256];
-		const size_t n = equals ? (size_t)(equals - opt->sets[k]) : 0;
-		if (n == 0 || n >= sizeof name)
-			continue;
-		memcpy(name, opt->sets[k], n);
-		name[n] = '\0';
-		const int32_t i = sm_document_parameter_index(*doc, name);
-		if (i >= 0 && !seen[i]) {
-			seen[i] = true;
-			order[order_count++] = i;
-		}
-	}
-	for (int32_t a = 0, b = order_count - 1; a < b; ++a, --b) {
-		const int32_t t = order[a];
-		order[a] = order[b];
-		order[b] = t;
-	}
 	sm_error err = {SM_OK, ""};
-	*parameters = fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
+	bool repeated = false;
+	for (int pass = 0; pass < 2 && !*parameters && !(pass == 1 && !repeated); ++pass) {
+		const bool last = pass == 0;
+		memset(seen, 0, ((size_t)np + 1) * sizeof *seen);
+		int32_t order_count = 0;
+		for (int j = 0; j < opt->set_count; ++j) {
+			const int k = last ? opt->set_count - 1 - j : j;
+			const char* equals = strchr(opt->sets[k], '=');
+			char name[256];
+			const size_t n = equals ? (size_t)(equals - opt->sets[k]) : 0;
+			if (n == 0 || n >= sizeof name)
+				continue;
+			memcpy(name, opt->sets[k], n);
+			name[n] = '\0';
+			const int32_t i = sm_document_parameter_index(*doc, name);
+			if (i >= 0 && seen[i])
+				repeated = true;
+			else if (i >= 0) {
+				seen[i] = true;
+				order[order_count++] = i;
+			}
+		}
+		for (int32_t a = 0, b = order_count - 1; last && a < b; ++a, --b) {
+			const int32_t t = order[a];
+			order[a] = order[b];
+			order[b] = t;
+		}
+		*parameters = fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
+		if (!*parameters && err.status == SM_ERROR_OUT_OF_MEMORY)
+			break;
+	}
 	free(order);
 	free(seen);
 	if (!*parameters) {
-		fprintf(stderr, "springmass fmu: --set: %s\n", err.message);
+		fprintf(stderr, "springmass fmu: --set: %s%s\n", err.message,
+		        repeated && err.status != SM_ERROR_OUT_OF_MEMORY
+		            ? " (a parameter is set more than once: the FMU holds each value once; give each parameter once, "
+		              "in an order the model takes)"
+		            : "");
 		return 1;
 	}
 	if (*parameters_length == 0) {

@@ -545,9 +545,30 @@ def test_set_values_the_file_order_cannot_take_keep_the_order_given(package, tmp
     fmu = package(model, ("b=1", "c=5", "a=1"))
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/parameters.txt") == b"b=1\nc=5\na=1\n"
+    # b set again at the end: where each was last set (c, a, b) a = 1 comes while b = 0, and the
+    # order where each was first set is written instead, the same FMU.
+    again = package(model, ("b=1", "c=5", "a=1", "b=1"))
+    assert read_model_description(str(again)).guid == read_model_description(str(fmu)).guid
     inst = Instance(fmu)
     try:
         inst.start()
         assert inst.get("p[0].x", "p[0].y", "p[0].z", "p[2].y", "p[2].z") == [1.0, 1.0, 5.0, 5.0, 1.0]
+    finally:
+        inst.free()
+
+
+def test_an_absolute_tolerance_below_the_bound_is_refused_when_set(test_fmu):
+    # Below 1e-150 CVODE's error norm overflows (simulation.h): the value is refused when it is
+    # set, not at fmi2ExitInitializationMode; the bound itself is taken through initialisation.
+    inst = Instance(test_fmu("driven_oscillator"))
+    s, vr = inst.slave, inst.vr
+    try:
+        s.setupExperiment(startTime=0.0)
+        expect_error(inst, lambda: s.setReal([vr["solver.atol_velocity"]], [1e-200]),
+                     "solver.atol_velocity = 1e-200 rejected", "at least 1e-150")
+        s.setReal([vr["solver.atol_velocity"]], [1e-150])
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        assert inst.get("solver.atol_velocity") == 1e-150
     finally:
         inst.free()
