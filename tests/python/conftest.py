@@ -22,7 +22,7 @@ SANITIZED = os.environ.get("SPRINGMASS_SANITIZE", "") not in ("", "0", "OFF")
 @pytest.fixture(scope="session")
 def package(tmp_path_factory):
     """package(model_path, sets=()) -> path of an FMU made with `springmass fmu`, with `--set S` for
-    each S of sets (once per session)."""
+    each S of sets (made once per test run)."""
     out = tmp_path_factory.mktemp("fmus")
     made = {}
 
