@@ -40,7 +40,8 @@ static void usage(FILE* out)
 	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
-	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s]\n"
+	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s],\n"
+	        "                         at least 1e-150\n"
 	        "  --atol-position A      absolute tolerance of positions alone [m] (wins over --atol)\n"
 	        "  --atol-velocity A      absolute tolerance of velocities and of the dissipated energy\n"
 	        "                         alone [m/s], [J] (wins over --atol)\n"
@@ -251,15 +252,18 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n", value);
 					return 2;
 				}
-			} else if (strcmp(a, "--atol") == 0) {
-				if (parse_positive(a, value, &o->atol))
+			} else if (strncmp(a, "--atol", 6) == 0) {
+				double* atol = strcmp(a, "--atol") == 0            ? &o->atol
+				               : strcmp(a, "--atol-position") == 0 ? &o->atol_position
+				                                                   : &o->atol_velocity;
+				if (parse_positive(a, value, atol))
 					return 2;
-			} else if (strcmp(a, "--atol-position") == 0) {
-				if (parse_positive(a, value, &o->atol_position))
+				if (!(*atol >= SM_MIN_ABSOLUTE_TOLERANCE)) {
+					fprintf(stderr,
+					        "springmass run: %s must be at least %g (CVODE's error norm overflows below), got '%s'\n", a,
+					        SM_MIN_ABSOLUTE_TOLERANCE, value);
 					return 2;
-			} else if (strcmp(a, "--atol-velocity") == 0) {
-				if (parse_positive(a, value, &o->atol_velocity))
-					return 2;
+				}
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
 			} else if (strcmp(a, "--vtk") == 0) {
