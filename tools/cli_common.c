@@ -9,21 +9,39 @@
 #include <string.h>
 #include <sys/stat.h>
 
-int cli_set_parameter(const char* command, sm_document* doc, const char* setting)
+// Copies the NAME of "NAME=VALUE" into name (NUL-terminated) and returns its length: 0 if there
+// is no '=' or no name, `size` if the name does not fit (name is then left as it was).
+static size_t setting_name(const char* setting, char* name, size_t size)
 {
 	const char* eq = strchr(setting, '=');
-	if (eq == NULL || eq == setting) {
+	const size_t length = eq ? (size_t)(eq - setting) : 0;
+	if (length == 0 || length >= size)
+		return length == 0 ? 0 : size;
+	memcpy(name, setting, length);
+	name[length] = '\0';
+	return length;
+}
+
+int32_t cli_setting_parameter(const sm_document* doc, const char* setting)
+{
+	char name[256];
+	const size_t length = setting_name(setting, name, sizeof name);
+	return length == 0 || length == sizeof name ? -1 : sm_document_parameter_index(doc, name);
+}
+
+int cli_set_parameter(const char* command, sm_document* doc, const char* setting)
+{
+	char name[256];
+	const size_t length = setting_name(setting, name, sizeof name);
+	if (length == 0) {
 		fprintf(stderr, "springmass %s: --set expects NAME=VALUE, got '%s'\n", command, setting);
 		return 2;
 	}
-	char name[256];
-	const size_t length = (size_t)(eq - setting);
-	if (length >= sizeof name) {
+	if (length == sizeof name) {
 		fprintf(stderr, "springmass %s: parameter name too long in '%s'\n", command, setting);
 		return 2;
 	}
-	memcpy(name, setting, length);
-	name[length] = '\0';
+	const char* eq = setting + length;
 	// A number below the smallest normal double is taken as strtod rounds it, as in a model file.
 	char* end = NULL;
 	const double value = strtod(eq + 1, &end);

@@ -11,6 +11,9 @@
 /// malformed setting (a usage error), 1 for a setting the model refuses.
 int cli_set_parameter(const char* command, sm_document* doc, const char* setting);
 
+/// The index of the parameter a "NAME=VALUE" setting names, or -1 if it is malformed or names none.
+int32_t cli_setting_parameter(const sm_document* doc, const char* setting);
+
 /// Applies `count` settings in order; stops at the first that fails and returns its status.
 int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count);
 

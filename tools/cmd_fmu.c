@@ -247,6 +247,32 @@ typedef struct options {
 	int set_count;
 } options;
 
+// The parameters of the --set options in the order they were set, each once: where last set
+// (last) or where first set. An order with each parameter once is all parameters.txt can hold;
+// the two are the same when each is set once, and *repeated says whether one was set again.
+// order and seen have room for every parameter of doc. Returns the count.
+static int32_t set_order(const options* opt, const sm_document* doc, bool last, int32_t* order, bool* seen,
+                         bool* repeated)
+{
+	memset(seen, 0, ((size_t)sm_document_parameter_count(doc) + 1) * sizeof *seen);
+	int32_t count = 0;
+	for (int j = 0; j < opt->set_count; ++j) {
+		const int32_t i = cli_setting_parameter(doc, opt->sets[last ? opt->set_count - 1 - j : j]);
+		if (i >= 0 && seen[i])
+			*repeated = true;
+		else if (i >= 0) {
+			seen[i] = true;
+			order[count++] = i;
+		}
+	}
+	for (int32_t a = 0, b = count - 1; last && a < b; ++a, --b) {
+		const int32_t t = order[a];
+		order[a] = order[b];
+		order[b] = t;
+	}
+	return count;
+}
+
 // Applies the --set values to doc (parsed from text), as `springmass run --set` does, and makes the
 // text of resources/parameters.txt: *parameters NULL when no value differs from the file's, and
 // *doc then as it was. Otherwise *doc is replaced by the document the FMU makes of the model file
@@ -259,9 +285,7 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	if (status != 0 || opt->set_count == 0)
 		return status;
 	// For values the file's order cannot take: the parameters in the order of the --set options,
-	// which the model took one at a time. An order with each parameter once is all parameters.txt
-	// can hold: where they were last set, and failing that where first set (the same when each
-	// is set once).
+	// which the model took one at a time (set_order), last set and failing that first set.
 	const int32_t np = sm_document_parameter_count(*doc);
 	int32_t* order = malloc(((size_t)np + 1) * sizeof *order);
 	bool* seen = malloc(((size_t)np + 1) * sizeof *seen);
@@ -274,31 +298,7 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	sm_error err = {SM_OK, ""};
 	bool repeated = false;
 	for (int pass = 0; pass < 2 && !*parameters && !(pass == 1 && !repeated); ++pass) {
-		const bool last = pass == 0;
-		memset(seen, 0, ((size_t)np + 1) * sizeof *seen);
-		int32_t order_count = 0;
-		for (int j = 0; j < opt->set_count; ++j) {
-			const int k = last ? opt->set_count - 1 - j : j;
-			const char* equals = strchr(opt->sets[k], '=');
-			char name[256];
-			const size_t n = equals ? (size_t)(equals - opt->sets[k]) : 0;
-			if (n == 0 || n >= sizeof name)
-				continue;
-			memcpy(name, opt->sets[k], n);
-			name[n] = '\0';
-			const int32_t i = sm_document_parameter_index(*doc, name);
-			if (i >= 0 && seen[i])
-				repeated = true;
-			else if (i >= 0) {
-				seen[i] = true;
-				order[order_count++] = i;
-			}
-		}
-		for (int32_t a = 0, b = order_count - 1; last && a < b; ++a, --b) {
-			const int32_t t = order[a];
-			order[a] = order[b];
-			order[b] = t;
-		}
+		const int32_t order_count = set_order(opt, *doc, pass == 0, order, seen, &repeated);
 		*parameters = fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
 		if (!*parameters && err.status == SM_ERROR_OUT_OF_MEMORY)
 			break;

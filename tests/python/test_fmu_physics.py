@@ -198,6 +198,13 @@ def test_tunable_parameter_between_steps(test_fmu):
         inst.free()
 
 
+def refused_as_fixed(inst, name, value):
+    """Setting the fixed parameter `name` after initialisation fails with a message saying so."""
+    with pytest.raises(FMICallException):
+        inst.set(name, value)
+    assert f"{name} is a fixed parameter" in inst.messages[-1][2]
+
+
 def test_a_bound_of_held_particles_is_a_fixed_parameter(test_fmu):
     # box_param: a box holds the rope's particles at x <= xmax = 2 (all five); 3.5, the first
     # value tried, holds the same, but 0.6 frees rope[3] and rope[4], which a running simulation
@@ -210,9 +217,7 @@ def test_a_bound_of_held_particles_is_a_fixed_parameter(test_fmu):
         inst.start({"xmax": 0.6})
         inst.slave.doStep(0.0, 0.1)
         assert inst.get("p[4].z") < 0.0 and inst.get("p[3].z") == 0.0  # rope[3] falls, rope[2] is held
-        with pytest.raises(FMICallException):
-            inst.set("xmax", 2.0)
-        assert "xmax is a fixed parameter" in inst.messages[-1][2]
+        refused_as_fixed(inst, "xmax", 2.0)
         inst.set("k", 50.0)
         inst.slave.doStep(0.1, 0.1)
     finally:
@@ -231,9 +236,7 @@ def test_a_bound_that_holds_the_same_particles_at_many_values_is_still_fixed(tes
         inst.start({"xmax": 6000.0})
         inst.slave.doStep(0.0, 0.1)
         assert inst.get("tip.x") == 5000.0 and inst.get("tip.z") == 0.0  # the bob is held too
-        with pytest.raises(FMICallException):
-            inst.set("xmax", 2.0)
-        assert "xmax is a fixed parameter" in inst.messages[-1][2]
+        refused_as_fixed(inst, "xmax", 2.0)
     finally:
         inst.free()
 
@@ -249,9 +252,7 @@ def test_a_rest_length_that_chooses_the_spring_law_is_fixed(test_fmu):
         assert inst.variables["L"].variability == "fixed" and inst.variables["L2"].variability == "tunable"
         inst.start({"L": 0.0})
         inst.slave.doStep(0.0, 0.1)
-        with pytest.raises(FMICallException):
-            inst.set("L", 0.5)
-        assert "L is a fixed parameter" in inst.messages[-1][2]
+        refused_as_fixed(inst, "L", 0.5)
         inst.set("L2", 0.3)
         inst.slave.doStep(0.1, 0.1)
     finally:
