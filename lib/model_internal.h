@@ -123,6 +123,16 @@ void spring_blocks(const sm_model* model, int32_t spring, const double* x, const
 double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
                                  double* f);
 
+// The springs' share of the forces, added to f, with at most `lanes` springs at a time (1, 2 or 4;
+// fewer where the processor lacks SSE2 or AVX): damping if v is given, every spring's record of
+// `variant` into jacobians if given, and their dissipated power added to *power if both v and
+// power are given [W]. The public evaluations use the widest lanes the processor has; every width
+// gives the same bits (the forces and records; the power with 2 and 4 lanes). Defined in forces.c,
+// for the tests that check it.
+void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const double* v, double* f,
+                                  sm_spring_jacobians* jacobians, sm_jacobian_variant variant, double* power,
+                                  int lanes);
+
 // sm_model_forces_and_power and, in the same pass over the springs, every spring's record of the
 // definiteness-preserving Jacobian as sm_model_forces_and_jacobians stores it (the same numbers,
 // bit for bit, as each of the two). v must be given. The right-hand side of a simulation whose

@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include <string.h>
 
 // xorshift64*: deterministic, the same sequence on every machine.
 typedef struct rng {
@@ -89,4 +90,20 @@ static inline sm_model* random_model(rng* r, int32_t n, int32_t springs, int wit
 		}
 	}
 	return m;
+}
+
+// The special cases of the spring loop added to a random_model of at least 6 particles and 8
+// springs: particles 4 and 5 made to coincide in x and a rest-length spring between them (the
+// degenerate point), and spring 7 disabled. Returns SM_OK or the failing call's status.
+static inline sm_status add_degenerate_and_disabled_springs(sm_model* m, double* x)
+{
+	memcpy(x + 3 * 4, x + 3 * 5, 3 * sizeof(double));
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 4;
+	d.b = 5;
+	d.rest_length = 0.3;
+	d.stiffness = 50.0;
+	d.damping = 1.0;
+	const sm_status status = sm_model_add_spring(m, &d, NULL);
+	return status != SM_OK ? status : sm_model_set_spring_enabled(m, 7, false);
 }

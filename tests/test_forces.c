@@ -292,6 +292,60 @@ static int test_forces_and_power_match_separate_evaluations(void)
 	return 0;
 }
 
+// The spring loop runs four springs at a time with AVX, two with SSE2 and one at a time
+// otherwise (forces.c), choosing the widest the processor has. Every width must be the same IEEE
+// operations: forces and Jacobian records equal bit for bit, for every combination of velocities,
+// records, variant and power, and for every remainder of the spring count modulo 4 (the last
+// springs take the narrower loops). The power is summed in two lanes by the 2- and 4-wide loops
+// (the same bits) and in one by the scalar loop (a few roundings of its positive terms: 1e-12
+// relative). Models with springs sharing particles within a group of four, a degenerate spring
+// (coincident ends) and a disabled one.
+static int test_every_lane_width_gives_the_same_bits(void)
+{
+	rng r = {8080};
+	enum { N = 10 };
+	double x[3 * N], v[3 * N];
+	for (int32_t springs = 17; springs <= 24; springs++) {
+		sm_model* m = random_model(&r, N, springs, springs % 2, x, v);
+		ENSURE(m != NULL);
+		ENSURE_STATUS(add_degenerate_and_disabled_springs(m, x), SM_OK);
+		const size_t record_bytes = SPRING_JACOBIAN_STRIDE * (size_t)sm_model_spring_count(m) * sizeof(double);
+		for (int combination = 0; combination < 12; combination++) {
+			const bool with_v = combination & 1, with_records = combination & 2, with_power = combination & 4;
+			const sm_jacobian_variant variant = combination & 8 ? SM_JACOBIAN_EXACT : SM_JACOBIAN_DEFINITE;
+			if (combination >= 8 && !with_records)
+				continue;
+			double f[3][3 * N], power[3];
+			sm_spring_jacobians* records[3];
+			const int lanes[3] = {1, 2, 4};
+			for (int w = 0; w < 3; w++) {
+				records[w] = sm_spring_jacobians_create(m);
+				ENSURE(records[w] != NULL);
+				memset(records[w]->data, 0, record_bytes);
+				memset(f[w], 0, sizeof f[w]);
+				power[w] = 0.0;
+				sm_model_spring_forces_lanes(m, x, with_v ? v : NULL, f[w], with_records ? records[w] : NULL,
+				                             variant, with_power ? &power[w] : NULL, lanes[w]);
+			}
+			for (int w = 1; w < 3; w++) {
+				ENSURE(memcmp(f[w], f[0], sizeof f[0]) == 0);
+				ENSURE(memcmp(records[w]->data, records[0]->data, record_bytes) == 0);
+			}
+			ENSURE(memcmp(&power[2], &power[1], sizeof power[1]) == 0);
+			if (with_power && with_v) {
+				ENSURE(power[0] > 0.0);
+				ENSURE_REL(power[1], power[0], 1e-12, 0.0);
+			} else {
+				ENSURE(power[0] == 0.0 && power[1] == 0.0);
+			}
+			for (int w = 0; w < 3; w++)
+				sm_spring_jacobians_destroy(records[w]);
+		}
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
 // The elastic force is minus the gradient of the elastic energy. Central differences with
 // h = 1e-6 m: truncation h^2/6 |E'''| <= 1e-12 * 1e5 ~ 1e-7 N for the springs of random_model,
 // rounding eps |E| / h ~ 2e-16 * 10 / 1e-6 ~ 2e-9 N; allowed: 1e-6 of the largest force (>= 1 N).
@@ -538,5 +592,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_degenerate_length_gives_finite_values);
 	RUN_TEST(test_disabled_spring_exerts_no_force);
 	RUN_TEST(test_per_strain_rope_stretch_is_independent_of_discretisation);
+	RUN_TEST(test_every_lane_width_gives_the_same_bits);
 	return TEST_SUMMARY();
 }
