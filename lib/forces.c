@@ -8,7 +8,8 @@
 //
 // streams through the structure-of-arrays springs with no branch (disabled springs have zero
 // constants; the degenerate point is a select, not a branch), four springs at a time where the
-// processor has AVX, two at a time with SSE2 (every x86-64 processor), and accumulates into f. The same pass can also store every spring's Jacobian in
+// processor has AVX, two at a time with SSE2 (every x86-64 processor), and accumulates into f.
+// Every width gives the same bits. The same pass can also store every spring's Jacobian in
 // factored form (sm_model_forces_and_jacobians), for the product in jacobian.c and the sparse
 // fill in sparse_jacobian.c. bench/README.md has the measurements behind these choices.
 #include "law_body_forces.h"
