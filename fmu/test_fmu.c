@@ -2,6 +2,7 @@
 // leak checker see every path: life cycle, closed form, misuse, state round trip, reset.
 #define _XOPEN_SOURCE 700
 #include "fmu_model.h"
+#include "physics_fixtures.h"
 #include "test_harness.h"
 
 #include "fmi2Functions.h"
@@ -355,6 +356,348 @@ static int test_parameter_values_refused(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Random call sequences against the FMI 2.0 Co-Simulation state machine
+// ---------------------------------------------------------------------------------------------
+
+// The states of FMI 2.0's table of allowed calls (section 4.2.4 of the standard) that this FMU
+// reaches (its fmi2DoStep is synchronous: no stepInProgress, no stepCanceled).
+enum { S_INSTANTIATED, S_INITIALIZATION, S_STEP_COMPLETE, S_STEP_FAILED, S_TERMINATED };
+#define IN(state, ...) state_in((state), (const int[]){__VA_ARGS__, -1})
+static bool state_in(int state, const int* states)
+{
+	for (; *states >= 0; ++states)
+		if (*states == state)
+			return true;
+	return false;
+}
+
+// What the test expects of the instance: its state, its start time and time, whether the force input is one no
+// step can take, and the saved FMU states (the state machine's state, the times and the inputs
+// are part of what fmi2GetFMUstate saves).
+#define SLOTS 3
+typedef struct expectation {
+	int state;
+	double start, time;  // [s]; time NAN after a discarded step (the FMU knows where it stopped)
+	bool huge;
+	fmi2FMUstate slot[SLOTS];
+	int slot_state[SLOTS];
+	double slot_start[SLOTS], slot_time[SLOTS];
+	bool slot_huge[SLOTS];
+} expectation;
+
+enum {
+	OP_SETUP, OP_ENTER, OP_EXIT, OP_STEP, OP_STEP_AT_WRONG_TIME, OP_STEP_NEGATIVE, OP_SET_FORCE, OP_SET_HUGE, OP_SET_NAN,
+	OP_GET, OP_GET_UNKNOWN, OP_TERMINATE, OP_RESET, OP_GET_STATE, OP_SET_STATE, OP_FREE_STATE, OP_SERIALIZE,
+	OP_STATUS, OP_DERIVATIVE, OP_LOGGING, OP_CANCEL, OP_INPUT_DERIVATIVES, OP_OUTPUT_DERIVATIVES, OP_COUNT
+};
+
+// 500 internal steps per communication step at most (the file's 100 000 would make each
+// discarded step take a tenth of a second), set where the fixed parameter can be set.
+static fmi2Status limit_steps(fmi2Component c, const fixture* f)
+{
+	const fmi2ValueReference max_steps = vr(f, "solver.max_steps");
+	const fmi2Integer limit = 500;
+	return fmi2SetInteger(c, &max_steps, 1, &limit);
+}
+
+// One call of kind op with arguments drawn from r. Returns the FMU's status and sets *expected to
+// what the standard's table and the arguments call for, updating the expectation for the calls
+// that succeed; `value` receives a value read (NAN if none).
+static fmi2Status call(fmi2Component c, const fixture* f, int op, rng* r, expectation* e, fmi2Status* expected,
+                       double* value)
+{
+	const int st = e->state;
+	const bool running = IN(st, S_INITIALIZATION, S_STEP_COMPLETE, S_STEP_FAILED, S_TERMINATED);
+	const bool settable = IN(st, S_INSTANTIATED, S_INITIALIZATION, S_STEP_COMPLETE);
+	const bool stepped = IN(st, S_STEP_COMPLETE, S_STEP_FAILED, S_TERMINATED);
+	const int k = (int)rng_uniform(r, 0.0, SLOTS - 1e-9);
+	fmi2ValueReference force = vr(f, "tip.fx"), position = vr(f, "tip.x"), unknown = 0xfffffff0u;
+	fmi2ValueReference base_force = vr(f, "base.fx"), base_position = vr(f, "base.x");
+	*value = NAN;
+	*expected = fmi2Error;
+	fmi2Status status;
+	switch (op) {
+	case OP_SETUP: {
+		const double start = rng_uniform(r, 0.0, 1.0) < 0.5 ? 0.0 : 0.25;
+		status = fmi2SetupExperiment(c, fmi2False, 0.0, start, fmi2False, 0.0);
+		if (st == S_INSTANTIATED) {
+			*expected = fmi2OK;
+			e->start = start;
+		}
+		return status;
+	}
+	case OP_ENTER:
+		status = fmi2EnterInitializationMode(c);
+		if (st == S_INSTANTIATED) {
+			*expected = fmi2OK;
+			e->state = S_INITIALIZATION;
+			e->time = e->start;
+		}
+		return status;
+	case OP_EXIT:
+		status = fmi2ExitInitializationMode(c);
+		if (st == S_INITIALIZATION) {
+			*expected = fmi2OK;
+			e->state = S_STEP_COMPLETE;
+		}
+		return status;
+	case OP_STEP: {
+		const double h = rng_uniform(r, 0.0, 1.0) < 0.5 ? 0.01 : 0.05;
+		status = fmi2DoStep(c, e->time, h, fmi2False);
+		if (st == S_STEP_COMPLETE && e->huge) {
+			*expected = fmi2Discard;
+			e->state = S_STEP_FAILED;
+			e->time = NAN;
+		} else if (st == S_STEP_COMPLETE) {
+			*expected = fmi2OK;
+			e->time += h;
+		}
+		return status;
+	}
+	case OP_STEP_AT_WRONG_TIME:
+		return fmi2DoStep(c, e->time + 0.5, 0.01, fmi2False);
+	case OP_STEP_NEGATIVE:
+		return fmi2DoStep(c, e->time, -0.01, fmi2False);
+	case OP_SET_FORCE: {
+		const double fx = rng_uniform(r, -1.0, 1.0);  // [N]: the bob stays within a few cm
+		if (settable) {
+			*expected = fmi2OK;
+			e->huge = false;
+		}
+		return fmi2SetReal(c, &force, 1, &fx);
+	}
+	case OP_SET_HUGE: {
+		// 1e200 N on 2 kg: the next step cannot be integrated and ends in a discard.
+		const double fx = 1e200;
+		if (settable) {
+			*expected = fmi2OK;
+			e->huge = true;
+		}
+		return fmi2SetReal(c, &force, 1, &fx);
+	}
+	case OP_SET_NAN: {
+		const double nan_value = NAN;
+		return fmi2SetReal(c, &force, 1, &nan_value);
+	}
+	case OP_GET:
+		if (running)
+			*expected = fmi2OK;
+		return fmi2GetReal(c, &position, 1, value);
+	case OP_GET_UNKNOWN: {
+		double ignored;
+		return fmi2GetReal(c, &unknown, 1, &ignored);
+	}
+	case OP_TERMINATE:
+		status = fmi2Terminate(c);
+		if (IN(st, S_STEP_COMPLETE, S_STEP_FAILED)) {
+			*expected = fmi2OK;
+			e->state = S_TERMINATED;
+		}
+		return status;
+	case OP_RESET:
+		*expected = fmi2OK;
+		e->state = S_INSTANTIATED;
+		e->start = e->time = 0.0;
+		e->huge = false;
+		status = fmi2Reset(c);
+		return status == fmi2OK ? limit_steps(c, f) : status;
+	case OP_GET_STATE:
+		*expected = fmi2OK;
+		status = fmi2GetFMUstate(c, &e->slot[k]);
+		e->slot_state[k] = st;
+		e->slot_start[k] = e->start;
+		e->slot_time[k] = e->time;
+		e->slot_huge[k] = e->huge;
+		return status;
+	case OP_SET_STATE:
+		if (e->slot[k] == NULL)
+			return fmi2SetFMUstate(c, NULL);
+		*expected = fmi2OK;
+		e->state = e->slot_state[k];
+		e->start = e->slot_start[k];
+		e->time = e->slot_time[k];
+		e->huge = e->slot_huge[k];
+		return fmi2SetFMUstate(c, e->slot[k]);
+	case OP_FREE_STATE:
+		*expected = fmi2OK;  // freeing a NULL state is a no-op
+		return fmi2FreeFMUstate(c, &e->slot[k]);
+	case OP_SERIALIZE: {
+		// Round trip of slot k through its bytes into slot (k + 1) % SLOTS.
+		const int to = (k + 1) % SLOTS;
+		if (e->slot[k] == NULL || e->slot[to] != NULL)
+			return fmi2SerializedFMUstateSize(c, NULL, &(size_t){0});
+		size_t size = 0;
+		if ((status = fmi2SerializedFMUstateSize(c, e->slot[k], &size)) != fmi2OK)
+			return status;
+		fmi2Byte* bytes = malloc(size);
+		if (bytes == NULL)
+			return fmi2Fatal;
+		status = fmi2SerializeFMUstate(c, e->slot[k], bytes, size);
+		if (status == fmi2OK)
+			status = fmi2DeSerializeFMUstate(c, bytes, size, &e->slot[to]);
+		free(bytes);
+		*expected = fmi2OK;
+		e->slot_state[to] = e->slot_state[k];
+		e->slot_start[to] = e->slot_start[k];
+		e->slot_time[to] = e->slot_time[k];
+		e->slot_huge[to] = e->slot_huge[k];
+		return status;
+	}
+	case OP_STATUS: {
+		fmi2Status step_status = fmi2Fatal;
+		if (IN(st, S_STEP_COMPLETE, S_STEP_FAILED, S_TERMINATED))
+			*expected = fmi2OK;
+		status = fmi2GetStatus(c, fmi2DoStepStatus, &step_status);
+		if (status == fmi2OK && step_status != (st == S_STEP_FAILED ? fmi2Discard : fmi2OK))
+			return fmi2Fatal;
+		return status;
+	}
+	case OP_DERIVATIVE: {
+		// d base.fx / d base.x: minus the stiffness along the spring, which stays on the x axis
+		// (the force port pushes along x only): -k = -50 N/m, up to the rounding of the factored
+		// blocks (K_xx = beta + (k - beta) with beta = k (1 - l0/L)): a few ulps, 1e-12 relative.
+		const double seed = 1.0;
+		if (running)
+			*expected = fmi2OK;
+		status = fmi2GetDirectionalDerivative(c, &base_force, 1, &base_position, 1, &seed, value);
+		if (status == fmi2OK && !(fabs(*value + 50.0) <= 1e-12 * 50.0)) {
+			printf("  d base.fx / d base.x = %.17g N/m, expected -50\n", *value);
+			return fmi2Fatal;
+		}
+		*value = NAN;
+		return status;
+	}
+	case OP_LOGGING: {
+		// On for events, solver statistics and errors, or off for the statistics alone: errors
+		// stay reported (logging on with categories logs those categories only).
+		const fmi2String categories[] = {"logSolver", "logEvents", "logStatusError"};
+		*expected = fmi2OK;
+		const bool on = rng_uniform(r, 0.0, 1.0) < 0.5;
+		return fmi2SetDebugLogging(c, on, on ? 3 : 1, categories);
+	}
+	case OP_CANCEL:  // there is never a step in progress
+		return fmi2CancelStep(c);
+	case OP_INPUT_DERIVATIVES: {
+		// None taken (canInterpolateInputs is false): an empty call is allowed where setting is.
+		const size_t n = rng_uniform(r, 0.0, 1.0) < 0.5 ? 0 : 1;
+		const fmi2Integer order = 1;
+		const double slope = 1.0;
+		if (settable && n == 0)
+			*expected = fmi2OK;
+		return fmi2SetRealInputDerivatives(c, &force, n, &order, &slope);
+	}
+	case OP_OUTPUT_DERIVATIVES: {
+		const fmi2Integer order = 1;
+		double slope;
+		if (stepped)
+			*expected = fmi2OK;
+		return fmi2GetRealOutputDerivatives(c, &position, 0, &order, &slope);
+	}
+	}
+	return fmi2Fatal;
+}
+
+// The bob's x over 20 steps of 0.01 s with tip.fx = 0.3 N from a reset instance.
+static int reference_run(fmi2Component c, const fixture* f, double* x)
+{
+	fmi2ValueReference force = vr(f, "tip.fx");
+	const double fx = 0.3;
+	if (fmi2Reset(c) != fmi2OK || fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK ||
+	    fmi2EnterInitializationMode(c) != fmi2OK || fmi2SetReal(c, &force, 1, &fx) != fmi2OK ||
+	    fmi2ExitInitializationMode(c) != fmi2OK)
+		return 1;
+	for (int n = 0; n < 20; ++n) {
+		if (fmi2DoStep(c, n * 0.01, 0.01, fmi2True) != fmi2OK)
+			return 1;
+		x[n] = get(c, f, "tip.x");
+	}
+	return 0;
+}
+
+// Random sequences of FMI calls, right and wrong, in every state the FMU reaches: every call the
+// standard's table does not allow in the current state, and every call with a bad argument,
+// returns fmi2Error with a logged message and changes nothing (the next calls behave as if it had
+// not been made); every allowed call with good arguments succeeds, and the values read are finite.
+// After each sequence the instance, reset, repeats a fresh instance's run bit for bit. 1000
+// sequences of 60 calls, with the sanitizers in CI.
+static int test_random_call_sequences_follow_the_state_machine(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component fresh = fmi2Instantiate("fresh", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+	                                      fmi2False);
+	ENSURE(fresh != NULL);
+	double expected_x[20], x[20];
+	ENSURE(reference_run(fresh, &f, expected_x) == 0);
+	fmi2FreeInstance(fresh);
+	static const char* const names[OP_COUNT] = {"SetupExperiment",
+	                                            "EnterInitializationMode",
+	                                            "ExitInitializationMode",
+	                                            "DoStep",
+	                                            "DoStep at a wrong time",
+	                                            "DoStep of a negative size",
+	                                            "SetReal",
+	                                            "SetReal 1e200 N",
+	                                            "SetReal NaN",
+	                                            "GetReal",
+	                                            "GetReal of an unknown reference",
+	                                            "Terminate",
+	                                            "Reset",
+	                                            "GetFMUstate",
+	                                            "SetFMUstate",
+	                                            "FreeFMUstate",
+	                                            "Serialize and DeSerialize",
+	                                            "GetStatus",
+	                                            "GetDirectionalDerivative",
+	                                            "SetDebugLogging",
+	                                            "CancelStep",
+	                                            "SetRealInputDerivatives",
+	                                            "GetRealOutputDerivatives"};
+	static const char* const state_names[] = {"instantiated", "initialization mode", "step complete", "step failed",
+	                                          "terminated"};
+	rng r = {20261201};
+	int visits[S_TERMINATED + 1] = {0}, discards = 0;  // calls made in each state; steps discarded
+	for (int sequence = 0; sequence < 1000; ++sequence) {
+		fmi2Component c = fmi2Instantiate("random", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+		                                  fmi2False);
+		ENSURE(c != NULL);
+		ENSURE_STATUS(limit_steps(c, &f), fmi2OK);
+		expectation e = {.state = S_INSTANTIATED};
+		for (int n = 0; n < 60; ++n) {
+			// The life cycle's calls twice as often as the others, so that sequences get far.
+			int op = (int)rng_uniform(&r, 0.0, OP_COUNT + 4 - 1e-9);
+			if (op >= OP_COUNT)
+				op = op - OP_COUNT;  // SETUP, ENTER, EXIT, STEP again
+			const int errors = f.log.errors, before = e.state;
+			visits[before]++;
+			fmi2Status expected;
+			double value;
+			const fmi2Status status = call(c, &f, op, &r, &e, &expected, &value);
+			const bool logged = f.log.errors > errors;
+			if (status != expected || (expected == fmi2Error) != logged || (!isnan(value) && !isfinite(value)) ||
+			    (expected == fmi2OK && op == OP_GET && !isfinite(value))) {
+				printf("  sequence %d, call %d: %s in state %s returned %d, expected %d (%s); last message: %s\n",
+				       sequence, n, names[op], state_names[before], (int)status, (int)expected,
+				       logged ? "an error logged" : "no error logged", f.log.last);
+				return 1;
+			}
+			discards += expected == fmi2Discard;
+		}
+		ENSURE(reference_run(c, &f, x) == 0);
+		ENSURE(memcmp(x, expected_x, sizeof x) == 0);
+		for (int k = 0; k < SLOTS; ++k)
+			ENSURE_STATUS(fmi2FreeFMUstate(c, &e.slot[k]), fmi2OK);
+		fmi2FreeInstance(c);
+	}
+	// Every state was visited often, and steps were discarded: the sequences went everywhere.
+	for (int state = S_INSTANTIATED; state <= S_TERMINATED; ++state)
+		ENSURE(visits[state] >= 1000);
+	ENSURE(discards >= 100);
+	teardown(&f);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -364,5 +707,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_model_description_lists_every_variable_once);
 	RUN_TEST(test_parameter_values);
 	RUN_TEST(test_parameter_values_refused);
+	RUN_TEST(test_random_call_sequences_follow_the_state_machine);
 	return TEST_SUMMARY();
 }
