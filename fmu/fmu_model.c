@@ -681,6 +681,16 @@ static void append_dependencies(text_buffer* out, const fmu_table* t, const fmu_
 	append_text(out, "\"");
 }
 
+// The shortest of %.15g, %.16g and %.17g that reads back to exactly the value (C locale).
+static void format_shortest(double value, char out[32])
+{
+	for (int digits = 15; digits <= 17; ++digits) {
+		snprintf(out, 32, "%.*g", digits, value);
+		if (strtod(out, NULL) == value)
+			return;
+	}
+}
+
 char* fmu_model_description(const fmu_table* t, const char* generation_date)
 {
 	text_buffer out = {NULL, 0, 0, false};
@@ -728,8 +738,12 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	       "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
 	       "  </LogCategories>\n");
 
-	appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%.17g\" stepSize=\"%.17g\" tolerance=\"%.17g\"/>\n",
-	        t->stop_time, t->step_size, t->tolerance);
+	char stop[32], step[32], tolerance[32];
+	format_shortest(t->stop_time, stop);
+	format_shortest(t->step_size, step);
+	format_shortest(t->tolerance, tolerance);
+	appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n", stop,
+	        step, tolerance);
 
 	append_text(&out, "  <ModelVariables>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
@@ -750,8 +764,11 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 			append_text(&out, "<Real");
 			if (v->unit)
 				appendf(&out, " unit=\"%s\"", v->unit);
-			if (v->has_start)
-				appendf(&out, " start=\"%.17g\"", v->start_real);
+			if (v->has_start) {
+				char start[32];
+				format_shortest(v->start_real, start);
+				appendf(&out, " start=\"%s\"", start);
+			}
 			break;
 		case FMU_INTEGER:
 			append_text(&out, "<Integer");
@@ -869,16 +886,6 @@ static void c_numbers_end(c_numbers* n)
 {
 	uselocale(n->previous);
 	freelocale(n->c);
-}
-
-// The shortest of %.15g, %.16g and %.17g that reads back to exactly the value (C locale).
-static void format_shortest(double value, char out[32])
-{
-	for (int digits = 15; digits <= 17; ++digits) {
-		snprintf(out, 32, "%.*g", digits, value);
-		if (strtod(out, NULL) == value)
-			return;
-	}
 }
 
 // A line of the file for a message: printable ASCII as it is with '"' and '\' escaped, any other

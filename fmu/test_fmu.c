@@ -249,6 +249,21 @@ static int test_model_description_lists_every_variable_once(void)
 	ENSURE(count == f.table.count);
 	ENSURE(strstr(xml, f.guid) != NULL);
 	ENSURE(strstr(xml, "name=\"base.fx\"") != NULL && strstr(xml, "name=\"p[1].vz\"") != NULL);
+	// Numbers in their shortest form that reads back exactly: the default tolerance 1e-6 as
+	// "1e-06" (not 9.9999999999999995e-07), and every Real start value back bit for bit.
+	ENSURE(strstr(xml, "tolerance=\"1e-06\"") != NULL);
+	for (int32_t i = 0; i < f.table.count; ++i) {
+		const fmu_variable* v = &f.table.variables[i];
+		if (v->type != FMU_REAL || !v->has_start)
+			continue;
+		char reference[48];
+		snprintf(reference, sizeof reference, "valueReference=\"%d\"", (int)i);
+		const char* at = strstr(xml, reference);
+		ENSURE(at != NULL);
+		at = strstr(at, "start=\"");
+		ENSURE(at != NULL);
+		ENSURE(strtod(at + strlen("start=\""), NULL) == v->start_real);
+	}
 	free(xml);
 	teardown(&f);
 	return 0;
