@@ -4,29 +4,44 @@ chain_left  = anchor --k1-- m1            (m1 is a force port: takes a force, gi
 chain_right = joint --k2,d2-- m2          (joint is a motion port: takes x and v, gives the force)
 chain_whole = anchor --k1-- m1 --k2,d2-- m2, the monolithic reference.
 
+The three model files are the example examples/coupled_chain/, which also connects the halves in
+an SSP archive (SystemStructure.ssd) for system-level tools.
+
 Each communication step the master gives m1's position and velocity to the joint and the
 joint's force (the force the right half exerts on whatever drives it) to m1. The right half
 moves the joint linearly over the step and the force is held, so the coupling error of this
 explicit (Jacobi) scheme is of first order in the communication step h.
 """
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from fmpy import simulate_fmu
 
+from conftest import BUILD, ROOT
 from fmu_helpers import Instance
+
+EXAMPLE = ROOT / "examples" / "coupled_chain"
 
 STOP = 2.0
 TIGHT = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
 
 
-def monolithic(test_fmu, h):
-    r = simulate_fmu(str(test_fmu("chain_whole")), stop_time=STOP, output_interval=h, start_values=TIGHT)
+@pytest.fixture(scope="session")
+def chain(package):
+    """chain(name) -> FMU of examples/coupled_chain/<name>.json."""
+    return lambda name: package(EXAMPLE / f"{name}.json")
+
+
+def monolithic(chain, h):
+    r = simulate_fmu(str(chain("chain_whole")), stop_time=STOP, output_interval=h, start_values=TIGHT)
     return r["time"], np.column_stack([r["m1.x"], r["m2.x"]])
 
 
-def master_loop(test_fmu, h):
-    left = Instance(test_fmu("chain_left"), "left").start(TIGHT)
-    right = Instance(test_fmu("chain_right"), "right").start(TIGHT)
+def master_loop(chain, h):
+    left = Instance(chain("chain_left"), "left").start(TIGHT)
+    right = Instance(chain("chain_right"), "right").start(TIGHT)
     try:
         steps = int(round(STOP / h))
         rows = [(left.get("m1.x"), right.get("m2.x"))]
@@ -45,11 +60,11 @@ def master_loop(test_fmu, h):
         right.free()
 
 
-def test_master_loop_agrees_with_the_monolithic_model_and_converges(test_fmu):
+def test_master_loop_agrees_with_the_monolithic_model_and_converges(chain):
     errors = []
     for h in (0.004, 0.002, 0.001):
-        _, reference = monolithic(test_fmu, h)
-        coupled = master_loop(test_fmu, h)
+        _, reference = monolithic(chain, h)
+        coupled = master_loop(chain, h)
         errors.append(np.max(np.abs(coupled - reference)))
     # First order: halving h roughly halves the error (ratio 2 +- 30 %), and at h = 1 ms the
     # coupled chain is within 1 mm of the monolithic one over 2 s (amplitudes of 0.1 m; the
@@ -59,7 +74,7 @@ def test_master_loop_agrees_with_the_monolithic_model_and_converges(test_fmu):
     assert errors[2] < 1e-3, errors
 
 
-def test_libcosim_runtime_agrees_with_the_monolithic_model(test_fmu):
+def test_libcosim_runtime_agrees_with_the_monolithic_model(chain):
     cosim = pytest.importorskip("libcosimpy.CosimExecution")
     from libcosimpy.CosimObserver import CosimObserver
     from libcosimpy.CosimSlave import CosimLocalSlave
@@ -69,7 +84,7 @@ def test_libcosim_runtime_agrees_with_the_monolithic_model(test_fmu):
     for h in (0.002, 0.001):
         nanoseconds = int(round(h * 1e9))
         execution = cosim.CosimExecution.from_step_size(step_size=nanoseconds)
-        left_fmu, right_fmu = str(test_fmu("chain_left")), str(test_fmu("chain_right"))
+        left_fmu, right_fmu = str(chain("chain_left")), str(chain("chain_right"))
         left = execution.add_local_slave(local_slave=CosimLocalSlave(fmu_path=left_fmu, instance_name="left"))
         right = execution.add_local_slave(local_slave=CosimLocalSlave(fmu_path=right_fmu, instance_name="right"))
         lvr = {v.name: v.valueReference for v in read_model_description(left_fmu).modelVariables}
@@ -86,7 +101,31 @@ def test_libcosim_runtime_agrees_with_the_monolithic_model(test_fmu):
         execution.simulate_until(target_time=int(round(STOP * 1e9)))
         m1 = observer.last_real_values(slave_index=left, variable_references=[lvr["m1.x"]])[0]
         m2 = observer.last_real_values(slave_index=right, variable_references=[rvr["m2.x"]])[0]
-        _, reference = monolithic(test_fmu, h)
+        _, reference = monolithic(chain, h)
         results.append(max(abs(m1 - reference[-1, 0]), abs(m2 - reference[-1, 1])))
     # Same coupling error as the master loop above, at the end time, and smaller for smaller h.
     assert results[1] < results[0] and results[1] < 1e-3, results
+
+
+def test_the_ssp_example_validates_and_agrees_with_the_monolithic_model(chain, tmp_path):
+    # examples/coupled_chain/make_ssp.sh packages the halves and SystemStructure.ssd into an SSP
+    # archive; the SSD validates against the SSP 1.0 schema (fmpy's copy), and libcosim, reading
+    # the connections and the tolerances' parameter bindings from it, gives the coupled chain:
+    # within 1 mm of the monolithic one at h = 1 ms and closer the smaller h (first order, as the
+    # master loop above).
+    pytest.importorskip("libcosimpy.CosimExecution")
+    from fmpy.ssp.ssd import read_ssd
+
+    ssp = tmp_path / "coupled_chain.ssp"
+    subprocess.run([str(EXAMPLE / "make_ssp.sh"), str(BUILD), str(ssp)], check=True, capture_output=True)
+    ssd = read_ssd(str(ssp), validate=True)
+    assert [c.name for c in ssd.system.elements] == ["left", "right"]
+    sys.path.insert(0, str(EXAMPLE))
+    from run_libcosim import simulate
+
+    errors = []
+    for h in (0.002, 0.001):
+        _, reference = monolithic(chain, h)
+        x = simulate(ssp, h, STOP)
+        errors.append(max(abs(x["m1.x"] - reference[-1, 0]), abs(x["m2.x"] - reference[-1, 1])))
+    assert errors[1] < errors[0] and errors[1] < 1e-3, errors
