@@ -44,22 +44,29 @@ static sm_model* oscillator(double m, double k, double kd, double u0)
 	return model;
 }
 
-// The benchmark cloth (bench/README.md): n x n, 1 kg, corners (n-1, 0) and (n-1, n-1) fixed.
-static sm_model* benchmark_cloth(int32_t n, double mass_damping)
+// An n x n sheet of sm_add_sheet's defaults (1 m x 1 m, 1 kg) with mass damping alpha [1/s],
+// corner (n-1, 0) fixed and corner (n-1, n-1) of the given motion.
+static sm_model* sheet_held_at_corners(int32_t n, double alpha, sm_particle_motion far_corner, sm_structure* st)
 {
 	sm_model_def md = sm_default_model_def();
-	md.mass_damping = mass_damping;
+	md.mass_damping = alpha;
 	sm_model* model = sm_model_create(&md, NULL);
 	sm_sheet_def sd = sm_default_sheet_def();
 	sd.nu = sd.nv = n;
-	sm_structure st;
-	if (!model || sm_add_sheet(model, &sd, &st) != SM_OK ||
-	    sm_set_motion_at(model, &st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
-	    sm_set_motion_at(model, &st, n - 1, n - 1, 0, SM_PARTICLE_FIXED) != SM_OK) {
+	if (!model || sm_add_sheet(model, &sd, st) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, n - 1, 0, far_corner) != SM_OK) {
 		sm_model_destroy(model);
 		return NULL;
 	}
 	return model;
+}
+
+// The benchmark cloth (bench/README.md): n x n, 1 kg, corners (n-1, 0) and (n-1, n-1) fixed.
+static sm_model* benchmark_cloth(int32_t n, double mass_damping)
+{
+	sm_structure st;
+	return sheet_held_at_corners(n, mass_damping, SM_PARTICLE_FIXED, &st);
 }
 
 // Two-mass chain hanging from a fixed anchor: anchor - 1 kg - 0.5 kg, rest-length springs of
@@ -1199,6 +1206,227 @@ static int test_adams_method(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Random call sequences: failed calls leave no trace, a reset forgets everything
+// ---------------------------------------------------------------------------------------------
+
+// An n x n sheet with one corner fixed and the opposite one driven, mass damping, and springs that
+// break at 30 % strain; `stiffer` scales every stiffness by 1.5 (the same topology, for
+// update_model).
+static sm_model* random_calls_model(int32_t n, double stiffer, int32_t* driven)
+{
+	sm_structure st;
+	sm_model* model = sheet_held_at_corners(n, 0.1, SM_PARTICLE_DRIVEN, &st);
+	if (!model)
+		return NULL;
+	*driven = sm_structure_particle(&st, n - 1, n - 1, 0);
+	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
+		sm_spring_def d;
+		sm_model_get_spring(model, k, &d);
+		d.break_strain = 0.3;
+		d.stiffness *= stiffer;
+		if (sm_model_set_spring(model, k, &d) != SM_OK) {
+			sm_model_destroy(model);
+			return NULL;
+		}
+	}
+	return model;
+}
+
+// Whether two simulations are in the same state, bit for bit: time, positions, velocities,
+// forces, dissipated energy, breaks and the solver's counters (not its timings).
+static bool same_state(const sm_simulation* a, const sm_simulation* b, int32_t n3, double* fa, double* fb)
+{
+	const double ta = sm_simulation_time(a), tb = sm_simulation_time(b);
+	const double ea = sm_simulation_dissipated_energy(a), eb = sm_simulation_dissipated_energy(b);
+	sm_simulation_forces(a, fa);
+	sm_simulation_forces(b, fb);
+	const sm_statistics sa = sm_simulation_statistics(a), sb = sm_simulation_statistics(b);
+	bool same = memcmp(&ta, &tb, sizeof ta) == 0 && memcmp(&ea, &eb, sizeof ea) == 0 &&
+	            memcmp(sm_simulation_positions(a), sm_simulation_positions(b), (size_t)n3 * sizeof(double)) == 0 &&
+	            memcmp(sm_simulation_velocities(a), sm_simulation_velocities(b), (size_t)n3 * sizeof(double)) == 0 &&
+	            memcmp(fa, fb, (size_t)n3 * sizeof(double)) == 0 &&
+	            sm_simulation_break_count(a) == sm_simulation_break_count(b) && sa.steps == sb.steps &&
+	            sa.rhs_evaluations == sb.rhs_evaluations && sa.jacobian_evaluations == sb.jacobian_evaluations &&
+	            sa.linear_iterations == sb.linear_iterations && sa.error_test_failures == sb.error_test_failures &&
+	            sa.convergence_failures == sb.convergence_failures && sa.restarts == sb.restarts &&
+	            sa.factorizations == sb.factorizations;
+	for (int32_t k = 0; same && k < sm_simulation_break_count(a); k++) {
+		const sm_break_event x = sm_simulation_break(a, k), y = sm_simulation_break(b, k);
+		same = x.spring == y.spring && memcmp(&x.time, &y.time, sizeof x.time) == 0;
+	}
+	return same;
+}
+
+// A random call that must succeed or fail alike on every simulation it is made on, by kind:
+// 0-2 advance by dt [s]; 3-4 an external force [N] on a particle (now and then 1e200 N, which
+// the solver cannot follow); 5-6 a driven motion (position offset by 0.05 vector [m] from where
+// the particle is, velocity [m/s]); 7 the current state set again with one coordinate perturbed
+// [m]; 8 a reset; 9 the constants of one of two models.
+typedef struct random_call {
+	int kind;
+	int32_t particle;
+	double dt, vector[3], velocity[3], perturbation;
+	const sm_model* model;
+} random_call;
+
+static random_call draw_call(rng* r, int32_t particles, int32_t driven, const sm_model* models[2])
+{
+	random_call c = {0};
+	c.kind = (int)rng_uniform(r, 0.0, 10.0 - 1e-9);
+	c.particle = c.kind == 5 || c.kind == 6 ? driven : (int32_t)rng_uniform(r, 0.0, particles - 1e-9);
+	const double steps[3] = {1e-3, 1e-2, 3e-2};
+	c.dt = steps[(int)rng_uniform(r, 0.0, 3.0 - 1e-9)];
+	const double scale = rng_uniform(r, 0.0, 1.0) < 0.05 ? 1e200 : 0.5;  // [N]
+	for (int k = 0; k < 3; k++) {
+		c.vector[k] = rng_uniform(r, -1.0, 1.0);
+		c.velocity[k] = rng_uniform(r, -0.1, 0.1);
+	}
+	if (c.kind == 3 || c.kind == 4)
+		for (int k = 0; k < 3; k++)
+			c.vector[k] *= scale;
+	c.perturbation = rng_uniform(r, -1e-4, 1e-4);
+	c.model = models[(int)rng_uniform(r, 0.0, 2.0 - 1e-9)];
+	return c;
+}
+
+// Makes the call on sim (x and v: scratch of 3 per particle) and returns its status.
+static sm_status make_call(sm_simulation* sim, const random_call* c, int32_t n3, double* x, double* v)
+{
+	switch (c->kind) {
+	case 0: case 1: case 2:
+		return sm_simulation_advance(sim, sm_simulation_time(sim) + c->dt);
+	case 3: case 4:
+		return sm_simulation_set_external_force(sim, c->particle, c->vector);
+	case 5: case 6: {
+		const double* at = sm_simulation_positions(sim) + 3 * (size_t)c->particle;
+		const double position[3] = {at[0] + 0.05 * c->vector[0], at[1] + 0.05 * c->vector[1], at[2]};
+		return sm_simulation_set_driven(sim, c->particle, position, c->velocity);
+	}
+	case 7:
+		memcpy(x, sm_simulation_positions(sim), (size_t)n3 * sizeof(double));
+		memcpy(v, sm_simulation_velocities(sim), (size_t)n3 * sizeof(double));
+		x[3 * (size_t)c->particle + 2] += c->perturbation;
+		return sm_simulation_set_state(sim, sm_simulation_time(sim), x, v);
+	case 8:
+		return sm_simulation_reset(sim);
+	default:
+		return sm_simulation_update_model(sim, c->model);
+	}
+}
+
+// One random call that every simulation must refuse with the given status, changing nothing. The
+// values refused are finite and different from the current ones but for one entry, so that a call
+// that wrote part of them before refusing would show.
+static sm_status make_wrong_call(sm_simulation* sim, rng* r, int32_t n3, int32_t driven, const sm_model* other,
+                                 double* x, double* v, sm_status* expected)
+{
+	const double bad[3] = {0.25, NAN, -0.5}, zero3[3] = {0.0, 0.0, 0.0};
+	const double t = sm_simulation_time(sim);
+	const int32_t particle = (int32_t)rng_uniform(r, 0.0, n3 / 3 - 1e-9);
+	switch ((int)rng_uniform(r, 0.0, 8.0 - 1e-9)) {
+	case 0:
+		*expected = SM_ERROR_INVALID_ARGUMENT;
+		return sm_simulation_advance(sim, t > 0.0 ? t * 0.5 - 1e-3 : -1e-3);
+	case 1:
+		*expected = SM_ERROR_INVALID_ARGUMENT;
+		return sm_simulation_advance(sim, NAN);
+	case 2:
+		*expected = SM_ERROR_INVALID_ARGUMENT;  // particle 0 is free
+		return sm_simulation_set_driven(sim, 0, zero3, zero3);
+	case 3:
+		*expected = SM_ERROR_NOT_FINITE;
+		return sm_simulation_set_driven(sim, driven, zero3, bad);
+	case 4:
+		*expected = SM_ERROR_PARTICLE_INDEX;
+		return sm_simulation_set_external_force(sim, n3 / 3, zero3);
+	case 5:
+		*expected = SM_ERROR_NOT_FINITE;
+		return sm_simulation_set_external_force(sim, particle, bad);
+	case 6:
+		*expected = SM_ERROR_NOT_FINITE;
+		for (int32_t k = 0; k < n3; k++) {
+			x[k] = sm_simulation_positions(sim)[k] + 1e-3;
+			v[k] = sm_simulation_velocities(sim)[k] + 1e-3;
+		}
+		v[1] = INFINITY;  // particle 0's vy: particle 0 is free
+		return sm_simulation_set_state(sim, t + 1.0, x, v);
+	default:
+		*expected = SM_ERROR_TOPOLOGY;
+		return sm_simulation_update_model(sim, other);
+	}
+}
+
+// Random sequences of calls made in lockstep on two simulations of the same model with each
+// linear solver (sheets of 4 x 4 for dense, 6 x 6 for KLU, 8 x 8 for cholmod and 11 x 11, 119 free
+// particles, for pcg's two-level preconditioner): A fresh; B after a sequence of its own and a reset, and with calls that must
+// fail (each with its documented status) slipped in between. After every call both must be in
+// the same state bit for bit: a reset forgets all that came before and a refused call leaves
+// nothing behind. Calls that fail on both (a solver failure after a force of 1e200 N) must fail
+// alike and leave both usable.
+static int test_random_calls_leave_no_trace(void)
+{
+	sm_model* other = two_mass_chain();
+	ENSURE(other != NULL);
+	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_KLU, SM_SOLVER_REDUCED_PCG,
+	                                    SM_SOLVER_REDUCED_CHOLMOD};
+	const int32_t sizes[] = {4, 6, 11, 8};
+	int failures = 0, refusals = 0, breaks = 0;
+	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
+		int32_t driven = -1;
+		sm_model* model = random_calls_model(sizes[k], 1.0, &driven);
+		sm_model* stiffer = random_calls_model(sizes[k], 1.5, &driven);
+		ENSURE(model != NULL && stiffer != NULL);
+		const sm_model* models[2] = {model, stiffer};
+		const int32_t particles = sm_model_particle_count(model), n3 = 3 * particles;
+		double *x = malloc(4 * (size_t)n3 * sizeof(double)), *v = x + n3, *fa = v + n3, *fb = fa + n3;
+		ENSURE(x != NULL);
+		sm_simulation_def d = sm_default_simulation_def();
+		d.solver = solvers[k];
+		d.max_steps = 2000;  // a failure after an absurd force comes quickly
+		sm_simulation* a = sm_simulation_create(model, &d, NULL);
+		sm_simulation* b = sm_simulation_create(model, &d, NULL);
+		ENSURE(a != NULL && b != NULL);
+		rng own = {77 + k}, shared = {1234 + k}, wrong = {99 + k};
+		for (int n = 0; n < 40; n++) {
+			const random_call c = draw_call(&own, particles, driven, models);
+			make_call(b, &c, n3, x, v);
+		}
+		ENSURE_STATUS(sm_simulation_reset(b), SM_OK);
+		ENSURE(same_state(a, b, n3, fa, fb));
+		for (int n = 0; n < 150; n++) {
+			if (rng_uniform(&wrong, 0.0, 1.0) < 0.3) {
+				sm_status expected;
+				const sm_status got = make_wrong_call(b, &wrong, n3, driven, other, x, v, &expected);
+				if (got != expected) {
+					printf("  solver %d, call %d: a wrong call returned %d, expected %d: %s\n", (int)solvers[k], n,
+					       (int)got, (int)expected, sm_simulation_last_error(b));
+					return 1;
+				}
+				refusals++;
+			}
+			const random_call c = draw_call(&shared, particles, driven, models);
+			const sm_status sa = make_call(a, &c, n3, x, v), sb = make_call(b, &c, n3, x, v);
+			failures += sa != SM_OK;
+			if (sa != sb || !same_state(a, b, n3, fa, fb)) {
+				printf("  solver %d, call %d (kind %d): statuses %d and %d, or the states differ\n",
+				       (int)solvers[k], n, c.kind, (int)sa, (int)sb);
+				return 1;
+			}
+			breaks += sm_simulation_break_count(a) > 0 && c.kind <= 2;
+		}
+		sm_simulation_destroy(a);
+		sm_simulation_destroy(b);
+		free(x);
+		sm_model_destroy(model);
+		sm_model_destroy(stiffer);
+	}
+	// The sequences reached solver failures and breaks, and the wrong calls were made.
+	ENSURE(failures > 0 && breaks > 0 && refusals > 100);
+	sm_model_destroy(other);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1230,5 +1458,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_reset_repeats_the_run);
 	RUN_TEST(test_update_model);
 	RUN_TEST(test_adams_method);
+	RUN_TEST(test_random_calls_leave_no_trace);
 	return TEST_SUMMARY();
 }
