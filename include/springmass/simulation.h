@@ -186,8 +186,10 @@ SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const 
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
-/// energy, statistics and break events cleared. The solver starts as new: the same calls as
-/// after creation repeat that run bit for bit.
+/// energy, statistics and break events cleared. The model is the simulation's own: the one it was
+/// created from, or the last one sm_simulation_update_model gave it (its constants and initial
+/// state). The solver starts as new: the same calls as after creation from that model repeat
+/// that run bit for bit.
 SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
