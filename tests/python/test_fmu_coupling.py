@@ -28,7 +28,7 @@ STOP = 2.0
 TIGHT = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def chain(package):
     """chain(name) -> FMU of examples/coupled_chain/<name>.json."""
     return lambda name: package(EXAMPLE / f"{name}.json")
