@@ -835,7 +835,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;
 	}
-	if (fmu_table_create_set(inst->doc, inst->text, inst->length, inst->parameters, inst->parameters_length,
+	if (fmu_table_create(inst->doc, inst->text, inst->length, inst->parameters, inst->parameters_length,
 	                         &inst->table, &err) != SM_OK) {
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;

@@ -62,11 +62,6 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 	         (unsigned)(lo & 0xffffffffu));
 }
 
-void fmu_guid(const char* text, size_t length, char guid[40])
-{
-	fmu_package_guid(text, length, NULL, 0, guid);
-}
-
 // ---------------------------------------------------------------------------------------------
 // Names
 // ---------------------------------------------------------------------------------------------
@@ -391,13 +386,8 @@ static sm_status failf(sm_error* err, sm_status status, const char* fmt, ...)
 	return status;
 }
 
-sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table, sm_error* err)
-{
-	return fmu_table_create_set(doc, text, length, NULL, 0, table, err);
-}
-
-sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t length, const char* parameters,
-                               size_t parameters_length, fmu_table* table, sm_error* err)
+sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, const char* parameters,
+                           size_t parameters_length, fmu_table* table, sm_error* err)
 {
 	memset(table, 0, sizeof *table);
 	if (!doc || !text)

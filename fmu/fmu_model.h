@@ -82,7 +82,7 @@ typedef struct fmu_variable {
 typedef struct fmu_table {
 	fmu_variable* variables;
 	int32_t count;
-	char guid[40];             ///< "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" from the file's bytes
+	char guid[40];             ///< "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (fmu_package_guid)
 	char* model_identifier;    ///< C identifier from the model's name
 	char* model_name;
 	char* description;
@@ -91,9 +91,9 @@ typedef struct fmu_table {
 	double tolerance;          ///< default relative tolerance [1]
 } fmu_table;
 
-/// Builds the table of a parsed model file. `text`/`length` are the file's bytes, used only for
-/// the GUID: the caller parses doc from them (the table is doc's); fmu_table_create_set for an
-/// FMU that also carries parameter values.
+/// Builds the table of a parsed model file. `text`/`length` are the file's bytes and `parameters`
+/// those of resources/parameters.txt, used only for the GUID: the caller parses doc from them (the
+/// table is doc's).
 ///
 /// A model-file parameter is tunable (changeable between communication steps) when it feeds
 /// only constants (stiffness, damping, masses, rest lengths, break strains, gravity, mass
@@ -107,26 +107,20 @@ typedef struct fmu_table {
 /// (sm_document_parameter_uses), whatever its value. Returns SM_OK, or an error with the message
 /// in err (e.g. two variables with the same name); on error *table is zeroed and nothing is
 /// leaked.
-sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, fmu_table* table,
-                           sm_error* err);
-
-/// The same for an FMU whose resources/parameters.txt holds `parameters` (NULL for none): doc is
-/// the model file with those values applied (fmu_document_parse), the parameters' start values and
+/// For an FMU whose resources/parameters.txt holds `parameters` (NULL for none), doc is the model
+/// file with those values applied (fmu_document_parse): the parameters' start values and
 /// constants, the counts, the ports and the default experiment are the model's with them, and the
 /// GUID is fmu_package_guid of both texts.
-sm_status fmu_table_create_set(const sm_document* doc, const char* text, size_t length, const char* parameters,
-                               size_t parameters_length, fmu_table* table, sm_error* err);
+sm_status fmu_table_create(const sm_document* doc, const char* text, size_t length, const char* parameters,
+                           size_t parameters_length, fmu_table* table, sm_error* err);
 
 /// Frees what the table owns; accepts a zeroed table.
 void fmu_table_destroy(fmu_table* table);
 
-/// The GUID of a model file's bytes: a 128-bit FNV-1a hash written as
-/// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL).
-void fmu_guid(const char* text, size_t length, char guid[40]);
-
-/// The GUID of an FMU's resources: fmu_guid of the model file's bytes when `parameters` is NULL
-/// (no resources/parameters.txt), else the same hash continued over a NUL byte and the parameters'
-/// bytes. A model file holds no NUL byte (the loader refuses one), so the two parts cannot be
+/// The GUID of an FMU's resources: a 128-bit FNV-1a hash, written as
+/// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL), of the model file's bytes
+/// when `parameters` is NULL (no resources/parameters.txt), else of those continued over a NUL
+/// byte and the parameters' bytes. A model file holds no NUL byte (the loader refuses one), so the two parts cannot be
 /// shifted into each other: another model file or other parameter values give another GUID.
 void fmu_package_guid(const char* text, size_t length, const char* parameters, size_t parameters_length,
                       char guid[40]);

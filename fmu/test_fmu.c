@@ -74,7 +74,7 @@ static int setup(fixture* f)
 		printf("  %s\n", err.message);
 		return 1;
 	}
-	sm_status st = fmu_table_create(doc, text, n, &f->table, &err);
+	sm_status st = fmu_table_create(doc, text, n, NULL, 0, &f->table, &err);
 	sm_document_destroy(doc);
 	if (st != SM_OK)
 		return 1;

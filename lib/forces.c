@@ -347,10 +347,11 @@ static AVX_TARGET int32_t spring_quads(int32_t count, const int32_t* first, cons
 	const int flags = with_velocity << 3 | with_jacobian << 2 | clamp << 1 | damping_position;
 	const bool sums = carried != NULL;
 	switch (flags) {
-	case 0x0: return sums ? 0 : QUADS(NULL, 0, 0, 0, 0);
+	// Without velocities no loop sums a power: the sums are left as they are.
+	case 0x0: return QUADS(NULL, 0, 0, 0, 0);
 	case 0x8: return sums ? QUADS(carried, 1, 0, 0, 0) : QUADS(NULL, 1, 0, 0, 0);
-	case 0x4: return sums ? 0 : QUADS(NULL, 0, 1, 0, 0);
-	case 0x6: return sums ? 0 : QUADS(NULL, 0, 1, 1, 0);
+	case 0x4: return QUADS(NULL, 0, 1, 0, 0);
+	case 0x6: return QUADS(NULL, 0, 1, 1, 0);
 	case 0xd: return sums ? QUADS(carried, 1, 1, 0, 1) : QUADS(NULL, 1, 1, 0, 1);
 	case 0xe: return sums ? QUADS(carried, 1, 1, 1, 0) : QUADS(NULL, 1, 1, 1, 0);
 	default: return 0;

@@ -990,7 +990,7 @@ static int test_fmu(void)
 	sm_error err;
 	sm_document* doc = sm_document_parse(model_small, strlen(model_small), "oom.json", &err);
 	ENSURE(doc != NULL);
-	ENSURE_STATUS(fmu_table_create(doc, model_small, strlen(model_small), &c.table, &err), SM_OK);
+	ENSURE_STATUS(fmu_table_create(doc, model_small, strlen(model_small), NULL, 0, &c.table, &err), SM_OK);
 	sm_document_destroy(doc);
 	c.callbacks.logger = fmu_logger;
 	c.callbacks.componentEnvironment = &c;

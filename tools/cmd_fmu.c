@@ -363,7 +363,7 @@ static int package(const options* opt)
 		result = set_status;
 		goto done;
 	}
-	if (fmu_table_create_set(doc, text, length, parameters, parameters_length, &table, &err) != SM_OK) {
+	if (fmu_table_create(doc, text, length, parameters, parameters_length, &table, &err) != SM_OK) {
 		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
 		goto done;
 	}
