@@ -671,16 +671,6 @@ static void append_dependencies(text_buffer* out, const fmu_table* t, const fmu_
 	append_text(out, "\"");
 }
 
-// The shortest of %.15g, %.16g and %.17g that reads back to exactly the value (C locale).
-static void format_shortest(double value, char out[32])
-{
-	for (int digits = 15; digits <= 17; ++digits) {
-		snprintf(out, 32, "%.*g", digits, value);
-		if (strtod(out, NULL) == value)
-			return;
-	}
-}
-
 char* fmu_model_description(const fmu_table* t, const char* generation_date)
 {
 	text_buffer out = {NULL, 0, 0, false};
@@ -728,10 +718,10 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	       "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
 	       "  </LogCategories>\n");
 
-	char stop[32], step[32], tolerance[32];
-	format_shortest(t->stop_time, stop);
-	format_shortest(t->step_size, step);
-	format_shortest(t->tolerance, tolerance);
+	char stop[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY], tolerance[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(t->stop_time, stop);
+	sm_format_number(t->step_size, step);
+	sm_format_number(t->tolerance, tolerance);
 	appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n", stop,
 	        step, tolerance);
 
@@ -755,8 +745,8 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 			if (v->unit)
 				appendf(&out, " unit=\"%s\"", v->unit);
 			if (v->has_start) {
-				char start[32];
-				format_shortest(v->start_real, start);
+				char start[SM_NUMBER_TEXT_CAPACITY];
+				sm_format_number(v->start_real, start);
 				appendf(&out, " start=\"%s\"", start);
 			}
 			break;
@@ -917,8 +907,8 @@ static int32_t write_values(sm_document* file, const sm_document* set, int32_t* 
 			const double value = sm_document_parameter_value(set, i);
 			sm_error e = {SM_OK, ""};
 			const sm_status st = sm_document_set_parameter(file, i, value, &e);
-			char number[32];
-			format_shortest(value, number);
+			char number[SM_NUMBER_TEXT_CAPACITY];
+			sm_format_number(value, number);
 			if (st == SM_OK) {
 				appendf(out, "%s=%s\n", sm_document_parameter_name(file, i), number);
 				progress = true;
@@ -1051,8 +1041,8 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	// Only what the packager writes: the shortest of 15, 16 or 17 significant digits that reads
 	// back to the value (no sign, space, hexadecimal or trailing zero of its own, and no number
 	// that rounds to another).
-	char written[32];
-	format_shortest(value, written);
+	char written[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(value, written);
 	if (strcmp(written, value_text) != 0)
 		return line_error(err, SM_ERROR_SYNTAX, source_name, number,
 		                  "\"%s\": the value is not written as the packager writes it (%s)", quoted, written);

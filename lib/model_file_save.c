@@ -49,16 +49,11 @@ static void puts_(text* t, const char* s)
 	put(t, s, strlen(s));
 }
 
-// The shortest of %.15g, %.16g and %.17g that reads back to exactly x.
+// x in the shortest text that reads back to exactly x (sm_format_number); -0 as 0.
 static void put_number(text* t, double x)
 {
-	char buffer[40];
-	snprintf(buffer, sizeof buffer, "%.15g", x);
-	if (strtod(buffer, NULL) != x) {
-		snprintf(buffer, sizeof buffer, "%.16g", x);
-		if (strtod(buffer, NULL) != x)
-			snprintf(buffer, sizeof buffer, "%.17g", x);
-	}
+	char buffer[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(x, buffer);
 	if (strcmp(buffer, "-0") == 0)
 		strcpy(buffer, "0");
 	puts_(t, buffer);

@@ -327,6 +327,43 @@ static int test_version(void)
 	return 0;
 }
 
+// sm_format_number: exact round trip, and the fewest of 15, 16 and 17 digits that give it. Random
+// bit patterns cover every exponent, subnormals included; the shorter forms are checked to fail
+// (so the text is the shortest of the three, not merely one that reads back).
+static int test_format_number(void)
+{
+	char text[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(0.03, text);
+	ENSURE(strcmp(text, "0.03") == 0);
+	sm_format_number(0.1 + 0.2, text);
+	ENSURE(strcmp(text, "0.30000000000000004") == 0);
+	sm_format_number(1e-6, text);
+	ENSURE(strcmp(text, "1e-06") == 0);
+	sm_format_number(-1500.0, text);
+	ENSURE(strcmp(text, "-1500") == 0);
+	sm_format_number(-0.0, text);
+	ENSURE(strcmp(text, "-0") == 0);
+	uint64_t state = 0x9e3779b97f4a7c15u;
+	for (int k = 0; k < 200000; k++) {
+		state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+		double value;
+		memcpy(&value, &state, sizeof value);
+		if (!isfinite(value))
+			continue;
+		sm_format_number(value, text);
+		ENSURE(strlen(text) < SM_NUMBER_TEXT_CAPACITY);
+		ENSURE(strtod(text, NULL) == value);
+		char shorter[SM_NUMBER_TEXT_CAPACITY];
+		snprintf(shorter, sizeof shorter, "%.15g", value);
+		if (strcmp(shorter, text) != 0) {
+			ENSURE(strtod(shorter, NULL) != value);
+			snprintf(shorter, sizeof shorter, "%.16g", value);
+			ENSURE(strcmp(shorter, text) == 0 || strtod(shorter, NULL) != value);
+		}
+	}
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -338,5 +375,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_clone_is_independent);
 	RUN_TEST(test_growth_keeps_values);
 	RUN_TEST(test_version);
+	RUN_TEST(test_format_number);
 	return TEST_SUMMARY();
 }

@@ -146,6 +146,13 @@ void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* su
 		fputc('"', f);
 }
 
+void cli_csv_number(FILE* f, double value)
+{
+	char text[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(value, text);
+	fprintf(f, ",%s", text);
+}
+
 FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,
                    const double* x)
 {

@@ -49,6 +49,10 @@ int cli_make_directory(const char* command, const char* dir);
 /// comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
 void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* suffix);
 
+/// Writes ",value" as one CSV field, value in the shortest text that reads back to exactly it
+/// (sm_format_number: 0.03 as 0.03, not 0.029999999999999999).
+void cli_csv_number(FILE* f, double value);
+
 /// Opens a legacy VTK polydata file and writes the particles at x [m] as points and the springs
 /// as lines (only the enabled ones, so that broken springs disappear). Follow with
 /// cli_vtk_vectors for point data, then cli_close. Prints the error and returns NULL on failure.

@@ -77,7 +77,7 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 		cli_csv_field(f, "", name != NULL ? name : "", "");
 		for (int32_t m = 0; m < modes->count; m++)
 			for (int c = 0; c < 3; c++)
-				fprintf(f, ",%.17g", modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
+				cli_csv_number(f, modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
 		fprintf(f, "\n");
 	}
 	const int failed = ferror(f);

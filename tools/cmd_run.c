@@ -129,12 +129,21 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 	fprintf(csv, "\n");
 }
 
+// The values as CSV fields (cli_csv_number).
+static void put_values(FILE* csv, const double* values, size_t count)
+{
+	for (size_t k = 0; k < count; k++)
+		cli_csv_number(csv, values[k]);
+}
+
 static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* sim, double* forces, bool positions)
 {
 	const double* x = sm_simulation_positions(sim);
 	const double* v = sm_simulation_velocities(sim);
 	const int32_t n = sm_model_particle_count(sm_simulation_model(sim));
-	fprintf(csv, "%.17g", sm_simulation_time(sim));
+	char time[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(sm_simulation_time(sim), time);
+	fputs(time, csv);
 	bool have_forces = false;
 	for (int32_t p = 0; p < sm_document_port_count(doc); p++) {
 		const sm_port port = sm_document_port(doc, p);
@@ -144,24 +153,26 @@ static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* si
 				sm_simulation_forces(sim, forces);
 				have_forces = true;
 			}
-			fprintf(csv, ",%.17g,%.17g,%.17g", forces[i], forces[i + 1], forces[i + 2]);
+			put_values(csv, forces + i, 3);
 		} else {
-			fprintf(csv, ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", x[i], x[i + 1], x[i + 2], v[i], v[i + 1], v[i + 2]);
+			put_values(csv, x + i, 3);
+			put_values(csv, v + i, 3);
 		}
 	}
 	const sm_energies e = sm_simulation_energies(sim);
-	fprintf(csv, ",%.17g,%.17g,%.17g,%.17g", e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim));
+	const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
+	put_values(csv, energies, 4);
 	if (positions)
-		for (int32_t i = 0; i < n; i++)
-			fprintf(csv, ",%.17g,%.17g,%.17g", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+		put_values(csv, x, 3 * (size_t)n);
 	fprintf(csv, "\n");
 }
 
 // One legacy VTK polydata file: the particles as points, the intact springs as lines.
 static int write_vtk(const char* path, const sm_simulation* sim)
 {
-	char title[64];
-	snprintf(title, sizeof title, "springmass t = %.17g s", sm_simulation_time(sim));
+	char time[SM_NUMBER_TEXT_CAPACITY], title[64];
+	sm_format_number(sm_simulation_time(sim), time);
+	snprintf(title, sizeof title, "springmass t = %s s", time);
 	FILE* f = cli_vtk_open("run", path, title, sm_simulation_model(sim), sm_simulation_positions(sim));
 	return f == NULL ? 1 : cli_close("run", path, f) != 0;
 }
@@ -411,7 +422,9 @@ int sm_cmd_run(int argc, char** argv)
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
 			if (write_vtk(path, sim) != 0)
 				goto done;
-			fprintf(pvd, "<DataSet timestep=\"%.17g\" file=\"%s_%06ld.vtk\"/>\n", t, name, k);
+			char timestep[SM_NUMBER_TEXT_CAPACITY];
+			sm_format_number(t, timestep);
+			fprintf(pvd, "<DataSet timestep=\"%s\" file=\"%s_%06ld.vtk\"/>\n", timestep, name, k);
 		}
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);

@@ -65,11 +65,11 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 		fprintf(f, "%d,", (int)i);
 		cli_csv_field(f, "", name != NULL ? name : "", "");
 		for (int c = 0; c < 3; c++)
-			fprintf(f, ",%.17g", x[3 * i + c]);
+			cli_csv_number(f, x[3 * i + c]);
 		for (int c = 0; c < 3; c++)
-			fprintf(f, ",%.17g", x[3 * i + c] - x0[3 * i + c]);
+			cli_csv_number(f, x[3 * i + c] - x0[3 * i + c]);
 		for (int c = 0; c < 3; c++)
-			fprintf(f, ",%.17g", reactions[3 * i + c]);
+			cli_csv_number(f, reactions[3 * i + c]);
 		fprintf(f, "\n");
 	}
 	const int failed = ferror(f);

@@ -63,6 +63,16 @@ typedef struct sm_error {
 	char message[SM_ERROR_MESSAGE_CAPACITY];  ///< specific message, NUL-terminated
 } sm_error;
 
+/// Capacity that sm_format_number needs [bytes], the terminating NUL included.
+#define SM_NUMBER_TEXT_CAPACITY 32
+
+/// Writes value as the shortest of 15, 16 and 17 significant digits ("%.*g") that reads back
+/// (strtod) to exactly the same double: 0.03 as "0.03", not "0.029999999999999999"; NaN and
+/// infinities as printf writes them. The decimal separator is the current locale's (the C
+/// locale's "." unless the program changed LC_NUMERIC). Used wherever springmass writes numbers
+/// meant to be read back (model files, modelDescription.xml, the CSV of `springmass run`).
+SM_API void sm_format_number(double value, char text[SM_NUMBER_TEXT_CAPACITY]);
+
 #ifdef __cplusplus
 }
 #endif
