@@ -110,9 +110,14 @@ typedef struct instance {
 
 // Logs a message in a category if that category is on. The text is formatted here and handed to
 // the importer's logger with '%' doubled, since FMI loggers treat the message as a format.
+static bool logging(const instance* inst, unsigned category)
+{
+	return inst && inst->logger && (inst->log_mask & category);
+}
+
 static void logf_(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
 {
-	if (!inst || !inst->logger || !(inst->log_mask & category))
+	if (!logging(inst, category))
 		return;
 	char text[1024];
 	va_list args;
@@ -135,6 +140,20 @@ static void logf_(instance* inst, fmi2Status status, unsigned category, const ch
 }
 
 #define log_error(inst, ...) logf_((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)
+
+// A number for a message, in the fewest digits that read back to it (0.3, not
+// 0.29999999999999999). Used as number_text(x).text within one call: the returned struct lives
+// until the end of the full expression that contains the call.
+typedef struct number_text_t {
+	char text[SM_NUMBER_TEXT_CAPACITY];
+} number_text_t;
+
+static number_text_t number_text(double x)
+{
+	number_text_t t;
+	sm_format_number(x, t.text);
+	return t;
+}
 
 // Checks the state machine: logs and returns false if `function` is not allowed now.
 static bool allowed(instance* inst, const char* function, int states)
@@ -283,8 +302,8 @@ static void changed_parameters(const instance* inst, const double* before, char*
 	for (int32_t i = 0; i < sm_document_parameter_count(inst->doc) && k < size; ++i) {
 		double value = sm_document_parameter_value(inst->doc, i);
 		if (value != before[i]) {
-			int n = snprintf(text + k, size - k, "%s%s = %.17g", k ? ", " : "", sm_document_parameter_name(inst->doc, i),
-			                 value);
+			int n = snprintf(text + k, size - k, "%s%s = %s", k ? ", " : "", sm_document_parameter_name(inst->doc, i),
+			                 number_text(value).text);
 			k += n > 0 ? (size_t)n : 0;
 		}
 	}
@@ -639,9 +658,9 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	}
 	inst->forces_valid = false;
 	for (int32_t k = 0; k < np; ++k) {
-		if (values[k] != old[k])
-			logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: parameter %s = %.17g (solver restarted)", inst->time,
-			      sm_document_parameter_name(inst->doc, k), values[k]);
+		if (values[k] != old[k] && logging(inst, LOG_EVENTS))
+			logf_(inst, fmi2OK, LOG_EVENTS, "t = %s: parameter %s = %s (solver restarted)", number_text(inst->time).text,
+			      sm_document_parameter_name(inst->doc, k), number_text(values[k]).text);
 	}
 	return fmi2OK;
 }
@@ -1091,8 +1110,8 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	if (v->variability == FMU_CONSTANT) {
 		if (value == sm_document_parameter_value(inst->doc, v->index))
 			return true;
-		log_error(inst, "fmi2SetReal: %s = %.17g refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%.17g)",
-		          v->name, value, v->name, v->name, value);
+		log_error(inst, "fmi2SetReal: %s = %s refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%s)",
+		          v->name, number_text(value).text, v->name, v->name, number_text(value).text);
 		return false;
 	}
 	if (!settable(inst, "fmi2SetReal", v))
@@ -1841,7 +1860,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	}
 	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
 	if (fabs(t - inst->time) > tolerance) {
-		log_error(inst, "fmi2DoStep: communication point %.17g does not match the FMU's time %.17g", t, inst->time);
+		log_error(inst, "fmi2DoStep: communication point %s does not match the FMU's time %s", number_text(t).text,
+		          number_text(inst->time).text);
 		return fmi2Error;
 	}
 	double t_end = t + h;
@@ -1870,25 +1890,29 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		sm_model_get_spring(sm_simulation_model(inst->sim), e.spring, &s);
 		const char* a = sm_document_particle_name(inst->doc, s.a);
 		const char* b = sm_document_particle_name(inst->doc, s.b);
-		logf_(inst, fmi2OK, LOG_EVENTS, "t = %.17g: spring %d between %s and %s broke", e.time + inst->start_time,
-		      (int)e.spring, a ? a : "(unnamed)", b ? b : "(unnamed)");
+		if (logging(inst, LOG_EVENTS))
+			logf_(inst, fmi2OK, LOG_EVENTS, "t = %s: spring %d between %s and %s broke",
+			      number_text(e.time + inst->start_time).text, (int)e.spring, a ? a : "(unnamed)", b ? b : "(unnamed)");
 	}
 	sm_statistics after = sm_simulation_statistics(inst->sim);
-	logf_(inst, fmi2OK, LOG_SOLVER,
-	      "step %.17g -> %.17g: %lld internal steps, %lld right-hand sides, %lld Jacobians, %lld restarts, "
-	      "%lld error-test and %lld convergence failures",
-	      t, t_end, (long long)(after.steps - before.steps), (long long)(after.rhs_evaluations - before.rhs_evaluations),
-	      (long long)(after.jacobian_evaluations - before.jacobian_evaluations),
-	      (long long)(after.restarts - before.restarts),
-	      (long long)(after.error_test_failures - before.error_test_failures),
-	      (long long)(after.convergence_failures - before.convergence_failures));
+	if (logging(inst, LOG_SOLVER))
+		logf_(inst, fmi2OK, LOG_SOLVER,
+		      "step %s -> %s: %lld internal steps, %lld right-hand sides, %lld Jacobians, %lld restarts, "
+		      "%lld error-test and %lld convergence failures",
+		      number_text(t).text, number_text(t_end).text, (long long)(after.steps - before.steps),
+		      (long long)(after.rhs_evaluations - before.rhs_evaluations),
+		      (long long)(after.jacobian_evaluations - before.jacobian_evaluations),
+		      (long long)(after.restarts - before.restarts),
+		      (long long)(after.error_test_failures - before.error_test_failures),
+		      (long long)(after.convergence_failures - before.convergence_failures));
 	if (st != SM_OK) {
 		inst->time = inst->start_time + sm_simulation_time(inst->sim);
 		inst->last_successful_time = inst->time;
 		inst->state = ST_STEP_FAILED;
 		logf_(inst, fmi2Discard, LOG_DISCARD,
-		      "fmi2DoStep: the step from %.17g to %.17g stopped at %.17g (readable as fmi2LastSuccessfulTime): %s", t,
-		      t_end, inst->time, sm_simulation_last_error(inst->sim));
+		      "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
+		      number_text(t).text, number_text(t_end).text, number_text(inst->time).text,
+		      sm_simulation_last_error(inst->sim));
 		return fmi2Discard;
 	}
 	inst->time = t_end;

@@ -551,11 +551,13 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	if (json_is_real(value)) {
 		// 3.0 is index 3, as a count may be written 3.0; 2.5 is no index.
 		const double v = json_real_value(value);
+		char text[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(v, text);
 		if (!(v == floor(v)))
-			return fail(p, SM_ERROR_SCHEMA, path, "a particle index must be a whole number, not %.17g", v);
+			return fail(p, SM_ERROR_SCHEMA, path, "a particle index must be a whole number, not %s", text);
 		if (!(v >= 0.0 && v < (double)n))
 			return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-			            "particle index %.17g is out of range (the model has %d particles)", v, (int)n);
+			            "particle index %s is out of range (the model has %d particles)", text, (int)n);
 		*out = (int32_t)v;
 		return true;
 	}

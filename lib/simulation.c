@@ -842,9 +842,11 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	sim->input_jumped = false;
 	if (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD)
 		sm_reduced_solver_invalidate(sim->linear_solver, reset);
-	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS)
-		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %.17g s: %s", sim->time,
-		            sim->solver_message);
+	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(sim->time, t);
+		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %s s: %s", t, sim->solver_message);
+	}
 	return SM_OK;
 }
 
@@ -974,10 +976,12 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	const double dt = t_end - sim->time;
 	if (dt <= 0.0)
 		return SM_OK;
-	if (rhs(sim->time, sim->y, sim->y_saved, sim) != 0)
+	if (rhs(sim->time, sim->y, sim->y_saved, sim) != 0) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(sim->time, t);
 		return fail(sim, SM_ERROR_SOLVER,
-		            "advance: the state or the forces at t = %.17g s are not finite (advancing by %.3g s)",
-		            sim->time, dt);
+		            "advance: the state or the forces at t = %s s are not finite (advancing by %.3g s)", t, dt);
+	}
 	N_VLinearSum(1.0, sim->y, dt, sim->y_saved, sim->y);
 	sim->time = t_end;
 	refresh_outputs(sim);
@@ -1004,10 +1008,13 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
-	if (!isfinite(t_end) || t_end < sim->time)
+	if (!isfinite(t_end) || t_end < sim->time) {
+		char end[SM_NUMBER_TEXT_CAPACITY], now[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(t_end, end);
+		sm_format_number(sim->time, now);
 		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
-		            "advance: end time %.17g s must be finite and not before the current time %.17g s", t_end,
-		            sim->time);
+		            "advance: end time %s s must be finite and not before the current time %s s", end, now);
+	}
 	sim->last_error[0] = '\0';
 	if (sim->time < t_end && break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
@@ -1070,8 +1077,11 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			if (flag == CV_LSETUP_FAIL && sim->jacobian_out_of_memory)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory evaluating the Jacobian");
-			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %.17g s while advancing to %.17g s%s%s%s",
-			     failure_name(flag), sim->time, t_end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
+			sm_format_number(sim->time, now);
+			sm_format_number(t_end, end);
+			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
+			     failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
 			     sim->solver_message);
 			return SM_ERROR_SOLVER;
 		}

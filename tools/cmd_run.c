@@ -331,8 +331,11 @@ int sm_cmd_run(int argc, char** argv)
 	const double interval = o.interval > 0.0 ? o.interval : settings.output_interval;
 	const long rows = cli_output_rows(t_end, interval);
 	if (rows < 0) {
-		fprintf(stderr, "springmass run: %.17g s / %.17g s would make more than %g output rows: give a larger interval\n",
-		        t_end, interval, CLI_MAX_ROWS);
+		char end[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(t_end, end);
+		sm_format_number(interval, step);
+		fprintf(stderr, "springmass run: %s s / %s s would make more than %g output rows: give a larger interval\n", end,
+		        step, CLI_MAX_ROWS);
 		goto done;
 	}
 	sm_simulation_def def = settings.solver;
