@@ -1069,7 +1069,8 @@ static int reduced_free(SUNLinearSolver ls)
 	return 0;
 }
 
-SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
+// The solver's content for the simulation's current model, or NULL when out of memory.
+static reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 {
 	reduced* r = calloc(1, sizeof *r);
 	if (r == NULL)
@@ -1167,6 +1168,32 @@ SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
 		memcpy(r->matrix->p, r->rows, n * sizeof(int64_t));
 		memcpy(r->matrix->i, r->cols, (size_t)r->nonzeros * sizeof(int64_t));
 	}
+	return r;
+}
+
+bool sm_reduced_solver_rebuild(SUNLinearSolver ls)
+{
+	reduced* old = ls->content;
+	if (!old->two_level || old->multilevel == NULL)
+		return true;  // the aggregates follow the springs alone: nothing depends on the constants
+	reduced* r = reduced_content_create(old->sim, old->use_cholmod);
+	if (r == NULL)
+		return false;
+	// What CVODE gave the solver when it was attached.
+	r->weights = old->weights;
+	r->psetup = old->psetup;
+	r->psetup_data = old->psetup_data;
+	r->last_flag = old->last_flag;
+	reduced_content_free(old);
+	ls->content = r;
+	return true;
+}
+
+SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod)
+{
+	reduced* r = reduced_content_create(sim, use_cholmod);
+	if (r == NULL)
+		return NULL;
 	SUNLinearSolver ls = SUNLinSolNewEmpty(sim->context);
 	if (ls == NULL) {
 		reduced_content_free(r);

@@ -1326,12 +1326,18 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sm_model* previous = sim->model;
 	sim->model = copy;
 	sm_status st = build_roots(sim);
+	const char* failure = "update_model: cannot set up the break events";
+	const bool reduced = sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD;
+	if (st == SM_OK && reduced && sim->linear_solver != NULL && !sm_reduced_solver_rebuild(sim->linear_solver)) {
+		st = SM_ERROR_OUT_OF_MEMORY;
+		failure = "update_model: out of memory rebuilding the linear solver";
+	}
 	if (st != SM_OK) {
 		sim->model = previous;
 		sm_model_destroy(copy);
 		free(enabled);
 		build_roots(sim);
-		return fail(sim, st, "update_model: cannot set up the break events");
+		return fail(sim, st, "%s", failure);
 	}
 	sm_model_destroy(previous);
 	free(sim->initial_enabled);

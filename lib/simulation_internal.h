@@ -109,6 +109,11 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 // preconditioner), so that a reset simulation repeats its first run bit for bit; after other
 // restarts the earlier factor stays a good preconditioner.
 void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor);
+// After the simulation's model changed its constants (sm_simulation_update_model): builds again
+// what was built from the constants at creation (the multilevel path's aggregates follow the
+// strong springs), so that the solver is the one a simulation created from the new model would
+// have. False, with the solver unchanged, when out of memory.
+bool sm_reduced_solver_rebuild(SUNLinearSolver ls);
 // The right-hand side's share in the Jacobian evaluation: the records to fill at time t with
 // sm_model_forces_power_and_jacobians, or NULL if the solver already holds the Jacobian of the
 // step at t; after filling them, sm_reduced_rhs_evaluated with the state y (CVODE's vector).
