@@ -1415,10 +1415,27 @@ static saved_state* save_state(instance* inst)
 	return s;
 }
 
-static bool all_finite(const double* a, size_t count)
+// The k-th double of the values after the header. The bytes of fmi2DeSerializeFMUstate are the
+// caller's, at any address: they are read without assuming the alignment of a double.
+static double value_at(const unsigned char* b, size_t k)
 {
-	for (size_t i = 0; i < count; ++i)
-		if (!isfinite(a[i]))
+	double v;
+	memcpy(&v, b + HEADER_BYTES + 8 * k, 8);
+	return v;
+}
+
+static bool all_finite(const unsigned char* b, size_t first, size_t count)
+{
+	for (size_t k = first; k < first + count; ++k)
+		if (!isfinite(value_at(b, k)))
+			return false;
+	return true;
+}
+
+static bool all_flags(const unsigned char* b, size_t first, size_t count)
+{
+	for (size_t k = first; k < first + count; ++k)
+		if (value_at(b, k) != 0.0 && value_at(b, k) != 1.0)
 			return false;
 	return true;
 }
@@ -1461,7 +1478,6 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	}
 	size_t n3 = 3 * (size_t)inst->particle_count, m = (size_t)inst->spring_count;
 	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
-	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
 	int64_t state = get_i(b, I_STATE), has_sim = get_i(b, I_HAS_SIM);
 	bool ok = (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
 	           state == ST_STEP_FAILED || state == ST_TERMINATED) &&
@@ -1476,16 +1492,30 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     max_step >= 0.0 && isfinite(max_step);
 	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
 	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP))) && !isnan(get_d(b, D_DISSIPATED));
-	ok = ok && all_finite(d, 2 * n3) && all_finite(d + 2 * n3 + m, np + 9 * nports);
-	for (size_t k = 0; ok && k < m; ++k)
-		ok = d[2 * n3 + k] == 0.0 || d[2 * n3 + k] == 1.0;
-	for (size_t k = 2 * n3 + m + np + 9 * nports; ok && k < 2 * n3 + m + np + 10 * nports; ++k)
-		ok = d[k] == 0.0 || d[k] == 1.0;
-	if (!ok)
+	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
+	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
+	if (!ok) {
 		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
 		                "velocities, parameters or inputs)",
 		          function);
-	return ok;
+		return false;
+	}
+	// The parameters that set the structure keep their packaged values, in a state as in a set
+	// (check_real): another value could keep the counts and still rearrange the particles.
+	for (int32_t i = 0; i < inst->table.count; ++i) {
+		const fmu_variable* v = &inst->table.variables[i];
+		if (v->source != FMU_SRC_MODEL_PARAMETER || v->variability != FMU_CONSTANT)
+			continue;
+		const double packaged = sm_document_parameter_value(inst->doc, v->index);
+		const double held = value_at(b, 2 * n3 + m + (size_t)v->index);
+		if (held != packaged) {
+			log_error(inst, "%s: the state gives %s = %s, but %s sets the model's structure (%s in this FMU): "
+			          PACKAGED_STRUCTURE "%s=%s)", function, v->name, number_text(held).text, v->name,
+			          number_text(packaged).text, v->name, number_text(held).text);
+			return false;
+		}
+	}
+	return true;
 }
 
 // Makes a checked state the instance's. All or nothing: a state the model refuses (a parameter
@@ -1696,8 +1726,9 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 //   d(gravitational energy)        = -sum m_i g . dx_i
 //   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g (the forces at
 //                                    zero velocity are elastic plus weight only)
+//   d(position, velocity of a particle) = dx_i, dv_i: a driven particle is where its port puts it
 // Positions and velocities of free particles and the dissipated energy are states: their
-// derivatives with respect to the current inputs are zero.
+// derivatives with respect to the current inputs are zero (dx and dv are zero there).
 // ---------------------------------------------------------------------------------------------
 
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
@@ -1776,6 +1807,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 				    w->component == v->component)
 					result += dvKnown[j];
 			}
+		} else if (v->source == FMU_SRC_PARTICLE_POSITION || v->source == FMU_SRC_PARTICLE_VELOCITY) {
+			const size_t i = 3 * (size_t)v->index + (size_t)v->component;
+			result = v->source == FMU_SRC_PARTICLE_POSITION ? dx[i] : dv[i];
 		} else if (v->source == FMU_SRC_ENERGY_KINETIC || v->source == FMU_SRC_ENERGY_GRAVITY ||
 		           v->source == FMU_SRC_ENERGY_ELASTIC) {
 			if (v->source == FMU_SRC_ENERGY_ELASTIC && !have_elastic) {

@@ -133,25 +133,28 @@ def test_directional_derivative_is_the_stiffness_seen_by_the_port(test_fmu):
     try:
         vr = inst.vr
         known = [vr["base.x"], vr["base.y"], vr["base.vx"]]
-        unknown = [vr["base.fx"], vr["base.fy"], vr["energy.elastic"], vr["tip.x"]]
+        # p[0] is the anchor, the motion port's particle: it is where base puts it.
+        unknown = [vr["base.fx"], vr["base.fy"], vr["energy.elastic"], vr["tip.x"], vr["p[0].x"], vr["p[0].vx"]]
         d = inst.slave.getDirectionalDerivative(unknown, [vr["base.x"]], [1.0])
         assert abs(d[0] - (-K)) < 1e-9 * K
         assert abs(d[1]) < 1e-12
         # Elastic energy k (L - l0)^2 / 2 with L = x_bob - x_anchor: dE/dx_anchor = -k (L - l0).
         assert abs(d[2] - (-K * (X0 - L0))) < 1e-9
         assert d[3] == 0.0  # the bob's position is a state: no direct feed-through
-        # Against finite differences of the outputs, for every known.
+        assert d[4] == 1.0 and d[5] == 0.0
+        # Against finite differences of the outputs (and of the anchor's position and velocity),
+        # for every known.
         for kv in known:
             name = inst.md.modelVariables[kv].name
             x = inst.slave.getReal([kv])[0]
             h = 1e-6
             inst.slave.setReal([kv], [x + h])
-            up = np.array(inst.slave.getReal(unknown[:3]))
+            up = np.array(inst.slave.getReal(unknown))
             inst.slave.setReal([kv], [x - h])
-            down = np.array(inst.slave.getReal(unknown[:3]))
+            down = np.array(inst.slave.getReal(unknown))
             inst.slave.setReal([kv], [x])
             fd = (up - down) / (2 * h)
-            analytic = np.array(inst.slave.getDirectionalDerivative(unknown[:3], [kv], [1.0]))
+            analytic = np.array(inst.slave.getDirectionalDerivative(unknown, [kv], [1.0]))
             assert np.allclose(analytic, fd, rtol=1e-6, atol=1e-6), (name, analytic, fd)
     finally:
         inst.free()

@@ -1,4 +1,6 @@
 """FMU state: get/set round trips, serialisation into another process, reset, threads."""
+import contextlib
+import ctypes
 import json
 import math
 import pathlib
@@ -33,6 +35,20 @@ def run(inst, t0, steps, h=0.01, force=None):
 
 def force(t):
     return 0.5 * np.sin(7.0 * t)
+
+
+@contextlib.contextmanager
+def state_and_receiver(fmu, parameters):
+    """(a, b, blob): instance a started with parameters and run 0.1 s, blob its serialised state,
+    and b a second instance started with the defaults, to receive it; both freed afterwards."""
+    a = Instance(fmu, "a").start(parameters)
+    b = Instance(fmu, "b").start()
+    try:
+        run(a, 0.0, 10)
+        yield a, b, a.slave.serializeFMUstate(a.slave.getFMUstate())
+    finally:
+        a.free()
+        b.free()
 
 
 def test_get_set_state_round_trip_continues_identically(test_fmu):
@@ -204,12 +220,7 @@ def test_instances_in_threads_match_a_lone_instance(test_fmu):
 def test_damaged_serialised_state_is_refused_and_changes_nothing(test_fmu):
     # A serialised state cut short, extended or with any one bit flipped is refused by
     # fmi2DeSerializeFMUstate with a message; the instance that refused it goes on unchanged.
-    fmu = test_fmu("driven_oscillator")
-    a = Instance(fmu, "a").start({"k": 60.0})
-    b = Instance(fmu, "b").start()
-    try:
-        run(a, 0.0, 10)
-        blob = a.slave.serializeFMUstate(a.slave.getFMUstate())
+    with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0}) as (a, b, blob):
         run(b, 0.0, 5)
         before = b.get(*OUTPUTS)
         damaged = [blob[:0], blob[:7], blob[:48], blob[:-8], blob[:-1], blob + b"\0"]
@@ -233,9 +244,6 @@ def test_damaged_serialised_state_is_refused_and_changes_nothing(test_fmu):
         # The intact state still restores.
         b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
         assert b.get("k") == 60.0 and b.slave.getRealStatus(2) == a.slave.getRealStatus(2)
-    finally:
-        a.free()
-        b.free()
 
 
 def checksummed(blob):
@@ -260,12 +268,7 @@ def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu)
     # state (0 would leave no call allowed, not even fmi2Reset), the error state, a non-finite
     # time or position, an unknown solver, and parameters the model rejects after others that it
     # takes. Each is refused with a message, and the instance steps on as before.
-    fmu = test_fmu("driven_oscillator")
-    a = Instance(fmu, "a").start({"k": 60.0, "m": 2.5})
-    b = Instance(fmu, "b").start()
-    try:
-        run(a, 0.0, 10)
-        blob = a.slave.serializeFMUstate(a.slave.getFMUstate())
+    with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0, "m": 2.5}) as (a, b, blob):
         assert checksummed(blob) == blob
         # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 13; time 20;
         # then positions from word 29; the parameters follow the positions, velocities and springs.
@@ -291,9 +294,47 @@ def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu)
         b.slave.reset()
         b.start()
         run(b, 0.0, 5)
+
+
+def test_state_that_changes_a_structure_constant_is_refused(test_fmu):
+    # na and nb set the structure (constants, which fmi2SetReal refuses to change); swapped, they
+    # keep the counts of particles and springs, so a state with them swapped (checksum valid: a
+    # state written by another tool) has the right size, yet would rearrange the particles. It
+    # is refused with a message naming the constant, and the instance steps on as before.
+    inst = Instance(test_fmu("two_rope_counts")).start()
+    try:
+        s = inst.slave
+        s.doStep(0.0, 0.01)
+        blob = s.serializeFMUstate(s.getFMUstate())
+        at = blob.index(struct.pack("<dd", 2.0, 4.0))
+        swapped = checksummed(blob[:at] + struct.pack("<dd", 4.0, 2.0) + blob[at + 16:])
+        before = inst.get("p[2].x", "p[2].z")
+        n = len(inst.messages)
+        with pytest.raises(FMICallException) as info:
+            s.deSerializeFMUstate(swapped)
+        assert info.value.status == FMI2_ERROR
+        assert any("na = 4" in m[2] and "sets the model's structure" in m[2] for m in inst.messages[n:])
+        assert inst.get("na", "nb") == [2.0, 4.0] and inst.get("p[2].x", "p[2].z") == before
+        s.doStep(0.01, 0.01)
     finally:
-        a.free()
-        b.free()
+        inst.free()
+
+
+def test_serialised_state_restores_from_any_address(test_fmu):
+    # FMI lets the serialised bytes be any fmi2Byte array, at any address: the FMU reads them
+    # without assuming a double's alignment (the sanitizer build's UBSan checks it). From each
+    # offset 1 - 7 the state restores and the run continues bit for bit like the original's.
+    with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0}) as (a, b, blob):
+        expected = run(a, 0.1, 5, force=force)
+        for offset in range(1, 8):
+            buffer = ctypes.create_string_buffer(len(blob) + offset)
+            ctypes.memmove(ctypes.addressof(buffer) + offset, blob, len(blob))
+            bytes_at = ctypes.cast(ctypes.addressof(buffer) + offset, ctypes.POINTER(ctypes.c_char))
+            state = ctypes.c_void_p()
+            b.slave.fmi2DeSerializeFMUstate(b.slave.component, bytes_at, len(blob), ctypes.byref(state))
+            b.slave.setFMUstate(state)
+            b.slave.freeFMUstate(state)
+            assert np.array_equal(run(b, 0.1, 5, force=force), expected), offset
 
 
 @pytest.mark.skipif(SANITIZED, reason="the sanitizer reserves more address space than the limit allows")
