@@ -27,12 +27,15 @@ void spring_blocks(const sm_model* model, int32_t spring, const double* x, const
 	spring_damping_add_blocks(model->damping[spring], &g, variant, K, D);
 }
 
+static bool known_variant(sm_jacobian_variant variant)
+{
+	return variant == SM_JACOBIAN_EXACT || variant == SM_JACOBIAN_DEFINITE;
+}
+
 sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x, const double* v,
                                    sm_jacobian_variant variant, double K[9], double D[9])
 {
-	if (model == NULL || x == NULL)
-		return SM_ERROR_INVALID_ARGUMENT;
-	if (variant != SM_JACOBIAN_EXACT && variant != SM_JACOBIAN_DEFINITE)
+	if (model == NULL || x == NULL || !known_variant(variant))
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (spring < 0 || spring >= model->spring_count)
 		return SM_ERROR_SPRING_INDEX;
@@ -55,11 +58,11 @@ static void add_dense_block(double* matrix, size_t columns, int32_t p, int32_t q
 			matrix[(3 * (size_t)p + i) * columns + 3 * (size_t)q + j] += sign * block[3 * i + j];
 }
 
-void sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
-                             sm_jacobian_variant variant, double* dfdx, double* dfdv)
+sm_status sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
+                                  sm_jacobian_variant variant, double* dfdx, double* dfdv)
 {
-	if (model == NULL || x == NULL)
-		return;
+	if (model == NULL || x == NULL || !known_variant(variant))
+		return SM_ERROR_INVALID_ARGUMENT;
 	const size_t dim = 3 * (size_t)model->particle_count;
 	if (dfdx != NULL)
 		memset(dfdx, 0, dim * dim * sizeof(double));
@@ -85,16 +88,17 @@ void sm_model_jacobian_dense(const sm_model* model, const double* x, const doubl
 			add_dense_block(dfdv, dim, b, b, -1.0, D);
 		}
 	}
+	return SM_OK;
 }
 
 // Without storage, each spring's factored form (forces.c: K = beta I + u z^T, D = kd u u^T) is
 // computed on the fly and applied at once, instead of building its two 3x3 blocks:
 // d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, d f_b = -d f_a.
-void sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
-                               sm_jacobian_variant variant, const double* dx, const double* dv, double* out)
+sm_status sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
+                                    sm_jacobian_variant variant, const double* dx, const double* dv, double* out)
 {
-	if (model == NULL || x == NULL || out == NULL)
-		return;
+	if (model == NULL || x == NULL || out == NULL || !known_variant(variant))
+		return SM_ERROR_INVALID_ARGUMENT;
 	const int32_t n = model->particle_count;
 	for (int32_t i = 0; i < n; i++) {
 		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
@@ -129,6 +133,7 @@ void sm_model_jacobian_product(const sm_model* model, const double* x, const dou
 			out[b + k] -= df;
 		}
 	}
+	return SM_OK;
 }
 
 // From the factored records (model_internal.h; derivation in forces.c):

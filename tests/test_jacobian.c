@@ -823,6 +823,21 @@ static int test_fused_errors(void)
 	ENSURE_STATUS(sm_spring_jacobians_block(sj, 6, K, NULL), SM_ERROR_SPRING_INDEX);
 	ENSURE_STATUS(sm_spring_jacobians_block(sj, -1, K, NULL), SM_ERROR_SPRING_INDEX);
 	ENSURE_STATUS(sm_spring_jacobians_product(sj, NULL, x, v, out), SM_ERROR_INVALID_ARGUMENT);
+	// Every function that takes a variant refuses one it does not know (the dense one built a
+	// hybrid of both, the product took it for the exact one), writing nothing.
+	double dense[15 * 15];
+	for (int k = 0; k < 15; k++)
+		out[k] = dense[k] = 42.0;
+	const sm_jacobian_variant unknown = (sm_jacobian_variant)2;
+	ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, unknown, dense, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, unknown, x, v, out), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_spring_jacobian(m, 0, x, v, unknown, K, NULL), SM_ERROR_INVALID_ARGUMENT);
+	for (int k = 0; k < 15; k++)
+		ENSURE(out[k] == 42.0 && dense[k] == 42.0);
+	ENSURE_STATUS(sm_model_jacobian_dense(NULL, x, v, SM_JACOBIAN_EXACT, dense, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_EXACT, x, v, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, SM_JACOBIAN_DEFINITE, dense, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_DEFINITE, x, v, out), SM_OK);
 	// A model with another spring count no longer matches the storage.
 	sm_spring_def d = sm_default_spring_def();
 	d.a = 0;

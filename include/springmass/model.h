@@ -221,14 +221,17 @@ SM_API sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring,
 
 /// Dense Jacobians over all particles, row-major 3n x 3n: dfdx [N/m] and dfdv [N s/m] (mass
 /// damping included in dfdv). Either may be NULL. For small models and tests.
-SM_API void sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
-                                    sm_jacobian_variant variant, double* dfdx, double* dfdv);
+/// SM_ERROR_INVALID_ARGUMENT, with nothing written, for a NULL model or x or an unknown variant.
+SM_API sm_status sm_model_jacobian_dense(const sm_model* model, const double* x, const double* v,
+                                         sm_jacobian_variant variant, double* dfdx, double* dfdv);
 
 /// Jacobian-vector product without assembling: out = df/dx dx + df/dv dv [N] over all particles
 /// (3 per particle). dx [m] or dv [m/s] may be NULL (treated as zero).
-SM_API void sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
-                                      sm_jacobian_variant variant, const double* dx,
-                                      const double* dv, double* out);
+/// SM_ERROR_INVALID_ARGUMENT, with nothing written, for a NULL model, x or out or an unknown
+/// variant.
+SM_API sm_status sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
+                                           sm_jacobian_variant variant, const double* dx,
+                                           const double* dv, double* out);
 
 // ---------------------------------------------------------------------------------------------
 // Sparse Jacobian over the free particles' degrees of freedom.
