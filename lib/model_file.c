@@ -1150,6 +1150,30 @@ static bool read_structures(parser* p, const json_t* list)
 	return true;
 }
 
+// A particle's own name may not read as a structure reference: "cloth[2]" beside a structure
+// "cloth" would take over the reference to cloth's particle 2 (names are looked up first), and
+// "cloth[0, 2]" would stand beside the generated "cloth[0,2]". Checked once the structures are
+// known, since the particles come first.
+static bool check_names_against_structures(parser* p, const json_t* list)
+{
+	for (size_t k = 0; k < json_array_size(list); k++) {
+		const json_t* value = json_object_get(json_array_get(list, k), "name");
+		const char* name = json_string_value(value);
+		const char* open = name != NULL ? strchr(name, '[') : NULL;
+		const size_t length = open != NULL ? strlen(name) : 0;
+		if (open == NULL || name[length - 1] != ']' || find_structure(p->ex, name, (size_t)(open - name)) == NULL)
+			continue;
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
+		child_index(path, "particles", k);
+		child_key(sub, path, "name");
+		return fail(p, SM_ERROR_SCHEMA, sub,
+		            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
+		            "name",
+		            text_quoted(text, name), (int)(open - name), name);
+	}
+	return true;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Fixed particles, ports, settings.
 // ---------------------------------------------------------------------------------------------
@@ -1424,7 +1448,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 			ok = fail(&p, model_err.status, "", "%s", model_err.message);
 	}
 	ok = ok && read_particles(&p, json_object_get(root, "particles")) &&
-	     read_structures(&p, json_object_get(root, "structures")) && read_springs(&p, json_object_get(root, "springs")) &&
+	     read_structures(&p, json_object_get(root, "structures")) &&
+	     check_names_against_structures(&p, json_object_get(root, "particles")) &&
+	     read_springs(&p, json_object_get(root, "springs")) &&
 	     read_fixed(&p, json_object_get(root, "fixed")) && read_ports(&p, json_object_get(root, "ports")) &&
 	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
 	if (ok && sm_model_particle_count(p.ex->model) == 0)
@@ -1551,19 +1577,11 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		length -= 3;
 	}
 	// A NUL byte ends the text for the JSON parser, which then reports what it misses at the
-	// end; say where the NUL is instead, in lines and characters as the parser counts them
-	// (columns count the bytes that begin a UTF-8 character).
+	// end; say where the NUL is instead.
 	const char* nul = memchr(text, '\0', length);
 	if (nul != NULL) {
-		int line = 1, column = 1;
-		for (const char* c = text; c < nul; c++) {
-			if (*c == '\n') {
-				line++;
-				column = 1;
-			} else if (((unsigned char)*c & 0xc0) != 0x80) {
-				column++;
-			}
-		}
+		int line, column;
+		text_position(text, length, (size_t)(nul - text) + 1, &line, &column);
 		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: a NUL byte (a model file is UTF-8 text without NUL bytes)",
 		             source_name, line, column);
 		sm_document_destroy(doc);
@@ -1581,12 +1599,19 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	json_error_t error;
 	doc->root = json_loadb(text, length, JSON_REJECT_DUPLICATES, &error);
 	if (doc->root == NULL) {
+		// Line and column from the parser's byte position: the parser ends lines at LF only, so
+		// that a file with lone CRs (old Mac line ends) would be all on line 1. Its message quotes
+		// the text near the error, which may hold what a terminal would act on: shown escaped.
 		const enum json_error_code code = json_error_code(&error);
+		int line, column;
+		text_position(text, length, (size_t)error.position, &line, &column);
+		char shown[6 * JSON_ERROR_TEXT_LENGTH + 1];
+		text_shown(shown, sizeof shown - 1, error.text);
 		if (code == json_error_null_character || code == json_error_null_byte_in_key)
 			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: strings in a model file may not contain \\u0000",
-			             source_name, error.line, error.column);
+			             source_name, line, column);
 		else
-			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, error.line, error.column, error.text);
+			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, line, column, shown);
 		sm_document_destroy(doc);
 		return NULL;
 	}

@@ -77,7 +77,23 @@ static bool shown_escaped(int32_t c)
 	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
 }
 
-bool text_escape(char* out, size_t most, const char* s)
+void text_position(const char* text, size_t length, size_t end, int* line, int* column)
+{
+	*line = 1;
+	*column = 0;
+	for (size_t i = 0; i < end && i < length; i++) {
+		const unsigned char c = (unsigned char)text[i];
+		if (c == '\n' || (c == '\r' && !(i + 1 < length && text[i + 1] == '\n'))) {
+			++*line;
+			*column = 0;
+		} else if (c != '\r' && (c & 0xc0) != 0x80) {
+			++*column;
+		}
+	}
+}
+
+// text_escape, or with quotes false text_shown.
+static bool escape(char* out, size_t most, const char* s, bool quotes)
 {
 	const unsigned char* u = (const unsigned char*)s;
 	const size_t n = strlen(s);
@@ -90,7 +106,7 @@ bool text_escape(char* out, size_t most, const char* s)
 		size_t length;
 		if (c < 0)
 			length = (size_t)snprintf(escaped, sizeof escaped, "\\x%02x", u[at]);
-		else if (c == '"' || c == '\\')
+		else if (quotes && (c == '"' || c == '\\'))
 			length = (size_t)snprintf(escaped, sizeof escaped, "\\%c", (char)c);
 		else if (shown_escaped(c))
 			length = (size_t)snprintf(escaped, sizeof escaped, "\\u%04x", (unsigned)c);
@@ -108,6 +124,16 @@ bool text_escape(char* out, size_t most, const char* s)
 	}
 	out[used] = '\0';
 	return true;
+}
+
+bool text_escape(char* out, size_t most, const char* s)
+{
+	return escape(out, most, s, true);
+}
+
+void text_shown(char* out, size_t most, const char* s)
+{
+	escape(out, most, s, false);
 }
 
 const char* text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)

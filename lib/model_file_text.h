@@ -27,11 +27,21 @@ bool text_refused_in_description(int32_t c);
 // position in s, counted in characters from 1.
 int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position);
 
+// Line and column, from 1, of the character that ends before byte `end` of text (length bytes),
+// as an editor shows them: LF, CR LF and a lone CR each end a line, and columns count characters
+// (the bytes that begin a UTF-8 character). For the JSON parser's error position it gives the
+// parser's own line and column wherever lines end in LF.
+void text_position(const char* text, size_t length, size_t end, int* line, int* column);
+
 // Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped; control
 // characters, line separators and the zero-width and bidirectional characters, which a terminal
 // would act on or not show, as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole
 // characters only, NUL-terminated (out has room for most + 1). Returns whether all of s fitted.
 bool text_escape(char* out, size_t most, const char* s);
+
+// s for a message without quotes around it: only the characters a terminal would act on or not
+// show escaped (as text_escape does them), at most `most` bytes, NUL-terminated.
+void text_shown(char* out, size_t most, const char* s);
 
 // "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
 // after the closing quote. Returns out.

@@ -59,6 +59,28 @@ JSON
 out=$("$cli" run "$tmp/falling.json" --t-end 0.1 --output-interval 0.1 -q -o - 2>&1)
 awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7) }' <<< "$out" ||
   fail "a falling particle without springs: $out"
+# Without springs a VTK file has no LINES section (VTK's legacy reader fails on "LINES 0 0" and
+# drops the point data after it), in run, statics and modes alike; modes of a model without free
+# particles still writes the CSV asked for (the particles, no mode columns).
+"$cli" run "$tmp/falling.json" --t-end 0.1 -q -o /dev/null --vtk "$tmp/falling_vtk" > /dev/null 2>&1 &&
+  "$cli" modes "$tmp/falling.json" --vtk "$tmp/falling_modes" > /dev/null 2>&1 &&
+  ! grep -q LINES "$tmp"/falling_vtk/*.vtk "$tmp"/falling_modes/*.vtk &&
+  grep -q "^POINT_DATA 1$" "$tmp/falling_modes/mode_1.vtk" || fail "VTK files of a model without springs"
+cat > "$tmp/held.json" << 'JSON'
+{"springmass": 1, "name": "held", "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true}]}
+JSON
+echo stale > "$tmp/held.csv"
+"$cli" modes "$tmp/held.json" -o "$tmp/held.csv" > /dev/null 2>&1 &&
+  [ "$(paste -sd ' ' "$tmp/held.csv")" = "particle,name 0,a" ] || fail "modes without free particles: $(cat "$tmp/held.csv")"
+# Column names stay unique: an unnamed particle is p[i], primed past a particle of that name.
+cat > "$tmp/names.json" << 'JSON'
+{"springmass": 1, "name": "names", "gravity": [0, 0, 0],
+ "particles": [{"name": "p[1]", "position": [0, 0, 0], "fixed": true}, {"position": [1, 0, 0]}],
+ "springs": [{"a": 0, "b": 1, "stiffness": 1}]}
+JSON
+out=$("$cli" run "$tmp/names.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
+[ "$out" = "time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,particle.p[1].x,particle.p[1].y,particle.p[1].z,particle.p[1]'.x,particle.p[1]'.y,particle.p[1]'.z" ] ||
+  fail "run --positions column names: $out"
 
 # Options: each line is the exit status, the first line the command prints on stderr (empty for
 # none) and its arguments. Numbers below the smallest normal double are numbers (as in a model

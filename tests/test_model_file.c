@@ -707,6 +707,14 @@ static int test_broken_files(void)
 	     "test.json:1:36: strings in a model file may not contain \\u0000"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u0000\": 1}}", SM_ERROR_SYNTAX,
 	     "test.json:1:55: strings in a model file may not contain \\u0000"},
+	    // Lines end at LF, CR LF or a lone CR, as editors show them (the parser counts LF only).
+	    {"{\r\"springmass\": 1,\r\n\"name\": \"x\",\r\"parameters\" {}}", SM_ERROR_SYNTAX,
+	     "test.json:4:14: ':' expected near '{'"},
+	    // The text near a syntax error is shown with what a terminal would act on escaped.
+	    {"{\"springmass\": 1, \"name\": \"x\", \x1b[31m}", SM_ERROR_SYNTAX,
+	     "test.json:1:32: string or '}' expected near '\\u001b'"},
+	    {"{\"springmass\": 1, \"name\": \"\xe2\x80\xae\\q\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:30: invalid escape near '\"\\u202e\\q'"},
 	    {"", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
 	    {" \r\n\t\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
 	    {"\xef\xbb\xbf\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},

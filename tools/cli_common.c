@@ -169,7 +169,10 @@ FILE* cli_vtk_open(const char* command, const char* path, const char* title, con
 	fprintf(f, "# vtk DataFile Version 3.0\n%s\nASCII\nDATASET POLYDATA\nPOINTS %d double\n", title, (int)n);
 	for (int32_t i = 0; i < n; i++)
 		fprintf(f, "%.9g %.9g %.9g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
-	fprintf(f, "LINES %d %d\n", (int)intact, 3 * (int)intact);
+	// No LINES section without springs: VTK's legacy reader fails on "LINES 0 0" and drops the
+	// point data after it.
+	if (intact > 0)
+		fprintf(f, "LINES %d %d\n", (int)intact, 3 * (int)intact);
 	for (int32_t s = 0; s < springs; s++) {
 		if (!sm_model_spring_enabled(model, s))
 			continue;

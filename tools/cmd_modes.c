@@ -88,6 +88,49 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 	return 0;
 }
 
+// The summary and the table of frequencies, periods, omega^2 and damping ratios.
+static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps_per_period)
+{
+	const bool sparse = modes->solver == SM_MODES_SPARSE;
+	if (sparse)
+		printf("eigensolver       shift-invert Lanczos (CHOLMOD), the lowest %d modes; largest residual %.2e\n",
+		       (int)modes->count, modes->residual);
+	else
+		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes->dof,
+		       modes->residual);
+	printf("rigid-body modes  %d%s\n", (int)modes->zero_count, sparse ? " (among the modes listed)" : "");
+	if (modes->unstable_count > 0)
+		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
+		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",
+		       at_equilibrium ? "" : "; try --at-equilibrium");
+	printf("damping           %s (largest normalised coupling %.3g among the modes listed)\n",
+	       modes->proportional ? "proportional: the modal damping ratios are exact"
+	                           : "not proportional: the damping ratios are the diagonal approximation",
+	       modes->damping_coupling);
+	printf("\n%6s %16s %16s %16s %14s\n", "mode", "frequency [Hz]", "period [s]", "omega^2 [1/s^2]", "damping ratio");
+	double highest = 0.0;
+	for (int32_t m = 0; m < modes->count; m++) {
+		const double fr = modes->frequency[m];
+		highest = fmax(highest, fr);
+		char period[32];
+		if (fr > 0.0)
+			snprintf(period, sizeof period, "%.9g", 1.0 / fr);
+		else
+			snprintf(period, sizeof period, "%s", modes->omega_squared[m] < 0.0 ? "unstable" : "rigid");
+		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes->omega_squared[m],
+		       modes->damping_ratio[m]);
+	}
+	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
+	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
+	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
+	if (modes->omega_max > 0.0)
+		printf("explicit stability limit 2/omega_max = %.6g s (largest step of explicit Euler-type integrators)\n",
+		       2.0 / modes->omega_max);
+	if (highest > 0.0)
+		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
+		       1.0 / (highest * steps_per_period), steps_per_period, highest);
+}
+
 int sm_cmd_modes(int argc, char** argv)
 {
 	const char* model_path = NULL;
@@ -219,52 +262,15 @@ int sm_cmd_modes(int argc, char** argv)
 	}
 	printf("model             %s (%d particles, %d degrees of freedom)\n", sm_document_name(doc), (int)n,
 	       (int)modes.dof);
-	if (modes.dof == 0) {
+	if (modes.dof == 0)
 		printf("no free particle: nothing vibrates\n");
-		status = 0;
-		goto done;
-	}
-	const bool sparse = modes.solver == SM_MODES_SPARSE;
-	if (sparse)
-		printf("eigensolver       shift-invert Lanczos (CHOLMOD), the lowest %d modes; largest residual %.2e\n",
-		       (int)modes.count, modes.residual);
 	else
-		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes.dof, modes.residual);
-	printf("rigid-body modes  %d%s\n", (int)modes.zero_count, sparse ? " (among the modes listed)" : "");
-	if (modes.unstable_count > 0)
-		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
-		       (int)modes.unstable_count, sparse ? " among the modes listed" : "",
-		       at_equilibrium ? "" : "; try --at-equilibrium");
-	printf("damping           %s (largest normalised coupling %.3g among the modes listed)\n",
-	       modes.proportional ? "proportional: the modal damping ratios are exact"
-	                          : "not proportional: the damping ratios are the diagonal approximation",
-	       modes.damping_coupling);
-	printf("\n%6s %16s %16s %16s %14s\n", "mode", "frequency [Hz]", "period [s]", "omega^2 [1/s^2]", "damping ratio");
-	double highest = 0.0;
-	for (int32_t m = 0; m < modes.count; m++) {
-		const double fr = modes.frequency[m];
-		highest = fmax(highest, fr);
-		char period[32];
-		if (fr > 0.0)
-			snprintf(period, sizeof period, "%.9g", 1.0 / fr);
-		else
-			snprintf(period, sizeof period, "%s", modes.omega_squared[m] < 0.0 ? "unstable" : "rigid");
-		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes.omega_squared[m],
-		       modes.damping_ratio[m]);
-	}
-	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
-	       modes.omega_max / (2.0 * 3.14159265358979323846), modes.omega_max,
-	       sparse ? "Gershgorin bound over all" : "of all", (int)modes.dof);
-	if (modes.omega_max > 0.0)
-		printf("explicit stability limit 2/omega_max = %.6g s (largest step of explicit Euler-type integrators)\n",
-		       2.0 / modes.omega_max);
-	if (highest > 0.0)
-		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
-		       1.0 / (highest * steps_per_period), steps_per_period, highest);
+		print_modes(&modes, at_equilibrium, steps_per_period);
 	if (csv_path != NULL) {
 		if (write_csv(csv_path, doc, &modes) != 0)
 			goto done;
-		printf("mode shapes written to %s\n", csv_path);
+		printf("mode shapes written to %s%s\n", csv_path,
+		       modes.count > 0 ? "" : " (no modes: the particles only)");
 	}
 	if (vtk_dir != NULL) {
 		if (cli_make_directory("modes", vtk_dir) != 0)
@@ -279,7 +285,10 @@ int sm_cmd_modes(int argc, char** argv)
 			                   modes.frequency[m]) != 0)
 				goto done;
 		}
-		printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
+		if (modes.count > 0)
+			printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
+		else
+			printf("no mode shapes to write to %s\n", vtk_dir);
 	}
 	status = 0;
 done:

@@ -115,10 +115,16 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 	fprintf(csv, ",energy.kinetic,energy.elastic,energy.gravity,energy.dissipated");
 	if (positions)
 		for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
+			// An unnamed particle is p[i], primed as often as needed to be no other particle's name
+			// (an explicit particle may be named "p[1]", and a rope "p" names its particles so).
 			const char* name = sm_document_particle_name(doc, i);
-			char fallback[32];
+			char fallback[64];
 			if (name == NULL) {
-				snprintf(fallback, sizeof fallback, "p[%d]", (int)i);
+				int length = snprintf(fallback, sizeof fallback, "p[%d]", (int)i);
+				while (sm_document_particle_index(doc, fallback) >= 0 && length + 1 < (int)sizeof fallback) {
+					fallback[length++] = '\'';
+					fallback[length] = '\0';
+				}
 				name = fallback;
 			}
 			for (int c = 0; c < 3; c++) {
