@@ -28,5 +28,10 @@ string(REGEX REPLACE "/$" "" SPRINGMASS_PC_TO_PREFIX "${SPRINGMASS_PC_TO_PREFIX}
 set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
+# The library of this build: libspringmassd in a Debug build (DEBUG_POSTFIX, lib/CMakeLists.txt).
+set(SPRINGMASS_PC_LIBRARY springmass)
+if(CMAKE_BUILD_TYPE STREQUAL "Debug")
+  set(SPRINGMASS_PC_LIBRARY springmassd)
+endif()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/springmass.pc.in ${PROJECT_BINARY_DIR}/springmass.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/springmass.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
