@@ -541,42 +541,31 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 	return false;
 }
 
-// Puts back the parameter values old[] that set_parameters recorded, last parameter first
-// (see there). Setting a value takes memory: if one cannot be put back, the document and the
-// simulation disagree, and the instance goes to the error state, from which fmi2SetFMUstate or
-// fmi2Reset lead back.
+// Puts back the parameter values old[] that set_parameters recorded. Setting values takes memory:
+// if they cannot be put back, the document and the simulation disagree, and the instance goes to
+// the error state, from which fmi2SetFMUstate or fmi2Reset lead back.
 static void put_back_parameters(instance* inst, const char* function, const double* old)
 {
-	bool restored = true;
-	for (int32_t k = sm_document_parameter_count(inst->doc); k-- > 0;) {
-		if (sm_document_parameter_value(inst->doc, k) != old[k] &&
-		    sm_document_set_parameter(inst->doc, k, old[k], NULL) != SM_OK)
-			restored = false;
-	}
-	if (!restored) {
+	if (sm_document_set_parameters(inst->doc, old, NULL) != SM_OK) {
 		log_error(inst, "%s: the earlier parameter values cannot be put back (out of memory): the instance "
 		          "is in the error state (fmi2SetFMUstate or fmi2Reset lead back)", function);
 		inst->state = ST_ERROR;
 	}
 }
 
-// Sets the model-file parameters to values[] (one per parameter, in file order) and records the
-// previous ones in old[]. The model checks each value as it is set, against the others as they
-// are then, so a rejected one (logged) is undone in the reverse order: every document on the way
-// back is one that was valid on the way there. Returns false after such an undo.
+// Sets the model-file parameters to values[] (one per parameter, in file order), all at once (a
+// state or a call may change values that are valid only together, such as a rope's start and
+// end), and records the previous ones in old[]. Returns false, with the document unchanged and
+// the refusal logged, if the model rejects them.
 static bool set_parameters(instance* inst, const char* function, const double* values, double* old)
 {
 	int32_t np = sm_document_parameter_count(inst->doc);
 	for (int32_t k = 0; k < np; ++k)
 		old[k] = sm_document_parameter_value(inst->doc, k);
-	for (int32_t k = 0; k < np; ++k) {
-		sm_error err = {SM_OK, ""};
-		if (old[k] != values[k] && sm_document_set_parameter(inst->doc, k, values[k], &err) != SM_OK) {
-			log_error(inst, "%s: %s = %g rejected by the model: %s", function, sm_document_parameter_name(inst->doc, k),
-			          values[k], err.message);
-			put_back_parameters(inst, function, old);
-			return false;
-		}
+	sm_error err = {SM_OK, ""};
+	if (sm_document_set_parameters(inst->doc, values, &err) != SM_OK) {
+		log_error(inst, "%s: rejected by the model: %s", function, err.message);
+		return false;
 	}
 	return true;
 }

@@ -1781,6 +1781,59 @@ int32_t sm_document_parameter_index(const sm_document* doc, const char* name)
 	return doc != NULL && name != NULL ? find_parameter(doc, name) : -1;
 }
 
+sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_error* err)
+{
+	if (doc == NULL || (values == NULL && doc->parameter_count > 0))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_parameters: no %s",
+		                    doc == NULL ? "document" : "values");
+	bool changed = false;
+	for (int32_t k = 0; k < doc->parameter_count; k++) {
+		if (!isfinite(values[k]))
+			return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: parameters.%s: %g is not finite", doc->source,
+			                    doc->parameter_names[k], values[k]);
+		changed = changed || values[k] != doc->parameter_values[k];
+	}
+	if (!changed)
+		return SM_OK;
+	double* copy = malloc((size_t)doc->parameter_count * sizeof(double));
+	if (copy == NULL)
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
+	memcpy(copy, values, (size_t)doc->parameter_count * sizeof(double));
+	sm_error local = {SM_OK, ""};
+	expansion* ex = expand(doc, copy, &local);
+	if (ex == NULL) {
+		// Name the parameters that changed, as the loader names those a value came from ("(with
+		// parameter a = 1 and parameter b = 2)"), unless the message already names one of them.
+		int32_t last = -1;
+		bool named = false;
+		for (int32_t k = 0; k < doc->parameter_count; k++) {
+			if (copy[k] == doc->parameter_values[k])
+				continue;
+			char name[300];
+			snprintf(name, sizeof name, "parameter %s = ", doc->parameter_names[k]);
+			named = named || strstr(local.message, name) != NULL;
+			last = k;
+		}
+		char with[SM_ERROR_MESSAGE_CAPACITY] = "";
+		size_t used = 0;
+		for (int32_t k = 0, n = 0; k < doc->parameter_count && !named && used < sizeof with; k++) {
+			if (copy[k] == doc->parameter_values[k])
+				continue;
+			const char* joint = n++ == 0 ? " (with " : k == last ? " and " : ", ";
+			const int written = snprintf(with + used, sizeof with - used, "%sparameter %s = %g%s", joint,
+			                             doc->parameter_names[k], copy[k], k == last ? ")" : "");
+			used += written > 0 ? (size_t)written : 0;
+		}
+		free(copy);
+		return sm_error_set(err, local.status, "%s%s", local.message, with);
+	}
+	expansion_free(doc->current);
+	doc->current = ex;
+	free(doc->parameter_values);
+	doc->parameter_values = copy;
+	return SM_OK;
+}
+
 sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err)
 {
 	if (doc == NULL)
@@ -1798,23 +1851,9 @@ sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double valu
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 	memcpy(values, doc->parameter_values, (size_t)doc->parameter_count * sizeof(double));
 	values[index] = value;
-	sm_error local = {SM_OK, ""};
-	expansion* ex = expand(doc, values, &local);
-	if (ex == NULL) {
-		free(values);
-		// Name the parameter unless the message already does (it names the one a value came from).
-		char named[300];
-		snprintf(named, sizeof named, "parameter %s = ", doc->parameter_names[index]);
-		if (strstr(local.message, named) != NULL)
-			return sm_error_set(err, local.status, "%s", local.message);
-		return sm_error_set(err, local.status, "%s (with parameter %s = %g)", local.message,
-		                    doc->parameter_names[index], value);
-	}
-	expansion_free(doc->current);
-	doc->current = ex;
-	free(doc->parameter_values);
-	doc->parameter_values = values;
-	return SM_OK;
+	const sm_status st = sm_document_set_parameters(doc, values, err);
+	free(values);
+	return st;
 }
 
 int32_t sm_document_port_count(const sm_document* doc)

@@ -96,6 +96,9 @@ check_cases() {
 }
 touch "$tmp/a_file"
 osc="$root/models/oscillator.json"
+# --set values are taken together: a rope's new start beyond its old end, with the new end.
+cp "$root/tests/python/models/rope_ends.json" "$tmp/rope_ends.json"
+ends="$tmp/rope_ends.json"
 check_cases << 'CASES'
 2|springmass run: --t-end expects a finite number, got 'nan'|run "$osc" -q -o - --t-end nan
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
@@ -111,6 +114,8 @@ check_cases << 'CASES'
 2|springmass statics: --set expects NAME=VALUE, got 'k'|statics "$osc" --set k
 2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
+0||run "$ends" -q -o - --t-end 0.01 --set xa=1 --set xb=3
+1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0) (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 CASES
 # An absolute tolerance the simulation would refuse is refused by the loader already.

@@ -1069,6 +1069,41 @@ static int test_messages_name_parameters(void)
 	return 0;
 }
 
+// Parameters set together are checked together: a rope from xa = 0 to xb = 1 with per-strain
+// springs (which need a rest length > 0) moves to xa = 1, xb = 3 in one call, where setting xa
+// first would make the rope a point. A refusal names the parameters that changed and leaves the
+// document unchanged.
+static int test_parameters_set_together(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"xa\": 0, \"xb\": 1},"
+	                         " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"xa\", 0, 0],"
+	                         " \"end\": [\"xb\", 0, 0], \"segments\": 2, \"structural\": {\"strain_stiffness\": 10}}]}",
+	                         &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 1.0, &err), SM_ERROR_ZERO_REST_LENGTH);
+	const double moved[2] = {1.0, 3.0};
+	ENSURE_STATUS(sm_document_set_parameters(doc, moved, &err), SM_OK);
+	sm_model* model = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	double x[9];
+	sm_model_initial_state(model, x, NULL);
+	ENSURE(x[0] == 1.0 && x[3] == 2.0 && x[6] == 3.0);  // the rope's three particles, evenly spaced
+	sm_model_destroy(model);
+	const double point[2] = {2.0, 2.0};
+	ENSURE_STATUS(sm_document_set_parameters(doc, point, &err), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE(strstr(err.message, "(with parameter xa = 2 and parameter xb = 2)") != NULL);
+	ENSURE(sm_document_parameter_value(doc, 0) == 1.0 && sm_document_parameter_value(doc, 1) == 3.0);
+	const double infinite[2] = {1.0, INFINITY};
+	ENSURE_STATUS(sm_document_set_parameters(doc, infinite, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "parameters.xb") != NULL);
+	ENSURE_STATUS(sm_document_set_parameters(doc, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_document_set_parameters(NULL, moved, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(sm_document_parameter_value(doc, 0) == 1.0 && sm_document_parameter_value(doc, 1) == 3.0);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // A particle index written as a whole real number (3.0, as a count may be written) is that index.
 static int test_whole_real_index(void)
 {
@@ -1194,6 +1229,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_bundled_models_round_trip);
 	RUN_TEST(test_oscillator);
 	RUN_TEST(test_parameter_uses);
+	RUN_TEST(test_parameters_set_together);
 	RUN_TEST(test_oscillator_follows_its_closed_form);
 	RUN_TEST(test_tearing_cloth_tears);
 	RUN_TEST(test_cloth_is_the_benchmark_cloth);

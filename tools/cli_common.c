@@ -29,7 +29,9 @@ int32_t cli_setting_parameter(const sm_document* doc, const char* setting)
 	return length == 0 || length == sizeof name ? -1 : sm_document_parameter_index(doc, name);
 }
 
-int cli_set_parameter(const char* command, sm_document* doc, const char* setting)
+// NAME=VALUE of --set: the parameter's index and the value, or a message and the exit status.
+static int parse_setting(const char* command, const sm_document* doc, const char* setting, int32_t* index,
+                         double* value)
 {
 	char name[256];
 	const size_t length = setting_name(setting, name, sizeof name);
@@ -44,31 +46,51 @@ int cli_set_parameter(const char* command, sm_document* doc, const char* setting
 	const char* eq = setting + length;
 	// A number below the smallest normal double is taken as strtod rounds it, as in a model file.
 	char* end = NULL;
-	const double value = strtod(eq + 1, &end);
-	if (end == eq + 1 || *end != '\0' || !isfinite(value)) {
+	*value = strtod(eq + 1, &end);
+	if (end == eq + 1 || *end != '\0' || !isfinite(*value)) {
 		fprintf(stderr, "springmass %s: --set %s: '%s' is not a finite number\n", command, setting, eq + 1);
 		return 2;
 	}
-	const int32_t index = sm_document_parameter_index(doc, name);
-	if (index < 0) {
+	*index = sm_document_parameter_index(doc, name);
+	if (*index < 0) {
 		fprintf(stderr, "springmass %s: --set %s: the model has no parameter named \"%s\"\n", command, setting,
 		        name);
-		return 1;
-	}
-	sm_error err;
-	if (sm_document_set_parameter(doc, index, value, &err) != SM_OK) {
-		fprintf(stderr, "springmass %s: --set %s: %s\n", command, setting, err.message);
 		return 1;
 	}
 	return 0;
 }
 
+// All settings at once (sm_document_set_parameters), as if the file gave these values: a rope's
+// new start and end are taken in either order; a parameter set twice takes the last value.
 int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count)
 {
+	const int32_t np = sm_document_parameter_count(doc);
+	double* values = malloc(((size_t)np + 1) * sizeof(double));
+	if (values == NULL) {
+		fprintf(stderr, "springmass %s: out of memory\n", command);
+		return 1;
+	}
+	for (int32_t k = 0; k < np; k++)
+		values[k] = sm_document_parameter_value(doc, k);
 	for (int k = 0; k < count; k++) {
-		const int status = cli_set_parameter(command, doc, settings[k]);
-		if (status != 0)
+		int32_t index;
+		double value;
+		const int status = parse_setting(command, doc, settings[k], &index, &value);
+		if (status != 0) {
+			free(values);
 			return status;
+		}
+		values[index] = value;
+	}
+	sm_error err;
+	const sm_status st = sm_document_set_parameters(doc, values, &err);
+	free(values);
+	if (st != SM_OK) {
+		fprintf(stderr, "springmass %s: ", command);
+		for (int k = 0; k < count; k++)
+			fprintf(stderr, "--set %s%s", settings[k], k + 1 < count ? " " : ": ");
+		fprintf(stderr, "%s\n", err.message);
+		return 1;
 	}
 	return 0;
 }

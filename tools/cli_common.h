@@ -6,20 +6,19 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-/// Applies "NAME=VALUE" (a --set option) to the document's parameters. Returns 0 on success;
-/// otherwise prints the error with the command's name and returns the exit status: 2 for a
-/// malformed setting (a usage error), 1 for a setting the model refuses.
-int cli_set_parameter(const char* command, sm_document* doc, const char* setting);
-
 /// The index of the parameter a "NAME=VALUE" setting names, or -1 if it is malformed or names none.
 int32_t cli_setting_parameter(const sm_document* doc, const char* setting);
 
-/// Applies `count` settings in order; stops at the first that fails and returns its status.
+/// Applies `count` "NAME=VALUE" settings (--set options) to the document's parameters, all at once
+/// (values valid only together are taken in any order; a parameter given twice takes the last).
+/// Returns 0 on success; otherwise prints the error with the command's name and returns the exit
+/// status: 2 for a malformed setting (a usage error), 1 for an unknown parameter or values the
+/// model refuses (the document then unchanged).
 int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count);
 
 /// Loads the model file at path, applies the settings and builds the model. Returns 0 with *doc
 /// and *model set (the caller destroys both); otherwise prints the error with the command's name,
-/// leaves both NULL and returns the exit status (as cli_set_parameter, 1 for a bad model file).
+/// leaves both NULL and returns the exit status (as cli_set_parameters, 1 for a bad model file).
 int cli_load_model(const char* command, const char* path, const char* const* settings, int count,
                    sm_document** doc, sm_model** model);
 

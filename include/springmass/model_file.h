@@ -98,6 +98,12 @@ SM_API uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index
 /// number of the file, counts included; a value that changes the number of particles fails if
 /// an initial state was set with sm_document_set_initial_state.
 SM_API sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err);
+/// Sets every parameter at once, values[i] for parameter i (sm_document_parameter_count values,
+/// in file order), checked together: values that are valid only together (a rope's new start
+/// beyond its old end, with the new end) are taken whatever their order, where one
+/// sm_document_set_parameter after the other could be refused. All or nothing, as above; the
+/// message names the parameters that changed.
+SM_API sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_error* err);
 
 /// Ports, in file order. A port's name stays valid as long as the document.
 SM_API int32_t sm_document_port_count(const sm_document* doc);

@@ -320,6 +320,34 @@ def test_state_that_changes_a_structure_constant_is_refused(test_fmu):
         inst.free()
 
 
+def test_parameters_valid_only_together_are_set_and_restored_together(test_fmu):
+    # rope_ends: xa = 1 alone would make the rope a point (refused), with xb = 3 it is valid. One
+    # fmi2SetReal of both takes them in either order, and a state holding them restores into an
+    # instance at the defaults (the parameters were set one at a time, in file order: refused).
+    fmu = test_fmu("rope_ends")
+    a = Instance(fmu, "a")
+    b = Instance(fmu, "b").start()
+    try:
+        s = a.slave
+        s.setupExperiment(startTime=0.0)
+        s.setReal([a.vr["xa"], a.vr["xb"]], [1.0, 3.0])
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.01)
+        blob = s.serializeFMUstate(s.getFMUstate())
+        expected = a.get("tip.x", "tip.z")
+        assert expected[0] == pytest.approx(3.0, abs=1e-3)  # the tip barely moves in 0.01 s
+        b.slave.doStep(0.0, 0.01)
+        b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
+        assert b.get("xa", "xb") == [1.0, 3.0] and b.get("tip.x", "tip.z") == expected
+        b.slave.doStep(0.01, 0.01)
+        s.doStep(0.01, 0.01)
+        assert b.get("tip.x", "tip.z") == a.get("tip.x", "tip.z")
+    finally:
+        a.free()
+        b.free()
+
+
 def test_serialised_state_restores_from_any_address(test_fmu):
     # FMI lets the serialised bytes be any fmi2Byte array, at any address: the FMU reads them
     # without assuming a double's alignment (the sanitizer build's UBSan checks it). From each
