@@ -12,7 +12,8 @@
 // ks [u u^T + (1 - 0/L) P] = ks (u u^T + I - u u^T) = ks I, including at L = 0 where the
 // geometry sets u = 0 and the block is again ks I. The model therefore stores l0 = 0 for
 // zero-length springs and evaluates both kinds with the same branch-free code; the functions
-// below state the law on its own, and the tests check that both forms agree.
+// below state the law on its own, and test_forces (test_zero_length_spring_is_linear) checks
+// that both forms agree.
 #pragma once
 
 #include "model_internal.h"

@@ -1,6 +1,7 @@
 // Forces and energies of the physics core against the laws they implement: closed forms,
 // conservation laws (Newton's third law, zero damping for rigid motion), the energy gradient
 // by finite differences, and the strain-based stiffness of a discretised rope.
+#include "law_zero_length.h"
 #include "model_internal.h"
 #include "physics_fixtures.h"
 #include "springmass/model.h"
@@ -405,7 +406,9 @@ static int test_gravity_force_is_minus_energy_gradient(void)
 
 // A zero-length spring is f_a = ks (x_b - x_a) everywhere, including L = 0 and with the
 // particles far apart (no rest length involved). Exact: one multiplication per component,
-// which the model computes as ks L (d / L): 1e-14 relative.
+// which the model computes as ks L (d / L): 1e-14 relative. The model evaluates it as a
+// rest-length spring with l0 = 0; its own law (law_zero_length.h: force, K = ks I, energy)
+// agrees: the block ks (u u^T + I - u u^T) to 1e-14 of ks, the energy to 1e-14 relative.
 static int test_zero_length_spring_is_linear(void)
 {
 	rng r = {333};
@@ -427,11 +430,22 @@ static int test_zero_length_spring_is_linear(void)
 		for (int k = 0; k < 6; k++)
 			x[k] = spread * rng_uniform(&r, -1, 1);
 		sm_model_forces(m, x, v, NULL, f);
+		const double dx[3] = {x[3] - x[0], x[4] - x[1], x[5] - x[2]};
+		double law[3], K[9], law_K[9] = {0};
+		zero_length_force(25.0, dx, law);
 		for (int k = 0; k < 3; k++) {
 			const double expect = 25.0 * (x[3 + k] - x[k]);
+			ENSURE(law[k] == expect);
 			ENSURE_NEAR(f[k], expect, 1e-14 * 25.0 * spread * 2 + 1e-300);
 			ENSURE(f[3 + k] == -f[k]);
 		}
+		ENSURE_STATUS(sm_model_spring_jacobian(m, 0, x, v, SM_JACOBIAN_EXACT, K, NULL), SM_OK);
+		zero_length_add_block(25.0, law_K);
+		for (int k = 0; k < 9; k++)
+			ENSURE_NEAR(K[k], law_K[k], 1e-14 * 25.0);
+		const double length = sqrt(dx[0] * dx[0] + dx[1] * dx[1] + dx[2] * dx[2]);
+		const double energy = zero_length_energy(25.0, length);
+		ENSURE_NEAR(sm_model_energies(m, x, v).elastic, energy, 1e-14 * energy);
 	}
 	sm_model_destroy(m);
 	return 0;
@@ -466,7 +480,9 @@ static int test_degenerate_length_gives_finite_values(void)
 		const double x2[6] = {1, 1, 1, 1 + L, 1, 1}, v0[6] = {0};
 		sm_model_forces(m, x2, v0, NULL, f);
 		const double expect = 100.0 * (L - d.rest_length);
-		ENSURE_NEAR(f[0], expect, 1e-6 * fabs(expect) + 1e-12);  // 1 + L rounds L to ~1e-6 relative
+		// 1 + L rounds L by up to half an ulp of 1 (1.1e-16 m, 1e-6 of L): f is off by ks times
+		// that, 1.1e-14 N, plus the rounding of a force of up to 20 N (ulp 3.6e-15 N): 1e-13 N.
+		ENSURE_NEAR(f[0], expect, 1e-13);
 		ENSURE(f[1] == 0.0 && f[2] == 0.0);
 		sm_model_destroy(m);
 	}

@@ -223,6 +223,24 @@ static int test_block_counts_and_shear_resistance(void)
 		body += fabs(l0 - 0.25 * sqrt(3.0)) < 1e-12;
 	}
 	ENSURE(edge == 54 && face == 72 && body == 32);
+	// Which particles the springs join, not only how many and how long: edges, face and body
+	// diagonals (by their rest length) join grid neighbours differing in 1, 2 or 3 coordinates
+	// by one step, and no two springs join the same pair (a repeated diagonal would have the
+	// right count and length).
+	bool joined[27][27] = {{false}};
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		sm_spring_def sd;
+		ENSURE_STATUS(sm_model_get_spring(m, s.first_spring + k, &sd), SM_OK);
+		const int32_t a = sd.a - s.first_particle, b = sd.b - s.first_particle;
+		ENSURE(a >= 0 && a < 27 && b >= 0 && b < 27 && !joined[a][b] && !joined[b][a]);
+		joined[a][b] = true;
+		// Index (k * 3 + i) * 3 + j (sm_structure_particle): coordinates j, i, k.
+		const int da = abs(a % 3 - b % 3), db = abs(a / 3 % 3 - b / 3 % 3), dc = abs(a / 9 - b / 9);
+		ENSURE(da <= 1 && db <= 1 && dc <= 1);
+		double l0;
+		sm_model_spring_constants(m, s.first_spring + k, &l0, NULL, NULL);
+		ENSURE(fabs(l0 - 0.25 * sqrt((double)(da + db + dc))) < 1e-12);
+	}
 	ENSURE(sm_structure_particle(&s, 1, 2, 2) == (2 * 3 + 1) * 3 + 2);
 	// A hand-made grid of (2^31 - 1)^3 points: indices beyond int32_t are -1, not an overflow.
 	sm_structure huge = s;
