@@ -524,6 +524,26 @@ static int current_jacobian(reduced* r, double t, const double* y)
 	return st == SM_OK ? 0 : -1;
 }
 
+int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p, double* q)
+{
+	reduced* r = ls->content;
+	sm_simulation* sim = r->sim;
+	if (r->n == 0) {
+		memset(q, 0, (size_t)r->full * sizeof(double));
+		return 0;
+	}
+	int status = current_jacobian(r, sim->time, N_VGetArrayPointer(sim->y));
+	if (status == 0) {
+		r->gamma = gamma;
+		if (!r->use_cholmod && !prepare_preconditioner(r, gamma))
+			status = -1;
+		else
+			multiply(r, p, q);
+	}
+	sm_reduced_solver_invalidate(ls, false);  // the next solve evaluates and prepares afresh
+	return status;
+}
+
 // CVODE evaluates the right-hand side at the predicted state of every step attempt and then
 // solves at that state, where the solver evaluates the Jacobian: the right-hand side computes
 // both in one pass over the springs instead (sm_model_forces_power_and_jacobians), which

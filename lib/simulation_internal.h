@@ -114,6 +114,12 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor);
 // strong springs), so that the solver is the one a simulation created from the new model would
 // have. False, with the solver unchanged, when out of memory.
 bool sm_reduced_solver_rebuild(SUNLinearSolver ls);
+// For the tests: q = A p with A = M (1 + gamma alpha) - gamma D - gamma^2 K of the reduced
+// solver, the Jacobian (definite variant) evaluated at the simulation's current state, formed
+// as the solver forms it in its conjugate gradients; p and q over all particles (3 each, p zero
+// and q set to zero at constrained particles). Returns 0, or -1 if the Jacobian cannot be
+// evaluated. The next solve evaluates its Jacobian afresh.
+int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p, double* q);
 // The right-hand side's share in the Jacobian evaluation: the records to fill at time t with
 // sm_model_forces_power_and_jacobians, or NULL if the solver already holds the Jacobian of the
 // step at t; after filling them, sm_reduced_rhs_evaluated with the state y (CVODE's vector).
