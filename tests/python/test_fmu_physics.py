@@ -160,6 +160,75 @@ def test_directional_derivative_is_the_stiffness_seen_by_the_port(test_fmu):
         inst.free()
 
 
+def test_directional_derivatives_of_a_moving_damped_system_match_finite_differences(test_fmu):
+    # hanging: a bob on a damped spring under gravity, in a viscous medium, its hook swung about
+    # so that positions and velocities are all non-zero. One call with every motion input seeded
+    # at once (seeds of different sizes and signs) against a central finite difference of the
+    # outputs along the same direction: the reaction (stiffness and damping), the three energies
+    # and the hook's own position and velocity. h = 1e-6: round-off of outputs of order 10 over
+    # 2h gives about 1e-9, the h^2 truncation about 1e-11: rtol and atol 1e-6.
+    inst = Instance(test_fmu("hanging")).start()
+    try:
+        s, vr = inst.slave, inst.vr
+        known = [vr[n] for n in ("hook.x", "hook.y", "hook.z", "hook.vx", "hook.vy", "hook.vz")]
+        for n in range(5):
+            s.setReal(known, [0.02 * n, -0.01 * n, 0.03 * n, 0.2, -0.1, 0.3])
+            s.doStep(0.01 * n, 0.01)
+        names = ["hook.fx", "hook.fy", "hook.fz", "energy.kinetic", "energy.elastic", "energy.gravity",
+                 "p[0].x", "p[0].vz", "bob.x"]
+        unknown = [vr[n] for n in names]
+        # The inputs set for the next step: the hook moves from them (a motion input is where the
+        # port is at the start of the step it is set for), so the derivatives and the finite
+        # differences are taken at the same point.
+        x = np.array([0.1, -0.05, 0.15, 0.2, -0.1, 0.3])
+        s.setReal(known, list(x))
+        seed = np.array([2.5, -1.0, 0.7, 1.5, -0.3, 0.9])
+        analytic = np.array(s.getDirectionalDerivative(unknown, known, list(seed)))
+        h = 1e-6
+        s.setReal(known, list(x + h * seed))
+        up = np.array(s.getReal(unknown))
+        s.setReal(known, list(x - h * seed))
+        down = np.array(s.getReal(unknown))
+        s.setReal(known, list(x))
+        fd = (up - down) / (2 * h)
+        assert np.allclose(analytic, fd, rtol=1e-6, atol=1e-6), list(zip(names, analytic, fd))
+        # Not all zero: every output but the bob's position (a state) depends on the seeds.
+        assert np.all(np.abs(analytic[:-1]) > 1e-3) and analytic[-1] == 0.0, list(zip(names, analytic))
+        # The ModelStructure lists every input an output's derivative depends on (it may list
+        # more: gravity along z makes energy.gravity depend on hook.z alone, at any state), and
+        # the reaction on all six (a moving, damped state, where none vanishes by accident).
+        for output in inst.md.outputs:
+            listed = {d.name for d in output.dependencies}
+            for k in known:
+                name = inst.md.modelVariables[k].name
+                d = s.getDirectionalDerivative([output.variable.valueReference], [k], [1.0])[0]
+                assert d == 0.0 or name in listed, (output.variable.name, name, d, sorted(listed))
+                if output.variable.name.startswith("hook.f"):
+                    assert d != 0.0 and name in listed, (output.variable.name, name, d)
+    finally:
+        inst.free()
+
+
+def test_a_force_input_acts_along_each_of_its_components(test_fmu):
+    # A force (Fx, Fy, Fz) on the bob at rest, 0.2 m stretched along x: over a short step h the
+    # velocity changes by (F + f_spring) h / m, the spring pulling along x only (-k 0.2 = -10 N);
+    # the spring's turning as the bob moves adds terms of relative size (k/m) h^2 = 2.5e-5 at
+    # h = 1 ms: 1e-4 relative to each component's prediction.
+    inst = Instance(test_fmu("driven_oscillator")).start({"solver.rtol": 1e-10})
+    try:
+        force = (1.5, -2.0, 3.0)
+        for name, value in zip(("tip.fx", "tip.fy", "tip.fz"), force):
+            inst.set(name, value)
+        h = 1e-3
+        inst.slave.doStep(0.0, h)
+        v = inst.get("tip.vx", "tip.vy", "tip.vz")
+        expected = [(force[0] - K * (X0 - L0)) * h / M, force[1] * h / M, force[2] * h / M]
+        for got, want in zip(v, expected):
+            assert abs(got - want) <= 1e-4 * abs(want), (v, expected)
+    finally:
+        inst.free()
+
+
 def test_a_motion_input_set_in_a_step_applies_from_its_start_changed_or_not(test_fmu):
     # A motion port set in a communication step moves from P.x with P.vx from the step's start.
     # The master holds base.x = 0 and base.vx = 1 m/s at every 0.1 s step, so the anchor is at
