@@ -1194,7 +1194,7 @@ static reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 bool sm_reduced_solver_rebuild(SUNLinearSolver ls)
 {
 	reduced* old = ls->content;
-	if (!old->two_level || old->multilevel == NULL)
+	if (old->multilevel == NULL)
 		return true;  // the aggregates follow the springs alone: nothing depends on the constants
 	reduced* r = reduced_content_create(old->sim, old->use_cholmod);
 	if (r == NULL)

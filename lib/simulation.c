@@ -163,6 +163,14 @@ static void refresh_outputs(sm_simulation* sim)
 // CVODE callbacks
 // ---------------------------------------------------------------------------------------------
 
+// Whether the linear solver is the reduced one (linear_solver_reduced.c). Adams' fixed-point
+// iteration has none, whatever the options name.
+static bool has_reduced_solver(const sm_simulation* sim)
+{
+	return sim->linear_solver != NULL &&
+	       (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
+}
+
 // y' = [v; M^-1 f; P]. A non-finite state is a recoverable failure (> 0): CVODE retries with
 // a smaller step.
 static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
@@ -179,9 +187,7 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	double* f = sim->work_force;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
-	// Adams' fixed-point iteration has no linear solver.
-	const bool reduced = sim->linear_solver != NULL &&
-	                     (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
+	const bool reduced = has_reduced_solver(sim);
 	sm_spring_jacobians* records = reduced ? sm_reduced_rhs_records(sim->linear_solver, t) : NULL;
 	double power;
 	if (records != NULL) {
@@ -840,7 +846,7 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 		sim->base.restarts++;
 	sim->need_restart = false;
 	sim->input_jumped = false;
-	if (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD)
+	if (has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, reset);
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
@@ -1327,8 +1333,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sim->model = copy;
 	sm_status st = build_roots(sim);
 	const char* failure = "update_model: cannot set up the break events";
-	const bool reduced = sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD;
-	if (st == SM_OK && reduced && sim->linear_solver != NULL && !sm_reduced_solver_rebuild(sim->linear_solver)) {
+	if (st == SM_OK && has_reduced_solver(sim) && !sm_reduced_solver_rebuild(sim->linear_solver)) {
 		st = SM_ERROR_OUT_OF_MEMORY;
 		failure = "update_model: out of memory rebuilding the linear solver";
 	}
