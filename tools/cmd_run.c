@@ -327,6 +327,9 @@ int sm_cmd_run(int argc, char** argv)
 	FILE* pvd = NULL;
 	double* forces = NULL;
 	char* path = NULL;
+	char* csv_default = NULL;  // <model>.csv when no --output is given
+	char* pvd_path = NULL;
+	const char* csv_name = NULL;  // for messages
 	sm_error err = {SM_OK, ""};
 
 	if ((status = cli_load_model("run", o.model, o.sets, o.set_count, &doc, &model)) != 0)
@@ -388,30 +391,32 @@ int sm_cmd_run(int argc, char** argv)
 	const char* name = sm_document_name(doc);
 	const size_t path_capacity = strlen(name) + (o.vtk_dir ? strlen(o.vtk_dir) : 0) + 64;
 	path = malloc(path_capacity);
+	pvd_path = malloc(path_capacity);
+	csv_default = malloc(strlen(name) + 5);
 	forces = malloc(sizeof(double) * (3 * (size_t)sm_model_particle_count(model) + 1));
-	if (!path || !forces)
+	if (!path || !pvd_path || !csv_default || !forces)
 		goto done;
 	// The series' folder and index first: a run refused for them leaves an existing CSV as it was.
 	if (o.vtk_dir) {
 		if (cli_make_directory("run", o.vtk_dir) != 0)
 			goto done;
-		snprintf(path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
-		pvd = fopen(path, "w");
+		snprintf(pvd_path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
+		pvd = fopen(pvd_path, "w");
 		if (!pvd) {
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", path, strerror(errno));
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", pvd_path, strerror(errno));
 			goto done;
 		}
 		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
 	}
 	if (o.output && strcmp(o.output, "-") == 0) {
 		csv = stdout;
+		csv_name = "standard output";
 	} else {
-		if (!o.output)
-			snprintf(path, path_capacity, "%s.csv", name);
-		const char* csv_path = o.output ? o.output : path;
-		csv = fopen(csv_path, "w");
+		sprintf(csv_default, "%s.csv", name);
+		csv_name = o.output ? o.output : csv_default;
+		csv = fopen(csv_name, "w");
 		if (!csv) {
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_path, strerror(errno));
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
 			goto done;
 		}
 	}
@@ -427,6 +432,12 @@ int sm_cmd_run(int argc, char** argv)
 			goto done;
 		}
 		write_row(csv, doc, sim, forces, o.positions);
+		// A full disk or a closed pipe stops the run at once, not after the last step.
+		if (ferror(csv)) {
+			end_progress(&prog);
+			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
+			goto done;
+		}
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
 			if (write_vtk(path, sim) != 0)
@@ -440,7 +451,7 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	end_progress(&prog);
 	if (fflush(csv) != 0 || ferror(csv)) {
-		fprintf(stderr, "springmass run: cannot write the CSV %s\n", csv == stdout ? "to standard output" : "file");
+		fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
 		goto done;
 	}
 	if (!o.quiet) {
@@ -465,17 +476,19 @@ int sm_cmd_run(int argc, char** argv)
 
 done:
 	if (csv && csv != stdout && fclose(csv) != 0 && status == 0) {
-		fprintf(stderr, "springmass run: cannot write the CSV file\n");
+		fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
 		status = 1;
 	}
 	// The index is closed after a failed run too: ParaView then shows the rows up to the failure.
 	if (pvd)
 		fprintf(pvd, "</Collection>\n</VTKFile>\n");
 	if (pvd && fclose(pvd) != 0 && status == 0) {
-		fprintf(stderr, "springmass run: cannot write the .pvd index\n");
+		fprintf(stderr, "springmass run: cannot write %s: %s\n", pvd_path, strerror(errno));
 		status = 1;
 	}
 	free(path);
+	free(pvd_path);
+	free(csv_default);
 	free(forces);
 	free(o.sets);
 	sm_simulation_destroy(sim);
