@@ -339,10 +339,14 @@ sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* e
 		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path, strerror(code));
 	}
 	const size_t length = strlen(data);
+	errno = 0;
 	const bool written = fwrite(data, 1, length, f) == length;
+	const int write_code = errno;
+	errno = 0;
 	const bool closed = fclose(f) == 0;
+	const int code = !written && write_code != 0 ? write_code : errno;
 	free(data);
 	if (!written || !closed)
-		return sm_error_set(err, SM_ERROR_FILE, "%s: write error", path);
+		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path, code != 0 ? strerror(code) : "write error");
 	return SM_OK;
 }

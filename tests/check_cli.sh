@@ -189,6 +189,20 @@ if [ -w /dev/full ]; then
   written=$(ls "$tmp/full_vtk" | grep -c '\.vtk$')
   [ $rc -eq 1 ] && [ "$out" = "springmass run: cannot write /dev/full: No space left on device" ] &&
     [ "$written" -lt 100 ] || fail "run -o /dev/full: exit $rc, '$out', $written VTK files"
+  # Every command's files and reports: a report on standard output that cannot be written fails
+  # the command too, as in any Unix tool.
+  for cmd in "statics -q -o /dev/full" "statics -q --save-model /dev/full" "modes -o /dev/full"; do
+    "$cli" $cmd "$root/models/two_mass_chain.json" > /dev/null 2> "$tmp/full.err"
+    rc=$?
+    [ $rc -eq 1 ] && grep -q "/dev/full: .*No space left on device" "$tmp/full.err" ||
+      fail "$cmd: exit $rc, $(cat "$tmp/full.err")"
+  done
+  for cmd in "check" "statics" "modes" "run -o -" "--help" "run --help"; do
+    out=$("$cli" $cmd "$root/models/two_mass_chain.json" 2>&1 > /dev/full)
+    rc=$?
+    [ $rc -eq 1 ] && case "$out" in *"cannot write standard output: No space left on device") true ;; *) false ;; esac ||
+      fail "$cmd > /dev/full: exit $rc, '$out'"
+  done
 fi
 echo "earlier" > "$tmp/earlier.csv"
 "$cli" run "$root/models/oscillator.json" -q -o "$tmp/earlier.csv" --vtk "$tmp/earlier.csv/vtk" > /dev/null 2>&1

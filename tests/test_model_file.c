@@ -472,6 +472,13 @@ static int test_initial_state_and_save_to_file(void)
 	double l0;
 	sm_model_spring_constants(m2, 0, &l0, NULL, NULL);
 	ENSURE_NEAR(l0, 0.05, 1e-15);
+	// A file that cannot be written is named with the reason.
+	ENSURE_STATUS(sm_document_save(doc, "no_such_folder/x.json", &err), SM_ERROR_FILE);
+	ENSURE(strcmp(err.message, "no_such_folder/x.json: cannot write: No such file or directory") == 0);
+	if (access("/dev/full", W_OK) == 0) {
+		ENSURE_STATUS(sm_document_save(doc, "/dev/full", &err), SM_ERROR_FILE);
+		ENSURE(strcmp(err.message, "/dev/full: cannot write: No space left on device") == 0);
+	}
 	// The elastic energy of the stretched rope: 20 springs of ks = E / l0 stretched by 10 % of
 	// l0 store (E / l0) (0.1 l0)^2 / 2 = E l0 0.01 / 2 each (relative rounding ~1e-15; 1e-9
 	// leaves room for the positions -0.055 i not being exact in binary).

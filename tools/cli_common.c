@@ -216,9 +216,12 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 
 int cli_close(const char* command, const char* path, FILE* f)
 {
+	// A failed write leaves data in the buffer, so fclose fails again and sets errno afresh.
 	const int failed = ferror(f);
+	errno = 0;
 	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass %s: error writing %s\n", command, path);
+		fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,
+		        errno != 0 ? strerror(errno) : "write error");
 		return -1;
 	}
 	return 0;

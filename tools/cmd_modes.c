@@ -80,12 +80,7 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 				cli_csv_number(f, modes->shapes[(size_t)m * n3 + 3 * (size_t)i + c]);
 		fprintf(f, "\n");
 	}
-	const int failed = ferror(f);
-	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass modes: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
+	return cli_close("modes", path, f);
 }
 
 // The summary and the table of frequencies, periods, omega^2 and damping ratios.

@@ -72,12 +72,7 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 			cli_csv_number(f, reactions[3 * i + c]);
 		fprintf(f, "\n");
 	}
-	const int failed = ferror(f);
-	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass statics: error writing %s\n", path);
-		return -1;
-	}
-	return 0;
+	return cli_close("statics", path, f);
 }
 
 int sm_cmd_statics(int argc, char** argv)

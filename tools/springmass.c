@@ -6,6 +6,7 @@
 #include "springmass/base.h"
 
 #include <dlfcn.h>
+#include <errno.h>
 #include <gsl/gsl_errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -51,6 +52,18 @@ static void single_threaded_blas(void)
 		set_threads(1);
 }
 
+// A report that could not be written to standard output (a full disk) fails the command, as in
+// any Unix tool; a command that failed has already said why.
+static int finish(int status)
+{
+	errno = 0;
+	if ((fflush(stdout) != 0 || ferror(stdout)) && status == 0) {
+		fprintf(stderr, "springmass: cannot write standard output: %s\n", errno != 0 ? strerror(errno) : "write error");
+		return 1;
+	}
+	return status;
+}
+
 int main(int argc, char** argv)
 {
 	single_threaded_blas();
@@ -63,15 +76,15 @@ int main(int argc, char** argv)
 	}
 	if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
 		usage(stdout);
-		return 0;
+		return finish(0);
 	}
 	if (strcmp(argv[1], "--version") == 0) {
 		printf("springmass %s\n", sm_version());
-		return 0;
+		return finish(0);
 	}
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
 		if (strcmp(argv[1], commands[i].name) == 0) {
-			return commands[i].run(argc - 1, argv + 1);
+			return finish(commands[i].run(argc - 1, argv + 1));
 		}
 	}
 	fprintf(stderr, "springmass: unknown command '%s'\n\n", argv[1]);
