@@ -797,6 +797,86 @@ static void append(text* t, const char* format, ...)
 	}
 }
 
+// Saving keeps what the file says, for every kind of value the writer treats apart: a
+// rest-length spring of rest length 0 (which a file without "kind" reads as zero-length),
+// per-strain stiffness beside absolute damping and the reverse, a literal break strain, parameters
+// whose value is 0 (their references kept, so that changing them later still acts), the "fmu"
+// settings and a description with a tab. And after sm_document_set_initial_state, a position the
+// file took from a parameter is saved as the new number, not as the parameter again.
+static sm_document* save_and_load(const sm_document* doc)
+{
+	sm_error err = {SM_OK, ""};
+	char* text = sm_document_to_json(doc, &err);
+	if (text == NULL)
+		return NULL;
+	sm_document* again = sm_document_parse(text, strlen(text), "saved.json", &err);
+	if (again == NULL)
+		printf("  saved: %s\n%s\n", err.message, text);
+	free(text);
+	return again;
+}
+
+static int test_canonical_form_keeps_what_the_file_says(void)
+{
+	const char* text =
+		"{\"springmass\": 1, \"name\": \"kept\", \"description\": \"a\\tb\","
+		" \"parameters\": {\"k0\": 0, \"c0\": 0, \"y\": 0.25},"
+		" \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0], \"fixed\": true},"
+		"  {\"name\": \"q\", \"position\": [0, \"y\", 0]}, {\"name\": \"r\", \"position\": [1, 0, 0]}],"
+		" \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"kind\": \"rest_length\", \"rest_length\": 0, \"stiffness\": 3},"
+		"  {\"a\": \"p\", \"b\": \"r\", \"strain_stiffness\": 50, \"damping\": 0.5, \"break_strain\": 0.2},"
+		"  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": 7, \"strain_damping\": 0.25},"
+		"  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": \"k0\", \"damping\": \"c0\"}],"
+		" \"fmu\": {\"particle_variables\": false}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(text, &err);
+	if (doc == NULL)
+		printf("  %s\n", err.message);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);  // kinds, constants, scalings, settings
+	ENSURE(strcmp(sm_document_description(again), "a\tb") == 0);
+	ENSURE(!sm_document_get_settings(again).particle_variables);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_spring_def s;
+	sm_model_get_spring(m, 0, &s);
+	ENSURE(s.kind == SM_SPRING_REST_LENGTH && s.rest_length == 0.0);
+	sm_model_get_spring(m, 1, &s);
+	ENSURE(s.stiffness_scaling == SM_PER_STRAIN && s.damping_scaling == SM_ABSOLUTE && s.break_strain == 0.2);
+	sm_model_get_spring(m, 2, &s);
+	ENSURE(s.stiffness_scaling == SM_ABSOLUTE && s.damping_scaling == SM_PER_STRAIN);
+	sm_model_destroy(m);
+	// The zero parameters still feed the last spring: set in both documents, they give the same
+	// spring (k = 4 N/m, d = 0.1 N s/m).
+	const double values[3] = {4.0, 0.1, 0.25};
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameters(again, values, &err), SM_OK);
+	ENSURE(sm_document_parameter_uses(again, 0) == SM_PARAMETER_CONSTANTS);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_model_get_spring(m, 3, &s);
+	ENSURE(s.stiffness == 4.0 && s.damping == 0.1);
+	sm_model_destroy(m);
+	sm_document_destroy(again);
+	// A new initial state: q moves from (0, 0.25, 0) to (0, 0.5, 0.1); the saved file starts
+	// there, and its parameter y no longer moves q.
+	const double x[9] = {0, 0, 0, 0, 0.5, 0.1, 1, 0, 0};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, NULL, &err), SM_OK);
+	again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_particle_def q;
+	sm_model_get_particle(m, 1, &q);
+	ENSURE(q.position[0] == 0.0 && q.position[1] == 0.5 && q.position[2] == 0.1);
+	sm_model_destroy(m);
+	ENSURE(sm_document_parameter_uses(again, 2) == 0);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // A structure's name has at most 175 bytes, so that the names its particles get (a block's
 // name[row,column,layer] adds up to 25 bytes) stay within the 200 bytes of any name: a model
 // whose structures have the longest names saves to a file that loads to the same model (the
@@ -1252,6 +1332,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_special_files_and_nul_bytes);
 	RUN_TEST(test_whole_real_index);
+	RUN_TEST(test_canonical_form_keeps_what_the_file_says);
 	RUN_TEST(test_longest_structure_names_round_trip);
 	RUN_TEST(test_structure_limit_counts_the_groups_present);
 	RUN_TEST(test_large_model_loads);

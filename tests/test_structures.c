@@ -336,6 +336,12 @@ static int test_mesh_errors(void)
 	} cases[] = {
 	    {{0, 1, 7}, 1, 4, SM_ERROR_PARTICLE_INDEX, "mesh: triangle 0 vertex 2 = 7 is out of range (mesh has 4 vertices)"},
 	    {{0, 1, 1}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (0, 1, 1) repeats a vertex"},
+	    // The exact bound: vertex index 4 of 4 vertices is out of range (v has a fifth point, so
+	    // an off-by-one would build the triangle instead of reading past the array).
+	    {{0, 1, 4}, 1, 4, SM_ERROR_PARTICLE_INDEX, "mesh: triangle 0 vertex 2 = 4 is out of range (mesh has 4 vertices)"},
+	    // Repeated first and last, or first and second, vertex: the repeat is named, not a zero area.
+	    {{0, 1, 0}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (0, 1, 0) repeats a vertex"},
+	    {{3, 3, 1}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (3, 3, 1) repeats a vertex"},
 	    {{0, 1, 2, 2, 1, 0}, 2, 3, SM_ERROR_INVALID_ARGUMENT,
 	     "mesh: triangle 1 repeats the vertices of an earlier triangle (2, 1, 0)"},
 	    {{0, 1, 2, 0, 1, 3, 1, 0, 4}, 3, 5, SM_ERROR_INVALID_ARGUMENT,
@@ -514,6 +520,291 @@ static int test_selection(void)
 	return 0;
 }
 
+// Index checks of the selection helpers at their exact bound: particle index n of a model of n
+// particles is out of range for sm_set_motion_of (all indices are checked first, so the valid
+// entry before it is not changed either), and so is a grid point of a hand-shifted structure
+// that lands on index n for sm_set_motion_at. The indices n - 1 and the shifted grid's first
+// point are accepted. An index equal to the count must never reach the motion arrays.
+static int test_selection_index_bounds(void)
+{
+	sm_model* m = new_model();
+	sm_sheet_def def = sm_default_sheet_def();
+	def.nu = def.nv = 5;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
+	const int32_t n = sm_model_particle_count(m);
+	ENSURE(n == 25 && sm_model_free_count(m) == n);
+	const int32_t list[] = {0, n};
+	ENSURE_STATUS(sm_set_motion_of(m, list, 2, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(strcmp(sm_model_last_error(m), "selection: entry 1, particle 25, is out of range (model has 25 particles)") ==
+	       0);
+	ENSURE(sm_model_free_count(m) == n && sm_model_free_index(m, 0) == 0);
+	sm_particle_def p;
+	ENSURE_STATUS(sm_model_get_particle(m, 0, &p), SM_OK);
+	ENSURE(p.motion == SM_PARTICLE_FREE);
+	const int32_t last[] = {n - 1};
+	ENSURE_STATUS(sm_set_motion_of(m, last, 1, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE(sm_model_free_count(m) == n - 1 && sm_model_free_index(m, n - 1) == -1);
+
+	// A structure shifted by one particle: its last grid point (4, 4, 0) is index n.
+	sm_structure shifted = s;
+	shifted.first_particle = 1;
+	ENSURE(sm_structure_particle(&shifted, 4, 4, 0) == n);
+	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 4, 4, 0, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(strcmp(sm_model_last_error(m), "grid coordinate (4, 4, 0) is outside the structure") == 0);
+	ENSURE(sm_model_free_count(m) == n - 1);
+	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 0, 0, 0, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE(sm_model_free_count(m) == n - 2 && sm_model_free_index(m, 1) == -1 && sm_model_free_index(m, 0) == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// sm_structure_particle on a hand-made grid whose index passes INT32_MAX only in the last step
+// (row * shape[0] + column + first_particle, the row itself small): -1, not an index wrapped to
+// int32_t. INT32_MAX itself is still an index, and a grid point before particle 0 (a negative
+// first_particle) is -1 too.
+static int test_structure_particle_int32_limit(void)
+{
+	sm_structure s;
+	memset(&s, 0, sizeof s);
+	s.shape[0] = INT32_MAX;
+	s.shape[1] = 2;
+	s.shape[2] = 1;
+	ENSURE(sm_structure_particle(&s, 1, 5, 0) == -1);  // INT32_MAX + 5
+	ENSURE(sm_structure_particle(&s, 1, 0, 0) == INT32_MAX);
+	ENSURE(sm_structure_particle(&s, 0, INT32_MAX - 1, 0) == INT32_MAX - 1);
+	s.first_particle = 1;
+	ENSURE(sm_structure_particle(&s, 0, INT32_MAX - 1, 0) == INT32_MAX);
+	ENSURE(sm_structure_particle(&s, 1, 0, 0) == -1);  // INT32_MAX + 1
+	s.first_particle = 2;
+	ENSURE(sm_structure_particle(&s, 0, INT32_MAX - 1, 0) == -1);
+	s.first_particle = -10;
+	ENSURE(sm_structure_particle(&s, 0, 5, 0) == -1);
+	ENSURE(sm_structure_particle(&s, 0, 10, 0) == 0);
+	return 0;
+}
+
+// SM_STRUCTURE_MAX_ELEMENTS limits the springs of one builder call as well as its particles
+// (structures.h): requests with particles under the limit but springs over it fail with
+// SM_ERROR_INVALID_ARGUMENT before anything is allocated, and the model is unchanged. A
+// 3 x 3355444 sheet of structural springs only has 2 * 3355444 + 3 * 3355443 = 2^24 + 1
+// springs (10066332 particles); a 110^3 block 16978276 springs (1331000 particles); a rope of
+// 2^24 - 1 segments exactly 2^24 particles (allowed) but 2^25 - 3 springs with bending. Fast:
+// nothing is built.
+static int test_spring_count_limit(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = 3;
+	sheet.nv = 3355444;
+	sheet.shear = sheet.bend = sm_default_spring_material();
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: 10066332 particles and 16777217 springs exceed the limit of 16777216 "
+	                                      "of each per structure") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+
+	sm_block_def block = sm_default_block_def();
+	block.nu = block.nv = block.nw = 110;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "block: 1331000 particles and 16978276 springs exceed the limit of 16777216 "
+	                                      "of each per structure") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+
+	sm_rope_def rope = sm_default_rope_def();
+	rope.segments = SM_STRUCTURE_MAX_ELEMENTS - 1;
+	rope.bending = rope.structural;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "rope: 16777216 particles and 33554429 springs exceed the limit of 16777216 "
+	                                      "of each per structure") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0 && sm_model_free_count(m) == 1);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// The coinciding-points check covers the last pair of grid points on each axis: a sheet of
+// nu = 2 (or nv = 2) and a block of nw = 2, whose only pair on that axis is also its last,
+// collapse 1e10 m from the origin with a 1e-10 m spacing. With absolute constants their springs
+// would be accepted at zero length, so only this check refuses them: SM_ERROR_INVALID_ARGUMENT
+// naming the coinciding particles, and the model unchanged.
+static int test_grid_last_pair_distinct(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_spring_material absolute = sm_default_spring_material();
+	absolute.stiffness = 10.0;
+	absolute.stiffness_scaling = absolute.damping_scaling = SM_ABSOLUTE;
+
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 2;
+	sheet.structural = sheet.shear = sheet.bend = absolute;
+	sheet.origin[0] = 1e10;
+	sheet.edge_u[0] = 1e-10;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is "
+	                                      "below the resolution of the coordinates there") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	// Along edge_v: particles (0, 0) and (1, 0), local indices 0 and 2.
+	sheet.origin[0] = 0.0;
+	sheet.origin[1] = 1e10;
+	sheet.edge_u[0] = 1.0;
+	sheet.edge_v[1] = 1e-10;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "sheet: particles 1 and 3 coincide at (0, 1e+10, 0) m: the grid spacing is "
+	                                      "below the resolution of the coordinates there") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+
+	sm_block_def block = sm_default_block_def();
+	block.nu = block.nv = block.nw = 2;
+	block.edge = block.face_diagonal = block.body_diagonal = absolute;
+	block.origin[2] = 1e10;
+	block.size[2] = 1e-10;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "block: particles 1 and 5 coincide at (0, 0, 1e+10) m: the grid spacing is "
+	                                      "below the resolution of the coordinates there") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	// The same shapes with a spacing the coordinates resolve are built.
+	block.size[2] = 1e-3;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 9);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// The box of sm_set_motion_in_box is closed: a particle exactly on any face, edge or corner of
+// [lo, hi] counts. On the unit cube of a 2 x 2 x 2 block (coordinates exactly 0 and 1), the box
+// [0, 1]^3 selects all eight, the box of the upper z face alone (lo[2] = hi[2] = 1) its four,
+// and a box shrunk to each corner point that one particle.
+static int test_box_selection_closed(void)
+{
+	sm_model* m = new_model();
+	sm_block_def def = sm_default_block_def();
+	def.nu = def.nv = def.nw = 2;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_block(m, &def, &s), SM_OK);
+	int32_t count = -1;
+	const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 8 && sm_model_free_count(m) == 0);
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FREE, &count), SM_OK);
+	ENSURE(count == 8 && sm_model_free_count(m) == 8);
+	const double top_lo[3] = {0, 0, 1};
+	ENSURE_STATUS(sm_set_motion_in_box(m, top_lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 4 && sm_model_free_count(m) == 4);
+	for (int32_t i = 0; i < 2; i++)
+		for (int32_t j = 0; j < 2; j++) {
+			ENSURE(sm_model_free_index(m, sm_structure_particle(&s, i, j, 1)) == -1);
+			ENSURE(sm_model_free_index(m, sm_structure_particle(&s, i, j, 0)) >= 0);
+		}
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FREE, NULL), SM_OK);
+	for (int32_t k = 0; k < 2; k++)
+		for (int32_t i = 0; i < 2; i++)
+			for (int32_t j = 0; j < 2; j++) {
+				const double corner[3] = {j, i, k};
+				ENSURE_STATUS(sm_set_motion_in_box(m, corner, corner, SM_PARTICLE_FIXED, &count), SM_OK);
+				ENSURE(count == 1);
+				ENSURE(sm_model_free_index(m, sm_structure_particle(&s, i, j, k)) == -1);
+				ENSURE_STATUS(sm_set_motion_in_box(m, corner, corner, SM_PARTICLE_FREE, NULL), SM_OK);
+			}
+	ENSURE(sm_model_free_count(m) == 8);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// The documented order and direction of a mesh's springs (structures.h): each edge once in order
+// of first appearance, the edges of a triangle (v0, v1), (v1, v2), (v2, v0), each spring from the
+// lower vertex index to the higher, vertex v being particle first_particle + v; then the bending
+// springs. Triangles given with their vertices in other orders show both rules.
+static int test_mesh_edge_order(void)
+{
+	const double v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+	struct {
+		int32_t triangles[6];
+		int32_t count;
+		int32_t edges[5][2];  // expected edge springs, in vertex indices
+		int32_t edge_count;
+	} cases[] = {
+	    {{0, 1, 2}, 1, {{0, 1}, {1, 2}, {0, 2}}, 3},
+	    {{2, 0, 1}, 1, {{0, 2}, {0, 1}, {1, 2}}, 3},
+	    {{2, 1, 0}, 1, {{1, 2}, {0, 1}, {0, 2}}, 3},
+	    {{0, 2, 1}, 1, {{0, 2}, {1, 2}, {0, 1}}, 3},
+	    // Two triangles sharing the edge (1, 2): it comes once, where it first appears.
+	    {{3, 2, 1, 0, 1, 2}, 2, {{2, 3}, {1, 2}, {1, 3}, {0, 1}, {0, 2}}, 5},
+	};
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		sm_mesh_def def = sm_default_mesh_def();
+		def.vertices = v;
+		def.vertex_count = cases[c].count == 1 ? 3 : 4;
+		def.triangles = cases[c].triangles;
+		def.triangle_count = cases[c].count;
+		def.bend = def.edge;
+		sm_structure s;
+		ENSURE_STATUS(sm_add_mesh(m, &def, &s), SM_OK);
+		ENSURE(s.group_spring_count[0] == cases[c].edge_count);
+		ENSURE(s.group_spring_count[1] == (cases[c].count == 2 ? 1 : 0));
+		for (int32_t e = 0; e < cases[c].edge_count; e++) {
+			sm_spring_def sd;
+			ENSURE_STATUS(sm_model_get_spring(m, s.first_spring + e, &sd), SM_OK);
+			if (sd.a != s.first_particle + cases[c].edges[e][0] || sd.b != s.first_particle + cases[c].edges[e][1]) {
+				printf("  case %zu: edge spring %d joins vertices (%d, %d), expected (%d, %d)\n", c, (int)e,
+				       (int)(sd.a - s.first_particle), (int)(sd.b - s.first_particle), (int)cases[c].edges[e][0],
+				       (int)cases[c].edges[e][1]);
+				return 1;
+			}
+		}
+		if (cases[c].count == 2) {
+			// The bending spring across (1, 2) joins the opposite vertices 3 and 0.
+			sm_spring_def sd;
+			ENSURE_STATUS(sm_model_get_spring(m, s.first_spring + cases[c].edge_count, &sd), SM_OK);
+			const int32_t a = sd.a - s.first_particle, b = sd.b - s.first_particle;
+			ENSURE((a == 0 && b == 3) || (a == 3 && b == 0));
+		}
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A zero size or break strain is refused as the headers say (block size > 0, break strain > 0):
+// SM_ERROR_NEGATIVE with the builder's own "must be > 0" message, before anything is added (a
+// zero size would otherwise be reported as coinciding particles, and a zero break strain only
+// by the model, per spring).
+static int test_zero_size_and_break_strain(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	for (int c = 0; c < 3; c++) {
+		sm_block_def block = sm_default_block_def();
+		block.size[c] = 0.0;
+		ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_NEGATIVE);
+		char expected[64];
+		snprintf(expected, sizeof expected, "block: size[%d] = 0 must be > 0", c);
+		ENSURE(strcmp(sm_model_last_error(m), expected) == 0);
+		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	}
+	sm_rope_def rope = sm_default_rope_def();
+	rope.structural.break_strain = 0.0;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NEGATIVE);
+	ENSURE(strcmp(sm_model_last_error(m), "rope: structural break strain = 0 must be > 0 (INFINITY for never)") == 0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	sm_block_def block = sm_default_block_def();
+	block.body_diagonal.break_strain = 0.0;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_NEGATIVE);
+	ENSURE(strcmp(sm_model_last_error(m), "block: body_diagonal break strain = 0 must be > 0 (INFINITY for never)") ==
+	       0);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	// The smallest positive values are accepted.
+	rope.structural.break_strain = 5e-324;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -526,5 +817,12 @@ int main(int argc, char** argv)
 	RUN_TEST(test_failed_builder_leaves_model_unchanged);
 	RUN_TEST(test_degenerate_geometry);
 	RUN_TEST(test_selection);
+	RUN_TEST(test_selection_index_bounds);
+	RUN_TEST(test_structure_particle_int32_limit);
+	RUN_TEST(test_spring_count_limit);
+	RUN_TEST(test_grid_last_pair_distinct);
+	RUN_TEST(test_box_selection_closed);
+	RUN_TEST(test_mesh_edge_order);
+	RUN_TEST(test_zero_size_and_break_strain);
 	return TEST_SUMMARY();
 }

@@ -93,6 +93,7 @@ int sm_cmd_check(int argc, char** argv)
 		path = argv[i];
 	}
 	if (path == NULL) {
+		fprintf(stderr, "springmass check: no model file given\n\n");
 		usage(stderr);
 		return 2;
 	}

@@ -192,12 +192,13 @@ int sm_cmd_modes(int argc, char** argv)
 		} else if (model_path == NULL) {
 			model_path = a;
 		} else {
-			fprintf(stderr, "springmass modes: more than one model file given ('%s')\n", a);
+			fprintf(stderr, "springmass modes: one model file at a time ('%s' and '%s' given)\n", model_path, a);
 			free(settings);
 			return 2;
 		}
 	}
 	if (model_path == NULL) {
+		fprintf(stderr, "springmass modes: no model file given\n\n");
 		usage(stderr);
 		free(settings);
 		return 2;

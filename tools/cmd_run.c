@@ -299,8 +299,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			return 2;
 		}
 	}
-	if (o->model == NULL)
+	if (o->model == NULL) {
+		fprintf(stderr, "springmass run: no model file given\n\n");
 		return 2;
+	}
 	return 0;
 }
 

@@ -142,12 +142,13 @@ int sm_cmd_statics(int argc, char** argv)
 		} else if (model_path == NULL) {
 			model_path = a;
 		} else {
-			fprintf(stderr, "springmass statics: more than one model file given ('%s')\n", a);
+			fprintf(stderr, "springmass statics: one model file at a time ('%s' and '%s' given)\n", model_path, a);
 			free(settings);
 			return 2;
 		}
 	}
 	if (model_path == NULL) {
+		fprintf(stderr, "springmass statics: no model file given\n\n");
 		usage(stderr);
 		free(settings);
 		return 2;

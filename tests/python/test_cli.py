@@ -1,0 +1,388 @@
+"""The `springmass` tool as a user meets it: its exit statuses, the rows and columns of `run`,
+the ParaView series, and what `statics`, `modes`, `check` and `fmu` print and write, each checked
+against the model's physics or against another of the tool's own outputs (the CSV against the
+VTK files, statics against the modes about its rest shape), never against a stored copy of the
+output."""
+import csv
+import math
+import os
+import re
+import subprocess
+import xml.etree.ElementTree as ET
+import zipfile
+
+import numpy as np
+import pytest
+
+from conftest import CLI, ROOT
+
+MODELS = ROOT / "models"
+# Set by ctest when the build has the FMU runtime that `springmass fmu` packs.
+HAS_FMU = os.environ.get("SPRINGMASS_HAS_FMU") == "1"
+
+
+def cli(*args, status=0, cwd=None):
+    """Runs the tool; asserts its exit status; returns the finished process (text)."""
+    out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    assert out.returncode == status, f"springmass {' '.join(map(str, args))}: exit {out.returncode}\n{out.stderr}"
+    return out
+
+
+def read_csv(path):
+    """(header, rows as a float array) of a CSV with a header line; a `name` column (statics,
+    modes) reads as NaN."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    named = rows[0].index("name") if "name" in rows[0] else -1
+    return rows[0], np.array([[math.nan if i == named else float(x) for i, x in enumerate(r)] for r in rows[1:]])
+
+
+def run_csv(tmp_path, model, *options, name="run.csv"):
+    path = tmp_path / name
+    cli("run", model, "-q", "-o", path, *options)
+    return read_csv(path)
+
+
+def vtk_sections(path):
+    """POINTS (n x 3), LINES (pairs) and VECTORS (name -> n x 3) of a legacy VTK polydata file."""
+    words = open(path).read().split("\n")
+    points, lines, vectors = None, [], {}
+    i = 0
+    while i < len(words):
+        fields = words[i].split()
+        if fields[:1] == ["POINTS"]:
+            n = int(fields[1])
+            points = np.array([[float(v) for v in words[i + 1 + k].split()] for k in range(n)])
+            i += n
+        elif fields[:1] == ["LINES"]:
+            lines = [tuple(int(v) for v in words[i + 1 + k].split()[1:]) for k in range(int(fields[1]))]
+            i += len(lines)
+        elif fields[:1] == ["VECTORS"]:
+            vectors[fields[1]] = np.array([[float(v) for v in words[i + 1 + k].split()] for k in range(len(points))])
+            i += len(points)
+        i += 1
+    return points, lines, vectors
+
+
+def number_after(text, label):
+    """The first number after `label` in text."""
+    match = re.search(re.escape(label) + r"\s*([-+0-9.eE]+)", text)
+    assert match, f"no '{label}' in:\n{text}"
+    return float(match.group(1))
+
+
+# --- Exit statuses -----------------------------------------------------------------------------
+
+def test_usage_errors_exit_with_2_and_help_goes_to_standard_output(tmp_path):
+    osc = MODELS / "oscillator.json"
+    cli(status=2)
+    assert "unknown command 'frob'" in cli("frob", status=2).stderr
+    for args in (["--help"], ["help"], ["-h"]):
+        assert cli(*args).stdout.startswith("usage:")
+    assert re.fullmatch(r"springmass \d+\.\d+\.\d+\n", cli("--version").stdout)
+    for command in ("run", "check", "statics", "modes", "fmu"):
+        out = cli(command, "--help")
+        assert out.stdout.startswith("usage: springmass " + command) and out.stderr == ""
+    usage_errors = [
+        ["run"], ["run", osc, osc], ["run", osc, "--solver", "x"], ["run", osc, "--method", "x"],
+        ["run", osc, "--max-steps", "1.5"], ["run", osc, "--t-end", "nan"], ["run", osc, "--set", "k"],
+        ["check"], ["statics", osc, osc], ["statics", osc, "--max-iterations", "0"],
+        ["statics", osc, "--solver", "x"], ["modes", osc, osc], ["modes", osc, "-n", "-1"],
+        ["modes", osc, "--steps-per-period", "0.5"], ["modes", osc, "--solver", "x"],
+    ]
+    if HAS_FMU:
+        usage_errors += [["fmu", osc], ["fmu", osc, osc, "-o", tmp_path / "x.fmu"]]
+    for args in usage_errors:
+        out = cli(*args, status=2)
+        assert out.stderr.startswith("springmass"), (args, out.stderr)
+    assert not (tmp_path / "x.fmu").exists()
+    # Bad values are errors of the model (1), not of the usage.
+    assert 'no parameter named "nosuch"' in cli("run", osc, "--set", "nosuch=1", status=1).stderr
+
+
+# --- run ---------------------------------------------------------------------------------------
+
+def test_rows_run_from_zero_to_exactly_the_end_time(tmp_path):
+    # 1.1 / 0.1 = 11.000000000000002 in doubles: the rows are 0, 0.1, ..., 1.0 and then 1.1,
+    # not an extra row or a repeated time.
+    _, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--t-end", 1.1, "--output-interval", 0.1)
+    assert len(rows) == 12 and rows[-1, 0] == 1.1
+    assert np.all(np.diff(rows[:, 0]) > 0)
+    np.testing.assert_allclose(rows[:11, 0], 0.1 * np.arange(11), rtol=0, atol=1e-15)
+    # A last interval shorter than the others: 0, 0.3, 0.6, 0.9, 1.0.
+    _, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--t-end", 1.0, "--output-interval", 0.3)
+    assert list(rows[:, 0]) == [0.0, 0.3, 0.6, 0.8999999999999999, 1.0]
+
+
+def test_default_output_is_the_model_name_with_the_files_settings(tmp_path):
+    cli("run", MODELS / "oscillator.json", "-q", cwd=tmp_path)
+    _, rows = read_csv(tmp_path / "oscillator.csv")
+    # The file's stop time 5 s and output interval 0.01 s: 501 rows.
+    assert len(rows) == 501 and rows[-1, 0] == 5.0
+
+
+def test_more_rows_than_the_limit_are_refused_before_anything_is_written(tmp_path):
+    out = cli("run", MODELS / "oscillator.json", "--t-end", 1e3, "--output-interval", 1e-7,
+              "-o", tmp_path / "many.csv", "--vtk", tmp_path / "vtk", status=1)
+    assert "more than 1e+09 output rows" in out.stderr
+    assert not (tmp_path / "many.csv").exists() and not (tmp_path / "vtk").exists()
+
+
+def test_port_columns_are_named_by_kind_and_carry_the_port_quantities(tmp_path):
+    header, rows = run_csv(tmp_path, MODELS / "two_mass_chain.json", "--t-end", 1, "--positions")
+    quantities = {"motion": ["fx", "fy", "fz"], "probe": ["x", "y", "z", "vx", "vy", "vz"]}
+    quantities["force"] = quantities["probe"]
+    expected = ["time"]
+    for port, kind in (("base", "motion"), ("m1", "probe"), ("m2", "force")):
+        expected += [f"{port}.{q}" for q in quantities[kind]]
+    expected += ["energy.kinetic", "energy.elastic", "energy.gravity", "energy.dissipated"]
+    expected += [f"particle.{p}.{c}" for p in ("base", "m1", "m2") for c in "xyz"]
+    assert header == expected
+    col = {name: rows[:, i] for i, name in enumerate(header)}
+    # The motion port's force is what the first spring exerts on the base: along +x,
+    # k1 (x1 - l0) + d1 v1 (k1 = 40 N/m, l0 = 1 m, d1 = 0.2 N s/m, the base at rest at 0). Every
+    # number is printed to round trip, so only the rounding of this sum remains (1e-12 N).
+    np.testing.assert_allclose(col["base.fx"], 40 * (col["m1.x"] - 1) + 0.2 * col["m1.vx"], rtol=0, atol=1e-12)
+    # The probe and the force port read their particles' positions.
+    assert np.array_equal(col["m1.x"], col["particle.m1.x"]) and np.array_equal(col["m2.x"], col["particle.m2.x"])
+    # Kinetic energy from the port velocities (m1 = 1 kg, m2 = 0.5 kg), to rounding.
+    kinetic = 0.5 * 1.0 * col["m1.vx"] ** 2 + 0.5 * 0.5 * col["m2.vx"] ** 2
+    np.testing.assert_allclose(col["energy.kinetic"], kinetic, rtol=1e-12, atol=1e-15)
+
+
+def test_options_take_effect(tmp_path):
+    osc = MODELS / "oscillator.json"
+    base = ["--t-end", 2]
+    _, default = run_csv(tmp_path, osc, *base, name="default.csv")
+    # The last --set of a parameter wins.
+    _, k80 = run_csv(tmp_path, osc, *base, "--set", "k=80", name="k80.csv")
+    _, k1_k80 = run_csv(tmp_path, osc, *base, "--set", "k=1", "--set", "k=80", name="k1_k80.csv")
+    assert np.array_equal(k80, k1_k80) and not np.array_equal(k80, default)
+    # Looser tolerances give another (still accurate) trajectory; each option alone changes it.
+    for option in (["--rtol", 1e-3], ["--atol-position", 1e-3], ["--atol-velocity", 1e-2], ["--atol", 1e-3]):
+        _, loose = run_csv(tmp_path, osc, *base, *option, name="loose.csv")
+        assert not np.array_equal(loose, default), option
+        # tip.x: the file's tolerances keep it within ~1e-8 m; 1e-3 m bounds the looser runs.
+        np.testing.assert_allclose(loose[:, 1], default[:, 1], rtol=0, atol=1e-3)
+    # Adams and every linear solver integrate the same equations: the bob's position agrees
+    # within what the file's tolerances (rtol 1e-8, atol 1e-10 m) allow over 2 s, 1e-6 m.
+    for option in (["--method", "adams"], ["--solver", "klu"], ["--solver", "pcg"], ["--solver", "cholmod"]):
+        path = tmp_path / "other.csv"
+        stats = cli("run", osc, *base, "-o", path, *option).stderr
+        expected = "Adams" if option[1] == "adams" else "solver " + option[1]
+        assert expected in stats, stats
+        _, other = read_csv(path)
+        np.testing.assert_allclose(other[:, 1], default[:, 1], rtol=0, atol=1e-6)
+    # One internal step per output interval is not enough for a second of the oscillator.
+    out = cli("run", osc, "-q", "-o", tmp_path / "few.csv", "--max-steps", 1, "--output-interval", 1, status=1)
+    assert "steps" in out.stderr
+
+
+def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
+    model = MODELS / "tearing_cloth.json"
+    vtk = tmp_path / "vtk"
+    path = tmp_path / "tear.csv"
+    stats = cli("run", model, "-o", path, "--positions", "--output-interval", 0.1, "--vtk", vtk).stderr
+    header, rows = read_csv(path)
+    broken = [int(s) for s in re.findall(r"spring (\d+) broke at", stats)]
+    assert len(broken) > 0
+    # The index lists one file per row, at the row's time.
+    index = ET.parse(vtk / "tearing_cloth.pvd").getroot()
+    sets = index.findall("./Collection/DataSet")
+    assert [float(d.get("timestep")) for d in sets] == list(rows[:, 0])
+    assert [d.get("file") for d in sets] == [f"tearing_cloth_{k:06d}.vtk" for k in range(len(rows))]
+    assert sorted(p.name for p in vtk.glob("*.vtk")) == [d.get("file") for d in sets]
+    first = next(i for i, name in enumerate(header) if name.startswith("particle."))
+    springs = int(re.search(r"springs\s+(\d+)", cli("check", model).stdout).group(1))
+    for k, d in enumerate(sets):
+        points, lines, _ = vtk_sections(vtk / d.get("file"))
+        # Points are written to 9 significant digits: 1e-8 m on a cloth within 2 m of the origin.
+        np.testing.assert_allclose(points.ravel(), rows[k, first:], rtol=0, atol=1e-8)
+        assert len(set(lines)) == len(lines)
+        if k == 0:
+            all_lines = lines
+            assert len(lines) == springs
+    # The last file has the intact springs only: every spring that broke is gone, the rest stay.
+    _, last_lines, _ = vtk_sections(vtk / sets[-1].get("file"))
+    assert len(last_lines) == springs - len(broken)
+    assert [all_lines[s] for s in sorted(set(range(springs)) - set(broken))] == last_lines
+
+
+# --- statics -----------------------------------------------------------------------------------
+
+def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
+    rope = MODELS / "hanging_rope.json"
+    out = cli("statics", rope, "-o", tmp_path / "rest.csv", "--vtk", tmp_path / "vtk",
+              "--save-model", tmp_path / "rest.json").stdout
+    assert re.search(r"stable\s+yes", out)
+    header, rows = read_csv(tmp_path / "rest.csv")
+    assert header == ["particle", "name", "x", "y", "z", "dx", "dy", "dz", "reaction_x", "reaction_y", "reaction_z"]
+    x, dx, reaction = rows[:, 2:5], rows[:, 5:8], rows[:, 8:11]
+    # Displacements from the initial positions (the rope along x from 0 to 1 m, 20 segments).
+    x0 = np.column_stack([np.linspace(0, 1, 21), np.zeros(21), np.zeros(21)])
+    np.testing.assert_allclose(dx, x - x0, rtol=0, atol=1e-15)
+    # Only the pinned end carries a reaction, and it holds the rope's weight (0.5 kg, g = 9.81):
+    # the reaction is the force the supports exert, so it balances the weight to the solver's
+    # tolerance (1e-9 N per particle).
+    assert np.all(reaction[1:] == 0)
+    np.testing.assert_allclose(reaction[0], [0, 0, 0.5 * 9.81], rtol=0, atol=1e-8)
+    summary = re.search(r"reactions, sum\s+\(([^)]*)\)", out).group(1)
+    np.testing.assert_allclose([float(v) for v in summary.split(",")], reaction[0], rtol=1e-8, atol=1e-12)
+    # The hanging rope is vertical below its pin, each segment stretched by the weight below it:
+    # segment j carries (20 - j) m g with m = 0.5 / 21 kg, and its stiffness is E / l0 with
+    # E = 2000 N, l0 = 0.05 m, so its length is l0 + (20 - j) m g l0 / E.
+    m, l0 = 0.5 / 21, 0.05
+    lengths = l0 + (20 - np.arange(20)) * m * 9.81 * l0 / 2000
+    np.testing.assert_allclose(np.diff(x[:, 2]), -lengths, rtol=1e-9)
+    np.testing.assert_allclose(x[:, :2], 0, atol=1e-9)
+    # The VTK file carries the same shape, displacements and reactions (9 significant digits).
+    points, lines, vectors = vtk_sections(tmp_path / "vtk" / "statics.vtk")
+    assert lines == [(j, j + 1) for j in range(20)]
+    np.testing.assert_allclose(points, x, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(vectors["displacement"], dx, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(vectors["reaction"], reaction, rtol=0, atol=1e-8)
+    # The saved model starts at rest in that shape: no Newton iteration is needed.
+    again = cli("statics", tmp_path / "rest.json", "-q").stdout
+    assert re.search(r"solver .*, 0 iterations", again), again
+    # The sparse solver finds the same shape; one Newton iteration is not enough from the
+    # horizontal rope; -q leaves out the per-particle table.
+    sparse = cli("statics", rope, "--solver", "sparse", "-o", tmp_path / "sparse.csv").stdout
+    assert "CHOLMOD" in sparse
+    np.testing.assert_allclose(read_csv(tmp_path / "sparse.csv")[1][:, 2:5], x, rtol=0, atol=1e-9)
+    cli("statics", rope, "--max-iterations", 1, status=1)
+    quiet = cli("statics", rope, "-q").stdout
+    assert len(quiet.splitlines()) < len(out.splitlines()) and "rope[0]" not in quiet and "rope[0]" in out
+
+
+# --- modes -------------------------------------------------------------------------------------
+
+def mode_table(text):
+    """Rows (mode, frequency [Hz], period [s], omega^2 [1/s^2], damping ratio) of `modes`; the
+    period of a rigid-body mode reads as inf."""
+    number = r"\s+([-0-9.e+]+|inf|rigid)"
+    rows = re.findall(r"^\s+(\d+)" + 4 * number + r"\s*$", text, re.M)
+    return np.array([[math.inf if v == "rigid" else float(v) for v in row] for row in rows])
+
+
+def test_modes_of_the_oscillator_follow_the_closed_form(tmp_path):
+    # A bob of mass m on a spring of stiffness k, rest length l0 = 0.5 m, stretched to L = 0.6 m:
+    # along the spring omega^2 = k / m; across it the spring acts with k (1 - l0 / L) (its
+    # tension over its length), twice (y and z). Spring damping d acts along the spring only:
+    # damping ratio d / (2 sqrt(k m)) there, 0 across. The table prints 9 digits.
+    m, k, d = 4.0, 40.0, 0.4
+    out = cli("modes", MODELS / "oscillator.json", "--set", f"m={m}", "--steps-per-period", 20,
+              "-o", tmp_path / "modes.csv", "--vtk", tmp_path / "vtk").stdout
+    table = mode_table(out)
+    omega2 = np.array([k * (1 - 0.5 / 0.6), k * (1 - 0.5 / 0.6), k]) / m
+    np.testing.assert_allclose(table[:, 3], omega2, rtol=1e-8)
+    np.testing.assert_allclose(table[:, 1], np.sqrt(omega2) / (2 * math.pi), rtol=1e-8)
+    np.testing.assert_allclose(table[:, 2], 1 / table[:, 1], rtol=1e-8)
+    # (Damping ratios are printed to 6 significant digits.)
+    np.testing.assert_allclose(table[:, 4], [0, 0, d / (2 * math.sqrt(k * m))], rtol=5e-6, atol=1e-12)
+    # A communication step of a twentieth of the highest mode's period (6 significant digits).
+    step = number_after(out, "communication step       <=")
+    assert step == pytest.approx(2 * math.pi / math.sqrt(k / m) / 20, rel=1e-5)
+    # Mass-normalised shapes: the axial mode moves the bob along x by 1 / sqrt(m), the others
+    # across (y, z); the anchor does not move.
+    header, shapes = read_csv_with_names(tmp_path / "modes.csv")
+    assert header[:2] == ["particle", "name"] and len(header) == 2 + 3 * 3
+    bob = shapes["bob"]
+    assert np.allclose(shapes["anchor"], 0)
+    assert abs(bob[6]) == pytest.approx(1 / math.sqrt(m), rel=1e-12) and np.allclose(bob[7:9], 0, atol=1e-15)
+    for mode in (0, 1):
+        shape = bob[3 * mode:3 * mode + 3]
+        assert shape[0] == pytest.approx(0, abs=1e-15) and np.linalg.norm(shape) == pytest.approx(1 / math.sqrt(m))
+    # One VTK file per mode, with the CSV's shape and the mode's frequency in its title.
+    for mode in range(3):
+        path = tmp_path / "vtk" / f"mode_{mode + 1}.vtk"
+        assert f"{table[mode, 1]:.6g}"[:6] in open(path).read().split("\n")[1]
+        _, _, vectors = vtk_sections(path)
+        np.testing.assert_allclose(vectors["shape"][1], bob[3 * mode:3 * mode + 3], rtol=0, atol=1e-9)
+    assert sorted(p.name for p in (tmp_path / "vtk").iterdir()) == ["mode_1.vtk", "mode_2.vtk", "mode_3.vtk"]
+
+
+def read_csv_with_names(path):
+    """(header, {name: the numbers after the name}) of a CSV whose first two columns are an index
+    and a name."""
+    with open(path, newline="") as f:
+        rows = list(csv.reader(f))
+    return rows[0], {r[1]: np.array([float(v) for v in r[2:]]) for r in rows[1:]}
+
+
+def test_modes_about_the_rest_shape_are_those_of_a_hanging_chain(tmp_path):
+    rope = MODELS / "hanging_rope.json"
+    # Default count: the 10 lowest of the 60; -n 0: all of them, in increasing order.
+    initial = mode_table(cli("modes", rope).stdout)
+    assert len(initial) == 10
+    everything = mode_table(cli("modes", rope, "-n", 0).stdout)
+    assert len(everything) == 60 and np.all(np.diff(everything[:, 3]) >= 0)
+    # About the rest shape, the swinging modes of a hanging chain: a segment of tension T and
+    # length L resists a sideways offset of its ends with stiffness T / L, so the lowest modes
+    # solve K y = omega^2 M y with K the tridiagonal matrix of the T_j / L_j (the tensions and
+    # lengths from the rest shape that statics writes) and M the 20 free masses, 0.5 / 21 kg
+    # each; they come twice (x and y). Mass damping alpha = 0.1 1/s gives damping ratios
+    # alpha / (2 omega). Both sides start from the statics solution (residual 1e-9 N), printed
+    # to 9 significant digits: they agree to about 1e-8 (1e-7 allowed).
+    cli("statics", rope, "-q", "-o", tmp_path / "rest.csv")
+    _, rest = read_csv(tmp_path / "rest.csv")
+    z = rest[:, 4]
+    m = 0.5 / 21
+    lengths = -np.diff(z)
+    tension = (20 - np.arange(20)) * m * 9.81
+    stiffness = tension / lengths
+    # Free particle i + 1 hangs from segment i and holds segment i + 1 (particle 0 is pinned).
+    K = np.diag(np.append(stiffness[:-1] + stiffness[1:], stiffness[-1]))
+    for j in range(19):
+        K[j, j + 1] = K[j + 1, j] = -stiffness[j + 1]
+    omega2 = np.sort(np.linalg.eigvalsh(K / m))[:5]
+    table = mode_table(cli("modes", rope, "--at-equilibrium", "-n", 10).stdout)
+    swinging = table[:, 3]
+    np.testing.assert_allclose(swinging[0::2][:5], omega2, rtol=1e-7)
+    np.testing.assert_allclose(swinging[1::2][:5], omega2, rtol=1e-7)
+    np.testing.assert_allclose(table[:, 4], 0.1 / (2 * np.sqrt(swinging)), rtol=5e-6)  # 6 digits
+    assert not np.allclose(table[:, 3], initial[:, 3], rtol=1e-2)
+
+
+# --- check -------------------------------------------------------------------------------------
+
+def summary_line(text, label):
+    match = re.search(r"^\s*" + re.escape(label) + r"\s+(.*)$", text, re.M)
+    assert match, f"no '{label}' line in:\n{text}"
+    return match.group(1)
+
+
+def test_check_summarises_the_model():
+    out = cli("check", MODELS / "two_mass_chain.json").stdout
+    assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
+    assert summary_line(out, "held") == "base (particle 0)"
+    assert summary_line(out, "springs").startswith("2: 2 rest-length, 0 zero-length")
+    assert summary_line(out, "total mass") == "2.5 kg"
+    assert summary_line(out, "base").split()[0] == "motion"
+    assert summary_line(out, "m1").split()[0] == "probe"
+    assert summary_line(out, "m2").split()[0] == "force"
+    # The stiffest spring, and the fastest single spring-mass pair sqrt(k / m) with the lighter
+    # mass (k2 = 25 N/m on m2 = 0.5 kg: 7.07107 rad/s, 1.1254 Hz; 2 / omega = 0.283 s).
+    assert summary_line(out, "stiffest").startswith("spring 0, 40 N/m")
+    fastest = summary_line(out, "fastest")
+    omega = math.sqrt(25 / 0.5)
+    assert number_after(fastest, "sqrt(k/m) =") == pytest.approx(omega, rel=1e-5)
+    assert number_after(fastest, "rad/s (") == pytest.approx(omega / (2 * math.pi), rel=1e-4)
+    assert number_after(out, "2/omega =") == pytest.approx(2 / omega, rel=2e-3)
+    assert out.rstrip().endswith("ok")
+    rope = cli("check", MODELS / "hanging_rope.json").stdout
+    assert "rope of 20 segments: particles 0 - 20, 20 springs (20 structural)" in rope
+    assert summary_line(rope, "particles") == "21: 20 free, 1 fixed"
+
+
+# --- fmu ---------------------------------------------------------------------------------------
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
+    reference = tmp_path / "reference.csv"
+    reference.write_text("time,x\n0,1\n")
+    fmu = tmp_path / "rope.fmu"
+    out = cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference, "--set", "E=150").stdout
+    assert "E=150" in out
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/reference.csv") == reference.read_bytes()
+        assert "E=150" in z.read("resources/parameters.txt").decode()
