@@ -1151,6 +1151,545 @@ static int test_coincident_rest_length_spring(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
+
+// A vertical column of three 1 kg particles 1 m apart, springs of 100 N/m at their rest length
+// 1 m: the top one fixed at the origin, the middle one DRIVEN at z = -1, the bottom one free at
+// z = -2; gravity 9.81 down. Driven particles are held like fixed ones (analysis.h, model.h):
+// only the bottom particle is an unknown, so it sags by m g / k under its own weight alone, the
+// driven particle stays exactly where it is, and its support takes its own weight plus the
+// tension m g of the spring below: 2 m g up. The top spring stays at rest length (no force), so
+// the fixed particle's support takes only its own weight. Modes: 3 degrees of freedom, a
+// pendulum of length L (omega^2 = g / L, twice) and the axial k / m. Tolerances: the residual
+// 1e-9 N over the axial stiffness 100 N/m is 1e-11 m; forces to the residual, 1e-9 N.
+static int test_driven_particle_is_held(void)
+{
+	const double g = 9.81, k = 100.0;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const sm_particle_motion motion[3] = {SM_PARTICLE_FIXED, SM_PARTICLE_DRIVEN, SM_PARTICLE_FREE};
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[2] = -(double)i;
+		p.motion = motion[i];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	for (int i = 0; i < 2; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = i + 1;
+		s.stiffness = k;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	double x[9], r[9];
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, r, &res, &err), SM_OK);
+	ENSURE(res.stable);
+	// The driven particle has not moved at all; the free one hangs m g / k below its rest place.
+	ENSURE(x[3] == 0.0 && x[4] == 0.0 && x[5] == -1.0);
+	ENSURE_NEAR(x[8], -2.0 - g / k, 1e-11);
+	ENSURE_NEAR(x[6], 0.0, 1e-12);  // on the axis: no sideways force at all
+	ENSURE_NEAR(x[7], 0.0, 1e-12);
+	// Reactions: the forces the supports exert. Fixed: its own weight; driven: its own weight
+	// plus the spring below; free: none.
+	ENSURE_NEAR(r[2], g, 1e-9);
+	ENSURE_NEAR(r[5], 2.0 * g, 1e-9);
+	for (int c = 0; c < 2; c++)
+		ENSURE_NEAR(r[3 + c], 0.0, 1e-12);
+	ENSURE(r[6] == 0.0 && r[7] == 0.0 && r[8] == 0.0);
+	ENSURE_NEAR(res.reaction_total[2], 3.0 * g, 1e-9);
+
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE(modes.dof == 3 && modes.count == 3);
+	ENSURE(modes.zero_count == 0 && modes.unstable_count == 0);
+	const double L = x[5] - x[8];
+	// Eigenvalues of a 3 x 3 problem: round-off ~1e-14 of the largest (100).
+	ENSURE_REL(modes.omega_squared[0], g / L, 1e-9, 0.0);
+	ENSURE_REL(modes.omega_squared[1], g / L, 1e-9, 0.0);
+	ENSURE_REL(modes.omega_squared[2], k, 1e-12, 0.0);
+	// The driven particle does not move in any mode.
+	for (int32_t a = 0; a < modes.count; a++)
+		for (int c = 0; c < 6; c++)
+			ENSURE(modes.shapes[(size_t)a * 9 + c] == 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A 1 kg particle on a spring (rest length 1 m, stiffness ks) to a fixed particle at the origin,
+// the free one at (x1, 0, z1); gravity 9.81 down. NULL on failure.
+static sm_model* pendulum_model(double ks, double x1, double z1)
+{
+	sm_model* model = anchored_mass(-9.81, z1, ks);
+	if (model == NULL)
+		return NULL;
+	sm_particle_def p;
+	if (sm_model_get_particle(model, 1, &p) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	p.position[0] = x1;
+	if (sm_model_set_particle(model, 1, &p) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// The start option: every particle moved 5 m up from the model's positions. The fixed particle
+// is held where the start puts it (z = 5, not the model's 0), and the free one hangs below it
+// at 5 - l0 - m g / k. Twice: a soft spring (100 N/m, hanging at the start: Newton converges at
+// once) and a stiff one (1e5 N/m, started sideways: Newton's steps stay short in the curved
+// valley and after 50 iterations the stiffness continuation restarts from the start, which
+// must again be the caller's). Tolerance: the residual tolerance actually used (up to 1.6e-8 N
+// for 1e6 N/m 5 m from the origin: its round-off floor) over the smallest stiffness, across the
+// spring (m g / L ~ 10 N/m): 2e-9 m (measured: 1e-14 m).
+static int test_statics_start_is_used(void)
+{
+	const double g = 9.81;
+	for (int stiff = 0; stiff <= 1; stiff++) {
+		const double k = stiff ? 1e6 : 100.0;
+		sm_model* model = stiff ? pendulum_model(k, 1.0, 0.0) : pendulum_model(k, 0.0, -1.0);
+		ENSURE(model != NULL);
+		double start[6], x[6];
+		sm_model_initial_state(model, start, NULL);
+		for (int i = 0; i < 2; i++)
+			start[3 * i + 2] += 5.0;
+		sm_statics_def def = sm_default_statics_def();
+		def.start = start;
+		sm_statics_result res;
+		sm_error err;
+		const sm_status st = sm_statics_solve(model, &def, x, NULL, &res, &err);
+		if (st != SM_OK)
+			printf("  %s\n", err.message);
+		ENSURE_STATUS(st, SM_OK);
+		if (stiff)
+			ENSURE(res.iterations > 50);  // the continuation ran (Newton alone gets 50)
+		ENSURE(x[0] == 0.0 && x[1] == 0.0 && x[2] == 5.0);
+		ENSURE_NEAR(x[3], 0.0, 2e-9);
+		ENSURE_NEAR(x[4], 0.0, 2e-9);
+		ENSURE_NEAR(x[5], 5.0 - 1.0 - g / k, 2e-9);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// External forces. (1) Two 1 kg particles joined by a spring, held by nothing, each pushed up
+// by an external m g: the net force on the free body is zero, so it is no error, and every
+// particle's force is zero at the start: SM_OK after 0 iterations, nothing moved. (2) The
+// pendulum below its anchor (k = 100 N/m, l0 = 1 m) pulled sideways by F = (3, 0, 0) N: it
+// hangs along F + m g, its spring stretched by |F + m g| / k; the anchor carries in addition
+// (0, 2, 0) N of its own, and its reaction is -(spring pull + its weight + that force). The
+// same with k = 1e6 N/m started sideways (the continuation path). Tolerances as in
+// test_statics_start_is_used: 2e-9 m; forces to the residual tolerance (<= 1.8e-9 N here) in
+// each component: 1e-8 N (measured: 2e-11 N).
+static int test_statics_external_forces(void)
+{
+	const double g = 9.81;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.position[0] = 0.5;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = 50.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	const double lift[6] = {0.0, 0.0, g, 0.0, 0.0, g};
+	sm_statics_def def = sm_default_statics_def();
+	def.external_forces = lift;
+	double x[6], r[6];
+	sm_statics_result res;
+	sm_error err;
+	const sm_status st = sm_statics_solve(model, &def, x, r, &res, &err);
+	if (st != SM_OK)
+		printf("  %s\n", err.message);
+	ENSURE_STATUS(st, SM_OK);
+	ENSURE(res.iterations == 0 && res.residual == 0.0);
+	ENSURE(x[0] == 0.0 && x[2] == 0.0 && x[3] == 0.5 && x[5] == 0.0);
+	for (int i = 0; i < 6; i++)
+		ENSURE(r[i] == 0.0);
+	sm_model_destroy(model);
+
+	for (int stiff = 0; stiff <= 1; stiff++) {
+		const double k = stiff ? 1e6 : 100.0;
+		model = stiff ? pendulum_model(k, 1.0, 0.0) : pendulum_model(k, 0.0, -1.0);
+		ENSURE(model != NULL);
+		const double F[6] = {0.0, 2.0, 0.0, 3.0, 0.0, 0.0};
+		def = sm_default_statics_def();
+		def.external_forces = F;
+		const sm_status st2 = sm_statics_solve(model, &def, x, r, &res, &err);
+		if (st2 != SM_OK)
+			printf("  %s\n", err.message);
+		ENSURE_STATUS(st2, SM_OK);
+		if (stiff)
+			ENSURE(res.iterations > 50);  // the continuation ran (Newton alone gets 50)
+		const double total[3] = {3.0, 0.0, -g};  // F + m g on the free particle [N]
+		const double T = sqrt(total[0] * total[0] + total[2] * total[2]);
+		const double L = 1.0 + T / k;
+		for (int c = 0; c < 3; c++)
+			ENSURE_NEAR(x[3 + c], L * total[c] / T, 2e-9);
+		// The anchor: the spring pulls it with T along the spring, towards the free particle.
+		ENSURE_NEAR(r[0], -3.0, 1e-8);
+		ENSURE_NEAR(r[1], -2.0, 1e-8);
+		ENSURE_NEAR(r[2], 2.0 * g, 1e-8);
+		// All reactions: -(total weight + external loads).
+		ENSURE_NEAR(res.reaction_total[0], -3.0, 1e-8);
+		ENSURE_NEAR(res.reaction_total[1], -2.0, 1e-8);
+		ENSURE_NEAR(res.reaction_total[2], 2.0 * g, 1e-8);
+		// U = k (L - l0)^2 / 2 - (F + m g) . x_1 - f_0 . x_0 (x_0 = 0) = T^2 / (2k) - T L.
+		ENSURE_NEAR(res.potential_energy, T * T / (2.0 * k) - T * L, 1e-9);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// Buckling. A 1 kg particle on a stiff column (rest-length spring, 1e4 N/m, l0 = 1 m) standing
+// on a fixed anchor, held sideways by four horizontal springs of 2 N/m (rest length 1 m, at
+// their rest length, anchored at the column's loaded height L = 1 - m g / k_c): the column's
+// compression m g gives it the negative sideways stiffness -m g / L, which the lateral springs
+// (4 N/m per direction) do not overcome: k_lat - m g / L = 4 - 9.82 < 0. Statics finds the
+// upright balance but must call it unstable (the exact stiffness is indefinite; with the
+// compressive geometric term dropped, as the definiteness-preserving Jacobian does, it would
+// look stable). Modes: two unstable sideways modes omega^2 = (k_lat - m g / L) / m and the
+// axial k_c / m. Tolerances: the mass stays on the axis (the sideways forces of opposite springs
+// cancel exactly), its height to the residual 1e-9 N over k_c, 1e-13 m (1e-12 allowed);
+// eigenvalues of a 3 x 3 problem, 1e-9 relative.
+static int test_buckled_column_is_unstable(void)
+{
+	const double g = 9.81, kc = 1e4, klat = 2.0;
+	const double height = 1.0 - g / kc;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);  // 0: the column's foot
+	p.motion = SM_PARTICLE_FREE;
+	p.position[2] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);  // 1: the mass
+	const double side[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+	p.motion = SM_PARTICLE_FIXED;
+	for (int i = 0; i < 4; i++) {
+		p.position[0] = side[i][0];
+		p.position[1] = side[i][1];
+		p.position[2] = height;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.rest_length = 1.0;
+	s.stiffness = kc;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	for (int i = 0; i < 4; i++) {
+		s.a = 1;
+		s.b = 2 + i;
+		s.stiffness = klat;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	double x[18];
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+	ENSURE_NEAR(x[3], 0.0, 1e-13);
+	ENSURE_NEAR(x[4], 0.0, 1e-13);
+	ENSURE_NEAR(x[5], height, 1e-12);
+	ENSURE(!res.stable);
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE(modes.dof == 3 && modes.unstable_count == 2 && modes.zero_count == 0);
+	const double L = x[5];
+	ENSURE(klat * 2.0 < g / L);  // buckled: the premise
+	ENSURE_REL(modes.omega_squared[0], 2.0 * klat - g / L, 1e-9, 0.0);
+	ENSURE_REL(modes.omega_squared[1], 2.0 * klat - g / L, 1e-9, 0.0);
+	ENSURE_REL(modes.omega_squared[2], kc, 1e-9, 0.0);
+	ENSURE(modes.frequency[0] == 0.0 && modes.frequency[1] == 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A particle hanging from a fixed one by a damper only (stiffness 0, damping 5 N s/m): at rest
+// a damper carries no force, so nothing holds the particle against gravity. The free-body test
+// joins particles by springs of nonzero stiffness only, so it reports this particle by name
+// before any iteration, with the outputs untouched.
+static int test_damper_does_not_hold_a_particle(void)
+{
+	sm_model* model = anchored_mass(-9.81, -1.0, 0.0);
+	ENSURE(model != NULL);
+	sm_spring_def s;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
+	s.damping = 5.0;
+	ENSURE_STATUS(sm_model_set_spring(model, 0, &s), SM_OK);
+	double x[6] = {-7.0, -7.0, -7.0, -7.0, -7.0, -7.0};
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
+	ENSURE(res.iterations == 0);
+	ENSURE(strstr(err.message, "no static equilibrium: particle 1 and the 0 other particle(s) joined to it by "
+	                           "springs of nonzero stiffness are held by no fixed or driven particle") != NULL);
+	for (int i = 0; i < 6; i++)
+		ENSURE(x[i] == -7.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Two 1 kg particles joined by a spring (50 N/m), held by nothing, under gravity; the first is
+// pushed up by an external force of about twice its weight, so the forces on the two are about
+// +m g and -m g and nearly cancel. A net force of 1e-9 of their magnitudes is far above
+// round-off (the test's threshold is 1e-12 of the sum of the members' force magnitudes): the
+// free-body error, before iterating. A net force of 1e-14 of them is round-off: no error, the
+// spring stretches by m g / k and the residual (half the net force per particle, ~1e-13 N) is
+// below the tolerance 1e-9 N.
+static int test_free_body_threshold(void)
+{
+	const double g = 9.81, k = 50.0;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.position[2] = -1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = k;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	for (int big = 1; big >= 0; big--) {
+		const double fraction = big ? 1e-9 : 1e-14;  // net force / (2 m g)
+		double F[6] = {0.0};
+		F[2] = 2.0 * g * (1.0 - fraction);
+		double x[6] = {-7.0, -7.0, -7.0, -7.0, -7.0, -7.0};
+		sm_statics_def def = sm_default_statics_def();
+		def.external_forces = F;
+		sm_statics_result res;
+		sm_error err;
+		const sm_status st = sm_statics_solve(model, &def, x, NULL, &res, &err);
+		if (big) {
+			ENSURE_STATUS(st, SM_ERROR_NOT_CONVERGED);
+			ENSURE(res.iterations == 0);
+			ENSURE(strstr(err.message, "no static equilibrium: particle 0 and the 1 other particle(s)") != NULL);
+			ENSURE(x[0] == -7.0 && x[5] == -7.0);
+		} else {
+			if (st != SM_OK)
+				printf("  %s\n", err.message);
+			ENSURE_STATUS(st, SM_OK);
+			// The spring's length, to the residual 1e-9 N over k.
+			ENSURE_NEAR(x[2] - x[5], 1.0 + g / k, 1e-10);
+		}
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The automatic solver choice at its limit, SM_STATICS_DENSE_LIMIT = SM_MODES_DENSE_LIMIT = 300
+// degrees of freedom: a chain of 100 free particles (300) is solved densely, one of 101 (303)
+// sparsely, by statics and by modes (10 modes asked for: the sparse path fits, (303 - 40) / 4
+// = 65). Zero-length springs between fixed ends, no gravity: the chain is at rest as built.
+static int test_automatic_solver_choice_at_the_limit(void)
+{
+	ENSURE(SM_STATICS_DENSE_LIMIT == 300 && SM_MODES_DENSE_LIMIT == 300);
+	for (int32_t n = 100; n <= 101; n++) {
+		sm_model* model = chain_model(n, 0.01, 500.0, 0.01, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+		ENSURE(model != NULL);
+		double* x = malloc(3 * (size_t)(n + 2) * sizeof(double));
+		ENSURE(x != NULL);
+		sm_statics_result res;
+		sm_error err;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+		ENSURE(res.solver == (n == 100 ? SM_STATICS_DENSE : SM_STATICS_SPARSE));
+		sm_modes_def def = sm_default_modes_def();
+		def.mode_count = 10;
+		sm_modes modes;
+		const sm_status st = sm_modes_compute(model, &def, &modes, &err);
+		if (st != SM_OK)
+			printf("  %s\n", err.message);
+		ENSURE_STATUS(st, SM_OK);
+		ENSURE(modes.dof == 3 * n && modes.count == 10);
+		ENSURE(modes.solver == (n == 100 ? SM_MODES_DENSE : SM_MODES_SPARSE));
+		// Both paths give the chain's lowest frequency, threefold (x, y, z).
+		for (int32_t i = 0; i < 3; i++)
+			ENSURE_REL(sqrt(modes.omega_squared[i]), chain_omega(n, 0.01, 500.0, 1), 1e-8, 0.0);
+		sm_modes_release(&modes);
+		free(x);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// Dense path, mode_count below and beyond the degrees of freedom. omega_max is documented as the
+// highest angular frequency over all modes, so keeping only the lowest 2 must not change it:
+// the same number as with all modes (the same eigensolution, bit for bit), the chain's closed
+// form omega_N to the eigensolver's 1e-9. A mode_count above dof (dof + 5) keeps all dof modes,
+// the same as mode_count = 0.
+static int test_dense_mode_count_and_omega_max(void)
+{
+	const int32_t n = 12;
+	const double m = 0.5, k = 200.0;
+	sm_model* model = chain_model(n, m, k, 0.1, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	sm_modes all, few, many;
+	sm_modes_def def = sm_default_modes_def();
+	ENSURE_STATUS(sm_modes_compute(model, &def, &all, NULL), SM_OK);
+	def.mode_count = 2;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &few, NULL), SM_OK);
+	def.mode_count = 3 * n + 5;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &many, NULL), SM_OK);
+	ENSURE(all.solver == SM_MODES_DENSE && few.solver == SM_MODES_DENSE && many.solver == SM_MODES_DENSE);
+	ENSURE(all.count == 3 * n && few.count == 2 && many.count == 3 * n && many.dof == 3 * n);
+	ENSURE(few.omega_max == all.omega_max && many.omega_max == all.omega_max);
+	ENSURE_REL(all.omega_max, chain_omega(n, m, k, n), 1e-9, 0.0);
+	for (int32_t i = 0; i < 3 * n; i++)
+		ENSURE(many.omega_squared[i] == all.omega_squared[i]);
+	ENSURE(few.omega_squared[0] == all.omega_squared[0] && few.omega_squared[1] == all.omega_squared[1]);
+	sm_modes_release(&all);
+	sm_modes_release(&few);
+	sm_modes_release(&many);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The sparse path enforces residual_tolerance (analysis.h: every kept mode must pass it or the
+// call fails with SM_ERROR_NOT_CONVERGED); 1e-30 is far below the round-off of any residual
+// (1e-16 at best), so it must fail, naming the test, with *modes zeroed. The dense path only
+// reports the residual and succeeds.
+static int test_sparse_residual_tolerance_is_enforced(void)
+{
+	sm_model* model = chain_model(20, 1.0, 10.0, 0.1, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+	ENSURE(model != NULL);
+	sm_modes_def def = sm_default_modes_def();
+	def.solver = SM_MODES_SPARSE;
+	def.mode_count = 2;
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);  // the default tolerance passes
+	ENSURE(modes.residual > 1e-30 && modes.residual <= def.residual_tolerance);
+	sm_modes_release(&modes);
+	def.residual_tolerance = 1e-30;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_NOT_CONVERGED);
+	ENSURE(err.status == SM_ERROR_NOT_CONVERGED && strstr(err.message, "residual_tolerance") != NULL);
+	ENSURE(modes.count == 0 && modes.shapes == NULL && modes.omega_squared == NULL);
+	def.solver = SM_MODES_DENSE;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE(modes.count == 2 && modes.residual > 1e-30);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// damping_coupling against its definition, max over pairs of kept modes i != j of
+// |c_ij| / sqrt(c_ii c_jj), with Phi^T C Phi formed here from the returned shapes and the
+// model's dense dfdv (C = -dfdv; an assembly independent of the library's Jacobian-vector
+// product). A 3 x 2 x 2 block pinned at one corner, mass damping 0.1 /s (every c_ii >= 0.1) and
+// uneven spring damping: not proportional, the off-diagonal entries are up to 0.5 of the
+// diagonal ones, of both signs. All 33 modes, the lowest 8 and the lowest 5: the block turns
+// freely about its pin, so modes 0-2 are rigid rotations, which neither damping couples (spring
+// damping does not resist a rigid motion, mass damping is alpha M): with 5 kept the only
+// coupling is that of modes 3 and 4, a pair of neighbours. The sign of c_ij follows the
+// eigensolver's arbitrary signs of phi_i and phi_j, so four damping patterns are tried (12
+// cases): with entries of both signs, a coupling that took the signed maximum instead of the
+// largest magnitude differs in some of them. Tolerance 1e-12: both sides are sums of O(1) terms
+// with round-off ~1e-15.
+static int test_damping_coupling_definition(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 0.1;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = 3;
+	bd.nv = 2;
+	bd.nw = 2;
+	bd.size[0] = 0.3;
+	bd.size[1] = 0.2;
+	bd.size[2] = 0.25;
+	bd.mass = 1.7;
+	bd.edge.stiffness = 300.0;
+	bd.face_diagonal.stiffness = 150.0;
+	bd.body_diagonal.stiffness = 90.0;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_block(model, &bd, &st), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, 0, SM_PARTICLE_FIXED), SM_OK);
+	const int32_t np = sm_model_particle_count(model), ns = sm_model_spring_count(model);
+	const size_t n3 = 3 * (size_t)np;
+	double* x = malloc(n3 * sizeof(double));
+	double* D = malloc(n3 * n3 * sizeof(double));
+	double* C = malloc(n3 * n3 * sizeof(double));  // Phi^T C Phi, up to n3 x n3
+	double* Cphi = malloc(n3 * sizeof(double));
+	ENSURE(x != NULL && D != NULL && C != NULL && Cphi != NULL);
+	sm_model_initial_state(model, x, NULL);
+	const int32_t kept_counts[3] = {0, 8, 5};
+	for (int pattern = 0; pattern < 4; pattern++) {
+		for (int32_t k = 0; k < ns; k++) {
+			sm_spring_def s;
+			ENSURE_STATUS(sm_model_get_spring(model, k, &s), SM_OK);
+			s.damping = 2.0 * (1.0 + sin(3.7 * k + 1.3 * pattern));
+			s.damping_scaling = SM_ABSOLUTE;
+			ENSURE_STATUS(sm_model_set_spring(model, k, &s), SM_OK);
+		}
+		ENSURE_STATUS(sm_model_jacobian_dense(model, x, NULL, SM_JACOBIAN_EXACT, NULL, D), SM_OK);
+		for (int t = 0; t < 3; t++) {
+			const int32_t kept = kept_counts[t];
+			sm_modes_def def = sm_default_modes_def();
+			def.mode_count = kept;
+			sm_modes modes;
+			ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+			const int32_t count = modes.count;
+			ENSURE(count == (kept ? kept : 33));
+			for (int32_t j = 0; j < count; j++) {
+				const double* phj = modes.shapes + (size_t)j * n3;
+				for (size_t r = 0; r < n3; r++) {
+					double sum = 0.0;
+					for (size_t c = 0; c < n3; c++)
+						sum -= D[r * n3 + c] * phj[c];
+					Cphi[r] = sum;
+				}
+				for (int32_t i = 0; i < count; i++) {
+					const double* phi = modes.shapes + (size_t)i * n3;
+					double sum = 0.0;
+					for (size_t r = 0; r < n3; r++)
+						sum += phi[r] * Cphi[r];
+					C[(size_t)i * count + j] = sum;
+				}
+			}
+			double coupling = 0.0;
+			for (int32_t i = 0; i < count; i++) {
+				const double ci = C[(size_t)i * count + i];
+				ENSURE(ci >= 0.1 - 1e-12);
+				ENSURE_NEAR(modes.modal_damping[i], ci, 1e-12);
+				for (int32_t j = 0; j < i; j++) {
+					const double cij = 0.5 * (C[(size_t)i * count + j] + C[(size_t)j * count + i]);
+					const double normalised = cij / sqrt(ci * C[(size_t)j * count + j]);
+					coupling = fmax(coupling, fabs(normalised));
+				}
+			}
+			ENSURE(coupling > 1e-2);
+			ENSURE_NEAR(modes.damping_coupling, coupling, 1e-12);
+			ENSURE(!modes.proportional);
+			sm_modes_release(&modes);
+		}
+	}
+	free(x);
+	free(D);
+	free(C);
+	free(Cphi);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1175,5 +1714,15 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sparse_free_block_zero_modes);
 	RUN_TEST(test_sparse_adaptive_shift_hanging_rope);
 	RUN_TEST(test_modes_overflow_is_refused);
+	RUN_TEST(test_driven_particle_is_held);
+	RUN_TEST(test_statics_start_is_used);
+	RUN_TEST(test_statics_external_forces);
+	RUN_TEST(test_buckled_column_is_unstable);
+	RUN_TEST(test_damper_does_not_hold_a_particle);
+	RUN_TEST(test_free_body_threshold);
+	RUN_TEST(test_automatic_solver_choice_at_the_limit);
+	RUN_TEST(test_dense_mode_count_and_omega_max);
+	RUN_TEST(test_sparse_residual_tolerance_is_enforced);
+	RUN_TEST(test_damping_coupling_definition);
 	return TEST_SUMMARY();
 }

@@ -22,8 +22,9 @@ HAS_FMU = os.environ.get("SPRINGMASS_HAS_FMU") == "1"
 
 
 def cli(*args, status=0, cwd=None):
-    """Runs the tool; asserts its exit status; returns the finished process (text)."""
-    out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd)
+    """Runs the tool; asserts its exit status; returns the finished process (text). Every call
+    here takes well under a second: a minute means the tool hangs (e.g. a row limit not applied)."""
+    out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=60)
     assert out.returncode == status, f"springmass {' '.join(map(str, args))}: exit {out.returncode}\n{out.stderr}"
     return out
 
@@ -122,9 +123,13 @@ def test_default_output_is_the_model_name_with_the_files_settings(tmp_path):
 
 
 def test_more_rows_than_the_limit_are_refused_before_anything_is_written(tmp_path):
-    out = cli("run", MODELS / "oscillator.json", "--t-end", 1e3, "--output-interval", 1e-7,
-              "-o", tmp_path / "many.csv", "--vtk", tmp_path / "vtk", status=1)
-    assert "more than 1e+09 output rows" in out.stderr
+    # 2e9 rows, twice the limit of 1e9. Written to /dev/null: a tool that took them would write
+    # until cli()'s timeout, not fill the disk.
+    out = cli("run", MODELS / "oscillator.json", "--t-end", 200, "--output-interval", 1e-7, "-o", "/dev/null", status=1)
+    assert "would make more than 1e+09 output rows" in out.stderr
+    # Far beyond the limit, with files asked for: none is created.
+    cli("run", MODELS / "oscillator.json", "--t-end", 1e3, "--output-interval", 1e-300,
+        "-o", tmp_path / "many.csv", "--vtk", tmp_path / "vtk", status=1)
     assert not (tmp_path / "many.csv").exists() and not (tmp_path / "vtk").exists()
 
 
