@@ -19,7 +19,7 @@ const char* sm_status_string(sm_status status)
 	case SM_ERROR_SPRING_INDEX: return "spring index out of range";
 	case SM_ERROR_SELF_SPRING: return "spring connects a particle to itself";
 	case SM_ERROR_NOT_FINITE: return "value is not finite";
-	case SM_ERROR_NEGATIVE: return "value is negative";
+	case SM_ERROR_NEGATIVE: return "value is negative (or zero where it must be positive)";
 	case SM_ERROR_NONPOSITIVE_MASS: return "mass is not positive";
 	case SM_ERROR_ZERO_REST_LENGTH: return "per-strain constant on a spring of zero rest length";
 	case SM_ERROR_FILE: return "file cannot be read or written";

@@ -37,7 +37,7 @@ typedef enum sm_status {
 	SM_ERROR_SPRING_INDEX,      ///< a spring index is out of range
 	SM_ERROR_SELF_SPRING,       ///< a spring connects a particle to itself
 	SM_ERROR_NOT_FINITE,        ///< a value is NaN or infinite where a finite one is required
-	SM_ERROR_NEGATIVE,          ///< a value is negative where it must be >= 0
+	SM_ERROR_NEGATIVE,          ///< a value is negative where it must be >= 0, or not > 0 where it must be
 	SM_ERROR_NONPOSITIVE_MASS,  ///< a particle mass is <= 0
 	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant on a spring whose rest length is zero
 	SM_ERROR_FILE,              ///< a file cannot be read or written
