@@ -104,12 +104,13 @@ def test_usage_errors_exit_with_2_and_help_goes_to_standard_output(tmp_path):
 # --- run ---------------------------------------------------------------------------------------
 
 def test_rows_run_from_zero_to_exactly_the_end_time(tmp_path):
-    # 1.1 / 0.1 = 11.000000000000002 in doubles: the rows are 0, 0.1, ..., 1.0 and then 1.1,
+    # 2.1 / 0.3 = 7.000000000000001 in doubles: the rows are 0, 0.3, ..., 1.8 and then 2.1,
     # not an extra row or a repeated time.
-    _, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--t-end", 1.1, "--output-interval", 0.1)
-    assert len(rows) == 12 and rows[-1, 0] == 1.1
+    assert 2.1 / 0.3 > 7
+    _, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--t-end", 2.1, "--output-interval", 0.3)
+    assert len(rows) == 8 and rows[-1, 0] == 2.1
     assert np.all(np.diff(rows[:, 0]) > 0)
-    np.testing.assert_allclose(rows[:11, 0], 0.1 * np.arange(11), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(rows[:7, 0], 0.3 * np.arange(7), rtol=0, atol=1e-15)
     # A last interval shorter than the others: 0, 0.3, 0.6, 0.9, 1.0.
     _, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--t-end", 1.0, "--output-interval", 0.3)
     assert list(rows[:, 0]) == [0.0, 0.3, 0.6, 0.8999999999999999, 1.0]
@@ -153,6 +154,18 @@ def test_port_columns_are_named_by_kind_and_carry_the_port_quantities(tmp_path):
     # Kinetic energy from the port velocities (m1 = 1 kg, m2 = 0.5 kg), to rounding.
     kinetic = 0.5 * 1.0 * col["m1.vx"] ** 2 + 0.5 * 0.5 * col["m2.vx"] ** 2
     np.testing.assert_allclose(col["energy.kinetic"], kinetic, rtol=1e-12, atol=1e-15)
+
+
+def test_names_with_quotes_and_commas_are_quoted_in_the_header(tmp_path):
+    # RFC 4180: a field holding a comma or a quote is quoted, its quotes doubled.
+    model = tmp_path / "names.json"
+    model.write_text('{"springmass": 1, "name": "names", "particles": [{"name": "a\\"b", "position": [0, 0, 0]},'
+                     ' {"name": "c,d", "position": [1, 0, 0]}], "gravity": [0, 0, 0]}')
+    cli("run", model, "-q", "--t-end", 0.01, "--positions", "-o", tmp_path / "names.csv")
+    header = (tmp_path / "names.csv").read_text().split("\n")[0]
+    assert header.endswith(',"particle.a""b.x","particle.a""b.y","particle.a""b.z",'
+                           '"particle.c,d.x","particle.c,d.y","particle.c,d.z"'), header
+    assert read_csv(tmp_path / "names.csv")[0][-6:-3] == ['particle.a"b.x', 'particle.a"b.y', 'particle.a"b.z']
 
 
 def test_options_take_effect(tmp_path):
