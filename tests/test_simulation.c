@@ -1234,6 +1234,13 @@ static int test_update_model_then_reset_is_a_fresh_run(void)
 		def.stiffness *= (s % 2) ? 30.0 : 1.0;
 		ENSURE_STATUS(sm_model_set_spring(stiff, s, &def), SM_OK);
 	}
+	// New masses too: the reduced solvers keep their own copy, which the update must refresh.
+	for (int32_t i = 0; i < sm_model_particle_count(stiff); i += 3) {
+		sm_particle_def def;
+		ENSURE_STATUS(sm_model_get_particle(stiff, i, &def), SM_OK);
+		def.mass *= 2.0;
+		ENSURE_STATUS(sm_model_set_particle(stiff, i, &def), SM_OK);
+	}
 	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_KLU, SM_SOLVER_REDUCED_PCG,
 	                                    SM_SOLVER_REDUCED_CHOLMOD};
 	const size_t bytes = 3 * (size_t)sm_model_particle_count(stiff) * sizeof(double);
