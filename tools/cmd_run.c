@@ -50,8 +50,8 @@ static void usage(FILE* out)
 	        "  -q, --quiet            no progress line and no statistics on stderr\n"
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
-	        "solver's statistics at the end. Exit status: 0 success, 1 bad model or solver failure,\n"
-	        "2 usage error.\n");
+	        "solver's statistics at the end. Exit status: 0 success, 1 bad model, solver failure or\n"
+	        "output that cannot be written, 2 usage error.\n");
 }
 
 static double wall_clock(void)
