@@ -5,6 +5,7 @@
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "physics_fixtures.h"
+#include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
 #include "test_harness.h"
 
@@ -1485,6 +1486,145 @@ static int test_two_level_from_100_free_particles(void)
 	return 0;
 }
 
+// The multilevel approximate inverse (preconditioner_multilevel.h) on its own, on a model of the
+// coarse matrices it serves: a 12 x 12 grid of 3x3 blocks, each grid edge a spring-like block
+// B = 1e4 (I + 2 u u^T) (u a random unit vector, so the blocks are full and their inverses need
+// every entry of the adjugate; entries far from 1, as stiffnesses are) added on the diagonal and
+// subtracted off it, plus a small mass term 100 I: symmetric positive definite and badly
+// conditioned, as gamma^2 K + M is. Coarsened down
+// to 12 unknowns (several levels). One V-cycle must be a symmetric positive definite operator
+// (the outer conjugate gradients of the reduced solver need it; a missing post-smoothing or an
+// unsymmetric block inverse breaks it: round-off allows 1e-12 relative), must reduce the residual
+// (a smoother with a wrongly scaled inverse does not), and conjugate gradients around it must
+// reduce it further with every iteration, to 1e-4 after 40 (see below).
+static void grid_matrix_apply(int32_t count, const int64_t* first, const int32_t* neighbour, const double* values,
+                              const double* x, double* y)
+{
+	for (int32_t I = 0; I < count; I++)
+		for (int i = 0; i < 3; i++) {
+			double sum = 0.0;
+			for (int32_t k = 0; k < (int32_t)(first[I + 1] - first[I]); k++)
+				for (int j = 0; j < 3; j++)
+					sum += values[sm_block_entry(first, I, k, i, j)] * x[3 * neighbour[first[I] + k] + j];
+			y[3 * I + i] = sum;
+		}
+}
+
+static double dot(const double* a, const double* b, size_t n)
+{
+	double s = 0.0;
+	for (size_t i = 0; i < n; i++)
+		s += a[i] * b[i];
+	return s;
+}
+
+static double relative_residual(int32_t count, const int64_t* first, const int32_t* neighbour, const double* values,
+                                const double* b, const double* x, double* work)
+{
+	const size_t n = 3 * (size_t)count;
+	grid_matrix_apply(count, first, neighbour, values, x, work);
+	for (size_t i = 0; i < n; i++)
+		work[i] = b[i] - work[i];
+	return sqrt(dot(work, work, n) / dot(b, b, n));
+}
+
+static int test_multilevel_cycle_on_a_grid(void)
+{
+	enum { side = 12, count = side * side };
+	const size_t n = 3 * (size_t)count;
+	int64_t first[count + 1];
+	int32_t neighbour[5 * count];
+	first[0] = 0;
+	for (int32_t I = 0; I < count; I++) {  // neighbours sorted, I itself included
+		const int32_t r = I / side, c = I % side;
+		int64_t e = first[I];
+		if (r > 0)
+			neighbour[e++] = I - side;
+		if (c > 0)
+			neighbour[e++] = I - 1;
+		neighbour[e++] = I;
+		if (c + 1 < side)
+			neighbour[e++] = I + 1;
+		if (r + 1 < side)
+			neighbour[e++] = I + side;
+		first[I + 1] = e;
+	}
+	double* values = calloc(9 * (size_t)first[count], sizeof(double));
+	double *b = malloc(n * sizeof(double)), *c = malloc(n * sizeof(double)), *work = malloc(n * sizeof(double));
+	ENSURE(values && b && c && work);
+	rng r = {77};
+	const double scale = 1e4;  // [N/m]-like entries: the block inverses are rescaled by powers of 2
+	for (int32_t I = 0; I < count; I++)
+		for (int32_t k = 0; k < (int32_t)(first[I + 1] - first[I]); k++) {
+			const int32_t J = neighbour[first[I] + k];
+			if (J == I) {
+				for (int i = 0; i < 3; i++)
+					values[sm_block_entry(first, I, k, i, i)] += 0.01 * scale;
+				continue;
+			}
+			if (J < I)
+				continue;
+			double u[3] = {rng_uniform(&r, -1, 1), rng_uniform(&r, -1, 1), rng_uniform(&r, -1, 1)};
+			const double length = sqrt(dot(u, u, 3));
+			int32_t kJ = 0;  // position of I among J's neighbours
+			while (neighbour[first[J] + kJ] != I)
+				kJ++;
+			int32_t kI = 0, kJJ = 0;  // the diagonal blocks' positions
+			while (neighbour[first[I] + kI] != I)
+				kI++;
+			while (neighbour[first[J] + kJJ] != J)
+				kJJ++;
+			for (int i = 0; i < 3; i++)
+				for (int j = 0; j < 3; j++) {
+					const double B = scale * ((i == j) + 2.0 * u[i] * u[j] / (length * length));
+					values[sm_block_entry(first, I, kI, i, j)] += B;
+					values[sm_block_entry(first, J, kJJ, i, j)] += B;
+					values[sm_block_entry(first, I, k, i, j)] -= B;
+					values[sm_block_entry(first, J, kJ, i, j)] -= B;
+				}
+		}
+	cholmod_common common;
+	cholmod_l_start(&common);
+	sm_multilevel* ml = sm_multilevel_create(count, first, neighbour, 12, &common);
+	ENSURE(ml != NULL && sm_multilevel_refresh(ml, values, &common));
+	for (size_t i = 0; i < n; i++) {
+		b[i] = rng_uniform(&r, -1, 1);
+		c[i] = rng_uniform(&r, -1, 1);
+	}
+	// Symmetric and positive definite: b . V c = c . V b, b . V b > 0.
+	double* Vb = malloc(n * sizeof(double));
+	ENSURE(Vb != NULL);
+	memcpy(Vb, sm_multilevel_solve(ml, b, 1, &common), n * sizeof(double));
+	const double* Vc = sm_multilevel_solve(ml, c, 1, &common);
+	ENSURE(Vc != NULL);
+	const double bVc = dot(b, Vc, n), cVb = dot(c, Vb, n);
+	ENSURE(fabs(bVc - cVb) <= 1e-12 * sqrt(dot(b, b, n) * dot(Vc, Vc, n)));
+	ENSURE(dot(b, Vb, n) > 0.0);
+	// The residual falls with one cycle and with every conjugate-gradient iteration around it.
+	double previous = 1.0;
+	for (int iterations = 1; iterations <= 4; iterations++) {
+		const double* x = sm_multilevel_solve(ml, b, iterations, &common);
+		ENSURE(x != NULL);
+		const double residual = relative_residual(count, first, neighbour, values, b, x, work);
+		ENSURE(residual < (iterations == 1 ? 0.9 : previous));
+		previous = residual;
+	}
+	// The levels hold their matrices in single precision (an approximate inverse: the reduced
+	// solver's own conjugate gradients apply the exact A), so against the double matrix the
+	// residual levels off near the float rounding times the condition number: 1.7e-6 measured
+	// after 40 iterations (0.47, 0.39, 0.23, 0.15 after 1 to 4, 5.7e-3 after 10).
+	const double* x = sm_multilevel_solve(ml, b, 40, &common);
+	ENSURE(x != NULL && relative_residual(count, first, neighbour, values, b, x, work) < 1e-4);
+	sm_multilevel_destroy(ml, &common);
+	cholmod_l_finish(&common);
+	free(values);
+	free(b);
+	free(c);
+	free(Vb);
+	free(work);
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Random call sequences: failed calls leave no trace, a reset forgets everything
 // ---------------------------------------------------------------------------------------------
@@ -1747,5 +1887,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_random_calls_leave_no_trace);
 	RUN_TEST(test_reduced_solver_statistics);
 	RUN_TEST(test_two_level_from_100_free_particles);
+	RUN_TEST(test_multilevel_cycle_on_a_grid);
 	return TEST_SUMMARY();
 }
