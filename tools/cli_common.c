@@ -180,7 +180,7 @@ FILE* cli_vtk_open(const char* command, const char* path, const char* title, con
 {
 	FILE* f = fopen(path, "w");
 	if (f == NULL) {
-		fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path, strerror(errno));
+		cli_cannot_write(command, path);
 		return NULL;
 	}
 	const int32_t n = sm_model_particle_count(model);
@@ -214,14 +214,18 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 		fprintf(f, "%.9g %.9g %.9g\n", values[3 * i], values[3 * i + 1], values[3 * i + 2]);
 }
 
+void cli_cannot_write(const char* command, const char* path)
+{
+	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path, errno != 0 ? strerror(errno) : "write error");
+}
+
 int cli_close(const char* command, const char* path, FILE* f)
 {
 	// A failed write leaves data in the buffer, so fclose fails again and sets errno afresh.
 	const int failed = ferror(f);
 	errno = 0;
 	if (fclose(f) != 0 || failed) {
-		fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,
-		        errno != 0 ? strerror(errno) : "write error");
+		cli_cannot_write(command, path);
 		return -1;
 	}
 	return 0;

@@ -61,5 +61,9 @@ FILE* cli_vtk_open(const char* command, const char* path, const char* title, con
 /// Writes one vector field of point data (3 values per particle); `first` for the first field.
 void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
 
+/// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
+/// failed call just before).
+void cli_cannot_write(const char* command, const char* path);
+
 /// Closes a file written by a subcommand; prints the error and returns -1 if anything failed.
 int cli_close(const char* command, const char* path, FILE* f);

@@ -462,8 +462,7 @@ static int package(const options* opt)
 	const bool written = write_output(opt->output, archive, archive_length);
 	free(archive);
 	if (!written) {
-		fprintf(stderr, "springmass fmu: cannot write %s: %s\n", opt->output,
-		        errno != 0 ? strerror(errno) : "write error");
+		cli_cannot_write("fmu", opt->output);
 		goto done;
 	}
 	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output, table.model_identifier,
@@ -478,7 +477,7 @@ static int package(const options* opt)
 	goto done;
 
 write_failed:
-	fprintf(stderr, "springmass fmu: cannot write %s: %s\n", path, strerror(errno));
+	cli_cannot_write("fmu", path);
 done:
 	if (staging[0])
 		nftw(staging, remove_entry, 16, FTW_DEPTH | FTW_PHYS);

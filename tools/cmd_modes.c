@@ -63,7 +63,7 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 {
 	FILE* f = fopen(path, "w");
 	if (f == NULL) {
-		fprintf(stderr, "springmass modes: cannot write %s: %s\n", path, strerror(errno));
+		cli_cannot_write("modes", path);
 		return -1;
 	}
 	fprintf(f, "particle,name");

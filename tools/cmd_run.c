@@ -405,7 +405,7 @@ int sm_cmd_run(int argc, char** argv)
 		snprintf(pvd_path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
 		pvd = fopen(pvd_path, "w");
 		if (!pvd) {
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", pvd_path, strerror(errno));
+			cli_cannot_write("run", pvd_path);
 			goto done;
 		}
 		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
@@ -418,7 +418,7 @@ int sm_cmd_run(int argc, char** argv)
 		csv_name = o.output ? o.output : csv_default;
 		csv = fopen(csv_name, "w");
 		if (!csv) {
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
+			cli_cannot_write("run", csv_name);
 			goto done;
 		}
 	}
@@ -437,7 +437,7 @@ int sm_cmd_run(int argc, char** argv)
 		// A full disk or a closed pipe stops the run at once, not after the last step.
 		if (ferror(csv)) {
 			end_progress(&prog);
-			fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
+			cli_cannot_write("run", csv_name);
 			goto done;
 		}
 		if (o.vtk_dir) {
@@ -453,7 +453,7 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	end_progress(&prog);
 	if (fflush(csv) != 0 || ferror(csv)) {
-		fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
+		cli_cannot_write("run", csv_name);
 		goto done;
 	}
 	if (!o.quiet) {
@@ -478,14 +478,14 @@ int sm_cmd_run(int argc, char** argv)
 
 done:
 	if (csv && csv != stdout && fclose(csv) != 0 && status == 0) {
-		fprintf(stderr, "springmass run: cannot write %s: %s\n", csv_name, strerror(errno));
+		cli_cannot_write("run", csv_name);
 		status = 1;
 	}
 	// The index is closed after a failed run too: ParaView then shows the rows up to the failure.
 	if (pvd)
 		fprintf(pvd, "</Collection>\n</VTKFile>\n");
 	if (pvd && fclose(pvd) != 0 && status == 0) {
-		fprintf(stderr, "springmass run: cannot write %s: %s\n", pvd_path, strerror(errno));
+		cli_cannot_write("run", pvd_path);
 		status = 1;
 	}
 	free(path);

@@ -56,7 +56,7 @@ static int write_csv(const char* path, const sm_document* doc, int32_t n, const 
 {
 	FILE* f = fopen(path, "w");
 	if (f == NULL) {
-		fprintf(stderr, "springmass statics: cannot write %s: %s\n", path, strerror(errno));
+		cli_cannot_write("statics", path);
 		return -1;
 	}
 	fprintf(f, "particle,name,x,y,z,dx,dy,dz,reaction_x,reaction_y,reaction_z\n");
