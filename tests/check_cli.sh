@@ -83,8 +83,9 @@ out=$("$cli" run "$tmp/names.json" --t-end 0.01 --positions -q -o - 2>&1 | head 
   fail "run --positions column names: $out"
 
 # Options: each line is the exit status, the first line the command prints on stderr (empty for
-# none) and its arguments. Numbers below the smallest normal double are numbers (as in a model
-# file); a malformed --set is a usage error in every command.
+# none) and its arguments. Numbers are decimal, as in a model file (no hexadecimal, infinities or
+# spaces, which strtod alone would take); numbers below the smallest normal double are numbers; a
+# malformed --set is a usage error in every command.
 check_cases() {
   while IFS='|' read -r expected_status expected args; do
     out=$(eval "\"$cli\" $args" 2>&1 > /dev/null)
@@ -101,6 +102,14 @@ cp "$root/tests/python/models/rope_ends.json" "$tmp/rope_ends.json"
 ends="$tmp/rope_ends.json"
 check_cases << 'CASES'
 2|springmass run: --t-end expects a finite number, got 'nan'|run "$osc" -q -o - --t-end nan
+2|springmass run: --t-end expects a finite number, got '0x10'|run "$osc" -q -o - --t-end 0x10
+2|springmass run: --t-end expects a finite number, got ' 1'|run "$osc" -q -o - --t-end ' 1'
+2|springmass run: --t-end expects a finite number, got '1e'|run "$osc" -q -o - --t-end 1e
+2|springmass run: --t-end expects a finite number, got '.'|run "$osc" -q -o - --t-end .
+0||run "$osc" -q -o - --t-end .01 --output-interval 1e-2 --max-steps 1e3
+0||run "$osc" -q -o - --t-end 0.01 --rtol +1.E-5
+2|springmass run: --max-steps needs a count from 1 to 2e9, got '0x10'|run "$osc" -q -o - --max-steps 0x10
+2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
 2|springmass run: --atol must be > 0, got '-1'|run "$osc" -q -o - --atol -1
 2|springmass run: --atol-velocity must be > 0, got '0'|run "$osc" -q -o - --atol-velocity 0
@@ -110,6 +119,7 @@ check_cases << 'CASES'
 0||run "$osc" -q -o - --t-end 1e-320
 0||run "$osc" -q -o - --t-end 0.01 --set k=1e-400
 2|springmass run: --set k=1e999: '1e999' is not a finite number|run "$osc" -q -o - --set k=1e999
+2|springmass run: --set k=0x1p3: '0x1p3' is not a finite number|run "$osc" -q -o - --set k=0x1p3
 1|springmass run: cannot create directory $tmp/a_file: a file of that name exists|run "$osc" -q -o - --vtk "$tmp/a_file"
 2|springmass statics: --set expects NAME=VALUE, got 'k'|statics "$osc" --set k
 2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
@@ -117,6 +127,7 @@ check_cases << 'CASES'
 0||run "$ends" -q -o - --t-end 0.01 --set xa=1 --set xb=3
 1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0) (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
+2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0x1p-20
 CASES
 # An absolute tolerance the simulation would refuse is refused by the loader already.
 printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [0, 0, 0]}], "simulation": {"atol_velocity": 1e-200}}' > "$tmp/tiny_atol.json"

@@ -9,6 +9,40 @@
 #include <string.h>
 #include <sys/stat.h>
 
+// The grammar is checked by hand because strtod also reads hexadecimal, infinities, NaN and
+// leading spaces; once it holds, strtod gives the correctly rounded double (in the C locale,
+// which the tool never changes).
+bool cli_parse_number(const char* text, double* value)
+{
+	const char* c = text;
+	if (*c == '+' || *c == '-')
+		c++;
+	int digits = 0;
+	for (; *c >= '0' && *c <= '9'; c++)
+		digits++;
+	if (*c == '.')
+		for (c++; *c >= '0' && *c <= '9'; c++)
+			digits++;
+	if (digits == 0)
+		return false;
+	if (*c == 'e' || *c == 'E') {
+		c++;
+		if (*c == '+' || *c == '-')
+			c++;
+		if (!(*c >= '0' && *c <= '9'))
+			return false;
+		while (*c >= '0' && *c <= '9')
+			c++;
+	}
+	if (*c != '\0')
+		return false;
+	const double v = strtod(text, NULL);
+	if (!isfinite(v))
+		return false;
+	*value = v;
+	return true;
+}
+
 // Copies the NAME of "NAME=VALUE" into name (NUL-terminated) and returns its length: 0 if there
 // is no '=' or no name, `size` if the name does not fit (name is then left as it was).
 static size_t setting_name(const char* setting, char* name, size_t size)
@@ -44,10 +78,7 @@ static int parse_setting(const char* command, const sm_document* doc, const char
 		return 2;
 	}
 	const char* eq = setting + length;
-	// A number below the smallest normal double is taken as strtod rounds it, as in a model file.
-	char* end = NULL;
-	*value = strtod(eq + 1, &end);
-	if (end == eq + 1 || *end != '\0' || !isfinite(*value)) {
+	if (!cli_parse_number(eq + 1, value)) {
 		fprintf(stderr, "springmass %s: --set %s: '%s' is not a finite number\n", command, setting, eq + 1);
 		return 2;
 	}

@@ -6,6 +6,13 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+/// Reads text as a finite decimal number, as a model file writes numbers: an optional sign,
+/// digits with an optional decimal point, an optional exponent (`-1.5e-3`, `.5`, `2.`); nothing
+/// before or after it. Hexadecimal (`0x10`), `inf`, `nan` and spaces are refused, though strtod
+/// takes them. A number below the smallest normal double is taken as strtod rounds it (1e-320),
+/// as in a model file. Returns false, *value unchanged, when text is not such a number.
+bool cli_parse_number(const char* text, double* value);
+
 /// The index of the parameter a "NAME=VALUE" setting names, or -1 if it is malformed or names none.
 int32_t cli_setting_parameter(const sm_document* doc, const char* setting);
 

@@ -158,9 +158,7 @@ int sm_cmd_modes(int argc, char** argv)
 		} else if (strcmp(a, "--at-equilibrium") == 0) {
 			at_equilibrium = 1;
 		} else if (strcmp(a, "--steps-per-period") == 0 && has_value) {
-			char* end = NULL;
-			steps_per_period = strtod(argv[++i], &end);
-			if (*end != '\0' || !(steps_per_period >= 1.0) || !isfinite(steps_per_period)) {
+			if (!cli_parse_number(argv[++i], &steps_per_period) || !(steps_per_period >= 1.0)) {
 				fprintf(stderr, "springmass modes: --steps-per-period needs a number >= 1\n");
 				free(settings);
 				return 2;

@@ -61,13 +61,11 @@ static double wall_clock(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-// A finite number > 0 (one below the smallest normal double, such as 1e-320, is taken as
-// strtod rounds it, like a number in a model file); prints what is wrong and returns 1 if not.
+// A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.
 static int parse_positive(const char* option, const char* text, double* value)
 {
-	char* end = NULL;
-	const double v = strtod(text, &end);
-	if (end == text || *end != '\0' || !isfinite(v)) {
+	double v;
+	if (!cli_parse_number(text, &v)) {
 		fprintf(stderr, "springmass run: %s expects a finite number, got '%s'\n", option, text);
 		return 1;
 	}
@@ -262,9 +260,7 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					return 2;
 				}
 			} else if (strcmp(a, "--max-steps") == 0) {
-				char* end = NULL;
-				o->max_steps = strtod(value, &end);
-				if (end == value || *end != '\0' || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
+				if (!cli_parse_number(value, &o->max_steps) || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
 				    o->max_steps != floor(o->max_steps)) {
 					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n", value);
 					return 2;

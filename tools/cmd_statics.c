@@ -103,9 +103,7 @@ int sm_cmd_statics(int argc, char** argv)
 		} else if (strcmp(a, "--set") == 0 && has_value) {
 			settings[setting_count++] = argv[++i];
 		} else if (strcmp(a, "--tolerance") == 0 && has_value) {
-			char* end = NULL;
-			def.residual_tolerance = strtod(argv[++i], &end);
-			if (*end != '\0' || !(def.residual_tolerance > 0.0) || !isfinite(def.residual_tolerance)) {
+			if (!cli_parse_number(argv[++i], &def.residual_tolerance) || !(def.residual_tolerance > 0.0)) {
 				fprintf(stderr, "springmass statics: --tolerance needs a positive number of newtons\n");
 				free(settings);
 				return 2;
