@@ -63,6 +63,10 @@ static int test_invalid_model_definitions(void)
 	md = sm_default_model_def();
 	md.spring_capacity = -1;
 	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_NEGATIVE);
+	md = sm_default_model_def();
+	md.particle_capacity = -1;
+	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_NEGATIVE);
+	ENSURE(strstr(err.message, "particle capacity") != NULL);
 	ENSURE(sm_model_create(NULL, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
 	md = sm_default_model_def();
 	md.particle_capacity = 100;
@@ -132,7 +136,7 @@ static int test_invalid_springs(void)
 	good.b = 1;
 	good.stiffness = 10.0;
 	ENSURE_STATUS(sm_model_add_spring(m, &good, NULL), SM_OK);
-	enum { CASES = 17 };
+	enum { CASES = 21 };
 	struct {
 		sm_spring_def def;
 		sm_status status;
@@ -162,6 +166,15 @@ static int test_invalid_springs(void)
 	c[15].def.stiffness_scaling = (sm_scaling)4, c[15].status = SM_ERROR_INVALID_ARGUMENT, c[15].rule = "scaling";
 	c[16].def.kind = SM_SPRING_ZERO_LENGTH, c[16].def.rest_length = 0.3, c[16].status = SM_ERROR_INVALID_ARGUMENT,
 	c[16].rule = "zero-length spring must have rest length 0";
+	// Indices are 0 .. n - 1: n itself is out of range.
+	c[17].def.a = 3, c[17].status = SM_ERROR_PARTICLE_INDEX,
+	c[17].rule = "particle a = 3 out of range (model has 3 particles)";
+	c[18].def.b = 3, c[18].status = SM_ERROR_PARTICLE_INDEX,
+	c[18].rule = "particle b = 3 out of range (model has 3 particles)";
+	c[19].def.damping_scaling = (sm_scaling)4, c[19].status = SM_ERROR_INVALID_ARGUMENT, c[19].rule = "damping scaling";
+	// kd = c / l0 = 1e308 / 1e-10 overflows.
+	c[20].def.rest_length = 1e-10, c[20].def.damping = 1e308, c[20].def.damping_scaling = SM_PER_STRAIN,
+	c[20].status = SM_ERROR_NOT_FINITE, c[20].rule = "damping c / l0 = 1e+308 / 1e-10 is not finite";
 	for (int i = 0; i < CASES; i++) {
 		int32_t index = -5;
 		ENSURE_STATUS(sm_model_add_spring(m, &c[i].def, &index), c[i].status);
@@ -181,6 +194,18 @@ static int test_invalid_springs(void)
 	coincident.stiffness_scaling = SM_PER_STRAIN;
 	ENSURE_STATUS(sm_model_add_spring(m, &coincident, NULL), SM_ERROR_ZERO_REST_LENGTH);
 	ENSURE_MESSAGE(m, "spring 1", "rest length is 0");
+	// Particles 1e308 m on either side of the origin: their distance, the initial rest length,
+	// overflows.
+	p.position[0] = 1e308;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 4
+	p.position[0] = -1e308;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 5
+	sm_spring_def far = good;
+	far.a = 4;
+	far.b = 5;
+	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "spring 1", "initial distance between particles 4 and 5 is not finite");
+	ENSURE(sm_model_spring_count(m) == 1);
 	ENSURE_STATUS(sm_model_add_spring(m, NULL, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_set_spring(m, 1, &good), SM_ERROR_SPRING_INDEX);
 	ENSURE_MESSAGE(m, "spring 1", "out of range (model has 1 springs)");
@@ -247,6 +272,28 @@ static int test_accessors_and_per_strain_constants(void)
 	sm_model_initial_state(m, x, v);
 	ENSURE(x[3] == 0.0 && x[6] == 1.0 && v[4] == 0.0);  // particle 1 was replaced at the origin
 	sm_model_initial_state(m, NULL, NULL);
+	// A rest-length spring of rest length 0 between particles 1 m apart keeps it when replaced
+	// with SM_REST_LENGTH_INITIAL ("keeps the current one").
+	sm_spring_def z = sm_default_spring_def();
+	z.a = 0;
+	z.b = 2;
+	z.rest_length = 0.0;
+	z.stiffness = 5.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &z, &index), SM_OK);
+	ENSURE(index == 1);
+	z.rest_length = SM_REST_LENGTH_INITIAL;
+	z.stiffness = 6.0;
+	ENSURE_STATUS(sm_model_set_spring(m, 1, &z), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(m, 1, &l0, &ks, NULL), SM_OK);
+	ENSURE(l0 == 0.0 && ks == 6.0);
+	// An added driven particle is constrained (free index -1); the next free one follows the
+	// free particle 2.
+	p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_DRIVEN;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	ENSURE(sm_model_free_count(m) == 2 && sm_model_free_index(m, 3) == -1 && sm_model_free_index(m, 4) == 1);
 	sm_model_destroy(m);
 	return 0;
 }
@@ -317,6 +364,62 @@ static int test_growth_keeps_values(void)
 	return 0;
 }
 
+// Each constant is scaled as its own definition says: per-strain stiffness with absolute damping
+// and the reverse. Particles 0 and 1 are 0.5 m apart (l0 = 0.5 m); at x_b - x_a = 0.6 m along x
+// and v_b - v_a = 0.3 m/s, f_a,x = ks (L - l0) + kd (v_b - v_a) (model.h). E = 300 N per strain
+// gives ks = 600 N/m, c = 2 N s per strain gives kd = 4 N s/m; the absolute constants are
+// 300 N/m and 2 N s/m. Rounding of 0.6 - 0.5 is ~1e-17 m, so 1e-12 N is ample.
+static int test_each_constant_scaled_as_given(void)
+{
+	const double x[9] = {0, 0, 0, 0.6, 0, 0, 1, 0, 0}, v[9] = {0, 0, 0, 0.3, 0, 0, 0, 0, 0};
+	const double expected[2] = {600.0 * 0.1 + 2.0 * 0.3, 300.0 * 0.1 + 4.0 * 0.3};
+	for (int k = 0; k < 2; k++) {
+		sm_model* m = three_particles();
+		ENSURE(m != NULL);
+		sm_spring_def d = sm_default_spring_def();
+		d.a = 0;
+		d.b = 1;
+		d.stiffness = 300.0;
+		d.damping = 2.0;
+		d.stiffness_scaling = k == 0 ? SM_PER_STRAIN : SM_ABSOLUTE;
+		d.damping_scaling = k == 0 ? SM_ABSOLUTE : SM_PER_STRAIN;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		double f[9];
+		sm_model_forces(m, x, v, NULL, f);
+		ENSURE_NEAR(f[0], expected[k], 1e-12);
+		ENSURE_NEAR(f[3], -expected[k], 1e-12);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// A disabled spring exerts no force, also after its definition is replaced: it stays disabled
+// and its new constants act once it is enabled again (particles 0 and 1, 0.5 m apart, at
+// x_b - x_a = 0.6 m: f_a,x = ks 0.1 m).
+static int test_replacing_a_disabled_spring_keeps_it_disabled(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.stiffness = 10.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, false), SM_OK);
+	d.stiffness = 50.0;
+	ENSURE_STATUS(sm_model_set_spring(m, 0, &d), SM_OK);
+	ENSURE(!sm_model_spring_enabled(m, 0));
+	const double x[9] = {0, 0, 0, 0.6, 0, 0, 1, 0, 0};
+	double f[9];
+	sm_model_forces(m, x, NULL, NULL, f);
+	ENSURE(f[0] == 0.0 && f[3] == 0.0);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, true), SM_OK);
+	sm_model_forces(m, x, NULL, NULL, f);
+	ENSURE_NEAR(f[0], 5.0, 1e-12);  // 50 N/m x 0.1 m, rounding of 0.6 - 0.5 aside
+	sm_model_destroy(m);
+	return 0;
+}
+
 // The library reports the version of the headers it was built with (the consumer test compiles
 // against the installed headers of the same build).
 static int test_version(void)
@@ -373,6 +476,8 @@ int main(int argc, char** argv)
 	RUN_TEST(test_invalid_springs);
 	RUN_TEST(test_accessors_and_per_strain_constants);
 	RUN_TEST(test_clone_is_independent);
+	RUN_TEST(test_each_constant_scaled_as_given);
+	RUN_TEST(test_replacing_a_disabled_spring_keeps_it_disabled);
 	RUN_TEST(test_growth_keeps_values);
 	RUN_TEST(test_version);
 	RUN_TEST(test_format_number);

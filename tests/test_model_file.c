@@ -36,6 +36,15 @@ static sm_document* parse(const char* text, sm_error* err)
 	return sm_document_parse(text, strlen(text), "test.json", err);
 }
 
+// parse for a text that must load: prints the message when it does not.
+static sm_document* parse_valid(const char* text, sm_error* err)
+{
+	sm_document* doc = parse(text, err);
+	if (doc == NULL)
+		printf("  %s\n", err->message);
+	return doc;
+}
+
 static int32_t count_fixed(const sm_model* m)
 {
 	int32_t fixed = 0;
@@ -406,9 +415,7 @@ static int test_parameter_uses(void)
 	    " \"fixed\": [\"r[0]\", {\"min\": [-1, -1, -1], \"max\": [\"b\", 0.1, 0.1]}],"
 	    " \"simulation\": {\"rtol\": \"tol\"}}";
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse(text, &err);
-	if (doc == NULL)
-		printf("  %s\n", err.message);
+	sm_document* doc = parse_valid(text, &err);
 	ENSURE(doc != NULL);
 	const struct {
 		const char* name;
@@ -829,9 +836,7 @@ static int test_canonical_form_keeps_what_the_file_says(void)
 		"  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": \"k0\", \"damping\": \"c0\"}],"
 		" \"fmu\": {\"particle_variables\": false}}";
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse(text, &err);
-	if (doc == NULL)
-		printf("  %s\n", err.message);
+	sm_document* doc = parse_valid(text, &err);
 	ENSURE(doc != NULL);
 	sm_document* again = save_and_load(doc);
 	ENSURE(again != NULL);
@@ -894,9 +899,7 @@ static int test_longest_structure_names_round_trip(void)
 	                     " \"edge\": {\"stiffness\": 5}}], \"fixed\": [\"%s[0]\"]}";
 	snprintf(text, sizeof text, format, rope, block, rope);
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse(text, &err);
-	if (doc == NULL)
-		printf("  %s\n", err.message);
+	sm_document* doc = parse_valid(text, &err);
 	ENSURE(doc != NULL);
 	const char* last = sm_document_particle_name(doc, 11 + 43);
 	ENSURE(last != NULL && strlen(last) == 175 + 8 && strcmp(last + 175, "[1,1,10]") == 0);
@@ -939,9 +942,7 @@ static int test_structure_limit_counts_the_groups_present(void)
 		char text[300];
 		snprintf(text, sizeof text, format, groups[k]);
 		sm_error err = {SM_OK, ""};
-		sm_document* doc = parse(text, &err);
-		if (doc == NULL)
-			printf("  %s\n", err.message);
+		sm_document* doc = parse_valid(text, &err);
 		ENSURE(doc != NULL);
 		const sm_structure_info block = sm_document_structure(doc, 0);
 		ENSURE(block.range.particle_count == 69 * 69 * 69 && block.range.spring_count == springs[k]);
@@ -1195,11 +1196,9 @@ static int test_parameters_set_together(void)
 static int test_whole_real_index(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]},"
-	                         " {\"position\": [1, 0, 0]}], \"fixed\": [1.0]}",
-	                         &err);
-	if (doc == NULL)
-		printf("  %s\n", err.message);
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]},"
+	                               " {\"position\": [1, 0, 0]}], \"fixed\": [1.0]}",
+	                               &err);
 	ENSURE(doc != NULL);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
@@ -1220,9 +1219,7 @@ static int test_byte_order_mark_and_directories(void)
 	sm_error err = {SM_OK, ""};
 	const char text[] =
 	    "\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}]}";
-	sm_document* doc = parse(text, &err);
-	if (doc == NULL)
-		printf("  %s\n", err.message);
+	sm_document* doc = parse_valid(text, &err);
 	ENSURE(doc != NULL && strcmp(sm_document_name(doc), "x") == 0);
 	sm_document_destroy(doc);
 	const char late[] = "{\"springmass\": 1,\n\xef\xbb\xbf\"name\": \"x\"}";
@@ -1310,6 +1307,375 @@ static int test_hostile_input(void)
 	return 0;
 }
 
+// Two free particles 1 m apart, the start of the files below.
+#define TWO_PARTICLES \
+	"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}]"
+
+// The rules of docs/model-format.md at their edges, each refused with the path of the element,
+// the value and the rule: a relative tolerance of 1 (it must be < 1), times of 0 and below, an
+// absolute tolerance just under 1e-150, no internal steps (a simulation refuses max_steps 0, see
+// test_settings_and_their_defaults), a negative mass damping, a mesh of density 0, a spring's
+// rest length of -1 (a rest length is >= 0, whatever the library uses -1 for), a zero-length
+// spring with another rest length, a constant and a mass given both ways, required keys left out,
+// a vector of four numbers, structure and port names that are not identifiers, and a port of
+// another kind beside a probe on the same particle (only probes share a particle).
+static int test_rules_at_their_edges(void)
+{
+	static const refusal cases[] = {
+	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 1}}", SM_ERROR_SCHEMA, "test.json: simulation.rtol: 1 must be < 1"},
+	    {TWO_PARTICLES ", \"simulation\": {\"output_interval\": 0}}", SM_ERROR_NEGATIVE,
+	     "test.json: simulation.output_interval: 0 must be > 0"},
+	    {TWO_PARTICLES ", \"simulation\": {\"stop_time\": -1}}", SM_ERROR_NEGATIVE,
+	     "test.json: simulation.stop_time: -1 must be > 0"},
+	    {TWO_PARTICLES ", \"simulation\": {\"atol_velocity\": 1e-151}}", SM_ERROR_SCHEMA,
+	     "test.json: simulation.atol_velocity: 1e-151 must be at least 1e-150 (CVODE's error norm overflows below)"},
+	    {TWO_PARTICLES ", \"simulation\": {\"max_steps\": 0}}", SM_ERROR_SCHEMA,
+	     "test.json: simulation.max_steps: 0 must be a whole number from 1 to 2147483647"},
+	    {TWO_PARTICLES ", \"mass_damping\": -0.5}", SM_ERROR_NEGATIVE, "test.json: mass_damping: -0.5 must be >= 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\", \"density\": 0,"
+	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
+	     SM_ERROR_NEGATIVE, "test.json: structures[0].density: 0 must be > 0"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"rest_length\": -1}]}", SM_ERROR_NEGATIVE,
+	     "test.json: springs[0].rest_length: -1 must be >= 0"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"kind\": \"zero_length\", \"rest_length\": 0.5}]}",
+	     SM_ERROR_SCHEMA, "test.json: springs[0]: a zero-length spring cannot have rest_length 0.5"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"damping\": 1, \"strain_damping\": 1}]}", SM_ERROR_SCHEMA,
+	     "test.json: springs[0]: give \"damping\" [N s/m] or \"strain_damping\" [N s], not both"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	     " \"end\": [1, 0, 0], \"segments\": 2, \"mass\": 1, \"mass_per_length\": 1}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0]: give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"nu\": 2, \"nv\": 2,"
+	     " \"nw\": 2}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"size\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"end\": [1, 0, 0],"
+	     " \"segments\": 2}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"start\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	     " \"segments\": 2}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"end\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\"}]}", SM_ERROR_SCHEMA,
+	     "test.json: particles[0]: missing required key \"position\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0, 0]}]}", SM_ERROR_SCHEMA,
+	     "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"my rope\", \"start\": [0, 0, 0],"
+	     " \"end\": [1, 0, 0], \"segments\": 2}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: structures[0].name: name \"my rope\" must be an identifier (letters, digits and '_', not starting with "
+	     "a digit)"},
+	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"tip 1\", \"particle\": 1, \"kind\": \"probe\"}]}", SM_ERROR_SCHEMA,
+	     "test.json: ports[0].name: name \"tip 1\" must be an identifier (letters, digits and '_', not starting with a "
+	     "digit)"},
+	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"f\", \"particle\": 1, \"kind\": \"force\"}, {\"name\": \"p\", \"particle\": 1,"
+	     " \"kind\": \"probe\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: ports[1]: particle 1 already has port f; only probe ports may share a particle"},
+	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"p\", \"particle\": 1, \"kind\": \"probe\"}, {\"name\": \"m\", \"particle\": 1,"
+	     " \"kind\": \"motion\"}]}",
+	     SM_ERROR_SCHEMA, "test.json: ports[1]: particle 1 already has port p; only probe ports may share a particle"},
+	};
+	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
+}
+
+// A reference outside its structure is refused, never taken for a particle beside it: particle
+// p comes before rope r (4 particles), sheet c (4 x 4), block b (2 x 2 x 2) and rope s (2), so
+// that one before r's first particle, or one past the end of a row, a layer or a structure, is a
+// particle of the model. A block takes one or three coordinates, not two (docs: "Referring to
+// particles"), and an index is below the particle count (31), whether an integer or a whole real.
+// Each reference is a spring's end, and the last part holds the last particles by "fixed".
+static int test_references_stay_inside_their_structures(void)
+{
+	static const char* const format =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [9, 9, 9]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 3},"
+	    "  {\"type\": \"sheet\", \"name\": \"c\", \"origin\": [0, 1, 0], \"nu\": 4, \"nv\": 4},"
+	    "  {\"type\": \"block\", \"name\": \"b\", \"origin\": [0, 3, 0], \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 2},"
+	    "  {\"type\": \"rope\", \"name\": \"s\", \"start\": [0, 5, 0], \"end\": [1, 5, 0], \"segments\": 1}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": %s, \"stiffness\": 1}], \"fixed\": [%s]}";
+	static const struct {
+		const char* reference;
+		sm_status status;
+		const char* message;
+	} cases[] = {
+	    {"\"r[4]\"", SM_ERROR_PARTICLE_INDEX, "\"r[4]\" is outside structure r ([0] to [3])"},
+	    {"\"r[-1]\"", SM_ERROR_PARTICLE_INDEX, "\"r[-1]\" is outside structure r ([0] to [3])"},
+	    {"\"c[0,4]\"", SM_ERROR_PARTICLE_INDEX, "\"c[0,4]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
+	    {"\"b[0,1]\"", SM_ERROR_PARTICLE_INDEX,
+	     "\"b[0,1]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
+	    {"\"b[0,0,2]\"", SM_ERROR_PARTICLE_INDEX,
+	     "\"b[0,0,2]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
+	    {"\"r[1]]\"", SM_ERROR_SCHEMA,
+	     "\"r[1]]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
+	    {"31", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
+	    {"31.0", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
+	    {"-1", SM_ERROR_PARTICLE_INDEX, "particle index -1 is out of range (the model has 31 particles)"},
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		char text[1024], expected[300];
+		snprintf(text, sizeof text, format, cases[c].reference, "");
+		snprintf(expected, sizeof expected, "test.json: springs[0].b: %s", cases[c].message);
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(text, &err);
+		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, expected) != 0) {
+			printf("  %s: status %d, \"%s\"\n  expected %d, \"%s\"\n", cases[c].reference, (int)err.status,
+			       doc != NULL ? "(loaded)" : err.message, (int)cases[c].status, expected);
+			failures++;
+		}
+		sm_document_destroy(doc);
+	}
+	ENSURE(failures == 0);
+	// The last particle of each structure, and of the model, by each form of reference: r 1..4,
+	// c 5..20, b 21..28, s 29..30.
+	char text[1024];
+	snprintf(text, sizeof text, format, "30", "\"r[3]\", \"c[3,3]\", \"b[1,1,1]\", \"b[7]\", 30.0, 29");
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 31 && count_fixed(m) == 5 && sm_model_spring_count(m) == 1);
+	static const int32_t held[] = {4, 20, 28, 29, 30};
+	for (size_t k = 0; k < sizeof held / sizeof held[0]; k++)
+		ENSURE(sm_model_free_index(m, held[k]) == -1);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A name has 1 to 200 bytes: a particle named with 200 bytes loads and is found by that name; one
+// of 201 is refused, naming the rule.
+static int test_names_of_200_bytes(void)
+{
+	char name[202], text[400];
+	memset(name, 'n', 200);
+	name[200] = '\0';
+	const char* format = "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"%s\", \"position\": [0, 0, 0]}]}";
+	snprintf(text, sizeof text, format, name);
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	ENSURE(sm_document_particle_index(doc, name) == 0);
+	sm_document_destroy(doc);
+	name[200] = 'n';
+	name[201] = '\0';
+	snprintf(text, sizeof text, format, name);
+	ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SCHEMA);
+	ENSURE(strcmp(err.message, "test.json: particles[0].name: a name must have 1 to 200 bytes (this one has 201)") == 0);
+	return 0;
+}
+
+// The "simulation" and "fmu" settings: a file without them gets the defaults of the tables in
+// docs/model-format.md, and a file that gives each setting gets it. "atol" sets both absolute
+// tolerances, and its least value, 1e-150, is allowed ("at least"); "atol_position" or
+// "atol_velocity" beside it wins for its own; "max_step": 0 is allowed (no limit). A simulation
+// takes the default settings, and refuses max_steps 0, which the file therefore refuses where
+// it is written.
+static int test_settings_and_their_defaults(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(TWO_PARTICLES "}", &err);
+	ENSURE(doc != NULL);
+	sm_document_settings s = sm_document_get_settings(doc);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_simulation* sim = sm_simulation_create(m, &s.solver, &err);
+	ENSURE(sim != NULL);
+	sm_simulation_destroy(sim);
+	sm_simulation_def no_steps = s.solver;
+	no_steps.max_steps = 0;
+	ENSURE(sm_simulation_create(m, &no_steps, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
+	sm_model_destroy(m);
+	ENSURE(s.stop_time == 1.0 && s.output_interval == 0.01 && s.particle_variables);
+	ENSURE(s.solver.relative_tolerance == 1e-6 && s.solver.absolute_tolerance_position == 1e-8 &&
+	       s.solver.absolute_tolerance_velocity == 1e-6);
+	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.solver == SM_SOLVER_AUTO &&
+	       s.solver.jacobian == SM_JACOBIAN_EXACT);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000);
+	sm_document_destroy(doc);
+
+	doc = parse_valid(TWO_PARTICLES ", \"simulation\": {\"stop_time\": 3, \"output_interval\": 0.5, \"rtol\": 0.001,"
+	                                " \"atol\": 1e-150, \"method\": \"adams\", \"solver\": \"klu\", \"jacobian\": \"definite\","
+	                                " \"max_step\": 0, \"max_steps\": 7}, \"fmu\": {\"particle_variables\": true}}",
+	                  &err);
+	ENSURE(doc != NULL);
+	s = sm_document_get_settings(doc);
+	ENSURE(s.stop_time == 3.0 && s.output_interval == 0.5 && s.particle_variables);
+	ENSURE(s.solver.relative_tolerance == 0.001 && s.solver.absolute_tolerance_position == 1e-150 &&
+	       s.solver.absolute_tolerance_velocity == 1e-150);
+	ENSURE(s.solver.method == SM_METHOD_ADAMS && s.solver.solver == SM_SOLVER_KLU &&
+	       s.solver.jacobian == SM_JACOBIAN_DEFINITE);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7);
+	sm_document_destroy(doc);
+
+	doc = parse(TWO_PARTICLES ", \"simulation\": {\"method\": \"bdf\", \"jacobian\": \"exact\", \"max_step\": 0.25}}", &err);
+	ENSURE(doc != NULL);
+	s = sm_document_get_settings(doc);
+	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.jacobian == SM_JACOBIAN_EXACT && s.solver.max_step == 0.25);
+	sm_document_destroy(doc);
+
+	// atol_position or atol_velocity beside atol wins for its own tolerance, in either order.
+	doc = parse(TWO_PARTICLES ", \"simulation\": {\"atol_position\": 1e-9, \"atol\": 1e-3}}", &err);
+	ENSURE(doc != NULL);
+	s = sm_document_get_settings(doc);
+	ENSURE(s.solver.absolute_tolerance_position == 1e-9 && s.solver.absolute_tolerance_velocity == 1e-3);
+	sm_document_destroy(doc);
+	doc = parse(TWO_PARTICLES ", \"simulation\": {\"atol\": 1e-3, \"atol_velocity\": 1e-5}}", &err);
+	ENSURE(doc != NULL);
+	s = sm_document_get_settings(doc);
+	ENSURE(s.solver.absolute_tolerance_position == 1e-3 && s.solver.absolute_tolerance_velocity == 1e-5);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A spring group whose stiffness alone, or damping alone, is a parameter creates its springs while
+// the parameter is 0 (docs: "parameters never change which springs exist"), and setting the
+// parameter then acts on them. Rope of 3 segments: 3 structural and 2 bending springs.
+static int test_groups_with_one_parameter_keep_their_springs(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 0, \"c\": 0}, \"structures\":"
+	                               " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [3, 0, 0], \"segments\": 3,"
+	                               " \"structural\": {\"stiffness\": \"k\"}, \"bending\": {\"stiffness\": 0, \"damping\": \"c\"}}]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 3 + 2);
+	sm_model_destroy(m);
+	const double values[2] = {40.0, 0.5};
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 3 + 2);
+	int structural = 0, bending = 0;
+	for (int32_t k = 0; k < sm_model_spring_count(m); k++) {
+		sm_spring_def d;
+		double ks, kd;
+		sm_model_get_spring(m, k, &d);
+		sm_model_spring_constants(m, k, NULL, &ks, &kd);
+		if (d.b - d.a == 1)
+			structural += ks == 40.0 && kd == 0.0;
+		else
+			bending += d.b - d.a == 2 && ks == 0.0 && kd == 0.5;
+	}
+	ENSURE(structural == 3 && bending == 2);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// Saving keeps each group's parameter on that group's springs, for every kind of structure and
+// group: the saved file loads to the same model, and after the same new parameter values in both
+// documents still does (docs: "every parameter reference kept"). Every group has its own
+// parameter and value, so a spring written with another group's parameter differs.
+static int test_saved_groups_keep_their_parameters(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"g\", \"parameters\": {\"a\": 1, \"b\": 2, \"c\": 3, \"d\": 4, \"e\": 5, \"f\": 6,"
+	    " \"g\": 7, \"h\": 8, \"i\": 9, \"j\": 10},"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 3,"
+	    "   \"structural\": {\"strain_stiffness\": \"a\"}, \"bending\": {\"stiffness\": \"b\"}},"
+	    "  {\"type\": \"sheet\", \"name\": \"s\", \"origin\": [0, 1, 0], \"nu\": 3, \"nv\": 3, \"structural\": {\"stiffness\": \"c\"},"
+	    "   \"shear\": {\"damping\": \"d\"}, \"bend\": {\"strain_stiffness\": \"e\"}},"
+	    "  {\"type\": \"block\", \"name\": \"k\", \"origin\": [0, 3, 0], \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 2,"
+	    "   \"edge\": {\"stiffness\": \"f\"}, \"face_diagonal\": {\"strain_damping\": \"g\"}, \"body_diagonal\": {\"stiffness\": \"h\"}},"
+	    "  {\"type\": \"mesh\", \"name\": \"m\", \"vertices\": [[0, 5, 0], [1, 5, 0], [0, 6, 0], [1, 6, 0]],"
+	    "   \"triangles\": [[0, 1, 3], [0, 3, 2]], \"edge\": {\"stiffness\": \"i\"}, \"bend\": {\"damping\": \"j\"}}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	const double values[10] = {11, 12, 13, 14, 15, 16, 17, 18, 19, 20};
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameters(again, values, &err), SM_OK);
+	ENSURE(same_document(doc, again) == 0);
+	for (int32_t k = 0; k < 10; k++)
+		ENSURE(sm_document_parameter_uses(again, k) == SM_PARAMETER_CONSTANTS);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// "fixed" holds every particle it lists and every particle in a box, bounds included; a fixed
+// particle starts at rest whatever velocity the file gives it (docs: velocity "ignored for a
+// fixed particle"), while a free one keeps its own.
+static int test_fixed_particles_start_at_rest(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"velocity\":"
+	                               " [1, 0, 0]}, {\"position\": [1, 0, 0], \"velocity\": [0, 2, 0]}, {\"position\": [2, 0, 0]},"
+	                               " {\"position\": [3, 0, 0], \"velocity\": [0, 0, 3]}],"
+	                               " \"fixed\": [{\"min\": [1, 0, 0], \"max\": [2, 0, 0]}, 0]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	double v[12];
+	sm_model_initial_state(m, NULL, v);
+	for (int32_t i = 0; i < 3; i++) {
+		ENSURE(sm_model_free_index(m, i) == -1);
+		ENSURE(v[3 * i] == 0.0 && v[3 * i + 1] == 0.0 && v[3 * i + 2] == 0.0);
+	}
+	ENSURE(sm_model_free_count(m) == 1 && sm_model_free_index(m, 3) == 0);
+	ENSURE(v[9] == 0.0 && v[10] == 0.0 && v[11] == 3.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// An initial state set on a document (sm_document_set_initial_state) gives the built model its
+// positions and velocities, and stays through a parameter change that keeps the particles (the
+// constant changes, the state and the file's rest lengths stay); a parameter value that would
+// change the number of particles, fewer or more, is refused, and so is a non-finite state, each
+// leaving the document as it was. Particles: a (fixed), b, then the rope's n + 1 = 3.
+static int test_initial_state_through_parameter_changes(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 10, \"n\": 2},"
+	                               " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+	                               " {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	                               " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 1], \"end\": [1, 0, 1],"
+	                               " \"segments\": \"n\"}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": \"k\"}]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	const double x[15] = {0, 0, 0, 1.5, 0, 0, 0, 0, 2, 0.5, 0, 2, 1, 0, 2};
+	const double v[15] = {0, 0, 0, 0, 0.25, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, v, &err), SM_OK);
+	const int32_t k = sm_document_parameter_index(doc, "k"), n = sm_document_parameter_index(doc, "n");
+	for (int pass = 0; pass < 2; pass++) {
+		sm_model* m = NULL;
+		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+		ENSURE(sm_model_particle_count(m) == 5);
+		double xm[15], vm[15];
+		sm_model_initial_state(m, xm, vm);
+		ENSURE(memcmp(xm, x, sizeof x) == 0 && memcmp(vm, v, sizeof v) == 0);
+		double l0, ks;
+		sm_model_spring_constants(m, sm_model_spring_count(m) - 1, &l0, &ks, NULL);
+		ENSURE(l0 == 1.0 && ks == (pass == 0 ? 10.0 : 20.0));
+		sm_model_destroy(m);
+		if (pass == 0)
+			ENSURE_STATUS(sm_document_set_parameter(doc, k, 20.0, &err), SM_OK);
+	}
+	ENSURE_STATUS(sm_document_set_parameter(doc, n, 1.0, &err), SM_ERROR_TOPOLOGY);
+	ENSURE_STATUS(sm_document_set_parameter(doc, n, 3.0, &err), SM_ERROR_TOPOLOGY);
+	ENSURE(sm_document_parameter_value(doc, n) == 2.0);
+	double bad[15];
+	memcpy(bad, x, sizeof x);
+	for (int c = 0; c < 15; c++)
+		bad[c] += 1.0;
+	bad[14] = NAN;
+	ENSURE_STATUS(sm_document_set_initial_state(doc, bad, NULL, &err), SM_ERROR_NOT_FINITE);
+	ENSURE_STATUS(sm_document_set_parameter(doc, k, 30.0, &err), SM_OK);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	double xm[15], vm[15];
+	sm_model_initial_state(m, xm, vm);
+	ENSURE(memcmp(xm, x, sizeof x) == 0 && memcmp(vm, v, sizeof v) == 0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1336,5 +1702,13 @@ int main(int argc, char** argv)
 	RUN_TEST(test_longest_structure_names_round_trip);
 	RUN_TEST(test_structure_limit_counts_the_groups_present);
 	RUN_TEST(test_large_model_loads);
+	RUN_TEST(test_rules_at_their_edges);
+	RUN_TEST(test_references_stay_inside_their_structures);
+	RUN_TEST(test_names_of_200_bytes);
+	RUN_TEST(test_settings_and_their_defaults);
+	RUN_TEST(test_groups_with_one_parameter_keep_their_springs);
+	RUN_TEST(test_saved_groups_keep_their_parameters);
+	RUN_TEST(test_fixed_particles_start_at_rest);
+	RUN_TEST(test_initial_state_through_parameter_changes);
 	return TEST_SUMMARY();
 }
