@@ -372,6 +372,472 @@ static int test_parameter_values_refused(void)
 }
 
 // ---------------------------------------------------------------------------------------------
+// Settings, value references and states
+// ---------------------------------------------------------------------------------------------
+
+static fmi2Status set_real(fmi2Component c, const fixture* f, const char* name, double value)
+{
+	const fmi2ValueReference r = vr(f, name);
+	return fmi2SetReal(c, &r, 1, &value);
+}
+
+static fmi2Status set_integer(fmi2Component c, const fixture* f, const char* name, int value)
+{
+	const fmi2ValueReference r = vr(f, name);
+	const fmi2Integer v = value;
+	return fmi2SetInteger(c, &r, 1, &v);
+}
+
+static fmi2Status set_string(fmi2Component c, const fixture* f, const char* name, const char* value)
+{
+	const fmi2ValueReference r = vr(f, name);
+	return fmi2SetString(c, &r, 1, &value);
+}
+
+// One solver setting given in initialisation mode, and what a run with it gives.
+typedef struct setting {
+	const char* name;
+	fmu_type type;
+	double real;
+	int integer;
+	const char* string;
+} setting;
+
+static fmi2Status apply_setting(fmi2Component c, const fixture* f, const setting* s)
+{
+	return s->type == FMU_REAL      ? set_real(c, f, s->name, s->real)
+	       : s->type == FMU_INTEGER ? set_integer(c, f, s->name, s->integer)
+	                                : set_string(c, f, s->name, s->string);
+}
+
+// The bob's x after each of 10 steps of 0.1 s, and each step's status (a run stops at the first
+// step that is not fmi2OK), with the setting given in initialisation mode (none if s is NULL),
+// after reading an output there first if read_first.
+static int settings_run(fixture* f, const setting* s, bool read_first, double x[10], fmi2Status status[10])
+{
+	for (int n = 0; n < 10; ++n) {
+		x[n] = 0.0;
+		status[n] = fmi2OK;
+	}
+	fmi2Component c = fmi2Instantiate("settings", fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False,
+	                                  fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	if (read_first)
+		ENSURE_NEAR(get(c, f, "tip.x"), 0.7, 0.0);
+	if (s)
+		ENSURE_STATUS(apply_setting(c, f, s), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	for (int n = 0; n < 10; ++n) {
+		status[n] = fmi2DoStep(c, n * 0.1, 0.1, fmi2True);
+		if (status[n] != fmi2OK)
+			break;
+		x[n] = get(c, f, "tip.x");
+	}
+	fmi2FreeInstance(c);
+	return 0;
+}
+
+// A solver setting given in initialisation mode takes effect whether or not an output was read
+// there before (reading one makes the simulation, FMI 2.0 allows both orders): the run is the same,
+// bit for bit, as the run where nothing was read (the same settings from the same state), and it
+// differs from the run with the file's settings, so that the setting did something. Two internal
+// steps cannot cover a step of 0.1 s (a fifth of the oscillation's 1.26 s period, from a first
+// step CVODE keeps tiny), and 0.1 s in internal steps of at most 1 ms takes at least 100 of them:
+// both settings end the first step in a discard.
+static int test_settings_take_effect_after_an_output_was_read(void)
+{
+	static const setting settings[] = {
+	    {"solver.rtol", FMU_REAL, 1e-3, 0, NULL},
+	    {"solver.atol_position", FMU_REAL, 1e-2, 0, NULL},
+	    {"solver.atol_velocity", FMU_REAL, 1e-1, 0, NULL},
+	    {"solver.max_step", FMU_REAL, 1e-4, 0, NULL},
+	    {"solver.max_steps", FMU_INTEGER, 0.0, 2, NULL},
+	    {"solver.method", FMU_STRING, 0.0, 0, "adams"},
+	};
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	double plain_x[10], x[10], read_x[10];
+	fmi2Status plain_status[10], status[10], read_status[10];
+	ENSURE(settings_run(&f, NULL, false, plain_x, plain_status) == 0);
+	for (size_t i = 0; i < sizeof settings / sizeof settings[0]; ++i) {
+		ENSURE(settings_run(&f, &settings[i], false, x, status) == 0);
+		ENSURE(settings_run(&f, &settings[i], true, read_x, read_status) == 0);
+		if (memcmp(x, read_x, sizeof x) != 0 || memcmp(status, read_status, sizeof status) != 0) {
+			printf("  %s set after an output was read: x(1 s) = %.17g (status %d), without the read %.17g (%d)\n",
+			       settings[i].name, read_x[9], (int)read_status[0], x[9], (int)status[0]);
+			return 1;
+		}
+		ENSURE(memcmp(x, plain_x, sizeof x) != 0 || memcmp(status, plain_status, sizeof status) != 0);
+	}
+	// solver.max_step = 1 ms with 50 internal steps per communication step: a discard.
+	fmi2Component c = fmi2Instantiate("limits", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+	                                  fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(set_integer(c, &f, "solver.max_steps", 50), fmi2OK);
+	ENSURE_NEAR(get(c, &f, "tip.x"), 0.7, 0.0);
+	ENSURE_STATUS(set_real(c, &f, "solver.max_step", 1e-3), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2Discard);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The solver variables' ranges (docs/fmu.md): both absolute tolerances at least 1e-150, a relative
+// one in (0, 1), solver.max_step >= 0 with 0 for no limit (the run is then the file's, whose
+// max_step is 0), solver.max_steps at least 1 (no internal step at all could never advance; CVODE
+// would read 0 as its own default of 500). A refused value is an fmi2Error naming the variable
+// and leaves the value before.
+static int test_solver_settings_are_checked_against_their_ranges(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	double plain_x[10], x[10];
+	fmi2Status plain_status[10], status[10];
+	ENSURE(settings_run(&f, NULL, false, plain_x, plain_status) == 0);
+	const setting unlimited = {"solver.max_step", FMU_REAL, 0.0, 0, NULL};
+	ENSURE(settings_run(&f, &unlimited, true, x, status) == 0);
+	ENSURE(memcmp(x, plain_x, sizeof x) == 0 && memcmp(status, plain_status, sizeof status) == 0);
+
+	fmi2Component c = fmi2Instantiate("ranges", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+	                                  fmi2False);
+	ENSURE(c != NULL);
+	// The experiment's tolerance, too, lies in (0, 1).
+	for (double tolerance = 0.0; tolerance >= -1e-6; tolerance -= 1e-6) {
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, tolerance, 0.0, fmi2False, 0.0), fmi2Error);
+		ENSURE(strstr(f.log.last, "must lie in (0, 1)") != NULL);
+	}
+	// A stop time before the start is refused; one at the start is an experiment of no length.
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 0.5), fmi2Error);
+	ENSURE(strstr(f.log.last, "start <= stop") != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 1.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	static const struct {
+		const char* name;
+		double value;
+		const char* message;
+	} refused[] = {
+	    {"solver.atol_position", 1e-200, "solver.atol_position = 1e-200 rejected"},
+	    {"solver.atol_velocity", 1e-200, "solver.atol_velocity = 1e-200 rejected"},
+	    {"solver.atol_position", 0.0, "solver.atol_position = 0 rejected"},
+	    {"solver.rtol", 0.0, "solver.rtol = 0 rejected"},
+	    {"solver.rtol", 1.0, "solver.rtol = 1 rejected"},
+	    {"solver.max_step", -1e-3, "solver.max_step = -0.001 rejected"},
+	};
+	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+		const double before = get(c, &f, refused[i].name);
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(set_real(c, &f, refused[i].name, refused[i].value), fmi2Error);
+		if (strstr(f.log.last, refused[i].message) == NULL) {
+			printf("  logged '%s', expected '%s'\n", f.log.last, refused[i].message);
+			return 1;
+		}
+		ENSURE(get(c, &f, refused[i].name) == before);
+	}
+	ENSURE_STATUS(set_real(c, &f, "solver.atol_position", 1e-150), fmi2OK);
+	ENSURE_STATUS(set_real(c, &f, "solver.max_step", 1e-3), fmi2OK);
+	ENSURE_STATUS(set_real(c, &f, "solver.max_step", 0.0), fmi2OK);
+	const fmi2ValueReference max_steps = vr(&f, "solver.max_steps");
+	fmi2Integer steps = 0;
+	for (int value = 0; value >= -1; --value) {
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(set_integer(c, &f, "solver.max_steps", value), fmi2Error);
+		ENSURE(strstr(f.log.last, "solver.max_steps") != NULL && strstr(f.log.last, "rejected") != NULL);
+		ENSURE_STATUS(fmi2GetInteger(c, &max_steps, 1, &steps), fmi2OK);
+		ENSURE(steps == 100000);  // the file's default
+	}
+	ENSURE_STATUS(set_integer(c, &f, "solver.max_steps", 1), fmi2OK);
+	ENSURE_STATUS(fmi2GetInteger(c, &max_steps, 1, &steps), fmi2OK);
+	ENSURE(steps == 1);
+	ENSURE(get(c, &f, "solver.atol_position") == 1e-150 && get(c, &f, "solver.max_step") == 0.0);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The experiment's tolerance sets CVODE's relative tolerance unless solver.rtol was set
+// explicitly (docs/fmu.md), also when it was set before fmi2SetupExperiment, and also when the
+// explicit value came with a restored state.
+static int test_experiment_tolerance_yields_to_an_explicit_rtol(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = fmi2Instantiate("experiment", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+	                                  fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-3, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE(get(c, &f, "solver.rtol") == 1e-3);
+	fmi2FreeInstance(c);
+
+	c = fmi2Instantiate("explicit", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(set_real(c, &f, "solver.rtol", 1e-9), fmi2OK);
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-3, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE(get(c, &f, "solver.rtol") == 1e-9);
+	fmi2FreeInstance(c);
+
+	c = fmi2Instantiate("restored", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-3, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE(get(c, &f, "solver.rtol") == 1e-9);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// A state carries the solver settings and the experiment: an instance with the file's settings
+// and no stop time that takes the state of one with solver.max_step = 1 ms, 50 internal steps,
+// Adams and a stop time of 0.5 s reads those settings back and behaves as that instance does: a
+// step of 0.1 s (at least 100 internal steps of at most 1 ms) is discarded, and a step past 0.5 s
+// is refused.
+static int test_state_carries_the_settings_and_the_experiment(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component a = fmi2Instantiate("a", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	ENSURE(a != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(a, fmi2False, 0.0, 0.0, fmi2True, 0.5), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
+	ENSURE_STATUS(set_real(a, &f, "solver.max_step", 1e-3), fmi2OK);
+	ENSURE_STATUS(set_integer(a, &f, "solver.max_steps", 50), fmi2OK);
+	ENSURE_STATUS(set_string(a, &f, "solver.method", "adams"), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(a), fmi2OK);
+	for (int n = 0; n < 8; ++n)
+		ENSURE_STATUS(fmi2DoStep(a, n * 0.04, 0.04, fmi2True), fmi2OK);  // 40 internal steps each
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(a, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(a, state, &size), fmi2OK);
+	fmi2Byte* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(fmi2SerializeFMUstate(a, state, bytes, size), fmi2OK);
+	const double t = 8 * 0.04;
+
+	fmi2Component b = start(&f, "b");
+	ENSURE(b != NULL);
+	fmi2FMUstate restored = NULL;
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(b, bytes, size, &restored), fmi2OK);
+	ENSURE_STATUS(fmi2SetFMUstate(b, restored), fmi2OK);
+	ENSURE(get(b, &f, "solver.max_step") == 1e-3 && get(b, &f, "solver.rtol") == get(a, &f, "solver.rtol"));
+	const fmi2ValueReference max_steps = vr(&f, "solver.max_steps"), method = vr(&f, "solver.method");
+	fmi2Integer steps = 0;
+	fmi2String name = NULL;
+	ENSURE_STATUS(fmi2GetInteger(b, &max_steps, 1, &steps), fmi2OK);
+	ENSURE_STATUS(fmi2GetString(b, &method, 1, &name), fmi2OK);
+	ENSURE(steps == 50 && strcmp(name, "adams") == 0);
+	ENSURE_STATUS(fmi2DoStep(b, t, 0.1, fmi2True), fmi2Discard);
+	ENSURE_STATUS(fmi2SetFMUstate(b, restored), fmi2OK);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(b, t, 0.5, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "goes past the stop time") != NULL);
+	ENSURE_STATUS(fmi2DoStep(b, t, 0.04, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(b, &restored), fmi2OK);
+	free(bytes);
+	fmi2FreeInstance(a);
+	fmi2FreeInstance(b);
+	teardown(&f);
+	return 0;
+}
+
+// A motion port whose inputs were set some steps before a state was saved keeps moving along its
+// line after fmi2GetFMUstate and fmi2SetFMUstate: base.x = 0 and base.vx = 1 m/s set once at
+// t = 0 put the anchor at x = t. Tolerance: t is a sum of steps of 0.1 s, exact to a few ulps of
+// 1 s (1e-15 m at 1 m/s).
+static int test_a_restored_motion_continues_along_its_line(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "motion");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(set_real(c, &f, "base.vx", 1.0), fmi2OK);
+	for (int n = 0; n < 3; ++n) {
+		ENSURE_STATUS(fmi2DoStep(c, n * 0.1, 0.1, fmi2True), fmi2OK);
+		ENSURE_NEAR(get(c, &f, "p[0].x"), (n + 1) * 0.1, 1e-15);
+	}
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	ENSURE_NEAR(get(c, &f, "p[0].x"), 0.3, 1e-15);
+	for (int n = 3; n < 5; ++n) {
+		ENSURE_STATUS(fmi2DoStep(c, n * 0.1, 0.1, fmi2True), fmi2OK);
+		ENSURE_NEAR(get(c, &f, "p[0].x"), (n + 1) * 0.1, 1e-15);
+	}
+	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.3, 0.1, fmi2True), fmi2OK);
+	ENSURE_NEAR(get(c, &f, "p[0].x"), 0.4, 1e-15);
+	ENSURE(get(c, &f, "base.x") == 0.0 && get(c, &f, "base.vx") == 1.0);  // the inputs as set
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// Value references one past the last variable, NULL value arrays, an empty instance name and a
+// buffer too small for a state: each an fmi2Error with a message, never a read or write out of
+// bounds (FMI 2.0: the instance name must be non-empty).
+static int test_bounds_of_references_arrays_and_buffers(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	ENSURE(fmi2Instantiate("", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False) == NULL);
+	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
+	fmi2Component c = start(&f, "bounds");
+	ENSURE(c != NULL);
+	const fmi2ValueReference past = (fmi2ValueReference)f.table.count, x = vr(&f, "tip.x"), fx = vr(&f, "tip.fx");
+	char expected[64];
+	snprintf(expected, sizeof expected, "unknown value reference %u", (unsigned)past);
+	double value = 0.0, seed = 1.0;
+	fmi2Integer integer = 0;
+	fmi2String string = NULL;
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetReal(c, &past, 1, &value), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetReal(c, &past, 1, &value), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetInteger(c, &past, 1, &integer), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetString(c, &past, 1, &string), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &x, 1, &past, 1, &seed, &value), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &past, 1, &fx, 1, &seed, &value), fmi2Error);
+	ENSURE(strstr(f.log.last, expected) != NULL);
+	// A value reference with a NULL value array.
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetReal(c, &x, 1, NULL), fmi2Error);
+	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetReal(c, &fx, 1, NULL), fmi2Error);
+	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	// A serialised state needs all its bytes.
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
+	fmi2Byte* bytes = calloc(size, 1);
+	ENSURE(bytes != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size - 1), fmi2Error);
+	ENSURE(strstr(f.log.last, "needs") != NULL);
+	ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
+	free(bytes);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The status functions answer in the terminated state too (FMI 2.0, 4.2.4: fmi2Get*Status is
+// allowed in stepComplete, stepFailed, stepCanceled and terminated): the last successful time is
+// the end of the last step.
+static int test_status_after_terminate(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "terminated");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.25, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2Terminate(c), fmi2OK);
+	double time = NAN;
+	fmi2Status status = fmi2Fatal;
+	fmi2Boolean terminated = fmi2True;
+	fmi2String pending = NULL;
+	ENSURE_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &time), fmi2OK);
+	ENSURE(time == 0.25);
+	ENSURE_STATUS(fmi2GetStatus(c, fmi2DoStepStatus, &status), fmi2OK);
+	ENSURE(status == fmi2OK);
+	ENSURE_STATUS(fmi2GetBooleanStatus(c, fmi2Terminated, &terminated), fmi2OK);
+	ENSURE(terminated == fmi2False);
+	ENSURE_STATUS(fmi2GetStringStatus(c, fmi2PendingStatus, &pending), fmi2OK);
+	ENSURE(pending != NULL && pending[0] == '\0');
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// FMI loggers take the message as a printf format (FMI 2.0, 2.1.5): a '%' of the text, here of a
+// resource location with a percent-escape, reaches the logger as "%%", and the message formatted
+// shows the location as it was given.
+static int test_messages_are_printf_formats(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	const char* location = "file:///nonexistent%25d%2541/resources";
+	ENSURE(fmi2Instantiate("percent", fmi2CoSimulation, f.guid, location, &f.callbacks, fmi2False, fmi2False) == NULL);
+	char formatted[sizeof f.log.last];
+	size_t k = 0;
+	for (const char* p = f.log.last; *p && k + 1 < sizeof formatted; ++p) {
+		if (*p == '%') {
+			ENSURE(p[1] == '%');  // no conversion: the logger gets no arguments
+			++p;
+		}
+		formatted[k++] = *p;
+	}
+	formatted[k] = '\0';
+	ENSURE(strstr(formatted, location) != NULL);
+	teardown(&f);
+	return 0;
+}
+
+// Time resolution and round-off margins scale with the time (docs/fmu.md): at t = 1e6 s a step
+// below 4 eps 1e6 s (8.9e-10 s) is refused, a communication point 1e-8 s off the FMU's time (well
+// within 1000 ulps of 1e6 s, 2.2e-7 s) is taken, 1e-3 s off is not; a stop time is reached by
+// steps whose sum overshoots it by round-off (0.1 + 0.1 + 0.1 = 0.30000000000000004).
+static int test_time_margins_scale_with_the_time(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = fmi2Instantiate("margins", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
+	                                  fmi2False);
+	ENSURE(c != NULL);
+	const double t0 = 1e6;
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-10, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "below the time resolution") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-3, 0.1, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "does not match") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-8, 0.1, fmi2True), fmi2OK);
+	// x = l0 + (x0 - l0) cos(w t) over the 0.1 s taken, at the default rtol 1e-6: 1e-5 m.
+	ENSURE_NEAR(get(c, &f, "tip.x"), 0.5 + 0.2 * cos(sqrt(25.0) * 0.1), 1e-5);
+	fmi2FreeInstance(c);
+
+	c = fmi2Instantiate("stop", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 0.3), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	double t = 0.0;
+	for (int n = 0; n < 3; ++n, t += 0.1)
+		ENSURE_STATUS(fmi2DoStep(c, t, 0.1, fmi2True), fmi2OK);
+	ENSURE(t > 0.3);
+	ENSURE_STATUS(fmi2DoStep(c, t, 0.1, fmi2True), fmi2Error);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Random call sequences against the FMI 2.0 Co-Simulation state machine
 // ---------------------------------------------------------------------------------------------
 
@@ -722,6 +1188,15 @@ int main(int argc, char** argv)
 	RUN_TEST(test_model_description_lists_every_variable_once);
 	RUN_TEST(test_parameter_values);
 	RUN_TEST(test_parameter_values_refused);
+	RUN_TEST(test_settings_take_effect_after_an_output_was_read);
+	RUN_TEST(test_solver_settings_are_checked_against_their_ranges);
+	RUN_TEST(test_experiment_tolerance_yields_to_an_explicit_rtol);
+	RUN_TEST(test_state_carries_the_settings_and_the_experiment);
+	RUN_TEST(test_a_restored_motion_continues_along_its_line);
+	RUN_TEST(test_bounds_of_references_arrays_and_buffers);
+	RUN_TEST(test_status_after_terminate);
+	RUN_TEST(test_messages_are_printf_formats);
+	RUN_TEST(test_time_margins_scale_with_the_time);
 	RUN_TEST(test_random_call_sequences_follow_the_state_machine);
 	return TEST_SUMMARY();
 }

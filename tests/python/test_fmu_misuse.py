@@ -1,4 +1,5 @@
 """Misuse of the FMU: each an error with a clear message, never a crash; usable after reset."""
+import json
 import math
 import os
 import struct
@@ -99,6 +100,17 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         inst.free()
 
 
+def categories_logged(inst, t):
+    """The categories of the messages one round logs: a step from t (logSolver), the tunable
+    parameter k set (logEvents) and an output set (logStatusError)."""
+    n = len(inst.messages)
+    inst.slave.doStep(t, 0.1)
+    inst.set("k", 51.0 + 10 * t)
+    with pytest.raises(FMICallException):
+        inst.slave.setReal([inst.vr["tip.x"]], [1.0])
+    return {m[1] for m in inst.messages[n:]}
+
+
 def test_debug_logging_logs_exactly_the_categories_asked_for(test_fmu):
     # FMI 2.0 (2.1.5): logging on with categories outputs only those, also after another list;
     # logging on with none outputs every category; logging off with none leaves the problems
@@ -106,27 +118,18 @@ def test_debug_logging_logs_exactly_the_categories_asked_for(test_fmu):
     # three categories: logSolver (a step), logEvents (a tunable parameter set), logStatusError.
     inst = Instance(test_fmu("driven_oscillator"), logging_on=True).start()
     s = inst.slave
-
-    def logged(t):
-        n = len(inst.messages)
-        s.doStep(t, 0.1)
-        inst.set("k", 51.0 + 10 * t)
-        with pytest.raises(FMICallException):
-            s.setReal([inst.vr["tip.x"]], [1.0])
-        return {m[1] for m in inst.messages[n:]}
-
     try:
         s.setDebugLogging(True, ["logEvents"])
-        assert logged(0.0) == {"logEvents"}
+        assert categories_logged(inst, 0.0) == {"logEvents"}
         s.setDebugLogging(True, ["logSolver"])
         s.setDebugLogging(True, ["logEvents", "logStatusError"])
-        assert logged(0.1) == {"logEvents", "logStatusError"}
+        assert categories_logged(inst, 0.1) == {"logEvents", "logStatusError"}
         s.setDebugLogging(True, [])
-        assert logged(0.2) == {"logEvents", "logSolver", "logStatusError"}
+        assert categories_logged(inst, 0.2) == {"logEvents", "logSolver", "logStatusError"}
         s.setDebugLogging(False, [])
-        assert logged(0.3) == {"logStatusError"}
+        assert categories_logged(inst, 0.3) == {"logStatusError"}
         s.setDebugLogging(False, ["logStatusError"])
-        assert logged(0.4) == set()
+        assert categories_logged(inst, 0.4) == set()
     finally:
         inst.free()
 
@@ -603,5 +606,114 @@ def test_an_absolute_tolerance_below_the_bound_is_refused_when_set(test_fmu):
         s.enterInitializationMode()
         s.exitInitializationMode()
         assert inst.get("solver.atol_velocity") == 1e-150
+    finally:
+        inst.free()
+
+
+def test_logging_off_with_categories_leaves_the_others_as_they_were(test_fmu):
+    # FMI 2.0 (2.1.5), docs/fmu.md: fmi2SetDebugLogging(fmi2False, categories) switches those
+    # categories off and leaves the others as they were, here every category (loggingOn at
+    # instantiation). A round makes one message of each of three categories (as in the test above);
+    # the event names the one parameter that changed, k, with its new value.
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True).start()
+    s = inst.slave
+
+    try:
+        assert categories_logged(inst, 0.0) == {"logEvents", "logSolver", "logStatusError"}
+        events = [m[2] for m in inst.messages if m[1] == "logEvents"]
+        assert len(events) == 1 and "parameter k = 51 " in events[0], events
+        s.setDebugLogging(False, ["logSolver"])
+        assert categories_logged(inst, 0.1) == {"logEvents", "logStatusError"}
+        s.setDebugLogging(False, ["logEvents"])
+        assert categories_logged(inst, 0.2) == {"logStatusError"}
+    finally:
+        inst.free()
+
+
+def test_directional_derivatives_are_of_outputs_only(test_fmu):
+    # FMI 2.0 (fmi2GetDirectionalDerivative): the unknowns are outputs (or states, here the local
+    # particle variables); a parameter or an input is no unknown: refused with a message.
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    s, vr = inst.slave, inst.vr
+    try:
+        for name in ("k", "tip.fx", "solver.rtol"):
+            expect_error(inst, lambda: s.getDirectionalDerivative([vr[name]], [vr["base.x"]], [1.0]), name,
+                         "not an output")
+        assert s.getDirectionalDerivative([vr["p[0].x"]], [vr["base.x"]], [1.0]) == [1.0]
+    finally:
+        inst.free()
+
+
+SETTINGS = {
+    "springmass": 1, "name": "settings", "description": "The driven oscillator with every solver setting given.",
+    "parameters": {"m": 2.0, "k": 50.0, "tol": 1e-7, "hmax": 0.005},
+    "gravity": [0, 0, 0], "mass_damping": 0.0,
+    "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                  {"name": "bob", "position": [0.7, 0, 0], "mass": "m"}],
+    "springs": [{"a": "anchor", "b": "bob", "stiffness": "k", "rest_length": 0.5}],
+    "ports": [{"name": "base", "particle": "anchor", "kind": "motion"},
+              {"name": "tip", "particle": "bob", "kind": "force"}],
+    "simulation": {"stop_time": 3.0, "output_interval": 0.02, "rtol": "tol", "atol_position": 1e-9,
+                   "atol_velocity": 1e-7, "max_step": "hmax", "max_steps": 777, "method": "adams", "solver": "klu",
+                   "jacobian": "definite"},
+    "fmu": {"particle_variables": False}}
+
+
+def test_the_description_declares_what_the_fmu_holds(package, tmp_path):
+    # modelDescription.xml is written from the table the FMU uses at run time: every parameter's
+    # start value (initial="exact") is what the instance reads in initialisation mode, here with
+    # every solver setting of the file away from its default; the DefaultExperiment is the file's
+    # stop time, output interval and tolerance; "particle_variables": false leaves out the
+    # particles' variables; the units are the SI units they name.
+    model = tmp_path / "settings.json"
+    model.write_text(json.dumps(SETTINGS))
+    fmu = package(model)
+    md = read_model_description(str(fmu))
+    experiment = md.defaultExperiment
+    assert [float(experiment.stopTime), float(experiment.stepSize), float(experiment.tolerance)] == [3.0, 0.02, 1e-7]
+    assert not [v.name for v in md.modelVariables if v.name.startswith("p[")]
+    base = {u.name: (u.baseUnit.kg, u.baseUnit.m, u.baseUnit.s) for u in md.unitDefinitions}
+    assert base == {"m": (0, 1, 0), "m/s": (0, 1, -1), "N": (1, 1, -2), "J": (1, 2, -2), "s": (0, 0, 1),
+                    "1": (0, 0, 0)}
+    inst = Instance(fmu)
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        parameters = [v for v in md.modelVariables if v.causality == "parameter"]
+        assert {v.name for v in parameters} >= {"solver.max_step", "solver.max_steps", "solver.method", "hmax"}
+        for v in parameters:
+            if v.type == "Real":
+                value, start = s.getReal([v.valueReference])[0], float(v.start)
+            elif v.type == "Integer":
+                value, start = s.getInteger([v.valueReference])[0], int(v.start)
+            else:
+                value, start = s.getString([v.valueReference])[0], v.start
+                value = value.decode() if isinstance(value, bytes) else value
+            assert value == start, (v.name, value, start)
+    finally:
+        inst.free()
+
+
+def test_settings_named_by_parameters_are_explicit_solver_settings(package, tmp_path):
+    # "rtol": "tol" and "max_step": "hmax": setting tol is setting solver.rtol, so that the
+    # experiment's tolerance, given after it, leaves it alone (as after solver.rtol itself); hmax
+    # sets solver.max_step, and 1 ms with 50 internal steps allowed cannot cover a step of 0.1 s
+    # (at least 100 internal steps): discarded.
+    model = tmp_path / "settings.json"
+    model.write_text(json.dumps(SETTINGS))
+    inst = Instance(package(model))
+    s = inst.slave
+    try:
+        inst.set("tol", 1e-9)
+        s.setupExperiment(tolerance=1e-3, startTime=0.0)
+        s.enterInitializationMode()
+        inst.set("hmax", 1e-3)
+        inst.set("solver.max_steps", 50)
+        assert inst.get("solver.rtol", "solver.max_step") == [1e-9, 1e-3]
+        s.exitInitializationMode()
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 0.1)
+        assert info.value.status == 2  # fmi2Discard
     finally:
         inst.free()
