@@ -593,6 +593,209 @@ static int test_per_strain_rope_stretch_is_independent_of_discretisation(void)
 	return 0;
 }
 
+// Below the singular point's threshold, 0 < L < SM_DEGENERATE_LENGTH_RATIO * l0, a rest-length
+// spring exerts no force and no damping, dissipates nothing, and its blocks are K = ks I and
+// D = 0 (model.h); at L = SM_DEGENERATE_LENGTH_RATIO * l0 exactly it is regular. Fifteen springs,
+// each between a pair of particles of its own, take three roles in turn: 1e-13 m along x with
+// l0 = 0.5 m, about 2.4e-13 m along a diagonal with l0 = 2 m (both below the threshold), and
+// exactly at the threshold along x. With 15 springs and a period of 3 every role meets every
+// slot of the four- and two-spring groups and the scalar remainder, and every lane width must
+// apply the rule (the public evaluations, the geometry of jacobian.c and the dissipated power
+// included). No gravity, no mass damping: the forces are the springs' alone.
+static int test_springs_shorter_than_the_degenerate_ratio_exert_nothing(void)
+{
+	enum { S = 15, N = 2 * S };
+	rng r = {9191};
+	sm_model* m = model_without_gravity(0.0);
+	ENSURE(m != NULL);
+	double x[3 * N], v[3 * N], expect[3 * N], ks[S], kd[S], l0[S];
+	double power = 0.0;  // kd r^2 of the springs at the threshold, the only ones that dissipate
+	for (int32_t s = 0; s < S; s++) {
+		const int role = s % 3;
+		double* xa = x + 6 * s;
+		double* xb = xa + 3;
+		l0[s] = role == 1 ? 2.0 : 0.5;
+		ks[s] = 40.0 + s;
+		kd[s] = 0.5 + 0.1 * s;
+		if (role == 2) {
+			// x_a at x = 0, so that x_b - x_a is the threshold exactly; sqrt(L^2) = L exactly
+			// in binary floating point, so L = ratio * l0 and the spring is regular.
+			xa[0] = 0.0;
+			xb[0] = SM_DEGENERATE_LENGTH_RATIO * l0[s];
+		} else {
+			xa[0] = 0.3;
+			xb[0] = 0.3 + 1e-13;
+		}
+		xa[1] = xb[1] = (double)s;
+		xa[2] = 0.1;
+		xb[2] = role == 1 ? 0.1 + 2e-13 : 0.1;
+		if (role == 1)
+			xb[1] = (double)s - 1e-13;
+		for (int e = 0; e < 2; e++) {
+			ENSURE(add_particle_at(m, x[6 * s + 3 * e], x[6 * s + 3 * e + 1], x[6 * s + 3 * e + 2], 1.0));
+			for (int k = 0; k < 3; k++)
+				v[6 * s + 3 * e + k] = rng_uniform(&r, -2.0, 2.0);
+		}
+		sm_spring_def d = sm_default_spring_def();
+		d.a = 2 * s;
+		d.b = 2 * s + 1;
+		d.rest_length = l0[s];
+		d.stiffness = ks[s];
+		d.damping = kd[s];
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		// Expected force on a: zero below the threshold; at it u = +x, f_a = [ks (L - l0) + kd r] u
+		// with r = the x component of v_b - v_a.
+		for (int k = 0; k < 6; k++)
+			expect[6 * s + k] = 0.0;
+		if (role == 2) {
+			const double rate = v[6 * s + 3] - v[6 * s];
+			const double magnitude = ks[s] * (xb[0] - l0[s]) + kd[s] * rate;
+			expect[6 * s] = magnitude;
+			expect[6 * s + 3] = -magnitude;
+			power += kd[s] * rate * rate;
+		}
+	}
+	// The force at the threshold is u = d (1/L), within an ulp of +x, times the magnitude
+	// computed from the same products: 1e-14 relative. The power is 5 positive terms summed in
+	// another order: 1e-14 relative. Below the threshold everything is exactly zero.
+	const int lanes[3] = {1, 2, 4};
+	for (int w = 0; w < 3; w++)
+		for (int variant = 0; variant < 2; variant++) {
+			double f[3 * N] = {0}, lane_power = 0.0;
+			sm_spring_jacobians* records = sm_spring_jacobians_create(m);
+			ENSURE(records != NULL);
+			sm_model_spring_forces_lanes(m, x, v, f, records, (sm_jacobian_variant)variant, &lane_power, lanes[w]);
+			records->evaluated = 1;  // the lanes function fills the records without marking them
+			for (int k = 0; k < 3 * N; k++)
+				ENSURE_NEAR(f[k], expect[k], 1e-14 * fabs(expect[k]));
+			ENSURE_REL(lane_power, power, 1e-14, 0.0);
+			for (int32_t s = 0; s < S; s++) {
+				double K[9], D[9];
+				ENSURE_STATUS(sm_spring_jacobians_block(records, s, K, D), SM_OK);
+				for (int k = 0; k < 9; k++) {
+					if (s % 3 != 2) {  // ks I and D = 0, exactly (u = 0, 1/L = 0)
+						ENSURE(K[k] == (k % 4 == 0 ? ks[s] : 0.0));
+						ENSURE(D[k] == 0.0);
+					} else if (variant == SM_JACOBIAN_DEFINITE) {
+						// Regular and compressed to almost nothing: the clamp leaves the axial
+						// ks u u^T, and D = kd u u^T, with u = +x to an ulp.
+						ENSURE_NEAR(K[k], k == 0 ? ks[s] : 0.0, 1e-14 * ks[s]);
+						ENSURE_NEAR(D[k], k == 0 ? kd[s] : 0.0, 1e-14 * kd[s]);
+					}
+				}
+			}
+			sm_spring_jacobians_destroy(records);
+		}
+	// The public evaluations: forces, dissipated power, and the blocks of jacobian.c.
+	double f[3 * N];
+	sm_model_forces(m, x, v, NULL, f);
+	for (int k = 0; k < 3 * N; k++)
+		ENSURE_NEAR(f[k], expect[k], 1e-14 * fabs(expect[k]));
+	ENSURE_REL(sm_model_dissipated_power(m, x, v), power, 1e-14, 0.0);
+	for (int32_t s = 0; s < S; s++) {
+		double K[9], D[9];
+		ENSURE_STATUS(sm_model_spring_jacobian(m, s, x, v, SM_JACOBIAN_DEFINITE, K, D), SM_OK);
+		for (int k = 0; k < 9; k++) {
+			const double k_expect = s % 3 != 2 ? (k % 4 == 0 ? ks[s] : 0.0) : (k == 0 ? ks[s] : 0.0);
+			const double d_expect = s % 3 != 2 ? 0.0 : (k == 0 ? kd[s] : 0.0);
+			ENSURE_NEAR(K[k], k_expect, 1e-14 * ks[s]);
+			ENSURE_NEAR(D[k], d_expect, 1e-14 * kd[s]);
+		}
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Each spring's stored Jacobian against the closed forms of law_rest_length.h and
+// law_spring_damping.h, for every lane width, with and without velocities and power, both
+// variants:
+//   K = ks [u u^T + g P] + (kd / L) [r P + u (P dv)^T],   D = kd u u^T,
+// with g = 1 - l0/L, which the definiteness-preserving variant clamps at zero and where it leaves
+// out the damping term (as does a missing v: dv = 0). Fifteen springs, each between a pair of
+// particles of its own, cycle through compressed (l0 = 1.5 L), stretched (l0 = 0.6 L) and
+// zero-length, so that each kind meets every slot of the groups of four and two and the scalar
+// remainder. The closed form and the factored records group the same O(|K|) terms differently
+// (the records subtract beta from ks): equal to a few rounding errors of the largest entry;
+// 1e-12 of it leaves a wide margin.
+static int test_records_of_every_lane_width_match_closed_forms(void)
+{
+	enum { S = 15, N = 2 * S };
+	rng r = {4711};
+	sm_model* m = model_without_gravity(0.0);
+	ENSURE(m != NULL);
+	double x[3 * N], v[3 * N];
+	for (int k = 0; k < 3 * N; k++) {
+		x[k] = rng_uniform(&r, 0.0, 1.0);
+		v[k] = rng_uniform(&r, -2.0, 2.0);
+	}
+	for (int32_t i = 0; i < N; i++)
+		ENSURE(add_particle_at(m, x[3 * i], x[3 * i + 1], x[3 * i + 2], 1.0));
+	for (int32_t s = 0; s < S; s++) {
+		sm_spring_def d = sm_default_spring_def();
+		d.a = 2 * s;
+		d.b = 2 * s + 1;
+		const double* xa = x + 6 * s;
+		const double dx = xa[3] - xa[0], dy = xa[4] - xa[1], dz = xa[5] - xa[2];
+		const double L = sqrt(dx * dx + dy * dy + dz * dz);
+		d.kind = s % 3 == 2 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		d.rest_length = s % 3 == 0 ? 1.5 * L : s % 3 == 1 ? 0.6 * L : 0.0;
+		d.stiffness = 20.0 + 10.0 * s;
+		d.damping = 0.5 + 0.2 * s;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	}
+	const int lanes[3] = {1, 2, 4};
+	for (int w = 0; w < 3; w++)
+		for (int combination = 0; combination < 3; combination++)  // no v; v; v and power
+			for (int variant = 0; variant < 2; variant++) {
+				const bool with_v = combination > 0;
+				double f[3 * N] = {0}, power = 0.0;
+				sm_spring_jacobians* records = sm_spring_jacobians_create(m);
+				ENSURE(records != NULL);
+				sm_model_spring_forces_lanes(m, x, with_v ? v : NULL, f, records, (sm_jacobian_variant)variant,
+				                             combination == 2 ? &power : NULL, lanes[w]);
+				records->evaluated = 1;  // the lanes function fills the records without marking them
+				for (int32_t s = 0; s < S; s++) {
+					double l0, ks, kd, K[9], D[9], expect_k[9], expect_d[9];
+					ENSURE_STATUS(sm_model_spring_constants(m, s, &l0, &ks, &kd), SM_OK);
+					const double* xa = x + 6 * s;
+					const double* va = v + 6 * s;
+					double d[3], u[3], dv[3], L = 0.0, rate = 0.0;
+					for (int k = 0; k < 3; k++) {
+						d[k] = xa[3 + k] - xa[k];
+						L += d[k] * d[k];
+					}
+					L = sqrt(L);
+					for (int k = 0; k < 3; k++) {
+						u[k] = d[k] / L;
+						dv[k] = with_v ? va[3 + k] - va[k] : 0.0;
+						rate += u[k] * dv[k];
+					}
+					double g = 1.0 - l0 / L;
+					if (variant == SM_JACOBIAN_DEFINITE && g < 0.0)
+						g = 0.0;
+					const double c = variant == SM_JACOBIAN_EXACT ? kd / L : 0.0;
+					for (int i = 0; i < 3; i++)
+						for (int j = 0; j < 3; j++) {
+							const double p = (i == j ? 1.0 : 0.0) - u[i] * u[j];
+							const double pdv_j = dv[j] - rate * u[j];
+							expect_k[3 * i + j] = ks * (u[i] * u[j] + g * p) + c * (rate * p + u[i] * pdv_j);
+							expect_d[3 * i + j] = kd * u[i] * u[j];
+						}
+					ENSURE_STATUS(sm_spring_jacobians_block(records, s, K, D), SM_OK);
+					double scale = 0.0;
+					for (int k = 0; k < 9; k++)
+						scale = fmax(scale, fabs(expect_k[k]));
+					for (int k = 0; k < 9; k++) {
+						ENSURE_NEAR(K[k], expect_k[k], 1e-12 * scale);
+						ENSURE_NEAR(D[k], expect_d[k], 1e-12 * kd);
+					}
+				}
+				sm_spring_jacobians_destroy(records);
+			}
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -609,5 +812,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_disabled_spring_exerts_no_force);
 	RUN_TEST(test_per_strain_rope_stretch_is_independent_of_discretisation);
 	RUN_TEST(test_every_lane_width_gives_the_same_bits);
+	RUN_TEST(test_springs_shorter_than_the_degenerate_ratio_exert_nothing);
+	RUN_TEST(test_records_of_every_lane_width_match_closed_forms);
 	return TEST_SUMMARY();
 }

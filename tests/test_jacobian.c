@@ -862,6 +862,68 @@ static int test_fused_errors(void)
 	return 0;
 }
 
+// The pattern belongs to the particles' motions and the springs' endpoints it was built from
+// (model.h). A model in which a constrained and a free particle swapped motions, or a spring was
+// moved to another particle at either end, keeps its counts but has another matrix: both fills
+// must refuse it with SM_ERROR_TOPOLOGY and leave the values untouched. Undoing the change makes
+// the pattern valid again.
+static int test_sparse_jacobian_rejects_changed_motions_and_endpoints(void)
+{
+	rng r = {8642};
+	enum { N = 8 };
+	double x[3 * N], v[3 * N], f[3 * N];
+	sm_model* m = random_model(&r, N, 14, 1, x, v);  // particle N - 1 fixed
+	ENSURE(m != NULL);
+	ENSURE_STATUS(sm_model_set_particle_motion(m, 2, SM_PARTICLE_DRIVEN), SM_OK);
+	v[6] = v[7] = v[8] = 0.0;
+	sm_sparse_jacobian* J = sm_sparse_jacobian_create(m);
+	sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+	ENSURE(J != NULL && sj != NULL);
+	const int64_t nnz = sm_sparse_jacobian_nonzeros(J);
+	double* values = malloc((size_t)nnz * sizeof(double));
+	ENSURE(values != NULL);
+	ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, SM_JACOBIAN_EXACT, values, NULL), SM_OK);
+	const int32_t moved = 5;
+	sm_spring_def original;
+	ENSURE_STATUS(sm_model_get_spring(m, moved, &original), SM_OK);
+	int32_t other = 0;  // a particle that is neither end of the moved spring
+	while (other == original.a || other == original.b)
+		other++;
+	for (int change = 0; change < 3; change++) {
+		sm_spring_def d = original;
+		if (change == 0) {  // particle 2 free, particle 4 driven: the same number of free particles
+			ENSURE_STATUS(sm_model_set_particle_motion(m, 2, SM_PARTICLE_FREE), SM_OK);
+			ENSURE_STATUS(sm_model_set_particle_motion(m, 4, SM_PARTICLE_DRIVEN), SM_OK);
+		} else {
+			if (change == 1)
+				d.b = other;
+			else
+				d.a = other;
+			ENSURE_STATUS(sm_model_set_spring(m, moved, &d), SM_OK);
+		}
+		ENSURE(sm_model_free_count(m) == N - 2 && sm_model_spring_count(m) == 14);
+		for (int64_t k = 0; k < nnz; k++)
+			values[k] = 42.0;
+		ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, SM_JACOBIAN_EXACT, values, NULL), SM_ERROR_TOPOLOGY);
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
+		ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, values, NULL), SM_ERROR_TOPOLOGY);
+		for (int64_t k = 0; k < nnz; k++)
+			ENSURE(values[k] == 42.0);
+		if (change == 0) {
+			ENSURE_STATUS(sm_model_set_particle_motion(m, 4, SM_PARTICLE_FREE), SM_OK);
+			ENSURE_STATUS(sm_model_set_particle_motion(m, 2, SM_PARTICLE_DRIVEN), SM_OK);
+		} else {
+			ENSURE_STATUS(sm_model_set_spring(m, moved, &original), SM_OK);
+		}
+		ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, SM_JACOBIAN_EXACT, values, NULL), SM_OK);
+	}
+	free(values);
+	sm_spring_jacobians_destroy(sj);
+	sm_sparse_jacobian_destroy(J);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -881,5 +943,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
 	RUN_TEST(test_springs_in_groups_equal_springs_alone_bit_for_bit);
 	RUN_TEST(test_fused_errors);
+	RUN_TEST(test_sparse_jacobian_rejects_changed_motions_and_endpoints);
 	return TEST_SUMMARY();
 }

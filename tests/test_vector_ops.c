@@ -422,6 +422,29 @@ static int check_dot_product_multi(vector_sets* s)
 
 LENGTH_TEST(dot_product_multi, 91)
 
+// The fused operations go through the vectors in blocks of 1024 elements (lib/vector_ops.c), so
+// that a block of the output and one of an input stay in the L1 cache while several vectors are
+// combined; the lengths above all fit in one block. At exactly one block, one element more, and
+// two blocks and a part the results must still be SUNDIALS' bit for bit.
+static int test_fused_operations_across_blocks(void)
+{
+	static const sunindextype lengths[] = {1024, 1025, 2 * 1024 + 37};
+	for (size_t l = 0; l < sizeof lengths / sizeof lengths[0]; l++) {
+		vector_sets s;
+		if (!sets_create(&s, lengths[l], 101 + (uint64_t)l)) {
+			sets_destroy(&s);
+			ENSURE(false);
+		}
+		const int failed = check_linear_combination(&s) || check_scale_add_multi_and_scale_array(&s);
+		sets_destroy(&s);
+		if (failed) {
+			printf("  at length %ld\n", (long)lengths[l]);
+			return 1;
+		}
+	}
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // The table of operations and its clones
 // ---------------------------------------------------------------------------------------------
@@ -787,6 +810,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_linear_combination);
 	RUN_TEST(test_scale_add_multi_and_scale_array);
 	RUN_TEST(test_dot_product_multi);
+	RUN_TEST(test_fused_operations_across_blocks);
 	RUN_TEST(test_installed_operations_and_clones);
 	RUN_TEST(test_cvode_with_and_without);
 	return TEST_SUMMARY();
