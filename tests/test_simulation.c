@@ -2385,6 +2385,40 @@ static int test_direct_solver_statistics(void)
 	return 0;
 }
 
+// CVODE's error weights, 1 / (rtol |y_i| + atol_i), follow the documented tolerances
+// (docs/simulation.md): positions get atol_position, velocities atol_velocity, and so does the
+// dissipated energy [J]. The damped oscillator moves along x only, so its y and z positions and
+// velocities are exactly 0 and their weights exactly 1 / atol; after 1 ms it has dissipated about
+// 1e-8 J, which rtol 1e-7 turns into 1e-15 beside an atol of at least 1e-9: 1e-5 relative.
+// Both ways round, so that the energy's tolerance cannot be taken for the positions'.
+static int test_error_weights_follow_the_tolerances(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 0.5, 0.2);
+	ENSURE(model != NULL);
+	const double tolerances[2][2] = {{1e-3, 1e-9}, {1e-9, 1e-3}};  // {position, velocity}
+	for (int k = 0; k < 2; k++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.relative_tolerance = 1e-7;
+		d.absolute_tolerance_position = tolerances[k][0];
+		d.absolute_tolerance_velocity = tolerances[k][1];
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1e-3), SM_OK);
+		ENSURE(sm_simulation_dissipated_energy(sim) > 0.0);
+		N_Vector weights = N_VClone(sim->y);
+		ENSURE(weights != NULL);
+		ENSURE(CVodeGetErrWeights(sim->cvode, weights) == CV_SUCCESS);
+		const double* w = N_VGetArrayPointer(weights);  // x y z, vx vy vz, dissipated energy
+		ENSURE(w[1] == 1.0 / tolerances[k][0] && w[2] == 1.0 / tolerances[k][0]);
+		ENSURE(w[4] == 1.0 / tolerances[k][1] && w[5] == 1.0 / tolerances[k][1]);
+		ENSURE_REL(w[6], 1.0 / tolerances[k][1], 1e-5, 0.0);
+		N_VDestroy(weights);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2437,5 +2471,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_auto_solver_choice_and_adams_above_it);
 	RUN_TEST(test_each_tolerance_is_used);
 	RUN_TEST(test_direct_solver_statistics);
+	RUN_TEST(test_error_weights_follow_the_tolerances);
 	return TEST_SUMMARY();
 }
