@@ -109,6 +109,9 @@ check_cases << 'CASES'
 0||run "$osc" -q -o - --t-end .01 --output-interval 1e-2 --max-steps 1e3
 0||run "$osc" -q -o - --t-end 0.01 --rtol +1.E-5
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '0x10'|run "$osc" -q -o - --max-steps 0x10
+2|springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '-1e-3'|run "$osc" -q -o - --max-step -1e-3
+0||run "$osc" -q -o - --t-end 0.01 --max-step 0
+2|springmass run: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
 2|springmass run: --atol must be > 0, got '-1'|run "$osc" -q -o - --atol -1

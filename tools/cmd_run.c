@@ -46,8 +46,12 @@ static void usage(FILE* out)
 	        "  --atol-velocity A      absolute tolerance of velocities and of the dissipated energy\n"
 	        "                         alone [m/s], [J] (wins over --atol)\n"
 	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
+	        "  --max-step H           largest internal step [s]; 0 for no limit\n"
+	        "  --jacobian NAME        exact or definite (the definiteness-preserving variant; the pcg\n"
+	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no statistics on stderr\n"
+	        "  -h, --help             this text\n"
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
 	        "solver's statistics at the end. Exit status: 0 success, 1 bad model, solver failure or\n"
@@ -88,6 +92,9 @@ typedef struct run_options {
 	double atol_position;
 	double atol_velocity;
 	double max_steps;
+	double max_step;
+	bool max_step_given;
+	const char* jacobian;
 	const char* solver;
 	const char* method;
 	bool positions;
@@ -232,8 +239,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 		} else if (a[0] == '-' && a[1] != '\0') {
 			static const char* const with_value[] = {
 			        "--t-end",  "--output-interval", "--rtol",   "--atol", "--atol-position", "--atol-velocity",
-			        "--max-steps", "--output",       "-o",       "--vtk",  "--solver",        "--method",
-			        "--set"};
+			        "--max-steps", "--max-step",     "--jacobian", "--output", "-o",          "--vtk",
+			        "--solver",    "--method",       "--set"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -277,6 +284,14 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					        SM_MIN_ABSOLUTE_TOLERANCE, value);
 					return 2;
 				}
+			} else if (strcmp(a, "--max-step") == 0) {
+				if (!cli_parse_number(value, &o->max_step) || !(o->max_step >= 0.0)) {
+					fprintf(stderr, "springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '%s'\n", value);
+					return 2;
+				}
+				o->max_step_given = true;
+			} else if (strcmp(a, "--jacobian") == 0) {
+				o->jacobian = value;
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
 			} else if (strcmp(a, "--vtk") == 0) {
@@ -356,6 +371,8 @@ int sm_cmd_run(int argc, char** argv)
 		def.absolute_tolerance_velocity = o.atol_velocity;
 	if (o.max_steps > 0.0)
 		def.max_steps = (int32_t)o.max_steps;
+	if (o.max_step_given)
+		def.max_step = o.max_step;
 	if (o.solver) {
 		def.solver = sm_linear_solver_from_name(o.solver);
 		if (def.solver == SM_SOLVER_COUNT) {
@@ -371,6 +388,17 @@ int sm_cmd_run(int argc, char** argv)
 			def.method = SM_METHOD_ADAMS;
 		else {
 			fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n", o.method);
+			status = 2;
+			goto done;
+		}
+	}
+	if (o.jacobian) {
+		if (strcmp(o.jacobian, "exact") == 0)
+			def.jacobian = SM_JACOBIAN_EXACT;
+		else if (strcmp(o.jacobian, "definite") == 0)
+			def.jacobian = SM_JACOBIAN_DEFINITE;
+		else {
+			fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n", o.jacobian);
 			status = 2;
 			goto done;
 		}

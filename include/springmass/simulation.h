@@ -87,7 +87,7 @@ typedef struct sm_simulation_def {
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
 	/// changes an input (default false: CVODE keeps its history and its error control absorbs
-	/// the jump; see "Inputs between calls" below).
+	/// the jump; see "Inputs between calls" above).
 	bool restart_on_input_change;
 	/// Called after every internal step of sm_simulation_advance with the time it reached [s]
 	/// and `on_step_context` (default NULL: not called), e.g. to show progress during a long

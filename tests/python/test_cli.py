@@ -191,6 +191,20 @@ def test_options_take_effect(tmp_path):
         assert expected in stats, stats
         _, other = read_csv(path)
         np.testing.assert_allclose(other[:, 1], default[:, 1], rtol=0, atol=1e-6)
+    # The definiteness-preserving Jacobian changes Newton's iterates, not the equations. The
+    # oscillator moves along its spring, where both Jacobians agree; the swinging rope turns its
+    # springs. At rtol 1e-9 the two runs of its tip agree to what the tolerances allow over
+    # 0.5 s of swing (measured 4.5e-7 m): 1e-5 m.
+    rope = [MODELS / "hanging_rope.json", "--t-end", 0.5, "--solver", "klu", "--rtol", 1e-9, "--atol", 1e-11]
+    _, exact = run_csv(tmp_path, *rope, "--jacobian", "exact", name="exact.csv")
+    _, definite = run_csv(tmp_path, *rope, "--jacobian", "definite", name="definite.csv")
+    assert not np.array_equal(definite, exact)
+    np.testing.assert_allclose(definite[:, 1:7], exact[:, 1:7], rtol=0, atol=1e-5)
+    # Internal steps of at most 1 ms take at least 2000 steps over 2 s.
+    stats = cli("run", osc, *base, "-o", tmp_path / "short.csv", "--max-step", 1e-3).stderr
+    assert int(stats.split(" steps,")[0].split()[-1]) >= 2000, stats
+    _, short = read_csv(tmp_path / "short.csv")
+    np.testing.assert_allclose(short[:, 1], default[:, 1], rtol=0, atol=1e-6)
     # One internal step per output interval is not enough for a second of the oscillator.
     out = cli("run", osc, "-q", "-o", tmp_path / "few.csv", "--max-steps", 1, "--output-interval", 1, status=1)
     assert "steps" in out.stderr
