@@ -8,6 +8,7 @@
 #include "springmass/structures.h"
 #include "test_harness.h"
 
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -1676,6 +1677,177 @@ static int test_initial_state_through_parameter_changes(void)
 	return 0;
 }
 
+// Line and column of a syntax error are those an editor shows: columns count characters, so
+// that a tab and a character of four UTF-8 bytes are one column each; lines end at LF or CR LF;
+// and an error at the end of a text whose last line ends is at column 0 of the line after it,
+// as in docs/model-format.md ("truncated.json:3:0: ']' expected near end of file").
+static int test_syntax_error_positions(void)
+{
+	static const refusal cases[] = {
+	    {"{\t\"springmass\": 1,\t\"name\":\t@}", SM_ERROR_SYNTAX, "test.json:1:28: invalid token near '@'"},
+	    {"{\"springmass\": 1, \"name\": \"\xf0\x9f\x98\x80\" @}", SM_ERROR_SYNTAX,
+	     "test.json:1:31: '}' expected near '@'"},
+	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX, "test.json:3:11: ':' expected near '\"x\"'"},
+	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n", SM_ERROR_SYNTAX,
+	     "test.json:3:0: ']' expected near end of file"},
+	};
+	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
+}
+
+// The edges of the character classes of docs/model-format.md: CR and FF are line breaks, like LF
+// and VT, in a description and in a name; U+009F is the last control character (C1), and the
+// no-break space U+00A0 after it is text that names and descriptions may hold.
+static int test_line_breaks_and_controls_at_their_edges(void)
+{
+	static const refusal cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\\rb\"}", SM_ERROR_SCHEMA,
+	     "test.json: description: must be one line: it has a line break, U+000D, at character 2"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"ab\\f\"}", SM_ERROR_SCHEMA,
+	     "test.json: description: must be one line: it has a line break, U+000C, at character 3"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"ab\\r\", \"position\": [0, 0, 0]}]}",
+	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"ab\\u000d\" has a line break, U+000D, at character 3"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\\fb\", \"position\": [0, 0, 0]}]}",
+	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"a\\u000cb\" has a line break, U+000C, at character 2"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\xc2\xa0\\u009f\", \"position\": [0, 0, 0]}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: particles[0].name: name \"\xc2\xa0\\u009f\" has a control character, U+009F, at character 2"},
+	};
+	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\xc2\xa0z\", \"particles\":"
+	                               " [{\"name\": \"\xc2\xa0\", \"position\": [0, 0, 0]}]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	ENSURE(strcmp(sm_document_description(doc), "a\xc2\xa0z") == 0 && sm_document_particle_index(doc, "\xc2\xa0") == 0);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A message escapes each of the invisible characters that reorder text or show nothing, at both
+// ends of their ranges (U+061C; U+200B - U+200F; U+202A - U+202E; U+2066 - U+2069; U+FEFF), and
+// shows the visible characters just outside those ranges as they are (U+061B, U+2010, U+2027,
+// U+202F, U+2070, U+FF01).
+static int test_messages_escape_invisible_characters(void)
+{
+	static const refusal cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\""
+	     "\xd8\x9c\xe2\x80\x8b\xe2\x80\x8f\xe2\x80\xaa\xe2\x80\xae\xe2\x81\xa6\xe2\x81\xa9\xef\xbb\xbf\"]}",
+	     SM_ERROR_NOT_FOUND,
+	     "test.json: fixed[0]: no particle named \"\\u061c\\u200b\\u200f\\u202a\\u202e\\u2066\\u2069\\ufeff\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\""
+	     "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\"]}",
+	     SM_ERROR_NOT_FOUND,
+	     "test.json: fixed[0]: no particle named \""
+	     "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\""},
+	};
+	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
+}
+
+// Every status has its own text (base.h gives "particle index out of range" for
+// SM_ERROR_PARTICLE_INDEX), and none is the text of a value that names no status, which is
+// still a text a message can print.
+static int test_status_texts(void)
+{
+	ENSURE(strcmp(sm_status_string(SM_ERROR_PARTICLE_INDEX), "particle index out of range") == 0);
+	const char* unknown = sm_status_string(SM_STATUS_COUNT);
+	ENSURE(unknown != NULL && unknown[0] != '\0');
+	for (int a = 0; a < SM_STATUS_COUNT; a++) {
+		const char* text = sm_status_string((sm_status)a);
+		ENSURE(text != NULL && text[0] != '\0' && strcmp(text, unknown) != 0);
+		for (int b = 0; b < a; b++)
+			ENSURE(strcmp(text, sm_status_string((sm_status)b)) != 0);
+	}
+	return 0;
+}
+
+// The canonical form reads back to the same document (docs/model-format.md, "Canonical form and
+// saving"): names and a description holding quotes, backslashes and non-ASCII text; a velocity
+// along z alone; simulation settings that need 17 significant digits; and every parameter
+// reference kept, also those of a velocity that is zero (w), of gravity and of mass damping, so
+// that new values act on the saved document as on the original. After
+// sm_document_set_initial_state, a velocity the file took from a parameter is saved as the new
+// number, not as the parameter again.
+static int test_canonical_form_reads_back(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"s\", \"description\": \"\\\"q\\\" \\\\ caf\xc3\xa9\\t.\","
+	    " \"parameters\": {\"v\": 0.5, \"w\": 0, \"g\": -9.81, \"alpha\": 0.1},"
+	    " \"gravity\": [0, 0, \"g\"], \"mass_damping\": \"alpha\","
+	    " \"particles\": [{\"name\": \"a\\\"b\", \"position\": [0, 0, 0], \"velocity\": [0, 0, 3]},"
+	    "  {\"name\": \"c\\\\d\", \"position\": [1, 0, 0], \"velocity\": [\"v\", 0, 0]},"
+	    "  {\"name\": \"e\", \"position\": [2, 0, 0], \"velocity\": [0, \"w\", 0]}],"
+	    " \"springs\": [{\"a\": \"a\\\"b\", \"b\": \"c\\\\d\", \"stiffness\": 2}],"
+	    " \"ports\": [{\"name\": \"p\", \"particle\": \"c\\\\d\", \"kind\": \"probe\"}],"
+	    " \"simulation\": {\"stop_time\": 1.2345678901234567, \"rtol\": 1.0000000000000002e-7}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(strcmp(sm_document_description(again), "\"q\" \\ caf\xc3\xa9\t.") == 0);
+	ENSURE(strcmp(sm_document_particle_name(again, 0), "a\"b") == 0);
+	ENSURE(strcmp(sm_document_particle_name(again, 1), "c\\d") == 0);
+	const sm_document_settings settings = sm_document_get_settings(again);
+	ENSURE(settings.stop_time == 1.2345678901234567 && settings.solver.relative_tolerance == 1.0000000000000002e-7);
+	const double values[4] = {0.75, 2.0, -1.5, 0.3};
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameters(again, values, &err), SM_OK);
+	ENSURE(same_document(doc, again) == 0);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	double v[9];
+	sm_model_initial_state(m, NULL, v);
+	ENSURE(v[2] == 3.0 && v[3] == 0.75 && v[7] == 2.0);
+	const sm_model_def def = sm_model_get_def(m);
+	ENSURE(def.gravity[2] == -1.5 && def.mass_damping == 0.3);
+	sm_model_destroy(m);
+	sm_document_destroy(again);
+
+	// A new initial state: c\d moves at 0.25 m/s along x; the saved file starts so, and its
+	// parameter v no longer sets that velocity.
+	const double x[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0}, moved[9] = {0, 0, 3, 0.25, 0, 0, 0, 2, 0};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, moved, &err), SM_OK);
+	again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(sm_document_parameter_uses(again, 0) == 0);
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_model_initial_state(m, NULL, v);
+	ENSURE(memcmp(v, moved, sizeof v) == 0);
+	sm_model_destroy(m);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// The canonical form is JSON whatever LC_NUMERIC the program chose: under a locale with a decimal
+// comma (de_DE), a gravity of 9.81 m/s^2 and a mass of 0.5 kg are still written with a point,
+// and the text loads. Where no such locale is installed there is nothing to check.
+static int test_canonical_form_ignores_the_locale(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0, 0, -9.81],"
+	                               " \"particles\": [{\"position\": [0, 0, 0], \"mass\": 0.5}]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") == NULL) {
+		printf("  no de_DE.UTF-8 locale: skipped\n");
+		sm_document_destroy(doc);
+		return 0;
+	}
+	char* text = sm_document_to_json(doc, &err);
+	setlocale(LC_NUMERIC, "C");
+	ENSURE(text != NULL);
+	ENSURE(strstr(text, "\"gravity\": [0, 0, -9.81]") != NULL && strstr(text, "\"mass\": 0.5") != NULL);
+	sm_document* again = sm_document_parse(text, strlen(text), "saved.json", &err);
+	free(text);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1710,5 +1882,11 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_groups_keep_their_parameters);
 	RUN_TEST(test_fixed_particles_start_at_rest);
 	RUN_TEST(test_initial_state_through_parameter_changes);
+	RUN_TEST(test_syntax_error_positions);
+	RUN_TEST(test_line_breaks_and_controls_at_their_edges);
+	RUN_TEST(test_messages_escape_invisible_characters);
+	RUN_TEST(test_status_texts);
+	RUN_TEST(test_canonical_form_reads_back);
+	RUN_TEST(test_canonical_form_ignores_the_locale);
 	return TEST_SUMMARY();
 }

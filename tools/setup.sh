@@ -7,7 +7,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 
 packages=(build-essential cmake ninja-build pkg-config git
           libsundials-dev libgsl-dev libsuitesparse-dev libjansson-dev libblas3 liblapack3
-          python3 python3-venv patchelf zip unzip)
+          python3 python3-venv patchelf zip unzip locales)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -21,10 +21,11 @@ MODELS = ROOT / "models"
 HAS_FMU = os.environ.get("SPRINGMASS_HAS_FMU") == "1"
 
 
-def cli(*args, status=0, cwd=None):
-    """Runs the tool; asserts its exit status; returns the finished process (text). Every call
-    here takes well under a second: a minute means the tool hangs (e.g. a row limit not applied)."""
-    out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd, timeout=60)
+def cli(*args, status=0, cwd=None, env=None):
+    """Runs the tool (in the environment env, if given); asserts its exit status; returns the
+    finished process (text). Every call here takes well under a second: a minute means the tool
+    hangs (e.g. a row limit not applied)."""
+    out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, cwd=cwd, env=env, timeout=60)
     assert out.returncode == status, f"springmass {' '.join(map(str, args))}: exit {out.returncode}\n{out.stderr}"
     return out
 
@@ -418,3 +419,89 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/reference.csv") == reference.read_bytes()
         assert "E=150" in z.read("resources/parameters.txt").decode()
+
+
+def stand_in_runtime(folder, binary):
+    """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
+    (its text `binary`), a library and a licence, which keep the archives small."""
+    (folder / "binaries" / "linux64").mkdir(parents=True)
+    (folder / "binaries" / "linux64" / "springmass_fmu.so").write_text(binary)
+    (folder / "binaries" / "linux64" / "libextra.so.1").write_text("library")
+    (folder / "documentation" / "licenses").mkdir(parents=True)
+    (folder / "documentation" / "licenses" / "README.txt").write_text("licences")
+    return folder
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_packs_the_runtime_it_is_given(tmp_path):
+    # docs/fmu.md: the runtime comes from --runtime, else from $SPRINGMASS_FMU_RUNTIME; the FMU
+    # holds the binary under the model's name, the libraries and licences as they are, and the
+    # model file byte for byte. The staging folder goes into $TMPDIR and is removed again.
+    osc = MODELS / "oscillator.json"
+    given = stand_in_runtime(tmp_path / "given", "given binary")
+    from_environment = stand_in_runtime(tmp_path / "environment", "binary of the environment")
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    env = dict(os.environ, SPRINGMASS_FMU_RUNTIME=str(from_environment), TMPDIR=str(staging))
+    for options, binary in ((["--runtime", given], "given binary"), ([], "binary of the environment")):
+        fmu = tmp_path / "oscillator.fmu"
+        cli("fmu", osc, "--output", fmu, *options, env=env)
+        with zipfile.ZipFile(fmu) as z:
+            names = set(z.namelist())
+            assert z.read("binaries/linux64/oscillator.so") == binary.encode()
+            assert z.read("binaries/linux64/libextra.so.1") == b"library"
+            assert z.read("documentation/licenses/README.txt") == b"licences"
+            assert z.read("resources/model.json") == osc.read_bytes()
+        assert "binaries/linux64/springmass_fmu.so" not in names and "resources/parameters.txt" not in names
+        assert "resources/reference.csv" not in names
+        fmu.unlink()
+    assert list(staging.iterdir()) == []
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
+    # -h prints the help as --help does; an unknown option is a usage error (2); a runtime folder
+    # without the FMU binary, a reference that cannot be read and a broken model are errors (1),
+    # each named, and none leaves an output or a staging folder behind.
+    osc = MODELS / "oscillator.json"
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    fmu = tmp_path / "x.fmu"
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    env = dict(os.environ, TMPDIR=str(staging))
+    assert cli("fmu", "-h").stdout.startswith("usage: springmass fmu")
+    out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--frobnicate", status=2, env=env)
+    assert out.stderr.startswith("springmass fmu: unknown option --frobnicate")
+    # The message says where it looked for the runtime.
+    (tmp_path / "empty").mkdir()
+    out = cli("fmu", osc, "-o", fmu, "--runtime", tmp_path / "empty", status=1, env=env)
+    assert out.stderr.startswith("springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in "
+                                 f"{tmp_path / 'empty'};")
+    out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", tmp_path / "missing.csv", status=1, env=env)
+    assert out.stderr == f"springmass fmu: cannot copy the reference result {tmp_path / 'missing.csv'}\n"
+    # A broken model is refused with the loader's message, as `springmass check` gives it.
+    broken = ROOT / "tests" / "bad_models" / "unknown_particle.json"
+    out = cli("fmu", broken, "-o", fmu, "--runtime", runtime, status=1, env=env)
+    assert out.stderr == f'springmass fmu: {broken}: springs[3].b: no particle named "bobb"\n'
+    assert not fmu.exists() and list(staging.iterdir()) == []
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_writes_values_the_file_order_cannot_take_where_each_was_last_set(tmp_path):
+    # docs/fmu.md: when no pass over the file's order takes the values, they are written in the
+    # order of the --set options, each parameter where it was last set. Two ropes start at
+    # (a, b, c) and (a, c, b), from (0, 0, 0), and end at (1, 1, 0) and (1, 5, 0): the file's order
+    # takes a = 1 first, and then b = 1 or c = 5 puts a rope's start on its end. Here b is set
+    # again after c: where each was last set, c=5, b=1, a=1 keeps both ropes long, as the order
+    # where each was first set (b=1, c=5, a=1) would too; the former is written.
+    model = tmp_path / "two_starts.json"
+    model.write_text('{"springmass": 1, "name": "two_starts", "parameters": {"a": 0, "b": 0, "c": 0}, '
+                     '"structures": [{"type": "rope", "name": "r1", "start": ["a", "b", "c"], "end": [1, 1, 0], '
+                     '"segments": 1, "structural": {"strain_stiffness": 10}}, {"type": "rope", "name": "r2", '
+                     '"start": ["a", "c", "b"], "end": [1, 5, 0], "segments": 1, '
+                     '"structural": {"strain_stiffness": 10}}]}')
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    fmu = tmp_path / "two_starts.fmu"
+    cli("fmu", model, "-o", fmu, "--runtime", runtime, "--set", "b=1", "--set", "c=5", "--set", "b=1", "--set", "a=1")
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/parameters.txt") == b"c=5\nb=1\na=1\n"
