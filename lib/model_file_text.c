@@ -83,7 +83,10 @@ void text_position(const char* text, size_t length, size_t end, int* line, int* 
 	*column = 0;
 	for (size_t i = 0; i < end && i < length; i++) {
 		const unsigned char c = (unsigned char)text[i];
-		if (c == '\n' || (c == '\r' && !(i + 1 < length && text[i + 1] == '\n'))) {
+		// The CR of a CR LF is part of the line end, counted at its LF; but where the position
+		// falls between the two, the line end has begun, as it has after an LF.
+		const bool crlf = c == '\r' && i + 1 < length && text[i + 1] == '\n';
+		if (c == '\n' || (c == '\r' && (!crlf || i + 1 == end))) {
 			++*line;
 			*column = 0;
 		} else if (c != '\r' && (c & 0xc0) != 0x80) {

@@ -30,7 +30,8 @@ int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* posi
 // Line and column, from 1, of the character that ends before byte `end` of text (length bytes),
 // as an editor shows them: LF, CR LF and a lone CR each end a line, and columns count characters
 // (the bytes that begin a UTF-8 character). For the JSON parser's error position it gives the
-// parser's own line and column wherever lines end in LF.
+// parser's own line and column wherever lines end in LF; a position at a line end, whichever its
+// kind, is at column 0 of the next line.
 void text_position(const char* text, size_t length, size_t end, int* line, int* column);
 
 // Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped; control
