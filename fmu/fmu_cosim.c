@@ -1078,9 +1078,9 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 		if (!v)
 			return fmi2Error;
 		switch (v->source) {
-		case FMU_SRC_SOLVER_METHOD: value[i] = fmu_method_name(inst->solver.method); break;
+		case FMU_SRC_SOLVER_METHOD: value[i] = sm_method_name(inst->solver.method); break;
 		case FMU_SRC_SOLVER_LINEAR_SOLVER: value[i] = sm_linear_solver_name(inst->solver.solver); break;
-		default: value[i] = fmu_jacobian_name(inst->solver.jacobian); break;
+		default: value[i] = sm_jacobian_variant_name(inst->solver.jacobian); break;
 		}
 	}
 	return fmi2OK;
@@ -1230,14 +1230,14 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 		if (!value[i]) {
 			bad = 1;
 		} else if (v->source == FMU_SRC_SOLVER_METHOD) {
-			bad = fmu_method_from_name(value[i], &solver.method);
+			bad = sm_method_from_name(value[i], &solver.method) != SM_OK;
 		} else if (v->source == FMU_SRC_SOLVER_LINEAR_SOLVER) {
 			sm_linear_solver s = sm_linear_solver_from_name(value[i]);
 			bad = s == SM_SOLVER_COUNT;
 			if (!bad)
 				solver.solver = s;
 		} else {
-			bad = fmu_jacobian_from_name(value[i], &solver.jacobian);
+			bad = sm_jacobian_variant_from_name(value[i], &solver.jacobian) != SM_OK;
 		}
 		if (bad) {
 			log_error(inst, "fmi2SetString: %s = \"%s\" rejected: %s", v->name, value[i] ? value[i] : "(null)",

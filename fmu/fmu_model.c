@@ -145,42 +145,6 @@ static char* name_part(const char* s)
 	return q;
 }
 
-const char* fmu_method_name(sm_method method)
-{
-	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
-}
-
-int fmu_method_from_name(const char* name, sm_method* method)
-{
-	if (name && strcmp(name, "bdf") == 0) {
-		*method = SM_METHOD_BDF;
-		return 0;
-	}
-	if (name && strcmp(name, "adams") == 0) {
-		*method = SM_METHOD_ADAMS;
-		return 0;
-	}
-	return -1;
-}
-
-const char* fmu_jacobian_name(sm_jacobian_variant variant)
-{
-	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
-}
-
-int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant)
-{
-	if (name && strcmp(name, "exact") == 0) {
-		*variant = SM_JACOBIAN_EXACT;
-		return 0;
-	}
-	if (name && strcmp(name, "definite") == 0) {
-		*variant = SM_JACOBIAN_DEFINITE;
-		return 0;
-	}
-	return -1;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Tunability of parameters
 // ---------------------------------------------------------------------------------------------
@@ -449,11 +413,11 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 		max_steps->start_integer = s->max_steps;
 	}
 	add_string_parameter(&b, "solver.method", "multistep method: bdf or adams", FMU_SRC_SOLVER_METHOD,
-	                     fmu_method_name(s->method));
+	                     sm_method_name(s->method));
 	add_string_parameter(&b, "solver.linear_solver", "linear solver: auto, dense, klu, pcg or cholmod",
 	                     FMU_SRC_SOLVER_LINEAR_SOLVER, sm_linear_solver_name(s->solver));
 	add_string_parameter(&b, "solver.jacobian", "Jacobian: exact or definite (definiteness-preserving)",
-	                     FMU_SRC_SOLVER_JACOBIAN, fmu_jacobian_name(s->jacobian));
+	                     FMU_SRC_SOLVER_JACOBIAN, sm_jacobian_variant_name(s->jacobian));
 
 	// Ports.
 	int32_t nports = sm_document_port_count(doc);

@@ -178,10 +178,6 @@ char* fmu_identifier(const char* name);
 char* fmu_read_file(const char* path, size_t* length, const char** problem);
 
 /// Linear solver, method and Jacobian names used by the string parameters.
-const char* fmu_method_name(sm_method method);
-int fmu_method_from_name(const char* name, sm_method* method);
-const char* fmu_jacobian_name(sm_jacobian_variant variant);
-int fmu_jacobian_from_name(const char* name, sm_jacobian_variant* variant);
 
 #ifdef __cplusplus
 }

@@ -113,10 +113,15 @@ static double get(fmi2Component c, const fixture* f, const char* name)
 	return value;
 }
 
+// An instance of the fixture's FMU, no logging, not visible.
+static fmi2Component instantiate(const fixture* f, const char* name)
+{
+	return fmi2Instantiate(name, fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False, fmi2False);
+}
+
 static fmi2Component start(fixture* f, const char* name)
 {
-	fmi2Component c = fmi2Instantiate(name, fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(f, name);
 	if (!c)
 		return NULL;
 	fmi2ValueReference r[3] = {vr(f, "solver.rtol"), vr(f, "solver.atol_position"), vr(f, "solver.atol_velocity")};
@@ -160,8 +165,7 @@ static int test_misuse(void)
 	ENSURE(strstr(f.log.last, "does not match") != NULL);
 	ENSURE(fmi2Instantiate("nores", fmi2CoSimulation, f.guid, "file:///nonexistent", &f.callbacks, fmi2False,
 	                       fmi2False) == NULL);
-	fmi2Component c = fmi2Instantiate("misuse", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(&f, "misuse");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2Error);
 	ENSURE(strstr(f.log.last, "illegal call sequence") != NULL);
@@ -313,7 +317,7 @@ static int test_parameter_values(void)
 	// Under a decimal comma (where the machine has one) the values are read as written.
 	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") != NULL) {
 		ENSURE(write_parameters(&f, "k=62.5\n", 7) == 0);
-		c = fmi2Instantiate("comma", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+		c = instantiate(&f, "comma");
 		setlocale(LC_NUMERIC, "C");
 		ENSURE(c != NULL);
 		ENSURE(get(c, &f, "k") == 62.5);
@@ -360,8 +364,7 @@ static int test_parameter_values_refused(void)
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
 		ENSURE(write_parameters(&f, cases[i].text, cases[i].length) == 0);
 		f.log.last[0] = '\0';
-		ENSURE(fmi2Instantiate("edited", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False) ==
-		       NULL);
+		ENSURE(instantiate(&f, "edited") == NULL);
 		if (strstr(f.log.last, cases[i].message) == NULL) {
 			printf("  case %zu: logged '%s', expected '%s'\n", i, f.log.last, cases[i].message);
 			return 1;
@@ -419,8 +422,7 @@ static int settings_run(fixture* f, const setting* s, bool read_first, double x[
 		x[n] = 0.0;
 		status[n] = fmi2OK;
 	}
-	fmi2Component c = fmi2Instantiate("settings", fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(f, "settings");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
@@ -472,8 +474,7 @@ static int test_settings_take_effect_after_an_output_was_read(void)
 		ENSURE(memcmp(x, plain_x, sizeof x) != 0 || memcmp(status, plain_status, sizeof status) != 0);
 	}
 	// solver.max_step = 1 ms with 50 internal steps per communication step: a discard.
-	fmi2Component c = fmi2Instantiate("limits", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(&f, "limits");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
@@ -503,8 +504,7 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	ENSURE(settings_run(&f, &unlimited, true, x, status) == 0);
 	ENSURE(memcmp(x, plain_x, sizeof x) == 0 && memcmp(status, plain_status, sizeof status) == 0);
 
-	fmi2Component c = fmi2Instantiate("ranges", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(&f, "ranges");
 	ENSURE(c != NULL);
 	// The experiment's tolerance, too, lies in (0, 1).
 	for (double tolerance = 0.0; tolerance >= -1e-6; tolerance -= 1e-6) {
@@ -567,15 +567,14 @@ static int test_experiment_tolerance_yields_to_an_explicit_rtol(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = fmi2Instantiate("experiment", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(&f, "experiment");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-3, 0.0, fmi2False, 0.0), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
 	ENSURE(get(c, &f, "solver.rtol") == 1e-3);
 	fmi2FreeInstance(c);
 
-	c = fmi2Instantiate("explicit", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	c = instantiate(&f, "explicit");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(set_real(c, &f, "solver.rtol", 1e-9), fmi2OK);
 	fmi2FMUstate state = NULL;
@@ -585,7 +584,7 @@ static int test_experiment_tolerance_yields_to_an_explicit_rtol(void)
 	ENSURE(get(c, &f, "solver.rtol") == 1e-9);
 	fmi2FreeInstance(c);
 
-	c = fmi2Instantiate("restored", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	c = instantiate(&f, "restored");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-3, 0.0, fmi2False, 0.0), fmi2OK);
@@ -606,7 +605,7 @@ static int test_state_carries_the_settings_and_the_experiment(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component a = fmi2Instantiate("a", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	fmi2Component a = instantiate(&f, "a");
 	ENSURE(a != NULL);
 	ENSURE_STATUS(fmi2SetupExperiment(a, fmi2False, 0.0, 0.0, fmi2True, 0.5), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
@@ -691,7 +690,7 @@ static int test_bounds_of_references_arrays_and_buffers(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	ENSURE(fmi2Instantiate("", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False) == NULL);
+	ENSURE(instantiate(&f, "") == NULL);
 	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
 	fmi2Component c = start(&f, "bounds");
 	ENSURE(c != NULL);
@@ -805,8 +804,7 @@ static int test_time_margins_scale_with_the_time(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = fmi2Instantiate("margins", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                  fmi2False);
+	fmi2Component c = instantiate(&f, "margins");
 	ENSURE(c != NULL);
 	const double t0 = 1e6;
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
@@ -822,7 +820,7 @@ static int test_time_margins_scale_with_the_time(void)
 	ENSURE_NEAR(get(c, &f, "tip.x"), 0.5 + 0.2 * cos(sqrt(25.0) * 0.1), 1e-5);
 	fmi2FreeInstance(c);
 
-	c = fmi2Instantiate("stop", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False, fmi2False);
+	c = instantiate(&f, "stop");
 	ENSURE(c != NULL);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 0.3), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
@@ -1106,8 +1104,7 @@ static int test_random_call_sequences_follow_the_state_machine(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component fresh = fmi2Instantiate("fresh", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-	                                      fmi2False);
+	fmi2Component fresh = instantiate(&f, "fresh");
 	ENSURE(fresh != NULL);
 	double expected_x[20], x[20];
 	ENSURE(reference_run(fresh, &f, expected_x) == 0);
@@ -1140,8 +1137,7 @@ static int test_random_call_sequences_follow_the_state_machine(void)
 	rng r = {20261201};
 	int visits[S_TERMINATED + 1] = {0}, discards = 0;  // calls made in each state; steps discarded
 	for (int sequence = 0; sequence < 1000; ++sequence) {
-		fmi2Component c = fmi2Instantiate("random", fmi2CoSimulation, f.guid, f.resources, &f.callbacks, fmi2False,
-		                                  fmi2False);
+		fmi2Component c = instantiate(&f, "random");
 		ENSURE(c != NULL);
 		ENSURE_STATUS(limit_steps(c, &f), fmi2OK);
 		expectation e = {.state = S_INSTANTIATED};

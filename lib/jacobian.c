@@ -269,3 +269,19 @@ sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobi
 	}
 	return SM_OK;
 }
+
+const char* sm_jacobian_variant_name(sm_jacobian_variant variant)
+{
+	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
+}
+
+sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant)
+{
+	if (name && strcmp(name, "exact") == 0)
+		*variant = SM_JACOBIAN_EXACT;
+	else if (name && strcmp(name, "definite") == 0)
+		*variant = SM_JACOBIAN_DEFINITE;
+	else
+		return SM_ERROR_INVALID_ARGUMENT;
+	return SM_OK;
+}

@@ -1322,16 +1322,6 @@ static bool read_ports(parser* p, const json_t* list)
 	return ok;
 }
 
-const char* document_method_name(sm_method method)
-{
-	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
-}
-
-const char* document_jacobian_name(sm_jacobian_variant variant)
-{
-	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
-}
-
 static bool read_choice(parser* p, const json_t* obj, const char* path, const char* key, const char* const* names,
                         int count, int* out)
 {
@@ -1393,8 +1383,9 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 				return false;
 			d->max_steps = (int32_t)steps;
 		}
-		static const char* const methods[] = {"bdf", "adams"};
-		static const char* const jacobians[] = {"exact", "definite"};
+		const char* const methods[] = {sm_method_name(SM_METHOD_BDF), sm_method_name(SM_METHOD_ADAMS)};
+		const char* const jacobians[] = {sm_jacobian_variant_name(SM_JACOBIAN_EXACT),
+		                                 sm_jacobian_variant_name(SM_JACOBIAN_DEFINITE)};
 		const char* solvers[SM_SOLVER_COUNT];
 		for (int k = 0; k < SM_SOLVER_COUNT; k++)
 			solvers[k] = sm_linear_solver_name((sm_linear_solver)k);

@@ -93,7 +93,3 @@ struct sm_document {
 // the fuzz target, which must not spend its time building enormous grids.
 sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
                                        int64_t max_elements, sm_error* err);
-
-// Names used by the file format.
-const char* document_method_name(sm_method method);
-const char* document_jacobian_name(sm_jacobian_variant variant);

@@ -94,6 +94,22 @@ const char* sm_linear_solver_name(sm_linear_solver solver)
 	return solver_names[solver];
 }
 
+const char* sm_method_name(sm_method method)
+{
+	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
+}
+
+sm_status sm_method_from_name(const char* name, sm_method* method)
+{
+	if (name && strcmp(name, "bdf") == 0)
+		*method = SM_METHOD_BDF;
+	else if (name && strcmp(name, "adams") == 0)
+		*method = SM_METHOD_ADAMS;
+	else
+		return SM_ERROR_INVALID_ARGUMENT;
+	return SM_OK;
+}
+
 sm_linear_solver sm_linear_solver_from_name(const char* name)
 {
 	if (name == NULL)

@@ -381,27 +381,15 @@ int sm_cmd_run(int argc, char** argv)
 			goto done;
 		}
 	}
-	if (o.method) {
-		if (strcmp(o.method, "bdf") == 0)
-			def.method = SM_METHOD_BDF;
-		else if (strcmp(o.method, "adams") == 0)
-			def.method = SM_METHOD_ADAMS;
-		else {
-			fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n", o.method);
-			status = 2;
-			goto done;
-		}
+	if (o.method && sm_method_from_name(o.method, &def.method) != SM_OK) {
+		fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n", o.method);
+		status = 2;
+		goto done;
 	}
-	if (o.jacobian) {
-		if (strcmp(o.jacobian, "exact") == 0)
-			def.jacobian = SM_JACOBIAN_EXACT;
-		else if (strcmp(o.jacobian, "definite") == 0)
-			def.jacobian = SM_JACOBIAN_DEFINITE;
-		else {
-			fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n", o.jacobian);
-			status = 2;
-			goto done;
-		}
+	if (o.jacobian && sm_jacobian_variant_from_name(o.jacobian, &def.jacobian) != SM_OK) {
+		fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n", o.jacobian);
+		status = 2;
+		goto done;
 	}
 	const bool terminal = isatty(fileno(stderr));
 	progress prog = {0.0, 0.0, terminal ? 0.5 : 5.0, t_end, terminal, false};

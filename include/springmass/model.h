@@ -96,6 +96,11 @@ typedef enum sm_jacobian_variant {
 	SM_JACOBIAN_DEFINITE,
 } sm_jacobian_variant;
 
+/// Name of a Jacobian variant ("exact", "definite") and the reverse lookup: SM_OK, or
+/// SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *variant then unchanged.
+SM_API const char* sm_jacobian_variant_name(sm_jacobian_variant variant);
+SM_API sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant);
+
 /// Energies of a configuration.
 typedef struct sm_energies {
 	double kinetic;  ///< sum of m |v|^2 / 2 over all particles [J]

@@ -130,6 +130,11 @@ SM_API sm_simulation_def sm_default_simulation_def(void);
 SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
 SM_API sm_linear_solver sm_linear_solver_from_name(const char* name);
 
+/// Name of a method ("bdf", "adams") and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT
+/// for an unknown name or NULL, *method then unchanged.
+SM_API const char* sm_method_name(sm_method method);
+SM_API sm_status sm_method_from_name(const char* name, sm_method* method);
+
 /// Creates a simulation of a copy of the model, starting at time 0 from the model's initial
 /// state; def NULL means the defaults. Returns NULL with err filled on invalid options or
 /// solver set-up failure.
