@@ -862,6 +862,7 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 		sim->base.restarts++;
 	sim->need_restart = false;
 	sim->input_jumped = false;
+	sim->break_pending = false;
 	if (has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, reset);
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
@@ -954,21 +955,22 @@ static sm_status break_springs(sm_simulation* sim)
 {
 	refresh_outputs(sim);
 	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
-	bool broke = false;
-	for (int32_t r = 0; r < sim->root_count; r++) {
+	bool broke = false, out_of_memory = false;
+	for (int32_t r = 0; r < sim->root_count && !out_of_memory; r++) {
 		if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
 			continue;
-		if (record_break(sim, sim->time, sim->root_spring[r]) != SM_OK) {
-			refresh_outputs(sim);
-			return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
-		}
-		broke = true;
+		out_of_memory = record_break(sim, sim->time, sim->root_spring[r]) != SM_OK;
+		broke = broke || !out_of_memory;
 	}
 	if (broke) {
 		const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
 		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
-		sim->need_restart = true;
 	}
+	// After a failure too: the springs not yet broken are beyond their limit at this time, and
+	// the next advance, starting afresh here, breaks them first.
+	sim->need_restart = sim->need_restart || broke || out_of_memory;
+	if (out_of_memory)
+		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
 	return SM_OK;
 }
 
@@ -1026,21 +1028,92 @@ static int check_step_size(sm_simulation* sim, int flag, double* reached)
 	return CV_ERR_FAILURE;
 }
 
-sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
+// CVODE's own time t_n: past the simulation's time after an advance that interpolated its end
+// (sm_simulation_advance_interpolated), equal to it otherwise (or within CVODE's round-off of a
+// stop time).
+static double cvode_time(const sm_simulation* sim)
 {
-	if (sim == NULL)
-		return SM_ERROR_INVALID_ARGUMENT;
-	if (!isfinite(t_end) || t_end < sim->time) {
-		char end[SM_NUMBER_TEXT_CAPACITY], now[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(t_end, end);
-		sm_format_number(sim->time, now);
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
-		            "advance: end time %s s must be finite and not before the current time %s s", end, now);
+	double t = sim->time;
+	if (!sim->need_restart)
+		CVodeGetCurrentTime(sim->cvode, &t);
+	return t;
+}
+
+// Whether CVODE has stepped past the simulation's time. Its steps beyond were taken with the
+// inputs as they were: a changed input must restart it at the simulation's time.
+static bool cvode_ahead(const sm_simulation* sim)
+{
+	return !sim->need_restart && cvode_time(sim) > sim->time;
+}
+
+// Steps up to exactly t_end, CVODE's stop time (sm_simulation_advance). *reached is where CVODE
+// stopped: t_end, a root, or the last state it reached on failure.
+static int step_to_end(sm_simulation* sim, double t_end, double* reached)
+{
+	CVodeSetStopTime(sim->cvode, t_end);
+	if (sim->def.on_step == NULL)
+		return check_step_size(sim, CVode(sim->cvode, t_end, sim->y, reached, CV_NORMAL), reached);
+	// One internal step per call: the same steps as CV_NORMAL, which loops over them inside
+	// CVODE up to the stop time, with the caller told of each. CVODE counts max_steps within one
+	// call, so the limit is kept here, as CV_NORMAL would.
+	int32_t steps = 0;
+	int flag;
+	do {
+		flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, reached, CV_ONE_STEP), reached);
+		if (flag >= 0)
+			sim->def.on_step(sim->def.on_step_context, *reached);
+		steps++;
+	} while (flag == CV_SUCCESS && *reached < t_end && steps < sim->def.max_steps);
+	return flag;
+}
+
+// Steps until CVODE's time passes t_end, never past t_stop, one internal step per call
+// (sm_simulation_advance_interpolated; no step at all if CVODE is already past t_end). y then
+// holds CVODE's last step, a root, or the last state it reached on failure; the caller
+// interpolates t_end. In this mode CVODE looks for roots over each whole step, t_end or not, so
+// the roots are those of one advance to t_stop, bit for bit.
+static int step_past_end(sm_simulation* sim, double t_end, double t_stop, double* reached)
+{
+	*reached = cvode_time(sim);
+	if (*reached >= t_end)
+		return CV_SUCCESS;
+	CVodeSetStopTime(sim->cvode, t_stop);
+	int32_t steps = 0;
+	int flag = CV_SUCCESS;
+	while (flag == CV_SUCCESS && *reached < t_end && steps < sim->def.max_steps) {
+		flag = check_step_size(sim, CVode(sim->cvode, t_stop, sim->y, reached, CV_ONE_STEP), reached);
+		if (flag >= 0 && sim->def.on_step != NULL)
+			sim->def.on_step(sim->def.on_step_context, *reached);
+		steps++;
 	}
+	return flag;
+}
+
+// The state at time t from CVODE's history of its last step (its interpolating polynomial, of
+// the order of the step), into y.
+static sm_status interpolate(sm_simulation* sim, double t)
+{
+	if (CVodeGetDky(sim->cvode, t, 0, sim->y) != CV_SUCCESS) {
+		char at[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(t, at);
+		sim->need_restart = true;
+		N_VScale(1.0, sim->y_saved, sim->y);
+		refresh_outputs(sim);
+		return fail(sim, SM_ERROR_SOLVER, "CVODE cannot interpolate its state at t = %s s: %s", at,
+		            sim->solver_message);
+	}
+	sim->time = t;
+	return SM_OK;
+}
+
+static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
+{
 	sim->last_error[0] = '\0';
-	if (sim->time < t_end && break_overstretched_springs(sim) != SM_OK)
+	// Where CVODE is past the current time, it has looked for roots beyond it already, on the
+	// same trajectory: springs are checked afresh only where it starts or restarts.
+	if (sim->time < t_end && !cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
-	if (t_end - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
+	if (!cvode_ahead(sim) && t_stop - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
 		return short_step(sim, t_end);
 	while (sim->time < t_end) {
 		if (sim->need_restart) {
@@ -1048,30 +1121,30 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			if (st != SM_OK)
 				return st;
 		}
-		CVodeSetStopTime(sim->cvode, t_end);
 		N_VScale(1.0, sim->y, sim->y_saved);
+		if (sim->break_pending) {
+			// A spring break that CVODE found past the end of the last advance: interpolate up
+			// to it, then break it there.
+			const double t = fmin(sim->break_time, t_end);
+			sm_status st = interpolate(sim, t);
+			if (st != SM_OK)
+				return st;
+			if (t < sim->break_time)
+				break;
+			sim->break_pending = false;
+			if (break_springs(sim) != SM_OK)
+				return SM_ERROR_OUT_OF_MEMORY;
+			continue;
+		}
 		sim->solver_message[0] = '\0';
 		sim->jacobian_out_of_memory = false;
+		const bool past_end = t_stop > t_end || cvode_ahead(sim);
 		double reached = sim->time;
-		int flag;
-		if (sim->def.on_step == NULL) {
-			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
-		} else {
-			// One internal step per call: the same steps as CV_NORMAL, which loops over them
-			// inside CVODE up to the stop time, with the caller told of each. CVODE counts
-			// max_steps within one call, so the limit is kept here, as CV_NORMAL would.
-			int32_t steps = 0;
-			do {
-				flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_ONE_STEP), &reached);
-				if (flag >= 0)
-					sim->def.on_step(sim->def.on_step_context, reached);
-				steps++;
-			} while (flag == CV_SUCCESS && reached < t_end && steps < sim->def.max_steps);
-			if (flag == CV_SUCCESS && reached < t_end) {
-				flag = CV_TOO_MUCH_WORK;
-				snprintf(sim->solver_message, sizeof sim->solver_message,
-				         "CVode: At t = %g, mxstep steps taken before reaching tout.", reached);
-			}
+		int flag = past_end ? step_past_end(sim, t_end, t_stop, &reached) : step_to_end(sim, t_end, &reached);
+		if (flag == CV_SUCCESS && reached < t_end) {
+			flag = CV_TOO_MUCH_WORK;
+			snprintf(sim->solver_message, sizeof sim->solver_message,
+			         "CVode: At t = %g, mxstep steps taken before reaching tout.", reached);
 		}
 		if (flag < 0 && flag != CV_TOO_MUCH_WORK && sim->input_jumped) {
 			// An input jumped and CVODE kept its history over it, but its error control could not
@@ -1107,15 +1180,66 @@ sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
 			     sim->solver_message);
 			return SM_ERROR_SOLVER;
 		}
-		sim->time = (flag == CV_ROOT_RETURN) ? fmin(reached, t_end) : t_end;
-		if (flag == CV_ROOT_RETURN) {
+		if (flag == CV_ROOT_RETURN && reached > t_end) {
+			// A root past the end: kept for the next advance, where CVODE's history still
+			// reaches it unless an input, the state or the model changes first.
+			CVodeGetRootInfo(sim->cvode, sim->roots_found);
+			sim->break_pending = true;
+			sim->break_time = reached;
+			sm_status st = interpolate(sim, t_end);
+			if (st != SM_OK)
+				return st;
+		} else if (flag == CV_ROOT_RETURN) {
+			sim->time = reached;
 			CVodeGetRootInfo(sim->cvode, sim->roots_found);
 			if (break_springs(sim) != SM_OK)
 				return SM_ERROR_OUT_OF_MEMORY;
+		} else if (past_end) {
+			// CVODE's last step ends at or past t_end, in this call or an earlier one.
+			sm_status st = interpolate(sim, t_end);
+			if (st != SM_OK)
+				return st;
+		} else {
+			sim->time = t_end;
 		}
 	}
 	refresh_outputs(sim);
 	return SM_OK;
+}
+
+// Refuses an end time that is not finite or lies before the current time, and a stop time that
+// is not finite or lies before the end time, with nothing changed.
+static sm_status check_times(sm_simulation* sim, const char* function, double t_end, double t_stop)
+{
+	char end[SM_NUMBER_TEXT_CAPACITY], other[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(t_end, end);
+	if (!isfinite(t_end) || t_end < sim->time) {
+		sm_format_number(sim->time, other);
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		            "%s: end time %s s must be finite and not before the current time %s s", function, end, other);
+	}
+	if (!isfinite(t_stop) || t_stop < t_end) {
+		sm_format_number(t_stop, other);
+		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "%s: stop time %s s must be finite and not before the end time %s s",
+		            function, other, end);
+	}
+	return SM_OK;
+}
+
+sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	sm_status st = check_times(sim, "advance", t_end, t_end);
+	return st != SM_OK ? st : advance(sim, t_end, t_end);
+}
+
+sm_status sm_simulation_advance_interpolated(sm_simulation* sim, double t_end, double t_stop)
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	sm_status st = check_times(sim, "advance_interpolated", t_end, t_stop);
+	return st != SM_OK ? st : advance(sim, t_end, t_stop);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1243,7 +1367,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	}
 	sim->drive_time[particle] = sim->time;
 	sim->input_jumped = sim->input_jumped || jump;
-	if (jump && sim->def.restart_on_input_change)
+	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
 		sim->need_restart = true;
 	refresh_outputs(sim);
 	return SM_OK;
@@ -1267,7 +1391,7 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	f[1] = force[1];
 	f[2] = force[2];
 	sim->input_jumped = sim->input_jumped || jump;
-	if (jump && sim->def.restart_on_input_change)
+	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
 		sim->need_restart = true;
 	return SM_OK;
 }

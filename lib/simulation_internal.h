@@ -27,6 +27,10 @@ struct sm_simulation {
 	SUNNonlinearSolver fixed_point;  // Adams only
 	bool need_restart;   // something requires CVodeReInit before the next step
 	bool input_jumped;   // an input jumped since CVODE's last (re)initialisation
+	// CVODE found a spring break at break_time, past the time the last advance interpolated
+	// (roots_found tells which); the next advance breaks it there.
+	bool break_pending;
+	double break_time;   // [s]
 
 	sm_model* model;          // own copy; broken springs disabled in it
 	uint8_t* initial_enabled; // per spring: enabled in the model given to create/update

@@ -473,7 +473,12 @@ typedef struct simulation_case {
 	// the advance (simulation.h), inside the same call. The retry starts afresh at t = 0, as the
 	// first attempt did, so the run repeats the one without failures bit for bit.
 	bool push;
+	// Rows every t_end / ROWS interpolated (sm_simulation_advance_interpolated up to t_end)
+	// instead of one advance.
+	bool rows;
 } simulation_case;
+
+#define ROWS 20
 
 // The push of simulation_case: 3 N along x on particle 1.
 static int push(const simulation_case* c, sm_simulation* sim)
@@ -496,7 +501,11 @@ static double largest_difference(const double* a, const double* b, int32_t n)
 // memory is back). Returns 0, 1 on a defect, 2 when the run is to stop (memory stays exhausted).
 static int advance_or_recover(simulation_case* c, sm_simulation* sim, bool* restarted)
 {
-	sm_status st = sm_simulation_advance(sim, c->t_end);
+	sm_status st = SM_OK;
+	if (!c->rows)
+		st = sm_simulation_advance(sim, c->t_end);
+	for (int k = 1; c->rows && st == SM_OK && k <= ROWS; k++)
+		st = sm_simulation_advance_interpolated(sim, k == ROWS ? c->t_end : c->t_end * k / ROWS, c->t_end);
 	if (st == SM_OK)
 		return 0;
 	ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
@@ -624,14 +633,15 @@ done:
 }
 
 static int run_simulation(const char* name, const char* text, sm_linear_solver solver, double t_end,
-                          int32_t breaks, bool push)
+                          int32_t breaks, bool push, bool rows)
 {
 	sm_model* model = build(text);
 	ENSURE(model != NULL);
 	int32_t n3 = 3 * sm_model_particle_count(model);
 	bool update = solver == SM_SOLVER_REDUCED_CHOLMOD;
-	simulation_case c = {model, sm_default_simulation_def(), t_end, n3, 0, NULL, 1e-3, update, push};
+	simulation_case c = {model, sm_default_simulation_def(), t_end, n3, 0, NULL, 1e-3, update, push, false};
 	c.def.solver = solver;
+	c.rows = rows;
 	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
 	ENSURE(c.reference != NULL);
 	int result = simulation_scenario(&c);
@@ -648,32 +658,37 @@ static int run_simulation(const char* name, const char* text, sm_linear_solver s
 
 static int test_simulation_dense(void)
 {
-	return run_simulation("simulation, dense", model_all, SM_SOLVER_DENSE, 0.2, 1, false);
+	return run_simulation("simulation, dense", model_all, SM_SOLVER_DENSE, 0.2, 1, false, false);
 }
 
 static int test_simulation_klu(void)
 {
-	return run_simulation("simulation, klu", model_all, SM_SOLVER_KLU, 0.2, 1, false);
+	return run_simulation("simulation, klu", model_all, SM_SOLVER_KLU, 0.2, 1, false, false);
 }
 
 static int test_simulation_klu_pushed(void)
 {
-	return run_simulation("simulation, klu, pushed", model_all, SM_SOLVER_KLU, 0.2, 1, true);
+	return run_simulation("simulation, klu, pushed", model_all, SM_SOLVER_KLU, 0.2, 1, true, false);
 }
 
 static int test_simulation_pcg(void)
 {
-	return run_simulation("simulation, pcg", model_all, SM_SOLVER_REDUCED_PCG, 0.2, 1, false);
+	return run_simulation("simulation, pcg", model_all, SM_SOLVER_REDUCED_PCG, 0.2, 1, false, false);
 }
 
 static int test_simulation_cholmod(void)
 {
-	return run_simulation("simulation, cholmod", model_all, SM_SOLVER_REDUCED_CHOLMOD, 0.2, 1, false);
+	return run_simulation("simulation, cholmod", model_all, SM_SOLVER_REDUCED_CHOLMOD, 0.2, 1, false, false);
+}
+
+static int test_simulation_pcg_rows(void)
+{
+	return run_simulation("simulation, pcg, rows", model_all, SM_SOLVER_REDUCED_PCG, 0.2, 1, false, true);
 }
 
 static int test_simulation_pcg_multilevel(void)
 {
-	return run_simulation("simulation, pcg, multilevel", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false);
+	return run_simulation("simulation, pcg, multilevel", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false, false);
 }
 
 static int test_simulation_adams(void)
@@ -681,7 +696,7 @@ static int test_simulation_adams(void)
 	sm_model* model = build(model_all);
 	ENSURE(model != NULL);
 	int32_t n3 = 3 * sm_model_particle_count(model);
-	simulation_case c = {model, sm_default_simulation_def(), 0.2, n3, 0, NULL, 1e-3, true, false};
+	simulation_case c = {model, sm_default_simulation_def(), 0.2, n3, 0, NULL, 1e-3, true, false, false};
 	c.def.method = SM_METHOD_ADAMS;
 	c.reference = malloc(2 * (size_t)c.n3 * sizeof(double));
 	int result = c.reference ? simulation_scenario(&c) : 1;
@@ -1039,6 +1054,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_simulation_klu);
 	RUN_TEST(test_simulation_klu_pushed);
 	RUN_TEST(test_simulation_pcg);
+	RUN_TEST(test_simulation_pcg_rows);
 	RUN_TEST(test_simulation_cholmod);
 	RUN_TEST(test_simulation_pcg_multilevel);
 	RUN_TEST(test_simulation_adams);

@@ -5,6 +5,7 @@
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "physics_fixtures.h"
+#include "simulation_fixtures.h"
 #include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
 #include "test_harness.h"
@@ -17,34 +18,6 @@
 // ---------------------------------------------------------------------------------------------
 // Fixtures
 // ---------------------------------------------------------------------------------------------
-
-// Oscillator along x: a fixed anchor at the origin and a bob of mass m [kg] at x = l0 + u0 on a
-// rest-length spring (stiffness k [N/m], rest length l0 = 1 m, spring damping kd [N s/m]), no
-// gravity. The spring stays stretched or mildly compressed (|u| <= u0 = 0.2 m < l0), so the
-// motion is the linear m u'' = -k u - kd u'.
-static sm_model* oscillator(double m, double k, double kd, double u0)
-{
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
-	sm_particle_def anchor = sm_default_particle_def();
-	anchor.motion = SM_PARTICLE_FIXED;
-	sm_particle_def bob = sm_default_particle_def();
-	bob.mass = m;
-	bob.position[0] = 1.0 + u0;
-	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
-	s.rest_length = 1.0;
-	s.stiffness = k;
-	s.damping = kd;
-	if (sm_model_add_particle(model, &anchor, NULL) != SM_OK || sm_model_add_particle(model, &bob, NULL) != SM_OK ||
-	    sm_model_add_spring(model, &s, NULL) != SM_OK) {
-		sm_model_destroy(model);
-		return NULL;
-	}
-	return model;
-}
 
 // An n x n sheet of sm_add_sheet's defaults (1 m x 1 m, 1 kg) with mass damping alpha [1/s],
 // corner (n-1, 0) fixed and corner (n-1, n-1) of the given motion.
@@ -814,28 +787,8 @@ static int test_on_step_keeps_max_steps(void)
 // solver has work to do.
 static int test_break_at_analytic_time(void)
 {
-	sm_model_def md = sm_default_model_def();
-	sm_model* model = sm_model_create(&md, NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.motion = SM_PARTICLE_FIXED;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	p.motion = SM_PARTICLE_DRIVEN;
-	p.position[0] = 1.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	p.motion = SM_PARTICLE_FREE;
-	p.position[0] = 0.0;
-	p.position[2] = -0.5;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
-	s.stiffness = 100.0;
-	s.break_strain = 0.1;
-	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
-	s.b = 2;
-	s.break_strain = INFINITY;
-	s.damping = 1.0;
-	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
 	sm_simulation_def d = sm_default_simulation_def();
 	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
 	ENSURE(sim != NULL);

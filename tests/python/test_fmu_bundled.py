@@ -67,7 +67,7 @@ def test_bundled_fmu_matches_springmass_run(model, tmp_path):
     stop = min(stop, 0.5)
     out = tmp_path / "run.csv"
     subprocess.run([str(CLI), "run", str(model), "--t-end", str(stop), "--output-interval", str(step),
-                    "--output", str(out)], check=True, capture_output=True)
+                    "--output", str(out), "--stop-at-outputs"], check=True, capture_output=True)
     header, data = read_csv(out)
     names = [v.name for v in md.modelVariables if v.causality == "output" and v.name in header]
     assert names, f"no common columns between the FMU's outputs and {header}"
@@ -127,7 +127,8 @@ def test_set_values_package_the_model_as_if_the_file_gave_them(package, tmp_path
     # instead of 3000 differs by up to 3e-2).
     out = tmp_path / "run.csv"
     subprocess.run([str(CLI), "run", str(ROPE), *(w for s in ROPE_SETS for w in ("--set", s)), "--positions",
-                    "--output-interval", "0.01", "-q", "-o", str(out)], check=True, capture_output=True)
+                    "--output-interval", "0.01", "--stop-at-outputs", "-q", "-o", str(out)], check=True,
+                   capture_output=True)
     header, data = read_csv(out)
     columns = {f"p[{i}].{c}": f"particle.rope[{i}].{c}" for i in range(41) for c in "xyz"}
     assert "particle.rope[40].z" in header and "particle.rope[41].z" not in header

@@ -1,0 +1,74 @@
+// Shared fixtures of the simulation tests: small models with closed-form motion.
+#pragma once
+
+#include "springmass/model.h"
+
+#include <math.h>
+
+// Oscillator along x: an anchor at the origin (fixed, or driven: still until the test moves it)
+// and a bob of mass m [kg] at x = l0 + u0 on a rest-length spring (stiffness k [N/m], rest length
+// l0 = 1 m, spring damping kd [N s/m]), no gravity. The spring stays stretched or mildly
+// compressed (|u| <= u0 = 0.2 m < l0), so the motion is the linear m u'' = -k u - kd u'.
+static inline sm_model* oscillator_anchored(double m, double k, double kd, double u0, sm_particle_motion anchor_motion)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def anchor = sm_default_particle_def();
+	anchor.motion = anchor_motion;
+	sm_particle_def bob = sm_default_particle_def();
+	bob.mass = m;
+	bob.position[0] = 1.0 + u0;
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.rest_length = 1.0;
+	s.stiffness = k;
+	s.damping = kd;
+	if (!model || sm_model_add_particle(model, &anchor, NULL) != SM_OK ||
+	    sm_model_add_particle(model, &bob, NULL) != SM_OK || sm_model_add_spring(model, &s, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+static inline sm_model* oscillator(double m, double k, double kd, double u0)
+{
+	return oscillator_anchored(m, k, kd, u0, SM_PARTICLE_FIXED);
+}
+
+// A spring to be pulled apart: spring 0 (100 N/m, rest length the initial 1 m, break strain 0.1)
+// from a fixed particle 0 at the origin to a driven
+// particle 1 at (1, 0, 0) m, which the test sets moving along x; spring 1 (damped, unbreakable)
+// from particle 0 to a free particle 2 at (0, 0, -0.5) m, so that the model has a state to
+// integrate. Driven at speed V from x = 1 m at t = 0, spring 0 breaks at 0.1 / V s.
+static inline sm_model* pulled_spring(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	sm_particle_def driven = sm_default_particle_def();
+	driven.motion = SM_PARTICLE_DRIVEN;
+	driven.position[0] = 1.0;
+	sm_particle_def free_particle = sm_default_particle_def();
+	free_particle.position[2] = -0.5;
+	sm_spring_def pulled = sm_default_spring_def();
+	pulled.a = 0;
+	pulled.b = 1;
+	pulled.stiffness = 100.0;
+	pulled.break_strain = 0.1;
+	sm_spring_def hanging = pulled;
+	hanging.b = 2;
+	hanging.break_strain = INFINITY;
+	hanging.damping = 1.0;
+	if (!model || sm_model_add_particle(model, &p, NULL) != SM_OK ||
+	    sm_model_add_particle(model, &driven, NULL) != SM_OK ||
+	    sm_model_add_particle(model, &free_particle, NULL) != SM_OK ||
+	    sm_model_add_spring(model, &pulled, NULL) != SM_OK || sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}

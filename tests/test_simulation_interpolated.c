@@ -1,0 +1,391 @@
+// sm_simulation_advance_interpolated: outputs interpolated from CVODE's steps, which run on to a
+// later stop time. Checked against one advance to that stop time (the same steps and breaks, bit
+// for bit), against closed forms (the damped oscillator, with and without a step force set
+// between outputs; a spring pulled to its break), and for what it must leave alone.
+#include "springmass/model_file.h"
+#include "springmass/simulation.h"
+#include "simulation_fixtures.h"
+#include "simulation_internal.h"
+#include "test_harness.h"
+
+#include <stdlib.h>
+
+#ifndef SPRINGMASS_MODELS_DIR
+#error "SPRINGMASS_MODELS_DIR must name the bundled models"
+#endif
+
+// The oscillator of simulation_fixtures.h with a 1 kg bob, k = 40 N/m and damping ratio zeta,
+// released from u = 0.2 m at rest: u'' + 2 zeta w0 u' + w0^2 u = F / m.
+#define OSC_K 40.0
+#define OSC_U0 0.2
+static sm_model* damped_oscillator(double zeta, sm_particle_motion anchor_motion)
+{
+	return oscillator_anchored(1.0, OSC_K, 2.0 * zeta * sqrt(OSC_K), OSC_U0, anchor_motion);
+}
+
+// Free motion of u'' + 2 zeta w0 u' + w0^2 u = 0 (zeta < 1) from u(0) = u0, u'(0) = v0, at time
+// tau: u = exp(-zeta w0 tau) (u0 cos(wd tau) + (v0 + zeta w0 u0) / wd sin(wd tau)).
+static void free_motion(double zeta, double w0, double u0, double v0, double tau, double* u, double* v)
+{
+	const double wd = w0 * sqrt(1.0 - zeta * zeta), a = u0, b = (v0 + zeta * w0 * u0) / wd;
+	const double e = exp(-zeta * w0 * tau), c = cos(wd * tau), s = sin(wd * tau);
+	*u = e * (a * c + b * s);
+	*v = e * (-zeta * w0 * (a * c + b * s) + wd * (-a * s + b * c));
+}
+
+static sm_simulation_def tight_def(void)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.relative_tolerance = 1e-10;
+	d.absolute_tolerance_position = 1e-12;
+	d.absolute_tolerance_velocity = 1e-12;
+	return d;
+}
+
+// Rows every 0.01 s up to 5 s, interpolated, follow the closed form as closely as advancing to
+// each row does (rtol 1e-10 on an amplitude of 0.2 m: the 1e-6 m bound, as for
+// sm_simulation_advance), in fewer steps: the rows no longer end steps.
+static int test_rows_follow_the_closed_form_in_fewer_steps(void)
+{
+	const double zeta = 0.1, w0 = sqrt(OSC_K);
+	sm_model* model = damped_oscillator(zeta, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* interpolated = sm_simulation_create(model, &d, NULL);
+	sm_simulation* stopped = sm_simulation_create(model, &d, NULL);
+	ENSURE(interpolated != NULL && stopped != NULL);
+	double worst = 0.0, worst_velocity = 0.0;
+	for (int i = 1; i <= 500; i++) {
+		const double t = 0.01 * i;
+		ENSURE_STATUS(sm_simulation_advance_interpolated(interpolated, t, 5.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(stopped, t), SM_OK);
+		ENSURE(sm_simulation_time(interpolated) == t);
+		double u, v;
+		free_motion(zeta, w0, OSC_U0, 0.0, t, &u, &v);
+		worst = fmax(worst, fabs(sm_simulation_positions(interpolated)[3] - 1.0 - u));
+		worst_velocity = fmax(worst_velocity, fabs(sm_simulation_velocities(interpolated)[3] - v));
+	}
+	ENSURE(worst <= 1e-6 && worst_velocity <= 1e-6 * w0);
+	// The energy balance holds at an interpolated time too: the dissipated energy is part of
+	// CVODE's state and interpolated with it (rtol 1e-10 of the 0.8 J at the start).
+	const sm_energies e = sm_simulation_energies(interpolated);
+	const double e0 = 0.5 * OSC_K * OSC_U0 * OSC_U0;
+	ENSURE_NEAR(e.kinetic + e.elastic + sm_simulation_dissipated_energy(interpolated), e0, 1e-7 * e0);
+	const int64_t steps = sm_simulation_statistics(interpolated).steps;
+	// The same model advanced once to 5 s takes the interpolated run's steps exactly.
+	sm_simulation* once = sm_simulation_create(model, &d, NULL);
+	ENSURE(once != NULL);
+	ENSURE_STATUS(sm_simulation_advance(once, 5.0), SM_OK);
+	ENSURE(sm_simulation_statistics(once).steps == steps);
+	ENSURE(memcmp(sm_simulation_positions(once), sm_simulation_positions(interpolated), 6 * sizeof(double)) == 0);
+	ENSURE(sm_simulation_statistics(stopped).steps > steps + 100);
+	sm_simulation_destroy(once);
+	sm_simulation_destroy(stopped);
+	sm_simulation_destroy(interpolated);
+	sm_model_destroy(model);
+	return 0;
+}
+
+typedef struct run_record {
+	int64_t steps;
+	int32_t breaks;
+	sm_break_event events[512];
+	double* y;  // positions, velocities, dissipated energy
+	int pending_seen;
+	int64_t on_step_calls;
+} run_record;
+
+static void count_step(void* context, double time)
+{
+	(void)time;
+	((run_record*)context)->on_step_calls++;
+}
+
+// The tearing cloth to t_end, one advance (dt = 0) or rows every dt interpolated.
+static int tear(const sm_model* model, sm_linear_solver solver, double t_end, double dt, bool on_step,
+                run_record* r)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = solver;
+	d.relative_tolerance = 1e-4;
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-6;
+	if (on_step) {
+		d.on_step = count_step;
+		d.on_step_context = r;
+	}
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	for (int pass = 0; pass < 2; pass++) {  // the second after a reset: the same run again
+		if (dt == 0.0) {
+			ENSURE_STATUS(sm_simulation_advance(sim, t_end), SM_OK);
+		} else {
+			const long rows = lround(t_end / dt);
+			for (long k = 1; k <= rows; k++) {
+				const double t = k == rows ? t_end : (double)k * dt;
+				ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, t_end), SM_OK);
+				ENSURE(sm_simulation_time(sim) == t);
+				r->pending_seen += sim->break_pending;
+			}
+		}
+		const int32_t n = sm_model_particle_count(model);
+		const sm_statistics s = sm_simulation_statistics(sim);
+		const int32_t breaks = sm_simulation_break_count(sim);
+		ENSURE(breaks <= 512);
+		if (pass == 0) {
+			r->steps = s.steps;
+			r->breaks = breaks;
+			for (int32_t b = 0; b < breaks; b++)
+				r->events[b] = sm_simulation_break(sim, b);
+			r->y = malloc(sizeof(double) * (6 * (size_t)n + 1));
+			ENSURE(r->y != NULL);
+			memcpy(r->y, sm_simulation_positions(sim), 3 * (size_t)n * sizeof(double));
+			memcpy(r->y + 3 * n, sm_simulation_velocities(sim), 3 * (size_t)n * sizeof(double));
+			r->y[6 * n] = sm_simulation_dissipated_energy(sim);
+			ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+		} else {
+			ENSURE(s.steps == r->steps && breaks == r->breaks);
+			ENSURE(memcmp(sm_simulation_positions(sim), r->y, 3 * (size_t)n * sizeof(double)) == 0);
+		}
+	}
+	sm_simulation_destroy(sim);
+	return 0;
+}
+
+// The bundled tearing cloth, torn for 0.8 s (about 60 springs break), with rows every 1 ms or
+// 7 ms interpolated: the steps, the breaks (time and spring) and the final state are those of
+// one advance to 0.8 s bit for bit, with every linear solver, with or without on_step, and again
+// after a reset. Breaks that CVODE found past a row (in a step that ends after it) happen where
+// CVODE found them, in the next advance.
+static int test_rows_leave_the_run_of_one_advance(void)
+{
+	sm_error err;
+	sm_document* doc = sm_document_load(SPRINGMASS_MODELS_DIR "/tearing_cloth.json", &err);
+	ENSURE(doc != NULL);
+	sm_model* model = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	const int32_t n = sm_model_particle_count(model);
+	// KLU, six times slower here, to 0.3 s (11 breaks).
+	const sm_linear_solver solvers[] = {SM_SOLVER_REDUCED_PCG, SM_SOLVER_REDUCED_CHOLMOD, SM_SOLVER_KLU};
+	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
+		const double t_end = solvers[k] == SM_SOLVER_KLU ? 0.3 : 0.8;
+		run_record once = {0};
+		ENSURE(tear(model, solvers[k], t_end, 0.0, false, &once) == 0);
+		ENSURE(once.breaks >= (solvers[k] == SM_SOLVER_KLU ? 10 : 50));
+		const double intervals[] = {1e-3, 7e-3};
+		for (int i = 0; i < 2; i++) {
+			run_record rows = {0};
+			ENSURE(tear(model, solvers[k], t_end, intervals[i], i == 1, &rows) == 0);
+			if (rows.steps != once.steps || rows.breaks != once.breaks)
+				printf("  %s, rows every %g s: %lld steps, %d breaks; one advance: %lld, %d\n",
+				       sm_linear_solver_name(solvers[k]), intervals[i], (long long)rows.steps, (int)rows.breaks,
+				       (long long)once.steps, (int)once.breaks);
+			ENSURE(rows.steps == once.steps && rows.breaks == once.breaks);
+			for (int32_t b = 0; b < once.breaks; b++)
+				ENSURE(rows.events[b].time == once.events[b].time && rows.events[b].spring == once.events[b].spring);
+			ENSURE(memcmp(rows.y, once.y, (6 * (size_t)n + 1) * sizeof(double)) == 0);
+			// Each of the two intervals left breaks pending past a row (about a third of them).
+			ENSURE(rows.pending_seen > 0);
+			ENSURE(i == 0 || rows.on_step_calls >= rows.steps);
+			free(rows.y);
+		}
+		free(once.y);
+	}
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A spring pulled at constant speed breaks at l0 (1 + strain) / speed = 0.1 / 0.37 s, between
+// rows 10 ms apart, to CVODE's root precision (100 unit roundoffs of the time and step: 1e-12 s,
+// as for sm_simulation_advance); and not before its time, at the row before it.
+static int test_break_between_rows_at_its_analytic_time(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const double speed = 0.37, x1[3] = {1.0, 0.0, 0.0}, v1[3] = {speed, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
+	const double t_break = 0.1 / speed;
+	for (int i = 1; i <= 100; i++) {
+		const double t = 0.01 * i;
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 1.0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == (t >= t_break ? 1 : 0));
+		ENSURE(sm_model_spring_enabled(sm_simulation_model(sim), 0) == (t < t_break));
+	}
+	ENSURE(sm_simulation_break(sim, 0).spring == 0);
+	ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_break, 1e-12);
+	// A break CVODE found past a row is dropped with the rest of its steps when the state is set
+	// anew or the simulation reset; the spring then breaks where CVODE finds it again.
+	for (int reset = 0; reset < 2; reset++) {
+		ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
+		double t = 0.0;
+		while (!sim->break_pending && t < t_break) {
+			t += 1e-3;
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 1.0), SM_OK);
+		}
+		ENSURE(sim->break_pending && sm_simulation_break_count(sim) == 0);
+		if (reset) {
+			ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+			ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
+		} else {
+			double x[9], v[9];
+			memcpy(x, sm_simulation_positions(sim), sizeof x);
+			memcpy(v, sm_simulation_velocities(sim), sizeof v);
+			ENSURE_STATUS(sm_simulation_set_state(sim, t, x, v), SM_OK);
+		}
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 1.0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).spring == 0);
+		ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_break, 1e-12);
+	}
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// An input set at a row while CVODE has stepped past it acts from that row on: CVODE restarts
+// there (whatever restart_on_input_change says). A step force F, or the anchor moved by F / k,
+// moves the bob's rest point to u = F / k, and the bob follows the closed form of the
+// oscillator about it from the state it had at the row. Kept on without the restart, CVODE
+// would have the force act only from the end of its step (here some 10 ms later: an error of
+// F / m (10 ms)^2 / 2 = 5e-5 m). rtol 1e-10: 1e-6 m as above.
+static int check_input_past_the_steps(bool driven)
+{
+	const double zeta = 0.1, w0 = sqrt(OSC_K), t_force = 0.5, force = 1.0;
+	sm_model* model = damped_oscillator(zeta, driven ? SM_PARTICLE_DRIVEN : SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_force, 2.0), SM_OK);
+	double tn = 0.0;
+	CVodeGetCurrentTime(sim->cvode, &tn);
+	ENSURE(tn > t_force);  // CVODE has stepped past the row
+	ENSURE(sm_simulation_statistics(sim).restarts == 0);
+	const double shift = force / OSC_K;
+	const double f[3] = {force, 0.0, 0.0}, moved[3] = {shift, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(driven ? sm_simulation_set_driven(sim, 0, moved, still) : sm_simulation_set_external_force(sim, 1, f),
+	              SM_OK);
+	double u1, v1;
+	free_motion(zeta, w0, OSC_U0, 0.0, t_force, &u1, &v1);
+	double worst = 0.0;
+	for (int i = 1; i <= 150; i++) {
+		const double t = t_force + 0.01 * i;
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 2.0), SM_OK);
+		double u, v;
+		free_motion(zeta, w0, u1 - shift, v1, t - t_force, &u, &v);
+		worst = fmax(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - (u + shift)));
+	}
+	if (!(worst <= 1e-6))
+		printf("  %s: %g m from the closed form\n", driven ? "anchor moved" : "force", worst);
+	ENSURE(worst <= 1e-6);
+	ENSURE(sm_simulation_statistics(sim).restarts == 1);
+	sm_simulation_destroy(sim);
+	// An input small enough for CVODE's error control to take without a failure (1e-3 N, the
+	// anchor moved by 1e-3 / k) gives the run of restart_on_input_change bit for bit: the same
+	// restart at the row.
+	double x[2][6];
+	int64_t steps[2];
+	for (int restart = 0; restart < 2; restart++) {
+		sm_simulation_def dr = tight_def();
+		dr.restart_on_input_change = restart;
+		sim = sm_simulation_create(model, &dr, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_force, 2.0), SM_OK);
+		const double small[3] = {1e-3, 0.0, 0.0}, nudged[3] = {1e-3 / OSC_K, 0.0, 0.0};
+		ENSURE_STATUS(driven ? sm_simulation_set_driven(sim, 0, nudged, still)
+		                     : sm_simulation_set_external_force(sim, 1, small),
+		              SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 2.0, 2.0), SM_OK);
+		memcpy(x[restart], sm_simulation_positions(sim), sizeof x[restart]);
+		steps[restart] = sm_simulation_statistics(sim).steps;
+		ENSURE(sm_simulation_statistics(sim).restarts == 1);
+		sm_simulation_destroy(sim);
+	}
+	ENSURE(steps[0] == steps[1] && memcmp(x[0], x[1], sizeof x[0]) == 0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+static int test_input_set_past_the_steps_restarts_at_the_row(void)
+{
+	return check_input_past_the_steps(false) || check_input_past_the_steps(true);
+}
+
+// A plain advance to a time CVODE has already passed interpolates, with no step and no
+// restart, the value an interpolated advance gives; one past CVODE's time steps on.
+static int test_plain_advance_within_the_steps_interpolates(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* a = sm_simulation_create(model, &d, NULL);
+	sm_simulation* b = sm_simulation_create(model, &d, NULL);
+	ENSURE(a != NULL && b != NULL);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(a, 0.3, 2.0), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(b, 0.3, 2.0), SM_OK);
+	double tn = 0.0;
+	CVodeGetCurrentTime(a->cvode, &tn);
+	ENSURE(tn > 0.3);
+	const double t = 0.5 * (0.3 + tn);
+	const sm_statistics before = sm_simulation_statistics(a);
+	ENSURE_STATUS(sm_simulation_advance(a, t), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(b, t, 2.0), SM_OK);
+	const sm_statistics after = sm_simulation_statistics(a);
+	ENSURE(after.steps == before.steps && after.restarts == 0 && after.rhs_evaluations == before.rhs_evaluations);
+	ENSURE(sm_simulation_time(a) == t);
+	ENSURE(memcmp(sm_simulation_positions(a), sm_simulation_positions(b), 6 * sizeof(double)) == 0);
+	ENSURE(memcmp(sm_simulation_velocities(a), sm_simulation_velocities(b), 6 * sizeof(double)) == 0);
+	ENSURE_STATUS(sm_simulation_advance(a, 1.0), SM_OK);
+	ENSURE(sm_simulation_time(a) == 1.0 && sm_simulation_statistics(a).steps > after.steps);
+	sm_simulation_destroy(b);
+	sm_simulation_destroy(a);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A stop time that is not finite or lies before the end time is refused, as is an end time
+// before the current time, with nothing changed and the message naming the times.
+static int test_bad_times_are_refused(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.25, 1.0), SM_OK);
+	double x[6];
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	const int64_t steps = sm_simulation_statistics(sim).steps;
+	const double bad[][2] = {{0.5, 0.4}, {0.5, NAN}, {0.5, INFINITY}, {0.1, 1.0}, {NAN, 1.0}, {INFINITY, INFINITY}};
+	for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, bad[k][0], bad[k][1]), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strstr(sm_simulation_last_error(sim), k < 3 ? "stop time" : "end time") != NULL);
+		ENSURE(sm_simulation_time(sim) == 0.25 && sm_simulation_statistics(sim).steps == steps);
+		ENSURE(memcmp(sm_simulation_positions(sim), x, sizeof x) == 0);
+	}
+	ENSURE(strstr(sm_simulation_last_error(sim), "advance_interpolated") != NULL);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(NULL, 1.0, 1.0), SM_ERROR_INVALID_ARGUMENT);
+	// The stop time equal to the end time is a plain advance; to the current time, nothing.
+	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.25, 0.25), SM_OK);
+	ENSURE(sm_simulation_statistics(sim).steps == steps);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 0.5), SM_OK);
+	ENSURE(sm_simulation_time(sim) == 0.5);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_rows_follow_the_closed_form_in_fewer_steps);
+	RUN_TEST(test_rows_leave_the_run_of_one_advance);
+	RUN_TEST(test_break_between_rows_at_its_analytic_time);
+	RUN_TEST(test_input_set_past_the_steps_restarts_at_the_row);
+	RUN_TEST(test_plain_advance_within_the_steps_interpolates);
+	RUN_TEST(test_bad_times_are_refused);
+	return TEST_SUMMARY();
+}
