@@ -1903,7 +1903,11 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	if (apply_inputs(inst) != fmi2OK)
 		return fmi2Error;
 	sm_statistics before = sm_simulation_statistics(inst->sim);
-	sm_status st = sm_simulation_advance(inst->sim, t_end - inst->start_time);
+	// Up to a stop time the master gave, CVODE steps on past the communication point and the
+	// outputs are interpolated from its steps: a changed input, a restored state or a tunable
+	// parameter restarts it at the point, so steps past it never see inputs they should not.
+	const double t_stop = inst->stop_time_defined ? fmax(inst->stop_time, t_end) : t_end;
+	sm_status st = sm_simulation_advance_interpolated(inst->sim, t_end - inst->start_time, t_stop - inst->start_time);
 	inst->forces_valid = false;
 
 	int32_t breaks = sm_simulation_break_count(inst->sim);

@@ -1109,6 +1109,10 @@ static sm_status interpolate(sm_simulation* sim, double t)
 static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 {
 	sim->last_error[0] = '\0';
+	// Inputs that changed for this advance will likely change at its end too (a co-simulation
+	// master's): CVODE then ends its last step at t_end rather than step past it.
+	const bool inputs_changed = sim->input_changed;
+	sim->input_changed = false;
 	// Where CVODE is past the current time, it has looked for roots beyond it already, on the
 	// same trajectory: springs are checked afresh only where it starts or restarts.
 	if (sim->time < t_end && !cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
@@ -1138,7 +1142,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		}
 		sim->solver_message[0] = '\0';
 		sim->jacobian_out_of_memory = false;
-		const bool past_end = t_stop > t_end || cvode_ahead(sim);
+		const bool past_end = (t_stop > t_end && !inputs_changed) || cvode_ahead(sim);
 		double reached = sim->time;
 		int flag = past_end ? step_past_end(sim, t_end, t_stop, &reached) : step_to_end(sim, t_end, &reached);
 		if (flag == CV_SUCCESS && reached < t_end) {
@@ -1367,6 +1371,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	}
 	sim->drive_time[particle] = sim->time;
 	sim->input_jumped = sim->input_jumped || jump;
+	sim->input_changed = sim->input_changed || jump;
 	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
 		sim->need_restart = true;
 	refresh_outputs(sim);
@@ -1391,6 +1396,7 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	f[1] = force[1];
 	f[2] = force[2];
 	sim->input_jumped = sim->input_jumped || jump;
+	sim->input_changed = sim->input_changed || jump;
 	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
 		sim->need_restart = true;
 	return SM_OK;

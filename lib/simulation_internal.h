@@ -27,6 +27,7 @@ struct sm_simulation {
 	SUNNonlinearSolver fixed_point;  // Adams only
 	bool need_restart;   // something requires CVodeReInit before the next step
 	bool input_jumped;   // an input jumped since CVODE's last (re)initialisation
+	bool input_changed;  // an input jumped since the last advance began
 	// CVODE found a spring break at break_time, past the time the last advance interpolated
 	// (roots_found tells which); the next advance breaks it there.
 	bool break_pending;

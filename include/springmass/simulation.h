@@ -166,7 +166,11 @@ SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 /// next advance that reaches its time.
 /// What is past the simulation's time is dropped, and CVODE restarts there, when an input
 /// changes (sm_simulation_set_driven, sm_simulation_set_external_force; whatever
-/// restart_on_input_change says), or the state or the model does. A later sm_simulation_advance
+/// restart_on_input_change says), or the state or the model does. An advance whose inputs
+/// changed since the previous advance began ends its last step at t_end, as
+/// sm_simulation_advance does: inputs that change at one output time tend to change at the next
+/// (a co-simulation master's), where steps past it would be dropped, and restarts from
+/// interpolated states add up their errors (docs/fmu.md measures it). A later sm_simulation_advance
 /// to a time CVODE has already passed interpolates too. SM_ERROR_INVALID_ARGUMENT, with nothing
 /// changed, for a t_end that sm_simulation_advance refuses or a t_stop that is not finite or lies
 /// before t_end; failures as for sm_simulation_advance.

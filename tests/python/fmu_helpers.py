@@ -38,9 +38,9 @@ class Instance:
     def log_text(self):
         return "\n".join(m[2] for m in self.messages)
 
-    def start(self, start_values=None, start_time=0.0):
+    def start(self, start_values=None, start_time=0.0, stop_time=None):
         s = self.slave
-        s.setupExperiment(startTime=start_time)
+        s.setupExperiment(startTime=start_time, stopTime=stop_time)
         s.enterInitializationMode()
         for name, value in (start_values or {}).items():
             self.set(name, value)

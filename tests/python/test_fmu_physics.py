@@ -1,6 +1,7 @@
 """The FMU against physics: closed forms, scaling laws and statics, through fmpy."""
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -62,12 +63,14 @@ def test_force_port_driven_by_input_signal(test_fmu):
     assert np.max(np.abs(r["tip.x"] - expected)) < 1e-6
 
 
-def test_force_step_changes_result_from_that_point(test_fmu):
+@pytest.mark.parametrize("stop_time", [None, 1.0], ids=["no stop time", "stop time"])
+def test_force_step_changes_result_from_that_point(test_fmu, stop_time):
     # A force switched on at t1 leaves the motion before t1 untouched and shifts the centre of
-    # oscillation afterwards (checked against the closed form of the piecewise problem).
+    # oscillation afterwards (checked against the closed form of the piecewise problem). With a
+    # stop time CVODE has stepped past t1 when the force comes, and restarts at t1.
     F, t1 = 2.0, 0.5
     inst = Instance(test_fmu("driven_oscillator")).start(
-        {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10})
+        {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}, stop_time=stop_time)
     w = math.sqrt(K / M)
     h, t = 0.01, 0.0
     try:
@@ -87,6 +90,53 @@ def test_force_step_changes_result_from_that_point(test_fmu):
             assert abs(x - expected) < 1e-6, (t, x, expected)
     finally:
         inst.free()
+
+
+def solver_steps(inst):
+    """Internal steps of every communication step so far, from the logSolver messages."""
+    pattern = re.compile(r"(\d+) internal steps")
+    return [int(pattern.search(text).group(1)) for _, category, text in inst.messages
+            if category == "logSolver" and pattern.search(text)]
+
+
+def held_or_changing_force(test_fmu, stop_time, changing):
+    """The driven oscillator over 1 s in 1 ms communication steps; tip.fx held at 0 or changed
+    at every step (1e-3 N, alternating in sign). Returns tip.x per step and the internal steps."""
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True)
+    inst.slave.setDebugLogging(True, ["logSolver"])
+    inst.start({"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10},
+               stop_time=stop_time)
+    try:
+        x = []
+        for n in range(1000):
+            if changing:
+                inst.set("tip.fx", 1e-3 * (-1) ** n)
+            inst.slave.doStep(n * 1e-3, 1e-3)
+            x.append(inst.get("tip.x"))
+        return np.array(x), solver_steps(inst)
+    finally:
+        inst.free()
+
+
+def test_with_a_stop_time_and_held_inputs_cvode_steps_past_communication_points(test_fmu):
+    # With the stop time given and the inputs held, CVODE steps as its tolerances allow and the
+    # outputs are interpolated: far fewer internal steps than communication steps, where without
+    # a stop time every communication step ends one. Both follow the closed form (rtol 1e-10:
+    # 1e-6 m, as above).
+    w = math.sqrt(K / M)
+    expected = L0 + (X0 - L0) * np.cos(w * 1e-3 * np.arange(1, 1001))
+    x_stop, steps_stop = held_or_changing_force(test_fmu, 1.0, False)
+    x_free, steps_free = held_or_changing_force(test_fmu, None, False)
+    assert len(steps_stop) == len(steps_free) == 1000
+    assert sum(steps_free) >= 1000 and min(steps_free) >= 1
+    assert sum(steps_stop) < 0.5 * 1000 and steps_stop.count(0) > 500
+    assert np.max(np.abs(x_stop - expected)) < 1e-6 and np.max(np.abs(x_free - expected)) < 1e-6
+    # An input that changes at every communication point (a coupled master's) makes every step
+    # end at the point, with or without a stop time: the same computation, bit for bit.
+    x_stop, steps_stop = held_or_changing_force(test_fmu, 1.0, True)
+    x_free, steps_free = held_or_changing_force(test_fmu, None, True)
+    assert steps_stop == steps_free and min(steps_stop) >= 1
+    assert np.array_equal(x_stop, x_free)
 
 
 def test_motion_port_reaction_matches_statics(test_fmu):
