@@ -11,9 +11,10 @@
 // otherwise), its pointers and value references, and returns fmi2Error with a logged message
 // rather than ever crashing the importer. There is no global state: each instance owns its
 // document, its simulation and its buffers.
-#include "fmu_model.h"
-
-#include "fmi2Functions.h"
+//
+// The FMU state (fmi2GetFMUstate to fmi2DeSerializeFMUstate) is in fmu_state.c; the instance and
+// the helpers both files call are declared in fmu_instance.h and defined here.
+#include "fmu_instance.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -25,88 +26,16 @@
 #include <string.h>
 
 // ---------------------------------------------------------------------------------------------
-// Instance
+// Logging
 // ---------------------------------------------------------------------------------------------
 
-// States of the FMI 2.0 Co-Simulation state machine, as bits so that each function states the
-// set in which it is allowed.
-enum {
-	ST_INSTANTIATED = 1 << 0,
-	ST_INITIALIZATION = 1 << 1,
-	ST_STEP_COMPLETE = 1 << 2,
-	ST_STEP_FAILED = 1 << 3,
-	ST_TERMINATED = 1 << 4,
-	ST_ERROR = 1 << 5,
-};
-#define ST_ANY (ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
-#define ST_RUNNING (ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
-
-// Log categories, as bits.
-enum {
-	LOG_EVENTS = 1 << 0,
-	LOG_WARNING = 1 << 1,
-	LOG_DISCARD = 1 << 2,
-	LOG_ERROR = 1 << 3,
-	LOG_SOLVER = 1 << 4,
-};
+// The names of the log categories (fmu_instance.h), in the order of their bits.
 static const char* const category_names[] = {"logEvents", "logStatusWarning", "logStatusDiscard", "logStatusError",
                                              "logSolver"};
 #define LOG_CATEGORY_COUNT 5
 // Warnings, discards and errors are reported unless switched off explicitly; events and solver
 // statistics are debug output, on when logging is.
 #define LOG_ALWAYS (LOG_WARNING | LOG_DISCARD | LOG_ERROR)
-
-// Held values of a port: prescribed or read position [m], velocity [m/s], force [N].
-typedef struct port_values {
-	double position[3];
-	double velocity[3];
-	double force[3];
-} port_values;
-
-typedef struct instance {
-	char* name;
-	fmi2CallbackLogger logger;
-	fmi2ComponentEnvironment environment;
-	unsigned log_mask;
-	int state;
-
-	char* text;  // resources/model.json as read
-	size_t length;
-	char* parameters;  // resources/parameters.txt as read, NULL when the FMU has none
-	size_t parameters_length;
-	sm_document* doc;
-	fmu_table table;
-	int32_t particle_count;
-	int32_t spring_count;
-	int32_t port_count;
-	sm_port* ports;  // particle indices of the ports (names stay in doc)
-
-	// Settings and inputs.
-	sm_simulation_def solver;
-	bool rtol_set;  // solver.rtol set explicitly: the experiment's tolerance does not override it
-	double start_time;
-	bool stop_time_defined;
-	double stop_time;
-	port_values* held;  // per port: the inputs as set, the start values until then
-	bool* port_dirty;   // inputs set since they were last given to the simulation
-
-	// The running simulation (created when first needed in initialisation mode).
-	sm_simulation* sim;
-	bool sim_dirty;  // fixed parameters or settings changed: create it again
-	double time;     // the FMU's time: start_time + the simulation's time [s]
-	double last_successful_time;
-	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
-	int32_t breaks_logged;
-	double* forces;   // 3 per particle, valid while forces_valid
-	bool forces_valid;
-	double* scratch;  // 5 * 3 per particle for directional derivatives
-	double* parameter_old;  // the model-file parameters' values before a change that may fail
-	double* parameter_new;  // the values such a change sets, one per parameter
-} instance;
-
-// ---------------------------------------------------------------------------------------------
-// Logging
-// ---------------------------------------------------------------------------------------------
 
 // Logs a message in a category if that category is on. The text is formatted here and handed to
 // the importer's logger with '%' doubled, since FMI loggers treat the message as a format.
@@ -115,7 +44,7 @@ static bool logging(const instance* inst, unsigned category)
 	return inst && inst->logger && (inst->log_mask & category);
 }
 
-static void logf_(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
+void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
 {
 	if (!logging(inst, category))
 		return;
@@ -139,16 +68,10 @@ static void logf_(instance* inst, fmi2Status status, unsigned category, const ch
 	             escaped);
 }
 
-#define log_error(inst, ...) logf_((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)
-
 // A number for a message, in the fewest digits that read back to it (0.3, not
-// 0.29999999999999999). Used as number_text(x).text within one call: the returned struct lives
+// 0.29999999999999999). Used as fmu_number_text(x).text within one call: the returned struct lives
 // until the end of the full expression that contains the call.
-typedef struct number_text_t {
-	char text[SM_NUMBER_TEXT_CAPACITY];
-} number_text_t;
-
-static number_text_t number_text(double x)
+number_text_t fmu_number_text(double x)
 {
 	number_text_t t;
 	sm_format_number(x, t.text);
@@ -156,7 +79,7 @@ static number_text_t number_text(double x)
 }
 
 // Checks the state machine: logs and returns false if `function` is not allowed now.
-static bool allowed(instance* inst, const char* function, int states)
+bool fmu_allowed(instance* inst, const char* function, int states)
 {
 	if (!inst)
 		return false;
@@ -288,11 +211,6 @@ static void load_start_values(instance* inst)
 	}
 }
 
-// How to get an FMU of another structure, for the messages that refuse one.
-#define PACKAGED_STRUCTURE                                                                                  \
-	"this FMU's variables were made for the structure at packaging: package the model with that value "    \
-	"(springmass fmu MODEL -o NAME.fmu --set "
-
 // Appends "name = value" of every parameter whose value differs from before[] to text (size bytes,
 // NUL-terminated), comma-separated.
 static void changed_parameters(const instance* inst, const double* before, char* text, size_t size)
@@ -303,7 +221,7 @@ static void changed_parameters(const instance* inst, const double* before, char*
 		double value = sm_document_parameter_value(inst->doc, i);
 		if (value != before[i]) {
 			int n = snprintf(text + k, size - k, "%s%s = %s", k ? ", " : "", sm_document_parameter_name(inst->doc, i),
-			                 number_text(value).text);
+			                 fmu_number_text(value).text);
 			k += n > 0 ? (size_t)n : 0;
 		}
 	}
@@ -339,7 +257,7 @@ static bool packaged_structure(instance* inst, const char* function, const sm_mo
 // Builds the model with the current parameter values, motion ports' particles driven; refuses a
 // model of another structure than the packaged one (packaged_structure, naming the parameters
 // that differ from before[], or NULL).
-static sm_status build_model(instance* inst, const char* function, const double* before, sm_model** out)
+sm_status fmu_build_model(instance* inst, const char* function, const double* before, sm_model** out)
 {
 	sm_error err = {SM_OK, ""};
 	sm_model* model = NULL;
@@ -397,20 +315,13 @@ static fmi2Status apply_inputs(instance* inst)
 	return fmi2OK;
 }
 
-static void mark_inputs_dirty(instance* inst)
-{
-	for (int32_t p = 0; p < inst->port_count; ++p)
-		inst->port_dirty[p] = true;
-	inst->forces_valid = false;
-}
-
 // Creates the simulation from a model at time start_time + sim_time with the given state (or the
 // model's initial state when x is NULL), the solver settings and the port inputs given (held, and
 // pending: which ports have inputs set that no step has taken yet), and makes it the instance's
 // only when all of that succeeded: a failure changes nothing.
-static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
-                                    const port_values* held, const bool* pending, double sim_time, const double* x,
-                                    const double* v)
+fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
+                                 const port_values* held, const bool* pending, double sim_time,
+                                 const double* x, const double* v)
 {
 	sm_error err = {SM_OK, ""};
 	sm_simulation* sim = sm_simulation_create(model, solver, &err);
@@ -458,14 +369,15 @@ static fmi2Status create_simulation(instance* inst, sm_model* model, const sm_si
 }
 
 // Makes sure a simulation with the current settings exists (initialisation mode and later).
-static fmi2Status ensure_simulation(instance* inst, const char* function)
+fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 {
 	if (inst->sim && !inst->sim_dirty)
 		return apply_inputs(inst);
 	sm_model* model = NULL;
-	if (build_model(inst, function, NULL, &model) != SM_OK)
+	if (fmu_build_model(inst, function, NULL, &model) != SM_OK)
 		return fmi2Error;
-	fmi2Status status = create_simulation(inst, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
+	fmi2Status status =
+	    fmu_create_simulation(inst, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
 	sm_model_destroy(model);
 	if (status == fmi2OK)
 		inst->time = inst->start_time;
@@ -541,10 +453,10 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 	return false;
 }
 
-// Puts back the parameter values old[] that set_parameters recorded. Setting values takes memory:
+// Puts back the parameter values old[] that fmu_set_parameters recorded. Setting values takes memory:
 // if they cannot be put back, the document and the simulation disagree, and the instance goes to
 // the error state, from which fmi2SetFMUstate or fmi2Reset lead back.
-static void put_back_parameters(instance* inst, const char* function, const double* old)
+void fmu_put_back_parameters(instance* inst, const char* function, const double* old)
 {
 	if (sm_document_set_parameters(inst->doc, old, NULL) != SM_OK) {
 		log_error(inst, "%s: the earlier parameter values cannot be put back (out of memory): the instance "
@@ -557,7 +469,7 @@ static void put_back_parameters(instance* inst, const char* function, const doub
 // state or a call may change values that are valid only together, such as a rope's start and
 // end), and records the previous ones in old[]. Returns false, with the document unchanged and
 // the refusal logged, if the model rejects them.
-static bool set_parameters(instance* inst, const char* function, const double* values, double* old)
+bool fmu_set_parameters(instance* inst, const char* function, const double* values, double* old)
 {
 	int32_t np = sm_document_parameter_count(inst->doc);
 	for (int32_t k = 0; k < np; ++k)
@@ -614,12 +526,12 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	}
 	const double* old = inst->parameter_old;
 	const sm_simulation_def settings = sm_document_get_settings(inst->doc).solver;
-	if (!set_parameters(inst, "fmi2SetReal", values, inst->parameter_old))
+	if (!fmu_set_parameters(inst, "fmi2SetReal", values, inst->parameter_old))
 		return fmi2Error;
 	if (memcmp(values, old, (size_t)np * sizeof *values) == 0)
 		return fmi2OK;
 	sm_model* model = NULL;
-	sm_status st = build_model(inst, "fmi2SetReal", old, &model);
+	sm_status st = fmu_build_model(inst, "fmi2SetReal", old, &model);
 	if (st == SM_OK && (inst->state & (ST_INSTANTIATED | ST_INITIALIZATION))) {
 		sm_model_destroy(model);
 		take_settings(inst, &settings);
@@ -642,14 +554,15 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	}
 	sm_model_destroy(model);
 	if (st != SM_OK) {
-		put_back_parameters(inst, "fmi2SetReal", old);
+		fmu_put_back_parameters(inst, "fmi2SetReal", old);
 		return fmi2Error;
 	}
 	inst->forces_valid = false;
 	for (int32_t k = 0; k < np; ++k) {
 		if (values[k] != old[k] && logging(inst, LOG_EVENTS))
-			logf_(inst, fmi2OK, LOG_EVENTS, "t = %s: parameter %s = %s (solver restarted)", number_text(inst->time).text,
-			      sm_document_parameter_name(inst->doc, k), number_text(values[k]).text);
+			fmu_logf(inst, fmi2OK, LOG_EVENTS, "t = %s: parameter %s = %s (solver restarted)",
+			         fmu_number_text(inst->time).text, sm_document_parameter_name(inst->doc, k),
+			         fmu_number_text(values[k]).text);
 	}
 	return fmi2OK;
 }
@@ -672,7 +585,7 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
                                const fmi2String categories[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetDebugLogging", ST_ANY))
+	if (!fmu_allowed(inst, "fmi2SetDebugLogging", ST_ANY))
 		return fmi2Error;
 	if (nCategories > 0 && !categories) {
 		log_error(inst, "fmi2SetDebugLogging: NULL categories with nCategories = %zu", nCategories);
@@ -894,7 +807,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetupExperiment", ST_INSTANTIATED))
+	if (!fmu_allowed(inst, "fmi2SetupExperiment", ST_INSTANTIATED))
 		return fmi2Error;
 	if (!isfinite(startTime) || (stopTimeDefined && (!isfinite(stopTime) || stopTime < startTime))) {
 		log_error(inst, "fmi2SetupExperiment: start time %g and stop time %g must be finite with start <= stop",
@@ -918,7 +831,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2EnterInitializationMode", ST_INSTANTIATED))
+	if (!fmu_allowed(inst, "fmi2EnterInitializationMode", ST_INSTANTIATED))
 		return fmi2Error;
 	inst->state = ST_INITIALIZATION;
 	inst->time = inst->start_time;
@@ -928,9 +841,9 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2ExitInitializationMode", ST_INITIALIZATION))
+	if (!fmu_allowed(inst, "fmi2ExitInitializationMode", ST_INITIALIZATION))
 		return fmi2Error;
-	if (ensure_simulation(inst, "fmi2ExitInitializationMode") != fmi2OK) {
+	if (fmu_ensure_simulation(inst, "fmi2ExitInitializationMode") != fmi2OK) {
 		inst->state = ST_ERROR;
 		return fmi2Error;
 	}
@@ -942,7 +855,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 fmi2Status fmi2Terminate(fmi2Component c)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2Terminate", ST_STEP_COMPLETE | ST_STEP_FAILED))
+	if (!fmu_allowed(inst, "fmi2Terminate", ST_STEP_COMPLETE | ST_STEP_FAILED))
 		return fmi2Error;
 	inst->state = ST_TERMINATED;
 	return fmi2OK;
@@ -951,7 +864,7 @@ fmi2Status fmi2Terminate(fmi2Component c)
 fmi2Status fmi2Reset(fmi2Component c)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2Reset", ST_ANY))
+	if (!fmu_allowed(inst, "fmi2Reset", ST_ANY))
 		return fmi2Error;
 	sm_error err = {SM_OK, ""};
 	sm_document* doc = parse_document(inst, &err);
@@ -1025,14 +938,14 @@ static bool needs_simulation(const fmu_variable* v)
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
+	if (!fmu_allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
 		return fmi2Error;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
 		if (!v)
 			return fmi2Error;
 		if (needs_simulation(v) && (!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)) {
-			if (ensure_simulation(inst, "fmi2GetReal") != fmi2OK)
+			if (fmu_ensure_simulation(inst, "fmi2GetReal") != fmi2OK)
 				return fmi2Error;
 		} else if (needs_simulation(v) && apply_inputs(inst) != fmi2OK) {
 			return fmi2Error;
@@ -1045,7 +958,8 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetInteger", ST_RUNNING) || !check_arrays(inst, "fmi2GetInteger", vr, nvr, value))
+	if (!fmu_allowed(inst, "fmi2GetInteger", ST_RUNNING) ||
+	    !check_arrays(inst, "fmi2GetInteger", vr, nvr, value))
 		return fmi2Error;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetInteger", vr[i], FMU_INTEGER);
@@ -1059,7 +973,8 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetBoolean", ST_RUNNING) || !check_arrays(inst, "fmi2GetBoolean", vr, nvr, value))
+	if (!fmu_allowed(inst, "fmi2GetBoolean", ST_RUNNING) ||
+	    !check_arrays(inst, "fmi2GetBoolean", vr, nvr, value))
 		return fmi2Error;
 	if (nvr > 0) {
 		log_error(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean variables", (unsigned)vr[0]);
@@ -1071,7 +986,8 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetString", ST_RUNNING) || !check_arrays(inst, "fmi2GetString", vr, nvr, value))
+	if (!fmu_allowed(inst, "fmi2GetString", ST_RUNNING) ||
+	    !check_arrays(inst, "fmi2GetString", vr, nvr, value))
 		return fmi2Error;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetString", vr[i], FMU_STRING);
@@ -1100,7 +1016,7 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 		if (value == sm_document_parameter_value(inst->doc, v->index))
 			return true;
 		log_error(inst, "fmi2SetReal: %s = %s refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%s)",
-		          v->name, number_text(value).text, v->name, v->name, number_text(value).text);
+		          v->name, fmu_number_text(value).text, v->name, v->name, fmu_number_text(value).text);
 		return false;
 	}
 	if (!settable(inst, "fmi2SetReal", v))
@@ -1163,7 +1079,7 @@ static void set_real(instance* inst, const fmu_variable* v, double value)
 fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetReal", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	if (!fmu_allowed(inst, "fmi2SetReal", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetReal", vr, nvr, value))
 		return fmi2Error;
 	// A rejected call changes nothing: every value is checked first, then the model-file
@@ -1183,7 +1099,7 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetInteger", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	if (!fmu_allowed(inst, "fmi2SetInteger", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetInteger", vr, nvr, value))
 		return fmi2Error;
 	for (size_t i = 0; i < nvr; ++i) {
@@ -1205,7 +1121,7 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetBoolean", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	if (!fmu_allowed(inst, "fmi2SetBoolean", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetBoolean", vr, nvr, value))
 		return fmi2Error;
 	if (nvr > 0) {
@@ -1218,7 +1134,7 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[])
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2SetString", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	if (!fmu_allowed(inst, "fmi2SetString", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetString", vr, nvr, value))
 		return fmi2Error;
 	sm_simulation_def solver = inst->solver;
@@ -1252,461 +1168,6 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 }
 
 // ---------------------------------------------------------------------------------------------
-// FMI 2.0: FMU state. The saved state is the model's state, not solver memory: time, every
-// particle's position and velocity, which springs are broken, the inputs, the parameters and
-// settings, the dissipated energy. Restoring creates the simulation from it, so CVODE starts
-// afresh; getting a state does the same to the running instance, so that continuing after
-// fmi2GetFMUstate and continuing after fmi2SetFMUstate of that state are the same computation
-// (bit for bit, in this or another process).
-// ---------------------------------------------------------------------------------------------
-
-#define STATE_MAGIC "SMFMUST3"
-
-// Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
-// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports], pending
-// ports[nports] (inputs set since the last step, as doubles 0/1: a state saved between setting
-// inputs and fmi2DoStep steps with them when restored). The checksum
-// is a 64-bit FNV-1a hash of all other bytes: a serialised state that was truncated, extended or
-// changed in transit is refused before anything of it is used.
-enum {
-	I_SIZE,
-	I_CHECKSUM,
-	I_STATE,
-	I_PARTICLES,
-	I_SPRINGS,
-	I_PARAMETERS,
-	I_PORTS,
-	I_HAS_SIM,
-	I_METHOD,
-	I_LINEAR_SOLVER,
-	I_JACOBIAN,
-	I_MAX_STEPS,
-	I_RTOL_SET,
-	I_STOP_DEFINED,
-	I_COUNT
-};
-enum {
-	D_TIME,
-	D_START,
-	D_LAST_SUCCESSFUL,
-	D_STOP,
-	D_DISSIPATED,
-	D_RTOL,
-	D_ATOL_POSITION,
-	D_ATOL_VELOCITY,
-	D_MAX_STEP,
-	D_COUNT
-};
-#define HEADER_BYTES (8 + 40 + 8 * I_COUNT + 8 * D_COUNT)
-#define CHECKSUM_OFFSET (48 + 8 * I_CHECKSUM)
-
-typedef struct saved_state {
-	size_t size;
-	unsigned char* bytes;
-} saved_state;
-
-static size_t state_size(const instance* inst)
-{
-	size_t n = (size_t)inst->particle_count, m = (size_t)inst->spring_count;
-	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
-	return HEADER_BYTES + 8 * (6 * n + m + np + 10 * nports);
-}
-
-static void put_i(unsigned char* b, int k, int64_t v)
-{
-	memcpy(b + 48 + 8 * k, &v, 8);
-}
-static int64_t get_i(const unsigned char* b, int k)
-{
-	int64_t v;
-	memcpy(&v, b + 48 + 8 * k, 8);
-	return v;
-}
-static void put_d(unsigned char* b, int k, double v)
-{
-	memcpy(b + 48 + 8 * I_COUNT + 8 * k, &v, 8);
-}
-static double get_d(const unsigned char* b, int k)
-{
-	double v;
-	memcpy(&v, b + 48 + 8 * I_COUNT + 8 * k, 8);
-	return v;
-}
-
-// 64-bit FNV-1a of a state's bytes except its checksum field (size >= HEADER_BYTES).
-static int64_t state_checksum(const unsigned char* b, size_t size)
-{
-	uint64_t hash = 0xcbf29ce484222325u;  // FNV-64 offset basis
-	for (size_t i = 0; i < size; ++i) {
-		if (i < CHECKSUM_OFFSET || i >= CHECKSUM_OFFSET + 8)
-			hash = (hash ^ b[i]) * 0x100000001b3u;  // FNV-64 prime
-	}
-	int64_t v;
-	memcpy(&v, &hash, 8);
-	return v;
-}
-
-static saved_state* save_state(instance* inst)
-{
-	saved_state* s = malloc(sizeof *s);
-	if (!s)
-		return NULL;
-	s->size = state_size(inst);
-	s->bytes = calloc(1, s->size);
-	if (!s->bytes) {
-		free(s);
-		return NULL;
-	}
-	unsigned char* b = s->bytes;
-	memcpy(b, STATE_MAGIC, 8);
-	memcpy(b + 8, inst->table.guid, 40);
-	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
-	bool has_sim = inst->sim && !inst->sim_dirty && !(inst->state & ST_INSTANTIATED);
-	put_i(b, I_SIZE, (int64_t)s->size);
-	put_i(b, I_STATE, inst->state);
-	put_i(b, I_PARTICLES, n);
-	put_i(b, I_SPRINGS, m);
-	put_i(b, I_PARAMETERS, np);
-	put_i(b, I_PORTS, inst->port_count);
-	put_i(b, I_HAS_SIM, has_sim);
-	put_i(b, I_METHOD, inst->solver.method);
-	put_i(b, I_LINEAR_SOLVER, inst->solver.solver);
-	put_i(b, I_JACOBIAN, inst->solver.jacobian);
-	put_i(b, I_MAX_STEPS, inst->solver.max_steps);
-	put_i(b, I_RTOL_SET, inst->rtol_set);
-	put_i(b, I_STOP_DEFINED, inst->stop_time_defined);
-	put_d(b, D_TIME, inst->time);
-	put_d(b, D_START, inst->start_time);
-	put_d(b, D_LAST_SUCCESSFUL, inst->last_successful_time);
-	put_d(b, D_STOP, inst->stop_time);
-	put_d(b, D_DISSIPATED, has_sim ? sm_simulation_dissipated_energy(inst->sim) + inst->dissipated_offset : 0.0);
-	put_d(b, D_RTOL, inst->solver.relative_tolerance);
-	put_d(b, D_ATOL_POSITION, inst->solver.absolute_tolerance_position);
-	put_d(b, D_ATOL_VELOCITY, inst->solver.absolute_tolerance_velocity);
-	put_d(b, D_MAX_STEP, inst->solver.max_step);
-	double* d = (double*)(void*)(b + HEADER_BYTES);  // HEADER_BYTES is a multiple of 8
-	if (has_sim) {
-		memcpy(d, sm_simulation_positions(inst->sim), 3 * (size_t)n * sizeof(double));
-		memcpy(d + 3 * n, sm_simulation_velocities(inst->sim), 3 * (size_t)n * sizeof(double));
-		const sm_model* model = sm_simulation_model(inst->sim);
-		for (int32_t k = 0; k < m; ++k)
-			d[6 * n + k] = sm_model_spring_enabled(model, k) ? 1.0 : 0.0;
-	} else {
-		for (int32_t k = 0; k < m; ++k)
-			d[6 * n + k] = 1.0;
-	}
-	for (int32_t k = 0; k < np; ++k)
-		d[6 * n + m + k] = sm_document_parameter_value(inst->doc, k);
-	memcpy(d + 6 * n + m + np, inst->held, 9 * (size_t)inst->port_count * sizeof(double));
-	for (int32_t p = 0; p < inst->port_count; ++p)
-		d[6 * n + m + np + 9 * inst->port_count + p] = inst->port_dirty[p] ? 1.0 : 0.0;
-	put_i(b, I_CHECKSUM, state_checksum(b, s->size));
-	return s;
-}
-
-// The k-th double of the values after the header. The bytes of fmi2DeSerializeFMUstate are the
-// caller's, at any address: they are read without assuming the alignment of a double.
-static double value_at(const unsigned char* b, size_t k)
-{
-	double v;
-	memcpy(&v, b + HEADER_BYTES + 8 * k, 8);
-	return v;
-}
-
-static bool all_finite(const unsigned char* b, size_t first, size_t count)
-{
-	for (size_t k = first; k < first + count; ++k)
-		if (!isfinite(value_at(b, k)))
-			return false;
-	return true;
-}
-
-static bool all_flags(const unsigned char* b, size_t first, size_t count)
-{
-	for (size_t k = first; k < first + count; ++k)
-		if (value_at(b, k) != 0.0 && value_at(b, k) != 1.0)
-			return false;
-	return true;
-}
-
-// Checks that bytes are a state of this model with values the instance can take; logs and
-// returns false otherwise. The checksum catches damage; the checks after it, states written by
-// something else than save_state.
-static bool valid_state(instance* inst, const char* function, const unsigned char* b, size_t size)
-{
-	// The magic's last character is the layout's version: a state of another version is named as
-	// such, since its fields would be read at the wrong places.
-	if (size >= 8 && memcmp(b, STATE_MAGIC, 7) == 0 && b[7] != (unsigned char)STATE_MAGIC[7]) {
-		log_error(inst, "%s: a state of another springmass version (layout %c, this FMU reads %c): save it again "
-		          "with this FMU", function, b[7] >= 0x20 && b[7] < 0x7f ? (char)b[7] : '?', STATE_MAGIC[7]);
-		return false;
-	}
-	if (size < HEADER_BYTES || memcmp(b, STATE_MAGIC, 8) != 0) {
-		log_error(inst, "%s: not a springmass FMU state", function);
-		return false;
-	}
-	if (memcmp(b + 8, inst->table.guid, 40) != 0) {
-		char guid[40];  // printable characters only: the bytes may be anything
-		for (int i = 0; i < 39; ++i)
-			guid[i] = b[8 + i] >= 0x20 && b[8 + i] < 0x7f ? (char)b[8 + i] : '?';
-		guid[39] = '\0';
-		log_error(inst, "%s: the state belongs to another model (GUID %s, this FMU's is %s)", function, guid,
-		          inst->table.guid);
-		return false;
-	}
-	if (get_i(b, I_SIZE) != (int64_t)size || size != state_size(inst) || get_i(b, I_PARTICLES) != inst->particle_count ||
-	    get_i(b, I_SPRINGS) != inst->spring_count || get_i(b, I_PORTS) != inst->port_count ||
-	    get_i(b, I_PARAMETERS) != sm_document_parameter_count(inst->doc)) {
-		log_error(inst, "%s: the state's size or counts do not match this model (%zu bytes, this model's take %zu)",
-		          function, size, state_size(inst));
-		return false;
-	}
-	if (get_i(b, I_CHECKSUM) != state_checksum(b, size)) {
-		log_error(inst, "%s: the state's checksum does not match its bytes: it was damaged", function);
-		return false;
-	}
-	size_t n3 = 3 * (size_t)inst->particle_count, m = (size_t)inst->spring_count;
-	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
-	int64_t state = get_i(b, I_STATE), has_sim = get_i(b, I_HAS_SIM);
-	bool ok = (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
-	           state == ST_STEP_FAILED || state == ST_TERMINATED) &&
-	          has_sim == (state != ST_INSTANTIATED);
-	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS && get_i(b, I_LINEAR_SOLVER) >= 0 &&
-	     get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT && get_i(b, I_JACOBIAN) >= 0 &&
-	     get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE && get_i(b, I_MAX_STEPS) >= 1 &&
-	     get_i(b, I_MAX_STEPS) <= INT32_MAX && (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
-	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
-	double max_step = get_d(b, D_MAX_STEP);
-	ok = ok && rtol > 0.0 && rtol < 1.0 && atol_x > 0.0 && isfinite(atol_x) && atol_v > 0.0 && isfinite(atol_v) &&
-	     max_step >= 0.0 && isfinite(max_step);
-	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
-	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP))) && !isnan(get_d(b, D_DISSIPATED));
-	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
-	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
-	if (!ok) {
-		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
-		                "velocities, parameters or inputs)",
-		          function);
-		return false;
-	}
-	// The parameters that set the structure keep their packaged values, in a state as in a set
-	// (check_real): another value could keep the counts and still rearrange the particles.
-	for (int32_t i = 0; i < inst->table.count; ++i) {
-		const fmu_variable* v = &inst->table.variables[i];
-		if (v->source != FMU_SRC_MODEL_PARAMETER || v->variability != FMU_CONSTANT)
-			continue;
-		const double packaged = sm_document_parameter_value(inst->doc, v->index);
-		const double held = value_at(b, 2 * n3 + m + (size_t)v->index);
-		if (held != packaged) {
-			log_error(inst, "%s: the state gives %s = %s, but %s sets the model's structure (%s in this FMU): "
-			          PACKAGED_STRUCTURE "%s=%s)", function, v->name, number_text(held).text, v->name,
-			          number_text(packaged).text, v->name, number_text(held).text);
-			return false;
-		}
-	}
-	return true;
-}
-
-// Makes a checked state the instance's. All or nothing: a state the model refuses (a parameter
-// out of its range, a simulation that cannot start from it) leaves the instance as it was.
-static fmi2Status restore_state(instance* inst, const char* function, const unsigned char* b)
-{
-	int32_t n = inst->particle_count, m = inst->spring_count, np = sm_document_parameter_count(inst->doc);
-	const double* d = (const double*)(const void*)(b + HEADER_BYTES);
-	double* old = inst->parameter_old;
-	port_values* held = malloc(((size_t)inst->port_count + 1) * sizeof *held);
-	bool* pending = malloc((size_t)inst->port_count + 1);
-	if (!held || !pending) {
-		free(held);
-		free(pending);
-		log_error(inst, "%s: out of memory", function);
-		return fmi2Error;
-	}
-	memcpy(held, d + 6 * n + m + np, (size_t)inst->port_count * sizeof *held);
-	for (int32_t p = 0; p < inst->port_count; ++p)
-		pending[p] = d[6 * n + m + np + 9 * inst->port_count + p] != 0.0;
-	sm_simulation_def solver = inst->solver;
-	solver.method = (sm_method)get_i(b, I_METHOD);
-	solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
-	solver.jacobian = (sm_jacobian_variant)get_i(b, I_JACOBIAN);
-	solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
-	solver.relative_tolerance = get_d(b, D_RTOL);
-	solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
-	solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);
-	solver.max_step = get_d(b, D_MAX_STEP);
-	// The parameters first: a state whose parameters give another structure (only a state
-	// written by something else than this FMU can hold such values) is refused like a set.
-	fmi2Status status = set_parameters(inst, function, d + 6 * n + m, old) ? fmi2OK : fmi2Error;
-	sm_model* model = NULL;
-	if (status == fmi2OK && build_model(inst, function, old, &model) != SM_OK) {
-		put_back_parameters(inst, function, old);
-		status = fmi2Error;
-	}
-	if (status == fmi2OK && get_i(b, I_HAS_SIM)) {
-		for (int32_t k = 0; k < m; ++k) {
-			if (d[6 * n + k] == 0.0)
-				sm_model_set_spring_enabled(model, k, false);
-		}
-		status = create_simulation(inst, model, &solver, held, pending, get_d(b, D_TIME) - get_d(b, D_START), d,
-		                           d + 3 * n);
-		if (status != fmi2OK)
-			put_back_parameters(inst, function, old);
-		else
-			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
-	} else if (status == fmi2OK) {
-		sm_simulation_destroy(inst->sim);
-		inst->sim = NULL;
-		inst->sim_dirty = true;
-		inst->solver = solver;
-		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
-		mark_inputs_dirty(inst);
-	}
-	sm_model_destroy(model);
-	free(held);
-	free(pending);
-	if (status != fmi2OK)
-		return status;
-	inst->rtol_set = get_i(b, I_RTOL_SET) != 0;
-	inst->stop_time_defined = get_i(b, I_STOP_DEFINED) != 0;
-	inst->stop_time = get_d(b, D_STOP);
-	inst->start_time = get_d(b, D_START);
-	inst->time = get_d(b, D_TIME);
-	inst->last_successful_time = get_d(b, D_LAST_SUCCESSFUL);
-	inst->state = (int)get_i(b, I_STATE);
-	return fmi2OK;
-}
-
-// Not in the error state: there is no consistent state to save then (FMI 2.0, 2.1.3: a state for
-// a restart is one saved before, in a non-erroneous state).
-fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2GetFMUstate", ST_ANY & ~ST_ERROR))
-		return fmi2Error;
-	if (!FMUstate) {
-		log_error(inst, "fmi2GetFMUstate: NULL FMUstate");
-		return fmi2Error;
-	}
-	if (inst->state == ST_INITIALIZATION && ensure_simulation(inst, "fmi2GetFMUstate") != fmi2OK)
-		return fmi2Error;
-	saved_state* s = save_state(inst);
-	if (!s) {
-		log_error(inst, "fmi2GetFMUstate: out of memory");
-		return fmi2Error;
-	}
-	// Continue from exactly what a restore would give (see above).
-	if (get_i(s->bytes, I_HAS_SIM) && restore_state(inst, "fmi2GetFMUstate", s->bytes) != fmi2OK) {
-		free(s->bytes);
-		free(s);
-		return fmi2Error;
-	}
-	if (*FMUstate) {
-		saved_state* old = *FMUstate;
-		free(old->bytes);
-		free(old);
-	}
-	*FMUstate = s;
-	return fmi2OK;
-}
-
-// Allowed in the error state too: FMI 2.0 (2.1.3) names restoring a state saved before as the
-// way to continue after fmi2Error. If the state cannot be restored, the instance stays in the
-// error state.
-fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2SetFMUstate", ST_ANY))
-		return fmi2Error;
-	if (!FMUstate) {
-		log_error(inst, "fmi2SetFMUstate: NULL FMUstate");
-		return fmi2Error;
-	}
-	const saved_state* s = FMUstate;
-	if (!valid_state(inst, "fmi2SetFMUstate", s->bytes, s->size))
-		return fmi2Error;
-	return restore_state(inst, "fmi2SetFMUstate", s->bytes);
-}
-
-fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2FreeFMUstate", ST_ANY))
-		return fmi2Error;
-	if (!FMUstate)
-		return fmi2OK;
-	saved_state* s = *FMUstate;
-	if (s) {
-		free(s->bytes);
-		free(s);
-	}
-	*FMUstate = NULL;
-	return fmi2OK;
-}
-
-fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t* size)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2SerializedFMUstateSize", ST_ANY))
-		return fmi2Error;
-	if (!FMUstate || !size) {
-		log_error(inst, "fmi2SerializedFMUstateSize: NULL argument");
-		return fmi2Error;
-	}
-	*size = ((const saved_state*)FMUstate)->size;
-	return fmi2OK;
-}
-
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2SerializeFMUstate", ST_ANY))
-		return fmi2Error;
-	if (!FMUstate || !serializedState) {
-		log_error(inst, "fmi2SerializeFMUstate: NULL argument");
-		return fmi2Error;
-	}
-	const saved_state* s = FMUstate;
-	if (size < s->size) {
-		log_error(inst, "fmi2SerializeFMUstate: buffer of %zu bytes, the state needs %zu", size, s->size);
-		return fmi2Error;
-	}
-	memcpy(serializedState, s->bytes, s->size);
-	return fmi2OK;
-}
-
-fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
-                                   fmi2FMUstate* FMUstate)
-{
-	instance* inst = c;
-	if (!allowed(inst, "fmi2DeSerializeFMUstate", ST_ANY))
-		return fmi2Error;
-	if (!serializedState || !FMUstate) {
-		log_error(inst, "fmi2DeSerializeFMUstate: NULL argument");
-		return fmi2Error;
-	}
-	if (!valid_state(inst, "fmi2DeSerializeFMUstate", (const unsigned char*)serializedState, size))
-		return fmi2Error;
-	saved_state* s = malloc(sizeof *s);
-	unsigned char* bytes = malloc(size);
-	if (!s || !bytes) {
-		free(s);
-		free(bytes);
-		log_error(inst, "fmi2DeSerializeFMUstate: out of memory");
-		return fmi2Error;
-	}
-	memcpy(bytes, serializedState, size);
-	s->size = size;
-	s->bytes = bytes;
-	if (*FMUstate) {
-		saved_state* old = *FMUstate;
-		free(old->bytes);
-		free(old);
-	}
-	*FMUstate = s;
-	return fmi2OK;
-}
-
-// ---------------------------------------------------------------------------------------------
 // FMI 2.0: directional derivatives of outputs with respect to inputs at the current
 // communication point (the direct feed-through a master needs). With dx and dv the seeds of the
 // motion ports' prescribed positions and velocities and g the seeds of the force inputs:
@@ -1726,7 +1187,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 {
 	instance* inst = c;
 	const char* fn = "fmi2GetDirectionalDerivative";
-	if (!allowed(inst, fn, ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	if (!fmu_allowed(inst, fn, ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
 		return fmi2Error;
 	if ((nUnknown > 0 && (!vUnknown_ref || !dvUnknown)) || (nKnown > 0 && (!vKnown_ref || !dvKnown))) {
 		log_error(inst, "%s: NULL array", fn);
@@ -1765,7 +1226,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 			return fmi2Error;
 		}
 	}
-	if ((!inst->sim || inst->sim_dirty) ? ensure_simulation(inst, fn) != fmi2OK : apply_inputs(inst) != fmi2OK)
+	if ((!inst->sim || inst->sim_dirty) ? fmu_ensure_simulation(inst, fn) != fmi2OK
+	                                    : apply_inputs(inst) != fmi2OK)
 		return fmi2Error;
 	for (size_t k = 0; k < nKnown; ++k) {
 		const fmu_variable* v = &inst->table.variables[vKnown_ref[k]];
@@ -1836,7 +1298,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 	(void)vr;
 	(void)order;
 	(void)value;
-	if (!allowed(inst, "fmi2SetRealInputDerivatives", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE))
+	if (!fmu_allowed(inst, "fmi2SetRealInputDerivatives",
+	                 ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE))
 		return fmi2Error;
 	if (nvr == 0)
 		return fmi2OK;
@@ -1852,7 +1315,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 	(void)vr;
 	(void)order;
 	(void)value;
-	if (!allowed(inst, "fmi2GetRealOutputDerivatives", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	if (!fmu_allowed(inst, "fmi2GetRealOutputDerivatives", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
 		return fmi2Error;
 	if (nvr == 0)
 		return fmi2OK;
@@ -1866,7 +1329,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 {
 	instance* inst = c;
 	(void)noSetFMUStatePriorToCurrentPoint;
-	if (!allowed(inst, "fmi2DoStep", ST_STEP_COMPLETE))
+	if (!fmu_allowed(inst, "fmi2DoStep", ST_STEP_COMPLETE))
 		return fmi2Error;
 	double t = currentCommunicationPoint, h = communicationStepSize;
 	if (!isfinite(t) || !isfinite(h) || !(h > 0.0)) {
@@ -1883,8 +1346,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	}
 	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
 	if (fabs(t - inst->time) > tolerance) {
-		log_error(inst, "fmi2DoStep: communication point %s does not match the FMU's time %s", number_text(t).text,
-		          number_text(inst->time).text);
+		log_error(inst, "fmi2DoStep: communication point %s does not match the FMU's time %s",
+		          fmu_number_text(t).text, fmu_number_text(inst->time).text);
 		return fmi2Error;
 	}
 	double t_end = t + h;
@@ -1918,28 +1381,30 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		const char* a = sm_document_particle_name(inst->doc, s.a);
 		const char* b = sm_document_particle_name(inst->doc, s.b);
 		if (logging(inst, LOG_EVENTS))
-			logf_(inst, fmi2OK, LOG_EVENTS, "t = %s: spring %d between %s and %s broke",
-			      number_text(e.time + inst->start_time).text, (int)e.spring, a ? a : "(unnamed)", b ? b : "(unnamed)");
+			fmu_logf(inst, fmi2OK, LOG_EVENTS, "t = %s: spring %d between %s and %s broke",
+			         fmu_number_text(e.time + inst->start_time).text, (int)e.spring, a ? a : "(unnamed)",
+			         b ? b : "(unnamed)");
 	}
 	sm_statistics after = sm_simulation_statistics(inst->sim);
 	if (logging(inst, LOG_SOLVER))
-		logf_(inst, fmi2OK, LOG_SOLVER,
-		      "step %s -> %s: %lld internal steps, %lld right-hand sides, %lld Jacobians, %lld restarts, "
-		      "%lld error-test and %lld convergence failures",
-		      number_text(t).text, number_text(t_end).text, (long long)(after.steps - before.steps),
-		      (long long)(after.rhs_evaluations - before.rhs_evaluations),
-		      (long long)(after.jacobian_evaluations - before.jacobian_evaluations),
-		      (long long)(after.restarts - before.restarts),
-		      (long long)(after.error_test_failures - before.error_test_failures),
-		      (long long)(after.convergence_failures - before.convergence_failures));
+		fmu_logf(inst, fmi2OK, LOG_SOLVER,
+		         "step %s -> %s: %lld internal steps, %lld right-hand sides, %lld Jacobians, %lld restarts, "
+		         "%lld error-test and %lld convergence failures",
+		         fmu_number_text(t).text, fmu_number_text(t_end).text,
+		         (long long)(after.steps - before.steps),
+		         (long long)(after.rhs_evaluations - before.rhs_evaluations),
+		         (long long)(after.jacobian_evaluations - before.jacobian_evaluations),
+		         (long long)(after.restarts - before.restarts),
+		         (long long)(after.error_test_failures - before.error_test_failures),
+		         (long long)(after.convergence_failures - before.convergence_failures));
 	if (st != SM_OK) {
 		inst->time = inst->start_time + sm_simulation_time(inst->sim);
 		inst->last_successful_time = inst->time;
 		inst->state = ST_STEP_FAILED;
-		logf_(inst, fmi2Discard, LOG_DISCARD,
-		      "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
-		      number_text(t).text, number_text(t_end).text, number_text(inst->time).text,
-		      sm_simulation_last_error(inst->sim));
+		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
+		         "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
+		         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
+		         sm_simulation_last_error(inst->sim));
 		return fmi2Discard;
 	}
 	inst->time = t_end;
@@ -1950,7 +1415,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 fmi2Status fmi2CancelStep(fmi2Component c)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2CancelStep", ST_STEP_COMPLETE | ST_STEP_FAILED))
+	if (!fmu_allowed(inst, "fmi2CancelStep", ST_STEP_COMPLETE | ST_STEP_FAILED))
 		return fmi2Error;
 	log_error(inst, "fmi2CancelStep: fmi2DoStep is synchronous and never returns fmi2Pending");
 	return fmi2Error;
@@ -1966,7 +1431,7 @@ static bool check_status_value(instance* inst, const char* function, const void*
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	if (!fmu_allowed(inst, "fmi2GetStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
 	    !check_status_value(inst, "fmi2GetStatus", value))
 		return fmi2Error;
 	if (s == fmi2DoStepStatus) {
@@ -1980,7 +1445,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* va
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetRealStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	if (!fmu_allowed(inst, "fmi2GetRealStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
 	    !check_status_value(inst, "fmi2GetRealStatus", value))
 		return fmi2Error;
 	if (s == fmi2LastSuccessfulTime) {
@@ -1995,7 +1460,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 {
 	instance* inst = c;
 	(void)value;
-	if (!allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	if (!fmu_allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
 		return fmi2Error;
 	log_error(inst, "fmi2GetIntegerStatus: status kind %d is not provided", (int)s);
 	return fmi2Error;
@@ -2004,7 +1469,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	if (!fmu_allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
 	    !check_status_value(inst, "fmi2GetBooleanStatus", value))
 		return fmi2Error;
 	if (s == fmi2Terminated) {
@@ -2018,7 +1483,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
 {
 	instance* inst = c;
-	if (!allowed(inst, "fmi2GetStringStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	if (!fmu_allowed(inst, "fmi2GetStringStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
 	    !check_status_value(inst, "fmi2GetStringStatus", value))
 		return fmi2Error;
 	if (s == fmi2PendingStatus) {

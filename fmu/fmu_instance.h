@@ -1,0 +1,135 @@
+// springmass FMU: what the files of the FMU binary share. The instance and the states of the FMI
+// 2.0 state machine, logging, and the model and simulation helpers that the entry points
+// (fmu_cosim.c, which defines these functions) and the FMU state (fmu_state.c) both call. Internal:
+// the binary exports the fmi2* entry points only, nothing declared here.
+#pragma once
+
+#include "fmu_model.h"
+
+#include "fmi2Functions.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+// ---------------------------------------------------------------------------------------------
+// Instance
+// ---------------------------------------------------------------------------------------------
+
+// States of the FMI 2.0 Co-Simulation state machine, as bits so that each function states the
+// set in which it is allowed.
+enum {
+	ST_INSTANTIATED = 1 << 0,
+	ST_INITIALIZATION = 1 << 1,
+	ST_STEP_COMPLETE = 1 << 2,
+	ST_STEP_FAILED = 1 << 3,
+	ST_TERMINATED = 1 << 4,
+	ST_ERROR = 1 << 5,
+};
+#define ST_ANY (ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
+#define ST_RUNNING (ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
+
+// Log categories, as bits.
+enum {
+	LOG_EVENTS = 1 << 0,
+	LOG_WARNING = 1 << 1,
+	LOG_DISCARD = 1 << 2,
+	LOG_ERROR = 1 << 3,
+	LOG_SOLVER = 1 << 4,
+};
+
+// Held values of a port: prescribed or read position [m], velocity [m/s], force [N].
+typedef struct port_values {
+	double position[3];
+	double velocity[3];
+	double force[3];
+} port_values;
+
+// An FMU instance: what an fmi2Component points to.
+typedef struct instance {
+	char* name;
+	fmi2CallbackLogger logger;
+	fmi2ComponentEnvironment environment;
+	unsigned log_mask;
+	int state;
+
+	char* text;  // resources/model.json as read
+	size_t length;
+	char* parameters;  // resources/parameters.txt as read, NULL when the FMU has none
+	size_t parameters_length;
+	sm_document* doc;
+	fmu_table table;
+	int32_t particle_count;
+	int32_t spring_count;
+	int32_t port_count;
+	sm_port* ports;  // particle indices of the ports (names stay in doc)
+
+	// Settings and inputs.
+	sm_simulation_def solver;
+	bool rtol_set;  // solver.rtol set explicitly: the experiment's tolerance does not override it
+	double start_time;
+	bool stop_time_defined;
+	double stop_time;
+	port_values* held;  // per port: the inputs as set, the start values until then
+	bool* port_dirty;   // inputs set since they were last given to the simulation
+
+	// The running simulation (created when first needed in initialisation mode).
+	sm_simulation* sim;
+	bool sim_dirty;  // fixed parameters or settings changed: create it again
+	double time;     // the FMU's time: start_time + the simulation's time [s]
+	double last_successful_time;
+	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
+	int32_t breaks_logged;
+	double* forces;   // 3 per particle, valid while forces_valid
+	bool forces_valid;
+	double* scratch;  // 5 * 3 per particle for directional derivatives
+	double* parameter_old;  // the model-file parameters' values before a change that may fail
+	double* parameter_new;  // the values such a change sets, one per parameter
+} instance;
+
+// ---------------------------------------------------------------------------------------------
+// Logging
+// ---------------------------------------------------------------------------------------------
+
+// Formats a message and hands it to the importer's logger if its category is on.
+void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...);
+
+// Logs an error (category logStatusError); the arguments are those of printf.
+#define log_error(inst, ...) fmu_logf((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)
+
+// The text of a number for a message (fmu_number_text).
+typedef struct number_text_t {
+	char text[SM_NUMBER_TEXT_CAPACITY];
+} number_text_t;
+
+// A number in the fewest digits that read back to it, valid until the end of the full expression.
+number_text_t fmu_number_text(double x);
+
+// Checks the state machine: logs and returns false if `function` is not allowed in `states` now.
+bool fmu_allowed(instance* inst, const char* function, int states);
+
+// ---------------------------------------------------------------------------------------------
+// Model and simulation
+// ---------------------------------------------------------------------------------------------
+
+// How to get an FMU of another structure, for the messages that refuse one.
+#define PACKAGED_STRUCTURE                                                                                  \
+	"this FMU's variables were made for the structure at packaging: package the model with that value "    \
+	"(springmass fmu MODEL -o NAME.fmu --set "
+
+// Builds the model with the current parameter values, refusing one of another structure than packaged.
+sm_status fmu_build_model(instance* inst, const char* function, const double* before, sm_model** out);
+
+// Makes a simulation of the model, state (or initial state) and inputs the instance's, all or nothing.
+fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
+                                 const port_values* held, const bool* pending, double sim_time,
+                                 const double* x, const double* v);
+
+// Makes sure a simulation with the current settings exists and has taken the inputs set.
+fmi2Status fmu_ensure_simulation(instance* inst, const char* function);
+
+// Sets the model-file parameters to values[] all at once, old ones in old[]; false if the model refuses.
+bool fmu_set_parameters(instance* inst, const char* function, const double* values, double* old);
+
+// Puts back the parameter values old[] of fmu_set_parameters (the error state if that fails).
+void fmu_put_back_parameters(instance* inst, const char* function, const double* old);
