@@ -245,6 +245,104 @@ static int test_break_between_rows_at_its_analytic_time(void)
 	return 0;
 }
 
+// A break that CVODE finds exactly at the end of an advance happens in that advance, not the
+// next: the pulled spring, its driven end given the speed 0.37 m/s by the model (no input set, so
+// that every advance may step past its end), breaks where one advance to 1 s finds it; an advance
+// to exactly that time ends with the spring broken there. The same steps, breaks and final state
+// as the one advance, bit for bit.
+static int test_a_break_at_the_end_time_happens_in_that_advance(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_particle_def driven;
+	ENSURE_STATUS(sm_model_get_particle(model, 1, &driven), SM_OK);
+	driven.velocity[0] = 0.37;
+	ENSURE_STATUS(sm_model_set_particle(model, 1, &driven), SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* once = sm_simulation_create(model, &d, NULL);
+	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
+	ENSURE(once != NULL && rows != NULL);
+	ENSURE_STATUS(sm_simulation_advance(once, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(once) == 1);
+	const double t_break = sm_simulation_break(once, 0).time;
+	ENSURE_NEAR(t_break, 0.1 / 0.37, 1e-12);  // CVODE's root precision, as above
+	ENSURE_STATUS(sm_simulation_advance_interpolated(rows, t_break, 1.0), SM_OK);
+	ENSURE(sm_simulation_time(rows) == t_break);
+	ENSURE(sm_simulation_break_count(rows) == 1 && !sm_model_spring_enabled(sm_simulation_model(rows), 0));
+	ENSURE(!rows->break_pending);
+	ENSURE(sm_simulation_break(rows, 0).time == t_break && sm_simulation_break(rows, 0).spring == 0);
+	ENSURE_STATUS(sm_simulation_advance_interpolated(rows, 1.0, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(rows) == 1);
+	ENSURE(sm_simulation_statistics(rows).steps == sm_simulation_statistics(once).steps);
+	ENSURE(memcmp(sm_simulation_positions(rows), sm_simulation_positions(once), 9 * sizeof(double)) == 0);
+	ENSURE(memcmp(sm_simulation_velocities(rows), sm_simulation_velocities(once), 9 * sizeof(double)) == 0);
+	sm_simulation_destroy(rows);
+	sm_simulation_destroy(once);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The oscillator released compressed (u = -0.2 m, zeta = 0.1) on a spring that breaks at strain
+// 0.1: u rises through 0.1 m at t_b (0.374 s, found from the closed form by bisection) before
+// its first maximum at pi / wd (0.146 m), and the bob then flies on at the 0.71 m/s it had.
+// Rows every 0.1 ms up to 1 s, so that some fall inside the step in which CVODE finds the break
+// (measured: 4.1 ms long, from 0.38 ms before t_b): those rows, at which the break is found but
+// not yet due, are interpolated at their own time like the others; every row before t_b follows
+// the oscillator, every row after it the flight from the state at t_b. rtol 1e-10 on 0.2 m: 1e-6 m
+// as above (measured 2e-9 m), and the break time to that 1e-6 m over the bob's speed there.
+static int test_rows_before_a_break_found_past_them_are_at_their_own_time(void)
+{
+	const double zeta = 0.1, w0 = sqrt(OSC_K), u0 = -0.2, strain = 0.1;
+	sm_model* model = oscillator_anchored(1.0, OSC_K, 2.0 * zeta * w0, u0, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	sm_spring_def s;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
+	s.break_strain = strain;  // l0 = 1 m: the spring breaks at u = 0.1 m
+	ENSURE_STATUS(sm_model_set_spring(model, 0, &s), SM_OK);
+	const double wd = w0 * sqrt(1.0 - zeta * zeta);
+	double lo = 0.0, hi = acos(-1.0) / wd, u, v;  // u rises from u0 to its maximum over [0, pi / wd]
+	for (int k = 0; k < 100; k++) {
+		const double mid = 0.5 * (lo + hi);
+		free_motion(zeta, w0, u0, 0.0, mid, &u, &v);
+		if (u < strain)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	const double t_b = lo;
+	double v_b;
+	free_motion(zeta, w0, u0, 0.0, t_b, &u, &v_b);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	double worst = 0.0, worst_velocity = 0.0;
+	int pending_rows = 0;
+	for (int i = 1; i <= 10000; i++) {
+		const double t = 1e-4 * i;
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 1.0), SM_OK);
+		pending_rows += sim->break_pending;
+		ENSURE(sm_simulation_break_count(sim) == (t >= t_b ? 1 : 0));
+		if (t < t_b) {
+			free_motion(zeta, w0, u0, 0.0, t, &u, &v);
+		} else {
+			u = strain + v_b * (t - t_b);
+			v = v_b;
+		}
+		worst = fmax(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - u));
+		worst_velocity = fmax(worst_velocity, fabs(sm_simulation_velocities(sim)[3] - v));
+	}
+	if (!(worst <= 1e-6 && worst_velocity <= 1e-6 * w0))
+		printf("  %g m, %g m/s from the closed form; %d rows with the break pending\n", worst, worst_velocity,
+		       pending_rows);
+	ENSURE(pending_rows > 0);
+	ENSURE(worst <= 1e-6 && worst_velocity <= 1e-6 * w0);
+	ENSURE(sm_simulation_break(sim, 0).spring == 0);
+	ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_b, 1e-6 / fabs(v_b));
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // An input set at a row while CVODE has stepped past it acts from that row on: CVODE restarts
 // there (whatever restart_on_input_change says), and the next advance ends its last step at its
 // end rather than step past it. A step force F, or the anchor moved by F / k,
@@ -323,34 +421,164 @@ static int test_input_set_past_the_steps_restarts_at_the_row(void)
 	return check_input_past_the_steps(false) || check_input_past_the_steps(true);
 }
 
+// Inputs set again as they are are no change: the driven oscillator with its still anchor and
+// the bob's zero force set anew before every row (10 ms apart, up to 2 s), as a master that sets
+// every input at every point does, takes the steps of one advance to 2 s, with no restart, and
+// ends in its state bit for bit.
+static int test_inputs_set_unchanged_leave_the_run_of_one_advance(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* once = sm_simulation_create(model, &d, NULL);
+	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
+	ENSURE(once != NULL && rows != NULL);
+	ENSURE_STATUS(sm_simulation_advance(once, 2.0), SM_OK);
+	const double zero[3] = {0.0, 0.0, 0.0};
+	for (int i = 1; i <= 200; i++) {
+		ENSURE_STATUS(sm_simulation_set_driven(rows, 0, zero, zero), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_external_force(rows, 1, zero), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(rows, i == 200 ? 2.0 : 0.01 * i, 2.0), SM_OK);
+	}
+	const sm_statistics s = sm_simulation_statistics(rows);
+	ENSURE(s.restarts == 0 && s.steps == sm_simulation_statistics(once).steps);
+	ENSURE(memcmp(sm_simulation_positions(rows), sm_simulation_positions(once), 6 * sizeof(double)) == 0);
+	ENSURE(memcmp(sm_simulation_velocities(rows), sm_simulation_velocities(once), 6 * sizeof(double)) == 0);
+	sm_simulation_destroy(rows);
+	sm_simulation_destroy(once);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Sets the inputs of the driven oscillator at a row: the anchor moved by 1e-3 N / k (2.5e-5 m) or a
+// 1e-3 N force on the bob, as `change` says, and then, when `also_held` says so, the other input
+// again as it is (the anchor where it is, still; no force): what a master does that sets every
+// input at every point, only some of them changed.
+enum { MOVE_ANCHOR = 1, PUSH_BOB = 2 };
+static int set_inputs(sm_simulation* sim, int change, bool also_held)
+{
+	const double nudged[3] = {1e-3 / OSC_K, 0.0, 0.0}, push[3] = {1e-3, 0.0, 0.0}, zero[3] = {0.0, 0.0, 0.0};
+	if (change == MOVE_ANCHOR) {
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 0, nudged, zero), SM_OK);
+		if (also_held)
+			ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, zero), SM_OK);
+	} else {
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, push), SM_OK);
+		if (also_held)
+			ENSURE_STATUS(sm_simulation_set_driven(sim, 0, zero, zero), SM_OK);
+	}
+	return 0;
+}
+
+// An input changed at a row makes the next advance end its last step at its end, whatever other
+// inputs are set after it unchanged: the run with the unchanged input set again is the run
+// without it, bit for bit (the same steps and states), for a moved anchor followed by an
+// unchanged force and a force followed by an unchanged anchor. The advance after that, the
+// inputs unchanged, steps past its end again.
+static int test_an_unchanged_input_set_after_a_changed_one_keeps_the_change(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	const int changes[] = {MOVE_ANCHOR, PUSH_BOB};
+	for (size_t c = 0; c < sizeof changes / sizeof changes[0]; c++) {
+		double x[2][6];
+		int64_t steps[2];
+		for (int held = 0; held < 2; held++) {
+			sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+			ENSURE(sim != NULL);
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 2.0), SM_OK);
+			ENSURE(set_inputs(sim, changes[c], held) == 0);
+			double tn = 0.0;
+			for (int i = 1; i <= 150; i++) {
+				const double t = 0.5 + 0.01 * i;
+				ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 2.0), SM_OK);
+				CVodeGetCurrentTime(sim->cvode, &tn);
+				if (i == 1)
+					ENSURE(tn <= t && tn > t - 1e-12);  // CVODE's stop-time round-off, as above
+				else if (i == 2)
+					ENSURE(tn > t);
+			}
+			memcpy(x[held], sm_simulation_positions(sim), sizeof x[held]);
+			steps[held] = sm_simulation_statistics(sim).steps;
+			sm_simulation_destroy(sim);
+		}
+		ENSURE(steps[0] == steps[1] && memcmp(x[0], x[1], sizeof x[0]) == 0);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A plain advance to a time CVODE has already passed interpolates, with no step and no
-// restart, the value an interpolated advance gives; one past CVODE's time steps on.
+// restart, the value an interpolated advance gives; one past CVODE's time steps on. With the
+// on_step hook too, which is told of no step then (CVODE, asked for one more step, would take it
+// past the time, where it has already been).
 static int test_plain_advance_within_the_steps_interpolates(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
-	sm_simulation* a = sm_simulation_create(model, &d, NULL);
-	sm_simulation* b = sm_simulation_create(model, &d, NULL);
-	ENSURE(a != NULL && b != NULL);
-	ENSURE_STATUS(sm_simulation_advance_interpolated(a, 0.3, 2.0), SM_OK);
-	ENSURE_STATUS(sm_simulation_advance_interpolated(b, 0.3, 2.0), SM_OK);
-	double tn = 0.0;
-	CVodeGetCurrentTime(a->cvode, &tn);
-	ENSURE(tn > 0.3);
-	const double t = 0.5 * (0.3 + tn);
-	const sm_statistics before = sm_simulation_statistics(a);
-	ENSURE_STATUS(sm_simulation_advance(a, t), SM_OK);
-	ENSURE_STATUS(sm_simulation_advance_interpolated(b, t, 2.0), SM_OK);
-	const sm_statistics after = sm_simulation_statistics(a);
-	ENSURE(after.steps == before.steps && after.restarts == 0 && after.rhs_evaluations == before.rhs_evaluations);
-	ENSURE(sm_simulation_time(a) == t);
-	ENSURE(memcmp(sm_simulation_positions(a), sm_simulation_positions(b), 6 * sizeof(double)) == 0);
-	ENSURE(memcmp(sm_simulation_velocities(a), sm_simulation_velocities(b), 6 * sizeof(double)) == 0);
-	ENSURE_STATUS(sm_simulation_advance(a, 1.0), SM_OK);
-	ENSURE(sm_simulation_time(a) == 1.0 && sm_simulation_statistics(a).steps > after.steps);
-	sm_simulation_destroy(b);
-	sm_simulation_destroy(a);
+	for (int hooked = 0; hooked < 2; hooked++) {
+		run_record calls = {0};
+		sm_simulation_def d = tight_def();
+		if (hooked) {
+			d.on_step = count_step;
+			d.on_step_context = &calls;
+		}
+		sm_simulation* a = sm_simulation_create(model, &d, NULL);
+		sm_simulation* b = sm_simulation_create(model, &d, NULL);
+		ENSURE(a != NULL && b != NULL);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(a, 0.3, 2.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(b, 0.3, 2.0), SM_OK);
+		double tn = 0.0;
+		CVodeGetCurrentTime(a->cvode, &tn);
+		ENSURE(tn > 0.3);
+		const double t = 0.5 * (0.3 + tn);
+		const sm_statistics before = sm_simulation_statistics(a);
+		const int64_t calls_before = calls.on_step_calls;
+		ENSURE_STATUS(sm_simulation_advance(a, t), SM_OK);
+		const sm_statistics after = sm_simulation_statistics(a);
+		ENSURE(after.steps == before.steps && after.restarts == 0);
+		ENSURE(after.rhs_evaluations == before.rhs_evaluations && calls.on_step_calls == calls_before);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(b, t, 2.0), SM_OK);
+		ENSURE(sm_simulation_time(a) == t);
+		ENSURE(memcmp(sm_simulation_positions(a), sm_simulation_positions(b), 6 * sizeof(double)) == 0);
+		ENSURE(memcmp(sm_simulation_velocities(a), sm_simulation_velocities(b), 6 * sizeof(double)) == 0);
+		ENSURE_STATUS(sm_simulation_advance(a, 1.0), SM_OK);
+		ENSURE(sm_simulation_time(a) == 1.0 && sm_simulation_statistics(a).steps > after.steps);
+		sm_simulation_destroy(b);
+		sm_simulation_destroy(a);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+// max_steps holds for an advance that steps past its end as for one that does not: allowed 10
+// steps, the oscillator advanced to 1 s with the stop time 2 s (some 190 steps at rtol 1e-10)
+// fails with CV_TOO_MUCH_WORK after exactly 10, where a plain advance to 2 s with the same limit
+// stops: the same steps (CVODE sizes its first from the time it is given, 2 s in both), the same
+// time and state, bit for bit. Both go on alike from there, 10 steps per advance.
+static int test_max_steps_holds_when_stepping_past_the_end(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	sm_simulation_def d = tight_def();
+	d.max_steps = 10;
+	sm_simulation* past = sm_simulation_create(model, &d, NULL);
+	sm_simulation* plain = sm_simulation_create(model, &d, NULL);
+	ENSURE(past != NULL && plain != NULL);
+	for (int attempt = 1; attempt <= 3; attempt++) {
+		ENSURE_STATUS(sm_simulation_advance_interpolated(past, 1.0, 2.0), SM_ERROR_SOLVER);
+		ENSURE_STATUS(sm_simulation_advance(plain, 2.0), SM_ERROR_SOLVER);
+		ENSURE(strstr(sm_simulation_last_error(past), "CV_TOO_MUCH_WORK") != NULL);
+		ENSURE(sm_simulation_statistics(past).steps == 10 * attempt);
+		ENSURE(sm_simulation_statistics(plain).steps == 10 * attempt);
+		ENSURE(sm_simulation_time(past) == sm_simulation_time(plain) && sm_simulation_time(plain) < 1.0);
+		const size_t bytes = 6 * sizeof(double);
+		ENSURE(memcmp(sm_simulation_positions(past), sm_simulation_positions(plain), bytes) == 0);
+		ENSURE(memcmp(sm_simulation_velocities(past), sm_simulation_velocities(plain), bytes) == 0);
+	}
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(past);
 	sm_model_destroy(model);
 	return 0;
 }
@@ -393,8 +621,13 @@ int main(int argc, char** argv)
 	RUN_TEST(test_rows_follow_the_closed_form_in_fewer_steps);
 	RUN_TEST(test_rows_leave_the_run_of_one_advance);
 	RUN_TEST(test_break_between_rows_at_its_analytic_time);
+	RUN_TEST(test_a_break_at_the_end_time_happens_in_that_advance);
+	RUN_TEST(test_rows_before_a_break_found_past_them_are_at_their_own_time);
 	RUN_TEST(test_input_set_past_the_steps_restarts_at_the_row);
+	RUN_TEST(test_inputs_set_unchanged_leave_the_run_of_one_advance);
+	RUN_TEST(test_an_unchanged_input_set_after_a_changed_one_keeps_the_change);
 	RUN_TEST(test_plain_advance_within_the_steps_interpolates);
+	RUN_TEST(test_max_steps_holds_when_stepping_past_the_end);
 	RUN_TEST(test_bad_times_are_refused);
 	return TEST_SUMMARY();
 }

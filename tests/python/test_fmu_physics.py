@@ -99,13 +99,19 @@ def solver_steps(inst):
             if category == "logSolver" and pattern.search(text)]
 
 
+def logged_driven_oscillator(test_fmu, stop_time):
+    """The driven oscillator at tight tolerances, started with the stop time given (or none), its
+    solver statistics logged."""
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True)
+    inst.slave.setDebugLogging(True, ["logSolver"])
+    return inst.start({"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10},
+                      stop_time=stop_time)
+
+
 def held_or_changing_force(test_fmu, stop_time, changing):
     """The driven oscillator over 1 s in 1 ms communication steps; tip.fx held at 0 or changed
     at every step (1e-3 N, alternating in sign). Returns tip.x per step and the internal steps."""
-    inst = Instance(test_fmu("driven_oscillator"), logging_on=True)
-    inst.slave.setDebugLogging(True, ["logSolver"])
-    inst.start({"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10},
-               stop_time=stop_time)
+    inst = logged_driven_oscillator(test_fmu, stop_time)
     try:
         x = []
         for n in range(1000):
@@ -137,6 +143,76 @@ def test_with_a_stop_time_and_held_inputs_cvode_steps_past_communication_points(
     x_free, steps_free = held_or_changing_force(test_fmu, None, True)
     assert steps_stop == steps_free and min(steps_stop) >= 1
     assert np.array_equal(x_stop, x_free)
+
+
+def test_a_master_that_sets_every_input_keeps_a_change_among_unchanged_ones(test_fmu):
+    # A master that sets every input at every point: the anchor (base, applied before tip) moved
+    # by 1e-6 m, alternating in sign, and tip.fx set again to 0 N, unchanged. The changed input
+    # ends the step at the point whatever unchanged one is applied after it, so with the stop
+    # time or without, the same computation, bit for bit (as for the changing force above).
+    runs = []
+    for stop_time in (1.0, None):
+        inst = logged_driven_oscillator(test_fmu, stop_time)
+        try:
+            x = []
+            for n in range(1000):
+                inst.set("base.x", 1e-6 * (-1) ** n)
+                inst.set("tip.fx", 0.0)
+                inst.slave.doStep(n * 1e-3, 1e-3)
+                x.append(inst.get("tip.x"))
+            runs.append((np.array(x), solver_steps(inst)))
+        finally:
+            inst.free()
+    (x_stop, steps_stop), (x_free, steps_free) = runs
+    assert steps_stop == steps_free and min(steps_stop) >= 1
+    assert np.array_equal(x_stop, x_free)
+
+
+def stepped_from(test_fmu, start_time):
+    """The driven oscillator from start_time over 1 s in communication steps of 1/128 s, with the
+    stop time start_time + 1 s given. Returns tip.x and tip.vx per step and the internal steps."""
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True)
+    inst.slave.setDebugLogging(True, ["logSolver"])
+    inst.start(start_time=start_time, stop_time=start_time + 1.0)
+    try:
+        h, states = 1.0 / 128, []
+        for n in range(128):
+            inst.slave.doStep(start_time + n * h, h)
+            states.append(inst.get("tip.x", "tip.vx"))
+        assert inst.slave.getRealStatus(2) == start_time + 1.0  # fmi2LastSuccessfulTime
+        return np.array(states), solver_steps(inst)
+    finally:
+        inst.free()
+
+
+def test_with_a_stop_time_the_run_does_not_depend_on_the_start_time(test_fmu):
+    # The model knows no absolute time: started at 4 s with the stop time 5 s, the run is the one
+    # started at 0 s with the stop time 1 s, bit for bit (the same internal steps, the same
+    # outputs), the stop time counted from the start as the communication points are. Steps of
+    # 1/128 s from 0 or 4 s are sums exact in binary, so that both runs see the same times.
+    states_0, steps_0 = stepped_from(test_fmu, 0.0)
+    states_4, steps_4 = stepped_from(test_fmu, 4.0)
+    assert sum(steps_0) < 128  # CVODE steps past communication points
+    assert steps_4 == steps_0
+    assert np.array_equal(states_4, states_0)
+
+
+def test_a_last_step_within_round_off_past_the_stop_time_is_taken(test_fmu):
+    # Three steps of 0.1 s to the stop time 0.3 s end at 0.2 + 0.1 = 0.30000000000000004 s, one
+    # ulp past it, which fmi2DoStep allows (up to 1000 ulps): CVODE then stops at that end, not
+    # at the stop time before it, and the bob is where the closed form puts it (rtol 1e-10:
+    # 1e-6 m, as above).
+    inst = Instance(test_fmu("driven_oscillator")).start(
+        {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}, stop_time=0.3)
+    try:
+        for n in range(3):
+            inst.slave.doStep(0.1 * n, 0.1)
+        t = 0.1 * 2 + 0.1
+        assert t > 0.3 and inst.slave.getRealStatus(2) == t  # fmi2LastSuccessfulTime
+        w = math.sqrt(K / M)
+        assert abs(inst.get("tip.x") - (L0 + (X0 - L0) * math.cos(w * t))) < 1e-6
+    finally:
+        inst.free()
 
 
 def test_motion_port_reaction_matches_statics(test_fmu):
