@@ -708,6 +708,131 @@ static int test_simulation_adams(void)
 }
 
 // ---------------------------------------------------------------------------------------------
+// Simulation: more springs breaking at one instant than the break records hold at first
+// ---------------------------------------------------------------------------------------------
+
+#define SIMULTANEOUS_BREAKS 20
+
+// SIMULTANEOUS_BREAKS springs (100 N/m, rest length 1 m, break strain 0.1), each from a fixed
+// particle at (0, i, 0) m to a driven one at (1, i, 0) m moving along x at 0.37 m/s: every spring's
+// length is 1 + 0.37 t to the last bit, so all break in one root event at 0.1 / 0.37 s; and a free
+// particle hanging from the first fixed one on a damped spring, for a state to integrate. The
+// break records hold 16 at first: the 17th grows them, and an allocation failed there leaves
+// springs of the event broken and others not.
+static sm_model* simultaneous_breaks_model(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	if (!model)
+		return NULL;
+	for (int32_t i = 0; i < SIMULTANEOUS_BREAKS; i++) {
+		sm_particle_def fixed = sm_default_particle_def(), driven = sm_default_particle_def();
+		fixed.motion = SM_PARTICLE_FIXED;
+		fixed.position[1] = driven.position[1] = (double)i;
+		driven.motion = SM_PARTICLE_DRIVEN;
+		driven.position[0] = 1.0;
+		driven.velocity[0] = 0.37;
+		sm_spring_def s = sm_default_spring_def();
+		s.stiffness = 100.0;
+		s.break_strain = 0.1;
+		if (sm_model_add_particle(model, &fixed, &s.a) != SM_OK || sm_model_add_particle(model, &driven, &s.b) != SM_OK ||
+		    sm_model_add_spring(model, &s, NULL) != SM_OK) {
+			sm_model_destroy(model);
+			return NULL;
+		}
+	}
+	sm_particle_def bob = sm_default_particle_def();
+	bob.position[2] = -0.5;
+	sm_spring_def hanging = sm_default_spring_def();
+	hanging.a = 0;
+	hanging.stiffness = 100.0;
+	hanging.damping = 1.0;
+	if (sm_model_add_particle(model, &bob, &hanging.b) != SM_OK || sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+typedef struct breaks_case {
+	const sm_model* model;
+	double dissipated;   // of the run without failures [J]
+	double bob_z;        // the free particle's height then [m]
+} breaks_case;
+
+// Advances to 0.5 s (once more after an injected failure). All springs break at one time, in
+// spring order, and the run ends where the one without failures does: a record that failed in
+// the middle of the event leaves the springs not yet broken to the next advance, which breaks
+// them first, at the same time, and the energy of those that broke stays dissipated (each spring
+// takes 0.5 J with it, so a lost one shows). Tolerances: 1e-9 J and m, the rounding of the
+// energy summed in two parts and of a restart at the same state.
+static int simultaneous_breaks_scenario(void* context)
+{
+	breaks_case* c = context;
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = sm_simulation_create(c->model, NULL, &err);
+	if (!sim) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	int result = 1;
+	sm_status st = sm_simulation_advance(sim, 0.5);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (oom_.persistent) {
+			result = 0;
+			goto done;
+		}
+		if (sm_simulation_advance(sim, 0.5) != SM_OK) {
+			printf("  the advance after a failed one failed: %s\n", sm_simulation_last_error(sim));
+			goto done;
+		}
+	}
+	if (sm_simulation_break_count(sim) != SIMULTANEOUS_BREAKS) {
+		printf("  %d springs broke, not %d\n", (int)sm_simulation_break_count(sim), SIMULTANEOUS_BREAKS);
+		goto done;
+	}
+	for (int32_t b = 0; b < SIMULTANEOUS_BREAKS; b++) {
+		const sm_break_event e = sm_simulation_break(sim, b);
+		if (e.spring != b || e.time != sm_simulation_break(sim, 0).time || !(fabs(e.time - 0.1 / 0.37) < 1e-9)) {
+			printf("  break %d: spring %d at %.17g s\n", (int)b, (int)e.spring, e.time);
+			goto done;
+		}
+	}
+	const double dissipated = sm_simulation_dissipated_energy(sim);
+	const double bob_z = sm_simulation_positions(sim)[3 * 2 * SIMULTANEOUS_BREAKS + 2];
+	if (oom_.fail_at == 0) {
+		c->dissipated = dissipated;
+		c->bob_z = bob_z;
+	} else if (!(fabs(dissipated - c->dissipated) <= 1e-9 && fabs(bob_z - c->bob_z) <= 1e-9)) {
+		printf("  dissipated %.17g J, bob at z = %.17g m; without failures %.17g J, %.17g m\n", dissipated, bob_z,
+		       c->dissipated, c->bob_z);
+		goto done;
+	}
+	result = 0;
+done:
+	sm_simulation_destroy(sim);
+	return result;
+}
+
+static int test_simulation_simultaneous_breaks(void)
+{
+	sm_model* model = simultaneous_breaks_model();
+	ENSURE(model != NULL);
+	breaks_case c = {model, 0.0, 0.0};
+	int result = simultaneous_breaks_scenario(&c);
+	// 20 springs of 0.5 J each, and what the damped hanging spring took.
+	if (result == 0 && !(c.dissipated >= 0.5 * SIMULTANEOUS_BREAKS)) {
+		printf("  %.17g J dissipated without failures\n", c.dissipated);
+		result = 1;
+	}
+	if (result == 0)
+		result = inject_every_failure("simulation, 20 breaks at once", simultaneous_breaks_scenario, &c);
+	sm_model_destroy(model);
+	return result;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Analysis: statics and modes, dense and sparse
 // ---------------------------------------------------------------------------------------------
 
@@ -1058,6 +1183,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_simulation_cholmod);
 	RUN_TEST(test_simulation_pcg_multilevel);
 	RUN_TEST(test_simulation_adams);
+	RUN_TEST(test_simulation_simultaneous_breaks);
 	RUN_TEST(test_analysis_dense);
 	RUN_TEST(test_analysis_sparse);
 	RUN_TEST(test_statics_continuation);
