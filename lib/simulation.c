@@ -1046,33 +1046,15 @@ static bool cvode_ahead(const sm_simulation* sim)
 	return !sim->need_restart && cvode_time(sim) > sim->time;
 }
 
-// Steps up to exactly t_end, CVODE's stop time (sm_simulation_advance). *reached is where CVODE
-// stopped: t_end, a root, or the last state it reached on failure.
-static int step_to_end(sm_simulation* sim, double t_end, double* reached)
-{
-	CVodeSetStopTime(sim->cvode, t_end);
-	if (sim->def.on_step == NULL)
-		return check_step_size(sim, CVode(sim->cvode, t_end, sim->y, reached, CV_NORMAL), reached);
-	// One internal step per call: the same steps as CV_NORMAL, which loops over them inside
-	// CVODE up to the stop time, with the caller told of each. CVODE counts max_steps within one
-	// call, so the limit is kept here, as CV_NORMAL would.
-	int32_t steps = 0;
-	int flag;
-	do {
-		flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, reached, CV_ONE_STEP), reached);
-		if (flag >= 0)
-			sim->def.on_step(sim->def.on_step_context, *reached);
-		steps++;
-	} while (flag == CV_SUCCESS && *reached < t_end && steps < sim->def.max_steps);
-	return flag;
-}
-
-// Steps until CVODE's time passes t_end, never past t_stop, one internal step per call
-// (sm_simulation_advance_interpolated; no step at all if CVODE is already past t_end). y then
-// holds CVODE's last step, a root, or the last state it reached on failure; the caller
-// interpolates t_end. In this mode CVODE looks for roots over each whole step, t_end or not, so
-// the roots are those of one advance to t_stop, bit for bit.
-static int step_past_end(sm_simulation* sim, double t_end, double t_stop, double* reached)
+// One internal step per CVode call until CVODE's time reaches t_end, never past t_stop, the
+// caller told of each step (on_step); no step if CVODE is there already. With t_stop = t_end
+// these are the steps of CV_NORMAL, which loops over them inside CVODE up to the stop time. With
+// t_stop past t_end (sm_simulation_advance_interpolated) CVODE looks for roots over each whole
+// step, t_end or not, so that the roots are those of one advance to t_stop, bit for bit, and
+// the caller interpolates t_end. CVODE counts max_steps within one call, so the limit is kept
+// here, as CV_NORMAL would. *reached is where CVODE stopped: the end of its last step, a root,
+// or the last state it reached on failure (in y).
+static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, double* reached)
 {
 	*reached = cvode_time(sim);
 	if (*reached >= t_end)
@@ -1144,7 +1126,13 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		sim->jacobian_out_of_memory = false;
 		const bool past_end = (t_stop > t_end && !inputs_changed) || cvode_ahead(sim);
 		double reached = sim->time;
-		int flag = past_end ? step_past_end(sim, t_end, t_stop, &reached) : step_to_end(sim, t_end, &reached);
+		int flag;
+		if (!past_end && sim->def.on_step == NULL) {
+			CVodeSetStopTime(sim->cvode, t_end);
+			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
+		} else {
+			flag = step_one_at_a_time(sim, t_end, past_end ? t_stop : t_end, &reached);
+		}
 		if (flag == CV_SUCCESS && reached < t_end) {
 			flag = CV_TOO_MUCH_WORK;
 			snprintf(sim->solver_message, sizeof sim->solver_message,
@@ -1215,19 +1203,17 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 // is not finite or lies before the end time, with nothing changed.
 static sm_status check_times(sm_simulation* sim, const char* function, double t_end, double t_stop)
 {
+	const bool bad_end = !isfinite(t_end) || t_end < sim->time;
+	if (!bad_end && isfinite(t_stop) && t_stop >= t_end)
+		return SM_OK;
 	char end[SM_NUMBER_TEXT_CAPACITY], other[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(t_end, end);
-	if (!isfinite(t_end) || t_end < sim->time) {
-		sm_format_number(sim->time, other);
+	sm_format_number(bad_end ? sim->time : t_stop, other);
+	if (bad_end)
 		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
 		            "%s: end time %s s must be finite and not before the current time %s s", function, end, other);
-	}
-	if (!isfinite(t_stop) || t_stop < t_end) {
-		sm_format_number(t_stop, other);
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "%s: stop time %s s must be finite and not before the end time %s s",
-		            function, other, end);
-	}
-	return SM_OK;
+	return fail(sim, SM_ERROR_INVALID_ARGUMENT, "%s: stop time %s s must be finite and not before the end time %s s",
+	            function, other, end);
 }
 
 sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
