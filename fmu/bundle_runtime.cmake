@@ -6,7 +6,7 @@
 #
 # It also gathers the licences of that software: the copyright file of the Debian package of each
 # bundled library and of the static archives linked into the binary (ARCHIVES, separated by commas),
-# in documentation/licenses/ with a README.txt that says which file covers which library.
+# in documentation/licenses/ with a license.txt that says which file covers which library.
 #
 #   cmake -DBINARY=<springmass_fmu.so> -DDESTINATION=<dir> -DPATCHELF=<patchelf>
 #         [-DARCHIVES=<a.a>,<b.a>] -P bundle_runtime.cmake
@@ -79,18 +79,19 @@ list(LENGTH resolved count)
 message(STATUS "FMU runtime: springmass_fmu.so and ${count} bundled libraries in ${dir}")
 
 # Licences. Binaries are redistributed with their authors' notices: the Debian copyright file of
-# the package that installed each one (dpkg -S), once per package. FMI 2.0 keeps documentation in
-# documentation/ (FMI 3.0 names documentation/licenses/ for exactly this).
+# the package that installed each one (dpkg -S), once per package, and license.txt saying which
+# covers which. FMI 2.0 keeps documentation in documentation/; FMI 3.0 names
+# documentation/licenses/ and its license.txt for exactly this.
 set(licenses "${DESTINATION}/documentation/licenses")
 file(REMOVE_RECURSE "${DESTINATION}/documentation")
 file(MAKE_DIRECTORY "${licenses}")
 find_program(DPKG dpkg)
 string(REPLACE "," ";" archives "${ARCHIVES}")
-set(readme "Licences of the software an FMU made by springmass carries\n\n")
-string(APPEND readme "The FMU's binary (binaries/linux64/, named after the model) is springmass with the static\n")
-string(APPEND readme "archives below linked in; the other files of binaries/linux64/ are shared libraries it loads.\n")
-string(APPEND readme "Each came from a Debian package, whose copyright file (its authors' notices and licences) is\n")
-string(APPEND readme "in this folder under the package's name.\n\n")
+set(entry "Licences of the software an FMU made by springmass carries\n\n")
+string(APPEND entry "The FMU's binary (binaries/linux64/, named after the model) is springmass with the static\n")
+string(APPEND entry "archives below linked in; the other files of binaries/linux64/ are shared libraries it loads.\n")
+string(APPEND entry "Each came from a Debian package, whose copyright file (its authors' notices and licences) is\n")
+string(APPEND entry "in this folder under the package's name.\n\n")
 set(missing "")
 foreach(library IN LISTS archives resolved)
   get_filename_component(name "${library}" NAME)
@@ -112,16 +113,16 @@ foreach(library IN LISTS archives resolved)
       file(COPY_FILE "/usr/share/doc/${package}/copyright" "${licenses}/${package}.txt")
     endif()
     if(name MATCHES "\\.a$")
-      string(APPEND readme "  ${name} (linked in)  ${package}.txt\n")
+      string(APPEND entry "  ${name} (linked in)  ${package}.txt\n")
     else()
-      string(APPEND readme "  ${name}  ${package}.txt\n")
+      string(APPEND entry "  ${name}  ${package}.txt\n")
     endif()
   else()
     list(APPEND missing "${name}")
-    string(APPEND readme "  ${name}  (no package found: its licence is not included)\n")
+    string(APPEND entry "  ${name}  (no package found: its licence is not included)\n")
   endif()
 endforeach()
-file(WRITE "${licenses}/README.txt" "${readme}")
+file(WRITE "${licenses}/license.txt" "${entry}")
 if(missing)
   message(WARNING "bundle_runtime.cmake: no licence found for ${missing} (not installed from a Debian package)")
 endif()

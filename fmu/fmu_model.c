@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "fmu_model.h"
+#include "fmu_text.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -486,86 +487,7 @@ void fmu_table_destroy(fmu_table* table)
 // modelDescription.xml
 // ---------------------------------------------------------------------------------------------
 
-typedef struct text_buffer {
-	char* data;
-	size_t length;
-	size_t capacity;
-	bool failed;
-} text_buffer;
-
-static void append(text_buffer* t, const char* s, size_t n)
-{
-	if (t->failed)
-		return;
-	if (t->length + n + 1 > t->capacity) {
-		size_t capacity = t->capacity ? t->capacity : 4096;
-		while (capacity < t->length + n + 1)
-			capacity *= 2;
-		char* grown = realloc(t->data, capacity);
-		if (!grown) {
-			t->failed = true;
-			return;
-		}
-		t->data = grown;
-		t->capacity = capacity;
-	}
-	memcpy(t->data + t->length, s, n);
-	t->length += n;
-	t->data[t->length] = '\0';
-}
-
-static void append_text(text_buffer* t, const char* s)
-{
-	append(t, s, strlen(s));
-}
-
-static void appendf(text_buffer* t, const char* fmt, ...)
-{
-	char small[512];
-	va_list args;
-	va_start(args, fmt);
-	int n = vsnprintf(small, sizeof small, fmt, args);
-	va_end(args);
-	if (n < 0) {
-		t->failed = true;
-		return;
-	}
-	if ((size_t)n < sizeof small) {
-		append(t, small, (size_t)n);
-		return;
-	}
-	char* big = malloc((size_t)n + 1);
-	if (!big) {
-		t->failed = true;
-		return;
-	}
-	va_start(args, fmt);
-	vsnprintf(big, (size_t)n + 1, fmt, args);
-	va_end(args);
-	append(t, big, (size_t)n);
-	free(big);
-}
-
-// Text escaped for an XML attribute value.
-static void append_escaped(text_buffer* t, const char* s)
-{
-	for (; s && *s; ++s) {
-		switch (*s) {
-		case '&': append_text(t, "&amp;"); break;
-		case '<': append_text(t, "&lt;"); break;
-		case '>': append_text(t, "&gt;"); break;
-		case '"': append_text(t, "&quot;"); break;
-		case '\'': append_text(t, "&apos;"); break;
-		case '\n': append_text(t, " "); break;
-		default:
-			if ((unsigned char)*s >= 0x20 || *s == '\t')
-				append(t, s, 1);
-			break;
-		}
-	}
-}
-
-static const char* causality_name(fmu_causality c)
+const char* fmu_causality_name(fmu_causality c)
 {
 	switch (c) {
 	case FMU_PARAMETER: return "parameter";
@@ -576,7 +498,7 @@ static const char* causality_name(fmu_causality c)
 	return "local";
 }
 
-static const char* variability_name(fmu_variability v)
+const char* fmu_variability_name(fmu_variability v)
 {
 	switch (v) {
 	case FMU_CONSTANT: return "constant";
@@ -611,7 +533,7 @@ static bool unit_used(const fmu_table* t, const char* unit)
 // energy are states: no direct dependence. A motion port's force depends on the prescribed
 // positions and velocities of the motion ports; kinetic energy on their velocities; elastic and
 // gravitational energy on their positions.
-static void append_dependencies(text_buffer* out, const fmu_table* t, const fmu_variable* v)
+static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_variable* v)
 {
 	bool position = false, velocity = false;
 	switch (v->source) {
@@ -621,131 +543,132 @@ static void append_dependencies(text_buffer* out, const fmu_table* t, const fmu_
 	case FMU_SRC_ENERGY_GRAVITY: position = true; break;
 	default: break;
 	}
-	append_text(out, " dependencies=\"");
+	fmu_text_append_string(out, " dependencies=\"");
 	bool first = true;
 	for (int32_t i = 0; i < t->count; ++i) {
 		const fmu_variable* w = &t->variables[i];
 		if (w->causality != FMU_INPUT)
 			continue;
 		if ((position && w->source == FMU_SRC_PORT_POSITION) || (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
-			appendf(out, first ? "%d" : " %d", (int)i + 1);
+			fmu_text_appendf(out, first ? "%d" : " %d", (int)i + 1);
 			first = false;
 		}
 	}
-	append_text(out, "\"");
+	fmu_text_append_string(out, "\"");
 }
 
 char* fmu_model_description(const fmu_table* t, const char* generation_date)
 {
-	text_buffer out = {NULL, 0, 0, false};
-	append_text(&out, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-	append_text(&out, "<fmiModelDescription\n  fmiVersion=\"2.0\"\n  modelName=\"");
-	append_escaped(&out, t->model_name);
-	appendf(&out, "\"\n  guid=\"%s\"\n  description=\"", t->guid);
-	append_escaped(&out, t->description);
-	appendf(&out, "\"\n  generationTool=\"springmass %s\"\n", SPRINGMASS_VERSION_STRING);
+	fmu_text out = {NULL, 0, 0, false};
+	fmu_text_append_string(&out, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+	fmu_text_append_string(&out, "<fmiModelDescription\n  fmiVersion=\"2.0\"\n  modelName=\"");
+	fmu_text_append_escaped(&out, t->model_name);
+	fmu_text_appendf(&out, "\"\n  guid=\"%s\"\n  description=\"", t->guid);
+	fmu_text_append_escaped(&out, t->description);
+	fmu_text_appendf(&out, "\"\n  generationTool=\"springmass %s\"\n", SPRINGMASS_VERSION_STRING);
 	if (generation_date)
-		appendf(&out, "  generationDateAndTime=\"%s\"\n", generation_date);
-	append_text(&out, "  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n");
+		fmu_text_appendf(&out, "  generationDateAndTime=\"%s\"\n", generation_date);
+	fmu_text_append_string(&out,
+		"  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n");
 
-	appendf(&out,
-	        "  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
-	        "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
-	        "    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
-	        "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
-	        "    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
-	        "    providesDirectionalDerivative=\"true\"/>\n",
-	        t->model_identifier);
+	fmu_text_appendf(&out,
+		"  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
+		"    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
+		"    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
+		"    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
+		"    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
+		"    providesDirectionalDerivative=\"true\"/>\n",
+		t->model_identifier);
 
-	append_text(&out, "  <UnitDefinitions>\n");
+	fmu_text_append_string(&out, "  <UnitDefinitions>\n");
 	for (size_t u = 0; u < sizeof units / sizeof units[0]; ++u) {
 		if (!unit_used(t, units[u].name))
 			continue;
-		appendf(&out, "    <Unit name=\"%s\"><BaseUnit", units[u].name);
+		fmu_text_appendf(&out, "    <Unit name=\"%s\"><BaseUnit", units[u].name);
 		if (units[u].kg)
-			appendf(&out, " kg=\"%d\"", units[u].kg);
+			fmu_text_appendf(&out, " kg=\"%d\"", units[u].kg);
 		if (units[u].m)
-			appendf(&out, " m=\"%d\"", units[u].m);
+			fmu_text_appendf(&out, " m=\"%d\"", units[u].m);
 		if (units[u].s)
-			appendf(&out, " s=\"%d\"", units[u].s);
-		append_text(&out, "/></Unit>\n");
+			fmu_text_appendf(&out, " s=\"%d\"", units[u].s);
+		fmu_text_append_string(&out, "/></Unit>\n");
 	}
-	append_text(&out, "  </UnitDefinitions>\n");
+	fmu_text_append_string(&out, "  </UnitDefinitions>\n");
 
-	append_text(&out,
-	       "  <LogCategories>\n"
-	       "    <Category name=\"logEvents\"\n"
-	       "      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
-	       "    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
-	       "    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
-	       "    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
-	       "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
-	       "  </LogCategories>\n");
+	fmu_text_append_string(&out,
+		"  <LogCategories>\n"
+		"    <Category name=\"logEvents\"\n"
+		"      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
+		"    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
+		"    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
+		"    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
+		"    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
+		"  </LogCategories>\n");
 
 	char stop[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY], tolerance[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(t->stop_time, stop);
 	sm_format_number(t->step_size, step);
 	sm_format_number(t->tolerance, tolerance);
-	appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n", stop,
-	        step, tolerance);
+	fmu_text_appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n",
+	                 stop, step, tolerance);
 
-	append_text(&out, "  <ModelVariables>\n");
+	fmu_text_append_string(&out, "  <ModelVariables>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
 		const fmu_variable* v = &t->variables[i];
-		append_text(&out, "    <ScalarVariable name=\"");
-		append_escaped(&out, v->name);
-		appendf(&out, "\" valueReference=\"%d\" description=\"", (int)i);
-		append_escaped(&out, v->description);
-		appendf(&out, "\" causality=\"%s\" variability=\"%s\"", causality_name(v->causality),
-		        variability_name(v->variability));
+		fmu_text_append_string(&out, "    <ScalarVariable name=\"");
+		fmu_text_append_escaped(&out, v->name);
+		fmu_text_appendf(&out, "\" valueReference=\"%d\" description=\"", (int)i);
+		fmu_text_append_escaped(&out, v->description);
+		fmu_text_appendf(&out, "\" causality=\"%s\" variability=\"%s\"", fmu_causality_name(v->causality),
+		                 fmu_variability_name(v->variability));
 		if (v->causality == FMU_PARAMETER || v->variability == FMU_CONSTANT)
-			append_text(&out, " initial=\"exact\"");
+			fmu_text_append_string(&out, " initial=\"exact\"");
 		else if (v->causality == FMU_OUTPUT || v->causality == FMU_LOCAL)
-			append_text(&out, " initial=\"calculated\"");
-		append_text(&out, ">\n      ");
+			fmu_text_append_string(&out, " initial=\"calculated\"");
+		fmu_text_append_string(&out, ">\n      ");
 		switch (v->type) {
 		case FMU_REAL:
-			append_text(&out, "<Real");
+			fmu_text_append_string(&out, "<Real");
 			if (v->unit)
-				appendf(&out, " unit=\"%s\"", v->unit);
+				fmu_text_appendf(&out, " unit=\"%s\"", v->unit);
 			if (v->has_start) {
 				char start[SM_NUMBER_TEXT_CAPACITY];
 				sm_format_number(v->start_real, start);
-				appendf(&out, " start=\"%s\"", start);
+				fmu_text_appendf(&out, " start=\"%s\"", start);
 			}
 			break;
 		case FMU_INTEGER:
-			append_text(&out, "<Integer");
+			fmu_text_append_string(&out, "<Integer");
 			if (v->has_start)
-				appendf(&out, " start=\"%d\"", (int)v->start_integer);
+				fmu_text_appendf(&out, " start=\"%d\"", (int)v->start_integer);
 			break;
 		case FMU_STRING:
-			append_text(&out, "<String");
+			fmu_text_append_string(&out, "<String");
 			if (v->has_start) {
-				append_text(&out, " start=\"");
-				append_escaped(&out, v->start_string);
-				append_text(&out, "\"");
+				fmu_text_append_string(&out, " start=\"");
+				fmu_text_append_escaped(&out, v->start_string);
+				fmu_text_append_string(&out, "\"");
 			}
 			break;
 		}
-		append_text(&out, "/>\n    </ScalarVariable>\n");
+		fmu_text_append_string(&out, "/>\n    </ScalarVariable>\n");
 	}
-	append_text(&out, "  </ModelVariables>\n");
+	fmu_text_append_string(&out, "  </ModelVariables>\n");
 
-	append_text(&out, "  <ModelStructure>\n    <Outputs>\n");
+	fmu_text_append_string(&out, "  <ModelStructure>\n    <Outputs>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
 		if (t->variables[i].causality != FMU_OUTPUT)
 			continue;
-		appendf(&out, "      <Unknown index=\"%d\"", (int)i + 1);
+		fmu_text_appendf(&out, "      <Unknown index=\"%d\"", (int)i + 1);
 		append_dependencies(&out, t, &t->variables[i]);
-		append_text(&out, "/>\n");
+		fmu_text_append_string(&out, "/>\n");
 	}
-	append_text(&out, "    </Outputs>\n    <InitialUnknowns>\n");
+	fmu_text_append_string(&out, "    </Outputs>\n    <InitialUnknowns>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
 		if (t->variables[i].causality == FMU_OUTPUT)
-			appendf(&out, "      <Unknown index=\"%d\"/>\n", (int)i + 1);
+			fmu_text_appendf(&out, "      <Unknown index=\"%d\"/>\n", (int)i + 1);
 	}
-	append_text(&out, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
+	fmu_text_append_string(&out, "    </InitialUnknowns>\n  </ModelStructure>\n</fmiModelDescription>\n");
 
 	if (out.failed) {
 		free(out.data);
@@ -858,7 +781,7 @@ static void quote_line(const char* line, size_t length, char* out, size_t size)
 // values refused until a pass takes none. Returns how many are left unwritten; the first refusal's
 // message goes to *refusal. Out of memory sets out->failed.
 static int32_t write_values(sm_document* file, const sm_document* set, int32_t* pending, int32_t count, bool retry,
-                            text_buffer* out, sm_error* refusal)
+                            fmu_text* out, sm_error* refusal)
 {
 	bool progress = true;
 	bool first = true;
@@ -874,7 +797,7 @@ static int32_t write_values(sm_document* file, const sm_document* set, int32_t* 
 			char number[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(value, number);
 			if (st == SM_OK) {
-				appendf(out, "%s=%s\n", sm_document_parameter_name(file, i), number);
+				fmu_text_appendf(out, "%s=%s\n", sm_document_parameter_name(file, i), number);
 				progress = true;
 			} else if (st == SM_ERROR_OUT_OF_MEMORY) {
 				out->failed = true;
@@ -921,8 +844,8 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 	// were given in): each value the model takes is written; one it refuses now is tried again
 	// after the others, until all are written or a pass takes none. If some are left, the order
 	// the caller set them in, which the model took, is written instead.
-	text_buffer out = {NULL, 0, 0, false};
-	append(&out, "", 0);
+	fmu_text out = {NULL, 0, 0, false};
+	fmu_text_append(&out, "", 0);
 	sm_error refusal = {SM_OK, ""};
 	count = write_values(file, set, pending, count, true, &out, &refusal);
 	if (count > 0 && order != NULL && !out.failed) {

@@ -163,6 +163,17 @@ sm_document* fmu_document_parse(const char* text, size_t length, const char* sou
 /// `generation_date` is an ISO 8601 UTC time stamp or NULL to leave it out.
 char* fmu_model_description(const fmu_table* table, const char* generation_date);
 
+/// documentation/index.html of the table (fmu_documentation.c): the model, how the FMU steps,
+/// its inputs, outputs, parameters and constants with their value references, units and start
+/// values, and, when `licenses` says the FMU has documentation/licenses/, where its licences are;
+/// a malloc'ed NUL-terminated string (NULL on OOM).
+char* fmu_documentation_html(const fmu_table* table, bool licenses);
+
+/// The FMI names of a causality ("parameter", "input", "output", "local") and of a variability
+/// ("constant", "fixed", "tunable", "continuous").
+const char* fmu_causality_name(fmu_causality causality);
+const char* fmu_variability_name(fmu_variability variability);
+
 /// Writes a C identifier made from `name` (letters, digits and '_'; a leading digit or an empty
 /// name gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);

@@ -1125,8 +1125,10 @@ static int fmu_scenario(void* context)
 	FMU_CALL(fmi2DoStep(inst, 0.0, 0.02, fmi2True));
 	FMU_CALL(fmi2Terminate(inst));
 end:
-	// The packager's modelDescription.xml from the same table: NULL when out of memory.
+	// The packager's modelDescription.xml and documentation/index.html from the same table: NULL
+	// when out of memory.
 	free(fmu_model_description(&c->table, "2026-01-01T00:00:00Z"));
+	free(fmu_documentation_html(&c->table, true));
 	result = 0;
 	if (state)
 		fmi2FreeFMUstate(inst, &state);

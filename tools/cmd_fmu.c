@@ -8,6 +8,7 @@
 //   resources/parameters.txt                   the values of --set that differ from the file's, if any
 //                                              (the GUID hashes this file and model.json together)
 //   resources/reference.csv                    a reference result, when one is given
+//   documentation/index.html                   the model's variables and how the FMU steps
 //   documentation/licenses/                    the licences of the libraries in binaries/
 // The binary, its libraries and their licences come from the FMU runtime folder the build
 // assembles (<build>/fmu/runtime, installed as <prefix>/<libdir>/springmass/fmu).
@@ -334,6 +335,7 @@ static int package(const options* opt)
 	char* parameters = NULL;
 	size_t parameters_length = 0;
 	char* xml = NULL;
+	char* html = NULL;
 	sm_document* doc = NULL;
 	fmu_table table;
 	memset(&table, 0, sizeof table);
@@ -423,31 +425,44 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, strerror(errno));
 		goto done;
 	}
-	bool licenses = false;
+	// documentation/: the page written from the table and, from the runtime, the licences (a
+	// runtime assembled before they were gathered has none).
+	if (!join(path, sizeof path, staging, "documentation"))
+		goto done;
+	if (mkdir(path, 0755) != 0) {
+		fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+		goto done;
+	}
 	if (!join(from, sizeof from, runtime, "documentation/licenses"))
 		goto done;
 	struct stat info;
-	if (stat(from, &info) == 0 && S_ISDIR(info.st_mode)) {
-		licenses = true;
-		const char* documentation[] = {"documentation", "documentation/licenses"};
-		for (size_t i = 0; i < 2; ++i) {
-			if (!join(path, sizeof path, staging, documentation[i]))
-				goto done;
-			if (mkdir(path, 0755) != 0) {
-				fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
-				goto done;
-			}
+	const bool licenses = stat(from, &info) == 0 && S_ISDIR(info.st_mode);
+	if (licenses) {
+		if (!join(path, sizeof path, staging, "documentation/licenses"))
+			goto done;
+		if (mkdir(path, 0755) != 0) {
+			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+			goto done;
 		}
 		if (!copy_folder(from, path, NULL, NULL)) {
 			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n", from, strerror(errno));
 			goto done;
 		}
 	}
+	html = fmu_documentation_html(&table, licenses);
+	if (!html) {
+		fprintf(stderr, "springmass fmu: out of memory\n");
+		goto done;
+	}
+	if (!join(path, sizeof path, staging, "documentation/index.html"))
+		goto done;
+	if (!write_all(path, html, strlen(html)))
+		goto write_failed;
 
 	// zip writes into the staging folder, under a name with an extension (zip adds ".zip" to one
 	// without), and the archive is then copied to the output (see write_output).
-	char* zip_argv[] = {"zip",       "-q",        "-r", "-X", "model.fmu", "modelDescription.xml", "binaries",
-	                    "resources", licenses ? "documentation" : NULL, NULL};
+	char* zip_argv[] = {"zip",      "-q",        "-r",            "-X", "model.fmu", "modelDescription.xml",
+	                    "binaries", "resources", "documentation", NULL};
 	if (!run_in(staging, zip_argv) || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
 		goto done;
@@ -482,6 +497,7 @@ done:
 	if (staging[0])
 		nftw(staging, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 	free(xml);
+	free(html);
 	fmu_table_destroy(&table);
 	sm_document_destroy(doc);
 	free(parameters);

@@ -1,7 +1,9 @@
 """Low-level access to an FMU with fmpy's FMU2Slave, with the log messages collected."""
 import ctypes
+import html.parser
 import shutil
 import tempfile
+import zipfile
 
 from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2CallbackAllocateMemoryTYPE
@@ -79,3 +81,51 @@ def fmu_guid(model, parameters=None):
         h = ((h ^ byte) * 0x0000000001000000000000000000013b) & ((1 << 128) - 1)
     x = f"{h:032x}"
     return "{%s-%s-%s-%s-%s}" % (x[:8], x[8:12], x[12:16], x[16:20], x[20:])
+
+
+class FmuDocumentation(html.parser.HTMLParser):
+    """documentation/index.html of an FMU, read back: .title, .paragraphs {section: [text]},
+    .tables {section: [[cell text]]} (the header row left out) and .links [href]; a section is
+    named by its h2's id ("" before the first)."""
+
+    def __init__(self, text):
+        super().__init__(convert_charrefs=True)
+        self.title, self.section = "", ""
+        self.paragraphs, self.tables, self.links = {}, {}, []
+        self._in, self._text, self._row = None, [], None
+        self.feed(text)
+        self.close()
+
+    def handle_starttag(self, tag, attrs):
+        attrs = dict(attrs)
+        if tag == "h2":
+            self.section = attrs.get("id", "")
+        elif tag in ("title", "p", "td", "th"):
+            self._in, self._text = tag, []
+        elif tag == "tr":
+            self._row = []
+        elif tag == "a":
+            self.links.append(attrs.get("href"))
+
+    def handle_endtag(self, tag):
+        text = "".join(self._text)
+        if tag == "title":
+            self.title = text
+        elif tag == "p":
+            self.paragraphs.setdefault(self.section, []).append(text)
+        elif tag == "td":
+            self._row.append(text)
+        elif tag == "tr" and self._row:
+            self.tables.setdefault(self.section, []).append(self._row)
+        if tag == self._in:
+            self._in = None
+
+    def handle_data(self, data):
+        if self._in:
+            self._text.append(data)
+
+
+def read_documentation(fmu):
+    """The FmuDocumentation of the FMU file's documentation/index.html."""
+    with zipfile.ZipFile(fmu) as archive:
+        return FmuDocumentation(archive.read("documentation/index.html").decode("utf-8"))

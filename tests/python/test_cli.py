@@ -4,9 +4,11 @@ against the model's physics or against another of the tool's own outputs (the CS
 VTK files, statics against the modes about its rest shape), never against a stored copy of the
 output."""
 import csv
+import json
 import math
 import os
 import re
+import shutil
 import subprocess
 import xml.etree.ElementTree as ET
 import zipfile
@@ -15,6 +17,7 @@ import numpy as np
 import pytest
 
 from conftest import CLI, ROOT
+from fmu_helpers import read_documentation
 
 MODELS = ROOT / "models"
 # Set by ctest when the build has the FMU runtime that `springmass fmu` packs.
@@ -432,7 +435,7 @@ def stand_in_runtime(folder, binary):
     (folder / "binaries" / "linux64" / "springmass_fmu.so").write_text(binary)
     (folder / "binaries" / "linux64" / "libextra.so.1").write_text("library")
     (folder / "documentation" / "licenses").mkdir(parents=True)
-    (folder / "documentation" / "licenses" / "README.txt").write_text("licences")
+    (folder / "documentation" / "licenses" / "license.txt").write_text("licences")
     return folder
 
 
@@ -454,12 +457,37 @@ def test_fmu_packs_the_runtime_it_is_given(tmp_path):
             names = set(z.namelist())
             assert z.read("binaries/linux64/oscillator.so") == binary.encode()
             assert z.read("binaries/linux64/libextra.so.1") == b"library"
-            assert z.read("documentation/licenses/README.txt") == b"licences"
+            assert z.read("documentation/licenses/license.txt") == b"licences"
             assert z.read("resources/model.json") == osc.read_bytes()
         assert "binaries/linux64/springmass_fmu.so" not in names and "resources/parameters.txt" not in names
         assert "resources/reference.csv" not in names
         fmu.unlink()
     assert list(staging.iterdir()) == []
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_documentation_page(tmp_path):
+    # documentation/index.html shows the model's description as text, whatever characters it holds
+    # (markup, quotes, ampersands, letters beyond ASCII; a name is an identifier), and links the licences only when the runtime
+    # has them (a runtime assembled before they were gathered has none).
+    model = json.loads((MODELS / "oscillator.json").read_text())
+    model["name"] = "odd_one"
+    model["description"] = 'A <b>bold</b> "claim" & more: Größe 1 µm'
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(model))
+    with_licences = stand_in_runtime(tmp_path / "with", "binary")
+    without = stand_in_runtime(tmp_path / "without", "binary")
+    shutil.rmtree(without / "documentation")
+    for runtime, links in ((with_licences, ["licenses/license.txt"]), (without, [])):
+        fmu = tmp_path / "odd.fmu"
+        cli("fmu", path, "--output", fmu, "--runtime", runtime)
+        doc = read_documentation(fmu)
+        assert doc.title == "odd_one"
+        assert doc.paragraphs[""][0] == 'A <b>bold</b> "claim" & more: Größe 1 µm'
+        assert doc.links == links
+        with zipfile.ZipFile(fmu) as z:
+            assert ("documentation/licenses/license.txt" in z.namelist()) == bool(links)
+        fmu.unlink()
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")

@@ -3,6 +3,7 @@ simulating it in fmpy gives what `springmass run` gives for the same file; a mod
 `springmass fmu --set` is the model with those values, as `springmass run --set` simulates it."""
 import csv
 import pathlib
+import re
 import subprocess
 import sys
 import zipfile
@@ -13,7 +14,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.validation import validate_fmu
 
 from conftest import BUNDLED_FMUS, CLI, MODELS as TEST_MODELS, ROOT
-from fmu_helpers import fmu_guid
+from fmu_helpers import fmu_guid, read_documentation
 
 MODELS = sorted((ROOT / "models").glob("*.json"))
 FMUTOOL = pathlib.Path(sys.executable).parent / "fmutool"
@@ -40,6 +41,56 @@ def test_bundled_fmu_is_valid(model):
     check_valid(fmu)
     md = read_model_description(str(fmu))
     assert md.guid and md.coSimulation.canGetAndSetFMUstate and md.coSimulation.providesDirectionalDerivative
+
+
+def documented_rows(md, causality, variability=None, with_variability=False):
+    """The rows documentation/index.html must have for these variables: value reference, name,
+    variability (parameters), unit, start value (not outputs) and description as
+    modelDescription.xml has them."""
+    rows = []
+    for v in md.modelVariables:
+        if v.causality != causality or (variability and v.variability != variability):
+            continue
+        row = [str(v.valueReference), v.name] + ([v.variability] if with_variability else [])
+        start = [] if causality == "output" else ["" if v.start is None else str(v.start)]
+        rows.append(row + [v.unit or ""] + start + [v.description])
+    return rows
+
+
+@pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
+def test_bundled_fmu_documents_its_variables(model):
+    # documentation/index.html is written from the FMU's variable table: every input, output,
+    # parameter and constant with the value reference, unit, start value and description of
+    # modelDescription.xml, the particles' locals as the range they fill, the default experiment,
+    # and a link to the licences' entry point that the archive holds.
+    fmu = bundled(model)
+    md = read_model_description(str(fmu))
+    doc = read_documentation(fmu)
+    assert doc.title == md.modelName
+    assert doc.paragraphs[""][0] == md.description
+    assert md.guid in doc.paragraphs[""][1] and md.coSimulation.modelIdentifier in doc.paragraphs[""][1]
+    assert doc.tables.get("inputs", []) == documented_rows(md, "input")
+    assert doc.tables["outputs"] == documented_rows(md, "output")
+    assert doc.tables["parameters"] == documented_rows(md, "parameter", with_variability=True)
+    assert doc.tables.get("constants", []) == documented_rows(md, "local", "constant")
+    listed = sum(len(rows) for rows in doc.tables.values())
+    particles = [v for v in md.modelVariables if v.name.startswith("p[")]
+    assert listed + len(particles) == len(md.modelVariables)
+    if particles:
+        first, last = particles[0], particles[-1]
+        assert [int(v.valueReference) for v in particles] == list(range(first.valueReference, last.valueReference + 1))
+        assert len(particles) % 6 == 0 and last.name == f"p[{len(particles) // 6 - 1}].vz"
+        sentence = doc.paragraphs["particles"][0]
+        assert f"{first.name} … {last.name}, value references {first.valueReference} to {last.valueReference}" \
+            in sentence, sentence
+    with zipfile.ZipFile(fmu) as archive:
+        names = set(archive.namelist())
+        page = archive.read("documentation/index.html").decode("utf-8")
+    experiment = re.search(r"from 0 s to (\S+) s in communication steps of (\S+) s, relative tolerance (\S+) ", page)
+    assert experiment, "no default experiment in the page"
+    de = md.defaultExperiment
+    assert list(experiment.groups()) == [de.stopTime, de.stepSize, de.tolerance]  # the XML's text
+    assert doc.links == ["licenses/license.txt"] and "documentation/licenses/license.txt" in names
 
 
 def read_csv(path):

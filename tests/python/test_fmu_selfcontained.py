@@ -71,12 +71,12 @@ def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
 
 def test_licences_of_everything_it_carries(test_fmu):
     """Every library in binaries/linux64 and the archives linked into the binary (SUNDIALS, GSL)
-    come with their Debian copyright file in documentation/licenses/, named in its README.txt."""
+    come with their Debian copyright file in documentation/licenses/, named in its license.txt (the entry point FMI names)."""
     fmu = test_fmu("driven_oscillator")
     md = read_model_description(str(fmu))
     with zipfile.ZipFile(fmu) as archive:
         names = archive.namelist()
-        readme = archive.read("documentation/licenses/README.txt").decode()
+        readme = archive.read("documentation/licenses/license.txt").decode()
         listed = {}
         for line in readme.splitlines():
             fields = line.split()
@@ -87,7 +87,7 @@ def test_licences_of_everything_it_carries(test_fmu):
                      and os.path.basename(n) != md.coSimulation.modelIdentifier + ".so"]
         assert libraries and "libcholmod.so.3" in libraries, names
         for name in libraries + ["libsundials_cvode.a", "libgsl.a"]:
-            assert name in listed, f"{name} has no licence in README.txt:\n{readme}"
+            assert name in listed, f"{name} has no licence in license.txt:\n{readme}"
             text = archive.read("documentation/licenses/" + listed[name]).decode(errors="replace")
             assert "Copyright" in text or "copyright" in text, (name, listed[name])
         assert "(linked in)" in readme and "no package found" not in readme, readme
