@@ -272,7 +272,11 @@ sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobi
 
 const char* sm_jacobian_variant_name(sm_jacobian_variant variant)
 {
-	return variant == SM_JACOBIAN_DEFINITE ? "definite" : "exact";
+	switch (variant) {
+	case SM_JACOBIAN_EXACT: return "exact";
+	case SM_JACOBIAN_DEFINITE: return "definite";
+	}
+	return "unknown";
 }
 
 sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant)

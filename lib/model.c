@@ -21,6 +21,14 @@ sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, .
 	return status;
 }
 
+void sm_error_clear(sm_error* err)
+{
+	if (err != NULL) {
+		err->status = SM_OK;
+		err->message[0] = '\0';
+	}
+}
+
 sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 {
 	if (err != NULL) {

@@ -1546,6 +1546,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
                                        sm_error* err)
 {
+	sm_error_clear(err);
 	if (source_name == NULL)
 		source_name = "<model>";
 	if (text == NULL) {
@@ -1675,6 +1676,7 @@ static sm_status read_all(int fd, off_t size, const char* path, char** text, siz
 // checked before the first read: a device such as /dev/zero would be read without end.
 sm_document* sm_document_load(const char* path, sm_error* err)
 {
+	sm_error_clear(err);
 	if (path == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "no model file given");
 		return NULL;
@@ -1736,6 +1738,7 @@ const char* sm_document_description(const sm_document* doc)
 
 sm_status sm_document_build(const sm_document* doc, sm_model** model, sm_error* err)
 {
+	sm_error_clear(err);
 	if (model == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_build: no place for the model");
 	*model = NULL;
@@ -1774,6 +1777,7 @@ int32_t sm_document_parameter_index(const sm_document* doc, const char* name)
 
 sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_error* err)
 {
+	sm_error_clear(err);
 	if (doc == NULL || (values == NULL && doc->parameter_count > 0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_parameters: no %s",
 		                    doc == NULL ? "document" : "values");
@@ -1827,6 +1831,7 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 
 sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err)
 {
+	sm_error_clear(err);
 	if (doc == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_parameter: no document");
 	if (index < 0 || index >= doc->parameter_count)
@@ -1916,6 +1921,7 @@ sm_document_settings sm_document_get_settings(const sm_document* doc)
 
 sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err)
 {
+	sm_error_clear(err);
 	if (doc == NULL || x == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: no document or positions");
 	const int32_t n = sm_model_particle_count(doc->current->model);

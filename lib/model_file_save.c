@@ -313,6 +313,7 @@ static char* document_text(const sm_document* doc, sm_error* err)
 // call; glibc's "C" locale object is static (no allocation, freelocale does nothing).
 char* sm_document_to_json(const sm_document* doc, sm_error* err)
 {
+	sm_error_clear(err);
 	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
 	if (c_locale == (locale_t)0) {
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "sm_document_to_json: out of memory for the C locale");
@@ -327,6 +328,7 @@ char* sm_document_to_json(const sm_document* doc, sm_error* err)
 
 sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err)
 {
+	sm_error_clear(err);
 	if (path == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_save: no file name");
 	char* data = sm_document_to_json(doc, err);

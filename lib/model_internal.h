@@ -57,6 +57,10 @@ sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, .
 #endif
 	;
 
+// Sets err (if not NULL) to SM_OK and an empty message: what every public function taking an
+// sm_error does first, so that a call that succeeds leaves no earlier failure in it.
+void sm_error_clear(sm_error* err);
+
 // Fills err (if not NULL) with status and a formatted message; returns status.
 sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 #if defined(__GNUC__)

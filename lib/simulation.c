@@ -96,7 +96,11 @@ const char* sm_linear_solver_name(sm_linear_solver solver)
 
 const char* sm_method_name(sm_method method)
 {
-	return method == SM_METHOD_ADAMS ? "adams" : "bdf";
+	switch (method) {
+	case SM_METHOD_BDF: return "bdf";
+	case SM_METHOD_ADAMS: return "adams";
+	}
+	return "unknown";
 }
 
 sm_status sm_method_from_name(const char* name, sm_method* method)
@@ -705,6 +709,7 @@ static sm_status setup_cvode(sm_simulation* sim)
 
 sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err)
 {
+	sm_error_clear(err);
 	if (model == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: model is NULL");
 		return NULL;

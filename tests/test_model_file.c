@@ -3,6 +3,7 @@
 // hostile files gives exactly the expected errors.
 #define _POSIX_C_SOURCE 200809L  // mkfifo, alarm
 
+#include "springmass/analysis.h"
 #include "springmass/model_file.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
@@ -1764,6 +1765,96 @@ static int test_status_texts(void)
 	return 0;
 }
 
+// Every function that takes an sm_error fills it on success too (base.h): SM_OK and an empty
+// message, so that a report left from an earlier failure is never read as this call's. And the
+// names of values outside an enum are "unknown", never a valid name.
+static void make_stale(sm_error* err)
+{
+	err->status = SM_ERROR_NOT_FINITE;
+	snprintf(err->message, sizeof err->message, "left from an earlier call");
+}
+
+static bool cleared(const sm_error* err)
+{
+	return err->status == SM_OK && err->message[0] == '\0';
+}
+
+static int test_error_reports_are_filled_on_success(void)
+{
+	sm_error err;
+	make_stale(&err);
+	sm_document* doc = load_bundled("two_mass_chain", &err);
+	ENSURE(doc != NULL && cleared(&err));
+	make_stale(&err);
+	sm_document* parsed = parse("{\"springmass\": 1, \"name\": \"one\", \"particles\": [{\"position\": [0, 0, 0]}]}",
+	                            &err);
+	ENSURE(parsed != NULL && cleared(&err));
+	sm_document_destroy(parsed);
+
+	sm_model* model = NULL;
+	make_stale(&err);
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	ENSURE(cleared(&err));
+	const int32_t np = sm_document_parameter_count(doc);
+	ENSURE(np > 0);
+	make_stale(&err);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 0, sm_document_parameter_value(doc, 0), &err), SM_OK);
+	ENSURE(cleared(&err));
+	double values[64];
+	ENSURE(np <= 64);
+	for (int32_t i = 0; i < np; i++)
+		values[i] = sm_document_parameter_value(doc, i);
+	make_stale(&err);
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE(cleared(&err));
+	const int32_t n = sm_model_particle_count(model);
+	double x[3 * 16], v[3 * 16];
+	ENSURE(n <= 16);
+	sm_model_initial_state(model, x, v);
+	make_stale(&err);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, v, &err), SM_OK);
+	ENSURE(cleared(&err));
+	make_stale(&err);
+	char* json = sm_document_to_json(doc, &err);
+	ENSURE(json != NULL && cleared(&err));
+	free(json);
+	make_stale(&err);
+	ENSURE_STATUS(sm_document_save(doc, "test_model_file_error_report.json", &err), SM_OK);
+	ENSURE(cleared(&err));
+	remove("test_model_file_error_report.json");
+
+	const sm_model_def world = sm_default_model_def();
+	make_stale(&err);
+	sm_model* empty = sm_model_create(&world, &err);
+	ENSURE(empty != NULL && cleared(&err));
+	sm_model_destroy(empty);
+	make_stale(&err);
+	sm_simulation* sim = sm_simulation_create(model, NULL, &err);
+	ENSURE(sim != NULL && cleared(&err));
+	const sm_model* own = sm_simulation_model(sim);  // simulation.h: a reset keeps the pointer
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	ENSURE(sm_simulation_model(sim) == own);
+	sm_simulation_destroy(sim);
+	make_stale(&err);
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, NULL, &err), SM_OK);
+	ENSURE(cleared(&err));
+	sm_modes modes;
+	make_stale(&err);
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(cleared(&err));
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+
+	ENSURE(strcmp(sm_method_name((sm_method)9), "unknown") == 0);
+	ENSURE(strcmp(sm_jacobian_variant_name((sm_jacobian_variant)7), "unknown") == 0);
+	ENSURE(strcmp(sm_linear_solver_name(SM_SOLVER_COUNT), "unknown") == 0);
+	ENSURE(strcmp(sm_method_name(SM_METHOD_ADAMS), "adams") == 0);
+	ENSURE(strcmp(sm_jacobian_variant_name(SM_JACOBIAN_DEFINITE), "definite") == 0);
+	return 0;
+}
+
 // The canonical form reads back to the same document (docs/model-format.md, "Canonical form and
 // saving"): names and a description holding quotes, backslashes and non-ASCII text; a velocity
 // along z alone; simulation settings that need 17 significant digits; and every parameter
@@ -1890,6 +1981,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_line_breaks_and_controls_at_their_edges);
 	RUN_TEST(test_messages_escape_invisible_characters);
 	RUN_TEST(test_status_texts);
+	RUN_TEST(test_error_reports_are_filled_on_success);
 	RUN_TEST(test_canonical_form_reads_back);
 	RUN_TEST(test_canonical_form_ignores_the_locale);
 	return TEST_SUMMARY();

@@ -39,7 +39,7 @@ typedef enum sm_status {
 	SM_ERROR_NOT_FINITE,        ///< a value is NaN or infinite where a finite one is required
 	SM_ERROR_NEGATIVE,          ///< a value is negative where it must be >= 0, or not > 0 where it must be
 	SM_ERROR_NONPOSITIVE_MASS,  ///< a particle mass is <= 0
-	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant on a spring whose rest length is zero
+	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant or a break strain on a spring whose rest length is zero
 	SM_ERROR_FILE,              ///< a file cannot be read or written
 	SM_ERROR_SYNTAX,            ///< a model file is not valid JSON (line and column in the message)
 	SM_ERROR_SCHEMA,            ///< a model file breaks a rule of the format (path in the message)
@@ -57,7 +57,8 @@ SM_API const char* sm_status_string(sm_status status);
 #define SM_ERROR_MESSAGE_CAPACITY 512
 
 /// Error report filled by functions that create objects (and so have no object to hold it).
-/// Pass NULL where the detail is not needed.
+/// Pass NULL where the detail is not needed. Every function that takes one fills it, on success
+/// too (SM_OK and an empty message), so an earlier failure never stays in it.
 typedef struct sm_error {
 	sm_status status;                         ///< same value the function returned
 	char message[SM_ERROR_MESSAGE_CAPACITY];  ///< specific message, NUL-terminated

@@ -28,7 +28,7 @@ typedef enum sm_particle_motion {
 typedef struct sm_particle_def {
 	double mass;                ///< mass, > 0 and finite [kg]; default 1
 	double position[3];         ///< initial position [m]; default (0, 0, 0)
-	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); ignored when fixed
+	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is zero whatever is given
 	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
 } sm_particle_def;
 
@@ -96,8 +96,9 @@ typedef enum sm_jacobian_variant {
 	SM_JACOBIAN_DEFINITE,
 } sm_jacobian_variant;
 
-/// Name of a Jacobian variant ("exact", "definite") and the reverse lookup: SM_OK, or
-/// SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *variant then unchanged.
+/// Name of a Jacobian variant ("exact", "definite"; "unknown" for another value) and the reverse
+/// lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *variant then
+/// unchanged.
 SM_API const char* sm_jacobian_variant_name(sm_jacobian_variant variant);
 SM_API sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant);
 
@@ -117,8 +118,9 @@ SM_API sm_particle_def sm_default_particle_def(void);
 SM_API sm_spring_def sm_default_spring_def(void);
 SM_API sm_model_def sm_default_model_def(void);
 
-/// Creates an empty model. Returns NULL if def is invalid (non-finite gravity, negative or
-/// non-finite mass damping, negative capacity) or memory runs out; err says which (may be NULL).
+/// Creates an empty model. Returns NULL if def is NULL (start from sm_default_model_def()) or
+/// invalid (non-finite gravity, negative or non-finite mass damping, negative capacity) or memory
+/// runs out; err says which (may be NULL).
 SM_API sm_model* sm_model_create(const sm_model_def* def, sm_error* err);
 
 /// Destroys a model; accepts NULL.

@@ -125,13 +125,14 @@ typedef struct sm_simulation sm_simulation;
 /// The default options (the values documented in sm_simulation_def).
 SM_API sm_simulation_def sm_default_simulation_def(void);
 
-/// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod") and the reverse lookup
+/// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod"; "unknown" for another
+/// value) and the reverse lookup
 /// (SM_SOLVER_COUNT if unknown).
 SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
 SM_API sm_linear_solver sm_linear_solver_from_name(const char* name);
 
-/// Name of a method ("bdf", "adams") and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT
-/// for an unknown name or NULL, *method then unchanged.
+/// Name of a method ("bdf", "adams"; "unknown" for another value) and the reverse lookup: SM_OK,
+/// or SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *method then unchanged.
 SM_API const char* sm_method_name(sm_method method);
 SM_API sm_status sm_method_from_name(const char* name, sm_method* method);
 
@@ -228,7 +229,9 @@ SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 /// disabled, and a reset still restores them.
 SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model);
 
-/// The simulation's own model (springs that broke are disabled in it).
+/// The simulation's own model (springs that broke are disabled in it). The pointer stays valid
+/// until the next successful sm_simulation_update_model, which replaces the model, or
+/// sm_simulation_destroy; a reset keeps it (and restores its springs).
 SM_API const sm_model* sm_simulation_model(const sm_simulation* sim);
 
 /// Solver statistics since creation or the last reset (sm_statistics).
