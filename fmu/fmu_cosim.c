@@ -719,7 +719,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		log_error(inst, "fmi2Instantiate: missing GUID");
 		goto fail;
 	}
-	if (!fmuResourceLocation) {
+	// An empty location names no folder: joined with the file names it would read the root's.
+	if (!fmuResourceLocation || !fmuResourceLocation[0]) {
 		log_error(inst, "fmi2Instantiate: missing resource location (the FMU's resources folder holds the model file)");
 		goto fail;
 	}
@@ -1353,6 +1354,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	double t_end = t + h;
 	if (!isfinite(t_end) || !isfinite(t_end - inst->start_time)) {
 		log_error(inst, "fmi2DoStep: the step from %g by %g s ends beyond the largest representable time", t, h);
+		return fmi2Error;
+	}
+	// A point taken within its tolerance may lag the FMU's time by more than a short step.
+	if (!(t_end > inst->time)) {
+		log_error(inst, "fmi2DoStep: the step from %s by %s s ends at %s, not after the FMU's time %s",
+		          fmu_number_text(t).text, fmu_number_text(h).text, fmu_number_text(t_end).text,
+		          fmu_number_text(inst->time).text);
 		return fmi2Error;
 	}
 	// The stop time is resolved like the communication point, 1000 ulps of max(1 s, |stop|), on

@@ -1353,9 +1353,15 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 		            "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
 	const size_t p = 3 * (size_t)particle;
 	const double dt = sim->time - sim->drive_time[particle];
+	// The same velocity with a position on the current path is no jump. A caller's x0 + v t and
+	// the path's own x0 + v dt, summed over steps, part in the last bits: 16 units of round-off of
+	// the largest term.
 	bool jump = false;
 	for (int c = 0; c < 3; c++) {
-		jump = jump || position[c] != sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt ||
+		const double path = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
+		const double scale = fmax(fmax(fabs(position[c]), fabs(sim->drive_position[p + c])),
+		                          fabs(sim->drive_velocity[p + c] * dt));
+		jump = jump || !(fabs(position[c] - path) <= 16.0 * DBL_EPSILON * scale) ||
 		       velocity[c] != sim->drive_velocity[p + c];
 		sim->drive_position[p + c] = position[c];
 		sim->drive_velocity[p + c] = velocity[c];

@@ -859,6 +859,56 @@ static int test_driven_anchor_drags_bob_as_closed_form(void)
 	return 0;
 }
 
+// A caller that sets a driven particle's motion before every advance, as an FMU master does, with
+// the position computed its own way (x0 + v t, or a sum of v h over the steps), continues the
+// motion: those positions and the path's own sum part in the last bits, which is no input change
+// (simulation.h), so with restart_on_input_change CVODE still takes the steps of a motion set
+// once. A position off the path by 1e-9 m is a change and restarts it.
+static int test_driven_motion_continued_by_the_caller_is_no_change(void)
+{
+	sm_model* model = oscillator_anchored(1.0, 40.0, 0.5, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	sm_simulation_def def = sm_default_simulation_def();
+	def.restart_on_input_change = true;
+	const double v[3] = {0.3, -0.1, 0.0};
+	const double h = 0.01;
+	int64_t steps[4];
+	double bob_x[4];
+	for (int way = 0; way < 4; way++) {
+		sm_simulation* sim = sm_simulation_create(model, &def, NULL);
+		ENSURE(sim != NULL);
+		const double origin[3] = {0.0, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 0, origin, v), SM_OK);
+		double t = 0.0, summed[3] = {0.0, 0.0, 0.0};
+		for (int k = 0; k < 100; k++) {
+			if (way > 0) {
+				double x[3];
+				for (int c = 0; c < 3; c++) {
+					x[c] = way == 1 ? v[c] * t : way == 2 ? summed[c] : v[c] * t + (k == 50) * 1e-9;
+					summed[c] += v[c] * h;
+				}
+				ENSURE_STATUS(sm_simulation_set_driven(sim, 0, x, v), SM_OK);
+			}
+			t += h;
+			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		}
+		const sm_statistics stats = sm_simulation_statistics(sim);
+		steps[way] = stats.steps;
+		bob_x[way] = sm_simulation_positions(sim)[3];
+		// One restart for the motion set at t = 0 (the model's anchor is at rest); with 1e-9 m two
+		// more: off the path, then back on the first path, off the one set off it.
+		ENSURE(stats.restarts == (way == 3 ? 3 : 1));
+		sm_simulation_destroy(sim);
+	}
+	// The same steps for the motion set once and continued both ways; the positions set differ
+	// from the path by round-off only, so the bob's does too (its scale 1 m: 1e-12).
+	ENSURE(steps[1] == steps[0] && steps[2] == steps[0]);
+	ENSURE_NEAR(bob_x[1], bob_x[0], 1e-12);
+	ENSURE_NEAR(bob_x[2], bob_x[0], 1e-12);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A driven particle follows x(t) = x_set + v_set (t - t_set), counted from the time t_set of the
 // call that set it, changed between calls; its outputs show a new motion at once, and a reset
 // brings back the model's own motion from t = 0 (the anchor starts at the origin moving at
@@ -2389,6 +2439,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
 	RUN_TEST(test_on_step_keeps_max_steps);
 	RUN_TEST(test_driven_follows_prescribed_motion);
+	RUN_TEST(test_driven_motion_continued_by_the_caller_is_no_change);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
 	RUN_TEST(test_overflowing_force_is_a_failure);

@@ -197,7 +197,10 @@ SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
 SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 
 /// Prescribes a driven particle's motion from the current time t0 on: x(t) = position +
-/// velocity (t - t0) [m, m/s]. Error if the particle is not driven.
+/// velocity (t - t0) [m, m/s]. Error if the particle is not driven. The same velocity with a
+/// position on the current path, to within round-off (16 units of it, of the largest of the
+/// positions and the distance travelled since the motion was last set), continues the motion: it
+/// is no input change (restart_on_input_change, sm_simulation_advance_interpolated).
 SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
                                           const double velocity[3]);
 

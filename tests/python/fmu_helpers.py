@@ -63,10 +63,15 @@ class Instance:
         return values[0] if len(names) == 1 else values
 
     def free(self):
+        """Frees the instance, if there is one, and unloads the FMU's library once: fmpy's
+        freeInstance unloads it itself, and a second unload would drop a reference that another
+        Instance of the same unzipped FMU holds."""
         try:
-            self.slave.freeInstance()
+            if self.slave.component:
+                self.slave.freeInstance()
+            else:
+                self.slave.freeLibrary()
         finally:
-            self.slave.freeLibrary()
             if self.own_dir:
                 shutil.rmtree(self.unzipdir, ignore_errors=True)
 

@@ -717,3 +717,63 @@ def test_settings_named_by_parameters_are_explicit_solver_settings(package, tmp_
         assert info.value.status == 2  # fmi2Discard
     finally:
         inst.free()
+
+
+def test_a_step_that_ends_before_the_fmus_time_is_refused(test_fmu):
+    # The communication point is taken within 1000 ulps of the FMU's time, so it may lag it by more
+    # than a short step: that step would end before the FMU's time. It is an fmi2Error that changes
+    # nothing; it was a discard that left the instance unable to step, reporting a last successful
+    # time after the step's end. With and without a stop time (two ways of advancing).
+    for stop_time in (None, 5.0):
+        inst = Instance(test_fmu("driven_oscillator")).start(stop_time=stop_time)
+        s = inst.slave
+        try:
+            t = 0.0
+            for _ in range(100):
+                s.doStep(t, 0.01)
+                t += 0.01
+            assert t != 1.0  # 1.0000000000000007: the sum of a hundred 0.01 s
+            lagging = t
+            for _ in range(100):
+                lagging = math.nextafter(lagging, 0.0)
+            state = s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]])
+            expect_error(inst, lambda: s.doStep(lagging, 1e-15), "not after the FMU's time")
+            assert s.getStatus(0) == 0 and s.getRealStatus(2) == t  # fmi2OK, fmi2LastSuccessfulTime
+            assert s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]]) == state
+            s.doStep(lagging, 0.01)  # a step that does end after it is taken from the lagging point
+            assert s.getRealStatus(2) == lagging + 0.01
+        finally:
+            inst.free()
+
+
+def test_an_empty_resource_location_is_refused(test_fmu):
+    # An empty location names no folder; joined with the file names it read /model.json.
+    inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
+    try:
+        comp = inst.slave.fmi2Instantiate(b"empty", 1, inst.md.guid.encode(), b"", inst.callbacks, 0, 0)
+        assert not comp and "missing resource location" in inst.log_text()
+    finally:
+        inst.free()
+
+
+def test_instances_of_one_unzipped_fmu_are_freed_independently(test_fmu, tmp_path):
+    # Two instances loaded from one folder share the FMU's library: freeing one leaves the other
+    # stepping, with the results of an instance alone.
+    from fmpy import extract
+    folder = extract(str(test_fmu("driven_oscillator")), unzipdir=str(tmp_path / "fmu"))
+    alone = Instance(test_fmu("driven_oscillator")).start()
+    a = Instance(test_fmu("driven_oscillator"), name="a", unzipdir=folder).start()
+    b = Instance(test_fmu("driven_oscillator"), name="b", unzipdir=folder).start()
+    try:
+        for k in range(10):
+            a.slave.doStep(0.01 * k, 0.01)
+            b.slave.doStep(0.01 * k, 0.01)
+            alone.slave.doStep(0.01 * k, 0.01)
+        a.free()
+        for k in range(10, 20):
+            b.slave.doStep(0.01 * k, 0.01)
+            alone.slave.doStep(0.01 * k, 0.01)
+        assert b.get("tip.x", "tip.vx") == alone.get("tip.x", "tip.vx")
+    finally:
+        b.free()
+        alone.free()
