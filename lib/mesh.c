@@ -29,6 +29,7 @@ typedef struct edge_entry {
 	int32_t triangles;    // triangles sharing the edge
 	int32_t opposite[2];  // the vertex opposite the edge in the first two triangles
 	int32_t order;        // order of first appearance
+	double area;          // of the triangles sharing the edge [m^2]
 } edge_entry;
 
 typedef struct edge_table {
@@ -62,6 +63,7 @@ static edge_entry* edge_find(edge_table* t, uint64_t key)
 	if (e->key == UINT64_MAX) {
 		e->key = key;
 		e->triangles = 0;
+		e->area = 0.0;
 		e->order = t->count;
 		t->in_order[t->count++] = (int32_t)s;
 	}
@@ -72,8 +74,8 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 {
 	static const char what[] = "mesh";
 	sm_status st;
-	if ((st = structure_check_material(model, what, "edge", &def->edge)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bend", &def->bend)) != SM_OK)
+	if ((st = structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK)
 		return st;
 	if (!isfinite(def->density) || !(def->density > 0.0))
 		return sm_model_fail(model, isfinite(def->density) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
@@ -169,6 +171,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 				break;
 			}
 			e->opposite[e->triangles++] = opposite;
+			e->area += area;
 		}
 	}
 	for (int32_t v = 0; v < nv && st == SM_OK; v++)
@@ -193,12 +196,13 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		st = structure_add_spring(model, what, "edge", p0 + (int32_t)(entry->key >> 32),
-		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge);
+		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
 	}
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		if (entry->triangles == 2)
-			st = structure_add_spring(model, what, "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend);
+			st = structure_add_spring(model, what, "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
+			                          entry->area);
 	}
 	if (st != SM_OK) {
 		structure_truncate(model, p0, s0);

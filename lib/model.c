@@ -41,6 +41,22 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 	return status;
 }
 
+static bool known_scaling(sm_scaling scaling)
+{
+	return scaling == SM_ABSOLUTE || scaling == SM_PER_STRAIN || scaling == SM_PER_SECTION;
+}
+
+// A spring's own constant (ks [N/m] or kd [N s/m]) from a definition's value (sm_scaling).
+static double spring_constant(double value, sm_scaling scaling, double section, double l0)
+{
+	switch (scaling) {
+	case SM_ABSOLUTE: return value;
+	case SM_PER_STRAIN: return value / l0;
+	case SM_PER_SECTION: return value * section / l0;
+	}
+	return value;
+}
+
 sm_particle_def sm_default_particle_def(void)
 {
 	sm_particle_def def;
@@ -62,6 +78,7 @@ sm_spring_def sm_default_spring_def(void)
 	def.stiffness_scaling = SM_ABSOLUTE;
 	def.damping = 0.0;
 	def.damping_scaling = SM_ABSOLUTE;
+	def.section = 1.0;
 	def.break_strain = INFINITY;
 	return def;
 }
@@ -171,12 +188,16 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (def->kind != SM_SPRING_REST_LENGTH && def->kind != SM_SPRING_ZERO_LENGTH)
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: kind = %d is not a known spring kind", index,
 		           (int)def->kind);
-	if (def->stiffness_scaling != SM_ABSOLUTE && def->stiffness_scaling != SM_PER_STRAIN)
+	if (!known_scaling(def->stiffness_scaling))
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: stiffness scaling = %d is not a known scaling",
 		           index, (int)def->stiffness_scaling);
-	if (def->damping_scaling != SM_ABSOLUTE && def->damping_scaling != SM_PER_STRAIN)
+	if (!known_scaling(def->damping_scaling))
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: damping scaling = %d is not a known scaling",
 		           index, (int)def->damping_scaling);
+	if ((def->stiffness_scaling == SM_PER_SECTION || def->damping_scaling == SM_PER_SECTION) &&
+	    !(isfinite(def->section) && def->section > 0.0))
+		return say(msg, isfinite(def->section) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
+		           "spring %ld: section = %g must be finite and > 0 for per-section constants", index, def->section);
 	if (!isfinite(def->stiffness))
 		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness = %g is not finite", index, def->stiffness);
 	if (def->stiffness < 0.0)
@@ -220,24 +241,30 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			return say(msg, SM_ERROR_INVALID_ARGUMENT,
 			           "spring %ld: a zero-length spring must have rest length 0, not %g", index, l0);
 	}
-	if (def->stiffness_scaling == SM_PER_STRAIN && !(l0 > 0.0))
-		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
-		           "spring %ld: per-strain stiffness needs a rest length > 0 (rest length is %g)", index, l0);
-	if (def->damping_scaling == SM_PER_STRAIN && !(l0 > 0.0))
-		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
-		           "spring %ld: per-strain damping needs a rest length > 0 (rest length is %g)", index, l0);
+	if (def->stiffness_scaling != SM_ABSOLUTE && !(l0 > 0.0))
+		return say(msg, SM_ERROR_ZERO_REST_LENGTH, "spring %ld: per-%s stiffness needs a rest length > 0 (rest length is %g)",
+		           index, def->stiffness_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
+	if (def->damping_scaling != SM_ABSOLUTE && !(l0 > 0.0))
+		return say(msg, SM_ERROR_ZERO_REST_LENGTH, "spring %ld: per-%s damping needs a rest length > 0 (rest length is %g)",
+		           index, def->damping_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
 	if (isfinite(def->break_strain) && !(l0 > 0.0))
 		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
 		           "spring %ld: a break strain needs a rest length > 0 (rest length is %g)", index, l0);
 
-	const double ks = def->stiffness_scaling == SM_PER_STRAIN ? def->stiffness / l0 : def->stiffness;
-	const double kd = def->damping_scaling == SM_PER_STRAIN ? def->damping / l0 : def->damping;
+	const double ks = spring_constant(def->stiffness, def->stiffness_scaling, def->section, l0);
+	const double kd = spring_constant(def->damping, def->damping_scaling, def->section, l0);
 	if (!isfinite(ks))
-		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness E / l0 = %g / %g is not finite", index,
-		           def->stiffness, l0);
+		return def->stiffness_scaling == SM_PER_SECTION
+		           ? say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness x section / l0 = %g x %g / %g is not finite",
+		                 index, def->stiffness, def->section, l0)
+		           : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness E / l0 = %g / %g is not finite", index,
+		                 def->stiffness, l0);
 	if (!isfinite(kd))
-		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping c / l0 = %g / %g is not finite", index,
-		           def->damping, l0);
+		return def->damping_scaling == SM_PER_SECTION
+		           ? say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping x section / l0 = %g x %g / %g is not finite",
+		                 index, def->damping, def->section, l0)
+		           : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping c / l0 = %g / %g is not finite", index,
+		                 def->damping, l0);
 	out->rest_length = l0;
 	out->stiffness = ks;
 	out->damping = kd;
@@ -608,9 +635,9 @@ sm_status sm_model_spring_constants(const sm_model* model, int32_t index, double
 	if (rest_length != NULL)
 		*rest_length = l0;
 	if (stiffness != NULL)
-		*stiffness = d->stiffness_scaling == SM_PER_STRAIN ? d->stiffness / l0 : d->stiffness;
+		*stiffness = spring_constant(d->stiffness, d->stiffness_scaling, d->section, l0);
 	if (damping != NULL)
-		*damping = d->damping_scaling == SM_PER_STRAIN ? d->damping / l0 : d->damping;
+		*damping = spring_constant(d->damping, d->damping_scaling, d->section, l0);
 	return SM_OK;
 }
 

@@ -684,26 +684,48 @@ static bool read_particles(parser* p, const json_t* list)
 // Springs.
 // ---------------------------------------------------------------------------------------------
 
-// Stiffness and damping, each absolute ("stiffness" [N/m], "damping" [N s/m]) or per unit
-// strain ("strain_stiffness" [N], "strain_damping" [N s]), and "break_strain".
+// The key of a constant ("stiffness" or "damping") given with a scaling: "stiffness",
+// "strain_stiffness" or "section_stiffness".
+static const char* constant_key(const char* constant, sm_scaling scaling)
+{
+	static const char* const keys[2][3] = {{"stiffness", "strain_stiffness", "section_stiffness"},
+	                                       {"damping", "strain_damping", "section_damping"}};
+	return keys[strcmp(constant, "damping") == 0][scaling];
+}
+
+// Which of a constant's keys obj gives (at most one): its scaling, SM_ABSOLUTE when none.
+static bool read_scaling(parser* p, const json_t* obj, const char* path, const char* constant, sm_scaling* scaling)
+{
+	static const sm_scaling scalings[3] = {SM_ABSOLUTE, SM_PER_STRAIN, SM_PER_SECTION};
+	int given = 0;
+	*scaling = SM_ABSOLUTE;
+	for (int k = 0; k < 3; k++)
+		if (json_object_get(obj, constant_key(constant, scalings[k])) != NULL) {
+			given++;
+			*scaling = scalings[k];
+		}
+	if (given > 1)
+		return fail(p, SM_ERROR_SCHEMA, path, "give one of \"%s\", \"%s\" and \"%s\", not more",
+		            constant_key(constant, SM_ABSOLUTE), constant_key(constant, SM_PER_STRAIN),
+		            constant_key(constant, SM_PER_SECTION));
+	return true;
+}
+
+// Stiffness and damping, each absolute ("stiffness" [N/m], "damping" [N s/m]), per unit strain
+// ("strain_stiffness" [N], "strain_damping" [N s]) or per unit strain and section
+// ("section_stiffness", "section_damping": sm_scaling's SM_PER_SECTION), and "break_strain".
 static bool read_constants(parser* p, const json_t* obj, const char* path, sm_spring_material* m, spring_source* src)
 {
-	const bool absolute_k = json_object_get(obj, "stiffness") != NULL;
-	const bool strain_k = json_object_get(obj, "strain_stiffness") != NULL;
-	const bool absolute_d = json_object_get(obj, "damping") != NULL;
-	const bool strain_d = json_object_get(obj, "strain_damping") != NULL;
-	if (absolute_k && strain_k)
-		return fail(p, SM_ERROR_SCHEMA, path, "give \"stiffness\" [N/m] or \"strain_stiffness\" [N], not both");
-	if (absolute_d && strain_d)
-		return fail(p, SM_ERROR_SCHEMA, path, "give \"damping\" [N s/m] or \"strain_damping\" [N s], not both");
-	m->stiffness_scaling = strain_k ? SM_PER_STRAIN : SM_ABSOLUTE;
-	m->damping_scaling = strain_d ? SM_PER_STRAIN : SM_ABSOLUTE;
+	if (!read_scaling(p, obj, path, "stiffness", &m->stiffness_scaling) ||
+	    !read_scaling(p, obj, path, "damping", &m->damping_scaling))
+		return false;
 	m->stiffness = 0.0;
 	m->damping = 0.0;
 	m->break_strain = INFINITY;
-	if (!read_field(p, FEEDS_CONSTANTS, obj, path, strain_k ? "strain_stiffness" : "stiffness", NON_NEGATIVE, &m->stiffness,
-	                &src->stiffness) ||
-	    !read_field(p, FEEDS_CONSTANTS, obj, path, strain_d ? "strain_damping" : "damping", NON_NEGATIVE, &m->damping, &src->damping))
+	if (!read_field(p, FEEDS_CONSTANTS, obj, path, constant_key("stiffness", m->stiffness_scaling), NON_NEGATIVE,
+	                &m->stiffness, &src->stiffness) ||
+	    !read_field(p, FEEDS_CONSTANTS, obj, path, constant_key("damping", m->damping_scaling), NON_NEGATIVE,
+	                &m->damping, &src->damping))
 		return false;
 	const json_t* brk = json_object_get(obj, "break_strain");
 	src->break_strain = -1;
@@ -714,8 +736,19 @@ static bool read_constants(parser* p, const json_t* obj, const char* path, sm_sp
 
 static bool read_springs(parser* p, const json_t* list)
 {
-	static const char* const keys[] = {"a",       "b",      "kind",           "rest_length", "stiffness", "strain_stiffness",
-	                                   "damping", "strain_damping", "break_strain", NULL};
+	static const char* const keys[] = {"a",
+	                                   "b",
+	                                   "kind",
+	                                   "rest_length",
+	                                   "stiffness",
+	                                   "strain_stiffness",
+	                                   "section_stiffness",
+	                                   "damping",
+	                                   "strain_damping",
+	                                   "section_damping",
+	                                   "section",
+	                                   "break_strain",
+	                                   NULL};
 	if (list == NULL)
 		return true;
 	if (!json_is_array(list))
@@ -745,10 +778,23 @@ static bool read_springs(parser* p, const json_t* list)
 		if (def.a == def.b)
 			return fail(p, SM_ERROR_SELF_SPRING, path, "connects particle %d to itself (a and b are the same particle)",
 			            (int)def.a);
-		spring_source src = {-1, -1, -1, -1};
+		spring_source src = {-1, -1, -1, -1, -1};
 		sm_spring_material m;
 		if (!read_constants(p, obj, path, &m, &src))
 			return false;
+		// A spring's own section: per-section constants of a single spring need it.
+		const bool per_section = m.stiffness_scaling == SM_PER_SECTION || m.damping_scaling == SM_PER_SECTION;
+		if (json_object_get(obj, "section") != NULL) {
+			if (!per_section)
+				return fail(p, SM_ERROR_SCHEMA, path,
+				            "\"section\" goes with \"section_stiffness\" or \"section_damping\"");
+			if (!read_field(p, FEEDS_CONSTANTS, obj, path, "section", POSITIVE, &def.section, &src.section))
+				return false;
+		} else if (per_section) {
+			return fail(p, SM_ERROR_SCHEMA, path,
+			            "per-section constants need the spring's \"section\" (the width [m] or area [m^2] it stands "
+			            "for)");
+		}
 		def.stiffness = m.stiffness;
 		def.stiffness_scaling = m.stiffness_scaling;
 		def.damping = m.damping;
@@ -801,10 +847,10 @@ static bool read_springs(parser* p, const json_t* list)
 static bool read_material(parser* p, const json_t* obj, const char* path, const char* key, sm_spring_material* m,
                           spring_source* src)
 {
-	static const char* const keys[] = {"stiffness", "strain_stiffness", "damping", "strain_damping", "break_strain",
-	                                   NULL};
+	static const char* const keys[] = {"stiffness",      "strain_stiffness", "section_stiffness", "damping",
+	                                   "strain_damping", "section_damping",  "break_strain",      NULL};
 	*m = sm_default_spring_material();
-	*src = (spring_source){-1, -1, -1, -1};
+	*src = (spring_source){-1, -1, -1, -1, -1};
 	const json_t* value = json_object_get(obj, key);
 	if (value == NULL)
 		return true;
@@ -989,7 +1035,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	sm_model* model = p->ex->model;
 	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
 	const int64_t limit = p->doc->max_elements;
-	spring_source groups[3] = {{-1, -1, -1, -1}, {-1, -1, -1, -1}, {-1, -1, -1, -1}};
+	spring_source groups[3] = {{-1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1}};
 	sm_status st = SM_OK;
 	switch (s.type) {
 	case STRUCTURE_ROPE: {

@@ -31,6 +31,7 @@ typedef struct spring_source {
 	int32_t stiffness;
 	int32_t damping;
 	int32_t break_strain;
+	int32_t section;
 } spring_source;
 
 typedef enum structure_type { STRUCTURE_ROPE, STRUCTURE_SHEET, STRUCTURE_BLOCK, STRUCTURE_MESH } structure_type;

@@ -194,13 +194,22 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 		puts_(t, ", \"kind\": \"rest_length\"");
 	puts_(t, ", \"rest_length\": ");
 	put_value(t, doc, def.kind == SM_SPRING_ZERO_LENGTH ? 0.0 : def.rest_length, src->rest_length);
-	if (def.stiffness != 0.0 || src->stiffness >= 0) {
-		puts_(t, def.stiffness_scaling == SM_PER_STRAIN ? ", \"strain_stiffness\": " : ", \"stiffness\": ");
+	static const char* const stiffness_keys[3] = {", \"stiffness\": ", ", \"strain_stiffness\": ",
+	                                              ", \"section_stiffness\": "};
+	static const char* const damping_keys[3] = {", \"damping\": ", ", \"strain_damping\": ", ", \"section_damping\": "};
+	const bool stiffness = def.stiffness != 0.0 || src->stiffness >= 0, damping = def.damping != 0.0 || src->damping >= 0;
+	if (stiffness) {
+		puts_(t, stiffness_keys[def.stiffness_scaling]);
 		put_value(t, doc, def.stiffness, src->stiffness);
 	}
-	if (def.damping != 0.0 || src->damping >= 0) {
-		puts_(t, def.damping_scaling == SM_PER_STRAIN ? ", \"strain_damping\": " : ", \"damping\": ");
+	if (damping) {
+		puts_(t, damping_keys[def.damping_scaling]);
 		put_value(t, doc, def.damping, src->damping);
+	}
+	// A structure's spring gets its section from the grid; saved as one spring, it keeps it.
+	if ((stiffness && def.stiffness_scaling == SM_PER_SECTION) || (damping && def.damping_scaling == SM_PER_SECTION)) {
+		puts_(t, ", \"section\": ");
+		put_value(t, doc, def.section, src->section);
 	}
 	if (isfinite(def.break_strain) || src->break_strain >= 0) {
 		puts_(t, ", \"break_strain\": ");

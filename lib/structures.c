@@ -91,7 +91,7 @@ bool structure_material_present(const sm_spring_material* m)
 }
 
 sm_status structure_check_material(sm_model* model, const char* what, const char* group,
-                                   const sm_spring_material* m)
+                                   const sm_spring_material* m, bool sections)
 {
 	if (!isfinite(m->stiffness) || m->stiffness < 0.0)
 		return sm_model_fail(model, isfinite(m->stiffness) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
@@ -99,12 +99,17 @@ sm_status structure_check_material(sm_model* model, const char* what, const char
 	if (!isfinite(m->damping) || m->damping < 0.0)
 		return sm_model_fail(model, isfinite(m->damping) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
 		                     "%s: %s damping = %g must be finite and >= 0", what, group, m->damping);
-	if (m->stiffness_scaling != SM_ABSOLUTE && m->stiffness_scaling != SM_PER_STRAIN)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s stiffness scaling = %d is not known", what,
-		                     group, (int)m->stiffness_scaling);
-	if (m->damping_scaling != SM_ABSOLUTE && m->damping_scaling != SM_PER_STRAIN)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s damping scaling = %d is not known", what,
-		                     group, (int)m->damping_scaling);
+	const sm_scaling scalings[2] = {m->stiffness_scaling, m->damping_scaling};
+	for (int k = 0; k < 2; k++) {
+		const char* constant = k == 0 ? "stiffness" : "damping";
+		if (scalings[k] != SM_ABSOLUTE && scalings[k] != SM_PER_STRAIN && scalings[k] != SM_PER_SECTION)
+			return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s scaling = %d is not known", what,
+			                     group, constant, (int)scalings[k]);
+		if (scalings[k] == SM_PER_SECTION && !sections)
+			return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+			                     "%s: %s %s per section: a %s has no cross-section (give it per strain)", what,
+			                     group, constant, what);
+	}
 	if (isnan(m->break_strain) || !(m->break_strain > 0.0))
 		return sm_model_fail(model, isnan(m->break_strain) ? SM_ERROR_NOT_FINITE : SM_ERROR_NEGATIVE,
 		                     "%s: %s break strain = %g must be > 0 (INFINITY for never)", what, group,
@@ -161,9 +166,15 @@ sm_status structure_add_particle(sm_model* model, const char* what, double mass,
 }
 
 sm_status structure_add_spring(sm_model* model, const char* what, const char* group, int32_t a, int32_t b,
-                               const sm_spring_material* m)
+                               const sm_spring_material* m, double measure)
 {
 	sm_spring_def s = sm_default_spring_def();
+	if (m->stiffness_scaling == SM_PER_SECTION || m->damping_scaling == SM_PER_SECTION) {
+		const double* xa = model->position + 3 * (size_t)a;
+		const double* xb = model->position + 3 * (size_t)b;
+		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+		s.section = measure / sqrt(dx * dx + dy * dy + dz * dz);
+	}
 	s.a = a;
 	s.b = b;
 	s.stiffness = m->stiffness;
@@ -206,6 +217,20 @@ void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_mode
 	out->shape[2] = n2;
 }
 
+// The share of a grid cell's area or volume that a spring from grid point `at` along `offset`
+// stands for: the cells on both sides of it, or only one side where it runs along the boundary.
+// Along each axis the spring does not advance on (offset 0), a spring on the first or last grid
+// line has cells on one side only: half. So uniformly stretched, the springs of a group carry
+// exactly the force per unit width (or area) that their constant gives, whatever the grid.
+static double boundary_share(const int offset[], const int64_t at[], const int64_t counts[], int axes)
+{
+	double share = 1.0;
+	for (int axis = 0; axis < axes; axis++)
+		if (offset[axis] == 0 && (at[axis] == 0 || at[axis] == counts[axis] - 1))
+			share *= 0.5;
+	return share;
+}
+
 // Two grid neighbours at the same position: a grid spacing below the rounding of the
 // coordinates (a 1e-10 m spacing 1e10 m from the origin) collapses the grid, and its springs
 // would have no length. The grid has shape[0] x shape[1] x shape[2] points from particle p0 on,
@@ -246,8 +271,8 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	sm_status st;
 	if ((st = structure_check_vector(model, what, "start", def->start)) != SM_OK ||
 	    (st = structure_check_vector(model, what, "end", def->end)) != SM_OK ||
-	    (st = structure_check_material(model, what, "structural", &def->structural)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bending", &def->bending)) != SM_OK)
+	    (st = structure_check_material(model, what, "structural", &def->structural, false)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bending", &def->bending, false)) != SM_OK)
 		return st;
 	if (def->segments < 1)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: segments = %d must be >= 1",
@@ -293,9 +318,9 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;
 		if (has_structural && p + 1 < n)
-			st = structure_add_spring(model, what, "structural", a, a + 1, &def->structural);
+			st = structure_add_spring(model, what, "structural", a, a + 1, &def->structural, 0.0);
 		if (st == SM_OK && has_bending && p + 2 < n)
-			st = structure_add_spring(model, what, "bending", a, a + 2, &def->bending);
+			st = structure_add_spring(model, what, "bending", a, a + 2, &def->bending, 0.0);
 	}
 	if (st != SM_OK) {
 		structure_truncate(model, p0, s0);
@@ -320,9 +345,9 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
 	    (st = structure_check_vector(model, what, "edge_u", def->edge_u)) != SM_OK ||
 	    (st = structure_check_vector(model, what, "edge_v", def->edge_v)) != SM_OK ||
-	    (st = structure_check_material(model, what, "structural", &def->structural)) != SM_OK ||
-	    (st = structure_check_material(model, what, "shear", &def->shear)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bend", &def->bend)) != SM_OK ||
+	    (st = structure_check_material(model, what, "structural", &def->structural, true)) != SM_OK ||
+	    (st = structure_check_material(model, what, "shear", &def->shear, true)) != SM_OK ||
+	    (st = structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK ||
 	    (st = check_mass(model, what, def->mass)) != SM_OK)
 		return st;
 	if (def->nu < 2 || def->nv < 2)
@@ -377,6 +402,11 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	const int64_t sheet_shape[3] = {nu, nv, 1};
 	if (st == SM_OK)
 		st = check_grid_distinct(model, what, p0, sheet_shape);
+	// Per-section constants: each spring stands for the area of a grid cell (one spring of each
+	// offset per cell), half of it along an edge of the sheet, and its section is that area over
+	// its length (sm_scaling).
+	const double cell_area = area * u_max * v_max / (double)((nu - 1) * (nv - 1));
+	const int64_t sheet_counts[2] = {nv, nu};
 	// Neighbour offsets (di, dj) and their group, in the benchmark cloth's order.
 	static const int offsets[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 1, 1}, {1, -1, 1}, {0, 2, 2}, {2, 0, 2}};
 	const sm_spring_material* groups[3] = {&def->structural, &def->shear, &def->bend};
@@ -389,8 +419,10 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 				const int64_t a = i + offsets[o][0], b = j + offsets[o][1];
 				if (!has[g] || a >= nv || b < 0 || b >= nu)
 					continue;
+				const int64_t at[2] = {i, j};
 				st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)(i * nu + j),
-				                          p0 + (int32_t)(a * nu + b), groups[g]);
+				                          p0 + (int32_t)(a * nu + b), groups[g],
+				                          cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
 				made[g]++;
 			}
 		}
@@ -417,9 +449,9 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	sm_status st;
 	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
 	    (st = structure_check_vector(model, what, "size", def->size)) != SM_OK ||
-	    (st = structure_check_material(model, what, "edge", &def->edge)) != SM_OK ||
-	    (st = structure_check_material(model, what, "face_diagonal", &def->face_diagonal)) != SM_OK ||
-	    (st = structure_check_material(model, what, "body_diagonal", &def->body_diagonal)) != SM_OK ||
+	    (st = structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
+	    (st = structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) != SM_OK ||
+	    (st = structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) != SM_OK ||
 	    (st = check_mass(model, what, def->mass)) != SM_OK)
 		return st;
 	for (int c = 0; c < 3; c++)
@@ -457,6 +489,11 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	const int64_t block_shape[3] = {nu, nv, nw};
 	if (st == SM_OK)
 		st = check_grid_distinct(model, what, p0, block_shape);
+	// Per-section constants: as in a sheet, each spring stands for the volume of a cell, halved
+	// for each face of the block it lies in.
+	const double cell_volume = def->size[0] / (double)(nu - 1) * (def->size[1] / (double)(nv - 1)) *
+	                           (def->size[2] / (double)(nw - 1));
+	const int64_t block_counts[3] = {nv, nu, nw};
 	// Neighbour offsets (di, dj, dk) and their group, in creation order.
 	static const int offsets[13][4] = {
 	    {0, 1, 0, 0},  {1, 0, 0, 0},  {0, 0, 1, 0},                                              // edges
@@ -474,8 +511,10 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 					const int64_t bi = i + offsets[o][0], bj = j + offsets[o][1], bk = k + offsets[o][2];
 					if (!has[g] || bi < 0 || bi >= nv || bj < 0 || bj >= nu || bk >= nw)
 						continue;
+					const int64_t at[3] = {i, j, k};
 					st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)((k * nv + i) * nu + j),
-					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g]);
+					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
+					                          cell_volume * boundary_share(offsets[o], at, block_counts, 3));
 					made[g]++;
 				}
 	if (st != SM_OK) {

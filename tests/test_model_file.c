@@ -80,6 +80,7 @@ static int same_model(const sm_model* a, const sm_model* b)
 		ENSURE(p.a == q.a && p.b == q.b && p.kind == q.kind);
 		ENSURE(p.stiffness == q.stiffness && p.stiffness_scaling == q.stiffness_scaling);
 		ENSURE(p.damping == q.damping && p.damping_scaling == q.damping_scaling);
+		ENSURE(p.section == q.section);
 		ENSURE(p.rest_length == q.rest_length);
 		ENSURE(p.break_strain == q.break_strain || (isinf(p.break_strain) && isinf(q.break_strain)));
 		double l0a, ksa, kda, l0b, ksb, kdb;
@@ -633,7 +634,8 @@ static int test_broken_files(void)
 	     SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"kk\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
-	     SM_ERROR_SCHEMA, "test.json: springs[0]: give \"stiffness\" [N/m] or \"strain_stiffness\" [N], not both"},
+	     SM_ERROR_SCHEMA,
+	     "test.json: springs[0]: give one of \"stiffness\", \"strain_stiffness\" and \"section_stiffness\", not more"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 1, \"rest_length\": 0}]}",
 	     SM_ERROR_ZERO_REST_LENGTH,
@@ -664,7 +666,7 @@ static int test_broken_files(void)
 	     " \"nv\": 4, \"bend\": {\"strain_stiffnes\": 1}}]}",
 	     SM_ERROR_SCHEMA,
 	     "test.json: structures[0].bend: unknown key \"strain_stiffnes\" (allowed here: stiffness, strain_stiffness, "
-	     "damping, strain_damping, break_strain)"},
+	     "section_stiffness, damping, strain_damping, section_damping, break_strain)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 1e9,"
 	     " \"nv\": 4}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1e+09 must be a whole number from 2 to 4194304"},
@@ -1342,7 +1344,7 @@ static int test_rules_at_their_edges(void)
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"kind\": \"zero_length\", \"rest_length\": 0.5}]}",
 	     SM_ERROR_SCHEMA, "test.json: springs[0]: a zero-length spring cannot have rest_length 0.5"},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"damping\": 1, \"strain_damping\": 1}]}", SM_ERROR_SCHEMA,
-	     "test.json: springs[0]: give \"damping\" [N s/m] or \"strain_damping\" [N s], not both"},
+	     "test.json: springs[0]: give one of \"damping\", \"strain_damping\" and \"section_damping\", not more"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
 	     " \"end\": [1, 0, 0], \"segments\": 2, \"mass\": 1, \"mass_per_length\": 1}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0]: give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both"},
@@ -1765,6 +1767,86 @@ static int test_status_texts(void)
 	return 0;
 }
 
+// Per-section constants in a model file (docs/model-format.md): a sheet's groups take
+// "section_stiffness" [N/m] and "section_damping" [N s/m] and give each spring its section; the
+// canonical form writes the springs with their sections and the parameters they came from, so
+// that it reads back to the same model and a new parameter value acts on it as on the original.
+// A single spring gives its own "section"; a rope, which has none, is refused.
+static int test_per_section_constants_in_a_model_file(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"membrane\", \"parameters\": {\"Y\": 300, \"eta\": 0.5},"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 1]}, {\"name\": \"q\", \"position\": [0, 0, 3]}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"section_stiffness\": \"Y\", \"section\": 0.25}],"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"edge_u\": [2, 0, 0], \"nu\": 5, \"nv\": 3,"
+	    "  \"structural\": {\"section_stiffness\": \"Y\", \"section_damping\": \"eta\"},"
+	    "  \"shear\": {\"section_stiffness\": 100}}]}";
+	sm_error err;
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_model* model = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	// The sheet (particles 0 .. 14) comes first: its first structural spring, along its edge
+	// (row 0) from (0, 0) to (0.5, 0), stands for half a cell of 0.5 m x 0.5 m: section 0.125 m^2
+	// over 0.5 m, ks = 300 x 0.25 / 0.5; the single spring, last, ks = 300 x 0.25 / 2.
+	double l0, ks, kd;
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE_NEAR(ks, 300.0 * 0.25 / 0.5, 1e-12);
+	ENSURE_NEAR(kd, 0.5 * 0.25 / 0.5, 1e-15);
+	const int32_t last = sm_model_spring_count(model) - 1;
+	ENSURE_STATUS(sm_model_spring_constants(model, last, &l0, &ks, &kd), SM_OK);
+	ENSURE(l0 == 2.0 && ks == 300.0 * 0.25 / 2.0 && kd == 0.0);
+	sm_model_destroy(model);
+
+	char* json = sm_document_to_json(doc, &err);
+	ENSURE(json != NULL);
+	ENSURE(strstr(json, "\"section_stiffness\": \"Y\"") != NULL && strstr(json, "\"section_damping\": \"eta\"") != NULL);
+	sm_document* again = parse_valid(json, &err);
+	free(json);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	const int32_t y = sm_document_parameter_index(doc, "Y");
+	ENSURE_STATUS(sm_document_set_parameter(doc, y, 600.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameter(again, y, 600.0, &err), SM_OK);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE_STATUS(sm_document_build(again, &model, &err), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE_NEAR(ks, 600.0 * 0.25 / 0.5, 1e-12);
+	sm_model_destroy(model);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	static const struct {
+		const char* text;
+		const char* message;
+	} refused[] = {
+	    {"{\"springmass\": 1, \"name\": \"r\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"segments\": 2,"
+	     " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"structural\": {\"section_stiffness\": 5}}]}",
+	     "rope: structural stiffness per section: a rope has no cross-section (give it per strain)"},
+	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"section_stiffness\": 5}]}",
+	     "springs[0]: per-section constants need the spring's \"section\""},
+	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 5, \"section\": 1}]}",
+	     "springs[0]: \"section\" goes with \"section_stiffness\" or \"section_damping\""},
+	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"section_damping\": 5, \"section\": 0}]}",
+	     "springs[0].section"},
+	};
+	for (size_t k = 0; k < sizeof refused / sizeof refused[0]; k++) {
+		sm_document* bad = parse(refused[k].text, &err);
+		sm_model* m = NULL;
+		if (bad != NULL) {
+			ENSURE(sm_document_build(bad, &m, &err) != SM_OK);
+			sm_document_destroy(bad);
+		}
+		if (strstr(err.message, refused[k].message) == NULL)
+			printf("  case %zu: %s\n", k, err.message);
+		ENSURE(strstr(err.message, refused[k].message) != NULL);
+	}
+	return 0;
+}
+
 // Every function that takes an sm_error fills it on success too (base.h): SM_OK and an empty
 // message, so that a report left from an earlier failure is never read as this call's. And the
 // names of values outside an enum are "unknown", never a valid name.
@@ -1982,6 +2064,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_messages_escape_invisible_characters);
 	RUN_TEST(test_status_texts);
 	RUN_TEST(test_error_reports_are_filled_on_success);
+	RUN_TEST(test_per_section_constants_in_a_model_file);
 	RUN_TEST(test_canonical_form_reads_back);
 	RUN_TEST(test_canonical_form_ignores_the_locale);
 	return TEST_SUMMARY();

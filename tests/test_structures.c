@@ -2,6 +2,7 @@
 // rest lengths and masses, the exact match with the benchmark cloth, the shear resistance of a
 // block (only rigid-body modes have zero stiffness), edges of a mesh counted once, roll-back
 // on error, and the selection helpers.
+#include "springmass/analysis.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
 
@@ -805,6 +806,267 @@ static int test_zero_size_and_break_strain(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Per-section constants (sm_scaling's SM_PER_SECTION): a structure's springs share its stiffness,
+// so a uniformly stretched sheet, block or mesh pulls with the same force whatever its grid.
+// ---------------------------------------------------------------------------------------------
+
+static sm_spring_material section_material(double stiffness)
+{
+	sm_spring_material m = sm_default_spring_material();
+	m.stiffness = stiffness;
+	m.stiffness_scaling = SM_PER_SECTION;
+	return m;
+}
+
+// The force [N] along x with which the springs of a structure, stretched uniformly by (1 + e)
+// along x, pull back the particles at x >= x_edge (the end the stretch is applied to): minus the
+// sum of the x forces on them. No gravity, no velocities.
+static double pull_of_stretched(const sm_model* model, double e, double x_edge)
+{
+	const int32_t n = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)n * sizeof(double));
+	double* f = malloc(3 * (size_t)n * sizeof(double));
+	if (x == NULL || f == NULL) {
+		free(x);
+		free(f);
+		return NAN;
+	}
+	sm_model_initial_state(model, x, NULL);
+	double pull = 0.0;
+	for (int32_t p = 0; p < n; p++)
+		x[3 * p] *= 1.0 + e;
+	sm_model_forces(model, x, NULL, NULL, f);
+	for (int32_t p = 0; p < n; p++)
+		if (x[3 * p] >= x_edge * (1.0 + e))
+			pull -= f[3 * p];
+	free(x);
+	free(f);
+	return pull;
+}
+
+static sm_model* weightless_model(void)
+{
+	sm_model_def def = sm_default_model_def();
+	def.gravity[2] = 0.0;
+	return sm_model_create(&def, NULL);
+}
+
+// A 2 m x 1 m sheet stretched by e along its 2 m edge, with each group per section [N/m]: the
+// structural springs along x carry exactly Y_s e per unit width, the bend springs that reach
+// the end (one row of them in two) Y_b e / 2, and the shear springs, each standing for a cell
+// h_x h_y, as the closed form below says. Every grid from 3 x 2 to 33 x 17 particles gives that
+// force, to round-off: each spring's strain L / l0 - 1 ~ 1e-3 keeps about 13 of the 16 digits,
+// and the rows add up (1e-11 relative). With per-strain constants the force grows with the rows.
+static int test_per_section_sheet_keeps_its_stiffness_when_refined(void)
+{
+	const double e = 1e-3, W = 1.0, Lx = 2.0, Ys = 300.0, Ysh = 100.0, Yb = 40.0;
+	// Shear springs of a cell hx x hy: l0 = sqrt(hx^2 + hy^2), stretched to
+	// L = sqrt(hx^2 (1 + e)^2 + hy^2); each stands for the cell's area A = hx hy, so its per-strain
+	// constant is Ysh A / l0 and its pull along x Ysh A / l0 (L / l0 - 1) hx (1 + e) / L. Two of
+	// them per cell at the end, (ny - 1) cells: the force depends on hx / hy only.
+	double previous = NAN;
+	for (int refine = 1; refine <= 16; refine *= 2) {
+		const int32_t nu = 2 * refine + 1, nv = refine + 1;
+		const double hx = Lx / (nu - 1), hy = W / (nv - 1);
+		sm_model* model = weightless_model();
+		ENSURE(model != NULL);
+		sm_sheet_def sheet = sm_default_sheet_def();
+		sheet.edge_u[0] = Lx;
+		sheet.edge_v[1] = W;
+		sheet.nu = nu;
+		sheet.nv = nv;
+		sheet.structural = section_material(Ys);
+		sheet.shear = section_material(Ysh);
+		sheet.bend = section_material(Yb);
+		ENSURE_STATUS(sm_add_sheet(model, &sheet, NULL), SM_OK);
+		const double l0 = sqrt(hx * hx + hy * hy), L = sqrt(hx * hx * (1 + e) * (1 + e) + hy * hy);
+		const double shear = 2.0 * (nv - 1) * Ysh * hx * hy / l0 * (L / l0 - 1.0) * hx * (1.0 + e) / L;
+		const double expected = W * e * (Ys + Yb / 2.0) + shear;
+		const double pull = pull_of_stretched(model, e, Lx);
+		ENSURE_NEAR(pull, expected, 1e-11 * expected);
+		if (refine > 1)
+			ENSURE_NEAR(pull, previous, 1e-11 * expected);
+		previous = pull;
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// A block 1 m x 0.5 m x 0.25 m stretched by e along x: its edge springs per section [N/m^2]
+// carry Y e over the 0.125 m^2 face exactly; with the face and body diagonals too, every grid
+// from 3 x 2 x 2 to 9 x 5 x 5 particles pulls with the same force (1e-12 relative: strains of
+// 1e-3 keep 13 digits).
+static int test_per_section_block_keeps_its_stiffness_when_refined(void)
+{
+	const double e = 1e-3, Y = 2e5;
+	for (int diagonals = 0; diagonals < 2; diagonals++) {
+		double previous = NAN;
+		for (int refine = 1; refine <= 4; refine *= 2) {
+			sm_model* model = weightless_model();
+			ENSURE(model != NULL);
+			sm_block_def block = sm_default_block_def();
+			block.size[0] = 1.0;
+			block.size[1] = 0.5;
+			block.size[2] = 0.25;
+			block.nu = 2 * refine + 1;
+			block.nv = refine + 1;
+			block.nw = refine + 1;
+			block.edge = section_material(Y);
+			block.face_diagonal = section_material(diagonals ? Y / 2 : 0.0);
+			block.body_diagonal = section_material(diagonals ? Y / 3 : 0.0);
+			ENSURE_STATUS(sm_add_block(model, &block, NULL), SM_OK);
+			const double pull = pull_of_stretched(model, e, 1.0);
+			if (!diagonals)
+				ENSURE_NEAR(pull, Y * e * 0.5 * 0.25, 1e-12 * Y * e);
+			if (refine > 1)
+				ENSURE_NEAR(pull, previous, 1e-12 * Y * e);
+			previous = pull;
+			sm_model_destroy(model);
+		}
+	}
+	return 0;
+}
+
+// A 1 m square meshed into k x k squares of two triangles each, stretched by e along x: with
+// edge springs per section [N/m] every k from 1 to 8 pulls with the same force (1e-12 relative),
+// and the horizontal edges alone (Y e per unit width, the vertical ones unstretched) give the
+// part that does not come from the diagonals.
+static int test_per_section_mesh_keeps_its_stiffness_when_refined(void)
+{
+	const double e = 1e-3, Y = 500.0;
+	double previous = NAN;
+	for (int k = 1; k <= 8; k *= 2) {
+		const int32_t nv = (k + 1) * (k + 1), nt = 2 * k * k;
+		double* vertices = malloc(3 * (size_t)nv * sizeof(double));
+		int32_t* triangles = malloc(3 * (size_t)nt * sizeof(int32_t));
+		ENSURE(vertices != NULL && triangles != NULL);
+		for (int i = 0; i <= k; i++)
+			for (int j = 0; j <= k; j++) {
+				double* v = vertices + 3 * (i * (k + 1) + j);
+				v[0] = (double)j / k;
+				v[1] = (double)i / k;
+				v[2] = 0.0;
+			}
+		for (int i = 0, t = 0; i < k; i++)
+			for (int j = 0; j < k; j++, t += 2) {
+				const int32_t v00 = i * (k + 1) + j, v01 = v00 + 1, v10 = v00 + k + 1, v11 = v10 + 1;
+				const int32_t two[6] = {v00, v01, v11, v00, v11, v10};
+				memcpy(triangles + 3 * t, two, sizeof two);
+			}
+		sm_model* model = weightless_model();
+		ENSURE(model != NULL);
+		sm_mesh_def mesh = sm_default_mesh_def();
+		mesh.vertices = vertices;
+		mesh.vertex_count = nv;
+		mesh.triangles = triangles;
+		mesh.triangle_count = nt;
+		mesh.edge = section_material(Y);
+		ENSURE_STATUS(sm_add_mesh(model, &mesh, NULL), SM_OK);
+		const double pull = pull_of_stretched(model, e, 1.0);
+		// Diagonals (1 + e, 1) h: each stands for its two triangles, h^2, one per row at the end.
+		const double l0 = sqrt(2.0), L = sqrt((1 + e) * (1 + e) + 1.0);
+		const double diagonal = Y / l0 * (L / l0 - 1.0) * (1.0 + e) / L;
+		ENSURE_NEAR(pull, Y * e + diagonal, 1e-12 * Y * e);
+		if (k > 1)
+			ENSURE_NEAR(pull, previous, 1e-12 * Y * e);
+		previous = pull;
+		sm_model_destroy(model);
+		free(vertices);
+		free(triangles);
+	}
+	return 0;
+}
+
+// The sag [m] of the bottom middle of a 1 m square sheet of n x n particles, 1 kg, hanging in
+// the x-z plane from its top edge under gravity, at rest (sm_statics_solve), with structural and
+// shear groups of the given constants and scaling.
+static double hanging_sheet_sag(int32_t n, sm_scaling scaling)
+{
+	sm_model_def world = sm_default_model_def();
+	sm_model* model = sm_model_create(&world, NULL);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.edge_v[1] = 0.0;
+	sheet.edge_v[2] = 1.0;
+	sheet.nu = sheet.nv = n;
+	sheet.structural = section_material(200.0);
+	sheet.shear = section_material(100.0);
+	sheet.bend = sm_default_spring_material();
+	sheet.structural.stiffness_scaling = sheet.shear.stiffness_scaling = scaling;
+	const double lo[3] = {-0.01, -0.01, 0.99}, hi[3] = {1.01, 0.01, 1.01};
+	double sag = NAN;
+	double* x = malloc(3 * (size_t)n * (size_t)n * sizeof(double));
+	if (model != NULL && x != NULL && sm_add_sheet(model, &sheet, NULL) == SM_OK &&
+	    sm_set_motion_in_box(model, lo, hi, SM_PARTICLE_FIXED, NULL) == SM_OK &&
+	    sm_statics_solve(model, NULL, x, NULL, NULL, NULL) == SM_OK)
+		sag = -x[3 * (n / 2) + 2];
+	free(x);
+	sm_model_destroy(model);
+	return sag;
+}
+
+// The same sheet on finer grids: per section, its sag converges (to first order in the spacing:
+// the changes 0.96, 0.56, 0.30 mm from 5 to 9, 17, 33 particles a side at least halve, and stay
+// within 10 % of the finest); per strain, the grid's rows add stiffness and the sag falls with
+// the spacing (3.96 to 0.59 mm).
+static int test_per_section_hanging_sheet_converges_when_refined(void)
+{
+	const int32_t sizes[4] = {5, 9, 17, 33};
+	double section[4], strain[4];
+	for (int k = 0; k < 4; k++) {
+		section[k] = hanging_sheet_sag(sizes[k], SM_PER_SECTION);
+		strain[k] = hanging_sheet_sag(sizes[k], SM_PER_STRAIN);
+		ENSURE(section[k] > 0.0 && strain[k] > 0.0);
+	}
+	for (int k = 0; k < 4; k++)
+		ENSURE(fabs(section[k] - section[3]) < 0.1 * section[3]);
+	for (int k = 2; k < 4; k++)
+		ENSURE(fabs(section[k] - section[k - 1]) < 0.65 * fabs(section[k - 1] - section[k - 2]));
+	ENSURE(strain[0] > 6.0 * strain[3]);
+	return 0;
+}
+
+// A rope has no cross-section: per-section constants are refused, naming the group; so is a
+// spring's own section that is not positive and finite.
+static int test_per_section_rules(void)
+{
+	sm_model* model = weightless_model();
+	ENSURE(model != NULL);
+	sm_rope_def rope = sm_default_rope_def();
+	rope.structural = section_material(10.0);
+	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(model), "rope: structural stiffness per section: a rope has no cross-section") !=
+	       NULL);
+	ENSURE(sm_model_particle_count(model) == 0);
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.position[0] = 2.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.b = 1;
+	s.stiffness = 30.0;
+	s.stiffness_scaling = SM_PER_SECTION;
+	s.damping = 4.0;
+	s.damping_scaling = SM_PER_SECTION;
+	s.section = 0.5;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	double l0, ks, kd;
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE(l0 == 2.0 && ks == 30.0 * 0.5 / 2.0 && kd == 4.0 * 0.5 / 2.0);
+	sm_spring_def back;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &back), SM_OK);
+	ENSURE(back.section == 0.5 && back.stiffness_scaling == SM_PER_SECTION);
+	const double bad[3] = {0.0, -1.0, NAN};
+	for (int k = 0; k < 3; k++) {
+		s.section = bad[k];
+		ENSURE(sm_model_add_spring(model, &s, NULL) != SM_OK);
+		ENSURE(strstr(sm_model_last_error(model), "section") != NULL);
+	}
+	ENSURE(sm_model_spring_count(model) == 1);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -824,5 +1086,10 @@ int main(int argc, char** argv)
 	RUN_TEST(test_box_selection_closed);
 	RUN_TEST(test_mesh_edge_order);
 	RUN_TEST(test_zero_size_and_break_strain);
+	RUN_TEST(test_per_section_sheet_keeps_its_stiffness_when_refined);
+	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
+	RUN_TEST(test_per_section_mesh_keeps_its_stiffness_when_refined);
+	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
+	RUN_TEST(test_per_section_rules);
 	return TEST_SUMMARY();
 }

@@ -127,7 +127,7 @@ int sm_cmd_check(int argc, char** argv)
 		fixed += p.motion == SM_PARTICLE_FIXED;
 		driven += p.motion == SM_PARTICLE_DRIVEN;
 	}
-	int32_t rest_length = 0, zero_length = 0, per_strain = 0, breakable = 0;
+	int32_t rest_length = 0, zero_length = 0, per_strain = 0, per_section = 0, breakable = 0;
 	int32_t stiffest = -1, fastest = -1;
 	double max_stiffness = -1.0, max_omega = 0.0;
 	for (int32_t s = 0; s < m; s++) {
@@ -140,6 +140,7 @@ int sm_cmd_check(int argc, char** argv)
 		else
 			rest_length++;
 		per_strain += def.stiffness_scaling == SM_PER_STRAIN;
+		per_section += def.stiffness_scaling == SM_PER_SECTION;
 		breakable += isfinite(def.break_strain);
 		if (ks > max_stiffness) {
 			max_stiffness = ks;
@@ -181,8 +182,11 @@ int sm_cmd_check(int argc, char** argv)
 		}
 		printf("\n");
 	}
-	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, %d breakable\n", (int)m,
-	       (int)rest_length, (int)zero_length, (int)per_strain, (int)breakable);
+	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, ", (int)m, (int)rest_length,
+	       (int)zero_length, (int)per_strain);
+	if (per_section > 0)
+		printf("%d per section, ", (int)per_section);
+	printf("%d breakable\n", (int)breakable);
 	const int32_t structures = sm_document_structure_count(doc);
 	if (structures > 0) {
 		printf("structures   %d\n", (int)structures);

@@ -46,8 +46,16 @@ typedef enum sm_scaling {
 	SM_ABSOLUTE = 0,
 	/// The constant is per unit strain: stiffness E [N] with ks = E / l0, damping c [N s] with
 	/// kd = c / l0. A structure discretised more finely, with shorter springs in series, then
-	/// keeps the same overall stiffness. Requires l0 > 0.
+	/// keeps the same overall stiffness (a rope). Requires l0 > 0.
 	SM_PER_STRAIN,
+	/// The constant is per unit strain and per unit of the cross-section the spring stands for:
+	/// ks = stiffness section / l0, kd = damping section / l0, with the spring's `section` a
+	/// width [m] in a sheet or a mesh (stiffness [N/m], damping [N s/m]) or an area [m^2] in a
+	/// block (stiffness [N/m^2], damping [N s/m^2]). Springs side by side then share a sheet's or
+	/// a block's stiffness, which a finer grid keeps: with per-strain constants alone a sheet of
+	/// twice the rows is twice as stiff. The sheet, block and mesh builders give each spring its
+	/// section (structures.h). Requires l0 > 0 and section > 0.
+	SM_PER_SECTION,
 } sm_scaling;
 
 /// Rest length meaning "the distance between the two particles when the spring is added".
@@ -67,6 +75,9 @@ typedef struct sm_spring_def {
 	sm_scaling stiffness_scaling;  ///< default SM_ABSOLUTE
 	double damping;                ///< >= 0: kd [N s/m] or, per strain, c [N s]; default 0
 	sm_scaling damping_scaling;    ///< default SM_ABSOLUTE
+	/// The cross-section the spring stands for [m or m^2], > 0, for SM_PER_SECTION constants
+	/// (ignored otherwise); default 1.
+	double section;
 	/// Strain (L - l0) / l0 [1] at which the spring breaks (the simulation detects the crossing
 	/// as an event, or breaks it at once if it is already at or beyond when an advance begins); its elastic
 	/// energy then counts as dissipated. > 0, or INFINITY (default) for a spring that never

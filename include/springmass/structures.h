@@ -20,10 +20,19 @@ extern "C" {
 
 /// Constants of one group of springs (structural, shear, bend, ...). A group whose stiffness
 /// and damping are both zero is not created, unless keep_when_zero is set.
+///
+/// Per section (SM_PER_SECTION; sheets, blocks and meshes, not ropes), each spring stands for a
+/// share of the structure's area (sheet, mesh) or volume (block), and its section is that share
+/// over its length: a sheet's or block's grid cell, halved for each boundary line or face the
+/// spring runs along; the triangles on both sides of a mesh edge (for its edge spring and the
+/// bend spring across it). Then a group stretched uniformly along its springs pulls with
+/// stiffness x strain per unit width of a sheet [N/m] or per unit area of a block's cross-section
+/// [N/m^2], whatever the grid; a mesh's edge springs per section give an equilateral
+/// triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's ratio 1/3).
 typedef struct sm_spring_material {
-	double stiffness;              ///< ks [N/m] or, per strain, E [N]; default 0
+	double stiffness;              ///< ks [N/m]; per strain, E [N]; per section, [N/m] or [N/m^2]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
-	double damping;                ///< kd [N s/m] or, per strain, c [N s]; default 0
+	double damping;                ///< kd [N s/m]; per strain, c [N s]; per section, [N s/m] or [N s/m^2]; default 0
 	sm_scaling damping_scaling;    ///< default SM_PER_STRAIN
 	double break_strain;           ///< [1]; INFINITY (default) = never breaks
 	/// Create the group's springs even when stiffness and damping are both zero (default false),
