@@ -989,14 +989,33 @@ static int64_t grid_springs(structure_type type, int64_t nu, int64_t nv, int64_t
 	return (present[0] ? group[0] : 0) + (present[1] ? group[1] : 0) + (present[2] ? group[2] : 0);
 }
 
+// A rope's, sheet's or block's "mass_distribution": "even" (the default) or "lumped".
+static bool read_distribution(parser* p, const json_t* obj, const char* path, sm_mass_distribution* distribution)
+{
+	const json_t* value = json_object_get(obj, "mass_distribution");
+	if (value == NULL)
+		return true;
+	const char* text = json_is_string(value) ? json_string_value(value) : "";
+	if (strcmp(text, "even") == 0)
+		*distribution = SM_MASS_EVEN;
+	else if (strcmp(text, "lumped") == 0)
+		*distribution = SM_MASS_LUMPED;
+	else {
+		char sub[PATH_CAPACITY];
+		child_key(sub, path, "mass_distribution");
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be \"even\" or \"lumped\"");
+	}
+	return true;
+}
+
 static bool read_structure(parser* p, const json_t* obj, const char* path)
 {
-	static const char* const rope_keys[] = {"type", "name",          "start",      "end",     "segments",
-	                                        "mass", "mass_per_length", "structural", "bending", NULL};
-	static const char* const sheet_keys[] = {"type", "name", "origin",     "edge_u", "edge_v", "nu",
-	                                         "nv",   "mass", "structural", "shear",  "bend",   NULL};
-	static const char* const block_keys[] = {"type", "name", "origin", "size",          "nu",            "nv",
-	                                         "nw",   "mass", "edge",   "face_diagonal", "body_diagonal", NULL};
+	static const char* const rope_keys[] = {"type",       "name",    "start", "end", "segments", "mass", "mass_per_length",
+	                                        "structural", "bending", "mass_distribution", NULL};
+	static const char* const sheet_keys[] = {"type", "name",  "origin", "edge_u", "edge_v", "nu", "nv", "mass",
+	                                         "structural", "shear", "bend", "mass_distribution", NULL};
+	static const char* const block_keys[] = {"type", "name", "origin", "size", "nu", "nv", "nw", "mass", "edge",
+	                                         "face_diagonal", "body_diagonal", "mass_distribution", NULL};
 	static const char* const mesh_keys[] = {"type", "name", "vertices", "triangles", "density", "edge", "bend", NULL};
 	char sub[PATH_CAPACITY];
 	forget_parameters(p);
@@ -1032,6 +1051,9 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
 		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", text_quoted(text, s.name));
 
+	sm_mass_distribution distribution = SM_MASS_EVEN;
+	if (!read_distribution(p, obj, path, &distribution))
+		return false;
 	sm_model* model = p->ex->model;
 	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
 	const int64_t limit = p->doc->max_elements;
@@ -1053,6 +1075,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		if (json_object_get(obj, "mass") != NULL && json_object_get(obj, "mass_per_length") != NULL)
 			return fail(p, SM_ERROR_SCHEMA, path, "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
 		d.segments = (int32_t)segments;
+		d.mass_distribution = distribution;
 		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.bending),
 		                         false};
 		if (!check_budget(p, path, segments + 1, grid_springs(s.type, segments + 1, 1, 1, present)))
@@ -1092,6 +1115,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 			return false;
 		d.nu = (int32_t)nu;
 		d.nv = (int32_t)nv;
+		d.mass_distribution = distribution;
 		st = sm_add_sheet(model, &d, &s.range);
 		break;
 	}
@@ -1119,6 +1143,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		d.nu = (int32_t)nu;
 		d.nv = (int32_t)nv;
 		d.nw = (int32_t)nw;
+		d.mass_distribution = distribution;
 		st = sm_add_block(model, &d, &s.range);
 		break;
 	}

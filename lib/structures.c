@@ -192,6 +192,30 @@ sm_status structure_add_spring(sm_model* model, const char* what, const char* gr
 	return st;
 }
 
+static sm_status check_distribution(sm_model* model, const char* what, sm_mass_distribution distribution)
+{
+	if (distribution != SM_MASS_EVEN && distribution != SM_MASS_LUMPED)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: mass distribution = %d is not known", what,
+		                     (int)distribution);
+	return SM_OK;
+}
+
+// The mass [kg] of grid point `at` of a structure of `total` kg on a grid of counts[] points
+// along each of its axes (sm_mass_distribution): the same for every point, or lumped, the share
+// of the cells around it: a half for each axis along which it is on the boundary.
+static double grid_point_mass(double total, sm_mass_distribution distribution, const int64_t at[],
+                              const int64_t counts[], int axes)
+{
+	double points = 1.0, cells = 1.0, share = 1.0;
+	for (int axis = 0; axis < axes; axis++) {
+		points *= (double)counts[axis];
+		cells *= (double)(counts[axis] - 1);
+		if (at[axis] == 0 || at[axis] == counts[axis] - 1)
+			share *= 0.5;
+	}
+	return distribution == SM_MASS_LUMPED ? total * share / cells : total / points;
+}
+
 static sm_status check_mass(sm_model* model, const char* what, double mass)
 {
 	if (!isfinite(mass))
@@ -297,7 +321,8 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 			                     "mass of %g kg, which must be finite and > 0 (give the mass instead)",
 			                     def->mass_per_length, length, total);
 	}
-	if ((st = check_mass(model, what, total)) != SM_OK)
+	if ((st = check_mass(model, what, total)) != SM_OK ||
+	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
 
 	const int64_t n = (int64_t)def->segments + 1;
@@ -309,11 +334,12 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
 	const int32_t made[3] = {has_structural ? (int32_t)(n - 1) : 0, has_bending ? (int32_t)(n - 2) : 0, 0};
-	const double m = total / (double)n;
+	const int64_t rope_counts[1] = {n};
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const double t = (double)p / (double)def->segments;
 		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
-		st = structure_add_particle(model, what, m, x);
+		const int64_t at[1] = {p};
+		st = structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1), x);
 	}
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;
@@ -348,7 +374,8 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	    (st = structure_check_material(model, what, "structural", &def->structural, true)) != SM_OK ||
 	    (st = structure_check_material(model, what, "shear", &def->shear, true)) != SM_OK ||
 	    (st = structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK ||
-	    (st = check_mass(model, what, def->mass)) != SM_OK)
+	    (st = check_mass(model, what, def->mass)) != SM_OK ||
+	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
 	if (def->nu < 2 || def->nv < 2)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "sheet: nu = %d and nv = %d must both be >= 2",
@@ -389,14 +416,16 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
-	const double m = def->mass / (double)n;
+	const int64_t sheet_counts[2] = {nv, nu};
 	for (int64_t i = 0; i < nv && st == SM_OK; i++) {
 		for (int64_t j = 0; j < nu && st == SM_OK; j++) {
 			const double s = (double)j / (double)(nu - 1), t = (double)i / (double)(nv - 1);
 			double x[3];
 			for (int c = 0; c < 3; c++)
 				x[c] = def->origin[c] + s * def->edge_u[c] + t * def->edge_v[c];
-			st = structure_add_particle(model, what, m, x);
+			const int64_t at[2] = {i, j};
+			st = structure_add_particle(model, what,
+			                            grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
 		}
 	}
 	const int64_t sheet_shape[3] = {nu, nv, 1};
@@ -406,7 +435,6 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	// offset per cell), half of it along an edge of the sheet, and its section is that area over
 	// its length (sm_scaling).
 	const double cell_area = area * u_max * v_max / (double)((nu - 1) * (nv - 1));
-	const int64_t sheet_counts[2] = {nv, nu};
 	// Neighbour offsets (di, dj) and their group, in the benchmark cloth's order.
 	static const int offsets[6][3] = {{0, 1, 0}, {1, 0, 0}, {1, 1, 1}, {1, -1, 1}, {0, 2, 2}, {2, 0, 2}};
 	const sm_spring_material* groups[3] = {&def->structural, &def->shear, &def->bend};
@@ -452,7 +480,8 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	    (st = structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
 	    (st = structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) != SM_OK ||
 	    (st = structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) != SM_OK ||
-	    (st = check_mass(model, what, def->mass)) != SM_OK)
+	    (st = check_mass(model, what, def->mass)) != SM_OK ||
+	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
 	for (int c = 0; c < 3; c++)
 		if (!(def->size[c] > 0.0))
@@ -477,14 +506,16 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
-	const double m = def->mass / (double)n;
+	const int64_t block_counts[3] = {nv, nu, nw};
 	for (int64_t k = 0; k < nw && st == SM_OK; k++)
 		for (int64_t i = 0; i < nv && st == SM_OK; i++)
 			for (int64_t j = 0; j < nu && st == SM_OK; j++) {
 				const double x[3] = {def->origin[0] + (double)j / (double)(nu - 1) * def->size[0],
 				                     def->origin[1] + (double)i / (double)(nv - 1) * def->size[1],
 				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
-				st = structure_add_particle(model, what, m, x);
+				const int64_t at[3] = {i, j, k};
+				st = structure_add_particle(model, what,
+				                            grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
 			}
 	const int64_t block_shape[3] = {nu, nv, nw};
 	if (st == SM_OK)
@@ -493,7 +524,6 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	// for each face of the block it lies in.
 	const double cell_volume = def->size[0] / (double)(nu - 1) * (def->size[1] / (double)(nv - 1)) *
 	                           (def->size[2] / (double)(nw - 1));
-	const int64_t block_counts[3] = {nv, nu, nw};
 	// Neighbour offsets (di, dj, dk) and their group, in creation order.
 	static const int offsets[13][4] = {
 	    {0, 1, 0, 0},  {1, 0, 0, 0},  {0, 0, 1, 0},                                              // edges

@@ -1779,6 +1779,7 @@ static int test_per_section_constants_in_a_model_file(void)
 	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 1]}, {\"name\": \"q\", \"position\": [0, 0, 3]}],"
 	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"section_stiffness\": \"Y\", \"section\": 0.25}],"
 	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"edge_u\": [2, 0, 0], \"nu\": 5, \"nv\": 3,"
+	    "  \"mass_distribution\": \"lumped\","
 	    "  \"structural\": {\"section_stiffness\": \"Y\", \"section_damping\": \"eta\"},"
 	    "  \"shear\": {\"section_stiffness\": 100}}]}";
 	sm_error err;
@@ -1786,7 +1787,7 @@ static int test_per_section_constants_in_a_model_file(void)
 	ENSURE(doc != NULL);
 	sm_model* model = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
-	// The sheet (particles 0 .. 14) comes first: its first structural spring, along its edge
+	// The sheet's springs come first: its first structural spring, along its edge
 	// (row 0) from (0, 0) to (0.5, 0), stands for half a cell of 0.5 m x 0.5 m: section 0.125 m^2
 	// over 0.5 m, ks = 300 x 0.25 / 0.5; the single spring, last, ks = 300 x 0.25 / 2.
 	double l0, ks, kd;
@@ -1796,6 +1797,10 @@ static int test_per_section_constants_in_a_model_file(void)
 	const int32_t last = sm_model_spring_count(model) - 1;
 	ENSURE_STATUS(sm_model_spring_constants(model, last, &l0, &ks, &kd), SM_OK);
 	ENSURE(l0 == 2.0 && ks == 300.0 * 0.25 / 2.0 && kd == 0.0);
+	// Lumped masses: 8 cells of 1/8 kg, a corner a quarter of one.
+	sm_particle_def corner;
+	ENSURE_STATUS(sm_model_get_particle(model, sm_document_particle_index(doc, "s[0,0]"), &corner), SM_OK);
+	ENSURE(corner.mass == 1.0 / 32.0);
 	sm_model_destroy(model);
 
 	char* json = sm_document_to_json(doc, &err);
@@ -1832,6 +1837,9 @@ static int test_per_section_constants_in_a_model_file(void)
 	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"section_damping\": 5, \"section\": 0}]}",
 	     "springs[0].section"},
+	    {"{\"springmass\": 1, \"name\": \"r\", \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": 2,"
+	     " \"nv\": 2, \"mass_distribution\": \"area\"}]}",
+	     "structures[0].mass_distribution: must be \"even\" or \"lumped\""},
 	};
 	for (size_t k = 0; k < sizeof refused / sizeof refused[0]; k++) {
 		sm_document* bad = parse(refused[k].text, &err);

@@ -25,10 +25,12 @@ extern "C" {
 /// share of the structure's area (sheet, mesh) or volume (block), and its section is that share
 /// over its length: a sheet's or block's grid cell, halved for each boundary line or face the
 /// spring runs along; the triangles on both sides of a mesh edge (for its edge spring and the
-/// bend spring across it). Then a group stretched uniformly along its springs pulls with
-/// stiffness x strain per unit width of a sheet [N/m] or per unit area of a block's cross-section
-/// [N/m^2], whatever the grid; a mesh's edge springs per section give an equilateral
-/// triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's ratio 1/3).
+/// bend spring across it). Then the springs of one direction, stretched uniformly along it,
+/// carry stiffness x strain per unit width of a sheet [N/m] or per unit area of a block's
+/// cross-section [N/m^2] across them, whatever the grid: the lattice's elastic constants depend
+/// on the shape of its cells, not on their number. A mesh's edge springs per section give an
+/// equilateral triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's ratio
+/// 1/3); other triangle shapes other constants.
 typedef struct sm_spring_material {
 	double stiffness;              ///< ks [N/m]; per strain, E [N]; per section, [N/m] or [N/m^2]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
@@ -40,6 +42,18 @@ typedef struct sm_spring_material {
 	/// sm_simulation_update_model, or a model file's parameters: see docs/model-format.md).
 	bool keep_when_zero;
 } sm_spring_material;
+
+/// How a rope, sheet or block spreads its mass over its particles.
+typedef enum sm_mass_distribution {
+	/// Every particle the same share (default; the benchmark cloth's).
+	SM_MASS_EVEN = 0,
+	/// Each particle the share of the length, area or volume nearest to it: a half at a rope's
+	/// end or a sheet's or block's boundary, a quarter at a corner of a sheet (and where two of a
+	/// block's faces meet), an eighth at a block's corner, the lumped masses of the grid's cells.
+	/// With per-section constants a refined structure then keeps its masses where its springs
+	/// are, and its results converge faster (docs/model-format.md).
+	SM_MASS_LUMPED,
+} sm_mass_distribution;
 
 /// Index ranges created by a builder, and the grid shape for grid addressing.
 typedef struct sm_structure {
@@ -73,8 +87,9 @@ typedef struct sm_rope_def {
 	double start[3];                ///< first particle's position [m]; default (0, 0, 0)
 	double end[3];                  ///< last particle's position [m]; default (1, 0, 0)
 	int32_t segments;               ///< number of structural springs, >= 1; default 10
-	double mass;                    ///< total mass [kg] > 0, spread evenly over segments + 1 particles; default 1
+	double mass;                    ///< total mass [kg] > 0 over the segments + 1 particles; default 1
 	double mass_per_length;         ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
+	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material structural;  ///< springs between neighbours; default E = 1000 N per strain, no damping
 	sm_spring_material bending;     ///< springs to the second neighbour; zero constants (default) = none
 } sm_rope_def;
@@ -92,7 +107,8 @@ typedef struct sm_sheet_def {
 	double edge_v[3];               ///< second edge [m]; default (0, 1, 0)
 	int32_t nu;                     ///< particles along edge_u, >= 2; default 16
 	int32_t nv;                     ///< particles along edge_v, >= 2; default 16
-	double mass;                    ///< total mass [kg] > 0, spread evenly; default 1
+	double mass;                    ///< total mass [kg] > 0; default 1
+	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material structural;
 	sm_spring_material shear;
 	sm_spring_material bend;
@@ -112,7 +128,8 @@ typedef struct sm_block_def {
 	double origin[3];    ///< [m]; default (0, 0, 0)
 	double size[3];      ///< edge lengths along x, y, z [m], > 0; default (1, 1, 1)
 	int32_t nu, nv, nw;  ///< particles along x, y, z, each >= 2; default 4
-	double mass;         ///< total mass [kg] > 0, spread evenly; default 1
+	double mass;         ///< total mass [kg] > 0; default 1
+	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material edge;
 	sm_spring_material face_diagonal;
 	sm_spring_material body_diagonal;
