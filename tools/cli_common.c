@@ -261,3 +261,25 @@ int cli_close(const char* command, const char* path, FILE* f)
 	}
 	return 0;
 }
+
+int cli_model_argument(const char* command, const char* arg, const char** model)
+{
+	if (arg[0] == '-' && arg[1] != '\0') {
+		fprintf(stderr, "springmass %s: unknown option or missing value: %s\n\n", command, arg);
+		return 2;
+	}
+	if (*model != NULL) {
+		fprintf(stderr, "springmass %s: one model file at a time ('%s' and '%s' given)\n\n", command, *model, arg);
+		return 2;
+	}
+	*model = arg;
+	return 0;
+}
+
+int cli_model_given(const char* command, const char* model)
+{
+	if (model != NULL)
+		return 0;
+	fprintf(stderr, "springmass %s: no model file given\n\n", command);
+	return 2;
+}

@@ -23,6 +23,15 @@ int32_t cli_setting_parameter(const sm_document* doc, const char* setting);
 /// model refuses (the document then unchanged).
 int cli_set_parameters(const char* command, sm_document* doc, const char* const* settings, int count);
 
+/// An argument of subcommand `command` that none of its options took: the model file when none
+/// was given yet (returns 0, *model set); else a usage error printed on stderr (returns 2): an
+/// unknown option or one missing its value (an argument starting with '-', "-" alone excepted),
+/// or a second model file. The caller prints its usage after it.
+int cli_model_argument(const char* command, const char* arg, const char** model);
+
+/// After the arguments: 0 when a model file was given, else the usage error printed (2).
+int cli_model_given(const char* command, const char* model);
+
 /// Loads the model file at path, applies the settings and builds the model. Returns 0 with *doc
 /// and *model set (the caller destroys both); otherwise prints the error with the command's name,
 /// leaves both NULL and returns the exit status (as cli_set_parameters, 1 for a bad model file).

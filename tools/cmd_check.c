@@ -80,20 +80,12 @@ int sm_cmd_check(int argc, char** argv)
 			usage(stdout);
 			return 0;
 		}
-		if (argv[i][0] == '-' && argv[i][1] != '\0') {
-			fprintf(stderr, "springmass check: unknown option '%s'\n\n", argv[i]);
+		if (cli_model_argument("check", argv[i], &path) != 0) {
 			usage(stderr);
 			return 2;
 		}
-		if (path != NULL) {
-			fprintf(stderr, "springmass check: one model file at a time ('%s' and '%s' given)\n\n", path, argv[i]);
-			usage(stderr);
-			return 2;
-		}
-		path = argv[i];
 	}
-	if (path == NULL) {
-		fprintf(stderr, "springmass check: no model file given\n\n");
+	if (cli_model_given("check", path) != 0) {
 		usage(stderr);
 		return 2;
 	}

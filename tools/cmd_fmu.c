@@ -533,21 +533,14 @@ static int parse_arguments(int argc, char** argv, options* opt)
 			}
 			*slot = argv[++i];
 			opt->set_count += set;
-		} else if (a[0] == '-' && a[1] != '\0') {
-			fprintf(stderr, "springmass fmu: unknown option %s\n\n", a);
-			usage(stderr);
-			return 2;
-		} else if (!opt->model) {
-			opt->model = a;
-		} else {
-			fprintf(stderr, "springmass fmu: one model file only (got %s and %s)\n\n", opt->model, a);
+		} else if (cli_model_argument("fmu", a, &opt->model) != 0) {
 			usage(stderr);
 			return 2;
 		}
 	}
-	if (!opt->model || !opt->output) {
-		fprintf(stderr, "springmass fmu: %s\n\n",
-		        !opt->model ? "no model file given" : "no output given (-o NAME.fmu)");
+	if (cli_model_given("fmu", opt->model) != 0 || !opt->output) {
+		if (opt->model)
+			fprintf(stderr, "springmass fmu: no output given (-o NAME.fmu)\n\n");
 		usage(stderr);
 		return 2;
 	}

@@ -182,21 +182,13 @@ int sm_cmd_modes(int argc, char** argv)
 			}
 		} else if (strcmp(a, "--set") == 0 && has_value) {
 			settings[setting_count++] = argv[++i];
-		} else if (a[0] == '-' && a[1] != '\0') {
-			fprintf(stderr, "springmass modes: unknown option or missing value: %s\n\n", a);
+		} else if (cli_model_argument("modes", a, &model_path) != 0) {
 			usage(stderr);
-			free(settings);
-			return 2;
-		} else if (model_path == NULL) {
-			model_path = a;
-		} else {
-			fprintf(stderr, "springmass modes: one model file at a time ('%s' and '%s' given)\n", model_path, a);
 			free(settings);
 			return 2;
 		}
 	}
-	if (model_path == NULL) {
-		fprintf(stderr, "springmass modes: no model file given\n\n");
+	if (cli_model_given("modes", model_path) != 0) {
 		usage(stderr);
 		free(settings);
 		return 2;

@@ -250,10 +250,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
-			if (!known) {
-				fprintf(stderr, "springmass run: unknown option '%s'\n\n", a);
-				return 2;
-			}
+			if (!known)
+				return cli_model_argument("run", a, &o->model);
 			if (!has_value) {
 				fprintf(stderr, "springmass run: %s needs a value\n\n", a);
 				return 2;
@@ -309,18 +307,11 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			} else {  // --set, the last of with_value
 				o->sets[o->set_count++] = value;
 			}
-		} else if (o->model == NULL) {
-			o->model = a;
-		} else {
-			fprintf(stderr, "springmass run: one model file at a time ('%s' and '%s' given)\n\n", o->model, a);
+		} else if (cli_model_argument("run", a, &o->model) != 0) {
 			return 2;
 		}
 	}
-	if (o->model == NULL) {
-		fprintf(stderr, "springmass run: no model file given\n\n");
-		return 2;
-	}
-	return 0;
+	return cli_model_given("run", o->model);
 }
 
 int sm_cmd_run(int argc, char** argv)

@@ -132,21 +132,13 @@ int sm_cmd_statics(int argc, char** argv)
 			}
 		} else if (strcmp(a, "-q") == 0 || strcmp(a, "--quiet") == 0) {
 			quiet = 1;
-		} else if (a[0] == '-' && a[1] != '\0') {
-			fprintf(stderr, "springmass statics: unknown option or missing value: %s\n\n", a);
+		} else if (cli_model_argument("statics", a, &model_path) != 0) {
 			usage(stderr);
-			free(settings);
-			return 2;
-		} else if (model_path == NULL) {
-			model_path = a;
-		} else {
-			fprintf(stderr, "springmass statics: one model file at a time ('%s' and '%s' given)\n", model_path, a);
 			free(settings);
 			return 2;
 		}
 	}
-	if (model_path == NULL) {
-		fprintf(stderr, "springmass statics: no model file given\n\n");
+	if (cli_model_given("statics", model_path) != 0) {
 		usage(stderr);
 		free(settings);
 		return 2;

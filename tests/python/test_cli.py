@@ -503,7 +503,7 @@ def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
     env = dict(os.environ, TMPDIR=str(staging))
     assert cli("fmu", "-h").stdout.startswith("usage: springmass fmu")
     out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--frobnicate", status=2, env=env)
-    assert out.stderr.startswith("springmass fmu: unknown option --frobnicate")
+    assert out.stderr.startswith("springmass fmu: unknown option or missing value: --frobnicate")
     # The message says where it looked for the runtime.
     (tmp_path / "empty").mkdir()
     out = cli("fmu", osc, "-o", fmu, "--runtime", tmp_path / "empty", status=1, env=env)
@@ -537,3 +537,19 @@ def test_fmu_writes_values_the_file_order_cannot_take_where_each_was_last_set(tm
     cli("fmu", model, "-o", fmu, "--runtime", runtime, "--set", "b=1", "--set", "c=5", "--set", "b=1", "--set", "a=1")
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/parameters.txt") == b"c=5\nb=1\na=1\n"
+
+
+@pytest.mark.parametrize("command", ["check", "run", "statics", "modes", "fmu"])
+def test_every_command_refuses_a_missing_or_second_model_file_and_unknown_options(command, tmp_path):
+    # One model file per call: none, two, or an option no command knows is a usage error (exit 2),
+    # said the same way by every command and followed by its usage; nothing is written.
+    osc, cloth = MODELS / "oscillator.json", MODELS / "cloth.json"
+    output = ["-o", tmp_path / "out"] if command in ("fmu", "run") else []
+    cases = (([], "no model file given"),
+             ([osc, cloth], f"one model file at a time ('{osc}' and '{cloth}' given)"),
+             (["--frobnicate", osc], "unknown option or missing value: --frobnicate"))
+    for args, message in cases:
+        out = cli(command, *args, *output, status=2)
+        assert out.stderr.startswith(f"springmass {command}: {message}\n"), out.stderr
+        assert f"usage: springmass {command}" in out.stderr, out.stderr
+    assert list(tmp_path.iterdir()) == []
