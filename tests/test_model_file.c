@@ -1843,6 +1843,48 @@ static int test_per_section_constants_in_a_model_file(void)
 	sm_document_destroy(again);
 	sm_document_destroy(doc);
 
+	// A single spring's section from a parameter, with only its damping per section: saved as
+	// the parameter, so that a new value acts on the saved document too (w = 1 doubles kd).
+	const char* damped =
+	    "{\"springmass\": 1, \"name\": \"d\", \"parameters\": {\"w\": 0.5},"
+	    " \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [2, 0, 0]}],"
+	    " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 5, \"section_damping\": 2, \"section\": \"w\"}]}";
+	doc = parse_valid(damped, &err);
+	ENSURE(doc != NULL);
+	json = sm_document_to_json(doc, &err);
+	ENSURE(json != NULL && strstr(json, "\"section\": \"w\"") != NULL);
+	again = parse_valid(json, &err);
+	free(json);
+	ENSURE(again != NULL && same_document(doc, again) == 0);
+	ENSURE_STATUS(sm_document_set_parameter(again, 0, 1.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(again, &model, &err), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE(ks == 5.0 && kd == 2.0 * 1.0 / 2.0);
+	sm_model_destroy(model);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	// Lumped masses of a rope (4 segments, 2 kg: 0.25 and 0.5 kg) and of a block (3 x 3 x 3,
+	// 8 kg: an eighth of a 1 kg cell at a corner) from a file.
+	const char* lumped =
+	    "{\"springmass\": 1, \"name\": \"l\", \"structures\": ["
+	    " {\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 4,"
+	    "  \"mass\": 2, \"mass_distribution\": \"lumped\", \"structural\": {\"strain_stiffness\": 10}},"
+	    " {\"type\": \"block\", \"name\": \"b\", \"origin\": [0, 2, 0], \"size\": [1, 1, 1], \"nu\": 3, \"nv\": 3,"
+	    "  \"nw\": 3, \"mass\": 8, \"mass_distribution\": \"lumped\", \"edge\": {\"strain_stiffness\": 10}}]}";
+	doc = parse_valid(lumped, &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	static const char* const names[3] = {"r[0]", "r[1]", "b[0,0,0]"};
+	static const double masses[3] = {0.25, 0.5, 0.125};
+	for (int k = 0; k < 3; k++) {
+		sm_particle_def particle;
+		ENSURE_STATUS(sm_model_get_particle(model, sm_document_particle_index(doc, names[k]), &particle), SM_OK);
+		ENSURE_NEAR(particle.mass, masses[k], 1e-15);
+	}
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+
 	static const struct {
 		const char* text;
 		const char* message;

@@ -1088,8 +1088,26 @@ static int test_lumped_masses(void)
 			}
 	ENSURE_NEAR(total, 8.0, 1e-14);
 	ENSURE(sm_default_sheet_def().mass_distribution == SM_MASS_EVEN);
-	block.mass_distribution = (sm_mass_distribution)7;
+	// A rope's mass per length is spread the same way: 0.5 kg/m over 4 m, 4 segments: 0.4 kg
+	// each when even, 0.25 and 0.5 kg lumped.
+	rope.end[0] = 4.0;
+	rope.mass = 1.0;
+	rope.mass_per_length = 0.5;
+	for (int lumped = 0; lumped < 2; lumped++) {
+		rope.mass_distribution = lumped ? SM_MASS_LUMPED : SM_MASS_EVEN;
+		ENSURE_STATUS(sm_add_rope(model, &rope, &r), SM_OK);
+		for (int32_t j = 0; j < 5; j++) {
+			ENSURE_STATUS(sm_model_get_particle(model, sm_structure_particle(&r, 0, j, 0), &p), SM_OK);
+			ENSURE_NEAR(p.mass, lumped ? (j == 0 || j == 4 ? 0.25 : 0.5) : 0.4, 1e-15);
+		}
+	}
+	// An unknown distribution is refused by every structure that has one, adding nothing.
+	rope.mass_distribution = sheet.mass_distribution = block.mass_distribution = (sm_mass_distribution)7;
 	const int32_t before = sm_model_particle_count(model);
+	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(model), "rope: mass distribution = 7 is not known") != NULL);
+	ENSURE_STATUS(sm_add_sheet(model, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(model), "sheet: mass distribution = 7 is not known") != NULL);
 	ENSURE_STATUS(sm_add_block(model, &block, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(strstr(sm_model_last_error(model), "block: mass distribution = 7 is not known") != NULL);
 	ENSURE(sm_model_particle_count(model) == before);
@@ -1097,8 +1115,10 @@ static int test_lumped_masses(void)
 	return 0;
 }
 
-// A rope has no cross-section: per-section constants are refused, naming the group; so is a
-// spring's own section that is not positive and finite.
+// A rope has no cross-section: per-section constants are refused, naming the group, its
+// stiffness or damping; so is a spring's own section that is not positive and finite (0 and -1
+// negative, NaN not finite), when either constant is per section; and a zero-length spring. The
+// default section is 1 m.
 static int test_per_section_rules(void)
 {
 	sm_model* model = weightless_model();
@@ -1107,6 +1127,13 @@ static int test_per_section_rules(void)
 	rope.structural = section_material(10.0);
 	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(strstr(sm_model_last_error(model), "rope: structural stiffness per section: a rope has no cross-section") !=
+	       NULL);
+	rope.structural = sm_default_spring_material();
+	rope.structural.stiffness = 10.0;
+	rope.structural.damping = 1.0;
+	rope.structural.damping_scaling = SM_PER_SECTION;
+	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(model), "rope: structural damping per section: a rope has no cross-section") !=
 	       NULL);
 	ENSURE(sm_model_particle_count(model) == 0);
 	sm_particle_def p = sm_default_particle_def();
@@ -1128,12 +1155,85 @@ static int test_per_section_rules(void)
 	ENSURE_STATUS(sm_model_get_spring(model, 0, &back), SM_OK);
 	ENSURE(back.section == 0.5 && back.stiffness_scaling == SM_PER_SECTION);
 	const double bad[3] = {0.0, -1.0, NAN};
+	const sm_status bad_status[3] = {SM_ERROR_NEGATIVE, SM_ERROR_NEGATIVE, SM_ERROR_NOT_FINITE};
 	for (int k = 0; k < 3; k++) {
 		s.section = bad[k];
-		ENSURE(sm_model_add_spring(model, &s, NULL) != SM_OK);
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), bad_status[k]);
 		ENSURE(strstr(sm_model_last_error(model), "section") != NULL);
 	}
+	// Only the stiffness per section: its section is still checked.
+	s.damping_scaling = SM_ABSOLUTE;
+	s.section = -1.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_NEGATIVE);
+	ENSURE(strstr(sm_model_last_error(model), "spring 1: section = -1 must be finite and > 0") != NULL);
+	// A zero-length spring has no length to divide by.
+	s.section = 0.5;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.rest_length = 0.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE(strstr(sm_model_last_error(model), "per-section stiffness needs a rest length > 0") != NULL);
 	ENSURE(sm_model_spring_count(model) == 1);
+	// The default section, 1 m: ks = 30 x 1 / 2.
+	sm_spring_def plain = sm_default_spring_def();
+	ENSURE(plain.section == 1.0);
+	plain.b = 1;
+	plain.stiffness = 30.0;
+	plain.stiffness_scaling = SM_PER_SECTION;
+	ENSURE_STATUS(sm_model_add_spring(model, &plain, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_spring_constants(model, 1, NULL, &ks, NULL), SM_OK);
+	ENSURE(ks == 15.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Sections in a sheet of non-square cells and in a mesh's bend group, worked out by hand. A
+// 2 m x 0.5 m sheet of 3 x 2 particles has cells of 1 m x 0.5 m: its first spring, along the
+// boundary row, stands for half a cell (0.25 m^2) over 1 m, ks = 300 x 0.25 / 1 = 75 N/m; the
+// vertical spring of its middle column for a whole cell over 0.5 m, ks = 300 x 1 / 0.5. A unit
+// square of two triangles has one bend spring, across the diagonal (0, 2), from 1 to 3: it
+// stands for both triangles (1 m^2) over sqrt(2) m, ks = 100 x (1 / sqrt(2)) / sqrt(2) = 50.
+static int test_per_section_sections_by_hand(void)
+{
+	sm_model* model = weightless_model();
+	ENSURE(model != NULL);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.edge_u[0] = 2.0;
+	sheet.edge_v[1] = 0.5;
+	sheet.nu = 3;
+	sheet.nv = 2;
+	sheet.structural = section_material(300.0);
+	sheet.shear = sheet.bend = sm_default_spring_material();
+	ENSURE_STATUS(sm_add_sheet(model, &sheet, NULL), SM_OK);
+	sm_spring_def s;
+	double ks;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
+	ENSURE(s.a == 0 && s.b == 1 && s.section == 0.25);
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, NULL, &ks, NULL), SM_OK);
+	ENSURE_NEAR(ks, 75.0, 1e-12);
+	ENSURE_STATUS(sm_model_get_spring(model, 3, &s), SM_OK);
+	ENSURE(s.a == 1 && s.b == 4);
+	ENSURE_STATUS(sm_model_spring_constants(model, 3, NULL, &ks, NULL), SM_OK);
+	ENSURE_NEAR(ks, 600.0, 1e-12);
+	sm_model_destroy(model);
+
+	model = weightless_model();
+	ENSURE(model != NULL);
+	const double vertices[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+	const int32_t triangles[6] = {0, 1, 2, 0, 2, 3};
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices;
+	mesh.vertex_count = 4;
+	mesh.triangles = triangles;
+	mesh.triangle_count = 2;
+	mesh.edge = sm_default_spring_material();
+	mesh.bend = section_material(100.0);
+	ENSURE_STATUS(sm_add_mesh(model, &mesh, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(model) == 1);
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
+	ENSURE(((s.a == 1 && s.b == 3) || (s.a == 3 && s.b == 1)));
+	ENSURE_NEAR(s.section, 1.0 / sqrt(2.0), 1e-15);
+	ENSURE_STATUS(sm_model_spring_constants(model, 0, NULL, &ks, NULL), SM_OK);
+	ENSURE_NEAR(ks, 50.0, 1e-12);
 	sm_model_destroy(model);
 	return 0;
 }
@@ -1162,6 +1262,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_mesh_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
 	RUN_TEST(test_per_section_rules);
+	RUN_TEST(test_per_section_sections_by_hand);
 	RUN_TEST(test_lumped_masses);
 	return TEST_SUMMARY();
 }

@@ -83,6 +83,7 @@ def test_bundled_fmu_documents_its_variables(model):
         sentence = doc.paragraphs["particles"][0]
         assert f"{first.name} … {last.name}, value references {first.valueReference} to {last.valueReference}" \
             in sentence, sentence
+        assert f"at value references {first.valueReference} + 6 i to {first.valueReference + 5} + 6 i" in sentence
     with zipfile.ZipFile(fmu) as archive:
         names = set(archive.namelist())
         page = archive.read("documentation/index.html").decode("utf-8")

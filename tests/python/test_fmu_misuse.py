@@ -738,6 +738,8 @@ def test_a_step_that_ends_before_the_fmus_time_is_refused(test_fmu):
                 lagging = math.nextafter(lagging, 0.0)
             state = s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]])
             expect_error(inst, lambda: s.doStep(lagging, 1e-15), "not after the FMU's time")
+            assert lagging + (t - lagging) == t  # a step that ends exactly at the FMU's time
+            expect_error(inst, lambda: s.doStep(lagging, t - lagging), "not after the FMU's time")
             assert s.getStatus(0) == 0 and s.getRealStatus(2) == t  # fmi2OK, fmi2LastSuccessfulTime
             assert s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]]) == state
             s.doStep(lagging, 0.01)  # a step that does end after it is taken from the lagging point
