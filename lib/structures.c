@@ -200,20 +200,35 @@ static sm_status check_distribution(sm_model* model, const char* what, sm_mass_d
 	return SM_OK;
 }
 
+// The share of a grid cell's area or volume that a spring from grid point `at` along `offset`
+// stands for: the cells on both sides of it, or only one side where it runs along the boundary.
+// Along each axis the spring does not advance on (offset 0), a spring on the first or last grid
+// line has cells on one side only: half. So uniformly stretched, the springs of a group carry
+// exactly the force per unit width (or area) that their constant gives, whatever the grid.
+static double boundary_share(const int offset[], const int64_t at[], const int64_t counts[], int axes)
+{
+	double share = 1.0;
+	for (int axis = 0; axis < axes; axis++)
+		if (offset[axis] == 0 && (at[axis] == 0 || at[axis] == counts[axis] - 1))
+			share *= 0.5;
+	return share;
+}
+
 // The mass [kg] of grid point `at` of a structure of `total` kg on a grid of counts[] points
 // along each of its axes (sm_mass_distribution): the same for every point, or lumped, the share
 // of the cells around it: a half for each axis along which it is on the boundary.
 static double grid_point_mass(double total, sm_mass_distribution distribution, const int64_t at[],
                               const int64_t counts[], int axes)
 {
-	double points = 1.0, cells = 1.0, share = 1.0;
+	// A point's share of the cells around it is a spring's that advances along no axis.
+	static const int no_offset[3] = {0, 0, 0};
+	double points = 1.0, cells = 1.0;
 	for (int axis = 0; axis < axes; axis++) {
 		points *= (double)counts[axis];
 		cells *= (double)(counts[axis] - 1);
-		if (at[axis] == 0 || at[axis] == counts[axis] - 1)
-			share *= 0.5;
 	}
-	return distribution == SM_MASS_LUMPED ? total * share / cells : total / points;
+	return distribution == SM_MASS_LUMPED ? total * boundary_share(no_offset, at, counts, axes) / cells
+	                                      : total / points;
 }
 
 static sm_status check_mass(sm_model* model, const char* what, double mass)
@@ -239,20 +254,6 @@ void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_mode
 	out->shape[0] = n0;
 	out->shape[1] = n1;
 	out->shape[2] = n2;
-}
-
-// The share of a grid cell's area or volume that a spring from grid point `at` along `offset`
-// stands for: the cells on both sides of it, or only one side where it runs along the boundary.
-// Along each axis the spring does not advance on (offset 0), a spring on the first or last grid
-// line has cells on one side only: half. So uniformly stretched, the springs of a group carry
-// exactly the force per unit width (or area) that their constant gives, whatever the grid.
-static double boundary_share(const int offset[], const int64_t at[], const int64_t counts[], int axes)
-{
-	double share = 1.0;
-	for (int axis = 0; axis < axes; axis++)
-		if (offset[axis] == 0 && (at[axis] == 0 || at[axis] == counts[axis] - 1))
-			share *= 0.5;
-	return share;
 }
 
 // Two grid neighbours at the same position: a grid spacing below the rounding of the
