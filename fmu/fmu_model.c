@@ -154,16 +154,18 @@ static char* name_part(const char* s)
 typedef enum parameter_role {
 	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity: tunable
 	ROLE_STATE,          // the initial state, which particles are held, settings, a spring's kind: fixed
-	ROLE_STRUCTURE,      // counts of particles and springs, which particles springs join: constant
+	ROLE_STRUCTURE,      // counts of particles and springs, which particles springs join and ports
+	                     // name: constant
 } parameter_role;
 
 // What a parameter is to the FMU, from the places the model file names it
-// (sm_document_parameter_uses, which does not depend on the value): a count makes it a constant,
-// anything but constants makes it fixed. An unused parameter feeds nothing and stays tunable.
+// (sm_document_parameter_uses, which does not depend on the value): a count or an index in a
+// particle reference makes it a constant, anything but constants makes it fixed. An unused
+// parameter feeds nothing and stays tunable.
 static parameter_role parameter_role_of(const sm_document* doc, int32_t parameter)
 {
 	const uint32_t uses = sm_document_parameter_uses(doc, parameter);
-	if (uses & SM_PARAMETER_COUNTS)
+	if (uses & (SM_PARAMETER_COUNTS | SM_PARAMETER_PARTICLE_REFERENCES))
 		return ROLE_STRUCTURE;
 	if (uses & ~(uint32_t)SM_PARAMETER_CONSTANTS)
 		return ROLE_STATE;

@@ -8,6 +8,7 @@
 // Every failure frees what was made so far; nothing is left half-built.
 #define _POSIX_C_SOURCE 200809L  // open, fstat, read
 
+#include "index_expression.h"
 #include "model_file_internal.h"
 #include "model_file_text.h"
 
@@ -174,7 +175,20 @@ typedef enum feeds {
 	FEEDS_COUNTS = SM_PARAMETER_COUNTS,
 	FEEDS_SETTINGS = SM_PARAMETER_SETTINGS,
 	FEEDS_SPRING_KINDS = SM_PARAMETER_SPRING_KINDS,
+	FEEDS_REFERENCES = SM_PARAMETER_PARTICLE_REFERENCES,
 } feeds;
+
+// Notes parameter k for the messages on the element being read (fail_naming_parameters).
+static void note_parameter(parser* p, int32_t k)
+{
+	bool known = false;
+	for (int n = 0; n < p->noted_count && !known; n++)
+		known = p->noted[n] == k;
+	if (!known && p->noted_count < NOTED_PARAMETERS)
+		p->noted[p->noted_count++] = k;
+	else if (!known)
+		p->noted_more = true;
+}
 
 // A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
 // parameter's index or -1 (source may be NULL).
@@ -195,13 +209,7 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 		p->ex->parameter_uses[k] |= (uint8_t)use;
 		if (source != NULL)
 			*source = k;
-		bool known = false;
-		for (int n = 0; n < p->noted_count && !known; n++)
-			known = p->noted[n] == k;
-		if (!known && p->noted_count < NOTED_PARAMETERS)
-			p->noted[p->noted_count++] = k;
-		else if (!known)
-			p->noted_more = true;
+		note_parameter(p, k);
 		return true;
 	}
 	return fail(p, SM_ERROR_SCHEMA, path, "must be a number or a parameter name, not %s", type_name(value));
@@ -210,10 +218,12 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 // Describes where a value came from, for messages: "5" or "parameter k = 5".
 static const char* describe(parser* p, char* buffer, size_t size, double value, int32_t source)
 {
+	char text[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(value, text);
 	if (source >= 0)
-		snprintf(buffer, size, "parameter %s = %g", p->doc->parameter_names[source], value);
+		snprintf(buffer, size, "parameter %s = %s", p->doc->parameter_names[source], text);
 	else
-		snprintf(buffer, size, "%g", value);
+		snprintf(buffer, size, "%s", text);
 	return buffer;
 }
 
@@ -534,9 +544,82 @@ static const document_structure* find_structure(const expansion* ex, const char*
 	return s >= 0 ? &ex->structures[s] : NULL;
 }
 
-// A particle reference: an index, a particle's name, or "structure[i, j, k]" with one to three
-// whole numbers (one: the particle's position in the structure; two: row and column of a sheet;
-// three: row, column and layer of a block).
+// A parameter named in an index of a structure reference (index_expression_lookup_fn).
+static bool lookup_index_parameter(void* context, const char* name, size_t length, double* value)
+{
+	parser* p = context;
+	const int32_t k = name_index_find(&p->doc->parameter_index, name, length);
+	if (k < 0)
+		return false;
+	*value = p->parameter_values[k];
+	p->ex->parameter_uses[k] |= (uint8_t)FEEDS_REFERENCES;
+	note_parameter(p, k);
+	return true;
+}
+
+// The particle of structure s that "name[...]" names (text: the reference quoted for messages;
+// open: its '['): one to three indices, each a whole number or an expression of parameters
+// (index_expression.h). One index is the particle's position in the structure; two are row and
+// column of a sheet; three row, column and layer of a block. A message on a value names the
+// parameters the indices came from.
+static bool resolve_structure_reference(parser* p, const document_structure* s, const char* open, const char* text,
+                                        const char* path, int32_t* out)
+{
+	static const char* const form = "a structure reference is name[i], name[row, column] or name[row, column, layer]";
+	int64_t c[3];
+	int count = 0;
+	const char* q = open + 1;
+	for (;;) {
+		char why[INDEX_EXPRESSION_MESSAGE_CAPACITY];
+		char message[SM_ERROR_MESSAGE_CAPACITY];
+		const char* end;
+		const index_expression_status status =
+		    count < 3 ? index_expression_evaluate(q, lookup_index_parameter, p, &c[count], &end, why)
+		              : INDEX_EXPRESSION_SYNTAX;
+		if (status == INDEX_EXPRESSION_UNKNOWN_NAME)
+			return fail(p, SM_ERROR_NOT_FOUND, path, "%s: %s", text, why);
+		if (status == INDEX_EXPRESSION_NOT_WHOLE)
+			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s", text, why);
+		if (status == INDEX_EXPRESSION_INVALID) {
+			snprintf(message, sizeof message, "%s: %s", text, why);
+			return fail_naming_parameters(p, SM_ERROR_SCHEMA, path, message);
+		}
+		if (status != INDEX_EXPRESSION_OK || (*end == ']' && end[1] != '\0') || *end == '\0')
+			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s", text, form);
+		count++;
+		if (*end == ']')
+			break;
+		q = end + 1;  // past the ','
+	}
+	const sm_structure* r = &s->range;
+	int64_t index = -1;
+	if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
+		index = r->first_particle + c[0];
+	else if (count == 2 && r->shape[2] == 1 && c[0] >= 0 && c[1] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0])
+		index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], 0);
+	else if (count == 3 && c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0] &&
+	         c[2] < r->shape[2])
+		index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
+	if (index >= 0) {
+		*out = (int32_t)index;
+		return true;
+	}
+	char message[SM_ERROR_MESSAGE_CAPACITY];
+	if (s->type == STRUCTURE_SHEET)
+		snprintf(message, sizeof message, "%s is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])",
+		         text, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
+	else if (s->type == STRUCTURE_BLOCK)
+		snprintf(message, sizeof message,
+		         "%s is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] to [%d])", text,
+		         s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1, (int)r->particle_count - 1);
+	else
+		snprintf(message, sizeof message, "%s is outside structure %s ([0] to [%d])", text, s->name,
+		         (int)r->particle_count - 1);
+	return fail_naming_parameters(p, SM_ERROR_PARTICLE_INDEX, path, message);
+}
+
+// A particle reference: an index, a particle's name, or "structure[i, j, k]"
+// (resolve_structure_reference).
 static bool resolve_particle(parser* p, const json_t* value, const char* path, int32_t* out)
 {
 	const int32_t n = sm_model_particle_count(p->ex->model);
@@ -571,60 +654,23 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 		*out = found;
 		return true;
 	}
-	// "structure[a, b, c]" written with other spacing than the generated names.
+	// "structure[...]": indices with other spacing than the generated names, or expressions.
 	const char* open = strchr(name, '[');
 	const size_t length = strlen(name);
 	if (open != NULL && length > 0 && name[length - 1] == ']') {
 		const document_structure* s = find_structure(p->ex, name, (size_t)(open - name));
 		if (s != NULL) {
-			long long c[3];
-			int count = 0;
-			const char* q = open + 1;
-			while (count < 3) {
-				char* end;
-				errno = 0;
-				c[count] = strtoll(q, &end, 10);
-				if (end == q || errno != 0) {
-					count = 0;  // a comma not followed by a number ("r[1,]") or an overflow
-					break;
-				}
-				count++;
-				while (*end == ' ')
-					end++;
-				if (*end == ',')
-					q = end + 1;
-				else {
-					q = end;
-					break;
-				}
-			}
-			if (count == 0 || *q != ']' || q[1] != '\0')
-				return fail(p, SM_ERROR_SCHEMA, path,
-				            "%s: a structure reference is name[i], name[row, column] or name[row, column, layer]", text);
-			const sm_structure* r = &s->range;
-			int64_t index = -1;
-			if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
-				index = r->first_particle + c[0];
-			else if (count == 2 && r->shape[2] == 1 && c[0] >= 0 && c[1] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0])
-				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], 0);
-			else if (count == 3 && c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0] &&
-			         c[2] < r->shape[2])
-				index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
-			if (index < 0 && s->type == STRUCTURE_SHEET)
-				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-				            "%s is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])", text,
-				            s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
-			if (index < 0 && s->type == STRUCTURE_BLOCK)
-				return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-				            "%s is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] "
-				            "to [%d])",
-				            text, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1,
-				            (int)r->particle_count - 1);
-			if (index < 0)
-				return fail(p, SM_ERROR_PARTICLE_INDEX, path, "%s is outside structure %s ([0] to [%d])", text,
-				            s->name, (int)r->particle_count - 1);
-			*out = (int32_t)index;
-			return true;
+			// The parameters the indices name are noted for this reference's messages alone.
+			int32_t noted[NOTED_PARAMETERS];
+			memcpy(noted, p->noted, sizeof noted);
+			const int noted_count = p->noted_count;
+			const bool noted_more = p->noted_more;
+			forget_parameters(p);
+			const bool ok = resolve_structure_reference(p, s, open, text, path, out);
+			memcpy(p->noted, noted, sizeof noted);
+			p->noted_count = noted_count;
+			p->noted_more = noted_more;
+			return ok;
 		}
 	}
 	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named %s", text);

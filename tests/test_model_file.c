@@ -272,7 +272,10 @@ static int test_bundled_model_facts(void)
 		double* x = malloc(3 * (size_t)n * (size_t)n * sizeof(double));
 		ENSURE(x != NULL);
 		ENSURE_STATUS(sm_statics_solve(m, NULL, x, NULL, NULL, NULL), SM_OK);
-		sag[k] = -x[3 * ((n / 2) * n + n / 2) + 2];
+		// The force port, membrane[n/2, n/2], follows the grid to its centre.
+		const int32_t centre = sm_document_port(doc, sm_document_port_index(doc, "centre")).particle;
+		ENSURE(centre == (n / 2) * n + n / 2);
+		sag[k] = -x[3 * centre + 2];
 		free(x);
 		sm_model_destroy(m);
 	}
@@ -691,7 +694,7 @@ static int test_broken_files(void)
 	     "section_stiffness, damping, strain_damping, section_damping, break_strain)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 1e9,"
 	     " \"nv\": 4}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1e+09 must be a whole number from 2 to 4194304"},
+	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1000000000 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 40000,"
 	     " \"nv\": 40000}]}",
 	     SM_ERROR_SCHEMA,
@@ -1401,6 +1404,19 @@ static int test_rules_at_their_edges(void)
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
 
+// Whether text is refused with status and message; prints what happened otherwise, under `label`.
+static bool refused_as(const char* text, const char* label, sm_status status, const char* message)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse(text, &err);
+	const bool refused = doc == NULL && err.status == status && strcmp(err.message, message) == 0;
+	if (!refused)
+		printf("  %s: status %d, \"%s\"\n  expected %d, \"%s\"\n", label, (int)err.status,
+		       doc != NULL ? "(loaded)" : err.message, (int)status, message);
+	sm_document_destroy(doc);
+	return refused;
+}
+
 // A reference outside its structure is refused, never taken for a particle beside it: particle
 // p comes before rope r (4 particles), sheet c (4 x 4), block b (2 x 2 x 2) and rope s (2), so
 // that one before r's first particle, or one past the end of a row, a layer or a structure, is a
@@ -1439,14 +1455,7 @@ static int test_references_stay_inside_their_structures(void)
 		char text[1024], expected[300];
 		snprintf(text, sizeof text, format, cases[c].reference, "");
 		snprintf(expected, sizeof expected, "test.json: springs[0].b: %s", cases[c].message);
-		sm_error err = {SM_OK, ""};
-		sm_document* doc = parse(text, &err);
-		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, expected) != 0) {
-			printf("  %s: status %d, \"%s\"\n  expected %d, \"%s\"\n", cases[c].reference, (int)err.status,
-			       doc != NULL ? "(loaded)" : err.message, (int)cases[c].status, expected);
-			failures++;
-		}
-		sm_document_destroy(doc);
+		failures += !refused_as(text, cases[c].reference, cases[c].status, expected);
 	}
 	ENSURE(failures == 0);
 	// The last particle of each structure, and of the model, by each form of reference: r 1..4,
@@ -1463,6 +1472,146 @@ static int test_references_stay_inside_their_structures(void)
 	for (size_t k = 0; k < sizeof held / sizeof held[0]; k++)
 		ENSURE(sm_model_free_index(m, held[k]) == -1);
 	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// An index of a structure reference may be an expression of parameters (docs: "Referring to
+// particles"): each case is worked out by hand as the position along a rope of 101 particles r
+// (particles 1..101, after particle p), a spring's end, with a = 7, b = -3, z = 0, h = 0.5 and
+// big = 2^31. Division rounds down, also for negative quotients (-7 / 2 is -4, not C's -3).
+static int test_reference_expressions(void)
+{
+	static const char* const format =
+	    "{\"springmass\": 1, \"name\": \"x\","
+	    " \"parameters\": {\"a\": 7, \"b\": -3, \"z\": 0, \"h\": 0.5, \"big\": 2147483648, \"k\": 2},"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [9, 9, 9]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 100}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"%s\", \"stiffness\": \"k\"}]}";
+	static const struct {
+		const char* reference;
+		int32_t position;
+	} values[] = {
+	    {"r[a*2+1]", 15},       {"r[(a+1)*2]", 16},      {"r[a - 2 - 1]", 4},       {"r[a/2]", 3},
+	    {"r[-b]", 3},           {"r[b/2+5]", 3},         {"r[7/-2+10]", 6},         {"r[-7/2+10]", 6},
+	    {"r[100/a*a]", 98},     {"r[+a]", 7},            {"r[ a\\t* 2 ]", 14},      {"r[--a]", 7},
+	    {"r[big - 2147483600]", 48},                     {"r[a - a/2*2]", 1},       {"r[-(b)*(-b)]", 9},
+	    {"r[((((((((((((((((((((((((((((((((1))))))))))))))))))))))))))))))))]", 1},  // 32 deep
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof values / sizeof values[0]; c++) {
+		char text[1024];
+		snprintf(text, sizeof text, format, values[c].reference);
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(text, &err);
+		sm_model* m = NULL;
+		sm_spring_def spring = sm_default_spring_def();
+		if (doc != NULL && sm_document_build(doc, &m, NULL) == SM_OK)
+			sm_model_get_spring(m, sm_model_spring_count(m) - 1, &spring);
+		if (doc == NULL || spring.b != 1 + values[c].position) {
+			printf("  %s: %s, particle %d, expected %d\n", values[c].reference, doc == NULL ? err.message : "loaded",
+			       (int)spring.b, (int)(1 + values[c].position));
+			failures++;
+		}
+		if (doc != NULL) {
+			const uint32_t uses = sm_document_parameter_uses(doc, sm_document_parameter_index(doc, "a"));
+			const bool named = strchr(values[c].reference, 'a') != NULL;
+			ENSURE(uses == (named ? (uint32_t)SM_PARAMETER_PARTICLE_REFERENCES : 0u));
+			ENSURE(sm_document_parameter_uses(doc, sm_document_parameter_index(doc, "k")) == SM_PARAMETER_CONSTANTS);
+		}
+		sm_model_destroy(m);
+		sm_document_destroy(doc);
+	}
+	ENSURE(failures == 0);
+	static const char* const form = "a structure reference is name[i], name[row, column] or name[row, column, layer]";
+	static const struct {
+		const char* reference;
+		sm_status status;
+		const char* message;  // after "test.json: springs[0].b: \"<reference>\""
+	} refusals[] = {
+	    {"r[c]", SM_ERROR_NOT_FOUND, ": no parameter named \"c\""},
+	    {"r[h]", SM_ERROR_SCHEMA, ": parameter h = 0.5 is not a whole number within 2^31"},
+	    {"r[a/z]", SM_ERROR_SCHEMA, ": division by zero (with parameter a = 7 and parameter z = 0)"},
+	    {"r[big*big]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
+	    {"r[big+1]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
+	    {"r[2147483649]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude"},
+	    // Only the reference's parameters are named, not the spring's stiffness k read before.
+	    {"r[a*b]", SM_ERROR_PARTICLE_INDEX,
+	     " is outside structure r ([0] to [100]) (with parameter a = 7 and parameter b = -3)"},
+	    {"r[a-]", SM_ERROR_SCHEMA, NULL},
+	    {"r[(a]", SM_ERROR_SCHEMA, NULL},
+	    {"r[a)]", SM_ERROR_SCHEMA, NULL},
+	    {"r[a b]", SM_ERROR_SCHEMA, NULL},
+	    {"r[2a]", SM_ERROR_SCHEMA, NULL},
+	    {"r[]", SM_ERROR_SCHEMA, NULL},
+	    {"r[1e2]", SM_ERROR_SCHEMA, NULL},
+	    {"r[a,]", SM_ERROR_SCHEMA, NULL},
+	    {"r[(((((((((((((((((((((((((((((((((1)))))))))))))))))))))))))))))))))]", SM_ERROR_SCHEMA, NULL},  // 33 deep
+	};
+	for (size_t c = 0; c < sizeof refusals / sizeof refusals[0]; c++) {
+		char text[1024], expected[400];
+		snprintf(text, sizeof text, format, refusals[c].reference);
+		if (refusals[c].message != NULL)
+			snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\"%s", refusals[c].reference,
+			         refusals[c].message);
+		else
+			snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\": %s", refusals[c].reference, form);
+		failures += !refused_as(text, refusals[c].reference, refusals[c].status, expected);
+	}
+	ENSURE(failures == 0);
+	return 0;
+}
+
+// References that name a grid by its size parameter follow it when it changes: a port at the
+// middle of an n x n sheet, the two far corners fixed, a spring to the end of a rope of m
+// segments, and a probe on the rope's particle n + 1 (m = n + 1 keeps it the rope's end). n = 5, 8
+// and 7 put the middle at 2, 4 and 3 (n / 2 rounds down).
+static int test_references_follow_their_parameters(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"n\": 5, \"m\": 6},"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": \"n\", \"nv\": \"n\","
+	    "   \"structural\": {\"strain_stiffness\": 10}},"
+	    "  {\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 1], \"end\": [1, 0, 1], \"segments\": \"m\"}],"
+	    " \"springs\": [{\"a\": \"c[n - 1, n / 2]\", \"b\": \"r[m]\", \"stiffness\": 1}],"
+	    " \"fixed\": [\"c[n-1, 0]\", \"c[n - 1, n - 1]\"],"
+	    " \"ports\": [{\"name\": \"middle\", \"particle\": \"c[n/2, n/2]\", \"kind\": \"force\"},"
+	    "  {\"name\": \"end\", \"particle\": \"r[n + 1]\", \"kind\": \"probe\"}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	const int32_t n = sm_document_parameter_index(doc, "n"), m = sm_document_parameter_index(doc, "m");
+	ENSURE(sm_document_parameter_uses(doc, n) == (SM_PARAMETER_COUNTS | SM_PARAMETER_PARTICLE_REFERENCES));
+	ENSURE(sm_document_parameter_uses(doc, m) == (SM_PARAMETER_COUNTS | SM_PARAMETER_PARTICLE_REFERENCES));
+	static const int sizes[] = {5, 8, 7};
+	for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+		const int size = sizes[k], middle = size / 2;
+		const double values[2] = {size, size + 1};
+		ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+		char name[64];
+		snprintf(name, sizeof name, "c[%d,%d]", middle, middle);
+		ENSURE(sm_document_port(doc, 0).particle == sm_document_particle_index(doc, name));
+		sm_model* model = NULL;
+		ENSURE_STATUS(sm_document_build(doc, &model, NULL), SM_OK);
+		ENSURE(count_fixed(model) == 2);
+		snprintf(name, sizeof name, "c[%d,0]", size - 1);
+		ENSURE(sm_model_free_index(model, sm_document_particle_index(doc, name)) == -1);
+		snprintf(name, sizeof name, "c[%d,%d]", size - 1, size - 1);
+		ENSURE(sm_model_free_index(model, sm_document_particle_index(doc, name)) == -1);
+		sm_spring_def spring;
+		sm_model_get_spring(model, sm_model_spring_count(model) - 1, &spring);
+		snprintf(name, sizeof name, "c[%d,%d]", size - 1, middle);
+		ENSURE(spring.a == sm_document_particle_index(doc, name));
+		snprintf(name, sizeof name, "r[%d]", size + 1);
+		ENSURE(spring.b == sm_document_particle_index(doc, name));
+		sm_model_destroy(model);
+	}
+	// A value that puts a reference outside its structure is refused, and the document keeps m = 8.
+	ENSURE_STATUS(sm_document_set_parameter(doc, m, 3, &err), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(strstr(err.message, "ports[1].particle: \"r[n + 1]\" is outside structure r ([0] to [3]) (with parameter n = 7)") !=
+	       NULL);
+	ENSURE(sm_document_parameter_value(doc, m) == 8.0 && sm_document_port(doc, 1).particle ==
+	                                                      sm_document_particle_index(doc, "r[8]"));
 	sm_document_destroy(doc);
 	return 0;
 }
@@ -2139,5 +2288,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_constants_in_a_model_file);
 	RUN_TEST(test_canonical_form_reads_back);
 	RUN_TEST(test_canonical_form_ignores_the_locale);
+	RUN_TEST(test_reference_expressions);
+	RUN_TEST(test_references_follow_their_parameters);
 	return TEST_SUMMARY();
 }

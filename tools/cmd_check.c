@@ -203,8 +203,8 @@ int sm_cmd_check(int argc, char** argv)
 	printf("parameters   %d\n", (int)parameters);
 	for (int32_t k = 0; k < parameters; k++) {
 		// What the parameter feeds, in the words of model_file.h's sm_parameter_use.
-		static const char* const uses[] = {"constants", "initial state", "held particles",
-		                                   "counts",    "settings",      "spring kinds"};
+		static const char* const uses[] = {"constants", "initial state", "held particles",     "counts",
+		                                   "settings",  "spring kinds",  "particle references"};
 		const uint32_t used = sm_document_parameter_uses(doc, k);
 		printf("  %-12s = %-12g feeds ", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
 		if (used == 0)

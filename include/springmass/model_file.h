@@ -89,6 +89,9 @@ typedef enum sm_parameter_use {
 	/// which law a spring follows: the rest length of a spring without a "kind" (0 makes it
 	/// zero-length, any other value rest-length)
 	SM_PARAMETER_SPRING_KINDS = 1 << 5,
+	/// which particle a structure reference names: an index of "cloth[n - 1, n / 2]" (ports,
+	/// "fixed", a spring's ends)
+	SM_PARAMETER_PARTICLE_REFERENCES = 1 << 6,
 } sm_parameter_use;
 
 /// The uses (sm_parameter_use flags) of a parameter; 0 for an unused one or an index out of

@@ -204,3 +204,24 @@ def test_set_values_the_file_has_change_nothing(package):
     with zipfile.ZipFile(plain) as a, zipfile.ZipFile(same) as b:
         assert a.namelist() == b.namelist()
         assert a.read("modelDescription.xml") == b.read("modelDescription.xml")
+
+
+def test_a_port_named_by_a_parameter_expression_follows_the_grid(package):
+    # The trampoline's force port is membrane[n/2, n/2]: packaged with n = 15 it is particle
+    # 7 * 15 + 7 = 112, the centre (0.5, 0.5, 0) m, and n is a constant of the FMU, as a count is.
+    # Its outputs are that particle's own variables, step for step (the same numbers: one state).
+    trampoline = ROOT / "models" / "trampoline.json"
+    fmu = package(trampoline, ("n=15",))
+    check_valid(fmu)
+    md = read_model_description(str(fmu))
+    v = {x.name: x for x in md.modelVariables}
+    assert (v["n"].causality, v["n"].variability, v["n"].start) == ("local", "constant", "15")
+    assert "membrane[7,7]" in v["centre.z"].description
+    names = ["centre.x", "centre.y", "centre.z", "p[112].x", "p[112].y", "p[112].z"]
+    r = simulate_fmu(str(fmu), stop_time=0.1, output_interval=0.01, output=names)
+    assert (r["centre.x"][0], r["centre.y"][0], r["centre.z"][0]) == (0.5, 0.5, 0.0)
+    for c in "xyz":
+        assert np.array_equal(r[f"centre.{c}"], r[f"p[112].{c}"])
+    # Dropped from flat, the centre falls: by g t^2 / 2 = 0.049 m at 0.1 s if free, less as the
+    # membrane catches it.
+    assert -0.049 < r["centre.z"][-1] < -0.005
