@@ -47,7 +47,7 @@ static bool failed(reader* r, index_expression_status status, const char* format
 
 static void skip_blanks(reader* r)
 {
-	while (*r->at == ' ' || *r->at == '\t')
+	while (*r->at == ' ' || (*r->at >= '\t' && *r->at <= '\r'))  // space, tab, LF, VT, FF, CR
 		r->at++;
 }
 

@@ -3,9 +3,10 @@
 //
 // An expression is made of whole numbers, names (the model file's parameters, whose values must
 // be whole numbers), the binary operators + - * /, unary + and -, and parentheses, with the usual
-// precedence (* and / before + and -, left to right). `/` divides and rounds down (13 / 2 is 6,
-// -1 / 2 is -1), so that n / 2 is the middle of n for even and odd n alike. Every value along the
-// way stays within +-2^31, so the arithmetic is exact.
+// precedence (* and / before + and -, left to right), nested at most 32 deep (parentheses and unary
+// signs). `/` divides and rounds down (13 / 2 is 6, -1 / 2 is -1, where C's division gives 0), so
+// that (n - 1) / 2 is the middle of n particles for odd n and the one before it for even n. Every
+// value along the way stays within +-2^31, so the arithmetic is exact.
 #pragma once
 
 #include <stdbool.h>
@@ -26,7 +27,7 @@ typedef enum index_expression_status {
 	INDEX_EXPRESSION_INVALID,       // a division by zero, or a value beyond +-2^31 along the way
 } index_expression_status;
 
-// Reads one expression from text, spaces and tabs around its parts allowed, up to the first ','
+// Reads one expression from text, white space (space, tab, LF, VT, FF, CR) around its parts allowed, up to the first ','
 // or ']' outside parentheses or the end of the text; *end gets where it stopped. On success
 // *value gets the expression's value. Otherwise message (INDEX_EXPRESSION_MESSAGE_CAPACITY bytes)
 // says what is wrong, naming the name or value at fault ("no parameter named \"m\"",

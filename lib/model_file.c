@@ -584,6 +584,8 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 			snprintf(message, sizeof message, "%s: %s", text, why);
 			return fail_naming_parameters(p, SM_ERROR_SCHEMA, path, message);
 		}
+		if (status == INDEX_EXPRESSION_SYNTAX && count < 3)
+			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s; %s", text, why, form);
 		if (status != INDEX_EXPRESSION_OK || (*end == ']' && end[1] != '\0') || *end == '\0')
 			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s", text, form);
 		count++;
@@ -660,17 +662,24 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	if (open != NULL && length > 0 && name[length - 1] == ']') {
 		const document_structure* s = find_structure(p->ex, name, (size_t)(open - name));
 		if (s != NULL) {
-			// The parameters the indices name are noted for this reference's messages alone.
-			int32_t noted[NOTED_PARAMETERS];
-			memcpy(noted, p->noted, sizeof noted);
-			const int noted_count = p->noted_count;
-			const bool noted_more = p->noted_more;
+			// A message on the reference names the parameters of its indices alone; later messages on
+			// the element name them with those noted before.
+			int32_t before[NOTED_PARAMETERS], indices[NOTED_PARAMETERS];
+			memcpy(before, p->noted, sizeof before);
+			const int before_count = p->noted_count;
+			const bool before_more = p->noted_more;
 			forget_parameters(p);
-			const bool ok = resolve_structure_reference(p, s, open, text, path, out);
-			memcpy(p->noted, noted, sizeof noted);
-			p->noted_count = noted_count;
-			p->noted_more = noted_more;
-			return ok;
+			if (!resolve_structure_reference(p, s, open, text, path, out))
+				return false;
+			memcpy(indices, p->noted, sizeof indices);
+			const int indices_count = p->noted_count;
+			const bool indices_more = p->noted_more;
+			memcpy(p->noted, before, sizeof before);
+			p->noted_count = before_count;
+			p->noted_more = before_more || indices_more;
+			for (int k = 0; k < indices_count; k++)
+				note_parameter(p, indices[k]);
+			return true;
 		}
 	}
 	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named %s", text);
@@ -821,9 +830,11 @@ static bool read_springs(parser* p, const json_t* list)
 		child_key(sub, path, "b");
 		if (!resolve_particle(p, json_object_get(obj, "b"), sub, &def.b))
 			return false;
-		if (def.a == def.b)
-			return fail(p, SM_ERROR_SELF_SPRING, path, "connects particle %d to itself (a and b are the same particle)",
-			            (int)def.a);
+		if (def.a == def.b) {
+			char message[SM_ERROR_MESSAGE_CAPACITY];
+			snprintf(message, sizeof message, "connects particle %d to itself (a and b are the same particle)", (int)def.a);
+			return fail_naming_parameters(p, SM_ERROR_SELF_SPRING, path, message);
+		}
 		spring_source src = {-1, -1, -1, -1, -1};
 		sm_spring_material m;
 		if (!read_constants(p, obj, path, &m, &src))
@@ -864,9 +875,10 @@ static bool read_springs(parser* p, const json_t* list)
 				def.kind = SM_SPRING_REST_LENGTH;
 			else
 				return fail(p, SM_ERROR_SCHEMA, sub, "must be \"rest_length\" or \"zero_length\"");
+			char text[128];
 			if (def.kind == SM_SPRING_ZERO_LENGTH && rest != NULL && def.rest_length != 0.0)
-				return fail(p, SM_ERROR_SCHEMA, path, "a zero-length spring cannot have rest_length %g",
-				            def.rest_length);
+				return fail(p, SM_ERROR_SCHEMA, path, "a zero-length spring cannot have rest_length %s",
+				            describe(p, text, sizeof text, def.rest_length, src.rest_length));
 		}
 		if (def.kind == SM_SPRING_ZERO_LENGTH)
 			def.rest_length = 0.0;
@@ -1932,8 +1944,10 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 			if (copy[k] == doc->parameter_values[k])
 				continue;
 			const char* joint = n++ == 0 ? " (with " : k == last ? " and " : ", ";
-			const int written = snprintf(with + used, sizeof with - used, "%sparameter %s = %g%s", joint,
-			                             doc->parameter_names[k], copy[k], k == last ? ")" : "");
+			char value[SM_NUMBER_TEXT_CAPACITY];
+			sm_format_number(copy[k], value);
+			const int written = snprintf(with + used, sizeof with - used, "%sparameter %s = %s%s", joint,
+			                             doc->parameter_names[k], value, k == last ? ")" : "");
 			used += written > 0 ? (size_t)written : 0;
 		}
 		free(copy);

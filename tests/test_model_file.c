@@ -771,7 +771,8 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
 	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,]\"]}",
 	     SM_ERROR_SCHEMA,
-	     "test.json: fixed[0]: \"r[1,]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
+	     "test.json: fixed[0]: \"r[1,]\": a number, a parameter or '(' expected; a structure reference is name[i], "
+	     "name[row, column] or name[row, column, layer]"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [0.5]}",
 	     SM_ERROR_SCHEMA, "test.json: fixed[0]: a particle index must be a whole number, not 0.5"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [1e300]}",
@@ -1063,7 +1064,7 @@ static int test_messages_quote_text(void)
 	     SM_ERROR_NOT_FOUND, "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
 	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,\\n]\"]}",
-	     SM_ERROR_SCHEMA, "test.json: fixed[0]: \"r[1,\\u000a]\": a structure reference is name[i], name[row, column] or name[row, "
+	     SM_ERROR_SCHEMA, "test.json: fixed[0]: \"r[1,\\u000a]\": a number, a parameter or '(' expected; a structure reference is name[i], name[row, column] or name[row, "
 	     "column, layer]"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
@@ -1478,20 +1479,27 @@ static int test_references_stay_inside_their_structures(void)
 
 // An index of a structure reference may be an expression of parameters (docs: "Referring to
 // particles"): each case is worked out by hand as the position along a rope of 101 particles r
-// (particles 1..101, after particle p), a spring's end, with a = 7, b = -3, z = 0, h = 0.5 and
-// big = 2^31. Division rounds down, also for negative quotients (-7 / 2 is -4, not C's -3).
+// (particles 1..101, after particle p), the end b of a spring from r[z] = r[0], with a = 7,
+// b = -3, z = 0, h = 0.5 and big = 2^31. Division rounds down, also for negative quotients
+// (-7 / 2 is -4, not C's -3). A message on the reference names its own parameters, not z of the
+// spring's other end.
 static int test_reference_expressions(void)
 {
 	static const char* const format =
 	    "{\"springmass\": 1, \"name\": \"x\","
-	    " \"parameters\": {\"a\": 7, \"b\": -3, \"z\": 0, \"h\": 0.5, \"big\": 2147483648, \"k\": 2},"
+	    " \"parameters\": {\"a\": 7, \"b\": -3, \"z\": 0, \"h\": 0.5, \"big\": 2147483648, \"k\": 2,"
+	    "   \"huge\": 2147483649, \"n_1\": 4, \"n2\": 5},"
 	    " \"particles\": [{\"name\": \"p\", \"position\": [9, 9, 9]}],"
 	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 100}],"
-	    " \"springs\": [{\"a\": \"p\", \"b\": \"%s\", \"stiffness\": \"k\"}]}";
+	    " \"springs\": [{\"a\": \"r[z]\", \"b\": \"%s\", \"stiffness\": \"k\"}]}";
 	static const struct {
 		const char* reference;
 		int32_t position;
 	} values[] = {
+	    // The limits: 2^31 itself is allowed, as a literal and as -2^31 halved.
+	    {"r[2147483648 - 2147483600]", 48},              {"r[(-2147483647 - 1) / 2 + 1073741834]", 10},
+	    {"r[-8/2+10]", 6},      {"r[n_1]", 4},           {"r[n2]", 5},              {"r[\\n1\\r]", 1},
+	    {"r[--------------------------------1]", 1},  // 32 unary signs deep
 	    {"r[a*2+1]", 15},       {"r[(a+1)*2]", 16},      {"r[a - 2 - 1]", 4},       {"r[a/2]", 3},
 	    {"r[-b]", 3},           {"r[b/2+5]", 3},         {"r[7/-2+10]", 6},         {"r[-7/2+10]", 6},
 	    {"r[100/a*a]", 98},     {"r[+a]", 7},            {"r[ a\\t* 2 ]", 14},      {"r[--a]", 7},
@@ -1535,30 +1543,55 @@ static int test_reference_expressions(void)
 	    {"r[big*big]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
 	    {"r[big+1]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
 	    {"r[2147483649]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude"},
-	    // Only the reference's parameters are named, not the spring's stiffness k read before.
+	    {"r[99999999999999999999]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude"},
+	    {"r[-big - 1]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
+	    {"r[huge - 2147483640]", SM_ERROR_SCHEMA, ": parameter huge = 2147483649 is not a whole number within 2^31"},
+	    // A name is shown up to 60 bytes.
+	    {"r[aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa]", SM_ERROR_NOT_FOUND,
+	     ": no parameter named \"aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa\"..."},
 	    {"r[a*b]", SM_ERROR_PARTICLE_INDEX,
 	     " is outside structure r ([0] to [100]) (with parameter a = 7 and parameter b = -3)"},
-	    {"r[a-]", SM_ERROR_SCHEMA, NULL},
-	    {"r[(a]", SM_ERROR_SCHEMA, NULL},
-	    {"r[a)]", SM_ERROR_SCHEMA, NULL},
-	    {"r[a b]", SM_ERROR_SCHEMA, NULL},
-	    {"r[2a]", SM_ERROR_SCHEMA, NULL},
-	    {"r[]", SM_ERROR_SCHEMA, NULL},
-	    {"r[1e2]", SM_ERROR_SCHEMA, NULL},
-	    {"r[a,]", SM_ERROR_SCHEMA, NULL},
-	    {"r[(((((((((((((((((((((((((((((((((1)))))))))))))))))))))))))))))))))]", SM_ERROR_SCHEMA, NULL},  // 33 deep
+	    {"r[a-]", SM_ERROR_SCHEMA, ": a number, a parameter or '(' expected; "},
+	    {"r[(a]", SM_ERROR_SCHEMA, ": ')' expected; "},
+	    {"r[a)]", SM_ERROR_SCHEMA, ": an operator, ',' or ']' expected; "},
+	    {"r[a b]", SM_ERROR_SCHEMA, ": an operator, ',' or ']' expected; "},
+	    {"r[2a]", SM_ERROR_SCHEMA, ": an operator, ',' or ']' expected; "},
+	    {"r[]", SM_ERROR_SCHEMA, ": a number, a parameter or '(' expected; "},
+	    {"r[1e2]", SM_ERROR_SCHEMA, ": an operator, ',' or ']' expected; "},
+	    {"r[a,]", SM_ERROR_SCHEMA, ": a number, a parameter or '(' expected; "},
+	    {"r[1,2,3,4]", SM_ERROR_SCHEMA, ": "},
+	    {"r[1]]", SM_ERROR_SCHEMA, ": "},
+	    {"r[(((((((((((((((((((((((((((((((((1)))))))))))))))))))))))))))))))))]", SM_ERROR_SCHEMA,
+	     ": nested more than 32 deep; "},
+	    {"r[---------------------------------1]", SM_ERROR_SCHEMA, ": nested more than 32 deep; "},
 	};
 	for (size_t c = 0; c < sizeof refusals / sizeof refusals[0]; c++) {
 		char text[1024], expected[400];
 		snprintf(text, sizeof text, format, refusals[c].reference);
-		if (refusals[c].message != NULL)
-			snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\"%s", refusals[c].reference,
-			         refusals[c].message);
-		else
-			snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\": %s", refusals[c].reference, form);
+		// A syntax error ends with the form of a reference.
+		const char* message = refusals[c].message;
+		const size_t length = strlen(message);
+		snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\"%s%s", refusals[c].reference, message,
+		         message[length - 1] == ' ' ? form : "");
 		failures += !refused_as(text, refusals[c].reference, refusals[c].status, expected);
 	}
 	ENSURE(failures == 0);
+	// Later messages on the element name the parameters of its references too: z puts the
+	// spring's end a on p, j both ends on one particle.
+	static const char* const later =
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"z\": 0, \"k\": 2, \"j\": 1},"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 4}],"
+	    " \"springs\": [{\"a\": \"r[%s]\", \"b\": \"%s\", \"strain_stiffness\": \"k\"}]}";
+	char text[1024];
+	snprintf(text, sizeof text, later, "z", "p");
+	ENSURE(refused_as(text, "r[z] on p", SM_ERROR_ZERO_REST_LENGTH,
+	                  "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0) "
+	                  "(with parameter z = 0 and parameter k = 2)"));
+	snprintf(text, sizeof text, later, "j", "r[j * 1]");
+	ENSURE(refused_as(text, "r[j] to itself", SM_ERROR_SELF_SPRING,
+	                  "test.json: springs[0]: connects particle 2 to itself (a and b are the same particle) "
+	                  "(with parameter j = 1)"));
 	return 0;
 }
 
