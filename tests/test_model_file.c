@@ -190,27 +190,37 @@ static int test_oscillator(void)
 	return 0;
 }
 
-// The bundled cloth is exactly the default sheet (the benchmark cloth) with its two corners at
-// y = 1 fixed.
+// The bundled cloth is exactly the default sheet (the benchmark cloth, n = 16) with its two
+// corners at y = 1 fixed, and the benchmark cloth of any n with --set n=N; its probe "center" is
+// at cloth[n/2, n/2].
 static int test_cloth_is_the_benchmark_cloth(void)
 {
 	sm_document* doc = load_bundled("cloth", NULL);
 	ENSURE(doc != NULL);
-	sm_model* m = NULL;
-	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
-	sm_model_def md = sm_default_model_def();
-	sm_model* reference = sm_model_create(&md, NULL);
-	sm_sheet_def sheet = sm_default_sheet_def();
-	sm_structure s;
-	ENSURE_STATUS(sm_add_sheet(reference, &sheet, &s), SM_OK);
-	ENSURE_STATUS(sm_set_motion_at(reference, &s, 15, 0, 0, SM_PARTICLE_FIXED), SM_OK);
-	ENSURE_STATUS(sm_set_motion_at(reference, &s, 15, 15, 0, SM_PARTICLE_FIXED), SM_OK);
-	ENSURE(same_model(m, reference) == 0);
-	ENSURE(count_fixed(m) == 2);
+	static const int sizes[] = {16, 9, 32};
+	for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+		const int n = sizes[k];
+		ENSURE_STATUS(sm_document_set_parameter(doc, sm_document_parameter_index(doc, "n"), n, NULL), SM_OK);
+		sm_model* m = NULL;
+		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+		sm_model_def md = sm_default_model_def();
+		sm_model* reference = sm_model_create(&md, NULL);
+		sm_sheet_def sheet = sm_default_sheet_def();
+		ENSURE(sheet.nu == 16 && sheet.nv == 16);
+		sheet.nu = sheet.nv = n;
+		sm_structure s;
+		ENSURE_STATUS(sm_add_sheet(reference, &sheet, &s), SM_OK);
+		ENSURE_STATUS(sm_set_motion_at(reference, &s, n - 1, 0, 0, SM_PARTICLE_FIXED), SM_OK);
+		ENSURE_STATUS(sm_set_motion_at(reference, &s, n - 1, n - 1, 0, SM_PARTICLE_FIXED), SM_OK);
+		ENSURE(same_model(m, reference) == 0);
+		ENSURE(count_fixed(m) == 2);
+		ENSURE(sm_document_port(doc, sm_document_port_index(doc, "center")).particle == (n / 2) * n + n / 2);
+		sm_model_destroy(reference);
+		sm_model_destroy(m);
+	}
+	ENSURE_STATUS(sm_document_set_parameter(doc, sm_document_parameter_index(doc, "n"), 16, NULL), SM_OK);
 	ENSURE(strcmp(sm_document_particle_name(doc, 15 * 16 + 3), "cloth[15,3]") == 0);
 	ENSURE(sm_document_particle_index(doc, "cloth[2,7]") == 2 * 16 + 7);
-	sm_model_destroy(reference);
-	sm_model_destroy(m);
 	sm_document_destroy(doc);
 	return 0;
 }
