@@ -38,4 +38,7 @@ cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t d
 // Factors A, the symbolic analysis done once into *factor: 1 if A is positive definite, 0 if not,
 // -1 on failure.
 int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common);
+
+// out = A^-1 rhs with the factor of A (dof entries each). Returns 0, or -1 on failure.
+int analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out);
 #endif

@@ -386,19 +386,7 @@ static int apply_operator(lanczos_work* w, const double* v, double* out)
 {
 	for (size_t i = 0; i < w->dof; i++)
 		w->rhs[i] = w->mass[i] * v[i];
-	cholmod_dense b;
-	memset(&b, 0, sizeof b);
-	b.nrow = b.d = b.nzmax = w->dof;
-	b.ncol = 1;
-	b.x = w->rhs;
-	b.xtype = CHOLMOD_REAL;
-	b.dtype = CHOLMOD_DOUBLE;
-	cholmod_dense* s = cholmod_l_solve(CHOLMOD_A, w->factor, &b, &w->common);
-	if (s == NULL)
-		return -1;
-	memcpy(out, s->x, w->dof * sizeof(double));
-	cholmod_l_free_dense(&s, &w->common);
-	return 0;
+	return analysis_cholmod_solve(w->factor, &w->common, w->dof, w->rhs, out);
 }
 
 // M-orthogonalises v against `count` M-orthonormal vectors (stride dof) by modified
@@ -845,6 +833,35 @@ done:
 // ---------------------------------------------------------------------------------------------
 // Both paths: frequencies, residuals and the modal damping matrix of the kept modes.
 
+// An upper bound on the largest eigenvalue of M^-1/2 C M^-1/2 [1/s], C = -df/dv over the free
+// degrees of freedom (Gershgorin): a spring's damping block kd u u^T has absolute row sums
+// |u_c| (|u_x| + |u_y| + |u_z|) kd <= sqrt(3) kd for a unit u, on the diagonal block of each free
+// end (scaled by 1 / m) and between two free ends (by 1 / sqrt(m_a m_b)); mass damping adds alpha.
+static sm_status damping_bound(const modes_problem* p, double* bound)
+{
+	const sm_model* m = p->model;
+	double* row = calloc((size_t)m->particle_count + 1, sizeof(double));
+	if (row == NULL)
+		return SM_ERROR_OUT_OF_MEMORY;
+	const double sqrt3 = sqrt(3.0);
+	for (int32_t k = 0; k < m->spring_count; k++) {
+		const int32_t a = m->spring_a[k], b = m->spring_b[k];
+		const bool free_a = p->free_index[a] >= 0, free_b = p->free_index[b] >= 0;
+		const double kd = sqrt3 * fabs(m->damping[k]);
+		const double between = free_a && free_b ? kd / sqrt(m->mass[a] * m->mass[b]) : 0.0;
+		if (free_a)
+			row[a] += kd / m->mass[a] + between;
+		if (free_b)
+			row[b] += kd / m->mass[b] + between;
+	}
+	*bound = 0.0;
+	for (int32_t q = 0; q < m->particle_count; q++)
+		*bound = fmax(*bound, row[q]);
+	*bound += fabs(m->def.mass_damping);
+	free(row);
+	return SM_OK;
+}
+
 static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error* err)
 {
 	const size_t kept = p->kept;
@@ -879,6 +896,17 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 			modes->residual = fmax(modes->residual, sqrt(r2 / phi2) / p->stiffness_norm);
 	}
 
+	// What round-off leaves in an entry of Phi^T C Phi: each is a sum over the n3 components of
+	// phi_i times C phi_j, with phi M-normalised, so its error is below about n3 eps times the
+	// largest eigenvalue of M^-1/2 C M^-1/2 (damping_bound). Entries within it are zero: those of
+	// a free body's rigid modes, which spring damping does not act on, come out as 1e-14 or so.
+	double damping_round_off = 0.0;
+	if (damping_bound(p, &damping_round_off) != SM_OK) {
+		free(product);
+		free(modal);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
+	}
+	damping_round_off *= 4.0 * (double)n3 * DBL_EPSILON;
 	// Modal damping matrix Phi^T C Phi over the kept modes; C phi = -(df/dv) phi.
 	for (size_t j = 0; j < kept; j++) {
 		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, NULL, modes->shapes + j * n3, product);
@@ -901,11 +929,13 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		if (omega > 0.0)
 			modes->damping_ratio[i] = ci / (2.0 * omega);
 		else
-			modes->damping_ratio[i] = ci > 1e-12 * largest_damping && ci > 0.0 ? INFINITY : 0.0;
+			modes->damping_ratio[i] = ci > fmax(1e-12 * largest_damping, damping_round_off) ? INFINITY : 0.0;
 		for (size_t j = 0; j < i; j++) {
 			// Symmetrised: C is symmetric up to round-off at zero velocity.
 			const double cij = 0.5 * (modal[i * kept + j] + modal[j * kept + i]);
 			const double cj = modal[j * kept + j];
+			if (fabs(cij) <= damping_round_off)
+				continue;
 			// Floor of the normalisation: entries below 1e-12 of the largest damping are round-off.
 			const double scale = fmax(sqrt(fmax(ci, 0.0) * fmax(cj, 0.0)), 1e-12 * largest_damping);
 			if (scale > 0.0)

@@ -130,6 +130,23 @@ int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_
 		return 0;
 	return common->status < CHOLMOD_OK ? -1 : 1;
 }
+
+int analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out)
+{
+	cholmod_dense b;
+	memset(&b, 0, sizeof b);
+	b.nrow = b.d = b.nzmax = dof;
+	b.ncol = 1;
+	b.x = (void*)rhs;
+	b.xtype = CHOLMOD_REAL;
+	b.dtype = CHOLMOD_DOUBLE;
+	cholmod_dense* s = cholmod_l_solve(CHOLMOD_A, factor, &b, common);
+	if (s == NULL)
+		return -1;
+	memcpy(out, s->x, dof * sizeof(double));
+	cholmod_l_free_dense(&s, common);
+	return 0;
+}
 #endif
 
 // K = -df/dx: the block K_s = d f_a / d x_b of spring s enters as
@@ -187,6 +204,7 @@ typedef struct statics_work {
 	double* f;              // 3 n forces
 	double* rhs;            // dof
 	double* step;           // dof
+	double norm;            // largest row sum of |H + mu M| at the last factorisation [N/m]
 	// Dense path.
 	double* matrix;         // dof x dof
 	double* perturbation;   // dof
@@ -328,7 +346,8 @@ static double potential_energy(const statics_work* w, const double* x)
 
 // Free bodies: groups of particles joined by springs of non-zero stiffness that contain no
 // constrained particle. Returns SM_OK, or SM_ERROR_NOT_CONVERGED with a message when the net
-// constant force on such a group is not zero.
+// constant force on such a group is not zero; *floating gets whether there is such a group (its
+// translations cost no energy: any equilibrium is neutral, never stable).
 static int32_t find_root(int32_t* parent, int32_t i)
 {
 	while (parent[i] != i) {
@@ -338,8 +357,9 @@ static int32_t find_root(int32_t* parent, int32_t i)
 	return i;
 }
 
-static sm_status check_free_bodies(const statics_work* w, sm_error* err)
+static sm_status check_free_bodies(const statics_work* w, bool* floating, sm_error* err)
 {
+	*floating = false;
 	const int32_t n = w->n;
 	int32_t* parent = malloc((size_t)n * sizeof *parent);
 	double* net = calloc(3 * (size_t)n, sizeof *net);
@@ -373,6 +393,7 @@ static sm_status check_free_bodies(const statics_work* w, sm_error* err)
 	for (int32_t i = 0; i < n; i++) {
 		if (parent[i] != i || held[i])
 			continue;
+		*floating = true;
 		const double* F = net + 3 * (size_t)i;
 		const double magnitude = hypot(hypot(F[0], F[1]), F[2]);  // no overflow for huge forces
 		// The net force is a sum of members' forces: anything above its round-off is real.
@@ -404,6 +425,21 @@ done:
 // (dense) or failed (sparse: no step), -1 on an internal failure.
 // ---------------------------------------------------------------------------------------------
 
+// Solves with the factor of the last factor_and_step (which returned 1): out = (H + mu M)^-1 rhs.
+// Returns 0, or -1 on failure.
+static int solve_factored(statics_work* w, const double* rhs, double* out)
+{
+#ifdef SPRINGMASS_HAVE_CHOLMOD
+	if (w->jacobian != NULL)
+		return analysis_cholmod_solve(w->factor, &w->common, w->dof, rhs, out);
+#endif
+	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, w->dof, w->dof);
+	gsl_permutation perm = {w->dof, w->permutation};
+	gsl_vector_const_view b = gsl_vector_const_view_array(rhs, w->dof);
+	gsl_vector_view s = gsl_vector_view_array(out, w->dof);
+	return gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) == GSL_SUCCESS ? 0 : -1;
+}
+
 static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
                       double* step)
 {
@@ -411,6 +447,13 @@ static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_v
 	analysis_dense_stiffness(w->model, w->free_index, x, dof, variant, w->matrix);
 	for (size_t i = 0; i < dof; i++)
 		w->matrix[i * dof + i] += mu * w->dof_mass[i];
+	w->norm = 0.0;
+	for (size_t i = 0; i < dof; i++) {
+		double row = 0.0;
+		for (size_t j = 0; j < dof; j++)
+			row += fabs(w->matrix[i * dof + j]);
+		w->norm = fmax(w->norm, row);
+	}
 	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, dof, dof);
 	gsl_permutation perm = {dof, w->permutation};
 	gsl_vector_view E = gsl_vector_view_array(w->perturbation, dof);
@@ -420,12 +463,8 @@ static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_v
 	for (size_t i = 0; i < dof; i++)
 		if (w->perturbation[i] != 0.0)
 			definite = 0;
-	if (step != NULL) {
-		gsl_vector_const_view b = gsl_vector_const_view_array(rhs, dof);
-		gsl_vector_view s = gsl_vector_view_array(step, dof);
-		if (gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) != GSL_SUCCESS)
-			return -1;
-	}
+	if (step != NULL && solve_factored(w, rhs, step) != 0)
+		return -1;
 	return definite;
 }
 
@@ -476,24 +515,19 @@ static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_
 		w->values[k] = -w->values[k];
 	for (size_t i = 0; i < w->dof; i++)
 		w->values[w->diagonal[i]] += mu * w->dof_mass[i];
+	const int64_t* rows = sm_sparse_jacobian_row_pointers(w->jacobian);
+	w->norm = 0.0;
+	for (size_t r = 0; r < w->dof; r++) {
+		double row = 0.0;
+		for (int64_t k = rows[r]; k < rows[r + 1]; k++)
+			row += fabs(w->values[k]);
+		w->norm = fmax(w->norm, row);
+	}
 	cholmod_sparse A = analysis_cholmod_view(w->jacobian, w->dof, w->values);
 	const int factored = analysis_cholmod_factor(&A, &w->factor, &w->common);
 	if (factored != 1 || step == NULL)
 		return factored;
-	cholmod_dense b;
-	memset(&b, 0, sizeof b);
-	b.nrow = b.d = w->dof;
-	b.ncol = 1;
-	b.nzmax = w->dof;
-	b.x = (void*)rhs;
-	b.xtype = CHOLMOD_REAL;
-	b.dtype = CHOLMOD_DOUBLE;
-	cholmod_dense* s = cholmod_l_solve(CHOLMOD_A, w->factor, &b, &w->common);
-	if (s == NULL)
-		return -1;
-	memcpy(step, s->x, w->dof * sizeof(double));
-	cholmod_l_free_dense(&s, &w->common);
-	return 1;
+	return solve_factored(w, rhs, step) == 0 ? 1 : -1;
 }
 #endif
 
@@ -508,6 +542,49 @@ static int factor_and_step(statics_work* w, const double* x, double mu, sm_jacob
 		return sparse_step(w, x, mu, variant, rhs, step);
 #endif
 	return dense_step(w, x, mu, variant, rhs, step);
+}
+
+// Whether H, just factored as positive definite (factor_and_step at mu = 0 returned 1), is
+// singular to working precision. A mechanism (a body free to turn about a pin, the sideways
+// motion of a straight unstressed chain) has exact zero eigenvalues, which round-off leaves as
+// pivots of either sign of about eps ||H||: a factorisation that succeeds does not prove H
+// definite. Inverse iteration with the factor bounds the smallest eigenvalue from above:
+// ||H^-1 v|| / ||v|| <= 1 / lambda_min, approached from below, and from a start with a component
+// along a null vector it reaches about 1 / (eps ||H||) at the first solve. H counts as singular
+// if lambda_min <= dof eps ||H||_inf, below what the computed H resolves (its entries carry errors
+// of eps ||H||, which move its eigenvalues as much). Returns 1 if singular, 0 if not, -1 on
+// failure.
+static int singular_to_round_off(statics_work* w)
+{
+	const size_t dof = w->dof;
+	double* v = w->rhs;
+	double* y = w->step;
+	// A start with components of both signs and varied sizes in every degree of freedom, the same
+	// on every run (a fixed sequence, no random state).
+	uint32_t state = 2463534242u;
+	double length = 0.0;
+	for (size_t i = 0; i < dof; i++) {
+		state ^= state << 13;
+		state ^= state >> 17;
+		state ^= state << 5;
+		v[i] = (double)state / 4294967296.0 - 0.5;
+		length += v[i] * v[i];
+	}
+	double growth = 0.0;
+	for (int iteration = 0; iteration < 3; iteration++) {
+		if (solve_factored(w, v, y) != 0)
+			return -1;
+		double y_length = 0.0;
+		for (size_t i = 0; i < dof; i++)
+			y_length += y[i] * y[i];
+		growth = sqrt(y_length / length);
+		if (!(growth <= DBL_MAX))
+			return 1;
+		for (size_t i = 0; i < dof; i++)
+			v[i] = y[i] / sqrt(y_length);
+		length = 1.0;
+	}
+	return 1.0 / growth <= (double)dof * DBL_EPSILON * w->norm;
 }
 
 // Newton's method from w->x on w->model (whose spring stiffnesses are in w->stiffness), for at
@@ -546,6 +623,14 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 		res->tolerance = fmax(tolerance, SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * force_scale(w, w->x));
 		if (!isfinite(res->residual)) {
 			*st = sm_error_set(err, SM_ERROR_NOT_FINITE, "statics: the forces became non-finite at iteration %d",
+			                   (int)res->iterations);
+			return -1;
+		}
+		// Stiffness times distance beyond the largest double: no force balance can be told there.
+		if (!isfinite(res->tolerance)) {
+			*st = sm_error_set(err, SM_ERROR_NOT_FINITE,
+			                   "statics: the spring forces' round-off scale (stiffness x distance) overflows at "
+			                   "iteration %d",
 			                   (int)res->iterations);
 			return -1;
 		}
@@ -867,8 +952,9 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 
 	statics_work w;
 	sm_status st = work_init(&w, model, &d, err);
+	bool floating = false;
 	if (st == SM_OK)
-		st = check_free_bodies(&w, err);
+		st = check_free_bodies(&w, &floating, err);
 	if (st == SM_OK)
 		st = setup_solver(&w, &d.solver, err);
 	if (st != SM_OK) {
@@ -892,18 +978,24 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 			for (int c = 0; c < 3; c++)
 				res.reaction_total[c] -= w.f[3 * (size_t)p + c];
 	res.potential_energy = potential_energy(&w, w.x);
-	// Stable if the exact stiffness factors as positive definite; out of memory for the sparse
-	// Jacobian, it cannot be told.
+	// Stable if the exact stiffness is positive definite beyond round-off (it factors, and it is
+	// not singular to working precision) and no group of particles floats free; out of memory for
+	// the sparse Jacobian, it cannot be told.
 	int definite = 1;
-	if (converged && w.nf > 0)
+	if (converged && w.nf > 0 && !floating) {
 		definite = factor_and_step(&w, w.x, 0.0, SM_JACOBIAN_EXACT, NULL, NULL);
+		if (definite == 1) {
+			const int singular = singular_to_round_off(&w);
+			definite = singular < 0 ? -1 : !singular;
+		}
+	}
 	if (definite == -2) {
 		converged = 0;
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
 		                  "statics: out of memory for the Jacobian of the stability test");
 	}
 	if (converged) {
-		res.stable = definite == 1 && analysis_coincident_spring(model, w.x) < 0;
+		res.stable = definite == 1 && !floating && analysis_coincident_spring(model, w.x) < 0;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)

@@ -1690,6 +1690,429 @@ static int test_damping_coupling_definition(void)
 	return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// Tests from a review that planted bugs in statics.c and modes.c.
+
+// Option checks: an unknown solver, a non-finite residual tolerance; x untouched.
+static int test_statics_refuses_unknown_solver_and_non_finite_tolerance(void)
+{
+	sm_model* model = anchored_mass(-9.81, -1.0, 100.0);
+	ENSURE(model != NULL);
+	double x[6] = {-7, -7, -7, -7, -7, -7};
+	sm_error err;
+	sm_statics_def def = sm_default_statics_def();
+	def.solver = (sm_statics_solver)7;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "unknown solver 7") != NULL);
+	def = sm_default_statics_def();
+	def.residual_tolerance = INFINITY;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	def.residual_tolerance = NAN;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, NULL, &err), SM_ERROR_INVALID_ARGUMENT);
+	for (int k = 0; k < 6; k++)
+		ENSURE(x[k] == -7.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A free particle at x = 0 between fixed ones at x = -2 and 2 m on zero-length springs of 1e308
+// N/m: the two spring forces, -+2e308 N, overflow to -+inf and sum to NaN. A particle at x = 1.5 m
+// on one such spring to x = 1 m: its force, 5e307 N, is finite, but the round-off scale of the
+// balance (stiffness x |x_a| + |x_b|) overflows: no balance can be told.
+static int test_statics_refuses_overflowing_forces(void)
+{
+	for (int overflow_at = 0; overflow_at < 2; overflow_at++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		p.position[0] = overflow_at == 0 ? -2.0 : 1.0;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.position[0] = 2.0;
+		if (overflow_at == 0)
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		p.position[0] = overflow_at == 0 ? 0.0 : 1.5;
+		int32_t free_particle;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, &free_particle), SM_OK);
+		for (int32_t a = 0; a < free_particle; a++) {
+			sm_spring_def s = sm_default_spring_def();
+			s.a = a;
+			s.b = free_particle;
+			s.kind = SM_SPRING_ZERO_LENGTH;
+			s.stiffness = 1e308;
+			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		}
+		double x[9] = {0};
+		sm_error err;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, NULL, &err), SM_ERROR_NOT_FINITE);
+		ENSURE(strstr(err.message, overflow_at == 0 ? "non-finite" : "overflows") != NULL);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// The tolerance actually used is the documented round-off floor: a 1 kg particle hanging at
+// (0, 0, 9) m under a fixed one at (0, 0, 10) m on a zero-length spring of ks = 1e6 N/m sags
+// g / ks, and the floor is SM_STATICS_ROUNDOFF_FACTOR eps (ks (|x_a| + |x_b|) + m g), the
+// positions' sum exceeding the spring's length (the same arithmetic as the library's: 1e-12).
+static int test_statics_tolerance_is_the_round_off_floor(void)
+{
+	const double ks = 1e6, g = 9.81;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[2] = 10.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[2] = 9.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.stiffness = ks;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	double x[6];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	// Linear: exact but for the round-off of 10 - 9.81e-6 (1e-15 m).
+	ENSURE_NEAR(x[5], 10.0 - g / ks, 1e-13);
+	const double floor = SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * (ks * (10.0 + fabs(x[5])) + g);
+	ENSURE_REL(res.tolerance, floor, 1e-12, 0.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// max_iterations is a hard budget: what converges in n iterations converges with n allowed and
+// not with n - 1, which stop at n - 1.
+static int test_statics_iteration_budget_is_exact(void)
+{
+	sm_model* model = anchored_mass(-9.81, -0.5, 100.0);  // compressed start, rest 1.0981 m below
+	ENSURE(model != NULL);
+	double x[6];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	const int32_t n = res.iterations;
+	ENSURE(n >= 2 && n < 50);
+	sm_statics_def def = sm_default_statics_def();
+	def.max_iterations = n;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.iterations == n);
+	def.max_iterations = n - 1;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_ERROR_NOT_CONVERGED);
+	ENSURE(res.iterations == n - 1);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A slack chain of 400 segments (1 kg, E = 1e4 N per strain) between supports 0.8 of its length
+// apart, started straight, so compressed: the indefinite exact stiffness must give way to the
+// definite one, and the shift must grow after short steps (without either: over 450 iterations).
+// It hangs stable, and the supports carry its weight (to the balance's round-off, 1e-8 N).
+static int test_statics_slack_chain_on_the_sparse_path(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_rope_def rope = sm_default_rope_def();
+	rope.segments = 400;
+	rope.mass = 1.0;
+	rope.structural.stiffness = 1e4;
+	rope.structural.stiffness_scaling = SM_PER_STRAIN;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_rope(model, &rope, &s), SM_OK);
+	const int32_t n = sm_model_particle_count(model);
+	for (int32_t i = 0; i < n; i++) {
+		sm_particle_def p;
+		sm_model_get_particle(model, i, &p);
+		p.position[0] *= 0.8;
+		p.motion = i == 0 || i == n - 1 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_set_particle(model, i, &p), SM_OK);
+	}
+	double* x = malloc(3 * (size_t)n * sizeof(double));
+	ENSURE(x != NULL);
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.solver == SM_STATICS_SPARSE && res.stable);
+	ENSURE(res.iterations <= 200);  // measured 118
+	ENSURE_NEAR(res.reaction_total[2], 9.81, 1e-8);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Stable means a minimum beyond round-off. A free block (gravity 0) is at rest where it is, but
+// its rigid motions cost nothing; pinned at one corner it can still turn about it, at two about
+// their axis (mechanisms whose exact zero eigenvalues round-off may leave as tiny positive
+// pivots); pinned at three corners it is held. Whatever the block's size and the solver.
+static int test_statics_stability_sees_mechanisms(void)
+{
+	static const int32_t sizes[] = {2, 5, 8};
+	for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++) {
+		const int32_t n = sizes[k];
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		sm_block_def block = sm_default_block_def();
+		block.nu = block.nv = block.nw = n;
+		sm_structure s;
+		ENSURE_STATUS(sm_add_block(model, &block, &s), SM_OK);
+		double* x = malloc(3 * (size_t)n * n * n * sizeof(double));
+		ENSURE(x != NULL);
+		const int32_t pins[3][3] = {{0, 0, 0}, {n - 1, n - 1, n - 1}, {0, n - 1, 0}};
+		for (int pinned = 0; pinned <= 3; pinned++) {
+			if (pinned > 0)
+				ENSURE_STATUS(sm_set_motion_at(model, &s, pins[pinned - 1][0], pins[pinned - 1][1], pins[pinned - 1][2],
+				                               SM_PARTICLE_FIXED),
+				              SM_OK);
+			for (int dense = 0; dense < 2; dense++) {
+				sm_statics_def def = sm_default_statics_def();
+				def.solver = dense ? SM_STATICS_DENSE : SM_STATICS_AUTO;
+				sm_statics_result res;
+				ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
+				ENSURE(res.iterations == 0);
+				if (res.stable != (pinned == 3))
+					printf("  block %d, %d pins, %s: stable %d\n", (int)n, pinned, dense ? "dense" : "auto", res.stable);
+				ENSURE(res.stable == (pinned == 3));
+			}
+		}
+		free(x);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
+// The zero tolerance is relative to the largest |omega^2|, negative ones included. A free 1 kg
+// particle between fixed ones at x = -1 and 1 m on rest-length springs of k = 1 N/m and l0 = 3 m
+// (compressed): axially omega^2 = 2 k / m = 2, sideways 2 k (1 - l0 / L) / m = -4, twice. With
+// zero_tolerance 0.6, |2| <= 0.6 x 4: the axial one is set to 0.
+static int test_zero_tolerance_is_relative_to_the_largest_magnitude(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[0] = -1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.position[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[0] = 0.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	for (int32_t a = 0; a < 2; a++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = a;
+		s.b = 2;
+		s.rest_length = 3.0;
+		s.stiffness = 1.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_modes_def def = sm_default_modes_def();
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	// A 3 x 3 eigenproblem: exact but for round-off.
+	ENSURE_REL(modes.omega_squared[0], -4.0, 1e-12, 0.0);
+	ENSURE_REL(modes.omega_squared[2], 2.0, 1e-12, 0.0);
+	sm_modes_release(&modes);
+	def.zero_tolerance = 0.6;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.zero_count == 1 && modes.unstable_count == 2);
+	ENSURE(modes.omega_squared[2] == 0.0 && modes.frequency[2] == 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// n free particles on zero-length springs of k [N/m] between fixed ends, masses alternating
+// m_odd and m_even [kg] (the fixed ends count as even), no gravity.
+static sm_model* two_mass_chain(int32_t n, double m_odd, double m_even, double k)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	bool ok = model != NULL;
+	for (int32_t i = 0; i < n + 2 && ok; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = i % 2 ? m_odd : m_even;
+		p.position[0] = 0.1 * i;
+		p.motion = i == 0 || i == n + 1 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ok = sm_model_add_particle(model, &p, NULL) == SM_OK;
+	}
+	for (int32_t i = 0; i < n + 1 && ok; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = i + 1;
+		s.kind = SM_SPRING_ZERO_LENGTH;
+		s.stiffness = k;
+		ok = sm_model_add_spring(model, &s, NULL) == SM_OK;
+	}
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// The sparse path's omega_max is the square root of the Gershgorin bound of M^-1/2 K M^-1/2: a
+// light particle (1 kg) between two heavy ones (4 kg) on springs of k has the row sum
+// 2 k / 1 + 2 k / sqrt(1 x 4) = 3 k (the heavy ones' rows: 2 k / 4 + 2 k / 2 = 1.5 k).
+static int test_sparse_omega_max_is_the_mass_weighted_gershgorin_bound(void)
+{
+	const double k = 100.0;
+	sm_model* model = two_mass_chain(20, 1.0, 4.0, k);
+	ENSURE(model != NULL);
+	sm_modes_def def = sm_default_modes_def();
+	def.solver = SM_MODES_SPARSE;
+	def.mode_count = 2;
+	sm_modes sparse, dense;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &sparse, NULL), SM_OK);
+	def.solver = SM_MODES_DENSE;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, NULL), SM_OK);
+	ENSURE_REL(sparse.omega_max, sqrt(3.0 * k), 1e-13, 0.0);  // a sum of four terms
+	ENSURE(sparse.omega_max >= dense.omega_max);               // a bound of the true largest
+	for (int i = 0; i < 2; i++)
+		ENSURE_REL(sparse.omega_squared[i], dense.omega_squared[i], 1e-9, 0.0);  // Lanczos' tolerance
+	sm_modes_release(&sparse);
+	sm_modes_release(&dense);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// On the sparse path the zero tolerance is relative to the Gershgorin bound G, as on the dense
+// path to the largest |omega^2|: a chain of 20 particles of 1 kg on springs of 1 N/m (G = 4) and
+// a 21st free particle tied to a fixed one by a zero-length spring of 2e-12 N/m: its three
+// omega^2 = 2e-12 <= 1e-12 G are zeros, and the chain's lowest is 4 sin^2(pi / 42).
+static int test_sparse_zero_tolerance_is_relative_to_gershgorin(void)
+{
+	sm_model* model = two_mass_chain(20, 1.0, 1.0, 1.0);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[1] = 5.0;
+	int32_t a, b;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, &a), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[1] = 6.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, &b), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = a;
+	s.b = b;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.stiffness = 2e-12;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	sm_modes_def def = sm_default_modes_def();
+	def.mode_count = 4;
+	def.solver = SM_MODES_SPARSE;
+	sm_modes sparse, dense;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &sparse, NULL), SM_OK);
+	def.solver = SM_MODES_DENSE;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, NULL), SM_OK);
+	ENSURE(dense.zero_count == 3 && sparse.zero_count == 3);
+	for (int i = 0; i < 3; i++)
+		ENSURE(sparse.omega_squared[i] == 0.0);
+	ENSURE_REL(sparse.omega_squared[3], 4.0 * pow(sin(pi / 42.0), 2), 1e-8, 0.0);  // Lanczos' tolerance
+	sm_modes_release(&sparse);
+	sm_modes_release(&dense);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Stiffness-proportional damping (kd = beta ks, per strain) on a free block at rest: C = beta K
+// exactly, so the damping is proportional, the six rigid modes are undamped (ratio 0, not
+// infinite: spring damping does not act on rigid motion, and what round-off leaves of their
+// entries is below the damping's round-off floor) and the elastic ones have zeta = beta omega / 2.
+static int test_free_block_with_stiffness_proportional_damping(void)
+{
+	const double beta = 1e-3;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_block_def block = sm_default_block_def();
+	block.nu = block.nv = block.nw = 3;
+	block.size[0] = block.size[1] = block.size[2] = 0.2;
+	block.mass = 2.0;
+	block.edge.stiffness = 500.0;
+	block.edge.damping = beta * 500.0;
+	block.face_diagonal.stiffness = 300.0;
+	block.face_diagonal.damping = beta * 300.0;
+	block.body_diagonal.stiffness = 200.0;
+	block.body_diagonal.damping = beta * 200.0;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_block(model, &block, &s), SM_OK);
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.zero_count == 6);
+	for (int i = 0; i < 6; i++)
+		ENSURE(modes.damping_ratio[i] == 0.0);
+	ENSURE(modes.proportional && modes.damping_coupling <= 1e-6);
+	for (int32_t i = 6; i < modes.count; i++)  // phi^T (beta K) phi / (2 omega), to round-off
+		ENSURE_REL(modes.damping_ratio[i], beta * sqrt(modes.omega_squared[i]) / 2.0, 1e-9, 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// proportional is damping_coupling <= proportional_tolerance, bounds included: an undamped chain
+// has no coupling at all, proportional at tolerance 0.
+static int test_undamped_is_proportional_at_zero_tolerance(void)
+{
+	sm_model* model = two_mass_chain(5, 1.0, 1.0, 10.0);
+	ENSURE(model != NULL);
+	sm_modes_def def = sm_default_modes_def();
+	def.proportional_tolerance = 0.0;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.damping_coupling == 0.0 && modes.proportional);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The sparse shift is lowered a hundredfold at a time: a chain of 60 particles of 0.1 kg on
+// springs of 100 N/m compressed by 1 / 1.0005 has omega^2 near -2 1/s^2 at the bottom and
+// G = 4000 1/s^2: the shifts -1e-6 G and -1e-4 G lie above its lowest eigenvalues and fail,
+// -1e-2 G = -40 lies below them all (a tenfold step would stop at -4, which is not).
+static int test_sparse_shift_is_lowered_a_hundredfold(void)
+{
+	const int32_t n = 60;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	for (int32_t i = 0; i < n + 2; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = 0.1;
+		p.position[0] = 0.1 * i;
+		p.motion = i == 0 || i == n + 1 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	for (int32_t i = 0; i < n + 1; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = i + 1;
+		s.stiffness = 100.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	double x[3 * 62];
+	sm_model_initial_state(model, x, NULL);
+	for (int32_t i = 0; i < n + 2; i++)
+		x[3 * i] /= 1.0005;
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	def.mode_count = 4;
+	def.solver = SM_MODES_SPARSE;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	const double G = modes.omega_max * modes.omega_max;
+	ENSURE(modes.unstable_count == 4);
+	ENSURE_REL(modes.shift, -1e-2 * G, 1e-12, 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1724,5 +2147,17 @@ int main(int argc, char** argv)
 	RUN_TEST(test_dense_mode_count_and_omega_max);
 	RUN_TEST(test_sparse_residual_tolerance_is_enforced);
 	RUN_TEST(test_damping_coupling_definition);
+	RUN_TEST(test_statics_refuses_unknown_solver_and_non_finite_tolerance);
+	RUN_TEST(test_statics_refuses_overflowing_forces);
+	RUN_TEST(test_statics_tolerance_is_the_round_off_floor);
+	RUN_TEST(test_statics_iteration_budget_is_exact);
+	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
+	RUN_TEST(test_statics_stability_sees_mechanisms);
+	RUN_TEST(test_zero_tolerance_is_relative_to_the_largest_magnitude);
+	RUN_TEST(test_sparse_omega_max_is_the_mass_weighted_gershgorin_bound);
+	RUN_TEST(test_sparse_zero_tolerance_is_relative_to_gershgorin);
+	RUN_TEST(test_free_block_with_stiffness_proportional_damping);
+	RUN_TEST(test_undamped_is_proportional_at_zero_tolerance);
+	RUN_TEST(test_sparse_shift_is_lowered_a_hundredfold);
 	return TEST_SUMMARY();
 }

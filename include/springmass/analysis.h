@@ -59,7 +59,9 @@ typedef struct sm_statics_def {
 	/// the largest sum, over a particle's springs, of ks max(L, l0, |x_a| + |x_b|) plus its
 	/// constant force: the round-off floor of the computed force balance (docs/analysis.md).
 	double residual_tolerance;
-	int32_t max_iterations;    ///< Newton iterations allowed in all, >= 1; default 500
+	/// Newton iterations allowed in all, >= 1; default 500. From 100 on, the stiffness
+	/// continuation takes over after 50 (docs/analysis.md); below, Newton alone takes them all.
+	int32_t max_iterations;
 	sm_statics_solver solver;  ///< default SM_STATICS_AUTO
 } sm_statics_def;
 
@@ -71,9 +73,11 @@ typedef struct sm_statics_result {
 	double potential_energy;   ///< U at the end, as defined above [J]
 	double reaction_total[3];  ///< sum of the reactions at the constrained particles [N]
 	/// True if the exact stiffness -df/dx over the free degrees of freedom is positive definite
-	/// at the equilibrium (a local minimum of U, not a saddle or a mechanism). False also where
-	/// the two particles of a rest-length spring coincide: a force balance by convention there
-	/// (model.h), but a maximum of that spring's energy.
+	/// at the equilibrium beyond round-off (a local minimum of U, not a saddle or a mechanism: its
+	/// smallest eigenvalue exceeds dof eps times its largest row sum). False for a group of
+	/// particles held by no constrained particle (gravity 0: at rest anywhere, never stable).
+	/// False also where the two particles of a rest-length spring coincide: a force balance by
+	/// convention there (model.h), but a maximum of that spring's energy.
 	bool stable;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 } sm_statics_result;
@@ -89,7 +93,8 @@ SM_API sm_statics_def sm_default_statics_def(void);
 ///
 /// Errors (x and reactions are not touched, err says which element and rule):
 /// - SM_ERROR_INVALID_ARGUMENT: NULL model or x, bad options;
-/// - SM_ERROR_NOT_FINITE: non-finite start positions or external forces;
+/// - SM_ERROR_NOT_FINITE: non-finite start positions or external forces, forces that overflow
+///   along the way, or spring forces whose round-off scale (stiffness x distance) does;
 /// - SM_ERROR_NOT_CONVERGED: no equilibrium exists (a group of free particles not held by any
 ///   constrained particle, with a non-zero net force on it, such as a free body under gravity),
 ///   or the iteration limit was reached; the message names the particles or gives the residual;
