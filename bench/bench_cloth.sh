@@ -17,7 +17,8 @@ set -euo pipefail
 build_dir=${1:?usage: bench_cloth.sh BUILD_DIR}
 repeats=${REPEATS:-3}
 top=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-peer="$top/../shared/bench/scipy_cloth.py"
+# The peer: in REFERENCE_BENCH, or the shared benchmark folder beside the checkout.
+peer="${REFERENCE_BENCH:-$top/../shared/bench}/scipy_cloth.py"
 bench="$build_dir/bench/bench_cloth"
 python="$top/.venv/bin/python"
 
@@ -82,7 +83,7 @@ done
 
 for n in "${peer_sizes[@]}"; do
 	if [[ ! -f "$peer" ]]; then
-		echo "peer not found at $peer: skipped"
+		echo "peer not found at $peer (set REFERENCE_BENCH to the folder that holds it): skipped"
 		break
 	fi
 	read -r _ _ _ _ _ wall z _ < <("$python" "$peer" "$n" 1)

@@ -16,7 +16,8 @@ set -euo pipefail
 build_dir=${1:?usage: bench_forces.sh BUILD_DIR [REPEATS]}
 repeats=${2:-3}
 top=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
-shared_bench="$top/../shared/bench"
+# The reference programs: REFERENCE_BENCH, or the shared benchmark folder beside the checkout.
+shared_bench="${REFERENCE_BENCH:-$top/../shared/bench}"
 bench="$build_dir/bench/bench_forces"
 
 if [[ ! -x "$bench" ]]; then
@@ -24,7 +25,8 @@ if [[ ! -x "$bench" ]]; then
 	exit 1
 fi
 if [[ ! -f "$shared_bench/spring_kernel.c" ]]; then
-	echo "bench_forces.sh: reference kernel not found at $shared_bench/spring_kernel.c" >&2
+	echo "bench_forces.sh: reference kernel not found at $shared_bench/spring_kernel.c" \
+		"(set REFERENCE_BENCH to the folder that holds it)" >&2
 	exit 1
 fi
 

@@ -479,6 +479,17 @@ static const char* particle_name(const void* owner, int32_t particle)
 	return ex->names + ex->name_offset[particle];
 }
 
+// "particle 10 (\"rope[10]\")", or "particle 10" for an unnamed one, for messages.
+static const char* describe_particle(const expansion* ex, int32_t particle, char* buffer, size_t size)
+{
+	char text[TEXT_QUOTED_CAPACITY];
+	if (ex->name_offset[particle] >= 0)
+		snprintf(buffer, size, "particle %d (%s)", (int)particle, text_quoted(text, particle_name(ex, particle)));
+	else
+		snprintf(buffer, size, "particle %d", (int)particle);
+	return buffer;
+}
+
 static const char* structure_name(const void* owner, int32_t structure)
 {
 	return ((const expansion*)owner)->structures[structure].name;
@@ -832,7 +843,9 @@ static bool read_springs(parser* p, const json_t* list)
 			return false;
 		if (def.a == def.b) {
 			char message[SM_ERROR_MESSAGE_CAPACITY];
-			snprintf(message, sizeof message, "connects particle %d to itself (a and b are the same particle)", (int)def.a);
+			char which[TEXT_QUOTED_CAPACITY + 32];
+			snprintf(message, sizeof message, "connects %s to itself (a and b are the same particle)",
+			         describe_particle(p->ex, def.a, which, sizeof which));
 			return fail_naming_parameters(p, SM_ERROR_SELF_SPRING, path, message);
 		}
 		spring_source src = {-1, -1, -1, -1, -1};
@@ -1406,17 +1419,17 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 			return fail(p, SM_ERROR_SCHEMA, sub, "must be \"force\", \"motion\" or \"probe\"");
 		sm_particle_def def;
 		sm_model_get_particle(p->ex->model, port.particle, &def);
+		char which[TEXT_QUOTED_CAPACITY + 32];
+		describe_particle(p->ex, port.particle, which, sizeof which);
 		if (port.kind == SM_PORT_FORCE && def.motion != SM_PARTICLE_FREE)
 			return fail(p, SM_ERROR_SCHEMA, path,
-			            "a force port needs a free particle, and particle %d is fixed (use a motion or probe port)",
-			            (int)port.particle);
+			            "a force port needs a free particle, and %s is fixed (use a motion or probe port)", which);
 		// Only probe ports share a particle, so a particle has one port of another kind or probes
 		// alone, and its first port says which.
 		const int32_t q = port_at[port.particle];
 		if (q >= 0 && (p->ex->ports[q].kind != SM_PORT_PROBE || port.kind != SM_PORT_PROBE))
 			return fail(p, SM_ERROR_SCHEMA, path,
-			            "particle %d already has port %s; only probe ports may share a particle",
-			            (int)port.particle, p->ex->ports[q].name);
+			            "%s already has port %s; only probe ports may share a particle", which, p->ex->ports[q].name);
 		int32_t holder;
 		p->ex->ports[p->ex->port_count] = port;
 		if (!name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count, &holder))

@@ -21,6 +21,7 @@ typedef struct text {
 	char* data;
 	size_t length, capacity;
 	bool failed;
+	uint8_t* named;  // per parameter: 1 once the text names it (NULL: not tracked)
 } text;
 
 static void put(text* t, const char* s, size_t n)
@@ -85,17 +86,22 @@ static void put_string(text* t, const char* s)
 
 // A JSON value copied from the file (gravity, mass damping, simulation and FMU settings, all
 // validated and shallow), with numbers written like every other number.
-static void put_json(text* t, const json_t* value)
+// A JSON value as the file gave it; a string that names a parameter counts as naming it.
+static void put_json(text* t, const sm_document* doc, const json_t* value)
 {
 	if (json_is_number(value)) {
 		put_number(t, json_number_value(value));
 	} else if (json_is_string(value)) {
-		put_string(t, json_string_value(value));
+		const char* s = json_string_value(value);
+		put_string(t, s);
+		const int32_t k = name_index_find(&doc->parameter_index, s, strlen(s));
+		if (k >= 0 && t->named != NULL)
+			t->named[k] = 1;
 	} else if (json_is_array(value)) {
 		puts_(t, "[");
 		for (size_t k = 0; k < json_array_size(value); k++) {
 			puts_(t, k > 0 ? ", " : "");
-			put_json(t, json_array_get(value, k));
+			put_json(t, doc, json_array_get(value, k));
 		}
 		puts_(t, "]");
 	} else if (json_is_object(value)) {
@@ -109,7 +115,7 @@ static void put_json(text* t, const json_t* value)
 			first = false;
 			put_string(t, key);
 			puts_(t, ": ");
-			put_json(t, item);
+			put_json(t, doc, item);
 		}
 		puts_(t, "}");
 	} else {
@@ -120,10 +126,13 @@ static void put_json(text* t, const json_t* value)
 // A number, or the parameter it came from.
 static void put_value(text* t, const sm_document* doc, double x, int32_t source)
 {
-	if (source >= 0)
+	if (source >= 0) {
 		put_string(t, doc->parameter_names[source]);
-	else
+		if (t->named != NULL)
+			t->named[source] = 1;
+	} else {
 		put_number(t, x);
+	}
 }
 
 static void put_vector(text* t, const sm_document* doc, const double x[3], const int32_t sources[3])
@@ -228,15 +237,15 @@ static const char* port_kind_name(sm_port_kind kind)
 	return "probe";
 }
 
+static void write_body(text* body, const sm_document* doc);
+
 static char* document_text(const sm_document* doc, sm_error* err)
 {
 	if (doc == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_to_json: no document");
 		return NULL;
 	}
-	const expansion* ex = doc->current;
-	const sm_model_def def = sm_model_get_def(ex->model);
-	text t = {NULL, 0, 0, false};
+	text t = {NULL, 0, 0, false, NULL};
 	char buffer[64];
 	snprintf(buffer, sizeof buffer, "{\n  \"springmass\": %d,\n  \"name\": ", SM_FORMAT_VERSION);
 	puts_(&t, buffer);
@@ -245,27 +254,57 @@ static char* document_text(const sm_document* doc, sm_error* err)
 		puts_(&t, ",\n  \"description\": ");
 		put_string(&t, doc->description);
 	}
-	if (doc->parameter_count > 0) {
-		puts_(&t, ",\n  \"parameters\": {");
+	// The rest first, to learn which parameters it names: only those are listed. A parameter that
+	// fed only what the writer writes out as numbers (a structure's total mass, its geometry, its
+	// counts, an initial state replaced by sm_document_set_initial_state) would feed nothing.
+	text body = {NULL, 0, 0, false, calloc((size_t)doc->parameter_count + 1, 1)};
+	if (body.named == NULL)
+		t.failed = true;
+	write_body(&body, doc);
+	if (doc->parameter_count > 0 && body.named != NULL) {
+		bool any = false;
 		for (int32_t k = 0; k < doc->parameter_count; k++) {
-			puts_(&t, k > 0 ? ", " : "");
+			if (!body.named[k])
+				continue;
+			puts_(&t, any ? ", " : ",\n  \"parameters\": {");
+			any = true;
 			put_string(&t, doc->parameter_names[k]);
 			puts_(&t, ": ");
 			put_number(&t, doc->parameter_values[k]);
 		}
-		puts_(&t, "}");
+		if (any)
+			puts_(&t, "}");
 	}
+	if (body.data != NULL)
+		puts_(&t, body.data);
+	t.failed = t.failed || body.failed;
+	free(body.data);
+	free(body.named);
+	if (t.failed) {
+		free(t.data);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory while writing the model", doc->source);
+		return NULL;
+	}
+	return t.data;
+}
+
+// Everything after the name, description and parameters.
+static void write_body(text* body, const sm_document* doc)
+{
+	text t = *body;
+	const expansion* ex = doc->current;
+	const sm_model_def def = sm_model_get_def(ex->model);
 	// Gravity and mass damping as the file gave them (they may name parameters).
 	puts_(&t, ",\n  \"gravity\": ");
 	const json_t* gravity = json_object_get(doc->root, "gravity");
 	if (gravity != NULL)
-		put_json(&t, gravity);
+		put_json(&t, doc, gravity);
 	else
 		put_vector(&t, doc, def.gravity, NULL);
 	puts_(&t, ",\n  \"mass_damping\": ");
 	const json_t* mass_damping = json_object_get(doc->root, "mass_damping");
 	if (mass_damping != NULL)
-		put_json(&t, mass_damping);
+		put_json(&t, doc, mass_damping);
 	else
 		put_number(&t, def.mass_damping);
 
@@ -305,15 +344,10 @@ static char* document_text(const sm_document* doc, sm_error* err)
 		puts_(&t, ",\n  \"");
 		puts_(&t, copied[k]);
 		puts_(&t, "\": ");
-		put_json(&t, value);
+		put_json(&t, doc, value);
 	}
 	puts_(&t, "\n}\n");
-	if (t.failed) {
-		free(t.data);
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory while writing the model", doc->source);
-		return NULL;
-	}
-	return t.data;
+	*body = t;
 }
 
 // The text is written in the C locale whatever LC_NUMERIC the program chose: setlocale() is

@@ -25,7 +25,7 @@ int sm_cmd_fmu(int argc, char** argv)
 	(void)argc;
 	fprintf(stderr, "springmass %s: this build has no FMU support (configure with SPRINGMASS_BUILD_FMU=ON and "
 	                "SPRINGMASS_PYTHON set)\n", argv[0]);
-	return 2;
+	return 1;  // not a usage error: the command cannot run in this build
 }
 
 #else

@@ -20,12 +20,13 @@ static void usage(FILE* out)
 	        "Linearises the model about its initial configuration (or its static equilibrium) with\n"
 	        "fixed and driven particles held, and solves K phi = omega^2 M phi: natural frequencies,\n"
 	        "modal damping ratios (from the damping matrix; exact when the damping is proportional,\n"
-	        "which is reported) and mass-normalised mode shapes. Rigid-body modes have frequency 0.\n"
+	        "which is reported) and mass-normalised mode shapes. Zero modes (rigid-body motions, and\n"
+	        "mechanisms such as the sideways motion of a straight unstressed chain) have frequency 0.\n"
 	        "Also prints the largest communication step suggested for co-simulation (a fraction of\n"
 	        "the period of the highest mode listed) and the stability limit 2/omega_max of explicit\n"
 	        "integrators. Small models (or -n 0) are solved densely, all modes; large ones by\n"
-	        "shift-invert Lanczos on the sparse matrices, the lowest N modes only (then the rigid-body\n"
-	        "and unstable counts are among those, and omega_max is an upper bound).\n"
+	        "shift-invert Lanczos on the sparse matrices, the lowest N modes only (then the zero and\n"
+	        "unstable counts are among those, and omega_max is an upper bound).\n"
 	        "\n"
 	        "options:\n"
 	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all; all or\n"
@@ -93,7 +94,9 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	else
 		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes->dof,
 		       modes->residual);
-	printf("rigid-body modes  %d%s\n", (int)modes->zero_count, sparse ? " (among the modes listed)" : "");
+	printf("zero modes        %d%s (frequency 0: rigid-body motions or mechanisms%s)\n", (int)modes->zero_count,
+	       sparse ? " among the modes listed" : "",
+	       modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium" : "");
 	if (modes->unstable_count > 0)
 		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
 		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",
@@ -111,7 +114,7 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 		if (fr > 0.0)
 			snprintf(period, sizeof period, "%.9g", 1.0 / fr);
 		else
-			snprintf(period, sizeof period, "%s", modes->omega_squared[m] < 0.0 ? "unstable" : "rigid");
+			snprintf(period, sizeof period, "%s", modes->omega_squared[m] < 0.0 ? "unstable" : "inf");
 		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes->omega_squared[m],
 		       modes->damping_ratio[m]);
 	}
@@ -124,6 +127,8 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	if (highest > 0.0)
 		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
 		       1.0 / (highest * steps_per_period), steps_per_period, highest);
+	else
+		printf("communication step       none suggested: no mode listed has a frequency (list more with -n)\n");
 }
 
 int sm_cmd_modes(int argc, char** argv)
