@@ -1685,6 +1685,22 @@ static bool read_header(sm_document* doc, sm_error* err)
 	return true;
 }
 
+// Whether a syntax error reads as a missing comma: the parser expected the end of an array or an
+// object and found the start of another value ("']' expected near '\"springs\"'").
+static bool missing_comma(const char* message)
+{
+	static const char* const closing[] = {"']' expected near '", "'}' expected near '"};
+	for (int k = 0; k < 2; k++) {
+		const size_t length = strlen(closing[k]);
+		if (strncmp(message, closing[k], length) == 0) {
+			const char c = message[length];
+			return c == '"' || c == '{' || c == '[' || c == '-' || (c >= '0' && c <= '9') || c == 't' || c == 'f' ||
+			       c == 'n';
+		}
+	}
+	return false;
+}
+
 sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
                                        sm_error* err)
 {
@@ -1745,7 +1761,8 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: strings in a model file may not contain \\u0000",
 			             source_name, line, column);
 		else
-			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s", source_name, line, column, shown);
+			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s%s", source_name, line, column, shown,
+			             missing_comma(error.text) ? " (or a ',' before it)" : "");
 		sm_document_destroy(doc);
 		return NULL;
 	}

@@ -1924,6 +1924,11 @@ static int test_syntax_error_positions(void)
 	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX, "test.json:3:11: ':' expected near '\"x\"'"},
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n", SM_ERROR_SYNTAX,
 	     "test.json:3:0: ']' expected near end of file"},
+	    // Another value where the end of an array or object was expected: a missing comma?
+	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n \"springs\": []}",
+	     SM_ERROR_SYNTAX, "test.json:3:10: ']' expected near '\"springs\"' (or a ',' before it)"},
+	    {"{\"springmass\": 1 \"name\": \"x\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:23: '}' expected near '\"name\"' (or a ',' before it)"},
 	    // An error at a line end is at column 0 of the next line, whichever kind the line end is.
 	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\\r\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
