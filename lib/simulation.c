@@ -1056,18 +1056,18 @@ static bool cvode_ahead(const sm_simulation* sim)
 // these are the steps of CV_NORMAL, which loops over them inside CVODE up to the stop time. With
 // t_stop past t_end (sm_simulation_advance_interpolated) CVODE looks for roots over each whole
 // step, t_end or not, so that the roots are those of one advance to t_stop, bit for bit, and
-// the caller interpolates t_end. CVODE counts max_steps within one call, so the limit is kept
-// here, as CV_NORMAL would. *reached is where CVODE stopped: the end of its last step, a root,
-// or the last state it reached on failure (in y).
-static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, double* reached)
+// the caller interpolates t_end. CVODE counts its step limit within one call, so the limit,
+// `allowed` steps, is kept here, as CV_NORMAL would. *reached is where CVODE stopped: the end of
+// its last step, a root, or the last state it reached on failure (in y).
+static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, long allowed, double* reached)
 {
 	*reached = cvode_time(sim);
 	if (*reached >= t_end)
 		return CV_SUCCESS;
 	CVodeSetStopTime(sim->cvode, t_stop);
-	int32_t steps = 0;
+	long steps = 0;
 	int flag = CV_SUCCESS;
-	while (flag == CV_SUCCESS && *reached < t_end && steps < sim->def.max_steps) {
+	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed) {
 		flag = check_step_size(sim, CVode(sim->cvode, t_stop, sim->y, reached, CV_ONE_STEP), reached);
 		if (flag >= 0 && sim->def.on_step != NULL)
 			sim->def.on_step(sim->def.on_step_context, *reached);
@@ -1106,6 +1106,9 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		return SM_ERROR_OUT_OF_MEMORY;
 	if (!cvode_ahead(sim) && t_stop - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
 		return short_step(sim, t_end);
+	// max_steps holds for the whole advance: over the CVode calls between spring breaks and
+	// restarts too, each of which CVODE would count afresh.
+	long steps_taken = 0;
 	while (sim->time < t_end) {
 		if (sim->need_restart) {
 			sm_status st = reinit(sim, false);
@@ -1131,13 +1134,21 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		sim->jacobian_out_of_memory = false;
 		const bool past_end = (t_stop > t_end && !inputs_changed) || cvode_ahead(sim);
 		double reached = sim->time;
+		const long allowed = (long)sim->def.max_steps - steps_taken;
+		long steps_before = 0, steps_after = 0;
+		CVodeGetNumSteps(sim->cvode, &steps_before);
 		int flag;
-		if (!past_end && sim->def.on_step == NULL) {
+		if (allowed <= 0) {
+			flag = CV_SUCCESS;  // reported as too much work below
+		} else if (!past_end && sim->def.on_step == NULL) {
 			CVodeSetStopTime(sim->cvode, t_end);
+			CVodeSetMaxNumSteps(sim->cvode, allowed);
 			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
 		} else {
-			flag = step_one_at_a_time(sim, t_end, past_end ? t_stop : t_end, &reached);
+			flag = step_one_at_a_time(sim, t_end, past_end ? t_stop : t_end, allowed, &reached);
 		}
+		CVodeGetNumSteps(sim->cvode, &steps_after);
+		steps_taken += steps_after - steps_before;
 		if (flag == CV_SUCCESS && reached < t_end) {
 			flag = CV_TOO_MUCH_WORK;
 			snprintf(sim->solver_message, sizeof sim->solver_message,
@@ -1428,6 +1439,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
 	load_initial_state(sim);
 	sim->break_count = 0;
+	sim->input_changed = false;  // the inputs set before the reset are gone with them
 	sim->last_error[0] = '\0';
 	sm_status st = reinit(sim, true);
 	memset(&sim->base, 0, sizeof sim->base);

@@ -84,7 +84,7 @@ typedef struct sm_simulation_def {
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy [J]; default 1e-6
 	double absolute_tolerance_velocity;
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
-	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance; default 100000
+	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
 	/// changes an input (default false: CVODE keeps its history and its error control absorbs
 	/// the jump; see "Inputs between calls" above).
