@@ -819,8 +819,10 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 		log_error(inst, "fmi2SetupExperiment: tolerance %g must lie in (0, 1)", tolerance);
 		return fmi2Error;
 	}
-	if (toleranceDefined && !inst->rtol_set)
-		inst->solver.relative_tolerance = tolerance;
+	// The experiment's tolerance, or without one the file's (an earlier call's does not stay).
+	if (!inst->rtol_set)
+		inst->solver.relative_tolerance =
+		    toleranceDefined ? tolerance : sm_document_get_settings(inst->doc).solver.relative_tolerance;
 	inst->start_time = startTime;
 	inst->time = startTime;
 	inst->stop_time_defined = stopTimeDefined;

@@ -835,6 +835,413 @@ static int test_time_margins_scale_with_the_time(void)
 	return 0;
 }
 
+// From a review that planted 71 bugs in the FMU layer (49 caught; 19 real gaps, each caught here).
+
+// A setter or getter called with no values is still a call: in a state where FMI 2.0 does not
+// allow it, it is an fmi2Error with "illegal call sequence" (the value checks of the non-empty
+// call cannot catch it then). Terminated: no setter is allowed; instantiated: no getter.
+static int test_calls_without_values_still_check_the_state(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "empty_calls");
+	ENSURE(c != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetReal(c, NULL, 0, NULL), fmi2Error);
+	ENSURE(strstr(f.log.last, "illegal call sequence") != NULL);
+	ENSURE_STATUS(fmi2GetInteger(c, NULL, 0, NULL), fmi2Error);
+	ENSURE_STATUS(fmi2GetString(c, NULL, 0, NULL), fmi2Error);
+	ENSURE_STATUS(fmi2GetBoolean(c, NULL, 0, NULL), fmi2Error);
+	fmi2FreeInstance(c);
+	c = start(&f, "empty_calls");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2Terminate(c), fmi2OK);
+	const char* names[] = {"fmi2SetReal", "fmi2SetInteger", "fmi2SetBoolean", "fmi2SetString",
+	                       "fmi2SetRealInputDerivatives"};
+	for (int k = 0; k < 5; ++k) {
+		f.log.last[0] = '\0';
+		const int errors = f.log.errors;
+		fmi2Status status = k == 0   ? fmi2SetReal(c, NULL, 0, NULL)
+		                    : k == 1 ? fmi2SetInteger(c, NULL, 0, NULL)
+		                    : k == 2 ? fmi2SetBoolean(c, NULL, 0, NULL)
+		                    : k == 3 ? fmi2SetString(c, NULL, 0, NULL)
+		                             : fmi2SetRealInputDerivatives(c, NULL, 0, NULL, NULL);
+		if (status != fmi2Error || f.log.errors != errors + 1 || strstr(f.log.last, names[k]) == NULL ||
+		    strstr(f.log.last, "illegal call sequence") == NULL) {
+			printf("  %s with nvr = 0 when terminated: status %d, logged '%s'\n", names[k], (int)status, f.log.last);
+			return 1;
+		}
+	}
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// fmi2GetDirectionalDerivative checks its seeds as fmi2SetReal checks values: a non-finite seed is
+// an fmi2Error naming the input, and a NULL seed or result array with values to read or write is
+// an fmi2Error, never a read through NULL.
+static int test_directional_derivative_seeds_are_checked(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "seeds");
+	ENSURE(c != NULL);
+	const fmi2ValueReference force = vr(&f, "base.fx"), position = vr(&f, "base.x");
+	double seed = NAN, result = 0.0;
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, &result), fmi2Error);
+	ENSURE(strstr(f.log.last, "seed of base.x is not finite") != NULL);
+	seed = INFINITY;
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, &result), fmi2Error);
+	seed = 1.0;
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, NULL, &result), fmi2Error);
+	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, NULL), fmi2Error);
+	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, NULL, 1, &seed, &result), fmi2Error);
+	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, &result), fmi2OK);
+	ENSURE_NEAR(result, -50.0, 1e-9);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// A value reference of another type is refused by every getter and setter, naming the variable
+// and both types: Real calls on the Integer and String solver settings too (they would read NaN
+// and set nothing with fmi2OK).
+static int test_values_of_another_type_are_refused(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "types");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	const fmi2ValueReference steps = vr(&f, "solver.max_steps"), method = vr(&f, "solver.method"),
+	                         tip = vr(&f, "tip.x");
+	double real = 0.0;
+	const double one = 1.0;
+	fmi2Integer integer = 0;
+	const fmi2Integer five = 5;
+	fmi2String string = NULL;
+	const fmi2String adams = "adams";
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetReal(c, &steps, 1, &real), fmi2Error);
+	ENSURE(strstr(f.log.last, "solver.max_steps) is a Integer variable, not Real") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetReal(c, &method, 1, &one), fmi2Error);
+	ENSURE(strstr(f.log.last, "solver.method) is a String variable, not Real") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetReal(c, &method, 1, &real), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a String variable, not Real") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetReal(c, &steps, 1, &one), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a Integer variable, not Real") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetInteger(c, &method, 1, &integer), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a String variable, not Integer") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetInteger(c, &tip, 1, &five), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a Real variable, not Integer") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetString(c, &steps, 1, &string), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a Integer variable, not String") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetString(c, &tip, 1, &adams), fmi2Error);
+	ENSURE(strstr(f.log.last, "is a Real variable, not String") != NULL);
+	ENSURE_STATUS(fmi2GetInteger(c, &steps, 1, &integer), fmi2OK);
+	ENSURE(integer == 100000);
+	ENSURE_STATUS(fmi2GetString(c, &method, 1, &string), fmi2OK);
+	ENSURE(strcmp(string, "bdf") == 0);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The communication point is the FMU's time to 1000 ulps of max(1 s, |t|), and a step is at least
+// 4 eps max(1 s, |t|) (docs/fmu.md): the bounds themselves, not only values far off. At t = 1e6 s
+// the point's margin is 1e3 eps 1e6 s = 2.2e-7 s: 1e-6 s off (4500 ulps of 1e6 s) is refused; the
+// resolution is 8.9e-10 s: 5e-10 s is refused, 1e-9 s taken. At t = 0, 1e-12 s off (4500 eps) is
+// refused, 1e-14 s (45 eps) taken.
+static int test_communication_point_and_step_size_at_their_bounds(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "bounds");
+	ENSURE(c != NULL);
+	const double t0 = 1e6;
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-6, 0.1, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "does not match") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, t0 - 1e-6, 0.1, fmi2True), fmi2Error);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(c, t0, 5e-10, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "below the time resolution") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-9, fmi2True), fmi2OK);
+	fmi2FreeInstance(c);
+
+	c = start(&f, "bounds_at_zero");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 1e-12, 0.01, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "does not match") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 1e-14, 0.01, fmi2True), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The stop time's margin is 1000 ulps of max(1 s, |stop|) on either side of zero: a stop time of
+// 0 is reached from -0.3 s by three steps of 0.1 s, whose sum ends 2.8e-17 s past it (the margin
+// is 2.2e-13 s, not 1000 ulps of 0); a step 1e-11 s past a stop time of 1 s (45 000 ulps) is
+// refused.
+static int test_stop_time_margin_at_its_bounds(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "stop_at_zero");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, -0.3, fmi2True, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	double t = -0.3;
+	for (int n = 0; n < 3; ++n, t += 0.1)
+		ENSURE_STATUS(fmi2DoStep(c, t, 0.1, fmi2True), fmi2OK);
+	ENSURE(t > 0.0);  // 2.7755575615628914e-17
+	fmi2FreeInstance(c);
+
+	c = instantiate(&f, "stop_at_one");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 1.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.5, fmi2True), fmi2OK);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(c, 0.5, 0.5 + 1e-11, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "goes past the stop time") != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.5, 0.5, fmi2True), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// fmi2SetString is all or nothing like fmi2SetReal: a call whose second value is refused leaves
+// the first setting as it was.
+static int test_a_refused_set_string_changes_nothing(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "strings");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	const fmi2ValueReference r[2] = {vr(&f, "solver.method"), vr(&f, "solver.linear_solver")};
+	const fmi2String values[2] = {"adams", "fast"};
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetString(c, r, 2, values), fmi2Error);
+	ENSURE(strstr(f.log.last, "solver.linear_solver = \"fast\" rejected") != NULL);
+	fmi2String read[2] = {NULL, NULL};
+	ENSURE_STATUS(fmi2GetString(c, r, 2, read), fmi2OK);
+	ENSURE(strcmp(read[0], "bdf") == 0 && strcmp(read[1], "auto") == 0);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// A state carries every solver setting, each in its own place: an instance started with other
+// settings reads back, after the state of one with every setting away from the file's default,
+// exactly that instance's values (both absolute tolerances, the step limits, method, linear solver
+// and Jacobian).
+static int test_state_carries_every_solver_setting(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component a = instantiate(&f, "a");
+	ENSURE(a != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(a, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
+	ENSURE_STATUS(set_real(a, &f, "solver.rtol", 1e-7), fmi2OK);
+	ENSURE_STATUS(set_real(a, &f, "solver.atol_position", 1e-9), fmi2OK);
+	ENSURE_STATUS(set_real(a, &f, "solver.atol_velocity", 3e-7), fmi2OK);
+	ENSURE_STATUS(set_real(a, &f, "solver.max_step", 2e-3), fmi2OK);
+	ENSURE_STATUS(set_integer(a, &f, "solver.max_steps", 777), fmi2OK);
+	ENSURE_STATUS(set_string(a, &f, "solver.method", "adams"), fmi2OK);
+	ENSURE_STATUS(set_string(a, &f, "solver.linear_solver", "klu"), fmi2OK);
+	ENSURE_STATUS(set_string(a, &f, "solver.jacobian", "definite"), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(a), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(a, 0.0, 0.01, fmi2True), fmi2OK);
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(a, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(a, state, &size), fmi2OK);
+	fmi2Byte* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(fmi2SerializeFMUstate(a, state, bytes, size), fmi2OK);
+
+	fmi2Component b = start(&f, "b");
+	ENSURE(b != NULL);
+	fmi2FMUstate restored = NULL;
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(b, bytes, size, &restored), fmi2OK);
+	ENSURE_STATUS(fmi2SetFMUstate(b, restored), fmi2OK);
+	// Compared with the values set, not with a's: fmi2GetFMUstate restarts a from the state it saved,
+	// through the same code as fmi2SetFMUstate, so a field restored into the wrong place would be
+	// wrong in both.
+	static const char* const reals[] = {"solver.rtol", "solver.atol_position", "solver.atol_velocity",
+	                                    "solver.max_step"};
+	static const double expected[] = {1e-7, 1e-9, 3e-7, 2e-3};
+	for (int k = 0; k < 4; ++k) {
+		if (get(b, &f, reals[k]) != expected[k] || get(a, &f, reals[k]) != expected[k]) {
+			printf("  %s: %.17g restored, %.17g in the saving instance, %.17g set\n", reals[k], get(b, &f, reals[k]),
+			       get(a, &f, reals[k]), expected[k]);
+			return 1;
+		}
+	}
+	const fmi2ValueReference steps = vr(&f, "solver.max_steps");
+	const fmi2ValueReference strings[3] = {vr(&f, "solver.method"), vr(&f, "solver.linear_solver"),
+	                                       vr(&f, "solver.jacobian")};
+	fmi2Integer max_steps = 0;
+	fmi2String names[3] = {NULL, NULL, NULL};
+	ENSURE_STATUS(fmi2GetInteger(b, &steps, 1, &max_steps), fmi2OK);
+	ENSURE_STATUS(fmi2GetString(b, strings, 3, names), fmi2OK);
+	ENSURE(max_steps == 777);
+	ENSURE(strcmp(names[0], "adams") == 0 && strcmp(names[1], "klu") == 0 && strcmp(names[2], "definite") == 0);
+	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(b, &restored), fmi2OK);
+	free(bytes);
+	fmi2FreeInstance(a);
+	fmi2FreeInstance(b);
+	teardown(&f);
+	return 0;
+}
+
+// fmi2LastSuccessfulTime is part of the state: after steps past the saved point, restoring gives
+// the saved point's time back, bit for bit; after a discarded step (1e200 N on the bob), the
+// restored instance steps again, with fmi2DoStepStatus fmi2OK.
+static int test_state_restores_the_last_successful_time(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "last_successful");
+	ENSURE(c != NULL);
+	double t = 0.0;
+	for (int n = 0; n < 10; ++n, t += 0.01)
+		ENSURE_STATUS(fmi2DoStep(c, t, 0.01, fmi2True), fmi2OK);
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	double reached = NAN;
+	fmi2Status status = fmi2Fatal;
+	for (int n = 0; n < 5; ++n)
+		ENSURE_STATUS(fmi2DoStep(c, t + 0.01 * n, 0.01, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
+	ENSURE_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &reached), fmi2OK);
+	ENSURE(reached == t);
+	ENSURE_STATUS(set_real(c, &f, "tip.fx", 1e200), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, t, 0.01, fmi2True), fmi2Discard);
+	ENSURE_STATUS(fmi2GetStatus(c, fmi2DoStepStatus, &status), fmi2OK);
+	ENSURE(status == fmi2Discard);
+	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
+	ENSURE_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &reached), fmi2OK);
+	ENSURE(reached == t);
+	ENSURE_STATUS(fmi2GetStatus(c, fmi2DoStepStatus, &status), fmi2OK);
+	ENSURE(status == fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, t, 0.01, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The 64-bit FNV-1a checksum of a serialised state (fmu_state.c: every byte but the checksum's
+// own, bytes 56 to 63) made valid again after an edit: a state written by another tool.
+static void fix_state_checksum(fmi2Byte* bytes, size_t size)
+{
+	uint64_t hash = 0xcbf29ce484222325u;
+	for (size_t i = 0; i < size; ++i) {
+		if (i < 56 || i >= 64)
+			hash = (hash ^ (unsigned char)bytes[i]) * 0x100000001b3u;
+	}
+	memcpy(bytes + 56, &hash, 8);
+}
+
+// A state the model refuses (m = -1, checksum valid) changes nothing, the experiment included:
+// the stop time of 0.5 s it carries does not stay behind, so the instance, which has none, steps
+// on past 0.5 s from where it was.
+static int test_a_refused_state_leaves_the_stop_time(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component a = instantiate(&f, "a");
+	ENSURE(a != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(a, fmi2False, 0.0, 0.0, fmi2True, 0.5), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(a), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(a), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(a, 0.0, 0.1, fmi2True), fmi2OK);
+	fmi2FMUstate state = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(a, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(a, state, &size), fmi2OK);
+	fmi2Byte* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(fmi2SerializeFMUstate(a, state, bytes, size), fmi2OK);
+	// The parameters m, k, d = 2, 50, 0 in file order: m made -1.
+	const double parameters[3] = {2.0, 50.0, 0.0}, refused = -1.0;
+	size_t at = 0;
+	while (at + sizeof parameters <= size && memcmp(bytes + at, parameters, sizeof parameters) != 0)
+		at += 8;
+	ENSURE(at + sizeof parameters <= size);
+	memcpy(bytes + at, &refused, 8);
+	fix_state_checksum(bytes, size);
+
+	fmi2Component b = start(&f, "b");
+	ENSURE(b != NULL);
+	ENSURE_STATUS(fmi2DoStep(b, 0.0, 0.1, fmi2True), fmi2OK);
+	fmi2FMUstate edited = NULL;
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(b, bytes, size, &edited), fmi2OK);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetFMUstate(b, edited), fmi2Error);
+	ENSURE(strstr(f.log.last, "m = -1") != NULL);
+	ENSURE(get(b, &f, "m") == 2.0);
+	ENSURE_STATUS(fmi2DoStep(b, 0.1, 0.5, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(b, &edited), fmi2OK);
+	free(bytes);
+	fmi2FreeInstance(a);
+	fmi2FreeInstance(b);
+	teardown(&f);
+	return 0;
+}
+
+// fmi2Reset goes back to the instantiated state (docs/fmu.md), experiment included: a stop time
+// given before the reset does not hold after it, also when the master enters initialisation mode
+// without calling fmi2SetupExperiment again (which this FMU accepts).
+static int test_reset_forgets_the_stop_time(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "reset_stop");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2True, 0.2), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.2, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.2, 0.1, fmi2True), fmi2Error);
+	ENSURE_STATUS(fmi2Reset(c), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.2, fmi2True), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.2, 0.1, fmi2True), fmi2OK);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Random call sequences against the FMI 2.0 Co-Simulation state machine
 // ---------------------------------------------------------------------------------------------
@@ -1194,5 +1601,15 @@ int main(int argc, char** argv)
 	RUN_TEST(test_messages_are_printf_formats);
 	RUN_TEST(test_time_margins_scale_with_the_time);
 	RUN_TEST(test_random_call_sequences_follow_the_state_machine);
+	RUN_TEST(test_calls_without_values_still_check_the_state);
+	RUN_TEST(test_directional_derivative_seeds_are_checked);
+	RUN_TEST(test_values_of_another_type_are_refused);
+	RUN_TEST(test_communication_point_and_step_size_at_their_bounds);
+	RUN_TEST(test_stop_time_margin_at_its_bounds);
+	RUN_TEST(test_a_refused_set_string_changes_nothing);
+	RUN_TEST(test_state_carries_every_solver_setting);
+	RUN_TEST(test_state_restores_the_last_successful_time);
+	RUN_TEST(test_a_refused_state_leaves_the_stop_time);
+	RUN_TEST(test_reset_forgets_the_stop_time);
 	return TEST_SUMMARY();
 }

@@ -779,3 +779,53 @@ def test_instances_of_one_unzipped_fmu_are_freed_independently(test_fmu, tmp_pat
     finally:
         b.free()
         alone.free()
+
+
+REFERENCE_ONLY = {
+    "springmass": 1, "name": "reference_only",
+    "description": "j names the particle of the probe port and nothing else.",
+    "parameters": {"j": 2},
+    "gravity": [0, 0, -9.81],
+    "structures": [{"type": "rope", "name": "rope", "start": [0, 0, 0], "end": [3, 0, 0], "segments": 3,
+                    "mass": 0.3, "structural": {"strain_stiffness": 100}}],
+    "fixed": ["rope[0]"],
+    "ports": [{"name": "probe", "particle": "rope[j]", "kind": "probe"}]}
+
+
+def test_a_parameter_that_only_names_a_particle_is_a_constant(package, tmp_path):
+    # docs/model-format.md, docs/fmu.md: a parameter that feeds a particle reference (here only
+    # the index of the probe port's particle, no count) is a constant of the packaged FMU: causality
+    # local, variability constant, initial exact; another value is refused with the way to package
+    # one, its own value is taken.
+    model = tmp_path / "reference_only.json"
+    model.write_text(json.dumps(REFERENCE_ONLY))
+    fmu = package(model)
+    j = next(v for v in read_model_description(str(fmu)).modelVariables if v.name == "j")
+    assert (j.causality, j.variability, j.initial, j.start) == ("local", "constant", "exact", "2")
+    inst = Instance(fmu)
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        expect_error(inst, lambda: inst.set("j", 3), "j = 3 refused", "springmass fmu")
+        inst.set("j", 2)
+        s.exitInitializationMode()
+        assert inst.get("probe.x") == 2.0
+    finally:
+        inst.free()
+
+
+def test_setup_without_a_tolerance_takes_the_files_after_one_with(test_fmu):
+    # fmi2SetupExperiment may be called again before initialisation: without a tolerance the
+    # second call leaves the file's relative tolerance (driven_oscillator.json names none: the
+    # default 1e-6), not the first call's 1e-3.
+    inst = Instance(test_fmu("driven_oscillator"))
+    s = inst.slave
+    try:
+        s.setupExperiment(tolerance=1e-3, startTime=0.0)
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        assert inst.get("solver.rtol") == 1e-6
+        s.exitInitializationMode()
+    finally:
+        inst.free()

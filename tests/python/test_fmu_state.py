@@ -270,12 +270,12 @@ def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu)
     # takes. Each is refused with a message, and the instance steps on as before.
     with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0, "m": 2.5}) as (a, b, blob):
         assert checksummed(blob) == blob
-        # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 13; time 20;
+        # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 14; time 20;
         # then positions from word 29; the parameters follow the positions, velocities and springs.
         params = blob.index(struct.pack("<d", 2.5)) // 8
         assert struct.unpack_from("<d", blob, 8 * params + 8)[0] == 60.0
         cases = [edited(blob, 8, "<q", 0), edited(blob, 8, "<q", 32), edited(blob, 8, "<q", 3),
-                 edited(blob, 13, "<q", 7), edited(blob, 20, "<d", math.nan), edited(blob, 29 + 3, "<d", math.inf),
+                 edited(blob, 14, "<q", 7), edited(blob, 20, "<d", math.nan), edited(blob, 29 + 3, "<d", math.inf),
                  edited(edited(blob, params + 1, "<d", 70.0), params + 2, "<d", -1.0)]
         run(b, 0.0, 5)
         before = b.get(*OUTPUTS)
@@ -415,3 +415,56 @@ print("restored")
 """
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
     assert out.returncode == 0 and "restored" in out.stdout, out.stdout + out.stderr
+
+
+# The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
+# parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
+# then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
+# linear solver 15, Jacobian 16, max_steps 17, rtol_set 18, stop defined 19; the doubles time 20,
+# start 21, last successful time 22, stop 23, dissipated 24, rtol 25, atol of positions 26 and of
+# velocities 27, max_step 28; then x (29-34), v (35-40), the spring's enabled flag 41, the
+# parameters 42-44, the held inputs of base (45-53) and tip (54-62: position, velocity, force) and
+# the pending flags 63-64.
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = 13, 14, 17, 26, 28, 41, 42, 60
+
+
+def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
+    # docs/fmu.md: a serialised state "with values out of range is refused with fmi2Error and a
+    # message naming which" - by fmi2DeSerializeFMUstate, before anything of it is used: a spring
+    # neither broken nor whole (0.5), no internal step allowed, a negative largest step, an absolute
+    # tolerance below the smallest one fmi2SetReal takes, an unknown
+    # method, a non-finite held input. The states are those of an instance that has run (the
+    # solver would refuse some of the values only at fmi2SetFMUstate) and of one saved before
+    # initialisation (whose values the FMU would take without a solver, and fail with at
+    # fmi2ExitInitializationMode, in the error state). The receiving instance goes on unchanged.
+    fmu = test_fmu("driven_oscillator")
+    early = Instance(fmu, "early")
+    try:
+        early.slave.setupExperiment(startTime=0.0)
+        instantiated = early.slave.serializeFMUstate(early.slave.getFMUstate())
+    finally:
+        early.free()
+    with state_and_receiver(fmu, {"k": 60.0}) as (a, b, blob):
+        assert struct.unpack_from("<3d", blob, 8 * W_M) == (2.0, 60.0, 0.0)
+        assert struct.unpack_from("<q", blob, 8 * W_HAS_SIM) == (1,)
+        assert struct.unpack_from("<q", instantiated, 8 * W_HAS_SIM) == (0,)
+        run(b, 0.0, 5)
+        before = b.get("tip.x", "tip.vx", "base.fx")
+        for state in (blob, instantiated):
+            cases = {"spring flag 0.5": edited(state, W_ENABLED, "<d", 0.5),
+                     "max_steps 0": edited(state, W_MAX_STEPS, "<q", 0),
+                     "max_step -1": edited(state, W_MAX_STEP, "<d", -1.0),
+                     # below what fmi2SetReal takes (SM_MIN_ABSOLUTE_TOLERANCE, 1e-150)
+                     "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
+                     "method 7": edited(state, W_METHOD, "<q", 7),
+                     "tip.fx NaN": edited(state, W_TIP_FX, "<d", math.nan),
+                     "tip.fx inf": edited(state, W_TIP_FX, "<d", math.inf)}
+            for what, bad in cases.items():
+                n = len(b.messages)
+                with pytest.raises(FMICallException) as info:
+                    b.slave.deSerializeFMUstate(bad)
+                assert info.value.status == FMI2_ERROR, what
+                assert any("fmi2DeSerializeFMUstate" in m[2] and "out of range" in m[2] for m in b.messages[n:]), \
+                    (what, b.messages[n:])
+        assert b.get("tip.x", "tip.vx", "base.fx") == before
+        run(b, 0.05, 5)
