@@ -412,8 +412,8 @@ static const fmu_variable* lookup(instance* inst, const char* function, fmi2Valu
 	}
 	const fmu_variable* v = &inst->table.variables[vr];
 	if (v->type != type) {
-		log_error(inst, "%s: value reference %u (%s) is a %s variable, not %s", function, (unsigned)vr, v->name,
-		          type_name(v->type), type_name(type));
+		log_error(inst, "%s: value reference %u (%s) is %s %s variable, not %s", function, (unsigned)vr, v->name,
+		          v->type == FMU_INTEGER ? "an" : "a", type_name(v->type), type_name(type));
 		return NULL;
 	}
 	return v;

@@ -932,7 +932,7 @@ static int test_values_of_another_type_are_refused(void)
 	const fmi2String adams = "adams";
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2GetReal(c, &steps, 1, &real), fmi2Error);
-	ENSURE(strstr(f.log.last, "solver.max_steps) is a Integer variable, not Real") != NULL);
+	ENSURE(strstr(f.log.last, "solver.max_steps) is an Integer variable, not Real") != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2SetReal(c, &method, 1, &one), fmi2Error);
 	ENSURE(strstr(f.log.last, "solver.method) is a String variable, not Real") != NULL);
@@ -941,7 +941,7 @@ static int test_values_of_another_type_are_refused(void)
 	ENSURE(strstr(f.log.last, "is a String variable, not Real") != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2SetReal(c, &steps, 1, &one), fmi2Error);
-	ENSURE(strstr(f.log.last, "is a Integer variable, not Real") != NULL);
+	ENSURE(strstr(f.log.last, "is an Integer variable, not Real") != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2GetInteger(c, &method, 1, &integer), fmi2Error);
 	ENSURE(strstr(f.log.last, "is a String variable, not Integer") != NULL);
@@ -950,7 +950,7 @@ static int test_values_of_another_type_are_refused(void)
 	ENSURE(strstr(f.log.last, "is a Real variable, not Integer") != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2GetString(c, &steps, 1, &string), fmi2Error);
-	ENSURE(strstr(f.log.last, "is a Integer variable, not String") != NULL);
+	ENSURE(strstr(f.log.last, "is an Integer variable, not String") != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2SetString(c, &tip, 1, &adams), fmi2Error);
 	ENSURE(strstr(f.log.last, "is a Real variable, not String") != NULL);
