@@ -309,7 +309,10 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		                     dy, dz);
 	const double length = sqrt(dx * dx + dy * dy + dz * dz);
 	double total = def->mass;
-	if (isnan(def->mass_per_length) || def->mass_per_length < 0.0 || isinf(def->mass_per_length))
+	if (!isfinite(def->mass_per_length))
+		return sm_model_fail(model, SM_ERROR_NOT_FINITE, "rope: mass per length = %g must be finite and >= 0",
+		                     def->mass_per_length);
+	if (def->mass_per_length < 0.0)
 		return sm_model_fail(model, SM_ERROR_NEGATIVE, "rope: mass per length = %g must be finite and >= 0",
 		                     def->mass_per_length);
 	if (def->mass_per_length > 0.0) {

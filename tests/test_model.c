@@ -467,6 +467,131 @@ static int test_format_number(void)
 	return 0;
 }
 
+// From a review that planted bugs in model.c (each test catches one that passed).
+
+// A clone has the original's settings, free numbering and springs: the same definition, free
+// count and indices, spring constants, and forces bit for bit (also where the zero-length
+// spring's particles coincide, which a rest-length spring of l0 = 0 does not handle the same).
+static int test_clone_copies_every_field(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[0] = 1.0, md.gravity[1] = 2.0, md.gravity[2] = -3.0;
+	md.mass_damping = 0.5;
+	sm_model* m = sm_model_create(&md, NULL);
+	ENSURE(m != NULL);
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = 0.5 * i;
+		p.motion = i == 1 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	}
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.stiffness = 5.0, d.rest_length = 0.4, d.damping = 1.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	d = sm_default_spring_def();
+	d.a = 1, d.b = 2, d.kind = SM_SPRING_ZERO_LENGTH, d.stiffness = 3.0, d.damping = 2.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	sm_model* c = sm_model_clone(m);
+	ENSURE(c != NULL);
+	const sm_model_def cd = sm_model_get_def(c);
+	ENSURE(cd.gravity[0] == 1.0 && cd.gravity[1] == 2.0 && cd.gravity[2] == -3.0 && cd.mass_damping == 0.5);
+	ENSURE(sm_model_free_count(c) == 2 && sm_model_free_count(m) == 2);
+	for (int32_t i = 0; i < 3; i++)
+		ENSURE(sm_model_free_index(c, i) == sm_model_free_index(m, i));
+	for (int32_t k = 0; k < 2; k++) {
+		double l0[2], ks[2], kd[2];
+		ENSURE_STATUS(sm_model_spring_constants(m, k, &l0[0], &ks[0], &kd[0]), SM_OK);
+		ENSURE_STATUS(sm_model_spring_constants(c, k, &l0[1], &ks[1], &kd[1]), SM_OK);
+		ENSURE(l0[0] == l0[1] && ks[0] == ks[1] && kd[0] == kd[1]);
+	}
+	// Two states: stretched and moving; particles 1 and 2 coinciding (zero-length spring at L = 0).
+	const double xs[2][9] = {{0, 0, 0, 1, 0, 0, 1, 2, 0}, {0, 0, 0, 1, 0, 0, 1, 0, 0}};
+	const double v[9] = {0, 0, 1, 0, 0, 0, 0.5, -1, 0};
+	for (int s = 0; s < 2; s++) {
+		double f[9], fc[9];
+		sm_model_forces(m, xs[s], v, NULL, f);
+		sm_model_forces(c, xs[s], v, NULL, fc);
+		for (int k = 0; k < 9; k++)
+			ENSURE(f[k] == fc[k]);
+	}
+	sm_model_destroy(c);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Disabling and enabling restores the damping too, and replacing the definition of a disabled
+// spring leaves its damping off. Spring (0, 1), l0 = 0.5 m along x, kd = 4 N s/m (absolute),
+// particle 1 moving at 1 m/s along x: f_0 = kd (u . (v_1 - v_0)) u = (4, 0, 0) N, exact.
+static int test_enabling_restores_damping(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.damping = 3.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, false), SM_OK);
+	d.damping = 4.0;
+	ENSURE_STATUS(sm_model_set_spring(m, 0, &d), SM_OK);
+	sm_model_def md = sm_model_get_def(m);
+	md.gravity[2] = 0.0;
+	ENSURE_STATUS(sm_model_set_def(m, &md), SM_OK);
+	const double x[9] = {0, 0, 0, 0.5, 0, 0, 1, 0, 0};
+	const double v[9] = {0, 0, 0, 1, 0, 0, 0, 0, 0};
+	double f[9];
+	sm_model_forces(m, x, v, NULL, f);
+	ENSURE(f[0] == 0.0 && f[3] == 0.0);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, true), SM_OK);
+	sm_model_forces(m, x, v, NULL, f);
+	ENSURE_NEAR(f[0], 4.0, 1e-12);
+	ENSURE_NEAR(f[3], -4.0, 1e-12);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Per-section damping alone requires a section > 0 (as per-section stiffness does).
+static int test_damping_per_section_needs_a_section(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.damping = 1.0, d.damping_scaling = SM_PER_SECTION, d.section = 0.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_ERROR_NEGATIVE);
+	ENSURE(strstr(sm_model_last_error(m), "section") != NULL);
+	ENSURE(sm_model_spring_count(m) == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// An infinite velocity is refused like a NaN one (model.h: "must be finite").
+static int test_infinite_velocity_refused(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.velocity[1] = INFINITY;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(sm_model_particle_count(m) == 3);
+	ENSURE_STATUS(sm_model_set_particle(m, 0, &p), SM_ERROR_NOT_FINITE);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// get_spring gives the rest length resolved to metres: 0 for a zero-length spring added with
+// SM_REST_LENGTH_INITIAL (not the -1 marker).
+static int test_zero_length_spring_rest_length_resolved(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 2, d.kind = SM_SPRING_ZERO_LENGTH, d.stiffness = 1.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	sm_spring_def stored;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &stored), SM_OK);
+	ENSURE(stored.rest_length == 0.0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -481,5 +606,10 @@ int main(int argc, char** argv)
 	RUN_TEST(test_growth_keeps_values);
 	RUN_TEST(test_version);
 	RUN_TEST(test_format_number);
+	RUN_TEST(test_clone_copies_every_field);
+	RUN_TEST(test_enabling_restores_damping);
+	RUN_TEST(test_damping_per_section_needs_a_section);
+	RUN_TEST(test_infinite_velocity_refused);
+	RUN_TEST(test_zero_length_spring_rest_length_resolved);
 	return TEST_SUMMARY();
 }

@@ -1238,6 +1238,242 @@ static int test_per_section_sections_by_hand(void)
 	return 0;
 }
 
+// From a review that planted bugs in structures.c and mesh.c (each test catches one that passed).
+
+// A block with a different count along each axis: particle (i, j, k) sits at
+// origin + (j/(nu-1) size[0], i/(nv-1) size[1], k/(nw-1) size[2]), each axis divided by its own
+// count (the default 4 x 4 x 4 cube cannot tell them apart). The values are exact or one
+// rounding away (1/3 x 3), hence 1e-15.
+static int test_block_positions_follow_each_axis_count(void)
+{
+	sm_model* m = new_model();
+	sm_block_def def = sm_default_block_def();
+	def.origin[0] = 0.5;
+	def.size[0] = 1.0, def.size[1] = 2.0, def.size[2] = 3.0;
+	def.nu = 2, def.nv = 3, def.nw = 4;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_block(m, &def, &s), SM_OK);
+	ENSURE(s.shape[0] == 2 && s.shape[1] == 3 && s.shape[2] == 4 && s.particle_count == 24);
+	static const int32_t at[4][3] = {{1, 0, 0}, {2, 1, 3}, {0, 0, 1}, {1, 1, 2}};
+	static const double expected[4][3] = {{0.5, 1.0, 0.0}, {1.5, 2.0, 3.0}, {0.5, 0.0, 1.0}, {1.5, 1.0, 2.0}};
+	for (int n = 0; n < 4; n++) {
+		sm_particle_def p;
+		ENSURE_STATUS(sm_model_get_particle(m, sm_structure_particle(&s, at[n][0], at[n][1], at[n][2]), &p), SM_OK);
+		for (int c = 0; c < 3; c++)
+			ENSURE_NEAR(p.position[c], expected[n][c], 1e-15);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Every spring a builder makes carries its group's break strain (rope: structural (0,1),
+// bending (0,2), structural (1,2); mesh: its three edge springs).
+static int test_builders_pass_break_strain_to_springs(void)
+{
+	sm_model* m = new_model();
+	sm_rope_def rope = sm_default_rope_def();
+	rope.segments = 2;
+	rope.structural.break_strain = 0.1;
+	rope.bending.stiffness = 10.0;
+	rope.bending.break_strain = 0.2;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 3);
+	static const double rope_expected[3] = {0.1, 0.2, 0.1};
+	for (int32_t k = 0; k < 3; k++) {
+		sm_spring_def d;
+		ENSURE_STATUS(sm_model_get_spring(m, k, &d), SM_OK);
+		ENSURE(d.break_strain == rope_expected[k]);
+	}
+	const double vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+	const int32_t triangles[3] = {0, 1, 2};
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices, mesh.vertex_count = 3, mesh.triangles = triangles, mesh.triangle_count = 1;
+	mesh.edge.break_strain = 0.3;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_mesh(m, &mesh, &s), SM_OK);
+	ENSURE(s.spring_count == 3);
+	for (int32_t k = s.first_spring; k < s.first_spring + 3; k++) {
+		sm_spring_def d;
+		ENSURE_STATUS(sm_model_get_spring(m, k, &d), SM_OK);
+		ENSURE(d.break_strain == 0.3);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Damping per section with stiffness per strain: the spring still gets its section. A 2 x 2
+// sheet of 2 m x 1 m has one cell of 2 m^2; every spring lies on the boundary: halved, 1 m^2.
+// Spring 0 (0, 1) runs along u, l0 = 2 m: section 1 / 2 = 0.5 m, kd = 4 x 0.5 / 2 = 1 N s/m,
+// ks = 1000 / 2 = 500 N/m. Spring 1 (0, 2) runs along v, l0 = 1 m: section 1 m, kd = 4 N s/m.
+// With section 1 (the default) spring 0 would have kd = 2. Exact in binary, hence 1e-12.
+static int test_per_section_damping_alone_gets_its_section(void)
+{
+	sm_model* m = new_model();
+	sm_sheet_def def = sm_default_sheet_def();
+	def.nu = def.nv = 2;
+	def.edge_u[0] = 2.0;
+	def.structural = sm_default_spring_material();
+	def.structural.stiffness = 1000.0;
+	def.structural.damping = 4.0;
+	def.structural.damping_scaling = SM_PER_SECTION;
+	def.shear = sm_default_spring_material();
+	def.bend = sm_default_spring_material();
+	ENSURE_STATUS(sm_add_sheet(m, &def, NULL), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 4);
+	double l0, ks, kd;
+	sm_spring_def d;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &d), SM_OK);
+	ENSURE(d.a == 0 && d.b == 1);
+	ENSURE_NEAR(d.section, 0.5, 1e-12);
+	ENSURE_STATUS(sm_model_spring_constants(m, 0, &l0, &ks, &kd), SM_OK);
+	ENSURE_NEAR(l0, 2.0, 1e-12);
+	ENSURE_NEAR(ks, 500.0, 1e-9);
+	ENSURE_NEAR(kd, 1.0, 1e-12);
+	ENSURE_STATUS(sm_model_get_spring(m, 1, &d), SM_OK);
+	ENSURE(d.a == 0 && d.b == 2);
+	ENSURE_STATUS(sm_model_spring_constants(m, 1, &l0, &ks, &kd), SM_OK);
+	ENSURE_NEAR(kd, 4.0, 1e-12);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A group with damping but no stiffness is created (only zero stiffness AND zero damping
+// omit it): a rope of 3 segments of 1/3 m with c = 2 N s per strain gets 3 springs of
+// kd = 2 / (1/3) = 6 N s/m and ks = 0.
+static int test_damping_only_group_is_created(void)
+{
+	sm_model* m = new_model();
+	sm_rope_def rope = sm_default_rope_def();
+	rope.segments = 3;
+	rope.structural.stiffness = 0.0;
+	rope.structural.damping = 2.0;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_rope(m, &rope, &s), SM_OK);
+	ENSURE(sm_model_spring_count(m) == 3 && s.group_spring_count[0] == 3);
+	double ks, kd;
+	ENSURE_STATUS(sm_model_spring_constants(m, 1, NULL, &ks, &kd), SM_OK);
+	ENSURE(ks == 0.0);
+	ENSURE_NEAR(kd, 6.0, 1e-12);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Grid counts one below their minimum are refused as such (not as the 0/0 positions they
+// would give): a block with nw = 1, a rope with 0 segments.
+static int test_grid_counts_below_two_refused(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_block_def block = sm_default_block_def();
+	block.nw = 1;
+	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "block: nu = 4, nv = 4 and nw = 1 must all be >= 2") == 0);
+	sm_rope_def rope = sm_default_rope_def();
+	rope.segments = 0;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT, "rope: segments = 0 must be >= 1") ==
+	       0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// The bend material of a sheet and of a mesh is validated up front and named in the message,
+// also for a single triangle (which has no interior edge, so no bend spring to reject it).
+static int test_bend_material_checked_by_sheet_and_mesh(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.bend.damping = -1.0;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NEGATIVE,
+	               "sheet: bend damping = -1 must be finite and >= 0") == 0);
+	const double vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+	const int32_t triangles[3] = {0, 1, 2};
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices, mesh.vertex_count = 3, mesh.triangles = triangles, mesh.triangle_count = 1;
+	mesh.bend.stiffness = 10.0;
+	mesh.bend.damping = -1.0;
+	ENSURE(refused(m, sm_add_mesh(m, &mesh, NULL), SM_ERROR_NEGATIVE,
+	               "mesh: bend damping = -1 must be finite and >= 0") == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// One triangle over the limit of SM_STRUCTURE_MAX_ELEMENTS / 3 is refused before the triangles
+// are read (here all (0, 0, 0): read, they would fail as a repeated vertex instead).
+// calloc'ed zero pages: 67 MB of address space, hardly touched.
+static int test_mesh_triangle_limit_checked_first(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	const int32_t count = SM_STRUCTURE_MAX_ELEMENTS / 3 + 1;
+	int32_t* triangles = calloc(3 * (size_t)count, sizeof(int32_t));
+	ENSURE(triangles != NULL);
+	const double vertices[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices, mesh.vertex_count = 3, mesh.triangles = triangles, mesh.triangle_count = count;
+	char expected[128];
+	snprintf(expected, sizeof expected, "mesh: %d triangles exceed the limit of %d per structure", (int)count,
+	         SM_STRUCTURE_MAX_ELEMENTS / 3);
+	const int bad = refused(m, sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT, expected);
+	free(triangles);
+	ENSURE(bad == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Fixing particles through the selection helpers zeroes their stored velocity, as fixing them
+// through their definition does (model.h: a fixed particle's velocity is zero).
+static int test_fixing_by_selection_zeroes_velocity(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	p.velocity[0] = 1.0, p.velocity[1] = 2.0, p.velocity[2] = 3.0;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	p.position[0] = 5.0;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	const int32_t first = 0;
+	ENSURE_STATUS(sm_set_motion_of(m, &first, 1, SM_PARTICLE_FIXED), SM_OK);
+	const double lo[3] = {4, -1, -1}, hi[3] = {6, 1, 1};
+	int32_t count = 0;
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 1);
+	for (int32_t i = 0; i < 2; i++) {
+		sm_particle_def q;
+		ENSURE_STATUS(sm_model_get_particle(m, i, &q), SM_OK);
+		ENSURE(q.motion == SM_PARTICLE_FIXED);
+		ENSURE(q.velocity[0] == 0.0 && q.velocity[1] == 0.0 && q.velocity[2] == 0.0);
+	}
+	ENSURE(sm_model_free_count(m) == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// A rope's mass per length: non-finite is SM_ERROR_NOT_FINITE, as for every other field, and
+// negative SM_ERROR_NEGATIVE.
+static int test_rope_mass_per_length_statuses(void)
+{
+	static const struct {
+		double value;
+		sm_status status;
+		const char* message;
+	} cases[] = {{NAN, SM_ERROR_NOT_FINITE, "rope: mass per length = nan must be finite and >= 0"},
+	             {INFINITY, SM_ERROR_NOT_FINITE, "rope: mass per length = inf must be finite and >= 0"},
+	             {-1.0, SM_ERROR_NEGATIVE, "rope: mass per length = -1 must be finite and >= 0"}};
+	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+		sm_model* m = new_model();
+		sm_particle_def p = sm_default_particle_def();
+		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+		sm_rope_def rope = sm_default_rope_def();
+		rope.mass_per_length = cases[k].value;
+		ENSURE(refused(m, sm_add_rope(m, &rope, NULL), cases[k].status, cases[k].message) == 0);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1264,5 +1500,14 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_rules);
 	RUN_TEST(test_per_section_sections_by_hand);
 	RUN_TEST(test_lumped_masses);
+	RUN_TEST(test_block_positions_follow_each_axis_count);
+	RUN_TEST(test_builders_pass_break_strain_to_springs);
+	RUN_TEST(test_per_section_damping_alone_gets_its_section);
+	RUN_TEST(test_damping_only_group_is_created);
+	RUN_TEST(test_grid_counts_below_two_refused);
+	RUN_TEST(test_bend_material_checked_by_sheet_and_mesh);
+	RUN_TEST(test_mesh_triangle_limit_checked_first);
+	RUN_TEST(test_fixing_by_selection_zeroes_velocity);
+	RUN_TEST(test_rope_mass_per_length_statuses);
 	return TEST_SUMMARY();
 }

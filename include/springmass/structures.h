@@ -3,8 +3,9 @@
 //
 // Each builder appends particles and springs to a model and reports the index ranges it
 // created in an sm_structure, so callers can fix, drive or probe particles of the structure.
-// On error the model is left exactly as it was (nothing half-built) and sm_model_last_error()
-// names the field and the rule it broke.
+// On error the model's particles and springs are left exactly as they were (nothing half-built;
+// only the room reserved for them may have grown) and sm_model_last_error() names the field and
+// the rule it broke.
 #pragma once
 
 #include "springmass/model.h"
