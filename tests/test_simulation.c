@@ -2423,19 +2423,9 @@ static int test_error_weights_follow_the_tolerances(void)
 
 // From a review of the reduced solvers: a wrong but convergent Newton correction passed every
 // trajectory test.
-// One Newton solve of each reduced solver, through the SUNLinearSolver interface CVODE calls,
-// against the full system (I - gamma J) [dx; dv; de] = [bx; bv; be] solved densely (Gaussian
-// elimination with partial pivoting on the reduced matrix M - gamma D - gamma^2 K built from
-// sm_model_jacobian_dense, then dx = bx + gamma dv). CVODE's error control tolerates a wrong
-// but convergent correction (a sign in the right-hand side or in dx only costs Newton
-// iterations: measured 3 - 5 times the steps on the benchmark cloth, the corner still within
-// 1e-3 m), so the trajectory tests cannot see it; this test sees the correction itself.
-// The solve is asked for a weighted residual 1e-10 of the right-hand side's; A = M + gamma^2 (-K)
-// + gamma (-D) at CVODE's gamma (about 1e-3 s) has a condition number of order
-// 1 + gamma^2 k_max / m_min, so the velocity correction agrees to far better than the 1e-6
-// (relative to its largest entry) checked; dx = bx + gamma dv to rounding (1e-12 relative),
-// de = be exactly.
-static int solve_dense(double* a, double* b, int n)  // a n x n row-major, b overwritten by the solution
+// Solves a x = b by Gaussian elimination with partial pivoting (a n x n row-major, b overwritten
+// by x); 1 if a is singular.
+static int solve_dense(double* a, double* b, int n)
 {
 	for (int k = 0; k < n; k++) {
 		int pivot = k;
@@ -2470,6 +2460,18 @@ static int solve_dense(double* a, double* b, int n)  // a n x n row-major, b ove
 	return 0;
 }
 
+// One Newton solve of each reduced solver, through the SUNLinearSolver interface CVODE calls,
+// against the full system (I - gamma J) [dx; dv; de] = [bx; bv; be] solved densely (Gaussian
+// elimination with partial pivoting on the reduced matrix M - gamma D - gamma^2 K built from
+// sm_model_jacobian_dense, then dx = bx + gamma dv). CVODE's error control tolerates a wrong
+// but convergent correction (a sign in the right-hand side or in dx only costs Newton
+// iterations: measured 3 - 5 times the steps on the benchmark cloth, the corner still within
+// 1e-3 m), so the trajectory tests cannot see it; this test sees the correction itself.
+// The solve is asked for a weighted residual 1e-10 of the right-hand side's; A = M + gamma^2 (-K)
+// + gamma (-D) at CVODE's gamma (about 1e-3 s) has a condition number of order
+// 1 + gamma^2 k_max / m_min, so the velocity correction agrees to far better than the 1e-6
+// (relative to its largest entry) checked; dx = bx + gamma dv to rounding (1e-12 relative),
+// de = be exactly.
 static int test_reduced_solve_matches_dense_newton_system(void)
 {
 	sm_model* model = benchmark_cloth(12, 3.0);  // 142 free particles: the two-level path, mass damping
