@@ -293,7 +293,7 @@ sm_status fmu_build_model(instance* inst, const char* function, const double* be
 // a motion port set in a step moves from its held position with its held velocity from the
 // step's start, whether or not a value changed (the simulation restarts CVODE only where the
 // motion leaves its extrapolated path, or a force changes). Ports not set since keep their motion.
-static fmi2Status apply_inputs(instance* inst)
+static fmi2Status apply_inputs(instance* inst, const char* function)
 {
 	for (int32_t p = 0; p < inst->port_count; ++p) {
 		if (!inst->port_dirty[p])
@@ -305,7 +305,7 @@ static fmi2Status apply_inputs(instance* inst)
 		else if (inst->ports[p].kind == SM_PORT_FORCE)
 			st = sm_simulation_set_external_force(inst->sim, inst->ports[p].particle, h->force);
 		if (st != SM_OK) {
-			log_error(inst, "port %s: cannot apply its inputs: %s", inst->ports[p].name,
+			log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
 			          sm_simulation_last_error(inst->sim));
 			return fmi2Error;
 		}
@@ -319,18 +319,18 @@ static fmi2Status apply_inputs(instance* inst)
 // model's initial state when x is NULL), the solver settings and the port inputs given (held, and
 // pending: which ports have inputs set that no step has taken yet), and makes it the instance's
 // only when all of that succeeded: a failure changes nothing.
-fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
-                                 const port_values* held, const bool* pending, double sim_time,
-                                 const double* x, const double* v)
+fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model* model,
+                                 const sm_simulation_def* solver, const port_values* held, const bool* pending,
+                                 double sim_time, const double* x, const double* v)
 {
 	sm_error err = {SM_OK, ""};
 	sm_simulation* sim = sm_simulation_create(model, solver, &err);
 	if (!sim) {
-		log_error(inst, "cannot create the simulation: %s", err.message);
+		log_error(inst, "%s: cannot create the simulation: %s", function, err.message);
 		return fmi2Error;
 	}
 	if (x && sm_simulation_set_state(sim, sim_time, x, v) != SM_OK) {
-		log_error(inst, "cannot restore the state: %s", sm_simulation_last_error(sim));
+		log_error(inst, "%s: cannot restore the state: %s", function, sm_simulation_last_error(sim));
 		sm_simulation_destroy(sim);
 		return fmi2Error;
 	}
@@ -348,7 +348,8 @@ fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simul
 		else if (inst->ports[p].kind == SM_PORT_FORCE)
 			st = sm_simulation_set_external_force(sim, particle, held[p].force);
 		if (st != SM_OK) {
-			log_error(inst, "port %s: cannot apply its inputs: %s", inst->ports[p].name, sm_simulation_last_error(sim));
+			log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
+			          sm_simulation_last_error(sim));
 			sm_simulation_destroy(sim);
 			return fmi2Error;
 		}
@@ -372,12 +373,12 @@ fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simul
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 {
 	if (inst->sim && !inst->sim_dirty)
-		return apply_inputs(inst);
+		return apply_inputs(inst, function);
 	sm_model* model = NULL;
 	if (fmu_build_model(inst, function, NULL, &model) != SM_OK)
 		return fmi2Error;
 	fmi2Status status =
-	    fmu_create_simulation(inst, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
+	    fmu_create_simulation(inst, function, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
 	sm_model_destroy(model);
 	if (status == fmi2OK)
 		inst->time = inst->start_time;
@@ -950,7 +951,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 		if (needs_simulation(v) && (!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)) {
 			if (fmu_ensure_simulation(inst, "fmi2GetReal") != fmi2OK)
 				return fmi2Error;
-		} else if (needs_simulation(v) && apply_inputs(inst) != fmi2OK) {
+		} else if (needs_simulation(v) && apply_inputs(inst, "fmi2GetReal") != fmi2OK) {
 			return fmi2Error;
 		}
 		value[i] = real_value(inst, v);
@@ -1230,7 +1231,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 		}
 	}
 	if ((!inst->sim || inst->sim_dirty) ? fmu_ensure_simulation(inst, fn) != fmi2OK
-	                                    : apply_inputs(inst) != fmi2OK)
+	                                    : apply_inputs(inst, fn) != fmi2OK)
 		return fmi2Error;
 	for (size_t k = 0; k < nKnown; ++k) {
 		const fmu_variable* v = &inst->table.variables[vKnown_ref[k]];
@@ -1373,7 +1374,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		          inst->stop_time);
 		return fmi2Error;
 	}
-	if (apply_inputs(inst) != fmi2OK)
+	if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)
 		return fmi2Error;
 	sm_statistics before = sm_simulation_statistics(inst->sim);
 	// Up to a stop time the master gave, CVODE steps on past the communication point and the

@@ -120,10 +120,11 @@ bool fmu_allowed(instance* inst, const char* function, int states);
 // Builds the model with the current parameter values, refusing one of another structure than packaged.
 sm_status fmu_build_model(instance* inst, const char* function, const double* before, sm_model** out);
 
-// Makes a simulation of the model, state (or initial state) and inputs the instance's, all or nothing.
-fmi2Status fmu_create_simulation(instance* inst, sm_model* model, const sm_simulation_def* solver,
-                                 const port_values* held, const bool* pending, double sim_time,
-                                 const double* x, const double* v);
+// Makes a simulation of the model, state (or initial state) and inputs the instance's, all or nothing;
+// a message names `function`, the entry point.
+fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model* model,
+                                 const sm_simulation_def* solver, const port_values* held, const bool* pending,
+                                 double sim_time, const double* x, const double* v);
 
 // Makes sure a simulation with the current settings exists and has taken the inputs set.
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function);

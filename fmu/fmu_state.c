@@ -315,7 +315,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 			if (d[6 * n + k] == 0.0)
 				sm_model_set_spring_enabled(model, k, false);
 		}
-		status = fmu_create_simulation(inst, model, &solver, held, pending,
+		status = fmu_create_simulation(inst, function, model, &solver, held, pending,
 		                               get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
 		if (status != fmi2OK)
 			fmu_put_back_parameters(inst, function, old);
