@@ -43,14 +43,18 @@ _Static_assert(SM_DOCUMENT_MAX_ELEMENTS <= 10000000, "the indices of a structure
 // there were more.
 #define NOTED_PARAMETERS 4
 
+typedef struct noted_parameters {
+	int32_t index[NOTED_PARAMETERS];
+	int count;
+	bool more;
+} noted_parameters;
+
 typedef struct parser {
 	const sm_document* doc;
 	const double* parameter_values;
 	sm_error* err;
 	expansion* ex;
-	int32_t noted[NOTED_PARAMETERS];
-	int noted_count;
-	bool noted_more;
+	noted_parameters noted;  // of the element being read
 } parser;
 
 // Records the first failure: "<source>: <path>: <message>".
@@ -178,16 +182,16 @@ typedef enum feeds {
 	FEEDS_REFERENCES = SM_PARAMETER_PARTICLE_REFERENCES,
 } feeds;
 
-// Notes parameter k for the messages on the element being read (fail_naming_parameters).
-static void note_parameter(parser* p, int32_t k)
+// Notes parameter k for messages (fail_naming).
+static void note_parameter(noted_parameters* noted, int32_t k)
 {
 	bool known = false;
-	for (int n = 0; n < p->noted_count && !known; n++)
-		known = p->noted[n] == k;
-	if (!known && p->noted_count < NOTED_PARAMETERS)
-		p->noted[p->noted_count++] = k;
+	for (int n = 0; n < noted->count && !known; n++)
+		known = noted->index[n] == k;
+	if (!known && noted->count < NOTED_PARAMETERS)
+		noted->index[noted->count++] = k;
 	else if (!known)
-		p->noted_more = true;
+		noted->more = true;
 }
 
 // A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
@@ -209,7 +213,7 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 		p->ex->parameter_uses[k] |= (uint8_t)use;
 		if (source != NULL)
 			*source = k;
-		note_parameter(p, k);
+		note_parameter(&p->noted, k);
 		return true;
 	}
 	return fail(p, SM_ERROR_SCHEMA, path, "must be a number or a parameter name, not %s", type_name(value));
@@ -240,28 +244,35 @@ static const char* describe_vector(parser* p, char* buffer, size_t size, const d
 // Forgets the parameters noted so far (before reading an element).
 static void forget_parameters(parser* p)
 {
-	p->noted_count = 0;
-	p->noted_more = false;
+	p->noted.count = 0;
+	p->noted.more = false;
 }
 
-// A builder's message on the element just read, naming the parameters its values came from:
-// "<message> (with parameter a = 0.5 and parameter b = 2)".
-static bool fail_naming_parameters(parser* p, sm_status status, const char* path, const char* message)
+// A message naming the parameters noted: "<message> (with parameter a = 0.5 and parameter b = 2)".
+static bool fail_naming(parser* p, sm_status status, const char* path, const char* message,
+                        const noted_parameters* noted)
 {
 	char with[SM_ERROR_MESSAGE_CAPACITY] = "";
 	size_t used = 0;
-	for (int n = 0; n < p->noted_count; n++) {
+	for (int n = 0; n < noted->count; n++) {
 		char text[300];
-		const char* joint = n == 0 ? " (with " : n + 1 == p->noted_count && !p->noted_more ? " and " : ", ";
+		const char* joint = n == 0 ? " (with " : n + 1 == noted->count && !noted->more ? " and " : ", ";
+		const int32_t k = noted->index[n];
 		const int written = snprintf(with + used, sizeof with - used, "%s%s", joint,
-		                             describe(p, text, sizeof text, p->parameter_values[p->noted[n]], p->noted[n]));
+		                             describe(p, text, sizeof text, p->parameter_values[k], k));
 		if (written < 0 || (size_t)written >= sizeof with - used)
 			break;
 		used += (size_t)written;
 	}
-	if (p->noted_count > 0)
-		snprintf(with + used, sizeof with - used, "%s)", p->noted_more ? " and others" : "");
+	if (noted->count > 0)
+		snprintf(with + used, sizeof with - used, "%s)", noted->more ? " and others" : "");
 	return fail(p, status, path, "%s%s", message, with);
+}
+
+// A builder's message on the element just read, naming the parameters its values came from.
+static bool fail_naming_parameters(parser* p, sm_status status, const char* path, const char* message)
+{
+	return fail_naming(p, status, path, message, &p->noted);
 }
 
 // FRACTION: > 0 and < 1 (a relative tolerance); TOLERANCE: an absolute tolerance, at least
@@ -555,16 +566,23 @@ static const document_structure* find_structure(const expansion* ex, const char*
 	return s >= 0 ? &ex->structures[s] : NULL;
 }
 
+// The parameters named in the indices of one structure reference.
+typedef struct index_parameters {
+	parser* p;
+	noted_parameters noted;
+} index_parameters;
+
 // A parameter named in an index of a structure reference (index_expression_lookup_fn).
 static bool lookup_index_parameter(void* context, const char* name, size_t length, double* value)
 {
-	parser* p = context;
+	index_parameters* named = context;
+	parser* p = named->p;
 	const int32_t k = name_index_find(&p->doc->parameter_index, name, length);
 	if (k < 0)
 		return false;
 	*value = p->parameter_values[k];
 	p->ex->parameter_uses[k] |= (uint8_t)FEEDS_REFERENCES;
-	note_parameter(p, k);
+	note_parameter(&named->noted, k);
 	return true;
 }
 
@@ -572,11 +590,13 @@ static bool lookup_index_parameter(void* context, const char* name, size_t lengt
 // open: its '['): one to three indices, each a whole number or an expression of parameters
 // (index_expression.h). One index is the particle's position in the structure; two are row and
 // column of a sheet; three row, column and layer of a block. A message on a value names the
-// parameters the indices came from.
+// parameters the indices came from, and only those; on success they join the element's noted
+// parameters, for its later messages.
 static bool resolve_structure_reference(parser* p, const document_structure* s, const char* open, const char* text,
                                         const char* path, int32_t* out)
 {
 	static const char* const form = "a structure reference is name[i], name[row, column] or name[row, column, layer]";
+	index_parameters named = {p, {{0}, 0, false}};
 	int64_t c[3];
 	int count = 0;
 	const char* q = open + 1;
@@ -585,7 +605,7 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 		char message[SM_ERROR_MESSAGE_CAPACITY];
 		const char* end;
 		const index_expression_status status =
-		    count < 3 ? index_expression_evaluate(q, lookup_index_parameter, p, &c[count], &end, why)
+		    count < 3 ? index_expression_evaluate(q, lookup_index_parameter, &named, &c[count], &end, why)
 		              : INDEX_EXPRESSION_SYNTAX;
 		if (status == INDEX_EXPRESSION_UNKNOWN_NAME)
 			return fail(p, SM_ERROR_NOT_FOUND, path, "%s: %s", text, why);
@@ -593,7 +613,7 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s", text, why);
 		if (status == INDEX_EXPRESSION_INVALID) {
 			snprintf(message, sizeof message, "%s: %s", text, why);
-			return fail_naming_parameters(p, SM_ERROR_SCHEMA, path, message);
+			return fail_naming(p, SM_ERROR_SCHEMA, path, message, &named.noted);
 		}
 		if (status == INDEX_EXPRESSION_SYNTAX && count < 3)
 			return fail(p, SM_ERROR_SCHEMA, path, "%s: %s; %s", text, why, form);
@@ -615,6 +635,9 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 		index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], (int32_t)c[2]);
 	if (index >= 0) {
 		*out = (int32_t)index;
+		for (int k = 0; k < named.noted.count; k++)
+			note_parameter(&p->noted, named.noted.index[k]);
+		p->noted.more = p->noted.more || named.noted.more;
 		return true;
 	}
 	char message[SM_ERROR_MESSAGE_CAPACITY];
@@ -628,7 +651,7 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 	else
 		snprintf(message, sizeof message, "%s is outside structure %s ([0] to [%d])", text, s->name,
 		         (int)r->particle_count - 1);
-	return fail_naming_parameters(p, SM_ERROR_PARTICLE_INDEX, path, message);
+	return fail_naming(p, SM_ERROR_PARTICLE_INDEX, path, message, &named.noted);
 }
 
 // A particle reference: an index, a particle's name, or "structure[i, j, k]"
@@ -672,26 +695,8 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	const size_t length = strlen(name);
 	if (open != NULL && length > 0 && name[length - 1] == ']') {
 		const document_structure* s = find_structure(p->ex, name, (size_t)(open - name));
-		if (s != NULL) {
-			// A message on the reference names the parameters of its indices alone; later messages on
-			// the element name them with those noted before.
-			int32_t before[NOTED_PARAMETERS], indices[NOTED_PARAMETERS];
-			memcpy(before, p->noted, sizeof before);
-			const int before_count = p->noted_count;
-			const bool before_more = p->noted_more;
-			forget_parameters(p);
-			if (!resolve_structure_reference(p, s, open, text, path, out))
-				return false;
-			memcpy(indices, p->noted, sizeof indices);
-			const int indices_count = p->noted_count;
-			const bool indices_more = p->noted_more;
-			memcpy(p->noted, before, sizeof before);
-			p->noted_count = before_count;
-			p->noted_more = before_more || indices_more;
-			for (int k = 0; k < indices_count; k++)
-				note_parameter(p, indices[k]);
-			return true;
-		}
+		if (s != NULL)
+			return resolve_structure_reference(p, s, open, text, path, out);
 	}
 	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named %s", text);
 }

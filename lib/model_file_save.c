@@ -85,8 +85,8 @@ static void put_string(text* t, const char* s)
 }
 
 // A JSON value copied from the file (gravity, mass damping, simulation and FMU settings, all
-// validated and shallow), with numbers written like every other number.
-// A JSON value as the file gave it; a string that names a parameter counts as naming it.
+// validated and shallow), with numbers written like every other number; a string that names a
+// parameter counts as naming it.
 static void put_json(text* t, const sm_document* doc, const json_t* value)
 {
 	if (json_is_number(value)) {
@@ -237,7 +237,7 @@ static const char* port_kind_name(sm_port_kind kind)
 	return "probe";
 }
 
-static void write_body(text* body, const sm_document* doc);
+static void write_body(text* t, const sm_document* doc);
 
 static char* document_text(const sm_document* doc, sm_error* err)
 {
@@ -289,65 +289,63 @@ static char* document_text(const sm_document* doc, sm_error* err)
 }
 
 // Everything after the name, description and parameters.
-static void write_body(text* body, const sm_document* doc)
+static void write_body(text* t, const sm_document* doc)
 {
-	text t = *body;
 	const expansion* ex = doc->current;
 	const sm_model_def def = sm_model_get_def(ex->model);
 	// Gravity and mass damping as the file gave them (they may name parameters).
-	puts_(&t, ",\n  \"gravity\": ");
+	puts_(t, ",\n  \"gravity\": ");
 	const json_t* gravity = json_object_get(doc->root, "gravity");
 	if (gravity != NULL)
-		put_json(&t, doc, gravity);
+		put_json(t, doc, gravity);
 	else
-		put_vector(&t, doc, def.gravity, NULL);
-	puts_(&t, ",\n  \"mass_damping\": ");
+		put_vector(t, doc, def.gravity, NULL);
+	puts_(t, ",\n  \"mass_damping\": ");
 	const json_t* mass_damping = json_object_get(doc->root, "mass_damping");
 	if (mass_damping != NULL)
-		put_json(&t, doc, mass_damping);
+		put_json(t, doc, mass_damping);
 	else
-		put_number(&t, def.mass_damping);
+		put_number(t, def.mass_damping);
 
 	const int32_t n = sm_model_particle_count(ex->model), m = sm_model_spring_count(ex->model);
-	puts_(&t, ",\n  \"particles\": [\n");
-	for (int32_t i = 0; i < n && !t.failed; i++) {
-		put_particle(&t, doc, i);
-		puts_(&t, i + 1 < n ? ",\n" : "\n");
+	puts_(t, ",\n  \"particles\": [\n");
+	for (int32_t i = 0; i < n && !t->failed; i++) {
+		put_particle(t, doc, i);
+		puts_(t, i + 1 < n ? ",\n" : "\n");
 	}
-	puts_(&t, "  ]");
+	puts_(t, "  ]");
 	if (m > 0) {
-		puts_(&t, ",\n  \"springs\": [\n");
-		for (int32_t s = 0; s < m && !t.failed; s++) {
-			put_spring(&t, doc, s);
-			puts_(&t, s + 1 < m ? ",\n" : "\n");
+		puts_(t, ",\n  \"springs\": [\n");
+		for (int32_t s = 0; s < m && !t->failed; s++) {
+			put_spring(t, doc, s);
+			puts_(t, s + 1 < m ? ",\n" : "\n");
 		}
-		puts_(&t, "  ]");
+		puts_(t, "  ]");
 	}
 	if (ex->port_count > 0) {
-		puts_(&t, ",\n  \"ports\": [\n");
+		puts_(t, ",\n  \"ports\": [\n");
 		for (int32_t k = 0; k < ex->port_count; k++) {
-			puts_(&t, "    {\"name\": ");
-			put_string(&t, ex->ports[k].name);
-			puts_(&t, ", \"particle\": ");
-			put_particle_reference(&t, doc, ex->ports[k].particle);
-			puts_(&t, ", \"kind\": \"");
-			puts_(&t, port_kind_name(ex->ports[k].kind));
-			puts_(&t, k + 1 < ex->port_count ? "\"},\n" : "\"}\n");
+			puts_(t, "    {\"name\": ");
+			put_string(t, ex->ports[k].name);
+			puts_(t, ", \"particle\": ");
+			put_particle_reference(t, doc, ex->ports[k].particle);
+			puts_(t, ", \"kind\": \"");
+			puts_(t, port_kind_name(ex->ports[k].kind));
+			puts_(t, k + 1 < ex->port_count ? "\"},\n" : "\"}\n");
 		}
-		puts_(&t, "  ]");
+		puts_(t, "  ]");
 	}
 	static const char* const copied[] = {"simulation", "fmu"};
 	for (int k = 0; k < 2; k++) {
 		const json_t* value = json_object_get(doc->root, copied[k]);
 		if (value == NULL)
 			continue;
-		puts_(&t, ",\n  \"");
-		puts_(&t, copied[k]);
-		puts_(&t, "\": ");
-		put_json(&t, doc, value);
+		puts_(t, ",\n  \"");
+		puts_(t, copied[k]);
+		puts_(t, "\": ");
+		put_json(t, doc, value);
 	}
-	puts_(&t, "\n}\n");
-	*body = t;
+	puts_(t, "\n}\n");
 }
 
 // The text is written in the C locale whatever LC_NUMERIC the program chose: setlocale() is
