@@ -5,6 +5,7 @@
 #include "springmass/model_file.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,9 +18,11 @@ static void usage(FILE* out)
 	        "Validates the model file MODEL (JSON, see docs/model-format.md) and prints a summary:\n"
 	        "particles (free, fixed), springs by kind, total mass, ports, parameters (with what each\n"
 	        "feeds: constants, initial state, held particles, counts, settings, spring kinds,\n"
-	        "particle references), the stiffest spring and the highest natural frequency estimate,\n"
-	        "sqrt(k/m) over every spring with m the smaller mass of its free ends, with the\n"
-	        "explicit-stability step 2/omega it implies.\n"
+	        "particle references), the stiffest spring, the fastest spring (the largest sqrt(k/m),\n"
+	        "with m the lighter of its free ends) and an upper bound on the highest natural frequency\n"
+	        "omega_max at the initial positions (Gershgorin's, undamped), with the lower bound it gives\n"
+	        "on the stability limit 2/omega_max of explicit (leapfrog) integration; `springmass modes\n"
+	        "MODEL -n 0` gives the exact value.\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -134,6 +137,13 @@ int sm_cmd_check(int argc, char** argv)
 	int32_t rest_length = 0, zero_length = 0, per_strain = 0, per_section = 0, breakable = 0;
 	int32_t stiffest = -1, fastest = -1;
 	double max_stiffness = -1.0, max_omega = 0.0;
+	double* row_sum = calloc((size_t)n + 1, sizeof *row_sum);  // [1/s^2], one per particle
+	if (row_sum == NULL) {
+		fprintf(stderr, "springmass check: out of memory\n");
+		sm_model_destroy(model);
+		sm_document_destroy(doc);
+		return 1;
+	}
 	for (int32_t s = 0; s < m; s++) {
 		sm_spring_def def;
 		double ks;
@@ -151,7 +161,7 @@ int sm_cmd_check(int argc, char** argv)
 			stiffest = s;
 		}
 		// A spring's own frequency sqrt(ks / m) with m the lighter of its free ends (a fixed or
-		// driven end does not move); an upper estimate of how fast the model can vibrate.
+		// driven end does not move): which spring makes the model fast.
 		sm_particle_def pa, pb;
 		sm_model_get_particle(model, def.a, &pa);
 		sm_model_get_particle(model, def.b, &pb);
@@ -164,7 +174,30 @@ int sm_cmd_check(int argc, char** argv)
 			max_omega = sqrt(ks / mass);
 			fastest = s;
 		}
+		// Gershgorin row sums of M^(-1/2) K M^(-1/2), K = -df/dx at the initial positions. A
+		// rest-length spring's block is ks u u^T + ks (1 - l0/L) (I - u u^T), so for any
+		// displacements z_a, z_b its energy is at most c ks |z_a - z_b|^2 with c = max(1, 1 - l0/L)
+		// (c = 1 for a zero-length spring, K = ks I): K is bounded by a scalar graph Laplacian, and
+		// omega_max^2 by the largest of its mass-scaled row sums, over the free particles,
+		// sum over springs of c ks (1/m_i + 1/sqrt(m_i m_j)) (the second term if j is free).
+		double c = 1.0;
+		if (def.kind == SM_SPRING_REST_LENGTH) {
+			const double d[3] = {pb.position[0] - pa.position[0], pb.position[1] - pa.position[1],
+			                     pb.position[2] - pa.position[2]};
+			const double length = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+			if (length > 0.0)
+				c = fmax(1.0, 1.0 - def.rest_length / length);
+		}
+		const bool a_free = pa.motion == SM_PARTICLE_FREE, b_free = pb.motion == SM_PARTICLE_FREE;
+		if (a_free)
+			row_sum[def.a] += c * ks * (1.0 / pa.mass + (b_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
+		if (b_free)
+			row_sum[def.b] += c * ks * (1.0 / pb.mass + (a_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
 	}
+	double omega_bound = 0.0;
+	for (int32_t i = 0; i < n; i++)
+		omega_bound = fmax(omega_bound, sqrt(row_sum[i]));
+	free(row_sum);
 
 	printf("model        %s\n", sm_document_name(doc));
 	if (sm_document_description(doc)[0] != '\0')
@@ -244,8 +277,11 @@ int sm_cmd_check(int argc, char** argv)
 		printf(" and ");
 		print_particle(doc, s.b);
 		printf("\n");
-		printf("             explicit-stability step 2/omega = %.3g s\n", 2.0 / max_omega);
 	}
+	if (omega_bound > 0.0)
+		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped): the explicit stability limit\n"
+		       "             2/omega_max >= %.3g s (springmass modes MODEL -n 0: the exact value)\n",
+		       omega_bound, omega_bound / (2.0 * 3.14159265358979323846), 2.0 / omega_bound);
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
 	printf("ok\n");

@@ -391,6 +391,18 @@ def summary_line(text, label):
     return match.group(1)
 
 
+@pytest.mark.parametrize("model", sorted(p.name for p in MODELS.glob("*.json")))
+def test_check_bounds_the_highest_frequency(model):
+    # check's omega_max is an upper bound (Gershgorin's, over the springs' stiffness at the
+    # initial positions): never below the exact highest frequency of the dense eigenproblem that
+    # `modes -n 0` solves, so the stability limit check prints is a safe step. Both print 6 or
+    # more digits: the comparison allows for the last one.
+    bound = number_after(cli("check", MODELS / model).stdout, "omega_max    <=")
+    modes = cli("modes", MODELS / model, "-n", "0").stdout
+    if "omega_max =" in modes:
+        assert bound >= number_after(modes, "omega_max =") * (1 - 1e-5)
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
@@ -407,7 +419,18 @@ def test_check_summarises_the_model():
     omega = math.sqrt(25 / 0.5)
     assert number_after(fastest, "sqrt(k/m) =") == pytest.approx(omega, rel=1e-5)
     assert number_after(fastest, "rad/s (") == pytest.approx(omega / (2 * math.pi), rel=1e-4)
-    assert number_after(out, "2/omega =") == pytest.approx(2 / omega, rel=2e-3)
+    # The bound on the highest frequency: the largest mass-scaled Gershgorin row sum of the
+    # springs' scalar Laplacian (both springs within their rest length or barely stretched, so
+    # each counts with its ks): m1's row 40/1 + 25 (1/1 + 1/sqrt(0.5)), m2's 25/0.5 + 25/sqrt(0.5).
+    # It must lie above the exact omega_max, the axial mode of the chain (transverse stiffness is
+    # only the springs' tension), from the 2 x 2 eigenproblem; 6 digits printed.
+    bound = math.sqrt(max(40 + 25 * (1 + 1 / math.sqrt(0.5)), 25 / 0.5 + 25 / math.sqrt(0.5)))
+    assert number_after(out, "omega_max    <=") == pytest.approx(bound, rel=1e-5)
+    axial = np.array([[65.0, -25 / math.sqrt(0.5)], [-25 / math.sqrt(0.5), 50.0]])
+    exact = math.sqrt(np.linalg.eigvalsh(axial).max())
+    assert exact == pytest.approx(9.67688383, rel=1e-8)  # springmass modes' omega_max
+    assert bound >= exact
+    assert number_after(out, "2/omega_max >=") == pytest.approx(2 / bound, rel=2e-3)  # 3 digits
     assert out.rstrip().endswith("ok")
     rope = cli("check", MODELS / "hanging_rope.json").stdout
     assert "rope of 20 segments: particles 0 - 20, 20 springs (20 structural)" in rope
