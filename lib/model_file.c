@@ -207,8 +207,16 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 	if (json_is_string(value)) {
 		const int32_t k = find_parameter(p->doc, json_string_value(value));
 		char text[TEXT_QUOTED_CAPACITY];
-		if (k < 0)
-			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s", text_quoted(text, json_string_value(value)));
+		if (k < 0) {
+			// "10" or "-1.5" is no parameter's name (names start with a letter or '_'): a number
+			// in quotes.
+			const char* name = json_string_value(value);
+			const char* digit = name + (name[0] == '-' || name[0] == '+');
+			digit += digit[0] == '.';
+			const bool numeric = digit[0] >= '0' && digit[0] <= '9';
+			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s%s", text_quoted(text, name),
+			            numeric ? " (a number is written without quotes)" : "");
+		}
 		*out = p->parameter_values[k];
 		p->ex->parameter_uses[k] |= (uint8_t)use;
 		if (source != NULL)
@@ -1084,6 +1092,31 @@ static bool read_distribution(parser* p, const json_t* obj, const char* path, sm
 	return true;
 }
 
+// A particle's own name may not read as a reference to structure `structure` (its name, `length`
+// bytes): "cloth[2]" beside a structure "cloth" would take over the reference to cloth's particle
+// 2 (names are looked up first), and "cloth[0, 2]" would stand beside the generated "cloth[0,2]".
+// Checked when the structure is read, before its particles are named (the particles come first).
+static bool check_names_against_structure(parser* p, const char* structure, size_t length)
+{
+	const json_t* list = json_object_get(p->doc->root, "particles");
+	for (size_t k = 0; k < json_array_size(list); k++) {
+		const json_t* value = json_object_get(json_array_get(list, k), "name");
+		const char* name = json_string_value(value);
+		const size_t bytes = name != NULL ? strlen(name) : 0;
+		if (bytes <= length + 1 || strncmp(name, structure, length) != 0 || name[length] != '[' ||
+		    name[bytes - 1] != ']')
+			continue;
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
+		child_index(path, "particles", k);
+		child_key(sub, path, "name");
+		return fail(p, SM_ERROR_SCHEMA, sub,
+		            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
+		            "name",
+		            text_quoted(text, name), (int)length, structure);
+	}
+	return true;
+}
+
 static bool read_structure(parser* p, const json_t* obj, const char* path)
 {
 	static const char* const rope_keys[] = {"type",       "name",    "start", "end", "segments", "mass", "mass_per_length",
@@ -1126,6 +1159,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		            text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
 		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", text_quoted(text, s.name));
+	if (!check_names_against_structure(p, s.name, name_bytes))
+		return false;
 
 	sm_mass_distribution distribution = SM_MASS_EVEN;
 	if (!read_distribution(p, obj, path, &distribution))
@@ -1293,30 +1328,6 @@ static bool read_structures(parser* p, const json_t* list)
 		child_index(path, "structures", k);
 		if (!read_structure(p, json_array_get(list, k), path))
 			return false;
-	}
-	return true;
-}
-
-// A particle's own name may not read as a structure reference: "cloth[2]" beside a structure
-// "cloth" would take over the reference to cloth's particle 2 (names are looked up first), and
-// "cloth[0, 2]" would stand beside the generated "cloth[0,2]". Checked once the structures are
-// known, since the particles come first.
-static bool check_names_against_structures(parser* p, const json_t* list)
-{
-	for (size_t k = 0; k < json_array_size(list); k++) {
-		const json_t* value = json_object_get(json_array_get(list, k), "name");
-		const char* name = json_string_value(value);
-		const char* open = name != NULL ? strchr(name, '[') : NULL;
-		const size_t length = open != NULL ? strlen(name) : 0;
-		if (open == NULL || name[length - 1] != ']' || find_structure(p->ex, name, (size_t)(open - name)) == NULL)
-			continue;
-		char path[PATH_CAPACITY], sub[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
-		child_index(path, "particles", k);
-		child_key(sub, path, "name");
-		return fail(p, SM_ERROR_SCHEMA, sub,
-		            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
-		            "name",
-		            text_quoted(text, name), (int)(open - name), name);
 	}
 	return true;
 }
@@ -1587,7 +1598,6 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 	}
 	ok = ok && read_particles(&p, json_object_get(root, "particles")) &&
 	     read_structures(&p, json_object_get(root, "structures")) &&
-	     check_names_against_structures(&p, json_object_get(root, "particles")) &&
 	     read_springs(&p, json_object_get(root, "springs")) &&
 	     read_fixed(&p, json_object_get(root, "fixed")) && read_ports(&p, json_object_get(root, "ports")) &&
 	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
@@ -1632,7 +1642,11 @@ static bool read_header(sm_document* doc, sm_error* err)
 		return fail(&p, SM_ERROR_SCHEMA, "",
 		            "missing \"springmass\": %d (the format version; is this a springmass model file?)",
 		            SM_FORMAT_VERSION);
-	if (!json_is_integer(version) || json_integer_value(version) != SM_FORMAT_VERSION)
+	if (!json_is_integer(version))
+		return fail(&p, SM_ERROR_SCHEMA, "springmass", "format version must be the integer %d, not %s",
+		            SM_FORMAT_VERSION,
+		            json_is_string(version) ? "a string (no quotes)" : json_is_real(version) ? "a real number" : "that");
+	if (json_integer_value(version) != SM_FORMAT_VERSION)
 		return fail(&p, SM_ERROR_SCHEMA, "springmass", "format version must be %d (this build reads version %d)",
 		            SM_FORMAT_VERSION, SM_FORMAT_VERSION);
 	if (!require(&p, root, "", "name") || !check_name(&p, json_object_get(root, "name"), "name", true, &doc->name))

@@ -935,8 +935,9 @@ static const char* failure_hint(int flag)
 {
 	switch (flag) {
 	case CV_TOO_MUCH_WORK:
-		return " (the max_steps internal steps allowed per advance were not enough: raise max_steps, or look "
-		       "for a spring much stiffer than the others or a huge force)";
+		return " (the max_steps internal steps allowed per advance were not enough: raise max_steps (a model "
+		       "file's \"max_steps\", springmass run --max-steps, an FMU's solver.max_steps), or look for a spring "
+		       "much stiffer than the others or a huge force)";
 	case CV_RHSFUNC_FAIL:
 	case CV_FIRST_RHSFUNC_ERR:
 	case CV_REPTD_RHSFUNC_ERR:

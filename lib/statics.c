@@ -405,7 +405,7 @@ static sm_status check_free_bodies(const statics_work* w, bool* floating, sm_err
 			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
 			                  "statics: no static equilibrium: particle %d and the %d other particle(s) joined to it "
 			                  "by springs of nonzero stiffness are held by no fixed or driven particle, yet feel a "
-			                  "net force (%g, %g, %g) N (gravity and external forces); fix or drive one of them",
+			                  "net force (%g, %g, %g) N (gravity and external forces); fix one of them (or drive it)",
 			                  (int)first, (int)members[i] - 1, F[0], F[1], F[2]);
 			goto done;
 		}

@@ -646,6 +646,10 @@ static int test_broken_files(void)
 	     "test.json: missing \"springmass\": 1 (the format version; is this a springmass model file?)"},
 	    {"{\"springmass\": 2, \"name\": \"x\"}", SM_ERROR_SCHEMA,
 	     "test.json: springmass: format version must be 1 (this build reads version 1)"},
+	    {"{\"springmass\": \"1\", \"name\": \"x\"}", SM_ERROR_SCHEMA,
+	     "test.json: springmass: format version must be the integer 1, not a string (no quotes)"},
+	    {"{\"springmass\": 1.0, \"name\": \"x\"}", SM_ERROR_SCHEMA,
+	     "test.json: springmass: format version must be the integer 1, not a real number"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravty\": [0, 0, 0]}", SM_ERROR_SCHEMA,
 	     "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
 	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
@@ -678,6 +682,10 @@ static int test_broken_files(void)
 	     " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"kk\"}]}",
 	     SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"kk\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
+	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"-.5\"}]}",
+	     SM_ERROR_NOT_FOUND,
+	     "test.json: springs[0].stiffness: no parameter named \"-.5\" (a number is written without quotes)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
 	     SM_ERROR_SCHEMA,
 	     "test.json: springs[0]: give one of \"stiffness\", \"strain_stiffness\" and \"section_stiffness\", not more"},
@@ -704,7 +712,9 @@ static int test_broken_files(void)
 	     SM_ERROR_SCHEMA, "test.json: structures[1].name: structure name \"c\" is already used"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[0,0]\", \"position\": [0, 0, 0]}],"
 	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4, \"nv\": 4}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].name: particle name \"c[0,0]\" is already used by particle 0"},
+	     SM_ERROR_SCHEMA,
+	     "test.json: particles[0].name: name \"c[0,0]\" reads as a reference to a particle of structure \"c\": give "
+	     "the particle another name"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"cube\", \"name\": \"c\"}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0].type: must be \"rope\", \"sheet\", \"block\" or \"mesh\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"

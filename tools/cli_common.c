@@ -126,6 +126,79 @@ int cli_set_parameters(const char* command, sm_document* doc, const char* const*
 	return 0;
 }
 
+// Writes particle `index` by its name in the file, or by its index where it has none.
+static void write_particle_name(FILE* f, const sm_document* doc, int32_t index)
+{
+	const char* name = sm_document_particle_name(doc, index);
+	if (name != NULL)
+		fputs(name, f);
+	else
+		fprintf(f, "particle %d", (int)index);
+}
+
+// Reads the decimal index at *text into *index and moves past it; false (nothing moved) if there
+// is none or it is out of range.
+static bool read_index(const char** text, int32_t count, int32_t* index)
+{
+	const char* s = *text;
+	long value = 0;
+	if (*s < '0' || *s > '9')
+		return false;
+	for (; *s >= '0' && *s <= '9'; s++)
+		if ((value = 10 * value + (*s - '0')) >= count)
+			return false;
+	*index = (int32_t)value;
+	*text = s;
+	return true;
+}
+
+void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, const char* message)
+{
+	const int32_t particles = sm_model_particle_count(model), springs = sm_model_spring_count(model);
+	const char* s = message;
+	while (*s != '\0') {
+		// A word "particle", "particles" or "spring" at a word's start, a space, an index.
+		const bool word_start = s == message || !((s[-1] >= 'a' && s[-1] <= 'z') || s[-1] == '_');
+		const size_t word = !word_start                          ? 0
+		                    : strncmp(s, "particles ", 10) == 0 ? 10
+		                    : strncmp(s, "particle ", 9) == 0   ? 9
+		                    : strncmp(s, "spring ", 7) == 0     ? 7
+		                                                        : 0;
+		int32_t index;
+		const char* after = s + word;
+		if (word == 0 || !read_index(&after, word == 7 ? springs : particles, &index)) {
+			fputc(*s++, f);
+			continue;
+		}
+		fwrite(s, 1, (size_t)(after - s), f);
+		if (word == 7) {
+			sm_spring_def def;
+			sm_model_get_spring(model, index, &def);
+			fputs(" (between ", f);
+			write_particle_name(f, doc, def.a);
+			fputs(" and ", f);
+			write_particle_name(f, doc, def.b);
+			fputc(')', f);
+			s = after;
+			continue;
+		}
+		// Particles: this index and, after "particles", those that follow (", 5", " and 6").
+		for (;;) {
+			const char* name = sm_document_particle_name(doc, index);
+			if (name != NULL)
+				fprintf(f, " (%s)", name);
+			s = after;
+			if (word != 10)
+				break;
+			const size_t gap = strncmp(s, ", ", 2) == 0 ? 2 : strncmp(s, " and ", 5) == 0 ? 5 : 0;
+			after = s + gap;
+			if (gap == 0 || !read_index(&after, particles, &index))
+				break;
+			fwrite(s, 1, (size_t)(after - s), f);
+		}
+	}
+}
+
 int cli_load_model(const char* command, const char* path, const char* const* settings, int count,
                    sm_document** doc, sm_model** model)
 {

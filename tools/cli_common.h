@@ -60,6 +60,11 @@ long cli_output_rows(double t_end, double interval);
 /// when a file that is not a directory has its name).
 int cli_make_directory(const char* command, const char* dir);
 
+/// Writes a message of the library that names particles and springs by index ("particle 12",
+/// "particles 3 and 4", "spring 30") with the names the model file gives them: "particle 12
+/// (cloth[0,12])", "spring 30 (between cloth[2,6] and cloth[2,7])"; the rest as it is.
+void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, const char* message);
+
 /// Writes prefix, text and suffix as one CSV field: quoted, with quotes doubled, when any holds a
 /// comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
 void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* suffix);

@@ -343,8 +343,11 @@ static int package(const options* opt)
 	char path[PATH_MAX], runtime[PATH_MAX];
 
 	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
-		fprintf(stderr, "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s; give one with "
-		                "--runtime\n", runtime);
+		fprintf(stderr, "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s%s; give one with "
+		                "--runtime\n", runtime,
+		        opt->runtime == NULL && getenv("SPRINGMASS_FMU_RUNTIME") != NULL && *getenv("SPRINGMASS_FMU_RUNTIME")
+		            ? " (from $SPRINGMASS_FMU_RUNTIME)"
+		            : "");
 		return 1;
 	}
 	size_t length = 0;

@@ -18,7 +18,8 @@ static void usage(FILE* out)
 	        "usage: springmass modes MODEL [options]\n"
 	        "\n"
 	        "Linearises the model about its initial configuration (or its static equilibrium) with\n"
-	        "fixed and driven particles held, and solves K phi = omega^2 M phi: natural frequencies,\n"
+	        "its fixed particles held (a motion port's particle is free here), and solves\n"
+	        "K phi = omega^2 M phi: natural frequencies,\n"
 	        "modal damping ratios (from the damping matrix; exact when the damping is proportional,\n"
 	        "which is reported) and mass-normalised mode shapes. Zero modes (rigid-body motions, and\n"
 	        "mechanisms such as the sideways motion of a straight unstressed chain) have frequency 0.\n"
@@ -234,7 +235,9 @@ int sm_cmd_modes(int argc, char** argv)
 	if (at_equilibrium) {
 		sm_statics_result res;
 		if (sm_statics_solve(model, NULL, x, NULL, &res, &err) != SM_OK) {
-			fprintf(stderr, "springmass modes: %s: %s\n", model_path, err.message);
+			fprintf(stderr, "springmass modes: %s: ", model_path);
+			cli_write_named(stderr, doc, model, err.message);
+			fputc('\n', stderr);
 			goto done;
 		}
 		printf("linearised about the static equilibrium (%d iterations, residual %.3e N)\n", (int)res.iterations,
@@ -248,7 +251,9 @@ int sm_cmd_modes(int argc, char** argv)
 	def.mode_count = (int32_t)count;
 	def.solver = solver;
 	if (sm_modes_compute(model, &def, &modes, &err) != SM_OK) {
-		fprintf(stderr, "springmass modes: %s: %s\n", model_path, err.message);
+		fprintf(stderr, "springmass modes: %s: ", model_path);
+		cli_write_named(stderr, doc, model, err.message);
+		fputc('\n', stderr);
 		goto done;
 	}
 	printf("model             %s (%d particles, %d degrees of freedom)\n", sm_document_name(doc), (int)n,

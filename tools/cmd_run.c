@@ -53,7 +53,8 @@ static void usage(FILE* out)
 	        "  --jacobian NAME        exact or definite (the definiteness-preserving variant; the pcg\n"
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
-	        "  -q, --quiet            no progress line and no statistics on stderr\n"
+	        "  -q, --quiet            no progress line, no statistics and no list of broken springs\n"
+	        "                         on stderr (errors only)\n"
 	        "  -h, --help             this text\n"
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
@@ -396,7 +397,9 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	sim = sm_simulation_create(model, &def, &err);
 	if (!sim) {
-		fprintf(stderr, "springmass run: %s\n", err.message);
+		fputs("springmass run: ", stderr);
+		cli_write_named(stderr, doc, model, err.message);
+		fputc('\n', stderr);
 		goto done;
 	}
 	const char* name = sm_document_name(doc);
@@ -441,7 +444,9 @@ int sm_cmd_run(int argc, char** argv)
 		// the rows interpolated from its steps.
 		if (k > 0 && sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end) != SM_OK) {
 			end_progress(&prog);
-			fprintf(stderr, "springmass run: %s\n", sm_simulation_last_error(sim));
+			fputs("springmass run: ", stderr);
+			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
+			fputc('\n', stderr);
 			goto done;
 		}
 		write_row(csv, doc, sim, forces, o.positions);
@@ -482,7 +487,9 @@ int sm_cmd_run(int argc, char** argv)
 		        s.linear_solve_seconds);
 		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
 			const sm_break_event e = sm_simulation_break(sim, b);
-			fprintf(stderr, "  spring %d broke at t = %.9g s\n", (int)e.spring, e.time);
+			char line[64];
+			snprintf(line, sizeof line, "  spring %d broke at t = %.9g s\n", (int)e.spring, e.time);
+			cli_write_named(stderr, doc, model, line);
 		}
 	}
 	status = 0;

@@ -18,10 +18,11 @@ static void usage(FILE* out)
 	        "usage: springmass statics MODEL [options]\n"
 	        "\n"
 	        "Finds where the model comes to rest under gravity, its constant loads and its fixed\n"
-	        "and driven particles (held at their initial positions): Newton's method on the force\n"
-	        "balance with the exact stiffness and a line search on the potential energy.\n"
+	        "particles (\"fixed\": true, held at their initial positions; a motion port's particle\n"
+	        "is free here, as in springmass run): Newton's method on the force balance with the\n"
+	        "exact stiffness and a line search on the potential energy.\n"
 	        "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
-	        "reaction force at every fixed or driven particle.\n"
+	        "reaction force at every fixed particle.\n"
 	        "\n"
 	        "options:\n"
 	        "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
@@ -168,7 +169,9 @@ int sm_cmd_statics(int argc, char** argv)
 	sm_statics_result res;
 	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
-		fprintf(stderr, "springmass statics: %s: %s\n", model_path, err.message);
+		fprintf(stderr, "springmass statics: %s: ", model_path);
+		cli_write_named(stderr, doc, model, err.message);
+		fputc('\n', stderr);
 		goto done;
 	}
 	for (size_t k = 0; k + 1 < n3; k++)

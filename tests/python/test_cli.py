@@ -218,14 +218,48 @@ def test_options_take_effect(tmp_path):
     assert "steps" in out.stderr
 
 
+def test_analysis_errors_name_particles_and_springs_as_the_file_does(tmp_path):
+    # The library names elements by index; the tool adds the names the file gives them.
+    free = {"springmass": 1, "name": "free", "gravity": [0, 0, -9.81],
+            "particles": [{"name": "a", "position": [0, 0, 0]}, {"name": "b", "position": [1, 0, 0]},
+                          {"position": [2, 0, 0]}],
+            "springs": [{"a": "a", "b": "b", "stiffness": 10}, {"a": "b", "b": 2, "stiffness": 10}]}
+    (tmp_path / "free.json").write_text(json.dumps(free))
+    err = cli("statics", tmp_path / "free.json", status=1).stderr
+    assert "particle 0 (a) and the 2 other particle(s)" in err and "fix one of them" in err, err
+    coincident = {"springmass": 1, "name": "coincident", "gravity": [0, 0, 0],
+                  "particles": [{"name": "a", "position": [0, 0, 0], "fixed": True},
+                                {"name": "b", "position": [0, 0, 0]}, {"position": [1, 0, 0]}],
+                  "springs": [{"a": 2, "b": "b", "stiffness": 10},
+                              {"a": "a", "b": "b", "stiffness": 10, "rest_length": 1}]}
+    (tmp_path / "coincident.json").write_text(json.dumps(coincident))
+    err = cli("modes", tmp_path / "coincident.json", status=1).stderr
+    # An unnamed particle keeps its index; "particles 0 and 1" names both.
+    assert "spring 1 (between a and b) (rest length 1 m) has its particles 0 (a) and 1 (b) at one point" in err, err
+    bad = dict(coincident, springs=coincident["springs"][::-1])
+    (tmp_path / "bad.json").write_text(json.dumps(bad))
+    err = cli("modes", tmp_path / "bad.json", status=1).stderr
+    assert "spring 0 (between a and b)" in err, err
+    chain = dict(bad, springs=[{"a": "b", "b": 2, "stiffness": 10, "rest_length": 1}], particles=[
+        {"name": "a", "position": [0, 0, 0], "fixed": True}, {"name": "b", "position": [0, 0, 0]},
+        {"position": [0, 0, 0]}])
+    (tmp_path / "chain.json").write_text(json.dumps(chain))
+    err = cli("modes", tmp_path / "chain.json", status=1).stderr
+    assert "spring 0 (between b and particle 2)" in err and "particles 1 (b) and 2 at one point" in err, err
+
+
 def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     model = MODELS / "tearing_cloth.json"
     vtk = tmp_path / "vtk"
     path = tmp_path / "tear.csv"
     stats = cli("run", model, "-o", path, "--positions", "--output-interval", 0.1, "--vtk", vtk).stderr
     header, rows = read_csv(path)
-    broken = [int(s) for s in re.findall(r"spring (\d+) broke at", stats)]
-    assert len(broken) > 0
+    # Each break names the spring's particles as the file does: neighbours on the cloth's grid.
+    breaks = re.findall(r"spring (\d+) \(between cloth\[(\d+),(\d+)\] and cloth\[(\d+),(\d+)\]\) broke at", stats)
+    assert len(breaks) > 0 and len(breaks) == stats.count(" broke at")
+    for _, i, j, k, l in breaks:
+        assert 0 < max(abs(int(i) - int(k)), abs(int(j) - int(l))) <= 2
+    broken = [int(b[0]) for b in breaks]
     # The index lists one file per row, at the row's time.
     index = ET.parse(vtk / "tearing_cloth.pvd").getroot()
     sets = index.findall("./Collection/DataSet")
@@ -540,6 +574,10 @@ def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
     out = cli("fmu", osc, "-o", fmu, "--runtime", tmp_path / "empty", status=1, env=env)
     assert out.stderr.startswith("springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in "
                                  f"{tmp_path / 'empty'};")
+    # ... and where that place came from, when the environment named it.
+    out = cli("fmu", osc, "-o", fmu, status=1, env=dict(env, SPRINGMASS_FMU_RUNTIME=str(tmp_path / "empty")))
+    assert out.stderr.startswith("springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in "
+                                 f"{tmp_path / 'empty'} (from $SPRINGMASS_FMU_RUNTIME);")
     out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", tmp_path / "missing.csv", status=1, env=env)
     assert out.stderr == f"springmass fmu: cannot copy the reference result {tmp_path / 'missing.csv'}\n"
     # A broken model is refused with the loader's message, as `springmass check` gives it.
