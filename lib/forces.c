@@ -79,14 +79,14 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
 		const double inv = 1.0 / (regular ? length : 1.0);
 		const double inv_length = regular ? inv : 0.0;
 		const double ux = dx * inv_length, uy = dy * inv_length, uz = dz * inv_length;
-		double magnitude = ks * (length - l0);
+		double magnitude = rest_length_magnitude(ks, l0, length);
 		double dvx = 0.0, dvy = 0.0, dvz = 0.0, rate = 0.0;
 		if (with_velocity) {
 			dvx = v[b] - v[a];
 			dvy = v[b + 1] - v[a + 1];
 			dvz = v[b + 2] - v[a + 2];
 			rate = ux * dvx + uy * dvy + uz * dvz;
-			magnitude += kd * rate;
+			magnitude += spring_damping_magnitude(kd, rate);
 			if (power != NULL)
 				dissipated += spring_damping_dissipation(kd, rate);
 		}

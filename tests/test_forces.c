@@ -796,6 +796,136 @@ static int test_records_of_every_lane_width_match_closed_forms(void)
 	return 0;
 }
 
+// The dissipated power of a model with a fixed particle, a driven one that moves and a disabled
+// spring, against its closed form: kd r^2 over the enabled springs (r = u . (v_b - v_a)) plus
+// alpha m |v|^2 over every particle, constrained ones included (mass damping acts on all of them,
+// model.h). A disabled spring dissipates nothing (its force is gone). Both the public function
+// and the simulation's one-pass evaluation must give it. 29 positive terms, each a few roundings
+// away from the closed form's (u computed as d / L here, d * (1/L) there): 1e-12 relative.
+static int test_dissipated_power_with_constrained_particles_and_a_disabled_spring(void)
+{
+	rng r = {5150};
+	for (int trial = 0; trial < 20; trial++) {
+		enum { N = 9, S = 20 };
+		double x[3 * N], v[3 * N], f[3 * N];
+		sm_model* m = random_model(&r, N, S, 1, x, v);  // particle N - 1 fixed, v = 0 there
+		ENSURE(m != NULL);
+		ENSURE_STATUS(sm_model_set_particle_motion(m, 4, SM_PARTICLE_DRIVEN), SM_OK);  // keeps its v
+		ENSURE_STATUS(sm_model_set_spring_enabled(m, 5 + trial % 3, false), SM_OK);
+		ENSURE(sm_model_free_count(m) == N - 2);
+		const double alpha = sm_model_get_def(m).mass_damping;
+		ENSURE(alpha > 0.0);
+		double expect = 0.0;
+		for (int32_t i = 0; i < N; i++) {
+			sm_particle_def p;
+			ENSURE_STATUS(sm_model_get_particle(m, i, &p), SM_OK);
+			const double* vi = v + 3 * i;
+			expect += alpha * p.mass * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
+		}
+		for (int32_t s = 0; s < S; s++) {
+			if (!sm_model_spring_enabled(m, s))
+				continue;
+			sm_spring_def d;
+			double kd;
+			ENSURE_STATUS(sm_model_get_spring(m, s, &d), SM_OK);
+			ENSURE_STATUS(sm_model_spring_constants(m, s, NULL, NULL, &kd), SM_OK);
+			double dx[3], L = 0.0, rate = 0.0;
+			for (int k = 0; k < 3; k++) {
+				dx[k] = x[3 * d.b + k] - x[3 * d.a + k];
+				L += dx[k] * dx[k];
+			}
+			L = sqrt(L);
+			for (int k = 0; k < 3; k++)
+				rate += dx[k] / L * (v[3 * d.b + k] - v[3 * d.a + k]);
+			expect += kd * rate * rate;
+		}
+		ENSURE_REL(sm_model_dissipated_power(m, x, v), expect, 1e-12, 0.0);
+		ENSURE_REL(sm_model_forces_and_power(m, x, v, NULL, f), expect, 1e-12, 0.0);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
+// The degenerate-length rule removes a rest-length spring's force where its direction is
+// undefined, not its energy: the elastic energy is ks (L - l0)^2 / 2 at every length (model.h),
+// so it reaches ks l0^2 / 2 continuously as the ends meet, and is the same closed form with the
+// ends far apart. One spring, l0 = 0.2 m, ks = 100 N/m: at L = 0, at 1e-13 m (below the
+// threshold 2e-13 m), at 0.05 m and at 1e4 m. The closed form and the model evaluate the same
+// two multiplications from an L that is exact or within an ulp: 1e-14 relative.
+static int test_elastic_energy_is_continuous_through_the_degenerate_point(void)
+{
+	const double ks = 100.0, l0 = 0.2;
+	sm_model* m = model_without_gravity(0.0);
+	ENSURE(m != NULL);
+	ENSURE(add_particle_at(m, 0, 0, 0, 1.0) && add_particle_at(m, 0, 0, 0, 1.0));
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.rest_length = l0;
+	d.stiffness = ks;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	const double lengths[4] = {0.0, 1e-13, 0.05, 1e4};
+	for (int c = 0; c < 4; c++) {
+		const double L = lengths[c];
+		const double x[6] = {0.0, 0.0, 0.0, L, 0.0, 0.0};
+		const double expect = 0.5 * ks * (L - l0) * (L - l0);
+		ENSURE_REL(sm_model_energies(m, x, NULL).elastic, expect, 1e-14, 0.0);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Gravity with all three components non-zero, on particles of different masses at positions
+// with all three coordinates non-zero: the force is m g exactly (one multiplication, 1e-15
+// relative allows for the compiler's grouping; no mass damping, so the velocities exert nothing),
+// the energy -sum m g . x to a few roundings of its O(100 J) terms (1e-13 relative), and the
+// force is minus the energy's gradient (linear: central differences exact up to rounding,
+// eps * 100 J / 1e-3 m ~ 2e-11 N; 1e-9 N allowed). The kinetic energy sum m |v|^2 / 2 of the
+// same particles, with masses other than 1, to a few roundings (1e-14 relative).
+static int test_gravity_in_every_direction(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[0] = 0.7;
+	md.gravity[1] = -1.3;
+	md.gravity[2] = -9.81;
+	sm_model* m = sm_model_create(&md, NULL);
+	ENSURE(m != NULL);
+	enum { N = 4 };
+	const double mass[N] = {0.5, 1.0, 2.5, 4.0};
+	double x[3 * N], v[3 * N], f[3 * N];
+	double expect_energy = 0.0, expect_kinetic = 0.0;
+	for (int i = 0; i < N; i++) {
+		for (int k = 0; k < 3; k++) {
+			v[3 * i + k] = 0.5 * (k + 1) - 0.75 * i;
+			expect_kinetic += 0.5 * mass[i] * v[3 * i + k] * v[3 * i + k];
+		}
+		x[3 * i] = 1.0 + i;
+		x[3 * i + 1] = -2.0 + 0.5 * i;
+		x[3 * i + 2] = 3.0 - i;
+		ENSURE(add_particle_at(m, x[3 * i], x[3 * i + 1], x[3 * i + 2], mass[i]));
+		for (int k = 0; k < 3; k++)
+			expect_energy -= mass[i] * md.gravity[k] * x[3 * i + k];
+	}
+	sm_model_forces(m, x, v, NULL, f);
+	for (int i = 0; i < N; i++)
+		for (int k = 0; k < 3; k++)
+			ENSURE_REL(f[3 * i + k], mass[i] * md.gravity[k], 1e-15, 0.0);
+	ENSURE_REL(sm_model_energies(m, x, v).gravity, expect_energy, 1e-13, 0.0);
+	ENSURE_REL(sm_model_energies(m, x, v).kinetic, expect_kinetic, 1e-14, 0.0);
+	const double h = 1e-3;
+	for (int k = 0; k < 3 * N; k++) {
+		const double keep = x[k];
+		x[k] = keep + h;
+		const double ep = sm_model_energies(m, x, NULL).gravity;
+		x[k] = keep - h;
+		const double em = sm_model_energies(m, x, NULL).gravity;
+		x[k] = keep;
+		ENSURE_NEAR(f[k], -(ep - em) / (2 * h), 1e-9);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -814,5 +944,8 @@ int main(int argc, char** argv)
 	RUN_TEST(test_every_lane_width_gives_the_same_bits);
 	RUN_TEST(test_springs_shorter_than_the_degenerate_ratio_exert_nothing);
 	RUN_TEST(test_records_of_every_lane_width_match_closed_forms);
+	RUN_TEST(test_dissipated_power_with_constrained_particles_and_a_disabled_spring);
+	RUN_TEST(test_elastic_energy_is_continuous_through_the_degenerate_point);
+	RUN_TEST(test_gravity_in_every_direction);
 	return TEST_SUMMARY();
 }

@@ -924,6 +924,58 @@ static int test_sparse_jacobian_rejects_changed_motions_and_endpoints(void)
 	return 0;
 }
 
+// The combined product of models with a single spring (the smallest case of its running sum per
+// first particle), with the spring's first particle not particle 0, and with mass damping, against
+// the dense matrices; same tolerance argument as test_combined_product_matches_dense.
+static int test_combined_product_of_a_single_spring(void)
+{
+	enum { N = 3 };
+	const size_t dim = 3 * N;
+	double x[3 * N] = {0.1, 0.2, 0.3, 0.9, -0.4, 0.5, -0.3, 0.8, 0.2};
+	double v[3 * N] = {0.5, -1.0, 0.25, -0.75, 0.6, 1.2, 0.3, -0.2, 0.9};
+	double p[3 * N] = {0.4, -0.7, 0.2, 0.9, 0.1, -0.5, -0.3, 0.6, 0.8};
+	double dfdx[3 * N * 3 * N], dfdv[3 * N * 3 * N], f[3 * N], out[3 * N];
+	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
+	for (int ends = 0; ends < 2; ends++) {
+		sm_model_def md = sm_default_model_def();
+		md.mass_damping = 0.6;
+		sm_model* m = sm_model_create(&md, NULL);
+		ENSURE(m != NULL);
+		for (int i = 0; i < N; i++) {
+			sm_particle_def pd = sm_default_particle_def();
+			pd.mass = 0.5 + i;
+			ENSURE_STATUS(sm_model_add_particle(m, &pd, NULL), SM_OK);
+		}
+		sm_spring_def d = sm_default_spring_def();
+		d.a = ends == 0 ? 0 : 2;
+		d.b = 1;
+		d.rest_length = 0.7;
+		d.stiffness = 80.0;
+		d.damping = 1.5;
+		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		for (int variant = 0; variant < 2; variant++) {
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv), SM_OK);
+			for (int s = 0; s < 3; s++) {
+				const double a = scales[s][0], b = scales[s][1];
+				ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
+				const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
+				for (size_t i = 0; i < dim; i++) {
+					double expect = 0.0;
+					for (size_t j = 0; j < dim; j++)
+						expect += (a * dfdx[i * dim + j] + b * dfdv[i * dim + j]) * p[j];
+					ENSURE_NEAR(out[i], expect, 1e-12 * bound);
+				}
+			}
+		}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -939,6 +991,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_spring_blocks_match_finite_differences);
 	RUN_TEST(test_fused_product_matches_finite_differences);
 	RUN_TEST(test_combined_product_matches_dense);
+	RUN_TEST(test_combined_product_of_a_single_spring);
 	RUN_TEST(test_fill_from_springs_matches_finite_differences);
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
 	RUN_TEST(test_springs_in_groups_equal_springs_alone_bit_for_bit);
