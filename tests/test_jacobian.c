@@ -540,6 +540,36 @@ static int test_fused_product_matches_finite_differences(void)
 	return 0;
 }
 
+// (a df/dx + b df/dv) p from the records of both variants against the dense matrices (dfdx and
+// dfdv: room for (3n)^2 each), for pure stiffness, gamma-like scales and pure damping: equal to
+// 1e-12 of the largest term times the dimension (a few rounding errors, with a margin).
+static int combined_products_match_dense(const sm_model* m, sm_spring_jacobians* sj, const double* x, const double* v,
+                                         const double* p, double* dfdx, double* dfdv)
+{
+	const size_t dim = 3 * (size_t)sm_model_particle_count(m);
+	double* f = malloc(2 * dim * sizeof(double));
+	ENSURE(f != NULL);
+	double* out = f + dim;
+	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
+	for (int variant = 0; variant < 2; variant++) {
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+		ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv), SM_OK);
+		for (int s = 0; s < 3; s++) {
+			const double a = scales[s][0], b = scales[s][1];
+			ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
+			const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
+			for (size_t i = 0; i < dim; i++) {
+				double expect = 0.0;
+				for (size_t j = 0; j < dim; j++)
+					expect += (a * dfdx[i * dim + j] + b * dfdv[i * dim + j]) * p[j];
+				ENSURE_NEAR(out[i], expect, 1e-12 * bound);
+			}
+		}
+	}
+	free(f);
+	return 0;
+}
+
 // The combined product (scale_k K + scale_d D) p against the dense matrices (built from
 // sm_model_spring_jacobian's blocks, an independent expansion), both variants, with mass damping
 // and gamma-like scales: equal to 1e-12 of the largest term (a few rounding errors, with a margin).
@@ -548,11 +578,10 @@ static int test_combined_product_matches_dense(void)
 	rng r = {2468};
 	enum { N = 9 };
 	const size_t dim = 3 * N;
-	double x[3 * N], v[3 * N], p[3 * N], out[3 * N], f[3 * N];
+	double x[3 * N], v[3 * N], p[3 * N], out[3 * N];
 	double* dfdx = malloc(dim * dim * sizeof(double));
 	double* dfdv = malloc(dim * dim * sizeof(double));
 	ENSURE(dfdx != NULL && dfdv != NULL);
-	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
 	for (int trial = 0; trial < 10; trial++) {
 		sm_model* m = random_model(&r, N, 20, trial % 2, x, v);
 		ENSURE(m != NULL);
@@ -563,21 +592,7 @@ static int test_combined_product_matches_dense(void)
 		ENSURE(sj != NULL);
 		for (size_t k = 0; k < dim; k++)
 			p[k] = rng_uniform(&r, -1, 1);
-		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
-			sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv);
-			for (int s = 0; s < 3; s++) {
-				const double a = scales[s][0], b = scales[s][1];
-				ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
-				const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
-				for (size_t i = 0; i < dim; i++) {
-					double expect = 0.0;
-					for (size_t j = 0; j < dim; j++)
-						expect += (a * dfdx[i * dim + j] + b * dfdv[i * dim + j]) * p[j];
-					ENSURE_NEAR(out[i], expect, 1e-12 * bound);
-				}
-			}
-		}
+		ENSURE(combined_products_match_dense(m, sj, x, v, p, dfdx, dfdv) == 0);
 		ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, 1.0, 1.0, NULL, out), SM_ERROR_INVALID_ARGUMENT);
 		sm_spring_jacobians_destroy(sj);
 		sm_model_destroy(m);
@@ -930,12 +945,10 @@ static int test_sparse_jacobian_rejects_changed_motions_and_endpoints(void)
 static int test_combined_product_of_a_single_spring(void)
 {
 	enum { N = 3 };
-	const size_t dim = 3 * N;
 	double x[3 * N] = {0.1, 0.2, 0.3, 0.9, -0.4, 0.5, -0.3, 0.8, 0.2};
 	double v[3 * N] = {0.5, -1.0, 0.25, -0.75, 0.6, 1.2, 0.3, -0.2, 0.9};
 	double p[3 * N] = {0.4, -0.7, 0.2, 0.9, 0.1, -0.5, -0.3, 0.6, 0.8};
-	double dfdx[3 * N * 3 * N], dfdv[3 * N * 3 * N], f[3 * N], out[3 * N];
-	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
+	double dfdx[3 * N * 3 * N], dfdv[3 * N * 3 * N];
 	for (int ends = 0; ends < 2; ends++) {
 		sm_model_def md = sm_default_model_def();
 		md.mass_damping = 0.6;
@@ -955,21 +968,7 @@ static int test_combined_product_of_a_single_spring(void)
 		ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
 		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
 		ENSURE(sj != NULL);
-		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
-			ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv), SM_OK);
-			for (int s = 0; s < 3; s++) {
-				const double a = scales[s][0], b = scales[s][1];
-				ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
-				const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
-				for (size_t i = 0; i < dim; i++) {
-					double expect = 0.0;
-					for (size_t j = 0; j < dim; j++)
-						expect += (a * dfdx[i * dim + j] + b * dfdv[i * dim + j]) * p[j];
-					ENSURE_NEAR(out[i], expect, 1e-12 * bound);
-				}
-			}
-		}
+		ENSURE(combined_products_match_dense(m, sj, x, v, p, dfdx, dfdv) == 0);
 		sm_spring_jacobians_destroy(sj);
 		sm_model_destroy(m);
 	}
