@@ -2722,6 +2722,31 @@ static int test_reduced_solve_matches_dense_newton_system(void)
 	return 0;
 }
 
+// A Newton right-hand side for a direct solve: zero position rows, velocity rows uniform in
+// [-1e-2, 1e-2] m/s, the dissipated-energy entry zero. Returns the velocity rows' norm in CVODE's
+// current error weights (what the solve's tolerance is measured in), or -1 on failure.
+static double velocity_right_hand_side(sm_simulation* sim, rng* r, N_Vector bv)
+{
+	N_Vector weights = N_VClone(sim->y);
+	if (weights == NULL || CVodeGetErrWeights(sim->cvode, weights) != CV_SUCCESS) {
+		if (weights != NULL)
+			N_VDestroy(weights);
+		return -1.0;
+	}
+	const int n = (int)sim->dofs;
+	double* b = N_VGetArrayPointer(bv);
+	const double* ewt = N_VGetArrayPointer(weights);
+	double norm = 0.0;
+	for (int i = 0; i < 2 * n; i++) {
+		b[i] = i < n ? 0.0 : rng_uniform(r, -1.0, 1.0) * 1e-2;  // [m], [m/s]
+		if (i >= n)
+			norm += (b[i] * ewt[i]) * (b[i] * ewt[i]);
+	}
+	b[2 * n] = 0.0;
+	N_VDestroy(weights);
+	return sqrt(norm);
+}
+
 // `count` free particles of 0.5 - 0.975 kg, each hung from its own fixed anchor 2 m from the next
 // by a spring of 1000 - 1600 N/m and 200 - 280 N s/m (strongly damped along itself), released off
 // its rest length and off the vertical, with mass damping alpha [1/s]: no spring joins two free
@@ -2784,25 +2809,16 @@ static int test_exact_block_preconditioner_takes_one_iteration(void)
 		ENSURE(sim != NULL);
 		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);  // nearly settled: large steps
 		sm_reduced_solver_invalidate(sim->linear_solver, true);
-		const int n = (int)sim->dofs;
 		double gamma;
 		ENSURE(CVodeGetCurrentGamma(sim->cvode, &gamma) == CV_SUCCESS && gamma > 0.0);
-		N_Vector bv = N_VClone(sim->y), xv = N_VClone(sim->y), weights = N_VClone(sim->y);
-		ENSURE(bv && xv && weights && CVodeGetErrWeights(sim->cvode, weights) == CV_SUCCESS);
-		double* b = N_VGetArrayPointer(bv);
-		const double* ewt = N_VGetArrayPointer(weights);
-		double norm = 0.0;
-		for (int i = 0; i < 2 * n; i++) {
-			b[i] = i < n ? 0.0 : rng_uniform(&r, -1.0, 1.0) * 1e-2;  // [m], [m/s]
-			if (i >= n)
-				norm += (b[i] * ewt[i]) * (b[i] * ewt[i]);
-		}
-		b[2 * n] = 0.0;
-		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * sqrt(norm)) == SUNLS_SUCCESS);
+		N_Vector bv = N_VClone(sim->y), xv = N_VClone(sim->y);
+		ENSURE(bv && xv);
+		const double norm = velocity_right_hand_side(sim, &r, bv);
+		ENSURE(norm > 0.0);
+		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * norm) == SUNLS_SUCCESS);
 		const int iterations = SUNLinSolNumIters(sim->linear_solver);
 		printf("  %d free particles, gamma %.3g: %d iteration(s)\n", (int)counts[k], gamma, iterations);
 		ENSURE(iterations == 1);
-		N_VDestroy(weights);
 		N_VDestroy(bv);
 		N_VDestroy(xv);
 		sm_simulation_destroy(sim);
@@ -2861,24 +2877,15 @@ static int test_update_model_refreshes_the_coarse_matrix(void)
 		ENSURE(CVodeGetCurrentGamma(sim->cvode, &gamma) == CV_SUCCESS && gamma > 0.0);
 		if (k == 1)
 			ENSURE(sm_reduced_solver_product(sim->linear_solver, 10.0 * gamma, p, q) == 0);
-		const int n = (int)sim->dofs;
-		N_Vector bv = N_VClone(sim->y), weights = N_VClone(sim->y);
+		N_Vector bv = N_VClone(sim->y);
 		solutions[k] = N_VClone(sim->y);
-		ENSURE(bv && weights && solutions[k] && CVodeGetErrWeights(sim->cvode, weights) == CV_SUCCESS);
-		double* b = N_VGetArrayPointer(bv);
-		const double* ewt = N_VGetArrayPointer(weights);
+		ENSURE(bv && solutions[k]);
 		rng r = {31};
-		double norm = 0.0;
-		for (int i = 0; i < 2 * n; i++) {
-			b[i] = i < n ? 0.0 : rng_uniform(&r, -1.0, 1.0) * 1e-2;  // [m], [m/s]
-			if (i >= n)
-				norm += (b[i] * ewt[i]) * (b[i] * ewt[i]);
-		}
-		b[2 * n] = 0.0;
-		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, solutions[k], bv, 1e-10 * sqrt(norm)) == SUNLS_SUCCESS);
+		const double norm = velocity_right_hand_side(sim, &r, bv);
+		ENSURE(norm > 0.0);
+		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, solutions[k], bv, 1e-10 * norm) == SUNLS_SUCCESS);
 		iterations[k] = SUNLinSolNumIters(sim->linear_solver);
 		N_VDestroy(bv);
-		N_VDestroy(weights);
 	}
 	const size_t length = (size_t)N_VGetLength(solutions[0]);
 	printf("  %d and %d iterations\n", iterations[0], iterations[1]);
