@@ -2321,6 +2321,204 @@ static int test_canonical_form_ignores_the_locale(void)
 	return 0;
 }
 
+// What each parameter feeds, for the places test_parameter_uses leaves out, one parameter per
+// place (docs/model-format.md, "Parameters"): a particle's velocity, a sheet's origin, edges and
+// mass, a block's size, nw and mass, a rope's mass per length, a mesh's density, a spring's break
+// strain and section, the simulation's stop time and output interval, the lower corner of a box
+// in "fixed" and the mass damping.
+static int test_parameter_uses_of_every_place(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"u\", \"parameters\": {\"vel\": 0.5, \"org\": 0, \"eu\": 1, \"ev\": 1,"
+	    " \"sm\": 2, \"sz\": 1, \"nw\": 2, \"bm\": 3, \"mpl\": 0.5, \"rho\": 0.2, \"brk\": 0.1, \"sec\": 0.25,"
+	    " \"stop\": 2, \"out\": 0.1, \"lo\": -1, \"alpha\": 0.1},"
+	    " \"mass_damping\": \"alpha\","
+	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 9], \"velocity\": [0, \"vel\", 0]},"
+	    "  {\"name\": \"q\", \"position\": [1, 0, 9]}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"stiffness\": 1, \"break_strain\": \"brk\"},"
+	    "  {\"a\": \"p\", \"b\": \"q\", \"section_stiffness\": 1, \"section\": \"sec\"}],"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"origin\": [\"org\", 0, 0], \"edge_u\": [\"eu\", 0, 0],"
+	    "   \"edge_v\": [0, \"ev\", 0], \"nu\": 2, \"nv\": 2, \"mass\": \"sm\"},"
+	    "  {\"type\": \"block\", \"name\": \"b\", \"origin\": [0, 3, 0], \"size\": [1, \"sz\", 1], \"nu\": 2, \"nv\": 2,"
+	    "   \"nw\": \"nw\", \"mass\": \"bm\"},"
+	    "  {\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 6, 0], \"end\": [1, 6, 0], \"segments\": 2,"
+	    "   \"mass_per_length\": \"mpl\"},"
+	    "  {\"type\": \"mesh\", \"name\": \"t\", \"density\": \"rho\", \"vertices\": [[0, 8, 0], [1, 8, 0], [0, 9, 0]],"
+	    "   \"triangles\": [[0, 1, 2]]}],"
+	    " \"fixed\": [{\"min\": [\"lo\", 7.9, -1], \"max\": [2, 9.1, 1]}],"
+	    " \"simulation\": {\"stop_time\": \"stop\", \"output_interval\": \"out\"}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	const struct {
+		const char* name;
+		uint32_t uses;
+	} expected[] = {
+	    {"vel", SM_PARAMETER_INITIAL_STATE}, {"org", SM_PARAMETER_INITIAL_STATE}, {"eu", SM_PARAMETER_INITIAL_STATE},
+	    {"ev", SM_PARAMETER_INITIAL_STATE},  {"sm", SM_PARAMETER_CONSTANTS},      {"sz", SM_PARAMETER_INITIAL_STATE},
+	    {"nw", SM_PARAMETER_COUNTS},         {"bm", SM_PARAMETER_CONSTANTS},      {"mpl", SM_PARAMETER_CONSTANTS},
+	    {"rho", SM_PARAMETER_CONSTANTS},     {"brk", SM_PARAMETER_CONSTANTS},     {"sec", SM_PARAMETER_CONSTANTS},
+	    {"stop", SM_PARAMETER_SETTINGS},     {"out", SM_PARAMETER_SETTINGS},      {"lo", SM_PARAMETER_MOTION},
+	    {"alpha", SM_PARAMETER_CONSTANTS},
+	};
+	int wrong = 0;
+	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
+		const int32_t k = sm_document_parameter_index(doc, expected[e].name);
+		ENSURE(k >= 0);
+		if (sm_document_parameter_uses(doc, k) != expected[e].uses) {
+			printf("  parameter %s: uses %u, expected %u\n", expected[e].name, (unsigned)sm_document_parameter_uses(doc, k),
+			       (unsigned)expected[e].uses);
+			wrong++;
+		}
+	}
+	sm_document_destroy(doc);
+	return wrong > 0;
+}
+
+// Rules at their edges that test_rules_at_their_edges leaves out, each refused with the path of
+// the element and the rule: a block's nw of 1 (each count >= 2), a break strain of 0 (> 0), a
+// rope's mass per length of 0 (> 0), a number in quotes starting with 0, a spring from a particle
+// to itself given by indices, a particle name given twice, a mesh vertex of two numbers (the path
+// names that vertex), and a block whose particle count overflows 64 bits (2^21 x 2^21 x 2^22 =
+// 2^64) refused by its first two counts.
+static int test_more_rules_at_their_edges(void)
+{
+	static const refusal cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
+	     " \"nu\": 2, \"nv\": 2, \"nw\": 1}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].nw: 1 must be a whole number from 2 to 4194304"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"break_strain\": 0}]}", SM_ERROR_NEGATIVE,
+	     "test.json: springs[0].break_strain: 0 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	     " \"end\": [1, 0, 0], \"segments\": 2, \"mass_per_length\": 0}]}",
+	     SM_ERROR_NEGATIVE, "test.json: structures[0].mass_per_length: 0 must be > 0"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"0.5\"}]}", SM_ERROR_NOT_FOUND,
+	     "test.json: springs[0].stiffness: no parameter named \"0.5\" (a number is written without quotes)"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 1, \"b\": 1.0, \"stiffness\": 1}]}", SM_ERROR_SELF_SPRING,
+	     "test.json: springs[0]: connects particle 1 to itself (a and b are the same particle)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
+	     " {\"name\": \"b\", \"position\": [1, 0, 0]}, {\"name\": \"a\", \"position\": [2, 0, 0]}]}",
+	     SM_ERROR_SCHEMA, "test.json: particles[2].name: particle name \"a\" is already used by particle 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+	     " \"vertices\": [[0, 0, 0], [1, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0].vertices[1]: must be an array of 3 numbers [x, y, z], not an array"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
+	     " \"nu\": 2097152, \"nv\": 2097152, \"nw\": 4194304}]}",
+	     SM_ERROR_SCHEMA, "test.json: structures[0]: 2097152 x 2097152 x 4194304 particles exceed the limit of 4194304"},
+	};
+	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
+	// Only a name of the form S[...] reads as a reference to structure S: "c[" and "c[1" do not.
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[\", \"position\":"
+	                               " [5, 5, 5]}, {\"name\": \"c[1\", \"position\": [6, 5, 5]}], \"structures\": [{\"type\":"
+	                               " \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
+	                               &err);
+	ENSURE(doc != NULL);
+	ENSURE(sm_document_particle_index(doc, "c[") == 0 && sm_document_particle_index(doc, "c[1") == 1);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// Saving keeps what test_canonical_form_keeps_what_the_file_says leaves out: a fixed particle
+// whose mass is a parameter stays fixed; a spring's rest length from a parameter stays that
+// parameter, so that a new value acts on the saved document as on the original; a motion port on
+// a particle other than the first stays on its particle; a particle's mass from a parameter is
+// still that parameter after sm_document_set_initial_state (only positions and velocities are
+// replaced); and a coordinate of -0 is written as 0, so that the saved text is a fixed point.
+static int test_canonical_form_keeps_parameters_and_ports(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"k\", \"parameters\": {\"m\": 2, \"l\": 0.5},"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [-0.0, 0, 0]},"
+	    "  {\"name\": \"h\", \"position\": [1, 0, 0], \"mass\": \"m\", \"fixed\": true},"
+	    "  {\"name\": \"b\", \"position\": [2, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"h\", \"b\": \"b\", \"rest_length\": \"l\", \"stiffness\": 3}],"
+	    " \"ports\": [{\"name\": \"base\", \"particle\": \"h\", \"kind\": \"motion\"}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(sm_document_port(again, 0).particle == 1 && sm_document_port(again, 0).kind == SM_PORT_MOTION);
+	const double values[2] = {3.0, 0.75};
+	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameters(again, values, &err), SM_OK);
+	ENSURE(same_document(doc, again) == 0);
+	sm_document_destroy(again);
+	char* first = sm_document_to_json(doc, &err);
+	ENSURE(first != NULL);
+	again = sm_document_parse(first, strlen(first), "saved.json", &err);
+	ENSURE(again != NULL);
+	char* second = sm_document_to_json(again, &err);
+	ENSURE(second != NULL);
+	const bool fixed_point = strcmp(first, second) == 0;
+	free(first);
+	free(second);
+	sm_document_destroy(again);
+	ENSURE(fixed_point);
+	// A new initial state: the mass parameter still feeds the saved particle's mass.
+	const double x[9] = {0, 0, 0, 1, 0, 0, 2.5, 0, 0};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, NULL, &err), SM_OK);
+	again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(sm_document_parameter_index(again, "m") >= 0);
+	ENSURE_STATUS(sm_document_set_parameter(again, sm_document_parameter_index(again, "m"), 5.0, &err), SM_OK);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_particle_def h;
+	sm_model_get_particle(m, 1, &h);
+	ENSURE(h.mass == 5.0 && h.motion == SM_PARTICLE_FIXED);
+	sm_model_destroy(m);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// The loader's entry with another limit on particles and springs (each), which the fuzz target
+// uses (lib/model_file_internal.h); with a limit of 10 the limits are checked at their edges
+// without models of millions of elements.
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
+                                       sm_error* err);
+
+// Exactly the limit of particles or springs loads and one more is refused: 10 explicit particles,
+// and a rope of 5 segments with bending springs (6 particles, 5 + 4 = 9 springs) beside one of 6
+// segments (7 particles, 6 + 5 = 11 springs).
+static int test_limits_at_their_edges(void)
+{
+	text t = {NULL, 0, 0};
+	for (int n = 10; n <= 11; n++) {
+		t.length = 0;
+		append(&t, "{\"springmass\": 1, \"name\": \"x\", \"particles\": [");
+		for (int i = 0; i < n; i++)
+			append(&t, "%s{\"position\": [%d, 0, 0]}", i > 0 ? ", " : "", i);
+		append(&t, "]}");
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = sm_document_parse_limited(t.data, t.length, "test.json", 10, &err);
+		if (n == 10) {
+			ENSURE(doc != NULL);
+		} else {
+			ENSURE(doc == NULL && strcmp(err.message, "test.json: particles: 11 particles exceed the limit of 10") == 0);
+		}
+		sm_document_destroy(doc);
+	}
+	free(t.data);
+	static const char* const rope =
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	    " \"end\": [1, 0, 0], \"segments\": %d, \"structural\": {\"stiffness\": 1}, \"bending\": {\"stiffness\": 1}}]}";
+	char text[400];
+	sm_error err = {SM_OK, ""};
+	snprintf(text, sizeof text, rope, 5);
+	sm_document* doc = sm_document_parse_limited(text, strlen(text), "test.json", 10, &err);
+	ENSURE(doc != NULL);
+	sm_document_destroy(doc);
+	snprintf(text, sizeof text, rope, 6);
+	ENSURE(sm_document_parse_limited(text, strlen(text), "test.json", 10, &err) == NULL);
+	ENSURE(strcmp(err.message, "test.json: structures[0]: the model would have 7 particles and 11 springs, more than "
+	                           "the limit of 10 of each") == 0);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2365,5 +2563,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_canonical_form_ignores_the_locale);
 	RUN_TEST(test_reference_expressions);
 	RUN_TEST(test_references_follow_their_parameters);
+	RUN_TEST(test_parameter_uses_of_every_place);
+	RUN_TEST(test_more_rules_at_their_edges);
+	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
+	RUN_TEST(test_limits_at_their_edges);
 	return TEST_SUMMARY();
 }
