@@ -31,6 +31,8 @@
 #define PATH_CAPACITY 160
 // Longest particle, port or parameter name [bytes].
 #define MAX_NAME_BYTES 200
+// Room for "parameter NAME = VALUE" (describe) with the longest name [bytes].
+#define DESCRIPTION_CAPACITY (MAX_NAME_BYTES + 64)
 // Longest structure name [bytes]. A structure's particles are named name[i], name[row,column]
 // or name[row,column,layer] (saved files name every particle so), with indices below
 // SM_DOCUMENT_MAX_ELEMENTS, at most 7 digits each: the suffix has at most 3 * 7 + 4 = 25 bytes,
@@ -242,7 +244,7 @@ static const char* describe(parser* p, char* buffer, size_t size, double value, 
 // Describes a vector so: "(parameter w = 0, 0, 0)".
 static const char* describe_vector(parser* p, char* buffer, size_t size, const double v[3], const int32_t sources[3])
 {
-	char text[3][128];
+	char text[3][DESCRIPTION_CAPACITY];
 	for (int c = 0; c < 3; c++)
 		describe(p, text[c], sizeof text[c], v[c], sources[c]);
 	snprintf(buffer, size, "(%s, %s, %s)", text[0], text[1], text[2]);
@@ -263,7 +265,7 @@ static bool fail_naming(parser* p, sm_status status, const char* path, const cha
 	char with[SM_ERROR_MESSAGE_CAPACITY] = "";
 	size_t used = 0;
 	for (int n = 0; n < noted->count; n++) {
-		char text[300];
+		char text[DESCRIPTION_CAPACITY];
 		const char* joint = n == 0 ? " (with " : n + 1 == noted->count && !noted->more ? " and " : ", ";
 		const int32_t k = noted->index[n];
 		const int written = snprintf(with + used, sizeof with - used, "%s%s", joint,
@@ -290,7 +292,7 @@ typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERAN
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
 static bool check_rule(parser* p, const char* path, double v, int32_t source, number_rule rule)
 {
-	char text[300];
+	char text[DESCRIPTION_CAPACITY];
 	if (!isfinite(v))
 		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite", describe(p, text, sizeof text, v, source));
 	if (rule == NON_NEGATIVE && v < 0.0)
@@ -340,7 +342,7 @@ static bool read_count(parser* p, feeds use, const json_t* value, const char* pa
 	int32_t source;
 	if (!read_number(p, use, value, path, &v, &source))
 		return false;
-	char text[128];
+	char text[DESCRIPTION_CAPACITY];
 	if (!(v == floor(v)) || !(v >= (double)lo) || !(v <= (double)hi))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be a whole number from %lld to %lld",
 		            describe(p, text, sizeof text, v, source), (long long)lo, (long long)hi);
@@ -632,6 +634,15 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 			break;
 		q = end + 1;  // past the ','
 	}
+	// One index for any structure; two (row, column) for a sheet, three for a block.
+	const int grid_indices = s->type == STRUCTURE_SHEET ? 2 : s->type == STRUCTURE_BLOCK ? 3 : 1;
+	if (count != 1 && count != grid_indices) {
+		static const char* const forms[] = {"a rope takes one index, name[i]",
+		                                    "a sheet takes name[i] or name[row, column]",
+		                                    "a block takes name[i] or name[row, column, layer]",
+		                                    "a mesh takes one index, name[i]"};
+		return fail(p, SM_ERROR_PARTICLE_INDEX, path, "%s has %d indices: %s", text, count, forms[s->type]);
+	}
 	const sm_structure* r = &s->range;
 	int64_t index = -1;
 	if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
@@ -861,7 +872,7 @@ static bool read_springs(parser* p, const json_t* list)
 			         describe_particle(p->ex, def.a, which, sizeof which));
 			return fail_naming_parameters(p, SM_ERROR_SELF_SPRING, path, message);
 		}
-		spring_source src = {-1, -1, -1, -1, -1};
+		spring_source src = {-1, -1, -1, -1, -1, false};
 		sm_spring_material m;
 		if (!read_constants(p, obj, path, &m, &src))
 			return false;
@@ -888,6 +899,7 @@ static bool read_springs(parser* p, const json_t* list)
 		const json_t* rest = json_object_get(obj, "rest_length");
 		const json_t* kind = json_object_get(obj, "kind");
 		const feeds rest_use = kind != NULL ? FEEDS_CONSTANTS : FEEDS_CONSTANTS | FEEDS_SPRING_KINDS;
+		src.kind_given = kind != NULL;
 		if (rest != NULL &&
 		    !read_field(p, rest_use, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
 			return false;
@@ -901,7 +913,7 @@ static bool read_springs(parser* p, const json_t* list)
 				def.kind = SM_SPRING_REST_LENGTH;
 			else
 				return fail(p, SM_ERROR_SCHEMA, sub, "must be \"rest_length\" or \"zero_length\"");
-			char text[128];
+			char text[DESCRIPTION_CAPACITY];
 			if (def.kind == SM_SPRING_ZERO_LENGTH && rest != NULL && def.rest_length != 0.0)
 				return fail(p, SM_ERROR_SCHEMA, path, "a zero-length spring cannot have rest_length %s",
 				            describe(p, text, sizeof text, def.rest_length, src.rest_length));
@@ -934,7 +946,7 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 	static const char* const keys[] = {"stiffness",      "strain_stiffness", "section_stiffness", "damping",
 	                                   "strain_damping", "section_damping",  "break_strain",      NULL};
 	*m = sm_default_spring_material();
-	*src = (spring_source){-1, -1, -1, -1, -1};
+	*src = (spring_source){-1, -1, -1, -1, -1, false};
 	const json_t* value = json_object_get(obj, key);
 	if (value == NULL)
 		return true;
@@ -1168,7 +1180,8 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 	sm_model* model = p->ex->model;
 	const int32_t p0 = sm_model_particle_count(model), s0 = sm_model_spring_count(model);
 	const int64_t limit = p->doc->max_elements;
-	spring_source groups[3] = {{-1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1}, {-1, -1, -1, -1, -1}};
+	spring_source groups[3] = {
+	    {-1, -1, -1, -1, -1, false}, {-1, -1, -1, -1, -1, false}, {-1, -1, -1, -1, -1, false}};
 	sm_status st = SM_OK;
 	switch (s.type) {
 	case STRUCTURE_ROPE: {
@@ -1213,7 +1226,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		for (int e = 0; e < 2; e++) {
 			const double* edge = e == 0 ? d.edge_u : d.edge_v;
 			if (edge[0] == 0.0 && edge[1] == 0.0 && edge[2] == 0.0) {
-				char text[PATH_CAPACITY], vector[1024];
+				char text[PATH_CAPACITY], vector[3 * DESCRIPTION_CAPACITY + 8];
 				child_key(text, path, edge_keys[e]);
 				return fail(p, SM_ERROR_INVALID_ARGUMENT, text,
 				            "%s m is zero: the sheet spans no area and its particles would coincide",
@@ -1363,7 +1376,7 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 					count++;
 				}
 			}
-			char from[1024], to[1024];
+			char from[3 * DESCRIPTION_CAPACITY + 8], to[3 * DESCRIPTION_CAPACITY + 8];
 			if (count == 0)
 				return fail(p, SM_ERROR_SCHEMA, path, "the box from %s to %s contains no particle",
 				            describe_vector(p, from, sizeof from, lo, lo_sources),

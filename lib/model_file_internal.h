@@ -32,6 +32,7 @@ typedef struct spring_source {
 	int32_t damping;
 	int32_t break_strain;
 	int32_t section;
+	bool kind_given;  // the file gave "kind": the rest length's parameter then chooses no law
 } spring_source;
 
 typedef enum structure_type { STRUCTURE_ROPE, STRUCTURE_SHEET, STRUCTURE_BLOCK, STRUCTURE_MESH } structure_type;

@@ -198,15 +198,20 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 	put_particle_reference(t, doc, def.a);
 	puts_(t, ", \"b\": ");
 	put_particle_reference(t, doc, def.b);
-	// The loader reads "rest_length": 0 as a zero-length spring; say so only when it is not.
-	if (def.kind == SM_SPRING_REST_LENGTH && def.rest_length == 0.0)
-		puts_(t, ", \"kind\": \"rest_length\"");
+	// The loader reads "rest_length": 0 as a zero-length spring; say so only when it is not. A
+	// rest length from a parameter keeps the file's "kind" or its absence: without one, the
+	// parameter's value chooses the law (it feeds spring kinds), with one it does not.
+	if (src->rest_length >= 0 ? src->kind_given : def.kind == SM_SPRING_REST_LENGTH && def.rest_length == 0.0)
+		puts_(t, def.kind == SM_SPRING_ZERO_LENGTH ? ", \"kind\": \"zero_length\"" : ", \"kind\": \"rest_length\"");
 	puts_(t, ", \"rest_length\": ");
 	put_value(t, doc, def.kind == SM_SPRING_ZERO_LENGTH ? 0.0 : def.rest_length, src->rest_length);
 	static const char* const stiffness_keys[3] = {", \"stiffness\": ", ", \"strain_stiffness\": ",
 	                                              ", \"section_stiffness\": "};
 	static const char* const damping_keys[3] = {", \"damping\": ", ", \"strain_damping\": ", ", \"section_damping\": "};
-	const bool stiffness = def.stiffness != 0.0 || src->stiffness >= 0, damping = def.damping != 0.0 || src->damping >= 0;
+	// A constant of 0 is the default, left out, unless it comes from a parameter or has a scaling
+	// (and a section) of its own to keep.
+	const bool stiffness = def.stiffness != 0.0 || src->stiffness >= 0 || def.stiffness_scaling != SM_ABSOLUTE;
+	const bool damping = def.damping != 0.0 || src->damping >= 0 || def.damping_scaling != SM_ABSOLUTE;
 	if (stiffness) {
 		puts_(t, stiffness_keys[def.stiffness_scaling]);
 		put_value(t, doc, def.stiffness, src->stiffness);

@@ -1458,8 +1458,8 @@ static bool refused_as(const char* text, const char* label, sm_status status, co
 // A reference outside its structure is refused, never taken for a particle beside it: particle
 // p comes before rope r (4 particles), sheet c (4 x 4), block b (2 x 2 x 2) and rope s (2), so
 // that one before r's first particle, or one past the end of a row, a layer or a structure, is a
-// particle of the model. A block takes one or three coordinates, not two (docs: "Referring to
-// particles"), and an index is below the particle count (31), whether an integer or a whole real.
+// particle of the model. A block takes one or three coordinates, not two, a sheet one or two, a
+// rope one (docs: "Referring to particles"), and an index is below the particle count (31), whether an integer or a whole real.
 // Each reference is a spring's end, and the last part holds the last particles by "fixed".
 static int test_references_stay_inside_their_structures(void)
 {
@@ -1479,7 +1479,11 @@ static int test_references_stay_inside_their_structures(void)
 	    {"\"r[-1]\"", SM_ERROR_PARTICLE_INDEX, "\"r[-1]\" is outside structure r ([0] to [3])"},
 	    {"\"c[0,4]\"", SM_ERROR_PARTICLE_INDEX, "\"c[0,4]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
 	    {"\"b[0,1]\"", SM_ERROR_PARTICLE_INDEX,
-	     "\"b[0,1]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
+	     "\"b[0,1]\" has 2 indices: a block takes name[i] or name[row, column, layer]"},
+	    {"\"r[0, 2]\"", SM_ERROR_PARTICLE_INDEX, "\"r[0, 2]\" has 2 indices: a rope takes one index, name[i]"},
+	    {"\"r[0, 2, 0]\"", SM_ERROR_PARTICLE_INDEX, "\"r[0, 2, 0]\" has 3 indices: a rope takes one index, name[i]"},
+	    {"\"c[1, 2, 0]\"", SM_ERROR_PARTICLE_INDEX,
+	     "\"c[1, 2, 0]\" has 3 indices: a sheet takes name[i] or name[row, column]"},
 	    {"\"b[0,0,2]\"", SM_ERROR_PARTICLE_INDEX,
 	     "\"b[0,0,2]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
 	    {"\"r[1]]\"", SM_ERROR_SCHEMA,
@@ -2519,6 +2523,82 @@ static int test_limits_at_their_edges(void)
 	return 0;
 }
 
+// A spring's explicit "kind" stays in the saved file when its rest length is a parameter, so that
+// the parameter feeds the same (constants, not spring kinds) and a new value acts alike: l = 0
+// keeps spring 0 a rest-length spring, and z = 0.3 is refused by both documents. Without a kind
+// (spring 2), the parameter keeps choosing the law in both.
+static int test_saved_springs_keep_their_kind(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"k\", \"gravity\": [0, 0, 0], \"parameters\": {\"l\": 0.5, \"z\": 0, \"w\": 0.7},"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"kind\": \"rest_length\", \"rest_length\": \"l\", \"stiffness\": 10},"
+	    "  {\"a\": \"a\", \"b\": \"b\", \"kind\": \"zero_length\", \"rest_length\": \"z\", \"stiffness\": 1},"
+	    "  {\"a\": \"a\", \"b\": \"b\", \"rest_length\": \"w\", \"stiffness\": 1}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	for (int32_t k = 0; k < 3; k++)
+		ENSURE(sm_document_parameter_uses(again, k) == sm_document_parameter_uses(doc, k));
+	ENSURE(sm_document_parameter_uses(doc, 2) == (SM_PARAMETER_CONSTANTS | SM_PARAMETER_SPRING_KINDS));
+	const double zero[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_document_set_parameters(doc, zero, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameters(again, zero, &err), SM_OK);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE_STATUS(sm_document_set_parameter(doc, 1, 0.3, &err), SM_ERROR_SCHEMA);
+	ENSURE_STATUS(sm_document_set_parameter(again, 1, 0.3, &err), SM_ERROR_SCHEMA);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// A message on a value from a parameter shows the parameter's value also when its name has the
+// full 200 bytes: a count (a rope's segments) and a vector (a sheet's zero edge).
+static int test_messages_show_values_of_long_parameters(void)
+{
+	char name[201], text[1024];
+	memset(name, 'n', 200);
+	name[200] = '\0';
+	snprintf(text, sizeof text,
+	         "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 2.5}, \"structures\": [{\"type\": \"rope\","
+	         " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": \"%s\"}]}",
+	         name, name);
+	sm_error err = {SM_OK, ""};
+	ENSURE(parse(text, &err) == NULL);
+	ENSURE(strstr(err.message, " = 2.5 must be a whole number from 1 to 4194304") != NULL);
+	snprintf(text, sizeof text,
+	         "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 0}, \"structures\": [{\"type\": \"sheet\","
+	         " \"name\": \"c\", \"edge_u\": [\"%s\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+	         name, name);
+	ENSURE(parse(text, &err) == NULL);
+	ENSURE(strstr(err.message, " = 0, 0, 0) m is zero") != NULL);
+	return 0;
+}
+
+// A spring constant of 0 given per strain or per section keeps its scaling (and its section)
+// through a save: the same spring definitions, not absolute zeros (same_document compares every
+// field of every spring).
+static int test_saved_zero_constants_keep_their_scaling(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"zs\", \"gravity\": [0, 0, 0],"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"strain_stiffness\": 0, \"damping\": 1},"
+	    "  {\"a\": \"a\", \"b\": \"b\", \"section_stiffness\": 0, \"section\": 0.5, \"strain_damping\": 2},"
+	    "  {\"a\": \"a\", \"b\": \"b\", \"stiffness\": 3, \"section_damping\": 0, \"section\": 0.25}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2565,6 +2645,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_references_follow_their_parameters);
 	RUN_TEST(test_parameter_uses_of_every_place);
 	RUN_TEST(test_more_rules_at_their_edges);
+	RUN_TEST(test_saved_springs_keep_their_kind);
+	RUN_TEST(test_messages_show_values_of_long_parameters);
+	RUN_TEST(test_saved_zero_constants_keep_their_scaling);
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_limits_at_their_edges);
 	return TEST_SUMMARY();
