@@ -408,6 +408,7 @@ sm_model* sm_model_clone(const sm_model* model)
 	if (m == NULL)
 		return NULL;
 	*m = *model;
+	m->last_error[0] = '\0';  // the copy has had no failed call
 	const size_t pc = (size_t)model->particle_capacity, sc = (size_t)model->spring_capacity;
 	int ok = 1;
 	m->mass = duplicate(model->mass, pc * sizeof(double), &ok);
@@ -479,12 +480,12 @@ int32_t sm_model_spring_count(const sm_model* model)
 	return model != NULL ? model->spring_count : 0;
 }
 
-static sm_status check_particle_index(const sm_model* model, int32_t index)
+static sm_status check_particle_index(sm_model* model, int32_t index)
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->particle_count)
-		return sm_model_fail((sm_model*)model, SM_ERROR_PARTICLE_INDEX,
+		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
 		                     "particle %ld out of range (model has %ld particles)", (long)index,
 		                     (long)model->particle_count);
 	return SM_OK;
@@ -588,12 +589,12 @@ sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t
 	return SM_OK;
 }
 
-static sm_status check_spring_index(const sm_model* model, int32_t index)
+static sm_status check_spring_index(sm_model* model, int32_t index)
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->spring_count)
-		return sm_model_fail((sm_model*)model, SM_ERROR_SPRING_INDEX, "spring %ld out of range (model has %ld springs)",
+		return sm_model_fail(model, SM_ERROR_SPRING_INDEX, "spring %ld out of range (model has %ld springs)",
 		                     (long)index, (long)model->spring_count);
 	return SM_OK;
 }
@@ -646,6 +647,7 @@ sm_status sm_model_set_spring_enabled(sm_model* model, int32_t index, bool enabl
 	sm_status st = check_spring_index(model, index);
 	if (st != SM_OK)
 		return st;
+	model->last_error[0] = '\0';
 	model->enabled[index] = enabled ? 1 : 0;
 	// The hot arrays hold zero constants while disabled, so the force loop needs no branch; the
 	// stored definition restores them.

@@ -592,6 +592,29 @@ static int test_zero_length_spring_rest_length_resolved(void)
 	return 0;
 }
 
+// The last error belongs to the calls that modify the model: a successful one clears it, a const
+// call leaves it (its status tells), and a clone starts without it.
+static int test_last_error_follows_the_modifying_calls(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.stiffness = 4.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 7, false), SM_ERROR_SPRING_INDEX);
+	ENSURE(strstr(sm_model_last_error(m), "spring 7") != NULL);
+	sm_model* copy = sm_model_clone(m);
+	ENSURE(copy != NULL && sm_model_last_error(copy)[0] == '\0');
+	sm_particle_def p;
+	ENSURE_STATUS(sm_model_get_particle(m, 99, &p), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(strstr(sm_model_last_error(m), "spring 7") != NULL);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, false), SM_OK);
+	ENSURE(sm_model_last_error(m)[0] == '\0');
+	sm_model_destroy(copy);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -611,5 +634,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_damping_per_section_needs_a_section);
 	RUN_TEST(test_infinite_velocity_refused);
 	RUN_TEST(test_zero_length_spring_rest_length_resolved);
+	RUN_TEST(test_last_error_follows_the_modifying_calls);
 	return TEST_SUMMARY();
 }

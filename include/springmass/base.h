@@ -26,9 +26,13 @@ extern "C" {
 /// built with, to compare with those a program was compiled against.
 SM_API const char* sm_version(void);
 
-/// Status returned by every fallible springmass function. SM_OK is zero; every other value
-/// names one rule that was broken. sm_status_string() gives a short generic text; the object
-/// involved (model, document, simulation) or an sm_error gives the specific message.
+/// Status returned by the springmass functions that can fail in more than one way. SM_OK is
+/// zero; every other value names one rule that was broken. sm_status_string() gives a short
+/// generic text; the object involved (model, document, simulation) or an sm_error gives the
+/// specific message. Functions that return a pointer return NULL on failure (those that take an
+/// sm_error say why; sm_model_clone, sm_sparse_jacobian_create and sm_spring_jacobians_create
+/// fail only for a NULL argument or a lack of memory); evaluation functions that return void or
+/// a value do nothing, or return 0, for a NULL object or a NULL required array.
 typedef enum sm_status {
 	SM_OK = 0,
 	SM_ERROR_INVALID_ARGUMENT,  ///< NULL pointer, unknown enum value or inconsistent option

@@ -21,7 +21,9 @@ extern "C" {
 typedef enum sm_particle_motion {
 	SM_PARTICLE_FREE = 0,  ///< moves under the forces
 	SM_PARTICLE_FIXED,     ///< stays at its position, velocity zero
-	SM_PARTICLE_DRIVEN,    ///< position and velocity prescribed by the caller over time
+	/// Position and velocity prescribed by the caller over time (sm_simulation_set_driven); until
+	/// then it moves from its initial position at its initial velocity, x0 + v0 t.
+	SM_PARTICLE_DRIVEN,
 } sm_particle_motion;
 
 /// Definition of a particle; get one from sm_default_particle_def().
@@ -140,8 +142,11 @@ SM_API void sm_model_destroy(sm_model* model);
 /// Deep copy of a model (NULL if memory runs out).
 SM_API sm_model* sm_model_clone(const sm_model* model);
 
-/// Message of the last failed call on this model, naming the particle or spring and the rule
-/// it broke; "" if none. Valid until the next call that modifies the model.
+/// Message of the last failed call that modifies this model (sm_model_add_*, sm_model_set_*, the
+/// builders of structures.h), naming the particle or spring and the rule it broke; "" after a
+/// successful one, and in a clone. Functions that take a const sm_model* never write it (they may
+/// run concurrently): their status alone says what went wrong. Valid until the next call that
+/// modifies the model.
 SM_API const char* sm_model_last_error(const sm_model* model);
 
 /// Adds a particle. On success writes its index to *index (may be NULL). On error the model
@@ -180,6 +185,7 @@ SM_API sm_status sm_model_spring_constants(const sm_model* model, int32_t index,
 /// A disabled spring exerts no force and contributes nothing to energies or Jacobians (a broken
 /// spring). The sparsity pattern of an sm_sparse_jacobian is unaffected.
 SM_API sm_status sm_model_set_spring_enabled(sm_model* model, int32_t index, bool enabled);
+/// Whether a spring is enabled (false also for an index out of range).
 SM_API bool sm_model_spring_enabled(const sm_model* model, int32_t index);
 
 /// Gravity [m/s^2] and mass damping [1/s] as stored.
@@ -195,15 +201,17 @@ SM_API void sm_model_initial_state(const sm_model* model, double* x, double* v);
 SM_API double sm_model_total_mass(const sm_model* model);
 
 /// Number of free particles, and the free index of a particle (its position among the free
-/// particles in particle order, or -1 if it is constrained). Free indices number the unknowns
+/// particles in particle order, or -1 if it is constrained or out of range). Free indices number the unknowns
 /// of the sparse Jacobian (degrees of freedom 3*free_index + 0..2).
 SM_API int32_t sm_model_free_count(const sm_model* model);
 SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 
 // ---------------------------------------------------------------------------------------------
 // Evaluation. x [m] and v [m/s] hold 3 values per particle (all particles, constrained ones
-// included); the model's stored initial state is not used. These functions do not modify the
-// model and may run concurrently on the same model.
+// included); the model's stored initial state is not used. v may be NULL for zero velocities
+// (no damping forces, no kinetic energy, no dissipated power). These functions do not modify the
+// model and may run concurrently on the same model; given a NULL model or a NULL required array
+// they do nothing (or return 0).
 // ---------------------------------------------------------------------------------------------
 
 /// Total force [N] on every particle: springs, spring damping, mass damping, gravity and the

@@ -65,7 +65,7 @@ SM_API sm_status sm_document_build(const sm_document* doc, sm_model** model, sm_
 /// Named parameters, in file order.
 SM_API int32_t sm_document_parameter_count(const sm_document* doc);
 SM_API const char* sm_document_parameter_name(const sm_document* doc, int32_t index);
-SM_API double sm_document_parameter_value(const sm_document* doc, int32_t index);
+SM_API double sm_document_parameter_value(const sm_document* doc, int32_t index);  // NaN out of range
 /// Index of a parameter by name, or -1.
 SM_API int32_t sm_document_parameter_index(const sm_document* doc, const char* name);
 /// What a parameter's value feeds, as flags or-ed over every place the file uses it (0 for a

@@ -30,6 +30,15 @@
 // same on every x86-64 processor: the force loop takes four springs at a time where the processor
 // has AVX and two or one elsewhere, with the same IEEE operations in the same order (no fused
 // multiply-add), so the forces and Jacobians are the same bits either way.
+//
+// Threads. The library starts no thread of its own, but two of its dependencies may, as
+// process-wide settings allow: OpenBLAS (see above) and CHOLMOD, whose supernodal factorisation
+// (the reduced Cholesky solver from about 2000 unknowns on, the coarse system of conjugate
+// gradients on large models, the sparse paths of sm_statics_solve and sm_modes_compute) runs in
+// an OpenMP team of up to 4 threads whatever OMP_NUM_THREADS says. The team belongs to the
+// calling thread and outlives the simulation (the OpenMP runtime keeps it for the next parallel
+// region). A program that runs simulations in threads of its own and wants no others sets
+// OMP_THREAD_LIMIT=1 (and OPENBLAS_NUM_THREADS=1) in the environment before the first call.
 #pragma once
 
 #include "springmass/model.h"
@@ -181,7 +190,9 @@ SM_API sm_status sm_simulation_advance_interpolated(sm_simulation* sim, double t
 SM_API double sm_simulation_time(const sm_simulation* sim);
 
 /// Positions [m] and velocities [m/s] of all particles (3 per particle) at the current time.
-/// The pointer stays valid until the simulation is destroyed; its contents change on advance.
+/// The pointer stays valid until the simulation is destroyed; its contents change with every
+/// call that changes the state: advance, set_driven (the driven particle), set_state, reset and
+/// update_model.
 SM_API const double* sm_simulation_positions(const sm_simulation* sim);
 SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
 
@@ -211,6 +222,11 @@ SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t pa
 /// (3 each; the entries of fixed and driven particles are ignored: they stay at their
 /// positions or follow their prescribed motion, see sm_simulation_set_driven). Re-initialises
 /// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry.
+/// Only the particles' state changes: the dissipated energy, the break events recorded so far
+/// and the springs that broke stay as they are (setting an earlier time undoes no break), so
+/// the energy balance of sm_simulation_dissipated_energy holds across the call only if the
+/// caller accounts for the energy the new state adds. sm_simulation_reset restores broken
+/// springs and clears the dissipated energy.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
 /// Back to time 0 and the model's initial state (driven particles at their initial position
@@ -229,12 +245,14 @@ SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 /// moved that way jumps, as a driven one set elsewhere does); driven ones keep their motion.
 /// Springs disabled in the new model are disabled from the start (a reset keeps them so),
 /// except those that broke in this simulation: a copy of sm_simulation_model() has them
-/// disabled, and a reset still restores them.
+/// disabled, and a reset still restores them. External forces stay as set.
 SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model);
 
 /// The simulation's own model (springs that broke are disabled in it). The pointer stays valid
 /// until the next successful sm_simulation_update_model, which replaces the model, or
-/// sm_simulation_destroy; a reset keeps it (and restores its springs).
+/// sm_simulation_destroy; a reset keeps it (and restores its springs). The simulation changes
+/// this model in sm_simulation_advance (springs that break), sm_simulation_reset and
+/// sm_simulation_update_model: another thread must not read it during those calls.
 SM_API const sm_model* sm_simulation_model(const sm_simulation* sim);
 
 /// Solver statistics since creation or the last reset (sm_statistics).
