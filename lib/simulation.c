@@ -1068,10 +1068,10 @@ static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, l
 	CVodeSetStopTime(sim->cvode, t_stop);
 	long steps = 0;
 	int flag = CV_SUCCESS;
-	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed) {
+	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed && !sim->stopped) {
 		flag = check_step_size(sim, CVode(sim->cvode, t_stop, sim->y, reached, CV_ONE_STEP), reached);
-		if (flag >= 0 && sim->def.on_step != NULL)
-			sim->def.on_step(sim->def.on_step_context, *reached);
+		if (flag >= 0 && sim->def.on_step != NULL && !sim->def.on_step(sim->def.on_step_context, *reached))
+			sim->stopped = true;
 		steps++;
 	}
 	return flag;
@@ -1092,6 +1092,16 @@ static sm_status interpolate(sm_simulation* sim, double t)
 	}
 	sim->time = t;
 	return SM_OK;
+}
+
+// The end of an advance that the caller's on_step stopped at the simulation's time.
+static sm_status stopped_by_caller(sm_simulation* sim, double t_end)
+{
+	refresh_outputs(sim);
+	char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(sim->time, now);
+	sm_format_number(t_end, end);
+	return fail(sim, SM_ERROR_STEP_LIMIT, "stopped by on_step at t = %s s while advancing to %s s", now, end);
 }
 
 static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
@@ -1150,6 +1160,14 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		}
 		CVodeGetNumSteps(sim->cvode, &steps_after);
 		steps_taken += steps_after - steps_before;
+		// The caller's on_step asked to stop: CVODE's last step is complete and its history intact,
+		// so the advance ends there (after a break found at it) and the next goes on from it.
+		const bool stop = sim->stopped;
+		sim->stopped = false;
+		if (flag == CV_SUCCESS && reached < t_end && stop) {
+			sim->time = reached;
+			return stopped_by_caller(sim, t_end);
+		}
 		if (flag == CV_SUCCESS && reached < t_end) {
 			flag = CV_TOO_MUCH_WORK;
 			snprintf(sim->solver_message, sizeof sim->solver_message,
@@ -1184,10 +1202,12 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(sim->time, now);
 			sm_format_number(t_end, end);
-			fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
-			     failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
-			     sim->solver_message);
-			return SM_ERROR_SOLVER;
+			// Too much work is no failure of the method: the state is good and the next advance
+			// goes on from it.
+			const sm_status status = flag == CV_TOO_MUCH_WORK && usable ? SM_ERROR_STEP_LIMIT : SM_ERROR_SOLVER;
+			return fail(sim, status, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
+			            failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			            sim->solver_message);
 		}
 		if (flag == CV_ROOT_RETURN && reached > t_end) {
 			// A root past the end: kept for the next advance, where CVODE's history still
@@ -1211,6 +1231,8 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		} else {
 			sim->time = t_end;
 		}
+		if (stop && sim->time < t_end)
+			return stopped_by_caller(sim, t_end);
 	}
 	refresh_outputs(sim);
 	return SM_OK;

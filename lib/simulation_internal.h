@@ -31,6 +31,7 @@ struct sm_simulation {
 	// CVODE found a spring break at break_time, past the time the last advance interpolated
 	// (roots_found tells which); the next advance breaks it there.
 	bool break_pending;
+	bool stopped;  // the caller's on_step returned false during this CVode call
 	double break_time;   // [s]
 
 	sm_model* model;          // own copy; broken springs disabled in it

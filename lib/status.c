@@ -29,6 +29,7 @@ const char* sm_status_string(sm_status status)
 	case SM_ERROR_SOLVER: return "solver failure";
 	case SM_ERROR_NOT_CONVERGED: return "not converged";
 	case SM_ERROR_TOPOLOGY: return "models differ in topology";
+	case SM_ERROR_STEP_LIMIT: return "advance stopped before its end (step limit)";
 	case SM_STATUS_COUNT: break;
 	}
 	return "unknown status";

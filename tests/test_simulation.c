@@ -697,12 +697,13 @@ typedef struct step_log {
 	bool increasing;
 } step_log;
 
-static void log_step(void* context, double time)
+static bool log_step(void* context, double time)
 {
 	step_log* log = context;
 	log->increasing = log->increasing && time > log->last;
 	log->last = time;
 	log->calls++;
+	return true;
 }
 
 // Two simulations of one model and definition, the second with log_step as its on_step hook.
@@ -715,20 +716,30 @@ static void create_with_and_without_hook(const sm_model* model, sm_simulation_de
 	*hooked = sm_simulation_create(model, &d, NULL);
 }
 
+// The benchmark cloth of 12 x 12 whose every spring breaks past 0.2 % strain: those at the pinned
+// corners do within 0.2 s.
+static sm_model* tearing_cloth_12(void)
+{
+	sm_model* model = benchmark_cloth(12, 0.0);
+	for (int32_t k = 0; model != NULL && k < sm_model_spring_count(model); k++) {
+		sm_spring_def sd;
+		sm_model_get_spring(model, k, &sd);
+		sd.break_strain = 2e-3;
+		if (sm_model_set_spring(model, k, &sd) != SM_OK) {
+			sm_model_destroy(model);
+			model = NULL;
+		}
+	}
+	return model;
+}
+
 // The on_step hook sees every internal step, in order, and changes nothing: the 12 x 12 cloth
 // (reduced solver) with springs that break on the way gives bit-identical states and the same
 // counters with and without it.
 static int test_on_step_sees_every_step_and_changes_nothing(void)
 {
-	sm_model* model = benchmark_cloth(12, 0.0);
+	sm_model* model = tearing_cloth_12();
 	ENSURE(model != NULL);
-	// Every spring breaks past 0.2 % strain: those at the pinned corners do within 0.2 s.
-	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
-		sm_spring_def sd;
-		ENSURE_STATUS(sm_model_get_spring(model, k, &sd), SM_OK);
-		sd.break_strain = 2e-3;
-		ENSURE_STATUS(sm_model_set_spring(model, k, &sd), SM_OK);
-	}
 	step_log log = {0, -1.0, true};
 	sm_simulation_def d = sm_default_simulation_def();
 	sm_simulation *plain, *hooked;
@@ -754,6 +765,67 @@ static int test_on_step_sees_every_step_and_changes_nothing(void)
 	return 0;
 }
 
+// An on_step hook that asks to stop after every `every`-th step it sees.
+typedef struct step_stopper {
+	int64_t calls;
+	int64_t every;
+	double last;  // [s]
+} step_stopper;
+
+static bool stop_every(void* context, double time)
+{
+	step_stopper* stopper = context;
+	stopper->last = time;
+	return ++stopper->calls % stopper->every != 0;
+}
+
+// on_step returning false ends the advance at that step with SM_ERROR_STEP_LIMIT, the state valid
+// there, and advancing again goes on as if uninterrupted: the 12 x 12 cloth with breaking springs
+// (as above) stopped every 7 steps and advanced again until it reaches 0.2 s takes the same steps,
+// breaks the same springs at the same times and ends in the same state, bit for bit, as one
+// advance without the hook.
+static int test_on_step_can_stop_an_advance(void)
+{
+	sm_model* model = tearing_cloth_12();
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* plain = sm_simulation_create(model, &d, NULL);
+	step_stopper stopper = {0, 7, 0.0};
+	d.on_step = stop_every;
+	d.on_step_context = &stopper;
+	sm_simulation* stopped = sm_simulation_create(model, &d, NULL);
+	ENSURE(plain != NULL && stopped != NULL);
+	ENSURE_STATUS(sm_simulation_advance(plain, 0.2), SM_OK);
+	int stops = 0;
+	for (;;) {
+		const int64_t before = stopper.calls;
+		const sm_status st = sm_simulation_advance(stopped, 0.2);
+		if (st == SM_OK)
+			break;
+		ENSURE_STATUS(st, SM_ERROR_STEP_LIMIT);
+		ENSURE(strstr(sm_simulation_last_error(stopped), "stopped by on_step") != NULL);
+		ENSURE(stopper.calls - before <= 7 && stopper.calls % 7 == 0);
+		ENSURE(sm_simulation_time(stopped) == stopper.last && stopper.last < 0.2);
+		ENSURE(++stops < 1000);
+	}
+	const sm_statistics a = sm_simulation_statistics(plain), b = sm_simulation_statistics(stopped);
+	ENSURE(stops > 10 && a.steps == b.steps && a.rhs_evaluations == b.rhs_evaluations && b.restarts == a.restarts);
+	const int32_t broke = sm_simulation_break_count(plain);
+	ENSURE(broke > 0 && sm_simulation_break_count(stopped) == broke);
+	for (int32_t k = 0; k < broke; k++) {
+		const sm_break_event e = sm_simulation_break(plain, k), f = sm_simulation_break(stopped, k);
+		ENSURE(e.spring == f.spring && e.time == f.time);
+	}
+	const size_t n3 = 3 * (size_t)sm_model_particle_count(model);
+	ENSURE(memcmp(sm_simulation_positions(plain), sm_simulation_positions(stopped), n3 * sizeof(double)) == 0);
+	ENSURE(memcmp(sm_simulation_velocities(plain), sm_simulation_velocities(stopped), n3 * sizeof(double)) == 0);
+	printf("  %d stops over %lld steps\n", stops, (long long)b.steps);
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(stopped);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // max_steps holds with the hook too: a 12 x 12 cloth allowed 20 steps per advance stops where
 // it would without the hook, with the same message, and both go on alike from there.
 static int test_on_step_keeps_max_steps(void)
@@ -768,8 +840,8 @@ static int test_on_step_keeps_max_steps(void)
 	ENSURE(plain != NULL && hooked != NULL);
 	const size_t n3 = 3 * (size_t)sm_model_particle_count(model);
 	for (int attempt = 0; attempt < 2; attempt++) {
-		ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_ERROR_SOLVER);
-		ENSURE_STATUS(sm_simulation_advance(hooked, 1.0), SM_ERROR_SOLVER);
+		ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_ERROR_STEP_LIMIT);
+		ENSURE_STATUS(sm_simulation_advance(hooked, 1.0), SM_ERROR_STEP_LIMIT);
 		ENSURE(strstr(sm_simulation_last_error(hooked), "max_steps") != NULL);
 		ENSURE(strcmp(sm_simulation_last_error(plain), sm_simulation_last_error(hooked)) == 0);
 		ENSURE(sm_simulation_time(plain) == sm_simulation_time(hooked) && sm_simulation_time(hooked) < 1.0);
@@ -1038,7 +1110,7 @@ static int test_failures_are_reported_and_recoverable(void)
 	d.max_steps = 5;
 	sm_simulation* sim = sm_simulation_create(model, &d, &err);
 	ENSURE(sim != NULL);
-	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_ERROR_SOLVER);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_ERROR_STEP_LIMIT);
 	ENSURE(strstr(sm_simulation_last_error(sim), "CV_TOO_MUCH_WORK") != NULL);
 	const double reached = sm_simulation_time(sim);
 	ENSURE(reached > 0.0 && reached < 1.0);
@@ -1047,7 +1119,7 @@ static int test_failures_are_reported_and_recoverable(void)
 	ENSURE_STATUS(sm_simulation_advance(sim, reached / 2), SM_ERROR_INVALID_ARGUMENT);
 	for (int i = 0; i < 1000 && sm_simulation_time(sim) < 1.0; i++) {
 		sm_status st = sm_simulation_advance(sim, 1.0);
-		ENSURE(st == SM_OK || st == SM_ERROR_SOLVER);
+		ENSURE(st == SM_OK || st == SM_ERROR_STEP_LIMIT);
 	}
 	ENSURE(sm_simulation_time(sim) == 1.0);
 	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
@@ -2215,12 +2287,13 @@ typedef struct step_gap_log {
 	int64_t calls;
 } step_gap_log;
 
-static void log_step_gap(void* context, double time)
+static bool log_step_gap(void* context, double time)
 {
 	step_gap_log* log = context;
 	log->widest = fmax(log->widest, time - log->last);
 	log->last = time;
 	log->calls++;
+	return true;
 }
 
 // max_step caps every internal step: a particle falling freely (its motion a quadratic, which
@@ -3067,12 +3140,12 @@ static int test_too_much_work_after_an_input_jump_is_not_retried(void)
 	ENSURE(sim != NULL);
 	const double force[3] = {0.5, 0.0, 0.0};
 	ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, force), SM_OK);
-	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_SOLVER);
+	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_STEP_LIMIT);
 	ENSURE(strstr(sm_simulation_last_error(sim), "CV_TOO_MUCH_WORK") != NULL);
 	sm_statistics st = sm_simulation_statistics(sim);
 	const double reached = sm_simulation_time(sim);
 	ENSURE(st.steps == 5 && st.restarts == 0 && reached > 0.0 && reached < 10.0);
-	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_SOLVER);
+	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_STEP_LIMIT);
 	st = sm_simulation_statistics(sim);
 	ENSURE(st.steps == 10 && st.restarts == 0 && sm_simulation_time(sim) > reached);
 	sm_simulation_destroy(sim);
@@ -3371,10 +3444,10 @@ static int test_max_steps_holds_across_breaks(void)
 	ENSURE(sim != NULL);
 	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {1.0, 0.0, 0.0};
 	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
-	ENSURE_STATUS(sm_simulation_advance(sim, 1.05), SM_ERROR_SOLVER);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.05), SM_ERROR_STEP_LIMIT);
 	ENSURE(strstr(sm_simulation_last_error(sim), "CV_TOO_MUCH_WORK") != NULL);
 	ENSURE(sm_simulation_statistics(sim).steps <= 40 && sm_simulation_time(sim) < 1.05);
-	ENSURE_STATUS(sm_simulation_advance(sim, 1.05), SM_ERROR_SOLVER);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.05), SM_ERROR_STEP_LIMIT);
 	ENSURE(sm_simulation_statistics(sim).steps <= 80);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
@@ -3401,6 +3474,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_inputs_null_arrays);
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
 	RUN_TEST(test_on_step_keeps_max_steps);
+	RUN_TEST(test_on_step_can_stop_an_advance);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_driven_motion_continued_by_the_caller_is_no_change);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);

@@ -217,9 +217,10 @@ static void show_progress(progress* p, double t, bool last_row)
 	p->shown = true;
 }
 
-static void progress_on_step(void* context, double t)
+static bool progress_on_step(void* context, double t)
 {
 	show_progress(context, t, false);
+	return true;
 }
 
 // Ends a progress line that rewrites itself, before other output.

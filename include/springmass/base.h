@@ -51,6 +51,9 @@ typedef enum sm_status {
 	SM_ERROR_SOLVER,            ///< the integrator or a linear solver failed (details in the message)
 	SM_ERROR_NOT_CONVERGED,     ///< an iterative method stopped before meeting its tolerance
 	SM_ERROR_TOPOLOGY,          ///< two models differ in particles or springs where they must match
+	/// An advance used its max_steps internal steps, or its on_step hook stopped it, before its
+	/// end: the state is valid at sm_simulation_time() and advancing again continues from it.
+	SM_ERROR_STEP_LIMIT,
 	SM_STATUS_COUNT
 } sm_status;
 

@@ -100,9 +100,10 @@ typedef struct sm_simulation_def {
 	bool restart_on_input_change;
 	/// Called after every internal step of sm_simulation_advance with the time it reached [s]
 	/// and `on_step_context` (default NULL: not called), e.g. to show progress during a long
-	/// advance. The steps and results are the same with or without it. It must not call back
-	/// into the simulation.
-	void (*on_step)(void* context, double time);
+	/// advance or to bound its wall time. The steps and results are the same with or without it.
+	/// Returning false stops the advance at that step, with SM_ERROR_STEP_LIMIT (advancing again
+	/// continues). It must not call back into the simulation.
+	bool (*on_step)(void* context, double time);
 	void* on_step_context;
 } sm_simulation_def;
 
@@ -158,11 +159,13 @@ SM_API void sm_simulation_destroy(sm_simulation* sim);
 /// 4 eps max(1 s, |t|) (about 9e-16 s at t = 1 s), too short for CVODE, is one explicit Euler
 /// step (exact to round-off). SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that
 /// is not finite or lies before t.
-/// On failure returns SM_ERROR_SOLVER (SM_ERROR_OUT_OF_MEMORY when a spring break cannot be
-/// recorded) with the message in sm_simulation_last_error(), which names a lack of memory as
-/// the cause where there was one; the state is then the last one the solver reached
-/// (sm_simulation_time() tells when) and the simulation remains usable (advance again, set a
-/// state, or reset).
+/// When the advance used its max_steps internal steps, or on_step returned false, before t_end:
+/// SM_ERROR_STEP_LIMIT, the state valid at the last step (sm_simulation_time()), and advancing
+/// again continues as if uninterrupted. On failure returns SM_ERROR_SOLVER
+/// (SM_ERROR_OUT_OF_MEMORY when a spring break cannot be recorded) with the message in
+/// sm_simulation_last_error(), which names a lack of memory as the cause where there was one; the
+/// state is then the last one the solver reached (sm_simulation_time() tells when) and the
+/// simulation remains usable (advance again, set a state, or reset).
 SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 
 /// Advances to t_end [s] as sm_simulation_advance does, but lets CVODE step past t_end, up to
