@@ -1433,6 +1433,29 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	return SM_OK;
 }
 
+// A break the caller decides on (a cut, a tear it models itself), as break_springs makes one
+// when a strain crosses its limit: recorded, its elastic energy moved to the dissipated energy,
+// CVODE restarted here (what it computed past this time assumed the spring).
+sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
+{
+	if (sim == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (spring < 0 || spring >= sm_model_spring_count(sim->model))
+		return fail(sim, SM_ERROR_SPRING_INDEX, "break_spring: spring %d is out of range (0..%d)", (int)spring,
+		            (int)sm_model_spring_count(sim->model) - 1);
+	if (!sim->model->enabled[spring])
+		return SM_OK;
+	refresh_outputs(sim);
+	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
+	if (record_break(sim, sim->time, spring) != SM_OK)
+		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "break_spring: out of memory recording the break");
+	const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
+	N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
+	sim->need_restart = true;
+	refresh_outputs(sim);
+	return SM_OK;
+}
+
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
 {
 	if (sim == NULL || x == NULL || v == NULL)

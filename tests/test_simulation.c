@@ -765,6 +765,95 @@ static int test_on_step_sees_every_step_and_changes_nothing(void)
 	return 0;
 }
 
+// A particle hung from a fixed one by two springs (ks 100 and 50 N/m, the first damped), under
+// gravity.
+static sm_model* bob_on_two_springs(void)
+{
+	const sm_model_def world = sm_default_model_def();  // gravity (0, 0, -9.81) m/s^2
+	sm_model* model = sm_model_create(&world, NULL);
+	if (model == NULL)
+		return NULL;
+	sm_particle_def top = sm_default_particle_def(), bob = sm_default_particle_def();
+	top.motion = SM_PARTICLE_FIXED;
+	bob.position[0] = 0.3;
+	bob.position[2] = -1.0;
+	sm_spring_def first = sm_default_spring_def(), second = sm_default_spring_def();
+	first.a = second.a = 0;
+	first.b = second.b = 1;
+	first.rest_length = 0.5, first.stiffness = 100.0, first.damping = 0.5;
+	second.rest_length = 0.8, second.stiffness = 50.0;
+	if (sm_model_add_particle(model, &top, NULL) != SM_OK || sm_model_add_particle(model, &bob, NULL) != SM_OK ||
+	    sm_model_add_spring(model, &first, NULL) != SM_OK || sm_model_add_spring(model, &second, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+static double total_energy(const sm_simulation* sim)
+{
+	const sm_energies e = sm_simulation_energies(sim);
+	return e.kinetic + e.elastic + e.gravity + sm_simulation_dissipated_energy(sim);
+}
+
+// sm_simulation_break_spring breaks a spring as a strain limit would: a break event at the current
+// time, the spring's elastic energy moved to the dissipated energy (the total stays what it was,
+// to round-off of its 10 J-sized terms: 1e-12 J), the forces from then on those of the model
+// without it (the same operations: bit for bit), and the motion after it that of a simulation of
+// that model started from the state at the break (both at rtol 1e-10: within 1e-7 m after 0.7 s).
+// After an advance that stepped past the break time (interpolated), the same motion. Breaking it
+// again changes nothing, an index out of range is refused, and a reset restores the spring.
+static int test_break_spring_by_the_caller(void)
+{
+	sm_model* model = bob_on_two_springs();
+	ENSURE(model != NULL);
+	sm_model* without = sm_model_clone(model);
+	ENSURE(without != NULL && sm_model_set_spring_enabled(without, 0, false) == SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	d.relative_tolerance = 1e-10;
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-12;
+	double f[6], expect[6];
+	double end_positions[2][6];
+	for (int interpolated = 0; interpolated < 2; interpolated++) {
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		if (interpolated)
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.3, 1.0), SM_OK);
+		else
+			ENSURE_STATUS(sm_simulation_advance(sim, 0.3), SM_OK);
+		const double before = total_energy(sim);
+		ENSURE_STATUS(sm_simulation_break_spring(sim, 0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 1);
+		const sm_break_event e = sm_simulation_break(sim, 0);
+		ENSURE(e.spring == 0 && e.time == 0.3 && sm_simulation_time(sim) == 0.3);
+		ENSURE_NEAR(total_energy(sim), before, 1e-12);
+		ENSURE(sm_simulation_dissipated_energy(sim) > 0.0);
+		sm_simulation_forces(sim, f);
+		sm_model_forces(without, sm_simulation_positions(sim), sm_simulation_velocities(sim), NULL, expect);
+		ENSURE(memcmp(f, expect, sizeof f) == 0);
+		ENSURE_STATUS(sm_simulation_break_spring(sim, 0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 1);
+		ENSURE_STATUS(sm_simulation_break_spring(sim, 2), SM_ERROR_SPRING_INDEX);
+		ENSURE(strstr(sm_simulation_last_error(sim), "spring 2") != NULL && sm_simulation_break_count(sim) == 1);
+		sm_simulation* reference = sm_simulation_create(without, &d, NULL);
+		ENSURE(reference != NULL);
+		ENSURE_STATUS(sm_simulation_set_state(reference, 0.3, sm_simulation_positions(sim), sm_simulation_velocities(sim)),
+		              SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(reference, 1.0), SM_OK);
+		ENSURE(max_difference(sm_simulation_positions(sim), sm_simulation_positions(reference), 6) <= 1e-7);
+		memcpy(end_positions[interpolated], sm_simulation_positions(sim), sizeof end_positions[0]);
+		ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 0 && sm_model_spring_enabled(sm_simulation_model(sim), 0));
+		sm_simulation_destroy(reference);
+		sm_simulation_destroy(sim);
+	}
+	ENSURE(max_difference(end_positions[0], end_positions[1], 6) <= 1e-7);
+	sm_model_destroy(without);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // An on_step hook that asks to stop after every `every`-th step it sees.
 typedef struct step_stopper {
 	int64_t calls;
@@ -3475,6 +3564,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
 	RUN_TEST(test_on_step_keeps_max_steps);
 	RUN_TEST(test_on_step_can_stop_an_advance);
+	RUN_TEST(test_break_spring_by_the_caller);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_driven_motion_continued_by_the_caller_is_no_change);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);

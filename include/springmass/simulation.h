@@ -232,6 +232,13 @@ SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t pa
 /// springs and clears the dissipated energy.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
+/// Breaks a spring now, as if its strain had just crossed its break strain (a cut, or a tear the
+/// caller models itself): it is disabled, recorded as a break event at the current time
+/// (sm_simulation_break), its elastic energy counts as dissipated, and a reset restores it.
+/// Re-initialises the solver. A spring already broken or disabled is left as it is (SM_OK, no
+/// event); SM_ERROR_SPRING_INDEX, with nothing changed, for an index out of range.
+SM_API sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring);
+
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
