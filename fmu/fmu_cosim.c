@@ -763,14 +763,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;
 	}
-	sm_model* model = NULL;
-	if (sm_document_build(inst->doc, &model, &err) != SM_OK) {
-		log_error(inst, "fmi2Instantiate: %s", err.message);
-		goto fail;
-	}
-	inst->particle_count = sm_model_particle_count(model);
-	inst->spring_count = sm_model_spring_count(model);
-	sm_model_destroy(model);
+	inst->particle_count = sm_document_particle_count(inst->doc);
+	inst->spring_count = sm_document_spring_count(inst->doc);
 	inst->port_count = sm_document_port_count(inst->doc);
 	size_t np = inst->port_count > 0 ? (size_t)inst->port_count : 1;
 	size_t n3 = 3 * (size_t)(inst->particle_count > 0 ? inst->particle_count : 1);

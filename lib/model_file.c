@@ -2085,6 +2085,16 @@ int32_t sm_document_port_index(const sm_document* doc, const char* name)
 	return name_index_find(&doc->current->port_names, name, strlen(name));
 }
 
+int32_t sm_document_particle_count(const sm_document* doc)
+{
+	return doc != NULL ? sm_model_particle_count(doc->current->model) : 0;
+}
+
+int32_t sm_document_spring_count(const sm_document* doc)
+{
+	return doc != NULL ? sm_model_spring_count(doc->current->model) : 0;
+}
+
 const char* sm_document_particle_name(const sm_document* doc, int32_t particle)
 {
 	if (doc == NULL || particle < 0 || particle >= sm_model_particle_count(doc->current->model))
@@ -2112,11 +2122,48 @@ sm_document_settings sm_document_get_settings(const sm_document* doc)
 	return doc->current->settings;
 }
 
+// Drops the initial state set with sm_document_set_initial_state. The current expansion's model
+// holds that state in place of the file's positions and velocities, which the parameters'
+// current values expanded without it give back; only its particles are copied over, so that the
+// particle names handed out stay valid. If the expansion fails (out of memory) the state stays.
+static sm_status drop_initial_state(sm_document* doc, sm_error* err)
+{
+	if (doc->initial_position == NULL)
+		return SM_OK;
+	double* position = doc->initial_position;
+	double* velocity = doc->initial_velocity;
+	doc->initial_position = NULL;
+	doc->initial_velocity = NULL;
+	sm_error local = {SM_OK, ""};
+	expansion* ex = expand(doc, doc->parameter_values, &local);
+	if (ex == NULL) {
+		doc->initial_position = position;
+		doc->initial_velocity = velocity;
+		return sm_error_set(err, local.status, "%s", local.message);
+	}
+	// The same parameter values: the same particles, in the same order.
+	const int32_t n = sm_model_particle_count(ex->model);
+	for (int32_t i = 0; i < n; i++) {
+		sm_particle_def d;
+		sm_model_get_particle(ex->model, i, &d);
+		sm_model_set_particle(doc->current->model, i, &d);
+	}
+	expansion_free(ex);
+	free(position);
+	free(velocity);
+	doc->initial_count = 0;
+	return SM_OK;
+}
+
 sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err)
 {
 	sm_error_clear(err);
-	if (doc == NULL || x == NULL)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: no document or positions");
+	if (doc == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: no document");
+	if (x == NULL && v != NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: velocities without positions");
+	if (x == NULL)
+		return drop_initial_state(doc, err);
 	const int32_t n = sm_model_particle_count(doc->current->model);
 	for (size_t k = 0; k < 3 * (size_t)n; k++)
 		if (!isfinite(x[k]) || (v != NULL && !isfinite(v[k])))

@@ -1925,6 +1925,126 @@ static int test_initial_state_through_parameter_changes(void)
 	return 0;
 }
 
+// A document's counts are those of the model it builds, for every bundled model, and follow a
+// parameter that changes them: the cloth of n x n particles has 2 n (n - 1) structural, 2 (n - 1)^2
+// shear and 2 n (n - 2) bending springs, and its last particle is cloth[n-1,n-1].
+static int test_document_counts(void)
+{
+	ENSURE(sm_document_particle_count(NULL) == 0 && sm_document_spring_count(NULL) == 0);
+	for (int b = 0; b < BUNDLED_COUNT; b++) {
+		sm_document* doc = load_bundled(bundled[b], NULL);
+		ENSURE(doc != NULL);
+		sm_model* m = NULL;
+		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+		ENSURE(sm_document_particle_count(doc) == sm_model_particle_count(m));
+		ENSURE(sm_document_spring_count(doc) == sm_model_spring_count(m));
+		sm_model_destroy(m);
+		sm_document_destroy(doc);
+	}
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = load_bundled("cloth", &err);
+	ENSURE(doc != NULL);
+	const int32_t n = sm_document_parameter_index(doc, "n");
+	for (int32_t side = 16; side >= 10; side -= 6) {
+		ENSURE_STATUS(sm_document_set_parameter(doc, n, side, &err), SM_OK);
+		ENSURE(sm_document_particle_count(doc) == side * side);
+		ENSURE(sm_document_spring_count(doc) == 2 * side * (side - 1) + 2 * (side - 1) * (side - 1) + 2 * side * (side - 2));
+		sm_model* m = NULL;
+		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+		ENSURE(sm_document_particle_count(doc) == sm_model_particle_count(m));
+		ENSURE(sm_document_spring_count(doc) == sm_model_spring_count(m));
+		sm_model_destroy(m);
+		char last[32];
+		snprintf(last, sizeof last, "cloth[%d,%d]", (int)side - 1, (int)side - 1);
+		ENSURE(strcmp(sm_document_particle_name(doc, sm_document_particle_count(doc) - 1), last) == 0);
+		ENSURE(sm_document_particle_name(doc, sm_document_particle_count(doc)) == NULL);
+	}
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// sm_document_set_initial_state with NULL positions drops the state set before and leaves
+// nothing of it: the cloth's n, refused while the state is set, is taken again; the model built
+// and the file saved are those of the file, velocities included (the state's are dropped too);
+// a position the file takes from a parameter is saved as that parameter again. Velocities
+// without positions are refused, keeping the state; dropping twice changes nothing.
+static int test_dropping_the_initial_state(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = load_bundled("cloth", &err);
+	sm_document* file = load_bundled("cloth", &err);
+	ENSURE(doc != NULL && file != NULL);
+	sm_model* from_file = NULL;
+	ENSURE_STATUS(sm_document_build(file, &from_file, NULL), SM_OK);
+	const int32_t count = sm_document_particle_count(doc);
+	double* x = malloc(3 * (size_t)count * sizeof(double));
+	double* v = calloc(3 * (size_t)count, sizeof(double));
+	ENSURE(x != NULL && v != NULL);
+	sm_model_initial_state(from_file, x, NULL);
+	// Lowered by 0.25 m, the free particles moving at 1 m/s along x.
+	for (int32_t i = 0; i < count; i++) {
+		x[3 * i + 2] -= 0.25;
+		v[3 * i] = sm_model_free_index(from_file, i) >= 0 ? 1.0 : 0.0;
+	}
+	const char* corner = sm_document_particle_name(doc, 0);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, v, &err), SM_OK);
+	const int32_t n = sm_document_parameter_index(doc, "n");
+	ENSURE_STATUS(sm_document_set_parameter(doc, n, 10.0, &err), SM_ERROR_TOPOLOGY);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, NULL, v, &err), SM_ERROR_INVALID_ARGUMENT);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_particle_def p;
+	sm_model_get_particle(m, 0, &p);
+	ENSURE(p.position[2] == -0.25 && p.velocity[0] == 1.0);
+	sm_model_destroy(m);
+
+	for (int pass = 0; pass < 2; pass++)
+		ENSURE_STATUS(sm_document_set_initial_state(doc, NULL, NULL, &err), SM_OK);
+	ENSURE(strcmp(corner, "cloth[0,0]") == 0);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	ENSURE(same_model(m, from_file) == 0);
+	sm_model_destroy(m);
+	char* saved = sm_document_to_json(doc, &err);
+	char* saved_file = sm_document_to_json(file, &err);
+	ENSURE(saved != NULL && saved_file != NULL);
+	ENSURE(strcmp(saved, saved_file) == 0);
+	free(saved);
+	free(saved_file);
+	ENSURE_STATUS(sm_document_set_parameter(doc, n, 10.0, &err), SM_OK);
+	ENSURE(sm_document_particle_count(doc) == 100);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, NULL, &err), SM_OK);
+	ENSURE(sm_document_particle_count(doc) == 100);
+	free(x);
+	free(v);
+	sm_model_destroy(from_file);
+	sm_document_destroy(file);
+	sm_document_destroy(doc);
+
+	// The height of the fixed particle is the parameter h.
+	doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 2},"
+	                  " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, \"h\"], \"fixed\": true},"
+	                  " {\"name\": \"b\", \"position\": [0, 0, 1]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
+	                  &err);
+	ENSURE(doc != NULL);
+	const double hanging[6] = {0, 0, 2, 0, 0, 0.5};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, hanging, NULL, &err), SM_OK);
+	saved = sm_document_to_json(doc, &err);
+	ENSURE(saved != NULL && strstr(saved, "\"h\"]") == NULL);
+	free(saved);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, NULL, NULL, &err), SM_OK);
+	saved = sm_document_to_json(doc, &err);
+	ENSURE(saved != NULL && strstr(saved, "\"position\": [0, 0, \"h\"]") != NULL);
+	free(saved);
+	ENSURE_STATUS(sm_document_set_parameter(doc, sm_document_parameter_index(doc, "h"), 3.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	double xm[6];
+	sm_model_initial_state(m, xm, NULL);
+	ENSURE(xm[2] == 3.0 && xm[5] == 1.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // Line and column of a syntax error are those an editor shows: columns count characters, so
 // that a tab and a character of four UTF-8 bytes are one column each; lines end at LF or CR LF;
 // and an error at the end of a text whose last line ends is at column 0 of the line after it,
@@ -2633,6 +2753,8 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_groups_keep_their_parameters);
 	RUN_TEST(test_fixed_particles_start_at_rest);
 	RUN_TEST(test_initial_state_through_parameter_changes);
+	RUN_TEST(test_document_counts);
+	RUN_TEST(test_dropping_the_initial_state);
 	RUN_TEST(test_syntax_error_positions);
 	RUN_TEST(test_line_breaks_and_controls_at_their_edges);
 	RUN_TEST(test_messages_escape_invisible_characters);

@@ -336,6 +336,24 @@ static int file_scenario(void* context)
 		}
 	}
 	sm_model_destroy(moved);
+	moved = NULL;
+	// Dropping it again: all or nothing too.
+	if (st == SM_OK) {
+		st = sm_document_set_initial_state(doc, NULL, NULL, &err);
+		if (st != SM_OK)
+			ENSURE_CLEAR_FAILURE(st, err.message);
+		if (sm_document_build(doc, &moved, &err) == SM_OK) {
+			sm_particle_def first;
+			sm_model_get_particle(moved, 0, &first);
+			if (first.position[0] != (st == SM_OK ? x[0] - 0.5 : x[0])) {
+				printf("  dropping the initial state returned %d with particle 0 at x = %g m\n", (int)st,
+				       first.position[0]);
+				sm_model_destroy(moved);
+				goto done;
+			}
+		}
+		sm_model_destroy(moved);
+	}
 	result = 0;
 done:
 	free(json);

@@ -100,7 +100,7 @@ SM_API uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index
 /// Sets a parameter's value; fails (document unchanged) if the model built with it would be
 /// invalid, with the message naming the element that breaks a rule. A parameter may feed any
 /// number of the file, counts included; a value that changes the number of particles fails if
-/// an initial state was set with sm_document_set_initial_state.
+/// an initial state is set with sm_document_set_initial_state.
 SM_API sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double value, sm_error* err);
 /// Sets every parameter at once, values[i] for parameter i (sm_document_parameter_count values,
 /// in file order), checked together: values that are valid only together (a rope's new start
@@ -127,6 +127,13 @@ typedef struct sm_structure_info {
 SM_API int32_t sm_document_structure_count(const sm_document* doc);
 SM_API sm_structure_info sm_document_structure(const sm_document* doc, int32_t index);
 
+/// Number of particles and of springs of the model sm_document_build gives with the parameters'
+/// current values, without building it (0 for NULL): 3 times the particle count is the length of
+/// sm_document_set_initial_state's arrays, and particles are numbered 0 to count - 1 for
+/// sm_document_particle_name. A parameter that feeds SM_PARAMETER_COUNTS changes them.
+SM_API int32_t sm_document_particle_count(const sm_document* doc);
+SM_API int32_t sm_document_spring_count(const sm_document* doc);
+
 /// Name of a particle ("anchor", or "cloth[3,4]" for structure particles: "name[row,column]"
 /// for a sheet, "name[row,column,layer]" for a block, "name[i]" for a rope or a mesh), NULL if
 /// unnamed or out of range. Valid until the next sm_document_set_parameter or destroy.
@@ -137,10 +144,14 @@ SM_API int32_t sm_document_particle_index(const sm_document* doc, const char* na
 /// The file's "simulation" settings, with the defaults for those it leaves out.
 SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
 
-/// Replaces the initial positions [m] and velocities [m/s] of all particles (3 per particle;
-/// v may be NULL for zero), e.g. with a static equilibrium, so that building or saving gives a
-/// model that starts there. Rest lengths stay those of the file's own positions (a hanging
-/// cloth keeps its stretch).
+/// Replaces the initial positions [m] and velocities [m/s] of all particles (3 per particle,
+/// sm_document_particle_count particles; v may be NULL for zero), e.g. with a static equilibrium,
+/// so that building or saving gives a model that starts there. Rest lengths stay those of the
+/// file's own positions (a hanging cloth keeps its stretch). The state stays through parameter
+/// changes, which may then not change the number of particles. x NULL with v NULL drops a state
+/// set before (nothing to do if none is): building and saving start from the file's positions
+/// and velocities with the parameters' current values again, and parameters may change the
+/// counts again; x NULL with v not NULL is SM_ERROR_INVALID_ARGUMENT.
 SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err);
 
 /// Writes the document in canonical form to a file, or to a malloc'ed string the caller frees
