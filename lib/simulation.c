@@ -1456,6 +1456,104 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	return SM_OK;
 }
 
+// A snapshot in one allocation: the header, then its arrays (doubles first, for alignment).
+struct sm_simulation_state {
+	int32_t particle_count, spring_count, free_count, break_count;
+	double time;                // [s]
+	double* y;                  // CVODE's state: free x, free v, dissipated energy
+	double* external_force;     // 3 per particle [N]
+	double* drive_position;     // 3 per particle [m]
+	double* drive_velocity;     // [m/s]
+	double* drive_time;         // per particle [s]
+	sm_break_event* breaks;     // break_count
+	int32_t* free_particles;    // the layout of y, to check a restore against
+	uint8_t* enabled;           // per spring
+};
+
+sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
+{
+	if (sim == NULL)
+		return NULL;
+	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
+	const size_t doubles = ny + 10 * n;
+	const size_t bytes = sizeof(sm_simulation_state) + doubles * sizeof(double) +
+	                     (size_t)sim->break_count * sizeof(sm_break_event) +
+	                     (size_t)sim->free_count * sizeof(int32_t) + (size_t)sim->spring_count;
+	sm_simulation_state* s = malloc(bytes);
+	if (s == NULL)
+		return NULL;
+	s->particle_count = sim->particle_count;
+	s->spring_count = sim->spring_count;
+	s->free_count = sim->free_count;
+	s->break_count = sim->break_count;
+	s->time = sim->time;
+	s->y = (double*)(s + 1);
+	s->external_force = s->y + ny;
+	s->drive_position = s->external_force + 3 * n;
+	s->drive_velocity = s->drive_position + 3 * n;
+	s->drive_time = s->drive_velocity + 3 * n;
+	s->breaks = (sm_break_event*)(s->drive_time + n);
+	s->free_particles = (int32_t*)(s->breaks + sim->break_count);
+	s->enabled = (uint8_t*)(s->free_particles + sim->free_count);
+	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
+	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
+	memcpy(s->drive_position, sim->drive_position, 3 * n * sizeof(double));
+	memcpy(s->drive_velocity, sim->drive_velocity, 3 * n * sizeof(double));
+	memcpy(s->drive_time, sim->drive_time, n * sizeof(double));
+	if (sim->break_count > 0)
+		memcpy(s->breaks, sim->breaks, (size_t)sim->break_count * sizeof(sm_break_event));
+	if (sim->free_count > 0)
+		memcpy(s->free_particles, sim->free_particles, (size_t)sim->free_count * sizeof(int32_t));
+	for (int32_t k = 0; k < sim->spring_count; k++)
+		s->enabled[k] = sm_model_spring_enabled(sim->model, k);
+	return s;
+}
+
+sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* s)
+{
+	if (sim == NULL || s == NULL)
+		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "restore_state: no state") : SM_ERROR_INVALID_ARGUMENT;
+	bool same = s->particle_count == sim->particle_count && s->spring_count == sim->spring_count &&
+	            s->free_count == sim->free_count;
+	for (int32_t k = 0; same && k < s->free_count; k++)
+		same = s->free_particles[k] == sim->free_particles[k];
+	if (!same)
+		return fail(sim, SM_ERROR_TOPOLOGY,
+		            "restore_state: the state is of %d particles (%d free) and %d springs, the simulation has %d (%d "
+		            "free) and %d, or other free particles",
+		            (int)s->particle_count, (int)s->free_count, (int)s->spring_count, (int)sim->particle_count,
+		            (int)sim->free_count, (int)sim->spring_count);
+	if (s->break_count > sim->break_capacity) {
+		sm_break_event* b = realloc(sim->breaks, (size_t)s->break_count * sizeof *b);
+		if (b == NULL)
+			return fail(sim, SM_ERROR_OUT_OF_MEMORY, "restore_state: out of memory for the break events");
+		sim->breaks = b;
+		sim->break_capacity = s->break_count;
+	}
+	const size_t n = (size_t)sim->particle_count;
+	sim->time = s->time;
+	memcpy(N_VGetArrayPointer(sim->y), s->y, (2 * (size_t)sim->dofs + 1) * sizeof(double));
+	memcpy(sim->external_force, s->external_force, 3 * n * sizeof(double));
+	memcpy(sim->drive_position, s->drive_position, 3 * n * sizeof(double));
+	memcpy(sim->drive_velocity, s->drive_velocity, 3 * n * sizeof(double));
+	memcpy(sim->drive_time, s->drive_time, n * sizeof(double));
+	if (s->break_count > 0)
+		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
+	sim->break_count = s->break_count;
+	for (int32_t k = 0; k < s->spring_count; k++)
+		if (sm_model_spring_enabled(sim->model, k) != (s->enabled[k] != 0))
+			sm_model_set_spring_enabled(sim->model, k, s->enabled[k] != 0);
+	sim->need_restart = true;
+	sim->input_changed = false;
+	refresh_outputs(sim);
+	return SM_OK;
+}
+
+void sm_simulation_state_destroy(sm_simulation_state* state)
+{
+	free(state);
+}
+
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
 {
 	if (sim == NULL || x == NULL || v == NULL)

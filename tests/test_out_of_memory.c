@@ -596,9 +596,25 @@ static int update_and_set_state(simulation_case* c, sm_simulation* sim)
 			return 0;
 	}
 	ENSURE(sm_simulation_time(sim) == c->t_end);
+	// A snapshot, an advance and the snapshot restored: a snapshot that cannot be made is NULL,
+	// its only sign; a restore is all or nothing.
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	if (!saved) {
+		ENSURE(oom_.reached);
+		return 0;
+	}
 	st = sm_simulation_advance(sim, c->t_end + 0.01);
 	if (st != SM_OK)
 		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+	const double reached = sm_simulation_time(sim);
+	st = sm_simulation_restore_state(sim, saved);
+	sm_simulation_state_destroy(saved);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		ENSURE(sm_simulation_time(sim) == reached);
+	} else {
+		ENSURE(sm_simulation_time(sim) == c->t_end);
+	}
 	return 0;
 }
 

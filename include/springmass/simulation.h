@@ -239,6 +239,28 @@ SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const 
 /// event); SM_ERROR_SPRING_INDEX, with nothing changed, for an index out of range.
 SM_API sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring);
 
+/// A snapshot of a simulation's state (sm_simulation_save_state): its time, the particles'
+/// positions and velocities, the dissipated energy, the inputs (external forces, driven motions),
+/// the springs broken and the break events recorded so far. Not its statistics, which count the
+/// work done, nor CVODE's history.
+typedef struct sm_simulation_state sm_simulation_state;
+
+/// Saves the simulation's current state in a new snapshot (NULL for a NULL simulation or when
+/// memory runs out); free it with sm_simulation_state_destroy. The simulation is unchanged.
+SM_API sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim);
+
+/// Puts the simulation back into a saved state, e.g. to repeat a step with other inputs (a
+/// co-simulation master's rollback) or to branch from a checkpoint: everything the snapshot holds,
+/// so that the energy balance, the break events and the broken springs are those of the save.
+/// Re-initialises the solver: the run goes on as a restart from that state would (within the
+/// tolerances of the run that went on from it without a restart). The snapshot may come from
+/// another simulation whose model has the same particles, motions and springs
+/// (sm_simulation_update_model's rule); SM_ERROR_TOPOLOGY otherwise, SM_ERROR_OUT_OF_MEMORY when
+/// the break events cannot be held, both with nothing changed. The snapshot stays valid.
+SM_API sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* state);
+
+SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
+
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
