@@ -132,10 +132,11 @@ int main(int argc, char** argv)
 		return 2;
 	}
 	const int32_t n = (int32_t)atoi(argv[1]);
-	const sm_linear_solver solver = sm_linear_solver_from_name(argv[2]);
+	sm_linear_solver solver = SM_SOLVER_AUTO;
+	const bool known = sm_linear_solver_from_name(argv[2], &solver) == SM_OK;
 	const int repeats = argc > 3 ? atoi(argv[3]) : 3;
 	const double t_end = argc > 4 ? atof(argv[4]) : 1.0;
-	if (n < 2 || solver == SM_SOLVER_COUNT || repeats < 1 || !(t_end > 0.0)) {
+	if (n < 2 || !known || repeats < 1 || !(t_end > 0.0)) {
 		fprintf(stderr, "bench_cloth: bad arguments\n");
 		return 2;
 	}

@@ -1146,10 +1146,7 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 		} else if (v->source == FMU_SRC_SOLVER_METHOD) {
 			bad = sm_method_from_name(value[i], &solver.method) != SM_OK;
 		} else if (v->source == FMU_SRC_SOLVER_LINEAR_SOLVER) {
-			sm_linear_solver s = sm_linear_solver_from_name(value[i]);
-			bad = s == SM_SOLVER_COUNT;
-			if (!bad)
-				solver.solver = s;
+			bad = sm_linear_solver_from_name(value[i], &solver.solver) != SM_OK;
 		} else {
 			bad = sm_jacobian_variant_from_name(value[i], &solver.jacobian) != SM_OK;
 		}

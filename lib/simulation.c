@@ -114,14 +114,14 @@ sm_status sm_method_from_name(const char* name, sm_method* method)
 	return SM_OK;
 }
 
-sm_linear_solver sm_linear_solver_from_name(const char* name)
+sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
 {
-	if (name == NULL)
-		return SM_SOLVER_COUNT;
-	for (int i = 0; i < SM_SOLVER_COUNT; i++)
-		if (strcmp(name, solver_names[i]) == 0)
-			return (sm_linear_solver)i;
-	return SM_SOLVER_COUNT;
+	for (int i = 0; name != NULL && solver != NULL && i < SM_SOLVER_COUNT; i++)
+		if (strcmp(name, solver_names[i]) == 0) {
+			*solver = (sm_linear_solver)i;
+			return SM_OK;
+		}
+	return SM_ERROR_INVALID_ARGUMENT;
 }
 
 // ---------------------------------------------------------------------------------------------

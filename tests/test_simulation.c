@@ -1610,17 +1610,21 @@ static int test_reduced_newton_matrix_matches_dense(void)
 }
 
 // Solver names, as springmass run --solver and the model files' settings give them: each name
-// leads back to its solver, and anything else to SM_SOLVER_COUNT.
+// leads back to its solver, and anything else is refused with the solver left as it was.
 static int test_solver_names_round_trip(void)
 {
 	static const char* const names[SM_SOLVER_COUNT] = {"auto", "dense", "klu", "pcg", "cholmod"};
 	for (int s = 0; s < SM_SOLVER_COUNT; s++) {
 		ENSURE(strcmp(sm_linear_solver_name((sm_linear_solver)s), names[s]) == 0);
-		ENSURE(sm_linear_solver_from_name(names[s]) == (sm_linear_solver)s);
+		sm_linear_solver solver = SM_SOLVER_COUNT;
+		ENSURE(sm_linear_solver_from_name(names[s], &solver) == SM_OK && solver == (sm_linear_solver)s);
 	}
-	ENSURE(sm_linear_solver_from_name(NULL) == SM_SOLVER_COUNT);
-	ENSURE(sm_linear_solver_from_name("") == SM_SOLVER_COUNT);
-	ENSURE(sm_linear_solver_from_name("Dense") == SM_SOLVER_COUNT);
+	sm_linear_solver solver = SM_SOLVER_REDUCED_PCG;
+	ENSURE(sm_linear_solver_from_name(NULL, &solver) == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(sm_linear_solver_from_name("", &solver) == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(sm_linear_solver_from_name("Dense", &solver) == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(sm_linear_solver_from_name("dense", NULL) == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(solver == SM_SOLVER_REDUCED_PCG);
 	ENSURE(strcmp(sm_linear_solver_name(SM_SOLVER_COUNT), "unknown") == 0);
 	// Methods and Jacobian variants as model files and FMU parameters name them; an unknown name
 	// leaves the value as it was.

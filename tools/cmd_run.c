@@ -373,8 +373,7 @@ int sm_cmd_run(int argc, char** argv)
 	if (o.max_step_given)
 		def.max_step = o.max_step;
 	if (o.solver) {
-		def.solver = sm_linear_solver_from_name(o.solver);
-		if (def.solver == SM_SOLVER_COUNT) {
+		if (sm_linear_solver_from_name(o.solver, &def.solver) != SM_OK) {
 			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n", o.solver);
 			status = 2;
 			goto done;

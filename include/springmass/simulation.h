@@ -136,10 +136,10 @@ typedef struct sm_simulation sm_simulation;
 SM_API sm_simulation_def sm_default_simulation_def(void);
 
 /// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod"; "unknown" for another
-/// value) and the reverse lookup
-/// (SM_SOLVER_COUNT if unknown).
+/// value) and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or
+/// NULL, *solver then unchanged.
 SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
-SM_API sm_linear_solver sm_linear_solver_from_name(const char* name);
+SM_API sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver);
 
 /// Name of a method ("bdf", "adams"; "unknown" for another value) and the reverse lookup: SM_OK,
 /// or SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *method then unchanged.
