@@ -1456,8 +1456,11 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	return SM_OK;
 }
 
-// A snapshot in one allocation: the header, then its arrays (doubles first, for alignment).
+// A snapshot in one allocation: the header, then its arrays (doubles first, for alignment). The
+// springs it holds broken are those of its break events; which springs the model itself disables
+// is the simulation's, not the snapshot's.
 struct sm_simulation_state {
+	uint64_t topology;          // topology_hash of the model it was taken from
 	int32_t particle_count, spring_count, free_count, break_count;
 	double time;                // [s]
 	double* y;                  // CVODE's state: free x, free v, dissipated energy
@@ -1466,9 +1469,27 @@ struct sm_simulation_state {
 	double* drive_velocity;     // [m/s]
 	double* drive_time;         // per particle [s]
 	sm_break_event* breaks;     // break_count
-	int32_t* free_particles;    // the layout of y, to check a restore against
-	uint8_t* enabled;           // per spring
 };
+
+// What sm_simulation_update_model requires to match, as one 64-bit FNV-1a hash: the counts, each
+// particle's motion, each spring's ends and kind.
+static uint64_t topology_hash(const sm_model* m)
+{
+	uint64_t h = 14695981039346656037ull;
+	const int32_t head[2] = {m->particle_count, m->spring_count};
+	const unsigned char* bytes = (const unsigned char*)head;
+	for (size_t k = 0; k < sizeof head; k++)
+		h = (h ^ bytes[k]) * 1099511628211ull;
+	for (int32_t i = 0; i < m->particle_count; i++)
+		h = (h ^ (uint64_t)m->motion[i]) * 1099511628211ull;
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		const int32_t spring[3] = {m->spring_a[s], m->spring_b[s], m->zero_length[s] ? 1 : 0};
+		bytes = (const unsigned char*)spring;
+		for (size_t k = 0; k < sizeof spring; k++)
+			h = (h ^ bytes[k]) * 1099511628211ull;
+	}
+	return h;
+}
 
 sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 {
@@ -1477,11 +1498,11 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
 	const size_t doubles = ny + 10 * n;
 	const size_t bytes = sizeof(sm_simulation_state) + doubles * sizeof(double) +
-	                     (size_t)sim->break_count * sizeof(sm_break_event) +
-	                     (size_t)sim->free_count * sizeof(int32_t) + (size_t)sim->spring_count;
+	                     (size_t)sim->break_count * sizeof(sm_break_event);
 	sm_simulation_state* s = malloc(bytes);
 	if (s == NULL)
 		return NULL;
+	s->topology = topology_hash(sim->model);
 	s->particle_count = sim->particle_count;
 	s->spring_count = sim->spring_count;
 	s->free_count = sim->free_count;
@@ -1493,8 +1514,6 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	s->drive_velocity = s->drive_position + 3 * n;
 	s->drive_time = s->drive_velocity + 3 * n;
 	s->breaks = (sm_break_event*)(s->drive_time + n);
-	s->free_particles = (int32_t*)(s->breaks + sim->break_count);
-	s->enabled = (uint8_t*)(s->free_particles + sim->free_count);
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
 	memcpy(s->drive_position, sim->drive_position, 3 * n * sizeof(double));
@@ -1502,10 +1521,6 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	memcpy(s->drive_time, sim->drive_time, n * sizeof(double));
 	if (sim->break_count > 0)
 		memcpy(s->breaks, sim->breaks, (size_t)sim->break_count * sizeof(sm_break_event));
-	if (sim->free_count > 0)
-		memcpy(s->free_particles, sim->free_particles, (size_t)sim->free_count * sizeof(int32_t));
-	for (int32_t k = 0; k < sim->spring_count; k++)
-		s->enabled[k] = sm_model_spring_enabled(sim->model, k);
 	return s;
 }
 
@@ -1513,14 +1528,10 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 {
 	if (sim == NULL || s == NULL)
 		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "restore_state: no state") : SM_ERROR_INVALID_ARGUMENT;
-	bool same = s->particle_count == sim->particle_count && s->spring_count == sim->spring_count &&
-	            s->free_count == sim->free_count;
-	for (int32_t k = 0; same && k < s->free_count; k++)
-		same = s->free_particles[k] == sim->free_particles[k];
-	if (!same)
+	if (s->topology != topology_hash(sim->model))
 		return fail(sim, SM_ERROR_TOPOLOGY,
-		            "restore_state: the state is of %d particles (%d free) and %d springs, the simulation has %d (%d "
-		            "free) and %d, or other free particles",
+		            "restore_state: the state is of a model of %d particles (%d free) and %d springs, the simulation's "
+		            "has %d (%d free) and %d, or its particles move otherwise or its springs join other particles",
 		            (int)s->particle_count, (int)s->free_count, (int)s->spring_count, (int)sim->particle_count,
 		            (int)sim->free_count, (int)sim->spring_count);
 	if (s->break_count > sim->break_capacity) {
@@ -1540,9 +1551,12 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	if (s->break_count > 0)
 		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
 	sim->break_count = s->break_count;
-	for (int32_t k = 0; k < s->spring_count; k++)
-		if (sm_model_spring_enabled(sim->model, k) != (s->enabled[k] != 0))
-			sm_model_set_spring_enabled(sim->model, k, s->enabled[k] != 0);
+	// Enabled: what the simulation's model enables, less the springs that had broken at the save.
+	for (int32_t k = 0; k < sim->spring_count; k++)
+		if (sm_model_spring_enabled(sim->model, k) != (sim->initial_enabled[k] != 0))
+			sm_model_set_spring_enabled(sim->model, k, sim->initial_enabled[k] != 0);
+	for (int32_t b = 0; b < s->break_count; b++)
+		sm_model_set_spring_enabled(sim->model, s->breaks[b].spring, false);
 	sim->need_restart = true;
 	sim->input_changed = false;
 	refresh_outputs(sim);

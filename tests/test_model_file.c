@@ -1518,6 +1518,80 @@ static int test_references_stay_inside_their_structures(void)
 	return 0;
 }
 
+// A mesh's particles are named by one index, its vertex's (docs: "Referring to particles"): two or
+// three indices are refused with the forms it takes, as for a rope, and m[3] is its last vertex.
+static int test_mesh_references_take_one_index(void)
+{
+	static const char* const format =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [9, 9, 9]}],"
+	    " \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+	    "  \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 0, 1], [1, 0, 1]], \"triangles\": [[0, 1, 3], [0, 3, 2]]}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": %s, \"stiffness\": 1}]}";
+	static const struct {
+		const char* reference;
+		const char* message;
+	} cases[] = {
+	    {"\"m[0, 2]\"", "\"m[0, 2]\" has 2 indices: a mesh takes one index, name[i]"},
+	    {"\"m[0, 0, 0]\"", "\"m[0, 0, 0]\" has 3 indices: a mesh takes one index, name[i]"},
+	    {"\"m[4]\"", "\"m[4]\" is outside structure m ([0] to [3])"},
+	};
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		char text[1024], expected[300];
+		snprintf(text, sizeof text, format, cases[c].reference);
+		snprintf(expected, sizeof expected, "test.json: springs[0].b: %s", cases[c].message);
+		failures += !refused_as(text, cases[c].reference, SM_ERROR_PARTICLE_INDEX, expected);
+	}
+	ENSURE(failures == 0);
+	char text[1024];
+	snprintf(text, sizeof text, format, "\"m[3]\"");
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_spring_def s;
+	ENSURE_STATUS(sm_model_get_spring(m, 0, &s), SM_OK);
+	ENSURE(s.a == 0 && s.b == 4 && strcmp(sm_document_particle_name(doc, 4), "m[3]") == 0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
+// Dropping an initial state gives back the file's velocities too, not zeros: a particle that the
+// file starts at 0.5 m/s (one from a parameter, w = -2) is at rest in a state set without
+// velocities, and moves as the file says again once that state is dropped (the same numbers:
+// compared exactly).
+static int test_dropping_the_initial_state_restores_the_file_velocities(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"w\": -2},"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+	    " {\"name\": \"b\", \"position\": [0, 0, -1], \"velocity\": [0.5, 0, \"w\"]}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
+	    &err);
+	ENSURE(doc != NULL);
+	const double lowered[6] = {0, 0, 0, 0, 0, -1.5};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, lowered, NULL, &err), SM_OK);
+	sm_model* m = NULL;
+	double x[6], v[6];
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_model_initial_state(m, x, v);
+	ENSURE(x[5] == -1.5 && v[3] == 0.0 && v[5] == 0.0);
+	sm_model_destroy(m);
+	ENSURE_STATUS(sm_document_set_initial_state(doc, NULL, NULL, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_model_initial_state(m, x, v);
+	ENSURE(x[5] == -1.0 && v[3] == 0.5 && v[4] == 0.0 && v[5] == -2.0);
+	sm_model_destroy(m);
+	char* saved = sm_document_to_json(doc, &err);
+	ENSURE(saved != NULL && strstr(saved, "\"velocity\": [0.5, 0, \"w\"]") != NULL);
+	free(saved);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // An index of a structure reference may be an expression of parameters (docs: "Referring to
 // particles"): each case is worked out by hand as the position along a rope of 101 particles r
 // (particles 1..101, after particle p), the end b of a spring from r[z] = r[0], with a = 7,
@@ -2747,6 +2821,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_large_model_loads);
 	RUN_TEST(test_rules_at_their_edges);
 	RUN_TEST(test_references_stay_inside_their_structures);
+	RUN_TEST(test_mesh_references_take_one_index);
 	RUN_TEST(test_names_of_200_bytes);
 	RUN_TEST(test_settings_and_their_defaults);
 	RUN_TEST(test_groups_with_one_parameter_keep_their_springs);
@@ -2755,6 +2830,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_initial_state_through_parameter_changes);
 	RUN_TEST(test_document_counts);
 	RUN_TEST(test_dropping_the_initial_state);
+	RUN_TEST(test_dropping_the_initial_state_restores_the_file_velocities);
 	RUN_TEST(test_syntax_error_positions);
 	RUN_TEST(test_line_breaks_and_controls_at_their_edges);
 	RUN_TEST(test_messages_escape_invisible_characters);

@@ -14,6 +14,7 @@
 // SPRINGMASS_OOM_FIRST=k starts each scenario at allocation k (to debug one failure).
 #define _XOPEN_SOURCE 700
 #include "springmass/springmass.h"
+#include "simulation_fixtures.h"
 #include "test_harness.h"
 
 #ifdef SPRINGMASS_OOM_FMU
@@ -1025,6 +1026,83 @@ static int test_analysis_sparse(void)
 // The FMU's entry points
 // ---------------------------------------------------------------------------------------------
 
+// ---------------------------------------------------------------------------------------------
+// Simulation: a snapshot with a break restored into another simulation
+// ---------------------------------------------------------------------------------------------
+
+// pulled_spring() with its driven particle pulled at 1 m/s breaks spring 0 at 0.1 s; the snapshot
+// at 0.2 s, with that break, goes into a second simulation that has no room for break events yet,
+// at 0.05 s. A restore that cannot hold the events leaves the second simulation as it was (its
+// time, positions, no events, spring 0 intact); one that succeeds gives it the saved time and
+// break.
+static int restore_scenario(void* context)
+{
+	(void)context;
+	int result = 1;
+	sm_simulation *a = NULL, *b = NULL;
+	sm_simulation_state* saved = NULL;
+	sm_model* model = pulled_spring();
+	if (!model) {
+		ENSURE(oom_.reached);
+		return 0;
+	}
+	sm_error err = {SM_OK, ""};
+	a = sm_simulation_create(model, NULL, &err);
+	if (!a) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		result = 0;
+		goto done;
+	}
+	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {1.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(a, 1, x1, v1), SM_OK);
+	sm_status st = sm_simulation_advance(a, 0.2);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(a));
+		result = 0;
+		goto done;
+	}
+	ENSURE(sm_simulation_break_count(a) == 1);
+	saved = sm_simulation_save_state(a);
+	b = sm_simulation_create(model, NULL, &err);
+	if (!saved || !b) {
+		if (!b)
+			ENSURE_CLEAR_FAILURE(err.status, err.message);
+		ENSURE(oom_.reached);
+		result = 0;
+		goto done;
+	}
+	st = sm_simulation_advance(b, 0.05);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(b));
+		result = 0;
+		goto done;
+	}
+	double before[9];
+	memcpy(before, sm_simulation_positions(b), sizeof before);
+	st = sm_simulation_restore_state(b, saved);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(b));
+		ENSURE(sm_simulation_time(b) == 0.05 && sm_simulation_break_count(b) == 0);
+		ENSURE(sm_model_spring_enabled(sm_simulation_model(b), 0));
+		ENSURE(memcmp(sm_simulation_positions(b), before, sizeof before) == 0);
+	} else {
+		ENSURE(sm_simulation_time(b) == 0.2 && sm_simulation_break_count(b) == 1);
+		ENSURE(!sm_model_spring_enabled(sm_simulation_model(b), 0));
+	}
+	result = 0;
+done:
+	sm_simulation_state_destroy(saved);
+	sm_simulation_destroy(b);
+	sm_simulation_destroy(a);
+	sm_model_destroy(model);
+	return result;
+}
+
+static int test_simulation_restore(void)
+{
+	return inject_every_failure("simulation restore", restore_scenario, NULL);
+}
+
 #ifdef SPRINGMASS_OOM_FMU
 
 // A bob on a spring that breaks (2 kg on 400 N/m at rest length 0.1 m, dropped), with a force
@@ -1220,6 +1298,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_simulation_pcg_multilevel);
 	RUN_TEST(test_simulation_adams);
 	RUN_TEST(test_simulation_simultaneous_breaks);
+	RUN_TEST(test_simulation_restore);
 	RUN_TEST(test_analysis_dense);
 	RUN_TEST(test_analysis_sparse);
 	RUN_TEST(test_statics_continuation);

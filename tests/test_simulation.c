@@ -932,6 +932,172 @@ static int test_saved_state_is_restored(void)
 	return 0;
 }
 
+// A snapshot holds the driven motions as set, not the positions they led to: pulled_spring()'s
+// particle 1 set moving at V = 0.37 m/s from x = 1 m at t = 0.05 s, saved at 0.1 s, then sent back
+// at -V and run on to 0.2 s. Restored, it is again at x = 1 + V (0.1 - 0.05) m with velocity V
+// (the same operations as the path's: to round-off of 1 m, 1e-15 m allowed), and run on it follows
+// x = 1 + V (t - 0.05) and breaks spring 0 when that reaches 1.1 m, at 0.05 + 0.1 / V s (a root of
+// a function linear in t, found to CVODE's root tolerance of a few ulps of t: 1e-12 s allowed, as
+// test_break_at_analytic_time).
+static int test_saved_state_keeps_the_driven_motion(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const double speed = 0.37;
+	const double start[3] = {1.0, 0.0, 0.0}, forth[3] = {speed, 0.0, 0.0}, back[3] = {-speed, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.05), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, start, forth), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	ENSURE(saved != NULL);
+	const double there[3] = {sm_simulation_positions(sim)[3], 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, there, back), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.2), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 0);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, saved), SM_OK);
+	ENSURE(sm_simulation_time(sim) == 0.1);
+	ENSURE_NEAR(sm_simulation_positions(sim)[3], 1.0 + speed * (0.1 - 0.05), 1e-15);
+	ENSURE(sm_simulation_velocities(sim)[3] == speed);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+	ENSURE_NEAR(sm_simulation_positions(sim)[3], 1.0 + speed * (0.5 - 0.05), 1e-15);
+	ENSURE(sm_simulation_break_count(sim) == 1);
+	const sm_break_event e = sm_simulation_break(sim, 0);
+	ENSURE(e.spring == 0);
+	ENSURE_NEAR(e.time, 0.05 + 0.1 / speed, 1e-12);
+	sm_simulation_state_destroy(saved);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Three particles in a chain (0 - 1 - 2), two of them free, with the given particle fixed, and an
+// extra spring between 0 and 2 if asked.
+static sm_model* chain_of_three(int32_t fixed, bool extra_spring)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	bool ok = true;
+	for (int32_t i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = (double)i;
+		p.motion = i == fixed ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK;
+	}
+	for (int32_t k = 0; k < (extra_spring ? 3 : 2); k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = k == 2 ? 0 : k;
+		s.b = k == 2 ? 2 : k + 1;
+		s.stiffness = 10.0;
+		ok = ok && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	}
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// A snapshot goes only into a simulation of its layout: of as many particles and springs, and as
+// many free particles, is not enough. The chain with particle 0 fixed refuses a snapshot of the
+// chain with particle 1 fixed (other free particles, whose states would be swapped) and one of
+// the chain with a third spring, with nothing changed; its own snapshot it takes.
+static int test_saved_state_needs_the_same_free_particles_and_springs(void)
+{
+	sm_model* held_at_0 = chain_of_three(0, false);
+	sm_model* held_at_1 = chain_of_three(1, false);
+	sm_model* three_springs = chain_of_three(0, true);
+	ENSURE(held_at_0 != NULL && held_at_1 != NULL && three_springs != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(held_at_0, &d, NULL);
+	sm_simulation* other_free = sm_simulation_create(held_at_1, &d, NULL);
+	sm_simulation* more_springs = sm_simulation_create(three_springs, &d, NULL);
+	ENSURE(sim != NULL && other_free != NULL && more_springs != NULL);
+	ENSURE_STATUS(sm_simulation_advance(other_free, 0.1), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(more_springs, 0.1), SM_OK);
+	sm_simulation_state* wrong_free = sm_simulation_save_state(other_free);
+	sm_simulation_state* wrong_springs = sm_simulation_save_state(more_springs);
+	ENSURE(wrong_free != NULL && wrong_springs != NULL);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, wrong_free), SM_ERROR_TOPOLOGY);
+	ENSURE(strstr(sm_simulation_last_error(sim), "restore_state") != NULL);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, wrong_springs), SM_ERROR_TOPOLOGY);
+	ENSURE(sm_simulation_time(sim) == 0.0);
+	ENSURE(sm_model_spring_count(sm_simulation_model(sim)) == 2);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	sm_simulation_state* own = sm_simulation_save_state(sim);
+	ENSURE(own != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.2), SM_OK);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, own), SM_OK);
+	ENSURE(sm_simulation_time(sim) == 0.1);
+	sm_simulation_state_destroy(own);
+	sm_simulation_state_destroy(wrong_free);
+	sm_simulation_state_destroy(wrong_springs);
+	sm_simulation_destroy(sim);
+	sm_simulation_destroy(other_free);
+	sm_simulation_destroy(more_springs);
+	sm_model_destroy(held_at_0);
+	sm_model_destroy(held_at_1);
+	sm_model_destroy(three_springs);
+	return 0;
+}
+
+// A snapshot holds the springs that broke, not the model's own choice: restored after
+// sm_simulation_update_model disabled spring 1 of the bob on two springs, spring 1 stays disabled
+// (no break event brings it back), and spring 0, broken before the save, is broken again. A snapshot
+// is refused, with nothing changed, by a simulation whose model moves a particle otherwise (the
+// fixed top driven) or joins a spring's ends the other way round, as sm_simulation_update_model
+// refuses those models.
+static int test_restore_keeps_the_models_springs_and_topology(void)
+{
+	sm_model* model = bob_on_two_springs();
+	ENSURE(model != NULL);
+	sm_model* without_second = sm_model_clone(model);
+	sm_model* driven_top = sm_model_clone(model);
+	sm_model* swapped = sm_model_clone(model);
+	ENSURE(without_second != NULL && driven_top != NULL && swapped != NULL);
+	ENSURE_STATUS(sm_model_set_spring_enabled(without_second, 1, false), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(driven_top, 0, SM_PARTICLE_DRIVEN), SM_OK);
+	sm_spring_def sd;
+	ENSURE_STATUS(sm_model_get_spring(swapped, 1, &sd), SM_OK);
+	sd.a = 1, sd.b = 0;
+	ENSURE_STATUS(sm_model_set_spring(swapped, 1, &sd), SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.2), SM_OK);
+	ENSURE_STATUS(sm_simulation_break_spring(sim, 0), SM_OK);
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	ENSURE(saved != NULL);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	ENSURE_STATUS(sm_simulation_update_model(sim, without_second), SM_OK);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, saved), SM_OK);
+	const sm_model* own = sm_simulation_model(sim);
+	ENSURE(!sm_model_spring_enabled(own, 0) && !sm_model_spring_enabled(own, 1));
+	ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).spring == 0);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	ENSURE(sm_model_spring_enabled(own, 0) && !sm_model_spring_enabled(own, 1));
+	const sm_model* others[2] = {driven_top, swapped};
+	for (int k = 0; k < 2; k++) {
+		sm_simulation* other = sm_simulation_create(others[k], &d, NULL);
+		ENSURE(other != NULL);
+		ENSURE_STATUS(sm_simulation_update_model(other, model), SM_ERROR_TOPOLOGY);
+		ENSURE_STATUS(sm_simulation_restore_state(other, saved), SM_ERROR_TOPOLOGY);
+		ENSURE(sm_simulation_time(other) == 0.0 && sm_simulation_break_count(other) == 0);
+		sm_simulation_destroy(other);
+	}
+	sm_simulation_state_destroy(saved);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(swapped);
+	sm_model_destroy(driven_top);
+	sm_model_destroy(without_second);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // An on_step hook that asks to stop after every `every`-th step it sees.
 typedef struct step_stopper {
 	int64_t calls;
@@ -3591,6 +3757,37 @@ static int test_reset_forgets_a_changed_input(void)
 	return 0;
 }
 
+// A restore puts the inputs back as saved, so an input changed before it is no change for the
+// advances after it, as for a reset (test_reset_forgets_a_changed_input): two simulations
+// restored from one snapshot, one of them after a force set in between, take the same steps and
+// reach the same states, bit for bit, in interpolated advances (an input change would have made
+// the first of them end its last step at its end).
+static int test_restore_forgets_a_changed_input(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 0.5, 0.2);
+	ENSURE(model != NULL);
+	sm_simulation* plain = sm_simulation_create(model, NULL, NULL);
+	sm_simulation* pushed = sm_simulation_create(model, NULL, NULL);
+	ENSURE(plain != NULL && pushed != NULL);
+	sm_simulation_state* start = sm_simulation_save_state(plain);
+	ENSURE(start != NULL);
+	const double force[3] = {0.3, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_external_force(pushed, 1, force), SM_OK);
+	ENSURE_STATUS(sm_simulation_restore_state(pushed, start), SM_OK);
+	ENSURE_STATUS(sm_simulation_restore_state(plain, start), SM_OK);
+	for (int i = 1; i <= 10; i++) {
+		ENSURE_STATUS(sm_simulation_advance_interpolated(plain, 0.1 * i, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(pushed, 0.1 * i, 1.0), SM_OK);
+		ENSURE(sm_simulation_statistics(plain).steps == sm_simulation_statistics(pushed).steps);
+		ENSURE(memcmp(sm_simulation_positions(plain), sm_simulation_positions(pushed), 6 * sizeof(double)) == 0);
+	}
+	sm_simulation_state_destroy(start);
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(pushed);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // max_steps holds for a whole advance (simulation.h), over the spring breaks inside it too, each of
 // which re-initialises CVODE, whose own limit counts afresh. pulled_spring() with nine more
 // breakable springs between particles 0 and 1 (break strains 0.2 ... 1.0), the driven particle
@@ -3648,6 +3845,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_on_step_can_stop_an_advance);
 	RUN_TEST(test_break_spring_by_the_caller);
 	RUN_TEST(test_saved_state_is_restored);
+	RUN_TEST(test_restore_keeps_the_models_springs_and_topology);
+	RUN_TEST(test_saved_state_keeps_the_driven_motion);
+	RUN_TEST(test_saved_state_needs_the_same_free_particles_and_springs);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_driven_motion_continued_by_the_caller_is_no_change);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
@@ -3696,6 +3896,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_on_step_is_not_called_for_a_failed_step);
 	RUN_TEST(test_update_model_refuses_each_topology_change);
 	RUN_TEST(test_reset_forgets_a_changed_input);
+	RUN_TEST(test_restore_forgets_a_changed_input);
 	RUN_TEST(test_max_steps_holds_across_breaks);
 	return TEST_SUMMARY();
 }

@@ -137,7 +137,8 @@ static void write_particle_name(FILE* f, const sm_document* doc, int32_t index)
 }
 
 // Reads the decimal index at *text into *index and moves past it; false (nothing moved) if there
-// is none or it is out of range.
+// is none, it is out of range, or it is the start of another number or word ("1.5", "1e3",
+// "2x"; a full stop after it ends a sentence).
 static bool read_index(const char** text, int32_t count, int32_t* index)
 {
 	const char* s = *text;
@@ -147,6 +148,9 @@ static bool read_index(const char** text, int32_t count, int32_t* index)
 	for (; *s >= '0' && *s <= '9'; s++)
 		if ((value = 10 * value + (*s - '0')) >= count)
 			return false;
+	const bool digit_next = s[1] >= '0' && s[1] <= '9';
+	if ((*s == '.' && digit_next) || (*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || *s == '_')
+		return false;
 	*index = (int32_t)value;
 	*text = s;
 	return true;

@@ -251,7 +251,8 @@ SM_API sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim);
 
 /// Puts the simulation back into a saved state, e.g. to repeat a step with other inputs (a
 /// co-simulation master's rollback) or to branch from a checkpoint: everything the snapshot holds,
-/// so that the energy balance, the break events and the broken springs are those of the save.
+/// so that the energy balance, the break events and the broken springs are those of the save
+/// (springs that the simulation's own model disables stay disabled).
 /// Re-initialises the solver: the run goes on as a restart from that state would (within the
 /// tolerances of the run that went on from it without a restart). The snapshot may come from
 /// another simulation whose model has the same particles, motions and springs

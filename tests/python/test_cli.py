@@ -437,6 +437,23 @@ def test_check_bounds_the_highest_frequency(model):
         assert bound >= number_after(modes, "omega_max =") * (1 - 1e-5)
 
 
+@pytest.mark.parametrize("ends", [("bob", "anchor"), ("anchor", "bob")])
+def test_check_bound_of_a_bob_on_a_fixed_anchor(tmp_path, ends):
+    # A held end adds no off-diagonal term to the Gershgorin row of the free end, whichever end
+    # of the spring it is: a 2 kg bob on an 8 N/m spring at its rest length (no tension, so no
+    # transverse stiffness) has the single axial frequency sqrt(8 / 2) = 2 rad/s, and the bound is
+    # that exactly. Both are printed with 6 digits: compared to 1e-5.
+    a, b = ends
+    bob = {"springmass": 1, "name": "bob", "gravity": [0, 0, 0],
+           "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                         {"name": "bob", "position": [0, 0, -1], "mass": 2}],
+           "springs": [{"a": a, "b": b, "stiffness": 8, "rest_length": 1}]}
+    path = tmp_path / "bob.json"
+    path.write_text(json.dumps(bob))
+    assert number_after(cli("check", path).stdout, "omega_max    <=") == pytest.approx(2.0, rel=1e-5)
+    assert number_after(cli("modes", path, "-n", "0").stdout, "omega_max =") == pytest.approx(2.0, rel=1e-5)
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
