@@ -20,7 +20,7 @@ static void usage(FILE* out)
 	        "feeds: constants, initial state, held particles, counts, settings, spring kinds,\n"
 	        "particle references), the stiffest spring, the fastest spring (the largest sqrt(k/m),\n"
 	        "with m the lighter of its free ends) and an upper bound on the highest natural frequency\n"
-	        "omega_max at the initial positions (Gershgorin's, undamped), with the lower bound it gives\n"
+	        "omega_max (Gershgorin's over the springs' stiffness, undamped), with the lower bound it gives\n"
 	        "on the stability limit 2/omega_max of explicit (leapfrog) integration; `springmass modes\n"
 	        "MODEL -n 0` gives the exact value.\n"
 	        "\n"
@@ -174,25 +174,17 @@ int sm_cmd_check(int argc, char** argv)
 			max_omega = sqrt(ks / mass);
 			fastest = s;
 		}
-		// Gershgorin row sums of M^(-1/2) K M^(-1/2), K = -df/dx at the initial positions. A
-		// rest-length spring's block is ks u u^T + ks (1 - l0/L) (I - u u^T), so for any
-		// displacements z_a, z_b its energy is at most c ks |z_a - z_b|^2 with c = max(1, 1 - l0/L)
-		// (c = 1 for a zero-length spring, K = ks I): K is bounded by a scalar graph Laplacian, and
-		// omega_max^2 by the largest of its mass-scaled row sums, over the free particles,
-		// sum over springs of c ks (1/m_i + 1/sqrt(m_i m_j)) (the second term if j is free).
-		double c = 1.0;
-		if (def.kind == SM_SPRING_REST_LENGTH) {
-			const double d[3] = {pb.position[0] - pa.position[0], pb.position[1] - pa.position[1],
-			                     pb.position[2] - pa.position[2]};
-			const double length = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-			if (length > 0.0)
-				c = fmax(1.0, 1.0 - def.rest_length / length);
-		}
+		// Gershgorin row sums of M^(-1/2) K M^(-1/2), K = -df/dx at any positions. A rest-length
+		// spring's block is ks u u^T + ks (1 - l0/L) (I - u u^T) with 1 - l0/L < 1 (a zero-length
+		// spring's ks I), so for any displacements z_a, z_b its energy is at most
+		// ks |z_a - z_b|^2: K is bounded by a scalar graph Laplacian, and omega_max^2 by the largest
+		// of its mass-scaled row sums, over the free particles, sum over springs of
+		// ks (1/m_i + 1/sqrt(m_i m_j)) (the second term if j is free).
 		const bool a_free = pa.motion == SM_PARTICLE_FREE, b_free = pb.motion == SM_PARTICLE_FREE;
 		if (a_free)
-			row_sum[def.a] += c * ks * (1.0 / pa.mass + (b_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
+			row_sum[def.a] += ks * (1.0 / pa.mass + (b_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
 		if (b_free)
-			row_sum[def.b] += c * ks * (1.0 / pb.mass + (a_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
+			row_sum[def.b] += ks * (1.0 / pb.mass + (a_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
 	}
 	double omega_bound = 0.0;
 	for (int32_t i = 0; i < n; i++)

@@ -427,8 +427,8 @@ def summary_line(text, label):
 
 @pytest.mark.parametrize("model", sorted(p.name for p in MODELS.glob("*.json")))
 def test_check_bounds_the_highest_frequency(model):
-    # check's omega_max is an upper bound (Gershgorin's, over the springs' stiffness at the
-    # initial positions): never below the exact highest frequency of the dense eigenproblem that
+    # check's omega_max is an upper bound (Gershgorin's, over the springs' stiffness, which holds at
+    # any positions): never below the exact highest frequency of the dense eigenproblem that
     # `modes -n 0` solves, so the stability limit check prints is a safe step. Both print 6 or
     # more digits: the comparison allows for the last one.
     bound = number_after(cli("check", MODELS / model).stdout, "omega_max    <=")
