@@ -148,8 +148,8 @@ static bool read_index(const char** text, int32_t count, int32_t* index)
 	for (; *s >= '0' && *s <= '9'; s++)
 		if ((value = 10 * value + (*s - '0')) >= count)
 			return false;
-	const bool digit_next = s[1] >= '0' && s[1] <= '9';
-	if ((*s == '.' && digit_next) || (*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') || *s == '_')
+	if ((*s == '.' && s[1] >= '0' && s[1] <= '9') || (*s >= 'a' && *s <= 'z') || (*s >= 'A' && *s <= 'Z') ||
+	    *s == '_')
 		return false;
 	*index = (int32_t)value;
 	*text = s;
