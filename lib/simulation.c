@@ -1491,36 +1491,53 @@ static uint64_t topology_hash(const sm_model* m)
 	return h;
 }
 
+// Bytes of a snapshot's arrays: y (6 free + 1), 10 doubles per particle, the break events.
+static size_t state_payload(int64_t particles, int64_t free, int64_t breaks)
+{
+	return (size_t)(6 * free + 1 + 10 * particles) * sizeof(double) + (size_t)breaks * sizeof(sm_break_event);
+}
+
+// A snapshot of the given counts, its arrays laid out after the header (contents unset).
+static sm_simulation_state* allocate_state(int32_t particles, int32_t springs, int32_t free, int32_t breaks)
+{
+	sm_simulation_state* s = malloc(sizeof(sm_simulation_state) + state_payload(particles, free, breaks));
+	if (s == NULL)
+		return NULL;
+	const size_t n = (size_t)particles;
+	s->particle_count = particles;
+	s->spring_count = springs;
+	s->free_count = free;
+	s->break_count = breaks;
+	s->y = (double*)(s + 1);
+	s->external_force = s->y + 6 * (size_t)free + 1;
+	s->drive_position = s->external_force + 3 * n;
+	s->drive_velocity = s->drive_position + 3 * n;
+	s->drive_time = s->drive_velocity + 3 * n;
+	s->breaks = (sm_break_event*)(s->drive_time + n);
+	return s;
+}
+
 sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 {
 	if (sim == NULL)
 		return NULL;
 	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
-	const size_t doubles = ny + 10 * n;
-	const size_t bytes = sizeof(sm_simulation_state) + doubles * sizeof(double) +
-	                     (size_t)sim->break_count * sizeof(sm_break_event);
-	sm_simulation_state* s = malloc(bytes);
+	sm_simulation_state* s = allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
 	if (s == NULL)
 		return NULL;
 	s->topology = topology_hash(sim->model);
-	s->particle_count = sim->particle_count;
-	s->spring_count = sim->spring_count;
-	s->free_count = sim->free_count;
-	s->break_count = sim->break_count;
 	s->time = sim->time;
-	s->y = (double*)(s + 1);
-	s->external_force = s->y + ny;
-	s->drive_position = s->external_force + 3 * n;
-	s->drive_velocity = s->drive_position + 3 * n;
-	s->drive_time = s->drive_velocity + 3 * n;
-	s->breaks = (sm_break_event*)(s->drive_time + n);
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
 	memcpy(s->drive_position, sim->drive_position, 3 * n * sizeof(double));
 	memcpy(s->drive_velocity, sim->drive_velocity, 3 * n * sizeof(double));
 	memcpy(s->drive_time, sim->drive_time, n * sizeof(double));
-	if (sim->break_count > 0)
-		memcpy(s->breaks, sim->breaks, (size_t)sim->break_count * sizeof(sm_break_event));
+	// Field by field into zeroed memory, so that the events' padding is zero in serialised bytes.
+	memset(s->breaks, 0, (size_t)sim->break_count * sizeof(sm_break_event));
+	for (int32_t b = 0; b < sim->break_count; b++) {
+		s->breaks[b].time = sim->breaks[b].time;
+		s->breaks[b].spring = sim->breaks[b].spring;
+	}
 	return s;
 }
 
@@ -1566,6 +1583,111 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 void sm_simulation_state_destroy(sm_simulation_state* state)
 {
 	free(state);
+}
+
+// The serialised form: a header of fixed layout, the arrays as the snapshot holds them, and a
+// 64-bit FNV-1a checksum of everything before it. Numbers in the machine's own byte order.
+typedef struct serialized_header {
+	char magic[8];  // "smstate", NUL-terminated
+	uint32_t layout;
+	int32_t particle_count, spring_count, free_count, break_count;
+	int32_t reserved;
+	uint64_t topology;
+	double time;  // [s]
+} serialized_header;
+
+#define STATE_LAYOUT 1u
+
+static uint64_t fnv1a(const unsigned char* bytes, size_t length)
+{
+	uint64_t h = 14695981039346656037ull;
+	for (size_t k = 0; k < length; k++)
+		h = (h ^ bytes[k]) * 1099511628211ull;
+	return h;
+}
+
+size_t sm_simulation_state_size(const sm_simulation_state* s)
+{
+	if (s == NULL)
+		return 0;
+	return sizeof(serialized_header) + state_payload(s->particle_count, s->free_count, s->break_count) +
+	       sizeof(uint64_t);
+}
+
+sm_status sm_simulation_state_serialize(const sm_simulation_state* s, void* buffer, size_t size)
+{
+	if (s == NULL || buffer == NULL || size < sm_simulation_state_size(s))
+		return SM_ERROR_INVALID_ARGUMENT;
+	serialized_header h;
+	memset(&h, 0, sizeof h);
+	memcpy(h.magic, "smstate", 8);
+	h.layout = STATE_LAYOUT;
+	h.particle_count = s->particle_count;
+	h.spring_count = s->spring_count;
+	h.free_count = s->free_count;
+	h.break_count = s->break_count;
+	h.topology = s->topology;
+	h.time = s->time;
+	unsigned char* out = buffer;
+	const size_t payload = state_payload(s->particle_count, s->free_count, s->break_count);
+	memcpy(out, &h, sizeof h);
+	memcpy(out + sizeof h, s->y, payload);  // the arrays lie one after another from y on
+	const uint64_t sum = fnv1a(out, sizeof h + payload);
+	memcpy(out + sizeof h + payload, &sum, sizeof sum);
+	return SM_OK;
+}
+
+sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t size, sm_error* err)
+{
+	const unsigned char* in = buffer;
+	serialized_header h;
+	if (buffer == NULL || size < sizeof h + sizeof(uint64_t)) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state",
+		             buffer == NULL ? (size_t)0 : size);
+		return NULL;
+	}
+	memcpy(&h, in, sizeof h);
+	if (memcmp(h.magic, "smstate", 8) != 0 || h.layout != STATE_LAYOUT) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		             "state_deserialize: not a simulation state of this springmass version (layout %u expected)",
+		             STATE_LAYOUT);
+		return NULL;
+	}
+	const bool counts = h.particle_count >= 0 && h.spring_count >= 0 && h.free_count >= 0 &&
+	                    h.free_count <= h.particle_count && h.break_count >= 0 && h.break_count <= h.spring_count;
+	if (!counts || size != sizeof h + state_payload(h.particle_count, h.free_count, h.break_count) + sizeof(uint64_t)) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: the state's counts and its %zu bytes disagree",
+		             size);
+		return NULL;
+	}
+	const size_t payload = state_payload(h.particle_count, h.free_count, h.break_count);
+	uint64_t sum;
+	memcpy(&sum, in + sizeof h + payload, sizeof sum);
+	if (sum != fnv1a(in, sizeof h + payload)) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: checksum mismatch (a damaged state)");
+		return NULL;
+	}
+	sm_simulation_state* s = allocate_state(h.particle_count, h.spring_count, h.free_count, h.break_count);
+	if (s == NULL) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "state_deserialize: out of memory");
+		return NULL;
+	}
+	s->topology = h.topology;
+	s->time = h.time;
+	memcpy(s->y, in + sizeof h, payload);
+	bool valid = isfinite(s->time);
+	const double* values = s->y;
+	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + 10 * (int64_t)h.particle_count); k++)
+		valid = isfinite(values[k]);
+	for (int32_t b = 0; valid && b < s->break_count; b++)
+		valid = s->breaks[b].spring >= 0 && s->breaks[b].spring < s->spring_count && isfinite(s->breaks[b].time);
+	if (!valid) {
+		free(s);
+		sm_error_set(err, SM_ERROR_NOT_FINITE, "state_deserialize: the state holds a value out of range");
+		return NULL;
+	}
+	sm_error_clear(err);
+	return s;
 }
 
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)

@@ -604,6 +604,21 @@ static int update_and_set_state(simulation_case* c, sm_simulation* sim)
 		ENSURE(oom_.reached);
 		return 0;
 	}
+	// The snapshot as bytes and back: a copy that cannot be made is NULL with a message.
+	const size_t size = sm_simulation_state_size(saved);
+	unsigned char* bytes = __real_malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(sm_simulation_state_serialize(saved, bytes, size), SM_OK);
+	sm_error err = {SM_OK, ""};
+	sm_simulation_state* read = sm_simulation_state_deserialize(bytes, size, &err);
+	free(bytes);
+	if (!read) {
+		sm_simulation_state_destroy(saved);
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	sm_simulation_state_destroy(saved);
+	saved = read;
 	st = sm_simulation_advance(sim, c->t_end + 0.01);
 	if (st != SM_OK)
 		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));

@@ -262,6 +262,16 @@ SM_API sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simula
 
 SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
 
+/// A snapshot as bytes, to store or send (an FMI master's serialised FMU state): its size
+/// [bytes] (0 for NULL), the bytes written into buffer (SM_ERROR_INVALID_ARGUMENT if it holds
+/// fewer than that size), and a snapshot read back from them (at any address; NULL with err for
+/// bytes of another layout version, of the wrong length, damaged (a 64-bit checksum) or holding
+/// non-finite values). Numbers are in the machine's byte order: read them on a machine of the same
+/// kind. A snapshot read back restores as the one saved does.
+SM_API size_t sm_simulation_state_size(const sm_simulation_state* state);
+SM_API sm_status sm_simulation_state_serialize(const sm_simulation_state* state, void* buffer, size_t size);
+SM_API sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t size, sm_error* err);
+
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
