@@ -1471,22 +1471,29 @@ struct sm_simulation_state {
 	sm_break_event* breaks;     // break_count
 };
 
-// What sm_simulation_update_model requires to match, as one 64-bit FNV-1a hash: the counts, each
-// particle's motion, each spring's ends and kind.
+// 64-bit FNV-1a: the hash h (FNV_OFFSET to start) extended by `length` bytes.
+#define FNV_OFFSET 14695981039346656037ull
+static uint64_t fnv1a(uint64_t h, const void* bytes, size_t length)
+{
+	const unsigned char* b = bytes;
+	for (size_t k = 0; k < length; k++)
+		h = (h ^ b[k]) * 1099511628211ull;
+	return h;
+}
+
+// What sm_simulation_update_model requires to match, as one hash: the counts, each particle's
+// motion, each spring's ends and kind.
 static uint64_t topology_hash(const sm_model* m)
 {
-	uint64_t h = 14695981039346656037ull;
 	const int32_t head[2] = {m->particle_count, m->spring_count};
-	const unsigned char* bytes = (const unsigned char*)head;
-	for (size_t k = 0; k < sizeof head; k++)
-		h = (h ^ bytes[k]) * 1099511628211ull;
-	for (int32_t i = 0; i < m->particle_count; i++)
-		h = (h ^ (uint64_t)m->motion[i]) * 1099511628211ull;
+	uint64_t h = fnv1a(FNV_OFFSET, head, sizeof head);
+	for (int32_t i = 0; i < m->particle_count; i++) {
+		const int32_t motion = (int32_t)m->motion[i];
+		h = fnv1a(h, &motion, sizeof motion);
+	}
 	for (int32_t s = 0; s < m->spring_count; s++) {
 		const int32_t spring[3] = {m->spring_a[s], m->spring_b[s], m->zero_length[s] ? 1 : 0};
-		bytes = (const unsigned char*)spring;
-		for (size_t k = 0; k < sizeof spring; k++)
-			h = (h ^ bytes[k]) * 1099511628211ull;
+		h = fnv1a(h, spring, sizeof spring);
 	}
 	return h;
 }
@@ -1598,14 +1605,6 @@ typedef struct serialized_header {
 
 #define STATE_LAYOUT 1u
 
-static uint64_t fnv1a(const unsigned char* bytes, size_t length)
-{
-	uint64_t h = 14695981039346656037ull;
-	for (size_t k = 0; k < length; k++)
-		h = (h ^ bytes[k]) * 1099511628211ull;
-	return h;
-}
-
 size_t sm_simulation_state_size(const sm_simulation_state* s)
 {
 	if (s == NULL)
@@ -1632,7 +1631,7 @@ sm_status sm_simulation_state_serialize(const sm_simulation_state* s, void* buff
 	const size_t payload = state_payload(s->particle_count, s->free_count, s->break_count);
 	memcpy(out, &h, sizeof h);
 	memcpy(out + sizeof h, s->y, payload);  // the arrays lie one after another from y on
-	const uint64_t sum = fnv1a(out, sizeof h + payload);
+	const uint64_t sum = fnv1a(FNV_OFFSET, out, sizeof h + payload);
 	memcpy(out + sizeof h + payload, &sum, sizeof sum);
 	return SM_OK;
 }
@@ -1663,7 +1662,7 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 	const size_t payload = state_payload(h.particle_count, h.free_count, h.break_count);
 	uint64_t sum;
 	memcpy(&sum, in + sizeof h + payload, sizeof sum);
-	if (sum != fnv1a(in, sizeof h + payload)) {
+	if (sum != fnv1a(FNV_OFFSET, in, sizeof h + payload)) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: checksum mismatch (a damaged state)");
 		return NULL;
 	}
