@@ -1452,8 +1452,16 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
 	N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
 	sim->need_restart = true;
-	refresh_outputs(sim);
 	return SM_OK;
+}
+
+// Every spring enabled as in the model the simulation was given (create or update_model): those
+// that broke restored, those the model disables disabled.
+static void restore_springs(sm_simulation* sim)
+{
+	for (int32_t s = 0; s < sim->spring_count; s++)
+		if (sm_model_spring_enabled(sim->model, s) != (sim->initial_enabled[s] != 0))
+			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
 }
 
 // A snapshot in one allocation: the header, then its arrays (doubles first, for alignment). The
@@ -1576,9 +1584,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
 	sim->break_count = s->break_count;
 	// Enabled: what the simulation's model enables, less the springs that had broken at the save.
-	for (int32_t k = 0; k < sim->spring_count; k++)
-		if (sm_model_spring_enabled(sim->model, k) != (sim->initial_enabled[k] != 0))
-			sm_model_set_spring_enabled(sim->model, k, sim->initial_enabled[k] != 0);
+	restore_springs(sim);
 	for (int32_t b = 0; b < s->break_count; b++)
 		sm_model_set_spring_enabled(sim->model, s->breaks[b].spring, false);
 	sim->need_restart = true;
@@ -1713,9 +1719,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
-	for (int32_t s = 0; s < sim->spring_count; s++)
-		if (sm_model_spring_enabled(sim->model, s) != (sim->initial_enabled[s] != 0))
-			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
+	restore_springs(sim);
 	load_initial_state(sim);
 	sim->break_count = 0;
 	sim->input_changed = false;  // the inputs set before the reset are gone with them
