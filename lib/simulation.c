@@ -1560,7 +1560,10 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 {
 	if (sim == NULL || s == NULL)
 		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "restore_state: no state") : SM_ERROR_INVALID_ARGUMENT;
-	if (s->topology != topology_hash(sim->model))
+	// The counts too: the hash is a field of the snapshot, which bytes read back may hold beside
+	// other counts, and the arrays copied below have the simulation's sizes.
+	if (s->topology != topology_hash(sim->model) || s->particle_count != sim->particle_count ||
+	    s->spring_count != sim->spring_count || s->free_count != sim->free_count)
 		return fail(sim, SM_ERROR_TOPOLOGY,
 		            "restore_state: the state is of a model of %d particles (%d free) and %d springs, the simulation's "
 		            "has %d (%d free) and %d, or its particles move otherwise or its springs join other particles",

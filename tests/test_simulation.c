@@ -1158,6 +1158,23 @@ static int test_saved_state_as_bytes(void)
 		h = (h ^ copy[k]) * 1099511628211ull;
 	memcpy(copy + size - 8, &h, 8);
 	ENSURE(sm_simulation_state_deserialize(copy, size, &err) == NULL && err.status == SM_ERROR_NOT_FINITE);
+	// Counts of another model under this model's topology hash, with a checksum made to match:
+	// read back (its length fits its counts), but refused by restore with nothing changed, not
+	// restored from arrays smaller than the model's.
+	unsigned char forged[48 + 8 + 8];
+	memcpy(forged, bytes + 1, 48);
+	memset(forged + 12, 0, 16);  // the particle, spring, free and break counts
+	memset(forged + 48, 0, 8);   // y[0], the dissipated energy
+	h = 14695981039346656037ull;
+	for (size_t k = 0; k < 56; k++)
+		h = (h ^ forged[k]) * 1099511628211ull;
+	memcpy(forged + 56, &h, 8);
+	sm_simulation_state* empty = sm_simulation_state_deserialize(forged, sizeof forged, &err);
+	ENSURE(empty != NULL);
+	const double before = sm_simulation_time(a);
+	ENSURE_STATUS(sm_simulation_restore_state(a, empty), SM_ERROR_TOPOLOGY);
+	ENSURE(sm_simulation_time(a) == before);
+	sm_simulation_state_destroy(empty);
 	free(copy);
 	sm_simulation_state_destroy(read);
 	sm_simulation_state_destroy(saved);
