@@ -1694,6 +1694,28 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 		sm_error_set(err, SM_ERROR_NOT_FINITE, "state_deserialize: the state holds a value out of range");
 		return NULL;
 	}
+	// A spring breaks once: a state that lists one twice was not written by a simulation.
+	if (s->break_count > 1) {
+		unsigned char* broken = calloc((size_t)s->spring_count, 1);
+		if (broken == NULL) {
+			free(s);
+			sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "state_deserialize: out of memory");
+			return NULL;
+		}
+		int32_t twice = -1;
+		for (int32_t b = 0; twice < 0 && b < s->break_count; b++) {
+			if (broken[s->breaks[b].spring])
+				twice = s->breaks[b].spring;
+			broken[s->breaks[b].spring] = 1;
+		}
+		free(broken);
+		if (twice >= 0) {
+			free(s);
+			sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: spring %d breaks twice in the state",
+			             (int)twice);
+			return NULL;
+		}
+	}
 	sm_error_clear(err);
 	return s;
 }

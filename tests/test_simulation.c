@@ -1101,8 +1101,9 @@ static int test_restore_keeps_the_models_springs_and_topology(void)
 // A snapshot as bytes: written, read back from a copy at an odd address and restored into a new
 // simulation of the model, it gives the state, the breaks and the run after it that the snapshot
 // itself gives, bit for bit (the same numbers restored, the same restart). Bytes of the wrong
-// length, of another layout, damaged in any byte (the checksum) or holding a NaN under a good
-// checksum are refused with a message; a buffer too small to write into is refused.
+// length, of another layout, damaged in any byte (the checksum), holding a NaN or a spring broken
+// twice under a good checksum are refused with a message, and bytes with another model's counts
+// are refused by restore; a buffer too small to write into is refused.
 static int test_saved_state_as_bytes(void)
 {
 	sm_model* model = tearing_cloth_12();
@@ -1175,6 +1176,23 @@ static int test_saved_state_as_bytes(void)
 	ENSURE_STATUS(sm_simulation_restore_state(a, empty), SM_ERROR_TOPOLOGY);
 	ENSURE(sm_simulation_time(a) == before);
 	sm_simulation_state_destroy(empty);
+	// A spring listed as broken twice (the last break event's spring made the first's, under a
+	// checksum made to match) is refused: a simulation breaks a spring once.
+	const int32_t breaks = sm_simulation_break_count(sim);
+	ENSURE(breaks >= 2);
+	memcpy(copy, bytes + 1, size);
+	const size_t events = size - 8 - (size_t)breaks * sizeof(sm_break_event);
+	sm_break_event first, last;
+	memcpy(&first, copy + events, sizeof first);
+	memcpy(&last, copy + size - 8 - sizeof last, sizeof last);
+	ENSURE(first.spring != last.spring);
+	last.spring = first.spring;
+	memcpy(copy + size - 8 - sizeof last, &last, sizeof last);
+	h = 14695981039346656037ull;
+	for (size_t k = 0; k + 8 < size; k++)
+		h = (h ^ copy[k]) * 1099511628211ull;
+	memcpy(copy + size - 8, &h, 8);
+	ENSURE(sm_simulation_state_deserialize(copy, size, &err) == NULL && strstr(err.message, "twice") != NULL);
 	free(copy);
 	sm_simulation_state_destroy(read);
 	sm_simulation_state_destroy(saved);

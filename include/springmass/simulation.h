@@ -265,8 +265,9 @@ SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
 /// A snapshot as bytes, to store or send (an FMI master's serialised FMU state): its size
 /// [bytes] (0 for NULL), the bytes written into buffer (SM_ERROR_INVALID_ARGUMENT if it holds
 /// fewer than that size), and a snapshot read back from them (at any address; NULL with err for
-/// bytes of another layout version, of the wrong length, damaged (a 64-bit checksum) or holding
-/// non-finite values). Numbers are in the machine's byte order: read them on a machine of the same
+/// bytes of another layout version, of the wrong length, damaged (a 64-bit checksum), holding
+/// non-finite values or spring indices out of range, or listing a spring as broken twice).
+/// sm_simulation_restore_state then checks the snapshot against the simulation. Numbers are in the machine's byte order: read them on a machine of the same
 /// kind. A snapshot read back restores as the one saved does.
 SM_API size_t sm_simulation_state_size(const sm_simulation_state* state);
 SM_API sm_status sm_simulation_state_serialize(const sm_simulation_state* state, void* buffer, size_t size);
