@@ -153,6 +153,12 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
+		if (!isfinite(area)) {
+			st = sm_model_fail(model, SM_ERROR_NOT_FINITE,
+			                   "mesh: the area of triangle %d (%d, %d, %d) overflows (its edges are too long)", (int)t,
+			                   (int)tri[0], (int)tri[1], (int)tri[2]);
+			break;
+		}
 		for (int c = 0; c < 3; c++)
 			mass[tri[c]] += def->density * area / 3.0;
 		for (int c = 0; c < 3; c++) {
@@ -174,11 +180,20 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			e->area += area;
 		}
 	}
-	for (int32_t v = 0; v < nv && st == SM_OK; v++)
-		if (!(mass[v] > 0.0) || !isfinite(mass[v]))
-			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS,
-			                   "mesh: vertex %d belongs to no triangle (or its mass %g is not finite and > 0)", (int)v,
-			                   mass[v]);
+	for (int32_t v = 0; v < nv && st == SM_OK; v++) {
+		if (mass[v] > 0.0 && isfinite(mass[v]))
+			continue;
+		bool in_triangle = false;
+		for (size_t k = 0; k < 3 * (size_t)nt && !in_triangle; k++)
+			in_triangle = def->triangles[k] == v;
+		if (!in_triangle)
+			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex %d belongs to no triangle", (int)v);
+		else
+			st = sm_model_fail(model, mass[v] > 0.0 ? SM_ERROR_NOT_FINITE : SM_ERROR_NONPOSITIVE_MASS,
+			                   "mesh: vertex %d: its mass, density x a third of its triangles' area, is %g (must be "
+			                   "finite and > 0)",
+			                   (int)v, mass[v]);
+	}
 	if (st != SM_OK)
 		goto done;
 

@@ -227,8 +227,9 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			l0 = sqrt(dx * dx + dy * dy + dz * dz);
 			if (!isfinite(l0))
 				return say(msg, SM_ERROR_NOT_FINITE,
-				           "spring %ld: initial distance between particles %ld and %ld is not finite", index,
-				           (long)def->a, (long)def->b);
+				           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
+				           "overflows: particles joined by springs must be less than about 1e154 m apart)",
+				           index, (long)def->a, (long)def->b);
 		}
 	} else {
 		l0 = def->rest_length;

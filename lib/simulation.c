@@ -943,7 +943,8 @@ static const char* failure_hint(int flag)
 	case CV_REPTD_RHSFUNC_ERR:
 	case CV_UNREC_RHSFUNC_ERR:
 		return " (the state or the forces became non-finite: look for huge or tiny masses, stiffnesses, "
-		       "velocities, positions or inputs)";
+		       "velocities, positions or inputs, or an advance so long that CVODE's first trial step, a tenth "
+		       "of it, overflows)";
 	case CV_ERR_FAILURE:
 	case CV_CONV_FAILURE:
 		return " (the step size fell to round-off: the model moves faster than the tolerances can follow, or "

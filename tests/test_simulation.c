@@ -3694,6 +3694,31 @@ static int test_non_finite_dissipated_power_is_a_non_finite_failure(void)
 	return 0;
 }
 
+// An advance of 1e200 s from rest: CVODE's first trial step is a tenth of the interval, and its
+// Newton matrix (gamma^2 K with gamma about 1e199 s) overflows, so every solver fails at t = 0.
+// The message says so among the causes of a non-finite state, and the simulation goes on from
+// where it was: the oscillator at rest stays at rest over 1 s.
+static int test_an_overlong_advance_fails_with_its_cause(void)
+{
+	for (int k = SM_SOLVER_DENSE; k < SM_SOLVER_COUNT; k++) {
+		sm_model* model = oscillator(1.0, 40.0, 0.5, 0.0);
+		ENSURE(model != NULL);
+		sm_simulation_def d = sm_default_simulation_def();
+		d.solver = (sm_linear_solver)k;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		const double x0 = sm_simulation_positions(sim)[3];
+		ENSURE_STATUS(sm_simulation_advance(sim, 1e200), SM_ERROR_SOLVER);
+		ENSURE(strstr(sm_simulation_last_error(sim), "an advance so long") != NULL);
+		ENSURE(sm_simulation_time(sim) == 0.0 && sm_simulation_positions(sim)[3] == x0);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+		ENSURE(sm_simulation_time(sim) == 1.0 && sm_simulation_positions(sim)[3] == x0);
+		sm_simulation_destroy(sim);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // A spring that broke raises no more events: its root function is -1 for good. A 1 kg particle
 // 1.05 m above a fixed one, on a spring of 100 N/m (l0 = 1 m) that breaks past 10 % strain, thrown
 // up at 2 m/s with 0.3 m/s sideways: the spring breaks on the way up, the particle rises, falls
@@ -4001,6 +4026,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_too_much_work_after_an_input_jump_is_not_retried);
 	RUN_TEST(test_driven_jump_with_kept_history);
 	RUN_TEST(test_non_finite_dissipated_power_is_a_non_finite_failure);
+	RUN_TEST(test_an_overlong_advance_fails_with_its_cause);
 	RUN_TEST(test_a_broken_spring_raises_no_more_events);
 	RUN_TEST(test_on_step_is_not_called_for_a_failed_step);
 	RUN_TEST(test_update_model_refuses_each_topology_change);

@@ -8,6 +8,7 @@
 
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_matrix.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -366,6 +367,30 @@ static int test_mesh_errors(void)
 		}
 		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
 	}
+	// Masses out of range, named for what they are: a triangle's area that overflows (edges of
+	// 1e200 m), a vertex mass that overflows (the largest density x an area of 2 m^2) and one that
+	// rounds to 0 (the smallest density x 0.5 m^2).
+	const double huge[] = {0, 0, 0, 1e200, 0, 0, 0, 1e200, 0};
+	const double two[] = {0, 0, 0, 2, 0, 0, 0, 2, 0};
+	const int32_t one[] = {0, 1, 2};
+	sm_mesh_def def = sm_default_mesh_def();
+	def.vertices = huge;
+	def.vertex_count = 3;
+	def.triangles = one;
+	def.triangle_count = 1;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) overflows") != NULL);
+	def.vertices = two;
+	def.density = DBL_MAX;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is inf") !=
+	       NULL);
+	def.vertices = v;
+	def.density = 4.9e-324;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") !=
+	       NULL);
+	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
 	sm_model_destroy(m);
 	return 0;
 }
