@@ -859,7 +859,10 @@ static void fold_counters(sm_simulation* sim)
 }
 
 // Re-initialises CVODE at the current state: a restart (counted in the statistics), or for a
-// reset, which is not counted and starts the linear solver as new.
+// reset, which is not counted and starts the linear solver as new. A restart keeps the cholmod
+// solver's factor of an earlier Newton matrix (a restart at every input change would otherwise
+// refactorise at every communication step), but not after a restore, which starts it as new too:
+// the run after a restore is then the same, bit for bit, whatever the simulation did before.
 static sm_status reinit(sm_simulation* sim, bool reset)
 {
 	fold_counters(sim);
@@ -869,7 +872,8 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	sim->input_jumped = false;
 	sim->break_pending = false;
 	if (has_reduced_solver(sim))
-		sm_reduced_solver_invalidate(sim->linear_solver, reset);
+		sm_reduced_solver_invalidate(sim->linear_solver, reset || sim->forget_factor);
+	sim->forget_factor = false;
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
@@ -1592,6 +1596,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	for (int32_t b = 0; b < s->break_count; b++)
 		sm_model_set_spring_enabled(sim->model, s->breaks[b].spring, false);
 	sim->need_restart = true;
+	sim->forget_factor = true;
 	sim->input_changed = false;
 	refresh_outputs(sim);
 	return SM_OK;

@@ -26,6 +26,7 @@ struct sm_simulation {
 	SUNLinearSolver linear_solver;
 	SUNNonlinearSolver fixed_point;  // Adams only
 	bool need_restart;   // something requires CVodeReInit before the next step
+	bool forget_factor;  // that restart also drops the cholmod solver's factor (after a restore)
 	bool input_jumped;   // an input jumped since CVODE's last (re)initialisation
 	bool input_changed;  // an input jumped since the last advance began
 	// CVODE found a spring break at break_time, past the time the last advance interpolated

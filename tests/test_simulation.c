@@ -2362,8 +2362,9 @@ static sm_model* random_calls_model(int32_t n, double stiffer, int32_t* driven)
 }
 
 // Whether two simulations are in the same state, bit for bit: time, positions, velocities,
-// forces, dissipated energy, breaks and the solver's counters (not its timings).
-static bool same_state(const sm_simulation* a, const sm_simulation* b, int32_t n3, double* fa, double* fb)
+// forces, dissipated energy, breaks and, if `counters`, the solver's counters (not its timings).
+static bool same_state_of(const sm_simulation* a, const sm_simulation* b, int32_t n3, double* fa, double* fb,
+                          bool counters)
 {
 	const double ta = sm_simulation_time(a), tb = sm_simulation_time(b);
 	const double ea = sm_simulation_dissipated_energy(a), eb = sm_simulation_dissipated_energy(b);
@@ -2374,11 +2375,13 @@ static bool same_state(const sm_simulation* a, const sm_simulation* b, int32_t n
 	            memcmp(sm_simulation_positions(a), sm_simulation_positions(b), (size_t)n3 * sizeof(double)) == 0 &&
 	            memcmp(sm_simulation_velocities(a), sm_simulation_velocities(b), (size_t)n3 * sizeof(double)) == 0 &&
 	            memcmp(fa, fb, (size_t)n3 * sizeof(double)) == 0 &&
-	            sm_simulation_break_count(a) == sm_simulation_break_count(b) && sa.steps == sb.steps &&
-	            sa.rhs_evaluations == sb.rhs_evaluations && sa.jacobian_evaluations == sb.jacobian_evaluations &&
-	            sa.linear_iterations == sb.linear_iterations && sa.error_test_failures == sb.error_test_failures &&
-	            sa.convergence_failures == sb.convergence_failures && sa.restarts == sb.restarts &&
-	            sa.factorizations == sb.factorizations;
+	            sm_simulation_break_count(a) == sm_simulation_break_count(b);
+	if (counters)
+		same = same && sa.steps == sb.steps && sa.rhs_evaluations == sb.rhs_evaluations &&
+		       sa.jacobian_evaluations == sb.jacobian_evaluations && sa.linear_iterations == sb.linear_iterations &&
+		       sa.error_test_failures == sb.error_test_failures &&
+		       sa.convergence_failures == sb.convergence_failures && sa.restarts == sb.restarts &&
+		       sa.factorizations == sb.factorizations;
 	for (int32_t k = 0; same && k < sm_simulation_break_count(a); k++) {
 		const sm_break_event x = sm_simulation_break(a, k), y = sm_simulation_break(b, k);
 		same = x.spring == y.spring && memcmp(&x.time, &y.time, sizeof x.time) == 0;
@@ -2386,22 +2389,32 @@ static bool same_state(const sm_simulation* a, const sm_simulation* b, int32_t n
 	return same;
 }
 
+static bool same_state(const sm_simulation* a, const sm_simulation* b, int32_t n3, double* fa, double* fb)
+{
+	return same_state_of(a, b, n3, fa, fb, true);
+}
+
 // A random call that must succeed or fail alike on every simulation it is made on, by kind:
 // 0-2 advance by dt [s]; 3-4 an external force [N] on a particle (now and then 1e200 N, which
 // the solver cannot follow); 5-6 a driven motion (position offset by 0.05 vector [m] from where
 // the particle is, velocity [m/s]); 7 the current state set again with one coordinate perturbed
-// [m]; 8 a reset; 9 the constants of one of two models.
+// [m]; 8 a reset; 9 the constants of one of two models; 10 a spring broken by the caller; 11 the
+// state saved in the simulation's snapshot slot; 12 the slot's snapshot restored (when there is
+// one); 13 the current state saved, written to bytes, read back and restored.
 typedef struct random_call {
 	int kind;
-	int32_t particle;
+	int32_t particle, spring;
 	double dt, vector[3], velocity[3], perturbation;
 	const sm_model* model;
 } random_call;
 
+#define RANDOM_CALL_KINDS 14
+
 static random_call draw_call(rng* r, int32_t particles, int32_t driven, const sm_model* models[2])
 {
 	random_call c = {0};
-	c.kind = (int)rng_uniform(r, 0.0, 10.0 - 1e-9);
+	c.kind = (int)rng_uniform(r, 0.0, RANDOM_CALL_KINDS - 1e-9);
+	c.spring = (int32_t)rng_uniform(r, 0.0, sm_model_spring_count(models[0]) - 1e-9);
 	c.particle = c.kind == 5 || c.kind == 6 ? driven : (int32_t)rng_uniform(r, 0.0, particles - 1e-9);
 	const double steps[3] = {1e-3, 1e-2, 3e-2};
 	c.dt = steps[(int)rng_uniform(r, 0.0, 3.0 - 1e-9)];
@@ -2418,8 +2431,43 @@ static random_call draw_call(rng* r, int32_t particles, int32_t driven, const sm
 	return c;
 }
 
-// Makes the call on sim (x and v: scratch of 3 per particle) and returns its status.
-static sm_status make_call(sm_simulation* sim, const random_call* c, int32_t n3, double* x, double* v)
+// The snapshot saved by a simulation's own random call 11: a status for the calls that make it.
+static sm_status save_in_slot(sm_simulation* sim, sm_simulation_state** slot)
+{
+	sm_simulation_state* s = sm_simulation_save_state(sim);
+	if (s == NULL)
+		return SM_ERROR_OUT_OF_MEMORY;
+	sm_simulation_state_destroy(*slot);
+	*slot = s;
+	return SM_OK;
+}
+
+// The current state through bytes and back (random call 13).
+static sm_status restore_through_bytes(sm_simulation* sim)
+{
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	const size_t size = sm_simulation_state_size(saved);
+	unsigned char* bytes = malloc(size);
+	sm_status st = saved != NULL && bytes != NULL ? sm_simulation_state_serialize(saved, bytes, size)
+	                                              : SM_ERROR_OUT_OF_MEMORY;
+	sm_simulation_state* read = NULL;
+	if (st == SM_OK) {
+		sm_error err;
+		read = sm_simulation_state_deserialize(bytes, size, &err);
+		st = err.status;
+	}
+	if (st == SM_OK)
+		st = sm_simulation_restore_state(sim, read);
+	sm_simulation_state_destroy(read);
+	sm_simulation_state_destroy(saved);
+	free(bytes);
+	return st;
+}
+
+// Makes the call on sim (x and v: scratch of 3 per particle; slot: its snapshot for calls 11 and
+// 12) and returns its status.
+static sm_status make_call(sm_simulation* sim, const random_call* c, int32_t n3, double* x, double* v,
+                           sm_simulation_state** slot)
 {
 	switch (c->kind) {
 	case 0: case 1: case 2:
@@ -2438,8 +2486,16 @@ static sm_status make_call(sm_simulation* sim, const random_call* c, int32_t n3,
 		return sm_simulation_set_state(sim, sm_simulation_time(sim), x, v);
 	case 8:
 		return sm_simulation_reset(sim);
-	default:
+	case 9:
 		return sm_simulation_update_model(sim, c->model);
+	case 10:
+		return sm_simulation_break_spring(sim, c->spring);
+	case 11:
+		return save_in_slot(sim, slot);
+	case 12:
+		return *slot != NULL ? sm_simulation_restore_state(sim, *slot) : SM_OK;
+	default:
+		return restore_through_bytes(sim);
 	}
 }
 
@@ -2452,7 +2508,7 @@ static sm_status make_wrong_call(sm_simulation* sim, rng* r, int32_t n3, int32_t
 	const double bad[3] = {0.25, NAN, -0.5}, zero3[3] = {0.0, 0.0, 0.0};
 	const double t = sm_simulation_time(sim);
 	const int32_t particle = (int32_t)rng_uniform(r, 0.0, n3 / 3 - 1e-9);
-	switch ((int)rng_uniform(r, 0.0, 8.0 - 1e-9)) {
+	switch ((int)rng_uniform(r, 0.0, 10.0 - 1e-9)) {
 	case 0:
 		*expected = SM_ERROR_INVALID_ARGUMENT;
 		return sm_simulation_advance(sim, t > 0.0 ? t * 0.5 - 1e-3 : -1e-3);
@@ -2479,6 +2535,18 @@ static sm_status make_wrong_call(sm_simulation* sim, rng* r, int32_t n3, int32_t
 		}
 		v[1] = INFINITY;  // particle 0's vy: particle 0 is free
 		return sm_simulation_set_state(sim, t + 1.0, x, v);
+	case 7:
+		*expected = SM_ERROR_SPRING_INDEX;
+		return sm_simulation_break_spring(sim, particle % 2 ? -1 : sm_model_spring_count(sm_simulation_model(sim)));
+	case 8: {
+		*expected = SM_ERROR_TOPOLOGY;
+		sm_simulation* elsewhere = sm_simulation_create(other, NULL, NULL);
+		sm_simulation_state* foreign = sm_simulation_save_state(elsewhere);
+		const sm_status st = foreign ? sm_simulation_restore_state(sim, foreign) : SM_ERROR_OUT_OF_MEMORY;
+		sm_simulation_state_destroy(foreign);
+		sm_simulation_destroy(elsewhere);
+		return st;
+	}
 	default:
 		*expected = SM_ERROR_TOPOLOGY;
 		return sm_simulation_update_model(sim, other);
@@ -2491,7 +2559,8 @@ static sm_status make_wrong_call(sm_simulation* sim, rng* r, int32_t n3, int32_t
 // model's constants set back and a reset, and with calls that must fail (each with its
 // documented status) slipped in between. After every call both must be in the same state bit
 // for bit: a reset forgets all that came before (but the model of the last update_model, which it
-// keeps) and a refused call leaves nothing behind. Calls that fail on both (a solver failure
+// keeps), a refused call leaves nothing behind, and snapshots restored, directly or through
+// bytes, carry everything the run after them depends on. Calls that fail on both (a solver failure
 // after a force of 1e200 N) must fail alike and leave both usable.
 static int test_random_calls_leave_no_trace(void)
 {
@@ -2500,7 +2569,7 @@ static int test_random_calls_leave_no_trace(void)
 	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_KLU, SM_SOLVER_REDUCED_PCG,
 	                                    SM_SOLVER_REDUCED_CHOLMOD};
 	const int32_t sizes[] = {4, 6, 11, 8};
-	int failures = 0, refusals = 0, breaks = 0;
+	int failures = 0, refusals = 0, breaks = 0, cuts = 0, restores = 0;
 	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
 		int32_t driven = -1;
 		sm_model* model = random_calls_model(sizes[k], 1.0, &driven);
@@ -2517,13 +2586,18 @@ static int test_random_calls_leave_no_trace(void)
 		sm_simulation* b = sm_simulation_create(model, &d, NULL);
 		ENSURE(a != NULL && b != NULL);
 		rng own = {77 + k}, shared = {1234 + k}, wrong = {99 + k};
+		sm_simulation_state *slot_a = NULL, *slot_b = NULL;
+		const sm_model* current = model;  // the model of A's last update_model
 		for (int n = 0; n < 40; n++) {
 			const random_call c = draw_call(&own, particles, driven, models);
-			make_call(b, &c, n3, x, v);
+			make_call(b, &c, n3, x, v, &slot_b);
 		}
 		// A reset keeps the model of the last update_model (simulation.h): the first one back first.
+		// B's snapshot is of its own sequence: forgotten.
 		ENSURE_STATUS(sm_simulation_update_model(b, model), SM_OK);
 		ENSURE_STATUS(sm_simulation_reset(b), SM_OK);
+		sm_simulation_state_destroy(slot_b);
+		slot_b = NULL;
 		ENSURE(same_state(a, b, n3, fa, fb));
 		for (int n = 0; n < 150; n++) {
 			if (rng_uniform(&wrong, 0.0, 1.0) < 0.3) {
@@ -2537,8 +2611,31 @@ static int test_random_calls_leave_no_trace(void)
 				refusals++;
 			}
 			const random_call c = draw_call(&shared, particles, driven, models);
-			const sm_status sa = make_call(a, &c, n3, x, v), sb = make_call(b, &c, n3, x, v);
+			const sm_status sa = make_call(a, &c, n3, x, v, &slot_a), sb = make_call(b, &c, n3, x, v, &slot_b);
 			failures += sa != SM_OK;
+			if (sa == SM_OK && c.kind == 9)
+				current = c.model;
+			cuts += sa == SM_OK && c.kind == 10;
+			if (sa == SM_OK && sb == SM_OK && c.kind == 12 && slot_a != NULL) {
+				// A third simulation, new, of the model A has (the last one update_model gave it), given
+				// the snapshot: the same state at once and after the next advance (which A and B both
+				// take), but for the work counted.
+				restores++;
+				sm_simulation* fresh = sm_simulation_create(current, &d, NULL);
+				ENSURE(fresh != NULL);
+				ENSURE_STATUS(sm_simulation_restore_state(fresh, slot_a), SM_OK);
+				ENSURE(same_state_of(a, fresh, n3, fa, fb, false));
+				const double t = sm_simulation_time(a) + 1e-2;
+				const sm_status s1 = sm_simulation_advance(a, t), s2 = sm_simulation_advance(b, t);
+				const sm_status s3 = sm_simulation_advance(fresh, t);
+				if (s1 != s2 || s1 != s3 || !same_state(a, b, n3, fa, fb) ||
+				    !same_state_of(a, fresh, n3, fa, fb, false)) {
+					printf("  solver %d, call %d: after a restore, statuses %d, %d, %d, or the states differ\n",
+					       (int)solvers[k], n, (int)s1, (int)s2, (int)s3);
+					return 1;
+				}
+				sm_simulation_destroy(fresh);
+			}
 			if (sa != sb || !same_state(a, b, n3, fa, fb)) {
 				printf("  solver %d, call %d (kind %d): statuses %d and %d, or the states differ\n",
 				       (int)solvers[k], n, c.kind, (int)sa, (int)sb);
@@ -2546,14 +2643,17 @@ static int test_random_calls_leave_no_trace(void)
 			}
 			breaks += sm_simulation_break_count(a) > 0 && c.kind <= 2;
 		}
+		sm_simulation_state_destroy(slot_a);
+		sm_simulation_state_destroy(slot_b);
 		sm_simulation_destroy(a);
 		sm_simulation_destroy(b);
 		free(x);
 		sm_model_destroy(model);
 		sm_model_destroy(stiffer);
 	}
-	// The sequences reached solver failures and breaks, and the wrong calls were made.
-	ENSURE(failures > 0 && breaks > 0 && refusals > 100);
+	// The sequences reached solver failures, breaks, cuts and restores, and the wrong calls were
+	// made.
+	ENSURE(failures > 0 && breaks > 0 && cuts > 10 && restores > 10 && refusals > 100);
 	sm_model_destroy(other);
 	return 0;
 }

@@ -253,8 +253,10 @@ SM_API sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim);
 /// co-simulation master's rollback) or to branch from a checkpoint: everything the snapshot holds,
 /// so that the energy balance, the break events and the broken springs are those of the save
 /// (springs that the simulation's own model disables stay disabled).
-/// Re-initialises the solver: the run goes on as a restart from that state would (within the
-/// tolerances of the run that went on from it without a restart). The snapshot may come from
+/// Re-initialises the solver as new: the run goes on as a restart from that state would (within
+/// the tolerances of the run that went on from it without a restart), and the same calls after
+/// it give the same trajectory bit for bit in any simulation of the model that restores that
+/// snapshot, whatever each did before (a rollback repeats a step exactly). The snapshot may come from
 /// another simulation whose model has the same particles, motions and springs
 /// (sm_simulation_update_model's rule); SM_ERROR_TOPOLOGY otherwise, SM_ERROR_OUT_OF_MEMORY when
 /// the break events cannot be held, both with nothing changed. The snapshot stays valid.
