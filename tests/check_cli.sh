@@ -111,6 +111,10 @@ check_cases << 'CASES'
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '0x10'|run "$osc" -q -o - --max-steps 0x10
 2|springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '-1e-3'|run "$osc" -q -o - --max-step -1e-3
 0||run "$osc" -q -o - --t-end 0.01 --max-step 0
+2|springmass run: --max-steps needs a count from 1 to 2e9, got '0'|run "$osc" -q -o - --max-steps 0
+2|springmass run: --max-steps needs a count from 1 to 2e9, got '3e9'|run "$osc" -q -o - --max-steps 3e9
+0||run "$osc" -q -o - --t-end 0.01 --max-steps 2e9
+2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end
 2|springmass run: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
@@ -131,7 +135,18 @@ check_cases << 'CASES'
 1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0) (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0x1p-20
+2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0
 CASES
+# A parameter name of up to 255 characters is looked up; a longer one is a usage error.
+long=$(printf 'n%.0s' $(seq 255))
+out=$("$cli" run "$osc" -q -o /dev/null --set "$long=1" 2>&1)
+status=$?
+[ $status -eq 1 ] && [ "$out" = "springmass run: --set $long=1: the model has no parameter named \"$long\"" ] ||
+  fail "--set with a name of 255 characters: exit status $status, printed '$out'"
+out=$("$cli" run "$osc" -q -o /dev/null --set "${long}n=1" 2>&1)
+status=$?
+[ $status -eq 2 ] && [ "$out" = "springmass run: parameter name too long in '${long}n=1'" ] ||
+  fail "--set with a name of 256 characters: exit status $status, printed '$out'"
 # An absolute tolerance the simulation would refuse is refused by the loader already.
 printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [0, 0, 0]}], "simulation": {"atol_velocity": 1e-200}}' > "$tmp/tiny_atol.json"
 out=$("$cli" check "$tmp/tiny_atol.json" 2>&1)
@@ -160,6 +175,10 @@ tight=$("$cli" run "$rope" -q -o - --t-end 0.5 --atol 1e-8)
 [ -n "$both" ] && [ "$both" = "$split" ] && [ "$both" = "$reversed" ] ||
   fail "--atol 1e-8 --atol-velocity 1e-3, the same split and reversed gave different CSVs"
 [ "$both" != "$tight" ] || fail "--atol-velocity 1e-3 changed nothing against --atol 1e-8"
+# --atol sets both: the same run as --atol-position and --atol-velocity of its value (the file
+# leaves the velocity tolerance at its default, 1e-6, which would give another run).
+[ "$tight" = "$("$cli" run "$rope" -q -o - --t-end 0.5 --atol-position 1e-8 --atol-velocity 1e-8)" ] ||
+  fail "--atol 1e-8 is not --atol-position 1e-8 --atol-velocity 1e-8"
 # All the modes of a model above CLI_DENSE_LIMIT (2000) degrees of freedom would take the dense
 # eigensolver minutes (2100 here; hours at 10000): refused at once unless --solver dense is given.
 cat > "$tmp/long_rope.json" << 'JSON'
@@ -171,6 +190,10 @@ out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 0 2>&1 > /dev/null)
   fail "modes -n 0 of 2100 degrees of freedom: $out"
 out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 3 2>&1 > /dev/null)
 [ $? -eq 0 ] && [ -z "$out" ] || fail "modes -n 3 of 2100 degrees of freedom: $out"
+# The sparse solver gives at most (dof - 40) / 4 = 515 of them: one more is refused at once too.
+out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 516 2>&1 > /dev/null)
+[ $? -eq 2 ] && [[ "$out" == "springmass modes: that many modes of 2100 degrees of freedom need the dense eigensolver,"*"(the sparse solver, N <= 515 here)"* ]] ||
+  fail "modes -n 516 of 2100 degrees of freedom: $out"
 
 # A particle name with a comma or a quote is one quoted CSV field (RFC 4180).
 cat > "$tmp/comma.json" << 'JSON'

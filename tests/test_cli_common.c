@@ -27,8 +27,9 @@ static char* named(const sm_document* doc, const sm_model* model, const char* me
 }
 
 // Whole indices after "particle", "particles" (each of a list joined by ", " and " and ") and
-// "spring" get the names; a number that is not a whole index (1.5, 1e3, 2x), an index out of range,
-// a word that only ends in "particle" and a sentence's full stop are left alone.
+// "spring" get the names; a number that is not a whole index (1.5, 1e3, 2x), an index out of range
+// (the particle or spring count itself), a word that only ends in "particle" and a sentence's full
+// stop are left alone.
 static int test_names_follow_whole_indices(void)
 {
 	sm_error err;
@@ -50,6 +51,8 @@ static int test_names_follow_whole_indices(void)
 	    {"particle 1e3 N", "particle 1e3 N"},
 	    {"particle 2x", "particle 2x"},
 	    {"particle 3 of 3", "particle 3 of 3"},
+	    {"spring 2 of 2", "spring 2 of 2"},
+	    {"particles 1 and 3", "particles 1 (b) and 3"},
 	    {"spring 99999999999999999999", "spring 99999999999999999999"},
 	    {"subparticle 0", "subparticle 0"},
 	    {"particle", "particle"},

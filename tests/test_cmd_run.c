@@ -10,6 +10,7 @@
 #include "test_harness.h"
 
 #include <dirent.h>
+#include <unistd.h>
 #include <sys/wait.h>
 #include <stdlib.h>
 
@@ -29,13 +30,23 @@ static int check_model(const char* path, bool stop_at_outputs)
 	char csv_path[] = "/tmp/springmass_run_XXXXXX";
 	int fd = mkstemp(csv_path);
 	ENSURE(fd >= 0);
+	char err_path[] = "/tmp/springmass_run_err_XXXXXX";
+	int err_fd = mkstemp(err_path);
+	ENSURE(err_fd >= 0);
+	close(err_fd);
 	char command[4096];
-	snprintf(command, sizeof command, "'%s' run '%s' --t-end %g --output-interval %g --output '%s' --quiet%s",
-	         SPRINGMASS_CLI, path, T_END, INTERVAL, csv_path, stop_at_outputs ? " --stop-at-outputs" : "");
+	snprintf(command, sizeof command, "'%s' run '%s' --t-end %g --output-interval %g --output '%s' --quiet%s 2> '%s'",
+	         SPRINGMASS_CLI, path, T_END, INTERVAL, csv_path, stop_at_outputs ? " --stop-at-outputs" : "", err_path);
 	const int rc = system(command);
 	if (rc != 0)
 		printf("  %s: exit status %d\n", path, rc);
 	ENSURE(rc == 0);
+	// --quiet: errors only, and there are none.
+	FILE* err_file = fopen(err_path, "r");
+	ENSURE(err_file != NULL);
+	ENSURE(fgetc(err_file) == EOF);
+	fclose(err_file);
+	remove(err_path);
 
 	sm_error err;
 	sm_document* doc = sm_document_load(path, &err);
@@ -97,6 +108,97 @@ static int check_model(const char* path, bool stop_at_outputs)
 	return 0;
 }
 
+
+// Without --quiet, `springmass run` ends with a summary on stderr: the solver and the counts of
+// the run's statistics, then each spring that broke. They are the library's own for the same
+// file simulated to the same output times (the counts exactly: the same calls in the same order;
+// the break times to the 9 significant digits printed). A run shorter than a second shows no
+// progress line before it.
+static int check_summary(const char* path, double t_end, double interval)
+{
+	char csv_path[] = "/tmp/springmass_run_XXXXXX", err_path[] = "/tmp/springmass_run_err_XXXXXX";
+	int fd = mkstemp(csv_path);
+	ENSURE(fd >= 0);
+	close(fd);
+	fd = mkstemp(err_path);
+	ENSURE(fd >= 0);
+	close(fd);
+	char command[4096];
+	snprintf(command, sizeof command, "'%s' run '%s' --t-end %.17g --output-interval %.17g --output '%s' 2> '%s'",
+	         SPRINGMASS_CLI, path, t_end, interval, csv_path, err_path);
+	ENSURE(system(command) == 0);
+
+	sm_error err;
+	sm_document* doc = sm_document_load(path, &err);
+	ENSURE(doc != NULL);
+	sm_model* model = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	sm_document_settings settings = sm_document_get_settings(doc);
+	sm_simulation* sim = sm_simulation_create(model, &settings.solver, &err);
+	ENSURE(sim != NULL);
+	FILE* csv = fopen(csv_path, "r");
+	ENSURE(csv != NULL);
+	static char line[1 << 16];
+	ENSURE(fgets(line, sizeof line, csv) != NULL);
+	for (int rows = 0; fgets(line, sizeof line, csv) != NULL; rows++)
+		if (rows > 0)
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, strtod(line, NULL), t_end), SM_OK);
+	fclose(csv);
+	remove(csv_path);
+	ENSURE(sm_simulation_time(sim) == t_end);
+
+	FILE* log = fopen(err_path, "r");
+	ENSURE(log != NULL);
+	int progress = 0;
+	while (fgets(line, sizeof line, log) != NULL && strncmp(line, "springmass run: t = ", 20) == 0)
+		progress++;
+	char start[512];
+	snprintf(start, sizeof start, "springmass run: %s to t = %g s with ", sm_document_name(doc), t_end);
+	if (strncmp(line, start, strlen(start)) != 0)
+		printf("  summary '%s', expected to start with '%s'\n", line, start);
+	ENSURE(strncmp(line, start, strlen(start)) == 0);
+	char solver[256];
+	snprintf(solver, sizeof solver, "%s: ",
+	         settings.solver.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ");
+	if (settings.solver.method != SM_METHOD_ADAMS)
+		snprintf(solver, sizeof solver, "BDF, solver %s: ", sm_linear_solver_name(sm_simulation_solver(sim)));
+	const char* counts = line + strlen(start);
+	ENSURE(strncmp(counts, solver, strlen(solver)) == 0);
+	long long c[7];
+	int broke = -1;
+	double wall = -1.0;
+	ENSURE(sscanf(counts + strlen(solver),
+	              "%lld steps, %lld right-hand sides, %lld Jacobians, %lld linear iterations, %lld error-test and "
+	              "%lld convergence failures, %lld restarts, %d springs broke; wall %lf s",
+	              &c[0], &c[1], &c[2], &c[3], &c[4], &c[5], &c[6], &broke, &wall) == 9);
+	const sm_statistics st = sm_simulation_statistics(sim);
+	const long long expected[7] = {st.steps, st.rhs_evaluations, st.jacobian_evaluations, st.linear_iterations,
+	                               st.error_test_failures, st.convergence_failures, st.restarts};
+	for (int k = 0; k < 7; k++) {
+		if (c[k] != expected[k])
+			printf("  count %d of the summary: %lld, the library's %lld\n", k, c[k], expected[k]);
+		ENSURE(c[k] == expected[k]);
+	}
+	ENSURE(broke == sm_simulation_break_count(sim));
+	ENSURE(progress == 0 || wall > 1.0);
+	for (int32_t b = 0; b < broke; b++) {
+		const sm_break_event e = sm_simulation_break(sim, b);
+		ENSURE(fgets(line, sizeof line, log) != NULL);
+		int spring = -1;
+		ENSURE(sscanf(line, "  spring %d ", &spring) == 1 && spring == e.spring);
+		const char* at = strstr(line, " broke at t = ");
+		ENSURE(at != NULL);
+		ENSURE_REL(strtod(at + 14, NULL), e.time, 5e-9, 0.0);
+	}
+	ENSURE(fgets(line, sizeof line, log) == NULL);
+	fclose(log);
+	remove(err_path);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 static int test_every_bundled_model(void)
 {
 	DIR* dir = opendir(SPRINGMASS_MODELS_DIR);
@@ -116,11 +218,22 @@ static int test_every_bundled_model(void)
 				return 1;
 			}
 		}
+		if (check_summary(path, T_END, INTERVAL) != 0) {
+			printf("  model %s, the summary\n", entry->d_name);
+			closedir(dir);
+			return 1;
+		}
 		models++;
 	}
 	closedir(dir);
 	ENSURE(models >= 1);
 	return 0;
+}
+
+// The tearing cloth: springs break from about 0.4 s on, each listed as the library has it.
+static int test_summary_lists_the_breaks(void)
+{
+	return check_summary(SPRINGMASS_MODELS_DIR "/tearing_cloth.json", 1.0, 0.1);
 }
 
 // Usage errors exit with status 2, a bad model file with 1.
@@ -146,6 +259,7 @@ int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_every_bundled_model);
+	RUN_TEST(test_summary_lists_the_breaks);
 	RUN_TEST(test_errors);
 	return TEST_SUMMARY();
 }

@@ -61,6 +61,8 @@ def vtk_sections(path):
             i += n
         elif fields[:1] == ["LINES"]:
             lines = [tuple(int(v) for v in words[i + 1 + k].split()[1:]) for k in range(int(fields[1]))]
+            # The legacy format's size is the count of integers that follow: 3 per line of two points.
+            assert int(fields[2]) == 3 * len(lines), words[i]
             i += len(lines)
         elif fields[:1] == ["VECTORS"]:
             vectors[fields[1]] = np.array([[float(v) for v in words[i + 1 + k].split()] for k in range(len(points))])
@@ -282,6 +284,57 @@ def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     assert [all_lines[s] for s in sorted(set(range(springs)) - set(broken))] == last_lines
 
 
+def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path):
+    # A 1 kg bob hangs from a fixed anchor on a 10 N/m spring at its rest length, 1 m, and is let
+    # go: z(t) = -1 - (g / omega^2) (1 - cos(omega t)) with omega^2 = k / m, until the spring's
+    # strain reaches its break strain 0.01 at t_b = acos(1 - 0.01 omega^2 l0 / g) / omega. From then
+    # on no spring is intact: the VTK files have no LINES section, which VTK's legacy reader would
+    # refuse as "LINES 0 0".
+    snap = {"springmass": 1, "name": "snap", "gravity": [0, 0, -9.81],
+            "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                          {"name": "bob", "position": [0, 0, -1], "mass": 1}],
+            "springs": [{"a": "anchor", "b": "bob", "stiffness": 10, "rest_length": 1, "break_strain": 0.01}]}
+    path = tmp_path / "snap.json"
+    path.write_text(json.dumps(snap))
+    vtk = tmp_path / "vtk"
+    stats = cli("run", path, "--t-end", 0.2, "--output-interval", 0.1, "-o", tmp_path / "snap.csv",
+                "--vtk", vtk).stderr
+    assert re.search(r"^springmass run: snap to t = 0\.2 s with .*, 1 springs broke; wall ", stats, re.M), stats
+    logged = re.findall(r"^  spring 0 \(between anchor and bob\) broke at t = (\S+) s$", stats, re.M)
+    omega = math.sqrt(10 / 1)
+    t_break = math.acos(1 - 0.01 * omega ** 2 * 1 / 9.81) / omega
+    # The default tolerances (rtol 1e-6, atol 1e-8 m) place the bob to about 1e-6 m; it falls at
+    # g t = 0.44 m/s there, so the crossing is found to about 2.3e-6 s (measured 8e-7 s).
+    assert len(logged) == 1 and float(logged[0]) == pytest.approx(t_break, abs=5e-6), stats
+    assert vtk_sections(vtk / "snap_000000.vtk")[1] == [(0, 1)]
+    for k in (1, 2):
+        points, lines, _ = vtk_sections(vtk / f"snap_{k:06d}.vtk")
+        assert points.shape == (2, 3) and lines == []
+        assert "LINES" not in (vtk / f"snap_{k:06d}.vtk").read_text()
+
+
+def shortest_text(value):
+    """A number as README.md says the tool writes it: the fewest of 15, 16 or 17 significant digits
+    that read back to exactly the same double."""
+    for digits in (15, 16):
+        text = f"{value:.{digits}g}"
+        if float(text) == value:
+            return text
+    return f"{value:.17g}"
+
+
+def test_csv_numbers_are_the_shortest_text_that_reads_back_exactly(tmp_path):
+    # 0.6 m is written 0.6, not 0.59999999999999998; a computed value with all 17 digits if it
+    # needs them. In every CSV of run, statics and modes (after the particle and name columns).
+    cli("run", MODELS / "two_mass_chain.json", "-q", "--t-end", 0.5, "--positions", "-o", tmp_path / "run.csv")
+    cli("statics", MODELS / "hanging_rope.json", "-q", "-o", tmp_path / "statics.csv")
+    cli("modes", MODELS / "oscillator.json", "-o", tmp_path / "modes.csv")
+    for name, first in (("run.csv", 0), ("statics.csv", 2), ("modes.csv", 2)):
+        with open(tmp_path / name, newline="") as f:
+            fields = [x for row in list(csv.reader(f))[1:] for x in row[first:]]
+        assert fields and [x for x in fields if x != shortest_text(float(x))] == [], name
+
+
 # --- statics -----------------------------------------------------------------------------------
 
 def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
@@ -295,6 +348,10 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     # Displacements from the initial positions (the rope along x from 0 to 1 m, 20 segments).
     x0 = np.column_stack([np.linspace(0, 1, 21), np.zeros(21), np.zeros(21)])
     np.testing.assert_allclose(dx, x - x0, rtol=0, atol=1e-15)
+    # The largest motion is the free end's, from (1, 0, 0) m to below the pin (6 digits printed).
+    motion = re.search(r"largest motion\s+(\S+) m at particle (\d+)", out)
+    assert int(motion.group(2)) == np.argmax(np.linalg.norm(dx, axis=1)) == 20
+    assert float(motion.group(1)) == pytest.approx(np.linalg.norm(dx[20]), rel=1e-5)
     # Only the pinned end carries a reaction, and it holds the rope's weight (0.5 kg, g = 9.81):
     # the reaction is the force the supports exert, so it balances the weight to the solver's
     # tolerance (1e-9 N per particle).
@@ -302,6 +359,12 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     np.testing.assert_allclose(reaction[0], [0, 0, 0.5 * 9.81], rtol=0, atol=1e-8)
     summary = re.search(r"reactions, sum\s+\(([^)]*)\)", out).group(1)
     np.testing.assert_allclose([float(v) for v in summary.split(",")], reaction[0], rtol=1e-8, atol=1e-12)
+    # The weight is the file's total mass under its gravity, (0, 0, -0.5 * 9.81) N, to the 9
+    # digits printed; the pin's row of the reaction table is the CSV's reaction.
+    weight = re.search(r"weight\s+\(([^)]*)\)", out).group(1)
+    np.testing.assert_allclose([float(v) for v in weight.split(",")], [0, 0, -0.5 * 9.81], rtol=1e-9, atol=0)
+    pin = re.search(r"^0\s+rope\[0\]\s+(\S+)\s+(\S+)\s+(\S+)\s*$", out, re.M)
+    np.testing.assert_allclose([float(v) for v in pin.groups()], reaction[0], rtol=1e-8, atol=1e-12)
     # The hanging rope is vertical below its pin, each segment stretched by the weight below it:
     # segment j carries (20 - j) m g with m = 0.5 / 21 kg, and its stiffness is E / l0 with
     # E = 2000 N, l0 = 0.05 m, so its length is l0 + (20 - j) m g l0 / E.
@@ -324,8 +387,46 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     assert "CHOLMOD" in sparse
     np.testing.assert_allclose(read_csv(tmp_path / "sparse.csv")[1][:, 2:5], x, rtol=0, atol=1e-9)
     cli("statics", rope, "--max-iterations", 1, status=1)
+    # --tolerance is the largest force left on a free particle [N]: the default 1e-9 N and a looser
+    # 1e-3 N are each reported and met, the looser one in no more Newton iterations.
+    iterations = lambda text: int(re.search(r", (\d+) iterations", text).group(1))
+    loose = cli("statics", rope, "-q", "--tolerance", 1e-3).stdout
+    for text, tolerance in ((out, 1e-9), (loose, 1e-3)):
+        assert number_after(text, "(tolerance") == pytest.approx(tolerance, rel=1e-3)  # 4 digits
+        assert number_after(text, "residual") <= tolerance
+    assert iterations(loose) <= iterations(out)
+    # Where the automatic choice is the sparse solver (the tearing cloth, 399 unknowns), --solver
+    # dense takes the dense one to the same rest shape: the same potential energy to the 9 digits
+    # printed (both solves meet the 1e-9 N tolerance).
+    cloth = MODELS / "tearing_cloth.json"
+    auto, dense = (cli("statics", cloth, "-q", *options).stdout for options in ([], ["--solver", "dense"]))
+    assert "CHOLMOD" in auto and "dense modified Cholesky" in dense, dense
+    assert number_after(dense, "potential energy") == pytest.approx(number_after(auto, "potential energy"), rel=1e-8)
     quiet = cli("statics", rope, "-q").stdout
     assert len(quiet.splitlines()) < len(out.splitlines()) and "rope[0]" not in quiet and "rope[0]" in out
+
+
+def test_statics_names_the_springs_its_rest_shape_would_break(tmp_path):
+    # Two 1 kg bobs hang in a chain from a fixed anchor on springs of 100 N/m and rest length 1 m,
+    # g = 10 m/s^2: the upper spring carries 20 N, strain 0.2; the lower one 10 N, strain 0.1. With
+    # break strains 0.1 and 0.5, the upper one is at twice its own and the lower one within: statics
+    # says so of the upper one alone, and nothing when both are within theirs.
+    chain = {"springmass": 1, "name": "chain", "gravity": [0, 0, -10],
+             "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True, "mass": 1},
+                           {"name": "b1", "position": [0, 0, -1], "mass": 1},
+                           {"name": "b2", "position": [0, 0, -2], "mass": 1}],
+             "springs": [{"a": "anchor", "b": "b1", "stiffness": 100, "rest_length": 1, "break_strain": 0.1},
+                         {"a": "b1", "b": "b2", "stiffness": 100, "rest_length": 1, "break_strain": 0.5}]}
+    path = tmp_path / "chain.json"
+    path.write_text(json.dumps(chain))
+    line = summary_line(cli("statics", path, "-q").stdout, "break strains")
+    assert re.fullmatch(r"1 spring\(s\) beyond theirs, which a simulation would break "
+                        r"\(spring 0\b.*: 2 times its break strain\)", line), line
+    # check counts both springs as breakable.
+    assert summary_line(cli("check", path).stdout, "springs").endswith("2 breakable")
+    chain["springs"][0]["break_strain"] = 0.5
+    path.write_text(json.dumps(chain))
+    assert "break strains" not in cli("statics", path, "-q").stdout
 
 
 # --- modes -------------------------------------------------------------------------------------
@@ -356,10 +457,15 @@ def test_modes_of_the_oscillator_follow_the_closed_form(tmp_path):
     # A communication step of a twentieth of the highest mode's period (6 significant digits).
     step = number_after(out, "communication step       <=")
     assert step == pytest.approx(2 * math.pi / math.sqrt(k / m) / 20, rel=1e-5)
+    # The highest mode is the axial one: omega_max = sqrt(k / m), in Hz divided by 2 pi (9 digits),
+    # and the explicit stability limit 2 / omega_max (6 digits).
+    assert number_after(out, "omega_max =") == pytest.approx(math.sqrt(k / m), rel=1e-8)
+    assert number_after(out, "highest frequency") == pytest.approx(math.sqrt(k / m) / (2 * math.pi), rel=1e-8)
+    assert number_after(out, "2/omega_max =") == pytest.approx(2 / math.sqrt(k / m), rel=1e-5)
     # Mass-normalised shapes: the axial mode moves the bob along x by 1 / sqrt(m), the others
     # across (y, z); the anchor does not move.
     header, shapes = read_csv_with_names(tmp_path / "modes.csv")
-    assert header[:2] == ["particle", "name"] and len(header) == 2 + 3 * 3
+    assert header == ["particle", "name"] + [f"mode{j}_{c}" for j in (1, 2, 3) for c in "xyz"]
     bob = shapes["bob"]
     assert np.allclose(shapes["anchor"], 0)
     assert abs(bob[6]) == pytest.approx(1 / math.sqrt(m), rel=1e-12) and np.allclose(bob[7:9], 0, atol=1e-15)
@@ -415,6 +521,33 @@ def test_modes_about_the_rest_shape_are_those_of_a_hanging_chain(tmp_path):
     np.testing.assert_allclose(swinging[1::2][:5], omega2, rtol=1e-7)
     np.testing.assert_allclose(table[:, 4], 0.1 / (2 * np.sqrt(swinging)), rtol=5e-6)  # 6 digits
     assert not np.allclose(table[:, 3], initial[:, 3], rtol=1e-2)
+    # The sparse eigensolver (shift-invert Lanczos) finds the lowest modes of the same problem:
+    # the dense solver's, to the residual of both (about 1e-12 relative; 1e-8 allowed).
+    sparse = cli("modes", rope, "--at-equilibrium", "--solver", "sparse", "-n", 4).stdout
+    assert "shift-invert Lanczos" in sparse, sparse
+    np.testing.assert_allclose(mode_table(sparse)[:, 3], table[:4, 3], rtol=1e-8)
+
+
+def test_modes_count_unstable_and_zero_modes(tmp_path):
+    # A 2 kg bob held by an 8 N/m spring of rest length 2 m compressed to 1 m: along the spring
+    # omega^2 = k / m = 4 1/s^2 (period pi s); across it the spring pushes, omega^2 = k (1 - l0 / L) / m
+    # = -4 1/s^2, twice: two unstable modes, which have no period. A particle without springs has
+    # three zero modes, of infinite period.
+    bob = {"springmass": 1, "name": "bob", "gravity": [0, 0, 0],
+           "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                         {"name": "bob", "position": [1, 0, 0], "mass": 2}],
+           "springs": [{"a": "anchor", "b": "bob", "stiffness": 8, "rest_length": 2}]}
+    (tmp_path / "bob.json").write_text(json.dumps(bob))
+    out = cli("modes", tmp_path / "bob.json").stdout
+    assert summary_line(out, "zero modes").startswith("0 (") and summary_line(out, "unstable modes").startswith("2 (")
+    rows = re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)
+    assert [period for _, period, _ in rows] == ["unstable", "unstable", "3.14159265"]  # 9 digits
+    np.testing.assert_allclose([float(w2) for _, _, w2 in rows], [-4, -4, 4], rtol=1e-12)
+    free = {"springmass": 1, "name": "free", "gravity": [0, 0, 0], "particles": [{"name": "p", "position": [0, 0, 0]}]}
+    (tmp_path / "free.json").write_text(json.dumps(free))
+    out = cli("modes", tmp_path / "free.json").stdout
+    assert summary_line(out, "zero modes").startswith("3 (") and "unstable modes" not in out
+    assert [period for _, period, _ in re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)] == 3 * ["inf"]
 
 
 # --- check -------------------------------------------------------------------------------------
@@ -483,7 +616,12 @@ def test_check_summarises_the_model():
     assert bound >= exact
     assert number_after(out, "2/omega_max >=") == pytest.approx(2 / bound, rel=2e-3)  # 3 digits
     assert out.rstrip().endswith("ok")
+    # The file's settings (stop time 5 s, output interval 0.01 s; rtol and solver their defaults)
+    # and its gravity and mass damping.
+    assert summary_line(out, "simulation") == "stop time 5 s, output interval 0.01 s, rtol 1e-06, solver auto"
+    assert summary_line(out, "gravity") == "(0, 0, 0) m/s^2, mass damping 0 1/s"
     rope = cli("check", MODELS / "hanging_rope.json").stdout
+    assert summary_line(rope, "gravity") == "(0, 0, -9.81) m/s^2, mass damping 0.1 1/s"
     assert "rope of 20 segments: particles 0 - 20, 20 springs (20 structural)" in rope
     assert summary_line(rope, "particles") == "21: 20 free, 1 fixed"
     # --set as for the other commands: n = 40 segments, the probes at rope[40] and rope[20]; a
@@ -494,6 +632,23 @@ def test_check_summarises_the_model():
     assert summary_line(rope, "middle") == "probe  at rope[20] (particle 20)"
     err = cli("check", MODELS / "hanging_rope.json", "--set", "n=0", status=1).stderr
     assert "--set n=0" in err and "segments" in err
+
+
+def test_check_sheet_grid_and_the_row_limit(tmp_path):
+    # A sheet of nu = 3 by nv = 5 points is summarised in the file's order, 3 x 5, its 15 particles
+    # numbered from 0. `springmass run` writes at most 1e9 rows (docs/model-format.md): a stop time
+    # of exactly 1e9 output intervals is taken, one interval more is refused.
+    sheet = {"springmass": 1, "name": "sheet", "structures": [
+        {"type": "sheet", "name": "s", "origin": [0, 0, 0], "edge_u": [1, 0, 0], "edge_v": [0, 1, 0],
+         "nu": 3, "nv": 5, "mass": 1, "structural": {"strain_stiffness": 10}}],
+        "simulation": {"stop_time": 1e9, "output_interval": 1}}
+    path = tmp_path / "sheet.json"
+    path.write_text(json.dumps(sheet))
+    out = cli("check", path).stdout
+    assert summary_line(out, "s").startswith("sheet 3 x 5: particles 0 - 14, "), out
+    sheet["simulation"]["stop_time"] = 1e9 + 1
+    path.write_text(json.dumps(sheet))
+    assert "would make more than 1e+09 output rows" in cli("check", path, status=1).stderr
 
 
 # --- fmu ---------------------------------------------------------------------------------------
@@ -512,9 +667,11 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
 
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
-    (its text `binary`), a library and a licence, which keep the archives small."""
+    (its text `binary`, executable as a built one is), a library and a licence, which keep the
+    archives small."""
     (folder / "binaries" / "linux64").mkdir(parents=True)
     (folder / "binaries" / "linux64" / "springmass_fmu.so").write_text(binary)
+    (folder / "binaries" / "linux64" / "springmass_fmu.so").chmod(0o755)
     (folder / "binaries" / "linux64" / "libextra.so.1").write_text("library")
     (folder / "documentation" / "licenses").mkdir(parents=True)
     (folder / "documentation" / "licenses" / "license.txt").write_text("licences")
@@ -541,6 +698,8 @@ def test_fmu_packs_the_runtime_it_is_given(tmp_path):
             assert z.read("binaries/linux64/libextra.so.1") == b"library"
             assert z.read("documentation/licenses/license.txt") == b"licences"
             assert z.read("resources/model.json") == osc.read_bytes()
+            # The binary keeps its mode (rwxr-xr-x), as the runtime's files are copied with theirs.
+            assert z.getinfo("binaries/linux64/oscillator.so").external_attr >> 16 & 0o777 == 0o755
         assert "binaries/linux64/springmass_fmu.so" not in names and "resources/parameters.txt" not in names
         assert "resources/reference.csv" not in names
         fmu.unlink()
