@@ -287,6 +287,11 @@ else
     [ -L "$tmp/link.fmu" ] && [ "$(stat -c %a "$tmp/earlier.fmu")" = 640 ] &&
     [ "$(head -c 2 "$tmp/earlier.fmu")" = PK ] && ! ls "$tmp" | grep -q partial ||
     fail "fmu -o LINK to an earlier output: not replaced in place with its permissions"
+  # A link to no file yet creates the file it names, as fopen would, and stays a link.
+  ln -s later.fmu "$tmp/dangling.fmu"
+  "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/dangling.fmu" > /dev/null 2>&1 &&
+    [ -L "$tmp/dangling.fmu" ] && [ "$(head -c 2 "$tmp/later.fmu")" = PK ] ||
+    fail "fmu -o LINK to no file: the link replaced or the file it names not written"
   # --set as in `springmass run`: a malformed setting is a usage error, an unknown parameter or a
   # value the model refuses a bad model; each is refused before anything is written.
   cp "$root/tests/python/models/rope_n.json" "$tmp/rope_n.json"

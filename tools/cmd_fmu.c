@@ -82,13 +82,14 @@ static bool write_all(const char* path, const char* data, size_t length)
 // archive and an earlier output as it was; the file keeps the earlier one's permissions, or gets
 // 0666 less the umask like any new file. A write-protected file is refused as fopen would refuse
 // it. Anything else is only opened for writing, never removed: a device is written (/dev/full
-// fails with 'No space left on device'), a directory fails with 'Is a directory'.
+// fails with 'No space left on device'), a directory fails with 'Is a directory', and a link to
+// no file creates the file it names, as fopen does.
 static bool write_output(const char* output, const char* data, size_t length)
 {
-	struct stat st;
+	struct stat st, link;
 	char target[PATH_MAX];
 	const bool exists = stat(output, &st) == 0;
-	if (exists && !S_ISREG(st.st_mode))
+	if ((exists && !S_ISREG(st.st_mode)) || (!exists && lstat(output, &link) == 0 && S_ISLNK(link.st_mode)))
 		return write_all(output, data, length);
 	if (exists && (access(output, W_OK) != 0 || !realpath(output, target)))
 		return false;  // a link is followed to the file it names, as fopen follows it
@@ -412,7 +413,8 @@ static int package(const options* opt)
 		if (!join(path, sizeof path, staging, "resources/reference.csv"))
 			goto done;
 		if (!copy_file(opt->reference, path)) {
-			fprintf(stderr, "springmass fmu: cannot copy the reference result %s\n", opt->reference);
+			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference,
+			        strerror(errno));
 			goto done;
 		}
 	}
