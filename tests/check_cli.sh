@@ -114,6 +114,13 @@ check_cases << 'CASES'
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '0'|run "$osc" -q -o - --max-steps 0
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '3e9'|run "$osc" -q -o - --max-steps 3e9
 0||run "$osc" -q -o - --t-end 0.01 --max-steps 2e9
+2|springmass run: --max-steps needs a count from 1 to 2e9, got ' 5'|run "$osc" -q -o - --max-steps ' 5'
+2|springmass statics: --max-iterations needs a count from 1 to 1000000, got ' 5'|statics "$osc" -q --max-iterations ' 5'
+2|springmass statics: --max-iterations needs a count from 1 to 1000000, got '2.5'|statics "$osc" -q --max-iterations 2.5
+0||statics "$osc" -q --max-iterations 1e3
+2|springmass modes: -n needs a count from 0 to 1e8, got ' +3'|modes "$osc" -n ' +3'
+2|springmass modes: --count needs a count from 0 to 1e8, got '0x10'|modes "$osc" --count 0x10
+0||modes "$osc" -n 1e0
 2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end
 2|springmass run: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity

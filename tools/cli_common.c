@@ -43,6 +43,15 @@ bool cli_parse_number(const char* text, double* value)
 	return true;
 }
 
+bool cli_parse_count(const char* text, double min, double max, long* value)
+{
+	double v;
+	if (!cli_parse_number(text, &v) || !(v >= min && v <= max) || v != floor(v))
+		return false;
+	*value = (long)v;
+	return true;
+}
+
 // Copies the NAME of "NAME=VALUE" into name (NUL-terminated) and returns its length: 0 if there
 // is no '=' or no name, `size` if the name does not fit (name is then left as it was).
 static size_t setting_name(const char* setting, char* name, size_t size)

@@ -13,6 +13,10 @@
 /// as in a model file. Returns false, *value unchanged, when text is not such a number.
 bool cli_parse_number(const char* text, double* value);
 
+/// A count on the command line: a number as cli_parse_number takes it (1000, 1e3) that is whole
+/// and from min to max. Returns false, *value unchanged, otherwise.
+bool cli_parse_count(const char* text, double min, double max, long* value);
+
 /// The index of the parameter a "NAME=VALUE" setting names, or -1 if it is malformed or names none.
 int32_t cli_setting_parameter(const sm_document* doc, const char* setting);
 

@@ -153,11 +153,8 @@ int sm_cmd_modes(int argc, char** argv)
 			free(settings);
 			return 0;
 		} else if ((strcmp(a, "-n") == 0 || strcmp(a, "--count") == 0) && has_value) {
-			const char* text = argv[++i];
-			char* end = NULL;
-			count = strtol(text, &end, 10);
-			if (end == text || *end != '\0' || count < 0 || count > 100000000) {
-				fprintf(stderr, "springmass modes: -n needs a count >= 0\n");
+			if (!cli_parse_count(argv[++i], 0, 100000000, &count)) {
+				fprintf(stderr, "springmass modes: %s needs a count from 0 to 1e8, got '%s'\n", a, argv[i]);
 				free(settings);
 				return 2;
 			}

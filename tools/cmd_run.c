@@ -230,6 +230,10 @@ static void end_progress(const progress* p)
 		fprintf(stderr, "\n");
 }
 
+// parse_arguments: a usage error after which the usage follows (an unknown option, a missing
+// value or model file), rather than a value refused with its own message (2).
+#define USAGE_ERROR 3
+
 static int parse_arguments(int argc, char** argv, run_options* o)
 {
 	for (int i = 1; i < argc; i++) {
@@ -253,10 +257,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
 			if (!known)
-				return cli_model_argument("run", a, &o->model);
+				return cli_model_argument("run", a, &o->model) != 0 ? USAGE_ERROR : 0;
 			if (!has_value) {
 				fprintf(stderr, "springmass run: %s needs a value\n\n", a);
-				return 2;
+				return USAGE_ERROR;
 			}
 			const char* value = argv[++i];
 			if (strcmp(a, "--t-end") == 0) {
@@ -273,11 +277,12 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					return 2;
 				}
 			} else if (strcmp(a, "--max-steps") == 0) {
-				if (!cli_parse_number(value, &o->max_steps) || !(o->max_steps >= 1.0 && o->max_steps <= 2e9) ||
-				    o->max_steps != floor(o->max_steps)) {
+				long steps;
+				if (!cli_parse_count(value, 1, 2e9, &steps)) {
 					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n", value);
 					return 2;
 				}
+				o->max_steps = (double)steps;
 			} else if (strncmp(a, "--atol", 6) == 0) {
 				double* atol = strcmp(a, "--atol") == 0            ? &o->atol
 				               : strcmp(a, "--atol-position") == 0 ? &o->atol_position
@@ -310,10 +315,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->sets[o->set_count++] = value;
 			}
 		} else if (cli_model_argument("run", a, &o->model) != 0) {
-			return 2;
+			return USAGE_ERROR;
 		}
 	}
-	return cli_model_given("run", o->model);
+	return cli_model_given("run", o->model) != 0 ? USAGE_ERROR : 0;
 }
 
 int sm_cmd_run(int argc, char** argv)
@@ -326,9 +331,9 @@ int sm_cmd_run(int argc, char** argv)
 	int st = parse_arguments(argc, argv, &o);
 	if (st != 0) {
 		free(o.sets);
-		if (st > 0)
+		if (st == USAGE_ERROR)
 			usage(stderr);
-		return st < 0 ? 0 : st;
+		return st < 0 ? 0 : 2;
 	}
 
 	int status = 1;

@@ -110,10 +110,10 @@ int sm_cmd_statics(int argc, char** argv)
 				return 2;
 			}
 		} else if (strcmp(a, "--max-iterations") == 0 && has_value) {
-			char* end = NULL;
-			const long v = strtol(argv[++i], &end, 10);
-			if (*end != '\0' || v < 1 || v > 1000000) {
-				fprintf(stderr, "springmass statics: --max-iterations needs a count from 1 to 1000000\n");
+			long v;
+			if (!cli_parse_count(argv[++i], 1, 1000000, &v)) {
+				fprintf(stderr, "springmass statics: --max-iterations needs a count from 1 to 1000000, got '%s'\n",
+				        argv[i]);
 				free(settings);
 				return 2;
 			}
@@ -198,8 +198,11 @@ int sm_cmd_statics(int argc, char** argv)
 	printf("stable           %s\n", res.stable ? "yes (a minimum of the potential energy)"
 	                                          : "no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)");
 	printf("potential energy %.9g J\n", res.potential_energy);
-	if (largest_at >= 0)
-		printf("largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
+	char line[256];
+	if (largest_at >= 0) {
+		snprintf(line, sizeof line, "largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
+		cli_write_named(stdout, doc, model, line);
+	}
 	// Statics treats every spring as intact; say so when the equilibrium stretches one beyond its
 	// break strain (a simulation would break it).
 	int32_t beyond = 0, worst = -1;
@@ -221,10 +224,13 @@ int sm_cmd_statics(int argc, char** argv)
 			}
 		}
 	}
-	if (beyond > 0)
-		printf("break strains    %d spring(s) beyond theirs, which a simulation would break (spring %d: %.3g "
-		       "times its break strain)\n",
-		       (int)beyond, (int)worst, worst_ratio);
+	if (beyond > 0) {
+		snprintf(line, sizeof line,
+		         "break strains    %d spring(s) beyond theirs, which a simulation would break; the furthest, at %.3g "
+		         "times its break strain: spring %d\n",
+		         (int)beyond, worst_ratio, (int)worst);
+		cli_write_named(stdout, doc, model, line);
+	}
 	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1], mass * md.gravity[2]);
 	printf("reactions, sum   (%.9g, %.9g, %.9g) N\n", res.reaction_total[0], res.reaction_total[1],
 	       res.reaction_total[2]);
