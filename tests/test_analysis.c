@@ -1151,6 +1151,53 @@ static int test_coincident_rest_length_spring(void)
 	return 0;
 }
 
+// A free particle on its fixed anchor, tied by a damped spring of rest length 0 (ks = 100 N/m,
+// kd = 4 N s/m, m = 1 kg), zero-length or rest-length kind: the elastic force ks (x_b - x_a) is
+// linear, but the damping force kd (u . dv) u is not differentiable where the particles meet (its
+// direction is that of the motion away from the anchor). Every motion through the anchor is a
+// straight line along u, where the damping force is exactly kd dv: the simulation damps it with
+// zeta = kd / (2 sqrt(ks m)) = 0.2, while the conventional D = 0 at L = 0 would give 0. So modes
+// must refuse the configuration, naming the spring, as for a coincident rest-length spring,
+// rather than report undamped modes. Apart, the same spring is an ordinary damped oscillator
+// along its axis and undamped across it, all three at omega^2 = ks / m: the split of the
+// threefold eigenspace is the eigensolver's, but the damping ratios sum to the trace,
+// tr(C) / (2 omega) = 0.2 (to round-off, 1e-12).
+static int test_coincident_damped_spring_of_zero_rest_length(void)
+{
+	for (int kind = 0; kind <= 1; kind++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.kind = kind == 0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		s.rest_length = 0.0;
+		s.stiffness = 100.0;
+		s.damping = 4.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_modes modes;
+		sm_error err;
+		ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strstr(err.message, "spring 0") != NULL && modes.count == 0);
+		const double apart[6] = {0.0, 0.0, 0.0, 0.5, 0.0, 0.0};
+		sm_modes_def def = sm_default_modes_def();
+		def.configuration = apart;
+		ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+		ENSURE(modes.count == 3);
+		ENSURE_NEAR(modes.damping_ratio[0] + modes.damping_ratio[1] + modes.damping_ratio[2], 0.2, 1e-12);
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
 
@@ -2118,6 +2165,7 @@ int main(int argc, char** argv)
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_chain_axial_frequencies);
 	RUN_TEST(test_coincident_rest_length_spring);
+	RUN_TEST(test_coincident_damped_spring_of_zero_rest_length);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);

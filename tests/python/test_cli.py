@@ -578,6 +578,26 @@ def test_check_bounds_the_highest_frequency(model):
         assert bound >= number_after(modes, "omega_max =") * (1 - 1e-5)
 
 
+def test_stability_limit_of_a_damped_oscillator(tmp_path):
+    # A 1 kg bob on a 100 N/m spring at its rest length with a 40 N s/m dashpot: omega = 10 rad/s,
+    # zeta = 40 / (2 sqrt(100)) = 2. Symplectic Euler (v += h a(x, v), then x += h v), the scheme
+    # the limit is printed for, maps (x, v) by [[1 - w^2 h^2, h (1 - 2 zeta w h)], [-w^2 h,
+    # 1 - 2 zeta w h]]: determinant 1 - 2 zeta w h, trace 2 - w^2 h^2 - 2 zeta w h; both
+    # eigenvalues lie in the unit circle (Jury) for w h <= 2 (sqrt(1 + zeta^2) - zeta), here
+    # 0.0472 s, a quarter of the undamped 2 / omega = 0.2 s. A step the tools call the limit, or a
+    # bound below it, must be stable: at most that step (6 digits printed: 1e-5 allowed).
+    bob = {"springmass": 1, "name": "bob", "gravity": [0, 0, 0],
+           "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                         {"name": "bob", "position": [1, 0, 0], "mass": 1}],
+           "springs": [{"a": "anchor", "b": "bob", "stiffness": 100, "damping": 40, "rest_length": 1}]}
+    path = tmp_path / "bob.json"
+    path.write_text(json.dumps(bob))
+    omega, zeta = 10.0, 2.0
+    stable = 2 * (math.sqrt(1 + zeta**2) - zeta) / omega
+    assert number_after(cli("modes", path, "-n", "0").stdout, "2/omega_max =") <= stable * (1 + 1e-5)
+    assert number_after(cli("check", path).stdout, "2/omega_max >=") <= stable * (1 + 1e-5)
+
+
 @pytest.mark.parametrize("ends", [("bob", "anchor"), ("anchor", "bob")])
 def test_check_bound_of_a_bob_on_a_fixed_anchor(tmp_path, ends):
     # A held end adds no off-diagonal term to the Gershgorin row of the free end, whichever end
