@@ -24,6 +24,13 @@ int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* do
 // a force balance, never a stable one, and it has no linearisation.
 int32_t analysis_coincident_spring(const sm_model* model, const double* x);
 
+// The first intact spring with damping whose two particles coincide at x (a spring of rest
+// length 0, or a rest-length spring at its degenerate point), or -1. Its damping force
+// kd (u . dv) u has no derivative there: a motion straight through the point is damped by
+// kd dv in full, while the model.h convention (no damping at L = 0, df/dv = 0) has none, so the
+// configuration has no linearisation of its damping.
+int32_t analysis_coincident_damper(const sm_model* model, const double* x);
+
 // True if all count values are finite.
 int analysis_all_finite(const double* values, size_t count);
 

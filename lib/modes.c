@@ -862,6 +862,56 @@ static sm_status damping_bound(const modes_problem* p, double* bound)
 	return SM_OK;
 }
 
+// h <= 2 / (gamma/2 + sqrt(gamma^2/4 + omega^2)), the condition on the determinant 1 - h gamma
+// (>= -1) and the trace 2 - h gamma - h^2 omega^2 (>= -1 - determinant) of symplectic Euler's map
+// (Jury's criterion; analysis.h).
+double sm_symplectic_euler_step(double omega, double gamma)
+{
+	const double denominator = 0.5 * gamma + hypot(0.5 * gamma, omega);
+	return denominator > 0.0 ? 2.0 / denominator : INFINITY;
+}
+
+sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limit)
+{
+	if (model == NULL || limit == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	const int32_t n = model->particle_count;
+	double* row = calloc(2 * (size_t)n + 1, sizeof(double));  // [1/s^2] then [1/s], per particle
+	if (row == NULL)
+		return SM_ERROR_OUT_OF_MEMORY;
+	double* damping_row = row + n;
+	for (int32_t k = 0; k < model->spring_count; k++) {
+		if (!model->enabled[k])
+			continue;
+		const int32_t a = model->spring_a[k], b = model->spring_b[k];
+		const bool free_a = model->free_index[a] >= 0, free_b = model->free_index[b] >= 0;
+		const double between = free_a && free_b ? 1.0 / sqrt(model->mass[a] * model->mass[b]) : 0.0;
+		const double ks = fabs(model->stiffness[k]), kd = fabs(model->damping[k]);
+		if (free_a) {
+			row[a] += ks * (1.0 / model->mass[a] + between);
+			damping_row[a] += kd * (1.0 / model->mass[a] + between);
+		}
+		if (free_b) {
+			row[b] += ks * (1.0 / model->mass[b] + between);
+			damping_row[b] += kd * (1.0 / model->mass[b] + between);
+		}
+	}
+	double omega2 = 0.0, gamma = 0.0;
+	bool any_free = false;
+	for (int32_t i = 0; i < n; i++) {
+		if (model->free_index[i] < 0)
+			continue;
+		any_free = true;
+		omega2 = fmax(omega2, row[i]);
+		gamma = fmax(gamma, damping_row[i]);
+	}
+	free(row);
+	limit->omega_max = sqrt(omega2);
+	limit->damping_rate = any_free ? gamma + fabs(model->def.mass_damping) : 0.0;
+	limit->step = sm_symplectic_euler_step(limit->omega_max, limit->damping_rate);
+	return SM_OK;
+}
+
 static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error* err)
 {
 	const size_t kept = p->kept;
@@ -943,6 +993,14 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		}
 	}
 	modes->proportional = modes->damping_coupling <= p->def->proportional_tolerance;
+	sm_explicit_limit limit;
+	if (sm_model_explicit_limit(p->model, &limit) != SM_OK) {
+		free(product);
+		free(modal);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the explicit step limit");
+	}
+	modes->damping_rate_max = limit.damping_rate;
+	modes->explicit_step = sm_symplectic_euler_step(modes->omega_max, modes->damping_rate_max);
 	free(product);
 	free(modal);
 	return SM_OK;
@@ -999,11 +1057,23 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		                  (int)model->spring_b[coincident]);
 		goto done;
 	}
+	const int32_t damper = analysis_coincident_damper(model, x0);
+	if (damper >= 0) {
+		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                  "modes: spring %d (damping %g N s/m) has its particles %d and %d at one point, where its "
+		                  "damping force has no derivative (a motion through the point is damped in full, the "
+		                  "linearisation would have no damping): the configuration has no modes; take one with the "
+		                  "particles apart",
+		                  (int)damper, model->damping[damper], (int)model->spring_a[damper],
+		                  (int)model->spring_b[damper]);
+		goto done;
+	}
 	const int32_t nf = analysis_free_map(model, free_index, dof_mass);
 	const size_t dof = 3 * (size_t)nf;
 	modes->dof = (int32_t)dof;
 	modes->particle_count = n;
 	modes->proportional = true;
+	modes->explicit_step = INFINITY;  // no free particle: nothing to integrate
 
 	// The sparse path needs 4 degrees of freedom per mode beyond a margin: room for the Krylov
 	// space (2 per mode + 20) next to the locked modes.

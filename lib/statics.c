@@ -91,6 +91,19 @@ int32_t analysis_coincident_spring(const sm_model* model, const double* x)
 	return -1;
 }
 
+int32_t analysis_coincident_damper(const sm_model* model, const double* x)
+{
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		if (!model->enabled[s] || !(model->damping[s] > 0.0))
+			continue;
+		spring_geometry g;
+		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
+		if (g.inv_length == 0.0)
+			return s;
+	}
+	return -1;
+}
+
 int analysis_all_finite(const double* values, size_t count)
 {
 	for (size_t k = 0; k < count; k++)

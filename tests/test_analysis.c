@@ -1198,6 +1198,63 @@ static int test_coincident_damped_spring_of_zero_rest_length(void)
 	return 0;
 }
 
+// The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
+// omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
+// a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
+// 0.6 N s/m, mass damping 0.5 1/s): the Gershgorin rows of the springs' scalar Laplacian,
+// omega^2 <= max(40 + 25 (1 + 1/sqrt(0.5)), 25/0.5 + 25/sqrt(0.5)) and gamma <= 0.5 +
+// max(0.2 + 0.6 (1 + 1/sqrt(0.5)), 0.6/0.5 + 0.6/sqrt(0.5)); modes takes that damping rate with its
+// own omega_max. Closed forms evaluated the same way: 1e-12 relative.
+static int test_explicit_step_limit(void)
+{
+	ENSURE(isinf(sm_symplectic_euler_step(0.0, 0.0)));
+	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 0.0), 0.2, 1e-15);
+	ENSURE_NEAR(sm_symplectic_euler_step(0.0, 4.0), 0.5, 1e-15);
+	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 40.0), 2.0 * (sqrt(5.0) - 2.0) / 10.0, 1e-15);
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 0.5;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[2] = -1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.position[2] = -2.0;
+	p.mass = 0.5;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = 40.0;
+	s.damping = 0.2;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	s.a = 1;
+	s.b = 2;
+	s.stiffness = 25.0;
+	s.damping = 0.6;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	sm_explicit_limit limit;
+	ENSURE_STATUS(sm_model_explicit_limit(model, &limit), SM_OK);
+	const double r = 1.0 / sqrt(0.5);
+	const double omega = sqrt(fmax(40.0 + 25.0 * (1.0 + r), 25.0 / 0.5 + 25.0 * r));
+	const double gamma = 0.5 + fmax(0.2 + 0.6 * (1.0 + r), 0.6 / 0.5 + 0.6 * r);
+	ENSURE_NEAR(limit.omega_max, omega, 1e-12 * omega);
+	ENSURE_NEAR(limit.damping_rate, gamma, 1e-12 * gamma);
+	ENSURE(limit.step == sm_symplectic_euler_step(limit.omega_max, limit.damping_rate));
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.damping_rate_max == limit.damping_rate && modes.omega_max <= limit.omega_max);
+	ENSURE(modes.explicit_step == sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
+	ENSURE(modes.explicit_step >= limit.step);
+	sm_modes_release(&modes);
+	ENSURE_STATUS(sm_model_explicit_limit(NULL, &limit), SM_ERROR_INVALID_ARGUMENT);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
 
@@ -2166,6 +2223,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_chain_axial_frequencies);
 	RUN_TEST(test_coincident_rest_length_spring);
 	RUN_TEST(test_coincident_damped_spring_of_zero_rest_length);
+	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);

@@ -2,6 +2,7 @@
 #include "cli_common.h"
 #include "commands.h"
 
+#include "springmass/analysis.h"
 #include "springmass/model_file.h"
 
 #include <math.h>
@@ -20,9 +21,9 @@ static void usage(FILE* out)
 	        "feeds: constants, initial state, held particles, counts, settings, spring kinds,\n"
 	        "particle references), the stiffest spring, the fastest spring (the largest sqrt(k/m),\n"
 	        "with m the lighter of its free ends) and an upper bound on the highest natural frequency\n"
-	        "omega_max (Gershgorin's over the springs' stiffness, undamped), with the lower bound it gives\n"
-	        "on the stability limit 2/omega_max of explicit (leapfrog) integration; `springmass modes\n"
-	        "MODEL -n 0` gives the exact value.\n"
+	        "omega_max (Gershgorin's over the springs' stiffness, undamped) and, with the same bound on\n"
+	        "the modes' damping rates, a step at which explicit (symplectic Euler) integration is\n"
+	        "stable; `springmass modes MODEL -n 0` gives a closer value from the exact omega_max.\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -137,13 +138,6 @@ int sm_cmd_check(int argc, char** argv)
 	int32_t rest_length = 0, zero_length = 0, per_strain = 0, per_section = 0, breakable = 0;
 	int32_t stiffest = -1, fastest = -1;
 	double max_stiffness = -1.0, max_omega = 0.0;
-	double* row_sum = calloc((size_t)n + 1, sizeof *row_sum);  // [1/s^2], one per particle
-	if (row_sum == NULL) {
-		fprintf(stderr, "springmass check: out of memory\n");
-		sm_model_destroy(model);
-		sm_document_destroy(doc);
-		return 1;
-	}
 	for (int32_t s = 0; s < m; s++) {
 		sm_spring_def def;
 		double ks;
@@ -174,22 +168,7 @@ int sm_cmd_check(int argc, char** argv)
 			max_omega = sqrt(ks / mass);
 			fastest = s;
 		}
-		// Gershgorin row sums of M^(-1/2) K M^(-1/2), K = -df/dx at any positions. A rest-length
-		// spring's block is ks u u^T + ks (1 - l0/L) (I - u u^T) with 1 - l0/L < 1 (a zero-length
-		// spring's ks I), so for any displacements z_a, z_b its energy is at most
-		// ks |z_a - z_b|^2: K is bounded by a scalar graph Laplacian, and omega_max^2 by the largest
-		// of its mass-scaled row sums, over the free particles, sum over springs of
-		// ks (1/m_i + 1/sqrt(m_i m_j)) (the second term if j is free).
-		const bool a_free = pa.motion == SM_PARTICLE_FREE, b_free = pb.motion == SM_PARTICLE_FREE;
-		if (a_free)
-			row_sum[def.a] += ks * (1.0 / pa.mass + (b_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
-		if (b_free)
-			row_sum[def.b] += ks * (1.0 / pb.mass + (a_free ? 1.0 / sqrt(pa.mass * pb.mass) : 0.0));
 	}
-	double omega_bound = 0.0;
-	for (int32_t i = 0; i < n; i++)
-		omega_bound = fmax(omega_bound, sqrt(row_sum[i]));
-	free(row_sum);
 
 	printf("model        %s\n", sm_document_name(doc));
 	if (sm_document_description(doc)[0] != '\0')
@@ -270,10 +249,20 @@ int sm_cmd_check(int argc, char** argv)
 		print_particle(doc, s.b);
 		printf("\n");
 	}
-	if (omega_bound > 0.0)
-		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped): the explicit stability limit\n"
-		       "             2/omega_max >= %.3g s (springmass modes MODEL -n 0: the exact value)\n",
-		       omega_bound, omega_bound / (2.0 * 3.14159265358979323846), 2.0 / omega_bound);
+	sm_explicit_limit limit;
+	if (sm_model_explicit_limit(model, &limit) != SM_OK) {
+		fprintf(stderr, "springmass check: out of memory\n");
+		sm_model_destroy(model);
+		sm_document_destroy(doc);
+		return 1;
+	}
+	if (limit.omega_max > 0.0)
+		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped)\n", limit.omega_max,
+		       limit.omega_max / (2.0 * 3.14159265358979323846));
+	if (isfinite(limit.step))
+		printf("explicit     step >= %.3g s stable with symplectic Euler (damping rate <= %.3g 1/s; springmass modes "
+		       "MODEL -n 0: a closer value)\n",
+		       limit.step, limit.damping_rate);
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
 	printf("ok\n");

@@ -24,10 +24,11 @@ static void usage(FILE* out)
 	        "which is reported) and mass-normalised mode shapes. Zero modes (rigid-body motions, and\n"
 	        "mechanisms such as the sideways motion of a straight unstressed chain) have frequency 0.\n"
 	        "Also prints the largest communication step suggested for co-simulation (a fraction of\n"
-	        "the period of the highest mode listed) and the stability limit 2/omega_max of explicit\n"
-	        "integrators. Small models (or -n 0) are solved densely, all modes; large ones by\n"
-	        "shift-invert Lanczos on the sparse matrices, the lowest N modes only (then the zero and\n"
-	        "unstable counts are among those, and omega_max is an upper bound).\n"
+	        "the period of the highest mode listed) and the stability limit of explicit (symplectic\n"
+	        "Euler) integration, from omega_max and a bound on the damping rates. Small models (or\n"
+	        "-n 0) are solved densely, all modes; large ones by shift-invert Lanczos on the sparse\n"
+	        "matrices, the lowest N modes only (then the zero and unstable counts are among those, and\n"
+	        "omega_max is an upper bound).\n"
 	        "\n"
 	        "options:\n"
 	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all; all or\n"
@@ -122,9 +123,10 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
 	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
-	if (modes->omega_max > 0.0)
-		printf("explicit stability limit 2/omega_max = %.6g s (largest step of explicit Euler-type integrators)\n",
-		       2.0 / modes->omega_max);
+	if (isfinite(modes->explicit_step))
+		printf("explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
+		       "2/omega_max = %.6g s undamped)\n",
+		       modes->explicit_step, modes->damping_rate_max, modes->omega_max > 0.0 ? 2.0 / modes->omega_max : INFINITY);
 	if (highest > 0.0)
 		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
 		       1.0 / (highest * steps_per_period), steps_per_period, highest);

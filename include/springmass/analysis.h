@@ -181,8 +181,14 @@ typedef struct sm_modes {
 	int32_t unstable_count;
 	/// Highest angular frequency over all modes [rad/s]: exact (dense) or an upper bound, the
 	/// square root of the Gershgorin bound on M^(-1/2) K M^(-1/2) (sparse; exact for uniform
-	/// lattices, and safe for the explicit stability limit 2 / omega_max).
+	/// lattices).
 	double omega_max;
+	/// Upper bound on every mode's damping rate phi^T C phi (2 zeta omega) [1/s]: the Gershgorin
+	/// bound of sm_model_explicit_limit.
+	double damping_rate_max;
+	/// Largest stable step of symplectic Euler [s] (sm_explicit_limit) with omega_max and
+	/// damping_rate_max: safe for proportional damping; INFINITY when nothing limits it.
+	double explicit_step;
 	double damping_coupling; ///< largest normalised off-diagonal entry of Phi^T C Phi (kept modes) [1]
 	bool proportional;       ///< damping_coupling <= proportional_tolerance
 	sm_modes_solver solver;  ///< the eigensolver actually used (AUTO resolved)
@@ -201,7 +207,8 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// defaults). On success fills *modes,
 /// which the caller releases with sm_modes_release(). On error *modes is zeroed and err says
 /// why (SM_ERROR_INVALID_ARGUMENT, also for a configuration in which a rest-length spring's two
-/// particles coincide: its force has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
+/// particles coincide, or those of a damped spring of rest length 0: its force, or its damping
+/// force, has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
 /// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
 /// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
 /// A model with no free particle has no modes: success with count = 0. Deterministic: the same
@@ -212,6 +219,32 @@ SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def
 /// Frees the arrays of a result of sm_modes_compute() and zeroes it; accepts NULL and a zeroed
 /// result.
 SM_API void sm_modes_release(sm_modes* modes);
+
+/// The stability limit of explicit integration, bounded at any positions. Symplectic Euler
+/// (v += h a(x, v), then x += h v) applied to a mode of angular frequency omega and damping rate
+/// gamma (m x'' + c x' + k x = 0: omega^2 = k/m, gamma = c/m) maps (x, v) by a matrix of
+/// determinant 1 - h gamma and trace 2 - h gamma - h^2 omega^2, whose eigenvalues stay in the unit
+/// circle while h <= 2 / (gamma/2 + sqrt(gamma^2/4 + omega^2)): 2/omega undamped, 2/gamma for
+/// damping alone, about 1/gamma when damping dominates (zeta = gamma / (2 omega) >> 1). The bound
+/// takes the largest omega^2 and gamma of any mode at once, from Gershgorin row sums: a spring's
+/// stiffness and damping blocks are at most ks I and kd I at any positions (ks u u^T +
+/// ks (1 - l0/L) (I - u u^T) with 1 - l0/L < 1; kd u u^T), so over the free particles
+/// omega_max^2 <= max_i sum ks (1/m_i + 1/sqrt(m_i m_j)) and gamma <= alpha + max_i sum kd (1/m_i +
+/// 1/sqrt(m_i m_j)) (the second terms where j is free too). With proportional damping each mode's
+/// step limit is then at least `step`; with other damping it is an estimate.
+typedef struct sm_explicit_limit {
+	double omega_max;    ///< upper bound on the highest angular frequency [rad/s]
+	double damping_rate; ///< upper bound on the damping rate of any mode [1/s]
+	double step;         ///< the largest stable step of symplectic Euler they give [s]; INFINITY for none
+} sm_explicit_limit;
+
+/// The bounds of sm_explicit_limit for a model (disabled springs left out);
+/// SM_ERROR_INVALID_ARGUMENT for NULL arguments, SM_ERROR_OUT_OF_MEMORY.
+SM_API sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limit);
+
+/// The largest stable step [s] of symplectic Euler for angular frequency omega [rad/s] and damping
+/// rate gamma [1/s] (sm_explicit_limit); INFINITY when both are 0.
+SM_API double sm_symplectic_euler_step(double omega, double gamma);
 
 #ifdef __cplusplus
 }
