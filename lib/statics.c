@@ -78,10 +78,13 @@ int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* do
 	return nf;
 }
 
-int32_t analysis_coincident_spring(const sm_model* model, const double* x)
+// The first intact spring whose particles coincide at x, among the rest-length springs of l0 > 0
+// (`damped` false) or the springs with damping (`damped` true).
+static int32_t first_coincident(const sm_model* model, const double* x, bool damped)
 {
 	for (int32_t s = 0; s < model->spring_count; s++) {
-		if (!model->enabled[s] || model->zero_length[s] || !(model->rest_length[s] > 0.0))
+		const bool candidate = damped ? model->damping[s] > 0.0 : !model->zero_length[s] && model->rest_length[s] > 0.0;
+		if (!model->enabled[s] || !candidate)
 			continue;
 		spring_geometry g;
 		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
@@ -91,17 +94,14 @@ int32_t analysis_coincident_spring(const sm_model* model, const double* x)
 	return -1;
 }
 
+int32_t analysis_coincident_spring(const sm_model* model, const double* x)
+{
+	return first_coincident(model, x, false);
+}
+
 int32_t analysis_coincident_damper(const sm_model* model, const double* x)
 {
-	for (int32_t s = 0; s < model->spring_count; s++) {
-		if (!model->enabled[s] || !(model->damping[s] > 0.0))
-			continue;
-		spring_geometry g;
-		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
-		if (g.inv_length == 0.0)
-			return s;
-	}
-	return -1;
+	return first_coincident(model, x, true);
 }
 
 int analysis_all_finite(const double* values, size_t count)
