@@ -29,7 +29,10 @@ extern "C" {
 /// bend spring across it). Then the springs of one direction, stretched uniformly along it,
 /// carry stiffness x strain per unit width of a sheet [N/m] or per unit area of a block's
 /// cross-section [N/m^2] across them, whatever the grid: the lattice's elastic constants depend
-/// on the shape of its cells, not on their number. A mesh's edge springs per section give an
+/// on the shape of its cells, not on their number (but for a sheet's bend group, whose springs
+/// span two cells and so leave the last cell of each row and column without one: its modulus is
+/// (nu - 2)/(nu - 1) of the value along u, 0.75 at 5 particles, tending to it as the grid is
+/// refined). A mesh's edge springs per section give an
 /// equilateral triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's ratio
 /// 1/3); other triangle shapes other constants.
 typedef struct sm_spring_material {
