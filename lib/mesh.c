@@ -148,15 +148,17 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	for (int32_t t = 0; t < nt && st == SM_OK; t++) {
 		const int32_t* tri = def->triangles + 3 * (size_t)t;
 		const double area = triangle_area(def->vertices, tri);
-		if (!(area > 0.0)) {
-			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle %d (%d, %d, %d) has zero area",
-			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
-			break;
-		}
+		// Overflow first: the vertices are finite, so a NaN area is an overflow too (inf - inf in
+		// the cross product), not a zero area.
 		if (!isfinite(area)) {
 			st = sm_model_fail(model, SM_ERROR_NOT_FINITE,
 			                   "mesh: the area of triangle %d (%d, %d, %d) overflows (its edges are too long)", (int)t,
 			                   (int)tri[0], (int)tri[1], (int)tri[2]);
+			break;
+		}
+		if (!(area > 0.0)) {
+			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle %d (%d, %d, %d) has zero area",
+			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
 		for (int c = 0; c < 3; c++)

@@ -864,11 +864,24 @@ static sm_status damping_bound(const modes_problem* p, double* bound)
 
 // h <= 2 / (gamma/2 + sqrt(gamma^2/4 + omega^2)), the condition on the determinant 1 - h gamma
 // (>= -1) and the trace 2 - h gamma - h^2 omega^2 (>= -1 - determinant) of symplectic Euler's map
-// (Jury's criterion; analysis.h).
+// (Jury's criterion; analysis.h). A negative gamma makes the determinant exceed 1 at every h > 0:
+// no step is stable. NaN stays NaN (hypot(NaN, inf) is inf, so it is tested first).
 double sm_symplectic_euler_step(double omega, double gamma)
 {
+	if (isnan(omega) || isnan(gamma))
+		return NAN;
+	if (gamma < 0.0)
+		return 0.0;
 	const double denominator = 0.5 * gamma + hypot(0.5 * gamma, omega);
 	return denominator > 0.0 ? 2.0 / denominator : INFINITY;
+}
+
+// A spring's term in a Gershgorin row: constant x (1/m_i + between). 0 for a zero constant even
+// where 1/m_i overflows (a subnormal mass), where the product would be NaN, which fmax would
+// then drop from the maximum.
+static double row_term(double constant, double inverse_mass, double between)
+{
+	return constant > 0.0 ? constant * (inverse_mass + between) : 0.0;
 }
 
 sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limit)
@@ -888,12 +901,12 @@ sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limi
 		const double between = free_a && free_b ? 1.0 / sqrt(model->mass[a] * model->mass[b]) : 0.0;
 		const double ks = fabs(model->stiffness[k]), kd = fabs(model->damping[k]);
 		if (free_a) {
-			row[a] += ks * (1.0 / model->mass[a] + between);
-			damping_row[a] += kd * (1.0 / model->mass[a] + between);
+			row[a] += row_term(ks, 1.0 / model->mass[a], between);
+			damping_row[a] += row_term(kd, 1.0 / model->mass[a], between);
 		}
 		if (free_b) {
-			row[b] += ks * (1.0 / model->mass[b] + between);
-			damping_row[b] += kd * (1.0 / model->mass[b] + between);
+			row[b] += row_term(ks, 1.0 / model->mass[b], between);
+			damping_row[b] += row_term(kd, 1.0 / model->mass[b], between);
 		}
 	}
 	double omega2 = 0.0, gamma = 0.0;

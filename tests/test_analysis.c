@@ -1255,6 +1255,156 @@ static int test_explicit_step_limit(void)
 	return 0;
 }
 
+// The chain of test_explicit_step_limit (a fixed particle, 1 kg and 0.5 kg free; springs of 40 and
+// 25 N/m, 0.2 and 0.6 N s/m; mass damping 0.5 1/s), or the same chain numbered from its free end
+// with each spring's ends swapped.
+static sm_model* explicit_limit_chain(bool reversed)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 0.5;
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	const double masses[3] = {1.0, 1.0, 0.5};  // the fixed particle's, then the free ones'
+	bool ok = true;
+	for (int32_t k = 0; k < 3; k++) {
+		const int32_t i = reversed ? 2 - k : k;
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		p.mass = masses[i];
+		p.position[2] = -(double)i;
+		ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK;
+	}
+	const double stiffness[2] = {40.0, 25.0}, damping[2] = {0.2, 0.6};
+	for (int32_t k = 0; k < 2; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = reversed ? 2 - (k + 1) : k;  // chain positions k and k + 1, ends swapped if reversed
+		s.b = reversed ? 2 - k : k + 1;
+		s.stiffness = stiffness[k];
+		s.damping = damping[k];
+		ok = ok && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	}
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// The explicit step limit at its edges. sm_symplectic_euler_step: NaN for a NaN argument (not
+// INFINITY, which would read as no limit), 0 for an infinite one and for a negative damping rate
+// (the determinant 1 - h gamma exceeds 1 at every h > 0). sm_model_explicit_limit: the chain's
+// bounds do not depend on how its particles are numbered or which end of a spring is a (the same
+// sums in the same order: equal); a model with no free particle has no limit, under mass damping
+// too, and modes gives none either; a free particle of the smallest subnormal mass on a 1 N/m
+// spring, beside a spring of zero constants, has an unbounded omega (1/m overflows) and step 0,
+// not the step of a particle on no spring.
+static int test_explicit_step_limit_edges(void)
+{
+	ENSURE(isnan(sm_symplectic_euler_step(NAN, 0.0)) && isnan(sm_symplectic_euler_step(0.0, NAN)));
+	ENSURE(isnan(sm_symplectic_euler_step(INFINITY, NAN)));
+	ENSURE(sm_symplectic_euler_step(INFINITY, 0.0) == 0.0 && sm_symplectic_euler_step(0.0, INFINITY) == 0.0);
+	ENSURE(sm_symplectic_euler_step(1.0, -4.0) == 0.0 && sm_symplectic_euler_step(0.0, -1e-300) == 0.0);
+
+	sm_model* chain = explicit_limit_chain(false);
+	sm_model* reversed = explicit_limit_chain(true);
+	ENSURE(chain != NULL && reversed != NULL);
+	sm_explicit_limit a, b;
+	ENSURE_STATUS(sm_model_explicit_limit(chain, &a), SM_OK);
+	ENSURE_STATUS(sm_model_explicit_limit(reversed, &b), SM_OK);
+	const double r = 1.0 / sqrt(0.5);
+	ENSURE_NEAR(a.damping_rate, 0.5 + 0.6 / 0.5 + 0.6 * r, 1e-12);  // the 0.5 kg particle's row
+	ENSURE(a.omega_max == b.omega_max && a.damping_rate == b.damping_rate && a.step == b.step);
+	sm_model_destroy(reversed);
+	sm_model_destroy(chain);
+
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 2.0;
+	sm_model* held = sm_model_create(&md, NULL);
+	ENSURE(held != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(held, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_DRIVEN;
+	p.position[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(held, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = 100.0;
+	s.damping = 3.0;
+	ENSURE_STATUS(sm_model_add_spring(held, &s, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_explicit_limit(held, &a), SM_OK);
+	ENSURE(a.omega_max == 0.0 && a.damping_rate == 0.0 && isinf(a.step));
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(held, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.count == 0 && modes.damping_rate_max == 0.0 && isinf(modes.explicit_step));
+	sm_modes_release(&modes);
+	sm_model_destroy(held);
+
+	md.mass_damping = 0.0;
+	sm_model* tiny = sm_model_create(&md, NULL);
+	ENSURE(tiny != NULL);
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[0] = 0.0;
+	ENSURE_STATUS(sm_model_add_particle(tiny, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.mass = 4.9e-324;
+	p.position[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(tiny, &p, NULL), SM_OK);
+	s.stiffness = 0.0;
+	s.damping = 0.0;
+	ENSURE_STATUS(sm_model_add_spring(tiny, &s, NULL), SM_OK);
+	s.stiffness = 1.0;
+	ENSURE_STATUS(sm_model_add_spring(tiny, &s, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_explicit_limit(tiny, &a), SM_OK);
+	ENSURE(isinf(a.omega_max) && a.damping_rate == 0.0 && a.step == 0.0);
+	sm_model_destroy(tiny);
+	return 0;
+}
+
+// A zero-length spring without damping whose particles coincide has a linearisation (its force
+// ks (x_b - x_a) is linear): modes of a 1 kg particle on a 100 N/m one at its fixed anchor are
+// three at omega^2 = 100 1/s^2 (dense eigenvalues of a diagonal matrix: 1e-12), as are those of
+// the same spring with 4 N s/m of damping once that spring is disabled (its damping left out).
+static int test_coincident_undamped_zero_length_spring_has_modes(void)
+{
+	for (int disabled = 0; disabled <= 1; disabled++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.kind = SM_SPRING_ZERO_LENGTH;
+		s.stiffness = 100.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		if (disabled) {
+			s.damping = 4.0;
+			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+			ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
+		}
+		sm_modes modes;
+		sm_error err;
+		ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+		ENSURE(modes.count == 3);
+		for (int k = 0; k < 3; k++) {
+			ENSURE_NEAR(modes.omega_squared[k], 100.0, 1e-12 * 100.0);
+			ENSURE(modes.damping_ratio[k] == 0.0);
+		}
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
 
@@ -2224,6 +2374,8 @@ int main(int argc, char** argv)
 	RUN_TEST(test_coincident_rest_length_spring);
 	RUN_TEST(test_coincident_damped_spring_of_zero_rest_length);
 	RUN_TEST(test_explicit_step_limit);
+	RUN_TEST(test_explicit_step_limit_edges);
+	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);

@@ -1045,6 +1045,114 @@ static int test_saved_state_needs_the_same_free_particles_and_springs(void)
 	return 0;
 }
 
+// The bytes of a snapshot of `other` relabelled with the topology hash of `own` (the 8 bytes at
+// offset 32 of the 48-byte header) under a checksum made to match, read back: a snapshot whose
+// hash is the simulation's but whose counts are other's. NULL if any step fails.
+static sm_simulation_state* relabelled_snapshot(const sm_simulation* own, const sm_simulation* other)
+{
+	sm_simulation_state* mine = sm_simulation_save_state(own);
+	sm_simulation_state* theirs = sm_simulation_save_state(other);
+	const size_t own_size = sm_simulation_state_size(mine), size = sm_simulation_state_size(theirs);
+	unsigned char* own_bytes = malloc(own_size);
+	unsigned char* bytes = malloc(size);
+	sm_simulation_state* forged = NULL;
+	if (mine != NULL && theirs != NULL && own_bytes != NULL && bytes != NULL &&
+	    sm_simulation_state_serialize(mine, own_bytes, own_size) == SM_OK &&
+	    sm_simulation_state_serialize(theirs, bytes, size) == SM_OK) {
+		memcpy(bytes + 32, own_bytes + 32, 8);
+		uint64_t h = 14695981039346656037ull;  // FNV-1a over all but the checksum
+		for (size_t k = 0; k + 8 < size; k++)
+			h = (h ^ bytes[k]) * 1099511628211ull;
+		memcpy(bytes + size - 8, &h, 8);
+		sm_error err;
+		forged = sm_simulation_state_deserialize(bytes, size, &err);
+	}
+	free(bytes);
+	free(own_bytes);
+	sm_simulation_state_destroy(theirs);
+	sm_simulation_state_destroy(mine);
+	return forged;
+}
+
+// Restore checks each count, not only the topology hash that bytes read back may carry beside
+// other counts: snapshots of a model with one spring more, one particle more (held, so the free
+// count is the same) and one free particle fewer (its arrays shorter than the simulation's), each
+// under the chain's own hash, are refused with nothing changed; the chain's own snapshot relabelled
+// the same way (its hash unchanged) is taken. Deserialize refuses two break events of one spring
+// also when they are the only two.
+static int test_restore_checks_every_count(void)
+{
+	sm_model* chain = chain_of_three(0, false);
+	sm_model* more_springs = chain_of_three(0, true);
+	sm_model* more_particles = sm_model_clone(chain);
+	sm_model* fewer_free = sm_model_clone(chain);
+	ENSURE(chain != NULL && more_springs != NULL && more_particles != NULL && fewer_free != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[1] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(more_particles, &p, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(fewer_free, 1, SM_PARTICLE_FIXED), SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(chain, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	const size_t n3 = 9;
+	double x[9];
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	const sm_model* others[3] = {more_springs, more_particles, fewer_free};
+	for (int k = 0; k < 3; k++) {
+		sm_simulation* other = sm_simulation_create(others[k], &d, NULL);
+		ENSURE(other != NULL);
+		ENSURE_STATUS(sm_simulation_advance(other, 0.2), SM_OK);
+		sm_simulation_state* forged = relabelled_snapshot(sim, other);
+		ENSURE(forged != NULL);
+		ENSURE_STATUS(sm_simulation_restore_state(sim, forged), SM_ERROR_TOPOLOGY);
+		ENSURE(sm_simulation_time(sim) == 0.1 && memcmp(sm_simulation_positions(sim), x, n3 * sizeof(double)) == 0);
+		sm_simulation_state_destroy(forged);
+		sm_simulation_destroy(other);
+	}
+	sm_simulation* twin = sm_simulation_create(chain, &d, NULL);
+	ENSURE(twin != NULL);
+	sm_simulation_state* own = relabelled_snapshot(sim, sim);
+	ENSURE(own != NULL);
+	ENSURE_STATUS(sm_simulation_restore_state(twin, own), SM_OK);
+	ENSURE(sm_simulation_time(twin) == 0.1 && memcmp(sm_simulation_positions(twin), x, n3 * sizeof(double)) == 0);
+	sm_simulation_state_destroy(own);
+	// Both springs cut: two break events, which read back; the second made the first's spring
+	// (under a checksum made to match) is refused, also with no third event beside them.
+	ENSURE_STATUS(sm_simulation_break_spring(twin, 0), SM_OK);
+	ENSURE_STATUS(sm_simulation_break_spring(twin, 1), SM_OK);
+	sm_simulation_state* cut = sm_simulation_save_state(twin);
+	ENSURE(cut != NULL);
+	const size_t size = sm_simulation_state_size(cut);
+	unsigned char* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(sm_simulation_state_serialize(cut, bytes, size), SM_OK);
+	sm_error err;
+	sm_simulation_state* read = sm_simulation_state_deserialize(bytes, size, &err);
+	ENSURE(read != NULL);
+	sm_simulation_state_destroy(read);
+	sm_break_event second;
+	memcpy(&second, bytes + size - 8 - sizeof second, sizeof second);
+	ENSURE(second.spring == 1);
+	second.spring = 0;
+	memcpy(bytes + size - 8 - sizeof second, &second, sizeof second);
+	uint64_t h = 14695981039346656037ull;
+	for (size_t k = 0; k + 8 < size; k++)
+		h = (h ^ bytes[k]) * 1099511628211ull;
+	memcpy(bytes + size - 8, &h, 8);
+	ENSURE(sm_simulation_state_deserialize(bytes, size, &err) == NULL && strstr(err.message, "spring 0 breaks twice") != NULL);
+	free(bytes);
+	sm_simulation_state_destroy(cut);
+	sm_simulation_destroy(twin);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(fewer_free);
+	sm_model_destroy(more_particles);
+	sm_model_destroy(more_springs);
+	sm_model_destroy(chain);
+	return 0;
+}
+
 // A snapshot holds the springs that broke, not the model's own choice: restored after
 // sm_simulation_update_model disabled spring 1 of the bob on two springs, spring 1 stays disabled
 // (no break event brings it back), and spring 0, broken before the save, is broken again. A snapshot
@@ -4080,6 +4188,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_state_is_restored);
 	RUN_TEST(test_restore_keeps_the_models_springs_and_topology);
 	RUN_TEST(test_saved_state_as_bytes);
+	RUN_TEST(test_restore_checks_every_count);
 	RUN_TEST(test_saved_state_keeps_the_driven_motion);
 	RUN_TEST(test_saved_state_needs_the_same_free_particles_and_springs);
 	RUN_TEST(test_driven_follows_prescribed_motion);

@@ -380,6 +380,12 @@ static int test_mesh_errors(void)
 	def.triangle_count = 1;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
 	ENSURE(strstr(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) overflows") != NULL);
+	// A triangle of area 7.1e199 m^2 whose cross product overflows as inf - inf (NaN): an overflow
+	// too, not a zero area.
+	const double skew[] = {0, 0, 0, 1e200, 1e200, 0, 1e200, 1e200, 1};
+	def.vertices = skew;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) overflows") != NULL);
 	def.vertices = two;
 	def.density = DBL_MAX;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
@@ -387,6 +393,17 @@ static int test_mesh_errors(void)
 	       NULL);
 	def.vertices = v;
 	def.density = 4.9e-324;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") !=
+	       NULL);
+	// The same for a vertex found only in the second triangle of a unit square (its mass rounds to 0
+	// too): it belongs to a triangle, wherever that triangle is listed.
+	const double square[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+	const int32_t later[] = {1, 2, 3, 3, 0, 1};
+	def.vertices = square;
+	def.vertex_count = 4;
+	def.triangles = later;
+	def.triangle_count = 2;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
 	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") !=
 	       NULL);

@@ -243,7 +243,8 @@ typedef struct sm_explicit_limit {
 SM_API sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limit);
 
 /// The largest stable step [s] of symplectic Euler for angular frequency omega [rad/s] and damping
-/// rate gamma [1/s] (sm_explicit_limit); INFINITY when both are 0.
+/// rate gamma [1/s] (sm_explicit_limit); INFINITY when both are 0, 0 for a negative gamma (no step
+/// is stable) or an infinite one, NaN if either is NaN.
 SM_API double sm_symplectic_euler_step(double omega, double gamma);
 
 #ifdef __cplusplus

@@ -604,6 +604,10 @@ def test_stability_limit_of_a_damped_oscillator(tmp_path):
     assert number_after(cli("modes", path, "-n", "0").stdout, "explicit stability limit") == pytest.approx(
         stable, rel=1e-5)
     assert number_after(cli("check", path).stdout, "step >=") == pytest.approx(stable, rel=2e-3)
+    # Both print the damping rate they take, here exactly the dashpot's d / m = 40 1/s (modes 6
+    # digits, check 3).
+    assert number_after(cli("modes", path, "-n", "0").stdout, "damping rate <=") == pytest.approx(40, rel=1e-5)
+    assert number_after(cli("check", path).stdout, "damping rate <=") == pytest.approx(40, rel=2e-3)
     # Each printed limit is stable: symplectic Euler on the bob at that step decays (the check is
     # the scheme itself, 2000 steps from x = 1e-3 m off rest), and at 1.1 times it blows up.
     def final_amplitude(h):
@@ -618,6 +622,11 @@ def test_stability_limit_of_a_damped_oscillator(tmp_path):
     bob["mass_damping"] = 4.0
     path.write_text(json.dumps(bob))
     assert number_after(cli("check", path).stdout, "step >=") == pytest.approx(0.5, rel=2e-3)
+    # Neither stiffness nor damping: nothing limits the step, and neither tool prints one.
+    bob["mass_damping"] = 0.0
+    path.write_text(json.dumps(bob))
+    assert "explicit" not in cli("check", path).stdout
+    assert "explicit" not in cli("modes", path, "-n", "0").stdout
 
 
 @pytest.mark.parametrize("ends", [("bob", "anchor"), ("anchor", "bob")])
