@@ -17,14 +17,14 @@ void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, 
 // dof_mass 3 * free count (may be NULL).
 int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
 
-// The first intact rest-length spring (l0 > 0) whose two particles coincide at x (its degenerate
+// The first intact rest-length spring (l0 > 0) with a free end whose two particles coincide at x (its degenerate
 // point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy ks (L - l0)^2 / 2
 // is a maximum there, falling as the particles part in any direction with a force of about
 // ks l0 that has no derivative at the point: the model.h convention (no force, K = ks I) makes it
 // a force balance, never a stable one, and it has no linearisation.
 int32_t analysis_coincident_spring(const sm_model* model, const double* x);
 
-// The first intact spring with damping whose two particles coincide at x (a spring of rest
+// The first intact spring with damping and a free end whose two particles coincide at x (a spring of rest
 // length 0, or a rest-length spring at its degenerate point), or -1. Its damping force
 // kd (u . dv) u has no derivative there: a motion straight through the point is damped by
 // kd dv in full, while the model.h convention (no damping at L = 0, df/dv = 0) has none, so the

@@ -78,13 +78,15 @@ int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* do
 	return nf;
 }
 
-// The first intact spring whose particles coincide at x, among the rest-length springs of l0 > 0
-// (`damped` false) or the springs with damping (`damped` true).
+// The first intact spring with a free end whose particles coincide at x, among the rest-length
+// springs of l0 > 0 (`damped` false) or the springs with damping (`damped` true). A spring
+// between two held particles acts on no free degree of freedom: it has nothing to linearise.
 static int32_t first_coincident(const sm_model* model, const double* x, bool damped)
 {
 	for (int32_t s = 0; s < model->spring_count; s++) {
 		const bool candidate = damped ? model->damping[s] > 0.0 : !model->zero_length[s] && model->rest_length[s] > 0.0;
-		if (!model->enabled[s] || !candidate)
+		const bool held = model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
+		if (!model->enabled[s] || !candidate || held)
 			continue;
 		spring_geometry g;
 		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);

@@ -1405,6 +1405,52 @@ static int test_coincident_undamped_zero_length_spring_has_modes(void)
 	return 0;
 }
 
+// Coincident springs between two held particles act on no free degree of freedom, so they stand
+// in the way of neither modes nor statics: two fixed particles at one point joined by a damped
+// zero-length spring and a rest-length spring of l0 = 1 m, and a 1 kg bob hanging 1 m below on
+// a 100 N/m spring of l0 = 1 m under g = 10 m/s^2. Modes about the start: three (the bob's);
+// statics: the bob 0.1 m lower, a stable equilibrium (the spring stretched, so its transverse
+// stiffness is positive), to Newton's tolerance (1e-9 N over 100 N/m: 1e-11 m; 1e-9 allowed).
+static int test_coincident_springs_between_held_particles(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = -10.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	p.position[2] = -1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.stiffness = 100.0;
+	s.damping = 2.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	s.kind = SM_SPRING_REST_LENGTH;
+	s.rest_length = 1.0;
+	s.damping = 0.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	s.b = 2;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.count == 3);
+	sm_modes_release(&modes);
+	double x[9];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+	ENSURE_NEAR(x[8], -1.1, 1e-9);
+	ENSURE(res.stable);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
 
@@ -2376,6 +2422,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
+	RUN_TEST(test_coincident_springs_between_held_particles);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);
