@@ -260,8 +260,8 @@ int sm_cmd_check(int argc, char** argv)
 		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped)\n", limit.omega_max,
 		       limit.omega_max / (2.0 * 3.14159265358979323846));
 	if (isfinite(limit.step))
-		printf("explicit     step >= %.3g s stable with symplectic Euler (damping rate <= %.3g 1/s; springmass modes "
-		       "MODEL -n 0: a closer value)\n",
+		printf("explicit     stable with symplectic Euler at steps up to at least %.3g s (damping rate <= %.3g 1/s; "
+		       "springmass modes MODEL -n 0: a closer value)\n",
 		       limit.step, limit.damping_rate);
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));

@@ -123,10 +123,13 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
 	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
-	if (isfinite(modes->explicit_step))
+	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0)
 		printf("explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
 		       "2/omega_max = %.6g s undamped)\n",
-		       modes->explicit_step, modes->damping_rate_max, modes->omega_max > 0.0 ? 2.0 / modes->omega_max : INFINITY);
+		       modes->explicit_step, modes->damping_rate_max, 2.0 / modes->omega_max);
+	else if (isfinite(modes->explicit_step))
+		printf("explicit stability limit %.6g s (symplectic Euler with damping rate <= %.6g 1/s, no stiffness)\n",
+		       modes->explicit_step, modes->damping_rate_max);
 	if (highest > 0.0)
 		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
 		       1.0 / (highest * steps_per_period), steps_per_period, highest);
