@@ -121,6 +121,8 @@ check_cases << 'CASES'
 2|springmass modes: -n needs a count from 0 to 1e8, got ' +3'|modes "$osc" -n ' +3'
 2|springmass modes: --count needs a count from 0 to 1e8, got '0x10'|modes "$osc" --count 0x10
 0||modes "$osc" -n 1e0
+2|springmass modes: -n needs a count from 0 to 1e8, got '1e-400'|modes "$osc" -n 1e-400
+0||modes "$osc" -n 0e5
 2|springmass modes: -n needs a count from 0 to 1e8, got '100000001'|modes "$osc" -n 100000001
 2|springmass statics: --max-iterations needs a count from 1 to 1000000, got '1000001'|statics "$osc" -q --max-iterations 1000001
 2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end

@@ -48,6 +48,10 @@ bool cli_parse_count(const char* text, double min, double max, long* value)
 	double v;
 	if (!cli_parse_number(text, &v) || !(v >= min && v <= max) || v != floor(v))
 		return false;
+	// A count that reads as 0 only by underflow (1e-400) is not 0.
+	for (const char* c = text; v == 0.0 && *c != '\0' && *c != 'e' && *c != 'E'; c++)
+		if (*c >= '1' && *c <= '9')
+			return false;
 	*value = (long)v;
 	return true;
 }

@@ -123,13 +123,19 @@ static bool write_output(const char* output, const char* data, size_t length)
 	return ok;
 }
 
-static bool copy_file(const char* from, const char* to)
+// Copies a regular file with its mode; false on failure, with *problem (if not NULL) saying why.
+static bool copy_file(const char* from, const char* to, const char** problem)
 {
 	size_t length = 0;
-	char* data = fmu_read_file(from, &length, NULL);
+	const char* unused;
+	if (problem == NULL)
+		problem = &unused;
+	char* data = fmu_read_file(from, &length, problem);
 	if (!data)
 		return false;
 	bool ok = write_all(to, data, length);
+	if (!ok)
+		*problem = strerror(errno);
 	free(data);
 	if (ok) {
 		struct stat st;
@@ -234,7 +240,7 @@ static bool copy_folder(const char* from, const char* to, const char* rename_fro
 		const bool renamed = rename_from != NULL && strcmp(entry->d_name, rename_from) == 0;
 		copied = join(source, sizeof source, from, entry->d_name) &&
 		         (!is_file(source) || (join(target, sizeof target, to, renamed ? rename_to : entry->d_name) &&
-		                               copy_file(source, target)));
+		                               copy_file(source, target, NULL)));
 	}
 	closedir(d);
 	return copied;
@@ -412,9 +418,9 @@ static int package(const options* opt)
 	if (opt->reference) {
 		if (!join(path, sizeof path, staging, "resources/reference.csv"))
 			goto done;
-		if (!copy_file(opt->reference, path)) {
-			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference,
-			        strerror(errno));
+		const char* problem = NULL;
+		if (!copy_file(opt->reference, path, &problem)) {
+			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference, problem);
 			goto done;
 		}
 	}

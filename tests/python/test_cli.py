@@ -823,6 +823,8 @@ def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
     out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", tmp_path / "missing.csv", status=1, env=env)
     assert out.stderr == (f"springmass fmu: cannot copy the reference result {tmp_path / 'missing.csv'}: "
                           "No such file or directory\n")
+    out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", "/dev/null", status=1, env=env)
+    assert out.stderr == "springmass fmu: cannot copy the reference result /dev/null: not a regular file\n"
     # A broken model is refused with the loader's message, as `springmass check` gives it.
     broken = ROOT / "tests" / "bad_models" / "unknown_particle.json"
     out = cli("fmu", broken, "-o", fmu, "--runtime", runtime, status=1, env=env)
