@@ -1014,6 +1014,16 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 	}
 	modes->damping_rate_max = limit.damping_rate;
 	modes->explicit_step = sm_symplectic_euler_step(modes->omega_max, modes->damping_rate_max);
+	// With every mode at hand (the dense path, all kept), the smallest of their own limits, each
+	// mode's omega with its damping rate phi^T C phi: exact for proportional damping, and above
+	// the bound, which pairs the largest rate with the largest frequency.
+	if (kept > 0 && kept == (size_t)modes->dof) {
+		double step = INFINITY;
+		for (size_t i = 0; i < kept; i++)
+			step = fmin(step, sm_symplectic_euler_step(sqrt(fmax(modes->omega_squared[i], 0.0)),
+			                                            fmax(modes->modal_damping[i], 0.0)));
+		modes->explicit_step = step;
+	}
 	free(product);
 	free(modal);
 	return SM_OK;

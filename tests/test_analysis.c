@@ -1247,8 +1247,22 @@ static int test_explicit_step_limit(void)
 	sm_error err;
 	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
 	ENSURE(modes.damping_rate_max == limit.damping_rate && modes.omega_max <= limit.omega_max);
-	ENSURE(modes.explicit_step == sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
+	// All six modes kept: the smallest of their own limits, at least the one of the largest
+	// frequency with the largest damping rate, and that at least the model's bound.
+	ENSURE(modes.count == modes.dof);
+	double own = INFINITY;
+	for (int32_t i = 0; i < modes.count; i++)
+		own = fmin(own, sm_symplectic_euler_step(sqrt(fmax(modes.omega_squared[i], 0.0)),
+		                                         fmax(modes.modal_damping[i], 0.0)));
+	ENSURE(modes.explicit_step == own);
+	ENSURE(own >= sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
 	ENSURE(modes.explicit_step >= limit.step);
+	sm_modes_release(&modes);
+	// Two modes kept of six: the bound's pairing of omega_max and damping_rate_max.
+	sm_modes_def two = sm_default_modes_def();
+	two.mode_count = 2;
+	ENSURE_STATUS(sm_modes_compute(model, &two, &modes, &err), SM_OK);
+	ENSURE(modes.count == 2 && modes.explicit_step == sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
 	sm_modes_release(&modes);
 	ENSURE_STATUS(sm_model_explicit_limit(NULL, &limit), SM_ERROR_INVALID_ARGUMENT);
 	sm_model_destroy(model);

@@ -123,7 +123,11 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
 	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
-	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0)
+	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0 && modes->count == modes->dof)
+		printf("explicit stability limit %.6g s (symplectic Euler, each mode with its own damping rate; "
+		       "2/omega_max = %.6g s undamped)\n",
+		       modes->explicit_step, 2.0 / modes->omega_max);
+	else if (isfinite(modes->explicit_step) && modes->omega_max > 0.0)
 		printf("explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
 		       "2/omega_max = %.6g s undamped)\n",
 		       modes->explicit_step, modes->damping_rate_max, 2.0 / modes->omega_max);

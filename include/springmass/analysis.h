@@ -186,8 +186,10 @@ typedef struct sm_modes {
 	/// Upper bound on every mode's damping rate phi^T C phi (2 zeta omega) [1/s]: the Gershgorin
 	/// bound of sm_model_explicit_limit.
 	double damping_rate_max;
-	/// Largest stable step of symplectic Euler [s] (sm_explicit_limit) with omega_max and
-	/// damping_rate_max: safe for proportional damping; INFINITY when nothing limits it.
+	/// Largest stable step of symplectic Euler [s] (sm_explicit_limit): with every mode kept
+	/// (dense path), the smallest of the modes' own limits (each omega with its modal_damping),
+	/// otherwise the one of omega_max with damping_rate_max; exact or safe for proportional
+	/// damping, an estimate otherwise; INFINITY when nothing limits it.
 	double explicit_step;
 	double damping_coupling; ///< largest normalised off-diagonal entry of Phi^T C Phi (kept modes) [1]
 	bool proportional;       ///< damping_coupling <= proportional_tolerance
