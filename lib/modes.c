@@ -833,35 +833,6 @@ done:
 // ---------------------------------------------------------------------------------------------
 // Both paths: frequencies, residuals and the modal damping matrix of the kept modes.
 
-// An upper bound on the largest eigenvalue of M^-1/2 C M^-1/2 [1/s], C = -df/dv over the free
-// degrees of freedom (Gershgorin): a spring's damping block kd u u^T has absolute row sums
-// |u_c| (|u_x| + |u_y| + |u_z|) kd <= sqrt(3) kd for a unit u, on the diagonal block of each free
-// end (scaled by 1 / m) and between two free ends (by 1 / sqrt(m_a m_b)); mass damping adds alpha.
-static sm_status damping_bound(const modes_problem* p, double* bound)
-{
-	const sm_model* m = p->model;
-	double* row = calloc((size_t)m->particle_count + 1, sizeof(double));
-	if (row == NULL)
-		return SM_ERROR_OUT_OF_MEMORY;
-	const double sqrt3 = sqrt(3.0);
-	for (int32_t k = 0; k < m->spring_count; k++) {
-		const int32_t a = m->spring_a[k], b = m->spring_b[k];
-		const bool free_a = p->free_index[a] >= 0, free_b = p->free_index[b] >= 0;
-		const double kd = sqrt3 * fabs(m->damping[k]);
-		const double between = free_a && free_b ? kd / sqrt(m->mass[a] * m->mass[b]) : 0.0;
-		if (free_a)
-			row[a] += kd / m->mass[a] + between;
-		if (free_b)
-			row[b] += kd / m->mass[b] + between;
-	}
-	*bound = 0.0;
-	for (int32_t q = 0; q < m->particle_count; q++)
-		*bound = fmax(*bound, row[q]);
-	*bound += fabs(m->def.mass_damping);
-	free(row);
-	return SM_OK;
-}
-
 // h <= 2 / (gamma/2 + sqrt(gamma^2/4 + omega^2)), the condition on the determinant 1 - h gamma
 // (>= -1) and the trace 2 - h gamma - h^2 omega^2 (>= -1 - determinant) of symplectic Euler's map
 // (Jury's criterion; analysis.h). A negative gamma makes the determinant exceed 1 at every h > 0:
@@ -959,17 +930,19 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 			modes->residual = fmax(modes->residual, sqrt(r2 / phi2) / p->stiffness_norm);
 	}
 
-	// What round-off leaves in an entry of Phi^T C Phi: each is a sum over the n3 components of
-	// phi_i times C phi_j, with phi M-normalised, so its error is below about n3 eps times the
-	// largest eigenvalue of M^-1/2 C M^-1/2 (damping_bound). Entries within it are zero: those of
-	// a free body's rigid modes, which spring damping does not act on, come out as 1e-14 or so.
-	double damping_round_off = 0.0;
-	if (damping_bound(p, &damping_round_off) != SM_OK) {
+	// The bounds of sm_model_explicit_limit: on every mode's damping rate, the largest eigenvalue of
+	// M^-1/2 C M^-1/2, C = -df/dv over the free degrees of freedom, and with it the step limit.
+	sm_explicit_limit limit;
+	if (sm_model_explicit_limit(p->model, &limit) != SM_OK) {
 		free(product);
 		free(modal);
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
 	}
-	damping_round_off *= 4.0 * (double)n3 * DBL_EPSILON;
+	// What round-off leaves in an entry of Phi^T C Phi: each is a sum over the n3 components of
+	// phi_i times C phi_j, with phi M-normalised, so its error is below about n3 eps times that
+	// largest eigenvalue. Entries within it are zero: those of a free body's rigid modes, which
+	// spring damping does not act on, come out as 1e-14 or so.
+	const double damping_round_off = limit.damping_rate * 4.0 * (double)n3 * DBL_EPSILON;
 	// Modal damping matrix Phi^T C Phi over the kept modes; C phi = -(df/dv) phi.
 	for (size_t j = 0; j < kept; j++) {
 		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, NULL, modes->shapes + j * n3, product);
@@ -1006,12 +979,6 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		}
 	}
 	modes->proportional = modes->damping_coupling <= p->def->proportional_tolerance;
-	sm_explicit_limit limit;
-	if (sm_model_explicit_limit(p->model, &limit) != SM_OK) {
-		free(product);
-		free(modal);
-		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the explicit step limit");
-	}
 	modes->damping_rate_max = limit.damping_rate;
 	modes->explicit_step = sm_symplectic_euler_step(modes->omega_max, modes->damping_rate_max);
 	// With every mode at hand (the dense path, all kept), the smallest of their own limits, each

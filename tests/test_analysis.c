@@ -1151,6 +1151,32 @@ static int test_coincident_rest_length_spring(void)
 	return 0;
 }
 
+// A 1 kg particle at its fixed anchor's point, without gravity, tied to it by a spring of the
+// given kind with rest length 0, 100 N/m and `damping` [N s/m].
+static sm_model* bob_on_its_anchor(sm_spring_kind kind, double damping)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.kind = kind;
+	s.rest_length = 0.0;
+	s.stiffness = 100.0;
+	s.damping = damping;
+	bool ok = model != NULL && sm_model_add_particle(model, &p, NULL) == SM_OK;
+	p.motion = SM_PARTICLE_FREE;
+	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A free particle on its fixed anchor, tied by a damped spring of rest length 0 (ks = 100 N/m,
 // kd = 4 N s/m, m = 1 kg), zero-length or rest-length kind: the elastic force ks (x_b - x_a) is
 // linear, but the damping force kd (u . dv) u is not differentiable where the particles meet (its
@@ -1165,23 +1191,8 @@ static int test_coincident_rest_length_spring(void)
 static int test_coincident_damped_spring_of_zero_rest_length(void)
 {
 	for (int kind = 0; kind <= 1; kind++) {
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = 0.0;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = bob_on_its_anchor(kind == 0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH, 4.0);
 		ENSURE(model != NULL);
-		sm_particle_def p = sm_default_particle_def();
-		p.motion = SM_PARTICLE_FIXED;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		p.motion = SM_PARTICLE_FREE;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		sm_spring_def s = sm_default_spring_def();
-		s.a = 0;
-		s.b = 1;
-		s.kind = kind == 0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
-		s.rest_length = 0.0;
-		s.stiffness = 100.0;
-		s.damping = 4.0;
-		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 		sm_modes modes;
 		sm_error err;
 		ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
@@ -1198,6 +1209,42 @@ static int test_coincident_damped_spring_of_zero_rest_length(void)
 	return 0;
 }
 
+// A chain hanging from a fixed particle, 1 kg and 0.5 kg free (springs of 40 and 25 N/m, 0.2 and
+// 0.6 N s/m; mass damping 0.5 1/s), or the same chain numbered from its free end with each
+// spring's ends swapped.
+static sm_model* explicit_limit_chain(bool reversed)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 0.5;
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	const double masses[3] = {1.0, 1.0, 0.5};  // the fixed particle's, then the free ones'
+	bool ok = true;
+	for (int32_t k = 0; k < 3; k++) {
+		const int32_t i = reversed ? 2 - k : k;
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		p.mass = masses[i];
+		p.position[2] = -(double)i;
+		ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK;
+	}
+	const double stiffness[2] = {40.0, 25.0}, damping[2] = {0.2, 0.6};
+	for (int32_t k = 0; k < 2; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = reversed ? 2 - (k + 1) : k;  // chain positions k and k + 1, ends swapped if reversed
+		s.b = reversed ? 2 - k : k + 1;
+		s.stiffness = stiffness[k];
+		s.damping = damping[k];
+		ok = ok && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	}
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
 // omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
 // a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
@@ -1211,30 +1258,8 @@ static int test_explicit_step_limit(void)
 	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 0.0), 0.2, 1e-15);
 	ENSURE_NEAR(sm_symplectic_euler_step(0.0, 4.0), 0.5, 1e-15);
 	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 40.0), 2.0 * (sqrt(5.0) - 2.0) / 10.0, 1e-15);
-	sm_model_def md = sm_default_model_def();
-	md.mass_damping = 0.5;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = explicit_limit_chain(false);
 	ENSURE(model != NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.motion = SM_PARTICLE_FIXED;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	p.motion = SM_PARTICLE_FREE;
-	p.position[2] = -1.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	p.position[2] = -2.0;
-	p.mass = 0.5;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
-	s.stiffness = 40.0;
-	s.damping = 0.2;
-	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
-	s.a = 1;
-	s.b = 2;
-	s.stiffness = 25.0;
-	s.damping = 0.6;
-	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 	sm_explicit_limit limit;
 	ENSURE_STATUS(sm_model_explicit_limit(model, &limit), SM_OK);
 	const double r = 1.0 / sqrt(0.5);
@@ -1267,42 +1292,6 @@ static int test_explicit_step_limit(void)
 	ENSURE_STATUS(sm_model_explicit_limit(NULL, &limit), SM_ERROR_INVALID_ARGUMENT);
 	sm_model_destroy(model);
 	return 0;
-}
-
-// The chain of test_explicit_step_limit (a fixed particle, 1 kg and 0.5 kg free; springs of 40 and
-// 25 N/m, 0.2 and 0.6 N s/m; mass damping 0.5 1/s), or the same chain numbered from its free end
-// with each spring's ends swapped.
-static sm_model* explicit_limit_chain(bool reversed)
-{
-	sm_model_def md = sm_default_model_def();
-	md.mass_damping = 0.5;
-	sm_model* model = sm_model_create(&md, NULL);
-	if (model == NULL)
-		return NULL;
-	const double masses[3] = {1.0, 1.0, 0.5};  // the fixed particle's, then the free ones'
-	bool ok = true;
-	for (int32_t k = 0; k < 3; k++) {
-		const int32_t i = reversed ? 2 - k : k;
-		sm_particle_def p = sm_default_particle_def();
-		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
-		p.mass = masses[i];
-		p.position[2] = -(double)i;
-		ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK;
-	}
-	const double stiffness[2] = {40.0, 25.0}, damping[2] = {0.2, 0.6};
-	for (int32_t k = 0; k < 2; k++) {
-		sm_spring_def s = sm_default_spring_def();
-		s.a = reversed ? 2 - (k + 1) : k;  // chain positions k and k + 1, ends swapped if reversed
-		s.b = reversed ? 2 - k : k + 1;
-		s.stiffness = stiffness[k];
-		s.damping = damping[k];
-		ok = ok && sm_model_add_spring(model, &s, NULL) == SM_OK;
-	}
-	if (!ok) {
-		sm_model_destroy(model);
-		return NULL;
-	}
-	return model;
 }
 
 // The explicit step limit at its edges. sm_symplectic_euler_step: NaN for a NaN argument (not
@@ -1385,22 +1374,11 @@ static int test_explicit_step_limit_edges(void)
 static int test_coincident_undamped_zero_length_spring_has_modes(void)
 {
 	for (int disabled = 0; disabled <= 1; disabled++) {
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = 0.0;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = bob_on_its_anchor(SM_SPRING_ZERO_LENGTH, 0.0);
 		ENSURE(model != NULL);
-		sm_particle_def p = sm_default_particle_def();
-		p.motion = SM_PARTICLE_FIXED;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		p.motion = SM_PARTICLE_FREE;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
-		sm_spring_def s = sm_default_spring_def();
-		s.a = 0;
-		s.b = 1;
-		s.kind = SM_SPRING_ZERO_LENGTH;
-		s.stiffness = 100.0;
-		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 		if (disabled) {
+			sm_spring_def s;
+			ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
 			s.damping = 4.0;
 			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 			ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
