@@ -26,7 +26,8 @@
 //
 // Damping: with mass-normalised phi, the modal damping matrix is Phi^T C Phi. When it is
 // diagonal (proportional or "classical" damping, e.g. C = a M + b K) each mode decays
-// independently as exp(-zeta omega t) with 2 zeta_i omega_i = phi_i^T C phi_i. The largest
+// independently as exp(-zeta omega t) with 2 zeta_i omega_i = phi_i^T C phi_i (within a repeated
+// frequency, in the basis that diagonalises the damping: diagonalise_repeated_groups). The largest
 // off-diagonal entry, normalised by the geometric mean of the two diagonal ones, measures how far
 // the damping is from proportional; C phi is computed without assembling C through the model's
 // Jacobian-vector product (df/dv times phi).
@@ -896,6 +897,113 @@ sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limi
 	return SM_OK;
 }
 
+// Within a repeated frequency any orthonormal basis of the eigenspace is a set of modes, and the
+// eigensolver returns whichever its round-off leads to; with non-proportional damping the modal
+// damping block of the group, Phi_g^T C Phi_g, then depends on that basis. Rotating the group's
+// shapes by the eigenvectors Q of that block (phi'_a = sum_b Q_ba phi_b: still M-orthonormal
+// and still modes of that frequency) makes the block diagonal, with its eigenvalues, which do
+// not depend on the basis, as the modes' damping: the only choice in which the group's modes
+// decay independently of each other. Modes are one group when their omega^2 differ by at most
+// repeated_tolerance times the largest |omega^2|, the eigensolvers' round-off (about 1e-15 of
+// it, dense or sparse), and they are all zero, all unstable or all positive. The rotation
+// applies to the rows and columns of the modal damping matrix as well (modal' = Q^T modal Q on
+// the group).
+static const double repeated_tolerance = 1e-12;
+
+// The end of the group of modes that starts at start (ascending omega^2).
+static size_t group_end(const double* w2, size_t count, size_t start, double tolerance)
+{
+	size_t end = start + 1;
+	while (end < count && (w2[end] == 0.0) == (w2[start] == 0.0) && (w2[end] < 0.0) == (w2[start] < 0.0) &&
+	       w2[end] - w2[end - 1] <= tolerance)
+		end++;
+	return end;
+}
+
+static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* modes, double* modal, sm_error* err)
+{
+	const size_t kept = p->kept;
+	const size_t n3 = 3 * (size_t)p->particle_count;
+	const double* w2 = modes->omega_squared;
+	double scale = modes->omega_max * modes->omega_max;
+	for (size_t i = 0; i < kept; i++)
+		scale = fmax(scale, fabs(w2[i]));
+	const double tolerance = repeated_tolerance * scale;
+	size_t largest_group = 1;
+	for (size_t start = 0, end; start < kept; start = end) {
+		end = group_end(w2, kept, start, tolerance);
+		largest_group = end - start > largest_group ? end - start : largest_group;
+	}
+	if (largest_group == 1)
+		return SM_OK;
+
+	const size_t g = largest_group;
+	const size_t row = kept > n3 ? kept : n3;
+	double* block = malloc(g * g * sizeof(double));
+	double* rotation = malloc(g * g * sizeof(double));
+	double* damping = malloc(g * sizeof(double));
+	double* rows = malloc(g * row * sizeof(double));
+	gsl_eigen_symmv_workspace* ws = symmv_workspace_create(g);
+	sm_status st = SM_OK;
+	if (block == NULL || rotation == NULL || damping == NULL || rows == NULL || ws == NULL) {
+		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
+		goto done;
+	}
+	for (size_t start = 0, end; start < kept; start = end) {
+		end = group_end(w2, kept, start, tolerance);
+		const size_t s = end - start;
+		if (s == 1)
+			continue;
+		// The group's block, symmetrised (C is symmetric up to round-off at zero velocity).
+		for (size_t a = 0; a < s; a++)
+			for (size_t b = 0; b < s; b++)
+				block[a * s + b] = 0.5 * (modal[(start + a) * kept + start + b] + modal[(start + b) * kept + start + a]);
+		gsl_matrix_view B = gsl_matrix_view_array(block, s, s);
+		gsl_matrix_view Q = gsl_matrix_view_array(rotation, s, s);
+		gsl_vector_view D = gsl_vector_view_array(damping, s);
+		if (gsl_eigen_symmv(&B.matrix, &D.vector, &Q.matrix, ws) != GSL_SUCCESS ||
+		    gsl_eigen_symmv_sort(&D.vector, &Q.matrix, GSL_EIGEN_SORT_VAL_ASC) != GSL_SUCCESS) {
+			st = sm_error_set(err, SM_ERROR_SOLVER, "modes: the eigensolver of a repeated frequency's damping failed");
+			goto done;
+		}
+		// Shapes: phi'_a = sum_b Q_ba phi_b.
+		double* shapes = modes->shapes + start * n3;
+		for (size_t a = 0; a < s; a++)
+			for (size_t k = 0; k < n3; k++) {
+				double sum = 0.0;
+				for (size_t b = 0; b < s; b++)
+					sum += rotation[b * s + a] * shapes[b * n3 + k];
+				rows[a * n3 + k] = sum;
+			}
+		memcpy(shapes, rows, s * n3 * sizeof(double));
+		// Rows of the modal damping matrix, then its columns.
+		for (size_t a = 0; a < s; a++)
+			for (size_t j = 0; j < kept; j++) {
+				double sum = 0.0;
+				for (size_t b = 0; b < s; b++)
+					sum += rotation[b * s + a] * modal[(start + b) * kept + j];
+				rows[a * kept + j] = sum;
+			}
+		memcpy(modal + start * kept, rows, s * kept * sizeof(double));
+		for (size_t i = 0; i < kept; i++) {
+			for (size_t a = 0; a < s; a++) {
+				double sum = 0.0;
+				for (size_t b = 0; b < s; b++)
+					sum += modal[i * kept + start + b] * rotation[b * s + a];
+				rows[a] = sum;
+			}
+			memcpy(modal + i * kept + start, rows, s * sizeof(double));
+		}
+	}
+done:
+	symmv_workspace_destroy(ws);
+	free(block);
+	free(rotation);
+	free(damping);
+	free(rows);
+	return st;
+}
+
 static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error* err)
 {
 	const size_t kept = p->kept;
@@ -907,29 +1015,6 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		free(modal);
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
 	}
-	// Residual ||K phi - omega^2 M phi|| / (||K|| ||phi||), K phi = -(df/dx) phi.
-	modes->residual = 0.0;
-	for (size_t a = 0; a < kept; a++) {
-		const double* phi = modes->shapes + a * n3;
-		const double w2 = modes->omega_squared[a];
-		modes->frequency[a] = w2 > 0.0 ? sqrt(w2) / two_pi : 0.0;
-		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, phi, NULL, product);
-		double r2 = 0.0, phi2 = 0.0;
-		for (int32_t q = 0; q < p->particle_count; q++) {
-			const int32_t fi = p->free_index[q];
-			if (fi < 0)
-				continue;
-			for (int c = 0; c < 3; c++) {
-				const size_t k = 3 * (size_t)q + c;
-				const double r = -product[k] - w2 * p->dof_mass[3 * (size_t)fi + c] * phi[k];
-				r2 += r * r;
-				phi2 += phi[k] * phi[k];
-			}
-		}
-		if (p->stiffness_norm > 0.0 && phi2 > 0.0)
-			modes->residual = fmax(modes->residual, sqrt(r2 / phi2) / p->stiffness_norm);
-	}
-
 	// The bounds of sm_model_explicit_limit: on every mode's damping rate, the largest eigenvalue of
 	// M^-1/2 C M^-1/2, C = -df/dv over the free degrees of freedom, and with it the step limit.
 	sm_explicit_limit limit;
@@ -954,6 +1039,35 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 			modal[i * kept + j] = s;
 		}
 	}
+	sm_status st = diagonalise_repeated_groups(p, modes, modal, err);
+	if (st != SM_OK) {
+		free(product);
+		free(modal);
+		return st;
+	}
+	// Residual ||K phi - omega^2 M phi|| / (||K|| ||phi||), K phi = -(df/dx) phi.
+	modes->residual = 0.0;
+	for (size_t a = 0; a < kept; a++) {
+		const double* phi = modes->shapes + a * n3;
+		const double w2 = modes->omega_squared[a];
+		modes->frequency[a] = w2 > 0.0 ? sqrt(w2) / two_pi : 0.0;
+		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, phi, NULL, product);
+		double r2 = 0.0, phi2 = 0.0;
+		for (int32_t q = 0; q < p->particle_count; q++) {
+			const int32_t fi = p->free_index[q];
+			if (fi < 0)
+				continue;
+			for (int c = 0; c < 3; c++) {
+				const size_t k = 3 * (size_t)q + c;
+				const double r = -product[k] - w2 * p->dof_mass[3 * (size_t)fi + c] * phi[k];
+				r2 += r * r;
+				phi2 += phi[k] * phi[k];
+			}
+		}
+		if (p->stiffness_norm > 0.0 && phi2 > 0.0)
+			modes->residual = fmax(modes->residual, sqrt(r2 / phi2) / p->stiffness_norm);
+	}
+
 	double largest_damping = 0.0;
 	for (size_t i = 0; i < kept; i++)
 		largest_damping = fmax(largest_damping, fabs(modal[i * kept + i]));

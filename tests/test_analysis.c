@@ -2405,6 +2405,76 @@ static int test_sparse_shift_is_lowered_a_hundredfold(void)
 	return 0;
 }
 
+// A rotation matrix (row-major) about the unit axis n by the angle t [rad] (Rodrigues).
+static void rotation_matrix(const double n[3], double t, double R[9])
+{
+	const double c = cos(t), s = sin(t);
+	const double K[9] = {0.0, -n[2], n[1], n[2], 0.0, -n[0], -n[1], n[0], 0.0};
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 3; j++) {
+			double kk = 0.0;
+			for (int l = 0; l < 3; l++)
+				kk += K[3 * i + l] * K[3 * l + j];
+			R[3 * i + j] = (i == j ? 1.0 : 0.0) + s * K[3 * i + j] + (1.0 - c) * kk;
+		}
+}
+
+// A particle of mass m held by six springs at rest length along the axes R e_k, two per axis,
+// each of stiffness ks, those along axis k damped by kd_k: K = 2 ks I (one threefold frequency,
+// omega^2 = 2 ks / m) and C = 2 sum kd_k (R e_k)(R e_k)^T. The damping is classical (C and K
+// commute) and the modes that decouple it are the three axes: modal damping 2 kd_k / m, shapes
+// R e_k / sqrt(m). The eigensolver's basis of the threefold eigenspace is arbitrary, so only
+// diagonalising the damping within it finds them.
+static int test_repeated_frequency_modes_diagonalise_the_damping(void)
+{
+	const double m = 0.2, ks = 100.0, arm = 0.5;
+	const double kd[3] = {1.0, 3.0, 7.0};
+	const double axis[3] = {0.48, -0.6, 0.64};  // a unit vector
+	double R[9];
+	rotation_matrix(axis, 0.9, R);
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def centre = sm_default_particle_def();
+	centre.mass = m;
+	ENSURE_STATUS(sm_model_add_particle(model, &centre, NULL), SM_OK);
+	for (int k = 0; k < 3; k++)
+		for (int side = -1; side <= 1; side += 2) {
+			sm_particle_def anchor = sm_default_particle_def();
+			anchor.motion = SM_PARTICLE_FIXED;
+			for (int c = 0; c < 3; c++)
+				anchor.position[c] = side * arm * R[3 * c + k];
+			int32_t index;
+			ENSURE_STATUS(sm_model_add_particle(model, &anchor, &index), SM_OK);
+			sm_spring_def s = sm_default_spring_def();
+			s.a = 0;
+			s.b = index;
+			s.stiffness = ks;
+			s.damping = kd[k];
+			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		}
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.count == 3);
+	// Round-off of sums of a few O(1) terms: 1e-12 relative leaves a thousandfold margin.
+	ENSURE(modes.proportional);
+	ENSURE(modes.damping_coupling < 1e-12);
+	for (int32_t a = 0; a < 3; a++) {
+		ENSURE_REL(modes.omega_squared[a], 2.0 * ks / m, 1e-12, 0.0);
+		ENSURE_REL(modes.modal_damping[a], 2.0 * kd[a] / m, 1e-12, 0.0);
+		ENSURE_REL(modes.damping_ratio[a], 2.0 * kd[a] / m / (2.0 * sqrt(2.0 * ks / m)), 1e-12, 0.0);
+		// The shape lies along R e_a: |phi . R e_a| = 1 / sqrt(m).
+		double along = 0.0;
+		for (int c = 0; c < 3; c++)
+			along += modes.shapes[(size_t)a * 3 * 7 + c] * R[3 * c + a];
+		ENSURE_REL(fabs(along), 1.0 / sqrt(m), 1e-12, 0.0);
+	}
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2456,5 +2526,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_free_block_with_stiffness_proportional_damping);
 	RUN_TEST(test_undamped_is_proportional_at_zero_tolerance);
 	RUN_TEST(test_sparse_shift_is_lowered_a_hundredfold);
+	RUN_TEST(test_repeated_frequency_modes_diagonalise_the_damping);
 	return TEST_SUMMARY();
 }

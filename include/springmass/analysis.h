@@ -165,7 +165,10 @@ typedef struct sm_modes {
 	int32_t count;           ///< modes kept (lowest first)
 	double* omega_squared;   ///< count eigenvalues omega^2, ascending; < 0 = unstable [1/s^2]
 	double* frequency;       ///< natural frequencies omega / (2 pi), 0 for rigid or unstable modes [Hz]
-	double* modal_damping;   ///< phi^T C phi = 2 zeta omega for mass-normalised phi [1/s]
+	/// phi^T C phi = 2 zeta omega for mass-normalised phi [1/s]. The modes of a repeated
+	/// frequency are the basis of its eigenspace that makes their damping block diagonal, with
+	/// these values ascending (docs/analysis.md).
+	double* modal_damping;
 	/// zeta = phi^T C phi / (2 omega) [1]; INFINITY for a damped zero-frequency mode, 0 for an
 	/// undamped one.
 	double* damping_ratio;
