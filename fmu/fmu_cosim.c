@@ -1182,7 +1182,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 {
 	instance* inst = c;
 	const char* fn = "fmi2GetDirectionalDerivative";
-	if (!fmu_allowed(inst, fn, ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	// Where values can be read (FMI 2.0, 4.2.4), the error state included, as for fmi2GetReal.
+	if (!fmu_allowed(inst, fn, ST_RUNNING))
 		return fmi2Error;
 	if ((nUnknown > 0 && (!vUnknown_ref || !dvUnknown)) || (nKnown > 0 && (!vKnown_ref || !dvKnown))) {
 		log_error(inst, "%s: NULL array", fn);
@@ -1310,7 +1311,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 	(void)vr;
 	(void)order;
 	(void)value;
-	if (!fmu_allowed(inst, "fmi2GetRealOutputDerivatives", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	if (!fmu_allowed(inst, "fmi2GetRealOutputDerivatives",
+	                 ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR))
 		return fmi2Error;
 	if (nvr == 0)
 		return fmi2OK;

@@ -417,6 +417,53 @@ print("restored")
     assert out.returncode == 0 and "restored" in out.stdout, out.stdout + out.stderr
 
 
+def test_values_and_derivatives_can_be_read_in_the_error_state():
+    # FMI 2.0's table of allowed calls (4.2.4) lets a master read values in the error state, for
+    # debugging: fmi2GetReal, fmi2GetDirectionalDerivative and fmi2GetRealOutputDerivatives alike
+    # (the status queries and fmi2DoStep stay refused). The error is running out of memory, as in
+    # the test above, in a process of its own.
+    script = f"""
+import ctypes, math, resource, sys
+sys.path.insert(0, {str(HERE)!r})
+from fmpy.fmi1 import FMICallException
+from conftest import BUNDLED_FMUS
+from fmu_helpers import Instance
+
+def address_space():
+    for line in open('/proc/self/status'):
+        if line.startswith('VmSize:'):
+            return int(line.split()[1]) * 1024
+
+def status(call):
+    try:
+        call()
+    except FMICallException as e:
+        return e.status
+    return 0
+
+a = Instance({str(BUNDLED_FMUS / "cloth.fmu")!r}, "a")
+s = a.slave
+s.setupExperiment(startTime=0.0)
+s.enterInitializationMode()
+a.set("solver.linear_solver", "dense")
+soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+resource.setrlimit(resource.RLIMIT_AS, (address_space() + 4 * 2**20, hard))
+assert status(s.exitInitializationMode) == {FMI2_ERROR}
+resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
+assert status(lambda: s.doStep(0.0, 0.01)) == {FMI2_ERROR}, "not in the error state"
+before = len(a.messages)
+kinetic = a.vr["energy.kinetic"]
+assert math.isfinite(s.getReal([kinetic])[0])
+assert s.getDirectionalDerivative([kinetic], [], []) == [0.0]
+assert s.dll.fmi2GetRealOutputDerivatives(s.component, None, ctypes.c_size_t(0), None, None) == 0
+assert a.messages[before:] == [], a.messages[before:]
+assert status(lambda: s.getRealStatus(2)) == {FMI2_ERROR}
+print("read")
+"""
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert out.returncode == 0 and "read" in out.stdout, out.stdout + out.stderr
+
+
 # The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
 # parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
