@@ -301,28 +301,6 @@ static void add_port(builder* b, const sm_document* doc, const sm_model* model, 
 	free(part);
 }
 
-static sm_status check_unique_names(const fmu_table* t, sm_error* err)
-{
-	// Quadratic in the number of non-particle variables only: particle variables are
-	// "p[i]..." and cannot collide with each other.
-	for (int32_t i = 0; i < t->count; ++i) {
-		if (t->variables[i].source == FMU_SRC_PARTICLE_POSITION || t->variables[i].source == FMU_SRC_PARTICLE_VELOCITY)
-			continue;
-		for (int32_t j = 0; j < t->count; ++j) {
-			if (j != i && strcmp(t->variables[i].name, t->variables[j].name) == 0) {
-				if (err) {
-					err->status = SM_ERROR_SCHEMA;
-					snprintf(err->message, sizeof err->message,
-					         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
-					         t->variables[i].name);
-				}
-				return SM_ERROR_SCHEMA;
-			}
-		}
-	}
-	return SM_OK;
-}
-
 static sm_status fail(sm_error* err, sm_status status, const char* message)
 {
 	if (err) {
@@ -330,6 +308,85 @@ static sm_status fail(sm_error* err, sm_status status, const char* message)
 		snprintf(err->message, sizeof err->message, "%s", message);
 	}
 	return status;
+}
+
+// A node of the structured names' tree (FMI 2.0, 2.2.9): a.b is field b of the record a, a[i]
+// element i of the array a. Every name is a leaf (kind 0), and each of its prefixes that ends
+// before an unquoted '.' or '[' is a record ('.') or an array ('[').
+typedef struct name_node {
+	const char* name;
+	size_t length;
+	char kind;
+} name_node;
+
+// Appends the nodes of one name; quoted parts ('...' with \ escapes) are skipped whole.
+static size_t name_nodes(const char* name, name_node* out)
+{
+	size_t n = 0;
+	bool quoted = false;
+	for (size_t k = 0; name[k] != '\0'; ++k) {
+		if (quoted && name[k] == '\\' && name[k + 1] != '\0')
+			++k;
+		else if (name[k] == '\'')
+			quoted = !quoted;
+		else if (!quoted && (name[k] == '.' || name[k] == '[') && k > 0)
+			out[n++] = (name_node){name, k, name[k]};
+	}
+	out[n++] = (name_node){name, strlen(name), 0};
+	return n;
+}
+
+static const char* node_kind(char kind)
+{
+	return kind == '.' ? "a record" : kind == '[' ? "an array" : "a variable";
+}
+
+// The names must form a tree, as modelDescription.xml declares (variableNamingConvention
+// "structured"): no name twice, and no name that is also a record or an array, or a record and an
+// array at once. A parameter "energy" beside "energy.kinetic", or a port "p" ("p.x") beside the
+// particles' "p[0].x", is refused. Quadratic in the nodes of the non-particle variables only:
+// particle variables "p[i].x" add the array p and cannot collide with each other.
+static sm_status check_unique_names(const fmu_table* t, sm_error* err)
+{
+	size_t capacity = 1, count = 0;
+	bool particles = false;
+	for (int32_t i = 0; i < t->count; ++i) {
+		if (t->variables[i].source == FMU_SRC_PARTICLE_POSITION || t->variables[i].source == FMU_SRC_PARTICLE_VELOCITY)
+			particles = true;
+		else
+			capacity += strlen(t->variables[i].name) + 1;
+	}
+	name_node* nodes = malloc(capacity * sizeof *nodes);
+	if (!nodes)
+		return fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while checking the FMU's variable names");
+	if (particles)
+		nodes[count++] = (name_node){"p[0].x", 1, '['};
+	for (int32_t i = 0; i < t->count; ++i)
+		if (t->variables[i].source != FMU_SRC_PARTICLE_POSITION && t->variables[i].source != FMU_SRC_PARTICLE_VELOCITY)
+			count += name_nodes(t->variables[i].name, nodes + count);
+	for (size_t i = 0; i < count; ++i)
+		for (size_t j = i + 1; j < count; ++j) {
+			const name_node* a = &nodes[i];
+			const name_node* b = &nodes[j];
+			if (a->length != b->length || memcmp(a->name, b->name, a->length) != 0 || (a->kind == b->kind && a->kind))
+				continue;
+			if (err) {
+				err->status = SM_ERROR_SCHEMA;
+				if (!a->kind && !b->kind)
+					snprintf(err->message, sizeof err->message,
+					         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
+					         a->name);
+				else
+					snprintf(err->message, sizeof err->message,
+					         "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
+					         "structured names (rename the parameter or port)",
+					         a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
+			}
+			free(nodes);
+			return SM_ERROR_SCHEMA;
+		}
+	free(nodes);
+	return SM_OK;
 }
 
 // Sets err to prefix and the formatted message (cut to the message's capacity); returns status.

@@ -1582,6 +1582,55 @@ static int test_random_call_sequences_follow_the_state_machine(void)
 	return 0;
 }
 
+// The variable names form the tree that variableNamingConvention="structured" declares: a
+// parameter or port whose name is also a record or an array of other variables is refused with
+// both names; records that only share fields are accepted.
+static int names_of(const char* parameters, const char* ports, const char* fmu, sm_error* err)
+{
+	char text[2048];
+	snprintf(text, sizeof text,
+	         "{\"springmass\": 1, \"name\": \"names\", \"parameters\": {%s},"
+	         " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+	         " {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	         " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}], \"ports\": [%s]%s}",
+	         parameters, ports, fmu);
+	sm_document* doc = sm_document_parse(text, strlen(text), "names.json", err);
+	if (!doc)
+		return -1;
+	fmu_table table;
+	const sm_status st = fmu_table_create(doc, text, strlen(text), NULL, 0, &table, err);
+	sm_document_destroy(doc);
+	if (st == SM_OK)
+		fmu_table_destroy(&table);
+	return (int)st;
+}
+
+static int test_variable_names_form_a_tree(void)
+{
+	sm_error err;
+	static const struct {
+		const char* parameters;
+		const char* ports;
+		const char* fmu;
+		const char* first;
+		const char* second;
+	} refused[] = {
+	    {"\"energy\": 1", "", "", "\"energy\"", "\"energy.kinetic\""},
+	    {"\"p\": 1", "", "", "\"p[0].x\"", "\"p\""},
+	    {"", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}", "", "\"p[0].x\"", "\"p.x\""},
+	    {"\"tip\": 1", "{\"name\": \"tip\", \"particle\": \"b\", \"kind\": \"probe\"}", "", "\"tip\"", "\"tip.x\""},
+	};
+	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+		ENSURE(names_of(refused[i].parameters, refused[i].ports, refused[i].fmu, &err) == SM_ERROR_SCHEMA);
+		ENSURE(strstr(err.message, refused[i].first) != NULL && strstr(err.message, refused[i].second) != NULL);
+	}
+	// A record beside solver.*, a port p without particle variables.
+	ENSURE(names_of("", "{\"name\": \"solver\", \"particle\": \"b\", \"kind\": \"probe\"}", "", &err) == SM_OK);
+	ENSURE(names_of("", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}",
+	                ", \"fmu\": {\"particle_variables\": false}", &err) == SM_OK);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1611,5 +1660,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_state_restores_the_last_successful_time);
 	RUN_TEST(test_a_refused_state_leaves_the_stop_time);
 	RUN_TEST(test_reset_forgets_the_stop_time);
+	RUN_TEST(test_variable_names_form_a_tree);
 	return TEST_SUMMARY();
 }
