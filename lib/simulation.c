@@ -1209,8 +1209,12 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			sm_format_number(t_end, end);
 			// Too much work is no failure of the method: the state is good and the next advance
 			// goes on from it.
-			const sm_status status = flag == CV_TOO_MUCH_WORK && usable ? SM_ERROR_STEP_LIMIT : SM_ERROR_SOLVER;
-			return fail(sim, status, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
+			if (flag == CV_TOO_MUCH_WORK && usable)
+				return fail(sim, SM_ERROR_STEP_LIMIT,
+				            "CVODE stopped at its step limit (CV_TOO_MUCH_WORK) at t = %s s while advancing to %s s; "
+				            "the state there is good and the next advance goes on from it%s",
+				            now, end, failure_hint(flag));
+			return fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
 			            failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
 			            sim->solver_message);
 		}
