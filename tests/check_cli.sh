@@ -303,6 +303,19 @@ else
   "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/dangling.fmu" > /dev/null 2>&1 &&
     [ -L "$tmp/dangling.fmu" ] && [ "$(head -c 2 "$tmp/later.fmu")" = PK ] ||
     fail "fmu -o LINK to no file: the link replaced or the file it names not written"
+  # A chain of links to no file, relative to each link's folder: the file at its end is written
+  # under a temporary name beside it and renamed (no partial file left); a cycle is refused.
+  mkdir -p "$tmp/chain/sub"
+  ln -s chain/first.fmu "$tmp/chained.fmu"
+  ln -s sub/last.fmu "$tmp/chain/first.fmu"
+  "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/chained.fmu" > /dev/null 2>&1 &&
+    [ -L "$tmp/chained.fmu" ] && [ -L "$tmp/chain/first.fmu" ] && [ "$(head -c 2 "$tmp/chain/sub/last.fmu")" = PK ] &&
+    cmp -s "$tmp/chain/sub/last.fmu" "$tmp/later.fmu" && ! ls -R "$tmp" | grep -q partial ||
+    fail "fmu -o through a chain of links to no file: not the file at its end, or a partial file left"
+  ln -s cycle.fmu "$tmp/cycle.fmu"
+  out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/cycle.fmu" 2>&1)
+  [ $? = 1 ] && printf '%s' "$out" | grep -q "symbolic links" && [ -L "$tmp/cycle.fmu" ] ||
+    fail "fmu -o through a cycle of links: not refused with the reason ($out)"
   # --set as in `springmass run`: a malformed setting is a usage error, an unknown parameter or a
   # value the model refuses a bad model; each is refused before anything is written.
   cp "$root/tests/python/models/rope_n.json" "$tmp/rope_n.json"

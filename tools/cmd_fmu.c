@@ -77,26 +77,57 @@ static bool write_all(const char* path, const char* data, size_t length)
 	return ok;
 }
 
+// The file that path names once its links are followed (a chain of at most 40, as the kernel
+// allows), written to target; the last one names no file yet. False with errno on failure
+// (ELOOP for a longer chain or a cycle).
+static bool link_target(const char* path, char* target)
+{
+	if (snprintf(target, PATH_MAX, "%s", path) >= PATH_MAX) {
+		errno = ENAMETOOLONG;
+		return false;
+	}
+	for (int depth = 0; depth <= 40; ++depth) {
+		struct stat st;
+		if (lstat(target, &st) != 0 || !S_ISLNK(st.st_mode))
+			return true;
+		char link[PATH_MAX];
+		const ssize_t n = readlink(target, link, sizeof link - 1);
+		if (n < 0)
+			return false;
+		link[n] = '\0';
+		// A relative link is relative to the folder of the link.
+		const char* slash = strrchr(target, '/');
+		const int folder = link[0] == '/' || !slash ? 0 : (int)(slash - target) + 1;
+		char next[PATH_MAX];
+		if (snprintf(next, sizeof next, "%.*s%s", folder, target, link) >= (int)sizeof next) {
+			errno = ENAMETOOLONG;
+			return false;
+		}
+		memcpy(target, next, sizeof next);
+	}
+	errno = ELOOP;
+	return false;
+}
+
 // Writes data to the output. A regular file, or a new one, is written beside it under a
 // temporary name that then replaces it, so that a failed write (a full disk) leaves no partial
 // archive and an earlier output as it was; the file keeps the earlier one's permissions, or gets
 // 0666 less the umask like any new file. A write-protected file is refused as fopen would refuse
-// it. Anything else is only opened for writing, never removed: a device is written (/dev/full
-// fails with 'No space left on device'), a directory fails with 'Is a directory', and a link to
-// no file creates the file it names, as fopen does.
+// it. A link is followed to the file it names, as fopen follows it, also a link to no file yet:
+// the file it names is created the same way. Anything else is only opened for writing, never
+// removed: a device is written (/dev/full fails with 'No space left on device'), a directory
+// fails with 'Is a directory'.
 static bool write_output(const char* output, const char* data, size_t length)
 {
-	struct stat st, link;
+	struct stat st;
 	char target[PATH_MAX];
 	const bool exists = stat(output, &st) == 0;
-	if ((exists && !S_ISREG(st.st_mode)) || (!exists && lstat(output, &link) == 0 && S_ISLNK(link.st_mode)))
+	if (exists && !S_ISREG(st.st_mode))
 		return write_all(output, data, length);
 	if (exists && (access(output, W_OK) != 0 || !realpath(output, target)))
-		return false;  // a link is followed to the file it names, as fopen follows it
-	if (!exists && snprintf(target, sizeof target, "%s", output) >= (int)sizeof target) {
-		errno = ENAMETOOLONG;
 		return false;
-	}
+	if (!exists && !link_target(output, target))
+		return errno == ELOOP ? write_all(output, data, length) : false;  // fopen names the loop
 	char temporary[PATH_MAX];
 	if (snprintf(temporary, sizeof temporary, "%s.partial-%ld", target, (long)getpid()) >= (int)sizeof temporary) {
 		errno = ENAMETOOLONG;
