@@ -910,6 +910,16 @@ sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limi
 // the group).
 static const double repeated_tolerance = 1e-12;
 
+// How far apart the omega^2 of one repeated frequency may lie: repeated_tolerance times the
+// largest |omega^2| [1/s^2].
+static double repeated_level(const sm_modes* modes, size_t kept)
+{
+	double scale = modes->omega_max * modes->omega_max;
+	for (size_t i = 0; i < kept; i++)
+		scale = fmax(scale, fabs(modes->omega_squared[i]));
+	return repeated_tolerance * scale;
+}
+
 // The end of the group of modes that starts at start (ascending omega^2).
 static size_t group_end(const double* w2, size_t count, size_t start, double tolerance)
 {
@@ -925,10 +935,7 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 	const size_t kept = p->kept;
 	const size_t n3 = 3 * (size_t)p->particle_count;
 	const double* w2 = modes->omega_squared;
-	double scale = modes->omega_max * modes->omega_max;
-	for (size_t i = 0; i < kept; i++)
-		scale = fmax(scale, fabs(w2[i]));
-	const double tolerance = repeated_tolerance * scale;
+	const double tolerance = repeated_level(modes, kept);
 	size_t largest_group = 1;
 	for (size_t start = 0, end; start < kept; start = end) {
 		end = group_end(w2, kept, start, tolerance);
@@ -1071,7 +1078,6 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 	double largest_damping = 0.0;
 	for (size_t i = 0; i < kept; i++)
 		largest_damping = fmax(largest_damping, fabs(modal[i * kept + i]));
-	modes->damping_coupling = 0.0;
 	for (size_t i = 0; i < kept; i++) {
 		const double ci = modal[i * kept + i];
 		modes->modal_damping[i] = ci;
@@ -1080,18 +1086,47 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 			modes->damping_ratio[i] = ci / (2.0 * omega);
 		else
 			modes->damping_ratio[i] = ci > fmax(1e-12 * largest_damping, damping_round_off) ? INFINITY : 0.0;
-		for (size_t j = 0; j < i; j++) {
-			// Symmetrised: C is symmetric up to round-off at zero velocity.
-			const double cij = 0.5 * (modal[i * kept + j] + modal[j * kept + i]);
-			const double cj = modal[j * kept + j];
-			if (fabs(cij) <= damping_round_off)
-				continue;
-			// Floor of the normalisation: entries below 1e-12 of the largest damping are round-off.
-			const double scale = fmax(sqrt(fmax(ci, 0.0) * fmax(cj, 0.0)), 1e-12 * largest_damping);
-			if (scale > 0.0)
-				modes->damping_coupling = fmax(modes->damping_coupling, fabs(cij) / scale);
-		}
 	}
+	// Coupling between blocks of modes: a block is modes alike in frequency and in damping (within
+	// round-off), which stay any basis of their span after diagonalise_repeated_groups (the two modes
+	// of a symmetric pair, damped alike). The coupling of two blocks is the Frobenius norm of their
+	// entries of Phi^T C Phi, which no rotation within either changes, over the geometric mean of
+	// their damping; for single modes, |c_ij| / sqrt(c_ii c_jj).
+	size_t* first = malloc((kept + 1) * sizeof *first);
+	if (first == NULL) {
+		free(product);
+		free(modal);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
+	}
+	const double level = repeated_level(modes, kept);
+	const double damping_level = fmax(damping_round_off, 1e-10 * largest_damping);
+	size_t blocks = 0;
+	for (size_t start = 0, end; start < kept; start = end) {
+		end = group_end(modes->omega_squared, kept, start, level);
+		for (size_t a = start; a < end; a++)
+			if (a == start || modes->modal_damping[a] - modes->modal_damping[a - 1] > damping_level)
+				first[blocks++] = a;
+	}
+	first[blocks] = kept;
+	modes->damping_coupling = 0.0;
+	for (size_t b = 0; b < blocks; b++)
+		for (size_t c = 0; c < b; c++) {
+			double sum = 0.0;
+			for (size_t i = first[b]; i < first[b + 1]; i++)
+				for (size_t j = first[c]; j < first[c + 1]; j++) {
+					// Symmetrised: C is symmetric up to round-off at zero velocity.
+					const double cij = 0.5 * (modal[i * kept + j] + modal[j * kept + i]);
+					if (fabs(cij) > damping_round_off)
+						sum += cij * cij;
+				}
+			// Floor of the normalisation: entries below 1e-12 of the largest damping are round-off.
+			const double scale = fmax(sqrt(fmax(modes->modal_damping[first[b]], 0.0) *
+			                               fmax(modes->modal_damping[first[c]], 0.0)),
+			                          1e-12 * largest_damping);
+			if (sum > 0.0 && scale > 0.0)
+				modes->damping_coupling = fmax(modes->damping_coupling, sqrt(sum) / scale);
+		}
+	free(first);
 	modes->proportional = modes->damping_coupling <= p->def->proportional_tolerance;
 	modes->damping_rate_max = limit.damping_rate;
 	modes->explicit_step = sm_symplectic_euler_step(modes->omega_max, modes->damping_rate_max);

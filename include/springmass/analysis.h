@@ -194,7 +194,10 @@ typedef struct sm_modes {
 	/// otherwise the one of omega_max with damping_rate_max; exact or safe for proportional
 	/// damping, an estimate otherwise; INFINITY when nothing limits it.
 	double explicit_step;
-	double damping_coupling; ///< largest normalised off-diagonal entry of Phi^T C Phi (kept modes) [1]
+	/// Largest normalised off-diagonal entry of Phi^T C Phi over the kept modes, |c_ij| /
+	/// sqrt(c_ii c_jj); modes alike in frequency and damping count as one block, whose entries are
+	/// taken together (docs/analysis.md) [1].
+	double damping_coupling;
 	bool proportional;       ///< damping_coupling <= proportional_tolerance
 	sm_modes_solver solver;  ///< the eigensolver actually used (AUTO resolved)
 	/// Largest ||K phi - omega^2 M phi|| / (||K|| ||phi||) over the kept modes [1].
