@@ -1214,8 +1214,15 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 				            "CVODE stopped at its step limit (CV_TOO_MUCH_WORK) at t = %s s while advancing to %s s; "
 				            "the state there is good and the next advance goes on from it%s",
 				            now, end, failure_hint(flag));
-			return fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
-			            failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			if (usable)
+				return fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
+				            failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+				            sim->solver_message);
+			// CVODE's last state is not finite: the message gives the time the simulation stays at.
+			return fail(sim, SM_ERROR_SOLVER,
+			            "CVODE failed with %s while advancing to %s s; the state it reached is not usable, so the "
+			            "simulation stays at its last good state, t = %s s%s%s%s",
+			            failure_name(flag), end, now, failure_hint(flag), sim->solver_message[0] ? ": " : "",
 			            sim->solver_message);
 		}
 		if (flag == CV_ROOT_RETURN && reached > t_end) {
