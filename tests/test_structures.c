@@ -970,6 +970,53 @@ static int test_per_section_block_keeps_its_stiffness_when_refined(void)
 	return 0;
 }
 
+// The same block with a different count along each axis (the grids above have nv = nw, so they
+// cannot tell the counts apart): each cell is size[0]/(nu-1) x size[1]/(nv-1) x size[2]/(nw-1),
+// and the edge springs per section alone still carry exactly Y e over the 0.5 m x 0.25 m face
+// across the stretch, whichever axis is stretched (the 1 m side lies along it) and whichever
+// counts the three axes have. Same 1e-12 as above: strains of 1e-3 keep 13 digits and a few
+// dozen springs add up.
+static int test_per_section_block_with_unequal_counts(void)
+{
+	const double e = 1e-3, Y = 2e5;
+	static const int32_t counts[3][3] = {{3, 2, 4}, {2, 5, 3}, {4, 3, 2}};
+	for (int n = 0; n < 3; n++)
+		for (int axis = 0; axis < 3; axis++) {
+			sm_model* model = weightless_model();
+			ENSURE(model != NULL);
+			sm_block_def block = sm_default_block_def();
+			// The stretched axis gets the 1 m side, the other two 0.5 m and 0.25 m.
+			block.size[axis] = 1.0;
+			block.size[(axis + 1) % 3] = 0.5;
+			block.size[(axis + 2) % 3] = 0.25;
+			block.nu = counts[n][0];
+			block.nv = counts[n][1];
+			block.nw = counts[n][2];
+			block.edge = section_material(Y);
+			block.face_diagonal = section_material(0.0);
+			block.body_diagonal = section_material(0.0);
+			ENSURE_STATUS(sm_add_block(model, &block, NULL), SM_OK);
+			// Stretch along `axis` by (1 + e) and sum the pull on the face at size[axis].
+			const int32_t particles = sm_model_particle_count(model);
+			double* x = malloc(3 * (size_t)particles * sizeof(double));
+			double* f = malloc(3 * (size_t)particles * sizeof(double));
+			ENSURE(x != NULL && f != NULL);
+			sm_model_initial_state(model, x, NULL);
+			for (int32_t p = 0; p < particles; p++)
+				x[3 * p + axis] *= 1.0 + e;
+			sm_model_forces(model, x, NULL, NULL, f);
+			double pull = 0.0;
+			for (int32_t p = 0; p < particles; p++)
+				if (x[3 * p + axis] >= 1.0 + e)
+					pull -= f[3 * p + axis];
+			free(x);
+			free(f);
+			ENSURE_NEAR(pull, Y * e * 0.5 * 0.25, 1e-12 * Y * e);
+			sm_model_destroy(model);
+		}
+	return 0;
+}
+
 // A 1 m square meshed into k x k squares of two triangles each, stretched by e along x: with
 // edge springs per section [N/m] every k from 1 to 8 pulls with the same force (1e-12 relative),
 // and the horizontal edges alone (Y e per unit width, the vertical ones unstretched) give the
@@ -1537,6 +1584,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_zero_size_and_break_strain);
 	RUN_TEST(test_per_section_sheet_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
+	RUN_TEST(test_per_section_block_with_unequal_counts);
 	RUN_TEST(test_per_section_mesh_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
 	RUN_TEST(test_per_section_rules);
