@@ -656,6 +656,15 @@ static int test_spring_count_limit(void)
 	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
 	               "sheet: 10066332 particles and 16777217 springs exceed the limit of 16777216 "
 	               "of each per structure") == 0);
+	// With every group the count is exact too: for nu = 3, structural (nu-1) nv + nu (nv-1)
+	// = 5 nv - 3, shear 2 (nu-1)(nv-1) = 4 nv - 4, bend (nu-2) nv + nu (nv-2) = 4 nv - 6, in all
+	// 13 (nv - 1) = 16777228 for nv = 1290557, the least nv above the limit (13 x 1290555 =
+	// 16777215 is below it).
+	sheet.nv = 1290557;
+	sheet.shear = sheet.bend = sheet.structural;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "sheet: 3871671 particles and 16777228 springs exceed the limit of 16777216 "
+	               "of each per structure") == 0);
 
 	sm_block_def block = sm_default_block_def();
 	block.nu = block.nv = block.nw = 110;
