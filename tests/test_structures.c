@@ -1336,6 +1336,62 @@ static int test_per_section_sections_by_hand(void)
 	return 0;
 }
 
+// A sheet's sections do not depend on where its edges point: the 2 m x 1 m sheet of 3 x 2
+// particles turned in the xy, yz and zx planes (edge_u = 2 (c, s), edge_v = (-s, c) with
+// c = -0.6, s = -0.8, a rotation), and turned out of the plane with edges whose components are
+// all <= 0 (edge_u = 2 (c, s, 0), edge_v = (0, 0, -1)), has the sections of the same sheet along
+// +x and +y, spring by spring: 0.5 m for the structural springs on the boundary, 1 m for the one
+// inside (a cell of 1 m^2 over a 1 m spring, halved on the boundary). The rotated edges have
+// rounded components (0.6, 0.8), so the cell area is 1 m^2 to a few ulps: 1e-14.
+static int test_per_section_sheet_sections_do_not_depend_on_its_direction(void)
+{
+	const double c = -0.6, s = -0.8;
+	double expected[7];
+	int32_t springs = 0;
+	for (int plane = -1; plane < 4; plane++) {
+		sm_model* model = weightless_model();
+		ENSURE(model != NULL);
+		sm_sheet_def sheet = sm_default_sheet_def();
+		memset(sheet.edge_u, 0, sizeof sheet.edge_u);
+		memset(sheet.edge_v, 0, sizeof sheet.edge_v);
+		if (plane < 0) {  // the reference: along +x and +y
+			sheet.edge_u[0] = 2.0;
+			sheet.edge_v[1] = 1.0;
+		} else if (plane < 3) {  // in the plane of axes plane and plane + 1
+			const int p = plane, q = (plane + 1) % 3;
+			sheet.edge_u[p] = 2.0 * c;
+			sheet.edge_u[q] = 2.0 * s;
+			sheet.edge_v[p] = -s;
+			sheet.edge_v[q] = c;
+		} else {  // upright, no component of either edge > 0
+			sheet.edge_u[0] = 2.0 * c;
+			sheet.edge_u[1] = 2.0 * s;
+			sheet.edge_v[2] = -1.0;
+		}
+		sheet.nu = 3;
+		sheet.nv = 2;
+		sheet.structural = section_material(300.0);
+		sheet.shear = sheet.bend = sm_default_spring_material();
+		ENSURE_STATUS(sm_add_sheet(model, &sheet, NULL), SM_OK);
+		if (plane < 0)
+			springs = sm_model_spring_count(model);
+		ENSURE(springs == 7 && sm_model_spring_count(model) == springs);
+		for (int32_t k = 0; k < springs; k++) {
+			sm_spring_def def;
+			ENSURE_STATUS(sm_model_get_spring(model, k, &def), SM_OK);
+			if (plane < 0)
+				expected[k] = def.section;
+			ENSURE_NEAR(def.section, expected[k], 1e-14);
+		}
+		sm_model_destroy(model);
+	}
+	// Spring 0, (0, 1) along u in row 0, is on the boundary: 0.5 m; spring 3, (1, 4) along v in
+	// the middle column, stands for two half cells: 1 m.
+	ENSURE_NEAR(expected[0], 0.5, 1e-15);
+	ENSURE_NEAR(expected[3], 1.0, 1e-15);
+	return 0;
+}
+
 // From a review that planted bugs in structures.c and mesh.c (each test catches one that passed).
 
 // A block with a different count along each axis: particle (i, j, k) sits at
@@ -1598,6 +1654,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
 	RUN_TEST(test_per_section_rules);
 	RUN_TEST(test_per_section_sections_by_hand);
+	RUN_TEST(test_per_section_sheet_sections_do_not_depend_on_its_direction);
 	RUN_TEST(test_lumped_masses);
 	RUN_TEST(test_block_positions_follow_each_axis_count);
 	RUN_TEST(test_builders_pass_break_strain_to_springs);
