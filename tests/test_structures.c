@@ -161,6 +161,18 @@ static int test_rope(void)
 			series += 1.0 / ks;
 	}
 	ENSURE_REL(1.0 / series, 1000.0 / 5.0, 1e-12, 0.0);
+	// Particle p sits at start + p/10 (end - start), from the start on: the first particle is the
+	// one at the start (where a rope is usually held), as sm_structure_particle(s, 0, p, 0)
+	// numbers them. p/10 x 3 and 1 + p/10 x 4 are a rounding or two from the decimal, a few ulps
+	// of coordinates up to 5 m: 4e-15.
+	for (int32_t p = 0; p <= 10; p++) {
+		sm_particle_def pd;
+		ENSURE(sm_structure_particle(&s, 0, p, 0) == p);
+		ENSURE_STATUS(sm_model_get_particle(m, p, &pd), SM_OK);
+		ENSURE_NEAR(pd.position[0], 0.3 * p, 4e-15);
+		ENSURE_NEAR(pd.position[1], 0.0, 0.0);
+		ENSURE_NEAR(pd.position[2], 1.0 + 0.4 * p, 4e-15);
+	}
 	sm_model_destroy(m);
 	return 0;
 }
