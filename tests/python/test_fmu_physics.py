@@ -49,6 +49,31 @@ def test_frequency_scales_with_sqrt_k_over_m(test_fmu):
     assert np.max(np.abs(light["tip.x"] - slow["tip.x"])) < 1e-6
 
 
+def test_a_parameter_set_after_an_output_was_read_in_initialisation_mode_counts(test_fmu):
+    # FMI 2.0 lets a master read outputs in initialisation mode and then set parameters: the
+    # values set count, the outputs read after them and the run that follows are the model's with
+    # them. Four times the stiffness: the anchor's reaction k (x0 - l0) becomes 40 N at once,
+    # and the bob oscillates as x(t) = l0 + (x0 - l0) cos(2 w t).
+    inst = Instance(test_fmu("driven_oscillator"))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for name, value in {"solver.rtol": 1e-10, "solver.atol_position": 1e-12,
+                            "solver.atol_velocity": 1e-10}.items():
+            inst.set(name, value)
+        assert inst.get("base.fx") == pytest.approx(K * (X0 - L0), rel=1e-12)
+        inst.set("k", 4 * K)
+        assert inst.get("base.fx") == pytest.approx(4 * K * (X0 - L0), rel=1e-12)
+        s.exitInitializationMode()
+        w, h = math.sqrt(4 * K / M), 0.01
+        for n in range(50):
+            s.doStep(n * h, h)
+            assert abs(inst.get("tip.x") - (L0 + (X0 - L0) * math.cos(w * (n + 1) * h))) < 1e-6
+    finally:
+        inst.free()
+
+
 def test_force_port_driven_by_input_signal(test_fmu):
     # A constant force F on the bob from t = 0 moves the centre of oscillation to l0 + F/k:
     # x(t) = l0 + F/k + (x0 - l0 - F/k) cos(w t).
@@ -393,7 +418,12 @@ def test_tunable_parameter_between_steps(test_fmu):
         inst.slave.doStep(0.0, t1)
         x1 = L0 + (X0 - L0) * math.cos(w1 * t1)
         v1 = -(X0 - L0) * w1 * math.sin(w1 * t1)
+        # The outputs follow the new value at once, before any step: the force on the anchor is
+        # k (x - l0) at the same state, four times what it was (read first, so that it was known).
+        force_before = inst.get("base.fx")
+        assert abs(force_before - K * (x1 - L0)) < 1e-6
         inst.set("k", 4 * K)
+        assert abs(inst.get("base.fx") - 4 * force_before) < 1e-12
         inst.slave.doStep(t1, 0.4)
         t = 0.4
         expected = L0 + (x1 - L0) * math.cos(w2 * t) + v1 / w2 * math.sin(w2 * t)
