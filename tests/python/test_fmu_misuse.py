@@ -86,6 +86,10 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         expect_error(inst, lambda: s.setReal([vr["solver.rtol"]], [1e-3]), "fixed parameter")
         expect_error(inst, lambda: s.setReal([vr["m"]], [-1.0]), "m = -1")
         expect_error(inst, lambda: s.setString([vr["solver.linear_solver"]], ["fast"]), "fixed parameter")
+        # Every solver setting is a fixed parameter (docs/fmu.md), the Integer one too: after
+        # initialisation any value of it is refused.
+        assert all(v.variability == "fixed" for v in inst.md.modelVariables if v.name.startswith("solver."))
+        expect_error(inst, lambda: s.setInteger([vr["solver.max_steps"]], [10]), "solver.max_steps", "fixed parameter")
         expect_error(inst, lambda: s.getDirectionalDerivative([vr["base.fx"]], [vr["m"]], [1.0]), "not an input")
         expect_error(inst, lambda: s.setDebugLogging(True, ["logNothing"]), "unknown log category")
         expect_error(inst, lambda: s.cancelStep() if hasattr(s, "cancelStep") else s.fmi2CancelStep(s.component),
@@ -557,6 +561,10 @@ def test_set_values_are_written_in_an_order_the_model_takes(package, tmp_path):
                      '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
     fmu = package(model, ("xb=3", "xa=1"))
     with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/parameters.txt") == b"xb=3\nxa=1\n"
+    # Given the other way round, the order given fails as the file's does (xa first), and a
+    # second pass over the file's order takes xa after xb: the same file, whatever the order.
+    with zipfile.ZipFile(package(model, ("xa=1", "xb=3"))) as z:
         assert z.read("resources/parameters.txt") == b"xb=3\nxa=1\n"
     inst = Instance(fmu)
     try:
