@@ -473,13 +473,16 @@ print("read")
 # velocities 27, max_step 28; then x (29-34), v (35-40), the spring's enabled flag 41, the
 # parameters 42-44, the held inputs of base (45-53) and tip (54-62: position, velocity, force) and
 # the pending flags 63-64.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = 13, 14, 17, 26, 28, 41, 42, 60
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_DISSIPATED, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = \
+    13, 14, 17, 24, 26, 28, 41, 42, 60
 
 
 def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
     # docs/fmu.md: a serialised state "with values out of range is refused with fmi2Error and a
     # message naming which" - by fmi2DeSerializeFMUstate, before anything of it is used: a spring
-    # neither broken nor whole (0.5), no internal step allowed, a negative largest step, an absolute
+    # neither broken nor whole (0.5), no internal step allowed, a negative largest step, a dissipated
+    # energy that is not a number (energy.dissipated would read NaN from then on), a simulation
+    # flagged where the FMU state has none or missing where it has one, an absolute
     # tolerance below the smallest one fmi2SetReal takes, an unknown
     # method, a non-finite held input. The states are those of an instance that has run (the
     # solver would refuse some of the values only at fmi2SetFMUstate) and of one saved before
@@ -499,12 +502,17 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
         run(b, 0.0, 5)
         before = b.get("tip.x", "tip.vx", "base.fx")
         for state in (blob, instantiated):
+            has_sim = struct.unpack_from("<q", state, 8 * W_HAS_SIM)[0]
             cases = {"spring flag 0.5": edited(state, W_ENABLED, "<d", 0.5),
                      "max_steps 0": edited(state, W_MAX_STEPS, "<q", 0),
                      "max_step -1": edited(state, W_MAX_STEP, "<d", -1.0),
                      # below what fmi2SetReal takes (SM_MIN_ABSOLUTE_TOLERANCE, 1e-150)
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
+                     "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
+                     # positions and velocities without a simulation after initialisation, or a
+                     # simulation before it: a state no instance is in
+                     "has_sim flipped": edited(state, W_HAS_SIM, "<q", 1 - has_sim),
                      "tip.fx NaN": edited(state, W_TIP_FX, "<d", math.nan),
                      "tip.fx inf": edited(state, W_TIP_FX, "<d", math.inf)}
             for what, bad in cases.items():
