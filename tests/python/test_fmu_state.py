@@ -7,6 +7,7 @@ import pathlib
 import struct
 import subprocess
 import sys
+import textwrap
 import threading
 
 import numpy as np
@@ -365,64 +366,13 @@ def test_serialised_state_restores_from_any_address(test_fmu):
             assert np.array_equal(run(b, 0.1, 5, force=force), expected), offset
 
 
-@pytest.mark.skipif(SANITIZED, reason="the sanitizer reserves more address space than the limit allows")
-def test_state_saved_before_an_error_restores_the_instance():
-    # FMI 2.0 (2.1.3): after fmi2Error the master may restart from a state saved before. The error
-    # here is running out of memory: the benchmark cloth (1524 unknowns) with the dense solver
-    # needs an 18 MB matrix, and the address space is limited to 4 MB above what the process
-    # uses. The script runs in its own process so that the limit stays there.
-    script = f"""
-import resource, sys
-sys.path.insert(0, {str(HERE)!r})
-from fmpy.fmi1 import FMICallException
-from conftest import BUNDLED_FMUS, SANITIZED
-from fmu_helpers import Instance
-
-def address_space():
-    for line in open('/proc/self/status'):
-        if line.startswith('VmSize:'):
-            return int(line.split()[1]) * 1024
-
-def refused(call):
-    try:
-        call()
-    except FMICallException as e:
-        return e.status == {FMI2_ERROR}
-    return False
-
-fmu = {str(BUNDLED_FMUS / "cloth.fmu")!r}
-a = Instance(fmu, "a")
-saved = a.slave.getFMUstate()
-a.slave.setupExperiment(startTime=0.0)
-a.slave.enterInitializationMode()
-a.set("solver.linear_solver", "dense")
-soft, hard = resource.getrlimit(resource.RLIMIT_AS)
-resource.setrlimit(resource.RLIMIT_AS, (address_space() + 4 * 2**20, hard))
-assert refused(a.slave.exitInitializationMode)
-resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
-assert refused(lambda: a.slave.doStep(0.0, 0.01)), "not in the error state"
-assert refused(a.slave.getFMUstate)
-a.slave.setFMUstate(saved)
-b = Instance(fmu, "b")
-for inst in (a, b):
-    inst.start()
-    for k in range(5):
-        inst.slave.doStep(0.01 * k, 0.01)
-names = [v.name for v in a.md.modelVariables if v.causality == "output"]
-# Bit for bit: the restored instance is the fresh one.
-assert a.get(*names) == b.get(*names), (a.get(*names), b.get(*names))
-print("restored")
-"""
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert out.returncode == 0 and "restored" in out.stdout, out.stdout + out.stderr
-
-
-@pytest.mark.skipif(SANITIZED, reason="the sanitizer reserves more address space than the limit allows")
-def test_values_and_derivatives_can_be_read_in_the_error_state():
-    # FMI 2.0's table of allowed calls (4.2.4) lets a master read values in the error state, for
-    # debugging: fmi2GetReal, fmi2GetDirectionalDerivative and fmi2GetRealOutputDerivatives alike
-    # (the status queries and fmi2DoStep stay refused). The error is running out of memory, as in
-    # the test above, in a process of its own.
+def run_in_the_error_state(then, done):
+    """Runs the Python text `then` in a process of its own, where instance `a` of the bundled cloth
+    (its slave `s`, and `saved`, a state got right after instantiation) is in FMI's error state,
+    and checks that it printed `done`. The error is running out of memory: the cloth (1524
+    unknowns) with the dense solver needs an 18 MB matrix, and the address space is limited to
+    4 MB above what the process uses while initialisation ends; its own process keeps the limit
+    away from the others. `status(call)` gives a call's status (0 for fmi2OK)."""
     script = f"""
 import ctypes, math, resource, sys
 sys.path.insert(0, {str(HERE)!r})
@@ -442,8 +392,10 @@ def status(call):
         return e.status
     return 0
 
-a = Instance({str(BUNDLED_FMUS / "cloth.fmu")!r}, "a")
+fmu = {str(BUNDLED_FMUS / "cloth.fmu")!r}
+a = Instance(fmu, "a")
 s = a.slave
+saved = s.getFMUstate()
 s.setupExperiment(startTime=0.0)
 s.enterInitializationMode()
 a.set("solver.linear_solver", "dense")
@@ -452,17 +404,50 @@ resource.setrlimit(resource.RLIMIT_AS, (address_space() + 4 * 2**20, hard))
 assert status(s.exitInitializationMode) == {FMI2_ERROR}
 resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 assert status(lambda: s.doStep(0.0, 0.01)) == {FMI2_ERROR}, "not in the error state"
-before = len(a.messages)
-kinetic = a.vr["energy.kinetic"]
-assert math.isfinite(s.getReal([kinetic])[0])
-assert s.getDirectionalDerivative([kinetic], [], []) == [0.0]
-assert s.dll.fmi2GetRealOutputDerivatives(s.component, None, ctypes.c_size_t(0), None, None) == 0
-assert a.messages[before:] == [], a.messages[before:]
-assert status(lambda: s.getRealStatus(2)) == {FMI2_ERROR}
-print("read")
 """
-    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
-    assert out.returncode == 0 and "read" in out.stdout, out.stdout + out.stderr
+    out = subprocess.run([sys.executable, "-c", script + textwrap.dedent(then)], capture_output=True, text=True)
+    assert out.returncode == 0 and done in out.stdout, out.stdout + out.stderr
+
+
+@pytest.mark.skipif(SANITIZED, reason="the sanitizer reserves more address space than the limit allows")
+def test_state_saved_before_an_error_restores_the_instance():
+    # FMI 2.0 (2.1.3): after fmi2Error the master may restart from a state saved before.
+    run_in_the_error_state(
+        f"""
+        assert status(s.getFMUstate) == {FMI2_ERROR}
+        s.setFMUstate(saved)
+        b = Instance(fmu, "b")
+        for inst in (a, b):
+            inst.start()
+            for k in range(5):
+                inst.slave.doStep(0.01 * k, 0.01)
+        names = [v.name for v in a.md.modelVariables if v.causality == "output"]
+        # Bit for bit: the restored instance is the fresh one.
+        assert a.get(*names) == b.get(*names), (a.get(*names), b.get(*names))
+        print("restored")
+        """,
+        "restored",
+    )
+
+
+@pytest.mark.skipif(SANITIZED, reason="the sanitizer reserves more address space than the limit allows")
+def test_values_and_derivatives_can_be_read_in_the_error_state():
+    # FMI 2.0's table of allowed calls (4.2.4) lets a master read values in the error state, for
+    # debugging: fmi2GetReal, fmi2GetDirectionalDerivative and fmi2GetRealOutputDerivatives alike
+    # (the status queries and fmi2DoStep stay refused).
+    run_in_the_error_state(
+        f"""
+        before = len(a.messages)
+        kinetic = a.vr["energy.kinetic"]
+        assert math.isfinite(s.getReal([kinetic])[0])
+        assert s.getDirectionalDerivative([kinetic], [], []) == [0.0]
+        assert s.dll.fmi2GetRealOutputDerivatives(s.component, None, ctypes.c_size_t(0), None, None) == 0
+        assert a.messages[before:] == [], a.messages[before:]
+        assert status(lambda: s.getRealStatus(2)) == {FMI2_ERROR}
+        print("read")
+        """,
+        "read",
+    )
 
 
 # The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
