@@ -163,16 +163,16 @@ printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [
 out=$("$cli" check "$tmp/tiny_atol.json" 2>&1)
 [ "$out" = "springmass check: $tmp/tiny_atol.json: simulation.atol_velocity: 1e-200 must be at least 1e-150 (CVODE's error norm overflows below)" ] ||
   fail "check tiny_atol.json printed '$out'"
-# check says what each parameter feeds.
+# check says what each parameter feeds, with its value as it reads back exactly.
 cat > "$tmp/uses.json" << 'JSON'
-{"springmass": 1, "name": "uses", "parameters": {"n": 4, "L": 1, "E": 10, "b": 0.1, "tol": 1e-6, "spare": 0},
+{"springmass": 1, "name": "uses", "parameters": {"n": 4, "L": 1, "E": 10, "b": 0.1, "tol": 1e-6, "spare": 4999.999},
  "structures": [{"type": "rope", "name": "r", "start": [0, 0, 0], "end": ["L", 0, 0], "segments": "n",
                  "structural": {"strain_stiffness": "E"}}],
  "fixed": [{"min": [-1, -1, -1], "max": ["b", 1, 1]}], "simulation": {"rtol": "tol"}}
 JSON
 out=$("$cli" check "$tmp/uses.json" 2>&1)
 for line in "n = 4 feeds counts" "L = 1 feeds initial state" "E = 10 feeds constants" \
-            "b = 0.1 feeds held particles" "tol = 1e-06 feeds settings" "spare = 0 feeds nothing"; do
+            "b = 0.1 feeds held particles" "tol = 1e-06 feeds settings" "spare = 4999.999 feeds nothing"; do
   grep -q "^  $(sed 's/ = \([^ ]*\) / *= \1 */' <<< "$line")$" <<< "$out" || fail "check uses.json: no line '$line' in: $out"
 done
 # The absolute tolerances one at a time: --atol-position and --atol-velocity win over --atol

@@ -223,7 +223,10 @@ int sm_cmd_check(int argc, char** argv)
 		static const char* const uses[] = {"constants", "initial state", "held particles",     "counts",
 		                                   "settings",  "spring kinds",  "particle references"};
 		const uint32_t used = sm_document_parameter_uses(doc, k);
-		printf("  %-12s = %-12g feeds ", sm_document_parameter_name(doc, k), sm_document_parameter_value(doc, k));
+		// The value as it reads back exactly: 4999.999 is not 5000.
+		char value[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(sm_document_parameter_value(doc, k), value);
+		printf("  %-12s = %-12s feeds ", sm_document_parameter_name(doc, k), value);
 		if (used == 0)
 			printf("nothing");
 		for (int u = 0, shown = 0; u < (int)(sizeof uses / sizeof uses[0]); u++)
