@@ -336,6 +336,19 @@ static size_t name_nodes(const char* name, name_node* out)
 	return n;
 }
 
+// Orders nodes by their name (the first length bytes), then their kind.
+static int compare_nodes(const void* left, const void* right)
+{
+	const name_node* a = left;
+	const name_node* b = right;
+	const int order = memcmp(a->name, b->name, a->length < b->length ? a->length : b->length);
+	if (order != 0)
+		return order;
+	if (a->length != b->length)
+		return a->length < b->length ? -1 : 1;
+	return (a->kind > b->kind) - (a->kind < b->kind);
+}
+
 static const char* node_kind(char kind)
 {
 	return kind == '.' ? "a record" : kind == '[' ? "an array" : "a variable";
@@ -344,8 +357,8 @@ static const char* node_kind(char kind)
 // The names must form a tree, as modelDescription.xml declares (variableNamingConvention
 // "structured"): no name twice, and no name that is also a record or an array, or a record and an
 // array at once. A parameter "energy" beside "energy.kinetic", or a port "p" ("p.x") beside the
-// particles' "p[0].x", is refused. Quadratic in the nodes of the non-particle variables only:
-// particle variables "p[i].x" add the array p and cannot collide with each other.
+// particles' "p[0].x", is refused. The nodes of the non-particle variables are sorted (particle
+// variables "p[i].x" add the array p and cannot collide with each other).
 static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 {
 	size_t capacity = 1, count = 0;
@@ -364,27 +377,28 @@ static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 	for (int32_t i = 0; i < t->count; ++i)
 		if (t->variables[i].source != FMU_SRC_PARTICLE_POSITION && t->variables[i].source != FMU_SRC_PARTICLE_VELOCITY)
 			count += name_nodes(t->variables[i].name, nodes + count);
-	for (size_t i = 0; i < count; ++i)
-		for (size_t j = i + 1; j < count; ++j) {
-			const name_node* a = &nodes[i];
-			const name_node* b = &nodes[j];
-			if (a->length != b->length || memcmp(a->name, b->name, a->length) != 0 || (a->kind == b->kind && a->kind))
-				continue;
-			if (err) {
-				err->status = SM_ERROR_SCHEMA;
-				if (!a->kind && !b->kind)
-					snprintf(err->message, sizeof err->message,
-					         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
-					         a->name);
-				else
-					snprintf(err->message, sizeof err->message,
-					         "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
-					         "structured names (rename the parameter or port)",
-					         a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
-			}
-			free(nodes);
-			return SM_ERROR_SCHEMA;
+	// Sorted, equal names lie side by side, a leaf first, then a record, then an array.
+	qsort(nodes, count, sizeof *nodes, compare_nodes);
+	for (size_t i = 1; i < count; ++i) {
+		const name_node* a = &nodes[i - 1];
+		const name_node* b = &nodes[i];
+		if (a->length != b->length || memcmp(a->name, b->name, a->length) != 0 || (a->kind == b->kind && a->kind))
+			continue;
+		if (err) {
+			err->status = SM_ERROR_SCHEMA;
+			if (!a->kind && !b->kind)
+				snprintf(err->message, sizeof err->message,
+				         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
+				         a->name);
+			else
+				snprintf(err->message, sizeof err->message,
+				         "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
+				         "structured names (rename the parameter or port)",
+				         a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
 		}
+		free(nodes);
+		return SM_ERROR_SCHEMA;
+	}
 	free(nodes);
 	return SM_OK;
 }
@@ -604,7 +618,8 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 	}
 	fmu_text_append_string(out, " dependencies=\"");
 	bool first = true;
-	for (int32_t i = 0; i < t->count; ++i) {
+	// States alone (a port's position and velocity, the dissipated energy): no input to look for.
+	for (int32_t i = 0; (position || velocity) && i < t->count; ++i) {
 		const fmu_variable* w = &t->variables[i];
 		if (w->causality != FMU_INPUT)
 			continue;

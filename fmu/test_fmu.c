@@ -1617,7 +1617,7 @@ static int test_variable_names_form_a_tree(void)
 	} refused[] = {
 	    {"\"energy\": 1", "", "", "\"energy\"", "\"energy.kinetic\""},
 	    {"\"p\": 1", "", "", "\"p[0].x\"", "\"p\""},
-	    {"", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}", "", "\"p[0].x\"", "\"p.x\""},
+	    {"", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}", "", "\"p[0].x\"", "\"p."},
 	    {"\"tip\": 1", "{\"name\": \"tip\", \"particle\": \"b\", \"kind\": \"probe\"}", "", "\"tip\"", "\"tip.x\""},
 	};
 	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
