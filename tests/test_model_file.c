@@ -2793,6 +2793,53 @@ static int test_saved_zero_constants_keep_their_scaling(void)
 	return 0;
 }
 
+// A key that is not listed is an error wherever it stands (docs: "The format is strict"), named
+// with the keys allowed there: in a structure, a fixed box, a port and the simulation and FMU
+// settings too, beside keys that are all valid.
+static int test_unknown_keys_are_refused_everywhere(void)
+{
+	static const char* const format =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 1, 0], \"end\": [1, 1, 0],"
+	    " \"segments\": 2%s}], \"fixed\": [{\"min\": [0, 0, 0], \"max\": [0, 0, 0]%s}],"
+	    " \"ports\": [{\"name\": \"tip\", \"particle\": \"r[2]\", \"kind\": \"probe\"%s}],"
+	    " \"simulation\": {\"stop_time\": 2%s}, \"fmu\": {\"particle_variables\": false%s}}";
+	static const struct {
+		int place;
+		const char* key;
+		const char* message;
+	} cases[] = {
+	    {0, "bendng",
+	     "test.json: structures[0]: unknown key \"bendng\" (allowed here: type, name, start, end, segments, "
+	     "mass, mass_per_length, structural, bending, mass_distribution)"},
+	    {1, "mx", "test.json: fixed[0]: unknown key \"mx\" (allowed here: min, max)"},
+	    {2, "knd", "test.json: ports[0]: unknown key \"knd\" (allowed here: name, particle, kind)"},
+	    {3, "stop_tme",
+	     "test.json: simulation: unknown key \"stop_tme\" (allowed here: stop_time, output_interval, rtol, "
+	     "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps)"},
+	    {4, "particle_variable",
+	     "test.json: fmu: unknown key \"particle_variable\" (allowed here: particle_variables)"},
+	};
+	const char* none[5] = {"", "", "", "", ""};
+	char text[1024];
+	snprintf(text, sizeof text, format, none[0], none[1], none[2], none[3], none[4]);
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document_destroy(doc);
+	int failures = 0;
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		const char* extra[5] = {"", "", "", "", ""};
+		char key[64];
+		snprintf(key, sizeof key, ", \"%s\": 1", cases[c].key);
+		extra[cases[c].place] = key;
+		snprintf(text, sizeof text, format, extra[0], extra[1], extra[2], extra[3], extra[4]);
+		failures += !refused_as(text, cases[c].key, SM_ERROR_SCHEMA, cases[c].message);
+	}
+	ENSURE(failures == 0);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2848,5 +2895,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_zero_constants_keep_their_scaling);
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_limits_at_their_edges);
+	RUN_TEST(test_unknown_keys_are_refused_everywhere);
 	return TEST_SUMMARY();
 }
