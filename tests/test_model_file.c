@@ -1272,7 +1272,8 @@ static int test_whole_real_index(void)
 }
 
 // A UTF-8 byte-order mark before the document is ignored (RFC 8259, section 8.1), and line and
-// column numbers stay those an editor shows; one anywhere else is an error. A directory given as
+// column numbers stay those an editor shows; one anywhere else is an error, and one alone leaves
+// an empty file. A directory given as
 // the model file says so.
 static int test_byte_order_mark_and_directories(void)
 {
@@ -1285,6 +1286,13 @@ static int test_byte_order_mark_and_directories(void)
 	const char late[] = "{\"springmass\": 1,\n\xef\xbb\xbf\"name\": \"x\"}";
 	ENSURE(parse(late, &err) == NULL && err.status == SM_ERROR_SYNTAX);
 	ENSURE(strncmp(err.message, "test.json:2:1: ", 15) == 0);
+	// The mark is no text: a file of the mark alone, as of the mark and white space, is empty.
+	static const char* const marks_alone[] = {"\xef\xbb\xbf", "\xef\xbb\xbf\n"};
+	for (size_t k = 0; k < sizeof marks_alone / sizeof marks_alone[0]; k++) {
+		ENSURE(parse(marks_alone[k], &err) == NULL && err.status == SM_ERROR_SYNTAX);
+		ENSURE(strcmp(err.message, "test.json: the model file is empty (a model file is one JSON object)") ==
+		       0);
+	}
 
 	ENSURE(sm_document_load(SPRINGMASS_MODELS_DIR, &err) == NULL);
 	char expected[600];
