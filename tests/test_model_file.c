@@ -1611,7 +1611,7 @@ static int test_reference_expressions(void)
 	static const char* const format =
 	    "{\"springmass\": 1, \"name\": \"x\","
 	    " \"parameters\": {\"a\": 7, \"b\": -3, \"z\": 0, \"h\": 0.5, \"big\": 2147483648, \"k\": 2,"
-	    "   \"huge\": 2147483649, \"n_1\": 4, \"n2\": 5},"
+	    "   \"huge\": 2147483649, \"n_1\": 4, \"n2\": 5, \"_m\": 2},"
 	    " \"particles\": [{\"name\": \"p\", \"position\": [9, 9, 9]}],"
 	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 100}],"
 	    " \"springs\": [{\"a\": \"r[z]\", \"b\": \"%s\", \"stiffness\": \"k\"}]}";
@@ -1622,6 +1622,7 @@ static int test_reference_expressions(void)
 	    // The limits: 2^31 itself is allowed, as a literal and as -2^31 halved.
 	    {"r[2147483648 - 2147483600]", 48},              {"r[(-2147483647 - 1) / 2 + 1073741834]", 10},
 	    {"r[-8/2+10]", 6},      {"r[n_1]", 4},           {"r[n2]", 5},              {"r[\\n1\\r]", 1},
+	    {"r[_m + 1]", 3},  // a parameter's name may begin with '_', as a C identifier may
 	    {"r[--------------------------------1]", 1},  // 32 unary signs deep
 	    {"r[a*2+1]", 15},       {"r[(a+1)*2]", 16},      {"r[a - 2 - 1]", 4},       {"r[a/2]", 3},
 	    {"r[-b]", 3},           {"r[b/2+5]", 3},         {"r[7/-2+10]", 6},         {"r[-7/2+10]", 6},
