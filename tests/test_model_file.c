@@ -2852,6 +2852,31 @@ static int test_unknown_keys_are_refused_everywhere(void)
 	return 0;
 }
 
+// A parameter index out of range names no parameter (docs: model_file.h): no name, a NaN value,
+// no uses, and setting it fails with the document unchanged, at -1 as at the parameter count.
+static int test_parameter_indices_out_of_range(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"m\": 2,"
+	                               " \"k\": 3}, \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"m\"}]}",
+	                               &err);
+	ENSURE(doc != NULL && sm_document_parameter_count(doc) == 2);
+	static const int32_t outside[] = {-1, 2};
+	for (size_t k = 0; k < sizeof outside / sizeof outside[0]; k++) {
+		const int32_t i = outside[k];
+		ENSURE(sm_document_parameter_name(doc, i) == NULL && isnan(sm_document_parameter_value(doc, i)));
+		ENSURE(sm_document_parameter_uses(doc, i) == 0);
+		ENSURE_STATUS(sm_document_set_parameter(doc, i, 5.0, &err), SM_ERROR_NOT_FOUND);
+		char expected[100];
+		snprintf(expected, sizeof expected, "test.json: parameter index %d is out of range (2 parameters)",
+		         (int)i);
+		ENSURE(strcmp(err.message, expected) == 0);
+		ENSURE(sm_document_parameter_value(doc, 0) == 2.0 && sm_document_parameter_value(doc, 1) == 3.0);
+	}
+	sm_document_destroy(doc);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2908,5 +2933,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_limits_at_their_edges);
 	RUN_TEST(test_unknown_keys_are_refused_everywhere);
+	RUN_TEST(test_parameter_indices_out_of_range);
 	return TEST_SUMMARY();
 }
