@@ -2597,6 +2597,12 @@ static int test_more_rules_at_their_edges(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\","
 	     " \"nu\": 2, \"nv\": 1}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0].nv: 1 must be a whole number from 2 to 4194304"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\","
+	     " \"nu\": 2, \"nv\": 2, \"mass\": 0}]}",
+	     SM_ERROR_NEGATIVE, "test.json: structures[0].mass: 0 must be > 0"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"m\": true}, \"particles\": [{\"position\":"
+	     " [0, 0, 0]}]}",
+	     SM_ERROR_SCHEMA, "test.json: parameters.m: a parameter's value must be a number, not a boolean"},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"break_strain\": 0}]}", SM_ERROR_NEGATIVE,
 	     "test.json: springs[0].break_strain: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
