@@ -2732,6 +2732,27 @@ static int test_limits_at_their_edges(void)
 	ENSURE(sm_document_parse_limited(text, strlen(text), "test.json", 10, &err) == NULL);
 	ENSURE(strcmp(err.message, "test.json: structures[0]: the model would have 7 particles and 11 springs, more than "
 	                           "the limit of 10 of each") == 0);
+	// Explicit springs count after a structure's: a rope of 5 springs leaves room for 5 more, not 6.
+	for (int n = 5; n <= 6; n++) {
+		t.data = NULL;
+		t.length = t.capacity = 0;
+		append(&t, "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\","
+		           " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 5,"
+		           " \"structural\": {\"stiffness\": 1}}], \"springs\": [");
+		for (int k = 0; k < n; k++)
+			append(&t, "%s{\"a\": \"r[0]\", \"b\": \"r[%d]\", \"stiffness\": 1}", k > 0 ? ", " : "",
+			       1 + k % 5);
+		append(&t, "]}");
+		doc = sm_document_parse_limited(t.data, t.length, "test.json", 10, &err);
+		if (n == 5) {
+			ENSURE(doc != NULL && sm_document_spring_count(doc) == 10);
+		} else {
+			ENSURE(doc == NULL &&
+			       strcmp(err.message, "test.json: springs: 6 more springs exceed the limit of 10") == 0);
+		}
+		sm_document_destroy(doc);
+		free(t.data);
+	}
 	return 0;
 }
 
