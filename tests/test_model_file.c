@@ -1496,6 +1496,10 @@ static int test_references_stay_inside_their_structures(void)
 	     "\"b[0,0,2]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
 	    {"\"r[1]]\"", SM_ERROR_SCHEMA,
 	     "\"r[1]]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
+	    // A syntax error in the third index is explained as in the first.
+	    {"\"b[0, 0, )]\"", SM_ERROR_SCHEMA,
+	     "\"b[0, 0, )]\": a number, a parameter or '(' expected; a structure reference is name[i], "
+	     "name[row, column] or name[row, column, layer]"},
 	    {"31", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
 	    {"31.0", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
 	    {"-1", SM_ERROR_PARTICLE_INDEX, "particle index -1 is out of range (the model has 31 particles)"},
