@@ -2150,6 +2150,8 @@ static int test_syntax_error_positions(void)
 	     SM_ERROR_SYNTAX, "test.json:3:10: ']' expected near '\"springs\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1 \"name\": \"x\"}", SM_ERROR_SYNTAX,
 	     "test.json:1:23: '}' expected near '\"name\"' (or a ',' before it)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0 0 -9.81]}", SM_ERROR_SYNTAX,
+	     "test.json:1:46: ']' expected near '0' (or a ',' before it)"},
 	    // An error at a line end is at column 0 of the next line, whichever kind the line end is.
 	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\\r\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
