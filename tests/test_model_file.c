@@ -2627,6 +2627,12 @@ static int test_more_rules_at_their_edges(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
 	     " \"nu\": 2097152, \"nv\": 2097152, \"nw\": 4194304}]}",
 	     SM_ERROR_SCHEMA, "test.json: structures[0]: 2097152 x 2097152 x 4194304 particles exceed the limit of 4194304"},
+	    // "c[]" is of the form S[...], though no reference has empty brackets.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[]\", \"position\": [5, 5, 5]}],"
+	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: particles[0].name: name \"c[]\" reads as a reference to a particle of structure \"c\": "
+	     "give the particle another name"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	// Only a name of the form S[...] reads as a reference to structure S: "c[" and "c[1" do not.
