@@ -112,6 +112,18 @@ static void symmv_workspace_destroy(gsl_eigen_symmv_workspace* w)
 	}
 }
 
+// All eigenpairs of the symmetric n x n matrix (destroyed), eigenvalues ascending, eigenvectors
+// as the columns of vectors; ws is a workspace for n. False if the eigensolver fails.
+static bool symmetric_eigenpairs(double* matrix, size_t n, double* values, double* vectors,
+                                 gsl_eigen_symmv_workspace* ws)
+{
+	gsl_matrix_view A = gsl_matrix_view_array(matrix, n, n);
+	gsl_matrix_view V = gsl_matrix_view_array(vectors, n, n);
+	gsl_vector_view L = gsl_vector_view_array(values, n);
+	return gsl_eigen_symmv(&A.matrix, &L.vector, &V.matrix, ws) == GSL_SUCCESS &&
+	       gsl_eigen_symmv_sort(&L.vector, &V.matrix, GSL_EIGEN_SORT_VAL_ASC) == GSL_SUCCESS;
+}
+
 sm_modes_def sm_default_modes_def(void)
 {
 	sm_modes_def def;
@@ -245,11 +257,7 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the eigensolver");
 		goto done;
 	}
-	gsl_matrix_view A = gsl_matrix_view_array(K, dof, dof);
-	gsl_matrix_view V = gsl_matrix_view_array(evec, dof, dof);
-	gsl_vector_view L = gsl_vector_view_array(eval, dof);
-	if (gsl_eigen_symmv(&A.matrix, &L.vector, &V.matrix, ws) != GSL_SUCCESS ||
-	    gsl_eigen_symmv_sort(&L.vector, &V.matrix, GSL_EIGEN_SORT_VAL_ASC) != GSL_SUCCESS) {
+	if (!symmetric_eigenpairs(K, dof, eval, evec, ws)) {
 		st = sm_error_set(err, SM_ERROR_SOLVER, "modes: the symmetric eigensolver failed");
 		goto done;
 	}
@@ -950,9 +958,8 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 	double* rotation = malloc(g * g * sizeof(double));
 	double* damping = malloc(g * sizeof(double));
 	double* rows = malloc(g * row * sizeof(double));
-	gsl_eigen_symmv_workspace* ws = symmv_workspace_create(g);
 	sm_status st = SM_OK;
-	if (block == NULL || rotation == NULL || damping == NULL || rows == NULL || ws == NULL) {
+	if (block == NULL || rotation == NULL || damping == NULL || rows == NULL) {
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
 		goto done;
 	}
@@ -965,11 +972,14 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 		for (size_t a = 0; a < s; a++)
 			for (size_t b = 0; b < s; b++)
 				block[a * s + b] = 0.5 * (modal[(start + a) * kept + start + b] + modal[(start + b) * kept + start + a]);
-		gsl_matrix_view B = gsl_matrix_view_array(block, s, s);
-		gsl_matrix_view Q = gsl_matrix_view_array(rotation, s, s);
-		gsl_vector_view D = gsl_vector_view_array(damping, s);
-		if (gsl_eigen_symmv(&B.matrix, &D.vector, &Q.matrix, ws) != GSL_SUCCESS ||
-		    gsl_eigen_symmv_sort(&D.vector, &Q.matrix, GSL_EIGEN_SORT_VAL_ASC) != GSL_SUCCESS) {
+		gsl_eigen_symmv_workspace* ws = symmv_workspace_create(s);
+		if (ws == NULL) {
+			st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
+			goto done;
+		}
+		const bool solved = symmetric_eigenpairs(block, s, damping, rotation, ws);
+		symmv_workspace_destroy(ws);
+		if (!solved) {
 			st = sm_error_set(err, SM_ERROR_SOLVER, "modes: the eigensolver of a repeated frequency's damping failed");
 			goto done;
 		}
@@ -1003,7 +1013,6 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 		}
 	}
 done:
-	symmv_workspace_destroy(ws);
 	free(block);
 	free(rotation);
 	free(damping);

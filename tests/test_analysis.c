@@ -532,30 +532,36 @@ static int test_external_force_on_a_spring(void)
 	return 0;
 }
 
-// A 1 kg particle at (0, 0, z) [m] tied to a fixed one at the origin by a rest-length spring of
-// ks [N/m] and rest length 1 m; gravity (0, 0, gz) [m/s^2]. NULL if any step fails.
-static sm_model* anchored_mass(double gz, double z, double ks)
+// A 1 kg particle at (0, 0, z) [m] tied to a fixed one at the origin by `spring` (its ends set
+// here); gravity (0, 0, gz) [m/s^2]. NULL if any step fails.
+static sm_model* anchored_particle(double gz, double z, sm_spring_def spring)
 {
 	sm_model_def md = sm_default_model_def();
 	md.gravity[2] = gz;
 	sm_model* model = sm_model_create(&md, NULL);
 	sm_particle_def p = sm_default_particle_def();
 	p.motion = SM_PARTICLE_FIXED;
-	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
-	s.rest_length = 1.0;
-	s.stiffness = ks;
+	spring.a = 0;
+	spring.b = 1;
 	bool ok = model != NULL && sm_model_add_particle(model, &p, NULL) == SM_OK;
 	p.motion = SM_PARTICLE_FREE;
 	p.mass = 1.0;
 	p.position[2] = z;
-	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &s, NULL) == SM_OK;
+	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &spring, NULL) == SM_OK;
 	if (!ok) {
 		sm_model_destroy(model);
 		return NULL;
 	}
 	return model;
+}
+
+// The same on a rest-length spring of ks [N/m] and rest length 1 m.
+static sm_model* anchored_mass(double gz, double z, double ks)
+{
+	sm_spring_def s = sm_default_spring_def();
+	s.rest_length = 1.0;
+	s.stiffness = ks;
+	return anchored_particle(gz, z, s);
 }
 
 // A particle on a rest-length spring directly above its fixed anchor, gravity pulling it down
@@ -1155,26 +1161,12 @@ static int test_coincident_rest_length_spring(void)
 // given kind with rest length 0, 100 N/m and `damping` [N s/m].
 static sm_model* bob_on_its_anchor(sm_spring_kind kind, double damping)
 {
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.motion = SM_PARTICLE_FIXED;
 	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
 	s.kind = kind;
 	s.rest_length = 0.0;
 	s.stiffness = 100.0;
 	s.damping = damping;
-	bool ok = model != NULL && sm_model_add_particle(model, &p, NULL) == SM_OK;
-	p.motion = SM_PARTICLE_FREE;
-	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &s, NULL) == SM_OK;
-	if (!ok) {
-		sm_model_destroy(model);
-		return NULL;
-	}
-	return model;
+	return anchored_particle(0.0, 0.0, s);
 }
 
 // A free particle on its fixed anchor, tied by a damped spring of rest length 0 (ks = 100 N/m,
@@ -1185,9 +1177,9 @@ static sm_model* bob_on_its_anchor(sm_spring_kind kind, double damping)
 // zeta = kd / (2 sqrt(ks m)) = 0.2, while the conventional D = 0 at L = 0 would give 0. So modes
 // must refuse the configuration, naming the spring, as for a coincident rest-length spring,
 // rather than report undamped modes. Apart, the same spring is an ordinary damped oscillator
-// along its axis and undamped across it, all three at omega^2 = ks / m: the split of the
-// threefold eigenspace is the eigensolver's, but the damping ratios sum to the trace,
-// tr(C) / (2 omega) = 0.2 (to round-off, 1e-12).
+// along its axis and undamped across it, all three at omega^2 = ks / m: the modes of the
+// threefold eigenspace are those that diagonalise its damping (the axis and two across it), and
+// their damping ratios sum to the trace, tr(C) / (2 omega) = 0.2 (to round-off, 1e-12).
 static int test_coincident_damped_spring_of_zero_rest_length(void)
 {
 	for (int kind = 0; kind <= 1; kind++) {
