@@ -373,22 +373,27 @@ bool sm_multilevel_refresh(sm_multilevel* ml, const double* values, cholmod_comm
 	return cholmod_l_factorize(ml->coarsest, ml->factor, common) && common->status == CHOLMOD_OK;
 }
 
-// r = b - A x on a level.
+// r = b - A x on a level. The three rows of a block row go together, so that each neighbour's
+// x is loaded once; each row's sum keeps its order (the same bits as row by row).
 static void residual(const level* l, const double* b, const double* x, double* r)
 {
 	for (int32_t I = 0; I < l->count; I++) {
 		const int64_t degree = l->first[I + 1] - l->first[I];
-		const float* row = l->matrix + 9 * l->first[I];
+		const float* a0 = l->matrix + 9 * l->first[I];
+		const float* a1 = a0 + 3 * degree;
+		const float* a2 = a1 + 3 * degree;
 		const int32_t* nb = l->neighbour + l->first[I];
-		for (int i = 0; i < 3; i++) {
-			const float* a = row + 3 * degree * i;
-			double s = b[3 * (size_t)I + i];
-			for (int64_t k = 0; k < degree; k++) {
-				const double* y = x + 3 * (size_t)nb[k];
-				s -= a[3 * k] * y[0] + a[3 * k + 1] * y[1] + a[3 * k + 2] * y[2];
-			}
-			r[3 * (size_t)I + i] = s;
+		double s0 = b[3 * (size_t)I], s1 = b[3 * (size_t)I + 1], s2 = b[3 * (size_t)I + 2];
+		for (int64_t k = 0; k < degree; k++) {
+			const double* y = x + 3 * (size_t)nb[k];
+			const double y0 = y[0], y1 = y[1], y2 = y[2];
+			s0 -= a0[3 * k] * y0 + a0[3 * k + 1] * y1 + a0[3 * k + 2] * y2;
+			s1 -= a1[3 * k] * y0 + a1[3 * k + 1] * y1 + a1[3 * k + 2] * y2;
+			s2 -= a2[3 * k] * y0 + a2[3 * k + 1] * y1 + a2[3 * k + 2] * y2;
 		}
+		r[3 * (size_t)I] = s0;
+		r[3 * (size_t)I + 1] = s1;
+		r[3 * (size_t)I + 2] = s2;
 	}
 }
 
