@@ -13,6 +13,7 @@
 // step (what an FMU sees with small communication steps), once keeping CVODE's history and once
 // re-initialising at every change, and prints both. ATOL_VELOCITY=<a> sets the velocities'
 // absolute tolerance alone [m/s] (positions keep 1e-6 m), to measure what it does to the steps.
+// THREADS=<t> sets sm_simulation_def.threads (default 1), which changes the time, not the results.
 #define _POSIX_C_SOURCE 200809L
 
 #include "springmass/simulation.h"
@@ -72,6 +73,9 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	const char* atol_velocity = getenv("ATOL_VELOCITY");
 	if (atol_velocity && atof(atol_velocity) > 0.0)
 		d.absolute_tolerance_velocity = atof(atol_velocity);
+	const char* threads = getenv("THREADS");
+	if (threads && atoi(threads) > 0)
+		d.threads = atoi(threads);
 	d.restart_on_input_change = restart;
 	const double start = now();
 	sm_error err;

@@ -58,6 +58,7 @@
 #include "model_internal.h"
 #include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
+#include "workers.h"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
@@ -66,6 +67,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 // Conjugate-gradient iterations allowed per solve with the block-Jacobi preconditioner, beyond
 // which the solve counts as failed (CVODE then reduces the step).
@@ -121,6 +123,16 @@
 #endif
 #define COARSE_ITERATIONS 3
 #define STRONG_FRACTION 0.25
+
+// Free particles from which the pcg solver's loops run in PARALLEL_CHUNKS chunks (below, every
+// loop runs in order, as one chunk), and the largest share of springs between chunks for which
+// it does (they are summed on the caller's thread after the chunks). The chunks do not depend on
+// the number of threads (sm_simulation_def.threads), so neither do the results.
+#ifndef PARALLEL_MIN_PARTICLES
+#define PARALLEL_MIN_PARTICLES 4000
+#endif
+#define PARALLEL_CHUNKS 4
+#define PARALLEL_MAX_BOUNDARY_FRACTION 0.125
 
 // Doubles per spring of the scaled records (seven used: one 64-byte record each).
 #define SCALED_STRIDE 8
@@ -179,6 +191,28 @@ typedef struct reduced {
 	cholmod_factor* coarse_factor;
 	cholmod_dense *coarse_b, *coarse_x, *coarse_y, *coarse_e;
 	sm_multilevel* multilevel; // replaces coarse_factor from MULTILEVEL_MIN_PARTICLES on
+	// Parallel loops (pcg): the particles in contiguous ranges chunk_particle[c] ..
+	// chunk_particle[c + 1]; the springs in chunk order: each chunk's springs with both ends in
+	// its range (positions chunk_spring[c] .. chunk_spring[c + 1]), then the springs between
+	// chunks (chunk_spring[chunks] .. spring_count), spring s at position slot[s], its particles
+	// ordered_a and ordered_b at that position, and its scaled record there too; the aggregates in
+	// ranges chunk_aggregate[c] .. chunk_aggregate[c + 1], each with its member particles in
+	// increasing order (member[member_first[I] .. member_first[I + 1]]) for the restriction.
+	// chunks = 1: every loop runs in order on the caller's thread, the springs in model order
+	// (slot, ordered_a and ordered_b NULL: the model's own arrays serve, the model being replaced
+	// by sm_simulation_update_model).
+	int chunks;
+	int32_t chunk_particle[PARALLEL_CHUNKS + 1];
+	int32_t chunk_spring[PARALLEL_CHUNKS + 1];
+	int32_t chunk_aggregate[PARALLEL_CHUNKS + 1];
+	int32_t* slot;
+	const int32_t* ordered_a;
+	const int32_t* ordered_b;
+	int32_t* ordered_owned;  // ordered_a and ordered_b when chunks > 1
+	int32_t* member_first;
+	int32_t* member;
+	double partial[PARALLEL_CHUNKS];  // per-chunk sums, added in chunk order
+	sm_workers* workers;              // NULL: one thread
 	double jacobian_time;   // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
 	// The state at which the right-hand side last stored the records (sm_reduced_rhs_records): a
 	// solve at that time and state adopts them instead of evaluating again.
@@ -312,7 +346,7 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 		const double w[3] = {g2 * q[3] + gamma * q[7] * q[0], g2 * q[4] + gamma * q[7] * q[1],
 		                     g2 * q[5] + gamma * q[7] * q[2]};
 		const double d = g2 * q[6];
-		double* record = r->scaled + SCALED_STRIDE * (size_t)s;
+		double* record = r->scaled + SCALED_STRIDE * (size_t)(r->slot != NULL ? r->slot[s] : s);
 		record[0] = q[0], record[1] = q[1], record[2] = q[2];
 		record[3] = w[0], record[4] = w[1], record[5] = w[2];
 		record[6] = d;
@@ -374,6 +408,101 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 	return ok;
 }
 
+// The springs at positions begin .. end of the chunk order added to q from their scaled records.
+static void add_spring_products(const reduced* r, const double* p, double* restrict q, int32_t begin, int32_t end)
+{
+	const int32_t* restrict first = r->slot != NULL ? r->ordered_a : r->sim->model->spring_a;
+	const int32_t* restrict second = r->slot != NULL ? r->ordered_b : r->sim->model->spring_b;
+	const double* restrict scaled = r->scaled;
+	if (begin >= end)
+		return;
+	// Structures list their springs particle by particle, so consecutive springs often share
+	// their first particle: its sum and its p are kept in registers until the particle changes
+	// (holding p too: 1.6 % faster at n = 16, 1 - 2 % at n = 64 and 128).
+	size_t held = 3 * (size_t)first[begin];
+	double hx = 0.0, hy = 0.0, hz = 0.0;
+	double px = p[held], py = p[held + 1], pz = p[held + 2];
+	for (int32_t s = begin; s < end; s++) {
+		const double* restrict e = scaled + SCALED_STRIDE * (size_t)s;
+		const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
+		if (a != held) {
+			q[held] -= hx;
+			q[held + 1] -= hy;
+			q[held + 2] -= hz;
+			hx = hy = hz = 0.0;
+			held = a;
+			px = p[a], py = p[a + 1], pz = p[a + 2];
+		}
+		const double rx = p[b] - px, ry = p[b + 1] - py, rz = p[b + 2] - pz;
+		const double c = e[3] * rx + e[4] * ry + e[5] * rz;
+		const double fx = e[0] * c + e[6] * rx, fy = e[1] * c + e[6] * ry, fz = e[2] * c + e[6] * rz;
+		hx += fx;
+		hy += fy;
+		hz += fz;
+		q[b] += fx;
+		q[b + 1] += fy;
+		q[b + 2] += fz;
+	}
+	q[held] -= hx;
+	q[held + 1] -= hy;
+	q[held + 2] -= hz;
+}
+
+typedef struct product_job {
+	reduced* r;
+	const double* p;
+	double* q;
+} product_job;
+
+// Chunk c of q = A p (pcg): the mass term at its particles, then its springs, which reach no
+// other chunk's particles.
+static void product_chunk(void* context, int c)
+{
+	const product_job* j = context;
+	const reduced* r = j->r;
+	const double damping = 1.0 + r->gamma * r->sim->model->def.mass_damping;
+	const double* restrict p = j->p;
+	const double* restrict mass = r->mass;
+	double* restrict q = j->q;
+	for (int64_t i = 3 * (int64_t)r->chunk_particle[c]; i < 3 * (int64_t)r->chunk_particle[c + 1]; i++)
+		q[i] = mass[i] * damping * p[i];
+	add_spring_products(r, p, q, r->chunk_spring[c], r->chunk_spring[c + 1]);
+}
+
+typedef struct dot_job {
+	reduced* r;
+	const double* a;
+	const double* b;
+} dot_job;
+
+static void dot_chunk(void* context, int c)
+{
+	const dot_job* j = context;
+	const double* restrict a = j->a;
+	const double* restrict b = j->b;
+	double s = 0.0;
+	for (int64_t i = 3 * (int64_t)j->r->chunk_particle[c]; i < 3 * (int64_t)j->r->chunk_particle[c + 1]; i++)
+		s += a[i] * b[i];
+	j->r->partial[c] = s;
+}
+
+// The chunks' partial sums, added in chunk order (with one chunk: the sum in order).
+static double sum_partials(const reduced* r)
+{
+	double s = r->partial[0];
+	for (int c = 1; c < r->chunks; c++)
+		s += r->partial[c];
+	return s;
+}
+
+// a . b over all particles, chunk by chunk.
+static double dot(reduced* r, const double* a, const double* b)
+{
+	dot_job job = {r, a, b};
+	sm_workers_run(r->workers, dot_chunk, &job, r->chunks);
+	return sum_partials(r);
+}
+
 // q = A p = M (1 + gamma alpha) p - gamma D p - gamma^2 K p over all particles (p is zero at the
 // constrained ones, whose entries of q are set to zero); returns p . q.
 //
@@ -389,58 +518,18 @@ static double multiply(reduced* r, const double* p, double* restrict q)
 {
 	const double g = r->gamma;
 	const sm_simulation* sim = r->sim;
-	const sm_model* model = sim->model;
 	if (r->use_cholmod) {
-		sm_spring_jacobians_combined_product(r->springs, model, g * g, g, p, q);
+		sm_spring_jacobians_combined_product(r->springs, sim->model, g * g, g, p, q);
 		for (int64_t i = 0; i < r->full; i++)
 			q[i] = r->mass[i] * p[i] - q[i];
 	} else {
-		const double damping = 1.0 + g * model->def.mass_damping;
-		for (int64_t i = 0; i < r->full; i++)
-			q[i] = r->mass[i] * damping * p[i];
-		const int32_t* restrict first = model->spring_a;
-		const int32_t* restrict second = model->spring_b;
-		const double* restrict scaled = r->scaled;
-		const int32_t count = model->spring_count;
-		// Structures list their springs particle by particle, so consecutive springs often
-		// share their first particle: its sum and its p are kept in registers until the
-		// particle changes (holding p too: 1.6 % faster at n = 16, 1 - 2 % at n = 64 and 128).
-		size_t held = count > 0 ? 3 * (size_t)first[0] : 0;
-		double hx = 0.0, hy = 0.0, hz = 0.0;
-		double px = count > 0 ? p[held] : 0.0, py = count > 0 ? p[held + 1] : 0.0, pz = count > 0 ? p[held + 2] : 0.0;
-		for (int32_t s = 0; s < count; s++) {
-			const double* restrict e = scaled + SCALED_STRIDE * (size_t)s;
-			const size_t a = 3 * (size_t)first[s], b = 3 * (size_t)second[s];
-			if (a != held) {
-				q[held] -= hx;
-				q[held + 1] -= hy;
-				q[held + 2] -= hz;
-				hx = hy = hz = 0.0;
-				held = a;
-				px = p[a], py = p[a + 1], pz = p[a + 2];
-			}
-			const double rx = p[b] - px, ry = p[b + 1] - py, rz = p[b + 2] - pz;
-			const double c = e[3] * rx + e[4] * ry + e[5] * rz;
-			const double fx = e[0] * c + e[6] * rx, fy = e[1] * c + e[6] * ry, fz = e[2] * c + e[6] * rz;
-			hx += fx;
-			hy += fy;
-			hz += fz;
-			q[b] += fx;
-			q[b + 1] += fy;
-			q[b + 2] += fz;
-		}
-		if (count > 0) {
-			q[held] -= hx;
-			q[held + 1] -= hy;
-			q[held + 2] -= hz;
-		}
+		product_job job = {r, p, q};
+		sm_workers_run(r->workers, product_chunk, &job, r->chunks);
+		add_spring_products(r, p, q, r->chunk_spring[r->chunks], sim->model->spring_count);
 	}
 	for (int32_t k = 0; k < sim->constrained_count; k++)
 		memset(q + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
-	double pq = 0.0;
-	for (int64_t i = 0; i < r->full; i++)
-		pq += p[i] * q[i];
-	return pq;
+	return dot(r, p, q);
 }
 
 static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
@@ -603,63 +692,99 @@ static double residual_norm(const reduced* r, const double* res)
 	return sqrt(s);
 }
 
-// Applies the preconditioner, out = B in, and returns in . out in *dot: block Jacobi
-// (out_i = A_ii^-1 in_i, zero blocks at constrained particles) plus the coarse correction
-// P A_c^-1 P^T in (additive), or a solve with the Cholesky factor (over the free degrees of
-// freedom). The restriction P^T in is summed in the block-Jacobi pass and the dot product in
-// the prolongation's, so that each pass over the particles does all it can.
+typedef struct precondition_job {
+	reduced* r;
+	const double* in;
+	double* out;
+	const double* yc;  // the coarse solution, for the prolongation
+} precondition_job;
+
+// Chunk c of block Jacobi (out_i = A_ii^-1 in_i, zero blocks at constrained particles) at its
+// particles, with in . out when there is no coarse correction, and of the restriction
+// P^T in at its aggregates, each summed over its members in order.
+static void block_jacobi_chunk(void* context, int c)
+{
+	const precondition_job* j = context;
+	reduced* r = j->r;
+	const double* restrict inverse = r->block_inverse;
+	const double* restrict in = j->in;
+	double* restrict out = j->out;
+	double sum = 0.0;
+	for (int64_t k = r->chunk_particle[c]; k < r->chunk_particle[c + 1]; k++) {
+		const double* m = inverse + 9 * k;
+		const double* a = in + 3 * k;
+		double* o = out + 3 * k;
+		o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
+		o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
+		o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
+		sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
+	}
+	r->partial[c] = sum;
+	if (!r->two_level)
+		return;
+	double* restrict rc = r->coarse_b->x;
+	const int32_t* restrict member = r->member;
+	for (int32_t I = r->chunk_aggregate[c]; I < r->chunk_aggregate[c + 1]; I++) {
+		double x = 0.0, y = 0.0, z = 0.0;
+		for (int32_t e = r->member_first[I]; e < r->member_first[I + 1]; e++) {
+			const double* a = in + 3 * (size_t)member[e];
+			x += a[0], y += a[1], z += a[2];
+		}
+		rc[3 * (size_t)I] = x, rc[3 * (size_t)I + 1] = y, rc[3 * (size_t)I + 2] = z;
+	}
+}
+
+// Chunk c of the prolongation out += P yc at its particles, with in . out.
+static void prolongation_chunk(void* context, int c)
+{
+	const precondition_job* j = context;
+	reduced* r = j->r;
+	const int32_t* restrict aggregate = r->aggregate;
+	const double* restrict in = j->in;
+	const double* restrict yc = j->yc;
+	double* restrict out = j->out;
+	double sum = 0.0;
+	for (int64_t k = r->chunk_particle[c]; k < r->chunk_particle[c + 1]; k++) {
+		const int32_t I = aggregate[k];
+		if (I < 0)
+			continue;
+		const double* a = in + 3 * k;
+		double* o = out + 3 * k;
+		o[0] += yc[3 * (size_t)I];
+		o[1] += yc[3 * (size_t)I + 1];
+		o[2] += yc[3 * (size_t)I + 2];
+		sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
+	}
+	r->partial[c] = sum;
+}
+
+// Applies the preconditioner, out = B in, and returns in . out in *dot: block Jacobi plus the
+// coarse correction P A_c^-1 P^T in (additive), or a solve with the Cholesky factor (over the
+// free degrees of freedom). The restriction is summed in the block-Jacobi pass and the dot
+// product in the prolongation's, so that each pass over the particles does all it can.
 static bool apply_preconditioner(reduced* r, const double* in, double* out, double* dot)
 {
 	const sm_simulation* sim = r->sim;
-	const int64_t particles = r->full / 3;
 	double sum = 0.0;
 	if (!r->use_cholmod) {
-		double* rc = r->two_level ? r->coarse_b->x : NULL;
-		if (rc != NULL)
-			memset(rc, 0, 3 * (size_t)r->aggregate_count * sizeof(double));
-		for (int64_t k = 0; k < particles; k++) {
-			const double* m = r->block_inverse + 9 * k;
-			const double* a = in + 3 * k;
-			double* o = out + 3 * k;
-			o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
-			o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
-			o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
-			const int32_t I = rc != NULL ? r->aggregate[k] : -1;
-			if (I >= 0) {
-				rc[3 * (size_t)I] += a[0];
-				rc[3 * (size_t)I + 1] += a[1];
-				rc[3 * (size_t)I + 2] += a[2];
-			} else if (rc == NULL) {
-				sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
-			}
-		}
-		if (rc == NULL) {
-			*dot = sum;
+		precondition_job job = {r, in, out, NULL};
+		sm_workers_run(r->workers, block_jacobi_chunk, &job, r->chunks);
+		if (!r->two_level) {
+			*dot = sum_partials(r);
 			return true;
 		}
-		const double* yc;
 		if (r->multilevel != NULL) {
-			yc = sm_multilevel_solve(r->multilevel, rc, COARSE_ITERATIONS, &r->common);
-			if (yc == NULL)
+			job.yc = sm_multilevel_solve(r->multilevel, r->coarse_b->x, COARSE_ITERATIONS, r->workers, &r->common);
+			if (job.yc == NULL)
 				return false;
 		} else {
 			if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL, &r->coarse_y,
 			                      &r->coarse_e, &r->common))
 				return false;
-			yc = r->coarse_x->x;
+			job.yc = r->coarse_x->x;
 		}
-		for (int64_t k = 0; k < particles; k++) {
-			const int32_t I = r->aggregate[k];
-			if (I < 0)
-				continue;
-			const double* a = in + 3 * k;
-			double* o = out + 3 * k;
-			o[0] += yc[3 * (size_t)I];
-			o[1] += yc[3 * (size_t)I + 1];
-			o[2] += yc[3 * (size_t)I + 2];
-			sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
-		}
-		*dot = sum;
+		sm_workers_run(r->workers, prolongation_chunk, &job, r->chunks);
+		*dot = sum_partials(r);
 		return true;
 	}
 	double* b = r->b->x;
@@ -676,6 +801,45 @@ static bool apply_preconditioner(reduced* r, const double* in, double* out, doub
 	}
 	*dot = sum;
 	return true;
+}
+
+typedef struct update_job {
+	reduced* r;
+	double *dv, *res, *p;
+	const double *q, *z;
+	double step;  // alpha, then beta
+} update_job;
+
+// Chunk c of dv += alpha p, res -= alpha q, with the squares of the weighted residual.
+static void update_chunk(void* context, int c)
+{
+	const update_job* j = context;
+	reduced* r = j->r;
+	double* restrict dv = j->dv;
+	double* restrict res = j->res;
+	const double* restrict p = j->p;
+	const double* restrict q = j->q;
+	const double* restrict weight = r->weight;
+	const double alpha = j->step;
+	double squares = 0.0;
+	for (int64_t i = 3 * (int64_t)r->chunk_particle[c]; i < 3 * (int64_t)r->chunk_particle[c + 1]; i++) {
+		dv[i] += alpha * p[i];
+		res[i] -= alpha * q[i];
+		const double t = res[i] * weight[i];
+		squares += t * t;
+	}
+	r->partial[c] = squares;
+}
+
+// Chunk c of p = z + beta p.
+static void direction_chunk(void* context, int c)
+{
+	const update_job* j = context;
+	double* restrict p = j->p;
+	const double* restrict z = j->z;
+	const double beta = j->step;
+	for (int64_t i = 3 * (int64_t)j->r->chunk_particle[c]; i < 3 * (int64_t)j->r->chunk_particle[c + 1]; i++)
+		p[i] = z[i] + beta * p[i];
 }
 
 // Preconditioned conjugate gradients on A dv = rhs from dv = 0, at most max_iterations, over
@@ -701,16 +865,11 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 		if (!(pq > 0.0) || !isfinite(pq))
 			return SUNLS_PACKAGE_FAIL_REC;
 		const double alpha = rz / pq;
-		double squares = 0.0;
-		for (int64_t i = 0; i < n; i++) {
-			dv[i] += alpha * p[i];
-			res[i] -= alpha * q[i];
-			const double t = res[i] * r->weight[i];
-			squares += t * t;
-		}
+		update_job job = {r, dv, res, p, q, z, alpha};
+		sm_workers_run(r->workers, update_chunk, &job, r->chunks);
 		r->sim->linear_iterations++;
 		r->last_iterations++;
-		norm = sqrt(squares);
+		norm = sqrt(sum_partials(r));
 		if (norm <= tol)
 			return SUNLS_SUCCESS;
 		double rz_next;
@@ -718,16 +877,9 @@ static int conjugate_gradients(reduced* r, double* dv, double tol, int max_itera
 			return SUNLS_MEM_FAIL;
 		// Flexible (Polak-Ribiere) when the preconditioner is not linear: beta = z' (r' - r) / (z r)
 		// with r' - r = -alpha q.
-		double beta = rz_next / rz;
-		if (r->multilevel != NULL) {
-			double zq = 0.0;
-			for (int64_t i = 0; i < n; i++)
-				zq += z[i] * q[i];
-			beta = -alpha * zq / rz;
-		}
+		job.step = r->multilevel != NULL ? -alpha * dot(r, z, q) / rz : rz_next / rz;
 		rz = rz_next;
-		for (int64_t i = 0; i < n; i++)
-			p[i] = z[i] + beta * p[i];
+		sm_workers_run(r->workers, direction_chunk, &job, r->chunks);
 	}
 	return norm < initial ? SUNLS_RES_REDUCED : SUNLS_CONV_FAIL;
 }
@@ -1055,6 +1207,11 @@ static void reduced_content_free(reduced* r)
 		cholmod_l_free_dense(&r->e_work, &r->common);
 		cholmod_l_finish(&r->common);
 	}
+	sm_workers_destroy(r->workers);
+	free(r->slot);
+	free(r->ordered_owned);
+	free(r->member_first);
+	free(r->member);
 	free(r->diagonal);
 	free(r->values);
 	free(r->block_inverse);
@@ -1087,6 +1244,92 @@ static int reduced_free(SUNLinearSolver ls)
 	ls->content = NULL;
 	SUNLinSolFreeEmpty(ls);
 	return 0;
+}
+
+// The chunks of the parallel loops (see reduced): one, or PARALLEL_CHUNKS of equal particle
+// counts for pcg from PARALLEL_MIN_PARTICLES free particles on, when at most
+// PARALLEL_MAX_BOUNDARY_FRACTION of the springs join two chunks (particles numbered along the
+// structure, as structures and meshes number them); the aggregates' member lists; and the team
+// of sm_simulation_def.threads threads, at most one per chunk and per processor online (none if
+// it cannot be had: the chunks then run in turn, with the same results). Returns false on out of
+// memory.
+static bool build_chunks(reduced* r)
+{
+	const sm_model* m = r->sim->model;
+	const int32_t np = m->particle_count, ns = m->spring_count;
+	r->chunks = 1;
+	r->chunk_particle[0] = 0, r->chunk_particle[1] = np;
+	r->chunk_spring[0] = 0, r->chunk_spring[1] = ns;
+	r->chunk_aggregate[0] = 0, r->chunk_aggregate[1] = r->aggregate_count;
+	if (r->two_level) {
+		r->member_first = calloc((size_t)r->aggregate_count + 2, sizeof(int32_t));
+		r->member = malloc(((size_t)np + 1) * sizeof(int32_t));
+		if (!r->member_first || !r->member)
+			return false;
+		for (int32_t i = 0; i < np; i++)
+			if (r->aggregate[i] >= 0)
+				r->member_first[r->aggregate[i] + 2]++;
+		for (int32_t I = 0; I < r->aggregate_count; I++)
+			r->member_first[I + 2] += r->member_first[I + 1];
+		for (int32_t i = 0; i < np; i++)
+			if (r->aggregate[i] >= 0)
+				r->member[r->member_first[r->aggregate[i] + 1]++] = i;
+	}
+	if (r->use_cholmod || r->sim->free_count < PARALLEL_MIN_PARTICLES)
+		return true;
+	const int chunks = PARALLEL_CHUNKS;
+	int32_t* key = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	if (key == NULL)
+		return false;
+	int32_t count[PARALLEL_CHUNKS + 2] = {0};
+	for (int c = 0; c <= chunks; c++)
+		r->chunk_particle[c] = (int32_t)((int64_t)np * c / chunks);
+	for (int32_t s = 0; s < ns; s++) {
+		const int32_t a = m->spring_a[s], b = m->spring_b[s];
+		int ca = 0, cb = 0;
+		while (a >= r->chunk_particle[ca + 1])
+			ca++;
+		while (b >= r->chunk_particle[cb + 1])
+			cb++;
+		key[s] = ca == cb ? ca : chunks;
+		count[key[s] + 1]++;
+	}
+	if (count[chunks + 1] > PARALLEL_MAX_BOUNDARY_FRACTION * ns) {
+		free(key);
+		r->chunk_particle[1] = np;
+		return true;
+	}
+	r->slot = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	r->ordered_owned = malloc(2 * ((size_t)ns + 1) * sizeof(int32_t));
+	if (r->slot == NULL || r->ordered_owned == NULL) {
+		free(key);
+		return false;
+	}
+	for (int c = 0; c <= chunks; c++)
+		count[c + 1] += count[c];
+	for (int c = 0; c <= chunks; c++)
+		r->chunk_spring[c] = count[c];
+	int32_t* ordered_a = r->ordered_owned;
+	int32_t* ordered_b = r->ordered_owned + ns + 1;
+	for (int32_t s = 0; s < ns; s++) {
+		const int32_t k = count[key[s]]++;
+		r->slot[s] = k;
+		ordered_a[k] = m->spring_a[s];
+		ordered_b[k] = m->spring_b[s];
+	}
+	r->ordered_a = ordered_a;
+	r->ordered_b = ordered_b;
+	free(key);
+	for (int c = 0; c <= chunks; c++)
+		r->chunk_aggregate[c] = (int32_t)((int64_t)r->aggregate_count * c / chunks);
+	r->chunks = chunks;
+	// More threads than processors would only wait for each other.
+	const long online = sysconf(_SC_NPROCESSORS_ONLN);
+	int threads = r->sim->def.threads < chunks ? r->sim->def.threads : chunks;
+	if (online > 0 && threads > online)
+		threads = (int)online;
+	r->workers = sm_workers_create(threads);
+	return true;
 }
 
 // The solver's content for the simulation's current model, or NULL when out of memory.
@@ -1159,6 +1402,10 @@ static reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	}
 	const bool multilevel = r->two_level && sim->free_count >= MULTILEVEL_MIN_PARTICLES;
 	if (r->two_level && !build_two_level(r, multilevel)) {
+		reduced_content_free(r);
+		return NULL;
+	}
+	if (!build_chunks(r)) {
 		reduced_content_free(r);
 		return NULL;
 	}

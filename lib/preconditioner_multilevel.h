@@ -11,6 +11,8 @@
 #include <stdint.h>
 #include <suitesparse/cholmod.h>
 
+#include "workers.h"
+
 typedef struct sm_multilevel sm_multilevel;
 
 // Index of entry (3 I + i, 3 J_k + j) in the block layout.
@@ -40,9 +42,12 @@ bool sm_multilevel_refresh(sm_multilevel* ml, const double* values, cholmod_comm
 
 // x ~ A^-1 b: one V-cycle from x = 0 (symmetric positive definite as a function of b), or with
 // iterations > 1 that many conjugate-gradient iterations preconditioned by it (then x depends
-// on b non-linearly: the outer solver must be flexible). Returns x (3 count entries, owned by ml,
-// stale at the next call), NULL on failure.
-const double* sm_multilevel_solve(sm_multilevel* ml, const double* b, int iterations, cholmod_common* common);
+// on b non-linearly: the outer solver must be flexible). The products of levels of
+// MULTILEVEL_PARALLEL_ROWS block rows or more run on the team `workers` (NULL: on the caller's
+// thread), row by row, so the result does not depend on it. Returns x (3 count entries, owned by
+// ml, stale at the next call), NULL on failure.
+const double* sm_multilevel_solve(sm_multilevel* ml, const double* b, int iterations, sm_workers* workers,
+                                  cholmod_common* common);
 
 // Accepts NULL.
 void sm_multilevel_destroy(sm_multilevel* ml, cholmod_common* common);

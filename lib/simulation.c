@@ -82,6 +82,7 @@ sm_simulation_def sm_default_simulation_def(void)
 	def.max_step = 0.0;
 	def.max_steps = 100000;
 	def.restart_on_input_change = false;
+	def.threads = 1;
 	return def;
 }
 
@@ -504,6 +505,9 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 	if (def->max_steps <= 0)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_steps = %d must be > 0",
 		                    (int)def->max_steps);
+	if (def->threads < 1)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: threads = %d must be >= 1",
+		                    (int)def->threads);
 	return SM_OK;
 }
 

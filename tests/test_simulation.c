@@ -2354,8 +2354,8 @@ static int test_multilevel_cycle_on_a_grid(void)
 	// Symmetric and positive definite: b . V c = c . V b, b . V b > 0.
 	double* Vb = malloc(n * sizeof(double));
 	ENSURE(Vb != NULL);
-	memcpy(Vb, sm_multilevel_solve(ml, b, 1, &common), n * sizeof(double));
-	const double* Vc = sm_multilevel_solve(ml, c, 1, &common);
+	memcpy(Vb, sm_multilevel_solve(ml, b, 1, NULL, &common), n * sizeof(double));
+	const double* Vc = sm_multilevel_solve(ml, c, 1, NULL, &common);
 	ENSURE(Vc != NULL);
 	const double bVc = dot(b, Vc, n), cVb = dot(c, Vb, n);
 	ENSURE(fabs(bVc - cVb) <= 1e-12 * sqrt(dot(b, b, n) * dot(Vc, Vc, n)));
@@ -2363,7 +2363,7 @@ static int test_multilevel_cycle_on_a_grid(void)
 	// The residual falls with one cycle and with every conjugate-gradient iteration around it.
 	double previous = 1.0;
 	for (int iterations = 1; iterations <= 4; iterations++) {
-		const double* x = sm_multilevel_solve(ml, b, iterations, &common);
+		const double* x = sm_multilevel_solve(ml, b, iterations, NULL, &common);
 		ENSURE(x != NULL);
 		const double residual = relative_residual(count, first, neighbour, values, b, x, work);
 		ENSURE(residual < (iterations == 1 ? 0.9 : previous));
@@ -2373,7 +2373,7 @@ static int test_multilevel_cycle_on_a_grid(void)
 	// solver's own conjugate gradients apply the exact A), so against the double matrix the
 	// residual levels off near the float rounding times the condition number: 1.7e-6 measured
 	// after 40 iterations (0.47, 0.39, 0.23, 0.15 after 1 to 4, 5.7e-3 after 10).
-	const double* x = sm_multilevel_solve(ml, b, 40, &common);
+	const double* x = sm_multilevel_solve(ml, b, 40, NULL, &common);
 	ENSURE(x != NULL && relative_residual(count, first, neighbour, values, b, x, work) < 1e-4);
 	sm_multilevel_destroy(ml, &common);
 	cholmod_l_finish(&common);
@@ -2382,6 +2382,97 @@ static int test_multilevel_cycle_on_a_grid(void)
 	free(c);
 	free(Vb);
 	free(work);
+	return 0;
+}
+
+// The multilevel solve gives the same bits on a team of threads as on the caller's alone: the
+// products of a level of MULTILEVEL_PARALLEL_ROWS (2000) block rows or more run in chunks of rows,
+// each row summed in its order. A 48 x 48 grid (2304 block rows) takes that path on its top level.
+static int test_multilevel_solve_same_bits_on_threads(void)
+{
+	enum { side = 48, count = side * side };
+	const size_t n = 3 * (size_t)count;
+	int64_t* first = malloc((count + 1) * sizeof(int64_t));
+	int32_t* neighbour = malloc(5 * count * sizeof(int32_t));
+	double *b = malloc(n * sizeof(double)), *alone = malloc(n * sizeof(double));
+	ENSURE(first && neighbour && b && alone);
+	rng r = {78};
+	double* values = grid_blocks(side, first, neighbour, &r);
+	ENSURE(values != NULL);
+	for (size_t i = 0; i < n; i++)
+		b[i] = rng_uniform(&r, -1, 1);
+	cholmod_common common;
+	cholmod_l_start(&common);
+	sm_multilevel* ml = sm_multilevel_create(count, first, neighbour, 12, &common);
+	ENSURE(ml != NULL && sm_multilevel_refresh(ml, values, &common));
+	for (int iterations = 1; iterations <= 3; iterations += 2) {
+		const double* x = sm_multilevel_solve(ml, b, iterations, NULL, &common);
+		ENSURE(x != NULL);
+		memcpy(alone, x, n * sizeof(double));
+		for (int threads = 2; threads <= 3; threads++) {
+			sm_workers* team = sm_workers_create(threads);
+			ENSURE(team != NULL);
+			x = sm_multilevel_solve(ml, b, iterations, team, &common);
+			ENSURE(x != NULL && memcmp(x, alone, n * sizeof(double)) == 0);
+			sm_workers_destroy(team);
+		}
+	}
+	sm_multilevel_destroy(ml, &common);
+	cholmod_l_finish(&common);
+	free(values), free(first), free(neighbour), free(b), free(alone);
+	return 0;
+}
+
+// Threads change the time, not the results: the pcg solver's loops run in chunks that depend on
+// the model alone (lib/linear_solver_reduced.c, from PARALLEL_MIN_PARTICLES free particles on;
+// this file's multilevel build lowers it to 100, so that its 24 x 24 cloth runs in chunks with
+// the multilevel coarse solve), and 1 to 4 threads give the same positions, velocities,
+// dissipated energy and counters, bit for bit, over advances with an input changed between them.
+static int test_threads_give_the_same_bits(void)
+{
+#ifdef PARALLEL_MIN_PARTICLES
+	const int32_t side = 24;
+#else
+	const int32_t side = 64;  // 4094 free particles, over the library's 4000
+#endif
+	sm_model* model = benchmark_cloth(side, 0.0);
+	ENSURE(model != NULL);
+	const size_t n = 3 * (size_t)sm_model_particle_count(model);
+	double* alone = malloc((2 * n + 1) * sizeof(double));
+	double* now = malloc((2 * n + 1) * sizeof(double));
+	ENSURE(alone && now);
+	sm_statistics first_run = {0};
+	for (int32_t threads = 1; threads <= 4; threads++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.solver = SM_SOLVER_REDUCED_PCG;
+		d.relative_tolerance = 1e-4;
+		d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-6;
+		d.threads = threads;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		for (int k = 1; k <= 3; k++) {
+			const double force[3] = {0.01 * k, 0.0, -0.02 * k};
+			ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, force), SM_OK);
+			ENSURE_STATUS(sm_simulation_advance(sim, 0.002 * k), SM_OK);
+		}
+		memcpy(now, sm_simulation_positions(sim), n * sizeof(double));
+		memcpy(now + n, sm_simulation_velocities(sim), n * sizeof(double));
+		now[2 * n] = sm_simulation_dissipated_energy(sim);
+		const sm_statistics st = sm_simulation_statistics(sim);
+		ENSURE(st.linear_iterations > 0);
+		if (threads == 1) {
+			memcpy(alone, now, (2 * n + 1) * sizeof(double));
+			first_run = st;
+		} else {
+			ENSURE(memcmp(now, alone, (2 * n + 1) * sizeof(double)) == 0);
+			ENSURE(st.steps == first_run.steps && st.rhs_evaluations == first_run.rhs_evaluations &&
+			       st.linear_iterations == first_run.linear_iterations &&
+			       st.error_test_failures == first_run.error_test_failures);
+		}
+		sm_simulation_destroy(sim);
+	}
+	free(alone), free(now);
+	sm_model_destroy(model);
 	return 0;
 }
 
@@ -2421,7 +2512,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 		for (size_t i = 0; i < n; i++)
 			x[i] = i % 3 == (size_t)c ? 1.0 : 0.0;
 		grid_matrix_apply(count, first, neighbour, values, x, b);
-		const double* y = sm_multilevel_solve(ml, b, 1, &common);
+		const double* y = sm_multilevel_solve(ml, b, 1, NULL, &common);
 		ENSURE(y != NULL);
 		double error = 0.0;
 		for (size_t i = 0; i < n; i++)
@@ -2436,7 +2527,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 			x[i] = 0.0;
 			res[i] = b[i];
 		}
-		const double* v = sm_multilevel_solve(ml, res, 1, &common);
+		const double* v = sm_multilevel_solve(ml, res, 1, NULL, &common);
 		ENSURE(v != NULL);
 		memcpy(z, v, n * sizeof(double));
 		memcpy(p, z, n * sizeof(double));
@@ -2450,7 +2541,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 			}
 			if (it == counts[k])
 				break;
-			v = sm_multilevel_solve(ml, res, 1, &common);
+			v = sm_multilevel_solve(ml, res, 1, NULL, &common);
 			ENSURE(v != NULL);
 			memcpy(z, v, n * sizeof(double));
 			const double rz_next = dot(res, z, n);
@@ -2458,7 +2549,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 				p[i] = z[i] + rz_next / rz * p[i];
 			rz = rz_next;
 		}
-		const double* y = sm_multilevel_solve(ml, b, counts[k], &common);
+		const double* y = sm_multilevel_solve(ml, b, counts[k], NULL, &common);
 		ENSURE(y != NULL);
 		double error = 0.0, largest = 0.0;
 		for (size_t i = 0; i < n; i++) {
@@ -4279,6 +4370,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_small_cloth_against_gsl);
 	RUN_TEST(test_benchmark_cloth_every_solver);
 	RUN_TEST(test_large_cloth_reduced_solvers_against_gsl);
+	RUN_TEST(test_threads_give_the_same_bits);
 	RUN_TEST(test_break_at_analytic_time);
 	RUN_TEST(test_energy_balance_across_a_break);
 	RUN_TEST(test_overstretched_spring_breaks_at_once);
@@ -4320,6 +4412,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_reduced_solver_statistics);
 	RUN_TEST(test_two_level_from_100_free_particles);
 	RUN_TEST(test_multilevel_cycle_on_a_grid);
+	RUN_TEST(test_multilevel_solve_same_bits_on_threads);
 	RUN_TEST(test_multilevel_solve_is_preconditioned_conjugate_gradients);
 	RUN_TEST(test_invert3_across_the_exponent_range);
 	RUN_TEST(test_break_limit_scales_with_rest_length);

@@ -98,6 +98,10 @@ typedef struct sm_simulation_def {
 	/// changes an input (default false: CVODE keeps its history and its error control absorbs
 	/// the jump; see "Inputs between calls" above).
 	bool restart_on_input_change;
+	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
+	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors online).
+	/// The results are the same bits with any count.
+	int32_t threads;
 	/// Called after every internal step of sm_simulation_advance with the time it reached [s]
 	/// and `on_step_context` (default NULL: not called), e.g. to show progress during a long
 	/// advance or to bound its wall time. The steps and results are the same with or without it.

@@ -1,0 +1,30 @@
+// A team of threads that runs one job over a fixed number of chunks: the caller's thread takes
+// chunks 0, T, 2T, ..., helper t takes t, t + T, ... (T threads in all), and sm_workers_run
+// returns when every chunk is done. Which thread runs a chunk never changes what it computes, so
+// a job whose chunks write disjoint data, and whose caller combines per-chunk sums in chunk order,
+// gives the same bits with any number of threads.
+//
+// Helpers wait for work by spinning briefly (a job every few microseconds, as in the iterations
+// of conjugate gradients, costs no wake-up) and then sleep on a condition variable. Each team
+// belongs to one owner (a simulation's linear solver); nothing is shared between teams.
+#ifndef SPRINGMASS_WORKERS_H
+#define SPRINGMASS_WORKERS_H
+
+#include <stdbool.h>
+
+typedef struct sm_workers sm_workers;
+
+typedef void (*sm_worker_job)(void* context, int chunk);
+
+// A team of `threads` threads, the caller's included (threads - 1 helpers are started); NULL if
+// threads < 2 or a thread or memory cannot be had (the caller then runs every chunk itself).
+sm_workers* sm_workers_create(int threads);
+
+// Runs job(context, c) for c = 0 .. chunks - 1 and returns when all are done; with a NULL team
+// on the caller's thread, in order.
+void sm_workers_run(sm_workers* workers, sm_worker_job job, void* context, int chunks);
+
+// Stops and joins the helpers; accepts NULL.
+void sm_workers_destroy(sm_workers* workers);
+
+#endif
