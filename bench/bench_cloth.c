@@ -6,7 +6,7 @@
 // (n-1, n-1) fixed), integrates it from rest to T_END (default 1 s) at the peer's tolerances
 // (rtol 1e-4, atol 1e-6) with the given linear solver ("auto", "dense", "klu", "pcg",
 // "cholmod"), REPEATS times (default 3), and prints the median wall time of create + advance:
-//   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> lin_iters=<v> fact=<v>
+//   cloth n=<n> solver=<name> threads=<t> wall_s=<median> steps=<v> rhs=<v> jac=<v> lin_iters=<v> fact=<v>
 //         restarts=<v> etf=<v> ncf=<v> z_corner=<v> force_s=<v> jacobian_s=<v> linear_s=<v>
 // (one line; the free corner is particle 0). With RESTART_EVERY=<dt> in the environment the
 // run advances in steps of dt with an external force on the free corner that changes at every
@@ -155,9 +155,10 @@ int main(int argc, char** argv)
 			sm_model_destroy(model);
 			return 1;
 		}
-		printf("cloth n=%d solver=%s wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld fact=%lld restarts=%lld etf=%lld ncf=%lld "
+		const char* threads = getenv("THREADS");
+		printf("cloth n=%d solver=%s threads=%d wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld fact=%lld restarts=%lld etf=%lld ncf=%lld "
 		       "z_corner=%.6f force_s=%.3g jacobian_s=%.3g linear_s=%.3g",
-		       (int)n, sm_linear_solver_name(r.solver), r.wall, (long long)r.stats.steps,
+		       (int)n, sm_linear_solver_name(r.solver), threads && atoi(threads) > 0 ? atoi(threads) : 1, r.wall, (long long)r.stats.steps,
 		       (long long)r.stats.rhs_evaluations, (long long)r.stats.jacobian_evaluations,
 		       (long long)r.stats.linear_iterations, (long long)r.stats.factorizations, (long long)r.stats.restarts, (long long)r.stats.error_test_failures, (long long)r.stats.convergence_failures, r.z_corner, r.stats.force_seconds,
 		       r.stats.jacobian_seconds, r.stats.linear_solve_seconds);

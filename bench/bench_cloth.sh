@@ -7,9 +7,11 @@
 #
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
-#   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> ...
+#   cloth n=<n> solver=<name> threads=1 wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> ...
 # a `skip` line for the combinations that would take too long, a `same` line for the solver auto
-# chose (measured once, on auto's line), then for the peer
+# chose (measured once, on auto's line), from n = 64 on (4000 free particles, from which the pcg
+# solver's loops can run on several threads) auto again on as many threads as processors
+# (threads=<t>, the same results), then for the peer
 #   peer n=<n> wall_s=<v> z_corner=<v>
 #   speedup n=<n> <peer wall / springmass wall with the default solver>
 set -euo pipefail
@@ -78,6 +80,11 @@ for n in 8 "${sizes[@]}"; do
 			line=${line/solver=/solver=auto:}
 		fi
 		[[ $n == 8 ]] || echo "$line"
+		processors=$(nproc)
+		if [[ $solver == auto ]] && ((n >= 64 && processors > 1)); then
+			line=$(THREADS=$processors OPENBLAS_NUM_THREADS=$blas_threads "$bench" "$n" "$solver" "$r")
+			echo "${line/solver=/solver=auto:}"
+		fi
 	done
 done
 

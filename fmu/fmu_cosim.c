@@ -963,7 +963,7 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 		const fmu_variable* v = lookup(inst, "fmi2GetInteger", vr[i], FMU_INTEGER);
 		if (!v)
 			return fmi2Error;
-		value[i] = inst->solver.max_steps;
+		value[i] = v->source == FMU_SRC_SOLVER_THREADS ? inst->solver.threads : inst->solver.max_steps;
 	}
 	return fmi2OK;
 }
@@ -1110,7 +1110,8 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 		}
 	}
 	for (size_t i = 0; i < nvr; ++i) {
-		inst->solver.max_steps = value[i];
+		const fmu_variable* v = lookup(inst, "fmi2SetInteger", vr[i], FMU_INTEGER);
+		*(v->source == FMU_SRC_SOLVER_THREADS ? &inst->solver.threads : &inst->solver.max_steps) = value[i];
 		inst->sim_dirty = true;
 	}
 	return fmi2OK;

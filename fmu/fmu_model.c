@@ -486,6 +486,14 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 		max_steps->has_start = true;
 		max_steps->start_integer = s->max_steps;
 	}
+	fmu_variable* threads = add(&b, duplicate("solver.threads"),
+	                            duplicate("threads for the pcg solver on models of 4000 free particles or more "
+	                                      "(at most 4, no more than the processors; the results do not depend on it)"),
+	                            FMU_INTEGER, FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_THREADS, 0, 0);
+	if (threads) {
+		threads->has_start = true;
+		threads->start_integer = s->threads;
+	}
 	add_string_parameter(&b, "solver.method", "multistep method: bdf or adams", FMU_SRC_SOLVER_METHOD,
 	                     sm_method_name(s->method));
 	add_string_parameter(&b, "solver.linear_solver", "linear solver: auto, dense, klu, pcg or cholmod",

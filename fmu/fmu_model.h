@@ -47,6 +47,7 @@ typedef enum fmu_source {
 	FMU_SRC_SOLVER_ATOL_VELOCITY, ///< absolute tolerance of velocities [m/s]
 	FMU_SRC_SOLVER_MAX_STEP,      ///< largest internal step [s], 0 = unlimited
 	FMU_SRC_SOLVER_MAX_STEPS,     ///< internal steps allowed per communication step
+	FMU_SRC_SOLVER_THREADS,       ///< threads of the pcg solver's loops
 	FMU_SRC_SOLVER_METHOD,        ///< "bdf" or "adams"
 	FMU_SRC_SOLVER_LINEAR_SOLVER, ///< "auto", "dense", "klu", "pcg", "cholmod"
 	FMU_SRC_SOLVER_JACOBIAN,      ///< "exact" or "definite"

@@ -18,7 +18,7 @@
 // (bit for bit, in this or another process).
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST3"
+#define STATE_MAGIC "SMFMUST4"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
 // x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports], pending
@@ -39,6 +39,7 @@ enum {
 	I_LINEAR_SOLVER,
 	I_JACOBIAN,
 	I_MAX_STEPS,
+	I_THREADS,
 	I_RTOL_SET,
 	I_STOP_DEFINED,
 	I_COUNT
@@ -131,6 +132,7 @@ static saved_state* save_state(instance* inst)
 	put_i(b, I_LINEAR_SOLVER, inst->solver.solver);
 	put_i(b, I_JACOBIAN, inst->solver.jacobian);
 	put_i(b, I_MAX_STEPS, inst->solver.max_steps);
+	put_i(b, I_THREADS, inst->solver.threads);
 	put_i(b, I_RTOL_SET, inst->rtol_set);
 	put_i(b, I_STOP_DEFINED, inst->stop_time_defined);
 	put_d(b, D_TIME, inst->time);
@@ -232,7 +234,8 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS && get_i(b, I_LINEAR_SOLVER) >= 0 &&
 	     get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT && get_i(b, I_JACOBIAN) >= 0 &&
 	     get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE && get_i(b, I_MAX_STEPS) >= 1 &&
-	     get_i(b, I_MAX_STEPS) <= INT32_MAX && (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
+	     get_i(b, I_MAX_STEPS) <= INT32_MAX && get_i(b, I_THREADS) >= 1 && get_i(b, I_THREADS) <= INT32_MAX &&
+	     (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
 	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
 	double max_step = get_d(b, D_MAX_STEP);
 	// The absolute tolerances as fmi2SetReal takes them: at least SM_MIN_ABSOLUTE_TOLERANCE.
@@ -298,6 +301,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);
 	solver.jacobian = (sm_jacobian_variant)get_i(b, I_JACOBIAN);
 	solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
+	solver.threads = (int32_t)get_i(b, I_THREADS);
 	solver.relative_tolerance = get_d(b, D_RTOL);
 	solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
 	solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);

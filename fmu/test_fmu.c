@@ -491,7 +491,7 @@ static int test_settings_take_effect_after_an_output_was_read(void)
 // The solver variables' ranges (docs/fmu.md): both absolute tolerances at least 1e-150, a relative
 // one in (0, 1), solver.max_step >= 0 with 0 for no limit (the run is then the file's, whose
 // max_step is 0), solver.max_steps at least 1 (no internal step at all could never advance; CVODE
-// would read 0 as its own default of 500). A refused value is an fmi2Error naming the variable
+// would read 0 as its own default of 500), solver.threads at least 1. A refused value is an fmi2Error naming the variable
 // and leaves the value before.
 static int test_solver_settings_are_checked_against_their_ranges(void)
 {
@@ -542,18 +542,30 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	ENSURE_STATUS(set_real(c, &f, "solver.atol_position", 1e-150), fmi2OK);
 	ENSURE_STATUS(set_real(c, &f, "solver.max_step", 1e-3), fmi2OK);
 	ENSURE_STATUS(set_real(c, &f, "solver.max_step", 0.0), fmi2OK);
-	const fmi2ValueReference max_steps = vr(&f, "solver.max_steps");
-	fmi2Integer steps = 0;
-	for (int value = 0; value >= -1; --value) {
-		f.log.last[0] = '\0';
-		ENSURE_STATUS(set_integer(c, &f, "solver.max_steps", value), fmi2Error);
-		ENSURE(strstr(f.log.last, "solver.max_steps") != NULL && strstr(f.log.last, "rejected") != NULL);
-		ENSURE_STATUS(fmi2GetInteger(c, &max_steps, 1, &steps), fmi2OK);
-		ENSURE(steps == 100000);  // the file's default
+	// The Integer variables, at least 1: solver.max_steps (the file's default 100 000) and
+	// solver.threads (1 by default; any count is taken, the library using what it can).
+	static const struct {
+		const char* name;
+		fmi2Integer start, taken;
+	} counts[] = {{"solver.max_steps", 100000, 1}, {"solver.threads", 1, 64}};
+	for (size_t i = 0; i < sizeof counts / sizeof counts[0]; ++i) {
+		const fmi2ValueReference r = vr(&f, counts[i].name);
+		fmi2Integer value = 0;
+		for (int bad = 0; bad >= -1; --bad) {
+			f.log.last[0] = '\0';
+			ENSURE_STATUS(set_integer(c, &f, counts[i].name, bad), fmi2Error);
+			ENSURE(strstr(f.log.last, counts[i].name) != NULL && strstr(f.log.last, "rejected") != NULL);
+			ENSURE_STATUS(fmi2GetInteger(c, &r, 1, &value), fmi2OK);
+			ENSURE(value == counts[i].start);
+		}
+		ENSURE_STATUS(set_integer(c, &f, counts[i].name, counts[i].taken), fmi2OK);
 	}
-	ENSURE_STATUS(set_integer(c, &f, "solver.max_steps", 1), fmi2OK);
-	ENSURE_STATUS(fmi2GetInteger(c, &max_steps, 1, &steps), fmi2OK);
-	ENSURE(steps == 1);
+	for (size_t i = 0; i < sizeof counts / sizeof counts[0]; ++i) {
+		const fmi2ValueReference r = vr(&f, counts[i].name);
+		fmi2Integer value = 0;
+		ENSURE_STATUS(fmi2GetInteger(c, &r, 1, &value), fmi2OK);
+		ENSURE(value == counts[i].taken);
+	}
 	ENSURE(get(c, &f, "solver.atol_position") == 1e-150 && get(c, &f, "solver.max_step") == 0.0);
 	fmi2FreeInstance(c);
 	teardown(&f);
@@ -1072,6 +1084,7 @@ static int test_state_carries_every_solver_setting(void)
 	ENSURE_STATUS(set_real(a, &f, "solver.atol_velocity", 3e-7), fmi2OK);
 	ENSURE_STATUS(set_real(a, &f, "solver.max_step", 2e-3), fmi2OK);
 	ENSURE_STATUS(set_integer(a, &f, "solver.max_steps", 777), fmi2OK);
+	ENSURE_STATUS(set_integer(a, &f, "solver.threads", 3), fmi2OK);
 	ENSURE_STATUS(set_string(a, &f, "solver.method", "adams"), fmi2OK);
 	ENSURE_STATUS(set_string(a, &f, "solver.linear_solver", "klu"), fmi2OK);
 	ENSURE_STATUS(set_string(a, &f, "solver.jacobian", "definite"), fmi2OK);
@@ -1103,7 +1116,7 @@ static int test_state_carries_every_solver_setting(void)
 			return 1;
 		}
 	}
-	const fmi2ValueReference steps = vr(&f, "solver.max_steps");
+	const fmi2ValueReference steps = vr(&f, "solver.max_steps"), threads = vr(&f, "solver.threads");
 	const fmi2ValueReference strings[3] = {vr(&f, "solver.method"), vr(&f, "solver.linear_solver"),
 	                                       vr(&f, "solver.jacobian")};
 	fmi2Integer max_steps = 0;
@@ -1111,6 +1124,9 @@ static int test_state_carries_every_solver_setting(void)
 	ENSURE_STATUS(fmi2GetInteger(b, &steps, 1, &max_steps), fmi2OK);
 	ENSURE_STATUS(fmi2GetString(b, strings, 3, names), fmi2OK);
 	ENSURE(max_steps == 777);
+	fmi2Integer thread_count = 0;
+	ENSURE_STATUS(fmi2GetInteger(b, &threads, 1, &thread_count), fmi2OK);
+	ENSURE(thread_count == 3);
 	ENSURE(strcmp(names[0], "adams") == 0 && strcmp(names[1], "klu") == 0 && strcmp(names[2], "definite") == 0);
 	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
 	ENSURE_STATUS(fmi2FreeFMUstate(b, &restored), fmi2OK);

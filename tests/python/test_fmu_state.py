@@ -271,12 +271,12 @@ def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu)
     # takes. Each is refused with a message, and the instance steps on as before.
     with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0, "m": 2.5}) as (a, b, blob):
         assert checksummed(blob) == blob
-        # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 14; time 20;
-        # then positions from word 29; the parameters follow the positions, velocities and springs.
+        # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 14; time 21;
+        # then positions from word 30; the parameters follow the positions, velocities and springs.
         params = blob.index(struct.pack("<d", 2.5)) // 8
         assert struct.unpack_from("<d", blob, 8 * params + 8)[0] == 60.0
         cases = [edited(blob, 8, "<q", 0), edited(blob, 8, "<q", 32), edited(blob, 8, "<q", 3),
-                 edited(blob, 14, "<q", 7), edited(blob, 20, "<d", math.nan), edited(blob, 29 + 3, "<d", math.inf),
+                 edited(blob, 14, "<q", 7), edited(blob, 21, "<d", math.nan), edited(blob, 30 + 3, "<d", math.inf),
                  edited(edited(blob, params + 1, "<d", 70.0), params + 2, "<d", -1.0)]
         run(b, 0.0, 5)
         before = b.get(*OUTPUTS)
@@ -453,13 +453,13 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
 # parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
-# linear solver 15, Jacobian 16, max_steps 17, rtol_set 18, stop defined 19; the doubles time 20,
-# start 21, last successful time 22, stop 23, dissipated 24, rtol 25, atol of positions 26 and of
-# velocities 27, max_step 28; then x (29-34), v (35-40), the spring's enabled flag 41, the
-# parameters 42-44, the held inputs of base (45-53) and tip (54-62: position, velocity, force) and
-# the pending flags 63-64.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_DISSIPATED, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = \
-    13, 14, 17, 24, 26, 28, 41, 42, 60
+# linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19, stop defined 20; the
+# doubles time 21, start 22, last successful time 23, stop 24, dissipated 25, rtol 26, atol of
+# positions 27 and of velocities 28, max_step 29; then x (30-35), v (36-41), the spring's enabled
+# flag 42, the parameters 43-45, the held inputs of base (46-54) and tip (55-63: position,
+# velocity, force) and the pending flags 64-65.
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = \
+    13, 14, 17, 18, 25, 27, 29, 42, 43, 61
 
 
 def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
@@ -490,6 +490,7 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
             has_sim = struct.unpack_from("<q", state, 8 * W_HAS_SIM)[0]
             cases = {"spring flag 0.5": edited(state, W_ENABLED, "<d", 0.5),
                      "max_steps 0": edited(state, W_MAX_STEPS, "<q", 0),
+                     "threads 0": edited(state, W_THREADS, "<q", 0),
                      "max_step -1": edited(state, W_MAX_STEP, "<d", -1.0),
                      # below what fmi2SetReal takes (SM_MIN_ABSOLUTE_TOLERANCE, 1e-150)
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
