@@ -8,10 +8,16 @@
 // wakes it under the lock. Completion: each helper decrements `pending` (release) after its
 // chunks, and the caller spins until it reads 0 (acquire), which makes the helpers' writes
 // visible to it.
+//
+// Floating-point environment. A thread starts with the environment of the thread that created
+// it, and the caller's may change after that (its rounding mode, flushing of subnormals), or the
+// caller may be another thread: the caller stores its environment with each job and the helpers
+// take it before their chunks, so that a chunk gives the same bits on whichever thread runs it.
 #define _POSIX_C_SOURCE 200809L
 
 #include "workers.h"
 
+#include <fenv.h>
 #include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
@@ -44,6 +50,7 @@ struct sm_workers {
 	sm_worker_job job;
 	void* context;
 	int chunks;
+	fenv_t environment;  // the caller's, for the job
 };
 
 static inline void relax(int polls)
@@ -85,6 +92,7 @@ static void* helper_main(void* argument)
 		seen = g;
 		if (w->stop)
 			return NULL;
+		fesetenv(&w->environment);
 		run_chunks(w, h->index);
 		atomic_fetch_sub_explicit(&w->pending, 1, memory_order_release);
 	}
@@ -159,6 +167,7 @@ void sm_workers_run(sm_workers* w, sm_worker_job job, void* context, int chunks)
 	w->job = job;
 	w->context = context;
 	w->chunks = chunks;
+	fegetenv(&w->environment);
 	atomic_store(&w->pending, w->threads - 1);
 	publish(w);
 	run_chunks(w, 0);

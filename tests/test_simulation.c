@@ -14,6 +14,7 @@
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
 
+#include <fenv.h>
 #include <stdlib.h>
 
 // ---------------------------------------------------------------------------------------------
@@ -2423,6 +2424,41 @@ static int test_multilevel_solve_same_bits_on_threads(void)
 	return 0;
 }
 
+// A team's helpers compute in the floating-point environment of the thread that runs the job,
+// not in the one they inherited when the team was created: a host may change its rounding (or
+// flush subnormals) after creating a simulation, or advance it from another thread, and the
+// chunks must still give the bits the caller's thread alone would give.
+typedef struct rounding_job {
+	volatile double one, three;
+	int rounding[8];
+	double third[8];
+} rounding_job;
+
+static void rounding_chunk(void* context, int c)
+{
+	rounding_job* j = context;
+	j->rounding[c] = fegetround();
+	j->third[c] = j->one / j->three;
+}
+
+static int test_workers_take_the_callers_floating_point_environment(void)
+{
+	sm_workers* team = sm_workers_create(3);
+	ENSURE(team != NULL);
+	rounding_job job = {.one = 1.0, .three = 3.0};
+	const int modes[] = {FE_UPWARD, FE_DOWNWARD, FE_TONEAREST};
+	for (int k = 0; k < 3; k++) {
+		ENSURE(fesetround(modes[k]) == 0);
+		const double third = job.one / job.three;
+		sm_workers_run(team, rounding_chunk, &job, 6);
+		fesetround(FE_TONEAREST);
+		for (int c = 0; c < 6; c++)
+			ENSURE(job.rounding[c] == modes[k] && job.third[c] == third);
+	}
+	sm_workers_destroy(team);
+	return 0;
+}
+
 // Threads change the time, not the results: the pcg solver's loops run in chunks that depend on
 // the model alone (lib/linear_solver_reduced.c, from PARALLEL_MIN_PARTICLES free particles on;
 // this file's multilevel build lowers it to 100, so that its 24 x 24 cloth runs in chunks with
@@ -4413,6 +4449,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_two_level_from_100_free_particles);
 	RUN_TEST(test_multilevel_cycle_on_a_grid);
 	RUN_TEST(test_multilevel_solve_same_bits_on_threads);
+	RUN_TEST(test_workers_take_the_callers_floating_point_environment);
 	RUN_TEST(test_multilevel_solve_is_preconditioned_conjugate_gradients);
 	RUN_TEST(test_invert3_across_the_exponent_range);
 	RUN_TEST(test_break_limit_scales_with_rest_length);
