@@ -67,7 +67,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 // Conjugate-gradient iterations allowed per solve with the block-Jacobi preconditioner, beyond
 // which the solve counts as failed (CVODE then reduces the step).
@@ -132,7 +131,9 @@
 #define PARALLEL_MIN_PARTICLES 4000
 #endif
 #define PARALLEL_CHUNKS 4
+#ifndef PARALLEL_MAX_BOUNDARY_FRACTION
 #define PARALLEL_MAX_BOUNDARY_FRACTION 0.125
+#endif
 
 // Doubles per spring of the scaled records (seven used: one 64-byte record each).
 #define SCALED_STRIDE 8
@@ -1250,9 +1251,9 @@ static int reduced_free(SUNLinearSolver ls)
 // counts for pcg from PARALLEL_MIN_PARTICLES free particles on, when at most
 // PARALLEL_MAX_BOUNDARY_FRACTION of the springs join two chunks (particles numbered along the
 // structure, as structures and meshes number them); the aggregates' member lists; and the team
-// of sm_simulation_def.threads threads, at most one per chunk and per processor online (none if
-// it cannot be had: the chunks then run in turn, with the same results). Returns false on out of
-// memory.
+// of sm_simulation_def.threads threads, at most one per chunk and per processor the process may
+// run on (none if it cannot be had: the chunks then run in turn, with the same results). Returns
+// false on out of memory.
 static bool build_chunks(reduced* r)
 {
 	const sm_model* m = r->sim->model;
@@ -1324,10 +1325,9 @@ static bool build_chunks(reduced* r)
 		r->chunk_aggregate[c] = (int32_t)((int64_t)r->aggregate_count * c / chunks);
 	r->chunks = chunks;
 	// More threads than processors would only wait for each other.
-	const long online = sysconf(_SC_NPROCESSORS_ONLN);
 	int threads = r->sim->def.threads < chunks ? r->sim->def.threads : chunks;
-	if (online > 0 && threads > online)
-		threads = (int)online;
+	if (threads > sm_workers_processors())
+		threads = sm_workers_processors();
 	r->workers = sm_workers_create(threads);
 	return true;
 }

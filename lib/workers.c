@@ -13,7 +13,7 @@
 // it, and the caller's may change after that (its rounding mode, flushing of subnormals), or the
 // caller may be another thread: the caller stores its environment with each job and the helpers
 // take it before their chunks, so that a chunk gives the same bits on whichever thread runs it.
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE  // sched_getaffinity, CPU_COUNT
 
 #include "workers.h"
 
@@ -22,6 +22,7 @@
 #include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 // Polls of the generation before a helper sleeps: about 50 - 100 us on current x86-64
 // processors, longer than the gap between the jobs of one conjugate-gradient iteration, much
@@ -51,6 +52,7 @@ struct sm_workers {
 	void* context;
 	int chunks;
 	fenv_t environment;  // the caller's, for the job
+	pid_t process;       // that started the helpers
 };
 
 static inline void relax(int polls)
@@ -109,6 +111,17 @@ static void publish(struct sm_workers* w)
 	}
 }
 
+int sm_workers_processors(void)
+{
+#ifdef CPU_COUNT
+	cpu_set_t set;
+	if (sched_getaffinity(0, sizeof set, &set) == 0 && CPU_COUNT(&set) > 0)
+		return CPU_COUNT(&set);
+#endif
+	const long online = sysconf(_SC_NPROCESSORS_ONLN);
+	return online > 0 ? (online < 1024 ? (int)online : 1024) : 1;
+}
+
 void sm_workers_destroy(sm_workers* w)
 {
 	if (w == NULL)
@@ -143,6 +156,7 @@ sm_workers* sm_workers_create(int threads)
 		return NULL;
 	}
 	w->threads = threads;
+	w->process = getpid();
 	atomic_init(&w->generation, 0);
 	atomic_init(&w->pending, 0);
 	atomic_init(&w->sleeping, 0);
@@ -159,7 +173,8 @@ sm_workers* sm_workers_create(int threads)
 
 void sm_workers_run(sm_workers* w, sm_worker_job job, void* context, int chunks)
 {
-	if (w == NULL) {
+	// A child of fork() has none of its parent's helpers: it runs the chunks itself.
+	if (w == NULL || w->process != getpid()) {
 		for (int c = 0; c < chunks; c++)
 			job(context, c);
 		return;

@@ -20,9 +20,13 @@ typedef void (*sm_worker_job)(void* context, int chunk);
 // threads < 2 or a thread or memory cannot be had (the caller then runs every chunk itself).
 sm_workers* sm_workers_create(int threads);
 
-// Runs job(context, c) for c = 0 .. chunks - 1 and returns when all are done; with a NULL team
-// on the caller's thread, in order.
+// Runs job(context, c) for c = 0 .. chunks - 1 and returns when all are done; with a NULL team,
+// or in a child process forked after the team started, on the caller's thread, in order.
 void sm_workers_run(sm_workers* workers, sm_worker_job job, void* context, int chunks);
+
+// The processors this process may run on: its affinity mask (what taskset or a container's CPU
+// limit leaves it), else those online; at least 1.
+int sm_workers_processors(void);
 
 // Stops and joins the helpers; accepts NULL.
 void sm_workers_destroy(sm_workers* workers);

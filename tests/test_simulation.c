@@ -2464,6 +2464,9 @@ static int test_workers_take_the_callers_floating_point_environment(void)
 // this file's multilevel build lowers it to 100, so that its 24 x 24 cloth runs in chunks with
 // the multilevel coarse solve), and 1 to 4 threads give the same positions, velocities,
 // dissipated energy and counters, bit for bit, over advances with an input changed between them.
+// The library starts no more threads than the process may use processors, so on a one-processor
+// machine this compares one thread with itself; the two tests of teams above start theirs
+// directly.
 static int test_threads_give_the_same_bits(void)
 {
 #ifdef PARALLEL_MIN_PARTICLES

@@ -13,7 +13,10 @@
 // The reduced solver is built into this test with the multilevel threshold lowered (as for
 // simulation_multilevel) so that a 12 x 12 cloth runs the multilevel coarse solve while an
 // 11 x 11 one runs the two-level preconditioner with the exact coarse solve; the sizes are in
-// lib/linear_solver_reduced.c (two-level from 100 free particles, block Jacobi alone below).
+// lib/linear_solver_reduced.c (two-level from 100 free particles, block Jacobi alone below). The
+// chunked loops' threshold is lowered the same way (and their limit on springs between chunks
+// raised), so that the 12 x 12 cloth runs in chunks, once on the calling thread and once on a team
+// of 2 threads, which must give the same bits.
 // Built with -fsanitize=thread, the same test is the race check of the library. ThreadSanitizer
 // then reports CHOLMOD's supernodal factorisation, which clears its workspace (the caller's own
 // cholmod_common) in an OpenMP loop: the join inside the uninstrumented libgomp is invisible to
@@ -22,6 +25,7 @@
 
 #include "springmass/springmass.h"
 #include "test_harness.h"
+#include "workers.h"
 
 #include <locale.h>
 #include <math.h>
@@ -30,6 +34,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #if !defined(MULTILEVEL_MIN_PARTICLES) || MULTILEVEL_MIN_PARTICLES > 142 || MULTILEVEL_MIN_PARTICLES < 120
 #error "build lib/linear_solver_reduced.c into this test with 120 <= MULTILEVEL_MIN_PARTICLES <= 142"
@@ -296,6 +302,7 @@ typedef enum work_kind {
 	WORK_JACOBI,
 	WORK_TWO_LEVEL,
 	WORK_MULTILEVEL,
+	WORK_MULTILEVEL_THREADS,
 	WORK_CHOLMOD,
 	WORK_ADAMS,
 	WORK_BREAK,
@@ -310,7 +317,7 @@ typedef enum work_kind {
 
 static const char* const work_names[WORK_COUNT] = {
     "parse",   "build", "dense",   "klu",           "pcg block Jacobi", "pcg two-level", "pcg multilevel",
-    "cholmod", "adams", "break",   "statics dense", "statics sparse",   "modes dense",   "modes sparse",
+    "pcg multilevel on 2 threads", "cholmod", "adams", "break",   "statics dense", "statics sparse",   "modes dense",   "modes sparse",
     "sparse jacobian",  "save"};
 
 // ENSURE for the functions below, which free what they made: they start with `int failed = 1`,
@@ -415,14 +422,15 @@ done:
 
 // Simulates a shared model to t_end and hashes the state, the energies, the counters and the
 // break events (wall-clock times left out); at least min_breaks springs must break.
-static int simulate(const sm_model* model, sm_method method, sm_linear_solver solver, double t_end,
-                    int32_t min_breaks, uint64_t* h)
+static int simulate(const sm_model* model, sm_method method, sm_linear_solver solver, int32_t threads,
+                    double t_end, int32_t min_breaks, uint64_t* h)
 {
 	int failed = 1;
 	sm_error err;
 	sm_simulation_def def = sm_default_simulation_def();
 	def.method = method;
 	def.solver = solver;
+	def.threads = threads;
 	sm_simulation* sim = sm_simulation_create(model, &def, &err);
 	CHECK(sim != NULL);
 	// Advance in a few calls, with an external force changed between them.
@@ -581,16 +589,19 @@ static int run_work(work_kind kind, int slot, uint64_t* hash)
 	switch (kind) {
 	case WORK_PARSE: failed = work_parse(&h); break;
 	case WORK_BUILD: failed = work_build(&h); break;
-	case WORK_DENSE: failed = simulate(in.chain, SM_METHOD_BDF, SM_SOLVER_DENSE, 1.0, 0, &h); break;
-	case WORK_KLU: failed = simulate(in.cloth_klu, SM_METHOD_BDF, SM_SOLVER_KLU, 0.05, 0, &h); break;
-	case WORK_JACOBI: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 0.05, 0, &h); break;
-	case WORK_TWO_LEVEL: failed = simulate(in.cloth_two_level, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 0.02, 0, &h); break;
+	case WORK_DENSE: failed = simulate(in.chain, SM_METHOD_BDF, SM_SOLVER_DENSE, 1, 1.0, 0, &h); break;
+	case WORK_KLU: failed = simulate(in.cloth_klu, SM_METHOD_BDF, SM_SOLVER_KLU, 1, 0.05, 0, &h); break;
+	case WORK_JACOBI: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.05, 0, &h); break;
+	case WORK_TWO_LEVEL: failed = simulate(in.cloth_two_level, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.02, 0, &h); break;
 	case WORK_MULTILEVEL:
-		failed = simulate(in.cloth_multilevel, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 0.02, 0, &h);
+		failed = simulate(in.cloth_multilevel, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.02, 0, &h);
 		break;
-	case WORK_CHOLMOD: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_CHOLMOD, 0.05, 0, &h); break;
-	case WORK_ADAMS: failed = simulate(in.chain, SM_METHOD_ADAMS, SM_SOLVER_AUTO, 1.0, 0, &h); break;
-	case WORK_BREAK: failed = simulate(in.cloth_tearing, SM_METHOD_BDF, SM_SOLVER_AUTO, 0.2, 2, &h); break;
+	case WORK_MULTILEVEL_THREADS:
+		failed = simulate(in.cloth_multilevel, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 2, 0.02, 0, &h);
+		break;
+	case WORK_CHOLMOD: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_CHOLMOD, 1, 0.05, 0, &h); break;
+	case WORK_ADAMS: failed = simulate(in.chain, SM_METHOD_ADAMS, SM_SOLVER_AUTO, 1, 1.0, 0, &h); break;
+	case WORK_BREAK: failed = simulate(in.cloth_tearing, SM_METHOD_BDF, SM_SOLVER_AUTO, 1, 0.2, 2, &h); break;
 	case WORK_STATICS_DENSE: failed = statics(SM_STATICS_DENSE, &h); break;
 	case WORK_STATICS_SPARSE: failed = statics(SM_STATICS_SPARSE, &h); break;
 	case WORK_MODES_DENSE: failed = modes(SM_MODES_DENSE, &h); break;
@@ -664,6 +675,12 @@ static int compute_references(void)
 		uint64_t again;
 		if (run_work((work_kind)k, 0, &reference[k]) || run_work((work_kind)k, 0, &again))
 			return 1;
+		// The simulation on a team of 2 threads gives the bits of the lone thread's (the chunks
+		// depend on the model alone).
+		if (k == WORK_MULTILEVEL_THREADS && reference[k] != reference[WORK_MULTILEVEL]) {
+			printf("  %s: other bits than on one thread\n", work_names[k]);
+			return 1;
+		}
 		if (again != reference[k]) {
 			printf("  %s: two lone runs differ (%016llx, %016llx)\n", work_names[k],
 			       (unsigned long long)reference[k], (unsigned long long)again);
@@ -696,6 +713,7 @@ COPIES_TEST(klu, WORK_KLU)
 COPIES_TEST(pcg_block_jacobi, WORK_JACOBI)
 COPIES_TEST(pcg_two_level, WORK_TWO_LEVEL)
 COPIES_TEST(pcg_multilevel, WORK_MULTILEVEL)
+COPIES_TEST(pcg_multilevel_on_threads, WORK_MULTILEVEL_THREADS)
 COPIES_TEST(cholmod, WORK_CHOLMOD)
 COPIES_TEST(adams, WORK_ADAMS)
 COPIES_TEST(break_events, WORK_BREAK)
@@ -719,6 +737,46 @@ static int test_mixed(void)
 			count++;
 		}
 	ENSURE(run_tasks(tasks, count) == 0);
+	return 0;
+}
+
+// A child of fork() has only the thread that forked: a team started before the fork runs its
+// chunks on the child's thread instead of waiting for helpers that are not there. A hang would
+// end the child by SIGALRM after 10 s.
+typedef struct count_job {
+	int done[8];
+} count_job;
+
+static void count_chunk(void* context, int c)
+{
+	((count_job*)context)->done[c]++;
+}
+
+static int test_team_in_a_forked_child(void)
+{
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	count_job job = {{0}};
+	sm_workers_run(team, count_chunk, &job, 8);
+	fflush(stdout);
+	const pid_t child = fork();
+	ENSURE(child >= 0);
+	if (child == 0) {
+		alarm(10);
+		count_job mine = {{0}};
+		sm_workers_run(team, count_chunk, &mine, 8);
+		int ok = 1;
+		for (int c = 0; c < 8; c++)
+			ok = ok && mine.done[c] == 1;
+		_exit(ok ? 0 : 1);
+	}
+	int status = 0;
+	ENSURE(waitpid(child, &status, 0) == child);
+	ENSURE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+	sm_workers_run(team, count_chunk, &job, 8);  // the parent's team still works
+	for (int c = 0; c < 8; c++)
+		ENSURE(job.done[c] == 2);
+	sm_workers_destroy(team);
 	return 0;
 }
 
@@ -768,6 +826,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_copies_pcg_block_jacobi);
 	RUN_TEST(test_copies_pcg_two_level);
 	RUN_TEST(test_copies_pcg_multilevel);
+	RUN_TEST(test_copies_pcg_multilevel_on_threads);
 	RUN_TEST(test_copies_cholmod);
 	RUN_TEST(test_copies_adams);
 	RUN_TEST(test_copies_break_events);
@@ -778,6 +837,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_copies_sparse_jacobian);
 	RUN_TEST(test_copies_save);
 	RUN_TEST(test_mixed);
+	RUN_TEST(test_team_in_a_forked_child);
 	RUN_TEST(test_save_in_a_decimal_comma_locale);
 	free_inputs();
 	return TEST_SUMMARY();

@@ -48,7 +48,7 @@ static void usage(FILE* out)
 	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
 	        "  --max-step H           largest internal step [s]; 0 for no limit\n"
 	        "  --threads N            threads for the pcg solver on models of 4000 free particles or\n"
-	        "                         more (default: the processors online; at most 4 are used);\n"
+	        "                         more (default: every processor it may run on; at most 4);\n"
 	        "                         the results are the same with any count\n"
 	        "  --stop-at-outputs      end an internal step at every output time, as an FMU given no\n"
 	        "                         stop time does at its communication points (more steps); by\n"

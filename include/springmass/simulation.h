@@ -99,7 +99,8 @@ typedef struct sm_simulation_def {
 	/// the jump; see "Inputs between calls" above).
 	bool restart_on_input_change;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
-	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors online).
+	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
+	/// may run on).
 	/// The results are the same bits with any count.
 	int32_t threads;
 	/// Called after every internal step of sm_simulation_advance with the time it reached [s]
