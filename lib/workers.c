@@ -1,13 +1,21 @@
 // A team of threads for the chunks of one job at a time (workers.h).
 //
-// Hand-off. The caller stores the job, then increments `generation` (sequentially consistent);
-// a helper that sees the new generation (acquire) sees the job too. A helper about to sleep
-// counts itself in `sleeping` and checks the generation again under the lock, and the caller
-// reads `sleeping` after its increment: of the two sequentially consistent operations one sees
-// the other, so either the helper sees the new generation or the caller sees it sleeping and
-// wakes it under the lock. Completion: each helper decrements `pending` (release) after its
-// chunks, and the caller spins until it reads 0 (acquire), which makes the helpers' writes
-// visible to it.
+// Claiming. The threads take a job's chunks one at a time from a shared ticket, the caller as
+// well as the helpers, so a helper that has not been scheduled yet (the processors busy with
+// other work) holds nothing up: the caller takes the chunks it leaves. The ticket packs the job's
+// generation (32 bits), its chunk count and the next chunk (16 bits each); a thread claims a
+// chunk by a compare-and-swap that adds 1, which fails once the ticket belongs to another job.
+// A claimed chunk keeps its job alive: the caller returns only when `done` reaches the count, so
+// the job's fields stay as they were until every claimer has finished with them.
+//
+// Hand-off. The caller stores the job's fields and `done` = 0, then the new ticket (sequentially
+// consistent, so a release): a claim that reads that ticket, or a later one of the same job,
+// sees the fields. A helper about to sleep counts itself in `sleeping` and checks the ticket
+// again under the lock, and the caller reads `sleeping` after storing the ticket: of the two
+// sequentially consistent operations one sees the other, so either the helper sees the new
+// ticket or the caller sees it sleeping and wakes it under the lock. Completion: each claimer
+// adds 1 to `done` after its chunk (release), and the caller spins until it reads the count
+// (acquire), which makes the chunks' writes visible to it.
 //
 // Floating-point environment. A thread starts with the environment of the thread that created
 // it, and the caller's may change after that (its rounding mode, flushing of subnormals), or the
@@ -21,20 +29,21 @@
 #include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-// Polls of the generation before a helper sleeps: about 50 - 100 us on current x86-64
-// processors, longer than the gap between the jobs of one conjugate-gradient iteration, much
-// shorter than that between two simulation calls. Every YIELD_EVERY polls a waiting thread
-// (helper or caller) yields its processor, so that a thread it waits for gets to run when there
-// are more threads than processors.
+// Polls of the ticket before a helper sleeps: about 50 - 100 us on current x86-64 processors,
+// longer than the gap between the jobs of one conjugate-gradient iteration, much shorter than
+// that between two simulation calls. Every YIELD_EVERY polls a waiting thread (helper or caller)
+// yields its processor, so that a thread it waits for gets to run when there are more threads
+// than processors.
 #define SPIN_LIMIT 20000
 #define YIELD_EVERY 1024
+#define MAX_CHUNKS 0xffff
 
 typedef struct helper {
 	struct sm_workers* team;
-	int index;  // 1 .. threads - 1
 	pthread_t thread;
 } helper;
 
@@ -44,13 +53,12 @@ struct sm_workers {
 	helper* helpers;
 	pthread_mutex_t lock;
 	pthread_cond_t wake;
-	atomic_uint generation;
-	atomic_int pending;
+	atomic_uint_least64_t ticket;  // generation << 32 | chunks << 16 | next chunk
+	atomic_int done;               // chunks of the current job finished
 	atomic_int sleeping;
-	bool stop;
+	atomic_bool stop;  // read by helpers that may lag a job behind
 	sm_worker_job job;
 	void* context;
-	int chunks;
 	fenv_t environment;  // the caller's, for the job
 	pid_t process;       // that started the helpers
 };
@@ -66,44 +74,60 @@ static inline void relax(int polls)
 #endif
 }
 
-static void run_chunks(struct sm_workers* w, int index)
+static inline unsigned generation_of(uint_least64_t ticket)
 {
-	for (int c = index; c < w->chunks; c += w->threads)
-		w->job(w->context, c);
+	return (unsigned)(ticket >> 32);
+}
+
+// Runs chunks of the current job while there are any left to claim.
+static void claim_chunks(struct sm_workers* w, bool helper)
+{
+	uint_least64_t t = atomic_load(&w->ticket);
+	for (;;) {
+		const unsigned next = (unsigned)(t & 0xffff), chunks = (unsigned)((t >> 16) & 0xffff);
+		if (next >= chunks)
+			return;
+		if (!atomic_compare_exchange_weak(&w->ticket, &t, t + 1))
+			continue;  // t now holds the ticket as it is
+		if (helper)
+			fesetenv(&w->environment);
+		w->job(w->context, (int)next);
+		atomic_fetch_add_explicit(&w->done, 1, memory_order_release);
+		t = atomic_load(&w->ticket);
+	}
 }
 
 static void* helper_main(void* argument)
 {
-	helper* h = argument;
-	struct sm_workers* w = h->team;
+	struct sm_workers* w = ((helper*)argument)->team;
 	unsigned seen = 0;
 	for (;;) {
-		unsigned g = atomic_load_explicit(&w->generation, memory_order_acquire);
+		unsigned g = generation_of(atomic_load_explicit(&w->ticket, memory_order_acquire));
 		for (int spins = 0; g == seen && spins < SPIN_LIMIT; spins++) {
 			relax(spins);
-			g = atomic_load_explicit(&w->generation, memory_order_acquire);
+			g = generation_of(atomic_load_explicit(&w->ticket, memory_order_acquire));
 		}
 		if (g == seen) {
 			pthread_mutex_lock(&w->lock);
 			atomic_fetch_add(&w->sleeping, 1);
-			while ((g = atomic_load(&w->generation)) == seen)
+			while ((g = generation_of(atomic_load(&w->ticket))) == seen)
 				pthread_cond_wait(&w->wake, &w->lock);
 			atomic_fetch_sub(&w->sleeping, 1);
 			pthread_mutex_unlock(&w->lock);
 		}
 		seen = g;
-		if (w->stop)
+		if (atomic_load(&w->stop))
 			return NULL;
-		fesetenv(&w->environment);
-		run_chunks(w, h->index);
-		atomic_fetch_sub_explicit(&w->pending, 1, memory_order_release);
+		claim_chunks(w, true);
 	}
 }
 
-// Publishes the job (or the stop) set by the caller and wakes sleeping helpers.
-static void publish(struct sm_workers* w)
+// Publishes a job of `chunks` chunks (0 with stop set: the end), whose fields the caller has set,
+// and wakes sleeping helpers.
+static void publish(struct sm_workers* w, int chunks)
 {
-	atomic_fetch_add(&w->generation, 1);
+	const uint_least64_t generation = generation_of(atomic_load(&w->ticket)) + 1u;
+	atomic_store(&w->ticket, (generation & 0xffffffffu) << 32 | (uint_least64_t)chunks << 16);
 	if (atomic_load(&w->sleeping) > 0) {
 		pthread_mutex_lock(&w->lock);
 		pthread_cond_broadcast(&w->wake);
@@ -126,8 +150,8 @@ void sm_workers_destroy(sm_workers* w)
 {
 	if (w == NULL)
 		return;
-	w->stop = true;
-	publish(w);
+	atomic_store(&w->stop, true);
+	publish(w, 0);
 	for (int t = 0; t < w->started; t++)
 		pthread_join(w->helpers[t].thread, NULL);
 	pthread_cond_destroy(&w->wake);
@@ -157,11 +181,12 @@ sm_workers* sm_workers_create(int threads)
 	}
 	w->threads = threads;
 	w->process = getpid();
-	atomic_init(&w->generation, 0);
-	atomic_init(&w->pending, 0);
+	atomic_init(&w->ticket, 0);
+	atomic_init(&w->done, 0);
 	atomic_init(&w->sleeping, 0);
+	atomic_init(&w->stop, false);
 	for (int t = 0; t < threads - 1; t++) {
-		w->helpers[t] = (helper){.team = w, .index = t + 1};
+		w->helpers[t].team = w;
 		if (pthread_create(&w->helpers[t].thread, NULL, helper_main, &w->helpers[t]) != 0) {
 			sm_workers_destroy(w);
 			return NULL;
@@ -173,19 +198,21 @@ sm_workers* sm_workers_create(int threads)
 
 void sm_workers_run(sm_workers* w, sm_worker_job job, void* context, int chunks)
 {
-	// A child of fork() has none of its parent's helpers: it runs the chunks itself.
-	if (w == NULL || w->process != getpid()) {
+	// A child of fork() has none of its parent's helpers: it runs the chunks itself, as does a
+	// job of more chunks than the ticket counts.
+	if (w == NULL || w->process != getpid() || chunks > MAX_CHUNKS) {
 		for (int c = 0; c < chunks; c++)
 			job(context, c);
 		return;
 	}
+	if (chunks <= 0)
+		return;
 	w->job = job;
 	w->context = context;
-	w->chunks = chunks;
 	fegetenv(&w->environment);
-	atomic_store(&w->pending, w->threads - 1);
-	publish(w);
-	run_chunks(w, 0);
-	for (int polls = 0; atomic_load_explicit(&w->pending, memory_order_acquire) > 0; polls++)
+	atomic_store_explicit(&w->done, 0, memory_order_relaxed);
+	publish(w, chunks);
+	claim_chunks(w, false);
+	for (int polls = 0; atomic_load_explicit(&w->done, memory_order_acquire) < chunks; polls++)
 		relax(polls);
 }

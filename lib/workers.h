@@ -1,8 +1,9 @@
-// A team of threads that runs one job over a fixed number of chunks: the caller's thread takes
-// chunks 0, T, 2T, ..., helper t takes t, t + T, ... (T threads in all), and sm_workers_run
-// returns when every chunk is done. Which thread runs a chunk never changes what it computes, so
-// a job whose chunks write disjoint data, and whose caller combines per-chunk sums in chunk order,
-// gives the same bits with any number of threads.
+// A team of threads that runs one job over a number of chunks: the caller's thread and the
+// helpers take the chunks one at a time until none is left (a helper the processors have no
+// time for leaves its share to the others), and sm_workers_run returns when every chunk is done.
+// Which thread runs a chunk never changes what it computes, so a job whose chunks write disjoint
+// data, and whose caller combines per-chunk sums in chunk order, gives the same bits with any
+// number of threads.
 //
 // Helpers wait for work by spinning briefly (a job every few microseconds, as in the iterations
 // of conjugate gradients, costs no wake-up) and then sleep on a condition variable. Each team

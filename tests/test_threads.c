@@ -30,6 +30,8 @@
 #include <locale.h>
 #include <math.h>
 #include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -780,6 +782,40 @@ static int test_team_in_a_forked_child(void)
 	return 0;
 }
 
+// Chunks are claimed, not dealt out: a thread takes the next chunk left whenever it is free, so
+// the caller does the work of a helper that does not get to run (processors busy elsewhere) rather
+// than wait for it. Shown with a job whose chunk 0 waits until chunks 1 to 3 are done: whichever
+// thread claims chunk 0, another must claim all three others (dealt out round-robin to 2
+// threads, chunk 2 would wait behind chunk 0 on the same thread forever, and the test would
+// hang until ctest's time limit for it ends it).
+typedef struct waiting_job {
+	atomic_int finished;
+} waiting_job;
+
+static void waiting_chunk(void* context, int c)
+{
+	waiting_job* j = context;
+	if (c == 0)
+		while (atomic_load(&j->finished) < 3)
+			sched_yield();
+	else
+		atomic_fetch_add(&j->finished, 1);
+}
+
+static int test_chunks_are_claimed_by_free_threads(void)
+{
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	for (int k = 0; k < 100; k++) {
+		waiting_job job;
+		atomic_init(&job.finished, 0);
+		sm_workers_run(team, waiting_chunk, &job, 4);
+		ENSURE(atomic_load(&job.finished) == 3);
+	}
+	sm_workers_destroy(team);
+	return 0;
+}
+
 // The program's locale is process-wide state the library must not depend on: saving in a thread
 // whose locale has a decimal comma gives the same text (it was "9,81" for 9.81, not JSON), and
 // leaves that thread's locale as it was. Skipped where no such locale is installed.
@@ -838,6 +874,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_copies_save);
 	RUN_TEST(test_mixed);
 	RUN_TEST(test_team_in_a_forked_child);
+	RUN_TEST(test_chunks_are_claimed_by_free_threads);
 	RUN_TEST(test_save_in_a_decimal_comma_locale);
 	free_inputs();
 	return TEST_SUMMARY();
