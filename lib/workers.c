@@ -28,6 +28,7 @@
 #include <fenv.h>
 #include <pthread.h>
 #include <sched.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -185,13 +186,21 @@ sm_workers* sm_workers_create(int threads)
 	atomic_init(&w->done, 0);
 	atomic_init(&w->sleeping, 0);
 	atomic_init(&w->stop, false);
+	// The helpers block every signal (a thread starts with its creator's mask), so that signals
+	// for the process go to the program's own threads, whose handlers expect them.
+	sigset_t all, old;
+	sigfillset(&all);
+	pthread_sigmask(SIG_SETMASK, &all, &old);
 	for (int t = 0; t < threads - 1; t++) {
 		w->helpers[t].team = w;
-		if (pthread_create(&w->helpers[t].thread, NULL, helper_main, &w->helpers[t]) != 0) {
-			sm_workers_destroy(w);
-			return NULL;
-		}
+		if (pthread_create(&w->helpers[t].thread, NULL, helper_main, &w->helpers[t]) != 0)
+			break;
 		w->started++;
+	}
+	pthread_sigmask(SIG_SETMASK, &old, NULL);
+	if (w->started < threads - 1) {
+		sm_workers_destroy(w);
+		return NULL;
 	}
 	return w;
 }

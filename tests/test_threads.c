@@ -31,6 +31,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <sched.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -816,6 +817,50 @@ static int test_chunks_are_claimed_by_free_threads(void)
 	return 0;
 }
 
+// The helpers block every signal, so that a signal for the process reaches one of the program's
+// own threads (the caller here blocks none of SIGINT, SIGTERM, SIGUSR1). Chunk 0 waits for the
+// others, so at least one chunk runs on the helper.
+typedef struct mask_job {
+	atomic_int finished;
+	pthread_t caller;
+	bool on_helper[4];
+	bool blocked[4];
+} mask_job;
+
+static void mask_chunk(void* context, int c)
+{
+	mask_job* j = context;
+	sigset_t mask;
+	pthread_sigmask(SIG_BLOCK, NULL, &mask);
+	j->on_helper[c] = !pthread_equal(pthread_self(), j->caller);
+	j->blocked[c] = sigismember(&mask, SIGINT) && sigismember(&mask, SIGTERM) && sigismember(&mask, SIGUSR1);
+	if (c == 0)
+		while (atomic_load(&j->finished) < 3)
+			sched_yield();
+	else
+		atomic_fetch_add(&j->finished, 1);
+}
+
+static int test_helpers_block_signals(void)
+{
+	sigset_t none;
+	sigemptyset(&none);
+	ENSURE(pthread_sigmask(SIG_SETMASK, &none, NULL) == 0);
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	mask_job job = {.caller = pthread_self()};
+	atomic_init(&job.finished, 0);
+	sm_workers_run(team, mask_chunk, &job, 4);
+	sm_workers_destroy(team);
+	int on_helper = 0;
+	for (int c = 0; c < 4; c++) {
+		ENSURE(job.blocked[c] == job.on_helper[c]);
+		on_helper += job.on_helper[c];
+	}
+	ENSURE(on_helper >= 1);
+	return 0;
+}
+
 // The program's locale is process-wide state the library must not depend on: saving in a thread
 // whose locale has a decimal comma gives the same text (it was "9,81" for 9.81, not JSON), and
 // leaves that thread's locale as it was. Skipped where no such locale is installed.
@@ -875,6 +920,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mixed);
 	RUN_TEST(test_team_in_a_forked_child);
 	RUN_TEST(test_chunks_are_claimed_by_free_threads);
+	RUN_TEST(test_helpers_block_signals);
 	RUN_TEST(test_save_in_a_decimal_comma_locale);
 	free_inputs();
 	return TEST_SUMMARY();
