@@ -821,7 +821,7 @@ static int test_chunks_are_claimed_by_free_threads(void)
 // own threads (the caller here blocks none of SIGINT, SIGTERM, SIGUSR1). Chunk 0 waits for the
 // others, so at least one chunk runs on the helper.
 typedef struct mask_job {
-	atomic_int finished;
+	waiting_job wait;
 	pthread_t caller;
 	bool on_helper[4];
 	bool blocked[4];
@@ -834,11 +834,7 @@ static void mask_chunk(void* context, int c)
 	pthread_sigmask(SIG_BLOCK, NULL, &mask);
 	j->on_helper[c] = !pthread_equal(pthread_self(), j->caller);
 	j->blocked[c] = sigismember(&mask, SIGINT) && sigismember(&mask, SIGTERM) && sigismember(&mask, SIGUSR1);
-	if (c == 0)
-		while (atomic_load(&j->finished) < 3)
-			sched_yield();
-	else
-		atomic_fetch_add(&j->finished, 1);
+	waiting_chunk(&j->wait, c);
 }
 
 static int test_helpers_block_signals(void)
@@ -849,7 +845,7 @@ static int test_helpers_block_signals(void)
 	sm_workers* team = sm_workers_create(2);
 	ENSURE(team != NULL);
 	mask_job job = {.caller = pthread_self()};
-	atomic_init(&job.finished, 0);
+	atomic_init(&job.wait.finished, 0);
 	sm_workers_run(team, mask_chunk, &job, 4);
 	sm_workers_destroy(team);
 	int on_helper = 0;
