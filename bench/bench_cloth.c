@@ -59,6 +59,7 @@ typedef struct run_result {
 	sm_statistics stats;
 	double z_corner;
 	sm_linear_solver solver;
+	int threads;  // sm_simulation_def.threads asked for
 } run_result;
 
 // One run; interval > 0 advances in steps of `interval` with a force on the free corner that
@@ -106,6 +107,7 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	out->stats = sm_simulation_statistics(sim);
 	out->z_corner = sm_simulation_positions(sim)[2];
 	out->solver = sm_simulation_solver(sim);
+	out->threads = d.threads;
 	sm_simulation_destroy(sim);
 	return 0;
 }
@@ -155,10 +157,9 @@ int main(int argc, char** argv)
 			sm_model_destroy(model);
 			return 1;
 		}
-		const char* threads = getenv("THREADS");
 		printf("cloth n=%d solver=%s threads=%d wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld fact=%lld restarts=%lld etf=%lld ncf=%lld "
 		       "z_corner=%.6f force_s=%.3g jacobian_s=%.3g linear_s=%.3g",
-		       (int)n, sm_linear_solver_name(r.solver), threads && atoi(threads) > 0 ? atoi(threads) : 1, r.wall, (long long)r.stats.steps,
+		       (int)n, sm_linear_solver_name(r.solver), r.threads, r.wall, (long long)r.stats.steps,
 		       (long long)r.stats.rhs_evaluations, (long long)r.stats.jacobian_evaluations,
 		       (long long)r.stats.linear_iterations, (long long)r.stats.factorizations, (long long)r.stats.restarts, (long long)r.stats.error_test_failures, (long long)r.stats.convergence_failures, r.z_corner, r.stats.force_seconds,
 		       r.stats.jacobian_seconds, r.stats.linear_solve_seconds);

@@ -207,9 +207,8 @@ typedef struct reduced {
 	int32_t chunk_spring[PARALLEL_CHUNKS + 1];
 	int32_t chunk_aggregate[PARALLEL_CHUNKS + 1];
 	int32_t* slot;
-	const int32_t* ordered_a;
-	const int32_t* ordered_b;
-	int32_t* ordered_owned;  // ordered_a and ordered_b when chunks > 1
+	int32_t* ordered_a;
+	int32_t* ordered_b;
 	int32_t* member_first;
 	int32_t* member;
 	double partial[PARALLEL_CHUNKS];  // per-chunk sums, added in chunk order
@@ -1210,7 +1209,8 @@ static void reduced_content_free(reduced* r)
 	}
 	sm_workers_destroy(r->workers);
 	free(r->slot);
-	free(r->ordered_owned);
+	free(r->ordered_a);
+	free(r->ordered_b);
 	free(r->member_first);
 	free(r->member);
 	free(r->diagonal);
@@ -1301,8 +1301,9 @@ static bool build_chunks(reduced* r)
 		return true;
 	}
 	r->slot = malloc(((size_t)ns + 1) * sizeof(int32_t));
-	r->ordered_owned = malloc(2 * ((size_t)ns + 1) * sizeof(int32_t));
-	if (r->slot == NULL || r->ordered_owned == NULL) {
+	r->ordered_a = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	r->ordered_b = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	if (r->slot == NULL || r->ordered_a == NULL || r->ordered_b == NULL) {
 		free(key);
 		return false;
 	}
@@ -1310,24 +1311,21 @@ static bool build_chunks(reduced* r)
 		count[c + 1] += count[c];
 	for (int c = 0; c <= chunks; c++)
 		r->chunk_spring[c] = count[c];
-	int32_t* ordered_a = r->ordered_owned;
-	int32_t* ordered_b = r->ordered_owned + ns + 1;
 	for (int32_t s = 0; s < ns; s++) {
 		const int32_t k = count[key[s]]++;
 		r->slot[s] = k;
-		ordered_a[k] = m->spring_a[s];
-		ordered_b[k] = m->spring_b[s];
+		r->ordered_a[k] = m->spring_a[s];
+		r->ordered_b[k] = m->spring_b[s];
 	}
-	r->ordered_a = ordered_a;
-	r->ordered_b = ordered_b;
 	free(key);
 	for (int c = 0; c <= chunks; c++)
 		r->chunk_aggregate[c] = (int32_t)((int64_t)r->aggregate_count * c / chunks);
 	r->chunks = chunks;
 	// More threads than processors would only wait for each other.
 	int threads = r->sim->def.threads < chunks ? r->sim->def.threads : chunks;
-	if (threads > sm_workers_processors())
-		threads = sm_workers_processors();
+	const int processors = sm_workers_processors();
+	if (threads > processors)
+		threads = processors;
 	r->workers = sm_workers_create(threads);
 	return true;
 }
