@@ -450,18 +450,24 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
 	            lanes);
 }
 
-// Gravity, mass damping and external forces: the starting value of f before the springs add.
-static void body_forces(const sm_model* model, const double* v, const double* f_external, double* f)
+// Gravity, mass damping and external forces on particles begin .. end - 1: the starting value of
+// their f before the springs add.
+static void body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
+                              int32_t begin, int32_t end)
 {
-	const int32_t n = model->particle_count;
 	static const double zero[3] = {0.0, 0.0, 0.0};
-	for (int32_t i = 0; i < n; i++) {
+	for (int32_t i = begin; i < end; i++) {
 		const double* vi = v != NULL ? v + 3 * (size_t)i : zero;
 		body_force(model->mass[i], model->def.gravity, model->def.mass_damping, vi, f + 3 * (size_t)i);
 	}
 	if (f_external != NULL)
-		for (size_t k = 0; k < 3 * (size_t)n; k++)
+		for (size_t k = 3 * (size_t)begin; k < 3 * (size_t)end; k++)
 			f[k] += f_external[k];
+}
+
+static void body_forces(const sm_model* model, const double* v, const double* f_external, double* f)
+{
+	body_forces_range(model, v, f_external, f, 0, model->particle_count);
 }
 
 void sm_model_forces(const sm_model* model, const double* x, const double* v, const double* f_external,
@@ -473,13 +479,18 @@ void sm_model_forces(const sm_model* model, const double* x, const double* v, co
 	springs_add(model, x, v, f, NULL, SM_JACOBIAN_EXACT, NULL, widest_lanes());
 }
 
-// Power dissipated by mass damping over all particles [W].
-static double mass_damping_power(const sm_model* model, const double* v)
+// Power dissipated by mass damping over particles begin .. end - 1 [W].
+static double mass_damping_power_range(const sm_model* model, const double* v, int32_t begin, int32_t end)
 {
 	double power = 0.0;
-	for (int32_t i = 0; i < model->particle_count; i++)
+	for (int32_t i = begin; i < end; i++)
 		power += mass_damping_dissipation(model->mass[i], model->def.mass_damping, v + 3 * (size_t)i);
 	return power;
+}
+
+static double mass_damping_power(const sm_model* model, const double* v)
+{
+	return mass_damping_power_range(model, v, 0, model->particle_count);
 }
 
 double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
@@ -500,6 +511,24 @@ double sm_model_forces_power_and_jacobians(const sm_model* model, const double* 
 	jacobians->variant = SM_JACOBIAN_DEFINITE;
 	jacobians->evaluated = 1;
 	return power + mass_damping_power(model, v);
+}
+
+double sm_model_body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
+                                  int32_t begin, int32_t end)
+{
+	body_forces_range(model, v, f_external, f, begin, end);
+	return mass_damping_power_range(model, v, begin, end);
+}
+
+double sm_spring_order_forces_and_jacobians(const sm_spring_order* order, int32_t begin, int32_t end,
+                                            const double* x, const double* v, double* f, double* records)
+{
+	double power = 0.0;
+	if (begin < end)
+		spring_loop(widest_lanes(), end - begin, order->a + begin, order->b + begin, order->rest_length + begin,
+		            order->stiffness + begin, order->damping + begin, x, v, f,
+		            records + SPRING_JACOBIAN_STRIDE * (size_t)begin, &power, 1, 1, 1, 0);
+	return power;
 }
 
 sm_spring_jacobians* sm_spring_jacobians_create(const sm_model* model)

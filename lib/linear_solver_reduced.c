@@ -135,8 +135,10 @@
 #define PARALLEL_MAX_BOUNDARY_FRACTION 0.125
 #endif
 
-// Doubles per spring of the scaled records (seven used: one 64-byte record each).
+// Doubles per spring of the scaled records (seven used: one 64-byte record each), laid out as the
+// Jacobian's records, so that one loop forms products from either (add_spring_products).
 #define SCALED_STRIDE 8
+_Static_assert(SCALED_STRIDE == SPRING_JACOBIAN_STRIDE, "scaled and Jacobian records share a layout");
 
 typedef struct reduced {
 	sm_simulation* sim;
@@ -170,7 +172,7 @@ typedef struct reduced {
 	double* weight;
 	double *r, *z, *p, *q, *rhs, *dv;
 	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
-	// at every step; products with A are formed from it without assembling A.
+	// at every step, in chunk order; products with A are formed from it without assembling A.
 	sm_spring_jacobians* springs;
 	double gamma;           // of the current solve
 	double* full_force;     // forces of the fused pass (unused)
@@ -209,6 +211,9 @@ typedef struct reduced {
 	int32_t* slot;
 	int32_t* ordered_a;
 	int32_t* ordered_b;
+	double* ordered_rest_length;  // the model's constants in chunk order (load_spring_order)
+	double* ordered_stiffness;
+	double* ordered_damping;
 	int32_t* member_first;
 	int32_t* member;
 	double partial[PARALLEL_CHUNKS];  // per-chunk sums, added in chunk order
@@ -313,7 +318,7 @@ static void coarse_add(double* values, const reduced* r, int32_t I, int64_t entr
 			values[entry + stride * i + j] += sign * B[3 * i + j];
 }
 
-// The preconditioner at gamma, in one pass over the springs. Each spring's share of A is
+// The preconditioner at gamma. Each spring's share of A is
 //   B = gamma^2 K + gamma D = gamma^2 beta I + u w^T,  w = gamma^2 z + gamma kd u
 // (the factored records, forces.c); A's diagonal block at a free particle i is
 //   A_ii = m_i (1 + gamma alpha) I + sum of B over its springs,
@@ -322,47 +327,103 @@ static void coarse_add(double* values, const reduced* r, int32_t I, int64_t entr
 // to a constrained particle adds it to its free end's (I, I); one inside an aggregate adds
 // nothing (P^T A P sums the aggregate's rows and columns, where +B and -B cancel). Then the
 // coarse matrix M_c (1 + gamma alpha) + sums is factorised, unless the last factor is recent
-// enough (COARSE_MAX_AGE). Returns false if a block is singular or the coarse matrix is not
-// positive definite.
-static bool prepare_preconditioner(reduced* r, double gamma)
+// enough (COARSE_MAX_AGE).
+
+typedef struct preconditioner_job {
+	reduced* r;
+	double gamma;
+	bool singular[PARALLEL_CHUNKS];
+} preconditioner_job;
+
+// The diagonal blocks' sums (after the inverses' storage in block_inverse, 9 per particle).
+static double* block_sums(const reduced* r)
+{
+	return r->block_inverse + 9 * (size_t)r->sim->model->particle_count;
+}
+
+// The springs at positions begin .. end of the chunk order: their scaled records (u, w,
+// gamma^2 beta) from the Jacobian's, and B added to the diagonal sums of both ends.
+static void add_spring_shares(reduced* r, double gamma, int32_t begin, int32_t end)
 {
 	const sm_model* m = r->sim->model;
-	const int32_t np = m->particle_count;
-	const double g2 = gamma * gamma, damping = 1.0 + gamma * m->def.mass_damping;
-	double* diag = r->block_inverse + 9 * (size_t)np;  // sums, after the inverses' storage
-	memset(diag, 0, 9 * (size_t)np * sizeof(double));
-	const bool refresh = r->two_level && (r->coarse_age >= COARSE_MAX_AGE ||
-	                                      !(fabs(gamma / r->coarse_gamma - 1.0) <= COARSE_GAMMA_CHANGE));
-	double* coarse = refresh ? r->coarse->x : NULL;
-	if (refresh) {
-		memset(coarse, 0, 9 * (size_t)r->coarse_first[r->aggregate_count] * sizeof(double));
-		r->coarse_gamma = gamma;
-	} else {
-		r->coarse_age++;
-	}
-	const double* data = r->springs->data;
-	for (int32_t s = 0; s < m->spring_count; s++) {
-		const double* q = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
+	const int32_t* first = r->slot != NULL ? r->ordered_a : m->spring_a;
+	const int32_t* second = r->slot != NULL ? r->ordered_b : m->spring_b;
+	const double g2 = gamma * gamma;
+	double* diag = block_sums(r);
+	for (int32_t k = begin; k < end; k++) {
+		const double* q = r->springs->data + SPRING_JACOBIAN_STRIDE * (size_t)k;
 		const double w[3] = {g2 * q[3] + gamma * q[7] * q[0], g2 * q[4] + gamma * q[7] * q[1],
 		                     g2 * q[5] + gamma * q[7] * q[2]};
 		const double d = g2 * q[6];
-		double* record = r->scaled + SCALED_STRIDE * (size_t)(r->slot != NULL ? r->slot[s] : s);
+		double* record = r->scaled + SCALED_STRIDE * (size_t)k;
 		record[0] = q[0], record[1] = q[1], record[2] = q[2];
 		record[3] = w[0], record[4] = w[1], record[5] = w[2];
 		record[6] = d;
 		const double B[9] = {q[0] * w[0] + d, q[0] * w[1],     q[0] * w[2],
 		                     q[1] * w[0],     q[1] * w[1] + d, q[1] * w[2],
 		                     q[2] * w[0],     q[2] * w[1],     q[2] * w[2] + d};
-		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
+		const int32_t ends[2] = {first[k], second[k]};
 		for (int e = 0; e < 2; e++) {
 			double* sum = diag + 9 * (size_t)ends[e];
 			for (int i = 0; i < 9; i++)
 				sum[i] += B[i];
 		}
-		const int64_t* entry = refresh ? r->spring_coarse + 4 * (size_t)s : NULL;
-		if (entry == NULL || (entry[0] < 0 && entry[1] < 0))
+	}
+}
+
+// Chunk c: its particles' diagonal sums cleared, then its springs' shares added (they reach no
+// other chunk's particles).
+static void spring_shares_chunk(void* context, int c)
+{
+	preconditioner_job* j = context;
+	reduced* r = j->r;
+	double* diag = block_sums(r);
+	memset(diag + 9 * (size_t)r->chunk_particle[c], 0,
+	       9 * (size_t)(r->chunk_particle[c + 1] - r->chunk_particle[c]) * sizeof(double));
+	add_spring_shares(r, j->gamma, r->chunk_spring[c], r->chunk_spring[c + 1]);
+}
+
+// Chunk c: the mass term added to its free particles' diagonal blocks, which are inverted.
+static void invert_chunk(void* context, int c)
+{
+	preconditioner_job* j = context;
+	reduced* r = j->r;
+	const sm_model* m = r->sim->model;
+	const double damping = 1.0 + j->gamma * m->def.mass_damping;
+	double* diag = block_sums(r);
+	j->singular[c] = false;
+	for (int32_t i = r->chunk_particle[c]; i < r->chunk_particle[c + 1]; i++) {
+		double* inv = r->block_inverse + 9 * (size_t)i;
+		if (m->free_index[i] < 0) {
+			memset(inv, 0, 9 * sizeof(double));
 			continue;
-		const int32_t I = r->aggregate[ends[0]], J = r->aggregate[ends[1]];
+		}
+		double* a = diag + 9 * (size_t)i;
+		const double mass = m->mass[i] * damping;
+		a[0] += mass, a[4] += mass, a[8] += mass;
+		j->singular[c] = j->singular[c] || !sm_invert3(a, inv);
+	}
+}
+
+// The coarse matrix at gamma from the scaled records (B = u w^T + gamma^2 beta I, the numbers
+// add_spring_shares summed), the springs in the model's order; then factorised. Returns false if
+// it is not positive definite.
+static bool refresh_coarse(reduced* r, double gamma)
+{
+	const sm_model* m = r->sim->model;
+	const double damping = 1.0 + gamma * m->def.mass_damping;
+	double* coarse = r->coarse->x;
+	memset(coarse, 0, 9 * (size_t)r->coarse_first[r->aggregate_count] * sizeof(double));
+	r->coarse_gamma = gamma;
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		const int64_t* entry = r->spring_coarse + 4 * (size_t)s;
+		if (entry[0] < 0 && entry[1] < 0)
+			continue;
+		const double* e = r->scaled + SCALED_STRIDE * (size_t)(r->slot != NULL ? r->slot[s] : s);
+		const double B[9] = {e[0] * e[3] + e[6], e[0] * e[4],        e[0] * e[5],
+		                     e[1] * e[3],        e[1] * e[4] + e[6], e[1] * e[5],
+		                     e[2] * e[3],        e[2] * e[4],        e[2] * e[5] + e[6]};
+		const int32_t I = r->aggregate[m->spring_a[s]], J = r->aggregate[m->spring_b[s]];
 		if (entry[0] >= 0)
 			coarse_add(coarse, r, I, entry[0], B, 1.0);
 		if (entry[1] >= 0)
@@ -373,22 +434,8 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 			coarse_add(coarse, r, J, entry[3], B, -1.0);
 		}
 	}
-	for (int32_t i = 0; i < np; i++) {
-		double* inv = r->block_inverse + 9 * (size_t)i;
-		if (m->free_index[i] < 0) {
-			memset(inv, 0, 9 * sizeof(double));
-			continue;
-		}
-		double* a = diag + 9 * (size_t)i;
-		const double mass = m->mass[i] * damping;
-		a[0] += mass, a[4] += mass, a[8] += mass;
-		if (!sm_invert3(a, inv))
-			return false;
-	}
-	if (!refresh)
-		return true;
 	memset(r->coarse_mass, 0, (size_t)r->aggregate_count * sizeof(double));
-	for (int32_t i = 0; i < np; i++)
+	for (int32_t i = 0; i < m->particle_count; i++)
 		if (r->aggregate[i] >= 0)
 			r->coarse_mass[r->aggregate[i]] += m->mass[i];
 	for (int32_t I = 0; I < r->aggregate_count; I++)
@@ -408,12 +455,36 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 	return ok;
 }
 
-// The springs at positions begin .. end of the chunk order added to q from their scaled records.
-static void add_spring_products(const reduced* r, const double* p, double* restrict q, int32_t begin, int32_t end)
+// The scaled records and the inverted diagonal blocks, chunk by chunk (the springs between
+// chunks on the caller's thread in between), then the coarse matrix if it is due. Returns false
+// if a block is singular or the coarse matrix is not positive definite.
+static bool prepare_preconditioner(reduced* r, double gamma)
+{
+	preconditioner_job job = {.r = r, .gamma = gamma};
+	sm_workers_run(r->workers, spring_shares_chunk, &job, r->chunks);
+	add_spring_shares(r, gamma, r->chunk_spring[r->chunks], r->sim->model->spring_count);
+	sm_workers_run(r->workers, invert_chunk, &job, r->chunks);
+	for (int c = 0; c < r->chunks; c++)
+		if (job.singular[c])
+			return false;
+	if (!r->two_level)
+		return true;
+	if (r->coarse_age >= COARSE_MAX_AGE || !(fabs(gamma / r->coarse_gamma - 1.0) <= COARSE_GAMMA_CHANGE))
+		return refresh_coarse(r, gamma);
+	r->coarse_age++;
+	return true;
+}
+
+// The springs at positions begin .. end of the chunk order added to q from their records, u[3],
+// w[3], c (stride 8): with r = p_b - p_a, u (w . r) + c r subtracted at a and added at b. The
+// scaled records give the share of A (w = gamma^2 z + gamma kd u, c = gamma^2 beta); the
+// Jacobian's own give that of -K (w = z, c = beta; kd, the eighth entry, unread).
+static void add_spring_products(const reduced* r, const double* records, const double* p, double* restrict q,
+                                int32_t begin, int32_t end)
 {
 	const int32_t* restrict first = r->slot != NULL ? r->ordered_a : r->sim->model->spring_a;
 	const int32_t* restrict second = r->slot != NULL ? r->ordered_b : r->sim->model->spring_b;
-	const double* restrict scaled = r->scaled;
+	const double* restrict scaled = records;
 	if (begin >= end)
 		return;
 	// Structures list their springs particle by particle, so consecutive springs often share
@@ -466,7 +537,17 @@ static void product_chunk(void* context, int c)
 	double* restrict q = j->q;
 	for (int64_t i = 3 * (int64_t)r->chunk_particle[c]; i < 3 * (int64_t)r->chunk_particle[c + 1]; i++)
 		q[i] = mass[i] * damping * p[i];
-	add_spring_products(r, p, q, r->chunk_spring[c], r->chunk_spring[c + 1]);
+	add_spring_products(r, r->scaled, p, q, r->chunk_spring[c], r->chunk_spring[c + 1]);
+}
+
+// Chunk c of q = -K p (the Jacobian's records): zero at its particles, then its springs.
+static void stiffness_chunk(void* context, int c)
+{
+	const product_job* j = context;
+	const reduced* r = j->r;
+	memset(j->q + 3 * (size_t)r->chunk_particle[c], 0,
+	       3 * (size_t)(r->chunk_particle[c + 1] - r->chunk_particle[c]) * sizeof(double));
+	add_spring_products(r, r->springs->data, j->p, j->q, r->chunk_spring[c], r->chunk_spring[c + 1]);
 }
 
 typedef struct dot_job {
@@ -525,7 +606,7 @@ static double multiply(reduced* r, const double* p, double* restrict q)
 	} else {
 		product_job job = {r, p, q};
 		sm_workers_run(r->workers, product_chunk, &job, r->chunks);
-		add_spring_products(r, p, q, r->chunk_spring[r->chunks], sim->model->spring_count);
+		add_spring_products(r, r->scaled, p, q, r->chunk_spring[r->chunks], sim->model->spring_count);
 	}
 	for (int32_t k = 0; k < sim->constrained_count; k++)
 		memset(q + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
@@ -590,27 +671,76 @@ static void load_masses(reduced* r)
 			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
 }
 
+typedef struct forces_job {
+	reduced* r;
+	const double *x, *v, *f_external;
+	double* f;
+	sm_spring_order order;
+} forces_job;
+
+// Chunk c of the forces: its particles' body forces, then its springs, with their records.
+static void forces_chunk(void* context, int c)
+{
+	const forces_job* j = context;
+	reduced* r = j->r;
+	const double body = sm_model_body_forces_range(r->sim->model, j->v, j->f_external, j->f, r->chunk_particle[c],
+	                                               r->chunk_particle[c + 1]);
+	r->partial[c] = sm_spring_order_forces_and_jacobians(&j->order, r->chunk_spring[c], r->chunk_spring[c + 1], j->x,
+	                                                     j->v, j->f, r->springs->data) +
+	                body;
+}
+
+// sm_model_forces_power_and_jacobians at x, v into f and the solver's records, chunk by chunk
+// (the springs between chunks after, on the caller's thread, and the chunks' powers added in
+// chunk order) when the model is split into chunks; returns the dissipated power [W].
+static double forces_and_records(reduced* r, const double* x, const double* v, const double* f_external, double* f)
+{
+	const sm_model* m = r->sim->model;
+	if (r->slot == NULL)
+		return sm_model_forces_power_and_jacobians(m, x, v, f_external, f, r->springs);
+	forces_job job = {r, x, v, f_external, f,
+	                  {r->ordered_a, r->ordered_b, r->ordered_rest_length, r->ordered_stiffness, r->ordered_damping}};
+	sm_workers_run(r->workers, forces_chunk, &job, r->chunks);
+	const double boundary = sm_spring_order_forces_and_jacobians(&job.order, r->chunk_spring[r->chunks],
+	                                                             m->spring_count, x, v, f, r->springs->data);
+	r->springs->variant = SM_JACOBIAN_DEFINITE;
+	r->springs->evaluated = 1;
+	return sum_partials(r) + boundary;
+}
+
+// The model's spring constants in chunk order: when the chunks are built and at every
+// invalidation, which follows every change of them (a break, a restore, a reset, a new model).
+static void load_spring_order(reduced* r)
+{
+	const sm_model* m = r->sim->model;
+	if (r->slot == NULL)
+		return;
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		const int32_t k = r->slot[s];
+		r->ordered_rest_length[k] = m->rest_length[s];
+		r->ordered_stiffness[k] = m->stiffness[s];
+		r->ordered_damping[k] = m->damping[s];
+	}
+}
+
 // Makes the Jacobian current at CVODE's state y (time t): adopts the records the right-hand side
 // stored if they were evaluated at exactly this time and state, evaluates the forces and every
 // spring's Jacobian blocks there otherwise.
-static int current_jacobian(reduced* r, double t, const double* y)
+static void current_jacobian(reduced* r, double t, const double* y)
 {
 	sm_simulation* sim = r->sim;
-	sm_status st = SM_OK;
 	if (!(r->rhs_records && r->rhs_time == t && memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0)) {
 		double* x = sim->work_position;
 		double* v = sim->work_velocity;
 		sm_simulation_unpack(sim, t, y, x, v);
 		const double start = sm_simulation_clock();
-		st = sm_model_forces_and_jacobians(sim->model, x, v, sim->external_force, SM_JACOBIAN_DEFINITE,
-		                                   r->full_force, r->springs);
+		forces_and_records(r, x, v, sim->external_force, r->full_force);
 		sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	}
 	sim->jacobian_evaluations++;
 	r->blocks_gamma = NAN;
-	r->jacobian_time = st == SM_OK ? t : NAN;
+	r->jacobian_time = t;
 	r->rhs_records = false;
-	return st == SM_OK ? 0 : -1;
 }
 
 int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p, double* q)
@@ -621,38 +751,41 @@ int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p,
 		memset(q, 0, (size_t)r->full * sizeof(double));
 		return 0;
 	}
-	int status = current_jacobian(r, sim->time, N_VGetArrayPointer(sim->y));
-	if (status == 0) {
-		r->gamma = gamma;
-		if (!r->use_cholmod && !prepare_preconditioner(r, gamma))
-			status = -1;
-		else
-			multiply(r, p, q);
-	}
+	load_spring_order(r);  // the model may have changed since the last invalidation
+	current_jacobian(r, sim->time, N_VGetArrayPointer(sim->y));
+	r->gamma = gamma;
+	int status = 0;
+	if (!r->use_cholmod && !prepare_preconditioner(r, gamma))
+		status = -1;
+	else
+		multiply(r, p, q);
 	sm_reduced_solver_invalidate(ls, false);  // the next solve evaluates and prepares afresh
 	return status;
 }
 
 // CVODE evaluates the right-hand side at the predicted state of every step attempt and then
 // solves at that state, where the solver evaluates the Jacobian: the right-hand side computes
-// both in one pass over the springs instead (sm_model_forces_power_and_jacobians), which
-// spares one force evaluation per step. Its records are adopted only if the solve's time and
-// state are exactly those of the evaluation, so the order of CVODE's calls decides only what
-// is spared, never the result: the trajectory is the same, bit for bit.
-sm_spring_jacobians* sm_reduced_rhs_records(SUNLinearSolver ls, double t)
+// both in one pass over the springs instead (sm_reduced_rhs_forces), which spares one force
+// evaluation per step. Its records are adopted only if the solve's time and state are exactly
+// those of the evaluation, so the order of CVODE's calls decides only what is spared, never the
+// result: the trajectory is the same, bit for bit.
+bool sm_reduced_rhs_wants_records(SUNLinearSolver ls, double t)
 {
-	reduced* r = ls->content;
-	return r->n > 0 && !(t == r->jacobian_time) ? r->springs : NULL;
+	const reduced* r = ls->content;
+	return r->n > 0 && !(t == r->jacobian_time);
 }
 
-void sm_reduced_rhs_evaluated(SUNLinearSolver ls, double t, const double* y)
+double sm_reduced_rhs_forces(SUNLinearSolver ls, double t, const double* y, const double* x, const double* v,
+                             const double* f_external, double* f)
 {
 	reduced* r = ls->content;
+	const double power = forces_and_records(r, x, v, f_external, f);
 	memcpy(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double));
 	r->rhs_time = t;
 	r->rhs_records = true;
 	r->jacobian_time = NAN;  // the records are no longer those of the last solve
 	r->blocks_gamma = NAN;
+	return power;
 }
 
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
@@ -666,8 +799,7 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 		return 0;
 	// Always the Jacobian at this state: the right-hand side's records, or one pass over the
 	// springs.
-	if (current_jacobian(r, t, N_VGetArrayPointer(y)) != 0)
-		return -1;
+	current_jacobian(r, t, N_VGetArrayPointer(y));
 	*jcur = SUNTRUE;
 	return 0;
 }
@@ -927,8 +1059,8 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (CVodeGetCurrentTime(sim->cvode, &t_current) != CV_SUCCESS ||
 	    CVodeGetCurrentState(sim->cvode, &y_current) != CV_SUCCESS)
 		return r->last_flag = SUNLS_MEM_FAIL;
-	if (!(t_current == r->jacobian_time) && current_jacobian(r, t_current, N_VGetArrayPointer(y_current)) != 0)
-		return r->last_flag = SUNLS_PACKAGE_FAIL_UNREC;
+	if (!(t_current == r->jacobian_time))
+		current_jacobian(r, t_current, N_VGetArrayPointer(y_current));
 	const double start = sm_simulation_clock();
 	r->gamma = gamma;
 	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the residual's weights (p and
@@ -941,13 +1073,15 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 			r->weight[i + c] = (w ? w[f + c] : 1.0) / r->mass[i + c];
 		}
 	}
-	sm_spring_jacobians_combined_product(r->springs, sim->model, 1.0, 0.0, r->p, r->rhs);
+	product_job stiffness = {r, r->p, r->rhs};  // rhs = -K bx first
+	sm_workers_run(r->workers, stiffness_chunk, &stiffness, r->chunks);
+	add_spring_products(r, r->springs->data, r->p, r->rhs, r->chunk_spring[r->chunks], sim->model->spring_count);
 	for (int32_t k = 0; k < sim->constrained_count; k++)
 		memset(r->rhs + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++)
-			r->rhs[i + c] = r->mass[i + c] * b[n + f + c] + gamma * r->rhs[i + c];
+			r->rhs[i + c] = r->mass[i + c] * b[n + f + c] - gamma * r->rhs[i + c];
 	}
 	if (!r->use_cholmod && !(r->blocks_gamma == gamma)) {
 		r->blocks_valid = prepare_preconditioner(r, gamma);
@@ -1185,6 +1319,7 @@ void sm_reduced_solver_invalidate(SUNLinearSolver ls, bool forget_factor)
 		r->extra_flops = 0.0;
 	}
 	load_masses(r);
+	load_spring_order(r);
 }
 
 static void reduced_content_free(reduced* r)
@@ -1211,6 +1346,9 @@ static void reduced_content_free(reduced* r)
 	free(r->slot);
 	free(r->ordered_a);
 	free(r->ordered_b);
+	free(r->ordered_rest_length);
+	free(r->ordered_stiffness);
+	free(r->ordered_damping);
 	free(r->member_first);
 	free(r->member);
 	free(r->diagonal);
@@ -1303,7 +1441,11 @@ static bool build_chunks(reduced* r)
 	r->slot = malloc(((size_t)ns + 1) * sizeof(int32_t));
 	r->ordered_a = malloc(((size_t)ns + 1) * sizeof(int32_t));
 	r->ordered_b = malloc(((size_t)ns + 1) * sizeof(int32_t));
-	if (r->slot == NULL || r->ordered_a == NULL || r->ordered_b == NULL) {
+	r->ordered_rest_length = malloc(((size_t)ns + 1) * sizeof(double));
+	r->ordered_stiffness = malloc(((size_t)ns + 1) * sizeof(double));
+	r->ordered_damping = malloc(((size_t)ns + 1) * sizeof(double));
+	if (!r->slot || !r->ordered_a || !r->ordered_b || !r->ordered_rest_length || !r->ordered_stiffness ||
+	    !r->ordered_damping) {
 		free(key);
 		return false;
 	}
@@ -1318,6 +1460,7 @@ static bool build_chunks(reduced* r)
 		r->ordered_b[k] = m->spring_b[s];
 	}
 	free(key);
+	load_spring_order(r);
 	for (int c = 0; c <= chunks; c++)
 		r->chunk_aggregate[c] = (int32_t)((int64_t)r->aggregate_count * c / chunks);
 	r->chunks = chunks;

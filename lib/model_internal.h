@@ -143,3 +143,28 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
 // linear solver will want the Jacobian at the same state (linear_solver_reduced.c).
 double sm_model_forces_power_and_jacobians(const sm_model* model, const double* x, const double* v,
                                            const double* f_external, double* f, sm_spring_jacobians* jacobians);
+
+// Gravity, mass damping and external forces (f_external NULL: none) on particles begin .. end - 1,
+// written into their f as sm_model_forces starts it (v must be given); returns the power their
+// mass damping dissipates [W]. With sm_spring_order_forces_and_jacobians, the pieces of
+// sm_model_forces_power_and_jacobians that a caller may run on disjoint parts of the model at
+// once (linear_solver_reduced.c). Defined in forces.c.
+double sm_model_body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
+                                  int32_t begin, int32_t end);
+
+// The springs in an order of the caller's: their particles and constants at positions 0, 1, ...
+// (copies of the model's arrays, permuted).
+typedef struct sm_spring_order {
+	const int32_t* a;
+	const int32_t* b;
+	const double* rest_length;  // [m]
+	const double* stiffness;    // [N/m]
+	const double* damping;      // [N s/m]
+} sm_spring_order;
+
+// The springs at positions begin .. end - 1 of `order`: their forces, damping included, added to
+// f, and their records of the definiteness-preserving Jacobian stored at the same positions of
+// `records` (SPRING_JACOBIAN_STRIDE doubles each), by the loop of sm_model_forces_power_and_jacobians
+// (the same numbers for each spring); returns their dissipated power [W]. Defined in forces.c.
+double sm_spring_order_forces_and_jacobians(const sm_spring_order* order, int32_t begin, int32_t end,
+                                            const double* x, const double* v, double* f, double* records);

@@ -208,12 +208,9 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	double* f = sim->work_force;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
-	const bool reduced = has_reduced_solver(sim);
-	sm_spring_jacobians* records = reduced ? sm_reduced_rhs_records(sim->linear_solver, t) : NULL;
 	double power;
-	if (records != NULL) {
-		power = sm_model_forces_power_and_jacobians(sim->model, x, v, sim->external_force, f, records);
-		sm_reduced_rhs_evaluated(sim->linear_solver, t, y);
+	if (has_reduced_solver(sim) && sm_reduced_rhs_wants_records(sim->linear_solver, t)) {
+		power = sm_reduced_rhs_forces(sim->linear_solver, t, y, x, v, sim->external_force, f);
 		sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	} else {
 		power = sm_model_forces_and_power(sim->model, x, v, sim->external_force, f);

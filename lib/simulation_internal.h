@@ -127,11 +127,14 @@ bool sm_reduced_solver_rebuild(SUNLinearSolver ls);
 // and q set to zero at constrained particles). Returns 0, or -1 if the Jacobian cannot be
 // evaluated. The next solve evaluates its Jacobian afresh.
 int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p, double* q);
-// The right-hand side's share in the Jacobian evaluation: the records to fill at time t with
-// sm_model_forces_power_and_jacobians, or NULL if the solver already holds the Jacobian of the
-// step at t; after filling them, sm_reduced_rhs_evaluated with the state y (CVODE's vector).
-sm_spring_jacobians* sm_reduced_rhs_records(SUNLinearSolver ls, double t);
-void sm_reduced_rhs_evaluated(SUNLinearSolver ls, double t, const double* y);
+// The right-hand side's share in the Jacobian evaluation: whether the solver wants the Jacobian's
+// records from the right-hand side at time t (false: it holds the Jacobian of the step at t);
+// if so, sm_reduced_rhs_forces evaluates the forces at x, v (unpacked from CVODE's state y) into f
+// and the records with them, as sm_model_forces_power_and_jacobians does (split into the solver's
+// chunks for a large model), and returns the dissipated power [W].
+bool sm_reduced_rhs_wants_records(SUNLinearSolver ls, double t);
+double sm_reduced_rhs_forces(SUNLinearSolver ls, double t, const double* y, const double* x, const double* v,
+                             const double* f_external, double* f);
 int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
                       sunrealtype delta, int lr, void* user_data);
 
