@@ -814,6 +814,12 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 		log_error(inst, "fmi2SetupExperiment: tolerance %g must lie in (0, 1)", tolerance);
 		return fmi2Error;
 	}
+	// It becomes CVODE's relative tolerance, which cannot be met below the machine epsilon.
+	if (toleranceDefined && !(tolerance >= SM_MIN_RELATIVE_TOLERANCE)) {
+		log_error(inst, "fmi2SetupExperiment: tolerance %g must be at least %g, the machine epsilon (CVODE cannot "
+		          "meet a smaller relative tolerance)", tolerance, SM_MIN_RELATIVE_TOLERANCE);
+		return fmi2Error;
+	}
 	// The experiment's tolerance, or without one the file's (an earlier call's does not stay).
 	if (!inst->rtol_set)
 		inst->solver.relative_tolerance =
@@ -1023,6 +1029,11 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	                 v->source == FMU_SRC_SOLVER_ATOL_VELOCITY;
 	if (tolerance && (!(value > 0.0) || (v->source == FMU_SRC_SOLVER_RTOL && !(value < 1.0)))) {
 		log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name, value);
+		return false;
+	}
+	if (v->source == FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_RELATIVE_TOLERANCE)) {
+		log_error(inst, "fmi2SetReal: %s = %g rejected: a relative tolerance must be at least %g, the machine "
+		          "epsilon (CVODE cannot meet a smaller one)", v->name, value, SM_MIN_RELATIVE_TOLERANCE);
 		return false;
 	}
 	if (tolerance && v->source != FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_ABSOLUTE_TOLERANCE)) {

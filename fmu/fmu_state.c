@@ -238,9 +238,11 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
 	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
 	double max_step = get_d(b, D_MAX_STEP);
-	// The absolute tolerances as fmi2SetReal takes them: at least SM_MIN_ABSOLUTE_TOLERANCE.
-	ok = ok && rtol > 0.0 && rtol < 1.0 && atol_x >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_x) &&
-	     atol_v >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_v) && max_step >= 0.0 && isfinite(max_step);
+	// The tolerances as fmi2SetReal takes them: the relative one at least SM_MIN_RELATIVE_TOLERANCE
+	// and below 1, the absolute ones at least SM_MIN_ABSOLUTE_TOLERANCE.
+	ok = ok && rtol >= SM_MIN_RELATIVE_TOLERANCE && rtol < 1.0 && atol_x >= SM_MIN_ABSOLUTE_TOLERANCE &&
+	     isfinite(atol_x) && atol_v >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_v) && max_step >= 0.0 &&
+	     isfinite(max_step);
 	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
 	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP))) && !isnan(get_d(b, D_DISSIPATED));
 	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);

@@ -489,10 +489,11 @@ static int test_settings_take_effect_after_an_output_was_read(void)
 }
 
 // The solver variables' ranges (docs/fmu.md): both absolute tolerances at least 1e-150, a relative
-// one in (0, 1), solver.max_step >= 0 with 0 for no limit (the run is then the file's, whose
-// max_step is 0), solver.max_steps at least 1 (no internal step at all could never advance; CVODE
-// would read 0 as its own default of 500), solver.threads at least 1. A refused value is an fmi2Error naming the variable
-// and leaves the value before.
+// one (solver.rtol or the experiment's tolerance) at least the machine epsilon and below 1,
+// solver.max_step >= 0 with 0 for no limit (the run is then the file's, whose max_step is 0),
+// solver.max_steps at least 1 (no internal step at all could never advance; CVODE would read 0 as
+// its own default of 500), solver.threads at least 1. A refused value is an fmi2Error naming the
+// variable and leaves the value before.
 static int test_solver_settings_are_checked_against_their_ranges(void)
 {
 	fixture f;
@@ -512,6 +513,9 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 		ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, tolerance, 0.0, fmi2False, 0.0), fmi2Error);
 		ENSURE(strstr(f.log.last, "must lie in (0, 1)") != NULL);
 	}
+	// It becomes CVODE's relative tolerance: at least the machine epsilon.
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-17, 0.0, fmi2False, 0.0), fmi2Error);
+	ENSURE(strstr(f.log.last, "tolerance 1e-17 must be at least 2.22045e-16, the machine epsilon") != NULL);
 	// A stop time before the start is refused; one at the start is an experiment of no length.
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 0.5), fmi2Error);
 	ENSURE(strstr(f.log.last, "start <= stop") != NULL);
@@ -527,6 +531,7 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	    {"solver.atol_position", 0.0, "solver.atol_position = 0 rejected"},
 	    {"solver.rtol", 0.0, "solver.rtol = 0 rejected"},
 	    {"solver.rtol", 1.0, "solver.rtol = 1 rejected"},
+	    {"solver.rtol", 1e-17, "solver.rtol = 1e-17 rejected: a relative tolerance must be at least 2.22045e-16"},
 	    {"solver.max_step", -1e-3, "solver.max_step = -0.001 rejected"},
 	};
 	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {

@@ -285,8 +285,9 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 	return fail_naming(p, status, path, message, &p->noted);
 }
 
-// FRACTION: > 0 and < 1 (a relative tolerance); TOLERANCE: an absolute tolerance, at least
-// SM_MIN_ABSOLUTE_TOLERANCE.
+// FRACTION: > 0 and < 1, and at least SM_MIN_RELATIVE_TOLERANCE (a relative tolerance: CVODE
+// cannot meet one below the machine epsilon, simulation.h); TOLERANCE: an absolute tolerance, at
+// least SM_MIN_ABSOLUTE_TOLERANCE.
 typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE } number_rule;
 
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
@@ -301,6 +302,10 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
 	if (rule == FRACTION && !(v < 1.0))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
+	if (rule == FRACTION && !(v >= SM_MIN_RELATIVE_TOLERANCE))
+		return fail(p, SM_ERROR_SCHEMA, path,
+		            "%s must be at least %g, the machine epsilon (CVODE cannot meet a smaller relative tolerance)",
+		            describe(p, text, sizeof text, v, source), SM_MIN_RELATIVE_TOLERANCE);
 	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %g (CVODE's error norm overflows below)",
 		            describe(p, text, sizeof text, v, source), SM_MIN_ABSOLUTE_TOLERANCE);

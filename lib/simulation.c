@@ -496,6 +496,12 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
 		                    def->relative_tolerance);
+	// Below the machine epsilon CVODE cannot meet it (SM_MIN_RELATIVE_TOLERANCE, simulation.h).
+	if (!(def->relative_tolerance >= SM_MIN_RELATIVE_TOLERANCE))
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "simulation: relative_tolerance = %g must be at least %g, the machine epsilon: "
+		                    "CVODE cannot hold errors below the rounding of the state",
+		                    def->relative_tolerance, SM_MIN_RELATIVE_TOLERANCE);
 	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_step = %g must be finite and >= 0",
 		                    def->max_step);

@@ -1380,7 +1380,8 @@ static int test_hostile_input(void)
 	"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}]"
 
 // The rules of docs/model-format.md at their edges, each refused with the path of the element,
-// the value and the rule: a relative tolerance of 1 (it must be < 1), times of 0 and below, an
+// the value and the rule: a relative tolerance of 1 (it must be < 1) and one just under the machine
+// epsilon, times of 0 and below, an
 // absolute tolerance just under 1e-150, no internal steps (a simulation refuses max_steps 0, see
 // test_settings_and_their_defaults), a negative mass damping, a mesh of density 0, a spring's
 // rest length of -1 (a rest length is >= 0, whatever the library uses -1 for), a zero-length
@@ -1391,6 +1392,14 @@ static int test_rules_at_their_edges(void)
 {
 	static const refusal cases[] = {
 	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 1}}", SM_ERROR_SCHEMA, "test.json: simulation.rtol: 1 must be < 1"},
+	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 2e-16}}", SM_ERROR_SCHEMA,
+	     "test.json: simulation.rtol: 2e-16 must be at least 2.22045e-16, the machine epsilon (CVODE cannot meet a "
+	     "smaller relative tolerance)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"tol\": 1e-17},"
+	     " \"particles\": [{\"position\": [0, 0, 0]}], \"simulation\": {\"rtol\": \"tol\"}}",
+	     SM_ERROR_SCHEMA,
+	     "test.json: simulation.rtol: parameter tol = 1e-17 must be at least 2.22045e-16, the machine epsilon (CVODE "
+	     "cannot meet a smaller relative tolerance)"},
 	    {TWO_PARTICLES ", \"simulation\": {\"output_interval\": 0}}", SM_ERROR_NEGATIVE,
 	     "test.json: simulation.output_interval: 0 must be > 0"},
 	    {TWO_PARTICLES ", \"simulation\": {\"stop_time\": -1}}", SM_ERROR_NEGATIVE,

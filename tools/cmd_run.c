@@ -280,6 +280,13 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					fprintf(stderr, "springmass run: --rtol must be < 1, got '%s'\n", value);
 					return 2;
 				}
+				if (!(o->rtol >= SM_MIN_RELATIVE_TOLERANCE)) {
+					fprintf(stderr,
+					        "springmass run: --rtol must be at least %g, the machine epsilon (CVODE cannot meet a "
+					        "smaller relative tolerance), got '%s'\n",
+					        SM_MIN_RELATIVE_TOLERANCE, value);
+					return 2;
+				}
 			} else if (strcmp(a, "--threads") == 0) {
 				if (!cli_parse_count(value, 1, 1024, &o->threads)) {
 					fprintf(stderr, "springmass run: --threads needs a count from 1 to 1024, got '%s'\n", value);

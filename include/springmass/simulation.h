@@ -41,6 +41,8 @@
 // OMP_THREAD_LIMIT=1 (and OPENBLAS_NUM_THREADS=1) in the environment before the first call.
 #pragma once
 
+#include <float.h>
+
 #include "springmass/model.h"
 
 #ifdef __cplusplus
@@ -53,6 +55,17 @@ extern "C" {
 /// m/s (21 for the 393 205 components of a 256 x 256 cloth), beyond any step's error, while at
 /// 3e-308 m/s the first steps of the bundled oscillator overflowed it and every step failed.
 #define SM_MIN_ABSOLUTE_TOLERANCE 1e-150
+
+/// Smallest relative tolerance accepted [1]: the machine epsilon, 2.2e-16. A smaller one asks
+/// for local errors below the rounding of the state itself, which CVODE 6.4.1 cannot meet: before
+/// every step it fails with CV_TOO_MUCH_ACC ("too much accuracy requested") when DBL_EPSILON
+/// times the root mean square of |y| / (rtol |y| + atol) over the state exceeds 1. With rtol at
+/// least DBL_EPSILON every term is below 1 / DBL_EPSILON, so that only the rounding of the norm
+/// could make the test fire; below it, it fires once the state's components exceed
+/// atol / (DBL_EPSILON - rtol) (the bundled oscillator at rtol 1e-17 and atol 1e-150 failed at
+/// t = 0; at rtol = DBL_EPSILON it runs). CVODE's guide advises keeping rtol well above the unit
+/// roundoff; this bound only refuses what cannot work.
+#define SM_MIN_RELATIVE_TOLERANCE DBL_EPSILON
 
 /// Linear multistep method.
 typedef enum sm_method {
@@ -87,7 +100,7 @@ typedef struct sm_simulation_def {
 	sm_method method;               ///< default SM_METHOD_BDF
 	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
 	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
-	double relative_tolerance;      ///< in (0, 1) [1]; default 1e-6
+	double relative_tolerance;      ///< in [SM_MIN_RELATIVE_TOLERANCE, 1) [1]; default 1e-6
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m]; default 1e-8
 	double absolute_tolerance_position;
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy [J]; default 1e-6

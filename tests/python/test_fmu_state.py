@@ -458,8 +458,8 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # positions 27 and of velocities 28, max_step 29; then x (30-35), v (36-41), the spring's enabled
 # flag 42, the parameters 43-45, the held inputs of base (46-54) and tip (55-63: position,
 # velocity, force) and the pending flags 64-65.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, W_TIP_FX = \
-    13, 14, 17, 18, 25, 27, 29, 42, 43, 61
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, \
+    W_TIP_FX = 13, 14, 17, 18, 25, 26, 27, 29, 42, 43, 61
 
 
 def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
@@ -467,9 +467,9 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
     # message naming which" - by fmi2DeSerializeFMUstate, before anything of it is used: a spring
     # neither broken nor whole (0.5), no internal step allowed, a negative largest step, a dissipated
     # energy that is not a number (energy.dissipated would read NaN from then on), a simulation
-    # flagged where the FMU state has none or missing where it has one, an absolute
-    # tolerance below the smallest one fmi2SetReal takes, an unknown
-    # method, a non-finite held input. The states are those of an instance that has run (the
+    # flagged where the FMU state has none or missing where it has one, a relative tolerance below
+    # the machine epsilon and an absolute tolerance below the smallest one fmi2SetReal takes, an
+    # unknown method, a non-finite held input. The states are those of an instance that has run (the
     # solver would refuse some of the values only at fmi2SetFMUstate) and of one saved before
     # initialisation (whose values the FMU would take without a solver, and fail with at
     # fmi2ExitInitializationMode, in the error state). The receiving instance goes on unchanged.
@@ -492,7 +492,9 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "max_steps 0": edited(state, W_MAX_STEPS, "<q", 0),
                      "threads 0": edited(state, W_THREADS, "<q", 0),
                      "max_step -1": edited(state, W_MAX_STEP, "<d", -1.0),
-                     # below what fmi2SetReal takes (SM_MIN_ABSOLUTE_TOLERANCE, 1e-150)
+                     # below what fmi2SetReal takes (SM_MIN_RELATIVE_TOLERANCE, the machine
+                     # epsilon, and SM_MIN_ABSOLUTE_TOLERANCE, 1e-150)
+                     "rtol 1e-17": edited(state, W_RTOL, "<d", 1e-17),
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
                      "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
