@@ -129,6 +129,10 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 // Makes sure a simulation with the current settings exists and has taken the inputs set.
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function);
 
+// The energy dissipated since the start [J], never negative (energy.dissipated and a saved
+// state's; the reason is in fmu_cosim.c). Needs the simulation.
+double fmu_dissipated_energy(const instance* inst);
+
 // Sets the model-file parameters to values[] all at once, old ones in old[]; false if the model refuses.
 bool fmu_set_parameters(instance* inst, const char* function, const double* values, double* old);
 

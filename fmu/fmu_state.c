@@ -139,7 +139,7 @@ static saved_state* save_state(instance* inst)
 	put_d(b, D_START, inst->start_time);
 	put_d(b, D_LAST_SUCCESSFUL, inst->last_successful_time);
 	put_d(b, D_STOP, inst->stop_time);
-	put_d(b, D_DISSIPATED, has_sim ? sm_simulation_dissipated_energy(inst->sim) + inst->dissipated_offset : 0.0);
+	put_d(b, D_DISSIPATED, has_sim ? fmu_dissipated_energy(inst) : 0.0);
 	put_d(b, D_RTOL, inst->solver.relative_tolerance);
 	put_d(b, D_ATOL_POSITION, inst->solver.absolute_tolerance_position);
 	put_d(b, D_ATOL_VELOCITY, inst->solver.absolute_tolerance_velocity);
@@ -244,13 +244,22 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     isfinite(atol_x) && atol_v >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_v) && max_step >= 0.0 &&
 	     isfinite(max_step);
 	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
-	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP))) && !isnan(get_d(b, D_DISSIPATED));
+	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP)));
 	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
 	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
 	if (!ok) {
 		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
 		                "velocities, parameters or inputs)",
 		          function);
+		return false;
+	}
+	// Dissipated energy is finite and non-negative by physics, and save_state writes it so, round-off
+	// included (fmu_dissipated_energy): a value below 0, however little, or not finite comes from
+	// no state of this FMU, and energy.dissipated would read it from then on.
+	const double dissipated = get_d(b, D_DISSIPATED);
+	if (!(isfinite(dissipated) && dissipated >= 0.0)) {
+		log_error(inst, "%s: the state's dissipated energy %s J is out of range: it must be finite and >= 0",
+		          function, fmu_number_text(dissipated).text);
 		return false;
 	}
 	// The parameters that set the structure keep their packaged values, in a state as in a set

@@ -466,7 +466,8 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
     # docs/fmu.md: a serialised state "with values out of range is refused with fmi2Error and a
     # message naming which" - by fmi2DeSerializeFMUstate, before anything of it is used: a spring
     # neither broken nor whole (0.5), no internal step allowed, a negative largest step, a dissipated
-    # energy that is not a number (energy.dissipated would read NaN from then on), a simulation
+    # energy that is not a number, infinite or negative, however little (energy.dissipated would
+    # read it from then on; the FMU writes it >= 0, round-off included), a simulation
     # flagged where the FMU state has none or missing where it has one, a relative tolerance below
     # the machine epsilon and an absolute tolerance below the smallest one fmi2SetReal takes, an
     # unknown method, a non-finite held input. The states are those of an instance that has run (the
@@ -498,6 +499,10 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
                      "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
+                     "dissipated energy inf": edited(state, W_DISSIPATED, "<d", math.inf),
+                     "dissipated energy -inf": edited(state, W_DISSIPATED, "<d", -math.inf),
+                     "dissipated energy -1": edited(state, W_DISSIPATED, "<d", -1.0),
+                     "dissipated energy -1e-300": edited(state, W_DISSIPATED, "<d", -1e-300),
                      # positions and velocities without a simulation after initialisation, or a
                      # simulation before it: a state no instance is in
                      "has_sim flipped": edited(state, W_HAS_SIM, "<q", 1 - has_sim),
@@ -512,3 +517,21 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                     (what, b.messages[n:])
         assert b.get("tip.x", "tip.vx", "base.fx") == before
         run(b, 0.05, 5)
+
+
+def test_a_state_sets_the_dissipated_energy_it_carries(test_fmu):
+    # energy.dissipated reads the value a state carries once it is set, the bound 0 included, and
+    # grows from there (d = 0.3 N s/m damps the oscillation); the values refused are above. The
+    # message of a refused one names the field and the rule.
+    with state_and_receiver(test_fmu("driven_oscillator"), {"d": 0.3}) as (a, b, blob):
+        assert struct.unpack_from("<d", blob, 8 * W_DISSIPATED)[0] == a.get("energy.dissipated") > 0.0
+        for value in (0.0, 2.5):
+            b.slave.setFMUstate(b.slave.deSerializeFMUstate(edited(blob, W_DISSIPATED, "<d", value)))
+            assert b.get("energy.dissipated") == value
+            run(b, 0.1, 5, force=force)
+            assert b.get("energy.dissipated") > value
+        n = len(b.messages)
+        with pytest.raises(FMICallException):
+            b.slave.deSerializeFMUstate(edited(blob, W_DISSIPATED, "<d", -1e-300))
+        assert any("dissipated energy -1e-300 J is out of range: it must be finite and >= 0" in m[2]
+                   for m in b.messages[n:]), b.messages[n:]
