@@ -8,6 +8,7 @@
 // no operation overflows: a product of two values within 2^31 stays within 2^62.
 #include "index_expression.h"
 
+#include "model_file_text.h"
 #include "springmass/base.h"
 
 #include <math.h>
@@ -18,8 +19,15 @@
 #define VALUE_LIMIT ((int64_t)1 << 31)
 // Deepest nesting of parentheses and unary signs (the recursion's depth).
 #define MAX_DEPTH 32
-// Most bytes of a name shown in a message.
-#define NAME_SHOWN_BYTES 60
+// Most bytes of a name shown in a message, as the model file's other messages quote a name or
+// key (QUOTE_TEXT_BYTES, docs/model-format.md): longer ones are cut with "..." after the quote.
+// A name here is ASCII letters, digits and '_', so no character is escaped or cut in two.
+#define NAME_SHOWN_BYTES QUOTE_TEXT_BYTES
+// The longest message, on a name whose value is not a whole number, fits the caller's buffer.
+_Static_assert(sizeof "parameter ... = " - 1 + NAME_SHOWN_BYTES + SM_NUMBER_TEXT_CAPACITY - 1 +
+                       sizeof " is not a whole number within 2^31" <=
+                   INDEX_EXPRESSION_MESSAGE_CAPACITY,
+               "INDEX_EXPRESSION_MESSAGE_CAPACITY holds the message on a name cut at NAME_SHOWN_BYTES");
 
 typedef struct reader {
 	const char* at;

@@ -13,8 +13,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Most bytes of a message from index_expression_evaluate, NUL included.
-#define INDEX_EXPRESSION_MESSAGE_CAPACITY 160
+// Most bytes of a message from index_expression_evaluate, NUL included: room for a name shown
+// up to 80 bytes (QUOTE_TEXT_BYTES) and a number.
+#define INDEX_EXPRESSION_MESSAGE_CAPACITY 192
 
 // Looks name[0, length) up: true with its value, false for an unknown name.
 typedef bool (*index_expression_lookup_fn)(void* context, const char* name, size_t length, double* value);
