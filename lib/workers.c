@@ -21,6 +21,10 @@
 // it, and the caller's may change after that (its rounding mode, flushing of subnormals), or the
 // caller may be another thread: the caller stores its environment with each job and the helpers
 // take it before their chunks, so that a chunk gives the same bits on whichever thread runs it.
+// The exception flags their chunks raise (a division by zero, an overflow) are gathered in
+// `raised` and raised in the caller's thread when the job is done, as if it had run every chunk
+// itself: a caller that tests the flags after a simulation call sees the same with any number of
+// threads.
 #define _GNU_SOURCE  // sched_getaffinity, CPU_COUNT
 
 #include "workers.h"
@@ -58,6 +62,7 @@ struct sm_workers {
 	atomic_int done;               // chunks of the current job finished
 	atomic_int sleeping;
 	atomic_bool stop;  // read by helpers that may lag a job behind
+	atomic_int raised; // floating-point exception flags raised by helpers in the current job
 	sm_worker_job job;
 	void* context;
 	fenv_t environment;  // the caller's, for the job
@@ -93,6 +98,11 @@ static void claim_chunks(struct sm_workers* w, bool helper)
 		if (helper)
 			fesetenv(&w->environment);
 		w->job(w->context, (int)next);
+		if (helper) {
+			const int flags = fetestexcept(FE_ALL_EXCEPT);
+			if (flags != 0)
+				atomic_fetch_or_explicit(&w->raised, flags, memory_order_relaxed);
+		}
 		atomic_fetch_add_explicit(&w->done, 1, memory_order_release);
 		t = atomic_load(&w->ticket);
 	}
@@ -186,6 +196,7 @@ sm_workers* sm_workers_create(int threads)
 	atomic_init(&w->done, 0);
 	atomic_init(&w->sleeping, 0);
 	atomic_init(&w->stop, false);
+	atomic_init(&w->raised, 0);
 	// The helpers block every signal (a thread starts with its creator's mask), so that signals
 	// for the process go to the program's own threads, whose handlers expect them.
 	sigset_t all, old;
@@ -220,8 +231,14 @@ void sm_workers_run(sm_workers* w, sm_worker_job job, void* context, int chunks)
 	w->context = context;
 	fegetenv(&w->environment);
 	atomic_store_explicit(&w->done, 0, memory_order_relaxed);
+	atomic_store_explicit(&w->raised, 0, memory_order_relaxed);
 	publish(w, chunks);
 	claim_chunks(w, false);
 	for (int polls = 0; atomic_load_explicit(&w->done, memory_order_acquire) < chunks; polls++)
 		relax(polls);
+	// Every helper's flags were added before its chunk counted as done. Only those the caller
+	// has not raised yet (inexact results, the common case, are raised in every job).
+	const int raised = atomic_load_explicit(&w->raised, memory_order_relaxed) & ~fetestexcept(FE_ALL_EXCEPT);
+	if (raised != 0)
+		feraiseexcept(raised);
 }

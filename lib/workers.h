@@ -22,7 +22,9 @@ typedef void (*sm_worker_job)(void* context, int chunk);
 sm_workers* sm_workers_create(int threads);
 
 // Runs job(context, c) for c = 0 .. chunks - 1 and returns when all are done; with a NULL team,
-// or in a child process forked after the team started, on the caller's thread, in order.
+// or in a child process forked after the team started, on the caller's thread, in order. Every
+// chunk runs in the caller's floating-point environment, and the exception flags the helpers'
+// chunks raise are raised in the caller's thread before the return.
 void sm_workers_run(sm_workers* workers, sm_worker_job job, void* context, int chunks);
 
 // The processors this process may run on: its affinity mask (what taskset or a container's CPU

@@ -27,6 +27,8 @@
 #include "test_harness.h"
 #include "workers.h"
 
+#include <fenv.h>
+#include <float.h>
 #include <locale.h>
 #include <math.h>
 #include <pthread.h>
@@ -857,6 +859,45 @@ static int test_helpers_block_signals(void)
 	return 0;
 }
 
+// Floating-point exceptions raised in a helper's chunk reach the caller's flags, as they would
+// if the caller had run the chunk: chunk 0 divides by zero and waits for chunk 1, which
+// overflows, so that each of the two threads runs one chunk; both flags must be set afterwards.
+typedef struct raising_job {
+	waiting_job wait;
+	volatile double zero, huge;
+	double result[2];
+} raising_job;
+
+static void raising_chunk(void* context, int c)
+{
+	raising_job* j = context;
+	if (c == 0) {
+		j->result[0] = 1.0 / j->zero;
+		while (atomic_load(&j->wait.finished) < 1)
+			sched_yield();
+	} else {
+		j->result[1] = j->huge * 2.0;
+		atomic_fetch_add(&j->wait.finished, 1);
+	}
+}
+
+static int test_exceptions_raised_in_helpers_reach_the_caller(void)
+{
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	for (int k = 0; k < 20; k++) {
+		raising_job job = {.zero = 0.0, .huge = DBL_MAX};
+		atomic_init(&job.wait.finished, 0);
+		feclearexcept(FE_ALL_EXCEPT);
+		sm_workers_run(team, raising_chunk, &job, 2);
+		ENSURE(fetestexcept(FE_DIVBYZERO) && fetestexcept(FE_OVERFLOW));
+		ENSURE(isinf(job.result[0]) && isinf(job.result[1]));
+	}
+	feclearexcept(FE_ALL_EXCEPT);
+	sm_workers_destroy(team);
+	return 0;
+}
+
 // The program's locale is process-wide state the library must not depend on: saving in a thread
 // whose locale has a decimal comma gives the same text (it was "9,81" for 9.81, not JSON), and
 // leaves that thread's locale as it was. Skipped where no such locale is installed.
@@ -916,6 +957,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mixed);
 	RUN_TEST(test_team_in_a_forked_child);
 	RUN_TEST(test_chunks_are_claimed_by_free_threads);
+	RUN_TEST(test_exceptions_raised_in_helpers_reach_the_caller);
 	RUN_TEST(test_helpers_block_signals);
 	RUN_TEST(test_save_in_a_decimal_comma_locale);
 	free_inputs();
