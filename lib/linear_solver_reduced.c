@@ -55,6 +55,7 @@
 // The symbolic analysis (fill-reducing ordering) is computed once.
 #define _POSIX_C_SOURCE 200809L
 
+#include "coarse_halves.h"
 #include "model_internal.h"
 #include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
@@ -194,6 +195,11 @@ typedef struct reduced {
 	cholmod_factor* coarse_factor;
 	cholmod_dense *coarse_b, *coarse_x, *coarse_y, *coarse_e;
 	sm_multilevel* multilevel; // replaces coarse_factor from MULTILEVEL_MIN_PARTICLES on
+	// Chunked models with coarse_factor: the coarse unknowns in two halves and a separator
+	// (coarse_part, per unknown: 0, 1, 2), the factor's solves in two at once (coarse_halves.h).
+	int8_t* coarse_part;
+	sm_coarse_halves* coarse_halves;
+	double* coarse_solution;
 	// Parallel loops (pcg): the particles in contiguous ranges chunk_particle[c] ..
 	// chunk_particle[c + 1]; the springs in chunk order: each chunk's springs with both ends in
 	// its range (positions chunk_spring[c] .. chunk_spring[c + 1]), then the springs between
@@ -445,7 +451,9 @@ static bool refresh_coarse(reduced* r, double gamma)
 	if (r->multilevel != NULL) {
 		ok = sm_multilevel_refresh(r->multilevel, coarse, &r->common);
 	} else {
-		if (r->coarse_factor == NULL)
+		if (r->coarse_factor == NULL && r->coarse_part != NULL)
+			r->coarse_halves = sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
+		else if (r->coarse_factor == NULL)
 			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
 		ok = r->coarse_factor != NULL && cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) &&
 		     r->common.status == CHOLMOD_OK;
@@ -909,6 +917,9 @@ static bool apply_preconditioner(reduced* r, const double* in, double* out, doub
 			job.yc = sm_multilevel_solve(r->multilevel, r->coarse_b->x, COARSE_ITERATIONS, r->workers, &r->common);
 			if (job.yc == NULL)
 				return false;
+		} else if (r->coarse_halves != NULL) {
+			sm_coarse_halves_solve(r->coarse_halves, r->coarse_factor, r->coarse_b->x, r->coarse_solution, r->workers);
+			job.yc = r->coarse_solution;
 		} else {
 			if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL, &r->coarse_y,
 			                      &r->coarse_e, &r->common))
@@ -1342,6 +1353,9 @@ static void reduced_content_free(reduced* r)
 		cholmod_l_free_dense(&r->e_work, &r->common);
 		cholmod_l_finish(&r->common);
 	}
+	sm_coarse_halves_destroy(r->coarse_halves);
+	free(r->coarse_part);
+	free(r->coarse_solution);
 	sm_workers_destroy(r->workers);
 	free(r->slot);
 	free(r->ordered_a);
@@ -1473,6 +1487,34 @@ static bool build_chunks(reduced* r)
 	return true;
 }
 
+// For the exact coarse solve of a chunked model: the aggregates in two halves, those whose first
+// member lies in the first two chunks and the others, and a separator, the aggregates of the
+// second half that neighbour the first (so that no coarse entry joins the two halves left). The
+// coarse factor's triangular solves then run in two at once (coarse_halves.h). Returns false on
+// out of memory.
+static bool split_coarse(reduced* r)
+{
+	const int32_t count = r->aggregate_count;
+	r->coarse_part = malloc(3 * ((size_t)count + 1) * sizeof(int8_t));
+	r->coarse_solution = malloc(3 * ((size_t)count + 1) * sizeof(double));
+	if (r->coarse_part == NULL || r->coarse_solution == NULL)
+		return false;
+	for (int32_t I = 0; I < count; I++)
+		r->coarse_part[3 * (size_t)I] = r->member[r->member_first[I]] < r->chunk_particle[2] ? 0 : 1;
+	for (int32_t I = 0; I < count; I++) {
+		if (r->coarse_part[3 * (size_t)I] != 1)
+			continue;
+		for (int64_t k = r->coarse_first[I]; k < r->coarse_first[I + 1]; k++)
+			if (r->coarse_part[3 * (size_t)r->coarse_neighbour[k]] == 0) {
+				r->coarse_part[3 * (size_t)I] = 2;
+				break;
+			}
+	}
+	for (int32_t I = 0; I < count; I++)
+		r->coarse_part[3 * (size_t)I + 1] = r->coarse_part[3 * (size_t)I + 2] = r->coarse_part[3 * (size_t)I];
+	return true;
+}
+
 // The solver's content for the simulation's current model, or NULL when out of memory.
 static reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 {
@@ -1546,7 +1588,7 @@ static reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 		reduced_content_free(r);
 		return NULL;
 	}
-	if (!build_chunks(r)) {
+	if (!build_chunks(r) || (r->two_level && !multilevel && r->chunks > 1 && !split_coarse(r))) {
 		reduced_content_free(r);
 		return NULL;
 	}

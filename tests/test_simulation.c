@@ -6,6 +6,7 @@
 #include "springmass/structures.h"
 #include "physics_fixtures.h"
 #include "simulation_fixtures.h"
+#include "coarse_halves.h"
 #include "model_internal.h"
 #include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
@@ -2530,6 +2531,102 @@ static int test_threads_give_the_same_bits(void)
 	return 0;
 }
 
+// The coarse factor split into two halves and a separator (coarse_halves.h), on the grid matrix
+// of test_multilevel_cycle_on_a_grid (24 x 24 blocks; the rows above the middle one a half, those
+// below the other, the middle row the separator):
+// - no column of L in one half has a row in the other, and each half has supernodes of its own
+//   (else nothing would run at once);
+// - the solve is that of CHOLMOD's own factorisation: both are backward stable, so they agree to
+//   about the condition number (below 1e5 here: the mass term is 1e-6 of the springs' sum over a
+//   row, the grid 24 wide) times the unit round-off, 2e-11; 1e-9 allowed (measured 6e-15), and
+//   the residual is at round-off, 1e-12 of |A| |x| allowed (measured 2e-16);
+// - a team of 2 gives the same bits as the caller alone.
+static int test_coarse_halves_solve(void)
+{
+	enum { side = 24, count = side * side };
+	const size_t n = 3 * (size_t)count;
+	int64_t* first = malloc((count + 1) * sizeof(int64_t));
+	int32_t* neighbour = malloc(5 * count * sizeof(int32_t));
+	int8_t* part = malloc(n);
+	double *b = malloc(n * sizeof(double)), *x = malloc(n * sizeof(double)), *again = malloc(n * sizeof(double));
+	double* work = malloc(n * sizeof(double));
+	ENSURE(first && neighbour && part && b && x && again && work);
+	rng r = {91};
+	double* values = grid_blocks(side, first, neighbour, &r);
+	ENSURE(values != NULL);
+	for (size_t i = 0; i < n; i++) {
+		b[i] = rng_uniform(&r, -1, 1);
+		const int32_t row = (int32_t)(i / 3) / side;
+		part[i] = row < side / 2 ? 0 : row == side / 2 ? 2 : 1;
+	}
+	cholmod_common common;
+	cholmod_l_start(&common);
+	const size_t nonzeros = 9 * (size_t)first[count];
+	cholmod_sparse* A = cholmod_l_allocate_sparse(n, n, nonzeros, 1, 1, 1, CHOLMOD_REAL, &common);
+	ENSURE(A != NULL);
+	sm_block_pattern_fill(count, first, neighbour, A->p, A->i);
+	memcpy(A->x, values, nonzeros * sizeof(double));
+	cholmod_factor* L = NULL;
+	sm_coarse_halves* halves = sm_coarse_halves_create(A, part, &L, &common);
+	ENSURE(halves != NULL && L != NULL);
+	ENSURE(cholmod_l_factorize(A, L, &common) && common.status == CHOLMOD_OK && L->is_super);
+	const SuiteSparse_long* perm = L->Perm;
+	const SuiteSparse_long* super = L->super;
+	const SuiteSparse_long* pi = L->pi;
+	const SuiteSparse_long* rows = L->s;
+	int pure[2] = {0, 0};
+	for (size_t s = 0; s < L->nsuper; s++) {
+		const int8_t p = part[perm[super[s]]];
+		bool one_half = p != 2;
+		for (SuiteSparse_long k = super[s]; k < super[s + 1]; k++)
+			one_half = one_half && part[perm[k]] == p;
+		for (SuiteSparse_long e = pi[s]; e < pi[s + 1] && p != 2; e++)
+			ENSURE(part[perm[rows[e]]] != 1 - p);
+		if (one_half)
+			pure[p]++;
+	}
+	ENSURE(pure[0] > 0 && pure[1] > 0);
+	sm_coarse_halves_solve(halves, L, b, x, NULL);
+	cholmod_factor* plain = cholmod_l_analyze(A, &common);
+	ENSURE(plain != NULL && cholmod_l_factorize(A, plain, &common) && common.status == CHOLMOD_OK);
+	cholmod_dense* bd = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &common);
+	ENSURE(bd != NULL);
+	memcpy(bd->x, b, n * sizeof(double));
+	cholmod_dense* reference = cholmod_l_solve(CHOLMOD_A, plain, bd, &common);
+	ENSURE(reference != NULL);
+	const double* xr = reference->x;
+	double difference = 0.0, size = 0.0, magnitude = 0.0;
+	for (size_t i = 0; i < n; i++) {
+		difference = fmax(difference, fabs(x[i] - xr[i]));
+		size = fmax(size, fabs(xr[i]));
+	}
+	ENSURE(difference <= 1e-9 * size);
+	grid_matrix_apply(count, first, neighbour, values, x, work);
+	for (size_t i = 0; i < n; i++) {
+		double row_size = 0.0;
+		for (int32_t k = 0; k < (int32_t)(first[i / 3 + 1] - first[i / 3]); k++)
+			for (int j = 0; j < 3; j++)
+				row_size += fabs(values[sm_block_entry(first, (int32_t)(i / 3), k, (int)(i % 3), j)]) *
+				            fabs(x[3 * neighbour[first[i / 3] + k] + j]);
+		magnitude = fmax(magnitude, fabs(b[i] - work[i]) / row_size);
+	}
+	ENSURE(magnitude <= 1e-12);
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	sm_coarse_halves_solve(halves, L, b, again, team);
+	ENSURE(memcmp(again, x, n * sizeof(double)) == 0);
+	sm_workers_destroy(team);
+	cholmod_l_free_dense(&reference, &common);
+	cholmod_l_free_dense(&bd, &common);
+	cholmod_l_free_factor(&plain, &common);
+	cholmod_l_free_factor(&L, &common);
+	cholmod_l_free_sparse(&A, &common);
+	sm_coarse_halves_destroy(halves);
+	cholmod_l_finish(&common);
+	free(values), free(first), free(neighbour), free(part), free(b), free(x), free(again), free(work);
+	return 0;
+}
+
 // Springs broken by the caller in a cloth large enough for the pcg solver's chunks (in the build
 // with lowered thresholds; one chunk otherwise): every spring of a fixed corner, which carries
 // half the cloth's weight, is cut at 0.05 s, and the cloth swings down from its other corner.
@@ -4516,6 +4613,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_multilevel_cycle_on_a_grid);
 	RUN_TEST(test_multilevel_solve_same_bits_on_threads);
 	RUN_TEST(test_energy_balance_across_cuts_in_a_large_cloth);
+	RUN_TEST(test_coarse_halves_solve);
 	RUN_TEST(test_workers_take_the_callers_floating_point_environment);
 	RUN_TEST(test_multilevel_solve_is_preconditioned_conjugate_gradients);
 	RUN_TEST(test_invert3_across_the_exponent_range);
