@@ -1018,6 +1018,12 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	const double dt = t_end - sim->time;
 	if (dt <= 0.0)
 		return SM_OK;
+	// A restart is due: the springs' constants may have changed since CVODE's last step (a break,
+	// a restore, a model update), and the reduced solver's right-hand side evaluates its copies of
+	// them, which it takes afresh at an invalidation. The restart would make one; this step comes
+	// before it.
+	if (sim->need_restart && has_reduced_solver(sim))
+		sm_reduced_solver_invalidate(sim->linear_solver, false);
 	if (rhs(sim->time, sim->y, sim->y_saved, sim) != 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);

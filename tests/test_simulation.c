@@ -2838,6 +2838,91 @@ static sm_model* random_calls_model(int32_t n, double stiffer, int32_t* driven)
 	return model;
 }
 
+// An advance shorter than the time resolution is one explicit Euler step, taken before CVODE
+// restarts: after a change of the springs' constants (springs cut by the caller, a restore that
+// mends them, a model update) it must evaluate the springs as they are now. A cloth large enough
+// for the pcg solver's chunks (12 x 12 in the build with lowered thresholds, where it is also
+// multilevel; 64 x 64, 4094 free particles, in chunks without it, otherwise) at t = 1e9 s, where
+// the resolution allows a step of 5e-7 s, springs stretched and moving: after each change, against
+// a simulation created with the changed constants and given the same state, the same positions,
+// velocities and forces bit for bit. With the chunk-ordered copies of the constants refreshed only
+// at CVODE's restart, the step still pulled with the cut springs, left the mended ones out and
+// kept the old stiffnesses.
+static int test_short_step_after_a_change_of_springs(void)
+{
+#if defined(PARALLEL_MIN_PARTICLES) && PARALLEL_MIN_PARTICLES <= 142
+	const int32_t side = 12;
+#else
+	const int32_t side = 64;
+#endif
+	const double t = 1e9, dt = 5e-7;
+	int32_t driven = -1;
+	sm_model* model = random_calls_model(side, 1.0, &driven);
+	sm_model* stiffer = random_calls_model(side, 1.5, &driven);
+	sm_model* cut = sm_model_clone(model);
+	ENSURE(model != NULL && stiffer != NULL && cut != NULL);
+	const int32_t count = sm_model_spring_count(model);
+	const int32_t springs[] = {0, 7, 40, count / 3, count / 2, count - 1};
+	for (size_t k = 0; k < sizeof springs / sizeof springs[0]; k++)
+		ENSURE_STATUS(sm_model_set_spring_enabled(cut, springs[k], false), SM_OK);
+	const int32_t n3 = 3 * sm_model_particle_count(model);
+	double* x = malloc(4 * (size_t)n3 * sizeof(double));
+	ENSURE(x != NULL);
+	double *v = x + n3, *fa = v + n3, *fb = fa + n3;
+	rng r = {4711};
+	for (int32_t i = 0; i < n3 / 3; i++) {
+		sm_particle_def p;
+		ENSURE_STATUS(sm_model_get_particle(model, i, &p), SM_OK);
+		for (int c = 0; c < 3; c++) {
+			x[3 * i + c] = p.position[c] + rng_uniform(&r, -2e-3, 2e-3);
+			v[3 * i + c] = rng_uniform(&r, -0.1, 0.1);
+		}
+	}
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = SM_SOLVER_REDUCED_PCG;
+	d.threads = 2;
+	for (int change = 0; change < 3; change++) {
+		// 0: springs cut by the caller; 1: a restore that mends them; 2: a model update.
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		const sm_model* changed = change == 0 ? cut : change == 1 ? model : stiffer;
+		sm_simulation* reference = sm_simulation_create(changed, &d, NULL);
+		ENSURE(sim != NULL && reference != NULL);
+		ENSURE_STATUS(sm_simulation_set_state(sim, t, x, v), SM_OK);
+		sm_simulation_state* saved = change == 1 ? sm_simulation_save_state(sim) : NULL;
+		ENSURE(change != 1 || saved != NULL);
+		if (change < 2)
+			for (size_t k = 0; k < sizeof springs / sizeof springs[0]; k++)
+				ENSURE_STATUS(sm_simulation_break_spring(sim, springs[k]), SM_OK);
+		if (change == 1) {
+			ENSURE_STATUS(sm_simulation_advance(sim, t + 1e-4), SM_OK);  // CVODE restarted with the cuts
+			ENSURE_STATUS(sm_simulation_restore_state(sim, saved), SM_OK);
+		}
+		if (change == 2)
+			ENSURE_STATUS(sm_simulation_update_model(sim, stiffer), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_state(reference, t, x, v), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, t + dt), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(reference, t + dt), SM_OK);
+		ENSURE(sm_simulation_time(sim) == t + dt && sm_simulation_time(reference) == t + dt);
+		const double* vs = sm_simulation_velocities(sim);
+		const double* vr = sm_simulation_velocities(reference);
+		ENSURE_NEAR(max_difference(vs, vr, n3), 0.0, 0.0);
+		ENSURE(memcmp(vs, vr, (size_t)n3 * sizeof(double)) == 0);
+		ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(reference),
+		              (size_t)n3 * sizeof(double)) == 0);
+		sm_simulation_forces(sim, fa);
+		sm_simulation_forces(reference, fb);
+		ENSURE(memcmp(fa, fb, (size_t)n3 * sizeof(double)) == 0);
+		sm_simulation_state_destroy(saved);
+		sm_simulation_destroy(sim);
+		sm_simulation_destroy(reference);
+	}
+	free(x);
+	sm_model_destroy(cut);
+	sm_model_destroy(stiffer);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Whether two simulations are in the same state, bit for bit: time, positions, velocities,
 // forces, dissipated energy, breaks and, if `counters`, the solver's counters (not its timings).
 static bool same_state_of(const sm_simulation* a, const sm_simulation* b, int32_t n3, double* fa, double* fb,
@@ -4614,6 +4699,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_multilevel_solve_same_bits_on_threads);
 	RUN_TEST(test_energy_balance_across_cuts_in_a_large_cloth);
 	RUN_TEST(test_coarse_halves_solve);
+	RUN_TEST(test_short_step_after_a_change_of_springs);
 	RUN_TEST(test_workers_take_the_callers_floating_point_environment);
 	RUN_TEST(test_multilevel_solve_is_preconditioned_conjugate_gradients);
 	RUN_TEST(test_invert3_across_the_exponent_range);
