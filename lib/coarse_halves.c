@@ -6,8 +6,9 @@
 // of a dense block of the rows below. A supernode whose columns all lie in one half is solved on
 // that half's thread; the others (the separator's, and any that mix a half's columns with the
 // separator's) on the caller's, after the halves in the forward solve and before them in the
-// backward one. Any topological order of the elimination tree gives the same factorisation, so
-// CHOLMOD's postordering of the constrained ordering changes nothing here.
+// backward one. CHOLMOD postorders the elimination tree after the constrained ordering, which
+// may interleave the two halves' columns, but no column gains a row of the other half (fill joins
+// only unknowns already joined through eliminated ones), and that is all the split needs.
 #include "coarse_halves.h"
 
 #include <stdlib.h>
