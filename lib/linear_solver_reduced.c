@@ -36,9 +36,10 @@
 // - (pcg) the inverses of A's 3x3 diagonal blocks (block Jacobi), from TWO_LEVEL_MIN_PARTICLES
 //   free particles on plus a coarse correction: the free particles are grouped into aggregates
 //   (a particle and its spring neighbours), the Galerkin coarse matrix P^T A P (P moves each
-//   aggregate as one body) is summed from the springs' blocks at the solve's gamma, in the same
-//   pass as the diagonal blocks, and factorised by CHOLMOD (it is small: about a tenth of the
-//   unknowns on the cloth), and the preconditioner is block Jacobi
+//   aggregate as one body) is summed from the springs' blocks at the solve's gamma (the scaled
+//   records the diagonal blocks' pass writes), and factorised by CHOLMOD (it is small: about a tenth of the
+//   unknowns on the cloth; for a model in chunks ordered in two halves whose triangular solves
+//   run at once, coarse_halves.h), and the preconditioner is block Jacobi
 //   plus P A_c^-1 P^T (additive, so symmetric positive definite). Block Jacobi alone smooths
 //   the short waves; the coarse correction takes the long ones, whose slow convergence made the
 //   iterations grow with the model's size. From MULTILEVEL_MIN_PARTICLES on, A_c^-1 is
