@@ -452,6 +452,7 @@ static bool refresh_coarse(reduced* r, double gamma)
 	if (r->multilevel != NULL) {
 		ok = sm_multilevel_refresh(r->multilevel, coarse, &r->common);
 	} else {
+		// The symbolic analysis, once: in halves for a model in chunks (split_coarse).
 		if (r->coarse_factor == NULL && r->coarse_part != NULL)
 			r->coarse_halves = sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
 		else if (r->coarse_factor == NULL)
