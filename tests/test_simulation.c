@@ -7,13 +7,12 @@
 #include "physics_fixtures.h"
 #include "simulation_fixtures.h"
 #include "coarse_halves.h"
+#include "gsl_reference.h"
 #include "model_internal.h"
 #include "preconditioner_multilevel.h"
 #include "simulation_internal.h"
 #include "test_harness.h"
 
-#include <gsl/gsl_errno.h>
-#include <gsl/gsl_odeiv2.h>
 
 #include <fenv.h>
 #include <stdlib.h>
@@ -94,83 +93,19 @@ static sm_simulation_def tight_def(sm_linear_solver solver)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Independent reference: GSL's explicit Runge-Kutta-Prince-Dormand (8, 9) over the same forces
+// Independent reference: GSL's explicit rk8pd over the same forces (gsl_reference.h)
 // ---------------------------------------------------------------------------------------------
-
-typedef struct gsl_system {
-	const sm_model* model;
-	int32_t n;
-	int32_t nf;
-	int32_t* free_particles;
-	double *x, *v, *f;
-	double* mass;
-} gsl_system;
-
-static int gsl_rhs(double t, const double y[], double dydt[], void* params)
-{
-	(void)t;
-	gsl_system* s = params;
-	const size_t nd = 3 * (size_t)s->nf;
-	for (int32_t k = 0; k < s->nf; k++)
-		for (int c = 0; c < 3; c++) {
-			s->x[3 * s->free_particles[k] + c] = y[3 * k + c];
-			s->v[3 * s->free_particles[k] + c] = y[nd + 3 * k + c];
-		}
-	sm_model_forces(s->model, s->x, s->v, NULL, s->f);
-	for (int32_t k = 0; k < s->nf; k++)
-		for (int c = 0; c < 3; c++) {
-			dydt[3 * k + c] = y[nd + 3 * k + c];
-			dydt[nd + 3 * k + c] = s->f[3 * s->free_particles[k] + c] / s->mass[k];
-		}
-	return GSL_SUCCESS;
-}
 
 // Integrates the model (fixed particles at rest, no driven ones) from its initial state to
 // t_end [s] at relative and absolute tolerance eps; writes all positions to x_out (3n).
-static int gsl_reference(const sm_model* model, double t_end, double eps, double* x_out)
+static int gsl_positions(const sm_model* model, double t_end, double eps, double* x_out)
 {
-	gsl_system s;
-	s.model = model;
-	s.n = sm_model_particle_count(model);
-	s.nf = sm_model_free_count(model);
-	s.free_particles = malloc(sizeof(int32_t) * (size_t)s.nf);
-	s.mass = malloc(sizeof(double) * (size_t)s.nf);
-	s.x = malloc(sizeof(double) * 3 * (size_t)s.n);
-	s.v = malloc(sizeof(double) * 3 * (size_t)s.n);
-	s.f = malloc(sizeof(double) * 3 * (size_t)s.n);
-	double* y = malloc(sizeof(double) * 6 * (size_t)s.nf);
-	sm_model_initial_state(model, s.x, s.v);
-	for (int32_t i = 0, k = 0; i < s.n; i++) {
-		if (sm_model_free_index(model, i) < 0) {
-			s.v[3 * i] = s.v[3 * i + 1] = s.v[3 * i + 2] = 0.0;
-			continue;
-		}
-		sm_particle_def p;
-		sm_model_get_particle(model, i, &p);
-		s.free_particles[k] = i;
-		s.mass[k] = p.mass;
-		for (int c = 0; c < 3; c++) {
-			y[3 * k + c] = s.x[3 * i + c];
-			y[3 * (size_t)s.nf + 3 * k + c] = s.v[3 * i + c];
-		}
-		k++;
-	}
-	gsl_odeiv2_system sys = {gsl_rhs, NULL, 6 * (size_t)s.nf, &s};
-	gsl_odeiv2_driver* d = gsl_odeiv2_driver_alloc_y_new(&sys, gsl_odeiv2_step_rk8pd, 1e-6, eps, eps);
-	double t = 0.0;
-	int status = gsl_odeiv2_driver_apply(d, &t, t_end, y);
-	gsl_odeiv2_driver_free(d);
-	double* dydt = malloc(sizeof(double) * 6 * (size_t)s.nf);
-	gsl_rhs(t, y, dydt, &s);  // unpacks y into s.x
-	free(dydt);
-	for (int32_t i = 0; i < 3 * s.n; i++)
-		x_out[i] = s.x[i];
-	free(y);
-	free(s.free_particles);
-	free(s.mass);
-	free(s.x);
-	free(s.v);
-	free(s.f);
+	gsl_reference g;
+	if (!gsl_reference_init(&g, model, eps))
+		return GSL_ENOMEM;
+	const int status = gsl_reference_advance(&g, t_end);
+	memcpy(x_out, g.x, sizeof(double) * 3 * (size_t)sm_model_particle_count(model));
+	gsl_reference_free(&g);
 	return status;
 }
 
@@ -382,7 +317,7 @@ static int check_against_gsl(sm_model* model, double t_end, double bound)
 	ENSURE(model != NULL);
 	const int32_t n = sm_model_particle_count(model);
 	double* reference = malloc(sizeof(double) * 3 * (size_t)n);
-	ENSURE_STATUS(gsl_reference(model, t_end, 1e-12, reference), GSL_SUCCESS);
+	ENSURE_STATUS(gsl_positions(model, t_end, 1e-12, reference), GSL_SUCCESS);
 	for (sm_linear_solver s = SM_SOLVER_DENSE; s < SM_SOLVER_COUNT; s++) {
 		sm_simulation_def d = tight_def(s);
 		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
@@ -426,7 +361,7 @@ static int test_large_cloth_reduced_solvers_against_gsl(void)
 	ENSURE(model != NULL);
 	const int32_t n = sm_model_particle_count(model);
 	double* reference = malloc(sizeof(double) * 3 * (size_t)n);
-	ENSURE_STATUS(gsl_reference(model, 0.02, 1e-11, reference), GSL_SUCCESS);
+	ENSURE_STATUS(gsl_positions(model, 0.02, 1e-11, reference), GSL_SUCCESS);
 	const sm_linear_solver solvers[] = {SM_SOLVER_REDUCED_PCG, SM_SOLVER_REDUCED_CHOLMOD};
 	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
 		sm_simulation_def d = sm_default_simulation_def();
@@ -460,7 +395,7 @@ static int test_benchmark_cloth_every_solver(void)
 	double* reference = malloc(sizeof(double) * 3 * (size_t)n);
 	// Tight reference from the explicit integrator (independent of CVODE); at tolerance 1e-8
 	// its own error is ~1e-7 m, negligible against the 1e-3 m bound.
-	ENSURE_STATUS(gsl_reference(model, 1.0, 1e-8, reference), GSL_SUCCESS);
+	ENSURE_STATUS(gsl_positions(model, 1.0, 1e-8, reference), GSL_SUCCESS);
 	double corners[SM_SOLVER_COUNT][3];
 	for (sm_linear_solver s = SM_SOLVER_DENSE; s < SM_SOLVER_COUNT; s++) {
 		sm_simulation_def d = sm_default_simulation_def();
@@ -3658,7 +3593,7 @@ static int test_auto_solver_choice_and_adams_above_it(void)
 	sm_model* model = horizontal_chain(9, 0.1, 0.2, 20.0);
 	ENSURE(model != NULL);
 	double reference[30];
-	ENSURE_STATUS(gsl_reference(model, 0.5, 1e-12, reference), GSL_SUCCESS);
+	ENSURE_STATUS(gsl_positions(model, 0.5, 1e-12, reference), GSL_SUCCESS);
 	sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	d.method = SM_METHOD_ADAMS;
 	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
