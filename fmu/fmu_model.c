@@ -837,12 +837,15 @@ static void c_numbers_end(c_numbers* n)
 	freelocale(n->c);
 }
 
-// A line of the file for a message: printable ASCII as it is with '"' and '\' escaped, any other
-// byte as \xNN, cut after 60 bytes with "...".
+// A line of the file for a message: printable ASCII as it is with '"' and '\\' escaped, any other
+// byte as \xNN, cut after QUOTED_LINE_BYTES bytes with "..." (as the model file's messages cut
+// their quotes). Each byte takes up to 4 characters, then "..." and the terminating null.
+enum { QUOTED_LINE_BYTES = 80, QUOTED_LINE_CAPACITY = 4 * QUOTED_LINE_BYTES + 5 };
+
 static void quote_line(const char* line, size_t length, char* out, size_t size)
 {
 	size_t k = 0;
-	for (size_t i = 0; i < length && i < 60 && k + 5 < size; ++i) {
+	for (size_t i = 0; i < length && i < QUOTED_LINE_BYTES && k + 5 < size; ++i) {
 		const unsigned char c = (unsigned char)line[i];
 		if (c == '"' || c == '\\')
 			k += (size_t)snprintf(out + k, size - k, "\\%c", c);
@@ -851,7 +854,7 @@ static void quote_line(const char* line, size_t length, char* out, size_t size)
 		else
 			k += (size_t)snprintf(out + k, size - k, "\\x%02x", c);
 	}
-	if (length > 60 && k + 4 < size) {
+	if (length > QUOTED_LINE_BYTES && k + 4 < size) {
 		memcpy(out + k, "...", 3);
 		k += 3;
 	}
@@ -986,7 +989,7 @@ static sm_status line_error(sm_error* err, sm_status status, const char* source_
 static sm_status apply_line(sm_document* doc, const char* line, size_t line_length, size_t number,
                             size_t* first_line, const char* source_name, sm_error* err)
 {
-	char quoted[300];
+	char quoted[QUOTED_LINE_CAPACITY];
 	quote_line(line, line_length, quoted, sizeof quoted);
 	const char* eq = memchr(line, '=', line_length);
 	char name[256], value_text[128];

@@ -332,6 +332,8 @@ static int test_parameter_values(void)
 static int test_parameter_values_refused(void)
 {
 #define TEXT(literal) literal, sizeof literal - 1
+#define BYTES_FF_10 "\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+#define QUOTED_FF_13 "\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff"
 	static const struct {
 		const char* text;
 		size_t length;
@@ -353,12 +355,23 @@ static int test_parameter_values_refused(void)
 	    {TEXT("k=" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111"
 	          "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "\n"),
 	     "the value is longer than 127 bytes"},
+	    // Quoted lines are cut after 80 bytes, as the model file's messages cut their quotes.
+	    {TEXT("k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa\n"),
+	     "parameters.txt:1: \""
+	     "k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa..."
+	     "\": the value is not a finite number"},
+	    {TEXT("k=" BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10
+	              BYTES_FF_10 "\xff\xff\xff\xff\xff\xff\xff\xff\n"),
+	     "\"k=" QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13
+	     "...\": the value is not a finite number"},
 	    {TEXT("zz=1\n"), "parameters.txt:1: \"zz=1\": the model has no parameter named \"zz\""},
 	    {TEXT("k=60\nm=1\nk=70"), "parameters.txt:3: parameter k is set again (first on line 1)"},
 	    {TEXT("d=1\nm=-1\n"),
 	     "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
 	};
 #undef TEXT
+#undef BYTES_FF_10
+#undef QUOTED_FF_13
 	fixture f;
 	ENSURE(setup(&f) == 0);
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
