@@ -160,6 +160,7 @@ typedef struct modes_problem {
 	size_t dof;
 	size_t kept;
 	double stiffness_norm;      // ||K||: largest absolute row sum [N/m]
+	double next_omega_squared;  // of the lowest mode not kept; NAN if unknown [1/s^2]
 } modes_problem;
 
 // Writes the free-dof vector y (scaled by scale[r], or 1 if scale is NULL) as a shape over all
@@ -272,6 +273,7 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 		scatter_shape(p, evec + m, dof, scale, modes->shapes + m * n3);
 		modes->omega_squared[m] = eval[m];
 	}
+	p->next_omega_squared = p->kept < dof ? eval[p->kept] : NAN;
 done:
 	symmv_workspace_destroy(ws);
 	free(K);
@@ -719,7 +721,9 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 {
 	const size_t dof = p->dof;
-	const size_t want = p->kept;
+	// One mode more than kept where the Krylov space has room for it, to tell whether the kept
+	// modes end inside a group of repeated frequencies.
+	const size_t want = p->kept + 1 <= (dof - SM_MODES_SPARSE_MARGIN) / 4 ? p->kept + 1 : p->kept;
 	lanczos_work w;
 	memset(&w, 0, sizeof w);
 	w.dof = dof;
@@ -819,12 +823,14 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	if (st != SM_OK)
 		goto done;
 	const size_t n3 = 3 * (size_t)p->particle_count;
-	for (size_t j = 0; j < want; j++) {
+	for (size_t j = 0; j < p->kept; j++) {
 		scatter_shape(p, pairs.fresh + j * dof, 1, NULL, modes->shapes + j * n3);
 		modes->omega_squared[j] = pairs.nu[j];
 	}
-	classify(modes->omega_squared, want, p->def->zero_tolerance * gershgorin, modes);
-	modes->omega_max = sqrt(fmax(gershgorin, modes->omega_squared[want - 1]));
+	const double zero_level = p->def->zero_tolerance * gershgorin;
+	classify(modes->omega_squared, p->kept, zero_level, modes);
+	p->next_omega_squared = want > p->kept ? (fabs(pairs.nu[p->kept]) <= zero_level ? 0.0 : pairs.nu[p->kept]) : NAN;
+	modes->omega_max = sqrt(fmax(gershgorin, pairs.nu[want - 1]));
 	modes->shift = w.shift;
 
 done:
@@ -1159,6 +1165,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	if (modes == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: result pointer must not be NULL");
 	memset(modes, 0, sizeof *modes);
+	modes->next_omega_squared = NAN;
 	if (model == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: model must not be NULL");
 	const sm_modes_def d = def != NULL ? *def : sm_default_modes_def();
@@ -1257,6 +1264,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 
 	modes_problem p;
 	memset(&p, 0, sizeof p);
+	p.next_omega_squared = NAN;
 	p.model = model;
 	p.def = &d;
 	p.x0 = x0;
@@ -1287,6 +1295,11 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		goto done;
 	modes->count = (int32_t)kept;
 	st = finish_modes(&p, modes, err);
+	modes->next_omega_squared = p.next_omega_squared;
+	if (kept > 0 && !isnan(p.next_omega_squared)) {
+		const double w2[2] = {modes->omega_squared[kept - 1], p.next_omega_squared};
+		modes->group_cut = group_end(w2, 2, 0, repeated_level(modes, kept)) == 2;
+	}
 	if (st == SM_OK && solver == SM_MODES_SPARSE && !(modes->residual <= d.residual_tolerance))
 		st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
 		                  "modes: the Lanczos modes miss the residual test: %.3g > residual_tolerance %.3g",

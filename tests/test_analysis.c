@@ -787,6 +787,17 @@ static int compare_sparse_to_dense(const sm_model* model, const double* x, int32
 	return 0;
 }
 
+// Adds the sheet and holds every particle of its edges.
+static sm_status add_held_sheet(sm_model* model, const sm_sheet_def* sd, sm_structure* sheet)
+{
+	sm_status st = sm_add_sheet(model, sd, sheet);
+	for (int32_t i = 0; i < sd->nv && st == SM_OK; i++)
+		for (int32_t j = 0; j < sd->nu && st == SM_OK; j++)
+			if (i == 0 || j == 0 || i == sd->nv - 1 || j == sd->nu - 1)
+				st = sm_set_motion_at(model, sheet, i, j, 0, SM_PARTICLE_FIXED);
+	return st;
+}
+
 // A 9 x 7 cloth with its boundary held, stretched unevenly (a membrane under tension, no
 // symmetry left) and a free block of 4 x 3 x 3 particles (six rigid-body modes, then elastic
 // ones): the lowest ten modes by Lanczos equal the dense ones.
@@ -800,11 +811,7 @@ static int test_sparse_modes_match_dense(void)
 	sd.nv = 7;
 	sd.shear.damping = 0.0;  // structural and bend springs damped, shear not: damping not proportional
 	sm_structure cloth;
-	ENSURE_STATUS(sm_add_sheet(model, &sd, &cloth), SM_OK);
-	for (int32_t i = 0; i < sd.nv; i++)
-		for (int32_t j = 0; j < sd.nu; j++)
-			if (i == 0 || j == 0 || i == sd.nv - 1 || j == sd.nu - 1)
-				ENSURE_STATUS(sm_set_motion_at(model, &cloth, i, j, 0, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE_STATUS(add_held_sheet(model, &sd, &cloth), SM_OK);
 	const int32_t np = sm_model_particle_count(model);
 	double* x = malloc(3 * (size_t)np * sizeof(double));
 	ENSURE(x != NULL);
@@ -2494,13 +2501,8 @@ static sm_modes sheet_modes(const double R[9], int* failed)
 	}
 	sm_structure sheet;
 	double* x = NULL;
-	if (sm_add_sheet(model, &sd, &sheet) != SM_OK)
+	if (add_held_sheet(model, &sd, &sheet) != SM_OK)
 		goto done;
-	for (int32_t i = 0; i < sd.nv; i++)
-		for (int32_t j = 0; j < sd.nu; j++)
-			if ((i == 0 || j == 0 || i == sd.nv - 1 || j == sd.nu - 1) &&
-			    sm_set_motion_at(model, &sheet, i, j, 0, SM_PARTICLE_FIXED) != SM_OK)
-				goto done;
 	const int32_t np = sm_model_particle_count(model);
 	x = malloc(3 * (size_t)np * sizeof(double));
 	if (x == NULL)
@@ -2516,6 +2518,66 @@ done:
 	free(x);
 	sm_model_destroy(model);
 	return modes;
+}
+
+// A square sheet held along its edges and stretched by 5 % has pairs of modes of one frequency
+// (its symmetry swaps the two directions). mode_count ending between the two modes of a pair is
+// reported as a cut group, with the next mode's omega^2; ending before or after the pair is not.
+// Dense and sparse, against the dense path's whole spectrum (the sparse Ritz values agree with
+// it to the Lanczos tolerance, 1e-10 relative; 1e-8 leaves a margin). With every mode kept, or
+// no room in the sparse path's Krylov space for one more, there is no next mode (NAN).
+static int test_mode_count_inside_a_repeated_group(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = sd.nv = 9;
+	const double o[3] = {-0.5, -0.5, 0.0};
+	memcpy(sd.origin, o, sizeof o);
+	sm_structure sheet;
+	ENSURE_STATUS(add_held_sheet(model, &sd, &sheet), SM_OK);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_model_initial_state(model, x, NULL);
+	for (size_t k = 0; k < 3 * (size_t)np; k++)
+		x[k] *= 1.05;
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	def.solver = SM_MODES_DENSE;
+	sm_modes all;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &all, NULL), SM_OK);
+	ENSURE(all.count == all.dof && isnan(all.next_omega_squared) && !all.group_cut);
+	// The lowest pair: modes g and g + 1 (0-based) of one frequency, between distinct ones.
+	int32_t g = 1;
+	while (g + 2 < all.count && !(all.omega_squared[g + 1] - all.omega_squared[g] <= 1e-12 * all.omega_squared[g]))
+		g++;
+	ENSURE(g + 2 < all.count && all.omega_squared[g] > all.omega_squared[g - 1] * (1.0 + 1e-6) &&
+	       all.omega_squared[g + 2] > all.omega_squared[g + 1] * (1.0 + 1e-6));
+	for (int path = 0; path < 2; path++) {
+		def.solver = path == 0 ? SM_MODES_DENSE : SM_MODES_SPARSE;
+		for (int32_t count = g; count <= g + 2; count++) {
+			def.mode_count = count;
+			sm_modes modes;
+			ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+			ENSURE(modes.solver == def.solver && modes.count == count);
+			ENSURE(modes.group_cut == (count == g + 1));
+			ENSURE_REL(modes.next_omega_squared, all.omega_squared[count], 1e-8, 0.0);
+			sm_modes_release(&modes);
+		}
+	}
+	// The sparse path keeps at most (dof - 40) / 4 modes and then has no room for one more.
+	def.mode_count = (all.dof - SM_MODES_SPARSE_MARGIN) / 4;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	ENSURE(modes.count == def.mode_count && isnan(modes.next_omega_squared) && !modes.group_cut);
+	sm_modes_release(&modes);
+	sm_modes_release(&all);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
 }
 
 static int test_modal_damping_and_coupling_do_not_depend_on_orientation(void)
@@ -2603,6 +2665,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_undamped_is_proportional_at_zero_tolerance);
 	RUN_TEST(test_sparse_shift_is_lowered_a_hundredfold);
 	RUN_TEST(test_repeated_frequency_modes_diagonalise_the_damping);
+	RUN_TEST(test_mode_count_inside_a_repeated_group);
 	RUN_TEST(test_modal_damping_and_coupling_do_not_depend_on_orientation);
 	return TEST_SUMMARY();
 }

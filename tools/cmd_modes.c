@@ -122,6 +122,10 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes->omega_squared[m],
 		       modes->damping_ratio[m]);
 	}
+	if (modes->group_cut)
+		printf("%6s mode %d's frequency repeats in mode %d and perhaps beyond: the list ends inside a group of\n"
+		       "%6s repeated frequencies, whose listed modes are one arbitrary part of it (list more with -n)\n",
+		       "", (int)modes->count, (int)modes->count + 1, "");
 	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
 	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);

@@ -206,6 +206,13 @@ typedef struct sm_modes {
 	/// -1e-6 of the Gershgorin bound or, when the wanted modes lie far below that, nearer to
 	/// them (docs/analysis.md); 0 on the dense path [1/s^2].
 	double shift;
+	/// omega^2 of the lowest mode beyond the kept ones [1/s^2]; NAN when every mode is kept, or on
+	/// the sparse path when one more mode than mode_count would not fit (see mode_count's limit).
+	double next_omega_squared;
+	/// mode_count ended inside a group of repeated frequencies: next_omega_squared is the
+	/// highest kept mode's (within the tolerance of docs/analysis.md). The group's kept modes are
+	/// then an arbitrary part of its eigenspace; ask for more modes to get all of it.
+	bool group_cut;
 } sm_modes;
 
 /// The default options (the values documented in sm_modes_def).
