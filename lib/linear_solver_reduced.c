@@ -413,9 +413,9 @@ static void invert_chunk(void* context, int c)
 }
 
 // The coarse matrix at gamma from the scaled records (B = u w^T + gamma^2 beta I, the numbers
-// add_spring_shares summed), the springs in the model's order; then factorised. Returns false if
-// it is not positive definite.
-static bool refresh_coarse(reduced* r, double gamma)
+// add_spring_shares summed), the springs in the model's order; then factorised. Returns 0, 1 if
+// it is not positive definite, -1 if out of memory (no symbolic analysis could be made).
+static int refresh_coarse(reduced* r, double gamma)
 {
 	const sm_model* m = r->sim->model;
 	const double damping = 1.0 + gamma * m->def.mass_damping;
@@ -448,27 +448,33 @@ static bool refresh_coarse(reduced* r, double gamma)
 	for (int32_t I = 0; I < r->aggregate_count; I++)
 		for (int i = 0; i < 3; i++)
 			coarse[coarse_entry(r, I, r->coarse_self[I], i, i)] += r->coarse_mass[I] * damping;
-	bool ok;
+	int status;
 	if (r->multilevel != NULL) {
-		ok = sm_multilevel_refresh(r->multilevel, coarse, &r->common);
+		status = sm_multilevel_refresh(r->multilevel, coarse, &r->common) ? 0 : 1;
 	} else {
-		// The symbolic analysis, once: in halves for a model in chunks (split_coarse).
+		// The symbolic analysis, once: in halves for a model in chunks (split_coarse). Without it
+		// (out of memory) nothing can be factorised at any step size: an error, not a matrix that
+		// is not positive definite, which a smaller step may mend.
 		if (r->coarse_factor == NULL && r->coarse_part != NULL)
 			r->coarse_halves = sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
 		else if (r->coarse_factor == NULL)
 			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
-		ok = r->coarse_factor != NULL && cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) &&
-		     r->common.status == CHOLMOD_OK;
+		if (r->coarse_factor == NULL)
+			status = -1;
+		else if (cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) && r->common.status == CHOLMOD_OK)
+			status = 0;
+		else
+			status = 1;
 	}
 	// A failed refresh is retried at the next set-up.
-	r->coarse_age = ok ? 0 : COARSE_MAX_AGE;
-	return ok;
+	r->coarse_age = status == 0 ? 0 : COARSE_MAX_AGE;
+	return status;
 }
 
 // The scaled records and the inverted diagonal blocks, chunk by chunk (the springs between
-// chunks on the caller's thread in between), then the coarse matrix if it is due. Returns false
-// if a block is singular or the coarse matrix is not positive definite.
-static bool prepare_preconditioner(reduced* r, double gamma)
+// chunks on the caller's thread in between), then the coarse matrix if it is due. Returns 0, 1 if
+// a block is singular or the coarse matrix is not positive definite, -1 if out of memory.
+static int prepare_preconditioner(reduced* r, double gamma)
 {
 	preconditioner_job job = {.r = r, .gamma = gamma};
 	sm_workers_run(r->workers, spring_shares_chunk, &job, r->chunks);
@@ -476,13 +482,13 @@ static bool prepare_preconditioner(reduced* r, double gamma)
 	sm_workers_run(r->workers, invert_chunk, &job, r->chunks);
 	for (int c = 0; c < r->chunks; c++)
 		if (job.singular[c])
-			return false;
+			return 1;
 	if (!r->two_level)
-		return true;
+		return 0;
 	if (r->coarse_age >= COARSE_MAX_AGE || !(fabs(gamma / r->coarse_gamma - 1.0) <= COARSE_GAMMA_CHANGE))
 		return refresh_coarse(r, gamma);
 	r->coarse_age++;
-	return true;
+	return 0;
 }
 
 // The springs at positions begin .. end of the chunk order added to q from their records, u[3],
@@ -765,7 +771,7 @@ int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p,
 	current_jacobian(r, sim->time, N_VGetArrayPointer(sim->y));
 	r->gamma = gamma;
 	int status = 0;
-	if (!r->use_cholmod && !prepare_preconditioner(r, gamma))
+	if (!r->use_cholmod && prepare_preconditioner(r, gamma) != 0)
 		status = -1;
 	else
 		multiply(r, p, q);
@@ -1096,13 +1102,18 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 		for (int c = 0; c < 3; c++)
 			r->rhs[i + c] = r->mass[i + c] * b[n + f + c] - gamma * r->rhs[i + c];
 	}
+	// Out of memory, the solve fails (unrecoverably: CVODE stops) and the next one prepares again.
+	int prepared = 0;
 	if (!r->use_cholmod && !(r->blocks_gamma == gamma)) {
-		r->blocks_valid = prepare_preconditioner(r, gamma);
-		r->blocks_gamma = gamma;
+		prepared = prepare_preconditioner(r, gamma);
+		r->blocks_valid = prepared == 0;
+		r->blocks_gamma = prepared < 0 ? NAN : gamma;
 	}
 	int flag;
 	if (r->use_cholmod)
 		flag = cholesky_solve(r, r->dv, tol);
+	else if (prepared < 0)
+		flag = SUNLS_MEM_FAIL;
 	else
 		flag = r->blocks_valid ? conjugate_gradients(r, r->dv, tol, PCG_MAX_ITERATIONS) : SUNLS_PACKAGE_FAIL_REC;
 	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED)

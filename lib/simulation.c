@@ -1217,6 +1217,10 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			if (flag == CV_LSETUP_FAIL && sim->jacobian_out_of_memory)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory evaluating the Jacobian");
+			// The reduced solver says why its solve failed in its last flag.
+			if (flag == CV_LSOLVE_FAIL && has_reduced_solver(sim) &&
+			    SUNLinSolLastFlag(sim->linear_solver) == SUNLS_MEM_FAIL)
+				snprintf(sim->solver_message, sizeof sim->solver_message, "out of memory in the linear solve");
 			char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(sim->time, now);
 			sm_format_number(t_end, end);
