@@ -2530,9 +2530,10 @@ static int test_threads_give_the_same_bits(void)
 // - no column of L in one half has a row in the other, and each half has supernodes of its own
 //   (else nothing would run at once);
 // - the solve is that of CHOLMOD's own factorisation: both are backward stable, so they agree to
-//   about the condition number (below 1e5 here: the mass term is 1e-6 of the springs' sum over a
-//   row, the grid 24 wide) times the unit round-off, 2e-11; 1e-9 allowed (measured 6e-15), and
-//   the residual is at round-off, 1e-12 of |A| |x| allowed (measured 2e-16);
+//   about the condition number (below 4e3 here: the springs' part is positive semi-definite, so
+//   the eigenvalues lie between the mass term, 100, and the largest row sum of |A|, at most
+//   8 x 1e4 (1 + 2 sqrt 3) = 3.6e5) times the unit round-off, 5e-13; 1e-9 allowed (measured
+//   6e-15), and the residual is at round-off, 1e-12 of |A| |x| allowed (measured 2e-16);
 // - a team of 2 gives the same bits as the caller alone.
 static int test_coarse_halves_solve(void)
 {
