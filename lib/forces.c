@@ -614,3 +614,26 @@ double sm_model_dissipated_power(const sm_model* model, const double* x, const d
 	}
 	return power;
 }
+
+// The force on a is f_a = (ks (L - l0) + kd r) u (law_rest_length.h, law_spring_damping.h): its
+// magnitude along u, positive when the spring pulls, is the tension. Where the geometry has no
+// direction (u = 0) the spring exerts no force.
+void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length, double* strain,
+                            double* tension)
+{
+	if (model == NULL || x == NULL)
+		return;
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		spring_geometry geo;
+		spring_geometry_eval(x, v, model->spring_a[s], model->spring_b[s], model->rest_length[s], &geo);
+		const double l0 = model->rest_length[s];
+		if (length != NULL)
+			length[s] = geo.length;
+		if (strain != NULL)
+			strain[s] = l0 > 0.0 ? (geo.length - l0) / l0 : NAN;
+		if (tension != NULL)
+			tension[s] = geo.inv_length > 0.0 ? rest_length_magnitude(model->stiffness[s], l0, geo.length) +
+			                                         spring_damping_magnitude(model->damping[s], geo.rate)
+			                                   : 0.0;
+	}
+}

@@ -926,6 +926,70 @@ static int test_gravity_in_every_direction(void)
 	return 0;
 }
 
+// Each spring's tension times u, put on its particles (f_a += T u, f_b -= T u), is what the
+// springs add to the forces: sm_model_forces minus the same model's forces with every spring
+// disabled, to round-off (1e-12 of the force scale). The strain is (L - l0) / l0 from the
+// resolved rest length (NAN for l0 = 0), the length |x_b - x_a|; a disabled spring keeps its
+// length and strain and pulls with 0, as does one whose particles coincide; without velocities
+// the tension is the elastic part alone.
+static int test_spring_states_add_up_to_the_spring_forces(void)
+{
+	rng r = {0x5eed5eedull};
+	enum { N = 12, S = 40 };
+	double x[3 * N], v[3 * N];
+	sm_model* model = random_model(&r, N, S, 1, x, v);
+	ENSURE(model != NULL);
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 5, false), SM_OK);
+	double length[S], strain[S], tension[S], elastic[S];
+	sm_model_spring_states(model, x, v, length, strain, tension);
+	sm_model_spring_states(model, x, NULL, NULL, NULL, elastic);
+	double f[3 * N], f_body[3 * N], f_states[3 * N];
+	sm_model_forces(model, x, v, NULL, f);
+	sm_model* body = sm_model_clone(model);
+	ENSURE(body != NULL);
+	for (int32_t s = 0; s < S; s++)
+		ENSURE_STATUS(sm_model_set_spring_enabled(body, s, false), SM_OK);
+	sm_model_forces(body, x, v, NULL, f_body);
+	memset(f_states, 0, sizeof f_states);
+	for (int32_t s = 0; s < S; s++) {
+		sm_spring_def d;
+		double l0, ks, kd;
+		ENSURE_STATUS(sm_model_get_spring(model, s, &d), SM_OK);
+		ENSURE_STATUS(sm_model_spring_constants(model, s, &l0, &ks, &kd), SM_OK);
+		double dx[3], dv[3], L = 0.0, rate = 0.0;
+		for (int c = 0; c < 3; c++) {
+			dx[c] = x[3 * d.b + c] - x[3 * d.a + c];
+			dv[c] = v[3 * d.b + c] - v[3 * d.a + c];
+			L += dx[c] * dx[c];
+		}
+		L = sqrt(L);
+		for (int c = 0; c < 3; c++)
+			rate += dx[c] / L * dv[c];
+		ENSURE_REL(length[s], L, 1e-15, 0.0);
+		if (l0 > 0.0)
+			ENSURE_REL(strain[s], (L - l0) / l0, 1e-14, 1e-15);
+		else
+			ENSURE(isnan(strain[s]));
+		const bool enabled = sm_model_spring_enabled(model, s);
+		ENSURE_REL(tension[s], enabled ? ks * (L - l0) + kd * rate : 0.0, 1e-13, 1e-13);
+		ENSURE_REL(elastic[s], enabled ? ks * (L - l0) : 0.0, 1e-13, 1e-13);
+		for (int c = 0; c < 3; c++) {
+			f_states[3 * d.a + c] += tension[s] * dx[c] / L;
+			f_states[3 * d.b + c] -= tension[s] * dx[c] / L;
+		}
+	}
+	const double scale = force_scale(f, 3 * N);
+	for (int k = 0; k < 3 * N; k++)
+		ENSURE_NEAR(f_states[k], f[k] - f_body[k], 1e-12 * scale);
+	// Coincident particles: no direction, no force.
+	memcpy(x + 3, x, 3 * sizeof(double));
+	sm_model_spring_states(model, x, v, length, strain, tension);
+	ENSURE(length[0] == 0.0 && tension[0] == 0.0);
+	sm_model_destroy(body);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -947,5 +1011,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_dissipated_power_with_constrained_particles_and_a_disabled_spring);
 	RUN_TEST(test_elastic_energy_is_continuous_through_the_degenerate_point);
 	RUN_TEST(test_gravity_in_every_direction);
+	RUN_TEST(test_spring_states_add_up_to_the_spring_forces);
 	return TEST_SUMMARY();
 }

@@ -86,6 +86,10 @@ FILE* cli_vtk_open(const char* command, const char* path, const char* title, con
 /// Writes one vector field of point data (3 values per particle); `first` for the first field.
 void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
 
+/// Writes one scalar field of cell data: the values (one per spring, in spring order) of the
+/// intact springs, the lines of cli_vtk_open; `first` for the first field.
+void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values, bool first);
+
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
 /// failed call just before).
 void cli_cannot_write(const char* command, const char* path);

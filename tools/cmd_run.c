@@ -35,8 +35,10 @@ static void usage(FILE* out)
 	        "  -o, --output FILE      CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
 	        "  --positions            also every particle's position (columns particle.NAME.x,\n"
 	        "                         particle.NAME.y, particle.NAME.z [m])\n"
-	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk (points, intact springs as\n"
-	        "                         lines) per row and the index DIR/NAME.pvd\n"
+	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk per row (particles as\n"
+	        "                         points with their velocity [m/s], intact springs as lines with\n"
+	        "                         their tension [N] and, if all have a rest length, strain [1])\n"
+	        "                         and the index DIR/NAME.pvd\n"
 	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
@@ -187,14 +189,36 @@ static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* si
 	fprintf(csv, "\n");
 }
 
-// One legacy VTK polydata file: the particles as points, the intact springs as lines.
-static int write_vtk(const char* path, const sm_simulation* sim)
+// One legacy VTK polydata file: the particles as points with their velocities, the intact
+// springs as lines with their tension [N] and, when every one has a rest length (a zero-length
+// spring has no strain), their strain. springs holds 2 values per spring of scratch.
+static int write_vtk(const char* path, const sm_simulation* sim, double* springs)
 {
 	char time[SM_NUMBER_TEXT_CAPACITY], title[64];
 	sm_format_number(sm_simulation_time(sim), time);
 	snprintf(title, sizeof title, "springmass t = %s s", time);
-	FILE* f = cli_vtk_open("run", path, title, sm_simulation_model(sim), sm_simulation_positions(sim));
-	return f == NULL ? 1 : cli_close("run", path, f) != 0;
+	const sm_model* model = sm_simulation_model(sim);
+	const double* x = sm_simulation_positions(sim);
+	FILE* f = cli_vtk_open("run", path, title, model, x);
+	if (f == NULL)
+		return 1;
+	cli_vtk_vectors(f, "velocity", sm_model_particle_count(model), sm_simulation_velocities(sim), true);
+	const int32_t count = sm_model_spring_count(model);
+	double *tension = springs, *strain = springs + count;
+	sm_model_spring_states(model, x, sm_simulation_velocities(sim), NULL, strain, tension);
+	bool every_strain = true;
+	int32_t intact = 0;
+	for (int32_t s = 0; s < count; s++)
+		if (sm_model_spring_enabled(model, s)) {
+			intact++;
+			every_strain = every_strain && !isnan(strain[s]);
+		}
+	if (intact > 0) {
+		cli_vtk_spring_scalars(f, model, "tension", tension, true);
+		if (every_strain)
+			cli_vtk_spring_scalars(f, model, "strain", strain, false);
+	}
+	return cli_close("run", path, f) != 0;
 }
 
 // The progress line on stderr, from one second into the run on: on a terminal it rewrites itself
@@ -359,6 +383,7 @@ int sm_cmd_run(int argc, char** argv)
 	FILE* csv = NULL;
 	FILE* pvd = NULL;
 	double* forces = NULL;
+	double* spring_values = NULL;
 	char* path = NULL;
 	char* csv_default = NULL;  // <model>.csv when no --output is given
 	char* pvd_path = NULL;
@@ -432,7 +457,8 @@ int sm_cmd_run(int argc, char** argv)
 	pvd_path = malloc(path_capacity);
 	csv_default = malloc(strlen(name) + 5);
 	forces = malloc(sizeof(double) * (3 * (size_t)sm_model_particle_count(model) + 1));
-	if (!path || !pvd_path || !csv_default || !forces)
+	spring_values = malloc(sizeof(double) * (2 * (size_t)sm_model_spring_count(model) + 1));
+	if (!path || !pvd_path || !csv_default || !forces || !spring_values)
 		goto done;
 	// The series' folder and index first: a run refused for them leaves an existing CSV as it was.
 	if (o.vtk_dir) {
@@ -482,7 +508,7 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
-			if (write_vtk(path, sim) != 0)
+			if (write_vtk(path, sim, spring_values) != 0)
 				goto done;
 			char timestep[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(t, timestep);
@@ -534,6 +560,7 @@ done:
 	free(pvd_path);
 	free(csv_default);
 	free(forces);
+	free(spring_values);
 	free(o.sets);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);

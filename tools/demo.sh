@@ -28,7 +28,8 @@ cat <<TXT
 
 Results in out/demo/:
   cloth.csv          time, port positions, velocities and energies of the cloth (any spreadsheet, or pandas)
-  cloth_vtk/cloth.pvd  the cloth's motion: open it in ParaView and press play
+  cloth_vtk/cloth.pvd  the cloth's motion: open it in ParaView and press play; colour the
+                     springs by "tension" [N] or "strain", the particles by "velocity" [m/s]
   oscillator.fmu     the oscillator as an FMI 2.0 Co-Simulation FMU (fmpy, or any FMI importer)
   oscillator.png     the FMU's outputs simulated in fmpy: look at it with any image viewer
 TXT

@@ -237,6 +237,15 @@ SM_API sm_energies sm_model_energies(const sm_model* model, const double* x, con
 /// Power dissipated by spring damping and mass damping [W], >= 0.
 SM_API double sm_model_dissipated_power(const sm_model* model, const double* x, const double* v);
 
+/// Each spring's state, one value per spring in spring order, into each of the arrays that is
+/// not NULL: its length L [m]; its strain (L - l0) / l0 [1], NAN for a spring with l0 = 0 (every
+/// zero-length spring); and its tension [N], the force with which it pulls its two particles
+/// towards each other, ks (L - l0) + kd u . (v_b - v_a) (elastic and damping; negative in
+/// compression): f_a = tension u. The tension is 0 for a disabled spring and at the singular
+/// point above, where the spring exerts no force.
+SM_API void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length,
+                                   double* strain, double* tension);
+
 /// Per-spring 3x3 blocks (row-major): K = d f_a / d x_b [N/m] and D = d f_a / d v_b [N s/m].
 /// Since f depends on x_b - x_a and v_b - v_a and f_b = -f_a: d f_a/d x_a = -K,
 /// d f_b/d x_b = -K, d f_b/d x_a = K, and likewise for D. Disabled springs give zero blocks.

@@ -49,9 +49,10 @@ def run_csv(tmp_path, model, *options, name="run.csv"):
 
 
 def vtk_sections(path):
-    """POINTS (n x 3), LINES (pairs) and VECTORS (name -> n x 3) of a legacy VTK polydata file."""
+    """POINTS (n x 3), LINES (pairs), VECTORS of the point data (name -> n x 3) and SCALARS of the
+    cell data (name -> one per line) of a legacy VTK polydata file."""
     words = open(path).read().split("\n")
-    points, lines, vectors = None, [], {}
+    points, lines, vectors, scalars = None, [], {}, {}
     i = 0
     while i < len(words):
         fields = words[i].split()
@@ -67,8 +68,14 @@ def vtk_sections(path):
         elif fields[:1] == ["VECTORS"]:
             vectors[fields[1]] = np.array([[float(v) for v in words[i + 1 + k].split()] for k in range(len(points))])
             i += len(points)
+        elif fields[:1] == ["CELL_DATA"]:
+            assert int(fields[1]) == len(lines), words[i]
+        elif fields[:1] == ["SCALARS"]:
+            assert fields[2:] == ["double", "1"] and words[i + 1] == "LOOKUP_TABLE default", words[i:i + 2]
+            scalars[fields[1]] = np.array([float(words[i + 2 + k]) for k in range(len(lines))])
+            i += 1 + len(lines)
         i += 1
-    return points, lines, vectors
+    return points, lines, vectors, scalars
 
 
 def number_after(text, label):
@@ -279,17 +286,56 @@ def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     first = next(i for i, name in enumerate(header) if name.startswith("particle."))
     springs = int(re.search(r"springs\s+(\d+)", cli("check", model).stdout).group(1))
     for k, d in enumerate(sets):
-        points, lines, _ = vtk_sections(vtk / d.get("file"))
+        points, lines, _, _ = vtk_sections(vtk / d.get("file"))
         # Points are written to 9 significant digits: 1e-8 m on a cloth within 2 m of the origin.
         np.testing.assert_allclose(points.ravel(), rows[k, first:], rtol=0, atol=1e-8)
         assert len(set(lines)) == len(lines)
         if k == 0:
             all_lines = lines
             assert len(lines) == springs
+        # Each file's lengths and strains imply the same rest lengths l0 = L / (1 + strain): 9
+        # significant digits each.
+        _, _, _, scalars = vtk_sections(vtk / d.get("file"))
+        lengths = np.linalg.norm(points[[b for _, b in lines]] - points[[a for a, _ in lines]], axis=1)
+        implied = dict(zip(lines, lengths / (1.0 + scalars["strain"])))
+        if k == 0:
+            rest = implied
+        assert all(implied[line] == pytest.approx(rest[line], rel=1e-7) for line in lines)
     # The last file has the intact springs only: every spring that broke is gone, the rest stay.
-    _, last_lines, _ = vtk_sections(vtk / sets[-1].get("file"))
+    _, last_lines, _, _ = vtk_sections(vtk / sets[-1].get("file"))
     assert len(last_lines) == springs - len(broken)
     assert [all_lines[s] for s in sorted(set(range(springs)) - set(broken))] == last_lines
+
+
+def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
+    # The bundled oscillator (a 1 kg bob on a 40 N/m spring of rest length 0.5 m with 0.4 N s/m
+    # damping, from a fixed anchor at the origin): each VTK file's velocity vectors are the CSV's,
+    # and its spring's tension and strain follow from the points and velocities by the laws,
+    # ks (L - l0) + kd u . (v_b - v_a) and (L - l0) / l0. The files hold 9 significant digits: the
+    # bob's coordinates (under 0.7 m) to 5e-10 m, so L to 1e-9 m, the strain to 2e-9 (3e-9 allowed)
+    # and the tension to 40 N/m times that (1e-7 N allowed).
+    vtk = tmp_path / "vtk"
+    header, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--output-interval", 0.25, "--vtk", vtk)
+    vx = header.index("tip.vx")
+    for k, row in enumerate(rows):
+        points, lines, vectors, scalars = vtk_sections(vtk / f"oscillator_{k:06d}.vtk")
+        assert lines == [(0, 1)] and set(scalars) == {"tension", "strain"}
+        np.testing.assert_allclose(vectors["velocity"][1], row[vx:vx + 3], rtol=1e-8, atol=1e-12)
+        d = points[1] - points[0]
+        length = np.linalg.norm(d)
+        rate = d @ vectors["velocity"][1] / length
+        assert scalars["strain"][0] == pytest.approx((length - 0.5) / 0.5, rel=1e-8, abs=3e-9)
+        assert scalars["tension"][0] == pytest.approx(40 * (length - 0.5) + 0.4 * rate, rel=1e-8, abs=1e-7)
+    # A zero-length spring has no strain: its file carries tensions alone.
+    pair = {"springmass": 1, "name": "pair", "gravity": [0, 0, -9.81],
+            "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                          {"name": "bob", "position": [0, 0, -1], "mass": 1}],
+            "springs": [{"a": "anchor", "b": "bob", "stiffness": 10, "rest_length": 0}]}
+    path = tmp_path / "pair.json"
+    path.write_text(json.dumps(pair))
+    cli("run", path, "-q", "--t-end", 0.1, "--output-interval", 0.1, "-o", tmp_path / "pair.csv", "--vtk", vtk)
+    points, _, _, scalars = vtk_sections(vtk / "pair_000000.vtk")
+    assert set(scalars) == {"tension"} and scalars["tension"][0] == pytest.approx(10.0)
 
 
 def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path):
@@ -316,7 +362,7 @@ def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path
     assert len(logged) == 1 and float(logged[0]) == pytest.approx(t_break, abs=5e-6), stats
     assert vtk_sections(vtk / "snap_000000.vtk")[1] == [(0, 1)]
     for k in (1, 2):
-        points, lines, _ = vtk_sections(vtk / f"snap_{k:06d}.vtk")
+        points, lines, _, _ = vtk_sections(vtk / f"snap_{k:06d}.vtk")
         assert points.shape == (2, 3) and lines == []
         assert "LINES" not in (vtk / f"snap_{k:06d}.vtk").read_text()
 
@@ -381,7 +427,7 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     np.testing.assert_allclose(np.diff(x[:, 2]), -lengths, rtol=1e-9)
     np.testing.assert_allclose(x[:, :2], 0, atol=1e-9)
     # The VTK file carries the same shape, displacements and reactions (9 significant digits).
-    points, lines, vectors = vtk_sections(tmp_path / "vtk" / "statics.vtk")
+    points, lines, vectors, _ = vtk_sections(tmp_path / "vtk" / "statics.vtk")
     assert lines == [(j, j + 1) for j in range(20)]
     np.testing.assert_allclose(points, x, rtol=0, atol=1e-9)
     np.testing.assert_allclose(vectors["displacement"], dx, rtol=0, atol=1e-9)
@@ -489,7 +535,7 @@ def test_modes_of_the_oscillator_follow_the_closed_form(tmp_path):
     for mode in range(3):
         path = tmp_path / "vtk" / f"mode_{mode + 1}.vtk"
         assert f"{table[mode, 1]:.6g}"[:6] in open(path).read().split("\n")[1]
-        _, _, vectors = vtk_sections(path)
+        _, _, vectors, _ = vtk_sections(path)
         np.testing.assert_allclose(vectors["shape"][1], bob[3 * mode:3 * mode + 3], rtol=0, atol=1e-9)
     assert sorted(p.name for p in (tmp_path / "vtk").iterdir()) == ["mode_1.vtk", "mode_2.vtk", "mode_3.vtk"]
 
