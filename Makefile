@@ -8,6 +8,8 @@ CTEST         ?= /usr/bin/ctest
 PYTHON        := $(CURDIR)/.venv/bin/python
 JOBS          ?= 2
 CMAKE_FLAGS   ?=
+FUZZ_SECONDS  ?= 60
+FUZZ_TARGETS  ?=
 
 .PHONY: all setup build demo test sanitize-build test-sanitize bench-forces bench-cloth fuzz install clean
 
@@ -46,7 +48,7 @@ bench-cloth: build
 	QUICK=$(QUICK) LONG=$(LONG) bench/bench_cloth.sh $(BUILD_DIR)
 
 fuzz: setup
-	fuzz/run.sh $(FUZZ_SECONDS)
+	fuzz/run.sh $(FUZZ_SECONDS) $(FUZZ_TARGETS)
 
 # Installs headers, library, tool, FMU runtime and CMake package under PREFIX (default /usr/local).
 PREFIX ?= /usr/local

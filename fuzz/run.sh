@@ -1,15 +1,32 @@
 #!/usr/bin/env bash
-# Fuzzes the model-file loader with libFuzzer for SECONDS (default 60): builds the target with
-# clang (installed from Debian's packages if missing, with the fuzzer runtime and the OpenMP
-# runtime SUNDIALS' CMake package asks for), seeds the corpus from the bundled and
-# test models, and runs on one core. Inputs that crash are written to build-fuzz/artifacts/.
+# Fuzzes with libFuzzer for SECONDS (default 60) each target named (default both):
+#   model_file        the model-file loader, seeded from the bundled and test models
+#   simulation_state  simulation states read back from bytes and restored, seeded with states
+#                     the target writes of its own model
+# Builds the targets with clang (installed from Debian's packages if missing, with the fuzzer
+# runtime and the OpenMP runtime SUNDIALS' CMake package asks for) and runs them one after the
+# other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's) or
+# fuzz/corpus-work-simulation-state/; inputs that crash are written to build-fuzz/artifacts/.
 #
 #   make fuzz FUZZ_SECONDS=600
+#   make fuzz FUZZ_SECONDS=600 FUZZ_TARGETS=simulation_state
 set -euo pipefail
 seconds=${1:-60}
+shift || true
+targets=("$@")
+((${#targets[@]})) || targets=(model_file simulation_state)
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build-fuzz
-work=$root/fuzz/corpus-work
+
+for target in "${targets[@]}"; do
+  case $target in
+  model_file | simulation_state) ;;
+  *)
+    echo "fuzz: unknown target $target (model_file, simulation_state)" >&2
+    exit 2
+    ;;
+  esac
+done
 
 need=()
 command -v clang > /dev/null || need+=(clang)
@@ -25,15 +42,32 @@ if ((${#need[@]})); then
 fi
 
 /usr/bin/cmake -S "$root/fuzz" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang > /dev/null
-/usr/bin/cmake --build "$build" --target fuzz_model_file
+/usr/bin/cmake --build "$build" --target "${targets[@]/#/fuzz_}"
 
-mkdir -p "$work" "$build/artifacts"
+mkdir -p "$build/artifacts"
 seeds=$(mktemp -d)
 trap 'rm -rf "$seeds"' EXIT
-cp "$root"/models/*.json "$seeds"/
-cp "$root"/tests/python/models/*.json "$seeds"/ 2> /dev/null || true
 
 # Leak detection stays on: a leak on any error path is a finding.
-"$build/fuzz_model_file" "$work" "$seeds" \
-  -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
-  -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
+for target in "${targets[@]}"; do
+  rm -rf "${seeds:?}"/*
+  case $target in
+  model_file)
+    work=$root/fuzz/corpus-work
+    cp "$root"/models/*.json "$seeds"/
+    cp "$root"/tests/python/models/*.json "$seeds"/ 2> /dev/null || true
+    mkdir -p "$work"
+    "$build/fuzz_model_file" "$work" "$seeds" \
+      -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
+      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
+    ;;
+  simulation_state)
+    work=$root/fuzz/corpus-work-simulation-state
+    SPRINGMASS_FUZZ_WRITE_SEEDS="$seeds" "$build/fuzz_simulation_state"
+    mkdir -p "$work"
+    "$build/fuzz_simulation_state" "$work" "$seeds" \
+      -max_total_time="$seconds" -max_len=1024 -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$build/artifacts/simulation_state-" -print_final_stats=1
+    ;;
+  esac
+done
