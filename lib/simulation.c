@@ -1589,6 +1589,26 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	return s;
 }
 
+// The first driven particle whose position at time t, x0 + v (t - t0) as sm_simulation_unpack
+// forms it, is not finite under the given motions (3 positions [m] and velocities [m/s], one start
+// time [s] per particle), or -1. An advance stops where forces are not finite, so a simulation
+// never gets there by itself; a snapshot read back from bytes may hold such a motion and time.
+static int32_t overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
+                                           const double* velocity, const double* start)
+{
+	for (int32_t k = 0; k < sim->constrained_count; k++) {
+		const int32_t i = sim->constrained[k];
+		if (sim->model->motion[i] != SM_PARTICLE_DRIVEN)
+			continue;
+		const size_t p = 3 * (size_t)i;
+		const double dt = t - start[i];
+		for (int c = 0; c < 3; c++)
+			if (!isfinite(position[p + c] + velocity[p + c] * dt))
+				return i;
+	}
+	return -1;
+}
+
 sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* s)
 {
 	if (sim == NULL || s == NULL)
@@ -1602,6 +1622,15 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 		            "has %d (%d free) and %d, or its particles move otherwise or its springs join other particles",
 		            (int)s->particle_count, (int)s->free_count, (int)s->spring_count, (int)sim->particle_count,
 		            (int)sim->free_count, (int)sim->spring_count);
+	const int32_t overflowing =
+	    overflowing_driven_particle(sim, s->time, s->drive_position, s->drive_velocity, s->drive_time);
+	if (overflowing >= 0) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(s->time, t);
+		return fail(sim, SM_ERROR_NOT_FINITE,
+		            "restore_state: driven particle %d's position at the state's time t = %s s is not finite",
+		            (int)overflowing, t);
+	}
 	if (s->break_count > sim->break_capacity) {
 		sm_break_event* b = realloc(sim->breaks, (size_t)s->break_count * sizeof *b);
 		if (b == NULL)

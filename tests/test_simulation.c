@@ -1250,6 +1250,60 @@ static int test_saved_state_as_bytes(void)
 	return 0;
 }
 
+// Bytes read back may hold a driven motion and a time at which the motion's position overflows, a
+// state no advance reaches (its forces are not finite there). Restore refuses it with nothing
+// changed, where it took it and gave positions that were not finite (found by
+// fuzz/fuzz_simulation_state.c): pulled_spring()'s driven particle set moving at 1e10 m/s at t = 0,
+// the snapshot's time made 1e300 s under a checksum made to match. The same snapshot at 1 s, 1e10 m
+// on, restores.
+static int test_restore_refuses_a_driven_motion_that_overflows(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	sm_simulation* other = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL && other != NULL);
+	const double at[3] = {1.0, 0.0, 0.0}, fast[3] = {1e10, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, at, fast), SM_OK);
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	ENSURE(saved != NULL);
+	const size_t size = sm_simulation_state_size(saved);
+	unsigned char* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(sm_simulation_state_serialize(saved, bytes, size), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(other, 0.01), SM_OK);
+	double x[9];
+	memcpy(x, sm_simulation_positions(other), sizeof x);
+	const double times[2] = {1e300, 1.0};
+	for (int k = 0; k < 2; k++) {
+		memcpy(bytes + 40, &times[k], sizeof times[k]);  // the time, the header's last field
+		uint64_t h = 14695981039346656037ull;
+		for (size_t b = 0; b + 8 < size; b++)
+			h = (h ^ bytes[b]) * 1099511628211ull;
+		memcpy(bytes + size - 8, &h, 8);
+		sm_error err;
+		sm_simulation_state* forged = sm_simulation_state_deserialize(bytes, size, &err);
+		ENSURE(forged != NULL);
+		const sm_status st = sm_simulation_restore_state(other, forged);
+		sm_simulation_state_destroy(forged);
+		if (k == 0) {
+			ENSURE_STATUS(st, SM_ERROR_NOT_FINITE);
+			ENSURE(strstr(sm_simulation_last_error(other), "particle 1") != NULL);
+			ENSURE(sm_simulation_time(other) == 0.01 && memcmp(sm_simulation_positions(other), x, sizeof x) == 0);
+		} else {
+			ENSURE_STATUS(st, SM_OK);
+			ENSURE(sm_simulation_time(other) == 1.0 && sm_simulation_positions(other)[3] == 1.0 + 1e10);
+		}
+	}
+	free(bytes);
+	sm_simulation_state_destroy(saved);
+	sm_simulation_destroy(other);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // An on_step hook that asks to stop after every `every`-th step it sees.
 typedef struct step_stopper {
 	int64_t calls;
@@ -4663,6 +4717,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_restore_keeps_the_models_springs_and_topology);
 	RUN_TEST(test_saved_state_as_bytes);
 	RUN_TEST(test_restore_checks_every_count);
+	RUN_TEST(test_restore_refuses_a_driven_motion_that_overflows);
 	RUN_TEST(test_saved_state_keeps_the_driven_motion);
 	RUN_TEST(test_saved_state_needs_the_same_free_particles_and_springs);
 	RUN_TEST(test_driven_follows_prescribed_motion);

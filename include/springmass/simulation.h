@@ -276,8 +276,10 @@ SM_API sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim);
 /// it give the same trajectory bit for bit in any simulation of the model that restores that
 /// snapshot, whatever each did before (a rollback repeats a step exactly). The snapshot may come from
 /// another simulation whose model has the same particles, motions and springs
-/// (sm_simulation_update_model's rule); SM_ERROR_TOPOLOGY otherwise, SM_ERROR_OUT_OF_MEMORY when
-/// the break events cannot be held, both with nothing changed. The snapshot stays valid.
+/// (sm_simulation_update_model's rule); SM_ERROR_TOPOLOGY otherwise, SM_ERROR_NOT_FINITE when a
+/// driven particle's position at the snapshot's time is not finite (a snapshot read back from bytes
+/// whose motion overflows there; no advance gets there), SM_ERROR_OUT_OF_MEMORY when the break
+/// events cannot be held, all with nothing changed. The snapshot stays valid.
 SM_API sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* state);
 
 SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
