@@ -1592,7 +1592,8 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 // The first driven particle whose position at time t, x0 + v (t - t0) as sm_simulation_unpack
 // forms it, is not finite under the given motions (3 positions [m] and velocities [m/s], one start
 // time [s] per particle), or -1. An advance stops where forces are not finite, so a simulation
-// never gets there by itself; a snapshot read back from bytes may hold such a motion and time.
+// never gets there by itself; a snapshot read back from bytes, or a time given to set_state, may
+// hold such a motion and time.
 static int32_t overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
                                            const double* velocity, const double* start)
 {
@@ -1795,6 +1796,14 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		if (!finite3(x + p) || !finite3(v + p))
 			return fail(sim, SM_ERROR_NOT_FINITE, "set_state: particle %d: position or velocity is not finite",
 			            (int)sim->free_particles[k]);
+	}
+	const int32_t overflowing =
+	    overflowing_driven_particle(sim, time, sim->drive_position, sim->drive_velocity, sim->drive_time);
+	if (overflowing >= 0) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(time, t);
+		return fail(sim, SM_ERROR_NOT_FINITE, "set_state: driven particle %d's position at t = %s s is not finite",
+		            (int)overflowing, t);
 	}
 	pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sim->time = time;

@@ -1255,8 +1255,8 @@ static int test_saved_state_as_bytes(void)
 // changed, where it took it and gave positions that were not finite (found by
 // fuzz/fuzz_simulation_state.c): pulled_spring()'s driven particle set moving at 1e10 m/s at t = 0,
 // the snapshot's time made 1e300 s under a checksum made to match. The same snapshot at 1 s, 1e10 m
-// on, restores.
-static int test_restore_refuses_a_driven_motion_that_overflows(void)
+// on, restores. set_state to that time is refused too.
+static int test_restore_and_set_state_refuse_a_driven_motion_that_overflows(void)
 {
 	sm_model* model = pulled_spring();
 	ENSURE(model != NULL);
@@ -1296,6 +1296,14 @@ static int test_restore_refuses_a_driven_motion_that_overflows(void)
 			ENSURE(sm_simulation_time(other) == 1.0 && sm_simulation_positions(other)[3] == 1.0 + 1e10);
 		}
 	}
+	// set_state to such a time is refused the same way; to a time where the motion is finite, not.
+	double v[9] = {0};
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	ENSURE_STATUS(sm_simulation_set_state(sim, 1e300, x, v), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_simulation_last_error(sim), "driven particle 1") != NULL);
+	ENSURE(sm_simulation_time(sim) == 0.0 && memcmp(sm_simulation_positions(sim), x, sizeof x) == 0);
+	ENSURE_STATUS(sm_simulation_set_state(sim, 1.0, x, v), SM_OK);
+	ENSURE(sm_simulation_positions(sim)[3] == 1.0 + 1e10);
 	free(bytes);
 	sm_simulation_state_destroy(saved);
 	sm_simulation_destroy(other);
@@ -4717,7 +4725,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_restore_keeps_the_models_springs_and_topology);
 	RUN_TEST(test_saved_state_as_bytes);
 	RUN_TEST(test_restore_checks_every_count);
-	RUN_TEST(test_restore_refuses_a_driven_motion_that_overflows);
+	RUN_TEST(test_restore_and_set_state_refuse_a_driven_motion_that_overflows);
 	RUN_TEST(test_saved_state_keeps_the_driven_motion);
 	RUN_TEST(test_saved_state_needs_the_same_free_particles_and_springs);
 	RUN_TEST(test_driven_follows_prescribed_motion);

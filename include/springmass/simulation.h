@@ -242,7 +242,8 @@ SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t pa
 /// Replaces the time [s] and the state: positions [m] and velocities [m/s] of all particles
 /// (3 each; the entries of fixed and driven particles are ignored: they stay at their
 /// positions or follow their prescribed motion, see sm_simulation_set_driven). Re-initialises
-/// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry.
+/// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry,
+/// or a time at which a driven particle's prescribed position is not finite.
 /// Only the particles' state changes: the dissipated energy, the break events recorded so far
 /// and the springs that broke stay as they are (setting an earlier time undoes no break), so
 /// the energy balance of sm_simulation_dissipated_energy holds across the call only if the
