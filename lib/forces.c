@@ -616,8 +616,12 @@ double sm_model_dissipated_power(const sm_model* model, const double* x, const d
 }
 
 // The force on a is f_a = (ks (L - l0) + kd r) u (law_rest_length.h, law_spring_damping.h): its
-// magnitude along u, positive when the spring pulls, is the tension. Where the geometry has no
-// direction (u = 0) the spring exerts no force.
+// magnitude along u, positive when the spring pulls, is the tension. At the singular point
+// (L = 0, or L < SM_DEGENERATE_LENGTH_RATIO l0) the geometry has no direction (u = 0) and the
+// spring exerts no force: tension 0. A length that is not finite is no singular point, although
+// its 1/L is 0 as well: a NaN length gives a NaN tension and an overflowed one (L = inf, u = 0,
+// r = 0) ks (inf - l0) = inf, so that a state gone wrong does not read as a slack spring. A
+// disabled spring (ks = kd = 0) pulls with 0 at any length (0 inf would be NaN).
 void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length, double* strain,
                             double* tension)
 {
@@ -631,9 +635,12 @@ void sm_model_spring_states(const sm_model* model, const double* x, const double
 			length[s] = geo.length;
 		if (strain != NULL)
 			strain[s] = l0 > 0.0 ? (geo.length - l0) / l0 : NAN;
-		if (tension != NULL)
-			tension[s] = geo.inv_length > 0.0 ? rest_length_magnitude(model->stiffness[s], l0, geo.length) +
-			                                         spring_damping_magnitude(model->damping[s], geo.rate)
-			                                   : 0.0;
+		if (tension != NULL) {
+			const bool singular = geo.length == 0.0 || geo.length < SM_DEGENERATE_LENGTH_RATIO * l0;
+			tension[s] = model->enabled[s] && !singular
+			                 ? rest_length_magnitude(model->stiffness[s], l0, geo.length) +
+			                       spring_damping_magnitude(model->damping[s], geo.rate)
+			                 : 0.0;
+		}
 	}
 }

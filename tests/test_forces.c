@@ -990,6 +990,41 @@ static int test_spring_states_add_up_to_the_spring_forces(void)
 	return 0;
 }
 
+// A length that is not finite is no singular point: the tension of such a spring says so rather
+// than 0, which would read as a slack spring. A position NaN gives a NaN length and tension; two
+// particles 1e200 m apart have a length whose square overflows (L = inf) and an infinite tension
+// (ks (L - l0) with u = 0 from 1/L = 0). A disabled spring still pulls with 0 whatever its length.
+static int test_spring_states_of_lengths_not_finite(void)
+{
+	const sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	for (int i = 0; i < 3; i++)
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def d = sm_default_spring_def();
+	d.stiffness = 100.0;
+	d.damping = 1.0;
+	d.rest_length = 1.0;
+	d.a = 0;
+	d.b = 1;
+	ENSURE_STATUS(sm_model_add_spring(model, &d, NULL), SM_OK);
+	d.b = 2;
+	ENSURE_STATUS(sm_model_add_spring(model, &d, NULL), SM_OK);
+	double x[9] = {0.0, 0.0, 0.0, NAN, 0.0, 0.0, 1e200, 0.0, 0.0};
+	const double v[9] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+	double length[2], strain[2], tension[2];
+	sm_model_spring_states(model, x, v, length, strain, tension);
+	ENSURE(isnan(length[0]) && isnan(strain[0]) && isnan(tension[0]));
+	ENSURE(isinf(length[1]) && isinf(strain[1]) && tension[1] == INFINITY);
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 0, false), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
+	sm_model_spring_states(model, x, v, length, strain, tension);
+	ENSURE(tension[0] == 0.0 && tension[1] == 0.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1012,5 +1047,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_elastic_energy_is_continuous_through_the_degenerate_point);
 	RUN_TEST(test_gravity_in_every_direction);
 	RUN_TEST(test_spring_states_add_up_to_the_spring_forces);
+	RUN_TEST(test_spring_states_of_lengths_not_finite);
 	return TEST_SUMMARY();
 }

@@ -242,7 +242,9 @@ SM_API double sm_model_dissipated_power(const sm_model* model, const double* x, 
 /// zero-length spring); and its tension [N], the force with which it pulls its two particles
 /// towards each other, ks (L - l0) + kd u . (v_b - v_a) (elastic and damping; negative in
 /// compression): f_a = tension u. The tension is 0 for a disabled spring and at the singular
-/// point above, where the spring exerts no force.
+/// point above, where the spring exerts no force; a length that is not finite (a position NaN or
+/// infinite, or particles so far apart that L^2 overflows, about 1e154 m) gives a tension that is
+/// not finite either (NaN, or inf for L = inf), not 0.
 SM_API void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length,
                                    double* strain, double* tension);
 
