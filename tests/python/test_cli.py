@@ -609,6 +609,26 @@ def test_modes_count_unstable_and_zero_modes(tmp_path):
     assert [period for _, period, _ in re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)] == 3 * ["inf"]
 
 
+
+def test_modes_say_when_the_list_ends_inside_a_repeated_frequency(tmp_path):
+    # The trampoline at equilibrium has a pair of modes at 7.885 Hz, modes 2 and 3: -n 2 ends
+    # inside it and says so under the table, -n 1 and -n 3 end between frequencies and do not.
+    # The groups of zero and unstable modes are cut alike: a free particle's three zero modes at
+    # -n 2, and the compressed bob's two unstable ones (as in the test above) at -n 1, not at -n 2.
+    note = re.compile(r"mode (\d+)'s frequency repeats in mode (\d+)")
+    for n, cut in ((1, False), (2, True), (3, False)):
+        out = cli("modes", MODELS / "trampoline.json", "--at-equilibrium", "-n", n).stdout
+        assert [m.groups() for m in note.finditer(out)] == ([(str(n), str(n + 1))] if cut else []), out
+    bob = {"springmass": 1, "name": "bob", "gravity": [0, 0, 0],
+           "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                         {"name": "bob", "position": [1, 0, 0], "mass": 2}],
+           "springs": [{"a": "anchor", "b": "bob", "stiffness": 8, "rest_length": 2}]}
+    free = {"springmass": 1, "name": "free", "gravity": [0, 0, 0], "particles": [{"name": "p", "position": [0, 0, 0]}]}
+    for model, n, cut in ((bob, 1, True), (bob, 2, False), (free, 2, True), (free, 3, False)):
+        path = tmp_path / f"{model['name']}.json"
+        path.write_text(json.dumps(model))
+        assert bool(note.search(cli("modes", path, "-n", n).stdout)) == cut, (model["name"], n)
+
 # --- check -------------------------------------------------------------------------------------
 
 def summary_line(text, label):
