@@ -222,9 +222,9 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 /// particles coincide), the direction u is undefined: the spring then exerts no force and its
 /// damping none either; its Jacobian blocks are df/dx = ks I (as if zero-length), df/dv = 0.
 /// A zero-length spring's elastic force is defined everywhere; its damping is zero at L = 0.
-/// The results are finite for finite inputs unless a product overflows (positions 1e308 m
-/// apart, ks (L - l0) or kd u.(v_b - v_a) beyond about 1.8e308 N): such forces come out
-/// infinite or NaN, which the simulation and the analyses report as non-finite.
+/// The results are finite for finite inputs unless a product overflows (particles about 1e154 m
+/// apart, where L^2 overflows; ks (L - l0) or kd u.(v_b - v_a) beyond about 1.8e308 N): such
+/// forces come out infinite or NaN, which the simulation and the analyses report as non-finite.
 SM_API void sm_model_forces(const sm_model* model, const double* x, const double* v,
                             const double* f_external, double* f);
 
