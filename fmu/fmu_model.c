@@ -1019,9 +1019,12 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 		return line_error(err, SM_ERROR_SYNTAX, source_name, number,
 		                  "\"%s\": the value is not written as the packager writes it (%s)", quoted, written);
 	const int32_t index = sm_document_parameter_index(doc, name);
-	if (index < 0)
+	if (index < 0) {
+		char quoted_name[QUOTED_LINE_CAPACITY];
+		quote_line(name, name_length, quoted_name, sizeof quoted_name);
 		return line_error(err, SM_ERROR_NOT_FOUND, source_name, number, "\"%s\": the model has no parameter named "
-		                  "\"%s\"", quoted, name);
+		                  "\"%s\"", quoted, quoted_name);
+	}
 	if (first_line[index] != 0)
 		return line_error(err, SM_ERROR_SCHEMA, source_name, number, "parameter %s is set again (first on line %zu)",
 		                  name, first_line[index]);

@@ -365,6 +365,8 @@ static int test_parameter_values_refused(void)
 	     "\"k=" QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13
 	     "...\": the value is not a finite number"},
 	    {TEXT("zz=1\n"), "parameters.txt:1: \"zz=1\": the model has no parameter named \"zz\""},
+	    // A name is quoted as the line is: a control character shows escaped, not as itself.
+	    {TEXT("z\x1b=1\n"), "the model has no parameter named \"z\\x1b\""},
 	    {TEXT("k=60\nm=1\nk=70"), "parameters.txt:3: parameter k is set again (first on line 1)"},
 	    {TEXT("d=1\nm=-1\n"),
 	     "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
