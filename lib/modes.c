@@ -643,9 +643,10 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 			return sm_error_set(err, SM_ERROR_SOLVER, "modes: a sparse solve failed in the Lanczos iteration");
 		if (r == 0)
 			return sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                    "modes: Lanczos did not converge to %zu modes in %d restarts (run %d, shift %.3g "
+			                    "modes: Lanczos did not converge to %zu modes%s in %d restarts (run %d, shift %.3g "
 			                    "1/s^2)",
-			                    want, max_restarts, run + 1, w->shift);
+			                    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts,
+			                    run + 1, w->shift);
 		// lambda = sigma + 1/nu. A mode is new if it lies below the highest kept one by more than
 		// the round-off of the operator (1e-9 of its scale 1/nu).
 		const double highest = count > 0 ? lambda[count - 1] : INFINITY;
