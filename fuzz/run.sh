@@ -1,28 +1,32 @@
 #!/usr/bin/env bash
-# Fuzzes with libFuzzer for SECONDS (default 60) each target named (default both):
+# Fuzzes with libFuzzer for SECONDS (default 60) each target named (default all three):
 #   model_file        the model-file loader, seeded from the bundled and test models
 #   simulation_state  simulation states read back from bytes and restored, seeded with states
 #                     the target writes of its own model
+#   fmu_state         the FMU's serialised states read back (fmi2DeSerializeFMUstate), set and
+#                     stepped, seeded with states the target writes of its own FMU instance
 # Builds the targets with clang (installed from Debian's packages if missing, with the fuzzer
 # runtime and the OpenMP runtime SUNDIALS' CMake package asks for) and runs them one after the
-# other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's) or
-# fuzz/corpus-work-simulation-state/; inputs that crash are written to build-fuzz/artifacts/.
+# other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's),
+# fuzz/corpus-work-simulation-state/ or fuzz/corpus-work-fmu-state/; inputs that crash are
+# written to build-fuzz/artifacts/.
 #
 #   make fuzz FUZZ_SECONDS=600
 #   make fuzz FUZZ_SECONDS=600 FUZZ_TARGETS=simulation_state
+#   make fuzz FUZZ_SECONDS=600 FUZZ_TARGETS=fmu_state
 set -euo pipefail
 seconds=${1:-60}
 shift || true
 targets=("$@")
-((${#targets[@]})) || targets=(model_file simulation_state)
+((${#targets[@]})) || targets=(model_file simulation_state fmu_state)
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build-fuzz
 
 for target in "${targets[@]}"; do
   case $target in
-  model_file | simulation_state) ;;
+  model_file | simulation_state | fmu_state) ;;
   *)
-    echo "fuzz: unknown target $target (model_file, simulation_state)" >&2
+    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state)" >&2
     exit 2
     ;;
   esac
@@ -41,7 +45,8 @@ if ((${#need[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${need[@]}"
 fi
 
-/usr/bin/cmake -S "$root/fuzz" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang > /dev/null
+/usr/bin/cmake -S "$root/fuzz" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+  -DSPRINGMASS_PYTHON="$root/.venv/bin/python" > /dev/null
 /usr/bin/cmake --build "$build" --target "${targets[@]/#/fuzz_}"
 
 mkdir -p "$build/artifacts"
@@ -68,6 +73,14 @@ for target in "${targets[@]}"; do
     "$build/fuzz_simulation_state" "$work" "$seeds" \
       -max_total_time="$seconds" -max_len=1024 -timeout=10 -rss_limit_mb=2048 \
       -artifact_prefix="$build/artifacts/simulation_state-" -print_final_stats=1
+    ;;
+  fmu_state)
+    work=$root/fuzz/corpus-work-fmu-state
+    SPRINGMASS_FUZZ_WRITE_SEEDS="$seeds" "$build/fuzz_fmu_state"
+    mkdir -p "$work"
+    "$build/fuzz_fmu_state" "$work" "$seeds" \
+      -max_total_time="$seconds" -max_len=1024 -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$build/artifacts/fmu_state-" -print_final_stats=1
     ;;
   esac
 done
