@@ -1361,9 +1361,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		log_error(inst, "fmi2DoStep: communication step size %g at t = %g must be finite and > 0", h, t);
 		return fmi2Error;
 	}
-	// Time is resolved to a few units of round-off of max(1 s, |t|): a shorter step could not
-	// advance it (t + h == t) or would leave CVODE nothing to integrate.
-	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
+	// Time is resolved to a few units of round-off of max(1 s, |t|, |t - start|): a shorter step
+	// could not advance it (t + h == t), nor the simulation's time t - start, which can be far
+	// larger (a state's start time is its own), or would leave CVODE nothing to integrate.
+	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fmax(fabs(t), fabs(t - inst->start_time)));
 	if (h < resolution) {
 		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
 		          resolution);

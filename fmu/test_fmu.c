@@ -1254,6 +1254,48 @@ static int test_a_refused_state_leaves_the_stop_time(void)
 	return 0;
 }
 
+// A step too short to advance the simulation's time, t - start, is refused like one too short for
+// t: it would return fmi2OK having integrated nothing. Found by fuzz/fuzz_fmu_state.c: a state at
+// t = 0.01 s with start time -3.8e255 s stepped with fmi2OK and its outputs unchanged. Here a state
+// at 0.01 s with start time -1e20 s (a run of 1e20 s, forged) and a step of 1 ms; the same step
+// from the state as saved is taken.
+static int test_a_step_below_the_resolution_of_the_simulation_time_is_refused(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "resolution");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.01, fmi2True), fmi2OK);
+	fmi2FMUstate state = NULL, forged = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
+	fmi2Byte* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
+	// The start time is the second double of the header, after the magic, the GUID and 15 integers.
+	const double start_time = -1e20;
+	ENSURE(size > 176 + 8);
+	memcpy(bytes + 176, &start_time, 8);
+	fix_state_checksum(bytes, size);
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(c, bytes, size, &forged), fmi2OK);
+	ENSURE_STATUS(fmi2SetFMUstate(c, forged), fmi2OK);
+	const double x = get(c, &f, "tip.x");
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DoStep(c, 0.01, 0.001, fmi2True), fmi2Error);
+	ENSURE(strstr(f.log.last, "below the time resolution") != NULL);
+	ENSURE(get(c, &f, "tip.x") == x);
+	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
+	ENSURE_STATUS(fmi2DoStep(c, 0.01, 0.001, fmi2True), fmi2OK);
+	ENSURE(get(c, &f, "tip.x") != x);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &forged), fmi2OK);
+	free(bytes);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // fmi2Reset goes back to the instantiated state (docs/fmu.md), experiment included: a stop time
 // given before the reset does not hold after it, also when the master enters initialisation mode
 // without calling fmi2SetupExperiment again (which this FMU accepts).
@@ -1695,6 +1737,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_state_carries_every_solver_setting);
 	RUN_TEST(test_state_restores_the_last_successful_time);
 	RUN_TEST(test_a_refused_state_leaves_the_stop_time);
+	RUN_TEST(test_a_step_below_the_resolution_of_the_simulation_time_is_refused);
 	RUN_TEST(test_reset_forgets_the_stop_time);
 	RUN_TEST(test_variable_names_form_a_tree);
 	return TEST_SUMMARY();
