@@ -245,6 +245,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     isfinite(max_step);
 	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
 	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP)));
+	// Time only runs forward from the experiment's start: t >= start in every state; from the
+	// end of initialisation on, the last successful time lies between them (fmi2DoStep sets it to
+	// where the step got, which is t).
+	const double time = get_d(b, D_TIME), start = get_d(b, D_START), last = get_d(b, D_LAST_SUCCESSFUL);
+	ok = ok && time >= start &&
+	     (state == ST_INSTANTIATED || state == ST_INITIALIZATION || (last >= start && last <= time));
 	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
 	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
 	if (!ok) {

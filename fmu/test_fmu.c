@@ -1296,6 +1296,45 @@ static int test_a_step_below_the_resolution_of_the_simulation_time_is_refused(vo
 	return 0;
 }
 
+// A state's times run forward from the experiment's start: a forged state whose time lies before
+// its start, or whose last successful time lies after its time, is refused as out of range, with
+// the instance unchanged (both were taken, and fmi2GetRealStatus then read a last successful time
+// the instance had not reached).
+static int test_a_state_with_times_out_of_order_is_refused(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "times");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.01, fmi2True), fmi2OK);
+	fmi2FMUstate state = NULL, forged = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
+	size_t size = 0;
+	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
+	fmi2Byte* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	// The header's doubles after the magic, the GUID and 15 integers: time, start, last successful.
+	const struct {
+		size_t offset;
+		double value;
+	} cases[] = {{168, -1.0}, {184, 0.02}};
+	const double x = get(c, &f, "tip.x");
+	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+		ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
+		memcpy(bytes + cases[k].offset, &cases[k].value, 8);
+		fix_state_checksum(bytes, size);
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(fmi2DeSerializeFMUstate(c, bytes, size, &forged), fmi2Error);
+		ENSURE(forged == NULL && strstr(f.log.last, "out of range") != NULL);
+		ENSURE(get(c, &f, "tip.x") == x);
+	}
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
+	free(bytes);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // fmi2Reset goes back to the instantiated state (docs/fmu.md), experiment included: a stop time
 // given before the reset does not hold after it, also when the master enters initialisation mode
 // without calling fmi2SetupExperiment again (which this FMU accepts).
@@ -1738,6 +1777,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_state_restores_the_last_successful_time);
 	RUN_TEST(test_a_refused_state_leaves_the_stop_time);
 	RUN_TEST(test_a_step_below_the_resolution_of_the_simulation_time_is_refused);
+	RUN_TEST(test_a_state_with_times_out_of_order_is_refused);
 	RUN_TEST(test_reset_forgets_the_stop_time);
 	RUN_TEST(test_variable_names_form_a_tree);
 	return TEST_SUMMARY();
