@@ -190,6 +190,35 @@ static int test_misuse(void)
 	return 0;
 }
 
+// Where a serialised state's header keeps its times (fmu_state.c): the first doubles after the
+// magic, the GUID and 15 integers.
+enum { STATE_TIME_AT = 168, STATE_START_AT = 176, STATE_LAST_SUCCESSFUL_AT = 184 };
+
+// The bytes of state as fmi2SerializeFMUstate writes them, in a malloc'ed buffer of *size bytes;
+// NULL on failure.
+static fmi2Byte* serialized_state(fmi2Component c, fmi2FMUstate state, size_t* size)
+{
+	fmi2Byte* bytes = NULL;
+	if (fmi2SerializedFMUstateSize(c, state, size) == fmi2OK && (bytes = malloc(*size)) != NULL &&
+	    fmi2SerializeFMUstate(c, state, bytes, *size) != fmi2OK) {
+		free(bytes);
+		bytes = NULL;
+	}
+	return bytes;
+}
+
+// The 64-bit FNV-1a checksum of a serialised state (fmu_state.c: every byte but the checksum's
+// own, bytes 56 to 63) made valid again after an edit: a state written by another tool.
+static void fix_state_checksum(fmi2Byte* bytes, size_t size)
+{
+	uint64_t hash = 0xcbf29ce484222325u;
+	for (size_t i = 0; i < size; ++i) {
+		if (i < 56 || i >= 64)
+			hash = (hash ^ (unsigned char)bytes[i]) * 0x100000001b3u;
+	}
+	memcpy(bytes + 56, &hash, 8);
+}
+
 static int test_state_round_trip(void)
 {
 	fixture f;
@@ -204,10 +233,8 @@ static int test_state_round_trip(void)
 	fmi2FMUstate state = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
 	size_t size = 0;
-	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
-	fmi2Byte* bytes = malloc(size);
+	fmi2Byte* bytes = serialized_state(c, state, &size);
 	ENSURE(bytes != NULL);
-	ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
 	double first[20], second[20], third[20];
 	for (int n = 0; n < 20; ++n) {
 		ENSURE_STATUS(fmi2DoStep(c, 0.1 + n * 0.01, 0.01, fmi2True), fmi2OK);
@@ -1194,18 +1221,6 @@ static int test_state_restores_the_last_successful_time(void)
 	return 0;
 }
 
-// The 64-bit FNV-1a checksum of a serialised state (fmu_state.c: every byte but the checksum's
-// own, bytes 56 to 63) made valid again after an edit: a state written by another tool.
-static void fix_state_checksum(fmi2Byte* bytes, size_t size)
-{
-	uint64_t hash = 0xcbf29ce484222325u;
-	for (size_t i = 0; i < size; ++i) {
-		if (i < 56 || i >= 64)
-			hash = (hash ^ (unsigned char)bytes[i]) * 0x100000001b3u;
-	}
-	memcpy(bytes + 56, &hash, 8);
-}
-
 // A state the model refuses (m = -1, checksum valid) changes nothing, the experiment included:
 // the stop time of 0.5 s it carries does not stay behind, so the instance, which has none, steps
 // on past 0.5 s from where it was.
@@ -1222,10 +1237,8 @@ static int test_a_refused_state_leaves_the_stop_time(void)
 	fmi2FMUstate state = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(a, &state), fmi2OK);
 	size_t size = 0;
-	ENSURE_STATUS(fmi2SerializedFMUstateSize(a, state, &size), fmi2OK);
-	fmi2Byte* bytes = malloc(size);
+	fmi2Byte* bytes = serialized_state(a, state, &size);
 	ENSURE(bytes != NULL);
-	ENSURE_STATUS(fmi2SerializeFMUstate(a, state, bytes, size), fmi2OK);
 	// The parameters m, k, d = 2, 50, 0 in file order: m made -1.
 	const double parameters[3] = {2.0, 50.0, 0.0}, refused = -1.0;
 	size_t at = 0;
@@ -1269,14 +1282,10 @@ static int test_a_step_below_the_resolution_of_the_simulation_time_is_refused(vo
 	fmi2FMUstate state = NULL, forged = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
 	size_t size = 0;
-	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
-	fmi2Byte* bytes = malloc(size);
-	ENSURE(bytes != NULL);
-	ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
-	// The start time is the second double of the header, after the magic, the GUID and 15 integers.
+	fmi2Byte* bytes = serialized_state(c, state, &size);
+	ENSURE(bytes != NULL && size > STATE_START_AT + 8);
 	const double start_time = -1e20;
-	ENSURE(size > 176 + 8);
-	memcpy(bytes + 176, &start_time, 8);
+	memcpy(bytes + STATE_START_AT, &start_time, 8);
 	fix_state_checksum(bytes, size);
 	ENSURE_STATUS(fmi2DeSerializeFMUstate(c, bytes, size, &forged), fmi2OK);
 	ENSURE_STATUS(fmi2SetFMUstate(c, forged), fmi2OK);
@@ -1310,14 +1319,13 @@ static int test_a_state_with_times_out_of_order_is_refused(void)
 	fmi2FMUstate state = NULL, forged = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
 	size_t size = 0;
-	ENSURE_STATUS(fmi2SerializedFMUstateSize(c, state, &size), fmi2OK);
-	fmi2Byte* bytes = malloc(size);
+	fmi2Byte* bytes = serialized_state(c, state, &size);
 	ENSURE(bytes != NULL);
-	// The header's doubles after the magic, the GUID and 15 integers: time, start, last successful.
+	// A time before the start (0 s), a last successful time past the time (0.01 s).
 	const struct {
 		size_t offset;
 		double value;
-	} cases[] = {{168, -1.0}, {184, 0.02}};
+	} cases[] = {{STATE_TIME_AT, -1.0}, {STATE_LAST_SUCCESSFUL_AT, 0.02}};
 	const double x = get(c, &f, "tip.x");
 	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
 		ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);

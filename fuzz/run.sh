@@ -66,21 +66,14 @@ for target in "${targets[@]}"; do
       -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
       -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
     ;;
-  simulation_state)
-    work=$root/fuzz/corpus-work-simulation-state
-    SPRINGMASS_FUZZ_WRITE_SEEDS="$seeds" "$build/fuzz_simulation_state"
+  simulation_state | fmu_state)
+    # Seeds: real states the target writes of its own model.
+    work=$root/fuzz/corpus-work-${target//_/-}
+    SPRINGMASS_FUZZ_WRITE_SEEDS="$seeds" "$build/fuzz_$target"
     mkdir -p "$work"
-    "$build/fuzz_simulation_state" "$work" "$seeds" \
+    "$build/fuzz_$target" "$work" "$seeds" \
       -max_total_time="$seconds" -max_len=1024 -timeout=10 -rss_limit_mb=2048 \
-      -artifact_prefix="$build/artifacts/simulation_state-" -print_final_stats=1
-    ;;
-  fmu_state)
-    work=$root/fuzz/corpus-work-fmu-state
-    SPRINGMASS_FUZZ_WRITE_SEEDS="$seeds" "$build/fuzz_fmu_state"
-    mkdir -p "$work"
-    "$build/fuzz_fmu_state" "$work" "$seeds" \
-      -max_total_time="$seconds" -max_len=1024 -timeout=10 -rss_limit_mb=2048 \
-      -artifact_prefix="$build/artifacts/fmu_state-" -print_final_stats=1
+      -artifact_prefix="$build/artifacts/$target-" -print_final_stats=1
     ;;
   esac
 done
