@@ -1671,7 +1671,7 @@ typedef struct serialized_header {
 	char magic[8];  // "smstate", NUL-terminated
 	uint32_t layout;
 	int32_t particle_count, spring_count, free_count, break_count;
-	int32_t reserved;
+	int32_t reserved;  // 0
 	uint64_t topology;
 	double time;  // [s]
 } serialized_header;
@@ -1719,7 +1719,8 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 		return NULL;
 	}
 	memcpy(&h, in, sizeof h);
-	if (memcmp(h.magic, "smstate", 8) != 0 || h.layout != STATE_LAYOUT) {
+	// The reserved field is zero in this layout; a later one may give it a meaning this one lacks.
+	if (memcmp(h.magic, "smstate", 8) != 0 || h.layout != STATE_LAYOUT || h.reserved != 0) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		             "state_deserialize: not a simulation state of this springmass version (layout %u expected)",
 		             STATE_LAYOUT);
