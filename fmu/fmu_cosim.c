@@ -1461,6 +1461,27 @@ static bool check_status_value(instance* inst, const char* function, const void*
 	return value != NULL;
 }
 
+// Refuses a status kind that `function` does not deliver. FMI 2.0 (4.2.3): "If a status is required
+// which cannot be retrieved by the slave it returns fmi2Discard" (2.1.3 lists the fmi2Get*Status
+// functions among those that may discard): a kind of fmi2StatusKind that is not this function's,
+// such as fmi2GetRealStatus(fmi2DoStepStatus) or any kind of fmi2GetIntegerStatus, is discarded,
+// logged as such. A value outside fmi2StatusKind asks for no status at all: an fmi2Error.
+static fmi2Status status_not_provided(instance* inst, const char* function, fmi2StatusKind s)
+{
+	static const char* const kinds[4][2] = {{"fmi2DoStepStatus", "fmi2GetStatus"},
+	                                        {"fmi2PendingStatus", "fmi2GetStringStatus"},
+	                                        {"fmi2LastSuccessfulTime", "fmi2GetRealStatus"},
+	                                        {"fmi2Terminated", "fmi2GetBooleanStatus"}};
+	const int k = (int)s;
+	if (k < 0 || k >= 4) {
+		log_error(inst, "%s: status kind %d is not an fmi2StatusKind (0 to 3)", function, k);
+		return fmi2Error;
+	}
+	fmu_logf(inst, fmi2Discard, LOG_DISCARD, "%s: status kind %d (%s) is not delivered here: read it with %s",
+	         function, k, kinds[k][0], kinds[k][1]);
+	return fmi2Discard;
+}
+
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* value)
 {
 	instance* inst = c;
@@ -1471,8 +1492,7 @@ fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status* va
 		*value = inst->state == ST_STEP_FAILED ? fmi2Discard : fmi2OK;
 		return fmi2OK;
 	}
-	log_error(inst, "fmi2GetStatus: status kind %d is not provided", (int)s);
-	return fmi2Error;
+	return status_not_provided(inst, "fmi2GetStatus", s);
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* value)
@@ -1485,8 +1505,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* 
 		*value = inst->last_successful_time;
 		return fmi2OK;
 	}
-	log_error(inst, "fmi2GetRealStatus: status kind %d is not provided", (int)s);
-	return fmi2Error;
+	return status_not_provided(inst, "fmi2GetRealStatus", s);
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value)
@@ -1495,8 +1514,7 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
 	(void)value;
 	if (!fmu_allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
 		return fmi2Error;
-	log_error(inst, "fmi2GetIntegerStatus: status kind %d is not provided", (int)s);
-	return fmi2Error;
+	return status_not_provided(inst, "fmi2GetIntegerStatus", s);
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean* value)
@@ -1509,8 +1527,7 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 		*value = fmi2False;  // the model never asks to stop the simulation
 		return fmi2OK;
 	}
-	log_error(inst, "fmi2GetBooleanStatus: status kind %d is not provided", (int)s);
-	return fmi2Error;
+	return status_not_provided(inst, "fmi2GetBooleanStatus", s);
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String* value)
@@ -1523,6 +1540,5 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 		*value = "";
 		return fmi2OK;
 	}
-	log_error(inst, "fmi2GetStringStatus: status kind %d is not provided", (int)s);
-	return fmi2Error;
+	return status_not_provided(inst, "fmi2GetStringStatus", s);
 }

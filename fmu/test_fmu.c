@@ -21,17 +21,18 @@
 typedef struct log_record {
 	int errors;
 	char last[1024];
+	char category[32];  // of the last message
 } log_record;
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...)
 {
 	(void)name;
-	(void)category;
 	log_record* log = env;
 	if (status >= fmi2Error)
 		log->errors++;
 	snprintf(log->last, sizeof log->last, "%s", message);
+	snprintf(log->category, sizeof log->category, "%s", category ? category : "");
 }
 
 typedef struct fixture {
@@ -826,6 +827,53 @@ static int test_status_after_terminate(void)
 	ENSURE(terminated == fmi2False);
 	ENSURE_STATUS(fmi2GetStringStatus(c, fmi2PendingStatus, &pending), fmi2OK);
 	ENSURE(pending != NULL && pending[0] == '\0');
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// A status kind that a status function does not deliver is discarded, not refused (FMI 2.0,
+// 4.2.3: "If a status is required which cannot be retrieved by the slave it returns fmi2Discard";
+// 2.1.3 lists the fmi2Get*Status functions among those that may discard), with a message in
+// logStatusDiscard, the value left alone and the instance stepping on. fmi2GetIntegerStatus
+// delivers no kind. A value that is no fmi2StatusKind at all is an fmi2Error.
+#define ENSURE_DISCARDED(call)                                                                      \
+	do {                                                                                            \
+		f.log.last[0] = f.log.category[0] = '\0';                                                   \
+		ENSURE_STATUS(call, fmi2Discard);                                                           \
+		ENSURE(strcmp(f.log.category, "logStatusDiscard") == 0);                                    \
+		ENSURE(strstr(f.log.last, "not delivered here") != NULL);                                   \
+	} while (0)
+
+static int test_status_kinds_not_delivered_are_discarded(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = start(&f, "kinds");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2DoStep(c, 0.0, 0.1, fmi2True), fmi2OK);
+	fmi2Status status = fmi2Fatal;
+	double time = -1.0;
+	fmi2Integer integer = -1;
+	fmi2Boolean boolean = 7;
+	fmi2String string = NULL;
+	for (int k = fmi2DoStepStatus; k <= fmi2Terminated; ++k) {
+		const fmi2StatusKind kind = (fmi2StatusKind)k;
+		if (kind != fmi2DoStepStatus)
+			ENSURE_DISCARDED(fmi2GetStatus(c, kind, &status));
+		if (kind != fmi2LastSuccessfulTime)
+			ENSURE_DISCARDED(fmi2GetRealStatus(c, kind, &time));
+		ENSURE_DISCARDED(fmi2GetIntegerStatus(c, kind, &integer));
+		if (kind != fmi2Terminated)
+			ENSURE_DISCARDED(fmi2GetBooleanStatus(c, kind, &boolean));
+		if (kind != fmi2PendingStatus)
+			ENSURE_DISCARDED(fmi2GetStringStatus(c, kind, &string));
+	}
+	ENSURE(status == fmi2Fatal && time == -1.0 && integer == -1 && boolean == 7 && string == NULL);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2GetRealStatus(c, (fmi2StatusKind)4, &time), fmi2Error);
+	ENSURE(strstr(f.log.last, "not an fmi2StatusKind") != NULL && time == -1.0);
+	ENSURE_STATUS(fmi2DoStep(c, 0.1, 0.1, fmi2True), fmi2OK);
 	fmi2FreeInstance(c);
 	teardown(&f);
 	return 0;
@@ -1772,6 +1820,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_a_restored_motion_continues_along_its_line);
 	RUN_TEST(test_bounds_of_references_arrays_and_buffers);
 	RUN_TEST(test_status_after_terminate);
+	RUN_TEST(test_status_kinds_not_delivered_are_discarded);
 	RUN_TEST(test_messages_are_printf_formats);
 	RUN_TEST(test_time_margins_scale_with_the_time);
 	RUN_TEST(test_random_call_sequences_follow_the_state_machine);

@@ -365,9 +365,16 @@ def test_status_queries_with_null_pointers_and_unknown_kinds(test_fmu):
     try:
         for function in (s.fmi2GetStatus, s.fmi2GetRealStatus, s.fmi2GetBooleanStatus, s.fmi2GetStringStatus):
             expect_error(inst, lambda: function(s.component, 0, None), "NULL value")
-        expect_error(inst, lambda: s.getStatus(99), "status kind 99")
-        expect_error(inst, lambda: s.getRealStatus(0), "status kind 0")
-        expect_error(inst, lambda: s.getIntegerStatus(2), "status kind 2")
+        expect_error(inst, lambda: s.getStatus(99), "status kind 99", "not an fmi2StatusKind")
+        # A kind the function does not deliver is discarded (FMI 2.0, 4.2.3), not refused.
+        for call, words in ((lambda: s.getRealStatus(0), ("status kind 0", "fmi2GetStatus")),
+                            (lambda: s.getIntegerStatus(2), ("status kind 2", "fmi2GetRealStatus"))):
+            before = len(inst.messages)
+            with pytest.raises(FMICallException) as info:
+                call()
+            assert info.value.status == 2  # fmi2Discard
+            assert [m[1] for m in inst.messages[before:]] == ["logStatusDiscard"]
+            assert all(word in inst.messages[-1][2] for word in words), inst.messages[-1][2]
         assert s.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime
         assert s.getStatus(0) == 0  # fmi2DoStepStatus: fmi2OK
         assert s.getBooleanStatus(3) == 0  # fmi2Terminated: false
