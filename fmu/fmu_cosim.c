@@ -38,7 +38,10 @@ static const char* const category_names[] = {"logEvents", "logStatusWarning", "l
 #define LOG_ALWAYS (LOG_WARNING | LOG_DISCARD | LOG_ERROR)
 
 // Logs a message in a category if that category is on. The text is formatted here and handed to
-// the importer's logger with '%' doubled, since FMI loggers treat the message as a format.
+// the importer's logger with '%' and '#' doubled: FMI 2.0 (2.1.5) loggers treat the message as a
+// printf format, and '#' as their escape character ("#r12#" names the Real variable of value
+// reference 12, "##" is a '#'), so text a message quotes (a path, a category, a string value) is
+// shown as it was given.
 static bool logging(const instance* inst, unsigned category)
 {
 	return inst && inst->logger && (inst->log_mask & category);
@@ -56,8 +59,8 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 	char escaped[2 * sizeof text];
 	size_t k = 0;
 	for (size_t i = 0; text[i] && k + 2 < sizeof escaped; ++i) {
-		if (text[i] == '%')
-			escaped[k++] = '%';
+		if (text[i] == '%' || text[i] == '#')
+			escaped[k++] = text[i];
 		escaped[k++] = text[i];
 	}
 	escaped[k] = '\0';

@@ -903,6 +903,35 @@ static int test_messages_are_printf_formats(void)
 	return 0;
 }
 
+// '#' is the logger's escape character (FMI 2.0, 2.1.5: "#r12#" names the Real variable of value
+// reference 12, and a '#' of the text is written "##"): text quoted in a message, here an unknown
+// log category "#r0# at 100%", reaches the logger escaped for both '#' and '%', and reads back as
+// given. Unescaped, a logger that expands references would have shown the parameter m's name.
+static int test_messages_escape_the_variable_reference_marker(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "marker");
+	ENSURE(c != NULL);
+	const fmi2String categories[] = {"#r0# at 100%"};
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2SetDebugLogging(c, fmi2True, 1, categories), fmi2Error);
+	char shown[sizeof f.log.last];
+	size_t k = 0;
+	for (const char* p = f.log.last; *p && k + 1 < sizeof shown; ++p) {
+		if (*p == '%' || *p == '#') {
+			ENSURE(p[1] == *p);  // no conversion and no variable reference
+			++p;
+		}
+		shown[k++] = *p;
+	}
+	shown[k] = '\0';
+	ENSURE(strstr(shown, "unknown log category \"#r0# at 100%\"") != NULL);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // Time resolution and round-off margins scale with the time (docs/fmu.md): at t = 1e6 s a step
 // below 4 eps 1e6 s (8.9e-10 s) is refused, a communication point 1e-8 s off the FMU's time (well
 // within 1000 ulps of 1e6 s, 2.2e-7 s) is taken, 1e-3 s off is not; a stop time is reached by
@@ -1822,6 +1851,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_status_after_terminate);
 	RUN_TEST(test_status_kinds_not_delivered_are_discarded);
 	RUN_TEST(test_messages_are_printf_formats);
+	RUN_TEST(test_messages_escape_the_variable_reference_marker);
 	RUN_TEST(test_time_margins_scale_with_the_time);
 	RUN_TEST(test_random_call_sequences_follow_the_state_machine);
 	RUN_TEST(test_calls_without_values_still_check_the_state);
