@@ -704,6 +704,18 @@ static sm_document* parse_document(const instance* inst, sm_error* err)
 	                          inst->parameters_length, err);
 }
 
+// Whether an instance name names nothing: NULL, empty or only white space (the C locale's, whatever
+// the importer's locale). FMI 2.0 (2.1.5): it "must have at least one character that is no white
+// space".
+static bool blank_name(const char* name)
+{
+	if (!name)
+		return true;
+	while (*name && strchr(" \t\n\v\f\r", *name))
+		++name;
+	return *name == '\0';
+}
+
 fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
                               fmi2String fmuResourceLocation, const fmi2CallbackFunctions* functions,
                               fmi2Boolean visible, fmi2Boolean loggingOn)
@@ -718,7 +730,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	inst->environment = functions ? functions->componentEnvironment : NULL;
 	inst->log_mask = LOG_ALWAYS | (loggingOn ? (unsigned)((1u << LOG_CATEGORY_COUNT) - 1u) : 0u);
 	inst->state = ST_INSTANTIATED;
-	const char* name = instanceName && *instanceName ? instanceName : "springmass";
+	const char* name = blank_name(instanceName) ? "springmass" : instanceName;
 	inst->name = malloc(strlen(name) + 1);
 	if (!inst->name) {
 		free(inst);
@@ -727,8 +739,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	}
 	strcpy(inst->name, name);
 
-	if (!instanceName || !*instanceName) {
-		log_error(inst, "fmi2Instantiate: missing instance name");
+	if (blank_name(instanceName)) {
+		log_error(inst, "fmi2Instantiate: missing instance name (it needs a character that is no white space)");
 		goto fail;
 	}
 	if (fmuType != fmi2CoSimulation) {

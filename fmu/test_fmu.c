@@ -743,14 +743,18 @@ static int test_a_restored_motion_continues_along_its_line(void)
 	return 0;
 }
 
-// Value references one past the last variable, NULL value arrays, an empty instance name and a
-// buffer too small for a state: each an fmi2Error with a message, never a read or write out of
-// bounds (FMI 2.0: the instance name must be non-empty).
+// Value references one past the last variable, NULL value arrays, an empty or blank instance name
+// and a buffer too small for a state: each an fmi2Error with a message, never a read or write out
+// of bounds (FMI 2.0, 2.1.5: the instance name "must have at least one character that is no white
+// space").
 static int test_bounds_of_references_arrays_and_buffers(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
 	ENSURE(instantiate(&f, "") == NULL);
+	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
+	f.log.last[0] = '\0';
+	ENSURE(instantiate(&f, " \t\n") == NULL);
 	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
 	fmi2Component c = start(&f, "bounds");
 	ENSURE(c != NULL);
