@@ -31,8 +31,9 @@
 // has AVX and two or one elsewhere, with the same IEEE operations in the same order (no fused
 // multiply-add), so the forces and Jacobians are the same bits either way.
 //
-// Threads. The library starts no thread of its own, but two of its dependencies may, as
-// process-wide settings allow: OpenBLAS (see above) and CHOLMOD, whose supernodal factorisation
+// Threads. The library starts threads of its own only when asked (sm_simulation_def.threads > 1,
+// for the pcg solver on models of 4000 free particles or more; they end with the simulation),
+// but two of its dependencies may start others, as process-wide settings allow: OpenBLAS (see above) and CHOLMOD, whose supernodal factorisation
 // (the reduced Cholesky solver from about 2000 unknowns on, the coarse system of conjugate
 // gradients on large models, the sparse paths of sm_statics_solve and sm_modes_compute) runs in
 // an OpenMP team of up to 4 threads whatever OMP_NUM_THREADS says. The team belongs to the
