@@ -2,6 +2,7 @@
 # needs. Everything real lives in CMakeLists.txt.
 BUILD_DIR     ?= build
 SANITIZE_DIR  ?= build-sanitize
+TSAN_DIR      ?= build-tsan
 BUILD_TYPE    ?= Release
 CMAKE         ?= /usr/bin/cmake
 CTEST         ?= /usr/bin/ctest
@@ -12,7 +13,7 @@ CMAKE_FLAGS   ?=
 FUZZ_SECONDS  ?= 60
 FUZZ_TARGETS  ?=
 
-.PHONY: all setup build demo test sanitize-build test-sanitize bench-forces bench-cloth fuzz install clean
+.PHONY: all setup build demo test sanitize-build test-sanitize test-thread-sanitize bench-forces bench-cloth fuzz install clean
 
 all: build
 
@@ -42,6 +43,15 @@ sanitize-build: setup $(SANITIZE_DIR)/build.ninja
 test-sanitize: sanitize-build
 	$(CTEST) --test-dir $(SANITIZE_DIR) --output-on-failure -j $(JOBS) -LE no-sanitize
 
+# ThreadSanitizer: only the executables of the tests that use threads are built and run.
+$(TSAN_DIR)/build.ninja: | setup
+	$(CMAKE) -S . -B $(TSAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	    -DSPRINGMASS_SANITIZE_THREAD=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+
+test-thread-sanitize: setup $(TSAN_DIR)/build.ninja
+	$(CMAKE) --build $(TSAN_DIR) -j $(JOBS) --target test_threads test_simulation test_fmu
+	$(CTEST) --test-dir $(TSAN_DIR) --output-on-failure -j $(JOBS) -L threads
+
 bench-forces: build
 	bench/bench_forces.sh $(BUILD_DIR)
 
@@ -57,4 +67,4 @@ install: build
 	$(CMAKE) --install $(BUILD_DIR) --prefix $(PREFIX)
 
 clean:
-	rm -rf $(BUILD_DIR) $(SANITIZE_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(TSAN_DIR)
