@@ -1133,7 +1133,10 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 	// same trajectory: springs are checked afresh only where it starts or restarts.
 	if (sim->time < t_end && !cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
-	if (!cvode_ahead(sim) && t_stop - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
+	// CVODE steps on to t_stop, or ends its last step at t_end when the inputs changed: an interval
+	// up to there too short for it is one step of our own.
+	const double t_last = inputs_changed ? t_end : t_stop;
+	if (!cvode_ahead(sim) && t_last - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
 		return short_step(sim, t_end);
 	// max_steps holds for the whole advance: over the CVode calls between spring breaks and
 	// restarts too, each of which CVODE would count afresh.

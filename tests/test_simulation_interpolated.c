@@ -584,6 +584,46 @@ static int test_max_steps_holds_when_stepping_past_the_end(void)
 	return 0;
 }
 
+// An interval below the time resolution (4 eps max(1 s, |t|), 8.9e-16 s at t = 1 s) is one explicit
+// Euler step for an interpolated advance too, also when an input changed, so that CVODE would end
+// its last step at the end time: there a restart (restart_on_input_change) failed with
+// CV_TOO_CLOSE, as plain advances did before they took such steps. With and without on_step, the
+// state is the one sm_simulation_advance gives to the same time, bit for bit (both the same
+// Euler step), and the run then goes on.
+static int test_an_interval_below_the_time_resolution_after_a_changed_input(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const double push[3] = {1.0, 0.0, 0.0}, t_end = 1.0 + 4e-16;
+	for (int hooked = 0; hooked < 2; hooked++) {
+		run_record r = {0};
+		sm_simulation_def d = tight_def();
+		d.restart_on_input_change = true;
+		if (hooked) {
+			d.on_step = count_step;
+			d.on_step_context = &r;
+		}
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		sm_simulation* plain = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL && plain != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, push), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_external_force(plain, 1, push), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_end, 2.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(plain, t_end), SM_OK);
+		ENSURE(sm_simulation_time(sim) == t_end && sm_simulation_time(plain) == t_end);
+		ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(plain), 6 * sizeof(double)) == 0);
+		ENSURE(memcmp(sm_simulation_velocities(sim), sm_simulation_velocities(plain), 6 * sizeof(double)) == 0);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 1.5, 2.0), SM_OK);
+		ENSURE(sm_simulation_time(sim) == 1.5);
+		sm_simulation_destroy(plain);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A stop time that is not finite or lies before the end time is refused, as is an end time
 // before the current time, with nothing changed and the message naming the times.
 static int test_bad_times_are_refused(void)
@@ -630,5 +670,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_plain_advance_within_the_steps_interpolates);
 	RUN_TEST(test_max_steps_holds_when_stepping_past_the_end);
 	RUN_TEST(test_bad_times_are_refused);
+	RUN_TEST(test_an_interval_below_the_time_resolution_after_a_changed_input);
 	return TEST_SUMMARY();
 }
