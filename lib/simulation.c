@@ -523,56 +523,61 @@ static sm_linear_solver resolve_solver(const sm_simulation_def* def, int64_t dof
 	return SM_SOLVER_REDUCED_PCG;
 }
 
-// Root functions for the model's breakable springs (recomputed when the model changes).
+// Root functions for the model's breakable springs (recomputed when the model changes). The new
+// arrays are made before the old ones go: out of memory for them, the simulation keeps the old ones
+// and CVODE the root functions it was given for them.
 static sm_status build_roots(sm_simulation* sim)
 {
-	free(sim->root_spring);
-	free(sim->root_limit);
-	free(sim->root_values);
-	free(sim->roots_found);
-	sim->root_spring = NULL;
-	sim->root_limit = NULL;
-	sim->root_values = NULL;
-	sim->roots_found = NULL;
-	sim->root_count = 0;
 	const sm_model* m = sim->model;
 	int32_t count = 0;
 	for (int32_t s = 0; s < m->spring_count; s++)
 		if (isfinite(m->spring_def[s].break_strain))
 			count++;
+	int32_t* spring = NULL;
+	double *limit = NULL, *values = NULL;
+	int *found = NULL, *direction = NULL;
 	if (count > 0) {
-		sim->root_spring = malloc((size_t)count * sizeof(int32_t));
-		sim->root_limit = malloc((size_t)count * sizeof(double));
-		sim->root_values = malloc((size_t)count * sizeof(double));
-		sim->roots_found = malloc((size_t)count * sizeof(int));
-		if (!sim->root_spring || !sim->root_limit || !sim->root_values || !sim->roots_found)
+		spring = malloc((size_t)count * sizeof(int32_t));
+		limit = malloc((size_t)count * sizeof(double));
+		values = malloc((size_t)count * sizeof(double));
+		found = malloc((size_t)count * sizeof(int));
+		direction = malloc((size_t)count * sizeof(int));
+		if (!spring || !limit || !values || !found || !direction) {
+			free(spring);
+			free(limit);
+			free(values);
+			free(found);
+			free(direction);
 			return SM_ERROR_OUT_OF_MEMORY;
-		for (int32_t s = 0; s < m->spring_count; s++) {
+		}
+		for (int32_t s = 0, r = 0; s < m->spring_count; s++) {
 			if (!isfinite(m->spring_def[s].break_strain))
 				continue;
-			sim->root_spring[sim->root_count] = s;
-			sim->root_limit[sim->root_count] = m->rest_length[s] * (1.0 + m->spring_def[s].break_strain);
-			sim->root_count++;
+			spring[r] = s;
+			limit[r] = m->rest_length[s] * (1.0 + m->spring_def[s].break_strain);
+			direction[r] = 1;  // only a strain rising through the limit breaks a spring
+			r++;
 		}
 	}
+	free(sim->root_spring);
+	free(sim->root_limit);
+	free(sim->root_values);
+	free(sim->roots_found);
+	sim->root_spring = spring;
+	sim->root_limit = limit;
+	sim->root_values = values;
+	sim->roots_found = found;
+	sim->root_count = count;
+	sm_status st = SM_OK;
 	if (sim->cvode != NULL) {
-		if (CVodeRootInit(sim->cvode, sim->root_count, sim->root_count > 0 ? roots : NULL) != CV_SUCCESS)
-			return SM_ERROR_SOLVER;
-		if (sim->root_count > 0) {
-			// Only a strain rising through the limit breaks a spring.
-			int* direction = malloc((size_t)sim->root_count * sizeof(int));
-			if (!direction)
-				return SM_ERROR_OUT_OF_MEMORY;
-			for (int32_t r = 0; r < sim->root_count; r++)
-				direction[r] = 1;
-			int flag = CVodeSetRootDirection(sim->cvode, direction);
-			free(direction);
-			if (flag != CV_SUCCESS)
-				return SM_ERROR_SOLVER;
+		if (CVodeRootInit(sim->cvode, count, count > 0 ? roots : NULL) != CV_SUCCESS ||
+		    (count > 0 && CVodeSetRootDirection(sim->cvode, direction) != CV_SUCCESS))
+			st = SM_ERROR_SOLVER;
+		else if (count > 0)
 			CVodeSetNoInactiveRootWarn(sim->cvode);
-		}
 	}
-	return SM_OK;
+	free(direction);
+	return st;
 }
 
 // Masses of the free particles, from the simulation's model.
@@ -1870,18 +1875,26 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	}
 	sm_model* previous = sim->model;
 	sim->model = copy;
+	sim->solver_message[0] = '\0';
 	sm_status st = build_roots(sim);
-	const char* failure = "update_model: cannot set up the break events";
+	const char* failure = st == SM_ERROR_OUT_OF_MEMORY ? "update_model: out of memory for the break events"
+	                                                   : "update_model: cannot set up the break events";
 	if (st == SM_OK && has_reduced_solver(sim) && !sm_reduced_solver_rebuild(sim->linear_solver)) {
 		st = SM_ERROR_OUT_OF_MEMORY;
 		failure = "update_model: out of memory rebuilding the linear solver";
 	}
 	if (st != SM_OK) {
+		char cause[SM_ERROR_MESSAGE_CAPACITY];
+		snprintf(cause, sizeof cause, "%s", sim->solver_message);
 		sim->model = previous;
 		sm_model_destroy(copy);
 		free(enabled);
 		build_roots(sim);
-		return fail(sim, st, "%s", failure);
+		// CVODE's root functions may have been set up anew, and with them went its records of
+		// their values and those of a break it found past the current time: it starts afresh
+		// here, from the state as it is.
+		sim->need_restart = true;
+		return fail(sim, st, "%s%s%s", failure, cause[0] ? ": " : "", cause);
 	}
 	sm_model_destroy(previous);
 	free(sim->initial_enabled);

@@ -1131,6 +1131,91 @@ static int test_simulation_restore(void)
 	return inject_every_failure("simulation restore", restore_scenario, NULL);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Simulation: new constants refused while a break found past the end time waits
+// ---------------------------------------------------------------------------------------------
+
+// pulled_spring() with its driven particle pulled at 0.37 m/s breaks spring 0 at 0.1 / 0.37 s.
+// Rows interpolated up to 1 s leave that break, found by CVODE past the row at 0.27 s, for the
+// next advance; then the model's constants change, spring 1 becoming breakable too (far from its
+// limit), which sets up CVODE's root functions anew. An update refused for lack of memory (with
+// the root functions of the old model set up again) must still leave a simulation whose next
+// advance breaks spring 0 at its time, and nothing else: CVODE's records of its root functions
+// and the pending break's are gone with the set-up. Root finding locates the time to about
+// 1e-14 s, a restart there within the tolerances: 1e-9 s.
+static int pending_break_scenario(void* context)
+{
+	const sm_linear_solver* solver = context;
+	sm_model* model = pulled_spring();
+	sm_model* changed = pulled_spring();
+	sm_spring_def spring;
+	if (!model || !changed || sm_model_get_spring(changed, 1, &spring) != SM_OK) {
+		sm_model_destroy(model);
+		sm_model_destroy(changed);
+		ENSURE(oom_.reached);  // the models' own allocations
+		return 0;
+	}
+	spring.break_strain = 10.0;
+	spring.stiffness *= 2.0;
+	const sm_status changed_st = sm_model_set_spring(changed, 1, &spring);
+	sm_simulation_def def = sm_default_simulation_def();
+	def.solver = *solver;
+	sm_error err = {SM_OK, ""};
+	sm_simulation* sim = changed_st == SM_OK ? sm_simulation_create(model, &def, &err) : NULL;
+	int result = 1;
+	if (!sim) {
+		if (changed_st != SM_OK)
+			ENSURE_CLEAR_FAILURE(changed_st, sm_model_last_error(changed));
+		else
+			ENSURE_CLEAR_FAILURE(err.status, err.message);
+		result = 0;
+		goto done;
+	}
+	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {0.37, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
+	sm_status st = sm_simulation_advance_interpolated(sim, 0.1, 1.0);
+	if (st == SM_OK)
+		st = sm_simulation_advance_interpolated(sim, 0.27, 1.0);
+	if (st == SM_OK)
+		st = sm_simulation_update_model(sim, changed);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (oom_.persistent) {
+			result = 0;
+			goto done;
+		}
+	}
+	st = sm_simulation_advance(sim, 1.0);
+	if (st != SM_OK) {
+		ENSURE_CLEAR_FAILURE(st, sm_simulation_last_error(sim));
+		if (oom_.persistent) {
+			result = 0;
+			goto done;
+		}
+		st = sm_simulation_advance(sim, 1.0);
+	}
+	if (st != SM_OK || sm_simulation_break_count(sim) != 1 || sm_simulation_break(sim, 0).spring != 0 ||
+	    !(fabs(sm_simulation_break(sim, 0).time - 0.1 / 0.37) <= 1e-9)) {
+		printf("  status %d, %d breaks, the first of spring %d at %.17g s: %s\n", (int)st,
+		       (int)sm_simulation_break_count(sim), (int)sm_simulation_break(sim, 0).spring,
+		       sm_simulation_break(sim, 0).time, sm_simulation_last_error(sim));
+		goto done;
+	}
+	result = 0;
+done:
+	sm_simulation_destroy(sim);
+	sm_model_destroy(changed);
+	sm_model_destroy(model);
+	return result;
+}
+
+static int test_simulation_update_with_a_pending_break(void)
+{
+	sm_linear_solver dense = SM_SOLVER_DENSE, pcg = SM_SOLVER_REDUCED_PCG;
+	return inject_every_failure("simulation update, break pending, dense", pending_break_scenario, &dense) ||
+	       inject_every_failure("simulation update, break pending, pcg", pending_break_scenario, &pcg);
+}
+
 #ifdef SPRINGMASS_OOM_FMU
 
 // A bob on a spring that breaks (2 kg on 400 N/m at rest length 0.1 m, dropped), with a force
@@ -1330,6 +1415,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_simulation_adams);
 	RUN_TEST(test_simulation_simultaneous_breaks);
 	RUN_TEST(test_simulation_restore);
+	RUN_TEST(test_simulation_update_with_a_pending_break);
 	RUN_TEST(test_analysis_dense);
 	RUN_TEST(test_analysis_sparse);
 	RUN_TEST(test_statics_continuation);

@@ -313,7 +313,9 @@ SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 /// moved that way jumps, as a driven one set elsewhere does); driven ones keep their motion.
 /// Springs disabled in the new model are disabled from the start (a reset keeps them so),
 /// except those that broke in this simulation: a copy of sm_simulation_model() has them
-/// disabled, and a reset still restores them. External forces stay as set.
+/// disabled, and a reset still restores them. External forces stay as set. Refused for lack of
+/// memory (SM_ERROR_OUT_OF_MEMORY, or SM_ERROR_SOLVER when CVODE's own allocation failed), the
+/// simulation keeps its model and state, and the next advance restarts CVODE there.
 SM_API sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model);
 
 /// The simulation's own model (springs that broke are disabled in it). The pointer stays valid
