@@ -1130,13 +1130,16 @@ static sm_status stopped_by_caller(sm_simulation* sim, double t_end)
 static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 {
 	sim->last_error[0] = '\0';
+	// To the current time: nothing, not even taking the inputs changed as seen by an advance.
+	if (!(sim->time < t_end))
+		return SM_OK;
 	// Inputs that changed for this advance will likely change at its end too (a co-simulation
 	// master's): CVODE then ends its last step at t_end rather than step past it.
 	const bool inputs_changed = sim->input_changed;
 	sim->input_changed = false;
 	// Where CVODE is past the current time, it has looked for roots beyond it already, on the
 	// same trajectory: springs are checked afresh only where it starts or restarts.
-	if (sim->time < t_end && !cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
+	if (!cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
 	// CVODE steps on to t_stop, or ends its last step at t_end when the inputs changed: an interval
 	// up to there too short for it is one step of our own.

@@ -510,6 +510,41 @@ static int test_an_unchanged_input_set_after_a_changed_one_keeps_the_change(void
 	return 0;
 }
 
+// An advance to the current time does nothing, also to what the inputs changed since the last
+// advance mean for the next: after a force changed at a row, the next advance still ends its last
+// step at its end (CVODE's time there, to its stop-time round-off), and the run with such an
+// advance (plain or interpolated) in between is the run without it, bit for bit. It took the
+// change as seen, and the next advance stepped past its end.
+static int test_an_advance_to_the_current_time_keeps_a_changed_input(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	double x[3][6];
+	int64_t steps[3];
+	for (int idle = 0; idle < 3; idle++) {
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 2.0), SM_OK);
+		ENSURE(set_inputs(sim, PUSH_BOB, false) == 0);
+		if (idle == 1)
+			ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+		else if (idle == 2)
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 2.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.51, 2.0), SM_OK);
+		double tn = 0.0;
+		CVodeGetCurrentTime(sim->cvode, &tn);
+		ENSURE(tn <= 0.51 && tn > 0.51 - 1e-12);
+		memcpy(x[idle], sm_simulation_positions(sim), sizeof x[idle]);
+		steps[idle] = sm_simulation_statistics(sim).steps;
+		sm_simulation_destroy(sim);
+	}
+	for (int idle = 1; idle < 3; idle++)
+		ENSURE(steps[idle] == steps[0] && memcmp(x[idle], x[0], sizeof x[0]) == 0);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A plain advance to a time CVODE has already passed interpolates, with no step and no
 // restart, the value an interpolated advance gives; one past CVODE's time steps on. With the
 // on_step hook too, which is told of no step then (CVODE, asked for one more step, would take it
@@ -667,6 +702,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_input_set_past_the_steps_restarts_at_the_row);
 	RUN_TEST(test_inputs_set_unchanged_leave_the_run_of_one_advance);
 	RUN_TEST(test_an_unchanged_input_set_after_a_changed_one_keeps_the_change);
+	RUN_TEST(test_an_advance_to_the_current_time_keeps_a_changed_input);
 	RUN_TEST(test_plain_advance_within_the_steps_interpolates);
 	RUN_TEST(test_max_steps_holds_when_stepping_past_the_end);
 	RUN_TEST(test_bad_times_are_refused);
