@@ -1419,8 +1419,8 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (particle < 0 || particle >= sim->particle_count)
-		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_driven: particle %d is out of range (0..%d)", (int)particle,
-		            (int)sim->particle_count - 1);
+		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_driven: particle %d is out of range (the model has %d)",
+		            (int)particle, (int)sim->particle_count);
 	if (sim->model->motion[particle] != SM_PARTICLE_DRIVEN)
 		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven", (int)particle);
 	if (position == NULL || velocity == NULL)
@@ -1458,8 +1458,8 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (particle < 0 || particle >= sim->particle_count)
-		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_external_force: particle %d is out of range (0..%d)",
-		            (int)particle, (int)sim->particle_count - 1);
+		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_external_force: particle %d is out of range (the model has %d)",
+		            (int)particle, (int)sim->particle_count);
 	if (force == NULL)
 		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_external_force: particle %d: force is NULL", (int)particle);
 	if (!finite3(force))
@@ -1485,8 +1485,8 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (spring < 0 || spring >= sm_model_spring_count(sim->model))
-		return fail(sim, SM_ERROR_SPRING_INDEX, "break_spring: spring %d is out of range (0..%d)", (int)spring,
-		            (int)sm_model_spring_count(sim->model) - 1);
+		return fail(sim, SM_ERROR_SPRING_INDEX, "break_spring: spring %d is out of range (the model has %d)",
+		            (int)spring, (int)sm_model_spring_count(sim->model));
 	if (!sim->model->enabled[spring])
 		return SM_OK;
 	refresh_outputs(sim);
