@@ -1004,6 +1004,24 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 			definite = singular < 0 ? -1 : !singular;
 		}
 	}
+	// The round-off floor is evaluated where the iteration ends, and grows with the distance of
+	// the particles from the origin: an iteration carried far away (a stiffness contrast that the
+	// continuation softens until the soft springs stretch a billion times their length) meets it
+	// with any shape. A balance whose floor exceeds every load cannot tell the loads from
+	// round-off: no rest shape is resolved there, whatever the residual.
+	double load = 0.0;
+	for (int32_t i = 0; i < w.nf; i++) {
+		const double* c = w.constant_force + 3 * (size_t)w.free_particle[i];
+		load = fmax(load, hypot(hypot(c[0], c[1]), c[2]));
+	}
+	if (converged && load > 0.0 && res.tolerance > d.residual_tolerance && res.tolerance > load) {
+		converged = 0;
+		st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+		                  "statics: no rest shape can be resolved: the round-off of the spring forces (stiffness "
+		                  "x position rounding) is %.3g N where the iteration ended, above the largest load on a "
+		                  "particle, %.3g N (a stiffness contrast beyond double precision at these coordinates)",
+		                  res.tolerance, load);
+	}
 	if (definite == -2) {
 		converged = 0;
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,

@@ -2077,6 +2077,86 @@ static int test_statics_tolerance_is_the_round_off_floor(void)
 	return 0;
 }
 
+// A chain hanging from its fixed top whose springs alternate between ks_even and ks_odd [N/m]
+// (rest length 0.1 m, particles of 0.01 kg), started straight down with a slight bow.
+static sm_model* contrast_chain(int32_t segments, double ks_even, double ks_odd)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	for (int32_t i = 0; i <= segments && model != NULL; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = 0.01;
+		p.position[0] = 0.001 * i * i;
+		p.position[2] = -0.1 * i;
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		if (sm_model_add_particle(model, &p, NULL) != SM_OK) {
+			sm_model_destroy(model);
+			return NULL;
+		}
+	}
+	for (int32_t i = 0; i < segments && model != NULL; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = i + 1;
+		s.rest_length = 0.1;
+		s.stiffness = i % 2 == 0 ? ks_even : ks_odd;
+		if (sm_model_add_spring(model, &s, NULL) != SM_OK) {
+			sm_model_destroy(model);
+			return NULL;
+		}
+	}
+	return model;
+}
+
+// Statics of a chain of stiff and soft springs. At equilibrium the part below spring i is in
+// balance, so its tension is the weight below it, (N - i) m g, less the residual forces on those
+// particles: within (N - i) residuals. With 1e9 N/m and 1 N/m that holds to the round-off floor
+// (2e-4 N against weights of 0.098 N). With 1e12 N/m and 1 N/m the problem lies beyond double
+// precision: the soft springs stretch the chain to 66 m, where the positions' round-off times
+// 1e12 N/m is 0.2 N, above a particle's weight, so no computed force balance can tell the
+// weights from round-off. The solver must say so instead of returning a shape: it used to return
+// one whose tensions were 1e11 N off, accepted against a floor of 6e9 N evaluated where the
+// iteration had carried the particles.
+static int test_statics_stiffness_contrast(void)
+{
+	const int32_t segments = 50;
+	const double weight = 0.01 * 9.81;
+	for (int resolvable = 1; resolvable >= 0; resolvable--) {
+		sm_model* model = contrast_chain(segments, resolvable ? 1e9 : 1e12, 1.0);
+		ENSURE(model != NULL);
+		const size_t n3 = 3 * (size_t)(segments + 1);
+		double* x = malloc(n3 * sizeof(double));
+		double* tension = malloc((size_t)segments * sizeof(double));
+		ENSURE(x != NULL && tension != NULL);
+		for (size_t k = 0; k < n3; k++)
+			x[k] = -7.0;
+		sm_statics_result res;
+		sm_error err;
+		const sm_status st = sm_statics_solve(model, NULL, x, NULL, &res, &err);
+		if (resolvable)
+			ENSURE_STATUS(st, SM_OK);
+		if (st == SM_OK) {
+			sm_model_spring_states(model, x, NULL, NULL, NULL, tension);
+			for (int32_t i = 0; i < segments; i++) {
+				const double expected = (segments - i) * weight;
+				// Bounded by the balance of the part below (above); and, whatever the floor, a
+				// shape that carries its weight gets every tension right to a tenth of a weight.
+				ENSURE_NEAR(tension[i], expected, fmin((segments - i) * res.residual, 0.1 * weight));
+			}
+		} else {
+			ENSURE_STATUS(st, SM_ERROR_NOT_CONVERGED);
+			ENSURE(strstr(err.message, "round-off") != NULL);
+			ENSURE(x[0] == -7.0 && x[n3 - 1] == -7.0);  // untouched
+		}
+		printf("  contrast %s: status %d, %d iterations, residual %.3g N, tolerance %.3g N\n",
+		       resolvable ? "1e9 " : "1e12", (int)st, (int)res.iterations, res.residual, res.tolerance);
+		free(x);
+		free(tension);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // max_iterations is a hard budget: what converges in n iterations converges with n allowed and
 // not with n - 1, which stop at n - 1.
 static int test_statics_iteration_budget_is_exact(void)
@@ -2656,6 +2736,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_refuses_overflowing_forces);
 	RUN_TEST(test_statics_tolerance_is_the_round_off_floor);
 	RUN_TEST(test_statics_iteration_budget_is_exact);
+	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_stability_sees_mechanisms);
 	RUN_TEST(test_zero_tolerance_is_relative_to_the_largest_magnitude);

@@ -99,7 +99,9 @@ SM_API sm_statics_def sm_default_statics_def(void);
 ///   along the way, or spring forces whose round-off scale (stiffness x distance) does;
 /// - SM_ERROR_NOT_CONVERGED: no equilibrium exists (a group of free particles not held by any
 ///   constrained particle, with a non-zero net force on it, such as a free body under gravity),
-///   or the iteration limit was reached; the message names the particles or gives the residual;
+///   the iteration limit was reached, or the round-off floor of the tolerance exceeds the largest
+///   constant force on a free particle where the iteration ended (no computed balance resolves
+///   the loads there); the message names the particles or gives the residual or the floor;
 /// - SM_ERROR_SOLVER: the sparse factorisation failed;
 /// - SM_ERROR_OUT_OF_MEMORY.
 SM_API sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x,
