@@ -120,6 +120,47 @@ static double triangle_area(const double* vertices, const int32_t* tri)
 	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
+// The sine of a triangle's smallest angle [1]: 2A / (a b), with a and b its two longest sides,
+// since 2A = a b sin C for the angle C between any two sides and the smallest angle lies between
+// the two longest. Collinear vertices give 0, up to the rounding of the cross product, a few ulps
+// of a b: vertices given in decimal ((0.1, 0.2, 0.3) and (0.3, 0.6, 0.9) with the origin) leave
+// a computed area of 1e-17 of it, never exactly 0. The edges are divided by their largest
+// component first, so that the rule does not depend on the unit of length (the longest scaled
+// side is then between 1 and sqrt(3), the second at least half of it: no underflow). NaN if an
+// edge overflows (vertices more than the largest double apart): then the other two edges are
+// nearly opposite, and the triangle flat unless its area overflows.
+static double smallest_angle_sine(const double* vertices, const int32_t* tri)
+{
+	double edge[3][3], largest = 0.0;
+	for (int k = 0; k < 3; k++) {
+		const double* from = vertices + 3 * (size_t)tri[k];
+		const double* to = vertices + 3 * (size_t)tri[(k + 1) % 3];
+		for (int c = 0; c < 3; c++) {
+			edge[k][c] = to[c] - from[c];
+			largest = fmax(largest, fabs(edge[k][c]));
+		}
+	}
+	if (!isfinite(largest))
+		return NAN;
+	if (!(largest > 0.0))
+		return 0.0;
+	double length[3];
+	for (int k = 0; k < 3; k++) {
+		for (int c = 0; c < 3; c++)
+			edge[k][c] /= largest;
+		length[k] = sqrt(edge[k][0] * edge[k][0] + edge[k][1] * edge[k][1] + edge[k][2] * edge[k][2]);
+	}
+	const double* u = edge[0];
+	const double* w = edge[2];
+	const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+	int shortest = 0;
+	for (int k = 1; k < 3; k++)
+		if (length[k] < length[shortest])
+			shortest = k;
+	const double sides = length[(shortest + 1) % 3] * length[(shortest + 2) % 3];
+	return sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / sides;
+}
+
 sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out)
 {
 	static const char what[] = "mesh";
@@ -156,8 +197,14 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			                   (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
-		if (!(area > 0.0)) {
-			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle %d (%d, %d, %d) has zero area",
+		// Zero area: exactly, or to rounding (collinear vertices), by the rule a sheet's edges
+		// follow: the sine of the smallest angle at most 1e-12 (NaN, an edge that overflows
+		// while the area does not, is a flat triangle too).
+		const double sine = smallest_angle_sine(def->vertices, tri);
+		if (!(area > 0.0) || !(sine > 1e-12)) {
+			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+			                   "mesh: triangle %d (%d, %d, %d) has zero area (to rounding: twice its area is at most "
+			                   "1e-12 times the product of its two longest edges)",
 			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}

@@ -766,7 +766,9 @@ static int test_broken_files(void)
 	     SM_ERROR_SCHEMA, "test.json: structures[0].triangles[0][2]: 3 must be a whole number from 0 to 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
 	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_INVALID_ARGUMENT, "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area"},
+	     SM_ERROR_INVALID_ARGUMENT,
+	     "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
+	     "most 1e-12 times the product of its two longest edges)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"position\":"
 	     " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
 	     " \"big\"}]}",
@@ -1189,7 +1191,9 @@ static int test_messages_name_parameters(void)
 	     "parameter far = 1e+308 and parameter near = -1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
 	     " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_INVALID_ARGUMENT, "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (with parameter x = 2)"},
+	     SM_ERROR_INVALID_ARGUMENT,
+	     "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
+	     "most 1e-12 times the product of its two longest edges) (with parameter x = 2)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
 	     " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
 	     " {\"strain_stiffness\": \"big\"}}]}",

@@ -1590,6 +1590,55 @@ static int test_mesh_triangle_limit_checked_first(void)
 	return 0;
 }
 
+// A triangle whose vertices are collinear has zero area even where rounding makes its computed
+// area positive: (0, 0, 0), (0.1, 0.2, 0.3) and (0.3, 0.6, 0.9) lie on one line, but the
+// decimals are not exact in binary and the cross product comes out near 3e-17 m^2, which gave
+// vertex 1 a mass of 5e-18 kg (and a frequency of some 1e10 rad/s on its springs of E = 1000 N). Refused
+// whichever vertex is listed first, naming the triangle, with the model unchanged. The rule
+// is the sheet's: twice the area at most 1e-12 times the product of the two longest edges (the
+// sine of the smallest angle), far above the rounding of the cross product (a few 1e-16 of that
+// product) and far below any triangle meant as one: smallest angles of 1e-11 rad are built.
+static int test_mesh_collinear_triangle_refused(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	const double line[] = {0, 0, 0, 0.1, 0.2, 0.3, 0.3, 0.6, 0.9, 1, 0, 0};
+	static const int32_t orders[3][6] = {{0, 1, 2, 0, 2, 3}, {1, 2, 0, 0, 2, 3}, {2, 0, 1, 0, 2, 3}};
+	for (int k = 0; k < 3; k++) {
+		sm_mesh_def def = sm_default_mesh_def();
+		def.vertices = line;
+		def.vertex_count = 4;
+		def.triangles = orders[k];
+		def.triangle_count = 2;
+		char expected[64];
+		snprintf(expected, sizeof expected, "mesh: triangle 0 (%d, %d, %d) has zero area", (int)orders[k][0],
+		         (int)orders[k][1], (int)orders[k][2]);
+		ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strncmp(sm_model_last_error(m), expected, strlen(expected)) == 0);
+		ENSURE(strstr(sm_model_last_error(m), "(to rounding: twice its area is at most 1e-12 times") != NULL);
+		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	}
+	// Thin triangles: a smallest angle of 1e-11 rad (its sine 1e-11) is a triangle, one of 1e-13
+	// rad is not (here with the angle at the last vertex listed).
+	const double thin[] = {0, 0, 0, 1, 0, 0, 1, 1e-11, 0, 1, 1e-13, 0};
+	const int32_t kept[3] = {0, 1, 2}, flat[3] = {1, 3, 0};
+	sm_mesh_def def = sm_default_mesh_def();
+	def.vertices = thin;
+	def.vertex_count = 3;
+	def.triangles = kept;
+	def.triangle_count = 1;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 4 && sm_model_spring_count(m) == 3);
+	def.vertex_count = 4;
+	def.triangles = flat;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strncmp(sm_model_last_error(m), "mesh: triangle 0 (1, 3, 0) has zero area", 40) == 0);
+	ENSURE(sm_model_particle_count(m) == 4 && sm_model_spring_count(m) == 3);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // Fixing particles through the selection helpers zeroes their stored velocity, as fixing them
 // through their definition does (model.h: a fixed particle's velocity is zero).
 static int test_fixing_by_selection_zeroes_velocity(void)
@@ -1675,6 +1724,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_grid_counts_below_two_refused);
 	RUN_TEST(test_bend_material_checked_by_sheet_and_mesh);
 	RUN_TEST(test_mesh_triangle_limit_checked_first);
+	RUN_TEST(test_mesh_collinear_triangle_refused);
 	RUN_TEST(test_fixing_by_selection_zeroes_velocity);
 	RUN_TEST(test_rope_mass_per_length_statuses);
 	return TEST_SUMMARY();

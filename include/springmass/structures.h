@@ -145,7 +145,9 @@ typedef struct sm_block_def {
 /// edge (between the two vertices opposite it, in the order of the edges). Each vertex gets a
 /// third of the mass of every triangle it belongs to, the triangle's mass being its area times
 /// the density; vertex v becomes particle first_particle + v.
-/// Errors: a vertex index out of range, a triangle with a repeated vertex or zero area, an edge
+/// Errors: a vertex index out of range, a triangle with a repeated vertex or zero area (to
+/// rounding: twice its area at most 1e-12 times the product of its two longest edges, the sine
+/// of its smallest angle, as for collinear vertices given in decimal), an edge
 /// shared by more than two triangles, two triangles on the same three vertices, a vertex that
 /// belongs to no triangle (it would have no mass).
 typedef struct sm_mesh_def {
