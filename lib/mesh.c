@@ -90,6 +90,10 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
 		                     "mesh: %d triangles exceed the limit of %d per structure", (int)def->triangle_count,
 		                     SM_STRUCTURE_MAX_ELEMENTS / 3);
+	if (def->vertex_count > SM_STRUCTURE_MAX_ELEMENTS)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "mesh: %d vertices exceed the limit of %d particles per structure", (int)def->vertex_count,
+		                     SM_STRUCTURE_MAX_ELEMENTS);
 	for (int32_t v = 0; v < def->vertex_count; v++)
 		for (int c = 0; c < 3; c++)
 			if (!isfinite(def->vertices[3 * (size_t)v + c]))

@@ -1639,6 +1639,33 @@ static int test_mesh_collinear_triangle_refused(void)
 	return 0;
 }
 
+// One vertex over SM_STRUCTURE_MAX_ELEMENTS is refused as the limit, SM_ERROR_INVALID_ARGUMENT,
+// before the vertices are read or anything is allocated (structures.h). It was refused only
+// after every vertex had been read and a mass allocated for each, as "vertex 3 belongs to no
+// triangle" (SM_ERROR_NONPOSITIVE_MASS), since one triangle uses only three of them. calloc'ed
+// zero pages: 400 MB of address space, untouched.
+static int test_mesh_vertex_limit_checked_first(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	const int32_t count = SM_STRUCTURE_MAX_ELEMENTS + 1;
+	double* vertices = calloc(3 * (size_t)count, sizeof(double));
+	ENSURE(vertices != NULL);
+	vertices[3] = vertices[7] = 1.0;
+	const int32_t triangle[3] = {0, 1, 2};
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices, mesh.vertex_count = count, mesh.triangles = triangle, mesh.triangle_count = 1;
+	char expected[128];
+	snprintf(expected, sizeof expected, "mesh: %d vertices exceed the limit of %d particles per structure", (int)count,
+	         SM_STRUCTURE_MAX_ELEMENTS);
+	const int bad = refused(m, sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT, expected);
+	free(vertices);
+	ENSURE(bad == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // Fixing particles through the selection helpers zeroes their stored velocity, as fixing them
 // through their definition does (model.h: a fixed particle's velocity is zero).
 static int test_fixing_by_selection_zeroes_velocity(void)
@@ -1725,6 +1752,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_bend_material_checked_by_sheet_and_mesh);
 	RUN_TEST(test_mesh_triangle_limit_checked_first);
 	RUN_TEST(test_mesh_collinear_triangle_refused);
+	RUN_TEST(test_mesh_vertex_limit_checked_first);
 	RUN_TEST(test_fixing_by_selection_zeroes_velocity);
 	RUN_TEST(test_rope_mass_per_length_statuses);
 	return TEST_SUMMARY();
