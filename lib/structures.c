@@ -260,23 +260,43 @@ void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_mode
 // coordinates (a 1e-10 m spacing 1e10 m from the origin) collapses the grid, and its springs
 // would have no length. The grid has shape[0] x shape[1] x shape[2] points from particle p0 on,
 // numbered as in sm_structure_particle. Fails naming the first such pair.
-static sm_status check_grid_distinct(sm_model* model, const char* what, int32_t p0, const int64_t shape[3])
+//
+// Neighbours along each axis are compared and, with `diagonals` (a sheet), across both
+// diagonals of each cell: a sheet's edges may be nearly parallel (down to a sine of 1e-12), and
+// then a cell's diagonal edge_v / (nv - 1) - edge_u / (nu - 1) can be below the rounding where
+// its sides are not. A block's axes are orthogonal and each coordinate follows one index, so its
+// diagonal neighbours coincide only where those along its axes do. Points two apart along a
+// grid line coincide only if the one between does too: each coordinate, rounded from a sum
+// that grows (or falls) along the line, never turns back.
+static sm_status check_grid_distinct(sm_model* model, const char* what, int32_t p0, const int64_t shape[3],
+                                     bool diagonals)
 {
+	// Offsets (column, row, layer) of the neighbours compared: the axes, then the diagonals.
+	static const int offsets[5][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 0}, {-1, 1, 0}};
 	const int64_t stride[3] = {1, shape[0], shape[0] * shape[1]};
 	for (int64_t k = 0; k < shape[2]; k++)
 		for (int64_t i = 0; i < shape[1]; i++)
 			for (int64_t j = 0; j < shape[0]; j++) {
 				const int64_t at[3] = {j, i, k}, p = p0 + j + i * stride[1] + k * stride[2];
-				for (int axis = 0; axis < 3; axis++) {
-					if (at[axis] + 1 >= shape[axis])
+				for (int o = 0; o < (diagonals ? 5 : 3); o++) {
+					int64_t q = p0;
+					bool inside = true;
+					for (int axis = 0; axis < 3; axis++) {
+						const int64_t to = at[axis] + offsets[o][axis];
+						inside = inside && to >= 0 && to < shape[axis];
+						q += to * stride[axis];
+					}
+					if (!inside)
 						continue;
 					const double* x = model->position + 3 * p;
-					const double* y = model->position + 3 * (p + stride[axis]);
+					const double* y = model->position + 3 * q;
 					if (x[0] == y[0] && x[1] == y[1] && x[2] == y[2])
 						return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-						                     "%s: particles %lld and %lld coincide at (%g, %g, %g) m: the grid "
-						                     "spacing is below the resolution of the coordinates there",
-						                     what, (long long)p, (long long)(p + stride[axis]), x[0], x[1], x[2]);
+						                     "%s: particles %lld and %lld coincide at (%g, %g, %g) m: %s", what,
+						                     (long long)p, (long long)q, x[0], x[1], x[2],
+						                     o < 3 ? "the grid spacing is below the resolution of the coordinates there"
+						                           : "the diagonal of the grid's cells is below the resolution of the "
+						                             "coordinates there (edge_u and edge_v nearly parallel)");
 				}
 			}
 	return SM_OK;
@@ -434,7 +454,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	}
 	const int64_t sheet_shape[3] = {nu, nv, 1};
 	if (st == SM_OK)
-		st = check_grid_distinct(model, what, p0, sheet_shape);
+		st = check_grid_distinct(model, what, p0, sheet_shape, true);
 	// Per-section constants: each spring stands for the area of a grid cell (one spring of each
 	// offset per cell), half of it along an edge of the sheet, and its section is that area over
 	// its length (sm_scaling).
@@ -523,7 +543,7 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 			}
 	const int64_t block_shape[3] = {nu, nv, nw};
 	if (st == SM_OK)
-		st = check_grid_distinct(model, what, p0, block_shape);
+		st = check_grid_distinct(model, what, p0, block_shape, false);
 	// Per-section constants: as in a sheet, each spring stands for the volume of a cell, halved
 	// for each face of the block it lies in.
 	const double cell_volume = def->size[0] / (double)(nu - 1) * (def->size[1] / (double)(nv - 1)) *

@@ -742,6 +742,45 @@ static int test_grid_last_pair_distinct(void)
 	return 0;
 }
 
+// A sheet's edges may be nearly parallel (a sine of 1e-11 is above the 1e-12 of the parallel-edge
+// rule), so that the diagonal of its cells, edge_v / (nv - 1) - edge_u / (nu - 1) = (0, 5e-12, 0)
+// m here, is below the rounding of the coordinates, 1.2e-10 m at y = 1e6 m, while its spacings
+// along the edges are not: particles (0, 1) and (1, 0), at (0.5, 1e6, 0) m both, coincide. With
+// absolute constants the shear springs between them were built with rest length 0 (a rest-length
+// spring at its singular point), with per-strain ones refused as a spring of zero rest length:
+// now both are refused before any spring is made, naming the two particles, model unchanged.
+// With the sheet at the origin the diagonal is resolved and the sheet built.
+static int test_sheet_diagonal_neighbours_distinct(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_spring_material absolute = sm_default_spring_material();
+	absolute.stiffness = 10.0;
+	absolute.stiffness_scaling = absolute.damping_scaling = SM_ABSOLUTE;
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 3;
+	sheet.origin[1] = 1e6;
+	sheet.edge_v[0] = 1.0;
+	sheet.edge_v[1] = 1e-11;
+	for (int constants = 0; constants < 2; constants++) {
+		sheet.structural = sheet.shear = sheet.bend = constants == 0 ? absolute : sm_default_sheet_def().shear;
+		ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+		               "sheet: particles 2 and 4 coincide at (0.5, 1e+06, 0) m: the diagonal of the grid's cells is "
+		               "below the resolution of the coordinates there (edge_u and edge_v nearly parallel)") == 0);
+	}
+	sheet.origin[1] = 0.0;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_sheet(m, &sheet, &s), SM_OK);
+	for (int32_t k = 0; k < s.spring_count; k++) {
+		double l0;
+		ENSURE_STATUS(sm_model_spring_constants(m, s.first_spring + k, &l0, NULL, NULL), SM_OK);
+		ENSURE(l0 > 0.0);
+	}
+	sm_model_destroy(m);
+	return 0;
+}
+
 // The box of sm_set_motion_in_box is closed: a particle exactly on any face, edge or corner of
 // [lo, hi] counts. On the unit cube of a 2 x 2 x 2 block (coordinates exactly 0 and 1), the box
 // [0, 1]^3 selects all eight, the box of the upper z face alone (lo[2] = hi[2] = 1) its four,
@@ -1732,6 +1771,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_structure_particle_int32_limit);
 	RUN_TEST(test_spring_count_limit);
 	RUN_TEST(test_grid_last_pair_distinct);
+	RUN_TEST(test_sheet_diagonal_neighbours_distinct);
 	RUN_TEST(test_box_selection_closed);
 	RUN_TEST(test_mesh_edge_order);
 	RUN_TEST(test_zero_size_and_break_strain);
