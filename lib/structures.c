@@ -431,7 +431,13 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		                     def->edge_u[0], def->edge_u[1], def->edge_u[2], def->edge_v[0], def->edge_v[1],
 		                     def->edge_v[2]);
 
+	// The particles first: for counts up to 2^31 - 1 each, nu nv fits in 64 bits but the springs,
+	// some 6 nu nv, do not.
 	const int64_t nu = def->nu, nv = def->nv, n = nu * nv;
+	if (n > SM_STRUCTURE_MAX_ELEMENTS)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "sheet: %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
+		                     SM_STRUCTURE_MAX_ELEMENTS);
 	const bool has[3] = {structure_material_present(&def->structural), structure_material_present(&def->shear),
 	                     structure_material_present(&def->bend)};
 	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) + (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +

@@ -695,6 +695,26 @@ static int test_spring_count_limit(void)
 	return 0;
 }
 
+// A sheet of (2^31 - 1) x (2^31 - 1) particles with every group would have about 2.8e19 springs,
+// beyond int64_t: its count overflowed (undefined behaviour) and the message gave 9.2e18
+// springs. Like a block, a sheet whose particles alone exceed the limit is refused for them,
+// before its springs are counted, naming its grid; nothing is built.
+static int test_sheet_particle_limit_checked_first(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = INT32_MAX;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "sheet: 2147483647 x 2147483647 particles exceed the limit of 16777216 per structure") == 0);
+	sheet.nv = 2;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "sheet: 2147483647 x 2 particles exceed the limit of 16777216 per structure") == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // The coinciding-points check covers the last pair of grid points on each axis: a sheet of
 // nu = 2 (or nv = 2) and a block of nw = 2, whose only pair on that axis is also its last,
 // collapse 1e10 m from the origin with a 1e-10 m spacing. With absolute constants their springs
@@ -1770,6 +1790,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_selection_index_bounds);
 	RUN_TEST(test_structure_particle_int32_limit);
 	RUN_TEST(test_spring_count_limit);
+	RUN_TEST(test_sheet_particle_limit_checked_first);
 	RUN_TEST(test_grid_last_pair_distinct);
 	RUN_TEST(test_sheet_diagonal_neighbours_distinct);
 	RUN_TEST(test_box_selection_closed);
