@@ -252,8 +252,25 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 
 	const bool has_edge = structure_material_present(&def->edge), has_bend = structure_material_present(&def->bend);
 	int64_t interior = 0;
-	for (int32_t e = 0; e < table.count; e++)
-		interior += table.slots[table.in_order[e]].triangles == 2;
+	for (int32_t e = 0; e < table.count; e++) {
+		const edge_entry* entry = &table.slots[table.in_order[e]];
+		if (entry->triangles != 2)
+			continue;
+		interior++;
+		// Two triangles folded onto each other about their edge: the vertices opposite it are
+		// distinct but coincide, and the bend spring between them would have no length (as a
+		// sheet's coincident grid neighbours, refused whatever its constants).
+		const double* x = def->vertices + 3 * (size_t)entry->opposite[0];
+		const double* y = def->vertices + 3 * (size_t)entry->opposite[1];
+		if (has_bend && x[0] == y[0] && x[1] == y[1] && x[2] == y[2]) {
+			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+			                   "mesh: the vertices %d and %d opposite edge (%d, %d) coincide at (%g, %g, %g) m (its two "
+			                   "triangles lie on each other): the bend spring across it would have no length",
+			                   (int)entry->opposite[0], (int)entry->opposite[1], (int)(entry->key >> 32),
+			                   (int)(entry->key & 0xffffffffu), x[0], x[1], x[2]);
+			goto done;
+		}
+	}
 	const int64_t springs = (has_edge ? table.count : 0) + (has_bend ? interior : 0);
 	if ((st = structure_check_size(model, what, nv, springs)) != SM_OK)
 		goto done;

@@ -1698,6 +1698,40 @@ static int test_mesh_collinear_triangle_refused(void)
 	return 0;
 }
 
+// Two triangles folded onto each other about their common edge (0, 1): the vertices 2 and 3
+// opposite it are distinct vertices at the same position, so the bend spring across the edge
+// would join two coincident particles. With absolute constants it was built with rest length 0
+// (a rest-length spring at its singular point, where modes refuses the model), per strain it was
+// refused as a spring of zero rest length, per section as a section of inf m; now each is
+// refused naming the edge, the two vertices and where they are, as a sheet's coincident grid
+// neighbours are, with the model unchanged. Without a bend group the folded pair is built (its
+// edges have length and its triangles area).
+static int test_mesh_folded_triangles_refused_with_bend(void)
+{
+	const double v[] = {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, 1, 0};
+	const int32_t t[] = {0, 1, 2, 1, 0, 3};
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	static const sm_scaling scalings[3] = {SM_ABSOLUTE, SM_PER_STRAIN, SM_PER_SECTION};
+	for (int k = 0; k < 3; k++) {
+		sm_mesh_def def = sm_default_mesh_def();
+		def.vertices = v, def.vertex_count = 4, def.triangles = t, def.triangle_count = 2;
+		def.bend.stiffness = 10.0;
+		def.bend.stiffness_scaling = def.bend.damping_scaling = scalings[k];
+		ENSURE(refused(m, sm_add_mesh(m, &def, NULL), SM_ERROR_INVALID_ARGUMENT,
+		               "mesh: the vertices 2 and 3 opposite edge (0, 1) coincide at (0.5, 1, 0) m (its two "
+		               "triangles lie on each other): the bend spring across it would have no length") == 0);
+	}
+	sm_mesh_def def = sm_default_mesh_def();
+	def.vertices = v, def.vertex_count = 4, def.triangles = t, def.triangle_count = 2;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_mesh(m, &def, &s), SM_OK);
+	ENSURE(s.particle_count == 4 && s.spring_count == 5 && s.group_spring_count[1] == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // One vertex over SM_STRUCTURE_MAX_ELEMENTS is refused as the limit, SM_ERROR_INVALID_ARGUMENT,
 // before the vertices are read or anything is allocated (structures.h). It was refused only
 // after every vertex had been read and a mass allocated for each, as "vertex 3 belongs to no
@@ -1814,6 +1848,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mesh_triangle_limit_checked_first);
 	RUN_TEST(test_mesh_collinear_triangle_refused);
 	RUN_TEST(test_mesh_vertex_limit_checked_first);
+	RUN_TEST(test_mesh_folded_triangles_refused_with_bend);
 	RUN_TEST(test_fixing_by_selection_zeroes_velocity);
 	RUN_TEST(test_rope_mass_per_length_statuses);
 	return TEST_SUMMARY();

@@ -149,7 +149,8 @@ typedef struct sm_block_def {
 /// rounding: twice its area at most 1e-12 times the product of its two longest edges, the sine
 /// of its smallest angle, as for collinear vertices given in decimal), an edge
 /// shared by more than two triangles, two triangles on the same three vertices, a vertex that
-/// belongs to no triangle (it would have no mass).
+/// belongs to no triangle (it would have no mass), and with bend springs two triangles folded
+/// onto each other (the vertices opposite their common edge at the same position).
 typedef struct sm_mesh_def {
 	const double* vertices;    ///< 3 per vertex [m]; not copied, read during the call only
 	int32_t vertex_count;
