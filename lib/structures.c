@@ -360,10 +360,13 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	const int32_t made[3] = {has_structural ? (int32_t)(n - 1) : 0, has_bending ? (int32_t)(n - 2) : 0, 0};
 	const int64_t rope_counts[1] = {n};
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
+		// The last particle at the end itself: start + 1 x (end - start) rounds to a neighbour of
+		// the end for about a third of decimal ends and starts.
 		const double t = (double)p / (double)def->segments;
 		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
 		const int64_t at[1] = {p};
-		st = structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1), x);
+		st = structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
+		                            p + 1 < n ? x : def->end);
 	}
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;

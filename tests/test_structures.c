@@ -177,6 +177,32 @@ static int test_rope(void)
 	return 0;
 }
 
+// A rope's last particle is at its end (structures.h: `end` is the last particle's position),
+// exactly: start + 1 x (end - start) rounds to a neighbour of end for about a third of decimal
+// ends, here (0.44999999999999996, 0.20000000000000018, 0) m for the end (0.45, 0.2, 0) m, so a
+// box around the end point alone selected no particle. The first particle is at the start.
+static int test_rope_ends_at_its_end(void)
+{
+	sm_model* m = new_model();
+	sm_rope_def def = sm_default_rope_def();
+	const double start[3] = {1.3, 2.3, 0.0}, end[3] = {0.45, 0.2, 0.0};
+	memcpy(def.start, start, sizeof start);
+	memcpy(def.end, end, sizeof end);
+	def.segments = 4;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_rope(m, &def, &s), SM_OK);
+	sm_particle_def first, last;
+	ENSURE_STATUS(sm_model_get_particle(m, sm_structure_particle(&s, 0, 0, 0), &first), SM_OK);
+	ENSURE_STATUS(sm_model_get_particle(m, sm_structure_particle(&s, 0, 4, 0), &last), SM_OK);
+	for (int c = 0; c < 3; c++)
+		ENSURE(first.position[c] == start[c] && last.position[c] == end[c]);
+	int32_t count = 0;
+	ENSURE_STATUS(sm_set_motion_in_box(m, end, end, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 1 && sm_model_free_index(m, sm_structure_particle(&s, 0, 4, 0)) == -1);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // Lowest eigenvalues of -df/dx over all particles of a free model: rigid-body modes are zero.
 static int count_zero_modes(const sm_model* m, int* zero, double* lowest_nonzero)
 {
@@ -1815,6 +1841,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sheet_matches_benchmark_cloth);
 	RUN_TEST(test_sheet_counts_and_rest_lengths);
 	RUN_TEST(test_rope);
+	RUN_TEST(test_rope_ends_at_its_end);
 	RUN_TEST(test_block_counts_and_shear_resistance);
 	RUN_TEST(test_mesh_disc);
 	RUN_TEST(test_mesh_errors);

@@ -84,9 +84,9 @@ SM_API int32_t sm_structure_particle(const sm_structure* structure, int32_t i, i
 SM_API sm_spring_material sm_default_spring_material(void);
 
 /// Rope or chain: a straight polyline of `segments` springs from start to end. Particle p
-/// (0 <= p <= segments) sits at start + p / segments (end - start) and has index
-/// first_particle + p. Springs, in order: for each p, the structural spring (p, p + 1), then the
-/// bending spring (p, p + 2) where it exists.
+/// (0 <= p <= segments) sits at start + p / segments (end - start), the last exactly at end, and
+/// has index first_particle + p. Springs, in order: for each p, the structural spring (p, p + 1),
+/// then the bending spring (p, p + 2) where it exists.
 typedef struct sm_rope_def {
 	double start[3];                ///< first particle's position [m]; default (0, 0, 0)
 	double end[3];                  ///< last particle's position [m]; default (1, 0, 0)
