@@ -59,6 +59,10 @@ void fmu_text_appendf(fmu_text* t, const char* fmt, ...)
 	free(big);
 }
 
+// XML 1.0 (2.2, Char) has no way to write the noncharacters U+FFFE and U+FFFF, not even as
+// character references, which a model file's names and descriptions may hold (UTF-8 EF BF BE and
+// EF BF BF): each is written as the replacement character U+FFFD. A tab is written as a reference,
+// since a parser reads a literal tab in an attribute value as a space (3.3.3).
 void fmu_text_append_escaped(fmu_text* t, const char* s)
 {
 	for (; s && *s; ++s) {
@@ -69,9 +73,15 @@ void fmu_text_append_escaped(fmu_text* t, const char* s)
 		case '"': fmu_text_append_string(t, "&quot;"); break;
 		case '\'': fmu_text_append_string(t, "&apos;"); break;
 		case '\n': fmu_text_append_string(t, " "); break;
+		case '\t': fmu_text_append_string(t, "&#9;"); break;
 		default:
-			if ((unsigned char)*s >= 0x20 || *s == '\t')
+			if ((unsigned char)s[0] == 0xef && (unsigned char)s[1] == 0xbf &&
+			    ((unsigned char)s[2] == 0xbe || (unsigned char)s[2] == 0xbf)) {
+				fmu_text_append_string(t, "\xef\xbf\xbd");
+				s += 2;
+			} else if ((unsigned char)*s >= 0x20) {
 				fmu_text_append(t, s, 1);
+			}
 			break;
 		}
 	}

@@ -24,6 +24,7 @@ void fmu_text_append_string(fmu_text* t, const char* s);
 /// Appends printf-formatted text (in the caller's locale: format numbers with sm_format_number).
 void fmu_text_appendf(fmu_text* t, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
 
-/// Appends s escaped for XML and HTML text and attribute values (& < > " '); a line break becomes
-/// a space and other control characters are dropped. NULL appends nothing.
+/// Appends s escaped for XML and HTML text and attribute values (& < > " ', a tab as "&#9;"); a
+/// line break becomes a space, other control characters are dropped, and the noncharacters U+FFFE
+/// and U+FFFF, which XML cannot hold, become U+FFFD. NULL appends nothing.
 void fmu_text_append_escaped(fmu_text* t, const char* s);

@@ -865,6 +865,29 @@ def test_fmu_documentation_page(tmp_path):
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_descriptions_read_back_as_the_model_file_gives_them(tmp_path):
+    # A description may hold tabs, and it and a particle's name any character but controls and
+    # line breaks, the noncharacters U+FFFE and U+FFFF too, which XML 1.0 has no way to write:
+    # modelDescription.xml stays well-formed (they read as U+FFFD) and a tab stays a tab (an
+    # attribute's tab reads as a space unless written as a character reference).
+    model = json.loads((MODELS / "oscillator.json").read_text())
+    model["description"] = "tab\there, <&> \"'\uffff\ufffe end"
+    model["particles"][1]["name"] = "bob\uffff&<>"
+    model["springs"][0]["b"] = model["ports"][0]["particle"] = "bob\uffff&<>"
+    path = tmp_path / "odd.json"
+    path.write_text(json.dumps(model, ensure_ascii=False), encoding="utf-8")
+    fmu = tmp_path / "odd.fmu"
+    cli("fmu", path, "--output", fmu, "--runtime", stand_in_runtime(tmp_path / "runtime", "binary"))
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    assert root.get("description") == "tab\there, <&> \"'\ufffd\ufffd end"
+    variables = {v.get("name"): v.get("description") for v in root.iter("ScalarVariable")}
+    assert variables["tip.x"] == "x of tip, position at the port at particle bob\ufffd&<>"
+    assert variables["p[1].vz"] == "z-velocity of particle bob\ufffd&<>"
+    assert read_documentation(fmu).paragraphs[""][0] == "tab\there, <&> \"'\ufffd\ufffd end"
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
     # -h prints the help as --help does; an unknown option is a usage error (2); a runtime folder
     # without the FMU binary, a reference that cannot be read and a broken model are errors (1),
