@@ -314,6 +314,12 @@ else
     [ -L "$tmp/chained.fmu" ] && [ -L "$tmp/chain/first.fmu" ] && [ "$(head -c 2 "$tmp/chain/sub/last.fmu")" = PK ] &&
     ! ls -R "$tmp" | grep -q partial ||
     fail "fmu -o through a chain of links to no file: not the file at its end, or a partial file left"
+  # A name as long as a file system takes (255 bytes) is written too: the temporary name beside
+  # it must not be longer.
+  long="$(printf '%0251d' 0 | tr 0 f).fmu"
+  out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/$long" 2>&1) &&
+    [ "$(head -c 2 "$tmp/$long")" = PK ] && ! ls "$tmp" | grep -q partial ||
+    fail "fmu -o a file name of 255 bytes: not written ($out)"
   ln -s cycle.fmu "$tmp/cycle.fmu"
   out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/cycle.fmu" 2>&1)
   [ $? = 1 ] && printf '%s' "$out" | grep -q "symbolic links" && [ -L "$tmp/cycle.fmu" ] ||

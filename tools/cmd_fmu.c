@@ -128,8 +128,13 @@ static bool write_output(const char* output, const char* data, size_t length)
 		return false;
 	if (!exists && !link_target(output, target))
 		return errno == ELOOP ? write_all(output, data, length) : false;  // fopen names the loop
+	// The temporary name is short, so that an output whose name is as long as the file system
+	// allows (255 bytes) has one beside it too.
+	const char* slash = strrchr(target, '/');
+	const int folder = slash ? (int)(slash - target) + 1 : 0;
 	char temporary[PATH_MAX];
-	if (snprintf(temporary, sizeof temporary, "%s.partial-%ld", target, (long)getpid()) >= (int)sizeof temporary) {
+	if (snprintf(temporary, sizeof temporary, "%.*sspringmass-fmu.partial-%ld", folder, target, (long)getpid()) >=
+	    (int)sizeof temporary) {
 		errno = ENAMETOOLONG;
 		return false;
 	}
