@@ -922,7 +922,7 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 	int32_t count = 0;
 	for (int32_t i = 0; i < np; ++i) {
 		const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
-		if (memcmp(&a, &b, sizeof a) != 0)
+		if (a != b)
 			pending[count++] = i;
 	}
 	// Passes in file order (the same values give the same text, and GUID, whatever order they
@@ -945,7 +945,7 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 			if (i < 0 || i >= np)
 				continue;
 			const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
-			if (memcmp(&a, &b, sizeof a) != 0)
+			if (a != b)
 				pending[count++] = i;
 		}
 		if (!file)

@@ -132,8 +132,9 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 
 /// The text of resources/parameters.txt for `set`, a document parsed from the model file `text`
 /// whose parameters were then set: one line "NAME=VALUE\n" for each parameter whose value differs
-/// from the file's (bit for bit), the value in the shortest of 15, 16 or 17 significant digits that
-/// reads back to the same double.
+/// from the file's (as sm_document_set_parameter compares them: 0 is the file's -0, which a line
+/// "NAME=0" would leave as it is), the value in the shortest of 15, 16 or 17 significant digits
+/// that reads back to the same double.
 /// The lines are in the file's order of parameters, except that a value the model refuses before
 /// others are set (a rope's end moved onto its start before the start moves away) comes after
 /// them; if no such order is found, they are in `order` (order_count distinct parameter indices,

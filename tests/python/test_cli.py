@@ -798,6 +798,28 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
         assert "E=150" in z.read("resources/parameters.txt").decode()
 
 
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_values_set_are_those_the_fmu_starts_from(tmp_path):
+    # A model takes 0 for a parameter of -0 as its own value (sm_document_set_parameter: no
+    # change), so --set z=0 on a file's -0 is no value of its own for resources/parameters.txt,
+    # also beside a value that does change; every line there is a start value of the FMU.
+    model = json.loads((MODELS / "oscillator.json").read_text())
+    model["parameters"]["z"] = -0.0
+    model["gravity"] = [0, "z", 0]
+    path = tmp_path / "zero.json"
+    path.write_text(json.dumps(model))
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    fmu = tmp_path / "zero.fmu"
+    cli("fmu", path, "-o", fmu, "--runtime", runtime, "--set", "z=0", "--set", "k=80")
+    with zipfile.ZipFile(fmu) as z:
+        lines = z.read("resources/parameters.txt").decode().split()
+        variables = ET.fromstring(z.read("modelDescription.xml")).iter("ScalarVariable")
+        starts = {v.get("name"): v[0].get("start") for v in variables}
+    assert lines == ["k=80"]
+    assert all(starts[name] == value for name, value in (line.split("=") for line in lines))
+    assert starts["z"] == "-0"
+
+
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
     (its text `binary`, executable as a built one is), a library and a licence, which keep the
