@@ -1870,11 +1870,16 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		memcpy(enabled, model->enabled, (size_t)model->spring_count);
 	// Springs that broke stay broken. A model made from the simulation's own (cloned, a constant
 	// changed) has them disabled too, by the simulation, not by its maker: their state at the
-	// start stays as it was, so that a reset restores them.
+	// start stays as it was, so that a reset restores them. Until the linear solver is rebuilt
+	// the copy holds them as at the start: what the solver builds from the constants (the
+	// multilevel path groups particles over the strong springs) is then that of a simulation
+	// created from the new model, whatever broke before, so that a reset or a restore runs as
+	// in one. The breaks are applied after; the solver's copies of the constants are taken
+	// afresh at the restart that follows (sm_reduced_solver_invalidate).
 	for (int32_t b = 0; b < sim->break_count; b++) {
 		const int32_t s = sim->breaks[b].spring;
-		sm_model_set_spring_enabled(copy, s, false);
 		enabled[s] = sim->initial_enabled[s];
+		sm_model_set_spring_enabled(copy, s, enabled[s] != 0);
 	}
 	sm_model* previous = sim->model;
 	sim->model = copy;
@@ -1899,6 +1904,8 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		sim->need_restart = true;
 		return fail(sim, st, "%s%s%s", failure, cause[0] ? ": " : "", cause);
 	}
+	for (int32_t b = 0; b < sim->break_count; b++)
+		sm_model_set_spring_enabled(copy, sim->breaks[b].spring, false);
 	sm_model_destroy(previous);
 	free(sim->initial_enabled);
 	sim->initial_enabled = enabled;
