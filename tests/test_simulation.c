@@ -1925,6 +1925,22 @@ static int test_reset_repeats_the_run(void)
 	return 0;
 }
 
+// A copy of model with every other spring (the odd ones) `factor` times as stiff; NULL on failure.
+static sm_model* every_other_spring_stiffer(const sm_model* model, double factor)
+{
+	sm_model* copy = sm_model_clone(model);
+	for (int32_t s = 1; copy != NULL && s < sm_model_spring_count(copy); s += 2) {
+		sm_spring_def def;
+		bool set = sm_model_get_spring(copy, s, &def) == SM_OK;
+		def.stiffness *= factor;
+		if (!set || sm_model_set_spring(copy, s, &def) != SM_OK) {
+			sm_model_destroy(copy);
+			copy = NULL;
+		}
+	}
+	return copy;
+}
+
 // After update_model and a reset, a simulation repeats bit for bit the run of one created from
 // the new model (simulation.h), with every linear solver, also where the solver built something
 // from the constants: the multilevel path (this file's multilevel build) groups particles over
@@ -1934,14 +1950,8 @@ static int test_update_model_then_reset_is_a_fresh_run(void)
 {
 	sm_model* soft = benchmark_cloth(14, 0.0);  // 194 free particles
 	ENSURE(soft != NULL);
-	sm_model* stiff = sm_model_clone(soft);
+	sm_model* stiff = every_other_spring_stiffer(soft, 30.0);
 	ENSURE(stiff != NULL);
-	for (int32_t s = 0; s < sm_model_spring_count(stiff); s++) {
-		sm_spring_def def;
-		ENSURE_STATUS(sm_model_get_spring(stiff, s, &def), SM_OK);
-		def.stiffness *= (s % 2) ? 30.0 : 1.0;
-		ENSURE_STATUS(sm_model_set_spring(stiff, s, &def), SM_OK);
-	}
 	// New masses too: the reduced solvers keep their own copy, which the update must refresh.
 	for (int32_t i = 0; i < sm_model_particle_count(stiff); i += 3) {
 		sm_particle_def def;
@@ -1986,14 +1996,8 @@ static int test_update_model_after_a_cut_then_reset_is_a_fresh_run(void)
 {
 	sm_model* soft = benchmark_cloth(14, 0.0);  // 194 free particles
 	ENSURE(soft != NULL);
-	sm_model* stiff = sm_model_clone(soft);
+	sm_model* stiff = every_other_spring_stiffer(soft, 30.0);
 	ENSURE(stiff != NULL);
-	for (int32_t s = 0; s < sm_model_spring_count(stiff); s++) {
-		sm_spring_def def;
-		ENSURE_STATUS(sm_model_get_spring(stiff, s, &def), SM_OK);
-		def.stiffness *= (s % 2) ? 30.0 : 1.0;
-		ENSURE_STATUS(sm_model_set_spring(stiff, s, &def), SM_OK);
-	}
 	const int32_t cut = 1;  // stiff in the new model, and one whose cut changes the grouping
 	const sm_linear_solver solvers[] = {SM_SOLVER_REDUCED_PCG, SM_SOLVER_REDUCED_CHOLMOD};
 	const size_t bytes = 3 * (size_t)sm_model_particle_count(stiff) * sizeof(double);
