@@ -203,10 +203,10 @@ int sm_cmd_statics(int argc, char** argv)
 		snprintf(line, sizeof line, "largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
 		cli_write_named(stdout, doc, model, line);
 	}
-	// Statics treats every spring as intact; say so when the equilibrium stretches one beyond its
-	// break strain (a simulation would break it).
+	// Statics treats every spring as intact; say so when the equilibrium stretches one to its
+	// break strain or beyond (a simulation would break it: the same test, L >= l0 (1 + strain)).
 	int32_t beyond = 0, worst = -1;
-	double worst_ratio = 1.0;
+	double worst_ratio = 0.0;
 	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
 		sm_spring_def sd;
 		if (sm_model_get_spring(model, k, &sd) != SM_OK || !isfinite(sd.break_strain) ||
@@ -215,10 +215,11 @@ int sm_cmd_statics(int argc, char** argv)
 		const double* a = x + 3 * (size_t)sd.a;
 		const double* b = x + 3 * (size_t)sd.b;
 		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
-		const double strain = sqrt(d0 * d0 + d1 * d1 + d2 * d2) / sd.rest_length - 1.0;
-		if (strain > sd.break_strain) {
+		const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+		if (length - sd.rest_length * (1.0 + sd.break_strain) >= 0.0) {
+			const double strain = length / sd.rest_length - 1.0;
 			beyond++;
-			if (strain / sd.break_strain > worst_ratio) {
+			if (worst < 0 || strain / sd.break_strain > worst_ratio) {
 				worst_ratio = strain / sd.break_strain;
 				worst = k;
 			}
@@ -226,7 +227,7 @@ int sm_cmd_statics(int argc, char** argv)
 	}
 	if (beyond > 0) {
 		snprintf(line, sizeof line,
-		         "break strains    %d spring(s) beyond theirs, which a simulation would break; the furthest, at %.3g "
+		         "break strains    %d spring(s) at or beyond theirs, which a simulation would break; the furthest, at %.3g "
 		         "times its break strain: spring %d\n",
 		         (int)beyond, worst_ratio, (int)worst);
 		cli_write_named(stdout, doc, model, line);

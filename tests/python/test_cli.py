@@ -474,13 +474,24 @@ def test_statics_names_the_springs_its_rest_shape_would_break(tmp_path):
     path = tmp_path / "chain.json"
     path.write_text(json.dumps(chain))
     line = summary_line(cli("statics", path, "-q").stdout, "break strains")
-    assert line == ("1 spring(s) beyond theirs, which a simulation would break; the furthest, at 2 times its "
+    assert line == ("1 spring(s) at or beyond theirs, which a simulation would break; the furthest, at 2 times its "
                     "break strain: spring 0 (between anchor and b1)"), line
     # check counts both springs as breakable.
     assert summary_line(cli("check", path).stdout, "springs").endswith("2 breakable")
     chain["springs"][0]["break_strain"] = 0.5
     path.write_text(json.dumps(chain))
     assert "break strains" not in cli("statics", path, "-q").stdout
+    # Exactly at its break strain (both ends held 1.5 m apart, rest length 1 m, break strain 0.5:
+    # L = l0 (1 + strain) without rounding), a spring breaks at the start of a simulation, and
+    # statics says so.
+    held = {"springmass": 1, "name": "held", "gravity": [0, 0, 0],
+            "particles": [{"name": "a", "position": [0, 0, 0], "fixed": True, "mass": 1},
+                          {"name": "b", "position": [1.5, 0, 0], "fixed": True, "mass": 1}],
+            "springs": [{"a": "a", "b": "b", "stiffness": 100, "rest_length": 1, "break_strain": 0.5}]}
+    path.write_text(json.dumps(held))
+    assert "spring 0 (between a and b) broke at t = 0 s" in cli("run", path, "--t-end", "0.1", "-o", "-").stderr
+    line = summary_line(cli("statics", path, "-q").stdout, "break strains")
+    assert line.startswith("1 spring(s) at or beyond theirs") and "at 1 times" in line, line
 
 
 # --- modes -------------------------------------------------------------------------------------
