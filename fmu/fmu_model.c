@@ -52,6 +52,12 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
                       char guid[40])
 {
 	fnv128 h = {0x6c62272e07bb0142u, 0x62b821756295c58du};  // FNV-128 offset basis
+	// The version first: another springmass may make another variable table of the same file, and
+	// the GUID is what tells an importer that a modelDescription.xml and a binary belong together.
+	char version[48];
+	const int n = snprintf(version, sizeof version, "springmass %d.%d.%d", SM_VERSION_MAJOR, SM_VERSION_MINOR,
+	                       SM_VERSION_PATCH);
+	fnv128_update(&h, version, (size_t)n + 1);  // with its NUL
 	fnv128_update(&h, text, length);
 	if (parameters) {
 		fnv128_update(&h, "", 1);

@@ -119,10 +119,12 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 void fmu_table_destroy(fmu_table* table);
 
 /// The GUID of an FMU's resources: a 128-bit FNV-1a hash, written as
-/// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL), of the model file's bytes
-/// when `parameters` is NULL (no resources/parameters.txt), else of those continued over a NUL
-/// byte and the parameters' bytes. A model file holds no NUL byte (the loader refuses one), so the two parts cannot be
-/// shifted into each other: another model file or other parameter values give another GUID.
+/// "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (39 characters and NUL), of "springmass
+/// MAJOR.MINOR.PATCH" (the SM_VERSION_* of base.h) and a NUL byte, continued over the model file's
+/// bytes, and when `parameters` is not NULL (the FMU has resources/parameters.txt) over a NUL byte
+/// and the parameters' bytes. A model file holds no NUL byte (the loader refuses one), so the parts
+/// cannot be shifted into each other: another version, model file or parameter values give another
+/// GUID.
 void fmu_package_guid(const char* text, size_t length, const char* parameters, size_t parameters_length,
                       char guid[40]);
 

@@ -1,6 +1,8 @@
 """Low-level access to an FMU with fmpy's FMU2Slave, with the log messages collected."""
 import ctypes
 import html.parser
+import pathlib
+import re
 import shutil
 import tempfile
 import zipfile
@@ -76,11 +78,20 @@ class Instance:
                 shutil.rmtree(self.unzipdir, ignore_errors=True)
 
 
+def springmass_version():
+    """MAJOR.MINOR.PATCH, as include/springmass/base.h defines it."""
+    root = pathlib.Path(__file__).resolve().parents[2]
+    text = (root / "include" / "springmass" / "base.h").read_text()
+    return ".".join(re.search(rf"#define SM_VERSION_{part} (\d+)", text).group(1)
+                    for part in ("MAJOR", "MINOR", "PATCH"))
+
+
 def fmu_guid(model, parameters=None):
     """The GUID of an FMU's resources (fmu/fmu_model.h, fmu_package_guid): the 128-bit FNV-1a hash
-    of resources/model.json's bytes, continued over a NUL byte and resources/parameters.txt's bytes
-    when the FMU has that file."""
-    data = model if parameters is None else model + b"\0" + parameters
+    of "springmass MAJOR.MINOR.PATCH" and a NUL byte, continued over resources/model.json's bytes,
+    and over a NUL byte and resources/parameters.txt's bytes when the FMU has that file."""
+    data = f"springmass {springmass_version()}\0".encode() + model
+    data = data if parameters is None else data + b"\0" + parameters
     h = 0x6c62272e07bb014262b821756295c58d
     for byte in data:
         h = ((h ^ byte) * 0x0000000001000000000000000000013b) & ((1 << 128) - 1)
