@@ -192,15 +192,15 @@ static bool has_reduced_solver(const sm_simulation* sim)
 	       (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
 }
 
-// y' = [v; M^-1 f; P]. A non-finite state is a recoverable failure (> 0): CVODE retries with
-// a smaller step.
+// y' = [v; M^-1 f; P]. A non-finite state, the dissipated energy included, is a recoverable
+// failure (> 0): CVODE retries with a smaller step.
 static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 {
 	sm_simulation* sim = user_data;
 	const double* y = N_VGetArrayPointer(yv);
 	double* ydot = N_VGetArrayPointer(ydotv);
 	const int64_t nd = sim->dofs;
-	for (int64_t i = 0; i < 2 * nd; i++)
+	for (int64_t i = 0; i <= 2 * nd; i++)
 		if (!isfinite(y[i]))
 			return 1;
 	double* x = sim->work_position;
