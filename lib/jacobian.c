@@ -281,9 +281,11 @@ const char* sm_jacobian_variant_name(sm_jacobian_variant variant)
 
 sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant)
 {
-	if (name && strcmp(name, "exact") == 0)
+	if (name == NULL || variant == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (strcmp(name, "exact") == 0)
 		*variant = SM_JACOBIAN_EXACT;
-	else if (name && strcmp(name, "definite") == 0)
+	else if (strcmp(name, "definite") == 0)
 		*variant = SM_JACOBIAN_DEFINITE;
 	else
 		return SM_ERROR_INVALID_ARGUMENT;

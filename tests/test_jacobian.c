@@ -975,6 +975,18 @@ static int test_combined_product_of_a_single_spring(void)
 	return 0;
 }
 
+// A NULL destination is refused like a NULL or unknown name (model.h), as
+// sm_linear_solver_from_name refuses one, instead of being written through.
+static int test_variant_from_name_refuses_null(void)
+{
+	ENSURE_STATUS(sm_jacobian_variant_from_name("exact", NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_jacobian_variant_from_name("definite", NULL), SM_ERROR_INVALID_ARGUMENT);
+	sm_jacobian_variant variant = SM_JACOBIAN_DEFINITE;
+	ENSURE_STATUS(sm_jacobian_variant_from_name(NULL, &variant), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(variant == SM_JACOBIAN_DEFINITE);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -991,6 +1003,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_product_matches_finite_differences);
 	RUN_TEST(test_combined_product_matches_dense);
 	RUN_TEST(test_combined_product_of_a_single_spring);
+	RUN_TEST(test_variant_from_name_refuses_null);
 	RUN_TEST(test_fill_from_springs_matches_finite_differences);
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
 	RUN_TEST(test_springs_in_groups_equal_springs_alone_bit_for_bit);

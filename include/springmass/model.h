@@ -110,8 +110,8 @@ typedef enum sm_jacobian_variant {
 } sm_jacobian_variant;
 
 /// Name of a Jacobian variant ("exact", "definite"; "unknown" for another value) and the reverse
-/// lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *variant then
-/// unchanged.
+/// lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or a NULL name or variant,
+/// *variant then unchanged.
 SM_API const char* sm_jacobian_variant_name(sm_jacobian_variant variant);
 SM_API sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_variant* variant);
 
