@@ -106,9 +106,11 @@ const char* sm_method_name(sm_method method)
 
 sm_status sm_method_from_name(const char* name, sm_method* method)
 {
-	if (name && strcmp(name, "bdf") == 0)
+	if (name == NULL || method == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (strcmp(name, "bdf") == 0)
 		*method = SM_METHOD_BDF;
-	else if (name && strcmp(name, "adams") == 0)
+	else if (strcmp(name, "adams") == 0)
 		*method = SM_METHOD_ADAMS;
 	else
 		return SM_ERROR_INVALID_ARGUMENT;

@@ -2213,6 +2213,7 @@ static int test_solver_names_round_trip(void)
 	ENSURE(sm_method_from_name("bdf", &method) == SM_OK && method == SM_METHOD_BDF);
 	ENSURE(sm_method_from_name("Adams", &method) == SM_ERROR_INVALID_ARGUMENT && method == SM_METHOD_BDF);
 	ENSURE(sm_method_from_name(NULL, &method) == SM_ERROR_INVALID_ARGUMENT && method == SM_METHOD_BDF);
+	ENSURE(sm_method_from_name("adams", NULL) == SM_ERROR_INVALID_ARGUMENT);
 	sm_jacobian_variant variant = SM_JACOBIAN_EXACT;
 	ENSURE(strcmp(sm_jacobian_variant_name(SM_JACOBIAN_EXACT), "exact") == 0 &&
 	       strcmp(sm_jacobian_variant_name(SM_JACOBIAN_DEFINITE), "definite") == 0);

@@ -161,7 +161,8 @@ SM_API const char* sm_linear_solver_name(sm_linear_solver solver);
 SM_API sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver);
 
 /// Name of a method ("bdf", "adams"; "unknown" for another value) and the reverse lookup: SM_OK,
-/// or SM_ERROR_INVALID_ARGUMENT for an unknown name or NULL, *method then unchanged.
+/// or SM_ERROR_INVALID_ARGUMENT for an unknown name, a NULL name or a NULL method, *method then
+/// unchanged.
 SM_API const char* sm_method_name(sm_method method);
 SM_API sm_status sm_method_from_name(const char* name, sm_method* method);
 
