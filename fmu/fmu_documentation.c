@@ -163,8 +163,10 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 		stop, step, tolerance);
 
 	append_table(&out, t, SECTION_INPUTS, "inputs",
-	             "Set before each step and held over it: a force port's force, a motion port's prescribed "
-	             "position and velocity.");
+	             "Set before each step and held over it: a force port's force; a motion port's position P.x and "
+	             "velocity P.vx, along which its particle moves, at P.x + P.vx (t - t_n) from the step's start "
+	             "t_n. A motion port starts from its inputs' start values, whatever parameters the model file "
+	             "places its particle with.");
 	append_table(&out, t, SECTION_OUTPUTS, "outputs", "The model at each communication point.");
 	append_table(&out, t, SECTION_PARAMETERS, "parameters",
 	             "Fixed ones are set before <code>fmi2ExitInitializationMode</code>; tunable ones also between "
