@@ -1033,7 +1033,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)
 				for (int c = 0; c < 3; c++)
-					reactions[3 * (size_t)p + c] = w.free_index[p] < 0 ? -w.f[3 * (size_t)p + c] : 0.0;
+					reactions[3 * (size_t)p + c] = w.free_index[p] < 0 ? 0.0 - w.f[3 * (size_t)p + c] : 0.0;  // +0, not -0, where f = 0
 		st = SM_OK;
 		if (err != NULL) {
 			err->status = SM_OK;

@@ -492,6 +492,9 @@ def test_statics_names_the_springs_its_rest_shape_would_break(tmp_path):
     assert "spring 0 (between a and b) broke at t = 0 s" in cli("run", path, "--t-end", "0.1", "-o", "-").stderr
     line = summary_line(cli("statics", path, "-q").stdout, "break strains")
     assert line.startswith("1 spring(s) at or beyond theirs") and "at 1 times" in line, line
+    # The supports' reactions along y and z are zero, printed as 0, not -0.
+    reactions = cli("statics", path).stdout.split("reaction z [N]")[1].split()
+    assert reactions == ["0", "a", "-50", "0", "0", "1", "b", "50", "0", "0"], reactions
 
 
 # --- modes -------------------------------------------------------------------------------------
