@@ -205,7 +205,10 @@ static bool has_runtime(const char* dir)
 }
 
 // The runtime folder: the option, then SPRINGMASS_FMU_RUNTIME, then the installed one beside
-// this executable, then the one of the build tree this tool was built in.
+// this executable, then, for the tool in the build tree, the one the build assembled beside it.
+// Both are found relative to this executable, so that an installed tool never reads the build
+// tree it came from (whose runtime may since have been rebuilt, or removed) and names no path of
+// it. When none is found, dir holds the installed one's place, for the message.
 static bool find_runtime(const char* option, char* dir, size_t size)
 {
 	if (option) {
@@ -217,19 +220,28 @@ static bool find_runtime(const char* option, char* dir, size_t size)
 		snprintf(dir, size, "%s", env);
 		return has_runtime(dir);
 	}
+	// The message names the installed runtime's place (relative to the tool's folder if that is
+	// not known).
+	snprintf(dir, size, "%s", SPRINGMASS_FMU_RUNTIME_FROM_BIN);
 	char exe[PATH_MAX];
 	ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-	if (n > 0) {
-		exe[n] = '\0';
-		char* slash = strrchr(exe, '/');
-		if (slash) {
-			*slash = '\0';
-			if (join(dir, size, exe, SPRINGMASS_FMU_RUNTIME_FROM_BIN) && has_runtime(dir))
-				return true;
-		}
+	if (n <= 0)
+		return false;
+	exe[n] = '\0';
+	char* slash = strrchr(exe, '/');
+	if (!slash)
+		return false;
+	*slash = '\0';
+	if (!join(dir, size, exe, SPRINGMASS_FMU_RUNTIME_FROM_BIN))
+		return false;
+	if (has_runtime(dir))
+		return true;
+	char build[PATH_MAX];
+	if (join(build, sizeof build, exe, SPRINGMASS_FMU_RUNTIME_FROM_BUILD_BIN) && has_runtime(build)) {
+		snprintf(dir, size, "%s", build);
+		return true;
 	}
-	snprintf(dir, size, "%s", SPRINGMASS_FMU_RUNTIME_BUILD_DIR);
-	return has_runtime(dir);
+	return false;
 }
 
 static int remove_entry(const char* path, const struct stat* st, int flag, struct FTW* ftw)

@@ -1,13 +1,38 @@
 #!/usr/bin/env bash
-# Installs the build tree into a scratch prefix, builds the programs of examples/ against it with
-# find_package(springmass), and runs them (each checks itself: the oscillator against its closed
-# form, the trampoline its static reactions and energy balance); then builds and runs them again
-# with a plain compiler call and pkg-config, as a project without CMake would.
+# Installs the build tree into a scratch prefix and moves the prefix elsewhere, as a user may (the
+# package, the pkg-config file and the tool find everything relative to themselves), then builds
+# the programs of examples/ against it with find_package(springmass), and runs them (each checks
+# itself: the oscillator against its closed form, the trampoline its static reactions and energy
+# balance); then builds and runs them again with a plain compiler call and pkg-config, as a
+# project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
+# installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
+# names the build tree.
 set -euo pipefail
-build=$1 source=$2 cmake=${3:-cmake}
+build=$1 source=$2 cmake=${3:-cmake} python=${4:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-"$cmake" --install "$build" --prefix "$work/prefix" > /dev/null
+fail() {
+	echo "consumer: $*" >&2
+	exit 1
+}
+build_logical=$(cd "$build" && pwd) build_real=$(cd "$build" && pwd -P)
+# The files under $1 that name the build tree, in what a program reads: the debug information of
+# a Debug build names its compiler's working folder, which is no use to a running program, so
+# binaries are searched without it.
+names_build() {
+	find "$1" -type f | while read -r file; do
+		if [ "$(head -c 4 "$file")" = $'\x7fELF' ] || [ "$(head -c 7 "$file")" = '!<arch>' ]; then
+			objcopy --strip-debug "$file" "$work/stripped" && searched=$work/stripped
+		else
+			searched=$file
+		fi
+		if grep -qF -e "$build_logical" -e "$build_real" "$searched"; then echo "$file"; fi
+	done
+}
+"$cmake" --install "$build" --prefix "$work/installed" > /dev/null
+mv "$work/installed" "$work/prefix"
+names=$(names_build "$work/prefix")
+[ -z "$names" ] || fail "installed files name the build tree $build: $names"
 "$cmake" -S "$source/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_PREFIX_PATH="$work/prefix" \
     -DEXAMPLES_DIR="$source/examples" > /dev/null
 "$cmake" --build "$work/build" > /dev/null
@@ -19,3 +44,26 @@ for example in oscillator trampoline; do
 	    $(PKG_CONFIG_PATH=$(dirname "$pc") pkg-config --cflags --libs springmass)
 	"$work/$example-pc" > /dev/null
 done
+
+runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
+[ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
+fmu=$work/oscillator.fmu
+env -u SPRINGMASS_FMU_RUNTIME "$work/prefix/bin/springmass" fmu "$source/models/oscillator.json" -o "$fmu" > /dev/null
+mkdir "$work/fmu"
+(cd "$work/fmu" && unzip -q "$fmu")
+cmp -s "$work/fmu/binaries/linux64/oscillator.so" "$runtime/binaries/linux64/springmass_fmu.so" ||
+	fail "the installed tool did not pack the installed runtime's binary"
+names=$(names_build "$work/fmu")
+[ -z "$names" ] || fail "the FMU packed by the installed tool names the build tree $build: $names"
+if [ -n "$python" ]; then
+	"$python" -c 'import sys, fmpy
+result = fmpy.simulate_fmu(sys.argv[1], stop_time=0.5)
+assert result["time"][-1] == 0.5 and abs(result["tip.x"][-1]) < 10, result[-1]' "$fmu"
+fi
+# Without its installed runtime, the installed tool refuses: it never falls back on the runtime
+# of the build tree it came from.
+mv "$runtime" "$runtime.away"
+if env -u SPRINGMASS_FMU_RUNTIME "$work/prefix/bin/springmass" fmu "$source/models/oscillator.json" \
+    -o "$work/without.fmu" 2> /dev/null; then
+	fail "the installed tool packed an FMU without an installed runtime (from the build tree's)"
+fi
