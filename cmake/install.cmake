@@ -28,10 +28,12 @@ string(REGEX REPLACE "/$" "" SPRINGMASS_PC_TO_PREFIX "${SPRINGMASS_PC_TO_PREFIX}
 set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
-# The library of this build: libspringmassd in a Debug build (DEBUG_POSTFIX, lib/CMakeLists.txt).
-set(SPRINGMASS_PC_LIBRARY springmass)
-if(CMAKE_BUILD_TYPE STREQUAL "Debug")
-  set(SPRINGMASS_PC_LIBRARY springmassd)
-endif()
-configure_file(${PROJECT_SOURCE_DIR}/cmake/springmass.pc.in ${PROJECT_BINARY_DIR}/springmass.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/springmass.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+# The library of this build: libspringmassd in a Debug build (DEBUG_POSTFIX, lib/CMakeLists.txt),
+# whatever the case of its name ("debug" too), and for each configuration of a multi-config
+# generator: the name comes from the target itself, when the file is generated.
+set(SPRINGMASS_PC_LIBRARY "$<TARGET_FILE_BASE_NAME:springmass>")
+configure_file(${PROJECT_SOURCE_DIR}/cmake/springmass.pc.in ${PROJECT_BINARY_DIR}/springmass.pc.in @ONLY)
+file(GENERATE OUTPUT ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/springmass.pc
+     INPUT ${PROJECT_BINARY_DIR}/springmass.pc.in)
+install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/springmass.pc
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -6,7 +6,8 @@
 # balance); then builds and runs them again with a plain compiler call and pkg-config, as a
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
-# names the build tree.
+# names the build tree. A build configured as debug also gets a pkg-config file that names its
+# library.
 set -euo pipefail
 build=$1 source=$2 cmake=${3:-cmake} python=${4:-}
 work=$(mktemp -d)
@@ -44,6 +45,15 @@ for example in oscillator trampoline; do
 	    $(PKG_CONFIG_PATH=$(dirname "$pc") pkg-config --cflags --libs springmass)
 	"$work/$example-pc" > /dev/null
 done
+
+# The pkg-config file names the library its build makes, in every build type: a build configured
+# as "debug" (any case) makes libspringmassd.a (DEBUG_POSTFIX). Configuring is enough to see it.
+"$cmake" -S "$source" -B "$work/debug" -G Ninja -DCMAKE_BUILD_TYPE=debug -DSPRINGMASS_BUILD_TESTS=OFF \
+    -DSPRINGMASS_BUILD_FMU=OFF > /dev/null
+exported=$(grep -ho 'lib[a-z]*\.a"' $(find "$work/debug" -name 'springmassTargets-*.cmake') | sort -u)
+named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmass.pc)") pkg-config --libs-only-l springmass)
+[ "${exported%\"}" = "libspringmassd.a" ] && [[ " $named " == *" -lspringmassd "* ]] ||
+	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
 runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
 [ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
