@@ -7,7 +7,8 @@
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
 # names the build tree. A build configured as debug also gets a pkg-config file that names its
-# library.
+# library, and a project to which springmass is optional goes on without it when jansson is
+# missing.
 set -euo pipefail
 build=$1 source=$2 cmake=${3:-cmake} python=${4:-}
 work=$(mktemp -d)
@@ -45,6 +46,15 @@ for example in oscillator trampoline; do
 	    $(PKG_CONFIG_PATH=$(dirname "$pc") pkg-config --cflags --libs springmass)
 	"$work/$example-pc" > /dev/null
 done
+
+# A project to which springmass is optional goes on without it when a dependency is missing
+# (jansson, hidden from pkg-config here) instead of failing its configuration.
+mkdir "$work/no-pkg-config"
+if ! out=$(PKG_CONFIG_LIBDIR="$work/no-pkg-config" PKG_CONFIG_PATH="" "$cmake" -S "$source/tests/consumer/optional" \
+    -B "$work/optional" -G Ninja -DCMAKE_PREFIX_PATH="$work/prefix" 2>&1) ||
+	! grep -q 'springmass: not found' <<< "$out"; then
+	fail "an optional find_package(springmass) without jansson failed the configuration: $out"
+fi
 
 # The pkg-config file names the library its build makes, in every build type: a build configured
 # as "debug" (any case) makes libspringmassd.a (DEBUG_POSTFIX). Configuring is enough to see it.
