@@ -1722,6 +1722,21 @@ static bool read_header(sm_document* doc, sm_error* err)
 	return true;
 }
 
+// Whether the parser stopped before the byte its error is about (error.position: bytes read),
+// without reading it: a byte that begins no UTF-8 character, or a control character in a string
+// (a line end there among them). The error is then at that byte, not at the character before.
+static bool error_before_its_byte(const json_error_t* error, const char* text, size_t length)
+{
+	if (error->position < 0 || (size_t)error->position >= length)
+		return false;
+	const unsigned char c = (unsigned char)text[error->position];
+	if (json_error_code(error) == json_error_invalid_utf8)
+		return c >= 0x80;
+	const bool control = strncmp(error->text, "control character ", 18) == 0 ||
+	                     strncmp(error->text, "unexpected newline", 18) == 0;
+	return json_error_code(error) == json_error_invalid_syntax && c < 0x20 && control;
+}
+
 // Whether a syntax error reads as a missing comma: the parser expected the end of an array or an
 // object and found the start of another value ("']' expected near '\"springs\"'").
 static bool missing_comma(const char* message)
@@ -1791,7 +1806,14 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		// the text near the error, which may hold what a terminal would act on: shown escaped.
 		const enum json_error_code code = json_error_code(&error);
 		int line, column;
-		text_position(text, length, (size_t)error.position, &line, &column);
+		// Where the parser stopped before the byte at fault, the error is at that byte: past it,
+		// so that a line end there begins the next line. A stray continuation byte is a
+		// character of its own there, which text_position, counting characters, does not count.
+		const size_t at = (size_t)error.position;
+		const bool before = error_before_its_byte(&error, text, length);
+		text_position(text, length, before ? at + 1 : at, &line, &column);
+		if (before && ((unsigned char)text[at] & 0xc0) == 0x80)
+			column++;
 		char shown[6 * JSON_ERROR_TEXT_LENGTH + 1];
 		text_shown(shown, sizeof shown - 1, error.text);
 		if (code == json_error_null_character || code == json_error_null_byte_in_key)

@@ -2195,6 +2195,21 @@ static int test_syntax_error_positions(void)
 	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\\r\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\\r\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
+	    // A byte the parser refuses where it stands (a control character in a string, one that
+	    // is no UTF-8) is at its own column, not at the character before it; a line end in a
+	    // string is at column 0 of the next line.
+	    {"{\"springmass\": 1, \"name\": \"\xc3\xa9\t\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:29: control character 0x9 near '\"\xc3\xa9'"},
+	    {"{\"springmass\": 1, \"name\": \"x\n\"}", SM_ERROR_SYNTAX,
+	     "test.json:2:0: unexpected newline near '\"x'"},
+	    {"{\"springmass\": 1, \"name\": \"x\r\n\"}", SM_ERROR_SYNTAX,
+	     "test.json:2:0: control character 0xd near '\"x'"},
+	    {"{\"springmass\": 1, \"name\": \"x\xff\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:29: unable to decode byte 0xff near '\"x'"},
+	    {"{\"springmass\": 1, \"name\": \"x\x80\"}", SM_ERROR_SYNTAX,
+	     "test.json:1:29: unable to decode byte 0x80 near '\"x'"},
+	    {"{\"springmass\": 1,\n\xe2\x82\"name\": \"x\"}", SM_ERROR_SYNTAX,
+	     "test.json:2:1: unable to decode byte 0xe2"},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
