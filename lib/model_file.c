@@ -1109,32 +1109,94 @@ static bool read_distribution(parser* p, const json_t* obj, const char* path, sm
 	return true;
 }
 
-// A particle's own name may not read as a reference to structure `structure` (its name, `length`
-// bytes): "cloth[2]" beside a structure "cloth" would take over the reference to cloth's particle
-// 2 (names are looked up first), and "cloth[0, 2]" would stand beside the generated "cloth[0,2]".
-// Checked when the structure is read, before its particles are named (the particles come first).
-static bool check_names_against_structure(parser* p, const char* structure, size_t length)
+// The particles of "particles" whose names read as references to a structure S, "S[...]", by S
+// (the first of them for each S), so that each structure's name is looked up among them rather
+// than searched for in every particle's name.
+typedef struct named_like_references {
+	name_index index;   // S -> entry
+	char* prefixes;     // every entry's S, NUL-terminated, one after the other
+	int64_t* offset;    // entry -> its S in prefixes
+	int32_t* particle;  // entry -> the particle's place in "particles"
+} named_like_references;
+
+static const char* named_like_prefix(const void* owner, int32_t entry)
+{
+	const named_like_references* like = owner;
+	return like->prefixes + like->offset[entry];
+}
+
+static void named_like_free(named_like_references* like)
+{
+	name_index_free(&like->index);
+	free(like->prefixes);
+	free(like->offset);
+	free(like->particle);
+}
+
+// Fills *like (name_index_init'ed with it as owner) from the particles read before.
+static bool find_names_like_references(parser* p, named_like_references* like)
 {
 	const json_t* list = json_object_get(p->doc->root, "particles");
-	for (size_t k = 0; k < json_array_size(list); k++) {
-		const json_t* value = json_object_get(json_array_get(list, k), "name");
-		const char* name = json_string_value(value);
-		const size_t bytes = name != NULL ? strlen(name) : 0;
-		if (bytes <= length + 1 || strncmp(name, structure, length) != 0 || name[length] != '[' ||
-		    name[bytes - 1] != ']')
+	const size_t n = json_array_size(list);
+	size_t bytes = 0;
+	for (size_t k = 0; k < n; k++) {
+		const char* name = json_string_value(json_object_get(json_array_get(list, k), "name"));
+		bytes += name != NULL ? strlen(name) + 1 : 0;
+	}
+	like->prefixes = malloc(bytes + 1);
+	like->offset = malloc((n + 1) * sizeof(int64_t));
+	like->particle = malloc((n + 1) * sizeof(int32_t));
+	if (like->prefixes == NULL || like->offset == NULL || like->particle == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "particles", "out of memory");
+	int64_t used = 0;
+	int32_t entries = 0;
+	for (size_t k = 0; k < n; k++) {
+		// S is what comes before the first '[' (a structure's name holds none), of a name that
+		// ends with ']' after it.
+		const char* name = json_string_value(json_object_get(json_array_get(list, k), "name"));
+		const char* open = name != NULL ? strchr(name, '[') : NULL;
+		const size_t length = open != NULL ? (size_t)(open - name) : 0;
+		const size_t name_bytes = name != NULL ? strlen(name) : 0;
+		if (open == NULL || length == 0 || name_bytes <= length + 1 || name[name_bytes - 1] != ']')
 			continue;
-		char path[PATH_CAPACITY], sub[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
-		child_index(path, "particles", k);
-		child_key(sub, path, "name");
-		return fail(p, SM_ERROR_SCHEMA, sub,
-		            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
-		            "name",
-		            text_quoted(text, name), (int)length, structure);
+		memcpy(like->prefixes + used, name, length);
+		like->prefixes[used + (int64_t)length] = '\0';
+		like->offset[entries] = used;
+		like->particle[entries] = (int32_t)k;
+		int32_t holder;
+		if (!name_index_insert(&like->index, name, length, entries, &holder))
+			return fail(p, SM_ERROR_OUT_OF_MEMORY, "particles", "out of memory");
+		if (holder < 0) {
+			used += (int64_t)length + 1;
+			entries++;
+		}
 	}
 	return true;
 }
 
-static bool read_structure(parser* p, const json_t* obj, const char* path)
+// A particle's own name may not read as a reference to structure `structure` (its name, `length`
+// bytes): "cloth[2]" beside a structure "cloth" would take over the reference to cloth's particle
+// 2 (names are looked up first), and "cloth[0, 2]" would stand beside the generated "cloth[0,2]".
+// Checked when the structure is read, before its particles are named (the particles come first).
+static bool check_names_against_structure(parser* p, const named_like_references* like, const char* structure,
+                                          size_t length)
+{
+	const int32_t entry = name_index_find(&like->index, structure, length);
+	if (entry < 0)
+		return true;
+	const size_t k = (size_t)like->particle[entry];
+	const json_t* list = json_object_get(p->doc->root, "particles");
+	const char* name = json_string_value(json_object_get(json_array_get(list, k), "name"));
+	char path[PATH_CAPACITY], sub[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
+	child_index(path, "particles", k);
+	child_key(sub, path, "name");
+	return fail(p, SM_ERROR_SCHEMA, sub,
+	            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
+	            "name",
+	            text_quoted(text, name), (int)length, structure);
+}
+
+static bool read_structure(parser* p, const named_like_references* like, const json_t* obj, const char* path)
 {
 	static const char* const rope_keys[] = {"type",       "name",    "start", "end", "segments", "mass", "mass_per_length",
 	                                        "structural", "bending", "mass_distribution", NULL};
@@ -1176,7 +1238,7 @@ static bool read_structure(parser* p, const json_t* obj, const char* path)
 		            text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
 		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", text_quoted(text, s.name));
-	if (!check_names_against_structure(p, s.name, name_bytes))
+	if (!check_names_against_structure(p, like, s.name, name_bytes))
 		return false;
 
 	sm_mass_distribution distribution = SM_MASS_EVEN;
@@ -1341,13 +1403,16 @@ static bool read_structures(parser* p, const json_t* list)
 		return true;
 	if (!json_is_array(list))
 		return fail(p, SM_ERROR_SCHEMA, "structures", "must be an array of structures, not %s", type_name(list));
-	for (size_t k = 0; k < json_array_size(list); k++) {
+	named_like_references like = {.prefixes = NULL};
+	name_index_init(&like.index, named_like_prefix, &like);
+	bool ok = find_names_like_references(p, &like);
+	for (size_t k = 0; ok && k < json_array_size(list); k++) {
 		char path[PATH_CAPACITY];
 		child_index(path, "structures", k);
-		if (!read_structure(p, json_array_get(list, k), path))
-			return false;
+		ok = read_structure(p, &like, json_array_get(list, k), path);
 	}
-	return true;
+	named_like_free(&like);
+	return ok;
 }
 
 // ---------------------------------------------------------------------------------------------
