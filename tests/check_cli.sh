@@ -216,7 +216,7 @@ out=$("$cli" run "$tmp/comma.json" --t-end 0.01 --positions -q -o - 2>&1 | head 
 [ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,"particle.a,""b"".x","particle.a,""b"".y","particle.a,""b"".z"' ] ||
   fail "run --positions with a comma in a particle's name: $out"
 out=$("$cli" statics "$tmp/comma.json" -q -o "$tmp/comma.csv" 2>&1 > /dev/null; tail -1 "$tmp/comma.csv")
-[ "${out%%,-0,-0,9.81*}" = '0,"a,""b""",0,0,0,0,0,0' ] || fail "statics -o with a comma in a particle's name: $out"
+[ "$out" = '0,"a,""b""",0,0,0,0,0,0,0,0,9.81' ] || fail "statics -o with a comma in a particle's name: $out"
 
 # Column names are unique: the bundled chain names its ports after their particles.
 header=$("$cli" run "$root/models/two_mass_chain.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
