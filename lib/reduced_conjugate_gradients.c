@@ -1,0 +1,127 @@
+// Preconditioned conjugate gradients on the reduced Newton system A dv = rhs (both variants).
+//
+// A is symmetric positive definite (linear_solver_reduced.c), and so is either preconditioner
+// (block Jacobi with the coarse correction, reduced_preconditioner.c; the Cholesky factor of an
+// earlier A, reduced_cholesky.c), which is what conjugate gradients need. The iteration runs over
+// all particles, the constrained particles' entries staying zero: the right-hand side, every
+// product and the preconditioner are zero there.
+//
+// Stopping test. The residual of the full system's velocity rows is M^-1 (rhs - A dv) (the
+// position rows hold exactly), so the iteration stops when the error-weighted norm of M^-1 res
+// falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers make.
+//
+// Flexible variant. With the multilevel coarse solve the preconditioner is a few inner
+// conjugate-gradient iterations, not a fixed linear map, and the usual beta = z' r' / (z r) loses
+// the conjugacy it rests on; the Polak-Ribiere beta = z' (r' - r) / (z r), which equals it when
+// the preconditioner is linear (z' r = 0 then), is the usual remedy (flexible conjugate
+// gradients), at one more dot product per iteration.
+#define _POSIX_C_SOURCE 200809L
+
+#include "linear_solver_reduced.h"
+
+#include <math.h>
+#include <string.h>
+
+// Error-weighted 2-norm of the velocity rows' residual M^-1 res (weight = CVODE's error weight
+// over the mass, zero at constrained particles).
+static double residual_norm(const sm_reduced* r, const double* res)
+{
+	double s = 0.0;
+	for (int64_t i = 0; i < r->full; i++) {
+		const double t = res[i] * r->weight[i];
+		s += t * t;
+	}
+	return sqrt(s);
+}
+
+typedef struct update_job {
+	sm_reduced* r;
+	double *dv, *res, *p;
+	const double *q, *z;
+	double step;  // alpha, then beta
+} update_job;
+
+// Chunk c of dv += alpha p, res -= alpha q, with the squares of the weighted residual.
+static void update_chunk(void* context, int c)
+{
+	const update_job* j = context;
+	sm_reduced* r = j->r;
+	double* restrict dv = j->dv;
+	double* restrict res = j->res;
+	const double* restrict p = j->p;
+	const double* restrict q = j->q;
+	const double* restrict weight = r->weight;
+	const double alpha = j->step;
+	double squares = 0.0;
+	for (int64_t i = 3 * (int64_t)r->chunk_particle[c]; i < 3 * (int64_t)r->chunk_particle[c + 1]; i++) {
+		dv[i] += alpha * p[i];
+		res[i] -= alpha * q[i];
+		const double t = res[i] * weight[i];
+		squares += t * t;
+	}
+	r->partial[c] = squares;
+}
+
+// Chunk c of p = z + beta p.
+static void direction_chunk(void* context, int c)
+{
+	const update_job* j = context;
+	double* restrict p = j->p;
+	const double* restrict z = j->z;
+	const double beta = j->step;
+	for (int64_t i = 3 * (int64_t)j->r->chunk_particle[c]; i < 3 * (int64_t)j->r->chunk_particle[c + 1]; i++)
+		p[i] = z[i] + beta * p[i];
+}
+
+// The variant's preconditioner, out = B in, with in . out in *dot.
+static bool apply_preconditioner(sm_reduced* r, const double* in, double* out, double* dot)
+{
+	if (r->use_cholmod)
+		return sm_reduced_cholesky_apply(r, in, out, dot);
+	return sm_reduced_apply_preconditioner(r, in, out, dot);
+}
+
+// Preconditioned conjugate gradients on A dv = rhs (r->rhs) from dv = 0, at most max_iterations,
+// over all particles (the constrained entries stay zero), flexible with the multilevel coarse
+// solve. Returns SUNLS_SUCCESS once the weighted residual norm is at most tol, else
+// SUNLS_RES_REDUCED or SUNLS_CONV_FAIL after max_iterations, SUNLS_PACKAGE_FAIL_REC if A p . p is
+// not positive (A not positive definite: a state far from any physical one), SUNLS_MEM_FAIL if the
+// preconditioner fails.
+int sm_reduced_conjugate_gradients(sm_reduced* r, double* dv, double tol, int max_iterations)
+{
+	const int64_t n = r->full;
+	double *res = r->r, *z = r->z, *p = r->p, *q = r->q;
+	memcpy(res, r->rhs, (size_t)n * sizeof(double));
+	r->last_iterations = 0;
+	memset(dv, 0, (size_t)n * sizeof(double));
+	const double initial = residual_norm(r, res);
+	double norm = initial;
+	if (norm <= tol)
+		return SUNLS_SUCCESS;
+	double rz;
+	if (!apply_preconditioner(r, res, z, &rz))
+		return SUNLS_MEM_FAIL;
+	memcpy(p, z, (size_t)n * sizeof(double));
+	for (int iteration = 1; iteration <= max_iterations; iteration++) {
+		const double pq = sm_reduced_multiply(r, p, q);
+		if (!(pq > 0.0) || !isfinite(pq))
+			return SUNLS_PACKAGE_FAIL_REC;
+		const double alpha = rz / pq;
+		update_job job = {r, dv, res, p, q, z, alpha};
+		sm_workers_run(r->workers, update_chunk, &job, r->chunks);
+		r->sim->linear_iterations++;
+		r->last_iterations++;
+		norm = sqrt(sm_reduced_sum_partials(r));
+		if (norm <= tol)
+			return SUNLS_SUCCESS;
+		double rz_next;
+		if (!apply_preconditioner(r, res, z, &rz_next))
+			return SUNLS_MEM_FAIL;
+		// Flexible (Polak-Ribiere) when the preconditioner is not linear: beta = z' (r' - r) / (z r)
+		// with r' - r = -alpha q.
+		job.step = r->multilevel != NULL ? -alpha * sm_reduced_dot(r, z, q) / rz : rz_next / rz;
+		rz = rz_next;
+		sm_workers_run(r->workers, direction_chunk, &job, r->chunks);
+	}
+	return norm < initial ? SUNLS_RES_REDUCED : SUNLS_CONV_FAIL;
+}
