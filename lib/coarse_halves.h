@@ -1,5 +1,5 @@
 // The coarse matrix of the two-level preconditioner factorised so that its triangular solves
-// split into two halves that run at once (linear_solver_reduced.c, chunked models).
+// split into two halves that run at once (reduced_preconditioner.c, chunked models).
 //
 // Derivation. Number the unknowns as two halves H0, H1 with no entry of the matrix between them,
 // then a separator S (the unknowns that join them). Then no column of H0 has a row of H1 in its

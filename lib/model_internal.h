@@ -148,7 +148,7 @@ double sm_model_forces_power_and_jacobians(const sm_model* model, const double* 
 // written into their f as sm_model_forces starts it (v must be given); returns the power their
 // mass damping dissipates [W]. With sm_spring_order_forces_and_jacobians, the pieces of
 // sm_model_forces_power_and_jacobians that a caller may run on disjoint parts of the model at
-// once (linear_solver_reduced.c). Defined in forces.c.
+// once (reduced_chunks.c). Defined in forces.c.
 double sm_model_body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
                                   int32_t begin, int32_t end);
 

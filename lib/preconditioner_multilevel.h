@@ -1,9 +1,9 @@
 // Multilevel approximate inverse of a symmetric positive definite matrix in 3x3 blocks (the
 // coarse matrix of the reduced solver's two-level preconditioner), internal.
 //
-// Block layout shared with linear_solver_reduced.c: block row I has the neighbours
-// neighbour[first[I] .. first[I + 1]) (sorted, I itself included), deg(I) of them, and its
-// entry (3 I + i, 3 J_k + j), J_k its k-th neighbour, is values[9 first[I] + 3 deg(I) i + 3 k + j]:
+// Block layout shared with reduced_aggregates.c and reduced_preconditioner.c: block row I has
+// the neighbours neighbour[first[I] .. first[I + 1]) (sorted, I itself included), deg(I) of them,
+// and its entry (3 I + i, 3 J_k + j), J_k its k-th neighbour, is values[9 first[I] + 3 deg(I) i + 3 k + j]:
 // the 3 rows of a block row one after the other, each holding its deg(I) blocks' rows.
 #pragma once
 
