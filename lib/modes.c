@@ -1232,13 +1232,14 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	modes->explicit_step = INFINITY;  // no free particle: nothing to integrate
 
 	// The sparse path needs 4 degrees of freedom per mode beyond a margin: room for the Krylov
-	// space (2 per mode + 20) next to the locked modes.
+	// space (2 per mode + 20) next to the locked modes. Without free particles there is nothing to
+	// solve and no solver to refuse: no modes, whichever solver was asked for.
 	const size_t wanted = (size_t)d.mode_count;
 	const int sparse_fits = wanted > 0 && dof >= SM_MODES_SPARSE_MARGIN && wanted <= (dof - SM_MODES_SPARSE_MARGIN) / 4;
 	sm_modes_solver solver = d.solver;
 	if (solver == SM_MODES_AUTO)
 		solver = dof > SM_MODES_DENSE_LIMIT && sparse_fits ? SM_MODES_SPARSE : SM_MODES_DENSE;
-	if (solver == SM_MODES_SPARSE && !sparse_fits) {
+	if (solver == SM_MODES_SPARSE && !sparse_fits && dof > 0) {
 		if (dof < SM_MODES_SPARSE_MARGIN + 4)
 			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 			                  "modes: the sparse solver needs at least %d free degrees of freedom, the model has %zu: "

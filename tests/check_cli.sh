@@ -72,6 +72,13 @@ JSON
 echo stale > "$tmp/held.csv"
 "$cli" modes "$tmp/held.json" -o "$tmp/held.csv" > /dev/null 2>&1 &&
   [ "$(paste -sd ' ' "$tmp/held.csv")" = "particle,name 0,a" ] || fail "modes without free particles: $(cat "$tmp/held.csv")"
+# ... and so does the sparse solver, asked for explicitly: nothing to solve is not too few degrees
+# of freedom for it.
+for n in 0 10; do
+  out=$("$cli" modes "$tmp/held.json" --solver sparse -n $n 2>&1)
+  [ $? -eq 0 ] && [ "$(tail -1 <<< "$out")" = "no free particle: nothing vibrates" ] ||
+    fail "modes --solver sparse -n $n without free particles: $out"
+done
 # Column names stay unique: an unnamed particle is p[i], primed past a particle of that name.
 cat > "$tmp/names.json" << 'JSON'
 {"springmass": 1, "name": "names", "gravity": [0, 0, 0],

@@ -1366,6 +1366,35 @@ static int test_explicit_step_limit_edges(void)
 	return 0;
 }
 
+// A model with no free particle has no modes (analysis.h), whichever eigensolver is asked for and
+// however many modes: success with count = 0 and dof = 0, not a refusal of the sparse solver for
+// having fewer than SM_MODES_SPARSE_MARGIN + 4 degrees of freedom.
+static int test_modes_without_free_particles_under_every_solver(void)
+{
+	const sm_model_def md = sm_default_model_def();
+	sm_model* held = sm_model_create(&md, NULL);
+	ENSURE(held != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(held, &p, NULL), SM_OK);
+	const sm_modes_solver solvers[3] = {SM_MODES_AUTO, SM_MODES_DENSE, SM_MODES_SPARSE};
+	const int32_t counts[2] = {0, 10};
+	for (int s = 0; s < 3; s++)
+		for (int c = 0; c < 2; c++) {
+			sm_modes_def def = sm_default_modes_def();
+			def.solver = solvers[s];
+			def.mode_count = counts[c];
+			sm_modes modes;
+			sm_error err;
+			ENSURE_STATUS(sm_modes_compute(held, &def, &modes, &err), SM_OK);
+			ENSURE(modes.count == 0 && modes.dof == 0 && modes.particle_count == 1);
+			ENSURE(isinf(modes.explicit_step) && isnan(modes.next_omega_squared));
+			sm_modes_release(&modes);
+		}
+	sm_model_destroy(held);
+	return 0;
+}
+
 // A zero-length spring without damping whose particles coincide has a linearisation (its force
 // ks (x_b - x_a) is linear): modes of a 1 kg particle on a 100 N/m one at its fixed anchor are
 // three at omega^2 = 100 1/s^2 (dense eigenvalues of a diagonal matrix: 1e-12), as are those of
@@ -2701,6 +2730,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_coincident_damped_spring_of_zero_rest_length);
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
+	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_coincident_springs_between_held_particles);
 	RUN_TEST(test_chain_zero_length_frequencies);

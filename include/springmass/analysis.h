@@ -125,7 +125,7 @@ typedef enum sm_modes_solver {
 	SM_MODES_AUTO = 0,
 	SM_MODES_DENSE,   ///< all eigenpairs, dense (GSL); O(dof^3) time, 2 dof^2 doubles of memory
 	/// lowest mode_count eigenpairs by shift-invert Lanczos (CHOLMOD); needs
-	/// 1 <= mode_count <= (dof - SM_MODES_SPARSE_MARGIN) / 4
+	/// 1 <= mode_count <= (dof - SM_MODES_SPARSE_MARGIN) / 4 (or no free particle: no modes)
 	SM_MODES_SPARSE,
 } sm_modes_solver;
 
@@ -228,7 +228,9 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// or its damping force, has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
 /// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
 /// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
-/// A model with no free particle has no modes: success with count = 0. Deterministic: the same
+/// A model with no free particle has no modes: success with count = 0, under every solver
+/// and mode_count (the sparse solver's limits apply only when there is something to solve).
+/// Deterministic: the same
 /// model and options give the same numbers (the Lanczos start vectors are fixed; on the sparse
 /// path, for a given BLAS thread count: see "BLAS threads" above).
 SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes, sm_error* err);
