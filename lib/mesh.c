@@ -10,6 +10,7 @@
 // two, which are the ends of the bending spring across an interior edge.
 #include "structures_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -121,7 +122,22 @@ static double triangle_area(const double* vertices, const int32_t* tri)
 	const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
 	const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
 	const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-	return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+	const double squared = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+	if (!(squared < DBL_MIN) || (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0))
+		return 0.5 * sqrt(squared);  // NaN or inf: an overflow, which the caller names
+	// |n|^2 underflowed (sides below about 1e-77 m; |n| itself is not 0, or the triangle flat): the cross product of the edges divided by
+	// their largest component, then scaled back by its square, which a triangle whose springs the
+	// model can hold (sides above 1.5e-154 m) keeps normal. Exactly 0 stays 0.
+	double largest = 0.0;
+	for (int c = 0; c < 3; c++)
+		largest = fmax(largest, fmax(fabs(u[c]), fabs(w[c])));
+	double us[3], ws[3];
+	for (int c = 0; c < 3; c++) {
+		us[c] = u[c] / largest;
+		ws[c] = w[c] / largest;
+	}
+	const double ns[3] = {us[1] * ws[2] - us[2] * ws[1], us[2] * ws[0] - us[0] * ws[2], us[0] * ws[1] - us[1] * ws[0]};
+	return 0.5 * sqrt(ns[0] * ns[0] + ns[1] * ns[1] + ns[2] * ns[2]) * largest * largest;
 }
 
 // The sine of a triangle's smallest angle [1]: 2A / (a b), with a and b its two longest sides,
@@ -205,6 +221,12 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		// follow: the sine of the smallest angle at most 1e-12 (NaN, an edge that overflows
 		// while the area does not, is a flat triangle too).
 		const double sine = smallest_angle_sine(def->vertices, tri);
+		if (!(area > 0.0) && sine > 1e-12) {
+			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+			                   "mesh: the area of triangle %d (%d, %d, %d) underflows to 0 (its edges are too short)",
+			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			break;
+		}
 		if (!(area > 0.0) || !(sine > 1e-12)) {
 			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
 			                   "mesh: triangle %d (%d, %d, %d) has zero area (to rounding: twice its area is at most "
@@ -241,8 +263,13 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			in_triangle = def->triangles[k] == v;
 		if (!in_triangle)
 			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex %d belongs to no triangle", (int)v);
+		else if (mass[v] > 0.0)
+			st = sm_model_fail(model, SM_ERROR_NOT_FINITE,
+			                   "mesh: vertex %d: its mass, density %g kg/m^2 x a third of its triangles' area, is "
+			                   "beyond the largest double",
+			                   (int)v, def->density);
 		else
-			st = sm_model_fail(model, mass[v] > 0.0 ? SM_ERROR_NOT_FINITE : SM_ERROR_NONPOSITIVE_MASS,
+			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS,
 			                   "mesh: vertex %d: its mass, density x a third of its triangles' area, is %g (must be "
 			                   "finite and > 0)",
 			                   (int)v, mass[v]);
@@ -280,13 +307,13 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		st = structure_add_particle(model, what, mass[v], def->vertices + 3 * (size_t)v);
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
-		st = structure_add_spring(model, what, "edge", p0 + (int32_t)(entry->key >> 32),
+		st = structure_add_spring(model, what, "the vertices", "edge", p0 + (int32_t)(entry->key >> 32),
 		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
 	}
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		if (entry->triangles == 2)
-			st = structure_add_spring(model, what, "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
+			st = structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
 			                          entry->area);
 	}
 	if (st != SM_OK) {

@@ -6,6 +6,7 @@
 // particle and spring counts it had before the call: nothing half-built stays.
 #include "structures_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -165,15 +166,44 @@ sm_status structure_add_particle(sm_model* model, const char* what, double mass,
 	return st;
 }
 
-sm_status structure_add_spring(sm_model* model, const char* what, const char* group, int32_t a, int32_t b,
-                               const sm_spring_material* m, double measure)
+// Spring lengths the model can hold: their squares (model.c computes L = sqrt(d . d)) must be
+// finite and normal doubles, so L lies between sqrt(DBL_MIN) = 1.5e-154 m and sqrt(DBL_MAX) =
+// 1.3e154 m. A structure's spacing outside that range comes from its extents and counts: the
+// message names them (`inputs`), not the inf or 0 their squares would give.
+sm_status structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
+                               int32_t b, const sm_spring_material* m, double measure)
 {
 	sm_spring_def s = sm_default_spring_def();
+	const double* xa = model->position + 3 * (size_t)a;
+	const double* xb = model->position + 3 * (size_t)b;
+	const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+	const double squared = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+	// Coincident particles (d = 0) are the builders' own concern: a sheet's or block's grid
+	// refuses them, a rope without length keeps them (rest length 0, absolute constants only).
+	if (!isfinite(squared))
+		return sm_model_fail(model, SM_ERROR_NOT_FINITE,
+		                     "%s: %s spring between particles %d and %d would be longer than %.2g m, where its squared "
+		                     "length overflows: %s make the structure too large",
+		                     what, group, (int)a, (int)b, sqrt(DBL_MAX), inputs);
+	if (squared < DBL_MIN && (d[0] != 0.0 || d[1] != 0.0 || d[2] != 0.0)) {
+		// The length from components divided by the largest, whose squares cannot underflow.
+		const double largest = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
+		const double u[3] = {d[0] / largest, d[1] / largest, d[2] / largest};
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "%s: %s spring between particles %d and %d would be %.3g m long, below %.2g m, where its "
+		                     "squared length underflows: %s make the grid too fine",
+		                     what, group, (int)a, (int)b, largest * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]),
+		                     sqrt(DBL_MIN), inputs);
+	}
 	if (m->stiffness_scaling == SM_PER_SECTION || m->damping_scaling == SM_PER_SECTION) {
-		const double* xa = model->position + 3 * (size_t)a;
-		const double* xb = model->position + 3 * (size_t)b;
-		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
-		s.section = measure / sqrt(dx * dx + dy * dy + dz * dz);
+		s.section = measure / sqrt(squared);
+		if (!isfinite(s.section) || !(s.section > 0.0))
+			return sm_model_fail(model, isfinite(s.section) ? SM_ERROR_INVALID_ARGUMENT : SM_ERROR_NOT_FINITE,
+			                     "%s: %s spring between particles %d and %d: its section, the %s of the cells it stands "
+			                     "for over its length, %s: %s make the cells too %s for per-section constants",
+			                     what, group, (int)a, (int)b, strcmp(what, "block") == 0 ? "volume" : "area",
+			                     isfinite(s.section) ? "underflows to 0" : "overflows", inputs,
+			                     isfinite(s.section) ? "small" : "large");
 	}
 	s.a = a;
 	s.b = b;
@@ -325,9 +355,38 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	const double dx = def->end[0] - def->start[0], dy = def->end[1] - def->start[1], dz = def->end[2] - def->start[2];
 	if (!isfinite(dx) || !isfinite(dy) || !isfinite(dz))
 		return sm_model_fail(model, SM_ERROR_NOT_FINITE,
-		                     "rope: end - start = (%g, %g, %g) m is not finite (start and end too far apart)", dx,
-		                     dy, dz);
-	const double length = sqrt(dx * dx + dy * dy + dz * dz);
+		                     "rope: start (%g, %g, %g) m and end (%g, %g, %g) m are too far apart: end - start is beyond "
+		                     "the largest double",
+		                     def->start[0], def->start[1], def->start[2], def->end[0], def->end[1], def->end[2]);
+	// |end - start|, from the components divided by the largest where the squares would overflow
+	// or underflow (a rope of 1e-200 m has a length, and with it a mass per length a mass).
+	double length = sqrt(dx * dx + dy * dy + dz * dz);
+	const double largest = fmax(fabs(dx), fmax(fabs(dy), fabs(dz)));
+	if (largest > 0.0 && !(length >= sqrt(DBL_MIN) && length <= sqrt(DBL_MAX)))
+		length = largest * sqrt((dx / largest) * (dx / largest) + (dy / largest) * (dy / largest) +
+		                        (dz / largest) * (dz / largest));
+	// A rope whose start is its end has springs of rest length 0. With absolute constants they
+	// pull like zero-length springs (ks L u = ks d); per-strain constants E / l0 and a break strain
+	// (L - l0) / l0 have no value there.
+	const sm_spring_material* groups[2] = {&def->structural, &def->bending};
+	static const char* const group_names[2] = {"structural", "bending"};
+	for (int g = 0; g < 2 && length == 0.0; g++) {
+		const sm_spring_material* m = groups[g];
+		if (!structure_material_present(m))
+			continue;
+		const char* needs = m->stiffness_scaling != SM_ABSOLUTE ? "per-strain stiffness (E / l0)"
+		                    : m->damping_scaling != SM_ABSOLUTE ? "per-strain damping (c / l0)"
+		                    : isfinite(m->break_strain)         ? "break strain ((L - l0) / l0)"
+		                                                        : NULL;
+		const char* instead = m->stiffness_scaling != SM_ABSOLUTE ? "an absolute stiffness"
+		                      : m->damping_scaling != SM_ABSOLUTE ? "an absolute damping"
+		                                                          : "none";
+		if (needs != NULL)
+			return sm_model_fail(model, SM_ERROR_ZERO_REST_LENGTH,
+			                     "rope: start = end = (%g, %g, %g) m: its springs have rest length 0, and the %s "
+			                     "group's %s needs a rest length > 0: give it %s, or the rope a length",
+			                     def->start[0], def->start[1], def->start[2], group_names[g], needs, instead);
+	}
 	double total = def->mass;
 	if (!isfinite(def->mass_per_length))
 		return sm_model_fail(model, SM_ERROR_NOT_FINITE, "rope: mass per length = %g must be finite and >= 0",
@@ -337,13 +396,15 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		                     def->mass_per_length);
 	if (def->mass_per_length > 0.0) {
 		total = def->mass_per_length * length;
-		// A rope whose start is its end is legitimate (with absolute stiffness its springs pull
-		// like zero-length springs), but it has no length to spread a mass per length over.
+		// A rope whose start is its end has no length to spread a mass per length over.
 		if (!(total > 0.0) || !isfinite(total))
 			return sm_model_fail(model, isfinite(total) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
 			                     "rope: mass per length %g kg/m over the length %g m from start to end gives a "
-			                     "mass of %g kg, which must be finite and > 0 (give the mass instead)",
-			                     def->mass_per_length, length, total);
+			                     "mass %s (give the mass instead)",
+			                     def->mass_per_length, length,
+			                     !isfinite(total) ? "beyond the largest double"
+			                     : length > 0.0   ? "below the smallest double"
+			                                      : "of 0 kg, which must be finite and > 0");
 	}
 	if ((st = check_mass(model, what, total)) != SM_OK ||
 	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
@@ -368,12 +429,18 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		st = structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
 		                            p + 1 < n ? x : def->end);
 	}
+	// Neighbours that coincide although the ends differ (a spacing below the rounding of the
+	// coordinates) would give springs of rest length 0 among longer ones: refused as in a grid.
+	const int64_t rope_shape[3] = {n, 1, 1};
+	if (st == SM_OK && length > 0.0)
+		st = check_grid_distinct(model, what, p0, rope_shape, false);
+	static const char rope_inputs[] = "start, end and segments";
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;
 		if (has_structural && p + 1 < n)
-			st = structure_add_spring(model, what, "structural", a, a + 1, &def->structural, 0.0);
+			st = structure_add_spring(model, what, rope_inputs, "structural", a, a + 1, &def->structural, 0.0);
 		if (st == SM_OK && has_bending && p + 2 < n)
-			st = structure_add_spring(model, what, "bending", a, a + 2, &def->bending, 0.0);
+			st = structure_add_spring(model, what, rope_inputs, "bending", a, a + 2, &def->bending, 0.0);
 	}
 	if (st != SM_OK) {
 		structure_truncate(model, p0, s0);
@@ -434,6 +501,17 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		                     def->edge_u[0], def->edge_u[1], def->edge_u[2], def->edge_v[0], def->edge_v[1],
 		                     def->edge_v[2]);
 
+	// The corners of the parallelogram must be doubles: its particles lie between them.
+	static const char axis_names[3] = {'x', 'y', 'z'};
+	for (int c = 0; c < 3; c++)
+		if (!isfinite(def->origin[c] + def->edge_u[c]) || !isfinite(def->origin[c] + def->edge_v[c]) ||
+		    !isfinite(def->origin[c] + def->edge_u[c] + def->edge_v[c]))
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE,
+			                     "sheet: origin (%g, %g, %g) m plus edge_u (%g, %g, %g) m and edge_v (%g, %g, %g) m "
+			                     "reaches beyond the largest double along %c",
+			                     def->origin[0], def->origin[1], def->origin[2], def->edge_u[0], def->edge_u[1],
+			                     def->edge_u[2], def->edge_v[0], def->edge_v[1], def->edge_v[2], axis_names[c]);
+
 	// The particles first: for counts up to 2^31 - 1 each, nu nv fits in 64 bits but the springs,
 	// some 6 nu nv, do not.
 	const int64_t nu = def->nu, nv = def->nv, n = nu * nv;
@@ -481,7 +559,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 				if (!has[g] || a >= nv || b < 0 || b >= nu)
 					continue;
 				const int64_t at[2] = {i, j};
-				st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)(i * nu + j),
+				st = structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g], p0 + (int32_t)(i * nu + j),
 				                          p0 + (int32_t)(a * nu + b), groups[g],
 				                          cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
 				made[g]++;
@@ -519,6 +597,10 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	for (int c = 0; c < 3; c++)
 		if (!(def->size[c] > 0.0))
 			return sm_model_fail(model, SM_ERROR_NEGATIVE, "block: size[%d] = %g must be > 0", c, def->size[c]);
+	for (int c = 0; c < 3; c++)
+		if (!isfinite(def->origin[c] + def->size[c]))
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "block: origin[%d] + size[%d] = %g m + %g m is beyond the "
+			                     "largest double", c, c, def->origin[c], def->size[c]);
 	if (def->nu < 2 || def->nv < 2 || def->nw < 2)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "block: nu = %d, nv = %d and nw = %d must all be >= 2",
 		                     (int)def->nu, (int)def->nv, (int)def->nw);
@@ -575,7 +657,8 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 					if (!has[g] || bi < 0 || bi >= nv || bj < 0 || bj >= nu || bk >= nw)
 						continue;
 					const int64_t at[3] = {i, j, k};
-					st = structure_add_spring(model, what, group_names[g], p0 + (int32_t)((k * nv + i) * nu + j),
+					st = structure_add_spring(model, what, "size, nu, nv and nw", group_names[g],
+					                          p0 + (int32_t)((k * nv + i) * nu + j),
 					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
 					                          cell_volume * boundary_share(offsets[o], at, block_counts, 3));
 					made[g]++;

@@ -152,7 +152,7 @@ check_cases << 'CASES'
 2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
 0||run "$ends" -q -o - --t-end 0.01 --set xa=1 --set xb=3
-1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: per-strain stiffness needs a rest length > 0 (rest length is 0) (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
+1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: start = end = (2, 0, 0) m: its springs have rest length 0, and the structural group's per-strain stiffness (E / l0) needs a rest length > 0: give it an absolute stiffness, or the rope a length (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0x1p-20
 2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0

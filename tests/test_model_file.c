@@ -1232,7 +1232,8 @@ static int test_messages_name_parameters(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"far\": 1e308, \"near\": -1e308}, \"structures\":"
 	     " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"far\", 0, 0], \"end\": [\"near\", 0, 0], \"segments\": 2}]}",
 	     SM_ERROR_NOT_FINITE,
-	     "test.json: structures[0]: rope: end - start = (-inf, 0, 0) m is not finite (start and end too far apart) (with "
+	     "test.json: structures[0]: rope: start (1e+308, 0, 0) m and end (-1e+308, 0, 0) m are too far apart: end - "
+	     "start is beyond the largest double (with "
 	     "parameter far = 1e+308 and parameter near = -1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
 	     " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 0, 0]], \"triangles\": [[0, 1, 2]]}]}",

@@ -427,8 +427,8 @@ static int test_mesh_errors(void)
 	def.vertices = two;
 	def.density = DBL_MAX;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is inf") !=
-	       NULL);
+	ENSURE(strcmp(sm_model_last_error(m), "mesh: vertex 0: its mass, density 1.79769e+308 kg/m^2 x a third of its "
+	                                      "triangles' area, is beyond the largest double") == 0);
 	def.vertices = v;
 	def.density = 4.9e-324;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
@@ -528,8 +528,8 @@ static int test_degenerate_geometry(void)
 	rope.start[0] = -1e308;
 	rope.end[0] = 1e308;
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE(strcmp(sm_model_last_error(m),
-	              "rope: end - start = (inf, 0, 0) m is not finite (start and end too far apart)") == 0);
+	ENSURE(strcmp(sm_model_last_error(m), "rope: start (-1e+308, 0, 0) m and end (1e+308, 0, 0) m are too far "
+	                                      "apart: end - start is beyond the largest double") == 0);
 	ENSURE(sm_model_particle_count(m) == 13 && sm_model_spring_count(m) == 3);
 	sm_model_destroy(m);
 	return 0;
@@ -544,12 +544,13 @@ static int test_failed_builder_leaves_model_unchanged(void)
 	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_OK);
 	sm_model_set_particle_motion(m, 0, SM_PARTICLE_FIXED);
 	const int32_t np = sm_model_particle_count(m), ns = sm_model_spring_count(m), nf = sm_model_free_count(m);
-	// A rope whose ends coincide: particles are valid, but its per-strain springs have zero
-	// rest length.
-	sm_rope_def rope = sm_default_rope_def();
-	rope.end[0] = 0.0;
-	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH);
-	ENSURE(strstr(sm_model_last_error(m), "rope: structural spring between particles 9 and 10") != NULL);
+	// A block of cells 1e154 m on a side: particles are valid, and so are its first (edge)
+	// springs, but a face diagonal's squared length, 2e308 m^2, overflows.
+	sm_block_def big = sm_default_block_def();
+	big.nu = big.nv = big.nw = 3;
+	big.size[0] = big.size[1] = big.size[2] = 2e154;
+	ENSURE_STATUS(sm_add_block(m, &big, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_model_last_error(m), "block: face diagonal spring between particles 9 and 13") != NULL);
 	ENSURE(sm_model_particle_count(m) == np && sm_model_spring_count(m) == ns && sm_model_free_count(m) == nf);
 	// Invalid definitions are refused before anything is added.
 	sheet.nu = 1;
@@ -1835,6 +1836,174 @@ static int test_rope_mass_per_length_statuses(void)
 	return 0;
 }
 
+// A message of a refused builder call names its inputs, never a value computed from them that
+// is not a number (a "section = -nan" for a sheet whose springs' lengths overflow when squared).
+static int names_no_non_finite(const sm_model* m)
+{
+	const char* message = sm_model_last_error(m);
+	ENSURE(strstr(message, "nan") == NULL && strstr(message, "inf") == NULL);
+	return 0;
+}
+
+// A rope whose start is its end has springs of rest length 0. With absolute constants they pull
+// like zero-length springs (test_degenerate_geometry); constants per strain (E / l0), and a
+// break strain ((L - l0) / l0), would divide by that 0: refused by the rope, naming its ends and
+// the group, before anything is added. A rope whose ends differ but whose neighbouring particles
+// coincide (a spacing below the rounding of its coordinates: 1.9e-6 m at 1e10 m, one ulp, over 4
+// segments) would mix springs of rest length 0 with longer ones: refused like a sheet's grid.
+static int test_rope_without_length(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_rope_def rope = sm_default_rope_def();
+	rope.end[0] = 0.0;
+	rope.segments = 3;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
+	               "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
+	               "per-strain stiffness (E / l0) needs a rest length > 0: give it an absolute stiffness, or the "
+	               "rope a length") == 0);
+	rope.structural = sm_default_spring_material();
+	rope.structural.stiffness = 10.0;
+	rope.structural.stiffness_scaling = rope.structural.damping_scaling = SM_ABSOLUTE;
+	rope.bending = rope.structural;
+	rope.bending.damping_scaling = SM_PER_STRAIN;
+	rope.bending.damping = 1.0;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
+	               "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the bending group's "
+	               "per-strain damping (c / l0) needs a rest length > 0: give it an absolute damping, or the "
+	               "rope a length") == 0);
+	rope.bending.damping_scaling = SM_ABSOLUTE;
+	rope.structural.break_strain = 0.5;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
+	               "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
+	               "break strain ((L - l0) / l0) needs a rest length > 0: give it none, or the rope a length") == 0);
+	rope.structural.break_strain = INFINITY;
+	rope.start[0] = 1e10;
+	rope.end[0] = 1e10 + 2e-6;
+	rope.segments = 4;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "rope: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is below the resolution "
+	               "of the coordinates there") == 0);
+	rope.start[0] = rope.end[0] = 0.0;
+	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
+	sm_model_destroy(m);
+	return 0;
+}
+
+// Absurd but finite sizes. Spring lengths are computed from their squares, so a structure can
+// hold springs from about sqrt(DBL_MIN) = 1.5e-154 m to sqrt(DBL_MAX) = 1.3e154 m; outside,
+// refused naming the spring and the inputs that set its length. Per-section constants divide
+// a cell's area or volume by a spring's length: a cell whose measure overflows or underflows is
+// refused naming the inputs. Corners beyond the largest double are refused naming origin and
+// extents; so are a rope's ends too far apart for end - start, and a mass per length whose mass
+// overflows. Every message names inputs, never a computed inf or nan. A rope of 1e-200 m with a
+// mass per length has a mass (1.4e-200 kg), not "a length of 0 m". Each refusal leaves the model
+// as it was; a mesh of 1e-100 m triangles has an area.
+static int test_absurd_sizes_named(void)
+{
+	sm_model* m = new_model();
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	sm_sheet_def sheet = sm_default_sheet_def();
+	sheet.nu = sheet.nv = 3;
+	sheet.shear = sheet.bend = sm_default_spring_material();
+	sheet.structural = section_material(1.0);
+	sheet.edge_u[0] = sheet.edge_v[1] = 1e200;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	               "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
+	               "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
+	sheet.edge_u[0] = sheet.edge_v[1] = 1e-200;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "sheet: structural spring between particles 1 and 2 would be 5e-201 m long, below 1.5e-154 m, "
+	               "where its squared length underflows: edge_u, edge_v, nu and nv make the grid too fine") == 0);
+	sheet.edge_u[0] = sheet.edge_v[1] = 1e160;
+	sheet.structural.stiffness_scaling = SM_ABSOLUTE;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	               "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
+	               "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
+	sheet.edge_u[0] = sheet.edge_v[1] = 1.0;
+	sheet.origin[0] = 1.5e308;
+	sheet.edge_u[0] = 1e308;
+	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	               "sheet: origin (1.5e+308, 0, 0) m plus edge_u (1e+308, 0, 0) m and edge_v (0, 1, 0) m reaches "
+	               "beyond the largest double along x") == 0);
+
+	sm_block_def block = sm_default_block_def();
+	block.nu = block.nv = block.nw = 3;
+	block.face_diagonal = block.body_diagonal = sm_default_spring_material();
+	block.edge = section_material(1.0);
+	block.size[0] = block.size[1] = block.size[2] = 1e110;  // cells of 1.25e329 m^3
+	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_NOT_FINITE,
+	               "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
+	               "for over its length, overflows: size, nu, nv and nw make the cells too large for per-section "
+	               "constants") == 0);
+	block.size[0] = block.size[1] = block.size[2] = 1e-110;  // cells of 1.25e-331 m^3
+	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
+	               "for over its length, underflows to 0: size, nu, nv and nw make the cells too small for "
+	               "per-section constants") == 0);
+	block.size[0] = block.size[1] = block.size[2] = 1.0;
+	block.origin[2] = -1.7e308;
+	block.size[2] = 1.7e308;
+	ENSURE_STATUS(sm_add_block(m, &block, NULL), SM_ERROR_NOT_FINITE);  // springs of 8.5e307 m
+	ENSURE(names_no_non_finite(m) == 0);
+	block.origin[2] = 1.7e308;
+	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_NOT_FINITE,
+	               "block: origin[2] + size[2] = 1.7e+308 m + 1.7e+308 m is beyond the largest double") == 0);
+
+	sm_rope_def rope = sm_default_rope_def();
+	rope.start[0] = -1e308;
+	rope.end[0] = 1e308;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_NOT_FINITE,
+	               "rope: start (-1e+308, 0, 0) m and end (1e+308, 0, 0) m are too far apart: end - start is "
+	               "beyond the largest double") == 0);
+	rope.start[0] = 0.0;
+	rope.end[0] = 1e10;
+	rope.mass_per_length = 1e300;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_NOT_FINITE,
+	               "rope: mass per length 1e+300 kg/m over the length 1e+10 m from start to end gives a mass "
+	               "beyond the largest double (give the mass instead)") == 0);
+	rope.end[0] = rope.end[1] = 1e-200;
+	rope.mass_per_length = 1.0;
+	rope.segments = 1;
+	rope.structural = sm_default_spring_material();
+	sm_structure r;
+	ENSURE_STATUS(sm_add_rope(m, &rope, &r), SM_OK);
+	sm_particle_def end;
+	ENSURE_STATUS(sm_model_get_particle(m, r.first_particle, &end), SM_OK);
+	ENSURE_REL(end.mass, sqrt(2.0) * 1e-200 / 2.0, 1e-15, 0.0);  // half of the mass: round-off only
+
+	sm_mesh_def mesh = sm_default_mesh_def();
+	const double triangle[9] = {0, 0, 0, 1e10, 0, 0, 0, 1e10, 0};
+	const int32_t corners[3] = {0, 1, 2};
+	mesh.vertices = triangle;
+	mesh.vertex_count = 3;
+	mesh.triangles = corners;
+	mesh.triangle_count = 1;
+	mesh.density = 1e300;
+	ENSURE_STATUS(sm_add_mesh(m, &mesh, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(sm_model_last_error(m), "mesh: vertex 0: its mass, density 1e+300 kg/m^2 x a third of its "
+	                                      "triangles' area, is beyond the largest double") == 0);
+	// A triangle of 1e-100 m sides has an area, 5e-201 m^2, though the square of its cross
+	// product underflows: not "zero area". Its vertices get a third of it each.
+	const double tiny[9] = {0, 0, 0, 1e-100, 0, 0, 0, 1e-100, 0};
+	mesh.vertices = tiny;
+	mesh.density = 1.0;
+	sm_structure t;
+	ENSURE_STATUS(sm_add_mesh(m, &mesh, &t), SM_OK);
+	ENSURE_STATUS(sm_model_get_particle(m, t.first_particle, &end), SM_OK);
+	ENSURE_REL(end.mass, 0.5e-200 / 3.0, 1e-15, 0.0);  // round-off only
+	// One of 1e-200 m sides has an area too small for a double: named so, not "zero area".
+	const double tinier[9] = {0, 0, 0, 1e-200, 0, 0, 0, 1e-200, 0};
+	mesh.vertices = tinier;
+	ENSURE_STATUS(sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) underflows to 0 (its edges are too "
+	                                      "short)") == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1878,5 +2047,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mesh_folded_triangles_refused_with_bend);
 	RUN_TEST(test_fixing_by_selection_zeroes_velocity);
 	RUN_TEST(test_rope_mass_per_length_statuses);
+	RUN_TEST(test_rope_without_length);
+	RUN_TEST(test_absurd_sizes_named);
 	return TEST_SUMMARY();
 }

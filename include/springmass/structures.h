@@ -5,7 +5,11 @@
 // created in an sm_structure, so callers can fix, drive or probe particles of the structure.
 // On error the model's particles and springs are left exactly as they were (nothing half-built;
 // only the room reserved for them may have grown) and sm_model_last_error() names the field and
-// the rule it broke.
+// the rule it broke. Sizes: every spring a builder makes must be between sqrt(DBL_MIN) = 1.5e-154
+// and sqrt(DBL_MAX) = 1.3e154 m long (lengths are computed from their squares), per-section
+// sections finite and > 0, and every position a finite double; otherwise the builder fails
+// (SM_ERROR_INVALID_ARGUMENT for too small, SM_ERROR_NOT_FINITE for too large) naming the spring
+// and the fields that set its size.
 #pragma once
 
 #include "springmass/model.h"
@@ -87,6 +91,11 @@ SM_API sm_spring_material sm_default_spring_material(void);
 /// (0 <= p <= segments) sits at start + p / segments (end - start), the last exactly at end, and
 /// has index first_particle + p. Springs, in order: for each p, the structural spring (p, p + 1),
 /// then the bending spring (p, p + 2) where it exists.
+/// start = end is allowed with absolute constants (springs of rest length 0, which pull like
+/// zero-length springs); per-strain constants, a finite break strain and mass_per_length need a
+/// length: SM_ERROR_ZERO_REST_LENGTH (mass_per_length: SM_ERROR_NONPOSITIVE_MASS). Ends that
+/// differ but leave neighbouring particles at one point (a spacing below the rounding of the
+/// coordinates) are refused (SM_ERROR_INVALID_ARGUMENT), as for a sheet's grid.
 typedef struct sm_rope_def {
 	double start[3];                ///< first particle's position [m]; default (0, 0, 0)
 	double end[3];                  ///< last particle's position [m]; default (1, 0, 0)
