@@ -212,6 +212,11 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (!(def->break_strain > 0.0))
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: break strain = %g must be > 0 (INFINITY for never)",
 		           index, def->break_strain);
+	if (!(def->break_strain > SM_MIN_BREAK_STRAIN))
+		return say(msg, SM_ERROR_INVALID_ARGUMENT,
+		           "spring %ld: break strain = %g must be > 1.1e-16 (2^-53): l0 (1 + break strain) would round to "
+		           "l0, and the spring break at rest",
+		           index, def->break_strain);
 
 	// Rest length.
 	double l0;

@@ -115,6 +115,11 @@ sm_status structure_check_material(sm_model* model, const char* what, const char
 		return sm_model_fail(model, isnan(m->break_strain) ? SM_ERROR_NOT_FINITE : SM_ERROR_NEGATIVE,
 		                     "%s: %s break strain = %g must be > 0 (INFINITY for never)", what, group,
 		                     m->break_strain);
+	if (!(m->break_strain > SM_MIN_BREAK_STRAIN))
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "%s: %s break strain = %g must be > 1.1e-16 (2^-53): l0 (1 + break strain) would round "
+		                     "to l0, and the springs break at rest",
+		                     what, group, m->break_strain);
 	return SM_OK;
 }
 

@@ -3343,6 +3343,48 @@ static int test_random_calls_leave_no_trace(void)
 // Contracts of simulation.h: driven motion, breaks, inputs, options, statistics
 // ---------------------------------------------------------------------------------------------
 
+// A break strain of at most 2^-53 = 1.1e-16 makes the limit l0 (1 + break_strain) round to l0,
+// where a spring at rest (strain 0, not beyond any break strain > 0) would count as at its limit
+// and break at once: refused (SM_MIN_BREAK_STRAIN), by the model and by a structure. The smallest
+// break strain accepted, the next double above it, gives the limit l0 (1 + 2^-52) > l0: a spring
+// at rest, weightless, stays whole for 1 s, and one pulled by gravity (strain 1e-3 at its rest
+// after a swing) breaks, at the first instant its strain rises above 0 (before 1 ms).
+static int test_smallest_break_strain(void)
+{
+	for (int hanging = 0; hanging <= 1; hanging++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = hanging ? -9.81 : 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		p.position[2] = -0.3;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 1e4;
+		s.break_strain = 1e-20;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strstr(sm_model_last_error(model), "break strain = 1e-20 must be > 1.1e-16") != NULL);
+		s.break_strain = SM_MIN_BREAK_STRAIN;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_INVALID_ARGUMENT);
+		s.break_strain = nextafter(SM_MIN_BREAK_STRAIN, 1.0);
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == (hanging ? 1 : 0));
+		if (hanging)
+			ENSURE(sm_simulation_break(sim, 0).time > 0.0 && sm_simulation_break(sim, 0).time < 1e-3);
+		sm_simulation_destroy(sim);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // The break limit is l0 (1 + break_strain) also for a rest length other than 1 m: a spring of
 // l0 = 0.5 m from a fixed particle to a driven one pulled at 0.25 m/s breaks at 20 % strain
 // at t = 0.5 * 0.2 / 0.25 = 0.4 s. A second breakable spring, to a free particle hanging
@@ -4901,6 +4943,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_workers_take_the_callers_floating_point_environment);
 	RUN_TEST(test_multilevel_solve_is_preconditioned_conjugate_gradients);
 	RUN_TEST(test_invert3_across_the_exponent_range);
+	RUN_TEST(test_smallest_break_strain);
 	RUN_TEST(test_break_limit_scales_with_rest_length);
 	RUN_TEST(test_break_takes_only_its_own_spring_energy);
 	RUN_TEST(test_advance_to_the_current_time_does_nothing);

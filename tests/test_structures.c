@@ -927,7 +927,7 @@ static int test_mesh_edge_order(void)
 // A zero size or break strain is refused as the headers say (block size > 0, break strain > 0):
 // SM_ERROR_NEGATIVE with the builder's own "must be > 0" message, before anything is added (a
 // zero size would otherwise be reported as coinciding particles, and a zero break strain only
-// by the model, per spring).
+// by the model, per spring), and so is one too small to move the limit l0 (1 + break strain).
 static int test_zero_size_and_break_strain(void)
 {
 	sm_model* m = new_model();
@@ -948,8 +948,13 @@ static int test_zero_size_and_break_strain(void)
 	block.body_diagonal.break_strain = 0.0;
 	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_NEGATIVE,
 	               "block: body_diagonal break strain = 0 must be > 0 (INFINITY for never)") == 0);
-	// The smallest positive values are accepted.
+	// A break strain of at most 2^-53 leaves l0 (1 + break strain) = l0 (SM_MIN_BREAK_STRAIN):
+	// refused by the structure, naming its group; the next double above is accepted.
 	rope.structural.break_strain = 5e-324;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "rope: structural break strain = 4.94066e-324 must be > 1.1e-16 (2^-53): l0 (1 + break strain) "
+	               "would round to l0, and the springs break at rest") == 0);
+	rope.structural.break_strain = nextafter(SM_MIN_BREAK_STRAIN, 1.0);
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
 	sm_model_destroy(m);
 	return 0;

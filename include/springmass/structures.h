@@ -44,7 +44,7 @@ typedef struct sm_spring_material {
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
 	double damping;                ///< kd [N s/m]; per strain, c [N s]; per section, [N s/m] or [N s/m^2]; default 0
 	sm_scaling damping_scaling;    ///< default SM_PER_STRAIN
-	double break_strain;           ///< [1]; INFINITY (default) = never breaks
+	double break_strain;           ///< [1], > SM_MIN_BREAK_STRAIN; INFINITY (default) = never breaks
 	/// Create the group's springs even when stiffness and damping are both zero (default false),
 	/// so that the model keeps its topology when they are given values later (through
 	/// sm_simulation_update_model, or a model file's parameters: see docs/model-format.md).
