@@ -50,13 +50,15 @@ static void puts_(text* t, const char* s)
 	put(t, s, strlen(s));
 }
 
-// x in the shortest text that reads back to exactly x (sm_format_number); -0 as 0.
+// x in the shortest text that reads back to exactly x (sm_format_number); -0 as -0.0, since the
+// JSON reader takes "-0" for the integer 0 and would drop the sign (a position or velocity of
+// -0 then reloads as +0, and the reloaded model prints "0" where the saved one printed "-0").
 static void put_number(text* t, double x)
 {
 	char buffer[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(x, buffer);
 	if (strcmp(buffer, "-0") == 0)
-		strcpy(buffer, "0");
+		strcpy(buffer, "-0.0");
 	puts_(t, buffer);
 }
 

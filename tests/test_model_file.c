@@ -70,8 +70,9 @@ static int same_model(const sm_model* a, const sm_model* b)
 		sm_model_get_particle(a, i, &p);
 		sm_model_get_particle(b, i, &q);
 		ENSURE(p.mass == q.mass && p.motion == q.motion);
-		for (int c = 0; c < 3; c++)
-			ENSURE(p.position[c] == q.position[c] && p.velocity[c] == q.velocity[c]);
+		// Bit for bit: a zero's sign too.
+		ENSURE(memcmp(p.position, q.position, sizeof p.position) == 0);
+		ENSURE(memcmp(p.velocity, q.velocity, sizeof p.velocity) == 0);
 	}
 	for (int32_t s = 0; s < sm_model_spring_count(a); s++) {
 		sm_spring_def p, q;
@@ -89,8 +90,7 @@ static int same_model(const sm_model* a, const sm_model* b)
 		ENSURE(l0a == l0b && ksa == ksb && kda == kdb);
 	}
 	const sm_model_def da = sm_model_get_def(a), db = sm_model_get_def(b);
-	for (int c = 0; c < 3; c++)
-		ENSURE(da.gravity[c] == db.gravity[c]);
+	ENSURE(memcmp(da.gravity, db.gravity, sizeof da.gravity) == 0);
 	ENSURE(da.mass_damping == db.mass_damping);
 	return 0;
 }
@@ -2752,12 +2752,15 @@ static int test_more_rules_at_their_edges(void)
 // parameter, so that a new value acts on the saved document as on the original; a motion port on
 // a particle other than the first stays on its particle; a particle's mass from a parameter is
 // still that parameter after sm_document_set_initial_state (only positions and velocities are
-// replaced); and a coordinate of -0 is written as 0, so that the saved text is a fixed point.
+// replaced); and a position, velocity or gravity component of -0 is written -0.0 (the reader
+// takes "-0" for the integer 0), so that it reloads as -0, bit for bit, and the saved text is a
+// fixed point.
 static int test_canonical_form_keeps_parameters_and_ports(void)
 {
 	const char* text =
 	    "{\"springmass\": 1, \"name\": \"k\", \"parameters\": {\"m\": 2, \"l\": 0.5},"
-	    " \"particles\": [{\"name\": \"a\", \"position\": [-0.0, 0, 0]},"
+	    " \"gravity\": [0, -0.0, -9.81],"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [-0.0, 0, 0], \"velocity\": [0, -0.0, 1]},"
 	    "  {\"name\": \"h\", \"position\": [1, 0, 0], \"mass\": \"m\", \"fixed\": true},"
 	    "  {\"name\": \"b\", \"position\": [2, 0, 0]}],"
 	    " \"springs\": [{\"a\": \"h\", \"b\": \"b\", \"rest_length\": \"l\", \"stiffness\": 3}],"
