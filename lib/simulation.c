@@ -8,7 +8,7 @@
 //   (zero): Newton's iteration still converges, and e is integrated to the same tolerance.
 // Linear solvers: dense LU of the full system (SUNDenseMatrix), sparse LU (KLU) of the full
 // system in CSR form, and the reduced second-order solver of linear_solver_reduced.c.
-// Breaking springs are root functions g = L - l0 (1 + break_strain), one per breakable spring.
+// Breaking springs: simulation_events.c.
 #define _POSIX_C_SOURCE 200809L
 
 #include "model_internal.h"
@@ -232,27 +232,6 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	for (int64_t i = nd; i <= 2 * nd; i++)
 		if (!isfinite(ydot[i]))
 			return 1;
-	return 0;
-}
-
-// g_i = L - l0 (1 + break_strain) for each breakable spring still intact; -1 once broken.
-static int roots(sunrealtype t, N_Vector yv, sunrealtype* g, void* user_data)
-{
-	sm_simulation* sim = user_data;
-	double* x = sim->work_position;
-	double* v = sim->work_velocity;
-	sm_simulation_unpack(sim, t, N_VGetArrayPointer(yv), x, v);
-	for (int32_t r = 0; r < sim->root_count; r++) {
-		const int32_t s = sim->root_spring[r];
-		if (!sim->model->enabled[s]) {
-			g[r] = -1.0;
-			continue;
-		}
-		const double* a = x + 3 * (size_t)sim->model->spring_a[s];
-		const double* b = x + 3 * (size_t)sim->model->spring_b[s];
-		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
-		g[r] = sqrt(d0 * d0 + d1 * d1 + d2 * d2) - sim->root_limit[r];
-	}
 	return 0;
 }
 
@@ -525,63 +504,6 @@ static sm_linear_solver resolve_solver(const sm_simulation_def* def, int64_t dof
 	return SM_SOLVER_REDUCED_PCG;
 }
 
-// Root functions for the model's breakable springs (recomputed when the model changes). The new
-// arrays are made before the old ones go: out of memory for them, the simulation keeps the old ones
-// and CVODE the root functions it was given for them.
-static sm_status build_roots(sm_simulation* sim)
-{
-	const sm_model* m = sim->model;
-	int32_t count = 0;
-	for (int32_t s = 0; s < m->spring_count; s++)
-		if (isfinite(m->spring_def[s].break_strain))
-			count++;
-	int32_t* spring = NULL;
-	double *limit = NULL, *values = NULL;
-	int *found = NULL, *direction = NULL;
-	if (count > 0) {
-		spring = malloc((size_t)count * sizeof(int32_t));
-		limit = malloc((size_t)count * sizeof(double));
-		values = malloc((size_t)count * sizeof(double));
-		found = malloc((size_t)count * sizeof(int));
-		direction = malloc((size_t)count * sizeof(int));
-		if (!spring || !limit || !values || !found || !direction) {
-			free(spring);
-			free(limit);
-			free(values);
-			free(found);
-			free(direction);
-			return SM_ERROR_OUT_OF_MEMORY;
-		}
-		for (int32_t s = 0, r = 0; s < m->spring_count; s++) {
-			if (!isfinite(m->spring_def[s].break_strain))
-				continue;
-			spring[r] = s;
-			limit[r] = m->rest_length[s] * (1.0 + m->spring_def[s].break_strain);
-			direction[r] = 1;  // only a strain rising through the limit breaks a spring
-			r++;
-		}
-	}
-	free(sim->root_spring);
-	free(sim->root_limit);
-	free(sim->root_values);
-	free(sim->roots_found);
-	sim->root_spring = spring;
-	sim->root_limit = limit;
-	sim->root_values = values;
-	sim->roots_found = found;
-	sim->root_count = count;
-	sm_status st = SM_OK;
-	if (sim->cvode != NULL) {
-		if (CVodeRootInit(sim->cvode, count, count > 0 ? roots : NULL) != CV_SUCCESS ||
-		    (count > 0 && CVodeSetRootDirection(sim->cvode, direction) != CV_SUCCESS))
-			st = SM_ERROR_SOLVER;
-		else if (count > 0)
-			CVodeSetNoInactiveRootWarn(sim->cvode);
-	}
-	free(direction);
-	return st;
-}
-
 // Masses of the free particles, from the simulation's model.
 static void refresh_masses(sm_simulation* sim)
 {
@@ -715,7 +637,7 @@ static sm_status setup_cvode(sm_simulation* sim)
 		return SM_ERROR_SOLVER;
 	// A step size that rounds to nothing is reported as a failure, not printed.
 	CVodeSetMaxHnilWarns(sim->cvode, -1);
-	sm_status st = build_roots(sim);
+	sm_status st = sm_simulation_build_events(sim);
 	if (st != SM_OK)
 		return st;
 	return attach_linear_solver(sim);
@@ -896,22 +818,6 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	return SM_OK;
 }
 
-static sm_status record_break(sm_simulation* sim, double t, int32_t spring)
-{
-	if (sim->break_count == sim->break_capacity) {
-		int32_t cap = sim->break_capacity ? 2 * sim->break_capacity : 16;
-		sm_break_event* b = realloc(sim->breaks, (size_t)cap * sizeof *b);
-		if (!b)
-			return SM_ERROR_OUT_OF_MEMORY;
-		sim->breaks = b;
-		sim->break_capacity = cap;
-	}
-	sim->breaks[sim->break_count].time = t;
-	sim->breaks[sim->break_count].spring = spring;
-	sim->break_count++;
-	return sm_model_set_spring_enabled(sim->model, spring, false);
-}
-
 // The name of a CVode failure flag. CVodeGetReturnFlagName would allocate it, and SUNDIALS 6.4.1
 // writes into that allocation without checking it: out of memory, a failed advance crashed there.
 #define FLAG_CASE(flag) \
@@ -970,51 +876,6 @@ static const char* failure_hint(int flag)
 	default:
 		return "";
 	}
-}
-
-// Breaks, at the current time, the intact springs marked in roots_found (> 0). A broken spring
-// takes its elastic energy with it, out of the mechanical system: it is added to the dissipated
-// energy, so that kinetic + elastic + gravitational + dissipated energy stays constant across
-// breaks as between them.
-static sm_status break_springs(sm_simulation* sim)
-{
-	refresh_outputs(sim);
-	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
-	bool broke = false, out_of_memory = false;
-	for (int32_t r = 0; r < sim->root_count && !out_of_memory; r++) {
-		if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
-			continue;
-		out_of_memory = record_break(sim, sim->time, sim->root_spring[r]) != SM_OK;
-		broke = broke || !out_of_memory;
-	}
-	if (broke) {
-		const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
-		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
-	}
-	// After a failure too: the springs not yet broken are beyond their limit at this time, and
-	// the next advance, starting afresh here, breaks them first.
-	sim->need_restart = sim->need_restart || broke || out_of_memory;
-	if (out_of_memory)
-		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "out of memory recording a spring break");
-	return SM_OK;
-}
-
-// CVODE's root functions see a strain rise through a spring's limit; a spring already beyond it
-// when an advance begins (placed there by the model's start, a new state, a moved driven
-// particle or a lowered break strain) breaks at once.
-static sm_status break_overstretched_springs(sm_simulation* sim)
-{
-	if (sim->root_count == 0)
-		return SM_OK;
-	roots(sim->time, sim->y, sim->root_values, sim);
-	bool any = false;
-	for (int32_t r = 0; r < sim->root_count; r++) {
-		// At the limit counts as beyond: CVODE would not report a root function that starts at 0
-		// as crossing when it rises. Broken springs give -1.
-		sim->roots_found[r] = sim->root_values[r] >= 0.0;
-		any = any || sim->roots_found[r];
-	}
-	return any ? break_springs(sim) : SM_OK;
 }
 
 // An interval too short for CVODE: one explicit Euler step y += (t_end - t) y'(t), exact to
@@ -1141,7 +1002,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 	sim->input_changed = false;
 	// Where CVODE is past the current time, it has looked for roots beyond it already, on the
 	// same trajectory: springs are checked afresh only where it starts or restarts.
-	if (!cvode_ahead(sim) && break_overstretched_springs(sim) != SM_OK)
+	if (!cvode_ahead(sim) && sm_simulation_break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
 	// CVODE steps on to t_stop, or ends its last step at t_end when the inputs changed: an interval
 	// up to there too short for it is one step of our own.
@@ -1168,7 +1029,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			if (t < sim->break_time)
 				break;
 			sim->break_pending = false;
-			if (break_springs(sim) != SM_OK)
+			if (sm_simulation_break_springs(sim) != SM_OK)
 				return SM_ERROR_OUT_OF_MEMORY;
 			continue;
 		}
@@ -1267,7 +1128,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		} else if (flag == CV_ROOT_RETURN) {
 			sim->time = reached;
 			CVodeGetRootInfo(sim->cvode, sim->roots_found);
-			if (break_springs(sim) != SM_OK)
+			if (sm_simulation_break_springs(sim) != SM_OK)
 				return SM_ERROR_OUT_OF_MEMORY;
 		} else if (past_end) {
 			// CVODE's last step ends at or past t_end, in this call or an earlier one.
@@ -1479,7 +1340,7 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	return SM_OK;
 }
 
-// A break the caller decides on (a cut, a tear it models itself), as break_springs makes one
+// A break the caller decides on (a cut, a tear it models itself), as sm_simulation_break_springs makes one
 // when a strain crosses its limit: recorded, its elastic energy moved to the dissipated energy,
 // CVODE restarted here (what it computed past this time assumed the spring).
 sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
@@ -1493,7 +1354,7 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 		return SM_OK;
 	refresh_outputs(sim);
 	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
-	if (record_break(sim, sim->time, spring) != SM_OK)
+	if (sm_simulation_record_break(sim, sim->time, spring) != SM_OK)
 		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "break_spring: out of memory recording the break");
 	const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
 	N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
@@ -1886,7 +1747,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sm_model* previous = sim->model;
 	sim->model = copy;
 	sim->solver_message[0] = '\0';
-	sm_status st = build_roots(sim);
+	sm_status st = sm_simulation_build_events(sim);
 	const char* failure = st == SM_ERROR_OUT_OF_MEMORY ? "update_model: out of memory for the break events"
 	                                                   : "update_model: cannot set up the break events";
 	if (st == SM_OK && has_reduced_solver(sim) && !sm_reduced_solver_rebuild(sim->linear_solver)) {
@@ -1899,7 +1760,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		sim->model = previous;
 		sm_model_destroy(copy);
 		free(enabled);
-		build_roots(sim);
+		sm_simulation_build_events(sim);
 		// CVODE's root functions may have been set up anew, and with them went its records of
 		// their values and those of a break it found past the current time: it starts afresh
 		// here, from the state as it is.

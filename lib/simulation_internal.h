@@ -1,4 +1,4 @@
-// Internal layout of sm_simulation, shared by simulation.c and the linear solvers
+// Internal layout of sm_simulation, shared by simulation.c, simulation_events.c and the linear solvers
 // (linear_solver_*.c).
 //
 // The CVODE state vector holds the free particles only, followed by the dissipated energy:
@@ -98,6 +98,22 @@ double sm_simulation_clock(void);
 
 // Fills work_position / work_velocity for all particles from a CVODE state at time t.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v);
+
+// Spring breaks (simulation_events.c).
+// The root functions for the model's breakable springs, given to CVODE (recomputed when the model
+// changes). The new arrays are made before the old ones go: out of memory for them, the simulation
+// keeps the old ones and CVODE the root functions it was given for them.
+sm_status sm_simulation_build_events(sm_simulation* sim);
+// Records a break of a spring at time t [s] and disables it in the simulation's model;
+// SM_ERROR_OUT_OF_MEMORY, with nothing changed, when the event cannot be held.
+sm_status sm_simulation_record_break(sm_simulation* sim, double t, int32_t spring);
+// Breaks, at the current time, the intact springs marked in roots_found (> 0), their elastic
+// energy counted as dissipated; CVODE restarts at the next step.
+sm_status sm_simulation_break_springs(sm_simulation* sim);
+// CVODE's root functions see a strain rise through a spring's limit; a spring already beyond it
+// when an advance begins (placed there by the model's start, a new state, a moved driven particle
+// or a lowered break strain) breaks at once.
+sm_status sm_simulation_break_overstretched_springs(sm_simulation* sim);
 
 // Fills sim->dfdx and sim->dfdv at the CVODE state y (time t) with the given variant.
 int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant);
