@@ -748,6 +748,7 @@ void sm_simulation_destroy(sm_simulation* sim)
 	N_VDestroy(sim->y);
 	N_VDestroy(sim->y_saved);
 	N_VDestroy(sim->tolerances);
+	sm_simulation_free_events(sim);  // before the context its vector belongs to
 	if (sim->context)
 		SUNContext_Free(&sim->context);
 	sm_model_destroy(sim->model);
@@ -770,10 +771,6 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->work_position);
 	free(sim->work_velocity);
 	free(sim->work_force);
-	free(sim->root_spring);
-	free(sim->root_limit);
-	free(sim->root_values);
-	free(sim->roots_found);
 	free(sim->breaks);
 	free(sim);
 }
@@ -944,8 +941,11 @@ static bool cvode_ahead(const sm_simulation* sim)
 // t_stop past t_end (sm_simulation_advance_interpolated) CVODE looks for roots over each whole
 // step, t_end or not, so that the roots are those of one advance to t_stop, bit for bit, and
 // the caller interpolates t_end. CVODE counts its step limit within one call, so the limit,
-// `allowed` steps, is kept here, as CV_NORMAL would. *reached is where CVODE stopped: the end of
-// its last step, a root, or the last state it reached on failure (in y).
+// `allowed` steps, is kept here, as CV_NORMAL would. Models with breakable springs always step
+// this way: each step is searched for a strain that crosses its limit inside it
+// (sm_simulation_search_step), which CVODE's root functions, compared at the ends of its steps,
+// miss. *reached is where CVODE stopped: the end of its last step, a break (CVODE's root or a
+// crossing inside the step), or the last state it reached on failure (in y).
 static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, long allowed, double* reached)
 {
 	*reached = cvode_time(sim);
@@ -955,7 +955,12 @@ static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, l
 	long steps = 0;
 	int flag = CV_SUCCESS;
 	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed && !sim->stopped) {
+		long steps_before = 0, steps_after = 0;
+		CVodeGetNumSteps(sim->cvode, &steps_before);
 		flag = check_step_size(sim, CVode(sim->cvode, t_stop, sim->y, reached, CV_ONE_STEP), reached);
+		CVodeGetNumSteps(sim->cvode, &steps_after);
+		// A spring that reached its break strain inside the step ends it there, as a root does.
+		flag = sm_simulation_search_step(sim, flag, steps_after > steps_before, reached);
 		if (flag >= 0 && sim->def.on_step != NULL && !sim->def.on_step(sim->def.on_step_context, *reached))
 			sim->stopped = true;
 		steps++;
@@ -1043,7 +1048,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		int flag;
 		if (allowed <= 0) {
 			flag = CV_SUCCESS;  // reported as too much work below
-		} else if (!past_end && sim->def.on_step == NULL) {
+		} else if (!past_end && sim->def.on_step == NULL && sim->root_count == 0) {
 			CVodeSetStopTime(sim->cvode, t_end);
 			CVodeSetMaxNumSteps(sim->cvode, allowed);
 			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
@@ -1117,9 +1122,8 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			            sim->solver_message);
 		}
 		if (flag == CV_ROOT_RETURN && reached > t_end) {
-			// A root past the end: kept for the next advance, where CVODE's history still
+			// A break past the end: kept for the next advance, where CVODE's history still
 			// reaches it unless an input, the state or the model changes first.
-			CVodeGetRootInfo(sim->cvode, sim->roots_found);
 			sim->break_pending = true;
 			sim->break_time = reached;
 			sm_status st = interpolate(sim, t_end);
@@ -1127,7 +1131,6 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 				return st;
 		} else if (flag == CV_ROOT_RETURN) {
 			sim->time = reached;
-			CVodeGetRootInfo(sim->cvode, sim->roots_found);
 			if (sm_simulation_break_springs(sim) != SM_OK)
 				return SM_ERROR_OUT_OF_MEMORY;
 		} else if (past_end) {

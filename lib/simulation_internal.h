@@ -64,8 +64,14 @@ struct sm_simulation {
 	int32_t root_count;
 	int32_t* root_spring;
 	double* root_limit;        // l0 (1 + break_strain) [m]
-	double* root_values;       // the root functions at the start of an advance [m]
-	int* roots_found;
+	double* root_values;       // the root functions at one time (work) [m]
+	int* roots_found;          // per breakable spring: > 0 when it breaks at the next event
+	// The search of each step for strain excursions between its ends (simulation_events.c).
+	double* crossing_time;     // per breakable spring: its first crossing in the step searched [s]
+	double* taylor_position;   // (max order + 1) x 3 per particle: positions' scaled derivatives [m]
+	double* reach;             // per particle: a bound of its distance from where the step began [m]
+	N_Vector interpolated;     // a derivative of CVODE's polynomial at one time (work)
+	double searched_until;     // CVODE time up to which its last step has been searched [s]
 
 	sm_break_event* breaks;
 	int32_t break_count;
@@ -114,6 +120,17 @@ sm_status sm_simulation_break_springs(sm_simulation* sim);
 // when an advance begins (placed there by the model's start, a new state, a moved driven particle
 // or a lowered break strain) breaks at once.
 sm_status sm_simulation_break_overstretched_springs(sm_simulation* sim);
+// After each CVode call in one-step mode that returned flag at *reached (the end of its step, a
+// stop time, or a root CVODE found, with the state there in y; new_step: the call took a step):
+// searches CVODE's polynomial over the part of the step not yet searched for a strain that rises
+// through its break strain, also where it falls back before the step ends. The first crossing
+// there, or CVODE's root if none comes before it, is the next event: returns CV_ROOT_RETURN with
+// *reached and y at it and roots_found marking the springs that break there (every intact one at
+// or beyond its limit). Otherwise returns flag unchanged; also when flag < 0 or the model has no
+// breakable spring. A negative CVODE flag if its polynomial cannot be read.
+int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, double* reached);
+// Frees what sm_simulation_build_events allocated.
+void sm_simulation_free_events(sm_simulation* sim);
 
 // Fills sim->dfdx and sim->dfdv at the CVODE state y (time t) with the given variant.
 int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant);

@@ -1441,6 +1441,208 @@ static int test_break_at_analytic_time(void)
 	return 0;
 }
 
+// The tethered mass (ks 100 N/m, l0 1 m, 1 kg: w = 10 rad/s; no gravity) released at rest at
+// length 1 - A swings to 1 + A: its strain is -A cos(w t), at its peak A at t = pi / w. With
+// A = 0.1 / (1 - delta) the strain exceeds the 10 % break strain only while |w t - pi| <
+// acos(1 - delta), and first reaches it at t_b = (pi - acos(1 - delta)) / w, where
+// acos(1 - delta) = 2 asin(sqrt(delta / 2)) without the cancellation of 1 - delta.
+static double grazing_amplitude(double delta)
+{
+	return 0.1 / (1.0 - delta);
+}
+
+static double grazing_break_time(double delta)
+{
+	return (acos(-1.0) - 2.0 * asin(sqrt(0.5 * delta))) / 10.0;
+}
+
+// A strain that exceeds the break strain only between two of CVODE's steps breaks the spring at
+// its first crossing. With delta = 1e-6 the excursion lasts 2 acos(1 - delta) / w = 2.8e-4 s, a
+// tenth of CVODE's steps there at rtol 1e-10 (w h = 0.02 to 0.035 measured): no step ends inside
+// it, with any linear solver nor with Adams, and CVODE, which compares the root functions at the
+// ends of its steps only, saw no crossing: the spring held.
+// Tolerances. The crossing grazes: the strain rises at A w sin(w t_b) = 1.4e-3 m/s there, so a
+// position error e moves the break by e / (1.4e-3 m/s). At rtol 1e-10 of the 1 m length the
+// global position error at t_b is 2.3e-9 m with BDF and 2.8e-10 m with Adams (measured without a
+// break strain); with e <= 1e-8 m the break is within 7e-6 s of t_b (measured 1.6e-6 s): 1e-5 s,
+// well inside the excursion's 1.4e-4 s before its peak, where the break must come. The break is
+// located on CVODE's polynomial to its time resolution, where the strain is the break strain: the
+// energy the spring takes with it is ks (0.1 l0)^2 / 2 = 0.5 J to the round-off of the length
+// (1e-16 m in a 10 N force: 1e-12 J). The total ks A^2 / 2 holds to the energy error of the
+// trajectory, ks A e = 1e-7 J (measured 2.3e-8 J).
+static int test_break_inside_one_step(void)
+{
+	const double delta = 1e-6, amplitude = grazing_amplitude(delta), t_break = grazing_break_time(delta);
+	sm_model* model = tethered_mass(1.0, 1.0 - amplitude, 0.0);
+	ENSURE(model != NULL);
+	for (int variant = 0; variant < 5; variant++) {
+		sm_simulation_def d = tight_def(variant < 4 ? (sm_linear_solver)(SM_SOLVER_DENSE + variant) : SM_SOLVER_AUTO);
+		if (variant == 4)
+			d.method = SM_METHOD_ADAMS;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+		printf("  %s %s: %d break(s)", sm_method_name(d.method), sm_linear_solver_name(sm_simulation_solver(sim)),
+		       (int)sm_simulation_break_count(sim));
+		if (sm_simulation_break_count(sim) > 0)
+			printf(" at t_b %+.2e s", sm_simulation_break(sim, 0).time - t_break);
+		printf("\n");
+		ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).spring == 0);
+		ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_break, 1e-5);
+		ENSURE(sm_simulation_break(sim, 0).time < acos(-1.0) / 10.0);  // before the peak
+		const double dissipated = sm_simulation_dissipated_energy(sim);
+		ENSURE_NEAR(dissipated, 0.5 * 100.0 * 0.1 * 0.1, 1e-12);
+		ENSURE_NEAR(sm_simulation_energies(sim).kinetic + dissipated, 0.5 * 100.0 * amplitude * amplitude, 1e-7);
+		ENSURE(sm_simulation_statistics(sim).restarts == 1);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The run of test_break_inside_one_step (BDF, dense) to 0.5 s on every path of an advance gives the
+// same break, bit for bit where the steps are the same: with an on_step hook (the same steps, each
+// reported once, the break's step at the break), with rows interpolated every 0.01 s up to
+// t_stop = 0.5 s (the excursion found in a step past a row: the break waits for the advance that
+// reaches it), and after a reset. Advances that end a step at each row take other steps and find
+// the break within the tolerance of test_break_inside_one_step (1e-5 s). A snapshot saved before
+// the excursion and restored twice gives the same break both times, bit for bit.
+static int test_break_inside_one_step_on_every_path(void)
+{
+	const double delta = 1e-6, t_break = grazing_break_time(delta);
+	sm_model* model = tethered_mass(1.0, 1.0 - grazing_amplitude(delta), 0.0);
+	ENSURE(model != NULL);
+	step_log log = {0, -1.0, true};
+	sm_simulation *plain, *hooked;
+	create_with_and_without_hook(model, tight_def(SM_SOLVER_DENSE), &log, &plain, &hooked);
+	sm_simulation_def d = tight_def(SM_SOLVER_DENSE);
+	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
+	sm_simulation* stepped = sm_simulation_create(model, &d, NULL);
+	ENSURE(plain != NULL && hooked != NULL && rows != NULL && stepped != NULL);
+	ENSURE_STATUS(sm_simulation_advance(plain, 0.5), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(hooked, 0.5), SM_OK);
+	for (int k = 1; k <= 50; k++) {
+		ENSURE_STATUS(sm_simulation_advance_interpolated(rows, 0.01 * k, 0.5), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(stepped, 0.01 * k), SM_OK);
+		ENSURE(sm_simulation_break_count(rows) == (0.01 * k >= t_break ? 1 : 0));
+	}
+	const sm_break_event e = sm_simulation_break(plain, 0);
+	ENSURE(sm_simulation_break_count(plain) == 1 && e.spring == 0);
+	ENSURE_NEAR(e.time, t_break, 1e-5);
+	const sm_statistics a = sm_simulation_statistics(plain), b = sm_simulation_statistics(hooked);
+	ENSURE(a.steps == b.steps && a.rhs_evaluations == b.rhs_evaluations && a.restarts == 1 && b.restarts == 1);
+	ENSURE(log.calls == b.steps && log.increasing && log.last == 0.5);
+	ENSURE(sm_simulation_statistics(rows).steps == a.steps);
+	sm_simulation* same[] = {hooked, rows};
+	for (int k = 0; k < 2; k++) {
+		ENSURE(sm_simulation_break_count(same[k]) == 1 && sm_simulation_break(same[k], 0).time == e.time);
+		ENSURE(memcmp(sm_simulation_positions(same[k]), sm_simulation_positions(plain), 6 * sizeof(double)) == 0);
+		ENSURE(memcmp(sm_simulation_velocities(same[k]), sm_simulation_velocities(plain), 6 * sizeof(double)) == 0);
+	}
+	ENSURE(sm_simulation_break_count(stepped) == 1);
+	ENSURE_NEAR(sm_simulation_break(stepped, 0).time, t_break, 1e-5);
+
+	ENSURE_STATUS(sm_simulation_reset(plain), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(plain, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(plain) == 1 && sm_simulation_break(plain, 0).time == e.time);
+
+	ENSURE_STATUS(sm_simulation_reset(plain), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(plain, 0.3), SM_OK);
+	sm_simulation_state* before = sm_simulation_save_state(plain);
+	ENSURE(before != NULL);
+	double restored_break[2];
+	for (int k = 0; k < 2; k++) {
+		ENSURE_STATUS(sm_simulation_advance(plain, 0.5), SM_OK);
+		ENSURE(sm_simulation_break_count(plain) == 1);
+		restored_break[k] = sm_simulation_break(plain, 0).time;
+		ENSURE_STATUS(sm_simulation_restore_state(plain, before), SM_OK);
+		ENSURE(sm_simulation_break_count(plain) == 0 && sm_model_spring_enabled(sm_simulation_model(plain), 0));
+	}
+	ENSURE_STATUS(sm_simulation_advance(plain, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(plain) == 1 && sm_simulation_break(plain, 0).time == restored_break[1]);
+	ENSURE_NEAR(restored_break[1], t_break, 1e-5);
+	sm_simulation_state_destroy(before);
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(hooked);
+	sm_simulation_destroy(rows);
+	sm_simulation_destroy(stepped);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Two springs that graze their limit together break in one event: the tethered mass of
+// test_break_inside_one_step held by two equal springs of 50 N/m (the same motion) instead of one,
+// whose strains are the same numbers. Both break at the first crossing (to 1e-5 s, as there), with
+// one restart, each taking ks (0.1 l0)^2 / 2 = 0.25 J (1e-12 J, as there).
+static int test_springs_grazing_together_break_together(void)
+{
+	const double delta = 1e-6, t_break = grazing_break_time(delta);
+	sm_model* model = tethered_mass(1.0, 1.0 - grazing_amplitude(delta), 0.0);
+	ENSURE(model != NULL);
+	sm_spring_def sd;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &sd), SM_OK);
+	sd.stiffness = 50.0;
+	ENSURE_STATUS(sm_model_set_spring(model, 0, &sd), SM_OK);
+	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 2 && sm_simulation_statistics(sim).restarts == 1);
+	ENSURE(sm_simulation_break(sim, 0).time == sm_simulation_break(sim, 1).time);
+	ENSURE(sm_simulation_break(sim, 0).spring + sm_simulation_break(sim, 1).spring == 1);
+	ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_break, 1e-5);
+	ENSURE_NEAR(sm_simulation_dissipated_energy(sim), 2.0 * 0.5 * 50.0 * 0.1 * 0.1, 1e-12);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A root CVODE finds later in the step of an excursion comes after it: beside the grazing tethered
+// mass, a spring from a fixed particle to a driven one pulled at V breaks at 10 % strain at
+// t_2 = 0.1 / V, chosen 5e-4 s after t_b: after the excursion (2.8e-4 s long) and inside the step
+// that holds it (measured: [0.3132, 0.3167] s with BDF, [0.3109, 0.3148] s with Adams). CVODE
+// reports the root at t_2, its search (a secant on a length linear in t) never inside the
+// excursion; the excursion's spring breaks first, at t_b (1e-5 s, as in
+// test_break_inside_one_step), and the pulled one at t_2 after the restart (its length is exact:
+// CVODE's root resolution, 1e-12 s as in test_break_at_analytic_time).
+static int test_break_inside_a_step_before_a_root_in_it(void)
+{
+	const double delta = 1e-6, t_break = grazing_break_time(delta), t_pulled = t_break + 5e-4;
+	sm_model* model = tethered_mass(1.0, 1.0 - grazing_amplitude(delta), 0.0);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	p.position[1] = 5.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_DRIVEN;
+	p.position[0] = 1.0;
+	p.velocity[0] = 0.1 / t_pulled;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def sd;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &sd), SM_OK);
+	sd.a = 2;
+	sd.b = 3;
+	ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	for (int variant = 0; variant < 2; variant++) {
+		sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
+		if (variant == 1)
+			d.method = SM_METHOD_ADAMS;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 2);
+		const sm_break_event first = sm_simulation_break(sim, 0), second = sm_simulation_break(sim, 1);
+		ENSURE(first.spring == 0 && second.spring == 1);
+		ENSURE_NEAR(first.time, t_break, 1e-5);
+		ENSURE_NEAR(second.time, t_pulled, 1e-12);
+		ENSURE(sm_simulation_statistics(sim).restarts == 2);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A driven anchor moving at constant speed V along the spring drags the bob: in the anchor's
 // frame (inertial) the stretch u = x_b - x_a - l0 is a damped oscillator started at u = 0 with
 // u' = -V, so u = -V / wd exp(-zeta w0 t) sin(wd t), and the reaction on the anchor is
@@ -4892,6 +5094,10 @@ int main(int argc, char** argv)
 	RUN_TEST(test_large_cloth_reduced_solvers_against_gsl);
 	RUN_TEST(test_threads_give_the_same_bits);
 	RUN_TEST(test_break_at_analytic_time);
+	RUN_TEST(test_break_inside_one_step);
+	RUN_TEST(test_break_inside_one_step_on_every_path);
+	RUN_TEST(test_springs_grazing_together_break_together);
+	RUN_TEST(test_break_inside_a_step_before_a_root_in_it);
 	RUN_TEST(test_energy_balance_across_a_break);
 	RUN_TEST(test_overstretched_spring_breaks_at_once);
 	RUN_TEST(test_spring_at_its_limit_breaks_at_once);

@@ -85,9 +85,10 @@ typedef struct sm_spring_def {
 	/// (ignored otherwise); default 1.
 	double section;
 	/// Strain (L - l0) / l0 [1] at which the spring breaks (the simulation detects the crossing
-	/// as an event, or breaks it at once if it is already at or beyond when an advance begins); its elastic
-	/// energy then counts as dissipated. > SM_MIN_BREAK_STRAIN (1.1e-16), or INFINITY (default) for a
-	/// spring that never breaks. Requires l0 > 0.
+	/// as an event, also one within a single solver step, or breaks it at once if it is already at
+	/// or beyond when an advance begins); its elastic energy then counts as dissipated.
+	/// > SM_MIN_BREAK_STRAIN (1.1e-16), or INFINITY (default) for a spring that never breaks.
+	/// Requires l0 > 0.
 	double break_strain;
 } sm_spring_def;
 

@@ -145,7 +145,7 @@ typedef struct sm_statistics {
 
 /// A spring that broke.
 typedef struct sm_break_event {
-	double time;     ///< when its strain crossed the break strain [s]
+	double time;     ///< when its strain first reached the break strain [s]
 	int32_t spring;  ///< spring index
 } sm_break_event;
 
