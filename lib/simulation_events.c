@@ -353,6 +353,11 @@ static double spring_first_crossing(const sm_simulation* sim, int32_t r, int q, 
 		for (int j = 0; j <= i; j++)
 			sum += weights[i * (n + 1) + j] * e[j];
 		bernstein[i] = sum;
+		// A polynomial that overflows (the derivatives of a state flying apart, 1e64 m/s, come out
+		// infinite or NaN) bounds nothing, and NaN fails every comparison of the search: such a step
+		// is left to CVODE's comparison of its ends.
+		if (!isfinite(sum))
+			return -1.0;
 	}
 	return first_rise(bernstein, n, resolution);
 }

@@ -1598,6 +1598,80 @@ static int test_springs_grazing_together_break_together(void)
 	return 0;
 }
 
+// A state flying apart (found by fuzz/fuzz_simulation_state.c): a driven particle and a free one
+// moving together at 1.6e64 m/s along -z, joined by a breakable spring, the free one also held
+// by a zero-length spring to a fixed particle; Adams. CVODE's polynomial of its steps overflows
+// (the fourth derivative of the free particle's position came out NaN), so no bound of a spring's
+// length over the step can be formed from it. The search used to descend the whole tree of
+// halvings, all of whose NaN bounds compare false: 2^47 intervals, no end. Such a step is left to
+// CVODE's comparison of its ends. The advance must end (as the fuzz target asks: successfully
+// with a finite state, or with a message) within its step limit, with every linear solver.
+static int test_break_search_of_an_overflowing_polynomial(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = 0.1;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double x[4][3] = {{0.0, 0.0, 0.0},
+	                        {1.04384e-300, 1.3048e-300, -1.36937e-235},
+	                        {-0.0762493, -0.00081885, -0.675431},
+	                        {3.05176e-05, 0.0390488, -0.607748}};
+	const double v[4][3] = {{0.0, 0.0, 0.0},
+	                        {0.124831, 0.156039, -1.6376e64},
+	                        {3.95778e-43, -298.878, 0.299192},
+	                        {0.124831, 0.156039, -1.6376e64}};
+	const sm_particle_motion motion[4] = {SM_PARTICLE_FIXED, SM_PARTICLE_DRIVEN, SM_PARTICLE_FREE, SM_PARTICLE_FREE};
+	for (int i = 0; i < 4; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		memcpy(p.position, x[i], sizeof p.position);
+		memcpy(p.velocity, v[i], sizeof p.velocity);
+		p.motion = motion[i];
+		p.mass = 0.5 + 0.25 * i;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t ends[3][2] = {{0, 2}, {1, 3}, {0, 3}};
+	for (int k = 0; k < 3; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = ends[k][0];
+		s.b = ends[k][1];
+		s.stiffness = 100.0;
+		s.damping = 1.0;
+		s.rest_length = k == 0 ? 0.5 : 1.0;
+		if (k == 1)
+			s.break_strain = 0.5;
+		if (k == 2) {
+			s.kind = SM_SPRING_ZERO_LENGTH;
+			s.rest_length = 0.0;
+			s.stiffness = 5.0;
+		}
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	const double force[3] = {0.0, 1.0, 0.0};
+	for (int variant = 0; variant < 5; variant++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.solver = variant < 4 ? (sm_linear_solver)(SM_SOLVER_DENSE + variant) : SM_SOLVER_DENSE;
+		d.max_steps = 2000;
+		if (variant == 4)
+			d.method = SM_METHOD_ADAMS;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 3, force), SM_OK);
+		const sm_status st = sm_simulation_advance_interpolated(sim, 1e-3, 2e-3);
+		printf("  %s %s: %s at t = %g s, %d break(s)%s%s\n", sm_method_name(d.method),
+		       sm_linear_solver_name(sm_simulation_solver(sim)), sm_status_string(st), sm_simulation_time(sim),
+		       (int)sm_simulation_break_count(sim), st == SM_OK ? "" : ": ", st == SM_OK ? "" : sm_simulation_last_error(sim));
+		if (st == SM_OK) {
+			for (int k = 0; k < 12; k++)
+				ENSURE(isfinite(sm_simulation_positions(sim)[k]) && isfinite(sm_simulation_velocities(sim)[k]));
+		} else {
+			ENSURE(sm_simulation_last_error(sim)[0] != '\0');
+		}
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A root CVODE finds later in the step of an excursion comes after it: beside the grazing tethered
 // mass, a spring from a fixed particle to a driven one pulled at V breaks at 10 % strain at
 // t_2 = 0.1 / V, chosen 5e-4 s after t_b: after the excursion (2.8e-4 s long) and inside the step
@@ -5095,6 +5169,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_threads_give_the_same_bits);
 	RUN_TEST(test_break_at_analytic_time);
 	RUN_TEST(test_break_inside_one_step);
+	RUN_TEST(test_break_search_of_an_overflowing_polynomial);
 	RUN_TEST(test_break_inside_one_step_on_every_path);
 	RUN_TEST(test_springs_grazing_together_break_together);
 	RUN_TEST(test_break_inside_a_step_before_a_root_in_it);
