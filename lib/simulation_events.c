@@ -223,10 +223,8 @@ void sm_simulation_free_events(sm_simulation* sim)
 #define MAX_HALVINGS 47
 #define MAX_DEGREE (2 * ADAMS_MAX_ORDER)
 
-// The first s in [0, 1] at which the polynomial of Bernstein coefficients b[0..n] is >= 0 after
-// being < 0, located to `resolution`: the right end of the first interval of that width over which
-// it rises from below 0 to 0 or above (0 if it is >= 0 at s = 0); -1 if it stays below 0.
-static double first_rise(const double* b, int n, double resolution)
+// The halvings of one spring's polynomial, depth first, left half first (simulation_internal.h).
+double sm_simulation_first_rise(const double* b, int n, double resolution)
 {
 	double pending[MAX_HALVINGS + 2][MAX_DEGREE + 1];
 	double start[MAX_HALVINGS + 2], width[MAX_HALVINGS + 2];
@@ -251,14 +249,18 @@ static double first_rise(const double* b, int n, double resolution)
 			continue;
 		}
 		// de Casteljau at 1/2: the left half's coefficients are the first of each level of
-		// averages, the right half's the last.
+		// averages, the right half's the last. Each average is taken as a sum of halves: that of
+		// two finite numbers is finite, where their sum may overflow (coefficients beyond
+		// DBL_MAX / 2, for lengths near 1e154 m); +inf and -inf in one level then made NaN, whose
+		// bounds compare false, and the search descended the whole tree of halvings. Halving is
+		// exact above the subnormals, so the averages are the same bits as (a + b) / 2.
 		double left[MAX_DEGREE + 1], right[MAX_DEGREE + 1], work[MAX_DEGREE + 1];
 		memcpy(work, c, (size_t)(n + 1) * sizeof(double));
 		left[0] = work[0];
 		right[n] = work[n];
 		for (int level = 1; level <= n; level++) {
 			for (int i = 0; i <= n - level; i++)
-				work[i] = 0.5 * (work[i] + work[i + 1]);
+				work[i] = 0.5 * work[i] + 0.5 * work[i + 1];
 			left[level] = work[0];
 			right[n - level] = work[n - level];
 		}
@@ -359,7 +361,7 @@ static double spring_first_crossing(const sm_simulation* sim, int32_t r, int q, 
 		if (!isfinite(sum))
 			return -1.0;
 	}
-	return first_rise(bernstein, n, resolution);
+	return sm_simulation_first_rise(bernstein, n, resolution);
 }
 
 int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, double* reached)

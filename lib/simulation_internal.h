@@ -129,6 +129,11 @@ sm_status sm_simulation_break_overstretched_springs(sm_simulation* sim);
 // or beyond its limit). Otherwise returns flag unchanged; also when flag < 0 or the model has no
 // breakable spring. A negative CVODE flag if its polynomial cannot be read.
 int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, double* reached);
+// The first s in [0, 1] at which the polynomial of Bernstein coefficients b[0..n] (finite, n at most
+// 24) is >= 0 after being < 0, located to `resolution` (of s): the right end of the first interval
+// of that width over which it rises from below 0 to 0 or above (0 if it is >= 0 at s = 0); -1 if
+// it stays below 0. The search of sm_simulation_search_step, for one spring.
+double sm_simulation_first_rise(const double* b, int n, double resolution);
 // Frees what sm_simulation_build_events allocated.
 void sm_simulation_free_events(sm_simulation* sim);
 

@@ -1672,6 +1672,26 @@ static int test_break_search_of_an_overflowing_polynomial(void)
 	return 0;
 }
 
+// The search of a step on a polynomial of finite Bernstein coefficients beyond DBL_MAX / 2 (a
+// squared length minus the squared limit of 1.5e308 m^2: lengths near 1.2e154 m, the largest the
+// model accepts). P(s) = -(1 - s)^4 + 1.5e308 (4 s (1 - s)^3 + 6 s^2 (1 - s)^2) - ... rises
+// through 0 at s = 1 / (6e308) = 1.7e-309, so its first rise is the right end of the first
+// interval of the resolution, 2^-46 (the first halving of [0, 1] at or below 100 unit
+// round-offs, 2.2e-14). The same coefficients times 2^-1000 (exact: the same signs everywhere,
+// so the same first rise) never come near an overflow and give it too. The sums of de Casteljau's
+// averages overflowed to +inf and -inf, whose averages were NaN, and the search descended
+// the whole tree of 2^47 halvings.
+static int test_break_search_of_coefficients_near_the_largest_double(void)
+{
+	double b[5] = {-1.0, 1.5e308, 1.5e308, -1.5e308, -1.5e308};
+	const double resolution = 100.0 * DBL_EPSILON;
+	ENSURE(sm_simulation_first_rise(b, 4, resolution) == 0x1p-46);
+	for (int i = 0; i < 5; i++)
+		b[i] *= 0x1p-1000;
+	ENSURE(sm_simulation_first_rise(b, 4, resolution) == 0x1p-46);
+	return 0;
+}
+
 // A root CVODE finds later in the step of an excursion comes after it: beside the grazing tethered
 // mass, a spring from a fixed particle to a driven one pulled at V breaks at 10 % strain at
 // t_2 = 0.1 / V, chosen 5e-4 s after t_b: after the excursion (2.8e-4 s long) and inside the step
@@ -5170,6 +5190,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_break_at_analytic_time);
 	RUN_TEST(test_break_inside_one_step);
 	RUN_TEST(test_break_search_of_an_overflowing_polynomial);
+	RUN_TEST(test_break_search_of_coefficients_near_the_largest_double);
 	RUN_TEST(test_break_inside_one_step_on_every_path);
 	RUN_TEST(test_springs_grazing_together_break_together);
 	RUN_TEST(test_break_inside_a_step_before_a_root_in_it);
