@@ -37,8 +37,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 // for a state of forces near 1e174 N, to end at the step limit with a clean error as documented;
 // the same path is reached with fewer steps, and the fuzzer keeps its pace.
 #define MAX_STEPS 2000
-// The serialised header (serialized_header in lib/simulation.c): 48 bytes, of which bytes 28 to 31
-// are reserved (written as 0, not read); the 8-byte checksum ends the state.
+// The serialised header (serialized_header in lib/simulation_state.c): 48 bytes, of which bytes
+// 28 to 31 are reserved (written as 0, not read); the 8-byte checksum ends the state.
 #define HEADER_BYTES 48
 #define RESERVED_OFFSET 28
 #define RESERVED_END 32
@@ -59,11 +59,11 @@ typedef struct fixture {
 static fixture* the_fixture;
 
 // 64-bit FNV-1a over all bytes but the last 8, the checksum as the serialised form defines it
-// (lib/simulation.c, above serialized_header). The library's own function is a static helper of
-// simulation.c with no internal header; the format fixes the hash, as the tests' forged states
-// assume, so the target computes it itself rather than widen the library for it. Initialisation
-// checks it against a state the library wrote, so that a change of the format stops the target
-// instead of leaving it to fuzz the checksum test alone.
+// (lib/simulation_state.c, above serialized_header). The library's own function is a static helper
+// of simulation_state.c with no internal header; the format fixes the hash, as the tests' forged
+// states assume, so the target computes it itself rather than widen the library for it.
+// Initialisation checks it against a state the library wrote, so that a change of the format stops
+// the target instead of leaving it to fuzz the checksum test alone.
 static uint64_t state_checksum(const unsigned char* bytes, size_t size)
 {
 	uint64_t h = 14695981039346656037ull;

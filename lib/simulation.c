@@ -8,7 +8,8 @@
 //   (zero): Newton's iteration still converges, and e is integrated to the same tolerance.
 // Linear solvers: dense LU of the full system (SUNDenseMatrix), sparse LU (KLU) of the full
 // system in CSR form, and the reduced second-order solver of linear_solver_reduced.c.
-// Breaking springs: simulation_events.c.
+// Breaking springs: simulation_events.c. State snapshots (save, restore, serialise):
+// simulation_state.c.
 #define _POSIX_C_SOURCE 200809L
 
 #include "model_internal.h"
@@ -54,13 +55,7 @@ double sm_simulation_clock(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static sm_status fail(sm_simulation* sim, sm_status status, const char* format, ...)
-#if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
-#endif
-	;
-
-static sm_status fail(sm_simulation* sim, sm_status status, const char* format, ...)
+sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* format, ...)
 {
 	va_list args;
 	va_start(args, format);
@@ -177,7 +172,7 @@ static void pack(const sm_simulation* sim, const double* x, const double* v, dou
 	}
 }
 
-static void refresh_outputs(sm_simulation* sim)
+void sm_simulation_refresh_outputs(sm_simulation* sim)
 {
 	sm_simulation_unpack(sim, sim->time, N_VGetArrayPointer(sim->y), sim->position, sim->velocity);
 }
@@ -531,7 +526,7 @@ static void load_initial_state(sm_simulation* sim)
 	pack(sim, m->position, m->velocity, y);
 	y[2 * sim->dofs] = 0.0;
 	sim->time = 0.0;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 }
 
 static sm_status attach_linear_solver(sm_simulation* sim)
@@ -810,7 +805,8 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
-		return fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %s s: %s", t, sim->solver_message);
+		return sm_simulation_fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %s s: %s", t,
+		                          sim->solver_message);
 	}
 	return SM_OK;
 }
@@ -892,12 +888,13 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	if (rhs(sim->time, sim->y, sim->y_saved, sim) != 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
-		return fail(sim, SM_ERROR_SOLVER,
-		            "advance: the state or the forces at t = %s s are not finite (advancing by %.3g s)", t, dt);
+		return sm_simulation_fail(
+		    sim, SM_ERROR_SOLVER,
+		    "advance: the state or the forces at t = %s s are not finite (advancing by %.3g s)", t, dt);
 	}
 	N_VLinearSum(1.0, sim->y, dt, sim->y_saved, sim->y);
 	sim->time = t_end;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }
 
@@ -977,9 +974,9 @@ static sm_status interpolate(sm_simulation* sim, double t)
 		sm_format_number(t, at);
 		sim->need_restart = true;
 		N_VScale(1.0, sim->y_saved, sim->y);
-		refresh_outputs(sim);
-		return fail(sim, SM_ERROR_SOLVER, "CVODE cannot interpolate its state at t = %s s: %s", at,
-		            sim->solver_message);
+		sm_simulation_refresh_outputs(sim);
+		return sm_simulation_fail(sim, SM_ERROR_SOLVER, "CVODE cannot interpolate its state at t = %s s: %s",
+		                          at, sim->solver_message);
 	}
 	sim->time = t;
 	return SM_OK;
@@ -988,11 +985,12 @@ static sm_status interpolate(sm_simulation* sim, double t)
 // The end of an advance that the caller's on_step stopped at the simulation's time.
 static sm_status stopped_by_caller(sm_simulation* sim, double t_end)
 {
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(sim->time, now);
 	sm_format_number(t_end, end);
-	return fail(sim, SM_ERROR_STEP_LIMIT, "stopped by on_step at t = %s s while advancing to %s s", now, end);
+	return sm_simulation_fail(sim, SM_ERROR_STEP_LIMIT,
+	                          "stopped by on_step at t = %s s while advancing to %s s", now, end);
 }
 
 static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
@@ -1092,7 +1090,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			// After too much work CVODE may simply go on; after any other failure it starts
 			// afresh from the last good state.
 			sim->need_restart = flag != CV_TOO_MUCH_WORK || !usable;
-			refresh_outputs(sim);
+			sm_simulation_refresh_outputs(sim);
 			if (flag == CV_LSETUP_FAIL && sim->jacobian_out_of_memory)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory evaluating the Jacobian");
@@ -1106,20 +1104,23 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			// Too much work is no failure of the method: the state is good and the next advance
 			// goes on from it.
 			if (flag == CV_TOO_MUCH_WORK && usable)
-				return fail(sim, SM_ERROR_STEP_LIMIT,
-				            "CVODE stopped at its step limit (CV_TOO_MUCH_WORK) at t = %s s while advancing to %s s; "
-				            "the state there is good and the next advance goes on from it%s",
-				            now, end, failure_hint(flag));
+				return sm_simulation_fail(
+				    sim, SM_ERROR_STEP_LIMIT,
+				    "CVODE stopped at its step limit (CV_TOO_MUCH_WORK) at t = %s s while advancing to %s s; "
+				    "the state there is good and the next advance goes on from it%s",
+				    now, end, failure_hint(flag));
 			if (usable)
-				return fail(sim, SM_ERROR_SOLVER, "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
-				            failure_name(flag), now, end, failure_hint(flag), sim->solver_message[0] ? ": " : "",
-				            sim->solver_message);
+				return sm_simulation_fail(sim, SM_ERROR_SOLVER,
+				                          "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
+				                          failure_name(flag), now, end, failure_hint(flag),
+				                          sim->solver_message[0] ? ": " : "", sim->solver_message);
 			// CVODE's last state is not finite: the message gives the time the simulation stays at.
-			return fail(sim, SM_ERROR_SOLVER,
-			            "CVODE failed with %s while advancing to %s s; the state it reached is not usable, so the "
-			            "simulation stays at its last good state, t = %s s%s%s%s",
-			            failure_name(flag), end, now, failure_hint(flag), sim->solver_message[0] ? ": " : "",
-			            sim->solver_message);
+			return sm_simulation_fail(
+			    sim, SM_ERROR_SOLVER,
+			    "CVODE failed with %s while advancing to %s s; the state it reached is not usable, so the "
+			    "simulation stays at its last good state, t = %s s%s%s%s",
+			    failure_name(flag), end, now, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			    sim->solver_message);
 		}
 		if (flag == CV_ROOT_RETURN && reached > t_end) {
 			// A break past the end: kept for the next advance, where CVODE's history still
@@ -1144,7 +1145,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		if (stop && sim->time < t_end)
 			return stopped_by_caller(sim, t_end);
 	}
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }
 
@@ -1159,10 +1160,12 @@ static sm_status check_times(sm_simulation* sim, const char* function, double t_
 	sm_format_number(t_end, end);
 	sm_format_number(bad_end ? sim->time : t_stop, other);
 	if (bad_end)
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT,
-		            "%s: end time %s s must be finite and not before the current time %s s", function, end, other);
-	return fail(sim, SM_ERROR_INVALID_ARGUMENT, "%s: stop time %s s must be finite and not before the end time %s s",
-	            function, other, end);
+		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		                          "%s: end time %s s must be finite and not before the current time %s s",
+		                          function, end, other);
+	return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
+	                          "%s: stop time %s s must be finite and not before the end time %s s", function,
+	                          other, end);
 }
 
 sm_status sm_simulation_advance(sm_simulation* sim, double t_end)
@@ -1285,16 +1288,20 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (particle < 0 || particle >= sim->particle_count)
-		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_driven: particle %d is out of range (the model has %d)",
-		            (int)particle, (int)sim->particle_count);
+		return sm_simulation_fail(sim, SM_ERROR_PARTICLE_INDEX,
+		                          "set_driven: particle %d is out of range (the model has %d)", (int)particle,
+		                          (int)sim->particle_count);
 	if (sim->model->motion[particle] != SM_PARTICLE_DRIVEN)
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven", (int)particle);
+		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven",
+		                          (int)particle);
 	if (position == NULL || velocity == NULL)
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d: position and velocity are required",
-		            (int)particle);
+		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		                          "set_driven: particle %d: position and velocity are required",
+		                          (int)particle);
 	if (!finite3(position) || !finite3(velocity))
-		return fail(sim, SM_ERROR_NOT_FINITE,
-		            "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
+		return sm_simulation_fail(
+		    sim, SM_ERROR_NOT_FINITE,
+		    "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
 	const size_t p = 3 * (size_t)particle;
 	const double dt = sim->time - sim->drive_time[particle];
 	// The same velocity with a position on the current path is no jump. A caller's x0 + v t and
@@ -1315,7 +1322,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	sim->input_changed = sim->input_changed || jump;
 	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
 		sim->need_restart = true;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }
 
@@ -1324,13 +1331,16 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (particle < 0 || particle >= sim->particle_count)
-		return fail(sim, SM_ERROR_PARTICLE_INDEX, "set_external_force: particle %d is out of range (the model has %d)",
-		            (int)particle, (int)sim->particle_count);
+		return sm_simulation_fail(sim, SM_ERROR_PARTICLE_INDEX,
+		                          "set_external_force: particle %d is out of range (the model has %d)",
+		                          (int)particle, (int)sim->particle_count);
 	if (force == NULL)
-		return fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_external_force: particle %d: force is NULL", (int)particle);
+		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		                          "set_external_force: particle %d: force is NULL", (int)particle);
 	if (!finite3(force))
-		return fail(sim, SM_ERROR_NOT_FINITE, "set_external_force: particle %d: force must be 3 finite numbers",
-		            (int)particle);
+		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
+		                          "set_external_force: particle %d: force must be 3 finite numbers",
+		                          (int)particle);
 	double* f = sim->external_force + 3 * (size_t)particle;
 	const bool jump = f[0] != force[0] || f[1] != force[1] || f[2] != force[2];
 	f[0] = force[0];
@@ -1351,14 +1361,16 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (spring < 0 || spring >= sm_model_spring_count(sim->model))
-		return fail(sim, SM_ERROR_SPRING_INDEX, "break_spring: spring %d is out of range (the model has %d)",
-		            (int)spring, (int)sm_model_spring_count(sim->model));
+		return sm_simulation_fail(sim, SM_ERROR_SPRING_INDEX,
+		                          "break_spring: spring %d is out of range (the model has %d)", (int)spring,
+		                          (int)sm_model_spring_count(sim->model));
 	if (!sim->model->enabled[spring])
 		return SM_OK;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
 	if (sm_simulation_record_break(sim, sim->time, spring) != SM_OK)
-		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "break_spring: out of memory recording the break");
+		return sm_simulation_fail(sim, SM_ERROR_OUT_OF_MEMORY,
+		                          "break_spring: out of memory recording the break");
 	const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
 	N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
 	sim->need_restart = true;
@@ -1367,103 +1379,11 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 
 // Every spring enabled as in the model the simulation was given (create or update_model): those
 // that broke restored, those the model disables disabled.
-static void restore_springs(sm_simulation* sim)
+void sm_simulation_restore_springs(sm_simulation* sim)
 {
 	for (int32_t s = 0; s < sim->spring_count; s++)
 		if (sm_model_spring_enabled(sim->model, s) != (sim->initial_enabled[s] != 0))
 			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
-}
-
-// A snapshot in one allocation: the header, then its arrays (doubles first, for alignment). The
-// springs it holds broken are those of its break events; which springs the model itself disables
-// is the simulation's, not the snapshot's.
-struct sm_simulation_state {
-	uint64_t topology;          // topology_hash of the model it was taken from
-	int32_t particle_count, spring_count, free_count, break_count;
-	double time;                // [s]
-	double* y;                  // CVODE's state: free x, free v, dissipated energy
-	double* external_force;     // 3 per particle [N]
-	double* drive_position;     // 3 per particle [m]
-	double* drive_velocity;     // [m/s]
-	double* drive_time;         // per particle [s]
-	sm_break_event* breaks;     // break_count
-};
-
-// 64-bit FNV-1a: the hash h (FNV_OFFSET to start) extended by `length` bytes.
-#define FNV_OFFSET 14695981039346656037ull
-static uint64_t fnv1a(uint64_t h, const void* bytes, size_t length)
-{
-	const unsigned char* b = bytes;
-	for (size_t k = 0; k < length; k++)
-		h = (h ^ b[k]) * 1099511628211ull;
-	return h;
-}
-
-// What sm_simulation_update_model requires to match, as one hash: the counts, each particle's
-// motion, each spring's ends and kind.
-static uint64_t topology_hash(const sm_model* m)
-{
-	const int32_t head[2] = {m->particle_count, m->spring_count};
-	uint64_t h = fnv1a(FNV_OFFSET, head, sizeof head);
-	for (int32_t i = 0; i < m->particle_count; i++) {
-		const int32_t motion = (int32_t)m->motion[i];
-		h = fnv1a(h, &motion, sizeof motion);
-	}
-	for (int32_t s = 0; s < m->spring_count; s++) {
-		const int32_t spring[3] = {m->spring_a[s], m->spring_b[s], m->zero_length[s] ? 1 : 0};
-		h = fnv1a(h, spring, sizeof spring);
-	}
-	return h;
-}
-
-// Bytes of a snapshot's arrays: y (6 free + 1), 10 doubles per particle, the break events.
-static size_t state_payload(int64_t particles, int64_t free, int64_t breaks)
-{
-	return (size_t)(6 * free + 1 + 10 * particles) * sizeof(double) + (size_t)breaks * sizeof(sm_break_event);
-}
-
-// A snapshot of the given counts, its arrays laid out after the header (contents unset).
-static sm_simulation_state* allocate_state(int32_t particles, int32_t springs, int32_t free, int32_t breaks)
-{
-	sm_simulation_state* s = malloc(sizeof(sm_simulation_state) + state_payload(particles, free, breaks));
-	if (s == NULL)
-		return NULL;
-	const size_t n = (size_t)particles;
-	s->particle_count = particles;
-	s->spring_count = springs;
-	s->free_count = free;
-	s->break_count = breaks;
-	s->y = (double*)(s + 1);
-	s->external_force = s->y + 6 * (size_t)free + 1;
-	s->drive_position = s->external_force + 3 * n;
-	s->drive_velocity = s->drive_position + 3 * n;
-	s->drive_time = s->drive_velocity + 3 * n;
-	s->breaks = (sm_break_event*)(s->drive_time + n);
-	return s;
-}
-
-sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
-{
-	if (sim == NULL)
-		return NULL;
-	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
-	sm_simulation_state* s = allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
-	if (s == NULL)
-		return NULL;
-	s->topology = topology_hash(sim->model);
-	s->time = sim->time;
-	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
-	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
-	memcpy(s->drive_position, sim->drive_position, 3 * n * sizeof(double));
-	memcpy(s->drive_velocity, sim->drive_velocity, 3 * n * sizeof(double));
-	memcpy(s->drive_time, sim->drive_time, n * sizeof(double));
-	// Field by field into zeroed memory, so that the events' padding is zero in serialised bytes.
-	memset(s->breaks, 0, (size_t)sim->break_count * sizeof(sm_break_event));
-	for (int32_t b = 0; b < sim->break_count; b++) {
-		s->breaks[b].time = sim->breaks[b].time;
-		s->breaks[b].spring = sim->breaks[b].spring;
-	}
-	return s;
 }
 
 // The first driven particle whose position at time t, x0 + v (t - t0) as sm_simulation_unpack
@@ -1471,8 +1391,8 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 // time [s] per particle), or -1. An advance stops where forces are not finite, so a simulation
 // never gets there by itself; a snapshot read back from bytes, or a time given to set_state, may
 // hold such a motion and time.
-static int32_t overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
-                                           const double* velocity, const double* start)
+int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
+                                                  const double* velocity, const double* start)
 {
 	for (int32_t k = 0; k < sim->constrained_count; k++) {
 		const int32_t i = sim->constrained[k];
@@ -1487,206 +1407,34 @@ static int32_t overflowing_driven_particle(const sm_simulation* sim, double t, c
 	return -1;
 }
 
-sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* s)
-{
-	if (sim == NULL || s == NULL)
-		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "restore_state: no state") : SM_ERROR_INVALID_ARGUMENT;
-	// The counts too: the hash is a field of the snapshot, which bytes read back may hold beside
-	// other counts, and the arrays copied below have the simulation's sizes.
-	if (s->topology != topology_hash(sim->model) || s->particle_count != sim->particle_count ||
-	    s->spring_count != sim->spring_count || s->free_count != sim->free_count)
-		return fail(sim, SM_ERROR_TOPOLOGY,
-		            "restore_state: the state is of a model of %d particles (%d free) and %d springs, the simulation's "
-		            "has %d (%d free) and %d, or its particles move otherwise or its springs join other particles",
-		            (int)s->particle_count, (int)s->free_count, (int)s->spring_count, (int)sim->particle_count,
-		            (int)sim->free_count, (int)sim->spring_count);
-	const int32_t overflowing =
-	    overflowing_driven_particle(sim, s->time, s->drive_position, s->drive_velocity, s->drive_time);
-	if (overflowing >= 0) {
-		char t[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(s->time, t);
-		return fail(sim, SM_ERROR_NOT_FINITE,
-		            "restore_state: driven particle %d's position at the state's time t = %s s is not finite",
-		            (int)overflowing, t);
-	}
-	if (s->break_count > sim->break_capacity) {
-		sm_break_event* b = realloc(sim->breaks, (size_t)s->break_count * sizeof *b);
-		if (b == NULL)
-			return fail(sim, SM_ERROR_OUT_OF_MEMORY, "restore_state: out of memory for the break events");
-		sim->breaks = b;
-		sim->break_capacity = s->break_count;
-	}
-	const size_t n = (size_t)sim->particle_count;
-	sim->time = s->time;
-	memcpy(N_VGetArrayPointer(sim->y), s->y, (2 * (size_t)sim->dofs + 1) * sizeof(double));
-	memcpy(sim->external_force, s->external_force, 3 * n * sizeof(double));
-	memcpy(sim->drive_position, s->drive_position, 3 * n * sizeof(double));
-	memcpy(sim->drive_velocity, s->drive_velocity, 3 * n * sizeof(double));
-	memcpy(sim->drive_time, s->drive_time, n * sizeof(double));
-	if (s->break_count > 0)
-		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
-	sim->break_count = s->break_count;
-	// Enabled: what the simulation's model enables, less the springs that had broken at the save.
-	restore_springs(sim);
-	for (int32_t b = 0; b < s->break_count; b++)
-		sm_model_set_spring_enabled(sim->model, s->breaks[b].spring, false);
-	sim->need_restart = true;
-	sim->forget_factor = true;
-	sim->input_changed = false;
-	refresh_outputs(sim);
-	return SM_OK;
-}
-
-void sm_simulation_state_destroy(sm_simulation_state* state)
-{
-	free(state);
-}
-
-// The serialised form: a header of fixed layout, the arrays as the snapshot holds them, and a
-// 64-bit FNV-1a checksum of everything before it. Numbers in the machine's own byte order.
-typedef struct serialized_header {
-	char magic[8];  // "smstate", NUL-terminated
-	uint32_t layout;
-	int32_t particle_count, spring_count, free_count, break_count;
-	int32_t reserved;  // 0
-	uint64_t topology;
-	double time;  // [s]
-} serialized_header;
-
-#define STATE_LAYOUT 1u
-
-size_t sm_simulation_state_size(const sm_simulation_state* s)
-{
-	if (s == NULL)
-		return 0;
-	return sizeof(serialized_header) + state_payload(s->particle_count, s->free_count, s->break_count) +
-	       sizeof(uint64_t);
-}
-
-sm_status sm_simulation_state_serialize(const sm_simulation_state* s, void* buffer, size_t size)
-{
-	if (s == NULL || buffer == NULL || size < sm_simulation_state_size(s))
-		return SM_ERROR_INVALID_ARGUMENT;
-	serialized_header h;
-	memset(&h, 0, sizeof h);
-	memcpy(h.magic, "smstate", 8);
-	h.layout = STATE_LAYOUT;
-	h.particle_count = s->particle_count;
-	h.spring_count = s->spring_count;
-	h.free_count = s->free_count;
-	h.break_count = s->break_count;
-	h.topology = s->topology;
-	h.time = s->time;
-	unsigned char* out = buffer;
-	const size_t payload = state_payload(s->particle_count, s->free_count, s->break_count);
-	memcpy(out, &h, sizeof h);
-	memcpy(out + sizeof h, s->y, payload);  // the arrays lie one after another from y on
-	const uint64_t sum = fnv1a(FNV_OFFSET, out, sizeof h + payload);
-	memcpy(out + sizeof h + payload, &sum, sizeof sum);
-	return SM_OK;
-}
-
-sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t size, sm_error* err)
-{
-	const unsigned char* in = buffer;
-	serialized_header h;
-	if (buffer == NULL || size < sizeof h + sizeof(uint64_t)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state",
-		             buffer == NULL ? (size_t)0 : size);
-		return NULL;
-	}
-	memcpy(&h, in, sizeof h);
-	// The reserved field is zero in this layout; a later one may give it a meaning this one lacks.
-	if (memcmp(h.magic, "smstate", 8) != 0 || h.layout != STATE_LAYOUT || h.reserved != 0) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		             "state_deserialize: not a simulation state of this springmass version (layout %u expected)",
-		             STATE_LAYOUT);
-		return NULL;
-	}
-	const bool counts = h.particle_count >= 0 && h.spring_count >= 0 && h.free_count >= 0 &&
-	                    h.free_count <= h.particle_count && h.break_count >= 0 && h.break_count <= h.spring_count;
-	if (!counts || size != sizeof h + state_payload(h.particle_count, h.free_count, h.break_count) + sizeof(uint64_t)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: the state's counts and its %zu bytes disagree",
-		             size);
-		return NULL;
-	}
-	const size_t payload = state_payload(h.particle_count, h.free_count, h.break_count);
-	uint64_t sum;
-	memcpy(&sum, in + sizeof h + payload, sizeof sum);
-	if (sum != fnv1a(FNV_OFFSET, in, sizeof h + payload)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: checksum mismatch (a damaged state)");
-		return NULL;
-	}
-	sm_simulation_state* s = allocate_state(h.particle_count, h.spring_count, h.free_count, h.break_count);
-	if (s == NULL) {
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "state_deserialize: out of memory");
-		return NULL;
-	}
-	s->topology = h.topology;
-	s->time = h.time;
-	memcpy(s->y, in + sizeof h, payload);
-	bool valid = isfinite(s->time);
-	const double* values = s->y;
-	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + 10 * (int64_t)h.particle_count); k++)
-		valid = isfinite(values[k]);
-	for (int32_t b = 0; valid && b < s->break_count; b++)
-		valid = s->breaks[b].spring >= 0 && s->breaks[b].spring < s->spring_count && isfinite(s->breaks[b].time);
-	if (!valid) {
-		free(s);
-		sm_error_set(err, SM_ERROR_NOT_FINITE, "state_deserialize: the state holds a value out of range");
-		return NULL;
-	}
-	// A spring breaks once: a state that lists one twice was not written by a simulation.
-	if (s->break_count > 1) {
-		unsigned char* broken = calloc((size_t)s->spring_count, 1);
-		if (broken == NULL) {
-			free(s);
-			sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "state_deserialize: out of memory");
-			return NULL;
-		}
-		int32_t twice = -1;
-		for (int32_t b = 0; twice < 0 && b < s->break_count; b++) {
-			if (broken[s->breaks[b].spring])
-				twice = s->breaks[b].spring;
-			broken[s->breaks[b].spring] = 1;
-		}
-		free(broken);
-		if (twice >= 0) {
-			free(s);
-			sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: spring %d breaks twice in the state",
-			             (int)twice);
-			return NULL;
-		}
-	}
-	sm_error_clear(err);
-	return s;
-}
-
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
 {
 	if (sim == NULL || x == NULL || v == NULL)
-		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_state: positions and velocities are required")
+		return sim ? sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
+		                                "set_state: positions and velocities are required")
 		           : SM_ERROR_INVALID_ARGUMENT;
 	if (!isfinite(time))
-		return fail(sim, SM_ERROR_NOT_FINITE, "set_state: time %g is not finite", time);
+		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE, "set_state: time %g is not finite", time);
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t p = 3 * (size_t)sim->free_particles[k];
 		if (!finite3(x + p) || !finite3(v + p))
-			return fail(sim, SM_ERROR_NOT_FINITE, "set_state: particle %d: position or velocity is not finite",
-			            (int)sim->free_particles[k]);
+			return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
+			                          "set_state: particle %d: position or velocity is not finite",
+			                          (int)sim->free_particles[k]);
 	}
-	const int32_t overflowing =
-	    overflowing_driven_particle(sim, time, sim->drive_position, sim->drive_velocity, sim->drive_time);
+	const int32_t overflowing = sm_simulation_overflowing_driven_particle(
+	    sim, time, sim->drive_position, sim->drive_velocity, sim->drive_time);
 	if (overflowing >= 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(time, t);
-		return fail(sim, SM_ERROR_NOT_FINITE, "set_state: driven particle %d's position at t = %s s is not finite",
-		            (int)overflowing, t);
+		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
+		                          "set_state: driven particle %d's position at t = %s s is not finite",
+		                          (int)overflowing, t);
 	}
 	pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sim->time = time;
 	sim->need_restart = true;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }
 
@@ -1694,7 +1442,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
-	restore_springs(sim);
+	sm_simulation_restore_springs(sim);
 	load_initial_state(sim);
 	sim->break_count = 0;
 	sim->input_changed = false;  // the inputs set before the reset are gone with them
@@ -1708,29 +1456,32 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 {
 	if (sim == NULL || model == NULL)
-		return sim ? fail(sim, SM_ERROR_INVALID_ARGUMENT, "update_model: model is NULL") : SM_ERROR_INVALID_ARGUMENT;
+		return sim ? sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "update_model: model is NULL")
+		           : SM_ERROR_INVALID_ARGUMENT;
 	const sm_model* old = sim->model;
 	if (model->particle_count != old->particle_count || model->spring_count != old->spring_count)
-		return fail(sim, SM_ERROR_TOPOLOGY,
-		            "update_model: the new model has %d particles and %d springs, the simulation %d and %d",
-		            (int)model->particle_count, (int)model->spring_count, (int)old->particle_count,
-		            (int)old->spring_count);
+		return sm_simulation_fail(
+		    sim, SM_ERROR_TOPOLOGY,
+		    "update_model: the new model has %d particles and %d springs, the simulation %d and %d",
+		    (int)model->particle_count, (int)model->spring_count, (int)old->particle_count,
+		    (int)old->spring_count);
 	for (int32_t i = 0; i < model->particle_count; i++)
 		if (model->motion[i] != old->motion[i])
-			return fail(sim, SM_ERROR_TOPOLOGY, "update_model: particle %d moves differently in the new model",
-			            (int)i);
+			return sm_simulation_fail(sim, SM_ERROR_TOPOLOGY,
+			                          "update_model: particle %d moves differently in the new model", (int)i);
 	for (int32_t s = 0; s < model->spring_count; s++)
 		if (model->spring_a[s] != old->spring_a[s] || model->spring_b[s] != old->spring_b[s] ||
 		    model->zero_length[s] != old->zero_length[s])
-			return fail(sim, SM_ERROR_TOPOLOGY,
-			            "update_model: spring %d connects other particles or has another kind in the new model",
-			            (int)s);
+			return sm_simulation_fail(
+			    sim, SM_ERROR_TOPOLOGY,
+			    "update_model: spring %d connects other particles or has another kind in the new model",
+			    (int)s);
 	sm_model* copy = sm_model_clone(model);
 	uint8_t* enabled = malloc((size_t)model->spring_count + 1);
 	if (!copy || !enabled) {
 		sm_model_destroy(copy);
 		free(enabled);
-		return fail(sim, SM_ERROR_OUT_OF_MEMORY, "update_model: out of memory");
+		return sm_simulation_fail(sim, SM_ERROR_OUT_OF_MEMORY, "update_model: out of memory");
 	}
 	if (model->spring_count > 0)
 		memcpy(enabled, model->enabled, (size_t)model->spring_count);
@@ -1768,7 +1519,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		// their values and those of a break it found past the current time: it starts afresh
 		// here, from the state as it is.
 		sim->need_restart = true;
-		return fail(sim, st, "%s%s%s", failure, cause[0] ? ": " : "", cause);
+		return sm_simulation_fail(sim, st, "%s%s%s", failure, cause[0] ? ": " : "", cause);
 	}
 	for (int32_t b = 0; b < sim->break_count; b++)
 		sm_model_set_spring_enabled(copy, sim->breaks[b].spring, false);
@@ -1777,6 +1528,6 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sim->initial_enabled = enabled;
 	refresh_masses(sim);
 	sim->need_restart = true;
-	refresh_outputs(sim);
+	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }

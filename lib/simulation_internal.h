@@ -1,5 +1,5 @@
-// Internal layout of sm_simulation, shared by simulation.c, simulation_events.c and the linear solvers
-// (linear_solver_*.c).
+// Internal layout of sm_simulation, shared by simulation.c, simulation_events.c, simulation_state.c
+// and the linear solvers (linear_solver_*.c).
 //
 // The CVODE state vector holds the free particles only, followed by the dissipated energy:
 //   y = [x_free (3 nf) ; v_free (3 nf) ; e (1)],  y' = [v ; M^-1 f(x, v) ; P_dissipated(x, v)].
@@ -104,6 +104,21 @@ double sm_simulation_clock(void);
 
 // Fills work_position / work_velocity for all particles from a CVODE state at time t.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v);
+
+// Helpers of simulation.c that the snapshots (simulation_state.c) use too.
+// Writes the formatted message into sim->last_error; returns status.
+sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* format, ...)
+#if defined(__GNUC__)
+	__attribute__((format(printf, 3, 4)))
+#endif
+	;
+// Sets sim->position and sim->velocity (all particles) from the CVODE state y at sim->time.
+void sm_simulation_refresh_outputs(sm_simulation* sim);
+// Enables each spring as the model given to create or update_model does (broken ones restored).
+void sm_simulation_restore_springs(sm_simulation* sim);
+// The first driven particle whose position at time t is not finite under the given motions, or -1.
+int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
+                                                  const double* velocity, const double* start);
 
 // Spring breaks (simulation_events.c).
 // The root functions for the model's breakable springs, given to CVODE (recomputed when the model
