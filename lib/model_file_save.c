@@ -177,7 +177,10 @@ static void put_particle(text* t, const sm_document* doc, int32_t i)
 	}
 	puts_(t, "\"position\": ");
 	put_vector(t, doc, def.position, replaced ? NULL : src->position);
-	const bool moving = def.velocity[0] != 0.0 || def.velocity[1] != 0.0 || def.velocity[2] != 0.0;
+	// A velocity of zeros is left out, but not one with a -0, which would reload as +0.
+	bool moving = false;
+	for (int c = 0; c < 3; c++)
+		moving = moving || def.velocity[c] != 0.0 || signbit(def.velocity[c]);
 	const bool velocity_parameter = !replaced && (src->velocity[0] >= 0 || src->velocity[1] >= 0 || src->velocity[2] >= 0);
 	if (moving || velocity_parameter) {
 		puts_(t, ", \"velocity\": ");

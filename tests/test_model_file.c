@@ -2754,7 +2754,8 @@ static int test_more_rules_at_their_edges(void)
 // still that parameter after sm_document_set_initial_state (only positions and velocities are
 // replaced); and a position, velocity or gravity component of -0 is written -0.0 (the reader
 // takes "-0" for the integer 0), so that it reloads as -0, bit for bit, and the saved text is a
-// fixed point.
+// fixed point, also where it is a velocity's only nonzero bit (b's (0, 0, -0), which a velocity
+// of zeros, left out, would lose).
 static int test_canonical_form_keeps_parameters_and_ports(void)
 {
 	const char* text =
@@ -2762,7 +2763,7 @@ static int test_canonical_form_keeps_parameters_and_ports(void)
 	    " \"gravity\": [0, -0.0, -9.81],"
 	    " \"particles\": [{\"name\": \"a\", \"position\": [-0.0, 0, 0], \"velocity\": [0, -0.0, 1]},"
 	    "  {\"name\": \"h\", \"position\": [1, 0, 0], \"mass\": \"m\", \"fixed\": true},"
-	    "  {\"name\": \"b\", \"position\": [2, 0, 0]}],"
+	    "  {\"name\": \"b\", \"position\": [2, 0, 0], \"velocity\": [0, 0, -0.0]}],"
 	    " \"springs\": [{\"a\": \"h\", \"b\": \"b\", \"rest_length\": \"l\", \"stiffness\": 3}],"
 	    " \"ports\": [{\"name\": \"base\", \"particle\": \"h\", \"kind\": \"motion\"}]}";
 	sm_error err = {SM_OK, ""};
