@@ -212,11 +212,16 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (!(def->break_strain > 0.0))
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: break strain = %g must be > 0 (INFINITY for never)",
 		           index, def->break_strain);
-	if (!(def->break_strain > SM_MIN_BREAK_STRAIN))
+	if (!(def->break_strain > SM_MIN_BREAK_STRAIN)) {
+		// Both in full: with %g, 1.105e-16 "must be > 1.1e-16" would read as met.
+		char value[SM_NUMBER_TEXT_CAPACITY], limit[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(def->break_strain, value);
+		sm_format_number(SM_MIN_BREAK_STRAIN, limit);
 		return say(msg, SM_ERROR_INVALID_ARGUMENT,
-		           "spring %ld: break strain = %g must be > 1.1e-16 (2^-53): l0 (1 + break strain) would round to "
-		           "l0, and the spring break at rest",
-		           index, def->break_strain);
+		           "spring %ld: break strain = %s must be > 2^-53 = %s: l0 (1 + break strain) would round to l0, "
+		           "and the spring break at rest",
+		           index, value, limit);
+	}
 
 	// Rest length.
 	double l0;

@@ -3664,9 +3664,18 @@ static int test_smallest_break_strain(void)
 		s.stiffness = 1e4;
 		s.break_strain = 1e-20;
 		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_INVALID_ARGUMENT);
-		ENSURE(strstr(sm_model_last_error(model), "break strain = 1e-20 must be > 1.1e-16") != NULL);
+		ENSURE(strstr(sm_model_last_error(model), "break strain = 1e-20 must be > 2^-53 = 1.1102230246251565e-16") !=
+		       NULL);
+		// Above 1.1e-16 but not above 2^-53: the message shows both in full, or it would read
+		// "1.105e-16 must be > 1.1e-16".
+		s.break_strain = 1.105e-16;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strstr(sm_model_last_error(model), "break strain = 1.105e-16 must be > 2^-53 = 1.1102230246251565e-16") !=
+		       NULL);
 		s.break_strain = SM_MIN_BREAK_STRAIN;
 		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE(strstr(sm_model_last_error(model),
+		              "break strain = 1.1102230246251565e-16 must be > 2^-53 = 1.1102230246251565e-16") != NULL);
 		s.break_strain = nextafter(SM_MIN_BREAK_STRAIN, 1.0);
 		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);

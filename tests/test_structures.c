@@ -952,8 +952,12 @@ static int test_zero_size_and_break_strain(void)
 	// refused by the structure, naming its group; the next double above is accepted.
 	rope.structural.break_strain = 5e-324;
 	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "rope: structural break strain = 4.94066e-324 must be > 1.1e-16 (2^-53): l0 (1 + break strain) "
-	               "would round to l0, and the springs break at rest") == 0);
+	               "rope: structural break strain = 4.94065645841247e-324 must be > 2^-53 = 1.1102230246251565e-16: "
+	               "l0 (1 + break strain) would round to l0, and the springs break at rest") == 0);
+	rope.structural.break_strain = 1.105e-16;
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "rope: structural break strain = 1.105e-16 must be > 2^-53 = 1.1102230246251565e-16: l0 (1 + "
+	               "break strain) would round to l0, and the springs break at rest") == 0);
 	rope.structural.break_strain = nextafter(SM_MIN_BREAK_STRAIN, 1.0);
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
 	sm_model_destroy(m);

@@ -63,8 +63,9 @@ typedef enum sm_scaling {
 /// Rest length meaning "the distance between the two particles when the spring is added".
 #define SM_REST_LENGTH_INITIAL (-1.0)
 
-/// Break strains must exceed this, 2^-53 = 1.1e-16 [1]: at or below it, l0 (1 + break_strain)
-/// rounds to l0, and a spring at rest (strain 0) would count as at its limit and break at once.
+/// Break strains must exceed this, 2^-53 = 1.1102230246251565e-16 [1]: at or below it,
+/// l0 (1 + break_strain) rounds to l0, and a spring at rest (strain 0) would count as at its limit
+/// and break at once.
 #define SM_MIN_BREAK_STRAIN 0x1p-53
 
 /// Definition of a spring between particles a and b; get one from sm_default_spring_def().
@@ -87,8 +88,8 @@ typedef struct sm_spring_def {
 	/// Strain (L - l0) / l0 [1] at which the spring breaks (the simulation detects the crossing
 	/// as an event, also one within a single solver step, or breaks it at once if it is already at
 	/// or beyond when an advance begins); its elastic energy then counts as dissipated.
-	/// > SM_MIN_BREAK_STRAIN (1.1e-16), or INFINITY (default) for a spring that never breaks.
-	/// Requires l0 > 0.
+	/// > SM_MIN_BREAK_STRAIN (2^-53 = 1.1102230246251565e-16), or INFINITY (default) for a spring
+	/// that never breaks. Requires l0 > 0.
 	double break_strain;
 } sm_spring_def;
 
