@@ -123,11 +123,14 @@ static double triangle_area(const double* vertices, const int32_t* tri)
 	const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
 	const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
 	const double squared = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-	if (!(squared < DBL_MIN) || (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0))
-		return 0.5 * sqrt(squared);  // NaN or inf: an overflow, which the caller names
-	// |n|^2 underflowed (sides below about 1e-77 m; |n| itself is not 0, or the triangle flat): the cross product of the edges divided by
+	if ((squared >= DBL_MIN && isfinite(squared)) || (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0))
+		return 0.5 * sqrt(squared);
+	// |n|^2 underflowed (sides below about 1e-77 m; |n| itself is not 0, or the triangle flat) or
+	// overflowed (sides above about 1e77 m, or n itself): the cross product of the edges divided by
 	// their largest component, then scaled back by its square, which a triangle whose springs the
-	// model can hold (sides above 1.5e-154 m) keeps normal. Exactly 0 stays 0.
+	// model can hold (sides from 1.5e-154 m to 1.3e154 m) keeps a normal double. Exactly 0 stays
+	// 0; an edge that overflows (largest = inf) gives NaN, an area beyond the largest double inf:
+	// overflows, which the caller names.
 	double largest = 0.0;
 	for (int c = 0; c < 3; c++)
 		largest = fmax(largest, fmax(fabs(u[c]), fabs(w[c])));

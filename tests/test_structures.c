@@ -418,10 +418,16 @@ static int test_mesh_errors(void)
 	def.triangle_count = 1;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
 	ENSURE(strstr(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) overflows") != NULL);
-	// A triangle of area 7.1e199 m^2 whose cross product overflows as inf - inf (NaN): an overflow
-	// too, not a zero area.
+	// A triangle of area 7.1e199 m^2 whose cross product overflows as inf - inf (NaN): its area
+	// is computed on the edges scaled down, and with sides of 1.4e200, 1.4e200 and 1 m it is flat
+	// to rounding (the sine of its smallest angle 7e-201), not "overflowing".
 	const double skew[] = {0, 0, 0, 1e200, 1e200, 0, 1e200, 1e200, 1};
 	def.vertices = skew;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_model_last_error(m), "mesh: triangle 0 (0, 1, 2) has zero area (to rounding") != NULL);
+	// One whose edge overflows (vertices 1.8e308 m apart): an overflow.
+	const double apart[] = {-9e307, 0, 0, 9e307, 0, 0, 0, 1, 0};
+	def.vertices = apart;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
 	ENSURE(strstr(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) overflows") != NULL);
 	def.vertices = two;
@@ -2009,6 +2015,20 @@ static int test_absurd_sizes_named(void)
 	ENSURE_STATUS(sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(strcmp(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) underflows to 0 (its edges are too "
 	                                      "short)") == 0);
+	// One of 1e100 m sides, whose springs a model holds as a sheet's of that size, has an area,
+	// 5e199 m^2, though the square of its cross product overflows: not "its area overflows". At
+	// 1e-200 kg/m^2 its vertices get a sixth of a kilogram each, edge springs per section a
+	// section of 5e199 m^2 / 1e100 m = 5e99 m along the legs.
+	const double huge[9] = {0, 0, 0, 1e100, 0, 0, 0, 1e100, 0};
+	mesh.vertices = huge;
+	mesh.density = 1e-200;
+	mesh.edge = section_material(1.0);
+	ENSURE_STATUS(sm_add_mesh(m, &mesh, &t), SM_OK);
+	ENSURE_STATUS(sm_model_get_particle(m, t.first_particle, &end), SM_OK);
+	ENSURE_REL(end.mass, 1.0 / 6.0, 1e-15, 0.0);  // round-off only
+	sm_spring_def leg;
+	ENSURE_STATUS(sm_model_get_spring(m, t.first_spring, &leg), SM_OK);
+	ENSURE_REL(leg.section, 5e99, 1e-15, 0.0);  // round-off only
 	sm_model_destroy(m);
 	return 0;
 }
