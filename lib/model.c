@@ -4,6 +4,7 @@
 // leaves the model exactly as it was; the message names the particle or spring and the rule.
 #include "model_internal.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -234,12 +235,25 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			const double* xa = model->position + 3 * (size_t)def->a;
 			const double* xb = model->position + 3 * (size_t)def->b;
 			const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
-			l0 = sqrt(dx * dx + dy * dy + dz * dz);
+			const double squared = dx * dx + dy * dy + dz * dz;
+			l0 = sqrt(squared);
 			if (!isfinite(l0))
 				return say(msg, SM_ERROR_NOT_FINITE,
 				           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
 				           "overflows: particles joined by springs must be less than about 1e154 m apart)",
 				           index, (long)def->a, (long)def->b);
+			// A square below DBL_MIN has lost digits or all of them (1e-170 m gives l0 = 0): the
+			// rest length would not be the distance. Structures refuse such springs too; particles
+			// at one point keep l0 = 0.
+			if (squared < DBL_MIN && (dx != 0.0 || dy != 0.0 || dz != 0.0)) {
+				const double largest = fmax(fabs(dx), fmax(fabs(dy), fabs(dz)));
+				const double ux = dx / largest, uy = dy / largest, uz = dz / largest;
+				return say(msg, SM_ERROR_INVALID_ARGUMENT,
+				           "spring %ld: the initial distance between particles %ld and %ld, %.3g m, is too small (its "
+				           "square underflows: particles joined by springs must be at one point or more than about "
+				           "1.5e-154 m apart)",
+				           index, (long)def->a, (long)def->b, largest * sqrt(ux * ux + uy * uy + uz * uz));
+			}
 		}
 	} else {
 		l0 = def->rest_length;

@@ -160,7 +160,9 @@ SM_API const char* sm_model_last_error(const sm_model* model);
 SM_API sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int32_t* index);
 
 /// Adds a spring. A rest length of SM_REST_LENGTH_INITIAL is resolved to the current distance
-/// between the particles. On error the model is unchanged.
+/// between the particles, which must be 0 or from sqrt(DBL_MIN) = 1.5e-154 m to sqrt(DBL_MAX) =
+/// 1.3e154 m (its square a normal double; else SM_ERROR_INVALID_ARGUMENT or
+/// SM_ERROR_NOT_FINITE). On error the model is unchanged.
 SM_API sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index);
 
 /// Numbers of particles and springs (disabled springs included); 0 for a NULL model.
