@@ -42,6 +42,15 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 	return status;
 }
 
+void sm_break_strain_floor_text(double break_strain, char text[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY])
+{
+	char value[SM_NUMBER_TEXT_CAPACITY], limit[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(break_strain, value);
+	sm_format_number(SM_MIN_BREAK_STRAIN, limit);
+	snprintf(text, SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY,
+	         "break strain = %s must be > 2^-53 = %s: l0 (1 + break strain) would round to l0", value, limit);
+}
+
 static bool known_scaling(sm_scaling scaling)
 {
 	return scaling == SM_ABSOLUTE || scaling == SM_PER_STRAIN || scaling == SM_PER_SECTION;
@@ -214,14 +223,9 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: break strain = %g must be > 0 (INFINITY for never)",
 		           index, def->break_strain);
 	if (!(def->break_strain > SM_MIN_BREAK_STRAIN)) {
-		// Both in full: with %g, 1.105e-16 "must be > 1.1e-16" would read as met.
-		char value[SM_NUMBER_TEXT_CAPACITY], limit[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(def->break_strain, value);
-		sm_format_number(SM_MIN_BREAK_STRAIN, limit);
-		return say(msg, SM_ERROR_INVALID_ARGUMENT,
-		           "spring %ld: break strain = %s must be > 2^-53 = %s: l0 (1 + break strain) would round to l0, "
-		           "and the spring break at rest",
-		           index, value, limit);
+		char rule[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY];
+		sm_break_strain_floor_text(def->break_strain, rule);
+		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: %s, and the spring break at rest", index, rule);
 	}
 
 	// Rest length.

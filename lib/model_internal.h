@@ -50,6 +50,12 @@ struct sm_spring_jacobians {
 	double* data;                 // SPRING_JACOBIAN_STRIDE per spring, 64-byte aligned
 };
 
+// The rule a break strain at or below SM_MIN_BREAK_STRAIN breaks, for a refusal's message: "break
+// strain = V must be > 2^-53 = L: l0 (1 + break strain) would round to l0". Both numbers in full:
+// with %g, 1.105e-16 "must be > 1.1e-16" would read as met.
+#define SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY 160
+void sm_break_strain_floor_text(double break_strain, char text[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY]);
+
 // Formats a message into model->last_error and returns status.
 sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, ...)
 #if defined(__GNUC__)

@@ -116,14 +116,10 @@ sm_status structure_check_material(sm_model* model, const char* what, const char
 		                     "%s: %s break strain = %g must be > 0 (INFINITY for never)", what, group,
 		                     m->break_strain);
 	if (!(m->break_strain > SM_MIN_BREAK_STRAIN)) {
-		// Both in full: with %g, 1.105e-16 "must be > 1.1e-16" would read as met.
-		char value[SM_NUMBER_TEXT_CAPACITY], limit[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(m->break_strain, value);
-		sm_format_number(SM_MIN_BREAK_STRAIN, limit);
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "%s: %s break strain = %s must be > 2^-53 = %s: l0 (1 + break strain) would round to "
-		                     "l0, and the springs break at rest",
-		                     what, group, value, limit);
+		char rule[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY];
+		sm_break_strain_floor_text(m->break_strain, rule);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s, and the springs break at rest", what,
+		                     group, rule);
 	}
 	return SM_OK;
 }
