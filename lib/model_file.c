@@ -969,10 +969,14 @@ static bool check_budget(parser* p, const char* path, int64_t particles, int64_t
 {
 	const sm_model* model = p->ex->model;
 	const int64_t np = sm_model_particle_count(model) + particles, ns = sm_model_spring_count(model) + springs;
-	if (np > p->doc->max_elements || ns > p->doc->max_elements)
+	const long long limit = p->doc->max_elements;
+	if (np > limit && ns > limit)
 		return fail(p, SM_ERROR_SCHEMA, path,
 		            "the model would have %lld particles and %lld springs, more than the limit of %lld of each",
-		            (long long)np, (long long)ns, (long long)p->doc->max_elements);
+		            (long long)np, (long long)ns, limit);
+	if (np > limit || ns > limit)
+		return fail(p, SM_ERROR_SCHEMA, path, "the model would have %lld %s, more than the limit of %lld",
+		            (long long)(np > limit ? np : ns), np > limit ? "particles" : "springs", limit);
 	return reserve(p, np, ns);
 }
 

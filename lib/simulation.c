@@ -1287,6 +1287,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	if (particle < 0 || particle >= sim->particle_count)
 		return sm_simulation_fail(sim, SM_ERROR_PARTICLE_INDEX,
 		                          "set_driven: particle %d is out of range (the model has %d)", (int)particle,
@@ -1330,6 +1331,7 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	if (particle < 0 || particle >= sim->particle_count)
 		return sm_simulation_fail(sim, SM_ERROR_PARTICLE_INDEX,
 		                          "set_external_force: particle %d is out of range (the model has %d)",
@@ -1360,6 +1362,7 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	if (spring < 0 || spring >= sm_model_spring_count(sim->model))
 		return sm_simulation_fail(sim, SM_ERROR_SPRING_INDEX,
 		                          "break_spring: spring %d is out of range (the model has %d)", (int)spring,
@@ -1413,6 +1416,7 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		return sim ? sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
 		                                "set_state: positions and velocities are required")
 		           : SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	if (!isfinite(time))
 		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE, "set_state: time %g is not finite", time);
 	for (int32_t k = 0; k < sim->free_count; k++) {
@@ -1458,6 +1462,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	if (sim == NULL || model == NULL)
 		return sim ? sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "update_model: model is NULL")
 		           : SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	const sm_model* old = sim->model;
 	if (model->particle_count != old->particle_count || model->spring_count != old->spring_count)
 		return sm_simulation_fail(

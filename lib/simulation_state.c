@@ -112,6 +112,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	if (sim == NULL || s == NULL)
 		return sim ? sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "restore_state: no state")
 		           : SM_ERROR_INVALID_ARGUMENT;
+	sim->last_error[0] = '\0';
 	// The counts too: the hash is a field of the snapshot, which bytes read back may hold beside
 	// other counts, and the arrays copied below have the simulation's sizes.
 	if (s->topology != topology_hash(sim->model) || s->particle_count != sim->particle_count ||
@@ -215,9 +216,12 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 {
 	const unsigned char* in = buffer;
 	serialized_header h;
-	if (buffer == NULL || size < sizeof h + sizeof(uint64_t)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state",
-		             buffer == NULL ? (size_t)0 : size);
+	if (buffer == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: buffer is NULL");
+		return NULL;
+	}
+	if (size < sizeof h + sizeof(uint64_t)) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state", size);
 		return NULL;
 	}
 	memcpy(&h, in, sizeof h);

@@ -706,6 +706,7 @@ sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double
 	free(inside);
 	if (count != NULL)
 		*count = changed;
+	model->last_error[0] = '\0';
 	return SM_OK;
 }
 
@@ -736,5 +737,6 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 			                     "selection: entry %d, particle %d, is out of range (model has %d particles)", (int)n,
 			                     (int)particles[n], (int)model->particle_count);
 	model_set_motions(model, NULL, particles, count, motion);
+	model->last_error[0] = '\0';
 	return SM_OK;
 }

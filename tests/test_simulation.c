@@ -630,6 +630,45 @@ static int test_inputs_null_arrays(void)
 	return 0;
 }
 
+// sm_simulation_last_error names the last failed call that modifies the simulation and is ""
+// after a successful one, whichever call it is: a caller that logs it after each call never
+// reports a failure that did not happen.
+static int test_success_clears_the_last_failure(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 0.0, 0.2);
+	ENSURE(model != NULL);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, 0, SM_PARTICLE_DRIVEN), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	sm_simulation_state* state = sm_simulation_save_state(sim);
+	ENSURE(state != NULL);
+	const double x[6] = {0.0, 0.0, 0.0, 1.1, 0.0, 0.0}, v[6] = {0.0};
+	const double nan3[3] = {NAN, 0.0, 0.0};
+	for (int call = 0; call < 7; ++call) {
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, nan3), SM_ERROR_NOT_FINITE);
+		ENSURE(sm_simulation_last_error(sim)[0] != '\0');
+		sm_status st = SM_OK;
+		switch (call) {
+		case 0: st = sm_simulation_set_external_force(sim, 1, v); break;
+		case 1: st = sm_simulation_set_driven(sim, 0, x, v); break;
+		case 2: st = sm_simulation_set_state(sim, 0.0, x, v); break;
+		case 3: st = sm_simulation_break_spring(sim, 0); break;
+		case 4: st = sm_simulation_restore_state(sim, state); break;
+		case 5: st = sm_simulation_update_model(sim, model); break;
+		default: st = sm_simulation_advance(sim, sm_simulation_time(sim) + 0.1); break;
+		}
+		ENSURE_STATUS(st, SM_OK);
+		if (strcmp(sm_simulation_last_error(sim), "") != 0) {
+			printf("  call %d left \"%s\"\n", call, sm_simulation_last_error(sim));
+			return 1;
+		}
+	}
+	sm_simulation_state_destroy(state);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 typedef struct step_log {
 	int64_t calls;
 	double last;
@@ -1190,8 +1229,10 @@ static int test_saved_state_as_bytes(void)
 		ENSURE_STATUS(sm_simulation_advance(a, 0.15), SM_OK);
 		ENSURE_STATUS(sm_simulation_advance(b, 0.15), SM_OK);
 	}
-	// Refusals: a byte short, another layout, one byte damaged anywhere, a NaN under a checksum
-	// made to match.
+	// Refusals: no buffer, a byte short, another layout, one byte damaged anywhere, a NaN under a
+	// checksum made to match.
+	ENSURE(sm_simulation_state_deserialize(NULL, size, &err) == NULL &&
+	       strcmp(err.message, "state_deserialize: buffer is NULL") == 0);
 	ENSURE(sm_simulation_state_deserialize(bytes + 1, size - 1, &err) == NULL && strstr(err.message, "bytes") != NULL);
 	unsigned char* copy = malloc(size);
 	ENSURE(copy != NULL);
@@ -5208,6 +5249,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_spring_at_its_limit_breaks_at_once);
 	RUN_TEST(test_step_input_with_kept_history);
 	RUN_TEST(test_inputs_null_arrays);
+	RUN_TEST(test_success_clears_the_last_failure);
 	RUN_TEST(test_on_step_sees_every_step_and_changes_nothing);
 	RUN_TEST(test_on_step_keeps_max_steps);
 	RUN_TEST(test_on_step_can_stop_an_advance);

@@ -643,6 +643,7 @@ static int test_selection_index_bounds(void)
 	const int32_t last[] = {n - 1};
 	ENSURE_STATUS(sm_set_motion_of(m, last, 1, SM_PARTICLE_FIXED), SM_OK);
 	ENSURE(sm_model_free_count(m) == n - 1 && sm_model_free_index(m, n - 1) == -1);
+	ENSURE(strcmp(sm_model_last_error(m), "") == 0);  // a successful call leaves no failure behind
 
 	// A structure shifted by one particle: its last grid point (4, 4, 0) is index n.
 	sm_structure shifted = s;
@@ -653,6 +654,16 @@ static int test_selection_index_bounds(void)
 	ENSURE(sm_model_free_count(m) == n - 1);
 	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 0, 0, 0, SM_PARTICLE_FIXED), SM_OK);
 	ENSURE(sm_model_free_count(m) == n - 2 && sm_model_free_index(m, 1) == -1 && sm_model_free_index(m, 0) == 0);
+	ENSURE(strcmp(sm_model_last_error(m), "") == 0);
+
+	// The same for the box selection and an empty list.
+	const double lo[3] = {NAN, 0.0, 0.0}, hi[3] = {1.0, 1.0, 1.0};
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE_STATUS(sm_set_motion_in_box(m, hi, hi, SM_PARTICLE_FIXED, NULL), SM_OK);
+	ENSURE(strcmp(sm_model_last_error(m), "") == 0);
+	ENSURE_STATUS(sm_set_motion_of(m, list, 2, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE_STATUS(sm_set_motion_of(m, NULL, 0, SM_PARTICLE_FIXED), SM_OK);
+	ENSURE(strcmp(sm_model_last_error(m), "") == 0);
 	sm_model_destroy(m);
 	return 0;
 }

@@ -337,7 +337,9 @@ SM_API sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t inde
 /// one the options name, resolved as for BDF.
 SM_API sm_linear_solver sm_simulation_solver(const sm_simulation* sim);
 
-/// Message of the last failure, "" if none.
+/// Message of the last failed call that modifies the simulation (advance, set_driven,
+/// set_external_force, set_state, break_spring, restore_state, reset, update_model), "" after a
+/// successful one.
 SM_API const char* sm_simulation_last_error(const sm_simulation* sim);
 
 #ifdef __cplusplus
