@@ -104,6 +104,23 @@ check_cases() {
 }
 touch "$tmp/a_file"
 osc="$root/models/oscillator.json"
+# No output overwrites a file the command reads, under its own name or another (a link); "-" is
+# standard output only for run's CSV. Each refusal comes before anything is written.
+cp "$osc" "$tmp/own.json"
+ln -s "$tmp/own.json" "$tmp/own_link.json"
+check_cases << 'CASES'
+2|springmass run: -o $tmp/own.json would overwrite the model file $tmp/own.json, which it reads; give another name|run "$tmp/own.json" -q -o "$tmp/own.json"
+2|springmass run: -o $tmp/own_link.json would overwrite the model file $tmp/own.json, which it reads; give another name|run "$tmp/own.json" -q -o "$tmp/own_link.json"
+2|springmass statics: -o $tmp/own.json would overwrite the model file $tmp/own.json, which it reads; give another name|statics "$tmp/own.json" -q -o "$tmp/own.json"
+2|springmass statics: --save-model $tmp/own.json would overwrite the model file $tmp/own.json, which it reads; give another name|statics "$tmp/own.json" -q --save-model "$tmp/own.json"
+2|springmass modes: -o $tmp/own.json would overwrite the model file $tmp/own.json, which it reads; give another name|modes "$tmp/own.json" -o "$tmp/own.json"
+2|springmass fmu: -o $tmp/own.json would overwrite the model file $tmp/own.json, which it reads; give another name|fmu "$tmp/own.json" -o "$tmp/own.json"
+2|springmass fmu: -o $tmp/a_file would overwrite the reference $tmp/a_file, which it reads; give another name|fmu "$tmp/own.json" -o "$tmp/a_file" --reference "$tmp/a_file"
+2|springmass fmu: -o -: this output is a file, not standard output; give its name|fmu "$tmp/own.json" -o -
+2|springmass statics: -o -: this output is a file, not standard output; give its name|statics "$tmp/own.json" -q -o -
+2|springmass modes: -o -: this output is a file, not standard output; give its name|modes "$tmp/own.json" -o -
+CASES
+cmp -s "$osc" "$tmp/own.json" && [ ! -e ./- ] || fail "a refused output was written"
 # --set values are taken together: a rope's new start beyond its old end, with the new end.
 cp "$root/tests/python/models/rope_ends.json" "$tmp/rope_ends.json"
 ends="$tmp/rope_ends.json"

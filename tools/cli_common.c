@@ -350,6 +350,28 @@ void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, co
 			fprintf(f, "%.9g\n", values[s]);
 }
 
+int cli_check_output(const char* command, const char* option, const char* output, const char* input,
+                     const char* input_what, bool dash_is_stdout)
+{
+	if (output == NULL)
+		return 0;
+	if (strcmp(output, "-") == 0) {
+		if (dash_is_stdout)
+			return 0;
+		fprintf(stderr, "springmass %s: %s -: this output is a file, not standard output; give its name\n", command,
+		        option);
+		return 2;
+	}
+	struct stat out, in;
+	if (input != NULL && stat(output, &out) == 0 && stat(input, &in) == 0 && out.st_dev == in.st_dev &&
+	    out.st_ino == in.st_ino) {
+		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n", command,
+		        option, output, input_what, input);
+		return 2;
+	}
+	return 0;
+}
+
 void cli_cannot_write(const char* command, const char* path)
 {
 	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path, errno != 0 ? strerror(errno) : "write error");

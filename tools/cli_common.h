@@ -90,6 +90,13 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 /// intact springs, the lines of cli_vtk_open; `first` for the first field.
 void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values, bool first);
 
+/// Checks the file an option writes (NULL: none given) before anything runs: "-" is standard
+/// output where `dash_is_stdout`, a file name everywhere else; a file that is `input` itself (the
+/// same file under any name), which the command reads and `input_what` names ("the model file"),
+/// would be destroyed. Returns 0, or prints why and returns 2 (a usage error).
+int cli_check_output(const char* command, const char* option, const char* output, const char* input,
+                     const char* input_what, bool dash_is_stdout);
+
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
 /// failed call just before).
 void cli_cannot_write(const char* command, const char* path);

@@ -603,6 +603,9 @@ static int parse_arguments(int argc, char** argv, options* opt)
 		usage(stderr);
 		return 2;
 	}
+	if (cli_check_output("fmu", "-o", opt->output, opt->model, "the model file", false) != 0 ||
+	    cli_check_output("fmu", "-o", opt->output, opt->reference, "the reference", false) != 0)
+		return 2;
 	return 0;
 }
 

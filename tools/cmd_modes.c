@@ -211,6 +211,10 @@ int sm_cmd_modes(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
+	if (cli_check_output("modes", "-o", csv_path, model_path, "the model file", false) != 0) {
+		free(settings);
+		return 2;
+	}
 
 	int status = 1;
 	sm_error err;

@@ -358,7 +358,9 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			return USAGE_ERROR;
 		}
 	}
-	return cli_model_given("run", o->model) != 0 ? USAGE_ERROR : 0;
+	if (cli_model_given("run", o->model) != 0)
+		return USAGE_ERROR;
+	return cli_check_output("run", "-o", o->output, o->model, "the model file", true);
 }
 
 int sm_cmd_run(int argc, char** argv)

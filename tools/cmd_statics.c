@@ -144,6 +144,11 @@ int sm_cmd_statics(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
+	if (cli_check_output("statics", "-o", csv_path, model_path, "the model file", false) != 0 ||
+	    cli_check_output("statics", "--save-model", save_path, model_path, "the model file", false) != 0) {
+		free(settings);
+		return 2;
+	}
 
 	int status = 1;
 	sm_error err;
