@@ -16,6 +16,7 @@
 #include "structures_internal.h"
 
 #include <errno.h>
+#include <float.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
@@ -287,8 +288,8 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 
 // FRACTION: > 0 and < 1, and at least SM_MIN_RELATIVE_TOLERANCE (a relative tolerance: CVODE
 // cannot meet one below the machine epsilon, simulation.h); TOLERANCE: an absolute tolerance, at
-// least SM_MIN_ABSOLUTE_TOLERANCE.
-typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE } number_rule;
+// least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least DBL_MIN (model.h).
+typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE, MASS } number_rule;
 
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
 static bool check_rule(parser* p, const char* path, double v, int32_t source, number_rule rule)
@@ -298,8 +299,15 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite", describe(p, text, sizeof text, v, source));
 	if (rule == NON_NEGATIVE && v < 0.0)
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
-	if ((rule == POSITIVE || rule == FRACTION) && !(v > 0.0))
+	if ((rule == POSITIVE || rule == FRACTION || rule == MASS) && !(v > 0.0))
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
+	if (rule == MASS && v < DBL_MIN) {
+		char least[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(DBL_MIN, least);
+		return fail(p, SM_ERROR_NONPOSITIVE_MASS, path,
+		            "%s must be at least %s, the smallest normal double (1 / mass would overflow)",
+		            describe(p, text, sizeof text, v, source), least);
+	}
 	if (rule == FRACTION && !(v < 1.0))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
 	if (rule == FRACTION && !(v >= SM_MIN_RELATIVE_TOLERANCE))
@@ -754,7 +762,7 @@ static bool read_particles(parser* p, const json_t* list)
 		if (!require(p, obj, path, "position") ||
 		    !read_vector(p, FEEDS_STATE, obj, path, "position", ANY_FINITE, def.position, src.position) ||
 		    !read_vector(p, FEEDS_STATE, obj, path, "velocity", ANY_FINITE, def.velocity, src.velocity) ||
-		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &def.mass, &src.mass) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", MASS, &def.mass, &src.mass) ||
 		    !read_bool(p, obj, path, "fixed", &fixed))
 			return false;
 		def.motion = fixed ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;

@@ -43,6 +43,16 @@ for special in /dev/zero "$tmp/check_fifo.json"; do
   [ $status -eq 1 ] && [ "$out" = "springmass check: $special: cannot read: not a regular file" ] ||
     fail "check $special exited with $status and printed '$out'"
 done
+# A valid model too fast for any integrator (stiffness / mass overflows): check says so instead of
+# printing infinite frequencies and a stable step of 0 s.
+cat > "$tmp/too_fast.json" << 'JSON'
+{"springmass": 1, "name": "too_fast", "gravity": [0, 0, 0],
+ "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true}, {"name": "b", "position": [1.1, 0, 0], "mass": 1e-10}],
+ "springs": [{"a": "a", "b": "b", "stiffness": 1e300, "rest_length": 1}]}
+JSON
+out=$("$cli" check "$tmp/too_fast.json" 2>&1)
+grep -q "^fastest      sqrt(k/m) overflows at spring 0" <<< "$out" && grep -q "^warning .*no integrator" <<< "$out" &&
+  ! grep -q "inf\|explicit" <<< "$out" || fail "check of a model whose stiffness / mass overflows: $out"
 out=$("$cli" run "$root/models/oscillator.json" --t-end 1e-11 -q -o - 2>&1)
 [ "$(wc -l <<< "$out")" -eq 3 ] && [ "$(tail -1 <<< "$out" | cut -d, -f1)" = "1e-11" ] ||
   fail "run to 1e-11 s did not write the rows at 0 and 1e-11 s: $out"

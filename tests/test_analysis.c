@@ -1298,9 +1298,9 @@ static int test_explicit_step_limit(void)
 // (the determinant 1 - h gamma exceeds 1 at every h > 0). sm_model_explicit_limit: the chain's
 // bounds do not depend on how its particles are numbered or which end of a spring is a (the same
 // sums in the same order: equal); a model with no free particle has no limit, under mass damping
-// too, and modes gives none either; a free particle of the smallest subnormal mass on a 1 N/m
-// spring, beside a spring of zero constants, has an unbounded omega (1/m overflows) and step 0,
-// not the step of a particle on no spring.
+// too, and modes gives none either; a free particle of 1e-10 kg on a 1e300 N/m spring, beside a
+// spring of zero constants, has an unbounded omega (k/m overflows) and step 0, not the step of a
+// particle on no spring. (Masses below DBL_MIN, whose reciprocal overflows, are refused.)
 static int test_explicit_step_limit_edges(void)
 {
 	ENSURE(isnan(sm_symplectic_euler_step(NAN, 0.0)) && isnan(sm_symplectic_euler_step(0.0, NAN)));
@@ -1354,11 +1354,13 @@ static int test_explicit_step_limit_edges(void)
 	p.motion = SM_PARTICLE_FREE;
 	p.mass = 4.9e-324;
 	p.position[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(tiny, &p, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	p.mass = 1e-10;
 	ENSURE_STATUS(sm_model_add_particle(tiny, &p, NULL), SM_OK);
 	s.stiffness = 0.0;
 	s.damping = 0.0;
 	ENSURE_STATUS(sm_model_add_spring(tiny, &s, NULL), SM_OK);
-	s.stiffness = 1.0;
+	s.stiffness = 1e300;
 	ENSURE_STATUS(sm_model_add_spring(tiny, &s, NULL), SM_OK);
 	ENSURE_STATUS(sm_model_explicit_limit(tiny, &a), SM_OK);
 	ENSURE(isinf(a.omega_max) && a.damping_rate == 0.0 && a.step == 0.0);

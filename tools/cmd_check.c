@@ -246,8 +246,11 @@ int sm_cmd_check(int argc, char** argv)
 	if (fastest >= 0) {
 		sm_spring_def s;
 		sm_model_get_spring(model, fastest, &s);
-		printf("fastest      sqrt(k/m) = %.6g rad/s (%.6g Hz) at spring %d, between ", max_omega,
-		       max_omega / (2.0 * 3.14159265358979323846), (int)fastest);
+		if (isfinite(max_omega))
+			printf("fastest      sqrt(k/m) = %.6g rad/s (%.6g Hz) at spring %d, between ", max_omega,
+			       max_omega / (2.0 * 3.14159265358979323846), (int)fastest);
+		else
+			printf("fastest      sqrt(k/m) overflows at spring %d, between ", (int)fastest);
 		print_particle(doc, s.a);
 		printf(" and ");
 		print_particle(doc, s.b);
@@ -260,13 +263,17 @@ int sm_cmd_check(int argc, char** argv)
 		sm_document_destroy(doc);
 		return 1;
 	}
-	if (limit.omega_max > 0.0)
+	if (limit.omega_max > 0.0 && isfinite(limit.omega_max))
 		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped)\n", limit.omega_max,
 		       limit.omega_max / (2.0 * 3.14159265358979323846));
-	if (isfinite(limit.step))
+	if (isfinite(limit.step) && limit.step > 0.0)
 		printf("explicit     stable with symplectic Euler at steps up to at least %.3g s (damping rate <= %.3g 1/s; "
 		       "springmass modes MODEL -n 0: a closer value)\n",
 		       limit.step, limit.damping_rate);
+	// A valid file all the same, but one no integrator can follow: its time scale is below 1e-154 s.
+	if (!isfinite(max_omega) || !isfinite(limit.omega_max))
+		printf("warning      the highest frequency overflows a double (a stiffness / mass ratio above 1.8e308 "
+		       "1/s^2): no integrator can simulate the model\n");
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
 	printf("ok\n");

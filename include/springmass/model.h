@@ -28,7 +28,7 @@ typedef enum sm_particle_motion {
 
 /// Definition of a particle; get one from sm_default_particle_def().
 typedef struct sm_particle_def {
-	double mass;                ///< mass, > 0 and finite [kg]; default 1
+	double mass;                ///< mass, finite and >= DBL_MIN (2.2e-308: 1 / mass finite) [kg]; default 1
 	double position[3];         ///< initial position [m]; default (0, 0, 0)
 	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is zero whatever is given
 	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
