@@ -1377,14 +1377,10 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		return fmi2Error;
 	}
 	// Time is resolved to a few units of round-off of max(1 s, |t|, |t - start|): a shorter step
-	// could not advance it (t + h == t), nor the simulation's time t - start, which can be far
-	// larger (a state's start time is its own), or would leave CVODE nothing to integrate.
-	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fmax(fabs(t), fabs(t - inst->start_time)));
-	if (h < resolution) {
-		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
-		          resolution);
-		return fmi2Error;
-	}
+	// may not advance it (t + h == t), nor the simulation's time t - start, which can be far
+	// larger (a state's start time is its own), and leaves CVODE nothing to integrate.
+	const double clock_resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
+	const double resolution = fmax(clock_resolution, 4.0 * DBL_EPSILON * fabs(t - inst->start_time));
 	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
 	if (fabs(t - inst->time) > tolerance) {
 		log_error(inst, "fmi2DoStep: communication point %s does not match the FMU's time %s",
@@ -1394,6 +1390,27 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	double t_end = t + h;
 	if (!isfinite(t_end) || !isfinite(t_end - inst->start_time)) {
 		log_error(inst, "fmi2DoStep: the step from %g by %g s ends beyond the largest representable time", t, h);
+		return fmi2Error;
+	}
+	// A step below the resolution of the master's clock is that clock catching up with round-off
+	// (t + h summed over steps lands an ulp short of its stop time, and the rest is stepped).
+	// FMI 2.0 (4.2.2) asks only h > 0 of it: the inputs are taken, as in any step, and the FMU's
+	// time moves to t + h with the state at t (it would move by h |v|). A step the clock resolves
+	// but the simulation's time t - start does not (a state's start time far from t) is refused
+	// below: every step of that size would leave the state where it is.
+	if (h < clock_resolution) {
+		if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)
+			return fmi2Error;
+		if (logging(inst, LOG_SOLVER))
+			fmu_logf(inst, fmi2OK, LOG_SOLVER,
+			         "step %s -> %s: below the time resolution %s s, nothing to integrate; the time moves on",
+			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(resolution).text);
+		inst->time = inst->last_successful_time = fmax(inst->time, t_end);
+		return fmi2OK;
+	}
+	if (h < resolution) {
+		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
+		          resolution);
 		return fmi2Error;
 	}
 	// A point taken within its tolerance may lag the FMU's time by more than a short step.
