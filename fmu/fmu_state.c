@@ -12,13 +12,15 @@
 // ---------------------------------------------------------------------------------------------
 // FMI 2.0: FMU state. The saved state is the model's state, not solver memory: time, every
 // particle's position and velocity, which springs are broken, the inputs, the parameters and
-// settings, the dissipated energy. Restoring creates the simulation from it, so CVODE starts
+// settings, the dissipated energy. Not the stop time: that is the experiment's, which the instance
+// restoring a state was given by its own fmi2SetupExperiment (FMI 2.0, 2.1.6), and a state may
+// start a longer run than the one that saved it. Restoring creates the simulation from it, so CVODE starts
 // afresh; getting a state does the same to the running instance, so that continuing after
 // fmi2GetFMUstate and continuing after fmi2SetFMUstate of that state are the same computation
 // (bit for bit, in this or another process).
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST4"
+#define STATE_MAGIC "SMFMUST5"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
 // x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports], pending
@@ -41,14 +43,12 @@ enum {
 	I_MAX_STEPS,
 	I_THREADS,
 	I_RTOL_SET,
-	I_STOP_DEFINED,
 	I_COUNT
 };
 enum {
 	D_TIME,
 	D_START,
 	D_LAST_SUCCESSFUL,
-	D_STOP,
 	D_DISSIPATED,
 	D_RTOL,
 	D_ATOL_POSITION,
@@ -134,11 +134,9 @@ static saved_state* save_state(instance* inst)
 	put_i(b, I_MAX_STEPS, inst->solver.max_steps);
 	put_i(b, I_THREADS, inst->solver.threads);
 	put_i(b, I_RTOL_SET, inst->rtol_set);
-	put_i(b, I_STOP_DEFINED, inst->stop_time_defined);
 	put_d(b, D_TIME, inst->time);
 	put_d(b, D_START, inst->start_time);
 	put_d(b, D_LAST_SUCCESSFUL, inst->last_successful_time);
-	put_d(b, D_STOP, inst->stop_time);
 	put_d(b, D_DISSIPATED, has_sim ? fmu_dissipated_energy(inst) : 0.0);
 	put_d(b, D_RTOL, inst->solver.relative_tolerance);
 	put_d(b, D_ATOL_POSITION, inst->solver.absolute_tolerance_position);
@@ -235,7 +233,7 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT && get_i(b, I_JACOBIAN) >= 0 &&
 	     get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE && get_i(b, I_MAX_STEPS) >= 1 &&
 	     get_i(b, I_MAX_STEPS) <= INT32_MAX && get_i(b, I_THREADS) >= 1 && get_i(b, I_THREADS) <= INT32_MAX &&
-	     (get_i(b, I_RTOL_SET) & ~1) == 0 && (get_i(b, I_STOP_DEFINED) & ~1) == 0;
+	     (get_i(b, I_RTOL_SET) & ~1) == 0;
 	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
 	double max_step = get_d(b, D_MAX_STEP);
 	// The tolerances as fmi2SetReal takes them: the relative one at least SM_MIN_RELATIVE_TOLERANCE
@@ -243,8 +241,7 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	ok = ok && rtol >= SM_MIN_RELATIVE_TOLERANCE && rtol < 1.0 && atol_x >= SM_MIN_ABSOLUTE_TOLERANCE &&
 	     isfinite(atol_x) && atol_v >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_v) && max_step >= 0.0 &&
 	     isfinite(max_step);
-	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL)) &&
-	     (!get_i(b, I_STOP_DEFINED) || isfinite(get_d(b, D_STOP)));
+	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL));
 	// Time only runs forward from the experiment's start: t >= start in every state; from the
 	// end of initialisation on, the last successful time lies between them (fmi2DoStep sets it to
 	// where the step got, which is t).
@@ -356,8 +353,6 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	if (status != fmi2OK)
 		return status;
 	inst->rtol_set = get_i(b, I_RTOL_SET) != 0;
-	inst->stop_time_defined = get_i(b, I_STOP_DEFINED) != 0;
-	inst->stop_time = get_d(b, D_STOP);
 	inst->start_time = get_d(b, D_START);
 	inst->time = get_d(b, D_TIME);
 	inst->last_successful_time = get_d(b, D_LAST_SUCCESSFUL);

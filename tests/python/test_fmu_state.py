@@ -453,13 +453,13 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
 # parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
-# linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19, stop defined 20; the
-# doubles time 21, start 22, last successful time 23, stop 24, dissipated 25, rtol 26, atol of
-# positions 27 and of velocities 28, max_step 29; then x (30-35), v (36-41), the spring's enabled
-# flag 42, the parameters 43-45, the held inputs of base (46-54) and tip (55-63: position,
-# velocity, force) and the pending flags 64-65.
+# linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19; the doubles time 20,
+# start 21, last successful time 22, dissipated 23, rtol 24, atol of positions 25 and of
+# velocities 26, max_step 27; then x (28-33), v (34-39), the spring's enabled flag 40, the
+# parameters 41-43, the held inputs of base (44-52) and tip (53-61: position, velocity, force) and
+# the pending flags 62-63.
 W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, \
-    W_TIP_FX = 13, 14, 17, 18, 25, 26, 27, 29, 42, 43, 61
+    W_TIP_FX = 13, 14, 17, 18, 23, 24, 25, 27, 40, 41, 59
 
 
 def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
