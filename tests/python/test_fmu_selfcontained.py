@@ -70,6 +70,20 @@ def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
     assert "RUNPATH" in dynamic and "[$ORIGIN]" in dynamic
 
 
+def test_the_c_library_it_needs_is_that_of_the_documented_systems(test_fmu, tmp_path):
+    """docs/fmu.md: the FMU loads where the C library is glibc 2.35 or later (Debian 12, Ubuntu
+    22.04, RHEL 10): the newest symbol version any file in binaries/linux64 asks for is at most
+    GLIBC_2.35 (the bundled libgcc_s of Debian 12 asks for it)."""
+    folder = extract(str(test_fmu("driven_oscillator")), unzipdir=str(tmp_path / "unzipped"))
+    binaries = os.path.join(folder, "binaries", "linux64")
+    needed = set()
+    for name in os.listdir(binaries):
+        out = subprocess.run(["objdump", "-T", os.path.join(binaries, name)], check=True, capture_output=True,
+                             text=True).stdout
+        needed |= {tuple(int(n) for n in v.split(".")) for v in re.findall(r"\bGLIBC_([0-9.]+)\b", out)}
+    assert needed and max(needed) <= (2, 35), max(needed)
+
+
 def test_licences_of_everything_it_carries(test_fmu):
     """Every library in binaries/linux64 and the archive linked into the binary (SUNDIALS) come
     with their Debian copyright file in documentation/licenses/, named in its license.txt (the
