@@ -14,10 +14,10 @@
 // particle's position and velocity, which springs are broken, the inputs, the parameters and
 // settings, the dissipated energy. Not the stop time: that is the experiment's, which the instance
 // restoring a state was given by its own fmi2SetupExperiment (FMI 2.0, 2.1.6), and a state may
-// start a longer run than the one that saved it. Restoring creates the simulation from it, so CVODE starts
-// afresh; getting a state does the same to the running instance, so that continuing after
-// fmi2GetFMUstate and continuing after fmi2SetFMUstate of that state are the same computation
-// (bit for bit, in this or another process).
+// start a longer run than the one that saved it. Restoring creates the simulation from it, so CVODE
+// starts afresh, and every restore of a state continues alike (bit for bit, in this or another
+// process). Getting a state only copies (FMI 2.0, 2.1.8): the running instance keeps CVODE's
+// history and goes on as if no state had been saved.
 // ---------------------------------------------------------------------------------------------
 
 #define STATE_MAGIC "SMFMUST5"
@@ -376,12 +376,6 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 	saved_state* s = save_state(inst);
 	if (!s) {
 		log_error(inst, "fmi2GetFMUstate: out of memory");
-		return fmi2Error;
-	}
-	// Continue from exactly what a restore would give (see above).
-	if (get_i(s->bytes, I_HAS_SIM) && restore_state(inst, "fmi2GetFMUstate", s->bytes) != fmi2OK) {
-		free(s->bytes);
-		free(s);
 		return fmi2Error;
 	}
 	if (*FMUstate) {

@@ -5,7 +5,7 @@
 
 Runs the FMU with small communication steps twice, side by side: as it is (CVODE keeps its
 history over communication points) and with a restart forced at every communication point
-(fmi2GetFMUstate re-initialises the solver from the state it saves). With --stop-time-defined
+(fmi2SetFMUstate of the state just saved re-initialises the solver from it). With --stop-time-defined
 the master gives fmi2SetupExperiment the stop time, so that CVODE may step past communication
 points while the inputs are held (they are here: none is set). Prints, per simulated
 second, the internal steps and right-hand-side evaluations (from the logSolver messages) and the
@@ -33,6 +33,7 @@ def run(fmu, step, stop, restart, stop_time_defined):
     for k in range(n):
         if restart:
             state = inst.slave.getFMUstate()
+            inst.slave.setFMUstate(state)
             inst.slave.freeFMUstate(state)
         inst.slave.doStep(k * step, step)
     wall = time.perf_counter() - begin

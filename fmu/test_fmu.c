@@ -221,17 +221,24 @@ static void fix_state_checksum(fmi2Byte* bytes, size_t size)
 	memcpy(bytes + 56, &hash, 8);
 }
 
+// fmi2GetFMUstate only copies: the run goes on bit for bit as one that saved no state. Restoring
+// the state (in the same instance, or from its bytes in a fresh one) starts CVODE afresh there, and
+// every restore continues bit for bit alike; against the run that kept CVODE's history it agrees to
+// the integration's accuracy.
 static int test_state_round_trip(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = start(&f, "state");
-	ENSURE(c != NULL);
+	fmi2Component c = start(&f, "state"), plain = start(&f, "plain");
+	ENSURE(c != NULL && plain != NULL);
 	fmi2ValueReference force = vr(&f, "tip.fx");
 	double one = 1.0;
 	ENSURE_STATUS(fmi2SetReal(c, &force, 1, &one), fmi2OK);
-	for (int n = 0; n < 10; ++n)
+	ENSURE_STATUS(fmi2SetReal(plain, &force, 1, &one), fmi2OK);
+	for (int n = 0; n < 10; ++n) {
 		ENSURE_STATUS(fmi2DoStep(c, n * 0.01, 0.01, fmi2True), fmi2OK);
+		ENSURE_STATUS(fmi2DoStep(plain, n * 0.01, 0.01, fmi2True), fmi2OK);
+	}
 	fmi2FMUstate state = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
 	size_t size = 0;
@@ -240,7 +247,9 @@ static int test_state_round_trip(void)
 	double first[20], second[20], third[20];
 	for (int n = 0; n < 20; ++n) {
 		ENSURE_STATUS(fmi2DoStep(c, 0.1 + n * 0.01, 0.01, fmi2True), fmi2OK);
+		ENSURE_STATUS(fmi2DoStep(plain, 0.1 + n * 0.01, 0.01, fmi2True), fmi2OK);
 		first[n] = get(c, &f, "tip.x");
+		ENSURE(first[n] == get(plain, &f, "tip.x"));
 	}
 	ENSURE_STATUS(fmi2SetFMUstate(c, state), fmi2OK);
 	for (int n = 0; n < 20; ++n) {
@@ -257,15 +266,21 @@ static int test_state_round_trip(void)
 		ENSURE_STATUS(fmi2DoStep(d, 0.1 + n * 0.01, 0.01, fmi2True), fmi2OK);
 		third[n] = get(d, &f, "tip.x");
 	}
-	// Identical continuations, bit for bit.
-	ENSURE(memcmp(first, second, sizeof first) == 0);
-	ENSURE(memcmp(first, third, sizeof first) == 0);
+	// The restores alike, bit for bit; the run that kept its history within 1e-6 m, ten times the
+	// tolerance the default rtol 1e-6 sets on the bob's excursion of about 0.1 m.
+	ENSURE(memcmp(second, third, sizeof second) == 0);
+	double deviation = 0.0;
+	for (int n = 0; n < 20; ++n)
+		deviation = fmax(deviation, fabs(first[n] - second[n]));
+	printf("  continuation after a restore against the one that kept CVODE's history: %.3g m\n", deviation);
+	ENSURE(deviation <= 1e-6);
 	ENSURE_STATUS(fmi2DeSerializeFMUstate(d, bytes, size - 8, &restored), fmi2Error);
 	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
 	ENSURE_STATUS(fmi2FreeFMUstate(d, &restored), fmi2OK);
 	free(bytes);
 	fmi2FreeInstance(c);
 	fmi2FreeInstance(d);
+	fmi2FreeInstance(plain);
 	teardown(&f);
 	return 0;
 }

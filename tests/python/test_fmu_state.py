@@ -40,31 +40,44 @@ def force(t):
 
 @contextlib.contextmanager
 def state_and_receiver(fmu, parameters):
-    """(a, b, blob): instance a started with parameters and run 0.1 s, blob its serialised state,
-    and b a second instance started with the defaults, to receive it; both freed afterwards."""
+    """(a, b, blob): instance a started with parameters and run 0.1 s, blob its serialised state
+    (which a has restored: it continues as any instance given the state does), and b a second
+    instance started with the defaults, to receive it; both freed afterwards."""
     a = Instance(fmu, "a").start(parameters)
     b = Instance(fmu, "b").start()
     try:
         run(a, 0.0, 10)
-        yield a, b, a.slave.serializeFMUstate(a.slave.getFMUstate())
+        state = a.slave.getFMUstate()
+        a.slave.setFMUstate(state)
+        yield a, b, a.slave.serializeFMUstate(state)
     finally:
         a.free()
         b.free()
 
 
-def test_get_set_state_round_trip_continues_identically(test_fmu):
-    inst = Instance(test_fmu("driven_oscillator")).start({"d": 0.3})
+def test_getting_a_state_changes_nothing_and_every_restore_continues_alike(test_fmu):
+    # fmi2GetFMUstate copies (FMI 2.0, 2.1.8): the run goes on bit for bit as one that saved no
+    # state. Each fmi2SetFMUstate starts CVODE afresh from the state: the restores continue alike,
+    # bit for bit, and agree with the run that kept its history to the integration's accuracy:
+    # each output within 1e-4 of its largest magnitude (rtol 1e-6 per step; measured 4.5e-6 over
+    # the 40 steps, whose changing force restarts CVODE at every one).
+    fmu = test_fmu("driven_oscillator")
+    inst, plain = Instance(fmu, "saving").start({"d": 0.3}), Instance(fmu, "plain").start({"d": 0.3})
     try:
         run(inst, 0.0, 30, force=force)
+        run(plain, 0.0, 30, force=force)
         state = inst.slave.getFMUstate()
         first = run(inst, 0.3, 40, force=force)
+        assert np.array_equal(first, run(plain, 0.3, 40, force=force))
         inst.slave.setFMUstate(state)
         second = run(inst, 0.3, 40, force=force)
-        # Bit for bit: both continuations start from the same re-initialised solver.
-        assert np.array_equal(first, second)
+        inst.slave.setFMUstate(state)
+        assert np.array_equal(second, run(inst, 0.3, 40, force=force))
+        assert np.all(np.abs(first - second) <= 1e-4 * np.max(np.abs(first), axis=0))
         inst.slave.freeFMUstate(state)
     finally:
         inst.free()
+        plain.free()
 
 
 def test_state_saved_between_setting_inputs_and_stepping_keeps_the_inputs(test_fmu):
@@ -139,6 +152,7 @@ def test_serialised_state_continues_identically_in_a_new_process(test_fmu, tmp_p
         run(inst, 0.0, 25, force=force)
         state = inst.slave.getFMUstate()
         blob = inst.slave.serializeFMUstate(state)
+        inst.slave.setFMUstate(state)
         here = run(inst, 0.25, 30, force=force)
         inst.slave.freeFMUstate(state)
     finally:
@@ -335,7 +349,9 @@ def test_parameters_valid_only_together_are_set_and_restored_together(test_fmu):
         s.enterInitializationMode()
         s.exitInitializationMode()
         s.doStep(0.0, 0.01)
-        blob = s.serializeFMUstate(s.getFMUstate())
+        state = s.getFMUstate()
+        s.setFMUstate(state)
+        blob = s.serializeFMUstate(state)
         expected = a.get("tip.x", "tip.z")
         assert expected[0] == pytest.approx(3.0, abs=1e-3)  # the tip barely moves in 0.01 s
         b.slave.doStep(0.0, 0.01)
