@@ -1404,7 +1404,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		if (logging(inst, LOG_SOLVER))
 			fmu_logf(inst, fmi2OK, LOG_SOLVER,
 			         "step %s -> %s: below the time resolution %s s, nothing to integrate; the time moves on",
-			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(resolution).text);
+			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(clock_resolution).text);
 		inst->time = inst->last_successful_time = fmax(inst->time, t_end);
 		return fmi2OK;
 	}
