@@ -76,7 +76,7 @@ sm_simulation_def sm_default_simulation_def(void)
 	def.absolute_tolerance_velocity = 1e-6;
 	def.max_step = 0.0;
 	def.max_steps = 100000;
-	def.restart_on_input_change = false;
+	def.restart_on_input_change = true;
 	def.threads = 1;
 	return def;
 }

@@ -6,17 +6,21 @@
 // and may run in separate threads.
 //
 // Inputs between calls. sm_simulation_set_driven and sm_simulation_set_external_force change
-// what the right-hand side sees from the current time on; by default CVODE keeps its history
-// (step size, order) over such changes and its error control absorbs the jump. Measured on the
-// 8 x 8 benchmark cloth with a force input changed at every communication step
-// (bench_cloth with RESTART_EVERY, bench/README.md): re-initialising at every change cost 5.9
-// times the steps and 6.2 times the wall time per simulated second with 1 ms steps, 2.3 and 2.1
-// times with 10 ms steps. So the solver is re-initialised only where it must be: a state set
-// with sm_simulation_set_state, a spring break, a model update, a reset, or a failure
-// (restart_on_input_change = true restores a restart at every changed input). A jump the error
-// control cannot absorb (a step force large against the model's, a driven particle moved far)
-// makes CVODE fail; the advance then restarts at the jump and tries once more, so the caller sees
-// a restart in the statistics rather than an error.
+// what the right-hand side sees from the current time on. By default (restart_on_input_change)
+// an input that changes re-initialises CVODE there, as a state set with sm_simulation_set_state,
+// a spring break, a model update, a reset or a failure do; an input set to what it was (the same
+// force, a motion on its path) keeps the history. Keeping the history (step size, order) over
+// changes too is faster but not accurate when inputs change at every call, as a co-simulation
+// master's do: a base excitation sampled every 1 ms missed its steady-state amplitude by 9e-4
+// (relative) at rtol 1e-6 and 1e-8 alike, against 2e-5 with restarts (the steps that straddle the
+// changes carry an error CVODE's error test does not see; tests/test_simulation.c,
+// test_base_excitation_sampled_at_every_step). Restarting cost 5.9 times the steps and 6.2 times
+// the wall time per simulated second on the 8 x 8 benchmark cloth with a force changed every 1 ms,
+// 2.3 and 2.1 times every 10 ms (bench_cloth with RESTART_EVERY, bench/README.md): keep the
+// history (restart_on_input_change = false) where inputs change rarely and by little. A jump
+// the error control cannot absorb then (a step force large against the model's, a driven particle
+// moved far) makes CVODE fail; the advance restarts at the jump and tries once more, so the
+// caller sees a restart in the statistics rather than an error.
 //
 // Reproducibility. On one machine the same model, options and calls give the same trajectory
 // bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced Cholesky
@@ -109,8 +113,8 @@ typedef struct sm_simulation_def {
 	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
-	/// changes an input (default false: CVODE keeps its history and its error control absorbs
-	/// the jump; see "Inputs between calls" above).
+	/// changes an input (default true; false keeps CVODE's history over changes: faster, but not
+	/// accurate when inputs change at every call; see "Inputs between calls" above).
 	bool restart_on_input_change;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
 	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
