@@ -9,30 +9,30 @@
 // row-major dof x dof, assembled from the per-spring blocks of the given variant (constrained
 // particles dropped). free_index[p] is the free index of particle p or -1. Adds nothing for disabled
 // springs (their blocks are zero).
-void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
+void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
                               sm_jacobian_variant variant, double* K);
 
 // Free index of every particle (-1 for constrained ones) and the mass of every free degree of
 // freedom; returns the number of free particles. free_index has particle_count entries,
 // dof_mass 3 * free count (may be NULL).
-int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
+int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
 
 // The first intact rest-length spring (l0 > 0) with a free end whose two particles coincide at x (its degenerate
 // point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy ks (L - l0)^2 / 2
 // is a maximum there, falling as the particles part in any direction with a force of about
 // ks l0 that has no derivative at the point: the model.h convention (no force, K = ks I) makes it
 // a force balance, never a stable one, and it has no linearisation.
-int32_t analysis_coincident_spring(const sm_model* model, const double* x);
+int32_t sm_analysis_coincident_spring(const sm_model* model, const double* x);
 
 // The first intact spring with damping and a free end whose two particles coincide at x (a spring of rest
 // length 0, or a rest-length spring at its degenerate point), or -1. Its damping force
 // kd (u . dv) u has no derivative there: a motion straight through the point is damped by
 // kd dv in full, while the model.h convention (no damping at L = 0, df/dv = 0) has none, so the
 // configuration has no linearisation of its damping.
-int32_t analysis_coincident_damper(const sm_model* model, const double* x);
+int32_t sm_analysis_coincident_damper(const sm_model* model, const double* x);
 
 // True if all count values are finite.
-int analysis_all_finite(const double* values, size_t count);
+int sm_analysis_all_finite(const double* values, size_t count);
 
 #ifdef SPRINGMASS_HAVE_CHOLMOD
 #include <cholmod.h>
@@ -40,12 +40,12 @@ int analysis_all_finite(const double* values, size_t count);
 // A CHOLMOD view (no copy) of the symmetric dof x dof matrix with the pattern of a sparse
 // Jacobian and the given values: the CSR arrays of a symmetric pattern are also its CSC arrays,
 // and stype = 1 reads one half.
-cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values);
+cholmod_sparse sm_analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values);
 
 // Factors A, the symbolic analysis done once into *factor: 1 if A is positive definite, 0 if not,
 // -1 on failure.
-int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common);
+int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common);
 
 // out = A^-1 rhs with the factor of A (dof entries each). Returns 0, or -1 on failure.
-int analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out);
+int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out);
 #endif

@@ -13,7 +13,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Most bytes of a message from index_expression_evaluate, NUL included: room for a name shown
+// Most bytes of a message from sm_index_expression_evaluate, NUL included: room for a name shown
 // up to 80 bytes (QUOTE_TEXT_BYTES) and a number.
 #define INDEX_EXPRESSION_MESSAGE_CAPACITY 192
 
@@ -33,5 +33,5 @@ typedef enum index_expression_status {
 // *value gets the expression's value. Otherwise message (INDEX_EXPRESSION_MESSAGE_CAPACITY bytes)
 // says what is wrong, naming the name or value at fault ("no parameter named \"m\"",
 // "parameter h = 0.5 is not a whole number", "division by zero").
-index_expression_status index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
+index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
                                                   int64_t* value, const char** end, char* message);

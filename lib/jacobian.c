@@ -16,7 +16,7 @@
 
 #include <string.h>
 
-void spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
+void sm_spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
                    sm_jacobian_variant variant, double K[9], double D[9])
 {
 	spring_geometry g;
@@ -40,7 +40,7 @@ sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const 
 	if (spring < 0 || spring >= model->spring_count)
 		return SM_ERROR_SPRING_INDEX;
 	double k[9], d[9];
-	spring_blocks(model, spring, x, v, variant, k, d);
+	sm_spring_blocks(model, spring, x, v, variant, k, d);
 	if (K != NULL)
 		memcpy(K, k, sizeof k);
 	if (D != NULL)
@@ -73,7 +73,7 @@ sm_status sm_model_jacobian_dense(const sm_model* model, const double* x, const 
 	}
 	for (int32_t s = 0; s < model->spring_count; s++) {
 		double K[9], D[9];
-		spring_blocks(model, s, x, v, variant, K, D);
+		sm_spring_blocks(model, s, x, v, variant, K, D);
 		const int32_t a = model->spring_a[s], b = model->spring_b[s];
 		if (dfdx != NULL) {
 			add_dense_block(dfdx, dim, a, b, 1.0, K);

@@ -75,8 +75,8 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 {
 	static const char what[] = "mesh";
 	sm_status st;
-	if ((st = structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK)
+	if ((st = sm_structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK)
 		return st;
 	if (!isfinite(def->density) || !(def->density > 0.0))
 		return sm_model_fail(model, isfinite(def->density) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
@@ -280,7 +280,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	if (st != SM_OK)
 		goto done;
 
-	const bool has_edge = structure_material_present(&def->edge), has_bend = structure_material_present(&def->bend);
+	const bool has_edge = sm_structure_material_present(&def->edge), has_bend = sm_structure_material_present(&def->bend);
 	int64_t interior = 0;
 	for (int32_t e = 0; e < table.count; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
@@ -302,29 +302,29 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		}
 	}
 	const int64_t springs = (has_edge ? table.count : 0) + (has_bend ? interior : 0);
-	if ((st = structure_check_size(model, what, nv, springs)) != SM_OK)
+	if ((st = sm_structure_check_size(model, what, nv, springs)) != SM_OK)
 		goto done;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
 	for (int32_t v = 0; v < nv && st == SM_OK; v++)
-		st = structure_add_particle(model, what, mass[v], def->vertices + 3 * (size_t)v);
+		st = sm_structure_add_particle(model, what, mass[v], def->vertices + 3 * (size_t)v);
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
-		st = structure_add_spring(model, what, "the vertices", "edge", p0 + (int32_t)(entry->key >> 32),
+		st = sm_structure_add_spring(model, what, "the vertices", "edge", p0 + (int32_t)(entry->key >> 32),
 		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
 	}
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		if (entry->triangles == 2)
-			st = structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
+			st = sm_structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
 			                          entry->area);
 	}
 	if (st != SM_OK) {
-		structure_truncate(model, p0, s0);
+		sm_structure_truncate(model, p0, s0);
 		goto done;
 	}
 	const int32_t made[3] = {has_edge ? table.count : 0, has_bend ? (int32_t)interior : 0, 0};
-	structure_fill_out(out, p0, s0, model, nv, 1, 1, made);
+	sm_structure_fill_out(out, p0, s0, model, nv, 1, 1, made);
 done:
 	free(table.slots);
 	free(table.in_order);

@@ -568,7 +568,7 @@ static void store_motion(sm_model* m, int32_t i, sm_particle_motion motion)
 		memset(m->velocity + 3 * (size_t)i, 0, 3 * sizeof(double));
 }
 
-void model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
+void sm_model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
                        sm_particle_motion motion)
 {
 	if (select != NULL) {

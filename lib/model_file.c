@@ -163,7 +163,7 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 				used += (size_t)n;
 			}
 			char text[TEXT_QUOTED_CAPACITY];
-			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", text_quoted(text, key), list);
+			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", sm_text_quoted(text, key), list);
 		}
 	}
 	return true;
@@ -171,7 +171,7 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 
 static int32_t find_parameter(const sm_document* doc, const char* name)
 {
-	return name_index_find(&doc->parameter_index, name, strlen(name));
+	return sm_name_index_find(&doc->parameter_index, name, strlen(name));
 }
 
 // What a value read feeds (sm_parameter_use), recorded for the parameter that gave it, if any.
@@ -217,7 +217,7 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 			const char* digit = name + (name[0] == '-' || name[0] == '+');
 			digit += digit[0] == '.';
 			const bool numeric = digit[0] >= '0' && digit[0] <= '9';
-			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s%s", text_quoted(text, name),
+			return fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s%s", sm_text_quoted(text, name),
 			            numeric ? " (a number is written without quotes)" : "");
 		}
 		*out = p->parameter_values[k];
@@ -426,10 +426,10 @@ static bool check_name_text(parser* p, const char* s, size_t n, const char* path
 		            n);
 	char text[TEXT_QUOTED_CAPACITY];
 	int64_t position;
-	const int32_t c = text_find_refused(s, text_refused_in_name, &position);
+	const int32_t c = sm_text_find_refused(s, sm_text_refused_in_name, &position);
 	if (c >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", text_quoted(text, s),
-		            text_is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
+		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", sm_text_quoted(text, s),
+		            sm_text_is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
 	for (size_t i = 0; i < n && identifier; i++) {
 		const unsigned char b = (unsigned char)s[i];
 		const bool letter = (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || b == '_';
@@ -437,7 +437,7 @@ static bool check_name_text(parser* p, const char* s, size_t n, const char* path
 		if (!(letter || (digit && i > 0)))
 			return fail(p, SM_ERROR_SCHEMA, path,
 			            "name %s must be an identifier (letters, digits and '_', not starting with a digit)",
-			            text_quoted(text, s));
+			            sm_text_quoted(text, s));
 	}
 	return true;
 }
@@ -465,11 +465,11 @@ static void expansion_free(expansion* ex)
 	free(ex->spring_sources);
 	free(ex->name_offset);
 	free(ex->names);
-	name_index_free(&ex->particle_names);
+	sm_name_index_free(&ex->particle_names);
 	free(ex->structures);
-	name_index_free(&ex->structure_names);
+	sm_name_index_free(&ex->structure_names);
 	free(ex->ports);
-	name_index_free(&ex->port_names);
+	sm_name_index_free(&ex->port_names);
 	free(ex->parameter_uses);
 	free(ex);
 }
@@ -518,7 +518,7 @@ static const char* describe_particle(const expansion* ex, int32_t particle, char
 {
 	char text[TEXT_QUOTED_CAPACITY];
 	if (ex->name_offset[particle] >= 0)
-		snprintf(buffer, size, "particle %d (%s)", (int)particle, text_quoted(text, particle_name(ex, particle)));
+		snprintf(buffer, size, "particle %d (%s)", (int)particle, sm_text_quoted(text, particle_name(ex, particle)));
 	else
 		snprintf(buffer, size, "particle %d", (int)particle);
 	return buffer;
@@ -541,7 +541,7 @@ static const char* parameter_name(const void* owner, int32_t parameter)
 
 static int32_t lookup_name(const expansion* ex, const char* name)
 {
-	return name_index_find(&ex->particle_names, name, strlen(name));
+	return sm_name_index_find(&ex->particle_names, name, strlen(name));
 }
 
 // Gives particle `index` the name (formatted); fails if the name is taken.
@@ -563,11 +563,11 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 	// make a structure's particle names longer than MAX_STRUCTURE_NAME_BYTES allows for.
 	char text[TEXT_QUOTED_CAPACITY];
 	if (written < 0 || written > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", text_quoted(text, name),
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", sm_text_quoted(text, name),
 		            MAX_NAME_BYTES);
 	const int32_t other = lookup_name(ex, name);
 	if (other >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", text_quoted(text, name),
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", sm_text_quoted(text, name),
 		            (int)other);
 	const int64_t length = (int64_t)strlen(name) + 1;
 	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
@@ -575,7 +575,7 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 	memcpy(ex->names + ex->names_length, name, (size_t)length);
 	ex->name_offset[index] = ex->names_length;
 	int32_t holder;
-	if (!name_index_insert(&ex->particle_names, name, (size_t)length - 1, index, &holder)) {
+	if (!sm_name_index_insert(&ex->particle_names, name, (size_t)length - 1, index, &holder)) {
 		ex->name_offset[index] = -1;
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
 	}
@@ -585,7 +585,7 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 
 static const document_structure* find_structure(const expansion* ex, const char* name, size_t length)
 {
-	const int32_t s = name_index_find(&ex->structure_names, name, length);
+	const int32_t s = sm_name_index_find(&ex->structure_names, name, length);
 	return s >= 0 ? &ex->structures[s] : NULL;
 }
 
@@ -600,7 +600,7 @@ static bool lookup_index_parameter(void* context, const char* name, size_t lengt
 {
 	index_parameters* named = context;
 	parser* p = named->p;
-	const int32_t k = name_index_find(&p->doc->parameter_index, name, length);
+	const int32_t k = sm_name_index_find(&p->doc->parameter_index, name, length);
 	if (k < 0)
 		return false;
 	*value = p->parameter_values[k];
@@ -628,7 +628,7 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 		char message[SM_ERROR_MESSAGE_CAPACITY];
 		const char* end;
 		const index_expression_status status =
-		    count < 3 ? index_expression_evaluate(q, lookup_index_parameter, &named, &c[count], &end, why)
+		    count < 3 ? sm_index_expression_evaluate(q, lookup_index_parameter, &named, &c[count], &end, why)
 		              : INDEX_EXPRESSION_SYNTAX;
 		if (status == INDEX_EXPRESSION_UNKNOWN_NAME)
 			return fail(p, SM_ERROR_NOT_FOUND, path, "%s: %s", text, why);
@@ -716,7 +716,7 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 		return fail(p, SM_ERROR_SCHEMA, path, "must be a particle name or index, not %s", type_name(value));
 	const char* name = json_string_value(value);
 	char text[TEXT_QUOTED_CAPACITY];
-	text_quoted(text, name);
+	sm_text_quoted(text, name);
 	const int32_t found = lookup_name(p->ex, name);
 	if (found >= 0) {
 		*out = found;
@@ -1139,13 +1139,13 @@ static const char* named_like_prefix(const void* owner, int32_t entry)
 
 static void named_like_free(named_like_references* like)
 {
-	name_index_free(&like->index);
+	sm_name_index_free(&like->index);
 	free(like->prefixes);
 	free(like->offset);
 	free(like->particle);
 }
 
-// Fills *like (name_index_init'ed with it as owner) from the particles read before.
+// Fills *like (sm_name_index_init'ed with it as owner) from the particles read before.
 static bool find_names_like_references(parser* p, named_like_references* like)
 {
 	const json_t* list = json_object_get(p->doc->root, "particles");
@@ -1176,7 +1176,7 @@ static bool find_names_like_references(parser* p, named_like_references* like)
 		like->offset[entries] = used;
 		like->particle[entries] = (int32_t)k;
 		int32_t holder;
-		if (!name_index_insert(&like->index, name, length, entries, &holder))
+		if (!sm_name_index_insert(&like->index, name, length, entries, &holder))
 			return fail(p, SM_ERROR_OUT_OF_MEMORY, "particles", "out of memory");
 		if (holder < 0) {
 			used += (int64_t)length + 1;
@@ -1193,7 +1193,7 @@ static bool find_names_like_references(parser* p, named_like_references* like)
 static bool check_names_against_structure(parser* p, const named_like_references* like, const char* structure,
                                           size_t length)
 {
-	const int32_t entry = name_index_find(&like->index, structure, length);
+	const int32_t entry = sm_name_index_find(&like->index, structure, length);
 	if (entry < 0)
 		return true;
 	const size_t k = (size_t)like->particle[entry];
@@ -1205,7 +1205,7 @@ static bool check_names_against_structure(parser* p, const named_like_references
 	return fail(p, SM_ERROR_SCHEMA, sub,
 	            "name %s reads as a reference to a particle of structure \"%.*s\": give the particle another "
 	            "name",
-	            text_quoted(text, name), (int)length, structure);
+	            sm_text_quoted(text, name), (int)length, structure);
 }
 
 static bool read_structure(parser* p, const named_like_references* like, const json_t* obj, const char* path)
@@ -1247,9 +1247,9 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		return fail(p, SM_ERROR_SCHEMA, sub,
 		            "structure name %s has %zu bytes; a structure's name may have at most %d, so that its "
 		            "particles' names (name[row,column,layer]) fit in %d",
-		            text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
+		            sm_text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
-		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", text_quoted(text, s.name));
+		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", sm_text_quoted(text, s.name));
 	if (!check_names_against_structure(p, like, s.name, name_bytes))
 		return false;
 
@@ -1279,7 +1279,7 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 			return fail(p, SM_ERROR_SCHEMA, path, "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
 		d.segments = (int32_t)segments;
 		d.mass_distribution = distribution;
-		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.bending),
+		const bool present[3] = {sm_structure_material_present(&d.structural), sm_structure_material_present(&d.bending),
 		                         false};
 		if (!check_budget(p, path, segments + 1, grid_springs(s.type, segments + 1, 1, 1, present)))
 			return false;
@@ -1312,8 +1312,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 				            describe_vector(p, vector, sizeof vector, edge, edge_sources[e]));
 			}
 		}
-		const bool present[3] = {structure_material_present(&d.structural), structure_material_present(&d.shear),
-		                         structure_material_present(&d.bend)};
+		const bool present[3] = {sm_structure_material_present(&d.structural), sm_structure_material_present(&d.shear),
+		                         sm_structure_material_present(&d.bend)};
 		if (!check_budget(p, path, nu * nv, grid_springs(s.type, nu, nv, 1, present)))
 			return false;
 		d.nu = (int32_t)nu;
@@ -1339,8 +1339,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		if (nu * nv > limit || nu * nv * nw > limit)
 			return fail(p, SM_ERROR_SCHEMA, path, "%lld x %lld x %lld particles exceed the limit of %lld",
 			            (long long)nu, (long long)nv, (long long)nw, (long long)limit);
-		const bool present[3] = {structure_material_present(&d.edge), structure_material_present(&d.face_diagonal),
-		                         structure_material_present(&d.body_diagonal)};
+		const bool present[3] = {sm_structure_material_present(&d.edge), sm_structure_material_present(&d.face_diagonal),
+		                         sm_structure_material_present(&d.body_diagonal)};
 		if (!check_budget(p, path, nu * nv * nw, grid_springs(s.type, nu, nv, nw, present)))
 			return false;
 		d.nu = (int32_t)nu;
@@ -1384,7 +1384,7 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 	if (!grow_array((void**)&ex->structures, &ex->structure_capacity, ex->structure_count + 1, sizeof s))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
 	ex->structures[ex->structure_count] = s;
-	if (!name_index_insert(&ex->structure_names, s.name, strlen(s.name), ex->structure_count, &holder))
+	if (!sm_name_index_insert(&ex->structure_names, s.name, strlen(s.name), ex->structure_count, &holder))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
 	ex->structure_count++;
 	const sm_structure* r = &s.range;
@@ -1416,7 +1416,7 @@ static bool read_structures(parser* p, const json_t* list)
 	if (!json_is_array(list))
 		return fail(p, SM_ERROR_SCHEMA, "structures", "must be an array of structures, not %s", type_name(list));
 	named_like_references like = {.prefixes = NULL};
-	name_index_init(&like.index, named_like_prefix, &like);
+	sm_name_index_init(&like.index, named_like_prefix, &like);
 	bool ok = find_names_like_references(p, &like);
 	for (size_t k = 0; ok && k < json_array_size(list); k++) {
 		char path[PATH_CAPACITY];
@@ -1473,7 +1473,7 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 	return true;
 }
 
-// The particles of "fixed" are marked first and then fixed together (model_set_motions), with
+// The particles of "fixed" are marked first and then fixed together (sm_model_set_motions), with
 // the free particles numbered once.
 static bool read_fixed(parser* p, const json_t* list)
 {
@@ -1488,7 +1488,7 @@ static bool read_fixed(parser* p, const json_t* list)
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, "fixed", "out of memory");
 	const bool ok = read_fixed_to(p, list, fix);
 	if (ok)
-		model_set_motions(model, fix, NULL, 0, SM_PARTICLE_FIXED);
+		sm_model_set_motions(model, fix, NULL, 0, SM_PARTICLE_FIXED);
 	free(fix);
 	return ok;
 }
@@ -1509,10 +1509,10 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		child_key(sub, path, "name");
 		if (!check_name(p, json_object_get(obj, "name"), sub, true, &port.name))
 			return false;
-		const int32_t same_name = name_index_find(&p->ex->port_names, port.name, strlen(port.name));
+		const int32_t same_name = sm_name_index_find(&p->ex->port_names, port.name, strlen(port.name));
 		char text[TEXT_QUOTED_CAPACITY];
 		if (same_name >= 0)
-			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", text_quoted(text, port.name),
+			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", sm_text_quoted(text, port.name),
 			            (int)same_name);
 		child_key(sub, path, "particle");
 		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
@@ -1543,7 +1543,7 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 			            "%s already has port %s; only probe ports may share a particle", which, p->ex->ports[q].name);
 		int32_t holder;
 		p->ex->ports[p->ex->port_count] = port;
-		if (!name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count, &holder))
+		if (!sm_name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count, &holder))
 			return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
 		if (q < 0)
 			port_at[port.particle] = p->ex->port_count;
@@ -1677,9 +1677,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
 	}
-	name_index_init(&p.ex->particle_names, particle_name, p.ex);
-	name_index_init(&p.ex->structure_names, structure_name, p.ex);
-	name_index_init(&p.ex->port_names, port_name, p.ex);
+	sm_name_index_init(&p.ex->particle_names, particle_name, p.ex);
+	sm_name_index_init(&p.ex->structure_names, structure_name, p.ex);
+	sm_name_index_init(&p.ex->port_names, port_name, p.ex);
 	const json_t* root = doc->root;
 	sm_model_def def = sm_default_model_def();
 	int32_t gravity_source[3];
@@ -1753,8 +1753,8 @@ static bool read_header(sm_document* doc, sm_error* err)
 			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s", type_name(description));
 		doc->description = json_string_value(description);
 		int64_t position;
-		const int32_t c = text_find_refused(doc->description, text_refused_in_description, &position);
-		if (c >= 0 && text_is_line_break(c))
+		const int32_t c = sm_text_find_refused(doc->description, sm_text_refused_in_description, &position);
+		if (c >= 0 && sm_text_is_line_break(c))
 			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line: it has a line break, U+%04X, at character %lld",
 			            (unsigned)c, (long long)position);
 		if (c >= 0)
@@ -1779,7 +1779,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 		// The key is escaped in the path as in the messages about it, and cut at a character
 		// before the 50 bytes child_key keeps of it.
 		char path[PATH_CAPACITY], escaped[50];
-		if (!text_escape(escaped, sizeof escaped - 4, key))
+		if (!sm_text_escape(escaped, sizeof escaped - 4, key))
 			strcat(escaped, "...");
 		child_key(path, "parameters", escaped);
 		if (!check_name_text(&p, key, strlen(key), path, true))
@@ -1792,7 +1792,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 		doc->parameter_names[doc->parameter_count] = key;
 		doc->parameter_values[doc->parameter_count] = v;
 		int32_t holder;  // the JSON parser refused repeated keys
-		if (!name_index_insert(&doc->parameter_index, key, strlen(key), doc->parameter_count, &holder))
+		if (!sm_name_index_insert(&doc->parameter_index, key, strlen(key), doc->parameter_count, &holder))
 			return fail(&p, SM_ERROR_OUT_OF_MEMORY, "parameters", "out of memory");
 		doc->parameter_count++;
 	}
@@ -1848,7 +1848,7 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	}
 	strcpy(doc->source, source_name);
 	doc->max_elements = max_elements;
-	name_index_init(&doc->parameter_index, parameter_name, doc);
+	sm_name_index_init(&doc->parameter_index, parameter_name, doc);
 	// A UTF-8 byte-order mark may open the text (RFC 8259, section 8.1, lets a parser ignore
 	// it). Editors do not show it, so skipping it keeps line 1's columns as they see them.
 	if (length >= 3 && memcmp(text, "\xef\xbb\xbf", 3) == 0) {
@@ -1860,7 +1860,7 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	const char* nul = memchr(text, '\0', length);
 	if (nul != NULL) {
 		int line, column;
-		text_position(text, length, (size_t)(nul - text) + 1, &line, &column);
+		sm_text_position(text, length, (size_t)(nul - text) + 1, &line, &column);
 		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: a NUL byte (a model file is UTF-8 text without NUL bytes)",
 		             source_name, line, column);
 		sm_document_destroy(doc);
@@ -1885,14 +1885,14 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		int line, column;
 		// Where the parser stopped before the byte at fault, the error is at that byte: past it,
 		// so that a line end there begins the next line. A stray continuation byte is a
-		// character of its own there, which text_position, counting characters, does not count.
+		// character of its own there, which sm_text_position, counting characters, does not count.
 		const size_t at = (size_t)error.position;
 		const bool before = error_before_its_byte(&error, text, length);
-		text_position(text, length, before ? at + 1 : at, &line, &column);
+		sm_text_position(text, length, before ? at + 1 : at, &line, &column);
 		if (before && ((unsigned char)text[at] & 0xc0) == 0x80)
 			column++;
 		char shown[6 * JSON_ERROR_TEXT_LENGTH + 1];
-		text_shown(shown, sizeof shown - 1, error.text);
+		sm_text_shown(shown, sizeof shown - 1, error.text);
 		if (code == json_error_null_character || code == json_error_null_byte_in_key)
 			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: strings in a model file may not contain \\u0000",
 			             source_name, line, column);
@@ -2009,7 +2009,7 @@ void sm_document_destroy(sm_document* doc)
 	expansion_free(doc->current);
 	json_decref(doc->root);
 	free(doc->parameter_names);
-	name_index_free(&doc->parameter_index);
+	sm_name_index_free(&doc->parameter_index);
 	free(doc->parameter_values);
 	free(doc->initial_position);
 	free(doc->initial_velocity);
@@ -2186,7 +2186,7 @@ int32_t sm_document_port_index(const sm_document* doc, const char* name)
 {
 	if (doc == NULL || name == NULL)
 		return -1;
-	return name_index_find(&doc->current->port_names, name, strlen(name));
+	return sm_name_index_find(&doc->current->port_names, name, strlen(name));
 }
 
 int32_t sm_document_particle_count(const sm_document* doc)

@@ -96,7 +96,7 @@ static void put_json(text* t, const sm_document* doc, const json_t* value)
 	} else if (json_is_string(value)) {
 		const char* s = json_string_value(value);
 		put_string(t, s);
-		const int32_t k = name_index_find(&doc->parameter_index, s, strlen(s));
+		const int32_t k = sm_name_index_find(&doc->parameter_index, s, strlen(s));
 		if (k >= 0 && t->named != NULL)
 			t->named[k] = 1;
 	} else if (json_is_array(value)) {

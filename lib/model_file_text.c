@@ -36,22 +36,22 @@ static bool is_control(int32_t c)
 	return c < 0x20 || (c >= 0x7f && c < 0xa0);
 }
 
-bool text_is_line_break(int32_t c)
+bool sm_text_is_line_break(int32_t c)
 {
 	return (c >= '\n' && c <= '\r') || c == 0x85 || c == 0x2028 || c == 0x2029;
 }
 
-bool text_refused_in_name(int32_t c)
+bool sm_text_refused_in_name(int32_t c)
 {
-	return is_control(c) || text_is_line_break(c);
+	return is_control(c) || sm_text_is_line_break(c);
 }
 
-bool text_refused_in_description(int32_t c)
+bool sm_text_refused_in_description(int32_t c)
 {
-	return (is_control(c) && c != '\t') || text_is_line_break(c);
+	return (is_control(c) && c != '\t') || sm_text_is_line_break(c);
 }
 
-int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position)
+int32_t sm_text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position)
 {
 	const unsigned char* u = (const unsigned char*)s;
 	const size_t n = strlen(s);
@@ -77,7 +77,7 @@ static bool shown_escaped(int32_t c)
 	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
 }
 
-void text_position(const char* text, size_t length, size_t end, int* line, int* column)
+void sm_text_position(const char* text, size_t length, size_t end, int* line, int* column)
 {
 	*line = 1;
 	*column = 0;
@@ -95,7 +95,7 @@ void text_position(const char* text, size_t length, size_t end, int* line, int* 
 	}
 }
 
-// text_escape, or with quotes false text_shown.
+// sm_text_escape, or with quotes false sm_text_shown.
 static bool escape(char* out, size_t most, const char* s, bool quotes)
 {
 	const unsigned char* u = (const unsigned char*)s;
@@ -129,20 +129,20 @@ static bool escape(char* out, size_t most, const char* s, bool quotes)
 	return true;
 }
 
-bool text_escape(char* out, size_t most, const char* s)
+bool sm_text_escape(char* out, size_t most, const char* s)
 {
 	return escape(out, most, s, true);
 }
 
-void text_shown(char* out, size_t most, const char* s)
+void sm_text_shown(char* out, size_t most, const char* s)
 {
 	escape(out, most, s, false);
 }
 
-const char* text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)
+const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)
 {
 	out[0] = '"';
-	const bool whole = text_escape(out + 1, QUOTE_TEXT_BYTES, s);
+	const bool whole = sm_text_escape(out + 1, QUOTE_TEXT_BYTES, s);
 	strcat(out, whole ? "\"" : "\"...");
 	return out;
 }

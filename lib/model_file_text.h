@@ -14,36 +14,36 @@
 
 // Line breaks (the mandatory breaks of Unicode's line breaking algorithm, UAX #14: LF, VT, FF,
 // CR, NEL, LINE SEPARATOR, PARAGRAPH SEPARATOR).
-bool text_is_line_break(int32_t c);
+bool sm_text_is_line_break(int32_t c);
 
 // What a name may not hold: control characters and line breaks.
-bool text_refused_in_name(int32_t c);
+bool sm_text_refused_in_name(int32_t c);
 
 // What a description (one line of text) may not hold: line breaks and control characters but
 // the tab.
-bool text_refused_in_description(int32_t c);
+bool sm_text_refused_in_description(int32_t c);
 
 // The first character of s that `refused` refuses, or -1 if there is none; *position gets its
 // position in s, counted in characters from 1.
-int32_t text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position);
+int32_t sm_text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* position);
 
 // Line and column, from 1, of the character that ends before byte `end` of text (length bytes),
 // as an editor shows them: LF, CR LF and a lone CR each end a line, and columns count characters
 // (the bytes that begin a UTF-8 character). For the JSON parser's error position it gives the
 // parser's own line and column wherever lines end in LF; a position at a line end, whichever its
 // kind, is at column 0 of the next line.
-void text_position(const char* text, size_t length, size_t end, int* line, int* column);
+void sm_text_position(const char* text, size_t length, size_t end, int* line, int* column);
 
 // Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped; control
 // characters, line separators and the zero-width and bidirectional characters, which a terminal
 // would act on or not show, as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole
 // characters only, NUL-terminated (out has room for most + 1). Returns whether all of s fitted.
-bool text_escape(char* out, size_t most, const char* s);
+bool sm_text_escape(char* out, size_t most, const char* s);
 
 // s for a message without quotes around it: only the characters a terminal would act on or not
-// show escaped (as text_escape does them), at most `most` bytes, NUL-terminated.
-void text_shown(char* out, size_t most, const char* s);
+// show escaped (as sm_text_escape does them), at most `most` bytes, NUL-terminated.
+void sm_text_shown(char* out, size_t most, const char* s);
 
 // "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
 // after the closing quote. Returns out.
-const char* text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s);
+const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s);

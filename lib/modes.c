@@ -225,8 +225,8 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 		                  "modes: out of memory for a dense eigenproblem of %zu degrees of freedom", dof);
 		goto done;
 	}
-	analysis_dense_stiffness(p->model, p->free_index, p->x0, dof, SM_JACOBIAN_EXACT, K);
-	if (!analysis_all_finite(K, dof * dof)) {
+	sm_analysis_dense_stiffness(p->model, p->free_index, p->x0, dof, SM_JACOBIAN_EXACT, K);
+	if (!sm_analysis_all_finite(K, dof * dof)) {
 		st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: the stiffness matrix is not finite");
 		goto done;
 	}
@@ -384,8 +384,8 @@ static int factor_shifted(lanczos_work* w, double shift)
 	memcpy(w->shifted, w->stiffness, (size_t)nnz * sizeof(double));
 	for (size_t i = 0; i < w->dof; i++)
 		w->shifted[w->diagonal[i]] += shift * w->mass[i];
-	cholmod_sparse A = analysis_cholmod_view(w->pattern, w->dof, w->shifted);
-	const int factored = analysis_cholmod_factor(&A, &w->factor, &w->common);
+	cholmod_sparse A = sm_analysis_cholmod_view(w->pattern, w->dof, w->shifted);
+	const int factored = sm_analysis_cholmod_factor(&A, &w->factor, &w->common);
 	if (factored != 1)
 		return factored;
 	w->shift = -shift;
@@ -397,7 +397,7 @@ static int apply_operator(lanczos_work* w, const double* v, double* out)
 {
 	for (size_t i = 0; i < w->dof; i++)
 		w->rhs[i] = w->mass[i] * v[i];
-	return analysis_cholmod_solve(w->factor, &w->common, w->dof, w->rhs, out);
+	return sm_analysis_cholmod_solve(w->factor, &w->common, w->dof, w->rhs, out);
 }
 
 // M-orthogonalises v against `count` M-orthonormal vectors (stride dof) by modified
@@ -561,7 +561,7 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 	                                               w->stiffness, NULL);
 	if (fill != SM_OK)
 		return sm_error_set(err, fill, "modes: the sparse stiffness could not be assembled");
-	if (!analysis_all_finite(w->stiffness, (size_t)nnz))
+	if (!sm_analysis_all_finite(w->stiffness, (size_t)nnz))
 		return sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: the stiffness matrix is not finite");
 	// K = -df/dx; the Gershgorin bound of M^(-1/2) K M^(-1/2) and ||K|| (largest row sum).
 	*gershgorin = 0.0;
@@ -1204,7 +1204,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: position of particle %zu is not finite", k / 3);
 			goto done;
 		}
-	const int32_t coincident = analysis_coincident_spring(model, x0);
+	const int32_t coincident = sm_analysis_coincident_spring(model, x0);
 	if (coincident >= 0) {
 		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                  "modes: spring %d (rest length %g m) has its particles %d and %d at one point, where its force "
@@ -1213,7 +1213,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		                  (int)model->spring_b[coincident]);
 		goto done;
 	}
-	const int32_t damper = analysis_coincident_damper(model, x0);
+	const int32_t damper = sm_analysis_coincident_damper(model, x0);
 	if (damper >= 0) {
 		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                  "modes: spring %d (damping %g N s/m) has its particles %d and %d at one point, where its "
@@ -1224,7 +1224,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		                  (int)model->spring_b[damper]);
 		goto done;
 	}
-	const int32_t nf = analysis_free_map(model, free_index, dof_mass);
+	const int32_t nf = sm_analysis_free_map(model, free_index, dof_mass);
 	const size_t dof = 3 * (size_t)nf;
 	modes->dof = (int32_t)dof;
 	modes->particle_count = n;

@@ -69,7 +69,7 @@ static void draw_key(name_index* index)
 	index->key[1] = (uint64_t)(uintptr_t)&draw_key ^ ((uint64_t)clock() << 29) ^ 0x9e3779b97f4a7c15ULL;
 }
 
-void name_index_init(name_index* index, name_index_name_fn name_of, const void* owner)
+void sm_name_index_init(name_index* index, name_index_name_fn name_of, const void* owner)
 {
 	memset(index, 0, sizeof *index);
 	index->name_of = name_of;
@@ -97,7 +97,7 @@ static int64_t slot_of(const name_index* index, const char* name, size_t length,
 	}
 }
 
-int32_t name_index_find(const name_index* index, const char* name, size_t length)
+int32_t sm_name_index_find(const name_index* index, const char* name, size_t length)
 {
 	if (index->count == 0)
 		return -1;
@@ -131,9 +131,9 @@ static bool grow(name_index* index)
 	return true;
 }
 
-bool name_index_insert(name_index* index, const char* name, size_t length, int32_t value, int32_t* holder)
+bool sm_name_index_insert(name_index* index, const char* name, size_t length, int32_t value, int32_t* holder)
 {
-	*holder = name_index_find(index, name, length);
+	*holder = sm_name_index_find(index, name, length);
 	if (*holder >= 0)
 		return true;
 	if (2 * (index->count + 1) > index->size && !grow(index))
@@ -146,7 +146,7 @@ bool name_index_insert(name_index* index, const char* name, size_t length, int32
 	return true;
 }
 
-void name_index_free(name_index* index)
+void sm_name_index_free(name_index* index)
 {
 	if (index == NULL)
 		return;

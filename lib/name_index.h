@@ -12,7 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// The name stored under `value`, NUL-terminated; owner is what name_index_init was given.
+// The name stored under `value`, NUL-terminated; owner is what sm_name_index_init was given.
 typedef const char* (*name_index_name_fn)(const void* owner, int32_t value);
 
 typedef struct name_slot {
@@ -30,15 +30,15 @@ typedef struct name_index {
 } name_index;
 
 // An empty index whose names owner's name_of gives. Allocates nothing.
-void name_index_init(name_index* index, name_index_name_fn name_of, const void* owner);
+void sm_name_index_init(name_index* index, name_index_name_fn name_of, const void* owner);
 
 // The value stored under name[0, length), or -1.
-int32_t name_index_find(const name_index* index, const char* name, size_t length);
+int32_t sm_name_index_find(const name_index* index, const char* name, size_t length);
 
 // Stores value (>= 0) under name[0, length) unless the name is there already. *holder gets -1
 // if the value was stored, or the value already stored under the name (nothing changes).
 // Returns false only when memory runs out (the index is unchanged and still usable).
-bool name_index_insert(name_index* index, const char* name, size_t length, int32_t value, int32_t* holder);
+bool sm_name_index_insert(name_index* index, const char* name, size_t length, int32_t value, int32_t* holder);
 
 // Frees the slots; the index is then empty (and may be used again). Accepts NULL.
-void name_index_free(name_index* index);
+void sm_name_index_free(name_index* index);

@@ -60,7 +60,7 @@ sm_statics_def sm_default_statics_def(void)
 // Shared helpers (also used by modes.c).
 // ---------------------------------------------------------------------------------------------
 
-int32_t analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass)
+int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass)
 {
 	const int32_t n = sm_model_particle_count(model);
 	int32_t nf = 0;
@@ -96,17 +96,17 @@ static int32_t first_coincident(const sm_model* model, const double* x, bool dam
 	return -1;
 }
 
-int32_t analysis_coincident_spring(const sm_model* model, const double* x)
+int32_t sm_analysis_coincident_spring(const sm_model* model, const double* x)
 {
 	return first_coincident(model, x, false);
 }
 
-int32_t analysis_coincident_damper(const sm_model* model, const double* x)
+int32_t sm_analysis_coincident_damper(const sm_model* model, const double* x)
 {
 	return first_coincident(model, x, true);
 }
 
-int analysis_all_finite(const double* values, size_t count)
+int sm_analysis_all_finite(const double* values, size_t count)
 {
 	for (size_t k = 0; k < count; k++)
 		if (!isfinite(values[k]))
@@ -115,7 +115,7 @@ int analysis_all_finite(const double* values, size_t count)
 }
 
 #ifdef SPRINGMASS_HAVE_CHOLMOD
-cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values)
+cholmod_sparse sm_analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t dof, double* values)
 {
 	cholmod_sparse A;
 	memset(&A, 0, sizeof A);
@@ -133,7 +133,7 @@ cholmod_sparse analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_t d
 	return A;
 }
 
-int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common)
+int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common)
 {
 	if (*factor == NULL) {
 		*factor = cholmod_l_analyze(A, common);
@@ -146,7 +146,7 @@ int analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_
 	return common->status < CHOLMOD_OK ? -1 : 1;
 }
 
-int analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out)
+int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out)
 {
 	cholmod_dense b;
 	memset(&b, 0, sizeof b);
@@ -167,7 +167,7 @@ int analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_
 // K = -df/dx: the block K_s = d f_a / d x_b of spring s enters as
 //   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
 // (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
-void analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
+void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
                               sm_jacobian_variant variant, double* K)
 {
 	memset(K, 0, dof * dof * sizeof(double));
@@ -446,7 +446,7 @@ static int solve_factored(statics_work* w, const double* rhs, double* out)
 {
 #ifdef SPRINGMASS_HAVE_CHOLMOD
 	if (w->jacobian != NULL)
-		return analysis_cholmod_solve(w->factor, &w->common, w->dof, rhs, out);
+		return sm_analysis_cholmod_solve(w->factor, &w->common, w->dof, rhs, out);
 #endif
 	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, w->dof, w->dof);
 	gsl_permutation perm = {w->dof, w->permutation};
@@ -459,7 +459,7 @@ static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_v
                       double* step)
 {
 	const size_t dof = w->dof;
-	analysis_dense_stiffness(w->model, w->free_index, x, dof, variant, w->matrix);
+	sm_analysis_dense_stiffness(w->model, w->free_index, x, dof, variant, w->matrix);
 	for (size_t i = 0; i < dof; i++)
 		w->matrix[i * dof + i] += mu * w->dof_mass[i];
 	w->norm = 0.0;
@@ -538,8 +538,8 @@ static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_
 			row += fabs(w->values[k]);
 		w->norm = fmax(w->norm, row);
 	}
-	cholmod_sparse A = analysis_cholmod_view(w->jacobian, w->dof, w->values);
-	const int factored = analysis_cholmod_factor(&A, &w->factor, &w->common);
+	cholmod_sparse A = sm_analysis_cholmod_view(w->jacobian, w->dof, w->values);
+	const int factored = sm_analysis_cholmod_factor(&A, &w->factor, &w->common);
 	if (factored != 1 || step == NULL)
 		return factored;
 	return solve_factored(w, rhs, step) == 0 ? 1 : -1;
@@ -680,7 +680,7 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 				slope -= w->rhs[k] * w->step[k];
 		int accepted = 0;
 		double alpha = 1.0;
-		if (have_step && slope < 0.0 && analysis_all_finite(w->step, w->dof)) {
+		if (have_step && slope < 0.0 && sm_analysis_all_finite(w->step, w->dof)) {
 			for (int tries = 0; tries < 40 && !accepted; tries++, alpha *= 0.5) {
 				memcpy(w->y, w->x, n3 * sizeof(double));
 				for (int32_t i = 0; i < w->nf; i++)
@@ -855,7 +855,7 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->dof_mass = malloc((n3 + 1) * sizeof(double));
 	if (w->free_index == NULL || w->dof_mass == NULL)
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)w->n);
-	w->nf = analysis_free_map(model, w->free_index, w->dof_mass);
+	w->nf = sm_analysis_free_map(model, w->free_index, w->dof_mass);
 	w->dof = 3 * (size_t)w->nf;
 	const size_t ns = (size_t)w->ns + 1, dof = w->dof + 1;
 	w->free_particle = malloc(((size_t)w->nf + 1) * sizeof(int32_t));
@@ -1028,7 +1028,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		                  "statics: out of memory for the Jacobian of the stability test");
 	}
 	if (converged) {
-		res.stable = definite == 1 && !floating && analysis_coincident_spring(model, w.x) < 0;
+		res.stable = definite == 1 && !floating && sm_analysis_coincident_spring(model, w.x) < 0;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)

@@ -86,12 +86,12 @@ int32_t sm_structure_particle(const sm_structure* s, int32_t i, int32_t j, int32
 // Shared steps of every builder.
 // ---------------------------------------------------------------------------------------------
 
-bool structure_material_present(const sm_spring_material* m)
+bool sm_structure_material_present(const sm_spring_material* m)
 {
 	return m->keep_when_zero || m->stiffness != 0.0 || m->damping != 0.0;
 }
 
-sm_status structure_check_material(sm_model* model, const char* what, const char* group,
+sm_status sm_structure_check_material(sm_model* model, const char* what, const char* group,
                                    const sm_spring_material* m, bool sections)
 {
 	if (!isfinite(m->stiffness) || m->stiffness < 0.0)
@@ -124,7 +124,7 @@ sm_status structure_check_material(sm_model* model, const char* what, const char
 	return SM_OK;
 }
 
-sm_status structure_check_vector(sm_model* model, const char* what, const char* field, const double v[3])
+sm_status sm_structure_check_vector(sm_model* model, const char* what, const char* field, const double v[3])
 {
 	for (int c = 0; c < 3; c++)
 		if (!isfinite(v[c]))
@@ -132,7 +132,7 @@ sm_status structure_check_vector(sm_model* model, const char* what, const char* 
 	return SM_OK;
 }
 
-sm_status structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs)
+sm_status sm_structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs)
 {
 	if (particles > SM_STRUCTURE_MAX_ELEMENTS || springs > SM_STRUCTURE_MAX_ELEMENTS)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
@@ -148,7 +148,7 @@ sm_status structure_check_size(sm_model* model, const char* what, int64_t partic
 // Cuts the model back to the counts it had before a failed builder call. Arrays only ever grow
 // and earlier entries are never moved, so the particles and springs below the counts are
 // intact; only the free-particle numbering must follow the particle count.
-void structure_truncate(sm_model* m, int32_t particles, int32_t springs)
+void sm_structure_truncate(sm_model* m, int32_t particles, int32_t springs)
 {
 	m->particle_count = particles;
 	m->spring_count = springs;
@@ -158,7 +158,7 @@ void structure_truncate(sm_model* m, int32_t particles, int32_t springs)
 	m->free_count = count;
 }
 
-sm_status structure_add_particle(sm_model* model, const char* what, double mass, const double position[3])
+sm_status sm_structure_add_particle(sm_model* model, const char* what, double mass, const double position[3])
 {
 	sm_particle_def p = sm_default_particle_def();
 	p.mass = mass;
@@ -176,7 +176,7 @@ sm_status structure_add_particle(sm_model* model, const char* what, double mass,
 // finite and normal doubles, so L lies between sqrt(DBL_MIN) = 1.5e-154 m and sqrt(DBL_MAX) =
 // 1.3e154 m. A structure's spacing outside that range comes from its extents and counts: the
 // message names them (`inputs`), not the inf or 0 their squares would give.
-sm_status structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
+sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
                                int32_t b, const sm_spring_material* m, double measure)
 {
 	sm_spring_def s = sm_default_spring_def();
@@ -276,7 +276,7 @@ static sm_status check_mass(sm_model* model, const char* what, double mass)
 	return SM_OK;
 }
 
-void structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
+void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
                         int32_t n2, const int32_t group_springs[3])
 {
 	if (out == NULL)
@@ -350,10 +350,10 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	if (def == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: definition is NULL");
 	sm_status st;
-	if ((st = structure_check_vector(model, what, "start", def->start)) != SM_OK ||
-	    (st = structure_check_vector(model, what, "end", def->end)) != SM_OK ||
-	    (st = structure_check_material(model, what, "structural", &def->structural, false)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bending", &def->bending, false)) != SM_OK)
+	if ((st = sm_structure_check_vector(model, what, "start", def->start)) != SM_OK ||
+	    (st = sm_structure_check_vector(model, what, "end", def->end)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "structural", &def->structural, false)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "bending", &def->bending, false)) != SM_OK)
 		return st;
 	if (def->segments < 1)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: segments = %d must be >= 1",
@@ -378,7 +378,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	static const char* const group_names[2] = {"structural", "bending"};
 	for (int g = 0; g < 2 && length == 0.0; g++) {
 		const sm_spring_material* m = groups[g];
-		if (!structure_material_present(m))
+		if (!sm_structure_material_present(m))
 			continue;
 		const char* needs = m->stiffness_scaling != SM_ABSOLUTE ? "per-strain stiffness (E / l0)"
 		                    : m->damping_scaling != SM_ABSOLUTE ? "per-strain damping (c / l0)"
@@ -417,10 +417,10 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		return st;
 
 	const int64_t n = (int64_t)def->segments + 1;
-	const bool has_structural = structure_material_present(&def->structural);
-	const bool has_bending = structure_material_present(&def->bending);
+	const bool has_structural = sm_structure_material_present(&def->structural);
+	const bool has_bending = sm_structure_material_present(&def->bending);
 	const int64_t springs = (has_structural ? n - 1 : 0) + (has_bending ? n - 2 : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
+	if ((st = sm_structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
@@ -432,7 +432,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		const double t = (double)p / (double)def->segments;
 		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
 		const int64_t at[1] = {p};
-		st = structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
+		st = sm_structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
 		                            p + 1 < n ? x : def->end);
 	}
 	// Neighbours that coincide although the ends differ (a spacing below the rounding of the
@@ -444,15 +444,15 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;
 		if (has_structural && p + 1 < n)
-			st = structure_add_spring(model, what, rope_inputs, "structural", a, a + 1, &def->structural, 0.0);
+			st = sm_structure_add_spring(model, what, rope_inputs, "structural", a, a + 1, &def->structural, 0.0);
 		if (st == SM_OK && has_bending && p + 2 < n)
-			st = structure_add_spring(model, what, rope_inputs, "bending", a, a + 2, &def->bending, 0.0);
+			st = sm_structure_add_spring(model, what, rope_inputs, "bending", a, a + 2, &def->bending, 0.0);
 	}
 	if (st != SM_OK) {
-		structure_truncate(model, p0, s0);
+		sm_structure_truncate(model, p0, s0);
 		return st;
 	}
-	structure_fill_out(out, p0, s0, model, (int32_t)n, 1, 1, made);
+	sm_structure_fill_out(out, p0, s0, model, (int32_t)n, 1, 1, made);
 	return SM_OK;
 }
 
@@ -468,12 +468,12 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 	if (def == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "sheet: definition is NULL");
 	sm_status st;
-	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
-	    (st = structure_check_vector(model, what, "edge_u", def->edge_u)) != SM_OK ||
-	    (st = structure_check_vector(model, what, "edge_v", def->edge_v)) != SM_OK ||
-	    (st = structure_check_material(model, what, "structural", &def->structural, true)) != SM_OK ||
-	    (st = structure_check_material(model, what, "shear", &def->shear, true)) != SM_OK ||
-	    (st = structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK ||
+	if ((st = sm_structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
+	    (st = sm_structure_check_vector(model, what, "edge_u", def->edge_u)) != SM_OK ||
+	    (st = sm_structure_check_vector(model, what, "edge_v", def->edge_v)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "structural", &def->structural, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "shear", &def->shear, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "bend", &def->bend, true)) != SM_OK ||
 	    (st = check_mass(model, what, def->mass)) != SM_OK ||
 	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
@@ -525,11 +525,11 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
 		                     "sheet: %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
 		                     SM_STRUCTURE_MAX_ELEMENTS);
-	const bool has[3] = {structure_material_present(&def->structural), structure_material_present(&def->shear),
-	                     structure_material_present(&def->bend)};
+	const bool has[3] = {sm_structure_material_present(&def->structural), sm_structure_material_present(&def->shear),
+	                     sm_structure_material_present(&def->bend)};
 	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) + (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +
 	                        (has[2] ? (nu - 2) * nv + nu * (nv - 2) : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
+	if ((st = sm_structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
@@ -541,7 +541,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 			for (int c = 0; c < 3; c++)
 				x[c] = def->origin[c] + s * def->edge_u[c] + t * def->edge_v[c];
 			const int64_t at[2] = {i, j};
-			st = structure_add_particle(model, what,
+			st = sm_structure_add_particle(model, what,
 			                            grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
 		}
 	}
@@ -565,7 +565,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 				if (!has[g] || a >= nv || b < 0 || b >= nu)
 					continue;
 				const int64_t at[2] = {i, j};
-				st = structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g], p0 + (int32_t)(i * nu + j),
+				st = sm_structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g], p0 + (int32_t)(i * nu + j),
 				                          p0 + (int32_t)(a * nu + b), groups[g],
 				                          cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
 				made[g]++;
@@ -573,10 +573,10 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		}
 	}
 	if (st != SM_OK) {
-		structure_truncate(model, p0, s0);
+		sm_structure_truncate(model, p0, s0);
 		return st;
 	}
-	structure_fill_out(out, p0, s0, model, def->nu, def->nv, 1, made);
+	sm_structure_fill_out(out, p0, s0, model, def->nu, def->nv, 1, made);
 	return SM_OK;
 }
 
@@ -592,11 +592,11 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	if (def == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "block: definition is NULL");
 	sm_status st;
-	if ((st = structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
-	    (st = structure_check_vector(model, what, "size", def->size)) != SM_OK ||
-	    (st = structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
-	    (st = structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) != SM_OK ||
-	    (st = structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) != SM_OK ||
+	if ((st = sm_structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
+	    (st = sm_structure_check_vector(model, what, "size", def->size)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) != SM_OK ||
 	    (st = check_mass(model, what, def->mass)) != SM_OK ||
 	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
@@ -617,13 +617,13 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 		                     "block: %d x %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
 		                     (int)nw, SM_STRUCTURE_MAX_ELEMENTS);
 	const int64_t n = nu * nv * nw;
-	const bool has[3] = {structure_material_present(&def->edge), structure_material_present(&def->face_diagonal),
-	                     structure_material_present(&def->body_diagonal)};
+	const bool has[3] = {sm_structure_material_present(&def->edge), sm_structure_material_present(&def->face_diagonal),
+	                     sm_structure_material_present(&def->body_diagonal)};
 	const int64_t edges = (nu - 1) * nv * nw + nu * (nv - 1) * nw + nu * nv * (nw - 1);
 	const int64_t faces = 2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
 	const int64_t bodies = 4 * (nu - 1) * (nv - 1) * (nw - 1);
 	const int64_t springs = (has[0] ? edges : 0) + (has[1] ? faces : 0) + (has[2] ? bodies : 0);
-	if ((st = structure_check_size(model, what, n, springs)) != SM_OK)
+	if ((st = sm_structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
 
 	const int32_t p0 = model->particle_count, s0 = model->spring_count;
@@ -635,7 +635,7 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 				                     def->origin[1] + (double)i / (double)(nv - 1) * def->size[1],
 				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
 				const int64_t at[3] = {i, j, k};
-				st = structure_add_particle(model, what,
+				st = sm_structure_add_particle(model, what,
 				                            grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
 			}
 	const int64_t block_shape[3] = {nu, nv, nw};
@@ -663,17 +663,17 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 					if (!has[g] || bi < 0 || bi >= nv || bj < 0 || bj >= nu || bk >= nw)
 						continue;
 					const int64_t at[3] = {i, j, k};
-					st = structure_add_spring(model, what, "size, nu, nv and nw", group_names[g],
+					st = sm_structure_add_spring(model, what, "size, nu, nv and nw", group_names[g],
 					                          p0 + (int32_t)((k * nv + i) * nu + j),
 					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
 					                          cell_volume * boundary_share(offsets[o], at, block_counts, 3));
 					made[g]++;
 				}
 	if (st != SM_OK) {
-		structure_truncate(model, p0, s0);
+		sm_structure_truncate(model, p0, s0);
 		return st;
 	}
-	structure_fill_out(out, p0, s0, model, def->nu, def->nv, def->nw, made);
+	sm_structure_fill_out(out, p0, s0, model, def->nu, def->nv, def->nw, made);
 	return SM_OK;
 }
 
@@ -702,7 +702,7 @@ sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double
 		inside[p] = x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2];
 		changed += inside[p];
 	}
-	model_set_motions(model, inside, NULL, 0, motion);
+	sm_model_set_motions(model, inside, NULL, 0, motion);
 	free(inside);
 	if (count != NULL)
 		*count = changed;
@@ -736,7 +736,7 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 			return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
 			                     "selection: entry %d, particle %d, is out of range (model has %d particles)", (int)n,
 			                     (int)particles[n], (int)model->particle_count);
-	model_set_motions(model, NULL, particles, count, motion);
+	sm_model_set_motions(model, NULL, particles, count, motion);
 	model->last_error[0] = '\0';
 	return SM_OK;
 }
