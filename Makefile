@@ -20,7 +20,15 @@ all: build
 setup:
 	@tools/setup.sh
 
-$(BUILD_DIR)/build.ninja: | setup
+# BUILD_TYPE or CMAKE_FLAGS given to make (on its command line or in the environment) configure
+# an existing build folder again with them; otherwise a folder configured once keeps its settings.
+ifneq ($(filter-out file default undefined,$(origin BUILD_TYPE) $(origin CMAKE_FLAGS)),)
+CONFIGURE_AGAIN := configure-again
+endif
+.PHONY: configure-again
+configure-again:
+
+$(BUILD_DIR)/build.ninja: $(CONFIGURE_AGAIN) | setup
 	$(CMAKE) -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
 	    -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
 

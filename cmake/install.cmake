@@ -8,7 +8,12 @@ install(TARGETS springmass EXPORT springmassTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/springmass DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# The tool (and the FMU runtime, fmu/CMakeLists.txt) come from the optimised configurations only:
+# a Debug build installed into the same prefix adds its library (libspringmassd.a) and its
+# pkg-config file (springmassd.pc) and leaves the Release tool, runtime and springmass.pc alone.
+set(SPRINGMASS_OPTIMISED_CONFIGURATIONS Release RelWithDebInfo MinSizeRel)
+install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+        CONFIGURATIONS ${SPRINGMASS_OPTIMISED_CONFIGURATIONS})
 
 set(SPRINGMASS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/springmass)
 install(EXPORT springmassTargets NAMESPACE springmass:: DESTINATION ${SPRINGMASS_CMAKE_DIR})
@@ -23,8 +28,22 @@ install(FILES ${PROJECT_BINARY_DIR}/springmassConfig.cmake ${PROJECT_BINARY_DIR}
 # stays right whatever prefix `cmake --install --prefix` gives. SUNDIALS, KLU and CHOLMOD have no
 # pkg-config files on Debian; they are named by library (the shared ones, which pkg-config users
 # link by default).
-file(RELATIVE_PATH SPRINGMASS_PC_TO_PREFIX "/root/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/root")
-string(REGEX REPLACE "/$" "" SPRINGMASS_PC_TO_PREFIX "${SPRINGMASS_PC_TO_PREFIX}")
+# A library or include folder given as an absolute path (GNUInstallDirs allows it) is written as
+# it is, and the file is then not relocatable.
+if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}")
+  set(SPRINGMASS_PC_PREFIX "${CMAKE_INSTALL_PREFIX}")
+  set(SPRINGMASS_PC_LIBDIR "${CMAKE_INSTALL_LIBDIR}")
+else()
+  file(RELATIVE_PATH _pc_to_prefix "/root/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/root")
+  string(REGEX REPLACE "/$" "" _pc_to_prefix "${_pc_to_prefix}")
+  set(SPRINGMASS_PC_PREFIX "\${pcfiledir}/${_pc_to_prefix}")
+  set(SPRINGMASS_PC_LIBDIR "\${prefix}/${CMAKE_INSTALL_LIBDIR}")
+endif()
+if(IS_ABSOLUTE "${CMAKE_INSTALL_INCLUDEDIR}")
+  set(SPRINGMASS_PC_INCLUDEDIR "${CMAKE_INSTALL_INCLUDEDIR}")
+else()
+  set(SPRINGMASS_PC_INCLUDEDIR "\${prefix}/${CMAKE_INSTALL_INCLUDEDIR}")
+endif()
 set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
@@ -33,7 +52,8 @@ string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
 # generator: the name comes from the target itself, when the file is generated.
 set(SPRINGMASS_PC_LIBRARY "$<TARGET_FILE_BASE_NAME:springmass>")
 configure_file(${PROJECT_SOURCE_DIR}/cmake/springmass.pc.in ${PROJECT_BINARY_DIR}/springmass.pc.in @ONLY)
-file(GENERATE OUTPUT ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/springmass.pc
+# The file is named after the library: springmassd.pc beside springmass.pc in a shared prefix.
+file(GENERATE OUTPUT ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/$<TARGET_FILE_BASE_NAME:springmass>.pc
      INPUT ${PROJECT_BINARY_DIR}/springmass.pc.in)
-install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/springmass.pc
+install(FILES ${PROJECT_BINARY_DIR}/pkgconfig/$<CONFIG>/$<TARGET_FILE_BASE_NAME:springmass>.pc
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
