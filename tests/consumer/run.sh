@@ -56,12 +56,13 @@ if ! out=$(PKG_CONFIG_LIBDIR="$work/no-pkg-config" PKG_CONFIG_PATH="" "$cmake" -
 	fail "an optional find_package(springmass) without jansson failed the configuration: $out"
 fi
 
-# The pkg-config file names the library its build makes, in every build type: a build configured
-# as "debug" (any case) makes libspringmassd.a (DEBUG_POSTFIX). Configuring is enough to see it.
+# The pkg-config file is named after the library its build makes, and links it, in every build
+# type: a build configured as "debug" (any case) makes libspringmassd.a (DEBUG_POSTFIX) and
+# springmassd.pc, which share a prefix with a Release build's. Configuring is enough to see it.
 "$cmake" -S "$source" -B "$work/debug" -G Ninja -DCMAKE_BUILD_TYPE=debug -DSPRINGMASS_BUILD_TESTS=OFF \
     -DSPRINGMASS_BUILD_FMU=OFF > /dev/null
 exported=$(grep -ho 'lib[a-z]*\.a"' $(find "$work/debug" -name 'springmassTargets-*.cmake') | sort -u)
-named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmass.pc)") pkg-config --libs-only-l springmass)
+named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") pkg-config --libs-only-l springmassd)
 [ "${exported%\"}" = "libspringmassd.a" ] && [[ " $named " == *" -lspringmassd "* ]] ||
 	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
