@@ -325,6 +325,18 @@ else
     [ $status -eq 1 ] && [ "$out" = "springmass fmu: cannot read $special: not a regular file" ] ||
       fail "fmu $special exited with $status and printed '$out'"
   done
+  # The same inputs give the same bytes (reproducible builds) whatever the packer's time zone and
+  # umask: entries in name order with fixed modes, dated SOURCE_DATE_EPOCH (UTC) when it is set
+  # and 1980-01-01 00:00 otherwise.
+  (umask 077; TZ=Asia/Tokyo "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/again" \
+    > /dev/null 2>&1)
+  SOURCE_DATE_EPOCH=1700000000 "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" \
+    -o "$tmp/dated.fmu" > /dev/null 2>&1
+  cmp -s "$tmp/oscillator" "$tmp/again" && [ "$(unzip -Z1 "$tmp/again" | paste -sd ' ')" = "binaries/ \
+binaries/linux64/ binaries/linux64/oscillator.so documentation/ documentation/index.html modelDescription.xml \
+resources/ resources/model.json" ] && unzip -Z -T "$tmp/again" | grep -q " 19800101\.000000 binaries/$" &&
+    unzip -Z -T "$tmp/dated.fmu" | grep -q " 20231114\.221320 binaries/$" ||
+    fail "fmu: two packings differ, or their entries or dates are not as documented: $(unzip -Z -T "$tmp/again")"
   # An earlier output is replaced whole (written beside it, then renamed over it: a full disk
   # leaves it as it was) and keeps its permissions; a link keeps pointing at the file it names.
   echo "earlier" > "$tmp/earlier.fmu"

@@ -42,6 +42,7 @@ int sm_cmd_fmu(int argc, char** argv)
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 static void usage(FILE* out)
@@ -253,13 +254,14 @@ static int remove_entry(const char* path, const struct stat* st, int flag, struc
 }
 
 // Runs a command in a directory and waits for it; true if it exited with status 0.
+// Runs argv in the folder dir, in UTC (zip writes its entries' times as local times).
 static bool run_in(const char* dir, char* const argv[])
 {
 	pid_t pid = fork();
 	if (pid < 0)
 		return false;
 	if (pid == 0) {
-		if (chdir(dir) != 0)
+		if (chdir(dir) != 0 || setenv("TZ", "UTC0", 1) != 0)
 			_exit(127);
 		execvp(argv[0], argv);
 		_exit(127);
@@ -292,6 +294,80 @@ static bool copy_folder(const char* from, const char* to, const char* rename_fro
 	}
 	closedir(d);
 	return copied;
+}
+
+// The archive's entries, so that the same inputs give the same bytes whoever packs them and
+// when (reproducible builds): every staged folder and file in name order, with the mode 0755
+// (folders, and files with an execute bit) or 0644, and the time SOURCE_DATE_EPOCH [s since
+// 1970] when it is set, else 1980-01-01 00:00 UTC (the earliest a zip entry holds).
+typedef struct entry_list {
+	char** names;
+	size_t count, capacity;
+} entry_list;
+
+// Appends name, or with NULL ends the list with a NULL (not counted), as execvp takes it.
+static bool add_entry(entry_list* list, const char* name)
+{
+	if (list->count == list->capacity) {
+		const size_t capacity = 2 * list->capacity + 16;
+		char** names = realloc(list->names, capacity * sizeof *names);
+		if (!names)
+			return false;
+		list->names = names;
+		list->capacity = capacity;
+	}
+	list->names[list->count] = name ? strdup(name) : NULL;
+	return name == NULL || list->names[list->count++] != NULL;
+}
+
+static void free_entries(entry_list* list)
+{
+	for (size_t i = 0; i < list->count; ++i)
+		free(list->names[i]);
+	free(list->names);
+}
+
+static struct timespec archive_time(void)
+{
+	struct timespec when = {315532800, 0};  // 1980-01-01 00:00 UTC
+	const char* epoch = getenv("SOURCE_DATE_EPOCH");
+	char* end = NULL;
+	errno = 0;
+	const long long seconds = epoch ? strtoll(epoch, &end, 10) : -1;
+	if (epoch && *epoch && *end == '\0' && errno == 0 && seconds >= when.tv_sec)
+		when.tv_sec = (time_t)seconds;
+	return when;
+}
+
+// Adds the entries under the staged folder `relative` ("" for the staging folder itself) to list,
+// setting their modes and times. False on failure, with errno.
+static bool stage_entries(const char* staging, const char* relative, const struct timespec when[2], entry_list* list)
+{
+	char folder[PATH_MAX];
+	if (!join(folder, sizeof folder, staging, relative))
+		return false;
+	struct dirent** names = NULL;
+	const int n = scandir(folder, &names, NULL, alphasort);
+	if (n < 0)
+		return false;
+	bool ok = true;
+	for (int i = 0; i < n; ++i) {
+		const char* name = names[i]->d_name;
+		char entry[PATH_MAX], full[PATH_MAX];
+		struct stat st;
+		if (ok && name[0] != '.') {
+			const int length = snprintf(entry, sizeof entry, "%s%s%s", relative, relative[0] ? "/" : "", name);
+			ok = length > 0 && (size_t)length < sizeof entry && join(full, sizeof full, staging, entry) &&
+			     stat(full, &st) == 0 && add_entry(list, entry);
+			const bool folder_entry = ok && S_ISDIR(st.st_mode);
+			ok = ok && chmod(full, folder_entry || (st.st_mode & 0111) ? 0755 : 0644) == 0;
+			ok = ok && (!folder_entry || stage_entries(staging, entry, when, list));
+			ok = ok && utimensat(AT_FDCWD, full, when, 0) == 0;
+		}
+		free(names[i]);
+	}
+	free(names);
+	return ok;
 }
 
 typedef struct options {
@@ -518,11 +594,22 @@ static int package(const options* opt)
 	if (!write_all(path, html, strlen(html)))
 		goto write_failed;
 
-	// zip writes into the staging folder, under a name with an extension (zip adds ".zip" to one
-	// without), and the archive is then copied to the output (see write_output).
-	char* zip_argv[] = {"zip",      "-q",        "-r",            "-X", "model.fmu", "modelDescription.xml",
-	                    "binaries", "resources", "documentation", NULL};
-	if (!run_in(staging, zip_argv) || !join(path, sizeof path, staging, "model.fmu")) {
+	// zip writes the entries in the order given into the staging folder, under a name with an
+	// extension (zip adds ".zip" to one without), and the archive is then copied to the output
+	// (see write_output). -X: no owner or extra times, which would differ between packers.
+	const struct timespec when = archive_time();
+	const struct timespec times[2] = {when, when};
+	entry_list entries = {NULL, 0, 0};
+	bool zipped = add_entry(&entries, "zip") && add_entry(&entries, "-q") && add_entry(&entries, "-X") &&
+	              add_entry(&entries, "model.fmu");
+	if (zipped && !stage_entries(staging, "", times, &entries)) {
+		fprintf(stderr, "springmass fmu: cannot prepare the files to archive in %s: %s\n", staging, strerror(errno));
+		free_entries(&entries);
+		goto done;
+	}
+	zipped = zipped && add_entry(&entries, NULL) && run_in(staging, entries.names);
+	free_entries(&entries);
+	if (!zipped || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
 		goto done;
 	}
