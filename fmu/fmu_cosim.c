@@ -1472,6 +1472,25 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		         sm_simulation_last_error(inst->sim));
 		return fmi2Discard;
 	}
+	// A state whose energies are beyond the largest double (1e218 kg at 1e98 m above the origin)
+	// cannot be reported through the outputs: the step is discarded at its end, like one the
+	// solver could not take, and the last successful time is its start.
+	const sm_energies energies = sm_simulation_energies(inst->sim);
+	const char* overflowing = !isfinite(energies.kinetic)              ? "energy.kinetic"
+	                          : !isfinite(energies.elastic)            ? "energy.elastic"
+	                          : !isfinite(energies.gravity)            ? "energy.gravity"
+	                          : !isfinite(fmu_dissipated_energy(inst)) ? "energy.dissipated"
+	                                                                   : NULL;
+	if (overflowing != NULL) {
+		inst->time = t_end;
+		inst->last_successful_time = t;
+		inst->state = ST_STEP_FAILED;
+		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
+		         "fmi2DoStep: at %s the output %s overflows a double (the state's energies are beyond the largest "
+		         "double); fmi2LastSuccessfulTime is the step's start, %s",
+		         fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
+		return fmi2Discard;
+	}
 	inst->time = t_end;
 	inst->last_successful_time = t_end;
 	return fmi2OK;

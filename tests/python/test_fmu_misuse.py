@@ -154,6 +154,29 @@ def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
         inst.free()
 
 
+def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
+    # 1e218 kg at 1e98 m above the origin: its gravitational energy, m g z = 9.8e316 J, is beyond
+    # the largest double, though every state is finite. A step to there cannot report its outputs:
+    # fmi2Discard naming the output, the step's start the last successful time; reset recovers.
+    model = {"springmass": 1, "name": "heavy",
+             "particles": [{"name": "bob", "position": [0, 0, 1e98], "mass": 1e218}],
+             "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
+    path = tmp_path / "heavy.json"
+    path.write_text(json.dumps(model))
+    inst = Instance(package(path)).start()
+    s = inst.slave
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 0.1)
+        assert info.value.status == 2  # fmi2Discard
+        assert s.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime
+        assert any(m[1] == "logStatusDiscard" and "energy.gravity overflows" in m[2] for m in inst.messages)
+        s.reset()
+        inst.start()
+    finally:
+        inst.free()
+
+
 def test_solver_failure_is_a_discard_with_the_time_reached(test_fmu):
     # Two internal steps cannot cover 1 s of a 5 rad/s oscillation at rtol 1e-10: the step is
     # discarded, the time reached is readable, and only reset or terminate are allowed then.
