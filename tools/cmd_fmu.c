@@ -253,8 +253,8 @@ static int remove_entry(const char* path, const struct stat* st, int flag, struc
 	return remove(path);
 }
 
-// Runs a command in a directory and waits for it; true if it exited with status 0.
-// Runs argv in the folder dir, in UTC (zip writes its entries' times as local times).
+// Runs argv in the folder dir, in UTC (zip writes its entries' times as local times), and waits
+// for it; true if it exited with status 0.
 static bool run_in(const char* dir, char* const argv[])
 {
 	pid_t pid = fork();
@@ -600,14 +600,16 @@ static int package(const options* opt)
 	const struct timespec when = archive_time();
 	const struct timespec times[2] = {when, when};
 	entry_list entries = {NULL, 0, 0};
-	bool zipped = add_entry(&entries, "zip") && add_entry(&entries, "-q") && add_entry(&entries, "-X") &&
-	              add_entry(&entries, "model.fmu");
-	if (zipped && !stage_entries(staging, "", times, &entries)) {
-		fprintf(stderr, "springmass fmu: cannot prepare the files to archive in %s: %s\n", staging, strerror(errno));
+	errno = 0;
+	if (!add_entry(&entries, "zip") || !add_entry(&entries, "-q") || !add_entry(&entries, "-X") ||
+	    !add_entry(&entries, "model.fmu") || !stage_entries(staging, "", times, &entries) ||
+	    !add_entry(&entries, NULL)) {
+		fprintf(stderr, "springmass fmu: cannot prepare the files to archive in %s: %s\n", staging,
+		        errno != 0 ? strerror(errno) : "out of memory");
 		free_entries(&entries);
 		goto done;
 	}
-	zipped = zipped && add_entry(&entries, NULL) && run_in(staging, entries.names);
+	const bool zipped = run_in(staging, entries.names);
 	free_entries(&entries);
 	if (!zipped || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
