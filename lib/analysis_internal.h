@@ -10,7 +10,7 @@
 // particles dropped). free_index[p] is the free index of particle p or -1. Adds nothing for disabled
 // springs (their blocks are zero).
 void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
-                              sm_jacobian_variant variant, double* K);
+                                 sm_jacobian_variant variant, double* K);
 
 // Free index of every particle (-1 for constrained ones) and the mass of every free degree of
 // freedom; returns the number of free particles. free_index has particle_count entries,

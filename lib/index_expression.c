@@ -182,7 +182,7 @@ static bool read_expression(reader* r, int depth, int64_t* value)
 }
 
 index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
-                                                  int64_t* value, const char** end, char* message)
+                                                     int64_t* value, const char** end, char* message)
 {
 	reader r = {text, lookup, context, message, INDEX_EXPRESSION_OK};
 	message[0] = '\0';

@@ -34,4 +34,4 @@ typedef enum index_expression_status {
 // says what is wrong, naming the name or value at fault ("no parameter named \"m\"",
 // "parameter h = 0.5 is not a whole number", "division by zero").
 index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
-                                                  int64_t* value, const char** end, char* message);
+                                                     int64_t* value, const char** end, char* message);

@@ -17,7 +17,7 @@
 #include <string.h>
 
 void sm_spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
-                   sm_jacobian_variant variant, double K[9], double D[9])
+                      sm_jacobian_variant variant, double K[9], double D[9])
 {
 	spring_geometry g;
 	spring_geometry_eval(x, v, model->spring_a[spring], model->spring_b[spring], model->rest_length[spring], &g);

@@ -311,13 +311,13 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		st = sm_structure_add_spring(model, what, "the vertices", "edge", p0 + (int32_t)(entry->key >> 32),
-		                          p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
+		                             p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
 	}
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		if (entry->triangles == 2)
 			st = sm_structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
-			                          entry->area);
+			                             entry->area);
 	}
 	if (st != SM_OK) {
 		sm_structure_truncate(model, p0, s0);

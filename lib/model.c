@@ -569,7 +569,7 @@ static void store_motion(sm_model* m, int32_t i, sm_particle_motion motion)
 }
 
 void sm_model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
-                       sm_particle_motion motion)
+                          sm_particle_motion motion)
 {
 	if (select != NULL) {
 		for (int32_t i = 0; i < m->particle_count; i++)

@@ -79,7 +79,7 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 // particle's stored velocity becomes zero), numbering the free particles once for all: one call
 // per particle would number them all again each time, quadratic in the model's size.
 void sm_model_set_motions(sm_model* m, const bool* select, const int32_t* particles, int32_t count,
-                       sm_particle_motion motion);
+                          sm_particle_motion motion);
 
 // Geometry of one spring at a configuration, shared by every force law and Jacobian.
 //
@@ -125,7 +125,7 @@ static inline void spring_geometry_eval(const double* x, const double* v, int32_
 // Per-spring Jacobian blocks K = d f_a / d x_b and D = d f_a / d v_b (row-major), the sum of
 // the laws in law_rest_length.h (both kinds) and law_spring_damping.h. Defined in jacobian.c.
 void sm_spring_blocks(const sm_model* model, int32_t spring, const double* x, const double* v,
-                   sm_jacobian_variant variant, double K[9], double D[9]);
+                      sm_jacobian_variant variant, double K[9], double D[9]);
 
 // sm_model_forces (the same numbers, bit for bit) and, from the same pass, the power the model
 // dissipates, as sm_model_dissipated_power computes it but summed in another order [W]. x, v

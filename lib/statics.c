@@ -168,7 +168,7 @@ int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, si
 //   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
 // (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
 void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
-                              sm_jacobian_variant variant, double* K)
+                                 sm_jacobian_variant variant, double* K)
 {
 	memset(K, 0, dof * dof * sizeof(double));
 	const int32_t ns = sm_model_spring_count(model);

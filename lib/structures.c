@@ -92,7 +92,7 @@ bool sm_structure_material_present(const sm_spring_material* m)
 }
 
 sm_status sm_structure_check_material(sm_model* model, const char* what, const char* group,
-                                   const sm_spring_material* m, bool sections)
+                                      const sm_spring_material* m, bool sections)
 {
 	if (!isfinite(m->stiffness) || m->stiffness < 0.0)
 		return sm_model_fail(model, isfinite(m->stiffness) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
@@ -177,7 +177,7 @@ sm_status sm_structure_add_particle(sm_model* model, const char* what, double ma
 // 1.3e154 m. A structure's spacing outside that range comes from its extents and counts: the
 // message names them (`inputs`), not the inf or 0 their squares would give.
 sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
-                               int32_t b, const sm_spring_material* m, double measure)
+                                  int32_t b, const sm_spring_material* m, double measure)
 {
 	sm_spring_def s = sm_default_spring_def();
 	const double* xa = model->position + 3 * (size_t)a;
@@ -277,7 +277,7 @@ static sm_status check_mass(sm_model* model, const char* what, double mass)
 }
 
 void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
-                        int32_t n2, const int32_t group_springs[3])
+                           int32_t n2, const int32_t group_springs[3])
 {
 	if (out == NULL)
 		return;
@@ -433,7 +433,7 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
 		const int64_t at[1] = {p};
 		st = sm_structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
-		                            p + 1 < n ? x : def->end);
+		                               p + 1 < n ? x : def->end);
 	}
 	// Neighbours that coincide although the ends differ (a spacing below the rounding of the
 	// coordinates) would give springs of rest length 0 among longer ones: refused as in a grid.
@@ -542,7 +542,7 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 				x[c] = def->origin[c] + s * def->edge_u[c] + t * def->edge_v[c];
 			const int64_t at[2] = {i, j};
 			st = sm_structure_add_particle(model, what,
-			                            grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
+			                               grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
 		}
 	}
 	const int64_t sheet_shape[3] = {nu, nv, 1};
@@ -566,8 +566,8 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 					continue;
 				const int64_t at[2] = {i, j};
 				st = sm_structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g], p0 + (int32_t)(i * nu + j),
-				                          p0 + (int32_t)(a * nu + b), groups[g],
-				                          cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
+				                             p0 + (int32_t)(a * nu + b), groups[g],
+				                             cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
 				made[g]++;
 			}
 		}
@@ -636,7 +636,7 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
 				const int64_t at[3] = {i, j, k};
 				st = sm_structure_add_particle(model, what,
-				                            grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
+				                               grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
 			}
 	const int64_t block_shape[3] = {nu, nv, nw};
 	if (st == SM_OK)
@@ -664,9 +664,9 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 						continue;
 					const int64_t at[3] = {i, j, k};
 					st = sm_structure_add_spring(model, what, "size, nu, nv and nw", group_names[g],
-					                          p0 + (int32_t)((k * nv + i) * nu + j),
-					                          p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
-					                          cell_volume * boundary_share(offsets[o], at, block_counts, 3));
+					                             p0 + (int32_t)((k * nv + i) * nu + j),
+					                             p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
+					                             cell_volume * boundary_share(offsets[o], at, block_counts, 3));
 					made[g]++;
 				}
 	if (st != SM_OK) {
