@@ -1364,6 +1364,31 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 	return fmi2Error;
 }
 
+// Ends a step from t that reached t_end. A finite state whose outputs overflow a double (the
+// energies of 1e218 kg at 1e98 m above the origin; the force on a driven particle, which no state
+// of the integration holds) cannot be reported: the step is then discarded at its end, like one
+// the solver could not take, and the last successful time is its start.
+static fmi2Status end_step(instance* inst, double t, double t_end)
+{
+	inst->time = t_end;
+	const char* overflowing = NULL;
+	for (int32_t i = 0; i < inst->table.count && overflowing == NULL; ++i) {
+		const fmu_variable* v = &inst->table.variables[i];
+		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v)))
+			overflowing = v->name;
+	}
+	if (overflowing != NULL) {
+		inst->last_successful_time = t;
+		inst->state = ST_STEP_FAILED;
+		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
+		         "fmi2DoStep: at %s the output %s overflows a double; fmi2LastSuccessfulTime is the step's start, %s",
+		         fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
+		return fmi2Discard;
+	}
+	inst->last_successful_time = t_end;
+	return fmi2OK;
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
@@ -1405,8 +1430,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 			fmu_logf(inst, fmi2OK, LOG_SOLVER,
 			         "step %s -> %s: below the time resolution %s s, nothing to integrate; the time moves on",
 			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(clock_resolution).text);
-		inst->time = inst->last_successful_time = fmax(inst->time, t_end);
-		return fmi2OK;
+		return end_step(inst, t, fmax(inst->time, t_end));
 	}
 	if (h < resolution) {
 		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
@@ -1472,28 +1496,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		         sm_simulation_last_error(inst->sim));
 		return fmi2Discard;
 	}
-	// A state whose energies are beyond the largest double (1e218 kg at 1e98 m above the origin)
-	// cannot be reported through the outputs: the step is discarded at its end, like one the
-	// solver could not take, and the last successful time is its start.
-	const sm_energies energies = sm_simulation_energies(inst->sim);
-	const char* overflowing = !isfinite(energies.kinetic)              ? "energy.kinetic"
-	                          : !isfinite(energies.elastic)            ? "energy.elastic"
-	                          : !isfinite(energies.gravity)            ? "energy.gravity"
-	                          : !isfinite(fmu_dissipated_energy(inst)) ? "energy.dissipated"
-	                                                                   : NULL;
-	if (overflowing != NULL) {
-		inst->time = t_end;
-		inst->last_successful_time = t;
-		inst->state = ST_STEP_FAILED;
-		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
-		         "fmi2DoStep: at %s the output %s overflows a double (the state's energies are beyond the largest "
-		         "double); fmi2LastSuccessfulTime is the step's start, %s",
-		         fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
-		return fmi2Discard;
-	}
-	inst->time = t_end;
-	inst->last_successful_time = t_end;
-	return fmi2OK;
+	return end_step(inst, t, t_end);
 }
 
 fmi2Status fmi2CancelStep(fmi2Component c)
