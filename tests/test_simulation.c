@@ -699,9 +699,8 @@ static int test_inputs_null_arrays(void)
 // reports a failure that did not happen.
 static int test_success_clears_the_last_failure(void)
 {
-	sm_model* model = oscillator(1.0, 40.0, 0.0, 0.2);
+	sm_model* model = oscillator_anchored(1.0, 40.0, 0.0, 0.2, SM_PARTICLE_DRIVEN);
 	ENSURE(model != NULL);
-	ENSURE_STATUS(sm_model_set_particle_motion(model, 0, SM_PARTICLE_DRIVEN), SM_OK);
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
 	sm_simulation_state* state = sm_simulation_save_state(sim);
