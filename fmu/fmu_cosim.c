@@ -931,7 +931,24 @@ fmi2Status fmi2Reset(fmi2Component c)
 // FMI 2.0: getting and setting values
 // ---------------------------------------------------------------------------------------------
 
-static double real_value(instance* inst, const fmu_variable* v)
+// The energies, evaluated once per call that reads them: the three energy outputs share one pass
+// over the particles and springs. Valid for one call, in which the state does not change after
+// its first value that needs the simulation.
+typedef struct energy_cache {
+	bool valid;
+	sm_energies energies;
+} energy_cache;
+
+static const sm_energies* cached_energies(instance* inst, energy_cache* cache)
+{
+	if (!cache->valid) {
+		cache->energies = sm_simulation_energies(inst->sim);
+		cache->valid = true;
+	}
+	return &cache->energies;
+}
+
+static double real_value(instance* inst, const fmu_variable* v, energy_cache* cache)
 {
 	const double* x = inst->sim ? sm_simulation_positions(inst->sim) : NULL;
 	const double* u = inst->sim ? sm_simulation_velocities(inst->sim) : NULL;
@@ -955,9 +972,9 @@ static double real_value(instance* inst, const fmu_variable* v)
 		return current_forces(inst)[3 * inst->ports[v->index].particle + v->component];
 	case FMU_SRC_PARTICLE_POSITION: return x[3 * v->index + v->component];
 	case FMU_SRC_PARTICLE_VELOCITY: return u[3 * v->index + v->component];
-	case FMU_SRC_ENERGY_KINETIC: return sm_simulation_energies(inst->sim).kinetic;
-	case FMU_SRC_ENERGY_ELASTIC: return sm_simulation_energies(inst->sim).elastic;
-	case FMU_SRC_ENERGY_GRAVITY: return sm_simulation_energies(inst->sim).gravity;
+	case FMU_SRC_ENERGY_KINETIC: return cached_energies(inst, cache)->kinetic;
+	case FMU_SRC_ENERGY_ELASTIC: return cached_energies(inst, cache)->elastic;
+	case FMU_SRC_ENERGY_GRAVITY: return cached_energies(inst, cache)->gravity;
 	case FMU_SRC_ENERGY_DISSIPATED: return fmu_dissipated_energy(inst);
 	default: return NAN;
 	}
@@ -975,6 +992,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
 		return fmi2Error;
+	energy_cache energies = {false, {0.0, 0.0, 0.0}};
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
 		if (!v)
@@ -985,7 +1003,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 		} else if (needs_simulation(v) && apply_inputs(inst, "fmi2GetReal") != fmi2OK) {
 			return fmi2Error;
 		}
-		value[i] = real_value(inst, v);
+		value[i] = real_value(inst, v, &energies);
 	}
 	return fmi2OK;
 }
@@ -1372,9 +1390,10 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 {
 	inst->time = t_end;
 	const char* overflowing = NULL;
+	energy_cache energies = {false, {0.0, 0.0, 0.0}};
 	for (int32_t i = 0; i < inst->table.count && overflowing == NULL; ++i) {
 		const fmu_variable* v = &inst->table.variables[i];
-		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v)))
+		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v, &energies)))
 			overflowing = v->name;
 	}
 	if (overflowing != NULL) {

@@ -155,11 +155,10 @@ static sm_status check_particle_def(const sm_particle_def* def, long index, char
 		return say(msg, SM_ERROR_NOT_FINITE, "particle %ld: mass = %g is not finite", index, def->mass);
 	if (!(def->mass > 0.0))
 		return say(msg, SM_ERROR_NONPOSITIVE_MASS, "particle %ld: mass = %g must be > 0", index, def->mass);
-	// Accelerations divide by the mass: below the smallest normal double its reciprocal overflows.
-	if (def->mass < DBL_MIN) {
+	if (def->mass < SM_MIN_MASS) {
 		char value[SM_NUMBER_TEXT_CAPACITY], least[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(def->mass, value);
-		sm_format_number(DBL_MIN, least);
+		sm_format_number(SM_MIN_MASS, least);
 		return say(msg, SM_ERROR_NONPOSITIVE_MASS,
 		           "particle %ld: mass = %s kg must be at least %s kg, the smallest normal double (1 / mass "
 		           "would overflow)",

@@ -16,7 +16,6 @@
 #include "structures_internal.h"
 
 #include <errno.h>
-#include <float.h>
 #include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
@@ -288,7 +287,7 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 
 // FRACTION: > 0 and < 1, and at least SM_MIN_RELATIVE_TOLERANCE (a relative tolerance: CVODE
 // cannot meet one below the machine epsilon, simulation.h); TOLERANCE: an absolute tolerance, at
-// least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least DBL_MIN (model.h).
+// least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least SM_MIN_MASS.
 typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE, MASS } number_rule;
 
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
@@ -301,9 +300,9 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
 	if ((rule == POSITIVE || rule == FRACTION || rule == MASS) && !(v > 0.0))
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
-	if (rule == MASS && v < DBL_MIN) {
+	if (rule == MASS && v < SM_MIN_MASS) {
 		char least[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(DBL_MIN, least);
+		sm_format_number(SM_MIN_MASS, least);
 		return fail(p, SM_ERROR_NONPOSITIVE_MASS, path,
 		            "%s must be at least %s, the smallest normal double (1 / mass would overflow)",
 		            describe(p, text, sizeof text, v, source), least);

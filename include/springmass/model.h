@@ -26,9 +26,13 @@ typedef enum sm_particle_motion {
 	SM_PARTICLE_DRIVEN,
 } sm_particle_motion;
 
+/// Masses must be at least this, DBL_MIN = 2^-1022 = 2.2250738585072014e-308 [kg]: below it,
+/// 1 / mass, which the accelerations need, overflows.
+#define SM_MIN_MASS 0x1p-1022
+
 /// Definition of a particle; get one from sm_default_particle_def().
 typedef struct sm_particle_def {
-	double mass;                ///< mass, finite and >= DBL_MIN (2.2e-308: 1 / mass finite) [kg]; default 1
+	double mass;                ///< mass, finite and >= SM_MIN_MASS [kg]; default 1
 	double position[3];         ///< initial position [m]; default (0, 0, 0)
 	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is zero whatever is given
 	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
