@@ -157,12 +157,15 @@ int main(int argc, char** argv)
 			sm_model_destroy(model);
 			return 1;
 		}
-		printf("cloth n=%d solver=%s threads=%d wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld fact=%lld restarts=%lld etf=%lld ncf=%lld "
-		       "z_corner=%.6f force_s=%.3g jacobian_s=%.3g linear_s=%.3g",
-		       (int)n, sm_linear_solver_name(r.solver), r.threads, r.wall, (long long)r.stats.steps,
-		       (long long)r.stats.rhs_evaluations, (long long)r.stats.jacobian_evaluations,
-		       (long long)r.stats.linear_iterations, (long long)r.stats.factorizations, (long long)r.stats.restarts, (long long)r.stats.error_test_failures, (long long)r.stats.convergence_failures, r.z_corner, r.stats.force_seconds,
-		       r.stats.jacobian_seconds, r.stats.linear_solve_seconds);
+		printf(
+		    "cloth n=%d solver=%s threads=%d wall_s=%.4g steps=%lld rhs=%lld jac=%lld lin_iters=%lld fact=%lld restarts=%lld etf=%lld ncf=%lld "
+		    "z_corner=%.6f force_s=%.3g jacobian_s=%.3g linear_s=%.3g",
+		    (int)n, sm_linear_solver_name(r.solver), r.threads, r.wall, (long long)r.stats.steps,
+		    (long long)r.stats.rhs_evaluations, (long long)r.stats.jacobian_evaluations,
+		    (long long)r.stats.linear_iterations, (long long)r.stats.factorizations,
+		    (long long)r.stats.restarts, (long long)r.stats.error_test_failures,
+		    (long long)r.stats.convergence_failures, r.z_corner, r.stats.force_seconds,
+		    r.stats.jacobian_seconds, r.stats.linear_solve_seconds);
 		if (interval > 0.0)
 			printf(" interval=%g inputs=%s", interval, pass == 1 ? "restart" : "keep-history");
 		printf("\n");

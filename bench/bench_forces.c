@@ -77,9 +77,7 @@ typedef struct workload {
 static void evaluate(const workload* w, int kind)
 {
 	switch (kind) {
-	case FORCES:
-		sm_model_forces(w->model, w->x, w->v, NULL, w->f);
-		break;
+	case FORCES: sm_model_forces(w->model, w->x, w->v, NULL, w->f); break;
 	case FORCES_JACOBIAN:
 		sm_model_forces_and_jacobians(w->model, w->x, w->v, NULL, SM_JACOBIAN_EXACT, w->f, w->springs);
 		break;

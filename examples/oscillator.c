@@ -17,8 +17,8 @@ int main(void)
 	sm_particle_def anchor = sm_default_particle_def();
 	anchor.motion = SM_PARTICLE_FIXED;
 	sm_particle_def bob = sm_default_particle_def();
-	bob.mass = 1.0;            // [kg]
-	bob.position[0] = 1.5;     // [m]
+	bob.mass = 1.0;         // [kg]
+	bob.position[0] = 1.5;  // [m]
 	int32_t a, b;
 	sm_model_add_particle(model, &anchor, &a);
 	sm_model_add_particle(model, &bob, &b);
@@ -61,8 +61,8 @@ int main(void)
 		double x = sm_simulation_positions(sim)[3 * b];
 		double exact = 1.0 + 0.5 * exp(-zeta * w * t) * (cos(wd * t) + zeta * w / wd * sin(wd * t));
 		sm_energies e = sm_simulation_energies(sim);
-		printf("t = %.1f s  x = %.6f m  exact = %.6f m  kinetic = %.4f J  elastic = %.4f J\n", t, x,
-		       exact, e.kinetic, e.elastic);
+		printf("t = %.1f s  x = %.6f m  exact = %.6f m  kinetic = %.4f J  elastic = %.4f J\n", t, x, exact,
+		       e.kinetic, e.elastic);
 		if (fabs(x - exact) > 1e-5) {
 			status = 1;
 		}

@@ -44,7 +44,8 @@ int main(void)
 	sm_structure trampoline;
 	const double e = 1e-6;  // margin of the boxes that select the edges [m]
 	if (sm_add_sheet(model, &sheet, &trampoline) != SM_OK || !hold(model, -e, -e, e, 1 + e) ||
-	    !hold(model, 1 - e, -e, 1 + e, 1 + e) || !hold(model, -e, -e, 1 + e, e) || !hold(model, -e, 1 - e, 1 + e, 1 + e)) {
+	    !hold(model, 1 - e, -e, 1 + e, 1 + e) || !hold(model, -e, -e, 1 + e, e) ||
+	    !hold(model, -e, 1 - e, 1 + e, 1 + e)) {
 		fprintf(stderr, "%s\n", sm_model_last_error(model));
 		sm_model_destroy(model);
 		return 1;
@@ -115,8 +116,8 @@ int main(void)
 		const double balance = en.kinetic + en.elastic + en.gravity + dissipated;
 		printf("t = %.2f s  centre z = %+.4f m  kinetic %.4f J  elastic %.4f J  gravity %+.4f J  dissipated "
 		       "%.4f J  balance %+.1e J\n",
-		       t, sm_simulation_positions(sim)[3 * centre + 2], en.kinetic, en.elastic, en.gravity, dissipated,
-		       balance);
+		       t, sm_simulation_positions(sim)[3 * centre + 2], en.kinetic, en.elastic, en.gravity,
+		       dissipated, balance);
 		if (!(fabs(balance) <= 1e-3 * fabs(en.gravity)))
 			status = 1;
 	}

@@ -30,8 +30,8 @@
 // ---------------------------------------------------------------------------------------------
 
 // The names of the log categories (fmu_instance.h), in the order of their bits.
-static const char* const category_names[] = {"logEvents", "logStatusWarning", "logStatusDiscard", "logStatusError",
-                                             "logSolver"};
+static const char* const category_names[] = {"logEvents", "logStatusWarning", "logStatusDiscard",
+                                             "logStatusError", "logSolver"};
 #define LOG_CATEGORY_COUNT 5
 // Warnings, discards and errors are reported unless switched off explicitly; events and solver
 // statistics are debug output, on when logging is.
@@ -67,8 +67,8 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 	int index = 0;
 	while (index < LOG_CATEGORY_COUNT && (1u << index) != category)
 		++index;
-	inst->logger(inst->environment, inst->name, status, index < LOG_CATEGORY_COUNT ? category_names[index] : "logAll",
-	             escaped);
+	inst->logger(inst->environment, inst->name, status,
+	             index < LOG_CATEGORY_COUNT ? category_names[index] : "logAll", escaped);
 }
 
 // A number for a message, in the fewest digits that read back to it (0.3, not
@@ -88,12 +88,12 @@ bool fmu_allowed(instance* inst, const char* function, int states)
 		return false;
 	if (!(inst->state & states)) {
 		log_error(inst, "%s: illegal call sequence (not allowed in the FMU's current state: %s)", function,
-		          inst->state == ST_INSTANTIATED      ? "instantiated"
-		          : inst->state == ST_INITIALIZATION  ? "initialization mode"
-		          : inst->state == ST_STEP_COMPLETE   ? "step complete"
-		          : inst->state == ST_STEP_FAILED     ? "step failed"
-		          : inst->state == ST_TERMINATED      ? "terminated"
-		                                              : "error");
+		          inst->state == ST_INSTANTIATED     ? "instantiated"
+		          : inst->state == ST_INITIALIZATION ? "initialization mode"
+		          : inst->state == ST_STEP_COMPLETE  ? "step complete"
+		          : inst->state == ST_STEP_FAILED    ? "step failed"
+		          : inst->state == ST_TERMINATED     ? "terminated"
+		                                             : "error");
 		return false;
 	}
 	return true;
@@ -223,8 +223,8 @@ static void changed_parameters(const instance* inst, const double* before, char*
 	for (int32_t i = 0; i < sm_document_parameter_count(inst->doc) && k < size; ++i) {
 		double value = sm_document_parameter_value(inst->doc, i);
 		if (value != before[i]) {
-			int n = snprintf(text + k, size - k, "%s%s = %s", k ? ", " : "", sm_document_parameter_name(inst->doc, i),
-			                 fmu_number_text(value).text);
+			int n = snprintf(text + k, size - k, "%s%s = %s", k ? ", " : "",
+			                 sm_document_parameter_name(inst->doc, i), fmu_number_text(value).text);
 			k += n > 0 ? (size_t)n : 0;
 		}
 	}
@@ -235,7 +235,8 @@ static void changed_parameters(const instance* inst, const double* before, char*
 // p[i].x and the ports name particles by index, and the instance's buffers are sized for those
 // counts, so a parameter value that changes them is refused (logged, naming the parameters that
 // differ from before[], which may be NULL) rather than ever taken.
-static bool packaged_structure(instance* inst, const char* function, const sm_model* model, const double* before)
+static bool packaged_structure(instance* inst, const char* function, const sm_model* model,
+                               const double* before)
 {
 	int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
 	char what[160] = "";
@@ -253,7 +254,8 @@ static bool packaged_structure(instance* inst, const char* function, const sm_mo
 	char names[512] = "the parameters";
 	if (before)
 		changed_parameters(inst, before, names, sizeof names);
-	log_error(inst, "%s: %s would give the model %s, but " PACKAGED_STRUCTURE "NAME=VALUE)", function, names, what);
+	log_error(inst, "%s: %s would give the model %s, but " PACKAGED_STRUCTURE "NAME=VALUE)", function, names,
+	          what);
 	return false;
 }
 
@@ -281,8 +283,8 @@ sm_status fmu_build_model(instance* inst, const char* function, const double* be
 		if (def.motion != SM_PARTICLE_DRIVEN) {
 			st = sm_model_set_particle_motion(model, inst->ports[p].particle, SM_PARTICLE_DRIVEN);
 			if (st != SM_OK) {
-				log_error(inst, "%s: cannot drive the particle of motion port %s: %s", function, inst->ports[p].name,
-				          sm_model_last_error(model));
+				log_error(inst, "%s: cannot drive the particle of motion port %s: %s", function,
+				          inst->ports[p].name, sm_model_last_error(model));
 				sm_model_destroy(model);
 				return st;
 			}
@@ -323,8 +325,8 @@ static fmi2Status apply_inputs(instance* inst, const char* function)
 // pending: which ports have inputs set that no step has taken yet), and makes it the instance's
 // only when all of that succeeded: a failure changes nothing.
 fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model* model,
-                                 const sm_simulation_def* solver, const port_values* held, const bool* pending,
-                                 double sim_time, const double* x, const double* v)
+                                 const sm_simulation_def* solver, const port_values* held,
+                                 const bool* pending, double sim_time, const double* x, const double* v)
 {
 	sm_error err = {SM_OK, ""};
 	sm_simulation* sim = sm_simulation_create(model, solver, &err);
@@ -380,8 +382,8 @@ fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 	sm_model* model = NULL;
 	if (fmu_build_model(inst, function, NULL, &model) != SM_OK)
 		return fmi2Error;
-	fmi2Status status =
-	    fmu_create_simulation(inst, function, model, &inst->solver, inst->held, inst->port_dirty, 0.0, NULL, NULL);
+	fmi2Status status = fmu_create_simulation(inst, function, model, &inst->solver, inst->held,
+	                                          inst->port_dirty, 0.0, NULL, NULL);
 	sm_model_destroy(model);
 	if (status == fmi2OK)
 		inst->time = inst->start_time;
@@ -391,8 +393,8 @@ fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 // The simulation's dissipated energy since it was created plus what a restored state carried
 // (dissipated_offset: the state's value minus the new simulation's, which starts at 0, so the
 // restored value itself). By physics it is non-negative: the integral of the damping power, a
-// sum of terms kd r^2 and c m |v|^2, each >= 0, plus the elastic energy of the springs that broke. The sum of two
-// non-negative doubles rounds to a non-negative one, so the offset adds no sign error; but the
+// sum of terms kd r^2 and c m |v|^2, each >= 0, plus the elastic energy of the springs that broke. The sum of
+// two non-negative doubles rounds to a non-negative one, so the offset adds no sign error; but the
 // simulation's own value may dip below 0 by round-off where it is near 0: CVODE's BDF formulas
 // of order 3 and more and its interpolation between steps do not keep an integral of a
 // non-negative rate monotone, and a break adds the difference of two sums of elastic energies.
@@ -432,8 +434,8 @@ static const fmu_variable* lookup(instance* inst, const char* function, fmi2Valu
 	}
 	const fmu_variable* v = &inst->table.variables[vr];
 	if (v->type != type) {
-		log_error(inst, "%s: value reference %u (%s) is %s %s variable, not %s", function, (unsigned)vr, v->name,
-		          v->type == FMU_INTEGER ? "an" : "a", type_name(v->type), type_name(type));
+		log_error(inst, "%s: value reference %u (%s) is %s %s variable, not %s", function, (unsigned)vr,
+		          v->name, v->type == FMU_INTEGER ? "an" : "a", type_name(v->type), type_name(type));
 		return NULL;
 	}
 	return v;
@@ -461,7 +463,8 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 		if (v->variability == FMU_TUNABLE && inst->state == ST_STEP_COMPLETE)
 			return true;
 		if (inst->state == ST_STEP_COMPLETE) {
-			log_error(inst, "%s: %s is a fixed parameter: set it before fmi2ExitInitializationMode", function, v->name);
+			log_error(inst, "%s: %s is a fixed parameter: set it before fmi2ExitInitializationMode", function,
+			          v->name);
 			return false;
 		}
 	} else {
@@ -469,7 +472,8 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 		          v->causality == FMU_OUTPUT ? "an output" : "a local variable");
 		return false;
 	}
-	log_error(inst, "%s: %s cannot be set in the FMU's current state (illegal call sequence)", function, v->name);
+	log_error(inst, "%s: %s cannot be set in the FMU's current state (illegal call sequence)", function,
+	          v->name);
 	return false;
 }
 
@@ -479,8 +483,10 @@ static bool settable(instance* inst, const char* function, const fmu_variable* v
 void fmu_put_back_parameters(instance* inst, const char* function, const double* old)
 {
 	if (sm_document_set_parameters(inst->doc, old, NULL) != SM_OK) {
-		log_error(inst, "%s: the earlier parameter values cannot be put back (out of memory): the instance "
-		          "is in the error state (fmi2SetFMUstate or fmi2Reset lead back)", function);
+		log_error(inst,
+		          "%s: the earlier parameter values cannot be put back (out of memory): the instance "
+		          "is in the error state (fmi2SetFMUstate or fmi2Reset lead back)",
+		          function);
 		inst->state = ST_ERROR;
 	}
 }
@@ -514,10 +520,10 @@ static void take_settings(instance* inst, const sm_simulation_def* before)
 		s->relative_tolerance = now.relative_tolerance;
 		inst->rtol_set = true;
 	}
-#define TAKE_CHANGED(field)            \
-	do {                               \
-		if (now.field != before->field) \
-			s->field = now.field;       \
+#define TAKE_CHANGED(field)                                                                                  \
+	do {                                                                                                     \
+		if (now.field != before->field)                                                                      \
+			s->field = now.field;                                                                            \
 	} while (0)
 	TAKE_CHANGED(absolute_tolerance_position);
 	TAKE_CHANGED(absolute_tolerance_velocity);
@@ -533,7 +539,8 @@ static void take_settings(instance* inst, const sm_simulation_def* before)
 // simulation is made again when next needed; afterwards (tunable parameters) the running
 // simulation takes the new constants, built into one model, and keeps its state. A value the
 // model rejects, alone or together with the others, puts every parameter back.
-static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[])
+static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Real value[])
 {
 	int32_t np = sm_document_parameter_count(inst->doc);
 	double* values = inst->parameter_new;
@@ -620,8 +627,9 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nC
 		while (k < LOG_CATEGORY_COUNT && !(categories[i] && strcmp(categories[i], category_names[k]) == 0))
 			++k;
 		if (k == LOG_CATEGORY_COUNT) {
-			log_error(inst, "fmi2SetDebugLogging: unknown log category \"%s\" (known: logEvents, logStatusWarning, "
-			                "logStatusDiscard, logStatusError, logSolver)",
+			log_error(inst,
+			          "fmi2SetDebugLogging: unknown log category \"%s\" (known: logEvents, logStatusWarning, "
+			          "logStatusDiscard, logStatusError, logSolver)",
 			          categories[i] ? categories[i] : "(null)");
 			return fmi2Error;
 		}
@@ -740,7 +748,8 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	strcpy(inst->name, name);
 
 	if (blank_name(instanceName)) {
-		log_error(inst, "fmi2Instantiate: missing instance name (it needs a character that is no white space)");
+		log_error(inst,
+		          "fmi2Instantiate: missing instance name (it needs a character that is no white space)");
 		goto fail;
 	}
 	if (fmuType != fmi2CoSimulation) {
@@ -753,7 +762,9 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	}
 	// An empty location names no folder: joined with the file names it would read the root's.
 	if (!fmuResourceLocation || !fmuResourceLocation[0]) {
-		log_error(inst, "fmi2Instantiate: missing resource location (the FMU's resources folder holds the model file)");
+		log_error(
+		    inst,
+		    "fmi2Instantiate: missing resource location (the FMU's resources folder holds the model file)");
 		goto fail;
 	}
 	bool out_of_memory = false;
@@ -763,9 +774,11 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		goto fail;
 	}
 	if (!dir) {
-		log_error(inst, "fmi2Instantiate: resource location \"%s\" is not a local file URI (file:///dir, file:/dir, "
-		          "file://localhost/dir or a path, without an escaped NUL)",
-		          fmuResourceLocation);
+		log_error(
+		    inst,
+		    "fmi2Instantiate: resource location \"%s\" is not a local file URI (file:///dir, file:/dir, "
+		    "file://localhost/dir or a path, without an escaped NUL)",
+		    fmuResourceLocation);
 		goto fail;
 	}
 	const bool read = read_resources(inst, dir, fmuResourceLocation);
@@ -776,11 +789,12 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 	char guid[40];
 	fmu_package_guid(inst->text, inst->length, inst->parameters, inst->parameters_length, guid);
 	if (strcmp(guid, fmuGUID) != 0) {
-		log_error(inst,
-		          "fmi2Instantiate: GUID %s does not match the model file resources/model.json%s, whose GUID is %s: "
-		          "the importer passed another FMU's GUID, or the resources were changed after packaging",
-		          fmuGUID, inst->parameters ? " with its parameter values resources/" FMU_PARAMETERS_RESOURCE : "",
-		          guid);
+		log_error(
+		    inst,
+		    "fmi2Instantiate: GUID %s does not match the model file resources/model.json%s, whose GUID is %s: "
+		    "the importer passed another FMU's GUID, or the resources were changed after packaging",
+		    fmuGUID, inst->parameters ? " with its parameter values resources/" FMU_PARAMETERS_RESOURCE : "",
+		    guid);
 		goto fail;
 	}
 	sm_error err = {SM_OK, ""};
@@ -790,7 +804,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
 		goto fail;
 	}
 	if (fmu_table_create(inst->doc, inst->text, inst->length, inst->parameters, inst->parameters_length,
-	                         &inst->table, &err) != SM_OK) {
+	                     &inst->table, &err) != SM_OK) {
 		log_error(inst, "fmi2Instantiate: %s", err.message);
 		goto fail;
 	}
@@ -837,7 +851,8 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 	if (!fmu_allowed(inst, "fmi2SetupExperiment", ST_INSTANTIATED))
 		return fmi2Error;
 	if (!isfinite(startTime) || (stopTimeDefined && (!isfinite(stopTime) || stopTime < startTime))) {
-		log_error(inst, "fmi2SetupExperiment: start time %g and stop time %g must be finite with start <= stop",
+		log_error(inst,
+		          "fmi2SetupExperiment: start time %g and stop time %g must be finite with start <= stop",
 		          startTime, stopTime);
 		return fmi2Error;
 	}
@@ -847,8 +862,10 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 	}
 	// It becomes CVODE's relative tolerance, which cannot be met below the machine epsilon.
 	if (toleranceDefined && !(tolerance >= SM_MIN_RELATIVE_TOLERANCE)) {
-		log_error(inst, "fmi2SetupExperiment: tolerance %g must be at least %g, the machine epsilon (CVODE cannot "
-		          "meet a smaller relative tolerance)", tolerance, SM_MIN_RELATIVE_TOLERANCE);
+		log_error(inst,
+		          "fmi2SetupExperiment: tolerance %g must be at least %g, the machine epsilon (CVODE cannot "
+		          "meet a smaller relative tolerance)",
+		          tolerance, SM_MIN_RELATIVE_TOLERANCE);
 		return fmi2Error;
 	}
 	// The experiment's tolerance, or without one the file's (an earlier call's does not stay).
@@ -1030,7 +1047,8 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 	    !check_arrays(inst, "fmi2GetBoolean", vr, nvr, value))
 		return fmi2Error;
 	if (nvr > 0) {
-		log_error(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean variables", (unsigned)vr[0]);
+		log_error(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean variables",
+		          (unsigned)vr[0]);
 		return fmi2Error;
 	}
 	return fmi2OK;
@@ -1068,7 +1086,8 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	if (v->variability == FMU_CONSTANT) {
 		if (value == sm_document_parameter_value(inst->doc, v->index))
 			return true;
-		log_error(inst, "fmi2SetReal: %s = %s refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%s)",
+		log_error(inst,
+		          "fmi2SetReal: %s = %s refused: %s sets the model's structure, " PACKAGED_STRUCTURE "%s=%s)",
 		          v->name, fmu_number_text(value).text, v->name, v->name, fmu_number_text(value).text);
 		return false;
 	}
@@ -1077,17 +1096,22 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	bool tolerance = v->source == FMU_SRC_SOLVER_RTOL || v->source == FMU_SRC_SOLVER_ATOL_POSITION ||
 	                 v->source == FMU_SRC_SOLVER_ATOL_VELOCITY;
 	if (tolerance && (!(value > 0.0) || (v->source == FMU_SRC_SOLVER_RTOL && !(value < 1.0)))) {
-		log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name, value);
+		log_error(inst, "fmi2SetReal: %s = %g rejected: tolerances must be > 0, a relative one < 1", v->name,
+		          value);
 		return false;
 	}
 	if (v->source == FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_RELATIVE_TOLERANCE)) {
-		log_error(inst, "fmi2SetReal: %s = %g rejected: a relative tolerance must be at least %g, the machine "
-		          "epsilon (CVODE cannot meet a smaller one)", v->name, value, SM_MIN_RELATIVE_TOLERANCE);
+		log_error(inst,
+		          "fmi2SetReal: %s = %g rejected: a relative tolerance must be at least %g, the machine "
+		          "epsilon (CVODE cannot meet a smaller one)",
+		          v->name, value, SM_MIN_RELATIVE_TOLERANCE);
 		return false;
 	}
 	if (tolerance && v->source != FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_ABSOLUTE_TOLERANCE)) {
-		log_error(inst, "fmi2SetReal: %s = %g rejected: an absolute tolerance must be at least %g (CVODE's error "
-		          "norm overflows below)", v->name, value, SM_MIN_ABSOLUTE_TOLERANCE);
+		log_error(inst,
+		          "fmi2SetReal: %s = %g rejected: an absolute tolerance must be at least %g (CVODE's error "
+		          "norm overflows below)",
+		          v->name, value, SM_MIN_ABSOLUTE_TOLERANCE);
 		return false;
 	}
 	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value < 0.0) {
@@ -1154,7 +1178,8 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	return fmi2OK;
 }
 
-fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[])
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[])
 {
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2SetInteger", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
@@ -1177,14 +1202,16 @@ fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
 	return fmi2OK;
 }
 
-fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[])
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[])
 {
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2SetBoolean", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !check_arrays(inst, "fmi2SetBoolean", vr, nvr, value))
 		return fmi2Error;
 	if (nvr > 0) {
-		log_error(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean variables", (unsigned)vr[0]);
+		log_error(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean variables",
+		          (unsigned)vr[0]);
 		return fmi2Error;
 	}
 	return fmi2OK;
@@ -1212,8 +1239,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 			bad = sm_jacobian_variant_from_name(value[i], &solver.jacobian) != SM_OK;
 		}
 		if (bad) {
-			log_error(inst, "fmi2SetString: %s = \"%s\" rejected: %s", v->name, value[i] ? value[i] : "(null)",
-			          v->description);
+			log_error(inst, "fmi2SetString: %s = \"%s\" rejected: %s", v->name,
+			          value[i] ? value[i] : "(null)", v->description);
 			return fmi2Error;
 		}
 	}
@@ -1237,8 +1264,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // derivatives with respect to the current inputs are zero (dx and dv are zero there).
 // ---------------------------------------------------------------------------------------------
 
-fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
-                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
+                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[])
 {
 	instance* inst = c;
@@ -1360,8 +1387,9 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 		return fmi2Error;
 	if (nvr == 0)
 		return fmi2OK;
-	log_error(inst, "fmi2SetRealInputDerivatives: this FMU holds its inputs over a step (canInterpolateInputs is "
-	                "false); a motion port takes its velocity as an input instead");
+	log_error(inst,
+	          "fmi2SetRealInputDerivatives: this FMU holds its inputs over a step (canInterpolateInputs is "
+	          "false); a motion port takes its velocity as an input instead");
 	return fmi2Error;
 }
 
@@ -1399,9 +1427,10 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 	if (overflowing != NULL) {
 		inst->last_successful_time = t;
 		inst->state = ST_STEP_FAILED;
-		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
-		         "fmi2DoStep: at %s the output %s overflows a double; fmi2LastSuccessfulTime is the step's start, %s",
-		         fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
+		fmu_logf(
+		    inst, fmi2Discard, LOG_DISCARD,
+		    "fmi2DoStep: at %s the output %s overflows a double; fmi2LastSuccessfulTime is the step's start, %s",
+		    fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
 		return fmi2Discard;
 	}
 	inst->last_successful_time = t_end;
@@ -1433,7 +1462,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	}
 	double t_end = t + h;
 	if (!isfinite(t_end) || !isfinite(t_end - inst->start_time)) {
-		log_error(inst, "fmi2DoStep: the step from %g by %g s ends beyond the largest representable time", t, h);
+		log_error(inst, "fmi2DoStep: the step from %g by %g s ends beyond the largest representable time", t,
+		          h);
 		return fmi2Error;
 	}
 	// A step below the resolution of the master's clock is that clock catching up with round-off
@@ -1448,12 +1478,13 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		if (logging(inst, LOG_SOLVER))
 			fmu_logf(inst, fmi2OK, LOG_SOLVER,
 			         "step %s -> %s: below the time resolution %s s, nothing to integrate; the time moves on",
-			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(clock_resolution).text);
+			         fmu_number_text(t).text, fmu_number_text(t_end).text,
+			         fmu_number_text(clock_resolution).text);
 		return end_step(inst, t, fmax(inst->time, t_end));
 	}
 	if (h < resolution) {
-		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s", h, t,
-		          resolution);
+		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s",
+		          h, t, resolution);
 		return fmi2Error;
 	}
 	// A point taken within its tolerance may lag the FMU's time by more than a short step.
@@ -1467,8 +1498,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	// either side of zero.
 	if (inst->stop_time_defined &&
 	    t_end > inst->stop_time + 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->stop_time))) {
-		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment", t_end,
-		          inst->stop_time);
+		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment",
+		          t_end, inst->stop_time);
 		return fmi2Error;
 	}
 	if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)
@@ -1478,7 +1509,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	// outputs are interpolated from its steps: a changed input, a restored state or a tunable
 	// parameter restarts it at the point, so steps past it never see inputs they should not.
 	const double t_stop = inst->stop_time_defined ? fmax(inst->stop_time, t_end) : t_end;
-	sm_status st = sm_simulation_advance_interpolated(inst->sim, t_end - inst->start_time, t_stop - inst->start_time);
+	sm_status st =
+	    sm_simulation_advance_interpolated(inst->sim, t_end - inst->start_time, t_stop - inst->start_time);
 	inst->forces_valid = false;
 
 	int32_t breaks = sm_simulation_break_count(inst->sim);

@@ -60,7 +60,8 @@ static void append_table(fmu_text* out, const fmu_table* t, section s, const cha
 	if (rows == 0)
 		return;
 	const bool variability = s == SECTION_PARAMETERS, start = s != SECTION_OUTPUTS;
-	fmu_text_appendf(out, "<h2 id=\"%s\">%s</h2>\n<p>%s</p>\n<table>\n<tr><th>value reference</th><th>name</th>",
+	fmu_text_appendf(out,
+	                 "<h2 id=\"%s\">%s</h2>\n<p>%s</p>\n<table>\n<tr><th>value reference</th><th>name</th>",
 	                 heading, heading, intro);
 	if (variability)
 		fmu_text_append_string(out, "<th>variability</th>");
@@ -104,9 +105,10 @@ static void append_particle_states(fmu_text* out, const fmu_table* t)
 	}
 	fmu_text_append_string(out, "<h2 id=\"particles\">particles</h2>\n<p>");
 	if (first < 0) {
-		fmu_text_append_string(out, "The model file's settings leave the particles' positions and velocities out "
-		                            "(<code>\"particle_variables\": false</code>): only the ports and energies "
-		                            "above can be read.</p>\n");
+		fmu_text_append_string(out,
+		                       "The model file's settings leave the particles' positions and velocities out "
+		                       "(<code>\"particle_variables\": false</code>): only the ports and energies "
+		                       "above can be read.</p>\n");
 		return;
 	}
 	fmu_text_append_string(out, "Every particle's position [m] and velocity [m/s], locals read at any "
@@ -114,10 +116,12 @@ static void append_particle_states(fmu_text* out, const fmu_table* t)
 	fmu_text_append_escaped(out, t->variables[first].name);
 	fmu_text_append_string(out, "</code> &hellip; <code>");
 	fmu_text_append_escaped(out, t->variables[last].name);
-	fmu_text_appendf(out, "</code>, value references %d to %d (<code>p[i].x</code>, <code>.y</code>, <code>.z</code>, "
-	                      "<code>.vx</code>, <code>.vy</code>, <code>.vz</code> of particle i at value references "
-	                      "%d + 6 i to %d + 6 i).</p>\n",
-	                 (int)first, (int)last, (int)first, (int)first + 5);
+	fmu_text_appendf(
+	    out,
+	    "</code>, value references %d to %d (<code>p[i].x</code>, <code>.y</code>, <code>.z</code>, "
+	    "<code>.vx</code>, <code>.vy</code>, <code>.vz</code> of particle i at value references "
+	    "%d + 6 i to %d + 6 i).</p>\n",
+	    (int)first, (int)last, (int)first, (int)first + 5);
 }
 
 char* fmu_documentation_html(const fmu_table* t, bool licenses)
@@ -128,59 +132,67 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 	sm_format_number(t->step_size, step);
 	sm_format_number(t->tolerance, tolerance);
 
-	fmu_text_append_string(&out, "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>");
-	fmu_text_append_escaped(&out, t->model_name);
 	fmu_text_append_string(&out,
-		"</title>\n<style>\nbody { font-family: sans-serif; max-width: 72em; margin: 2em auto; line-height: 1.4; }\n"
-		"table { border-collapse: collapse; }\nth, td { border: 1px solid #bbb; padding: 0.2em 0.5em; "
-		"text-align: left; vertical-align: top; }\n</style>\n</head>\n<body>\n<h1>");
+	                       "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>");
+	fmu_text_append_escaped(&out, t->model_name);
+	fmu_text_append_string(
+	    &out,
+	    "</title>\n<style>\nbody { font-family: sans-serif; max-width: 72em; margin: 2em auto; line-height: 1.4; }\n"
+	    "table { border-collapse: collapse; }\nth, td { border: 1px solid #bbb; padding: 0.2em 0.5em; "
+	    "text-align: left; vertical-align: top; }\n</style>\n</head>\n<body>\n<h1>");
 	fmu_text_append_escaped(&out, t->model_name);
 	fmu_text_append_string(&out, "</h1>\n<p id=\"description\">");
 	fmu_text_append_escaped(&out, t->description);
-	fmu_text_appendf(&out,
-		"</p>\n<p>An FMI 2.0 Co-Simulation FMU made by springmass %s from the model file in "
-		"<code>resources/model.json</code> (with the parameter values of <code>resources/parameters.txt</code>, "
-		"when there is one). Model identifier <code>%s</code>, GUID <code>%s</code>.</p>\n",
-		SPRINGMASS_VERSION_STRING, t->model_identifier, t->guid);
+	fmu_text_appendf(
+	    &out,
+	    "</p>\n<p>An FMI 2.0 Co-Simulation FMU made by springmass %s from the model file in "
+	    "<code>resources/model.json</code> (with the parameter values of <code>resources/parameters.txt</code>, "
+	    "when there is one). Model identifier <code>%s</code>, GUID <code>%s</code>.</p>\n",
+	    SPRINGMASS_VERSION_STRING, t->model_identifier, t->guid);
 
-	fmu_text_appendf(&out,
-		"<h2 id=\"simulating\">simulating it</h2>\n<ul>\n"
-		"<li>Default experiment: from 0 s to %s s in communication steps of %s s, relative tolerance %s "
-		"(<code>solver.rtol</code>).</li>\n"
-		"<li>Each <code>fmi2DoStep</code> integrates to the communication point with SUNDIALS CVODE, holding the "
-		"inputs at the values set before it (<code>canInterpolateInputs</code> is false). A spring with a "
-		"break strain breaks at the instant its strain crosses it, found by root finding.</li>\n"
-		"<li>Give the stop time to <code>fmi2SetupExperiment</code>: while the inputs are held, CVODE then "
-		"steps on past the communication points and the outputs are interpolated from its steps, which "
-		"takes fewer internal steps. Without a stop time every communication point ends an internal step.</li>\n"
-		"<li>A step the solver cannot complete returns <code>fmi2Discard</code>; "
-		"<code>fmi2GetRealStatus(fmi2LastSuccessfulTime)</code> gives the time reached. A call in the wrong "
-		"state or with a bad argument returns <code>fmi2Error</code> with a logged message and changes "
-		"nothing.</li>\n"
-		"<li>The FMU state can be got, set and serialised, and directional derivatives are provided. Log "
-		"categories: <code>logEvents</code>, <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
-		"<code>logStatusError</code>, <code>logSolver</code>.</li>\n</ul>\n",
-		stop, step, tolerance);
+	fmu_text_appendf(
+	    &out,
+	    "<h2 id=\"simulating\">simulating it</h2>\n<ul>\n"
+	    "<li>Default experiment: from 0 s to %s s in communication steps of %s s, relative tolerance %s "
+	    "(<code>solver.rtol</code>).</li>\n"
+	    "<li>Each <code>fmi2DoStep</code> integrates to the communication point with SUNDIALS CVODE, holding the "
+	    "inputs at the values set before it (<code>canInterpolateInputs</code> is false). A spring with a "
+	    "break strain breaks at the instant its strain crosses it, found by root finding.</li>\n"
+	    "<li>Give the stop time to <code>fmi2SetupExperiment</code>: while the inputs are held, CVODE then "
+	    "steps on past the communication points and the outputs are interpolated from its steps, which "
+	    "takes fewer internal steps. Without a stop time every communication point ends an internal step.</li>\n"
+	    "<li>A step the solver cannot complete returns <code>fmi2Discard</code>; "
+	    "<code>fmi2GetRealStatus(fmi2LastSuccessfulTime)</code> gives the time reached. A call in the wrong "
+	    "state or with a bad argument returns <code>fmi2Error</code> with a logged message and changes "
+	    "nothing.</li>\n"
+	    "<li>The FMU state can be got, set and serialised, and directional derivatives are provided. Log "
+	    "categories: <code>logEvents</code>, <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
+	    "<code>logStatusError</code>, <code>logSolver</code>.</li>\n</ul>\n",
+	    stop, step, tolerance);
 
-	append_table(&out, t, SECTION_INPUTS, "inputs",
-	             "Set before each step and held over it: a force port's force; a motion port's position P.x and "
-	             "velocity P.vx, along which its particle moves, at P.x + P.vx (t - t_n) from the step's start "
-	             "t_n. A motion port starts from its inputs' start values, whatever parameters the model file "
-	             "places its particle with.");
+	append_table(
+	    &out, t, SECTION_INPUTS, "inputs",
+	    "Set before each step and held over it: a force port's force; a motion port's position P.x and "
+	    "velocity P.vx, along which its particle moves, at P.x + P.vx (t - t_n) from the step's start "
+	    "t_n. A motion port starts from its inputs' start values, whatever parameters the model file "
+	    "places its particle with.");
 	append_table(&out, t, SECTION_OUTPUTS, "outputs", "The model at each communication point.");
-	append_table(&out, t, SECTION_PARAMETERS, "parameters",
-	             "Fixed ones are set before <code>fmi2ExitInitializationMode</code>; tunable ones also between "
-	             "steps (each change restarts the solver).");
-	append_table(&out, t, SECTION_CONSTANTS, "constants",
-	             "Parameters of the model file that set its structure (a count, a port's particle): fixed when the "
-	             "FMU was made.");
+	append_table(
+	    &out, t, SECTION_PARAMETERS, "parameters",
+	    "Fixed ones are set before <code>fmi2ExitInitializationMode</code>; tunable ones also between "
+	    "steps (each change restarts the solver).");
+	append_table(
+	    &out, t, SECTION_CONSTANTS, "constants",
+	    "Parameters of the model file that set its structure (a count, a port's particle): fixed when the "
+	    "FMU was made.");
 	append_particle_states(&out, t);
 
 	if (licenses)
-		fmu_text_append_string(&out,
-			"<h2 id=\"licences\">licences</h2>\n<p>The FMU carries other people's software: "
-			"<a href=\"licenses/license.txt\">licenses/license.txt</a> says which licence covers which library. "
-			"Read it before passing the FMU on.</p>\n");
+		fmu_text_append_string(
+		    &out,
+		    "<h2 id=\"licences\">licences</h2>\n<p>The FMU carries other people's software: "
+		    "<a href=\"licenses/license.txt\">licenses/license.txt</a> says which licence covers which library. "
+		    "Read it before passing the FMU on.</p>\n");
 	fmu_text_append_string(&out, "</body>\n</html>\n");
 
 	if (out.failed) {

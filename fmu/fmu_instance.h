@@ -26,7 +26,8 @@ enum {
 	ST_TERMINATED = 1 << 4,
 	ST_ERROR = 1 << 5,
 };
-#define ST_ANY (ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
+#define ST_ANY                                                                                               \
+	(ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
 #define ST_RUNNING (ST_INITIALIZATION | ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR)
 
 // Log categories, as bits.
@@ -80,9 +81,9 @@ typedef struct instance {
 	double last_successful_time;
 	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
 	int32_t breaks_logged;
-	double* forces;   // 3 per particle, valid while forces_valid
+	double* forces;  // 3 per particle, valid while forces_valid
 	bool forces_valid;
-	double* scratch;  // 5 * 3 per particle for directional derivatives
+	double* scratch;        // 5 * 3 per particle for directional derivatives
 	double* parameter_old;  // the model-file parameters' values before a change that may fail
 	double* parameter_new;  // the values such a change sets, one per parameter
 } instance;
@@ -113,8 +114,8 @@ bool fmu_allowed(instance* inst, const char* function, int states);
 // ---------------------------------------------------------------------------------------------
 
 // How to get an FMU of another structure, for the messages that refuse one.
-#define PACKAGED_STRUCTURE                                                                                  \
-	"this FMU's variables were made for the structure at packaging: package the model with that value "    \
+#define PACKAGED_STRUCTURE                                                                                   \
+	"this FMU's variables were made for the structure at packaging: package the model with that value "      \
 	"(springmass fmu MODEL -o NAME.fmu --set "
 
 // Builds the model with the current parameter values, refusing one of another structure than packaged.
@@ -123,8 +124,8 @@ sm_status fmu_build_model(instance* inst, const char* function, const double* be
 // Makes a simulation of the model, state (or initial state) and inputs the instance's, all or nothing;
 // a message names `function`, the entry point.
 fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model* model,
-                                 const sm_simulation_def* solver, const port_values* held, const bool* pending,
-                                 double sim_time, const double* x, const double* v);
+                                 const sm_simulation_def* solver, const port_values* held,
+                                 const bool* pending, double sim_time, const double* x, const double* v);
 
 // Makes sure a simulation with the current settings exists and has taken the inputs set.
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function);

@@ -8,13 +8,13 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <locale.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 // ---------------------------------------------------------------------------------------------
 // GUID: FNV-1a with 128-bit state. The FNV-128 prime is 2^88 + 2^8 + 0x3b = 2^88 + 0x13b, so
@@ -64,9 +64,9 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 		fnv128_update(&h, parameters, parameters_length);
 	}
 	const uint64_t hi = h.hi, lo = h.lo;
-	snprintf(guid, 40, "{%08x-%04x-%04x-%04x-%04x%08x}", (unsigned)(hi >> 32), (unsigned)((hi >> 16) & 0xffffu),
-	         (unsigned)(hi & 0xffffu), (unsigned)(lo >> 48), (unsigned)((lo >> 32) & 0xffffu),
-	         (unsigned)(lo & 0xffffffffu));
+	snprintf(guid, 40, "{%08x-%04x-%04x-%04x-%04x%08x}", (unsigned)(hi >> 32),
+	         (unsigned)((hi >> 16) & 0xffffu), (unsigned)(hi & 0xffffu), (unsigned)(lo >> 48),
+	         (unsigned)((lo >> 32) & 0xffffu), (unsigned)(lo & 0xffffffffu));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -228,8 +228,8 @@ static fmu_variable* add(builder* b, char* name, char* description, fmu_type typ
 static void add_real_parameter(builder* b, const char* name, const char* description, const char* unit,
                                fmu_source source, double start)
 {
-	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_REAL, FMU_PARAMETER, FMU_FIXED, unit,
-	                      source, 0, 0);
+	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_REAL, FMU_PARAMETER, FMU_FIXED,
+	                      unit, source, 0, 0);
 	if (v) {
 		v->has_start = true;
 		v->start_real = start;
@@ -239,8 +239,8 @@ static void add_real_parameter(builder* b, const char* name, const char* descrip
 static void add_string_parameter(builder* b, const char* name, const char* description, fmu_source source,
                                  const char* start)
 {
-	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_STRING, FMU_PARAMETER, FMU_FIXED, NULL,
-	                      source, 0, 0);
+	fmu_variable* v = add(b, duplicate(name), duplicate(description), FMU_STRING, FMU_PARAMETER, FMU_FIXED,
+	                      NULL, source, 0, 0);
 	if (v) {
 		v->has_start = true;
 		v->start_string = start;
@@ -270,21 +270,22 @@ static void add_port(builder* b, const sm_document* doc, const sm_model* model, 
 	bool motion = port.kind == SM_PORT_MOTION;
 	fmu_causality kinematic = motion ? FMU_INPUT : FMU_OUTPUT;
 	for (int c = 0; c < 3; ++c) {
-		fmu_variable* v = add(b, format("%s.%s", part, axis[c]),
-		                      format("%s of %s, %s port at particle %s", axis[c], port.name,
-		                             motion ? "position prescribed at the motion" : "position at the",
-		                             particle_name),
-		                      FMU_REAL, kinematic, FMU_CONTINUOUS, "m", FMU_SRC_PORT_POSITION, port_index, c);
+		fmu_variable* v =
+		    add(b, format("%s.%s", part, axis[c]),
+			    format("%s of %s, %s port at particle %s", axis[c], port.name,
+			           motion ? "position prescribed at the motion" : "position at the", particle_name),
+			    FMU_REAL, kinematic, FMU_CONTINUOUS, "m", FMU_SRC_PORT_POSITION, port_index, c);
 		if (v && motion) {
 			v->has_start = true;
 			v->start_real = particle.position[c];
 		}
 	}
 	for (int c = 0; c < 3; ++c) {
-		fmu_variable* v = add(b, format("%s.%s", part, velocity_axis[c]),
-		                      format("%s-velocity of %s, %s port at particle %s", axis[c], port.name,
-		                             motion ? "prescribed at the motion" : "at the", particle_name),
-		                      FMU_REAL, kinematic, FMU_CONTINUOUS, "m/s", FMU_SRC_PORT_VELOCITY, port_index, c);
+		fmu_variable* v =
+		    add(b, format("%s.%s", part, velocity_axis[c]),
+			    format("%s-velocity of %s, %s port at particle %s", axis[c], port.name,
+			           motion ? "prescribed at the motion" : "at the", particle_name),
+			    FMU_REAL, kinematic, FMU_CONTINUOUS, "m/s", FMU_SRC_PORT_VELOCITY, port_index, c);
 		if (v && motion) {
 			v->has_start = true;
 			v->start_real = particle.velocity[c];
@@ -292,12 +293,14 @@ static void add_port(builder* b, const sm_document* doc, const sm_model* model, 
 	}
 	if (port.kind != SM_PORT_PROBE) {
 		for (int c = 0; c < 3; ++c) {
-			fmu_variable* v = add(
-			    b, format("%s.%s", part, force_axis[c]),
-			    motion ? format("%s-force the model exerts on whatever drives %s (particle %s)", axis[c], port.name,
-			                    particle_name)
-			           : format("%s-force applied from outside at %s (particle %s)", axis[c], port.name, particle_name),
-			    FMU_REAL, motion ? FMU_OUTPUT : FMU_INPUT, FMU_CONTINUOUS, "N", FMU_SRC_PORT_FORCE, port_index, c);
+			fmu_variable* v =
+			    add(b, format("%s.%s", part, force_axis[c]),
+				    motion ? format("%s-force the model exerts on whatever drives %s (particle %s)", axis[c],
+				                    port.name, particle_name)
+				           : format("%s-force applied from outside at %s (particle %s)", axis[c], port.name,
+				                    particle_name),
+				    FMU_REAL, motion ? FMU_OUTPUT : FMU_INPUT, FMU_CONTINUOUS, "N", FMU_SRC_PORT_FORCE,
+				    port_index, c);
 			if (v && !motion) {
 				v->has_start = true;
 				v->start_real = 0.0;
@@ -370,7 +373,8 @@ static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 	size_t capacity = 1, count = 0;
 	bool particles = false;
 	for (int32_t i = 0; i < t->count; ++i) {
-		if (t->variables[i].source == FMU_SRC_PARTICLE_POSITION || t->variables[i].source == FMU_SRC_PARTICLE_VELOCITY)
+		if (t->variables[i].source == FMU_SRC_PARTICLE_POSITION ||
+		    t->variables[i].source == FMU_SRC_PARTICLE_VELOCITY)
 			particles = true;
 		else
 			capacity += strlen(t->variables[i].name) + 1;
@@ -381,26 +385,30 @@ static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 	if (particles)
 		nodes[count++] = (name_node){"p[0].x", 1, '['};
 	for (int32_t i = 0; i < t->count; ++i)
-		if (t->variables[i].source != FMU_SRC_PARTICLE_POSITION && t->variables[i].source != FMU_SRC_PARTICLE_VELOCITY)
+		if (t->variables[i].source != FMU_SRC_PARTICLE_POSITION &&
+		    t->variables[i].source != FMU_SRC_PARTICLE_VELOCITY)
 			count += name_nodes(t->variables[i].name, nodes + count);
 	// Sorted, equal names lie side by side, a leaf first, then a record, then an array.
 	qsort(nodes, count, sizeof *nodes, compare_nodes);
 	for (size_t i = 1; i < count; ++i) {
 		const name_node* a = &nodes[i - 1];
 		const name_node* b = &nodes[i];
-		if (a->length != b->length || memcmp(a->name, b->name, a->length) != 0 || (a->kind == b->kind && a->kind))
+		if (a->length != b->length || memcmp(a->name, b->name, a->length) != 0 ||
+		    (a->kind == b->kind && a->kind))
 			continue;
 		if (err) {
 			err->status = SM_ERROR_SCHEMA;
 			if (!a->kind && !b->kind)
-				snprintf(err->message, sizeof err->message,
-				         "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
-				         a->name);
+				snprintf(
+				    err->message, sizeof err->message,
+				    "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
+				    a->name);
 			else
-				snprintf(err->message, sizeof err->message,
-				         "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
-				         "structured names (rename the parameter or port)",
-				         a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
+				snprintf(
+				    err->message, sizeof err->message,
+				    "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
+				    "structured names (rename the parameter or port)",
+				    a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
 		}
 		free(nodes);
 		return SM_ERROR_SCHEMA;
@@ -465,10 +473,13 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 		    "fixed: feeds the initial state, which particles are held or the simulation settings",
 		    "constant: sets the model's structure (a count or a port's particle), fixed at packaging",
 		};
-		fmu_variable* v = add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text[role]),
-		                      FMU_REAL, role == ROLE_STRUCTURE ? FMU_LOCAL : FMU_PARAMETER,
-		                      role == ROLE_CONSTANTS ? FMU_TUNABLE : role == ROLE_STATE ? FMU_FIXED : FMU_CONSTANT,
-		                      NULL, FMU_SRC_MODEL_PARAMETER, i, 0);
+		fmu_variable* v =
+		    add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text[role]),
+			    FMU_REAL, role == ROLE_STRUCTURE ? FMU_LOCAL : FMU_PARAMETER,
+			    role == ROLE_CONSTANTS ? FMU_TUNABLE
+			    : role == ROLE_STATE   ? FMU_FIXED
+			                           : FMU_CONSTANT,
+			    NULL, FMU_SRC_MODEL_PARAMETER, i, 0);
 		if (v) {
 			v->has_start = true;
 			v->start_real = sm_document_parameter_value(doc, i);
@@ -483,19 +494,20 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	                   FMU_SRC_SOLVER_ATOL_POSITION, s->absolute_tolerance_position);
 	add_real_parameter(&b, "solver.atol_velocity", "absolute tolerance of velocities", "m/s",
 	                   FMU_SRC_SOLVER_ATOL_VELOCITY, s->absolute_tolerance_velocity);
-	add_real_parameter(&b, "solver.max_step", "largest internal step (0: unlimited)", "s", FMU_SRC_SOLVER_MAX_STEP,
-	                   s->max_step);
-	fmu_variable* max_steps = add(&b, duplicate("solver.max_steps"),
-	                              duplicate("internal steps allowed per communication step"), FMU_INTEGER,
-	                              FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_MAX_STEPS, 0, 0);
+	add_real_parameter(&b, "solver.max_step", "largest internal step (0: unlimited)", "s",
+	                   FMU_SRC_SOLVER_MAX_STEP, s->max_step);
+	fmu_variable* max_steps =
+	    add(&b, duplicate("solver.max_steps"), duplicate("internal steps allowed per communication step"),
+		    FMU_INTEGER, FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_MAX_STEPS, 0, 0);
 	if (max_steps) {
 		max_steps->has_start = true;
 		max_steps->start_integer = s->max_steps;
 	}
-	fmu_variable* threads = add(&b, duplicate("solver.threads"),
-	                            duplicate("threads for the pcg solver on models of 4000 free particles or more "
-	                                      "(at most 4, no more than the processors; the results do not depend on it)"),
-	                            FMU_INTEGER, FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_THREADS, 0, 0);
+	fmu_variable* threads =
+	    add(&b, duplicate("solver.threads"),
+		    duplicate("threads for the pcg solver on models of 4000 free particles or more "
+		              "(at most 4, no more than the processors; the results do not depend on it)"),
+		    FMU_INTEGER, FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_THREADS, 0, 0);
 	if (threads) {
 		threads->has_start = true;
 		threads->start_integer = s->threads;
@@ -515,12 +527,13 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	// Energies.
 	add(&b, duplicate("energy.kinetic"), duplicate("kinetic energy of all particles"), FMU_REAL, FMU_OUTPUT,
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_KINETIC, 0, 0);
-	add(&b, duplicate("energy.elastic"), duplicate("elastic energy stored in the springs"), FMU_REAL, FMU_OUTPUT,
-	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_ELASTIC, 0, 0);
-	add(&b, duplicate("energy.gravity"), duplicate("gravitational potential energy (zero at the origin)"), FMU_REAL,
-	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
-	add(&b, duplicate("energy.dissipated"), duplicate("energy dissipated since the start (damping, broken springs)"),
-	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
+	add(&b, duplicate("energy.elastic"), duplicate("elastic energy stored in the springs"), FMU_REAL,
+	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_ELASTIC, 0, 0);
+	add(&b, duplicate("energy.gravity"), duplicate("gravitational potential energy (zero at the origin)"),
+	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
+	add(&b, duplicate("energy.dissipated"),
+	    duplicate("energy dissipated since the start (damping, broken springs)"), FMU_REAL, FMU_OUTPUT,
+	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
 
 	// Every particle's position and velocity, unless the model file switches them off.
 	if (settings.particle_variables) {
@@ -637,7 +650,8 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 		const fmu_variable* w = &t->variables[i];
 		if (w->causality != FMU_INPUT)
 			continue;
-		if ((position && w->source == FMU_SRC_PORT_POSITION) || (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
+		if ((position && w->source == FMU_SRC_PORT_POSITION) ||
+		    (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
 			fmu_text_appendf(out, first ? "%d" : " %d", (int)i + 1);
 			first = false;
 		}
@@ -657,16 +671,17 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	if (generation_date)
 		fmu_text_appendf(&out, "  generationDateAndTime=\"%s\"\n", generation_date);
 	fmu_text_append_string(&out,
-		"  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n");
+	                       "  variableNamingConvention=\"structured\"\n  numberOfEventIndicators=\"0\">\n");
 
-	fmu_text_appendf(&out,
-		"  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
-		"    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
-		"    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
-		"    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
-		"    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
-		"    providesDirectionalDerivative=\"true\"/>\n",
-		t->model_identifier);
+	fmu_text_appendf(
+	    &out,
+	    "  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
+	    "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
+	    "    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
+	    "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
+	    "    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
+	    "    providesDirectionalDerivative=\"true\"/>\n",
+	    t->model_identifier);
 
 	fmu_text_append_string(&out, "  <UnitDefinitions>\n");
 	for (size_t u = 0; u < sizeof units / sizeof units[0]; ++u) {
@@ -683,22 +698,24 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	}
 	fmu_text_append_string(&out, "  </UnitDefinitions>\n");
 
-	fmu_text_append_string(&out,
-		"  <LogCategories>\n"
-		"    <Category name=\"logEvents\"\n"
-		"      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
-		"    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
-		"    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
-		"    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
-		"    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
-		"  </LogCategories>\n");
+	fmu_text_append_string(
+	    &out,
+	    "  <LogCategories>\n"
+	    "    <Category name=\"logEvents\"\n"
+	    "      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
+	    "    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
+	    "    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
+	    "    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
+	    "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
+	    "  </LogCategories>\n");
 
 	char stop[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY], tolerance[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(t->stop_time, stop);
 	sm_format_number(t->step_size, step);
 	sm_format_number(t->tolerance, tolerance);
-	fmu_text_appendf(&out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n",
-	                 stop, step, tolerance);
+	fmu_text_appendf(
+	    &out, "  <DefaultExperiment startTime=\"0\" stopTime=\"%s\" stepSize=\"%s\" tolerance=\"%s\"/>\n",
+	    stop, step, tolerance);
 
 	fmu_text_append_string(&out, "  <ModelVariables>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
@@ -871,8 +888,8 @@ static void quote_line(const char* line, size_t length, char* out, size_t size)
 // takes after those before: one pass in the order given, and with retry, further passes over the
 // values refused until a pass takes none. Returns how many are left unwritten; the first refusal's
 // message goes to *refusal. Out of memory sets out->failed.
-static int32_t write_values(sm_document* file, const sm_document* set, int32_t* pending, int32_t count, bool retry,
-                            fmu_text* out, sm_error* refusal)
+static int32_t write_values(sm_document* file, const sm_document* set, int32_t* pending, int32_t count,
+                            bool retry, fmu_text* out, sm_error* refusal)
 {
 	bool progress = true;
 	bool first = true;
@@ -978,8 +995,8 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 }
 
 // Sets err to "source:line: " and the formatted message; returns status.
-static sm_status line_error(sm_error* err, sm_status status, const char* source_name, size_t line, const char* fmt,
-                            ...)
+static sm_status line_error(sm_error* err, sm_status status, const char* source_name, size_t line,
+                            const char* fmt, ...)
 {
 	char prefix[SM_ERROR_MESSAGE_CAPACITY];
 	snprintf(prefix, sizeof prefix, "%s:%zu: ", source_name, line);
@@ -1002,10 +1019,12 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	const size_t name_length = eq ? (size_t)(eq - line) : 0;
 	const size_t value_length = eq ? line_length - name_length - 1 : 0;
 	if (!eq || name_length == 0 || memchr(line, '\0', line_length))
-		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "expected NAME=VALUE, got \"%s\"", quoted);
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "expected NAME=VALUE, got \"%s\"",
+		                  quoted);
 	if (name_length >= sizeof name || value_length >= sizeof value_text)
-		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the %s is longer than %zu bytes",
-		                  quoted, name_length >= sizeof name ? "name" : "value",
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number,
+		                  "\"%s\": the %s is longer than %zu bytes", quoted,
+		                  name_length >= sizeof name ? "name" : "value",
 		                  (name_length >= sizeof name ? sizeof name : sizeof value_text) - 1);
 	memcpy(name, line, name_length);
 	name[name_length] = '\0';
@@ -1014,8 +1033,8 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	char* end = NULL;
 	const double value = strtod(value_text, &end);
 	if (value_length == 0 || end != value_text + value_length || !isfinite(value))
-		return line_error(err, SM_ERROR_SYNTAX, source_name, number, "\"%s\": the value is not a finite number",
-		                  quoted);
+		return line_error(err, SM_ERROR_SYNTAX, source_name, number,
+		                  "\"%s\": the value is not a finite number", quoted);
 	// Only what the packager writes: the shortest of 15, 16 or 17 significant digits that reads
 	// back to the value (no sign, space, hexadecimal or trailing zero of its own, and no number
 	// that rounds to another).
@@ -1028,12 +1047,14 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 	if (index < 0) {
 		char quoted_name[QUOTED_LINE_CAPACITY];
 		quote_line(name, name_length, quoted_name, sizeof quoted_name);
-		return line_error(err, SM_ERROR_NOT_FOUND, source_name, number, "\"%s\": the model has no parameter named "
-		                  "\"%s\"", quoted, quoted_name);
+		return line_error(err, SM_ERROR_NOT_FOUND, source_name, number,
+		                  "\"%s\": the model has no parameter named "
+		                  "\"%s\"",
+		                  quoted, quoted_name);
 	}
 	if (first_line[index] != 0)
-		return line_error(err, SM_ERROR_SCHEMA, source_name, number, "parameter %s is set again (first on line %zu)",
-		                  name, first_line[index]);
+		return line_error(err, SM_ERROR_SCHEMA, source_name, number,
+		                  "parameter %s is set again (first on line %zu)", name, first_line[index]);
 	first_line[index] = number;
 	sm_error refusal = {SM_OK, ""};
 	const sm_status st = sm_document_set_parameter(doc, index, value, &refusal);
@@ -1048,7 +1069,8 @@ sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t 
 	if (!doc || !parameters)
 		return fail(err, SM_ERROR_INVALID_ARGUMENT, "no document or no parameter values");
 	if (parameters_length == 0)
-		return line_error(err, SM_ERROR_SYNTAX, source_name, 1, "empty: the file lists the parameter values set at "
+		return line_error(err, SM_ERROR_SYNTAX, source_name, 1,
+		                  "empty: the file lists the parameter values set at "
 		                  "packaging, one NAME=VALUE a line, and is left out when there are none");
 	size_t* first_line = calloc((size_t)sm_document_parameter_count(doc) + 1, sizeof *first_line);
 	c_numbers numbers;
@@ -1069,12 +1091,13 @@ sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t 
 	return st;
 }
 
-sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name, const char* parameters,
-                                size_t parameters_length, sm_error* err)
+sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name,
+                                const char* parameters, size_t parameters_length, sm_error* err)
 {
 	sm_document* doc = sm_document_parse(text, length, source_name, err);
 	if (doc && parameters &&
-	    fmu_apply_parameters(doc, parameters, parameters_length, "resources/" FMU_PARAMETERS_RESOURCE, err) != SM_OK) {
+	    fmu_apply_parameters(doc, parameters, parameters_length, "resources/" FMU_PARAMETERS_RESOURCE, err) !=
+	        SM_OK) {
 		sm_document_destroy(doc);
 		return NULL;
 	}

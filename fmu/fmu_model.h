@@ -41,25 +41,25 @@ typedef enum fmu_variability {
 
 /// What a variable reads or writes in the runtime.
 typedef enum fmu_source {
-	FMU_SRC_MODEL_PARAMETER = 0,  ///< index = parameter index of the document
-	FMU_SRC_SOLVER_RTOL,          ///< relative tolerance [1]
-	FMU_SRC_SOLVER_ATOL_POSITION, ///< absolute tolerance of positions [m]
-	FMU_SRC_SOLVER_ATOL_VELOCITY, ///< absolute tolerance of velocities [m/s]
-	FMU_SRC_SOLVER_MAX_STEP,      ///< largest internal step [s], 0 = unlimited
-	FMU_SRC_SOLVER_MAX_STEPS,     ///< internal steps allowed per communication step
-	FMU_SRC_SOLVER_THREADS,       ///< threads of the pcg solver's loops
-	FMU_SRC_SOLVER_METHOD,        ///< "bdf" or "adams"
-	FMU_SRC_SOLVER_LINEAR_SOLVER, ///< "auto", "dense", "klu", "pcg", "cholmod"
-	FMU_SRC_SOLVER_JACOBIAN,      ///< "exact" or "definite"
-	FMU_SRC_PORT_POSITION,        ///< index = port, component 0..2 [m]
-	FMU_SRC_PORT_VELOCITY,        ///< index = port, component 0..2 [m/s]
-	FMU_SRC_PORT_FORCE,           ///< index = port, component 0..2 [N]
-	FMU_SRC_PARTICLE_POSITION,    ///< index = particle, component 0..2 [m]
-	FMU_SRC_PARTICLE_VELOCITY,    ///< index = particle, component 0..2 [m/s]
-	FMU_SRC_ENERGY_KINETIC,       ///< [J]
-	FMU_SRC_ENERGY_ELASTIC,       ///< [J]
-	FMU_SRC_ENERGY_GRAVITY,       ///< [J]
-	FMU_SRC_ENERGY_DISSIPATED,    ///< [J]
+	FMU_SRC_MODEL_PARAMETER = 0,   ///< index = parameter index of the document
+	FMU_SRC_SOLVER_RTOL,           ///< relative tolerance [1]
+	FMU_SRC_SOLVER_ATOL_POSITION,  ///< absolute tolerance of positions [m]
+	FMU_SRC_SOLVER_ATOL_VELOCITY,  ///< absolute tolerance of velocities [m/s]
+	FMU_SRC_SOLVER_MAX_STEP,       ///< largest internal step [s], 0 = unlimited
+	FMU_SRC_SOLVER_MAX_STEPS,      ///< internal steps allowed per communication step
+	FMU_SRC_SOLVER_THREADS,        ///< threads of the pcg solver's loops
+	FMU_SRC_SOLVER_METHOD,         ///< "bdf" or "adams"
+	FMU_SRC_SOLVER_LINEAR_SOLVER,  ///< "auto", "dense", "klu", "pcg", "cholmod"
+	FMU_SRC_SOLVER_JACOBIAN,       ///< "exact" or "definite"
+	FMU_SRC_PORT_POSITION,         ///< index = port, component 0..2 [m]
+	FMU_SRC_PORT_VELOCITY,         ///< index = port, component 0..2 [m/s]
+	FMU_SRC_PORT_FORCE,            ///< index = port, component 0..2 [N]
+	FMU_SRC_PARTICLE_POSITION,     ///< index = particle, component 0..2 [m]
+	FMU_SRC_PARTICLE_VELOCITY,     ///< index = particle, component 0..2 [m/s]
+	FMU_SRC_ENERGY_KINETIC,        ///< [J]
+	FMU_SRC_ENERGY_ELASTIC,        ///< [J]
+	FMU_SRC_ENERGY_GRAVITY,        ///< [J]
+	FMU_SRC_ENERGY_DISSIPATED,     ///< [J]
 } fmu_source;
 
 /// One scalar variable. Its value reference is its index in the table.
@@ -69,7 +69,7 @@ typedef struct fmu_variable {
 	fmu_type type;
 	fmu_causality causality;
 	fmu_variability variability;
-	const char* unit;   ///< static unit name ("m", "N", ...) or NULL
+	const char* unit;  ///< static unit name ("m", "N", ...) or NULL
 	fmu_source source;
 	int32_t index;      ///< parameter, port or particle index (see fmu_source)
 	int32_t component;  ///< 0..2 for vector quantities
@@ -83,13 +83,13 @@ typedef struct fmu_variable {
 typedef struct fmu_table {
 	fmu_variable* variables;
 	int32_t count;
-	char guid[40];             ///< "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (fmu_package_guid)
-	char* model_identifier;    ///< C identifier from the model's name
+	char guid[40];           ///< "{xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx}" (fmu_package_guid)
+	char* model_identifier;  ///< C identifier from the model's name
 	char* model_name;
 	char* description;
-	double stop_time;          ///< default experiment [s]
-	double step_size;          ///< default communication step [s]
-	double tolerance;          ///< default relative tolerance [1]
+	double stop_time;  ///< default experiment [s]
+	double step_size;  ///< default communication step [s]
+	double tolerance;  ///< default relative tolerance [1]
 } fmu_table;
 
 /// Builds the table of a parsed model file. `text`/`length` are the file's bytes and `parameters`
@@ -160,8 +160,8 @@ sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t 
 /// The document an FMU simulates: the model file `text` parsed (messages name `source_name`) with
 /// the values of resources/parameters.txt applied when `parameters` is not NULL (messages name
 /// "resources/parameters.txt"). NULL with err set on failure; the caller destroys the result.
-sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name, const char* parameters,
-                                size_t parameters_length, sm_error* err);
+sm_document* fmu_document_parse(const char* text, size_t length, const char* source_name,
+                                const char* parameters, size_t parameters_length, sm_error* err);
 
 /// modelDescription.xml of the table, as a malloc'ed NUL-terminated string (NULL on OOM).
 /// `generation_date` is an ISO 8601 UTC time stamp or NULL to leave it out.

@@ -195,8 +195,10 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	// The magic's last character is the layout's version: a state of another version is named as
 	// such, since its fields would be read at the wrong places.
 	if (size >= 8 && memcmp(b, STATE_MAGIC, 7) == 0 && b[7] != (unsigned char)STATE_MAGIC[7]) {
-		log_error(inst, "%s: a state of another springmass version (layout %c, this FMU reads %c): save it again "
-		          "with this FMU", function, b[7] >= 0x20 && b[7] < 0x7f ? (char)b[7] : '?', STATE_MAGIC[7]);
+		log_error(inst,
+		          "%s: a state of another springmass version (layout %c, this FMU reads %c): save it again "
+		          "with this FMU",
+		          function, b[7] >= 0x20 && b[7] < 0x7f ? (char)b[7] : '?', STATE_MAGIC[7]);
 		return false;
 	}
 	if (size < HEADER_BYTES || memcmp(b, STATE_MAGIC, 8) != 0) {
@@ -212,10 +214,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 		          inst->table.guid);
 		return false;
 	}
-	if (get_i(b, I_SIZE) != (int64_t)size || size != state_size(inst) || get_i(b, I_PARTICLES) != inst->particle_count ||
-	    get_i(b, I_SPRINGS) != inst->spring_count || get_i(b, I_PORTS) != inst->port_count ||
+	if (get_i(b, I_SIZE) != (int64_t)size || size != state_size(inst) ||
+	    get_i(b, I_PARTICLES) != inst->particle_count || get_i(b, I_SPRINGS) != inst->spring_count ||
+	    get_i(b, I_PORTS) != inst->port_count ||
 	    get_i(b, I_PARAMETERS) != sm_document_parameter_count(inst->doc)) {
-		log_error(inst, "%s: the state's size or counts do not match this model (%zu bytes, this model's take %zu)",
+		log_error(inst,
+		          "%s: the state's size or counts do not match this model (%zu bytes, this model's take %zu)",
 		          function, size, state_size(inst));
 		return false;
 	}
@@ -229,11 +233,11 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	bool ok = (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
 	           state == ST_STEP_FAILED || state == ST_TERMINATED) &&
 	          has_sim == (state != ST_INSTANTIATED);
-	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS && get_i(b, I_LINEAR_SOLVER) >= 0 &&
-	     get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT && get_i(b, I_JACOBIAN) >= 0 &&
-	     get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE && get_i(b, I_MAX_STEPS) >= 1 &&
-	     get_i(b, I_MAX_STEPS) <= INT32_MAX && get_i(b, I_THREADS) >= 1 && get_i(b, I_THREADS) <= INT32_MAX &&
-	     (get_i(b, I_RTOL_SET) & ~1) == 0;
+	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS &&
+	     get_i(b, I_LINEAR_SOLVER) >= 0 && get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT &&
+	     get_i(b, I_JACOBIAN) >= 0 && get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE &&
+	     get_i(b, I_MAX_STEPS) >= 1 && get_i(b, I_MAX_STEPS) <= INT32_MAX && get_i(b, I_THREADS) >= 1 &&
+	     get_i(b, I_THREADS) <= INT32_MAX && (get_i(b, I_RTOL_SET) & ~1) == 0;
 	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
 	double max_step = get_d(b, D_MAX_STEP);
 	// The tolerances as fmi2SetReal takes them: the relative one at least SM_MIN_RELATIVE_TOLERANCE
@@ -241,7 +245,8 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	ok = ok && rtol >= SM_MIN_RELATIVE_TOLERANCE && rtol < 1.0 && atol_x >= SM_MIN_ABSOLUTE_TOLERANCE &&
 	     isfinite(atol_x) && atol_v >= SM_MIN_ABSOLUTE_TOLERANCE && isfinite(atol_v) && max_step >= 0.0 &&
 	     isfinite(max_step);
-	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) && isfinite(get_d(b, D_LAST_SUCCESSFUL));
+	ok = ok && isfinite(get_d(b, D_TIME)) && isfinite(get_d(b, D_START)) &&
+	     isfinite(get_d(b, D_LAST_SUCCESSFUL));
 	// Time only runs forward from the experiment's start: t >= start in every state; from the
 	// end of initialisation on, the last successful time lies between them (fmi2DoStep sets it to
 	// where the step got, which is t).
@@ -251,8 +256,9 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
 	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
 	if (!ok) {
-		log_error(inst, "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
-		                "velocities, parameters or inputs)",
+		log_error(inst,
+		          "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
+		          "velocities, parameters or inputs)",
 		          function);
 		return false;
 	}
@@ -274,9 +280,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 		const double packaged = sm_document_parameter_value(inst->doc, v->index);
 		const double held = value_at(b, 2 * n3 + m + (size_t)v->index);
 		if (held != packaged) {
-			log_error(inst, "%s: the state gives %s = %s, but %s sets the model's structure (%s in this FMU): "
-			          PACKAGED_STRUCTURE "%s=%s)", function, v->name, fmu_number_text(held).text, v->name,
-			          fmu_number_text(packaged).text, v->name, fmu_number_text(held).text);
+			log_error(
+			    inst,
+			    "%s: the state gives %s = %s, but %s sets the model's structure (%s in this FMU): " PACKAGED_STRUCTURE
+			    "%s=%s)",
+			    function, v->name, fmu_number_text(held).text, v->name, fmu_number_text(packaged).text,
+			    v->name, fmu_number_text(held).text);
 			return false;
 		}
 	}
@@ -434,7 +443,8 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, si
 	return fmi2OK;
 }
 
-fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size)
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
+                                 size_t size)
 {
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2SerializeFMUstate", ST_ANY))

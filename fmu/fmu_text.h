@@ -9,10 +9,10 @@
 #include <stddef.h>
 
 typedef struct fmu_text {
-	char* data;       ///< NUL-terminated once anything was appended
-	size_t length;    ///< bytes before the NUL
+	char* data;     ///< NUL-terminated once anything was appended
+	size_t length;  ///< bytes before the NUL
 	size_t capacity;
-	bool failed;      ///< an allocation failed: data is incomplete
+	bool failed;  ///< an allocation failed: data is incomplete
 } fmu_text;
 
 /// Appends n bytes of s.

@@ -118,7 +118,8 @@ static double get(fmi2Component c, const fixture* f, const char* name)
 // An instance of the fixture's FMU, no logging, not visible.
 static fmi2Component instantiate(const fixture* f, const char* name)
 {
-	return fmi2Instantiate(name, fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False, fmi2False);
+	return fmi2Instantiate(name, fmi2CoSimulation, f->guid, f->resources, &f->callbacks, fmi2False,
+	                       fmi2False);
 }
 
 static fmi2Component start(fixture* f, const char* name)
@@ -126,7 +127,8 @@ static fmi2Component start(fixture* f, const char* name)
 	fmi2Component c = instantiate(f, name);
 	if (!c)
 		return NULL;
-	fmi2ValueReference r[3] = {vr(f, "solver.rtol"), vr(f, "solver.atol_position"), vr(f, "solver.atol_velocity")};
+	fmi2ValueReference r[3] = {vr(f, "solver.rtol"), vr(f, "solver.atol_position"),
+	                           vr(f, "solver.atol_velocity")};
 	double tight[3] = {1e-10, 1e-12, 1e-10};
 	if (fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK ||
 	    fmi2EnterInitializationMode(c) != fmi2OK || fmi2SetReal(c, r, 3, tight) != fmi2OK ||
@@ -295,8 +297,8 @@ static int test_state_round_trip(void)
 typedef struct instance_run {
 	const fixture* f;
 	char name[32];
-	double force;             // tip.fx [N]
-	double x[THREAD_STEPS];   // tip.x after each communication step [m]
+	double force;            // tip.fx [N]
+	double x[THREAD_STEPS];  // tip.x after each communication step [m]
 	log_record log;
 	fmi2CallbackFunctions callbacks;
 	int result;
@@ -320,8 +322,8 @@ static int run_instance(instance_run* r)
 	const fixture* f = r->f;
 	r->callbacks = f->callbacks;
 	r->callbacks.componentEnvironment = &r->log;
-	fmi2Component c =
-	    fmi2Instantiate(r->name, fmi2CoSimulation, f->guid, f->resources, &r->callbacks, fmi2False, fmi2False);
+	fmi2Component c = fmi2Instantiate(r->name, fmi2CoSimulation, f->guid, f->resources, &r->callbacks,
+	                                  fmi2False, fmi2False);
 	ENSURE(c != NULL);
 	const fmi2ValueReference settings[4] = {vr(f, "solver.rtol"), vr(f, "solver.atol_position"),
 	                                        vr(f, "solver.atol_velocity"), vr(f, "tip.fx")};
@@ -445,7 +447,8 @@ static int test_parameter_values(void)
 	memcpy(plain, f.guid, 40);
 	ENSURE(write_parameters(&f, "k=200\nd=0\n", 10) == 0);
 	ENSURE(strcmp(plain, f.guid) != 0);
-	ENSURE(fmi2Instantiate("plain", fmi2CoSimulation, plain, f.resources, &f.callbacks, fmi2False, fmi2False) == NULL);
+	ENSURE(fmi2Instantiate("plain", fmi2CoSimulation, plain, f.resources, &f.callbacks, fmi2False,
+	                       fmi2False) == NULL);
 	ENSURE(strstr(f.log.last, "with its parameter values resources/parameters.txt") != NULL);
 	fmi2Component c = start(&f, "set");
 	ENSURE(c != NULL);
@@ -498,24 +501,37 @@ static int test_parameter_values_refused(void)
 	    {TEXT("k=0x3c\n"), "\"k=0x3c\": the value is not written as the packager writes it (60)"},
 	    {TEXT("k=60.0\n"), "\"k=60.0\": the value is not written as the packager writes it (60)"},
 	    {TEXT("k=1e-400\n"), "\"k=1e-400\": the value is not written as the packager writes it (0)"},
-	    {TEXT("k=" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111"
-	          "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "1111111111" "\n"),
-	     "the value is longer than 127 bytes"},
+	    {TEXT("k="
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "1111111111"
+		      "\n"),
+		 "the value is longer than 127 bytes"},
 	    // Quoted lines are cut after 80 bytes, as the model file's messages cut their quotes.
 	    {TEXT("k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa\n"),
-	     "parameters.txt:1: \""
-	     "k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa..."
-	     "\": the value is not a finite number"},
-	    {TEXT("k=" BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10
-	              BYTES_FF_10 "\xff\xff\xff\xff\xff\xff\xff\xff\n"),
-	     "\"k=" QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13
-	     "...\": the value is not a finite number"},
+		 "parameters.txt:1: \""
+		 "k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa..."
+		 "\": the value is not a finite number"},
+	    {TEXT("k=" BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10 BYTES_FF_10
+		          BYTES_FF_10 BYTES_FF_10 "\xff\xff\xff\xff\xff\xff\xff\xff\n"),
+		 "\"k=" QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13 QUOTED_FF_13
+		 "...\": the value is not a finite number"},
 	    {TEXT("zz=1\n"), "parameters.txt:1: \"zz=1\": the model has no parameter named \"zz\""},
 	    // A name is quoted as the line is: a control character shows escaped, not as itself.
 	    {TEXT("z\x1b=1\n"), "the model has no parameter named \"z\\x1b\""},
 	    {TEXT("k=60\nm=1\nk=70"), "parameters.txt:3: parameter k is set again (first on line 1)"},
 	    {TEXT("d=1\nm=-1\n"),
-	     "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
+		 "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
 	};
 #undef TEXT
 #undef BYTES_FF_10
@@ -612,12 +628,9 @@ static int settings_run(fixture* f, const setting* s, bool read_first, double x[
 static int test_settings_take_effect_after_an_output_was_read(void)
 {
 	static const setting settings[] = {
-	    {"solver.rtol", FMU_REAL, 1e-3, 0, NULL},
-	    {"solver.atol_position", FMU_REAL, 1e-2, 0, NULL},
-	    {"solver.atol_velocity", FMU_REAL, 1e-1, 0, NULL},
-	    {"solver.max_step", FMU_REAL, 1e-4, 0, NULL},
-	    {"solver.max_steps", FMU_INTEGER, 0.0, 2, NULL},
-	    {"solver.method", FMU_STRING, 0.0, 0, "adams"},
+	    {"solver.rtol", FMU_REAL, 1e-3, 0, NULL},          {"solver.atol_position", FMU_REAL, 1e-2, 0, NULL},
+	    {"solver.atol_velocity", FMU_REAL, 1e-1, 0, NULL}, {"solver.max_step", FMU_REAL, 1e-4, 0, NULL},
+	    {"solver.max_steps", FMU_INTEGER, 0.0, 2, NULL},   {"solver.method", FMU_STRING, 0.0, 0, "adams"},
 	};
 	fixture f;
 	ENSURE(setup(&f) == 0);
@@ -628,8 +641,9 @@ static int test_settings_take_effect_after_an_output_was_read(void)
 		ENSURE(settings_run(&f, &settings[i], false, x, status) == 0);
 		ENSURE(settings_run(&f, &settings[i], true, read_x, read_status) == 0);
 		if (memcmp(x, read_x, sizeof x) != 0 || memcmp(status, read_status, sizeof status) != 0) {
-			printf("  %s set after an output was read: x(1 s) = %.17g (status %d), without the read %.17g (%d)\n",
-			       settings[i].name, read_x[9], (int)read_status[0], x[9], (int)status[0]);
+			printf(
+			    "  %s set after an output was read: x(1 s) = %.17g (status %d), without the read %.17g (%d)\n",
+			    settings[i].name, read_x[9], (int)read_status[0], x[9], (int)status[0]);
 			return 1;
 		}
 		ENSURE(memcmp(x, plain_x, sizeof x) != 0 || memcmp(status, plain_status, sizeof status) != 0);
@@ -692,7 +706,8 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	    {"solver.atol_position", 0.0, "solver.atol_position = 0 rejected"},
 	    {"solver.rtol", 0.0, "solver.rtol = 0 rejected"},
 	    {"solver.rtol", 1.0, "solver.rtol = 1 rejected"},
-	    {"solver.rtol", 1e-17, "solver.rtol = 1e-17 rejected: a relative tolerance must be at least 2.22045e-16"},
+	    {"solver.rtol", 1e-17,
+		 "solver.rtol = 1e-17 rejected: a relative tolerance must be at least 2.22045e-16"},
 	    {"solver.max_step", -1e-3, "solver.max_step = -0.001 rejected"},
 	};
 	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
@@ -879,7 +894,8 @@ static int test_bounds_of_references_arrays_and_buffers(void)
 	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
 	fmi2Component c = start(&f, "bounds");
 	ENSURE(c != NULL);
-	const fmi2ValueReference past = (fmi2ValueReference)f.table.count, x = vr(&f, "tip.x"), fx = vr(&f, "tip.fx");
+	const fmi2ValueReference past = (fmi2ValueReference)f.table.count, x = vr(&f, "tip.x"),
+	                         fx = vr(&f, "tip.fx");
 	char expected[64];
 	snprintf(expected, sizeof expected, "unknown value reference %u", (unsigned)past);
 	double value = 0.0, seed = 1.0;
@@ -962,12 +978,12 @@ static int test_status_after_terminate(void)
 // 2.1.3 lists the fmi2Get*Status functions among those that may discard), with a message in
 // logStatusDiscard, the value left alone and the instance stepping on. fmi2GetIntegerStatus
 // delivers no kind. A value that is no fmi2StatusKind at all is an fmi2Error.
-#define ENSURE_DISCARDED(call)                                                                      \
-	do {                                                                                            \
-		f.log.last[0] = f.log.category[0] = '\0';                                                   \
-		ENSURE_STATUS(call, fmi2Discard);                                                           \
-		ENSURE(strcmp(f.log.category, "logStatusDiscard") == 0);                                    \
-		ENSURE(strstr(f.log.last, "not delivered here") != NULL);                                   \
+#define ENSURE_DISCARDED(call)                                                                               \
+	do {                                                                                                     \
+		f.log.last[0] = f.log.category[0] = '\0';                                                            \
+		ENSURE_STATUS(call, fmi2Discard);                                                                    \
+		ENSURE(strcmp(f.log.category, "logStatusDiscard") == 0);                                             \
+		ENSURE(strstr(f.log.last, "not delivered here") != NULL);                                            \
 	} while (0)
 
 static int test_status_kinds_not_delivered_are_discarded(void)
@@ -1012,7 +1028,8 @@ static int test_messages_are_printf_formats(void)
 	fixture f;
 	ENSURE(setup(&f) == 0);
 	const char* location = "file:///nonexistent%25d%2541/resources";
-	ENSURE(fmi2Instantiate("percent", fmi2CoSimulation, f.guid, location, &f.callbacks, fmi2False, fmi2False) == NULL);
+	ENSURE(fmi2Instantiate("percent", fmi2CoSimulation, f.guid, location, &f.callbacks, fmi2False,
+	                       fmi2False) == NULL);
 	char formatted[sizeof f.log.last];
 	size_t k = 0;
 	for (const char* p = f.log.last; *p && k + 1 < sizeof formatted; ++p) {
@@ -1131,7 +1148,8 @@ static int test_calls_without_values_still_check_the_state(void)
 		                             : fmi2SetRealInputDerivatives(c, NULL, 0, NULL, NULL);
 		if (status != fmi2Error || f.log.errors != errors + 1 || strstr(f.log.last, names[k]) == NULL ||
 		    strstr(f.log.last, "illegal call sequence") == NULL) {
-			printf("  %s with nvr = 0 when terminated: status %d, logged '%s'\n", names[k], (int)status, f.log.last);
+			printf("  %s with nvr = 0 when terminated: status %d, logged '%s'\n", names[k], (int)status,
+			       f.log.last);
 			return 1;
 		}
 	}
@@ -1394,8 +1412,8 @@ static int test_state_carries_every_solver_setting(void)
 	static const double expected[] = {1e-7, 1e-9, 3e-7, 2e-3};
 	for (int k = 0; k < 4; ++k) {
 		if (get(b, &f, reals[k]) != expected[k] || get(a, &f, reals[k]) != expected[k]) {
-			printf("  %s: %.17g restored, %.17g in the saving instance, %.17g set\n", reals[k], get(b, &f, reals[k]),
-			       get(a, &f, reals[k]), expected[k]);
+			printf("  %s: %.17g restored, %.17g in the saving instance, %.17g set\n", reals[k],
+			       get(b, &f, reals[k]), get(a, &f, reals[k]), expected[k]);
 			return 1;
 		}
 	}
@@ -1410,7 +1428,8 @@ static int test_state_carries_every_solver_setting(void)
 	fmi2Integer thread_count = 0;
 	ENSURE_STATUS(fmi2GetInteger(b, &threads, 1, &thread_count), fmi2OK);
 	ENSURE(thread_count == 3);
-	ENSURE(strcmp(names[0], "adams") == 0 && strcmp(names[1], "klu") == 0 && strcmp(names[2], "definite") == 0);
+	ENSURE(strcmp(names[0], "adams") == 0 && strcmp(names[1], "klu") == 0 &&
+	       strcmp(names[2], "definite") == 0);
 	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
 	ENSURE_STATUS(fmi2FreeFMUstate(b, &restored), fmi2OK);
 	free(bytes);
@@ -1619,9 +1638,9 @@ static bool state_in(int state, const int* states)
 	return false;
 }
 
-// What the test expects of the instance: its state, its start time and time, whether the force input is one no
-// step can take, and the saved FMU states (the state machine's state, the times and the inputs
-// are part of what fmi2GetFMUstate saves).
+// What the test expects of the instance: its state, its start time and time, whether the force input is one
+// no step can take, and the saved FMU states (the state machine's state, the times and the inputs are part of
+// what fmi2GetFMUstate saves).
 #define SLOTS 3
 typedef struct expectation {
 	int state;
@@ -1634,9 +1653,30 @@ typedef struct expectation {
 } expectation;
 
 enum {
-	OP_SETUP, OP_ENTER, OP_EXIT, OP_STEP, OP_STEP_AT_WRONG_TIME, OP_STEP_NEGATIVE, OP_SET_FORCE, OP_SET_HUGE, OP_SET_NAN,
-	OP_GET, OP_GET_UNKNOWN, OP_TERMINATE, OP_RESET, OP_GET_STATE, OP_SET_STATE, OP_FREE_STATE, OP_SERIALIZE,
-	OP_STATUS, OP_DERIVATIVE, OP_LOGGING, OP_CANCEL, OP_INPUT_DERIVATIVES, OP_OUTPUT_DERIVATIVES, OP_COUNT
+	OP_SETUP,
+	OP_ENTER,
+	OP_EXIT,
+	OP_STEP,
+	OP_STEP_AT_WRONG_TIME,
+	OP_STEP_NEGATIVE,
+	OP_SET_FORCE,
+	OP_SET_HUGE,
+	OP_SET_NAN,
+	OP_GET,
+	OP_GET_UNKNOWN,
+	OP_TERMINATE,
+	OP_RESET,
+	OP_GET_STATE,
+	OP_SET_STATE,
+	OP_FREE_STATE,
+	OP_SERIALIZE,
+	OP_STATUS,
+	OP_DERIVATIVE,
+	OP_LOGGING,
+	OP_CANCEL,
+	OP_INPUT_DERIVATIVES,
+	OP_OUTPUT_DERIVATIVES,
+	OP_COUNT
 };
 
 // 500 internal steps per communication step at most (the file's 100 000 would make each
@@ -1651,8 +1691,8 @@ static fmi2Status limit_steps(fmi2Component c, const fixture* f)
 // One call of kind op with arguments drawn from r. Returns the FMU's status and sets *expected to
 // what the standard's table and the arguments call for, updating the expectation for the calls
 // that succeed; `value` receives a value read (NAN if none).
-static fmi2Status call(fmi2Component c, const fixture* f, int op, rng* r, expectation* e, fmi2Status* expected,
-                       double* value)
+static fmi2Status call(fmi2Component c, const fixture* f, int op, rng* r, expectation* e,
+                       fmi2Status* expected, double* value)
 {
 	const int st = e->state;
 	const bool running = IN(st, S_INITIALIZATION, S_STEP_COMPLETE, S_STEP_FAILED, S_TERMINATED);
@@ -1702,10 +1742,8 @@ static fmi2Status call(fmi2Component c, const fixture* f, int op, rng* r, expect
 		}
 		return status;
 	}
-	case OP_STEP_AT_WRONG_TIME:
-		return fmi2DoStep(c, e->time + 0.5, 0.01, fmi2False);
-	case OP_STEP_NEGATIVE:
-		return fmi2DoStep(c, e->time, -0.01, fmi2False);
+	case OP_STEP_AT_WRONG_TIME: return fmi2DoStep(c, e->time + 0.5, 0.01, fmi2False);
+	case OP_STEP_NEGATIVE: return fmi2DoStep(c, e->time, -0.01, fmi2False);
 	case OP_SET_FORCE: {
 		const double fx = rng_uniform(r, -1.0, 1.0);  // [N]: the bob stays within a few cm
 		if (settable) {
@@ -1900,8 +1938,8 @@ static int test_random_call_sequences_follow_the_state_machine(void)
 	                                            "CancelStep",
 	                                            "SetRealInputDerivatives",
 	                                            "GetRealOutputDerivatives"};
-	static const char* const state_names[] = {"instantiated", "initialization mode", "step complete", "step failed",
-	                                          "terminated"};
+	static const char* const state_names[] = {"instantiated", "initialization mode", "step complete",
+	                                          "step failed", "terminated"};
 	rng r = {20261201};
 	int visits[S_TERMINATED + 1] = {0}, discards = 0;  // calls made in each state; steps discarded
 	for (int sequence = 0; sequence < 1000; ++sequence) {
@@ -1920,11 +1958,13 @@ static int test_random_call_sequences_follow_the_state_machine(void)
 			double value;
 			const fmi2Status status = call(c, &f, op, &r, &e, &expected, &value);
 			const bool logged = f.log.errors > errors;
-			if (status != expected || (expected == fmi2Error) != logged || (!isnan(value) && !isfinite(value)) ||
+			if (status != expected || (expected == fmi2Error) != logged ||
+			    (!isnan(value) && !isfinite(value)) ||
 			    (expected == fmi2OK && op == OP_GET && !isfinite(value))) {
-				printf("  sequence %d, call %d: %s in state %s returned %d, expected %d (%s); last message: %s\n",
-				       sequence, n, names[op], state_names[before], (int)status, (int)expected,
-				       logged ? "an error logged" : "no error logged", f.log.last);
+				printf(
+				    "  sequence %d, call %d: %s in state %s returned %d, expected %d (%s); last message: %s\n",
+				    sequence, n, names[op], state_names[before], (int)status, (int)expected,
+				    logged ? "an error logged" : "no error logged", f.log.last);
 				return 1;
 			}
 			discards += expected == fmi2Discard;
@@ -1979,14 +2019,17 @@ static int test_variable_names_form_a_tree(void)
 	    {"\"energy\": 1", "", "", "\"energy\"", "\"energy.kinetic\""},
 	    {"\"p\": 1", "", "", "\"p[0].x\"", "\"p\""},
 	    {"", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}", "", "\"p[0].x\"", "\"p."},
-	    {"\"tip\": 1", "{\"name\": \"tip\", \"particle\": \"b\", \"kind\": \"probe\"}", "", "\"tip\"", "\"tip.x\""},
+	    {"\"tip\": 1", "{\"name\": \"tip\", \"particle\": \"b\", \"kind\": \"probe\"}", "", "\"tip\"",
+		 "\"tip.x\""},
 	};
 	for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
 		ENSURE(names_of(refused[i].parameters, refused[i].ports, refused[i].fmu, &err) == SM_ERROR_SCHEMA);
-		ENSURE(strstr(err.message, refused[i].first) != NULL && strstr(err.message, refused[i].second) != NULL);
+		ENSURE(strstr(err.message, refused[i].first) != NULL &&
+		       strstr(err.message, refused[i].second) != NULL);
 	}
 	// A record beside solver.*, a port p without particle variables.
-	ENSURE(names_of("", "{\"name\": \"solver\", \"particle\": \"b\", \"kind\": \"probe\"}", "", &err) == SM_OK);
+	ENSURE(names_of("", "{\"name\": \"solver\", \"particle\": \"b\", \"kind\": \"probe\"}", "", &err) ==
+	       SM_OK);
 	ENSURE(names_of("", "{\"name\": \"p\", \"particle\": \"b\", \"kind\": \"force\"}",
 	                ", \"fmu\": {\"particle_variables\": false}", &err) == SM_OK);
 	return 0;

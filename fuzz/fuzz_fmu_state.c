@@ -185,7 +185,8 @@ static void write_seed(fixture* f, const char* folder, int number, unsigned cont
 	snprintf(path, sizeof path, "%s/fmu-state-%d", folder, number);
 	const unsigned char first = (unsigned char)control;
 	FILE* out = fopen(path, "wb");
-	if (out == NULL || fwrite(&first, 1, 1, out) != 1 || fwrite(bytes, 1, size, out) != size || fclose(out) != 0)
+	if (out == NULL || fwrite(&first, 1, 1, out) != 1 || fwrite(bytes, 1, size, out) != size ||
+	    fclose(out) != 0)
 		fail("cannot write a seed", path);
 	free(bytes);
 }
@@ -322,7 +323,8 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 	fmi2Integer steps = 0;
 	if (size < MIN_STATE_BYTES || written != state_checksum(bytes, size) || time != f->good_time ||
 	    fmi2GetInteger(f->instance, &r, 1, &steps) != fmi2OK || max_steps != steps)
-		fail("the FMU state's layout or checksum is no longer what the target reads; update the target", NULL);
+		fail("the FMU state's layout or checksum is no longer what the target reads; update the target",
+		     NULL);
 	free(bytes);
 	the_fixture = f;
 	return 0;
@@ -369,7 +371,8 @@ static void forget(observed* o)
 }
 
 // A refusal is fmi2Error with a message, and leaves the instance as `before`.
-static void check_refusal(fixture* f, fmi2Status status, long problems, const observed* before, const char* what)
+static void check_refusal(fixture* f, fmi2Status status, long problems, const observed* before,
+                          const char* what)
 {
 	if (status != fmi2Error || f->log.problems == problems)
 		fail(what, "refused without fmi2Error and a message");

@@ -17,7 +17,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = sm_document_parse_limited((const char*)data, size, "fuzz.json", FUZZ_MAX_ELEMENTS, &err);
+	sm_document* doc =
+	    sm_document_parse_limited((const char*)data, size, "fuzz.json", FUZZ_MAX_ELEMENTS, &err);
 	if (doc == NULL) {
 		if (err.status == SM_OK || err.message[0] == '\0')
 			abort();  // a refusal must say why

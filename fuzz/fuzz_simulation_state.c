@@ -221,7 +221,8 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 	uint64_t written;
 	memcpy(&written, f->baseline + f->baseline_size - CHECKSUM_BYTES, CHECKSUM_BYTES);
 	if (written != state_checksum(f->baseline, f->baseline_size)) {
-		fprintf(stderr, "fuzz_simulation_state: the state's checksum is no longer FNV-1a; update the target\n");
+		fprintf(stderr,
+		        "fuzz_simulation_state: the state's checksum is no longer FNV-1a; update the target\n");
 		abort();
 	}
 	the_fixture = f;

@@ -9,16 +9,16 @@
 // row-major dof x dof, assembled from the per-spring blocks of the given variant (constrained
 // particles dropped). free_index[p] is the free index of particle p or -1. Adds nothing for disabled
 // springs (their blocks are zero).
-void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
-                                 sm_jacobian_variant variant, double* K);
+void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x,
+                                 size_t dof, sm_jacobian_variant variant, double* K);
 
 // Free index of every particle (-1 for constrained ones) and the mass of every free degree of
 // freedom; returns the number of free particles. free_index has particle_count entries,
 // dof_mass 3 * free count (may be NULL).
 int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
 
-// The first intact rest-length spring (l0 > 0) with a free end whose two particles coincide at x (its degenerate
-// point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy ks (L - l0)^2 / 2
+// The first intact rest-length spring (l0 > 0) with a free end whose two particles coincide at x (its
+// degenerate point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy ks (L - l0)^2 / 2
 // is a maximum there, falling as the particles part in any direction with a force of about
 // ks l0 that has no derivative at the point: the model.h convention (no force, K = ks I) makes it
 // a force balance, never a stable one, and it has no linearisation.
@@ -47,5 +47,6 @@ cholmod_sparse sm_analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_
 int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common);
 
 // out = A^-1 rhs with the factor of A (dof entries each). Returns 0, or -1 on failure.
-int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out);
+int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs,
+                              double* out);
 #endif

@@ -16,14 +16,14 @@
 
 struct sm_coarse_halves {
 	int64_t n;
-	int8_t* column_part;       // per column of L (pivot order): 0 or 1 (a half) or 2 (separator)
-	int64_t* supernodes;       // of half 0, then of half 1, then the others, each group in order
-	int64_t group[4];          // group g is supernodes[group[g] .. group[g + 1]]
-	int64_t* separator_rows;   // the columns of part 2
+	int8_t* column_part;      // per column of L (pivot order): 0 or 1 (a half) or 2 (separator)
+	int64_t* supernodes;      // of half 0, then of half 1, then the others, each group in order
+	int64_t group[4];         // group g is supernodes[group[g] .. group[g + 1]]
+	int64_t* separator_rows;  // the columns of part 2
 	int64_t separator_count;
-	double* y;                 // the vector being solved, in pivot order
-	double* separator[2];      // per half: its updates to separator rows (zero at the others)
-	double* scratch[2];        // per half: the rows below one supernode's triangle
+	double* y;             // the vector being solved, in pivot order
+	double* separator[2];  // per half: its updates to separator rows (zero at the others)
+	double* scratch[2];    // per half: the rows below one supernode's triangle
 };
 
 void sm_coarse_halves_destroy(sm_coarse_halves* h)
@@ -58,7 +58,8 @@ sm_coarse_halves* sm_coarse_halves_create(cholmod_sparse* A, const int8_t* part,
 	// little fill; the analysis takes that ordering as given.
 	if (!cholmod_l_camd(A, NULL, 0, member, order, common))
 		goto fail;
-	const int methods = common->nmethods, ordering = common->method[0].ordering, supernodal = common->supernodal;
+	const int methods = common->nmethods, ordering = common->method[0].ordering,
+	          supernodal = common->supernodal;
 	common->nmethods = 1;
 	common->method[0].ordering = CHOLMOD_GIVEN;
 	common->supernodal = CHOLMOD_SUPERNODAL;
@@ -80,8 +81,8 @@ sm_coarse_halves* sm_coarse_halves_create(cholmod_sparse* A, const int8_t* part,
 		h->separator[k] = calloc((size_t)n + 1, sizeof(double));
 		h->scratch[k] = malloc((L->maxesize + 1) * sizeof(double));
 	}
-	if (!h->column_part || !h->supernodes || !h->separator_rows || !h->y || !h->separator[0] || !h->separator[1] ||
-	    !h->scratch[0] || !h->scratch[1])
+	if (!h->column_part || !h->supernodes || !h->separator_rows || !h->y || !h->separator[0] ||
+	    !h->separator[1] || !h->scratch[0] || !h->scratch[1])
 		goto fail;
 	for (int64_t k = 0; k < n; k++) {
 		h->column_part[k] = part[perm[k]];
@@ -151,8 +152,8 @@ static supernode supernode_of(const cholmod_factor* L, int64_t s)
 
 // Forward solve with supernode s: its triangle in place on y, then its rows below updated, into
 // `separator` for separator rows when a half solves it (NULL: the caller's, directly into y).
-static void forward_supernode(const sm_coarse_halves* h, const cholmod_factor* L, int64_t s, double* restrict y,
-                              double* restrict separator, double* restrict below)
+static void forward_supernode(const sm_coarse_halves* h, const cholmod_factor* L, int64_t s,
+                              double* restrict y, double* restrict separator, double* restrict below)
 {
 	const supernode n = supernode_of(L, s);
 	const int64_t columns = n.columns, rows = n.rows, below_count = rows - columns;
@@ -196,7 +197,8 @@ static void backward_supernode(const cholmod_factor* L, int64_t s, double* restr
 		below[i] = y[row[columns + i]];
 	for (int64_t j = columns - 1; j >= 0; j--) {
 		const double* c = values + j * rows;
-		const double sum = ys[j] - dot(c + j + 1, ys + j + 1, columns - j - 1) - dot(c + columns, below, below_count);
+		const double sum =
+		    ys[j] - dot(c + j + 1, ys + j + 1, columns - j - 1) - dot(c + columns, below, below_count);
 		ys[j] = sum / c[j];
 	}
 }

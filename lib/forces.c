@@ -62,11 +62,12 @@
 // `damping_position` (exact variant's c). The force is computed by the same expressions in
 // every specialisation, so sm_model_forces and sm_model_forces_and_jacobians agree bit for bit.
 SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t* restrict first,
-                                      const int32_t* restrict second, const double* restrict rest_length,
-                                      const double* restrict stiffness, const double* restrict damping,
-                                      const double* restrict x, const double* restrict v, double* restrict f,
-                                      double* restrict jacobian, double* restrict power, const int with_velocity,
-                                      const int with_jacobian, const int clamp, const int damping_position)
+                                    const int32_t* restrict second, const double* restrict rest_length,
+                                    const double* restrict stiffness, const double* restrict damping,
+                                    const double* restrict x, const double* restrict v, double* restrict f,
+                                    double* restrict jacobian, double* restrict power,
+                                    const int with_velocity, const int with_jacobian, const int clamp,
+                                    const int damping_position)
 {
 	double dissipated = 0.0;
 	for (int32_t s = begin; s < count; s++) {
@@ -131,11 +132,12 @@ SPECIALISED void spring_loop_scalar(int32_t begin, int32_t count, const int32_t*
 // The dissipated power is summed in two lanes, even and odd springs, carried in and out through
 // `carried` (NULL: not wanted), so that the four-lane loop can hand its sums over unchanged.
 SPECIALISED int32_t spring_loop_pairs(int32_t begin, int32_t count, const int32_t* restrict first,
-                                        const int32_t* restrict second, const double* restrict rest_length,
-                                        const double* restrict stiffness, const double* restrict damping,
-                                        const double* restrict x, const double* restrict v, double* restrict f,
-                                        double* restrict jacobian, double* restrict carried, const int with_velocity,
-                                        const int with_jacobian, const int clamp, const int damping_position)
+                                      const int32_t* restrict second, const double* restrict rest_length,
+                                      const double* restrict stiffness, const double* restrict damping,
+                                      const double* restrict x, const double* restrict v, double* restrict f,
+                                      double* restrict jacobian, double* restrict carried,
+                                      const int with_velocity, const int with_jacobian, const int clamp,
+                                      const int damping_position)
 {
 	const __m128d zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
 	__m128d dissipated = carried != NULL ? _mm_loadu_pd(carried) : zero;
@@ -152,9 +154,9 @@ SPECIALISED int32_t spring_loop_pairs(int32_t begin, int32_t count, const int32_
 		const __m128d l0 = _mm_loadu_pd(rest_length + s), ks = _mm_loadu_pd(stiffness + s);
 		const __m128d kd = _mm_loadu_pd(damping + s);
 		const __m128d length =
-			_mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
+		    _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_mul_pd(dz, dz)));
 		const __m128d regular =
-			_mm_and_pd(_mm_cmpgt_pd(length, zero), _mm_cmpge_pd(length, _mm_mul_pd(ratio, l0)));
+		    _mm_and_pd(_mm_cmpgt_pd(length, zero), _mm_cmpge_pd(length, _mm_mul_pd(ratio, l0)));
 		const __m128d denominator = _mm_or_pd(_mm_and_pd(regular, length), _mm_andnot_pd(regular, one));
 		const __m128d inv = _mm_div_pd(one, denominator);
 		const __m128d inv_length = _mm_and_pd(regular, inv);
@@ -212,7 +214,6 @@ SPECIALISED int32_t spring_loop_pairs(int32_t begin, int32_t count, const int32_
 }
 #endif
 
-
 #if defined(SM_HAVE_AVX_PATH)
 #define AVX_TARGET __attribute__((target("avx")))
 
@@ -228,12 +229,12 @@ SPECIALISED int32_t spring_loop_pairs(int32_t begin, int32_t count, const int32_
 // added to f spring after spring; the dissipated power's lanes 0 and 2 (even springs) and 1 and 3
 // (odd) are added into the pairs' two sums in the order the pairs loop adds them. Returns where
 // the pairs loop takes over.
-static inline AVX_TARGET __attribute__((always_inline)) int32_t
-spring_loop_quads(int32_t count, const int32_t* restrict first, const int32_t* restrict second,
-                  const double* restrict rest_length, const double* restrict stiffness,
-                  const double* restrict damping, const double* restrict x, const double* restrict v,
-                  double* restrict f, double* restrict jacobian, double* restrict carried, const int with_velocity,
-                  const int with_jacobian, const int clamp, const int damping_position)
+static inline AVX_TARGET __attribute__((always_inline)) int32_t spring_loop_quads(
+    int32_t count, const int32_t* restrict first, const int32_t* restrict second,
+    const double* restrict rest_length, const double* restrict stiffness, const double* restrict damping,
+    const double* restrict x, const double* restrict v, double* restrict f, double* restrict jacobian,
+    double* restrict carried, const int with_velocity, const int with_jacobian, const int clamp,
+    const int damping_position)
 {
 	const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
 	const __m256d ratio = _mm256_set1_pd(SM_DEGENERATE_LENGTH_RATIO);
@@ -247,25 +248,25 @@ spring_loop_quads(int32_t count, const int32_t* restrict first, const int32_t* r
 		}
 		// (x, y) differences spring by spring in 128-bit registers, z differences as scalars,
 		// then transposed into one register per component (lane k: spring s + k).
-#define DIFFERENCES(p, ox, oy, oz)                                                                      \
-	do {                                                                                                \
-		__m128d xy[4];                                                                                  \
-		double dzs[4];                                                                                  \
-		for (int k = 0; k < 4; k++) {                                                                   \
-			xy[k] = _mm_sub_pd(_mm_loadu_pd((p) + b[k]), _mm_loadu_pd((p) + a[k]));                     \
-			dzs[k] = (p)[b[k] + 2] - (p)[a[k] + 2];                                                     \
-		}                                                                                               \
-		const __m256d even = AVX_JOIN(xy[0], xy[2]), odd = AVX_JOIN(xy[1], xy[3]);                      \
-		ox = _mm256_unpacklo_pd(even, odd);                                                             \
-		oy = _mm256_unpackhi_pd(even, odd);                                                             \
-		oz = _mm256_loadu_pd(dzs);                                                                      \
+#define DIFFERENCES(p, ox, oy, oz)                                                                           \
+	do {                                                                                                     \
+		__m128d xy[4];                                                                                       \
+		double dzs[4];                                                                                       \
+		for (int k = 0; k < 4; k++) {                                                                        \
+			xy[k] = _mm_sub_pd(_mm_loadu_pd((p) + b[k]), _mm_loadu_pd((p) + a[k]));                          \
+			dzs[k] = (p)[b[k] + 2] - (p)[a[k] + 2];                                                          \
+		}                                                                                                    \
+		const __m256d even = AVX_JOIN(xy[0], xy[2]), odd = AVX_JOIN(xy[1], xy[3]);                           \
+		ox = _mm256_unpacklo_pd(even, odd);                                                                  \
+		oy = _mm256_unpackhi_pd(even, odd);                                                                  \
+		oz = _mm256_loadu_pd(dzs);                                                                           \
 	} while (0)
 		__m256d dx, dy, dz;
 		DIFFERENCES(x, dx, dy, dz);
 		const __m256d l0 = _mm256_loadu_pd(rest_length + s), ks = _mm256_loadu_pd(stiffness + s);
 		const __m256d kd = _mm256_loadu_pd(damping + s);
-		const __m256d length = _mm256_sqrt_pd(
-			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
+		const __m256d length = _mm256_sqrt_pd(_mm256_add_pd(
+		    _mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
 		const __m256d regular = _mm256_and_pd(_mm256_cmp_pd(length, zero, _CMP_GT_OQ),
 		                                      _mm256_cmp_pd(length, _mm256_mul_pd(ratio, l0), _CMP_GE_OQ));
 		const __m256d inv = _mm256_div_pd(one, _mm256_blendv_pd(one, length, regular));
@@ -336,14 +337,14 @@ spring_loop_quads(int32_t count, const int32_t* restrict first, const int32_t* r
 // expanded inside a function compiled for AVX). Returns where the pairs loop takes over: 0 for
 // any other combination.
 static AVX_TARGET int32_t spring_quads(int32_t count, const int32_t* first, const int32_t* second,
-                                       const double* rest_length, const double* stiffness, const double* damping,
-                                       const double* x, const double* v, double* f, double* jacobian,
-                                       double* carried, const int with_velocity, const int with_jacobian,
-                                       const int clamp, const int damping_position)
+                                       const double* rest_length, const double* stiffness,
+                                       const double* damping, const double* x, const double* v, double* f,
+                                       double* jacobian, double* carried, const int with_velocity,
+                                       const int with_jacobian, const int clamp, const int damping_position)
 {
-#define QUADS(c, wv, wj, cl, dp)                                                                           \
-	spring_loop_quads(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian, c, wv, wj, cl, \
-	                  dp)
+#define QUADS(c, wv, wj, cl, dp)                                                                             \
+	spring_loop_quads(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian, c, wv, wj,   \
+	                  cl, dp)
 	const int flags = with_velocity << 3 | with_jacobian << 2 | clamp << 1 | damping_position;
 	const bool sums = carried != NULL;
 	switch (flags) {
@@ -383,11 +384,11 @@ static int widest_lanes(void)
 // for what is left (the same bits whichever way, see above; the power's two lanes are added last,
 // as the pairs loop always did).
 SPECIALISED void spring_loop(int lanes, int32_t count, const int32_t* restrict first,
-                               const int32_t* restrict second, const double* restrict rest_length,
-                               const double* restrict stiffness, const double* restrict damping,
-                               const double* restrict x, const double* restrict v, double* restrict f,
-                               double* restrict jacobian, double* restrict power, const int with_velocity,
-                               const int with_jacobian, const int clamp, const int damping_position)
+                             const int32_t* restrict second, const double* restrict rest_length,
+                             const double* restrict stiffness, const double* restrict damping,
+                             const double* restrict x, const double* restrict v, double* restrict f,
+                             double* restrict jacobian, double* restrict power, const int with_velocity,
+                             const int with_jacobian, const int clamp, const int damping_position)
 {
 	int32_t begin = 0;
 #if defined(__SSE2__)
@@ -395,12 +396,12 @@ SPECIALISED void spring_loop(int lanes, int32_t count, const int32_t* restrict f
 	double* carried = power != NULL ? sums : NULL;
 #if defined(SM_HAVE_AVX_PATH)
 	if (lanes >= 4)
-		begin = spring_quads(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian, carried,
-		                     with_velocity, with_jacobian, clamp, damping_position);
+		begin = spring_quads(count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
+		                     carried, with_velocity, with_jacobian, clamp, damping_position);
 #endif
 	if (lanes >= 2)
-		begin = spring_loop_pairs(begin, count, first, second, rest_length, stiffness, damping, x, v, f, jacobian,
-		                          carried, with_velocity, with_jacobian, clamp, damping_position);
+		begin = spring_loop_pairs(begin, count, first, second, rest_length, stiffness, damping, x, v, f,
+		                          jacobian, carried, with_velocity, with_jacobian, clamp, damping_position);
 	if (power != NULL)
 		*power += sums[0] + sums[1];
 #else
@@ -417,8 +418,8 @@ static void springs_add(const sm_model* m, const double* x, const double* v, dou
                         sm_jacobian_variant variant, double* power, int lanes)
 {
 #define LOOP(vv, jj, pp, wv, wj, cl, dp)                                                                     \
-	spring_loop(lanes, m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping, x, \
-	            vv, f, jj, pp, wv, wj, cl, dp)
+	spring_loop(lanes, m->spring_count, m->spring_a, m->spring_b, m->rest_length, m->stiffness, m->damping,  \
+	            x, vv, f, jj, pp, wv, wj, cl, dp)
 	const bool exact = variant == SM_JACOBIAN_EXACT;
 	// Exact: no clamp, the damping-position term (none without v). Definite: clamp, no term.
 	if (jacobian == NULL && v == NULL)
@@ -493,8 +494,8 @@ static double mass_damping_power(const sm_model* model, const double* v)
 	return mass_damping_power_range(model, v, 0, model->particle_count);
 }
 
-double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
-                                 double* f)
+double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v,
+                                 const double* f_external, double* f)
 {
 	body_forces(model, v, f_external, f);
 	double power = 0.0;
@@ -503,7 +504,8 @@ double sm_model_forces_and_power(const sm_model* model, const double* x, const d
 }
 
 double sm_model_forces_power_and_jacobians(const sm_model* model, const double* x, const double* v,
-                                           const double* f_external, double* f, sm_spring_jacobians* jacobians)
+                                           const double* f_external, double* f,
+                                           sm_spring_jacobians* jacobians)
 {
 	body_forces(model, v, f_external, f);
 	double power = 0.0;
@@ -525,8 +527,8 @@ double sm_spring_order_forces_and_jacobians(const sm_spring_order* order, int32_
 {
 	double power = 0.0;
 	if (begin < end)
-		spring_loop(widest_lanes(), end - begin, order->a + begin, order->b + begin, order->rest_length + begin,
-		            order->stiffness + begin, order->damping + begin, x, v, f,
+		spring_loop(widest_lanes(), end - begin, order->a + begin, order->b + begin,
+		            order->rest_length + begin, order->stiffness + begin, order->damping + begin, x, v, f,
 		            records + SPRING_JACOBIAN_STRIDE * (size_t)begin, &power, 1, 1, 1, 0);
 	return power;
 }
@@ -595,7 +597,8 @@ sm_energies sm_model_energies(const sm_model* model, const double* x, const doub
 	if (x != NULL)
 		for (int32_t s = 0; s < model->spring_count; s++) {
 			spring_geometry geo;
-			spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &geo);
+			spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s],
+			                     &geo);
 			// Zero-length springs have l0 = 0: ks (L - 0)^2 / 2 = ks L^2 / 2 (law_zero_length.h).
 			e.elastic += rest_length_energy(model->stiffness[s], model->rest_length[s], geo.length);
 		}
@@ -622,8 +625,8 @@ double sm_model_dissipated_power(const sm_model* model, const double* x, const d
 // its 1/L is 0 as well: a NaN length gives a NaN tension and an overflowed one (L = inf, u = 0,
 // r = 0) ks (inf - l0) = inf, so that a state gone wrong does not read as a slack spring. A
 // disabled spring (ks = kd = 0) pulls with 0 at any length (0 inf would be NaN).
-void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length, double* strain,
-                            double* tension)
+void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length,
+                            double* strain, double* tension)
 {
 	if (model == NULL || x == NULL)
 		return;

@@ -120,12 +120,13 @@ static bool read_factor(reader* r, int depth, int64_t* value)
 		const char* cut = length > NAME_SHOWN_BYTES ? "..." : "";
 		double v;
 		if (!r->lookup(r->context, name, length, &v))
-			return failed(r, INDEX_EXPRESSION_UNKNOWN_NAME, "no parameter named \"%.*s\"%s", shown, name, cut);
+			return failed(r, INDEX_EXPRESSION_UNKNOWN_NAME, "no parameter named \"%.*s\"%s", shown, name,
+			              cut);
 		if (!(v == floor(v)) || !(fabs(v) <= (double)VALUE_LIMIT)) {
 			char text[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(v, text);
-			return failed(r, INDEX_EXPRESSION_NOT_WHOLE, "parameter %.*s%s = %s is not a whole number within 2^31", shown,
-			              name, cut, text);
+			return failed(r, INDEX_EXPRESSION_NOT_WHOLE,
+			              "parameter %.*s%s = %s is not a whole number within 2^31", shown, name, cut, text);
 		}
 		*value = (int64_t)v;
 		return true;
@@ -181,8 +182,9 @@ static bool read_expression(reader* r, int depth, int64_t* value)
 	}
 }
 
-index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
-                                                     int64_t* value, const char** end, char* message)
+index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup,
+                                                     void* context, int64_t* value, const char** end,
+                                                     char* message)
 {
 	reader r = {text, lookup, context, message, INDEX_EXPRESSION_OK};
 	message[0] = '\0';

@@ -28,10 +28,11 @@ typedef enum index_expression_status {
 	INDEX_EXPRESSION_INVALID,       // a division by zero, or a value beyond +-2^31 along the way
 } index_expression_status;
 
-// Reads one expression from text, white space (space, tab, LF, VT, FF, CR) around its parts allowed, up to the first ','
-// or ']' outside parentheses or the end of the text; *end gets where it stopped. On success
+// Reads one expression from text, white space (space, tab, LF, VT, FF, CR) around its parts allowed, up to
+// the first ',' or ']' outside parentheses or the end of the text; *end gets where it stopped. On success
 // *value gets the expression's value. Otherwise message (INDEX_EXPRESSION_MESSAGE_CAPACITY bytes)
 // says what is wrong, naming the name or value at fault ("no parameter named \"m\"",
 // "parameter h = 0.5 is not a whole number", "division by zero").
-index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup, void* context,
-                                                     int64_t* value, const char** end, char* message);
+index_expression_status sm_index_expression_evaluate(const char* text, index_expression_lookup_fn lookup,
+                                                     void* context, int64_t* value, const char** end,
+                                                     char* message);

@@ -20,7 +20,8 @@ void sm_spring_blocks(const sm_model* model, int32_t spring, const double* x, co
                       sm_jacobian_variant variant, double K[9], double D[9])
 {
 	spring_geometry g;
-	spring_geometry_eval(x, v, model->spring_a[spring], model->spring_b[spring], model->rest_length[spring], &g);
+	spring_geometry_eval(x, v, model->spring_a[spring], model->spring_b[spring], model->rest_length[spring],
+	                     &g);
 	for (int k = 0; k < 9; k++)
 		K[k] = D[k] = 0.0;
 	rest_length_add_block(model->stiffness[spring], model->rest_length[spring], &g, variant, K);
@@ -95,7 +96,8 @@ sm_status sm_model_jacobian_dense(const sm_model* model, const double* x, const 
 // computed on the fly and applied at once, instead of building its two 3x3 blocks:
 // d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, d f_b = -d f_a.
 sm_status sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
-                                    sm_jacobian_variant variant, const double* dx, const double* dv, double* out)
+                                    sm_jacobian_variant variant, const double* dx, const double* dv,
+                                    double* out)
 {
 	if (model == NULL || x == NULL || out == NULL || !known_variant(variant))
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -160,8 +162,8 @@ sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians, int32_
 // The product of one spring: d f_a = K rx + D rv = u (z . rx + kd u . rv) + beta rx, with
 // rx = dx_b - dx_a, rv = dv_b - dv_a; d f_b = -d f_a. Specialised for the NULL cases.
 static inline void factored_product(const sm_spring_jacobians* J, const sm_model* model,
-                                    const double* restrict dx, const double* restrict dv, double* restrict out,
-                                    const int with_x, const int with_v)
+                                    const double* restrict dx, const double* restrict dv,
+                                    double* restrict out, const int with_x, const int with_v)
 {
 	const int32_t* restrict first = model->spring_a;
 	const int32_t* restrict second = model->spring_b;

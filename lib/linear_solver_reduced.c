@@ -187,7 +187,8 @@ static void load_masses(sm_reduced* r)
 static void current_jacobian(sm_reduced* r, double t, const double* y)
 {
 	sm_simulation* sim = r->sim;
-	if (!(r->rhs_records && r->rhs_time == t && memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0)) {
+	if (!(r->rhs_records && r->rhs_time == t &&
+	      memcmp(r->rhs_state, y, 2 * (size_t)r->n * sizeof(double)) == 0)) {
 		double* x = sim->work_position;
 		double* v = sim->work_velocity;
 		sm_simulation_unpack(sim, t, y, x, v);
@@ -454,8 +455,8 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->rhs_state = malloc(2 * n * sizeof(double));
 	if (!use_cholmod)
 		r->scaled = malloc(SCALED_STRIDE * ((size_t)sim->model->spring_count + 1) * sizeof(double));
-	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->r || !r->z || !r->p ||
-	    !r->q || !r->rhs || !r->dv || !r->rhs_state || (!use_cholmod && !r->scaled)) {
+	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->r || !r->z ||
+	    !r->p || !r->q || !r->rhs || !r->dv || !r->rhs_state || (!use_cholmod && !r->scaled)) {
 		reduced_content_free(r);
 		return NULL;
 	}

@@ -44,20 +44,20 @@ _Static_assert(SCALED_STRIDE == SPRING_JACOBIAN_STRIDE, "scaled and Jacobian rec
 typedef struct sm_reduced {
 	sm_simulation* sim;
 	bool use_cholmod;
-	int64_t n;            // free degrees of freedom
-	int64_t full;         // 3 per particle: the conjugate gradients' vectors, constrained entries 0
+	int64_t n;     // free degrees of freedom
+	int64_t full;  // 3 per particle: the conjugate gradients' vectors, constrained entries 0
 	int64_t nonzeros;
 	const int64_t* rows;  // pattern (owned by the simulation's sparse Jacobian)
 	const int64_t* cols;
-	int64_t* diagonal;    // per dof i: entry index of (i, 3 floor(i/3)), its diagonal block's first column
-	N_Vector weights;     // error weights CVODE gives (not owned)
-	double* values;       // A in pattern order
-	bool blocks_valid;    // block_inverse holds the inverses of A's diagonal blocks at blocks_gamma
+	int64_t* diagonal;  // per dof i: entry index of (i, 3 floor(i/3)), its diagonal block's first column
+	N_Vector weights;   // error weights CVODE gives (not owned)
+	double* values;     // A in pattern order
+	bool blocks_valid;  // block_inverse holds the inverses of A's diagonal blocks at blocks_gamma
 	// Cholesky preconditioner: floating-point operations of one factorisation and of one
 	// iteration (a product with A and a triangular solve pair), and those spent on iterations
 	// beyond the first since the last factorisation.
 	bool factor_valid;
-	bool refactor;        // factorise at the next solve
+	bool refactor;  // factorise at the next solve
 	double factor_flops;
 	double iteration_flops;
 	double extra_flops;
@@ -76,26 +76,26 @@ typedef struct sm_reduced {
 	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
 	// at every step, in chunk order; products with A are formed from it without assembling A.
 	sm_spring_jacobians* springs;
-	double gamma;           // of the current solve [s]
-	double* full_force;     // forces of the fused pass (unused)
-	double blocks_gamma;    // gamma of block_inverse; NAN after a Jacobian refresh [s]
+	double gamma;         // of the current solve [s]
+	double* full_force;   // forces of the fused pass (unused)
+	double blocks_gamma;  // gamma of block_inverse; NAN after a Jacobian refresh [s]
 	// Two-level block-Jacobi preconditioner (pcg): aggregates of neighbouring free particles,
 	// the Galerkin coarse matrix P^T A P (P: each aggregate moves as one) in 3x3 blocks,
 	// factorised by CHOLMOD.
 	bool two_level;
 	int32_t aggregate_count;
-	int32_t* aggregate;        // per particle, -1 for constrained ones
-	int64_t* coarse_first;     // per aggregate: first index into coarse_neighbour (aggregate_count + 1)
-	int32_t* coarse_neighbour; // neighbouring aggregates (itself included), sorted
-	int32_t* coarse_self;      // per aggregate: position of itself in its neighbour list
-	int64_t* spring_coarse;    // per spring: first entries of its blocks (I,I), (J,J), (I,J), (J,I), or -1
-	double* coarse_mass;       // per aggregate [kg]
-	double coarse_gamma;       // gamma of the coarse factorisation [s]
-	int coarse_age;            // preconditioner preparations since (sm_reduced_prepare_preconditioner)
+	int32_t* aggregate;         // per particle, -1 for constrained ones
+	int64_t* coarse_first;      // per aggregate: first index into coarse_neighbour (aggregate_count + 1)
+	int32_t* coarse_neighbour;  // neighbouring aggregates (itself included), sorted
+	int32_t* coarse_self;       // per aggregate: position of itself in its neighbour list
+	int64_t* spring_coarse;     // per spring: first entries of its blocks (I,I), (J,J), (I,J), (J,I), or -1
+	double* coarse_mass;        // per aggregate [kg]
+	double coarse_gamma;        // gamma of the coarse factorisation [s]
+	int coarse_age;             // preconditioner preparations since (sm_reduced_prepare_preconditioner)
 	cholmod_sparse* coarse;
 	cholmod_factor* coarse_factor;
 	cholmod_dense *coarse_b, *coarse_x, *coarse_y, *coarse_e;
-	sm_multilevel* multilevel; // replaces coarse_factor from MULTILEVEL_MIN_PARTICLES on
+	sm_multilevel* multilevel;  // replaces coarse_factor from MULTILEVEL_MIN_PARTICLES on
 	// Chunked models with coarse_factor: the coarse unknowns in two halves and a separator
 	// (coarse_part, per unknown: 0, 1, 2), the factor's solves in two at once (coarse_halves.h).
 	int8_t* coarse_part;
@@ -125,15 +125,15 @@ typedef struct sm_reduced {
 	int32_t* member;
 	double partial[PARALLEL_CHUNKS];  // per-chunk sums, added in chunk order
 	sm_workers* workers;              // NULL: one thread
-	double jacobian_time;   // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
+	double jacobian_time;             // CVODE's current time at the last Jacobian evaluation [s]; NAN if none
 	// The state at which the right-hand side last stored the records (sm_reduced_rhs_forces): a
 	// solve at that time and state adopts them instead of evaluating again.
 	bool rhs_records;
-	double rhs_time;        // [s]
-	double* rhs_state;      // the first 2 n entries of CVODE's y
+	double rhs_time;    // [s]
+	double* rhs_state;  // the first 2 n entries of CVODE's y
 	long last_flag;
 	int last_iterations;
-	SUNPSetupFn psetup;   // CVODE's preconditioner set-up hook: leads to sm_reduced_pset
+	SUNPSetupFn psetup;  // CVODE's preconditioner set-up hook: leads to sm_reduced_pset
 	void* psetup_data;
 	// CHOLMOD
 	cholmod_common common;

@@ -82,34 +82,38 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 		return sm_model_fail(model, isfinite(def->density) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
 		                     "mesh: density = %g must be finite and > 0", def->density);
 	if (def->vertex_count < 3 || def->triangle_count < 1)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "mesh: %d vertices and %d triangles; a mesh needs at least 3 vertices and 1 triangle",
-		                     (int)def->vertex_count, (int)def->triangle_count);
+		return sm_model_fail(
+		    model, SM_ERROR_INVALID_ARGUMENT,
+		    "mesh: %d vertices and %d triangles; a mesh needs at least 3 vertices and 1 triangle",
+		    (int)def->vertex_count, (int)def->triangle_count);
 	if (def->vertices == NULL || def->triangles == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL");
 	if (def->triangle_count > SM_STRUCTURE_MAX_ELEMENTS / 3)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "mesh: %d triangles exceed the limit of %d per structure", (int)def->triangle_count,
-		                     SM_STRUCTURE_MAX_ELEMENTS / 3);
+		                     "mesh: %d triangles exceed the limit of %d per structure",
+		                     (int)def->triangle_count, SM_STRUCTURE_MAX_ELEMENTS / 3);
 	if (def->vertex_count > SM_STRUCTURE_MAX_ELEMENTS)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "mesh: %d vertices exceed the limit of %d particles per structure", (int)def->vertex_count,
-		                     SM_STRUCTURE_MAX_ELEMENTS);
+		                     "mesh: %d vertices exceed the limit of %d particles per structure",
+		                     (int)def->vertex_count, SM_STRUCTURE_MAX_ELEMENTS);
 	for (int32_t v = 0; v < def->vertex_count; v++)
 		for (int c = 0; c < 3; c++)
 			if (!isfinite(def->vertices[3 * (size_t)v + c]))
-				return sm_model_fail(model, SM_ERROR_NOT_FINITE, "mesh: vertex %d coordinate %d = %g is not finite",
-				                     (int)v, c, def->vertices[3 * (size_t)v + c]);
+				return sm_model_fail(model, SM_ERROR_NOT_FINITE,
+				                     "mesh: vertex %d coordinate %d = %g is not finite", (int)v, c,
+				                     def->vertices[3 * (size_t)v + c]);
 	for (int32_t t = 0; t < def->triangle_count; t++) {
 		const int32_t* tri = def->triangles + 3 * (size_t)t;
 		for (int c = 0; c < 3; c++)
 			if (tri[c] < 0 || tri[c] >= def->vertex_count)
-				return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
-				                     "mesh: triangle %d vertex %d = %d is out of range (mesh has %d vertices)", (int)t,
-				                     c, (int)tri[c], (int)def->vertex_count);
+				return sm_model_fail(
+				    model, SM_ERROR_PARTICLE_INDEX,
+				    "mesh: triangle %d vertex %d = %d is out of range (mesh has %d vertices)", (int)t, c,
+				    (int)tri[c], (int)def->vertex_count);
 		if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
-			return sm_model_fail(model, SM_ERROR_SELF_SPRING, "mesh: triangle %d (%d, %d, %d) repeats a vertex",
-			                     (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			return sm_model_fail(model, SM_ERROR_SELF_SPRING,
+			                     "mesh: triangle %d (%d, %d, %d) repeats a vertex", (int)t, (int)tri[0],
+			                     (int)tri[1], (int)tri[2]);
 	}
 	return SM_OK;
 }
@@ -139,7 +143,8 @@ static double triangle_area(const double* vertices, const int32_t* tri)
 		us[c] = u[c] / largest;
 		ws[c] = w[c] / largest;
 	}
-	const double ns[3] = {us[1] * ws[2] - us[2] * ws[1], us[2] * ws[0] - us[0] * ws[2], us[0] * ws[1] - us[1] * ws[0]};
+	const double ns[3] = {us[1] * ws[2] - us[2] * ws[1], us[2] * ws[0] - us[0] * ws[2],
+	                      us[0] * ws[1] - us[1] * ws[0]};
 	return 0.5 * sqrt(ns[0] * ns[0] + ns[1] * ns[1] + ns[2] * ns[2]) * largest * largest;
 }
 
@@ -199,8 +204,8 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	size_t capacity = 16;
 	while (capacity < 6 * (size_t)nt)
 		capacity *= 2;
-	edge_table table = {malloc(capacity * sizeof(edge_entry)), capacity - 1, malloc(3 * (size_t)nt * sizeof(int32_t)),
-	                    0};
+	edge_table table = {malloc(capacity * sizeof(edge_entry)), capacity - 1,
+	                    malloc(3 * (size_t)nt * sizeof(int32_t)), 0};
 	double* mass = calloc((size_t)nv, sizeof(double));
 	if (table.slots == NULL || table.in_order == NULL || mass == NULL) {
 		st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "mesh: out of memory for %d triangles", (int)nt);
@@ -215,9 +220,10 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		// Overflow first: the vertices are finite, so a NaN area is an overflow too (inf - inf in
 		// the cross product), not a zero area.
 		if (!isfinite(area)) {
-			st = sm_model_fail(model, SM_ERROR_NOT_FINITE,
-			                   "mesh: the area of triangle %d (%d, %d, %d) overflows (its edges are too long)", (int)t,
-			                   (int)tri[0], (int)tri[1], (int)tri[2]);
+			st =
+			    sm_model_fail(model, SM_ERROR_NOT_FINITE,
+				              "mesh: the area of triangle %d (%d, %d, %d) overflows (its edges are too long)",
+				              (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
 		// Zero area: exactly, or to rounding (collinear vertices), by the rule a sheet's edges
@@ -225,16 +231,18 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		// while the area does not, is a flat triangle too).
 		const double sine = smallest_angle_sine(def->vertices, tri);
 		if (!(area > 0.0) && sine > 1e-12) {
-			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-			                   "mesh: the area of triangle %d (%d, %d, %d) underflows to 0 (its edges are too short)",
-			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			st = sm_model_fail(
+			    model, SM_ERROR_INVALID_ARGUMENT,
+			    "mesh: the area of triangle %d (%d, %d, %d) underflows to 0 (its edges are too short)",
+			    (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
 		if (!(area > 0.0) || !(sine > 1e-12)) {
-			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-			                   "mesh: triangle %d (%d, %d, %d) has zero area (to rounding: twice its area is at most "
-			                   "1e-12 times the product of its two longest edges)",
-			                   (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			st = sm_model_fail(
+			    model, SM_ERROR_INVALID_ARGUMENT,
+			    "mesh: triangle %d (%d, %d, %d) has zero area (to rounding: twice its area is at most "
+			    "1e-12 times the product of its two longest edges)",
+			    (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
 			break;
 		}
 		for (int c = 0; c < 3; c++)
@@ -244,14 +252,15 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			edge_entry* e = edge_find(&table, edge_key(a, b));
 			if (e->triangles >= 2) {
 				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-				                   "mesh: edge (%d, %d) of triangle %d is shared by more than two triangles", (int)a,
-				                   (int)b, (int)t);
+				                   "mesh: edge (%d, %d) of triangle %d is shared by more than two triangles",
+				                   (int)a, (int)b, (int)t);
 				break;
 			}
 			if (e->triangles == 1 && e->opposite[0] == opposite) {
-				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-				                   "mesh: triangle %d repeats the vertices of an earlier triangle (%d, %d, %d)", (int)t,
-				                   (int)tri[0], (int)tri[1], (int)tri[2]);
+				st = sm_model_fail(
+				    model, SM_ERROR_INVALID_ARGUMENT,
+				    "mesh: triangle %d repeats the vertices of an earlier triangle (%d, %d, %d)", (int)t,
+				    (int)tri[0], (int)tri[1], (int)tri[2]);
 				break;
 			}
 			e->opposite[e->triangles++] = opposite;
@@ -265,22 +274,26 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		for (size_t k = 0; k < 3 * (size_t)nt && !in_triangle; k++)
 			in_triangle = def->triangles[k] == v;
 		if (!in_triangle)
-			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex %d belongs to no triangle", (int)v);
+			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex %d belongs to no triangle",
+			                   (int)v);
 		else if (mass[v] > 0.0)
-			st = sm_model_fail(model, SM_ERROR_NOT_FINITE,
-			                   "mesh: vertex %d: its mass, density %g kg/m^2 x a third of its triangles' area, is "
-			                   "beyond the largest double",
-			                   (int)v, def->density);
+			st = sm_model_fail(
+			    model, SM_ERROR_NOT_FINITE,
+			    "mesh: vertex %d: its mass, density %g kg/m^2 x a third of its triangles' area, is "
+			    "beyond the largest double",
+			    (int)v, def->density);
 		else
-			st = sm_model_fail(model, SM_ERROR_NONPOSITIVE_MASS,
-			                   "mesh: vertex %d: its mass, density x a third of its triangles' area, is %g (must be "
-			                   "finite and > 0)",
-			                   (int)v, mass[v]);
+			st = sm_model_fail(
+			    model, SM_ERROR_NONPOSITIVE_MASS,
+			    "mesh: vertex %d: its mass, density x a third of its triangles' area, is %g (must be "
+			    "finite and > 0)",
+			    (int)v, mass[v]);
 	}
 	if (st != SM_OK)
 		goto done;
 
-	const bool has_edge = sm_structure_material_present(&def->edge), has_bend = sm_structure_material_present(&def->bend);
+	const bool has_edge = sm_structure_material_present(&def->edge),
+	           has_bend = sm_structure_material_present(&def->bend);
 	int64_t interior = 0;
 	for (int32_t e = 0; e < table.count; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
@@ -293,11 +306,12 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 		const double* x = def->vertices + 3 * (size_t)entry->opposite[0];
 		const double* y = def->vertices + 3 * (size_t)entry->opposite[1];
 		if (has_bend && x[0] == y[0] && x[1] == y[1] && x[2] == y[2]) {
-			st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-			                   "mesh: the vertices %d and %d opposite edge (%d, %d) coincide at (%g, %g, %g) m (its two "
-			                   "triangles lie on each other): the bend spring across it would have no length",
-			                   (int)entry->opposite[0], (int)entry->opposite[1], (int)(entry->key >> 32),
-			                   (int)(entry->key & 0xffffffffu), x[0], x[1], x[2]);
+			st = sm_model_fail(
+			    model, SM_ERROR_INVALID_ARGUMENT,
+			    "mesh: the vertices %d and %d opposite edge (%d, %d) coincide at (%g, %g, %g) m (its two "
+			    "triangles lie on each other): the bend spring across it would have no length",
+			    (int)entry->opposite[0], (int)entry->opposite[1], (int)(entry->key >> 32),
+			    (int)(entry->key & 0xffffffffu), x[0], x[1], x[2]);
 			goto done;
 		}
 	}
@@ -316,8 +330,8 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
 		const edge_entry* entry = &table.slots[table.in_order[e]];
 		if (entry->triangles == 2)
-			st = sm_structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0], p0 + entry->opposite[1], &def->bend,
-			                             entry->area);
+			st = sm_structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0],
+			                             p0 + entry->opposite[1], &def->bend, entry->area);
 	}
 	if (st != SM_OK) {
 		sm_structure_truncate(model, p0, s0);

@@ -109,9 +109,9 @@ sm_model_def sm_default_model_def(void)
 
 static sm_status say(char* buffer, sm_status status, const char* format, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
+    __attribute__((format(printf, 3, 4)))
 #endif
-	;
+    ;
 
 static sm_status say(char* buffer, sm_status status, const char* format, ...)
 {
@@ -196,11 +196,13 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: definition is NULL", index);
 	const long n = model->particle_count;
 	if (def->a < 0 || def->a >= n)
-		return say(msg, SM_ERROR_PARTICLE_INDEX, "spring %ld: particle a = %ld out of range (model has %ld particles)",
-		           index, (long)def->a, n);
+		return say(msg, SM_ERROR_PARTICLE_INDEX,
+		           "spring %ld: particle a = %ld out of range (model has %ld particles)", index, (long)def->a,
+		           n);
 	if (def->b < 0 || def->b >= n)
-		return say(msg, SM_ERROR_PARTICLE_INDEX, "spring %ld: particle b = %ld out of range (model has %ld particles)",
-		           index, (long)def->b, n);
+		return say(msg, SM_ERROR_PARTICLE_INDEX,
+		           "spring %ld: particle b = %ld out of range (model has %ld particles)", index, (long)def->b,
+		           n);
 	if (def->a == def->b)
 		return say(msg, SM_ERROR_SELF_SPRING, "spring %ld: connects particle %ld to itself (a = b)", index,
 		           (long)def->a);
@@ -208,17 +210,20 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: kind = %d is not a known spring kind", index,
 		           (int)def->kind);
 	if (!known_scaling(def->stiffness_scaling))
-		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: stiffness scaling = %d is not a known scaling",
-		           index, (int)def->stiffness_scaling);
+		return say(msg, SM_ERROR_INVALID_ARGUMENT,
+		           "spring %ld: stiffness scaling = %d is not a known scaling", index,
+		           (int)def->stiffness_scaling);
 	if (!known_scaling(def->damping_scaling))
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: damping scaling = %d is not a known scaling",
 		           index, (int)def->damping_scaling);
 	if ((def->stiffness_scaling == SM_PER_SECTION || def->damping_scaling == SM_PER_SECTION) &&
 	    !(isfinite(def->section) && def->section > 0.0))
 		return say(msg, isfinite(def->section) ? SM_ERROR_NEGATIVE : SM_ERROR_NOT_FINITE,
-		           "spring %ld: section = %g must be finite and > 0 for per-section constants", index, def->section);
+		           "spring %ld: section = %g must be finite and > 0 for per-section constants", index,
+		           def->section);
 	if (!isfinite(def->stiffness))
-		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness = %g is not finite", index, def->stiffness);
+		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness = %g is not finite", index,
+		           def->stiffness);
 	if (def->stiffness < 0.0)
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: stiffness = %g must be >= 0", index, def->stiffness);
 	if (!isfinite(def->damping))
@@ -234,7 +239,8 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (!(def->break_strain > SM_MIN_BREAK_STRAIN)) {
 		char rule[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY];
 		sm_break_strain_floor_text(def->break_strain, rule);
-		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: %s, and the spring break at rest", index, rule);
+		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: %s, and the spring break at rest", index,
+		           rule);
 	}
 
 	// Rest length.
@@ -251,21 +257,23 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			const double squared = dx * dx + dy * dy + dz * dz;
 			l0 = sqrt(squared);
 			if (!isfinite(l0))
-				return say(msg, SM_ERROR_NOT_FINITE,
-				           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
-				           "overflows: particles joined by springs must be less than about 1e154 m apart)",
-				           index, (long)def->a, (long)def->b);
+				return say(
+				    msg, SM_ERROR_NOT_FINITE,
+				    "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
+				    "overflows: particles joined by springs must be less than about 1e154 m apart)",
+				    index, (long)def->a, (long)def->b);
 			// A square below DBL_MIN has lost digits or all of them (1e-170 m gives l0 = 0): the
 			// rest length would not be the distance. Structures refuse such springs too; particles
 			// at one point keep l0 = 0.
 			if (squared < DBL_MIN && (dx != 0.0 || dy != 0.0 || dz != 0.0)) {
 				const double largest = fmax(fabs(dx), fmax(fabs(dy), fabs(dz)));
 				const double ux = dx / largest, uy = dy / largest, uz = dz / largest;
-				return say(msg, SM_ERROR_INVALID_ARGUMENT,
-				           "spring %ld: the initial distance between particles %ld and %ld, %.3g m, is too small (its "
-				           "square underflows: particles joined by springs must be at one point or more than about "
-				           "1.5e-154 m apart)",
-				           index, (long)def->a, (long)def->b, largest * sqrt(ux * ux + uy * uy + uz * uz));
+				return say(
+				    msg, SM_ERROR_INVALID_ARGUMENT,
+				    "spring %ld: the initial distance between particles %ld and %ld, %.3g m, is too small (its "
+				    "square underflows: particles joined by springs must be at one point or more than about "
+				    "1.5e-154 m apart)",
+				    index, (long)def->a, (long)def->b, largest * sqrt(ux * ux + uy * uy + uz * uz));
 			}
 		}
 	} else {
@@ -280,11 +288,13 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			           "spring %ld: a zero-length spring must have rest length 0, not %g", index, l0);
 	}
 	if (def->stiffness_scaling != SM_ABSOLUTE && !(l0 > 0.0))
-		return say(msg, SM_ERROR_ZERO_REST_LENGTH, "spring %ld: per-%s stiffness needs a rest length > 0 (rest length is %g)",
-		           index, def->stiffness_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
+		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
+		           "spring %ld: per-%s stiffness needs a rest length > 0 (rest length is %g)", index,
+		           def->stiffness_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
 	if (def->damping_scaling != SM_ABSOLUTE && !(l0 > 0.0))
-		return say(msg, SM_ERROR_ZERO_REST_LENGTH, "spring %ld: per-%s damping needs a rest length > 0 (rest length is %g)",
-		           index, def->damping_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
+		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
+		           "spring %ld: per-%s damping needs a rest length > 0 (rest length is %g)", index,
+		           def->damping_scaling == SM_PER_STRAIN ? "strain" : "section", l0);
 	if (isfinite(def->break_strain) && !(l0 > 0.0))
 		return say(msg, SM_ERROR_ZERO_REST_LENGTH,
 		           "spring %ld: a break strain needs a rest length > 0 (rest length is %g)", index, l0);
@@ -293,16 +303,18 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	const double kd = spring_constant(def->damping, def->damping_scaling, def->section, l0);
 	if (!isfinite(ks))
 		return def->stiffness_scaling == SM_PER_SECTION
-		           ? say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness x section / l0 = %g x %g / %g is not finite",
-		                 index, def->stiffness, def->section, l0)
-		           : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness E / l0 = %g / %g is not finite", index,
-		                 def->stiffness, l0);
+		           ? say(msg, SM_ERROR_NOT_FINITE,
+				         "spring %ld: stiffness x section / l0 = %g x %g / %g is not finite", index,
+				         def->stiffness, def->section, l0)
+				   : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: stiffness E / l0 = %g / %g is not finite",
+				         index, def->stiffness, l0);
 	if (!isfinite(kd))
 		return def->damping_scaling == SM_PER_SECTION
-		           ? say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping x section / l0 = %g x %g / %g is not finite",
-		                 index, def->damping, def->section, l0)
-		           : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping c / l0 = %g / %g is not finite", index,
-		                 def->damping, l0);
+		           ? say(msg, SM_ERROR_NOT_FINITE,
+				         "spring %ld: damping x section / l0 = %g x %g / %g is not finite", index,
+				         def->damping, def->section, l0)
+				   : say(msg, SM_ERROR_NOT_FINITE, "spring %ld: damping c / l0 = %g / %g is not finite",
+				         index, def->damping, l0);
 	out->rest_length = l0;
 	out->stiffness = ks;
 	out->damping = kd;
@@ -377,9 +389,9 @@ static int reserve_springs(sm_model* m, int64_t needed)
 	const size_t c = (size_t)cap;
 	if (!grow((void**)&m->spring_def, c, sizeof(sm_spring_def)) ||
 	    !grow((void**)&m->spring_a, c, sizeof(int32_t)) || !grow((void**)&m->spring_b, c, sizeof(int32_t)) ||
-	    !grow((void**)&m->rest_length, c, sizeof(double)) || !grow((void**)&m->stiffness, c, sizeof(double)) ||
-	    !grow((void**)&m->damping, c, sizeof(double)) || !grow((void**)&m->zero_length, c, sizeof(uint8_t)) ||
-	    !grow((void**)&m->enabled, c, sizeof(uint8_t)))
+	    !grow((void**)&m->rest_length, c, sizeof(double)) ||
+	    !grow((void**)&m->stiffness, c, sizeof(double)) || !grow((void**)&m->damping, c, sizeof(double)) ||
+	    !grow((void**)&m->zero_length, c, sizeof(uint8_t)) || !grow((void**)&m->enabled, c, sizeof(uint8_t)))
 		return 0;
 	m->spring_capacity = (int32_t)cap;
 	return 1;
@@ -409,7 +421,8 @@ sm_model* sm_model_create(const sm_model_def* def, sm_error* err)
 	m->def = *def;
 	if (!reserve_particles(m, def->particle_capacity) || !reserve_springs(m, def->spring_capacity)) {
 		sm_model_destroy(m);
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "model: out of memory reserving %d particles and %d springs",
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
+		             "model: out of memory reserving %d particles and %d springs",
 		             (int)def->particle_capacity, (int)def->spring_capacity);
 		return NULL;
 	}
@@ -497,7 +510,8 @@ sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int
 	sm_status st = check_particle_def(def, (long)model->particle_count, model->last_error);
 	if (st != SM_OK)
 		return st;
-	if (model->particle_count >= INT32_MAX / 4 || !reserve_particles(model, (int64_t)model->particle_count + 1))
+	if (model->particle_count >= INT32_MAX / 4 ||
+	    !reserve_particles(model, (int64_t)model->particle_count + 1))
 		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "particle %ld: out of memory",
 		                     (long)model->particle_count);
 	const int32_t i = model->particle_count++;
@@ -618,7 +632,8 @@ sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t
 	if (st != SM_OK)
 		return st;
 	if (model->spring_count >= INT32_MAX / 4 || !reserve_springs(model, (int64_t)model->spring_count + 1))
-		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "spring %ld: out of memory", (long)model->spring_count);
+		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "spring %ld: out of memory",
+		                     (long)model->spring_count);
 	const int32_t s = model->spring_count++;
 	model->enabled[s] = 1;
 	store_spring(model, s, def, &r);

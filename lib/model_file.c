@@ -38,7 +38,8 @@
 // SM_DOCUMENT_MAX_ELEMENTS, at most 7 digits each: the suffix has at most 3 * 7 + 4 = 25 bytes,
 // and every particle's name stays within MAX_NAME_BYTES, as any name in a file must.
 #define MAX_STRUCTURE_NAME_BYTES (MAX_NAME_BYTES - 25)
-_Static_assert(SM_DOCUMENT_MAX_ELEMENTS <= 10000000, "the indices of a structure's particles have at most 7 digits");
+_Static_assert(SM_DOCUMENT_MAX_ELEMENTS <= 10000000,
+               "the indices of a structure's particles have at most 7 digits");
 
 // The parameters the values of one element (a structure, a spring) came from, for messages of
 // the builders, which see the values but not where they came from: the first few, and whether
@@ -162,7 +163,8 @@ static bool check_keys(parser* p, const json_t* obj, const char* path, const cha
 				used += (size_t)n;
 			}
 			char text[TEXT_QUOTED_CAPACITY];
-			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)", sm_text_quoted(text, key), list);
+			return fail(p, SM_ERROR_SCHEMA, path, "unknown key %s (allowed here: %s)",
+			            sm_text_quoted(text, key), list);
 		}
 	}
 	return true;
@@ -198,7 +200,8 @@ static void note_parameter(noted_parameters* noted, int32_t k)
 
 // A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
 // parameter's index or -1 (source may be NULL).
-static bool read_number(parser* p, feeds use, const json_t* value, const char* path, double* out, int32_t* source)
+static bool read_number(parser* p, feeds use, const json_t* value, const char* path, double* out,
+                        int32_t* source)
 {
 	if (source != NULL)
 		*source = -1;
@@ -242,7 +245,8 @@ static const char* describe(parser* p, char* buffer, size_t size, double value, 
 }
 
 // Describes a vector so: "(parameter w = 0, 0, 0)".
-static const char* describe_vector(parser* p, char* buffer, size_t size, const double v[3], const int32_t sources[3])
+static const char* describe_vector(parser* p, char* buffer, size_t size, const double v[3],
+                                   const int32_t sources[3])
 {
 	char text[3][DESCRIPTION_CAPACITY];
 	for (int c = 0; c < 3; c++)
@@ -295,7 +299,8 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 {
 	char text[DESCRIPTION_CAPACITY];
 	if (!isfinite(v))
-		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite", describe(p, text, sizeof text, v, source));
+		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite",
+		            describe(p, text, sizeof text, v, source));
 	if (rule == NON_NEGATIVE && v < 0.0)
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
 	if ((rule == POSITIVE || rule == FRACTION || rule == MASS) && !(v > 0.0))
@@ -310,9 +315,10 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 	if (rule == FRACTION && !(v < 1.0))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
 	if (rule == FRACTION && !(v >= SM_MIN_RELATIVE_TOLERANCE))
-		return fail(p, SM_ERROR_SCHEMA, path,
-		            "%s must be at least %g, the machine epsilon (CVODE cannot meet a smaller relative tolerance)",
-		            describe(p, text, sizeof text, v, source), SM_MIN_RELATIVE_TOLERANCE);
+		return fail(
+		    p, SM_ERROR_SCHEMA, path,
+		    "%s must be at least %g, the machine epsilon (CVODE cannot meet a smaller relative tolerance)",
+		    describe(p, text, sizeof text, v, source), SM_MIN_RELATIVE_TOLERANCE);
 	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %g (CVODE's error norm overflows below)",
 		            describe(p, text, sizeof text, v, source), SM_MIN_ABSOLUTE_TOLERANCE);
@@ -320,8 +326,8 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 }
 
 // Optional number at obj[key] (keeps *out when absent) that must obey `rule`.
-static bool read_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key, number_rule rule,
-                       double* out, int32_t* source)
+static bool read_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key,
+                       number_rule rule, double* out, int32_t* source)
 {
 	int32_t dummy;
 	if (source == NULL)
@@ -362,8 +368,8 @@ static bool read_count(parser* p, feeds use, const json_t* value, const char* pa
 	return true;
 }
 
-static bool read_count_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key, int64_t lo,
-                             int64_t hi, int64_t* out)
+static bool read_count_field(parser* p, feeds use, const json_t* obj, const char* path, const char* key,
+                             int64_t lo, int64_t hi, int64_t* out)
 {
 	if (!require(p, obj, path, key))
 		return false;
@@ -374,8 +380,8 @@ static bool read_count_field(parser* p, feeds use, const json_t* obj, const char
 
 // Optional 3-vector at obj[key] (keeps out when absent) whose components obey `rule`; sources
 // may be NULL.
-static bool read_vector(parser* p, feeds use, const json_t* obj, const char* path, const char* key, number_rule rule,
-                        double out[3], int32_t sources[3])
+static bool read_vector(parser* p, feeds use, const json_t* obj, const char* path, const char* key,
+                        number_rule rule, double out[3], int32_t sources[3])
 {
 	if (sources != NULL)
 		sources[0] = sources[1] = sources[2] = -1;
@@ -385,8 +391,8 @@ static bool read_vector(parser* p, feeds use, const json_t* obj, const char* pat
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
 	if (!json_is_array(value) || json_array_size(value) != 3)
-		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of 3 numbers [x, y, z], not %s%s", type_name(value),
-		            json_is_array(value) ? " of another length" : "");
+		return fail(p, SM_ERROR_SCHEMA, sub, "must be an array of 3 numbers [x, y, z], not %s%s",
+		            type_name(value), json_is_array(value) ? " of another length" : "");
 	for (size_t c = 0; c < 3; c++) {
 		char element[PATH_CAPACITY];
 		child_index(element, sub, c);
@@ -421,14 +427,16 @@ static bool read_bool(parser* p, const json_t* obj, const char* path, const char
 static bool check_name_text(parser* p, const char* s, size_t n, const char* path, bool identifier)
 {
 	if (n == 0 || n > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d bytes (this one has %zu)", MAX_NAME_BYTES,
-		            n);
+		return fail(p, SM_ERROR_SCHEMA, path, "a name must have 1 to %d bytes (this one has %zu)",
+		            MAX_NAME_BYTES, n);
 	char text[TEXT_QUOTED_CAPACITY];
 	int64_t position;
 	const int32_t c = sm_text_find_refused(s, sm_text_refused_in_name, &position);
 	if (c >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld", sm_text_quoted(text, s),
-		            sm_text_is_line_break(c) ? "a line break" : "a control character", (unsigned)c, (long long)position);
+		return fail(p, SM_ERROR_SCHEMA, path, "name %s has %s, U+%04X, at character %lld",
+		            sm_text_quoted(text, s),
+		            sm_text_is_line_break(c) ? "a line break" : "a control character", (unsigned)c,
+		            (long long)position);
 	for (size_t i = 0; i < n && identifier; i++) {
 		const unsigned char b = (unsigned char)s[i];
 		const bool letter = (b >= 'a' && b <= 'z') || (b >= 'A' && b <= 'Z') || b == '_';
@@ -517,7 +525,8 @@ static const char* describe_particle(const expansion* ex, int32_t particle, char
 {
 	char text[TEXT_QUOTED_CAPACITY];
 	if (ex->name_offset[particle] >= 0)
-		snprintf(buffer, size, "particle %d (%s)", (int)particle, sm_text_quoted(text, particle_name(ex, particle)));
+		snprintf(buffer, size, "particle %d (%s)", (int)particle,
+		         sm_text_quoted(text, particle_name(ex, particle)));
 	else
 		snprintf(buffer, size, "particle %d", (int)particle);
 	return buffer;
@@ -562,12 +571,12 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 	// make a structure's particle names longer than MAX_STRUCTURE_NAME_BYTES allows for.
 	char text[TEXT_QUOTED_CAPACITY];
 	if (written < 0 || written > MAX_NAME_BYTES)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes", sm_text_quoted(text, name),
-		            MAX_NAME_BYTES);
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s would have more than %d bytes",
+		            sm_text_quoted(text, name), MAX_NAME_BYTES);
 	const int32_t other = lookup_name(ex, name);
 	if (other >= 0)
-		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d", sm_text_quoted(text, name),
-		            (int)other);
+		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d",
+		            sm_text_quoted(text, name), (int)other);
 	const int64_t length = (int64_t)strlen(name) + 1;
 	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
@@ -614,10 +623,11 @@ static bool lookup_index_parameter(void* context, const char* name, size_t lengt
 // column of a sheet; three row, column and layer of a block. A message on a value names the
 // parameters the indices came from, and only those; on success they join the element's noted
 // parameters, for its later messages.
-static bool resolve_structure_reference(parser* p, const document_structure* s, const char* open, const char* text,
-                                        const char* path, int32_t* out)
+static bool resolve_structure_reference(parser* p, const document_structure* s, const char* open,
+                                        const char* text, const char* path, int32_t* out)
 {
-	static const char* const form = "a structure reference is name[i], name[row, column] or name[row, column, layer]";
+	static const char* const form =
+	    "a structure reference is name[i], name[row, column] or name[row, column, layer]";
 	index_parameters named = {p, {{0}, 0, false}};
 	int64_t c[3];
 	int count = 0;
@@ -628,7 +638,7 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 		const char* end;
 		const index_expression_status status =
 		    count < 3 ? sm_index_expression_evaluate(q, lookup_index_parameter, &named, &c[count], &end, why)
-		              : INDEX_EXPRESSION_SYNTAX;
+			          : INDEX_EXPRESSION_SYNTAX;
 		if (status == INDEX_EXPRESSION_UNKNOWN_NAME)
 			return fail(p, SM_ERROR_NOT_FOUND, path, "%s: %s", text, why);
 		if (status == INDEX_EXPRESSION_NOT_WHOLE)
@@ -649,17 +659,17 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 	// One index for any structure; two (row, column) for a sheet, three for a block.
 	const int grid_indices = s->type == STRUCTURE_SHEET ? 2 : s->type == STRUCTURE_BLOCK ? 3 : 1;
 	if (count != 1 && count != grid_indices) {
-		static const char* const forms[] = {"a rope takes one index, name[i]",
-		                                    "a sheet takes name[i] or name[row, column]",
-		                                    "a block takes name[i] or name[row, column, layer]",
-		                                    "a mesh takes one index, name[i]"};
+		static const char* const forms[] = {
+		    "a rope takes one index, name[i]", "a sheet takes name[i] or name[row, column]",
+		    "a block takes name[i] or name[row, column, layer]", "a mesh takes one index, name[i]"};
 		return fail(p, SM_ERROR_PARTICLE_INDEX, path, "%s has %d indices: %s", text, count, forms[s->type]);
 	}
 	const sm_structure* r = &s->range;
 	int64_t index = -1;
 	if (count == 1 && c[0] >= 0 && c[0] < r->particle_count)
 		index = r->first_particle + c[0];
-	else if (count == 2 && r->shape[2] == 1 && c[0] >= 0 && c[1] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0])
+	else if (count == 2 && r->shape[2] == 1 && c[0] >= 0 && c[1] >= 0 && c[0] < r->shape[1] &&
+	         c[1] < r->shape[0])
 		index = sm_structure_particle(r, (int32_t)c[0], (int32_t)c[1], 0);
 	else if (count == 3 && c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < r->shape[1] && c[1] < r->shape[0] &&
 	         c[2] < r->shape[2])
@@ -673,12 +683,14 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 	}
 	char message[SM_ERROR_MESSAGE_CAPACITY];
 	if (s->type == STRUCTURE_SHEET)
-		snprintf(message, sizeof message, "%s is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])",
-		         text, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
+		snprintf(message, sizeof message,
+		         "%s is outside structure %s (rows 0 to %d, columns 0 to %d, or [0] to [%d])", text, s->name,
+		         (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->particle_count - 1);
 	else if (s->type == STRUCTURE_BLOCK)
 		snprintf(message, sizeof message,
-		         "%s is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] to [%d])", text,
-		         s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1, (int)r->particle_count - 1);
+		         "%s is outside structure %s (rows 0 to %d, columns 0 to %d, layers 0 to %d, or [0] to [%d])",
+		         text, s->name, (int)r->shape[1] - 1, (int)r->shape[0] - 1, (int)r->shape[2] - 1,
+		         (int)r->particle_count - 1);
 	else
 		snprintf(message, sizeof message, "%s is outside structure %s ([0] to [%d])", text, s->name,
 		         (int)r->particle_count - 1);
@@ -693,8 +705,9 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 	if (json_is_integer(value)) {
 		const json_int_t i = json_integer_value(value);
 		if (i < 0 || i >= n)
-			return fail(p, SM_ERROR_PARTICLE_INDEX, path, "particle index %lld is out of range (the model has %d particles)",
-			            (long long)i, (int)n);
+			return fail(p, SM_ERROR_PARTICLE_INDEX, path,
+			            "particle index %lld is out of range (the model has %d particles)", (long long)i,
+			            (int)n);
 		*out = (int32_t)i;
 		return true;
 	}
@@ -742,7 +755,8 @@ static bool read_particles(parser* p, const json_t* list)
 	if (list == NULL)
 		return true;
 	if (!json_is_array(list))
-		return fail(p, SM_ERROR_SCHEMA, "particles", "must be an array of particles, not %s", type_name(list));
+		return fail(p, SM_ERROR_SCHEMA, "particles", "must be an array of particles, not %s",
+		            type_name(list));
 	const size_t n = json_array_size(list);
 	if ((int64_t)n > p->doc->max_elements)
 		return fail(p, SM_ERROR_SCHEMA, "particles", "%zu particles exceed the limit of %lld", n,
@@ -796,7 +810,8 @@ static const char* constant_key(const char* constant, sm_scaling scaling)
 }
 
 // Which of a constant's keys obj gives (at most one): its scaling, SM_ABSOLUTE when none.
-static bool read_scaling(parser* p, const json_t* obj, const char* path, const char* constant, sm_scaling* scaling)
+static bool read_scaling(parser* p, const json_t* obj, const char* path, const char* constant,
+                         sm_scaling* scaling)
 {
 	static const sm_scaling scalings[3] = {SM_ABSOLUTE, SM_PER_STRAIN, SM_PER_SECTION};
 	int given = 0;
@@ -816,7 +831,8 @@ static bool read_scaling(parser* p, const json_t* obj, const char* path, const c
 // Stiffness and damping, each absolute ("stiffness" [N/m], "damping" [N s/m]), per unit strain
 // ("strain_stiffness" [N], "strain_damping" [N s]) or per unit strain and section
 // ("section_stiffness", "section_damping": sm_scaling's SM_PER_SECTION), and "break_strain".
-static bool read_constants(parser* p, const json_t* obj, const char* path, sm_spring_material* m, spring_source* src)
+static bool read_constants(parser* p, const json_t* obj, const char* path, sm_spring_material* m,
+                           spring_source* src)
 {
 	if (!read_scaling(p, obj, path, "stiffness", &m->stiffness_scaling) ||
 	    !read_scaling(p, obj, path, "damping", &m->damping_scaling))
@@ -824,14 +840,15 @@ static bool read_constants(parser* p, const json_t* obj, const char* path, sm_sp
 	m->stiffness = 0.0;
 	m->damping = 0.0;
 	m->break_strain = INFINITY;
-	if (!read_field(p, FEEDS_CONSTANTS, obj, path, constant_key("stiffness", m->stiffness_scaling), NON_NEGATIVE,
-	                &m->stiffness, &src->stiffness) ||
+	if (!read_field(p, FEEDS_CONSTANTS, obj, path, constant_key("stiffness", m->stiffness_scaling),
+	                NON_NEGATIVE, &m->stiffness, &src->stiffness) ||
 	    !read_field(p, FEEDS_CONSTANTS, obj, path, constant_key("damping", m->damping_scaling), NON_NEGATIVE,
 	                &m->damping, &src->damping))
 		return false;
 	const json_t* brk = json_object_get(obj, "break_strain");
 	src->break_strain = -1;
-	if (brk != NULL && !read_field(p, FEEDS_CONSTANTS, obj, path, "break_strain", POSITIVE, &m->break_strain, &src->break_strain))
+	if (brk != NULL && !read_field(p, FEEDS_CONSTANTS, obj, path, "break_strain", POSITIVE, &m->break_strain,
+	                               &src->break_strain))
 		return false;
 	return true;
 }
@@ -897,9 +914,10 @@ static bool read_springs(parser* p, const json_t* list)
 			if (!read_field(p, FEEDS_CONSTANTS, obj, path, "section", POSITIVE, &def.section, &src.section))
 				return false;
 		} else if (per_section) {
-			return fail(p, SM_ERROR_SCHEMA, path,
-			            "per-section constants need the spring's \"section\" (the width [m] or area [m^2] it stands "
-			            "for)");
+			return fail(
+			    p, SM_ERROR_SCHEMA, path,
+			    "per-section constants need the spring's \"section\" (the width [m] or area [m^2] it stands "
+			    "for)");
 		}
 		def.stiffness = m.stiffness;
 		def.stiffness_scaling = m.stiffness_scaling;
@@ -912,8 +930,8 @@ static bool read_springs(parser* p, const json_t* list)
 		const json_t* kind = json_object_get(obj, "kind");
 		const feeds rest_use = kind != NULL ? FEEDS_CONSTANTS : FEEDS_CONSTANTS | FEEDS_SPRING_KINDS;
 		src.kind_given = kind != NULL;
-		if (rest != NULL &&
-		    !read_field(p, rest_use, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length, &src.rest_length))
+		if (rest != NULL && !read_field(p, rest_use, obj, path, "rest_length", NON_NEGATIVE, &def.rest_length,
+		                                &src.rest_length))
 			return false;
 		def.kind = rest != NULL && def.rest_length == 0.0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
 		if (kind != NULL) {
@@ -952,8 +970,8 @@ static bool read_springs(parser* p, const json_t* list)
 // A group of springs; absent means no springs of that group, and so do literal zero constants.
 // A group whose stiffness or damping is a parameter is created whatever values they take, so
 // that changing parameters never changes the model's topology (an FMU's tunable parameters).
-static bool read_material(parser* p, const json_t* obj, const char* path, const char* key, sm_spring_material* m,
-                          spring_source* src)
+static bool read_material(parser* p, const json_t* obj, const char* path, const char* key,
+                          sm_spring_material* m, spring_source* src)
 {
 	static const char* const keys[] = {"stiffness",      "strain_stiffness", "section_stiffness", "damping",
 	                                   "strain_damping", "section_damping",  "break_strain",      NULL};
@@ -964,7 +982,8 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 		return true;
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
-	if (!expect_object(p, value, sub) || !check_keys(p, value, sub, keys) || !read_constants(p, value, sub, m, src))
+	if (!expect_object(p, value, sub) || !check_keys(p, value, sub, keys) ||
+	    !read_constants(p, value, sub, m, src))
 		return false;
 	m->keep_when_zero = src->stiffness >= 0 || src->damping >= 0;
 	return true;
@@ -975,12 +994,14 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 static bool check_budget(parser* p, const char* path, int64_t particles, int64_t springs)
 {
 	const sm_model* model = p->ex->model;
-	const int64_t np = sm_model_particle_count(model) + particles, ns = sm_model_spring_count(model) + springs;
+	const int64_t np = sm_model_particle_count(model) + particles,
+	              ns = sm_model_spring_count(model) + springs;
 	const long long limit = p->doc->max_elements;
 	if (np > limit && ns > limit)
-		return fail(p, SM_ERROR_SCHEMA, path,
-		            "the model would have %lld particles and %lld springs, more than the limit of %lld of each",
-		            (long long)np, (long long)ns, limit);
+		return fail(
+		    p, SM_ERROR_SCHEMA, path,
+		    "the model would have %lld particles and %lld springs, more than the limit of %lld of each",
+		    (long long)np, (long long)ns, limit);
 	if (np > limit || ns > limit)
 		return fail(p, SM_ERROR_SCHEMA, path, "the model would have %lld %s, more than the limit of %lld",
 		            (long long)(np > limit ? np : ns), np > limit ? "particles" : "springs", limit);
@@ -988,8 +1009,8 @@ static bool check_budget(parser* p, const char* path, int64_t particles, int64_t
 }
 
 // Mesh vertices [[x, y, z], ...] and triangles [[a, b, c], ...], copied into arrays.
-static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, double** vertices, int32_t* vertex_count,
-                             int32_t** triangles, int32_t* triangle_count)
+static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, double** vertices,
+                             int32_t* vertex_count, int32_t** triangles, int32_t* triangle_count)
 {
 	char sub[PATH_CAPACITY];
 	const json_t* vs = json_object_get(obj, "vertices");
@@ -1032,12 +1053,14 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 		snprintf(element, sizeof element, "%.100s.triangles[%zu]", path, t);
 		const json_t* triple = json_array_get(ts, t);
 		if (!json_is_array(triple) || json_array_size(triple) != 3)
-			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 vertex indices, not %s", type_name(triple));
+			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 vertex indices, not %s",
+			            type_name(triple));
 		for (size_t c = 0; c < 3; c++) {
 			char corner[PATH_CAPACITY];
 			child_index(corner, element, c);
 			int64_t index;
-			if (!read_count(p, FEEDS_COUNTS, json_array_get(triple, c), corner, 0, nv > 0 ? (int64_t)nv - 1 : 0, &index))
+			if (!read_count(p, FEEDS_COUNTS, json_array_get(triple, c), corner, 0,
+			                nv > 0 ? (int64_t)nv - 1 : 0, &index))
 				return false;
 			(*triangles)[3 * t + c] = (int32_t)index;
 		}
@@ -1102,7 +1125,8 @@ static int64_t grid_springs(structure_type type, int64_t nu, int64_t nv, int64_t
 }
 
 // A rope's, sheet's or block's "mass_distribution": "even" (the default) or "lumped".
-static bool read_distribution(parser* p, const json_t* obj, const char* path, sm_mass_distribution* distribution)
+static bool read_distribution(parser* p, const json_t* obj, const char* path,
+                              sm_mass_distribution* distribution)
 {
 	const json_t* value = json_object_get(obj, "mass_distribution");
 	if (value == NULL)
@@ -1209,13 +1233,36 @@ static bool check_names_against_structure(parser* p, const named_like_references
 
 static bool read_structure(parser* p, const named_like_references* like, const json_t* obj, const char* path)
 {
-	static const char* const rope_keys[] = {"type",       "name",    "start", "end", "segments", "mass", "mass_per_length",
-	                                        "structural", "bending", "mass_distribution", NULL};
-	static const char* const sheet_keys[] = {"type", "name",  "origin", "edge_u", "edge_v", "nu", "nv", "mass",
-	                                         "structural", "shear", "bend", "mass_distribution", NULL};
-	static const char* const block_keys[] = {"type", "name", "origin", "size", "nu", "nv", "nw", "mass", "edge",
-	                                         "face_diagonal", "body_diagonal", "mass_distribution", NULL};
-	static const char* const mesh_keys[] = {"type", "name", "vertices", "triangles", "density", "edge", "bend", NULL};
+	static const char* const rope_keys[] = {"type",
+	                                        "name",
+	                                        "start",
+	                                        "end",
+	                                        "segments",
+	                                        "mass",
+	                                        "mass_per_length",
+	                                        "structural",
+	                                        "bending",
+	                                        "mass_distribution",
+	                                        NULL};
+	static const char* const sheet_keys[] = {"type",       "name",  "origin", "edge_u",
+	                                         "edge_v",     "nu",    "nv",     "mass",
+	                                         "structural", "shear", "bend",   "mass_distribution",
+	                                         NULL};
+	static const char* const block_keys[] = {"type",
+	                                         "name",
+	                                         "origin",
+	                                         "size",
+	                                         "nu",
+	                                         "nv",
+	                                         "nw",
+	                                         "mass",
+	                                         "edge",
+	                                         "face_diagonal",
+	                                         "body_diagonal",
+	                                         "mass_distribution",
+	                                         NULL};
+	static const char* const mesh_keys[] = {"type",    "name", "vertices", "triangles",
+	                                        "density", "edge", "bend",     NULL};
 	char sub[PATH_CAPACITY];
 	forget_parameters(p);
 	if (!expect_object(p, obj, path) || !require(p, obj, path, "type") || !require(p, obj, path, "name"))
@@ -1248,7 +1295,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		            "particles' names (name[row,column,layer]) fit in %d",
 		            sm_text_quoted(text, s.name), name_bytes, MAX_STRUCTURE_NAME_BYTES, MAX_NAME_BYTES);
 	if (find_structure(p->ex, s.name, name_bytes) != NULL)
-		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used", sm_text_quoted(text, s.name));
+		return fail(p, SM_ERROR_SCHEMA, sub, "structure name %s is already used",
+		            sm_text_quoted(text, s.name));
 	if (!check_names_against_structure(p, like, s.name, name_bytes))
 		return false;
 
@@ -1270,16 +1318,18 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		    !read_vector(p, FEEDS_STATE, obj, path, "end", ANY_FINITE, d.end, NULL) ||
 		    !read_count_field(p, FEEDS_COUNTS, obj, path, "segments", 1, limit, &segments) ||
 		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass", POSITIVE, &d.mass, NULL) ||
-		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length, NULL) ||
+		    !read_field(p, FEEDS_CONSTANTS, obj, path, "mass_per_length", POSITIVE, &d.mass_per_length,
+		                NULL) ||
 		    !read_material(p, obj, path, "structural", &d.structural, &groups[0]) ||
 		    !read_material(p, obj, path, "bending", &d.bending, &groups[1]))
 			return false;
 		if (json_object_get(obj, "mass") != NULL && json_object_get(obj, "mass_per_length") != NULL)
-			return fail(p, SM_ERROR_SCHEMA, path, "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
+			return fail(p, SM_ERROR_SCHEMA, path,
+			            "give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both");
 		d.segments = (int32_t)segments;
 		d.mass_distribution = distribution;
-		const bool present[3] = {sm_structure_material_present(&d.structural), sm_structure_material_present(&d.bending),
-		                         false};
+		const bool present[3] = {sm_structure_material_present(&d.structural),
+		                         sm_structure_material_present(&d.bending), false};
 		if (!check_budget(p, path, segments + 1, grid_springs(s.type, segments + 1, 1, 1, present)))
 			return false;
 		st = sm_add_rope(model, &d, &s.range);
@@ -1311,7 +1361,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 				            describe_vector(p, vector, sizeof vector, edge, edge_sources[e]));
 			}
 		}
-		const bool present[3] = {sm_structure_material_present(&d.structural), sm_structure_material_present(&d.shear),
+		const bool present[3] = {sm_structure_material_present(&d.structural),
+		                         sm_structure_material_present(&d.shear),
 		                         sm_structure_material_present(&d.bend)};
 		if (!check_budget(p, path, nu * nv, grid_springs(s.type, nu, nv, 1, present)))
 			return false;
@@ -1325,7 +1376,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		sm_block_def d = sm_default_block_def();
 		d.edge = d.face_diagonal = d.body_diagonal = sm_default_spring_material();
 		int64_t nu, nv, nw;
-		if (!require(p, obj, path, "size") || !read_vector(p, FEEDS_STATE, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
+		if (!require(p, obj, path, "size") ||
+		    !read_vector(p, FEEDS_STATE, obj, path, "origin", ANY_FINITE, d.origin, NULL) ||
 		    !read_vector(p, FEEDS_STATE, obj, path, "size", POSITIVE, d.size, NULL) ||
 		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nu", 2, limit, &nu) ||
 		    !read_count_field(p, FEEDS_COUNTS, obj, path, "nv", 2, limit, &nv) ||
@@ -1338,7 +1390,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		if (nu * nv > limit || nu * nv * nw > limit)
 			return fail(p, SM_ERROR_SCHEMA, path, "%lld x %lld x %lld particles exceed the limit of %lld",
 			            (long long)nu, (long long)nv, (long long)nw, (long long)limit);
-		const bool present[3] = {sm_structure_material_present(&d.edge), sm_structure_material_present(&d.face_diagonal),
+		const bool present[3] = {sm_structure_material_present(&d.edge),
+		                         sm_structure_material_present(&d.face_diagonal),
 		                         sm_structure_material_present(&d.body_diagonal)};
 		if (!check_budget(p, path, nu * nv * nw, grid_springs(s.type, nu, nv, nw, present)))
 			return false;
@@ -1413,7 +1466,8 @@ static bool read_structures(parser* p, const json_t* list)
 	if (list == NULL)
 		return true;
 	if (!json_is_array(list))
-		return fail(p, SM_ERROR_SCHEMA, "structures", "must be an array of structures, not %s", type_name(list));
+		return fail(p, SM_ERROR_SCHEMA, "structures", "must be an array of structures, not %s",
+		            type_name(list));
 	named_like_references like = {.prefixes = NULL};
 	sm_name_index_init(&like.index, named_like_prefix, &like);
 	bool ok = find_names_like_references(p, &like);
@@ -1444,7 +1498,8 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 			double lo[3], hi[3];
 			int32_t lo_sources[3], hi_sources[3];
 			if (!check_keys(p, item, path, box_keys) || !require(p, item, path, "min") ||
-			    !require(p, item, path, "max") || !read_vector(p, FEEDS_MOTION, item, path, "min", ANY_FINITE, lo, lo_sources) ||
+			    !require(p, item, path, "max") ||
+			    !read_vector(p, FEEDS_MOTION, item, path, "min", ANY_FINITE, lo, lo_sources) ||
 			    !read_vector(p, FEEDS_MOTION, item, path, "max", ANY_FINITE, hi, hi_sources))
 				return false;
 			// Every particle whose initial position is in the box, bounds included.
@@ -1501,8 +1556,9 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
 		child_index(path, "ports", k);
 		const json_t* obj = json_array_get(list, k);
-		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys) || !require(p, obj, path, "name") ||
-		    !require(p, obj, path, "particle") || !require(p, obj, path, "kind"))
+		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys) ||
+		    !require(p, obj, path, "name") || !require(p, obj, path, "particle") ||
+		    !require(p, obj, path, "kind"))
 			return false;
 		sm_port port;
 		child_key(sub, path, "name");
@@ -1511,8 +1567,8 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		const int32_t same_name = sm_name_index_find(&p->ex->port_names, port.name, strlen(port.name));
 		char text[TEXT_QUOTED_CAPACITY];
 		if (same_name >= 0)
-			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]", sm_text_quoted(text, port.name),
-			            (int)same_name);
+			return fail(p, SM_ERROR_SCHEMA, sub, "port name %s is already used by ports[%d]",
+			            sm_text_quoted(text, port.name), (int)same_name);
 		child_key(sub, path, "particle");
 		if (!resolve_particle(p, json_object_get(obj, "particle"), sub, &port.particle))
 			return false;
@@ -1533,16 +1589,19 @@ static bool read_ports_to(parser* p, const json_t* list, int32_t* port_at)
 		describe_particle(p->ex, port.particle, which, sizeof which);
 		if (port.kind == SM_PORT_FORCE && def.motion != SM_PARTICLE_FREE)
 			return fail(p, SM_ERROR_SCHEMA, path,
-			            "a force port needs a free particle, and %s is fixed (use a motion or probe port)", which);
+			            "a force port needs a free particle, and %s is fixed (use a motion or probe port)",
+			            which);
 		// Only probe ports share a particle, so a particle has one port of another kind or probes
 		// alone, and its first port says which.
 		const int32_t q = port_at[port.particle];
 		if (q >= 0 && (p->ex->ports[q].kind != SM_PORT_PROBE || port.kind != SM_PORT_PROBE))
 			return fail(p, SM_ERROR_SCHEMA, path,
-			            "%s already has port %s; only probe ports may share a particle", which, p->ex->ports[q].name);
+			            "%s already has port %s; only probe ports may share a particle", which,
+			            p->ex->ports[q].name);
 		int32_t holder;
 		p->ex->ports[p->ex->port_count] = port;
-		if (!sm_name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count, &holder))
+		if (!sm_name_index_insert(&p->ex->port_names, port.name, strlen(port.name), p->ex->port_count,
+		                          &holder))
 			return fail(p, SM_ERROR_OUT_OF_MEMORY, "ports", "out of memory");
 		if (q < 0)
 			port_at[port.particle] = p->ex->port_count;
@@ -1574,8 +1633,8 @@ static bool read_ports(parser* p, const json_t* list)
 	return ok;
 }
 
-static bool read_choice(parser* p, const json_t* obj, const char* path, const char* key, const char* const* names,
-                        int count, int* out)
+static bool read_choice(parser* p, const json_t* obj, const char* path, const char* key,
+                        const char* const* names, int count, int* out)
 {
 	const json_t* value = json_object_get(obj, key);
 	if (value == NULL)
@@ -1603,9 +1662,9 @@ static bool read_choice(parser* p, const json_t* obj, const char* path, const ch
 
 static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu)
 {
-	static const char* const keys[] = {"stop_time", "output_interval", "rtol",   "atol",     "atol_position",
-	                                   "atol_velocity", "method",      "solver", "jacobian", "max_step",
-	                                   "max_steps",     NULL};
+	static const char* const keys[] = {"stop_time",     "output_interval", "rtol",      "atol",
+	                                   "atol_position", "atol_velocity",   "method",    "solver",
+	                                   "jacobian",      "max_step",        "max_steps", NULL};
 	static const char* const fmu_keys[] = {"particle_variables", NULL};
 	sm_document_settings* s = &p->ex->settings;
 	s->stop_time = 1.0;
@@ -1619,19 +1678,24 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		sm_simulation_def* d = &s->solver;
 		double atol = -1.0;
 		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "stop_time", POSITIVE, &s->stop_time, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "output_interval", POSITIVE, &s->output_interval, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "rtol", FRACTION, &d->relative_tolerance, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "output_interval", POSITIVE, &s->output_interval,
+		                NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "rtol", FRACTION, &d->relative_tolerance,
+		                NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol", TOLERANCE, &atol, NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
 			return false;
 		if (atol > 0.0)
 			d->absolute_tolerance_position = d->absolute_tolerance_velocity = atol;
-		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "atol_position", TOLERANCE, &d->absolute_tolerance_position, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol_velocity", TOLERANCE, &d->absolute_tolerance_velocity, NULL))
+		if (!read_field(p, FEEDS_SETTINGS, simulation, path, "atol_position", TOLERANCE,
+		                &d->absolute_tolerance_position, NULL) ||
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol_velocity", TOLERANCE,
+		                &d->absolute_tolerance_velocity, NULL))
 			return false;
 		if (json_object_get(simulation, "max_steps") != NULL) {
 			int64_t steps;
-			if (!read_count(p, FEEDS_SETTINGS, json_object_get(simulation, "max_steps"), "simulation.max_steps", 1, INT32_MAX, &steps))
+			if (!read_count(p, FEEDS_SETTINGS, json_object_get(simulation, "max_steps"),
+			                "simulation.max_steps", 1, INT32_MAX, &steps))
 				return false;
 			d->max_steps = (int32_t)steps;
 		}
@@ -1665,7 +1729,8 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 // Evaluates the document's tree with the given parameter values into a new expansion.
 static expansion* expand(const sm_document* doc, const double* parameter_values, sm_error* err)
 {
-	parser p = {.doc = doc, .parameter_values = parameter_values, .err = err, .ex = calloc(1, sizeof(expansion))};
+	parser p = {
+	    .doc = doc, .parameter_values = parameter_values, .err = err, .ex = calloc(1, sizeof(expansion))};
 	if (p.ex == NULL) {
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
@@ -1682,8 +1747,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 	const json_t* root = doc->root;
 	sm_model_def def = sm_default_model_def();
 	int32_t gravity_source[3];
-	bool ok = read_vector(&p, FEEDS_CONSTANTS, root, "", "gravity", ANY_FINITE, def.gravity, gravity_source) &&
-	          read_field(&p, FEEDS_CONSTANTS, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
+	bool ok =
+	    read_vector(&p, FEEDS_CONSTANTS, root, "", "gravity", ANY_FINITE, def.gravity, gravity_source) &&
+	    read_field(&p, FEEDS_CONSTANTS, root, "", "mass_damping", NON_NEGATIVE, &def.mass_damping, NULL);
 	if (ok) {
 		sm_error model_err;
 		p.ex->model = sm_model_create(&def, &model_err);
@@ -1696,7 +1762,8 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 	     read_fixed(&p, json_object_get(root, "fixed")) && read_ports(&p, json_object_get(root, "ports")) &&
 	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
 	if (ok && sm_model_particle_count(p.ex->model) == 0)
-		ok = fail(&p, SM_ERROR_SCHEMA, "", "the model has no particles (give \"particles\" or \"structures\")");
+		ok = fail(&p, SM_ERROR_SCHEMA, "",
+		          "the model has no particles (give \"particles\" or \"structures\")");
 	if (ok && doc->initial_position != NULL) {
 		sm_model* model = p.ex->model;
 		const int32_t n = sm_model_particle_count(model);
@@ -1722,9 +1789,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 
 static bool read_header(sm_document* doc, sm_error* err)
 {
-	static const char* const keys[] = {"springmass", "name",      "description", "parameters", "gravity",
-	                                   "mass_damping", "particles", "springs",     "structures", "fixed",
-	                                   "ports",        "simulation", "fmu",        NULL};
+	static const char* const keys[] = {"springmass",   "name",       "description", "parameters", "gravity",
+	                                   "mass_damping", "particles",  "springs",     "structures", "fixed",
+	                                   "ports",        "simulation", "fmu",         NULL};
 	parser p = {.doc = doc, .err = err};
 	const json_t* root = doc->root;
 	if (!json_is_object(root))
@@ -1739,27 +1806,33 @@ static bool read_header(sm_document* doc, sm_error* err)
 	if (!json_is_integer(version))
 		return fail(&p, SM_ERROR_SCHEMA, "springmass", "format version must be the integer %d, not %s",
 		            SM_FORMAT_VERSION,
-		            json_is_string(version) ? "a string (no quotes)" : json_is_real(version) ? "a real number" : "that");
+		            json_is_string(version) ? "a string (no quotes)"
+		            : json_is_real(version) ? "a real number"
+		                                    : "that");
 	if (json_integer_value(version) != SM_FORMAT_VERSION)
-		return fail(&p, SM_ERROR_SCHEMA, "springmass", "format version must be %d (this build reads version %d)",
-		            SM_FORMAT_VERSION, SM_FORMAT_VERSION);
-	if (!require(&p, root, "", "name") || !check_name(&p, json_object_get(root, "name"), "name", true, &doc->name))
+		return fail(&p, SM_ERROR_SCHEMA, "springmass",
+		            "format version must be %d (this build reads version %d)", SM_FORMAT_VERSION,
+		            SM_FORMAT_VERSION);
+	if (!require(&p, root, "", "name") ||
+	    !check_name(&p, json_object_get(root, "name"), "name", true, &doc->name))
 		return false;
 	const json_t* description = json_object_get(root, "description");
 	doc->description = "";
 	if (description != NULL) {
 		if (!json_is_string(description))
-			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s", type_name(description));
+			return fail(&p, SM_ERROR_SCHEMA, "description", "must be a string, not %s",
+			            type_name(description));
 		doc->description = json_string_value(description);
 		int64_t position;
 		const int32_t c = sm_text_find_refused(doc->description, sm_text_refused_in_description, &position);
 		if (c >= 0 && sm_text_is_line_break(c))
-			return fail(&p, SM_ERROR_SCHEMA, "description", "must be one line: it has a line break, U+%04X, at character %lld",
-			            (unsigned)c, (long long)position);
+			return fail(&p, SM_ERROR_SCHEMA, "description",
+			            "must be one line: it has a line break, U+%04X, at character %lld", (unsigned)c,
+			            (long long)position);
 		if (c >= 0)
 			return fail(&p, SM_ERROR_SCHEMA, "description",
-			            "has a control character, U+%04X, at character %lld (a tab is the only one allowed)", (unsigned)c,
-			            (long long)position);
+			            "has a control character, U+%04X, at character %lld (a tab is the only one allowed)",
+			            (unsigned)c, (long long)position);
 	}
 	const json_t* parameters = json_object_get(root, "parameters");
 	if (parameters == NULL)
@@ -1784,7 +1857,8 @@ static bool read_header(sm_document* doc, sm_error* err)
 		if (!check_name_text(&p, key, strlen(key), path, true))
 			return false;
 		if (!json_is_number(value))
-			return fail(&p, SM_ERROR_SCHEMA, path, "a parameter's value must be a number, not %s", type_name(value));
+			return fail(&p, SM_ERROR_SCHEMA, path, "a parameter's value must be a number, not %s",
+			            type_name(value));
 		const double v = json_number_value(value);
 		if (!isfinite(v))
 			return fail(&p, SM_ERROR_NOT_FINITE, path, "%g is not finite", v);
@@ -1822,15 +1896,15 @@ static bool missing_comma(const char* message)
 		const size_t length = strlen(closing[k]);
 		if (strncmp(message, closing[k], length) == 0) {
 			const char c = message[length];
-			return c == '"' || c == '{' || c == '[' || c == '-' || (c >= '0' && c <= '9') || c == 't' || c == 'f' ||
-			       c == 'n';
+			return c == '"' || c == '{' || c == '[' || c == '-' || (c >= '0' && c <= '9') || c == 't' ||
+			       c == 'f' || c == 'n';
 		}
 	}
 	return false;
 }
 
-sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
-                                       sm_error* err)
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
+                                       int64_t max_elements, sm_error* err)
 {
 	sm_error_clear(err);
 	if (source_name == NULL)
@@ -1860,8 +1934,9 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 	if (nul != NULL) {
 		int line, column;
 		sm_text_position(text, length, (size_t)(nul - text) + 1, &line, &column);
-		sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: a NUL byte (a model file is UTF-8 text without NUL bytes)",
-		             source_name, line, column);
+		sm_error_set(err, SM_ERROR_SYNTAX,
+		             "%s:%d:%d: a NUL byte (a model file is UTF-8 text without NUL bytes)", source_name, line,
+		             column);
 		sm_document_destroy(doc);
 		return NULL;
 	}
@@ -1947,7 +2022,8 @@ static sm_status read_all(int fd, off_t size, const char* path, char** text, siz
 		// The byte read took the NUL's place: grow, unless the text is now too long.
 		if (used > (size_t)MAX_FILE_BYTES) {
 			free(data);
-			return sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", path, MAX_FILE_BYTES);
+			return sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", path,
+			                    MAX_FILE_BYTES);
 		}
 		capacity = 2 * capacity > 4096 ? 2 * capacity : 4096;
 		if (capacity > (size_t)MAX_FILE_BYTES + 1)
@@ -2061,7 +2137,8 @@ double sm_document_parameter_value(const sm_document* doc, int32_t index)
 
 uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index)
 {
-	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->current->parameter_uses[index] : 0;
+	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->current->parameter_uses[index]
+	                                                                 : 0;
 }
 
 int32_t sm_document_parameter_index(const sm_document* doc, const char* name)
@@ -2264,7 +2341,8 @@ sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const
 	if (doc == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: no document");
 	if (x == NULL && v != NULL)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_set_initial_state: velocities without positions");
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "sm_document_set_initial_state: velocities without positions");
 	if (x == NULL)
 		return drop_initial_state(doc, err);
 	const int32_t n = sm_model_particle_count(doc->current->model);

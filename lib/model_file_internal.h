@@ -35,7 +35,12 @@ typedef struct spring_source {
 	bool kind_given;  // the file gave "kind": the rest length's parameter then chooses no law
 } spring_source;
 
-typedef enum structure_type { STRUCTURE_ROPE, STRUCTURE_SHEET, STRUCTURE_BLOCK, STRUCTURE_MESH } structure_type;
+typedef enum structure_type {
+	STRUCTURE_ROPE,
+	STRUCTURE_SHEET,
+	STRUCTURE_BLOCK,
+	STRUCTURE_MESH
+} structure_type;
 
 typedef struct document_structure {
 	const char* name;  // points into the JSON tree

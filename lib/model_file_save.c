@@ -181,7 +181,8 @@ static void put_particle(text* t, const sm_document* doc, int32_t i)
 	bool moving = false;
 	for (int c = 0; c < 3; c++)
 		moving = moving || def.velocity[c] != 0.0 || signbit(def.velocity[c]);
-	const bool velocity_parameter = !replaced && (src->velocity[0] >= 0 || src->velocity[1] >= 0 || src->velocity[2] >= 0);
+	const bool velocity_parameter =
+	    !replaced && (src->velocity[0] >= 0 || src->velocity[1] >= 0 || src->velocity[2] >= 0);
 	if (moving || velocity_parameter) {
 		puts_(t, ", \"velocity\": ");
 		put_vector(t, doc, def.velocity, replaced ? NULL : src->velocity);
@@ -207,15 +208,18 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 	// rest length from a parameter keeps the file's "kind" or its absence: without one, the
 	// parameter's value chooses the law (it feeds spring kinds), with one it does not.
 	if (src->rest_length >= 0 ? src->kind_given : def.kind == SM_SPRING_REST_LENGTH && def.rest_length == 0.0)
-		puts_(t, def.kind == SM_SPRING_ZERO_LENGTH ? ", \"kind\": \"zero_length\"" : ", \"kind\": \"rest_length\"");
+		puts_(t, def.kind == SM_SPRING_ZERO_LENGTH ? ", \"kind\": \"zero_length\""
+		                                           : ", \"kind\": \"rest_length\"");
 	puts_(t, ", \"rest_length\": ");
 	put_value(t, doc, def.kind == SM_SPRING_ZERO_LENGTH ? 0.0 : def.rest_length, src->rest_length);
-	static const char* const stiffness_keys[3] = {", \"stiffness\": ", ", \"strain_stiffness\": ",
-	                                              ", \"section_stiffness\": "};
-	static const char* const damping_keys[3] = {", \"damping\": ", ", \"strain_damping\": ", ", \"section_damping\": "};
+	static const char* const stiffness_keys[3] = {
+	    ", \"stiffness\": ", ", \"strain_stiffness\": ", ", \"section_stiffness\": "};
+	static const char* const damping_keys[3] = {
+	    ", \"damping\": ", ", \"strain_damping\": ", ", \"section_damping\": "};
 	// A constant of 0 is the default, left out, unless it comes from a parameter or has a scaling
 	// (and a section) of its own to keep.
-	const bool stiffness = def.stiffness != 0.0 || src->stiffness >= 0 || def.stiffness_scaling != SM_ABSOLUTE;
+	const bool stiffness =
+	    def.stiffness != 0.0 || src->stiffness >= 0 || def.stiffness_scaling != SM_ABSOLUTE;
 	const bool damping = def.damping != 0.0 || src->damping >= 0 || def.damping_scaling != SM_ABSOLUTE;
 	if (stiffness) {
 		puts_(t, stiffness_keys[def.stiffness_scaling]);
@@ -226,7 +230,8 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 		put_value(t, doc, def.damping, src->damping);
 	}
 	// A structure's spring gets its section from the grid; saved as one spring, it keeps it.
-	if ((stiffness && def.stiffness_scaling == SM_PER_SECTION) || (damping && def.damping_scaling == SM_PER_SECTION)) {
+	if ((stiffness && def.stiffness_scaling == SM_PER_SECTION) ||
+	    (damping && def.damping_scaling == SM_PER_SECTION)) {
 		puts_(t, ", \"section\": ");
 		put_value(t, doc, def.section, src->section);
 	}
@@ -400,6 +405,7 @@ sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* e
 	const int code = !written && write_code != 0 ? write_code : errno;
 	free(data);
 	if (!written || !closed)
-		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path, code != 0 ? strerror(code) : "write error");
+		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path,
+		                    code != 0 ? strerror(code) : "write error");
 	return SM_OK;
 }

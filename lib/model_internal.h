@@ -14,24 +14,24 @@ struct sm_model {
 	// Particles (count, capacity).
 	int32_t particle_count;
 	int32_t particle_capacity;
-	double* mass;                    // [kg]
-	double* position;                // initial positions, 3 per particle [m]
-	double* velocity;                // initial velocities, 3 per particle [m/s]
+	double* mass;      // [kg]
+	double* position;  // initial positions, 3 per particle [m]
+	double* velocity;  // initial velocities, 3 per particle [m/s]
 	sm_particle_motion* motion;
-	int32_t* free_index;             // position among free particles, or -1
+	int32_t* free_index;  // position among free particles, or -1
 	int32_t free_count;
 
 	// Springs (count, capacity). The resolved constants are what the force laws use.
 	int32_t spring_count;
 	int32_t spring_capacity;
-	sm_spring_def* spring_def;       // as given, rest length resolved to metres
-	int32_t* spring_a;               // first particle
-	int32_t* spring_b;               // second particle
-	double* rest_length;             // l0 [m] (0 for zero-length springs)
-	double* stiffness;               // ks [N/m], 0 while disabled
-	double* damping;                 // kd [N s/m], 0 while disabled
-	uint8_t* zero_length;            // 1 for SM_SPRING_ZERO_LENGTH
-	uint8_t* enabled;                // 0 for a disabled (broken) spring
+	sm_spring_def* spring_def;  // as given, rest length resolved to metres
+	int32_t* spring_a;          // first particle
+	int32_t* spring_b;          // second particle
+	double* rest_length;        // l0 [m] (0 for zero-length springs)
+	double* stiffness;          // ks [N/m], 0 while disabled
+	double* damping;            // kd [N s/m], 0 while disabled
+	uint8_t* zero_length;       // 1 for SM_SPRING_ZERO_LENGTH
+	uint8_t* enabled;           // 0 for a disabled (broken) spring
 
 	char last_error[SM_ERROR_MESSAGE_CAPACITY];
 };
@@ -43,7 +43,7 @@ struct sm_model {
 #define SPRING_JACOBIAN_STRIDE 8
 
 struct sm_spring_jacobians {
-	int32_t particle_count;       // of the model the storage was made for
+	int32_t particle_count;  // of the model the storage was made for
 	int32_t spring_count;
 	int evaluated;                // 0 until the first sm_model_forces_and_jacobians
 	sm_jacobian_variant variant;  // of the last evaluation
@@ -59,9 +59,9 @@ void sm_break_strain_floor_text(double break_strain, char text[SM_BREAK_STRAIN_F
 // Formats a message into model->last_error and returns status.
 sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
+    __attribute__((format(printf, 3, 4)))
 #endif
-	;
+    ;
 
 // Sets err (if not NULL) to SM_OK and an empty message: what every public function taking an
 // sm_error does first, so that a call that succeeds leaves no earlier failure in it.
@@ -70,9 +70,9 @@ void sm_error_clear(sm_error* err);
 // Fills err (if not NULL) with status and a formatted message; returns status.
 sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
+    __attribute__((format(printf, 3, 4)))
 #endif
-	;
+    ;
 
 // Sets the motion of the particles marked in select[] (particle_count entries; NULL: those listed
 // in particles[], count of them, valid indices) as sm_model_set_particle_motion sets one (a fixed
@@ -130,8 +130,8 @@ void sm_spring_blocks(const sm_model* model, int32_t spring, const double* x, co
 // sm_model_forces (the same numbers, bit for bit) and, from the same pass, the power the model
 // dissipates, as sm_model_dissipated_power computes it but summed in another order [W]. x, v
 // and f must be given. Defined in forces.c.
-double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v, const double* f_external,
-                                 double* f);
+double sm_model_forces_and_power(const sm_model* model, const double* x, const double* v,
+                                 const double* f_external, double* f);
 
 // The springs' share of the forces, added to f, with at most `lanes` springs at a time (1, 2 or 4;
 // fewer where the processor lacks SSE2 or AVX): damping if v is given, every spring's record of
@@ -148,7 +148,8 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
 // bit for bit, as each of the two). v must be given. The right-hand side of a simulation whose
 // linear solver will want the Jacobian at the same state (linear_solver_reduced.c).
 double sm_model_forces_power_and_jacobians(const sm_model* model, const double* x, const double* v,
-                                           const double* f_external, double* f, sm_spring_jacobians* jacobians);
+                                           const double* f_external, double* f,
+                                           sm_spring_jacobians* jacobians);
 
 // Gravity, mass damping and external forces (f_external NULL: none) on particles begin .. end - 1,
 // written into their f as sm_model_forces starts it (v must be given); returns the power their

@@ -165,7 +165,8 @@ typedef struct modes_problem {
 
 // Writes the free-dof vector y (scaled by scale[r], or 1 if scale is NULL) as a shape over all
 // particles (constrained particles 0).
-static void scatter_shape(const modes_problem* p, const double* y, size_t stride, const double* scale, double* shape)
+static void scatter_shape(const modes_problem* p, const double* y, size_t stride, const double* scale,
+                          double* shape)
 {
 	for (int32_t q = 0; q < p->particle_count; q++) {
 		const int32_t fi = p->free_index[q];
@@ -308,26 +309,26 @@ static const double adaptive_floor = 1e-8;
 
 typedef struct lanczos_work {
 	size_t dof;
-	const double* mass;        // dof [kg]
+	const double* mass;  // dof [kg]
 	sm_sparse_jacobian* pattern;
-	const int64_t* rows;       // CSR row pointers (symmetric pattern)
-	const int64_t* cols;       // column indices
-	double* stiffness;         // nonzeros: K = -df/dx [N/m]
-	double* shifted;           // nonzeros: K - sigma M
-	int64_t* diagonal;         // dof positions of the diagonal entries
-	double shift;              // sigma [1/s^2]
+	const int64_t* rows;  // CSR row pointers (symmetric pattern)
+	const int64_t* cols;  // column indices
+	double* stiffness;    // nonzeros: K = -df/dx [N/m]
+	double* shifted;      // nonzeros: K - sigma M
+	int64_t* diagonal;    // dof positions of the diagonal entries
+	double shift;         // sigma [1/s^2]
 	cholmod_common common;
 	int common_started;
 	cholmod_factor* factor;
-	size_t basis_size;         // m, Krylov vectors per run
-	double* basis;             // (m + 1) x dof
-	double* projected;         // m x m: H
-	double* eigen_input;       // m x m: copy of H for GSL
-	double* ritz;              // m x m: eigenvectors of H
-	double* theta;             // m
-	double* coefficients;      // m + 1
-	double* products;          // m x dof: V Y on restart
-	double* rhs;               // dof
+	size_t basis_size;     // m, Krylov vectors per run
+	double* basis;         // (m + 1) x dof
+	double* projected;     // m x m: H
+	double* eigen_input;   // m x m: copy of H for GSL
+	double* ritz;          // m x m: eigenvectors of H
+	double* theta;         // m
+	double* coefficients;  // m + 1
+	double* products;      // m x dof: V Y on restart
+	double* rhs;           // dof
 	gsl_eigen_symmv_workspace* eigen;
 } lanczos_work;
 
@@ -546,9 +547,11 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 {
 	w->pattern = sm_sparse_jacobian_create(p->model);
 	if (w->pattern == NULL)
-		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the sparse stiffness pattern");
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
+		                    "modes: out of memory for the sparse stiffness pattern");
 	if ((size_t)sm_sparse_jacobian_dimension(w->pattern) != p->dof)
-		return sm_error_set(err, SM_ERROR_SOLVER, "modes: the sparse pattern does not match the free particles");
+		return sm_error_set(err, SM_ERROR_SOLVER,
+		                    "modes: the sparse pattern does not match the free particles");
 	const int64_t nnz = sm_sparse_jacobian_nonzeros(w->pattern);
 	w->rows = sm_sparse_jacobian_row_pointers(w->pattern);
 	w->cols = sm_sparse_jacobian_column_indices(w->pattern);
@@ -557,8 +560,8 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 	w->diagonal = malloc(p->dof * sizeof(int64_t));
 	if (w->stiffness == NULL || w->shifted == NULL || w->diagonal == NULL)
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the sparse stiffness");
-	const sm_status fill = sm_sparse_jacobian_fill(w->pattern, p->model, p->x0, NULL, SM_JACOBIAN_EXACT,
-	                                               w->stiffness, NULL);
+	const sm_status fill =
+	    sm_sparse_jacobian_fill(w->pattern, p->model, p->x0, NULL, SM_JACOBIAN_EXACT, w->stiffness, NULL);
 	if (fill != SM_OK)
 		return sm_error_set(err, fill, "modes: the sparse stiffness could not be assembled");
 	if (!sm_analysis_all_finite(w->stiffness, (size_t)nnz))
@@ -640,13 +643,15 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 		                  ? 1
 		                  : lanczos_run(w, want, found, count, (uint64_t)run, max_restarts, nu, fresh);
 		if (r < 0)
-			return sm_error_set(err, SM_ERROR_SOLVER, "modes: a sparse solve failed in the Lanczos iteration");
+			return sm_error_set(err, SM_ERROR_SOLVER,
+			                    "modes: a sparse solve failed in the Lanczos iteration");
 		if (r == 0)
-			return sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                    "modes: Lanczos did not converge to %zu modes%s in %d restarts (run %d, shift %.3g "
-			                    "1/s^2)",
-			                    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts,
-			                    run + 1, w->shift);
+			return sm_error_set(
+			    err, SM_ERROR_NOT_CONVERGED,
+			    "modes: Lanczos did not converge to %zu modes%s in %d restarts (run %d, shift %.3g "
+			    "1/s^2)",
+			    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts, run + 1,
+			    w->shift);
 		// lambda = sigma + 1/nu. A mode is new if it lies below the highest kept one by more than
 		// the round-off of the operator (1e-9 of its scale 1/nu).
 		const double highest = count > 0 ? lambda[count - 1] : INFINITY;
@@ -665,7 +670,8 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 		count = count + added < want ? count + added : want;
 		if (run == max_runs - 1)
 			return sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                    "modes: multiple eigenvalues still being found after %d Lanczos runs", max_runs);
+			                    "modes: multiple eigenvalues still being found after %d Lanczos runs",
+			                    max_runs);
 	}
 
 	// Rayleigh-Ritz on the kept vectors X: K_r = X^T K X, M_r = X^T M X, K_r z = lambda M_r z.
@@ -755,8 +761,8 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	}
 	if (factored != 1) {
 		st = sm_error_set(err, SM_ERROR_SOLVER,
-		                  "modes: CHOLMOD could not factor K - sigma M (sigma = %.3g 1/s^2; status %d)", -shift,
-		                  (int)w.common.status);
+		                  "modes: CHOLMOD could not factor K - sigma M (sigma = %.3g 1/s^2; status %d)",
+		                  -shift, (int)w.common.status);
 		goto done;
 	}
 
@@ -777,13 +783,13 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	pairs.fresh = malloc(want * dof * sizeof(double));
 	pairs.reduced = malloc(4 * want * want * sizeof(double));
 	pairs.general = gensymmv_workspace_create(want);
-	if (w.basis == NULL || w.projected == NULL || w.eigen_input == NULL || w.ritz == NULL || w.theta == NULL ||
-	    w.coefficients == NULL || w.products == NULL || w.rhs == NULL || w.eigen == NULL || pairs.lambda == NULL ||
-	    pairs.found == NULL || pairs.nu == NULL || pairs.fresh == NULL || pairs.reduced == NULL ||
-	    pairs.general == NULL) {
+	if (w.basis == NULL || w.projected == NULL || w.eigen_input == NULL || w.ritz == NULL ||
+	    w.theta == NULL || w.coefficients == NULL || w.products == NULL || w.rhs == NULL || w.eigen == NULL ||
+	    pairs.lambda == NULL || pairs.found == NULL || pairs.nu == NULL || pairs.fresh == NULL ||
+	    pairs.reduced == NULL || pairs.general == NULL) {
 		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
-		                  "modes: out of memory for a Krylov space of %zu vectors of %zu degrees of freedom", m,
-		                  dof);
+		                  "modes: out of memory for a Krylov space of %zu vectors of %zu degrees of freedom",
+		                  m, dof);
 		goto done;
 	}
 
@@ -830,7 +836,8 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	}
 	const double zero_level = p->def->zero_tolerance * gershgorin;
 	classify(modes->omega_squared, p->kept, zero_level, modes);
-	p->next_omega_squared = want > p->kept ? (fabs(pairs.nu[p->kept]) <= zero_level ? 0.0 : pairs.nu[p->kept]) : NAN;
+	p->next_omega_squared =
+	    want > p->kept ? (fabs(pairs.nu[p->kept]) <= zero_level ? 0.0 : pairs.nu[p->kept]) : NAN;
 	modes->omega_max = sqrt(fmax(gershgorin, pairs.nu[want - 1]));
 	modes->shift = w.shift;
 
@@ -945,7 +952,8 @@ static size_t group_end(const double* w2, size_t count, size_t start, double tol
 	return end;
 }
 
-static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* modes, double* modal, sm_error* err)
+static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* modes, double* modal,
+                                             sm_error* err)
 {
 	const size_t kept = p->kept;
 	const size_t n3 = 3 * (size_t)p->particle_count;
@@ -978,7 +986,8 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 		// The group's block, symmetrised (C is symmetric up to round-off at zero velocity).
 		for (size_t a = 0; a < s; a++)
 			for (size_t b = 0; b < s; b++)
-				block[a * s + b] = 0.5 * (modal[(start + a) * kept + start + b] + modal[(start + b) * kept + start + a]);
+				block[a * s + b] =
+				    0.5 * (modal[(start + a) * kept + start + b] + modal[(start + b) * kept + start + a]);
 		gsl_eigen_symmv_workspace* ws = symmv_workspace_create(s);
 		if (ws == NULL) {
 			st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for the modal damping");
@@ -987,7 +996,8 @@ static sm_status diagonalise_repeated_groups(const modes_problem* p, sm_modes* m
 		const bool solved = symmetric_eigenpairs(block, s, damping, rotation, ws);
 		symmv_workspace_destroy(ws);
 		if (!solved) {
-			st = sm_error_set(err, SM_ERROR_SOLVER, "modes: the eigensolver of a repeated frequency's damping failed");
+			st = sm_error_set(err, SM_ERROR_SOLVER,
+			                  "modes: the eigensolver of a repeated frequency's damping failed");
 			goto done;
 		}
 		// Shapes: phi'_a = sum_b Q_ba phi_b.
@@ -1053,7 +1063,8 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 	const double damping_round_off = limit.damping_rate * 4.0 * (double)n3 * DBL_EPSILON;
 	// Modal damping matrix Phi^T C Phi over the kept modes; C phi = -(df/dv) phi.
 	for (size_t j = 0; j < kept; j++) {
-		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, NULL, modes->shapes + j * n3, product);
+		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, NULL, modes->shapes + j * n3,
+		                          product);
 		for (size_t i = 0; i < kept; i++) {
 			const double* phi = modes->shapes + i * n3;
 			double s = 0.0;
@@ -1136,9 +1147,9 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 						sum += cij * cij;
 				}
 			// Floor of the normalisation: entries below 1e-12 of the largest damping are round-off.
-			const double scale = fmax(sqrt(fmax(modes->modal_damping[first[b]], 0.0) *
-			                               fmax(modes->modal_damping[first[c]], 0.0)),
-			                          1e-12 * largest_damping);
+			const double scale = fmax(
+			    sqrt(fmax(modes->modal_damping[first[b]], 0.0) * fmax(modes->modal_damping[first[c]], 0.0)),
+			    1e-12 * largest_damping);
 			if (sum > 0.0 && scale > 0.0)
 				modes->damping_coupling = fmax(modes->damping_coupling, sqrt(sum) / scale);
 		}
@@ -1153,7 +1164,7 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		double step = INFINITY;
 		for (size_t i = 0; i < kept; i++)
 			step = fmin(step, sm_symplectic_euler_step(sqrt(fmax(modes->omega_squared[i], 0.0)),
-			                                            fmax(modes->modal_damping[i], 0.0)));
+			                                           fmax(modes->modal_damping[i], 0.0)));
 		modes->explicit_step = step;
 	}
 	free(product);
@@ -1174,16 +1185,17 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: mode_count must be >= 0, got %d",
 		                    (int)d.mode_count);
 	if (!(d.zero_tolerance >= 0.0 && d.zero_tolerance < 1.0))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: zero_tolerance must lie in [0, 1), got %g",
-		                    d.zero_tolerance);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "modes: zero_tolerance must lie in [0, 1), got %g", d.zero_tolerance);
 	if (!(d.proportional_tolerance >= 0.0) || !isfinite(d.proportional_tolerance))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "modes: proportional_tolerance must be finite and >= 0, got %g", d.proportional_tolerance);
+		                    "modes: proportional_tolerance must be finite and >= 0, got %g",
+		                    d.proportional_tolerance);
 	if (d.solver != SM_MODES_AUTO && d.solver != SM_MODES_DENSE && d.solver != SM_MODES_SPARSE)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: unknown solver %d", (int)d.solver);
 	if (!(d.residual_tolerance > 0.0 && d.residual_tolerance < 1.0))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: residual_tolerance must lie in (0, 1), got %g",
-		                    d.residual_tolerance);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "modes: residual_tolerance must lie in (0, 1), got %g", d.residual_tolerance);
 
 	const int32_t n = sm_model_particle_count(model);
 	const size_t n3 = 3 * (size_t)n;
@@ -1201,27 +1213,29 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		sm_model_initial_state(model, x0, NULL);
 	for (size_t k = 0; k < n3; k++)
 		if (!isfinite(x0[k])) {
-			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: position of particle %zu is not finite", k / 3);
+			st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: position of particle %zu is not finite",
+			                  k / 3);
 			goto done;
 		}
 	const int32_t coincident = sm_analysis_coincident_spring(model, x0);
 	if (coincident >= 0) {
-		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                  "modes: spring %d (rest length %g m) has its particles %d and %d at one point, where its force "
-		                  "has no derivative (its energy is a maximum there): the configuration has no modes",
-		                  (int)coincident, model->rest_length[coincident], (int)model->spring_a[coincident],
-		                  (int)model->spring_b[coincident]);
+		st = sm_error_set(
+		    err, SM_ERROR_INVALID_ARGUMENT,
+		    "modes: spring %d (rest length %g m) has its particles %d and %d at one point, where its force "
+		    "has no derivative (its energy is a maximum there): the configuration has no modes",
+		    (int)coincident, model->rest_length[coincident], (int)model->spring_a[coincident],
+		    (int)model->spring_b[coincident]);
 		goto done;
 	}
 	const int32_t damper = sm_analysis_coincident_damper(model, x0);
 	if (damper >= 0) {
-		st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                  "modes: spring %d (damping %g N s/m) has its particles %d and %d at one point, where its "
-		                  "damping force has no derivative (a motion through the point is damped in full, the "
-		                  "linearisation would have no damping): the configuration has no modes; take one with the "
-		                  "particles apart",
-		                  (int)damper, model->damping[damper], (int)model->spring_a[damper],
-		                  (int)model->spring_b[damper]);
+		st = sm_error_set(
+		    err, SM_ERROR_INVALID_ARGUMENT,
+		    "modes: spring %d (damping %g N s/m) has its particles %d and %d at one point, where its "
+		    "damping force has no derivative (a motion through the point is damped in full, the "
+		    "linearisation would have no damping): the configuration has no modes; take one with the "
+		    "particles apart",
+		    (int)damper, model->damping[damper], (int)model->spring_a[damper], (int)model->spring_b[damper]);
 		goto done;
 	}
 	const int32_t nf = sm_analysis_free_map(model, free_index, dof_mass);
@@ -1235,26 +1249,30 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	// space (2 per mode + 20) next to the locked modes. Without free particles there is nothing to
 	// solve and no solver to refuse: no modes, whichever solver was asked for.
 	const size_t wanted = (size_t)d.mode_count;
-	const int sparse_fits = wanted > 0 && dof >= SM_MODES_SPARSE_MARGIN && wanted <= (dof - SM_MODES_SPARSE_MARGIN) / 4;
+	const int sparse_fits =
+	    wanted > 0 && dof >= SM_MODES_SPARSE_MARGIN && wanted <= (dof - SM_MODES_SPARSE_MARGIN) / 4;
 	sm_modes_solver solver = d.solver;
 	if (solver == SM_MODES_AUTO)
 		solver = dof > SM_MODES_DENSE_LIMIT && sparse_fits ? SM_MODES_SPARSE : SM_MODES_DENSE;
 	if (solver == SM_MODES_SPARSE && !sparse_fits && dof > 0) {
 		if (dof < SM_MODES_SPARSE_MARGIN + 4)
-			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-			                  "modes: the sparse solver needs at least %d free degrees of freedom, the model has %zu: "
-			                  "use the dense solver",
-			                  SM_MODES_SPARSE_MARGIN + 4, dof);
+			st = sm_error_set(
+			    err, SM_ERROR_INVALID_ARGUMENT,
+			    "modes: the sparse solver needs at least %d free degrees of freedom, the model has %zu: "
+			    "use the dense solver",
+			    SM_MODES_SPARSE_MARGIN + 4, dof);
 		else if (d.mode_count == 0)
-			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-			                  "modes: the sparse solver gives the lowest modes, 1 to (dof - %d) / 4 = %zu of this "
-			                  "model's %zu, not all (mode_count = 0): use the dense solver for all",
-			                  SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof);
+			st = sm_error_set(
+			    err, SM_ERROR_INVALID_ARGUMENT,
+			    "modes: the sparse solver gives the lowest modes, 1 to (dof - %d) / 4 = %zu of this "
+			    "model's %zu, not all (mode_count = 0): use the dense solver for all",
+			    SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof);
 		else
-			st = sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-			                  "modes: the sparse solver gives 1 to (dof - %d) / 4 = %zu modes of this model (%zu free "
-			                  "degrees of freedom), not %d: use the dense solver for more",
-			                  SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof, (int)d.mode_count);
+			st = sm_error_set(
+			    err, SM_ERROR_INVALID_ARGUMENT,
+			    "modes: the sparse solver gives 1 to (dof - %d) / 4 = %zu modes of this model (%zu free "
+			    "degrees of freedom), not %d: use the dense solver for more",
+			    SM_MODES_SPARSE_MARGIN, (dof - SM_MODES_SPARSE_MARGIN) / 4, dof, (int)d.mode_count);
 		goto done;
 	}
 #ifndef SPRINGMASS_HAVE_CHOLMOD
@@ -1283,8 +1301,8 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	modes->shapes = kept <= SIZE_MAX / sizeof(double) / (n3 + 1) ? calloc(kept * n3, sizeof(double)) : NULL;
 	if (modes->omega_squared == NULL || modes->frequency == NULL || modes->modal_damping == NULL ||
 	    modes->damping_ratio == NULL || modes->shapes == NULL) {
-		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for %zu modes of %d particles", kept,
-		                  (int)n);
+		st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "modes: out of memory for %zu modes of %d particles",
+		                  kept, (int)n);
 		goto done;
 	}
 #ifdef SPRINGMASS_HAVE_CHOLMOD

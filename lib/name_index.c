@@ -40,8 +40,8 @@ static void sip_round(uint64_t v[4])
 // holds the remaining bytes and, in its top byte, the length mod 256 (little-endian words).
 static uint64_t siphash13(const uint64_t key[2], const unsigned char* data, size_t length)
 {
-	uint64_t v[4] = {0x736f6d6570736575ULL ^ key[0], 0x646f72616e646f6dULL ^ key[1], 0x6c7967656e657261ULL ^ key[0],
-	                 0x7465646279746573ULL ^ key[1]};
+	uint64_t v[4] = {0x736f6d6570736575ULL ^ key[0], 0x646f72616e646f6dULL ^ key[1],
+	                 0x6c7967656e657261ULL ^ key[0], 0x7465646279746573ULL ^ key[1]};
 	const size_t whole = length - length % 8;
 	for (size_t at = 0; at <= whole; at += 8) {
 		const size_t bytes = at < whole ? 8 : length - whole;

@@ -53,7 +53,7 @@ struct sm_multilevel {
 	cholmod_factor* factor;
 	cholmod_dense *cb, *cx, *cy, *ce;
 	double *solution, *residual, *direction, *product;  // top level's conjugate gradients
-	sm_workers* workers;  // of the current solve
+	sm_workers* workers;                                // of the current solve
 };
 
 // The adjugate of a 3x3 block into adj, returning the determinant.
@@ -105,7 +105,8 @@ bool sm_invert3(const double* a, double* inv)
 	return true;
 }
 
-void sm_block_pattern_fill(int32_t count, const int64_t* first, const int32_t* neighbour, int64_t* p, int64_t* index)
+void sm_block_pattern_fill(int32_t count, const int64_t* first, const int32_t* neighbour, int64_t* p,
+                           int64_t* index)
 {
 	p[0] = 0;
 	for (int32_t I = 0; I < count; I++) {
@@ -114,7 +115,8 @@ void sm_block_pattern_fill(int32_t count, const int64_t* first, const int32_t* n
 			const int64_t row = 3 * (int64_t)I + i;
 			for (int64_t k = 0; k < degree; k++)
 				for (int j = 0; j < 3; j++)
-					index[sm_block_entry(first, I, (int32_t)k, i, j)] = 3 * (int64_t)neighbour[first[I] + k] + j;
+					index[sm_block_entry(first, I, (int32_t)k, i, j)] =
+					    3 * (int64_t)neighbour[first[I] + k] + j;
 			p[row + 1] = sm_block_entry(first, I, 0, i, 0) + 3 * degree;
 		}
 	}
@@ -382,7 +384,8 @@ bool sm_multilevel_refresh(sm_multilevel* ml, const double* values, cholmod_comm
 // r = b - A x on a level's block rows begin .. end. The three rows of a block row go together,
 // so that each neighbour's x is loaded once; each row's sum keeps its order (the same bits as
 // row by row).
-static void residual_rows(const level* l, const double* b, const double* x, double* r, int32_t begin, int32_t end)
+static void residual_rows(const level* l, const double* b, const double* x, double* r, int32_t begin,
+                          int32_t end)
 {
 	for (int32_t I = begin; I < end; I++) {
 		const int64_t degree = l->first[I + 1] - l->first[I];

@@ -24,7 +24,8 @@ static inline int64_t sm_block_entry(const int64_t* first, int32_t I, int32_t k,
 
 // Fills a CHOLMOD matrix's column pointers p (3 count + 1) and row indices (9 first[count]) for
 // the block layout: its rows are the columns of the symmetric matrix CHOLMOD reads.
-void sm_block_pattern_fill(int32_t count, const int64_t* first, const int32_t* neighbour, int64_t* p, int64_t* index);
+void sm_block_pattern_fill(int32_t count, const int64_t* first, const int32_t* neighbour, int64_t* p,
+                           int64_t* index);
 
 // Inverts the 3x3 block a (row-major) into inv; false if it is singular.
 bool sm_invert3(const double* a, double* inv);

@@ -4,10 +4,10 @@
 //
 // Aggregation. Each aggregate is a particle and its spring neighbours, formed greedily in
 // particle order; the prolongation P moves an aggregate as one rigid translation, so the coarse
-// space holds the long, smooth waves that block Jacobi cannot damp. For the multilevel path the aggregates follow the strong springs only
-// (stiffness at least STRONG_FRACTION of the stiffest at either end): neighbours across soft
-// springs (bending) are then not drawn in, which makes the aggregates smaller (9 particles instead
-// of 15 on the cloth) and the coarse space larger. The coarse pattern follows all springs.
+// space holds the long, smooth waves that block Jacobi cannot damp. For the multilevel path the aggregates
+// follow the strong springs only (stiffness at least STRONG_FRACTION of the stiffest at either end):
+// neighbours across soft springs (bending) are then not drawn in, which makes the aggregates smaller (9
+// particles instead of 15 on the cloth) and the coarse space larger. The coarse pattern follows all springs.
 #define _POSIX_C_SOURCE 200809L
 
 #include "linear_solver_reduced.h"
@@ -41,7 +41,7 @@ bool sm_reduced_build_two_level(sm_reduced* r, bool strong_only)
 	int32_t* neighbour = malloc(2 * (size_t)m->spring_count * sizeof(int32_t) + sizeof(int32_t));
 	int64_t* fill = malloc(((size_t)nf + 1) * sizeof(int64_t));
 	int32_t* mark = malloc(((size_t)nf + 1) * sizeof(int32_t));
-	int32_t* group = malloc(((size_t)nf + 1) * sizeof(int32_t));  // aggregate per free particle
+	int32_t* group = malloc(((size_t)nf + 1) * sizeof(int32_t));            // aggregate per free particle
 	bool* strong = malloc(2 * (size_t)m->spring_count * sizeof(bool) + 1);  // per neighbour entry
 	double* strongest = calloc((size_t)nf + 1, sizeof(double));
 	r->aggregate = malloc(((size_t)m->particle_count + 1) * sizeof(int32_t));

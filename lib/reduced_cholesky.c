@@ -65,8 +65,8 @@ bool sm_reduced_cholesky_allocate(sm_reduced* r)
 		r->common.supernodal = CHOLMOD_SIMPLICIAL;
 	// A symmetric matrix whose upper triangle CHOLMOD reads: the CSR arrays of a symmetric
 	// pattern are also its CSC arrays.
-	r->matrix = cholmod_l_allocate_sparse((size_t)r->n, (size_t)r->n, (size_t)r->nonzeros, 1, 1, 1, CHOLMOD_REAL,
-	                                      &r->common);
+	r->matrix = cholmod_l_allocate_sparse((size_t)r->n, (size_t)r->n, (size_t)r->nonzeros, 1, 1, 1,
+	                                      CHOLMOD_REAL, &r->common);
 	r->b = cholmod_l_allocate_dense((size_t)r->n, 1, (size_t)r->n, CHOLMOD_REAL, &r->common);
 	if (!r->matrix || !r->b)
 		return false;
@@ -97,7 +97,7 @@ static int factorize(sm_reduced* r)
 	sm_simulation* sim = r->sim;
 	const double start = sm_simulation_clock();
 	const sm_status st =
-		sm_sparse_jacobian_fill_from_springs(sim->pattern, sim->model, r->springs, sim->dfdx, sim->dfdv);
+	    sm_sparse_jacobian_fill_from_springs(sim->pattern, sim->model, r->springs, sim->dfdx, sim->dfdv);
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	if (st != SM_OK)
 		return -1;

@@ -27,24 +27,27 @@ static void forces_chunk(void* context, int c)
 {
 	const forces_job* j = context;
 	sm_reduced* r = j->r;
-	const double body = sm_model_body_forces_range(r->sim->model, j->v, j->f_external, j->f, r->chunk_particle[c],
-	                                               r->chunk_particle[c + 1]);
-	r->partial[c] = sm_spring_order_forces_and_jacobians(&j->order, r->chunk_spring[c], r->chunk_spring[c + 1], j->x,
-	                                                     j->v, j->f, r->springs->data) +
-	                body;
+	const double body = sm_model_body_forces_range(r->sim->model, j->v, j->f_external, j->f,
+	                                               r->chunk_particle[c], r->chunk_particle[c + 1]);
+	r->partial[c] =
+	    sm_spring_order_forces_and_jacobians(&j->order, r->chunk_spring[c], r->chunk_spring[c + 1], j->x,
+		                                     j->v, j->f, r->springs->data) +
+	    body;
 }
 
 // sm_model_forces_power_and_jacobians at x, v into f and the solver's records, chunk by chunk
 // (the springs between chunks after, on the caller's thread, and the chunks' powers added in
 // chunk order) when the model is split into chunks; returns the dissipated power [W].
-double sm_reduced_forces_and_records(sm_reduced* r, const double* x, const double* v, const double* f_external,
-                                     double* f)
+double sm_reduced_forces_and_records(sm_reduced* r, const double* x, const double* v,
+                                     const double* f_external, double* f)
 {
 	const sm_model* m = r->sim->model;
 	if (r->slot == NULL)
 		return sm_model_forces_power_and_jacobians(m, x, v, f_external, f, r->springs);
-	forces_job job = {r, x, v, f_external, f,
-	                  {r->ordered_a, r->ordered_b, r->ordered_rest_length, r->ordered_stiffness, r->ordered_damping}};
+	forces_job job = {
+	    r, x,
+	    v, f_external,
+	    f, {r->ordered_a, r->ordered_b, r->ordered_rest_length, r->ordered_stiffness, r->ordered_damping}};
 	sm_workers_run(r->workers, forces_chunk, &job, r->chunks);
 	const double boundary = sm_spring_order_forces_and_jacobians(&job.order, r->chunk_spring[r->chunks],
 	                                                             m->spring_count, x, v, f, r->springs->data);

@@ -47,7 +47,8 @@
 #define COARSE_ITERATIONS 3
 
 // Adds sign B (row-major 3x3) to the coarse block whose first entry is `entry`, in block row I.
-static void coarse_add(double* values, const sm_reduced* r, int32_t I, int64_t entry, const double* B, double sign)
+static void coarse_add(double* values, const sm_reduced* r, int32_t I, int64_t entry, const double* B,
+                       double sign)
 {
 	const int64_t stride = 3 * (r->coarse_first[I + 1] - r->coarse_first[I]);
 	for (int i = 0; i < 3; i++)
@@ -86,9 +87,8 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 		record[0] = q[0], record[1] = q[1], record[2] = q[2];
 		record[3] = w[0], record[4] = w[1], record[5] = w[2];
 		record[6] = d;
-		const double B[9] = {q[0] * w[0] + d, q[0] * w[1],     q[0] * w[2],
-		                     q[1] * w[0],     q[1] * w[1] + d, q[1] * w[2],
-		                     q[2] * w[0],     q[2] * w[1],     q[2] * w[2] + d};
+		const double B[9] = {q[0] * w[0] + d, q[0] * w[1], q[0] * w[2], q[1] * w[0],    q[1] * w[1] + d,
+		                     q[1] * w[2],     q[2] * w[0], q[2] * w[1], q[2] * w[2] + d};
 		const int32_t ends[2] = {first[k], second[k]};
 		for (int e = 0; e < 2; e++) {
 			double* sum = diag + 9 * (size_t)ends[e];
@@ -176,12 +176,14 @@ static int refresh_coarse(sm_reduced* r, double gamma)
 		// (out of memory) nothing can be factorised at any step size: an error, not a matrix that
 		// is not positive definite, which a smaller step may mend.
 		if (r->coarse_factor == NULL && r->coarse_part != NULL)
-			r->coarse_halves = sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
+			r->coarse_halves =
+			    sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
 		else if (r->coarse_factor == NULL)
 			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
 		if (r->coarse_factor == NULL)
 			status = -1;
-		else if (cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) && r->common.status == CHOLMOD_OK)
+		else if (cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) &&
+		         r->common.status == CHOLMOD_OK)
 			status = 0;
 		else
 			status = 1;
@@ -290,15 +292,17 @@ bool sm_reduced_apply_preconditioner(sm_reduced* r, const double* in, double* ou
 		return true;
 	}
 	if (r->multilevel != NULL) {
-		job.yc = sm_multilevel_solve(r->multilevel, r->coarse_b->x, COARSE_ITERATIONS, r->workers, &r->common);
+		job.yc =
+		    sm_multilevel_solve(r->multilevel, r->coarse_b->x, COARSE_ITERATIONS, r->workers, &r->common);
 		if (job.yc == NULL)
 			return false;
 	} else if (r->coarse_halves != NULL) {
-		sm_coarse_halves_solve(r->coarse_halves, r->coarse_factor, r->coarse_b->x, r->coarse_solution, r->workers);
+		sm_coarse_halves_solve(r->coarse_halves, r->coarse_factor, r->coarse_b->x, r->coarse_solution,
+		                       r->workers);
 		job.yc = r->coarse_solution;
 	} else {
-		if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL, &r->coarse_y,
-		                      &r->coarse_e, &r->common))
+		if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL,
+		                      &r->coarse_y, &r->coarse_e, &r->common))
 			return false;
 		job.yc = r->coarse_x->x;
 	}

@@ -21,8 +21,8 @@
 // derivation above). The
 // scaled records give the share of A (w = gamma^2 z + gamma kd u, c = gamma^2 beta); the
 // Jacobian's own give that of -K (w = z, c = beta; kd, the eighth entry, unread).
-static void add_spring_products(const sm_reduced* r, const double* records, const double* p, double* restrict q,
-                                int32_t begin, int32_t end)
+static void add_spring_products(const sm_reduced* r, const double* records, const double* p,
+                                double* restrict q, int32_t begin, int32_t end)
 {
 	const int32_t* restrict first = r->slot != NULL ? r->ordered_a : r->sim->model->spring_a;
 	const int32_t* restrict second = r->slot != NULL ? r->ordered_b : r->sim->model->spring_b;

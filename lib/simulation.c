@@ -244,8 +244,8 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 }
 
 // Dense J: [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]], scattered from the sparse fill.
-static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
-                          N_Vector tmp2, N_Vector tmp3)
+static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
+                          N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
 {
 	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
 	sm_simulation* sim = user_data;
@@ -301,8 +301,8 @@ static sm_status build_klu_pattern(sm_simulation* sim)
 	return SM_OK;
 }
 
-static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data, N_Vector tmp1,
-                           N_Vector tmp2, N_Vector tmp3)
+static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
+                           N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
 {
 	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
 	sm_simulation* sim = user_data;
@@ -340,7 +340,8 @@ static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J,
 	return 0;
 }
 
-static void error_handler(int error_code, const char* module, const char* function, char* msg, void* user_data)
+static void error_handler(int error_code, const char* module, const char* function, char* msg,
+                          void* user_data)
 {
 	(void)error_code, (void)module;
 	sm_simulation* sim = user_data;
@@ -443,9 +444,11 @@ SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner
 static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 {
 	if ((int)def->method < 0 || def->method > SM_METHOD_ADAMS)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown method %d", (int)def->method);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown method %d",
+		                    (int)def->method);
 	if ((int)def->solver < 0 || def->solver >= SM_SOLVER_COUNT)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown linear solver %d", (int)def->solver);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown linear solver %d",
+		                    (int)def->solver);
 	if ((int)def->jacobian < 0 || def->jacobian > SM_JACOBIAN_DEFINITE)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown Jacobian variant %d",
 		                    (int)def->jacobian);
@@ -469,9 +472,10 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		                    position_ok ? def->absolute_tolerance_velocity : def->absolute_tolerance_position,
 		                    SM_MIN_ABSOLUTE_TOLERANCE);
 	if (!(def->relative_tolerance < 1.0))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
-		                    def->relative_tolerance);
+		return sm_error_set(
+		    err, SM_ERROR_INVALID_ARGUMENT,
+		    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
+		    def->relative_tolerance);
 	// Below the machine epsilon CVODE cannot meet it (SM_MIN_RELATIVE_TOLERANCE, simulation.h).
 	if (!(def->relative_tolerance >= SM_MIN_RELATIVE_TOLERANCE))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
@@ -479,8 +483,8 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		                    "CVODE cannot hold errors below the rounding of the state",
 		                    def->relative_tolerance, SM_MIN_RELATIVE_TOLERANCE);
 	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_step = %g must be finite and >= 0",
-		                    def->max_step);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "simulation: max_step = %g must be finite and >= 0", def->max_step);
 	if (def->max_steps <= 0)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_steps = %d must be > 0",
 		                    (int)def->max_steps);
@@ -583,8 +587,7 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		return SM_OK;
 	}
 	case SM_SOLVER_AUTO:
-	case SM_SOLVER_COUNT:
-		break;
+	case SM_SOLVER_COUNT: break;
 	}
 	return SM_ERROR_INVALID_ARGUMENT;
 }
@@ -671,13 +674,14 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	sim->constrained = malloc(((size_t)sim->constrained_count + 1) * sizeof(int32_t));
 	sim->inverse_mass = malloc(((size_t)sim->free_count + 1) * sizeof(double));
 	sim->mass_dof = malloc(((size_t)sim->dofs + 1) * sizeof(double));
-	double** arrays[] = {&sim->position,       &sim->velocity,   &sim->external_force, &sim->drive_position,
-	                     &sim->drive_velocity, &sim->drive_time, &sim->work_position,  &sim->work_velocity,
-	                     &sim->work_force};
+	double** arrays[] = {&sim->position,       &sim->velocity,       &sim->external_force,
+	                     &sim->drive_position, &sim->drive_velocity, &sim->drive_time,
+	                     &sim->work_position,  &sim->work_velocity,  &sim->work_force};
 	for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
 		if (!(*arrays[i] = calloc(n3, sizeof(double))))
 			goto out_of_memory;
-	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass || !sim->mass_dof)
+	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass ||
+	    !sim->mass_dof)
 		goto out_of_memory;
 	if (m->spring_count > 0)  // no array to copy from in a model without springs
 		memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
@@ -689,7 +693,8 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	}
 	refresh_masses(sim);
 	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU || sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
+	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU ||
+	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
 		sim->pattern = sm_sparse_jacobian_create(m);
 		if (!sim->pattern)
 			goto out_of_memory;
@@ -813,7 +818,7 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 
 // The name of a CVode failure flag. CVodeGetReturnFlagName would allocate it, and SUNDIALS 6.4.1
 // writes into that allocation without checking it: out of memory, a failed advance crashed there.
-#define FLAG_CASE(flag) \
+#define FLAG_CASE(flag)                                                                                      \
 	case flag: return #flag
 static const char* failure_name(int flag)
 {
@@ -866,8 +871,7 @@ static const char* failure_hint(int flag)
 	case CV_CONV_FAILURE:
 		return " (the step size fell to round-off: the model moves faster than the tolerances can follow, or "
 		       "its forces jump)";
-	default:
-		return "";
+	default: return "";
 	}
 }
 
@@ -908,9 +912,10 @@ static int check_step_size(sm_simulation* sim, int flag, double* reached)
 	if (flag < 0 || flag == CV_ROOT_RETURN || (CVodeGetLastStep(sim->cvode, &h) == CV_SUCCESS && h > 0.0))
 		return flag;
 	*reached = NAN;
-	snprintf(sim->solver_message, sizeof sim->solver_message,
-	         "the step size is 0 s at t = %g s: the accelerations are too large to measure against the tolerances",
-	         sim->time);
+	snprintf(
+	    sim->solver_message, sizeof sim->solver_message,
+	    "the step size is 0 s at t = %g s: the accelerations are too large to measure against the tolerances",
+	    sim->time);
 	return CV_ERR_FAILURE;
 }
 
@@ -1097,7 +1102,8 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			// The reduced solver says why its solve failed in its last flag.
 			if (flag == CV_LSOLVE_FAIL && has_reduced_solver(sim) &&
 			    SUNLinSolLastFlag(sim->linear_solver) == SUNLS_MEM_FAIL)
-				snprintf(sim->solver_message, sizeof sim->solver_message, "out of memory in the linear solve");
+				snprintf(sim->solver_message, sizeof sim->solver_message,
+				         "out of memory in the linear solve");
 			char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(sim->time, now);
 			sm_format_number(t_end, end);

@@ -19,41 +19,41 @@ struct sm_simulation {
 	sm_linear_solver solver;  // resolved (never AUTO)
 	SUNContext context;
 	void* cvode;
-	N_Vector y;          // state at `time`
-	N_Vector y_saved;    // state before the last CVode call (restored if a failure spoils y)
-	N_Vector tolerances; // absolute tolerance per component
-	SUNMatrix matrix;    // NULL for the matrix-embedded solvers
+	N_Vector y;           // state at `time`
+	N_Vector y_saved;     // state before the last CVode call (restored if a failure spoils y)
+	N_Vector tolerances;  // absolute tolerance per component
+	SUNMatrix matrix;     // NULL for the matrix-embedded solvers
 	SUNLinearSolver linear_solver;
 	SUNNonlinearSolver fixed_point;  // Adams only
-	bool need_restart;   // something requires CVodeReInit before the next step
-	bool forget_factor;  // that restart also drops the cholmod solver's factor (after a restore)
-	bool input_jumped;   // an input jumped since CVODE's last (re)initialisation
-	bool input_changed;  // an input jumped since the last advance began
+	bool need_restart;               // something requires CVodeReInit before the next step
+	bool forget_factor;              // that restart also drops the cholmod solver's factor (after a restore)
+	bool input_jumped;               // an input jumped since CVODE's last (re)initialisation
+	bool input_changed;              // an input jumped since the last advance began
 	// CVODE found a spring break at break_time, past the time the last advance interpolated
 	// (roots_found tells which); the next advance breaks it there.
 	bool break_pending;
-	bool stopped;  // the caller's on_step returned false during this CVode call
-	double break_time;   // [s]
+	bool stopped;       // the caller's on_step returned false during this CVode call
+	double break_time;  // [s]
 
-	sm_model* model;          // own copy; broken springs disabled in it
-	uint8_t* initial_enabled; // per spring: enabled in the model given to create/update
+	sm_model* model;           // own copy; broken springs disabled in it
+	uint8_t* initial_enabled;  // per spring: enabled in the model given to create/update
 	int32_t particle_count;
 	int32_t spring_count;
 	int32_t free_count;
-	int64_t dofs;              // 3 * free_count
-	int32_t* free_particles;   // particle index of each free particle
+	int64_t dofs;             // 3 * free_count
+	int32_t* free_particles;  // particle index of each free particle
 	int32_t constrained_count;
-	int32_t* constrained;      // particle indices of fixed and driven particles
-	double* inverse_mass;      // per free particle [1/kg]
-	double* mass_dof;          // per free degree of freedom [kg]
+	int32_t* constrained;  // particle indices of fixed and driven particles
+	double* inverse_mass;  // per free particle [1/kg]
+	double* mass_dof;      // per free degree of freedom [kg]
 
-	double time;               // [s]
-	double* position;          // all particles at `time` [m]
-	double* velocity;          // [m/s]
-	double* external_force;    // per particle [N], held until changed
-	double* drive_position;    // per particle [m]
-	double* drive_velocity;    // [m/s]
-	double* drive_time;        // [s]
+	double time;             // [s]
+	double* position;        // all particles at `time` [m]
+	double* velocity;        // [m/s]
+	double* external_force;  // per particle [N], held until changed
+	double* drive_position;  // per particle [m]
+	double* drive_velocity;  // [m/s]
+	double* drive_time;      // [s]
 
 	// Work arrays of the right-hand side and the Jacobian (all particles).
 	double* work_position;
@@ -63,15 +63,15 @@ struct sm_simulation {
 	// Breakable springs: one root function each.
 	int32_t root_count;
 	int32_t* root_spring;
-	double* root_limit;        // l0 (1 + break_strain) [m]
-	double* root_values;       // the root functions at one time (work) [m]
-	int* roots_found;          // per breakable spring: > 0 when it breaks at the next event
+	double* root_limit;   // l0 (1 + break_strain) [m]
+	double* root_values;  // the root functions at one time (work) [m]
+	int* roots_found;     // per breakable spring: > 0 when it breaks at the next event
 	// The search of each step for strain excursions between its ends (simulation_events.c).
-	double* crossing_time;     // per breakable spring: its first crossing in the step searched [s]
-	double* taylor_position;   // (max order + 1) x 3 per particle: positions' scaled derivatives [m]
-	double* reach;             // per particle: a bound of its distance from where the step began [m]
-	N_Vector interpolated;     // a derivative of CVODE's polynomial at one time (work)
-	double searched_until;     // CVODE time up to which its last step has been searched [s]
+	double* crossing_time;    // per breakable spring: its first crossing in the step searched [s]
+	double* taylor_position;  // (max order + 1) x 3 per particle: positions' scaled derivatives [m]
+	double* reach;            // per particle: a bound of its distance from where the step began [m]
+	N_Vector interpolated;    // a derivative of CVODE's polynomial at one time (work)
+	double searched_until;    // CVODE time up to which its last step has been searched [s]
 
 	sm_break_event* breaks;
 	int32_t break_count;
@@ -79,9 +79,9 @@ struct sm_simulation {
 
 	// Sparse Jacobian over the free degrees of freedom (KLU and the reduced solvers).
 	sm_sparse_jacobian* pattern;
-	double* dfdx;  // values in the pattern's order [N/m]
-	double* dfdv;  // [N s/m]
-	int64_t* klu_row_pointers;    // pattern of the 6nf+1 KLU matrix, rewritten on every fill
+	double* dfdx;               // values in the pattern's order [N/m]
+	double* dfdv;               // [N s/m]
+	int64_t* klu_row_pointers;  // pattern of the 6nf+1 KLU matrix, rewritten on every fill
 	int64_t* klu_column_indices;
 
 	// Counters; CVODE's own counters restart with every CVodeReInit, so what they had reached
@@ -109,9 +109,9 @@ void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double*
 // Writes the formatted message into sim->last_error; returns status.
 sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* format, ...)
 #if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
+    __attribute__((format(printf, 3, 4)))
 #endif
-	;
+    ;
 // Sets sim->position and sim->velocity (all particles) from the CVODE state y at sim->time.
 void sm_simulation_refresh_outputs(sm_simulation* sim);
 // Enables each spring as the model given to create or update_model does (broken ones restored).

@@ -19,15 +19,15 @@
 // springs it holds broken are those of its break events; which springs the model itself disables
 // is the simulation's, not the snapshot's.
 struct sm_simulation_state {
-	uint64_t topology;          // topology_hash of the model it was taken from
+	uint64_t topology;  // topology_hash of the model it was taken from
 	int32_t particle_count, spring_count, free_count, break_count;
-	double time;                // [s]
-	double* y;                  // CVODE's state: free x, free v, dissipated energy
-	double* external_force;     // 3 per particle [N]
-	double* drive_position;     // 3 per particle [m]
-	double* drive_velocity;     // [m/s]
-	double* drive_time;         // per particle [s]
-	sm_break_event* breaks;     // break_count
+	double time;             // [s]
+	double* y;               // CVODE's state: free x, free v, dissipated energy
+	double* external_force;  // 3 per particle [N]
+	double* drive_position;  // 3 per particle [m]
+	double* drive_velocity;  // [m/s]
+	double* drive_time;      // per particle [s]
+	sm_break_event* breaks;  // break_count
 };
 
 // 64-bit FNV-1a: the hash h (FNV_OFFSET to start) extended by `length` bytes.
@@ -88,7 +88,8 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	if (sim == NULL)
 		return NULL;
 	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
-	sm_simulation_state* s = allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
+	sm_simulation_state* s =
+	    allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
 	if (s == NULL)
 		return NULL;
 	s->topology = topology_hash(sim->model);
@@ -221,29 +222,34 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 		return NULL;
 	}
 	if (size < sizeof h + sizeof(uint64_t)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state", size);
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: %zu bytes are no simulation state",
+		             size);
 		return NULL;
 	}
 	memcpy(&h, in, sizeof h);
 	// The reserved field is zero in this layout; a later one may give it a meaning this one lacks.
 	if (memcmp(h.magic, "smstate", 8) != 0 || h.layout != STATE_LAYOUT || h.reserved != 0) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		             "state_deserialize: not a simulation state of this springmass version (layout %u expected)",
-		             STATE_LAYOUT);
+		sm_error_set(
+		    err, SM_ERROR_INVALID_ARGUMENT,
+		    "state_deserialize: not a simulation state of this springmass version (layout %u expected)",
+		    STATE_LAYOUT);
 		return NULL;
 	}
 	const bool counts = h.particle_count >= 0 && h.spring_count >= 0 && h.free_count >= 0 &&
-	                    h.free_count <= h.particle_count && h.break_count >= 0 && h.break_count <= h.spring_count;
-	if (!counts || size != sizeof h + state_payload(h.particle_count, h.free_count, h.break_count) + sizeof(uint64_t)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: the state's counts and its %zu bytes disagree",
-		             size);
+	                    h.free_count <= h.particle_count && h.break_count >= 0 &&
+	                    h.break_count <= h.spring_count;
+	if (!counts ||
+	    size != sizeof h + state_payload(h.particle_count, h.free_count, h.break_count) + sizeof(uint64_t)) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		             "state_deserialize: the state's counts and its %zu bytes disagree", size);
 		return NULL;
 	}
 	const size_t payload = state_payload(h.particle_count, h.free_count, h.break_count);
 	uint64_t sum;
 	memcpy(&sum, in + sizeof h + payload, sizeof sum);
 	if (sum != fnv1a(FNV_OFFSET, in, sizeof h + payload)) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: checksum mismatch (a damaged state)");
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		             "state_deserialize: checksum mismatch (a damaged state)");
 		return NULL;
 	}
 	sm_simulation_state* s = allocate_state(h.particle_count, h.spring_count, h.free_count, h.break_count);
@@ -256,10 +262,12 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 	memcpy(s->y, in + sizeof h, payload);
 	bool valid = isfinite(s->time);
 	const double* values = s->y;
-	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + 10 * (int64_t)h.particle_count); k++)
+	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + 10 * (int64_t)h.particle_count);
+	     k++)
 		valid = isfinite(values[k]);
 	for (int32_t b = 0; valid && b < s->break_count; b++)
-		valid = s->breaks[b].spring >= 0 && s->breaks[b].spring < s->spring_count && isfinite(s->breaks[b].time);
+		valid =
+		    s->breaks[b].spring >= 0 && s->breaks[b].spring < s->spring_count && isfinite(s->breaks[b].time);
 	if (!valid) {
 		free(s);
 		sm_error_set(err, SM_ERROR_NOT_FINITE, "state_deserialize: the state holds a value out of range");
@@ -282,8 +290,8 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 		free(broken);
 		if (twice >= 0) {
 			free(s);
-			sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "state_deserialize: spring %d breaks twice in the state",
-			             (int)twice);
+			sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+			             "state_deserialize: spring %d breaks twice in the state", (int)twice);
 			return NULL;
 		}
 	}

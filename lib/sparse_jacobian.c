@@ -180,11 +180,13 @@ sm_sparse_jacobian* sm_sparse_jacobian_create(const sm_model* model)
 				const int32_t fa = fi[model->spring_a[s]], fb = fi[model->spring_b[s]];
 				if (fa >= 0) {
 					J->incident_spring[fill[fa]] = s;
-					J->incident_block[fill[fa]++] = fb >= 0 ? find_block(neighbours + start[fa], count[fa], fb) : -1;
+					J->incident_block[fill[fa]++] =
+					    fb >= 0 ? find_block(neighbours + start[fa], count[fa], fb) : -1;
 				}
 				if (fb >= 0) {
 					J->incident_spring[fill[fb]] = s;
-					J->incident_block[fill[fb]++] = fa >= 0 ? find_block(neighbours + start[fb], count[fb], fa) : -1;
+					J->incident_block[fill[fb]++] =
+					    fa >= 0 ? find_block(neighbours + start[fb], count[fb], fa) : -1;
 				}
 			}
 			free(fill);

@@ -69,7 +69,8 @@ int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double*
 		sm_model_get_particle(model, p, &def);
 		if (def.motion == SM_PARTICLE_FREE) {
 			if (dof_mass != NULL)
-				dof_mass[3 * (size_t)nf] = dof_mass[3 * (size_t)nf + 1] = dof_mass[3 * (size_t)nf + 2] = def.mass;
+				dof_mass[3 * (size_t)nf] = dof_mass[3 * (size_t)nf + 1] = dof_mass[3 * (size_t)nf + 2] =
+				    def.mass;
 			free_index[p] = nf++;
 		} else {
 			free_index[p] = -1;
@@ -84,8 +85,10 @@ int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double*
 static int32_t first_coincident(const sm_model* model, const double* x, bool damped)
 {
 	for (int32_t s = 0; s < model->spring_count; s++) {
-		const bool candidate = damped ? model->damping[s] > 0.0 : !model->zero_length[s] && model->rest_length[s] > 0.0;
-		const bool held = model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
+		const bool candidate =
+		    damped ? model->damping[s] > 0.0 : !model->zero_length[s] && model->rest_length[s] > 0.0;
+		const bool held =
+		    model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
 		if (!model->enabled[s] || !candidate || held)
 			continue;
 		spring_geometry g;
@@ -146,7 +149,8 @@ int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholm
 	return common->status < CHOLMOD_OK ? -1 : 1;
 }
 
-int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs, double* out)
+int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, size_t dof, const double* rhs,
+                              double* out)
 {
 	cholmod_dense b;
 	memset(&b, 0, sizeof b);
@@ -167,8 +171,8 @@ int sm_analysis_cholmod_solve(cholmod_factor* factor, cholmod_common* common, si
 // K = -df/dx: the block K_s = d f_a / d x_b of spring s enters as
 //   K[a][a] += K_s, K[b][b] += K_s, K[a][b] -= K_s, K[b][a] -= K_s
 // (since d f_a / d x_a = -K_s, see model.h), rows and columns of constrained particles dropped.
-void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x, size_t dof,
-                                 sm_jacobian_variant variant, double* K)
+void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_index, const double* x,
+                                 size_t dof, sm_jacobian_variant variant, double* K)
 {
 	memset(K, 0, dof * dof * sizeof(double));
 	const int32_t ns = sm_model_spring_count(model);
@@ -205,29 +209,29 @@ typedef struct statics_work {
 	const sm_model* model;
 	int32_t n, nf, ns;
 	size_t dof;
-	int32_t* free_index;    // n
-	int32_t* free_particle; // nf: particle of each free index
-	double* dof_mass;       // dof [kg]
-	int32_t* spring_a;      // ns
+	int32_t* free_index;     // n
+	int32_t* free_particle;  // nf: particle of each free index
+	double* dof_mass;        // dof [kg]
+	int32_t* spring_a;       // ns
 	int32_t* spring_b;
-	double* rest_length;    // [m]
-	double* stiffness;      // [N/m], 0 for disabled springs
-	double* constant_force; // 3 n: m g + f_ext [N]
-	const double* external; // 3 n or NULL
-	double* x;              // 3 n current positions
-	double* y;              // 3 n trial positions
-	double* f;              // 3 n forces
-	double* rhs;            // dof
-	double* step;           // dof
-	double norm;            // largest row sum of |H + mu M| at the last factorisation [N/m]
+	double* rest_length;     // [m]
+	double* stiffness;       // [N/m], 0 for disabled springs
+	double* constant_force;  // 3 n: m g + f_ext [N]
+	const double* external;  // 3 n or NULL
+	double* x;               // 3 n current positions
+	double* y;               // 3 n trial positions
+	double* f;               // 3 n forces
+	double* rhs;             // dof
+	double* step;            // dof
+	double norm;             // largest row sum of |H + mu M| at the last factorisation [N/m]
 	// Dense path.
-	double* matrix;         // dof x dof
-	double* perturbation;   // dof
-	size_t* permutation;    // dof
+	double* matrix;        // dof x dof
+	double* perturbation;  // dof
+	size_t* permutation;   // dof
 	// Sparse path.
 	sm_sparse_jacobian* jacobian;
-	double* values;         // nonzeros of H + mu M
-	int64_t* diagonal;      // dof positions of the diagonal entries
+	double* values;     // nonzeros of H + mu M
+	int64_t* diagonal;  // dof positions of the diagonal entries
 #ifdef SPRINGMASS_HAVE_CHOLMOD
 	cholmod_common common;
 	int common_started;
@@ -417,11 +421,12 @@ static sm_status check_free_bodies(const statics_work* w, bool* floating, sm_err
 			for (int32_t p = 0; p < n && first < 0; p++)
 				if (find_root(parent, p) == i)
 					first = p;
-			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                  "statics: no static equilibrium: particle %d and the %d other particle(s) joined to it "
-			                  "by springs of nonzero stiffness are held by no fixed or driven particle, yet feel a "
-			                  "net force (%g, %g, %g) N (gravity and external forces); fix one of them (or drive it)",
-			                  (int)first, (int)members[i] - 1, F[0], F[1], F[2]);
+			st = sm_error_set(
+			    err, SM_ERROR_NOT_CONVERGED,
+			    "statics: no static equilibrium: particle %d and the %d other particle(s) joined to it "
+			    "by springs of nonzero stiffness are held by no fixed or driven particle, yet feel a "
+			    "net force (%g, %g, %g) N (gravity and external forces); fix one of them (or drive it)",
+			    (int)first, (int)members[i] - 1, F[0], F[1], F[2]);
 			goto done;
 		}
 	}
@@ -455,8 +460,8 @@ static int solve_factored(statics_work* w, const double* rhs, double* out)
 	return gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) == GSL_SUCCESS ? 0 : -1;
 }
 
-static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
-                      double* step)
+static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant,
+                      const double* rhs, double* step)
 {
 	const size_t dof = w->dof;
 	sm_analysis_dense_stiffness(w->model, w->free_index, x, dof, variant, w->matrix);
@@ -519,8 +524,8 @@ static int sparse_prepare(statics_work* w)
 
 // The sparse pattern in CSR with a symmetric pattern is also its own CSC; CHOLMOD reads only
 // the upper triangle (stype = 1).
-static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant, const double* rhs,
-                       double* step)
+static int sparse_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant,
+                       const double* rhs, double* step)
 {
 	const sm_status fill = sm_sparse_jacobian_fill(w->jacobian, w->model, x, NULL, variant, w->values, NULL);
 	if (fill != SM_OK)
@@ -675,16 +680,17 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 		res->residual = residual_norm(w, w->f);
 		res->tolerance = fmax(tolerance, SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * force_scale(w, w->x));
 		if (!isfinite(res->residual)) {
-			*st = sm_error_set(err, SM_ERROR_NOT_FINITE, "statics: the forces became non-finite at iteration %d",
-			                   (int)res->iterations);
+			*st = sm_error_set(err, SM_ERROR_NOT_FINITE,
+			                   "statics: the forces became non-finite at iteration %d", (int)res->iterations);
 			return -1;
 		}
 		// Stiffness times distance beyond the largest double: no force balance can be told there.
 		if (!isfinite(res->tolerance)) {
-			*st = sm_error_set(err, SM_ERROR_NOT_FINITE,
-			                   "statics: the spring forces' round-off scale (stiffness x distance) overflows at "
-			                   "iteration %d",
-			                   (int)res->iterations);
+			*st = sm_error_set(
+			    err, SM_ERROR_NOT_FINITE,
+			    "statics: the spring forces' round-off scale (stiffness x distance) overflows at "
+			    "iteration %d",
+			    (int)res->iterations);
 			return -1;
 		}
 		if (res->residual <= res->tolerance) {
@@ -703,7 +709,8 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 			// Indefinite (compressed springs, a shape far from the rest shape): the
 			// definiteness-preserving stiffness, with compressive geometric terms dropped, is
 			// positive semi-definite, and with the shift a descent direction of U.
-			factored = factor_and_step(w, w->x, fmax(mu, 1e-9 * mu_ref), SM_JACOBIAN_DEFINITE, w->rhs, w->step);
+			factored =
+			    factor_and_step(w, w->x, fmax(mu, 1e-9 * mu_ref), SM_JACOBIAN_DEFINITE, w->rhs, w->step);
 		}
 		if (factored == -2) {
 			*st = sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory at iteration %d",
@@ -896,7 +903,8 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->free_index = malloc(((size_t)w->n + 1) * sizeof(int32_t));
 	w->dof_mass = malloc((n3 + 1) * sizeof(double));
 	if (w->free_index == NULL || w->dof_mass == NULL)
-		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)w->n);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles",
+		                    (int)w->n);
 	w->nf = sm_analysis_free_map(model, w->free_index, w->dof_mass);
 	w->dof = 3 * (size_t)w->nf;
 	const size_t ns = (size_t)w->ns + 1, dof = w->dof + 1;
@@ -914,7 +922,8 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	if (w->free_particle == NULL || w->spring_a == NULL || w->spring_b == NULL || w->rest_length == NULL ||
 	    w->stiffness == NULL || w->constant_force == NULL || w->x == NULL || w->y == NULL || w->f == NULL ||
 	    w->rhs == NULL || w->step == NULL)
-		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles", (int)w->n);
+		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles",
+		                    (int)w->n);
 	for (int32_t p = 0; p < w->n; p++)
 		if (w->free_index[p] >= 0)
 			w->free_particle[w->free_index[p]] = p;
@@ -950,18 +959,19 @@ static sm_status setup_solver(statics_work* w, sm_statics_solver* solver, sm_err
 #ifndef SPRINGMASS_HAVE_CHOLMOD
 	if (*solver == SM_STATICS_SPARSE) {
 		if (w->dof > 3 * SM_STATICS_DENSE_LIMIT)
-			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-			                    "statics: %zu degrees of freedom need the sparse solver, which this build lacks "
-			                    "(CHOLMOD)",
-			                    w->dof);
+			return sm_error_set(
+			    err, SM_ERROR_INVALID_ARGUMENT,
+			    "statics: %zu degrees of freedom need the sparse solver, which this build lacks "
+			    "(CHOLMOD)",
+			    w->dof);
 		*solver = SM_STATICS_DENSE;
 	}
 #endif
 	if (*solver == SM_STATICS_DENSE) {
 		const size_t dof = w->dof + 1;
 		if (dof > 0 && dof > SIZE_MAX / sizeof(double) / dof)
-			return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: dense matrix of %zu unknowns too large",
-			                    w->dof);
+			return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY,
+			                    "statics: dense matrix of %zu unknowns too large", w->dof);
 		w->matrix = malloc(dof * dof * sizeof(double));
 		w->perturbation = malloc(dof * sizeof(double));
 		w->permutation = malloc(dof * sizeof(size_t));
@@ -989,7 +999,8 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: model and x must not be NULL");
 	if (!(d.residual_tolerance > 0.0) || !isfinite(d.residual_tolerance))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "statics: residual_tolerance must be finite and > 0 N, got %g", d.residual_tolerance);
+		                    "statics: residual_tolerance must be finite and > 0 N, got %g",
+		                    d.residual_tolerance);
 	if (d.max_iterations < 1)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: max_iterations must be >= 1, got %d",
 		                    (int)d.max_iterations);
@@ -1058,11 +1069,12 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	}
 	if (converged && load > 0.0 && res.tolerance > d.residual_tolerance && res.tolerance > load) {
 		converged = 0;
-		st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-		                  "statics: no rest shape can be resolved: the round-off of the spring forces (stiffness "
-		                  "x position rounding) is %.3g N where the iteration ended, above the largest load on a "
-		                  "particle, %.3g N (a stiffness contrast beyond double precision at these coordinates)",
-		                  res.tolerance, load);
+		st = sm_error_set(
+		    err, SM_ERROR_NOT_CONVERGED,
+		    "statics: no rest shape can be resolved: the round-off of the spring forces (stiffness "
+		    "x position rounding) is %.3g N where the iteration ended, above the largest load on a "
+		    "particle, %.3g N (a stiffness contrast beyond double precision at these coordinates)",
+		    res.tolerance, load);
 	}
 	if (definite == -2) {
 		converged = 0;
@@ -1075,7 +1087,8 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)
 				for (int c = 0; c < 3; c++)
-					reactions[3 * (size_t)p + c] = w.free_index[p] < 0 ? 0.0 - w.f[3 * (size_t)p + c] : 0.0;  // +0, not -0, where f = 0
+					reactions[3 * (size_t)p + c] =
+					    w.free_index[p] < 0 ? 0.0 - w.f[3 * (size_t)p + c] : 0.0;  // +0, not -0, where f = 0
 		st = SM_OK;
 		if (err != NULL) {
 			err->status = SM_OK;

@@ -6,7 +6,8 @@
 
 const char* sm_version(void)
 {
-	return SM_STRINGIFY(SM_VERSION_MAJOR) "." SM_STRINGIFY(SM_VERSION_MINOR) "." SM_STRINGIFY(SM_VERSION_PATCH);
+	return SM_STRINGIFY(SM_VERSION_MAJOR) "." SM_STRINGIFY(SM_VERSION_MINOR) "." SM_STRINGIFY(
+	    SM_VERSION_PATCH);
 }
 
 const char* sm_status_string(sm_status status)
@@ -21,7 +22,8 @@ const char* sm_status_string(sm_status status)
 	case SM_ERROR_NOT_FINITE: return "value is not finite";
 	case SM_ERROR_NEGATIVE: return "value is negative (or zero where it must be positive)";
 	case SM_ERROR_NONPOSITIVE_MASS: return "mass is not positive";
-	case SM_ERROR_ZERO_REST_LENGTH: return "per-strain constant or break strain on a spring of zero rest length";
+	case SM_ERROR_ZERO_REST_LENGTH:
+		return "per-strain constant or break strain on a spring of zero rest length";
 	case SM_ERROR_FILE: return "file cannot be read or written";
 	case SM_ERROR_SYNTAX: return "syntax error in model file";
 	case SM_ERROR_SCHEMA: return "model file breaks a rule of the format";

@@ -104,12 +104,12 @@ sm_status sm_structure_check_material(sm_model* model, const char* what, const c
 	for (int k = 0; k < 2; k++) {
 		const char* constant = k == 0 ? "stiffness" : "damping";
 		if (scalings[k] != SM_ABSOLUTE && scalings[k] != SM_PER_STRAIN && scalings[k] != SM_PER_SECTION)
-			return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s scaling = %d is not known", what,
-			                     group, constant, (int)scalings[k]);
+			return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s scaling = %d is not known",
+			                     what, group, constant, (int)scalings[k]);
 		if (scalings[k] == SM_PER_SECTION && !sections)
 			return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-			                     "%s: %s %s per section: a %s has no cross-section (give it per strain)", what,
-			                     group, constant, what);
+			                     "%s: %s %s per section: a %s has no cross-section (give it per strain)",
+			                     what, group, constant, what);
 	}
 	if (isnan(m->break_strain) || !(m->break_strain > 0.0))
 		return sm_model_fail(model, isnan(m->break_strain) ? SM_ERROR_NOT_FINITE : SM_ERROR_NEGATIVE,
@@ -118,8 +118,8 @@ sm_status sm_structure_check_material(sm_model* model, const char* what, const c
 	if (!(m->break_strain > SM_MIN_BREAK_STRAIN)) {
 		char rule[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY];
 		sm_break_strain_floor_text(m->break_strain, rule);
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s, and the springs break at rest", what,
-		                     group, rule);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: %s %s, and the springs break at rest",
+		                     what, group, rule);
 	}
 	return SM_OK;
 }
@@ -128,16 +128,18 @@ sm_status sm_structure_check_vector(sm_model* model, const char* what, const cha
 {
 	for (int c = 0; c < 3; c++)
 		if (!isfinite(v[c]))
-			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "%s: %s[%d] = %g is not finite", what, field, c, v[c]);
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "%s: %s[%d] = %g is not finite", what, field, c,
+			                     v[c]);
 	return SM_OK;
 }
 
 sm_status sm_structure_check_size(sm_model* model, const char* what, int64_t particles, int64_t springs)
 {
 	if (particles > SM_STRUCTURE_MAX_ELEMENTS || springs > SM_STRUCTURE_MAX_ELEMENTS)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "%s: %lld particles and %lld springs exceed the limit of %d of each per structure",
-		                     what, (long long)particles, (long long)springs, SM_STRUCTURE_MAX_ELEMENTS);
+		return sm_model_fail(
+		    model, SM_ERROR_INVALID_ARGUMENT,
+		    "%s: %lld particles and %lld springs exceed the limit of %d of each per structure", what,
+		    (long long)particles, (long long)springs, SM_STRUCTURE_MAX_ELEMENTS);
 	if ((int64_t)model->particle_count + particles > SM_STRUCTURE_MAX_ELEMENTS * 4LL ||
 	    (int64_t)model->spring_count + springs > SM_STRUCTURE_MAX_ELEMENTS * 4LL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: the model would grow past %lld elements",
@@ -176,8 +178,8 @@ sm_status sm_structure_add_particle(sm_model* model, const char* what, double ma
 // finite and normal doubles, so L lies between sqrt(DBL_MIN) = 1.5e-154 m and sqrt(DBL_MAX) =
 // 1.3e154 m. A structure's spacing outside that range comes from its extents and counts: the
 // message names them (`inputs`), not the inf or 0 their squares would give.
-sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
-                                  int32_t b, const sm_spring_material* m, double measure)
+sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group,
+                                  int32_t a, int32_t b, const sm_spring_material* m, double measure)
 {
 	sm_spring_def s = sm_default_spring_def();
 	const double* xa = model->position + 3 * (size_t)a;
@@ -187,29 +189,32 @@ sm_status sm_structure_add_spring(sm_model* model, const char* what, const char*
 	// Coincident particles (d = 0) are the builders' own concern: a sheet's or block's grid
 	// refuses them, a rope without length keeps them (rest length 0, absolute constants only).
 	if (!isfinite(squared))
-		return sm_model_fail(model, SM_ERROR_NOT_FINITE,
-		                     "%s: %s spring between particles %d and %d would be longer than %.2g m, where its squared "
-		                     "length overflows: %s make the structure too large",
-		                     what, group, (int)a, (int)b, sqrt(DBL_MAX), inputs);
+		return sm_model_fail(
+		    model, SM_ERROR_NOT_FINITE,
+		    "%s: %s spring between particles %d and %d would be longer than %.2g m, where its squared "
+		    "length overflows: %s make the structure too large",
+		    what, group, (int)a, (int)b, sqrt(DBL_MAX), inputs);
 	if (squared < DBL_MIN && (d[0] != 0.0 || d[1] != 0.0 || d[2] != 0.0)) {
 		// The length from components divided by the largest, whose squares cannot underflow.
 		const double largest = fmax(fabs(d[0]), fmax(fabs(d[1]), fabs(d[2])));
 		const double u[3] = {d[0] / largest, d[1] / largest, d[2] / largest};
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "%s: %s spring between particles %d and %d would be %.3g m long, below %.2g m, where its "
-		                     "squared length underflows: %s make the grid too fine",
-		                     what, group, (int)a, (int)b, largest * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]),
-		                     sqrt(DBL_MIN), inputs);
+		return sm_model_fail(
+		    model, SM_ERROR_INVALID_ARGUMENT,
+		    "%s: %s spring between particles %d and %d would be %.3g m long, below %.2g m, where its "
+		    "squared length underflows: %s make the grid too fine",
+		    what, group, (int)a, (int)b, largest * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]),
+		    sqrt(DBL_MIN), inputs);
 	}
 	if (m->stiffness_scaling == SM_PER_SECTION || m->damping_scaling == SM_PER_SECTION) {
 		s.section = measure / sqrt(squared);
 		if (!isfinite(s.section) || !(s.section > 0.0))
-			return sm_model_fail(model, isfinite(s.section) ? SM_ERROR_INVALID_ARGUMENT : SM_ERROR_NOT_FINITE,
-			                     "%s: %s spring between particles %d and %d: its section, the %s of the cells it stands "
-			                     "for over its length, %s: %s make the cells too %s for per-section constants",
-			                     what, group, (int)a, (int)b, strcmp(what, "block") == 0 ? "volume" : "area",
-			                     isfinite(s.section) ? "underflows to 0" : "overflows", inputs,
-			                     isfinite(s.section) ? "small" : "large");
+			return sm_model_fail(
+			    model, isfinite(s.section) ? SM_ERROR_INVALID_ARGUMENT : SM_ERROR_NOT_FINITE,
+			    "%s: %s spring between particles %d and %d: its section, the %s of the cells it stands "
+			    "for over its length, %s: %s make the cells too %s for per-section constants",
+			    what, group, (int)a, (int)b, strcmp(what, "block") == 0 ? "volume" : "area",
+			    isfinite(s.section) ? "underflows to 0" : "overflows", inputs,
+			    isfinite(s.section) ? "small" : "large");
 	}
 	s.a = a;
 	s.b = b;
@@ -231,8 +236,8 @@ sm_status sm_structure_add_spring(sm_model* model, const char* what, const char*
 static sm_status check_distribution(sm_model* model, const char* what, sm_mass_distribution distribution)
 {
 	if (distribution != SM_MASS_EVEN && distribution != SM_MASS_LUMPED)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: mass distribution = %d is not known", what,
-		                     (int)distribution);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "%s: mass distribution = %d is not known",
+		                     what, (int)distribution);
 	return SM_OK;
 }
 
@@ -276,8 +281,8 @@ static sm_status check_mass(sm_model* model, const char* what, double mass)
 	return SM_OK;
 }
 
-void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
-                           int32_t n2, const int32_t group_springs[3])
+void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0,
+                           int32_t n1, int32_t n2, const int32_t group_springs[3])
 {
 	if (out == NULL)
 		return;
@@ -327,12 +332,13 @@ static sm_status check_grid_distinct(sm_model* model, const char* what, int32_t 
 					const double* x = model->position + 3 * p;
 					const double* y = model->position + 3 * q;
 					if (x[0] == y[0] && x[1] == y[1] && x[2] == y[2])
-						return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-						                     "%s: particles %lld and %lld coincide at (%g, %g, %g) m: %s", what,
-						                     (long long)p, (long long)q, x[0], x[1], x[2],
-						                     o < 3 ? "the grid spacing is below the resolution of the coordinates there"
-						                           : "the diagonal of the grid's cells is below the resolution of the "
-						                             "coordinates there (edge_u and edge_v nearly parallel)");
+						return sm_model_fail(
+						    model, SM_ERROR_INVALID_ARGUMENT,
+						    "%s: particles %lld and %lld coincide at (%g, %g, %g) m: %s", what, (long long)p,
+						    (long long)q, x[0], x[1], x[2],
+						    o < 3 ? "the grid spacing is below the resolution of the coordinates there"
+							      : "the diagonal of the grid's cells is below the resolution of the "
+							        "coordinates there (edge_u and edge_v nearly parallel)");
 				}
 			}
 	return SM_OK;
@@ -358,12 +364,14 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	if (def->segments < 1)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "rope: segments = %d must be >= 1",
 		                     (int)def->segments);
-	const double dx = def->end[0] - def->start[0], dy = def->end[1] - def->start[1], dz = def->end[2] - def->start[2];
+	const double dx = def->end[0] - def->start[0], dy = def->end[1] - def->start[1],
+	             dz = def->end[2] - def->start[2];
 	if (!isfinite(dx) || !isfinite(dy) || !isfinite(dz))
-		return sm_model_fail(model, SM_ERROR_NOT_FINITE,
-		                     "rope: start (%g, %g, %g) m and end (%g, %g, %g) m are too far apart: end - start is beyond "
-		                     "the largest double",
-		                     def->start[0], def->start[1], def->start[2], def->end[0], def->end[1], def->end[2]);
+		return sm_model_fail(
+		    model, SM_ERROR_NOT_FINITE,
+		    "rope: start (%g, %g, %g) m and end (%g, %g, %g) m are too far apart: end - start is beyond "
+		    "the largest double",
+		    def->start[0], def->start[1], def->start[2], def->end[0], def->end[1], def->end[2]);
 	// |end - start|, from the components divided by the largest where the squares would overflow
 	// or underflow (a rope of 1e-200 m has a length, and with it a mass per length a mass).
 	double length = sqrt(dx * dx + dy * dy + dz * dz);
@@ -388,10 +396,11 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		                      : m->damping_scaling != SM_ABSOLUTE ? "an absolute damping"
 		                                                          : "none";
 		if (needs != NULL)
-			return sm_model_fail(model, SM_ERROR_ZERO_REST_LENGTH,
-			                     "rope: start = end = (%g, %g, %g) m: its springs have rest length 0, and the %s "
-			                     "group's %s needs a rest length > 0: give it %s, or the rope a length",
-			                     def->start[0], def->start[1], def->start[2], group_names[g], needs, instead);
+			return sm_model_fail(
+			    model, SM_ERROR_ZERO_REST_LENGTH,
+			    "rope: start = end = (%g, %g, %g) m: its springs have rest length 0, and the %s "
+			    "group's %s needs a rest length > 0: give it %s, or the rope a length",
+			    def->start[0], def->start[1], def->start[2], group_names[g], needs, instead);
 	}
 	double total = def->mass;
 	if (!isfinite(def->mass_per_length))
@@ -404,13 +413,14 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		total = def->mass_per_length * length;
 		// A rope whose start is its end has no length to spread a mass per length over.
 		if (!(total > 0.0) || !isfinite(total))
-			return sm_model_fail(model, isfinite(total) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
-			                     "rope: mass per length %g kg/m over the length %g m from start to end gives a "
-			                     "mass %s (give the mass instead)",
-			                     def->mass_per_length, length,
-			                     !isfinite(total) ? "beyond the largest double"
-			                     : length > 0.0   ? "below the smallest double"
-			                                      : "of 0 kg, which must be finite and > 0");
+			return sm_model_fail(
+			    model, isfinite(total) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
+			    "rope: mass per length %g kg/m over the length %g m from start to end gives a "
+			    "mass %s (give the mass instead)",
+			    def->mass_per_length, length,
+			    !isfinite(total) ? "beyond the largest double"
+				: length > 0.0   ? "below the smallest double"
+				                 : "of 0 kg, which must be finite and > 0");
 	}
 	if ((st = check_mass(model, what, total)) != SM_OK ||
 	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
@@ -432,7 +442,8 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 		const double t = (double)p / (double)def->segments;
 		const double x[3] = {def->start[0] + t * dx, def->start[1] + t * dy, def->start[2] + t * dz};
 		const int64_t at[1] = {p};
-		st = sm_structure_add_particle(model, what, grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
+		st = sm_structure_add_particle(model, what,
+		                               grid_point_mass(total, def->mass_distribution, at, rope_counts, 1),
 		                               p + 1 < n ? x : def->end);
 	}
 	// Neighbours that coincide although the ends differ (a spacing below the rounding of the
@@ -444,7 +455,8 @@ sm_status sm_add_rope(sm_model* model, const sm_rope_def* def, sm_structure* out
 	for (int64_t p = 0; p < n && st == SM_OK; p++) {
 		const int32_t a = p0 + (int32_t)p;
 		if (has_structural && p + 1 < n)
-			st = sm_structure_add_spring(model, what, rope_inputs, "structural", a, a + 1, &def->structural, 0.0);
+			st = sm_structure_add_spring(model, what, rope_inputs, "structural", a, a + 1, &def->structural,
+			                             0.0);
 		if (st == SM_OK && has_bending && p + 2 < n)
 			st = sm_structure_add_spring(model, what, rope_inputs, "bending", a, a + 2, &def->bending, 0.0);
 	}
@@ -489,45 +501,51 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 		v_max = fmax(v_max, fabs(def->edge_v[c]));
 	}
 	if (u_max == 0.0 || v_max == 0.0)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "sheet: %s = (0, 0, 0) m is zero: the sheet spans no area and its particles would "
-		                     "coincide",
-		                     u_max == 0.0 ? "edge_u" : "edge_v");
+		return sm_model_fail(
+		    model, SM_ERROR_INVALID_ARGUMENT,
+		    "sheet: %s = (0, 0, 0) m is zero: the sheet spans no area and its particles would "
+		    "coincide",
+		    u_max == 0.0 ? "edge_u" : "edge_v");
 	for (int c = 0; c < 3; c++) {
 		u[c] = def->edge_u[c] / u_max;
 		v[c] = def->edge_v[c] / v_max;
 	}
-	const double normal[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+	const double normal[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+	                          u[0] * v[1] - u[1] * v[0]};
 	const double area = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
-	if (!(area > 1e-12 * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) * sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "sheet: edge_u = (%g, %g, %g) m and edge_v = (%g, %g, %g) m are parallel "
-		                     "(|edge_u x edge_v| <= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its "
-		                     "particles would coincide",
-		                     def->edge_u[0], def->edge_u[1], def->edge_u[2], def->edge_v[0], def->edge_v[1],
-		                     def->edge_v[2]);
+	if (!(area > 1e-12 * sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) *
+	                 sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])))
+		return sm_model_fail(
+		    model, SM_ERROR_INVALID_ARGUMENT,
+		    "sheet: edge_u = (%g, %g, %g) m and edge_v = (%g, %g, %g) m are parallel "
+		    "(|edge_u x edge_v| <= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its "
+		    "particles would coincide",
+		    def->edge_u[0], def->edge_u[1], def->edge_u[2], def->edge_v[0], def->edge_v[1], def->edge_v[2]);
 
 	// The corners of the parallelogram must be doubles: its particles lie between them.
 	static const char axis_names[3] = {'x', 'y', 'z'};
 	for (int c = 0; c < 3; c++)
 		if (!isfinite(def->origin[c] + def->edge_u[c]) || !isfinite(def->origin[c] + def->edge_v[c]) ||
 		    !isfinite(def->origin[c] + def->edge_u[c] + def->edge_v[c]))
-			return sm_model_fail(model, SM_ERROR_NOT_FINITE,
-			                     "sheet: origin (%g, %g, %g) m plus edge_u (%g, %g, %g) m and edge_v (%g, %g, %g) m "
-			                     "reaches beyond the largest double along %c",
-			                     def->origin[0], def->origin[1], def->origin[2], def->edge_u[0], def->edge_u[1],
-			                     def->edge_u[2], def->edge_v[0], def->edge_v[1], def->edge_v[2], axis_names[c]);
+			return sm_model_fail(
+			    model, SM_ERROR_NOT_FINITE,
+			    "sheet: origin (%g, %g, %g) m plus edge_u (%g, %g, %g) m and edge_v (%g, %g, %g) m "
+			    "reaches beyond the largest double along %c",
+			    def->origin[0], def->origin[1], def->origin[2], def->edge_u[0], def->edge_u[1],
+			    def->edge_u[2], def->edge_v[0], def->edge_v[1], def->edge_v[2], axis_names[c]);
 
 	// The particles first: for counts up to 2^31 - 1 each, nu nv fits in 64 bits but the springs,
 	// some 6 nu nv, do not.
 	const int64_t nu = def->nu, nv = def->nv, n = nu * nv;
 	if (n > SM_STRUCTURE_MAX_ELEMENTS)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "sheet: %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
-		                     SM_STRUCTURE_MAX_ELEMENTS);
-	const bool has[3] = {sm_structure_material_present(&def->structural), sm_structure_material_present(&def->shear),
+		                     "sheet: %d x %d particles exceed the limit of %d per structure", (int)nu,
+		                     (int)nv, SM_STRUCTURE_MAX_ELEMENTS);
+	const bool has[3] = {sm_structure_material_present(&def->structural),
+	                     sm_structure_material_present(&def->shear),
 	                     sm_structure_material_present(&def->bend)};
-	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) + (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +
+	const int64_t springs = (has[0] ? (nu - 1) * nv + nu * (nv - 1) : 0) +
+	                        (has[1] ? 2 * (nu - 1) * (nv - 1) : 0) +
 	                        (has[2] ? (nu - 2) * nv + nu * (nv - 2) : 0);
 	if ((st = sm_structure_check_size(model, what, n, springs)) != SM_OK)
 		return st;
@@ -541,8 +559,8 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 			for (int c = 0; c < 3; c++)
 				x[c] = def->origin[c] + s * def->edge_u[c] + t * def->edge_v[c];
 			const int64_t at[2] = {i, j};
-			st = sm_structure_add_particle(model, what,
-			                               grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
+			st = sm_structure_add_particle(
+			    model, what, grid_point_mass(def->mass, def->mass_distribution, at, sheet_counts, 2), x);
 		}
 	}
 	const int64_t sheet_shape[3] = {nu, nv, 1};
@@ -565,9 +583,10 @@ sm_status sm_add_sheet(sm_model* model, const sm_sheet_def* def, sm_structure* o
 				if (!has[g] || a >= nv || b < 0 || b >= nu)
 					continue;
 				const int64_t at[2] = {i, j};
-				st = sm_structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g], p0 + (int32_t)(i * nu + j),
-				                             p0 + (int32_t)(a * nu + b), groups[g],
-				                             cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
+				st =
+				    sm_structure_add_spring(model, what, "edge_u, edge_v, nu and nv", group_names[g],
+					                        p0 + (int32_t)(i * nu + j), p0 + (int32_t)(a * nu + b), groups[g],
+					                        cell_area * boundary_share(offsets[o], at, sheet_counts, 2));
 				made[g]++;
 			}
 		}
@@ -595,32 +614,40 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	if ((st = sm_structure_check_vector(model, what, "origin", def->origin)) != SM_OK ||
 	    (st = sm_structure_check_vector(model, what, "size", def->size)) != SM_OK ||
 	    (st = sm_structure_check_material(model, what, "edge", &def->edge, true)) != SM_OK ||
-	    (st = sm_structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) != SM_OK ||
-	    (st = sm_structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) != SM_OK ||
+	    (st = sm_structure_check_material(model, what, "face_diagonal", &def->face_diagonal, true)) !=
+	        SM_OK ||
+	    (st = sm_structure_check_material(model, what, "body_diagonal", &def->body_diagonal, true)) !=
+	        SM_OK ||
 	    (st = check_mass(model, what, def->mass)) != SM_OK ||
 	    (st = check_distribution(model, what, def->mass_distribution)) != SM_OK)
 		return st;
 	for (int c = 0; c < 3; c++)
 		if (!(def->size[c] > 0.0))
-			return sm_model_fail(model, SM_ERROR_NEGATIVE, "block: size[%d] = %g must be > 0", c, def->size[c]);
+			return sm_model_fail(model, SM_ERROR_NEGATIVE, "block: size[%d] = %g must be > 0", c,
+			                     def->size[c]);
 	for (int c = 0; c < 3; c++)
 		if (!isfinite(def->origin[c] + def->size[c]))
-			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "block: origin[%d] + size[%d] = %g m + %g m is beyond the "
-			                     "largest double", c, c, def->origin[c], def->size[c]);
+			return sm_model_fail(model, SM_ERROR_NOT_FINITE,
+			                     "block: origin[%d] + size[%d] = %g m + %g m is beyond the "
+			                     "largest double",
+			                     c, c, def->origin[c], def->size[c]);
 	if (def->nu < 2 || def->nv < 2 || def->nw < 2)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "block: nu = %d, nv = %d and nw = %d must all be >= 2",
-		                     (int)def->nu, (int)def->nv, (int)def->nw);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
+		                     "block: nu = %d, nv = %d and nw = %d must all be >= 2", (int)def->nu,
+		                     (int)def->nv, (int)def->nw);
 
 	const int64_t nu = def->nu, nv = def->nv, nw = def->nw;
 	if (nu * nv > SM_STRUCTURE_MAX_ELEMENTS || nu * nv * nw > SM_STRUCTURE_MAX_ELEMENTS)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
-		                     "block: %d x %d x %d particles exceed the limit of %d per structure", (int)nu, (int)nv,
-		                     (int)nw, SM_STRUCTURE_MAX_ELEMENTS);
+		                     "block: %d x %d x %d particles exceed the limit of %d per structure", (int)nu,
+		                     (int)nv, (int)nw, SM_STRUCTURE_MAX_ELEMENTS);
 	const int64_t n = nu * nv * nw;
-	const bool has[3] = {sm_structure_material_present(&def->edge), sm_structure_material_present(&def->face_diagonal),
+	const bool has[3] = {sm_structure_material_present(&def->edge),
+	                     sm_structure_material_present(&def->face_diagonal),
 	                     sm_structure_material_present(&def->body_diagonal)};
 	const int64_t edges = (nu - 1) * nv * nw + nu * (nv - 1) * nw + nu * nv * (nw - 1);
-	const int64_t faces = 2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
+	const int64_t faces =
+	    2 * ((nu - 1) * (nv - 1) * nw + (nu - 1) * nv * (nw - 1) + nu * (nv - 1) * (nw - 1));
 	const int64_t bodies = 4 * (nu - 1) * (nv - 1) * (nw - 1);
 	const int64_t springs = (has[0] ? edges : 0) + (has[1] ? faces : 0) + (has[2] ? bodies : 0);
 	if ((st = sm_structure_check_size(model, what, n, springs)) != SM_OK)
@@ -635,8 +662,8 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 				                     def->origin[1] + (double)i / (double)(nv - 1) * def->size[1],
 				                     def->origin[2] + (double)k / (double)(nw - 1) * def->size[2]};
 				const int64_t at[3] = {i, j, k};
-				st = sm_structure_add_particle(model, what,
-				                               grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
+				st = sm_structure_add_particle(
+				    model, what, grid_point_mass(def->mass, def->mass_distribution, at, block_counts, 3), x);
 			}
 	const int64_t block_shape[3] = {nu, nv, nw};
 	if (st == SM_OK)
@@ -647,9 +674,9 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 	                           (def->size[2] / (double)(nw - 1));
 	// Neighbour offsets (di, dj, dk) and their group, in creation order.
 	static const int offsets[13][4] = {
-	    {0, 1, 0, 0},  {1, 0, 0, 0},  {0, 0, 1, 0},                                              // edges
-	    {1, 1, 0, 1},  {1, -1, 0, 1}, {0, 1, 1, 1},  {0, -1, 1, 1}, {1, 0, 1, 1}, {-1, 0, 1, 1},  // faces
-	    {1, 1, 1, 2},  {1, -1, 1, 2}, {-1, 1, 1, 2}, {-1, -1, 1, 2},                              // bodies
+	    {0, 1, 0, 0}, {1, 0, 0, 0},  {0, 0, 1, 0},                                                // edges
+	    {1, 1, 0, 1}, {1, -1, 0, 1}, {0, 1, 1, 1},  {0, -1, 1, 1},  {1, 0, 1, 1}, {-1, 0, 1, 1},  // faces
+	    {1, 1, 1, 2}, {1, -1, 1, 2}, {-1, 1, 1, 2}, {-1, -1, 1, 2},                               // bodies
 	};
 	const sm_spring_material* groups[3] = {&def->edge, &def->face_diagonal, &def->body_diagonal};
 	static const char* const group_names[3] = {"edge", "face diagonal", "body diagonal"};
@@ -663,10 +690,10 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 					if (!has[g] || bi < 0 || bi >= nv || bj < 0 || bj >= nu || bk >= nw)
 						continue;
 					const int64_t at[3] = {i, j, k};
-					st = sm_structure_add_spring(model, what, "size, nu, nv and nw", group_names[g],
-					                             p0 + (int32_t)((k * nv + i) * nu + j),
-					                             p0 + (int32_t)((bk * nv + bi) * nu + bj), groups[g],
-					                             cell_volume * boundary_share(offsets[o], at, block_counts, 3));
+					st = sm_structure_add_spring(
+					    model, what, "size, nu, nv and nw", group_names[g],
+					    p0 + (int32_t)((k * nv + i) * nu + j), p0 + (int32_t)((bk * nv + bi) * nu + bj),
+					    groups[g], cell_volume * boundary_share(offsets[o], at, block_counts, 3));
 					made[g]++;
 				}
 	if (st != SM_OK) {
@@ -681,8 +708,8 @@ sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_structure* o
 // Selection.
 // ---------------------------------------------------------------------------------------------
 
-sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double hi[3], sm_particle_motion motion,
-                               int32_t* count)
+sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double hi[3],
+                               sm_particle_motion motion, int32_t* count)
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -692,14 +719,16 @@ sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double
 		if (isnan(lo[c]) || isnan(hi[c]))
 			return sm_model_fail(model, SM_ERROR_NOT_FINITE, "box selection: corner coordinate %d is NaN", c);
 	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "box selection: motion = %d is not known", (int)motion);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "box selection: motion = %d is not known",
+		                     (int)motion);
 	bool* inside = malloc((size_t)model->particle_count + 1);
 	if (inside == NULL)
 		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "box selection: out of memory");
 	int32_t changed = 0;
 	for (int32_t p = 0; p < model->particle_count; p++) {
 		const double* x = model->position + 3 * (size_t)p;
-		inside[p] = x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] && x[2] <= hi[2];
+		inside[p] = x[0] >= lo[0] && x[0] <= hi[0] && x[1] >= lo[1] && x[1] <= hi[1] && x[2] >= lo[2] &&
+		            x[2] <= hi[2];
 		changed += inside[p];
 	}
 	sm_model_set_motions(model, inside, NULL, 0, motion);
@@ -717,12 +746,13 @@ sm_status sm_set_motion_at(sm_model* model, const sm_structure* structure, int32
 		return SM_ERROR_INVALID_ARGUMENT;
 	const int32_t p = sm_structure_particle(structure, i, j, k);
 	if (p < 0 || p >= model->particle_count)
-		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX, "grid coordinate (%d, %d, %d) is outside the structure",
-		                     (int)i, (int)j, (int)k);
+		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
+		                     "grid coordinate (%d, %d, %d) is outside the structure", (int)i, (int)j, (int)k);
 	return sm_model_set_particle_motion(model, p, motion);
 }
 
-sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t count, sm_particle_motion motion)
+sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t count,
+                           sm_particle_motion motion)
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -730,12 +760,13 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: %d particles given without a list",
 		                     (int)count);
 	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)
-		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: motion = %d is not known", (int)motion);
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: motion = %d is not known",
+		                     (int)motion);
 	for (int32_t n = 0; n < count; n++)
 		if (particles[n] < 0 || particles[n] >= model->particle_count)
 			return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
-			                     "selection: entry %d, particle %d, is out of range (model has %d particles)", (int)n,
-			                     (int)particles[n], (int)model->particle_count);
+			                     "selection: entry %d, particle %d, is out of range (model has %d particles)",
+			                     (int)n, (int)particles[n], (int)model->particle_count);
 	sm_model_set_motions(model, NULL, particles, count, motion);
 	model->last_error[0] = '\0';
 	return SM_OK;

@@ -19,13 +19,13 @@ sm_status sm_structure_check_size(sm_model* model, const char* what, int64_t par
 void sm_structure_truncate(sm_model* m, int32_t particles, int32_t springs);
 // Describes the structure just built in *out (may be NULL): particles from p0, springs from s0 to
 // the model's count, the grid shape and the springs made of each group.
-void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0, int32_t n1,
-                           int32_t n2, const int32_t group_springs[3]);
+void sm_structure_fill_out(sm_structure* out, int32_t p0, int32_t s0, const sm_model* model, int32_t n0,
+                           int32_t n1, int32_t n2, const int32_t group_springs[3]);
 sm_status sm_structure_add_particle(sm_model* model, const char* what, double mass, const double position[3]);
 // Adds a spring of the group between particles a and b (already added). `measure` is the area
 // [m^2] (sheet, mesh) or volume [m^3] (block) the spring stands for: per-section constants
 // (SM_PER_SECTION) get the section measure / |x_b - x_a|. Fails, naming `inputs` (the fields
 // that set the structure's size, "edge_u, edge_v, nu and nv"), if the spring's length is beyond
 // what a model holds (its square not a finite normal double) or its section not finite and > 0.
-sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group, int32_t a,
-                                  int32_t b, const sm_spring_material* m, double measure);
+sm_status sm_structure_add_spring(sm_model* model, const char* what, const char* inputs, const char* group,
+                                  int32_t a, int32_t b, const sm_spring_material* m, double measure);

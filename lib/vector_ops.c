@@ -48,14 +48,10 @@ static inline double term(enum term_kind kind, const double* x, const double* w,
                           sunindextype i)
 {
 	switch (kind) {
-	case TERM_PRODUCT:
-		return x[i] * w[i];
-	case TERM_WEIGHTED_SQUARE:
-		return (x[i] * w[i]) * (x[i] * w[i]);
-	case TERM_MASKED_SQUARE:
-		return id[i] > 0.0 ? (x[i] * w[i]) * (x[i] * w[i]) : 0.0;
-	case TERM_ABSOLUTE:
-		return fabs(x[i]);
+	case TERM_PRODUCT: return x[i] * w[i];
+	case TERM_WEIGHTED_SQUARE: return (x[i] * w[i]) * (x[i] * w[i]);
+	case TERM_MASKED_SQUARE: return id[i] > 0.0 ? (x[i] * w[i]) * (x[i] * w[i]) : 0.0;
+	case TERM_ABSOLUTE: return fabs(x[i]);
 	}
 	return 0.0;
 }
@@ -131,20 +127,13 @@ static inline double map_element(enum map_kind kind, double c, const double* x, 
                                  sunindextype i)
 {
 	switch (kind) {
-	case MAP_PRODUCT:
-		return x[i] * y[i];
-	case MAP_QUOTIENT:
-		return x[i] / y[i];
-	case MAP_SCALE:
-		return c * x[i];
-	case MAP_ABSOLUTE:
-		return fabs(x[i]);
-	case MAP_INVERSE:
-		return 1.0 / x[i];
-	case MAP_ADD_CONSTANT:
-		return x[i] + c;
-	case MAP_COMPARE:
-		return fabs(x[i]) >= c ? 1.0 : 0.0;
+	case MAP_PRODUCT: return x[i] * y[i];
+	case MAP_QUOTIENT: return x[i] / y[i];
+	case MAP_SCALE: return c * x[i];
+	case MAP_ABSOLUTE: return fabs(x[i]);
+	case MAP_INVERSE: return 1.0 / x[i];
+	case MAP_ADD_CONSTANT: return x[i] + c;
+	case MAP_COMPARE: return fabs(x[i]) >= c ? 1.0 : 0.0;
 	}
 	return 0.0;
 }

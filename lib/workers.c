@@ -61,8 +61,8 @@ struct sm_workers {
 	atomic_uint_least64_t ticket;  // generation << 32 | chunks << 16 | next chunk
 	atomic_int done;               // chunks of the current job finished
 	atomic_int sleeping;
-	atomic_bool stop;  // read by helpers that may lag a job behind
-	atomic_int raised; // floating-point exception flags raised by helpers in the current job
+	atomic_bool stop;   // read by helpers that may lag a job behind
+	atomic_int raised;  // floating-point exception flags raised by helpers in the current job
 	sm_worker_job job;
 	void* context;
 	fenv_t environment;  // the caller's, for the job

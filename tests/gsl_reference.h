@@ -16,8 +16,8 @@ typedef struct gsl_reference {
 	double* mass;       // of each free particle [kg]
 	double *x, *v, *f;  // every particle's position [m], velocity [m/s] and force [N]
 	double* y;
-	double t;           // [s]
-	long evaluations;   // right-hand sides so far
+	double t;          // [s]
+	long evaluations;  // right-hand sides so far
 	gsl_odeiv2_system system;
 	gsl_odeiv2_driver* driver;
 } gsl_reference;

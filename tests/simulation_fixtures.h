@@ -9,7 +9,8 @@
 // and a bob of mass m [kg] at x = l0 + u0 on a rest-length spring (stiffness k [N/m], rest length
 // l0 = 1 m, spring damping kd [N s/m]), no gravity. The spring stays stretched or mildly
 // compressed (|u| <= u0 = 0.2 m < l0), so the motion is the linear m u'' = -k u - kd u'.
-static inline sm_model* oscillator_anchored(double m, double k, double kd, double u0, sm_particle_motion anchor_motion)
+static inline sm_model* oscillator_anchored(double m, double k, double kd, double u0,
+                                            sm_particle_motion anchor_motion)
 {
 	sm_model_def md = sm_default_model_def();
 	md.gravity[2] = 0.0;
@@ -66,7 +67,8 @@ static inline sm_model* pulled_spring(void)
 	if (!model || sm_model_add_particle(model, &p, NULL) != SM_OK ||
 	    sm_model_add_particle(model, &driven, NULL) != SM_OK ||
 	    sm_model_add_particle(model, &free_particle, NULL) != SM_OK ||
-	    sm_model_add_spring(model, &pulled, NULL) != SM_OK || sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
+	    sm_model_add_spring(model, &pulled, NULL) != SM_OK ||
+	    sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
 		sm_model_destroy(model);
 		return NULL;
 	}

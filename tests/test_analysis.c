@@ -370,8 +370,9 @@ static int test_hanging_rope_elongation(void)
 		// The support carries the whole weight, straight up.
 		ENSURE_REL(res.reaction_total[2], mass * g, 1e-12, 0.0);
 		ENSURE_REL(reactions[2], mass * g, 1e-12, 0.0);
-		printf("  hanging rope N=%-3d stretch %.12f m (closed form %.12f), profile error %.3e m, %d iterations\n",
-		       (int)n, bottom - length, stretch, error, (int)res.iterations);
+		printf(
+		    "  hanging rope N=%-3d stretch %.12f m (closed form %.12f), profile error %.3e m, %d iterations\n",
+		    (int)n, bottom - length, stretch, error, (int)res.iterations);
 		free(x);
 		free(reactions);
 		sm_model_destroy(model);
@@ -479,8 +480,10 @@ static int test_hanging_cloth_reactions(void)
 	sd.bend.stiffness = 100.0;
 	sm_structure st;
 	ENSURE_STATUS(sm_add_sheet(model, &sd, &st), SM_OK);
-	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 0, 0), SM_PARTICLE_FIXED), SM_OK);
-	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 9, 0), SM_PARTICLE_FIXED), SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 0, 0), SM_PARTICLE_FIXED),
+	              SM_OK);
+	ENSURE_STATUS(sm_model_set_particle_motion(model, sm_structure_particle(&st, 0, 9, 0), SM_PARTICLE_FIXED),
+	              SM_OK);
 	const int32_t np = sm_model_particle_count(model);
 	double* x = malloc(3 * (size_t)np * sizeof(double));
 	double* r = malloc(3 * (size_t)np * sizeof(double));
@@ -579,7 +582,8 @@ static sm_model* anchored_particle(double gz, double z, sm_spring_def spring)
 	p.motion = SM_PARTICLE_FREE;
 	p.mass = 1.0;
 	p.position[2] = z;
-	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK && sm_model_add_spring(model, &spring, NULL) == SM_OK;
+	ok = ok && sm_model_add_particle(model, &p, NULL) == SM_OK &&
+	     sm_model_add_spring(model, &spring, NULL) == SM_OK;
 	if (!ok) {
 		sm_model_destroy(model);
 		return NULL;
@@ -762,7 +766,8 @@ static double mass_product(const double* mass, const double* a, const double* b,
 // has no unique shape, so each sparse shape is projected onto the dense shapes of its cluster
 // (eigenvalues within 1e-6 omega_max^2 of its own): sum (phi_s^T M phi_d)^2 = 1 to 1e-8 (the
 // squared sine of the angle between the spaces, of the order of (residual / gap)^2).
-static int compare_sparse_to_dense(const sm_model* model, const double* x, int32_t count, int32_t expected_zero)
+static int compare_sparse_to_dense(const sm_model* model, const double* x, int32_t count,
+                                   int32_t expected_zero)
 {
 	sm_modes_def def = sm_default_modes_def();
 	def.configuration = x;
@@ -803,7 +808,8 @@ static int compare_sparse_to_dense(const sm_model* model, const double* x, int32
 		ENSURE_NEAR(projection, 1.0, 1e-8);
 		// M-orthonormal among themselves.
 		for (int32_t j = 0; j <= i; j++)
-			ENSURE_NEAR(mass_product(mass, phi, sparse.shapes + (size_t)j * n3, n3), i == j ? 1.0 : 0.0, 1e-10);
+			ENSURE_NEAR(mass_product(mass, phi, sparse.shapes + (size_t)j * n3, n3), i == j ? 1.0 : 0.0,
+			            1e-10);
 		for (int32_t p = 0; p < dense.particle_count; p++) {
 			sm_particle_def pd;
 			sm_model_get_particle(model, p, &pd);
@@ -811,7 +817,8 @@ static int compare_sparse_to_dense(const sm_model* model, const double* x, int32
 				ENSURE(phi[3 * p] == 0.0 && phi[3 * p + 1] == 0.0 && phi[3 * p + 2] == 0.0);
 		}
 		// Modal damping over the kept modes: the same diagonal as the dense path's.
-		ENSURE_NEAR(sparse.modal_damping[i], dense.modal_damping[i], 1e-6 * (fabs(dense.modal_damping[i]) + 1e-9));
+		ENSURE_NEAR(sparse.modal_damping[i], dense.modal_damping[i],
+		            1e-6 * (fabs(dense.modal_damping[i]) + 1e-9));
 	}
 	free(mass);
 	sm_modes_release(&dense);
@@ -950,8 +957,9 @@ static int test_sparse_hanging_chain_bessel(void)
 	ENSURE(modes.count == 4 && modes.zero_count == 0 && modes.unstable_count == 0);
 	for (int32_t i = 0; i < 4; i++) {
 		const double omega = 0.5 * zeros[i / 2] * sqrt(g / length);
-		printf("  hanging chain mode %d: omega^2 %.6f 1/s^2 (closed form %.6f), %.1e of omega_max^2\n", (int)i + 1,
-		       modes.omega_squared[i], omega * omega, modes.omega_squared[i] / (modes.omega_max * modes.omega_max));
+		printf("  hanging chain mode %d: omega^2 %.6f 1/s^2 (closed form %.6f), %.1e of omega_max^2\n",
+		       (int)i + 1, modes.omega_squared[i], omega * omega,
+		       modes.omega_squared[i] / (modes.omega_max * modes.omega_max));
 		ENSURE_REL(modes.omega_squared[i], omega * omega, 2e-3, 0.0);
 	}
 	sm_modes_release(&modes);
@@ -1114,9 +1122,9 @@ static int test_sparse_adaptive_shift_hanging_rope(void)
 	def.solver = SM_MODES_DENSE;
 	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, &err), SM_OK);
 	const double g = sparse.omega_max * sparse.omega_max;
-	printf("  shift %.3g 1/s^2 (%.1e G), lowest omega^2 %.6g (%.1e G), 50th %.6g, residual %.2e\n", sparse.shift,
-	       -sparse.shift / g, sparse.omega_squared[0], sparse.omega_squared[0] / g, sparse.omega_squared[49],
-	       sparse.residual);
+	printf("  shift %.3g 1/s^2 (%.1e G), lowest omega^2 %.6g (%.1e G), 50th %.6g, residual %.2e\n",
+	       sparse.shift, -sparse.shift / g, sparse.omega_squared[0], sparse.omega_squared[0] / g,
+	       sparse.omega_squared[49], sparse.residual);
 	ENSURE(sparse.shift < 0.0 && -sparse.shift < 1e-7 * g && dense.shift == 0.0);
 	ENSURE(sparse.count == 50 && sparse.zero_count == 0 && sparse.unstable_count == 0);
 	ENSURE(sparse.omega_squared[0] < 1e-10 * g && sparse.omega_squared[49] < 3e-8 * g);
@@ -1318,7 +1326,8 @@ static int test_explicit_step_limit(void)
 	sm_modes_def two = sm_default_modes_def();
 	two.mode_count = 2;
 	ENSURE_STATUS(sm_modes_compute(model, &two, &modes, &err), SM_OK);
-	ENSURE(modes.count == 2 && modes.explicit_step == sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
+	ENSURE(modes.count == 2 &&
+	       modes.explicit_step == sm_symplectic_euler_step(modes.omega_max, limit.damping_rate));
 	sm_modes_release(&modes);
 	ENSURE_STATUS(sm_model_explicit_limit(NULL, &limit), SM_ERROR_INVALID_ARGUMENT);
 	sm_model_destroy(model);
@@ -1686,7 +1695,7 @@ static int test_statics_external_forces(void)
 			printf("  %s\n", err.message);
 		ENSURE_STATUS(st2, SM_OK);
 		if (stiff)
-			ENSURE(res.iterations > 50);  // the continuation ran (Newton alone gets 50)
+			ENSURE(res.iterations > 50);         // the continuation ran (Newton alone gets 50)
 		const double total[3] = {3.0, 0.0, -g};  // F + m g on the free particle [N]
 		const double T = sqrt(total[0] * total[0] + total[2] * total[2]);
 		const double L = 1.0 + T / k;
@@ -1792,8 +1801,9 @@ static int test_damper_does_not_hold_a_particle(void)
 	sm_error err;
 	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
 	ENSURE(res.iterations == 0);
-	ENSURE(strstr(err.message, "no static equilibrium: particle 1 and the 0 other particle(s) joined to it by "
-	                           "springs of nonzero stiffness are held by no fixed or driven particle") != NULL);
+	ENSURE(strstr(err.message,
+	              "no static equilibrium: particle 1 and the 0 other particle(s) joined to it by "
+	              "springs of nonzero stiffness are held by no fixed or driven particle") != NULL);
 	for (int i = 0; i < 6; i++)
 		ENSURE(x[i] == -7.0);
 	sm_model_destroy(model);
@@ -1835,7 +1845,8 @@ static int test_free_body_threshold(void)
 		if (big) {
 			ENSURE_STATUS(st, SM_ERROR_NOT_CONVERGED);
 			ENSURE(res.iterations == 0);
-			ENSURE(strstr(err.message, "no static equilibrium: particle 0 and the 1 other particle(s)") != NULL);
+			ENSURE(strstr(err.message, "no static equilibrium: particle 0 and the 1 other particle(s)") !=
+			       NULL);
 			ENSURE(x[0] == -7.0 && x[5] == -7.0);
 		} else {
 			if (st != SM_OK)
@@ -2298,8 +2309,8 @@ static int test_statics_stability_sees_mechanisms(void)
 		const int32_t pins[3][3] = {{0, 0, 0}, {n - 1, n - 1, n - 1}, {0, n - 1, 0}};
 		for (int pinned = 0; pinned <= 3; pinned++) {
 			if (pinned > 0)
-				ENSURE_STATUS(sm_set_motion_at(model, &s, pins[pinned - 1][0], pins[pinned - 1][1], pins[pinned - 1][2],
-				                               SM_PARTICLE_FIXED),
+				ENSURE_STATUS(sm_set_motion_at(model, &s, pins[pinned - 1][0], pins[pinned - 1][1],
+				                               pins[pinned - 1][2], SM_PARTICLE_FIXED),
 				              SM_OK);
 			for (int dense = 0; dense < 2; dense++) {
 				sm_statics_def def = sm_default_statics_def();
@@ -2308,7 +2319,8 @@ static int test_statics_stability_sees_mechanisms(void)
 				ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
 				ENSURE(res.iterations == 0);
 				if (res.stable != (pinned == 3))
-					printf("  block %d, %d pins, %s: stable %d\n", (int)n, pinned, dense ? "dense" : "auto", res.stable);
+					printf("  block %d, %d pins, %s: stable %d\n", (int)n, pinned, dense ? "dense" : "auto",
+					       res.stable);
 				ENSURE(res.stable == (pinned == 3));
 			}
 		}
@@ -2406,7 +2418,7 @@ static int test_sparse_omega_max_is_the_mass_weighted_gershgorin_bound(void)
 	def.solver = SM_MODES_DENSE;
 	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, NULL), SM_OK);
 	ENSURE_REL(sparse.omega_max, sqrt(3.0 * k), 1e-13, 0.0);  // a sum of four terms
-	ENSURE(sparse.omega_max >= dense.omega_max);               // a bound of the true largest
+	ENSURE(sparse.omega_max >= dense.omega_max);              // a bound of the true largest
 	for (int i = 0; i < 2; i++)
 		ENSURE_REL(sparse.omega_squared[i], dense.omega_squared[i], 1e-9, 0.0);  // Lanczos' tolerance
 	sm_modes_release(&sparse);
@@ -2695,7 +2707,8 @@ static int test_mode_count_inside_a_repeated_group(void)
 	ENSURE(all.count == all.dof && isnan(all.next_omega_squared) && !all.group_cut);
 	// The lowest pair: modes g and g + 1 (0-based) of one frequency, between distinct ones.
 	int32_t g = 1;
-	while (g + 2 < all.count && !(all.omega_squared[g + 1] - all.omega_squared[g] <= 1e-12 * all.omega_squared[g]))
+	while (g + 2 < all.count &&
+	       !(all.omega_squared[g + 1] - all.omega_squared[g] <= 1e-12 * all.omega_squared[g]))
 		g++;
 	ENSURE(g + 2 < all.count && all.omega_squared[g] > all.omega_squared[g - 1] * (1.0 + 1e-6) &&
 	       all.omega_squared[g + 2] > all.omega_squared[g + 1] * (1.0 + 1e-6));

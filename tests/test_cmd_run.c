@@ -10,9 +10,9 @@
 #include "test_harness.h"
 
 #include <dirent.h>
-#include <unistd.h>
-#include <sys/wait.h>
 #include <stdlib.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #ifndef SPRINGMASS_CLI
 #error "SPRINGMASS_CLI must name the springmass executable"
@@ -35,8 +35,9 @@ static int check_model(const char* path, bool stop_at_outputs)
 	ENSURE(err_fd >= 0);
 	close(err_fd);
 	char command[4096];
-	snprintf(command, sizeof command, "'%s' run '%s' --t-end %g --output-interval %g --output '%s' --quiet%s 2> '%s'",
-	         SPRINGMASS_CLI, path, T_END, INTERVAL, csv_path, stop_at_outputs ? " --stop-at-outputs" : "", err_path);
+	snprintf(command, sizeof command,
+	         "'%s' run '%s' --t-end %g --output-interval %g --output '%s' --quiet%s 2> '%s'", SPRINGMASS_CLI,
+	         path, T_END, INTERVAL, csv_path, stop_at_outputs ? " --stop-at-outputs" : "", err_path);
 	const int rc = system(command);
 	if (rc != 0)
 		printf("  %s: exit status %d\n", path, rc);
@@ -69,7 +70,8 @@ static int check_model(const char* path, bool stop_at_outputs)
 		char* p = line;
 		const double t = strtod(p, &p);
 		if (rows > 0)
-			ENSURE_STATUS(stop_at_outputs ? sm_simulation_advance(sim, t) : sm_simulation_advance_interpolated(sim, t, T_END),
+			ENSURE_STATUS(stop_at_outputs ? sm_simulation_advance(sim, t)
+			                              : sm_simulation_advance_interpolated(sim, t, T_END),
 			              SM_OK);
 		ENSURE(sm_simulation_time(sim) == t);
 		const double* x = sm_simulation_positions(sim);
@@ -108,7 +110,6 @@ static int check_model(const char* path, bool stop_at_outputs)
 	return 0;
 }
 
-
 // Without --quiet, `springmass run` ends with a summary on stderr: the solver and the counts of
 // the run's statistics, then each spring that broke. They are the library's own for the same
 // file simulated to the same output times (the counts exactly: the same calls in the same order;
@@ -124,8 +125,9 @@ static int check_summary(const char* path, double t_end, double interval)
 	ENSURE(fd >= 0);
 	close(fd);
 	char command[4096];
-	snprintf(command, sizeof command, "'%s' run '%s' --t-end %.17g --output-interval %.17g --output '%s' 2> '%s'",
-	         SPRINGMASS_CLI, path, t_end, interval, csv_path, err_path);
+	snprintf(command, sizeof command,
+	         "'%s' run '%s' --t-end %.17g --output-interval %.17g --output '%s' 2> '%s'", SPRINGMASS_CLI,
+	         path, t_end, interval, csv_path, err_path);
 	ENSURE(system(command) == 0);
 
 	sm_error err;
@@ -159,7 +161,8 @@ static int check_summary(const char* path, double t_end, double interval)
 	ENSURE(strncmp(line, start, strlen(start)) == 0);
 	char solver[256];
 	snprintf(solver, sizeof solver, "%s: ",
-	         settings.solver.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ");
+	         settings.solver.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)"
+	                                                   : "BDF, solver ");
 	if (settings.solver.method != SM_METHOD_ADAMS)
 		snprintf(solver, sizeof solver, "BDF, solver %s: ", sm_linear_solver_name(sm_simulation_solver(sim)));
 	const char* counts = line + strlen(start);
@@ -167,13 +170,20 @@ static int check_summary(const char* path, double t_end, double interval)
 	long long c[7];
 	int broke = -1;
 	double wall = -1.0;
-	ENSURE(sscanf(counts + strlen(solver),
-	              "%lld steps, %lld right-hand sides, %lld Jacobians, %lld linear iterations, %lld error-test and "
-	              "%lld convergence failures, %lld restarts, %d springs broke; wall %lf s",
-	              &c[0], &c[1], &c[2], &c[3], &c[4], &c[5], &c[6], &broke, &wall) == 9);
+	ENSURE(
+	    sscanf(
+	        counts + strlen(solver),
+	        "%lld steps, %lld right-hand sides, %lld Jacobians, %lld linear iterations, %lld error-test and "
+	        "%lld convergence failures, %lld restarts, %d springs broke; wall %lf s",
+	        &c[0], &c[1], &c[2], &c[3], &c[4], &c[5], &c[6], &broke, &wall) == 9);
 	const sm_statistics st = sm_simulation_statistics(sim);
-	const long long expected[7] = {st.steps, st.rhs_evaluations, st.jacobian_evaluations, st.linear_iterations,
-	                               st.error_test_failures, st.convergence_failures, st.restarts};
+	const long long expected[7] = {st.steps,
+	                               st.rhs_evaluations,
+	                               st.jacobian_evaluations,
+	                               st.linear_iterations,
+	                               st.error_test_failures,
+	                               st.convergence_failures,
+	                               st.restarts};
 	for (int k = 0; k < 7; k++) {
 		if (c[k] != expected[k])
 			printf("  count %d of the summary: %lld, the library's %lld\n", k, c[k], expected[k]);
@@ -243,8 +253,9 @@ static int test_errors(void)
 	snprintf(command, sizeof command, "'%s' run --no-such-option >/dev/null 2>&1", SPRINGMASS_CLI);
 	int rc = system(command);
 	ENSURE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
-	snprintf(command, sizeof command, "'%s' run '%s/oscillator.json' --set nothere=1 --output /dev/null 2>/dev/null",
-	         SPRINGMASS_CLI, SPRINGMASS_MODELS_DIR);
+	snprintf(command, sizeof command,
+	         "'%s' run '%s/oscillator.json' --set nothere=1 --output /dev/null 2>/dev/null", SPRINGMASS_CLI,
+	         SPRINGMASS_MODELS_DIR);
 	rc = system(command);
 	ENSURE(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
 	snprintf(command, sizeof command, "'%s' run /nonexistent/model.json 2>/dev/null", SPRINGMASS_CLI);

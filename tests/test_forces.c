@@ -310,7 +310,8 @@ static int test_every_lane_width_gives_the_same_bits(void)
 		sm_model* m = random_model(&r, N, springs, springs % 2, x, v);
 		ENSURE(m != NULL);
 		ENSURE_STATUS(add_degenerate_and_disabled_springs(m, x), SM_OK);
-		const size_t record_bytes = SPRING_JACOBIAN_STRIDE * (size_t)sm_model_spring_count(m) * sizeof(double);
+		const size_t record_bytes =
+		    SPRING_JACOBIAN_STRIDE * (size_t)sm_model_spring_count(m) * sizeof(double);
 		for (int combination = 0; combination < 12; combination++) {
 			const bool with_v = combination & 1, with_records = combination & 2, with_power = combination & 4;
 			const sm_jacobian_variant variant = combination & 8 ? SM_JACOBIAN_EXACT : SM_JACOBIAN_DEFINITE;
@@ -528,7 +529,8 @@ static int test_disabled_spring_exerts_no_force(void)
 // checked with the model's own forces (every free particle's net force zero). Per-strain
 // stiffness E gives ks = E / l0, so the total stretch F * sum(l0_i) / E = F / E * 1 m does not
 // depend on N; a constant ks gives N F / ks, ten times more for N = 100 than for N = 10.
-static double rope_stretch(int32_t segments, sm_scaling scaling, double stiffness, double load, double* residual)
+static double rope_stretch(int32_t segments, sm_scaling scaling, double stiffness, double load,
+                           double* residual)
 {
 	sm_model* m = model_without_gravity(0.0);
 	for (int32_t i = 0; i <= segments; i++) {
@@ -664,7 +666,8 @@ static int test_springs_shorter_than_the_degenerate_ratio_exert_nothing(void)
 			double f[3 * N] = {0}, lane_power = 0.0;
 			sm_spring_jacobians* records = sm_spring_jacobians_create(m);
 			ENSURE(records != NULL);
-			sm_model_spring_forces_lanes(m, x, v, f, records, (sm_jacobian_variant)variant, &lane_power, lanes[w]);
+			sm_model_spring_forces_lanes(m, x, v, f, records, (sm_jacobian_variant)variant, &lane_power,
+			                             lanes[w]);
 			records->evaluated = 1;  // the lanes function fills the records without marking them
 			for (int k = 0; k < 3 * N; k++)
 				ENSURE_NEAR(f[k], expect[k], 1e-14 * fabs(expect[k]));
@@ -751,8 +754,9 @@ static int test_records_of_every_lane_width_match_closed_forms(void)
 				double f[3 * N] = {0}, power = 0.0;
 				sm_spring_jacobians* records = sm_spring_jacobians_create(m);
 				ENSURE(records != NULL);
-				sm_model_spring_forces_lanes(m, x, with_v ? v : NULL, f, records, (sm_jacobian_variant)variant,
-				                             combination == 2 ? &power : NULL, lanes[w]);
+				sm_model_spring_forces_lanes(m, x, with_v ? v : NULL, f, records,
+				                             (sm_jacobian_variant)variant, combination == 2 ? &power : NULL,
+				                             lanes[w]);
 				records->evaluated = 1;  // the lanes function fills the records without marking them
 				for (int32_t s = 0; s < S; s++) {
 					double l0, ks, kd, K[9], D[9], expect_k[9], expect_d[9];

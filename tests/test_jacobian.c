@@ -154,7 +154,8 @@ static int test_jacobian_product_matches_dense(void)
 				for (size_t i = 0; i < dim; i++) {
 					expect[i] = 0.0;
 					for (size_t j = 0; j < dim; j++)
-						expect[i] += (px ? dfdx[i * dim + j] * px[j] : 0.0) + (pv ? dfdv[i * dim + j] * pv[j] : 0.0);
+						expect[i] +=
+						    (px ? dfdx[i * dim + j] * px[j] : 0.0) + (pv ? dfdv[i * dim + j] * pv[j] : 0.0);
 					ENSURE_NEAR(out[i], expect[i], 1e-12 * scale);
 				}
 			}
@@ -418,8 +419,9 @@ static int test_fused_forces_equal_forces_exactly(void)
 					const double* pv = with_v ? v : NULL;
 					const double* pe = with_ext ? ext : NULL;
 					sm_model_forces(m, x, pv, pe, f);
-					ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, pv, pe, (sm_jacobian_variant)variant, g, sj),
-					              SM_OK);
+					ENSURE_STATUS(
+					    sm_model_forces_and_jacobians(m, x, pv, pe, (sm_jacobian_variant)variant, g, sj),
+					    SM_OK);
 					for (size_t k = 0; k < 3 * N; k++)
 						ENSURE(f[k] == g[k]);
 				}
@@ -444,11 +446,13 @@ static int test_fused_spring_blocks_match_finite_differences(void)
 		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
 		ENSURE(sj != NULL);
 		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+			              SM_OK);
 			for (int32_t s = 0; s < sm_model_spring_count(m); s++) {
 				double K[9], D[9], K0[9], D0[9];
 				ENSURE_STATUS(sm_spring_jacobians_block(sj, s, K, D), SM_OK);
-				ENSURE_STATUS(sm_model_spring_jacobian(m, s, x, v, (sm_jacobian_variant)variant, K0, D0), SM_OK);
+				ENSURE_STATUS(sm_model_spring_jacobian(m, s, x, v, (sm_jacobian_variant)variant, K0, D0),
+				              SM_OK);
 				const double scale_k = max_abs(K0, 9), scale_d = max_abs(D0, 9);
 				for (int k = 0; k < 9; k++) {
 					ENSURE_NEAR(K[k], K0[k], 1e-12 * scale_k);
@@ -504,7 +508,8 @@ static int test_fused_product_matches_finite_differences(void)
 			dv[k] = rng_uniform(&r, -1, 1);
 		}
 		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+			              SM_OK);
 			sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv);
 			const double bound = fmax(max_abs(dfdx, dim * dim), max_abs(dfdv, dim * dim)) * (double)dim;
 			for (int which = 0; which < 3; which++) {  // both, dx only, dv only
@@ -526,7 +531,8 @@ static int test_fused_product_matches_finite_differences(void)
 					for (size_t i = 0; i < dim; i++) {
 						double expect = 0.0;
 						for (size_t j = 0; j < dim; j++)
-							expect += (px ? dfdx[i * dim + j] * px[j] : 0.0) + (pv ? dfdv[i * dim + j] * pv[j] : 0.0);
+							expect += (px ? dfdx[i * dim + j] * px[j] : 0.0) +
+							          (pv ? dfdv[i * dim + j] * pv[j] : 0.0);
 						ENSURE_NEAR(out[i], expect, 1e-12 * bound);
 					}
 				}
@@ -543,8 +549,8 @@ static int test_fused_product_matches_finite_differences(void)
 // (a df/dx + b df/dv) p from the records of both variants against the dense matrices (dfdx and
 // dfdv: room for (3n)^2 each), for pure stiffness, gamma-like scales and pure damping: equal to
 // 1e-12 of the largest term times the dimension (a few rounding errors, with a margin).
-static int combined_products_match_dense(const sm_model* m, sm_spring_jacobians* sj, const double* x, const double* v,
-                                         const double* p, double* dfdx, double* dfdv)
+static int combined_products_match_dense(const sm_model* m, sm_spring_jacobians* sj, const double* x,
+                                         const double* v, const double* p, double* dfdx, double* dfdv)
 {
 	const size_t dim = 3 * (size_t)sm_model_particle_count(m);
 	double* f = malloc(2 * dim * sizeof(double));
@@ -552,12 +558,14 @@ static int combined_products_match_dense(const sm_model* m, sm_spring_jacobians*
 	double* out = f + dim;
 	const double scales[3][2] = {{1.0, 0.0}, {2.5e-7, 5e-4}, {0.0, 1.0}};
 	for (int variant = 0; variant < 2; variant++) {
-		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+		              SM_OK);
 		ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, (sm_jacobian_variant)variant, dfdx, dfdv), SM_OK);
 		for (int s = 0; s < 3; s++) {
 			const double a = scales[s][0], b = scales[s][1];
 			ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, a, b, p, out), SM_OK);
-			const double bound = fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
+			const double bound =
+			    fmax(a * max_abs(dfdx, dim * dim), b * max_abs(dfdv, dim * dim)) * (double)dim;
 			for (size_t i = 0; i < dim; i++) {
 				double expect = 0.0;
 				for (size_t j = 0; j < dim; j++)
@@ -593,7 +601,8 @@ static int test_combined_product_matches_dense(void)
 		for (size_t k = 0; k < dim; k++)
 			p[k] = rng_uniform(&r, -1, 1);
 		ENSURE(combined_products_match_dense(m, sj, x, v, p, dfdx, dfdv) == 0);
-		ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, 1.0, 1.0, NULL, out), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, 1.0, 1.0, NULL, out),
+		              SM_ERROR_INVALID_ARGUMENT);
 		sm_spring_jacobians_destroy(sj);
 		sm_model_destroy(m);
 	}
@@ -637,7 +646,8 @@ static int test_fill_from_springs_matches_finite_differences(void)
 		double* av = malloc((size_t)(dim * dim) * sizeof(double));
 		ENSURE(sx && sv && rx && rv && ax && av);
 		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+			              SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, sx, sv), SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, (sm_jacobian_variant)variant, rx, rv), SM_OK);
 			for (int64_t k = 0; k < nnz; k++)
@@ -741,7 +751,8 @@ static int test_fused_degenerate_and_disabled_springs(void)
 	sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
 	ENSURE(sj != NULL);
 	for (int variant = 0; variant < 2; variant++) {
-		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+		              SM_OK);
 		for (int k = 0; k < 9; k++)
 			ENSURE(isfinite(f[k]));
 		for (int32_t s = 0; s < 3; s++) {
@@ -775,7 +786,8 @@ static int test_springs_in_groups_equal_springs_alone_bit_for_bit(void)
 		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
 		ENSURE(sj != NULL);
 		for (int variant = 0; variant < 2; variant++) {
-			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj), SM_OK);
+			ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)variant, f, sj),
+			              SM_OK);
 			// Body forces alone: the same model with every spring disabled (zero constants).
 			sm_model* body = sm_model_clone(m);
 			ENSURE(body != NULL);
@@ -792,8 +804,9 @@ static int test_springs_in_groups_equal_springs_alone_bit_for_bit(void)
 					ENSURE_STATUS(sm_model_set_spring_enabled(one, 0, false), SM_OK);
 				sm_spring_jacobians* alone = sm_spring_jacobians_create(one);
 				ENSURE(alone != NULL);
-				ENSURE_STATUS(sm_model_forces_and_jacobians(one, x2, v2, NULL, (sm_jacobian_variant)variant, fa, alone),
-				              SM_OK);
+				ENSURE_STATUS(
+				    sm_model_forces_and_jacobians(one, x2, v2, NULL, (sm_jacobian_variant)variant, fa, alone),
+				    SM_OK);
 				for (int k = 0; k < 3; k++) {
 					expect[3 * def.a + k] += fa[k];
 					expect[3 * def.b + k] -= fa[k];
@@ -829,9 +842,12 @@ static int test_fused_errors(void)
 	// Nothing evaluated yet.
 	ENSURE_STATUS(sm_spring_jacobians_block(sj, 0, K, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_spring_jacobians_product(sj, m, x, v, out), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE_STATUS(sm_model_forces_and_jacobians(NULL, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE_STATUS(sm_model_forces_and_jacobians(m, NULL, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(NULL, x, v, NULL, SM_JACOBIAN_EXACT, f, sj),
+	              SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, NULL, v, NULL, SM_JACOBIAN_EXACT, f, sj),
+	              SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, NULL),
+	              SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, (sm_jacobian_variant)7, f, sj),
 	              SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
@@ -849,8 +865,10 @@ static int test_fused_errors(void)
 	ENSURE_STATUS(sm_model_spring_jacobian(m, 0, x, v, unknown, K, NULL), SM_ERROR_INVALID_ARGUMENT);
 	for (int k = 0; k < 15; k++)
 		ENSURE(out[k] == 42.0 && dense[k] == 42.0);
-	ENSURE_STATUS(sm_model_jacobian_dense(NULL, x, v, SM_JACOBIAN_EXACT, dense, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_EXACT, x, v, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_dense(NULL, x, v, SM_JACOBIAN_EXACT, dense, NULL),
+	              SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_EXACT, x, v, NULL),
+	              SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_jacobian_dense(m, x, v, SM_JACOBIAN_DEFINITE, dense, NULL), SM_OK);
 	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_DEFINITE, x, v, out), SM_OK);
 	// A model with another spring count no longer matches the storage.
@@ -919,7 +937,8 @@ static int test_sparse_jacobian_rejects_changed_motions_and_endpoints(void)
 		ENSURE(sm_model_free_count(m) == N - 2 && sm_model_spring_count(m) == 14);
 		for (int64_t k = 0; k < nnz; k++)
 			values[k] = 42.0;
-		ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, SM_JACOBIAN_EXACT, values, NULL), SM_ERROR_TOPOLOGY);
+		ENSURE_STATUS(sm_sparse_jacobian_fill(J, m, x, v, SM_JACOBIAN_EXACT, values, NULL),
+		              SM_ERROR_TOPOLOGY);
 		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
 		ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, values, NULL), SM_ERROR_TOPOLOGY);
 		for (int64_t k = 0; k < nnz; k++)

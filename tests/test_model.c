@@ -9,14 +9,14 @@
 #include <string.h>
 
 // The message must name the element and the rule: it contains both substrings.
-#define ENSURE_MESSAGE(model, part1, part2)                                                         \
-	do {                                                                                            \
-		const char* msg_ = sm_model_last_error(model);                                              \
-		if (strstr(msg_, part1) == NULL || strstr(msg_, part2) == NULL) {                           \
-			printf("  %s:%d: message \"%s\" lacks \"%s\" or \"%s\"\n", __FILE__, __LINE__, msg_,     \
-			       part1, part2);                                                               \
-			return 1;                                                                               \
-		}                                                                                           \
+#define ENSURE_MESSAGE(model, part1, part2)                                                                  \
+	do {                                                                                                     \
+		const char* msg_ = sm_model_last_error(model);                                                       \
+		if (strstr(msg_, part1) == NULL || strstr(msg_, part2) == NULL) {                                    \
+			printf("  %s:%d: message \"%s\" lacks \"%s\" or \"%s\"\n", __FILE__, __LINE__, msg_, part1,      \
+			       part2);                                                                                   \
+			return 1;                                                                                        \
+		}                                                                                                    \
 	} while (0)
 
 static sm_model* three_particles(void)
@@ -95,12 +95,14 @@ static int test_invalid_particles(void)
 	} cases[8];
 	for (int i = 0; i < 8; i++)
 		cases[i].def = sm_default_particle_def();
-	cases[0].def.mass = 0.0, cases[0].status = SM_ERROR_NONPOSITIVE_MASS, cases[0].rule = "mass = 0 must be > 0";
+	cases[0].def.mass = 0.0, cases[0].status = SM_ERROR_NONPOSITIVE_MASS,
+	cases[0].rule = "mass = 0 must be > 0";
 	cases[1].def.mass = -2.0, cases[1].status = SM_ERROR_NONPOSITIVE_MASS, cases[1].rule = "must be > 0";
 	cases[2].def.mass = NAN, cases[2].status = SM_ERROR_NOT_FINITE, cases[2].rule = "mass";
 	cases[3].def.position[2] = INFINITY, cases[3].status = SM_ERROR_NOT_FINITE, cases[3].rule = "position z";
 	cases[4].def.velocity[0] = NAN, cases[4].status = SM_ERROR_NOT_FINITE, cases[4].rule = "velocity x";
-	cases[5].def.motion = (sm_particle_motion)7, cases[5].status = SM_ERROR_INVALID_ARGUMENT, cases[5].rule = "motion";
+	cases[5].def.motion = (sm_particle_motion)7, cases[5].status = SM_ERROR_INVALID_ARGUMENT,
+	cases[5].rule = "motion";
 	cases[6].def.mass = INFINITY, cases[6].status = SM_ERROR_NOT_FINITE, cases[6].rule = "not finite";
 	cases[7].def.position[1] = -INFINITY, cases[7].status = SM_ERROR_NOT_FINITE, cases[7].rule = "position y";
 	for (int i = 0; i < 8; i++) {
@@ -154,24 +156,27 @@ static int test_invalid_springs(void)
 	c[6].def.damping = INFINITY, c[6].status = SM_ERROR_NOT_FINITE, c[6].rule = "damping";
 	c[7].def.rest_length = -0.25, c[7].status = SM_ERROR_NEGATIVE, c[7].rule = "rest length = -0.25";
 	c[8].def.rest_length = NAN, c[8].status = SM_ERROR_NOT_FINITE, c[8].rule = "rest length";
-	c[9].def.rest_length = 0.0, c[9].def.stiffness_scaling = SM_PER_STRAIN, c[9].status = SM_ERROR_ZERO_REST_LENGTH,
-	c[9].rule = "per-strain stiffness needs a rest length > 0";
+	c[9].def.rest_length = 0.0, c[9].def.stiffness_scaling = SM_PER_STRAIN,
+	c[9].status = SM_ERROR_ZERO_REST_LENGTH, c[9].rule = "per-strain stiffness needs a rest length > 0";
 	c[10].def.kind = SM_SPRING_ZERO_LENGTH, c[10].def.damping_scaling = SM_PER_STRAIN,
 	c[10].status = SM_ERROR_ZERO_REST_LENGTH, c[10].rule = "per-strain damping";
-	c[11].def.break_strain = 0.0, c[11].status = SM_ERROR_NEGATIVE, c[11].rule = "break strain = 0 must be > 0";
+	c[11].def.break_strain = 0.0, c[11].status = SM_ERROR_NEGATIVE,
+	c[11].rule = "break strain = 0 must be > 0";
 	c[12].def.break_strain = NAN, c[12].status = SM_ERROR_NOT_FINITE, c[12].rule = "break strain";
 	c[13].def.rest_length = 0.0, c[13].def.break_strain = 0.1, c[13].status = SM_ERROR_ZERO_REST_LENGTH,
 	c[13].rule = "break strain needs a rest length > 0";
 	c[14].def.kind = (sm_spring_kind)9, c[14].status = SM_ERROR_INVALID_ARGUMENT, c[14].rule = "kind";
-	c[15].def.stiffness_scaling = (sm_scaling)4, c[15].status = SM_ERROR_INVALID_ARGUMENT, c[15].rule = "scaling";
-	c[16].def.kind = SM_SPRING_ZERO_LENGTH, c[16].def.rest_length = 0.3, c[16].status = SM_ERROR_INVALID_ARGUMENT,
-	c[16].rule = "zero-length spring must have rest length 0";
+	c[15].def.stiffness_scaling = (sm_scaling)4, c[15].status = SM_ERROR_INVALID_ARGUMENT,
+	c[15].rule = "scaling";
+	c[16].def.kind = SM_SPRING_ZERO_LENGTH, c[16].def.rest_length = 0.3,
+	c[16].status = SM_ERROR_INVALID_ARGUMENT, c[16].rule = "zero-length spring must have rest length 0";
 	// Indices are 0 .. n - 1: n itself is out of range.
 	c[17].def.a = 3, c[17].status = SM_ERROR_PARTICLE_INDEX,
 	c[17].rule = "particle a = 3 out of range (model has 3 particles)";
 	c[18].def.b = 3, c[18].status = SM_ERROR_PARTICLE_INDEX,
 	c[18].rule = "particle b = 3 out of range (model has 3 particles)";
-	c[19].def.damping_scaling = (sm_scaling)4, c[19].status = SM_ERROR_INVALID_ARGUMENT, c[19].rule = "damping scaling";
+	c[19].def.damping_scaling = (sm_scaling)4, c[19].status = SM_ERROR_INVALID_ARGUMENT,
+	c[19].rule = "damping scaling";
 	// kd = c / l0 = 1e308 / 1e-10 overflows.
 	c[20].def.rest_length = 1e-10, c[20].def.damping = 1e308, c[20].def.damping_scaling = SM_PER_STRAIN,
 	c[20].status = SM_ERROR_NOT_FINITE, c[20].rule = "damping c / l0 = 1e+308 / 1e-10 is not finite";
@@ -204,7 +209,8 @@ static int test_invalid_springs(void)
 	far.a = 4;
 	far.b = 5;
 	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE_MESSAGE(m, "spring 1", "initial distance between particles 4 and 5 is too large (its square overflows");
+	ENSURE_MESSAGE(m, "spring 1",
+	               "initial distance between particles 4 and 5 is too large (its square overflows");
 	// Particles 1e-170 m apart, whose squared distance underflows to 0: the initial rest length
 	// would be 0, not their distance, and per-strain constants refused as "rest length is 0".
 	// Refused for what it is, as a structure's spring of that length, also with absolute
@@ -220,8 +226,9 @@ static int test_invalid_springs(void)
 		for (int scaling = SM_ABSOLUTE; scaling <= SM_PER_STRAIN; scaling++) {
 			close.stiffness_scaling = (sm_scaling)scaling;
 			ENSURE_STATUS(sm_model_add_spring(m, &close, NULL), SM_ERROR_INVALID_ARGUMENT);
-			ENSURE_MESSAGE(m, "spring 1", k == 6 ? "initial distance between particles 3 and 6, 1e-170 m, is too small"
-			                                     : "initial distance between particles 3 and 7, 1e-155 m, is too small");
+			ENSURE_MESSAGE(m, "spring 1",
+			               k == 6 ? "initial distance between particles 3 and 6, 1e-170 m, is too small"
+			                      : "initial distance between particles 3 and 7, 1e-155 m, is too small");
 		}
 	}
 	ENSURE(sm_model_spring_count(m) == 1);
@@ -282,7 +289,8 @@ static int test_accessors_and_per_strain_constants(void)
 	ENSURE_STATUS(sm_model_get_particle(m, 1, &q), SM_OK);
 	ENSURE(q.mass == 2.5 && q.velocity[1] == 0.0 && q.motion == SM_PARTICLE_FIXED);
 	ENSURE(sm_model_free_count(m) == 2);
-	ENSURE(sm_model_free_index(m, 0) == 0 && sm_model_free_index(m, 1) == -1 && sm_model_free_index(m, 2) == 1);
+	ENSURE(sm_model_free_index(m, 0) == 0 && sm_model_free_index(m, 1) == -1 &&
+	       sm_model_free_index(m, 2) == 1);
 	ENSURE(sm_model_free_index(m, 3) == -1);
 	ENSURE_STATUS(sm_model_set_particle_motion(m, 0, SM_PARTICLE_DRIVEN), SM_OK);
 	ENSURE(sm_model_free_count(m) == 1 && sm_model_free_index(m, 2) == 0);

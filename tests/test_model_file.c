@@ -22,8 +22,8 @@
 #error "SPRINGMASS_MODELS_DIR must name the directory of the bundled models"
 #endif
 
-static const char* const bundled[] = {"oscillator",  "two_mass_chain", "hanging_rope", "cloth", "tearing_cloth",
-                                      "jelly_block", "flag",           "trampoline"};
+static const char* const bundled[] = {"oscillator",    "two_mass_chain", "hanging_rope", "cloth",
+                                      "tearing_cloth", "jelly_block",    "flag",         "trampoline"};
 enum { BUNDLED_COUNT = sizeof bundled / sizeof bundled[0] };
 
 static sm_document* load_bundled(const char* name, sm_error* err)
@@ -383,7 +383,8 @@ static int test_parameters(void)
 
 	sm_error err = {SM_OK, ""};
 	ENSURE_STATUS(sm_document_set_parameter(doc, E, -1.0, &err), SM_ERROR_NEGATIVE);
-	ENSURE(strstr(err.message, "cloth.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0") !=
+	ENSURE(strstr(err.message,
+	              "cloth.json: structures[0].structural.strain_stiffness: parameter E = -1 must be >= 0") !=
 	       NULL);
 	ENSURE(strstr(err.message, "(with parameter") == NULL);  // the parameter is named once
 	ENSURE_STATUS(sm_document_set_parameter(doc, E, NAN, &err), SM_ERROR_NOT_FINITE);
@@ -392,9 +393,10 @@ static int test_parameters(void)
 	sm_document_destroy(doc);
 
 	// A parameter may set a count: the topology follows it.
-	const char* text = "{\"springmass\": 1, \"name\": \"r\", \"parameters\": {\"n\": 4},"
-	                   " \"structures\": [{\"type\": \"rope\", \"name\": \"rope\", \"start\": [0,0,0],"
-	                   " \"end\": [1,0,0], \"segments\": \"n\", \"structural\": {\"strain_stiffness\": 10}}]}";
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"r\", \"parameters\": {\"n\": 4},"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"rope\", \"start\": [0,0,0],"
+	    " \"end\": [1,0,0], \"segments\": \"n\", \"structural\": {\"strain_stiffness\": 10}}]}";
 	doc = parse(text, &err);
 	ENSURE(doc != NULL);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 9.0, &err), SM_OK);
@@ -403,8 +405,9 @@ static int test_parameters(void)
 	ENSURE(strcmp(sm_document_particle_name(doc, 9), "rope[9]") == 0);
 	sm_model_destroy(m);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 2.5, &err), SM_ERROR_SCHEMA);
-	ENSURE(strcmp(err.message, "test.json: structures[0].segments: parameter n = 2.5 must be a whole number from 1 to "
-	                           "4194304") == 0);
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0].segments: parameter n = 2.5 must be a whole number from 1 to "
+	              "4194304") == 0);
 	sm_document_destroy(doc);
 
 	// A group whose constants are parameters keeps its springs when they are all zero, so that
@@ -462,20 +465,30 @@ static int test_parameter_uses(void)
 		const char* name;
 		uint32_t uses;
 	} expected[] = {
-	    {"m", SM_PARAMETER_CONSTANTS},    {"x", SM_PARAMETER_INITIAL_STATE}, {"k", SM_PARAMETER_CONSTANTS},
-	    {"c", SM_PARAMETER_CONSTANTS},    {"L", SM_PARAMETER_INITIAL_STATE}, {"n", SM_PARAMETER_COUNTS},
-	    {"M", SM_PARAMETER_CONSTANTS},    {"v", SM_PARAMETER_INITIAL_STATE}, {"i", SM_PARAMETER_COUNTS},
-	    {"b", SM_PARAMETER_MOTION},       {"tol", SM_PARAMETER_SETTINGS},    {"g", SM_PARAMETER_CONSTANTS},
-	    {"both", SM_PARAMETER_CONSTANTS | SM_PARAMETER_INITIAL_STATE},      {"spare", 0},
+	    {"m", SM_PARAMETER_CONSTANTS},
+	    {"x", SM_PARAMETER_INITIAL_STATE},
+	    {"k", SM_PARAMETER_CONSTANTS},
+	    {"c", SM_PARAMETER_CONSTANTS},
+	    {"L", SM_PARAMETER_INITIAL_STATE},
+	    {"n", SM_PARAMETER_COUNTS},
+	    {"M", SM_PARAMETER_CONSTANTS},
+	    {"v", SM_PARAMETER_INITIAL_STATE},
+	    {"i", SM_PARAMETER_COUNTS},
+	    {"b", SM_PARAMETER_MOTION},
+	    {"tol", SM_PARAMETER_SETTINGS},
+	    {"g", SM_PARAMETER_CONSTANTS},
+	    {"both", SM_PARAMETER_CONSTANTS | SM_PARAMETER_INITIAL_STATE},
+	    {"spare", 0},
 	    // Without a kind, a rest length of 0 makes the spring zero-length: it chooses the law.
-	    {"l0", SM_PARAMETER_CONSTANTS | SM_PARAMETER_SPRING_KINDS},        {"l1", SM_PARAMETER_CONSTANTS},
+	    {"l0", SM_PARAMETER_CONSTANTS | SM_PARAMETER_SPRING_KINDS},
+	    {"l1", SM_PARAMETER_CONSTANTS},
 	};
 	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
 		const int32_t k = sm_document_parameter_index(doc, expected[e].name);
 		ENSURE(k >= 0);
 		if (sm_document_parameter_uses(doc, k) != expected[e].uses)
-			printf("  parameter %s: uses %u, expected %u\n", expected[e].name, (unsigned)sm_document_parameter_uses(doc, k),
-			       (unsigned)expected[e].uses);
+			printf("  parameter %s: uses %u, expected %u\n", expected[e].name,
+			       (unsigned)sm_document_parameter_uses(doc, k), (unsigned)expected[e].uses);
 		ENSURE(sm_document_parameter_uses(doc, k) == expected[e].uses);
 	}
 	ENSURE(sm_document_parameter_uses(doc, -1) == 0 && sm_document_parameter_uses(doc, 99) == 0);
@@ -517,8 +530,10 @@ static int test_initial_state_and_save_to_file(void)
 	// springs' constants and of the mass damping stay, feeding what they fed.
 	ENSURE(sm_document_parameter_index(again, "mass") == -1 && sm_document_parameter_index(again, "n") == -1);
 	ENSURE(sm_document_parameter_count(again) == 3);
-	ENSURE(sm_document_parameter_uses(again, sm_document_parameter_index(again, "E")) == SM_PARAMETER_CONSTANTS);
-	ENSURE(sm_document_parameter_uses(again, sm_document_parameter_index(again, "alpha")) == SM_PARAMETER_CONSTANTS);
+	ENSURE(sm_document_parameter_uses(again, sm_document_parameter_index(again, "E")) ==
+	       SM_PARAMETER_CONSTANTS);
+	ENSURE(sm_document_parameter_uses(again, sm_document_parameter_index(again, "alpha")) ==
+	       SM_PARAMETER_CONSTANTS);
 	sm_model* m2 = NULL;
 	ENSURE_STATUS(sm_document_build(again, &m2, NULL), SM_OK);
 	sm_particle_def p;
@@ -600,8 +615,9 @@ static int test_references(void)
 	ENSURE(sheet.range.group_spring_count[0] == 7 && sheet.range.group_spring_count[1] == 0 &&
 	       sheet.range.group_spring_count[2] == 0);
 	ENSURE(strcmp(block.name, "b") == 0 && strcmp(block.type, "block") == 0);
-	ENSURE(block.range.first_particle == 7 && block.range.particle_count == 8 && block.range.first_spring == 7 &&
-	       block.range.spring_count == 12 && block.range.group_spring_count[0] == 12);
+	ENSURE(block.range.first_particle == 7 && block.range.particle_count == 8 &&
+	       block.range.first_spring == 7 && block.range.spring_count == 12 &&
+	       block.range.group_spring_count[0] == 12);
 	ENSURE(sm_structure_particle(&block.range, 1, 0, 1) == 13);
 	ENSURE(sm_document_structure(doc, 2).name == NULL && sm_document_structure(doc, -1).name == NULL);
 	ENSURE(sm_document_structure_count(NULL) == 0);
@@ -625,8 +641,8 @@ static int count_wrong_refusals(const refusal* cases, size_t count)
 		sm_error err = {SM_OK, ""};
 		sm_document* doc = parse(cases[c].text, &err);
 		if (doc != NULL || err.status != cases[c].status || strcmp(err.message, cases[c].message) != 0) {
-			printf("  case %zu: status %d, message\n    \"%s\"\n  expected %d,\n    \"%s\"\n", c, (int)err.status,
-			       err.message, (int)cases[c].status, cases[c].message);
+			printf("  case %zu: status %d, message\n    \"%s\"\n  expected %d,\n    \"%s\"\n", c,
+			       (int)err.status, err.message, (int)cases[c].status, cases[c].message);
 			sm_document_destroy(doc);
 			failures++;
 		}
@@ -639,195 +655,202 @@ static int test_broken_files(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [}", SM_ERROR_SYNTAX,
-	     "test.json:2:16: unexpected token near '}'"},
-	    {"{\"springmass\": 1, \"springmass\": 1}", SM_ERROR_SYNTAX, "test.json:1:30: duplicate object key near '\"springmass\"'"},
+		 "test.json:2:16: unexpected token near '}'"},
+	    {"{\"springmass\": 1, \"springmass\": 1}", SM_ERROR_SYNTAX,
+		 "test.json:1:30: duplicate object key near '\"springmass\"'"},
 	    {"[1, 2]", SM_ERROR_SCHEMA, "test.json: a model file is a JSON object, not an array"},
 	    {"{\"name\": \"x\"}", SM_ERROR_SCHEMA,
-	     "test.json: missing \"springmass\": 1 (the format version; is this a springmass model file?)"},
+		 "test.json: missing \"springmass\": 1 (the format version; is this a springmass model file?)"},
 	    {"{\"springmass\": 2, \"name\": \"x\"}", SM_ERROR_SCHEMA,
-	     "test.json: springmass: format version must be 1 (this build reads version 1)"},
+		 "test.json: springmass: format version must be 1 (this build reads version 1)"},
 	    {"{\"springmass\": \"1\", \"name\": \"x\"}", SM_ERROR_SCHEMA,
-	     "test.json: springmass: format version must be the integer 1, not a string (no quotes)"},
+		 "test.json: springmass: format version must be the integer 1, not a string (no quotes)"},
 	    {"{\"springmass\": 1.0, \"name\": \"x\"}", SM_ERROR_SCHEMA,
-	     "test.json: springmass: format version must be the integer 1, not a real number"},
+		 "test.json: springmass: format version must be the integer 1, not a real number"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravty\": [0, 0, 0]}", SM_ERROR_SCHEMA,
-	     "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
-	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+		 "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
+		 "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"my model\"}", SM_ERROR_SCHEMA,
-	     "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
-	     "digit)"},
+		 "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
+		 "digit)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"two\\nlines\"}", SM_ERROR_SCHEMA,
-	     "test.json: description: must be one line: it has a line break, U+000A, at character 4"},
+		 "test.json: description: must be one line: it has a line break, U+000A, at character 4"},
 	    {"{\"springmass\": 1, \"name\": \"x\"}", SM_ERROR_SCHEMA,
-	     "test.json: the model has no particles (give \"particles\" or \"structures\")"},
+		 "test.json: the model has no particles (give \"particles\" or \"structures\")"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0]}]}", SM_ERROR_SCHEMA,
-	     "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
+		 "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mas\": 1}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: particles[0]: unknown key \"mas\" (allowed here: name, position, velocity, mass, fixed)"},
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0]: unknown key \"mas\" (allowed here: name, position, velocity, mass, fixed)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": 0}]}",
-	     SM_ERROR_NEGATIVE, "test.json: particles[0].mass: 0 must be > 0"},
+		 SM_ERROR_NEGATIVE, "test.json: particles[0].mass: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
-	     " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"a\"}, {\"a\": \"a\","
-	     " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
-	     SM_ERROR_SELF_SPRING, "test.json: springs[0]: connects particle 0 (\"a\") to itself (a and b are the same particle)"},
+		 " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"a\"}, {\"a\": \"a\","
+		 " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
+		 SM_ERROR_SELF_SPRING,
+		 "test.json: springs[0]: connects particle 0 (\"a\") to itself (a and b are the same particle)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
-	     " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\","
-	     " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
-	     SM_ERROR_NOT_FOUND, "test.json: springs[3].b: no particle named \"bobb\""},
+		 " {\"name\": \"b\", \"position\": [1, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\","
+		 " \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"b\"}, {\"a\": \"a\", \"b\": \"bobb\"}]}",
+		 SM_ERROR_NOT_FOUND, "test.json: springs[3].b: no particle named \"bobb\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 2}]}",
-	     SM_ERROR_PARTICLE_INDEX, "test.json: springs[0].b: particle index 2 is out of range (the model has 2 particles)"},
+		 " \"springs\": [{\"a\": 0, \"b\": 2}]}",
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: springs[0].b: particle index 2 is out of range (the model has 2 particles)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
-	     " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"kk\"}]}",
-	     SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"kk\""},
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"kk\"}]}",
+		 SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"kk\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"-.5\"}]}",
-	     SM_ERROR_NOT_FOUND,
-	     "test.json: springs[0].stiffness: no parameter named \"-.5\" (a number is written without quotes)"},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"-.5\"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"-.5\" (a number is written without quotes)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: springs[0]: give one of \"stiffness\", \"strain_stiffness\" and \"section_stiffness\", not more"},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: springs[0]: give one of \"stiffness\", \"strain_stiffness\" and \"section_stiffness\", not more"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 1, \"rest_length\": 0}]}",
-	     SM_ERROR_ZERO_REST_LENGTH,
-	     "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0)"},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 1, \"rest_length\": 0}]}",
+		 SM_ERROR_ZERO_REST_LENGTH,
+		 "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"break_strain\": -0.1}]}",
-	     SM_ERROR_NEGATIVE, "test.json: springs[0].break_strain: -0.1 must be > 0"},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"break_strain\": -0.1}]}",
+		 SM_ERROR_NEGATIVE, "test.json: springs[0].break_strain: -0.1 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"kind\": \"cubic\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: springs[0].kind: must be \"rest_length\" or \"zero_length\""},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"kind\": \"cubic\"}]}",
+		 SM_ERROR_SCHEMA, "test.json: springs[0].kind: must be \"rest_length\" or \"zero_length\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
-	     " \"nv\": 4}], \"fixed\": [\"c[4,0]\"]}",
-	     SM_ERROR_PARTICLE_INDEX,
-	     "test.json: fixed[0]: \"c[4,0]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
+		 " \"nv\": 4}], \"fixed\": [\"c[4,0]\"]}",
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: fixed[0]: \"c[4,0]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
-	     " \"nv\": 4}], \"fixed\": [{\"min\": [5, 5, 5], \"max\": [6, 6, 6]}]}",
-	     SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (5, 5, 5) to (6, 6, 6) contains no particle"},
+		 " \"nv\": 4}], \"fixed\": [{\"min\": [5, 5, 5], \"max\": [6, 6, 6]}]}",
+		 SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (5, 5, 5) to (6, 6, 6) contains no particle"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
-	     " \"nv\": 4}, {\"type\": \"rope\", \"name\": \"c\", \"start\": [0, 0, 0], \"end\": [1, 0, 0],"
-	     " \"segments\": 2}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[1].name: structure name \"c\" is already used"},
+		 " \"nv\": 4}, {\"type\": \"rope\", \"name\": \"c\", \"start\": [0, 0, 0], \"end\": [1, 0, 0],"
+		 " \"segments\": 2}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[1].name: structure name \"c\" is already used"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[0,0]\", \"position\": [0, 0, 0]}],"
-	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4, \"nv\": 4}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: particles[0].name: name \"c[0,0]\" reads as a reference to a particle of structure \"c\": give "
-	     "the particle another name"},
+		 " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4, \"nv\": 4}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"c[0,0]\" reads as a reference to a particle of structure \"c\": give "
+		 "the particle another name"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"cube\", \"name\": \"c\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].type: must be \"rope\", \"sheet\", \"block\" or \"mesh\""},
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].type: must be \"rope\", \"sheet\", \"block\" or \"mesh\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 4,"
-	     " \"nv\": 4, \"bend\": {\"strain_stiffnes\": 1}}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0].bend: unknown key \"strain_stiffnes\" (allowed here: stiffness, strain_stiffness, "
-	     "section_stiffness, damping, strain_damping, section_damping, break_strain)"},
+		 " \"nv\": 4, \"bend\": {\"strain_stiffnes\": 1}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].bend: unknown key \"strain_stiffnes\" (allowed here: stiffness, strain_stiffness, "
+		 "section_stiffness, damping, strain_damping, section_damping, break_strain)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 1e9,"
-	     " \"nv\": 4}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1000000000 must be a whole number from 2 to 4194304"},
+		 " \"nv\": 4}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0].nu: 1000000000 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 40000,"
-	     " \"nv\": 40000}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 1600000000 particles, more than the limit of 4194304"},
+		 " \"nv\": 40000}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: the model would have 1600000000 particles, more than the limit of 4194304"},
 	    // The springs the groups present make, in closed form: a 2100 x 2100 sheet's structural
 	    // springs 2 * 2099 * 2100; a 161^3 block's edges 3 * 160 * 161^2 (its particles are within
 	    // the limit); a rope's bending springs, one fewer than its segments.
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 2100,"
-	     " \"nv\": 2100, \"structural\": {\"stiffness\": 1}}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 4410000 particles and 8815800 springs, more than the limit of "
-	     "4194304 of each"},
+		 " \"nv\": 2100, \"structural\": {\"stiffness\": 1}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: the model would have 4410000 particles and 8815800 springs, more than the limit of "
+		 "4194304 of each"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
-	     " \"nu\": 161, \"nv\": 161, \"nw\": 161, \"edge\": {\"stiffness\": 1}}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 12442080 springs, more than the limit of 4194304"},
+		 " \"nu\": 161, \"nv\": 161, \"nw\": 161, \"edge\": {\"stiffness\": 1}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: the model would have 12442080 springs, more than the limit of 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
-	     " \"nu\": 100, \"nv\": 100, \"nw\": 419, \"face_diagonal\": {\"damping\": 1}}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 24766038 springs, more than the limit of 4194304"},
+		 " \"nu\": 100, \"nv\": 100, \"nw\": 419, \"face_diagonal\": {\"damping\": 1}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: the model would have 24766038 springs, more than the limit of 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"structures\": [{\"type\":"
-	     " \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 4194304, \"bending\":"
-	     " {\"stiffness\": 1}}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: the model would have 4194306 particles, more than the limit of 4194304"},
+		 " \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 4194304, \"bending\":"
+		 " {\"stiffness\": 1}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: the model would have 4194306 particles, more than the limit of 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
-	     " \"nu\": 4000000, \"nv\": 4000000, \"nw\": 4000000}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0]: 4000000 x 4000000 x 4000000 particles exceed the limit of 4194304"},
+		 " \"nu\": 4000000, \"nv\": 4000000, \"nw\": 4000000}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: 4000000 x 4000000 x 4000000 particles exceed the limit of 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"c\", \"size\": [1, 1, 1],"
-	     " \"nu\": -3, \"nv\": 4, \"nw\": 4}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].nu: -3 must be a whole number from 2 to 4194304"},
+		 " \"nu\": -3, \"nv\": 4, \"nw\": 4}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0].nu: -3 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
-	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 3]]}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].triangles[0][2]: 3 must be a whole number from 0 to 2"},
+		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 3]]}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0].triangles[0][2]: 3 must be a whole number from 0 to 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
-	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_INVALID_ARGUMENT,
-	     "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
-	     "most 1e-12 times the product of its two longest edges)"},
+		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
+		 "most 1e-12 times the product of its two longest edges)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"position\":"
-	     " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
-	     " \"big\"}]}",
-	     SM_ERROR_NOT_FINITE,
-	     "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite (with parameter big = 1e+308)"},
+		 " [0, 0, 0]}, {\"position\": [1e-10, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\":"
+		 " \"big\"}]}",
+		 SM_ERROR_NOT_FINITE,
+		 "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite (with parameter big = 1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
-	     "test.json:1:56: real number overflow near '1e400'"},
+		 "test.json:1:56: real number overflow near '1e400'"},
 	    {"\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
-	     "test.json:1:56: real number overflow near '1e400'"},
+		 "test.json:1:56: real number overflow near '1e400'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\u0000y\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:36: strings in a model file may not contain \\u0000"},
+		 "test.json:1:36: strings in a model file may not contain \\u0000"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u0000\": 1}}", SM_ERROR_SYNTAX,
-	     "test.json:1:55: strings in a model file may not contain \\u0000"},
+		 "test.json:1:55: strings in a model file may not contain \\u0000"},
 	    // Lines end at LF, CR LF or a lone CR, as editors show them (the parser counts LF only).
 	    {"{\r\"springmass\": 1,\r\n\"name\": \"x\",\r\"parameters\" {}}", SM_ERROR_SYNTAX,
-	     "test.json:4:14: ':' expected near '{'"},
+		 "test.json:4:14: ':' expected near '{'"},
 	    // The text near a syntax error is shown with what a terminal would act on escaped.
 	    {"{\"springmass\": 1, \"name\": \"x\", \x1b[31m}", SM_ERROR_SYNTAX,
-	     "test.json:1:32: string or '}' expected near '\\u001b'"},
+		 "test.json:1:32: string or '}' expected near '\\u001b'"},
 	    {"{\"springmass\": 1, \"name\": \"\xe2\x80\xae\\q\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:30: invalid escape near '\"\\u202e\\q'"},
+		 "test.json:1:30: invalid escape near '\"\\u202e\\q'"},
 	    {"", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
-	    {" \r\n\t\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
-	    {"\xef\xbb\xbf\n", SM_ERROR_SYNTAX, "test.json: the model file is empty (a model file is one JSON object)"},
+	    {" \r\n\t\n", SM_ERROR_SYNTAX,
+		 "test.json: the model file is empty (a model file is one JSON object)"},
+	    {"\xef\xbb\xbf\n", SM_ERROR_SYNTAX,
+		 "test.json: the model file is empty (a model file is one JSON object)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaN}}", SM_ERROR_SYNTAX,
-	     "test.json:1:54: invalid token near 'NaN'"},
-	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 99999999999999999999}}", SM_ERROR_SYNTAX,
-	     "test.json:1:71: too big integer near '99999999999999999999'"},
+		 "test.json:1:54: invalid token near 'NaN'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 99999999999999999999}}",
+		 SM_ERROR_SYNTAX, "test.json:1:71: too big integer near '99999999999999999999'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"2k\": 1}}", SM_ERROR_SCHEMA,
-	     "test.json: parameters.2k: name \"2k\" must be an identifier (letters, digits and '_', not starting with a "
-	     "digit)"},
+		 "test.json: parameters.2k: name \"2k\" must be an identifier (letters, digits and '_', not starting with a "
+		 "digit)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,]\"]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: fixed[0]: \"r[1,]\": a number, a parameter or '(' expected; a structure reference is name[i], "
-	     "name[row, column] or name[row, column, layer]"},
+		 " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,]\"]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: fixed[0]: \"r[1,]\": a number, a parameter or '(' expected; a structure reference is name[i], "
+		 "name[row, column] or name[row, column, layer]"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [0.5]}",
-	     SM_ERROR_SCHEMA, "test.json: fixed[0]: a particle index must be a whole number, not 0.5"},
+		 SM_ERROR_SCHEMA, "test.json: fixed[0]: a particle index must be a whole number, not 0.5"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [1e300]}",
-	     SM_ERROR_PARTICLE_INDEX, "test.json: fixed[0]: particle index 1e+300 is out of range (the model has 1 particles)"},
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: fixed[0]: particle index 1e+300 is out of range (the model has 1 particles)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": \"m\"}}", SM_ERROR_SCHEMA,
-	     "test.json: parameters.k: a parameter's value must be a number, not a string"},
+		 "test.json: parameters.k: a parameter's value must be a number, not a string"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"fixed\": true}],"
-	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"force\"}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: ports[0]: a force port needs a free particle, and particle 0 is fixed (use a motion or probe port)"},
+		 " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"force\"}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: ports[0]: a force port needs a free particle, and particle 0 is fixed (use a motion or probe port)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
-	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"push\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: ports[0].kind: must be \"force\", \"motion\" or \"probe\""},
+		 " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"push\"}]}",
+		 SM_ERROR_SCHEMA, "test.json: ports[0].kind: must be \"force\", \"motion\" or \"probe\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"probe\"}, {\"name\": \"p\", \"particle\": 1,"
-	     " \"kind\": \"probe\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: ports[1].name: port name \"p\" is already used by ports[0]"},
+		 " \"ports\": [{\"name\": \"p\", \"particle\": 0, \"kind\": \"probe\"}, {\"name\": \"p\", \"particle\": 1,"
+		 " \"kind\": \"probe\"}]}",
+		 SM_ERROR_SCHEMA, "test.json: ports[1].name: port name \"p\" is already used by ports[0]"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
-	     " \"simulation\": {\"solver\": \"gauss\"}}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: simulation.solver: must be one of \"auto\", \"dense\", \"klu\", \"pcg\", \"cholmod\""},
+		 " \"simulation\": {\"solver\": \"gauss\"}}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: simulation.solver: must be one of \"auto\", \"dense\", \"klu\", \"pcg\", \"cholmod\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
-	     " \"simulation\": {\"rtol\": 0}}",
-	     SM_ERROR_NEGATIVE, "test.json: simulation.rtol: 0 must be > 0"},
+		 " \"simulation\": {\"rtol\": 0}}",
+		 SM_ERROR_NEGATIVE, "test.json: simulation.rtol: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
-	     " \"fmu\": {\"particle_variables\": 0}}",
-	     SM_ERROR_SCHEMA, "test.json: fmu.particle_variables: must be true or false, not a number"},
+		 " \"fmu\": {\"particle_variables\": 0}}",
+		 SM_ERROR_SCHEMA, "test.json: fmu.particle_variables: must be true or false, not a number"},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
@@ -884,15 +907,15 @@ static sm_document* save_and_load(const sm_document* doc)
 static int test_canonical_form_keeps_what_the_file_says(void)
 {
 	const char* text =
-		"{\"springmass\": 1, \"name\": \"kept\", \"description\": \"a\\tb\","
-		" \"parameters\": {\"k0\": 0, \"c0\": 0, \"y\": 0.25},"
-		" \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0], \"fixed\": true},"
-		"  {\"name\": \"q\", \"position\": [0, \"y\", 0]}, {\"name\": \"r\", \"position\": [1, 0, 0]}],"
-		" \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"kind\": \"rest_length\", \"rest_length\": 0, \"stiffness\": 3},"
-		"  {\"a\": \"p\", \"b\": \"r\", \"strain_stiffness\": 50, \"damping\": 0.5, \"break_strain\": 0.2},"
-		"  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": 7, \"strain_damping\": 0.25},"
-		"  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": \"k0\", \"damping\": \"c0\"}],"
-		" \"fmu\": {\"particle_variables\": false}}";
+	    "{\"springmass\": 1, \"name\": \"kept\", \"description\": \"a\\tb\","
+	    " \"parameters\": {\"k0\": 0, \"c0\": 0, \"y\": 0.25},"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0], \"fixed\": true},"
+	    "  {\"name\": \"q\", \"position\": [0, \"y\", 0]}, {\"name\": \"r\", \"position\": [1, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"kind\": \"rest_length\", \"rest_length\": 0, \"stiffness\": 3},"
+	    "  {\"a\": \"p\", \"b\": \"r\", \"strain_stiffness\": 50, \"damping\": 0.5, \"break_strain\": 0.2},"
+	    "  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": 7, \"strain_damping\": 0.25},"
+	    "  {\"a\": \"q\", \"b\": \"r\", \"stiffness\": \"k0\", \"damping\": \"c0\"}],"
+	    " \"fmu\": {\"particle_variables\": false}}";
 	sm_error err = {SM_OK, ""};
 	sm_document* doc = parse_valid(text, &err);
 	ENSURE(doc != NULL);
@@ -951,10 +974,11 @@ static int test_longest_structure_names_round_trip(void)
 	rope[175] = '\0';
 	memset(block, 'b', 175);
 	block[175] = '\0';
-	const char* format = "{\"springmass\": 1, \"name\": \"long\", \"structures\": [{\"type\": \"rope\", \"name\": \"%s\","
-	                     " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 10, \"structural\": {\"stiffness\": 5}},"
-	                     " {\"type\": \"block\", \"name\": \"%s\", \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 11,"
-	                     " \"edge\": {\"stiffness\": 5}}], \"fixed\": [\"%s[0]\"]}";
+	const char* format =
+	    "{\"springmass\": 1, \"name\": \"long\", \"structures\": [{\"type\": \"rope\", \"name\": \"%s\","
+	    " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 10, \"structural\": {\"stiffness\": 5}},"
+	    " {\"type\": \"block\", \"name\": \"%s\", \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 11,"
+	    " \"edge\": {\"stiffness\": 5}}], \"fixed\": [\"%s[0]\"]}";
 	snprintf(text, sizeof text, format, rope, block, rope);
 	sm_error err = {SM_OK, ""};
 	sm_document* doc = parse_valid(text, &err);
@@ -978,10 +1002,11 @@ static int test_longest_structure_names_round_trip(void)
 	snprintf(text, sizeof text, format, rope, block, rope);
 	ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SCHEMA);
 	char expected[400];
-	snprintf(expected, sizeof expected,
-	         "test.json: structures[1].name: structure name \"%.80s\"... has 176 bytes; a structure's name may have at "
-	         "most 175, so that its particles' names (name[row,column,layer]) fit in 200",
-	         block);
+	snprintf(
+	    expected, sizeof expected,
+	    "test.json: structures[1].name: structure name \"%.80s\"... has 176 bytes; a structure's name may have at "
+	    "most 175, so that its particles' names (name[row,column,layer]) fit in 200",
+	    block);
 	ENSURE(strcmp(err.message, expected) == 0);
 	return 0;
 }
@@ -992,8 +1017,9 @@ static int test_longest_structure_names_round_trip(void)
 // counted they would have been 4.27 million springs, over the limit.
 static int test_structure_limit_counts_the_groups_present(void)
 {
-	const char* format = "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\","
-	                     " \"size\": [1, 1, 1], \"nu\": 69, \"nv\": 69, \"nw\": 69%s}]}";
+	const char* format =
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\","
+	    " \"size\": [1, 1, 1], \"nu\": 69, \"nv\": 69, \"nw\": 69%s}]}";
 	const char* groups[] = {"", ", \"edge\": {\"stiffness\": 1}"};
 	const int32_t springs[] = {0, 971244};
 	for (int k = 0; k < 2; k++) {
@@ -1040,7 +1066,8 @@ static int test_large_model_loads(void)
 		append(&t, "%s\"r%d[ 0 ]\"", i > 0 ? ", " : "", i);
 	append(&t, "],\n\"ports\": [");
 	for (int i = 0; i < N; i++)
-		append(&t, "%s{\"name\": \"q%d\", \"particle\": \"r%d[1]\", \"kind\": \"probe\"}", i > 0 ? ", " : "", i, i);
+		append(&t, "%s{\"name\": \"q%d\", \"particle\": \"r%d[1]\", \"kind\": \"probe\"}", i > 0 ? ", " : "",
+		       i, i);
 	append(&t, "]}");
 	sm_error err = {SM_OK, ""};
 	sm_document* doc = sm_document_parse(t.data, t.length, "large.json", &err);
@@ -1067,7 +1094,8 @@ static int test_large_model_loads(void)
 		ENSURE(start.motion == SM_PARTICLE_FIXED && start.position[0] == i && start.position[1] == 0.0);
 		ENSURE(end.motion == SM_PARTICLE_FREE && end.position[0] == i && end.position[1] == 1.0);
 	}
-	ENSURE(sm_document_parameter_index(doc, "one") == N + 1 && sm_document_parameter_index(doc, "x100000") == -1);
+	ENSURE(sm_document_parameter_index(doc, "one") == N + 1 &&
+	       sm_document_parameter_index(doc, "x100000") == -1);
 	ENSURE(sm_document_port_index(doc, "q") == -1 && sm_document_particle_index(doc, "r0[2]") == -1);
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
@@ -1127,22 +1155,25 @@ static int test_messages_quote_text(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\\u001b[31mred\", \"position\": [0, 0, 0]}]}",
-	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
-	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}",
-	     SM_ERROR_SCHEMA, "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
-	     "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
-	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}",
-	     SM_ERROR_SCHEMA, "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}", SM_ERROR_SCHEMA,
+		 "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
+		 "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}", SM_ERROR_SCHEMA,
+		 "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
-	     SM_ERROR_NOT_FOUND, "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
+		 SM_ERROR_NOT_FOUND, "test.json: particles[0].mass: no parameter named \"a\\\"b\\\\c\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,\\n]\"]}",
-	     SM_ERROR_SCHEMA, "test.json: fixed[0]: \"r[1,\\u000a]\": a number, a parameter or '(' expected; a structure reference is name[i], name[row, column] or name[row, "
-	     "column, layer]"},
+		 " \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[1,\\n]\"]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: fixed[0]: \"r[1,\\u000a]\": a number, a parameter or '(' expected; a structure reference is name[i], name[row, column] or name[row, "
+		 "column, layer]"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	// "€" is 3 bytes: 26 of them fit in 80 bytes, and the 27th is not cut.
-	char text[512] = "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\"";
+	char text[512] =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\"";
 	char expected[256] = "test.json: fixed[0]: no particle named \"";
 	for (int k = 0; k < 30; k++)
 		strcat(text, "\xe2\x82\xac");
@@ -1168,29 +1199,37 @@ static int test_names_and_descriptions_refuse_controls_and_line_breaks(void)
 		const char* description;
 		const char* message;  // NULL: loads
 	} cases[] = {
-	    {"\\u009b31mred", "", "particles[0].name: name \"\\u009b31mred\" has a control character, U+009B, at character 1"},
-	    {"\xc3\xa9\\u007f", "", "particles[0].name: name \"\xc3\xa9\\u007f\" has a control character, U+007F, at character 2"},
+	    {"\\u009b31mred", "",
+		 "particles[0].name: name \"\\u009b31mred\" has a control character, U+009B, at character 1"},
+	    {"\xc3\xa9\\u007f", "",
+		 "particles[0].name: name \"\xc3\xa9\\u007f\" has a control character, U+007F, at character 2"},
 	    {"a\\u2028b", "", "particles[0].name: name \"a\\u2028b\" has a line break, U+2028, at character 2"},
 	    {"a", "a\\u0085b", "description: must be one line: it has a line break, U+0085, at character 2"},
-	    {"a", "\xe2\x82\xac\xe2\x82\xac\\u2029", "description: must be one line: it has a line break, U+2029, at character 3"},
+	    {"a", "\xe2\x82\xac\xe2\x82\xac\\u2029",
+		 "description: must be one line: it has a line break, U+2029, at character 3"},
 	    {"a", "x\\u000by", "description: must be one line: it has a line break, U+000B, at character 2"},
-	    {"a", "bold \\u001b[1m", "description: has a control character, U+001B, at character 6 (a tab is the only one "
-	                            "allowed)"},
+	    {"a", "bold \\u001b[1m",
+		 "description: has a control character, U+001B, at character 6 (a tab is the only one "
+		 "allowed)"},
 	    {"caf\xc3\xa9 \xe2\x82\xac", "a\\tb \xe2\x80\x94 c", NULL},
 	};
 	int failures = 0;
 	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
 		char text[300], expected[300];
-		snprintf(text, sizeof text,
-		         "{\"springmass\": 1, \"name\": \"x\", \"description\": \"%s\", \"particles\": [{\"name\": \"%s\","
-		         " \"position\": [0, 0, 0]}]}",
-		         cases[c].description, cases[c].name);
-		snprintf(expected, sizeof expected, "test.json: %s", cases[c].message != NULL ? cases[c].message : "");
+		snprintf(
+		    text, sizeof text,
+		    "{\"springmass\": 1, \"name\": \"x\", \"description\": \"%s\", \"particles\": [{\"name\": \"%s\","
+		    " \"position\": [0, 0, 0]}]}",
+		    cases[c].description, cases[c].name);
+		snprintf(expected, sizeof expected, "test.json: %s",
+		         cases[c].message != NULL ? cases[c].message : "");
 		sm_error err = {SM_OK, ""};
 		sm_document* doc = parse(text, &err);
-		const bool right = cases[c].message != NULL ? doc == NULL && strcmp(err.message, expected) == 0 : doc != NULL;
+		const bool right =
+		    cases[c].message != NULL ? doc == NULL && strcmp(err.message, expected) == 0 : doc != NULL;
 		if (!right) {
-			printf("  case %zu: \"%s\"\n  expected \"%s\"\n", c, doc != NULL ? "(loaded)" : err.message, expected);
+			printf("  case %zu: \"%s\"\n  expected \"%s\"\n", c, doc != NULL ? "(loaded)" : err.message,
+			       expected);
 			failures++;
 		}
 		sm_document_destroy(doc);
@@ -1206,57 +1245,60 @@ static int test_messages_name_parameters(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"s\": 0}, \"structures\": [{\"type\": \"block\","
-	     " \"name\": \"j\", \"size\": [1, \"s\", 1], \"nu\": 2, \"nv\": 2, \"nw\": 2}]}",
-	     SM_ERROR_NEGATIVE, "test.json: structures[0].size[1]: parameter s = 0 must be > 0"},
+		 " \"name\": \"j\", \"size\": [1, \"s\", 1], \"nu\": 2, \"nv\": 2, \"nw\": 2}]}",
+		 SM_ERROR_NEGATIVE, "test.json: structures[0].size[1]: parameter s = 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"w\": 0}, \"structures\": [{\"type\": \"sheet\","
-	     " \"name\": \"c\", \"edge_u\": [\"w\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
-	     SM_ERROR_INVALID_ARGUMENT,
-	     "test.json: structures[0].edge_u: (parameter w = 0, 0, 0) m is zero: the sheet spans no area and its particles would "
-	     "coincide"},
+		 " \"name\": \"c\", \"edge_u\": [\"w\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0].edge_u: (parameter w = 0, 0, 0) m is zero: the sheet spans no area and its particles would "
+		 "coincide"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 0.5}, \"structures\": [{\"type\": \"sheet\","
-	     " \"name\": \"c\", \"edge_v\": [\"h\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
-	     SM_ERROR_INVALID_ARGUMENT,
-	     "test.json: structures[0]: sheet: edge_u = (1, 0, 0) m and edge_v = (0.5, 0, 0) m are parallel (|edge_u x edge_v| <= "
-	     "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter h = 0.5)"},
+		 " \"name\": \"c\", \"edge_v\": [\"h\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0]: sheet: edge_u = (1, 0, 0) m and edge_v = (0.5, 0, 0) m are parallel (|edge_u x edge_v| <= "
+		 "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter h = 0.5)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a\": 1, \"b\": 2, \"c\": 3, \"d\": 4, \"e\": 5},"
-	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"origin\": [\"a\", \"b\", \"c\"], \"edge_u\": [\"d\","
-	     " 0, 0], \"edge_v\": [\"e\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
-	     SM_ERROR_INVALID_ARGUMENT,
-	     "test.json: structures[0]: sheet: edge_u = (4, 0, 0) m and edge_v = (5, 0, 0) m are parallel (|edge_u x edge_v| <= "
-	     "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter a = 1, "
-	     "parameter b = 2, parameter c = 3, parameter d = 4 and others)"},
+		 " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"origin\": [\"a\", \"b\", \"c\"], \"edge_u\": [\"d\","
+		 " 0, 0], \"edge_v\": [\"e\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0]: sheet: edge_u = (4, 0, 0) m and edge_v = (5, 0, 0) m are parallel (|edge_u x edge_v| <= "
+		 "1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide (with parameter a = 1, "
+		 "parameter b = 2, parameter c = 3, parameter d = 4 and others)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"far\": 1e308, \"near\": -1e308}, \"structures\":"
-	     " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"far\", 0, 0], \"end\": [\"near\", 0, 0], \"segments\": 2}]}",
-	     SM_ERROR_NOT_FINITE,
-	     "test.json: structures[0]: rope: start (1e+308, 0, 0) m and end (-1e+308, 0, 0) m are too far apart: end - "
-	     "start is beyond the largest double (with "
-	     "parameter far = 1e+308 and parameter near = -1e+308)"},
+		 " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"far\", 0, 0], \"end\": [\"near\", 0, 0], \"segments\": 2}]}",
+		 SM_ERROR_NOT_FINITE,
+		 "test.json: structures[0]: rope: start (1e+308, 0, 0) m and end (-1e+308, 0, 0) m are too far apart: end - "
+		 "start is beyond the largest double (with "
+		 "parameter far = 1e+308 and parameter near = -1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
-	     " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_INVALID_ARGUMENT,
-	     "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
-	     "most 1e-12 times the product of its two longest edges) (with parameter x = 2)"},
+		 " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
+		 "most 1e-12 times the product of its two longest edges) (with parameter x = 2)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
-	     " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
-	     " {\"strain_stiffness\": \"big\"}}]}",
-	     SM_ERROR_NOT_FINITE,
-	     "test.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: stiffness E / l0 = 1e+308 / "
-	     "1e-10 is not finite (with parameter big = 1e+308)"},
+		 " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
+		 " {\"strain_stiffness\": \"big\"}}]}",
+		 SM_ERROR_NOT_FINITE,
+		 "test.json: structures[0]: rope: structural spring between particles 0 and 1: spring 0: stiffness E / l0 = 1e+308 / "
+		 "1e-10 is not finite (with parameter big = 1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a\": 5}, \"particles\": [{\"position\": [0, 0, 0]}],"
-	     " \"fixed\": [{\"min\": [\"a\", 5, 5], \"max\": [6, 6, 6]}]}",
-	     SM_ERROR_SCHEMA, "test.json: fixed[0]: the box from (parameter a = 5, 5, 5) to (6, 6, 6) contains no particle"},
+		 " \"fixed\": [{\"min\": [\"a\", 5, 5], \"max\": [6, 6, 6]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: fixed[0]: the box from (parameter a = 5, 5, 5) to (6, 6, 6) contains no particle"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 
 	// Changing the parameter gives the same message, which names it once.
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 1}, \"structures\": [{\"type\":"
-	                         " \"sheet\", \"name\": \"c\", \"edge_v\": [0, \"h\", 0], \"nu\": 2, \"nv\": 2}]}",
-	                         &err);
+	sm_document* doc =
+	    parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 1}, \"structures\": [{\"type\":"
+		      " \"sheet\", \"name\": \"c\", \"edge_v\": [0, \"h\", 0], \"nu\": 2, \"nv\": 2}]}",
+		      &err);
 	ENSURE(doc != NULL);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 0.0, &err), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strcmp(err.message, "test.json: structures[0].edge_v: (0, parameter h = 0, 0) m is zero: the sheet spans no "
-	                           "area and its particles would coincide") == 0);
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0].edge_v: (0, parameter h = 0, 0) m is zero: the sheet spans no "
+	              "area and its particles would coincide") == 0);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 1e-300, &err), SM_OK);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, -1e308, &err), SM_OK);
 	sm_document_destroy(doc);
@@ -1270,10 +1312,11 @@ static int test_messages_name_parameters(void)
 static int test_parameters_set_together(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"xa\": 0, \"xb\": 1},"
-	                         " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"xa\", 0, 0],"
-	                         " \"end\": [\"xb\", 0, 0], \"segments\": 2, \"structural\": {\"strain_stiffness\": 10}}]}",
-	                         &err);
+	sm_document* doc =
+	    parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"xa\": 0, \"xb\": 1},"
+		      " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [\"xa\", 0, 0],"
+		      " \"end\": [\"xb\", 0, 0], \"segments\": 2, \"structural\": {\"strain_stiffness\": 10}}]}",
+		      &err);
 	ENSURE(doc != NULL);
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 1.0, &err), SM_ERROR_ZERO_REST_LENGTH);
 	const double moved[2] = {1.0, 3.0};
@@ -1302,9 +1345,10 @@ static int test_parameters_set_together(void)
 static int test_whole_real_index(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]},"
-	                               " {\"position\": [1, 0, 0]}], \"fixed\": [1.0]}",
-	                               &err);
+	sm_document* doc =
+	    parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]},"
+		            " {\"position\": [1, 0, 0]}], \"fixed\": [1.0]}",
+		            &err);
 	ENSURE(doc != NULL);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
@@ -1355,7 +1399,8 @@ static int test_special_files_and_nul_bytes(void)
 {
 	sm_error err = {SM_OK, ""};
 	ENSURE(sm_document_load("/dev/zero", &err) == NULL);
-	ENSURE(err.status == SM_ERROR_FILE && strcmp(err.message, "/dev/zero: cannot read: not a regular file") == 0);
+	ENSURE(err.status == SM_ERROR_FILE &&
+	       strcmp(err.message, "/dev/zero: cannot read: not a regular file") == 0);
 	const char* fifo = "test_model_file_fifo.json";
 	remove(fifo);
 	ENSURE(mkfifo(fifo, 0600) == 0);
@@ -1373,10 +1418,12 @@ static int test_special_files_and_nul_bytes(void)
 	static const char nul_first_line[] = "{\"springmass\": 1, \"name\": \"a\"\0, \"particles\": []}";
 	ENSURE(sm_document_parse(nul_first_line, sizeof nul_first_line - 1, "test.json", &err) == NULL);
 	ENSURE(err.status == SM_ERROR_SYNTAX &&
-	       strcmp(err.message, "test.json:1:30: a NUL byte (a model file is UTF-8 text without NUL bytes)") == 0);
+	       strcmp(err.message, "test.json:1:30: a NUL byte (a model file is UTF-8 text without NUL bytes)") ==
+	           0);
 	static const char nul_after_euro[] = "{\"springmass\": 1,\n \"name\": \"\xe2\x82\xac\"\0}";
 	ENSURE(sm_document_parse(nul_after_euro, sizeof nul_after_euro - 1, "test.json", &err) == NULL);
-	ENSURE(strcmp(err.message, "test.json:2:13: a NUL byte (a model file is UTF-8 text without NUL bytes)") == 0);
+	ENSURE(strcmp(err.message, "test.json:2:13: a NUL byte (a model file is UTF-8 text without NUL bytes)") ==
+	       0);
 	return 0;
 }
 
@@ -1422,7 +1469,7 @@ static int test_hostile_input(void)
 }
 
 // Two free particles 1 m apart, the start of the files below.
-#define TWO_PARTICLES \
+#define TWO_PARTICLES                                                                                        \
 	"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}]"
 
 // The rules of docs/model-format.md at their edges, each refused with the path of the element,
@@ -1437,70 +1484,81 @@ static int test_hostile_input(void)
 static int test_rules_at_their_edges(void)
 {
 	static const refusal cases[] = {
-	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 1}}", SM_ERROR_SCHEMA, "test.json: simulation.rtol: 1 must be < 1"},
+	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 1}}", SM_ERROR_SCHEMA,
+		 "test.json: simulation.rtol: 1 must be < 1"},
 	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 2e-16}}", SM_ERROR_SCHEMA,
-	     "test.json: simulation.rtol: 2e-16 must be at least 2.22045e-16, the machine epsilon (CVODE cannot meet a "
-	     "smaller relative tolerance)"},
+		 "test.json: simulation.rtol: 2e-16 must be at least 2.22045e-16, the machine epsilon (CVODE cannot meet a "
+		 "smaller relative tolerance)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"tol\": 1e-17},"
-	     " \"particles\": [{\"position\": [0, 0, 0]}], \"simulation\": {\"rtol\": \"tol\"}}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: simulation.rtol: parameter tol = 1e-17 must be at least 2.22045e-16, the machine epsilon (CVODE "
-	     "cannot meet a smaller relative tolerance)"},
+		 " \"particles\": [{\"position\": [0, 0, 0]}], \"simulation\": {\"rtol\": \"tol\"}}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: simulation.rtol: parameter tol = 1e-17 must be at least 2.22045e-16, the machine epsilon (CVODE "
+		 "cannot meet a smaller relative tolerance)"},
 	    {TWO_PARTICLES ", \"simulation\": {\"output_interval\": 0}}", SM_ERROR_NEGATIVE,
-	     "test.json: simulation.output_interval: 0 must be > 0"},
+		 "test.json: simulation.output_interval: 0 must be > 0"},
 	    {TWO_PARTICLES ", \"simulation\": {\"stop_time\": -1}}", SM_ERROR_NEGATIVE,
-	     "test.json: simulation.stop_time: -1 must be > 0"},
+		 "test.json: simulation.stop_time: -1 must be > 0"},
 	    {TWO_PARTICLES ", \"simulation\": {\"atol_velocity\": 1e-151}}", SM_ERROR_SCHEMA,
-	     "test.json: simulation.atol_velocity: 1e-151 must be at least 1e-150 (CVODE's error norm overflows below)"},
+		 "test.json: simulation.atol_velocity: 1e-151 must be at least 1e-150 (CVODE's error norm overflows below)"},
 	    {TWO_PARTICLES ", \"simulation\": {\"max_steps\": 0}}", SM_ERROR_SCHEMA,
-	     "test.json: simulation.max_steps: 0 must be a whole number from 1 to 2147483647"},
-	    {TWO_PARTICLES ", \"mass_damping\": -0.5}", SM_ERROR_NEGATIVE, "test.json: mass_damping: -0.5 must be >= 0"},
+		 "test.json: simulation.max_steps: 0 must be a whole number from 1 to 2147483647"},
+	    {TWO_PARTICLES ", \"mass_damping\": -0.5}", SM_ERROR_NEGATIVE,
+		 "test.json: mass_damping: -0.5 must be >= 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\", \"density\": 0,"
-	     " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_NEGATIVE, "test.json: structures[0].density: 0 must be > 0"},
-	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"rest_length\": -1}]}", SM_ERROR_NEGATIVE,
-	     "test.json: springs[0].rest_length: -1 must be >= 0"},
-	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"kind\": \"zero_length\", \"rest_length\": 0.5}]}",
-	     SM_ERROR_SCHEMA, "test.json: springs[0]: a zero-length spring cannot have rest_length 0.5"},
-	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"damping\": 1, \"strain_damping\": 1}]}", SM_ERROR_SCHEMA,
-	     "test.json: springs[0]: give one of \"damping\", \"strain_damping\" and \"section_damping\", not more"},
+		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
+		 SM_ERROR_NEGATIVE, "test.json: structures[0].density: 0 must be > 0"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"rest_length\": -1}]}",
+		 SM_ERROR_NEGATIVE, "test.json: springs[0].rest_length: -1 must be >= 0"},
+	    {TWO_PARTICLES
+		 ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"kind\": \"zero_length\", \"rest_length\": 0.5}]}",
+		 SM_ERROR_SCHEMA, "test.json: springs[0]: a zero-length spring cannot have rest_length 0.5"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"damping\": 1, \"strain_damping\": 1}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: springs[0]: give one of \"damping\", \"strain_damping\" and \"section_damping\", not more"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 2, \"mass\": 1, \"mass_per_length\": 1}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0]: give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both"},
+		 " \"end\": [1, 0, 0], \"segments\": 2, \"mass\": 1, \"mass_per_length\": 1}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: give \"mass\" [kg] or \"mass_per_length\" [kg/m], not both"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"nu\": 2, \"nv\": 2,"
-	     " \"nw\": 2}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"size\""},
+		 " \"nw\": 2}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"size\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"end\": [1, 0, 0],"
-	     " \"segments\": 2}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"start\""},
+		 " \"segments\": 2}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"start\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"segments\": 2}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"end\""},
+		 " \"segments\": 2}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0]: missing required key \"end\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\"}]}", SM_ERROR_SCHEMA,
-	     "test.json: particles[0]: missing required key \"position\""},
-	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0, 0]}]}", SM_ERROR_SCHEMA,
-	     "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
+		 "test.json: particles[0]: missing required key \"position\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0, 0]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].position: must be an array of 3 numbers [x, y, z], not an array of another length"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"my rope\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 2}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: structures[0].name: name \"my rope\" must be an identifier (letters, digits and '_', not starting with "
-	     "a digit)"},
-	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"tip 1\", \"particle\": 1, \"kind\": \"probe\"}]}", SM_ERROR_SCHEMA,
-	     "test.json: ports[0].name: name \"tip 1\" must be an identifier (letters, digits and '_', not starting with a "
-	     "digit)"},
-	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"f\", \"particle\": 1, \"kind\": \"force\"}, {\"name\": \"p\", \"particle\": 1,"
-	     " \"kind\": \"probe\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: ports[1]: particle 1 already has port f; only probe ports may share a particle"},
-	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"p\", \"particle\": 1, \"kind\": \"probe\"}, {\"name\": \"m\", \"particle\": 1,"
-	     " \"kind\": \"motion\"}]}",
-	     SM_ERROR_SCHEMA, "test.json: ports[1]: particle 1 already has port p; only probe ports may share a particle"},
+		 " \"end\": [1, 0, 0], \"segments\": 2}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].name: name \"my rope\" must be an identifier (letters, digits and '_', not starting with "
+		 "a digit)"},
+	    {TWO_PARTICLES ", \"ports\": [{\"name\": \"tip 1\", \"particle\": 1, \"kind\": \"probe\"}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: ports[0].name: name \"tip 1\" must be an identifier (letters, digits and '_', not starting with a "
+		 "digit)"},
+	    {TWO_PARTICLES
+		 ", \"ports\": [{\"name\": \"f\", \"particle\": 1, \"kind\": \"force\"}, {\"name\": \"p\", \"particle\": 1,"
+		 " \"kind\": \"probe\"}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: ports[1]: particle 1 already has port f; only probe ports may share a particle"},
+	    {TWO_PARTICLES
+		 ", \"ports\": [{\"name\": \"p\", \"particle\": 1, \"kind\": \"probe\"}, {\"name\": \"m\", \"particle\": 1,"
+		 " \"kind\": \"motion\"}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: ports[1]: particle 1 already has port p; only probe ports may share a particle"},
 	    // A named particle is named too.
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 2}], \"fixed\": [\"r[0]\"],"
-	     " \"ports\": [{\"name\": \"f\", \"particle\": \"r[0]\", \"kind\": \"force\"}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: ports[0]: a force port needs a free particle, and particle 0 (\"r[0]\") is fixed (use a motion or "
-	     "probe port)"},
+		 " \"end\": [1, 0, 0], \"segments\": 2}], \"fixed\": [\"r[0]\"],"
+		 " \"ports\": [{\"name\": \"f\", \"particle\": \"r[0]\", \"kind\": \"force\"}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: ports[0]: a force port needs a free particle, and particle 0 (\"r[0]\") is fixed (use a motion or "
+		 "probe port)"},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
@@ -1522,8 +1580,9 @@ static bool refused_as(const char* text, const char* label, sm_status status, co
 // p comes before rope r (4 particles), sheet c (4 x 4), block b (2 x 2 x 2) and rope s (2), so
 // that one before r's first particle, or one past the end of a row, a layer or a structure, is a
 // particle of the model. A block takes one or three coordinates, not two, a sheet one or two, a
-// rope one (docs: "Referring to particles"), and an index is below the particle count (31), whether an integer or a whole real.
-// Each reference is a spring's end, and the last part holds the last particles by "fixed".
+// rope one (docs: "Referring to particles"), and an index is below the particle count (31), whether an
+// integer or a whole real. Each reference is a spring's end, and the last part holds the last particles by
+// "fixed".
 static int test_references_stay_inside_their_structures(void)
 {
 	static const char* const format =
@@ -1540,21 +1599,24 @@ static int test_references_stay_inside_their_structures(void)
 	} cases[] = {
 	    {"\"r[4]\"", SM_ERROR_PARTICLE_INDEX, "\"r[4]\" is outside structure r ([0] to [3])"},
 	    {"\"r[-1]\"", SM_ERROR_PARTICLE_INDEX, "\"r[-1]\" is outside structure r ([0] to [3])"},
-	    {"\"c[0,4]\"", SM_ERROR_PARTICLE_INDEX, "\"c[0,4]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
+	    {"\"c[0,4]\"", SM_ERROR_PARTICLE_INDEX,
+		 "\"c[0,4]\" is outside structure c (rows 0 to 3, columns 0 to 3, or [0] to [15])"},
 	    {"\"b[0,1]\"", SM_ERROR_PARTICLE_INDEX,
-	     "\"b[0,1]\" has 2 indices: a block takes name[i] or name[row, column, layer]"},
-	    {"\"r[0, 2]\"", SM_ERROR_PARTICLE_INDEX, "\"r[0, 2]\" has 2 indices: a rope takes one index, name[i]"},
-	    {"\"r[0, 2, 0]\"", SM_ERROR_PARTICLE_INDEX, "\"r[0, 2, 0]\" has 3 indices: a rope takes one index, name[i]"},
+		 "\"b[0,1]\" has 2 indices: a block takes name[i] or name[row, column, layer]"},
+	    {"\"r[0, 2]\"", SM_ERROR_PARTICLE_INDEX,
+		 "\"r[0, 2]\" has 2 indices: a rope takes one index, name[i]"},
+	    {"\"r[0, 2, 0]\"", SM_ERROR_PARTICLE_INDEX,
+		 "\"r[0, 2, 0]\" has 3 indices: a rope takes one index, name[i]"},
 	    {"\"c[1, 2, 0]\"", SM_ERROR_PARTICLE_INDEX,
-	     "\"c[1, 2, 0]\" has 3 indices: a sheet takes name[i] or name[row, column]"},
+		 "\"c[1, 2, 0]\" has 3 indices: a sheet takes name[i] or name[row, column]"},
 	    {"\"b[0,0,2]\"", SM_ERROR_PARTICLE_INDEX,
-	     "\"b[0,0,2]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
+		 "\"b[0,0,2]\" is outside structure b (rows 0 to 1, columns 0 to 1, layers 0 to 1, or [0] to [7])"},
 	    {"\"r[1]]\"", SM_ERROR_SCHEMA,
-	     "\"r[1]]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
+		 "\"r[1]]\": a structure reference is name[i], name[row, column] or name[row, column, layer]"},
 	    // A syntax error in the third index is explained as in the first.
 	    {"\"b[0, 0, )]\"", SM_ERROR_SCHEMA,
-	     "\"b[0, 0, )]\": a number, a parameter or '(' expected; a structure reference is name[i], "
-	     "name[row, column] or name[row, column, layer]"},
+		 "\"b[0, 0, )]\": a number, a parameter or '(' expected; a structure reference is name[i], "
+		 "name[row, column] or name[row, column, layer]"},
 	    {"31", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
 	    {"31.0", SM_ERROR_PARTICLE_INDEX, "particle index 31 is out of range (the model has 31 particles)"},
 	    {"-1", SM_ERROR_PARTICLE_INDEX, "particle index -1 is out of range (the model has 31 particles)"},
@@ -1632,12 +1694,12 @@ static int test_mesh_references_take_one_index(void)
 static int test_dropping_the_initial_state_restores_the_file_velocities(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid(
-	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"w\": -2},"
-	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
-	    " {\"name\": \"b\", \"position\": [0, 0, -1], \"velocity\": [0.5, 0, \"w\"]}],"
-	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
-	    &err);
+	sm_document* doc =
+	    parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"w\": -2},"
+		            " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+		            " {\"name\": \"b\", \"position\": [0, 0, -1], \"velocity\": [0.5, 0, \"w\"]}],"
+		            " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
+		            &err);
 	ENSURE(doc != NULL);
 	const double lowered[6] = {0, 0, 0, 0, 0, -1.5};
 	ENSURE_STATUS(sm_document_set_initial_state(doc, lowered, NULL, &err), SM_OK);
@@ -1679,14 +1741,29 @@ static int test_reference_expressions(void)
 		int32_t position;
 	} values[] = {
 	    // The limits: 2^31 itself is allowed, as a literal and as -2^31 halved.
-	    {"r[2147483648 - 2147483600]", 48},              {"r[(-2147483647 - 1) / 2 + 1073741834]", 10},
-	    {"r[-8/2+10]", 6},      {"r[n_1]", 4},           {"r[n2]", 5},              {"r[\\n1\\r]", 1},
+	    {"r[2147483648 - 2147483600]", 48},
+	    {"r[(-2147483647 - 1) / 2 + 1073741834]", 10},
+	    {"r[-8/2+10]", 6},
+	    {"r[n_1]", 4},
+	    {"r[n2]", 5},
+	    {"r[\\n1\\r]", 1},
 	    {"r[_m + 1]", 3},  // a parameter's name may begin with '_', as a C identifier may
 	    {"r[--------------------------------1]", 1},  // 32 unary signs deep
-	    {"r[a*2+1]", 15},       {"r[(a+1)*2]", 16},      {"r[a - 2 - 1]", 4},       {"r[a/2]", 3},
-	    {"r[-b]", 3},           {"r[b/2+5]", 3},         {"r[7/-2+10]", 6},         {"r[-7/2+10]", 6},
-	    {"r[100/a*a]", 98},     {"r[+a]", 7},            {"r[ a\\t* 2 ]", 14},      {"r[--a]", 7},
-	    {"r[big - 2147483600]", 48},                     {"r[a - a/2*2]", 1},       {"r[-(b)*(-b)]", 9},
+	    {"r[a*2+1]", 15},
+	    {"r[(a+1)*2]", 16},
+	    {"r[a - 2 - 1]", 4},
+	    {"r[a/2]", 3},
+	    {"r[-b]", 3},
+	    {"r[b/2+5]", 3},
+	    {"r[7/-2+10]", 6},
+	    {"r[-7/2+10]", 6},
+	    {"r[100/a*a]", 98},
+	    {"r[+a]", 7},
+	    {"r[ a\\t* 2 ]", 14},
+	    {"r[--a]", 7},
+	    {"r[big - 2147483600]", 48},
+	    {"r[a - a/2*2]", 1},
+	    {"r[-(b)*(-b)]", 9},
 	    {"r[((((((((((((((((((((((((((((((((1))))))))))))))))))))))))))))))))]", 1},  // 32 deep
 	};
 	int failures = 0;
@@ -1700,21 +1777,23 @@ static int test_reference_expressions(void)
 		if (doc != NULL && sm_document_build(doc, &m, NULL) == SM_OK)
 			sm_model_get_spring(m, sm_model_spring_count(m) - 1, &spring);
 		if (doc == NULL || spring.b != 1 + values[c].position) {
-			printf("  %s: %s, particle %d, expected %d\n", values[c].reference, doc == NULL ? err.message : "loaded",
-			       (int)spring.b, (int)(1 + values[c].position));
+			printf("  %s: %s, particle %d, expected %d\n", values[c].reference,
+			       doc == NULL ? err.message : "loaded", (int)spring.b, (int)(1 + values[c].position));
 			failures++;
 		}
 		if (doc != NULL) {
 			const uint32_t uses = sm_document_parameter_uses(doc, sm_document_parameter_index(doc, "a"));
 			const bool named = strchr(values[c].reference, 'a') != NULL;
 			ENSURE(uses == (named ? (uint32_t)SM_PARAMETER_PARTICLE_REFERENCES : 0u));
-			ENSURE(sm_document_parameter_uses(doc, sm_document_parameter_index(doc, "k")) == SM_PARAMETER_CONSTANTS);
+			ENSURE(sm_document_parameter_uses(doc, sm_document_parameter_index(doc, "k")) ==
+			       SM_PARAMETER_CONSTANTS);
 		}
 		sm_model_destroy(m);
 		sm_document_destroy(doc);
 	}
 	ENSURE(failures == 0);
-	static const char* const form = "a structure reference is name[i], name[row, column] or name[row, column, layer]";
+	static const char* const form =
+	    "a structure reference is name[i], name[row, column] or name[row, column, layer]";
 	static const struct {
 		const char* reference;
 		sm_status status;
@@ -1723,14 +1802,17 @@ static int test_reference_expressions(void)
 	    {"r[c]", SM_ERROR_NOT_FOUND, ": no parameter named \"c\""},
 	    {"r[h]", SM_ERROR_SCHEMA, ": parameter h = 0.5 is not a whole number within 2^31"},
 	    {"r[a/z]", SM_ERROR_SCHEMA, ": division by zero (with parameter a = 7 and parameter z = 0)"},
-	    {"r[big*big]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
+	    {"r[big*big]", SM_ERROR_SCHEMA,
+		 ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
 	    {"r[big+1]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
 	    {"r[2147483649]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude"},
 	    {"r[99999999999999999999]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude"},
-	    {"r[-big - 1]", SM_ERROR_SCHEMA, ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
-	    {"r[huge - 2147483640]", SM_ERROR_SCHEMA, ": parameter huge = 2147483649 is not a whole number within 2^31"},
+	    {"r[-big - 1]", SM_ERROR_SCHEMA,
+		 ": a value beyond 2^31 in magnitude (with parameter big = 2147483648)"},
+	    {"r[huge - 2147483640]", SM_ERROR_SCHEMA,
+		 ": parameter huge = 2147483649 is not a whole number within 2^31"},
 	    {"r[a*b]", SM_ERROR_PARTICLE_INDEX,
-	     " is outside structure r ([0] to [100]) (with parameter a = 7 and parameter b = -3)"},
+		 " is outside structure r ([0] to [100]) (with parameter a = 7 and parameter b = -3)"},
 	    {"r[a-]", SM_ERROR_SCHEMA, ": a number, a parameter or '(' expected; "},
 	    {"r[(a]", SM_ERROR_SCHEMA, ": ')' expected; "},
 	    {"r[a)]", SM_ERROR_SCHEMA, ": an operator, ',' or ']' expected; "},
@@ -1742,7 +1824,7 @@ static int test_reference_expressions(void)
 	    {"r[1,2,3,4]", SM_ERROR_SCHEMA, ": "},
 	    {"r[1]]", SM_ERROR_SCHEMA, ": "},
 	    {"r[(((((((((((((((((((((((((((((((((1)))))))))))))))))))))))))))))))))]", SM_ERROR_SCHEMA,
-	     ": nested more than 32 deep; "},
+		 ": nested more than 32 deep; "},
 	    {"r[---------------------------------1]", SM_ERROR_SCHEMA, ": nested more than 32 deep; "},
 	};
 	for (size_t c = 0; c < sizeof refusals / sizeof refusals[0]; c++) {
@@ -1751,8 +1833,8 @@ static int test_reference_expressions(void)
 		// A syntax error ends with the form of a reference.
 		const char* message = refusals[c].message;
 		const size_t length = strlen(message);
-		snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\"%s%s", refusals[c].reference, message,
-		         message[length - 1] == ' ' ? form : "");
+		snprintf(expected, sizeof expected, "test.json: springs[0].b: \"%s\"%s%s", refusals[c].reference,
+		         message, message[length - 1] == ' ' ? form : "");
 		failures += !refused_as(text, refusals[c].reference, refusals[c].status, expected);
 	}
 	ENSURE(failures == 0);
@@ -1769,8 +1851,9 @@ static int test_reference_expressions(void)
 		char reference[100], text[1024], expected[400];
 		snprintf(reference, sizeof reference, "r[%s%s]", a80, length > 80 ? "a" : "");
 		snprintf(text, sizeof text, format, reference);
-		snprintf(expected, sizeof expected, "test.json: springs[0].b: \"r[%s\"...: no parameter named \"%s\"%s", a78,
-		         a80, length > 80 ? "..." : "");
+		snprintf(expected, sizeof expected,
+		         "test.json: springs[0].b: \"r[%s\"...: no parameter named \"%s\"%s", a78, a80,
+		         length > 80 ? "..." : "");
 		ENSURE(refused_as(text, reference, SM_ERROR_NOT_FOUND, expected));
 	}
 	char h90[91], h78[79], long_text[1024], long_expected[400];
@@ -1778,12 +1861,14 @@ static int test_reference_expressions(void)
 	h90[90] = '\0';
 	memcpy(h78, h90, 78);
 	h78[78] = '\0';
-	snprintf(long_text, sizeof long_text,
-	         "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 0.5}, \"structures\": [{\"type\": \"rope\","
-	         " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[%s]\"]}",
-	         h90, h90);
+	snprintf(
+	    long_text, sizeof long_text,
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 0.5}, \"structures\": [{\"type\": \"rope\","
+	    " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 3}], \"fixed\": [\"r[%s]\"]}",
+	    h90, h90);
 	snprintf(long_expected, sizeof long_expected,
-	         "test.json: fixed[0]: \"r[%s\"...: parameter %.80s... = 0.5 is not a whole number within 2^31", h78, h90);
+	         "test.json: fixed[0]: \"r[%s\"...: parameter %.80s... = 0.5 is not a whole number within 2^31",
+	         h78, h90);
 	ENSURE(refused_as(long_text, "r[h90]", SM_ERROR_SCHEMA, long_expected));
 	// Later messages on the element name the parameters of its references too: z puts the
 	// spring's end a on p, j both ends on one particle.
@@ -1794,13 +1879,15 @@ static int test_reference_expressions(void)
 	    " \"springs\": [{\"a\": \"r[%s]\", \"b\": \"%s\", \"strain_stiffness\": \"k\"}]}";
 	char text[1024];
 	snprintf(text, sizeof text, later, "z", "p");
-	ENSURE(refused_as(text, "r[z] on p", SM_ERROR_ZERO_REST_LENGTH,
-	                  "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0) "
-	                  "(with parameter z = 0 and parameter k = 2)"));
+	ENSURE(
+	    refused_as(text, "r[z] on p", SM_ERROR_ZERO_REST_LENGTH,
+		           "test.json: springs[0]: per-strain stiffness needs a rest length > 0 (rest length is 0) "
+		           "(with parameter z = 0 and parameter k = 2)"));
 	snprintf(text, sizeof text, later, "j", "r[j * 1]");
-	ENSURE(refused_as(text, "r[j] to itself", SM_ERROR_SELF_SPRING,
-	                  "test.json: springs[0]: connects particle 2 (\"r[1]\") to itself (a and b are the same particle) "
-	                  "(with parameter j = 1)"));
+	ENSURE(refused_as(
+	    text, "r[j] to itself", SM_ERROR_SELF_SPRING,
+	    "test.json: springs[0]: connects particle 2 (\"r[1]\") to itself (a and b are the same particle) "
+	    "(with parameter j = 1)"));
 	return 0;
 }
 
@@ -1850,10 +1937,13 @@ static int test_references_follow_their_parameters(void)
 	}
 	// A value that puts a reference outside its structure is refused, and the document keeps m = 8.
 	ENSURE_STATUS(sm_document_set_parameter(doc, m, 3, &err), SM_ERROR_PARTICLE_INDEX);
-	ENSURE(strstr(err.message, "ports[1].particle: \"r[n + 1]\" is outside structure r ([0] to [3]) (with parameter n = 7)") !=
-	       NULL);
-	ENSURE(sm_document_parameter_value(doc, m) == 8.0 && sm_document_port(doc, 1).particle ==
-	                                                      sm_document_particle_index(doc, "r[8]"));
+	ENSURE(
+	    strstr(
+	        err.message,
+	        "ports[1].particle: \"r[n + 1]\" is outside structure r ([0] to [3]) (with parameter n = 7)") !=
+	    NULL);
+	ENSURE(sm_document_parameter_value(doc, m) == 8.0 &&
+	       sm_document_port(doc, 1).particle == sm_document_particle_index(doc, "r[8]"));
 	sm_document_destroy(doc);
 	return 0;
 }
@@ -1865,7 +1955,8 @@ static int test_names_of_200_bytes(void)
 	char name[202], text[400];
 	memset(name, 'n', 200);
 	name[200] = '\0';
-	const char* format = "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"%s\", \"position\": [0, 0, 0]}]}";
+	const char* format =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"%s\", \"position\": [0, 0, 0]}]}";
 	snprintf(text, sizeof text, format, name);
 	sm_error err = {SM_OK, ""};
 	sm_document* doc = parse_valid(text, &err);
@@ -1876,7 +1967,8 @@ static int test_names_of_200_bytes(void)
 	name[201] = '\0';
 	snprintf(text, sizeof text, format, name);
 	ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SCHEMA);
-	ENSURE(strcmp(err.message, "test.json: particles[0].name: a name must have 1 to 200 bytes (this one has 201)") == 0);
+	ENSURE(strcmp(err.message,
+	              "test.json: particles[0].name: a name must have 1 to 200 bytes (this one has 201)") == 0);
 	return 0;
 }
 
@@ -1909,10 +2001,12 @@ static int test_settings_and_their_defaults(void)
 	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000);
 	sm_document_destroy(doc);
 
-	doc = parse_valid(TWO_PARTICLES ", \"simulation\": {\"stop_time\": 3, \"output_interval\": 0.5, \"rtol\": 0.001,"
-	                                " \"atol\": 1e-150, \"method\": \"adams\", \"solver\": \"klu\", \"jacobian\": \"definite\","
-	                                " \"max_step\": 0, \"max_steps\": 7}, \"fmu\": {\"particle_variables\": true}}",
-	                  &err);
+	doc = parse_valid(
+	    TWO_PARTICLES
+	    ", \"simulation\": {\"stop_time\": 3, \"output_interval\": 0.5, \"rtol\": 0.001,"
+	    " \"atol\": 1e-150, \"method\": \"adams\", \"solver\": \"klu\", \"jacobian\": \"definite\","
+	    " \"max_step\": 0, \"max_steps\": 7}, \"fmu\": {\"particle_variables\": true}}",
+	    &err);
 	ENSURE(doc != NULL);
 	s = sm_document_get_settings(doc);
 	ENSURE(s.stop_time == 3.0 && s.output_interval == 0.5 && s.particle_variables);
@@ -1923,10 +2017,13 @@ static int test_settings_and_their_defaults(void)
 	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7);
 	sm_document_destroy(doc);
 
-	doc = parse(TWO_PARTICLES ", \"simulation\": {\"method\": \"bdf\", \"jacobian\": \"exact\", \"max_step\": 0.25}}", &err);
+	doc = parse(TWO_PARTICLES
+	            ", \"simulation\": {\"method\": \"bdf\", \"jacobian\": \"exact\", \"max_step\": 0.25}}",
+	            &err);
 	ENSURE(doc != NULL);
 	s = sm_document_get_settings(doc);
-	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.jacobian == SM_JACOBIAN_EXACT && s.solver.max_step == 0.25);
+	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.jacobian == SM_JACOBIAN_EXACT &&
+	       s.solver.max_step == 0.25);
 	sm_document_destroy(doc);
 
 	// atol_position or atol_velocity beside atol wins for its own tolerance, in either order.
@@ -1949,10 +2046,11 @@ static int test_settings_and_their_defaults(void)
 static int test_groups_with_one_parameter_keep_their_springs(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 0, \"c\": 0}, \"structures\":"
-	                               " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [3, 0, 0], \"segments\": 3,"
-	                               " \"structural\": {\"stiffness\": \"k\"}, \"bending\": {\"stiffness\": 0, \"damping\": \"c\"}}]}",
-	                               &err);
+	sm_document* doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 0, \"c\": 0}, \"structures\":"
+	    " [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [3, 0, 0], \"segments\": 3,"
+	    " \"structural\": {\"stiffness\": \"k\"}, \"bending\": {\"stiffness\": 0, \"damping\": \"c\"}}]}",
+	    &err);
 	ENSURE(doc != NULL);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
@@ -2019,11 +2117,12 @@ static int test_saved_groups_keep_their_parameters(void)
 static int test_fixed_particles_start_at_rest(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"velocity\":"
-	                               " [1, 0, 0]}, {\"position\": [1, 0, 0], \"velocity\": [0, 2, 0]}, {\"position\": [2, 0, 0]},"
-	                               " {\"position\": [3, 0, 0], \"velocity\": [0, 0, 3]}],"
-	                               " \"fixed\": [{\"min\": [1, 0, 0], \"max\": [2, 0, 0]}, 0]}",
-	                               &err);
+	sm_document* doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"velocity\":"
+	    " [1, 0, 0]}, {\"position\": [1, 0, 0], \"velocity\": [0, 2, 0]}, {\"position\": [2, 0, 0]},"
+	    " {\"position\": [3, 0, 0], \"velocity\": [0, 0, 3]}],"
+	    " \"fixed\": [{\"min\": [1, 0, 0], \"max\": [2, 0, 0]}, 0]}",
+	    &err);
 	ENSURE(doc != NULL);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
@@ -2048,12 +2147,13 @@ static int test_fixed_particles_start_at_rest(void)
 static int test_initial_state_through_parameter_changes(void)
 {
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 10, \"n\": 2},"
-	                               " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
-	                               " {\"name\": \"b\", \"position\": [1, 0, 0]}],"
-	                               " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 1], \"end\": [1, 0, 1],"
-	                               " \"segments\": \"n\"}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": \"k\"}]}",
-	                               &err);
+	sm_document* doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 10, \"n\": 2},"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+	    " {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 1], \"end\": [1, 0, 1],"
+	    " \"segments\": \"n\"}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": \"k\"}]}",
+	    &err);
 	ENSURE(doc != NULL);
 	const double x[15] = {0, 0, 0, 1.5, 0, 0, 0, 0, 2, 0.5, 0, 2, 1, 0, 2};
 	const double v[15] = {0, 0, 0, 0, 0.25, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1};
@@ -2116,7 +2216,8 @@ static int test_document_counts(void)
 	for (int32_t side = 16; side >= 10; side -= 6) {
 		ENSURE_STATUS(sm_document_set_parameter(doc, n, side, &err), SM_OK);
 		ENSURE(sm_document_particle_count(doc) == side * side);
-		ENSURE(sm_document_spring_count(doc) == 2 * side * (side - 1) + 2 * (side - 1) * (side - 1) + 2 * side * (side - 2));
+		ENSURE(sm_document_spring_count(doc) ==
+		       2 * side * (side - 1) + 2 * (side - 1) * (side - 1) + 2 * side * (side - 2));
 		sm_model* m = NULL;
 		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
 		ENSURE(sm_document_particle_count(doc) == sm_model_particle_count(m));
@@ -2189,10 +2290,11 @@ static int test_dropping_the_initial_state(void)
 	sm_document_destroy(doc);
 
 	// The height of the fixed particle is the parameter h.
-	doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 2},"
-	                  " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, \"h\"], \"fixed\": true},"
-	                  " {\"name\": \"b\", \"position\": [0, 0, 1]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
-	                  &err);
+	doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"h\": 2},"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, \"h\"], \"fixed\": true},"
+	    " {\"name\": \"b\", \"position\": [0, 0, 1]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 10}]}",
+	    &err);
 	ENSURE(doc != NULL);
 	const double hanging[6] = {0, 0, 2, 0, 0, 0.5};
 	ENSURE_STATUS(sm_document_set_initial_state(doc, hanging, NULL, &err), SM_OK);
@@ -2222,36 +2324,40 @@ static int test_syntax_error_positions(void)
 	static const refusal cases[] = {
 	    {"{\t\"springmass\": 1,\t\"name\":\t@}", SM_ERROR_SYNTAX, "test.json:1:28: invalid token near '@'"},
 	    {"{\"springmass\": 1, \"name\": \"\xf0\x9f\x98\x80\" @}", SM_ERROR_SYNTAX,
-	     "test.json:1:31: '}' expected near '@'"},
-	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX, "test.json:3:11: ':' expected near '\"x\"'"},
-	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n", SM_ERROR_SYNTAX,
-	     "test.json:3:0: ']' expected near end of file"},
+		 "test.json:1:31: '}' expected near '@'"},
+	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX,
+		 "test.json:3:11: ':' expected near '\"x\"'"},
+	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n",
+		 SM_ERROR_SYNTAX, "test.json:3:0: ']' expected near end of file"},
 	    // Another value where the end of an array or object was expected: a missing comma?
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n \"springs\": []}",
-	     SM_ERROR_SYNTAX, "test.json:3:10: ']' expected near '\"springs\"' (or a ',' before it)"},
+		 SM_ERROR_SYNTAX, "test.json:3:10: ']' expected near '\"springs\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1 \"name\": \"x\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:23: '}' expected near '\"name\"' (or a ',' before it)"},
+		 "test.json:1:23: '}' expected near '\"name\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0 0 -9.81]}", SM_ERROR_SYNTAX,
-	     "test.json:1:46: ']' expected near '0' (or a ',' before it)"},
+		 "test.json:1:46: ']' expected near '0' (or a ',' before it)"},
 	    // An error at a line end is at column 0 of the next line, whichever kind the line end is.
-	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
-	    {"{\"springmass\": 1, \"name\": \"x\\\r\n\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
-	    {"{\"springmass\": 1, \"name\": \"x\\\r\"}", SM_ERROR_SYNTAX, "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
+	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX,
+		 "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
+	    {"{\"springmass\": 1, \"name\": \"x\\\r\n\"}", SM_ERROR_SYNTAX,
+		 "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
+	    {"{\"springmass\": 1, \"name\": \"x\\\r\"}", SM_ERROR_SYNTAX,
+		 "test.json:2:0: invalid escape near '\"x\\\\u000d'"},
 	    // A byte the parser refuses where it stands (a control character in a string, one that
 	    // is no UTF-8) is at its own column, not at the character before it; a line end in a
 	    // string is at column 0 of the next line.
 	    {"{\"springmass\": 1, \"name\": \"\xc3\xa9\t\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:29: control character 0x9 near '\"\xc3\xa9'"},
+		 "test.json:1:29: control character 0x9 near '\"\xc3\xa9'"},
 	    {"{\"springmass\": 1, \"name\": \"x\n\"}", SM_ERROR_SYNTAX,
-	     "test.json:2:0: unexpected newline near '\"x'"},
+		 "test.json:2:0: unexpected newline near '\"x'"},
 	    {"{\"springmass\": 1, \"name\": \"x\r\n\"}", SM_ERROR_SYNTAX,
-	     "test.json:2:0: control character 0xd near '\"x'"},
+		 "test.json:2:0: control character 0xd near '\"x'"},
 	    {"{\"springmass\": 1, \"name\": \"x\xff\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:29: unable to decode byte 0xff near '\"x'"},
+		 "test.json:1:29: unable to decode byte 0xff near '\"x'"},
 	    {"{\"springmass\": 1, \"name\": \"x\x80\"}", SM_ERROR_SYNTAX,
-	     "test.json:1:29: unable to decode byte 0x80 near '\"x'"},
+		 "test.json:1:29: unable to decode byte 0x80 near '\"x'"},
 	    {"{\"springmass\": 1,\n\xe2\x82\"name\": \"x\"}", SM_ERROR_SYNTAX,
-	     "test.json:2:1: unable to decode byte 0xe2"},
+		 "test.json:2:1: unable to decode byte 0xe2"},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
@@ -2263,24 +2369,28 @@ static int test_line_breaks_and_controls_at_their_edges(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\\rb\"}", SM_ERROR_SCHEMA,
-	     "test.json: description: must be one line: it has a line break, U+000D, at character 2"},
+		 "test.json: description: must be one line: it has a line break, U+000D, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"ab\\f\"}", SM_ERROR_SCHEMA,
-	     "test.json: description: must be one line: it has a line break, U+000C, at character 3"},
+		 "test.json: description: must be one line: it has a line break, U+000C, at character 3"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"ab\\r\", \"position\": [0, 0, 0]}]}",
-	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"ab\\u000d\" has a line break, U+000D, at character 3"},
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"ab\\u000d\" has a line break, U+000D, at character 3"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\\fb\", \"position\": [0, 0, 0]}]}",
-	     SM_ERROR_SCHEMA, "test.json: particles[0].name: name \"a\\u000cb\" has a line break, U+000C, at character 2"},
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"a\\u000cb\" has a line break, U+000C, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"\xc2\xa0\\u009f\", \"position\": [0, 0, 0]}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: particles[0].name: name \"\xc2\xa0\\u009f\" has a control character, U+009F, at character 2"},
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"\xc2\xa0\\u009f\" has a control character, U+009F, at character 2"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\xc2\xa0z\", \"particles\":"
-	                               " [{\"name\": \"\xc2\xa0\", \"position\": [0, 0, 0]}]}",
-	                               &err);
+	sm_document* doc =
+	    parse_valid("{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\xc2\xa0z\", \"particles\":"
+		            " [{\"name\": \"\xc2\xa0\", \"position\": [0, 0, 0]}]}",
+		            &err);
 	ENSURE(doc != NULL);
-	ENSURE(strcmp(sm_document_description(doc), "a\xc2\xa0z") == 0 && sm_document_particle_index(doc, "\xc2\xa0") == 0);
+	ENSURE(strcmp(sm_document_description(doc), "a\xc2\xa0z") == 0 &&
+	       sm_document_particle_index(doc, "\xc2\xa0") == 0);
 	sm_document_destroy(doc);
 	return 0;
 }
@@ -2293,14 +2403,14 @@ static int test_messages_escape_invisible_characters(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\""
-	     "\xd8\x9c\xe2\x80\x8b\xe2\x80\x8f\xe2\x80\xaa\xe2\x80\xae\xe2\x81\xa6\xe2\x81\xa9\xef\xbb\xbf\"]}",
-	     SM_ERROR_NOT_FOUND,
-	     "test.json: fixed[0]: no particle named \"\\u061c\\u200b\\u200f\\u202a\\u202e\\u2066\\u2069\\ufeff\""},
+		 "\xd8\x9c\xe2\x80\x8b\xe2\x80\x8f\xe2\x80\xaa\xe2\x80\xae\xe2\x81\xa6\xe2\x81\xa9\xef\xbb\xbf\"]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: fixed[0]: no particle named \"\\u061c\\u200b\\u200f\\u202a\\u202e\\u2066\\u2069\\ufeff\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [\""
-	     "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\"]}",
-	     SM_ERROR_NOT_FOUND,
-	     "test.json: fixed[0]: no particle named \""
-	     "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\""},
+		 "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\"]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: fixed[0]: no particle named \""
+		 "\xd8\x9b\xe2\x80\x90\xe2\x80\xa7\xe2\x80\xaf\xe2\x81\xb0\xef\xbc\x81\""},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
@@ -2360,7 +2470,8 @@ static int test_per_section_constants_in_a_model_file(void)
 
 	char* json = sm_document_to_json(doc, &err);
 	ENSURE(json != NULL);
-	ENSURE(strstr(json, "\"section_stiffness\": \"Y\"") != NULL && strstr(json, "\"section_damping\": \"eta\"") != NULL);
+	ENSURE(strstr(json, "\"section_stiffness\": \"Y\"") != NULL &&
+	       strstr(json, "\"section_damping\": \"eta\"") != NULL);
 	sm_document* again = parse_valid(json, &err);
 	free(json);
 	ENSURE(again != NULL);
@@ -2412,7 +2523,8 @@ static int test_per_section_constants_in_a_model_file(void)
 	static const double masses[3] = {0.25, 0.5, 0.125};
 	for (int k = 0; k < 3; k++) {
 		sm_particle_def particle;
-		ENSURE_STATUS(sm_model_get_particle(model, sm_document_particle_index(doc, names[k]), &particle), SM_OK);
+		ENSURE_STATUS(sm_model_get_particle(model, sm_document_particle_index(doc, names[k]), &particle),
+		              SM_OK);
 		ENSURE_NEAR(particle.mass, masses[k], 1e-15);
 	}
 	sm_model_destroy(model);
@@ -2423,20 +2535,20 @@ static int test_per_section_constants_in_a_model_file(void)
 		const char* message;
 	} refused[] = {
 	    {"{\"springmass\": 1, \"name\": \"r\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"segments\": 2,"
-	     " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"structural\": {\"section_stiffness\": 5}}]}",
-	     "rope: structural stiffness per section: a rope has no cross-section (give it per strain)"},
+		 " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"structural\": {\"section_stiffness\": 5}}]}",
+		 "rope: structural stiffness per section: a rope has no cross-section (give it per strain)"},
 	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"section_stiffness\": 5}]}",
-	     "springs[0]: per-section constants need the spring's \"section\""},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"section_stiffness\": 5}]}",
+		 "springs[0]: per-section constants need the spring's \"section\""},
 	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 5, \"section\": 1}]}",
-	     "springs[0]: \"section\" goes with \"section_stiffness\" or \"section_damping\""},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"strain_stiffness\": 5, \"section\": 1}]}",
+		 "springs[0]: \"section\" goes with \"section_stiffness\" or \"section_damping\""},
 	    {"{\"springmass\": 1, \"name\": \"r\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
-	     " \"springs\": [{\"a\": 0, \"b\": 1, \"section_damping\": 5, \"section\": 0}]}",
-	     "springs[0].section"},
+		 " \"springs\": [{\"a\": 0, \"b\": 1, \"section_damping\": 5, \"section\": 0}]}",
+		 "springs[0].section"},
 	    {"{\"springmass\": 1, \"name\": \"r\", \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": 2,"
-	     " \"nv\": 2, \"mass_distribution\": \"area\"}]}",
-	     "structures[0].mass_distribution: must be \"even\" or \"lumped\""},
+		 " \"nv\": 2, \"mass_distribution\": \"area\"}]}",
+		 "structures[0].mass_distribution: must be \"even\" or \"lumped\""},
 	};
 	for (size_t k = 0; k < sizeof refused / sizeof refused[0]; k++) {
 		sm_document* bad = parse(refused[k].text, &err);
@@ -2473,8 +2585,8 @@ static int test_error_reports_are_filled_on_success(void)
 	sm_document* doc = load_bundled("two_mass_chain", &err);
 	ENSURE(doc != NULL && cleared(&err));
 	make_stale(&err);
-	sm_document* parsed = parse("{\"springmass\": 1, \"name\": \"one\", \"particles\": [{\"position\": [0, 0, 0]}]}",
-	                            &err);
+	sm_document* parsed =
+	    parse("{\"springmass\": 1, \"name\": \"one\", \"particles\": [{\"position\": [0, 0, 0]}]}", &err);
 	ENSURE(parsed != NULL && cleared(&err));
 	sm_document_destroy(parsed);
 
@@ -2571,7 +2683,8 @@ static int test_canonical_form_reads_back(void)
 	ENSURE(strcmp(sm_document_particle_name(again, 0), "a\"b") == 0);
 	ENSURE(strcmp(sm_document_particle_name(again, 1), "c\\d") == 0);
 	const sm_document_settings settings = sm_document_get_settings(again);
-	ENSURE(settings.stop_time == 1.2345678901234567 && settings.solver.relative_tolerance == 1.0000000000000002e-7);
+	ENSURE(settings.stop_time == 1.2345678901234567 &&
+	       settings.solver.relative_tolerance == 1.0000000000000002e-7);
 	const double values[4] = {0.75, 2.0, -1.5, 0.3};
 	ENSURE_STATUS(sm_document_set_parameters(doc, values, &err), SM_OK);
 	ENSURE_STATUS(sm_document_set_parameters(again, values, &err), SM_OK);
@@ -2663,20 +2776,22 @@ static int test_parameter_uses_of_every_place(void)
 		const char* name;
 		uint32_t uses;
 	} expected[] = {
-	    {"vel", SM_PARAMETER_INITIAL_STATE}, {"org", SM_PARAMETER_INITIAL_STATE}, {"eu", SM_PARAMETER_INITIAL_STATE},
-	    {"ev", SM_PARAMETER_INITIAL_STATE},  {"sm", SM_PARAMETER_CONSTANTS},      {"sz", SM_PARAMETER_INITIAL_STATE},
-	    {"nw", SM_PARAMETER_COUNTS},         {"bm", SM_PARAMETER_CONSTANTS},      {"mpl", SM_PARAMETER_CONSTANTS},
-	    {"rho", SM_PARAMETER_CONSTANTS},     {"brk", SM_PARAMETER_CONSTANTS},     {"sec", SM_PARAMETER_CONSTANTS},
-	    {"stop", SM_PARAMETER_SETTINGS},     {"out", SM_PARAMETER_SETTINGS},      {"lo", SM_PARAMETER_MOTION},
-	    {"alpha", SM_PARAMETER_CONSTANTS},
+	    {"vel", SM_PARAMETER_INITIAL_STATE}, {"org", SM_PARAMETER_INITIAL_STATE},
+	    {"eu", SM_PARAMETER_INITIAL_STATE},  {"ev", SM_PARAMETER_INITIAL_STATE},
+	    {"sm", SM_PARAMETER_CONSTANTS},      {"sz", SM_PARAMETER_INITIAL_STATE},
+	    {"nw", SM_PARAMETER_COUNTS},         {"bm", SM_PARAMETER_CONSTANTS},
+	    {"mpl", SM_PARAMETER_CONSTANTS},     {"rho", SM_PARAMETER_CONSTANTS},
+	    {"brk", SM_PARAMETER_CONSTANTS},     {"sec", SM_PARAMETER_CONSTANTS},
+	    {"stop", SM_PARAMETER_SETTINGS},     {"out", SM_PARAMETER_SETTINGS},
+	    {"lo", SM_PARAMETER_MOTION},         {"alpha", SM_PARAMETER_CONSTANTS},
 	};
 	int wrong = 0;
 	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
 		const int32_t k = sm_document_parameter_index(doc, expected[e].name);
 		ENSURE(k >= 0);
 		if (sm_document_parameter_uses(doc, k) != expected[e].uses) {
-			printf("  parameter %s: uses %u, expected %u\n", expected[e].name, (unsigned)sm_document_parameter_uses(doc, k),
-			       (unsigned)expected[e].uses);
+			printf("  parameter %s: uses %u, expected %u\n", expected[e].name,
+			       (unsigned)sm_document_parameter_uses(doc, k), (unsigned)expected[e].uses);
 			wrong++;
 		}
 	}
@@ -2694,49 +2809,52 @@ static int test_more_rules_at_their_edges(void)
 {
 	static const refusal cases[] = {
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
-	     " \"nu\": 2, \"nv\": 2, \"nw\": 1}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].nw: 1 must be a whole number from 2 to 4194304"},
+		 " \"nu\": 2, \"nv\": 2, \"nw\": 1}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0].nw: 1 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\","
-	     " \"nu\": 2, \"nv\": 1}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].nv: 1 must be a whole number from 2 to 4194304"},
+		 " \"nu\": 2, \"nv\": 1}]}",
+		 SM_ERROR_SCHEMA, "test.json: structures[0].nv: 1 must be a whole number from 2 to 4194304"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\","
-	     " \"nu\": 2, \"nv\": 2, \"mass\": 0}]}",
-	     SM_ERROR_NEGATIVE, "test.json: structures[0].mass: 0 must be > 0"},
+		 " \"nu\": 2, \"nv\": 2, \"mass\": 0}]}",
+		 SM_ERROR_NEGATIVE, "test.json: structures[0].mass: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"m\": true}, \"particles\": [{\"position\":"
-	     " [0, 0, 0]}]}",
-	     SM_ERROR_SCHEMA, "test.json: parameters.m: a parameter's value must be a number, not a boolean"},
-	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"break_strain\": 0}]}", SM_ERROR_NEGATIVE,
-	     "test.json: springs[0].break_strain: 0 must be > 0"},
+		 " [0, 0, 0]}]}",
+		 SM_ERROR_SCHEMA, "test.json: parameters.m: a parameter's value must be a number, not a boolean"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"break_strain\": 0}]}",
+		 SM_ERROR_NEGATIVE, "test.json: springs[0].break_strain: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
-	     " \"end\": [1, 0, 0], \"segments\": 2, \"mass_per_length\": 0}]}",
-	     SM_ERROR_NEGATIVE, "test.json: structures[0].mass_per_length: 0 must be > 0"},
+		 " \"end\": [1, 0, 0], \"segments\": 2, \"mass_per_length\": 0}]}",
+		 SM_ERROR_NEGATIVE, "test.json: structures[0].mass_per_length: 0 must be > 0"},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"0.5\"}]}", SM_ERROR_NOT_FOUND,
-	     "test.json: springs[0].stiffness: no parameter named \"0.5\" (a number is written without quotes)"},
+		 "test.json: springs[0].stiffness: no parameter named \"0.5\" (a number is written without quotes)"},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 1, \"b\": 1.0, \"stiffness\": 1}]}", SM_ERROR_SELF_SPRING,
-	     "test.json: springs[0]: connects particle 1 to itself (a and b are the same particle)"},
+		 "test.json: springs[0]: connects particle 1 to itself (a and b are the same particle)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
-	     " {\"name\": \"b\", \"position\": [1, 0, 0]}, {\"name\": \"a\", \"position\": [2, 0, 0]}]}",
-	     SM_ERROR_SCHEMA, "test.json: particles[2].name: particle name \"a\" is already used by particle 0"},
+		 " {\"name\": \"b\", \"position\": [1, 0, 0]}, {\"name\": \"a\", \"position\": [2, 0, 0]}]}",
+		 SM_ERROR_SCHEMA, "test.json: particles[2].name: particle name \"a\" is already used by particle 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
-	     " \"vertices\": [[0, 0, 0], [1, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0].vertices[1]: must be an array of 3 numbers [x, y, z], not an array"},
+		 " \"vertices\": [[0, 0, 0], [1, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2]]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].vertices[1]: must be an array of 3 numbers [x, y, z], not an array"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
-	     " \"nu\": 2097152, \"nv\": 2097152, \"nw\": 4194304}]}",
-	     SM_ERROR_SCHEMA, "test.json: structures[0]: 2097152 x 2097152 x 4194304 particles exceed the limit of 4194304"},
+		 " \"nu\": 2097152, \"nv\": 2097152, \"nw\": 4194304}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0]: 2097152 x 2097152 x 4194304 particles exceed the limit of 4194304"},
 	    // "c[]" is of the form S[...], though no reference has empty brackets.
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[]\", \"position\": [5, 5, 5]}],"
-	     " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
-	     SM_ERROR_SCHEMA,
-	     "test.json: particles[0].name: name \"c[]\" reads as a reference to a particle of structure \"c\": "
-	     "give the particle another name"},
+		 " \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"c[]\" reads as a reference to a particle of structure \"c\": "
+		 "give the particle another name"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	// Only a name of the form S[...] reads as a reference to structure S: "c[" and "c[1" do not.
 	sm_error err = {SM_OK, ""};
-	sm_document* doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[\", \"position\":"
-	                               " [5, 5, 5]}, {\"name\": \"c[1\", \"position\": [6, 5, 5]}], \"structures\": [{\"type\":"
-	                               " \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
-	                               &err);
+	sm_document* doc =
+	    parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[\", \"position\":"
+		            " [5, 5, 5]}, {\"name\": \"c[1\", \"position\": [6, 5, 5]}], \"structures\": [{\"type\":"
+		            " \"sheet\", \"name\": \"c\", \"nu\": 2, \"nv\": 2}]}",
+		            &err);
 	ENSURE(doc != NULL);
 	ENSURE(sm_document_particle_index(doc, "c[") == 0 && sm_document_particle_index(doc, "c[1") == 1);
 	sm_document_destroy(doc);
@@ -2791,7 +2909,8 @@ static int test_canonical_form_keeps_parameters_and_ports(void)
 	again = save_and_load(doc);
 	ENSURE(again != NULL);
 	ENSURE(sm_document_parameter_index(again, "m") >= 0);
-	ENSURE_STATUS(sm_document_set_parameter(again, sm_document_parameter_index(again, "m"), 5.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameter(again, sm_document_parameter_index(again, "m"), 5.0, &err),
+	              SM_OK);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
 	sm_particle_def h;
@@ -2806,8 +2925,8 @@ static int test_canonical_form_keeps_parameters_and_ports(void)
 // The loader's entry with another limit on particles and springs (each), which the fuzz target
 // uses (lib/model_file_internal.h); with a limit of 10 the limits are checked at their edges
 // without models of millions of elements.
-sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name, int64_t max_elements,
-                                       sm_error* err);
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
+                                       int64_t max_elements, sm_error* err);
 
 // Exactly the limit of particles or springs loads and one more is refused: 10 explicit particles,
 // and a rope of 5 segments with bending springs (6 particles, 5 + 4 = 9 springs) beside one of 6
@@ -2826,7 +2945,8 @@ static int test_limits_at_their_edges(void)
 		if (n == 10) {
 			ENSURE(doc != NULL);
 		} else {
-			ENSURE(doc == NULL && strcmp(err.message, "test.json: particles: 11 particles exceed the limit of 10") == 0);
+			ENSURE(doc == NULL &&
+			       strcmp(err.message, "test.json: particles: 11 particles exceed the limit of 10") == 0);
 		}
 		sm_document_destroy(doc);
 	}
@@ -2842,7 +2962,8 @@ static int test_limits_at_their_edges(void)
 	sm_document_destroy(doc);
 	snprintf(text, sizeof text, rope, 6);
 	ENSURE(sm_document_parse_limited(text, strlen(text), "test.json", 10, &err) == NULL);
-	ENSURE(strcmp(err.message, "test.json: structures[0]: the model would have 11 springs, more than the limit of 10") ==
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0]: the model would have 11 springs, more than the limit of 10") ==
 	       0);
 	// Explicit springs count after a structure's: a rope of 5 springs leaves room for 5 more, not 6.
 	for (int n = 5; n <= 6; n++) {
@@ -2906,17 +3027,19 @@ static int test_messages_show_values_of_long_parameters(void)
 	char name[201], text[1024];
 	memset(name, 'n', 200);
 	name[200] = '\0';
-	snprintf(text, sizeof text,
-	         "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 2.5}, \"structures\": [{\"type\": \"rope\","
-	         " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": \"%s\"}]}",
-	         name, name);
+	snprintf(
+	    text, sizeof text,
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 2.5}, \"structures\": [{\"type\": \"rope\","
+	    " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": \"%s\"}]}",
+	    name, name);
 	sm_error err = {SM_OK, ""};
 	ENSURE(parse(text, &err) == NULL);
 	ENSURE(strstr(err.message, " = 2.5 must be a whole number from 1 to 4194304") != NULL);
-	snprintf(text, sizeof text,
-	         "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 0}, \"structures\": [{\"type\": \"sheet\","
-	         " \"name\": \"c\", \"edge_u\": [\"%s\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
-	         name, name);
+	snprintf(
+	    text, sizeof text,
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 0}, \"structures\": [{\"type\": \"sheet\","
+	    " \"name\": \"c\", \"edge_u\": [\"%s\", 0, 0], \"nu\": 2, \"nv\": 2}]}",
+	    name, name);
 	ENSURE(parse(text, &err) == NULL);
 	ENSURE(strstr(err.message, " = 0, 0, 0) m is zero") != NULL);
 	return 0;
@@ -2961,15 +3084,15 @@ static int test_unknown_keys_are_refused_everywhere(void)
 		const char* message;
 	} cases[] = {
 	    {0, "bendng",
-	     "test.json: structures[0]: unknown key \"bendng\" (allowed here: type, name, start, end, segments, "
-	     "mass, mass_per_length, structural, bending, mass_distribution)"},
+		 "test.json: structures[0]: unknown key \"bendng\" (allowed here: type, name, start, end, segments, "
+		 "mass, mass_per_length, structural, bending, mass_distribution)"},
 	    {1, "mx", "test.json: fixed[0]: unknown key \"mx\" (allowed here: min, max)"},
 	    {2, "knd", "test.json: ports[0]: unknown key \"knd\" (allowed here: name, particle, kind)"},
 	    {3, "stop_tme",
-	     "test.json: simulation: unknown key \"stop_tme\" (allowed here: stop_time, output_interval, rtol, "
-	     "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps)"},
+		 "test.json: simulation: unknown key \"stop_tme\" (allowed here: stop_time, output_interval, rtol, "
+		 "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps)"},
 	    {4, "particle_variable",
-	     "test.json: fmu: unknown key \"particle_variable\" (allowed here: particle_variables)"},
+		 "test.json: fmu: unknown key \"particle_variable\" (allowed here: particle_variables)"},
 	};
 	const char* none[5] = {"", "", "", "", ""};
 	char text[1024];

@@ -13,8 +13,8 @@
 // SPRINGMASS_OOM_VERBOSE=1 prints every run's allocation number and the error it ended in;
 // SPRINGMASS_OOM_FIRST=k starts each scenario at allocation k (to debug one failure).
 #define _XOPEN_SOURCE 700
-#include "springmass/springmass.h"
 #include "simulation_fixtures.h"
+#include "springmass/springmass.h"
 #include "test_harness.h"
 
 #ifdef SPRINGMASS_OOM_FMU
@@ -103,17 +103,17 @@ static long suspend_failures(void)
 	return fail_at;
 }
 
-#define AS_ONE_ALLOCATION(type, name, failed, parameters, arguments)                                \
-	type __real_##name parameters;                                                                  \
-	type __wrap_##name parameters;                                                                  \
-	type __wrap_##name parameters                                                                   \
-	{                                                                                               \
-		if (fail_this_allocation())                                                                 \
-			return failed;                                                                          \
-		long fail_at_ = suspend_failures();                                                         \
-		type result_ = __real_##name arguments;                                                     \
-		oom_.fail_at = fail_at_;                                                                    \
-		return result_;                                                                             \
+#define AS_ONE_ALLOCATION(type, name, failed, parameters, arguments)                                         \
+	type __real_##name parameters;                                                                           \
+	type __wrap_##name parameters;                                                                           \
+	type __wrap_##name parameters                                                                            \
+	{                                                                                                        \
+		if (fail_this_allocation())                                                                          \
+			return failed;                                                                                   \
+		long fail_at_ = suspend_failures();                                                                  \
+		type result_ = __real_##name arguments;                                                              \
+		oom_.fail_at = fail_at_;                                                                             \
+		return result_;                                                                                      \
 	}
 
 AS_ONE_ALLOCATION(int, SUNContext_Create, (*context = NULL, -1), (void* comm, SUNContext* context),
@@ -125,18 +125,18 @@ AS_ONE_ALLOCATION(int, CVodeInit, CV_MEM_FAIL, (void* cvode, CVRhsFn f, sunrealt
 
 // A call that failed must have failed because of the injected allocation, with an error status
 // and a message.
-#define ENSURE_CLEAR_FAILURE(status, message)                                                       \
-	do {                                                                                            \
-		int s_ = (int)(status);                                                                     \
-		const char* m_ = (message);                                                                 \
-		if (!oom_.reached || s_ == SM_OK || m_ == NULL || m_[0] == '\0') {                          \
-			printf("  %s:%d: failure without an injected allocation failure, status or message: "  \
-			       "status %d, reached %d, message \"%s\"\n",                                       \
-			       __FILE__, __LINE__, s_, (int)oom_.reached, m_ ? m_ : "(null)");                  \
-			return 1;                                                                               \
-		}                                                                                           \
-		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                       \
-			printf("    [%ld] %d %s\n", oom_.fail_at, s_, m_);                                      \
+#define ENSURE_CLEAR_FAILURE(status, message)                                                                \
+	do {                                                                                                     \
+		int s_ = (int)(status);                                                                              \
+		const char* m_ = (message);                                                                          \
+		if (!oom_.reached || s_ == SM_OK || m_ == NULL || m_[0] == '\0') {                                   \
+			printf("  %s:%d: failure without an injected allocation failure, status or message: "            \
+			       "status %d, reached %d, message \"%s\"\n",                                                \
+			       __FILE__, __LINE__, s_, (int)oom_.reached, m_ ? m_ : "(null)");                           \
+			return 1;                                                                                        \
+		}                                                                                                    \
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                                \
+			printf("    [%ld] %d %s\n", oom_.fail_at, s_, m_);                                               \
 	} while (0)
 
 // Runs fn(context) with allocation k failing, for k = 1, 2, ... until a run reaches no failure:
@@ -479,11 +479,11 @@ typedef struct simulation_case {
 	sm_simulation_def def;
 	double t_end;
 	int32_t n3;
-	int32_t breaks;       // of the run without failures
+	int32_t breaks;  // of the run without failures
 	// Positions at t_end without failures, before and after the reset (which need not repeat the
 	// first run bit for bit: the cholmod solver keeps its factorisation over a reset).
 	double* reference;
-	double tolerance;     // on positions after a restart caused by a failure [m]
+	double tolerance;  // on positions after a restart caused by a failure [m]
 	// Then new constants and a state set anew (independent of the linear solver: done with one
 	// or two of them only, to keep the test short).
 	bool update;
@@ -738,7 +738,8 @@ static int test_simulation_pcg_rows(void)
 
 static int test_simulation_pcg_multilevel(void)
 {
-	return run_simulation("simulation, pcg, multilevel", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false, false);
+	return run_simulation("simulation, pcg, multilevel", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false,
+	                      false);
 }
 
 // The build of test_out_of_memory_halves (tests/CMakeLists.txt) runs the pcg solver's loops in
@@ -750,7 +751,8 @@ static int test_simulation_pcg_multilevel(void)
 #if defined(PARALLEL_MIN_PARTICLES) && PARALLEL_MIN_PARTICLES <= 100 && !defined(MULTILEVEL_MIN_PARTICLES)
 static int test_simulation_pcg_halves(void)
 {
-	return run_simulation("simulation, pcg, halves", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false, false);
+	return run_simulation("simulation, pcg, halves", model_cloth, SM_SOLVER_REDUCED_PCG, 0.02, 0, false,
+	                      false);
 }
 #endif
 
@@ -798,7 +800,8 @@ static sm_model* simultaneous_breaks_model(void)
 		sm_spring_def s = sm_default_spring_def();
 		s.stiffness = 100.0;
 		s.break_strain = 0.1;
-		if (sm_model_add_particle(model, &fixed, &s.a) != SM_OK || sm_model_add_particle(model, &driven, &s.b) != SM_OK ||
+		if (sm_model_add_particle(model, &fixed, &s.a) != SM_OK ||
+		    sm_model_add_particle(model, &driven, &s.b) != SM_OK ||
 		    sm_model_add_spring(model, &s, NULL) != SM_OK) {
 			sm_model_destroy(model);
 			return NULL;
@@ -810,7 +813,8 @@ static sm_model* simultaneous_breaks_model(void)
 	hanging.a = 0;
 	hanging.stiffness = 100.0;
 	hanging.damping = 1.0;
-	if (sm_model_add_particle(model, &bob, &hanging.b) != SM_OK || sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
+	if (sm_model_add_particle(model, &bob, &hanging.b) != SM_OK ||
+	    sm_model_add_spring(model, &hanging, NULL) != SM_OK) {
 		sm_model_destroy(model);
 		return NULL;
 	}
@@ -819,8 +823,8 @@ static sm_model* simultaneous_breaks_model(void)
 
 typedef struct breaks_case {
 	const sm_model* model;
-	double dissipated;   // of the run without failures [J]
-	double bob_z;        // the free particle's height then [m]
+	double dissipated;  // of the run without failures [J]
+	double bob_z;       // the free particle's height then [m]
 } breaks_case;
 
 // Advances to 0.5 s (once more after an injected failure). All springs break at one time, in
@@ -857,7 +861,8 @@ static int simultaneous_breaks_scenario(void* context)
 	}
 	for (int32_t b = 0; b < SIMULTANEOUS_BREAKS; b++) {
 		const sm_break_event e = sm_simulation_break(sim, b);
-		if (e.spring != b || e.time != sm_simulation_break(sim, 0).time || !(fabs(e.time - 0.1 / 0.37) < 1e-9)) {
+		if (e.spring != b || e.time != sm_simulation_break(sim, 0).time ||
+		    !(fabs(e.time - 0.1 / 0.37) < 1e-9)) {
 			printf("  break %d: spring %d at %.17g s\n", (int)b, (int)e.spring, e.time);
 			goto done;
 		}
@@ -868,8 +873,8 @@ static int simultaneous_breaks_scenario(void* context)
 		c->dissipated = dissipated;
 		c->bob_z = bob_z;
 	} else if (!(fabs(dissipated - c->dissipated) <= 1e-9 && fabs(bob_z - c->bob_z) <= 1e-9)) {
-		printf("  dissipated %.17g J, bob at z = %.17g m; without failures %.17g J, %.17g m\n", dissipated, bob_z,
-		       c->dissipated, c->bob_z);
+		printf("  dissipated %.17g J, bob at z = %.17g m; without failures %.17g J, %.17g m\n", dissipated,
+		       bob_z, c->dissipated, c->bob_z);
 		goto done;
 	}
 	result = 0;
@@ -1260,28 +1265,27 @@ static fmi2ValueReference fmu_reference(const fmu_case* c, const char* name)
 // A call that returned something else than fmi2OK must have returned fmi2Error and logged an
 // error, because of the injected failure; or, for fmi2DoStep, fmi2Discard with the reason logged
 // (the FMU's answer to any failed step: the instance stays at its last successful time).
-#define ENSURE_FMU_FAILURE(status, c, errors_before)                                                \
-	do {                                                                                            \
-		if (!oom_.reached || ((status) != fmi2Error && (status) != fmi2Discard) ||                  \
-		    (c)->errors <= (errors_before)) {                                                       \
-			printf("  %s:%d: FMU call returned %d (reached %d) with %d errors logged: \"%s\"\n",     \
-			       __FILE__, __LINE__, (int)(status), (int)oom_.reached,                            \
-			       (c)->errors - (errors_before), (c)->last);                                       \
-			return 1;                                                                               \
-		}                                                                                           \
-		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                       \
-			printf("    [%ld] %s\n", oom_.fail_at, (c)->last);                                      \
+#define ENSURE_FMU_FAILURE(status, c, errors_before)                                                         \
+	do {                                                                                                     \
+		if (!oom_.reached || ((status) != fmi2Error && (status) != fmi2Discard) ||                           \
+		    (c)->errors <= (errors_before)) {                                                                \
+			printf("  %s:%d: FMU call returned %d (reached %d) with %d errors logged: \"%s\"\n", __FILE__,   \
+			       __LINE__, (int)(status), (int)oom_.reached, (c)->errors - (errors_before), (c)->last);    \
+			return 1;                                                                                        \
+		}                                                                                                    \
+		if (getenv("SPRINGMASS_OOM_VERBOSE"))                                                                \
+			printf("    [%ld] %s\n", oom_.fail_at, (c)->last);                                               \
 	} while (0)
 
 // The call must succeed, or fail clearly; on failure the instance is freed and the run ends.
-#define FMU_CALL(call)                                                                              \
-	do {                                                                                            \
-		int before_ = c->errors;                                                                    \
-		fmi2Status st_ = (call);                                                                    \
-		if (st_ != fmi2OK) {                                                                        \
-			ENSURE_FMU_FAILURE(st_, c, before_);                                                    \
-			goto end;                                                                               \
-		}                                                                                           \
+#define FMU_CALL(call)                                                                                       \
+	do {                                                                                                     \
+		int before_ = c->errors;                                                                             \
+		fmi2Status st_ = (call);                                                                             \
+		if (st_ != fmi2OK) {                                                                                 \
+			ENSURE_FMU_FAILURE(st_, c, before_);                                                             \
+			goto end;                                                                                        \
+		}                                                                                                    \
 	} while (0)
 
 static int fmu_scenario(void* context)

@@ -11,9 +11,9 @@
 // - the model's own settings (its file's tolerances) stay close to it.
 #define _POSIX_C_SOURCE 200809L
 
+#include "gsl_reference.h"
 #include "springmass/model_file.h"
 #include "springmass/simulation.h"
-#include "gsl_reference.h"
 #include "test_harness.h"
 
 #include <dirent.h>
@@ -166,8 +166,8 @@ static int simulate(const sm_document* doc, const sm_model* model, const sm_simu
 		sm_simulation_forces(sim, f);
 		const sm_energies e = sm_simulation_energies(sim);
 		const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
-		ENSURE(state_columns(doc, sm_simulation_positions(sim), sm_simulation_velocities(sim), f, energies, reference,
-		                     out->values[r]) == 0);
+		ENSURE(state_columns(doc, sm_simulation_positions(sim), sm_simulation_velocities(sim), f, energies,
+		                     reference, out->values[r]) == 0);
 	}
 	free(f);
 	sm_simulation_destroy(sim);
@@ -198,10 +198,11 @@ static int compare(const char* what, const table* computed, const table* referen
 		}
 	}
 	if (failures > 0 || getenv("SPRINGMASS_REFERENCES_VERBOSE"))
-		printf("  %s: %d values out of bounds; the worst, %s at t = %g s, is %.3g of its bound (%.17g against "
-		       "%.17g)\n",
-		       what, failures, reference->names[worst_column], reference->values[worst_row][0], worst,
-		       computed->values[worst_row][worst_column], reference->values[worst_row][worst_column]);
+		printf(
+		    "  %s: %d values out of bounds; the worst, %s at t = %g s, is %.3g of its bound (%.17g against "
+		    "%.17g)\n",
+		    what, failures, reference->names[worst_column], reference->values[worst_row][0], worst,
+		    computed->values[worst_row][worst_column], reference->values[worst_row][worst_column]);
 	return failures > 0;
 }
 

@@ -2,10 +2,10 @@
 // later stop time. Checked against one advance to that stop time (the same steps and breaks, bit
 // for bit), against closed forms (the damped oscillator, with and without a step force set
 // between outputs; a spring pulled to its break), and for what it must leave alone.
-#include "springmass/model_file.h"
-#include "springmass/simulation.h"
 #include "simulation_fixtures.h"
 #include "simulation_internal.h"
+#include "springmass/model_file.h"
+#include "springmass/simulation.h"
 #include "test_harness.h"
 
 #include <stdlib.h>
@@ -77,7 +77,8 @@ static int test_rows_follow_the_closed_form_in_fewer_steps(void)
 	ENSURE(once != NULL);
 	ENSURE_STATUS(sm_simulation_advance(once, 5.0), SM_OK);
 	ENSURE(sm_simulation_statistics(once).steps == steps);
-	ENSURE(memcmp(sm_simulation_positions(once), sm_simulation_positions(interpolated), 6 * sizeof(double)) == 0);
+	ENSURE(memcmp(sm_simulation_positions(once), sm_simulation_positions(interpolated), 6 * sizeof(double)) ==
+	       0);
 	ENSURE(sm_simulation_statistics(stopped).steps > steps + 100);
 	sm_simulation_destroy(once);
 	sm_simulation_destroy(stopped);
@@ -178,11 +179,12 @@ static int test_rows_leave_the_run_of_one_advance(void)
 			ENSURE(tear(model, solvers[k], t_end, intervals[i], i == 1, &rows) == 0);
 			if (rows.steps != once.steps || rows.breaks != once.breaks)
 				printf("  %s, rows every %g s: %lld steps, %d breaks; one advance: %lld, %d\n",
-				       sm_linear_solver_name(solvers[k]), intervals[i], (long long)rows.steps, (int)rows.breaks,
-				       (long long)once.steps, (int)once.breaks);
+				       sm_linear_solver_name(solvers[k]), intervals[i], (long long)rows.steps,
+				       (int)rows.breaks, (long long)once.steps, (int)once.breaks);
 			ENSURE(rows.steps == once.steps && rows.breaks == once.breaks);
 			for (int32_t b = 0; b < once.breaks; b++)
-				ENSURE(rows.events[b].time == once.events[b].time && rows.events[b].spring == once.events[b].spring);
+				ENSURE(rows.events[b].time == once.events[b].time &&
+				       rows.events[b].spring == once.events[b].spring);
 			ENSURE(memcmp(rows.y, once.y, (6 * (size_t)n + 1) * sizeof(double)) == 0);
 			// Each of the two intervals left breaks pending past a row (about a third of them).
 			ENSURE(rows.pending_seen > 0);
@@ -366,7 +368,8 @@ static int check_input_past_the_steps(bool driven)
 	ENSURE(sm_simulation_statistics(sim).restarts == 0);
 	const double shift = force / OSC_K;
 	const double f[3] = {force, 0.0, 0.0}, moved[3] = {shift, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
-	ENSURE_STATUS(driven ? sm_simulation_set_driven(sim, 0, moved, still) : sm_simulation_set_external_force(sim, 1, f),
+	ENSURE_STATUS(driven ? sm_simulation_set_driven(sim, 0, moved, still)
+	                     : sm_simulation_set_external_force(sim, 1, f),
 	              SM_OK);
 	double u1, v1;
 	free_motion(zeta, w0, OSC_U0, 0.0, t_force, &u1, &v1);
@@ -649,7 +652,8 @@ static int test_an_interval_below_the_time_resolution_after_a_changed_input(void
 		ENSURE_STATUS(sm_simulation_advance(plain, t_end), SM_OK);
 		ENSURE(sm_simulation_time(sim) == t_end && sm_simulation_time(plain) == t_end);
 		ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(plain), 6 * sizeof(double)) == 0);
-		ENSURE(memcmp(sm_simulation_velocities(sim), sm_simulation_velocities(plain), 6 * sizeof(double)) == 0);
+		ENSURE(memcmp(sm_simulation_velocities(sim), sm_simulation_velocities(plain), 6 * sizeof(double)) ==
+		       0);
 		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 1.5, 2.0), SM_OK);
 		ENSURE(sm_simulation_time(sim) == 1.5);
 		sm_simulation_destroy(plain);
@@ -672,9 +676,11 @@ static int test_bad_times_are_refused(void)
 	double x[6];
 	memcpy(x, sm_simulation_positions(sim), sizeof x);
 	const int64_t steps = sm_simulation_statistics(sim).steps;
-	const double bad[][2] = {{0.5, 0.4}, {0.5, NAN}, {0.5, INFINITY}, {0.1, 1.0}, {NAN, 1.0}, {INFINITY, INFINITY}};
+	const double bad[][2] = {{0.5, 0.4}, {0.5, NAN}, {0.5, INFINITY},
+	                         {0.1, 1.0}, {NAN, 1.0}, {INFINITY, INFINITY}};
 	for (size_t k = 0; k < sizeof bad / sizeof bad[0]; k++) {
-		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, bad[k][0], bad[k][1]), SM_ERROR_INVALID_ARGUMENT);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, bad[k][0], bad[k][1]),
+		              SM_ERROR_INVALID_ARGUMENT);
 		ENSURE(strstr(sm_simulation_last_error(sim), k < 3 ? "stop time" : "end time") != NULL);
 		ENSURE(sm_simulation_time(sim) == 0.25 && sm_simulation_statistics(sim).steps == steps);
 		ENSURE(memcmp(sm_simulation_positions(sim), x, sizeof x) == 0);

@@ -6,9 +6,9 @@
 #include "springmass/structures.h"
 #include "test_harness.h"
 
+#include <float.h>
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_matrix.h>
-#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -93,8 +93,8 @@ static int test_sheet_counts_and_rest_lengths(void)
 	sm_sheet_def def = sm_default_sheet_def();
 	def.nu = 3;
 	def.nv = 5;
-	def.edge_u[0] = 2.0;  // columns 1 m apart
-	def.edge_v[1] = 2.0;  // rows 0.5 m apart
+	def.edge_u[0] = 2.0;                      // columns 1 m apart
+	def.edge_v[1] = 2.0;                      // rows 0.5 m apart
 	def.bend = sm_default_spring_material();  // no bend springs
 	sm_structure s;
 	ENSURE_STATUS(sm_add_sheet(m, &def, &s), SM_OK);
@@ -374,18 +374,32 @@ static int test_mesh_errors(void)
 		sm_status status;
 		const char* message;
 	} cases[] = {
-	    {{0, 1, 7}, 1, 4, SM_ERROR_PARTICLE_INDEX, "mesh: triangle 0 vertex 2 = 7 is out of range (mesh has 4 vertices)"},
+	    {{0, 1, 7},
+		 1,
+		 4,
+		 SM_ERROR_PARTICLE_INDEX,
+		 "mesh: triangle 0 vertex 2 = 7 is out of range (mesh has 4 vertices)"},
 	    {{0, 1, 1}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (0, 1, 1) repeats a vertex"},
 	    // The exact bound: vertex index 4 of 4 vertices is out of range (v has a fifth point, so
 	    // an off-by-one would build the triangle instead of reading past the array).
-	    {{0, 1, 4}, 1, 4, SM_ERROR_PARTICLE_INDEX, "mesh: triangle 0 vertex 2 = 4 is out of range (mesh has 4 vertices)"},
+	    {{0, 1, 4},
+		 1,
+		 4,
+		 SM_ERROR_PARTICLE_INDEX,
+		 "mesh: triangle 0 vertex 2 = 4 is out of range (mesh has 4 vertices)"},
 	    // Repeated first and last, or first and second, vertex: the repeat is named, not a zero area.
 	    {{0, 1, 0}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (0, 1, 0) repeats a vertex"},
 	    {{3, 3, 1}, 1, 4, SM_ERROR_SELF_SPRING, "mesh: triangle 0 (3, 3, 1) repeats a vertex"},
-	    {{0, 1, 2, 2, 1, 0}, 2, 3, SM_ERROR_INVALID_ARGUMENT,
-	     "mesh: triangle 1 repeats the vertices of an earlier triangle (2, 1, 0)"},
-	    {{0, 1, 2, 0, 1, 3, 1, 0, 4}, 3, 5, SM_ERROR_INVALID_ARGUMENT,
-	     "mesh: edge (1, 0) of triangle 2 is shared by more than two triangles"},
+	    {{0, 1, 2, 2, 1, 0},
+		 2,
+		 3,
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "mesh: triangle 1 repeats the vertices of an earlier triangle (2, 1, 0)"},
+	    {{0, 1, 2, 0, 1, 3, 1, 0, 4},
+		 3,
+		 5,
+		 SM_ERROR_INVALID_ARGUMENT,
+		 "mesh: edge (1, 0) of triangle 2 is shared by more than two triangles"},
 	    {{0, 3, 4}, 1, 5, SM_ERROR_INVALID_ARGUMENT, "mesh: triangle 0 (0, 3, 4) has zero area"},
 	    {{0, 1, 2}, 1, 4, SM_ERROR_NONPOSITIVE_MASS, "mesh: vertex 3 belongs to no triangle"},
 	};
@@ -400,7 +414,8 @@ static int test_mesh_errors(void)
 		def.triangle_count = cases[c].count;
 		ENSURE_STATUS(sm_add_mesh(m, &def, NULL), cases[c].status);
 		if (strncmp(sm_model_last_error(m), cases[c].message, strlen(cases[c].message)) != 0) {
-			printf("  case %zu: message \"%s\", expected \"%s\"\n", c, sm_model_last_error(m), cases[c].message);
+			printf("  case %zu: message \"%s\", expected \"%s\"\n", c, sm_model_last_error(m),
+			       cases[c].message);
 			return 1;
 		}
 		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
@@ -433,13 +448,14 @@ static int test_mesh_errors(void)
 	def.vertices = two;
 	def.density = DBL_MAX;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE(strcmp(sm_model_last_error(m), "mesh: vertex 0: its mass, density 1.79769e+308 kg/m^2 x a third of its "
-	                                      "triangles' area, is beyond the largest double") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "mesh: vertex 0: its mass, density 1.79769e+308 kg/m^2 x a third of its "
+	              "triangles' area, is beyond the largest double") == 0);
 	def.vertices = v;
 	def.density = 4.9e-324;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
-	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") !=
-	       NULL);
+	ENSURE(strstr(sm_model_last_error(m),
+	              "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") != NULL);
 	// The same for a vertex found only in the second triangle of a unit square (its mass rounds to 0
 	// too): it belongs to a triangle, wherever that triangle is listed.
 	const double square[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
@@ -449,8 +465,8 @@ static int test_mesh_errors(void)
 	def.triangles = later;
 	def.triangle_count = 2;
 	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_ERROR_NONPOSITIVE_MASS);
-	ENSURE(strstr(sm_model_last_error(m), "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") !=
-	       NULL);
+	ENSURE(strstr(sm_model_last_error(m),
+	              "mesh: vertex 0: its mass, density x a third of its triangles' area, is 0") != NULL);
 	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
 	sm_model_destroy(m);
 	return 0;
@@ -475,8 +491,9 @@ static int test_degenerate_geometry(void)
 	sheet.nu = sheet.nv = 3;
 	sheet.edge_v[0] = 2.0;
 	sheet.edge_v[1] = 0.0;
-	const char parallel[] = "sheet: edge_u = (1, 0, 0) m and edge_v = (2, 0, 0) m are parallel (|edge_u x edge_v| "
-	                        "<= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide";
+	const char parallel[] =
+	    "sheet: edge_u = (1, 0, 0) m and edge_v = (2, 0, 0) m are parallel (|edge_u x edge_v| "
+	    "<= 1e-12 |edge_u| |edge_v|): the sheet spans no area and its particles would coincide";
 	for (int constants = 0; constants < 3; constants++) {
 		const sm_spring_material group = constants == 0 ? none : constants == 1 ? absolute : sheet.shear;
 		sheet.structural = sheet.bend = group;
@@ -490,14 +507,16 @@ static int test_degenerate_geometry(void)
 	sheet.edge_v[0] = 0.0;
 	sheet.edge_v[1] = 0.0;
 	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strcmp(sm_model_last_error(m), "sheet: edge_v = (0, 0, 0) m is zero: the sheet spans no area and its "
-	                                      "particles would coincide") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "sheet: edge_v = (0, 0, 0) m is zero: the sheet spans no area and its "
+	              "particles would coincide") == 0);
 	sheet.origin[0] = 1e10;
 	sheet.edge_u[0] = 1e-10;
 	sheet.edge_v[1] = 1.0;
 	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strcmp(sm_model_last_error(m), "sheet: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is "
-	                                      "below the resolution of the coordinates there") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "sheet: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is "
+	              "below the resolution of the coordinates there") == 0);
 	sm_block_def block = sm_default_block_def();
 	block.origin[2] = -1e12;
 	block.size[2] = 1e-6;
@@ -525,17 +544,20 @@ static int test_degenerate_geometry(void)
 	rope.structural = absolute;
 	sm_structure r;
 	ENSURE_STATUS(sm_add_rope(m, &rope, &r), SM_OK);
-	ENSURE(r.particle_count == 4 && r.spring_count == 3 && distance(m, r.first_particle, r.first_particle + 3) == 0.0);
+	ENSURE(r.particle_count == 4 && r.spring_count == 3 &&
+	       distance(m, r.first_particle, r.first_particle + 3) == 0.0);
 	rope.mass_per_length = 2.0;
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NONPOSITIVE_MASS);
-	ENSURE(strcmp(sm_model_last_error(m), "rope: mass per length 2 kg/m over the length 0 m from start to end gives a "
-	                                      "mass of 0 kg, which must be finite and > 0 (give the mass instead)") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "rope: mass per length 2 kg/m over the length 0 m from start to end gives a "
+	              "mass of 0 kg, which must be finite and > 0 (give the mass instead)") == 0);
 	rope.mass_per_length = 0.0;
 	rope.start[0] = -1e308;
 	rope.end[0] = 1e308;
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE(strcmp(sm_model_last_error(m), "rope: start (-1e+308, 0, 0) m and end (1e+308, 0, 0) m are too far "
-	                                      "apart: end - start is beyond the largest double") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "rope: start (-1e+308, 0, 0) m and end (1e+308, 0, 0) m are too far "
+	              "apart: end - start is beyond the largest double") == 0);
 	ENSURE(sm_model_particle_count(m) == 13 && sm_model_spring_count(m) == 3);
 	sm_model_destroy(m);
 	return 0;
@@ -557,7 +579,8 @@ static int test_failed_builder_leaves_model_unchanged(void)
 	big.size[0] = big.size[1] = big.size[2] = 2e154;
 	ENSURE_STATUS(sm_add_block(m, &big, NULL), SM_ERROR_NOT_FINITE);
 	ENSURE(strstr(sm_model_last_error(m), "block: face diagonal spring between particles 9 and 13") != NULL);
-	ENSURE(sm_model_particle_count(m) == np && sm_model_spring_count(m) == ns && sm_model_free_count(m) == nf);
+	ENSURE(sm_model_particle_count(m) == np && sm_model_spring_count(m) == ns &&
+	       sm_model_free_count(m) == nf);
 	// Invalid definitions are refused before anything is added.
 	sheet.nu = 1;
 	ENSURE_STATUS(sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT);
@@ -634,8 +657,8 @@ static int test_selection_index_bounds(void)
 	ENSURE(n == 25 && sm_model_free_count(m) == n);
 	const int32_t list[] = {0, n};
 	ENSURE_STATUS(sm_set_motion_of(m, list, 2, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
-	ENSURE(strcmp(sm_model_last_error(m), "selection: entry 1, particle 25, is out of range (model has 25 particles)") ==
-	       0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "selection: entry 1, particle 25, is out of range (model has 25 particles)") == 0);
 	ENSURE(sm_model_free_count(m) == n && sm_model_free_index(m, 0) == 0);
 	sm_particle_def p;
 	ENSURE_STATUS(sm_model_get_particle(m, 0, &p), SM_OK);
@@ -653,7 +676,8 @@ static int test_selection_index_bounds(void)
 	ENSURE(strcmp(sm_model_last_error(m), "grid coordinate (4, 4, 0) is outside the structure") == 0);
 	ENSURE(sm_model_free_count(m) == n - 1);
 	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 0, 0, 0, SM_PARTICLE_FIXED), SM_OK);
-	ENSURE(sm_model_free_count(m) == n - 2 && sm_model_free_index(m, 1) == -1 && sm_model_free_index(m, 0) == 0);
+	ENSURE(sm_model_free_count(m) == n - 2 && sm_model_free_index(m, 1) == -1 &&
+	       sm_model_free_index(m, 0) == 0);
 	ENSURE(strcmp(sm_model_last_error(m), "") == 0);
 
 	// The same for the box selection and an empty list.
@@ -732,8 +756,9 @@ static int test_spring_count_limit(void)
 	rope.segments = SM_STRUCTURE_MAX_ELEMENTS - 1;
 	rope.bending = rope.structural;
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strcmp(sm_model_last_error(m), "rope: 16777216 particles and 33554429 springs exceed the limit of 16777216 "
-	                                      "of each per structure") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "rope: 16777216 particles and 33554429 springs exceed the limit of 16777216 "
+	              "of each per structure") == 0);
 	ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0 && sm_model_free_count(m) == 1);
 	sm_model_destroy(m);
 	return 0;
@@ -751,7 +776,8 @@ static int test_sheet_particle_limit_checked_first(void)
 	sm_sheet_def sheet = sm_default_sheet_def();
 	sheet.nu = sheet.nv = INT32_MAX;
 	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "sheet: 2147483647 x 2147483647 particles exceed the limit of 16777216 per structure") == 0);
+	               "sheet: 2147483647 x 2147483647 particles exceed the limit of 16777216 per structure") ==
+	       0);
 	sheet.nv = 2;
 	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
 	               "sheet: 2147483647 x 2 particles exceed the limit of 16777216 per structure") == 0);
@@ -828,10 +854,13 @@ static int test_sheet_diagonal_neighbours_distinct(void)
 	sheet.edge_v[0] = 1.0;
 	sheet.edge_v[1] = 1e-11;
 	for (int constants = 0; constants < 2; constants++) {
-		sheet.structural = sheet.shear = sheet.bend = constants == 0 ? absolute : sm_default_sheet_def().shear;
-		ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
-		               "sheet: particles 2 and 4 coincide at (0.5, 1e+06, 0) m: the diagonal of the grid's cells is "
-		               "below the resolution of the coordinates there (edge_u and edge_v nearly parallel)") == 0);
+		sheet.structural = sheet.shear = sheet.bend =
+		    constants == 0 ? absolute : sm_default_sheet_def().shear;
+		ENSURE(
+		    refused(
+		        m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+		        "sheet: particles 2 and 4 coincide at (0.5, 1e+06, 0) m: the diagonal of the grid's cells is "
+		        "below the resolution of the coordinates there (edge_u and edge_v nearly parallel)") == 0);
 	}
 	sheet.origin[1] = 0.0;
 	sm_structure s;
@@ -922,10 +951,11 @@ static int test_mesh_edge_order(void)
 		for (int32_t e = 0; e < cases[c].edge_count; e++) {
 			sm_spring_def sd;
 			ENSURE_STATUS(sm_model_get_spring(m, s.first_spring + e, &sd), SM_OK);
-			if (sd.a != s.first_particle + cases[c].edges[e][0] || sd.b != s.first_particle + cases[c].edges[e][1]) {
+			if (sd.a != s.first_particle + cases[c].edges[e][0] ||
+			    sd.b != s.first_particle + cases[c].edges[e][1]) {
 				printf("  case %zu: edge spring %d joins vertices (%d, %d), expected (%d, %d)\n", c, (int)e,
-				       (int)(sd.a - s.first_particle), (int)(sd.b - s.first_particle), (int)cases[c].edges[e][0],
-				       (int)cases[c].edges[e][1]);
+				       (int)(sd.a - s.first_particle), (int)(sd.b - s.first_particle),
+				       (int)cases[c].edges[e][0], (int)cases[c].edges[e][1]);
 				return 1;
 			}
 		}
@@ -968,13 +998,16 @@ static int test_zero_size_and_break_strain(void)
 	// A break strain of at most 2^-53 leaves l0 (1 + break strain) = l0 (SM_MIN_BREAK_STRAIN):
 	// refused by the structure, naming its group; the next double above is accepted.
 	rope.structural.break_strain = 5e-324;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "rope: structural break strain = 4.94065645841247e-324 must be > 2^-53 = 1.1102230246251565e-16: "
-	               "l0 (1 + break strain) would round to l0, and the springs break at rest") == 0);
+	ENSURE(
+	    refused(
+	        m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	        "rope: structural break strain = 4.94065645841247e-324 must be > 2^-53 = 1.1102230246251565e-16: "
+	        "l0 (1 + break strain) would round to l0, and the springs break at rest") == 0);
 	rope.structural.break_strain = 1.105e-16;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "rope: structural break strain = 1.105e-16 must be > 2^-53 = 1.1102230246251565e-16: l0 (1 + "
-	               "break strain) would round to l0, and the springs break at rest") == 0);
+	ENSURE(
+	    refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+		        "rope: structural break strain = 1.105e-16 must be > 2^-53 = 1.1102230246251565e-16: l0 (1 + "
+		        "break strain) would round to l0, and the springs break at rest") == 0);
 	rope.structural.break_strain = nextafter(SM_MIN_BREAK_STRAIN, 1.0);
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
 	sm_model_destroy(m);
@@ -1348,15 +1381,15 @@ static int test_per_section_rules(void)
 	sm_rope_def rope = sm_default_rope_def();
 	rope.structural = section_material(10.0);
 	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strstr(sm_model_last_error(model), "rope: structural stiffness per section: a rope has no cross-section") !=
-	       NULL);
+	ENSURE(strstr(sm_model_last_error(model),
+	              "rope: structural stiffness per section: a rope has no cross-section") != NULL);
 	rope.structural = sm_default_spring_material();
 	rope.structural.stiffness = 10.0;
 	rope.structural.damping = 1.0;
 	rope.structural.damping_scaling = SM_PER_SECTION;
 	ENSURE_STATUS(sm_add_rope(model, &rope, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strstr(sm_model_last_error(model), "rope: structural damping per section: a rope has no cross-section") !=
-	       NULL);
+	ENSURE(strstr(sm_model_last_error(model),
+	              "rope: structural damping per section: a rope has no cross-section") != NULL);
 	ENSURE(sm_model_particle_count(model) == 0);
 	sm_particle_def p = sm_default_particle_def();
 	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
@@ -1536,7 +1569,8 @@ static int test_block_positions_follow_each_axis_count(void)
 	static const double expected[4][3] = {{0.5, 1.0, 0.0}, {1.5, 2.0, 3.0}, {0.5, 0.0, 1.0}, {1.5, 1.0, 2.0}};
 	for (int n = 0; n < 4; n++) {
 		sm_particle_def p;
-		ENSURE_STATUS(sm_model_get_particle(m, sm_structure_particle(&s, at[n][0], at[n][1], at[n][2]), &p), SM_OK);
+		ENSURE_STATUS(sm_model_get_particle(m, sm_structure_particle(&s, at[n][0], at[n][1], at[n][2]), &p),
+		              SM_OK);
 		for (int c = 0; c < 3; c++)
 			ENSURE_NEAR(p.position[c], expected[n][c], 1e-15);
 	}
@@ -1649,8 +1683,8 @@ static int test_grid_counts_below_two_refused(void)
 	               "block: nu = 4, nv = 4 and nw = 1 must all be >= 2") == 0);
 	sm_rope_def rope = sm_default_rope_def();
 	rope.segments = 0;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT, "rope: segments = 0 must be >= 1") ==
-	       0);
+	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	               "rope: segments = 0 must be >= 1") == 0);
 	sm_model_destroy(m);
 	return 0;
 }
@@ -1803,8 +1837,8 @@ static int test_mesh_vertex_limit_checked_first(void)
 	sm_mesh_def mesh = sm_default_mesh_def();
 	mesh.vertices = vertices, mesh.vertex_count = count, mesh.triangles = triangle, mesh.triangle_count = 1;
 	char expected[128];
-	snprintf(expected, sizeof expected, "mesh: %d vertices exceed the limit of %d particles per structure", (int)count,
-	         SM_STRUCTURE_MAX_ELEMENTS);
+	snprintf(expected, sizeof expected, "mesh: %d vertices exceed the limit of %d particles per structure",
+	         (int)count, SM_STRUCTURE_MAX_ELEMENTS);
 	const int bad = refused(m, sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT, expected);
 	free(vertices);
 	ENSURE(bad == 0);
@@ -1885,10 +1919,11 @@ static int test_rope_without_length(void)
 	sm_rope_def rope = sm_default_rope_def();
 	rope.end[0] = 0.0;
 	rope.segments = 3;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
-	               "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
-	               "per-strain stiffness (E / l0) needs a rest length > 0: give it an absolute stiffness, or the "
-	               "rope a length") == 0);
+	ENSURE(refused(
+	           m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
+	           "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
+	           "per-strain stiffness (E / l0) needs a rest length > 0: give it an absolute stiffness, or the "
+	           "rope a length") == 0);
 	rope.structural = sm_default_spring_material();
 	rope.structural.stiffness = 10.0;
 	rope.structural.stiffness_scaling = rope.structural.damping_scaling = SM_ABSOLUTE;
@@ -1901,16 +1936,20 @@ static int test_rope_without_length(void)
 	               "rope a length") == 0);
 	rope.bending.damping_scaling = SM_ABSOLUTE;
 	rope.structural.break_strain = 0.5;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
-	               "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
-	               "break strain ((L - l0) / l0) needs a rest length > 0: give it none, or the rope a length") == 0);
+	ENSURE(
+	    refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_ZERO_REST_LENGTH,
+		        "rope: start = end = (0, 0, 0) m: its springs have rest length 0, and the structural group's "
+		        "break strain ((L - l0) / l0) needs a rest length > 0: give it none, or the rope a length") ==
+	    0);
 	rope.structural.break_strain = INFINITY;
 	rope.start[0] = 1e10;
 	rope.end[0] = 1e10 + 2e-6;
 	rope.segments = 4;
-	ENSURE(refused(m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "rope: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is below the resolution "
-	               "of the coordinates there") == 0);
+	ENSURE(
+	    refused(
+	        m, sm_add_rope(m, &rope, NULL), SM_ERROR_INVALID_ARGUMENT,
+	        "rope: particles 1 and 2 coincide at (1e+10, 0, 0) m: the grid spacing is below the resolution "
+	        "of the coordinates there") == 0);
 	rope.start[0] = rope.end[0] = 0.0;
 	ENSURE_STATUS(sm_add_rope(m, &rope, NULL), SM_OK);
 	sm_model_destroy(m);
@@ -1936,39 +1975,47 @@ static int test_absurd_sizes_named(void)
 	sheet.shear = sheet.bend = sm_default_spring_material();
 	sheet.structural = section_material(1.0);
 	sheet.edge_u[0] = sheet.edge_v[1] = 1e200;
-	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
-	               "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
-	               "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
+	ENSURE(
+	    refused(
+	        m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	        "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
+	        "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
 	sheet.edge_u[0] = sheet.edge_v[1] = 1e-200;
-	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "sheet: structural spring between particles 1 and 2 would be 5e-201 m long, below 1.5e-154 m, "
-	               "where its squared length underflows: edge_u, edge_v, nu and nv make the grid too fine") == 0);
+	ENSURE(refused(
+	           m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_INVALID_ARGUMENT,
+	           "sheet: structural spring between particles 1 and 2 would be 5e-201 m long, below 1.5e-154 m, "
+	           "where its squared length underflows: edge_u, edge_v, nu and nv make the grid too fine") == 0);
 	sheet.edge_u[0] = sheet.edge_v[1] = 1e160;
 	sheet.structural.stiffness_scaling = SM_ABSOLUTE;
-	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
-	               "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
-	               "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
+	ENSURE(
+	    refused(
+	        m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	        "sheet: structural spring between particles 1 and 2 would be longer than 1.3e+154 m, where its "
+	        "squared length overflows: edge_u, edge_v, nu and nv make the structure too large") == 0);
 	sheet.edge_u[0] = sheet.edge_v[1] = 1.0;
 	sheet.origin[0] = 1.5e308;
 	sheet.edge_u[0] = 1e308;
-	ENSURE(refused(m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
-	               "sheet: origin (1.5e+308, 0, 0) m plus edge_u (1e+308, 0, 0) m and edge_v (0, 1, 0) m reaches "
-	               "beyond the largest double along x") == 0);
+	ENSURE(refused(
+	           m, sm_add_sheet(m, &sheet, NULL), SM_ERROR_NOT_FINITE,
+	           "sheet: origin (1.5e+308, 0, 0) m plus edge_u (1e+308, 0, 0) m and edge_v (0, 1, 0) m reaches "
+	           "beyond the largest double along x") == 0);
 
 	sm_block_def block = sm_default_block_def();
 	block.nu = block.nv = block.nw = 3;
 	block.face_diagonal = block.body_diagonal = sm_default_spring_material();
 	block.edge = section_material(1.0);
 	block.size[0] = block.size[1] = block.size[2] = 1e110;  // cells of 1.25e329 m^3
-	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_NOT_FINITE,
-	               "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
-	               "for over its length, overflows: size, nu, nv and nw make the cells too large for per-section "
-	               "constants") == 0);
+	ENSURE(refused(
+	           m, sm_add_block(m, &block, NULL), SM_ERROR_NOT_FINITE,
+	           "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
+	           "for over its length, overflows: size, nu, nv and nw make the cells too large for per-section "
+	           "constants") == 0);
 	block.size[0] = block.size[1] = block.size[2] = 1e-110;  // cells of 1.25e-331 m^3
-	ENSURE(refused(m, sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT,
-	               "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
-	               "for over its length, underflows to 0: size, nu, nv and nw make the cells too small for "
-	               "per-section constants") == 0);
+	ENSURE(refused(
+	           m, sm_add_block(m, &block, NULL), SM_ERROR_INVALID_ARGUMENT,
+	           "block: edge spring between particles 1 and 2: its section, the volume of the cells it stands "
+	           "for over its length, underflows to 0: size, nu, nv and nw make the cells too small for "
+	           "per-section constants") == 0);
 	block.size[0] = block.size[1] = block.size[2] = 1.0;
 	block.origin[2] = -1.7e308;
 	block.size[2] = 1.7e308;
@@ -2024,8 +2071,9 @@ static int test_absurd_sizes_named(void)
 	const double tinier[9] = {0, 0, 0, 1e-200, 0, 0, 0, 1e-200, 0};
 	mesh.vertices = tinier;
 	ENSURE_STATUS(sm_add_mesh(m, &mesh, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strcmp(sm_model_last_error(m), "mesh: the area of triangle 0 (0, 1, 2) underflows to 0 (its edges are too "
-	                                      "short)") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "mesh: the area of triangle 0 (0, 1, 2) underflows to 0 (its edges are too "
+	              "short)") == 0);
 	// One of 1e100 m sides, whose springs a model holds as a sheet's of that size, has an area,
 	// 5e199 m^2, though the square of its cross product overflows: not "its area overflows". At
 	// 1e-200 kg/m^2 its vertices get a sixth of a kilogram each, edge springs per section a

@@ -101,8 +101,8 @@ static void hash_model(uint64_t* h, const sm_model* model)
 		sm_model_get_spring(model, s, &d);
 		double resolved[3];
 		sm_model_spring_constants(model, s, &resolved[0], &resolved[1], &resolved[2]);
-		const int64_t kind[6] = {d.a, d.b, d.kind, d.stiffness_scaling, d.damping_scaling,
-		                         sm_model_spring_enabled(model, s)};
+		const int64_t kind[6] = {
+		    d.a, d.b, d.kind, d.stiffness_scaling, d.damping_scaling, sm_model_spring_enabled(model, s)};
 		const double given[4] = {d.rest_length, d.stiffness, d.damping, d.break_strain};
 		hash_bytes(h, kind, sizeof kind);
 		hash_doubles(h, given, 4);
@@ -161,15 +161,15 @@ static const char model_text[] =
 
 typedef struct inputs {
 	sm_document* document;
-	sm_model* chain;            // 6 particles, the first fixed: dense LU, Adams
-	sm_model* cloth_klu;        // 6 x 6, 34 free particles
-	sm_model* cloth_jacobi;     // 8 x 8, 62 free: block Jacobi alone
-	sm_model* cloth_two_level;  // 11 x 11, 119 free: two-level, exact coarse solve
-	sm_model* cloth_multilevel; // 12 x 12, 142 free: multilevel coarse solve
-	sm_model* cloth_tearing;    // 6 x 6, soft springs that break under gravity
-	sm_model* cloth_hanging;    // 7 x 7 hanging from its whole first row: statics and modes
+	sm_model* chain;              // 6 particles, the first fixed: dense LU, Adams
+	sm_model* cloth_klu;          // 6 x 6, 34 free particles
+	sm_model* cloth_jacobi;       // 8 x 8, 62 free: block Jacobi alone
+	sm_model* cloth_two_level;    // 11 x 11, 119 free: two-level, exact coarse solve
+	sm_model* cloth_multilevel;   // 12 x 12, 142 free: multilevel coarse solve
+	sm_model* cloth_tearing;      // 6 x 6, soft springs that break under gravity
+	sm_model* cloth_hanging;      // 7 x 7 hanging from its whole first row: statics and modes
 	sm_sparse_jacobian* pattern;  // of cloth_hanging
-	double* state;              // a configuration of cloth_hanging: x then v, 3 per particle each
+	double* state;                // a configuration of cloth_hanging: x then v, 3 per particle each
 } inputs;
 
 static inputs in;
@@ -320,19 +320,32 @@ typedef enum work_kind {
 	WORK_COUNT
 } work_kind;
 
-static const char* const work_names[WORK_COUNT] = {
-    "parse",   "build", "dense",   "klu",           "pcg block Jacobi", "pcg two-level", "pcg multilevel",
-    "pcg multilevel on 2 threads", "cholmod", "adams", "break",   "statics dense", "statics sparse",   "modes dense",   "modes sparse",
-    "sparse jacobian",  "save"};
+static const char* const work_names[WORK_COUNT] = {"parse",
+                                                   "build",
+                                                   "dense",
+                                                   "klu",
+                                                   "pcg block Jacobi",
+                                                   "pcg two-level",
+                                                   "pcg multilevel",
+                                                   "pcg multilevel on 2 threads",
+                                                   "cholmod",
+                                                   "adams",
+                                                   "break",
+                                                   "statics dense",
+                                                   "statics sparse",
+                                                   "modes dense",
+                                                   "modes sparse",
+                                                   "sparse jacobian",
+                                                   "save"};
 
 // ENSURE for the functions below, which free what they made: they start with `int failed = 1`,
 // set it to 0 at the end of the work and free everything after the label `done`.
-#define CHECK(cond)                                                                                 \
-	do {                                                                                            \
-		if (!(cond)) {                                                                              \
-			printf("  %s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);                       \
-			goto done;                                                                              \
-		}                                                                                           \
+#define CHECK(cond)                                                                                          \
+	do {                                                                                                     \
+		if (!(cond)) {                                                                                       \
+			printf("  %s:%d: check failed: %s\n", __FILE__, __LINE__, #cond);                                \
+			goto done;                                                                                       \
+		}                                                                                                    \
 	} while (0)
 
 static int work_parse(uint64_t* h)
@@ -454,9 +467,15 @@ static int simulate(const sm_model* model, sm_method method, sm_linear_solver so
 	const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
 	hash_doubles(h, energies, 4);
 	const sm_statistics s = sm_simulation_statistics(sim);
-	const int64_t counters[9] = {s.steps,        s.rhs_evaluations,     s.jacobian_evaluations,
-	                             s.linear_iterations, s.error_test_failures, s.convergence_failures,
-	                             s.restarts,     s.factorizations,      sm_simulation_solver(sim)};
+	const int64_t counters[9] = {s.steps,
+	                             s.rhs_evaluations,
+	                             s.jacobian_evaluations,
+	                             s.linear_iterations,
+	                             s.error_test_failures,
+	                             s.convergence_failures,
+	                             s.restarts,
+	                             s.factorizations,
+	                             sm_simulation_solver(sim)};
 	hash_bytes(h, counters, sizeof counters);
 	CHECK(sm_simulation_break_count(sim) >= min_breaks);
 	hash_int(h, sm_simulation_break_count(sim));
@@ -487,8 +506,12 @@ static int statics(sm_statics_solver solver, uint64_t* h)
 	}
 	CHECK(result.solver == solver);
 	hash_doubles(h, x, 6 * (size_t)n);
-	const double numbers[7] = {result.residual,          result.potential_energy, result.reaction_total[0],
-	                           result.reaction_total[1], result.reaction_total[2], result.iterations,
+	const double numbers[7] = {result.residual,
+	                           result.potential_energy,
+	                           result.reaction_total[0],
+	                           result.reaction_total[1],
+	                           result.reaction_total[2],
+	                           result.iterations,
 	                           result.stable};
 	hash_doubles(h, numbers, 7);
 	failed = 0;
@@ -515,7 +538,8 @@ static int modes(sm_modes_solver solver, uint64_t* h)
 	hash_doubles(h, m.modal_damping, count);
 	hash_doubles(h, m.damping_ratio, count);
 	hash_doubles(h, m.shapes, count * 3 * (size_t)m.particle_count);
-	const double summary[6] = {m.zero_count, m.unstable_count, m.omega_max, m.damping_coupling, m.residual, m.shift};
+	const double summary[6] = {m.zero_count,       m.unstable_count, m.omega_max,
+	                           m.damping_coupling, m.residual,       m.shift};
 	hash_doubles(h, summary, 6);
 	sm_modes_release(&m);
 	if (used != solver || count != 6) {
@@ -596,15 +620,21 @@ static int run_work(work_kind kind, int slot, uint64_t* hash)
 	case WORK_BUILD: failed = work_build(&h); break;
 	case WORK_DENSE: failed = simulate(in.chain, SM_METHOD_BDF, SM_SOLVER_DENSE, 1, 1.0, 0, &h); break;
 	case WORK_KLU: failed = simulate(in.cloth_klu, SM_METHOD_BDF, SM_SOLVER_KLU, 1, 0.05, 0, &h); break;
-	case WORK_JACOBI: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.05, 0, &h); break;
-	case WORK_TWO_LEVEL: failed = simulate(in.cloth_two_level, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.02, 0, &h); break;
+	case WORK_JACOBI:
+		failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.05, 0, &h);
+		break;
+	case WORK_TWO_LEVEL:
+		failed = simulate(in.cloth_two_level, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.02, 0, &h);
+		break;
 	case WORK_MULTILEVEL:
 		failed = simulate(in.cloth_multilevel, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 1, 0.02, 0, &h);
 		break;
 	case WORK_MULTILEVEL_THREADS:
 		failed = simulate(in.cloth_multilevel, SM_METHOD_BDF, SM_SOLVER_REDUCED_PCG, 2, 0.02, 0, &h);
 		break;
-	case WORK_CHOLMOD: failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_CHOLMOD, 1, 0.05, 0, &h); break;
+	case WORK_CHOLMOD:
+		failed = simulate(in.cloth_jacobi, SM_METHOD_BDF, SM_SOLVER_REDUCED_CHOLMOD, 1, 0.05, 0, &h);
+		break;
 	case WORK_ADAMS: failed = simulate(in.chain, SM_METHOD_ADAMS, SM_SOLVER_AUTO, 1, 1.0, 0, &h); break;
 	case WORK_BREAK: failed = simulate(in.cloth_tearing, SM_METHOD_BDF, SM_SOLVER_AUTO, 1, 0.2, 2, &h); break;
 	case WORK_STATICS_DENSE: failed = statics(SM_STATICS_DENSE, &h); break;
@@ -706,10 +736,10 @@ static int check_copies(work_kind kind)
 	return 0;
 }
 
-#define COPIES_TEST(name, kind)                                                                     \
-	static int test_copies_##name(void)                                                             \
-	{                                                                                               \
-		return check_copies(kind);                                                                  \
+#define COPIES_TEST(name, kind)                                                                              \
+	static int test_copies_##name(void)                                                                      \
+	{                                                                                                        \
+		return check_copies(kind);                                                                           \
 	}
 COPIES_TEST(parse, WORK_PARSE)
 COPIES_TEST(build, WORK_BUILD)
@@ -904,7 +934,8 @@ static int test_exceptions_raised_in_helpers_reach_the_caller(void)
 static int test_save_in_a_decimal_comma_locale(void)
 {
 	ENSURE(reference_failed == 0);
-	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8", "nl_NL.UTF-8"};
+	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
+	                                    "nl_NL.UTF-8"};
 	locale_t comma = (locale_t)0;
 	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
 		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);

@@ -90,18 +90,10 @@ static void fill(vector_sets* s, int k, enum fill_kind kind)
 			if (rng_uniform(&s->random, 0.0, 1.0) < 1.0 / 6.0)
 				v = u < 0.0 ? -0.0 : 0.0;
 			break;
-		case FILL_NONZERO:
-			v = u < 0.0 ? -0.1 + 1.9 * u : 0.1 + 1.9 * u;
-			break;
-		case FILL_POSITIVE:
-			v = 0.1 + 1.9 * fabs(u);
-			break;
-		case FILL_CONSTRAINT:
-			v = floor(2.5 * u + 2.5) - 2.0;
-			break;
-		case FILL_MASK:
-			v = floor(1.5 * u + 1.5) - 1.0;
-			break;
+		case FILL_NONZERO: v = u < 0.0 ? -0.1 + 1.9 * u : 0.1 + 1.9 * u; break;
+		case FILL_POSITIVE: v = 0.1 + 1.9 * fabs(u); break;
+		case FILL_CONSTRAINT: v = floor(2.5 * u + 2.5) - 2.0; break;
+		case FILL_MASK: v = floor(1.5 * u + 1.5) - 1.0; break;
 		}
 		ours[i] = theirs[i] = v;
 	}
@@ -123,11 +115,11 @@ static bool same_value(double a, double b)
 }
 
 // |a - b| <= 1e-14 magnitude, or both NaN.
-#define ENSURE_SUM(a, b, magnitude)                                                                 \
-	do {                                                                                            \
-		const double sa_ = (a), sb_ = (b);                                                          \
-		if (!(isnan(sa_) && isnan(sb_)))                                                            \
-			ENSURE_REL(sa_, sb_, 1e-14, (magnitude));                                               \
+#define ENSURE_SUM(a, b, magnitude)                                                                          \
+	do {                                                                                                     \
+		const double sa_ = (a), sb_ = (b);                                                                   \
+		if (!(isnan(sa_) && isnan(sb_)))                                                                     \
+			ENSURE_REL(sa_, sb_, 1e-14, (magnitude));                                                        \
 	} while (0)
 
 // sum |x_i y_i| over vectors i and j of `theirs` (y = NULL: sum |x_i|).
@@ -161,10 +153,10 @@ static int for_each_length(int (*check)(vector_sets* s), uint64_t seed)
 }
 
 // test_NAME runs check_NAME on every length.
-#define LENGTH_TEST(name, seed)                                                                     \
-	static int test_##name(void)                                                                    \
-	{                                                                                               \
-		return for_each_length(check_##name, seed);                                                 \
+#define LENGTH_TEST(name, seed)                                                                              \
+	static int test_##name(void)                                                                             \
+	{                                                                                                        \
+		return for_each_length(check_##name, seed);                                                          \
 	}
 
 // ---------------------------------------------------------------------------------------------
@@ -174,9 +166,9 @@ static int for_each_length(int (*check)(vector_sets* s), uint64_t seed)
 static int check_linear_sum(vector_sets* s)
 {
 	// The special cases +-1, equal and opposite weights, zero, and general weights.
-	static const double weights[][2] = {{1, 1},     {1, -1},      {-1, 1},     {-1, -1}, {1, 0.3},
-	                                    {-1, 0.3},  {0.3, 1},     {0.3, -1},   {0.7, 0.7}, {0.7, -0.7},
-	                                    {-0.7, 0.7}, {0.3, -2.5}, {0, 0.5},    {0, 0},     {1e-3, 7}};
+	static const double weights[][2] = {{1, 1},      {1, -1},     {-1, 1},   {-1, -1},   {1, 0.3},
+	                                    {-1, 0.3},   {0.3, 1},    {0.3, -1}, {0.7, 0.7}, {0.7, -0.7},
+	                                    {-0.7, 0.7}, {0.3, -2.5}, {0, 0.5},  {0, 0},     {1e-3, 7}};
 	for (size_t w = 0; w < sizeof weights / sizeof weights[0]; w++) {
 		const double a = weights[w][0], b = weights[w][1];
 		// z distinct, z = x, z = y, and x = y = z.
@@ -636,8 +628,8 @@ static int heat_preconditioner_solve(sunrealtype t, N_Vector y, N_Vector fy, N_V
 
 // Which operations the state vector carries.
 typedef enum heat_operations {
-	OPERATIONS_SUNDIALS,  // SUNDIALS' serial ones
-	OPERATIONS_OURS,      // vector_ops.c
+	OPERATIONS_SUNDIALS,       // SUNDIALS' serial ones
+	OPERATIONS_OURS,           // vector_ops.c
 	OPERATIONS_OURS_BUT_SUMS,  // vector_ops.c, with SUNDIALS' sums and norms put back
 } heat_operations;
 

@@ -97,8 +97,8 @@ static int parse_setting(const char* command, const sm_document* doc, const char
 	}
 	*index = sm_document_parameter_index(doc, name);
 	if (*index < 0) {
-		fprintf(stderr, "springmass %s: --set %s: the model has no parameter named \"%s\"\n", command, setting,
-		        name);
+		fprintf(stderr, "springmass %s: --set %s: the model has no parameter named \"%s\"\n", command,
+		        setting, name);
 		return 1;
 	}
 	return 0;
@@ -176,7 +176,7 @@ void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, con
 	while (*s != '\0') {
 		// A word "particle", "particles" or "spring" at a word's start, a space, an index.
 		const bool word_start = s == message || !((s[-1] >= 'a' && s[-1] <= 'z') || s[-1] == '_');
-		const size_t word = !word_start                          ? 0
+		const size_t word = !word_start                         ? 0
 		                    : strncmp(s, "particles ", 10) == 0 ? 10
 		                    : strncmp(s, "particle ", 9) == 0   ? 9
 		                    : strncmp(s, "spring ", 7) == 0     ? 7
@@ -242,10 +242,11 @@ int cli_load_model(const char* command, const char* path, const char* const* set
 void cli_note_dense(const char* command, size_t dof)
 {
 	if (dof > CLI_DENSE_LIMIT)
-		fprintf(stderr,
-		        "springmass %s: note: a dense solve of %zu degrees of freedom takes long (its time grows as the "
-		        "cube of their number: minutes above %d, hours at 10000)\n",
-		        command, dof, CLI_DENSE_LIMIT);
+		fprintf(
+		    stderr,
+		    "springmass %s: note: a dense solve of %zu degrees of freedom takes long (its time grows as the "
+		    "cube of their number: minutes above %d, hours at 10000)\n",
+		    command, dof, CLI_DENSE_LIMIT);
 }
 
 long cli_output_rows(double t_end, double interval)
@@ -265,7 +266,8 @@ int cli_make_directory(const char* command, const char* dir)
 	if (error == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode))
 		return 0;
 	if (error == EEXIST)
-		fprintf(stderr, "springmass %s: cannot create directory %s: a file of that name exists\n", command, dir);
+		fprintf(stderr, "springmass %s: cannot create directory %s: a file of that name exists\n", command,
+		        dir);
 	else
 		fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command, dir, strerror(error));
 	return -1;
@@ -335,7 +337,8 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 		fprintf(f, "%.9g %.9g %.9g\n", values[3 * i], values[3 * i + 1], values[3 * i + 2]);
 }
 
-void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values, bool first)
+void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values,
+                            bool first)
 {
 	const int32_t springs = sm_model_spring_count(model);
 	if (first) {
@@ -358,15 +361,15 @@ int cli_check_output(const char* command, const char* option, const char* output
 	if (strcmp(output, "-") == 0) {
 		if (dash_is_stdout)
 			return 0;
-		fprintf(stderr, "springmass %s: %s -: this output is a file, not standard output; give its name\n", command,
-		        option);
+		fprintf(stderr, "springmass %s: %s -: this output is a file, not standard output; give its name\n",
+		        command, option);
 		return 2;
 	}
 	struct stat out, in;
 	if (input != NULL && stat(output, &out) == 0 && stat(input, &in) == 0 && out.st_dev == in.st_dev &&
 	    out.st_ino == in.st_ino) {
-		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n", command,
-		        option, output, input_what, input);
+		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n",
+		        command, option, output, input_what, input);
 		return 2;
 	}
 	return 0;
@@ -374,7 +377,8 @@ int cli_check_output(const char* command, const char* option, const char* output
 
 void cli_cannot_write(const char* command, const char* path)
 {
-	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path, errno != 0 ? strerror(errno) : "write error");
+	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,
+	        errno != 0 ? strerror(errno) : "write error");
 }
 
 int cli_close(const char* command, const char* path, FILE* f)
@@ -396,7 +400,8 @@ int cli_model_argument(const char* command, const char* arg, const char** model)
 		return 2;
 	}
 	if (*model != NULL) {
-		fprintf(stderr, "springmass %s: one model file at a time ('%s' and '%s' given)\n\n", command, *model, arg);
+		fprintf(stderr, "springmass %s: one model file at a time ('%s' and '%s' given)\n\n", command, *model,
+		        arg);
 		return 2;
 	}
 	*model = arg;

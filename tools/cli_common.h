@@ -88,7 +88,8 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 
 /// Writes one scalar field of cell data: the values (one per spring, in spring order) of the
 /// intact springs, the lines of cli_vtk_open; `first` for the first field.
-void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values, bool first);
+void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values,
+                            bool first);
 
 /// Checks the file an option writes (NULL: none given) before anything runs: "-" is standard
 /// output where `dash_is_stdout`, a file name everywhere else; a file that is `input` itself (the

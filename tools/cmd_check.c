@@ -69,8 +69,8 @@ static void print_structure(const sm_structure_info* s)
 		printf("of %d vertices", (int)r->shape[0]);
 		groups = mesh;
 	}
-	printf(": particles %d - %d, %d springs", (int)r->first_particle, (int)(r->first_particle + r->particle_count - 1),
-	       (int)r->spring_count);
+	printf(": particles %d - %d, %d springs", (int)r->first_particle,
+	       (int)(r->first_particle + r->particle_count - 1), (int)r->spring_count);
 	const char* separator = " (";
 	for (int g = 0; g < 3; g++)
 		if (groups[g] != NULL && r->group_spring_count[g] > 0) {
@@ -119,10 +119,11 @@ int sm_cmd_check(int argc, char** argv)
 	// The settings must also suit `springmass run MODEL`, which writes a row every interval.
 	const sm_document_settings settings = sm_document_get_settings(doc);
 	if (cli_output_rows(settings.stop_time, settings.output_interval) < 0) {
-		fprintf(stderr,
-		        "springmass check: %s: simulation: stop_time / output_interval = %g s / %g s would make more than %g "
-		        "output rows in springmass run\n",
-		        path, settings.stop_time, settings.output_interval, CLI_MAX_ROWS);
+		fprintf(
+		    stderr,
+		    "springmass check: %s: simulation: stop_time / output_interval = %g s / %g s would make more than %g "
+		    "output rows in springmass run\n",
+		    path, settings.stop_time, settings.output_interval, CLI_MAX_ROWS);
 		sm_model_destroy(model);
 		sm_document_destroy(doc);
 		return 1;
@@ -191,8 +192,8 @@ int sm_cmd_check(int argc, char** argv)
 		}
 		printf("\n");
 	}
-	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, ", (int)m, (int)rest_length,
-	       (int)zero_length, (int)per_strain);
+	printf("springs      %d: %d rest-length, %d zero-length; %d with per-strain stiffness, ", (int)m,
+	       (int)rest_length, (int)zero_length, (int)per_strain);
 	if (per_section > 0)
 		printf("%d per section, ", (int)per_section);
 	printf("%d breakable\n", (int)breakable);
@@ -206,8 +207,8 @@ int sm_cmd_check(int argc, char** argv)
 	}
 	printf("total mass   %.6g kg\n", sm_model_total_mass(model));
 	const sm_model_def def = sm_model_get_def(model);
-	printf("gravity      (%g, %g, %g) m/s^2, mass damping %g 1/s\n", def.gravity[0], def.gravity[1], def.gravity[2],
-	       def.mass_damping);
+	printf("gravity      (%g, %g, %g) m/s^2, mass damping %g 1/s\n", def.gravity[0], def.gravity[1],
+	       def.gravity[2], def.mass_damping);
 	const int32_t ports = sm_document_port_count(doc);
 	printf("ports        %d\n", (int)ports);
 	for (int32_t k = 0; k < ports; k++) {
@@ -267,15 +268,18 @@ int sm_cmd_check(int argc, char** argv)
 		printf("omega_max    <= %.6g rad/s (%.6g Hz; Gershgorin bound, undamped)\n", limit.omega_max,
 		       limit.omega_max / (2.0 * 3.14159265358979323846));
 	if (isfinite(limit.step) && limit.step > 0.0)
-		printf("explicit     stable with symplectic Euler at steps up to at least %.3g s (damping rate <= %.3g 1/s; "
-		       "springmass modes MODEL -n 0: a closer value)\n",
-		       limit.step, limit.damping_rate);
+		printf(
+		    "explicit     stable with symplectic Euler at steps up to at least %.3g s (damping rate <= %.3g 1/s; "
+		    "springmass modes MODEL -n 0: a closer value)\n",
+		    limit.step, limit.damping_rate);
 	// A valid file all the same, but one no integrator can follow: its time scale is below 1e-154 s.
 	if (!isfinite(max_omega) || !isfinite(limit.omega_max))
-		printf("warning      the highest frequency overflows a double (a stiffness / mass ratio above 1.8e308 "
-		       "1/s^2): no integrator can simulate the model\n");
+		printf(
+		    "warning      the highest frequency overflows a double (a stiffness / mass ratio above 1.8e308 "
+		    "1/s^2): no integrator can simulate the model\n");
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
-	       settings.output_interval, settings.solver.relative_tolerance, sm_linear_solver_name(settings.solver.solver));
+	       settings.output_interval, settings.solver.relative_tolerance,
+	       sm_linear_solver_name(settings.solver.solver));
 	printf("ok\n");
 	sm_model_destroy(model);
 	sm_document_destroy(doc);

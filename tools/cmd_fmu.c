@@ -23,8 +23,10 @@
 int sm_cmd_fmu(int argc, char** argv)
 {
 	(void)argc;
-	fprintf(stderr, "springmass %s: this build has no FMU support (configure with SPRINGMASS_BUILD_FMU=ON and "
-	                "SPRINGMASS_PYTHON set)\n", argv[0]);
+	fprintf(stderr,
+	        "springmass %s: this build has no FMU support (configure with SPRINGMASS_BUILD_FMU=ON and "
+	        "SPRINGMASS_PYTHON set)\n",
+	        argv[0]);
 	return 1;  // not a usage error: the command cannot run in this build
 }
 
@@ -134,8 +136,8 @@ static bool write_output(const char* output, const char* data, size_t length)
 	const char* slash = strrchr(target, '/');
 	const int folder = slash ? (int)(slash - target) + 1 : 0;
 	char temporary[PATH_MAX];
-	if (snprintf(temporary, sizeof temporary, "%.*sspringmass-fmu.partial-%ld", folder, target, (long)getpid()) >=
-	    (int)sizeof temporary) {
+	if (snprintf(temporary, sizeof temporary, "%.*sspringmass-fmu.partial-%ld", folder, target,
+	             (long)getpid()) >= (int)sizeof temporary) {
 		errno = ENAMETOOLONG;
 		return false;
 	}
@@ -341,7 +343,8 @@ static struct timespec archive_time(void)
 
 // Adds the entries under the staged folder `relative` ("" for the staging folder itself) to list,
 // setting their modes and times. False on failure, with errno.
-static bool stage_entries(const char* staging, const char* relative, const struct timespec when[2], entry_list* list)
+static bool stage_entries(const char* staging, const char* relative, const struct timespec when[2],
+                          entry_list* list)
 {
 	char folder[PATH_MAX];
 	if (!join(folder, sizeof folder, staging, relative))
@@ -356,7 +359,8 @@ static bool stage_entries(const char* staging, const char* relative, const struc
 		char entry[PATH_MAX], full[PATH_MAX];
 		struct stat st;
 		if (ok && name[0] != '.') {
-			const int length = snprintf(entry, sizeof entry, "%s%s%s", relative, relative[0] ? "/" : "", name);
+			const int length =
+			    snprintf(entry, sizeof entry, "%s%s%s", relative, relative[0] ? "/" : "", name);
 			ok = length > 0 && (size_t)length < sizeof entry && join(full, sizeof full, staging, entry) &&
 			     stat(full, &st) == 0 && add_entry(list, entry);
 			const bool folder_entry = ok && S_ISDIR(st.st_mode);
@@ -409,8 +413,8 @@ static int32_t set_order(const options* opt, const sm_document* doc, bool last, 
 // text of resources/parameters.txt: *parameters NULL when no value differs from the file's, and
 // *doc then as it was. Otherwise *doc is replaced by the document the FMU makes of the model file
 // and that text. Returns 0 or the exit status, after printing why.
-static int apply_sets(const options* opt, const char* text, size_t length, sm_document** doc, char** parameters,
-                      size_t* parameters_length)
+static int apply_sets(const options* opt, const char* text, size_t length, sm_document** doc,
+                      char** parameters, size_t* parameters_length)
 {
 	*parameters = NULL;
 	const int status = cli_set_parameters("fmu", *doc, opt->sets, opt->set_count);
@@ -431,18 +435,20 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	bool repeated = false;
 	for (int pass = 0; pass < 2 && !*parameters && !(pass == 1 && !repeated); ++pass) {
 		const int32_t order_count = set_order(opt, *doc, pass == 0, order, seen, &repeated);
-		*parameters = fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
+		*parameters =
+		    fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
 		if (!*parameters && err.status == SM_ERROR_OUT_OF_MEMORY)
 			break;
 	}
 	free(order);
 	free(seen);
 	if (!*parameters) {
-		fprintf(stderr, "springmass fmu: --set: %s%s\n", err.message,
-		        repeated && err.status != SM_ERROR_OUT_OF_MEMORY
-		            ? " (a parameter is set more than once: the FMU holds each value once; give each parameter once, "
-		              "in an order the model takes)"
-		            : "");
+		fprintf(
+		    stderr, "springmass fmu: --set: %s%s\n", err.message,
+		    repeated && err.status != SM_ERROR_OUT_OF_MEMORY
+		        ? " (a parameter is set more than once: the FMU holds each value once; give each parameter once, "
+		          "in an order the model takes)"
+				: "");
 		return 1;
 	}
 	if (*parameters_length == 0) {
@@ -474,11 +480,14 @@ static int package(const options* opt)
 	char path[PATH_MAX], runtime[PATH_MAX];
 
 	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
-		fprintf(stderr, "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s%s; give one with "
-		                "--runtime\n", runtime,
-		        opt->runtime == NULL && getenv("SPRINGMASS_FMU_RUNTIME") != NULL && *getenv("SPRINGMASS_FMU_RUNTIME")
+		fprintf(stderr,
+		        "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s%s; give one with "
+		        "--runtime\n",
+		        runtime,
+		        opt->runtime == NULL && getenv("SPRINGMASS_FMU_RUNTIME") != NULL &&
+		                *getenv("SPRINGMASS_FMU_RUNTIME")
 		            ? " (from $SPRINGMASS_FMU_RUNTIME)"
-		            : "");
+					: "");
 		return 1;
 	}
 	size_t length = 0;
@@ -544,7 +553,8 @@ static int package(const options* opt)
 			goto done;
 		const char* problem = NULL;
 		if (!copy_file(opt->reference, path, &problem)) {
-			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference, problem);
+			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference,
+			        problem);
 			goto done;
 		}
 	}
@@ -554,7 +564,8 @@ static int package(const options* opt)
 	char binary_name[NAME_MAX + 1], from[PATH_MAX];
 	const int written_name = snprintf(binary_name, sizeof binary_name, "%s.so", table.model_identifier);
 	if (written_name < 0 || (size_t)written_name >= sizeof binary_name ||
-	    !join(from, sizeof from, runtime, "binaries/linux64") || !join(path, sizeof path, staging, "binaries/linux64"))
+	    !join(from, sizeof from, runtime, "binaries/linux64") ||
+	    !join(path, sizeof path, staging, "binaries/linux64"))
 		goto done;
 	if (!copy_folder(from, path, "springmass_fmu.so", binary_name)) {
 		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, strerror(errno));
@@ -628,8 +639,8 @@ static int package(const options* opt)
 		cli_cannot_write("fmu", opt->output);
 		goto done;
 	}
-	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output, table.model_identifier,
-	       (int)table.count, table.guid);
+	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output,
+	       table.model_identifier, (int)table.count, table.guid);
 	if (parameters) {
 		printf("springmass fmu: parameter values of resources/" FMU_PARAMETERS_RESOURCE ":");
 		for (const char* line = parameters; *line; line = strchr(line, '\n') + 1)

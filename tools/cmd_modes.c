@@ -93,14 +93,16 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 {
 	const bool sparse = modes->solver == SM_MODES_SPARSE;
 	if (sparse)
-		printf("eigensolver       shift-invert Lanczos (CHOLMOD), the lowest %d modes; largest residual %.2e\n",
-		       (int)modes->count, modes->residual);
+		printf(
+		    "eigensolver       shift-invert Lanczos (CHOLMOD), the lowest %d modes; largest residual %.2e\n",
+		    (int)modes->count, modes->residual);
 	else
 		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes->dof,
 		       modes->residual);
-	printf("zero modes        %d%s (frequency 0: rigid-body motions or mechanisms%s)\n", (int)modes->zero_count,
-	       sparse ? " among the modes listed" : "",
-	       modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium" : "");
+	printf("zero modes        %d%s (frequency 0: rigid-body motions or mechanisms%s)\n",
+	       (int)modes->zero_count, sparse ? " among the modes listed" : "",
+	       modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium"
+	                                                : "");
 	if (modes->unstable_count > 0)
 		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
 		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",
@@ -109,7 +111,8 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	       modes->proportional ? "proportional: the modal damping ratios are exact"
 	                           : "not proportional: the damping ratios are the diagonal approximation",
 	       modes->damping_coupling);
-	printf("\n%6s %16s %16s %16s %14s\n", "mode", "frequency [Hz]", "period [s]", "omega^2 [1/s^2]", "damping ratio");
+	printf("\n%6s %16s %16s %16s %14s\n", "mode", "frequency [Hz]", "period [s]", "omega^2 [1/s^2]",
+	       "damping ratio");
 	double highest = 0.0;
 	for (int32_t m = 0; m < modes->count; m++) {
 		const double fr = modes->frequency[m];
@@ -123,28 +126,33 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 		       modes->damping_ratio[m]);
 	}
 	if (modes->group_cut)
-		printf("%6s mode %d's frequency repeats in mode %d and perhaps beyond: the list ends inside a group of\n"
-		       "%6s repeated frequencies, whose listed modes are one arbitrary part of it (list more with -n)\n",
-		       "", (int)modes->count, (int)modes->count + 1, "");
-	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n", sparse ? "<= " : "",
-	       modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
+		printf(
+		    "%6s mode %d's frequency repeats in mode %d and perhaps beyond: the list ends inside a group of\n"
+		    "%6s repeated frequencies, whose listed modes are one arbitrary part of it (list more with -n)\n",
+		    "", (int)modes->count, (int)modes->count + 1, "");
+	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n",
+	       sparse ? "<= " : "", modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
 	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0 && modes->count == modes->dof)
 		printf("explicit stability limit %.6g s (symplectic Euler, each mode with its own damping rate; "
 		       "2/omega_max = %.6g s undamped)\n",
 		       modes->explicit_step, 2.0 / modes->omega_max);
 	else if (isfinite(modes->explicit_step) && modes->omega_max > 0.0)
-		printf("explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
-		       "2/omega_max = %.6g s undamped)\n",
-		       modes->explicit_step, modes->damping_rate_max, 2.0 / modes->omega_max);
+		printf(
+		    "explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
+		    "2/omega_max = %.6g s undamped)\n",
+		    modes->explicit_step, modes->damping_rate_max, 2.0 / modes->omega_max);
 	else if (isfinite(modes->explicit_step))
-		printf("explicit stability limit %.6g s (symplectic Euler with damping rate <= %.6g 1/s, no stiffness)\n",
-		       modes->explicit_step, modes->damping_rate_max);
+		printf(
+		    "explicit stability limit %.6g s (symplectic Euler with damping rate <= %.6g 1/s, no stiffness)\n",
+		    modes->explicit_step, modes->damping_rate_max);
 	if (highest > 0.0)
-		printf("communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
-		       1.0 / (highest * steps_per_period), steps_per_period, highest);
+		printf(
+		    "communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",
+		    1.0 / (highest * steps_per_period), steps_per_period, highest);
 	else
-		printf("communication step       none suggested: no mode listed has a frequency (list more with -n)\n");
+		printf(
+		    "communication step       none suggested: no mode listed has a frequency (list more with -n)\n");
 }
 
 int sm_cmd_modes(int argc, char** argv)
@@ -233,11 +241,12 @@ int sm_cmd_modes(int argc, char** argv)
 	const size_t dof = 3 * (size_t)sm_model_free_count(model);
 	const size_t sparse_most = dof >= SM_MODES_SPARSE_MARGIN ? (dof - SM_MODES_SPARSE_MARGIN) / 4 : 0;
 	if (solver == SM_MODES_AUTO && dof > CLI_DENSE_LIMIT && (count == 0 || (size_t)count > sparse_most)) {
-		fprintf(stderr,
-		        "springmass modes: %s of %zu degrees of freedom need the dense eigensolver, whose time grows as "
-		        "the cube of their number (minutes above %d, hours at 10000): ask for the lowest N modes with "
-		        "-n N (the sparse solver, N <= %zu here), or give --solver dense to wait for it\n",
-		        count == 0 ? "all the modes" : "that many modes", dof, CLI_DENSE_LIMIT, sparse_most);
+		fprintf(
+		    stderr,
+		    "springmass modes: %s of %zu degrees of freedom need the dense eigensolver, whose time grows as "
+		    "the cube of their number (minutes above %d, hours at 10000): ask for the lowest N modes with "
+		    "-n N (the sparse solver, N <= %zu here), or give --solver dense to wait for it\n",
+		    count == 0 ? "all the modes" : "that many modes", dof, CLI_DENSE_LIMIT, sparse_most);
 		status = 2;
 		goto done;
 	}
@@ -256,8 +265,8 @@ int sm_cmd_modes(int argc, char** argv)
 			fputc('\n', stderr);
 			goto done;
 		}
-		printf("linearised about the static equilibrium (%d iterations, residual %.3e N)\n", (int)res.iterations,
-		       res.residual);
+		printf("linearised about the static equilibrium (%d iterations, residual %.3e N)\n",
+		       (int)res.iterations, res.residual);
 	} else {
 		sm_model_initial_state(model, x, NULL);
 		printf("linearised about the initial configuration\n");

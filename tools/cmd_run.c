@@ -125,8 +125,8 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 		if (port.kind == SM_PORT_MOTION)
 			fprintf(csv, ",%s.fx,%s.fy,%s.fz", port.name, port.name, port.name);
 		else
-			fprintf(csv, ",%s.x,%s.y,%s.z,%s.vx,%s.vy,%s.vz", port.name, port.name, port.name, port.name, port.name,
-			        port.name);
+			fprintf(csv, ",%s.x,%s.y,%s.z,%s.vx,%s.vy,%s.vz", port.name, port.name, port.name, port.name,
+			        port.name, port.name);
 	}
 	fprintf(csv, ",energy.kinetic,energy.elastic,energy.gravity,energy.dissipated");
 	if (positions)
@@ -158,7 +158,8 @@ static void put_values(FILE* csv, const double* values, size_t count)
 		cli_csv_number(csv, values[k]);
 }
 
-static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* sim, double* forces, bool positions)
+static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* sim, double* forces,
+                      bool positions)
 {
 	const double* x = sm_simulation_positions(sim);
 	const double* v = sm_simulation_velocities(sim);
@@ -239,8 +240,8 @@ static void show_progress(progress* p, double t, bool last_row)
 	const double now = wall_clock();
 	if (p->start == 0.0 || now - p->start <= 1.0 || (now - p->last <= p->period && !last_row))
 		return;
-	fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", p->terminal ? "\r" : "", t, p->t_end,
-	        100.0 * t / p->t_end, now - p->start, p->terminal ? "" : "\n");
+	fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", p->terminal ? "\r" : "", t,
+	        p->t_end, 100.0 * t / p->t_end, now - p->start, p->terminal ? "" : "\n");
 	p->last = now;
 	p->shown = true;
 }
@@ -278,9 +279,10 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			o->quiet = true;
 		} else if (a[0] == '-' && a[1] != '\0') {
 			static const char* const with_value[] = {
-			        "--t-end",  "--output-interval", "--rtol",   "--atol", "--atol-position", "--atol-velocity",
-			        "--max-steps", "--max-step",     "--jacobian", "--output", "-o",          "--vtk",
-			        "--solver",    "--method",       "--set",        "--threads"};
+			    "--t-end",         "--output-interval", "--rtol",      "--atol",
+			    "--atol-position", "--atol-velocity",   "--max-steps", "--max-step",
+			    "--jacobian",      "--output",          "-o",          "--vtk",
+			    "--solver",        "--method",          "--set",       "--threads"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -305,21 +307,24 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					return 2;
 				}
 				if (!(o->rtol >= SM_MIN_RELATIVE_TOLERANCE)) {
-					fprintf(stderr,
-					        "springmass run: --rtol must be at least %g, the machine epsilon (CVODE cannot meet a "
-					        "smaller relative tolerance), got '%s'\n",
-					        SM_MIN_RELATIVE_TOLERANCE, value);
+					fprintf(
+					    stderr,
+					    "springmass run: --rtol must be at least %g, the machine epsilon (CVODE cannot meet a "
+					    "smaller relative tolerance), got '%s'\n",
+					    SM_MIN_RELATIVE_TOLERANCE, value);
 					return 2;
 				}
 			} else if (strcmp(a, "--threads") == 0) {
 				if (!cli_parse_count(value, 1, 1024, &o->threads)) {
-					fprintf(stderr, "springmass run: --threads needs a count from 1 to 1024, got '%s'\n", value);
+					fprintf(stderr, "springmass run: --threads needs a count from 1 to 1024, got '%s'\n",
+					        value);
 					return 2;
 				}
 			} else if (strcmp(a, "--max-steps") == 0) {
 				long steps;
 				if (!cli_parse_count(value, 1, 2e9, &steps)) {
-					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n", value);
+					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n",
+					        value);
 					return 2;
 				}
 				o->max_steps = (double)steps;
@@ -330,14 +335,17 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				if (parse_positive(a, value, atol))
 					return 2;
 				if (!(*atol >= SM_MIN_ABSOLUTE_TOLERANCE)) {
-					fprintf(stderr,
-					        "springmass run: %s must be at least %g (CVODE's error norm overflows below), got '%s'\n", a,
-					        SM_MIN_ABSOLUTE_TOLERANCE, value);
+					fprintf(
+					    stderr,
+					    "springmass run: %s must be at least %g (CVODE's error norm overflows below), got '%s'\n",
+					    a, SM_MIN_ABSOLUTE_TOLERANCE, value);
 					return 2;
 				}
 			} else if (strcmp(a, "--max-step") == 0) {
 				if (!cli_parse_number(value, &o->max_step) || !(o->max_step >= 0.0)) {
-					fprintf(stderr, "springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '%s'\n", value);
+					fprintf(stderr,
+					        "springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '%s'\n",
+					        value);
 					return 2;
 				}
 				o->max_step_given = true;
@@ -403,8 +411,9 @@ int sm_cmd_run(int argc, char** argv)
 		char end[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(t_end, end);
 		sm_format_number(interval, step);
-		fprintf(stderr, "springmass run: %s s / %s s would make more than %g output rows: give a larger interval\n", end,
-		        step, CLI_MAX_ROWS);
+		fprintf(stderr,
+		        "springmass run: %s s / %s s would make more than %g output rows: give a larger interval\n",
+		        end, step, CLI_MAX_ROWS);
 		goto done;
 	}
 	sm_simulation_def def = settings.solver;
@@ -425,7 +434,8 @@ int sm_cmd_run(int argc, char** argv)
 	def.threads = (int32_t)(o.threads > 0 ? o.threads : online > 0 ? (online < 1024 ? online : 1024) : 1);
 	if (o.solver) {
 		if (sm_linear_solver_from_name(o.solver, &def.solver) != SM_OK) {
-			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n", o.solver);
+			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n",
+			        o.solver);
 			status = 2;
 			goto done;
 		}
@@ -472,7 +482,8 @@ int sm_cmd_run(int argc, char** argv)
 			cli_cannot_write("run", pvd_path);
 			goto done;
 		}
-		fprintf(pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
+		fprintf(pvd,
+		        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
 	}
 	if (o.output && strcmp(o.output, "-") == 0) {
 		csv = stdout;
@@ -530,13 +541,13 @@ int sm_cmd_run(int argc, char** argv)
 		        "springmass run: %s to t = %g s with %s%s: %lld steps, %lld right-hand sides, %lld "
 		        "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
 		        "restarts, %d springs broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
-		        name, t_end, def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
+		        name, t_end,
+		        def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
 		        def.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(sm_simulation_solver(sim)),
-		        (long long)s.steps,
-		        (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations, (long long)s.linear_iterations,
-		        (long long)s.error_test_failures, (long long)s.convergence_failures, (long long)s.restarts,
-		        (int)sm_simulation_break_count(sim), wall_clock() - start, s.force_seconds, s.jacobian_seconds,
-		        s.linear_solve_seconds);
+		        (long long)s.steps, (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations,
+		        (long long)s.linear_iterations, (long long)s.error_test_failures,
+		        (long long)s.convergence_failures, (long long)s.restarts, (int)sm_simulation_break_count(sim),
+		        wall_clock() - start, s.force_seconds, s.jacobian_seconds, s.linear_solve_seconds);
 		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
 			const sm_break_event e = sm_simulation_break(sim, b);
 			char line[64];

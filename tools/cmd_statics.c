@@ -14,29 +14,28 @@
 
 static void usage(FILE* out)
 {
-	fprintf(out,
-	        "usage: springmass statics MODEL [options]\n"
-	        "\n"
-	        "Finds where the model comes to rest under gravity, its constant loads and its fixed\n"
-	        "particles (\"fixed\": true, held at their initial positions; a motion port's particle\n"
-	        "is free here, as in springmass run): Newton's method on the force balance with the\n"
-	        "exact stiffness and a line search on the potential energy.\n"
-	        "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
-	        "reaction force at every fixed particle.\n"
-	        "\n"
-	        "options:\n"
-	        "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
-	        "                         displacement from the initial position [m], reaction [N]\n"
-	        "  --vtk DIR              write DIR/statics.vtk (ParaView: particles, springs as lines,\n"
-	        "                         displacement and reaction vectors)\n"
-	        "  --save-model FILE      save the model with the rest shape as its initial positions\n"
-	        "                         (a cloth that starts hanging at rest)\n"
-	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
-	        "  --tolerance F          largest force left on a free particle [N] (default 1e-9)\n"
-	        "  --max-iterations N     Newton iterations allowed (default 500)\n"
-	        "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
-	        "  -q, --quiet            print the summary only, not every reaction\n"
-	        "  -h, --help             this text\n");
+	fprintf(out, "usage: springmass statics MODEL [options]\n"
+	             "\n"
+	             "Finds where the model comes to rest under gravity, its constant loads and its fixed\n"
+	             "particles (\"fixed\": true, held at their initial positions; a motion port's particle\n"
+	             "is free here, as in springmass run): Newton's method on the force balance with the\n"
+	             "exact stiffness and a line search on the potential energy.\n"
+	             "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
+	             "reaction force at every fixed particle.\n"
+	             "\n"
+	             "options:\n"
+	             "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
+	             "                         displacement from the initial position [m], reaction [N]\n"
+	             "  --vtk DIR              write DIR/statics.vtk (ParaView: particles, springs as lines,\n"
+	             "                         displacement and reaction vectors)\n"
+	             "  --save-model FILE      save the model with the rest shape as its initial positions\n"
+	             "                         (a cloth that starts hanging at rest)\n"
+	             "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
+	             "  --tolerance F          largest force left on a free particle [N] (default 1e-9)\n"
+	             "  --max-iterations N     Newton iterations allowed (default 500)\n"
+	             "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
+	             "  -q, --quiet            print the summary only, not every reaction\n"
+	             "  -h, --help             this text\n");
 }
 
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
@@ -112,7 +111,8 @@ int sm_cmd_statics(int argc, char** argv)
 		} else if (strcmp(a, "--max-iterations") == 0 && has_value) {
 			long v;
 			if (!cli_parse_count(argv[++i], 1, 1000000, &v)) {
-				fprintf(stderr, "springmass statics: --max-iterations needs a count from 1 to 1000000, got '%s'\n",
+				fprintf(stderr,
+				        "springmass statics: --max-iterations needs a count from 1 to 1000000, got '%s'\n",
 				        argv[i]);
 				free(settings);
 				return 2;
@@ -196,12 +196,13 @@ int sm_cmd_statics(int argc, char** argv)
 	}
 	printf("model            %s (%d particles, %d free, %d springs)\n", sm_document_name(doc), (int)n,
 	       (int)sm_model_free_count(model), (int)sm_model_spring_count(model));
-	printf("solver           %s, %d iterations\n", res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)"
-	                                                                                 : "dense modified Cholesky (GSL)",
+	printf("solver           %s, %d iterations\n",
+	       res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)" : "dense modified Cholesky (GSL)",
 	       (int)res.iterations);
 	printf("residual         %.3e N (tolerance %.3e N)\n", res.residual, res.tolerance);
-	printf("stable           %s\n", res.stable ? "yes (a minimum of the potential energy)"
-	                                          : "no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)");
+	printf("stable           %s\n",
+	       res.stable ? "yes (a minimum of the potential energy)"
+	                  : "no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)");
 	printf("potential energy %.9g J\n", res.potential_energy);
 	char line[256];
 	if (largest_at >= 0) {
@@ -231,13 +232,15 @@ int sm_cmd_statics(int argc, char** argv)
 		}
 	}
 	if (beyond > 0) {
-		snprintf(line, sizeof line,
-		         "break strains    %d spring(s) at or beyond theirs, which a simulation would break; the furthest, at %.3g "
-		         "times its break strain: spring %d\n",
-		         (int)beyond, worst_ratio, (int)worst);
+		snprintf(
+		    line, sizeof line,
+		    "break strains    %d spring(s) at or beyond theirs, which a simulation would break; the furthest, at %.3g "
+		    "times its break strain: spring %d\n",
+		    (int)beyond, worst_ratio, (int)worst);
 		cli_write_named(stdout, doc, model, line);
 	}
-	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1], mass * md.gravity[2]);
+	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1],
+	       mass * md.gravity[2]);
 	printf("reactions, sum   (%.9g, %.9g, %.9g) N\n", res.reaction_total[0], res.reaction_total[1],
 	       res.reaction_total[2]);
 	if (!quiet) {
@@ -246,8 +249,8 @@ int sm_cmd_statics(int argc, char** argv)
 			if (sm_model_free_index(model, i) >= 0)
 				continue;
 			if (!header) {
-				printf("\n%-10s %-20s %16s %16s %16s\n", "particle", "name", "reaction x [N]", "reaction y [N]",
-				       "reaction z [N]");
+				printf("\n%-10s %-20s %16s %16s %16s\n", "particle", "name", "reaction x [N]",
+				       "reaction y [N]", "reaction z [N]");
 				header = 1;
 			}
 			const char* name = sm_document_particle_name(doc, i);

@@ -19,11 +19,11 @@ typedef struct command {
 } command;
 
 static const command commands[] = {
-	{"check", sm_cmd_check, "validate a model file and print a summary"},
-	{"run", sm_cmd_run, "simulate a model (CSV and VTK output)"},
-	{"statics", sm_cmd_statics, "find the static equilibrium"},
-	{"modes", sm_cmd_modes, "natural frequencies and mode shapes"},
-	{"fmu", sm_cmd_fmu, "package a model file as an FMI 2.0 Co-Simulation FMU"},
+    {"check", sm_cmd_check, "validate a model file and print a summary"},
+    {"run", sm_cmd_run, "simulate a model (CSV and VTK output)"},
+    {"statics", sm_cmd_statics, "find the static equilibrium"},
+    {"modes", sm_cmd_modes, "natural frequencies and mode shapes"},
+    {"fmu", sm_cmd_fmu, "package a model file as an FMI 2.0 Co-Simulation FMU"},
 };
 
 static void usage(FILE* out)
@@ -32,7 +32,9 @@ static void usage(FILE* out)
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
 		fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
 	}
-	fprintf(out, "\n`springmass <command> --help` explains a command; `springmass --version` prints the version.\n");
+	fprintf(
+	    out,
+	    "\n`springmass <command> --help` explains a command; `springmass --version` prints the version.\n");
 }
 
 // CHOLMOD's supernodal factorisations call BLAS, and Debian's OpenBLAS starts a thread per core
@@ -58,7 +60,8 @@ static int finish(int status)
 {
 	errno = 0;
 	if ((fflush(stdout) != 0 || ferror(stdout)) && status == 0) {
-		fprintf(stderr, "springmass: cannot write standard output: %s\n", errno != 0 ? strerror(errno) : "write error");
+		fprintf(stderr, "springmass: cannot write standard output: %s\n",
+		        errno != 0 ? strerror(errno) : "write error");
 		return 1;
 	}
 	return status;

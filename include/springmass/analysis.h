@@ -87,11 +87,11 @@ typedef struct sm_statics_result {
 /// The default options (the values documented in sm_statics_def).
 SM_API sm_statics_def sm_default_statics_def(void);
 
-/// Finds the static equilibrium of the model (def NULL means the defaults). On success writes the positions of all particles
-/// to x (3 per particle [m]; constrained particles stay at their start) and, if `reactions` is
-/// not NULL, the reaction force on every particle (3 per particle [N]): for a constrained
-/// particle the force its support exerts on it, minus the force the model exerts there;
-/// zero for free particles. The reactions and the model's forces then balance exactly.
+/// Finds the static equilibrium of the model (def NULL means the defaults). On success writes the positions
+/// of all particles to x (3 per particle [m]; constrained particles stay at their start) and, if `reactions`
+/// is not NULL, the reaction force on every particle (3 per particle [N]): for a constrained particle the
+/// force its support exerts on it, minus the force the model exerts there; zero for free particles. The
+/// reactions and the model's forces then balance exactly.
 ///
 /// Errors (x and reactions are not touched, err says which element and rule):
 /// - SM_ERROR_INVALID_ARGUMENT: NULL model or x, bad options;
@@ -123,7 +123,7 @@ typedef enum sm_modes_solver {
 	/// dense up to SM_MODES_DENSE_LIMIT degrees of freedom or when all modes (mode_count = 0) or
 	/// too many of them are asked for; sparse otherwise (if the build has CHOLMOD)
 	SM_MODES_AUTO = 0,
-	SM_MODES_DENSE,   ///< all eigenpairs, dense (GSL); O(dof^3) time, 2 dof^2 doubles of memory
+	SM_MODES_DENSE,  ///< all eigenpairs, dense (GSL); O(dof^3) time, 2 dof^2 doubles of memory
 	/// lowest mode_count eigenpairs by shift-invert Lanczos (CHOLMOD); needs
 	/// 1 <= mode_count <= (dof - SM_MODES_SPARSE_MARGIN) / 4 (or no free particle: no modes)
 	SM_MODES_SPARSE,
@@ -233,7 +233,8 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// Deterministic: the same
 /// model and options give the same numbers (the Lanczos start vectors are fixed; on the sparse
 /// path, for a given BLAS thread count: see "BLAS threads" above).
-SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes, sm_error* err);
+SM_API sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_modes* modes,
+                                  sm_error* err);
 
 /// Frees the arrays of a result of sm_modes_compute() and zeroes it; accepts NULL and a zeroed
 /// result.
@@ -252,9 +253,9 @@ SM_API void sm_modes_release(sm_modes* modes);
 /// 1/sqrt(m_i m_j)) (the second terms where j is free too). With proportional damping each mode's
 /// step limit is then at least `step`; with other damping it is an estimate.
 typedef struct sm_explicit_limit {
-	double omega_max;    ///< upper bound on the highest angular frequency [rad/s]
-	double damping_rate; ///< upper bound on the damping rate of any mode [1/s]
-	double step;         ///< the largest stable step of symplectic Euler they give [s]; INFINITY for none
+	double omega_max;     ///< upper bound on the highest angular frequency [rad/s]
+	double damping_rate;  ///< upper bound on the damping rate of any mode [1/s]
+	double step;          ///< the largest stable step of symplectic Euler they give [s]; INFINITY for none
 } sm_explicit_limit;
 
 /// The bounds of sm_explicit_limit for a model (disabled springs left out);

@@ -32,9 +32,10 @@ typedef enum sm_particle_motion {
 
 /// Definition of a particle; get one from sm_default_particle_def().
 typedef struct sm_particle_def {
-	double mass;                ///< mass, finite and >= SM_MIN_MASS [kg]; default 1
-	double position[3];         ///< initial position [m]; default (0, 0, 0)
-	double velocity[3];         ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is zero whatever is given
+	double mass;         ///< mass, finite and >= SM_MIN_MASS [kg]; default 1
+	double position[3];  ///< initial position [m]; default (0, 0, 0)
+	double velocity[3];  ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is
+	                     ///< zero whatever is given
 	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
 } sm_particle_def;
 
@@ -78,11 +79,11 @@ typedef enum sm_scaling {
 /// resists the rate of change of the spring's length, so it never slows down a rigid motion
 /// (translation or rotation) of the particles. Compare the model's mass damping.
 typedef struct sm_spring_def {
-	int32_t a;                     ///< first particle index
-	int32_t b;                     ///< second particle index, != a
-	sm_spring_kind kind;           ///< default SM_SPRING_REST_LENGTH
-	double rest_length;            ///< l0 >= 0 [m], or SM_REST_LENGTH_INITIAL (default); zero-length springs use 0
-	double stiffness;              ///< >= 0: ks [N/m] or, per strain, E [N]; default 0
+	int32_t a;            ///< first particle index
+	int32_t b;            ///< second particle index, != a
+	sm_spring_kind kind;  ///< default SM_SPRING_REST_LENGTH
+	double rest_length;   ///< l0 >= 0 [m], or SM_REST_LENGTH_INITIAL (default); zero-length springs use 0
+	double stiffness;     ///< >= 0: ks [N/m] or, per strain, E [N]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_ABSOLUTE
 	double damping;                ///< >= 0: kd [N s/m] or, per strain, c [N s]; default 0
 	sm_scaling damping_scaling;    ///< default SM_ABSOLUTE
@@ -237,8 +238,8 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 /// The results are finite for finite inputs unless a product overflows (particles about 1e154 m
 /// apart, where L^2 overflows; ks (L - l0) or kd u.(v_b - v_a) beyond about 1.8e308 N): such
 /// forces come out infinite or NaN, which the simulation and the analyses report as non-finite.
-SM_API void sm_model_forces(const sm_model* model, const double* x, const double* v,
-                            const double* f_external, double* f);
+SM_API void sm_model_forces(const sm_model* model, const double* x, const double* v, const double* f_external,
+                            double* f);
 
 /// Relative length below which a rest-length spring is treated as degenerate [1].
 #define SM_DEGENERATE_LENGTH_RATIO 1e-12
@@ -279,8 +280,8 @@ SM_API sm_status sm_model_jacobian_dense(const sm_model* model, const double* x,
 /// SM_ERROR_INVALID_ARGUMENT, with nothing written, for a NULL model, x or out or an unknown
 /// variant.
 SM_API sm_status sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
-                                           sm_jacobian_variant variant, const double* dx,
-                                           const double* dv, double* out);
+                                           sm_jacobian_variant variant, const double* dx, const double* dv,
+                                           double* out);
 
 // ---------------------------------------------------------------------------------------------
 // Sparse Jacobian over the free particles' degrees of freedom.
@@ -316,8 +317,8 @@ SM_API const int64_t* sm_sparse_jacobian_column_indices(const sm_sparse_jacobian
 /// Equivalent to sm_model_forces_and_jacobians followed by sm_sparse_jacobian_fill_from_springs,
 /// which a caller that needs the forces too should use instead.
 SM_API sm_status sm_sparse_jacobian_fill(const sm_sparse_jacobian* jacobian, const sm_model* model,
-                                         const double* x, const double* v,
-                                         sm_jacobian_variant variant, double* dfdx, double* dfdv);
+                                         const double* x, const double* v, sm_jacobian_variant variant,
+                                         double* dfdx, double* dfdv);
 
 // ---------------------------------------------------------------------------------------------
 // Forces and per-spring Jacobians in one pass.
@@ -377,9 +378,9 @@ SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobian
 /// it with scale_k = gamma^2, scale_d = gamma [s^2, s]: the same numbers as
 /// sm_spring_jacobians_product(gamma^2 p, gamma p) to rounding, without scaling p twice. p and
 /// out must not overlap. Errors as sm_spring_jacobians_product (and NULL p).
-SM_API sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobians, const sm_model* model,
-                                                      double scale_k, double scale_d, const double* p,
-                                                      double* out);
+SM_API sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobians,
+                                                      const sm_model* model, double scale_k, double scale_d,
+                                                      const double* p, double* out);
 
 /// Fills the sparse df/dx [N/m] and df/dv [N s/m] (mass damping from the model) from the stored
 /// data, without evaluating any spring again: the same values as sm_sparse_jacobian_fill at the

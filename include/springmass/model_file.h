@@ -26,17 +26,17 @@ typedef enum sm_port_kind {
 
 /// A named particle through which the model meets the outside world.
 typedef struct sm_port {
-	const char* name;   ///< owned by the document
-	int32_t particle;   ///< particle index in the built model
+	const char* name;  ///< owned by the document
+	int32_t particle;  ///< particle index in the built model
 	sm_port_kind kind;
 } sm_port;
 
 /// Settings a file may carry for simulations and FMUs ("simulation" and "fmu" objects).
 typedef struct sm_document_settings {
-	double stop_time;            ///< default end of a run [s]; default 1
-	double output_interval;      ///< default output interval [s]; default 0.01
-	sm_simulation_def solver;    ///< integrator options
-	bool particle_variables;     ///< FMU exposes every particle's position and velocity; default true
+	double stop_time;          ///< default end of a run [s]; default 1
+	double output_interval;    ///< default output interval [s]; default 0.01
+	sm_simulation_def solver;  ///< integrator options
+	bool particle_variables;   ///< FMU exposes every particle's position and velocity; default true
 } sm_document_settings;
 
 typedef struct sm_document sm_document;
@@ -50,7 +50,8 @@ typedef struct sm_document sm_document;
 SM_API sm_document* sm_document_load(const char* path, sm_error* err);
 
 /// Same from text in memory; `source_name` is used in messages in place of a file name.
-SM_API sm_document* sm_document_parse(const char* text, size_t length, const char* source_name, sm_error* err);
+SM_API sm_document* sm_document_parse(const char* text, size_t length, const char* source_name,
+                                      sm_error* err);
 
 /// Frees a document; accepts NULL.
 SM_API void sm_document_destroy(sm_document* doc);
@@ -152,7 +153,8 @@ SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
 /// set before (nothing to do if none is): building and saving start from the file's positions
 /// and velocities with the parameters' current values again, and parameters may change the
 /// counts again; x NULL with v not NULL is SM_ERROR_INVALID_ARGUMENT.
-SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v, sm_error* err);
+SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v,
+                                               sm_error* err);
 
 /// Writes the document in canonical form to a file, or to a malloc'ed string the caller frees
 /// (NULL on error). Structures are expanded into explicit particles and springs (keeping their

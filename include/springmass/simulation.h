@@ -23,25 +23,24 @@
 // caller sees a restart in the statistics rather than an error.
 //
 // Reproducibility. On one machine the same model, options and calls give the same trajectory
-// bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced Cholesky
-// solver, and the coarse system of conjugate gradients on large models) use BLAS for large
-// matrices, whose sums may depend on the number of BLAS threads (a process-wide setting, e.g.
-// OPENBLAS_NUM_THREADS); keep it fixed to reproduce a run to the last bit. Across machines,
-// OpenBLAS chooses its kernels by processor (OPENBLAS_CORETYPE overrides the choice), so the
-// same large model may take another step sequence within the tolerances: over 0.3 s the
-// 128 x 128 benchmark cloth took 1794 steps with OpenBLAS's AVX-512 kernels and 1842 with its
-// Haswell ones, the free corner within 1e-6 m of each other. springmass's own arithmetic is the
-// same on every x86-64 processor: the force loop takes four springs at a time where the processor
-// has AVX and two or one elsewhere, with the same IEEE operations in the same order (no fused
+// bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced
+// Cholesky solver, and the coarse system of conjugate gradients on large models) use BLAS for large matrices,
+// whose sums may depend on the number of BLAS threads (a process-wide setting, e.g. OPENBLAS_NUM_THREADS);
+// keep it fixed to reproduce a run to the last bit. Across machines, OpenBLAS chooses its kernels by
+// processor (OPENBLAS_CORETYPE overrides the choice), so the same large model may take another step sequence
+// within the tolerances: over 0.3 s the 128 x 128 benchmark cloth took 1794 steps with OpenBLAS's AVX-512
+// kernels and 1842 with its Haswell ones, the free corner within 1e-6 m of each other. springmass's own
+// arithmetic is the same on every x86-64 processor: the force loop takes four springs at a time where the
+// processor has AVX and two or one elsewhere, with the same IEEE operations in the same order (no fused
 // multiply-add), so the forces and Jacobians are the same bits either way.
 //
 // Threads. The library starts threads of its own only when asked (sm_simulation_def.threads > 1,
 // for the pcg solver on models of 4000 free particles or more; they end with the simulation),
-// but two of its dependencies may start others, as process-wide settings allow: OpenBLAS (see above) and CHOLMOD, whose supernodal factorisation
-// (the reduced Cholesky solver from about 2000 unknowns on, the coarse system of conjugate
-// gradients on large models, the sparse paths of sm_statics_solve and sm_modes_compute) runs in
-// an OpenMP team of up to 4 threads whatever OMP_NUM_THREADS says. The team belongs to the
-// calling thread and outlives the simulation (the OpenMP runtime keeps it for the next parallel
+// but two of its dependencies may start others, as process-wide settings allow: OpenBLAS (see above) and
+// CHOLMOD, whose supernodal factorisation (the reduced Cholesky solver from about 2000 unknowns on, the
+// coarse system of conjugate gradients on large models, the sparse paths of sm_statics_solve and
+// sm_modes_compute) runs in an OpenMP team of up to 4 threads whatever OMP_NUM_THREADS says. The team belongs
+// to the calling thread and outlives the simulation (the OpenMP runtime keeps it for the next parallel
 // region). A program that runs simulations in threads of its own and wants no others sets
 // OMP_THREAD_LIMIT=1 (and OPENBLAS_NUM_THREADS=1) in the environment before the first call.
 #pragma once
@@ -80,9 +79,10 @@ typedef enum sm_method {
 
 /// Linear solver for Newton's method (BDF only).
 typedef enum sm_linear_solver {
-	SM_SOLVER_AUTO = 0,  ///< dense up to 8 free particles, reduced conjugate gradients above (bench/README.md)
-	SM_SOLVER_DENSE,     ///< dense LU of the full 6n system with the analytic Jacobian (small models)
-	SM_SOLVER_KLU,       ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
+	SM_SOLVER_AUTO =
+	    0,            ///< dense up to 8 free particles, reduced conjugate gradients above (bench/README.md)
+	SM_SOLVER_DENSE,  ///< dense LU of the full 6n system with the analytic Jacobian (small models)
+	SM_SOLVER_KLU,    ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
 	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner
@@ -102,16 +102,16 @@ typedef enum sm_linear_solver {
 
 /// Integration options; get them from sm_default_simulation_def().
 typedef struct sm_simulation_def {
-	sm_method method;               ///< default SM_METHOD_BDF
-	sm_linear_solver solver;        ///< default SM_SOLVER_AUTO
-	sm_jacobian_variant jacobian;   ///< default SM_JACOBIAN_EXACT
-	double relative_tolerance;      ///< in [SM_MIN_RELATIVE_TOLERANCE, 1) [1]; default 1e-6
+	sm_method method;              ///< default SM_METHOD_BDF
+	sm_linear_solver solver;       ///< default SM_SOLVER_AUTO
+	sm_jacobian_variant jacobian;  ///< default SM_JACOBIAN_EXACT
+	double relative_tolerance;     ///< in [SM_MIN_RELATIVE_TOLERANCE, 1) [1]; default 1e-6
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m]; default 1e-8
 	double absolute_tolerance_position;
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy [J]; default 1e-6
 	double absolute_tolerance_velocity;
-	double max_step;                ///< largest internal step [s]; 0 (default) = unlimited
-	int32_t max_steps;              ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
+	double max_step;    ///< largest internal step [s]; 0 (default) = unlimited
+	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
 	/// changes an input (default true; false keeps CVODE's history over changes: faster, but not
 	/// accurate when inputs change at every call; see "Inputs between calls" above).
@@ -135,13 +135,13 @@ typedef struct sm_statistics {
 	int64_t steps;
 	int64_t rhs_evaluations;
 	int64_t jacobian_evaluations;
-	int64_t linear_iterations;     ///< conjugate-gradient iterations, or one per solve for direct solvers
+	int64_t linear_iterations;  ///< conjugate-gradient iterations, or one per solve for direct solvers
 	int64_t error_test_failures;
 	int64_t convergence_failures;
-	int64_t restarts;              ///< solver re-initialisations (events, state changes, jumps in inputs)
-	double force_seconds;          ///< wall time in force evaluation [s]
-	double jacobian_seconds;       ///< wall time in Jacobian evaluation and matrix setup [s]
-	double linear_solve_seconds;   ///< wall time in linear solves [s]
+	int64_t restarts;             ///< solver re-initialisations (events, state changes, jumps in inputs)
+	double force_seconds;         ///< wall time in force evaluation [s]
+	double jacobian_seconds;      ///< wall time in Jacobian evaluation and matrix setup [s]
+	double linear_solve_seconds;  ///< wall time in linear solves [s]
 	/// Numeric factorisations of a Newton matrix: the set-ups of the dense and KLU solvers,
 	/// CHOLMOD's factorisations for the reduced Cholesky solver, none for conjugate gradients.
 	int64_t factorizations;
@@ -173,7 +173,8 @@ SM_API sm_status sm_method_from_name(const char* name, sm_method* method);
 /// Creates a simulation of a copy of the model, starting at time 0 from the model's initial
 /// state; def NULL means the defaults. Returns NULL with err filled on invalid options or
 /// solver set-up failure.
-SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err);
+SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def,
+                                           sm_error* err);
 
 /// Destroys the simulation and everything it owns; accepts NULL.
 SM_API void sm_simulation_destroy(sm_simulation* sim);
@@ -243,7 +244,8 @@ SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, 
                                           const double velocity[3]);
 
 /// Sets the external force [N] on a particle, held constant until changed.
-SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3]);
+SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
+                                                  const double force[3]);
 
 /// Replaces the time [s] and the state: positions [m] and velocities [m/s] of all particles
 /// (3 each; the entries of fixed and driven particles are ignored: they stay at their
@@ -296,8 +298,8 @@ SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
 /// fewer than that size), and a snapshot read back from them (at any address; NULL with err for
 /// bytes of another layout version, of the wrong length, damaged (a 64-bit checksum), holding
 /// non-finite values or spring indices out of range, or listing a spring as broken twice).
-/// sm_simulation_restore_state then checks the snapshot against the simulation. Numbers are in the machine's byte order: read them on a machine of the same
-/// kind. A snapshot read back restores as the one saved does.
+/// sm_simulation_restore_state then checks the snapshot against the simulation. Numbers are in the machine's
+/// byte order: read them on a machine of the same kind. A snapshot read back restores as the one saved does.
 SM_API size_t sm_simulation_state_size(const sm_simulation_state* state);
 SM_API sm_status sm_simulation_state_serialize(const sm_simulation_state* state, void* buffer, size_t size);
 SM_API sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t size, sm_error* err);

@@ -42,9 +42,9 @@ extern "C" {
 typedef struct sm_spring_material {
 	double stiffness;              ///< ks [N/m]; per strain, E [N]; per section, [N/m] or [N/m^2]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
-	double damping;                ///< kd [N s/m]; per strain, c [N s]; per section, [N s/m] or [N s/m^2]; default 0
-	sm_scaling damping_scaling;    ///< default SM_PER_STRAIN
-	double break_strain;           ///< [1], > SM_MIN_BREAK_STRAIN; INFINITY (default) = never breaks
+	double damping;  ///< kd [N s/m]; per strain, c [N s]; per section, [N s/m] or [N s/m^2]; default 0
+	sm_scaling damping_scaling;  ///< default SM_PER_STRAIN
+	double break_strain;         ///< [1], > SM_MIN_BREAK_STRAIN; INFINITY (default) = never breaks
 	/// Create the group's springs even when stiffness and damping are both zero (default false),
 	/// so that the model keeps its topology when they are given values later (through
 	/// sm_simulation_update_model, or a model file's parameters: see docs/model-format.md).
@@ -69,7 +69,7 @@ typedef struct sm_structure {
 	int32_t particle_count;  ///< its particles are first_particle .. first_particle + particle_count - 1
 	int32_t first_spring;    ///< its springs are first_spring .. first_spring + spring_count - 1
 	int32_t spring_count;
-	int32_t shape[3];        ///< grid points per axis (rope: segments + 1, 1, 1; mesh: vertices, 1, 1)
+	int32_t shape[3];  ///< grid points per axis (rope: segments + 1, 1, 1; mesh: vertices, 1, 1)
 	/// Springs made of each group, in the order of the definition's materials: rope structural,
 	/// bending; sheet structural, shear, bend; block edge, face_diagonal, body_diagonal; mesh
 	/// edge, bend (a mesh's edge springs come first: springs first_spring ..
@@ -97,11 +97,12 @@ SM_API sm_spring_material sm_default_spring_material(void);
 /// differ but leave neighbouring particles at one point (a spacing below the rounding of the
 /// coordinates) are refused (SM_ERROR_INVALID_ARGUMENT), as for a sheet's grid.
 typedef struct sm_rope_def {
-	double start[3];                ///< first particle's position [m]; default (0, 0, 0)
-	double end[3];                  ///< last particle's position [m]; default (1, 0, 0)
-	int32_t segments;               ///< number of structural springs, >= 1; default 10
-	double mass;                    ///< total mass [kg] > 0 over the segments + 1 particles; default 1
-	double mass_per_length;         ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
+	double start[3];   ///< first particle's position [m]; default (0, 0, 0)
+	double end[3];     ///< last particle's position [m]; default (1, 0, 0)
+	int32_t segments;  ///< number of structural springs, >= 1; default 10
+	double mass;       ///< total mass [kg] > 0 over the segments + 1 particles; default 1
+	double
+	    mass_per_length;  ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
 	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material structural;  ///< springs between neighbours; default E = 1000 N per strain, no damping
 	sm_spring_material bending;     ///< springs to the second neighbour; zero constants (default) = none
@@ -115,12 +116,12 @@ typedef struct sm_rope_def {
 /// The default definition is the benchmark cloth with n = 16 (1 m x 1 m in the z = 0 plane,
 /// 1 kg, E = 1000 N structural and shear, 50 N bend, c = 2 N s for all, per strain).
 typedef struct sm_sheet_def {
-	double origin[3];               ///< [m]; default (0, 0, 0)
-	double edge_u[3];               ///< first edge [m]; default (1, 0, 0)
-	double edge_v[3];               ///< second edge [m]; default (0, 1, 0)
-	int32_t nu;                     ///< particles along edge_u, >= 2; default 16
-	int32_t nv;                     ///< particles along edge_v, >= 2; default 16
-	double mass;                    ///< total mass [kg] > 0; default 1
+	double origin[3];                        ///< [m]; default (0, 0, 0)
+	double edge_u[3];                        ///< first edge [m]; default (1, 0, 0)
+	double edge_v[3];                        ///< second edge [m]; default (0, 1, 0)
+	int32_t nu;                              ///< particles along edge_u, >= 2; default 16
+	int32_t nv;                              ///< particles along edge_v, >= 2; default 16
+	double mass;                             ///< total mass [kg] > 0; default 1
 	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material structural;
 	sm_spring_material shear;
@@ -138,10 +139,10 @@ typedef struct sm_sheet_def {
 /// [body diagonal], where they exist and their group has constants.
 /// The default is a 1 m cube of 4 x 4 x 4 particles, 1 kg, E = 1000 N in every group.
 typedef struct sm_block_def {
-	double origin[3];    ///< [m]; default (0, 0, 0)
-	double size[3];      ///< edge lengths along x, y, z [m], > 0; default (1, 1, 1)
-	int32_t nu, nv, nw;  ///< particles along x, y, z, each >= 2; default 4
-	double mass;         ///< total mass [kg] > 0; default 1
+	double origin[3];                        ///< [m]; default (0, 0, 0)
+	double size[3];                          ///< edge lengths along x, y, z [m], > 0; default (1, 1, 1)
+	int32_t nu, nv, nw;                      ///< particles along x, y, z, each >= 2; default 4
+	double mass;                             ///< total mass [kg] > 0; default 1
 	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material edge;
 	sm_spring_material face_diagonal;
@@ -161,13 +162,13 @@ typedef struct sm_block_def {
 /// belongs to no triangle (it would have no mass), and with bend springs two triangles folded
 /// onto each other (the vertices opposite their common edge at the same position).
 typedef struct sm_mesh_def {
-	const double* vertices;    ///< 3 per vertex [m]; not copied, read during the call only
+	const double* vertices;  ///< 3 per vertex [m]; not copied, read during the call only
 	int32_t vertex_count;
 	const int32_t* triangles;  ///< 3 vertex indices per triangle
 	int32_t triangle_count;
-	double density;            ///< areal density [kg/m^2], > 0; default 1
-	sm_spring_material edge;   ///< default E = 1000 N per strain, no damping
-	sm_spring_material bend;   ///< default none (zero constants)
+	double density;           ///< areal density [kg/m^2], > 0; default 1
+	sm_spring_material edge;  ///< default E = 1000 N per strain, no damping
+	sm_spring_material bend;  ///< default none (zero constants)
 } sm_mesh_def;
 
 /// Definitions with the defaults documented in their structs.
