@@ -282,7 +282,9 @@ static int test_proportional_damping_ratios(void)
 // max |u_i - u(s_i)| = m g L / (8 E (N + 1)) at mid-rope (worked out in docs/analysis.md).
 // A rope of `segments` springs hanging straight down from its fixed top at the origin, at rest
 // length (per-strain stiffness E [N], total mass [kg], gravity g [m/s^2] down).
-static sm_model* hanging_rope(double length, double mass, double E, double g, int32_t segments)
+// With bending springs of per-strain stiffness E_b [N] (0: none).
+static sm_model* hanging_rope_bending(double length, double mass, double E, double E_b, double g,
+                                      int32_t segments)
 {
 	sm_model_def md = sm_default_model_def();
 	md.gravity[2] = -g;
@@ -294,6 +296,8 @@ static sm_model* hanging_rope(double length, double mass, double E, double g, in
 	rd.mass = mass;
 	rd.structural.stiffness = E;
 	rd.structural.stiffness_scaling = SM_PER_STRAIN;
+	rd.bending.stiffness = E_b;
+	rd.bending.stiffness_scaling = SM_PER_STRAIN;
 	sm_structure st;
 	if (model == NULL || sm_add_rope(model, &rd, &st) != SM_OK ||
 	    sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED) != SM_OK) {
@@ -301,6 +305,11 @@ static sm_model* hanging_rope(double length, double mass, double E, double g, in
 		return NULL;
 	}
 	return model;
+}
+
+static sm_model* hanging_rope(double length, double mass, double E, double g, int32_t segments)
+{
+	return hanging_rope_bending(length, mass, E, 0.0, g, segments);
 }
 
 // A stiff rope (E = 1e9 N, 200 segments of 5 mm: 2e11 N/m each, 1 kg) held at one end swings down
@@ -377,6 +386,44 @@ static int test_hanging_rope_elongation(void)
 		free(reactions);
 		sm_model_destroy(model);
 	}
+	return 0;
+}
+
+// Bending springs (p, p + 2) are not in series: two cross every segment but the end ones, which
+// one crosses. A rope with them stretches m g L / (2 (E + E_b)) with 2 segments (one bending
+// spring beside the chain: exact, as the chain alone is for any N), and towards
+// m g L / (2 (E + 2 E_b)) at first order as it is refined: the end segments' missing spring
+// leaves an excess C / N, the same C for every N once the ends' boundary layers (a few
+// segments) no longer meet (docs/model-format.md, Rope). The solutions are converged to 1e-9 N.
+static int test_hanging_rope_with_bending_springs(void)
+{
+	const double mass = 1.0, length = 1.0, E = 1000.0, E_b = 1000.0, g = 9.81;
+	const double limit = mass * g * length / (2.0 * (E + 2.0 * E_b));
+	const int32_t sizes[] = {2, 20, 40, 80};
+	double excess_times_n[4];
+	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
+		const int32_t n = sizes[t];
+		sm_model* model = hanging_rope_bending(length, mass, E, E_b, g, n);
+		ENSURE(model != NULL);
+		double* x = malloc(3 * (size_t)(n + 1) * sizeof(double));
+		ENSURE(x != NULL);
+		sm_statics_result res;
+		sm_error err;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+		const double stretch = -x[3 * (size_t)n + 2] - length;
+		printf("  N=%-3d stretch %.12f m, (stretch - limit) N = %.12f m\n", (int)n, stretch,
+		       (stretch - limit) * n);
+		if (n == 2)
+			ENSURE_REL(stretch, mass * g * length / (2.0 * (E + E_b)), 1e-9, 0.0);
+		excess_times_n[t] = (stretch - limit) * n;
+		free(x);
+		sm_model_destroy(model);
+	}
+	// The same C for N = 20, 40, 80 (to the solutions' accuracy, a relative 1e-6 of the excess):
+	// the stretch tends to the limit, and at first order.
+	ENSURE(excess_times_n[1] > 0.0);
+	ENSURE_REL(excess_times_n[2], excess_times_n[1], 1e-6, 0.0);
+	ENSURE_REL(excess_times_n[3], excess_times_n[1], 1e-6, 0.0);
 	return 0;
 }
 
@@ -2785,6 +2832,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_free_block_six_zero_frequencies);
 	RUN_TEST(test_proportional_damping_ratios);
 	RUN_TEST(test_hanging_rope_elongation);
+	RUN_TEST(test_hanging_rope_with_bending_springs);
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_hanging_cloth_reactions);

@@ -4639,8 +4639,8 @@ static sm_model* anchored_bobs(int32_t count, double alpha)
 // coarse cycles read the blocks in single precision.
 static int test_exact_block_preconditioner_takes_one_iteration(void)
 {
-	const int32_t counts[] = {10, 120};  // block Jacobi alone; with the coarse correction (multilevel in
-	                                     // test_simulation_multilevel)
+	// Block Jacobi alone; with the coarse correction (multilevel in test_simulation_multilevel).
+	const int32_t counts[] = {10, 120};
 	rng r = {515};
 	for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
 		sm_model* model = anchored_bobs(counts[k], 50.0);

@@ -43,8 +43,7 @@ typedef enum sm_status {
 	SM_ERROR_NOT_FINITE,        ///< a value is NaN or infinite where a finite one is required
 	SM_ERROR_NEGATIVE,          ///< a value is negative where it must be >= 0, or not > 0 where it must be
 	SM_ERROR_NONPOSITIVE_MASS,  ///< a particle mass is <= 0 (or below DBL_MIN, where 1 / mass overflows)
-	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant or a break strain on a spring whose rest length is
-	                            ///< zero
+	SM_ERROR_ZERO_REST_LENGTH,  ///< a per-strain constant or a break strain on a spring of rest length 0
 	SM_ERROR_FILE,              ///< a file cannot be read or written
 	SM_ERROR_SYNTAX,            ///< a model file is not valid JSON (line and column in the message)
 	SM_ERROR_SCHEMA,            ///< a model file breaks a rule of the format (path in the message)

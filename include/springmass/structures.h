@@ -35,10 +35,16 @@ extern "C" {
 /// cross-section [N/m^2] across them, whatever the grid: the lattice's elastic constants depend
 /// on the shape of its cells, not on their number (but for a sheet's bend group, whose springs
 /// span two cells and so leave the last cell of each row and column without one: its modulus is
-/// (nu - 2)/(nu - 1) of the value along u, 0.75 at 5 particles, tending to it as the grid is
-/// refined). A mesh's edge springs per section give an
-/// equilateral triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's ratio
-/// 1/3); other triangle shapes other constants.
+/// (nu - 2)/(nu - 1) of the value along u when every particle moves with the stretch, 0.75 at 5
+/// particles, and less where the particles next to the edges settle; both tend to the value as
+/// the grid is refined; docs/model-format.md gives figures). A mesh's edge springs per section
+/// give an equilateral triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's
+/// ratio 1/3); other triangle shapes other constants.
+///
+/// Per strain, a rope's structural springs are in series, so its stretch under a load does not
+/// depend on its segments; its bending springs (p, p + 2) are not: two of them cross every
+/// segment but the first and the last, so they add twice their value to the rope's axial
+/// stiffness inside and once across its end segments (docs/model-format.md, Rope).
 typedef struct sm_spring_material {
 	double stiffness;              ///< ks [N/m]; per strain, E [N]; per section, [N/m] or [N/m^2]; default 0
 	sm_scaling stiffness_scaling;  ///< default SM_PER_STRAIN
@@ -101,8 +107,8 @@ typedef struct sm_rope_def {
 	double end[3];     ///< last particle's position [m]; default (1, 0, 0)
 	int32_t segments;  ///< number of structural springs, >= 1; default 10
 	double mass;       ///< total mass [kg] > 0 over the segments + 1 particles; default 1
-	double
-	    mass_per_length;  ///< [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
+	/// [kg/m]; > 0 overrides mass (total = mass_per_length |end - start|); default 0
+	double mass_per_length;
 	sm_mass_distribution mass_distribution;  ///< default SM_MASS_EVEN
 	sm_spring_material structural;  ///< springs between neighbours; default E = 1000 N per strain, no damping
 	sm_spring_material bending;     ///< springs to the second neighbour; zero constants (default) = none
