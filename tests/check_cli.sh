@@ -131,6 +131,25 @@ check_cases << 'CASES'
 2|springmass modes: -o -: this output is a file, not standard output; give its name|modes "$tmp/own.json" -o -
 CASES
 cmp -s "$osc" "$tmp/own.json" && [ ! -e ./- ] || fail "a refused output was written"
+# run's other outputs: the default CSV (NAME.csv in the working folder) and the ParaView series
+# (DIR/NAME.pvd, DIR/NAME_<k>.vtk) are no model file, and the series' files are not the CSV.
+mkdir -p "$tmp/clash/vt1" "$tmp/clash/vt2"
+cp "$osc" "$tmp/clash/oscillator.csv"
+cp "$osc" "$tmp/clash/vt1/oscillator.pvd"
+cp "$osc" "$tmp/clash/vt2/oscillator_000001.vtk"
+out=$(cd "$tmp/clash" && "$cli" run oscillator.csv -q --t-end 0.02 2>&1)
+status=$?
+[ $status -eq 2 ] && [ "$out" = "springmass run: the output oscillator.csv (NAME.csv, without -o) would overwrite the model file oscillator.csv, which it reads; give another name with -o" ] ||
+  fail "run onto its model file by the default output: exit status $status, printed '$out'"
+check_cases << 'CASES'
+2|springmass run: --vtk $tmp/clash/vt1: the series' file $tmp/clash/vt1/oscillator.pvd would overwrite the model file $tmp/clash/vt1/oscillator.pvd; give another folder|run "$tmp/clash/vt1/oscillator.pvd" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt1"
+2|springmass run: --vtk $tmp/clash/vt2: the series' file $tmp/clash/vt2/oscillator_000001.vtk would overwrite the model file $tmp/clash/vt2/oscillator_000001.vtk; give another folder|run "$tmp/clash/vt2/oscillator_000001.vtk" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt2"
+2|springmass run: --vtk $tmp/clash/vt3: the series' file $tmp/clash/vt3/oscillator.pvd would overwrite the CSV output $tmp/clash/vt3/oscillator.pvd; give another folder or -o|run "$osc" -q --t-end 0.02 --vtk "$tmp/clash/vt3" -o "$tmp/clash/vt3/oscillator.pvd"
+2|springmass run: --vtk $tmp/clash/vt4: the series' file $tmp/clash/vt4/oscillator_000001.vtk would overwrite the CSV output $tmp/clash/vt4/oscillator_000001.vtk; give another folder or -o|run "$osc" -q --t-end 0.02 --vtk "$tmp/clash/vt4" -o "$tmp/clash/vt4/oscillator_000001.vtk"
+CASES
+for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtk; do
+  cmp -s "$osc" "$tmp/clash/$f" || fail "run overwrote its model file $f"
+done
 # --set values are taken together: a rope's new start beyond its old end, with the new end.
 cp "$root/tests/python/models/rope_ends.json" "$tmp/rope_ends.json"
 ends="$tmp/rope_ends.json"

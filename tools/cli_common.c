@@ -1,5 +1,5 @@
 // Helpers shared by the subcommands.
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700  // realpath
 
 #include "cli_common.h"
 
@@ -365,14 +365,46 @@ int cli_check_output(const char* command, const char* option, const char* output
 		        command, option);
 		return 2;
 	}
-	struct stat out, in;
-	if (input != NULL && stat(output, &out) == 0 && stat(input, &in) == 0 && out.st_dev == in.st_dev &&
-	    out.st_ino == in.st_ino) {
+	if (input != NULL && cli_same_file(output, input)) {
 		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n",
 		        command, option, output, input_what, input);
 		return 2;
 	}
 	return 0;
+}
+
+// The path a file has, or would have once created: its real path if it exists, else its
+// folder's real path and its name; NULL if the folder cannot be found either (malloc'd).
+static char* canonical_path(const char* path)
+{
+	char* real = realpath(path, NULL);
+	if (real != NULL)
+		return real;
+	const char* slash = strrchr(path, '/');
+	const char* name = slash != NULL ? slash + 1 : path;
+	char* folder = slash == NULL ? strdup(".") : strndup(path, slash == path ? 1 : (size_t)(slash - path));
+	char* real_folder = folder != NULL ? realpath(folder, NULL) : NULL;
+	free(folder);
+	if (real_folder == NULL)
+		return NULL;
+	char* out = malloc(strlen(real_folder) + strlen(name) + 2);
+	if (out != NULL)
+		sprintf(out, "%s/%s", real_folder, name);
+	free(real_folder);
+	return out;
+}
+
+bool cli_same_file(const char* a, const char* b)
+{
+	struct stat sa, sb;
+	if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+		return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+	char* ca = canonical_path(a);
+	char* cb = canonical_path(b);
+	const bool same = ca != NULL && cb != NULL && strcmp(ca, cb) == 0;
+	free(ca);
+	free(cb);
+	return same;
 }
 
 void cli_cannot_write(const char* command, const char* path)

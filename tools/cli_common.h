@@ -98,6 +98,10 @@ void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, co
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout);
 
+/// Whether paths a and b name one file: the same file under any name if both exist, else the same
+/// place once created (the real path of the folder, and the name).
+bool cli_same_file(const char* a, const char* b);
+
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
 /// failed call just before).
 void cli_cannot_write(const char* command, const char* path);

@@ -371,6 +371,19 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 	return cli_check_output("run", "-o", o->output, o->model, "the model file", true);
 }
 
+// Whether a file of the ParaView series (the index or a frame) would overwrite the model file
+// or the CSV (NULL: standard output); prints which and returns 2 if so.
+static int series_file_clashes(const char* path, const run_options* o, const char* csv_path)
+{
+	const bool model = cli_same_file(path, o->model);
+	if (!model && (csv_path == NULL || !cli_same_file(path, csv_path)))
+		return 0;
+	fprintf(stderr, "springmass run: --vtk %s: the series' file %s would overwrite %s %s; give another %s\n",
+	        o->vtk_dir, path, model ? "the model file" : "the CSV output", model ? o->model : csv_path,
+	        model ? "folder" : "folder or -o");
+	return 2;
+}
+
 int sm_cmd_run(int argc, char** argv)
 {
 	run_options o;
@@ -472,11 +485,29 @@ int sm_cmd_run(int argc, char** argv)
 	spring_values = malloc(sizeof(double) * (2 * (size_t)sm_model_spring_count(model) + 1));
 	if (!path || !pvd_path || !csv_default || !forces || !spring_values)
 		goto done;
+	sprintf(csv_default, "%s.csv", name);
+	const bool csv_to_stdout = o.output && strcmp(o.output, "-") == 0;
+	csv_name = csv_to_stdout ? "standard output" : o.output ? o.output : csv_default;
+	// No file the run writes may be the model file (-o is checked with the arguments), nor the
+	// CSV one of the series' files (each frame is checked before it is written).
+	if (!o.output && cli_same_file(csv_default, o.model)) {
+		fprintf(
+		    stderr,
+		    "springmass run: the output %s (NAME.csv, without -o) would overwrite the model file %s, which "
+		    "it reads; give another name with -o\n",
+		    csv_default, o.model);
+		status = 2;
+		goto done;
+	}
 	// The series' folder and index first: a run refused for them leaves an existing CSV as it was.
 	if (o.vtk_dir) {
 		if (cli_make_directory("run", o.vtk_dir) != 0)
 			goto done;
 		snprintf(pvd_path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
+		if (series_file_clashes(pvd_path, &o, csv_to_stdout ? NULL : csv_name) != 0) {
+			status = 2;
+			goto done;
+		}
 		pvd = fopen(pvd_path, "w");
 		if (!pvd) {
 			cli_cannot_write("run", pvd_path);
@@ -485,12 +516,9 @@ int sm_cmd_run(int argc, char** argv)
 		fprintf(pvd,
 		        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
 	}
-	if (o.output && strcmp(o.output, "-") == 0) {
+	if (csv_to_stdout) {
 		csv = stdout;
-		csv_name = "standard output";
 	} else {
-		sprintf(csv_default, "%s.csv", name);
-		csv_name = o.output ? o.output : csv_default;
 		csv = fopen(csv_name, "w");
 		if (!csv) {
 			cli_cannot_write("run", csv_name);
@@ -521,6 +549,11 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
+			if (series_file_clashes(path, &o, csv_to_stdout ? NULL : csv_name) != 0) {
+				end_progress(&prog);
+				status = 2;
+				goto done;
+			}
 			if (write_vtk(path, sim, spring_values) != 0)
 				goto done;
 			char timestep[SM_NUMBER_TEXT_CAPACITY];
