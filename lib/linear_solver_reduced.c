@@ -211,7 +211,7 @@ int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p,
 		return 0;
 	}
 	sm_reduced_load_spring_order(r);  // the model may have changed since the last invalidation
-	current_jacobian(r, sim->time, N_VGetArrayPointer(sim->y));
+	current_jacobian(r, sm_simulation_cvode_time(sim, sim->time), N_VGetArrayPointer(sim->y));
 	r->gamma = gamma;
 	int status = 0;
 	if (!r->use_cholmod && sm_reduced_prepare_preconditioner(r, gamma) != 0)

@@ -126,6 +126,8 @@ sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
 // State packing
 // ---------------------------------------------------------------------------------------------
 
+// A driven particle's motion has run for (time_origin - drive_time) + t: both differences are of
+// times near each other, so that neither loses the precision of a large time.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v)
 {
 	const int64_t nd = sim->dofs;
@@ -144,7 +146,7 @@ void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double*
 		const int32_t i = sim->constrained[k];
 		const size_t p = 3 * (size_t)i;
 		if (m->motion[i] == SM_PARTICLE_DRIVEN) {
-			const double dt = t - sim->drive_time[i];
+			const double dt = (sim->time_origin - sim->drive_time[i]) + t;
 			for (int c = 0; c < 3; c++) {
 				x[p + c] = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
 				v[p + c] = sim->drive_velocity[p + c];
@@ -174,7 +176,8 @@ static void pack(const sm_simulation* sim, const double* x, const double* v, dou
 
 void sm_simulation_refresh_outputs(sm_simulation* sim)
 {
-	sm_simulation_unpack(sim, sim->time, N_VGetArrayPointer(sim->y), sim->position, sim->velocity);
+	sm_simulation_unpack(sim, sm_simulation_cvode_time(sim, sim->time), N_VGetArrayPointer(sim->y),
+	                     sim->position, sim->velocity);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -530,6 +533,7 @@ static void load_initial_state(sm_simulation* sim)
 	pack(sim, m->position, m->velocity, y);
 	y[2 * sim->dofs] = 0.0;
 	sim->time = 0.0;
+	sim->time_origin = 0.0;
 	sm_simulation_refresh_outputs(sim);
 }
 
@@ -627,13 +631,14 @@ static sm_status setup_cvode(sm_simulation* sim)
 	if (!sim->cvode)
 		return SM_ERROR_OUT_OF_MEMORY;
 	if (CVodeSetErrHandlerFn(sim->cvode, error_handler, sim) != CV_SUCCESS ||
-	    CVodeInit(sim->cvode, rhs, sim->time, sim->y) != CV_SUCCESS ||
+	    CVodeInit(sim->cvode, rhs, sm_simulation_cvode_time(sim, sim->time), sim->y) != CV_SUCCESS ||
 	    CVodeWFtolerances(sim->cvode, error_weights) != CV_SUCCESS ||
 	    CVodeSetUserData(sim->cvode, sim) != CV_SUCCESS ||
 	    CVodeSetMaxNumSteps(sim->cvode, sim->def.max_steps) != CV_SUCCESS ||
 	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS)
 		return SM_ERROR_SOLVER;
-	// A step size that rounds to nothing is reported as a failure, not printed.
+	// CVODE's warnings that t + h rounds to t are not printed (its time axis starts at every
+	// (re)initialisation, so they would come only after a long run without one).
 	CVodeSetMaxHnilWarns(sim->cvode, -1);
 	sm_status st = sm_simulation_build_events(sim);
 	if (st != SM_OK)
@@ -807,7 +812,8 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	if (has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, reset || sim->forget_factor);
 	sim->forget_factor = false;
-	if (CVodeReInit(sim->cvode, sim->time, sim->y) != CV_SUCCESS) {
+	sim->time_origin = sim->time;
+	if (CVodeReInit(sim->cvode, 0.0, sim->y) != CV_SUCCESS) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
 		return sm_simulation_fail(sim, SM_ERROR_SOLVER, "cannot re-initialise CVODE at t = %s s: %s", t,
@@ -889,7 +895,7 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	// before it.
 	if (sim->need_restart && has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, false);
-	if (rhs(sim->time, sim->y, sim->y_saved, sim) != 0) {
+	if (rhs(sm_simulation_cvode_time(sim, sim->time), sim->y, sim->y_saved, sim) != 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
 		return sm_simulation_fail(
@@ -919,12 +925,12 @@ static int check_step_size(sm_simulation* sim, int flag, double* reached)
 	return CV_ERR_FAILURE;
 }
 
-// CVODE's own time t_n: past the simulation's time after an advance that interpolated its end
-// (sm_simulation_advance_interpolated), equal to it otherwise (or within CVODE's round-off of a
-// stop time).
+// CVODE's own time t_n (on its axis): past the simulation's time after an advance that
+// interpolated its end (sm_simulation_advance_interpolated), at it otherwise (or within CVODE's
+// round-off of a stop time).
 static double cvode_time(const sm_simulation* sim)
 {
-	double t = sim->time;
+	double t = sm_simulation_cvode_time(sim, sim->time);
 	if (!sim->need_restart)
 		CVodeGetCurrentTime(sim->cvode, &t);
 	return t;
@@ -934,7 +940,14 @@ static double cvode_time(const sm_simulation* sim)
 // inputs as they were: a changed input must restart it at the simulation's time.
 static bool cvode_ahead(const sm_simulation* sim)
 {
-	return !sim->need_restart && cvode_time(sim) > sim->time;
+	return !sim->need_restart && cvode_time(sim) > sm_simulation_cvode_time(sim, sim->time);
+}
+
+// The simulation's time of CVODE's time `cvode_t` in an advance to t_end (cvode_end on CVODE's
+// axis): t_end itself there, never past it.
+static double time_of(const sm_simulation* sim, double cvode_t, double cvode_end, double t_end)
+{
+	return cvode_t >= cvode_end ? t_end : fmin(sim->time_origin + cvode_t, t_end);
 }
 
 // One internal step per CVode call until CVODE's time reaches t_end, never past t_stop, the
@@ -947,7 +960,7 @@ static bool cvode_ahead(const sm_simulation* sim)
 // this way: each step is searched for a strain that crosses its limit inside it
 // (sm_simulation_search_step), which CVODE's root functions, compared at the ends of its steps,
 // miss. *reached is where CVODE stopped: the end of its last step, a break (CVODE's root or a
-// crossing inside the step), or the last state it reached on failure (in y).
+// crossing inside the step), or the last state it reached on failure (in y). All times are CVODE's.
 static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, long allowed, double* reached)
 {
 	*reached = cvode_time(sim);
@@ -963,18 +976,19 @@ static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, l
 		CVodeGetNumSteps(sim->cvode, &steps_after);
 		// A spring that reached its break strain inside the step ends it there, as a root does.
 		flag = sm_simulation_search_step(sim, flag, steps_after > steps_before, reached);
-		if (flag >= 0 && sim->def.on_step != NULL && !sim->def.on_step(sim->def.on_step_context, *reached))
+		if (flag >= 0 && sim->def.on_step != NULL &&
+		    !sim->def.on_step(sim->def.on_step_context, sim->time_origin + *reached))
 			sim->stopped = true;
 		steps++;
 	}
 	return flag;
 }
 
-// The state at time t from CVODE's history of its last step (its interpolating polynomial, of
-// the order of the step), into y.
-static sm_status interpolate(sm_simulation* sim, double t)
+// The state at CVODE's time cvode_t, the simulation's time t, from CVODE's history of its last
+// step (its interpolating polynomial, of the order of the step), into y.
+static sm_status interpolate(sm_simulation* sim, double cvode_t, double t)
 {
-	if (CVodeGetDky(sim->cvode, t, 0, sim->y) != CV_SUCCESS) {
+	if (CVodeGetDky(sim->cvode, cvode_t, 0, sim->y) != CV_SUCCESS) {
 		char at[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(t, at);
 		sim->need_restart = true;
@@ -1026,15 +1040,20 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			if (st != SM_OK)
 				return st;
 		}
+		// The end and the stop time on CVODE's axis, which a restart moves.
+		const double cvode_end = sm_simulation_cvode_time(sim, t_end);
+		const double cvode_stop = sm_simulation_cvode_time(sim, t_stop);
 		N_VScale(1.0, sim->y, sim->y_saved);
 		if (sim->break_pending) {
 			// A spring break that CVODE found past the end of the last advance: interpolate up
 			// to it, then break it there.
-			const double t = fmin(sim->break_time, t_end);
-			sm_status st = interpolate(sim, t);
+			const bool beyond = sim->break_time > cvode_end;
+			sm_status st =
+			    beyond ? interpolate(sim, cvode_end, t_end)
+				       : interpolate(sim, sim->break_time, time_of(sim, sim->break_time, cvode_end, t_end));
 			if (st != SM_OK)
 				return st;
-			if (t < sim->break_time)
+			if (beyond)
 				break;
 			sim->break_pending = false;
 			if (sm_simulation_break_springs(sim) != SM_OK)
@@ -1044,7 +1063,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		sim->solver_message[0] = '\0';
 		sim->jacobian_out_of_memory = false;
 		const bool past_end = (t_stop > t_end && !inputs_changed) || cvode_ahead(sim);
-		double reached = sim->time;
+		double reached = sm_simulation_cvode_time(sim, sim->time);  // CVODE's time
 		const long allowed = (long)sim->def.max_steps - steps_taken;
 		long steps_before = 0, steps_after = 0;
 		CVodeGetNumSteps(sim->cvode, &steps_before);
@@ -1052,11 +1071,11 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		if (allowed <= 0) {
 			flag = CV_SUCCESS;  // reported as too much work below
 		} else if (!past_end && sim->def.on_step == NULL && sim->root_count == 0) {
-			CVodeSetStopTime(sim->cvode, t_end);
+			CVodeSetStopTime(sim->cvode, cvode_end);
 			CVodeSetMaxNumSteps(sim->cvode, allowed);
-			flag = check_step_size(sim, CVode(sim->cvode, t_end, sim->y, &reached, CV_NORMAL), &reached);
+			flag = check_step_size(sim, CVode(sim->cvode, cvode_end, sim->y, &reached, CV_NORMAL), &reached);
 		} else {
-			flag = step_one_at_a_time(sim, t_end, past_end ? t_stop : t_end, allowed, &reached);
+			flag = step_one_at_a_time(sim, cvode_end, past_end ? cvode_stop : cvode_end, allowed, &reached);
 		}
 		CVodeGetNumSteps(sim->cvode, &steps_after);
 		steps_taken += steps_after - steps_before;
@@ -1064,14 +1083,15 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		// so the advance ends there (after a break found at it) and the next goes on from it.
 		const bool stop = sim->stopped;
 		sim->stopped = false;
-		if (flag == CV_SUCCESS && reached < t_end && stop) {
-			sim->time = reached;
+		if (flag == CV_SUCCESS && reached < cvode_end && stop) {
+			sim->time = time_of(sim, reached, cvode_end, t_end);
 			return stopped_by_caller(sim, t_end);
 		}
-		if (flag == CV_SUCCESS && reached < t_end) {
+		if (flag == CV_SUCCESS && reached < cvode_end) {
 			flag = CV_TOO_MUCH_WORK;
 			snprintf(sim->solver_message, sizeof sim->solver_message,
-			         "CVode: At t = %g, mxstep steps taken before reaching tout.", reached);
+			         "CVode: At t = %g, mxstep steps taken before reaching tout.",
+			         sim->time_origin + reached);
 		}
 		if (flag < 0 && flag != CV_TOO_MUCH_WORK && sim->input_jumped) {
 			// An input jumped and CVODE kept its history over it, but its error control could not
@@ -1085,11 +1105,12 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			// CVODE leaves the last state it reached in y; keep the state from before the call
 			// if that is not usable.
 			const double* y = N_VGetArrayPointer(sim->y);
-			bool usable = isfinite(reached) && reached >= sim->time && reached <= t_end;
+			bool usable = isfinite(reached) && reached >= sm_simulation_cvode_time(sim, sim->time) &&
+			              reached <= cvode_end;
 			for (int64_t i = 0; usable && i <= 2 * sim->dofs; i++)
 				usable = isfinite(y[i]);
 			if (usable)
-				sim->time = reached;
+				sim->time = time_of(sim, reached, cvode_end, t_end);
 			else
 				N_VScale(1.0, sim->y_saved, sim->y);
 			// After too much work CVODE may simply go on; after any other failure it starts
@@ -1128,21 +1149,21 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			    failure_name(flag), end, now, failure_hint(flag), sim->solver_message[0] ? ": " : "",
 			    sim->solver_message);
 		}
-		if (flag == CV_ROOT_RETURN && reached > t_end) {
+		if (flag == CV_ROOT_RETURN && reached > cvode_end) {
 			// A break past the end: kept for the next advance, where CVODE's history still
 			// reaches it unless an input, the state or the model changes first.
 			sim->break_pending = true;
 			sim->break_time = reached;
-			sm_status st = interpolate(sim, t_end);
+			sm_status st = interpolate(sim, cvode_end, t_end);
 			if (st != SM_OK)
 				return st;
 		} else if (flag == CV_ROOT_RETURN) {
-			sim->time = reached;
+			sim->time = time_of(sim, reached, cvode_end, t_end);
 			if (sm_simulation_break_springs(sim) != SM_OK)
 				return SM_ERROR_OUT_OF_MEMORY;
 		} else if (past_end) {
 			// CVODE's last step ends at or past t_end, in this call or an earlier one.
-			sm_status st = interpolate(sim, t_end);
+			sm_status st = interpolate(sim, cvode_end, t_end);
 			if (st != SM_OK)
 				return st;
 		} else {

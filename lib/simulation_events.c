@@ -134,7 +134,7 @@ sm_status sm_simulation_record_break(sm_simulation* sim, double t, int32_t sprin
 // constant across breaks as between them.
 sm_status sm_simulation_break_springs(sm_simulation* sim)
 {
-	sm_simulation_unpack(sim, sim->time, N_VGetArrayPointer(sim->y), sim->position, sim->velocity);
+	sm_simulation_refresh_outputs(sim);
 	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
 	bool broke = false, out_of_memory = false;
 	for (int32_t r = 0; r < sim->root_count && !out_of_memory; r++) {
@@ -161,7 +161,7 @@ sm_status sm_simulation_break_overstretched_springs(sm_simulation* sim)
 {
 	if (sim->root_count == 0)
 		return SM_OK;
-	roots(sim->time, sim->y, sim->root_values, sim);
+	roots(sm_simulation_cvode_time(sim, sim->time), sim->y, sim->root_values, sim);
 	bool any = false;
 	for (int32_t r = 0; r < sim->root_count; r++) {
 		// At the limit counts as beyond: CVODE would not report a root function that starts at 0
@@ -364,6 +364,20 @@ static double spring_first_crossing(const sm_simulation* sim, int32_t r, int q, 
 	return sm_simulation_first_rise(bernstein, n, resolution);
 }
 
+// The round-off of breakable spring r's root function at the positions x [m]: its length is formed
+// from coordinate differences, each rounded to eps of the coordinates, and its limit from its
+// rest length, rounded to eps of it; a few of each.
+#define LENGTH_ROUNDOFF (8.0 * DBL_EPSILON)
+static double length_roundoff(const sm_simulation* sim, int32_t r, const double* x)
+{
+	const int32_t s = sim->root_spring[r];
+	const double* a = x + 3 * (size_t)sim->model->spring_a[s];
+	const double* b = x + 3 * (size_t)sim->model->spring_b[s];
+	const double extent = fmax(fmax(fabs(a[0]), fabs(a[1])), fabs(a[2])) +
+	                      fmax(fmax(fabs(b[0]), fabs(b[1])), fabs(b[2])) + sim->root_limit[r];
+	return LENGTH_ROUNDOFF * extent;
+}
+
 int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, double* reached)
 {
 	if (sim->root_count == 0 || flag < 0)
@@ -424,10 +438,14 @@ int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, doubl
 	}
 	// Every spring that crossed within the resolution of the event breaks with it, as CVODE breaks
 	// every root function whose sign changed in its last bracket, and so does every intact one at
-	// or beyond its limit in the state there, so that CVODE restarts with all of them below.
+	// or beyond its limit in the state there, to the round-off of its length, so that CVODE
+	// restarts with all of them below. Springs that reach their limits together by symmetry (a
+	// ring expanding evenly) differ by the round-off of their coordinates and rest lengths, which
+	// spreads their crossings over a few 1e-15 s: one event, not one per few.
 	roots(t_event, sim->y, sim->root_values, sim);
 	for (int32_t r = 0; r < sim->root_count; r++)
-		if (sim->crossing_time[r] <= t_event + resolution || sim->root_values[r] >= 0.0)
+		if (sim->crossing_time[r] <= t_event + resolution ||
+		    sim->root_values[r] >= -length_roundoff(sim, r, sim->work_position))
 			sim->roots_found[r] = 1;
 	return CV_ROOT_RETURN;
 }

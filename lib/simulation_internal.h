@@ -33,7 +33,7 @@ struct sm_simulation {
 	// (roots_found tells which); the next advance breaks it there.
 	bool break_pending;
 	bool stopped;       // the caller's on_step returned false during this CVode call
-	double break_time;  // [s]
+	double break_time;  // CVODE's time [s]
 
 	sm_model* model;           // own copy; broken springs disabled in it
 	uint8_t* initial_enabled;  // per spring: enabled in the model given to create/update
@@ -47,7 +47,12 @@ struct sm_simulation {
 	double* inverse_mass;  // per free particle [1/kg]
 	double* mass_dof;      // per free degree of freedom [kg]
 
-	double time;             // [s]
+	double time;  // [s]
+	// CVODE integrates on its own time axis, t - time_origin, with the origin at its last
+	// (re)initialisation: its steps then keep their precision however large the simulation's time
+	// (a state set at t = 1e14 s, where a double resolves only 0.016 s). Every time CVODE sees or
+	// gives ("CVODE's time" below) is on that axis.
+	double time_origin;      // [s]
 	double* position;        // all particles at `time` [m]
 	double* velocity;        // [m/s]
 	double* external_force;  // per particle [N], held until changed
@@ -102,8 +107,14 @@ struct sm_simulation {
 // Seconds on a monotonic clock [s].
 double sm_simulation_clock(void);
 
-// Fills work_position / work_velocity for all particles from a CVODE state at time t.
+// Fills x and v for all particles from a CVODE state y at CVODE's time t.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v);
+
+// CVODE's time of the simulation's time t [s].
+static inline double sm_simulation_cvode_time(const sm_simulation* sim, double t)
+{
+	return t - sim->time_origin;
+}
 
 // Helpers of simulation.c that the snapshots (simulation_state.c) use too.
 // Writes the formatted message into sim->last_error; returns status.

@@ -1525,6 +1525,50 @@ static int test_on_step_keeps_max_steps(void)
 	return 0;
 }
 
+// A ring of 12 particles moving outwards at 1 m/s, its neighbours joined by springs of break
+// strain 0.05: by symmetry every spring reaches its limit at the same instant, and all break in
+// one event with one restart. The round-off of the coordinates (cos, sin) and rest lengths spread
+// their computed crossings over a few 1e-15 s, wider than CVODE's time resolution there, and the
+// ring broke in 7 events with 7 restarts.
+static int test_springs_at_their_limit_together_break_in_one_event(void)
+{
+	enum { N = 12 };
+	const double pi = 3.14159265358979323846;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	for (int i = 0; i < N; i++) {
+		const double a = 2.0 * pi * i / N;
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = p.velocity[0] = cos(a);
+		p.position[1] = p.velocity[1] = sin(a);
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	for (int i = 0; i < N; i++) {
+		sm_spring_def sd = sm_default_spring_def();
+		sd.a = i;
+		sd.b = (i + 1) % N;
+		sd.stiffness = 100.0;
+		sd.rest_length = 2.0 * sin(pi / N);
+		sd.break_strain = 0.05;
+		ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	}
+	sm_simulation_def d = tight_def(SM_SOLVER_DENSE);
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	printf("  %d breaks at %.17g s, %d restarts\n", (int)sm_simulation_break_count(sim),
+	       sm_simulation_break(sim, 0).time, (int)sm_simulation_statistics(sim).restarts);
+	ENSURE(sm_simulation_break_count(sim) == N);
+	for (int k = 1; k < N; k++)
+		ENSURE(sm_simulation_break(sim, k).time == sm_simulation_break(sim, 0).time);
+	ENSURE(sm_simulation_statistics(sim).restarts == 1);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A spring from a fixed particle to a driven one pulled at constant speed s breaks when
 // l0 + s t = l0 (1 + strain), at t = l0 strain / s. A free particle hangs beside it so that the
 // solver has work to do.
@@ -2321,6 +2365,52 @@ static int test_set_state_continues(void)
 	ENSURE(sm_simulation_statistics(a).restarts == 0);
 	sm_simulation_destroy(a);
 	sm_simulation_destroy(b);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// CVODE integrates on its own time axis from its last (re)initialisation, so a state set at a
+// large time runs as it would at t = 0: pulled_spring()'s driven particle set moving at
+// V = 0.05 m/s at T0 and run for 1 s (before its spring breaks at T0 + 0.1 / V = T0 + 2 s) ends
+// in the same bits at T0 = 1e6, 1e10 and 1e14 s as at 0. On CVODE's absolute time the steps
+// rounded to the time's resolution (0.016 s at 1e14 s), all with SM_OK: here the hanging particle
+// ended 3.2e-6 m off at 1e6 s; the bundled oscillator at rtol 1e-8, 3.5e-7 m off at 1e10 s,
+// 3.2e-4 m at 1e12 s and nearly still at 1e14 s. Run on past the break, the break is
+// recorded at T0 + 2 s to the resolution of a double there (half an ulp of T0, 4e-9 s at 1e10 s),
+// what every time the simulation reports carries.
+static int test_large_times_keep_the_steps_precision(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	const double speed = 0.05, start[3] = {1.0, 0.0, 0.0}, velocity[3] = {speed, 0.0, 0.0};
+	const double starts[] = {0.0, 1e6, 1e10, 1e14};
+	const size_t n3 = 3 * (size_t)sm_model_particle_count(model);
+	double at_zero[9];
+	ENSURE(n3 == 9);
+	for (size_t k = 0; k < sizeof starts / sizeof starts[0]; k++) {
+		const double t0 = starts[k];
+		sm_simulation_def d = sm_default_simulation_def();
+		d.solver = SM_SOLVER_DENSE;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		double x[9], v[9];
+		memcpy(x, sm_simulation_positions(sim), sizeof x);
+		memcpy(v, sm_simulation_velocities(sim), sizeof v);
+		ENSURE_STATUS(sm_simulation_set_state(sim, t0, x, v), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 1, start, velocity), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, t0 + 1.0), SM_OK);
+		ENSURE(sm_simulation_time(sim) == t0 + 1.0 && sm_simulation_break_count(sim) == 0);
+		if (k == 0)
+			memcpy(at_zero, sm_simulation_positions(sim), sizeof at_zero);
+		printf("  T0 = %-6g free particle (%.17g, %.17g) m\n", t0, sm_simulation_positions(sim)[6],
+		       sm_simulation_positions(sim)[8]);
+		ENSURE(memcmp(sm_simulation_positions(sim), at_zero, sizeof at_zero) == 0);
+		ENSURE_STATUS(sm_simulation_advance(sim, t0 + 3.0), SM_OK);
+		ENSURE(sm_simulation_break_count(sim) == 1);
+		const double resolution = DBL_EPSILON * fmax(t0, 1.0);  // 2 half-ulps of T0, a few of 2 s
+		ENSURE_NEAR(sm_simulation_break(sim, 0).time, t0 + 0.1 / speed, resolution);
+		sm_simulation_destroy(sim);
+	}
 	sm_model_destroy(model);
 	return 0;
 }
@@ -5372,6 +5462,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_large_cloth_reduced_solvers_against_gsl);
 	RUN_TEST(test_threads_give_the_same_bits);
 	RUN_TEST(test_break_at_analytic_time);
+	RUN_TEST(test_springs_at_their_limit_together_break_in_one_event);
 	RUN_TEST(test_break_inside_one_step);
 	RUN_TEST(test_break_search_of_an_overflowing_polynomial);
 	RUN_TEST(test_break_search_of_coefficients_near_the_largest_double);
@@ -5407,6 +5498,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_reduced_solver_huge_mass);
 	RUN_TEST(test_empty_model);
 	RUN_TEST(test_set_state_continues);
+	RUN_TEST(test_large_times_keep_the_steps_precision);
 	RUN_TEST(test_reset_repeats_the_run);
 	RUN_TEST(test_update_model);
 	RUN_TEST(test_solver_names_round_trip);

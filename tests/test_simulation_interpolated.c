@@ -364,7 +364,8 @@ static int check_input_past_the_steps(bool driven)
 	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_force, 2.0), SM_OK);
 	double tn = 0.0;
 	CVodeGetCurrentTime(sim->cvode, &tn);
-	ENSURE(tn > t_force);  // CVODE has stepped past the row
+	tn += sim->time_origin;  // CVODE's time on the simulation's axis
+	ENSURE(tn > t_force);    // CVODE has stepped past the row
 	ENSURE(sm_simulation_statistics(sim).restarts == 0);
 	const double shift = force / OSC_K;
 	const double f[3] = {force, 0.0, 0.0}, moved[3] = {shift, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
@@ -381,6 +382,7 @@ static int check_input_past_the_steps(bool driven)
 		// round-off), as the last one does at the stop time; the others, with the inputs
 		// unchanged, step past.
 		CVodeGetCurrentTime(sim->cvode, &tn);
+		tn += sim->time_origin;  // CVODE's time on the simulation's axis
 		if (i == 1 || i == 150)
 			ENSURE(tn <= t && tn > t - 1e-12);
 		else
@@ -498,6 +500,7 @@ static int test_an_unchanged_input_set_after_a_changed_one_keeps_the_change(void
 				const double t = 0.5 + 0.01 * i;
 				ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 2.0), SM_OK);
 				CVodeGetCurrentTime(sim->cvode, &tn);
+				tn += sim->time_origin;  // CVODE's time on the simulation's axis
 				if (i == 1)
 					ENSURE(tn <= t && tn > t - 1e-12);  // CVODE's stop-time round-off, as above
 				else if (i == 2)
@@ -537,6 +540,7 @@ static int test_an_advance_to_the_current_time_keeps_a_changed_input(void)
 		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.51, 2.0), SM_OK);
 		double tn = 0.0;
 		CVodeGetCurrentTime(sim->cvode, &tn);
+		tn += sim->time_origin;  // CVODE's time on the simulation's axis
 		ENSURE(tn <= 0.51 && tn > 0.51 - 1e-12);
 		memcpy(x[idle], sm_simulation_positions(sim), sizeof x[idle]);
 		steps[idle] = sm_simulation_statistics(sim).steps;
@@ -570,6 +574,7 @@ static int test_plain_advance_within_the_steps_interpolates(void)
 		ENSURE_STATUS(sm_simulation_advance_interpolated(b, 0.3, 2.0), SM_OK);
 		double tn = 0.0;
 		CVodeGetCurrentTime(a->cvode, &tn);
+		tn += a->time_origin;  // CVODE's time on the simulation's axis
 		ENSURE(tn > 0.3);
 		const double t = 0.5 * (0.3 + tn);
 		const sm_statistics before = sm_simulation_statistics(a);
