@@ -239,11 +239,21 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (!(def->break_strain > SM_MIN_BREAK_STRAIN)) {
 		char rule[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY];
 		sm_break_strain_floor_text(def->break_strain, rule);
-		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: %s, and the spring break at rest", index,
-		           rule);
+		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: %s, and the spring would break at rest",
+		           index, rule);
 	}
 
-	// Rest length.
+	// Rest length. A rest-length spring's length must be a double, whatever its rest length: its
+	// square may not overflow.
+	const double* xa = model->position + 3 * (size_t)def->a;
+	const double* xb = model->position + 3 * (size_t)def->b;
+	const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+	const double squared = dx * dx + dy * dy + dz * dz;
+	if (def->kind == SM_SPRING_REST_LENGTH && !isfinite(sqrt(squared)))
+		return say(msg, SM_ERROR_NOT_FINITE,
+		           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
+		           "overflows: particles joined by springs must be less than about 1e154 m apart)",
+		           index, (long)def->a, (long)def->b);
 	double l0;
 	if (def->rest_length == SM_REST_LENGTH_INITIAL) {
 		if (def->kind == SM_SPRING_ZERO_LENGTH) {
@@ -251,17 +261,7 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 		} else if (current_rest_length >= 0.0) {
 			l0 = current_rest_length;
 		} else {
-			const double* xa = model->position + 3 * (size_t)def->a;
-			const double* xb = model->position + 3 * (size_t)def->b;
-			const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
-			const double squared = dx * dx + dy * dy + dz * dz;
 			l0 = sqrt(squared);
-			if (!isfinite(l0))
-				return say(
-				    msg, SM_ERROR_NOT_FINITE,
-				    "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
-				    "overflows: particles joined by springs must be less than about 1e154 m apart)",
-				    index, (long)def->a, (long)def->b);
 			// A square below DBL_MIN has lost digits or all of them (1e-170 m gives l0 = 0): the
 			// rest length would not be the distance. Structures refuse such springs too; particles
 			// at one point keep l0 = 0.

@@ -1052,7 +1052,10 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 		char element[PATH_CAPACITY];
 		snprintf(element, sizeof element, "%.100s.triangles[%zu]", path, t);
 		const json_t* triple = json_array_get(ts, t);
-		if (!json_is_array(triple) || json_array_size(triple) != 3)
+		if (json_is_array(triple) && json_array_size(triple) != 3)
+			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 vertex indices, not of %zu",
+			            json_array_size(triple));
+		if (!json_is_array(triple))
 			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 vertex indices, not %s",
 			            type_name(triple));
 		for (size_t c = 0; c < 3; c++) {

@@ -781,6 +781,17 @@ static int test_broken_files(void)
 		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 3]]}]}",
 		 SM_ERROR_SCHEMA, "test.json: structures[0].triangles[0][2]: 3 must be a whole number from 0 to 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1]]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].triangles[0]: must be an array of 3 vertex indices, not of 2"},
+	    // An explicit rest length does not spare a spring a length that overflows: it could not run.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
+		 " {\"name\": \"b\", \"position\": [1e200, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\","
+		 " \"rest_length\": 1, \"stiffness\": 1}]}",
+		 SM_ERROR_NOT_FINITE,
+		 "test.json: springs[0]: the initial distance between particles 0 and 1 is too large (its square overflows: "
+		 "particles joined by springs must be less than about 1e154 m apart)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
 		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
 		 SM_ERROR_INVALID_ARGUMENT,
 		 "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "

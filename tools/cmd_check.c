@@ -119,11 +119,14 @@ int sm_cmd_check(int argc, char** argv)
 	// The settings must also suit `springmass run MODEL`, which writes a row every interval.
 	const sm_document_settings settings = sm_document_get_settings(doc);
 	if (cli_output_rows(settings.stop_time, settings.output_interval) < 0) {
+		char end[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(settings.stop_time, end);
+		sm_format_number(settings.output_interval, step);
 		fprintf(
 		    stderr,
-		    "springmass check: %s: simulation: stop_time / output_interval = %g s / %g s would make more than %g "
+		    "springmass check: %s: simulation: stop_time / output_interval = %s s / %s s would make more than %g "
 		    "output rows in springmass run\n",
-		    path, settings.stop_time, settings.output_interval, CLI_MAX_ROWS);
+		    path, end, step, CLI_MAX_ROWS);
 		sm_model_destroy(model);
 		sm_document_destroy(doc);
 		return 1;
