@@ -150,6 +150,22 @@ CASES
 for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtk; do
   cmp -s "$osc" "$tmp/clash/$f" || fail "run overwrote its model file $f"
 done
+# modes --zero-tolerance: two zero-length springs of 1 and 1e12 N/m in a chain of two 1 kg
+# particles have no zero mode, but the soft one (omega^2 = 0.5 1/s^2 per axis, to 1/(8e12)) lies
+# below the default 1e-12 of the stiffest (2e12 1/s^2): the default calls it zero, 1e-15 resolves
+# it, to the round-off of the stiff spring (eps 1e12 / 1 = 2e-4 of it; 1e-3 allowed).
+cat > "$tmp/stiff.json" << 'JSON'
+{"springmass": 1, "name": "stiff", "gravity": [0, 0, 0],
+ "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": true}, {"position": [1, 0, 0]}, {"position": [2, 0, 0]}],
+ "springs": [{"a": 0, "b": 1, "kind": "zero_length", "stiffness": 1}, {"a": 1, "b": 2, "kind": "zero_length", "stiffness": 1e12}]}
+JSON
+zero_default=$("$cli" modes "$tmp/stiff.json" -n 0 | sed -n 's/^zero modes *\([0-9]*\) .*/\1/p')
+resolved=$("$cli" modes "$tmp/stiff.json" -n 0 --zero-tolerance 1e-15)
+zero_resolved=$(sed -n 's/^zero modes *\([0-9]*\) .*/\1/p' <<< "$resolved")
+soft=$(awk '$1 == "1" && NF == 5 { print $4 }' <<< "$resolved")
+[ "$zero_default" = 3 ] && [ "$zero_resolved" = 0 ] && awk -v w="$soft" 'BEGIN { exit !(w > 0.4995 && w < 0.5005) }' ||
+  fail "modes --zero-tolerance: zero modes $zero_default by default, $zero_resolved at 1e-15, soft omega^2 '$soft'"
+
 # --set values are taken together: a rope's new start beyond its old end, with the new end.
 cp "$root/tests/python/models/rope_ends.json" "$tmp/rope_ends.json"
 ends="$tmp/rope_ends.json"

@@ -37,6 +37,8 @@ static void usage(FILE* out)
 	        "                         more than the sparse solver gives need --solver dense above %d\n"
 	        "                         degrees of freedom, where the dense solver takes minutes)\n"
 	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics)\n"
+	        "  --zero-tolerance R     omega^2 within R of the largest |omega^2| is a zero mode (default\n"
+	        "                         1e-12; lower it for a model whose stiffnesses span more than 1e12)\n"
 	        "  --steps-per-period K   communication steps per period of the highest mode listed\n"
 	        "                         (default 10)\n"
 	        "  -o, --output FILE      write the listed mode shapes as CSV: particle, name, then x, y, z\n"
@@ -89,7 +91,8 @@ static int write_csv(const char* path, const sm_document* doc, const sm_modes* m
 }
 
 // The summary and the table of frequencies, periods, omega^2 and damping ratios.
-static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps_per_period)
+static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps_per_period,
+                        double zero_tolerance)
 {
 	const bool sparse = modes->solver == SM_MODES_SPARSE;
 	if (sparse)
@@ -99,10 +102,13 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	else
 		printf("eigensolver       dense (GSL), all %d modes; largest residual %.2e\n", (int)modes->dof,
 		       modes->residual);
-	printf("zero modes        %d%s (frequency 0: rigid-body motions or mechanisms%s)\n",
-	       (int)modes->zero_count, sparse ? " among the modes listed" : "",
-	       modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium"
-	                                                : "");
+	// A zero mode is one the eigensolver cannot tell from 0 beside the stiffest: a rigid-body motion,
+	// a mechanism, or a mode too soft for the model's range of stiffnesses.
+	printf(
+	    "zero modes        %d%s (|omega^2| <= %g of the largest: rigid-body motions, mechanisms or modes too "
+	    "soft to resolve, see --zero-tolerance%s)\n",
+	    (int)modes->zero_count, sparse ? " among the modes listed" : "", zero_tolerance,
+	    modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium" : "");
 	if (modes->unstable_count > 0)
 		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
 		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",
@@ -166,6 +172,7 @@ int sm_cmd_modes(int argc, char** argv)
 	long count = 10;
 	sm_modes_solver solver = SM_MODES_AUTO;
 	double steps_per_period = 10.0;
+	double zero_tolerance = sm_default_modes_def().zero_tolerance;
 	if (settings == NULL)
 		return 1;
 	for (int i = 1; i < argc; i++) {
@@ -183,6 +190,14 @@ int sm_cmd_modes(int argc, char** argv)
 			}
 		} else if (strcmp(a, "--at-equilibrium") == 0) {
 			at_equilibrium = 1;
+		} else if (strcmp(a, "--zero-tolerance") == 0 && has_value) {
+			if (!cli_parse_number(argv[++i], &zero_tolerance) ||
+			    !(zero_tolerance >= 0.0 && zero_tolerance < 1.0)) {
+				fprintf(stderr, "springmass modes: --zero-tolerance needs a number in [0, 1), got '%s'\n",
+				        argv[i]);
+				free(settings);
+				return 2;
+			}
 		} else if (strcmp(a, "--steps-per-period") == 0 && has_value) {
 			if (!cli_parse_number(argv[++i], &steps_per_period) || !(steps_per_period >= 1.0)) {
 				fprintf(stderr, "springmass modes: --steps-per-period needs a number >= 1\n");
@@ -275,6 +290,7 @@ int sm_cmd_modes(int argc, char** argv)
 	def.configuration = x;
 	def.mode_count = (int32_t)count;
 	def.solver = solver;
+	def.zero_tolerance = zero_tolerance;
 	if (sm_modes_compute(model, &def, &modes, &err) != SM_OK) {
 		fprintf(stderr, "springmass modes: %s: ", model_path);
 		cli_write_named(stderr, doc, model, err.message);
@@ -286,7 +302,7 @@ int sm_cmd_modes(int argc, char** argv)
 	if (modes.dof == 0)
 		printf("no free particle: nothing vibrates\n");
 	else
-		print_modes(&modes, at_equilibrium, steps_per_period);
+		print_modes(&modes, at_equilibrium, steps_per_period, zero_tolerance);
 	if (csv_path != NULL) {
 		if (write_csv(csv_path, doc, &modes) != 0)
 			goto done;
