@@ -1033,11 +1033,21 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 
 	int converged = 0;
 	st = solve_with_continuation(&w, &d, &res, &converged, err);
-	if (st == SM_OK && !converged)
-		st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-		                  "statics: no equilibrium found in %d iterations: largest force on a free particle "
-		                  "%.3g N > tolerance %.3g N",
-		                  (int)res.iterations, res.residual, res.tolerance);
+	// Either the iterations ran out, or the stiffness continuation stopped before: no stage it could
+	// reach converged (a load far beyond what the springs carry, a model with no equilibrium).
+	if (st == SM_OK && !converged && res.iterations >= d.max_iterations)
+		st = sm_error_set(
+		    err, SM_ERROR_NOT_CONVERGED,
+		    "statics: no equilibrium found in %d iterations (max_iterations): largest force on a "
+		    "free particle %.3g N > tolerance %.3g N",
+		    (int)res.iterations, res.residual, res.tolerance);
+	else if (st == SM_OK && !converged)
+		st = sm_error_set(
+		    err, SM_ERROR_NOT_CONVERGED,
+		    "statics: no equilibrium found: the stiffness continuation gave up after %d of at most %d "
+		    "iterations, no softened stage converging; largest force on a free particle %.3g N > "
+		    "tolerance %.3g N",
+		    (int)res.iterations, (int)d.max_iterations, res.residual, res.tolerance);
 
 	for (int c = 0; c < 3; c++)
 		res.reaction_total[c] = 0.0;

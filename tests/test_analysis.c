@@ -344,6 +344,27 @@ static int test_stiff_rope_carries_its_whole_weight(void)
 	return 0;
 }
 
+// A load no spring can carry (1e308 N on the free end of a rope): the stiffness continuation
+// stops before the iteration limit. The refusal says so instead of "no equilibrium found in 100
+// iterations", which read as if a limit of 100 had been reached.
+static int test_statics_says_when_the_continuation_gives_up(void)
+{
+	sm_model* model = hanging_rope(1.0, 1.0, 1000.0, 9.81, 5);
+	ENSURE(model != NULL);
+	double force[18] = {0.0}, x[18];
+	force[15] = 1e308;
+	sm_statics_def def = sm_default_statics_def();
+	def.external_forces = force;
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
+	printf("  %s\n", err.message);
+	ENSURE(res.iterations < def.max_iterations);
+	ENSURE(strstr(err.message, "the stiffness continuation gave up after") != NULL);
+	sm_model_destroy(model);
+	return 0;
+}
+
 static int test_hanging_rope_elongation(void)
 {
 	const double mass = 0.8, length = 2.0, E = 400.0, g = 9.81;
@@ -2834,6 +2855,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_hanging_rope_elongation);
 	RUN_TEST(test_hanging_rope_with_bending_springs);
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
+	RUN_TEST(test_statics_says_when_the_continuation_gives_up);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_hanging_cloth_reactions);
 	RUN_TEST(test_external_force_on_a_spring);
