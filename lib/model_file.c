@@ -982,8 +982,18 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 		return true;
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
-	if (!expect_object(p, value, sub) || !check_keys(p, value, sub, keys) ||
-	    !read_constants(p, value, sub, m, src))
+	if (!expect_object(p, value, sub) || !check_keys(p, value, sub, keys))
+		return false;
+	// A group that gives neither constant makes no springs: a forgotten stiffness, not a choice
+	// (zeros given make none too, as asked).
+	bool constants = false;
+	for (int k = 0; k < 6; k++)
+		constants = constants || json_object_get(value, keys[k]) != NULL;
+	if (!constants)
+		return fail(p, SM_ERROR_SCHEMA, sub,
+		            "gives no stiffness and no damping, so it would make no springs (give stiffness, "
+		            "strain_stiffness or section_stiffness, or a damping; or leave the group out)");
+	if (!read_constants(p, value, sub, m, src))
 		return false;
 	m->keep_when_zero = src->stiffness >= 0 || src->damping >= 0;
 	return true;

@@ -784,6 +784,11 @@ static int test_broken_files(void)
 		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1]]}]}",
 		 SM_ERROR_SCHEMA,
 		 "test.json: structures[0].triangles[0]: must be an array of 3 vertex indices, not of 2"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+		 " \"end\": [1, 0, 0], \"segments\": 2, \"bending\": {\"break_strain\": 0.5}}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].bending: gives no stiffness and no damping, so it would make no springs (give "
+		 "stiffness, strain_stiffness or section_stiffness, or a damping; or leave the group out)"},
 	    // An explicit rest length does not spare a spring a length that overflows: it could not run.
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
 		 " {\"name\": \"b\", \"position\": [1e200, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\","
