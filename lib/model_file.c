@@ -305,8 +305,8 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
 	if ((rule == POSITIVE || rule == FRACTION || rule == MASS) && !(v > 0.0))
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
+	char least[SM_NUMBER_TEXT_CAPACITY];
 	if (rule == MASS && v < SM_MIN_MASS) {
-		char least[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(SM_MIN_MASS, least);
 		return fail(p, SM_ERROR_NONPOSITIVE_MASS, path,
 		            "%s must be at least %s, the smallest normal double (1 / mass would overflow)",
@@ -314,14 +314,20 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 	}
 	if (rule == FRACTION && !(v < 1.0))
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be < 1", describe(p, text, sizeof text, v, source));
-	if (rule == FRACTION && !(v >= SM_MIN_RELATIVE_TOLERANCE))
+	// The limits in the digits the value is shown in: 2.220446049250313e-16, not 2.22045e-16,
+	// which a value just above it would seem to be below.
+	if (rule == FRACTION && !(v >= SM_MIN_RELATIVE_TOLERANCE)) {
+		sm_format_number(SM_MIN_RELATIVE_TOLERANCE, least);
 		return fail(
 		    p, SM_ERROR_SCHEMA, path,
-		    "%s must be at least %g, the machine epsilon (CVODE cannot meet a smaller relative tolerance)",
-		    describe(p, text, sizeof text, v, source), SM_MIN_RELATIVE_TOLERANCE);
-	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE))
-		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %g (CVODE's error norm overflows below)",
-		            describe(p, text, sizeof text, v, source), SM_MIN_ABSOLUTE_TOLERANCE);
+		    "%s must be at least %s, the machine epsilon (CVODE cannot meet a smaller relative tolerance)",
+		    describe(p, text, sizeof text, v, source), least);
+	}
+	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE)) {
+		sm_format_number(SM_MIN_ABSOLUTE_TOLERANCE, least);
+		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %s (CVODE's error norm overflows below)",
+		            describe(p, text, sizeof text, v, source), least);
+	}
 	return true;
 }
 

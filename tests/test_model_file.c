@@ -1503,12 +1503,12 @@ static int test_rules_at_their_edges(void)
 	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 1}}", SM_ERROR_SCHEMA,
 		 "test.json: simulation.rtol: 1 must be < 1"},
 	    {TWO_PARTICLES ", \"simulation\": {\"rtol\": 2e-16}}", SM_ERROR_SCHEMA,
-		 "test.json: simulation.rtol: 2e-16 must be at least 2.22045e-16, the machine epsilon (CVODE cannot meet a "
+		 "test.json: simulation.rtol: 2e-16 must be at least 2.220446049250313e-16, the machine epsilon (CVODE cannot meet a "
 		 "smaller relative tolerance)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"tol\": 1e-17},"
 		 " \"particles\": [{\"position\": [0, 0, 0]}], \"simulation\": {\"rtol\": \"tol\"}}",
 		 SM_ERROR_SCHEMA,
-		 "test.json: simulation.rtol: parameter tol = 1e-17 must be at least 2.22045e-16, the machine epsilon (CVODE "
+		 "test.json: simulation.rtol: parameter tol = 1e-17 must be at least 2.220446049250313e-16, the machine epsilon (CVODE "
 		 "cannot meet a smaller relative tolerance)"},
 	    {TWO_PARTICLES ", \"simulation\": {\"output_interval\": 0}}", SM_ERROR_NEGATIVE,
 		 "test.json: simulation.output_interval: 0 must be > 0"},
