@@ -150,6 +150,14 @@ CASES
 for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtk; do
   cmp -s "$osc" "$tmp/clash/$f" || fail "run overwrote its model file $f"
 done
+# statics and modes check where every output goes before solving: none is written when one of
+# them cannot be (a missing folder, a file where a folder goes).
+check_cases << 'CASES'
+1|springmass statics: --save-model $tmp/none/x.json: cannot write there: the folder it would go in does not exist|statics "$osc" -q -o "$tmp/fresh.csv" --save-model "$tmp/none/x.json"
+1|springmass modes: --vtk $tmp/a_file: cannot write there: a file of that name exists|modes "$osc" -o "$tmp/fresh_modes.csv" --vtk "$tmp/a_file"
+CASES
+[ ! -e "$tmp/fresh.csv" ] && [ ! -e "$tmp/fresh_modes.csv" ] || fail "an output was written before a refusal"
+
 # modes --zero-tolerance: two zero-length springs of 1 and 1e12 N/m in a chain of two 1 kg
 # particles have no zero mode, but the soft one (omega^2 = 0.5 1/s^2 per axis, to 1/(8e12)) lies
 # below the default 1e-12 of the stiffest (2e12 1/s^2): the default calls it zero, 1e-15 resolves

@@ -407,6 +407,24 @@ bool cli_same_file(const char* a, const char* b)
 	return same;
 }
 
+int cli_check_output_place(const char* command, const char* option, const char* path, bool folder)
+{
+	if (path == NULL || strcmp(path, "-") == 0)
+		return 0;
+	char* place = canonical_path(path);
+	struct stat st;
+	const bool exists = stat(path, &st) == 0;
+	const char* wrong = place == NULL ? "the folder it would go in does not exist"
+	                    : exists && folder && !S_ISDIR(st.st_mode) ? "a file of that name exists"
+	                    : exists && !folder && S_ISDIR(st.st_mode) ? "it is a folder"
+	                                                               : NULL;
+	free(place);
+	if (wrong == NULL)
+		return 0;
+	fprintf(stderr, "springmass %s: %s %s: cannot write there: %s\n", command, option, path, wrong);
+	return 1;
+}
+
 void cli_cannot_write(const char* command, const char* path)
 {
 	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,

@@ -98,6 +98,12 @@ void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, co
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout);
 
+/// Checks, before anything is computed, that an output can be made where `path` names it (NULL or
+/// "-": none): a file in a folder that exists and is no folder, or a `folder` that exists or whose
+/// parent does. Returns 0, or prints why not and returns 1, so that a command never stops with
+/// some outputs written and others not for a place it could have checked first.
+int cli_check_output_place(const char* command, const char* option, const char* path, bool folder);
+
 /// Whether paths a and b name one file: the same file under any name if both exist, else the same
 /// place once created (the real path of the folder, and the name).
 bool cli_same_file(const char* a, const char* b);

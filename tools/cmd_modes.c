@@ -238,6 +238,11 @@ int sm_cmd_modes(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
+	if (cli_check_output_place("modes", "-o", csv_path, false) != 0 ||
+	    cli_check_output_place("modes", "--vtk", vtk_dir, true) != 0) {
+		free(settings);
+		return 1;
+	}
 
 	int status = 1;
 	sm_error err;

@@ -149,6 +149,12 @@ int sm_cmd_statics(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
+	if (cli_check_output_place("statics", "-o", csv_path, false) != 0 ||
+	    cli_check_output_place("statics", "--vtk", vtk_dir, true) != 0 ||
+	    cli_check_output_place("statics", "--save-model", save_path, false) != 0) {
+		free(settings);
+		return 1;
+	}
 
 	int status = 1;
 	sm_error err;
