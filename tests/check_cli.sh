@@ -157,6 +157,9 @@ check_cases << 'CASES'
 1|springmass modes: --vtk $tmp/a_file: cannot write there: a file of that name exists|modes "$osc" -o "$tmp/fresh_modes.csv" --vtk "$tmp/a_file"
 CASES
 [ ! -e "$tmp/fresh.csv" ] && [ ! -e "$tmp/fresh_modes.csv" ] || fail "an output was written before a refusal"
+# A new folder named with a trailing slash is a place the folder can go.
+"$cli" modes "$osc" --vtk "$tmp/slash_dir/" > /dev/null 2>&1 && [ -e "$tmp/slash_dir/mode_1.vtk" ] ||
+  fail "modes --vtk NEW_DIR/ was refused or wrote nothing"
 
 # modes --zero-tolerance: two zero-length springs of 1 and 1e12 N/m in a chain of two 1 kg
 # particles have no zero mode, but the soft one (omega^2 = 0.5 1/s^2 per axis, to 1/(8e12)) lies

@@ -374,23 +374,30 @@ int cli_check_output(const char* command, const char* option, const char* output
 }
 
 // The path a file has, or would have once created: its real path if it exists, else its
-// folder's real path and its name; NULL if the folder cannot be found either (malloc'd).
+// folder's real path and its name (a folder's name may end in '/'); NULL if the folder cannot be
+// found either (malloc'd).
 static char* canonical_path(const char* path)
 {
 	char* real = realpath(path, NULL);
 	if (real != NULL)
 		return real;
-	const char* slash = strrchr(path, '/');
-	const char* name = slash != NULL ? slash + 1 : path;
-	char* folder = slash == NULL ? strdup(".") : strndup(path, slash == path ? 1 : (size_t)(slash - path));
+	size_t length = strlen(path);
+	while (length > 1 && path[length - 1] == '/')
+		length--;
+	char* trimmed = strndup(path, length);
+	if (trimmed == NULL)
+		return NULL;
+	const char* slash = strrchr(trimmed, '/');
+	const char* name = slash != NULL ? slash + 1 : trimmed;
+	char* folder =
+	    slash == NULL ? strdup(".") : strndup(trimmed, slash == trimmed ? 1 : (size_t)(slash - trimmed));
 	char* real_folder = folder != NULL ? realpath(folder, NULL) : NULL;
 	free(folder);
-	if (real_folder == NULL)
-		return NULL;
-	char* out = malloc(strlen(real_folder) + strlen(name) + 2);
+	char* out = real_folder != NULL ? malloc(strlen(real_folder) + strlen(name) + 2) : NULL;
 	if (out != NULL)
 		sprintf(out, "%s/%s", real_folder, name);
 	free(real_folder);
+	free(trimmed);
 	return out;
 }
 
