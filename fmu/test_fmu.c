@@ -482,6 +482,7 @@ static int test_parameter_values_refused(void)
 {
 #define TEXT(literal) literal, sizeof literal - 1
 #define BYTES_FF_10 "\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+#define DIGITS_10 "1111111111"
 #define QUOTED_FF_13 "\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff\\xff"
 	static const struct {
 		const char* text;
@@ -501,21 +502,8 @@ static int test_parameter_values_refused(void)
 	    {TEXT("k=0x3c\n"), "\"k=0x3c\": the value is not written as the packager writes it (60)"},
 	    {TEXT("k=60.0\n"), "\"k=60.0\": the value is not written as the packager writes it (60)"},
 	    {TEXT("k=1e-400\n"), "\"k=1e-400\": the value is not written as the packager writes it (0)"},
-	    {TEXT("k="
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "1111111111"
-		      "\n"),
+	    {TEXT("k=" DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10
+		          DIGITS_10 DIGITS_10 DIGITS_10 DIGITS_10 "\n"),
 		 "the value is longer than 127 bytes"},
 	    // Quoted lines are cut after 80 bytes, as the model file's messages cut their quotes.
 	    {TEXT("k=aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa\n"),
@@ -535,6 +523,7 @@ static int test_parameter_values_refused(void)
 	};
 #undef TEXT
 #undef BYTES_FF_10
+#undef DIGITS_10
 #undef QUOTED_FF_13
 	fixture f;
 	ENSURE(setup(&f) == 0);

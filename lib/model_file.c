@@ -993,8 +993,8 @@ static bool read_material(parser* p, const json_t* obj, const char* path, const 
 	// A group that gives neither constant makes no springs: a forgotten stiffness, not a choice
 	// (zeros given make none too, as asked).
 	bool constants = false;
-	for (int k = 0; k < 6; k++)
-		constants = constants || json_object_get(value, keys[k]) != NULL;
+	for (const char* const* k = keys; *k != NULL; k++)
+		constants = constants || (strcmp(*k, "break_strain") != 0 && json_object_get(value, *k) != NULL);
 	if (!constants)
 		return fail(p, SM_ERROR_SCHEMA, sub,
 		            "gives no stiffness and no damping, so it would make no springs (give stiffness, "

@@ -14,6 +14,14 @@
 #error "SPRINGMASS_MODELS_DIR must name the bundled models"
 #endif
 
+// CVODE's own time t_n, on the simulation's time axis (CVODE counts from its last restart).
+static double cvode_now(const sm_simulation* sim)
+{
+	double tn = 0.0;
+	CVodeGetCurrentTime(sim->cvode, &tn);
+	return sim->time_origin + tn;
+}
+
 // The oscillator of simulation_fixtures.h with a 1 kg bob, k = 40 N/m and damping ratio zeta,
 // released from u = 0.2 m at rest: u'' + 2 zeta w0 u' + w0^2 u = F / m.
 #define OSC_K 40.0
@@ -362,10 +370,8 @@ static int check_input_past_the_steps(bool driven)
 	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
 	ENSURE(sim != NULL);
 	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_force, 2.0), SM_OK);
-	double tn = 0.0;
-	CVodeGetCurrentTime(sim->cvode, &tn);
-	tn += sim->time_origin;  // CVODE's time on the simulation's axis
-	ENSURE(tn > t_force);    // CVODE has stepped past the row
+	double tn = cvode_now(sim);
+	ENSURE(tn > t_force);  // CVODE has stepped past the row
 	ENSURE(sm_simulation_statistics(sim).restarts == 0);
 	const double shift = force / OSC_K;
 	const double f[3] = {force, 0.0, 0.0}, moved[3] = {shift, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
@@ -381,8 +387,7 @@ static int check_input_past_the_steps(bool driven)
 		// The advance after the change ends its last step at its end (within CVODE's stop-time
 		// round-off), as the last one does at the stop time; the others, with the inputs
 		// unchanged, step past.
-		CVodeGetCurrentTime(sim->cvode, &tn);
-		tn += sim->time_origin;  // CVODE's time on the simulation's axis
+		tn = cvode_now(sim);
 		if (i == 1 || i == 150)
 			ENSURE(tn <= t && tn > t - 1e-12);
 		else
@@ -495,12 +500,10 @@ static int test_an_unchanged_input_set_after_a_changed_one_keeps_the_change(void
 			ENSURE(sim != NULL);
 			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 2.0), SM_OK);
 			ENSURE(set_inputs(sim, changes[c], held) == 0);
-			double tn = 0.0;
 			for (int i = 1; i <= 150; i++) {
 				const double t = 0.5 + 0.01 * i;
 				ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t, 2.0), SM_OK);
-				CVodeGetCurrentTime(sim->cvode, &tn);
-				tn += sim->time_origin;  // CVODE's time on the simulation's axis
+				const double tn = cvode_now(sim);
 				if (i == 1)
 					ENSURE(tn <= t && tn > t - 1e-12);  // CVODE's stop-time round-off, as above
 				else if (i == 2)
@@ -538,9 +541,7 @@ static int test_an_advance_to_the_current_time_keeps_a_changed_input(void)
 		else if (idle == 2)
 			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.5, 2.0), SM_OK);
 		ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.51, 2.0), SM_OK);
-		double tn = 0.0;
-		CVodeGetCurrentTime(sim->cvode, &tn);
-		tn += sim->time_origin;  // CVODE's time on the simulation's axis
+		double tn = cvode_now(sim);
 		ENSURE(tn <= 0.51 && tn > 0.51 - 1e-12);
 		memcpy(x[idle], sm_simulation_positions(sim), sizeof x[idle]);
 		steps[idle] = sm_simulation_statistics(sim).steps;
@@ -572,9 +573,7 @@ static int test_plain_advance_within_the_steps_interpolates(void)
 		ENSURE(a != NULL && b != NULL);
 		ENSURE_STATUS(sm_simulation_advance_interpolated(a, 0.3, 2.0), SM_OK);
 		ENSURE_STATUS(sm_simulation_advance_interpolated(b, 0.3, 2.0), SM_OK);
-		double tn = 0.0;
-		CVodeGetCurrentTime(a->cvode, &tn);
-		tn += a->time_origin;  // CVODE's time on the simulation's axis
+		double tn = cvode_now(a);
 		ENSURE(tn > 0.3);
 		const double t = 0.5 * (0.3 + tn);
 		const sm_statistics before = sm_simulation_statistics(a);

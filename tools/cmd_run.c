@@ -488,6 +488,7 @@ int sm_cmd_run(int argc, char** argv)
 	sprintf(csv_default, "%s.csv", name);
 	const bool csv_to_stdout = o.output && strcmp(o.output, "-") == 0;
 	csv_name = csv_to_stdout ? "standard output" : o.output ? o.output : csv_default;
+	const char* csv_file = csv_to_stdout ? NULL : csv_name;  // the CSV's file, if it has one
 	// No file the run writes may be the model file (-o is checked with the arguments), nor the
 	// CSV one of the series' files (each frame is checked before it is written).
 	if (!o.output && cli_same_file(csv_default, o.model)) {
@@ -504,7 +505,7 @@ int sm_cmd_run(int argc, char** argv)
 		if (cli_make_directory("run", o.vtk_dir) != 0)
 			goto done;
 		snprintf(pvd_path, path_capacity, "%s/%s.pvd", o.vtk_dir, name);
-		if (series_file_clashes(pvd_path, &o, csv_to_stdout ? NULL : csv_name) != 0) {
+		if (series_file_clashes(pvd_path, &o, csv_file) != 0) {
 			status = 2;
 			goto done;
 		}
@@ -549,7 +550,7 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
-			if (series_file_clashes(path, &o, csv_to_stdout ? NULL : csv_name) != 0) {
+			if (series_file_clashes(path, &o, csv_file) != 0) {
 				end_progress(&prog);
 				status = 2;
 				goto done;
