@@ -2,6 +2,8 @@
 // (model_file_text.h).
 #include "model_file_text.h"
 
+#include "springmass/model_file.h"
+
 #include <stdio.h>
 #include <string.h>
 
@@ -137,6 +139,12 @@ bool sm_text_escape(char* out, size_t most, const char* s)
 void sm_text_shown(char* out, size_t most, const char* s)
 {
 	escape(out, most, s, false);
+}
+
+void sm_text_for_terminal(char* out, const char* text)
+{
+	// Every byte of text becomes at most 6 (a control character's \uXXXX), so all of it fits.
+	escape(out, SM_TERMINAL_TEXT_CAPACITY(strlen(text)) - 1, text, false);
 }
 
 const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)

@@ -98,6 +98,16 @@ JSON
 out=$("$cli" run "$tmp/names.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
 [ "$out" = "time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,particle.p[1].x,particle.p[1].y,particle.p[1].z,particle.p[1]'.x,particle.p[1]'.y,particle.p[1]'.z" ] ||
   fail "run --positions column names: $out"
+# A particle's name and the description are shown escaped where a terminal would act on them or
+# not show them (a right-to-left override, a zero-width space), as the library's messages do.
+printf '%s\n' '{"springmass": 1, "name": "shown", "description": "left \u202e right",' \
+  ' "particles": [{"name": "a\u200bb", "position": [0, 0, 0], "fixed": true}, {"position": [0, 0, -1]}],' \
+  ' "springs": [{"a": 0, "b": 1, "stiffness": 10, "rest_length": 1}]}' > "$tmp/shown.json"
+out=$("$cli" check "$tmp/shown.json" 2>&1)
+grep -qF 'description  left \u202e right' <<< "$out" && grep -qF 'a\u200bb (particle 0)' <<< "$out" ||
+  fail "check shows a name or description unescaped: $out"
+out=$("$cli" statics "$tmp/shown.json" 2>&1)
+grep -qE '^0 +a\\u200bb +' <<< "$out" || fail "statics shows a name unescaped: $out"
 
 # Options: each line is the exit status, the first line the command prints on stderr (empty for
 # none) and its arguments. Numbers are decimal, as in a model file (no hexadecimal, infinities or

@@ -2431,6 +2431,42 @@ static int test_messages_escape_invisible_characters(void)
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
 
+// sm_text_for_terminal shows text as the messages do, and SM_TERMINAL_TEXT_CAPACITY is room
+// enough for the widest case: each byte a control character, 6 bytes as \u0001. A byte that
+// begins no character is \xNN; the tab is escaped, characters beyond ASCII stay as they are.
+static int test_text_for_terminal(void)
+{
+	static const struct {
+		const char* text;
+		const char* shown;
+	} cases[] = {
+	    {"", ""},
+	    {"plain \xc3\xa9t\xc3\xa9", "plain \xc3\xa9t\xc3\xa9"},
+	    {"\x01\x02\x1b\x7f", "\\u0001\\u0002\\u001b\\u007f"},
+	    {"a\tb\nc", "a\\u0009b\\u000ac"},
+	    {"left \xe2\x80\xae right \xef\xbb\xbf", "left \\u202e right \\ufeff"},
+	    {"bad \xff\xc3", "bad \\xff\\xc3"},
+	    {"\"quoted\" \\", "\"quoted\" \\"},
+	};
+	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+		const size_t capacity = SM_TERMINAL_TEXT_CAPACITY(strlen(cases[k].text));
+		char* out = malloc(capacity);
+		ENSURE(out != NULL);
+		memset(out, '#', capacity);
+		sm_text_for_terminal(out, cases[k].text);
+		const bool same = strcmp(out, cases[k].shown) == 0 && strlen(out) < capacity;
+		free(out);
+		ENSURE(same);
+	}
+	// The widest case fills the capacity to its last byte.
+	char controls[40], out[SM_TERMINAL_TEXT_CAPACITY(sizeof controls - 1)];
+	memset(controls, '\x01', sizeof controls - 1);
+	controls[sizeof controls - 1] = '\0';
+	sm_text_for_terminal(out, controls);
+	ENSURE(strlen(out) == sizeof out - 1 && strncmp(out + sizeof out - 7, "\\u0001", 6) == 0);
+	return 0;
+}
+
 // Every status has its own text (base.h gives "particle index out of range" for
 // SM_ERROR_PARTICLE_INDEX), and none is the text of a value that names no status, which is
 // still a text a message can print.
@@ -3197,6 +3233,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_syntax_error_positions);
 	RUN_TEST(test_line_breaks_and_controls_at_their_edges);
 	RUN_TEST(test_messages_escape_invisible_characters);
+	RUN_TEST(test_text_for_terminal);
 	RUN_TEST(test_status_texts);
 	RUN_TEST(test_error_reports_are_filled_on_success);
 	RUN_TEST(test_per_section_constants_in_a_model_file);

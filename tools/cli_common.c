@@ -139,12 +139,27 @@ int cli_set_parameters(const char* command, sm_document* doc, const char* const*
 	return 0;
 }
 
+void cli_write_text(FILE* f, const char* text, int width)
+{
+	char* shown = malloc(SM_TERMINAL_TEXT_CAPACITY(strlen(text)));
+	if (shown != NULL)
+		sm_text_for_terminal(shown, text);
+	fputs(shown != NULL ? shown : "(out of memory)", f);
+	// Characters, not bytes: those of UTF-8 are the bytes that begin one.
+	int characters = 0;
+	for (const char* c = shown != NULL ? shown : ""; *c != '\0'; c++)
+		characters += ((unsigned char)*c & 0xc0) != 0x80;
+	for (; characters < width; characters++)
+		fputc(' ', f);
+	free(shown);
+}
+
 // Writes particle `index` by its name in the file, or by its index where it has none.
 static void write_particle_name(FILE* f, const sm_document* doc, int32_t index)
 {
 	const char* name = sm_document_particle_name(doc, index);
 	if (name != NULL)
-		fputs(name, f);
+		cli_write_text(f, name, 0);
 	else
 		fprintf(f, "particle %d", (int)index);
 }
@@ -202,8 +217,11 @@ void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, con
 		// Particles: this index and, after "particles", those that follow (", 5", " and 6").
 		for (;;) {
 			const char* name = sm_document_particle_name(doc, index);
-			if (name != NULL)
-				fprintf(f, " (%s)", name);
+			if (name != NULL) {
+				fputs(" (", f);
+				cli_write_text(f, name, 0);
+				fputc(')', f);
+			}
 			s = after;
 			if (word != 10)
 				break;

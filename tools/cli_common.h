@@ -69,6 +69,10 @@ int cli_make_directory(const char* command, const char* dir);
 /// (cloth[0,12])", "spring 30 (between cloth[2,6] and cloth[2,7])"; the rest as it is.
 void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, const char* message);
 
+/// Writes a particle's name or the description of a model file as sm_text_for_terminal shows it:
+/// what a terminal would act on or not show, escaped; then spaces up to `width` characters.
+void cli_write_text(FILE* f, const char* text, int width);
+
 /// Writes prefix, text and suffix as one CSV field: quoted, with quotes doubled, when any holds a
 /// comma or a quote (a particle's name may; RFC 4180), as it is otherwise.
 void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* suffix);

@@ -40,9 +40,10 @@ static const char* port_kind(sm_port_kind kind)
 static void print_particle(const sm_document* doc, int32_t particle)
 {
 	const char* name = sm_document_particle_name(doc, particle);
-	if (name != NULL)
-		printf("%s (particle %d)", name, (int)particle);
-	else
+	if (name != NULL) {
+		cli_write_text(stdout, name, 0);
+		printf(" (particle %d)", (int)particle);
+	} else
 		printf("particle %d", (int)particle);
 }
 
@@ -176,8 +177,11 @@ int sm_cmd_check(int argc, char** argv)
 	}
 
 	printf("model        %s\n", sm_document_name(doc));
-	if (sm_document_description(doc)[0] != '\0')
-		printf("description  %s\n", sm_document_description(doc));
+	if (sm_document_description(doc)[0] != '\0') {
+		printf("description  ");
+		cli_write_text(stdout, sm_document_description(doc), 0);
+		printf("\n");
+	}
 	printf("particles    %d: %d free, %d fixed", (int)n, (int)(n - fixed - driven), (int)fixed);
 	if (driven > 0)
 		printf(", %d driven", (int)driven);

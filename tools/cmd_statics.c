@@ -260,8 +260,9 @@ int sm_cmd_statics(int argc, char** argv)
 				header = 1;
 			}
 			const char* name = sm_document_particle_name(doc, i);
-			printf("%-10d %-20s %16.9g %16.9g %16.9g\n", (int)i, name != NULL ? name : "", reactions[3 * i],
-			       reactions[3 * i + 1], reactions[3 * i + 2]);
+			printf("%-10d ", (int)i);
+			cli_write_text(stdout, name != NULL ? name : "", 20);
+			printf(" %16.9g %16.9g %16.9g\n", reactions[3 * i], reactions[3 * i + 1], reactions[3 * i + 2]);
 		}
 	}
 	if (csv_path != NULL) {

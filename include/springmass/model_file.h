@@ -60,6 +60,16 @@ SM_API void sm_document_destroy(sm_document* doc);
 SM_API const char* sm_document_name(const sm_document* doc);
 SM_API const char* sm_document_description(const sm_document* doc);
 
+/// Room for sm_text_for_terminal's output for a text of `length` bytes, the NUL included [bytes].
+#define SM_TERMINAL_TEXT_CAPACITY(length) (6 * (size_t)(length) + 1)
+
+/// A name or description of a model file as a terminal can show it, the way the library's
+/// messages show them: control characters (the tab too), line breaks and the zero-width and
+/// bidirectional formatting characters, which a terminal would act on or not show, as \uXXXX; a
+/// byte that begins no well-formed UTF-8 character as \xNN; every other character as it is.
+/// `out` has room for SM_TERMINAL_TEXT_CAPACITY(strlen(text)) bytes.
+SM_API void sm_text_for_terminal(char* out, const char* text);
+
 /// Builds the model with the parameters' current values. The caller owns the result.
 SM_API sm_status sm_document_build(const sm_document* doc, sm_model** model, sm_error* err);
 
