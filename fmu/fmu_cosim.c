@@ -1449,11 +1449,6 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		log_error(inst, "fmi2DoStep: communication step size %g at t = %g must be finite and > 0", h, t);
 		return fmi2Error;
 	}
-	// Time is resolved to a few units of round-off of max(1 s, |t|, |t - start|): a shorter step
-	// may not advance it (t + h == t), nor the simulation's time t - start, which can be far
-	// larger (a state's start time is its own), and leaves CVODE nothing to integrate.
-	const double clock_resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
-	const double resolution = fmax(clock_resolution, 4.0 * DBL_EPSILON * fabs(t - inst->start_time));
 	double tolerance = 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->time));
 	if (fabs(t - inst->time) > tolerance) {
 		log_error(inst, "fmi2DoStep: communication point %s does not match the FMU's time %s",
@@ -1466,25 +1461,35 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		          h);
 		return fmi2Error;
 	}
-	// A step below the resolution of the master's clock is that clock catching up with round-off
-	// (t + h summed over steps lands an ulp short of its stop time, and the rest is stepped).
-	// FMI 2.0 (4.2.2) asks only h > 0 of it: the inputs are taken, as in any step, and the FMU's
-	// time moves to t + h with the state at t (it would move by h |v|). A step the clock resolves
-	// but the simulation's time t - start does not (a state's start time far from t) is refused
-	// below: every step of that size would leave the state where it is.
-	if (h < clock_resolution) {
+	// The simulation's time is t - start (start: the start time of its initial state), resolved to
+	// 4 eps max(1 s, |t - start|); the step it sees is the difference of the ends as they round,
+	// so that it moves with the master's clock. At t = 1.7e9 s (a Unix time) and start 1.7e9 s, a
+	// step of 1e-6 s is 4 ulps of t, 9.5e-7 s, and that is integrated. A step the simulation's
+	// time does not resolve is
+	// - below the resolution of the master's clock, 4 eps max(1 s, |t|): that clock catching up
+	//   with round-off (t + h summed over steps lands an ulp short of its stop time, and the rest
+	//   is stepped). FMI 2.0 (4.2.2) asks only h > 0 of it: the inputs are taken, as in any step,
+	//   and the FMU's time moves to t + h with the state at t (it would move by h |v|);
+	// - otherwise refused: the master's clock resolves it but the simulation's time, far larger
+	//   (a state's start time is its own), does not, and every step of that size would leave the
+	//   state where it is.
+	const double simulation_step = (t_end - inst->start_time) - (t - inst->start_time);
+	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t - inst->start_time));
+	const double clock_resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
+	if (!(simulation_step >= resolution) && h < clock_resolution) {
 		if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)
 			return fmi2Error;
 		if (logging(inst, LOG_SOLVER))
 			fmu_logf(inst, fmi2OK, LOG_SOLVER,
 			         "step %s -> %s: below the time resolution %s s, nothing to integrate; the time moves on",
-			         fmu_number_text(t).text, fmu_number_text(t_end).text,
-			         fmu_number_text(clock_resolution).text);
+			         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(resolution).text);
 		return end_step(inst, t, fmax(inst->time, t_end));
 	}
-	if (h < resolution) {
-		log_error(inst, "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s",
-		          h, t, resolution);
+	if (!(simulation_step >= resolution)) {
+		log_error(inst,
+		          "fmi2DoStep: communication step size %g at t = %g is below the time resolution %g s of the "
+		          "simulation's time t - start = %g",
+		          h, t, resolution, t - inst->start_time);
 		return fmi2Error;
 	}
 	// A point taken within its tolerance may lag the FMU's time by more than a short step.

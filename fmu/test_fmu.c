@@ -1063,10 +1063,10 @@ static int test_messages_escape_the_variable_reference_marker(void)
 	return 0;
 }
 
-// Time resolution and round-off margins scale with the time (docs/fmu.md): at t = 1e6 s a step
-// below 4 eps 1e6 s (8.9e-10 s) moves the time alone, a communication point 1e-8 s off the FMU's time (well
-// within 1000 ulps of 1e6 s, 2.2e-7 s) is taken, 1e-3 s off is not; a stop time is reached by
-// steps whose sum overshoots it by round-off (0.1 + 0.1 + 0.1 = 0.30000000000000004).
+// Round-off margins scale with the time (docs/fmu.md): at t = 1e6 s a step too short to move t
+// (1e-11 s, below half an ulp of 1e6 s) moves nothing, a communication point 1e-8 s off the FMU's
+// time (well within 1000 ulps of 1e6 s, 2.2e-7 s) is taken, 1e-3 s off is not; a stop time is
+// reached by steps whose sum overshoots it by round-off (0.1 + 0.1 + 0.1 = 0.30000000000000004).
 static int test_time_margins_scale_with_the_time(void)
 {
 	fixture f;
@@ -1079,8 +1079,8 @@ static int test_time_margins_scale_with_the_time(void)
 	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
 	f.log.last[0] = '\0';
 	const double x0 = get(c, &f, "tip.x");
-	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-10, fmi2True), fmi2OK);
-	ENSURE(get(c, &f, "tip.x") == x0);
+	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-11, fmi2True), fmi2OK);
+	ENSURE(get(c, &f, "tip.x") == x0 && get(c, &f, "tip.vx") == 0.0);
 	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-3, 0.1, fmi2True), fmi2Error);
 	ENSURE(strstr(f.log.last, "does not match") != NULL);
 	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-8, 0.1, fmi2True), fmi2OK);
@@ -1232,11 +1232,41 @@ static int test_values_of_another_type_are_refused(void)
 	return 0;
 }
 
-// The communication point is the FMU's time to 1000 ulps of max(1 s, |t|), and a step shorter
-// than 4 eps max(1 s, |t|) moves the time alone (docs/fmu.md): the bounds themselves, not only
-// values far off. At t = 1e6 s the point's margin is 1e3 eps 1e6 s = 2.2e-7 s: 1e-6 s off (4500
-// ulps of 1e6 s) is refused; the resolution is 8.9e-10 s: 5e-10 s leaves the state as it was,
-// 1e-9 s is integrated. At t = 0, 1e-12 s off (4500 eps) is refused, 1e-14 s (45 eps) taken.
+// A master on a large clock, a Unix time of 1.7e9 s as its start time, stepping 1e-6 s: each step
+// ends 4 ulps of 1.7e9 s later (9.5e-7 s), below 4 eps 1.7e9 s = 1.5e-6 s, the resolution of the
+// clock, but far above that of the simulation's time t - start, and is integrated: after 2000
+// steps the oscillator is where the closed form puts it at the summed clock's t - start (it
+// returned fmi2OK and stayed at rest, every step taken for the clock catching up with round-off).
+// The velocity, -A w sin(w (t - start)) = -9.5e-3 m/s, is checked to 1e-6 of itself, what the
+// default rtol 1e-6 allows.
+static int test_short_steps_on_a_large_clock_are_integrated(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "unix_time");
+	ENSURE(c != NULL);
+	const double t0 = 1.7e9;
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	double t = t0;
+	for (int k = 0; k < 2000; ++k, t += 1e-6)
+		ENSURE_STATUS(fmi2DoStep(c, t, 1e-6, fmi2True), fmi2OK);
+	const double elapsed = t - t0, v = -0.2 * 5.0 * sin(5.0 * elapsed);
+	ENSURE(elapsed > 1.9e-3 && elapsed < 1.91e-3);
+	ENSURE_NEAR(get(c, &f, "tip.vx"), v, 1e-6 * fabs(v));
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
+// The communication point is the FMU's time to 1000 ulps of max(1 s, |t|), and a step is
+// integrated when it moves the simulation's time t - start by 4 eps max(1 s, |t - start|)
+// (docs/fmu.md): the bounds themselves, not only values far off. At t = 1e6 s the point's margin
+// is 1e3 eps 1e6 s = 2.2e-7 s: 1e-6 s off (4500 ulps of 1e6 s) is refused. With the start there
+// too, a step of 5e-10 s, below 4 eps 1e6 s, ends 4 ulps of 1e6 s later (4.66e-10 s), and so far
+// it is integrated: v = -A w^2 (t - start) to first order, -5 (t - start) m/s here. At t = 0, 1e-12
+// s off (4500 eps) is refused, 1e-14 s (45 eps) taken.
 static int test_communication_point_and_step_size_at_their_bounds(void)
 {
 	fixture f;
@@ -1251,10 +1281,10 @@ static int test_communication_point_and_step_size_at_their_bounds(void)
 	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-6, 0.1, fmi2True), fmi2Error);
 	ENSURE(strstr(f.log.last, "does not match") != NULL);
 	ENSURE_STATUS(fmi2DoStep(c, t0 - 1e-6, 0.1, fmi2True), fmi2Error);
-	const double x0 = get(c, &f, "tip.x");
 	ENSURE_STATUS(fmi2DoStep(c, t0, 5e-10, fmi2True), fmi2OK);
-	ENSURE(get(c, &f, "tip.x") == x0);
-	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-9, fmi2True), fmi2OK);
+	const double moved = (t0 + 5e-10) - t0;
+	ENSURE(moved > 4e-10 && moved < 5e-10);
+	ENSURE_NEAR(get(c, &f, "tip.vx"), -5.0 * moved, 1e-6 * 5.0 * moved);
 	fmi2FreeInstance(c);
 
 	c = start(&f, "bounds_at_zero");
@@ -2051,6 +2081,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_communication_point_and_step_size_at_their_bounds);
 	RUN_TEST(test_stop_time_margin_at_its_bounds);
 	RUN_TEST(test_a_master_clock_catching_up_with_round_off);
+	RUN_TEST(test_short_steps_on_a_large_clock_are_integrated);
 	RUN_TEST(test_a_refused_set_string_changes_nothing);
 	RUN_TEST(test_state_carries_every_solver_setting);
 	RUN_TEST(test_state_restores_the_last_successful_time);
