@@ -1,5 +1,5 @@
 # Assembles the FMU runtime folder: the generic FMU binary and the shared libraries it needs
-# (SuiteSparse, jansson and what they pull in), each with RUNPATH $ORIGIN so that everything
+# (SuiteSparse, jansson and what they pull in), each with RPATH $ORIGIN so that everything
 # resolves from binaries/linux64/ of the FMU. Libraries of the C runtime itself (libc, libm,
 # libpthread, libdl, librt and the loader) stay those of the machine that loads the FMU, and so
 # do the sanitizer runtimes of an instrumented build.
@@ -70,7 +70,7 @@ foreach(library IN LISTS resolved)
   list(APPEND copied "${dir}/${name}")
 endforeach()
 foreach(file IN LISTS copied)
-  execute_process(COMMAND "${PATCHELF}" --set-rpath "$ORIGIN" "${file}" RESULT_VARIABLE rc)
+  execute_process(COMMAND "${PATCHELF}" --force-rpath --set-rpath "$ORIGIN" "${file}" RESULT_VARIABLE rc)
   if(rc)
     message(FATAL_ERROR "bundle_runtime.cmake: patchelf failed on ${file}")
   endif()

@@ -3,7 +3,7 @@
 // The FMU is a zip archive of
 //   modelDescription.xml                       written from the FMU's variable table
 //   binaries/linux64/<modelIdentifier>.so      the generic FMU binary
-//   binaries/linux64/lib*.so*                  the shared libraries it needs (RUNPATH $ORIGIN)
+//   binaries/linux64/lib*.so*                  the shared libraries it needs (RPATH $ORIGIN)
 //   resources/model.json                       the model file, byte for byte
 //   resources/parameters.txt                   the values of --set that differ from the file's, if any
 //                                              (the GUID hashes this file and model.json together)

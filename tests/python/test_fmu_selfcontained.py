@@ -15,8 +15,19 @@ from conftest import SANITIZED
 GLIBC = re.compile(r"^(libc|libm|libpthread|libdl|librt|ld-linux[-\w]*)\.so")
 
 
+def system_library_folders():
+    """The folders in which the loader's cache finds libraries (ldconfig -p): where an importer's
+    LD_LIBRARY_PATH would name the system's copies of the libraries an FMU bundles."""
+    out = subprocess.run(["/sbin/ldconfig", "-p"], capture_output=True, text=True).stdout
+    return sorted({os.path.dirname(line.split("=>")[1].strip()) for line in out.splitlines() if "=>" in line})
+
+
 @pytest.mark.skipif(SANITIZED, reason="an instrumented FMU needs the sanitizer runtimes of the machine")
-def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path):
+@pytest.mark.parametrize("library_path", ["unset", "system folders"])
+def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path, library_path):
+    # Also with the system's library folders on LD_LIBRARY_PATH, as many tools launch importers:
+    # the bundled libraries come first all the same (DT_RPATH), and the system's OpenBLAS, which
+    # its liblapack would bring with a thread, stays out.
     fmu = test_fmu("driven_oscillator")
     folder = extract(str(fmu), unzipdir=str(tmp_path / "unzipped"))
     md = read_model_description(str(fmu))
@@ -37,6 +48,9 @@ def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path):
               "print('loaded', ' '.join(sorted(mapped() - before)))\n")
     env = dict(os.environ, LD_DEBUG="libs")
     env.pop("LD_LIBRARY_PATH", None)
+    if library_path == "system folders":
+        env["LD_LIBRARY_PATH"] = ":".join(system_library_folders())
+        assert env["LD_LIBRARY_PATH"]
     out = subprocess.run([sys.executable, "-c", script, binary], env=env, capture_output=True, text=True)
     assert out.returncode == 0 and "loaded" in out.stdout, out.stderr[-2000:]
     # Loading starts no thread in the importer's process (OpenBLAS would start one per core:
@@ -67,7 +81,8 @@ def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
     assert symbols and all(s.startswith("fmi2") for s in symbols), symbols
     assert "fmi2DoStep" in symbols and "fmi2GetDirectionalDerivative" in symbols
     dynamic = subprocess.run(["readelf", "-d", binary], check=True, capture_output=True, text=True).stdout
-    assert "RUNPATH" in dynamic and "[$ORIGIN]" in dynamic
+    # DT_RPATH, searched before LD_LIBRARY_PATH (DT_RUNPATH would come after it).
+    assert "(RPATH)" in dynamic and "RUNPATH" not in dynamic and "[$ORIGIN]" in dynamic
 
 
 def test_the_c_library_it_needs_is_that_of_the_documented_systems(test_fmu, tmp_path):
