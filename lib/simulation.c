@@ -1027,9 +1027,12 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 	if (!cvode_ahead(sim) && sm_simulation_break_overstretched_springs(sim) != SM_OK)
 		return SM_ERROR_OUT_OF_MEMORY;
 	// CVODE steps on to t_stop, or ends its last step at t_end when the inputs changed: an interval
-	// up to there too short for it is one step of our own.
+	// up to there too short for it is one step of our own. Too short on CVODE's time axis, which
+	// starts at 0 at the restart due here: at t = 1e14 s an ulp of t, 0.016 s, is a step CVODE
+	// takes, and far too long for one explicit step.
 	const double t_last = inputs_changed ? t_end : t_stop;
-	if (!cvode_ahead(sim) && t_last - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(sim->time)))
+	const double cvode_now = sim->need_restart ? 0.0 : sm_simulation_cvode_time(sim, sim->time);
+	if (!cvode_ahead(sim) && t_last - sim->time < TIME_RESOLUTION * fmax(1.0, fabs(cvode_now)))
 		return short_step(sim, t_end);
 	// max_steps holds for the whole advance: over the CVode calls between spring breaks and
 	// restarts too, each of which CVODE would count afresh.

@@ -2415,6 +2415,43 @@ static int test_large_times_keep_the_steps_precision(void)
 	return 0;
 }
 
+// At a large time an ulp of it is a step of physics: 0.015625 s at 1e14 s, a tenth of the period
+// of 1 kg on 1e4 N/m. Four advances of an ulp each after a state set at 1e14 s are integrated by
+// CVODE on its own axis, as the same four steps from 0 are, to the same bits; they were four
+// explicit Euler steps (too short for the resolution of t itself), and the oscillator's 0.5 J went
+// to 70 J. Undamped, its energy is kept to 1e-6 of itself: rtol 1e-10 of the bob's x, 1 m, is 1e-8
+// of the amplitude 0.01 m, and the four steps lose 1e-7 of the energy (measured 9.6e-8).
+static int test_an_ulp_of_a_large_time_is_integrated(void)
+{
+	sm_model* model = oscillator(1.0, 1e4, 0.0, 0.01);
+	ENSURE(model != NULL);
+	const double starts[] = {0.0, 1e14}, ulp = 0.015625;
+	ENSURE(nextafter(1e14, INFINITY) - 1e14 == ulp);
+	double at_zero[6];
+	for (size_t k = 0; k < sizeof starts / sizeof starts[0]; k++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.relative_tolerance = 1e-10;
+		d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-12;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		const double energy = sm_simulation_energies(sim).elastic;
+		double x[6], v[6];
+		memcpy(x, sm_simulation_positions(sim), sizeof x);
+		memcpy(v, sm_simulation_velocities(sim), sizeof v);
+		ENSURE_STATUS(sm_simulation_set_state(sim, starts[k], x, v), SM_OK);
+		for (int step = 1; step <= 4; step++)
+			ENSURE_STATUS(sm_simulation_advance(sim, starts[k] + step * ulp), SM_OK);
+		const sm_energies e = sm_simulation_energies(sim);
+		ENSURE_NEAR(e.kinetic + e.elastic, energy, 1e-6 * energy);
+		if (k == 0)
+			memcpy(at_zero, sm_simulation_positions(sim), sizeof at_zero);
+		ENSURE(memcmp(sm_simulation_positions(sim), at_zero, sizeof at_zero) == 0);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A reset simulation repeats its first run bit for bit with every linear solver (the cholmod
 // solver used to keep the previous run's Cholesky factor as its preconditioner: 5.7e-11 m off).
 static int test_reset_repeats_the_run(void)
@@ -3489,8 +3526,9 @@ static sm_model* random_calls_model(int32_t n, double stiffer, int32_t* driven)
 // restarts: after a change of the springs' constants (springs cut by the caller, a restore that
 // mends them, a model update) it must evaluate the springs as they are now. A cloth large enough
 // for the pcg solver's chunks (12 x 12 in the build with lowered thresholds, where it is also
-// multilevel; 64 x 64, 4094 free particles, in chunks without it, otherwise) at t = 1e9 s, where
-// the resolution allows a step of 5e-7 s, springs stretched and moving: after each change, against
+// multilevel; 64 x 64, 4094 free particles, in chunks without it, otherwise) at t = 1 s, stepped
+// 2 ulps of it, below the resolution of CVODE's axis (4 eps from its restart), springs stretched
+// and moving: after each change, against
 // a simulation created with the changed constants and given the same state, the same positions,
 // velocities and forces bit for bit. With the chunk-ordered copies of the constants refreshed only
 // at CVODE's restart, the step still pulled with the cut springs, left the mended ones out and
@@ -3502,7 +3540,7 @@ static int test_short_step_after_a_change_of_springs(void)
 #else
 	const int32_t side = 64;
 #endif
-	const double t = 1e9, dt = 5e-7;
+	const double t = 1.0, dt = 2.0 * DBL_EPSILON;
 	int32_t driven = -1;
 	sm_model* model = random_calls_model(side, 1.0, &driven);
 	sm_model* stiffer = random_calls_model(side, 1.5, &driven);
@@ -5499,6 +5537,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_empty_model);
 	RUN_TEST(test_set_state_continues);
 	RUN_TEST(test_large_times_keep_the_steps_precision);
+	RUN_TEST(test_an_ulp_of_a_large_time_is_integrated);
 	RUN_TEST(test_reset_repeats_the_run);
 	RUN_TEST(test_update_model);
 	RUN_TEST(test_solver_names_round_trip);

@@ -180,13 +180,15 @@ SM_API sm_simulation* sm_simulation_create(const sm_model* model, const sm_simul
 SM_API void sm_simulation_destroy(sm_simulation* sim);
 
 /// Integrates to exactly t_end [s] (never past it), handling spring breaks on the way; t_end
-/// equal to the current time t does nothing, and an interval below the time resolution
-/// 4 eps max(1 s, |t|) (about 9e-16 s at t = 1 s), too short for CVODE, is one explicit Euler
-/// step (exact to round-off). SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that
-/// is not finite or lies before t. CVODE integrates on a time axis that starts at its last
-/// (re)initialisation (set_state, restore_state, reset, a break, a changed input), so a state set
-/// at a large time (1e9 s, 1e14 s) steps as precisely as at 0; the times the simulation reports
-/// are doubles all the same, resolving eps |t| (a break at 1e14 s is recorded to 0.016 s).
+/// equal to the current time t does nothing. CVODE integrates on a time axis that starts at its
+/// last (re)initialisation (set_state, restore_state, reset, a break, a changed input), so a state
+/// set at a large time (1e9 s, 1e14 s) steps as precisely as at 0; the times the simulation
+/// reports are doubles all the same, resolving eps |t| (a break at 1e14 s is recorded to 0.016 s,
+/// and an advance to 1e14 s plus an ulp integrates 0.016 s). An interval below the resolution of
+/// CVODE's axis, 4 eps max(1 s, |t - the last initialisation's t|) (about 9e-16 s in the first
+/// second), too short for CVODE, is one explicit Euler step (exact to round-off).
+/// SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that is not finite or lies before
+/// t.
 /// When the advance used its max_steps internal steps, or on_step returned false, before t_end:
 /// SM_ERROR_STEP_LIMIT, the state valid at the last step (sm_simulation_time()), and advancing
 /// again continues as if uninterrupted. On failure returns SM_ERROR_SOLVER
