@@ -4,6 +4,7 @@
 #include "springmass/model.h"
 #include "test_harness.h"
 
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,6 +44,9 @@ static int test_defaults(void)
 	const sm_model_def md = sm_default_model_def();
 	ENSURE(md.gravity[0] == 0.0 && md.gravity[1] == 0.0 && md.gravity[2] == -9.81 && md.mass_damping == 0.0);
 	sm_model_destroy(NULL);
+	// The limits are written in decimal (C++ before C++17 has no hexadecimal floating literals),
+	// to the bits of the powers of two they are.
+	ENSURE(SM_MIN_MASS == DBL_MIN && SM_MIN_BREAK_STRAIN == ldexp(1.0, -53));
 	return 0;
 }
 

@@ -28,7 +28,7 @@ typedef enum sm_particle_motion {
 
 /// Masses must be at least this, DBL_MIN = 2^-1022 = 2.2250738585072014e-308 [kg]: below it,
 /// 1 / mass, which the accelerations need, overflows.
-#define SM_MIN_MASS 0x1p-1022
+#define SM_MIN_MASS 2.2250738585072014e-308
 
 /// Definition of a particle; get one from sm_default_particle_def().
 typedef struct sm_particle_def {
@@ -71,7 +71,7 @@ typedef enum sm_scaling {
 /// Break strains must exceed this, 2^-53 = 1.1102230246251565e-16 [1]: at or below it,
 /// l0 (1 + break_strain) rounds to l0, and a spring at rest (strain 0) would count as at its limit
 /// and break at once.
-#define SM_MIN_BREAK_STRAIN 0x1p-53
+#define SM_MIN_BREAK_STRAIN 1.1102230246251565e-16
 
 /// Definition of a spring between particles a and b; get one from sm_default_spring_def().
 ///

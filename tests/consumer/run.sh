@@ -40,6 +40,15 @@ names=$(names_build "$work/prefix")
 "$cmake" --build "$work/build" > /dev/null
 "$work/build/oscillator"
 "$work/build/trampoline"
+# The headers are C++ too (extern "C"): each compiles alone as C++11, strictly, where a C++ compiler
+# is installed.
+if command -v c++ > /dev/null; then
+	for header in "$work"/prefix/include/springmass/*.h; do
+		echo "#include \"springmass/$(basename "$header")\"" |
+			c++ -std=c++11 -Wall -Wextra -Wpedantic -Werror -fsyntax-only -x c++ -I"$work/prefix/include" - ||
+			fail "$(basename "$header") is no C++11"
+	done
+fi
 pc=$(find "$work/prefix" -name springmass.pc)
 for example in oscillator trampoline; do
 	cc -std=c11 -Wall -Wextra -Wpedantic -Werror "$source/examples/$example.c" -o "$work/$example-pc" \
