@@ -143,10 +143,13 @@ sm_status sm_simulation_break_springs(sm_simulation* sim)
 		out_of_memory = sm_simulation_record_break(sim, sim->time, sim->root_spring[r]) != SM_OK;
 		broke = broke || !out_of_memory;
 	}
-	if (broke) {
-		const double elastic_after = sm_model_energies(sim->model, sim->position, NULL).elastic;
-		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += elastic_before - elastic_after;
-	}
+	// An energy beyond a double (ks (L - l0)^2 / 2 above 1.8e308 J) is not handed on: the
+	// dissipated energy is part of CVODE's state, and an infinite or NaN one would fail every step
+	// after. The balance is lost with it, as the energies themselves were.
+	const double released =
+	    broke ? elastic_before - sm_model_energies(sim->model, sim->position, NULL).elastic : 0.0;
+	if (isfinite(released))
+		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += released;
 	// After a failure too: the springs not yet broken are beyond their limit at this time, and
 	// the next advance, starting afresh here, breaks them first.
 	sim->need_restart = sim->need_restart || broke || out_of_memory;

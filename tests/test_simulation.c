@@ -2452,6 +2452,35 @@ static int test_an_ulp_of_a_large_time_is_integrated(void)
 	return 0;
 }
 
+// A spring whose elastic energy overflows a double breaks without making the dissipated energy,
+// part of CVODE's state, infinite: a driven end moved 1e200 m away breaks its spring (10 N/m, break
+// strain 0.5; ks L^2 / 2 = 5e400 J) at once. The advance fails all the same (the forces of a
+// spring 1e200 m long, broken or not, overflow: |d|^2 does), but the driven end moved back, the
+// simulation goes on, with the free end at rest; it failed every advance after, whatever the
+// inputs, until a reset.
+static int test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usable(void)
+{
+	sm_model* model = oscillator_anchored(1.0, 10.0, 0.0, 0.0, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	sm_spring_def s;
+	ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
+	s.break_strain = 0.5;
+	ENSURE_STATUS(sm_model_set_spring(model, 0, &s), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double far[3] = {-1e200, 0.0, 0.0}, home[3] = {0.0, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, far, still), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_ERROR_SOLVER);
+	ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).time == 0.0);
+	ENSURE(isfinite(sm_simulation_dissipated_energy(sim)));
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, home, still), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
+	ENSURE(sm_simulation_positions(sim)[3] == 1.0 && sm_simulation_velocities(sim)[3] == 0.0);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A reset simulation repeats its first run bit for bit with every linear solver (the cholmod
 // solver used to keep the previous run's Cholesky factor as its preconditioner: 5.7e-11 m off).
 static int test_reset_repeats_the_run(void)
@@ -5538,6 +5567,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_set_state_continues);
 	RUN_TEST(test_large_times_keep_the_steps_precision);
 	RUN_TEST(test_an_ulp_of_a_large_time_is_integrated);
+	RUN_TEST(test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usable);
 	RUN_TEST(test_reset_repeats_the_run);
 	RUN_TEST(test_update_model);
 	RUN_TEST(test_solver_names_round_trip);
