@@ -40,6 +40,7 @@ names=$(names_build "$work/prefix")
 "$cmake" --build "$work/build" > /dev/null
 "$work/build/oscillator"
 "$work/build/trampoline"
+"$work/build/frequency_check"
 # The headers are C++ too (extern "C"): each compiles alone as C++11, strictly, where a C++ compiler
 # is installed.
 if command -v c++ > /dev/null; then
