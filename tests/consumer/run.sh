@@ -3,7 +3,8 @@
 # package, the pkg-config file and the tool find everything relative to themselves), then builds
 # the programs of examples/ against it with find_package(springmass), and runs them (each checks
 # itself: the oscillator against its closed form, the trampoline its static reactions and energy
-# balance); then builds and runs them again with a plain compiler call and pkg-config, as a
+# balance), and a shared library that links it with the program that checks it (shared/); then
+# builds and runs the examples again with a plain compiler call and pkg-config, as a
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
 # names the build tree. A build configured as debug also gets a pkg-config file that names its
