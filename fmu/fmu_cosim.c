@@ -1010,6 +1010,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	if (!fmu_allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
 		return fmi2Error;
 	energy_cache energies = {false, {0.0, 0.0, 0.0}};
+	const fmu_variable* overflowing = NULL;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
 		if (!v)
@@ -1021,6 +1022,18 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 			return fmi2Error;
 		}
 		value[i] = real_value(inst, v, &energies);
+		if (!isfinite(value[i]) && overflowing == NULL)
+			overflowing = v;
+	}
+	// A finite state whose outputs overflow (an input far beyond the model's scale, such as a
+	// motion port at 1e300 m, whose spring's squared length does): the values are given, as they
+	// are, with fmi2Warning and the first such variable named; a step from here is discarded.
+	if (overflowing != NULL) {
+		fmu_logf(inst, fmi2Warning, LOG_WARNING,
+		         "fmi2GetReal: %s is not finite: the inputs or the state put the model beyond the range of a "
+		         "double",
+		         overflowing->name);
+		return fmi2Warning;
 	}
 	return fmi2OK;
 }

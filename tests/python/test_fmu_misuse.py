@@ -179,6 +179,27 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
         inst.free()
 
 
+def test_outputs_beyond_a_double_between_steps_are_a_warning(test_fmu):
+    # A motion port set to 1e300 m: the spring's squared length overflows, and with it the reaction
+    # and the elastic energy, though every input is finite. fmi2GetReal gives the values as they
+    # are with fmi2Warning (fmpy raises only above it), naming the first; they read fmi2OK again
+    # once the port is back.
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    s = inst.slave
+    try:
+        s.doStep(0.0, 0.01)
+        inst.set("base.x", 1e300)
+        fx, energy = s.getReal([inst.vr["base.fx"], inst.vr["energy.elastic"]])
+        assert not math.isfinite(fx) and not math.isfinite(energy)
+        assert inst.messages[-1][1] == "logStatusWarning" and "base.fx is not finite" in inst.messages[-1][2]
+        count = len(inst.messages)
+        inst.set("base.x", 0.0)
+        assert all(math.isfinite(v) for v in s.getReal([inst.vr["base.fx"], inst.vr["energy.elastic"]]))
+        assert len(inst.messages) == count
+    finally:
+        inst.free()
+
+
 def test_solver_failure_is_a_discard_with_the_time_reached(test_fmu):
     # Two internal steps cannot cover 1 s of a 5 rad/s oscillation at rtol 1e-10: the step is
     # discarded, the time reached is readable, and only reset or terminate are allowed then.
