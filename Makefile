@@ -49,7 +49,7 @@ sanitize-build: setup $(SANITIZE_DIR)/build.ninja
 	$(CMAKE) --build $(SANITIZE_DIR) -j $(JOBS)
 
 test-sanitize: sanitize-build
-	$(CTEST) --test-dir $(SANITIZE_DIR) --output-on-failure -j $(JOBS) -LE no-sanitize
+	$(CTEST) --test-dir $(SANITIZE_DIR) --output-on-failure -j $(JOBS)
 
 # ThreadSanitizer: only the executables of the tests that use threads are built and run.
 $(TSAN_DIR)/build.ninja: | setup

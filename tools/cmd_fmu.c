@@ -67,7 +67,11 @@ static void usage(FILE* out)
 	        "  --reference FILE     a reference result to include as resources/reference.csv\n"
 	        "  --runtime DIR        folder holding binaries/linux64/springmass_fmu.so and its libraries\n"
 	        "                       (default: the one of this build or installation)\n"
-	        "  -h, --help           this text\n");
+	        "  -h, --help           this text\n"
+	        "\n"
+	        "Exit status: 0 success, 1 for a bad model or reference, a missing runtime or an FMU that\n"
+	        "cannot be written, 2 for a usage error (a malformed --set, an output that would\n"
+	        "overwrite an input).\n");
 }
 
 static bool write_all(const char* path, const char* data, size_t length)

@@ -48,7 +48,11 @@ static void usage(FILE* out)
 	        "  --solver NAME          auto (default: dense up to %d degrees of freedom or with -n 0),\n"
 	        "                         dense (GSL, all modes) or sparse (CHOLMOD + Lanczos, lowest N)\n"
 	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
-	        "  -h, --help             this text\n",
+	        "  -h, --help             this text\n"
+	        "\n"
+	        "Exit status: 0 success, 1 for a bad model, a failed solve or an output that cannot be\n"
+	        "written, 2 for a usage error (also all modes of a model too large for the dense\n"
+	        "eigensolver without --solver dense).\n",
 	        CLI_DENSE_LIMIT, SM_MODES_DENSE_LIMIT);
 }
 

@@ -35,7 +35,10 @@ static void usage(FILE* out)
 	             "  --max-iterations N     Newton iterations allowed (default 500)\n"
 	             "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
 	             "  -q, --quiet            print the summary only, not every reaction\n"
-	             "  -h, --help             this text\n");
+	             "  -h, --help             this text\n"
+	             "\n"
+	             "Exit status: 0 when an equilibrium is found (stable or not, as printed), 1 for a bad model,\n"
+	             "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
 }
 
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
