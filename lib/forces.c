@@ -607,9 +607,11 @@ sm_energies sm_model_energies(const sm_model* model, const double* x, const doub
 
 double sm_model_dissipated_power(const sm_model* model, const double* x, const double* v)
 {
-	if (model == NULL || x == NULL || v == NULL)
+	if (model == NULL || v == NULL)
 		return 0.0;
 	double power = mass_damping_power(model, v);
+	if (x == NULL)
+		return power;
 	for (int32_t s = 0; s < model->spring_count; s++) {
 		spring_geometry geo;
 		spring_geometry_eval(x, v, model->spring_a[s], model->spring_b[s], model->rest_length[s], &geo);

@@ -122,6 +122,10 @@ static int test_gravity_mass_damping_and_external_forces(void)
 		for (int k = 0; k < 3; k++)
 			power += md.mass_damping * mass[i] * v[3 * i + k] * v[3 * i + k];
 	ENSURE_NEAR(sm_model_dissipated_power(m, x, v), power, 1e-13);
+	// Without positions (model.h): the mass damping alone (no springs here) and the kinetic energy.
+	ENSURE(sm_model_dissipated_power(m, NULL, v) == sm_model_dissipated_power(m, x, v));
+	const sm_energies moving = sm_model_energies(m, NULL, v);
+	ENSURE(moving.kinetic == e.kinetic && moving.elastic == 0.0 && moving.gravity == 0.0);
 	const double x2[9] = {1, 0, 2, 0, 0, -1, 0, 0, 0};
 	ENSURE_NEAR(sm_model_energies(m, x2, v).gravity, -(0.5 * (1.5 * 1 - 9.81 * 2) + 2.0 * (9.81)), 1e-13);
 	sm_model_destroy(m);

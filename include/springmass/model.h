@@ -181,7 +181,8 @@ SM_API sm_status sm_model_get_particle(const sm_model* model, int32_t index, sm_
 /// already added are not changed.
 SM_API sm_status sm_model_set_particle(sm_model* model, int32_t index, const sm_particle_def* def);
 
-/// Changes only how a particle moves.
+/// Changes only how a particle moves. A fixed particle is at rest: making one fixed sets its stored
+/// velocity to 0 (as sm_model_set_particle does), and making it free or driven again leaves it 0.
 SM_API sm_status sm_model_set_particle_motion(sm_model* model, int32_t index, sm_particle_motion motion);
 
 /// The spring's definition as stored, with rest_length resolved to metres.
@@ -224,7 +225,8 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 // included); the model's stored initial state is not used. v may be NULL for zero velocities
 // (no damping forces, no kinetic energy, no dissipated power). These functions do not modify the
 // model and may run concurrently on the same model; given a NULL model or a NULL required array
-// they do nothing (or return 0).
+// they do nothing (or return 0). sm_model_energies and sm_model_dissipated_power take a NULL x
+// too, and leave out what needs positions (elastic and gravitational energy; spring damping).
 // ---------------------------------------------------------------------------------------------
 
 /// Total force [N] on every particle: springs, spring damping, mass damping, gravity and the
