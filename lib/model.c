@@ -231,8 +231,9 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (def->damping < 0.0)
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: damping = %g must be >= 0", index, def->damping);
 	if (isnan(def->break_strain) || def->break_strain == -INFINITY)
-		return say(msg, SM_ERROR_NOT_FINITE, "spring %ld: break strain = %g is not a number or infinity",
-		           index, def->break_strain);
+		return say(msg, SM_ERROR_NOT_FINITE,
+		           "spring %ld: break strain = %g must be a number > 0, or INFINITY for never", index,
+		           def->break_strain);
 	if (!(def->break_strain > 0.0))
 		return say(msg, SM_ERROR_NEGATIVE, "spring %ld: break strain = %g must be > 0 (INFINITY for never)",
 		           index, def->break_strain);

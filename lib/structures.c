@@ -744,6 +744,8 @@ sm_status sm_set_motion_at(sm_model* model, const sm_structure* structure, int32
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
+	if (structure == NULL)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: no structure given");
 	const int32_t p = sm_structure_particle(structure, i, j, k);
 	if (p < 0 || p >= model->particle_count)
 		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
@@ -756,7 +758,10 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 {
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
-	if (count < 0 || (count > 0 && particles == NULL))
+	if (count < 0)
+		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: a count of %d particles",
+		                     (int)count);
+	if (count > 0 && particles == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: %d particles given without a list",
 		                     (int)count);
 	if (motion != SM_PARTICLE_FREE && motion != SM_PARTICLE_FIXED && motion != SM_PARTICLE_DRIVEN)

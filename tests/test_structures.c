@@ -688,6 +688,12 @@ static int test_selection_index_bounds(void)
 	ENSURE_STATUS(sm_set_motion_of(m, list, 2, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
 	ENSURE_STATUS(sm_set_motion_of(m, NULL, 0, SM_PARTICLE_FIXED), SM_OK);
 	ENSURE(strcmp(sm_model_last_error(m), "") == 0);
+	// Arguments that are no selection (base.h: a NULL pointer is an invalid argument).
+	ENSURE_STATUS(sm_set_motion_at(m, NULL, 0, 0, 0, SM_PARTICLE_FIXED), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "selection: no structure given") == 0);
+	ENSURE_STATUS(sm_set_motion_of(m, list, -2, SM_PARTICLE_FIXED), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(sm_model_last_error(m), "selection: a count of -2 particles") == 0);
+	ENSURE(sm_model_free_count(m) == n - 2);
 	sm_model_destroy(m);
 	return 0;
 }
