@@ -236,6 +236,39 @@ static void add_real_parameter(builder* b, const char* name, const char* descrip
 	}
 }
 
+// The range fmi2SetReal and fmi2SetInteger accept for a solver setting (fmu_cosim.c), declared as
+// its min and max (FMI 2.0, 2.2.7; both bounds are inclusive, so a relative tolerance below 1 has
+// the double just below 1 as its max); NAN where no bound is declared.
+static void solver_range(fmu_source source, double* min, double* max)
+{
+	*min = *max = NAN;
+	switch (source) {
+	case FMU_SRC_SOLVER_RTOL:
+		*min = SM_MIN_RELATIVE_TOLERANCE;
+		*max = nextafter(1.0, 0.0);
+		break;
+	case FMU_SRC_SOLVER_ATOL_POSITION:
+	case FMU_SRC_SOLVER_ATOL_VELOCITY: *min = SM_MIN_ABSOLUTE_TOLERANCE; break;
+	case FMU_SRC_SOLVER_MAX_STEP: *min = 0.0; break;
+	case FMU_SRC_SOLVER_MAX_STEPS:
+	case FMU_SRC_SOLVER_THREADS: *min = 1.0; break;
+	default: break;
+	}
+}
+
+// Appends ` min="..." max="..."` for the bounds of solver_range that are declared.
+static void append_range(fmu_text* out, const fmu_variable* v)
+{
+	double bound[2];
+	solver_range(v->source, &bound[0], &bound[1]);
+	for (int k = 0; k < 2; k++)
+		if (!isnan(bound[k])) {
+			char text[SM_NUMBER_TEXT_CAPACITY];
+			sm_format_number(bound[k], text);
+			fmu_text_appendf(out, " %s=\"%s\"", k == 0 ? "min" : "max", text);
+		}
+}
+
 static void add_string_parameter(builder* b, const char* name, const char* description, fmu_source source,
                                  const char* start)
 {
@@ -736,6 +769,7 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 			fmu_text_append_string(&out, "<Real");
 			if (v->unit)
 				fmu_text_appendf(&out, " unit=\"%s\"", v->unit);
+			append_range(&out, v);
 			if (v->has_start) {
 				char start[SM_NUMBER_TEXT_CAPACITY];
 				sm_format_number(v->start_real, start);
@@ -744,6 +778,7 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 			break;
 		case FMU_INTEGER:
 			fmu_text_append_string(&out, "<Integer");
+			append_range(&out, v);
 			if (v->has_start)
 				fmu_text_appendf(&out, " start=\"%d\"", (int)v->start_integer);
 			break;

@@ -179,6 +179,27 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
         inst.free()
 
 
+def test_declared_ranges_are_the_ones_the_setters_accept(test_fmu):
+    # The solver settings declare min (and the relative tolerance max) in modelDescription.xml:
+    # each bound is accepted, the next double beyond it refused with a message, for every variable
+    # that declares one. The Integers' next value beyond 1 is 0.
+    inst = Instance(test_fmu("driven_oscillator"))
+    try:
+        ranged = [v for v in inst.md.modelVariables if v.min is not None or v.max is not None]
+        assert {v.name for v in ranged} == {"solver.rtol", "solver.atol_position", "solver.atol_velocity",
+                                           "solver.max_step", "solver.max_steps", "solver.threads"}
+        for v in ranged:
+            for bound, outward in ((v.min, -math.inf), (v.max, math.inf)):
+                if bound is None:
+                    continue
+                bound = float(bound)
+                inst.set(v.name, bound)
+                beyond = bound - 1 if v.type == "Integer" else math.nextafter(bound, outward)
+                expect_error(inst, lambda: inst.set(v.name, beyond), v.name, "rejected")
+    finally:
+        inst.free()
+
+
 def test_outputs_beyond_a_double_between_steps_are_a_warning(test_fmu):
     # A motion port set to 1e300 m: the spring's squared length overflows, and with it the reaction
     # and the elastic energy, though every input is finite. fmi2GetReal gives the values as they
