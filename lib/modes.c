@@ -1109,8 +1109,11 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		const double ci = modal[i * kept + i];
 		modes->modal_damping[i] = ci;
 		const double omega = modes->omega_squared[i] > 0.0 ? sqrt(modes->omega_squared[i]) : 0.0;
+		// An unstable mode grows (or, damped, creeps away) whatever its damping: it has no ratio.
 		if (omega > 0.0)
 			modes->damping_ratio[i] = ci / (2.0 * omega);
+		else if (modes->omega_squared[i] < 0.0)
+			modes->damping_ratio[i] = NAN;
 		else
 			modes->damping_ratio[i] = ci > fmax(1e-12 * largest_damping, damping_round_off) ? INFINITY : 0.0;
 	}

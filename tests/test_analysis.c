@@ -688,6 +688,9 @@ static int test_inverted_pendulum_is_unstable(void)
 		sm_modes modes;
 		ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
 		ENSURE(modes.unstable_count == (below ? 0 : 2));
+		// An unstable mode has no damping ratio (NAN); the stable ones of this undamped model 0.
+		for (int32_t m = 0; m < 3; m++)
+			ENSURE(m < modes.unstable_count ? isnan(modes.damping_ratio[m]) : modes.damping_ratio[m] == 0.0);
 		// Sideways: omega^2 = (k / m) (1 - l0 / L) = -/+ g / L, a pendulum of length L.
 		const double L = fabs(x[5]);
 		ENSURE_REL(modes.omega_squared[below ? 0 : 0], below ? 9.81 / L : -9.81 / L, 1e-9, 0.0);

@@ -132,8 +132,12 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 			snprintf(period, sizeof period, "%.9g", 1.0 / fr);
 		else
 			snprintf(period, sizeof period, "%s", modes->omega_squared[m] < 0.0 ? "unstable" : "inf");
-		printf("%6d %16.9g %16s %16.9g %14.6g\n", (int)m + 1, fr, period, modes->omega_squared[m],
-		       modes->damping_ratio[m]);
+		char ratio[32];
+		if (isnan(modes->damping_ratio[m]))
+			snprintf(ratio, sizeof ratio, "-");
+		else
+			snprintf(ratio, sizeof ratio, "%.6g", modes->damping_ratio[m]);
+		printf("%6d %16.9g %16s %16.9g %14s\n", (int)m + 1, fr, period, modes->omega_squared[m], ratio);
 	}
 	if (modes->group_cut)
 		printf(

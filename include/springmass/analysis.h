@@ -172,7 +172,7 @@ typedef struct sm_modes {
 	/// these values ascending (docs/analysis.md).
 	double* modal_damping;
 	/// zeta = phi^T C phi / (2 omega) [1]; INFINITY for a damped zero-frequency mode, 0 for an
-	/// undamped one.
+	/// undamped one, NAN for an unstable one (omega^2 < 0), which has none.
 	double* damping_ratio;
 	/// count shapes, each 3 per particle (constrained particles 0), mass-normalised:
 	/// phi^T M phi = 1 [1/sqrt(kg)]. Shape i starts at shapes + i * 3 * particle_count.
