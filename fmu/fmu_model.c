@@ -99,10 +99,26 @@ static char* format(const char* fmt, ...)
 	return s;
 }
 
+// The keywords of C (C11 and C23), which no identifier may be.
+static bool is_c_keyword(const char* s)
+{
+	static const char keywords[] =
+	    " alignas alignof auto bool break case char const constexpr continue default do double else enum"
+	    " extern false float for goto if inline int long nullptr register restrict return short signed"
+	    " sizeof static static_assert struct switch thread_local true typedef typeof typeof_unqual union"
+	    " unsigned void volatile while _Alignas _Alignof _Atomic _BitInt _Bool _Complex _Decimal128"
+	    " _Decimal32 _Decimal64 _Generic _Imaginary _Noreturn _Static_assert _Thread_local ";
+	const size_t n = strlen(s);
+	for (const char* at = n > 0 ? strstr(keywords + 1, s) : NULL; at != NULL; at = strstr(at + 1, s))
+		if (at[-1] == ' ' && at[n] == ' ')
+			return true;
+	return false;
+}
+
 char* fmu_identifier(const char* name)
 {
 	size_t n = name ? strlen(name) : 0;
-	bool prefix = n == 0 || isdigit((unsigned char)name[0]);
+	bool prefix = n == 0 || isdigit((unsigned char)name[0]) || is_c_keyword(name);
 	char* id = malloc(n + 7);
 	if (!id)
 		return NULL;

@@ -178,8 +178,8 @@ char* fmu_documentation_html(const fmu_table* table, bool licenses);
 const char* fmu_causality_name(fmu_causality causality);
 const char* fmu_variability_name(fmu_variability variability);
 
-/// Writes a C identifier made from `name` (letters, digits and '_'; a leading digit or an empty
-/// name gets a "model_" prefix) into a malloc'ed string.
+/// Writes a C identifier made from `name` (letters, digits and '_'; a leading digit, an empty name
+/// or a C keyword such as "int" gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);
 
 /// Files larger than this are refused: the model-file loader's limit (model_file.h).

@@ -2025,6 +2025,25 @@ static int names_of(const char* parameters, const char* ports, const char* fmu, 
 	return (int)st;
 }
 
+// The modelIdentifier is a C identifier (FMI 2.0, 2.2.1: it prefixes the functions of a source or
+// static-library FMU): a model named like a C keyword gets the prefix model_ that a leading digit
+// gets, and other names stay as they are.
+static int test_model_identifiers_are_no_keywords(void)
+{
+	static const char* const cases[][2] = {
+	    {"int", "model_int"},       {"while", "model_while"},   {"_Bool", "model__Bool"},
+	    {"typeof", "model_typeof"}, {"integer", "integer"},     {"Int", "Int"},
+	    {"cloth", "cloth"},         {"9lives", "model_9lives"}, {"a-b", "a_b"},
+	};
+	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+		char* id = fmu_identifier(cases[k][0]);
+		const bool same = id != NULL && strcmp(id, cases[k][1]) == 0;
+		free(id);
+		ENSURE(same);
+	}
+	return 0;
+}
+
 static int test_variable_names_form_a_tree(void)
 {
 	sm_error err;
@@ -2089,6 +2108,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_a_step_below_the_resolution_of_the_simulation_time_is_refused);
 	RUN_TEST(test_a_state_with_times_out_of_order_is_refused);
 	RUN_TEST(test_reset_forgets_the_stop_time);
+	RUN_TEST(test_model_identifiers_are_no_keywords);
 	RUN_TEST(test_variable_names_form_a_tree);
 	RUN_TEST(test_instances_in_concurrent_threads);
 	return TEST_SUMMARY();
