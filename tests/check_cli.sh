@@ -393,6 +393,16 @@ binaries/linux64/ binaries/linux64/oscillator.so documentation/ documentation/in
 resources/ resources/model.json" ] && unzip -Z -T "$tmp/again" | grep -q " 19800101\.000000 binaries/$" &&
     unzip -Z -T "$tmp/dated.fmu" | grep -q " 20231114\.221320 binaries/$" ||
     fail "fmu: two packings differ, or their entries or dates are not as documented: $(unzip -Z -T "$tmp/again")"
+  # Beyond a zip date's range, SOURCE_DATE_EPOCH dates the entries at its last, 2107-12-31 23:59:58
+  # (zip wrapped the next second to 1980); a value that is no count of seconds is refused.
+  SOURCE_DATE_EPOCH=4354819199 "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" \
+    -o "$tmp/late.fmu" > /dev/null 2>&1
+  unzip -Z -T "$tmp/late.fmu" | grep -q " 21071231\.235958 binaries/$" ||
+    fail "fmu: SOURCE_DATE_EPOCH past 2107 not dated at the last zip date: $(unzip -Z -T "$tmp/late.fmu")"
+  out=$(SOURCE_DATE_EPOCH=-5 "$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/neg.fmu" 2>&1)
+  [ $? -eq 2 ] && [ ! -e "$tmp/neg.fmu" ] &&
+    [ "$out" = "springmass fmu: SOURCE_DATE_EPOCH '-5' is not a count of seconds since 1970" ] ||
+    fail "fmu: a malformed SOURCE_DATE_EPOCH was not refused: $out"
   # An earlier output is replaced whole (written beside it, then renamed over it: a full disk
   # leaves it as it was) and keeps its permissions; a link keeps pointing at the file it names.
   echo "earlier" > "$tmp/earlier.fmu"

@@ -304,8 +304,7 @@ static bool copy_folder(const char* from, const char* to, const char* rename_fro
 
 // The archive's entries, so that the same inputs give the same bytes whoever packs them and
 // when (reproducible builds): every staged folder and file in name order, with the mode 0755
-// (folders, and files with an execute bit) or 0644, and the time SOURCE_DATE_EPOCH [s since
-// 1970] when it is set, else 1980-01-01 00:00 UTC (the earliest a zip entry holds).
+// (folders, and files with an execute bit) or 0644, and the time of archive_time.
 typedef struct entry_list {
 	char** names;
 	size_t count, capacity;
@@ -333,16 +332,27 @@ static void free_entries(entry_list* list)
 	free(list->names);
 }
 
-static struct timespec archive_time(void)
+// The entries' time: SOURCE_DATE_EPOCH, a decimal count of seconds since 1970 (the
+// reproducible-builds convention), within what a zip entry's date holds, 1980-01-01 00:00 to
+// 2107-12-31 23:59:58 UTC (earlier times are the first, later ones the last: zip would wrap them
+// to 1980); without it (or empty) the first. False, with a message, for a value that is no such
+// count, which the convention asks a build to refuse.
+static bool archive_time(struct timespec* when)
 {
-	struct timespec when = {315532800, 0};  // 1980-01-01 00:00 UTC
+	const time_t earliest = 315532800, latest = (time_t)4354819198LL;
+	*when = (struct timespec){earliest, 0};
 	const char* epoch = getenv("SOURCE_DATE_EPOCH");
+	if (epoch == NULL || *epoch == '\0')
+		return true;
 	char* end = NULL;
-	errno = 0;
-	const long long seconds = epoch ? strtoll(epoch, &end, 10) : -1;
-	if (epoch && *epoch && *end == '\0' && errno == 0 && seconds >= when.tv_sec)
-		when.tv_sec = (time_t)seconds;
-	return when;
+	const long long seconds = strtoll(epoch, &end, 10);  // beyond the range: LLONG_MAX, the last
+	if (*epoch < '0' || *epoch > '9' || *end != '\0') {
+		fprintf(stderr, "springmass fmu: SOURCE_DATE_EPOCH '%s' is not a count of seconds since 1970\n",
+		        epoch);
+		return false;
+	}
+	when->tv_sec = seconds < earliest ? earliest : seconds > latest ? latest : (time_t)seconds;
+	return true;
 }
 
 // Adds the entries under the staged folder `relative` ("" for the staging folder itself) to list,
@@ -612,7 +622,8 @@ static int package(const options* opt)
 	// zip writes the entries in the order given into the staging folder, under a name with an
 	// extension (zip adds ".zip" to one without), and the archive is then copied to the output
 	// (see write_output). -X: no owner or extra times, which would differ between packers.
-	const struct timespec when = archive_time();
+	struct timespec when;
+	archive_time(&when);  // checked with the arguments
 	const struct timespec times[2] = {when, when};
 	entry_list entries = {NULL, 0, 0};
 	errno = 0;
@@ -710,7 +721,8 @@ static int parse_arguments(int argc, char** argv, options* opt)
 	if (cli_check_output("fmu", "-o", opt->output, opt->model, "the model file", false) != 0 ||
 	    cli_check_output("fmu", "-o", opt->output, opt->reference, "the reference", false) != 0)
 		return 2;
-	return 0;
+	struct timespec when;
+	return archive_time(&when) ? 0 : 2;
 }
 
 int sm_cmd_fmu(int argc, char** argv)
