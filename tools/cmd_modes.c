@@ -112,7 +112,9 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	    "zero modes        %d%s (|omega^2| <= %g of the largest: rigid-body motions, mechanisms or modes too "
 	    "soft to resolve, see --zero-tolerance%s)\n",
 	    (int)modes->zero_count, sparse ? " among the modes listed" : "", zero_tolerance,
-	    modes->zero_count > 0 && !at_equilibrium ? "; about a stretched rest shape, --at-equilibrium" : "");
+	    modes->zero_count > 0 && !at_equilibrium
+	        ? "; where the rest shape is stretched, --at-equilibrium gives mechanisms their stiffness"
+			: "");
 	if (modes->unstable_count > 0)
 		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
 		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",
