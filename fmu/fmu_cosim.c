@@ -863,9 +863,9 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 	// It becomes CVODE's relative tolerance, which cannot be met below the machine epsilon.
 	if (toleranceDefined && !(tolerance >= SM_MIN_RELATIVE_TOLERANCE)) {
 		log_error(inst,
-		          "fmi2SetupExperiment: tolerance %g must be at least %g, the machine epsilon (CVODE cannot "
+		          "fmi2SetupExperiment: tolerance %s must be at least %s, the machine epsilon (CVODE cannot "
 		          "meet a smaller relative tolerance)",
-		          tolerance, SM_MIN_RELATIVE_TOLERANCE);
+		          fmu_number_text(tolerance).text, fmu_number_text(SM_MIN_RELATIVE_TOLERANCE).text);
 		return fmi2Error;
 	}
 	// The experiment's tolerance, or without one the file's (an earlier call's does not stay).
@@ -1115,9 +1115,9 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	}
 	if (v->source == FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_RELATIVE_TOLERANCE)) {
 		log_error(inst,
-		          "fmi2SetReal: %s = %g rejected: a relative tolerance must be at least %g, the machine "
+		          "fmi2SetReal: %s = %s rejected: a relative tolerance must be at least %s, the machine "
 		          "epsilon (CVODE cannot meet a smaller one)",
-		          v->name, value, SM_MIN_RELATIVE_TOLERANCE);
+		          v->name, fmu_number_text(value).text, fmu_number_text(SM_MIN_RELATIVE_TOLERANCE).text);
 		return false;
 	}
 	if (tolerance && v->source != FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_ABSOLUTE_TOLERANCE)) {

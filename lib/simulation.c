@@ -480,11 +480,16 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 		    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
 		    def->relative_tolerance);
 	// Below the machine epsilon CVODE cannot meet it (SM_MIN_RELATIVE_TOLERANCE, simulation.h).
-	if (!(def->relative_tolerance >= SM_MIN_RELATIVE_TOLERANCE))
+	// Both in their shortest exact digits: a value an ulp below the floor reads as below it.
+	if (!(def->relative_tolerance >= SM_MIN_RELATIVE_TOLERANCE)) {
+		char value[SM_NUMBER_TEXT_CAPACITY], floor[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(def->relative_tolerance, value);
+		sm_format_number(SM_MIN_RELATIVE_TOLERANCE, floor);
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: relative_tolerance = %g must be at least %g, the machine epsilon: "
+		                    "simulation: relative_tolerance = %s must be at least %s, the machine epsilon: "
 		                    "CVODE cannot hold errors below the rounding of the state",
-		                    def->relative_tolerance, SM_MIN_RELATIVE_TOLERANCE);
+		                    value, floor);
+	}
 	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: max_step = %g must be finite and >= 0", def->max_step);

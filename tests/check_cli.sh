@@ -219,7 +219,7 @@ check_cases << 'CASES'
 2|springmass run: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
-2|springmass run: --rtol must be at least 2.22045e-16, the machine epsilon (CVODE cannot meet a smaller relative tolerance), got '1e-17'|run "$osc" -q -o - --rtol 1e-17
+2|springmass run: --rtol must be at least 2.220446049250313e-16, the machine epsilon (CVODE cannot meet a smaller relative tolerance), got '1e-17'|run "$osc" -q -o - --rtol 1e-17
 0||run "$osc" -q -o - --t-end 1e-3 --rtol 2.220446049250313e-16
 2|springmass run: --atol must be > 0, got '-1'|run "$osc" -q -o - --atol -1
 2|springmass run: --atol-velocity must be > 0, got '0'|run "$osc" -q -o - --atol-velocity 0

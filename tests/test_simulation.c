@@ -2116,7 +2116,8 @@ static int test_failures_are_reported_and_recoverable(void)
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
 	ENSURE(err.status == SM_ERROR_INVALID_ARGUMENT &&
 	       strstr(err.message,
-	              "relative_tolerance = 1e-17 must be at least 2.22045e-16, the machine epsilon") != NULL);
+	              "relative_tolerance = 1e-17 must be at least 2.220446049250313e-16, the machine epsilon") !=
+	           NULL);
 	d.relative_tolerance = SM_MIN_RELATIVE_TOLERANCE;
 	sm_simulation* at_epsilon = sm_simulation_create(model, &d, &err);
 	ENSURE(at_epsilon != NULL);

@@ -307,11 +307,13 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					return 2;
 				}
 				if (!(o->rtol >= SM_MIN_RELATIVE_TOLERANCE)) {
+					char floor[SM_NUMBER_TEXT_CAPACITY];
+					sm_format_number(SM_MIN_RELATIVE_TOLERANCE, floor);
 					fprintf(
 					    stderr,
-					    "springmass run: --rtol must be at least %g, the machine epsilon (CVODE cannot meet a "
+					    "springmass run: --rtol must be at least %s, the machine epsilon (CVODE cannot meet a "
 					    "smaller relative tolerance), got '%s'\n",
-					    SM_MIN_RELATIVE_TOLERANCE, value);
+					    floor, value);
 					return 2;
 				}
 			} else if (strcmp(a, "--threads") == 0) {
