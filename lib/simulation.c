@@ -972,12 +972,17 @@ static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, l
 	if (*reached >= t_end)
 		return CV_SUCCESS;
 	CVodeSetStopTime(sim->cvode, t_stop);
+	// In one-step mode tout only sizes CVODE's first step after a (re)initialisation, from the
+	// interval to it (at least 100 eps |tout|): a stop time far beyond this advance (a master's
+	// 1e28 s for "no end") made that step too large to converge, every time. It is the stop time up
+	// to a million times this advance's interval, beyond which no step of the run is sized anyway.
+	const double tout = fmin(t_stop, *reached + 1e6 * (t_end - *reached));
 	long steps = 0;
 	int flag = CV_SUCCESS;
 	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed && !sim->stopped) {
 		long steps_before = 0, steps_after = 0;
 		CVodeGetNumSteps(sim->cvode, &steps_before);
-		flag = check_step_size(sim, CVode(sim->cvode, t_stop, sim->y, reached, CV_ONE_STEP), reached);
+		flag = check_step_size(sim, CVode(sim->cvode, tout, sim->y, reached, CV_ONE_STEP), reached);
 		CVodeGetNumSteps(sim->cvode, &steps_after);
 		// A spring that reached its break strain inside the step ends it there, as a root does.
 		flag = sm_simulation_search_step(sim, flag, steps_after > steps_before, reached);
@@ -1343,6 +1348,7 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	// The same velocity with a position on the current path is no jump. A caller's x0 + v t and
 	// the path's own x0 + v dt, summed over steps, part in the last bits: 16 units of round-off of
 	// the largest term.
+	// No jump keeps the path as it was, so that the run is that of no call, to the bit.
 	bool jump = false;
 	for (int c = 0; c < 3; c++) {
 		const double path = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
@@ -1350,10 +1356,12 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 		                          fabs(sim->drive_velocity[p + c] * dt));
 		jump = jump || !(fabs(position[c] - path) <= 16.0 * DBL_EPSILON * scale) ||
 		       velocity[c] != sim->drive_velocity[p + c];
-		sim->drive_position[p + c] = position[c];
-		sim->drive_velocity[p + c] = velocity[c];
 	}
-	sim->drive_time[particle] = sim->time;
+	if (jump) {
+		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
+		memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
+		sim->drive_time[particle] = sim->time;
+	}
 	sim->input_jumped = sim->input_jumped || jump;
 	sim->input_changed = sim->input_changed || jump;
 	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
@@ -1378,8 +1386,10 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
 		                          "set_external_force: particle %d: force must be 3 finite numbers",
 		                          (int)particle);
+	// A held particle's force moves nothing: no input change (the reaction it adds is read as it is).
 	double* f = sim->external_force + 3 * (size_t)particle;
-	const bool jump = f[0] != force[0] || f[1] != force[1] || f[2] != force[2];
+	const bool jump = (f[0] != force[0] || f[1] != force[1] || f[2] != force[2]) &&
+	                  sim->model->motion[particle] == SM_PARTICLE_FREE;
 	f[0] = force[0];
 	f[1] = force[1];
 	f[2] = force[2];
@@ -1472,6 +1482,9 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 	}
 	pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sim->time = time;
+	// CVODE restarts here, at 0 on its axis: the outputs are those of the restart already, not of
+	// an axis of the past (a driven particle's position would part from the run's in its last bit).
+	sim->time_origin = time;
 	sim->need_restart = true;
 	sm_simulation_refresh_outputs(sim);
 	return SM_OK;

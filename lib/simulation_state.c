@@ -157,6 +157,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sm_simulation_restore_springs(sim);
 	for (int32_t b = 0; b < s->break_count; b++)
 		sm_model_set_spring_enabled(sim->model, s->breaks[b].spring, false);
+	sim->time_origin = sim->time;  // CVODE's axis of the restart due, as set_state does
 	sim->need_restart = true;
 	sim->forget_factor = true;
 	sim->input_changed = false;

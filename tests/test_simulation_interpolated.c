@@ -461,6 +461,92 @@ static int test_inputs_set_unchanged_leave_the_run_of_one_advance(void)
 	return 0;
 }
 
+// A master that writes a moving anchor's motion at every row, on the path it follows (x0 + v t as
+// the master computes it, which parts from the simulation's own sum in the last bits), changes no
+// input: the run is the one without the calls, bit for bit, with no restart. The calls re-based
+// the path on the given position, and the state at 2 s differed in its last bits.
+static int test_a_motion_set_on_its_own_path_changes_no_input(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* sims[2] = {sm_simulation_create(model, &d, NULL), sm_simulation_create(model, &d, NULL)};
+	ENSURE(sims[0] != NULL && sims[1] != NULL);
+	const double start[3] = {0.0, 0.0, 0.0}, v[3] = {0.3, 0.1, 0.0};
+	for (int k = 0; k < 2; k++) {
+		ENSURE_STATUS(sm_simulation_set_driven(sims[k], 0, start, v), SM_OK);
+		for (int i = 1; i <= 200; i++) {
+			const double t = i == 200 ? 2.0 : 0.01 * i;
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sims[k], t, 2.0), SM_OK);
+			const double x[3] = {v[0] * t, v[1] * t, 0.0};
+			if (k == 1)
+				ENSURE_STATUS(sm_simulation_set_driven(sims[k], 0, x, v), SM_OK);
+		}
+	}
+	const sm_statistics quiet = sm_simulation_statistics(sims[0]), set = sm_simulation_statistics(sims[1]);
+	ENSURE(set.restarts == quiet.restarts && set.steps == quiet.steps);
+	ENSURE(memcmp(sm_simulation_positions(sims[1]), sm_simulation_positions(sims[0]), 6 * sizeof(double)) ==
+	       0);
+	ENSURE(memcmp(sm_simulation_velocities(sims[1]), sm_simulation_velocities(sims[0]), 6 * sizeof(double)) ==
+	       0);
+	sm_simulation_destroy(sims[0]);
+	sm_simulation_destroy(sims[1]);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A force on a held particle moves nothing: setting it, changed at every row, is no input change
+// (no restart; the run of one advance, bit for bit). It restarted CVODE at every row.
+static int test_a_force_on_a_held_particle_changes_no_input(void)
+{
+	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* once = sm_simulation_create(model, &d, NULL);
+	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
+	ENSURE(once != NULL && rows != NULL);
+	ENSURE_STATUS(sm_simulation_advance(once, 1.0), SM_OK);
+	for (int i = 1; i <= 100; i++) {
+		const double f[3] = {0.1 * i, -1.0, 2.0};
+		ENSURE_STATUS(sm_simulation_set_external_force(rows, 0, f), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(rows, i == 100 ? 1.0 : 0.01 * i, 1.0), SM_OK);
+	}
+	ENSURE(sm_simulation_statistics(rows).restarts == 0);
+	ENSURE(memcmp(sm_simulation_positions(rows), sm_simulation_positions(once), 6 * sizeof(double)) == 0);
+	sm_simulation_destroy(rows);
+	sm_simulation_destroy(once);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A stop time far beyond the rows (a master's 1e28 s or the largest double for "no end") sizes no
+// step of the run: CVODE sized its first step from it, at least 100 eps of it (2e14 s for 1e28 s),
+// and failed at t = 0 every time. The rows are those of a stop time a million rows ahead (1e4 s),
+// bit for bit, and on the closed form to 1e-8 m (rtol 1e-10 of 0.2 m, and 2 s of stepping).
+static int test_a_far_stop_time_sizes_no_step(void)
+{
+	const double zeta = 0.1, w0 = sqrt(OSC_K), stops[] = {1e4, 1e28, DBL_MAX};
+	sm_model* model = damped_oscillator(zeta, SM_PARTICLE_FIXED);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	double first[6];
+	for (size_t k = 0; k < sizeof stops / sizeof stops[0]; k++) {
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		for (int i = 1; i <= 200; i++)
+			ENSURE_STATUS(sm_simulation_advance_interpolated(sim, 0.01 * i, stops[k]), SM_OK);
+		double u, v;
+		free_motion(zeta, w0, OSC_U0, 0.0, sm_simulation_time(sim), &u, &v);
+		ENSURE_NEAR(sm_simulation_positions(sim)[3], 1.0 + u, 1e-8);
+		if (k == 0)
+			memcpy(first, sm_simulation_positions(sim), sizeof first);
+		ENSURE(memcmp(sm_simulation_positions(sim), first, sizeof first) == 0);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Sets the inputs of the driven oscillator at a row: the anchor moved by 1e-3 N / k (2.5e-5 m) or a
 // 1e-3 N force on the bob, as `change` says, and then, when `also_held` says so, the other input
 // again as it is (the anchor where it is, still; no force): what a master does that sets every
@@ -711,6 +797,9 @@ int main(int argc, char** argv)
 	RUN_TEST(test_rows_before_a_break_found_past_them_are_at_their_own_time);
 	RUN_TEST(test_input_set_past_the_steps_restarts_at_the_row);
 	RUN_TEST(test_inputs_set_unchanged_leave_the_run_of_one_advance);
+	RUN_TEST(test_a_motion_set_on_its_own_path_changes_no_input);
+	RUN_TEST(test_a_force_on_a_held_particle_changes_no_input);
+	RUN_TEST(test_a_far_stop_time_sizes_no_step);
 	RUN_TEST(test_an_unchanged_input_set_after_a_changed_one_keeps_the_change);
 	RUN_TEST(test_an_advance_to_the_current_time_keeps_a_changed_input);
 	RUN_TEST(test_plain_advance_within_the_steps_interpolates);

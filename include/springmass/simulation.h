@@ -9,7 +9,8 @@
 // what the right-hand side sees from the current time on. By default (restart_on_input_change)
 // an input that changes re-initialises CVODE there, as a state set with sm_simulation_set_state,
 // a spring break, a model update, a reset or a failure do; an input set to what it was (the same
-// force, a motion on its path) keeps the history. Keeping the history (step size, order) over
+// force, a motion on its path, which then stays the path it was) or a force on a held particle,
+// which moves nothing, keeps the history. Keeping the history (step size, order) over
 // changes too is faster but not accurate when inputs change at every call, as a co-simulation
 // master's do: a base excitation sampled every 1 ms missed its steady-state amplitude by 9e-4
 // (relative) at rtol 1e-6 and 1e-8 alike, against 2e-5 with restarts (the steps that straddle the
@@ -205,8 +206,10 @@ SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 /// takes the steps of one advance to t_stop, whatever the output times, where advancing to
 /// each output time ends a step at each (the bundled cloth with 0.01 s outputs: 650 steps
 /// instead of 1065). The trajectory at t_stop, and the spring breaks on the way, are then those
-/// of one advance to t_stop, bit for bit; a break that CVODE finds past t_end happens in the
-/// next advance that reaches its time.
+/// of one advance to t_stop, bit for bit, for a t_stop up to a million times the first interval
+/// (t_end - t) ahead; a farther t_stop (a master's 1e28 s for "no end") sizes CVODE's first step
+/// as that one would, so that it is no step of order t_stop. A break that CVODE finds past t_end
+/// happens in the next advance that reaches its time.
 /// What is past the simulation's time is dropped, and CVODE restarts there, when an input
 /// changes (sm_simulation_set_driven, sm_simulation_set_external_force; whatever
 /// restart_on_input_change says), or the state or the model does. An advance whose inputs
@@ -248,7 +251,8 @@ SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
                                           const double velocity[3]);
 
-/// Sets the external force [N] on a particle, held constant until changed.
+/// Sets the external force [N] on a particle, held constant until changed. On a fixed or driven
+/// particle it moves nothing, and changing it is no input change.
 SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
                                                   const double force[3]);
 
