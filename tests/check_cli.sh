@@ -167,9 +167,44 @@ check_cases << 'CASES'
 1|springmass modes: --vtk $tmp/a_file: cannot write there: a file of that name exists|modes "$osc" -o "$tmp/fresh_modes.csv" --vtk "$tmp/a_file"
 CASES
 [ ! -e "$tmp/fresh.csv" ] && [ ! -e "$tmp/fresh_modes.csv" ] || fail "an output was written before a refusal"
+# Outputs that are one file under two names are refused before anything is written (only the last
+# written would be left), and a write that fails at its place (nothing may be made in /proc) leaves
+# no other output written: each is written under a temporary name and moved once all are.
+mkdir -p "$tmp/apart"
+check_cases << 'CASES'
+2|springmass statics: -o $tmp/apart/same.json and --save-model $tmp/apart/same.json are one file, which only the last would hold; give each its own|statics "$osc" -q -o "$tmp/apart/same.json" --save-model "$tmp/apart/same.json"
+2|springmass statics: -o $tmp/apart/statics.vtk and --vtk's file $tmp/apart/statics.vtk are one file, which only the last would hold; give each its own|statics "$osc" -q -o "$tmp/apart/statics.vtk" --vtk "$tmp/apart"
+2|springmass modes: -o $tmp/apart/mode_1.vtk and --vtk's file $tmp/apart/mode_1.vtk are one file, which only the last would hold; give each its own|modes "$osc" -o "$tmp/apart/mode_1.vtk" --vtk "$tmp/apart"
+CASES
+# (As root the check of the place passes, and the write itself fails; otherwise the check refuses.)
+"$cli" statics "$osc" -q -o "$tmp/apart/fresh.csv" --save-model /proc/springmass_x.json > /dev/null 2>&1
+[ $? -eq 1 ] || fail "statics --save-model into /proc did not fail with exit status 1"
+[ -z "$(ls -A "$tmp/apart")" ] || fail "an output was written, or a temporary left, beside a refused one: $(ls -A "$tmp/apart")"
 # A new folder named with a trailing slash is a place the folder can go.
 "$cli" modes "$osc" --vtk "$tmp/slash_dir/" > /dev/null 2>&1 && [ -e "$tmp/slash_dir/mode_1.vtk" ] ||
   fail "modes --vtk NEW_DIR/ was refused or wrote nothing"
+
+# A run stopped by a signal (Ctrl-C, a kill) or by the reader of its pipe ends after the row it was
+# writing: the CSV holds whole rows, the series' index is closed, and the exit status is the
+# signal's (143 for SIGTERM; a pipe's reader gone is SIGPIPE's, 141).
+cat > "$tmp/slow.json" << 'JSON'
+{"springmass": 1, "name": "slow", "gravity": [0, 0, -9.81],
+ "structures": [{"type": "sheet", "name": "s", "edge_u": [1, 0, 0], "edge_v": [0, 1, 0], "nu": 24, "nv": 24, "mass": 1,
+   "structural": {"strain_stiffness": 1000}, "shear": {"strain_stiffness": 1000}}],
+ "fixed": ["s[0,0]", "s[0,23]"]}
+JSON
+timeout --preserve-status -s TERM 2 "$cli" run "$tmp/slow.json" --t-end 100 -q -o "$tmp/slow.csv" --vtk "$tmp/slow_vtk" 2> "$tmp/slow.err"
+status=$?
+fields=$(head -1 "$tmp/slow.csv" | awk -F, '{ print NF }')
+[ $status -eq 143 ] && [ "$(tail -c 1 "$tmp/slow.csv" | od -An -c | tr -d ' ')" = '\n' ] &&
+  awk -F, -v n="$fields" 'NF != n { exit 1 }' "$tmp/slow.csv" && [ "$(tail -1 "$tmp/slow_vtk/slow.pvd")" = "</VTKFile>" ] &&
+  [ "$(grep -c DataSet "$tmp/slow_vtk/slow.pvd")" -eq "$(($(wc -l < "$tmp/slow.csv") - 1))" ] &&
+  grep -q "^springmass run: stopped by Terminated at t = " "$tmp/slow.err" ||
+  fail "run stopped by SIGTERM: exit status $status, last row or index torn: $(tail -c 80 "$tmp/slow.csv"); $(tail -1 "$tmp/slow_vtk/slow.pvd"); $(cat "$tmp/slow.err")"
+"$cli" run "$tmp/slow.json" --t-end 100 -q -o - --vtk "$tmp/piped_vtk" 2> "$tmp/piped.err" | head -1 > /dev/null
+status=${PIPESTATUS[0]}
+[ $status -eq 141 ] && [ "$(tail -1 "$tmp/piped_vtk/slow.pvd")" = "</VTKFile>" ] && [ ! -s "$tmp/piped.err" ] ||
+  fail "run into a pipe closed early: exit status $status, index $(tail -1 "$tmp/piped_vtk/slow.pvd"), $(cat "$tmp/piped.err")"
 
 # modes --zero-tolerance: two zero-length springs of 1 and 1e12 N/m in a chain of two 1 kg
 # particles have no zero mode, but the soft one (omega^2 = 0.5 1/s^2 per axis, to 1/(8e12)) lies
@@ -230,7 +265,7 @@ check_cases << 'CASES'
 0||run "$osc" -q -o - --t-end 0.01 --set k=1e-400
 2|springmass run: --set k=1e999: '1e999' is not a finite number|run "$osc" -q -o - --set k=1e999
 2|springmass run: --set k=0x1p3: '0x1p3' is not a finite number|run "$osc" -q -o - --set k=0x1p3
-1|springmass run: cannot create directory $tmp/a_file: a file of that name exists|run "$osc" -q -o - --vtk "$tmp/a_file"
+1|springmass run: --vtk $tmp/a_file: cannot write there: a file of that name exists|run "$osc" -q -o - --vtk "$tmp/a_file"
 2|springmass statics: --set expects NAME=VALUE, got 'k'|statics "$osc" --set k
 2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 // The grammar is checked by hand because strtod also reads hexadecimal, infinities, NaN and
 // leading spaces; once it holds, strtod gives the correctly rounded double (in the C locale,
@@ -316,12 +317,13 @@ void cli_csv_number(FILE* f, double value)
 	fprintf(f, ",%s", text);
 }
 
-FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,
-                   const double* x)
+FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, const char* title,
+                   const sm_model* model, const double* x)
 {
-	FILE* f = fopen(path, "w");
+	FILE* f = outputs != NULL ? cli_outputs_open(outputs, path) : fopen(path, "w");
 	if (f == NULL) {
-		cli_cannot_write(command, path);
+		if (outputs == NULL)
+			cli_cannot_write(command, path);
 		return NULL;
 	}
 	const int32_t n = sm_model_particle_count(model);
@@ -439,15 +441,36 @@ int cli_check_output_place(const char* command, const char* option, const char* 
 	char* place = canonical_path(path);
 	struct stat st;
 	const bool exists = stat(path, &st) == 0;
+	// Where the output is made: in the folder that holds its place (a new file or folder, or the
+	// temporary a file is written under before it replaces the one there), or in the folder itself.
+	char* slash = place != NULL ? strrchr(place, '/') : NULL;
+	if (slash != NULL)
+		*(slash == place ? slash + 1 : slash) = '\0';
+	const bool writable = place != NULL && (folder && exists ? access(path, W_OK | X_OK) == 0
+	                                                         : access(place, W_OK | X_OK) == 0 &&
+	                                                               (!exists || access(path, W_OK) == 0));
 	const char* wrong = place == NULL ? "the folder it would go in does not exist"
 	                    : exists && folder && !S_ISDIR(st.st_mode) ? "a file of that name exists"
 	                    : exists && !folder && S_ISDIR(st.st_mode) ? "it is a folder"
+	                    : !writable                                ? "permission denied"
 	                                                               : NULL;
 	free(place);
 	if (wrong == NULL)
 		return 0;
 	fprintf(stderr, "springmass %s: %s %s: cannot write there: %s\n", command, option, path, wrong);
 	return 1;
+}
+
+int cli_check_outputs_apart(const char* command, const char* option_a, const char* a, const char* option_b,
+                            const char* b)
+{
+	if (a == NULL || b == NULL || !cli_same_file(a, b))
+		return 0;
+	fprintf(
+	    stderr,
+	    "springmass %s: %s %s and %s %s are one file, which only the last would hold; give each its own\n",
+	    command, option_a, a, option_b, b);
+	return 2;
 }
 
 void cli_cannot_write(const char* command, const char* path)

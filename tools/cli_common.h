@@ -1,6 +1,8 @@
 // Helpers shared by the subcommands: parameter overrides, directories and VTK output.
 #pragma once
 
+#include "cli_outputs.h"
+
 #include "springmass/model_file.h"
 
 #include <stdbool.h>
@@ -81,11 +83,12 @@ void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* su
 /// (sm_format_number: 0.03 as 0.03, not 0.029999999999999999).
 void cli_csv_number(FILE* f, double value);
 
-/// Opens a legacy VTK polydata file and writes the particles at x [m] as points and the springs
-/// as lines (only the enabled ones, so that broken springs disappear). Follow with
-/// cli_vtk_vectors for point data, then cli_close. Prints the error and returns NULL on failure.
-FILE* cli_vtk_open(const char* command, const char* path, const char* title, const sm_model* model,
-                   const double* x);
+/// Opens a legacy VTK polydata file, one of `outputs` (NULL: directly), and writes the particles
+/// at x [m] as points and the springs as lines (only the enabled ones, so that broken springs
+/// disappear). Follow with cli_vtk_vectors for point data, then cli_close. Prints the error and
+/// returns NULL on failure.
+FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, const char* title,
+                   const sm_model* model, const double* x);
 
 /// Writes one vector field of point data (3 values per particle); `first` for the first field.
 void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
@@ -104,9 +107,14 @@ int cli_check_output(const char* command, const char* option, const char* output
 
 /// Checks, before anything is computed, that an output can be made where `path` names it (NULL or
 /// "-": none): a file in a folder that exists and is no folder, or a `folder` that exists or whose
-/// parent does. Returns 0, or prints why not and returns 1, so that a command never stops with
+/// parent does, where this process may write (the file, and the folder that holds it). Returns 0, or prints why not and returns 1, so that a command never stops with
 /// some outputs written and others not for a place it could have checked first.
 int cli_check_output_place(const char* command, const char* option, const char* path, bool folder);
+
+/// Checks that two outputs (NULL: not given) are not one file under two names, which would leave
+/// only the one written last. Returns 0, or prints why and returns 2 (a usage error).
+int cli_check_outputs_apart(const char* command, const char* option_a, const char* a, const char* option_b,
+                            const char* b);
 
 /// Whether paths a and b name one file: the same file under any name if both exist, else the same
 /// place once created (the real path of the folder, and the name).

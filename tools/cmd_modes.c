@@ -58,25 +58,23 @@ static void usage(FILE* out)
 
 // Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
 // mode shape as a vector field.
-static int write_mode_vtk(const char* path, const sm_model* model, const double* x, const double* shape,
-                          int index, double frequency)
+static int write_mode_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
+                          const double* shape, int index, double frequency)
 {
 	char title[128];
 	snprintf(title, sizeof title, "springmass mode %d, %.9g Hz", index, frequency);
-	FILE* f = cli_vtk_open("modes", path, title, model, x);
+	FILE* f = cli_vtk_open(outputs, "modes", path, title, model, x);
 	if (f == NULL)
 		return -1;
 	cli_vtk_vectors(f, "shape", sm_model_particle_count(model), shape, true);
 	return cli_close("modes", path, f);
 }
 
-static int write_csv(const char* path, const sm_document* doc, const sm_modes* modes)
+static int write_csv(cli_outputs* outputs, const char* path, const sm_document* doc, const sm_modes* modes)
 {
-	FILE* f = fopen(path, "w");
-	if (f == NULL) {
-		cli_cannot_write("modes", path);
+	FILE* f = cli_outputs_open(outputs, path);
+	if (f == NULL)
 		return -1;
-	}
 	fprintf(f, "particle,name");
 	for (int32_t m = 0; m < modes->count; m++)
 		fprintf(f, ",mode%d_x,mode%d_y,mode%d_z", (int)m + 1, (int)m + 1, (int)m + 1);
@@ -256,6 +254,7 @@ int sm_cmd_modes(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
+	cli_outputs outputs = {"modes", 0, 0, NULL};
 	sm_model* model = NULL;
 	double* x = NULL;
 	sm_modes modes;
@@ -319,11 +318,12 @@ int sm_cmd_modes(int argc, char** argv)
 	else
 		print_modes(&modes, at_equilibrium, steps_per_period, zero_tolerance);
 	if (csv_path != NULL) {
-		if (write_csv(csv_path, doc, &modes) != 0)
+		if (write_csv(&outputs, csv_path, doc, &modes) != 0)
 			goto done;
-		printf("mode shapes written to %s%s\n", csv_path,
-		       modes.count > 0 ? "" : " (no modes: the particles only)");
 	}
+	// Every output is written, then all are moved to their places: none is left half-written, or
+	// replaced, when another fails. The CSV is none of the mode files (checked before either is
+	// written; their count is known now).
 	if (vtk_dir != NULL) {
 		if (cli_make_directory("modes", vtk_dir) != 0)
 			goto done;
@@ -333,17 +333,27 @@ int sm_cmd_modes(int argc, char** argv)
 				fprintf(stderr, "springmass modes: path too long: %s\n", vtk_dir);
 				goto done;
 			}
-			if (write_mode_vtk(path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
+			if (cli_check_outputs_apart("modes", "-o", csv_path, "--vtk's file", path) != 0) {
+				status = 2;
+				goto done;
+			}
+			if (write_mode_vtk(&outputs, path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
 			                   modes.frequency[m]) != 0)
 				goto done;
 		}
-		if (modes.count > 0)
-			printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
-		else
-			printf("no mode shapes to write to %s\n", vtk_dir);
 	}
+	if (cli_outputs_commit(&outputs) != 0)
+		goto done;
+	if (csv_path != NULL)
+		printf("mode shapes written to %s%s\n", csv_path,
+		       modes.count > 0 ? "" : " (no modes: the particles only)");
+	if (vtk_dir != NULL && modes.count > 0)
+		printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
+	else if (vtk_dir != NULL)
+		printf("no mode shapes to write to %s\n", vtk_dir);
 	status = 0;
 done:
+	cli_outputs_discard(&outputs);
 	sm_modes_release(&modes);
 	free(x);
 	sm_model_destroy(model);

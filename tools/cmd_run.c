@@ -10,6 +10,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -64,7 +65,9 @@ static void usage(FILE* out)
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
 	        "solver's statistics at the end. Exit status: 0 success, 1 bad model, solver failure or\n"
-	        "output that cannot be written, 2 usage error.\n");
+	        "output that cannot be written, 2 usage error. Stopped by a signal (Ctrl-C, a kill, a\n"
+	        "closed pipe), it ends after the row it was writing, its outputs whole up to there, with\n"
+	        "the signal's status.\n");
 }
 
 static double wall_clock(void)
@@ -200,7 +203,7 @@ static int write_vtk(const char* path, const sm_simulation* sim, double* springs
 	snprintf(title, sizeof title, "springmass t = %s s", time);
 	const sm_model* model = sm_simulation_model(sim);
 	const double* x = sm_simulation_positions(sim);
-	FILE* f = cli_vtk_open("run", path, title, model, x);
+	FILE* f = cli_vtk_open(NULL, "run", path, title, model, x);
 	if (f == NULL)
 		return 1;
 	cli_vtk_vectors(f, "velocity", sm_model_particle_count(model), sm_simulation_velocities(sim), true);
@@ -222,6 +225,28 @@ static int write_vtk(const char* path, const sm_simulation* sim, double* springs
 	return cli_close("run", path, f) != 0;
 }
 
+// A run stopped from outside (Ctrl-C, a kill, the reader of a pipe gone) ends after the row being
+// written, with every file whole: the CSV's rows up to there, the series' index closed. The
+// handler only notes the signal; the run then stops, and raises it again for its exit status.
+static volatile sig_atomic_t stop_signal;
+
+static void note_signal(int signal)
+{
+	stop_signal = signal;
+}
+
+static void catch_stop_signals(void)
+{
+	struct sigaction action;
+	memset(&action, 0, sizeof action);
+	action.sa_handler = note_signal;
+	sigemptyset(&action.sa_mask);
+	sigaction(SIGINT, &action, NULL);
+	sigaction(SIGTERM, &action, NULL);
+	sigaction(SIGHUP, &action, NULL);
+	sigaction(SIGPIPE, &action, NULL);  // a write to the pipe then fails with EPIPE
+}
+
 // The progress line on stderr, from one second into the run on: on a terminal it rewrites itself
 // every half second; in a log it is one line every five seconds. Shown after output rows and,
 // through the simulation's on_step hook, after internal steps, so that a long output interval
@@ -233,6 +258,7 @@ typedef struct progress {
 	double t_end;   // [s]
 	bool terminal;
 	bool shown;
+	int width;  // characters of the line last shown on a terminal, which the next one covers
 } progress;
 
 static void show_progress(progress* p, double t, bool last_row)
@@ -240,16 +266,24 @@ static void show_progress(progress* p, double t, bool last_row)
 	const double now = wall_clock();
 	if (p->start == 0.0 || now - p->start <= 1.0 || (now - p->last <= p->period && !last_row))
 		return;
-	fprintf(stderr, "%sspringmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s%s", p->terminal ? "\r" : "", t,
-	        p->t_end, 100.0 * t / p->t_end, now - p->start, p->terminal ? "" : "\n");
+	char line[128];
+	const int width = snprintf(line, sizeof line, "springmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s", t,
+	                           p->t_end, 100.0 * t / p->t_end, now - p->start);
+	if (p->terminal)
+		fprintf(stderr, "\r%s%*s", line, p->width > width ? p->width - width : 0, "");
+	else
+		fprintf(stderr, "%s\n", line);
+	p->width = width;
 	p->last = now;
 	p->shown = true;
 }
 
-static bool progress_on_step(void* context, double t)
+// After every internal step: the progress line (unless quiet) and whether to go on.
+static bool on_internal_step(void* context, double t)
 {
-	show_progress(context, t, false);
-	return true;
+	if (context != NULL)
+		show_progress(context, t, false);
+	return stop_signal == 0;
 }
 
 // Ends a progress line that rewrites itself, before other output.
@@ -466,11 +500,9 @@ int sm_cmd_run(int argc, char** argv)
 		goto done;
 	}
 	const bool terminal = isatty(fileno(stderr));
-	progress prog = {0.0, 0.0, terminal ? 0.5 : 5.0, t_end, terminal, false};
-	if (!o.quiet) {
-		def.on_step = progress_on_step;
-		def.on_step_context = &prog;
-	}
+	progress prog = {0.0, 0.0, terminal ? 0.5 : 5.0, t_end, terminal, false, 0};
+	def.on_step = on_internal_step;
+	def.on_step_context = o.quiet ? NULL : &prog;
 	sim = sm_simulation_create(model, &def, &err);
 	if (!sim) {
 		fputs("springmass run: ", stderr);
@@ -502,7 +534,11 @@ int sm_cmd_run(int argc, char** argv)
 		status = 2;
 		goto done;
 	}
-	// The series' folder and index first: a run refused for them leaves an existing CSV as it was.
+	// Where the CSV and the series go is checked before either is opened, so that a run refused
+	// for one leaves the other as it was (opening the index emptied an earlier one); the CSV may
+	// go in the series' folder, made first.
+	if (cli_check_output_place("run", "--vtk", o.vtk_dir, true) != 0)
+		goto done;
 	if (o.vtk_dir) {
 		if (cli_make_directory("run", o.vtk_dir) != 0)
 			goto done;
@@ -511,6 +547,11 @@ int sm_cmd_run(int argc, char** argv)
 			status = 2;
 			goto done;
 		}
+	}
+	if (cli_check_output_place("run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file,
+	                           false) != 0)
+		goto done;
+	if (o.vtk_dir) {
 		pvd = fopen(pvd_path, "w");
 		if (!pvd) {
 			cli_cannot_write("run", pvd_path);
@@ -532,11 +573,18 @@ int sm_cmd_run(int argc, char** argv)
 
 	const double start = wall_clock();
 	prog.start = prog.last = start;
+	catch_stop_signals();
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		// Nothing changes the inputs during the run: CVODE may step as in one advance to t_end,
 		// the rows interpolated from its steps.
-		if (k > 0 && sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end) != SM_OK) {
+		const sm_status advanced =
+		    k > 0 && stop_signal == 0
+		        ? sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end)
+		        : SM_OK;
+		if (stop_signal != 0)
+			break;
+		if (advanced != SM_OK) {
 			end_progress(&prog);
 			fputs("springmass run: ", stderr);
 			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
@@ -545,7 +593,9 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		write_row(csv, doc, sim, forces, o.positions);
 		// A full disk or a closed pipe stops the run at once, not after the last step.
-		if (ferror(csv)) {
+		if (ferror(csv) && errno == EPIPE)
+			stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
+		if (ferror(csv) && stop_signal == 0) {
 			end_progress(&prog);
 			cli_cannot_write("run", csv_name);
 			goto done;
@@ -565,8 +615,17 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);
+		if (stop_signal != 0)
+			break;
 	}
 	end_progress(&prog);
+	if (stop_signal != 0) {
+		if (stop_signal != SIGPIPE)
+			fprintf(stderr,
+			        "springmass run: stopped by %s at t = %.9g s; the outputs hold the rows up to there\n",
+			        strsignal(stop_signal), sm_simulation_time(sim));
+		goto done;
+	}
 	if (fflush(csv) != 0 || ferror(csv)) {
 		cli_cannot_write("run", csv_name);
 		goto done;
@@ -614,5 +673,11 @@ done:
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
 	sm_document_destroy(doc);
+	// Stopped by a signal: the files are whole; the exit status is the signal's, as without a handler.
+	if (stop_signal != 0) {
+		fflush(stdout);
+		signal(stop_signal, SIG_DFL);
+		raise(stop_signal);
+	}
 	return status;
 }

@@ -43,10 +43,10 @@ static void usage(FILE* out)
 }
 
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
-static int write_vtk(const char* path, const sm_model* model, const double* x, const double* displacement,
-                     const double* reactions)
+static int write_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
+                     const double* displacement, const double* reactions)
 {
-	FILE* f = cli_vtk_open("statics", path, "springmass static equilibrium", model, x);
+	FILE* f = cli_vtk_open(outputs, "statics", path, "springmass static equilibrium", model, x);
 	if (f == NULL)
 		return -1;
 	const int32_t n = sm_model_particle_count(model);
@@ -55,14 +55,12 @@ static int write_vtk(const char* path, const sm_model* model, const double* x, c
 	return cli_close("statics", path, f);
 }
 
-static int write_csv(const char* path, const sm_document* doc, int32_t n, const double* x, const double* x0,
-                     const double* reactions)
+static int write_csv(cli_outputs* outputs, const char* path, const sm_document* doc, int32_t n,
+                     const double* x, const double* x0, const double* reactions)
 {
-	FILE* f = fopen(path, "w");
-	if (f == NULL) {
-		cli_cannot_write("statics", path);
+	FILE* f = cli_outputs_open(outputs, path);
+	if (f == NULL)
 		return -1;
-	}
 	fprintf(f, "particle,name,x,y,z,dx,dy,dz,reaction_x,reaction_y,reaction_z\n");
 	for (int32_t i = 0; i < n; i++) {
 		const char* name = sm_document_particle_name(doc, i);
@@ -153,6 +151,21 @@ int sm_cmd_statics(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
+	// The VTK file's name, and no two outputs one file.
+	char vtk_path[4096];
+	if (vtk_dir != NULL &&
+	    (size_t)snprintf(vtk_path, sizeof vtk_path, "%s/statics.vtk", vtk_dir) >= sizeof vtk_path) {
+		fprintf(stderr, "springmass statics: path too long: %s\n", vtk_dir);
+		free(settings);
+		return 2;
+	}
+	const char* vtk_file = vtk_dir != NULL ? vtk_path : NULL;
+	if (cli_check_outputs_apart("statics", "-o", csv_path, "--save-model", save_path) != 0 ||
+	    cli_check_outputs_apart("statics", "-o", csv_path, "--vtk's file", vtk_file) != 0 ||
+	    cli_check_outputs_apart("statics", "--save-model", save_path, "--vtk's file", vtk_file) != 0) {
+		free(settings);
+		return 2;
+	}
 	if (cli_check_output_place("statics", "-o", csv_path, false) != 0 ||
 	    cli_check_output_place("statics", "--vtk", vtk_dir, true) != 0 ||
 	    cli_check_output_place("statics", "--save-model", save_path, false) != 0) {
@@ -162,6 +175,8 @@ int sm_cmd_statics(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
+	cli_outputs outputs = {"statics", 0, 0, NULL};
+	char* saved_model = NULL;
 	sm_model* model = NULL;
 	double *x0 = NULL, *x = NULL, *reactions = NULL, *displacement = NULL;
 	sm_document* doc = NULL;
@@ -269,33 +284,38 @@ int sm_cmd_statics(int argc, char** argv)
 			printf(" %16.9g %16.9g %16.9g\n", reactions[3 * i], reactions[3 * i + 1], reactions[3 * i + 2]);
 		}
 	}
-	if (csv_path != NULL) {
-		if (write_csv(csv_path, doc, n, x, x0, reactions) != 0)
-			goto done;
-		printf("\nrest shape written to %s\n", csv_path);
-	}
-	if (vtk_dir != NULL) {
-		char path[4096];
-		if (cli_make_directory("statics", vtk_dir) != 0)
-			goto done;
-		if ((size_t)snprintf(path, sizeof path, "%s/statics.vtk", vtk_dir) >= sizeof path) {
-			fprintf(stderr, "springmass statics: path too long: %s\n", vtk_dir);
-			goto done;
-		}
-		if (write_vtk(path, model, x, displacement, reactions) != 0)
-			goto done;
-		printf("rest shape written to %s (open it in ParaView)\n", path);
-	}
+	// Every output is written, then all are moved to their places: none is left half-written, or
+	// replaced, when another fails.
+	if (csv_path != NULL && write_csv(&outputs, csv_path, doc, n, x, x0, reactions) != 0)
+		goto done;
+	if (vtk_dir != NULL && (cli_make_directory("statics", vtk_dir) != 0 ||
+	                        write_vtk(&outputs, vtk_path, model, x, displacement, reactions) != 0))
+		goto done;
 	if (save_path != NULL) {
+		FILE* f = NULL;
 		if (sm_document_set_initial_state(doc, x, NULL, &err) != SM_OK ||
-		    sm_document_save(doc, save_path, &err) != SM_OK) {
+		    (saved_model = sm_document_to_json(doc, &err)) == NULL) {
 			fprintf(stderr, "springmass statics: %s\n", err.message);
 			goto done;
 		}
-		printf("model starting at rest saved to %s\n", save_path);
+		if ((f = cli_outputs_open(&outputs, save_path)) == NULL)
+			goto done;
+		fputs(saved_model, f);
+		if (cli_close("statics", save_path, f) != 0)
+			goto done;
 	}
+	if (cli_outputs_commit(&outputs) != 0)
+		goto done;
+	if (csv_path != NULL)
+		printf("\nrest shape written to %s\n", csv_path);
+	if (vtk_dir != NULL)
+		printf("rest shape written to %s (open it in ParaView)\n", vtk_path);
+	if (save_path != NULL)
+		printf("model starting at rest saved to %s\n", save_path);
 	status = 0;
 done:
+	cli_outputs_discard(&outputs);
+	free(saved_model);
 	free(x0);
 	free(x);
 	free(reactions);
