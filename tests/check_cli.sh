@@ -206,6 +206,18 @@ status=${PIPESTATUS[0]}
 [ $status -eq 141 ] && [ "$(tail -1 "$tmp/piped_vtk/slow.pvd")" = "</VTKFile>" ] && [ ! -s "$tmp/piped.err" ] ||
   fail "run into a pipe closed early: exit status $status, index $(tail -1 "$tmp/piped_vtk/slow.pvd"), $(cat "$tmp/piped.err")"
 
+# A closed standard stream is no file the tool writes: its reports go nowhere, not into the CSV or
+# the series' index, which would take the closed stream's descriptor.
+"$cli" run "$osc" -o "$tmp/closed_err.csv" --t-end 0.05 2>&-
+"$cli" run "$osc" -q -o - --t-end 0.05 --vtk "$tmp/closed_out" >&-
+! grep -q springmass "$tmp/closed_err.csv" && [ "$(head -c 5 "$tmp/closed_out/oscillator.pvd")" = "<?xml" ] ||
+  fail "a report written into an output through a closed standard stream: $(tail -1 "$tmp/closed_err.csv")"
+# An output that is standard output under another name, where that is a file, would be
+# overwritten by the report: refused. /dev/null stays an output like any other.
+"$cli" statics "$osc" -q -o /dev/stdout > "$tmp/stdout.txt" 2> "$tmp/stdout.err"
+[ $? -eq 2 ] && grep -q "is standard output" "$tmp/stdout.err" || fail "statics -o /dev/stdout into a file was not refused"
+"$cli" statics "$osc" -q -o /dev/null > /dev/null || fail "statics -o /dev/null failed"
+
 # modes --zero-tolerance: two zero-length springs of 1 and 1e12 N/m in a chain of two 1 kg
 # particles have no zero mode, but the soft one (omega^2 = 0.5 1/s^2 per axis, to 1/(8e12)) lies
 # below the default 1e-12 of the stiffest (2e12 1/s^2): the default calls it zero, 1e-15 resolves
@@ -402,6 +414,10 @@ if ! out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o
 else
   [ -f "$tmp/oscillator" ] && [ ! -e "$tmp/oscillator.zip" ] ||
     fail "fmu -o NAME without an extension did not write NAME"
+  # No output goes into the runtime the FMU is packed from (it would replace the binary).
+  out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/runtime/binaries/linux64/springmass_fmu.so" 2>&1)
+  [ $? -eq 2 ] && [ "$(cat "$tmp/runtime/binaries/linux64/springmass_fmu.so")" = "stand-in" ] ||
+    fail "fmu -o into its runtime was not refused: $out"
   mkdir "$tmp/folder"
   out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/folder" 2>&1)
   status=$?

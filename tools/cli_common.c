@@ -385,6 +385,17 @@ int cli_check_output(const char* command, const char* option, const char* output
 		        command, option);
 		return 2;
 	}
+	// Nor is it standard output under another name (/dev/stdout) where that is a file: the report
+	// the command prints there would overwrite it.
+	struct stat out, st;
+	if (!dash_is_stdout && fstat(STDOUT_FILENO, &out) == 0 && S_ISREG(out.st_mode) &&
+	    stat(output, &st) == 0 && st.st_dev == out.st_dev && st.st_ino == out.st_ino) {
+		fprintf(
+		    stderr,
+		    "springmass %s: %s %s is standard output, where the report goes; give the output its own file\n",
+		    command, option, output);
+		return 2;
+	}
 	if (input != NULL && cli_same_file(output, input)) {
 		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n",
 		        command, option, output, input_what, input);
@@ -432,6 +443,18 @@ bool cli_same_file(const char* a, const char* b)
 	free(ca);
 	free(cb);
 	return same;
+}
+
+bool cli_inside(const char* path, const char* folder)
+{
+	char* place = canonical_path(path);
+	char* real = realpath(folder, NULL);
+	const size_t length = real != NULL ? strlen(real) : 0;
+	const bool inside = place != NULL && real != NULL && strncmp(place, real, length) == 0 &&
+	                    (place[length] == '/' || real[length - 1] == '/');
+	free(place);
+	free(real);
+	return inside;
 }
 
 int cli_check_output_place(const char* command, const char* option, const char* path, bool folder)

@@ -107,14 +107,18 @@ int cli_check_output(const char* command, const char* option, const char* output
 
 /// Checks, before anything is computed, that an output can be made where `path` names it (NULL or
 /// "-": none): a file in a folder that exists and is no folder, or a `folder` that exists or whose
-/// parent does, where this process may write (the file, and the folder that holds it). Returns 0, or prints why not and returns 1, so that a command never stops with
-/// some outputs written and others not for a place it could have checked first.
+/// parent does, where this process may write (the file, and the folder that holds it). Returns 0, or prints
+/// why not and returns 1, so that a command never stops with some outputs written and others not for a place
+/// it could have checked first.
 int cli_check_output_place(const char* command, const char* option, const char* path, bool folder);
 
 /// Checks that two outputs (NULL: not given) are not one file under two names, which would leave
 /// only the one written last. Returns 0, or prints why and returns 2 (a usage error).
 int cli_check_outputs_apart(const char* command, const char* option_a, const char* a, const char* option_b,
                             const char* b);
+
+/// Whether `path` names a file inside `folder` (at any depth, under any names), existing or not.
+bool cli_inside(const char* path, const char* folder);
 
 /// Whether paths a and b name one file: the same file under any name if both exist, else the same
 /// place once created (the real path of the folder, and the name).

@@ -69,9 +69,9 @@ static void usage(FILE* out)
 	        "                       (default: the one of this build or installation)\n"
 	        "  -h, --help           this text\n"
 	        "\n"
-	        "Exit status: 0 success, 1 for a bad model or reference, a missing runtime or an FMU that\n"
-	        "cannot be written, 2 for a usage error (a malformed --set, an output that would\n"
-	        "overwrite an input).\n");
+	        "Exit status: 0 success, 1 for a bad model, a reference that cannot be read (it is packed\n"
+	        "as it is), a missing runtime or an FMU that cannot be written, 2 for a usage error (a\n"
+	        "malformed --set, an output that would overwrite an input or go into the runtime).\n");
 }
 
 static bool write_all(const char* path, const char* data, size_t length)
@@ -503,6 +503,14 @@ static int package(const options* opt)
 		            ? " (from $SPRINGMASS_FMU_RUNTIME)"
 					: "");
 		return 1;
+	}
+	// The runtime is read as the FMU is packed: no output goes into it (it would replace the binary
+	// the next FMU packs, or a licence).
+	if (cli_inside(opt->output, runtime)) {
+		fprintf(stderr,
+		        "springmass fmu: -o %s is inside the FMU runtime %s, which it reads; give another name\n",
+		        opt->output, runtime);
+		return 2;
 	}
 	size_t length = 0;
 	const char* problem = NULL;

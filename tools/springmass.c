@@ -7,10 +7,12 @@
 
 #include <dlfcn.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <gsl/gsl_errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 typedef struct command {
 	const char* name;
@@ -54,6 +56,20 @@ static void single_threaded_blas(void)
 		set_threads(1);
 }
 
+// Standard input, output and error are open, if only on /dev/null: a stream the caller closed
+// (`2>&-`) would otherwise be the descriptor the next file opened gets, and the reports written
+// to it would land in the CSV or the series' index.
+static void open_standard_streams(void)
+{
+	for (int fd = 0; fd <= 2; fd++)
+		if (fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
+			// The lowest free descriptor, fd itself (without /dev/null, as in a bare chroot, none).
+			const int opened = open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+			if (opened >= 0 && opened != fd)
+				close(opened);
+		}
+}
+
 // A report that could not be written to standard output (a full disk) fails the command, as in
 // any Unix tool; a command that failed has already said why.
 static int finish(int status)
@@ -69,6 +85,7 @@ static int finish(int status)
 
 int main(int argc, char** argv)
 {
+	open_standard_streams();
 	single_threaded_blas();
 	// Failures inside GSL come back as status codes, reported like any other error, instead of
 	// GSL's default abort (include/springmass/analysis.h).
