@@ -464,14 +464,14 @@ int cli_check_output_place(const char* command, const char* option, const char* 
 	char* place = canonical_path(path);
 	struct stat st;
 	const bool exists = stat(path, &st) == 0;
-	// Where the output is made: in the folder that holds its place (a new file or folder, or the
-	// temporary a file is written under before it replaces the one there), or in the folder itself.
+	// Where the output is made: in the folder that holds its place (a new file or folder), or in
+	// the file or folder there (a file may be rewritten in a folder that takes no new files).
 	char* slash = place != NULL ? strrchr(place, '/') : NULL;
 	if (slash != NULL)
 		*(slash == place ? slash + 1 : slash) = '\0';
 	const bool writable = place != NULL && (folder && exists ? access(path, W_OK | X_OK) == 0
-	                                                         : access(place, W_OK | X_OK) == 0 &&
-	                                                               (!exists || access(path, W_OK) == 0));
+	                                        : exists         ? access(path, W_OK) == 0
+	                                                         : access(place, W_OK | X_OK) == 0);
 	const char* wrong = place == NULL ? "the folder it would go in does not exist"
 	                    : exists && folder && !S_ISDIR(st.st_mode) ? "a file of that name exists"
 	                    : exists && !folder && S_ISDIR(st.st_mode) ? "it is a folder"

@@ -61,7 +61,7 @@ FILE* cli_outputs_open(cli_outputs* outputs, const char* path)
 	}
 	cli_output item = {NULL, strdup(path)};
 	struct stat st;
-	const bool direct = lstat(path, &st) == 0 && !S_ISREG(st.st_mode);
+	bool direct = lstat(path, &st) == 0 && !S_ISREG(st.st_mode);
 	if (item.path != NULL && !direct)
 		item.temporary = temporary_name(path, outputs->count);
 	if (item.path == NULL || (!direct && item.temporary == NULL)) {
@@ -71,7 +71,15 @@ FILE* cli_outputs_open(cli_outputs* outputs, const char* path)
 		return NULL;
 	}
 	errno = 0;
-	FILE* f = direct ? fopen(path, "w") : open_temporary(item.temporary, path);
+	FILE* f = direct ? NULL : open_temporary(item.temporary, path);
+	// A file in a folder that takes no new files (nor the temporary) is rewritten where it is.
+	if (!direct && f == NULL && errno != ENOSPC && lstat(path, &st) == 0 && access(path, W_OK) == 0) {
+		free(item.temporary);
+		item.temporary = NULL;
+		direct = true;
+	}
+	if (direct)
+		f = fopen(path, "w");
 	if (f == NULL) {
 		cli_cannot_write(outputs->command, path);
 		free(item.path);

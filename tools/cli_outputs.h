@@ -19,8 +19,8 @@ typedef struct cli_outputs {
 
 /// Opens a new output at `path` for writing, to be closed with cli_close (which reports write
 /// errors under `path`). A place that holds something other than a regular file (a link, a device
-/// such as /dev/null) is opened directly, as fopen would. Prints the error and returns NULL on
-/// failure.
+/// such as /dev/null), and a file in a folder where no temporary can be made, is opened directly,
+/// as fopen would. Prints the error and returns NULL on failure.
 FILE* cli_outputs_open(cli_outputs* outputs, const char* path);
 
 /// Moves every output to its place, in the order opened. Returns 0, or prints why and returns -1
