@@ -10,12 +10,16 @@
 #include "model_internal.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
 
 typedef struct text {
 	char* data;
@@ -382,6 +386,43 @@ char* sm_document_to_json(const sm_document* doc, sm_error* err)
 	return text;
 }
 
+// Opens for writing a new file beside path, named path.partial-<pid>-<n> with n from the clock
+// (another name while one of that name exists: O_EXCL), with the permissions of the file it will
+// replace, or 0666 less the umask as fopen creates one. Its name goes to *temporary (malloc'ed).
+static FILE* open_beside(const char* path, const struct stat* replaced, char** temporary)
+{
+	const size_t capacity = strlen(path) + 64;
+	*temporary = malloc(capacity);
+	if (*temporary == NULL)
+		return NULL;
+	struct timespec now;
+	clock_gettime(CLOCK_REALTIME, &now);
+	int fd = -1;
+	for (long n = now.tv_nsec; fd < 0 && n < now.tv_nsec + 100; n++) {
+		snprintf(*temporary, capacity, "%s.partial-%ld-%ld", path, (long)getpid(), n);
+		fd = open(*temporary, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd < 0 && errno != EEXIST)
+			break;
+	}
+	FILE* f =
+	    fd >= 0 && (replaced == NULL || fchmod(fd, replaced->st_mode & 07777) == 0) ? fdopen(fd, "wb") : NULL;
+	if (f == NULL) {
+		const int code = errno;
+		if (fd >= 0) {
+			close(fd);
+			unlink(*temporary);
+		}
+		free(*temporary);
+		*temporary = NULL;
+		errno = code;
+	}
+	return f;
+}
+
+// The file is written whole or not at all: beside the one it replaces, then renamed over it, so
+// that a failed write (a full disk) leaves an earlier file as it was. A path that holds no
+// regular file (a link, a device), or whose folder takes no new files, is written directly, as
+// fopen would.
 sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err)
 {
 	sm_error_clear(err);
@@ -390,7 +431,15 @@ sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* e
 	char* data = sm_document_to_json(doc, err);
 	if (data == NULL)
 		return err != NULL ? err->status : SM_ERROR_OUT_OF_MEMORY;
-	FILE* f = fopen(path, "wb");
+	struct stat st;
+	const bool exists = lstat(path, &st) == 0;
+	char* temporary = NULL;
+	FILE* f = NULL;
+	if (!exists || S_ISREG(st.st_mode))
+		f = open_beside(path, exists ? &st : NULL, &temporary);
+	if (f == NULL &&
+	    (!(!exists || S_ISREG(st.st_mode)) || errno == EACCES || errno == EPERM || errno == EROFS))
+		f = fopen(path, "wb");
 	if (f == NULL) {
 		const int code = errno;
 		free(data);
@@ -402,9 +451,19 @@ sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* e
 	const int write_code = errno;
 	errno = 0;
 	const bool closed = fclose(f) == 0;
-	const int code = !written && write_code != 0 ? write_code : errno;
+	int code = !written && write_code != 0 ? write_code : errno;
 	free(data);
-	if (!written || !closed)
+	bool moved = true;
+	if (temporary != NULL) {
+		errno = 0;
+		moved = written && closed && rename(temporary, path) == 0;
+		if (!moved) {
+			code = code != 0 ? code : errno;
+			unlink(temporary);
+		}
+		free(temporary);
+	}
+	if (!written || !closed || !moved)
 		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot write: %s", path,
 		                    code != 0 ? strerror(code) : "write error");
 	return SM_OK;

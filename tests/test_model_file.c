@@ -9,12 +9,15 @@
 #include "springmass/structures.h"
 #include "test_harness.h"
 
+#include <dirent.h>
 #include <locale.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -549,6 +552,34 @@ static int test_initial_state_and_save_to_file(void)
 		ENSURE_STATUS(sm_document_save(doc, "/dev/full", &err), SM_ERROR_FILE);
 		ENSURE(strcmp(err.message, "/dev/full: cannot write: No space left on device") == 0);
 	}
+	// A save that fails on the way (here a file size limit below the model's size, as a full disk
+	// would) leaves the file it would replace as it was, and nothing beside it; one that succeeds
+	// replaces it with its permissions.
+	FILE* earlier = fopen(path, "w");
+	ENSURE(earlier != NULL && fputs("earlier", earlier) >= 0 && fclose(earlier) == 0 &&
+	       chmod(path, 0640) == 0);
+	struct rlimit limit, small = {100, 100};
+	ENSURE(getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur > 100);
+	small.rlim_max = limit.rlim_max;
+	void (*handler)(int) = signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead
+	ENSURE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+	const sm_status limited = sm_document_save(doc, path, &err);
+	ENSURE(setrlimit(RLIMIT_FSIZE, &limit) == 0);
+	signal(SIGXFSZ, handler);
+	ENSURE_STATUS(limited, SM_ERROR_FILE);
+	ENSURE(strcmp(err.message, "test_model_file_saved.json: cannot write: File too large") == 0);
+	char kept[16] = "";
+	earlier = fopen(path, "r");
+	ENSURE(earlier != NULL && fgets(kept, sizeof kept, earlier) != NULL && fclose(earlier) == 0);
+	ENSURE(strcmp(kept, "earlier") == 0);
+	ENSURE_STATUS(sm_document_save(doc, path, &err), SM_OK);
+	struct stat st;
+	ENSURE(stat(path, &st) == 0 && (st.st_mode & 0777) == 0640 && st.st_size > 100);
+	DIR* folder = opendir(".");
+	ENSURE(folder != NULL);
+	for (struct dirent* e = readdir(folder); e != NULL; e = readdir(folder))
+		ENSURE(strstr(e->d_name, ".partial-") == NULL);
+	closedir(folder);
 	// The elastic energy of the stretched rope: 20 springs of ks = E / l0 stretched by 10 % of
 	// l0 store (E / l0) (0.1 l0)^2 / 2 = E l0 0.01 / 2 each (relative rounding ~1e-15; 1e-9
 	// leaves room for the positions -0.055 i not being exact in binary).

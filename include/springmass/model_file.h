@@ -170,7 +170,10 @@ SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x
 /// (NULL on error). Structures are expanded into explicit particles and springs (keeping their
 /// particles' names), rest lengths are written out, and every value that was a parameter
 /// reference stays one (values a structure derives from a parameter, such as a particle's share
-/// of a total mass, are written as numbers). Loading the result builds the same model.
+/// of a total mass, are written as numbers). Loading the result builds the same model. The file is
+/// written whole or not at all: beside the one it replaces, then renamed over it (keeping its
+/// permissions), so that a failed save (a full disk) leaves an earlier file as it was; a link or
+/// a device, or a file in a folder that takes no new files, is written where it is.
 SM_API sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err);
 SM_API char* sm_document_to_json(const sm_document* doc, sm_error* err);
 
