@@ -10,7 +10,7 @@ import zipfile
 import pytest
 from fmpy import extract, read_model_description
 
-from conftest import SANITIZED
+from conftest import ROOT, SANITIZED
 
 GLIBC = re.compile(r"^(libc|libm|libpthread|libdl|librt|ld-linux[-\w]*)\.so")
 
@@ -70,6 +70,35 @@ def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path, library_path):
     assert "openblas" not in names, names
 
 
+@pytest.mark.skipif(SANITIZED, reason="an instrumented FMU needs the sanitizer runtimes of the machine")
+def test_threads_the_fmu_started_keep_their_code_after_it_is_unloaded(package):
+    """CHOLMOD's OpenMP team (the cholmod solver on 6144 unknowns) outlives the instance that used
+    it. fmpy unloads the FMU after fmi2FreeInstance, and with it went libgomp, under its idle
+    threads: the importer crashed at their next wake-up (seen in a test run that freed one instance
+    and started another). The FMU is never unloaded (NODELETE), so its libraries stay mapped."""
+    fmu = package(ROOT / "models" / "cloth.json", ["n=32"])
+    script = ("import os, sys\n"
+              "from fmpy import extract, read_model_description\n"
+              "from fmpy.fmi2 import FMU2Slave\n"
+              "md = read_model_description(sys.argv[1])\n"
+              "s = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1]),\n"
+              "              modelIdentifier=md.coSimulation.modelIdentifier, instanceName='x')\n"
+              "vr = {v.name: v.valueReference for v in md.modelVariables}\n"
+              "threads = lambda: len(os.listdir('/proc/self/task'))\n"
+              "before = threads()\n"
+              "s.instantiate(); s.setupExperiment(startTime=0.0); s.enterInitializationMode()\n"
+              "s.setString([vr['solver.linear_solver']], ['cholmod']); s.exitInitializationMode()\n"
+              "for k in range(3): s.doStep(0.002 * k, 0.002)\n"
+              "s.terminate(); s.freeInstance()\n"
+              "print('started', threads() - before, 'mapped', 'libgomp' in open('/proc/self/maps').read())\n")
+    env = dict(os.environ, OMP_THREAD_LIMIT="4")
+    env.pop("LD_LIBRARY_PATH", None)
+    out = subprocess.run([sys.executable, "-c", script, str(fmu)], env=env, capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    started, mapped = out.stdout.split()[1], out.stdout.split()[3]
+    assert started != "0" and mapped == "True", out.stdout
+
+
 @pytest.mark.skipif(SANITIZED, reason="an instrumented FMU exports the sanitizer's symbols too")
 def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
     fmu = test_fmu("driven_oscillator")
@@ -83,6 +112,7 @@ def test_only_fmi2_symbols_are_exported(test_fmu, tmp_path):
     dynamic = subprocess.run(["readelf", "-d", binary], check=True, capture_output=True, text=True).stdout
     # DT_RPATH, searched before LD_LIBRARY_PATH (DT_RUNPATH would come after it).
     assert "(RPATH)" in dynamic and "RUNPATH" not in dynamic and "[$ORIGIN]" in dynamic
+    assert "NODELETE" in dynamic  # see test_threads_the_fmu_started_keep_their_code_after_it_is_unloaded
 
 
 def test_the_c_library_it_needs_is_that_of_the_documented_systems(test_fmu, tmp_path):
