@@ -1486,10 +1486,12 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	// - otherwise refused: the master's clock resolves it but the simulation's time, far larger
 	//   (a state's start time is its own), does not, and every step of that size would leave the
 	//   state where it is.
+	// A point taken within its tolerance may trail the FMU's time: a step that ends there or before
+	// has nothing to integrate either.
 	const double simulation_step = (t_end - inst->start_time) - (t - inst->start_time);
 	const double resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t - inst->start_time));
 	const double clock_resolution = 4.0 * DBL_EPSILON * fmax(1.0, fabs(t));
-	if (!(simulation_step >= resolution) && h < clock_resolution) {
+	if (!(simulation_step >= resolution && t_end > inst->time) && h < clock_resolution) {
 		if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)
 			return fmi2Error;
 		if (logging(inst, LOG_SOLVER))

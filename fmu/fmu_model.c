@@ -109,7 +109,9 @@ static bool is_c_keyword(const char* s)
 	    " unsigned void volatile while _Alignas _Alignof _Atomic _BitInt _Bool _Complex _Decimal128"
 	    " _Decimal32 _Decimal64 _Generic _Imaginary _Noreturn _Static_assert _Thread_local ";
 	const size_t n = strlen(s);
-	for (const char* at = n > 0 ? strstr(keywords + 1, s) : NULL; at != NULL; at = strstr(at + 1, s))
+	// One word: a run of keywords ("long double") is none.
+	for (const char* at = n > 0 && strchr(s, ' ') == NULL ? strstr(keywords + 1, s) : NULL; at != NULL;
+	     at = strstr(at + 1, s))
 		if (at[-1] == ' ' && at[n] == ' ')
 			return true;
 	return false;

@@ -386,12 +386,16 @@ char* sm_document_to_json(const sm_document* doc, sm_error* err)
 	return text;
 }
 
-// Opens for writing a new file beside path, named path.partial-<pid>-<n> with n from the clock
-// (another name while one of that name exists: O_EXCL), with the permissions of the file it will
-// replace, or 0666 less the umask as fopen creates one. Its name goes to *temporary (malloc'ed).
+// Opens for writing a new file beside path, named .springmass-<pid>-<n>.partial in its folder
+// with n from the clock (another name while one of that name exists: O_EXCL; short, so that a
+// file whose name is as long as the file system allows has one beside it too), with the
+// permissions of the file it will replace, or 0666 less the umask as fopen creates one. Its name
+// goes to *temporary (malloc'ed).
 static FILE* open_beside(const char* path, const struct stat* replaced, char** temporary)
 {
-	const size_t capacity = strlen(path) + 64;
+	const char* slash = strrchr(path, '/');
+	const int folder = slash != NULL ? (int)(slash - path) + 1 : 0;
+	const size_t capacity = (size_t)folder + 64;
 	*temporary = malloc(capacity);
 	if (*temporary == NULL)
 		return NULL;
@@ -399,7 +403,7 @@ static FILE* open_beside(const char* path, const struct stat* replaced, char** t
 	clock_gettime(CLOCK_REALTIME, &now);
 	int fd = -1;
 	for (long n = now.tv_nsec; fd < 0 && n < now.tv_nsec + 100; n++) {
-		snprintf(*temporary, capacity, "%s.partial-%ld-%ld", path, (long)getpid(), n);
+		snprintf(*temporary, capacity, "%.*s.springmass-%ld-%ld.partial", folder, path, (long)getpid(), n);
 		fd = open(*temporary, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
 		if (fd < 0 && errno != EEXIST)
 			break;

@@ -2477,6 +2477,14 @@ static int test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usabl
 	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, home, still), SM_OK);
 	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
 	ENSURE(sm_simulation_positions(sim)[3] == 1.0 && sm_simulation_velocities(sim)[3] == 0.0);
+	// The same break by the caller (sm_simulation_break_spring).
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, far, still), SM_OK);
+	ENSURE_STATUS(sm_simulation_break_spring(sim, 0), SM_OK);
+	ENSURE(isfinite(sm_simulation_dissipated_energy(sim)));
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, home, still), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE(sm_simulation_positions(sim)[3] == 1.0 && sm_simulation_velocities(sim)[3] == 0.0);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
 	return 0;

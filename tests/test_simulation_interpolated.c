@@ -256,6 +256,22 @@ static int test_break_between_rows_at_its_analytic_time(void)
 	return 0;
 }
 
+// The pulled spring of simulation_fixtures.h, its driven end given `speed` [m/s] along x by the
+// model itself (no input set, so that every advance may step past its end).
+static sm_model* pulled_by_its_model(double speed)
+{
+	sm_model* model = pulled_spring();
+	sm_particle_def driven;
+	if (model == NULL || sm_model_get_particle(model, 1, &driven) != SM_OK)
+		return model;
+	driven.velocity[0] = speed;
+	if (sm_model_set_particle(model, 1, &driven) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A break that CVODE finds exactly at the end of an advance happens in that advance, not the
 // next: the pulled spring, its driven end given the speed 0.37 m/s by the model (no input set, so
 // that every advance may step past its end), breaks where one advance to 1 s finds it; an advance
@@ -263,12 +279,8 @@ static int test_break_between_rows_at_its_analytic_time(void)
 // as the one advance, bit for bit.
 static int test_a_break_at_the_end_time_happens_in_that_advance(void)
 {
-	sm_model* model = pulled_spring();
+	sm_model* model = pulled_by_its_model(0.37);
 	ENSURE(model != NULL);
-	sm_particle_def driven;
-	ENSURE_STATUS(sm_model_get_particle(model, 1, &driven), SM_OK);
-	driven.velocity[0] = 0.37;
-	ENSURE_STATUS(sm_model_set_particle(model, 1, &driven), SM_OK);
 	sm_simulation_def d = sm_default_simulation_def();
 	sm_simulation* once = sm_simulation_create(model, &d, NULL);
 	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
@@ -519,13 +531,43 @@ static int test_a_force_on_a_held_particle_changes_no_input(void)
 	return 0;
 }
 
+// A row just after a spring break (1e-12 s, 1e-9 s after it) leaves the run of one advance to the
+// stop time, bit for bit: CVODE's restart at the break sizes its first step from the stop time as
+// one advance does, not from the row (a cap of a million times the row's interval made it take
+// 311 steps instead of 308).
+static int test_a_row_just_after_a_break_leaves_the_run_of_one_advance(void)
+{
+	sm_model* model = pulled_by_its_model(0.25);  // breaks at 0.1 / 0.25 = 0.4 s
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def();
+	sm_simulation* once = sm_simulation_create(model, &d, NULL);
+	ENSURE(once != NULL);
+	ENSURE_STATUS(sm_simulation_advance(once, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(once) == 1);
+	const double t_break = sm_simulation_break(once, 0).time;
+	ENSURE_NEAR(t_break, 0.4, 1e-9);
+	const double gaps[] = {1e-12, 1e-9, 1e-6};
+	for (size_t k = 0; k < sizeof gaps / sizeof gaps[0]; k++) {
+		sm_simulation* rows = sm_simulation_create(model, &d, NULL);
+		ENSURE(rows != NULL);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(rows, t_break + gaps[k], 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance_interpolated(rows, 1.0, 1.0), SM_OK);
+		ENSURE(sm_simulation_statistics(rows).steps == sm_simulation_statistics(once).steps);
+		ENSURE(memcmp(sm_simulation_positions(rows), sm_simulation_positions(once), 9 * sizeof(double)) == 0);
+		sm_simulation_destroy(rows);
+	}
+	sm_simulation_destroy(once);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A stop time far beyond the rows (a master's 1e28 s or the largest double for "no end") sizes no
 // step of the run: CVODE sized its first step from it, at least 100 eps of it (2e14 s for 1e28 s),
-// and failed at t = 0 every time. The rows are those of a stop time a million rows ahead (1e4 s),
-// bit for bit, and on the closed form to 1e-8 m (rtol 1e-10 of 0.2 m, and 2 s of stepping).
+// and failed at t = 0 every time. The rows are those of a stop time 1e9 s ahead, bit for bit, and
+// on the closed form to 1e-8 m (rtol 1e-10 of 0.2 m, and 2 s of stepping).
 static int test_a_far_stop_time_sizes_no_step(void)
 {
-	const double zeta = 0.1, w0 = sqrt(OSC_K), stops[] = {1e4, 1e28, DBL_MAX};
+	const double zeta = 0.1, w0 = sqrt(OSC_K), stops[] = {1e9, 1e28, DBL_MAX};
 	sm_model* model = damped_oscillator(zeta, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
 	const sm_simulation_def d = tight_def();
@@ -800,6 +842,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_a_motion_set_on_its_own_path_changes_no_input);
 	RUN_TEST(test_a_force_on_a_held_particle_changes_no_input);
 	RUN_TEST(test_a_far_stop_time_sizes_no_step);
+	RUN_TEST(test_a_row_just_after_a_break_leaves_the_run_of_one_advance);
 	RUN_TEST(test_an_unchanged_input_set_after_a_changed_one_keeps_the_change);
 	RUN_TEST(test_an_advance_to_the_current_time_keeps_a_changed_input);
 	RUN_TEST(test_plain_advance_within_the_steps_interpolates);

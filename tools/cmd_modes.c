@@ -70,6 +70,15 @@ static int write_mode_vtk(cli_outputs* outputs, const char* path, const sm_model
 	return cli_close("modes", path, f);
 }
 
+// The VTK file of mode m (from 0): DIR/mode_<m + 1>.vtk; false, with a message, if it is too long.
+static bool mode_path(char* path, size_t size, const char* vtk_dir, int32_t m)
+{
+	if ((size_t)snprintf(path, size, "%s/mode_%d.vtk", vtk_dir, (int)m + 1) < size)
+		return true;
+	fprintf(stderr, "springmass modes: path too long: %s\n", vtk_dir);
+	return false;
+}
+
 static int write_csv(cli_outputs* outputs, const char* path, const sm_document* doc, const sm_modes* modes)
 {
 	FILE* f = cli_outputs_open(outputs, path);
@@ -254,7 +263,7 @@ int sm_cmd_modes(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
-	cli_outputs outputs = {"modes", 0, 0, NULL};
+	cli_outputs outputs = {"modes", 0, 0, NULL, NULL};
 	sm_model* model = NULL;
 	double* x = NULL;
 	sm_modes modes;
@@ -322,25 +331,25 @@ int sm_cmd_modes(int argc, char** argv)
 			goto done;
 	}
 	// Every output is written, then all are moved to their places: none is left half-written, or
-	// replaced, when another fails. The CSV is none of the mode files (checked before either is
-	// written; their count is known now).
+	// replaced, when another fails. The CSV is none of the mode files, whose count is known now
+	// (checked before the folder is made or a mode written; a refusal removes the CSV's temporary).
 	if (vtk_dir != NULL) {
-		if (cli_make_directory("modes", vtk_dir) != 0)
-			goto done;
+		char path[4096];
 		for (int32_t m = 0; m < modes.count; m++) {
-			char path[4096];
-			if ((size_t)snprintf(path, sizeof path, "%s/mode_%d.vtk", vtk_dir, (int)m + 1) >= sizeof path) {
-				fprintf(stderr, "springmass modes: path too long: %s\n", vtk_dir);
+			if (!mode_path(path, sizeof path, vtk_dir, m))
 				goto done;
-			}
 			if (cli_check_outputs_apart("modes", "-o", csv_path, "--vtk's file", path) != 0) {
 				status = 2;
 				goto done;
 			}
-			if (write_mode_vtk(&outputs, path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
+		}
+		if (cli_make_directory("modes", vtk_dir) != 0)
+			goto done;
+		for (int32_t m = 0; m < modes.count; m++)
+			if (!mode_path(path, sizeof path, vtk_dir, m) ||
+			    write_mode_vtk(&outputs, path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
 			                   modes.frequency[m]) != 0)
 				goto done;
-		}
 	}
 	if (cli_outputs_commit(&outputs) != 0)
 		goto done;

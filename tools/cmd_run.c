@@ -240,6 +240,7 @@ static void catch_stop_signals(void)
 	struct sigaction action;
 	memset(&action, 0, sizeof action);
 	action.sa_handler = note_signal;
+	action.sa_flags = SA_RESTART;  // a write the signal interrupts goes on: no row is cut
 	sigemptyset(&action.sa_mask);
 	sigaction(SIGINT, &action, NULL);
 	sigaction(SIGTERM, &action, NULL);
@@ -574,6 +575,7 @@ int sm_cmd_run(int argc, char** argv)
 	const double start = wall_clock();
 	prog.start = prog.last = start;
 	catch_stop_signals();
+	double last_row = 0.0;
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		// Nothing changes the inputs during the run: CVODE may step as in one advance to t_end,
@@ -592,6 +594,7 @@ int sm_cmd_run(int argc, char** argv)
 			goto done;
 		}
 		write_row(csv, doc, sim, forces, o.positions);
+		last_row = t;
 		// A full disk or a closed pipe stops the run at once, not after the last step.
 		if (ferror(csv) && errno == EPIPE)
 			stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
@@ -621,9 +624,8 @@ int sm_cmd_run(int argc, char** argv)
 	end_progress(&prog);
 	if (stop_signal != 0) {
 		if (stop_signal != SIGPIPE)
-			fprintf(stderr,
-			        "springmass run: stopped by %s at t = %.9g s; the outputs hold the rows up to there\n",
-			        strsignal(stop_signal), sm_simulation_time(sim));
+			fprintf(stderr, "springmass run: stopped by %s; the outputs hold the rows up to t = %.9g s\n",
+			        strsignal(stop_signal), last_row);
 		goto done;
 	}
 	if (fflush(csv) != 0 || ferror(csv)) {

@@ -206,10 +206,11 @@ SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 /// takes the steps of one advance to t_stop, whatever the output times, where advancing to
 /// each output time ends a step at each (the bundled cloth with 0.01 s outputs: 650 steps
 /// instead of 1065). The trajectory at t_stop, and the spring breaks on the way, are then those
-/// of one advance to t_stop, bit for bit, for a t_stop up to a million times the first interval
-/// (t_end - t) ahead; a farther t_stop (a master's 1e28 s for "no end") sizes CVODE's first step
-/// as that one would, so that it is no step of order t_stop. A break that CVODE finds past t_end
-/// happens in the next advance that reaches its time.
+/// of one advance to t_stop, bit for bit, for a t_stop up to 1e9 s ahead; a farther t_stop (a
+/// master's 1e28 s for "no end") sizes CVODE's first steps as one 1e9 s ahead would (CVODE's
+/// first step is at least 100 eps of the interval it is sized for: 2e14 s for 1e28 s, which no
+/// model converges at). A break that CVODE finds past t_end happens in the next advance that
+/// reaches its time.
 /// What is past the simulation's time is dropped, and CVODE restarts there, when an input
 /// changes (sm_simulation_set_driven, sm_simulation_set_external_force; whatever
 /// restart_on_input_change says), or the state or the model does. An advance whose inputs
