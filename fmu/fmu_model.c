@@ -120,20 +120,21 @@ static bool is_c_keyword(const char* s)
 char* fmu_identifier(const char* name)
 {
 	size_t n = name ? strlen(name) : 0;
-	bool prefix = n == 0 || isdigit((unsigned char)name[0]) || is_c_keyword(name);
 	char* id = malloc(n + 7);
 	if (!id)
 		return NULL;
-	size_t k = 0;
-	if (prefix) {
-		memcpy(id, "model_", 6);
-		k = 6;
-	}
+	// The name with every other character than a letter or a digit made '_', after the prefix's
+	// room; then the prefix where the result is no identifier or a keyword ("thread local").
 	for (size_t i = 0; i < n; ++i) {
 		unsigned char c = (unsigned char)name[i];
-		id[k++] = (char)(isalnum(c) ? c : '_');
+		id[6 + i] = (char)(isalnum(c) ? c : '_');
 	}
-	id[k] = '\0';
+	id[6 + n] = '\0';
+	const bool prefix = n == 0 || isdigit((unsigned char)id[6]) || is_c_keyword(id + 6);
+	if (prefix)
+		memcpy(id, "model_", 6);
+	else
+		memmove(id, id + 6, n + 1);
 	return id;
 }
 

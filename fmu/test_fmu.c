@@ -2038,11 +2038,18 @@ static int names_of(const char* parameters, const char* ports, const char* fmu, 
 static int test_model_identifiers_are_no_keywords(void)
 {
 	static const char* const cases[][2] = {
-	    {"int", "model_int"},           {"while", "model_while"},
-	    {"_Bool", "model__Bool"},       {"typeof", "model_typeof"},
-	    {"integer", "integer"},         {"Int", "Int"},
-	    {"long double", "long_double"}, {"cloth", "cloth"},
-	    {"9lives", "model_9lives"},     {"a-b", "a_b"},
+	    {"int", "model_int"},
+	    {"while", "model_while"},
+	    {"_Bool", "model__Bool"},
+	    {"typeof", "model_typeof"},
+	    {"integer", "integer"},
+	    {"Int", "Int"},
+	    {"long double", "long_double"},
+	    {"cloth", "cloth"},
+	    {"9lives", "model_9lives"},
+	    {"a-b", "a_b"},
+	    {"thread local", "model_thread_local"},
+	    {"-Bool", "model__Bool"},
 	};
 	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
 		char* id = fmu_identifier(cases[k][0]);

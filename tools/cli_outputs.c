@@ -6,7 +6,6 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <signal.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,26 +47,8 @@ static FILE* open_temporary(const char* temporary, const char* path)
 	return f;
 }
 
-// Holds back the signals that ask the tool to stop while outputs are open.
-static void hold_signals(cli_outputs* outputs)
-{
-	sigset_t* saved = malloc(sizeof *saved);
-	sigset_t stop;
-	sigemptyset(&stop);
-	sigaddset(&stop, SIGINT);
-	sigaddset(&stop, SIGTERM);
-	sigaddset(&stop, SIGHUP);
-	sigaddset(&stop, SIGQUIT);
-	if (saved != NULL && sigprocmask(SIG_BLOCK, &stop, saved) == 0)
-		outputs->signal_mask = saved;
-	else
-		free(saved);
-}
-
 FILE* cli_outputs_open(cli_outputs* outputs, const char* path)
 {
-	if (outputs->signal_mask == NULL)
-		hold_signals(outputs);
 	if (outputs->count == outputs->capacity) {
 		const int capacity = 2 * outputs->capacity + 4;
 		cli_output* items = realloc(outputs->items, (size_t)capacity * sizeof *items);
@@ -140,9 +121,4 @@ void cli_outputs_discard(cli_outputs* outputs)
 	free(outputs->items);
 	outputs->items = NULL;
 	outputs->count = outputs->capacity = 0;
-	if (outputs->signal_mask != NULL) {
-		sigprocmask(SIG_SETMASK, outputs->signal_mask, NULL);
-		free(outputs->signal_mask);
-		outputs->signal_mask = NULL;
-	}
 }

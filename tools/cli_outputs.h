@@ -3,8 +3,8 @@
 // removes the temporaries and leaves every place as it was (a file there before is replaced only
 // then, whole, and keeps its permissions; only a rename that fails after others, which a folder
 // that took a new file does not refuse but on a fault of the file system, leaves those before it
-// moved). Ctrl-C and the signals that ask to stop wait while outputs are open, and take effect
-// once they are moved or removed: no temporary is left behind.
+// moved). A command killed while writing (Ctrl-C) leaves its temporaries, hidden files named
+// .springmass-<pid>-<k>.partial, and every place as it was.
 #pragma once
 
 #include <stdio.h>
@@ -18,7 +18,6 @@ typedef struct cli_outputs {
 	const char* command;  ///< the subcommand, for messages
 	int count, capacity;
 	cli_output* items;
-	void* signal_mask;  ///< the mask before the first output was opened (a sigset_t), until the end
 } cli_outputs;
 
 /// Opens a new output at `path` for writing, to be closed with cli_close (which reports write
@@ -31,6 +30,6 @@ FILE* cli_outputs_open(cli_outputs* outputs, const char* path);
 /// (the outputs not moved yet are removed).
 int cli_outputs_commit(cli_outputs* outputs);
 
-/// Removes the temporaries of the outputs not committed, frees the list and lets the signals held
-/// back take effect; call it always, after a commit too.
+/// Removes the temporaries of the outputs not committed and frees the list; call it always, after a
+/// commit too.
 void cli_outputs_discard(cli_outputs* outputs);

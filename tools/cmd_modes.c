@@ -263,7 +263,7 @@ int sm_cmd_modes(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
-	cli_outputs outputs = {"modes", 0, 0, NULL, NULL};
+	cli_outputs outputs = {"modes", 0, 0, NULL};
 	sm_model* model = NULL;
 	double* x = NULL;
 	sm_modes modes;
