@@ -47,8 +47,9 @@
 // an interval below this with an explicit step of its own. The FMU's shortest communication
 // step is the same.
 #define TIME_RESOLUTION (4.0 * DBL_EPSILON)
-// How far ahead a stop time sizes CVODE's first step after a (re)initialisation [s]: 1e9 s, whose
-// least first step, 100 eps of it, is 2.2e-5 s (simulation.h).
+// How far ahead a stop time or an end sizes CVODE's first step after a (re)initialisation [s]:
+// 1e9 s, whose least first step, 100 eps of it, is 2.2e-5 s (simulation.h). An advance to a
+// farther end steps one at a time (step_one_at_a_time), which caps it.
 #define STOP_HORIZON 1e9
 
 double sm_simulation_clock(void)
@@ -879,8 +880,7 @@ static const char* failure_hint(int flag)
 	case CV_REPTD_RHSFUNC_ERR:
 	case CV_UNREC_RHSFUNC_ERR:
 		return " (the state or the forces became non-finite: look for huge or tiny masses, stiffnesses, "
-		       "velocities, positions or inputs, or an advance so long that CVODE's first trial step, a tenth "
-		       "of it, overflows)";
+		       "velocities, positions or inputs)";
 	case CV_ERR_FAILURE:
 	case CV_CONV_FAILURE:
 		return " (the step size fell to round-off: the model moves faster than the tolerances can follow, or "
@@ -1086,7 +1086,8 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		int flag;
 		if (allowed <= 0) {
 			flag = CV_SUCCESS;  // reported as too much work below
-		} else if (!past_end && sim->def.on_step == NULL && sim->root_count == 0) {
+		} else if (!past_end && sim->def.on_step == NULL && sim->root_count == 0 &&
+		           cvode_end - reached <= STOP_HORIZON) {
 			CVodeSetStopTime(sim->cvode, cvode_end);
 			CVodeSetMaxNumSteps(sim->cvode, allowed);
 			flag = check_step_size(sim, CVode(sim->cvode, cvode_end, sim->y, &reached, CV_NORMAL), &reached);

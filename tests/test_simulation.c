@@ -2453,6 +2453,28 @@ static int test_an_ulp_of_a_large_time_is_integrated(void)
 	return 0;
 }
 
+// An advance to a far end (1e28 s, 1e300 s: "until it settles") of an overdamped oscillator
+// (zeta = 2) ends at rest at its spring's rest length, 1 m, in a few hundred steps that grow with
+// the time. Its first step was sized from the end (at least 100 eps of it): 1e300 s failed at t = 0
+// with non-finite forces. Within 1e9 s the run is as it was (the end sizes the first step).
+static int test_an_advance_to_a_far_end_comes_to_rest(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 4.0 * sqrt(40.0), 0.2);
+	ENSURE(model != NULL);
+	const double ends[] = {1e28, 1e300};
+	for (size_t k = 0; k < sizeof ends / sizeof ends[0]; k++) {
+		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, ends[k]), SM_OK);
+		ENSURE(sm_simulation_time(sim) == ends[k] && sm_simulation_statistics(sim).steps < 1000);
+		ENSURE_NEAR(sm_simulation_positions(sim)[3], 1.0, 1e-12);
+		ENSURE(sm_simulation_velocities(sim)[3] == 0.0 || fabs(sm_simulation_velocities(sim)[3]) < 1e-12);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A spring whose elastic energy overflows a double breaks without making the dissipated energy,
 // part of CVODE's state, infinite: a driven end moved 1e200 m away breaks its spring (10 N/m, break
 // strain 0.5; ks L^2 / 2 = 5e400 J) at once. The advance fails all the same (the forces of a
@@ -5217,11 +5239,11 @@ static int test_non_finite_dissipated_power_is_a_non_finite_failure(void)
 	return 0;
 }
 
-// An advance of 1e200 s from rest: CVODE's first trial step is a tenth of the interval, and its
-// Newton matrix (gamma^2 K with gamma about 1e199 s) overflows, so every solver fails at t = 0.
-// The message says so among the causes of a non-finite state and that the simulation stays at
-// t = 0, and it goes on from there: the oscillator at rest stays at rest over 1 s.
-static int test_an_overlong_advance_fails_with_its_cause(void)
+// An advance of 1e200 s from rest, with every solver: CVODE's first trial step was a tenth of the
+// interval, its Newton matrix (gamma^2 K with gamma about 1e199 s) overflowed, and every solver
+// failed at t = 0. The first step is now sized from 1e9 s ahead at most: the oscillator at rest
+// stays at rest to 1e200 s, and goes on from there.
+static int test_an_overlong_advance_is_stepped_through(void)
 {
 	for (int k = SM_SOLVER_DENSE; k < SM_SOLVER_COUNT; k++) {
 		sm_model* model = oscillator(1.0, 40.0, 0.5, 0.0);
@@ -5231,13 +5253,10 @@ static int test_an_overlong_advance_fails_with_its_cause(void)
 		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
 		ENSURE(sim != NULL);
 		const double x0 = sm_simulation_positions(sim)[3];
-		ENSURE_STATUS(sm_simulation_advance(sim, 1e200), SM_ERROR_SOLVER);
-		ENSURE(strstr(sm_simulation_last_error(sim), "an advance so long") != NULL);
-		// CVODE gave up far beyond t = 0, with a non-finite state: the message names the time kept.
-		ENSURE(strstr(sm_simulation_last_error(sim), "stays at its last good state, t = 0 s") != NULL);
-		ENSURE(sm_simulation_time(sim) == 0.0 && sm_simulation_positions(sim)[3] == x0);
-		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
-		ENSURE(sm_simulation_time(sim) == 1.0 && sm_simulation_positions(sim)[3] == x0);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1e200), SM_OK);
+		ENSURE(sm_simulation_time(sim) == 1e200 && sm_simulation_positions(sim)[3] == x0);
+		ENSURE_STATUS(sm_simulation_advance(sim, 2e200), SM_OK);
+		ENSURE(sm_simulation_time(sim) == 2e200 && sm_simulation_positions(sim)[3] == x0);
 		sm_simulation_destroy(sim);
 		sm_model_destroy(model);
 	}
@@ -5610,6 +5629,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_set_state_continues);
 	RUN_TEST(test_large_times_keep_the_steps_precision);
 	RUN_TEST(test_an_ulp_of_a_large_time_is_integrated);
+	RUN_TEST(test_an_advance_to_a_far_end_comes_to_rest);
 	RUN_TEST(test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usable);
 	RUN_TEST(test_a_restored_state_reports_the_same_bits_whatever_came_before);
 	RUN_TEST(test_reset_repeats_the_run);
@@ -5655,7 +5675,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_too_much_work_after_an_input_jump_is_not_retried);
 	RUN_TEST(test_driven_jump_with_kept_history);
 	RUN_TEST(test_non_finite_dissipated_power_is_a_non_finite_failure);
-	RUN_TEST(test_an_overlong_advance_fails_with_its_cause);
+	RUN_TEST(test_an_overlong_advance_is_stepped_through);
 	RUN_TEST(test_a_broken_spring_raises_no_more_events);
 	RUN_TEST(test_on_step_is_not_called_for_a_failed_step);
 	RUN_TEST(test_update_model_refuses_each_topology_change);

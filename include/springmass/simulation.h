@@ -187,7 +187,9 @@ SM_API void sm_simulation_destroy(sm_simulation* sim);
 /// reports are doubles all the same, resolving eps |t| (a break at 1e14 s is recorded to 0.016 s,
 /// and an advance to 1e14 s plus an ulp integrates 0.016 s). An interval below the resolution of
 /// CVODE's axis, 4 eps max(1 s, |t - the last initialisation's t|) (about 9e-16 s in the first
-/// second), too short for CVODE, is one explicit Euler step (exact to round-off).
+/// second), too short for CVODE, is one explicit Euler step (exact to round-off). CVODE sizes its
+/// first step after a (re)initialisation from the interval ahead, up to 1e9 s of it: an end far
+/// beyond (1e300 s, "until it settles") is reached by steps that grow as the motion allows.
 /// SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that is not finite or lies before
 /// t.
 /// When the advance used its max_steps internal steps, or on_step returned false, before t_end:
