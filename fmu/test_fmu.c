@@ -122,6 +122,18 @@ static fmi2Component instantiate(const fixture* f, const char* name)
 	                       fmi2False);
 }
 
+// An instance initialised with the model file's tolerances, its start time t0 [s], no stop time.
+static fmi2Component start_at(fixture* f, const char* name, double t0)
+{
+	fmi2Component c = instantiate(f, name);
+	if (c != NULL && (fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0) != fmi2OK ||
+	                  fmi2EnterInitializationMode(c) != fmi2OK || fmi2ExitInitializationMode(c) != fmi2OK)) {
+		fmi2FreeInstance(c);
+		return NULL;
+	}
+	return c;
+}
+
 static fmi2Component start(fixture* f, const char* name)
 {
 	fmi2Component c = instantiate(f, name);
@@ -1072,12 +1084,9 @@ static int test_time_margins_scale_with_the_time(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = instantiate(&f, "margins");
-	ENSURE(c != NULL);
 	const double t0 = 1e6;
-	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
-	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	fmi2Component c = start_at(&f, "margins", t0);
+	ENSURE(c != NULL);
 	f.log.last[0] = '\0';
 	const double x0 = get(c, &f, "tip.x");
 	ENSURE_STATUS(fmi2DoStep(c, t0, 1e-11, fmi2True), fmi2OK);
@@ -1244,12 +1253,9 @@ static int test_short_steps_on_a_large_clock_are_integrated(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = instantiate(&f, "unix_time");
-	ENSURE(c != NULL);
 	const double t0 = 1.7e9;
-	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
-	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	fmi2Component c = start_at(&f, "unix_time", t0);
+	ENSURE(c != NULL);
 	double t = t0;
 	for (int k = 0; k < 2000; ++k, t += 1e-6)
 		ENSURE_STATUS(fmi2DoStep(c, t, 1e-6, fmi2True), fmi2OK);
@@ -1278,12 +1284,9 @@ static int test_communication_point_and_step_size_at_their_bounds(void)
 {
 	fixture f;
 	ENSURE(setup(&f) == 0);
-	fmi2Component c = instantiate(&f, "bounds");
-	ENSURE(c != NULL);
 	const double t0 = 1e6;
-	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, t0, fmi2False, 0.0), fmi2OK);
-	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
-	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	fmi2Component c = start_at(&f, "bounds", t0);
+	ENSURE(c != NULL);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2DoStep(c, t0 + 1e-6, 0.1, fmi2True), fmi2Error);
 	ENSURE(strstr(f.log.last, "does not match") != NULL);

@@ -437,12 +437,10 @@ sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* e
 		return err != NULL ? err->status : SM_ERROR_OUT_OF_MEMORY;
 	struct stat st;
 	const bool exists = lstat(path, &st) == 0;
+	const bool regular = !exists || S_ISREG(st.st_mode);  // a file there, or none yet
 	char* temporary = NULL;
-	FILE* f = NULL;
-	if (!exists || S_ISREG(st.st_mode))
-		f = open_beside(path, exists ? &st : NULL, &temporary);
-	if (f == NULL &&
-	    (!(!exists || S_ISREG(st.st_mode)) || errno == EACCES || errno == EPERM || errno == EROFS))
+	FILE* f = regular ? open_beside(path, exists ? &st : NULL, &temporary) : NULL;
+	if (f == NULL && (!regular || errno == EACCES || errno == EPERM || errno == EROFS))
 		f = fopen(path, "wb");
 	if (f == NULL) {
 		const int code = errno;

@@ -580,13 +580,11 @@ int sm_cmd_run(int argc, char** argv)
 		const double t = k == rows ? t_end : (double)k * interval;
 		// Nothing changes the inputs during the run: CVODE may step as in one advance to t_end,
 		// the rows interpolated from its steps.
-		const sm_status advanced =
-		    k > 0 && stop_signal == 0
-		        ? sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end)
-		        : SM_OK;
 		if (stop_signal != 0)
 			break;
-		if (advanced != SM_OK) {
+		if (k > 0 && sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end) != SM_OK) {
+			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
+				break;
 			end_progress(&prog);
 			fputs("springmass run: ", stderr);
 			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
@@ -618,8 +616,6 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);
-		if (stop_signal != 0)
-			break;
 	}
 	end_progress(&prog);
 	if (stop_signal != 0) {
