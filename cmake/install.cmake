@@ -8,6 +8,7 @@ install(TARGETS springmass EXPORT springmassTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/springmass DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
 # The tool (and the FMU runtime, fmu/CMakeLists.txt) come from the optimised configurations only:
 # a Debug build installed into the same prefix adds its library (libspringmassd.a) and its
 # pkg-config file (springmassd.pc) and leaves the Release tool, runtime and springmass.pc alone.

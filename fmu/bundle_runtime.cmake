@@ -4,13 +4,14 @@
 # libpthread, libdl, librt and the loader) stay those of the machine that loads the FMU, and so
 # do the sanitizer runtimes of an instrumented build.
 #
-# It also gathers the licences of that software: the copyright file of the Debian package of each
-# bundled library and of the static archives linked into the binary (ARCHIVES, separated by commas),
-# in documentation/licenses/ with a license.txt that says which file covers which library.
+# It also gathers the licences of that software: springmass's own (LICENSE, the binary's), and the
+# copyright file of the Debian package of each bundled library and of the static archives linked
+# into the binary (ARCHIVES, separated by commas), in documentation/licenses/ with a license.txt
+# that says which file covers which.
 #
 #   cmake -DBINARY=<springmass_fmu.so> -DDESTINATION=<dir> -DPATCHELF=<patchelf>
-#         [-DARCHIVES=<a.a>,<b.a>] -P bundle_runtime.cmake
-foreach(var BINARY DESTINATION PATCHELF)
+#         -DLICENSE=<springmass's LICENSE> [-DARCHIVES=<a.a>,<b.a>] -P bundle_runtime.cmake
+foreach(var BINARY DESTINATION PATCHELF LICENSE)
   if(NOT ${var})
     message(FATAL_ERROR "bundle_runtime.cmake: ${var} is not set")
   endif()
@@ -87,11 +88,13 @@ file(REMOVE_RECURSE "${DESTINATION}/documentation")
 file(MAKE_DIRECTORY "${licenses}")
 find_program(DPKG dpkg)
 string(REPLACE "," ";" archives "${ARCHIVES}")
+file(COPY_FILE "${LICENSE}" "${licenses}/springmass.txt")
 set(entry "Licences of the software an FMU made by springmass carries\n\n")
-string(APPEND entry "The FMU's binary (binaries/linux64/, named after the model) is springmass with the static\n")
-string(APPEND entry "archives below linked in; the other files of binaries/linux64/ are shared libraries it loads.\n")
-string(APPEND entry "Each came from a Debian package, whose copyright file (its authors' notices and licences) is\n")
-string(APPEND entry "in this folder under the package's name.\n\n")
+string(APPEND entry "The FMU's binary (binaries/linux64/, named after the model) is springmass, whose licence is\n")
+string(APPEND entry "springmass.txt, with the static archives below linked in; the other files of binaries/linux64/\n")
+string(APPEND entry "are shared libraries it loads. Each of those came from a Debian package, whose copyright file\n")
+string(APPEND entry "(its authors' notices and licences) is in this folder under the package's name.\n\n")
+string(APPEND entry "  springmass (the binary)  springmass.txt\n")
 set(missing "")
 foreach(library IN LISTS archives resolved)
   get_filename_component(name "${library}" NAME)

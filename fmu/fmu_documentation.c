@@ -190,8 +190,9 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 	if (licenses)
 		fmu_text_append_string(
 		    &out,
-		    "<h2 id=\"licences\">licences</h2>\n<p>The FMU carries other people's software: "
-		    "<a href=\"licenses/license.txt\">licenses/license.txt</a> says which licence covers which library. "
+		    "<h2 id=\"licences\">licences</h2>\n<p>The FMU carries springmass (BSD 2-Clause) and other people's "
+		    "software: <a href=\"licenses/license.txt\">licenses/license.txt</a> says which licence covers which "
+		    "library. "
 		    "Read it before passing the FMU on.</p>\n");
 	fmu_text_append_string(&out, "</body>\n</html>\n");
 

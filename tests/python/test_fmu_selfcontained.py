@@ -132,9 +132,9 @@ def test_the_c_library_it_needs_is_that_of_the_documented_systems(test_fmu, tmp_
 
 
 def test_licences_of_everything_it_carries(test_fmu):
-    """Every library in binaries/linux64 and the archive linked into the binary (SUNDIALS) come
-    with their Debian copyright file in documentation/licenses/, named in its license.txt (the
-    entry point FMI names). No GSL code is linked in (the FMU runs no analysis), so GSL's
+    """The binary comes with springmass's LICENSE, and every library in binaries/linux64 and the
+    archive linked into the binary (SUNDIALS) with their Debian copyright file, in
+    documentation/licenses/, named in its license.txt (the entry point FMI names). No GSL code is linked in (the FMU runs no analysis), so GSL's
     licence is not there: a binary that came to hold GSL's symbols would need it."""
     fmu = test_fmu("driven_oscillator")
     md = read_model_description(str(fmu))
@@ -155,6 +155,10 @@ def test_licences_of_everything_it_carries(test_fmu):
             text = archive.read("documentation/licenses/" + listed[name]).decode(errors="replace")
             assert "Copyright" in text or "copyright" in text, (name, listed[name])
         assert "(linked in)" in readme and "no package found" not in readme, readme
+        # springmass's own licence, the binary's, is the repository's LICENSE.
+        assert listed.get("springmass") == "springmass.txt", readme
+        with open(os.path.join(os.path.dirname(__file__), "..", "..", "LICENSE"), "rb") as f:
+            assert archive.read("documentation/licenses/springmass.txt") == f.read()
         assert "libgsl" not in readme, readme
         binary = archive.read(f"binaries/linux64/{md.coSimulation.modelIdentifier}.so")
     with tempfile.NamedTemporaryFile(suffix=".so") as f:
