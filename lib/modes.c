@@ -21,7 +21,7 @@
 // Rigid-body modes have omega^2 = 0 in exact arithmetic and about 1e-15 max|omega^2| after
 // round-off, of either sign: eigenvalues within zero_tolerance * max|omega^2| are set to 0
 // (default 1e-12: physical modes can lie far below 1e-9 of the largest, e.g. a long rope's
-// pendulum modes, whose ratio to its axial modes falls as N^-3).
+// pendulum modes, whose ratio to its axial modes falls as N^-2).
 // An eigenvalue below that is a true instability (x0 is not a stable rest shape).
 //
 // Damping: with mass-normalised phi, the modal damping matrix is Phi^T C Phi. When it is

@@ -53,6 +53,8 @@ sm_statics_def sm_default_statics_def(void)
 	def.residual_tolerance = 1e-9;
 	def.max_iterations = 500;
 	def.solver = SM_STATICS_AUTO;
+	def.on_iteration = NULL;
+	def.on_iteration_context = NULL;
 	return def;
 }
 
@@ -224,6 +226,10 @@ typedef struct statics_work {
 	double* rhs;             // dof
 	double* step;            // dof
 	double norm;             // largest row sum of |H + mu M| at the last factorisation [N/m]
+	// The caller's progress callback (sm_statics_def.on_iteration) and the iteration it last saw.
+	bool (*on_iteration)(void* context, int32_t iterations, double residual);
+	void* on_iteration_context;
+	int32_t reported;
 	// Dense path.
 	double* matrix;        // dof x dof
 	double* perturbation;  // dof
@@ -270,6 +276,22 @@ static void work_free(statics_work* w)
 }
 
 // Largest force component on a free particle [N].
+// Tells the caller's callback of an iteration not reported yet. False when it asks to stop (*st
+// and err set).
+static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_status* st, sm_error* err)
+{
+	if (w->on_iteration == NULL || res->iterations == w->reported)
+		return true;
+	w->reported = res->iterations;
+	if (w->on_iteration(w->on_iteration_context, res->iterations, res->residual))
+		return true;
+	*st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+	                   "statics: stopped by the caller (on_iteration) after %d iterations, largest force on "
+	                   "a free particle %.3g N",
+	                   (int)res->iterations, res->residual);
+	return false;
+}
+
 static double residual_norm(const statics_work* w, const double* f)
 {
 	double r = 0.0;
@@ -641,6 +663,8 @@ static bool polish(statics_work* w, double tolerance, int32_t last, sm_statics_r
 		memcpy(w->x, w->y, n3 * sizeof(double));
 		res->residual = residual;
 		res->iterations++;
+		if (!report_iteration(w, res, st, err))
+			return false;
 	}
 	return true;
 }
@@ -693,6 +717,8 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 			    (int)res->iterations);
 			return -1;
 		}
+		if (!report_iteration(w, res, st, err))
+			return -1;
 		if (res->residual <= res->tolerance) {
 			if (res->residual > tolerance && !polish(w, tolerance, last, res, st, err))
 				return -1;
@@ -901,6 +927,8 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->n = sm_model_particle_count(model);
 	w->ns = sm_model_spring_count(model);
 	w->external = def->external_forces;
+	w->on_iteration = def->on_iteration;
+	w->on_iteration_context = def->on_iteration_context;
 	const size_t n3 = 3 * (size_t)w->n;
 	w->free_index = malloc(((size_t)w->n + 1) * sizeof(int32_t));
 	w->dof_mass = malloc((n3 + 1) * sizeof(double));

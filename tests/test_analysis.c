@@ -312,6 +312,26 @@ static sm_model* hanging_rope(double length, double mass, double E, double g, in
 	return hanging_rope_bending(length, mass, E, 0.0, g, segments);
 }
 
+// A stiff rope: E = 1e9 N per strain, 200 segments of 5 mm (2e11 N/m each), 1 kg, along x from
+// its first particle, which is fixed.
+static sm_model* stiff_rope(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.segments = 200;
+	rd.mass = 1.0;
+	rd.structural.stiffness = 1e9;
+	rd.structural.stiffness_scaling = SM_PER_STRAIN;
+	sm_structure st;
+	if (model == NULL || sm_add_rope(model, &rd, &st) != SM_OK ||
+	    sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A stiff rope (E = 1e9 N, 200 segments of 5 mm: 2e11 N/m each, 1 kg) held at one end swings down
 // from horizontal: the stiffness continuation takes it there, and its last stage ended within the
 // round-off floor (8 eps sum ks |x|: 1.4e-3 N) with every particle 1.2e-3 N short of its
@@ -320,17 +340,8 @@ static sm_model* hanging_rope(double length, double mass, double E, double g, in
 // one spring force, ks eps |x| = 4.4e-5 N, summed over 200 particles with random signs: 6e-4 N).
 static int test_stiff_rope_carries_its_whole_weight(void)
 {
-	sm_model_def md = sm_default_model_def();
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = stiff_rope();
 	ENSURE(model != NULL);
-	sm_rope_def rd = sm_default_rope_def();
-	rd.segments = 200;
-	rd.mass = 1.0;
-	rd.structural.stiffness = 1e9;
-	rd.structural.stiffness_scaling = SM_PER_STRAIN;
-	sm_structure st;
-	ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
-	ENSURE_STATUS(sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED), SM_OK);
 	double* x = malloc(3 * 201 * sizeof(double));
 	ENSURE(x != NULL);
 	sm_statics_result res;
@@ -340,6 +351,65 @@ static int test_stiff_rope_carries_its_whole_weight(void)
 	       res.residual, res.tolerance, res.reaction_total[2]);
 	ENSURE(fabs(res.reaction_total[2] - 9.81) <= 1e-4 * 9.81);
 	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// What the progress callback of sm_statics_solve saw.
+typedef struct iteration_log {
+	int32_t calls, last, stop_after;  // stop_after 0: never stop
+	bool in_order;                    // every count one more than the one before, every residual >= 0
+} iteration_log;
+
+static bool log_iteration(void* context, int32_t iterations, double residual)
+{
+	iteration_log* log = context;
+	log->in_order = log->in_order && iterations == log->last + 1 && residual >= 0.0;
+	log->calls++;
+	log->last = iterations;
+	return log->stop_after == 0 || iterations < log->stop_after;
+}
+
+// The stiff rope above, whose solve takes every stage (Newton, the stiffness continuation, the
+// polishing steps): on_iteration hears of every iteration once, in order, and changes nothing (the
+// same iterations and the same bits); returning false stops the solve there with
+// SM_ERROR_NOT_CONVERGED, x untouched.
+static int test_statics_reports_every_iteration(void)
+{
+	sm_model* model = stiff_rope();
+	ENSURE(model != NULL);
+	const size_t n3 = 3 * 201;
+	double* plain = malloc(n3 * sizeof(double));
+	double* heard = malloc(n3 * sizeof(double));
+	ENSURE(plain != NULL && heard != NULL);
+	sm_statics_result expected, res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, plain, NULL, &expected, &err), SM_OK);
+	ENSURE(expected.iterations > 50);  // past the first Newton stage: the continuation ran
+
+	iteration_log log = {0, 0, 0, true};
+	sm_statics_def def = sm_default_statics_def();
+	def.on_iteration = log_iteration;
+	def.on_iteration_context = &log;
+	ENSURE_STATUS(sm_statics_solve(model, &def, heard, NULL, &res, &err), SM_OK);
+	ENSURE(log.in_order && log.calls == expected.iterations && res.iterations == expected.iterations);
+	ENSURE(memcmp(plain, heard, n3 * sizeof(double)) == 0 && res.residual == expected.residual);
+
+	// Stopped in the first Newton stage, and in the continuation.
+	const int32_t stops[] = {1, 5, 60};
+	for (size_t k = 0; k < sizeof stops / sizeof stops[0]; k++) {
+		iteration_log stopping = {0, 0, stops[k], true};
+		def.on_iteration_context = &stopping;
+		for (size_t i = 0; i < n3; i++)
+			heard[i] = NAN;
+		ENSURE_STATUS(sm_statics_solve(model, &def, heard, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
+		ENSURE(stopping.in_order && stopping.calls == stops[k] && res.iterations == stops[k]);
+		ENSURE(strstr(err.message, "stopped by the caller") != NULL);
+		for (size_t i = 0; i < n3; i++)
+			ENSURE(isnan(heard[i]));
+	}
+	free(plain);
+	free(heard);
 	sm_model_destroy(model);
 	return 0;
 }
@@ -2859,6 +2929,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_hanging_rope_with_bending_springs);
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
 	RUN_TEST(test_statics_says_when_the_continuation_gives_up);
+	RUN_TEST(test_statics_reports_every_iteration);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_hanging_cloth_reactions);
 	RUN_TEST(test_external_force_on_a_spring);

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "cli_common.h"
+#include "cli_progress.h"
 #include "commands.h"
 
 #include "springmass/model_file.h"
@@ -15,7 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 #include <unistd.h>
 
 static void usage(FILE* out)
@@ -68,13 +68,6 @@ static void usage(FILE* out)
 	        "output that cannot be written, 2 usage error. Stopped by a signal (Ctrl-C, a kill, a\n"
 	        "closed pipe), it ends after the row it was writing, its outputs whole up to there, with\n"
 	        "the signal's status.\n");
-}
-
-static double wall_clock(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.
@@ -248,35 +241,21 @@ static void catch_stop_signals(void)
 	sigaction(SIGPIPE, &action, NULL);  // a write to the pipe then fails with EPIPE
 }
 
-// The progress line on stderr, from one second into the run on: on a terminal it rewrites itself
-// every half second; in a log it is one line every five seconds. Shown after output rows and,
-// through the simulation's on_step hook, after internal steps, so that a long output interval
-// does not look like a hang.
-typedef struct progress {
-	double start;   // wall-clock time of the start [s]; 0 until the run begins
-	double last;    // when the line was last shown [s]
-	double period;  // [s]
-	double t_end;   // [s]
-	bool terminal;
-	bool shown;
-	int width;  // characters of the line last shown on a terminal, which the next one covers
-} progress;
+// The progress line (cli_progress.h), shown after output rows and, through the simulation's on_step
+// hook, after internal steps, so that a long output interval does not look like a hang.
+typedef struct run_progress {
+	cli_progress line;
+	double t_end;  // [s]
+} run_progress;
 
-static void show_progress(progress* p, double t, bool last_row)
+static void show_progress(run_progress* p, double t, bool last_row)
 {
-	const double now = wall_clock();
-	if (p->start == 0.0 || now - p->start <= 1.0 || (now - p->last <= p->period && !last_row))
+	if (!cli_progress_due(&p->line, last_row))
 		return;
 	char line[128];
-	const int width = snprintf(line, sizeof line, "springmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s", t,
-	                           p->t_end, 100.0 * t / p->t_end, now - p->start);
-	if (p->terminal)
-		fprintf(stderr, "\r%s%*s", line, p->width > width ? p->width - width : 0, "");
-	else
-		fprintf(stderr, "%s\n", line);
-	p->width = width;
-	p->last = now;
-	p->shown = true;
+	snprintf(line, sizeof line, "springmass run: t = %.4g of %.4g s (%3.0f %%), %.1f s", t, p->t_end,
+	         100.0 * t / p->t_end, cli_wall_clock() - p->line.start);
+	cli_progress_show(&p->line, line);
 }
 
 // After every internal step: the progress line (unless quiet) and whether to go on.
@@ -285,13 +264,6 @@ static bool on_internal_step(void* context, double t)
 	if (context != NULL)
 		show_progress(context, t, false);
 	return stop_signal == 0;
-}
-
-// Ends a progress line that rewrites itself, before other output.
-static void end_progress(const progress* p)
-{
-	if (p->shown && p->terminal)
-		fprintf(stderr, "\n");
 }
 
 // parse_arguments: a usage error after which the usage follows (an unknown option, a missing
@@ -500,8 +472,7 @@ int sm_cmd_run(int argc, char** argv)
 		status = 2;
 		goto done;
 	}
-	const bool terminal = isatty(fileno(stderr));
-	progress prog = {0.0, 0.0, terminal ? 0.5 : 5.0, t_end, terminal, false, 0};
+	run_progress prog = {{0.0, 0.0, 0.0, false, false, 0}, t_end};
 	def.on_step = on_internal_step;
 	def.on_step_context = o.quiet ? NULL : &prog;
 	sim = sm_simulation_create(model, &def, &err);
@@ -572,8 +543,8 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	write_header(csv, doc, model, o.positions);
 
-	const double start = wall_clock();
-	prog.start = prog.last = start;
+	cli_progress_start(&prog.line);
+	const double start = prog.line.start;
 	catch_stop_signals();
 	double last_row = 0.0;
 	for (long k = 0; k <= rows; k++) {
@@ -585,7 +556,7 @@ int sm_cmd_run(int argc, char** argv)
 		if (k > 0 && sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end) != SM_OK) {
 			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
 				break;
-			end_progress(&prog);
+			cli_progress_end(&prog.line);
 			fputs("springmass run: ", stderr);
 			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
 			fputc('\n', stderr);
@@ -597,14 +568,14 @@ int sm_cmd_run(int argc, char** argv)
 		if (ferror(csv) && errno == EPIPE)
 			stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
 		if (ferror(csv) && stop_signal == 0) {
-			end_progress(&prog);
+			cli_progress_end(&prog.line);
 			cli_cannot_write("run", csv_name);
 			goto done;
 		}
 		if (o.vtk_dir) {
 			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
 			if (series_file_clashes(path, &o, csv_file) != 0) {
-				end_progress(&prog);
+				cli_progress_end(&prog.line);
 				status = 2;
 				goto done;
 			}
@@ -617,7 +588,7 @@ int sm_cmd_run(int argc, char** argv)
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);
 	}
-	end_progress(&prog);
+	cli_progress_end(&prog.line);
 	if (stop_signal != 0) {
 		if (stop_signal != SIGPIPE)
 			fprintf(stderr, "springmass run: stopped by %s; the outputs hold the rows up to t = %.9g s\n",
@@ -640,7 +611,7 @@ int sm_cmd_run(int argc, char** argv)
 		        (long long)s.steps, (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations,
 		        (long long)s.linear_iterations, (long long)s.error_test_failures,
 		        (long long)s.convergence_failures, (long long)s.restarts, (int)sm_simulation_break_count(sim),
-		        wall_clock() - start, s.force_seconds, s.jacobian_seconds, s.linear_solve_seconds);
+		        cli_wall_clock() - start, s.force_seconds, s.jacobian_seconds, s.linear_solve_seconds);
 		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
 			const sm_break_event e = sm_simulation_break(sim, b);
 			char line[64];

@@ -1,5 +1,6 @@
 // springmass statics: the static equilibrium of a model file.
 #include "cli_common.h"
+#include "cli_progress.h"
 #include "commands.h"
 
 #include "springmass/analysis.h"
@@ -22,7 +23,8 @@ static void usage(FILE* out)
 	        "is free here, as in springmass run): Newton's method on the force balance with the\n"
 	        "exact stiffness and a line search on the potential energy.\n"
 	        "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
-	        "reaction force at every fixed particle.\n"
+	        "reaction force at every fixed particle. A progress line goes to stderr for solves longer\n"
+	        "than a second.\n"
 	        "\n"
 	        "options:\n"
 	        "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
@@ -35,11 +37,30 @@ static void usage(FILE* out)
 	        "  --tolerance F          largest force left on a free particle [N] (default 1e-9)\n"
 	        "  --max-iterations N     Newton iterations allowed (default 500)\n"
 	        "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
-	        "  -q, --quiet            print the summary only, not every reaction\n"
+	        "  -q, --quiet            print the summary only, not every reaction, and no progress line\n"
 	        "  -h, --help             this text\n"
 	        "\n"
 	        "Exit status: 0 when an equilibrium is found (stable or not, as printed), 1 for a bad model,\n"
 	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
+}
+
+// After every Newton iteration: the progress line (cli_progress.h).
+typedef struct statics_progress {
+	cli_progress line;
+	int32_t max_iterations;
+} statics_progress;
+
+static bool on_iteration(void* context, int32_t iterations, double residual)
+{
+	statics_progress* p = context;
+	if (cli_progress_due(&p->line, false)) {
+		char line[128];
+		snprintf(line, sizeof line,
+		         "springmass statics: iteration %d of at most %d, largest force %.3g N, %.1f s",
+		         (int)iterations, (int)p->max_iterations, residual, cli_wall_clock() - p->line.start);
+		cli_progress_show(&p->line, line);
+	}
+	return true;
 }
 
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
@@ -196,8 +217,15 @@ int sm_cmd_statics(int argc, char** argv)
 	sm_model_initial_state(model, x0, NULL);
 	if (def.solver == SM_STATICS_DENSE)
 		cli_note_dense("statics", 3 * (size_t)sm_model_free_count(model));
+	statics_progress progress = {{0.0, 0.0, 0.0, false, false, 0}, def.max_iterations};
+	if (!quiet) {
+		def.on_iteration = on_iteration;
+		def.on_iteration_context = &progress;
+	}
+	cli_progress_start(&progress.line);
 	sm_statics_result res;
 	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
+	cli_progress_end(&progress.line);
 	if (st != SM_OK) {
 		fprintf(stderr, "springmass statics: %s: ", model_path);
 		cli_write_named(stderr, doc, model, err.message);

@@ -65,6 +65,14 @@ typedef struct sm_statics_def {
 	/// continuation takes over after 50 (docs/analysis.md); below, Newton alone takes them all.
 	int32_t max_iterations;
 	sm_statics_solver solver;  ///< default SM_STATICS_AUTO
+	/// Called after every Newton iteration with the iterations taken so far, the largest force
+	/// component on a free particle at the new positions [N] (during the stiffness continuation,
+	/// that of the softened model the stage solves) and `on_iteration_context` (default NULL: not
+	/// called), e.g. to show progress during a long solve or to bound its wall time. The
+	/// iterations and results are the same with or without it. Returning false stops the solve
+	/// with SM_ERROR_NOT_CONVERGED (x and reactions not touched). It must not modify the model.
+	bool (*on_iteration)(void* context, int32_t iterations, double residual);
+	void* on_iteration_context;
 } sm_statics_def;
 
 /// What sm_statics_solve() found. Filled on success and, as far as it got, on failure.
@@ -99,9 +107,9 @@ SM_API sm_statics_def sm_default_statics_def(void);
 ///   along the way, or spring forces whose round-off scale (stiffness x distance) does;
 /// - SM_ERROR_NOT_CONVERGED: no equilibrium exists (a group of free particles not held by any
 ///   constrained particle, with a non-zero net force on it, such as a free body under gravity),
-///   the iteration limit was reached, or the round-off floor of the tolerance exceeds the largest
-///   constant force on a free particle where the iteration ended (no computed balance resolves
-///   the loads there); the message names the particles or gives the residual or the floor;
+///   the iteration limit was reached, on_iteration returned false, or the round-off floor of the tolerance
+///   exceeds the largest constant force on a free particle where the iteration ended (no computed balance
+///   resolves the loads there); the message names the particles or gives the residual or the floor;
 /// - SM_ERROR_SOLVER: the sparse factorisation failed;
 /// - SM_ERROR_OUT_OF_MEMORY.
 SM_API sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x,

@@ -1,0 +1,49 @@
+// The progress line of a long command (cli_progress.h).
+#define _POSIX_C_SOURCE 200809L
+
+#include "cli_progress.h"
+
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+double cli_wall_clock(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void cli_progress_start(cli_progress* p)
+{
+	p->terminal = isatty(fileno(stderr));
+	p->period = p->terminal ? 0.5 : 5.0;
+	p->start = p->last = cli_wall_clock();
+	p->shown = false;
+	p->width = 0;
+}
+
+bool cli_progress_due(const cli_progress* p, bool last_one)
+{
+	const double now = cli_wall_clock();
+	return p->start != 0.0 && now - p->start > 1.0 && (now - p->last > p->period || last_one);
+}
+
+void cli_progress_show(cli_progress* p, const char* line)
+{
+	const int width = (int)strlen(line);
+	if (p->terminal)
+		fprintf(stderr, "\r%s%*s", line, p->width > width ? p->width - width : 0, "");
+	else
+		fprintf(stderr, "%s\n", line);
+	p->width = width;
+	p->last = cli_wall_clock();
+	p->shown = true;
+}
+
+void cli_progress_end(const cli_progress* p)
+{
+	if (p->shown && p->terminal)
+		fprintf(stderr, "\n");
+}

@@ -1,0 +1,31 @@
+// The progress line of a long command on stderr, from one second into the work on: on a terminal
+// it rewrites itself every half second; in a log it is one line every five seconds. A command that
+// shows one ends it with cli_progress_end before writing anything else to stderr.
+#pragma once
+
+#include <stdbool.h>
+
+typedef struct cli_progress {
+	double start;   ///< wall-clock time of the start [s]; 0 until cli_progress_start
+	double last;    ///< when the line was last shown [s]
+	double period;  ///< between two lines [s]
+	bool terminal;  ///< stderr is a terminal: the line rewrites itself
+	bool shown;     ///< a line has been shown
+	int width;      ///< characters of the line last shown on a terminal, which the next one covers
+} cli_progress;
+
+/// Monotonic wall-clock time [s].
+double cli_wall_clock(void);
+
+/// Starts the clock; the period follows from whether stderr is a terminal.
+void cli_progress_start(cli_progress* p);
+
+/// Whether a line is due now: more than a second since the start and a period since the last line,
+/// or, with `last_one`, the work's last line once any other would have been shown.
+bool cli_progress_due(const cli_progress* p, bool last_one);
+
+/// Shows `line` (without a newline) and notes when.
+void cli_progress_show(cli_progress* p, const char* line);
+
+/// Ends a line that rewrites itself, before other output.
+void cli_progress_end(const cli_progress* p);
