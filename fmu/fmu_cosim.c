@@ -511,7 +511,8 @@ bool fmu_set_parameters(instance* inst, const char* function, const double* valu
 // Takes the solver settings that a change of the model-file parameters changed (the file's
 // "simulation" object may name parameters: "rtol": "tol"; such parameters are fixed). Setting such
 // a parameter is setting its solver variable: "tol" as solver.rtol, which the experiment's
-// tolerance then leaves alone.
+// tolerance then leaves alone. Only a change counts: a parameter set to the value it has (an
+// importer writing every start value) leaves a solver variable set before it alone.
 static void take_settings(instance* inst, const sm_simulation_def* before)
 {
 	const sm_simulation_def now = sm_document_get_settings(inst->doc).solver;
@@ -1427,10 +1428,12 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 // Ends a step from t that reached t_end. A finite state whose outputs overflow a double (the
 // energies of 1e218 kg at 1e98 m above the origin; the force on a driven particle, which no state
 // of the integration holds) cannot be reported: the step is then discarded at its end, like one
-// the solver could not take, and the last successful time is its start.
+// the solver could not take beyond a time it reached, and that end is the last successful time,
+// where the state and the outputs are.
 static fmi2Status end_step(instance* inst, double t, double t_end)
 {
 	inst->time = t_end;
+	inst->last_successful_time = t_end;
 	const char* overflowing = NULL;
 	energy_cache energies = {false, {0.0, 0.0, 0.0}};
 	for (int32_t i = 0; i < inst->table.count && overflowing == NULL; ++i) {
@@ -1439,15 +1442,14 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 			overflowing = v->name;
 	}
 	if (overflowing != NULL) {
-		inst->last_successful_time = t;
 		inst->state = ST_STEP_FAILED;
 		fmu_logf(
 		    inst, fmi2Discard, LOG_DISCARD,
-		    "fmi2DoStep: at %s the output %s overflows a double; fmi2LastSuccessfulTime is the step's start, %s",
-		    fmu_number_text(t_end).text, overflowing, fmu_number_text(t).text);
+		    "fmi2DoStep: the step from %s reached %s, where the output %s overflows a double; the state and "
+		    "outputs are at %s, fmi2LastSuccessfulTime",
+		    fmu_number_text(t).text, fmu_number_text(t_end).text, overflowing, fmu_number_text(t_end).text);
 		return fmi2Discard;
 	}
-	inst->last_successful_time = t_end;
 	return fmi2OK;
 }
 

@@ -157,8 +157,9 @@ def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
 def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
     # 1e218 kg at 1e98 m above the origin: its gravitational energy, m g z = 9.8e316 J, is beyond
     # the largest double, though every state is finite. A step to there cannot report its outputs:
-    # fmi2Discard naming the output, the step's start the last successful time; reset recovers.
-    # The same for a step too short to integrate (below the clock's resolution, 4 eps).
+    # fmi2Discard naming the output, the step's end the last successful time (where the state and
+    # outputs are); reset recovers. The same for a step too short to integrate (below the clock's
+    # resolution, 4 eps).
     model = {"springmass": 1, "name": "heavy",
              "particles": [{"name": "bob", "position": [0, 0, 1e98], "mass": 1e218}],
              "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
@@ -171,10 +172,38 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
             with pytest.raises(FMICallException) as info:
                 s.doStep(0.0, h)
             assert info.value.status == 2  # fmi2Discard
-            assert s.getRealStatus(2) == 0.0  # fmi2LastSuccessfulTime
+            assert s.getRealStatus(2) == h  # fmi2LastSuccessfulTime
             assert "energy.gravity overflows" in inst.messages[-1][2] and inst.messages[-1][1] == "logStatusDiscard"
             s.reset()
             inst.start()
+    finally:
+        inst.free()
+
+
+def test_outputs_after_an_overflow_discard_are_at_the_last_successful_time(package, tmp_path):
+    # 1e300 kg falling from rest: at 1000 s its kinetic energy, m (g t)^2 / 2 = 4.8e307 J, is
+    # finite; at 3000 s, 4.3e308 J, it is not. The step from 1000 to 3000 s is discarded, and what
+    # the master reads then (the position, the velocity, the time of a saved state) is at
+    # fmi2LastSuccessfulTime, as FMI 2.0 has it for a discarded step: free fall to 1e-9 (the
+    # integration's relative tolerance, 1e-10, on states of order g t^2).
+    model = {"springmass": 1, "name": "falling", "simulation": {"rtol": 1e-10},
+             "particles": [{"name": "bob", "position": [0, 0, 0], "mass": 1e300}],
+             "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
+    path = tmp_path / "falling.json"
+    path.write_text(json.dumps(model))
+    inst = Instance(package(path)).start()
+    s = inst.slave
+    g = 9.81
+    try:
+        s.doStep(0.0, 1000.0)
+        with pytest.raises(FMICallException) as info:
+            s.doStep(1000.0, 2000.0)
+        assert info.value.status == 2  # fmi2Discard
+        assert "energy.kinetic overflows" in inst.messages[-1][2], inst.messages[-1]
+        t = s.getRealStatus(2)  # fmi2LastSuccessfulTime
+        assert t == 3000.0
+        z, vz = inst.get("bob.z", "bob.vz")
+        assert z == pytest.approx(-0.5 * g * t * t, rel=1e-9) and vz == pytest.approx(-g * t, rel=1e-9)
     finally:
         inst.free()
 
@@ -247,6 +276,9 @@ def test_parameters_in_the_simulation_settings_set_the_solver(test_fmu):
     # is setting solver.rtol and solver.max_steps (so tol wins over the experiment's tolerance, as
     # solver.rtol does); the solver variables read the values, and ms = 2 makes the 1 s step fail
     # as solver.max_steps = 2 does above. Both are fixed parameters. A reset goes back to the file.
+    # Of tol and solver.rtol, the one changed last counts: tol set to the value it has changes
+    # nothing, so an importer that writes every start value after the user's solver.rtol leaves
+    # it alone.
     inst = Instance(test_fmu("param_settings"))
     s = inst.slave
     max_steps = inst.vr["solver.max_steps"]
@@ -266,6 +298,15 @@ def test_parameters_in_the_simulation_settings_set_the_solver(test_fmu):
         inst.start()
         assert inst.get("solver.rtol") == 1e-6 and s.getInteger([max_steps]) == [100000]
         s.doStep(0.0, 1.0)
+        s.reset()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        inst.set("solver.rtol", 1e-9)
+        inst.set("tol", 1e-6)  # its start value
+        assert inst.get("solver.rtol", "tol") == [1e-9, 1e-6]
+        inst.set("tol", 1e-8)
+        assert inst.get("solver.rtol", "tol") == [1e-8, 1e-8]
+        s.exitInitializationMode()
     finally:
         inst.free()
 
