@@ -154,18 +154,23 @@ def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
         inst.free()
 
 
+def lone_particle(package, tmp_path, name, height, mass, simulation=None):
+    """The FMU of one free particle `bob` of `mass` [kg] at `height` [m], a probe port on it."""
+    model = {"springmass": 1, "name": name, "simulation": simulation or {},
+             "particles": [{"name": "bob", "position": [0, 0, height], "mass": mass}],
+             "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(model))
+    return package(path)
+
+
 def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
     # 1e218 kg at 1e98 m above the origin: its gravitational energy, m g z = 9.8e316 J, is beyond
     # the largest double, though every state is finite. A step to there cannot report its outputs:
     # fmi2Discard naming the output, the step's end the last successful time (where the state and
     # outputs are); reset recovers. The same for a step too short to integrate (below the clock's
     # resolution, 4 eps).
-    model = {"springmass": 1, "name": "heavy",
-             "particles": [{"name": "bob", "position": [0, 0, 1e98], "mass": 1e218}],
-             "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
-    path = tmp_path / "heavy.json"
-    path.write_text(json.dumps(model))
-    inst = Instance(package(path)).start()
+    inst = Instance(lone_particle(package, tmp_path, "heavy", 1e98, 1e218)).start()
     s = inst.slave
     try:
         for h in (0.1, 1e-17):
@@ -183,15 +188,10 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
 def test_outputs_after_an_overflow_discard_are_at_the_last_successful_time(package, tmp_path):
     # 1e300 kg falling from rest: at 1000 s its kinetic energy, m (g t)^2 / 2 = 4.8e307 J, is
     # finite; at 3000 s, 4.3e308 J, it is not. The step from 1000 to 3000 s is discarded, and what
-    # the master reads then (the position, the velocity, the time of a saved state) is at
+    # the master reads then (the position, the velocity) is at
     # fmi2LastSuccessfulTime, as FMI 2.0 has it for a discarded step: free fall to 1e-9 (the
     # integration's relative tolerance, 1e-10, on states of order g t^2).
-    model = {"springmass": 1, "name": "falling", "simulation": {"rtol": 1e-10},
-             "particles": [{"name": "bob", "position": [0, 0, 0], "mass": 1e300}],
-             "ports": [{"name": "bob", "particle": "bob", "kind": "probe"}]}
-    path = tmp_path / "falling.json"
-    path.write_text(json.dumps(model))
-    inst = Instance(package(path)).start()
+    inst = Instance(lone_particle(package, tmp_path, "falling", 0.0, 1e300, {"rtol": 1e-10})).start()
     s = inst.slave
     g = 9.81
     try:
