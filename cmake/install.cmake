@@ -47,7 +47,7 @@ else()
 endif()
 set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
-string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -lm")
+string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -ldl -lm")
 # The library of this build: libspringmassd in a Debug build (DEBUG_POSTFIX, lib/CMakeLists.txt),
 # whatever the case of its name ("debug" too), and for each configuration of a multi-config
 # generator: the name comes from the target itself, when the file is generated.

@@ -730,7 +730,6 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn)
 {
 	(void)visible;
-	fmu_keep_openmp_loaded();
 	instance* inst = calloc(1, sizeof *inst);
 	if (!inst) {
 		log_instantiate_error(functions, instanceName, "fmi2Instantiate: out of memory");

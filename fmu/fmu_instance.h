@@ -98,9 +98,6 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 // Logs an error (category logStatusError); the arguments are those of printf.
 #define log_error(inst, ...) fmu_logf((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)
 
-// Marks the OpenMP runtime CHOLMOD uses, if loaded, never to be unloaded (fmu_openmp.c).
-void fmu_keep_openmp_loaded(void);
-
 // The text of a number for a message (fmu_number_text).
 typedef struct number_text_t {
 	char text[SM_NUMBER_TEXT_CAPACITY];

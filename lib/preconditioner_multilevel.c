@@ -27,6 +27,8 @@
 
 #include "preconditioner_multilevel.h"
 
+#include "cholmod_factorize.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -373,7 +375,7 @@ bool sm_multilevel_refresh(sm_multilevel* ml, const double* values, cholmod_comm
 		for (int64_t e = 0; e < 9 * l->first[l->count]; e++)
 			l->matrix[e] = (float)l->values[e];
 	}
-	return cholmod_l_factorize(ml->coarsest, ml->factor, common) && common->status == CHOLMOD_OK;
+	return sm_cholmod_factorize(ml->coarsest, ml->factor, common) && common->status == CHOLMOD_OK;
 }
 
 // Block rows from which a level's products run in chunks on the workers, if there are any:

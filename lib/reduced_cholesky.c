@@ -13,6 +13,8 @@
 
 #include "linear_solver_reduced.h"
 
+#include "cholmod_factorize.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -109,7 +111,7 @@ static int factorize(sm_reduced* r)
 			return -1;
 	}
 	r->factor_valid = false;
-	const int ok = cholmod_l_factorize(r->matrix, r->factor, &r->common);
+	const int ok = sm_cholmod_factorize(r->matrix, r->factor, &r->common);
 	if (!ok || r->common.status == CHOLMOD_OUT_OF_MEMORY)
 		return -1;
 	if (r->common.status != CHOLMOD_OK)

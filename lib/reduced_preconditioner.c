@@ -29,6 +29,8 @@
 
 #include "linear_solver_reduced.h"
 
+#include "cholmod_factorize.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -182,7 +184,7 @@ static int refresh_coarse(sm_reduced* r, double gamma)
 			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
 		if (r->coarse_factor == NULL)
 			status = -1;
-		else if (cholmod_l_factorize(r->coarse, r->coarse_factor, &r->common) &&
+		else if (sm_cholmod_factorize(r->coarse, r->coarse_factor, &r->common) &&
 		         r->common.status == CHOLMOD_OK)
 			status = 0;
 		else

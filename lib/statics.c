@@ -42,6 +42,8 @@
 
 #ifdef SPRINGMASS_HAVE_CHOLMOD
 #include <cholmod.h>
+
+#include "cholmod_factorize.h"
 #endif
 
 sm_statics_def sm_default_statics_def(void)
@@ -145,7 +147,7 @@ int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholm
 		if (*factor == NULL)
 			return -1;
 	}
-	cholmod_l_factorize(A, *factor, common);
+	sm_cholmod_factorize(A, *factor, common);
 	if (common->status == CHOLMOD_NOT_POSDEF || (*factor)->minor < (*factor)->n)
 		return 0;
 	return common->status < CHOLMOD_OK ? -1 : 1;

@@ -17,10 +17,9 @@
 // chunked loops' threshold is lowered the same way (and their limit on springs between chunks
 // raised), so that the 12 x 12 cloth runs in chunks, once on the calling thread and once on a team
 // of 2 threads, which must give the same bits.
-// Built with -fsanitize=thread, the same test is the race check of the library. ThreadSanitizer
-// then reports CHOLMOD's supernodal factorisation, which clears its workspace (the caller's own
-// cholmod_common) in an OpenMP loop: the join inside the uninstrumented libgomp is invisible to
-// it. Run it there with TSAN_OPTIONS=suppressions=FILE, FILE holding `race:libgomp.so.1`.
+// Built with -fsanitize=thread, the same test is the race check of the library (CHOLMOD's OpenMP
+// loops, whose joins inside the uninstrumented libgomp ThreadSanitizer could not see, run on the
+// calling thread: lib/cholmod_factorize.c).
 #define _POSIX_C_SOURCE 200809L
 
 #include "springmass/springmass.h"

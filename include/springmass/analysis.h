@@ -18,8 +18,8 @@
 // e.g. OPENBLAS_NUM_THREADS): the sparse paths give the same bits run after run and in
 // concurrent threads for a given BLAS thread count, and may differ in the last bits between
 // counts (measured on a 40 x 40 hanging cloth, statics and modes, 1 and 2 threads). CHOLMOD
-// also runs its supernodal factorisation in an OpenMP team of up to 4 threads (see "Threads" in
-// simulation.h; OMP_THREAD_LIMIT=1 keeps it to the calling thread).
+// would run its supernodal factorisation's loops in an OpenMP team of 4 threads; springmass keeps
+// them to the calling thread (see "Threads" in simulation.h).
 #pragma once
 
 #include "springmass/model.h"
