@@ -2512,6 +2512,37 @@ static int test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usabl
 	return 0;
 }
 
+// A position set off a driven particle's current path is taken however close to it, down to the
+// round-off that the path's own sums leave (16 eps of the coordinate): an anchor at 1 m, at rest
+// or moving at 0.5 m/s, set 1e-4, 1e-9 and 1e-12 m off its path at 0.1 s is there right after the
+// call, follows the new path after a further advance (x = x1 + v (t - 0.1), to the round-off of
+// that sum), and the integration restarts once for it.
+static int test_a_small_jump_of_a_driven_particle_is_taken(void)
+{
+	sm_model* model = oscillator_anchored(1.0, 100.0, 0.0, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double speeds[] = {0.0, 0.5}, offsets[] = {1e-4, 1e-9, 1e-12};
+	for (size_t i = 0; i < 2; i++)
+		for (size_t k = 0; k < 3; k++) {
+			ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+			const double start[3] = {1.0, 0.0, 0.0}, v[3] = {speeds[i], 0.0, 0.0};
+			ENSURE_STATUS(sm_simulation_set_driven(sim, 0, start, v), SM_OK);
+			ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+			const double moved[3] = {1.0 + speeds[i] * 0.1 + offsets[k], 0.0, 0.0};
+			const int64_t restarts = sm_simulation_statistics(sim).restarts;
+			ENSURE_STATUS(sm_simulation_set_driven(sim, 0, moved, v), SM_OK);
+			ENSURE(sm_simulation_positions(sim)[0] == moved[0]);
+			ENSURE_STATUS(sm_simulation_advance(sim, 0.2), SM_OK);
+			ENSURE_NEAR(sm_simulation_positions(sim)[0], moved[0] + speeds[i] * 0.1, 4.0 * DBL_EPSILON);
+			ENSURE(sm_simulation_statistics(sim).restarts == restarts + 1);
+		}
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A restored state reports the same positions whatever the simulation did before, right after the
 // restore too: a driven particle's position is formed on the axis of CVODE's restart due there.
 // It was formed on the axis of the simulation's last restart until the next advance, one ulp off in
@@ -5631,6 +5662,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_an_ulp_of_a_large_time_is_integrated);
 	RUN_TEST(test_an_advance_to_a_far_end_comes_to_rest);
 	RUN_TEST(test_a_break_beyond_the_range_of_energies_leaves_the_simulation_usable);
+	RUN_TEST(test_a_small_jump_of_a_driven_particle_is_taken);
 	RUN_TEST(test_a_restored_state_reports_the_same_bits_whatever_came_before);
 	RUN_TEST(test_reset_repeats_the_run);
 	RUN_TEST(test_update_model);
