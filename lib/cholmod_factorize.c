@@ -11,11 +11,14 @@
 // waiting in the program's OpenMP runtime.
 //
 // OpenMP's max-active-levels setting belongs to the thread (a data-environment setting since
-// OpenMP 5.0, and so in GCC's libgomp): 0 makes every parallel region the thread starts run on
-// that thread alone. It is set for the call and put back after it, so other threads and the
-// program's own OpenMP are untouched. The runtime's functions are looked up in the process
-// (dlopen with RTLD_NOLOAD): springmass does not link OpenMP itself, and without an OpenMP runtime
-// loaded (a CHOLMOD built without OpenMP) there is nothing to keep to one thread.
+// OpenMP 5.0, and so in GCC's libgomp from GCC 11 on): 0 makes every parallel region the thread
+// starts run on that thread alone. It is set for the call and put back after it, so other threads
+// and the program's own OpenMP are untouched. (An older libgomp, loaded by a program before
+// springmass, keeps one setting for the whole process: its other threads' parallel regions run on
+// one thread while a factorisation lasts, and two factorisations at once in two threads may leave
+// it at 0, a program's OpenMP then running on one thread: slower, never wrong.) The runtime's functions are
+// looked up in the process (dlopen with RTLD_NOLOAD): springmass does not link OpenMP itself, and without an
+// OpenMP runtime loaded (a CHOLMOD built without OpenMP) there is nothing to keep to one thread.
 #define _GNU_SOURCE  // RTLD_NOLOAD
 
 #include "cholmod_factorize.h"

@@ -277,7 +277,6 @@ static void work_free(statics_work* w)
 #endif
 }
 
-// Largest force component on a free particle [N].
 // Tells the caller's callback of an iteration not reported yet. False when it asks to stop (*st
 // and err set).
 static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_status* st, sm_error* err)
@@ -294,6 +293,7 @@ static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_s
 	return false;
 }
 
+// Largest force component on a free particle [N].
 static double residual_norm(const statics_work* w, const double* f)
 {
 	double r = 0.0;
@@ -791,8 +791,8 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 				mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
 		} else {
 			mu = mu == 0.0 ? 1e-6 * mu_ref : 10.0 * mu;
-			if (mu > 1e12 * mu_ref)
-				return 0;
+			if (mu > 1e12 * mu_ref)  // giving up: the iteration left the shape where it was
+				return report_iteration(w, res, st, err) ? 0 : -1;
 		}
 	}
 }

@@ -418,7 +418,8 @@ static int test_statics_reports_every_iteration(void)
 
 // A load no spring can carry (1e308 N on the free end of a rope): the stiffness continuation
 // stops before the iteration limit. The refusal says so instead of "no equilibrium found in 100
-// iterations", which read as if a limit of 100 had been reached.
+// iterations", which read as if a limit of 100 had been reached. on_iteration heard of every
+// iteration, the last one (after which Newton gave up) too.
 static int test_statics_says_when_the_continuation_gives_up(void)
 {
 	sm_model* model = hanging_rope(1.0, 1.0, 1000.0, 9.81, 5);
@@ -427,11 +428,15 @@ static int test_statics_says_when_the_continuation_gives_up(void)
 	force[15] = 1e308;
 	sm_statics_def def = sm_default_statics_def();
 	def.external_forces = force;
+	iteration_log log = {0, 0, 0, true};
+	def.on_iteration = log_iteration;
+	def.on_iteration_context = &log;
 	sm_statics_result res;
 	sm_error err;
 	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, &err), SM_ERROR_NOT_CONVERGED);
 	printf("  %s\n", err.message);
 	ENSURE(res.iterations < def.max_iterations);
+	ENSURE(log.in_order && log.calls == res.iterations);
 	ENSURE(strstr(err.message, "the stiffness continuation gave up after") != NULL);
 	sm_model_destroy(model);
 	return 0;

@@ -44,22 +44,26 @@ static void usage(FILE* out)
 	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
 }
 
-// After every Newton iteration: the progress line (cli_progress.h).
+// The progress line (cli_progress.h): after Newton iterations, and the last one after the solve.
 typedef struct statics_progress {
 	cli_progress line;
 	int32_t max_iterations;
 } statics_progress;
 
+static void show_progress(statics_progress* p, int32_t iterations, double residual, bool last)
+{
+	if (!cli_progress_due(&p->line, last))
+		return;
+	char line[128];
+	snprintf(line, sizeof line,
+	         "springmass statics: iteration %d of at most %d, largest force %.3g N, %.1f s", (int)iterations,
+	         (int)p->max_iterations, residual, cli_wall_clock() - p->line.start);
+	cli_progress_show(&p->line, line);
+}
+
 static bool on_iteration(void* context, int32_t iterations, double residual)
 {
-	statics_progress* p = context;
-	if (cli_progress_due(&p->line, false)) {
-		char line[128];
-		snprintf(line, sizeof line,
-		         "springmass statics: iteration %d of at most %d, largest force %.3g N, %.1f s",
-		         (int)iterations, (int)p->max_iterations, residual, cli_wall_clock() - p->line.start);
-		cli_progress_show(&p->line, line);
-	}
+	show_progress(context, iterations, residual, false);
 	return true;
 }
 
@@ -225,6 +229,8 @@ int sm_cmd_statics(int argc, char** argv)
 	cli_progress_start(&progress.line);
 	sm_statics_result res;
 	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
+	if (!quiet)
+		show_progress(&progress, res.iterations, res.residual, true);
 	cli_progress_end(&progress.line);
 	if (st != SM_OK) {
 		fprintf(stderr, "springmass statics: %s: ", model_path);
