@@ -4,11 +4,12 @@
 // supernode in OpenMP parallel loops of 4 threads (an explicit num_threads(4), whatever
 // OMP_NUM_THREADS says): thousands of parallel regions per factorisation, each a few microseconds
 // of scattering (the dense work is BLAS's). On 2 cores the team of 4 spent more time waiting on
-// its barriers than working: the sparse statics of the 40 x 40 benchmark cloth took 6.6 - 8.2 s
-// with it, 540 000 context switches, and 1.8 - 2.3 s on the calling thread alone (the same
-// iterations; the loops only scatter, so the factor is the same either way); the ten lowest modes
-// of the 129 x 129 trampoline 5.7 s against 4.1 s. The team also outlived the call, as threads
-// waiting in the program's OpenMP runtime.
+// its barriers than working (three alternating runs on a quiet machine): the sparse statics of
+// the 40 x 40 benchmark cloth took 5.7 - 6.4 s with it, with 540 000 context switches, and 1.1 -
+// 1.3 s on the calling thread alone (the same iterations; the loops only scatter, so the factor
+// is the same either way); the 64 x 64 cloth's 52 s against 12 s; the ten lowest modes of the
+// 129 x 129 trampoline 5.1 - 5.5 s against 3.2 - 3.6 s. The team also outlived the call, as
+// threads waiting in the program's OpenMP runtime.
 //
 // OpenMP's max-active-levels setting belongs to the thread (a data-environment setting since
 // OpenMP 5.0, and so in GCC's libgomp from GCC 11 on): 0 makes every parallel region the thread
