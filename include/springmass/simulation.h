@@ -39,12 +39,15 @@
 // for the pcg solver on models of 4000 free particles or more; they end with the simulation),
 // but OpenBLAS, which CHOLMOD calls, may start others, as its process-wide settings allow (see above): a
 // program that runs simulations in threads of its own and wants no others sets OPENBLAS_NUM_THREADS=1 in
-// the environment before the first call. CHOLMOD's supernodal factorisation (the reduced Cholesky solver
-// from about 2000 unknowns on, the coarse system of conjugate gradients on large models, the sparse paths
-// of sm_statics_solve and sm_modes_compute) would run its loops in an OpenMP team of 4 threads whatever
-// OMP_NUM_THREADS says; springmass keeps them to the calling thread (the sparse statics of a 40 x 40 cloth
-// ran 5 times faster so on 2 cores: lib/cholmod_factorize.c), and leaves the thread's OpenMP settings as they
-// were.
+// the environment before the first call. It costs no time where CHOLMOD's blocks are small: a program
+// solving the sparse statics of a 40 x 40 cloth took 3.5 - 3.9 s with one BLAS thread and 3.3 - 4.3 s with
+// OpenBLAS's default of one per core on 2 cores, which spent twice the processor time (3 s of it waiting in
+// the kernel) and, with the test suite running beside it, took 42 s against 4.2 s in one run. CHOLMOD's
+// supernodal factorisation (the reduced Cholesky solver from about 2000 unknowns on, the coarse system of
+// conjugate gradients on large models, the sparse paths of sm_statics_solve and sm_modes_compute) would run
+// its loops in an OpenMP team of 4 threads whatever OMP_NUM_THREADS says; springmass keeps them to the
+// calling thread (the sparse statics of a 40 x 40 cloth ran 5 times faster so on 2 cores:
+// lib/cholmod_factorize.c), and leaves the thread's OpenMP settings as they were.
 #pragma once
 
 #include <float.h>
