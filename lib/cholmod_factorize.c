@@ -17,9 +17,10 @@
 // and the program's own OpenMP are untouched. (An older libgomp, loaded by a program before
 // springmass, keeps one setting for the whole process: its other threads' parallel regions run on
 // one thread while a factorisation lasts, and two factorisations at once in two threads may leave
-// it at 0, a program's OpenMP then running on one thread: slower, never wrong.) The runtime's functions are
-// looked up in the process (dlopen with RTLD_NOLOAD): springmass does not link OpenMP itself, and without an
-// OpenMP runtime loaded (a CHOLMOD built without OpenMP) there is nothing to keep to one thread.
+// it at 0, a program's OpenMP then running on one thread: slower, never wrong.) The runtime's
+// functions are looked up in the process (dlopen with RTLD_NOLOAD): springmass does not link
+// OpenMP itself, and without an OpenMP runtime loaded (a CHOLMOD built without OpenMP) there is
+// nothing to keep to one thread.
 #define _GNU_SOURCE  // RTLD_NOLOAD
 
 #include "cholmod_factorize.h"
