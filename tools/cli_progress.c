@@ -47,3 +47,19 @@ void cli_progress_end(const cli_progress* p)
 	if (p->shown && p->terminal)
 		fprintf(stderr, "\n");
 }
+
+void cli_statics_progress_show(cli_statics_progress* p, int32_t iterations, double residual, bool last)
+{
+	if (!cli_progress_due(&p->line, last))
+		return;
+	char line[160];
+	snprintf(line, sizeof line, "%s: iteration %d of at most %d, largest force %.3g N, %.1f s", p->label,
+	         (int)iterations, (int)p->max_iterations, residual, cli_wall_clock() - p->line.start);
+	cli_progress_show(&p->line, line);
+}
+
+bool cli_statics_progress_iteration(void* context, int32_t iterations, double residual)
+{
+	cli_statics_progress_show(context, iterations, residual, false);
+	return true;
+}

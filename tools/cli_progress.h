@@ -4,6 +4,7 @@
 #pragma once
 
 #include <stdbool.h>
+#include <stdint.h>
 
 typedef struct cli_progress {
 	double start;   ///< wall-clock time of the start [s]; 0 until cli_progress_start
@@ -29,3 +30,17 @@ void cli_progress_show(cli_progress* p, const char* line);
 
 /// Ends a line that rewrites itself, before other output.
 void cli_progress_end(const cli_progress* p);
+
+/// The progress line of a static equilibrium (springmass statics, modes --at-equilibrium): after
+/// Newton iterations, through sm_statics_def.on_iteration, and the last one after the solve.
+typedef struct cli_statics_progress {
+	cli_progress line;
+	const char* label;  ///< what the line starts with: "springmass statics"
+	int32_t max_iterations;
+} cli_statics_progress;
+
+/// Shows the line for `iterations` and `residual` [N] if it is due (`last`: after the solve).
+void cli_statics_progress_show(cli_statics_progress* p, int32_t iterations, double residual, bool last);
+
+/// sm_statics_def.on_iteration with a cli_statics_progress as its context: shows the line, goes on.
+bool cli_statics_progress_iteration(void* context, int32_t iterations, double residual);

@@ -1,5 +1,6 @@
 // springmass modes: natural frequencies, damping ratios and mode shapes of a model file.
 #include "cli_common.h"
+#include "cli_progress.h"
 #include "commands.h"
 
 #include "springmass/analysis.h"
@@ -36,7 +37,8 @@ static void usage(FILE* out)
 	        "  -n, --count N          modes listed and written, lowest first (default 10; 0 = all; all or\n"
 	        "                         more than the sparse solver gives need --solver dense above %d\n"
 	        "                         degrees of freedom, where the dense solver takes minutes)\n"
-	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics)\n"
+	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics,\n"
+	        "                         with its progress line on stderr once it takes over a second)\n"
 	        "  --zero-tolerance R     omega^2 within R of the largest |omega^2| is a zero mode (default\n"
 	        "                         1e-12; lower it for a model whose stiffnesses span more than 1e12)\n"
 	        "  --steps-per-period K   communication steps per period of the highest mode listed\n"
@@ -296,8 +298,17 @@ int sm_cmd_modes(int argc, char** argv)
 		goto done;
 	}
 	if (at_equilibrium) {
+		sm_statics_def statics = sm_default_statics_def();
+		cli_statics_progress progress = {
+		    {0.0, 0.0, 0.0, false, false, 0}, "springmass modes: static equilibrium", statics.max_iterations};
+		statics.on_iteration = cli_statics_progress_iteration;
+		statics.on_iteration_context = &progress;
+		cli_progress_start(&progress.line);
 		sm_statics_result res;
-		if (sm_statics_solve(model, NULL, x, NULL, &res, &err) != SM_OK) {
+		const sm_status found = sm_statics_solve(model, &statics, x, NULL, &res, &err);
+		cli_statics_progress_show(&progress, res.iterations, res.residual, true);
+		cli_progress_end(&progress.line);
+		if (found != SM_OK) {
 			fprintf(stderr, "springmass modes: %s: ", model_path);
 			cli_write_named(stderr, doc, model, err.message);
 			fputc('\n', stderr);

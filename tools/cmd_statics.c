@@ -44,29 +44,6 @@ static void usage(FILE* out)
 	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
 }
 
-// The progress line (cli_progress.h): after Newton iterations, and the last one after the solve.
-typedef struct statics_progress {
-	cli_progress line;
-	int32_t max_iterations;
-} statics_progress;
-
-static void show_progress(statics_progress* p, int32_t iterations, double residual, bool last)
-{
-	if (!cli_progress_due(&p->line, last))
-		return;
-	char line[128];
-	snprintf(line, sizeof line,
-	         "springmass statics: iteration %d of at most %d, largest force %.3g N, %.1f s", (int)iterations,
-	         (int)p->max_iterations, residual, cli_wall_clock() - p->line.start);
-	cli_progress_show(&p->line, line);
-}
-
-static bool on_iteration(void* context, int32_t iterations, double residual)
-{
-	show_progress(context, iterations, residual, false);
-	return true;
-}
-
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
 static int write_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
                      const double* displacement, const double* reactions)
@@ -221,16 +198,17 @@ int sm_cmd_statics(int argc, char** argv)
 	sm_model_initial_state(model, x0, NULL);
 	if (def.solver == SM_STATICS_DENSE)
 		cli_note_dense("statics", 3 * (size_t)sm_model_free_count(model));
-	statics_progress progress = {{0.0, 0.0, 0.0, false, false, 0}, def.max_iterations};
+	cli_statics_progress progress = {
+	    {0.0, 0.0, 0.0, false, false, 0}, "springmass statics", def.max_iterations};
 	if (!quiet) {
-		def.on_iteration = on_iteration;
+		def.on_iteration = cli_statics_progress_iteration;
 		def.on_iteration_context = &progress;
 	}
 	cli_progress_start(&progress.line);
 	sm_statics_result res;
 	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
 	if (!quiet)
-		show_progress(&progress, res.iterations, res.residual, true);
+		cli_statics_progress_show(&progress, res.iterations, res.residual, true);
 	cli_progress_end(&progress.line);
 	if (st != SM_OK) {
 		fprintf(stderr, "springmass statics: %s: ", model_path);
