@@ -48,7 +48,14 @@ void cli_progress_end(const cli_progress* p)
 		fprintf(stderr, "\n");
 }
 
-void cli_statics_progress_show(cli_statics_progress* p, int32_t iterations, double residual, bool last)
+// The progress of a statics solve: the line, what it starts with and the iteration limit.
+typedef struct statics_progress {
+	cli_progress line;
+	const char* label;
+	int32_t max_iterations;
+} statics_progress;
+
+static void show_statics_progress(statics_progress* p, int32_t iterations, double residual, bool last)
 {
 	if (!cli_progress_due(&p->line, last))
 		return;
@@ -58,8 +65,24 @@ void cli_statics_progress_show(cli_statics_progress* p, int32_t iterations, doub
 	cli_progress_show(&p->line, line);
 }
 
-bool cli_statics_progress_iteration(void* context, int32_t iterations, double residual)
+static bool on_statics_iteration(void* context, int32_t iterations, double residual)
 {
-	cli_statics_progress_show(context, iterations, residual, false);
+	show_statics_progress(context, iterations, residual, false);
 	return true;
+}
+
+sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, sm_statics_def* def,
+                            double* x, double* reactions, sm_statics_result* res, sm_error* err)
+{
+	statics_progress progress = {.label = label, .max_iterations = def->max_iterations};
+	if (!quiet) {
+		def->on_iteration = on_statics_iteration;
+		def->on_iteration_context = &progress;
+	}
+	cli_progress_start(&progress.line);
+	const sm_status st = sm_statics_solve(model, def, x, reactions, res, err);
+	if (!quiet)
+		show_statics_progress(&progress, res->iterations, res->residual, true);
+	cli_progress_end(&progress.line);
+	return st;
 }

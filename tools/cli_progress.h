@@ -3,8 +3,9 @@
 // shows one ends it with cli_progress_end before writing anything else to stderr.
 #pragma once
 
+#include "springmass/analysis.h"
+
 #include <stdbool.h>
-#include <stdint.h>
 
 typedef struct cli_progress {
 	double start;   ///< wall-clock time of the start [s]; 0 until cli_progress_start
@@ -31,16 +32,8 @@ void cli_progress_show(cli_progress* p, const char* line);
 /// Ends a line that rewrites itself, before other output.
 void cli_progress_end(const cli_progress* p);
 
-/// The progress line of a static equilibrium (springmass statics, modes --at-equilibrium): after
-/// Newton iterations, through sm_statics_def.on_iteration, and the last one after the solve.
-typedef struct cli_statics_progress {
-	cli_progress line;
-	const char* label;  ///< what the line starts with: "springmass statics"
-	int32_t max_iterations;
-} cli_statics_progress;
-
-/// Shows the line for `iterations` and `residual` [N] if it is due (`last`: after the solve).
-void cli_statics_progress_show(cli_statics_progress* p, int32_t iterations, double residual, bool last);
-
-/// sm_statics_def.on_iteration with a cli_statics_progress as its context: shows the line, goes on.
-bool cli_statics_progress_iteration(void* context, int32_t iterations, double residual);
+/// sm_statics_solve with the progress line of a static equilibrium (springmass statics, modes
+/// --at-equilibrium), unless `quiet`: a line after Newton iterations (def->on_iteration, which
+/// this sets) and the last one after the solve, each starting with `label`.
+sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, sm_statics_def* def,
+                            double* x, double* reactions, sm_statics_result* res, sm_error* err);

@@ -299,16 +299,9 @@ int sm_cmd_modes(int argc, char** argv)
 	}
 	if (at_equilibrium) {
 		sm_statics_def statics = sm_default_statics_def();
-		cli_statics_progress progress = {
-		    {0.0, 0.0, 0.0, false, false, 0}, "springmass modes: static equilibrium", statics.max_iterations};
-		statics.on_iteration = cli_statics_progress_iteration;
-		statics.on_iteration_context = &progress;
-		cli_progress_start(&progress.line);
 		sm_statics_result res;
-		const sm_status found = sm_statics_solve(model, &statics, x, NULL, &res, &err);
-		cli_statics_progress_show(&progress, res.iterations, res.residual, true);
-		cli_progress_end(&progress.line);
-		if (found != SM_OK) {
+		if (cli_statics_solve("springmass modes: static equilibrium", false, model, &statics, x, NULL, &res,
+		                      &err) != SM_OK) {
 			fprintf(stderr, "springmass modes: %s: ", model_path);
 			cli_write_named(stderr, doc, model, err.message);
 			fputc('\n', stderr);

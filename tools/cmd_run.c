@@ -472,7 +472,7 @@ int sm_cmd_run(int argc, char** argv)
 		status = 2;
 		goto done;
 	}
-	run_progress prog = {{0.0, 0.0, 0.0, false, false, 0}, t_end};
+	run_progress prog = {.t_end = t_end};
 	def.on_step = on_internal_step;
 	def.on_step_context = o.quiet ? NULL : &prog;
 	sim = sm_simulation_create(model, &def, &err);

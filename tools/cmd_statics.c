@@ -198,18 +198,9 @@ int sm_cmd_statics(int argc, char** argv)
 	sm_model_initial_state(model, x0, NULL);
 	if (def.solver == SM_STATICS_DENSE)
 		cli_note_dense("statics", 3 * (size_t)sm_model_free_count(model));
-	cli_statics_progress progress = {
-	    {0.0, 0.0, 0.0, false, false, 0}, "springmass statics", def.max_iterations};
-	if (!quiet) {
-		def.on_iteration = cli_statics_progress_iteration;
-		def.on_iteration_context = &progress;
-	}
-	cli_progress_start(&progress.line);
 	sm_statics_result res;
-	const sm_status st = sm_statics_solve(model, &def, x, reactions, &res, &err);
-	if (!quiet)
-		cli_statics_progress_show(&progress, res.iterations, res.residual, true);
-	cli_progress_end(&progress.line);
+	const sm_status st =
+	    cli_statics_solve("springmass statics", quiet, model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
 		fprintf(stderr, "springmass statics: %s: ", model_path);
 		cli_write_named(stderr, doc, model, err.message);
