@@ -330,6 +330,9 @@ typedef struct lanczos_work {
 	double* products;      // m x dof: V Y on restart
 	double* rhs;           // dof
 	gsl_eigen_symmv_workspace* eigen;
+	const sm_modes_def* def;  // on_iteration, the caller's progress callback
+	int64_t steps;            // Lanczos steps (solves) so far, over every run
+	bool stopped;             // on_iteration returned false
 } lanczos_work;
 
 static void lanczos_free(lanczos_work* w)
@@ -452,7 +455,8 @@ static int fresh_vector(const lanczos_work* w, uint64_t seed, const double* lock
 // One Lanczos run: the `want` largest eigenvalues nu of OP on the M-orthogonal complement of
 // the locked vectors, into nu[] (descending) and vectors (want x dof, M-orthonormal), with at
 // most `restarts` thick restarts. Returns 1 when converged, 0 when the restarts ran out (nu and
-// vectors then hold the current Ritz pairs), -1 on a failed solve.
+// vectors then hold the current Ritz pairs), -1 on a failed solve or when the caller's
+// on_iteration stopped it (w->stopped).
 static int lanczos_run(lanczos_work* w, size_t want, const double* locked, size_t locked_count, uint64_t seed,
                        int restarts, double* nu, double* vectors)
 {
@@ -470,6 +474,7 @@ static int lanczos_run(lanczos_work* w, size_t want, const double* locked, size_
 			double* next = V + (j + 1) * dof;
 			if (apply_operator(w, V + j * dof, next) != 0)
 				return -1;
+			w->steps++;
 			orthogonalise(w, next, locked, locked_count, NULL);
 			memset(w->coefficients, 0, (j + 1) * sizeof(double));
 			orthogonalise(w, next, V, j + 1, w->coefficients);
@@ -494,10 +499,16 @@ static int lanczos_run(lanczos_work* w, size_t want, const double* locked, size_
 		if (gsl_eigen_symmv(&A.matrix, &T.vector, &Y.matrix, w->eigen) != GSL_SUCCESS ||
 		    gsl_eigen_symmv_sort(&T.vector, &Y.matrix, GSL_EIGEN_SORT_VAL_DESC) != GSL_SUCCESS)
 			return -1;
-		int converged = 1;
+		size_t converged_pairs = 0;
 		for (size_t i = 0; i < want; i++)
-			if (fabs(beta * w->ritz[(m - 1) * m + i]) > lanczos_tolerance * fabs(w->theta[i]))
-				converged = 0;
+			if (!(fabs(beta * w->ritz[(m - 1) * m + i]) > lanczos_tolerance * fabs(w->theta[i])))
+				converged_pairs++;
+		const int converged = converged_pairs == want;
+		if (w->def->on_iteration != NULL && !w->def->on_iteration(w->def->on_iteration_context, w->steps,
+		                                                          (int32_t)converged_pairs, (int32_t)want)) {
+			w->stopped = true;
+			return -1;
+		}
 		const int last = converged || restart == restarts;
 		size_t keep = last ? want : want + (m - want) / 2;
 		if (keep > m - 2)
@@ -526,6 +537,16 @@ static int lanczos_run(lanczos_work* w, size_t want, const double* locked, size_
 			H[i * m + i] = w->theta[i];
 		kept = keep;
 	}
+}
+
+// The error of a Lanczos run that returned -1.
+static sm_status lanczos_failure(const lanczos_work* w, sm_error* err)
+{
+	if (w->stopped)
+		return sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+		                    "modes: stopped by the caller (on_iteration) after %lld Lanczos steps",
+		                    (long long)w->steps);
+	return sm_error_set(err, SM_ERROR_SOLVER, "modes: a sparse solve failed in the Lanczos iteration");
 }
 
 // Sorts `count` eigenvalues ascending and their vectors (stride dof) along (insertion sort:
@@ -643,8 +664,7 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 		                  ? 1
 		                  : lanczos_run(w, want, found, count, (uint64_t)run, max_restarts, nu, fresh);
 		if (r < 0)
-			return sm_error_set(err, SM_ERROR_SOLVER,
-			                    "modes: a sparse solve failed in the Lanczos iteration");
+			return lanczos_failure(w, err);
 		if (r == 0)
 			return sm_error_set(
 			    err, SM_ERROR_NOT_CONVERGED,
@@ -735,6 +755,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	memset(&w, 0, sizeof w);
 	w.dof = dof;
 	w.mass = p->dof_mass;
+	w.def = p->def;
 	double gershgorin = 0.0;
 	sm_status st = lanczos_setup(&w, p, &gershgorin, err);
 	lanczos_pairs pairs;
@@ -804,7 +825,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	if (!lowered) {
 		const int r = lanczos_run(&w, want, NULL, 0, 0, probe_restarts, pairs.nu, pairs.fresh);
 		if (r < 0) {
-			st = sm_error_set(err, SM_ERROR_SOLVER, "modes: a sparse solve failed in the Lanczos iteration");
+			st = lanczos_failure(&w, err);
 			goto done;
 		}
 		first_done = r == 1;
@@ -820,7 +841,8 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	}
 	double residual = 0.0;
 	st = lowest_pairs(&w, p, &pairs, first_done, &residual, err);
-	if (moved && st != SM_ERROR_OUT_OF_MEMORY && (st != SM_OK || !(residual <= p->def->residual_tolerance))) {
+	if (moved && st != SM_ERROR_OUT_OF_MEMORY && !w.stopped &&
+	    (st != SM_OK || !(residual <= p->def->residual_tolerance))) {
 		if (factor_shifted(&w, shift) != 1) {
 			st = sm_error_set(err, SM_ERROR_SOLVER, "modes: CHOLMOD could not factor K - sigma M again");
 			goto done;

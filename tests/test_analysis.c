@@ -334,6 +334,32 @@ static sm_model* stiff_rope(void)
 	return model;
 }
 
+// The model's static equilibrium from its initial state (malloc'd), or NULL.
+static double* rest_shape(const sm_model* model)
+{
+	double* x = malloc(3 * (size_t)sm_model_particle_count(model) * sizeof(double));
+	if (x != NULL && sm_statics_solve(model, NULL, x, NULL, NULL, NULL) != SM_OK) {
+		free(x);
+		return NULL;
+	}
+	return x;
+}
+
+// A free block of 8 x 8 x 8 particles, the default block otherwise (six rigid-body modes).
+static sm_model* free_block(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_block_def bd = sm_default_block_def();
+	bd.nu = bd.nv = bd.nw = 8;
+	sm_structure block;
+	if (model != NULL && sm_add_block(model, &bd, &block) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A stiff rope (E = 1e9 N, 200 segments of 5 mm: 2e11 N/m each, 1 kg) held at one end swings down
 // from horizontal: the stiffness continuation takes it there, and its last stage ended within the
 // round-off floor (8 eps sum ks |x|: 1.4e-3 N) with every particle 1.2e-3 N short of its
@@ -1224,13 +1250,8 @@ static int test_sparse_unstable_configuration(void)
 // mode elastic.
 static int test_sparse_free_block_zero_modes(void)
 {
-	sm_model_def md = sm_default_model_def();
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = free_block();
 	ENSURE(model != NULL);
-	sm_block_def bd = sm_default_block_def();
-	bd.nu = bd.nv = bd.nw = 8;
-	sm_structure block;
-	ENSURE_STATUS(sm_add_block(model, &bd, &block), SM_OK);
 	sm_modes modes;
 	if (lowest_ten_by_auto_choice(model, &modes) != 0)
 		return 1;
@@ -1328,10 +1349,9 @@ static int test_sparse_adaptive_shift_hanging_rope(void)
 {
 	sm_model* model = hanging_rope(1.0, 0.5, 1e6, 9.81, 300);
 	ENSURE(model != NULL);
-	double* x = malloc(3 * (size_t)sm_model_particle_count(model) * sizeof(double));
+	double* x = rest_shape(model);
 	ENSURE(x != NULL);
 	sm_error err;
-	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, NULL, &err), SM_OK);
 	sm_modes_def def = sm_default_modes_def();
 	def.configuration = x;
 	def.mode_count = 50;
@@ -1358,6 +1378,96 @@ static int test_sparse_adaptive_shift_hanging_rope(void)
 	sm_modes_release(&dense);
 	free(x);
 	sm_model_destroy(model);
+	return 0;
+}
+
+typedef struct lanczos_log {
+	int32_t calls, stop_after;  // stop_after 0: never stop
+	int64_t last_steps;
+	int32_t sought, most_converged, runs_restarted;  // runs_restarted: converged counts that fell
+	int32_t last_converged;
+	bool in_order;  // steps rising, 0 <= converged <= sought, sought the same every time
+} lanczos_log;
+
+static bool log_lanczos(void* context, int64_t steps, int32_t converged, int32_t sought)
+{
+	lanczos_log* log = context;
+	if (log->calls == 0)
+		log->sought = sought;
+	log->in_order = log->in_order && steps > log->last_steps && converged >= 0 && converged <= sought &&
+	                sought == log->sought;
+	if (converged < log->last_converged)
+		log->runs_restarted++;
+	log->most_converged = converged > log->most_converged ? converged : log->most_converged;
+	log->last_converged = converged;
+	log->last_steps = steps;
+	log->calls++;
+	return log->stop_after == 0 || log->calls < log->stop_after;
+}
+
+// on_iteration of the sparse modes: a free 8 x 8 x 8 block (six rigid-body modes: Lanczos runs
+// again for each further mode of the repeated zero) and a hanging rope whose slow pendulum modes
+// move the shift after a probing run. Every cycle is heard of, in order, the modes are the same
+// bits as without it, returning false stops the computation with SM_ERROR_NOT_CONVERGED and the
+// result zeroed, and the dense path does not call it.
+static int test_sparse_modes_report_their_progress(void)
+{
+	sm_model* block = free_block();
+	ENSURE(block != NULL);
+	sm_model* rope = hanging_rope(1.0, 0.5, 1e6, 9.81, 300);
+	ENSURE(rope != NULL);
+	double* x = rest_shape(rope);
+	ENSURE(x != NULL);
+	sm_error err;
+
+	sm_model* models[] = {block, rope};
+	for (int k = 0; k < 2; k++) {
+		sm_modes_def def = sm_default_modes_def();
+		def.mode_count = 10;
+		def.solver = SM_MODES_SPARSE;
+		def.configuration = k == 1 ? x : NULL;
+		sm_modes plain, heard;
+		ENSURE_STATUS(sm_modes_compute(models[k], &def, &plain, &err), SM_OK);
+		lanczos_log log = {.in_order = true};
+		def.on_iteration = log_lanczos;
+		def.on_iteration_context = &log;
+		ENSURE_STATUS(sm_modes_compute(models[k], &def, &heard, &err), SM_OK);
+		printf("  %s: %d cycles, %lld Lanczos steps, %d runs after the first\n", k == 0 ? "block" : "rope",
+		       (int)log.calls, (long long)log.last_steps, (int)log.runs_restarted);
+		ENSURE(log.in_order && log.calls > 1 && log.sought == 11 && log.most_converged == 11);
+		if (k == 0)
+			ENSURE(log.runs_restarted >= 1);  // the repeated zero takes several runs
+		const size_t n3 = 3 * (size_t)heard.particle_count;
+		ENSURE(heard.count == plain.count && heard.shift == plain.shift);
+		ENSURE(memcmp(heard.omega_squared, plain.omega_squared, 10 * sizeof(double)) == 0);
+		ENSURE(memcmp(heard.shapes, plain.shapes, 10 * n3 * sizeof(double)) == 0);
+		sm_modes_release(&heard);
+
+		// Stopped at the first cycle, and at the last one.
+		const int32_t stops[] = {1, log.calls};
+		for (int s = 0; s < 2; s++) {
+			lanczos_log stopping = {.in_order = true, .stop_after = stops[s]};
+			def.on_iteration_context = &stopping;
+			ENSURE_STATUS(sm_modes_compute(models[k], &def, &heard, &err), SM_ERROR_NOT_CONVERGED);
+			ENSURE(stopping.calls == stops[s] && strstr(err.message, "stopped by the caller") != NULL);
+			ENSURE(heard.count == 0 && heard.shapes == NULL && heard.omega_squared == NULL);
+		}
+		sm_modes_release(&plain);
+	}
+	// The dense path: one call of GSL's eigensolver, no progress to report.
+	sm_modes_def def = sm_default_modes_def();
+	def.solver = SM_MODES_DENSE;
+	def.configuration = x;
+	lanczos_log log = {.in_order = true};
+	def.on_iteration = log_lanczos;
+	def.on_iteration_context = &log;
+	sm_modes dense;
+	ENSURE_STATUS(sm_modes_compute(rope, &def, &dense, &err), SM_OK);
+	ENSURE(log.calls == 0 && dense.count == dense.dof);
+	sm_modes_release(&dense);
+	free(x);
+	sm_model_destroy(block);
+	sm_model_destroy(rope);
 	return 0;
 }
 
@@ -3022,6 +3132,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sparse_unstable_configuration);
 	RUN_TEST(test_sparse_free_block_zero_modes);
 	RUN_TEST(test_sparse_adaptive_shift_hanging_rope);
+	RUN_TEST(test_sparse_modes_report_their_progress);
 	RUN_TEST(test_modes_overflow_is_refused);
 	RUN_TEST(test_driven_particle_is_held);
 	RUN_TEST(test_statics_start_is_used);

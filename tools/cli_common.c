@@ -445,6 +445,35 @@ bool cli_same_file(const char* a, const char* b)
 	return same;
 }
 
+// Whether the file at path starts as a legacy VTK file does.
+static bool is_vtk_file(const char* path)
+{
+	static const char header[] = "# vtk DataFile";
+	char start[sizeof header] = {0};
+	FILE* f = fopen(path, "rb");
+	if (f == NULL)
+		return false;
+	const size_t got = fread(start, 1, sizeof header - 1, f);
+	fclose(f);
+	return got == sizeof header - 1 && memcmp(start, header, sizeof header - 1) == 0;
+}
+
+long cli_remove_series_tail(const char* prefix, int digits, long first)
+{
+	const size_t size = strlen(prefix) + 32;
+	char* path = malloc(size);
+	long removed = 0;
+	for (long k = first; path != NULL; k++) {
+		snprintf(path, size, "%s%0*ld.vtk", prefix, digits, k);
+		struct stat st;
+		if (stat(path, &st) != 0 || !S_ISREG(st.st_mode) || !is_vtk_file(path) || unlink(path) != 0)
+			break;
+		removed++;
+	}
+	free(path);
+	return removed;
+}
+
 bool cli_inside(const char* path, const char* folder)
 {
 	char* place = canonical_path(path);

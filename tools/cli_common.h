@@ -124,6 +124,12 @@ bool cli_inside(const char* path, const char* folder);
 /// place once created (the real path of the folder, and the name).
 bool cli_same_file(const char* a, const char* b);
 
+/// Removes what an earlier, longer series left behind in the folder of this one: the files
+/// prefix<k>.vtk for k = first, first + 1, ... (k with at least `digits` digits), up to the first
+/// that does not exist or is not a VTK file (starting "# vtk DataFile", as no model file or CSV
+/// does). Returns how many it removed.
+long cli_remove_series_tail(const char* prefix, int digits, long first);
+
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
 /// failed call just before).
 void cli_cannot_write(const char* command, const char* path);

@@ -86,3 +86,45 @@ sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model
 	cli_progress_end(&progress.line);
 	return st;
 }
+
+// The progress of the Lanczos iteration of sm_modes_compute: the line and what it last heard.
+typedef struct modes_progress {
+	cli_progress line;
+	const char* label;
+	int64_t steps;
+	int32_t converged, sought;
+} modes_progress;
+
+static void show_modes_progress(modes_progress* p, bool last)
+{
+	if (p->steps == 0 || !cli_progress_due(&p->line, last))
+		return;
+	char line[160];
+	snprintf(line, sizeof line, "%s: Lanczos step %lld, %d of %d modes converged in this run, %.1f s",
+	         p->label, (long long)p->steps, (int)p->converged, (int)p->sought,
+	         cli_wall_clock() - p->line.start);
+	cli_progress_show(&p->line, line);
+}
+
+static bool on_lanczos_cycle(void* context, int64_t steps, int32_t converged, int32_t sought)
+{
+	modes_progress* p = context;
+	p->steps = steps;
+	p->converged = converged;
+	p->sought = sought;
+	show_modes_progress(p, false);
+	return true;
+}
+
+sm_status cli_modes_compute(const char* label, const sm_model* model, sm_modes_def* def, sm_modes* modes,
+                            sm_error* err)
+{
+	modes_progress progress = {.label = label};
+	def->on_iteration = on_lanczos_cycle;
+	def->on_iteration_context = &progress;
+	cli_progress_start(&progress.line);
+	const sm_status st = sm_modes_compute(model, def, modes, err);
+	show_modes_progress(&progress, true);
+	cli_progress_end(&progress.line);
+	return st;
+}

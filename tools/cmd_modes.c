@@ -46,7 +46,8 @@ static void usage(FILE* out)
 	        "  -o, --output FILE      write the listed mode shapes as CSV: particle, name, then x, y, z\n"
 	        "                         of every mode [1/sqrt(kg), mass-normalised]\n"
 	        "  --vtk DIR              write DIR/mode_<k>.vtk per listed mode (ParaView: the shape as\n"
-	        "                         the vector field 'shape'; animate with Warp By Vector)\n"
+	        "                         the vector field 'shape'; animate with Warp By Vector), and\n"
+	        "                         remove the further mode files an earlier run left there\n"
 	        "  --solver NAME          auto (default: dense up to %d degrees of freedom or with -n 0),\n"
 	        "                         dense (GSL, all modes) or sparse (CHOLMOD + Lanczos, lowest N)\n"
 	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
@@ -318,7 +319,7 @@ int sm_cmd_modes(int argc, char** argv)
 	def.mode_count = (int32_t)count;
 	def.solver = solver;
 	def.zero_tolerance = zero_tolerance;
-	if (sm_modes_compute(model, &def, &modes, &err) != SM_OK) {
+	if (cli_modes_compute("springmass modes", model, &def, &modes, &err) != SM_OK) {
 		fprintf(stderr, "springmass modes: %s: ", model_path);
 		cli_write_named(stderr, doc, model, err.message);
 		fputc('\n', stderr);
@@ -357,13 +358,23 @@ int sm_cmd_modes(int argc, char** argv)
 	}
 	if (cli_outputs_commit(&outputs) != 0)
 		goto done;
+	long removed = 0;
+	if (vtk_dir != NULL) {
+		char prefix[4096];
+		if ((size_t)snprintf(prefix, sizeof prefix, "%s/mode_", vtk_dir) < sizeof prefix)
+			removed = cli_remove_series_tail(prefix, 0, (long)modes.count + 1);
+	}
 	if (csv_path != NULL)
 		printf("mode shapes written to %s%s\n", csv_path,
 		       modes.count > 0 ? "" : " (no modes: the particles only)");
 	if (vtk_dir != NULL && modes.count > 0)
-		printf("mode shapes written to %s/mode_<k>.vtk (open them in ParaView)\n", vtk_dir);
+		printf("mode shapes written to %s/mode_<k>.vtk, k = 1 to %d (open them in ParaView)\n", vtk_dir,
+		       (int)modes.count);
 	else if (vtk_dir != NULL)
 		printf("no mode shapes to write to %s\n", vtk_dir);
+	if (removed > 0)
+		printf("removed %s/mode_%d.vtk to mode_%ld.vtk, left there by an earlier run with more modes\n",
+		       vtk_dir, (int)modes.count + 1, (long)modes.count + removed);
 	status = 0;
 done:
 	cli_outputs_discard(&outputs);

@@ -39,7 +39,8 @@ static void usage(FILE* out)
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk per row (particles as\n"
 	        "                         points with their velocity [m/s], intact springs as lines with\n"
 	        "                         their tension [N] and, if all have a rest length, strain [1])\n"
-	        "                         and the index DIR/NAME.pvd\n"
+	        "                         and the index DIR/NAME.pvd (files NAME_<k>.vtk of an earlier,\n"
+	        "                         longer run there are removed)\n"
 	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
@@ -598,6 +599,14 @@ int sm_cmd_run(int argc, char** argv)
 	if (fflush(csv) != 0 || ferror(csv)) {
 		cli_cannot_write("run", csv_name);
 		goto done;
+	}
+	// Files of an earlier run with more rows, which the index does not name.
+	if (o.vtk_dir) {
+		snprintf(path, path_capacity, "%s/%s_", o.vtk_dir, name);
+		const long removed = cli_remove_series_tail(path, 6, rows + 1);
+		if (removed > 0 && !o.quiet)
+			fprintf(stderr, "springmass run: removed %s_%06ld.vtk to %s_%06ld.vtk of an earlier run\n", name,
+			        rows + 1, name, rows + removed);
 	}
 	if (!o.quiet) {
 		const sm_statistics s = sm_simulation_statistics(sim);

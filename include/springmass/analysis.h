@@ -166,6 +166,17 @@ typedef struct sm_modes_def {
 	/// sum) or the call fails with SM_ERROR_NOT_CONVERGED [1]; default 1e-9. The dense path
 	/// reports the same residual without a test (it is at round-off, about 1e-14).
 	double residual_tolerance;
+	/// Sparse path: called after every cycle of the Lanczos iteration (a full Krylov space, whose
+	/// Ritz pairs are then tested and kept for a thick restart) with the Lanczos steps taken so
+	/// far (one sparse solve each), how many of the modes sought the current Lanczos run has
+	/// converged (a later run, which looks for further modes of a repeated frequency, starts again
+	/// from 0), the modes sought (those kept and, where the Krylov space has room, the next one),
+	/// and `on_iteration_context` (default NULL: not called), e.g. to show progress or to bound
+	/// the wall time of a large model. The modes are the same with or without it. Returning
+	/// false stops the computation with SM_ERROR_NOT_CONVERGED (*modes zeroed). The dense path,
+	/// one call of GSL's eigensolver, does not call it. It must not modify the model.
+	bool (*on_iteration)(void* context, int64_t steps, int32_t converged, int32_t sought);
+	void* on_iteration_context;
 } sm_modes_def;
 
 /// Modes found by sm_modes_compute(); the arrays are owned by it until sm_modes_release().
@@ -235,7 +246,8 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// particles coincide, or those of a damped spring of rest length 0 (one of them free): its force,
 /// or its damping force, has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
 /// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
-/// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails).
+/// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails
+/// or on_iteration returned false).
 /// A model with no free particle has no modes: success with count = 0, under every solver
 /// and mode_count (the sparse solver's limits apply only when there is something to solve).
 /// Deterministic: the same

@@ -10,6 +10,7 @@ import os
 import re
 import shutil
 import subprocess
+import time
 import xml.etree.ElementTree as ET
 import zipfile
 
@@ -552,6 +553,43 @@ def test_modes_of_the_oscillator_follow_the_closed_form(tmp_path):
         _, _, vectors, _ = vtk_sections(path)
         np.testing.assert_allclose(vectors["shape"][1], bob[3 * mode:3 * mode + 3], rtol=0, atol=1e-9)
     assert sorted(p.name for p in (tmp_path / "vtk").iterdir()) == ["mode_1.vtk", "mode_2.vtk", "mode_3.vtk"]
+
+
+def test_a_shorter_series_removes_what_a_longer_one_left(tmp_path):
+    # modes: 3 modes after 5 leave mode_1 to mode_3, which ParaView would otherwise open with the
+    # earlier run's mode_4 and mode_5 as one group; a file of that name that is not a VTK file
+    # (here mode_7, past a gap) is not touched.
+    vtk = tmp_path / "vtk"
+    cli("modes", MODELS / "hanging_rope.json", "-n", 5, "--vtk", vtk)
+    (vtk / "mode_7.vtk").write_text("notes\n")
+    out = cli("modes", MODELS / "hanging_rope.json", "-n", 3, "--vtk", vtk).stdout
+    assert f"removed {vtk}/mode_4.vtk to mode_5.vtk" in out
+    assert sorted(p.name for p in vtk.iterdir()) == ["mode_1.vtk", "mode_2.vtk", "mode_3.vtk", "mode_7.vtk"]
+    # run: 6 rows after 11 (t = 0 to 1 s every 0.1 s, then every 0.2 s); the index names the six.
+    model = MODELS / "oscillator.json"
+    cli("run", model, "-q", "-o", tmp_path / "a.csv", "--t-end", 1, "--output-interval", 0.1, "--vtk", vtk)
+    assert len(list(vtk.glob("oscillator_*.vtk"))) == 11
+    err = cli("run", model, "-o", tmp_path / "b.csv", "--t-end", 1, "--output-interval", 0.2, "--vtk", vtk).stderr
+    assert "removed oscillator_000006.vtk to oscillator_000010.vtk of an earlier run" in err
+    index = ET.parse(vtk / "oscillator.pvd").getroot()
+    assert sorted(p.name for p in vtk.glob("oscillator_*.vtk")) == [
+        d.get("file") for d in index.findall("./Collection/DataSet")] == [f"oscillator_{k:06d}.vtk" for k in range(6)]
+
+
+def test_modes_show_the_progress_of_a_long_lanczos_iteration():
+    # The lowest 10 modes of a 129 x 129 trampoline (49 923 degrees of freedom) take about 3 s:
+    # into a pipe, the progress line comes as the last line on stderr once the work took over a
+    # second. The last Lanczos cycle has converged every mode it sought (10 and the next one).
+    start = time.monotonic()
+    out = cli("modes", MODELS / "trampoline.json", "--set", "n=129", "-n", 10)
+    wall = time.monotonic() - start
+    lines = re.findall(r"springmass modes: Lanczos step (\d+), (\d+) of (\d+) modes converged in this run, "
+                       r"([0-9.]+) s", out.stderr)
+    if wall > 1.5:
+        step, converged, sought, seconds = lines[-1]
+        assert int(step) > 0 and converged == sought == "11" and 1.0 < float(seconds) <= wall + 0.05  # printed to 0.1 s
+    elif wall < 0.9:
+        assert lines == []
 
 
 def read_csv_with_names(path):
