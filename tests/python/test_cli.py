@@ -577,7 +577,7 @@ def test_a_shorter_series_removes_what_a_longer_one_left(tmp_path):
 
 
 def test_modes_show_the_progress_of_a_long_lanczos_iteration():
-    # The lowest 10 modes of a 129 x 129 trampoline (49 923 degrees of freedom) take about 3 s:
+    # The lowest 10 modes of a 129 x 129 trampoline (48 387 degrees of freedom) take about 2 s:
     # into a pipe, the progress line comes as the last line on stderr once the work took over a
     # second. The last Lanczos cycle has converged every mode it sought (10 and the next one).
     start = time.monotonic()
