@@ -5,10 +5,12 @@
 #                     the target writes of its own model
 #   fmu_state         the FMU's serialised states read back (fmi2DeSerializeFMUstate), set and
 #                     stepped, seeded with states the target writes of its own FMU instance
+#   reference         the reference results `springmass fmu --reference` checks, seeded with
+#                     a result of the hanging rope's variables
 # Builds the targets with clang (installed from Debian's packages if missing, with the fuzzer
 # runtime and the OpenMP runtime SUNDIALS' CMake package asks for) and runs them one after the
 # other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's),
-# fuzz/corpus-work-simulation-state/ or fuzz/corpus-work-fmu-state/; inputs that crash are
+# fuzz/corpus-work-simulation-state/, fuzz/corpus-work-fmu-state/ or fuzz/corpus-work-reference/; inputs that crash are
 # written to build-fuzz/artifacts/.
 #
 #   make fuzz FUZZ_SECONDS=600
@@ -18,15 +20,15 @@ set -euo pipefail
 seconds=${1:-60}
 shift || true
 targets=("$@")
-((${#targets[@]})) || targets=(model_file simulation_state fmu_state)
+((${#targets[@]})) || targets=(model_file simulation_state fmu_state reference)
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build-fuzz
 
 for target in "${targets[@]}"; do
   case $target in
-  model_file | simulation_state | fmu_state) ;;
+  model_file | simulation_state | fmu_state | reference) ;;
   *)
-    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state)" >&2
+    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state, reference)" >&2
     exit 2
     ;;
   esac
@@ -65,6 +67,13 @@ for target in "${targets[@]}"; do
     "$build/fuzz_model_file" "$work" "$seeds" \
       -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
       -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
+    ;;
+  reference)
+    work=$root/fuzz/corpus-work-reference
+    printf '"time","tip.x","tip.z",energy.kinetic\r\n0,1,0,0\r\n0.5,0.5,-0.5,"1e-3"\r\n0.5,0.5,-0.5,2\r\n' > "$seeds/result.csv"
+    mkdir -p "$work"
+    "$build/fuzz_reference" "$work" "$seeds" -max_total_time="$seconds" -max_len=1024 -timeout=10 \
+      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/reference-" -print_final_stats=1
     ;;
   simulation_state | fmu_state)
     # Seeds: real states the target writes of its own model.

@@ -34,6 +34,7 @@ int sm_cmd_fmu(int argc, char** argv)
 
 #include "cli_common.h"
 #include "fmu_model.h"
+#include "fmu_reference.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -64,13 +65,15 @@ static void usage(FILE* out)
 	        "                       that sets the structure (a rope's segment count), the FMU's constant.\n"
 	        "                       The file goes into the FMU as it is, the values beside it in\n"
 	        "                       resources/parameters.txt; the GUID hashes both\n"
-	        "  --reference FILE     a reference result to include as resources/reference.csv\n"
+	        "  --reference FILE     a reference result to include as resources/reference.csv: a CSV as\n"
+	        "                       fmpy writes one, \"time\" and then variables of the FMU as its\n"
+	        "                       columns, a row of numbers per time (checked, then packed as it is)\n"
 	        "  --runtime DIR        folder holding binaries/linux64/springmass_fmu.so and its libraries\n"
 	        "                       (default: the one of this build or installation)\n"
 	        "  -h, --help           this text\n"
 	        "\n"
-	        "Exit status: 0 success, 1 for a bad model, a reference that cannot be read (it is packed\n"
-	        "as it is), a missing runtime or an FMU that cannot be written, 2 for a usage error (a\n"
+	        "Exit status: 0 success, 1 for a bad model, a reference that cannot be read or is no such\n"
+	        "result, a missing runtime or an FMU that cannot be written, 2 for a usage error (a\n"
 	        "malformed --set, an output that would overwrite an input or go into the runtime).\n");
 }
 
@@ -487,6 +490,8 @@ static int package(const options* opt)
 	size_t parameters_length = 0;
 	char* xml = NULL;
 	char* html = NULL;
+	char* reference = NULL;
+	size_t reference_length = 0;
 	sm_document* doc = NULL;
 	fmu_table table;
 	memset(&table, 0, sizeof table);
@@ -534,6 +539,24 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
 		goto done;
 	}
+	// The reference result names the FMU's variables: checked against them before anything is
+	// written, and packed as it was read.
+	if (opt->reference) {
+		reference = fmu_read_file(opt->reference, &reference_length, &problem);
+		if (!reference) {
+			fprintf(stderr, "springmass fmu: cannot read the reference result %s: %s\n", opt->reference,
+			        problem);
+			goto done;
+		}
+		bool out_of_memory = false;
+		char* wrong = fmu_reference_problem(reference, reference_length, &table, &out_of_memory);
+		if (wrong != NULL || out_of_memory) {
+			fprintf(stderr, "springmass fmu: --reference %s:%s\n", opt->reference,
+			        wrong != NULL ? wrong : " out of memory");
+			free(wrong);
+			goto done;
+		}
+	}
 	xml = fmu_model_description(&table, NULL);
 	if (!xml) {
 		fprintf(stderr, "springmass fmu: out of memory\n");
@@ -573,12 +596,8 @@ static int package(const options* opt)
 	if (opt->reference) {
 		if (!join(path, sizeof path, staging, "resources/reference.csv"))
 			goto done;
-		const char* problem = NULL;
-		if (!copy_file(opt->reference, path, &problem)) {
-			fprintf(stderr, "springmass fmu: cannot copy the reference result %s: %s\n", opt->reference,
-			        problem);
-			goto done;
-		}
+		if (!write_all(path, reference, reference_length))
+			goto write_failed;
 	}
 
 	// The binary under the model's identifier, every bundled library as it is, and their
@@ -680,6 +699,7 @@ done:
 		nftw(staging, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 	free(xml);
 	free(html);
+	free(reference);
 	fmu_table_destroy(&table);
 	sm_document_destroy(doc);
 	free(parameters);

@@ -840,14 +840,64 @@ def test_check_sheet_grid_and_the_row_limit(tmp_path):
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
+    # The reference is a result of the FMU written by fmpy: quoted names, its own number format.
+    from fmpy import simulate_fmu
+    from fmpy.util import write_csv
+    first = tmp_path / "first.fmu"
+    cli("fmu", MODELS / "hanging_rope.json", "-o", first, "--set", "E=150")
     reference = tmp_path / "reference.csv"
-    reference.write_text("time,x\n0,1\n")
+    write_csv(reference, simulate_fmu(str(first), stop_time=0.1, output=["tip.z", "middle.x", "solver.max_steps"]))
+    assert reference.read_text().startswith('"time","tip.z","middle.x","solver.max_steps"\n0.0,0.0,0.5,100000\n')
     fmu = tmp_path / "rope.fmu"
     out = cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference, "--set", "E=150").stdout
     assert "E=150" in out
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/reference.csv") == reference.read_bytes()
         assert "E=150" in z.read("resources/parameters.txt").decode()
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+@pytest.mark.parametrize("text, message", [
+    ("", "1:1: an empty file"),
+    ("t,tip.x\n0,1\n", '1:1: the first column is "t", not "time"'),
+    ('"time",tip.x,"tip.q"\n0,1,2\n', '1:14: "tip.q" is not a variable of the FMU'),
+    ("time,solver.method\n0,1\n", '1:6: "solver.method" is a String variable: a result holds numbers'),
+    ("time,tip.x,tip.y,tip.x\n0,1,2,3\n", '1:18: "tip.x" is named twice'),
+    ("time,tip.x\n0,1\n0.5,nan\n", '3:5: "nan" is not a finite number'),
+    ("time,tip.x\n0,1\n0.5, 2\n", '3:5: " 2" is not a finite number'),
+    ("time,tip.x\r\n0,1\r\n0.5\r\n", "3:4: fewer fields than columns: the header names 2 columns"),
+    ("time,tip.x\n0,1,\n", "2:4: more fields than columns: the header names 2 columns"),
+    ("time,tip.x\n1,1\n0.5,1\n", "3:1: time 0.5 s is before the previous row's 1 s"),
+    ("time,tip.x\n0,1\n\n1,1\n", "3:1: an empty line before the end of the result"),
+    ('time,"tip.x\n0,1\n', "1:6: a quoted field is not closed"),
+    ('time,"tip.x"y\n0,1\n', "1:13: text after the closing quote of a field"),
+    ("time,tip.x\n", "2:1: no rows after the header"),
+    ("time,tip.x\n0,\x00\n", "2:3: a NUL byte: not a text file"),
+    ('time,"a\x1b[2Jb"\n0,1\n', '1:6: "a\\u001b[2Jb" is not a variable of the FMU'),
+])
+def test_fmu_refuses_a_reference_that_is_no_result_of_it(tmp_path, text, message):
+    # Before anything is written: no FMU, and the last good one at the place stays.
+    reference = tmp_path / "reference.csv"
+    reference.write_bytes(text.encode())
+    fmu = tmp_path / "rope.fmu"
+    fmu.write_bytes(b"an earlier FMU")
+    err = cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference, status=1).stderr
+    assert err == f"springmass fmu: --reference {reference}:{message}\n"
+    assert fmu.read_bytes() == b"an earlier FMU"
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_takes_a_reference_with_events_and_without_a_last_line_end(tmp_path):
+    # A time repeated at an event, CRLF line ends, a quoted name with a doubled quote nowhere
+    # needed but allowed, empty lines at the end only, and no line end after the last row.
+    reference = tmp_path / "reference.csv"
+    text = b'"time",tip.x,"energy.kinetic"\r\n0,1,0\r\n0.5,1e-3,-2.5E+2\r\n0.5,.5,3\r\n1,2,3'
+    for ending in (b"", b"\n\n\r\n"):
+        reference.write_bytes(text + ending)
+        fmu = tmp_path / "rope.fmu"
+        cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference)
+        with zipfile.ZipFile(fmu) as z:
+            assert z.read("resources/reference.csv") == text + ending
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
@@ -985,10 +1035,10 @@ def test_fmu_refuses_what_it_cannot_pack_and_writes_nothing(tmp_path):
     assert out.stderr.startswith("springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in "
                                  f"{tmp_path / 'empty'} (from $SPRINGMASS_FMU_RUNTIME);")
     out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", tmp_path / "missing.csv", status=1, env=env)
-    assert out.stderr == (f"springmass fmu: cannot copy the reference result {tmp_path / 'missing.csv'}: "
+    assert out.stderr == (f"springmass fmu: cannot read the reference result {tmp_path / 'missing.csv'}: "
                           "No such file or directory\n")
     out = cli("fmu", osc, "-o", fmu, "--runtime", runtime, "--reference", "/dev/null", status=1, env=env)
-    assert out.stderr == "springmass fmu: cannot copy the reference result /dev/null: not a regular file\n"
+    assert out.stderr == "springmass fmu: cannot read the reference result /dev/null: not a regular file\n"
     # A broken model is refused with the loader's message, as `springmass check` gives it.
     broken = ROOT / "tests" / "bad_models" / "unknown_particle.json"
     out = cli("fmu", broken, "-o", fmu, "--runtime", runtime, status=1, env=env)
