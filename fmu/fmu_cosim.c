@@ -1278,6 +1278,53 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // derivatives with respect to the current inputs are zero (dx and dv are zero there).
 // ---------------------------------------------------------------------------------------------
 
+// The change of an output that is a function of the state (the force on a driven particle, the
+// kinetic, elastic and gravitational energies) along a change (dx, dv) of every particle's position
+// and velocity, at the current state: the Jacobian product's row of the driven particle, sum m v.dv,
+// -sum f_elastic.dx (f_elastic = f(x, 0) - m g, the springs' forces without damping) and
+// -sum m g.dx. With an input's seed as (dx, dv) it is a directional derivative, with the velocities
+// and accelerations a time derivative. work holds 3 n3 doubles; *evaluated says which of its parts
+// hold values of earlier calls for the same (dx, dv) (bit 0: the Jacobian product, bit 1: f_elastic).
+static double state_output_change(const instance* inst, const fmu_variable* v, const double* dx,
+                                  const double* dv, double* work, unsigned* evaluated)
+{
+	const size_t n3 = 3 * (size_t)inst->particle_count;
+	const sm_model* model = sm_simulation_model(inst->sim);
+	const double* x = sm_simulation_positions(inst->sim);
+	const double* u = sm_simulation_velocities(inst->sim);
+	double* df = work;
+	double* elastic = work + n3;
+	double* zero = work + 2 * n3;
+	if (v->source == FMU_SRC_PORT_FORCE) {
+		if (!(*evaluated & 1u)) {
+			sm_model_jacobian_product(model, x, u, SM_JACOBIAN_EXACT, dx, dv, df);
+			*evaluated |= 1u;
+		}
+		return df[3 * (size_t)inst->ports[v->index].particle + (size_t)v->component];
+	}
+	if (v->source == FMU_SRC_ENERGY_ELASTIC && !(*evaluated & 2u)) {
+		memset(zero, 0, n3 * sizeof(double));
+		sm_model_forces(model, x, zero, NULL, elastic);
+		*evaluated |= 2u;
+	}
+	const sm_model_def def = sm_model_get_def(model);
+	double change = 0.0;
+	for (int32_t p = 0; p < inst->particle_count; ++p) {
+		sm_particle_def pd;
+		sm_model_get_particle(model, p, &pd);
+		for (size_t c3 = 0; c3 < 3; ++c3) {
+			const size_t i = 3 * (size_t)p + c3;
+			if (v->source == FMU_SRC_ENERGY_KINETIC)
+				change += pd.mass * u[i] * dv[i];
+			else if (v->source == FMU_SRC_ENERGY_GRAVITY)
+				change -= pd.mass * def.gravity[c3] * dx[i];
+			else if (v->source == FMU_SRC_ENERGY_ELASTIC)
+				change -= (elastic[i] - pd.mass * def.gravity[c3]) * dx[i];
+		}
+	}
+	return change;
+}
+
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[],
                                         size_t nUnknown, const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[])
@@ -1294,9 +1341,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 	size_t n3 = 3 * (size_t)inst->particle_count;
 	double* dx = inst->scratch;
 	double* dv = dx + n3;
-	double* df = dv + n3;
-	double* work = df + n3;
-	double* zero = work + n3;
+	double* work = dv + n3;
 	memset(dx, 0, 2 * n3 * sizeof(double));
 	for (size_t k = 0; k < nKnown; ++k) {
 		if (vKnown_ref[k] >= (fmi2ValueReference)inst->table.count) {
@@ -1335,21 +1380,13 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 		else if (v->source == FMU_SRC_PORT_VELOCITY)
 			dv[i] += dvKnown[k];
 	}
-	const sm_model* model = sm_simulation_model(inst->sim);
-	const double* x = sm_simulation_positions(inst->sim);
-	const double* u = sm_simulation_velocities(inst->sim);
-	bool have_product = false, have_elastic = false;
-	sm_model_def def = sm_model_get_def(model);
+	unsigned evaluated = 0;
 	for (size_t k = 0; k < nUnknown; ++k) {
 		const fmu_variable* v = &inst->table.variables[vUnknown_ref[k]];
 		double result = 0.0;
 		if (v->source == FMU_SRC_PORT_FORCE) {
-			if (!have_product) {
-				sm_model_jacobian_product(model, x, u, SM_JACOBIAN_EXACT, dx, dv, df);
-				have_product = true;
-			}
 			int32_t particle = inst->ports[v->index].particle;
-			result = df[3 * (size_t)particle + (size_t)v->component];
+			result = state_output_change(inst, v, dx, dv, work, &evaluated);
 			for (size_t j = 0; j < nKnown; ++j) {
 				const fmu_variable* w = &inst->table.variables[vKnown_ref[j]];
 				if (w->source == FMU_SRC_PORT_FORCE && inst->ports[w->index].particle == particle &&
@@ -1361,24 +1398,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 			result = v->source == FMU_SRC_PARTICLE_POSITION ? dx[i] : dv[i];
 		} else if (v->source == FMU_SRC_ENERGY_KINETIC || v->source == FMU_SRC_ENERGY_GRAVITY ||
 		           v->source == FMU_SRC_ENERGY_ELASTIC) {
-			if (v->source == FMU_SRC_ENERGY_ELASTIC && !have_elastic) {
-				memset(zero, 0, n3 * sizeof(double));
-				sm_model_forces(model, x, zero, NULL, work);
-				have_elastic = true;
-			}
-			for (int32_t p = 0; p < inst->particle_count; ++p) {
-				sm_particle_def pd;
-				sm_model_get_particle(model, p, &pd);
-				for (int c3 = 0; c3 < 3; ++c3) {
-					size_t i = 3 * (size_t)p + (size_t)c3;
-					if (v->source == FMU_SRC_ENERGY_KINETIC)
-						result += pd.mass * u[i] * dv[i];
-					else if (v->source == FMU_SRC_ENERGY_GRAVITY)
-						result -= pd.mass * def.gravity[c3] * dx[i];
-					else
-						result -= (work[i] - pd.mass * def.gravity[c3]) * dx[i];
-				}
-			}
+			result = state_output_change(inst, v, dx, dv, work, &evaluated);
 		}
 		dvUnknown[k] = result;
 	}
@@ -1407,21 +1427,71 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 	return fmi2Error;
 }
 
+// First time derivatives of outputs (maxOutputDerivativeOrder = 1) at the current state and
+// inputs, from the equations of motion: a position's is the velocity; a velocity's the
+// acceleration a = f / m of a free particle (0 for a held one, and for a driven one, whose velocity
+// is held over a step); a driven particle's force and the kinetic, elastic and gravitational
+// energies change along (v, a) as state_output_change gives; the dissipated energy's is the
+// dissipated power, the rate the simulation integrates it at.
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[])
 {
 	instance* inst = c;
-	(void)vr;
-	(void)order;
-	(void)value;
-	if (!fmu_allowed(inst, "fmi2GetRealOutputDerivatives",
-	                 ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR))
+	const char* fn = "fmi2GetRealOutputDerivatives";
+	if (!fmu_allowed(inst, fn, ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED | ST_ERROR))
 		return fmi2Error;
 	if (nvr == 0)
 		return fmi2OK;
-	log_error(inst, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder is 0); read the "
-	                "velocity outputs instead");
-	return fmi2Error;
+	if (!vr || !order || !value) {
+		log_error(inst, "%s: NULL array", fn);
+		return fmi2Error;
+	}
+	for (size_t k = 0; k < nvr; ++k) {
+		const fmu_variable* v = lookup(inst, fn, vr[k], FMU_REAL);
+		if (!v)
+			return fmi2Error;
+		if (v->causality != FMU_OUTPUT) {
+			log_error(inst, "%s: %s is not an output", fn, v->name);
+			return fmi2Error;
+		}
+		if (order[k] != 1) {
+			log_error(inst,
+			          "%s: order %d of %s: this FMU gives first derivatives (maxOutputDerivativeOrder = 1)",
+			          fn, (int)order[k], v->name);
+			return fmi2Error;
+		}
+	}
+	if (fmu_ensure_simulation(inst, fn) != fmi2OK)
+		return fmi2Error;
+	const size_t n3 = 3 * (size_t)inst->particle_count;
+	const sm_model* model = sm_simulation_model(inst->sim);
+	const double* x = sm_simulation_positions(inst->sim);
+	const double* u = sm_simulation_velocities(inst->sim);
+	const double* f = current_forces(inst);
+	double* a = inst->scratch;
+	double* work = a + n3;
+	for (int32_t p = 0; p < inst->particle_count; ++p) {
+		sm_particle_def pd;
+		sm_model_get_particle(model, p, &pd);
+		for (size_t c3 = 0; c3 < 3; ++c3) {
+			const size_t i = 3 * (size_t)p + c3;
+			a[i] = pd.motion == SM_PARTICLE_FREE ? f[i] / pd.mass : 0.0;
+		}
+	}
+	unsigned evaluated = 0;
+	for (size_t k = 0; k < nvr; ++k) {
+		const fmu_variable* v = &inst->table.variables[vr[k]];
+		const size_t i = v->source == FMU_SRC_PORT_POSITION || v->source == FMU_SRC_PORT_VELOCITY
+		                     ? 3 * (size_t)inst->ports[v->index].particle + (size_t)v->component
+		                     : 0;
+		switch (v->source) {
+		case FMU_SRC_PORT_POSITION: value[k] = u[i]; break;
+		case FMU_SRC_PORT_VELOCITY: value[k] = a[i]; break;
+		case FMU_SRC_ENERGY_DISSIPATED: value[k] = sm_model_dissipated_power(model, x, u); break;
+		default: value[k] = state_output_change(inst, v, u, a, work, &evaluated); break;
+		}
+	}
+	return fmi2OK;
 }
 
 // Ends a step from t that reached t_end. A finite state whose outputs overflow a double (the

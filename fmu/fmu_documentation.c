@@ -165,7 +165,8 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 	    "<code>fmi2GetRealStatus(fmi2LastSuccessfulTime)</code> gives the time reached. A call in the wrong "
 	    "state or with a bad argument returns <code>fmi2Error</code> with a logged message and changes "
 	    "nothing.</li>\n"
-	    "<li>The FMU state can be got, set and serialised, and directional derivatives are provided. Log "
+	    "<li>The FMU state can be got, set and serialised; directional derivatives and the first time "
+	    "derivatives of the outputs (<code>maxOutputDerivativeOrder</code> 1) are provided. Log "
 	    "categories: <code>logEvents</code>, <code>logStatusWarning</code>, <code>logStatusDiscard</code>, "
 	    "<code>logStatusError</code>, <code>logSolver</code>.</li>\n</ul>\n",
 	    stop, step, tolerance);

@@ -729,7 +729,7 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	    &out,
 	    "  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
 	    "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
-	    "    maxOutputDerivativeOrder=\"0\"\n    canRunAsynchronuously=\"false\"\n"
+	    "    maxOutputDerivativeOrder=\"1\"\n    canRunAsynchronuously=\"false\"\n"
 	    "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
 	    "    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"
 	    "    providesDirectionalDerivative=\"true\"/>\n",

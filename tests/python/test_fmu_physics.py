@@ -366,6 +366,76 @@ def test_directional_derivatives_of_a_moving_damped_system_match_finite_differen
         inst.free()
 
 
+def test_output_derivatives_are_the_rates_of_the_outputs(test_fmu):
+    # hanging: a bob on a damped spring under gravity, in a viscous medium, its hook moving at a
+    # held velocity. The first derivative of every output at a communication point against a
+    # three-point forward difference of the outputs over two more steps of h from a saved state,
+    # with the hook moving on as it did: truncation h^2/3 times the third derivative (up to about
+    # 1e3: the bob swings at 20 rad/s) gives 3e-8 at h = 1e-5, round-off of outputs of order 1
+    # over h about 1e-11, the integration at rtol 1e-12 less: rtol and atol 1e-6.
+    inst = Instance(test_fmu("hanging")).start({"solver.rtol": 1e-12, "solver.atol_position": 1e-14,
+                                               "solver.atol_velocity": 1e-14})
+    try:
+        s, vr = inst.slave, inst.vr
+        known = [vr[n] for n in ("hook.x", "hook.y", "hook.z", "hook.vx", "hook.vy", "hook.vz")]
+        s.setReal(known, [0.0, 0.0, 0.0, 0.2, -0.1, 0.3])
+        t = 0.0
+        for _ in range(5):
+            s.doStep(t, 0.01)
+            t += 0.01
+        outputs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
+        assert len(outputs) == 13  # the hook's force, the bob's position and velocity, four energies
+        refs = [vr[n] for n in outputs]
+        rates = np.array(s.getRealOutputDerivatives(refs, [1] * len(refs)))
+        # A position's rate is the velocity output itself, bit for bit.
+        for c in "xyz":
+            assert rates[outputs.index(f"bob.{c}")] == inst.get(f"bob.v{c}")
+        h = 1e-5
+        saved = s.getFMUstate()
+        y = [np.array(s.getReal(refs))]
+        for k in range(2):
+            s.doStep(t + k * h, h)
+            y.append(np.array(s.getReal(refs)))
+        s.setFMUstate(saved)
+        s.freeFMUstate(saved)
+        fd = (-3 * y[0] + 4 * y[1] - y[2]) / (2 * h)
+        assert np.allclose(rates, fd, rtol=1e-6, atol=1e-6), list(zip(outputs, rates, fd))
+        # None vanishes by accident at this moving, damped state.
+        assert np.all(np.abs(rates) > 1e-3), list(zip(outputs, rates))
+        # The same after the state was set back: the rates are those of the state and inputs.
+        assert s.getRealOutputDerivatives(refs, [1] * len(refs)) == list(rates)
+        # Other orders, other causalities: fmi2Error with a message, nothing else changed.
+        before = len(inst.messages)
+        for ref, order in ((vr["bob.x"], 2), (vr["bob.x"], 0), (vr["hook.x"], 1), (vr["k"], 1)):
+            with pytest.raises(FMICallException):
+                s.getRealOutputDerivatives([ref], [order])
+        texts = [m[2] for m in inst.messages[before:]]
+        assert "order 2 of bob.x: this FMU gives first derivatives (maxOutputDerivativeOrder = 1)" in texts[0]
+        assert "order 0 of bob.x" in texts[1] and "hook.x is not an output" in texts[2] and "k is not" in texts[3]
+        assert s.getRealOutputDerivatives(refs, [1] * len(refs)) == list(rates)
+    finally:
+        inst.free()
+
+
+def test_output_derivatives_of_the_oscillator_follow_its_equation(test_fmu):
+    # driven_oscillator: a bob of mass M on a spring K of rest length L0 from an anchor held at
+    # the origin: its acceleration is -K (x - L0) / M along x, the force on the anchor K (x - L0)
+    # changes at K vx (the force port's input is 0).
+    inst = Instance(test_fmu("driven_oscillator")).start()
+    try:
+        s, vr = inst.slave, inst.vr
+        s.doStep(0.0, 0.05)
+        x, vx = inst.get("tip.x", "tip.vx")
+        names = ["tip.x", "tip.vx", "base.fx"]
+        rates = s.getRealOutputDerivatives([vr[n] for n in names], [1, 1, 1])
+        assert rates[0] == vx
+        assert rates[1] == pytest.approx(-K * (x - L0) / M, rel=1e-12)
+        assert rates[2] == pytest.approx(K * vx, rel=1e-12)
+        assert inst.md.coSimulation.maxOutputDerivativeOrder == 1
+    finally:
+        inst.free()
+
+
 def test_a_force_input_acts_along_each_of_its_components(test_fmu):
     # A force (Fx, Fy, Fz) on the bob at rest, 0.2 m stretched along x: over a short step h the
     # velocity changes by (F + f_spring) h / m, the spring pulling along x only (-k 0.2 = -10 N);
