@@ -1000,6 +1000,19 @@ static double real_value(instance* inst, const fmu_variable* v, energy_cache* ca
 
 // Whether a variable's value needs the simulation (everything but parameters, constants and
 // inputs).
+// fmi2OK, or fmi2Warning, logged, when a value read (`what`: "" or "the derivative of ") of
+// `overflowing` is beyond the range of a double.
+static fmi2Status overflow_warning(instance* inst, const char* function, const char* what,
+                                   const fmu_variable* overflowing)
+{
+	if (overflowing == NULL)
+		return fmi2OK;
+	fmu_logf(inst, fmi2Warning, LOG_WARNING,
+	         "%s: %s%s is not finite: the inputs or the state put the model beyond the range of a double",
+	         function, what, overflowing->name);
+	return fmi2Warning;
+}
+
 static bool needs_simulation(const fmu_variable* v)
 {
 	return v->source >= FMU_SRC_PORT_POSITION && v->causality != FMU_INPUT;
@@ -1029,14 +1042,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	// A finite state whose outputs overflow (an input far beyond the model's scale, such as a
 	// motion port at 1e300 m, whose spring's squared length does): the values are given, as they
 	// are, with fmi2Warning and the first such variable named; a step from here is discarded.
-	if (overflowing != NULL) {
-		fmu_logf(inst, fmi2Warning, LOG_WARNING,
-		         "fmi2GetReal: %s is not finite: the inputs or the state put the model beyond the range of a "
-		         "double",
-		         overflowing->name);
-		return fmi2Warning;
-	}
-	return fmi2OK;
+	return overflow_warning(inst, "fmi2GetReal", "", overflowing);
 }
 
 fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[])
@@ -1479,6 +1485,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 		}
 	}
 	unsigned evaluated = 0;
+	const fmu_variable* overflowing = NULL;
 	for (size_t k = 0; k < nvr; ++k) {
 		const fmu_variable* v = &inst->table.variables[vr[k]];
 		const size_t i = v->source == FMU_SRC_PORT_POSITION || v->source == FMU_SRC_PORT_VELOCITY
@@ -1490,8 +1497,11 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 		case FMU_SRC_ENERGY_DISSIPATED: value[k] = sm_model_dissipated_power(model, x, u); break;
 		default: value[k] = state_output_change(inst, v, u, a, work, &evaluated); break;
 		}
+		if (!isfinite(value[k]) && overflowing == NULL)
+			overflowing = v;
 	}
-	return fmi2OK;
+	// As fmi2GetReal: derivatives beyond the range of a double are given with fmi2Warning.
+	return overflow_warning(inst, fn, "the derivative of ", overflowing);
 }
 
 // Ends a step from t that reached t_end. A finite state whose outputs overflow a double (the

@@ -83,7 +83,7 @@ typedef struct instance {
 	int32_t breaks_logged;
 	double* forces;  // 3 per particle, valid while forces_valid
 	bool forces_valid;
-	double* scratch;        // 5 * 3 per particle for directional derivatives
+	double* scratch;        // 5 * 3 per particle for directional and output derivatives
 	double* parameter_old;  // the model-file parameters' values before a change that may fail
 	double* parameter_new;  // the values such a change sets, one per parameter
 } instance;

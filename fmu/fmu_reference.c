@@ -6,6 +6,7 @@
 
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -13,11 +14,19 @@
 // Bytes of a field a message shows.
 enum { shown_bytes = 60 };
 
-// Where the reader is in the text: its position, and the line and the start of that line.
+// A line of the text: its number (from 1) and where it starts.
+typedef struct line_place {
+	size_t line, start;
+} line_place;
+
+// Where the reader is in the text: its position and its line.
 typedef struct reader {
 	const char* text;
-	size_t length, at, line, line_start;
-	char* field;  // the last field read, unquoted (malloc'd, grown as needed)
+	size_t length, at;
+	line_place here;
+	line_place field_place;  // the line the last field started on (a quoted one may span lines)
+	char* field;             // the last field read, unquoted (malloc'd, grown as needed)
+	bool quoted;             // it was quoted
 	size_t field_capacity;
 	bool out_of_memory;
 	char shown[SM_TERMINAL_TEXT_CAPACITY(shown_bytes)];  // the field as a message shows it
@@ -35,7 +44,8 @@ static const char* field_shown(reader* r)
 	return r->shown;
 }
 
-static char* problem_at(const reader* r, size_t at, const char* format, ...)
+// A problem at `at` on the line that starts at place.start, line place.line.
+static char* problem_at(line_place place, size_t at, const char* format, ...)
 {
 	char message[400];
 	va_list args;
@@ -44,7 +54,7 @@ static char* problem_at(const reader* r, size_t at, const char* format, ...)
 	va_end(args);
 	char* text = malloc(strlen(message) + 48);
 	if (text != NULL)
-		sprintf(text, "%zu:%zu: %s", r->line, at - r->line_start + 1, message);
+		sprintf(text, "%zu:%zu: %s", place.line, at - place.start + 1, message);
 	return text;
 }
 
@@ -76,36 +86,39 @@ static bool at_line_end(const reader* r)
 static char* read_field(reader* r)
 {
 	size_t n = 0;
+	r->field_place = r->here;
 	if (!field_append(r, 0, '\0'))
 		return NULL;
 	r->field[0] = '\0';
-	if (r->at < r->length && r->text[r->at] == '"') {
-		const size_t open = r->at++, open_line = r->line, open_line_start = r->line_start;
+	r->quoted = r->at < r->length && r->text[r->at] == '"';
+	if (r->quoted) {
+		const size_t open = r->at++;
 		for (;;) {
-			if (r->at >= r->length) {
-				r->line = open_line;
-				r->line_start = open_line_start;
-				return problem_at(r, open, "a quoted field is not closed");
-			}
+			if (r->at >= r->length)
+				return problem_at(r->field_place, open, "a quoted field is not closed");
 			const char c = r->text[r->at++];
 			if (c == '"' && (r->at >= r->length || r->text[r->at] != '"'))
 				break;
 			if (c == '"')
 				r->at++;  // a doubled quote
 			if (c == '\n') {
-				r->line++;
-				r->line_start = r->at;
+				r->here.line++;
+				r->here.start = r->at;
 			}
 			if (!field_append(r, n++, c))
 				return NULL;
 		}
 		if (!at_line_end(r) && r->text[r->at] != ',')
-			return problem_at(r, r->at, "text after the closing quote of a field");
+			return problem_at(r->here, r->at, "text after the closing quote of a field");
 		return NULL;
 	}
-	while (!at_line_end(r) && r->text[r->at] != ',')
+	while (!at_line_end(r) && r->text[r->at] != ',') {
+		if (r->text[r->at] == '\r')
+			return problem_at(r->here, r->at,
+			                  "a carriage return without a line feed: lines end in LF or CRLF");
 		if (!field_append(r, n++, r->text[r->at++]))
 			return NULL;
+	}
 	return NULL;
 }
 
@@ -116,8 +129,8 @@ static void next_line(reader* r)
 		r->at++;
 	if (r->at < r->length) {
 		r->at++;
-		r->line++;
-		r->line_start = r->at;
+		r->here.line++;
+		r->here.start = r->at;
 	}
 }
 
@@ -126,20 +139,46 @@ static int compare_names(const void* a, const void* b)
 	return strcmp((*(const fmu_variable* const*)a)->name, (*(const fmu_variable* const*)b)->name);
 }
 
-// A finite number written out in full (strtod's form, without white space, inf or nan).
-static bool finite_number(const char* text, double* value)
+static size_t digits(const char* text)
 {
-	if (*text == '\0' || strpbrk(text, " \t\n\v\f\r") != NULL)
-		return false;
-	char* end = NULL;
-	*value = strtod(text, &end);
-	return *end == '\0' && isfinite(*value);
+	size_t n = 0;
+	while (text[n] >= '0' && text[n] <= '9')
+		n++;
+	return n;
 }
 
-// The header: "time", then Real or Integer variables of the table, each once. sorted: the
-// table's variables by name; named: a flag per variable, false on entry.
+// A finite decimal number as a result writes one: an optional sign, digits with an optional
+// decimal point (at least one digit), an optional exponent; no white space, hexadecimal, inf or
+// nan, which strtod would take.
+static bool decimal_number(const char* text, double* value)
+{
+	const char* c = text + (*text == '+' || *text == '-');
+	const size_t whole = digits(c);
+	c += whole;
+	size_t fraction = 0;
+	if (*c == '.') {
+		fraction = digits(c + 1);
+		c += 1 + fraction;
+	}
+	if (whole + fraction == 0)
+		return false;
+	if (*c == 'e' || *c == 'E') {
+		c += 1 + (c[1] == '+' || c[1] == '-');
+		const size_t exponent = digits(c);
+		if (exponent == 0)
+			return false;
+		c += exponent;
+	}
+	if (*c != '\0')
+		return false;
+	*value = strtod(text, NULL);
+	return isfinite(*value);
+}
+
+// The header: "time", then Real or Integer variables of the table, each once, into column[1 ..
+// columns - 1]. sorted: the table's variables by name; named: a flag per variable, false on entry.
 static char* read_header(reader* r, const fmu_table* table, const fmu_variable** sorted, bool* named,
-                         int32_t* columns)
+                         const fmu_variable** column, int32_t* columns)
 {
 	for (*columns = 0;; ++*columns) {
 		const size_t start = r->at;
@@ -147,21 +186,24 @@ static char* read_header(reader* r, const fmu_table* table, const fmu_variable**
 		if (problem != NULL || r->out_of_memory)
 			return problem;
 		if (*columns == 0 && strcmp(r->field, "time") != 0)
-			return problem_at(r, start, "the first column is \"%s\", not \"time\"", field_shown(r));
+			return problem_at(r->field_place, start, "the first column is \"%s\", not \"time\"",
+			                  field_shown(r));
 		if (*columns > 0) {
 			const fmu_variable key = {.name = r->field};
 			const fmu_variable* pointer = &key;
 			const fmu_variable** found =
 			    bsearch(&pointer, sorted, (size_t)table->count, sizeof *sorted, compare_names);
 			if (found == NULL)
-				return problem_at(r, start, "\"%s\" is not a variable of the FMU", field_shown(r));
-			if ((*found)->type == FMU_STRING)
-				return problem_at(r, start, "\"%s\" is a String variable: a result holds numbers",
+				return problem_at(r->field_place, start, "\"%s\" is not a variable of the FMU",
 				                  field_shown(r));
+			if ((*found)->type == FMU_STRING)
+				return problem_at(r->field_place, start,
+				                  "\"%s\" is a String variable: a result holds numbers", field_shown(r));
 			const size_t index = (size_t)(*found - table->variables);
 			if (named[index])
-				return problem_at(r, start, "\"%s\" is named twice", field_shown(r));
+				return problem_at(r->field_place, start, "\"%s\" is named twice", field_shown(r));
 			named[index] = true;
+			column[*columns] = *found;
 		}
 		if (at_line_end(r)) {
 			++*columns;
@@ -171,39 +213,40 @@ static char* read_header(reader* r, const fmu_table* table, const fmu_variable**
 	}
 }
 
-// The rows: as many finite numbers as columns, time never decreasing; empty lines only at the end.
-static char* read_rows(reader* r, int32_t columns)
+// The rows: a number per column (a whole one for an Integer variable), time never decreasing; no
+// empty line (fmpy's read_csv takes none).
+static char* read_rows(reader* r, const fmu_variable* const* column, int32_t columns)
 {
 	double previous_time = -INFINITY;
 	size_t rows = 0;
 	while (r->at < r->length) {
-		if (at_line_end(r)) {  // an empty line: only empty lines may follow
-			const size_t line = r->line, start = r->at;
-			while (r->at < r->length && at_line_end(r))
-				next_line(r);
-			if (r->at < r->length) {
-				r->line = line;
-				r->line_start = start;
-				return problem_at(r, start, "an empty line before the end of the result");
-			}
-			break;
-		}
+		if (at_line_end(r))
+			return problem_at(r->here, r->at, "an empty line: a result has none");
 		for (int32_t c = 0; c < columns; c++) {
 			const size_t start = r->at;
 			char* problem = read_field(r);
 			if (problem != NULL || r->out_of_memory)
 				return problem;
 			double value;
-			if (!finite_number(r->field, &value))
-				return problem_at(r, start, "\"%s\" is not a finite number", field_shown(r));
+			if (r->quoted)
+				return problem_at(r->field_place, start,
+				                  "\"%s\" is quoted: a result writes its numbers without quotes",
+				                  field_shown(r));
+			if (!decimal_number(r->field, &value))
+				return problem_at(r->field_place, start, "\"%s\" is not a finite decimal number",
+				                  field_shown(r));
+			if (c > 0 && column[c]->type == FMU_INTEGER &&
+			    !(value == floor(value) && fabs(value) <= INT32_MAX))
+				return problem_at(r->field_place, start, "%s is an Integer variable: \"%s\" is no such value",
+				                  column[c]->name, field_shown(r));
 			if (c == 0 && value < previous_time)
-				return problem_at(r, start, "time %.17g s is before the previous row's %.17g s", value,
-				                  previous_time);
+				return problem_at(r->field_place, start, "time %.17g s is before the previous row's %.17g s",
+				                  value, previous_time);
 			if (c == 0)
 				previous_time = value;
 			const bool last = c == columns - 1;
 			if (at_line_end(r) != last)
-				return problem_at(r, r->at, "%s: the header names %d columns",
+				return problem_at(r->here, r->at, "%s: the header names %d columns",
 				                  last ? "more fields than columns" : "fewer fields than columns",
 				                  (int)columns);
 			if (!last)
@@ -213,29 +256,33 @@ static char* read_rows(reader* r, int32_t columns)
 		next_line(r);
 	}
 	if (rows == 0)
-		return problem_at(r, r->at, "no rows after the header");
+		return problem_at(r->here, r->at, "no rows after the header");
 	return NULL;
 }
 
 char* fmu_reference_problem(const char* text, size_t length, const fmu_table* table, bool* out_of_memory)
 {
-	reader r = {.text = text, .length = length, .line = 1};
+	reader r = {.text = text, .length = length, .here = {1, 0}};
 	*out_of_memory = false;
 	if (length == 0)
-		return problem_at(&r, 0, "an empty file");
+		return problem_at(r.here, 0, "an empty file");
 	const char* nul = memchr(text, '\0', length);
 	if (nul != NULL) {
 		for (const char* c = text; c < nul; c++)
 			if (*c == '\n') {
-				r.line++;
-				r.line_start = (size_t)(c + 1 - text);
+				r.here.line++;
+				r.here.start = (size_t)(c + 1 - text);
 			}
-		return problem_at(&r, (size_t)(nul - text), "a NUL byte: not a text file");
+		return problem_at(r.here, (size_t)(nul - text), "a NUL byte: not a text file");
 	}
+	if (length >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0)
+		return problem_at(r.here, 0, "a byte-order mark before the header: write the file without one");
 	const fmu_variable** sorted = malloc(((size_t)table->count + 1) * sizeof *sorted);
+	const fmu_variable** column = calloc((size_t)table->count + 1, sizeof *column);
 	bool* named = calloc((size_t)table->count + 1, sizeof *named);
-	if (sorted == NULL || named == NULL) {
+	if (sorted == NULL || column == NULL || named == NULL) {
 		free(sorted);
+		free(column);
 		free(named);
 		*out_of_memory = true;
 		return NULL;
@@ -244,13 +291,14 @@ char* fmu_reference_problem(const char* text, size_t length, const fmu_table* ta
 		sorted[i] = &table->variables[i];
 	qsort(sorted, (size_t)table->count, sizeof *sorted, compare_names);
 	int32_t columns = 0;
-	char* problem = read_header(&r, table, sorted, named, &columns);
+	char* problem = read_header(&r, table, sorted, named, column, &columns);
 	free(sorted);
 	free(named);
 	if (problem == NULL && !r.out_of_memory) {
 		next_line(&r);
-		problem = read_rows(&r, columns);
+		problem = read_rows(&r, column, columns);
 	}
+	free(column);
 	free(r.field);
 	*out_of_memory = r.out_of_memory;
 	if (r.out_of_memory) {

@@ -10,13 +10,15 @@
 extern "C" {
 #endif
 
-/// Checks the text of a reference result: a CSV (RFC 4180: fields separated by commas, quoted
-/// with doubled quotes inside where needed, lines ending in LF or CRLF, as fmpy writes it) whose
-/// first line names the columns, "time" first and then Real or Integer variables of the FMU
-/// described by `table`, each once, and whose every other line holds a finite number per column,
-/// time never decreasing (a step may repeat a time at an event); empty lines only at the end, at
-/// least one row. Returns NULL if it is such a result, else a malloc'd message "LINE:COLUMN: what
-/// is wrong" (1-based, the column in bytes), or NULL with *out_of_memory set.
+/// Checks the text of a reference result as fmpy's write_csv writes one and its read_csv reads
+/// it back: a CSV (fields separated by commas, a name quoted or not, with doubled quotes inside a
+/// quoted one; lines ending in LF or CRLF) whose first line names the columns, "time" first and
+/// then Real or Integer variables of the FMU described by `table`, each once, and whose every other
+/// line holds a decimal number per column, unquoted and finite (a whole one within 32 bits for an
+/// Integer variable), time never decreasing (a step may repeat a time at an event); at least one
+/// row, no empty line, no byte-order mark. Returns NULL if it is such a result, else a malloc'd
+/// message "LINE:COLUMN: what is wrong" (1-based, the column in bytes, of the line the offending
+/// field starts on), or NULL with *out_of_memory set.
 char* fmu_reference_problem(const char* text, size_t length, const fmu_table* table, bool* out_of_memory);
 
 #ifdef __cplusplus

@@ -53,6 +53,15 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 		if (sscanf(problem, "%lu:%lu: %n", &line, &column, &used) != 2 || used == 0 || line < 1 ||
 		    line > lines || column < 1)
 			abort();
+		// COLUMN within its line: at most one past the line's last byte (its LF).
+		size_t line_start = 0;
+		for (unsigned long l = 1; l < line; l++)
+			line_start =
+			    (size_t)((const uint8_t*)memchr(data + line_start, '\n', size - line_start) - data) + 1;
+		const uint8_t* end = memchr(data + line_start, '\n', size - line_start);
+		const size_t line_length = (end != NULL ? (size_t)(end - data) : size) - line_start;
+		if (column > line_length + 1)
+			abort();
 		free(problem);
 		return 0;
 	}

@@ -70,7 +70,7 @@ for target in "${targets[@]}"; do
     ;;
   reference)
     work=$root/fuzz/corpus-work-reference
-    printf '"time","tip.x","tip.z",energy.kinetic\r\n0,1,0,0\r\n0.5,0.5,-0.5,"1e-3"\r\n0.5,0.5,-0.5,2\r\n' > "$seeds/result.csv"
+    printf '"time","tip.x","tip.z",energy.kinetic\r\n0,1,0,0\r\n0.5,0.5,-0.5,1e-3\r\n0.5,0.5,-0.5,2\r\n' > "$seeds/result.csv"
     mkdir -p "$work"
     "$build/fuzz_reference" "$work" "$seeds" -max_total_time="$seconds" -max_len=1024 -timeout=10 \
       -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/reference-" -print_final_stats=1

@@ -466,7 +466,7 @@ long cli_remove_series_tail(const char* prefix, int digits, long first)
 	for (long k = first; path != NULL; k++) {
 		snprintf(path, size, "%s%0*ld.vtk", prefix, digits, k);
 		struct stat st;
-		if (stat(path, &st) != 0 || !S_ISREG(st.st_mode) || !is_vtk_file(path) || unlink(path) != 0)
+		if (lstat(path, &st) != 0 || !S_ISREG(st.st_mode) || !is_vtk_file(path) || unlink(path) != 0)
 			break;
 		removed++;
 	}

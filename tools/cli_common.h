@@ -126,8 +126,9 @@ bool cli_same_file(const char* a, const char* b);
 
 /// Removes what an earlier, longer series left behind in the folder of this one: the files
 /// prefix<k>.vtk for k = first, first + 1, ... (k with at least `digits` digits), up to the first
-/// that does not exist or is not a VTK file (starting "# vtk DataFile", as no model file or CSV
-/// does). Returns how many it removed.
+/// that does not exist or is not a regular VTK file (a symbolic link, or a file that does not
+/// start "# vtk DataFile", as no model file or CSV does). Returns how many it removed. Nothing
+/// guards against another run writing a longer series into the folder at the same time.
 long cli_remove_series_tail(const char* prefix, int digits, long first);
 
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the

@@ -372,7 +372,10 @@ int sm_cmd_modes(int argc, char** argv)
 		       (int)modes.count);
 	else if (vtk_dir != NULL)
 		printf("no mode shapes to write to %s\n", vtk_dir);
-	if (removed > 0)
+	if (removed == 1)
+		printf("removed %s/mode_%d.vtk, left there by an earlier run with more modes\n", vtk_dir,
+		       (int)modes.count + 1);
+	else if (removed > 1)
 		printf("removed %s/mode_%d.vtk to mode_%ld.vtk, left there by an earlier run with more modes\n",
 		       vtk_dir, (int)modes.count + 1, (long)modes.count + removed);
 	status = 0;

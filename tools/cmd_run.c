@@ -604,7 +604,9 @@ int sm_cmd_run(int argc, char** argv)
 	if (o.vtk_dir) {
 		snprintf(path, path_capacity, "%s/%s_", o.vtk_dir, name);
 		const long removed = cli_remove_series_tail(path, 6, rows + 1);
-		if (removed > 0 && !o.quiet)
+		if (removed == 1 && !o.quiet)
+			fprintf(stderr, "springmass run: removed %s_%06ld.vtk of an earlier run\n", name, rows + 1);
+		else if (removed > 1 && !o.quiet)
 			fprintf(stderr, "springmass run: removed %s_%06ld.vtk to %s_%06ld.vtk of an earlier run\n", name,
 			        rows + 1, name, rows + removed);
 	}

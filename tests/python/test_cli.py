@@ -558,13 +558,20 @@ def test_modes_of_the_oscillator_follow_the_closed_form(tmp_path):
 def test_a_shorter_series_removes_what_a_longer_one_left(tmp_path):
     # modes: 3 modes after 5 leave mode_1 to mode_3, which ParaView would otherwise open with the
     # earlier run's mode_4 and mode_5 as one group; a file of that name that is not a VTK file
-    # (here mode_7, past a gap) is not touched.
+    # (here mode_7, past a gap) is not touched, nor a symbolic link (mode_9, after a mode_8).
     vtk = tmp_path / "vtk"
     cli("modes", MODELS / "hanging_rope.json", "-n", 5, "--vtk", vtk)
     (vtk / "mode_7.vtk").write_text("notes\n")
     out = cli("modes", MODELS / "hanging_rope.json", "-n", 3, "--vtk", vtk).stdout
     assert f"removed {vtk}/mode_4.vtk to mode_5.vtk" in out
     assert sorted(p.name for p in vtk.iterdir()) == ["mode_1.vtk", "mode_2.vtk", "mode_3.vtk", "mode_7.vtk"]
+    shutil.copy(vtk / "mode_1.vtk", tmp_path / "kept.vtk")
+    shutil.copy(vtk / "mode_1.vtk", vtk / "mode_8.vtk")
+    (vtk / "mode_9.vtk").symlink_to(tmp_path / "kept.vtk")
+    (vtk / "mode_7.vtk").unlink()
+    out = cli("modes", MODELS / "hanging_rope.json", "-n", 7, "--vtk", vtk).stdout
+    assert f"removed {vtk}/mode_8.vtk, left there by an earlier run with more modes" in out
+    assert (vtk / "mode_9.vtk").is_symlink() and (tmp_path / "kept.vtk").exists()
     # run: 6 rows after 11 (t = 0 to 1 s every 0.1 s, then every 0.2 s); the index names the six.
     model = MODELS / "oscillator.json"
     cli("run", model, "-q", "-o", tmp_path / "a.csv", "--t-end", 1, "--output-interval", 0.1, "--vtk", vtk)
@@ -840,13 +847,15 @@ def test_check_sheet_grid_and_the_row_limit(tmp_path):
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
-    # The reference is a result of the FMU written by fmpy: quoted names, its own number format.
-    from fmpy import simulate_fmu
+    # The reference as fmpy's write_csv writes a result of the FMU: quoted names, its own number
+    # format. (A result made here, not by simulate_fmu: in an instrumented build the FMU cannot be
+    # loaded into this interpreter, which has no sanitizer runtime preloaded.)
     from fmpy.util import write_csv
-    first = tmp_path / "first.fmu"
-    cli("fmu", MODELS / "hanging_rope.json", "-o", first, "--set", "E=150")
     reference = tmp_path / "reference.csv"
-    write_csv(reference, simulate_fmu(str(first), stop_time=0.1, output=["tip.z", "middle.x", "solver.max_steps"]))
+    result = np.array([(0.0, 0.0, 0.5, 100000), (0.05, -0.012, 0.5, 100000)],
+                      dtype=[("time", np.float64), ("tip.z", np.float64), ("middle.x", np.float64),
+                             ("solver.max_steps", np.int32)])
+    write_csv(reference, result)
     assert reference.read_text().startswith('"time","tip.z","middle.x","solver.max_steps"\n0.0,0.0,0.5,100000\n')
     fmu = tmp_path / "rope.fmu"
     out = cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference, "--set", "E=150").stdout
@@ -863,14 +872,25 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
     ('"time",tip.x,"tip.q"\n0,1,2\n', '1:14: "tip.q" is not a variable of the FMU'),
     ("time,solver.method\n0,1\n", '1:6: "solver.method" is a String variable: a result holds numbers'),
     ("time,tip.x,tip.y,tip.x\n0,1,2,3\n", '1:18: "tip.x" is named twice'),
-    ("time,tip.x\n0,1\n0.5,nan\n", '3:5: "nan" is not a finite number'),
-    ("time,tip.x\n0,1\n0.5, 2\n", '3:5: " 2" is not a finite number'),
+    ("time,tip.x\n0,1\n0.5,nan\n", '3:5: "nan" is not a finite decimal number'),
+    ("time,tip.x\n0,1\n0.5, 2\n", '3:5: " 2" is not a finite decimal number'),
+    ("time,tip.x\n0,0x1p3\n", '2:3: "0x1p3" is not a finite decimal number'),
+    ("time,tip.x\n0,1e400\n", '2:3: "1e400" is not a finite decimal number'),
+    ("time,tip.x\n0,1.\n0.5,.\n", '3:5: "." is not a finite decimal number'),
+    ("time,tip.x\n0,2e\n", '2:3: "2e" is not a finite decimal number'),
+    ('time,tip.x\n0,"1"\n', '2:3: "1" is quoted: a result writes its numbers without quotes'),
+    ("time,solver.max_steps\n0,1.5\n", '2:3: solver.max_steps is an Integer variable: "1.5" is no such value'),
+    ("\ufefftime,tip.x\n0,1\n", "1:1: a byte-order mark before the header: write the file without one"),
+    ("time,tip.x\r0,1\n", "1:11: a carriage return without a line feed: lines end in LF or CRLF"),
     ("time,tip.x\r\n0,1\r\n0.5\r\n", "3:4: fewer fields than columns: the header names 2 columns"),
     ("time,tip.x\n0,1,\n", "2:4: more fields than columns: the header names 2 columns"),
     ("time,tip.x\n1,1\n0.5,1\n", "3:1: time 0.5 s is before the previous row's 1 s"),
-    ("time,tip.x\n0,1\n\n1,1\n", "3:1: an empty line before the end of the result"),
+    ("time,tip.x\n0,1\n\n1,1\n", "3:1: an empty line: a result has none"),
+    ("time,tip.x\n0,1\n\n", "3:1: an empty line: a result has none"),
     ('time,"tip.x\n0,1\n', "1:6: a quoted field is not closed"),
     ('time,"tip.x"y\n0,1\n', "1:13: text after the closing quote of a field"),
+    ('time,"tip\n.q"\n0,1\n', '1:6: "tip\\u000a.q" is not a variable of the FMU'),
+    ('time,tip.x\n0,"1\n2"\n', '2:3: "1\\u000a2" is quoted: a result writes its numbers without quotes'),
     ("time,tip.x\n", "2:1: no rows after the header"),
     ("time,tip.x\n0,\x00\n", "2:3: a NUL byte: not a text file"),
     ('time,"a\x1b[2Jb"\n0,1\n', '1:6: "a\\u001b[2Jb" is not a variable of the FMU'),
@@ -888,11 +908,12 @@ def test_fmu_refuses_a_reference_that_is_no_result_of_it(tmp_path, text, message
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_takes_a_reference_with_events_and_without_a_last_line_end(tmp_path):
-    # A time repeated at an event, CRLF line ends, a quoted name with a doubled quote nowhere
-    # needed but allowed, empty lines at the end only, and no line end after the last row.
+    # A time repeated at an event, CRLF line ends, names quoted or not, numbers in every form a
+    # decimal takes, whole numbers of an Integer variable, and no line end after the last row.
     reference = tmp_path / "reference.csv"
-    text = b'"time",tip.x,"energy.kinetic"\r\n0,1,0\r\n0.5,1e-3,-2.5E+2\r\n0.5,.5,3\r\n1,2,3'
-    for ending in (b"", b"\n\n\r\n"):
+    text = (b'"time",tip.x,"energy.kinetic",solver.max_steps\r\n0,1,0,7\r\n0.5,1e-3,-2.5E+2,+8.0\r\n'
+            b'0.5,.5,3,-9e2\r\n1,2.,+3,10')
+    for ending in (b"", b"\n", b"\r\n"):
         reference.write_bytes(text + ending)
         fmu = tmp_path / "rope.fmu"
         cli("fmu", MODELS / "hanging_rope.json", "-o", fmu, "--reference", reference)

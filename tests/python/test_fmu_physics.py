@@ -1,4 +1,5 @@
 """The FMU against physics: closed forms, scaling laws and statics, through fmpy."""
+import ctypes
 import json
 import math
 import re
@@ -413,6 +414,14 @@ def test_output_derivatives_are_the_rates_of_the_outputs(test_fmu):
         assert "order 2 of bob.x: this FMU gives first derivatives (maxOutputDerivativeOrder = 1)" in texts[0]
         assert "order 0 of bob.x" in texts[1] and "hook.x is not an output" in texts[2] and "k is not" in texts[3]
         assert s.getRealOutputDerivatives(refs, [1] * len(refs)) == list(rates)
+        # A motion input far beyond the model's scale: derivatives beyond a double come with
+        # fmi2Warning and the first such output named, as fmi2GetReal gives the values.
+        s.setReal([vr["hook.x"]], [1e160])
+        values = (ctypes.c_double * len(refs))()
+        status = s.fmi2GetRealOutputDerivatives(s.component, (ctypes.c_uint * len(refs))(*refs), len(refs),
+                                                (ctypes.c_int * len(refs))(*[1] * len(refs)), values)
+        assert status == 1 and not all(math.isfinite(v) for v in values)
+        assert "the derivative of hook.fx is not finite" in inst.messages[-1][2], inst.messages[-1]
     finally:
         inst.free()
 
