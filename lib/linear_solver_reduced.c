@@ -387,6 +387,8 @@ static void reduced_content_free(sm_reduced* r)
 	sm_workers_destroy(r->workers);
 	free(r->slot);
 	free(r->ordered_a);
+	free(r->entry_a);
+	free(r->entry_b);
 	free(r->ordered_b);
 	free(r->ordered_rest_length);
 	free(r->ordered_stiffness);

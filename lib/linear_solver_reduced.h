@@ -118,6 +118,11 @@ typedef struct sm_reduced {
 	int32_t* slot;
 	int32_t* ordered_a;
 	int32_t* ordered_b;
+	// The first vector entries of each spring's particles (3 a, 3 b; a model holds at most
+	// INT32_MAX / 4 particles, so they fit) at its position of the chunk order, for the products
+	// (reduced_products.c); loaded with the constants (sm_reduced_load_spring_order).
+	int32_t* entry_a;
+	int32_t* entry_b;
 	double* ordered_rest_length;  // the model's constants in chunk order (sm_reduced_load_spring_order)
 	double* ordered_stiffness;
 	double* ordered_damping;
@@ -166,8 +171,8 @@ static inline int64_t sm_reduced_coarse_entry(const sm_reduced* r, int32_t I, in
 // springs join two chunks; the aggregates' member lists; and the team of threads. False on out of
 // memory.
 bool sm_reduced_build_chunks(sm_reduced* r, int32_t min_particles, double max_boundary_fraction);
-// The model's spring constants in chunk order (nothing with one chunk): when the chunks are built
-// and at every invalidation, which follows every change of them.
+// The springs' entries and the model's spring constants in chunk order (the constants only with
+// chunks): when the chunks are built and at every invalidation, which follows every change of them.
 void sm_reduced_load_spring_order(sm_reduced* r);
 // sm_model_forces_power_and_jacobians at x, v into f and the solver's records, in chunk order;
 // returns the dissipated power [W].

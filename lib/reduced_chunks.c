@@ -56,15 +56,18 @@ double sm_reduced_forces_and_records(sm_reduced* r, const double* x, const doubl
 	return sm_reduced_sum_partials(r) + boundary;
 }
 
-// The model's spring constants in chunk order: when the chunks are built and at every
-// invalidation, which follows every change of them (a break, a restore, a reset, a new model).
+// The springs' entries (entry_a, entry_b) and, in chunks, the model's spring constants in chunk
+// order: when the chunks are built and at every invalidation, which follows every change of them (a
+// break, a restore, a reset, a new model).
 void sm_reduced_load_spring_order(sm_reduced* r)
 {
 	const sm_model* m = r->sim->model;
-	if (r->slot == NULL)
-		return;
 	for (int32_t s = 0; s < m->spring_count; s++) {
-		const int32_t k = r->slot[s];
+		const int32_t k = r->slot != NULL ? r->slot[s] : s;
+		r->entry_a[k] = 3 * m->spring_a[s];
+		r->entry_b[k] = 3 * m->spring_b[s];
+		if (r->slot == NULL)
+			continue;
 		r->ordered_rest_length[k] = m->rest_length[s];
 		r->ordered_stiffness[k] = m->stiffness[s];
 		r->ordered_damping[k] = m->damping[s];
@@ -84,6 +87,10 @@ bool sm_reduced_build_chunks(sm_reduced* r, int32_t min_particles, double max_bo
 	r->chunk_particle[0] = 0, r->chunk_particle[1] = np;
 	r->chunk_spring[0] = 0, r->chunk_spring[1] = ns;
 	r->chunk_aggregate[0] = 0, r->chunk_aggregate[1] = r->aggregate_count;
+	r->entry_a = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	r->entry_b = malloc(((size_t)ns + 1) * sizeof(int32_t));
+	if (!r->entry_a || !r->entry_b)
+		return false;
 	if (r->two_level) {
 		// Each aggregate's members in increasing order, by a counting sort: counts at I + 2, their
 		// running sums at I + 2 (the start of I + 1), then each member placed at member_first[I + 1],
@@ -101,6 +108,7 @@ bool sm_reduced_build_chunks(sm_reduced* r, int32_t min_particles, double max_bo
 			if (r->aggregate[i] >= 0)
 				r->member[r->member_first[r->aggregate[i] + 1]++] = i;
 	}
+	sm_reduced_load_spring_order(r);
 	if (r->use_cholmod || r->sim->free_count < min_particles)
 		return true;
 	const int chunks = PARALLEL_CHUNKS;
@@ -124,7 +132,7 @@ bool sm_reduced_build_chunks(sm_reduced* r, int32_t min_particles, double max_bo
 		// Too many springs between chunks, which run on one thread: one chunk after all.
 		free(key);
 		r->chunk_particle[1] = np;
-		return true;
+		return true;  // the entries as loaded above, in the model's order
 	}
 	r->slot = malloc(((size_t)ns + 1) * sizeof(int32_t));
 	r->ordered_a = malloc(((size_t)ns + 1) * sizeof(int32_t));
