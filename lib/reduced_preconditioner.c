@@ -72,32 +72,48 @@ static double* block_sums(const sm_reduced* r)
 
 // The springs at positions begin .. end of the chunk order: their scaled records (u, w,
 // gamma^2 beta) from the Jacobian's (q: u = q[0 .. 2], z = q[3 .. 5], beta = q[6], kd = q[7]),
-// and B added to the diagonal sums of both ends.
+// and B added to the diagonal sums of both ends. Consecutive springs often share their first
+// particle (structures list their springs particle by particle): its sum is held in registers
+// from its first spring to its last, loaded before and stored after. No other spring of the run
+// reaches it (a spring's ends differ), so the additions are those of adding to memory, in the
+// same order: the same bits, without waiting for each stored sum to be loaded again.
 static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_t end)
 {
-	const sm_model* m = r->sim->model;
-	const int32_t* first = r->slot != NULL ? r->ordered_a : m->spring_a;
-	const int32_t* second = r->slot != NULL ? r->ordered_b : m->spring_b;
+	const int32_t* restrict first = r->entry_a;
+	const int32_t* restrict second = r->entry_b;
+	const double* restrict data = r->springs->data;
+	double* restrict scaled = r->scaled;
 	const double g2 = gamma * gamma;
-	double* diag = block_sums(r);
+	double* restrict diag = block_sums(r);
+	if (begin >= end)
+		return;
+	int32_t held = first[begin];
+	double h[9];
+	memcpy(h, diag + 3 * (size_t)held, sizeof h);
 	for (int32_t k = begin; k < end; k++) {
-		const double* q = r->springs->data + SPRING_JACOBIAN_STRIDE * (size_t)k;
+		const double* restrict q = data + SPRING_JACOBIAN_STRIDE * (size_t)k;
+		const int32_t a = first[k];
+		if (a != held) {
+			memcpy(diag + 3 * (size_t)held, h, sizeof h);
+			held = a;
+			memcpy(h, diag + 3 * (size_t)held, sizeof h);
+		}
 		const double w[3] = {g2 * q[3] + gamma * q[7] * q[0], g2 * q[4] + gamma * q[7] * q[1],
 		                     g2 * q[5] + gamma * q[7] * q[2]};
 		const double d = g2 * q[6];
-		double* record = r->scaled + SCALED_STRIDE * (size_t)k;
+		double* restrict record = scaled + SCALED_STRIDE * (size_t)k;
 		record[0] = q[0], record[1] = q[1], record[2] = q[2];
 		record[3] = w[0], record[4] = w[1], record[5] = w[2];
 		record[6] = d;
 		const double B[9] = {q[0] * w[0] + d, q[0] * w[1], q[0] * w[2], q[1] * w[0],    q[1] * w[1] + d,
 		                     q[1] * w[2],     q[2] * w[0], q[2] * w[1], q[2] * w[2] + d};
-		const int32_t ends[2] = {first[k], second[k]};
-		for (int e = 0; e < 2; e++) {
-			double* sum = diag + 9 * (size_t)ends[e];
-			for (int i = 0; i < 9; i++)
-				sum[i] += B[i];
+		double* restrict sum = diag + 3 * (size_t)second[k];
+		for (int i = 0; i < 9; i++) {
+			h[i] += B[i];
+			sum[i] += B[i];
 		}
 	}
+	memcpy(diag + 3 * (size_t)held, h, sizeof h);
 }
 
 // Chunk c: its particles' diagonal sums cleared, then its springs' shares added (they reach no
