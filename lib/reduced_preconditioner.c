@@ -34,6 +34,10 @@
 #include <math.h>
 #include <string.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 // The coarse matrix is summed and factorised again after COARSE_MAX_AGE preconditioner
 // preparations (a preparation follows every Jacobian evaluation and change of gamma) or when gamma
 // has changed by more than COARSE_GAMMA_CHANGE (relative) since; in between the older factor
@@ -88,6 +92,67 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 	if (begin >= end)
 		return;
 	int32_t held = first[begin];
+#if defined(__SSE2__)
+	// Pairs of entries in the two lanes of SSE2 registers (part of every x86-64 processor): w_x and
+	// w_y, and B and the sums as (B_0, B_1), (B_2, B_3), (B_4, B_5), (B_6, B_7), B_8, with (d, 0) for
+	// the d of B_0 and B_4 (B_1 + 0 and B_5 + 0 differ from B_1, B_5 at most in the sign of a zero,
+	// which a sum that starts at +0 does not keep). Each lane does the scalar operations in their
+	// order: the same bits.
+	__m128d h[4];
+	double h8;
+	const double* sum_held = diag + 3 * (size_t)held;
+	for (int i = 0; i < 4; i++)
+		h[i] = _mm_loadu_pd(sum_held + 2 * i);
+	h8 = sum_held[8];
+	const __m128d g2v = _mm_set1_pd(g2);
+	for (int32_t k = begin; k < end; k++) {
+		const double* restrict q = data + SPRING_JACOBIAN_STRIDE * (size_t)k;
+		const int32_t a = first[k];
+		if (a != held) {
+			double* out = diag + 3 * (size_t)held;
+			for (int i = 0; i < 4; i++)
+				_mm_storeu_pd(out + 2 * i, h[i]);
+			out[8] = h8;
+			held = a;
+			const double* in = diag + 3 * (size_t)held;
+			for (int i = 0; i < 4; i++)
+				h[i] = _mm_loadu_pd(in + 2 * i);
+			h8 = in[8];
+		}
+		const double gk = gamma * q[7];
+		const __m128d u01 = _mm_loadu_pd(q);
+		const __m128d w01 =
+		    _mm_add_pd(_mm_mul_pd(g2v, _mm_loadu_pd(q + 3)), _mm_mul_pd(_mm_set1_pd(gk), u01));
+		const double w2 = g2 * q[5] + gk * q[2];
+		const double d = g2 * q[6];
+		double* restrict record = scaled + SCALED_STRIDE * (size_t)k;
+		_mm_storeu_pd(record, u01);
+		record[2] = q[2];
+		_mm_storeu_pd(record + 3, w01);
+		record[5] = w2;
+		record[6] = d;
+		const __m128d dv = _mm_set_sd(d);
+		const __m128d w2v = _mm_set_sd(w2);
+		const __m128d B[4] = {
+		    _mm_add_pd(_mm_mul_pd(_mm_set1_pd(q[0]), w01), dv),
+		    _mm_mul_pd(u01, _mm_unpacklo_pd(w2v, w01)),
+		    _mm_add_pd(_mm_mul_pd(_mm_set1_pd(q[1]), _mm_shuffle_pd(w01, w2v, 1)), dv),
+		    _mm_mul_pd(_mm_set1_pd(q[2]), w01),
+		};
+		const double B8 = q[2] * w2 + d;
+		double* restrict sum = diag + 3 * (size_t)second[k];
+		for (int i = 0; i < 4; i++) {
+			h[i] = _mm_add_pd(h[i], B[i]);
+			_mm_storeu_pd(sum + 2 * i, _mm_add_pd(_mm_loadu_pd(sum + 2 * i), B[i]));
+		}
+		h8 += B8;
+		sum[8] += B8;
+	}
+	double* out = diag + 3 * (size_t)held;
+	for (int i = 0; i < 4; i++)
+		_mm_storeu_pd(out + 2 * i, h[i]);
+	out[8] = h8;
+#else
 	double h[9];
 	memcpy(h, diag + 3 * (size_t)held, sizeof h);
 	for (int32_t k = begin; k < end; k++) {
@@ -114,6 +179,7 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 		}
 	}
 	memcpy(diag + 3 * (size_t)held, h, sizeof h);
+#endif
 }
 
 // Chunk c: its particles' diagonal sums cleared, then its springs' shares added (they reach no
@@ -146,7 +212,12 @@ static void invert_chunk(void* context, int c)
 		double* a = diag + 9 * (size_t)i;
 		const double mass = m->mass[i] * damping;
 		a[0] += mass, a[4] += mass, a[8] += mass;
-		j->singular[c] = j->singular[c] || !sm_invert3(a, inv);
+		double t[9];
+		j->singular[c] = j->singular[c] || !sm_invert3(a, t);
+		// Stored by column pairs for block Jacobi: (t00, t10), (t01, t11), (t02, t12), then the
+		// last row t20, t21, t22.
+		inv[0] = t[0], inv[1] = t[3], inv[2] = t[1], inv[3] = t[4], inv[4] = t[2], inv[5] = t[5];
+		inv[6] = t[6], inv[7] = t[7], inv[8] = t[8];
 	}
 }
 
@@ -241,7 +312,11 @@ typedef struct precondition_job {
 
 // Chunk c of block Jacobi (out_i = A_ii^-1 in_i, zero blocks at constrained particles) at its
 // particles, with in . out when there is no coarse correction, and of the restriction
-// P^T in at its aggregates, each summed over its members in order.
+// P^T in at its aggregates, each summed over its members in order. The inverses are stored by
+// column pairs (invert_chunk), so that the first two rows of a product are one SSE2 register
+// (part of every x86-64 processor): out_x and out_y are m_0 in_x + m_1 in_y + m_2 in_z with the
+// pairs m_0, m_1, m_2 of the first two rows' entries, each lane doing the scalar row's operations
+// in their order, and the sums too, x and y in one register: the same bits as scalar loops.
 static void block_jacobi_chunk(void* context, int c)
 {
 	const precondition_job* j = context;
@@ -254,10 +329,21 @@ static void block_jacobi_chunk(void* context, int c)
 		const double* m = inverse + 9 * k;
 		const double* a = in + 3 * k;
 		double* o = out + 3 * k;
-		o[0] = m[0] * a[0] + m[1] * a[1] + m[2] * a[2];
-		o[1] = m[3] * a[0] + m[4] * a[1] + m[5] * a[2];
+#if defined(__SSE2__)
+		const __m128d oxy = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(m), _mm_set1_pd(a[0])),
+		                                          _mm_mul_pd(_mm_loadu_pd(m + 2), _mm_set1_pd(a[1]))),
+		                               _mm_mul_pd(_mm_loadu_pd(m + 4), _mm_set1_pd(a[2])));
+		const double oz = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
+		_mm_storeu_pd(o, oxy);
+		o[2] = oz;
+		const __m128d t = _mm_mul_pd(_mm_loadu_pd(a), oxy);
+		sum += (_mm_cvtsd_f64(t) + _mm_cvtsd_f64(_mm_unpackhi_pd(t, t))) + a[2] * oz;
+#else
+		o[0] = m[0] * a[0] + m[2] * a[1] + m[4] * a[2];
+		o[1] = m[1] * a[0] + m[3] * a[1] + m[5] * a[2];
 		o[2] = m[6] * a[0] + m[7] * a[1] + m[8] * a[2];
 		sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
+#endif
 	}
 	r->partial[c] = sum;
 	if (!r->two_level)
@@ -265,12 +351,24 @@ static void block_jacobi_chunk(void* context, int c)
 	double* restrict rc = r->coarse_b->x;
 	const int32_t* restrict member = r->member;
 	for (int32_t I = r->chunk_aggregate[c]; I < r->chunk_aggregate[c + 1]; I++) {
+#if defined(__SSE2__)
+		__m128d xy = _mm_setzero_pd();
+		double z = 0.0;
+		for (int32_t e = r->member_first[I]; e < r->member_first[I + 1]; e++) {
+			const double* a = in + 3 * (size_t)member[e];
+			xy = _mm_add_pd(xy, _mm_loadu_pd(a));
+			z += a[2];
+		}
+		_mm_storeu_pd(rc + 3 * (size_t)I, xy);
+		rc[3 * (size_t)I + 2] = z;
+#else
 		double x = 0.0, y = 0.0, z = 0.0;
 		for (int32_t e = r->member_first[I]; e < r->member_first[I + 1]; e++) {
 			const double* a = in + 3 * (size_t)member[e];
 			x += a[0], y += a[1], z += a[2];
 		}
 		rc[3 * (size_t)I] = x, rc[3 * (size_t)I + 1] = y, rc[3 * (size_t)I + 2] = z;
+#endif
 	}
 }
 
@@ -290,10 +388,19 @@ static void prolongation_chunk(void* context, int c)
 			continue;
 		const double* a = in + 3 * k;
 		double* o = out + 3 * k;
+#if defined(__SSE2__)
+		const __m128d oxy = _mm_add_pd(_mm_loadu_pd(o), _mm_loadu_pd(yc + 3 * (size_t)I));
+		const double oz = o[2] + yc[3 * (size_t)I + 2];
+		_mm_storeu_pd(o, oxy);
+		o[2] = oz;
+		const __m128d t = _mm_mul_pd(_mm_loadu_pd(a), oxy);
+		sum += (_mm_cvtsd_f64(t) + _mm_cvtsd_f64(_mm_unpackhi_pd(t, t))) + a[2] * oz;
+#else
 		o[0] += yc[3 * (size_t)I];
 		o[1] += yc[3 * (size_t)I + 1];
 		o[2] += yc[3 * (size_t)I + 2];
 		sum += a[0] * o[0] + a[1] * o[1] + a[2] * o[2];
+#endif
 	}
 	r->partial[c] = sum;
 }
