@@ -40,6 +40,16 @@
 #define SCALED_STRIDE 8
 _Static_assert(SCALED_STRIDE == SPRING_JACOBIAN_STRIDE, "scaled and Jacobian records share a layout");
 
+// The pcg loops' SSE2 pairs (reduced_products.c, reduced_preconditioner.c): only where double
+// arithmetic is SSE2's too (x86-64; 32-bit x86 with -mfpmath=sse). With x87 arithmetic
+// (-m32 -msse2 alone) the scalar z lane would keep extended precision within expressions and the
+// pairs' x and y would not: not the scalar loops' bits. A compiler without SSE2 math takes the
+// scalar loops, the same operations in the same order; so does the sanitizer build
+// (SPRINGMASS_SCALAR_LOOPS), whose tests run them.
+#if defined(__SSE2__) && defined(__SSE2_MATH__) && !defined(SPRINGMASS_SCALAR_LOOPS)
+#define SM_REDUCED_SSE2 1
+#endif
+
 // The SUNLinearSolver's content.
 typedef struct sm_reduced {
 	sm_simulation* sim;
@@ -62,7 +72,9 @@ typedef struct sm_reduced {
 	double iteration_flops;
 	double extra_flops;
 	// Per particle, zero for constrained particles: block_inverse, 18 doubles each (A's inverted
-	// 3x3 diagonal blocks, 9 per particle, then their sums before the inversion, 9 per particle),
+	// 3x3 diagonal blocks, 9 per particle, stored by column pairs (t00, t10), (t01, t11), (t02, t12),
+	// then the last row t20, t21, t22 (invert_chunk, for block Jacobi's pairs); then their sums
+	// before the inversion, 9 per particle, row-major),
 	// and 3 doubles each: mass [kg], weight (CVODE's error weight over the mass, the residual's
 	// weight) and the conjugate gradients' vectors r, z, p, q, rhs, dv.
 	double* block_inverse;

@@ -34,7 +34,7 @@
 #include <math.h>
 #include <string.h>
 
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 #include <emmintrin.h>
 #endif
 
@@ -92,7 +92,7 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 	if (begin >= end)
 		return;
 	int32_t held = first[begin];
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 	// Pairs of entries in the two lanes of SSE2 registers (part of every x86-64 processor): w_x and
 	// w_y, and B and the sums as (B_0, B_1), (B_2, B_3), (B_4, B_5), (B_6, B_7), B_8, with (d, 0) for
 	// the d of B_0 and B_4 (B_1 + 0 and B_5 + 0 differ from B_1, B_5 at most in the sign of a zero,
@@ -329,7 +329,7 @@ static void block_jacobi_chunk(void* context, int c)
 		const double* m = inverse + 9 * k;
 		const double* a = in + 3 * k;
 		double* o = out + 3 * k;
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 		const __m128d oxy = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(m), _mm_set1_pd(a[0])),
 		                                          _mm_mul_pd(_mm_loadu_pd(m + 2), _mm_set1_pd(a[1]))),
 		                               _mm_mul_pd(_mm_loadu_pd(m + 4), _mm_set1_pd(a[2])));
@@ -351,7 +351,7 @@ static void block_jacobi_chunk(void* context, int c)
 	double* restrict rc = r->coarse_b->x;
 	const int32_t* restrict member = r->member;
 	for (int32_t I = r->chunk_aggregate[c]; I < r->chunk_aggregate[c + 1]; I++) {
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 		__m128d xy = _mm_setzero_pd();
 		double z = 0.0;
 		for (int32_t e = r->member_first[I]; e < r->member_first[I + 1]; e++) {
@@ -388,7 +388,7 @@ static void prolongation_chunk(void* context, int c)
 			continue;
 		const double* a = in + 3 * k;
 		double* o = out + 3 * k;
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 		const __m128d oxy = _mm_add_pd(_mm_loadu_pd(o), _mm_loadu_pd(yc + 3 * (size_t)I));
 		const double oz = o[2] + yc[3 * (size_t)I + 2];
 		_mm_storeu_pd(o, oxy);

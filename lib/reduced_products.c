@@ -16,7 +16,7 @@
 
 #include <string.h>
 
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 #include <emmintrin.h>
 #endif
 
@@ -30,15 +30,19 @@
 // their first particle: its sum and its p are kept in registers until the particle changes
 // (holding p too: 1.6 % faster at n = 16, 1 - 2 % at n = 64 and 128). The entries' offsets
 // (entry_a, entry_b: 3 a and 3 b) are precomputed.
-#if defined(__SSE2__)
+#if defined(SM_REDUCED_SSE2)
 // x and y in the two lanes of one SSE2 register (part of every x86-64 processor), z apart: the
 // loop is bound by the instructions it issues, not by its loads or arithmetic, and this takes
 // about a quarter fewer. Each lane performs the scalar loop's operations in the same order, and
 // w . r is (w_x r_x + w_y r_y) + w_z r_z as there: the same bits.
-static inline __attribute__((always_inline)) void
-spring_products_loop(const int32_t* restrict first, const int32_t* restrict second,
-                     const double* restrict records, const double* restrict p, double* restrict q,
-                     int32_t begin, int32_t end)
+#if defined(__GNUC__)
+#define PRODUCTS_LOOP static inline __attribute__((always_inline))
+#else
+#define PRODUCTS_LOOP static inline
+#endif
+PRODUCTS_LOOP void spring_products_loop(const int32_t* restrict first, const int32_t* restrict second,
+                                        const double* restrict records, const double* restrict p,
+                                        double* restrict q, int32_t begin, int32_t end)
 {
 	int32_t held = first[begin];
 	__m128d hxy = _mm_setzero_pd();

@@ -747,7 +747,8 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 			memcpy(w->rhs + 3 * (size_t)i, w->f + 3 * (size_t)w->free_particle[i], 3 * sizeof(double));
 		int factored = factor_and_step(w, w->x, mu, SM_JACOBIAN_EXACT, w->rhs, w->step);
 		// After DEFINITE_RUN definite steps in a row, the exact H with a larger shift first: mu
-		// grows tenfold from 1e-9 mu_ref until H + mu M factors, up to 1e-3 mu_ref.
+		// grows tenfold from max(10 mu, 1e-9 mu_ref) until H + mu M factors, up to 1e-3 mu_ref (the
+		// shift found then shrinks after full steps, as any).
 		for (double m = fmax(10.0 * mu, 1e-9 * mu_ref);
 		     factored == 0 && definite_steps >= DEFINITE_RUN && m <= 1e-3 * mu_ref; m *= 10.0) {
 			factored = factor_and_step(w, w->x, m, SM_JACOBIAN_EXACT, w->rhs, w->step);
