@@ -193,7 +193,7 @@ static void current_jacobian(sm_reduced* r, double t, const double* y)
 		double* v = sim->work_velocity;
 		sm_simulation_unpack(sim, t, y, x, v);
 		const double start = sm_simulation_clock();
-		sm_reduced_forces_and_records(r, x, v, sim->external_force, r->full_force);
+		sm_reduced_forces_and_records(r, x, v, sm_simulation_external_forces(sim, t), r->full_force);
 		sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	}
 	sim->jacobian_evaluations++;

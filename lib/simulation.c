@@ -130,8 +130,9 @@ sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
 // State packing
 // ---------------------------------------------------------------------------------------------
 
-// A driven particle's motion has run for (time_origin - drive_time) + t: both differences are of
-// times near each other, so that neither loses the precision of a large time.
+// A driven particle's motion has run for s = (time_origin - drive_time) + t: both differences are
+// of times near each other, so that neither loses the precision of a large time. Its position is
+// x0 + s (v0 + s a / 2), its velocity v0 + s a.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v)
 {
 	const int64_t nd = sim->dofs;
@@ -152,8 +153,9 @@ void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double*
 		if (m->motion[i] == SM_PARTICLE_DRIVEN) {
 			const double dt = (sim->time_origin - sim->drive_time[i]) + t;
 			for (int c = 0; c < 3; c++) {
-				x[p + c] = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
-				v[p + c] = sim->drive_velocity[p + c];
+				const double a = sim->drive_acceleration[p + c];
+				x[p + c] = sim->drive_position[p + c] + dt * (sim->drive_velocity[p + c] + 0.5 * dt * a);
+				v[p + c] = sim->drive_velocity[p + c] + dt * a;
 			}
 		} else {
 			for (int c = 0; c < 3; c++) {
@@ -162,6 +164,20 @@ void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double*
 			}
 		}
 	}
+}
+
+// A ramp's time since it was set is a difference of times near each other, as a driven motion's.
+const double* sm_simulation_external_forces(sm_simulation* sim, double t)
+{
+	if (sim->ramping_forces == 0)
+		return sim->external_force;
+	for (int32_t i = 0; i < sim->particle_count; i++) {
+		const size_t p = 3 * (size_t)i;
+		const double dt = (sim->time_origin - sim->force_time[i]) + t;
+		for (int c = 0; c < 3; c++)
+			sim->work_external[p + c] = sim->external_force[p + c] + sim->force_rate[p + c] * dt;
+	}
+	return sim->work_external;
 }
 
 // Writes the free particles' entries of x and v into y (e untouched).
@@ -212,12 +228,13 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 	double* f = sim->work_force;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
+	const double* external = sm_simulation_external_forces(sim, t);
 	double power;
 	if (has_reduced_solver(sim) && sm_reduced_rhs_wants_records(sim->linear_solver, t)) {
-		power = sm_reduced_rhs_forces(sim->linear_solver, t, y, x, v, sim->external_force, f);
+		power = sm_reduced_rhs_forces(sim->linear_solver, t, y, x, v, external, f);
 		sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	} else {
-		power = sm_model_forces_and_power(sim->model, x, v, sim->external_force, f);
+		power = sm_model_forces_and_power(sim->model, x, v, external, f);
 		sim->base.force_seconds += sm_simulation_clock() - start;
 	}
 	sim->rhs_evaluations++;
@@ -536,8 +553,11 @@ static void load_initial_state(sm_simulation* sim)
 		memcpy(sim->drive_velocity, m->velocity, n3 * sizeof(double));
 	}
 	for (int32_t i = 0; i < sim->particle_count; i++)
-		sim->drive_time[i] = 0.0;
+		sim->drive_time[i] = sim->force_time[i] = 0.0;
+	memset(sim->drive_acceleration, 0, n3 * sizeof(double));
 	memset(sim->external_force, 0, n3 * sizeof(double));
+	memset(sim->force_rate, 0, n3 * sizeof(double));
+	sim->ramping_forces = 0;
 	double* y = N_VGetArrayPointer(sim->y);
 	pack(sim, m->position, m->velocity, y);
 	y[2 * sim->dofs] = 0.0;
@@ -688,9 +708,11 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	sim->constrained = malloc(((size_t)sim->constrained_count + 1) * sizeof(int32_t));
 	sim->inverse_mass = malloc(((size_t)sim->free_count + 1) * sizeof(double));
 	sim->mass_dof = malloc(((size_t)sim->dofs + 1) * sizeof(double));
-	double** arrays[] = {&sim->position,       &sim->velocity,       &sim->external_force,
-	                     &sim->drive_position, &sim->drive_velocity, &sim->drive_time,
-	                     &sim->work_position,  &sim->work_velocity,  &sim->work_force};
+	double** arrays[] = {&sim->position,       &sim->velocity,           &sim->external_force,
+	                     &sim->force_rate,     &sim->force_time,         &sim->drive_position,
+	                     &sim->drive_velocity, &sim->drive_acceleration, &sim->drive_time,
+	                     &sim->work_position,  &sim->work_velocity,      &sim->work_force,
+	                     &sim->work_external};
 	for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
 		if (!(*arrays[i] = calloc(n3, sizeof(double))))
 			goto out_of_memory;
@@ -781,7 +803,11 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->external_force);
 	free(sim->drive_position);
 	free(sim->drive_velocity);
+	free(sim->drive_acceleration);
 	free(sim->drive_time);
+	free(sim->force_rate);
+	free(sim->force_time);
+	free(sim->work_external);
 	free(sim->work_position);
 	free(sim->work_velocity);
 	free(sim->work_force);
@@ -1251,7 +1277,17 @@ void sm_simulation_forces(const sm_simulation* sim, double* f)
 {
 	if (sim == NULL || f == NULL)
 		return;
-	sm_model_forces(sim->model, sim->position, sim->velocity, sim->external_force, f);
+	if (sim->ramping_forces == 0) {
+		sm_model_forces(sim->model, sim->position, sim->velocity, sim->external_force, f);
+		return;
+	}
+	sm_model_forces(sim->model, sim->position, sim->velocity, NULL, f);
+	for (int32_t i = 0; i < sim->particle_count; i++) {
+		const size_t p = 3 * (size_t)i;
+		const double dt = sim->time - sim->force_time[i];
+		for (int c = 0; c < 3; c++)
+			f[p + c] += sim->external_force[p + c] + sim->force_rate[p + c] * dt;
+	}
 }
 
 sm_energies sm_simulation_energies(const sm_simulation* sim)
@@ -1326,8 +1362,36 @@ static bool finite3(const double* a)
 	return isfinite(a[0]) && isfinite(a[1]) && isfinite(a[2]);
 }
 
+// Whether a value given at a time t (16 units of round-off of the largest term) lies on the path
+// value + rate dt a call at t - dt set: a caller's x0 + v t and the path's own x0 + v dt, summed
+// over steps, part in the last bits.
+static bool on_path(double given, double value, double rate, double dt)
+{
+	const double path = value + rate * dt;
+	const double scale = fmax(fmax(fabs(given), fabs(value)), fabs(rate * dt));
+	return fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
+}
+
+// After an input changed at the current time: CVODE restarts here when the options ask for it or
+// when it has stepped past (its steps assumed the input as it was).
+static void note_input_change(sm_simulation* sim)
+{
+	sim->input_jumped = true;
+	sim->input_changed = true;
+	if (sim->def.restart_on_input_change || cvode_ahead(sim))
+		sim->need_restart = true;
+}
+
 sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
                                    const double velocity[3])
+{
+	static const double none[3] = {0.0, 0.0, 0.0};
+	return sm_simulation_set_driven_accelerating(sim, particle, position, velocity, none);
+}
+
+sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t particle,
+                                                const double position[3], const double velocity[3],
+                                                const double acceleration[3])
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -1339,42 +1403,47 @@ sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const d
 	if (sim->model->motion[particle] != SM_PARTICLE_DRIVEN)
 		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d is not driven",
 		                          (int)particle);
-	if (position == NULL || velocity == NULL)
-		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
-		                          "set_driven: particle %d: position and velocity are required",
+	if (position == NULL || velocity == NULL || acceleration == NULL)
+		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT, "set_driven: particle %d: %s is NULL",
+		                          (int)particle,
+		                          position == NULL   ? "position"
+		                          : velocity == NULL ? "velocity"
+		                                             : "acceleration");
+	if (!finite3(position) || !finite3(velocity) || !finite3(acceleration))
+		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
+		                          "set_driven: particle %d: position, velocity and acceleration must be 3 "
+		                          "finite numbers each",
 		                          (int)particle);
-	if (!finite3(position) || !finite3(velocity))
-		return sm_simulation_fail(
-		    sim, SM_ERROR_NOT_FINITE,
-		    "set_driven: particle %d: position and velocity must be 3 finite numbers each", (int)particle);
 	const size_t p = 3 * (size_t)particle;
 	const double dt = sim->time - sim->drive_time[particle];
-	// The same velocity with a position on the current path is no jump. A caller's x0 + v t and
-	// the path's own x0 + v dt, summed over steps, part in the last bits: 16 units of round-off of
-	// the largest term.
-	// No jump keeps the path as it was, so that the run is that of no call, to the bit.
+	// The same acceleration with a position and a velocity on the current path is no jump, and keeps
+	// the path as it was, so that the run is that of no call, to the bit.
 	bool jump = false;
 	for (int c = 0; c < 3; c++) {
-		const double path = sim->drive_position[p + c] + sim->drive_velocity[p + c] * dt;
-		const double scale = fmax(fmax(fabs(position[c]), fabs(sim->drive_position[p + c])),
-		                          fabs(sim->drive_velocity[p + c] * dt));
-		jump = jump || !(fabs(position[c] - path) <= 16.0 * DBL_EPSILON * scale) ||
-		       velocity[c] != sim->drive_velocity[p + c];
+		const double v0 = sim->drive_velocity[p + c], a = sim->drive_acceleration[p + c];
+		jump = jump || acceleration[c] != a ||
+		       (a == 0.0 ? velocity[c] != v0 : !on_path(velocity[c], v0, a, dt)) ||
+		       !on_path(position[c], sim->drive_position[p + c], v0 + 0.5 * dt * a, dt);
 	}
 	if (jump) {
 		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
 		memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
+		memcpy(sim->drive_acceleration + p, acceleration, 3 * sizeof(double));
 		sim->drive_time[particle] = sim->time;
+		note_input_change(sim);
 	}
-	sim->input_jumped = sim->input_jumped || jump;
-	sim->input_changed = sim->input_changed || jump;
-	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
-		sim->need_restart = true;
 	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }
 
 sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle, const double force[3])
+{
+	static const double none[3] = {0.0, 0.0, 0.0};
+	return sm_simulation_set_external_force_ramp(sim, particle, force, none);
+}
+
+sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t particle, const double force[3],
+                                                const double rate[3])
 {
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
@@ -1383,24 +1452,33 @@ sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
 		return sm_simulation_fail(sim, SM_ERROR_PARTICLE_INDEX,
 		                          "set_external_force: particle %d is out of range (the model has %d)",
 		                          (int)particle, (int)sim->particle_count);
-	if (force == NULL)
+	if (force == NULL || rate == NULL)
 		return sm_simulation_fail(sim, SM_ERROR_INVALID_ARGUMENT,
-		                          "set_external_force: particle %d: force is NULL", (int)particle);
-	if (!finite3(force))
-		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
-		                          "set_external_force: particle %d: force must be 3 finite numbers",
-		                          (int)particle);
-	// A held particle's force moves nothing: no input change (the reaction it adds is read as it is).
+		                          "set_external_force: particle %d: %s is NULL", (int)particle,
+		                          force == NULL ? "force" : "rate");
+	if (!finite3(force) || !finite3(rate))
+		return sm_simulation_fail(
+		    sim, SM_ERROR_NOT_FINITE,
+		    "set_external_force: particle %d: force and rate must be 3 finite numbers each", (int)particle);
+	// The same rate with a force on the current ramp is no change; a held particle's force moves
+	// nothing, so it is none either (the reaction it adds is read as it is).
 	double* f = sim->external_force + 3 * (size_t)particle;
-	const bool jump = (f[0] != force[0] || f[1] != force[1] || f[2] != force[2]) &&
-	                  sim->model->motion[particle] == SM_PARTICLE_FREE;
-	f[0] = force[0];
-	f[1] = force[1];
-	f[2] = force[2];
-	sim->input_jumped = sim->input_jumped || jump;
-	sim->input_changed = sim->input_changed || jump;
-	if (jump && (sim->def.restart_on_input_change || cvode_ahead(sim)))
-		sim->need_restart = true;
+	double* r = sim->force_rate + 3 * (size_t)particle;
+	const double dt = sim->time - sim->force_time[particle];
+	bool differs = false;
+	for (int c = 0; c < 3; c++)
+		differs = differs || rate[c] != r[c] ||
+		          (r[c] == 0.0 ? force[c] != f[c] : !on_path(force[c], f[c], r[c], dt));
+	if (!differs)
+		return SM_OK;
+	const bool ramped = r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
+	const bool ramps = rate[0] != 0.0 || rate[1] != 0.0 || rate[2] != 0.0;
+	sim->ramping_forces += (int32_t)ramps - (int32_t)ramped;
+	memcpy(f, force, 3 * sizeof(double));
+	memcpy(r, rate, 3 * sizeof(double));
+	sim->force_time[particle] = sim->time;
+	if (sim->model->motion[particle] == SM_PARTICLE_FREE)
+		note_input_change(sim);
 	return SM_OK;
 }
 
@@ -1447,7 +1525,8 @@ void sm_simulation_restore_springs(sm_simulation* sim)
 // never gets there by itself; a snapshot read back from bytes, or a time given to set_state, may
 // hold such a motion and time.
 int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
-                                                  const double* velocity, const double* start)
+                                                  const double* velocity, const double* acceleration,
+                                                  const double* start)
 {
 	for (int32_t k = 0; k < sim->constrained_count; k++) {
 		const int32_t i = sim->constrained[k];
@@ -1456,7 +1535,8 @@ int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, doub
 		const size_t p = 3 * (size_t)i;
 		const double dt = t - start[i];
 		for (int c = 0; c < 3; c++)
-			if (!isfinite(position[p + c] + velocity[p + c] * dt))
+			if (!isfinite(position[p + c] + dt * (velocity[p + c] + 0.5 * dt * acceleration[p + c])) ||
+			    !isfinite(velocity[p + c] + dt * acceleration[p + c]))
 				return i;
 	}
 	return -1;
@@ -1479,7 +1559,7 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 			                          (int)sim->free_particles[k]);
 	}
 	const int32_t overflowing = sm_simulation_overflowing_driven_particle(
-	    sim, time, sim->drive_position, sim->drive_velocity, sim->drive_time);
+	    sim, time, sim->drive_position, sim->drive_velocity, sim->drive_acceleration, sim->drive_time);
 	if (overflowing >= 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(time, t);

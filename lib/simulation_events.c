@@ -307,12 +307,18 @@ static int fill_taylor_positions(sm_simulation* sim, double t_lo, double H, int 
 			x[2] = scale * y[3 * (size_t)f + 2];
 			sim->reach[i] += fabs(x[0]) + fabs(x[1]) + fabs(x[2]);
 		}
+		// A driven particle's path x0 + v0 s + a s^2 / 2 has the scaled derivatives H (v0 + a s) and
+		// H^2 a / 2 at s = (time_origin - drive_time) + t_lo, and none beyond. At order 1 (a first
+		// step) the second is left out, as the free particles' higher derivatives are.
 		for (int32_t j = 0; j < sim->constrained_count; j++) {
 			const int32_t i = sim->constrained[j];
-			const bool moves = k == 1 && sim->model->motion[i] == SM_PARTICLE_DRIVEN;
+			const bool driven = sim->model->motion[i] == SM_PARTICLE_DRIVEN;
+			const double s = (sim->time_origin - sim->drive_time[i]) + t_lo;
 			double* x = X + 3 * (size_t)i;
 			for (int c = 0; c < 3; c++) {
-				x[c] = moves ? H * sim->drive_velocity[3 * (size_t)i + c] : 0.0;
+				const double v0 = sim->drive_velocity[3 * (size_t)i + c];
+				const double a = sim->drive_acceleration[3 * (size_t)i + c];
+				x[c] = !driven ? 0.0 : k == 1 ? H * (v0 + s * a) : k == 2 ? scale * a : 0.0;
 				sim->reach[i] += fabs(x[c]);
 			}
 		}

@@ -52,18 +52,26 @@ struct sm_simulation {
 	// (re)initialisation: its steps then keep their precision however large the simulation's time
 	// (a state set at t = 1e14 s, where a double resolves only 0.016 s). Every time CVODE sees or
 	// gives ("CVODE's time" below) is on that axis.
-	double time_origin;      // [s]
-	double* position;        // all particles at `time` [m]
-	double* velocity;        // [m/s]
-	double* external_force;  // per particle [N], held until changed
-	double* drive_position;  // per particle [m]
-	double* drive_velocity;  // [m/s]
-	double* drive_time;      // [s]
+	double time_origin;  // [s]
+	double* position;    // all particles at `time` [m]
+	double* velocity;    // [m/s]
+	// Inputs. A particle's external force is external_force + force_rate (t - force_time); a driven
+	// particle's position drive_position + drive_velocity s + drive_acceleration s^2 / 2 at
+	// s = t - drive_time (3 per particle, times 1 per particle).
+	double* external_force;      // [N]
+	double* force_rate;          // [N/s]
+	double* force_time;          // [s]
+	int32_t ramping_forces;      // particles whose force_rate is not 0
+	double* drive_position;      // [m]
+	double* drive_velocity;      // [m/s]
+	double* drive_acceleration;  // [m/s^2]
+	double* drive_time;          // [s]
 
 	// Work arrays of the right-hand side and the Jacobian (all particles).
 	double* work_position;
 	double* work_velocity;
 	double* work_force;
+	double* work_external;  // the external forces at one time, when some ramp [N]
 
 	// Breakable springs: one root function each.
 	int32_t root_count;
@@ -109,6 +117,9 @@ double sm_simulation_clock(void);
 
 // Fills x and v for all particles from a CVODE state y at CVODE's time t.
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v);
+// The external forces on all particles at CVODE's time t [N]: sim->external_force itself when
+// none ramps, else sim->work_external filled.
+const double* sm_simulation_external_forces(sm_simulation* sim, double t);
 
 // CVODE's time of the simulation's time t [s].
 static inline double sm_simulation_cvode_time(const sm_simulation* sim, double t)
@@ -129,7 +140,8 @@ void sm_simulation_refresh_outputs(sm_simulation* sim);
 void sm_simulation_restore_springs(sm_simulation* sim);
 // The first driven particle whose position at time t is not finite under the given motions, or -1.
 int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
-                                                  const double* velocity, const double* start);
+                                                  const double* velocity, const double* acceleration,
+                                                  const double* start);
 
 // Spring breaks (simulation_events.c).
 // The root functions for the model's breakable springs, given to CVODE (recomputed when the model

@@ -1,9 +1,9 @@
 // Snapshots of a simulation's state: save and restore, and their serialised form.
 //
 // A snapshot holds what the next advance depends on beyond the model: the time, CVODE's state
-// vector (free positions and velocities, dissipated energy), the inputs (external forces, the
-// driven particles' motions) and the break events. It is tied to a model's topology by a hash,
-// and restoring one restarts CVODE from it.
+// vector (free positions and velocities, dissipated energy), the inputs (external forces and
+// their ramps, the driven particles' motions) and the break events. It is tied to a model's topology by a
+// hash, and restoring one restarts CVODE from it.
 #include "model_internal.h"
 #include "simulation_internal.h"
 
@@ -21,13 +21,16 @@
 struct sm_simulation_state {
 	uint64_t topology;  // topology_hash of the model it was taken from
 	int32_t particle_count, spring_count, free_count, break_count;
-	double time;             // [s]
-	double* y;               // CVODE's state: free x, free v, dissipated energy
-	double* external_force;  // 3 per particle [N]
-	double* drive_position;  // 3 per particle [m]
-	double* drive_velocity;  // [m/s]
-	double* drive_time;      // per particle [s]
-	sm_break_event* breaks;  // break_count
+	double time;                 // [s]
+	double* y;                   // CVODE's state: free x, free v, dissipated energy
+	double* external_force;      // 3 per particle [N]
+	double* force_rate;          // 3 per particle [N/s]
+	double* force_time;          // per particle [s]
+	double* drive_position;      // 3 per particle [m]
+	double* drive_velocity;      // [m/s]
+	double* drive_acceleration;  // [m/s^2]
+	double* drive_time;          // per particle [s]
+	sm_break_event* breaks;      // break_count
 };
 
 // 64-bit FNV-1a: the hash h (FNV_OFFSET to start) extended by `length` bytes.
@@ -57,10 +60,14 @@ static uint64_t topology_hash(const sm_model* m)
 	return h;
 }
 
-// Bytes of a snapshot's arrays: y (6 free + 1), 10 doubles per particle, the break events.
+// Doubles per particle of a snapshot: the force, its rate and time, the driven motion and its time.
+#define PARTICLE_DOUBLES 17
+
+// Bytes of a snapshot's arrays: y (6 free + 1), PARTICLE_DOUBLES per particle, the break events.
 static size_t state_payload(int64_t particles, int64_t free, int64_t breaks)
 {
-	return (size_t)(6 * free + 1 + 10 * particles) * sizeof(double) + (size_t)breaks * sizeof(sm_break_event);
+	return (size_t)(6 * free + 1 + PARTICLE_DOUBLES * particles) * sizeof(double) +
+	       (size_t)breaks * sizeof(sm_break_event);
 }
 
 // A snapshot of the given counts, its arrays laid out after the header (contents unset).
@@ -76,9 +83,12 @@ static sm_simulation_state* allocate_state(int32_t particles, int32_t springs, i
 	s->break_count = breaks;
 	s->y = (double*)(s + 1);
 	s->external_force = s->y + 6 * (size_t)free + 1;
-	s->drive_position = s->external_force + 3 * n;
+	s->force_rate = s->external_force + 3 * n;
+	s->force_time = s->force_rate + 3 * n;
+	s->drive_position = s->force_time + n;
 	s->drive_velocity = s->drive_position + 3 * n;
-	s->drive_time = s->drive_velocity + 3 * n;
+	s->drive_acceleration = s->drive_velocity + 3 * n;
+	s->drive_time = s->drive_acceleration + 3 * n;
 	s->breaks = (sm_break_event*)(s->drive_time + n);
 	return s;
 }
@@ -96,8 +106,11 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	s->time = sim->time;
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
+	memcpy(s->force_rate, sim->force_rate, 3 * n * sizeof(double));
+	memcpy(s->force_time, sim->force_time, n * sizeof(double));
 	memcpy(s->drive_position, sim->drive_position, 3 * n * sizeof(double));
 	memcpy(s->drive_velocity, sim->drive_velocity, 3 * n * sizeof(double));
+	memcpy(s->drive_acceleration, sim->drive_acceleration, 3 * n * sizeof(double));
 	memcpy(s->drive_time, sim->drive_time, n * sizeof(double));
 	// Field by field into zeroed memory, so that the events' padding is zero in serialised bytes.
 	memset(s->breaks, 0, (size_t)sim->break_count * sizeof(sm_break_event));
@@ -125,8 +138,8 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 		    "other particles",
 		    (int)s->particle_count, (int)s->free_count, (int)s->spring_count, (int)sim->particle_count,
 		    (int)sim->free_count, (int)sim->spring_count);
-	const int32_t overflowing = sm_simulation_overflowing_driven_particle(sim, s->time, s->drive_position,
-	                                                                      s->drive_velocity, s->drive_time);
+	const int32_t overflowing = sm_simulation_overflowing_driven_particle(
+	    sim, s->time, s->drive_position, s->drive_velocity, s->drive_acceleration, s->drive_time);
 	if (overflowing >= 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(s->time, t);
@@ -147,9 +160,17 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sim->time = s->time;
 	memcpy(N_VGetArrayPointer(sim->y), s->y, (2 * (size_t)sim->dofs + 1) * sizeof(double));
 	memcpy(sim->external_force, s->external_force, 3 * n * sizeof(double));
+	memcpy(sim->force_rate, s->force_rate, 3 * n * sizeof(double));
+	memcpy(sim->force_time, s->force_time, n * sizeof(double));
 	memcpy(sim->drive_position, s->drive_position, 3 * n * sizeof(double));
 	memcpy(sim->drive_velocity, s->drive_velocity, 3 * n * sizeof(double));
+	memcpy(sim->drive_acceleration, s->drive_acceleration, 3 * n * sizeof(double));
 	memcpy(sim->drive_time, s->drive_time, n * sizeof(double));
+	sim->ramping_forces = 0;
+	for (size_t k = 0; k < n; k++) {
+		const double* r = sim->force_rate + 3 * k;
+		sim->ramping_forces += r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
+	}
 	if (s->break_count > 0)
 		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
 	sim->break_count = s->break_count;
@@ -181,7 +202,7 @@ typedef struct serialized_header {
 	double time;  // [s]
 } serialized_header;
 
-#define STATE_LAYOUT 1u
+#define STATE_LAYOUT 2u  // 2: force ramps and driven accelerations
 
 size_t sm_simulation_state_size(const sm_simulation_state* s)
 {
@@ -263,7 +284,8 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 	memcpy(s->y, in + sizeof h, payload);
 	bool valid = isfinite(s->time);
 	const double* values = s->y;
-	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + 10 * (int64_t)h.particle_count);
+	for (size_t k = 0;
+	     valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + PARTICLE_DOUBLES * (int64_t)h.particle_count);
 	     k++)
 		valid = isfinite(values[k]);
 	for (int32_t b = 0; valid && b < s->break_count; b++)

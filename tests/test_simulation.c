@@ -689,7 +689,11 @@ static int test_inputs_null_arrays(void)
 	const double v[3] = {0.0, 0.4, 0.0};
 	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, NULL, v), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, v, NULL), SM_ERROR_INVALID_ARGUMENT);
-	ENSURE(strstr(sm_simulation_last_error(sim), "position and velocity are required") != NULL);
+	ENSURE(strstr(sm_simulation_last_error(sim), "velocity is NULL") != NULL);
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, v, v, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_simulation_last_error(sim), "acceleration is NULL") != NULL);
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, v, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_simulation_last_error(sim), "rate is NULL") != NULL);
 	ENSURE(sm_simulation_positions(sim)[1] == 0.0 && sm_simulation_velocities(sim)[1] == 0.0);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);

@@ -5,8 +5,9 @@
 // model, its own SUNDIALS context and all solver memory: separate simulations are independent
 // and may run in separate threads.
 //
-// Inputs between calls. sm_simulation_set_driven and sm_simulation_set_external_force change
-// what the right-hand side sees from the current time on. By default (restart_on_input_change)
+// Inputs between calls. sm_simulation_set_driven and sm_simulation_set_external_force (and their
+// forms that change along a step: _accelerating, _ramp) change what the right-hand side sees
+// from the current time on. By default (restart_on_input_change)
 // an input that changes re-initialises CVODE there, as a state set with sm_simulation_set_state,
 // a spring break, a model update, a reset or a failure do; an input set to what it was (the same
 // force, a motion on its path, which then stays the path it was) or a force on a held particle,
@@ -258,10 +259,28 @@ SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
                                           const double velocity[3]);
 
+/// Prescribes a driven particle's motion with a constant acceleration from the current time t0
+/// on: x(t) = position + velocity s + acceleration s^2 / 2, x'(t) = velocity + acceleration s,
+/// s = t - t0 [m, m/s, m/s^2] (a co-simulation master's extrapolation of a motion input and its
+/// derivative over a step). sm_simulation_set_driven is this with no acceleration. The same
+/// acceleration with a position and a velocity on the current path, to within round-off as there,
+/// continues the motion.
+SM_API sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t particle,
+                                                       const double position[3], const double velocity[3],
+                                                       const double acceleration[3]);
+
 /// Sets the external force [N] on a particle, held constant until changed. On a fixed or driven
 /// particle it moves nothing, and changing it is no input change.
 SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t particle,
                                                   const double force[3]);
+
+/// Sets an external force that changes linearly from the current time t0 on until changed:
+/// f(t) = force + rate (t - t0) [N, N/s] (a co-simulation master's extrapolation of a force input
+/// and its derivative over a step). sm_simulation_set_external_force is this with rate 0. The
+/// same rate with a force on the current ramp, to within round-off as in
+/// sm_simulation_set_driven, is no input change.
+SM_API sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t particle,
+                                                       const double force[3], const double rate[3]);
 
 /// Replaces the time [s] and the state: positions [m] and velocities [m/s] of all particles
 /// (3 each; the entries of fixed and driven particles are ignored: they stay at their

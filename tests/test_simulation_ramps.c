@@ -1,0 +1,300 @@
+// Inputs that change along a step: external forces that ramp (sm_simulation_set_external_force_ramp)
+// and driven particles that accelerate (sm_simulation_set_driven_accelerating), as a co-simulation
+// master extrapolates an input from its value and derivative. Checked against closed forms (an
+// oscillator pushed by a ramp, one dragged by an accelerating anchor, a spring pulled to its break),
+// for what a caller continuing them does, and through snapshots and resets.
+#include "simulation_fixtures.h"
+#include "springmass/simulation.h"
+#include "test_harness.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define OSC_M 1.0
+#define OSC_K 40.0
+
+// Tight tolerances, so that the closed forms are met to far below the tolerances asserted.
+static sm_simulation_def tight_def(sm_linear_solver solver)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = solver;
+	d.relative_tolerance = 1e-10;
+	d.absolute_tolerance_position = 1e-12;
+	d.absolute_tolerance_velocity = 1e-12;
+	return d;
+}
+
+// The undamped oscillator (1 kg, 40 N/m, at rest at its rest length) pushed along the spring by
+// f(t) = f0 + r t from t = 0: m u'' + k u = f0 + r t, u(0) = u'(0) = 0, so
+// u = (f0 + r t) / k - f0 / k cos(w t) - r / (k w) sin(w t), w = sqrt(k / m); the bob's force is
+// f0 + r t - k u. Every linear solver (each evaluates forces on its own path). At rtol 1e-10 on
+// displacements of 0.1 m the global error stays near 1e-9 m over 2 s (measured up to 1e-9 m):
+// 1e-7 m, and on the force k times that: 4e-6 N.
+static int test_ramped_force_pushes_oscillator_as_closed_form(void)
+{
+	const double f0 = 0.5, r = 2.0, w = sqrt(OSC_K / OSC_M);
+	sm_model* model = oscillator(OSC_M, OSC_K, 0.0, 0.0);
+	ENSURE(model != NULL);
+	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_KLU, SM_SOLVER_REDUCED_PCG,
+	                                    SM_SOLVER_REDUCED_CHOLMOD};
+	for (size_t s = 0; s < sizeof solvers / sizeof solvers[0]; s++) {
+		const sm_simulation_def d = tight_def(solvers[s]);
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		const double force[3] = {f0, 0.0, 0.0}, rate[3] = {r, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, force, rate), SM_OK);
+		double worst_x = 0.0, worst_f = 0.0, f[6];
+		for (int i = 1; i <= 20; i++) {
+			const double t = 0.1 * i;
+			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+			const double push = f0 + r * t;
+			const double u = push / OSC_K - f0 / OSC_K * cos(w * t) - r / (OSC_K * w) * sin(w * t);
+			worst_x = fmax(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
+			sm_simulation_forces(sim, f);
+			worst_f = fmax(worst_f, fabs(f[3] - (push - OSC_K * u)));
+		}
+		printf("  %s: max |x - closed form| = %.3g m, max |force - closed form| = %.3g N\n",
+		       sm_linear_solver_name(solvers[s]), worst_x, worst_f);
+		ENSURE(worst_x <= 1e-7);
+		ENSURE(worst_f <= 4e-6);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A caller that sets the ramp again before every advance, as an FMU master sets an input and its
+// derivative at every communication point, with the force computed its own way (f0 + r t, or a
+// sum of r h over the steps), continues it: no input change, so with restart_on_input_change
+// CVODE takes the steps of the ramp set once. A force off the ramp by 1e-9 N restarts it, and so
+// does a new rate.
+static int test_ramp_continued_by_the_caller_is_no_change(void)
+{
+	sm_model* model = oscillator(OSC_M, OSC_K, 0.5, 0.1);
+	ENSURE(model != NULL);
+	sm_simulation_def def = sm_default_simulation_def();
+	def.restart_on_input_change = true;
+	const double f0[3] = {0.3, -0.2, 0.1}, r[3] = {1.5, 0.25, -0.75};
+	const double h = 0.01;
+	int64_t steps[5];
+	double bob_x[5];
+	for (int way = 0; way < 5; way++) {
+		sm_simulation* sim = sm_simulation_create(model, &def, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, f0, r), SM_OK);
+		double t = 0.0, summed[3] = {f0[0], f0[1], f0[2]};
+		for (int k = 0; k < 100; k++) {
+			if (way > 0 && k > 0) {
+				double f[3], rate[3] = {r[0], r[1], r[2]};
+				for (int c = 0; c < 3; c++)
+					f[c] = way == 1 ? f0[c] + r[c] * t : way == 2 ? summed[c] : f0[c] + r[c] * t;
+				if (k == 50 && way == 3)
+					f[0] += 1e-9;
+				if (k == 50 && way == 4)
+					rate[0] *= 2.0;
+				ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, f, rate), SM_OK);
+			}
+			for (int c = 0; c < 3; c++)
+				summed[c] += r[c] * h;
+			t += h;
+			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		}
+		const sm_statistics stats = sm_simulation_statistics(sim);
+		steps[way] = stats.steps;
+		bob_x[way] = sm_simulation_positions(sim)[3];
+		// One restart for the ramp set at t = 0; off the ramp at k = 50 one more and then, back on
+		// the first ramp, one more again; a new rate one more (the caller then continues the first
+		// ramp's values, off the new one: one more each call after).
+		if (way <= 3)
+			ENSURE(stats.restarts == (way == 3 ? 3 : 1));
+		else
+			ENSURE(stats.restarts > 2);
+		sm_simulation_destroy(sim);
+	}
+	// The same steps for the ramp set once and continued both ways; forces set differ from the ramp
+	// by round-off only, so the bob's position does too (its scale 1 m: 1e-12).
+	ENSURE(steps[1] == steps[0] && steps[2] == steps[0]);
+	ENSURE_NEAR(bob_x[1], bob_x[0], 1e-12);
+	ENSURE_NEAR(bob_x[2], bob_x[0], 1e-12);
+	ENSURE(fabs(bob_x[3] - bob_x[0]) > 0.0 || steps[3] != steps[0]);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// The oscillator's anchor driven from rest with a constant acceleration a along the spring: in the
+// anchor's frame the stretch u = x_bob - x_anchor - l0 obeys m u'' + k u = -m a from u = u' = 0,
+// so u = -a / w^2 (1 - cos(w t)). The anchor itself is at a t^2 / 2 with velocity a t, each one
+// multiply-add of numbers of order 1 (1e-15); the bob's error as in the ramp test (1e-7 m).
+static int test_accelerating_anchor_drags_bob_as_closed_form(void)
+{
+	const double a = 0.6, w = sqrt(OSC_K / OSC_M);
+	sm_model* model = oscillator_anchored(OSC_M, OSC_K, 0.0, 0.0, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const double zero[3] = {0.0, 0.0, 0.0}, acceleration[3] = {a, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, zero, zero, acceleration), SM_OK);
+	double worst_bob = 0.0, worst_anchor = 0.0;
+	for (int i = 1; i <= 20; i++) {
+		const double t = 0.1 * i;
+		ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		const double* x = sm_simulation_positions(sim);
+		const double* v = sm_simulation_velocities(sim);
+		const double anchor = 0.5 * a * t * t, u = -a / (w * w) * (1.0 - cos(w * t));
+		worst_anchor = fmax(worst_anchor, fmax(fabs(x[0] - anchor), fabs(v[0] - a * t)));
+		worst_bob = fmax(worst_bob, fabs(x[3] - (anchor + 1.0 + u)));
+	}
+	printf("  max |anchor - path| = %.3g, max |bob - closed form| = %.3g m\n", worst_anchor, worst_bob);
+	ENSURE(worst_anchor <= 1e-15);
+	ENSURE(worst_bob <= 1e-7);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// pulled_spring()'s driven particle pulled from rest with acceleration a: spring 0 reaches its
+// 10 % break strain when a t^2 / 2 = 0.1 m, at t = sqrt(0.2 / a). CVODE locates the root to 100
+// units of round-off of the time, as for the constant speed (test_simulation.c): 1e-12 s. The
+// break is found inside a step, on the driven particle's quadratic path.
+static int test_spring_pulled_with_constant_acceleration_breaks_at_analytic_time(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double a = 0.5, x1[3] = {1.0, 0.0, 0.0}, v1[3] = {0.0, 0.0, 0.0}, a1[3] = {a, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 1, x1, v1, a1), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1);
+	const sm_break_event e = sm_simulation_break(sim, 0);
+	ENSURE(e.spring == 0);
+	printf("  break at %.17g s, |error| %.3g s\n", e.time, fabs(e.time - sqrt(0.2 / a)));
+	ENSURE_NEAR(e.time, sqrt(0.2 / a), 1e-12);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A driven particle thrown outward at v0 and pulled back by a constant deceleration a stretches
+// pulled_spring()'s spring 0 by at most v0^2 / (2 a), here 0.1 m (1 + delta), so the strain passes
+// its 10 % limit only for 2 sqrt(0.2 delta / a) = 0.4 ms around t = v0 / a: inside one step, whose
+// ends both see the spring below its limit. The search of each step finds the excursion on the
+// particle's quadratic path (a straight one misses it), and the break comes at the first crossing,
+// l0 + v0 t - a t^2 / 2 = 1.1 m: t = (v0 - sqrt(v0^2 - 0.2 a)) / a, located by CVODE to 1e-10 s
+// (the root's slope, a times 0.2 ms, is 1e-3 m/s).
+static int test_decelerating_pull_breaks_the_spring_inside_a_step(void)
+{
+	const double v0 = 1.0, delta = 1e-6, a = v0 * v0 / (0.2 * (1.0 + delta));
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {v0, 0.0, 0.0}, a1[3] = {-a, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 1, x1, v1, a1), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.5), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 1);
+	const double t_break = (v0 - sqrt(v0 * v0 - 0.2 * a)) / a;
+	printf("  break at %.17g s, |error| %.3g s\n", sm_simulation_break(sim, 0).time,
+	       fabs(sm_simulation_break(sim, 0).time - t_break));
+	ENSURE_NEAR(sm_simulation_break(sim, 0).time, t_break, 1e-10);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Ramps and accelerations belong to the state: a snapshot taken mid-ramp, restored into the same
+// simulation or read back from bytes into a new one, goes on along them (the same bits both ways,
+// and within the tolerances of the run that went on without a restart: at rtol 1e-10 each run is
+// within about 1e-9 m of the exact motion, as in the closed-form tests, so 1e-7 m); a reset clears
+// them (the same bits as a new simulation given no inputs).
+static int test_ramps_are_part_of_the_state(void)
+{
+	sm_model* model = oscillator_anchored(OSC_M, OSC_K, 0.5, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	sm_simulation* other = sm_simulation_create(model, &d, NULL);
+	sm_simulation* plain = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL && other != NULL && plain != NULL);
+	const double zero[3] = {0.0, 0.0, 0.0}, v[3] = {0.1, 0.0, 0.0}, a[3] = {0.4, -0.3, 0.0};
+	const double f0[3] = {0.2, 0.0, 0.1}, r[3] = {-0.5, 1.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, zero, v, a), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, f0, r), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.3), SM_OK);
+	sm_simulation_state* saved = sm_simulation_save_state(sim);
+	ENSURE(saved != NULL);
+	const size_t size = sm_simulation_state_size(saved);
+	unsigned char* bytes = malloc(size);
+	ENSURE(bytes != NULL);
+	ENSURE_STATUS(sm_simulation_state_serialize(saved, bytes, size), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	double through[6], restored[6];
+	memcpy(through, sm_simulation_positions(sim), sizeof through);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, saved), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	memcpy(restored, sm_simulation_positions(sim), sizeof restored);
+	sm_simulation_state* read = sm_simulation_state_deserialize(bytes, size, NULL);
+	ENSURE(read != NULL);
+	ENSURE_STATUS(sm_simulation_restore_state(other, read), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(other, 1.0), SM_OK);
+	ENSURE(memcmp(sm_simulation_positions(other), restored, sizeof restored) == 0);
+	for (int k = 0; k < 6; k++)
+		ENSURE_NEAR(restored[k], through[k], 1e-7);
+	// The anchor's path is exact: x0 + v t + a t^2 / 2 at t = 1 s.
+	ENSURE_NEAR(restored[0], 0.1 + 0.2, 1e-15);
+	ENSURE_NEAR(restored[1], -0.15, 1e-15);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_OK);
+	ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(plain), sizeof restored) == 0);
+	free(bytes);
+	sm_simulation_state_destroy(saved);
+	sm_simulation_state_destroy(read);
+	sm_simulation_destroy(sim);
+	sm_simulation_destroy(other);
+	sm_simulation_destroy(plain);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// Bad arguments change nothing: non-finite rates and accelerations are refused with a message
+// naming the particle, and a ramp on a held particle moves nothing.
+static int test_bad_ramps_are_refused(void)
+{
+	sm_model* model = oscillator_anchored(OSC_M, OSC_K, 0.0, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double zero[3] = {0.0, 0.0, 0.0}, bad[3] = {0.0, NAN, 0.0}, one[3] = {1.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, zero, bad), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(sm_simulation_last_error(sim), "particle 1") != NULL);
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, zero, zero, bad), SM_ERROR_NOT_FINITE);
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 1, zero, zero, one), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(sm_simulation_last_error(sim), "not driven") != NULL);
+	// The driven anchor's ramp moves nothing: the bob oscillates as without it.
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 0, one, one), SM_OK);
+	sm_simulation* plain = sm_simulation_create(model, NULL, NULL);
+	ENSURE(plain != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(plain, 1.0), SM_OK);
+	ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(plain), 6 * sizeof(double)) == 0);
+	ENSURE(sm_simulation_statistics(sim).steps == sm_simulation_statistics(plain).steps);
+	sm_simulation_destroy(plain);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_ramped_force_pushes_oscillator_as_closed_form);
+	RUN_TEST(test_ramp_continued_by_the_caller_is_no_change);
+	RUN_TEST(test_accelerating_anchor_drags_bob_as_closed_form);
+	RUN_TEST(test_spring_pulled_with_constant_acceleration_breaks_at_analytic_time);
+	RUN_TEST(test_decelerating_pull_breaks_the_spring_inside_a_step);
+	RUN_TEST(test_ramps_are_part_of_the_state);
+	RUN_TEST(test_bad_ramps_are_refused);
+	return TEST_SUMMARY();
+}
