@@ -294,21 +294,34 @@ sm_status fmu_build_model(instance* inst, const char* function, const double* be
 	return SM_OK;
 }
 
+// Gives a port's inputs to a simulation from its current time on: a motion port's position,
+// velocity and acceleration, a force port's force and rate, as held (position and force given, or
+// NULL for the held ones).
+static sm_status give_port_inputs(sm_simulation* sim, const sm_port* port, const port_values* h,
+                                  const double* position, const double* velocity, const double* force)
+{
+	if (port->kind == SM_PORT_MOTION)
+		return sm_simulation_set_driven_accelerating(sim, port->particle, position ? position : h->position,
+		                                             velocity ? velocity : h->velocity, h->acceleration);
+	if (port->kind == SM_PORT_FORCE)
+		return sm_simulation_set_external_force_ramp(sim, port->particle, force ? force : h->force,
+		                                             h->force_rate);
+	return SM_OK;
+}
+
 // Gives the inputs set since the last step to the simulation, at the current communication point:
-// a motion port set in a step moves from its held position with its held velocity from the
-// step's start, whether or not a value changed (the simulation restarts CVODE only where the
-// motion leaves its extrapolated path, or a force changes). Ports not set since keep their motion.
+// a motion port set in a step moves from its held position with its held velocity (and
+// acceleration) from the step's start, a force port pushes with its held force (and rate), whether
+// or not a value changed (the simulation restarts CVODE only where the motion leaves its
+// extrapolated path, or a force its ramp). Ports not set since keep their motion and ramp.
 static fmi2Status apply_inputs(instance* inst, const char* function)
 {
 	for (int32_t p = 0; p < inst->port_count; ++p) {
 		if (!inst->port_dirty[p])
 			continue;
-		sm_status st = SM_OK;
-		const port_values* h = &inst->held[p];
-		if (inst->ports[p].kind == SM_PORT_MOTION)
-			st = sm_simulation_set_driven(inst->sim, inst->ports[p].particle, h->position, h->velocity);
-		else if (inst->ports[p].kind == SM_PORT_FORCE)
-			st = sm_simulation_set_external_force(inst->sim, inst->ports[p].particle, h->force);
+		port_values* h = &inst->held[p];
+		const sm_status st = give_port_inputs(inst->sim, &inst->ports[p], h, NULL, NULL, NULL);
+		h->since = sm_simulation_time(inst->sim);
 		if (st != SM_OK) {
 			log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
 			          sm_simulation_last_error(inst->sim));
@@ -340,18 +353,18 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 		return fmi2Error;
 	}
 	for (int32_t p = 0; p < inst->port_count; ++p) {
-		// A restored motion port continues from where its particle is, with the held velocity:
-		// the prescribed motion of a port whose inputs were set some steps before the state was
-		// saved has moved on since (the held position is still what the input reads). Inputs set
-		// since the last step (pending[p]) start from the held position, as at fmi2DoStep.
-		sm_status st = SM_OK;
-		int32_t particle = inst->ports[p].particle;
-		if (inst->ports[p].kind == SM_PORT_MOTION)
-			st = sm_simulation_set_driven(sim, particle,
-			                              x && !pending[p] ? x + 3 * (size_t)particle : held[p].position,
-			                              held[p].velocity);
-		else if (inst->ports[p].kind == SM_PORT_FORCE)
-			st = sm_simulation_set_external_force(sim, particle, held[p].force);
+		// A restored motion port continues from where its particle is, with the velocity it has
+		// there: the prescribed motion of a port whose inputs were set some steps before the state
+		// was saved has moved on since (the held position is still what the input reads). A
+		// restored force port goes on along its ramp from the value it reached. Inputs set since
+		// the last step (pending[p]) start from the held values, as at fmi2DoStep.
+		const size_t i = 3 * (size_t)inst->ports[p].particle;
+		const bool continued = x && !pending[p];
+		double force[3];
+		for (int c = 0; c < 3; c++)
+			force[c] = held[p].force[c] + held[p].force_rate[c] * (sim_time - held[p].since);
+		const sm_status st = continued ? give_port_inputs(sim, &inst->ports[p], &held[p], x + i, v + i, force)
+		                               : give_port_inputs(sim, &inst->ports[p], &held[p], NULL, NULL, NULL);
 		if (st != SM_OK) {
 			log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
 			          sm_simulation_last_error(sim));
@@ -365,8 +378,11 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 		inst->solver = *solver;
 	if (held != inst->held)
 		memcpy(inst->held, held, (size_t)inst->port_count * sizeof *held);
-	for (int32_t p = 0; p < inst->port_count; ++p)
+	for (int32_t p = 0; p < inst->port_count; ++p) {
+		if (!x || pending[p])
+			inst->held[p].since = sim_time;
 		inst->port_dirty[p] = false;
+	}
 	inst->forces_valid = false;
 	inst->sim_dirty = false;
 	inst->breaks_logged = 0;
@@ -1415,30 +1431,62 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 // FMI 2.0 Co-Simulation: stepping and status
 // ---------------------------------------------------------------------------------------------
 
+// Input derivatives (canInterpolateInputs): over the coming steps a force port pushes with
+// P.fx + d(P.fx)/dt (t - t_n), a motion port moves along P.x + P.vx s + d(P.vx)/dt s^2 / 2 with
+// velocity P.vx + d(P.vx)/dt s (s = t - t_n), from the communication point t_n at which its inputs
+// or their derivatives were last set; a derivative holds until set again, fmi2Reset clears it. A
+// motion port's position moves with its velocity input, so the derivative of P.x is taken but not
+// used, as are orders above 1, of which the extrapolation uses none (both logged as events).
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[])
 {
 	instance* inst = c;
-	(void)vr;
-	(void)order;
-	(void)value;
-	if (!fmu_allowed(inst, "fmi2SetRealInputDerivatives",
-	                 ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE))
+	const char* fn = "fmi2SetRealInputDerivatives";
+	if (!fmu_allowed(inst, fn, ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
+	    !check_arrays(inst, fn, vr, nvr, value) || !check_arrays(inst, fn, vr, nvr, order))
 		return fmi2Error;
-	if (nvr == 0)
-		return fmi2OK;
-	log_error(inst,
-	          "fmi2SetRealInputDerivatives: this FMU holds its inputs over a step (canInterpolateInputs is "
-	          "false); a motion port takes its velocity as an input instead");
-	return fmi2Error;
+	for (size_t k = 0; k < nvr; ++k) {
+		const fmu_variable* v = lookup(inst, fn, vr[k], FMU_REAL);
+		if (!v)
+			return fmi2Error;
+		if (v->causality != FMU_INPUT) {
+			log_error(inst, "%s: %s is not an input", fn, v->name);
+			return fmi2Error;
+		}
+		if (order[k] < 1) {
+			log_error(inst, "%s: order %d of %s: the orders of derivatives start at 1", fn, (int)order[k],
+			          v->name);
+			return fmi2Error;
+		}
+		if (!isfinite(value[k])) {
+			log_error(inst, "%s: the derivative of %s must be finite, not %s", fn, v->name,
+			          fmu_number_text(value[k]).text);
+			return fmi2Error;
+		}
+	}
+	for (size_t k = 0; k < nvr; ++k) {
+		const fmu_variable* v = &inst->table.variables[vr[k]];
+		port_values* h = &inst->held[v->index];
+		if (order[k] > 1 || v->source == FMU_SRC_PORT_POSITION) {
+			fmu_logf(inst, fmi2OK, LOG_EVENTS, "%s: order %d of %s is not used (%s)", fn, (int)order[k],
+			         v->name,
+			         order[k] > 1 ? "inputs are extrapolated with their first derivatives"
+			                      : "a motion port's position moves with its velocity input");
+			continue;
+		}
+		*(v->source == FMU_SRC_PORT_VELOCITY ? &h->acceleration[v->component]
+		                                     : &h->force_rate[v->component]) = value[k];
+		inst->port_dirty[v->index] = true;
+	}
+	return fmi2OK;
 }
 
 // First time derivatives of outputs (maxOutputDerivativeOrder = 1) at the current state and
 // inputs, from the equations of motion: a position's is the velocity; a velocity's the
-// acceleration a = f / m of a free particle (0 for a held one, and for a driven one, whose velocity
-// is held over a step); a driven particle's force and the kinetic, elastic and gravitational
-// energies change along (v, a) as state_output_change gives; the dissipated energy's is the
-// dissipated power, the rate the simulation integrates it at.
+// acceleration a = f / m of a free particle (0 for a held one; a motion port's particle has the
+// acceleration its velocity input's derivative gives, 0 unless set); a driven particle's force and the
+// kinetic, elastic and gravitational energies change along (v, a) as state_output_change gives; the
+// dissipated energy's is the dissipated power, the rate the simulation integrates it at.
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[])
 {
@@ -1484,6 +1532,9 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 			a[i] = pd.motion == SM_PARTICLE_FREE ? f[i] / pd.mass : 0.0;
 		}
 	}
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		if (inst->ports[p].kind == SM_PORT_MOTION)
+			memcpy(a + 3 * (size_t)inst->ports[p].particle, inst->held[p].acceleration, 3 * sizeof(double));
 	unsigned evaluated = 0;
 	const fmu_variable* overflowing = NULL;
 	for (size_t k = 0; k < nvr; ++k) {

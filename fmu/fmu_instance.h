@@ -39,12 +39,19 @@ enum {
 	LOG_SOLVER = 1 << 4,
 };
 
-// Held values of a port: prescribed or read position [m], velocity [m/s], force [N].
+// Held values of a port: prescribed or read position [m], velocity [m/s], force [N], and the
+// derivatives fmi2SetRealInputDerivatives gives (a motion port's acceleration [m/s^2] from its
+// velocity's, a force port's rate [N/s]), with the simulation's time at which they were last given
+// to it [s]. Doubles only: an FMU state holds PORT_DOUBLES per port.
 typedef struct port_values {
 	double position[3];
 	double velocity[3];
 	double force[3];
+	double acceleration[3];
+	double force_rate[3];
+	double since;
 } port_values;
+#define PORT_DOUBLES (sizeof(port_values) / sizeof(double))
 
 // An FMU instance: what an fmi2Component points to.
 typedef struct instance {

@@ -728,7 +728,7 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	fmu_text_appendf(
 	    &out,
 	    "  <CoSimulation\n    modelIdentifier=\"%s\"\n    needsExecutionTool=\"false\"\n"
-	    "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"false\"\n"
+	    "    canHandleVariableCommunicationStepSize=\"true\"\n    canInterpolateInputs=\"true\"\n"
 	    "    maxOutputDerivativeOrder=\"1\"\n    canRunAsynchronuously=\"false\"\n"
 	    "    canBeInstantiatedOnlyOncePerProcess=\"false\"\n    canNotUseMemoryManagementFunctions=\"true\"\n"
 	    "    canGetAndSetFMUstate=\"true\"\n    canSerializeFMUstate=\"true\"\n"

@@ -20,10 +20,10 @@
 // history and goes on as if no state had been saved.
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST5"
+#define STATE_MAGIC "SMFMUST6"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
-// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[9 nports], pending
+// x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[PORT_DOUBLES nports], pending
 // ports[nports] (inputs set since the last step, as doubles 0/1: a state saved between setting
 // inputs and fmi2DoStep steps with them when restored). The checksum
 // is a 64-bit FNV-1a hash of all other bytes: a serialised state that was truncated, extended or
@@ -68,7 +68,7 @@ static size_t state_size(const instance* inst)
 {
 	size_t n = (size_t)inst->particle_count, m = (size_t)inst->spring_count;
 	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
-	return HEADER_BYTES + 8 * (6 * n + m + np + 10 * nports);
+	return HEADER_BYTES + 8 * (6 * n + m + np + (PORT_DOUBLES + 1) * nports);
 }
 
 static void put_i(unsigned char* b, int k, int64_t v)
@@ -155,9 +155,9 @@ static saved_state* save_state(instance* inst)
 	}
 	for (int32_t k = 0; k < np; ++k)
 		d[6 * n + m + k] = sm_document_parameter_value(inst->doc, k);
-	memcpy(d + 6 * n + m + np, inst->held, 9 * (size_t)inst->port_count * sizeof(double));
+	memcpy(d + 6 * n + m + np, inst->held, (size_t)inst->port_count * sizeof(port_values));
 	for (int32_t p = 0; p < inst->port_count; ++p)
-		d[6 * n + m + np + 9 * inst->port_count + p] = inst->port_dirty[p] ? 1.0 : 0.0;
+		d[6 * n + m + np + PORT_DOUBLES * (size_t)inst->port_count + p] = inst->port_dirty[p] ? 1.0 : 0.0;
 	put_i(b, I_CHECKSUM, state_checksum(b, s->size));
 	return s;
 }
@@ -253,8 +253,8 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	const double time = get_d(b, D_TIME), start = get_d(b, D_START), last = get_d(b, D_LAST_SUCCESSFUL);
 	ok = ok && time >= start &&
 	     (state == ST_INSTANTIATED || state == ST_INITIALIZATION || (last >= start && last <= time));
-	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + 9 * nports);
-	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + 9 * nports, nports);
+	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + PORT_DOUBLES * nports);
+	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + PORT_DOUBLES * nports, nports);
 	if (!ok) {
 		log_error(inst,
 		          "%s: the state holds values out of range (FMU state, solver settings, times, positions, "
@@ -318,7 +318,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	}
 	memcpy(held, d + 6 * n + m + np, (size_t)inst->port_count * sizeof *held);
 	for (int32_t p = 0; p < inst->port_count; ++p)
-		pending[p] = d[6 * n + m + np + 9 * inst->port_count + p] != 0.0;
+		pending[p] = d[6 * n + m + np + PORT_DOUBLES * (size_t)inst->port_count + p] != 0.0;
 	sm_simulation_def solver = inst->solver;
 	solver.method = (sm_method)get_i(b, I_METHOD);
 	solver.solver = (sm_linear_solver)get_i(b, I_LINEAR_SOLVER);

@@ -1893,11 +1893,12 @@ static fmi2Status call(fmi2Component c, const fixture* f, int op, rng* r, expect
 	case OP_CANCEL:  // there is never a step in progress
 		return fmi2CancelStep(c);
 	case OP_INPUT_DERIVATIVES: {
-		// None taken (canInterpolateInputs is false): an empty call is allowed where setting is.
+		// The bob's force ramps over the next steps (canInterpolateInputs), or an empty call:
+		// allowed where setting is.
 		const size_t n = rng_uniform(r, 0.0, 1.0) < 0.5 ? 0 : 1;
 		const fmi2Integer order = 1;
-		const double slope = 1.0;
-		if (settable && n == 0)
+		const double slope = rng_uniform(r, -1.0, 1.0);
+		if (settable)
 			*expected = fmi2OK;
 		return fmi2SetRealInputDerivatives(c, &force, n, &order, &slope);
 	}

@@ -951,3 +951,37 @@ def test_setup_without_a_tolerance_takes_the_files_after_one_with(test_fmu):
         s.exitInitializationMode()
     finally:
         inst.free()
+
+
+def test_input_derivatives_of_inputs_only_of_order_one_and_up_and_finite(test_fmu):
+    # Each refusal is an fmi2Error naming the variable and changes nothing: the run that follows
+    # is that of no call. Orders above 1 and a motion port's position derivative are taken and not
+    # used (noted under logEvents).
+    inst = Instance(test_fmu("driven_oscillator"), logging_on=True).start()
+    plain = Instance(test_fmu("driven_oscillator")).start()
+    try:
+        s, vr = inst.slave, inst.vr
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["tip.fx"]], [0], [1.0]), "order 0 of tip.fx")
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["tip.fx"]], [1], [math.nan]),
+                     "derivative of tip.fx must be finite")
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["tip.x"]], [1], [1.0]), "tip.x is not an input")
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["k"]], [1], [1.0]), "k is not an input")
+        expect_error(inst, lambda: s.setRealInputDerivatives([9999], [1], [1.0]), "unknown value reference 9999")
+        # All or nothing: a good derivative beside a bad one is not taken either.
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["tip.fx"], vr["tip.y"]], [1, 1], [5.0, 1.0]),
+                     "tip.y is not an input")
+        before = len(inst.messages)
+        s.setRealInputDerivatives([vr["tip.fx"], vr["base.x"]], [2, 1], [5.0, 1.0])
+        notes = [m for m in inst.messages[before:]]
+        assert len(notes) == 2 and all(m[1] == "logEvents" for m in notes), notes
+        assert "order 2 of tip.fx is not used" in notes[0][2] and "base.x is not used" in notes[1][2]
+        for n in range(5):
+            s.doStep(n * 0.1, 0.1)
+            plain.slave.doStep(n * 0.1, 0.1)
+        assert inst.get("tip.x", "tip.vx") == plain.get("tip.x", "tip.vx")
+        # Not after termination, as fmi2SetReal.
+        s.terminate()
+        expect_error(inst, lambda: s.setRealInputDerivatives([vr["tip.fx"]], [1], [1.0]), "illegal call sequence")
+    finally:
+        inst.free()
+        plain.free()
