@@ -1,309 +1,53 @@
 // springmass FMU: checking a reference result (see fmu_reference.h).
-#define _POSIX_C_SOURCE 200809L  // strnlen
 #include "fmu_reference.h"
 
-#include "springmass/model_file.h"
+#include "cli_csv.h"
 
-#include <math.h>
-#include <stdarg.h>
-#include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-// Bytes of a field a message shows.
-enum { shown_bytes = 60 };
-
-// A line of the text: its number (from 1) and where it starts.
-typedef struct line_place {
-	size_t line, start;
-} line_place;
-
-// Where the reader is in the text: its position and its line.
-typedef struct reader {
-	const char* text;
-	size_t length, at;
-	line_place here;
-	line_place field_place;  // the line the last field started on (a quoted one may span lines)
-	char* field;             // the last field read, unquoted (malloc'd, grown as needed)
-	bool quoted;             // it was quoted
-	size_t field_capacity;
-	bool out_of_memory;
-	char shown[SM_TERMINAL_TEXT_CAPACITY(shown_bytes)];  // the field as a message shows it
-} reader;
-
-// The field as a message shows it: its first shown_bytes bytes, escaped where a terminal would
-// act on them.
-static const char* field_shown(reader* r)
-{
-	char start[shown_bytes + 1];
-	const size_t n = strnlen(r->field, shown_bytes);
-	memcpy(start, r->field, n);
-	start[n] = '\0';
-	sm_text_for_terminal(r->shown, start);
-	return r->shown;
-}
-
-// A problem at `at` on the line that starts at place.start, line place.line.
-static char* problem_at(line_place place, size_t at, const char* format, ...)
-{
-	char message[400];
-	va_list args;
-	va_start(args, format);
-	vsnprintf(message, sizeof message, format, args);
-	va_end(args);
-	char* text = malloc(strlen(message) + 48);
-	if (text != NULL)
-		sprintf(text, "%zu:%zu: %s", place.line, at - place.start + 1, message);
-	return text;
-}
-
-static bool field_append(reader* r, size_t n, char c)
-{
-	if (n + 2 > r->field_capacity) {
-		const size_t capacity = r->field_capacity ? 2 * r->field_capacity : 64;
-		char* grown = realloc(r->field, capacity);
-		if (grown == NULL) {
-			r->out_of_memory = true;
-			return false;
-		}
-		r->field = grown;
-		r->field_capacity = capacity;
-	}
-	r->field[n] = c;
-	r->field[n + 1] = '\0';
-	return true;
-}
-
-static bool at_line_end(const reader* r)
-{
-	return r->at >= r->length || r->text[r->at] == '\n' ||
-	       (r->text[r->at] == '\r' && r->at + 1 < r->length && r->text[r->at + 1] == '\n');
-}
-
-// Reads one field into r->field, up to the comma or line end that follows it (not consumed).
-// Returns NULL, or the problem (a quote left open or text after a closing quote).
-static char* read_field(reader* r)
-{
-	size_t n = 0;
-	r->field_place = r->here;
-	if (!field_append(r, 0, '\0'))
-		return NULL;
-	r->field[0] = '\0';
-	r->quoted = r->at < r->length && r->text[r->at] == '"';
-	if (r->quoted) {
-		const size_t open = r->at++;
-		for (;;) {
-			if (r->at >= r->length)
-				return problem_at(r->field_place, open, "a quoted field is not closed");
-			const char c = r->text[r->at++];
-			if (c == '"' && (r->at >= r->length || r->text[r->at] != '"'))
-				break;
-			if (c == '"')
-				r->at++;  // a doubled quote
-			if (c == '\n') {
-				r->here.line++;
-				r->here.start = r->at;
-			}
-			if (!field_append(r, n++, c))
-				return NULL;
-		}
-		if (!at_line_end(r) && r->text[r->at] != ',')
-			return problem_at(r->here, r->at, "text after the closing quote of a field");
-		return NULL;
-	}
-	while (!at_line_end(r) && r->text[r->at] != ',') {
-		if (r->text[r->at] == '\r')
-			return problem_at(r->here, r->at,
-			                  "a carriage return without a line feed: lines end in LF or CRLF");
-		if (!field_append(r, n++, r->text[r->at++]))
-			return NULL;
-	}
-	return NULL;
-}
-
-// Moves past the line end (LF or CRLF) the reader is at.
-static void next_line(reader* r)
-{
-	if (r->at < r->length && r->text[r->at] == '\r')
-		r->at++;
-	if (r->at < r->length) {
-		r->at++;
-		r->here.line++;
-		r->here.start = r->at;
-	}
-}
+// The table's variables by name, for the columns of a result.
+typedef struct table_names {
+	const fmu_table* table;
+	const fmu_variable** sorted;
+} table_names;
 
 static int compare_names(const void* a, const void* b)
 {
 	return strcmp((*(const fmu_variable* const*)a)->name, (*(const fmu_variable* const*)b)->name);
 }
 
-static size_t digits(const char* text)
+// A result's column: a Real or Integer variable of the FMU (whole values for an Integer one).
+static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
 {
-	size_t n = 0;
-	while (text[n] >= '0' && text[n] <= '9')
-		n++;
-	return n;
-}
-
-// A finite decimal number as a result writes one: an optional sign, digits with an optional
-// decimal point (at least one digit), an optional exponent; no white space, hexadecimal, inf or
-// nan, which strtod would take.
-static bool decimal_number(const char* text, double* value)
-{
-	const char* c = text + (*text == '+' || *text == '-');
-	const size_t whole = digits(c);
-	c += whole;
-	size_t fraction = 0;
-	if (*c == '.') {
-		fraction = digits(c + 1);
-		c += 1 + fraction;
-	}
-	if (whole + fraction == 0)
-		return false;
-	if (*c == 'e' || *c == 'E') {
-		c += 1 + (c[1] == '+' || c[1] == '-');
-		const size_t exponent = digits(c);
-		if (exponent == 0)
-			return false;
-		c += exponent;
-	}
-	if (*c != '\0')
-		return false;
-	*value = strtod(text, NULL);
-	return isfinite(*value);
-}
-
-// The header: "time", then Real or Integer variables of the table, each once, into column[1 ..
-// columns - 1]. sorted: the table's variables by name; named: a flag per variable, false on entry.
-static char* read_header(reader* r, const fmu_table* table, const fmu_variable** sorted, bool* named,
-                         const fmu_variable** column, int32_t* columns)
-{
-	for (*columns = 0;; ++*columns) {
-		const size_t start = r->at;
-		char* problem = read_field(r);
-		if (problem != NULL || r->out_of_memory)
-			return problem;
-		if (*columns == 0 && strcmp(r->field, "time") != 0)
-			return problem_at(r->field_place, start, "the first column is \"%s\", not \"time\"",
-			                  field_shown(r));
-		if (*columns > 0) {
-			const fmu_variable key = {.name = r->field};
-			const fmu_variable* pointer = &key;
-			const fmu_variable** found =
-			    bsearch(&pointer, sorted, (size_t)table->count, sizeof *sorted, compare_names);
-			if (found == NULL)
-				return problem_at(r->field_place, start, "\"%s\" is not a variable of the FMU",
-				                  field_shown(r));
-			if ((*found)->type == FMU_STRING)
-				return problem_at(r->field_place, start,
-				                  "\"%s\" is a String variable: a result holds numbers", field_shown(r));
-			const size_t index = (size_t)(*found - table->variables);
-			if (named[index])
-				return problem_at(r->field_place, start, "\"%s\" is named twice", field_shown(r));
-			named[index] = true;
-			column[*columns] = *found;
-		}
-		if (at_line_end(r)) {
-			++*columns;
-			return NULL;
-		}
-		r->at++;  // the comma
-	}
-}
-
-// The rows: a number per column (a whole one for an Integer variable), time never decreasing; no
-// empty line (fmpy's read_csv takes none).
-static char* read_rows(reader* r, const fmu_variable* const* column, int32_t columns)
-{
-	double previous_time = -INFINITY;
-	size_t rows = 0;
-	while (r->at < r->length) {
-		if (at_line_end(r))
-			return problem_at(r->here, r->at, "an empty line: a result has none");
-		for (int32_t c = 0; c < columns; c++) {
-			const size_t start = r->at;
-			char* problem = read_field(r);
-			if (problem != NULL || r->out_of_memory)
-				return problem;
-			double value;
-			if (r->quoted)
-				return problem_at(r->field_place, start,
-				                  "\"%s\" is quoted: a result writes its numbers without quotes",
-				                  field_shown(r));
-			if (!decimal_number(r->field, &value))
-				return problem_at(r->field_place, start, "\"%s\" is not a finite decimal number",
-				                  field_shown(r));
-			if (c > 0 && column[c]->type == FMU_INTEGER &&
-			    !(value == floor(value) && fabs(value) <= INT32_MAX))
-				return problem_at(r->field_place, start, "%s is an Integer variable: \"%s\" is no such value",
-				                  column[c]->name, field_shown(r));
-			if (c == 0 && value < previous_time)
-				return problem_at(r->field_place, start, "time %.17g s is before the previous row's %.17g s",
-				                  value, previous_time);
-			if (c == 0)
-				previous_time = value;
-			const bool last = c == columns - 1;
-			if (at_line_end(r) != last)
-				return problem_at(r->here, r->at, "%s: the header names %d columns",
-				                  last ? "more fields than columns" : "fewer fields than columns",
-				                  (int)columns);
-			if (!last)
-				r->at++;  // the comma
-		}
-		rows++;
-		next_line(r);
-	}
-	if (rows == 0)
-		return problem_at(r->here, r->at, "no rows after the header");
+	const table_names* names = context;
+	const fmu_variable key = {.name = (char*)name};
+	const fmu_variable* pointer = &key;
+	const fmu_variable** found =
+	    bsearch(&pointer, names->sorted, (size_t)names->table->count, sizeof *names->sorted, compare_names);
+	if (found == NULL)
+		return "is not a variable of the FMU";
+	if ((*found)->type == FMU_STRING)
+		return "is a String variable: a result holds numbers";
+	*id = (int32_t)(*found - names->table->variables);
+	*whole = (*found)->type == FMU_INTEGER;
 	return NULL;
 }
 
 char* fmu_reference_problem(const char* text, size_t length, const fmu_table* table, bool* out_of_memory)
 {
-	reader r = {.text = text, .length = length, .here = {1, 0}};
-	*out_of_memory = false;
-	if (length == 0)
-		return problem_at(r.here, 0, "an empty file");
-	const char* nul = memchr(text, '\0', length);
-	if (nul != NULL) {
-		for (const char* c = text; c < nul; c++)
-			if (*c == '\n') {
-				r.here.line++;
-				r.here.start = (size_t)(c + 1 - text);
-			}
-		return problem_at(r.here, (size_t)(nul - text), "a NUL byte: not a text file");
-	}
-	if (length >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0)
-		return problem_at(r.here, 0, "a byte-order mark before the header: write the file without one");
-	const fmu_variable** sorted = malloc(((size_t)table->count + 1) * sizeof *sorted);
-	const fmu_variable** column = calloc((size_t)table->count + 1, sizeof *column);
-	bool* named = calloc((size_t)table->count + 1, sizeof *named);
-	if (sorted == NULL || column == NULL || named == NULL) {
-		free(sorted);
-		free(column);
-		free(named);
+	table_names names = {table, malloc(((size_t)table->count + 1) * sizeof *names.sorted)};
+	if (names.sorted == NULL) {
 		*out_of_memory = true;
 		return NULL;
 	}
 	for (int32_t i = 0; i < table->count; i++)
-		sorted[i] = &table->variables[i];
-	qsort(sorted, (size_t)table->count, sizeof *sorted, compare_names);
-	int32_t columns = 0;
-	char* problem = read_header(&r, table, sorted, named, column, &columns);
-	free(sorted);
-	free(named);
-	if (problem == NULL && !r.out_of_memory) {
-		next_line(&r);
-		problem = read_rows(&r, column, columns);
-	}
-	free(column);
-	free(r.field);
-	*out_of_memory = r.out_of_memory;
-	if (r.out_of_memory) {
-		free(problem);
-		return NULL;
-	}
+		names.sorted[i] = &table->variables[i];
+	qsort(names.sorted, (size_t)table->count, sizeof *names.sorted, compare_names);
+	const cli_csv_form form = {"a result", name_column, &names, table->count};
+	cli_csv csv;
+	char* problem = cli_csv_read(text, length, &form, &csv, out_of_memory);
+	cli_csv_free(&csv);
+	free(names.sorted);
 	return problem;
 }

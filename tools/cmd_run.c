@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "cli_common.h"
+#include "cli_inputs.h"
 #include "cli_progress.h"
 #include "commands.h"
 
@@ -27,13 +28,21 @@ static void usage(FILE* out)
 	        "time: time [s], every port's quantities (force port P: P.x P.y P.z [m] P.vx P.vy P.vz [m/s];\n"
 	        "motion port P: P.fx P.fy P.fz [N], the force the model exerts on what drives it; probe P:\n"
 	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity and energy.dissipated [J].\n"
-	        "Force ports get no force, and a motion port's particle moves as the file says (mark it\n"
-	        "fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
+	        "Without --input, force ports get no force, and a motion port's particle moves as the file\n"
+	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
 	        "  --output-interval DT   time between rows [s]\n"
 	        "  -o, --output FILE      CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
+	        "  --input FILE           the ports' inputs over time: a CSV as fmpy writes one, \"time\" and\n"
+	        "                         then any of force port P's P.fx P.fy P.fz [N] and motion port P's\n"
+	        "                         P.x P.y P.z [m], P.vx P.vy P.vz [m/s]; linear between rows (a\n"
+	        "                         repeated time is a jump), held before the first and after the\n"
+	        "                         last. A motion port named there is driven: along the positions\n"
+	        "                         given (at their slope), or with the velocities given (from the\n"
+	        "                         positions, or from where it has got); other components move as\n"
+	        "                         the file says\n"
 	        "  --positions            also every particle's position (columns particle.NAME.x,\n"
 	        "                         particle.NAME.y, particle.NAME.z [m])\n"
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk per row (particles as\n"
@@ -91,6 +100,7 @@ typedef struct run_options {
 	const char* model;
 	const char* output;
 	const char* vtk_dir;
+	const char* input;
 	double t_end;
 	double interval;
 	double rtol;
@@ -290,7 +300,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			    "--t-end",         "--output-interval", "--rtol",      "--atol",
 			    "--atol-position", "--atol-velocity",   "--max-steps", "--max-step",
 			    "--jacobian",      "--output",          "-o",          "--vtk",
-			    "--solver",        "--method",          "--set",       "--threads"};
+			    "--solver",        "--method",          "--set",       "--threads",
+			    "--input"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -365,6 +376,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->output = value;
 			} else if (strcmp(a, "--vtk") == 0) {
 				o->vtk_dir = value;
+			} else if (strcmp(a, "--input") == 0) {
+				o->input = value;
 			} else if (strcmp(a, "--solver") == 0) {
 				o->solver = value;
 			} else if (strcmp(a, "--method") == 0) {
@@ -378,6 +391,9 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 	}
 	if (cli_model_given("run", o->model) != 0)
 		return USAGE_ERROR;
+	if (o->input != NULL &&
+	    cli_check_output("run", "-o", o->output, o->input, "the input signals", true) != 0)
+		return 2;
 	return cli_check_output("run", "-o", o->output, o->model, "the model file", true);
 }
 
@@ -413,6 +429,7 @@ int sm_cmd_run(int argc, char** argv)
 	sm_document* doc = NULL;
 	sm_model* model = NULL;
 	sm_simulation* sim = NULL;
+	cli_inputs* inputs = NULL;
 	FILE* csv = NULL;
 	FILE* pvd = NULL;
 	double* forces = NULL;
@@ -473,6 +490,11 @@ int sm_cmd_run(int argc, char** argv)
 		status = 2;
 		goto done;
 	}
+	if (o.input != NULL) {
+		inputs = cli_inputs_read(o.input, doc);
+		if (inputs == NULL || cli_inputs_drive(inputs, model) != SM_OK)
+			goto done;
+	}
 	run_progress prog = {.t_end = t_end};
 	def.on_step = on_internal_step;
 	def.on_step_context = o.quiet ? NULL : &prog;
@@ -481,6 +503,10 @@ int sm_cmd_run(int argc, char** argv)
 		fputs("springmass run: ", stderr);
 		cli_write_named(stderr, doc, model, err.message);
 		fputc('\n', stderr);
+		goto done;
+	}
+	if (inputs != NULL && cli_inputs_apply(inputs, sim) != SM_OK) {
+		fprintf(stderr, "springmass run: --input %s: %s\n", o.input, sm_simulation_last_error(sim));
 		goto done;
 	}
 	const char* name = sm_document_name(doc);
@@ -498,6 +524,14 @@ int sm_cmd_run(int argc, char** argv)
 	const char* csv_file = csv_to_stdout ? NULL : csv_name;  // the CSV's file, if it has one
 	// No file the run writes may be the model file (-o is checked with the arguments), nor the
 	// CSV one of the series' files (each frame is checked before it is written).
+	if (!o.output && o.input && cli_same_file(csv_default, o.input)) {
+		fprintf(stderr,
+		        "springmass run: the output %s (NAME.csv, without -o) would overwrite the input signals %s, "
+		        "which it reads; give another name with -o\n",
+		        csv_default, o.input);
+		status = 2;
+		goto done;
+	}
 	if (!o.output && cli_same_file(csv_default, o.model)) {
 		fprintf(
 		    stderr,
@@ -550,11 +584,20 @@ int sm_cmd_run(int argc, char** argv)
 	double last_row = 0.0;
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
-		// Nothing changes the inputs during the run: CVODE may step as in one advance to t_end,
-		// the rows interpolated from its steps.
+		// Between changes of the inputs' course CVODE may step as in one advance up to the next
+		// change (t_end without inputs), the rows interpolated from its steps; at a change the
+		// run stops and takes the inputs' new course.
 		if (stop_signal != 0)
 			break;
-		if (k > 0 && sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : t_end) != SM_OK) {
+		bool failed = false;
+		for (double change = inputs ? cli_inputs_next_change(inputs, sm_simulation_time(sim)) : INFINITY;
+		     k > 0 && !failed && change <= t; change = cli_inputs_next_change(inputs, change)) {
+			failed = sm_simulation_advance_interpolated(sim, change, change) != SM_OK ||
+			         cli_inputs_apply(inputs, sim) != SM_OK;
+		}
+		const double next = inputs ? fmin(t_end, cli_inputs_next_change(inputs, t)) : t_end;
+		if (k > 0 &&
+		    (failed || sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : next) != SM_OK)) {
 			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
 				break;
 			cli_progress_end(&prog.line);
@@ -651,6 +694,7 @@ done:
 	free(spring_values);
 	free(o.sets);
 	sm_simulation_destroy(sim);
+	cli_inputs_destroy(inputs);
 	sm_model_destroy(model);
 	sm_document_destroy(doc);
 	// Stopped by a signal: the files are whole; the exit status is the signal's, as without a handler.

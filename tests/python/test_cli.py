@@ -378,6 +378,106 @@ def shortest_text(value):
     return f"{value:.17g}"
 
 
+# tests/python/models/driven_oscillator.json: a bob (force port "tip", 2 kg) on a spring (50 N/m,
+# rest length 0.5 m) from an anchor (motion port "base", fixed in the file) at the origin,
+# released at x = 0.7 m; no gravity, no damping.
+OSC = ROOT / "tests" / "python" / "models" / "driven_oscillator.json"
+OSC_M, OSC_K, OSC_L0, OSC_X0 = 2.0, 50.0, 0.5, 0.7
+TIGHT_RUN = ("--rtol", "1e-10", "--atol", "1e-12", "--t-end", "2", "--output-interval", "0.1")
+
+
+def test_run_takes_input_signals_as_closed_forms(tmp_path):
+    # A force growing as r t (rows at 0 and 2 s): M u'' + K u = r t from u(0) = x0 - l0 at rest,
+    # u = (x0 - l0) cos(w t) + r / K (t - sin(w t) / w). The anchor's velocity growing as a t (its
+    # position, not given, the integral from the origin): in its frame M u'' = -K u - M a,
+    # u = -M a / K + (x0 - l0 + M a / K) cos(w t), and the anchor feels K u. At rtol 1e-10 the
+    # error of the state over 2 s is near 1e-8 m (measured 6e-9 and 3e-9 m): 1e-6 m, K times that
+    # for the force.
+    w = math.sqrt(OSC_K / OSC_M)
+    (tmp_path / "ramp.csv").write_text("time,tip.fx\n0,0\n2,6\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "ramp.csv", *TIGHT_RUN)
+    t, x = rows[:, 0], rows[:, header.index("tip.x")]
+    u = (OSC_X0 - OSC_L0) * np.cos(w * t) + 3.0 / OSC_K * (t - np.sin(w * t) / w)
+    assert len(t) == 21 and np.max(np.abs(x - (OSC_L0 + u))) < 1e-6
+    (tmp_path / "accelerate.csv").write_text("time,base.vx\n0,0\n2,1.6\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "accelerate.csv", *TIGHT_RUN)
+    t, x, f = rows[:, 0], rows[:, header.index("tip.x")], rows[:, header.index("base.fx")]
+    a = 0.8
+    u = -OSC_M * a / OSC_K + (OSC_X0 - OSC_L0 + OSC_M * a / OSC_K) * np.cos(w * t)
+    assert np.max(np.abs(x - (0.5 * a * t * t + OSC_L0 + u))) < 1e-6
+    assert np.max(np.abs(f - OSC_K * u)) < OSC_K * 1e-6
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="needs the FMU runtime")
+def test_run_with_input_signals_agrees_with_the_fmu_given_their_derivatives(tmp_path):
+    # Piecewise-linear signals with a jump (a repeated time) and a hold after the last row, for the
+    # force port and the motion port's positions: `run --input` against the model's FMU driven by
+    # fmpy, which sets each input's value and its slope (fmi2SetRealInputDerivatives; a motion
+    # port's velocity is the positions' slope) at communication points every 0.1 s, the row times
+    # among them. The same inputs, integrated apart at rtol 1e-10: within 1e-8 m.
+    from fmpy import read_model_description, extract
+    from fmpy.fmi2 import FMU2Slave
+    rows = [(0.0, 0.0, 0.0), (0.5, 2.0, 0.1), (0.5, -1.0, 0.1), (1.2, 1.0, -0.2), (1.6, 1.0, 0.0)]
+    signals = tmp_path / "signals.csv"
+    signals.write_text("time,tip.fx,base.x\n" + "".join(f"{t},{f},{x}\n" for t, f, x in rows))
+    header, ran = run_csv(tmp_path, OSC, "--input", signals, *TIGHT_RUN)
+    fmu = tmp_path / "osc.fmu"
+    cli("fmu", OSC, "-o", fmu)
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier=md.coSimulation.modelIdentifier)
+    slave.instantiate()
+    try:
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setReal([vr["solver.rtol"], vr["solver.atol_position"], vr["solver.atol_velocity"]], [1e-10, 1e-12, 1e-12])
+        slave.exitInitializationMode()
+
+        def course(t, column):
+            # The value in force at t (the later row of a repeated time) and the slope until the next.
+            k = max(i for i, r in enumerate(rows) if r[0] <= t + 1e-12)
+            if k + 1 == len(rows):
+                return rows[k][column], 0.0
+            slope = (rows[k + 1][column] - rows[k][column]) / (rows[k + 1][0] - rows[k][0])
+            return rows[k][column] + slope * (t - rows[k][0]), slope
+
+        got = [slave.getReal([vr["tip.x"], vr["base.fx"]])]
+        for n in range(20):
+            t = n * 0.1
+            (f, df), (x, dx) = course(t, 1), course(t, 2)
+            slave.setReal([vr["tip.fx"], vr["base.x"], vr["base.vx"]], [f, x, dx])
+            slave.setRealInputDerivatives([vr["tip.fx"]], [1], [df])
+            slave.doStep(t, 0.1)
+            got.append(slave.getReal([vr["tip.x"], vr["base.fx"]]))
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    got = np.array(got)
+    assert np.max(np.abs(ran[:, header.index("tip.x")] - got[:, 0])) < 1e-8
+    assert np.max(np.abs(ran[:, header.index("base.fx")] - got[:, 1])) < OSC_K * 1e-8
+
+
+@pytest.mark.parametrize("text, message", [
+    ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
+    ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
+    ("time,nowhere.fx\n0,1\n", '1:6: "nowhere.fx" is no port\'s input'),
+    ("time,tip.fx,tip.fx\n0,1,2\n", '1:13: "tip.fx" is named twice'),
+    ("time,tip.fx\n0,1\n1,x\n", '3:3: "x" is not a finite decimal number'),
+    ("time,tip.fx\n1,1\n0,2\n", "3:1: time 0 s is before the previous row's 1 s"),
+    ("time,tip.fx\n", "2:1: no rows after the header"),
+])
+def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, message):
+    signals = tmp_path / "signals.csv"
+    signals.write_text(text)
+    err = cli("run", OSC, "-q", "-o", tmp_path / "out.csv", "--input", signals, status=1).stderr
+    assert err.startswith(f"springmass run: --input {signals}:{message}"), err
+    assert not (tmp_path / "out.csv").exists()
+    # The output may not be the signals it reads.
+    err = cli("run", OSC, "-q", "-o", signals, "--input", signals, status=2).stderr
+    assert "the input signals" in err
+    assert signals.read_text() == text
+
+
 def test_csv_numbers_are_the_shortest_text_that_reads_back_exactly(tmp_path):
     # 0.6 m is written 0.6, not 0.59999999999999998; a computed value with all 17 digits if it
     # needs them. In every CSV of run, statics and modes (after the particle and name columns).

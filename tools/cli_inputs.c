@@ -1,0 +1,242 @@
+// The input signals of `springmass run --input` (see cli_inputs.h).
+#define _POSIX_C_SOURCE 200809L
+
+#include "cli_inputs.h"
+
+#include "cli_csv.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+// A port's inputs in the file: quantity q (0 position, 1 velocity, 2 force), component c.
+enum { QUANTITIES = 3, INPUTS_PER_PORT = 3 * QUANTITIES };
+static const char* const suffixes[INPUTS_PER_PORT] = {"x", "y", "z", "vx", "vy", "vz", "fx", "fy", "fz"};
+
+struct cli_inputs {
+	const sm_document* doc;
+	int32_t port_count;
+	cli_csv csv;
+	int32_t* column;  // per port and input (INPUTS_PER_PORT each): its column in the file, or -1
+	char why[256];    // a refused column's reason, while reading
+};
+
+// Reads a whole file; NULL with *problem set (errno's text) if it cannot.
+static char* read_text(const char* path, size_t* length, const char** problem)
+{
+	FILE* f = fopen(path, "rb");
+	char* text = NULL;
+	size_t size = 0, capacity = 0;
+	*problem = NULL;
+	if (f == NULL) {
+		*problem = strerror(errno);
+		return NULL;
+	}
+	for (;;) {
+		if (size + 4096 > capacity) {
+			capacity = capacity ? 2 * capacity : 65536;
+			char* grown = realloc(text, capacity);
+			if (grown == NULL) {
+				*problem = "out of memory";
+				break;
+			}
+			text = grown;
+		}
+		const size_t got = fread(text + size, 1, capacity - size, f);
+		size += got;
+		if (got == 0) {
+			if (ferror(f))
+				*problem = strerror(errno);
+			break;
+		}
+	}
+	fclose(f);
+	if (*problem != NULL) {
+		free(text);
+		return NULL;
+	}
+	*length = size;
+	return text;
+}
+
+// A column of the file: "PORT.SUFFIX", an input of a force or motion port.
+static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
+{
+	cli_inputs* in = context;
+	const char* dot = strrchr(name, '.');
+	int32_t port = -1;
+	if (dot != NULL) {
+		char* port_name = strdup(name);
+		if (port_name == NULL)
+			return "cannot be read: out of memory";
+		port_name[dot - name] = '\0';
+		port = sm_document_port_index(in->doc, port_name);
+		free(port_name);
+	}
+	int q = -1;
+	for (int k = 0; dot != NULL && k < INPUTS_PER_PORT; k++)
+		if (strcmp(dot + 1, suffixes[k]) == 0)
+			q = k;
+	if (port < 0 || q < 0)
+		return "is no port's input: force port P takes P.fx, P.fy, P.fz, motion port P takes P.x .. P.vz";
+	const sm_port p = sm_document_port(in->doc, port);
+	if (p.kind == SM_PORT_PROBE)
+		return "is a probe's: a probe takes no input";
+	if ((p.kind == SM_PORT_FORCE) != (q >= 6)) {
+		snprintf(in->why, sizeof in->why, "is an output: %s port %s takes %s",
+		         p.kind == SM_PORT_FORCE ? "force" : "motion", p.name,
+		         p.kind == SM_PORT_FORCE ? "a force (.fx .fy .fz)" : "a position and velocity (.x .. .vz)");
+		return in->why;
+	}
+	*id = INPUTS_PER_PORT * port + q;
+	*whole = false;
+	return NULL;
+}
+
+cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
+{
+	cli_inputs* in = calloc(1, sizeof *in);
+	const int32_t ports = sm_document_port_count(doc);
+	int32_t* column = malloc(((size_t)ports * INPUTS_PER_PORT + 1) * sizeof *column);
+	const char* problem = NULL;
+	size_t length = 0;
+	char* text = in != NULL && column != NULL ? read_text(path, &length, &problem) : NULL;
+	if (text == NULL) {
+		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path,
+		        problem != NULL ? problem : "out of memory");
+		free(in);
+		free(column);
+		return NULL;
+	}
+	in->doc = doc;
+	in->port_count = ports;
+	in->column = column;
+	const cli_csv_form form = {"an input file", name_column, in, ports * INPUTS_PER_PORT};
+	bool out_of_memory = false;
+	char* wrong = cli_csv_read(text, length, &form, &in->csv, &out_of_memory);
+	free(text);
+	if (wrong != NULL || out_of_memory) {
+		fprintf(stderr, "springmass run: --input %s:%s\n", path, wrong != NULL ? wrong : " out of memory");
+		free(wrong);
+		cli_inputs_destroy(in);
+		return NULL;
+	}
+	for (int32_t k = 0; k < ports * INPUTS_PER_PORT; k++)
+		column[k] = -1;
+	for (int32_t c = 1; c < in->csv.columns; c++)
+		column[in->csv.id[c]] = c;
+	return in;
+}
+
+// Whether the signals name any input of port p.
+static bool named(const cli_inputs* in, int32_t p)
+{
+	for (int k = 0; k < INPUTS_PER_PORT; k++)
+		if (in->column[INPUTS_PER_PORT * p + k] >= 0)
+			return true;
+	return false;
+}
+
+sm_status cli_inputs_drive(const cli_inputs* in, sm_model* model)
+{
+	for (int32_t p = 0; p < in->port_count; p++) {
+		const sm_port port = sm_document_port(in->doc, p);
+		if (port.kind != SM_PORT_MOTION || !named(in, p))
+			continue;
+		sm_particle_def def;
+		sm_status st = sm_model_get_particle(model, port.particle, &def);
+		if (st != SM_OK)
+			return st;
+		if (def.motion == SM_PARTICLE_FIXED)
+			def.velocity[0] = def.velocity[1] = def.velocity[2] = 0.0;
+		def.motion = SM_PARTICLE_DRIVEN;
+		if ((st = sm_model_set_particle(model, port.particle, &def)) != SM_OK)
+			return st;
+	}
+	return SM_OK;
+}
+
+// The row of the signals in force at t: the last one at or before t, or -1 before the first.
+static int64_t row_at(const cli_inputs* in, double t)
+{
+	int64_t lo = 0, hi = in->csv.rows;  // the answer + 1 lies in [lo, hi]
+	while (lo < hi) {
+		const int64_t mid = lo + (hi - lo) / 2;
+		if (in->csv.values[mid * in->csv.columns] <= t)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return lo - 1;
+}
+
+double cli_inputs_next_change(const cli_inputs* in, double t)
+{
+	const int64_t k = row_at(in, t) + 1;
+	return k < in->csv.rows ? in->csv.values[k * in->csv.columns] : INFINITY;
+}
+
+// Signal `column` at t and its slope until the next row (0 before the first row and after the
+// last). Between rows k and k + 1: v_k + slope (t - t_k), slope = (v_k+1 - v_k) / (t_k+1 - t_k).
+static void signal_at(const cli_inputs* in, int32_t column, double t, double* value, double* slope)
+{
+	const int64_t k = row_at(in, t), n = in->csv.columns;
+	const double* v = in->csv.values;
+	*slope = 0.0;
+	if (k < 0) {
+		*value = v[column];
+		return;
+	}
+	*value = v[k * n + column];
+	if (k + 1 < in->csv.rows) {
+		*slope = (v[(k + 1) * n + column] - *value) / (v[(k + 1) * n] - v[k * n]);
+		*value += *slope * (t - v[k * n]);
+	}
+}
+
+sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim)
+{
+	const double t = sm_simulation_time(sim);
+	for (int32_t p = 0; p < in->port_count; p++) {
+		const sm_port port = sm_document_port(in->doc, p);
+		if (port.kind == SM_PORT_PROBE || !named(in, p))
+			continue;
+		const int32_t* column = in->column + INPUTS_PER_PORT * p;
+		const size_t i = 3 * (size_t)port.particle;
+		double value[INPUTS_PER_PORT], slope[INPUTS_PER_PORT];
+		for (int k = 0; k < INPUTS_PER_PORT; k++) {
+			value[k] = slope[k] = 0.0;
+			if (column[k] >= 0)
+				signal_at(in, column[k], t, &value[k], &slope[k]);
+		}
+		sm_status st;
+		if (port.kind == SM_PORT_FORCE) {
+			st = sm_simulation_set_external_force_ramp(sim, port.particle, value + 6, slope + 6);
+		} else {
+			// Per component: positions and velocities given; positions (at their slope); velocities
+			// (accelerating at theirs) from where the motion is; or the motion as it is.
+			double x[3], v[3], a[3];
+			for (int c = 0; c < 3; c++) {
+				const bool position = column[c] >= 0, velocity = column[3 + c] >= 0;
+				x[c] = position ? value[c] : sm_simulation_positions(sim)[i + c];
+				v[c] = velocity ? value[3 + c] : position ? slope[c] : sm_simulation_velocities(sim)[i + c];
+				a[c] = velocity ? slope[3 + c] : 0.0;
+			}
+			st = sm_simulation_set_driven_accelerating(sim, port.particle, x, v, a);
+		}
+		if (st != SM_OK)
+			return st;
+	}
+	return SM_OK;
+}
+
+void cli_inputs_destroy(cli_inputs* in)
+{
+	if (in == NULL)
+		return;
+	cli_csv_free(&in->csv);
+	free(in->column);
+	free(in);
+}

@@ -1,0 +1,34 @@
+// The input signals of `springmass run --input FILE`: a CSV of the ports' inputs over time, as
+// fmpy's write_csv writes one (and fmpy's simulate_fmu takes for the model's FMU): "time", then
+// the FMU's names of the inputs it gives, force ports' P.fx P.fy P.fz [N] and motion ports' P.x
+// P.y P.z [m] and P.vx P.vy P.vz [m/s].
+//
+// Between rows a signal is linear (a repeated time is a jump there); before the first row it has
+// the first row's value, after the last the last one's. A force port pushes with the force given
+// (0 in a component not named). A motion port named in the file is driven (the file's own
+// `fixed` or motion no longer applies to its particle), component by component: along the
+// positions given, at their slope when no velocities are given; with the velocities given,
+// accelerating at their slope, from the positions given or, without them, from where the motion
+// has got to; a component named neither way keeps the particle's motion in the file (its initial
+// position and velocity; a fixed particle's stays put).
+#pragma once
+
+#include "springmass/model_file.h"
+#include "springmass/simulation.h"
+
+typedef struct cli_inputs cli_inputs;
+
+// Reads the signals in the file at path for the model's ports. NULL after printing on stderr
+// what is wrong, naming the file, the line and the column ("springmass run: --input F:3:7: ...").
+cli_inputs* cli_inputs_read(const char* path, const sm_document* doc);
+
+// Drives the particles of the motion ports the signals name, at rest if the file holds them.
+sm_status cli_inputs_drive(const cli_inputs* inputs, sm_model* model);
+
+// The time of the first row after t [s], or INFINITY: the inputs change their course there.
+double cli_inputs_next_change(const cli_inputs* inputs, double t);
+
+// Gives the simulation the inputs from its current time on, up to the next change.
+sm_status cli_inputs_apply(const cli_inputs* inputs, sm_simulation* sim);
+
+void cli_inputs_destroy(cli_inputs* inputs);
