@@ -196,9 +196,10 @@ static void signal_at(const cli_inputs* in, int32_t column, double t, double* va
 	}
 }
 
-sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim)
+sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim, char* why, size_t size)
 {
 	const double t = sm_simulation_time(sim);
+	why[0] = '\0';
 	for (int32_t p = 0; p < in->port_count; p++) {
 		const sm_port port = sm_document_port(in->doc, p);
 		if (port.kind == SM_PORT_PROBE || !named(in, p))
@@ -210,6 +211,11 @@ sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim)
 			value[k] = slope[k] = 0.0;
 			if (column[k] >= 0)
 				signal_at(in, column[k], t, &value[k], &slope[k]);
+			if (!isfinite(value[k]) || !isfinite(slope[k])) {
+				snprintf(why, size, "%s.%s at t = %.17g s: its %s to the next row is beyond a double",
+				         port.name, suffixes[k], t, isfinite(slope[k]) ? "value" : "slope");
+				return SM_ERROR_NOT_FINITE;
+			}
 		}
 		sm_status st;
 		if (port.kind == SM_PORT_FORCE) {
@@ -226,8 +232,10 @@ sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim)
 			}
 			st = sm_simulation_set_driven_accelerating(sim, port.particle, x, v, a);
 		}
-		if (st != SM_OK)
+		if (st != SM_OK) {
+			snprintf(why, size, "port %s at t = %.17g s: %s", port.name, t, sm_simulation_last_error(sim));
 			return st;
+		}
 	}
 	return SM_OK;
 }

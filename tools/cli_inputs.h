@@ -28,7 +28,8 @@ sm_status cli_inputs_drive(const cli_inputs* inputs, sm_model* model);
 // The time of the first row after t [s], or INFINITY: the inputs change their course there.
 double cli_inputs_next_change(const cli_inputs* inputs, double t);
 
-// Gives the simulation the inputs from its current time on, up to the next change.
-sm_status cli_inputs_apply(const cli_inputs* inputs, sm_simulation* sim);
+// Gives the simulation the inputs from its current time on, up to the next change. On failure
+// (a slope beyond a double: rows too close for their values) why[size] says what failed.
+sm_status cli_inputs_apply(const cli_inputs* inputs, sm_simulation* sim, char* why, size_t size);
 
 void cli_inputs_destroy(cli_inputs* inputs);

@@ -505,8 +505,9 @@ int sm_cmd_run(int argc, char** argv)
 		fputc('\n', stderr);
 		goto done;
 	}
-	if (inputs != NULL && cli_inputs_apply(inputs, sim) != SM_OK) {
-		fprintf(stderr, "springmass run: --input %s: %s\n", o.input, sm_simulation_last_error(sim));
+	char input_problem[SM_ERROR_MESSAGE_CAPACITY + 128] = "";
+	if (inputs != NULL && cli_inputs_apply(inputs, sim, input_problem, sizeof input_problem) != SM_OK) {
+		fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
 		goto done;
 	}
 	const char* name = sm_document_name(doc);
@@ -593,7 +594,7 @@ int sm_cmd_run(int argc, char** argv)
 		for (double change = inputs ? cli_inputs_next_change(inputs, sm_simulation_time(sim)) : INFINITY;
 		     k > 0 && !failed && change <= t; change = cli_inputs_next_change(inputs, change)) {
 			failed = sm_simulation_advance_interpolated(sim, change, change) != SM_OK ||
-			         cli_inputs_apply(inputs, sim) != SM_OK;
+			         cli_inputs_apply(inputs, sim, input_problem, sizeof input_problem) != SM_OK;
 		}
 		const double next = inputs ? fmin(t_end, cli_inputs_next_change(inputs, t)) : t_end;
 		if (k > 0 &&
@@ -601,6 +602,10 @@ int sm_cmd_run(int argc, char** argv)
 			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
 				break;
 			cli_progress_end(&prog.line);
+			if (input_problem[0] != '\0') {
+				fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
+				goto done;
+			}
 			fputs("springmass run: ", stderr);
 			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
 			fputc('\n', stderr);
