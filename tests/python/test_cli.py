@@ -408,55 +408,6 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     assert np.max(np.abs(f - OSC_K * u)) < OSC_K * 1e-6
 
 
-@pytest.mark.skipif(not HAS_FMU, reason="needs the FMU runtime")
-def test_run_with_input_signals_agrees_with_the_fmu_given_their_derivatives(tmp_path):
-    # Piecewise-linear signals with a jump (a repeated time) and a hold after the last row, for the
-    # force port and the motion port's positions: `run --input` against the model's FMU driven by
-    # fmpy, which sets each input's value and its slope (fmi2SetRealInputDerivatives; a motion
-    # port's velocity is the positions' slope) at communication points every 0.1 s, the row times
-    # among them. The same inputs, integrated apart at rtol 1e-10: within 1e-8 m.
-    from fmpy import read_model_description, extract
-    from fmpy.fmi2 import FMU2Slave
-    rows = [(0.0, 0.0, 0.0), (0.5, 2.0, 0.1), (0.5, -1.0, 0.1), (1.2, 1.0, -0.2), (1.6, 1.0, 0.0)]
-    signals = tmp_path / "signals.csv"
-    signals.write_text("time,tip.fx,base.x\n" + "".join(f"{t},{f},{x}\n" for t, f, x in rows))
-    header, ran = run_csv(tmp_path, OSC, "--input", signals, *TIGHT_RUN)
-    fmu = tmp_path / "osc.fmu"
-    cli("fmu", OSC, "-o", fmu)
-    md = read_model_description(str(fmu))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    slave = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier=md.coSimulation.modelIdentifier)
-    slave.instantiate()
-    try:
-        slave.setupExperiment(startTime=0.0)
-        slave.enterInitializationMode()
-        slave.setReal([vr["solver.rtol"], vr["solver.atol_position"], vr["solver.atol_velocity"]], [1e-10, 1e-12, 1e-12])
-        slave.exitInitializationMode()
-
-        def course(t, column):
-            # The value in force at t (the later row of a repeated time) and the slope until the next.
-            k = max(i for i, r in enumerate(rows) if r[0] <= t + 1e-12)
-            if k + 1 == len(rows):
-                return rows[k][column], 0.0
-            slope = (rows[k + 1][column] - rows[k][column]) / (rows[k + 1][0] - rows[k][0])
-            return rows[k][column] + slope * (t - rows[k][0]), slope
-
-        got = [slave.getReal([vr["tip.x"], vr["base.fx"]])]
-        for n in range(20):
-            t = n * 0.1
-            (f, df), (x, dx) = course(t, 1), course(t, 2)
-            slave.setReal([vr["tip.fx"], vr["base.x"], vr["base.vx"]], [f, x, dx])
-            slave.setRealInputDerivatives([vr["tip.fx"]], [1], [df])
-            slave.doStep(t, 0.1)
-            got.append(slave.getReal([vr["tip.x"], vr["base.fx"]]))
-    finally:
-        slave.terminate()
-        slave.freeInstance()
-    got = np.array(got)
-    assert np.max(np.abs(ran[:, header.index("tip.x")] - got[:, 0])) < 1e-8
-    assert np.max(np.abs(ran[:, header.index("base.fx")] - got[:, 1])) < OSC_K * 1e-8
-
-
 @pytest.mark.parametrize("text, message", [
     ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
     ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
