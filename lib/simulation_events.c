@@ -198,7 +198,8 @@ void sm_simulation_free_events(sm_simulation* sim)
 //
 // Over the part [t_lo, t_hi] of a step searched, s = (t - t_lo) / H in [0, 1], H = t_hi - t_lo,
 // the polynomial of order q gives each particle x(s) = sum_k X_k s^k with X_k = x^(k)(t_lo) H^k / k!
-// (CVodeGetDky; a driven particle's motion is linear, a fixed one's constant). A spring's vector
+// (CVodeGetDky; a driven particle's path is its own, of degree 2 at most, and q is taken as 2 at
+// least while one accelerates; a fixed particle's is constant). A spring's vector
 // d(s) = x_b(s) - x_a(s) = sum_k D_k s^k, and its length reaches the limit l where
 //   P(s) = |d(s)|^2 - l^2 = sum_j e_j s^j,  e_j = sum_{k + m = j} D_k . D_m  (minus l^2 for j = 0),
 // a polynomial of degree n = 2q (at most 24, with Adams) of the same sign as L - l.
@@ -279,22 +280,25 @@ double sm_simulation_first_rise(const double* b, int n, double resolution)
 	return -1.0;
 }
 
-// taylor_position row k (3 per particle) = X_k = x^(k)(t_lo) H^k / k!, k = 0..q, from CVODE's
-// polynomial of its last step, and reach = sum_{k >= 1} |X_k|_1 >= |x(s) - x(0)| for s in [0, 1].
-// A CVODE flag.
-static int fill_taylor_positions(sm_simulation* sim, double t_lo, double H, int q)
+// taylor_position row k (3 per particle) = X_k = x^(k)(t_lo) H^k / k!, k = 0..order, from CVODE's
+// polynomial of its last step (of order q <= order: the free particles' rows beyond q are 0), and
+// reach = sum_{k >= 1} |X_k|_1 >= |x(s) - x(0)| for s in [0, 1]. A CVODE flag.
+static int fill_taylor_positions(sm_simulation* sim, double t_lo, double H, int q, int order)
 {
 	const size_t n3 = 3 * (size_t)sim->particle_count;
 	for (int32_t i = 0; i < sim->particle_count; i++)
 		sim->reach[i] = 0.0;
 	double scale = 1.0;  // H^k / k!
-	for (int k = 0; k <= q; k++) {
+	for (int k = 0; k <= order; k++) {
 		scale *= k > 0 ? H / k : 1.0;
-		const int flag = CVodeGetDky(sim->cvode, t_lo, k, sim->interpolated);
-		if (flag != CV_SUCCESS)
-			return flag;
-		const double* y = N_VGetArrayPointer(sim->interpolated);
 		double* X = sim->taylor_position + (size_t)k * n3;
+		const double* y = NULL;
+		if (k <= q) {
+			const int flag = CVodeGetDky(sim->cvode, t_lo, k, sim->interpolated);
+			if (flag != CV_SUCCESS)
+				return flag;
+			y = N_VGetArrayPointer(sim->interpolated);
+		}
 		if (k == 0) {  // every particle's position at t_lo, the constrained ones' from their motion
 			sm_simulation_unpack(sim, t_lo, y, X, sim->work_velocity);
 			continue;
@@ -302,14 +306,15 @@ static int fill_taylor_positions(sm_simulation* sim, double t_lo, double H, int 
 		for (int32_t f = 0; f < sim->free_count; f++) {
 			const int32_t i = sim->free_particles[f];
 			double* x = X + 3 * (size_t)i;
-			x[0] = scale * y[3 * (size_t)f];
-			x[1] = scale * y[3 * (size_t)f + 1];
-			x[2] = scale * y[3 * (size_t)f + 2];
+			for (int c = 0; c < 3; c++)
+				x[c] = y != NULL ? scale * y[3 * (size_t)f + (size_t)c] : 0.0;
 			sim->reach[i] += fabs(x[0]) + fabs(x[1]) + fabs(x[2]);
 		}
 		// A driven particle's path x0 + v0 s + a s^2 / 2 has the scaled derivatives H (v0 + a s) and
-		// H^2 a / 2 at s = (time_origin - drive_time) + t_lo, and none beyond. At order 1 (a first
-		// step) the second is left out, as the free particles' higher derivatives are.
+		// H^2 a / 2 at s = (time_origin - drive_time) + t_lo, and none beyond: its own, exact, whatever
+		// CVODE's order (the search asks for order 2 at least when a driven particle accelerates; a
+		// first-order step cut to H (v0 + a s) alone overshot a decelerating particle's path and broke
+		// springs that never reached their limits).
 		for (int32_t j = 0; j < sim->constrained_count; j++) {
 			const int32_t i = sim->constrained[j];
 			const bool driven = sim->model->motion[i] == SM_PARTICLE_DRIVEN;
@@ -387,6 +392,18 @@ static double length_roundoff(const sm_simulation* sim, int32_t r, const double*
 	return LENGTH_ROUNDOFF * extent;
 }
 
+// Whether a driven particle moves with an acceleration (sm_simulation_set_driven_accelerating).
+static bool drives_accelerate(const sm_simulation* sim)
+{
+	for (int32_t j = 0; j < sim->constrained_count; j++) {
+		const int32_t i = sim->constrained[j];
+		const double* a = sim->drive_acceleration + 3 * (size_t)i;
+		if (sim->model->motion[i] == SM_PARTICLE_DRIVEN && (a[0] != 0.0 || a[1] != 0.0 || a[2] != 0.0))
+			return true;
+	}
+	return false;
+}
+
 int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, double* reached)
 {
 	if (sim->root_count == 0 || flag < 0)
@@ -408,10 +425,12 @@ int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, doubl
 		sim->crossing_time[r] = INFINITY;
 	if (t_hi > t_lo && q >= 1 && q <= max_order(sim)) {
 		const double H = t_hi - t_lo;
-		const int status = fill_taylor_positions(sim, t_lo, H, q);
+		// The polynomials' order: CVODE's, and at least a driven particle's quadratic path.
+		const int order = q < 2 && drives_accelerate(sim) ? 2 : q;
+		const int status = fill_taylor_positions(sim, t_lo, H, q, order);
 		if (status != CV_SUCCESS)
 			return status;
-		const int n = 2 * q;
+		const int n = 2 * order;
 		double weights[(MAX_DEGREE + 1) * (MAX_DEGREE + 1)];
 		for (int i = 0; i <= n; i++) {
 			double ratio = 1.0;  // C(i, j) / C(n, j) = prod_{m < j} (i - m) / (n - m)
@@ -423,7 +442,7 @@ int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, doubl
 		for (int32_t r = 0; r < sim->root_count; r++) {
 			if (!sim->model->enabled[sim->root_spring[r]])
 				continue;
-			const double u = spring_first_crossing(sim, r, q, weights, resolution / H);
+			const double u = spring_first_crossing(sim, r, order, weights, resolution / H);
 			if (u < 0.0)
 				continue;
 			sim->crossing_time[r] = u >= 1.0 ? t_hi : fmin(t_lo + u * H, t_hi);

@@ -203,6 +203,57 @@ static int test_decelerating_pull_breaks_the_spring_inside_a_step(void)
 	return 0;
 }
 
+// pulled_spring() without gravity: its free particle hangs at rest, so CVODE's steps grow long at
+// order 1. A driven particle thrown outward at v0 = 1 m/s and pulled back at a stretches spring 0 by
+// v0^2 / (2 a) at most: 0.07 m, below its 0.1 m limit, at a = 7.14 m/s^2 (no break), and by
+// 0.1 m (1 + 1e-6) (a break at the first crossing, as in the test above). The search of a
+// first-order step took the driven path as its tangent, which overshoots a decelerating path: the
+// spring broke at t = 0.1 s, at a strain of 0.064, in both runs.
+static int test_decelerating_pull_in_long_first_order_steps_breaks_only_past_the_limit(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def fixed = sm_default_particle_def(), driven = fixed, hanging = fixed;
+	fixed.motion = SM_PARTICLE_FIXED;
+	driven.motion = SM_PARTICLE_DRIVEN;
+	driven.position[0] = 1.0;
+	hanging.position[2] = -0.5;
+	sm_spring_def pulled = sm_default_spring_def();
+	pulled.a = 0;
+	pulled.b = 1;
+	pulled.stiffness = 100.0;
+	pulled.break_strain = 0.1;
+	sm_spring_def holding = pulled;
+	holding.b = 2;
+	holding.break_strain = INFINITY;
+	ENSURE_STATUS(sm_model_add_particle(model, &fixed, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_particle(model, &driven, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_particle(model, &hanging, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_spring(model, &pulled, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_spring(model, &holding, NULL), SM_OK);
+	const double stretches[2] = {0.07, 0.1 * (1.0 + 1e-6)};
+	for (int k = 0; k < 2; k++) {
+		const double v0 = 1.0, a = v0 * v0 / (2.0 * stretches[k]);
+		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+		ENSURE(sim != NULL);
+		const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {v0, 0.0, 0.0}, a1[3] = {-a, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 1, x1, v1, a1), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 0.4), SM_OK);
+		printf("  largest stretch %.3g m: %d breaks", stretches[k], (int)sm_simulation_break_count(sim));
+		if (sm_simulation_break_count(sim) > 0)
+			printf(", at %.17g s", sm_simulation_break(sim, 0).time);
+		printf("\n");
+		ENSURE(sm_simulation_break_count(sim) == k);
+		if (k == 1)
+			ENSURE_NEAR(sm_simulation_break(sim, 0).time, (v0 - sqrt(v0 * v0 - 0.2 * a)) / a, 1e-10);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Ramps and accelerations belong to the state: a snapshot taken mid-ramp, restored into the same
 // simulation or read back from bytes into a new one, goes on along them (the same bits both ways,
 // and within the tolerances of the run that went on without a restart: at rtol 1e-10 each run is
@@ -294,6 +345,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_accelerating_anchor_drags_bob_as_closed_form);
 	RUN_TEST(test_spring_pulled_with_constant_acceleration_breaks_at_analytic_time);
 	RUN_TEST(test_decelerating_pull_breaks_the_spring_inside_a_step);
+	RUN_TEST(test_decelerating_pull_in_long_first_order_steps_breaks_only_past_the_limit);
 	RUN_TEST(test_ramps_are_part_of_the_state);
 	RUN_TEST(test_bad_ramps_are_refused);
 	return TEST_SUMMARY();
