@@ -1363,12 +1363,14 @@ static bool finite3(const double* a)
 }
 
 // Whether a value given at a time t (16 units of round-off of the largest term) lies on the path
-// value + rate dt a call at t - dt set: a caller's x0 + v t and the path's own x0 + v dt, summed
-// over steps, part in the last bits.
-static bool on_path(double given, double value, double rate, double dt)
+// value + change a call at t - dt set, where change is the sum of terms of which the largest is
+// `term` in size: a caller's x0 + v t and the path's own x0 + v dt, summed over steps, part in the
+// last bits; x0 + v0 t + a t^2 / 2 and x0 + t (v0 + t a / 2) part by round-off of v0 t and a t^2 / 2,
+// however much of them cancels.
+static bool on_path(double given, double value, double change, double term)
 {
-	const double path = value + rate * dt;
-	const double scale = fmax(fmax(fabs(given), fabs(value)), fabs(rate * dt));
+	const double path = value + change;
+	const double scale = fmax(fmax(fabs(given), fabs(value)), fmax(fabs(change), term));
 	return fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
 }
 
@@ -1422,8 +1424,9 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	for (int c = 0; c < 3; c++) {
 		const double v0 = sim->drive_velocity[p + c], a = sim->drive_acceleration[p + c];
 		jump = jump || acceleration[c] != a ||
-		       (a == 0.0 ? velocity[c] != v0 : !on_path(velocity[c], v0, a, dt)) ||
-		       !on_path(position[c], sim->drive_position[p + c], v0 + 0.5 * dt * a, dt);
+		       (a == 0.0 ? velocity[c] != v0 : !on_path(velocity[c], v0, a * dt, fabs(a * dt))) ||
+		       !on_path(position[c], sim->drive_position[p + c], dt * (v0 + 0.5 * dt * a),
+		                fmax(fabs(v0 * dt), fabs(0.5 * dt * dt * a)));
 	}
 	if (jump) {
 		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
@@ -1468,7 +1471,7 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	bool differs = false;
 	for (int c = 0; c < 3; c++)
 		differs = differs || rate[c] != r[c] ||
-		          (r[c] == 0.0 ? force[c] != f[c] : !on_path(force[c], f[c], r[c], dt));
+		          (r[c] == 0.0 ? force[c] != f[c] : !on_path(force[c], f[c], r[c] * dt, fabs(r[c] * dt)));
 	if (!differs)
 		return SM_OK;
 	const bool ramped = r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;

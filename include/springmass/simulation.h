@@ -263,8 +263,9 @@ SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, 
 /// on: x(t) = position + velocity s + acceleration s^2 / 2, x'(t) = velocity + acceleration s,
 /// s = t - t0 [m, m/s, m/s^2] (a co-simulation master's extrapolation of a motion input and its
 /// derivative over a step). sm_simulation_set_driven is this with no acceleration. The same
-/// acceleration with a position and a velocity on the current path, to within round-off as there,
-/// continues the motion.
+/// acceleration with a position and a velocity on the current path, to within round-off as there
+/// (of the largest of the positions and the terms v s and a s^2 / 2 however they cancel; of the
+/// velocities and a s), continues the motion.
 SM_API sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t particle,
                                                        const double position[3], const double velocity[3],
                                                        const double acceleration[3]);
