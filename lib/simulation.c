@@ -1545,6 +1545,21 @@ int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, doub
 	return -1;
 }
 
+// The first particle whose external force at time t, force + rate (t - t0), is not finite under the
+// given ramps (3 forces [N] and rates [N/s], one start time [s] per particle), or -1: as for a driven
+// particle's position, a snapshot read back from bytes or a time given to set_state may hold one.
+int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, const double* force,
+                                        const double* rate, const double* start)
+{
+	for (int32_t i = 0; i < sim->particle_count; i++) {
+		const size_t p = 3 * (size_t)i;
+		for (int c = 0; c < 3; c++)
+			if (rate[p + c] != 0.0 && !isfinite(force[p + c] + rate[p + c] * (t - start[i])))
+				return i;
+	}
+	return -1;
+}
+
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
 {
 	if (sim == NULL || x == NULL || v == NULL)
@@ -1569,6 +1584,15 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		return sm_simulation_fail(sim, SM_ERROR_NOT_FINITE,
 		                          "set_state: driven particle %d's position at t = %s s is not finite",
 		                          (int)overflowing, t);
+	}
+	const int32_t pushed =
+	    sm_simulation_overflowing_force(sim, time, sim->external_force, sim->force_rate, sim->force_time);
+	if (pushed >= 0) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(time, t);
+		return sm_simulation_fail(
+		    sim, SM_ERROR_NOT_FINITE,
+		    "set_state: particle %d's external force at t = %s s is not finite (its ramp)", (int)pushed, t);
 	}
 	pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sim->time = time;

@@ -4,7 +4,8 @@
 // The CVODE state vector holds the free particles only, followed by the dissipated energy:
 //   y = [x_free (3 nf) ; v_free (3 nf) ; e (1)],  y' = [v ; M^-1 f(x, v) ; P_dissipated(x, v)].
 // Constrained particles take their positions from the simulation's own arrays: fixed ones
-// from the model, driven ones from x(t) = drive_position + drive_velocity (t - drive_time).
+// from the model, driven ones from x(t) = drive_position + drive_velocity s + drive_acceleration
+// s^2 / 2, s = t - drive_time.
 #pragma once
 
 #include "springmass/simulation.h"
@@ -142,6 +143,9 @@ void sm_simulation_restore_springs(sm_simulation* sim);
 int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
                                                   const double* velocity, const double* acceleration,
                                                   const double* start);
+// The first particle whose external force at time t is not finite under the given ramps, or -1.
+int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, const double* force,
+                                        const double* rate, const double* start);
 
 // Spring breaks (simulation_events.c).
 // The root functions for the model's breakable springs, given to CVODE (recomputed when the model

@@ -148,6 +148,16 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 		    "restore_state: driven particle %d's position at the state's time t = %s s is not finite",
 		    (int)overflowing, t);
 	}
+	const int32_t pushed =
+	    sm_simulation_overflowing_force(sim, s->time, s->external_force, s->force_rate, s->force_time);
+	if (pushed >= 0) {
+		char t[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(s->time, t);
+		return sm_simulation_fail(
+		    sim, SM_ERROR_NOT_FINITE,
+		    "restore_state: particle %d's external force at the state's time t = %s s is not finite (its ramp)",
+		    (int)pushed, t);
+	}
 	if (s->break_count > sim->break_capacity) {
 		sm_break_event* b = realloc(sim->breaks, (size_t)s->break_count * sizeof *b);
 		if (b == NULL)

@@ -287,7 +287,8 @@ SM_API sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32
 /// (3 each; the entries of fixed and driven particles are ignored: they stay at their
 /// positions or follow their prescribed motion, see sm_simulation_set_driven). Re-initialises
 /// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry,
-/// or a time at which a driven particle's prescribed position is not finite.
+/// or a time at which a driven particle's prescribed position or a ramped external force is not
+/// finite.
 /// Only the particles' state changes: the dissipated energy, the break events recorded so far
 /// and the springs that broke stay as they are (setting an earlier time undoes no break), so
 /// the energy balance of sm_simulation_dissipated_energy holds across the call only if the
@@ -322,9 +323,9 @@ SM_API sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim);
 /// snapshot, whatever each did before (a rollback repeats a step exactly). The snapshot may come from
 /// another simulation whose model has the same particles, motions and springs
 /// (sm_simulation_update_model's rule); SM_ERROR_TOPOLOGY otherwise, SM_ERROR_NOT_FINITE when a
-/// driven particle's position at the snapshot's time is not finite (a snapshot read back from bytes
-/// whose motion overflows there; no advance gets there), SM_ERROR_OUT_OF_MEMORY when the break
-/// events cannot be held, all with nothing changed. The snapshot stays valid.
+/// driven particle's position or an external force at the snapshot's time is not finite (a snapshot
+/// read back from bytes whose motion or ramp overflows there; no advance gets there), SM_ERROR_OUT_OF_MEMORY
+/// when the break events cannot be held, all with nothing changed. The snapshot stays valid.
 SM_API sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_state* state);
 
 SM_API void sm_simulation_state_destroy(sm_simulation_state* state);
