@@ -472,10 +472,19 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19; the doubles time 20,
 # start 21, last successful time 22, dissipated 23, rtol 24, atol of positions 25 and of
 # velocities 26, max_step 27; then x (28-33), v (34-39), the spring's enabled flag 40, the
-# parameters 41-43, the held inputs of base (44-52) and tip (53-61: position, velocity, force) and
-# the pending flags 62-63.
+# parameters 41-43, the held inputs of base (44-59) and tip (60-75: position, velocity, force,
+# acceleration, force rate, since; fmu_instance.h's port_values) and the pending flags 76-77.
 W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, \
-    W_TIP_FX = 13, 14, 17, 18, 23, 24, 25, 27, 40, 41, 59
+    W_TIP_FX, W_WORDS = 13, 14, 17, 18, 23, 24, 25, 27, 40, 41, 66, 78
+
+
+def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
+    # The layout above: a state of driven_oscillator has W_WORDS words, and the word W_TIP_FX is the
+    # held force of the port tip, which a restored state gives back.
+    with state_and_receiver(test_fmu("driven_oscillator"), {}) as (a, b, blob):
+        assert len(blob) == 8 * W_WORDS
+        b.slave.setFMUstate(b.slave.deSerializeFMUstate(edited(blob, W_TIP_FX, "<d", 2.5)))
+        assert b.get("tip.fx") == 2.5
 
 
 def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(test_fmu):
