@@ -175,10 +175,11 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 
 	append_table(
 	    &out, t, SECTION_INPUTS, "inputs",
-	    "Set before each step and held over it: a force port's force; a motion port's position P.x and "
-	    "velocity P.vx, along which its particle moves, at P.x + P.vx (t - t_n) from the step's start "
-	    "t_n. A motion port starts from its inputs' start values, whatever parameters the model file "
-	    "places its particle with.");
+	    "Set before each step and held over it, or extrapolated with the first derivatives "
+	    "<code>fmi2SetRealInputDerivatives</code> gives: a force port's force, P.fx + d(P.fx)/dt (t - t_n); a "
+	    "motion port's position P.x and velocity P.vx, along which its particle moves, at P.x + P.vx s + "
+	    "d(P.vx)/dt s^2 / 2 (s = t - t_n) from the step's start t_n. A motion port starts from its inputs' "
+	    "start values, whatever parameters the model file places its particle with.");
 	append_table(&out, t, SECTION_OUTPUTS, "outputs", "The model at each communication point.");
 	append_table(
 	    &out, t, SECTION_PARAMETERS, "parameters",

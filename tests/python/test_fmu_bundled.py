@@ -70,6 +70,9 @@ def test_bundled_fmu_documents_its_variables(model):
     assert doc.paragraphs[""][0] == md.description
     assert md.guid in doc.paragraphs[""][1] and md.coSimulation.modelIdentifier in doc.paragraphs[""][1]
     assert doc.tables.get("inputs", []) == documented_rows(md, "input")
+    if doc.tables.get("inputs"):  # held, or extrapolated with their derivatives (canInterpolateInputs)
+        assert md.coSimulation.canInterpolateInputs
+        assert "fmi2SetRealInputDerivatives" in doc.paragraphs["inputs"][0], doc.paragraphs["inputs"]
     assert doc.tables["outputs"] == documented_rows(md, "output")
     assert doc.tables["parameters"] == documented_rows(md, "parameter", with_variability=True)
     assert doc.tables.get("constants", []) == documented_rows(md, "local", "constant")
