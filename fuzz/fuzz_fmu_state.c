@@ -152,6 +152,15 @@ static void set_real(fixture* f, const char* name, double value)
 		fail("fmi2SetReal failed", f->log.last);
 }
 
+// A first time derivative of an input (fmi2SetRealInputDerivatives).
+static void set_derivative(fixture* f, const char* name, double value)
+{
+	const fmi2ValueReference r = reference(f, name);
+	const fmi2Integer order = 1;
+	if (fmi2SetRealInputDerivatives(f->instance, &r, 1, &order, &value) != fmi2OK)
+		fail("fmi2SetRealInputDerivatives failed", f->log.last);
+}
+
 static void step(fixture* f, double* t, double h)
 {
 	if (fmi2DoStep(f->instance, *t, h, fmi2True) != fmi2OK)
@@ -236,9 +245,9 @@ static void instantiate(fixture* f)
 }
 
 // One run of the model, with a state written as a seed at each stage: instantiated, in
-// initialisation mode, under way with inputs set and not yet stepped with, after the bob's
-// spring broke, terminated, and with other solver settings; one with its checksum kept. Keeps
-// the state after a few steps as the fixture's known-good one.
+// initialisation mode, under way with inputs and their derivatives set and not yet stepped with, after the
+// bob's spring broke, terminated, and with other solver settings; one with its checksum kept. Keeps the state
+// after a few steps as the fixture's known-good one.
 static void run(fixture* f, const char* seeds)
 {
 	write_seed(f, seeds, 0, 0);
@@ -258,6 +267,8 @@ static void run(fixture* f, const char* seeds)
 	set_real(f, "hook.x", 0.02);
 	set_real(f, "hook.vx", 0.5);
 	set_real(f, "tip.fx", 0.3);
+	set_derivative(f, "hook.vx", -2.0);  // the hook decelerates, the force ramps
+	set_derivative(f, "tip.fx", 5.0);
 	write_seed(f, seeds, 2, 0);
 	write_seed(f, seeds, 3, CONTROL_KEEP_CHECKSUM);
 	step(f, &t, 0.01);
