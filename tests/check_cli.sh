@@ -160,6 +160,16 @@ CASES
 for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtk; do
   cmp -s "$osc" "$tmp/clash/$f" || fail "run overwrote its model file $f"
 done
+# Nor are they the input signals run --input reads.
+mkdir -p "$tmp/clash/vt5" "$tmp/clash/vt6"
+printf 'time,tip.fx\n0,1\n' | tee "$tmp/clash/vt5/oscillator.pvd" > "$tmp/clash/vt6/oscillator_000001.vtk"
+check_cases << 'CASES'
+2|springmass run: --vtk $tmp/clash/vt5: the series' file $tmp/clash/vt5/oscillator.pvd would overwrite the input signals $tmp/clash/vt5/oscillator.pvd; give another folder|run "$osc" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt5" --input "$tmp/clash/vt5/oscillator.pvd"
+2|springmass run: --vtk $tmp/clash/vt6: the series' file $tmp/clash/vt6/oscillator_000001.vtk would overwrite the input signals $tmp/clash/vt6/oscillator_000001.vtk; give another folder|run "$osc" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt6" --input "$tmp/clash/vt6/oscillator_000001.vtk"
+CASES
+for f in vt5/oscillator.pvd vt6/oscillator_000001.vtk; do
+  [ "$(cat "$tmp/clash/$f")" = "$(printf 'time,tip.fx\n0,1')" ] || fail "run overwrote its input signals $f"
+done
 # statics and modes check where every output goes before solving: none is written when one of
 # them cannot be (a missing folder, a file where a folder goes).
 check_cases << 'CASES'

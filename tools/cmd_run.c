@@ -397,16 +397,21 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 	return cli_check_output("run", "-o", o->output, o->model, "the model file", true);
 }
 
-// Whether a file of the ParaView series (the index or a frame) would overwrite the model file
-// or the CSV (NULL: standard output); prints which and returns 2 if so.
+// Whether a file of the ParaView series (the index or a frame) would overwrite the model file,
+// the input signals or the CSV (NULL: standard output); prints which and returns 2 if so.
 static int series_file_clashes(const char* path, const run_options* o, const char* csv_path)
 {
-	const bool model = cli_same_file(path, o->model);
-	if (!model && (csv_path == NULL || !cli_same_file(path, csv_path)))
-		return 0;
+	const char *what = "the model file", *file = o->model, *instead = "folder";
+	if (!cli_same_file(path, o->model)) {
+		what = "the input signals", file = o->input;
+		if (o->input == NULL || !cli_same_file(path, o->input)) {
+			what = "the CSV output", file = csv_path, instead = "folder or -o";
+			if (csv_path == NULL || !cli_same_file(path, csv_path))
+				return 0;
+		}
+	}
 	fprintf(stderr, "springmass run: --vtk %s: the series' file %s would overwrite %s %s; give another %s\n",
-	        o->vtk_dir, path, model ? "the model file" : "the CSV output", model ? o->model : csv_path,
-	        model ? "folder" : "folder or -o");
+	        o->vtk_dir, path, what, file, instead);
 	return 2;
 }
 
