@@ -5,7 +5,6 @@
 
 #include "cli_csv.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,44 +21,6 @@ struct cli_inputs {
 	int32_t* column;  // per port and input (INPUTS_PER_PORT each): its column in the file, or -1
 	char why[256];    // a refused column's reason, while reading
 };
-
-// Reads a whole file; NULL with *problem set (errno's text) if it cannot.
-static char* read_text(const char* path, size_t* length, const char** problem)
-{
-	FILE* f = fopen(path, "rb");
-	char* text = NULL;
-	size_t size = 0, capacity = 0;
-	*problem = NULL;
-	if (f == NULL) {
-		*problem = strerror(errno);
-		return NULL;
-	}
-	for (;;) {
-		if (size + 4096 > capacity) {
-			capacity = capacity ? 2 * capacity : 65536;
-			char* grown = realloc(text, capacity);
-			if (grown == NULL) {
-				*problem = "out of memory";
-				break;
-			}
-			text = grown;
-		}
-		const size_t got = fread(text + size, 1, capacity - size, f);
-		size += got;
-		if (got == 0) {
-			if (ferror(f))
-				*problem = strerror(errno);
-			break;
-		}
-	}
-	fclose(f);
-	if (*problem != NULL) {
-		free(text);
-		return NULL;
-	}
-	*length = size;
-	return text;
-}
 
 // A column of the file: "PORT.SUFFIX", an input of a force or motion port.
 static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
@@ -102,7 +63,7 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	int32_t* column = malloc(((size_t)ports * INPUTS_PER_PORT + 1) * sizeof *column);
 	const char* problem = NULL;
 	size_t length = 0;
-	char* text = in != NULL && column != NULL ? read_text(path, &length, &problem) : NULL;
+	char* text = in != NULL && column != NULL ? cli_csv_read_file(path, &length, &problem) : NULL;
 	if (text == NULL) {
 		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path,
 		        problem != NULL ? problem : "out of memory");

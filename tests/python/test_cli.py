@@ -430,6 +430,19 @@ def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, messa
     assert signals.read_text() == text
 
 
+def test_run_reads_input_signals_from_a_regular_file_only(tmp_path):
+    # As the model file: a FIFO without a writer is refused at once (it blocked the open for ever),
+    # and so is a device, which would be read without end (/dev/zero filled the memory).
+    fifo = tmp_path / "signals.csv"
+    os.mkfifo(fifo)
+    for signals in (fifo, "/dev/zero"):
+        out = subprocess.run([str(CLI), "run", str(OSC), "-q", "-o", str(tmp_path / "out.csv"), "--input", str(signals)],
+                             capture_output=True, text=True, timeout=10)
+        assert out.returncode == 1
+        assert out.stderr == f"springmass run: cannot read the input signals {signals}: not a regular file\n"
+        assert not (tmp_path / "out.csv").exists()
+
+
 def test_csv_numbers_are_the_shortest_text_that_reads_back_exactly(tmp_path):
     # 0.6 m is written 0.6, not 0.59999999999999998; a computed value with all 17 digits if it
     # needs them. In every CSV of run, statics and modes (after the particle and name columns).
