@@ -44,7 +44,7 @@ char* fmu_reference_problem(const char* text, size_t length, const fmu_table* ta
 	for (int32_t i = 0; i < table->count; i++)
 		names.sorted[i] = &table->variables[i];
 	qsort(names.sorted, (size_t)table->count, sizeof *names.sorted, compare_names);
-	const cli_csv_form form = {"a result", name_column, &names, table->count};
+	const cli_csv_form form = {"a result", name_column, &names, table->count, false};
 	cli_csv csv;
 	char* problem = cli_csv_read(text, length, &form, &csv, out_of_memory);
 	cli_csv_free(&csv);

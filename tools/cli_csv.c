@@ -266,7 +266,7 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				                  (int)csv->columns);
 			if (!last)
 				r->at++;  // the comma
-			if (!append_value(r, csv, &capacity, count++, value))
+			if (form->keep_values && !append_value(r, csv, &capacity, count++, value))
 				return NULL;
 		}
 		csv->rows++;

@@ -16,9 +16,11 @@ typedef struct cli_csv_form {
 	const char* (*name_column)(void* context, const char* name, int32_t* id, bool* whole);
 	void* context;
 	int32_t id_count;
+	bool keep_values;  // whether csv->values keeps the rows (else the file is only checked)
 } cli_csv_form;
 
-// A file read: its columns (time first, id -1) and its rows of numbers.
+// A file read: its columns (time first, id -1) and its rows of numbers (NULL unless the form
+// keeps them).
 typedef struct cli_csv {
 	int32_t columns;
 	int32_t* id;  // per column

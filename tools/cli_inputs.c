@@ -74,7 +74,7 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	in->doc = doc;
 	in->port_count = ports;
 	in->column = column;
-	const cli_csv_form form = {"an input file", name_column, in, ports * INPUTS_PER_PORT};
+	const cli_csv_form form = {"an input file", name_column, in, ports * INPUTS_PER_PORT, true};
 	bool out_of_memory = false;
 	char* wrong = cli_csv_read(text, length, &form, &in->csv, &out_of_memory);
 	free(text);
