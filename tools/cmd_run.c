@@ -41,8 +41,9 @@ static void usage(FILE* out)
 	        "                         repeated time is a jump), held before the first and after the\n"
 	        "                         last. A motion port named there is driven: along the positions\n"
 	        "                         given (at their slope), or with the velocities given (from the\n"
-	        "                         positions, or from where it has got); other components move as\n"
-	        "                         the file says\n"
+	        "                         positions, or from where it has got); its other components\n"
+	        "                         keep the file's initial position and velocity. An output row\n"
+	        "                         at the time of a jump shows the state after it\n"
 	        "  --positions            also every particle's position (columns particle.NAME.x,\n"
 	        "                         particle.NAME.y, particle.NAME.z [m])\n"
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk per row (particles as\n"
@@ -74,10 +75,10 @@ static void usage(FILE* out)
 	        "  -h, --help             this text\n"
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
-	        "solver's statistics at the end. Exit status: 0 success, 1 bad model, solver failure or\n"
-	        "output that cannot be written, 2 usage error. Stopped by a signal (Ctrl-C, a kill, a\n"
-	        "closed pipe), it ends after the row it was writing, its outputs whole up to there, with\n"
-	        "the signal's status.\n");
+	        "solver's statistics at the end. Exit status: 0 success, 1 bad model or input signals,\n"
+	        "solver failure or output that cannot be written, 2 usage error. Stopped by a signal\n"
+	        "(Ctrl-C, a kill, a closed pipe), it ends after the row it was writing, its outputs whole up\n"
+	        "to there, with the signal's status.\n");
 }
 
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.

@@ -409,6 +409,17 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     assert np.max(np.abs(f - OSC_K * u)) < OSC_K * 1e-6
 
 
+def test_run_shows_the_state_after_a_jump_at_its_output_row(tmp_path):
+    # The anchor jumps from 0 to 0.1 m at t = 0.5 s, an output time: that row's base.fx is the
+    # spring's K (tip.x - 0.1 - l0), after the jump, as --help says (fmpy records the one before: README).
+    (tmp_path / "jump.csv").write_text("time,base.x\n0,0\n0.5,0\n0.5,0.1\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "jump.csv", "--t-end", "1", "--output-interval", "0.5")
+    x, f = rows[:, header.index("tip.x")], rows[:, header.index("base.fx")]
+    assert list(rows[:, 0]) == [0, 0.5, 1]
+    assert abs(f[0] - OSC_K * (x[0] - OSC_L0)) < 1e-12
+    assert abs(f[1] - OSC_K * (x[1] - 0.1 - OSC_L0)) < 1e-12 and abs(f[2] - OSC_K * (x[2] - 0.1 - OSC_L0)) < 1e-12
+
+
 @pytest.mark.parametrize("text, message", [
     ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
     ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
