@@ -15,6 +15,7 @@
 // The FMU state (fmi2GetFMUstate to fmi2DeSerializeFMUstate) is in fmu_state.c; the instance and
 // the helpers both files call are declared in fmu_instance.h and defined here.
 #include "fmu_instance.h"
+#include "text_file.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -709,7 +710,7 @@ static bool read_resources(instance* inst, const char* dir, const char* location
 		}
 		sprintf(path, "%s/%s", dir, names[k]);
 		const char* problem = NULL;
-		*texts[k] = fmu_read_file(path, lengths[k], &problem);
+		*texts[k] = text_file_read(path, lengths[k], &problem);
 		if (!*texts[k] && !(k == 1 && errno == ENOENT)) {
 			log_error(inst, "fmi2Instantiate: cannot read the %s %s (from resource location \"%s\"): %s",
 			          k == 0 ? "model file" : "parameter values", path, location, problem);

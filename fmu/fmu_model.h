@@ -182,16 +182,6 @@ const char* fmu_variability_name(fmu_variability variability);
 /// or a C keyword such as "int" gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);
 
-/// Files larger than this are refused: the model-file loader's limit (model_file.h).
-#define FMU_MAX_FILE_BYTES ((long long)1 << 30)
-
-/// Reads a whole regular file of at most FMU_MAX_FILE_BYTES into a malloc'ed NUL-terminated
-/// buffer and its length (without the NUL). On failure returns NULL with errno set and, if problem
-/// is not NULL, *problem saying why in a few words (a static string): the system's reason, or that
-/// the path names a directory or other non-regular file (a FIFO, a device) or too large a file.
-/// Shared by the FMU runtime (its model file) and `springmass fmu` (files it packs).
-char* fmu_read_file(const char* path, size_t* length, const char** problem);
-
 /// Linear solver, method and Jacobian names used by the string parameters.
 
 #ifdef __cplusplus

@@ -6,6 +6,7 @@
 #define _XOPEN_SOURCE 700
 #include "fmu_model.h"
 #include "fmu_reference.h"
+#include "text_file.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -25,7 +26,7 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 	const char* path = SPRINGMASS_FUZZ_MODEL;
 	size_t length = 0;
 	const char* problem = NULL;
-	char* text = fmu_read_file(path, &length, &problem);
+	char* text = text_file_read(path, &length, &problem);
 	sm_error err;
 	sm_document* doc = text != NULL ? sm_document_parse(text, length, path, &err) : NULL;
 	if (doc == NULL || fmu_table_create(doc, text, length, NULL, 0, &table, &err) != SM_OK) {

@@ -4,16 +4,12 @@
 
 #include "springmass/model_file.h"
 
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 // Bytes of a field a message shows.
 enum { shown_bytes = 60 };
@@ -334,49 +330,4 @@ char* cli_csv_read(const char* text, size_t length, const cli_csv_form* form, cl
 	if (problem != NULL || r.out_of_memory)
 		cli_csv_free(csv);
 	return problem;
-}
-
-char* cli_csv_read_file(const char* path, size_t* length, const char** problem)
-{
-	// O_NONBLOCK: opening a FIFO without a writer would wait for ever; it is refused below.
-	const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-	if (fd < 0) {
-		*problem = strerror(errno);
-		return NULL;
-	}
-	struct stat st;
-	char* data = NULL;
-	*problem = NULL;
-	if (fstat(fd, &st) != 0)
-		*problem = strerror(errno);
-	else if (S_ISDIR(st.st_mode))
-		*problem = strerror(EISDIR);
-	else if (!S_ISREG(st.st_mode))
-		*problem = "not a regular file";
-	else if (st.st_size > ((off_t)1 << 30))
-		*problem = "larger than 1 GiB";
-	else if ((data = malloc((size_t)st.st_size + 1)) == NULL)
-		*problem = "out of memory";
-	else {
-		// st_size bytes, then one more to see that the file did not grow meanwhile.
-		const size_t size = (size_t)st.st_size;
-		size_t got = 0;
-		ssize_t r = 0;
-		char extra;
-		while (got < size && ((r = read(fd, data + got, size - got)) > 0 || (r < 0 && errno == EINTR)))
-			got += r > 0 ? (size_t)r : 0;
-		if (r >= 0 && got == size)
-			while ((r = read(fd, &extra, 1)) < 0 && errno == EINTR)
-				;
-		if (r != 0 || got != size) {
-			*problem = r < 0 ? strerror(errno) : "the file changed while it was read";
-			free(data);
-			data = NULL;
-		} else {
-			data[size] = '\0';
-			*length = size;
-		}
-	}
-	close(fd);
-	return data;
 }

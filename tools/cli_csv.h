@@ -41,8 +41,3 @@ char* cli_csv_read(const char* text, size_t length, const cli_csv_form* form, cl
                    bool* out_of_memory);
 
 void cli_csv_free(cli_csv* csv);
-
-// Reads a whole regular file of at most 1 GiB into a malloc'd NUL-terminated buffer, as the
-// model file's loader does: a FIFO is refused at once rather than waited on, a device such as
-// /dev/zero before it is read without end. NULL with *problem set (static text) if it cannot.
-char* cli_csv_read_file(const char* path, size_t* length, const char** problem);

@@ -4,6 +4,7 @@
 #include "cli_inputs.h"
 
 #include "cli_csv.h"
+#include "text_file.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -63,7 +64,7 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	int32_t* column = malloc(((size_t)ports * INPUTS_PER_PORT + 1) * sizeof *column);
 	const char* problem = NULL;
 	size_t length = 0;
-	char* text = in != NULL && column != NULL ? cli_csv_read_file(path, &length, &problem) : NULL;
+	char* text = in != NULL && column != NULL ? text_file_read(path, &length, &problem) : NULL;
 	if (text == NULL) {
 		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path,
 		        problem != NULL ? problem : "out of memory");

@@ -35,6 +35,7 @@ int sm_cmd_fmu(int argc, char** argv)
 #include "cli_common.h"
 #include "fmu_model.h"
 #include "fmu_reference.h"
+#include "text_file.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -177,7 +178,7 @@ static bool copy_file(const char* from, const char* to, const char** problem)
 	const char* unused;
 	if (problem == NULL)
 		problem = &unused;
-	char* data = fmu_read_file(from, &length, problem);
+	char* data = text_file_read(from, &length, problem);
 	if (!data)
 		return false;
 	bool ok = write_all(to, data, length);
@@ -520,7 +521,7 @@ static int package(const options* opt)
 	}
 	size_t length = 0;
 	const char* problem = NULL;
-	text = fmu_read_file(opt->model, &length, &problem);
+	text = text_file_read(opt->model, &length, &problem);
 	if (!text) {
 		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, problem);
 		goto done;
@@ -543,7 +544,7 @@ static int package(const options* opt)
 	// The reference result names the FMU's variables: checked against them before anything is
 	// written, and packed as it was read.
 	if (opt->reference) {
-		reference = fmu_read_file(opt->reference, &reference_length, &problem);
+		reference = text_file_read(opt->reference, &reference_length, &problem);
 		if (!reference) {
 			fprintf(stderr, "springmass fmu: cannot read the reference result %s: %s\n", opt->reference,
 			        problem);
@@ -670,7 +671,7 @@ static int package(const options* opt)
 		goto done;
 	}
 	size_t archive_length = 0;
-	char* archive = fmu_read_file(path, &archive_length, &problem);
+	char* archive = text_file_read(path, &archive_length, &problem);
 	if (!archive) {
 		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", problem);
 		goto done;
