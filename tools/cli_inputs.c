@@ -89,6 +89,21 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 		column[k] = -1;
 	for (int32_t c = 1; c < in->csv.columns; c++)
 		column[in->csv.id[c]] = c;
+	// Each signal's slope from one row to the next (rows one per line after the header), checked
+	// before the run rather than when it gets there.
+	const int64_t n = in->csv.columns;
+	const double* v = in->csv.values;
+	for (int64_t k = 1; k < in->csv.rows; k++)
+		for (int64_t c = 1; c < n && v[k * n] > v[(k - 1) * n]; c++)
+			if (!isfinite((v[k * n + c] - v[(k - 1) * n + c]) / (v[k * n] - v[(k - 1) * n]))) {
+				fprintf(
+				    stderr,
+				    "springmass run: --input %s:%lld: column %lld: the slope from the row before is beyond a "
+				    "double (rows too close in time for their values)\n",
+				    path, (long long)k + 2, (long long)c + 1);
+				cli_inputs_destroy(in);
+				return NULL;
+			}
 	return in;
 }
 
