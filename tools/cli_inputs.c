@@ -96,11 +96,13 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	for (int64_t k = 1; k < in->csv.rows; k++)
 		for (int64_t c = 1; c < n && v[k * n] > v[(k - 1) * n]; c++)
 			if (!isfinite((v[k * n + c] - v[(k - 1) * n + c]) / (v[k * n] - v[(k - 1) * n]))) {
+				const int32_t id = in->csv.id[c];
 				fprintf(
 				    stderr,
-				    "springmass run: --input %s:%lld: column %lld: the slope from the row before is beyond a "
-				    "double (rows too close in time for their values)\n",
-				    path, (long long)k + 2, (long long)c + 1);
+				    "springmass run: --input %s:%lld: %s.%s: the slope from the row before is beyond a double "
+				    "(rows too close in time for their values)\n",
+				    path, (long long)k + 2, sm_document_port(doc, id / INPUTS_PER_PORT).name,
+				    suffixes[id % INPUTS_PER_PORT]);
 				cli_inputs_destroy(in);
 				return NULL;
 			}

@@ -428,7 +428,7 @@ def test_run_shows_the_state_after_a_jump_at_its_output_row(tmp_path):
     ("time,tip.fx\n0,1\n1,x\n", '3:3: "x" is not a finite decimal number'),
     ("time,tip.fx\n1,1\n0,2\n", "3:1: time 0 s is before the previous row's 1 s"),
     ("time,tip.fx\n", "2:1: no rows after the header"),
-    ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3: column 2: the slope from the row before is beyond a double"),
+    ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3: tip.fx: the slope from the row before is beyond a double"),
 ])
 def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, message):
     signals = tmp_path / "signals.csv"
