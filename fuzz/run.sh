@@ -7,11 +7,13 @@
 #                     stepped, seeded with states the target writes of its own FMU instance
 #   reference         the reference results `springmass fmu --reference` checks, seeded with
 #                     a result of the hanging rope's variables
+#   inputs            the input signals of `springmass run --input`, read for a model of the
+#                     target's own and run for 0.05 s, seeded with signals of both port kinds
 # Builds the targets with clang (installed from Debian's packages if missing, with the fuzzer
 # runtime and the OpenMP runtime SUNDIALS' CMake package asks for) and runs them one after the
 # other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's),
-# fuzz/corpus-work-simulation-state/, fuzz/corpus-work-fmu-state/ or fuzz/corpus-work-reference/; inputs that crash are
-# written to build-fuzz/artifacts/.
+# fuzz/corpus-work-simulation-state/, fuzz/corpus-work-fmu-state/, fuzz/corpus-work-reference/ or
+# fuzz/corpus-work-inputs/; inputs that crash are written to build-fuzz/artifacts/.
 #
 #   make fuzz FUZZ_SECONDS=600
 #   make fuzz FUZZ_SECONDS=600 FUZZ_TARGETS=simulation_state
@@ -20,15 +22,15 @@ set -euo pipefail
 seconds=${1:-60}
 shift || true
 targets=("$@")
-((${#targets[@]})) || targets=(model_file simulation_state fmu_state reference)
+((${#targets[@]})) || targets=(model_file simulation_state fmu_state reference inputs)
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build-fuzz
 
 for target in "${targets[@]}"; do
   case $target in
-  model_file | simulation_state | fmu_state | reference) ;;
+  model_file | simulation_state | fmu_state | reference | inputs) ;;
   *)
-    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state, reference)" >&2
+    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state, reference, inputs)" >&2
     exit 2
     ;;
   esac
@@ -74,6 +76,14 @@ for target in "${targets[@]}"; do
     mkdir -p "$work"
     "$build/fuzz_reference" "$work" "$seeds" -max_total_time="$seconds" -max_len=1024 -timeout=10 \
       -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/reference-" -print_final_stats=1
+    ;;
+  inputs)
+    work=$root/fuzz/corpus-work-inputs
+    printf 'time,tip.fx,base.x\n0,0,0\n0.02,1.5,0.01\n0.02,-1,0.01\n0.04,0,-0.02\n' > "$seeds/positions.csv"
+    printf '"time","base.vx","base.z","tip.fz"\r\n-1,0,0,0\r\n0.03,2,0.1,-3\r\n' > "$seeds/velocities.csv"
+    mkdir -p "$work"
+    "$build/fuzz_inputs" "$work" "$seeds" -max_total_time="$seconds" -max_len=1024 -timeout=10 \
+      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/inputs-" -print_final_stats=1
     ;;
   simulation_state | fmu_state)
     # Seeds: real states the target writes of its own model.

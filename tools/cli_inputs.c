@@ -7,6 +7,7 @@
 #include "text_file.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -57,17 +58,24 @@ static const char* name_column(void* context, const char* name, int32_t* id, boo
 	return NULL;
 }
 
-cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
+// A malloc'd message from a format, or NULL when memory runs out.
+static char* message(const char* format, ...)
 {
+	char text[512];
+	va_list args;
+	va_start(args, format);
+	vsnprintf(text, sizeof text, format, args);
+	va_end(args);
+	return strdup(text);
+}
+
+cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document* doc, char** problem)
+{
+	*problem = NULL;
 	cli_inputs* in = calloc(1, sizeof *in);
 	const int32_t ports = sm_document_port_count(doc);
 	int32_t* column = malloc(((size_t)ports * INPUTS_PER_PORT + 1) * sizeof *column);
-	const char* problem = NULL;
-	size_t length = 0;
-	char* text = in != NULL && column != NULL ? text_file_read(path, &length, &problem) : NULL;
-	if (text == NULL) {
-		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path,
-		        problem != NULL ? problem : "out of memory");
+	if (in == NULL || column == NULL) {
 		free(in);
 		free(column);
 		return NULL;
@@ -77,11 +85,8 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	in->column = column;
 	const cli_csv_form form = {"an input file", name_column, in, ports * INPUTS_PER_PORT, true};
 	bool out_of_memory = false;
-	char* wrong = cli_csv_read(text, length, &form, &in->csv, &out_of_memory);
-	free(text);
-	if (wrong != NULL || out_of_memory) {
-		fprintf(stderr, "springmass run: --input %s:%s\n", path, wrong != NULL ? wrong : " out of memory");
-		free(wrong);
+	*problem = cli_csv_read(text, length, &form, &in->csv, &out_of_memory);
+	if (*problem != NULL || out_of_memory) {
 		cli_inputs_destroy(in);
 		return NULL;
 	}
@@ -97,15 +102,32 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 		for (int64_t c = 1; c < n && v[k * n] > v[(k - 1) * n]; c++)
 			if (!isfinite((v[k * n + c] - v[(k - 1) * n + c]) / (v[k * n] - v[(k - 1) * n]))) {
 				const int32_t id = in->csv.id[c];
-				fprintf(
-				    stderr,
-				    "springmass run: --input %s:%lld: %s.%s: the slope from the row before is beyond a double "
-				    "(rows too close in time for their values)\n",
-				    path, (long long)k + 2, sm_document_port(doc, id / INPUTS_PER_PORT).name,
-				    suffixes[id % INPUTS_PER_PORT]);
+				*problem = message("%lld: %s.%s: the slope from the row before is beyond a double (rows too "
+				                   "close in time for their values)",
+				                   (long long)k + 2, sm_document_port(doc, id / INPUTS_PER_PORT).name,
+				                   suffixes[id % INPUTS_PER_PORT]);
 				cli_inputs_destroy(in);
 				return NULL;
 			}
+	return in;
+}
+
+cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
+{
+	const char* unreadable = NULL;
+	size_t length = 0;
+	char* text = text_file_read(path, &length, &unreadable);
+	if (text == NULL) {
+		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path, unreadable);
+		return NULL;
+	}
+	char* problem = NULL;
+	cli_inputs* in = cli_inputs_parse(text, length, doc, &problem);
+	free(text);
+	if (in == NULL)
+		fprintf(stderr, "springmass run: --input %s:%s\n", path,
+		        problem != NULL ? problem : " out of memory");
+	free(problem);
 	return in;
 }
 
@@ -151,7 +173,8 @@ static int64_t row_at(const cli_inputs* in, double t)
 	return lo - 1;
 }
 
-double cli_inputs_next_change(const cli_inputs* in, double t)
+// The time of the first row after t [s], or INFINITY: the inputs change their course there.
+static double next_change(const cli_inputs* in, double t)
 {
 	const int64_t k = row_at(in, t) + 1;
 	return k < in->csv.rows ? in->csv.values[k * in->csv.columns] : INFINITY;
@@ -217,6 +240,23 @@ sm_status cli_inputs_apply(const cli_inputs* in, sm_simulation* sim, char* why, 
 		}
 	}
 	return SM_OK;
+}
+
+sm_status cli_inputs_advance(const cli_inputs* in, sm_simulation* sim, double t, double t_stop, char* why,
+                             size_t size)
+{
+	why[0] = '\0';
+	if (in == NULL)
+		return sm_simulation_advance_interpolated(sim, t, t_stop);
+	for (double change = next_change(in, sm_simulation_time(sim)); change <= t;
+	     change = next_change(in, change)) {
+		sm_status st = sm_simulation_advance_interpolated(sim, change, change);
+		if (st == SM_OK)
+			st = cli_inputs_apply(in, sim, why, size);
+		if (st != SM_OK)
+			return st;
+	}
+	return sm_simulation_advance_interpolated(sim, t, fmax(t, fmin(t_stop, next_change(in, t))));
 }
 
 void cli_inputs_destroy(cli_inputs* in)

@@ -22,14 +22,22 @@ typedef struct cli_inputs cli_inputs;
 // what is wrong, naming the file, the line and the column ("springmass run: --input F:3:7: ...").
 cli_inputs* cli_inputs_read(const char* path, const sm_document* doc);
 
+// The same from the file's text: NULL with *problem a malloc'd "LINE:COLUMN: what is wrong" (or
+// "LINE: signal: ..." for a slope beyond a double), or NULL with *problem NULL when memory runs out.
+cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document* doc, char** problem);
+
 // Drives the particles of the motion ports the signals name, at rest if the file holds them.
 sm_status cli_inputs_drive(const cli_inputs* inputs, sm_model* model);
-
-// The time of the first row after t [s], or INFINITY: the inputs change their course there.
-double cli_inputs_next_change(const cli_inputs* inputs, double t);
 
 // Gives the simulation the inputs from its current time on, up to the next change. On failure
 // (a slope beyond a double: rows too close for their values) why[size] says what failed.
 sm_status cli_inputs_apply(const cli_inputs* inputs, sm_simulation* sim, char* why, size_t size);
+
+// Advances the simulation to t [s] (sm_simulation_advance_interpolated, CVODE stepping on towards
+// t_stop >= t), stopping at every change of the inputs' course on the way and giving the
+// simulation the inputs from there. NULL inputs: the plain advance. On failure the simulation's
+// last error says why, or why[size] when the inputs could not be given.
+sm_status cli_inputs_advance(const cli_inputs* inputs, sm_simulation* sim, double t, double t_stop, char* why,
+                             size_t size);
 
 void cli_inputs_destroy(cli_inputs* inputs);

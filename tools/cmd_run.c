@@ -596,15 +596,8 @@ int sm_cmd_run(int argc, char** argv)
 		// run stops and takes the inputs' new course.
 		if (stop_signal != 0)
 			break;
-		bool failed = false;
-		for (double change = inputs ? cli_inputs_next_change(inputs, sm_simulation_time(sim)) : INFINITY;
-		     k > 0 && !failed && change <= t; change = cli_inputs_next_change(inputs, change)) {
-			failed = sm_simulation_advance_interpolated(sim, change, change) != SM_OK ||
-			         cli_inputs_apply(inputs, sim, input_problem, sizeof input_problem) != SM_OK;
-		}
-		const double next = inputs ? fmin(t_end, cli_inputs_next_change(inputs, t)) : t_end;
-		if (k > 0 &&
-		    (failed || sm_simulation_advance_interpolated(sim, t, o.stop_at_outputs ? t : next) != SM_OK)) {
+		if (k > 0 && cli_inputs_advance(inputs, sim, t, o.stop_at_outputs ? t : t_end, input_problem,
+		                                sizeof input_problem) != SM_OK) {
 			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
 				break;
 			cli_progress_end(&prog.line);
