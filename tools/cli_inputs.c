@@ -6,6 +6,7 @@
 #include "cli_csv.h"
 #include "text_file.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -112,13 +113,47 @@ cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document*
 	return in;
 }
 
+// Standard input to its end, at most TEXT_FILE_MAX_BYTES; NULL with *problem set if it cannot.
+static char* read_standard_input(size_t* length, const char** problem)
+{
+	size_t size = 0, capacity = 0;
+	char* text = NULL;
+	for (;;) {
+		if (size + 1 >= capacity) {
+			capacity = capacity ? 2 * capacity : 65536;
+			char* grown = size < (size_t)TEXT_FILE_MAX_BYTES ? realloc(text, capacity + 1) : NULL;
+			if (grown == NULL) {
+				*problem = size < (size_t)TEXT_FILE_MAX_BYTES ? "out of memory" : "larger than 1 GiB";
+				free(text);
+				return NULL;
+			}
+			text = grown;
+		}
+		const size_t got = fread(text + size, 1, capacity - size, stdin);
+		size += got;
+		if (got == 0)
+			break;
+	}
+	if (ferror(stdin)) {
+		*problem = strerror(errno);
+		free(text);
+		return NULL;
+	}
+	text[size] = '\0';
+	*length = size;
+	return text;
+}
+
 cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 {
 	const char* unreadable = NULL;
 	size_t length = 0;
-	char* text = text_file_read(path, &length, &unreadable);
+	const bool standard = strcmp(path, "-") == 0;
+	char* text =
+	    standard ? read_standard_input(&length, &unreadable) : text_file_read(path, &length, &unreadable);
 	if (text == NULL) {
-		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n", path, unreadable);
+		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n",
+		        standard ? "from standard input" : path, unreadable);
 		return NULL;
 	}
 	char* problem = NULL;

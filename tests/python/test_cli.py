@@ -400,6 +400,10 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     t, x = rows[:, 0], rows[:, header.index("tip.x")]
     u = (OSC_X0 - OSC_L0) * np.cos(w * t) + 3.0 / OSC_K * (t - np.sin(w * t) / w)
     assert len(t) == 21 and np.max(np.abs(x - (OSC_L0 + u))) < 1e-6
+    # The same signals from standard input (--input -) give the same file, bit for bit.
+    subprocess.run([str(CLI), "run", str(OSC), "-q", "-o", str(tmp_path / "piped.csv"), "--input", "-", *TIGHT_RUN],
+                   input="time,tip.fx\n0,0\n2,6\n", text=True, check=True, timeout=60)
+    assert (tmp_path / "piped.csv").read_bytes() == (tmp_path / "run.csv").read_bytes()
     (tmp_path / "accelerate.csv").write_text("time,base.vx\n0,0\n2,1.6\n")
     header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "accelerate.csv", *TIGHT_RUN)
     t, x, f = rows[:, 0], rows[:, header.index("tip.x")], rows[:, header.index("base.fx")]
