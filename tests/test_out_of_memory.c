@@ -13,6 +13,7 @@
 // SPRINGMASS_OOM_VERBOSE=1 prints every run's allocation number and the error it ended in;
 // SPRINGMASS_OOM_FIRST=k starts each scenario at allocation k (to debug one failure).
 #define _XOPEN_SOURCE 700
+#include "cli_inputs.h"
 #include "simulation_fixtures.h"
 #include "springmass/springmass.h"
 #include "test_harness.h"
@@ -1139,6 +1140,104 @@ static int test_simulation_restore(void)
 // ---------------------------------------------------------------------------------------------
 // Simulation: new constants refused while a break found past the end time waits
 // ---------------------------------------------------------------------------------------------
+// Input signals of `springmass run --input` (tools/cli_inputs.c): read, given to a simulation and
+// run through their rows
+// ---------------------------------------------------------------------------------------------
+
+// A bob on a spring that breaks, from a motion port, pushed by a force port.
+static const char model_ported[] =
+    "{ \"springmass\": 1, \"name\": \"oom_inputs\", \"gravity\": [0, 0, -9.81],\n"
+    "  \"particles\": [ { \"name\": \"anchor\", \"position\": [0, 0, 0], \"fixed\": true },\n"
+    "                  { \"name\": \"bob\", \"position\": [0.5, 0, 0], \"mass\": 0.2 } ],\n"
+    "  \"springs\": [ { \"a\": \"anchor\", \"b\": \"bob\", \"stiffness\": 80, \"damping\": 0.5,\n"
+    "                 \"rest_length\": 0.5, \"break_strain\": 0.5 } ],\n"
+    "  \"ports\": [ { \"name\": \"base\", \"particle\": \"anchor\", \"kind\": \"motion\" },\n"
+    "             { \"name\": \"tip\", \"particle\": \"bob\", \"kind\": \"force\" } ] }\n";
+
+typedef struct inputs_case {
+	const sm_document* doc;
+	double reference[6];  // positions at the end of the run without failures
+	bool have_reference;
+} inputs_case;
+
+// The signals read, the model built and driven, the simulation created and run through the rows
+// (a force ramp and a jump, a base moving out and back) to 0.1 s. Each failure is clean: NULL
+// signals only for want of memory (the text is valid), a status and a message otherwise.
+static int inputs_scenario(void* context)
+{
+	inputs_case* c = context;
+	static const char signals[] = "time,tip.fx,base.x\n0,0,0\n0.03,1,0.01\n0.03,-1,0.01\n0.06,0,0\n";
+	char* problem = NULL;
+	cli_inputs* in = cli_inputs_parse(signals, sizeof signals - 1, c->doc, &problem);
+	if (in == NULL) {
+		if (problem != NULL || !oom_.reached) {
+			printf("  input signals refused without an injected failure: %s\n", problem ? problem : "(null)");
+			free(problem);
+			return 1;
+		}
+		return 0;
+	}
+	sm_model* model = NULL;
+	sm_simulation* sim = NULL;
+	sm_error err = {SM_OK, ""};
+	sm_status st = sm_document_build(c->doc, &model, &err);
+	if (st != SM_OK) {
+		cli_inputs_destroy(in);
+		ENSURE_CLEAR_FAILURE(st, err.message);
+		return 0;
+	}
+	int result = 0;
+	if (cli_inputs_drive(in, model) != SM_OK)
+		result = 1;
+	sim = result == 0 ? sm_simulation_create(model, NULL, &err) : NULL;
+	if (result == 0 && sim == NULL) {
+		cli_inputs_destroy(in);
+		sm_model_destroy(model);
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	char why[SM_ERROR_MESSAGE_CAPACITY + 128] = "";
+	st = result == 0 ? cli_inputs_apply(in, sim, why, sizeof why) : SM_OK;
+	for (int k = 1; k <= 10 && result == 0 && st == SM_OK; k++)
+		st = cli_inputs_advance(in, sim, 0.01 * k, 0.1, why, sizeof why);
+	if (result == 0 && st == SM_OK && !oom_.reached) {
+		memcpy(c->reference, sm_simulation_positions(sim), sizeof c->reference);
+		c->have_reference = true;
+	} else if (result == 0 && st == SM_OK) {
+		// Runs that went through despite a failure (one the solver recovered from) end where the
+		// run without failures does, or at least finite.
+		for (int i = 0; i < 6; i++)
+			result = result || !isfinite(sm_simulation_positions(sim)[i]);
+	}
+	char message[SM_ERROR_MESSAGE_CAPACITY + 128];  // the simulation's goes with it
+	snprintf(message, sizeof message, "%s", why[0] != '\0' ? why : sim ? sm_simulation_last_error(sim) : "");
+	const bool failed = st != SM_OK;
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	cli_inputs_destroy(in);
+	if (result != 0)
+		return 1;
+	if (failed)
+		ENSURE_CLEAR_FAILURE(st, message);
+	return 0;
+}
+
+static int test_input_signals(void)
+{
+	sm_error err;
+	sm_document* doc = sm_document_parse(model_ported, strlen(model_ported), "oom_inputs.json", &err);
+	ENSURE(doc != NULL);
+	inputs_case c = {doc, {0}, false};
+	int result = inputs_scenario(&c) != 0 || !c.have_reference;
+	if (result)
+		printf("  the run of the input signals without failures failed\n");
+	else
+		result = inject_every_failure("input signals", inputs_scenario, &c);
+	sm_document_destroy(doc);
+	return result;
+}
+
+// ---------------------------------------------------------------------------------------------
 
 // pulled_spring() with its driven particle pulled at 0.37 m/s breaks spring 0 at 0.1 / 0.37 s.
 // Rows interpolated up to 1 s leave that break, found by CVODE past the row at 0.27 s, for the
@@ -1423,6 +1522,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_analysis_dense);
 	RUN_TEST(test_analysis_sparse);
 	RUN_TEST(test_statics_continuation);
+	RUN_TEST(test_input_signals);
 #ifdef SPRINGMASS_OOM_FMU
 	RUN_TEST(test_fmu);
 #endif
