@@ -1099,16 +1099,6 @@ static int test_saved_state_needs_the_same_free_particles_and_springs(void)
 	return 0;
 }
 
-// Makes a serialised state's last 8 bytes the FNV-1a checksum of the rest, as the format has
-// it, so that a state changed on purpose is judged by its content, not by its checksum.
-static void fix_checksum(unsigned char* bytes, size_t size)
-{
-	uint64_t h = 14695981039346656037ull;
-	for (size_t k = 0; k + 8 < size; k++)
-		h = (h ^ bytes[k]) * 1099511628211ull;
-	memcpy(bytes + size - 8, &h, 8);
-}
-
 // The bytes of a snapshot of `other` relabelled with the topology hash of `own` (the 8 bytes at
 // offset 32 of the 48-byte header) under a checksum made to match, read back: a snapshot whose
 // hash is the simulation's but whose counts are other's. NULL if any step fails.

@@ -322,16 +322,6 @@ static int test_ramps_are_part_of_the_state(void)
 	return 0;
 }
 
-// Makes a serialised state's last 8 bytes the FNV-1a checksum of the rest, as the format has it
-// (test_simulation.c's helper).
-static void fix_checksum(unsigned char* bytes, size_t size)
-{
-	uint64_t h = 14695981039346656037ull;
-	for (size_t k = 0; k + 8 < size; k++)
-		h = (h ^ bytes[k]) * 1099511628211ull;
-	memcpy(bytes + size - 8, &h, 8);
-}
-
 // As for a driven motion (test_simulation.c, test_restore_and_set_state_refuse_a_driven_motion_that_
 // overflows): a ramp and a time at which its force is not finite, 1e10 N/s set at t = 0 and a
 // snapshot's time made 1e300 s, or set_state to that time, are refused with nothing changed. They
