@@ -337,7 +337,9 @@ static fmi2Status apply_inputs(instance* inst, const char* function)
 // Creates the simulation from a model at time start_time + sim_time with the given state (or the
 // model's initial state when x is NULL), the solver settings and the port inputs given (held, and
 // pending: which ports have inputs set that no step has taken yet), and makes it the instance's
-// only when all of that succeeded: a failure changes nothing.
+// only when all of that succeeded: a failure changes nothing. The inputs' work counts from the
+// state given (work_offset): what giving the ports their inputs does belongs to it, except the
+// pending inputs of a restored state, which its run had yet to give (as fmi2DoStep would).
 fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model* model,
                                  const sm_simulation_def* solver, const port_values* held,
                                  const bool* pending, double sim_time, const double* x, const double* v)
@@ -353,25 +355,34 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 		sm_simulation_destroy(sim);
 		return fmi2Error;
 	}
-	for (int32_t p = 0; p < inst->port_count; ++p) {
-		// A restored motion port continues from where its particle is, with the velocity it has
-		// there: the prescribed motion of a port whose inputs were set some steps before the state
-		// was saved has moved on since (the held position is still what the input reads). A
-		// restored force port goes on along its ramp from the value it reached. Inputs set since
-		// the last step (pending[p]) start from the held values, as at fmi2DoStep.
-		const size_t i = 3 * (size_t)inst->ports[p].particle;
-		const bool continued = x && !pending[p];
-		double force[3];
-		for (int c = 0; c < 3; c++)
-			force[c] = held[p].force[c] + held[p].force_rate[c] * (sim_time - held[p].since);
-		const sm_status st = continued ? give_port_inputs(sim, &inst->ports[p], &held[p], x + i, v + i, force)
-		                               : give_port_inputs(sim, &inst->ports[p], &held[p], NULL, NULL, NULL);
-		if (st != SM_OK) {
-			log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
-			          sm_simulation_last_error(sim));
-			sm_simulation_destroy(sim);
-			return fmi2Error;
+	// A restored motion port continues from where its particle is, with the velocity it has there:
+	// the prescribed motion of a port whose inputs were set some steps before the state was saved
+	// has moved on since (the held position is still what the input reads). A restored force port
+	// goes on along its ramp from the value it reached. Inputs set since the last step (pending[p])
+	// start from the held values, as at fmi2DoStep: after the others (pass 1), so that the work
+	// counts from before them.
+	double work_origin = 0.0;
+	for (int pass = 0; pass < 2; ++pass) {
+		for (int32_t p = 0; p < inst->port_count; ++p) {
+			const bool continued = x && !pending[p];
+			if ((x && pending[p]) != (pass == 1))
+				continue;
+			const size_t i = 3 * (size_t)inst->ports[p].particle;
+			double force[3];
+			for (int c = 0; c < 3; c++)
+				force[c] = held[p].force[c] + held[p].force_rate[c] * (sim_time - held[p].since);
+			const sm_status st = continued
+			                         ? give_port_inputs(sim, &inst->ports[p], &held[p], x + i, v + i, force)
+			                         : give_port_inputs(sim, &inst->ports[p], &held[p], NULL, NULL, NULL);
+			if (st != SM_OK) {
+				log_error(inst, "%s: port %s: cannot apply its inputs: %s", function, inst->ports[p].name,
+				          sm_simulation_last_error(sim));
+				sm_simulation_destroy(sim);
+				return fmi2Error;
+			}
 		}
+		if (pass == 0)
+			work_origin = sm_simulation_input_work(sim);
 	}
 	sm_simulation_destroy(inst->sim);
 	inst->sim = sim;
@@ -388,6 +399,7 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 	inst->sim_dirty = false;
 	inst->breaks_logged = 0;
 	inst->dissipated_offset = 0.0;
+	inst->work_offset = -work_origin;
 	return fmi2OK;
 }
 
@@ -421,6 +433,11 @@ fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 double fmu_dissipated_energy(const instance* inst)
 {
 	return fmax(0.0, sm_simulation_dissipated_energy(inst->sim) + inst->dissipated_offset);
+}
+
+double fmu_input_work(const instance* inst)
+{
+	return sm_simulation_input_work(inst->sim) + inst->work_offset;
 }
 
 static const double* current_forces(instance* inst)
@@ -955,6 +972,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 	inst->last_successful_time = 0.0;
 	inst->stop_time_defined = false;
 	inst->dissipated_offset = 0.0;
+	inst->work_offset = 0.0;
 	inst->breaks_logged = 0;
 	inst->forces_valid = false;
 	load_start_values(inst);
@@ -1011,6 +1029,7 @@ static double real_value(instance* inst, const fmu_variable* v, energy_cache* ca
 	case FMU_SRC_ENERGY_ELASTIC: return cached_energies(inst, cache)->elastic;
 	case FMU_SRC_ENERGY_GRAVITY: return cached_energies(inst, cache)->gravity;
 	case FMU_SRC_ENERGY_DISSIPATED: return fmu_dissipated_energy(inst);
+	case FMU_SRC_ENERGY_INPUT: return fmu_input_work(inst);
 	default: return NAN;
 	}
 }
@@ -1297,12 +1316,15 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 //   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g (the forces at
 //                                    zero velocity are elastic plus weight only)
 //   d(position, velocity of a particle) = dx_i, dv_i: a driven particle is where its port puts it
+//   d(inputs' work)                = the sum of the three energies' (a motion set elsewhere does
+//                                    the work of the energy it adds at once)
 // Positions and velocities of free particles and the dissipated energy are states: their
 // derivatives with respect to the current inputs are zero (dx and dv are zero there).
 // ---------------------------------------------------------------------------------------------
 
 // The change of an output that is a function of the state (the force on a driven particle, the
-// kinetic, elastic and gravitational energies) along a change (dx, dv) of every particle's position
+// kinetic, elastic and gravitational energies, their sum for the inputs' work) along a change
+// (dx, dv) of every particle's position
 // and velocity, at the current state: the Jacobian product's row of the driven particle, sum m v.dv,
 // -sum f_elastic.dx (f_elastic = f(x, 0) - m g, the springs' forces without damping) and
 // -sum m g.dx. With an input's seed as (dx, dv) it is a directional derivative, with the velocities
@@ -1325,7 +1347,10 @@ static double state_output_change(const instance* inst, const fmu_variable* v, c
 		}
 		return df[3 * (size_t)inst->ports[v->index].particle + (size_t)v->component];
 	}
-	if (v->source == FMU_SRC_ENERGY_ELASTIC && !(*evaluated & 2u)) {
+	// A motion input set elsewhere moves its particle at once: the inputs' work changes by the
+	// energy that adds, the sum of the three.
+	const bool all = v->source == FMU_SRC_ENERGY_INPUT;
+	if ((all || v->source == FMU_SRC_ENERGY_ELASTIC) && !(*evaluated & 2u)) {
 		memset(zero, 0, n3 * sizeof(double));
 		sm_model_forces(model, x, zero, NULL, elastic);
 		*evaluated |= 2u;
@@ -1337,11 +1362,11 @@ static double state_output_change(const instance* inst, const fmu_variable* v, c
 		sm_model_get_particle(model, p, &pd);
 		for (size_t c3 = 0; c3 < 3; ++c3) {
 			const size_t i = 3 * (size_t)p + c3;
-			if (v->source == FMU_SRC_ENERGY_KINETIC)
+			if (all || v->source == FMU_SRC_ENERGY_KINETIC)
 				change += pd.mass * u[i] * dv[i];
-			else if (v->source == FMU_SRC_ENERGY_GRAVITY)
+			if (all || v->source == FMU_SRC_ENERGY_GRAVITY)
 				change -= pd.mass * def.gravity[c3] * dx[i];
-			else if (v->source == FMU_SRC_ENERGY_ELASTIC)
+			if (all || v->source == FMU_SRC_ENERGY_ELASTIC)
 				change -= (elastic[i] - pd.mass * def.gravity[c3]) * dx[i];
 		}
 	}
@@ -1420,7 +1445,7 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 			const size_t i = 3 * (size_t)v->index + (size_t)v->component;
 			result = v->source == FMU_SRC_PARTICLE_POSITION ? dx[i] : dv[i];
 		} else if (v->source == FMU_SRC_ENERGY_KINETIC || v->source == FMU_SRC_ENERGY_GRAVITY ||
-		           v->source == FMU_SRC_ENERGY_ELASTIC) {
+		           v->source == FMU_SRC_ENERGY_ELASTIC || v->source == FMU_SRC_ENERGY_INPUT) {
 			result = state_output_change(inst, v, dx, dv, work, &evaluated);
 		}
 		dvUnknown[k] = result;
@@ -1487,7 +1512,8 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference
 // acceleration a = f / m of a free particle (0 for a held one; a motion port's particle has the
 // acceleration its velocity input's derivative gives, 0 unless set); a driven particle's force and the
 // kinetic, elastic and gravitational energies change along (v, a) as state_output_change gives; the
-// dissipated energy's is the dissipated power, the rate the simulation integrates it at.
+// dissipated energy's is the dissipated power, the rate the simulation integrates it at, and the
+// inputs' work's the power they deliver (sm_simulation_input_power).
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[])
 {
@@ -1547,6 +1573,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 		case FMU_SRC_PORT_POSITION: value[k] = u[i]; break;
 		case FMU_SRC_PORT_VELOCITY: value[k] = a[i]; break;
 		case FMU_SRC_ENERGY_DISSIPATED: value[k] = sm_model_dissipated_power(model, x, u); break;
+		case FMU_SRC_ENERGY_INPUT: value[k] = sm_simulation_input_power(inst->sim); break;
 		default: value[k] = state_output_change(inst, v, u, a, work, &evaluated); break;
 		}
 		if (!isfinite(value[k]) && overflowing == NULL)

@@ -87,6 +87,7 @@ typedef struct instance {
 	double time;     // the FMU's time: start_time + the simulation's time [s]
 	double last_successful_time;
 	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
+	double work_offset;        // added to the simulation's input work (fmu_input_work) [J]
 	int32_t breaks_logged;
 	double* forces;  // 3 per particle, valid while forces_valid
 	bool forces_valid;
@@ -140,6 +141,8 @@ fmi2Status fmu_ensure_simulation(instance* inst, const char* function);
 // The energy dissipated since the start [J], never negative (energy.dissipated and a saved
 // state's; the reason is in fmu_cosim.c). Needs the simulation.
 double fmu_dissipated_energy(const instance* inst);
+// The work the inputs did since the start (energy.input) [J].
+double fmu_input_work(const instance* inst);
 
 // Sets the model-file parameters to values[] all at once, old ones in old[]; false if the model refuses.
 bool fmu_set_parameters(instance* inst, const char* function, const double* values, double* old);

@@ -582,6 +582,9 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	add(&b, duplicate("energy.dissipated"),
 	    duplicate("energy dissipated since the start (damping, broken springs)"), FMU_REAL, FMU_OUTPUT,
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
+	add(&b, duplicate("energy.input"),
+	    duplicate("work done by the inputs since the start (force ports on free particles, motion ports)"),
+	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_INPUT, 0, 0);
 
 	// Every particle's position and velocity, unless the model file switches them off.
 	if (settings.particle_variables) {
@@ -680,12 +683,14 @@ static bool unit_used(const fmu_table* t, const char* unit)
 // communication point. Positions and velocities of force and probe ports and the dissipated
 // energy are states: no direct dependence. A motion port's force depends on the prescribed
 // positions and velocities of the motion ports; kinetic energy on their velocities; elastic and
-// gravitational energy on their positions.
+// gravitational energy on their positions; the inputs' work on both (a motion set elsewhere does
+// the work of the energy it adds at once).
 static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_variable* v)
 {
 	bool position = false, velocity = false;
 	switch (v->source) {
-	case FMU_SRC_PORT_FORCE: position = velocity = true; break;
+	case FMU_SRC_PORT_FORCE:
+	case FMU_SRC_ENERGY_INPUT: position = velocity = true; break;
 	case FMU_SRC_ENERGY_KINETIC: velocity = true; break;
 	case FMU_SRC_ENERGY_ELASTIC:
 	case FMU_SRC_ENERGY_GRAVITY: position = true; break;

@@ -60,6 +60,7 @@ typedef enum fmu_source {
 	FMU_SRC_ENERGY_ELASTIC,        ///< [J]
 	FMU_SRC_ENERGY_GRAVITY,        ///< [J]
 	FMU_SRC_ENERGY_DISSIPATED,     ///< [J]
+	FMU_SRC_ENERGY_INPUT,          ///< the inputs' work [J]
 } fmu_source;
 
 /// One scalar variable. Its value reference is its index in the table.

@@ -12,15 +12,15 @@
 // ---------------------------------------------------------------------------------------------
 // FMI 2.0: FMU state. The saved state is the model's state, not solver memory: time, every
 // particle's position and velocity, which springs are broken, the inputs, the parameters and
-// settings, the dissipated energy. Not the stop time: that is the experiment's, which the instance
-// restoring a state was given by its own fmi2SetupExperiment (FMI 2.0, 2.1.6), and a state may
-// start a longer run than the one that saved it. Restoring creates the simulation from it, so CVODE
-// starts afresh, and every restore of a state continues alike (bit for bit, in this or another
-// process). Getting a state only copies (FMI 2.0, 2.1.8): the running instance keeps CVODE's
+// settings, the dissipated energy and the inputs' work. Not the stop time: that is the
+// experiment's, which the instance restoring a state was given by its own fmi2SetupExperiment
+// (FMI 2.0, 2.1.6), and a state may start a longer run than the one that saved it. Restoring creates the
+// simulation from it, so CVODE starts afresh, and every restore of a state continues alike (bit for bit, in
+// this or another process). Getting a state only copies (FMI 2.0, 2.1.8): the running instance keeps CVODE's
 // history and goes on as if no state had been saved.
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST6"
+#define STATE_MAGIC "SMFMUST7"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
 // x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[PORT_DOUBLES nports], pending
@@ -54,6 +54,7 @@ enum {
 	D_ATOL_POSITION,
 	D_ATOL_VELOCITY,
 	D_MAX_STEP,
+	D_INPUT_WORK,
 	D_COUNT
 };
 #define HEADER_BYTES (8 + 40 + 8 * I_COUNT + 8 * D_COUNT)
@@ -142,6 +143,7 @@ static saved_state* save_state(instance* inst)
 	put_d(b, D_ATOL_POSITION, inst->solver.absolute_tolerance_position);
 	put_d(b, D_ATOL_VELOCITY, inst->solver.absolute_tolerance_velocity);
 	put_d(b, D_MAX_STEP, inst->solver.max_step);
+	put_d(b, D_INPUT_WORK, has_sim ? fmu_input_work(inst) : 0.0);
 	double* d = (double*)(void*)(b + HEADER_BYTES);  // HEADER_BYTES is a multiple of 8
 	if (has_sim) {
 		memcpy(d, sm_simulation_positions(inst->sim), 3 * (size_t)n * sizeof(double));
@@ -271,6 +273,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 		          function, fmu_number_text(dissipated).text);
 		return false;
 	}
+	const double work = get_d(b, D_INPUT_WORK);
+	if (!isfinite(work)) {
+		log_error(inst, "%s: the state's input work %s J is not finite", function,
+		          fmu_number_text(work).text);
+		return false;
+	}
 	// The parameters that set the structure keep their packaged values, in a state as in a set
 	// (check_real): another value could keep the counts and still rearrange the particles.
 	for (int32_t i = 0; i < inst->table.count; ++i) {
@@ -344,10 +352,12 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 		}
 		status = fmu_create_simulation(inst, function, model, &solver, held, pending,
 		                               get_d(b, D_TIME) - get_d(b, D_START), d, d + 3 * n);
-		if (status != fmi2OK)
+		if (status != fmi2OK) {
 			fmu_put_back_parameters(inst, function, old);
-		else
+		} else {
 			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
+			inst->work_offset += get_d(b, D_INPUT_WORK);
+		}
 	} else if (status == fmi2OK) {
 		sm_simulation_destroy(inst->sim);
 		inst->sim = NULL;

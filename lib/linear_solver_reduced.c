@@ -3,12 +3,13 @@
 // every size threshold that chooses a path), the Jacobian it holds and the solve; the other
 // concepts are in the files listed in linear_solver_reduced.h.
 //
-// Derivation. With y = [x; v; e] and J = [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]]
-// (K = df/dx, D = df/dv over the free degrees of freedom, M the diagonal of masses, e the
-// dissipated energy), Newton's system (I - gamma J) [dx; dv; de] = [bx; bv; be] reads
+// Derivation. With y = [x; v; e; w] and J = [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0],
+// [0, 0, 0, 0]] (K = df/dx, D = df/dv over the free degrees of freedom, M the diagonal of masses,
+// e the dissipated energy, w the inputs' work), Newton's system (I - gamma J) [dx; dv; de; dw] =
+// [bx; bv; be; bw] reads
 //     dx - gamma dv = bx
 //     -gamma M^-1 K dx + dv - gamma M^-1 D dv = bv
-//     de = be.
+//     de = be,  dw = bw.
 // Substituting dx = bx + gamma dv into the second row and multiplying by M:
 //     (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,    dx = bx + gamma dv.
 // With the definiteness-preserving Jacobian, K and D are symmetric negative semi-definite, so
@@ -282,7 +283,8 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	double gamma;
 	if (CVodeGetCurrentGamma(sim->cvode, &gamma) != CV_SUCCESS)
 		return r->last_flag = SUNLS_MEM_FAIL;
-	x[2 * n] = b[2 * n];  // the dissipated energy's row: de = be
+	for (int c = 0; c < SM_ENERGY_COMPONENTS; c++)
+		x[2 * n + c] = b[2 * n + c];  // the energies' rows: de = be, dw = bw
 	if (n == 0)
 		return r->last_flag = SUNLS_SUCCESS;
 	// A new step (or a new attempt at one) since the Jacobian was evaluated: evaluate it at the

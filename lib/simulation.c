@@ -1,11 +1,12 @@
 // Time integration of a model with SUNDIALS CVODE.
 //
 // State, right-hand side and Jacobian:
-//   y = [x; v; e] over the free particles, x' = v, v' = M^-1 f(x, v, t), e' = P_dissipated(x, v).
+//   y = [x; v; e; w] over the free particles, x' = v, v' = M^-1 f(x, v, t), e' = P_dissipated(x, v),
+//   w' = P_input(x, v, t) (input_power).
 //   The Newton matrix of BDF is I - gamma J with
-//     J = [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]],  K = df/dx, D = df/dv;
-//   the dissipated energy e feeds back into nothing, so its row and column of J are left out
-//   (zero): Newton's iteration still converges, and e is integrated to the same tolerance.
+//     J = [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]],  K = df/dx, D = df/dv;
+//   the energies e and w feed back into nothing, so their rows and columns of J are left out
+//   (zero): Newton's iteration still converges, and they are integrated to the same tolerance.
 // Linear solvers: dense LU of the full system (SUNDenseMatrix), sparse LU (KLU) of the full
 // system in CSR form, and the reduced second-order solver of linear_solver_reduced.c.
 // Breaking springs: simulation_events.c. State snapshots (save, restore, serialise):
@@ -212,15 +213,43 @@ static bool has_reduced_solver(const sm_simulation* sim)
 	       (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
 }
 
-// y' = [v; M^-1 f; P]. A non-finite state, the dissipated energy included, is a recoverable
-// failure (> 0): CVODE retries with a smaller step.
+// Power the inputs deliver [W], from the velocities v and forces f of all particles (external
+// forces included) and the external forces at one time. An external force on a free particle
+// does f_ext . v. A driven particle follows its path because whatever drives it adds to the model's
+// forces (f - f_ext: springs, damping, gravity) what its acceleration a needs, m a - (f - f_ext);
+// with the external force it takes, the outside does (m a - f + f_ext) . v on it. With the
+// dissipated power they balance the change of kinetic, elastic and gravitational energy.
+static double input_power(const sm_simulation* sim, const double* v, const double* f, const double* external)
+{
+	double power = 0.0;
+	if (sim->forced_particles > 0)
+		for (int32_t k = 0; k < sim->free_count; k++) {
+			const size_t p = 3 * (size_t)sim->free_particles[k];
+			power += external[p] * v[p] + external[p + 1] * v[p + 1] + external[p + 2] * v[p + 2];
+		}
+	if (sim->driven_count > 0)
+		for (int32_t k = 0; k < sim->constrained_count; k++) {
+			const int32_t i = sim->constrained[k];
+			if (sim->model->motion[i] != SM_PARTICLE_DRIVEN)
+				continue;
+			const size_t p = 3 * (size_t)i;
+			const double m = sim->model->mass[i];
+			for (int c = 0; c < 3; c++)
+				power += (m * sim->drive_acceleration[p + c] - f[p + c] + external[p + c]) * v[p + c];
+		}
+	return power;
+}
+
+// y' = [v; M^-1 f; P_dissipated; P_input]. A non-finite state, the energies included, is a
+// recoverable failure (> 0): CVODE retries with a smaller step.
 static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 {
 	sm_simulation* sim = user_data;
 	const double* y = N_VGetArrayPointer(yv);
 	double* ydot = N_VGetArrayPointer(ydotv);
 	const int64_t nd = sim->dofs;
-	for (int64_t i = 0; i <= 2 * nd; i++)
+	const int64_t length = sm_simulation_state_length(sim);
+	for (int64_t i = 0; i < length; i++)
 		if (!isfinite(y[i]))
 			return 1;
 	double* x = sim->work_position;
@@ -247,8 +276,9 @@ static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 		ydot[nd + q + 1] = f[p + 1] * w;
 		ydot[nd + q + 2] = f[p + 2] * w;
 	}
-	ydot[2 * nd] = power;
-	for (int64_t i = nd; i <= 2 * nd; i++)
+	ydot[sm_simulation_dissipated_index(sim)] = power;
+	ydot[sm_simulation_work_index(sim)] = input_power(sim, v, f, external);
+	for (int64_t i = nd; i < length; i++)
 		if (!isfinite(ydot[i]))
 			return 1;
 	return 0;
@@ -293,17 +323,17 @@ static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, 
 	return 0;
 }
 
-// Pattern of the (6nf + 1) CSR matrix for KLU, every diagonal entry present (CVODE adds the
+// Pattern of the (6nf + 2) CSR matrix for KLU, every diagonal entry present (CVODE adds the
 // identity in place): x row i: (i, i) = 0 and (i, nd + i) = 1; v row i: the pattern row of K
-// then the same columns shifted by nd for D; e row: (2nd, 2nd) = 0.
+// then the same columns shifted by nd for D; the energies' rows: their diagonal entries, 0.
 static sm_status build_klu_pattern(sm_simulation* sim)
 {
 	const int64_t nd = sim->dofs;
 	const int64_t nnz = sm_sparse_jacobian_nonzeros(sim->pattern);
 	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
 	const int64_t* cols = sm_sparse_jacobian_column_indices(sim->pattern);
-	sim->klu_row_pointers = malloc((size_t)(2 * nd + 2) * sizeof(int64_t));
-	sim->klu_column_indices = malloc((size_t)(2 * nd + 2 * nnz + 1) * sizeof(int64_t));
+	sim->klu_row_pointers = malloc((size_t)(2 * nd + SM_ENERGY_COMPONENTS + 1) * sizeof(int64_t));
+	sim->klu_column_indices = malloc((size_t)(2 * nd + 2 * nnz + SM_ENERGY_COMPONENTS) * sizeof(int64_t));
 	if (!sim->klu_row_pointers || !sim->klu_column_indices)
 		return SM_ERROR_OUT_OF_MEMORY;
 	int64_t e = 0;
@@ -319,9 +349,11 @@ static sm_status build_klu_pattern(sm_simulation* sim)
 		for (int64_t k = rows[i]; k < rows[i + 1]; k++)
 			sim->klu_column_indices[e++] = nd + cols[k];
 	}
-	sim->klu_row_pointers[2 * nd] = e;
-	sim->klu_column_indices[e++] = 2 * nd;
-	sim->klu_row_pointers[2 * nd + 1] = e;
+	for (int64_t i = 2 * nd; i < 2 * nd + SM_ENERGY_COMPONENTS; i++) {
+		sim->klu_row_pointers[i] = e;
+		sim->klu_column_indices[e++] = i;
+	}
+	sim->klu_row_pointers[2 * nd + SM_ENERGY_COMPONENTS] = e;
 	return SM_OK;
 }
 
@@ -335,11 +367,12 @@ static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J,
 	const double start = sm_simulation_clock();
 	const int64_t nd = sim->dofs;
 	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
-	const int64_t total = sim->klu_row_pointers[2 * nd + 1];
+	const int64_t total = sim->klu_row_pointers[2 * nd + SM_ENERGY_COMPONENTS];
 	if (SUNSparseMatrix_NNZ(J) < total && SUNSparseMatrix_Reallocate(J, total) != 0)
 		return -1;
 	// CVODE zeroes the matrix, index arrays included, before each call: restore the pattern.
-	memcpy(SUNSparseMatrix_IndexPointers(J), sim->klu_row_pointers, (size_t)(2 * nd + 2) * sizeof(int64_t));
+	memcpy(SUNSparseMatrix_IndexPointers(J), sim->klu_row_pointers,
+	       (size_t)(2 * nd + SM_ENERGY_COMPONENTS + 1) * sizeof(int64_t));
 	memcpy(SUNSparseMatrix_IndexValues(J), sim->klu_column_indices, (size_t)total * sizeof(int64_t));
 	double* val = SUNSparseMatrix_Data(J);
 	int64_t e = 0;
@@ -359,7 +392,8 @@ static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J,
 			val[e + k] = w * kv[k];
 		e += len;
 	}
-	val[e] = 0.0;
+	for (int c = 0; c < SM_ENERGY_COMPONENTS; c++)
+		val[e + c] = 0.0;
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	return 0;
 }
@@ -543,7 +577,7 @@ static void refresh_masses(sm_simulation* sim)
 }
 
 // Everything from the model's stored initial state: positions, velocities, driven motion,
-// no external forces, e = 0.
+// no external forces, e = w = 0.
 static void load_initial_state(sm_simulation* sim)
 {
 	const sm_model* m = sim->model;
@@ -558,9 +592,12 @@ static void load_initial_state(sm_simulation* sim)
 	memset(sim->external_force, 0, n3 * sizeof(double));
 	memset(sim->force_rate, 0, n3 * sizeof(double));
 	sim->ramping_forces = 0;
+	sim->forced_particles = 0;
 	double* y = N_VGetArrayPointer(sim->y);
 	pack(sim, m->position, m->velocity, y);
-	y[2 * sim->dofs] = 0.0;
+	y[sm_simulation_dissipated_index(sim)] = 0.0;
+	y[sm_simulation_work_index(sim)] = 0.0;
+	sim->jump_work = 0.0;
 	sim->time = 0.0;
 	sim->time_origin = 0.0;
 	sm_simulation_refresh_outputs(sim);
@@ -581,7 +618,7 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		sim->fixed_point = nls;
 		return SM_OK;
 	}
-	const int64_t n = 2 * sim->dofs + 1;
+	const int64_t n = sm_simulation_state_length(sim);
 	switch (sim->solver) {
 	case SM_SOLVER_DENSE: {
 		sim->matrix = SUNDenseMatrix(n, n, sim->context);
@@ -654,8 +691,9 @@ static sm_status setup_cvode(sm_simulation* sim)
 		tol[i] = sim->def.absolute_tolerance_position;
 		tol[nd + i] = sim->def.absolute_tolerance_velocity;
 	}
-	// The dissipated energy [J] shares the velocities' absolute tolerance.
-	tol[2 * nd] = sim->def.absolute_tolerance_velocity;
+	// The energies [J] share the velocities' absolute tolerance.
+	tol[sm_simulation_dissipated_index(sim)] = sim->def.absolute_tolerance_velocity;
+	tol[sm_simulation_work_index(sim)] = sim->def.absolute_tolerance_velocity;
 	sim->cvode = CVodeCreate(sim->def.method == SM_METHOD_ADAMS ? CV_ADAMS : CV_BDF, sim->context);
 	if (!sim->cvode)
 		return SM_ERROR_OUT_OF_MEMORY;
@@ -726,6 +764,7 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 			sim->free_particles[kf++] = i;
 		else
 			sim->constrained[kc++] = i;
+		sim->driven_count += m->motion[i] == SM_PARTICLE_DRIVEN;
 	}
 	refresh_masses(sim);
 	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
@@ -744,9 +783,9 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		sim->context = NULL;
 		goto out_of_memory;
 	}
-	sim->y = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
-	sim->y_saved = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
-	sim->tolerances = N_VNew_Serial(2 * sim->dofs + 1, sim->context);
+	sim->y = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
+	sim->y_saved = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
+	sim->tolerances = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
 	if (!sim->y || !sim->y_saved || !sim->tolerances)
 		goto out_of_memory;
 	// Before CVodeInit: every vector CVODE and the solvers clone from y inherits the operations.
@@ -1150,7 +1189,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 			const double* y = N_VGetArrayPointer(sim->y);
 			bool usable = isfinite(reached) && reached >= sm_simulation_cvode_time(sim, sim->time) &&
 			              reached <= cvode_end;
-			for (int64_t i = 0; usable && i <= 2 * sim->dofs; i++)
+			for (int64_t i = 0; usable && i < sm_simulation_state_length(sim); i++)
 				usable = isfinite(y[i]);
 			if (usable)
 				sim->time = time_of(sim, reached, cvode_end, t_end);
@@ -1301,7 +1340,21 @@ sm_energies sm_simulation_energies(const sm_simulation* sim)
 
 double sm_simulation_dissipated_energy(const sm_simulation* sim)
 {
-	return sim ? N_VGetArrayPointer(sim->y)[2 * sim->dofs] : NAN;
+	return sim ? N_VGetArrayPointer(sim->y)[sm_simulation_dissipated_index(sim)] : NAN;
+}
+
+double sm_simulation_input_work(const sm_simulation* sim)
+{
+	return sim ? N_VGetArrayPointer(sim->y)[sm_simulation_work_index(sim)] + sim->jump_work : NAN;
+}
+
+double sm_simulation_input_power(sm_simulation* sim)
+{
+	if (sim == NULL)
+		return NAN;
+	const double* external = sm_simulation_external_forces(sim, sm_simulation_cvode_time(sim, sim->time));
+	sm_model_forces(sim->model, sim->position, sim->velocity, external, sim->work_force);
+	return input_power(sim, sim->velocity, sim->work_force, external);
 }
 
 const sm_model* sm_simulation_model(const sm_simulation* sim)
@@ -1428,6 +1481,10 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		       !on_path(position[c], sim->drive_position[p + c], dt * (v0 + 0.5 * dt * a),
 		                fmax(fabs(v0 * dt), fabs(0.5 * dt * dt * a)));
 	}
+	// What moves the particle to its new position and velocity at once does the work the energy
+	// takes in the jump. An energy beyond a double is not handed on to the inputs' work.
+	const double before =
+	    jump ? sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle) : 0.0;
 	if (jump) {
 		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
 		memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
@@ -1436,6 +1493,12 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		note_input_change(sim);
 	}
 	sm_simulation_refresh_outputs(sim);
+	if (jump) {
+		const double work =
+		    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle) - before;
+		if (isfinite(work))
+			sim->jump_work += work;
+	}
 	return SM_OK;
 }
 
@@ -1474,13 +1537,17 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 		          (r[c] == 0.0 ? force[c] != f[c] : !on_path(force[c], f[c], r[c] * dt, fabs(r[c] * dt)));
 	if (!differs)
 		return SM_OK;
+	const bool free = sim->model->motion[particle] == SM_PARTICLE_FREE;
 	const bool ramped = r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
 	const bool ramps = rate[0] != 0.0 || rate[1] != 0.0 || rate[2] != 0.0;
+	const bool forced = ramped || f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0;
+	const bool forces = ramps || force[0] != 0.0 || force[1] != 0.0 || force[2] != 0.0;
 	sim->ramping_forces += (int32_t)ramps - (int32_t)ramped;
+	sim->forced_particles += free ? (int32_t)forces - (int32_t)forced : 0;
 	memcpy(f, force, 3 * sizeof(double));
 	memcpy(r, rate, 3 * sizeof(double));
 	sim->force_time[particle] = sim->time;
-	if (sim->model->motion[particle] == SM_PARTICLE_FREE)
+	if (free)
 		note_input_change(sim);
 	return SM_OK;
 }
@@ -1508,7 +1575,7 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 	// not handed on to the dissipated energy, part of CVODE's state.
 	const double released = elastic_before - sm_model_energies(sim->model, sim->position, NULL).elastic;
 	if (isfinite(released))
-		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += released;
+		N_VGetArrayPointer(sim->y)[sm_simulation_dissipated_index(sim)] += released;
 	sim->need_restart = true;
 	return SM_OK;
 }

@@ -149,7 +149,7 @@ sm_status sm_simulation_break_springs(sm_simulation* sim)
 	const double released =
 	    broke ? elastic_before - sm_model_energies(sim->model, sim->position, NULL).elastic : 0.0;
 	if (isfinite(released))
-		N_VGetArrayPointer(sim->y)[2 * sim->dofs] += released;
+		N_VGetArrayPointer(sim->y)[sm_simulation_dissipated_index(sim)] += released;
 	// After a failure too: the springs not yet broken are beyond their limit at this time, and
 	// the next advance, starting afresh here, breaks them first.
 	sim->need_restart = sim->need_restart || broke || out_of_memory;

@@ -1,8 +1,9 @@
 // Internal layout of sm_simulation, shared by simulation.c, simulation_events.c, simulation_state.c
 // and the linear solvers (linear_solver_*.c).
 //
-// The CVODE state vector holds the free particles only, followed by the dissipated energy:
-//   y = [x_free (3 nf) ; v_free (3 nf) ; e (1)],  y' = [v ; M^-1 f(x, v) ; P_dissipated(x, v)].
+// The CVODE state vector holds the free particles only, followed by two energies: the dissipated
+// energy e and the work w the inputs did,
+//   y = [x_free (3 nf) ; v_free (3 nf) ; e ; w],  y' = [v ; M^-1 f(x, v) ; P_dissipated ; P_input].
 // Constrained particles take their positions from the simulation's own arrays: fixed ones
 // from the model, driven ones from x(t) = drive_position + drive_velocity s + drive_acceleration
 // s^2 / 2, s = t - drive_time.
@@ -14,6 +15,9 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_linearsolver.h>
 #include <sundials/sundials_matrix.h>
+
+// Components of CVODE's state after the particles' 6 nf: the dissipated energy and the inputs' work.
+#define SM_ENERGY_COMPONENTS 2
 
 struct sm_simulation {
 	sm_simulation_def def;
@@ -63,6 +67,8 @@ struct sm_simulation {
 	double* force_rate;          // [N/s]
 	double* force_time;          // [s]
 	int32_t ramping_forces;      // particles whose force_rate is not 0
+	int32_t forced_particles;    // free particles whose external force or force_rate is not 0
+	int32_t driven_count;        // driven particles
 	double* drive_position;      // [m]
 	double* drive_velocity;      // [m/s]
 	double* drive_acceleration;  // [m/s^2]
@@ -73,6 +79,9 @@ struct sm_simulation {
 	double* work_velocity;
 	double* work_force;
 	double* work_external;  // the external forces at one time, when some ramp [N]
+	// The inputs' work at jumps of driven particles (the energy each jump added), which CVODE's
+	// state does not hold until it restarts [J].
+	double jump_work;
 
 	// Breakable springs: one root function each.
 	int32_t root_count;
@@ -126,6 +135,20 @@ const double* sm_simulation_external_forces(sm_simulation* sim, double t);
 static inline double sm_simulation_cvode_time(const sm_simulation* sim, double t)
 {
 	return t - sim->time_origin;
+}
+
+// Length of CVODE's state vector, and the places of the dissipated energy and the inputs' work in it.
+static inline int64_t sm_simulation_state_length(const sm_simulation* sim)
+{
+	return 2 * sim->dofs + SM_ENERGY_COMPONENTS;
+}
+static inline int64_t sm_simulation_dissipated_index(const sm_simulation* sim)
+{
+	return 2 * sim->dofs;
+}
+static inline int64_t sm_simulation_work_index(const sm_simulation* sim)
+{
+	return 2 * sim->dofs + 1;
 }
 
 // Helpers of simulation.c that the snapshots (simulation_state.c) use too.

@@ -1,7 +1,7 @@
 // Snapshots of a simulation's state: save and restore, and their serialised form.
 //
 // A snapshot holds what the next advance depends on beyond the model: the time, CVODE's state
-// vector (free positions and velocities, dissipated energy), the inputs (external forces and
+// vector (free positions and velocities, dissipated energy, inputs' work), the inputs (external forces and
 // their ramps, the driven particles' motions) and the break events. It is tied to a model's topology by a
 // hash, and restoring one restarts CVODE from it.
 #include "model_internal.h"
@@ -22,7 +22,7 @@ struct sm_simulation_state {
 	uint64_t topology;  // topology_hash of the model it was taken from
 	int32_t particle_count, spring_count, free_count, break_count;
 	double time;                 // [s]
-	double* y;                   // CVODE's state: free x, free v, dissipated energy
+	double* y;                   // CVODE's state: free x, free v, dissipated energy, inputs' work
 	double* external_force;      // 3 per particle [N]
 	double* force_rate;          // 3 per particle [N/s]
 	double* force_time;          // per particle [s]
@@ -63,10 +63,11 @@ static uint64_t topology_hash(const sm_model* m)
 // Doubles per particle of a snapshot: the force, its rate and time, the driven motion and its time.
 #define PARTICLE_DOUBLES 17
 
-// Bytes of a snapshot's arrays: y (6 free + 1), PARTICLE_DOUBLES per particle, the break events.
+// Bytes of a snapshot's arrays: y (6 free + SM_ENERGY_COMPONENTS), PARTICLE_DOUBLES per particle,
+// the break events.
 static size_t state_payload(int64_t particles, int64_t free, int64_t breaks)
 {
-	return (size_t)(6 * free + 1 + PARTICLE_DOUBLES * particles) * sizeof(double) +
+	return (size_t)(6 * free + SM_ENERGY_COMPONENTS + PARTICLE_DOUBLES * particles) * sizeof(double) +
 	       (size_t)breaks * sizeof(sm_break_event);
 }
 
@@ -82,7 +83,7 @@ static sm_simulation_state* allocate_state(int32_t particles, int32_t springs, i
 	s->free_count = free;
 	s->break_count = breaks;
 	s->y = (double*)(s + 1);
-	s->external_force = s->y + 6 * (size_t)free + 1;
+	s->external_force = s->y + 6 * (size_t)free + SM_ENERGY_COMPONENTS;
 	s->force_rate = s->external_force + 3 * n;
 	s->force_time = s->force_rate + 3 * n;
 	s->drive_position = s->force_time + n;
@@ -97,7 +98,7 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 {
 	if (sim == NULL)
 		return NULL;
-	const size_t n = (size_t)sim->particle_count, ny = 2 * (size_t)sim->dofs + 1;
+	const size_t n = (size_t)sim->particle_count, ny = (size_t)sm_simulation_state_length(sim);
 	sm_simulation_state* s =
 	    allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
 	if (s == NULL)
@@ -105,6 +106,7 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	s->topology = topology_hash(sim->model);
 	s->time = sim->time;
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
+	s->y[sm_simulation_work_index(sim)] += sim->jump_work;
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
 	memcpy(s->force_rate, sim->force_rate, 3 * n * sizeof(double));
 	memcpy(s->force_time, sim->force_time, n * sizeof(double));
@@ -168,7 +170,8 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	}
 	const size_t n = (size_t)sim->particle_count;
 	sim->time = s->time;
-	memcpy(N_VGetArrayPointer(sim->y), s->y, (2 * (size_t)sim->dofs + 1) * sizeof(double));
+	memcpy(N_VGetArrayPointer(sim->y), s->y, (size_t)sm_simulation_state_length(sim) * sizeof(double));
+	sim->jump_work = 0.0;  // the snapshot's work holds it
 	memcpy(sim->external_force, s->external_force, 3 * n * sizeof(double));
 	memcpy(sim->force_rate, s->force_rate, 3 * n * sizeof(double));
 	memcpy(sim->force_time, s->force_time, n * sizeof(double));
@@ -176,10 +179,14 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	memcpy(sim->drive_velocity, s->drive_velocity, 3 * n * sizeof(double));
 	memcpy(sim->drive_acceleration, s->drive_acceleration, 3 * n * sizeof(double));
 	memcpy(sim->drive_time, s->drive_time, n * sizeof(double));
-	sim->ramping_forces = 0;
+	sim->ramping_forces = sim->forced_particles = 0;
 	for (size_t k = 0; k < n; k++) {
 		const double* r = sim->force_rate + 3 * k;
-		sim->ramping_forces += r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
+		const double* f = sim->external_force + 3 * k;
+		const bool ramps = r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
+		sim->ramping_forces += ramps;
+		sim->forced_particles +=
+		    sim->model->motion[k] == SM_PARTICLE_FREE && (ramps || f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0);
 	}
 	if (s->break_count > 0)
 		memcpy(sim->breaks, s->breaks, (size_t)s->break_count * sizeof(sm_break_event));
@@ -212,7 +219,7 @@ typedef struct serialized_header {
 	double time;  // [s]
 } serialized_header;
 
-#define STATE_LAYOUT 2u  // 2: force ramps and driven accelerations
+#define STATE_LAYOUT 3u  // 2: force ramps and driven accelerations; 3: the inputs' work
 
 size_t sm_simulation_state_size(const sm_simulation_state* s)
 {
@@ -294,8 +301,8 @@ sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, size_t 
 	memcpy(s->y, in + sizeof h, payload);
 	bool valid = isfinite(s->time);
 	const double* values = s->y;
-	for (size_t k = 0;
-	     valid && k < (size_t)(6 * (int64_t)h.free_count + 1 + PARTICLE_DOUBLES * (int64_t)h.particle_count);
+	for (size_t k = 0; valid && k < (size_t)(6 * (int64_t)h.free_count + SM_ENERGY_COMPONENTS +
+	                                         PARTICLE_DOUBLES * (int64_t)h.particle_count);
 	     k++)
 		valid = isfinite(values[k]);
 	for (int32_t b = 0; valid && b < s->break_count; b++)

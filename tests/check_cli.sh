@@ -96,7 +96,7 @@ cat > "$tmp/names.json" << 'JSON'
  "springs": [{"a": 0, "b": 1, "stiffness": 1}]}
 JSON
 out=$("$cli" run "$tmp/names.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
-[ "$out" = "time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,particle.p[1].x,particle.p[1].y,particle.p[1].z,particle.p[1]'.x,particle.p[1]'.y,particle.p[1]'.z" ] ||
+[ "$out" = "time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,energy.input,particle.p[1].x,particle.p[1].y,particle.p[1].z,particle.p[1]'.x,particle.p[1]'.y,particle.p[1]'.z" ] ||
   fail "run --positions column names: $out"
 # A particle's name and the description are shown escaped where a terminal would act on them or
 # not show them (a right-to-left override, a zero-width space), as the library's messages do.
@@ -360,7 +360,7 @@ cat > "$tmp/comma.json" << 'JSON'
 {"springmass": 1, "name": "comma", "particles": [{"name": "a,\"b\"", "position": [0, 0, 0], "fixed": true}]}
 JSON
 out=$("$cli" run "$tmp/comma.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
-[ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,"particle.a,""b"".x","particle.a,""b"".y","particle.a,""b"".z"' ] ||
+[ "$out" = 'time,energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,energy.input,"particle.a,""b"".x","particle.a,""b"".y","particle.a,""b"".z"' ] ||
   fail "run --positions with a comma in a particle's name: $out"
 out=$("$cli" statics "$tmp/comma.json" -q -o "$tmp/comma.csv" 2>&1 > /dev/null; tail -1 "$tmp/comma.csv")
 [ "$out" = '0,"a,""b""",0,0,0,0,0,0,0,0,9.81' ] || fail "statics -o with a comma in a particle's name: $out"

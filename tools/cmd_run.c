@@ -27,9 +27,11 @@ static void usage(FILE* out)
 	        "Simulates the model file MODEL from its initial state and writes one CSV row per output\n"
 	        "time: time [s], every port's quantities (force port P: P.x P.y P.z [m] P.vx P.vy P.vz [m/s];\n"
 	        "motion port P: P.fx P.fy P.fz [N], the force the model exerts on what drives it; probe P:\n"
-	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity and energy.dissipated [J].\n"
+	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity, energy.dissipated and\n"
+	        "energy.input (the work the inputs did since the start) [J].\n"
 	        "Without --input, force ports get no force, and a motion port's particle moves as the file\n"
-	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
+	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n");
+	fprintf(out,
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
@@ -57,8 +59,8 @@ static void usage(FILE* out)
 	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s],\n"
 	        "                         at least 1e-150\n"
 	        "  --atol-position A      absolute tolerance of positions alone [m] (wins over --atol)\n"
-	        "  --atol-velocity A      absolute tolerance of velocities and of the dissipated energy\n"
-	        "                         alone [m/s], [J] (wins over --atol)\n"
+	        "  --atol-velocity A      absolute tolerance of velocities and of the energies integrated\n"
+	        "                         (dissipated, input) alone [m/s], [J] (wins over --atol)\n"
 	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
 	        "  --max-step H           largest internal step [s]; 0 for no limit\n"
 	        "  --threads N            threads for the pcg solver on models of 4000 free particles or\n"
@@ -136,7 +138,7 @@ static void write_header(FILE* csv, const sm_document* doc, const sm_model* mode
 			fprintf(csv, ",%s.x,%s.y,%s.z,%s.vx,%s.vy,%s.vz", port.name, port.name, port.name, port.name,
 			        port.name, port.name);
 	}
-	fprintf(csv, ",energy.kinetic,energy.elastic,energy.gravity,energy.dissipated");
+	fprintf(csv, ",energy.kinetic,energy.elastic,energy.gravity,energy.dissipated,energy.input");
 	if (positions)
 		for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
 			// An unnamed particle is p[i], primed as often as needed to be no other particle's name
@@ -166,8 +168,9 @@ static void put_values(FILE* csv, const double* values, size_t count)
 		cli_csv_number(csv, values[k]);
 }
 
+// work_origin: the inputs' work at the start, the time-0 inputs given [J] (it counts from there).
 static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* sim, double* forces,
-                      bool positions)
+                      double work_origin, bool positions)
 {
 	const double* x = sm_simulation_positions(sim);
 	const double* v = sm_simulation_velocities(sim);
@@ -191,8 +194,9 @@ static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* si
 		}
 	}
 	const sm_energies e = sm_simulation_energies(sim);
-	const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
-	put_values(csv, energies, 4);
+	const double energies[5] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim),
+	                            sm_simulation_input_work(sim) - work_origin};
+	put_values(csv, energies, 5);
 	if (positions)
 		put_values(csv, x, 3 * (size_t)n);
 	fprintf(csv, "\n");
@@ -516,6 +520,7 @@ int sm_cmd_run(int argc, char** argv)
 		fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
 		goto done;
 	}
+	const double work_origin = sm_simulation_input_work(sim);
 	const char* name = sm_document_name(doc);
 	const size_t path_capacity = strlen(name) + (o.vtk_dir ? strlen(o.vtk_dir) : 0) + 64;
 	path = malloc(path_capacity);
@@ -610,7 +615,7 @@ int sm_cmd_run(int argc, char** argv)
 			fputc('\n', stderr);
 			goto done;
 		}
-		write_row(csv, doc, sim, forces, o.positions);
+		write_row(csv, doc, sim, forces, work_origin, o.positions);
 		last_row = t;
 		// A full disk or a closed pipe stops the run at once, not after the last step.
 		if (ferror(csv) && errno == EPIPE)

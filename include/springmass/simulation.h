@@ -114,7 +114,8 @@ typedef struct sm_simulation_def {
 	double relative_tolerance;     ///< in [SM_MIN_RELATIVE_TOLERANCE, 1) [1]; default 1e-6
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m]; default 1e-8
 	double absolute_tolerance_position;
-	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy [J]; default 1e-6
+	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy and the inputs' work [J]; default
+	/// 1e-6
 	double absolute_tolerance_velocity;
 	double max_step;    ///< largest internal step [s]; 0 (default) = unlimited
 	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
@@ -248,8 +249,23 @@ SM_API void sm_simulation_forces(const sm_simulation* sim, double* f);
 SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
 /// Energy dissipated since the start [J]: by damping (integrated with the state) and by broken
 /// springs (the elastic energy each held when it broke), so that kinetic + elastic +
-/// gravitational + dissipated energy is constant without external forces or driven particles.
+/// gravitational + dissipated energy is constant without external forces or driven particles,
+/// and kinetic + elastic + gravitational + dissipated - input work (sm_simulation_input_work)
+/// with them.
 SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
+
+/// Work the inputs have done on the model since the start [J] (negative when they took energy
+/// out): external forces on free particles, integrated with the state as f_ext . v; and what
+/// drives each driven particle along its prescribed motion, the force m a - f_model its path
+/// needs beyond the model's forces (springs, damping, gravity; an external force on it goes to
+/// whatever drives it), times its velocity, plus the energy a motion that jumps (a new position
+/// or velocity, sm_simulation_set_driven) adds at once. Fixed particles do none.
+SM_API double sm_simulation_input_work(const sm_simulation* sim);
+
+/// Power the inputs deliver at the current state [W]: the rate of sm_simulation_input_work
+/// between jumps. Evaluates the forces into the simulation's work arrays: not at the same time
+/// as another call on the same simulation. NAN for a NULL simulation.
+SM_API double sm_simulation_input_power(sm_simulation* sim);
 
 /// Prescribes a driven particle's motion from the current time t0 on: x(t) = position +
 /// velocity (t - t0) [m, m/s]. Error if the particle is not driven. The same velocity with a
@@ -289,11 +305,11 @@ SM_API sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32
 /// the solver. SM_ERROR_NOT_FINITE, with nothing changed, for a non-finite time or free entry,
 /// or a time at which a driven particle's prescribed position or a ramped external force is not
 /// finite.
-/// Only the particles' state changes: the dissipated energy, the break events recorded so far
-/// and the springs that broke stay as they are (setting an earlier time undoes no break), so
-/// the energy balance of sm_simulation_dissipated_energy holds across the call only if the
-/// caller accounts for the energy the new state adds. sm_simulation_reset restores broken
-/// springs and clears the dissipated energy.
+/// Only the particles' state changes: the dissipated energy, the inputs' work, the break events
+/// recorded so far and the springs that broke stay as they are (setting an earlier time undoes no
+/// break), so the energy balance of sm_simulation_dissipated_energy holds across the call only if
+/// the caller accounts for the energy the new state adds. sm_simulation_reset restores broken
+/// springs and clears the dissipated energy and the inputs' work.
 SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v);
 
 /// Breaks a spring now, as if its strain had just crossed its break strain (a cut, or a tear the
@@ -304,8 +320,8 @@ SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const 
 SM_API sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring);
 
 /// A snapshot of a simulation's state (sm_simulation_save_state): its time, the particles'
-/// positions and velocities, the dissipated energy, the inputs (external forces, driven motions),
-/// the springs broken and the break events recorded so far. Not its statistics, which count the
+/// positions and velocities, the dissipated energy, the inputs' work, the inputs (external forces, driven
+/// motions), the springs broken and the break events recorded so far. Not its statistics, which count the
 /// work done, nor CVODE's history.
 typedef struct sm_simulation_state sm_simulation_state;
 
@@ -344,15 +360,16 @@ SM_API sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, 
 /// Back to time 0 and the model's initial state (driven particles at their initial position
 /// and velocity again), no external forces, springs as at the start (those that broke restored;
 /// springs disabled in the model stay disabled, see sm_simulation_update_model), dissipated
-/// energy, statistics and break events cleared. The model is the simulation's own: the one it was
-/// created from, or the last one sm_simulation_update_model gave it (its constants and initial
-/// state). The solver starts as new: the same calls as after creation from that model repeat
-/// that run bit for bit.
+/// energy, inputs' work, statistics and break events cleared. The model is the simulation's own: the one it
+/// was created from, or the last one sm_simulation_update_model gave it (its constants and initial state).
+/// The solver starts as new: the same calls as after creation from that model repeat that run bit for bit.
 SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
 /// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
 /// model of the same topology (same particle count and motions, same spring endpoints and kinds);
-/// keeps the state of the free particles and broken springs; re-initialises the solver.
+/// keeps the state of the free particles and broken springs, the dissipated energy and the inputs'
+/// work (the energies change with the constants: the energy balance holds across the call only
+/// if the caller accounts for that); re-initialises the solver.
 /// SM_ERROR_TOPOLOGY otherwise. Fixed particles take the new model's positions (a fixed particle
 /// moved that way jumps, as a driven one set elsewhere does); driven ones keep their motion.
 /// Springs disabled in the new model are disabled from the start (a reset keeps them so),

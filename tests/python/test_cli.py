@@ -164,7 +164,7 @@ def test_port_columns_are_named_by_kind_and_carry_the_port_quantities(tmp_path):
     expected = ["time"]
     for port, kind in (("base", "motion"), ("m1", "probe"), ("m2", "force")):
         expected += [f"{port}.{q}" for q in quantities[kind]]
-    expected += ["energy.kinetic", "energy.elastic", "energy.gravity", "energy.dissipated"]
+    expected += ["energy.kinetic", "energy.elastic", "energy.gravity", "energy.dissipated", "energy.input"]
     expected += [f"particle.{p}.{c}" for p in ("base", "m1", "m2") for c in "xyz"]
     assert header == expected
     col = {name: rows[:, i] for i, name in enumerate(header)}
