@@ -275,7 +275,7 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	}
 	const double work = get_d(b, D_INPUT_WORK);
 	if (!isfinite(work)) {
-		log_error(inst, "%s: the state's input work %s J is not finite", function,
+		log_error(inst, "%s: the state's input work %s J is out of range: it must be finite", function,
 		          fmu_number_text(work).text);
 		return false;
 	}

@@ -2,11 +2,24 @@
 #pragma once
 
 #include "springmass/model.h"
+#include "springmass/simulation.h"
 
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+
+// Tight tolerances (rtol 1e-10, atol 1e-12 m and m/s) with the given linear solver: the closed forms
+// and conservation laws the tests check are then met far below what they assert.
+static inline sm_simulation_def tight_def(sm_linear_solver solver)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = solver;
+	d.relative_tolerance = 1e-10;
+	d.absolute_tolerance_position = 1e-12;
+	d.absolute_tolerance_velocity = 1e-12;
+	return d;
+}
 
 // Oscillator along x: an anchor at the origin (fixed, or driven: still until the test moves it)
 // and a bob of mass m [kg] at x = l0 + u0 on a rest-length spring (stiffness k [N/m], rest length

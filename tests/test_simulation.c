@@ -83,16 +83,6 @@ static sm_model* two_mass_chain(void)
 	return model;
 }
 
-static sm_simulation_def tight_def(sm_linear_solver solver)
-{
-	sm_simulation_def d = sm_default_simulation_def();
-	d.solver = solver;
-	d.relative_tolerance = 1e-10;
-	d.absolute_tolerance_position = 1e-12;
-	d.absolute_tolerance_velocity = 1e-12;
-	return d;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Independent reference: GSL's explicit rk8pd over the same forces (gsl_reference.h)
 // ---------------------------------------------------------------------------------------------

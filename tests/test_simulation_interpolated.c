@@ -41,15 +41,6 @@ static void free_motion(double zeta, double w0, double u0, double v0, double tau
 	*v = e * (-zeta * w0 * (a * c + b * s) + wd * (-a * s + b * c));
 }
 
-static sm_simulation_def tight_def(void)
-{
-	sm_simulation_def d = sm_default_simulation_def();
-	d.relative_tolerance = 1e-10;
-	d.absolute_tolerance_position = 1e-12;
-	d.absolute_tolerance_velocity = 1e-12;
-	return d;
-}
-
 // Rows every 0.01 s up to 5 s, interpolated, follow the closed form as closely as advancing to
 // each row does (rtol 1e-10 on an amplitude of 0.2 m: the 1e-6 m bound, as for
 // sm_simulation_advance), in fewer steps: the rows no longer end steps.
@@ -58,7 +49,7 @@ static int test_rows_follow_the_closed_form_in_fewer_steps(void)
 	const double zeta = 0.1, w0 = sqrt(OSC_K);
 	sm_model* model = damped_oscillator(zeta, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* interpolated = sm_simulation_create(model, &d, NULL);
 	sm_simulation* stopped = sm_simulation_create(model, &d, NULL);
 	ENSURE(interpolated != NULL && stopped != NULL);
@@ -335,7 +326,7 @@ static int test_rows_before_a_break_found_past_them_are_at_their_own_time(void)
 	const double t_b = lo;
 	double v_b;
 	free_motion(zeta, w0, u0, 0.0, t_b, &u, &v_b);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
 	ENSURE(sim != NULL);
 	double worst = 0.0, worst_velocity = 0.0;
@@ -378,7 +369,7 @@ static int check_input_past_the_steps(bool driven)
 	const double zeta = 0.1, w0 = sqrt(OSC_K), t_force = 0.5, force = 1.0;
 	sm_model* model = damped_oscillator(zeta, driven ? SM_PARTICLE_DRIVEN : SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
 	ENSURE(sim != NULL);
 	ENSURE_STATUS(sm_simulation_advance_interpolated(sim, t_force, 2.0), SM_OK);
@@ -419,7 +410,7 @@ static int check_input_past_the_steps(bool driven)
 	double x[2][6];
 	int64_t steps[2];
 	for (int restart = 0; restart < 2; restart++) {
-		sm_simulation_def dr = tight_def();
+		sm_simulation_def dr = tight_def(SM_SOLVER_AUTO);
 		dr.restart_on_input_change = restart;
 		sim = sm_simulation_create(model, &dr, NULL);
 		ENSURE(sim != NULL);
@@ -452,7 +443,7 @@ static int test_inputs_set_unchanged_leave_the_run_of_one_advance(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* once = sm_simulation_create(model, &d, NULL);
 	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
 	ENSURE(once != NULL && rows != NULL);
@@ -481,7 +472,7 @@ static int test_a_motion_set_on_its_own_path_changes_no_input(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* sims[2] = {sm_simulation_create(model, &d, NULL), sm_simulation_create(model, &d, NULL)};
 	ENSURE(sims[0] != NULL && sims[1] != NULL);
 	const double start[3] = {0.0, 0.0, 0.0}, v[3] = {0.3, 0.1, 0.0};
@@ -513,7 +504,7 @@ static int test_a_force_on_a_held_particle_changes_no_input(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* once = sm_simulation_create(model, &d, NULL);
 	sm_simulation* rows = sm_simulation_create(model, &d, NULL);
 	ENSURE(once != NULL && rows != NULL);
@@ -539,7 +530,7 @@ static int test_a_row_just_after_a_break_leaves_the_run_of_one_advance(void)
 {
 	sm_model* model = pulled_by_its_model(0.25);  // breaks at 0.1 / 0.25 = 0.4 s
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	sm_simulation* once = sm_simulation_create(model, &d, NULL);
 	ENSURE(once != NULL);
 	ENSURE_STATUS(sm_simulation_advance(once, 1.0), SM_OK);
@@ -570,7 +561,7 @@ static int test_a_far_stop_time_sizes_no_step(void)
 	const double zeta = 0.1, w0 = sqrt(OSC_K), stops[] = {1e9, 1e28, DBL_MAX};
 	sm_model* model = damped_oscillator(zeta, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	double first[6];
 	for (size_t k = 0; k < sizeof stops / sizeof stops[0]; k++) {
 		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
@@ -618,7 +609,7 @@ static int test_an_unchanged_input_set_after_a_changed_one_keeps_the_change(void
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_DRIVEN);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	const int changes[] = {MOVE_ANCHOR, PUSH_BOB};
 	for (size_t c = 0; c < sizeof changes / sizeof changes[0]; c++) {
 		double x[2][6];
@@ -656,7 +647,7 @@ static int test_an_advance_to_the_current_time_keeps_a_changed_input(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	const sm_simulation_def d = tight_def();
+	const sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	double x[3][6];
 	int64_t steps[3];
 	for (int idle = 0; idle < 3; idle++) {
@@ -691,7 +682,7 @@ static int test_plain_advance_within_the_steps_interpolates(void)
 	ENSURE(model != NULL);
 	for (int hooked = 0; hooked < 2; hooked++) {
 		run_record calls = {0};
-		sm_simulation_def d = tight_def();
+		sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 		if (hooked) {
 			d.on_step = count_step;
 			d.on_step_context = &calls;
@@ -732,7 +723,7 @@ static int test_max_steps_holds_when_stepping_past_the_end(void)
 {
 	sm_model* model = damped_oscillator(0.1, SM_PARTICLE_FIXED);
 	ENSURE(model != NULL);
-	sm_simulation_def d = tight_def();
+	sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 	d.max_steps = 10;
 	sm_simulation* past = sm_simulation_create(model, &d, NULL);
 	sm_simulation* plain = sm_simulation_create(model, &d, NULL);
@@ -767,7 +758,7 @@ static int test_an_interval_below_the_time_resolution_after_a_changed_input(void
 	const double push[3] = {1.0, 0.0, 0.0}, t_end = 1.0 + 4e-16;
 	for (int hooked = 0; hooked < 2; hooked++) {
 		run_record r = {0};
-		sm_simulation_def d = tight_def();
+		sm_simulation_def d = tight_def(SM_SOLVER_AUTO);
 		d.restart_on_input_change = true;
 		if (hooked) {
 			d.on_step = count_step;

@@ -15,17 +15,6 @@
 #define OSC_M 1.0
 #define OSC_K 40.0
 
-// Tight tolerances, so that the closed forms are met to far below the tolerances asserted.
-static sm_simulation_def tight_def(sm_linear_solver solver)
-{
-	sm_simulation_def d = sm_default_simulation_def();
-	d.solver = solver;
-	d.relative_tolerance = 1e-10;
-	d.absolute_tolerance_position = 1e-12;
-	d.absolute_tolerance_velocity = 1e-12;
-	return d;
-}
-
 // The undamped oscillator (1 kg, 40 N/m, at rest at its rest length) pushed along the spring by
 // f(t) = f0 + r t from t = 0: m u'' + k u = f0 + r t, u(0) = u'(0) = 0, so
 // u = (f0 + r t) / k - f0 / k cos(w t) - r / (k w) sin(w t), w = sqrt(k / m); the bob's force is

@@ -28,10 +28,9 @@ static void usage(FILE* out)
 	        "time: time [s], every port's quantities (force port P: P.x P.y P.z [m] P.vx P.vy P.vz [m/s];\n"
 	        "motion port P: P.fx P.fy P.fz [N], the force the model exerts on what drives it; probe P:\n"
 	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity, energy.dissipated and\n"
-	        "energy.input (the work the inputs did since the start) [J].\n"
+	        "energy.input (the inputs' work) [J].\n"
 	        "Without --input, force ports get no force, and a motion port's particle moves as the file\n"
-	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n");
-	fprintf(out,
+	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
@@ -59,8 +58,8 @@ static void usage(FILE* out)
 	        "  --atol A               absolute tolerance of positions [m] and velocities [m/s],\n"
 	        "                         at least 1e-150\n"
 	        "  --atol-position A      absolute tolerance of positions alone [m] (wins over --atol)\n"
-	        "  --atol-velocity A      absolute tolerance of velocities and of the energies integrated\n"
-	        "                         (dissipated, input) alone [m/s], [J] (wins over --atol)\n"
+	        "  --atol-velocity A      absolute tolerance of velocities and of the energies\n"
+	        "                         integrated alone [m/s], [J] (wins over --atol)\n"
 	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
 	        "  --max-step H           largest internal step [s]; 0 for no limit\n"
 	        "  --threads N            threads for the pcg solver on models of 4000 free particles or\n"

@@ -324,8 +324,9 @@ def test_directional_derivatives_of_a_moving_damped_system_match_finite_differen
     # hanging: a bob on a damped spring under gravity, in a viscous medium, its hook swung about
     # so that positions and velocities are all non-zero. One call with every motion input seeded
     # at once (seeds of different sizes and signs) against a central finite difference of the
-    # outputs along the same direction: the reaction (stiffness and damping), the three energies
-    # and the hook's own position and velocity. h = 1e-6: round-off of outputs of order 10 over
+    # outputs along the same direction: the reaction (stiffness and damping), the three energies,
+    # the inputs' work (a motion set elsewhere does the work of the energy it adds at once: the
+    # three energies' sum) and the hook's own position and velocity. h = 1e-6: round-off of outputs of order 10 over
     # 2h gives about 1e-9, the h^2 truncation about 1e-11: rtol and atol 1e-6.
     inst = Instance(test_fmu("hanging")).start()
     try:
@@ -335,7 +336,7 @@ def test_directional_derivatives_of_a_moving_damped_system_match_finite_differen
             s.setReal(known, [0.02 * n, -0.01 * n, 0.03 * n, 0.2, -0.1, 0.3])
             s.doStep(0.01 * n, 0.01)
         names = ["hook.fx", "hook.fy", "hook.fz", "energy.kinetic", "energy.elastic", "energy.gravity",
-                 "p[0].x", "p[0].vz", "bob.x"]
+                 "energy.input", "p[0].x", "p[0].vz", "bob.x"]
         unknown = [vr[n] for n in names]
         # The inputs set for the next step: the hook moves from them (a motion input is where the
         # port is at the start of the step it is set for), so the derivatives and the finite
@@ -391,7 +392,7 @@ def test_output_derivatives_are_the_rates_of_the_outputs(test_fmu, accelerating)
             s.doStep(t, 0.01)
             t += 0.01
         outputs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
-        assert len(outputs) == 13  # the hook's force, the bob's position and velocity, four energies
+        assert len(outputs) == 14  # the hook's force, the bob's position and velocity, five energies
         refs = [vr[n] for n in outputs]
         rates = np.array(s.getRealOutputDerivatives(refs, [1] * len(refs)))
         # A position's rate is the velocity output itself, bit for bit.

@@ -471,11 +471,11 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
 # linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19; the doubles time 20,
 # start 21, last successful time 22, dissipated 23, rtol 24, atol of positions 25 and of
-# velocities 26, max_step 27; then x (28-33), v (34-39), the spring's enabled flag 40, the
-# parameters 41-43, the held inputs of base (44-59) and tip (60-75: position, velocity, force,
-# acceleration, force rate, since; fmu_instance.h's port_values) and the pending flags 76-77.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_ENABLED, W_M, \
-    W_TIP_FX, W_WORDS = 13, 14, 17, 18, 23, 24, 25, 27, 40, 41, 66, 78
+# velocities 26, max_step 27, input work 28; then x (29-34), v (35-40), the spring's enabled flag
+# 41, the parameters 42-44, the held inputs of base (45-60) and tip (61-76: position, velocity,
+# force, acceleration, force rate, since; fmu_instance.h's port_values) and the pending flags 77-78.
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_INPUT_WORK, \
+    W_ENABLED, W_M, W_TIP_FX, W_WORDS = 13, 14, 17, 18, 23, 24, 25, 27, 28, 41, 42, 67, 79
 
 
 def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
@@ -528,6 +528,8 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "dissipated energy -inf": edited(state, W_DISSIPATED, "<d", -math.inf),
                      "dissipated energy -1": edited(state, W_DISSIPATED, "<d", -1.0),
                      "dissipated energy -1e-300": edited(state, W_DISSIPATED, "<d", -1e-300),
+                     "input work NaN": edited(state, W_INPUT_WORK, "<d", math.nan),
+                     "input work -inf": edited(state, W_INPUT_WORK, "<d", -math.inf),
                      # positions and velocities without a simulation after initialisation, or a
                      # simulation before it: a state no instance is in
                      "has_sim flipped": edited(state, W_HAS_SIM, "<q", 1 - has_sim),
