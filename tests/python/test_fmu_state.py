@@ -85,7 +85,12 @@ def test_state_saved_between_setting_inputs_and_stepping_keeps_the_inputs(test_f
     # port base) moved to x = 0.3 and the bob pushed must act from that step on, whether or not a
     # state was saved in between, and restoring the state steps with them again: the same
     # results bit for bit (each continuation restarts CVODE at the same state with the same inputs).
-    names = ["p[0].x", "base.fx", "tip.x", "tip.vx"]
+    # The inputs' work too, to the round-off of its sums (the parts may add up in another order):
+    # the anchor's jump towards the bob, which the step gives, counts in every run, the restored
+    # one included (its state was saved before the step gave it). The jump releases about 0.75 J
+    # of the spring's 1 J (it shortens from 0.7 to 0.4 m against a rest length of 0.5 m): the work
+    # is negative, where the push alone would make it positive.
+    names = ["p[0].x", "base.fx", "tip.x", "tip.vx", "energy.input"]
 
     def step_after_inputs(save):
         inst = Instance(test_fmu("driven_oscillator")).start()
@@ -107,7 +112,8 @@ def test_state_saved_between_setting_inputs_and_stepping_keeps_the_inputs(test_f
 
     plain, _ = step_after_inputs(False)
     saved, restored = step_after_inputs(True)
-    assert plain[0] == 0.3 and saved == plain and restored == plain
+    assert plain[0] == 0.3 and saved == plain and restored[:-1] == plain[:-1]
+    assert abs(restored[-1] - plain[-1]) <= 1e-15 and plain[-1] < -0.3, (restored, plain)
 
 
 def test_broken_springs_stay_broken_when_a_parameter_changes_after_a_state(test_fmu):
