@@ -232,9 +232,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	size_t n3 = 3 * (size_t)inst->particle_count, m = (size_t)inst->spring_count;
 	size_t np = (size_t)sm_document_parameter_count(inst->doc), nports = (size_t)inst->port_count;
 	int64_t state = get_i(b, I_STATE), has_sim = get_i(b, I_HAS_SIM);
-	bool ok = (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
-	           state == ST_STEP_FAILED || state == ST_TERMINATED) &&
-	          has_sim == (state != ST_INSTANTIATED);
+	// A state saved in the error state may or may not hold a simulation (the error may have been
+	// creating it); it is never restored (fmi2SetFMUstate), only serialised and read back.
+	bool ok = ((state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_STEP_COMPLETE ||
+	            state == ST_STEP_FAILED || state == ST_TERMINATED) &&
+	           has_sim == (state != ST_INSTANTIATED)) ||
+	          (state == ST_ERROR && (has_sim & ~1) == 0);
 	ok = ok && get_i(b, I_METHOD) >= 0 && get_i(b, I_METHOD) <= SM_METHOD_ADAMS &&
 	     get_i(b, I_LINEAR_SOLVER) >= 0 && get_i(b, I_LINEAR_SOLVER) < SM_SOLVER_COUNT &&
 	     get_i(b, I_JACOBIAN) >= 0 && get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE &&
@@ -251,10 +254,11 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     isfinite(get_d(b, D_LAST_SUCCESSFUL));
 	// Time only runs forward from the experiment's start: t >= start in every state; from the
 	// end of initialisation on, the last successful time lies between them (fmi2DoStep sets it to
-	// where the step got, which is t).
+	// where the step got, which is t). The error state may come before the end of initialisation.
 	const double time = get_d(b, D_TIME), start = get_d(b, D_START), last = get_d(b, D_LAST_SUCCESSFUL);
 	ok = ok && time >= start &&
-	     (state == ST_INSTANTIATED || state == ST_INITIALIZATION || (last >= start && last <= time));
+	     (state == ST_INSTANTIATED || state == ST_INITIALIZATION || state == ST_ERROR ||
+	      (last >= start && last <= time));
 	ok = ok && all_finite(b, 0, 2 * n3) && all_finite(b, 2 * n3 + m, np + PORT_DOUBLES * nports);
 	ok = ok && all_flags(b, 2 * n3, m) && all_flags(b, 2 * n3 + m + np + PORT_DOUBLES * nports, nports);
 	if (!ok) {
@@ -379,12 +383,13 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	return fmi2OK;
 }
 
-// Not in the error state: there is no consistent state to save then (FMI 2.0, 2.1.3: a state for
-// a restart is one saved before, in a non-erroneous state).
+// In the error state too, as FMI 2.0's table of allowed calls has it, with values "usable for
+// debugging only": the state saved there records the error state, and fmi2SetFMUstate refuses it
+// (a state to restart from is one saved before, in a non-erroneous state: 2.1.3).
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate* FMUstate)
 {
 	instance* inst = c;
-	if (!fmu_allowed(inst, "fmi2GetFMUstate", ST_ANY & ~ST_ERROR))
+	if (!fmu_allowed(inst, "fmi2GetFMUstate", ST_ANY))
 		return fmi2Error;
 	if (!FMUstate) {
 		log_error(inst, "fmi2GetFMUstate: NULL FMUstate");
@@ -421,6 +426,13 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 	const saved_state* s = FMUstate;
 	if (!valid_state(inst, "fmi2SetFMUstate", s->bytes, s->size))
 		return fmi2Error;
+	if (get_i(s->bytes, I_STATE) == ST_ERROR) {
+		log_error(
+		    inst,
+		    "fmi2SetFMUstate: the state was saved in the error state, for debugging only: restore a state "
+		    "saved before the error");
+		return fmi2Error;
+	}
 	return restore_state(inst, "fmi2SetFMUstate", s->bytes);
 }
 
