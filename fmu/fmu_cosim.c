@@ -331,6 +331,9 @@ static fmi2Status apply_inputs(instance* inst, const char* function)
 		inst->port_dirty[p] = false;
 		inst->forces_valid = false;
 	}
+	// Inputs set in initialisation mode give the initial state: they do no work.
+	if (inst->state == ST_INITIALIZATION)
+		inst->work_offset = -sm_simulation_input_work(inst->sim);
 	return fmi2OK;
 }
 

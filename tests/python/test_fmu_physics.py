@@ -638,6 +638,43 @@ def test_a_force_input_acts_along_each_of_its_components(test_fmu):
         inst.free()
 
 
+def test_inputs_set_in_initialisation_do_no_work_and_those_after_do(test_fmu):
+    # Inputs set in initialisation mode give the initial state, also after a value was read there
+    # (which creates the simulation and gives it the inputs set so far): energy.input stays 0. The
+    # same move of the anchor after initialisation does the work of the energy it adds, at once:
+    # moved from 0.1 m to 0.2 m and stopped, it lets the spring (to the bob at 0.7 m) relax from
+    # 0.1 m beyond its rest length to none, -k 0.1^2 / 2, and loses its own kinetic energy,
+    # -m 0.5^2 / 2 (1 kg): -0.375 J, to round-off. The push on the bob then works as it moves, closing the balance:
+    # kinetic + elastic + dissipated - input stays at its value after the move (rtol 1e-10 over
+    # 0.5 s on energies of 1 J: within 1e-8 J).
+    inst = Instance(test_fmu("driven_oscillator"))
+    try:
+        s = inst.slave
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for name, value in TIGHT.items():
+            inst.set(name, value)
+        assert inst.get("energy.input") == 0.0
+        inst.set("base.x", 0.1)
+        inst.set("base.vx", 0.5)
+        assert inst.get("energy.input") == 0.0
+        s.exitInitializationMode()
+        assert inst.get("energy.input") == 0.0
+        inst.set("base.vx", 0.0)
+        inst.set("base.x", 0.2)
+        moved = inst.get("energy.input")
+        assert abs(moved - (-0.5 * K * 0.1 ** 2 - 0.5 * 1.0 * 0.5 ** 2)) < 1e-15, moved
+        inst.set("tip.fx", 3.0)
+        names = ("energy.kinetic", "energy.elastic", "energy.dissipated", "energy.input")
+        start = sum(np.array(inst.get(*names)) * [1, 1, 1, -1])
+        for n in range(5):
+            s.doStep(0.1 * n, 0.1)
+            assert abs(sum(np.array(inst.get(*names)) * [1, 1, 1, -1]) - start) < 1e-8
+        assert inst.get("energy.input") - moved > 0.1
+    finally:
+        inst.free()
+
+
 def test_a_motion_input_set_in_a_step_applies_from_its_start_changed_or_not(test_fmu):
     # A motion port set in a communication step moves from P.x with P.vx from the step's start.
     # The master holds base.x = 0 and base.vx = 1 m/s at every 0.1 s step, so the anchor is at
