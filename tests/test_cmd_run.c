@@ -91,8 +91,9 @@ static int check_model(const char* path, bool stop_at_outputs)
 				}
 		}
 		const sm_energies e = sm_simulation_energies(sim);
-		const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
-		for (int c = 0; c < 4; c++) {
+		const double energies[5] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim),
+		                            sm_simulation_input_work(sim)};
+		for (int c = 0; c < 5; c++) {
 			ENSURE(*p == ',');
 			ENSURE_NEAR(strtod(p + 1, &p), energies[c], 0.0);
 		}
@@ -200,6 +201,22 @@ static int check_summary(const char* path, double t_end, double interval)
 		ENSURE(at != NULL);
 		ENSURE_REL(strtod(at + 14, NULL), e.time, 5e-9, 0.0);
 	}
+	// The energy balance, at the start (the model's initial state) and at the end, the library's to
+	// the 9 significant digits printed.
+	double at_start = NAN, at_end = NAN;
+	ENSURE(fgets(line, sizeof line, log) != NULL);
+	ENSURE(sscanf(line,
+	              "springmass run: kinetic + elastic + gravitational + dissipated energy - input work: %lf J "
+	              "at the start, %lf J at the end",
+	              &at_start, &at_end) == 2);
+	const sm_energies end = sm_simulation_energies(sim);
+	ENSURE_REL(at_end,
+	           end.kinetic + end.elastic + end.gravity + sm_simulation_dissipated_energy(sim) -
+	               sm_simulation_input_work(sim),
+	           5e-9, 1e-300);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	const sm_energies begin = sm_simulation_energies(sim);
+	ENSURE_REL(at_start, begin.kinetic + begin.elastic + begin.gravity, 5e-9, 1e-300);
 	ENSURE(fgets(line, sizeof line, log) == NULL);
 	fclose(log);
 	remove(err_path);

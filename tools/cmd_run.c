@@ -71,15 +71,14 @@ static void usage(FILE* out)
 	        "  --jacobian NAME        exact or definite (the definiteness-preserving variant; the pcg\n"
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
-	        "  -q, --quiet            no progress line, no statistics and no list of broken springs\n"
-	        "                         on stderr (errors only)\n"
+	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
 	        "  -h, --help             this text\n"
 	        "\n"
-	        "A progress line goes to stderr for runs longer than a second, and a summary of the\n"
-	        "solver's statistics at the end. Exit status: 0 success, 1 bad model or input signals,\n"
-	        "solver failure or output that cannot be written, 2 usage error. Stopped by a signal\n"
-	        "(Ctrl-C, a kill, a closed pipe), it ends after the row it was writing, its outputs whole up\n"
-	        "to there, with the signal's status.\n");
+	        "A progress line goes to stderr for runs longer than a second, and a summary at the end:\n"
+	        "the solver's statistics, the springs that broke and the energy balance. Exit status: 0\n"
+	        "success, 1 bad model or input signals, solver failure or output that cannot be written, 2\n"
+	        "usage error. Stopped by a signal (Ctrl-C, a kill, a closed pipe), it ends after the row it\n"
+	        "was writing, its outputs whole up to there, with the signal's status.\n");
 }
 
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.
@@ -165,6 +164,15 @@ static void put_values(FILE* csv, const double* values, size_t count)
 {
 	for (size_t k = 0; k < count; k++)
 		cli_csv_number(csv, values[k]);
+}
+
+// Kinetic + elastic + gravitational + dissipated energy - the inputs' work since work_origin [J]:
+// constant but for the integration's error (and BDF's damping of oscillations, docs/simulation.md).
+static double energy_balance(const sm_simulation* sim, double work_origin)
+{
+	const sm_energies e = sm_simulation_energies(sim);
+	return e.kinetic + e.elastic + e.gravity + sm_simulation_dissipated_energy(sim) -
+	       (sm_simulation_input_work(sim) - work_origin);
 }
 
 // work_origin: the inputs' work at the start, the time-0 inputs given [J] (it counts from there).
@@ -520,6 +528,7 @@ int sm_cmd_run(int argc, char** argv)
 		goto done;
 	}
 	const double work_origin = sm_simulation_input_work(sim);
+	const double balance_at_start = energy_balance(sim, work_origin);
 	const char* name = sm_document_name(doc);
 	const size_t path_capacity = strlen(name) + (o.vtk_dir ? strlen(o.vtk_dir) : 0) + 64;
 	path = malloc(path_capacity);
@@ -680,6 +689,11 @@ int sm_cmd_run(int argc, char** argv)
 			snprintf(line, sizeof line, "  spring %d broke at t = %.9g s\n", (int)e.spring, e.time);
 			cli_write_named(stderr, doc, model, line);
 		}
+		const double balance_at_end = energy_balance(sim, work_origin);
+		fprintf(stderr,
+		        "springmass run: kinetic + elastic + gravitational + dissipated energy - input work: %.9g J "
+		        "at the start, %.9g J at the end (%+.3g J)\n",
+		        balance_at_start, balance_at_end, balance_at_end - balance_at_start);
 	}
 	status = 0;
 
