@@ -90,11 +90,13 @@ static const double two_pi = 6.283185307179586476925287;
 // aborts the process (and the handler is process-wide, so the library leaves it alone). The
 // workspaces are plain structs of gsl_eigen.h: symmv's holds four arrays of n doubles (diagonal,
 // subdiagonal, Givens cosines and sines) and gensymmv's one symmv workspace. They are allocated
-// here instead, a failure returned as NULL.
+// here instead, a failure returned as NULL. Behind symmv's arrays lie n row indices for
+// symmetric_eigenpairs (row_places).
 static gsl_eigen_symmv_workspace* symmv_workspace_create(size_t n)
 {
 	gsl_eigen_symmv_workspace* w = malloc(sizeof *w);
-	double* arrays = n <= SIZE_MAX / 4 / sizeof(double) ? malloc(4 * n * sizeof(double)) : NULL;
+	double* arrays =
+	    n <= SIZE_MAX / 5 / sizeof(double) ? malloc(4 * n * sizeof(double) + n * sizeof(size_t)) : NULL;
 	if (w == NULL || arrays == NULL) {
 		free(w);
 		free(arrays);
@@ -102,6 +104,12 @@ static gsl_eigen_symmv_workspace* symmv_workspace_create(size_t n)
 	}
 	*w = (gsl_eigen_symmv_workspace){n, arrays, arrays + n, arrays + 2 * n, arrays + 3 * n};
 	return w;
+}
+
+// The n row indices behind the arrays of a workspace of symmv_workspace_create.
+static size_t* row_places(gsl_eigen_symmv_workspace* w)
+{
+	return (size_t*)(void*)(w->d + 4 * w->size);
 }
 
 static void symmv_workspace_destroy(gsl_eigen_symmv_workspace* w)
@@ -114,14 +122,59 @@ static void symmv_workspace_destroy(gsl_eigen_symmv_workspace* w)
 
 // All eigenpairs of the symmetric n x n matrix (destroyed), eigenvalues ascending, eigenvectors
 // as the columns of vectors; ws is a workspace for n. False if the eigensolver fails.
+//
+// A row of zeros (a degree of freedom that no spring holds, such as a particle without springs
+// or one on an unstressed spring along x in y and z; a mode that no spring damps) is an
+// eigenvector by itself, e_i with eigenvalue exactly 0, and is taken out before GSL's solver
+// sees the matrix. Left in, such rows let the Householder reduction pass the round-off of the
+// other rows on from row to row, shrinking by about the machine epsilon at each, down to
+// subnormal numbers, where gsl_eigen_symmv's implicit QR never meets its convergence test
+// (eps (|d_i| + |d_i+1|) underflows) and loops for ever: a spring along (2, 3, 6) among 20
+// particles without springs, or a damper alone among 40 particles, never returned. The other
+// rows and columns, in their order, form the matrix solved; a matrix without zero rows is solved
+// as it is.
 static bool symmetric_eigenpairs(double* matrix, size_t n, double* values, double* vectors,
                                  gsl_eigen_symmv_workspace* ws)
 {
-	gsl_matrix_view A = gsl_matrix_view_array(matrix, n, n);
-	gsl_matrix_view V = gsl_matrix_view_array(vectors, n, n);
+	// place[i]: where row i goes, the rows kept first in their order, then the zero rows.
+	size_t* place = row_places(ws);
+	size_t kept = 0;
+	for (size_t i = 0; i < n; i++) {
+		size_t j = 0;
+		while (j < n && matrix[i * n + j] == 0.0)
+			j++;
+		place[i] = j < n ? kept++ : SIZE_MAX;
+	}
+	for (size_t i = 0, zero = kept; i < n; i++)
+		if (place[i] == SIZE_MAX)
+			place[i] = zero++;
 	gsl_vector_view L = gsl_vector_view_array(values, n);
-	return gsl_eigen_symmv(&A.matrix, &L.vector, &V.matrix, ws) == GSL_SUCCESS &&
-	       gsl_eigen_symmv_sort(&L.vector, &V.matrix, GSL_EIGEN_SORT_VAL_ASC) == GSL_SUCCESS;
+	gsl_matrix_view V = gsl_matrix_view_array(vectors, n, n);
+	bool solved;
+	if (kept == n) {
+		gsl_matrix_view A = gsl_matrix_view_array(matrix, n, n);
+		solved = gsl_eigen_symmv(&A.matrix, &L.vector, &V.matrix, ws) == GSL_SUCCESS;
+	} else {
+		// The rows kept, kept x kept, into vectors; their eigenvectors into matrix (both hold
+		// n x n), then spread back, and a unit vector with eigenvalue 0 for each zero row.
+		for (size_t i = 0; i < n; i++)
+			for (size_t j = 0; j < n; j++)
+				if (place[i] < kept && place[j] < kept)
+					vectors[place[i] * kept + place[j]] = matrix[i * n + j];
+		gsl_eigen_symmv_workspace part = *ws;  // its arrays have room for n
+		part.size = kept;
+		gsl_matrix_view A = gsl_matrix_view_array(vectors, kept, kept);
+		gsl_matrix_view Y = gsl_matrix_view_array(matrix, kept, kept);
+		gsl_vector_view T = gsl_vector_view_array(values, kept);
+		solved = kept == 0 || gsl_eigen_symmv(&A.matrix, &T.vector, &Y.matrix, &part) == GSL_SUCCESS;
+		for (size_t i = 0; i < n && solved; i++)
+			for (size_t k = 0; k < n; k++)
+				vectors[i * n + k] = place[i] < kept ? (k < kept ? matrix[place[i] * kept + k] : 0.0)
+				                                     : (k == place[i] ? 1.0 : 0.0);
+		for (size_t k = kept; k < n; k++)
+			values[k] = 0.0;
+	}
+	return solved && gsl_eigen_symmv_sort(&L.vector, &V.matrix, GSL_EIGEN_SORT_VAL_ASC) == GSL_SUCCESS;
 }
 
 sm_modes_def sm_default_modes_def(void)

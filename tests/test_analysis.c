@@ -8,6 +8,7 @@
 #include <dlfcn.h>
 #include <float.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 static const double pi = 3.14159265358979323846;
 
@@ -1826,6 +1827,51 @@ static int test_coincident_undamped_zero_length_spring_has_modes(void)
 	return 0;
 }
 
+// Degrees of freedom that nothing holds beside one spring: 22 particles of 1 kg without gravity,
+// the first at the origin and the last at (-0.219, -0.589, 0.357) m joined by a spring, the 20
+// between (at (i, 5, 0) m) by nothing; all modes. With a stiffness of 100 N/m the dense
+// eigensolver gives one mode of omega^2 = 2 k / m = 200 1/s^2 and 65 zero modes; with a damping
+// of 3 N s/m alone (a mechanism without stiffness) 66 zero modes, one of them damped at
+// phi^T C phi = 2 kd / m = 6 1/s. The stiffness, and the damping block of the zero modes, are
+// zero but for the spring's rows, which made GSL's symmetric eigensolver loop for ever (the
+// alarm ends the test then).
+static int test_particles_without_springs_beside_one_spring(void)
+{
+	for (int damper = 0; damper <= 1; damper++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		for (int32_t i = 0; i < 22; i++) {
+			sm_particle_def p = sm_default_particle_def();
+			const double end[3] = {-0.219, -0.589, 0.357}, between[3] = {(double)i, 5.0, 0.0};
+			for (int c = 0; c < 3; c++)
+				p.position[c] = i == 0 ? 0.0 : i == 21 ? end[c] : between[c];
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		}
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 21;
+		s.stiffness = damper ? 0.0 : 100.0;
+		s.damping = damper ? 3.0 : 0.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_modes modes;
+		sm_error err;
+		alarm(60);
+		const sm_status st = sm_modes_compute(model, NULL, &modes, &err);
+		alarm(0);
+		ENSURE_STATUS(st, SM_OK);
+		ENSURE(modes.solver == SM_MODES_DENSE && modes.count == 66);
+		ENSURE(modes.zero_count == (damper ? 66 : 65) && modes.unstable_count == 0);
+		ENSURE_REL(modes.omega_squared[65], damper ? 0.0 : 200.0, 1e-14, 1e-300);
+		ENSURE_REL(modes.modal_damping[65], damper ? 6.0 : 0.0, 1e-14, 1e-300);
+		ENSURE(modes.residual <= 1e-14);
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // Coincident springs between two held particles act on no free degree of freedom, so they stand
 // in the way of neither modes nor statics: two fixed particles at one point joined by a damped
 // zero-length spring and a rest-length spring of l0 = 1 m, and a 1 kg bob hanging 1 m below on
@@ -3137,6 +3183,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_explicit_step_limit_edges);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
+	RUN_TEST(test_particles_without_springs_beside_one_spring);
 	RUN_TEST(test_coincident_springs_between_held_particles);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
