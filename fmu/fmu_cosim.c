@@ -362,13 +362,13 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 	// the prescribed motion of a port whose inputs were set some steps before the state was saved
 	// has moved on since (the held position is still what the input reads). A restored force port
 	// goes on along its ramp from the value it reached. Inputs set since the last step (pending[p])
-	// start from the held values, as at fmi2DoStep: after the others (pass 1), so that the work
-	// counts from before them.
+	// start from the held values, as at fmi2DoStep: after every port has its particle where the
+	// state has it (pass 1), so that the work counts their jumps from there.
 	double work_origin = 0.0;
 	for (int pass = 0; pass < 2; ++pass) {
 		for (int32_t p = 0; p < inst->port_count; ++p) {
-			const bool continued = x && !pending[p];
-			if ((x && pending[p]) != (pass == 1))
+			const bool continued = x && pass == 0;
+			if (pass == 1 && !(x && pending[p]))
 				continue;
 			const size_t i = 3 * (size_t)inst->ports[p].particle;
 			double force[3];

@@ -116,6 +116,35 @@ def test_state_saved_between_setting_inputs_and_stepping_keeps_the_inputs(test_f
     assert abs(restored[-1] - plain[-1]) <= 1e-15 and plain[-1] < -0.3, (restored, plain)
 
 
+def test_a_pending_motion_input_of_a_restored_state_does_the_work_of_its_jump(test_fmu):
+    # The anchor (motion port base) moved to x = 0.1 in the first step, then set to 0.3 and a
+    # state saved before the step that gives it: restored, the step counts the jump's work from
+    # where the state had the anchor, 0.1 m, as the run that saved no state does; from the
+    # model's anchor at the origin, 0.1 m further from the bob, it would be 0.52 J less.
+    names = ["p[0].x", "tip.x", "energy.input"]
+
+    def run(save):
+        inst = Instance(test_fmu("driven_oscillator")).start()
+        try:
+            inst.set("base.x", 0.1)
+            inst.slave.doStep(0.0, 0.1)
+            inst.slave.doStep(0.1, 0.1)
+            inst.set("base.x", 0.3)
+            state = inst.slave.getFMUstate() if save else None
+            inst.slave.doStep(0.2, 0.1)
+            if state is None:
+                return inst.get(*names)
+            inst.slave.setFMUstate(state)
+            inst.slave.doStep(0.2, 0.1)
+            return inst.get(*names)
+        finally:
+            inst.free()
+
+    plain, restored = run(False), run(True)
+    assert restored[:2] == plain[:2]
+    assert abs(restored[2] - plain[2]) <= 1e-15, (restored, plain)
+
+
 def test_broken_springs_stay_broken_when_a_parameter_changes_after_a_state(test_fmu):
     # The bundled tearing cloth has torn by t = 1 s. A tunable parameter set then (E_bend by a
     # relative 1e-7, or break_strain raised so that nothing would break) must not mend the broken
