@@ -612,10 +612,18 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 			if (!sm_model_spring_enabled(running, k))
 				sm_model_set_spring_enabled(model, k, false);
 		}
+		// The new constants change the energies at once (a stiffer spring holds more at the same
+		// stretch): what sets them does that work, as a motion set elsewhere does.
+		const sm_energies before = sm_simulation_energies(inst->sim);
 		st = sm_simulation_update_model(inst->sim, model);
-		if (st != SM_OK)
+		if (st != SM_OK) {
 			log_error(inst, "fmi2SetReal: the simulation cannot take the new parameters: %s",
 			          sm_simulation_last_error(inst->sim));
+		} else {
+			const sm_energies after = sm_simulation_energies(inst->sim);
+			inst->work_offset += (after.kinetic - before.kinetic) + (after.elastic - before.elastic) +
+			                     (after.gravity - before.gravity);
+		}
 	}
 	sm_model_destroy(model);
 	if (st != SM_OK) {
