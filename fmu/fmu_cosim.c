@@ -1328,7 +1328,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 //                                    zero velocity are elastic plus weight only)
 //   d(position, velocity of a particle) = dx_i, dv_i: a driven particle is where its port puts it
 //   d(inputs' work)                = the sum of the three energies' (a motion set elsewhere does
-//                                    the work of the energy it adds at once)
+//                                    the work of the energy it adds at once); 0 in initialisation
+//                                    mode, where the inputs give the initial state and do no work
 // Positions and velocities of free particles and the dissipated energy are states: their
 // derivatives with respect to the current inputs are zero (dx and dv are zero there).
 // ---------------------------------------------------------------------------------------------
@@ -1456,7 +1457,8 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 			const size_t i = 3 * (size_t)v->index + (size_t)v->component;
 			result = v->source == FMU_SRC_PARTICLE_POSITION ? dx[i] : dv[i];
 		} else if (v->source == FMU_SRC_ENERGY_KINETIC || v->source == FMU_SRC_ENERGY_GRAVITY ||
-		           v->source == FMU_SRC_ENERGY_ELASTIC || v->source == FMU_SRC_ENERGY_INPUT) {
+		           v->source == FMU_SRC_ENERGY_ELASTIC ||
+		           (v->source == FMU_SRC_ENERGY_INPUT && inst->state != ST_INITIALIZATION)) {
 			result = state_output_change(inst, v, dx, dv, work, &evaluated);
 		}
 		dvUnknown[k] = result;

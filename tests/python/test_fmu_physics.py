@@ -658,8 +658,14 @@ def test_inputs_set_in_initialisation_do_no_work_and_those_after_do(test_fmu):
         inst.set("base.x", 0.1)
         inst.set("base.vx", 0.5)
         assert inst.get("energy.input") == 0.0
+        # Its derivative with respect to a motion input is 0 there, and after initialisation that
+        # of the energy a move adds: the spring (0.6 m, rest length 0.5 m) relaxes as the anchor
+        # moves towards the bob, -k 0.1 m.
+        vr = [inst.vr["energy.input"]], [inst.vr["base.x"]]
+        assert s.getDirectionalDerivative(*vr, [1.0]) == [0.0]
         s.exitInitializationMode()
         assert inst.get("energy.input") == 0.0
+        assert abs(s.getDirectionalDerivative(*vr, [1.0])[0] - (-K * (0.7 - 0.1 - 0.5))) < 1e-12
         inst.set("base.vx", 0.0)
         inst.set("base.x", 0.2)
         moved = inst.get("energy.input")
