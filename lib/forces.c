@@ -605,7 +605,8 @@ sm_energies sm_model_energies(const sm_model* model, const double* x, const doub
 	return e;
 }
 
-double sm_model_particle_energy(const sm_model* model, const double* x, const double* v, int32_t i)
+double sm_model_particle_energy(const sm_model* model, const double* x, const double* v, int32_t i,
+                                const int32_t* springs, int32_t count)
 {
 	const double m = model->mass[i];
 	const double* g = model->def.gravity;
@@ -613,13 +614,12 @@ double sm_model_particle_energy(const sm_model* model, const double* x, const do
 	const double* vi = v + 3 * (size_t)i;
 	double energy = 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]) -
 	                m * (g[0] * xi[0] + g[1] * xi[1] + g[2] * xi[2]);
-	for (int32_t s = 0; s < model->spring_count; s++)
-		if (model->spring_a[s] == i || model->spring_b[s] == i) {
-			spring_geometry geo;
-			spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s],
-			                     &geo);
-			energy += rest_length_energy(model->stiffness[s], model->rest_length[s], geo.length);
-		}
+	for (int32_t k = 0; k < count; k++) {
+		const int32_t s = springs[k];
+		spring_geometry geo;
+		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &geo);
+		energy += rest_length_energy(model->stiffness[s], model->rest_length[s], geo.length);
+	}
 	return energy;
 }
 

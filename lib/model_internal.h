@@ -134,10 +134,11 @@ double sm_model_forces_and_power(const sm_model* model, const double* x, const d
                                  const double* f_external, double* f);
 
 // The terms of the energy that involve particle i: its kinetic and gravitational energy and the
-// elastic energy of the springs at it [J]. A move of particle i alone changes the energy
-// (sm_model_energies) by the change of these terms, computed without the rest's round-off. x and
-// v must be given. Defined in forces.c.
-double sm_model_particle_energy(const sm_model* model, const double* x, const double* v, int32_t i);
+// elastic energy of the springs at it, springs[0 .. count - 1] [J]. A move of particle i alone
+// changes the energy (sm_model_energies) by the change of these terms, computed without the
+// rest's round-off. x and v must be given. Defined in forces.c.
+double sm_model_particle_energy(const sm_model* model, const double* x, const double* v, int32_t i,
+                                const int32_t* springs, int32_t count);
 
 // The springs' share of the forces, added to f, with at most `lanes` springs at a time (1, 2 or 4;
 // fewer where the processor lacks SSE2 or AVX): damping if v is given, every spring's record of

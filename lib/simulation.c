@@ -576,6 +576,37 @@ static void refresh_masses(sm_simulation* sim)
 	}
 }
 
+// The springs at each driven particle (driven_spring_start, driven_springs): counted, then listed.
+static sm_status build_driven_springs(sm_simulation* sim)
+{
+	const sm_model* m = sim->model;
+	int32_t* start = calloc((size_t)m->particle_count + 2, sizeof(int32_t));
+	if (start == NULL)
+		return SM_ERROR_OUT_OF_MEMORY;
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
+		for (int e = 0; e < 2; e++)
+			start[ends[e] + 2] += m->motion[ends[e]] == SM_PARTICLE_DRIVEN;
+	}
+	for (int32_t i = 0; i < m->particle_count; i++)
+		start[i + 2] += start[i + 1];
+	int32_t* springs = malloc(((size_t)start[m->particle_count + 1] + 1) * sizeof(int32_t));
+	if (springs == NULL) {
+		free(start);
+		return SM_ERROR_OUT_OF_MEMORY;
+	}
+	// start[i + 1] is the next place of particle i's springs, and ends as the end of them.
+	for (int32_t s = 0; s < m->spring_count; s++) {
+		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
+		for (int e = 0; e < 2; e++)
+			if (m->motion[ends[e]] == SM_PARTICLE_DRIVEN)
+				springs[start[ends[e] + 1]++] = s;
+	}
+	sim->driven_spring_start = start;
+	sim->driven_springs = springs;
+	return SM_OK;
+}
+
 // Everything from the model's stored initial state: positions, velocities, driven motion,
 // no external forces, e = w = 0.
 static void load_initial_state(sm_simulation* sim)
@@ -767,6 +798,8 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		sim->driven_count += m->motion[i] == SM_PARTICLE_DRIVEN;
 	}
 	refresh_masses(sim);
+	if (build_driven_springs(sim) != SM_OK)
+		goto out_of_memory;
 	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
 	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU ||
 	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
@@ -847,6 +880,8 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->force_rate);
 	free(sim->force_time);
 	free(sim->work_external);
+	free(sim->driven_spring_start);
+	free(sim->driven_springs);
 	free(sim->work_position);
 	free(sim->work_velocity);
 	free(sim->work_force);
@@ -1483,8 +1518,11 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	}
 	// What moves the particle to its new position and velocity at once does the work the energy
 	// takes in the jump. An energy beyond a double is not handed on to the inputs' work.
+	const int32_t* springs = sim->driven_springs + sim->driven_spring_start[particle];
+	const int32_t count = sim->driven_spring_start[particle + 1] - sim->driven_spring_start[particle];
 	const double before =
-	    jump ? sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle) : 0.0;
+	    jump ? sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count)
+		     : 0.0;
 	if (jump) {
 		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
 		memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
@@ -1495,7 +1533,8 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	sm_simulation_refresh_outputs(sim);
 	if (jump) {
 		const double work =
-		    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle) - before;
+		    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) -
+		    before;
 		if (isfinite(work))
 			sim->jump_work += work;
 	}

@@ -63,12 +63,17 @@ struct sm_simulation {
 	// Inputs. A particle's external force is external_force + force_rate (t - force_time); a driven
 	// particle's position drive_position + drive_velocity s + drive_acceleration s^2 / 2 at
 	// s = t - drive_time (3 per particle, times 1 per particle).
-	double* external_force;      // [N]
-	double* force_rate;          // [N/s]
-	double* force_time;          // [s]
-	int32_t ramping_forces;      // particles whose force_rate is not 0
-	int32_t forced_particles;    // free particles whose external force or force_rate is not 0
-	int32_t driven_count;        // driven particles
+	double* external_force;    // [N]
+	double* force_rate;        // [N/s]
+	double* force_time;        // [s]
+	int32_t ramping_forces;    // particles whose force_rate is not 0
+	int32_t forced_particles;  // free particles whose external force or force_rate is not 0
+	int32_t driven_count;      // driven particles
+	// The springs at each driven particle, whose energy a jump of the particle changes: those of
+	// particle i are driven_springs[driven_spring_start[i] .. driven_spring_start[i + 1] - 1]
+	// (none for the other particles).
+	int32_t* driven_spring_start;  // particle_count + 1
+	int32_t* driven_springs;
 	double* drive_position;      // [m]
 	double* drive_velocity;      // [m/s]
 	double* drive_acceleration;  // [m/s^2]
