@@ -102,8 +102,8 @@ def test_master_loop_agrees_with_the_monolithic_model_and_converges(chain):
 def test_input_derivatives_make_the_coupling_second_order(chain):
     # The same loop with each input extrapolated from its output's first derivative: the joint
     # accelerates with m1 (d(m1.vx)/dt = f / m), m1's force ramps with d(joint.fx)/dt. Halving h
-    # now quarters the error (ratio 4 +- 25 %; measured 3.57e-5, 8.99e-6 and 2.36e-6 m, ratios
-    # 3.98 and 3.80), and at h = 1 ms the coupled chain is 300 times closer to the monolithic one
+    # now quarters the error (ratio 4 +- 25 %; measured 3.58e-5, 9.03e-6 and 2.40e-6 m, ratios
+    # 3.96 and 3.76), and at h = 1 ms the coupled chain is 300 times closer to the monolithic one
     # than with held inputs (7.61e-4 m): below 1e-5 m.
     errors = []
     for h in (0.004, 0.002, 0.001):
