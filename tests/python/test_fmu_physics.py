@@ -27,7 +27,7 @@ def test_oscillator_matches_closed_form(test_fmu):
     w = math.sqrt(K / M)
     t = r["time"]
     assert np.max(np.abs(r["tip.x"] - (L0 + (X0 - L0) * np.cos(w * t)))) < 1e-6
-    # The velocity (amplitude 1 m/s) carries the same relative error (measured 3.3e-8 m/s).
+    # The velocity (amplitude 1 m/s) carries the same relative error (measured 9.3e-8 m/s).
     assert np.max(np.abs(r["tip.vx"] + (X0 - L0) * w * np.sin(w * t))) < 1e-6
     # Energy is conserved (no damping): kinetic + elastic stays at k (x0 - l0)^2 / 2 = 1 J, to
     # about twice the relative error of the state, which the tolerances keep below 5e-7 of the
@@ -273,8 +273,8 @@ def test_motion_port_reaction_matches_statics(test_fmu):
         stretch = l0 + np.linalg.norm(f_s) / k
         # Tolerances: what is left of the transients is below 1e-6 of the initial ones; the rest
         # is the integrator's error, default rtol 1e-6 on forces of about 6 N (6e-6 N; measured
-        # 1.1e-8 N), on positions of 0.3 m and velocities of 0.1 m/s (measured 6.6e-10 m and
-        # 2e-8 m/s).
+        # 5.7e-9 N), on positions of 0.3 m and velocities of 0.1 m/s (measured 3.4e-10 m and
+        # 1.3e-8 m/s).
         assert np.allclose(force, (m + m_hook) * g - alpha * (m + m_hook) * velocity, atol=1e-5)
         # The input reads what was set last (at t - h); the hook itself is at v t.
         assert np.allclose(hook, velocity * (t - h), atol=1e-12)
@@ -542,7 +542,7 @@ def test_input_derivatives_are_part_of_the_fmu_state(test_fmu):
         for n in range(3, 10):
             other.slave.doStep(n * 0.1, 0.1)
         assert other.get(*names) == restored
-        # Measured 7.7e-10 m, 1.6e-9 m/s and K times the first, 3.9e-8 N.
+        # Measured 2.3e-10 m, 1.8e-9 m/s and K times the first, 1.2e-8 N.
         assert np.all(np.abs(np.array(restored) - through) < [1e-8, 1e-8, K * 1e-8]), (restored, through)
         s.freeFMUstate(saved)
         s.reset()
@@ -686,7 +686,7 @@ def test_a_tunable_parameter_set_between_steps_does_the_work_of_the_energy_it_ad
     # there changes it: whatever sets the parameter does that work, so that the balance kinetic +
     # elastic + dissipated - input holds across the set to round-off and after it to the
     # tolerances (rtol 1e-10 over 0.5 s on energies of 1 J, the spring now twice as stiff: within
-    # 1e-7 J, measured 2.4e-8 J). Without the work it
+    # 1e-7 J, measured 4.0e-8 J). Without the work it
     # would be off by the spring's energy before the set, 0.84 J here.
     inst = Instance(test_fmu("driven_oscillator")).start(TIGHT)
     names = ("energy.kinetic", "energy.elastic", "energy.dissipated", "energy.input")
@@ -850,7 +850,7 @@ def test_energy_balance_holds_across_saved_and_restored_states(test_fmu):
     # elastic and dissipated energy add up to the k (x0 - l0)^2 / 2 = 1 J it starts with, at every
     # step, after each fmi2GetFMUstate, after fmi2SetFMUstate of either of two states, and in
     # another instance given a state through its bytes: the dissipated energy is part of the state. rtol 1e-10: the three energies are
-    # integrated to about 1e-8 J (measured 1.0e-8 J over 0.6 s): 1e-7 J.
+    # integrated to about 1e-8 J (measured 6.1e-9 J over 0.6 s): 1e-7 J.
     tight = {"d": 0.5, "solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
     fmu = test_fmu("driven_oscillator")
     a, b = Instance(fmu, "a").start(tight), Instance(fmu, "b").start()
@@ -898,10 +898,10 @@ def test_a_spring_breaks_when_its_closed_form_strain_reaches_the_limit(package, 
     # from rest: x - l0 = (F/k) (1 - cos(w t)), w = 10 rad/s, so the strain (x - l0) / l0 reaches
     # the break strain 0.1 at cos(w t) = 1/2, t_b = pi/30 s. The experiment starts at t = 5 s: the
     # logged time is 5 + t_b, found by root finding on a solution integrated at rtol 1e-10 (the
-    # strain rises at 1.7 /s there; measured 8e-10 s off): 1e-8 s. The elastic energy the spring
+    # strain rises at 1.7 /s there; measured 7e-11 s off): 1e-8 s. The elastic energy the spring
     # held, k (0.1)^2 / 2 = 0.5 J, is dissipated, and then the bob accelerates freely: kinetic
     # energy is the work of F, F (x - x0), less the 0.5 J, to the integration's error on about
-    # 2 J (measured 2.1e-8 J): 1e-7 J.
+    # 2 J (measured 2.0e-9 J): 1e-7 J.
     model = tmp_path / "breaking.json"
     model.write_text(json.dumps(BREAKING))
     inst = Instance(package(model), logging_on=True).start(
