@@ -205,8 +205,8 @@ def test_options_take_effect(tmp_path):
         assert not np.array_equal(loose, default), option
         # tip.x: the file's tolerances keep it within ~1e-8 m. The rows are interpolated from the
         # solver's steps, which the 0.01 s rows no longer cut short: each step errs by about the
-        # tolerance and the errors add up over the two periods (measured: 6e-4 m at rtol 1e-3,
-        # 1.4e-4 m at atol 1e-5; 1.1e-2 m at atol 1e-3, which is why that one is not used).
+        # tolerance and the errors add up over the two periods (measured: 7.5e-4 m at rtol 1e-3,
+        # 1.6e-4 m at atol 1e-5; 1.1e-2 m at atol 1e-3, which is why that one is not used).
         # 1e-3 m, a hundredth of the amplitude, bounds them.
         np.testing.assert_allclose(loose[:, 1], default[:, 1], rtol=0, atol=1e-3)
     # Adams and every linear solver integrate the same equations: the bob's position agrees
@@ -221,7 +221,7 @@ def test_options_take_effect(tmp_path):
     # The definiteness-preserving Jacobian changes Newton's iterates, not the equations. The
     # oscillator moves along its spring, where both Jacobians agree; the swinging rope turns its
     # springs. At rtol 1e-9 the two runs of its tip agree to what the tolerances allow over
-    # 0.5 s of swing (measured 4.5e-7 m): 1e-5 m.
+    # 0.5 s of swing (measured 2.6e-9 m, its velocity 1.1e-7 m/s): 1e-5 m.
     rope = [MODELS / "hanging_rope.json", "--t-end", 0.5, "--solver", "klu", "--rtol", 1e-9, "--atol", 1e-11]
     _, exact = run_csv(tmp_path, *rope, "--jacobian", "exact", name="exact.csv")
     _, definite = run_csv(tmp_path, *rope, "--jacobian", "definite", name="definite.csv")
@@ -392,7 +392,7 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     # u = (x0 - l0) cos(w t) + r / K (t - sin(w t) / w). The anchor's velocity growing as a t (its
     # position, not given, the integral from the origin): in its frame M u'' = -K u - M a,
     # u = -M a / K + (x0 - l0 + M a / K) cos(w t), and the anchor feels K u. At rtol 1e-10 the
-    # error of the state over 2 s is near 1e-8 m (measured 6e-9 and 3e-9 m): 1e-6 m, K times that
+    # error of the state over 2 s is near 1e-8 m (measured 2.5e-9 and 1.9e-9 m): 1e-6 m, K times that
     # for the force.
     w = math.sqrt(OSC_K / OSC_M)
     (tmp_path / "ramp.csv").write_text("time,tip.fx\n0,0\n2,6\n")
