@@ -281,8 +281,8 @@ static int test_momentum_conserved_free_block(void)
 		// Linear momentum is a linear invariant: every Newton iterate of BDF keeps it (the spring
 		// forces sum to zero and so do the columns of their Jacobian), so it drifts only by
 		// round-off, about 1e-16 of its scale per step over some thousand steps: 1e-12 (measured
-		// 1e-16). Angular momentum is quadratic: conserved to the integration error, rtol 1e-10
-		// per unit time over 2 s, with a factor of 5: 1e-9 of its scale (measured 6e-13).
+		// 1e-15). Angular momentum is quadratic: conserved to the integration error, rtol 1e-10
+		// per unit time over 2 s, with a factor of 5: 1e-9 of its scale (measured 2.3e-12).
 		for (int c = 0; c < 3; c++) {
 			ENSURE_NEAR(P[c], P0[c], 1e-12 * scaleP);
 			ENSURE_NEAR(L[c], L0[c], 1e-9 * scaleL);
@@ -451,8 +451,8 @@ fail:
 // dissipated, so kinetic + elastic + dissipated stays at its initial value (1 + 0.125 J).
 // Tolerances: the dissipated energy is the spring's energy at the located break, whose strain
 // root finding puts at 0.1 to about 1e-14: 1e-12 J (measured 9e-16); the total carries the
-// global error of the undamped motion at rtol 1e-8, which grows over the run to 1.7e-7 J
-// measured (15 times rtol times the total): 1e-6 J.
+// global error of the undamped motion at rtol 1e-8, which grows over the run to 1.8e-7 J
+// measured (16 times rtol times the total): 1e-6 J.
 // Then a model made from the simulation's own (cloned, the bob's mass halved) has the broken
 // spring disabled: update_model keeps it broken, and a reset restores it (it took that model's
 // disabled spring for its state at the start, and the reset left it broken), so it breaks again.
@@ -1616,12 +1616,12 @@ static double grazing_break_time(double delta)
 // Tolerances. The crossing grazes: the strain rises at A w sin(w t_b) = 1.4e-3 m/s there, so a
 // position error e moves the break by e / (1.4e-3 m/s). At rtol 1e-10 of the 1 m length the
 // global position error at t_b is 2.3e-9 m with BDF and 2.8e-10 m with Adams (measured without a
-// break strain); with e <= 1e-8 m the break is within 7e-6 s of t_b (measured 1.6e-6 s): 1e-5 s,
+// break strain); with e <= 1e-8 m the break is within 7e-6 s of t_b (measured 2.0e-7 s): 1e-5 s,
 // well inside the excursion's 1.4e-4 s before its peak, where the break must come. The break is
 // located on CVODE's polynomial to its time resolution, where the strain is the break strain: the
 // energy the spring takes with it is ks (0.1 l0)^2 / 2 = 0.5 J to the round-off of the length
 // (1e-16 m in a 10 N force: 1e-12 J). The total ks A^2 / 2 holds to the energy error of the
-// trajectory, ks A e = 1e-7 J (measured 2.3e-8 J).
+// trajectory, ks A e = 1e-7 J (measured 2.8e-9 J).
 static int test_break_inside_one_step(void)
 {
 	const double delta = 1e-6, amplitude = grazing_amplitude(delta), t_break = grazing_break_time(delta);
@@ -2071,7 +2071,7 @@ static int test_cloth_at_rest_reactions_balance_weight(void)
 	const double weight = sm_model_total_mass(model) * 9.81;
 	// The supports carry the whole weight (their own particles' weight included): the
 	// reaction -f balances it to the residual of a state at rest, the stiffness times a
-	// position error held to atol 1e-10 m (measured 1.7e-10 N, 2e-11 of the weight): 1e-8 of
+	// position error held to atol 1e-10 m (measured 9e-14 N, 9e-15 of the weight): 1e-8 of
 	// the weight.
 	ENSURE_NEAR(on_supports[0], 0.0, 1e-8 * weight);
 	ENSURE_NEAR(on_supports[1], 0.0, 1e-8 * weight);
@@ -2296,7 +2296,7 @@ static int test_reduced_solver_huge_mass(void)
 		       (long)stats.steps, (long)stats.convergence_failures);
 		ENSURE(stats.convergence_failures == 0 && stats.steps <= dense_steps + dense_steps / 10);
 		// Default tolerances (rtol 1e-6, atol 1e-8 m) on a 4.9 m fall: a few rtol of it, 1e-5 m
-		// (measured 3.9e-8 m).
+		// (measured 4.0e-8 m).
 		ENSURE_NEAR(sm_simulation_positions(sim)[5], -0.5 * 9.81, 1e-5);
 		sm_simulation_destroy(sim);
 	}
@@ -2407,7 +2407,7 @@ static int test_large_times_keep_the_steps_precision(void)
 // CVODE on its own axis, as the same four steps from 0 are, to the same bits; they were four
 // explicit Euler steps (too short for the resolution of t itself), and the oscillator's 0.5 J went
 // to 70 J. Undamped, its energy is kept to 1e-6 of itself: rtol 1e-10 of the bob's x, 1 m, is 1e-8
-// of the amplitude 0.01 m, and the four steps lose 1e-7 of the energy (measured 9.6e-8).
+// of the amplitude 0.01 m, and the four steps lose 1e-7 of the energy (measured 1.2e-7).
 static int test_an_ulp_of_a_large_time_is_integrated(void)
 {
 	sm_model* model = oscillator(1.0, 1e4, 0.0, 0.01);
@@ -2907,7 +2907,7 @@ static int test_update_model(void)
 	ENSURE_STATUS(sm_simulation_update_model(sim, stiff), SM_OK);
 	ENSURE_STATUS(sm_simulation_advance(sim, 0.3), SM_OK);
 	// Undamped, u0 = 0.2: u = 0.2 cos(sqrt(160) t). At rtol 1e-10 the global error is about 100
-	// rtol of the 0.2 m amplitude (measured 1.9e-9 m, the restart after the update included):
+	// rtol of the 0.2 m amplitude (measured 1.5e-9 m, the restart after the update included):
 	// 1e-8 m.
 	ENSURE_NEAR(sm_simulation_positions(sim)[3] - 1.0, 0.2 * cos(sqrt(160.0) * 0.3), 1e-8);
 	sm_model* other = two_mass_chain();
@@ -2930,7 +2930,7 @@ static int test_adams_method(void)
 	ENSURE(sim != NULL);
 	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
 	// Adams at rtol 1e-10 over two periods: the global error is about 14 rtol of the 0.2 m
-	// amplitude (measured 2.7e-10 m); 1e-8 m leaves room for other step sequences.
+	// amplitude (measured 2.9e-10 m); 1e-8 m leaves room for other step sequences.
 	ENSURE_NEAR(sm_simulation_positions(sim)[3] - 1.0, 0.2 * cos(sqrt(40.0) * 2.0), 1e-8);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
@@ -2941,7 +2941,7 @@ static int test_adams_method(void)
 // one free particle, block Jacobi is the inverse of the 3x3 Newton matrix, so conjugate
 // gradients take at most one iteration per Newton solve (none where the residual starts below
 // the tolerance); each Newton solve follows a right-hand side evaluation at its iterate, so the
-// iterations cannot exceed the right-hand side evaluations (measured 102 against 119). Both
+// iterations cannot exceed the right-hand side evaluations (measured 109 against 128). Both
 // reduced solvers evaluate the Jacobian afresh at every step (simulation.h), so at least once a
 // step. Factorisations: none for conjugate gradients, at least one for the Cholesky
 // preconditioner (its first solve has no factor yet).
@@ -2970,7 +2970,7 @@ static int test_reduced_solver_statistics(void)
 	sm_model_destroy(model);
 	// The Cholesky preconditioner keeps its factor while the iterations it costs beyond the first
 	// of each solve add up to less than one factorisation: on the benchmark cloth n = 8 over 0.5 s
-	// (186 unknowns) measured 32 factorisations and 504 iterations in 263 steps. A quarter of the
+	// (186 unknowns) measured 33 factorisations and 503 iterations in 258 steps. A quarter of the
 	// steps bounds it with room; a solver that factorised at every solve (320 in 300 steps) is as
 	// accurate, only several times slower, so no trajectory test sees it.
 	model = benchmark_cloth(8, 0.0);
@@ -4522,8 +4522,8 @@ static int64_t zero_length_oscillator_steps(double rtol, double atol_position, d
 
 // Each tolerance bounds the local error of its own components (docs/simulation.md): against a
 // run with all three at 1e-10, loosening the relative tolerance, the positions' absolute
-// tolerance or the velocities' alone to 1e-5 lets CVODE take fewer steps (measured 458 against
-// 118, 411 and 365: the positions and velocities pass through 0, where the absolute tolerances
+// tolerance or the velocities' alone to 1e-5 lets CVODE take fewer steps (measured 454 against
+// 119, 446 and 390: the positions and velocities pass through 0, where the absolute tolerances
 // are what holds them). The tight run meets the closed form x = cos(w t) to 1e-7 m (tolerances
 // 1e-10 over 2 periods: a global error of order 1e-9 m).
 static int test_each_tolerance_is_used(void)
@@ -5039,9 +5039,9 @@ static int test_translation_of_a_flat_free_cloth_takes_one_iteration(void)
 // the new balance at 1.1 m, x = 1.1 + 0.1 cos(sqrt(40) t), and the reaction on the anchor is
 // k (x - 1.1). A reset starts from the new model: anchor 0.1 m, bob 1.5 m,
 // x = 1.1 + 0.4 cos(sqrt(40) t). Tolerances: as test_update_model, rtol 1e-10 over 0.3 s gives
-// about 1e-8 of the amplitude (measured 6.3e-10 m for 0.1 m, 2.8e-9 m for 0.4 m): 1e-8 and
+// about 1e-8 of the amplitude (measured 7.5e-10 m for 0.1 m, 2.8e-9 m for 0.4 m): 1e-8 and
 // 2e-8 m; the reaction is 40 N/m times the same position, to round-off: 1e-12 N (measured
-// 4.7e-15 N).
+// 4.4e-15 N).
 // Caught: the fixed particles read from the drive arrays (set at creation) instead of the
 // model, and update_model not refreshing the outputs.
 static int test_update_model_moves_fixed_particles(void)
@@ -5170,7 +5170,7 @@ static int test_too_much_work_after_an_input_jump_is_not_retried(void)
 // the dense and cholmod solvers fail on the first step after the jump (CV_ERR_FAILURE at t = 20 s,
 // measured); the advance must restart there and succeed, agreeing with a run that restarts at
 // every input change: the same smooth motion after t = 20 s at rtol 1e-6 over displacements of
-// about 1 m, 1e-4 m (measured up to 1.1e-6 m, pcg). Caught: set_driven not marking the jump, so the advance
+// about 1 m, 1e-4 m (measured up to 4.9e-6 m, pcg). Caught: set_driven not marking the jump, so the advance
 // reported CV_ERR_FAILURE at t = 20 s.
 static int test_driven_jump_with_kept_history(void)
 {
