@@ -207,8 +207,9 @@ def test_options_take_effect(tmp_path):
         # solver's steps, which the 0.01 s rows no longer cut short: each step errs by about the
         # tolerance and the errors add up over the two periods (measured: 7.5e-4 m at rtol 1e-3,
         # 1.6e-4 m at atol 1e-5; 1.1e-2 m at atol 1e-3, which is why that one is not used).
-        # 1e-3 m, a hundredth of the amplitude, bounds them.
-        np.testing.assert_allclose(loose[:, 1], default[:, 1], rtol=0, atol=1e-3)
+        # 2e-3 m, a fiftieth of the amplitude, bounds them with a margin of 2.5 (the step sequences,
+        # and with them the largest, move with the last bits of the error estimates).
+        np.testing.assert_allclose(loose[:, 1], default[:, 1], rtol=0, atol=2e-3)
     # Adams and every linear solver integrate the same equations: the bob's position agrees
     # within what the file's tolerances (rtol 1e-8, atol 1e-10 m) allow over 2 s, 1e-6 m.
     for option in (["--method", "adams"], ["--solver", "klu"], ["--solver", "pcg"], ["--solver", "cholmod"]):
