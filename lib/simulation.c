@@ -1516,28 +1516,26 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		       !on_path(position[c], sim->drive_position[p + c], dt * (v0 + 0.5 * dt * a),
 		                fmax(fabs(v0 * dt), fabs(0.5 * dt * dt * a)));
 	}
+	if (!jump) {
+		sm_simulation_refresh_outputs(sim);
+		return SM_OK;
+	}
 	// What moves the particle to its new position and velocity at once does the work the energy
 	// takes in the jump. An energy beyond a double is not handed on to the inputs' work.
 	const int32_t* springs = sim->driven_springs + sim->driven_spring_start[particle];
 	const int32_t count = sim->driven_spring_start[particle + 1] - sim->driven_spring_start[particle];
 	const double before =
-	    jump ? sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count)
-		     : 0.0;
-	if (jump) {
-		memcpy(sim->drive_position + p, position, 3 * sizeof(double));
-		memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
-		memcpy(sim->drive_acceleration + p, acceleration, 3 * sizeof(double));
-		sim->drive_time[particle] = sim->time;
-		note_input_change(sim);
-	}
+	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count);
+	memcpy(sim->drive_position + p, position, 3 * sizeof(double));
+	memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
+	memcpy(sim->drive_acceleration + p, acceleration, 3 * sizeof(double));
+	sim->drive_time[particle] = sim->time;
+	note_input_change(sim);
 	sm_simulation_refresh_outputs(sim);
-	if (jump) {
-		const double work =
-		    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) -
-		    before;
-		if (isfinite(work))
-			sim->jump_work += work;
-	}
+	const double work =
+	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) - before;
+	if (isfinite(work))
+		sim->jump_work += work;
 	return SM_OK;
 }
 
