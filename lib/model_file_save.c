@@ -430,6 +430,8 @@ static FILE* open_beside(const char* path, const struct stat* replaced, char** t
 sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err)
 {
 	sm_error_clear(err);
+	if (doc == NULL)
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_save: no document");
 	if (path == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "sm_document_save: no file name");
 	char* data = sm_document_to_json(doc, err);

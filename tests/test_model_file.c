@@ -534,6 +534,10 @@ static int test_initial_state_and_save_to_file(void)
 	const char* path = "test_model_file_saved.json";
 	sm_error err = {SM_OK, ""};
 	ENSURE_STATUS(sm_document_save(doc, path, &err), SM_OK);
+	// A missing document is named as the caller's: the message is the save's, not that of the
+	// function it writes the text with.
+	ENSURE_STATUS(sm_document_save(NULL, path, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strcmp(err.message, "sm_document_save: no document") == 0);
 	sm_document* again = sm_document_load(path, &err);
 	ENSURE(again != NULL);
 	ENSURE(same_document(doc, again) == 0);
