@@ -259,7 +259,8 @@ SM_API double sm_model_dissipated_power(const sm_model* model, const double* x, 
 /// compression): f_a = tension u. The tension is 0 for a disabled spring and at the singular
 /// point above, where the spring exerts no force; a length that is not finite (a position NaN or
 /// infinite, or particles so far apart that L^2 overflows, about 1e154 m) gives a tension that is
-/// not finite either (NaN, or inf for L = inf), not 0.
+/// not finite either, not 0: inf when L^2 overflows (ks > 0), NaN when a position is NaN or
+/// infinite (the direction u is then NaN too) or ks = 0 (0 x inf).
 SM_API void sm_model_spring_states(const sm_model* model, const double* x, const double* v, double* length,
                                    double* strain, double* tension);
 
