@@ -69,12 +69,12 @@ JSON
 out=$("$cli" run "$tmp/falling.json" --t-end 0.1 --output-interval 0.1 -q -o - 2>&1)
 awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7) }' <<< "$out" ||
   fail "a falling particle without springs: $out"
-# Without springs a VTK file has no LINES section (VTK's legacy reader fails on "LINES 0 0" and
-# drops the point data after it), in run, statics and modes alike; modes of a model without free
+# Without springs a VTK file has no lines (VTK's legacy reader fails on "LINES 0 0" and drops the
+# point data after it), in run's XML series, statics and modes alike; modes of a model without free
 # particles still writes the CSV asked for (the particles, no mode columns).
 "$cli" run "$tmp/falling.json" --t-end 0.1 -q -o /dev/null --vtk "$tmp/falling_vtk" > /dev/null 2>&1 &&
   "$cli" modes "$tmp/falling.json" --vtk "$tmp/falling_modes" > /dev/null 2>&1 &&
-  ! grep -q LINES "$tmp"/falling_vtk/*.vtk "$tmp"/falling_modes/*.vtk &&
+  ! grep -q '<Lines>' "$tmp"/falling_vtk/*.vtp && ! grep -q LINES "$tmp"/falling_modes/*.vtk &&
   grep -q "^POINT_DATA 1$" "$tmp/falling_modes/mode_1.vtk" || fail "VTK files of a model without springs"
 cat > "$tmp/held.json" << 'JSON'
 {"springmass": 1, "name": "held", "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true}]}
@@ -142,32 +142,32 @@ check_cases << 'CASES'
 CASES
 cmp -s "$osc" "$tmp/own.json" && [ ! -e ./- ] || fail "a refused output was written"
 # run's other outputs: the default CSV (NAME.csv in the working folder) and the ParaView series
-# (DIR/NAME.pvd, DIR/NAME_<k>.vtk) are no model file, and the series' files are not the CSV.
+# (DIR/NAME.pvd, DIR/NAME_<k>.vtp) are no model file, and the series' files are not the CSV.
 mkdir -p "$tmp/clash/vt1" "$tmp/clash/vt2"
 cp "$osc" "$tmp/clash/oscillator.csv"
 cp "$osc" "$tmp/clash/vt1/oscillator.pvd"
-cp "$osc" "$tmp/clash/vt2/oscillator_000001.vtk"
+cp "$osc" "$tmp/clash/vt2/oscillator_000001.vtp"
 out=$(cd "$tmp/clash" && "$cli" run oscillator.csv -q --t-end 0.02 2>&1)
 status=$?
 [ $status -eq 2 ] && [ "$out" = "springmass run: the output oscillator.csv (NAME.csv, without -o) would overwrite the model file oscillator.csv, which it reads; give another name with -o" ] ||
   fail "run onto its model file by the default output: exit status $status, printed '$out'"
 check_cases << 'CASES'
 2|springmass run: --vtk $tmp/clash/vt1: the series' file $tmp/clash/vt1/oscillator.pvd would overwrite the model file $tmp/clash/vt1/oscillator.pvd; give another folder|run "$tmp/clash/vt1/oscillator.pvd" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt1"
-2|springmass run: --vtk $tmp/clash/vt2: the series' file $tmp/clash/vt2/oscillator_000001.vtk would overwrite the model file $tmp/clash/vt2/oscillator_000001.vtk; give another folder|run "$tmp/clash/vt2/oscillator_000001.vtk" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt2"
+2|springmass run: --vtk $tmp/clash/vt2: the series' file $tmp/clash/vt2/oscillator_000001.vtp would overwrite the model file $tmp/clash/vt2/oscillator_000001.vtp; give another folder|run "$tmp/clash/vt2/oscillator_000001.vtp" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt2"
 2|springmass run: --vtk $tmp/clash/vt3: the series' file $tmp/clash/vt3/oscillator.pvd would overwrite the CSV output $tmp/clash/vt3/oscillator.pvd; give another folder or -o|run "$osc" -q --t-end 0.02 --vtk "$tmp/clash/vt3" -o "$tmp/clash/vt3/oscillator.pvd"
-2|springmass run: --vtk $tmp/clash/vt4: the series' file $tmp/clash/vt4/oscillator_000001.vtk would overwrite the CSV output $tmp/clash/vt4/oscillator_000001.vtk; give another folder or -o|run "$osc" -q --t-end 0.02 --vtk "$tmp/clash/vt4" -o "$tmp/clash/vt4/oscillator_000001.vtk"
+2|springmass run: --vtk $tmp/clash/vt4: the series' file $tmp/clash/vt4/oscillator_000001.vtp would overwrite the CSV output $tmp/clash/vt4/oscillator_000001.vtp; give another folder or -o|run "$osc" -q --t-end 0.02 --vtk "$tmp/clash/vt4" -o "$tmp/clash/vt4/oscillator_000001.vtp"
 CASES
-for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtk; do
+for f in oscillator.csv vt1/oscillator.pvd vt2/oscillator_000001.vtp; do
   cmp -s "$osc" "$tmp/clash/$f" || fail "run overwrote its model file $f"
 done
 # Nor are they the input signals run --input reads.
 mkdir -p "$tmp/clash/vt5" "$tmp/clash/vt6"
-printf 'time,tip.fx\n0,1\n' | tee "$tmp/clash/vt5/oscillator.pvd" > "$tmp/clash/vt6/oscillator_000001.vtk"
+printf 'time,tip.fx\n0,1\n' | tee "$tmp/clash/vt5/oscillator.pvd" > "$tmp/clash/vt6/oscillator_000001.vtp"
 check_cases << 'CASES'
 2|springmass run: --vtk $tmp/clash/vt5: the series' file $tmp/clash/vt5/oscillator.pvd would overwrite the input signals $tmp/clash/vt5/oscillator.pvd; give another folder|run "$osc" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt5" --input "$tmp/clash/vt5/oscillator.pvd"
-2|springmass run: --vtk $tmp/clash/vt6: the series' file $tmp/clash/vt6/oscillator_000001.vtk would overwrite the input signals $tmp/clash/vt6/oscillator_000001.vtk; give another folder|run "$osc" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt6" --input "$tmp/clash/vt6/oscillator_000001.vtk"
+2|springmass run: --vtk $tmp/clash/vt6: the series' file $tmp/clash/vt6/oscillator_000001.vtp would overwrite the input signals $tmp/clash/vt6/oscillator_000001.vtp; give another folder|run "$osc" -q --t-end 0.02 -o - --vtk "$tmp/clash/vt6" --input "$tmp/clash/vt6/oscillator_000001.vtp"
 CASES
-for f in vt5/oscillator.pvd vt6/oscillator_000001.vtk; do
+for f in vt5/oscillator.pvd vt6/oscillator_000001.vtp; do
   [ "$(cat "$tmp/clash/$f")" = "$(printf 'time,tip.fx\n0,1')" ] || fail "run overwrote its input signals $f"
 done
 # statics and modes check where every output goes before solving: none is written when one of
@@ -383,7 +383,7 @@ if [ -w /dev/full ]; then
   # so far fewer than 501 VTK files are written.
   out=$("$cli" run "$root/models/oscillator.json" -q -o /dev/full --vtk "$tmp/full_vtk" 2>&1 > /dev/null)
   rc=$?
-  written=$(ls "$tmp/full_vtk" | grep -c '\.vtk$')
+  written=$(ls "$tmp/full_vtk" | grep -c '\.vtp$')
   [ $rc -eq 1 ] && [ "$out" = "springmass run: cannot write /dev/full: No space left on device" ] &&
     [ "$written" -lt 100 ] || fail "run -o /dev/full: exit $rc, '$out', $written VTK files"
   # Every command's files and reports: a report on standard output that cannot be written fails
@@ -410,7 +410,7 @@ cat > "$tmp/stiff.json" << 'JSON'
 JSON
 "$cli" run "$tmp/stiff.json" --t-end 0.05 --max-steps 100 -q -o /dev/null --vtk "$tmp/stiff_vtk" > /dev/null 2>&1
 [ $? -eq 1 ] && [ "$(tail -2 "$tmp/stiff_vtk/stiff.pvd" | paste -sd ' ')" = "</Collection> </VTKFile>" ] &&
-  grep -q 'file="stiff_000000.vtk"' "$tmp/stiff_vtk/stiff.pvd" || fail "run failing midway left a broken .pvd index"
+  grep -q 'file="stiff_000000.vtp"' "$tmp/stiff_vtk/stiff.pvd" || fail "run failing midway left a broken .pvd index"
 "$cli" modes "$root/models/oscillator.json" -n "" > /dev/null 2>&1; [ $? -eq 2 ] || fail "modes -n '' did not exit with 2"
 
 # `springmass fmu` only ever writes its output: a directory named by mistake stays (it was

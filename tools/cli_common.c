@@ -445,28 +445,31 @@ bool cli_same_file(const char* a, const char* b)
 	return same;
 }
 
-// Whether the file at path starts as a legacy VTK file does.
-static bool is_vtk_file(const char* path)
+// Whether the file at path starts with `header`.
+static bool starts_with(const char* path, const char* header)
 {
-	static const char header[] = "# vtk DataFile";
-	char start[sizeof header] = {0};
+	const size_t length = strlen(header);
+	char start[128] = {0};
+	if (length > sizeof start)
+		return false;
 	FILE* f = fopen(path, "rb");
 	if (f == NULL)
 		return false;
-	const size_t got = fread(start, 1, sizeof header - 1, f);
+	const size_t got = fread(start, 1, length, f);
 	fclose(f);
-	return got == sizeof header - 1 && memcmp(start, header, sizeof header - 1) == 0;
+	return got == length && memcmp(start, header, length) == 0;
 }
 
-long cli_remove_series_tail(const char* prefix, int digits, long first)
+long cli_remove_series_tail(const char* prefix, int digits, long first, const char* extension,
+                            const char* header)
 {
-	const size_t size = strlen(prefix) + 32;
+	const size_t size = strlen(prefix) + strlen(extension) + 32;
 	char* path = malloc(size);
 	long removed = 0;
 	for (long k = first; path != NULL; k++) {
-		snprintf(path, size, "%s%0*ld.vtk", prefix, digits, k);
+		snprintf(path, size, "%s%0*ld%s", prefix, digits, k, extension);
 		struct stat st;
-		if (lstat(path, &st) != 0 || !S_ISREG(st.st_mode) || !is_vtk_file(path) || unlink(path) != 0)
+		if (lstat(path, &st) != 0 || !S_ISREG(st.st_mode) || !starts_with(path, header) || unlink(path) != 0)
 			break;
 		removed++;
 	}

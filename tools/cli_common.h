@@ -125,11 +125,19 @@ bool cli_inside(const char* path, const char* folder);
 bool cli_same_file(const char* a, const char* b);
 
 /// Removes what an earlier, longer series left behind in the folder of this one: the files
-/// prefix<k>.vtk for k = first, first + 1, ... (k with at least `digits` digits), up to the first
-/// that does not exist or is not a regular VTK file (a symbolic link, or a file that does not
-/// start "# vtk DataFile", as no model file or CSV does). Returns how many it removed. Nothing
-/// guards against another run writing a longer series into the folder at the same time.
-long cli_remove_series_tail(const char* prefix, int digits, long first);
+/// prefix<k>extension for k = first, first + 1, ... (k with at least `digits` digits), up to the
+/// first that does not exist or is not a regular file of the series (a symbolic link, or a file
+/// that does not start with `header`, CLI_LEGACY_VTK_HEADER or CLI_VTP_HEADER, as no model file
+/// or CSV does). Returns how many it removed. Nothing guards against another run writing a
+/// longer series into the folder at the same time.
+long cli_remove_series_tail(const char* prefix, int digits, long first, const char* extension,
+                            const char* header);
+
+/// How the files cli_vtk_open writes start.
+#define CLI_LEGACY_VTK_HEADER "# vtk DataFile"
+
+/// How the VTK XML polydata files (.vtp) of springmass run's series start.
+#define CLI_VTP_HEADER "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\""
 
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
 /// failed call just before).

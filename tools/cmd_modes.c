@@ -362,7 +362,7 @@ int sm_cmd_modes(int argc, char** argv)
 	if (vtk_dir != NULL) {
 		char prefix[4096];
 		if ((size_t)snprintf(prefix, sizeof prefix, "%s/mode_", vtk_dir) < sizeof prefix)
-			removed = cli_remove_series_tail(prefix, 0, (long)modes.count + 1);
+			removed = cli_remove_series_tail(prefix, 0, (long)modes.count + 1, ".vtk", CLI_LEGACY_VTK_HEADER);
 	}
 	if (csv_path != NULL)
 		printf("mode shapes written to %s%s\n", csv_path,

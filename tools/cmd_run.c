@@ -1,5 +1,5 @@
 // springmass run: simulates a model file with CVODE and writes a CSV of its ports and energies,
-// optionally every particle's position and a ParaView series (VTK polydata + .pvd index).
+// optionally every particle's position and a ParaView series (VTK XML polydata + .pvd index).
 #define _POSIX_C_SOURCE 200809L
 
 #include "cli_common.h"
@@ -47,11 +47,11 @@ static void usage(FILE* out)
 	        "                         at the time of a jump shows the state after it\n"
 	        "  --positions            also every particle's position (columns particle.NAME.x,\n"
 	        "                         particle.NAME.y, particle.NAME.z [m])\n"
-	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtk per row (particles as\n"
-	        "                         points with their velocity [m/s], intact springs as lines with\n"
-	        "                         their tension [N] and, if all have a rest length, strain [1])\n"
-	        "                         and the index DIR/NAME.pvd (files NAME_<k>.vtk of an earlier,\n"
-	        "                         longer run there are removed)\n"
+	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtp per row (XML polydata:\n"
+	        "                         particles as points with their velocity [m/s], intact springs\n"
+	        "                         as lines with their tension [N] and, if all have a rest length,\n"
+	        "                         strain [1]) and the index DIR/NAME.pvd (files NAME_<k>.vtp of\n"
+	        "                         an earlier, longer run there are removed)\n"
 	        "  --solver NAME          linear solver: auto, dense, klu, pcg, cholmod\n"
 	        "  --method NAME          bdf (default) or adams\n"
 	        "  --rtol R               relative tolerance [1]\n"
@@ -209,23 +209,39 @@ static void write_row(FILE* csv, const sm_document* doc, const sm_simulation* si
 	fprintf(csv, "\n");
 }
 
-// One legacy VTK polydata file: the particles as points with their velocities, the intact
-// springs as lines with their tension [N] and, when every one has a rest length (a zero-length
-// spring has no strain), their strain. springs holds 2 values per spring of scratch.
-static int write_vtk(const char* path, const sm_simulation* sim, double* springs)
+// Writes count values as the text of a DataArray, `per_line` to a line; only the intact springs'
+// where `model` is given (one value per spring).
+static void write_vtp_values(FILE* f, const double* values, int32_t count, int per_line,
+                             const sm_model* model)
 {
-	char time[SM_NUMBER_TEXT_CAPACITY], title[64];
-	sm_format_number(sm_simulation_time(sim), time);
-	snprintf(title, sizeof title, "springmass t = %s s", time);
+	for (int32_t i = 0; i < count; i++) {
+		if (model != NULL && !sm_model_spring_enabled(model, i))
+			continue;
+		for (int c = 0; c < per_line; c++)
+			fprintf(f, c + 1 < per_line ? "%.9g " : "%.9g\n",
+			        values[(size_t)per_line * (size_t)i + (size_t)c]);
+	}
+}
+
+// One VTK XML polydata file (.vtp, the format of the files a ParaView .pvd index names: its reader
+// takes no legacy .vtk file): the particles as points with their velocities, the intact springs as
+// lines with their tension [N] and, when every one has a rest length (a zero-length spring has no
+// strain), their strain; the time as the field TimeValue. springs holds 2 values per spring of
+// scratch.
+static int write_vtp(const char* path, const sm_simulation* sim, double* springs)
+{
 	const sm_model* model = sm_simulation_model(sim);
 	const double* x = sm_simulation_positions(sim);
-	FILE* f = cli_vtk_open(NULL, "run", path, title, model, x);
-	if (f == NULL)
+	const double* v = sm_simulation_velocities(sim);
+	FILE* f = fopen(path, "w");
+	if (f == NULL) {
+		cli_cannot_write("run", path);
 		return 1;
-	cli_vtk_vectors(f, "velocity", sm_model_particle_count(model), sm_simulation_velocities(sim), true);
+	}
+	const int32_t n = sm_model_particle_count(model);
 	const int32_t count = sm_model_spring_count(model);
 	double *tension = springs, *strain = springs + count;
-	sm_model_spring_states(model, x, sm_simulation_velocities(sim), NULL, strain, tension);
+	sm_model_spring_states(model, x, v, NULL, strain, tension);
 	bool every_strain = true;
 	int32_t intact = 0;
 	for (int32_t s = 0; s < count; s++)
@@ -233,11 +249,49 @@ static int write_vtk(const char* path, const sm_simulation* sim, double* springs
 			intact++;
 			every_strain = every_strain && !isnan(strain[s]);
 		}
+	char time[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(sm_simulation_time(sim), time);
+	fprintf(f,
+	        CLI_VTP_HEADER " version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n<FieldData>\n"
+	                       "<DataArray type=\"Float64\" Name=\"TimeValue\" NumberOfTuples=\"1\" "
+	                       "format=\"ascii\">%s</DataArray>\n</FieldData>\n"
+	                       "<Piece NumberOfPoints=\"%d\" NumberOfVerts=\"0\" NumberOfLines=\"%d\" "
+	                       "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n",
+	        time, (int)n, (int)intact);
+	fprintf(f, "<PointData Vectors=\"velocity\">\n<DataArray type=\"Float64\" Name=\"velocity\" "
+	           "NumberOfComponents=\"3\" format=\"ascii\">\n");
+	write_vtp_values(f, v, n, 3, NULL);
+	fprintf(f, "</DataArray>\n</PointData>\n");
 	if (intact > 0) {
-		cli_vtk_spring_scalars(f, model, "tension", tension, true);
-		if (every_strain)
-			cli_vtk_spring_scalars(f, model, "strain", strain, false);
+		fprintf(f, "<CellData Scalars=\"tension\">\n<DataArray type=\"Float64\" Name=\"tension\" "
+		           "format=\"ascii\">\n");
+		write_vtp_values(f, tension, count, 1, model);
+		fprintf(f, "</DataArray>\n");
+		if (every_strain) {
+			fprintf(f, "<DataArray type=\"Float64\" Name=\"strain\" format=\"ascii\">\n");
+			write_vtp_values(f, strain, count, 1, model);
+			fprintf(f, "</DataArray>\n");
+		}
+		fprintf(f, "</CellData>\n");
 	}
+	fprintf(f, "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+	write_vtp_values(f, x, n, 3, NULL);
+	fprintf(f, "</DataArray>\n</Points>\n");
+	if (intact > 0) {
+		fprintf(f, "<Lines>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");
+		for (int32_t s = 0; s < count; s++) {
+			if (!sm_model_spring_enabled(model, s))
+				continue;
+			sm_spring_def d;
+			sm_model_get_spring(model, s, &d);
+			fprintf(f, "%d %d\n", (int)d.a, (int)d.b);
+		}
+		fprintf(f, "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n");
+		for (int32_t k = 1; k <= intact; k++)
+			fprintf(f, "%lld\n", 2LL * k);
+		fprintf(f, "</DataArray>\n</Lines>\n");
+	}
+	fprintf(f, "</Piece>\n</PolyData>\n</VTKFile>\n");
 	return cli_close("run", path, f) != 0;
 }
 
@@ -634,17 +688,17 @@ int sm_cmd_run(int argc, char** argv)
 			goto done;
 		}
 		if (o.vtk_dir) {
-			snprintf(path, path_capacity, "%s/%s_%06ld.vtk", o.vtk_dir, name, k);
+			snprintf(path, path_capacity, "%s/%s_%06ld.vtp", o.vtk_dir, name, k);
 			if (series_file_clashes(path, &o, csv_file) != 0) {
 				cli_progress_end(&prog.line);
 				status = 2;
 				goto done;
 			}
-			if (write_vtk(path, sim, spring_values) != 0)
+			if (write_vtp(path, sim, spring_values) != 0)
 				goto done;
 			char timestep[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(t, timestep);
-			fprintf(pvd, "<DataSet timestep=\"%s\" file=\"%s_%06ld.vtk\"/>\n", timestep, name, k);
+			fprintf(pvd, "<DataSet timestep=\"%s\" file=\"%s_%06ld.vtp\"/>\n", timestep, name, k);
 		}
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);
@@ -663,11 +717,11 @@ int sm_cmd_run(int argc, char** argv)
 	// Files of an earlier run with more rows, which the index does not name.
 	if (o.vtk_dir) {
 		snprintf(path, path_capacity, "%s/%s_", o.vtk_dir, name);
-		const long removed = cli_remove_series_tail(path, 6, rows + 1);
+		const long removed = cli_remove_series_tail(path, 6, rows + 1, ".vtp", CLI_VTP_HEADER);
 		if (removed == 1 && !o.quiet)
-			fprintf(stderr, "springmass run: removed %s_%06ld.vtk of an earlier run\n", name, rows + 1);
+			fprintf(stderr, "springmass run: removed %s_%06ld.vtp of an earlier run\n", name, rows + 1);
 		else if (removed > 1 && !o.quiet)
-			fprintf(stderr, "springmass run: removed %s_%06ld.vtk to %s_%06ld.vtk of an earlier run\n", name,
+			fprintf(stderr, "springmass run: removed %s_%06ld.vtp to %s_%06ld.vtp of an earlier run\n", name,
 			        rows + 1, name, rows + removed);
 	}
 	if (!o.quiet) {

@@ -268,6 +268,36 @@ def test_analysis_errors_name_particles_and_springs_as_the_file_does(tmp_path):
     assert "spring 0 (between b and particle 2)" in err and "particles 1 (b) and 2 at one point" in err, err
 
 
+def vtp_sections(path):
+    """The same as vtk_sections, of a VTK XML polydata file (.vtp) as ParaView's readers take it:
+    ASCII data arrays whose sizes the piece's counts give, lines by connectivity and offsets."""
+    root = ET.parse(path).getroot()
+    assert root.tag == "VTKFile" and root.get("type") == "PolyData", root.attrib
+    pieces = root.findall("./PolyData/Piece")
+    assert len(pieces) == 1
+    piece = pieces[0]
+    n, count = int(piece.get("NumberOfPoints")), int(piece.get("NumberOfLines"))
+
+    def values(array, size):
+        assert array.get("format") == "ascii", array.attrib
+        data = np.array([float(v) for v in (array.text or "").split()])
+        assert data.size == size * int(array.get("NumberOfComponents", "1")), (array.attrib, data.size)
+        return data.reshape(size, -1) if array.get("NumberOfComponents") else data
+
+    points = values(piece.find("./Points/DataArray"), n)
+    lines = []
+    if count > 0:
+        connectivity = values(piece.find("./Lines/DataArray[@Name='connectivity']"), 2 * count).astype(int)
+        offsets = values(piece.find("./Lines/DataArray[@Name='offsets']"), count).astype(int)
+        assert list(offsets) == [2 * (k + 1) for k in range(count)]
+        lines = [(int(connectivity[2 * k]), int(connectivity[2 * k + 1])) for k in range(count)]
+    else:
+        assert piece.find("./Lines") is None or not piece.find("./Lines").findall("DataArray")
+    vectors = {a.get("Name"): values(a, n) for a in piece.findall("./PointData/DataArray")}
+    scalars = {a.get("Name"): values(a, count) for a in piece.findall("./CellData/DataArray")}
+    return points, lines, vectors, scalars
+
+
 def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     model = MODELS / "tearing_cloth.json"
     vtk = tmp_path / "vtk"
@@ -284,12 +314,12 @@ def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     index = ET.parse(vtk / "tearing_cloth.pvd").getroot()
     sets = index.findall("./Collection/DataSet")
     assert [float(d.get("timestep")) for d in sets] == list(rows[:, 0])
-    assert [d.get("file") for d in sets] == [f"tearing_cloth_{k:06d}.vtk" for k in range(len(rows))]
-    assert sorted(p.name for p in vtk.glob("*.vtk")) == [d.get("file") for d in sets]
+    assert [d.get("file") for d in sets] == [f"tearing_cloth_{k:06d}.vtp" for k in range(len(rows))]
+    assert sorted(p.name for p in vtk.glob("*.vtp")) == [d.get("file") for d in sets]
     first = next(i for i, name in enumerate(header) if name.startswith("particle."))
     springs = int(re.search(r"springs\s+(\d+)", cli("check", model).stdout).group(1))
     for k, d in enumerate(sets):
-        points, lines, _, _ = vtk_sections(vtk / d.get("file"))
+        points, lines, _, _ = vtp_sections(vtk / d.get("file"))
         # Points are written to 9 significant digits: 1e-8 m on a cloth within 2 m of the origin.
         np.testing.assert_allclose(points.ravel(), rows[k, first:], rtol=0, atol=1e-8)
         assert len(set(lines)) == len(lines)
@@ -298,16 +328,39 @@ def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
             assert len(lines) == springs
         # Each file's lengths and strains imply the same rest lengths l0 = L / (1 + strain): 9
         # significant digits each.
-        _, _, _, scalars = vtk_sections(vtk / d.get("file"))
+        _, _, _, scalars = vtp_sections(vtk / d.get("file"))
         lengths = np.linalg.norm(points[[b for _, b in lines]] - points[[a for a, _ in lines]], axis=1)
         implied = dict(zip(lines, lengths / (1.0 + scalars["strain"])))
         if k == 0:
             rest = implied
         assert all(implied[line] == pytest.approx(rest[line], rel=1e-7) for line in lines)
     # The last file has the intact springs only: every spring that broke is gone, the rest stay.
-    _, last_lines, _, _ = vtk_sections(vtk / sets[-1].get("file"))
+    _, last_lines, _, _ = vtp_sections(vtk / sets[-1].get("file"))
     assert len(last_lines) == springs - len(broken)
     assert [all_lines[s] for s in sorted(set(range(springs)) - set(broken))] == last_lines
+
+
+def test_the_series_index_names_vtk_xml_polydata_files(tmp_path):
+    # ParaView reads a .pvd index with its XML collection reader, which picks each file's reader by
+    # its extension among the XML formats (.vtp, .vtu, ...) and has none for a legacy .vtk file: an
+    # index of legacy files opens to "Could not determine the data type for the first dataset".
+    # So every file the index names is VTK XML polydata, with its time as the field TimeValue.
+    vtk = tmp_path / "vtk"
+    cli("run", MODELS / "two_mass_chain.json", "-q", "-o", tmp_path / "chain.csv", "--t-end", 0.05,
+        "--vtk", vtk)
+    index = ET.parse(vtk / "two_mass_chain.pvd").getroot()
+    assert index.tag == "VTKFile" and index.get("type") == "Collection"
+    sets = index.findall("./Collection/DataSet")
+    assert len(sets) == 6
+    for d in sets:
+        assert d.get("file").endswith(".vtp"), d.get("file")
+        root = ET.parse(vtk / d.get("file")).getroot()
+        assert root.get("type") == "PolyData" and root.get("byte_order") == "LittleEndian"
+        time = root.find("./PolyData/FieldData/DataArray[@Name='TimeValue']")
+        assert float(time.text) == float(d.get("timestep"))
+        points, lines, vectors, scalars = vtp_sections(vtk / d.get("file"))
+        assert points.shape == (3, 3) and lines == [(0, 1), (1, 2)]
+        assert set(vectors) == {"velocity"} and set(scalars) == {"tension", "strain"}
 
 
 def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
@@ -321,7 +374,7 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     header, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--output-interval", 0.25, "--vtk", vtk)
     vx = header.index("tip.vx")
     for k, row in enumerate(rows):
-        points, lines, vectors, scalars = vtk_sections(vtk / f"oscillator_{k:06d}.vtk")
+        points, lines, vectors, scalars = vtp_sections(vtk / f"oscillator_{k:06d}.vtp")
         assert lines == [(0, 1)] and set(scalars) == {"tension", "strain"}
         np.testing.assert_allclose(vectors["velocity"][1], row[vx:vx + 3], rtol=1e-8, atol=1e-12)
         d = points[1] - points[0]
@@ -337,7 +390,7 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     path = tmp_path / "pair.json"
     path.write_text(json.dumps(pair))
     cli("run", path, "-q", "--t-end", 0.1, "--output-interval", 0.1, "-o", tmp_path / "pair.csv", "--vtk", vtk)
-    points, _, _, scalars = vtk_sections(vtk / "pair_000000.vtk")
+    points, _, _, scalars = vtp_sections(vtk / "pair_000000.vtp")
     assert set(scalars) == {"tension"} and scalars["tension"][0] == pytest.approx(10.0)
 
 
@@ -363,11 +416,11 @@ def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path
     # The default tolerances (rtol 1e-6, atol 1e-8 m) place the bob to about 1e-6 m; it falls at
     # g t = 0.44 m/s there, so the crossing is found to about 2.3e-6 s (measured 8e-7 s).
     assert len(logged) == 1 and float(logged[0]) == pytest.approx(t_break, abs=5e-6), stats
-    assert vtk_sections(vtk / "snap_000000.vtk")[1] == [(0, 1)]
+    assert vtp_sections(vtk / "snap_000000.vtp")[1] == [(0, 1)]
     for k in (1, 2):
-        points, lines, _, _ = vtk_sections(vtk / f"snap_{k:06d}.vtk")
+        points, lines, _, _ = vtp_sections(vtk / f"snap_{k:06d}.vtp")
         assert points.shape == (2, 3) and lines == []
-        assert "LINES" not in (vtk / f"snap_{k:06d}.vtk").read_text()
+        assert "<Lines>" not in (vtk / f"snap_{k:06d}.vtp").read_text()
 
 
 def shortest_text(value):
@@ -657,12 +710,12 @@ def test_a_shorter_series_removes_what_a_longer_one_left(tmp_path):
     # run: 6 rows after 11 (t = 0 to 1 s every 0.1 s, then every 0.2 s); the index names the six.
     model = MODELS / "oscillator.json"
     cli("run", model, "-q", "-o", tmp_path / "a.csv", "--t-end", 1, "--output-interval", 0.1, "--vtk", vtk)
-    assert len(list(vtk.glob("oscillator_*.vtk"))) == 11
+    assert len(list(vtk.glob("oscillator_*.vtp"))) == 11
     err = cli("run", model, "-o", tmp_path / "b.csv", "--t-end", 1, "--output-interval", 0.2, "--vtk", vtk).stderr
-    assert "removed oscillator_000006.vtk to oscillator_000010.vtk of an earlier run" in err
+    assert "removed oscillator_000006.vtp to oscillator_000010.vtp of an earlier run" in err
     index = ET.parse(vtk / "oscillator.pvd").getroot()
-    assert sorted(p.name for p in vtk.glob("oscillator_*.vtk")) == [
-        d.get("file") for d in index.findall("./Collection/DataSet")] == [f"oscillator_{k:06d}.vtk" for k in range(6)]
+    assert sorted(p.name for p in vtk.glob("oscillator_*.vtp")) == [
+        d.get("file") for d in index.findall("./Collection/DataSet")] == [f"oscillator_{k:06d}.vtp" for k in range(6)]
 
 
 def test_modes_show_the_progress_of_a_long_lanczos_iteration():
