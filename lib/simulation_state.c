@@ -106,7 +106,10 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	s->topology = topology_hash(sim->model);
 	s->time = sim->time;
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
-	s->y[sm_simulation_work_index(sim)] += sim->jump_work;
+	// A jump's work not yet in CVODE's state; none leaves the work's bits as they are (-0 + 0 would
+	// be +0: a snapshot read back and restored saves the bytes it came from).
+	if (sim->jump_work != 0.0)
+		s->y[sm_simulation_work_index(sim)] += sim->jump_work;
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
 	memcpy(s->force_rate, sim->force_rate, 3 * n * sizeof(double));
 	memcpy(s->force_time, sim->force_time, n * sizeof(double));
