@@ -1440,6 +1440,9 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		st = sm_add_mesh(model, &d, &s.range);
 		free(vertices);
 		free(triangles);
+		// A triangle that repeats a vertex: which vertices a triangle joins is no parameter's doing.
+		if (st == SM_ERROR_SELF_SPRING)
+			return fail(p, st, path, "%s", sm_model_last_error(model));
 		// The mesh's particles are within the limit; its springs are counted now.
 		if (st == SM_OK && !check_budget(p, path, 0, 0))
 			return false;

@@ -1307,7 +1307,8 @@ static int test_names_and_descriptions_refuse_controls_and_line_breaks(void)
 // A value from a parameter names the parameter: a rule on one value at the value's own path
 // (a block's size[1], a sheet's edge_u), a rule on several (parallel edges, a rope's ends too far
 // apart, a triangle of zero area, a stiffness E / l0 that overflows, an empty box) with the
-// parameters the element's values came from, the first four of them.
+// parameters the element's values came from, the first four of them; a triangle that repeats a
+// vertex, which no parameter makes, with none.
 static int test_messages_name_parameters(void)
 {
 	static const refusal cases[] = {
@@ -1342,6 +1343,9 @@ static int test_messages_name_parameters(void)
 		 SM_ERROR_INVALID_ARGUMENT,
 		 "test.json: structures[0]: mesh: triangle 0 (0, 1, 2) has zero area (to rounding: twice its area is at "
 		 "most 1e-12 times the product of its two longest edges) (with parameter x = 2)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
+		 " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 1, 0]], \"triangles\": [[0, 1, 1]]}]}",
+		 SM_ERROR_SELF_SPRING, "test.json: structures[0]: mesh: triangle 0 (0, 1, 1) repeats a vertex"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
 		 " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
 		 " {\"strain_stiffness\": \"big\"}}]}",
