@@ -161,12 +161,18 @@ void sm_workers_destroy(sm_workers* w)
 {
 	if (w == NULL)
 		return;
-	atomic_store(&w->stop, true);
-	publish(w, 0);
-	for (int t = 0; t < w->started; t++)
-		pthread_join(w->helpers[t].thread, NULL);
-	pthread_cond_destroy(&w->wake);
-	pthread_mutex_destroy(&w->lock);
+	// A child of fork() has none of the helpers (sm_workers_run): there is nothing to stop or join
+	// (joining a thread of the parent waits for ever), and the lock and the condition variable are
+	// as the parent's helpers left them (a sleeping helper counts as a waiter, which destroying
+	// the condition variable would wait for). Only the memory is the child's to free.
+	if (w->process == getpid()) {
+		atomic_store(&w->stop, true);
+		publish(w, 0);
+		for (int t = 0; t < w->started; t++)
+			pthread_join(w->helpers[t].thread, NULL);
+		pthread_cond_destroy(&w->wake);
+		pthread_mutex_destroy(&w->lock);
+	}
 	free(w->helpers);
 	free(w);
 }

@@ -39,6 +39,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #if !defined(MULTILEVEL_MIN_PARTICLES) || MULTILEVEL_MIN_PARTICLES > 142 || MULTILEVEL_MIN_PARTICLES < 120
@@ -814,6 +815,38 @@ static int test_team_in_a_forked_child(void)
 	return 0;
 }
 
+// The child of a fork() destroys its copy of a team (as it does destroying a simulation, or
+// updating the model of one on the multilevel path) without waiting for the parent's helpers,
+// which it does not have: forked while they slept, joining them or destroying the condition
+// variable they waited on hung the child until SIGALRM ended it after 10 s.
+static int test_team_destroyed_in_a_forked_child(void)
+{
+	sm_workers* team = sm_workers_create(2);
+	ENSURE(team != NULL);
+	count_job job = {{0}};
+	sm_workers_run(team, count_chunk, &job, 8);
+	// The helpers go to sleep after about 0.1 ms without work.
+	const struct timespec pause = {0, 50 * 1000 * 1000};
+	nanosleep(&pause, NULL);
+	fflush(stdout);
+	const pid_t child = fork();
+	ENSURE(child >= 0);
+	if (child == 0) {
+		alarm(10);
+		count_job mine = {{0}};
+		sm_workers_run(team, count_chunk, &mine, 8);
+		sm_workers_destroy(team);
+		_exit(mine.done[7] == 1 ? 0 : 1);
+	}
+	int status = 0;
+	ENSURE(waitpid(child, &status, 0) == child);
+	ENSURE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+	sm_workers_run(team, count_chunk, &job, 8);  // the parent's team still works
+	ENSURE(job.done[7] == 2);
+	sm_workers_destroy(team);
+	return 0;
+}
+
 // Chunks are claimed, not dealt out: a thread takes the next chunk left whenever it is free, so
 // the caller does the work of a helper that does not get to run (processors busy elsewhere) rather
 // than wait for it. Shown with a job whose chunk 0 waits until chunks 1 to 3 are done: whichever
@@ -986,6 +1019,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_copies_save);
 	RUN_TEST(test_mixed);
 	RUN_TEST(test_team_in_a_forked_child);
+	RUN_TEST(test_team_destroyed_in_a_forked_child);
 	RUN_TEST(test_chunks_are_claimed_by_free_threads);
 	RUN_TEST(test_exceptions_raised_in_helpers_reach_the_caller);
 	RUN_TEST(test_helpers_block_signals);
