@@ -96,9 +96,15 @@ def test_usage_errors_exit_with_2_and_help_goes_to_standard_output(tmp_path):
     for args in (["--help"], ["help"], ["-h"]):
         assert cli(*args).stdout.startswith("usage:")
     assert re.fullmatch(r"springmass \d+\.\d+\.\d+\n", cli("--version").stdout)
-    for command in ("run", "check", "statics", "modes", "fmu"):
+    for command in ("run", "check", "statics", "modes") + (("fmu",) if HAS_FMU else ()):
         out = cli(command, "--help")
         assert out.stdout.startswith("usage: springmass " + command) and out.stderr == ""
+    if not HAS_FMU:
+        # A build without FMUs has the command, which refuses whatever it is given: it cannot run.
+        for args in (["--help"], [], [osc, "-o", tmp_path / "x.fmu"]):
+            out = cli("fmu", *args, status=1)
+            assert "this build has no FMU support" in out.stderr and out.stdout == "", out.stderr
+        assert list(tmp_path.iterdir()) == []
     usage_errors = [
         ["run"], ["run", osc, osc], ["run", osc, "--solver", "x"], ["run", osc, "--method", "x"],
         ["run", osc, "--max-steps", "1.5"], ["run", osc, "--t-end", "nan"], ["run", osc, "--set", "k"],
@@ -116,7 +122,7 @@ def test_usage_errors_exit_with_2_and_help_goes_to_standard_output(tmp_path):
         with_usage = len(args) == 1 or args[-1] == osc or args[-1] == tmp_path / "x.fmu"
         assert ("\nusage: springmass " in out.stderr) == with_usage, (args, out.stderr)
         assert with_usage or out.stderr.count("\n") == 1, (args, out.stderr)
-    for command in ("run", "statics", "modes", "fmu"):
+    for command in ("run", "statics", "modes") + (("fmu",) if HAS_FMU else ()):
         out = cli(command, osc, "--frobnicate", status=2)
         assert "unknown option or missing value: --frobnicate\n\nusage: springmass " + command in out.stderr
     assert not (tmp_path / "x.fmu").exists()
@@ -1240,7 +1246,9 @@ def test_fmu_writes_values_the_file_order_cannot_take_where_each_was_last_set(tm
         assert z.read("resources/parameters.txt") == b"c=5\nb=1\na=1\n"
 
 
-@pytest.mark.parametrize("command", ["check", "run", "statics", "modes", "fmu"])
+@pytest.mark.parametrize("command", ["check", "run", "statics", "modes",
+                                     pytest.param("fmu", marks=pytest.mark.skipif(
+                                         not HAS_FMU, reason="a build without the FMU runtime"))])
 def test_every_command_refuses_a_missing_or_second_model_file_and_unknown_options(command, tmp_path):
     # One model file per call: none, two, or an option no command knows is a usage error (exit 2),
     # said the same way by every command and followed by its usage; nothing is written.
