@@ -77,6 +77,40 @@ named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") 
 [ "${exported%\"}" = "libspringmassd.a" ] && [[ " $named " == *" -lspringmassd "* ]] ||
 	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
+# Which library each configuration of a consumer links, when a prefix holds a Debug and a Release
+# library, and when it holds that of a build without a build type (springmass added with
+# add_subdirectory to a project that sets none, and installed with it): from the consumer's build
+# plan, nothing compiled. The Release package's files stand in for the others, renamed.
+ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
+targets=$(find "$work/prefix" -name 'springmassTargets-release.cmake')
+library=$(find "$work/prefix" -name 'libspringmass.a')
+stand_in() {  # prefix config CONFIG library-file
+	cp -R "$work/prefix" "$1"
+	local files=${targets#"$work/prefix"} lib=${library#"$work/prefix"}
+	sed -e "s/RELEASE/$3/g" -e "s/\"Release\"/\"$2\"/g" -e "s/libspringmass\.a/$4/g" "$targets" \
+	    > "$1/$(dirname "$files")/springmassTargets-${2,,}.cmake"
+	cp "$library" "$1/$(dirname "$lib")/$4"
+}
+linked() {  # prefix build-type
+	rm -rf "$work/map"
+	"$cmake" -S "$source/tests/consumer" -B "$work/map" -G Ninja -DCMAKE_PREFIX_PATH="$1" \
+	    -DCMAKE_BUILD_TYPE="$2" -DEXAMPLES_DIR="$source/examples" > /dev/null 2>&1 || { echo "no library"; return; }
+	"$ninja" -C "$work/map" -t commands oscillator | grep -o 'libspringmassd\?\.a' | sort -u | tr '\n' ' '
+}
+stand_in "$work/both" Debug DEBUG libspringmassd.a
+for config in "" RelWithDebInfo Debug; do
+	expected="libspringmass.a "
+	[ "$config" != Debug ] || expected="libspringmassd.a "
+	got=$(linked "$work/both" "$config")
+	[ "$got" = "$expected" ] || fail "with a Debug and a Release install, build type '$config' links $got"
+done
+stand_in "$work/noconfig" NoConfig NOCONFIG libspringmass.a
+rm "$work/noconfig${targets#"$work/prefix"}"
+for config in RelWithDebInfo MinSizeRel; do
+	got=$(linked "$work/noconfig" "$config")
+	[ "$got" = "libspringmass.a " ] || fail "with the install of a build without a build type, build type '$config' links $got"
+done
+
 runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
 [ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
 fmu=$work/oscillator.fmu
