@@ -168,6 +168,34 @@ static char* name_part(const char* s)
 }
 
 // ---------------------------------------------------------------------------------------------
+// Units
+// ---------------------------------------------------------------------------------------------
+
+// Units with their exponents of the SI base units kg, m, s.
+typedef struct unit_definition {
+	const char* name;
+	int kg, m, s;
+} unit_definition;
+
+// Those of the outputs and settings, and those the model file's keys give parameters
+// (sm_document_parameter_unit).
+static const unit_definition units[] = {
+    {"m", 0, 1, 0},      {"m/s", 0, 1, -1},  {"N", 1, 1, -2},     {"J", 1, 2, -2},
+    {"s", 0, 0, 1},      {"1", 0, 0, 0},     {"kg", 1, 0, 0},     {"kg/m", 1, -1, 0},
+    {"kg/m2", 1, -2, 0}, {"m/s2", 0, 1, -2}, {"1/s", 0, 0, -1},   {"N/m", 1, 0, -2},
+    {"N/m2", 1, -1, -2}, {"N.s", 1, 1, -1},  {"N.s/m", 1, 0, -1}, {"N.s/m2", 1, -1, -1},
+};
+
+// The definition's own copy of a unit's name, NULL for "" or a unit it does not define.
+static const char* defined_unit(const char* unit)
+{
+	for (size_t u = 0; unit != NULL && u < sizeof units / sizeof units[0]; ++u)
+		if (strcmp(units[u].name, unit) == 0)
+			return units[u].name;
+	return NULL;
+}
+
+// ---------------------------------------------------------------------------------------------
 // Tunability of parameters
 // ---------------------------------------------------------------------------------------------
 
@@ -527,7 +555,7 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 			    role == ROLE_CONSTANTS ? FMU_TUNABLE
 			    : role == ROLE_STATE   ? FMU_FIXED
 			                           : FMU_CONSTANT,
-			    NULL, FMU_SRC_MODEL_PARAMETER, i, 0);
+			    defined_unit(sm_document_parameter_unit(doc, i)), FMU_SRC_MODEL_PARAMETER, i, 0);
 		if (v) {
 			v->has_start = true;
 			v->start_real = sm_document_parameter_value(doc, i);
@@ -659,16 +687,6 @@ const char* fmu_variability_name(fmu_variability v)
 	}
 	return "continuous";
 }
-
-// Units with their exponents of the SI base units kg, m, s.
-typedef struct unit_definition {
-	const char* name;
-	int kg, m, s;
-} unit_definition;
-
-static const unit_definition units[] = {
-    {"m", 0, 1, 0}, {"m/s", 0, 1, -1}, {"N", 1, 1, -2}, {"J", 1, 2, -2}, {"s", 0, 0, 1}, {"1", 0, 0, 0},
-};
 
 static bool unit_used(const fmu_table* t, const char* unit)
 {

@@ -58,6 +58,9 @@ typedef struct parser {
 	sm_error* err;
 	expansion* ex;
 	noted_parameters noted;  // of the element being read
+	// What a per-section constant multiplies in the structure being read: 1 a width [m] (sheet,
+	// mesh), 2 an area [m^2] (block); 0 unknown (a single spring's section is either).
+	int section_dimension;
 } parser;
 
 // Records the first failure: "<source>: <path>: <message>".
@@ -198,10 +201,76 @@ static void note_parameter(noted_parameters* noted, int32_t k)
 		noted->more = true;
 }
 
-// A number, or the name of a parameter standing for one, which feeds `use`. *source gets the
-// parameter's index or -1 (source may be NULL).
-static bool read_number(parser* p, feeds use, const json_t* value, const char* path, double* out,
-                        int32_t* source)
+// The unit of parameters that stand for values of different units, or for counts and indices.
+static const char no_single_unit[] = "";
+
+// Notes that parameter k stands for a value in `unit` (NULL: a count, an index, or a value whose
+// unit the key alone does not tell): a parameter keeps a unit while every value it stands for
+// has that one.
+static void note_unit(expansion* ex, int32_t k, const char* unit)
+{
+	const char* had = ex->parameter_units[k];
+	if (had == NULL)
+		ex->parameter_units[k] = unit != NULL ? unit : no_single_unit;
+	else if (unit == NULL || strcmp(had, unit) != 0)
+		ex->parameter_units[k] = no_single_unit;
+}
+
+// The SI unit of the number at a key of the format, as docs/model-format.md gives it, for the
+// parameters that stand for it; NULL where the key alone does not tell (atol sets both
+// tolerances, m and m/s; a single spring's section is a width or an area).
+static const char* key_unit(const parser* p, const char* key)
+{
+	static const struct {
+		const char* key;
+		const char* unit;
+	} units[] = {
+	    {"position", "m"},
+	    {"velocity", "m/s"},
+	    {"mass", "kg"},
+	    {"rest_length", "m"},
+	    {"stiffness", "N/m"},
+	    {"strain_stiffness", "N"},
+	    {"damping", "N.s/m"},
+	    {"strain_damping", "N.s"},
+	    {"break_strain", "1"},
+	    {"start", "m"},
+	    {"end", "m"},
+	    {"mass_per_length", "kg/m"},
+	    {"origin", "m"},
+	    {"edge_u", "m"},
+	    {"edge_v", "m"},
+	    {"size", "m"},
+	    {"density", "kg/m2"},
+	    {"min", "m"},
+	    {"max", "m"},
+	    {"gravity", "m/s2"},
+	    {"mass_damping", "1/s"},
+	    {"stop_time", "s"},
+	    {"output_interval", "s"},
+	    {"rtol", "1"},
+	    {"atol_position", "m"},
+	    {"atol_velocity", "m/s"},
+	    {"max_step", "s"},
+	};
+	// Per section: Y s / l0 is in N/m, so Y in N/m for a width s [m], in N/m^2 for an area.
+	if (strcmp(key, "section_stiffness") == 0 || strcmp(key, "section_damping") == 0) {
+		const bool stiffness = key[8] == 's';
+		return p->section_dimension == 1   ? (stiffness ? "N/m" : "N.s/m")
+		       : p->section_dimension == 2 ? (stiffness ? "N/m2" : "N.s/m2")
+		                                   : NULL;
+	}
+	for (size_t k = 0; k < sizeof units / sizeof units[0]; k++)
+		if (strcmp(units[k].key, key) == 0)
+			return units[k].unit;
+	return NULL;
+}
+
+// A number, or the name of a parameter standing for one, which feeds `use` and is in `unit` (NULL:
+// a count, an index, or a unit not known here). *source gets the parameter's index or -1 (source
+// may be NULL).
+static bool read_number(parser* p, feeds use, const char* unit, const json_t* value, const char* path,
+                        double* out, int32_t* source)
 {
 	if (source != NULL)
 		*source = -1;
@@ -224,6 +293,7 @@ static bool read_number(parser* p, feeds use, const json_t* value, const char* p
 		}
 		*out = p->parameter_values[k];
 		p->ex->parameter_uses[k] |= (uint8_t)use;
+		note_unit(p->ex, k, unit);
 		if (source != NULL)
 			*source = k;
 		note_parameter(&p->noted, k);
@@ -345,7 +415,8 @@ static bool read_field(parser* p, feeds use, const json_t* obj, const char* path
 	char sub[PATH_CAPACITY];
 	child_key(sub, path, key);
 	double v = 0.0;
-	if (!read_number(p, use, value, sub, &v, source) || !check_rule(p, sub, v, *source, rule))
+	if (!read_number(p, use, key_unit(p, key), value, sub, &v, source) ||
+	    !check_rule(p, sub, v, *source, rule))
 		return false;
 	*out = v;
 	return true;
@@ -364,7 +435,7 @@ static bool read_count(parser* p, feeds use, const json_t* value, const char* pa
 {
 	double v = 0.0;
 	int32_t source;
-	if (!read_number(p, use, value, path, &v, &source))
+	if (!read_number(p, use, NULL, value, path, &v, &source))
 		return false;
 	char text[DESCRIPTION_CAPACITY];
 	if (!(v == floor(v)) || !(v >= (double)lo) || !(v <= (double)hi))
@@ -404,7 +475,7 @@ static bool read_vector(parser* p, feeds use, const json_t* obj, const char* pat
 		child_index(element, sub, c);
 		int32_t source;
 		double v = 0.0;
-		if (!read_number(p, use, json_array_get(value, c), element, &v, &source) ||
+		if (!read_number(p, use, key_unit(p, key), json_array_get(value, c), element, &v, &source) ||
 		    !check_rule(p, element, v, source, rule))
 			return false;
 		out[c] = v;
@@ -484,6 +555,7 @@ static void expansion_free(expansion* ex)
 	free(ex->ports);
 	sm_name_index_free(&ex->port_names);
 	free(ex->parameter_uses);
+	free(ex->parameter_units);
 	free(ex);
 }
 
@@ -619,6 +691,7 @@ static bool lookup_index_parameter(void* context, const char* name, size_t lengt
 		return false;
 	*value = p->parameter_values[k];
 	p->ex->parameter_uses[k] |= (uint8_t)FEEDS_REFERENCES;
+	note_unit(p->ex, k, NULL);
 	note_parameter(&named->noted, k);
 	return true;
 }
@@ -1058,7 +1131,7 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 			child_index(coordinate, element, c);
 			double x = 0.0;
 			int32_t source;
-			if (!read_number(p, FEEDS_STATE, json_array_get(vector, c), coordinate, &x, &source) ||
+			if (!read_number(p, FEEDS_STATE, "m", json_array_get(vector, c), coordinate, &x, &source) ||
 			    !check_rule(p, coordinate, x, source, ANY_FINITE))
 				return false;
 			(*vertices)[3 * v + c] = x;
@@ -1328,6 +1401,9 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 	spring_source groups[3] = {
 	    {-1, -1, -1, -1, -1, false}, {-1, -1, -1, -1, -1, false}, {-1, -1, -1, -1, -1, false}};
 	sm_status st = SM_OK;
+	// A rope has no per-section constants; a sheet's and a mesh's springs stand for a width, a
+	// block's for an area (docs/model-format.md).
+	p->section_dimension = s.type == STRUCTURE_BLOCK ? 2 : s.type == STRUCTURE_ROPE ? 0 : 1;
 	switch (s.type) {
 	case STRUCTURE_ROPE: {
 		sm_rope_def d = sm_default_rope_def();
@@ -1449,6 +1525,7 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		break;
 	}
 	}
+	p->section_dimension = 0;
 	if (st != SM_OK)
 		return fail_naming_parameters(p, st, path, sm_model_last_error(model));
 
@@ -1757,8 +1834,12 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
 	}
-	p.ex->parameter_uses = calloc(doc->parameter_count > 0 ? (size_t)doc->parameter_count : 1, 1);
-	if (p.ex->parameter_uses == NULL) {
+	const size_t parameters = doc->parameter_count > 0 ? (size_t)doc->parameter_count : 1;
+	p.ex->parameter_uses = calloc(parameters, 1);
+	p.ex->parameter_units = calloc(parameters, sizeof(const char*));
+	if (p.ex->parameter_uses == NULL || p.ex->parameter_units == NULL) {
+		free(p.ex->parameter_uses);
+		free(p.ex->parameter_units);
 		free(p.ex);
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", doc->source);
 		return NULL;
@@ -2155,6 +2236,14 @@ const char* sm_document_parameter_name(const sm_document* doc, int32_t index)
 double sm_document_parameter_value(const sm_document* doc, int32_t index)
 {
 	return doc != NULL && index >= 0 && index < doc->parameter_count ? doc->parameter_values[index] : NAN;
+}
+
+const char* sm_document_parameter_unit(const sm_document* doc, int32_t index)
+{
+	if (doc == NULL || index < 0 || index >= doc->parameter_count)
+		return NULL;
+	const char* unit = doc->current->parameter_units[index];
+	return unit != NULL ? unit : no_single_unit;
 }
 
 uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index)

@@ -73,6 +73,9 @@ typedef struct expansion {
 	sm_document_settings settings;
 
 	uint8_t* parameter_uses;  // per parameter: sm_parameter_use flags of the places naming it
+	// Per parameter: the unit of every value naming it, "" for several or for counts and indices,
+	// NULL while unused (static strings).
+	const char** parameter_units;
 } expansion;
 
 struct sm_document {

@@ -312,7 +312,8 @@ printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [
 out=$("$cli" check "$tmp/tiny_atol.json" 2>&1)
 [ "$out" = "springmass check: $tmp/tiny_atol.json: simulation.atol_velocity: 1e-200 must be at least 1e-150 (CVODE's error norm overflows below)" ] ||
   fail "check tiny_atol.json printed '$out'"
-# check says what each parameter feeds, with its value as it reads back exactly.
+# check says what each parameter feeds, with its value as it reads back exactly and the unit of what
+# it stands for (none for a count or a ratio).
 cat > "$tmp/uses.json" << 'JSON'
 {"springmass": 1, "name": "uses", "parameters": {"n": 4, "L": 1, "E": 10, "b": 0.1, "tol": 1e-6, "spare": 4999.999},
  "structures": [{"type": "rope", "name": "r", "start": [0, 0, 0], "end": ["L", 0, 0], "segments": "n",
@@ -320,9 +321,9 @@ cat > "$tmp/uses.json" << 'JSON'
  "fixed": [{"min": [-1, -1, -1], "max": ["b", 1, 1]}], "simulation": {"rtol": "tol"}}
 JSON
 out=$("$cli" check "$tmp/uses.json" 2>&1)
-for line in "n = 4 feeds counts" "L = 1 feeds initial state" "E = 10 feeds constants" \
-            "b = 0.1 feeds held particles" "tol = 1e-06 feeds settings" "spare = 4999.999 feeds nothing"; do
-  grep -q "^  $(sed 's/ = \([^ ]*\) / *= \1 */' <<< "$line")$" <<< "$out" || fail "check uses.json: no line '$line' in: $out"
+for line in "n = 4 feeds counts" "L = 1 m feeds initial state" "E = 10 N feeds constants" \
+            "b = 0.1 m feeds held particles" "tol = 1e-06 feeds settings" "spare = 4999.999 feeds nothing"; do
+  grep -q "^  $(sed 's/ = / *= /; s/ feeds / *feeds /' <<< "$line")$" <<< "$out" || fail "check uses.json: no line '$line' in: $out"
 done
 # The absolute tolerances one at a time: --atol-position and --atol-velocity win over --atol
 # whatever the order, and a looser velocity tolerance is a different run (fewer steps on the

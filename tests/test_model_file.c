@@ -513,6 +513,61 @@ static int test_parameter_uses(void)
 	return 0;
 }
 
+// The unit of what each parameter stands for, from the keys naming it: one unit per kind of key
+// (a per-section constant in the unit its structure's section gives it: a sheet's width, a
+// block's area); none for a count, an index, atol (positions and velocities), a single spring's
+// per-section constant, two units at once, or nothing.
+static int test_parameter_units(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"u\", \"parameters\": {\"m\": 1, \"x\": 0, \"v\": 0, \"k\": 5,"
+	    " \"c\": 0.1, \"E\": 10, \"Ys\": 100, \"Yb\": 1000, \"Yd\": 1, \"Ds\": 0.5, \"rho\": 1, \"n\": 4,"
+	    " \"g\": -9.81, \"alpha\": 0.1, \"brk\": 0.5, \"tol\": 1e-6, \"atol\": 1e-8, \"h\": 1e-3,"
+	    " \"both\": 2, \"single\": 3, \"spare\": 3, \"l\": 0.5},"
+	    " \"gravity\": [0, 0, \"g\"], \"mass_damping\": \"alpha\","
+	    " \"particles\": [{\"name\": \"p\", \"position\": [\"x\", 0, 5], \"velocity\": [\"v\", 0, 0], \"mass\": \"m\"},"
+	    "                 {\"name\": \"q\", \"position\": [1, 0, 5], \"mass\": \"both\"}],"
+	    " \"springs\": [{\"a\": \"p\", \"b\": \"q\", \"stiffness\": \"k\", \"damping\": \"c\","
+	    "               \"break_strain\": \"brk\", \"rest_length\": \"l\"},"
+	    "             {\"a\": \"p\", \"b\": \"q\", \"strain_stiffness\": \"E\", \"damping\": \"both\"},"
+	    "             {\"a\": \"p\", \"b\": \"q\", \"section_stiffness\": \"single\", \"section\": 0.1}],"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": \"n\", \"nv\": 3,"
+	    "   \"structural\": {\"section_stiffness\": \"Ys\", \"section_damping\": \"Ds\"}},"
+	    "  {\"type\": \"block\", \"name\": \"b\", \"origin\": [5, 0, 0], \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2,"
+	    "   \"nw\": 2, \"edge\": {\"section_stiffness\": \"Yb\", \"section_damping\": \"Yd\"}},"
+	    "  {\"type\": \"mesh\", \"name\": \"t\", \"density\": \"rho\", \"vertices\": [[0, 0, 2], [1, 0, 2], [0, 1, 2]],"
+	    "   \"triangles\": [[0, 1, 2]], \"edge\": {\"section_stiffness\": \"Ys\"}}],"
+	    " \"fixed\": [\"s[0, n - 1]\"],"
+	    " \"simulation\": {\"rtol\": \"tol\", \"atol\": \"atol\", \"max_step\": \"h\"}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	const struct {
+		const char* name;
+		const char* unit;
+	} expected[] = {
+	    {"m", "kg"},   {"x", "m"},       {"v", "m/s"},     {"k", "N/m"},    {"c", "N.s/m"},   {"E", "N"},
+	    {"Ys", "N/m"}, {"Yb", "N/m2"},   {"Yd", "N.s/m2"}, {"Ds", "N.s/m"}, {"rho", "kg/m2"}, {"n", ""},
+	    {"g", "m/s2"}, {"alpha", "1/s"}, {"brk", "1"},     {"tol", "1"},    {"atol", ""},     {"h", "s"},
+	    {"both", ""},  {"single", ""},   {"spare", ""},    {"l", "m"},
+	};
+	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
+		const char* unit =
+		    sm_document_parameter_unit(doc, sm_document_parameter_index(doc, expected[e].name));
+		if (unit == NULL || strcmp(unit, expected[e].unit) != 0)
+			printf("  parameter %s: unit \"%s\", expected \"%s\"\n", expected[e].name, unit ? unit : "(null)",
+			       expected[e].unit);
+		ENSURE(unit != NULL && strcmp(unit, expected[e].unit) == 0);
+	}
+	ENSURE(sm_document_parameter_unit(doc, -1) == NULL && sm_document_parameter_unit(doc, 99) == NULL);
+	ENSURE(sm_document_parameter_unit(NULL, 0) == NULL);
+	// The units stay when a value changes the counts.
+	ENSURE_STATUS(sm_document_set_parameter(doc, sm_document_parameter_index(doc, "n"), 6.0, &err), SM_OK);
+	ENSURE(strcmp(sm_document_parameter_unit(doc, sm_document_parameter_index(doc, "Ys")), "N/m") == 0);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // An initial state (e.g. a static equilibrium) replaces positions but keeps rest lengths, and
 // survives saving and loading.
 static int test_initial_state_and_save_to_file(void)
@@ -3252,6 +3307,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_bundled_models_round_trip);
 	RUN_TEST(test_oscillator);
 	RUN_TEST(test_parameter_uses);
+	RUN_TEST(test_parameter_units);
 	RUN_TEST(test_parameters_set_together);
 	RUN_TEST(test_oscillator_follows_its_closed_form);
 	RUN_TEST(test_tearing_cloth_tears);

@@ -108,6 +108,16 @@ typedef enum sm_parameter_use {
 /// The uses (sm_parameter_use flags) of a parameter; 0 for an unused one or an index out of
 /// range. They depend on where the file names the parameter, not on its value.
 SM_API uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index);
+
+/// The SI unit of the values a parameter stands for, when all have the same one: "kg" for a mass,
+/// "N/m" for a stiffness, "1" for a strain or a relative tolerance, and so on, as
+/// docs/model-format.md gives each key's ("N.s/m" for N s/m, "m/s2" for m/s^2). "" for a parameter
+/// that stands for values of different units, for a count or an index, for a value whose unit its
+/// key alone does not tell (`atol`, which sets the tolerances of positions [m] and velocities
+/// [m/s]; a single spring's `section`, a width [m] or an area [m^2], and its per-section
+/// constants), or for nothing. NULL for an index out of range. Like the uses, it depends on where
+/// the file names the parameter, not on its value.
+SM_API const char* sm_document_parameter_unit(const sm_document* doc, int32_t index);
 /// Sets a parameter's value; fails (document unchanged) if the model built with it would be
 /// invalid, with the message naming the element that breaks a rule. A parameter may feed any
 /// number of the file, counts included; a value that changes the number of particles fails if

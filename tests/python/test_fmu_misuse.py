@@ -786,7 +786,8 @@ def test_the_description_declares_what_the_fmu_holds(package, tmp_path):
     # start value (initial="exact") is what the instance reads in initialisation mode, here with
     # every solver setting of the file away from its default; the DefaultExperiment is the file's
     # stop time, output interval and tolerance; "particle_variables": false leaves out the
-    # particles' variables; the units are the SI units they name.
+    # particles' variables; the units are the SI units they name, the model file's parameters' those
+    # of the values they stand for.
     model = tmp_path / "settings.json"
     model.write_text(json.dumps(SETTINGS))
     fmu = package(model)
@@ -796,7 +797,9 @@ def test_the_description_declares_what_the_fmu_holds(package, tmp_path):
     assert not [v.name for v in md.modelVariables if v.name.startswith("p[")]
     base = {u.name: (u.baseUnit.kg, u.baseUnit.m, u.baseUnit.s) for u in md.unitDefinitions}
     assert base == {"m": (0, 1, 0), "m/s": (0, 1, -1), "N": (1, 1, -2), "J": (1, 2, -2), "s": (0, 0, 1),
-                    "1": (0, 0, 0)}
+                    "1": (0, 0, 0), "kg": (1, 0, 0), "N/m": (1, 0, -2)}
+    units = {v.name: v.unit for v in md.modelVariables}
+    assert [units[name] for name in ("m", "k", "tol", "hmax")] == ["kg", "N/m", "1", "s"]
     inst = Instance(fmu)
     s = inst.slave
     try:
