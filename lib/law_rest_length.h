@@ -28,7 +28,7 @@
 
 #include "model_internal.h"
 
-// Magnitude of the elastic force along u: f_a = elastic_magnitude * u [N].
+// Magnitude of the elastic force along u, ks (L - l0): f_a = rest_length_magnitude(...) u [N].
 static inline double rest_length_magnitude(double stiffness, double rest_length, double length)
 {
 	return stiffness * (length - rest_length);

@@ -23,7 +23,7 @@
 
 #include "model_internal.h"
 
-// Magnitude of the damping force along u: f_a = damping_magnitude * u [N].
+// Magnitude of the damping force along u, kd r: f_a = spring_damping_magnitude(...) u [N].
 static inline double spring_damping_magnitude(double damping, double rate)
 {
 	return damping * rate;
