@@ -181,7 +181,7 @@ const double* sm_simulation_external_forces(sm_simulation* sim, double t)
 	return sim->work_external;
 }
 
-// Writes the free particles' entries of x and v into y (e untouched).
+// Writes the free particles' entries of x and v into y (the energies e and w untouched).
 static void pack(const sm_simulation* sim, const double* x, const double* v, double* y)
 {
 	const int64_t nd = sim->dofs;
@@ -297,7 +297,8 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 	return st == SM_OK ? 0 : -1;
 }
 
-// Dense J: [[0, I, 0], [M^-1 K, M^-1 D, 0], [0, 0, 0]], scattered from the sparse fill.
+// Dense J: [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]], scattered from
+// the sparse fill.
 static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
                           N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
 {
@@ -1626,9 +1627,10 @@ void sm_simulation_restore_springs(sm_simulation* sim)
 			sm_model_set_spring_enabled(sim->model, s, sim->initial_enabled[s] != 0);
 }
 
-// The first driven particle whose position at time t, x0 + v (t - t0) as sm_simulation_unpack
-// forms it, is not finite under the given motions (3 positions [m] and velocities [m/s], one start
-// time [s] per particle), or -1. An advance stops where forces are not finite, so a simulation
+// The first driven particle whose position at time t, x0 + s (v0 + s a / 2) with s = t - t0 as
+// sm_simulation_unpack forms it, or whose velocity v0 + s a, is not finite under the given motions
+// (3 positions [m], velocities [m/s] and accelerations [m/s^2] per particle, one start time [s]
+// per particle), or -1. An advance stops where forces are not finite, so a simulation
 // never gets there by itself; a snapshot read back from bytes, or a time given to set_state, may
 // hold such a motion and time.
 int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
