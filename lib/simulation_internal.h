@@ -105,11 +105,12 @@ struct sm_simulation {
 	int32_t break_count;
 	int32_t break_capacity;
 
-	// Sparse Jacobian over the free degrees of freedom (KLU and the reduced solvers).
+	// Sparse Jacobian over the free degrees of freedom (dense, KLU and cholmod solvers; pcg uses
+	// the springs' factored blocks only).
 	sm_sparse_jacobian* pattern;
 	double* dfdx;               // values in the pattern's order [N/m]
 	double* dfdv;               // [N s/m]
-	int64_t* klu_row_pointers;  // pattern of the 6nf+1 KLU matrix, rewritten on every fill
+	int64_t* klu_row_pointers;  // pattern of the (6nf + 2) KLU matrix, copied into it on every fill
 	int64_t* klu_column_indices;
 
 	// Counters; CVODE's own counters restart with every CVodeReInit, so what they had reached
@@ -167,7 +168,8 @@ sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* f
 void sm_simulation_refresh_outputs(sm_simulation* sim);
 // Enables each spring as the model given to create or update_model does (broken ones restored).
 void sm_simulation_restore_springs(sm_simulation* sim);
-// The first driven particle whose position at time t is not finite under the given motions, or -1.
+// The first driven particle whose position or velocity at time t is not finite under the given
+// motions, or -1.
 int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, double t, const double* position,
                                                   const double* velocity, const double* acceleration,
                                                   const double* start);
@@ -211,8 +213,9 @@ void sm_simulation_free_events(sm_simulation* sim);
 int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant);
 
 // The reduced second-order linear solver (linear_solver_reduced.c): a SUNLinearSolver that
-// solves (M - gamma D - gamma^2 K) dv = M bv + gamma K bx by
-// preconditioned conjugate gradients (use_cholmod false) or sparse Cholesky (true).
+// solves (M - gamma D - gamma^2 K) dv = M bv + gamma K bx by conjugate gradients, preconditioned
+// by block Jacobi and its coarse correction (use_cholmod false) or by the Cholesky factor of an
+// earlier Newton matrix (true).
 SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
 // Its set-up, given to CVodeSetPreconditioner (user data: the simulation): evaluates the
 // Jacobian afresh (always, whatever CVODE allows); psolve is a formality.
