@@ -219,8 +219,8 @@ bool sm_reduced_apply_preconditioner(sm_reduced* r, const double* in, double* ou
 
 // reduced_aggregates.c
 
-// The aggregates and the coarse pattern (over the strong springs only if strong_only). False on out
-// of memory.
+// The aggregates (over the strong springs only if strong_only) and the coarse pattern (over all
+// springs). False on out of memory.
 bool sm_reduced_build_two_level(sm_reduced* r, bool strong_only);
 // The coarse unknowns of a chunked model in two halves and a separator. False on out of memory.
 bool sm_reduced_split_coarse(sm_reduced* r);
