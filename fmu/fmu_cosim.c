@@ -1045,8 +1045,6 @@ static double real_value(instance* inst, const fmu_variable* v, energy_cache* ca
 	}
 }
 
-// Whether a variable's value needs the simulation (everything but parameters, constants and
-// inputs).
 // fmi2OK, or fmi2Warning, logged, when a value read (`what`: "" or "the derivative of ") of
 // `overflowing` is beyond the range of a double.
 static fmi2Status overflow_warning(instance* inst, const char* function, const char* what,
@@ -1060,6 +1058,8 @@ static fmi2Status overflow_warning(instance* inst, const char* function, const c
 	return fmi2Warning;
 }
 
+// Whether a variable's value needs the simulation (everything but parameters, constants and
+// inputs).
 static bool needs_simulation(const fmu_variable* v)
 {
 	return v->source >= FMU_SRC_PORT_POSITION && v->causality != FMU_INPUT;

@@ -183,8 +183,6 @@ const char* fmu_variability_name(fmu_variability variability);
 /// or a C keyword such as "int" gets a "model_" prefix) into a malloc'ed string.
 char* fmu_identifier(const char* name);
 
-/// Linear solver, method and Jacobian names used by the string parameters.
-
 #ifdef __cplusplus
 }
 #endif
