@@ -357,22 +357,6 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 		fprintf(f, "%.9g %.9g %.9g\n", values[3 * i], values[3 * i + 1], values[3 * i + 2]);
 }
 
-void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values,
-                            bool first)
-{
-	const int32_t springs = sm_model_spring_count(model);
-	if (first) {
-		int32_t intact = 0;
-		for (int32_t s = 0; s < springs; s++)
-			intact += sm_model_spring_enabled(model, s);
-		fprintf(f, "CELL_DATA %d\n", (int)intact);
-	}
-	fprintf(f, "SCALARS %s double 1\nLOOKUP_TABLE default\n", name);
-	for (int32_t s = 0; s < springs; s++)
-		if (sm_model_spring_enabled(model, s))
-			fprintf(f, "%.9g\n", values[s]);
-}
-
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout)
 {

@@ -93,11 +93,6 @@ FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, 
 /// Writes one vector field of point data (3 values per particle); `first` for the first field.
 void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
 
-/// Writes one scalar field of cell data: the values (one per spring, in spring order) of the
-/// intact springs, the lines of cli_vtk_open; `first` for the first field.
-void cli_vtk_spring_scalars(FILE* f, const sm_model* model, const char* name, const double* values,
-                            bool first);
-
 /// Checks the file an option writes (NULL: none given) before anything runs: "-" is standard
 /// output where `dash_is_stdout`, a file name everywhere else; a file that is `input` itself (the
 /// same file under any name), which the command reads and `input_what` names ("the model file"),
