@@ -1376,10 +1376,13 @@ static double state_output_change(const instance* inst, const fmu_variable* v, c
 			const size_t i = 3 * (size_t)p + c3;
 			if (all || v->source == FMU_SRC_ENERGY_KINETIC)
 				change += pd.mass * u[i] * dv[i];
+			// The constant forces, gravity and the load: the gravitational energy's gradient is minus
+			// them, and the elastic energy's minus the rest of the forces at zero velocities.
+			const double constant = pd.mass * def.gravity[c3] + pd.load[c3];
 			if (all || v->source == FMU_SRC_ENERGY_GRAVITY)
-				change -= pd.mass * def.gravity[c3] * dx[i];
+				change -= constant * dx[i];
 			if (all || v->source == FMU_SRC_ENERGY_ELASTIC)
-				change -= (elastic[i] - pd.mass * def.gravity[c3]) * dx[i];
+				change -= (elastic[i] - constant) * dx[i];
 		}
 	}
 	return change;

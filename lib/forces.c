@@ -451,8 +451,8 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
 	            lanes);
 }
 
-// Gravity, mass damping and external forces on particles begin .. end - 1: the starting value of
-// their f before the springs add.
+// Gravity, mass damping, loads and external forces on particles begin .. end - 1: the starting
+// value of their f before the springs add.
 static void body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
                               int32_t begin, int32_t end)
 {
@@ -461,6 +461,9 @@ static void body_forces_range(const sm_model* model, const double* v, const doub
 		const double* vi = v != NULL ? v + 3 * (size_t)i : zero;
 		body_force(model->mass[i], model->def.gravity, model->def.mass_damping, vi, f + 3 * (size_t)i);
 	}
+	if (model->load_count > 0)
+		for (size_t k = 3 * (size_t)begin; k < 3 * (size_t)end; k++)
+			f[k] += model->load[k];
 	if (f_external != NULL)
 		for (size_t k = 3 * (size_t)begin; k < 3 * (size_t)end; k++)
 			f[k] += f_external[k];
@@ -589,10 +592,8 @@ sm_energies sm_model_energies(const sm_model* model, const double* x, const doub
 			const double* vi = v + 3 * (size_t)i;
 			e.kinetic += 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]);
 		}
-		if (x != NULL) {
-			const double* xi = x + 3 * (size_t)i;
-			e.gravity -= m * (g[0] * xi[0] + g[1] * xi[1] + g[2] * xi[2]);
-		}
+		if (x != NULL)
+			e.gravity += constant_force_potential(m, g, model->load + 3 * (size_t)i, x + 3 * (size_t)i);
 	}
 	if (x != NULL)
 		for (int32_t s = 0; s < model->spring_count; s++) {
@@ -612,8 +613,8 @@ double sm_model_particle_energy(const sm_model* model, const double* x, const do
 	const double* g = model->def.gravity;
 	const double* xi = x + 3 * (size_t)i;
 	const double* vi = v + 3 * (size_t)i;
-	double energy = 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]) -
-	                m * (g[0] * xi[0] + g[1] * xi[1] + g[2] * xi[2]);
+	double energy = 0.5 * m * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]) +
+	                constant_force_potential(m, g, model->load + 3 * (size_t)i, xi);
 	for (int32_t k = 0; k < count; k++) {
 		const int32_t s = springs[k];
 		spring_geometry geo;

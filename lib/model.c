@@ -172,6 +172,10 @@ static sm_status check_particle_def(const sm_particle_def* def, long index, char
 		if (!isfinite(def->velocity[k]))
 			return say(msg, SM_ERROR_NOT_FINITE, "particle %ld: velocity %c = %g is not finite", index,
 			           axis[k], def->velocity[k]);
+	for (int k = 0; k < 3; k++)
+		if (!isfinite(def->load[k]))
+			return say(msg, SM_ERROR_NOT_FINITE, "particle %ld: load %c = %g N is not finite", index, axis[k],
+			           def->load[k]);
 	if (def->motion != SM_PARTICLE_FREE && def->motion != SM_PARTICLE_FIXED &&
 	    def->motion != SM_PARTICLE_DRIVEN)
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "particle %ld: motion = %d is not a known motion", index,
@@ -332,6 +336,7 @@ static void free_arrays(sm_model* m)
 	free(m->position);
 	free(m->velocity);
 	free(m->motion);
+	free(m->load);
 	free(m->free_index);
 	free(m->spring_def);
 	free(m->spring_a);
@@ -370,7 +375,7 @@ static int reserve_particles(sm_model* m, int64_t needed)
 	if (!grow((void**)&m->mass, c, sizeof(double)) || !grow((void**)&m->position, 3 * c, sizeof(double)) ||
 	    !grow((void**)&m->velocity, 3 * c, sizeof(double)) ||
 	    !grow((void**)&m->motion, c, sizeof(sm_particle_motion)) ||
-	    !grow((void**)&m->free_index, c, sizeof(int32_t)))
+	    !grow((void**)&m->load, 3 * c, sizeof(double)) || !grow((void**)&m->free_index, c, sizeof(int32_t)))
 		return 0;
 	m->particle_capacity = (int32_t)cap;
 	return 1;
@@ -467,6 +472,7 @@ sm_model* sm_model_clone(const sm_model* model)
 	m->position = duplicate(model->position, 3 * pc * sizeof(double), &ok);
 	m->velocity = duplicate(model->velocity, 3 * pc * sizeof(double), &ok);
 	m->motion = duplicate(model->motion, pc * sizeof(sm_particle_motion), &ok);
+	m->load = duplicate(model->load, 3 * pc * sizeof(double), &ok);
 	m->free_index = duplicate(model->free_index, pc * sizeof(int32_t), &ok);
 	m->spring_def = duplicate(model->spring_def, sc * sizeof(sm_spring_def), &ok);
 	m->spring_a = duplicate(model->spring_a, sc * sizeof(int32_t), &ok);
@@ -492,9 +498,18 @@ const char* sm_model_last_error(const sm_model* model)
 // Particles.
 // ---------------------------------------------------------------------------------------------
 
+static bool loaded(const double load[3])
+{
+	return load[0] != 0.0 || load[1] != 0.0 || load[2] != 0.0;
+}
+
+// Stores particle i's definition; its place holds no load before (a new particle), or had its
+// load taken out of load_count.
 static void store_particle(sm_model* m, int32_t i, const sm_particle_def* def)
 {
 	m->mass[i] = def->mass;
+	memcpy(m->load + 3 * (size_t)i, def->load, 3 * sizeof(double));
+	m->load_count += loaded(def->load);
 	for (int k = 0; k < 3; k++) {
 		m->position[3 * (size_t)i + k] = def->position[k];
 		// A fixed particle does not move: its stored velocity is zero whatever was given.
@@ -556,6 +571,7 @@ sm_status sm_model_get_particle(const sm_model* model, int32_t index, sm_particl
 		def->velocity[k] = model->velocity[3 * (size_t)index + k];
 	}
 	def->motion = model->motion[index];
+	memcpy(def->load, model->load + 3 * (size_t)index, 3 * sizeof(double));
 	return SM_OK;
 }
 
@@ -569,6 +585,7 @@ sm_status sm_model_set_particle(sm_model* model, int32_t index, const sm_particl
 	if (st != SM_OK)
 		return st;
 	const int renumber = def->motion != model->motion[index];
+	model->load_count -= loaded(model->load + 3 * (size_t)index);
 	store_particle(model, index, def);
 	if (renumber)
 		renumber_free(model);

@@ -252,6 +252,7 @@ static const char* key_unit(const parser* p, const char* key)
 	    {"atol_position", "m"},
 	    {"atol_velocity", "m/s"},
 	    {"max_step", "s"},
+	    {"force", "N"},
 	};
 	// Per section: Y s / l0 is in N/m, so Y in N/m for a width s [m], in N/m^2 for an area.
 	if (strcmp(key, "section_stiffness") == 0 || strcmp(key, "section_damping") == 0) {
@@ -552,6 +553,7 @@ static void expansion_free(expansion* ex)
 	sm_name_index_free(&ex->particle_names);
 	free(ex->structures);
 	sm_name_index_free(&ex->structure_names);
+	free(ex->loads);
 	free(ex->ports);
 	sm_name_index_free(&ex->port_names);
 	free(ex->parameter_uses);
@@ -1628,6 +1630,46 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 
 // The particles of "fixed" are marked first and then fixed together (sm_model_set_motions), with
 // the free particles numbered once.
+// "loads": constant forces on particles, [{"particle": REF, "force": [fx, fy, fz]}, ...]; the loads on
+// one particle add up.
+static bool read_loads(parser* p, const json_t* list)
+{
+	static const char* const keys[] = {"particle", "force", NULL};
+	if (list == NULL)
+		return true;
+	if (!json_is_array(list))
+		return fail(p, SM_ERROR_SCHEMA, "loads", "must be an array of loads, not %s", type_name(list));
+	const size_t n = json_array_size(list);
+	if ((int64_t)n > p->doc->max_elements)
+		return fail(p, SM_ERROR_SCHEMA, "loads", "too many loads (%zu)", n);
+	p->ex->loads = calloc(n > 0 ? n : 1, sizeof(document_load));
+	if (p->ex->loads == NULL)
+		return fail(p, SM_ERROR_OUT_OF_MEMORY, "loads", "out of memory");
+	sm_model* model = p->ex->model;
+	for (size_t k = 0; k < n; k++) {
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
+		child_index(path, "loads", k);
+		const json_t* obj = json_array_get(list, k);
+		document_load* load = &p->ex->loads[k];
+		child_key(sub, path, "particle");
+		forget_parameters(p);
+		if (!expect_object(p, obj, path) || !check_keys(p, obj, path, keys) ||
+		    !require(p, obj, path, "particle") || !require(p, obj, path, "force") ||
+		    !resolve_particle(p, json_object_get(obj, "particle"), sub, &load->particle) ||
+		    !read_vector(p, FEEDS_CONSTANTS, obj, path, "force", ANY_FINITE, load->force, load->source))
+			return false;
+		p->ex->load_count++;
+		sm_particle_def def;
+		sm_model_get_particle(model, load->particle, &def);
+		for (int c = 0; c < 3; c++)
+			def.load[c] += load->force[c];
+		// The loads on one particle add up to a force beyond a double: the model names the particle.
+		if (sm_model_set_particle(model, load->particle, &def) != SM_OK)
+			return fail_naming_parameters(p, SM_ERROR_NOT_FINITE, path, sm_model_last_error(model));
+	}
+	return true;
+}
+
 static bool read_fixed(parser* p, const json_t* list)
 {
 	if (list == NULL)
@@ -1862,7 +1904,8 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 	ok = ok && read_particles(&p, json_object_get(root, "particles")) &&
 	     read_structures(&p, json_object_get(root, "structures")) &&
 	     read_springs(&p, json_object_get(root, "springs")) &&
-	     read_fixed(&p, json_object_get(root, "fixed")) && read_ports(&p, json_object_get(root, "ports")) &&
+	     read_fixed(&p, json_object_get(root, "fixed")) && read_loads(&p, json_object_get(root, "loads")) &&
+	     read_ports(&p, json_object_get(root, "ports")) &&
 	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
 	if (ok && sm_model_particle_count(p.ex->model) == 0)
 		ok = fail(&p, SM_ERROR_SCHEMA, "",
@@ -1892,9 +1935,9 @@ static expansion* expand(const sm_document* doc, const double* parameter_values,
 
 static bool read_header(sm_document* doc, sm_error* err)
 {
-	static const char* const keys[] = {"springmass",   "name",       "description", "parameters", "gravity",
-	                                   "mass_damping", "particles",  "springs",     "structures", "fixed",
-	                                   "ports",        "simulation", "fmu",         NULL};
+	static const char* const keys[] = {"springmass",   "name",      "description", "parameters", "gravity",
+	                                   "mass_damping", "particles", "springs",     "structures", "fixed",
+	                                   "loads",        "ports",     "simulation",  "fmu",        NULL};
 	parser p = {.doc = doc, .err = err};
 	const json_t* root = doc->root;
 	if (!json_is_object(root))

@@ -18,6 +18,14 @@
 #define SM_DOCUMENT_MAX_ELEMENTS (1 << 22)
 
 // Where a particle's values came from: a parameter index, or -1 for a number.
+// One entry of "loads": a force [N] on a particle, each component from a parameter (its index) or
+// a number (-1).
+typedef struct document_load {
+	int32_t particle;
+	double force[3];
+	int32_t source[3];
+} document_load;
+
 typedef struct particle_source {
 	int32_t mass;
 	int32_t position[3];
@@ -65,6 +73,9 @@ typedef struct expansion {
 	int64_t structure_capacity;
 	int32_t structure_count;
 	name_index structure_names;
+
+	document_load* loads;  // as the file gives them, for the canonical writer
+	int32_t load_count;
 
 	sm_port* ports;  // names point into the JSON tree
 	int32_t port_count;

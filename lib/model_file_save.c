@@ -341,6 +341,17 @@ static void write_body(text* t, const sm_document* doc)
 		}
 		puts_(t, "  ]");
 	}
+	if (ex->load_count > 0) {
+		puts_(t, ",\n  \"loads\": [\n");
+		for (int32_t k = 0; k < ex->load_count; k++) {
+			puts_(t, "    {\"particle\": ");
+			put_particle_reference(t, doc, ex->loads[k].particle);
+			puts_(t, ", \"force\": ");
+			put_vector(t, doc, ex->loads[k].force, ex->loads[k].source);
+			puts_(t, k + 1 < ex->load_count ? "},\n" : "}\n");
+		}
+		puts_(t, "  ]");
+	}
 	if (ex->port_count > 0) {
 		puts_(t, ",\n  \"ports\": [\n");
 		for (int32_t k = 0; k < ex->port_count; k++) {

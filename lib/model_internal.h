@@ -18,6 +18,8 @@ struct sm_model {
 	double* position;  // initial positions, 3 per particle [m]
 	double* velocity;  // initial velocities, 3 per particle [m/s]
 	sm_particle_motion* motion;
+	double* load;         // constant external forces, 3 per particle [N]
+	int32_t load_count;   // particles with a load other than (0, 0, 0)
 	int32_t* free_index;  // position among free particles, or -1
 	int32_t free_count;
 

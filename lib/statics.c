@@ -222,7 +222,7 @@ typedef struct statics_work {
 	int32_t* spring_b;
 	double* rest_length;     // [m]
 	double* stiffness;       // [N/m], 0 for disabled springs
-	double* constant_force;  // 3 n: m g + f_ext [N]
+	double* constant_force;  // 3 n: m g + load + f_ext [N]
 	const double* external;  // 3 n or NULL
 	double* x;               // 3 n current positions
 	double* y;               // 3 n trial positions
@@ -451,7 +451,7 @@ static sm_status check_free_bodies(const statics_work* w, bool* floating, sm_err
 			    err, SM_ERROR_NOT_CONVERGED,
 			    "statics: no static equilibrium: particle %d and the %d other particle(s) joined to it "
 			    "by springs of nonzero stiffness are held by no fixed or driven particle, yet feel a "
-			    "net force (%g, %g, %g) N (gravity and external forces); fix one of them (or drive it)",
+			    "net force (%g, %g, %g) N (gravity, loads and external forces); fix one of them (or drive it)",
 			    (int)first, (int)members[i] - 1, F[0], F[1], F[2]);
 			goto done;
 		}
@@ -998,7 +998,8 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 		sm_model_get_particle(model, p, &pd);
 		for (int c = 0; c < 3; c++)
 			w->constant_force[3 * (size_t)p + c] =
-			    pd.mass * md.gravity[c] + (w->external != NULL ? w->external[3 * (size_t)p + c] : 0.0);
+			    pd.mass * md.gravity[c] + pd.load[c] +
+			    (w->external != NULL ? w->external[3 * (size_t)p + c] : 0.0);
 	}
 	if (def->start != NULL)
 		memcpy(w->x, def->start, n3 * sizeof(double));

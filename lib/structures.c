@@ -149,7 +149,8 @@ sm_status sm_structure_check_size(sm_model* model, const char* what, int64_t par
 
 // Cuts the model back to the counts it had before a failed builder call. Arrays only ever grow
 // and earlier entries are never moved, so the particles and springs below the counts are
-// intact; only the free-particle numbering must follow the particle count.
+// intact; only the free-particle numbering must follow the particle count (the builders' particles
+// carry no load, so the count of loaded particles stays).
 void sm_structure_truncate(sm_model* m, int32_t particles, int32_t springs)
 {
 	m->particle_count = particles;

@@ -799,7 +799,8 @@ static int test_hanging_cloth_reactions(void)
 }
 
 // A mass on a zero-length spring under a constant external force: k x = F + m g exactly.
-// Both the dense and the sparse solver agree.
+// Both the dense and the sparse solver agree, and so does the same force given as the particle's
+// load, or half as the load and half as an external force; the potential energy counts it too.
 static int test_external_force_on_a_spring(void)
 {
 	sm_model_def md = sm_default_model_def();
@@ -818,10 +819,16 @@ static int test_external_force_on_a_spring(void)
 	s.kind = SM_SPRING_ZERO_LENGTH;
 	s.stiffness = 25.0;
 	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
-	const double F[6] = {0, 0, 0, 1.5, -2.0, 0.5};
-	for (int solver = SM_STATICS_DENSE; solver <= SM_STATICS_SPARSE; solver++) {
+	const double F[6] = {0, 0, 0, 1.5, -2.0, 0.5}, half[6] = {0, 0, 0, 0.75, -1.0, 0.25};
+	for (int run = 0; run < 6; run++) {
+		const int solver = SM_STATICS_DENSE + run % 2, given_as = run / 2;  // external, load, half each
+		sm_particle_def bob;
+		ENSURE_STATUS(sm_model_get_particle(model, 1, &bob), SM_OK);
+		for (int c = 0; c < 3; c++)
+			bob.load[c] = given_as == 0 ? 0.0 : given_as == 1 ? F[3 + c] : half[3 + c];
+		ENSURE_STATUS(sm_model_set_particle(model, 1, &bob), SM_OK);
 		sm_statics_def def = sm_default_statics_def();
-		def.external_forces = F;
+		def.external_forces = given_as == 0 ? F : given_as == 1 ? NULL : half;
 		def.solver = (sm_statics_solver)solver;
 		double x[6];
 		sm_statics_result res;

@@ -97,11 +97,14 @@ static int test_gravity_mass_damping_and_external_forces(void)
 	md.mass_damping = 0.3;
 	sm_model* m = sm_model_create(&md, NULL);
 	const double mass[3] = {0.5, 2.0, 3.0};
+	// Loads on a free particle and a held one (whose force is its reaction's share).
+	const double load[9] = {0, 0, 0, 0.5, 0, -2, 0, 3, 0};
 	for (int i = 0; i < 3; i++) {
 		sm_particle_def p = sm_default_particle_def();
 		p.mass = mass[i];
 		p.position[1] = i;
 		p.motion = i == 2 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		memcpy(p.load, load + 3 * i, sizeof p.load);
 		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
 	}
 	const double x[9] = {0, 0, 0, 0, 1, 0, 0, 2, 0};
@@ -111,12 +114,13 @@ static int test_gravity_mass_damping_and_external_forces(void)
 	sm_model_forces(m, x, v, ext, f);
 	for (int i = 0; i < 3; i++)
 		for (int k = 0; k < 3; k++) {
-			const double expect = mass[i] * (md.gravity[k] - md.mass_damping * v[3 * i + k]) + ext[3 * i + k];
+			const double expect =
+			    mass[i] * (md.gravity[k] - md.mass_damping * v[3 * i + k]) + load[3 * i + k] + ext[3 * i + k];
 			ENSURE_NEAR(f[3 * i + k], expect, 1e-14 * fmax(1.0, fabs(expect)));
 		}
-	// Gravitational energy -sum m g . x and mass-damping power alpha m |v|^2.
+	// Gravitational energy -sum (m g + load) . x and mass-damping power alpha m |v|^2.
 	const sm_energies e = sm_model_energies(m, x, v);
-	ENSURE_NEAR(e.gravity, 0.0, 1e-15);  // g has no y component and all x, z are zero
+	ENSURE_NEAR(e.gravity, -3.0 * 2.0, 1e-15);  // g has no y component and all x, z are zero
 	double power = 0.0;
 	for (int i = 0; i < 3; i++)
 		for (int k = 0; k < 3; k++)
@@ -127,7 +131,8 @@ static int test_gravity_mass_damping_and_external_forces(void)
 	const sm_energies moving = sm_model_energies(m, NULL, v);
 	ENSURE(moving.kinetic == e.kinetic && moving.elastic == 0.0 && moving.gravity == 0.0);
 	const double x2[9] = {1, 0, 2, 0, 0, -1, 0, 0, 0};
-	ENSURE_NEAR(sm_model_energies(m, x2, v).gravity, -(0.5 * (1.5 * 1 - 9.81 * 2) + 2.0 * (9.81)), 1e-13);
+	ENSURE_NEAR(sm_model_energies(m, x2, v).gravity,
+	            -(0.5 * (1.5 * 1 - 9.81 * 2) + 2.0 * (9.81) + (-2.0) * (-1.0)), 1e-13);
 	sm_model_destroy(m);
 	return 0;
 }
@@ -386,7 +391,8 @@ static int test_elastic_force_is_minus_energy_gradient(void)
 	return 0;
 }
 
-// Gravity's energy gradient is likewise minus the gravity force (linear: exact up to rounding).
+// Gravity's and the loads' energy gradient is likewise minus their forces (linear: exact up to
+// rounding).
 static int test_gravity_force_is_minus_energy_gradient(void)
 {
 	rng r = {222};
@@ -394,6 +400,14 @@ static int test_gravity_force_is_minus_energy_gradient(void)
 	double x[3 * N], v[3 * N], zero_v[3 * N] = {0}, f[3 * N];
 	sm_model* m = random_model(&r, N, 0, 0, x, v);
 	ENSURE(m != NULL);
+	// Loads of up to 10 N on every other particle: constant forces as gravity is.
+	for (int32_t i = 0; i < N; i += 2) {
+		sm_particle_def p;
+		ENSURE_STATUS(sm_model_get_particle(m, i, &p), SM_OK);
+		for (int c = 0; c < 3; c++)
+			p.load[c] = rng_uniform(&r, -10.0, 10.0);
+		ENSURE_STATUS(sm_model_set_particle(m, i, &p), SM_OK);
+	}
 	sm_model_forces(m, x, zero_v, NULL, f);
 	const double h = 1e-3;
 	for (int k = 0; k < 3 * N; k++) {

@@ -96,8 +96,8 @@ static int test_invalid_particles(void)
 		sm_particle_def def;
 		sm_status status;
 		const char* rule;
-	} cases[8];
-	for (int i = 0; i < 8; i++)
+	} cases[9];
+	for (int i = 0; i < 9; i++)
 		cases[i].def = sm_default_particle_def();
 	cases[0].def.mass = 0.0, cases[0].status = SM_ERROR_NONPOSITIVE_MASS,
 	cases[0].rule = "mass = 0 must be > 0";
@@ -109,7 +109,8 @@ static int test_invalid_particles(void)
 	cases[5].rule = "motion";
 	cases[6].def.mass = INFINITY, cases[6].status = SM_ERROR_NOT_FINITE, cases[6].rule = "not finite";
 	cases[7].def.position[1] = -INFINITY, cases[7].status = SM_ERROR_NOT_FINITE, cases[7].rule = "position y";
-	for (int i = 0; i < 8; i++) {
+	cases[8].def.load[2] = NAN, cases[8].status = SM_ERROR_NOT_FINITE, cases[8].rule = "load z = nan N";
+	for (int i = 0; i < 9; i++) {
 		int32_t index = -5;
 		ENSURE_STATUS(sm_model_add_particle(m, &cases[i].def, &index), cases[i].status);
 		ENSURE(index == -5);
@@ -120,7 +121,8 @@ static int test_invalid_particles(void)
 		ENSURE_MESSAGE(m, "particle 1", cases[i].rule);
 		sm_particle_def now;
 		ENSURE_STATUS(sm_model_get_particle(m, 1, &now), SM_OK);
-		ENSURE(now.mass == 1.0 && now.position[0] == 0.5 && now.motion == SM_PARTICLE_FREE);
+		ENSURE(now.mass == 1.0 && now.position[0] == 0.5 && now.motion == SM_PARTICLE_FREE &&
+		       now.load[2] == 0.0);
 	}
 	ENSURE_STATUS(sm_model_add_particle(m, NULL, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_set_particle(m, 3, &cases[0].def), SM_ERROR_PARTICLE_INDEX);
@@ -514,6 +516,7 @@ static int test_clone_copies_every_field(void)
 		sm_particle_def p = sm_default_particle_def();
 		p.position[0] = 0.5 * i;
 		p.motion = i == 1 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		p.load[1] = i == 2 ? 4.0 : 0.0;
 		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
 	}
 	sm_spring_def d = sm_default_spring_def();
@@ -544,7 +547,11 @@ static int test_clone_copies_every_field(void)
 		sm_model_forces(c, xs[s], v, NULL, fc);
 		for (int k = 0; k < 9; k++)
 			ENSURE(f[k] == fc[k]);
+		ENSURE(sm_model_energies(m, xs[s], v).gravity == sm_model_energies(c, xs[s], v).gravity);
 	}
+	sm_particle_def loaded;
+	ENSURE_STATUS(sm_model_get_particle(c, 2, &loaded), SM_OK);
+	ENSURE(loaded.load[0] == 0.0 && loaded.load[1] == 4.0 && loaded.load[2] == 0.0);
 	sm_model_destroy(c);
 	sm_model_destroy(m);
 	return 0;

@@ -756,6 +756,81 @@ static int count_wrong_refusals(const refusal* cases, size_t count)
 	return failures;
 }
 
+// "loads": constant forces on particles named or referred to in a structure, from numbers or
+// parameters (in N, tunable), adding up on one particle; the model holds them as the particles'
+// loads, and the canonical form writes them back as given. A load on no particle, a force that
+// is not three finite numbers, and loads whose sum overflows are refused with their place.
+static int test_loads(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"l\", \"parameters\": {\"F\": 2.5, \"n\": 3},"
+	    " \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 5]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0],"
+	    "   \"segments\": \"n\", \"structural\": {\"stiffness\": 10}}],"
+	    " \"fixed\": [\"r[0]\"],"
+	    " \"loads\": [{\"particle\": \"r[n]\", \"force\": [0, 0, \"F\"]}, {\"particle\": \"p\", \"force\": [1, 2, 3]},"
+	    "             {\"particle\": \"r[n]\", \"force\": [0.5, 0, 1]}, {\"particle\": \"r[0]\", \"force\": [0, 7, 0]}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, &err), SM_OK);
+	// Particle 0 is p, the rope's particles 1 to 4: r[3] is particle 4, r[0] particle 1 (held).
+	const double expected[5][3] = {{1, 2, 3}, {0, 7, 0}, {0, 0, 0}, {0, 0, 0}, {0.5, 0, 3.5}};
+	for (int32_t i = 0; i < 5; i++) {
+		sm_particle_def def;
+		ENSURE_STATUS(sm_model_get_particle(m, i, &def), SM_OK);
+		ENSURE(def.load[0] == expected[i][0] && def.load[1] == expected[i][1] &&
+		       def.load[2] == expected[i][2]);
+	}
+	const int32_t F = sm_document_parameter_index(doc, "F");
+	ENSURE(sm_document_parameter_uses(doc, F) == SM_PARAMETER_CONSTANTS);
+	ENSURE(strcmp(sm_document_parameter_unit(doc, F), "N") == 0);
+	sm_model_destroy(m);
+	// A new value of F moves the load with it.
+	ENSURE_STATUS(sm_document_set_parameter(doc, F, -1.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(doc, &m, &err), SM_OK);
+	sm_particle_def tip;
+	ENSURE_STATUS(sm_model_get_particle(m, 4, &tip), SM_OK);
+	ENSURE(tip.load[2] == 0.0);
+	sm_model_destroy(m);
+	// The canonical form keeps the loads as given, F by name.
+	char* json = sm_document_to_json(doc, &err);
+	ENSURE(json != NULL);
+	ENSURE(strstr(json, "\"loads\": [\n    {\"particle\": \"r[3]\", \"force\": [0, 0, \"F\"]},") != NULL);
+	sm_document* again = parse_valid(json, &err);
+	free(json);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	static const refusal cases[] = {
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0]}],"
+		 " \"loads\": [{\"particle\": \"q\", \"force\": [0, 0, 1]}]}",
+		 SM_ERROR_NOT_FOUND, "test.json: loads[0].particle: no particle named \"q\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0]}],"
+		 " \"loads\": [{\"particle\": \"p\", \"force\": [0, 1]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: loads[0].force: must be an array of 3 numbers [x, y, z], not an array of another length"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0]}],"
+		 " \"loads\": [{\"particle\": \"p\"}]}",
+		 SM_ERROR_SCHEMA, "test.json: loads[0]: missing required key \"force\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"p\", \"position\": [0, 0, 0]}],"
+		 " \"loads\": [{\"particle\": \"p\", \"force\": [1, 0, 0], \"moment\": [0, 0, 0]}]}",
+		 SM_ERROR_SCHEMA, "test.json: loads[0]: unknown key \"moment\" (allowed here: particle, force)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"particles\": [{\"name\": \"p\","
+		 " \"position\": [0, 0, 0]}], \"loads\": [{\"particle\": \"p\", \"force\": [\"big\", 0, 0]},"
+		 " {\"particle\": \"p\", \"force\": [\"big\", 0, 0]}]}",
+		 SM_ERROR_NOT_FINITE,
+		 "test.json: loads[1]: particle 0: load x = inf N is not finite (with parameter big = 1e+308)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [], \"loads\": {}}", SM_ERROR_SCHEMA,
+		 "test.json: loads: must be an array of loads, not an object"},
+	};
+	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
+	return 0;
+}
+
 // Broken files, each with the exact error: status and message.
 static int test_broken_files(void)
 {
@@ -775,7 +850,7 @@ static int test_broken_files(void)
 		 "test.json: springmass: format version must be the integer 1, not a real number"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravty\": [0, 0, 0]}", SM_ERROR_SCHEMA,
 		 "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
-		 "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+		 "mass_damping, particles, springs, structures, fixed, loads, ports, simulation, fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"my model\"}", SM_ERROR_SCHEMA,
 		 "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
 		 "digit)"},
@@ -1281,7 +1356,7 @@ static int test_messages_quote_text(void)
 		 "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}", SM_ERROR_SCHEMA,
 		 "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
-		 "mass_damping, particles, springs, structures, fixed, ports, simulation, fmu)"},
+		 "mass_damping, particles, springs, structures, fixed, loads, ports, simulation, fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}", SM_ERROR_SCHEMA,
 		 "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
@@ -3308,6 +3383,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_oscillator);
 	RUN_TEST(test_parameter_uses);
 	RUN_TEST(test_parameter_units);
+	RUN_TEST(test_loads);
 	RUN_TEST(test_parameters_set_together);
 	RUN_TEST(test_oscillator_follows_its_closed_form);
 	RUN_TEST(test_tearing_cloth_tears);

@@ -552,3 +552,17 @@ int cli_model_given(const char* command, const char* model)
 	fprintf(stderr, "springmass %s: no model file given\n\n", command);
 	return 2;
 }
+
+int32_t cli_total_load(const sm_model* model, double total[3])
+{
+	int32_t loaded = 0;
+	total[0] = total[1] = total[2] = 0.0;
+	for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
+		sm_particle_def pd;
+		sm_model_get_particle(model, i, &pd);
+		loaded += pd.load[0] != 0.0 || pd.load[1] != 0.0 || pd.load[2] != 0.0;
+		for (int c = 0; c < 3; c++)
+			total[c] += pd.load[c];
+	}
+	return loaded;
+}

@@ -119,6 +119,9 @@ bool cli_inside(const char* path, const char* folder);
 /// place once created (the real path of the folder, and the name).
 bool cli_same_file(const char* a, const char* b);
 
+/// The sum of the particles' loads [N] into total; returns how many particles have one.
+int32_t cli_total_load(const sm_model* model, double total[3]);
+
 /// Removes what an earlier, longer series left behind in the folder of this one: the files
 /// prefix<k>extension for k = first, first + 1, ... (k with at least `digits` digits), up to the
 /// first that does not exist or is not a regular file of the series (a symbolic link, or a file

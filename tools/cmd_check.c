@@ -216,6 +216,12 @@ int sm_cmd_check(int argc, char** argv)
 	const sm_model_def def = sm_model_get_def(model);
 	printf("gravity      (%g, %g, %g) m/s^2, mass damping %g 1/s\n", def.gravity[0], def.gravity[1],
 	       def.gravity[2], def.mass_damping);
+	// What the file's "loads" add to the weight.
+	double total[3];
+	const int32_t loaded = cli_total_load(model, total);
+	if (loaded > 0)
+		printf("loads        on %d particle%s, (%g, %g, %g) N in all\n", (int)loaded, loaded > 1 ? "s" : "",
+		       total[0], total[1], total[2]);
 	const int32_t ports = sm_document_port_count(doc);
 	printf("ports        %d\n", (int)ports);
 	for (int32_t k = 0; k < ports; k++) {

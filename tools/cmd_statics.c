@@ -269,6 +269,10 @@ int sm_cmd_statics(int argc, char** argv)
 	}
 	printf("weight           (%.9g, %.9g, %.9g) N\n", mass * md.gravity[0], mass * md.gravity[1],
 	       mass * md.gravity[2]);
+	// The particles' loads, which the reactions balance with the weight.
+	double loads[3];
+	if (cli_total_load(model, loads) > 0)
+		printf("loads            (%.9g, %.9g, %.9g) N\n", loads[0], loads[1], loads[2]);
 	printf("reactions, sum   (%.9g, %.9g, %.9g) N\n", res.reaction_total[0], res.reaction_total[1],
 	       res.reaction_total[2]);
 	if (!quiet) {

@@ -37,6 +37,10 @@ typedef struct sm_particle_def {
 	double velocity[3];  ///< initial velocity [m/s]; default (0, 0, 0); must be finite; a fixed particle's is
 	                     ///< zero whatever is given
 	sm_particle_motion motion;  ///< default SM_PARTICLE_FREE
+	/// Load: a constant external force on the particle [N], in every evaluation of the forces as
+	/// gravity is (on a held particle it goes to the reaction); its potential -load . x is part of
+	/// the gravitational energy. Must be finite; default (0, 0, 0).
+	double load[3];
 } sm_particle_def;
 
 /// Force law of a spring.
@@ -130,7 +134,7 @@ SM_API sm_status sm_jacobian_variant_from_name(const char* name, sm_jacobian_var
 typedef struct sm_energies {
 	double kinetic;  ///< sum of m |v|^2 / 2 over all particles [J]
 	double elastic;  ///< sum of ks (L - l0)^2 / 2 (rest-length) or ks L^2 / 2 (zero-length) [J]
-	double gravity;  ///< gravitational potential -sum m g . x (zero at the origin) [J]
+	double gravity;  ///< potential of the constant forces, -sum (m g + load) . x (zero at the origin) [J]
 } sm_energies;
 
 /// Opaque model: owns its particles and springs. Not thread-safe for concurrent modification;
