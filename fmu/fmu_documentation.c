@@ -178,7 +178,9 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 	    "Set before each step and held over it, or extrapolated with the first derivatives "
 	    "<code>fmi2SetRealInputDerivatives</code> gives: a force port's force, P.fx + d(P.fx)/dt (t - t_n); a "
 	    "motion port's position P.x and velocity P.vx, along which its particle moves, at P.x + P.vx s + "
-	    "d(P.vx)/dt s^2 / 2 (s = t - t_n) from the step's start t_n. A motion port starts from its inputs' "
+	    "d(P.vx)/dt s^2 / 2 (s = t - t_n), t_n the communication point at which the port's inputs or their "
+	    "derivatives were last set (the step's start for a master that sets them every step). A motion port "
+	    "starts from its inputs' "
 	    "start values, whatever parameters the model file places its particle with.");
 	append_table(&out, t, SECTION_OUTPUTS, "outputs", "The model at each communication point.");
 	append_table(
