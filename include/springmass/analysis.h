@@ -30,9 +30,9 @@ extern "C" {
 
 // ---------------------------------------------------------------------------------------------
 // Static equilibrium: the free particles' positions x where the force balance
-// f(x) = springs + gravity + external forces = 0 holds, found by Newton's method on f with the
-// exact Jacobian and a line search on the total potential energy
-//   U(x) = elastic energy - sum m g . x - sum f_ext . x   [J].
+// f(x) = springs + gravity + loads + external forces = 0 holds, found by Newton's method on f with
+// the exact Jacobian and a line search on the total potential energy
+//   U(x) = elastic energy - sum (m g + load) . x - sum f_ext . x   [J].
 // ---------------------------------------------------------------------------------------------
 
 /// Linear algebra used by the Newton iteration.
