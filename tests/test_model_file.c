@@ -61,7 +61,7 @@ static int32_t count_fixed(const sm_model* m)
 	return fixed;
 }
 
-// Two models are the same: particles (mass, position, velocity, motion), springs (ends, kind,
+// Two models are the same: particles (mass, position, velocity, motion, load), springs (ends, kind,
 // scaling, constants as given and as resolved, break strain), gravity and mass damping; all
 // bit for bit, since saving writes numbers that read back exactly.
 static int same_model(const sm_model* a, const sm_model* b)
@@ -76,6 +76,7 @@ static int same_model(const sm_model* a, const sm_model* b)
 		// Bit for bit: a zero's sign too.
 		ENSURE(memcmp(p.position, q.position, sizeof p.position) == 0);
 		ENSURE(memcmp(p.velocity, q.velocity, sizeof p.velocity) == 0);
+		ENSURE(memcmp(p.load, q.load, sizeof p.load) == 0);
 	}
 	for (int32_t s = 0; s < sm_model_spring_count(a); s++) {
 		sm_spring_def p, q;
