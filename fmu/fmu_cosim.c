@@ -1323,9 +1323,9 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // motion ports' prescribed positions and velocities and g the seeds of the force inputs:
 //   d(force on a driven particle)  = (df/dx dx + df/dv dv)_p + g_p   (analytic Jacobian product)
 //   d(kinetic energy)              = sum m_i v_i . dv_i
-//   d(gravitational energy)        = -sum m_i g . dx_i
-//   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g (the forces at
-//                                    zero velocity are elastic plus weight only)
+//   d(gravitational energy)        = -sum (m_i g + F_i) . dx_i (F_i the particle's load)
+//   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g - F (the forces
+//                                    at zero velocity are elastic plus weight and load only)
 //   d(position, velocity of a particle) = dx_i, dv_i: a driven particle is where its port puts it
 //   d(inputs' work)                = the sum of the three energies' (a motion set elsewhere does
 //                                    the work of the energy it adds at once); 0 in initialisation
@@ -1338,9 +1338,9 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 // kinetic, elastic and gravitational energies, their sum for the inputs' work) along a change
 // (dx, dv) of every particle's position
 // and velocity, at the current state: the Jacobian product's row of the driven particle, sum m v.dv,
-// -sum f_elastic.dx (f_elastic = f(x, 0) - m g, the springs' forces without damping) and
-// -sum m g.dx. With an input's seed as (dx, dv) it is a directional derivative, with the velocities
-// and accelerations a time derivative. work holds 3 n3 doubles; *evaluated says which of its parts
+// -sum f_elastic.dx (f_elastic = f(x, 0) - m g - F, the springs' forces without damping) and
+// -sum (m g + F).dx (F the loads). With an input's seed as (dx, dv) it is a directional derivative, with the
+// velocities and accelerations a time derivative. work holds 3 n3 doubles; *evaluated says which of its parts
 // hold values of earlier calls for the same (dx, dv) (bit 0: the Jacobian product, bit 1: f_elastic).
 static double state_output_change(const instance* inst, const fmu_variable* v, const double* dx,
                                   const double* dv, double* work, unsigned* evaluated)

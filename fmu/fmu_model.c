@@ -201,7 +201,7 @@ static const char* defined_unit(const char* unit)
 
 // What a model-file parameter feeds, as far as the FMU is concerned; the larger value wins.
 typedef enum parameter_role {
-	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity: tunable
+	ROLE_CONSTANTS = 0,  // stiffness, damping, masses, rest lengths, gravity, loads: tunable
 	ROLE_STATE,          // the initial state, which particles are held, settings, a spring's kind: fixed
 	ROLE_STRUCTURE,      // counts of particles and springs, which particles springs join and ports
 	                     // name: constant
@@ -605,8 +605,9 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_KINETIC, 0, 0);
 	add(&b, duplicate("energy.elastic"), duplicate("elastic energy stored in the springs"), FMU_REAL,
 	    FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_ELASTIC, 0, 0);
-	add(&b, duplicate("energy.gravity"), duplicate("gravitational potential energy (zero at the origin)"),
-	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
+	add(&b, duplicate("energy.gravity"),
+	    duplicate("potential energy of gravity and the loads (zero at the origin)"), FMU_REAL, FMU_OUTPUT,
+	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_GRAVITY, 0, 0);
 	add(&b, duplicate("energy.dissipated"),
 	    duplicate("energy dissipated since the start (damping, broken springs)"), FMU_REAL, FMU_OUTPUT,
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);

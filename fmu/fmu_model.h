@@ -99,7 +99,7 @@ typedef struct fmu_table {
 ///
 /// A model-file parameter is tunable (changeable between communication steps) when it feeds
 /// only constants (stiffness, damping, masses, rest lengths, break strains, gravity, mass
-/// damping), which a running simulation can take over. It is fixed (settable only before
+/// damping, loads), which a running simulation can take over. It is fixed (settable only before
 /// initialisation) when it also feeds the initial state (positions, velocities), which
 /// particles are held, a setting or a spring's kind. It is a constant (causality local,
 /// variability constant: not settable at all) when it feeds the particle or spring counts,

@@ -233,8 +233,9 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 // too, and leave out what needs positions (elastic and gravitational energy; spring damping).
 // ---------------------------------------------------------------------------------------------
 
-/// Total force [N] on every particle: springs, spring damping, mass damping, gravity and the
-/// optional external forces f_external [N] (3 per particle, NULL for none), written to f.
+/// Total force [N] on every particle: springs, spring damping, mass damping, gravity, the
+/// particles' loads and the optional external forces f_external [N] (3 per particle, NULL for
+/// none), written to f.
 /// For constrained particles f is the force the model exerts on them (their reaction is -f).
 ///
 /// At the singular point of a rest-length spring, L < SM_DEGENERATE_LENGTH_RATIO * l0 (the two

@@ -84,7 +84,7 @@ SM_API int32_t sm_document_parameter_index(const sm_document* doc, const char* n
 /// runs (the FMU does) changes in place only those that feed SM_PARAMETER_CONSTANTS alone.
 typedef enum sm_parameter_use {
 	/// masses, densities, stiffness, damping, rest lengths, break strains, sections, gravity,
-	/// mass damping
+	/// mass damping, loads
 	SM_PARAMETER_CONSTANTS = 1 << 0,
 	/// initial positions and velocities, among them a structure's geometry (which sets its
 	/// springs' rest lengths too) and a mesh's vertices

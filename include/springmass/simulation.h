@@ -257,8 +257,8 @@ SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 /// Work the inputs have done on the model since the start [J] (negative when they took energy
 /// out): external forces on free particles, integrated with the state as f_ext . v; and what
 /// drives each driven particle along its prescribed motion, the force m a - f_model its path
-/// needs beyond the model's forces (springs, damping, gravity; an external force on it goes to
-/// whatever drives it), times its velocity, plus the energy a motion that jumps (a new position
+/// needs beyond the model's forces (springs, damping, gravity, its load; an external force on it
+/// goes to whatever drives it), times its velocity, plus the energy a motion that jumps (a new position
 /// or velocity, sm_simulation_set_driven) adds at once. Fixed particles do none.
 SM_API double sm_simulation_input_work(const sm_simulation* sim);
 
@@ -365,7 +365,7 @@ SM_API sm_simulation_state* sm_simulation_state_deserialize(const void* buffer, 
 /// The solver starts as new: the same calls as after creation from that model repeat that run bit for bit.
 SM_API sm_status sm_simulation_reset(sm_simulation* sim);
 
-/// Takes new constants (stiffness, damping, rest lengths, masses, gravity, mass damping) from a
+/// Takes new constants (stiffness, damping, rest lengths, masses, loads, gravity, mass damping) from a
 /// model of the same topology (same particle count and motions, same spring endpoints and kinds);
 /// keeps the state of the free particles and broken springs, the dissipated energy and the inputs'
 /// work (the energies change with the constants: the energy balance holds across the call only
