@@ -238,13 +238,13 @@ int sm_cmd_check(int argc, char** argv)
 		                                   "settings",  "spring kinds",  "particle references"};
 		const uint32_t used = sm_document_parameter_uses(doc, k);
 		// The value as it reads back exactly: 4999.999 is not 5000.
-		char value[SM_NUMBER_TEXT_CAPACITY], shown[SM_NUMBER_TEXT_CAPACITY + 16];
+		char value[SM_NUMBER_TEXT_CAPACITY], with_unit[SM_NUMBER_TEXT_CAPACITY + 16];
 		sm_format_number(sm_document_parameter_value(doc, k), value);
 		// With the unit of what it stands for, but for a ratio's "1".
 		const char* unit = sm_document_parameter_unit(doc, k);
-		snprintf(shown, sizeof shown, "%s%s%s", value, unit[0] && strcmp(unit, "1") != 0 ? " " : "",
+		snprintf(with_unit, sizeof with_unit, "%s%s%s", value, unit[0] && strcmp(unit, "1") != 0 ? " " : "",
 		         strcmp(unit, "1") != 0 ? unit : "");
-		printf("  %-12s = %-12s feeds ", sm_document_parameter_name(doc, k), shown);
+		printf("  %-12s = %-12s feeds ", sm_document_parameter_name(doc, k), with_unit);
 		if (used == 0)
 			printf("nothing");
 		for (int u = 0, shown = 0; u < (int)(sizeof uses / sizeof uses[0]); u++)
