@@ -1628,8 +1628,6 @@ static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 	return true;
 }
 
-// The particles of "fixed" are marked first and then fixed together (sm_model_set_motions), with
-// the free particles numbered once.
 // "loads": constant forces on particles, [{"particle": REF, "force": [fx, fy, fz]}, ...]; the loads on
 // one particle add up.
 static bool read_loads(parser* p, const json_t* list)
@@ -1670,6 +1668,8 @@ static bool read_loads(parser* p, const json_t* list)
 	return true;
 }
 
+// The particles of "fixed" are marked first and then fixed together (sm_model_set_motions), with
+// the free particles numbered once.
 static bool read_fixed(parser* p, const json_t* list)
 {
 	if (list == NULL)

@@ -17,7 +17,6 @@
 // Default limit on particles and on springs of one document (each).
 #define SM_DOCUMENT_MAX_ELEMENTS (1 << 22)
 
-// Where a particle's values came from: a parameter index, or -1 for a number.
 // One entry of "loads": a force [N] on a particle, each component from a parameter (its index) or
 // a number (-1).
 typedef struct document_load {
@@ -26,6 +25,7 @@ typedef struct document_load {
 	int32_t source[3];
 } document_load;
 
+// Where a particle's values came from: a parameter index, or -1 for a number.
 typedef struct particle_source {
 	int32_t mass;
 	int32_t position[3];
