@@ -216,9 +216,9 @@ static bool has_reduced_solver(const sm_simulation* sim)
 // Power the inputs deliver [W], from the velocities v and forces f of all particles (external
 // forces included) and the external forces at one time. An external force on a free particle
 // does f_ext . v. A driven particle follows its path because whatever drives it adds to the model's
-// forces (f - f_ext: springs, damping, gravity) what its acceleration a needs, m a - (f - f_ext);
-// with the external force it takes, the outside does (m a - f + f_ext) . v on it. With the
-// dissipated power they balance the change of kinetic, elastic and gravitational energy.
+// forces (f - f_ext: springs, damping, gravity, its load) what its acceleration a needs,
+// m a - (f - f_ext); with the external force it takes, the outside does (m a - f + f_ext) . v on
+// it. With the dissipated power they balance the change of kinetic, elastic and gravitational energy.
 static double input_power(const sm_simulation* sim, const double* v, const double* f, const double* external)
 {
 	double power = 0.0;
