@@ -23,7 +23,7 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/springmassConfig.cmake
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/springmassConfigVersion.cmake
     COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/springmassConfig.cmake ${PROJECT_BINARY_DIR}/springmassConfigVersion.cmake
-        DESTINATION ${SPRINGMASS_CMAKE_DIR})
+        ${PROJECT_SOURCE_DIR}/cmake/sundials_static.cmake DESTINATION ${SPRINGMASS_CMAKE_DIR})
 
 # pkg-config: the prefix is found from the file's own folder (${pcfiledir}), so that the file
 # stays right whatever prefix `cmake --install --prefix` gives. SUNDIALS, KLU and CHOLMOD have no

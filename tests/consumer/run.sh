@@ -77,11 +77,16 @@ named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") 
 [ "${exported%\"}" = "libspringmassd.a" ] && [[ " $named " == *" -lspringmassd "* ]] ||
 	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
+ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
+# The package links SUNDIALS's static libraries only: no shared one on a consumer's link line,
+# which a linker without --as-needed would make the program need (cmake/sundials_static.cmake).
+shared=$("$ninja" -C "$work/build" -t commands | grep -o 'libsundials_[a-z_]*\.so[.0-9]*' | sort -u | tr '\n' ' ' || true)
+[ -z "$shared" ] || fail "a consumer of the package links SUNDIALS's shared libraries: $shared"
+
 # Which library each configuration of a consumer links, when a prefix holds a Debug and a Release
 # library, and when it holds that of a build without a build type (springmass added with
 # add_subdirectory to a project that sets none, and installed with it): from the consumer's build
 # plan, nothing compiled. The Release package's files stand in for the others, renamed.
-ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
 targets=$(find "$work/prefix" -name 'springmassTargets-release.cmake')
 library=$(find "$work/prefix" -name 'libspringmass.a')
 stand_in() {  # prefix config CONFIG library-file
