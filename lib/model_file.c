@@ -1661,7 +1661,7 @@ static bool read_loads(parser* p, const json_t* list)
 		sm_model_get_particle(model, load->particle, &def);
 		for (int c = 0; c < 3; c++)
 			def.load[c] += load->force[c];
-		// The loads on one particle add up to a force beyond a double: the model names the particle.
+		// Loads on one particle whose sum is beyond a double are refused; the model names the particle.
 		if (sm_model_set_particle(model, load->particle, &def) != SM_OK)
 			return fail_naming_parameters(p, SM_ERROR_NOT_FINITE, path, sm_model_last_error(model));
 	}
