@@ -202,12 +202,22 @@ static int check_summary(const char* path, double t_end, double interval)
 		ENSURE_REL(strtod(at + 14, NULL), e.time, 5e-9, 0.0);
 	}
 	// The energy balance, at the start (the model's initial state) and at the end, the library's to
-	// the 9 significant digits printed.
+	// the 9 significant digits printed; where the model has loads, their potential is said to count
+	// with gravity's.
+	bool loaded = false;
+	for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
+		sm_particle_def p;
+		sm_model_get_particle(model, i, &p);
+		loaded = loaded || p.load[0] != 0.0 || p.load[1] != 0.0 || p.load[2] != 0.0;
+	}
 	double at_start = NAN, at_end = NAN;
 	ENSURE(fgets(line, sizeof line, log) != NULL);
 	ENSURE(sscanf(line,
-	              "springmass run: kinetic + elastic + gravitational + dissipated energy - input work: %lf J "
-	              "at the start, %lf J at the end",
+	              loaded
+	                  ? "springmass run: kinetic + elastic + gravitational (with the loads') + dissipated "
+	                    "energy - input work: %lf J at the start, %lf J at the end"
+					  : "springmass run: kinetic + elastic + gravitational + dissipated energy - input work: "
+					    "%lf J at the start, %lf J at the end",
 	              &at_start, &at_end) == 2);
 	const sm_energies end = sm_simulation_energies(sim);
 	ENSURE_REL(at_end,
@@ -263,6 +273,27 @@ static int test_summary_lists_the_breaks(void)
 	return check_summary(SPRINGMASS_MODELS_DIR "/tearing_cloth.json", 1.0, 0.1);
 }
 
+// A model with loads (the bundled ones have none): its CSV is the library's, and its summary's
+// balance counts the loads' potential with gravity's, and says so.
+static int test_a_model_with_loads(void)
+{
+	const char* path = "test_cmd_run_loads.json";
+	FILE* f = fopen(path, "w");
+	ENSURE(f != NULL);
+	fputs("{\"springmass\": 1, \"name\": \"loaded\", \"parameters\": {\"F\": 2},"
+	      " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true},"
+	      " {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	      " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 40, \"damping\": 0.5}],"
+	      " \"loads\": [{\"particle\": \"b\", \"force\": [\"F\", 0, 1]}],"
+	      " \"ports\": [{\"name\": \"tip\", \"particle\": \"b\", \"kind\": \"probe\"}]}\n",
+	      f);
+	ENSURE(fclose(f) == 0);
+	const int failed = check_model(path, false) != 0 || check_summary(path, 1.0, 0.1) != 0;
+	remove(path);
+	ENSURE(!failed);
+	return 0;
+}
+
 // Usage errors exit with status 2, a bad model file with 1.
 static int test_errors(void)
 {
@@ -288,6 +319,7 @@ int main(int argc, char** argv)
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_every_bundled_model);
 	RUN_TEST(test_summary_lists_the_breaks);
+	RUN_TEST(test_a_model_with_loads);
 	RUN_TEST(test_errors);
 	return TEST_SUMMARY();
 }

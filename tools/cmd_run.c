@@ -744,10 +744,14 @@ int sm_cmd_run(int argc, char** argv)
 			cli_write_named(stderr, doc, model, line);
 		}
 		const double balance_at_end = energy_balance(sim, work_origin);
-		fprintf(stderr,
-		        "springmass run: kinetic + elastic + gravitational + dissipated energy - input work: %.9g J "
-		        "at the start, %.9g J at the end (%+.3g J)\n",
-		        balance_at_start, balance_at_end, balance_at_end - balance_at_start);
+		// The loads' potential is counted with gravity's (energy.gravity): said so where there are some.
+		double loads[3];
+		fprintf(
+		    stderr,
+		    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
+		    "at the start, %.9g J at the end (%+.3g J)\n",
+		    cli_total_load(model, loads) > 0 ? " (with the loads')" : "", balance_at_start, balance_at_end,
+		    balance_at_end - balance_at_start);
 	}
 	status = 0;
 
