@@ -255,12 +255,11 @@ static const char* key_unit(const parser* p, const char* key)
 	    {"force", "N"},
 	};
 	// Per section: Y s / l0 is in N/m, so Y in N/m for a width s [m], in N/m^2 for an area.
-	if (strcmp(key, "section_stiffness") == 0 || strcmp(key, "section_damping") == 0) {
-		const bool stiffness = key[8] == 's';
+	const bool stiffness = strcmp(key, "section_stiffness") == 0;
+	if (stiffness || strcmp(key, "section_damping") == 0)
 		return p->section_dimension == 1   ? (stiffness ? "N/m" : "N.s/m")
 		       : p->section_dimension == 2 ? (stiffness ? "N/m2" : "N.s/m2")
 		                                   : NULL;
-	}
 	for (size_t k = 0; k < sizeof units / sizeof units[0]; k++)
 		if (strcmp(units[k].key, key) == 0)
 			return units[k].unit;
