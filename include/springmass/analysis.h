@@ -86,8 +86,8 @@ typedef struct sm_statics_result {
 	/// at the equilibrium beyond round-off (a local minimum of U, not a saddle or a mechanism: its
 	/// smallest eigenvalue exceeds dof eps times its largest row sum). False for a group of
 	/// particles held by no constrained particle (gravity 0: at rest anywhere, never stable).
-	/// False also where the two particles of a rest-length spring coincide: a force balance by
-	/// convention there (model.h), but a maximum of that spring's energy.
+	/// False also where the two particles of a rest-length spring of rest length > 0 coincide: a
+	/// force balance by convention there (model.h), but a maximum of that spring's energy.
 	bool stable;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 } sm_statics_result;
