@@ -108,6 +108,18 @@ grep -qF 'description  left \u202e right' <<< "$out" && grep -qF 'a\u200bb (part
   fail "check shows a name or description unescaped: $out"
 out=$("$cli" statics "$tmp/shown.json" 2>&1)
 grep -qE '^0 +a\\u200bb +' <<< "$out" || fail "statics shows a name unescaped: $out"
+# A free particle on its anchor, a rest-length spring of 1 m between them and no gravity: the force
+# balances only by the convention that the spring exerts none at its singular point (model.h), at a
+# maximum of its energy (k l0^2 / 2 = 5 J). Not stable, and not for the reason of a saddle or a
+# mechanism, for which the message sends to `modes --at-equilibrium`, which refuses this state.
+cat > "$tmp/on_anchor.json" << 'JSON'
+{"springmass": 1, "name": "on_anchor", "gravity": [0, 0, 0],
+ "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true}, {"name": "b", "position": [0, 0, 0]}],
+ "springs": [{"a": "a", "b": "b", "stiffness": 10, "rest_length": 1}]}
+JSON
+out=$("$cli" statics "$tmp/on_anchor.json" -q 2>&1)
+grep -qF 'stable           no (spring 0 (between a and b) has its two particles at one point' <<< "$out" &&
+  ! grep -q 'saddle' <<< "$out" || fail "statics at a spring's singular point: $out"
 
 # Options: each line is the exit status, the first line the command prints on stderr (empty for
 # none) and its arguments. Numbers are decimal, as in a model file (no hexadecimal, infinities or

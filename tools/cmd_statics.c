@@ -44,6 +44,26 @@ static void usage(FILE* out)
 	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
 }
 
+// The first intact rest-length spring of rest length > 0 with a free end whose two particles are at
+// one point at x (L = 0 or L < SM_DEGENERATE_LENGTH_RATIO l0: the singular point of model.h), or -1.
+static int32_t coincident_spring(const sm_model* model, const double* x)
+{
+	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
+		sm_spring_def sd;
+		if (sm_model_get_spring(model, k, &sd) != SM_OK || sd.kind != SM_SPRING_REST_LENGTH ||
+		    !(sd.rest_length > 0.0) || !sm_model_spring_enabled(model, k) ||
+		    (sm_model_free_index(model, sd.a) < 0 && sm_model_free_index(model, sd.b) < 0))
+			continue;
+		const double* a = x + 3 * (size_t)sd.a;
+		const double* b = x + 3 * (size_t)sd.b;
+		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
+		const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
+		if (length == 0.0 || length < SM_DEGENERATE_LENGTH_RATIO * sd.rest_length)
+			return k;
+	}
+	return -1;
+}
+
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
 static int write_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
                      const double* displacement, const double* reactions)
@@ -228,9 +248,24 @@ int sm_cmd_statics(int argc, char** argv)
 	       res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)" : "dense modified Cholesky (GSL)",
 	       (int)res.iterations);
 	printf("residual         %.3e N (tolerance %.3e N)\n", res.residual, res.tolerance);
-	printf("stable           %s\n",
-	       res.stable ? "yes (a minimum of the potential energy)"
-	                  : "no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)");
+	// Where a rest-length spring has its two particles at one point the balance holds only by the
+	// convention that such a spring exerts no force (model.h): not a saddle or a mechanism but a
+	// maximum of that spring's energy, which `modes` refuses to linearise.
+	const int32_t coincident = res.stable ? -1 : coincident_spring(model, x);
+	if (res.stable)
+		printf("stable           yes (a minimum of the potential energy)\n");
+	else if (coincident < 0)
+		printf(
+		    "stable           no (a saddle point or a free mechanism: see `springmass modes --at-equilibrium`)\n");
+	else {
+		char stable_line[256];
+		snprintf(
+		    stable_line, sizeof stable_line,
+		    "stable           no (spring %d has its two particles at one point: a force balance only by the "
+		    "convention that it exerts no force there, at a maximum of its energy)\n",
+		    (int)coincident);
+		cli_write_named(stdout, doc, model, stable_line);
+	}
 	printf("potential energy %.9g J\n", res.potential_energy);
 	char line[256];
 	if (largest_at >= 0) {
