@@ -69,6 +69,16 @@ JSON
 out=$("$cli" run "$tmp/falling.json" --t-end 0.1 --output-interval 0.1 -q -o - 2>&1)
 awk -F, 'END { exit !($1 == 0.1 && $4 > -0.04905 - 1e-7 && $4 < -0.04905 + 1e-7) }' <<< "$out" ||
   fail "a falling particle without springs: $out"
+# A valid model whose kinetic energy is beyond a double (1e300 kg at 1e5 m/s: 5e309 J) runs (its
+# motion is a free fall), and its summary says there is no energy balance rather than print
+# inf - inf as nan.
+cat > "$tmp/heavy_fast.json" << 'JSON'
+{"springmass": 1, "name": "heavy_fast",
+ "particles": [{"name": "p", "position": [0, 0, 0], "velocity": [1e5, 0, 0], "mass": 1e300}]}
+JSON
+out=$("$cli" run "$tmp/heavy_fast.json" --t-end 0.1 -o /dev/null 2>&1)
+[ $? -eq 0 ] && grep -q "^springmass run: kinetic .*: inf J at the start, inf J at the end: beyond a double" <<< "$out" &&
+  ! grep -qi "nan" <<< "$out" || fail "run's summary of energies beyond a double: $out"
 # Without springs a VTK file has no lines (VTK's legacy reader fails on "LINES 0 0" and drops the
 # point data after it), in run's XML series, statics and modes alike; modes of a model without free
 # particles still writes the CSV asked for (the particles, no mode columns).

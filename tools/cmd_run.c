@@ -746,12 +746,21 @@ int sm_cmd_run(int argc, char** argv)
 		const double balance_at_end = energy_balance(sim, work_origin);
 		// The loads' potential is counted with gravity's (energy.gravity): said so where there are some.
 		double loads[3];
-		fprintf(
-		    stderr,
-		    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
-		    "at the start, %.9g J at the end (%+.3g J)\n",
-		    cli_total_load(model, loads) > 0 ? " (with the loads')" : "", balance_at_start, balance_at_end,
-		    balance_at_end - balance_at_start);
+		const char* with_loads = cli_total_load(model, loads) > 0 ? " (with the loads')" : "";
+		// Energies beyond a double (a kinetic energy of 1e300 kg at 1e5 m/s) leave no balance to
+		// check: their difference, inf - inf, would print as nan.
+		if (isfinite(balance_at_start) && isfinite(balance_at_end))
+			fprintf(
+			    stderr,
+			    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
+			    "at the start, %.9g J at the end (%+.3g J)\n",
+			    with_loads, balance_at_start, balance_at_end, balance_at_end - balance_at_start);
+		else
+			fprintf(
+			    stderr,
+			    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
+			    "at the start, %.9g J at the end: beyond a double, no energy balance to check\n",
+			    with_loads, balance_at_start, balance_at_end);
 	}
 	status = 0;
 
