@@ -221,6 +221,47 @@ static parameter_role parameter_role_of(const sm_document* doc, int32_t paramete
 	return ROLE_CONSTANTS;
 }
 
+// The role of a model-file parameter and what makes it so, for its variable's description: a
+// fixed parameter names each of its uses beyond constants, a constant each of its uses that set
+// the structure (a rest length that chooses a spring's law is fixed for that alone, an index
+// that names a spring's end a constant for that alone).
+#define PARAMETER_ROLE_TEXT_CAPACITY 192
+static void describe_parameter_role(uint32_t uses, parameter_role role,
+                                    char text[PARAMETER_ROLE_TEXT_CAPACITY])
+{
+	static const struct {
+		uint32_t use;
+		const char* words;
+	} fixed_uses[] = {{SM_PARAMETER_INITIAL_STATE, "the initial state"},
+	                  {SM_PARAMETER_MOTION, "which particles are held"},
+	                  {SM_PARAMETER_SPRING_KINDS, "a spring's kind (rest length 0 or not)"},
+	                  {SM_PARAMETER_SETTINGS, "the simulation settings"}},
+	  structure_uses[] = {{SM_PARAMETER_COUNTS, "a count"},
+	                      {SM_PARAMETER_PARTICLE_REFERENCES, "which particle a reference names"}};
+	if (role == ROLE_CONSTANTS) {
+		snprintf(text, PARAMETER_ROLE_TEXT_CAPACITY, "tunable: feeds constants only");
+		return;
+	}
+	const bool fixed = role == ROLE_STATE;
+	const size_t count =
+	    fixed ? sizeof fixed_uses / sizeof fixed_uses[0] : sizeof structure_uses / sizeof structure_uses[0];
+	const char* words[4];
+	size_t n = 0;
+	for (size_t k = 0; k < count; k++)
+		if (uses & (fixed ? fixed_uses[k].use : structure_uses[k].use))
+			words[n++] = fixed ? fixed_uses[k].words : structure_uses[k].words;
+	int used = snprintf(text, PARAMETER_ROLE_TEXT_CAPACITY, "%s",
+	                    fixed ? "fixed: feeds " : "constant: sets the model's structure (");
+	for (size_t k = 0; k < n; k++)
+		used += snprintf(text + used, PARAMETER_ROLE_TEXT_CAPACITY - (size_t)used, "%s%s",
+		                 k == 0       ? ""
+		                 : k + 1 == n ? " and "
+		                              : ", ",
+		                 words[k]);
+	if (!fixed)
+		snprintf(text + used, PARAMETER_ROLE_TEXT_CAPACITY - (size_t)used, "), fixed at packaging");
+}
+
 // ---------------------------------------------------------------------------------------------
 // The table
 // ---------------------------------------------------------------------------------------------
@@ -544,14 +585,11 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	for (int32_t i = 0; i < np && !b.failed; ++i) {
 		const char* pname = sm_document_parameter_name(doc, i);
 		const parameter_role role = parameter_role_of(doc, i);
-		static const char* const role_text[] = {
-		    "tunable: feeds constants only",
-		    "fixed: feeds the initial state, which particles are held or the simulation settings",
-		    "constant: sets the model's structure (a count or a port's particle), fixed at packaging",
-		};
+		char role_text[PARAMETER_ROLE_TEXT_CAPACITY];
+		describe_parameter_role(sm_document_parameter_uses(doc, i), role, role_text);
 		fmu_variable* v =
-		    add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text[role]),
-			    FMU_REAL, role == ROLE_STRUCTURE ? FMU_LOCAL : FMU_PARAMETER,
+		    add(&b, name_part(pname), format("model-file parameter %s (%s)", pname, role_text), FMU_REAL,
+			    role == ROLE_STRUCTURE ? FMU_LOCAL : FMU_PARAMETER,
 			    role == ROLE_CONSTANTS ? FMU_TUNABLE
 			    : role == ROLE_STATE   ? FMU_FIXED
 			                           : FMU_CONSTANT,

@@ -219,6 +219,9 @@ def test_a_port_named_by_a_parameter_expression_follows_the_grid(package):
     md = read_model_description(str(fmu))
     v = {x.name: x for x in md.modelVariables}
     assert (v["n"].causality, v["n"].variability, v["n"].start) == ("local", "constant", "15")
+    assert v["n"].description == (
+        "model-file parameter n (constant: sets the model's structure (a count and which particle a "
+        "reference names), fixed at packaging)")
     assert "membrane[7,7]" in v["centre.z"].description
     names = ["centre.x", "centre.y", "centre.z", "p[112].x", "p[112].y", "p[112].z"]
     r = simulate_fmu(str(fmu), stop_time=0.1, output_interval=0.01, output=names)

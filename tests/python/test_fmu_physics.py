@@ -810,6 +810,8 @@ def test_a_bound_of_held_particles_is_a_fixed_parameter(test_fmu):
     inst = Instance(fmu)
     try:
         assert inst.variables["xmax"].variability == "fixed" and inst.variables["k"].variability == "tunable"
+        assert inst.variables["xmax"].description == (
+            "model-file parameter xmax (fixed: feeds which particles are held)")
         inst.start({"xmax": 0.6})
         inst.slave.doStep(0.0, 0.1)
         assert inst.get("p[4].z") < 0.0 and inst.get("p[3].z") == 0.0  # rope[3] falls, rope[2] is held
@@ -846,6 +848,9 @@ def test_a_rest_length_that_chooses_the_spring_law_is_fixed(test_fmu):
     inst = Instance(fmu)
     try:
         assert inst.variables["L"].variability == "fixed" and inst.variables["L2"].variability == "tunable"
+        # Its description says what makes it fixed: the spring's kind, not a state it does not feed.
+        assert inst.variables["L"].description == (
+            "model-file parameter L (fixed: feeds a spring's kind (rest length 0 or not))")
         inst.start({"L": 0.0})
         # Taken: the first spring is zero-length, 50 (0.5)^2 / 2 = 6.25 J at the start, the
         # second at its rest length (one multiplication each: 1e-12 J).
