@@ -650,7 +650,8 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	    duplicate("energy dissipated since the start (damping, broken springs)"), FMU_REAL, FMU_OUTPUT,
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_DISSIPATED, 0, 0);
 	add(&b, duplicate("energy.input"),
-	    duplicate("work done by the inputs since the start (force ports on free particles, motion ports)"),
+	    duplicate("work done by the inputs since the start (force ports on free particles, motion ports, "
+	              "tunable parameters set between steps)"),
 	    FMU_REAL, FMU_OUTPUT, FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_INPUT, 0, 0);
 
 	// Every particle's position and velocity, unless the model file switches them off.

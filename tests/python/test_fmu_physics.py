@@ -690,6 +690,10 @@ def test_a_tunable_parameter_set_between_steps_does_the_work_of_the_energy_it_ad
     # would be off by the spring's energy before the set, 0.84 J here.
     inst = Instance(test_fmu("driven_oscillator")).start(TIGHT)
     names = ("energy.kinetic", "energy.elastic", "energy.dissipated", "energy.input")
+    # The variable's description says so, beside the ports whose work it counts.
+    assert inst.variables["energy.input"].description == (
+        "work done by the inputs since the start (force ports on free particles, motion ports, "
+        "tunable parameters set between steps)")
     try:
         s = inst.slave
         inst.set("tip.fx", 3.0)
