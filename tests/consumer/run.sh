@@ -51,10 +51,11 @@ if command -v c++ > /dev/null; then
 			fail "$(basename "$header") is no C++11"
 	done
 fi
-pc=$(find "$work/prefix" -name springmass.pc)
+# springmass.pc, or springmassd.pc from a Debug build.
+pc=$(find "$work/prefix" -name 'springmass*.pc')
 for example in oscillator trampoline; do
 	cc -std=c11 -Wall -Wextra -Wpedantic -Werror "$source/examples/$example.c" -o "$work/$example-pc" \
-	    $(PKG_CONFIG_PATH=$(dirname "$pc") pkg-config --cflags --libs springmass)
+	    $(PKG_CONFIG_PATH=$(dirname "$pc") pkg-config --cflags --libs "$(basename "$pc" .pc)")
 	"$work/$example-pc" > /dev/null
 done
 
@@ -86,13 +87,18 @@ shared=$("$ninja" -C "$work/build" -t commands | grep -o 'libsundials_[a-z_]*\.s
 # Which library each configuration of a consumer links, when a prefix holds a Debug and a Release
 # library, and when it holds that of a build without a build type (springmass added with
 # add_subdirectory to a project that sets none, and installed with it): from the consumer's build
-# plan, nothing compiled. The Release package's files stand in for the others, renamed.
-targets=$(find "$work/prefix" -name 'springmassTargets-release.cmake')
-library=$(find "$work/prefix" -name 'libspringmass.a')
+# plan, nothing compiled. The installed package's files, of whatever build type this build has,
+# stand in for the others, renamed.
+targets=$(find "$work/prefix" -name 'springmassTargets-*.cmake')
+[ "$(wc -w <<< "$targets")" = 1 ] || fail "the package has more or fewer than one configuration: $targets"
+installed=$(sed -n 's/^# Generated CMake target import file for configuration "\(.*\)"\.$/\1/p' "$targets")
+[ -n "$installed" ] || fail "$targets names no configuration"
+library=$(find "$work/prefix" -name 'libspringmass*.a')
 stand_in() {  # prefix config CONFIG library-file
 	cp -R "$work/prefix" "$1"
-	local files=${targets#"$work/prefix"} lib=${library#"$work/prefix"}
-	sed -e "s/RELEASE/$3/g" -e "s/\"Release\"/\"$2\"/g" -e "s/libspringmass\.a/$4/g" "$targets" \
+	local files=${targets#"$work/prefix"} lib=${library#"$work/prefix"} name
+	name=$(basename "$library")
+	sed -e "s/${installed^^}/$3/g" -e "s/\"$installed\"/\"$2\"/g" -e "s/${name%.a}\.a/$4/g" "$targets" \
 	    > "$1/$(dirname "$files")/springmassTargets-${2,,}.cmake"
 	cp "$library" "$1/$(dirname "$lib")/$4"
 }
@@ -102,7 +108,11 @@ linked() {  # prefix build-type
 	    -DCMAKE_BUILD_TYPE="$2" -DEXAMPLES_DIR="$source/examples" > /dev/null 2>&1 || { echo "no library"; return; }
 	"$ninja" -C "$work/map" -t commands oscillator | grep -o 'libspringmassd\?\.a' | sort -u | tr '\n' ' '
 }
-stand_in "$work/both" Debug DEBUG libspringmassd.a
+if [ "${installed,,}" = debug ]; then
+	stand_in "$work/both" Release RELEASE libspringmass.a
+else
+	stand_in "$work/both" Debug DEBUG libspringmassd.a
+fi
 for config in "" RelWithDebInfo Debug; do
 	expected="libspringmass.a "
 	[ "$config" != Debug ] || expected="libspringmassd.a "
