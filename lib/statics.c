@@ -289,8 +289,8 @@ static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_s
 	if (w->on_iteration(w->on_iteration_context, res->iterations, res->residual))
 		return true;
 	*st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-	                   "statics: stopped by the caller (on_iteration) after %d iterations, largest force on "
-	                   "a free particle %.3g N",
+	                   "statics: stopped by the caller (on_iteration) after %d iterations; the largest force "
+	                   "on a free particle is %.3g N",
 	                   (int)res->iterations, res->residual);
 	return false;
 }
@@ -1090,18 +1090,20 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	int converged = 0;
 	st = solve_with_continuation(&w, &d, &res, &converged, err);
 	// Either the iterations ran out, or the stiffness continuation stopped before: no stage it could
-	// reach converged (a load far beyond what the springs carry, a model with no equilibrium).
+	// reach converged (a load far beyond what the springs carry, a model with no equilibrium). A
+	// message puts no value right after "particle", which reads as a particle's index (springmass
+	// statics adds that particle's name to "particle 20").
 	if (st == SM_OK && !converged && res.iterations >= d.max_iterations)
 		st = sm_error_set(
 		    err, SM_ERROR_NOT_CONVERGED,
-		    "statics: no equilibrium found in %d iterations (max_iterations): largest force on a "
-		    "free particle %.3g N > tolerance %.3g N",
+		    "statics: no equilibrium found in %d iterations (max_iterations): the largest force on a "
+		    "free particle is %.3g N > tolerance %.3g N",
 		    (int)res.iterations, res.residual, res.tolerance);
 	else if (st == SM_OK && !converged)
 		st = sm_error_set(
 		    err, SM_ERROR_NOT_CONVERGED,
 		    "statics: no equilibrium found: the stiffness continuation gave up after %d of at most %d "
-		    "iterations, no softened stage converging; largest force on a free particle %.3g N > "
+		    "iterations, no softened stage converging; the largest force on a free particle is %.3g N > "
 		    "tolerance %.3g N",
 		    (int)res.iterations, (int)d.max_iterations, res.residual, res.tolerance);
 
