@@ -35,6 +35,10 @@
 
 enum { MAX_COLUMNS = 256, MAX_ROWS = 64 };
 
+// The energy columns that end every row: kinetic, elastic, gravitational, dissipated, and the
+// inputs' work [J].
+enum { ENERGY_COLUMNS = 5 };
+
 // A CSV of `springmass run`: column names, then rows of numbers (time first).
 typedef struct table {
 	char command[512];
@@ -47,10 +51,10 @@ typedef struct table {
 // The scale a column's bounds are relative to, that of the quantity it is a component of: the
 // largest length over the rows of the port's position, velocity or force vector whose x, y or z
 // it is (a component that stays near zero is as accurate as the others), or the largest of the
-// four energies.
+// energies.
 static double column_scale(const table* t, int column)
 {
-	const int energies = t->columns - 4;
+	const int energies = t->columns - ENERGY_COLUMNS;
 	double scale = 0.0;
 	for (int r = 0; r < t->rows; r++) {
 		if (column >= energies) {
@@ -112,10 +116,10 @@ static int read_reference(const char* model, table* t)
 
 // The columns `springmass run` writes for a state, after the time: each port's (a motion port:
 // the force f the model exerts on its particle [N]; the others: position x [m] and velocity v
-// [m/s]), then the kinetic, elastic, gravitational and dissipated energies [J]. The names must be
-// the reference's, in its order.
+// [m/s]), then the kinetic, elastic, gravitational and dissipated energies and the inputs' work [J].
+// The names must be the reference's, in its order.
 static int state_columns(const sm_document* doc, const double* x, const double* v, const double* f,
-                         const double energies[4], const table* reference, double* out)
+                         const double energies[ENERGY_COLUMNS], const table* reference, double* out)
 {
 	int c = 1;
 	static const char* const axes[6] = {"x", "y", "z", "vx", "vy", "vz"};
@@ -131,9 +135,9 @@ static int state_columns(const sm_document* doc, const double* x, const double* 
 			out[c++] = motion ? f[i + (size_t)q] : q < 3 ? x[i + (size_t)q] : v[i + (size_t)q - 3];
 		}
 	}
-	static const char* const energy_names[4] = {"energy.kinetic", "energy.elastic", "energy.gravity",
-	                                            "energy.dissipated"};
-	for (int q = 0; q < 4; q++) {
+	static const char* const energy_names[ENERGY_COLUMNS] = {
+	    "energy.kinetic", "energy.elastic", "energy.gravity", "energy.dissipated", "energy.input"};
+	for (int q = 0; q < ENERGY_COLUMNS; q++) {
 		ENSURE(c < reference->columns && strcmp(reference->names[c], energy_names[q]) == 0);
 		out[c++] = energies[q];
 	}
@@ -165,7 +169,9 @@ static int simulate(const sm_document* doc, const sm_model* model, const sm_simu
 		// the model only.
 		sm_simulation_forces(sim, f);
 		const sm_energies e = sm_simulation_energies(sim);
-		const double energies[4] = {e.kinetic, e.elastic, e.gravity, sm_simulation_dissipated_energy(sim)};
+		const double energies[ENERGY_COLUMNS] = {e.kinetic, e.elastic, e.gravity,
+		                                         sm_simulation_dissipated_energy(sim),
+		                                         sm_simulation_input_work(sim)};
 		ENSURE(state_columns(doc, sm_simulation_positions(sim), sm_simulation_velocities(sim), f, energies,
 		                     reference, out->values[r]) == 0);
 	}
@@ -209,7 +215,7 @@ static int compare(const char* what, const table* computed, const table* referen
 // The reference's rows integrated by GSL's rk8pd (gsl_reference.h) at relative and absolute
 // tolerance eps, as far as `budget` right-hand sides take it: out->rows is the number of rows
 // reached. Nothing does work on the model (no inputs, nothing driven), so the dissipated energy
-// is what the other energies lost since t = 0.
+// is what the other energies lost since t = 0, and the inputs' work is 0.
 static int gsl_simulate(const sm_document* doc, const sm_model* model, const table* reference, double eps,
                         long budget, table* out)
 {
@@ -228,7 +234,8 @@ static int gsl_simulate(const sm_document* doc, const sm_model* model, const tab
 		const double total = e.kinetic + e.elastic + e.gravity;
 		if (r == 0)
 			initial_energy = total;
-		const double energies[4] = {e.kinetic, e.elastic, e.gravity, initial_energy - total};
+		const double energies[ENERGY_COLUMNS] = {e.kinetic, e.elastic, e.gravity, initial_energy - total,
+		                                         0.0};
 		out->values[r][0] = g.t;
 		if (state_columns(doc, g.x, g.v, g.f, energies, reference, out->values[r]) != 0) {
 			status = GSL_FAILURE;
@@ -272,23 +279,25 @@ static int check_model(const char* model_name)
 	int failures = 0;
 	char what[1024];
 
-	// No inputs and no driven particles: nothing does work on the model, so the total energy
-	// stays what it is at t = 0. CVODE integrates the dissipated energy with the motion; the sum
-	// drifts by the run's global error, measured up to 4.2e-8 of the largest energy (the
+	// No inputs and no driven particles: nothing does work on the model (the inputs' work column
+	// is 0), so the total energy stays what it is at t = 0. CVODE integrates the dissipated energy with the
+	// motion; the sum drifts by the run's global error, measured up to 4.2e-8 of the largest energy (the
 	// two-mass chain over 5 s, 20 periods): 1e-6.
 	for (int32_t i = 0; i < sm_model_particle_count(model); i++) {
 		sm_particle_def p;
 		sm_model_get_particle(model, i, &p);
 		ENSURE(p.motion != SM_PARTICLE_DRIVEN);
 	}
-	const int energy = reference.columns - 4;
+	const int energy = reference.columns - ENERGY_COLUMNS;
 	const double energy_scale = column_scale(&reference, energy);
 	double worst_drift = 0.0;
 	for (int r = 0; r < reference.rows; r++) {
 		double total[2] = {0.0, 0.0};
-		for (int q = 0; q < 4; q++) {
-			total[0] += reference.values[0][energy + q];
-			total[1] += reference.values[r][energy + q];
+		for (int q = 0; q < ENERGY_COLUMNS; q++) {
+			// kinetic + elastic + gravitational + dissipated - the inputs' work
+			const double sign = q == ENERGY_COLUMNS - 1 ? -1.0 : 1.0;
+			total[0] += sign * reference.values[0][energy + q];
+			total[1] += sign * reference.values[r][energy + q];
 		}
 		worst_drift = fmax(worst_drift, fabs(total[1] - total[0]) / energy_scale);
 		if (!(fabs(total[1] - total[0]) <= 1e-6 * energy_scale)) {
