@@ -456,8 +456,10 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
                                   sm_spring_jacobians* jacobians, sm_jacobian_variant variant, double* power,
                                   int lanes)
 {
+	// A processor without AVX (or SSE2) would fault on the wider loops: at most its widest.
+	const int widest = widest_lanes();
 	springs_add(model, x, v, f, jacobians != NULL ? jacobians->data : NULL, variant, v != NULL ? power : NULL,
-	            lanes);
+	            lanes < widest ? lanes : widest);
 }
 
 // Gravity, mass damping, loads and external forces on particles begin .. end - 1: the starting

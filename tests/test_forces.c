@@ -309,7 +309,8 @@ static int test_forces_and_power_match_separate_evaluations(void)
 // springs take the narrower loops). The power is summed in two lanes by the 2- and 4-wide loops
 // (the same bits) and in one by the scalar loop (a few roundings of its positive terms: 1e-12
 // relative). Models with springs sharing particles within a group of four, a degenerate spring
-// (coincident ends) and a disabled one.
+// (coincident ends) and a disabled one. A processor without AVX runs the pairs where four lanes
+// are asked for.
 static int test_every_lane_width_gives_the_same_bits(void)
 {
 	rng r = {8080};
