@@ -96,6 +96,9 @@ installed=$(sed -n 's/^# Generated CMake target import file for configuration "\
 library=$(find "$work/prefix" -name 'libspringmass*.a')
 stand_in() {  # prefix config CONFIG library-file
 	cp -R "$work/prefix" "$1"
+	add_config "$@"
+}
+add_config() {  # prefix config CONFIG library-file: the package's files as those of another build type
 	local files=${targets#"$work/prefix"} lib=${library#"$work/prefix"} name
 	name=$(basename "$library")
 	sed -e "s/${installed^^}/$3/g" -e "s/\"$installed\"/\"$2\"/g" -e "s/${name%.a}\.a/$4/g" "$targets" \
@@ -125,6 +128,13 @@ for config in RelWithDebInfo MinSizeRel; do
 	got=$(linked "$work/noconfig" "$config")
 	[ "$got" = "libspringmass.a " ] || fail "with the install of a build without a build type, build type '$config' links $got"
 done
+# A Debug and a RelWithDebInfo install, no Release: a Release consumer links the optimised one.
+cp -R "$work/prefix" "$work/optimised"
+rm "$work/optimised${targets#"$work/prefix"}" "$work/optimised${library#"$work/prefix"}"
+add_config "$work/optimised" RelWithDebInfo RELWITHDEBINFO libspringmass.a
+add_config "$work/optimised" Debug DEBUG libspringmassd.a
+got=$(linked "$work/optimised" Release)
+[ "$got" = "libspringmass.a " ] || fail "with a Debug and a RelWithDebInfo install, build type Release links $got"
 
 runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
 [ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
