@@ -1663,6 +1663,23 @@ static int test_explicit_step_limit(void)
 	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 0.0), 0.2, 1e-15);
 	ENSURE_NEAR(sm_symplectic_euler_step(0.0, 4.0), 0.5, 1e-15);
 	ENSURE_NEAR(sm_symplectic_euler_step(10.0, 40.0), 2.0 * (sqrt(5.0) - 2.0) / 10.0, 1e-15);
+	// Overdamped modes (zeta = gamma / (2 omega) >= 1): 2 / ((1 + sqrt(2)) / 2) = 1.657 at critical
+	// damping, then towards 2/gamma (the limit of damping alone), never near 1/gamma. The map
+	// itself, iterated 2000 times from (1, 0): bounded at 0.99 of the limit, growing past 1e3 at
+	// 1.01 (its eigenvalue of largest modulus is then -(1 + O(1e-2))).
+	for (int zeta = 1; zeta <= 64; zeta *= 4) {
+		const double w = 10.0, g = 2.0 * zeta * w, h = sm_symplectic_euler_step(w, g);
+		ENSURE(h * g >= 2.0 / (0.5 + sqrt(0.5)) * (1.0 - 1e-15) && h * g < 2.0);
+		for (int side = -1; side <= 1; side += 2) {
+			const double step = h * (1.0 + 0.01 * side);
+			double x = 1.0, v = 0.0;
+			for (int n = 0; n < 2000; n++) {
+				v += step * (-w * w * x - g * v);
+				x += step * v;
+			}
+			ENSURE(side < 0 ? fabs(x) < 1.0 : fabs(x) > 1e3);
+		}
+	}
 	sm_model* model = explicit_limit_chain(false);
 	ENSURE(model != NULL);
 	sm_explicit_limit limit;

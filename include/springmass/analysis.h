@@ -265,7 +265,8 @@ SM_API void sm_modes_release(sm_modes* modes);
 /// gamma (m x'' + c x' + k x = 0: omega^2 = k/m, gamma = c/m) maps (x, v) by a matrix of
 /// determinant 1 - h gamma and trace 2 - h gamma - h^2 omega^2, whose eigenvalues stay in the unit
 /// circle while h <= 2 / (gamma/2 + sqrt(gamma^2/4 + omega^2)): 2/omega undamped, 2/gamma for
-/// damping alone, about 1/gamma when damping dominates (zeta = gamma / (2 omega) >> 1). The bound
+/// damping alone, and from 1.66/gamma (critical damping, zeta = gamma / (2 omega) = 1) up to
+/// nearly 2/gamma for overdamped modes (zeta > 1; 1.89/gamma at zeta = 2). The bound
 /// takes the largest omega^2 and gamma of any mode at once, from Gershgorin row sums: a spring's
 /// stiffness and damping blocks are at most ks I and kd I at any positions (ks u u^T +
 /// ks (1 - l0/L) (I - u u^T) with 1 - l0/L < 1; kd u u^T), so over the free particles
