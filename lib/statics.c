@@ -230,6 +230,7 @@ typedef struct statics_work {
 	double* rhs;             // dof
 	double* step;            // dof
 	double norm;             // largest row sum of |H + mu M| at the last factorisation [N/m]
+	double dense_scale;      // dense path: the factor holds dense_scale (H + mu M) [1]
 	// The caller's progress callback (sm_statics_def.on_iteration) and the iteration it last saw.
 	bool (*on_iteration)(void* context, int32_t iterations, double residual);
 	void* on_iteration_context;
@@ -483,7 +484,13 @@ static int solve_factored(statics_work* w, const double* rhs, double* out)
 	gsl_permutation perm = {w->dof, w->permutation};
 	gsl_vector_const_view b = gsl_vector_const_view_array(rhs, w->dof);
 	gsl_vector_view s = gsl_vector_view_array(out, w->dof);
-	return gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) == GSL_SUCCESS ? 0 : -1;
+	if (gsl_linalg_mcholesky_solve(&A.matrix, &perm, &b.vector, &s.vector) != GSL_SUCCESS)
+		return -1;
+	// (s A)^-1 rhs = A^-1 rhs / s.
+	if (w->dense_scale != 1.0)
+		for (size_t i = 0; i < w->dof; i++)
+			out[i] *= w->dense_scale;
+	return 0;
 }
 
 static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_variant variant,
@@ -500,6 +507,16 @@ static int dense_step(statics_work* w, const double* x, double mu, sm_jacobian_v
 			row += fabs(w->matrix[i * dof + j]);
 		w->norm = fmax(w->norm, row);
 	}
+	// GSL's modified Cholesky raises every pivot to at least DBL_EPSILON, an absolute floor in the
+	// matrix's units [N/m]: a well-conditioned stiffness of springs below about 1e-16 N/m (a chain
+	// of 1e-16 N/m zero-length springs between held ends) came out perturbed, so not positive
+	// definite, unlike on the sparse path, and its steps were those of the floor. Scaled to a norm
+	// of at least 1, the floor is at most DBL_EPSILON ||H + mu M||, relative like round-off; a
+	// matrix of norm 1 or more is factored as it is.
+	w->dense_scale = w->norm >= DBL_MIN && w->norm < 1.0 ? 1.0 / w->norm : 1.0;
+	if (w->dense_scale != 1.0)
+		for (size_t i = 0; i < dof * dof; i++)
+			w->matrix[i] *= w->dense_scale;
 	gsl_matrix_view A = gsl_matrix_view_array(w->matrix, dof, dof);
 	gsl_permutation perm = {dof, w->permutation};
 	gsl_vector_view E = gsl_vector_view_array(w->perturbation, dof);
@@ -954,6 +971,7 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->external = def->external_forces;
 	w->on_iteration = def->on_iteration;
 	w->on_iteration_context = def->on_iteration_context;
+	w->dense_scale = 1.0;
 	const size_t n3 = 3 * (size_t)w->n;
 	w->free_index = malloc(((size_t)w->n + 1) * sizeof(int32_t));
 	w->dof_mass = malloc((n3 + 1) * sizeof(double));

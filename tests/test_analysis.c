@@ -2720,6 +2720,44 @@ static int test_statics_slack_chain_on_the_sparse_path(void)
 // its rigid motions cost nothing; pinned at one corner it can still turn about it, at two about
 // their axis (mechanisms whose exact zero eigenvalues round-off may leave as tiny positive
 // pivots); pinned at three corners it is held. Whatever the block's size and the solver.
+// The dense path's verdicts and steps do not depend on the unit of stiffness. A chain of 4
+// particles of m on zero-length springs of k between held ends, evenly spaced, is at rest with
+// the stiffness k tridiag(-1, 2, -1) (x I3), positive definite with eigenvalues
+// 2 k (1 - cos(j pi / 5)), 0.38 k to 3.6 k: stable for every k. GSL's modified Cholesky raises
+// pivots to an absolute DBL_EPSILON, so with k = 1e-17 N/m the dense solver called it
+// perturbed: not stable, unlike the sparse one. Under gravity the problem is linear, and Newton
+// is exact in one step (and one that confirms it); with k = 1e-17 N/m and m = 1e-18 kg the floor
+// made the dense steps short, and 500 iterations did not reach the residual a few roundings of
+// the weights m g = 1e-17 N allow.
+static int test_dense_statics_does_not_depend_on_the_unit_of_stiffness(void)
+{
+	static const double stiffness[] = {1.0, 1e-17};
+	for (size_t k = 0; k < sizeof stiffness / sizeof stiffness[0]; k++)
+		for (int solver = 0; solver < 2; solver++) {
+			const double ks = stiffness[k], m = 0.1 * ks;
+			sm_model* model = chain_model(4, m, ks, 1.0, SM_SPRING_ZERO_LENGTH, 0.0, 0.0);
+			ENSURE(model != NULL);
+			double x[18];
+			sm_statics_def def = sm_default_statics_def();
+			def.solver = solver == 0 ? SM_STATICS_DENSE : SM_STATICS_SPARSE;
+			sm_statics_result res;
+			ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
+			ENSURE(res.iterations == 0 && res.stable);
+			sm_model_def md = sm_model_get_def(model);
+			md.gravity[2] = -9.81;
+			ENSURE_STATUS(sm_model_set_def(model, &md), SM_OK);
+			// A residual of 1e-12 of the weights: a few roundings of the force balance.
+			def.residual_tolerance = 1e-12 * m * 9.81;
+			ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
+			ENSURE(res.iterations <= 2 && res.stable);
+			// Each free particle sags by sum_j (weight below the spring j) / k; the first, below
+			// a spring that carries half of the 4 weights: 2 m g / k.
+			ENSURE_REL(x[5] - 0.0, -2.0 * m * 9.81 / ks, 1e-12, 0.0);
+			sm_model_destroy(model);
+		}
+	return 0;
+}
+
 static int test_statics_stability_sees_mechanisms(void)
 {
 	static const int32_t sizes[] = {2, 5, 8};
@@ -3252,6 +3290,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_stability_sees_mechanisms);
+	RUN_TEST(test_dense_statics_does_not_depend_on_the_unit_of_stiffness);
 	RUN_TEST(test_zero_tolerance_is_relative_to_the_largest_magnitude);
 	RUN_TEST(test_sparse_omega_max_is_the_mass_weighted_gershgorin_bound);
 	RUN_TEST(test_sparse_zero_tolerance_is_relative_to_gershgorin);
