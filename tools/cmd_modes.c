@@ -39,8 +39,9 @@ static void usage(FILE* out)
 	        "                         degrees of freedom, where the dense solver takes minutes)\n"
 	        "  --at-equilibrium       linearise about the static equilibrium (springmass statics,\n"
 	        "                         with its progress line on stderr once it takes over a second)\n"
-	        "  --zero-tolerance R     omega^2 within R of the largest |omega^2| is a zero mode (default\n"
-	        "                         1e-12; lower it for a model whose stiffnesses span more than 1e12)\n"
+	        "  --zero-tolerance R     omega^2 within R of the largest |omega^2| (sparse solver: of its\n"
+	        "                         Gershgorin bound) is a zero mode (default 1e-12; lower it for a\n"
+	        "                         model whose stiffnesses span more than 1e12)\n"
 	        "  --steps-per-period K   communication steps per period of the highest mode listed\n"
 	        "                         (default 10)\n"
 	        "  -o, --output FILE      write the listed mode shapes as CSV: particle, name, then x, y, z\n"
@@ -118,13 +119,15 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 		       modes->residual);
 	// A zero mode is one the eigensolver cannot tell from 0 beside the stiffest: a rigid-body motion,
 	// a mechanism, or a mode too soft for the model's range of stiffnesses.
-	printf(
-	    "zero modes        %d%s (|omega^2| <= %g of the largest: rigid-body motions, mechanisms or modes too "
-	    "soft to resolve, see --zero-tolerance%s)\n",
-	    (int)modes->zero_count, sparse ? " among the modes listed" : "", zero_tolerance,
-	    modes->zero_count > 0 && !at_equilibrium
-	        ? "; where the rest shape is stretched, --at-equilibrium gives mechanisms their stiffness"
-			: "");
+	// The sparse path knows only its kept modes: its zero level is relative to the Gershgorin bound
+	// on the largest |omega^2| (omega_max^2), not to the largest itself.
+	printf("zero modes        %d%s (|omega^2| <= %g of %s: rigid-body motions, mechanisms or modes too "
+	       "soft to resolve, see --zero-tolerance%s)\n",
+	       (int)modes->zero_count, sparse ? " among the modes listed" : "", zero_tolerance,
+	       sparse ? "the Gershgorin bound on the largest, omega_max^2" : "the largest",
+	       modes->zero_count > 0 && !at_equilibrium
+	           ? "; where the rest shape is stretched, --at-equilibrium gives mechanisms their stiffness"
+			   : "");
 	if (modes->unstable_count > 0)
 		printf("unstable modes    %d%s (omega^2 < 0: the configuration is not a stable rest shape%s)\n",
 		       (int)modes->unstable_count, sparse ? " among the modes listed" : "",

@@ -819,6 +819,20 @@ def test_modes_count_unstable_and_zero_modes(tmp_path):
 
 
 
+def test_modes_say_what_their_zero_level_is_relative_to(tmp_path):
+    # The dense solver sets |omega^2| <= 1e-12 of the largest eigenvalue to 0; the sparse one, which
+    # computes only the lowest modes, 1e-12 of the Gershgorin bound omega_max^2 (docs/analysis.md).
+    # A free 4 x 4 x 4 block (192 degrees of freedom, enough for the sparse solver): six zero modes.
+    block = {"springmass": 1, "name": "block", "gravity": [0, 0, 0],
+             "structures": [{"type": "block", "name": "b", "size": [1, 1, 1], "nu": 4, "nv": 4, "nw": 4,
+                             "edge": {"strain_stiffness": 300}, "face_diagonal": {"strain_stiffness": 300}}]}
+    (tmp_path / "block.json").write_text(json.dumps(block))
+    dense = summary_line(cli("modes", tmp_path / "block.json", "--solver", "dense").stdout, "zero modes")
+    sparse = summary_line(cli("modes", tmp_path / "block.json", "--solver", "sparse").stdout, "zero modes")
+    assert dense.startswith("6 (|omega^2| <= 1e-12 of the largest:"), dense
+    assert sparse.startswith("6 among the modes listed (|omega^2| <= 1e-12 of the Gershgorin bound"), sparse
+
+
 def test_modes_say_when_the_list_ends_inside_a_repeated_frequency(tmp_path):
     # The trampoline at equilibrium has a pair of modes at 7.885 Hz, modes 2 and 3: -n 2 ends
     # inside it and says so under the table, -n 1 and -n 3 end between frequencies and do not.
