@@ -370,6 +370,7 @@ typedef struct lanczos_work {
 	double* shifted;      // nonzeros: K - sigma M
 	int64_t* diagonal;    // dof positions of the diagonal entries
 	double shift;         // sigma [1/s^2]
+	double gershgorin;    // G, the Gershgorin bound of M^(-1/2) K M^(-1/2) [1/s^2]
 	cholmod_common common;
 	int common_started;
 	cholmod_factor* factor;
@@ -718,13 +719,18 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 		                  : lanczos_run(w, want, found, count, (uint64_t)run, max_restarts, nu, fresh);
 		if (r < 0)
 			return lanczos_failure(w, err);
+		// Modes at the round-off of the stiffness (omega^2 about 1e-13 G: the near-zero modes of a
+		// stiff model) have nu within round-off of 1/|sigma| and may never converge; the dense
+		// solver resolves them as zeros.
 		if (r == 0)
 			return sm_error_set(
 			    err, SM_ERROR_NOT_CONVERGED,
 			    "modes: Lanczos did not converge to %zu modes%s in %d restarts (run %d, shift %.3g "
-			    "1/s^2)",
+			    "1/s^2); modes with omega^2 near the round-off of the largest (about 1e-12 of the "
+			    "Gershgorin bound %.3g 1/s^2, as in a stiff model) may not converge: the dense solver "
+			    "resolves them (SM_MODES_DENSE, springmass modes --solver dense)",
 			    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts, run + 1,
-			    w->shift);
+			    w->shift, w->gershgorin);
 		// lambda = sigma + 1/nu. A mode is new if it lies below the highest kept one by more than
 		// the round-off of the operator (1e-9 of its scale 1/nu).
 		const double highest = count > 0 ? lambda[count - 1] : INFINITY;
@@ -811,6 +817,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	w.def = p->def;
 	double gershgorin = 0.0;
 	sm_status st = lanczos_setup(&w, p, &gershgorin, err);
+	w.gershgorin = gershgorin;
 	lanczos_pairs pairs;
 	memset(&pairs, 0, sizeof pairs);
 	pairs.want = want;

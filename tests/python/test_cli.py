@@ -833,6 +833,17 @@ def test_modes_say_what_their_zero_level_is_relative_to(tmp_path):
     assert sparse.startswith("6 among the modes listed (|omega^2| <= 1e-12 of the Gershgorin bound"), sparse
 
 
+def test_modes_that_lanczos_cannot_converge_point_to_the_dense_solver():
+    # A cloth 1e6 times stiffer than the bundled one, at its equilibrium: its lowest modes lie at
+    # about 1e-13 of the Gershgorin bound, at the round-off of the stiffness, where shift-invert
+    # Lanczos does not converge; the dense solver resolves them (as seven zeros).
+    args = ("modes", MODELS / "cloth.json", "--at-equilibrium", "--set", "E=1e9", "-n", 3)
+    failed = cli(*args, status=1)
+    assert "Lanczos did not converge" in failed.stderr, failed.stderr
+    assert "the dense solver resolves them (SM_MODES_DENSE, springmass modes --solver dense)" in failed.stderr
+    assert summary_line(cli(*args, "--solver", "dense").stdout, "zero modes").startswith("7 (")
+
+
 def test_modes_say_when_the_list_ends_inside_a_repeated_frequency(tmp_path):
     # The trampoline at equilibrium has a pair of modes at 7.885 Hz, modes 2 and 3: -n 2 ends
     # inside it and says so under the table, -n 1 and -n 3 end between frequencies and do not.
