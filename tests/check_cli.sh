@@ -377,6 +377,14 @@ out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 3 2>&1 > /dev/null)
 out=$(timeout 60 "$cli" modes "$tmp/long_rope.json" -n 516 2>&1 > /dev/null)
 [ $? -eq 2 ] && [[ "$out" == "springmass modes: that many modes of 2100 degrees of freedom need the dense eigensolver,"*"(the sparse solver, N <= 515 here)"* ]] ||
   fail "modes -n 516 of 2100 degrees of freedom: $out"
+# --solver sparse asked for more than it gives, or for a model too small for it: usage errors,
+# refused before the linearisation.
+out=$("$cli" modes "$root/models/cloth.json" --solver sparse -n 0 2>&1)
+[ $? -eq 2 ] && [ "$out" = "springmass modes: --solver sparse gives the lowest modes, 1 to (dof - 40) / 4 = 180 of this model's 762 degrees of freedom, not all of them (-n 0): use --solver dense" ] ||
+  fail "modes --solver sparse -n 0: $out"
+out=$("$cli" modes "$root/models/oscillator.json" --solver sparse -n 1 2>&1)
+[ $? -eq 2 ] && [ "$out" = "springmass modes: --solver sparse needs at least 44 free degrees of freedom, the model has 3: use --solver dense" ] ||
+  fail "modes --solver sparse of 3 degrees of freedom: $out"
 
 # A particle name with a comma or a quote is one quoted CSV field (RFC 4180).
 cat > "$tmp/comma.json" << 'JSON'

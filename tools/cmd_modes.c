@@ -56,7 +56,7 @@ static void usage(FILE* out)
 	        "\n"
 	        "Exit status: 0 success, 1 for a bad model, a failed solve or an output that cannot be\n"
 	        "written, 2 for a usage error (also all modes of a model too large for the dense\n"
-	        "eigensolver without --solver dense).\n",
+	        "eigensolver without --solver dense, or more than --solver sparse gives).\n",
 	        CLI_DENSE_LIMIT, SM_MODES_DENSE_LIMIT);
 }
 
@@ -291,6 +291,23 @@ int sm_cmd_modes(int argc, char** argv)
 		    "the cube of their number (minutes above %d, hours at 10000): ask for the lowest N modes with "
 		    "-n N (the sparse solver, N <= %zu here), or give --solver dense to wait for it\n",
 		    count == 0 ? "all the modes" : "that many modes", dof, CLI_DENSE_LIMIT, sparse_most);
+		status = 2;
+		goto done;
+	}
+	// --solver sparse asked for what it cannot give: a usage error, refused before the work.
+	if (solver == SM_MODES_SPARSE && dof > 0 && (count == 0 || (size_t)count > sparse_most)) {
+		if (sparse_most == 0)
+			fprintf(
+			    stderr,
+			    "springmass modes: --solver sparse needs at least %d free degrees of freedom, the model has "
+			    "%zu: use --solver dense\n",
+			    SM_MODES_SPARSE_MARGIN + 4, dof);
+		else
+			fprintf(
+			    stderr,
+			    "springmass modes: --solver sparse gives the lowest modes, 1 to (dof - %d) / 4 = %zu of this "
+			    "model's %zu degrees of freedom, not %s: use --solver dense\n",
+			    SM_MODES_SPARSE_MARGIN, sparse_most, dof, count == 0 ? "all of them (-n 0)" : "that many");
 		status = 2;
 		goto done;
 	}
