@@ -212,8 +212,8 @@ SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 /// interpolating polynomial, of the step's order: within the tolerances, as a step is). For
 /// outputs at fixed times from a run whose inputs do not change before t_stop: CVODE then
 /// takes the steps of one advance to t_stop, whatever the output times, where advancing to
-/// each output time ends a step at each (the bundled cloth with 0.01 s outputs: 650 steps
-/// instead of 1065). The trajectory at t_stop, and the spring breaks on the way, are then those
+/// each output time ends a step at each (the bundled cloth with 0.01 s outputs: 671 steps
+/// instead of 1075). The trajectory at t_stop, and the spring breaks on the way, are then those
 /// of one advance to t_stop, bit for bit, for a t_stop up to 1e9 s ahead; a farther t_stop (a
 /// master's 1e28 s for "no end") sizes CVODE's first steps as one 1e9 s ahead would (CVODE's
 /// first step is at least 100 eps of the interval it is sized for: 2e14 s for 1e28 s, which no
