@@ -752,6 +752,50 @@ def test_a_load_parameter_is_tunable_and_its_potential_counts(package, tmp_path)
         inst.free()
 
 
+LOADED_HOOK = {
+    "springmass": 1, "name": "loaded_hook", "gravity": [0, 0, -9.81],
+    "particles": [{"name": "hook", "position": [0, 0, 0], "mass": 0.1, "fixed": True},
+                  {"name": "bob", "position": [0, 0, -0.3], "mass": 0.5}],
+    "springs": [{"a": "hook", "b": "bob", "stiffness": 200.0, "rest_length": 0.3}],
+    "loads": [{"particle": "hook", "force": [1.5, -2.0, 3.0]}],
+    "ports": [{"name": "hook", "particle": "hook", "kind": "motion"}]}
+
+
+def test_directional_derivative_of_the_potential_of_a_load_on_a_driven_particle(package, tmp_path):
+    # A load on a driven particle is part of the model (docs/model-format.md, Loads: on a
+    # constrained particle it goes to the reaction) and its potential -F . x part of
+    # energy.gravity: E_g = -(m_hook g + F) . x_hook - m_bob g . x_bob. Moving the hook by a seed
+    # dx therefore changes energy.gravity by -(m_hook g + F) . dx, a closed form, and the inputs'
+    # work by the change of the three energies (as the moving damped system above). E_g is linear
+    # in x_hook, so a central difference with h = 1e-6 m is exact but for the round-off of
+    # energies of order 1 J over 2h, about 1e-10: 1e-9 asserted for the closed form, rtol and
+    # atol 1e-7 against the differences (the elastic energy's h^2 truncation is ~1e-10 J/m).
+    model = tmp_path / "loaded_hook.json"
+    model.write_text(json.dumps(LOADED_HOOK))
+    inst = Instance(package(model)).start()
+    try:
+        s, vr = inst.slave, inst.vr
+        known = [vr[n] for n in ("hook.x", "hook.y", "hook.z")]
+        x = np.array([0.05, -0.02, 0.04])
+        s.setReal(known, list(x))
+        names = ["energy.gravity", "energy.elastic", "energy.kinetic", "energy.input"]
+        unknown = [vr[n] for n in names]
+        seed = np.array([0.7, 1.3, -0.4])
+        analytic = np.array(s.getDirectionalDerivative(unknown, known, list(seed)))
+        constant = 0.1 * np.array([0.0, 0.0, -9.81]) + np.array([1.5, -2.0, 3.0])
+        assert abs(analytic[0] - (-constant @ seed)) < 1e-9, (analytic[0], -constant @ seed)
+        h = 1e-6
+        s.setReal(known, list(x + h * seed))
+        up = np.array(s.getReal(unknown))
+        s.setReal(known, list(x - h * seed))
+        down = np.array(s.getReal(unknown))
+        s.setReal(known, list(x))
+        fd = (up - down) / (2 * h)
+        assert np.allclose(analytic, fd, rtol=1e-7, atol=1e-7), list(zip(names, analytic, fd))
+    finally:
+        inst.free()
+
+
 def test_a_motion_input_set_in_a_step_applies_from_its_start_changed_or_not(test_fmu):
     # A motion port set in a communication step moves from P.x with P.vx from the step's start.
     # The master holds base.x = 0 and base.vx = 1 m/s at every 0.1 s step, so the anchor is at
