@@ -186,6 +186,39 @@ static int test_balance_holds_across_a_break(void)
 	return 0;
 }
 
+// A driven particle that carries a load jumps: the load is part of the model, its potential -F . x
+// part of the gravitational energy, so what moves the particle at once does the work of the load's
+// potential too. The oscillator (40 N/m, at rest at its rest length 1 m, no gravity) with its driven
+// anchor loaded with F = (2, -1, 0.5) N, the anchor jumping from the origin to (-0.1, 0, 0) m at
+// rest: the spring stretches by 0.1 m, k 0.1^2 / 2 = 0.2 J, and the load's potential rises by
+// -F . dx = 0.2 J, so the work is 0.4 J (without the load's share, 0.2 J). Closed forms of
+// doubles near 1: their round-off is a few 1e-17 J, 1e-15 J asserted; the balance likewise.
+static int test_a_jump_of_a_loaded_driven_particle_does_the_work_of_its_load(void)
+{
+	const double k = 40.0;
+	sm_model* model = oscillator_anchored(1.0, k, 0.0, 0.0, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	sm_particle_def anchor;
+	ENSURE_STATUS(sm_model_get_particle(model, 0, &anchor), SM_OK);
+	const double load[3] = {2.0, -1.0, 0.5};
+	memcpy(anchor.load, load, sizeof load);
+	ENSURE_STATUS(sm_model_set_particle(model, 0, &anchor), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double start = balance(sim);
+	ENSURE(sm_simulation_input_work(sim) == 0.0);
+	const double to[3] = {-0.1, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 0, to, still), SM_OK);
+	const double elastic = 0.5 * k * 0.1 * 0.1;
+	const double potential = -(load[0] * to[0] + load[1] * to[1] + load[2] * to[2]);
+	ENSURE_NEAR(sm_simulation_energies(sim).elastic, elastic, 1e-15);
+	ENSURE_NEAR(sm_simulation_input_work(sim), elastic + potential, 1e-15);
+	ENSURE_NEAR(balance(sim), start, 1e-15);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A fixed particle takes no work, whatever force acts on it; a free particle's force does none
 // while the particle is at rest, and a driven particle's goes to its driver: the work stays 0 over
 // a run in which nothing moves but what gravity and the springs move (the work of gravity is in
@@ -295,6 +328,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_a_constant_force_as_input_or_load);
 	RUN_TEST(test_balance_holds_with_every_kind_of_input);
 	RUN_TEST(test_balance_holds_across_a_break);
+	RUN_TEST(test_a_jump_of_a_loaded_driven_particle_does_the_work_of_its_load);
 	RUN_TEST(test_forces_on_held_particles_do_no_work);
 	RUN_TEST(test_snapshots_and_resets_keep_the_work);
 	RUN_TEST(test_a_restored_negative_zero_work_saves_the_same_bytes);
