@@ -311,6 +311,36 @@ def test_parameters_in_the_simulation_settings_set_the_solver(test_fmu):
         inst.free()
 
 
+def test_parameters_in_the_simulation_settings_set_every_numeric_solver_setting(package, tmp_path):
+    # docs/fmu.md: setting a parameter that the file's "simulation" object names is setting its
+    # solver variable. Beside rtol and max_steps (above), the absolute tolerances and the step
+    # limit: a run whose parameters loosen atol_position and atol_velocity to 1e-2 and limit the step
+    # to 0.05 s is the run with the solver variables set so, bit for bit (the same settings make
+    # the same steps), and the solver variables read the values; the loose tolerances make another
+    # run than the file's defaults (velocities of about 1 m/s, rtol 1e-6: the absolute tolerances
+    # decide the steps), so the comparison is not one of runs that the settings leave alike.
+    model = json.loads((MODELS / "param_settings.json").read_text())
+    model["parameters"].update({"ap": 1e-8, "av": 1e-6, "hs": 0.0})
+    model["simulation"].update({"atol_position": "ap", "atol_velocity": "av", "max_step": "hs"})
+    path = tmp_path / "solver_parameters.json"
+    path.write_text(json.dumps(model))
+    fmu = package(path)
+    settings = {"ap": 1e-2, "av": 1e-2, "hs": 0.05}
+    solver = {"solver.atol_position": 1e-2, "solver.atol_velocity": 1e-2, "solver.max_step": 0.05}
+    runs = []
+    for start in (settings, solver, {}):
+        inst = Instance(fmu).start(start)
+        try:
+            if start:
+                assert inst.get(*solver) == list(solver.values()), start
+            for n in range(10):
+                inst.slave.doStep(0.1 * n, 0.1)
+            runs.append(inst.get("tip.x", "tip.vx", "base.fx"))
+        finally:
+            inst.free()
+    assert runs[0] == runs[1] and runs[1] != runs[2], runs
+
+
 def test_reset_equals_a_fresh_instance(test_fmu):
     fmu = test_fmu("driven_oscillator")
     a = Instance(fmu, "a")
