@@ -545,7 +545,7 @@ bool fmu_set_parameters(instance* inst, const char* function, const double* valu
 	return true;
 }
 
-// Takes the solver settings that a change of the model-file parameters changed (the file's
+// Takes the numeric solver settings that a change of the model-file parameters changed (the file's
 // "simulation" object may name parameters: "rtol": "tol"; such parameters are fixed). Setting such
 // a parameter is setting its solver variable: "tol" as solver.rtol, which the experiment's
 // tolerance then leaves alone. Only a change counts: a parameter set to the value it has (an
@@ -567,10 +567,8 @@ static void take_settings(instance* inst, const sm_simulation_def* before)
 	TAKE_CHANGED(absolute_tolerance_velocity);
 	TAKE_CHANGED(max_step);
 	TAKE_CHANGED(max_steps);
-	TAKE_CHANGED(method);
-	TAKE_CHANGED(solver);
-	TAKE_CHANGED(jacobian);
 #undef TAKE_CHANGED
+	// The method, the linear solver and the Jacobian are names in a model file, never parameters.
 }
 
 // Sets the model-file parameters among vr[] (all or none). Before initialisation ends the
