@@ -18,6 +18,17 @@ from fmu_helpers import Instance
 M, K, L0, X0 = 2.0, 50.0, 0.5, 0.7
 
 
+def central_difference(slave, unknown, known, x, seed, h=1e-6):
+    """(outputs at x + h seed - outputs at x - h seed) / 2h: the derivative of the unknowns along
+    seed, with the knowns put back to x afterwards."""
+    slave.setReal(known, list(x + h * seed))
+    up = np.array(slave.getReal(unknown))
+    slave.setReal(known, list(x - h * seed))
+    down = np.array(slave.getReal(unknown))
+    slave.setReal(known, list(x))
+    return (up - down) / (2 * h)
+
+
 def test_oscillator_matches_closed_form(test_fmu):
     # Undamped: x(t) = l0 + (x0 - l0) cos(w t), w = sqrt(k/m). rtol 1e-10 in CVODE keeps the
     # global error over 2 s (about 3 periods) far below 1e-6 m.
@@ -306,14 +317,7 @@ def test_directional_derivative_is_the_stiffness_seen_by_the_port(test_fmu):
         # for every known.
         for kv in known:
             name = inst.md.modelVariables[kv].name
-            x = inst.slave.getReal([kv])[0]
-            h = 1e-6
-            inst.slave.setReal([kv], [x + h])
-            up = np.array(inst.slave.getReal(unknown))
-            inst.slave.setReal([kv], [x - h])
-            down = np.array(inst.slave.getReal(unknown))
-            inst.slave.setReal([kv], [x])
-            fd = (up - down) / (2 * h)
+            fd = central_difference(inst.slave, unknown, [kv], np.array(inst.slave.getReal([kv])), np.ones(1))
             analytic = np.array(inst.slave.getDirectionalDerivative(unknown, [kv], [1.0]))
             assert np.allclose(analytic, fd, rtol=1e-6, atol=1e-6), (name, analytic, fd)
     finally:
@@ -345,13 +349,7 @@ def test_directional_derivatives_of_a_moving_damped_system_match_finite_differen
         s.setReal(known, list(x))
         seed = np.array([2.5, -1.0, 0.7, 1.5, -0.3, 0.9])
         analytic = np.array(s.getDirectionalDerivative(unknown, known, list(seed)))
-        h = 1e-6
-        s.setReal(known, list(x + h * seed))
-        up = np.array(s.getReal(unknown))
-        s.setReal(known, list(x - h * seed))
-        down = np.array(s.getReal(unknown))
-        s.setReal(known, list(x))
-        fd = (up - down) / (2 * h)
+        fd = central_difference(s, unknown, known, x, seed)
         assert np.allclose(analytic, fd, rtol=1e-6, atol=1e-6), list(zip(names, analytic, fd))
         # Not all zero: every output but the bob's position (a state) depends on the seeds.
         assert np.all(np.abs(analytic[:-1]) > 1e-3) and analytic[-1] == 0.0, list(zip(names, analytic))
@@ -788,13 +786,7 @@ def test_directional_derivative_of_the_potential_of_a_load_on_a_driven_particle(
         seed = np.array([0.7, 1.3, -0.4])
         analytic = np.array(s.getDirectionalDerivative(unknown, known, list(seed)))
         assert abs(analytic[0] - (-constant @ seed)) < 1e-9, (analytic[0], -constant @ seed)
-        h = 1e-6
-        s.setReal(known, list(x + h * seed))
-        up = np.array(s.getReal(unknown))
-        s.setReal(known, list(x - h * seed))
-        down = np.array(s.getReal(unknown))
-        s.setReal(known, list(x))
-        fd = (up - down) / (2 * h)
+        fd = central_difference(s, unknown, known, x, seed)
         assert np.allclose(analytic, fd, rtol=1e-7, atol=1e-7), list(zip(names, analytic, fd))
     finally:
         inst.free()
