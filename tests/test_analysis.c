@@ -2716,10 +2716,6 @@ static int test_statics_slack_chain_on_the_sparse_path(void)
 	return 0;
 }
 
-// Stable means a minimum beyond round-off. A free block (gravity 0) is at rest where it is, but
-// its rigid motions cost nothing; pinned at one corner it can still turn about it, at two about
-// their axis (mechanisms whose exact zero eigenvalues round-off may leave as tiny positive
-// pivots); pinned at three corners it is held. Whatever the block's size and the solver.
 // The dense path's verdicts and steps do not depend on the unit of stiffness. A chain of 4
 // particles of m on zero-length springs of k between held ends, evenly spaced, is at rest with
 // the stiffness k tridiag(-1, 2, -1) (x I3), positive definite with eigenvalues
@@ -2758,6 +2754,10 @@ static int test_dense_statics_does_not_depend_on_the_unit_of_stiffness(void)
 	return 0;
 }
 
+// Stable means a minimum beyond round-off. A free block (gravity 0) is at rest where it is, but
+// its rigid motions cost nothing; pinned at one corner it can still turn about it, at two about
+// their axis (mechanisms whose exact zero eigenvalues round-off may leave as tiny positive
+// pivots); pinned at three corners it is held. Whatever the block's size and the solver.
 static int test_statics_stability_sees_mechanisms(void)
 {
 	static const int32_t sizes[] = {2, 5, 8};
