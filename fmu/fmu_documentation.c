@@ -189,8 +189,8 @@ char* fmu_documentation_html(const fmu_table* t, bool licenses)
 	    "steps (each change restarts the solver).");
 	append_table(
 	    &out, t, SECTION_CONSTANTS, "constants",
-	    "Parameters of the model file that set its structure (a count, a port's particle): fixed when the "
-	    "FMU was made.");
+	    "Parameters of the model file that set its structure (a count, which particle a reference names: a "
+	    "port's, a spring's end, a load's): fixed when the FMU was made.");
 	append_particle_states(&out, t);
 
 	if (licenses)

@@ -222,6 +222,8 @@ def test_a_port_named_by_a_parameter_expression_follows_the_grid(package):
     assert v["n"].description == (
         "model-file parameter n (constant: sets the model's structure (a count and which particle a "
         "reference names), fixed at packaging)")
+    # The documentation's constants table says the same of what makes a parameter a constant.
+    assert "which particle a reference names" in read_documentation(fmu).paragraphs["constants"][0]
     assert "membrane[7,7]" in v["centre.z"].description
     names = ["centre.x", "centre.y", "centre.z", "p[112].x", "p[112].y", "p[112].z"]
     r = simulate_fmu(str(fmu), stop_time=0.1, output_interval=0.01, output=names)
