@@ -1066,6 +1066,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 {
 	sm_statics_result res;
 	memset(&res, 0, sizeof res);
+	res.coincident_spring = -1;
 	if (result != NULL)
 		*result = res;
 	sm_statics_def d = def != NULL ? *def : sm_default_statics_def();
@@ -1168,7 +1169,8 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		                  "statics: out of memory for the Jacobian of the stability test");
 	}
 	if (converged) {
-		res.stable = definite == 1 && !floating && sm_analysis_coincident_spring(model, w.x) < 0;
+		res.coincident_spring = sm_analysis_coincident_spring(model, w.x);
+		res.stable = definite == 1 && !floating && res.coincident_spring < 0;
 		memcpy(x, w.x, n3 * sizeof(double));
 		if (reactions != NULL)
 			for (int32_t p = 0; p < w.n; p++)

@@ -44,26 +44,6 @@ static void usage(FILE* out)
 	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
 }
 
-// The first intact rest-length spring of rest length > 0 with a free end whose two particles are at
-// one point at x (L = 0 or L < SM_DEGENERATE_LENGTH_RATIO l0: the singular point of model.h), or -1.
-static int32_t coincident_spring(const sm_model* model, const double* x)
-{
-	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
-		sm_spring_def sd;
-		if (sm_model_get_spring(model, k, &sd) != SM_OK || sd.kind != SM_SPRING_REST_LENGTH ||
-		    !(sd.rest_length > 0.0) || !sm_model_spring_enabled(model, k) ||
-		    (sm_model_free_index(model, sd.a) < 0 && sm_model_free_index(model, sd.b) < 0))
-			continue;
-		const double* a = x + 3 * (size_t)sd.a;
-		const double* b = x + 3 * (size_t)sd.b;
-		const double d0 = b[0] - a[0], d1 = b[1] - a[1], d2 = b[2] - a[2];
-		const double length = sqrt(d0 * d0 + d1 * d1 + d2 * d2);
-		if (length == 0.0 || length < SM_DEGENERATE_LENGTH_RATIO * sd.rest_length)
-			return k;
-	}
-	return -1;
-}
-
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
 static int write_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
                      const double* displacement, const double* reactions)
@@ -251,7 +231,7 @@ int sm_cmd_statics(int argc, char** argv)
 	// Where a rest-length spring has its two particles at one point the balance holds only by the
 	// convention that such a spring exerts no force (model.h): not a saddle or a mechanism but a
 	// maximum of that spring's energy, which `modes` refuses to linearise.
-	const int32_t coincident = res.stable ? -1 : coincident_spring(model, x);
+	const int32_t coincident = res.coincident_spring;
 	if (res.stable)
 		printf("stable           yes (a minimum of the potential energy)\n");
 	else if (coincident < 0)

@@ -89,6 +89,8 @@ typedef struct sm_statics_result {
 	/// False also where the two particles of a rest-length spring of rest length > 0 coincide: a
 	/// force balance by convention there (model.h), but a maximum of that spring's energy.
 	bool stable;
+	/// The first such spring, whose two particles coincide at the rest shape, or -1.
+	int32_t coincident_spring;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 } sm_statics_result;
 
