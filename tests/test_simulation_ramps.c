@@ -54,6 +54,42 @@ static int test_ramped_force_pushes_oscillator_as_closed_form(void)
 	return 0;
 }
 
+// A ramp runs from the time it is set (sm_simulation_set_external_force_ramp: force + rate (t -
+// t_set)), not from t = 0: the oscillator of test_ramped_force_pushes_oscillator_as_closed_form,
+// at rest until t_set = 1 s and pushed by f0 + r (t - t_set) from there, follows that test's
+// closed form in s = t - t_set, with its tolerances (a ramp counted from t = 0 would push r t_set
+// = 2 N harder, 0.05 m more of displacement).
+static int test_ramp_set_later_runs_from_its_own_time(void)
+{
+	const double f0 = 0.5, r = 2.0, w = sqrt(OSC_K / OSC_M), t_set = 1.0;
+	sm_model* model = oscillator(OSC_M, OSC_K, 0.0, 0.0);
+	ENSURE(model != NULL);
+	const sm_linear_solver solvers[] = {SM_SOLVER_DENSE, SM_SOLVER_REDUCED_PCG};
+	for (size_t k = 0; k < sizeof solvers / sizeof solvers[0]; k++) {
+		const sm_simulation_def d = tight_def(solvers[k]);
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, t_set), SM_OK);
+		const double force[3] = {f0, 0.0, 0.0}, rate[3] = {r, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, force, rate), SM_OK);
+		double worst_x = 0.0, worst_f = 0.0, f[6];
+		for (int i = 1; i <= 20; i++) {
+			const double s = 0.1 * i;
+			ENSURE_STATUS(sm_simulation_advance(sim, t_set + s), SM_OK);
+			const double push = f0 + r * s;
+			const double u = push / OSC_K - f0 / OSC_K * cos(w * s) - r / (OSC_K * w) * sin(w * s);
+			worst_x = fmax(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
+			sm_simulation_forces(sim, f);
+			worst_f = fmax(worst_f, fabs(f[3] - (push - OSC_K * u)));
+		}
+		ENSURE(worst_x <= 1e-7);
+		ENSURE(worst_f <= 4e-6);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A caller that sets the ramp again before every advance, as an FMU master sets an input and its
 // derivative at every communication point, with the force computed its own way (f0 + r t, or a
 // sum of r h over the steps), continues it: no input change, so with restart_on_input_change
@@ -401,6 +437,7 @@ int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_ramped_force_pushes_oscillator_as_closed_form);
+	RUN_TEST(test_ramp_set_later_runs_from_its_own_time);
 	RUN_TEST(test_ramp_continued_by_the_caller_is_no_change);
 	RUN_TEST(test_accelerating_anchor_drags_bob_as_closed_form);
 	RUN_TEST(test_accelerating_path_continued_near_its_start_is_no_change);
