@@ -473,6 +473,18 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     assert np.max(np.abs(f - OSC_K * u)) < OSC_K * 1e-6
 
 
+def test_run_interpolates_the_input_rows_around_the_start(tmp_path):
+    # Rows at -2 s and 2 s, forces -6 N and 6 N: linear between rows (--help), the force at t in
+    # [0, 2] s is 3 t, the ramp of test_run_takes_input_signals_as_closed_forms, and so is the
+    # motion, with its tolerance (the first row's value held from t = 0 would push with 3 t - 6).
+    w = math.sqrt(OSC_K / OSC_M)
+    (tmp_path / "straddle.csv").write_text("time,tip.fx\n-2,-6\n2,6\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "straddle.csv", *TIGHT_RUN)
+    t, x = rows[:, 0], rows[:, header.index("tip.x")]
+    u = (OSC_X0 - OSC_L0) * np.cos(w * t) + 3.0 / OSC_K * (t - np.sin(w * t) / w)
+    assert len(t) == 21 and np.max(np.abs(x - (OSC_L0 + u))) < 1e-6
+
+
 def test_run_shows_the_state_after_a_jump_at_its_output_row(tmp_path):
     # The anchor jumps from 0 to 0.1 m at t = 0.5 s, an output time: that row's base.fx is the
     # spring's K (tip.x - 0.1 - l0), after the jump, as --help says (fmpy records the one before: README).
