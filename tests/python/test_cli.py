@@ -614,6 +614,30 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     assert len(quiet.splitlines()) < len(out.splitlines()) and "rope[0]" not in quiet and "rope[0]" in out
 
 
+def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_path):
+    # Two loads on one particle, (3, -4, 5) N and (1, 2, -20) N: the "loads" line is their sum,
+    # every component, and the reaction at the anchor balances it with the weight of both
+    # particles (the bob's 2 kg and the anchor's default 1 kg at 9.81 m/s^2): reactions =
+    # -(loads + weight). Printed with 9 digits: 1e-9 N covers their rounding.
+    model = tmp_path / "loaded.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "loaded", "gravity": [0, 0, -9.81],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [0, 0, -1], "mass": 2}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 1000, "rest_length": 1}],
+        "loads": [{"particle": "bob", "force": [3, -4, 5]}, {"particle": "bob", "force": [1, 2, -20]}]}))
+    out = cli("statics", model).stdout
+
+    def vector(label):
+        match = re.search(re.escape(label) + r"\s+\(([^)]*)\) N", out)
+        assert match, f"no '{label}' in:\n{out}"
+        return [float(x) for x in match.group(1).split(",")]
+
+    assert vector("loads") == [4.0, -2.0, -15.0]
+    np.testing.assert_allclose(vector("weight"), [0.0, 0.0, -29.43], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(vector("reactions, sum"), [-4.0, 2.0, 44.43], rtol=0, atol=1e-9)
+
+
 def test_statics_out_of_iterations_gives_the_force_left_without_a_particle_name():
     # The bundled cloth after 2 Newton iterations (it needs 125) has 20 N left on a free particle.
     # The tool names the particle of every "particle N" in a message; the force must not read as
