@@ -242,8 +242,8 @@ int sm_cmd_check(int argc, char** argv)
 		sm_format_number(sm_document_parameter_value(doc, k), value);
 		// With the unit of what it stands for, but for a ratio's "1".
 		const char* unit = sm_document_parameter_unit(doc, k);
-		snprintf(with_unit, sizeof with_unit, "%s%s%s", value, unit[0] && strcmp(unit, "1") != 0 ? " " : "",
-		         strcmp(unit, "1") != 0 ? unit : "");
+		const bool shown = unit[0] != '\0' && strcmp(unit, "1") != 0;
+		snprintf(with_unit, sizeof with_unit, "%s%s%s", value, shown ? " " : "", shown ? unit : "");
 		printf("  %-12s = %-12s feeds ", sm_document_parameter_name(doc, k), with_unit);
 		if (used == 0)
 			printf("nothing");

@@ -749,18 +749,14 @@ int sm_cmd_run(int argc, char** argv)
 		const char* with_loads = cli_total_load(model, loads) > 0 ? " (with the loads')" : "";
 		// Energies beyond a double (a kinetic energy of 1e300 kg at 1e5 m/s) leave no balance to
 		// check: their difference, inf - inf, would print as nan.
+		char drift[64] = ": beyond a double, no energy balance to check";
 		if (isfinite(balance_at_start) && isfinite(balance_at_end))
-			fprintf(
-			    stderr,
-			    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
-			    "at the start, %.9g J at the end (%+.3g J)\n",
-			    with_loads, balance_at_start, balance_at_end, balance_at_end - balance_at_start);
-		else
-			fprintf(
-			    stderr,
-			    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
-			    "at the start, %.9g J at the end: beyond a double, no energy balance to check\n",
-			    with_loads, balance_at_start, balance_at_end);
+			snprintf(drift, sizeof drift, " (%+.3g J)", balance_at_end - balance_at_start);
+		fprintf(
+		    stderr,
+		    "springmass run: kinetic + elastic + gravitational%s + dissipated energy - input work: %.9g J "
+		    "at the start, %.9g J at the end%s\n",
+		    with_loads, balance_at_start, balance_at_end, drift);
 	}
 	status = 0;
 
