@@ -31,6 +31,11 @@ int32_t sm_analysis_coincident_spring(const sm_model* model, const double* x);
 // configuration has no linearisation of its damping.
 int32_t sm_analysis_coincident_damper(const sm_model* model, const double* x);
 
+// The first intact rest-length or damped spring with a free end whose length at x is not a double (its square
+// overflows: particles about 1e154 m apart or more), or -1. Its direction u = d / L comes out 0
+// there, so its Jacobian blocks (the u u^T parts) are not those of the configuration.
+int32_t sm_analysis_overflowing_spring(const sm_model* model, const double* x);
+
 // True if all count values are finite.
 int sm_analysis_all_finite(const double* values, size_t count);
 

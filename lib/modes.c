@@ -1302,6 +1302,17 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 			                  k / 3);
 			goto done;
 		}
+	// A spring's length that overflows leaves its direction 0 (model.h): its Jacobian blocks would
+	// not be the configuration's, and the check below would take it for two coincident particles.
+	const int32_t overflowing = sm_analysis_overflowing_spring(model, x0);
+	if (overflowing >= 0) {
+		st = sm_error_set(
+		    err, SM_ERROR_NOT_FINITE,
+		    "modes: spring %d between particles %d and %d is too long in the configuration (its squared "
+		    "length overflows: particles joined by springs must be less than about 1e154 m apart)",
+		    (int)overflowing, (int)model->spring_a[overflowing], (int)model->spring_b[overflowing]);
+		goto done;
+	}
 	const int32_t coincident = sm_analysis_coincident_spring(model, x0);
 	if (coincident >= 0) {
 		st = sm_error_set(

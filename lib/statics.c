@@ -99,7 +99,25 @@ static int32_t first_coincident(const sm_model* model, const double* x, bool dam
 			continue;
 		spring_geometry g;
 		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
-		if (g.inv_length == 0.0)
+		// 1 / L is 0 also where L overflows: particles far apart, not at one point.
+		if (g.inv_length == 0.0 && isfinite(g.length))
+			return s;
+	}
+	return -1;
+}
+
+int32_t sm_analysis_overflowing_spring(const sm_model* model, const double* x)
+{
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		const bool held =
+		    model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
+		// An undamped zero-length spring's blocks, ks I and 0, need no direction.
+		const bool directed = !model->zero_length[s] || model->damping[s] > 0.0;
+		if (!model->enabled[s] || held || !directed)
+			continue;
+		spring_geometry g;
+		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
+		if (!isfinite(g.length))
 			return s;
 	}
 	return -1;

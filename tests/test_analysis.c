@@ -1582,6 +1582,36 @@ static sm_model* bob_on_its_anchor(sm_spring_kind kind, double damping)
 	return anchored_particle(0.0, 0.0, s);
 }
 
+// A configuration 1e200 m apart along a spring: its squared length overflows, and its direction
+// d / L comes out 0 (model.h), as it does where two particles coincide. Modes must refuse it as
+// not finite, naming the spring as too long, not as a spring whose particles are at one point
+// (they are as far apart as a double allows); an undamped zero-length spring, whose blocks ks I
+// and 0 need no direction, still has its modes there: omega^2 = ks / m = 100 1/s^2 in every
+// direction (to round-off, 1e-12).
+static int test_modes_refuse_a_spring_too_long_as_not_finite(void)
+{
+	const double far[6] = {0.0, 0.0, 0.0, 1e200, 0.0, 0.0};
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = far;
+	sm_modes modes;
+	sm_error err;
+	sm_model* model = anchored_mass(0.0, -1.0, 10.0);
+	ENSURE(model != NULL);
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "spring 0") != NULL && strstr(err.message, "too long") != NULL);
+	ENSURE(strstr(err.message, "at one point") == NULL && modes.count == 0);
+	sm_model_destroy(model);
+	model = bob_on_its_anchor(SM_SPRING_ZERO_LENGTH, 0.0);
+	ENSURE(model != NULL);
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE(modes.count == 3);
+	for (int32_t k = 0; k < 3; k++)
+		ENSURE_NEAR(modes.omega_squared[k], 100.0, 1e-12);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A free particle on its fixed anchor, tied by a damped spring of rest length 0 (ks = 100 N/m,
 // kd = 4 N s/m, m = 1 kg), zero-length or rest-length kind: the elastic force ks (x_b - x_a) is
 // linear, but the damping force kd (u . dv) u is not differentiable where the particles meet (its
@@ -3241,6 +3271,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_chain_axial_frequencies);
 	RUN_TEST(test_coincident_rest_length_spring);
 	RUN_TEST(test_coincident_damped_spring_of_zero_rest_length);
+	RUN_TEST(test_modes_refuse_a_spring_too_long_as_not_finite);
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);

@@ -247,7 +247,9 @@ SM_API sm_modes_def sm_default_modes_def(void);
 /// why (SM_ERROR_INVALID_ARGUMENT, also for a configuration in which a rest-length spring's two
 /// particles coincide, or those of a damped spring of rest length 0 (one of them free): its force,
 /// or its damping force, has no derivative there; SM_ERROR_NOT_FINITE for a non-finite configuration or
-/// stiffness, or an omega^2 beyond the range of a double; SM_ERROR_OUT_OF_MEMORY;
+/// stiffness, a configuration in which a rest-length or damped spring (one of its particles free) is
+/// too long for its squared length to be a double (about 1e154 m), or an omega^2 beyond the range of a
+/// double; SM_ERROR_OUT_OF_MEMORY;
 /// SM_ERROR_SOLVER; and on the sparse path SM_ERROR_NOT_CONVERGED when the residual test fails
 /// or on_iteration returned false).
 /// A model with no free particle has no modes: success with count = 0, under every solver
