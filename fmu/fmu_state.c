@@ -208,10 +208,12 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 		return false;
 	}
 	if (memcmp(b + 8, inst->table.guid, 40) != 0) {
-		char guid[40];  // printable characters only: the bytes may be anything
-		for (int i = 0; i < 39; ++i)
-			guid[i] = b[8 + i] >= 0x20 && b[8 + i] < 0x7f ? (char)b[8 + i] : '?';
-		guid[39] = '\0';
+		// The GUID as written (up to its NUL), printable characters only: the bytes may be anything.
+		char guid[40];
+		int length = 0;
+		for (; length < 39 && b[8 + length] != '\0'; ++length)
+			guid[length] = b[8 + length] >= 0x20 && b[8 + length] < 0x7f ? (char)b[8 + length] : '?';
+		guid[length] = '\0';
 		log_error(inst, "%s: the state belongs to another model (GUID %s, this FMU's is %s)", function, guid,
 		          inst->table.guid);
 		return false;

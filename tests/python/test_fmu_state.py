@@ -222,6 +222,9 @@ def test_state_of_another_model_is_refused(test_fmu):
             b.slave.deSerializeFMUstate(blob)
         assert info.value.status == FMI2_ERROR
         assert "belongs to another model" in b.log_text()
+        # Both GUIDs as they are, the state's without the padding of its 40-byte field.
+        guid_a, guid_b = a.md.guid, b.md.guid
+        assert f"(GUID {guid_a}, this FMU's is {guid_b})" in b.log_text(), b.log_text()
         assert b.get("hook.fz") == before
     finally:
         a.free()
