@@ -143,6 +143,15 @@ static sm_status check_model_def(const sm_model_def* def, char* msg)
 	if (def->spring_capacity < 0)
 		return say(msg, SM_ERROR_NEGATIVE, "model: spring capacity = %d must be >= 0",
 		           (int)def->spring_capacity);
+	// No room is reserved beyond the most a model holds: such a hint could never be met, whatever
+	// the memory.
+	const bool particles = def->particle_capacity > SM_MODEL_MAX_ELEMENTS;
+	if (particles || def->spring_capacity > SM_MODEL_MAX_ELEMENTS)
+		return say(msg, SM_ERROR_INVALID_ARGUMENT,
+		           "model: %s capacity = %d exceeds the most %ss a model holds, %d",
+		           particles ? "particle" : "spring",
+		           (int)(particles ? def->particle_capacity : def->spring_capacity),
+		           particles ? "particle" : "spring", SM_MODEL_MAX_ELEMENTS);
 	return SM_OK;
 }
 
@@ -364,13 +373,13 @@ static int reserve_particles(sm_model* m, int64_t needed)
 {
 	if (needed <= m->particle_capacity)
 		return 1;
-	if (needed > INT32_MAX / 4)
+	if (needed > SM_MODEL_MAX_ELEMENTS)
 		return 0;
 	int64_t cap = m->particle_capacity > 0 ? m->particle_capacity : 16;
 	while (cap < needed)
 		cap *= 2;
-	if (cap > INT32_MAX / 4)
-		cap = INT32_MAX / 4;
+	if (cap > SM_MODEL_MAX_ELEMENTS)
+		cap = SM_MODEL_MAX_ELEMENTS;
 	const size_t c = (size_t)cap;
 	if (!grow((void**)&m->mass, c, sizeof(double)) || !grow((void**)&m->position, 3 * c, sizeof(double)) ||
 	    !grow((void**)&m->velocity, 3 * c, sizeof(double)) ||
@@ -385,13 +394,13 @@ static int reserve_springs(sm_model* m, int64_t needed)
 {
 	if (needed <= m->spring_capacity)
 		return 1;
-	if (needed > INT32_MAX / 4)
+	if (needed > SM_MODEL_MAX_ELEMENTS)
 		return 0;
 	int64_t cap = m->spring_capacity > 0 ? m->spring_capacity : 16;
 	while (cap < needed)
 		cap *= 2;
-	if (cap > INT32_MAX / 4)
-		cap = INT32_MAX / 4;
+	if (cap > SM_MODEL_MAX_ELEMENTS)
+		cap = SM_MODEL_MAX_ELEMENTS;
 	const size_t c = (size_t)cap;
 	if (!grow((void**)&m->spring_def, c, sizeof(sm_spring_def)) ||
 	    !grow((void**)&m->spring_a, c, sizeof(int32_t)) || !grow((void**)&m->spring_b, c, sizeof(int32_t)) ||
@@ -526,7 +535,7 @@ sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int
 	sm_status st = check_particle_def(def, (long)model->particle_count, model->last_error);
 	if (st != SM_OK)
 		return st;
-	if (model->particle_count >= INT32_MAX / 4 ||
+	if (model->particle_count >= SM_MODEL_MAX_ELEMENTS ||
 	    !reserve_particles(model, (int64_t)model->particle_count + 1))
 		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "particle %ld: out of memory",
 		                     (long)model->particle_count);
@@ -649,7 +658,8 @@ sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t
 	sm_status st = check_spring_def(model, def, (long)model->spring_count, -1.0, &r, model->last_error);
 	if (st != SM_OK)
 		return st;
-	if (model->spring_count >= INT32_MAX / 4 || !reserve_springs(model, (int64_t)model->spring_count + 1))
+	if (model->spring_count >= SM_MODEL_MAX_ELEMENTS ||
+	    !reserve_springs(model, (int64_t)model->spring_count + 1))
 		return sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "spring %ld: out of memory",
 		                     (long)model->spring_count);
 	const int32_t s = model->spring_count++;

@@ -8,6 +8,11 @@
 
 #include <math.h>
 
+// The most particles, and the most springs, a model holds: INT32_MAX / 4 = 2^29 - 1, so that 3
+// times a particle index (its first coordinate) and the sums of counts the solvers form stay
+// within 32 bits.
+#define SM_MODEL_MAX_ELEMENTS (INT32_MAX / 4)
+
 struct sm_model {
 	sm_model_def def;  // gravity [m/s^2], mass damping [1/s]
 

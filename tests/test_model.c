@@ -71,6 +71,16 @@ static int test_invalid_model_definitions(void)
 	md.particle_capacity = -1;
 	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_NEGATIVE);
 	ENSURE(strstr(err.message, "particle capacity") != NULL);
+	// A capacity beyond the most a model holds (2^29 - 1) is an invalid hint, not a lack of memory:
+	// nothing is allocated for it.
+	md = sm_default_model_def();
+	md.spring_capacity = INT32_MAX;
+	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "spring capacity = 2147483647") != NULL && strstr(err.message, "536870911"));
+	md = sm_default_model_def();
+	md.particle_capacity = (1 << 29);
+	ENSURE(sm_model_create(&md, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "particle capacity = 536870912") != NULL);
 	ENSURE(sm_model_create(NULL, &err) == NULL && err.status == SM_ERROR_INVALID_ARGUMENT);
 	md = sm_default_model_def();
 	md.particle_capacity = 100;

@@ -147,8 +147,9 @@ SM_API sm_spring_def sm_default_spring_def(void);
 SM_API sm_model_def sm_default_model_def(void);
 
 /// Creates an empty model. Returns NULL if def is NULL (start from sm_default_model_def()) or
-/// invalid (non-finite gravity, negative or non-finite mass damping, negative capacity) or memory
-/// runs out; err says which (may be NULL).
+/// invalid (non-finite gravity, negative or non-finite mass damping, a negative capacity or one
+/// above 2^29 - 1 = 536870911, the most particles or springs a model holds) or memory runs out;
+/// err says which (may be NULL).
 SM_API sm_model* sm_model_create(const sm_model_def* def, sm_error* err);
 
 /// Destroys a model; accepts NULL.
