@@ -317,6 +317,16 @@ void cli_csv_number(FILE* f, double value)
 	fprintf(f, ",%s", text);
 }
 
+void cli_vtk_points(FILE* f, int32_t n, const double* x)
+{
+	char text[3][SM_NUMBER_TEXT_CAPACITY];
+	for (int32_t i = 0; i < n; i++) {
+		for (int c = 0; c < 3; c++)
+			sm_format_number(x[3 * (size_t)i + (size_t)c], text[c]);
+		fprintf(f, "%s %s %s\n", text[0], text[1], text[2]);
+	}
+}
+
 FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, const char* title,
                    const sm_model* model, const double* x)
 {
@@ -332,8 +342,7 @@ FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, 
 	for (int32_t s = 0; s < springs; s++)
 		intact += sm_model_spring_enabled(model, s);
 	fprintf(f, "# vtk DataFile Version 3.0\n%s\nASCII\nDATASET POLYDATA\nPOINTS %d double\n", title, (int)n);
-	for (int32_t i = 0; i < n; i++)
-		fprintf(f, "%.9g %.9g %.9g\n", x[3 * i], x[3 * i + 1], x[3 * i + 2]);
+	cli_vtk_points(f, n, x);
 	// No LINES section without springs: VTK's legacy reader fails on "LINES 0 0" and drops the
 	// point data after it.
 	if (intact > 0)

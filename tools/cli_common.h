@@ -83,6 +83,12 @@ void cli_csv_field(FILE* f, const char* prefix, const char* text, const char* su
 /// (sm_format_number: 0.03 as 0.03, not 0.029999999999999999).
 void cli_csv_number(FILE* f, double value);
 
+/// Writes the n particles' positions x [m] as the text of VTK points, one particle to a line, each
+/// coordinate in the shortest text that reads back to exactly it (sm_format_number). Nine
+/// significant digits, enough for the other fields, are not for points: the geometry is their
+/// differences, so a model 100 km from the origin would lose its 1 cm springs' shape to 0.5 mm.
+void cli_vtk_points(FILE* f, int32_t n, const double* x);
+
 /// Opens a legacy VTK polydata file, one of `outputs` (NULL: directly), and writes the particles
 /// at x [m] as points and the springs as lines (only the enabled ones, so that broken springs
 /// disappear). Follow with cli_vtk_vectors for point data, then cli_close. Prints the error and

@@ -275,7 +275,7 @@ static int write_vtp(const char* path, const sm_simulation* sim, double* springs
 		fprintf(f, "</CellData>\n");
 	}
 	fprintf(f, "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
-	write_vtp_values(f, x, n, 3, NULL);
+	cli_vtk_points(f, n, x);
 	fprintf(f, "</DataArray>\n</Points>\n");
 	if (intact > 0) {
 		fprintf(f, "<Lines>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");

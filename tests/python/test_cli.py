@@ -326,8 +326,8 @@ def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     springs = int(re.search(r"springs\s+(\d+)", cli("check", model).stdout).group(1))
     for k, d in enumerate(sets):
         points, lines, _, _ = vtp_sections(vtk / d.get("file"))
-        # Points are written to 9 significant digits: 1e-8 m on a cloth within 2 m of the origin.
-        np.testing.assert_allclose(points.ravel(), rows[k, first:], rtol=0, atol=1e-8)
+        # Points are written exactly, as the CSV's positions are.
+        assert np.array_equal(points.ravel(), rows[k, first:])
         assert len(set(lines)) == len(lines)
         if k == 0:
             all_lines = lines
@@ -373,9 +373,10 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     # The bundled oscillator (a 1 kg bob on a 40 N/m spring of rest length 0.5 m with 0.4 N s/m
     # damping, from a fixed anchor at the origin): each VTK file's velocity vectors are the CSV's,
     # and its spring's tension and strain follow from the points and velocities by the laws,
-    # ks (L - l0) + kd u . (v_b - v_a) and (L - l0) / l0. The files hold 9 significant digits: the
-    # bob's coordinates (under 0.7 m) to 5e-10 m, so L to 1e-9 m, the strain to 2e-9 (3e-9 allowed)
-    # and the tension to 40 N/m times that (1e-7 N allowed).
+    # ks (L - l0) + kd u . (v_b - v_a) and (L - l0) / l0. The files hold the points exactly and the
+    # rest to 9 significant digits: the velocities to 5e-9 relative, the strain (under 0.4) to 2e-10
+    # (3e-9 allowed) and the tension (under 8 N, with 40 N/m times the strain's rounding) to 1e-8 N
+    # (1e-7 N allowed).
     vtk = tmp_path / "vtk"
     header, rows = run_csv(tmp_path, MODELS / "oscillator.json", "--output-interval", 0.25, "--vtk", vtk)
     vx = header.index("tip.vx")
@@ -398,6 +399,37 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     cli("run", path, "-q", "--t-end", 0.1, "--output-interval", 0.1, "-o", tmp_path / "pair.csv", "--vtk", vtk)
     points, _, _, scalars = vtp_sections(vtk / "pair_000000.vtp")
     assert set(scalars) == {"tension"} and scalars["tension"][0] == pytest.approx(10.0)
+
+
+def test_vtk_points_are_the_csv_positions_exactly_far_from_the_origin(tmp_path):
+    # The geometry of a VTK file is the differences of its points. A 1 m rope of 1 cm segments
+    # 100 km out along x, hanging from its first particle: at 9 significant digits its points
+    # would be rounded to 0.5 mm, half a segment, and the strains that follow from them would be
+    # wrong by up to 0.1 (the rope's own strains stay below 1e-3). Its points (in the run's series
+    # and in statics' legacy file) are the CSV's positions to the last bit, and the strains they
+    # imply are the file's strain array: 9 significant digits of strains below 1e-3, plus lengths
+    # of 1 cm from coordinates of 1e5 m (1.5e-11 m of rounding, 1.5e-9 of strain); 1e-8 allowed.
+    far = {"springmass": 1, "name": "far_rope",
+           "structures": [{"type": "rope", "name": "rope", "start": [100000, 0, 0], "end": [100001, 0, 0],
+                           "segments": 100, "mass": 0.1, "structural": {"strain_stiffness": 1000}}],
+           "fixed": ["rope[0]"]}
+    model = tmp_path / "far_rope.json"
+    model.write_text(json.dumps(far))
+    vtk = tmp_path / "vtk"
+    header, rows = run_csv(tmp_path, model, "--positions", "--t-end", 0.2, "--output-interval", 0.1, "--vtk", vtk)
+    first = next(i for i, name in enumerate(header) if name.startswith("particle."))
+    for k, row in enumerate(rows):
+        points, lines, _, scalars = vtp_sections(vtk / f"far_rope_{k:06d}.vtp")
+        assert np.array_equal(points.ravel(), row[first:])
+        assert lines == [(j, j + 1) for j in range(100)]
+        lengths = np.linalg.norm(np.diff(points, axis=0), axis=1)
+        assert np.abs(scalars["strain"]).max() < 1e-3
+        np.testing.assert_allclose((lengths - 0.01) / 0.01, scalars["strain"], rtol=0, atol=1e-8)
+    out = tmp_path / "statics.csv"
+    cli("statics", model, "-q", "-o", out, "--vtk", tmp_path / "statics")
+    header, rest = read_csv(out)
+    points, _, _, _ = vtk_sections(tmp_path / "statics" / "statics.vtk")
+    assert np.array_equal(points, rest[:, header.index("x"):header.index("x") + 3])
 
 
 def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path):
@@ -573,10 +605,11 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     lengths = l0 + (20 - np.arange(20)) * m * 9.81 * l0 / 2000
     np.testing.assert_allclose(np.diff(x[:, 2]), -lengths, rtol=1e-9)
     np.testing.assert_allclose(x[:, :2], 0, atol=1e-9)
-    # The VTK file carries the same shape, displacements and reactions (9 significant digits).
+    # The VTK file carries the same shape (exactly), displacements and reactions (9 significant
+    # digits).
     points, lines, vectors, _ = vtk_sections(tmp_path / "vtk" / "statics.vtk")
     assert lines == [(j, j + 1) for j in range(20)]
-    np.testing.assert_allclose(points, x, rtol=0, atol=1e-9)
+    assert np.array_equal(points, x)
     np.testing.assert_allclose(vectors["displacement"], dx, rtol=0, atol=1e-9)
     np.testing.assert_allclose(vectors["reaction"], reaction, rtol=0, atol=1e-8)
     # The saved model starts at rest in that shape: no Newton iteration is needed.
