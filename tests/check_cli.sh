@@ -310,6 +310,9 @@ check_cases << 'CASES'
 2|springmass run: --set k=1e999: '1e999' is not a finite number|run "$osc" -q -o - --set k=1e999
 2|springmass run: --set k=0x1p3: '0x1p3' is not a finite number|run "$osc" -q -o - --set k=0x1p3
 1|springmass run: --vtk $tmp/a_file: cannot write there: a file of that name exists|run "$osc" -q -o - --vtk "$tmp/a_file"
+1|springmass run: --vtk $tmp/a_file/series: cannot write there: the folder it would go in is a file|run "$osc" -q -o - --vtk "$tmp/a_file/series"
+1|springmass run: -o $tmp/a_file/out.csv: cannot write there: the folder it would go in is a file|run "$osc" -q -o "$tmp/a_file/out.csv"
+1|springmass statics: --save-model $tmp/a_file/x.json: cannot write there: the folder it would go in is a file|statics "$osc" -q -o "$tmp/fresh_statics.csv" --save-model "$tmp/a_file/x.json"
 2|springmass statics: --set expects NAME=VALUE, got 'k'|statics "$osc" --set k
 2|springmass modes: --set expects NAME=VALUE, got 'k'|modes "$osc" --set k
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1

@@ -497,7 +497,12 @@ int cli_check_output_place(const char* command, const char* option, const char* 
 	const bool writable = place != NULL && (folder && exists ? access(path, W_OK | X_OK) == 0
 	                                        : exists         ? access(path, W_OK) == 0
 	                                                         : access(place, W_OK | X_OK) == 0);
+	// The place of a new file or folder under a file ("notes.txt/out"): realpath takes the file for
+	// its folder, and access would report it as a permission (or not at all, for an executable).
+	struct stat holder;
+	const bool under_file = place != NULL && !exists && stat(place, &holder) == 0 && !S_ISDIR(holder.st_mode);
 	const char* wrong = place == NULL ? "the folder it would go in does not exist"
+	                    : under_file  ? "the folder it would go in is a file"
 	                    : exists && folder && !S_ISDIR(st.st_mode) ? "a file of that name exists"
 	                    : exists && !folder && S_ISDIR(st.st_mode) ? "it is a folder"
 	                    : !writable                                ? "permission denied"
