@@ -1012,6 +1012,33 @@ def test_a_spring_breaks_when_its_closed_form_strain_reaches_the_limit(package, 
         inst.free()
 
 
+def test_a_break_is_logged_again_in_the_run_from_a_restored_state(package, tmp_path):
+    # The bob of the test above, pulled by 20 N from rest, breaks its spring at t_b = pi/30 s. A
+    # state saved at the start is the bob at rest on an intact spring: the run from it is the same
+    # motion, and the spring breaks again at t_b, inside a step, which logEvents reports as it does
+    # every break (to the same 1e-8 s as above). Restored twice, twice more, each logged once.
+    model = tmp_path / "breaking.json"
+    model.write_text(json.dumps(BREAKING))
+    inst = Instance(package(model), logging_on=True).start(
+        {"tip.fx": 20.0, "solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10})
+    try:
+        state = inst.slave.getFMUstate()
+        for run in range(3):
+            if run > 0:
+                inst.slave.setFMUstate(state)
+            first = len(inst.messages)
+            for n in range(20):
+                inst.slave.doStep(0.01 * n, 0.01)
+            events = [m[2] for m in inst.messages[first:] if m[1] == "logEvents" and "broke" in m[2]]
+            assert len(events) == 1 and "between anchor and bob" in events[0], (run, events)
+            logged = float(events[0].split(":")[0].removeprefix("t = "))
+            assert abs(logged - math.pi / 30) < 1e-8, (run, events)
+            assert inst.get("energy.elastic") == 0.0
+        inst.slave.freeFMUstate(state)
+    finally:
+        inst.free()
+
+
 def test_directional_derivative_of_a_compressed_spring(test_fmu):
     # The anchor moved to x = 0.4 m compresses the spring to L = 0.3 m < l0 = 0.5 m. Moving the
     # anchor sideways by dy turns the spring: the force on the anchor, k (L - l0) along the spring
