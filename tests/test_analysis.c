@@ -1855,11 +1855,19 @@ static int test_modes_without_free_particles_under_every_solver(void)
 // ks (x_b - x_a) is linear): modes of a 1 kg particle on a 100 N/m one at its fixed anchor are
 // three at omega^2 = 100 1/s^2 (dense eigenvalues of a diagonal matrix: 1e-12), as are those of
 // the same spring with 4 N s/m of damping once that spring is disabled (its damping left out).
+// A rest-length spring of rest length 0 is the same spring, ks (L - 0) u = ks (x_b - x_a): only a
+// rest length > 0 makes the force lose its derivative where the particles meet. Its rest shape
+// there is a strict minimum of U = ks L^2 / 2, stable, with no coincident spring to report.
 static int test_coincident_undamped_zero_length_spring_has_modes(void)
 {
-	for (int disabled = 0; disabled <= 1; disabled++) {
-		sm_model* model = bob_on_its_anchor(SM_SPRING_ZERO_LENGTH, 0.0);
+	for (int variant = 0; variant < 4; variant++) {
+		const int disabled = variant % 2;
+		sm_model* model = bob_on_its_anchor(variant < 2 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH, 0.0);
 		ENSURE(model != NULL);
+		double x[6];
+		sm_statics_result res;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+		ENSURE(res.iterations == 0 && res.stable && res.coincident_spring == -1);
 		if (disabled) {
 			sm_spring_def s;
 			ENSURE_STATUS(sm_model_get_spring(model, 0, &s), SM_OK);
