@@ -4108,6 +4108,51 @@ static int test_smallest_break_strain(void)
 	return 0;
 }
 
+// Breaks do not depend on the unit of length. Two springs of l0 = 1e15 m from a fixed particle at
+// the origin to two driven ones, pulled along x at 5e14 m/s and along y at 2.5e14 m/s, reach their
+// break strain 0.2 at t = 0.2 l0 / v: 0.4 s and 0.8 s, as the same pulls at 1 m would. Each
+// spring breaks once: at these coordinates the round-off of a length (8 eps of 2.6e15 m, 4.6 m)
+// exceeds the -1 that a broken spring's root function holds, and the broken spring must not be
+// taken for one at its limit at the second break. Root finding on the driven particles' exact
+// paths locates the times to about 1e-14 s (test_break_at_analytic_time): 1e-10 s.
+static int test_a_spring_breaks_once_at_any_length_scale(void)
+{
+	const double l0 = 1e15, v[2] = {5e14, 2.5e14};
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_DRIVEN;
+	for (int k = 0; k < 2; k++) {
+		p.position[0] = p.position[1] = p.velocity[0] = p.velocity[1] = 0.0;
+		p.position[k] = l0;
+		p.velocity[k] = v[k];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1 + k;
+		s.stiffness = 100.0;
+		s.rest_length = l0;
+		s.break_strain = 0.2;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	ENSURE(sm_simulation_break_count(sim) == 2);
+	for (int k = 0; k < 2; k++) {
+		const sm_break_event e = sm_simulation_break(sim, k);
+		ENSURE(e.spring == k);
+		ENSURE_NEAR(e.time, 0.2 * l0 / v[k], 1e-10);
+	}
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The break limit is l0 (1 + break_strain) also for a rest length other than 1 m: a spring of
 // l0 = 0.5 m from a fixed particle to a driven one pulled at 0.25 m/s breaks at 20 % strain
 // at t = 0.5 * 0.2 / 0.25 = 0.4 s. A second breakable spring, to a free particle hanging
@@ -5784,6 +5829,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_invert3_across_the_exponent_range);
 	RUN_TEST(test_smallest_break_strain);
 	RUN_TEST(test_break_limit_scales_with_rest_length);
+	RUN_TEST(test_a_spring_breaks_once_at_any_length_scale);
 	RUN_TEST(test_break_takes_only_its_own_spring_energy);
 	RUN_TEST(test_advance_to_the_current_time_does_nothing);
 	RUN_TEST(test_invalid_options_are_refused);
