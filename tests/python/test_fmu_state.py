@@ -634,3 +634,30 @@ def test_a_state_sets_the_dissipated_energy_it_carries(test_fmu):
             b.slave.deSerializeFMUstate(edited(blob, W_DISSIPATED, "<d", -1e-300))
         assert any("dissipated energy -1e-300 J is out of range: it must be finite and >= 0" in m[2]
                    for m in b.messages[n:]), b.messages[n:]
+
+
+def test_a_state_saved_after_a_restore_carries_all_the_dissipated_energy_and_work(test_fmu):
+    # The dissipated energy is the integral of the damping power from the start (d = 0.3 N s/m),
+    # and the inputs' work that of the power the force input delivers, however many restores the
+    # run went through: a state saved after a restore carries all of each, what came before the
+    # restored state and after it, and restoring that state reads them back exactly (the values
+    # a state carries, test above).
+    names = ("energy.dissipated", "energy.input")
+    inst = Instance(test_fmu("driven_oscillator"), "chained").start({"d": 0.3})
+    try:
+        run(inst, 0.0, 30, force=force)
+        first = inst.slave.getFMUstate()
+        before = inst.get(*names)
+        inst.slave.setFMUstate(first)
+        assert inst.get(*names) == before and before[0] > 0.0 and before[1] != 0.0
+        run(inst, 0.3, 30, force=force)
+        total = inst.get(*names)
+        assert total[0] > before[0] and total[1] != before[1]
+        second = inst.slave.getFMUstate()
+        run(inst, 0.6, 10, force=force)
+        inst.slave.setFMUstate(second)
+        assert inst.get(*names) == total
+        inst.slave.freeFMUstate(first)
+        inst.slave.freeFMUstate(second)
+    finally:
+        inst.free()
