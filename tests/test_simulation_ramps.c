@@ -292,6 +292,39 @@ static int test_decelerating_pull_in_long_first_order_steps_breaks_only_past_the
 	return 0;
 }
 
+// The same decelerating pull with nothing free to move (pulled_spring()'s hanging particle held)
+// and loose tolerances (rtol = atol = 0.1), so that CVODE's steps are long at order 1: the largest
+// stretch, v0^2 / (2 a) = 0.09 m, stays below the 0.1 m limit, and nothing may break. A search
+// that followed the driven particle on the tangent of its path at the step's start (CVODE's
+// order 1), not on the parabola itself, broke the spring here: the tangent overshoots a
+// decelerating path by a H^2 / 2, the 1 cm left to the limit over a step of 0.06 s.
+static int test_decelerating_pull_in_loose_first_order_steps_breaks_nothing(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_model_def md = sm_model_get_def(model);
+	md.gravity[2] = 0.0;
+	ENSURE_STATUS(sm_model_set_def(model, &md), SM_OK);
+	sm_particle_def held;
+	ENSURE_STATUS(sm_model_get_particle(model, 2, &held), SM_OK);
+	held.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_set_particle(model, 2, &held), SM_OK);
+	sm_simulation_def d = sm_default_simulation_def();
+	d.relative_tolerance = d.absolute_tolerance_position = d.absolute_tolerance_velocity = 0.1;
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const double v0 = 1.0, a = v0 * v0 / (2.0 * 0.09);
+	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {v0, 0.0, 0.0}, a1[3] = {-a, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 1, x1, v1, a1), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.6), SM_OK);
+	printf("  %lld steps, %d breaks\n", (long long)sm_simulation_statistics(sim).steps,
+	       (int)sm_simulation_break_count(sim));
+	ENSURE(sm_simulation_break_count(sim) == 0);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Ramps and accelerations belong to the state: a snapshot taken mid-ramp, restored into the same
 // simulation or read back from bytes into a new one, goes on along them (the same bits both ways,
 // and within the tolerances of the run that went on without a restart: at rtol 1e-10 each run is
@@ -444,6 +477,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_spring_pulled_with_constant_acceleration_breaks_at_analytic_time);
 	RUN_TEST(test_decelerating_pull_breaks_the_spring_inside_a_step);
 	RUN_TEST(test_decelerating_pull_in_long_first_order_steps_breaks_only_past_the_limit);
+	RUN_TEST(test_decelerating_pull_in_loose_first_order_steps_breaks_nothing);
 	RUN_TEST(test_ramps_are_part_of_the_state);
 	RUN_TEST(test_restore_and_set_state_refuse_a_ramp_that_overflows);
 	RUN_TEST(test_bad_ramps_are_refused);
