@@ -676,7 +676,11 @@ static int test_fill_from_springs_matches_finite_differences(void)
 				}
 			free(dx_dense);
 			free(dv_dense);
-			// One matrix at a time gives the same values.
+			// One matrix at a time gives the same values, written over NaN (rx and rv hold them
+			// already from sm_sparse_jacobian_fill, so that a call leaving its output untouched
+			// would pass unseen).
+			for (int64_t k = 0; k < nnz; k++)
+				rx[k] = rv[k] = NAN;
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, rx, NULL), SM_OK);
 			ENSURE_STATUS(sm_sparse_jacobian_fill_from_springs(J, m, sj, NULL, rv), SM_OK);
 			for (int64_t k = 0; k < nnz; k++)
