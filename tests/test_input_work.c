@@ -219,6 +219,47 @@ static int test_a_jump_of_a_loaded_driven_particle_does_the_work_of_its_load(voi
 	return 0;
 }
 
+// A loaded driven particle that is not the model's first jumps: the work is its own load's share,
+// not another particle's. Free particle 0 at (1, 0, 0) m loaded with (3, 4, -2) N, driven particle 1
+// at the origin loaded with F = (2, -1, 0.5) N, a 40 N/m spring between them at its rest length
+// 1 m, no gravity. The driven particle jumps to (-0.1, 0, 0) m at rest: the spring takes
+// 40 0.1^2 / 2 = 0.2 J and the load's potential -F . x rises by 0.2 J, so the work is 0.4 J
+// (with particle 0's load instead, 0.5 J). Round-off of a few 1e-17 J, 1e-15 J asserted.
+static int test_a_jump_does_the_work_of_the_jumping_particles_own_load(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def bob = sm_default_particle_def();
+	bob.position[0] = 1.0;
+	const double bob_load[3] = {3.0, 4.0, -2.0}, load[3] = {2.0, -1.0, 0.5};
+	memcpy(bob.load, bob_load, sizeof bob_load);
+	sm_particle_def driven = sm_default_particle_def();
+	driven.motion = SM_PARTICLE_DRIVEN;
+	memcpy(driven.load, load, sizeof load);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 1;
+	s.b = 0;
+	s.stiffness = 40.0;
+	s.rest_length = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &bob, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_particle(model, &driven, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double start = balance(sim);
+	const double to[3] = {-0.1, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, to, still), SM_OK);
+	const double elastic = 0.5 * 40.0 * 0.1 * 0.1;
+	const double potential = -(load[0] * to[0] + load[1] * to[1] + load[2] * to[2]);
+	ENSURE_NEAR(sm_simulation_input_work(sim), elastic + potential, 1e-15);
+	ENSURE_NEAR(balance(sim), start, 1e-15);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A fixed particle takes no work, whatever force acts on it; a free particle's force does none
 // while the particle is at rest, and a driven particle's goes to its driver: the work stays 0 over
 // a run in which nothing moves but what gravity and the springs move (the work of gravity is in
@@ -329,6 +370,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_balance_holds_with_every_kind_of_input);
 	RUN_TEST(test_balance_holds_across_a_break);
 	RUN_TEST(test_a_jump_of_a_loaded_driven_particle_does_the_work_of_its_load);
+	RUN_TEST(test_a_jump_does_the_work_of_the_jumping_particles_own_load);
 	RUN_TEST(test_forces_on_held_particles_do_no_work);
 	RUN_TEST(test_snapshots_and_resets_keep_the_work);
 	RUN_TEST(test_a_restored_negative_zero_work_saves_the_same_bytes);
