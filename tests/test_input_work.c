@@ -260,6 +260,52 @@ static int test_a_jump_does_the_work_of_the_jumping_particles_own_load(void)
 	return 0;
 }
 
+// A driven particle with two springs jumps: the work is the energy both springs take, not one
+// of them twice. Free particles 0 at (1, 0, 0) m and 1 at (0, 1, 0) m, driven particle 2 at the
+// origin, no gravity; spring 0 (25 N/m) joins 0 and 1 at its rest length sqrt(2) m, spring 1
+// (40 N/m) runs from 2 to 0 and spring 2 (10 N/m) from 1 to 2, both at their rest length 1 m. The
+// driven particle jumps to (-0.1, 0, 0) m at rest: spring 1 stretches to 1.1 m, 40 0.1^2 / 2 =
+// 0.2 J, spring 2 to sqrt(1.01) m, 10 (sqrt(1.01) - 1)^2 / 2 = 1.24e-4 J, and spring 0 does not
+// change. Closed forms of doubles near 1: round-off of a few 1e-17 J, 1e-15 J asserted.
+static int test_a_jump_does_the_work_of_every_spring_at_the_particle(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double at[3][3] = {{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 0.0}};
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		memcpy(p.position, at[i], sizeof p.position);
+		p.motion = i == 2 ? SM_PARTICLE_DRIVEN : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t ends[3][2] = {{0, 1}, {2, 0}, {1, 2}};
+	const double k[3] = {25.0, 40.0, 10.0}, l0[3] = {sqrt(2.0), 1.0, 1.0};
+	for (int s = 0; s < 3; s++) {
+		sm_spring_def d = sm_default_spring_def();
+		d.a = ends[s][0];
+		d.b = ends[s][1];
+		d.stiffness = k[s];
+		d.rest_length = l0[s];
+		ENSURE_STATUS(sm_model_add_spring(model, &d, NULL), SM_OK);
+	}
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double start = balance(sim);
+	ENSURE(sm_simulation_energies(sim).elastic == 0.0);
+	const double to[3] = {-0.1, 0.0, 0.0}, still[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 2, to, still), SM_OK);
+	const double first = 0.5 * k[1] * 0.1 * 0.1;
+	const double second = 0.5 * k[2] * (sqrt(1.01) - 1.0) * (sqrt(1.01) - 1.0);
+	ENSURE_NEAR(sm_simulation_energies(sim).elastic, first + second, 1e-15);
+	ENSURE_NEAR(sm_simulation_input_work(sim), first + second, 1e-15);
+	ENSURE_NEAR(balance(sim), start, 1e-15);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A fixed particle takes no work, whatever force acts on it; a free particle's force does none
 // while the particle is at rest, and a driven particle's goes to its driver: the work stays 0 over
 // a run in which nothing moves but what gravity and the springs move (the work of gravity is in
@@ -371,6 +417,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_balance_holds_across_a_break);
 	RUN_TEST(test_a_jump_of_a_loaded_driven_particle_does_the_work_of_its_load);
 	RUN_TEST(test_a_jump_does_the_work_of_the_jumping_particles_own_load);
+	RUN_TEST(test_a_jump_does_the_work_of_every_spring_at_the_particle);
 	RUN_TEST(test_forces_on_held_particles_do_no_work);
 	RUN_TEST(test_snapshots_and_resets_keep_the_work);
 	RUN_TEST(test_a_restored_negative_zero_work_saves_the_same_bytes);
