@@ -521,6 +521,23 @@ def test_run_shows_the_state_after_a_jump_at_its_output_row(tmp_path):
     assert abs(f[1] - OSC_K * (x[1] - 0.1 - OSC_L0)) < 1e-12 and abs(f[2] - OSC_K * (x[2] - 0.1 - OSC_L0)) < 1e-12
 
 
+def test_run_holds_input_signals_before_the_first_row_and_after_the_last(tmp_path):
+    # Rows at 0.5 s and 1 s only, both 3 N: held before the first and after the last (--help), the
+    # force is 3 N over the whole run, M u'' + K u = F from u(0) = x0 - l0 at rest,
+    # u = F / K + (x0 - l0 - F / K) cos(w t); no force before 0.5 s (u = (x0 - l0) cos(w t) there)
+    # would leave the bob F / K (1 - cos(w t)), up to 0.12 m, off that. The anchor held at 0.1 m
+    # from the start the same way: the anchor's force, K (tip.x - 0.1 - l0), at every row.
+    # Tolerances as in test_run_takes_input_signals_as_closed_forms.
+    w = math.sqrt(OSC_K / OSC_M)
+    (tmp_path / "held.csv").write_text("time,tip.fx,base.x\n0.5,3,0.1\n1,3,0.1\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "held.csv", *TIGHT_RUN)
+    t, x = rows[:, 0], rows[:, header.index("tip.x")]
+    u = 3.0 / OSC_K + (OSC_X0 - 0.1 - OSC_L0 - 3.0 / OSC_K) * np.cos(w * t)
+    assert len(t) == 21 and np.max(np.abs(x - (0.1 + OSC_L0 + u))) < 1e-6
+    f = rows[:, header.index("base.fx")]
+    assert np.max(np.abs(f - OSC_K * (x - 0.1 - OSC_L0))) < 1e-9
+
+
 @pytest.mark.parametrize("text, message", [
     ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
     ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
