@@ -538,6 +538,24 @@ def test_run_holds_input_signals_before_the_first_row_and_after_the_last(tmp_pat
     assert np.max(np.abs(f - OSC_K * (x - 0.1 - OSC_L0))) < 1e-9
 
 
+def test_run_leaves_a_motion_port_the_input_file_does_not_name_free(tmp_path):
+    # The anchor made free (2 kg) and only the force port named (0 N): the motion port's particle
+    # moves as the file says (--help), not driven. Two equal masses M on the spring, released at rest
+    # with it stretched by s0 = x0 - l0: the centre stays at x0 / 2 and the stretch oscillates at
+    # w = sqrt(K / mu), mu = M / 2, so the anchor is at x0 / 2 - (l0 + s0 cos(w t)) / 2. Driven where
+    # the file starts it, it would stay at 0. Tolerance as in test_run_takes_input_signals_as_closed_forms.
+    model = json.loads(OSC.read_text())
+    model["particles"][0] = {"name": "anchor", "position": [0, 0, 0], "mass": OSC_M}
+    path = tmp_path / "free_anchor.json"
+    path.write_text(json.dumps(model))
+    (tmp_path / "none.csv").write_text("time,tip.fx\n0,0\n")
+    header, rows = run_csv(tmp_path, path, "--input", tmp_path / "none.csv", "--positions", *TIGHT_RUN)
+    t, anchor = rows[:, 0], rows[:, header.index("particle.anchor.x")]
+    w = math.sqrt(OSC_K / (OSC_M / 2))
+    expected = OSC_X0 / 2 - (OSC_L0 + (OSC_X0 - OSC_L0) * np.cos(w * t)) / 2
+    assert len(t) == 21 and np.max(np.abs(anchor - expected)) < 1e-6
+
+
 @pytest.mark.parametrize("text, message", [
     ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
     ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
