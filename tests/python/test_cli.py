@@ -556,6 +556,22 @@ def test_run_leaves_a_motion_port_the_input_file_does_not_name_free(tmp_path):
     assert len(t) == 21 and np.max(np.abs(anchor - expected)) < 1e-6
 
 
+def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
+    # The anchor's x from 0 to 0.4 m over 2 s, no velocities given: it moves at the positions'
+    # slope, v = 0.2 m/s (--help: "along the positions given (at their slope)"). In its frame the bob
+    # starts with -v: M u'' = -K u, u(0) = x0 - l0, u'(0) = -v, u = (x0 - l0) cos(w t) - v / w sin(w t).
+    # Held still between the rows it would stay at 0 and the bob would not see -v.
+    # Tolerance as in test_run_takes_input_signals_as_closed_forms.
+    w, v = math.sqrt(OSC_K / OSC_M), 0.2
+    (tmp_path / "slide.csv").write_text("time,base.x\n0,0\n2,0.4\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "slide.csv", *TIGHT_RUN)
+    t, x = rows[:, 0], rows[:, header.index("tip.x")]
+    u = (OSC_X0 - OSC_L0) * np.cos(w * t) - v / w * np.sin(w * t)
+    assert len(t) == 21 and np.max(np.abs(x - (v * t + OSC_L0 + u))) < 1e-6
+    f = rows[:, header.index("base.fx")]
+    assert np.max(np.abs(f - OSC_K * (x - v * t - OSC_L0))) < 1e-9
+
+
 @pytest.mark.parametrize("text, message", [
     ("time,tip.x\n0,1\n", '1:6: "tip.x" is an output: force port tip takes a force (.fx .fy .fz)'),
     ("time,base.fx\n0,1\n", '1:6: "base.fx" is an output: motion port base takes a position and velocity (.x .. .vz)'),
