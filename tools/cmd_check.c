@@ -134,12 +134,12 @@ int sm_cmd_check(int argc, char** argv)
 	}
 
 	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
-	int32_t fixed = 0, driven = 0;
+	// A model file's particles are free or fixed (an FMU drives its motion ports' particles).
+	int32_t fixed = 0;
 	for (int32_t i = 0; i < n; i++) {
 		sm_particle_def p;
 		sm_model_get_particle(model, i, &p);
 		fixed += p.motion == SM_PARTICLE_FIXED;
-		driven += p.motion == SM_PARTICLE_DRIVEN;
 	}
 	int32_t rest_length = 0, zero_length = 0, per_strain = 0, per_section = 0, breakable = 0;
 	int32_t stiffest = -1, fastest = -1;
@@ -160,8 +160,8 @@ int sm_cmd_check(int argc, char** argv)
 			max_stiffness = ks;
 			stiffest = s;
 		}
-		// A spring's own frequency sqrt(ks / m) with m the lighter of its free ends (a fixed or
-		// driven end does not move): which spring makes the model fast.
+		// A spring's own frequency sqrt(ks / m) with m the lighter of its free ends (a fixed end
+		// does not move): which spring makes the model fast.
 		sm_particle_def pa, pb;
 		sm_model_get_particle(model, def.a, &pa);
 		sm_model_get_particle(model, def.b, &pb);
@@ -182,12 +182,9 @@ int sm_cmd_check(int argc, char** argv)
 		cli_write_text(stdout, sm_document_description(doc), 0);
 		printf("\n");
 	}
-	printf("particles    %d: %d free, %d fixed", (int)n, (int)(n - fixed - driven), (int)fixed);
-	if (driven > 0)
-		printf(", %d driven", (int)driven);
-	printf("\n");
+	printf("particles    %d: %d free, %d fixed\n", (int)n, (int)(n - fixed), (int)fixed);
 	// Which particles are held, by name, when there are few of them.
-	if (fixed + driven > 0 && fixed + driven <= 8) {
+	if (fixed > 0 && fixed <= 8) {
 		printf("  held      ");
 		for (int32_t i = 0, shown = 0; i < n; i++) {
 			sm_particle_def p;
