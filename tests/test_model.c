@@ -610,6 +610,28 @@ static int test_damping_per_section_needs_a_section(void)
 	return 0;
 }
 
+// The smallest mass accepted is SM_MIN_MASS = DBL_MIN itself (model.h: mass ">= SM_MIN_MASS"),
+// whose reciprocal 1 / DBL_MIN = 4.5e307 kg^-1 is finite; the double just below it, subnormal, is
+// refused with the rule.
+static int test_the_smallest_normal_mass_is_accepted(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.mass = SM_MIN_MASS;
+	ENSURE(isfinite(1.0 / p.mass));
+	int32_t index = -1;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, &index), SM_OK);
+	ENSURE(index == 3);
+	ENSURE_STATUS(sm_model_set_particle(m, 0, &p), SM_OK);
+	p.mass = nextafter(SM_MIN_MASS, 0.0);
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_ERROR_NONPOSITIVE_MASS);
+	ENSURE_MESSAGE(m, "particle 4", "must be at least 2.2250738585072014e-308 kg");
+	ENSURE(sm_model_particle_count(m) == 4);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // An infinite velocity is refused like a NaN one (model.h: "must be finite").
 static int test_infinite_velocity_refused(void)
 {
@@ -683,5 +705,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_infinite_velocity_refused);
 	RUN_TEST(test_zero_length_spring_rest_length_resolved);
 	RUN_TEST(test_last_error_follows_the_modifying_calls);
+	RUN_TEST(test_the_smallest_normal_mass_is_accepted);
 	return TEST_SUMMARY();
 }
