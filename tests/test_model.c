@@ -632,6 +632,26 @@ static int test_the_smallest_normal_mass_is_accepted(void)
 	return 0;
 }
 
+// Per-section damping, kd = damping section / l0, needs l0 > 0 (model.h, SM_PER_SECTION) as
+// per-section stiffness does: on a spring of rest length 0 it is refused for that rule
+// (SM_ERROR_ZERO_REST_LENGTH), not as the infinite constant the division would give.
+static int test_per_section_damping_needs_a_rest_length(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.rest_length = 0.0, d.stiffness = 10.0, d.damping = 1.0;
+	d.damping_scaling = SM_PER_SECTION, d.section = 0.01;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE_MESSAGE(m, "spring 0", "per-section damping needs a rest length > 0");
+	d.kind = SM_SPRING_ZERO_LENGTH;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_ERROR_ZERO_REST_LENGTH);
+	ENSURE_MESSAGE(m, "spring 0", "per-section damping needs a rest length > 0");
+	ENSURE(sm_model_spring_count(m) == 0);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // An infinite velocity is refused like a NaN one (model.h: "must be finite").
 static int test_infinite_velocity_refused(void)
 {
@@ -706,5 +726,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_zero_length_spring_rest_length_resolved);
 	RUN_TEST(test_last_error_follows_the_modifying_calls);
 	RUN_TEST(test_the_smallest_normal_mass_is_accepted);
+	RUN_TEST(test_per_section_damping_needs_a_rest_length);
 	return TEST_SUMMARY();
 }
