@@ -652,6 +652,33 @@ static int test_per_section_damping_needs_a_rest_length(void)
 	return 0;
 }
 
+// Gravity and initial velocities must be finite along every axis (model.h), z included: a
+// non-finite z component is refused with its axis named, and sm_model_set_def leaves the model
+// as it was.
+static int test_every_axis_of_gravity_and_velocity_is_checked(void)
+{
+	sm_error err;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = -INFINITY;
+	ENSURE(sm_model_create(&md, &err) == NULL);
+	ENSURE(err.status == SM_ERROR_NOT_FINITE && strstr(err.message, "gravity z") != NULL);
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	md.gravity[2] = NAN;
+	ENSURE_STATUS(sm_model_set_def(m, &md), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "model", "gravity z");
+	ENSURE(sm_model_get_def(m).gravity[2] == -9.81);
+	sm_particle_def p = sm_default_particle_def();
+	p.velocity[2] = NAN;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "particle 3", "velocity z");
+	ENSURE_STATUS(sm_model_set_particle(m, 0, &p), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "particle 0", "velocity z");
+	ENSURE(sm_model_particle_count(m) == 3);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // An infinite velocity is refused like a NaN one (model.h: "must be finite").
 static int test_infinite_velocity_refused(void)
 {
@@ -727,5 +754,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_last_error_follows_the_modifying_calls);
 	RUN_TEST(test_the_smallest_normal_mass_is_accepted);
 	RUN_TEST(test_per_section_damping_needs_a_rest_length);
+	RUN_TEST(test_every_axis_of_gravity_and_velocity_is_checked);
 	return TEST_SUMMARY();
 }
