@@ -4,6 +4,7 @@ import json
 import math
 import re
 import subprocess
+import zipfile
 
 import numpy as np
 import pytest
@@ -1115,3 +1116,49 @@ def test_solver_threads_change_nothing_in_the_results(package):
             inst.free()
     assert results[0] == results[1]
     assert results[0][1] < 0.0  # the cloth falls
+
+
+def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
+    # FMI 2.0 (2.2.8): an output's `dependencies` are the knowns it depends on directly, in
+    # Co-Simulation its inputs, each named by its index in ModelVariables (1-based). docs/fmu.md
+    # names them: a motion port's force depends on the motion ports' prescribed positions and
+    # velocities, the kinetic energy on their velocities, the elastic and gravitational energies
+    # on their positions, the inputs' work on both; a port's position and velocity and the
+    # dissipated energy are states, with none. In driven_oscillator the motion port is "base"
+    # (the anchor, mass 1 kg) and the force port "tip".
+    fmu = test_fmu("driven_oscillator")
+    md = read_model_description(str(fmu))
+    variables = md.modelVariables
+    inputs = {v.name for v in variables if v.causality == "input"}
+    position = ["base.x", "base.y", "base.z"]
+    velocity = ["base.vx", "base.vy", "base.vz"]
+    expected = {f"base.f{c}": position + velocity for c in "xyz"}
+    expected.update({f"tip.{c}": [] for c in ("x", "y", "z", "vx", "vy", "vz")})
+    expected.update({"energy.kinetic": velocity, "energy.elastic": position, "energy.gravity": position,
+                     "energy.dissipated": [], "energy.input": position + velocity})
+    with zipfile.ZipFile(fmu) as archive:
+        xml = archive.read("modelDescription.xml").decode("utf-8")
+    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
+    listed = {}
+    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
+        output = variables[int(index) - 1]
+        assert output.causality == "output", (index, output.name)
+        names = [variables[int(k) - 1].name for k in dependencies.split()]
+        assert set(names) <= inputs, (output.name, names)
+        listed[output.name] = names
+    assert listed == expected
+    # The analytic derivatives at a moving, displaced anchor with spring damping d = 0.3 N s/m:
+    # every input an output changes with is among its dependencies.
+    inst = Instance(fmu).start(start_values={"d": 0.3})
+    try:
+        s, vr = inst.slave, inst.vr
+        for name, value in {"base.x": 0.1, "base.y": 0.05, "base.vx": 0.2, "base.vy": 0.1, "tip.fx": 1.0}.items():
+            inst.set(name, value)
+        s.doStep(0.0, 0.01)
+        for output, names in listed.items():
+            for known in sorted(inputs):
+                d = s.getDirectionalDerivative([vr[output]], [vr[known]], [1.0])[0]
+                assert d == 0.0 or known in names, (output, known, d)
+    finally:
+        inst.free()
+
