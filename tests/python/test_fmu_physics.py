@@ -1162,3 +1162,31 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
     finally:
         inst.free()
 
+
+def test_every_variable_has_the_unit_of_its_quantity(test_fmu):
+    # docs/fmu.md's table of variables: positions in m, velocities in m/s, forces in N, energies in
+    # J, the tolerances of positions and velocities in m and m/s, the largest step in s, the
+    # relative tolerance 1; Integer and String settings have none. Each unit is defined by its
+    # exponents of the SI base units (FMI 2.0, 2.2.2): N = kg m s^-2, J = kg m^2 s^-2.
+    md = read_model_description(str(test_fmu("driven_oscillator")))
+    quantity = {"x": "m", "y": "m", "z": "m", "vx": "m/s", "vy": "m/s", "vz": "m/s", "fx": "N", "fy": "N", "fz": "N"}
+    settings = {"solver.rtol": "1", "solver.atol_position": "m", "solver.atol_velocity": "m/s",
+                "solver.max_step": "s"}
+    seen = set()
+    for v in md.modelVariables:
+        head, _, field = v.name.rpartition(".")
+        if head in ("base", "tip") or head.startswith("p["):
+            expected = quantity[field]
+        elif head == "energy":
+            expected = "J"
+        elif v.name in settings:
+            expected = settings[v.name]
+        else:
+            continue
+        assert v.unit == expected, (v.name, v.unit, expected)
+        seen.add(v.name)
+    assert {"base.vx", "tip.vz", "p[1].vy", "energy.elastic", "solver.atol_velocity"} <= seen
+    assert all(v.unit is None for v in md.modelVariables if v.type in ("Integer", "String"))
+    base = {u.name: (u.baseUnit.kg, u.baseUnit.m, u.baseUnit.s) for u in md.unitDefinitions}
+    assert {name: base[name] for name in ("m", "m/s", "N", "J", "s", "1")} == {
+        "m": (0, 1, 0), "m/s": (0, 1, -1), "N": (1, 1, -2), "J": (1, 2, -2), "s": (0, 0, 1), "1": (0, 0, 0)}
