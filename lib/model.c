@@ -257,13 +257,14 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 		           index, rule);
 	}
 
-	// Rest length. A rest-length spring's length must be a double, whatever its rest length: its
-	// square may not overflow.
+	// Rest length. A spring's length must be a double, whatever its kind and rest length: its square
+	// may not overflow. Both kinds are evaluated from L and u = d / L (law_zero_length.h), which
+	// give ks (L - 0) u = inf 0, not a number, where L overflows.
 	const double* xa = model->position + 3 * (size_t)def->a;
 	const double* xb = model->position + 3 * (size_t)def->b;
 	const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
 	const double squared = dx * dx + dy * dy + dz * dz;
-	if (def->kind == SM_SPRING_REST_LENGTH && !isfinite(sqrt(squared)))
+	if (!isfinite(sqrt(squared)))
 		return say(msg, SM_ERROR_NOT_FINITE,
 		           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
 		           "overflows: particles joined by springs must be less than about 1e154 m apart)",

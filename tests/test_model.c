@@ -216,7 +216,8 @@ static int test_invalid_springs(void)
 	ENSURE_STATUS(sm_model_add_spring(m, &coincident, NULL), SM_ERROR_ZERO_REST_LENGTH);
 	ENSURE_MESSAGE(m, "spring 1", "rest length is 0");
 	// Particles 1e308 m on either side of the origin: their distance, the initial rest length,
-	// overflows.
+	// overflows. Refused for a zero-length spring too, whose force ks d the model evaluates as
+	// ks L u (law_zero_length.h): not a number where L overflows.
 	p.position[0] = 1e308;
 	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 4
 	p.position[0] = -1e308;
@@ -224,6 +225,10 @@ static int test_invalid_springs(void)
 	sm_spring_def far = good;
 	far.a = 4;
 	far.b = 5;
+	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "spring 1",
+	               "initial distance between particles 4 and 5 is too large (its square overflows");
+	far.kind = SM_SPRING_ZERO_LENGTH;
 	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
 	ENSURE_MESSAGE(m, "spring 1",
 	               "initial distance between particles 4 and 5 is too large (its square overflows");

@@ -172,7 +172,8 @@ SM_API sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* d
 /// Adds a spring. A rest length of SM_REST_LENGTH_INITIAL is resolved to the current distance
 /// between the particles, which must be 0 or from sqrt(DBL_MIN) = 1.5e-154 m to sqrt(DBL_MAX) =
 /// 1.3e154 m (its square a normal double; else SM_ERROR_INVALID_ARGUMENT or
-/// SM_ERROR_NOT_FINITE). On error the model is unchanged.
+/// SM_ERROR_NOT_FINITE). The particles of a spring of either kind, whatever its rest length, must
+/// be less than 1.3e154 m apart (SM_ERROR_NOT_FINITE). On error the model is unchanged.
 SM_API sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index);
 
 /// Numbers of particles and springs (disabled springs included); 0 for a NULL model.
