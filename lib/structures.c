@@ -748,9 +748,15 @@ sm_status sm_set_motion_at(sm_model* model, const sm_structure* structure, int32
 	if (structure == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "selection: no structure given");
 	const int32_t p = sm_structure_particle(structure, i, j, k);
-	if (p < 0 || p >= model->particle_count)
+	if (p < 0)
 		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
 		                     "grid coordinate (%d, %d, %d) is outside the structure", (int)i, (int)j, (int)k);
+	// A structure built in another, larger model may name a particle this one does not have.
+	if (p >= model->particle_count)
+		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
+		                     "grid coordinate (%d, %d, %d) is particle %d of the structure, beyond the "
+		                     "model's %d particles: the structure belongs to another model",
+		                     (int)i, (int)j, (int)k, (int)p, (int)model->particle_count);
 	return sm_model_set_particle_motion(model, p, motion);
 }
 

@@ -668,12 +668,18 @@ static int test_selection_index_bounds(void)
 	ENSURE(sm_model_free_count(m) == n - 1 && sm_model_free_index(m, n - 1) == -1);
 	ENSURE(strcmp(sm_model_last_error(m), "") == 0);  // a successful call leaves no failure behind
 
-	// A structure shifted by one particle: its last grid point (4, 4, 0) is index n.
+	// A structure shifted by one particle (as one built in a larger model may be): its last grid
+	// point (4, 4, 0) is index n, inside the structure but beyond the model; (5, 0, 0) is outside
+	// the 5 x 5 grid.
 	sm_structure shifted = s;
 	shifted.first_particle = 1;
 	ENSURE(sm_structure_particle(&shifted, 4, 4, 0) == n);
 	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 4, 4, 0, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
-	ENSURE(strcmp(sm_model_last_error(m), "grid coordinate (4, 4, 0) is outside the structure") == 0);
+	ENSURE(strcmp(sm_model_last_error(m),
+	              "grid coordinate (4, 4, 0) is particle 25 of the structure, beyond the model's 25 "
+	              "particles: the structure belongs to another model") == 0);
+	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 5, 0, 0, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(strcmp(sm_model_last_error(m), "grid coordinate (5, 0, 0) is outside the structure") == 0);
 	ENSURE(sm_model_free_count(m) == n - 1);
 	ENSURE_STATUS(sm_set_motion_at(m, &shifted, 0, 0, 0, SM_PARTICLE_FIXED), SM_OK);
 	ENSURE(sm_model_free_count(m) == n - 2 && sm_model_free_index(m, 1) == -1 &&
