@@ -85,22 +85,33 @@ int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double*
 	return nf;
 }
 
-// The first intact spring with a free end whose particles coincide at x, among the rest-length
-// springs of l0 > 0 (`damped` false) or the springs with damping (`damped` true). A spring
-// between two held particles acts on no free degree of freedom: it has nothing to linearise.
-static int32_t first_coincident(const sm_model* model, const double* x, bool damped)
+// What first_spring looks for.
+typedef enum spring_question {
+	COINCIDENT_SPRING,   // a rest-length spring of l0 > 0 whose particles coincide at x
+	COINCIDENT_DAMPER,   // a damped spring whose particles coincide at x
+	OVERFLOWING_SPRING,  // a rest-length or damped spring whose length at x is not a double
+} spring_question;
+
+// The first intact spring with a free end that answers the question at x, or -1. A spring between
+// two held particles acts on no free degree of freedom: it has nothing to linearise. 1 / L is 0
+// both where the particles coincide and where L overflows (about 1e154 m): the length tells
+// which. An undamped zero-length spring's blocks, ks I and 0, need no direction, so its length
+// may overflow.
+static int32_t first_spring(const sm_model* model, const double* x, spring_question question)
 {
 	for (int32_t s = 0; s < model->spring_count; s++) {
-		const bool candidate =
-		    damped ? model->damping[s] > 0.0 : !model->zero_length[s] && model->rest_length[s] > 0.0;
+		const bool zero_length = model->zero_length[s], damped = model->damping[s] > 0.0;
+		const bool concerned = question == COINCIDENT_SPRING   ? !zero_length && model->rest_length[s] > 0.0
+		                       : question == COINCIDENT_DAMPER ? damped
+		                                                       : !zero_length || damped;
 		const bool held =
 		    model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
-		if (!model->enabled[s] || !candidate || held)
+		if (!model->enabled[s] || !concerned || held)
 			continue;
 		spring_geometry g;
 		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
-		// 1 / L is 0 also where L overflows: particles far apart, not at one point.
-		if (g.inv_length == 0.0 && isfinite(g.length))
+		const bool overflows = !isfinite(g.length);
+		if (question == OVERFLOWING_SPRING ? overflows : g.inv_length == 0.0 && !overflows)
 			return s;
 	}
 	return -1;
@@ -108,29 +119,17 @@ static int32_t first_coincident(const sm_model* model, const double* x, bool dam
 
 int32_t sm_analysis_overflowing_spring(const sm_model* model, const double* x)
 {
-	for (int32_t s = 0; s < model->spring_count; s++) {
-		const bool held =
-		    model->free_index[model->spring_a[s]] < 0 && model->free_index[model->spring_b[s]] < 0;
-		// An undamped zero-length spring's blocks, ks I and 0, need no direction.
-		const bool directed = !model->zero_length[s] || model->damping[s] > 0.0;
-		if (!model->enabled[s] || held || !directed)
-			continue;
-		spring_geometry g;
-		spring_geometry_eval(x, NULL, model->spring_a[s], model->spring_b[s], model->rest_length[s], &g);
-		if (!isfinite(g.length))
-			return s;
-	}
-	return -1;
+	return first_spring(model, x, OVERFLOWING_SPRING);
 }
 
 int32_t sm_analysis_coincident_spring(const sm_model* model, const double* x)
 {
-	return first_coincident(model, x, false);
+	return first_spring(model, x, COINCIDENT_SPRING);
 }
 
 int32_t sm_analysis_coincident_damper(const sm_model* model, const double* x)
 {
-	return first_coincident(model, x, true);
+	return first_spring(model, x, COINCIDENT_DAMPER);
 }
 
 int sm_analysis_all_finite(const double* values, size_t count)
