@@ -54,7 +54,7 @@ sm_statics_def sm_default_statics_def(void)
 	memset(&def, 0, sizeof def);
 	def.start = NULL;
 	def.external_forces = NULL;
-	def.residual_tolerance = 1e-9;
+	def.residual_tolerance = 0.0;  // automatic: SM_STATICS_DEFAULT_TOLERANCE, scaled to small loads
 	def.max_iterations = 500;
 	def.solver = SM_STATICS_AUTO;
 	def.on_iteration = NULL;
@@ -1089,10 +1089,11 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	sm_statics_def d = def != NULL ? *def : sm_default_statics_def();
 	if (model == NULL || x == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: model and x must not be NULL");
-	if (!(d.residual_tolerance > 0.0) || !isfinite(d.residual_tolerance))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "statics: residual_tolerance must be finite and > 0 N, got %g",
-		                    d.residual_tolerance);
+	if (!(d.residual_tolerance >= 0.0) || !isfinite(d.residual_tolerance))
+		return sm_error_set(
+		    err, SM_ERROR_INVALID_ARGUMENT,
+		    "statics: residual_tolerance must be finite and > 0 N (0 for the default), got %g",
+		    d.residual_tolerance);
 	if (d.max_iterations < 1)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "statics: max_iterations must be >= 1, got %d",
 		                    (int)d.max_iterations);
@@ -1122,6 +1123,27 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		return st;
 	}
 	res.solver = d.solver;
+	// The largest constant force on a free particle (its weight, load and external force) sets the
+	// scale of the balance. A tolerance in newtons fixed for metre-and-kilogram models passes any
+	// shape of a model whose loads lie below it (a 1e-12 kg proof mass weighs 9.8e-12 N, a
+	// hundredth of 1e-9 N): the default is scaled down to SM_STATICS_LOAD_FRACTION of the load
+	// there, and a tolerance given at or above the load is refused.
+	double load = 0.0;
+	for (int32_t i = 0; i < w.nf; i++) {
+		const double* c = w.constant_force + 3 * (size_t)w.free_particle[i];
+		load = fmax(load, hypot(hypot(c[0], c[1]), c[2]));
+	}
+	if (d.residual_tolerance == 0.0) {
+		d.residual_tolerance = SM_STATICS_DEFAULT_TOLERANCE;
+		if (load > 0.0)
+			d.residual_tolerance = fmin(d.residual_tolerance, SM_STATICS_LOAD_FRACTION * load);
+	} else if (load > 0.0 && d.residual_tolerance >= load) {
+		work_free(&w);
+		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
+		                    "statics: residual_tolerance %.3g N is not below the largest load on a free "
+		                    "particle, %.3g N: any shape would pass as a rest shape",
+		                    d.residual_tolerance, load);
+	}
 
 	int converged = 0;
 	st = solve_with_continuation(&w, &d, &res, &converged, err);
@@ -1166,11 +1188,6 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	// continuation softens until the soft springs stretch a billion times their length) meets it
 	// with any shape. A balance whose floor exceeds every load cannot tell the loads from
 	// round-off: no rest shape is resolved there, whatever the residual.
-	double load = 0.0;
-	for (int32_t i = 0; i < w.nf; i++) {
-		const double* c = w.constant_force + 3 * (size_t)w.free_particle[i];
-		load = fmax(load, hypot(hypot(c[0], c[1]), c[2]));
-	}
 	if (converged && load > 0.0 && res.tolerance > d.residual_tolerance && res.tolerance > load) {
 		converged = 0;
 		st = sm_error_set(

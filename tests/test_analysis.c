@@ -1980,6 +1980,68 @@ static int test_coincident_springs_between_held_particles(void)
 	return 0;
 }
 
+// A micromechanical pendulum: a 1e-12 kg proof mass on a 1 N/m spring of 1 um hanging from a
+// fixed anchor. Its weight, 9.81e-12 N, is a hundredth of the default residual tolerance of
+// 1e-9 N, so that tolerance alone would pass the unloaded start as the rest shape. The tolerance
+// used is at most SM_STATICS_LOAD_FRACTION of the weight, so the sag is m g / k to that fraction
+// (the force left, at most 1e-6 m g, moves the mass by 1e-6 m g / k); the modes about the rest
+// shape then have the pendulum's omega^2 = g / L twice (the tension m g over the length L:
+// eigenvalues to about 1e-15 of the axial k / m = 1e12 1/s^2, 1e-10 of g / L) beside k / m.
+static int test_statics_balances_loads_below_the_default_tolerance(void)
+{
+	const double g = 9.81, m = 1e-12, k = 1.0, length = 1e-6;
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	for (int i = 0; i < 2; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[2] = -length * i;
+		p.mass = i == 0 ? 1.0 : m;
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = k;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	double x[6], r[6];
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, r, &res, &err), SM_OK);
+	ENSURE(res.iterations >= 1);
+	ENSURE(res.tolerance <= SM_STATICS_LOAD_FRACTION * m * g);
+	ENSURE(res.residual <= res.tolerance);
+	ENSURE(res.stable);
+	const double sag = m * g / k;
+	ENSURE_NEAR(x[5], -length - sag, 1e-6 * sag);
+	ENSURE(x[3] == 0.0 && x[4] == 0.0);
+	ENSURE_NEAR(r[2], 1.0 * g + m * g, 1e-6 * m * g + 4.0 * DBL_EPSILON * g);
+
+	sm_modes_def def = sm_default_modes_def();
+	def.configuration = x;
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+	ENSURE(modes.count == 3 && modes.zero_count == 0 && modes.unstable_count == 0);
+	const double pendulum = g / (length + sag);
+	ENSURE_NEAR(modes.omega_squared[0], pendulum, 1e-6 * pendulum);
+	ENSURE_NEAR(modes.omega_squared[1], pendulum, 1e-6 * pendulum);
+	ENSURE_NEAR(modes.omega_squared[2], k / m, 1e-9 * k / m);
+	sm_modes_release(&modes);
+	// A tolerance given explicitly is used as it is, unless it is not below the weight: then it
+	// would pass any shape, and the solve is refused with the outputs untouched.
+	sm_statics_def given = sm_default_statics_def();
+	given.residual_tolerance = 1e-3 * m * g;
+	ENSURE_STATUS(sm_statics_solve(model, &given, x, r, &res, &err), SM_OK);
+	ENSURE(res.tolerance == given.residual_tolerance && res.residual <= res.tolerance);
+	given.residual_tolerance = 1e-9;
+	x[5] = 1.0;
+	ENSURE_STATUS(sm_statics_solve(model, &given, x, r, &res, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(strstr(err.message, "not below the largest load") != NULL && x[5] == 1.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
 
@@ -3294,6 +3356,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_hanging_rope_with_bending_springs);
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
 	RUN_TEST(test_statics_says_when_the_continuation_gives_up);
+	RUN_TEST(test_statics_balances_loads_below_the_default_tolerance);
 	RUN_TEST(test_statics_reports_every_iteration);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_hanging_cloth_reactions);

@@ -48,6 +48,14 @@ typedef enum sm_statics_solver {
 /// Factor of the round-off floor of the residual tolerance [1].
 #define SM_STATICS_ROUNDOFF_FACTOR 8.0
 
+/// The default residual tolerance [N], for loads of 1e-3 N and more (SM_STATICS_LOAD_FRACTION).
+#define SM_STATICS_DEFAULT_TOLERANCE 1e-9
+
+/// The default residual tolerance is never above this fraction of the largest constant force
+/// (weight, load and external force) on a free particle [1]: the loads of a micromechanical model,
+/// far below 1e-9 N, are balanced to this fraction of themselves.
+#define SM_STATICS_LOAD_FRACTION 1e-6
+
 /// Options of sm_statics_solve(); get them from sm_default_statics_def().
 typedef struct sm_statics_def {
 	/// Starting positions of all particles, 3 per particle [m]; NULL (default) = the model's
@@ -56,7 +64,10 @@ typedef struct sm_statics_def {
 	/// Constant external forces, 3 per particle [N]; NULL (default) = none. Entries of
 	/// constrained particles add to the force their supports must take.
 	const double* external_forces;
-	/// Convergence: largest force component on a free particle [N]; default 1e-9. The
+	/// Convergence: largest force component on a free particle [N], below the largest constant
+	/// force on a free particle (a tolerance at or above it is refused: any shape would pass);
+	/// default 0, which stands for SM_STATICS_DEFAULT_TOLERANCE (1e-9 N) or
+	/// SM_STATICS_LOAD_FRACTION times that largest constant force where this is smaller. The
 	/// tolerance actually used is never below SM_STATICS_ROUNDOFF_FACTOR machine epsilons times
 	/// the largest sum, over a particle's springs, of ks max(L, l0, |x_a| + |x_b|) plus its
 	/// constant force: the round-off floor of the computed force balance (docs/analysis.md).
