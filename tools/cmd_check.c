@@ -294,6 +294,7 @@ int sm_cmd_check(int argc, char** argv)
 	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance,
 	       sm_linear_solver_name(settings.solver.solver));
+	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
 	printf("ok\n");
 	sm_model_destroy(model);
 	sm_document_destroy(doc);

@@ -112,7 +112,8 @@ typedef struct sm_simulation_def {
 	sm_linear_solver solver;       ///< default SM_SOLVER_AUTO
 	sm_jacobian_variant jacobian;  ///< default SM_JACOBIAN_EXACT
 	double relative_tolerance;     ///< in [SM_MIN_RELATIVE_TOLERANCE, 1) [1]; default 1e-6
-	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m]; default 1e-8
+	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m]; default 1e-8, for models of centimetres and more: a
+	/// smaller model's motion lies below it and needs it scaled down (docs/simulation.md)
 	double absolute_tolerance_position;
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy and the inputs' work [J]; default
 	/// 1e-6

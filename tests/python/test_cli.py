@@ -1063,6 +1063,50 @@ def test_check_bound_of_a_bob_on_a_fixed_anchor(tmp_path, ends):
     assert number_after(cli("modes", path, "-n", "0").stdout, "omega_max =") == pytest.approx(2.0, rel=1e-5)
 
 
+def oscillator_at_scale(path, length, time, mass):
+    """The bundled damped oscillator (1 kg, 40 N/m, 0.4 N s/m, 0.5 m rest length, released 0.1 m
+    out) in units of `length` [m], `time` [s] and `mass` [kg]: stiffness in mass / time^2, damping
+    in mass / time."""
+    path.write_text(json.dumps({
+        "springmass": 1, "name": "scaled", "gravity": [0, 0, 0],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [0.6 * length, 0, 0], "mass": mass}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 40.0 * mass / time**2,
+                     "damping": 0.4 * mass / time, "rest_length": 0.5 * length}],
+        "ports": [{"name": "tip", "particle": "bob", "kind": "probe"}],
+        "simulation": {"stop_time": 5.0 * time, "output_interval": 0.01 * time}}))
+    return path
+
+
+@pytest.mark.parametrize("length, time, mass", [(1e-6, 1e-3, 1e-12), (1e-9, 1e-6, 1e-18)])
+def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time, mass):
+    # A micromechanical oscillator: the bundled one with lengths of micrometres or nanometres and
+    # a period of milliseconds or microseconds. Its amplitude, 0.1 length, and speeds, up to 0.6
+    # length / time, lie near the default absolute tolerances (1e-8 m, 1e-6 m/s), which then hold
+    # it to nothing: the closed form x = 0.5 + 0.1 e^(-g t) (cos(wd t) + g / wd sin(wd t)) (in
+    # units of length and time; g = 0.2, wd^2 = 40 - g^2) is missed by over a tenth of the
+    # amplitude. check and run say so. With both absolute tolerances scaled like the model (1e-8
+    # length, 1e-6 length / time) the error is, in units of length, within a factor 2 of the
+    # bundled oscillator's at its default tolerances (2.6e-5): below 1e-4 here, and no warning.
+    model = oscillator_at_scale(tmp_path / "scaled.json", length, time, mass)
+    g, wd = 0.2, math.sqrt(40.0 - 0.04)
+    def error(*options):
+        _, rows = run_csv(tmp_path, model, *options)
+        t, x = rows[:, 0] / time, rows[:, 1] / length
+        exact = 0.5 + 0.1 * np.exp(-g * t) * (np.cos(wd * t) + g / wd * np.sin(wd * t))
+        return np.max(np.abs(x - exact))
+    assert error() > 0.01
+    assert re.search(r"^warning +the absolute tolerances, 1e-08 m and 1e-06 m/s, are coarse", cli("check", model).stdout, re.M)
+    assert "springmass run: warning: the absolute tolerances" in cli("run", model, "-o", tmp_path / "x.csv").stderr
+    scaled = ["--atol-position", 1e-8 * length, "--atol-velocity", 1e-6 * length / time]
+    assert error(*scaled) < 1e-4
+    assert "warning" not in cli("run", model, "-o", tmp_path / "x.csv", *scaled).stderr
+    # The bundled oscillator, and the same at a megahertz (micrometres and microseconds: speeds of
+    # metres per second, which the default velocity tolerance holds), are warned about by nothing.
+    for quiet in (MODELS / "oscillator.json", oscillator_at_scale(tmp_path / "mhz.json", 1e-6, 1e-6, 1e-12)):
+        assert "warning" not in cli("check", quiet).stdout
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
