@@ -2299,6 +2299,15 @@ int32_t sm_document_parameter_index(const sm_document* doc, const char* name)
 	return doc != NULL && name != NULL ? find_parameter(doc, name) : -1;
 }
 
+// A parameter keeps its value only when the new one is the same double, down to the sign of a zero:
+// -0 and 0 compare equal, but a file that gives -0.0 builds a model with -0 where it gives 0 a +0
+// (a position or velocity, which the saved file and `springmass run`'s CSV then write "-0"), and
+// setting a parameter is giving the file its value.
+static bool same_value(double a, double b)
+{
+	return a == b && signbit(a) == signbit(b);
+}
+
 sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_error* err)
 {
 	sm_error_clear(err);
@@ -2310,7 +2319,7 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 		if (!isfinite(values[k]))
 			return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: parameters.%s: %g is not finite", doc->source,
 			                    doc->parameter_names[k], values[k]);
-		changed = changed || values[k] != doc->parameter_values[k];
+		changed = changed || !same_value(values[k], doc->parameter_values[k]);
 	}
 	if (!changed)
 		return SM_OK;
@@ -2326,7 +2335,7 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 		int32_t last = -1;
 		bool named = false;
 		for (int32_t k = 0; k < doc->parameter_count; k++) {
-			if (copy[k] == doc->parameter_values[k])
+			if (same_value(copy[k], doc->parameter_values[k]))
 				continue;
 			char name[300];
 			snprintf(name, sizeof name, "parameter %s = ", doc->parameter_names[k]);
@@ -2336,7 +2345,7 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 		char with[SM_ERROR_MESSAGE_CAPACITY] = "";
 		size_t used = 0;
 		for (int32_t k = 0, n = 0; k < doc->parameter_count && !named && used < sizeof with; k++) {
-			if (copy[k] == doc->parameter_values[k])
+			if (same_value(copy[k], doc->parameter_values[k]))
 				continue;
 			const char* joint = n++ == 0 ? " (with " : k == last ? " and " : ", ";
 			char value[SM_NUMBER_TEXT_CAPACITY];
@@ -2366,7 +2375,7 @@ sm_status sm_document_set_parameter(sm_document* doc, int32_t index, double valu
 	if (!isfinite(value))
 		return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: parameters.%s: %g is not finite", doc->source,
 		                    doc->parameter_names[index], value);
-	if (value == doc->parameter_values[index])
+	if (same_value(value, doc->parameter_values[index]))
 		return SM_OK;
 	double* values = malloc((size_t)doc->parameter_count * sizeof(double));
 	if (values == NULL)
