@@ -1272,24 +1272,29 @@ def test_fmu_checks_a_reference_without_keeping_its_numbers(tmp_path):
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_values_set_are_those_the_fmu_starts_from(tmp_path):
-    # A model takes 0 for a parameter of -0 as its own value (sm_document_set_parameter: no
-    # change), so --set z=0 on a file's -0 is no value of its own for resources/parameters.txt,
-    # also beside a value that does change; every line there is a start value of the FMU.
+    # --set z=0 on a file's -0 is a value of its own, as editing the file to 0 is (a velocity of
+    # 0 where the file's starts at -0; sm_document_set_parameter takes it), and so is -0 on a
+    # file's 0: both go into resources/parameters.txt, beside a value that changes more; every
+    # line there is a start value of the FMU. A value the file has, to the sign of a zero, is not.
     model = json.loads((MODELS / "oscillator.json").read_text())
     model["parameters"]["z"] = -0.0
-    model["gravity"] = [0, "z", 0]
+    model["parameters"]["w"] = 0.0
+    model["gravity"] = ["w", "z", 0]
     path = tmp_path / "zero.json"
     path.write_text(json.dumps(model))
     runtime = stand_in_runtime(tmp_path / "runtime", "binary")
     fmu = tmp_path / "zero.fmu"
-    cli("fmu", path, "-o", fmu, "--runtime", runtime, "--set", "z=0", "--set", "k=80")
+    cli("fmu", path, "-o", fmu, "--runtime", runtime, "--set", "z=0", "--set", "w=-0.0", "--set", "k=80")
     with zipfile.ZipFile(fmu) as z:
         lines = z.read("resources/parameters.txt").decode().split()
         variables = ET.fromstring(z.read("modelDescription.xml")).iter("ScalarVariable")
         starts = {v.get("name"): v[0].get("start") for v in variables}
-    assert lines == ["k=80"]
+    assert lines == ["k=80", "z=0", "w=-0"]
     assert all(starts[name] == value for name, value in (line.split("=") for line in lines))
-    assert starts["z"] == "-0"
+    same = tmp_path / "same.fmu"
+    cli("fmu", path, "-o", same, "--runtime", runtime, "--set", "z=-0.0", "--set", "w=0")
+    with zipfile.ZipFile(same) as z:
+        assert "resources/parameters.txt" not in z.namelist()
 
 
 def stand_in_runtime(folder, binary):
