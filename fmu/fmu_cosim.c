@@ -582,9 +582,11 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	double* values = inst->parameter_new;
 	for (int32_t k = 0; k < np; ++k)
 		values[k] = sm_document_parameter_value(inst->doc, k);
+	// A constant takes only its own value (check_real), which it keeps as packaged: -0 is taken for
+	// a constant of 0, but the model, which tells -0 from 0, is not given it.
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = &inst->table.variables[vr[i]];
-		if (v->source == FMU_SRC_MODEL_PARAMETER)
+		if (v->source == FMU_SRC_MODEL_PARAMETER && v->variability != FMU_CONSTANT)
 			values[v->index] = value[i];
 	}
 	const double* old = inst->parameter_old;

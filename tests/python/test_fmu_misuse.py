@@ -970,6 +970,27 @@ def test_a_parameter_that_only_names_a_particle_is_a_constant(package, tmp_path)
         inst.free()
 
 
+def test_a_constant_set_to_its_value_keeps_it_to_the_sign_of_a_zero(package, tmp_path):
+    # A constant set to its own value is taken and changes nothing (docs/fmu.md); -0 equals 0 and
+    # is taken for a constant of 0 too, which keeps its packaged +0: the model's parameters, which
+    # tell -0 from 0, are not given it.
+    model = tmp_path / "reference_zero.json"
+    model.write_text(json.dumps(dict(REFERENCE_ONLY, parameters={"j": 0})))
+    inst = Instance(package(model))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        inst.set("j", -0.0)
+        s.exitInitializationMode()
+        assert math.copysign(1.0, inst.get("j")) == 1.0
+        s.doStep(0.0, 0.01)
+        inst.set("j", -0.0)
+        assert math.copysign(1.0, inst.get("j")) == 1.0
+    finally:
+        inst.free()
+
+
 def test_setup_without_a_tolerance_takes_the_files_after_one_with(test_fmu):
     # fmi2SetupExperiment may be called again before initialisation: without a tolerance the
     # second call leaves the file's relative tolerance (driven_oscillator.json names none: the
