@@ -1245,6 +1245,84 @@ static int test_per_section_mesh_keeps_its_stiffness_when_refined(void)
 	return 0;
 }
 
+// The elastic energy [J] of a rhombus of k x k cells of side 1 / k, each cut into two
+// equilateral triangles (a 1 m equilateral triangulation, area sqrt(3)/2 m^2), in the z = 0
+// plane, under the uniform strain (e_x, e_y) (every position scaled by 1 + e_x along x and
+// 1 + e_y along y), with an edge group and a bend group per section [N/m]; NAN on failure.
+static double strained_equilateral_mesh_energy(int k, double edge, double bend, double e_x, double e_y)
+{
+	const int32_t nv = (k + 1) * (k + 1), nt = 2 * k * k;
+	double* vertices = malloc(3 * (size_t)nv * sizeof(double));
+	int32_t* triangles = malloc(3 * (size_t)nt * sizeof(int32_t));
+	sm_model* model = weightless_model();
+	double* x = malloc(3 * (size_t)nv * sizeof(double));
+	double energy = NAN;
+	if (vertices == NULL || triangles == NULL || model == NULL || x == NULL)
+		goto done;
+	for (int i = 0; i <= k; i++)
+		for (int j = 0; j <= k; j++) {
+			double* v = vertices + 3 * (i * (k + 1) + j);
+			v[0] = (j + 0.5 * i) / k;
+			v[1] = 0.5 * sqrt(3.0) * i / k;
+			v[2] = 0.0;
+		}
+	for (int i = 0, t = 0; i < k; i++)
+		for (int j = 0; j < k; j++, t += 2) {
+			const int32_t v00 = i * (k + 1) + j, v01 = v00 + 1, v10 = v00 + k + 1, v11 = v10 + 1;
+			const int32_t two[6] = {v00, v01, v10, v01, v11, v10};
+			memcpy(triangles + 3 * t, two, sizeof two);
+		}
+	sm_mesh_def mesh = sm_default_mesh_def();
+	mesh.vertices = vertices;
+	mesh.vertex_count = nv;
+	mesh.triangles = triangles;
+	mesh.triangle_count = nt;
+	mesh.edge = section_material(edge);
+	mesh.bend = section_material(bend);
+	if (sm_add_mesh(model, &mesh, NULL) != SM_OK)
+		goto done;
+	sm_model_initial_state(model, x, NULL);
+	for (int32_t p = 0; p < nv; p++) {
+		x[3 * p] *= 1.0 + e_x;
+		x[3 * p + 1] *= 1.0 + e_y;
+	}
+	energy = sm_model_energies(model, x, NULL).elastic;
+done:
+	free(vertices);
+	free(triangles);
+	free(x);
+	sm_model_destroy(model);
+	return energy;
+}
+
+// The membrane moduli of a per-section mesh of equilateral triangles (docs/model-format.md,
+// Mesh): its edge group is isotropic with Young's modulus Y [N/m] and Poisson's ratio 1/3, on
+// every refinement that keeps the triangles' shape (k = 1, 2, 4, 8 cells a side). Each edge
+// spring stands for the triangles beside it (section: their area over its length, ks =
+// Y A / l0^2), so a uniform strain gives an energy of Y A / 2 x the sum over each triangle's
+// three edges of its strain along them squared. Under uniaxial strain e along an edge, that is
+// (1 + 1/16 + 1/16) Y A e^2 / 2 = C11 A e^2 / 2 with C11 = Y / (1 - nu^2) = 9 Y / 8; under
+// uniaxial stress (e, -e/3) the edges at 60 degrees are not stretched and it is Y A e^2 / 2.
+// The bend springs across the interior edges form the same lattice turned by 30 degrees and add
+// their value: under uniaxial stress their strains are -e/3 (across an edge along x) and 2e/3,
+// and the edges on the boundary have none, which leaves out 5 / (9 k) of their energy (k edges
+// on each side, one triangle of area sqrt(3) / (4 k^2) each). A strain of 1e-6 keeps the energy
+// quadratic to a relative 1e-6 (the spring strain's next term) and round-off of L - l0 at 1e-9
+// of it: 1e-5 relative.
+static int test_per_section_equilateral_mesh_moduli(void)
+{
+	const double e = 1e-6, Y = 500.0, Yb = 80.0, area = 0.5 * sqrt(3.0);
+	for (int k = 1; k <= 8; k *= 2) {
+		const double strain = strained_equilateral_mesh_energy(k, Y, 0.0, e, 0.0);
+		const double stress = strained_equilateral_mesh_energy(k, Y, 0.0, e, -e / 3.0);
+		const double both = strained_equilateral_mesh_energy(k, Y, Yb, e, -e / 3.0);
+		ENSURE_REL(strain, 0.5 * 9.0 / 8.0 * Y * area * e * e, 1e-5, 0.0);
+		ENSURE_REL(stress, 0.5 * Y * area * e * e, 1e-5, 0.0);
+		ENSURE_REL(both - stress, (1.0 - 5.0 / (9.0 * k)) * 0.5 * Yb * area * e * e, 1e-5, 0.0);
+	}
+	return 0;
+}
+
 // The sag [m] of the bottom middle of a 1 m square sheet of n x n particles, 1 kg, hanging in
 // the x-z plane from its top edge under gravity, at rest (sm_statics_solve), with structural and
 // shear groups of 200 and 100 in the given scaling and its mass spread as given.
@@ -2130,6 +2208,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_block_with_unequal_counts);
 	RUN_TEST(test_per_section_mesh_keeps_its_stiffness_when_refined);
+	RUN_TEST(test_per_section_equilateral_mesh_moduli);
 	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
 	RUN_TEST(test_per_section_rules);
 	RUN_TEST(test_per_section_sections_by_hand);
