@@ -553,6 +553,112 @@ static int test_hanging_rope_with_bending_springs(void)
 	return 0;
 }
 
+// A rope of `segments` springs along x from its fixed first particle, length [m], mass [kg]
+// lumped (the ends half), per-strain stiffness E [N] and damping c [N s], no gravity; with its
+// last particle fixed too if `both_ends`.
+static sm_model* lumped_rope(double length, double mass, double E, double c, int32_t segments, bool both_ends)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.end[0] = length;
+	rd.segments = segments;
+	rd.mass = mass;
+	rd.mass_distribution = SM_MASS_LUMPED;
+	rd.structural.stiffness = E;
+	rd.structural.damping = c;
+	sm_structure st;
+	if (model == NULL || sm_add_rope(model, &rd, &st) != SM_OK ||
+	    sm_model_set_particle_motion(model, st.first_particle, SM_PARTICLE_FIXED) != SM_OK ||
+	    (both_ends &&
+	     sm_model_set_particle_motion(model, st.first_particle + segments, SM_PARTICLE_FIXED) != SM_OK)) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// Per-strain constants keep a rope's vibrations as it is refined (docs/model-format.md). Held at
+// one end, at rest length, a rope of N segments with lumped masses is the fixed-free chain of
+// springs ks = E N / L and masses m / N, the last one halved: u_j = sin(j theta) solves it with
+// cos(N theta) = 0, so its axial modes are omega_k = 2 sqrt(ks N / m) sin((2k - 1) pi / (4 N))
+// (to 1e-9: the eigensolver's error is ~1e-14 here), which tend to the bar's
+// (2k - 1) pi / (2 L) sqrt(E L / m) at second order: the error, -((2k - 1) pi / (4 N))^2 / 6 at
+// first order, falls fourfold per doubling of N (by 3.9 to 4.1 from N = 10 to 20 on; the
+// string's third mode by only 3.88 from N = 5 to 10). Per-strain damping gives every spring
+// kd / ks = c / E, so C = (c / E) K and zeta_k = c omega_k / (2 E), which depends on N only
+// through omega_k. Held at both ends and stretched by eps, every spring
+// carries T = E eps and pulls sideways with T / l, l = (1 + eps) L / N: the transverse modes
+// are 2 sqrt(T N^2 / (m (1 + eps) L)) sin(k pi / (2 N)), tending to the string's
+// k pi / L' sqrt(T L' / m) (L' = (1 + eps) L), undamped (spring damping acts along the springs).
+static int test_rope_modes_converge_when_refined(void)
+{
+	const double length = 2.0, mass = 0.8, E = 400.0, c = 0.5, eps = 0.01;
+	const int32_t sizes[] = {5, 10, 20, 40, 80};
+	double previous_axial[3] = {0.0, 0.0, 0.0}, previous_string[3] = {0.0, 0.0, 0.0};
+	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
+		const int32_t n = sizes[t];
+		sm_model* model = lumped_rope(length, mass, E, c, n, false);
+		ENSURE(model != NULL);
+		sm_modes modes;
+		sm_error err;
+		ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+		// At rest length the 2 N transverse modes are zero (no tension); the axial ones follow.
+		ENSURE(modes.zero_count == 2 * n);
+		for (int k = 1; k <= 3; k++) {
+			const double omega = sqrt(modes.omega_squared[2 * n + k - 1]);
+			const double chain = 2.0 * sqrt(E * n / length * n / mass) * sin((2 * k - 1) * pi / (4.0 * n));
+			const double bar = (2 * k - 1) * pi / (2.0 * length) * sqrt(E * length / mass);
+			ENSURE_REL(omega, chain, 1e-9, 0.0);
+			ENSURE_REL(modes.damping_ratio[2 * n + k - 1], c * omega / (2.0 * E), 1e-9, 0.0);
+			const double error = bar - omega;
+			ENSURE(error > 0.0);
+			if (n >= 20) {
+				ENSURE(previous_axial[k - 1] / error > 3.9);
+				ENSURE(previous_axial[k - 1] / error < 4.1);
+			}
+			previous_axial[k - 1] = error;
+		}
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+
+		model = lumped_rope(length, mass, E, c, n, true);
+		ENSURE(model != NULL);
+		double* x = malloc(3 * (size_t)(n + 1) * sizeof(double));
+		ENSURE(x != NULL);
+		sm_model_initial_state(model, x, NULL);
+		for (int32_t p = 0; p <= n; p++)
+			x[3 * p] *= 1.0 + eps;
+		sm_modes_def def = sm_default_modes_def();
+		def.configuration = x;
+		ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_OK);
+		free(x);
+		const double tension = E * eps, stretched = (1.0 + eps) * length;
+		for (int k = 1; k <= 3; k++) {
+			// Each transverse frequency twice (y and z), below the axial ones.
+			for (int c2 = 0; c2 < 2; c2++) {
+				const double omega = sqrt(modes.omega_squared[2 * (k - 1) + c2]);
+				const double chain =
+				    2.0 * sqrt(tension * n * n / (mass * stretched)) * sin(k * pi / (2.0 * n));
+				ENSURE_REL(omega, chain, 1e-9, 0.0);
+				ENSURE(modes.damping_ratio[2 * (k - 1) + c2] < 1e-12);
+			}
+			const double omega = sqrt(modes.omega_squared[2 * (k - 1)]);
+			const double error = k * pi / stretched * sqrt(tension * stretched / mass) - omega;
+			ENSURE(error > 0.0);
+			if (n >= 20) {
+				ENSURE(previous_string[k - 1] / error > 3.9);
+				ENSURE(previous_string[k - 1] / error < 4.1);
+			}
+			previous_string[k - 1] = error;
+		}
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // Catenary y(x) = a cosh((x - S/2)/a) - a cosh(S/(2a)) of length 2 a sinh(S/(2a)) = Lc over the
 // span S: the parameter a by bisection (the length decreases monotonically in a).
 static double catenary_parameter(double span, double length)
@@ -3354,6 +3460,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_proportional_damping_ratios);
 	RUN_TEST(test_hanging_rope_elongation);
 	RUN_TEST(test_hanging_rope_with_bending_springs);
+	RUN_TEST(test_rope_modes_converge_when_refined);
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
 	RUN_TEST(test_statics_says_when_the_continuation_gives_up);
 	RUN_TEST(test_statics_balances_loads_below_the_default_tolerance);
