@@ -36,10 +36,10 @@ extern "C" {
 /// on the shape of its cells, not on their number (but for a sheet's bend group, whose springs
 /// span two cells and so leave the last cell of each row and column without one: its modulus is
 /// (nu - 2)/(nu - 1) of the value along u when every particle moves with the stretch, 0.75 at 5
-/// particles, and less where the particles next to the edges settle; both tend to the value as
-/// the grid is refined; docs/model-format.md gives figures). A mesh's edge springs per section
-/// give an equilateral triangulation a membrane Young's modulus of `stiffness` [N/m] (Poisson's
-/// ratio 1/3); other triangle shapes other constants.
+/// particles, and less where the particles next to the edges settle, all four edges held; both
+/// tend to the value as the grid is refined; docs/model-format.md gives figures). A mesh's edge
+/// springs per section give an equilateral triangulation a membrane Young's modulus of
+/// `stiffness` [N/m] (Poisson's ratio 1/3); other triangle shapes other constants.
 ///
 /// Per strain, a rope's structural springs are in series, so its stretch under a load does not
 /// depend on its segments; its bending springs (p, p + 2) are not: two of them cross every
