@@ -35,12 +35,14 @@
 #include <time.h>
 
 // Free degrees of freedom up to which SM_SOLVER_AUTO picks the dense solver; above, it picks
-// the reduced conjugate-gradient solver. Measured with bench/bench_cloth.sh (bench/README.md):
-// SUNDIALS' dense LU (no BLAS) costs O(n^3) per set-up and is 50 times slower than the reduced
-// solvers already for the 8 x 8 cloth (186 unknowns); on the benchmark cloth from n = 8 to 64
+// the reduced conjugate-gradient solver. Measured with `springmass run` on ropes, small sheets,
+// a block, a mesh and anchored sheets of 1 to 9 free particles (bench/README.md, "The linear
+// solver auto picks"): SUNDIALS' dense LU (Debian's archives are built without optimisation)
+// costs about what the reduced solver does with 1 or 2 free particles, 1.5 - 2.6 times as much
+// from 3 to 5 and 3 - 5 times from 6 on. On the benchmark cloth from n = 8 to 64
 // block-Jacobi conjugate gradients beat the CHOLMOD-preconditioned ones by 1.3 to 1.7 times and
 // KLU on the full system by more.
-#define AUTO_DENSE_MAX_DOFS 24
+#define AUTO_DENSE_MAX_DOFS 6
 
 // Time resolution relative to max(1 s, |t|) [1]. CVODE's first step after a (re)start must
 // exceed about 2 eps |t| (CV_TOO_CLOSE), and at t = 0 an interval of 1e-200 s made its initial

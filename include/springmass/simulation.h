@@ -86,7 +86,7 @@ typedef enum sm_method {
 /// Linear solver for Newton's method (BDF only).
 typedef enum sm_linear_solver {
 	SM_SOLVER_AUTO =
-	    0,            ///< dense up to 8 free particles, reduced conjugate gradients above (bench/README.md)
+	    0,            ///< dense up to 2 free particles, reduced conjugate gradients above (bench/README.md)
 	SM_SOLVER_DENSE,  ///< dense LU of the full 6n system with the analytic Jacobian (small models)
 	SM_SOLVER_KLU,    ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,

@@ -1458,3 +1458,22 @@ def test_every_command_refuses_a_missing_or_second_model_file_and_unknown_option
         assert out.stderr.startswith(f"springmass {command}: {message}\n"), out.stderr
         assert f"usage: springmass {command}" in out.stderr, out.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "model, sets, solver",
+    [
+        ("oscillator", [], "dense"),
+        ("two_mass_chain", [], "dense"),
+        ("hanging_rope", ["n=3"], "pcg"),
+        ("cloth", ["n=3"], "pcg"),
+        ("hanging_rope", [], "pcg"),
+    ],
+)
+def test_run_summary_names_the_solver_auto_picks(tmp_path, model, sets, solver):
+    """The default solver is dense up to 2 free particles and pcg above (docs/simulation.md): from 3
+    free particles on SUNDIALS' dense LU takes 1.5 - 5 times the time of pcg (bench/README.md), as
+    on the 7 free particles of the 3 x 3 cloth. The summary names the solver in use."""
+    args = [x for kv in sets for x in ("--set", kv)]
+    out = cli("run", MODELS / f"{model}.json", *args, "--t-end", 0.1, "-o", tmp_path / "out.csv")
+    assert re.search(rf" with BDF, solver {solver}: ", out.stderr), out.stderr
