@@ -469,7 +469,8 @@ int sm_simulation_search_step(sm_simulation* sim, int flag, bool new_step, doubl
 	// or beyond its limit in the state there, to the round-off of its length, so that CVODE
 	// restarts with all of them below. Springs that reach their limits together by symmetry (a
 	// ring expanding evenly) differ by the round-off of their coordinates and rest lengths, which
-	// spreads their crossings over a few 1e-15 s: one event, not one per few.
+	// spreads their crossings over a few 1e-15 s: one event, not one per few. (The round-off of a
+	// long integration, or pcg's iterations, can set them further apart: docs/simulation.md.)
 	roots(t_event, sim->y, sim->root_values, sim);
 	for (int32_t r = 0; r < sim->root_count; r++)
 		if (sim->crossing_time[r] <= t_event + resolution ||
