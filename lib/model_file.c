@@ -822,6 +822,14 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 		if (s != NULL)
 			return resolve_structure_reference(p, s, open, text, path, out);
 	}
+	// A parameter's name is no particle reference: an index is written as a number, and only a
+	// structure reference's indices take parameters.
+	if (find_parameter(p->doc, name) >= 0)
+		return fail(p, SM_ERROR_NOT_FOUND, path,
+		            "no particle named %s (%s is a parameter, and a parameter cannot stand for a particle's "
+		            "index: name the particle, or refer to a structure's particle as name[i] with i an "
+		            "expression of parameters)",
+		            text, text);
 	return fail(p, SM_ERROR_NOT_FOUND, path, "no particle named %s", text);
 }
 
