@@ -1563,6 +1563,35 @@ static int test_whole_real_index(void)
 	return 0;
 }
 
+// Springs are numbered structures first, then the explicit springs (docs/model-format.md,
+// "Springs"), the other way round from particles: the explicit spring below, written first in
+// the file, is the last of the model, after the rope's two structural springs.
+static int test_springs_are_numbered_structures_first(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"springs\": [{\"a\": \"hook\", \"b\": \"r[0]\", \"stiffness\": 7}],"
+	    " \"particles\": [{\"name\": \"hook\", \"position\": [0, 0, 1]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [2, 0, 0],"
+	    " \"segments\": 2, \"structural\": {\"stiffness\": 5}}]}",
+	    &err);
+	ENSURE(doc != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &m, &err), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 4 && sm_model_spring_count(m) == 3);
+	ENSURE(sm_document_particle_index(doc, "hook") == 0 && sm_document_particle_index(doc, "r[0]") == 1);
+	sm_spring_def s;
+	for (int32_t k = 0; k < 2; k++) {
+		ENSURE_STATUS(sm_model_get_spring(m, k, &s), SM_OK);
+		ENSURE(s.a == 1 + k && s.b == 2 + k && s.stiffness == 5.0);
+	}
+	ENSURE_STATUS(sm_model_get_spring(m, 2, &s), SM_OK);
+	ENSURE(s.a == 0 && s.b == 1 && s.stiffness == 7.0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // A UTF-8 byte-order mark before the document is ignored (RFC 8259, section 8.1), and line and
 // column numbers stay those an editor shows; one anywhere else is an error, and one alone leaves
 // an empty file. A directory given as
@@ -3480,5 +3509,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_limits_at_their_edges);
 	RUN_TEST(test_unknown_keys_are_refused_everywhere);
 	RUN_TEST(test_parameter_indices_out_of_range);
+	RUN_TEST(test_springs_are_numbered_structures_first);
 	return TEST_SUMMARY();
 }
