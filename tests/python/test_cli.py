@@ -197,6 +197,19 @@ def test_names_with_quotes_and_commas_are_quoted_in_the_header(tmp_path):
     assert read_csv(tmp_path / "names.csv")[0][-6:-3] == ['particle.a"b.x', 'particle.a"b.y', 'particle.a"b.z']
 
 
+def test_unnamed_particles_are_named_in_the_header_as_the_readme_says(tmp_path):
+    # README: a particle without a name is p[i] in the --positions columns, primed when a particle
+    # has that name (particle 0 is unnamed, particle 1 is named "p[0]").
+    model = tmp_path / "unnamed.json"
+    model.write_text('{"springmass": 1, "name": "unnamed", "particles": [{"position": [0, 0, 0]},'
+                     ' {"name": "p[0]", "position": [1, 0, 0]}, {"position": [2, 0, 0]}], "gravity": [0, 0, 0]}')
+    cli("run", model, "-q", "--t-end", 0.01, "--positions", "-o", tmp_path / "unnamed.csv")
+    header = read_csv(tmp_path / "unnamed.csv")[0]
+    assert header[-9:] == ["particle.p[0]'.x", "particle.p[0]'.y", "particle.p[0]'.z", "particle.p[0].x",
+                           "particle.p[0].y", "particle.p[0].z", "particle.p[2].x", "particle.p[2].y",
+                           "particle.p[2].z"], header
+
+
 def test_options_take_effect(tmp_path):
     osc = MODELS / "oscillator.json"
     base = ["--t-end", 2]
