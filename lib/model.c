@@ -267,7 +267,7 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	if (!isfinite(sqrt(squared)))
 		return say(msg, SM_ERROR_NOT_FINITE,
 		           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
-		           "overflows: particles joined by springs must be less than about 1e154 m apart)",
+		           "overflows: particles joined by springs must be less than 1.3e154 m apart)",
 		           index, (long)def->a, (long)def->b);
 	double l0;
 	if (def->rest_length == SM_REST_LENGTH_INITIAL) {

@@ -1309,7 +1309,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 		st = sm_error_set(
 		    err, SM_ERROR_NOT_FINITE,
 		    "modes: spring %d between particles %d and %d is too long in the configuration (its squared "
-		    "length overflows: particles joined by springs must be less than about 1e154 m apart)",
+		    "length overflows: particles joined by springs must be less than 1.3e154 m apart)",
 		    (int)overflowing, (int)model->spring_a[overflowing], (int)model->spring_b[overflowing]);
 		goto done;
 	}
