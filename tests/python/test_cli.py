@@ -1111,6 +1111,8 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
     assert error() > 0.01
     assert re.search(r"^warning +the absolute tolerances, 1e-08 m and 1e-06 m/s, are coarse", cli("check", model).stdout, re.M)
     assert "springmass run: warning: the absolute tolerances" in cli("run", model, "-o", tmp_path / "x.csv").stderr
+    if HAS_FMU:  # the FMU starts from the file's tolerances: packaging it warns too
+        assert "springmass fmu: warning: the absolute tolerances" in cli("fmu", model, "-o", tmp_path / "x.fmu").stderr
     scaled = ["--atol-position", 1e-8 * length, "--atol-velocity", 1e-6 * length / time]
     assert error(*scaled) < 1e-4
     assert "warning" not in cli("run", model, "-o", tmp_path / "x.csv", *scaled).stderr
@@ -1118,6 +1120,8 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
     # metres per second, which the default velocity tolerance holds), are warned about by nothing.
     for quiet in (MODELS / "oscillator.json", oscillator_at_scale(tmp_path / "mhz.json", 1e-6, 1e-6, 1e-12)):
         assert "warning" not in cli("check", quiet).stdout
+        if HAS_FMU:
+            assert "warning" not in cli("fmu", quiet, "-o", tmp_path / "quiet.fmu").stderr
 
 
 def test_check_summarises_the_model():
