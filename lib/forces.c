@@ -635,6 +635,14 @@ double sm_model_particle_energy(const sm_model* model, const double* x, const do
 	return energy;
 }
 
+double sm_model_spring_energy(const sm_model* model, int32_t s, const double xa[3], const double xb[3])
+{
+	const double x[6] = {xa[0], xa[1], xa[2], xb[0], xb[1], xb[2]};
+	spring_geometry geo;
+	spring_geometry_eval(x, NULL, 0, 1, model->rest_length[s], &geo);
+	return rest_length_energy(model->stiffness[s], model->rest_length[s], geo.length);
+}
+
 double sm_model_dissipated_power(const sm_model* model, const double* x, const double* v)
 {
 	if (model == NULL || v == NULL)

@@ -1592,9 +1592,30 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	return SM_OK;
 }
 
+// Particle i's position at the simulation's time, as sm_simulation_refresh_outputs puts it in
+// sim->position, without unpacking every particle.
+static void position_now(const sm_simulation* sim, int32_t i, double x[3])
+{
+	const sm_model* m = sim->model;
+	const size_t p = 3 * (size_t)i;
+	const int32_t k = m->free_index[i];
+	if (k >= 0) {
+		memcpy(x, N_VGetArrayPointer(sim->y) + 3 * (size_t)k, 3 * sizeof(double));
+	} else if (m->motion[i] == SM_PARTICLE_DRIVEN) {
+		const double dt = (sim->time_origin - sim->drive_time[i]) + sm_simulation_cvode_time(sim, sim->time);
+		for (int c = 0; c < 3; c++)
+			x[c] = sim->drive_position[p + c] +
+			       dt * (sim->drive_velocity[p + c] + 0.5 * dt * sim->drive_acceleration[p + c]);
+	} else {
+		memcpy(x, m->position + p, 3 * sizeof(double));
+	}
+}
+
 // A break the caller decides on (a cut, a tear it models itself), as sm_simulation_break_springs makes one
 // when a strain crosses its limit: recorded, its elastic energy moved to the dissipated energy,
-// CVODE restarted here (what it computed past this time assumed the spring).
+// CVODE restarted here (what it computed past this time assumed the spring). Its cost does not grow
+// with the model (the restart comes once, at the next advance), so that cutting k springs of a large
+// model costs k breaks and one restart.
 sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 {
 	if (sim == NULL)
@@ -1606,14 +1627,15 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 		                          (int)sm_model_spring_count(sim->model));
 	if (!sim->model->enabled[spring])
 		return SM_OK;
-	sm_simulation_refresh_outputs(sim);
-	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
+	double xa[3], xb[3];
+	position_now(sim, sim->model->spring_a[spring], xa);
+	position_now(sim, sim->model->spring_b[spring], xb);
+	const double released = sm_model_spring_energy(sim->model, spring, xa, xb);
 	if (sm_simulation_record_break(sim, sim->time, spring) != SM_OK)
 		return sm_simulation_fail(sim, SM_ERROR_OUT_OF_MEMORY,
 		                          "break_spring: out of memory recording the break");
 	// As at a break found by the integration (simulation_events.c): an energy beyond a double is
 	// not handed on to the dissipated energy, part of CVODE's state.
-	const double released = elastic_before - sm_model_energies(sim->model, sim->position, NULL).elastic;
 	if (isfinite(released))
 		N_VGetArrayPointer(sim->y)[sm_simulation_dissipated_index(sim)] += released;
 	sim->need_restart = true;

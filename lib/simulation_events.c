@@ -135,19 +135,25 @@ sm_status sm_simulation_record_break(sm_simulation* sim, double t, int32_t sprin
 sm_status sm_simulation_break_springs(sm_simulation* sim)
 {
 	sm_simulation_refresh_outputs(sim);
-	const double elastic_before = sm_model_energies(sim->model, sim->position, NULL).elastic;
+	// The springs' own energies, not the model's elastic energy before and after: that would cost
+	// two passes over every spring per event (a tear of many events over a large model).
+	double released = 0.0;
 	bool broke = false, out_of_memory = false;
 	for (int32_t r = 0; r < sim->root_count && !out_of_memory; r++) {
 		if (sim->roots_found[r] <= 0 || !sim->model->enabled[sim->root_spring[r]])
 			continue;
-		out_of_memory = sm_simulation_record_break(sim, sim->time, sim->root_spring[r]) != SM_OK;
+		const int32_t s = sim->root_spring[r];
+		const double energy =
+		    sm_model_spring_energy(sim->model, s, sim->position + 3 * (size_t)sim->model->spring_a[s],
+			                       sim->position + 3 * (size_t)sim->model->spring_b[s]);
+		out_of_memory = sm_simulation_record_break(sim, sim->time, s) != SM_OK;
+		if (!out_of_memory)
+			released += energy;
 		broke = broke || !out_of_memory;
 	}
 	// An energy beyond a double (ks (L - l0)^2 / 2 above 1.8e308 J) is not handed on: the
 	// dissipated energy is part of CVODE's state, and an infinite or NaN one would fail every step
 	// after. The balance is lost with it, as the energies themselves were.
-	const double released =
-	    broke ? elastic_before - sm_model_energies(sim->model, sim->position, NULL).elastic : 0.0;
 	if (isfinite(released))
 		N_VGetArrayPointer(sim->y)[sm_simulation_dissipated_index(sim)] += released;
 	// After a failure too: the springs not yet broken are beyond their limit at this time, and

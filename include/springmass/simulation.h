@@ -316,8 +316,10 @@ SM_API sm_status sm_simulation_set_state(sm_simulation* sim, double time, const 
 /// Breaks a spring now, as if its strain had just crossed its break strain (a cut, or a tear the
 /// caller models itself): it is disabled, recorded as a break event at the current time
 /// (sm_simulation_break), its elastic energy counts as dissipated, and a reset restores it.
-/// Re-initialises the solver. A spring already broken or disabled is left as it is (SM_OK, no
-/// event); SM_ERROR_SPRING_INDEX, with nothing changed, for an index out of range.
+/// Re-initialises the solver (once, at the next advance: cutting many springs between two advances
+/// costs one restart, and each cut takes a time independent of the model's size). A spring already
+/// broken or disabled is left as it is (SM_OK, no event); SM_ERROR_SPRING_INDEX, with nothing
+/// changed, for an index out of range.
 SM_API sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring);
 
 /// A snapshot of a simulation's state (sm_simulation_save_state): its time, the particles'
