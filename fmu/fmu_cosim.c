@@ -578,6 +578,20 @@ static void take_settings(instance* inst, const sm_simulation_def* before)
 static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Real value[])
 {
+	// A call that changes no parameter (inputs alone, or every start value written back as it is)
+	// changes nothing here, and takes a time in proportion to the values it sets, not to the
+	// parameters: a master setting each input of a model with many parameters on its own went over
+	// all of them for every value. Bit for bit, as the document tells -0 from 0.
+	bool changes = false;
+	for (size_t i = 0; i < nvr && !changes; ++i) {
+		const fmu_variable* v = &inst->table.variables[vr[i]];
+		if (v->source == FMU_SRC_MODEL_PARAMETER && v->variability != FMU_CONSTANT) {
+			const double now = sm_document_parameter_value(inst->doc, v->index);
+			changes = memcmp(&now, &value[i], sizeof now) != 0;
+		}
+	}
+	if (!changes)
+		return fmi2OK;
 	int32_t np = sm_document_parameter_count(inst->doc);
 	double* values = inst->parameter_new;
 	for (int32_t k = 0; k < np; ++k)
