@@ -148,9 +148,9 @@ double sm_model_particle_energy(const sm_model* model, const double* x, const do
                                 const int32_t* springs, int32_t count);
 
 // The elastic energy spring s holds with its particles a and b at xa and xb [J], as its term of
-// sm_model_energies (0 for a disabled spring). What a break takes out of the elastic energy, computed from
-// the spring alone: in time independent of the model's size, and without the round-off of the other springs'
-// terms. Defined in forces.c.
+// sm_model_energies would be were it enabled (the spring's state is not looked at). What a break
+// takes out of the elastic energy, computed from the spring alone: in time independent of the
+// model's size, and without the round-off of the other springs' terms. Defined in forces.c.
 double sm_model_spring_energy(const sm_model* model, int32_t s, const double xa[3], const double xb[3]);
 
 // The springs' share of the forces, added to f, with at most `lanes` springs at a time (1, 2 or 4;
