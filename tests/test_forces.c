@@ -302,6 +302,31 @@ static int test_forces_and_power_match_separate_evaluations(void)
 	return 0;
 }
 
+#if defined(__x86_64__) && defined(__GNUC__)
+// a * b + c as the C source writes it, in a function that may use FMA instructions, as every
+// function may under -march=native or -mfma.
+__attribute__((target("fma"), noinline)) static double product_plus(double a, double b, double c)
+{
+	return a * b + c;
+}
+#endif
+
+// The lane widths are the same bits only if no compiler fuses a * b + c into one FMA rounding in
+// the scalar loop while the SIMD loops round twice (an FMA target: -march=native, -mfma): the
+// project compiles with contraction off, which GCC's ISO C mode does by itself but Clang does
+// not. (1 + 2^-30)(1 - 2^-30) = 1 - 2^-60 rounds to 1, so the two roundings give exactly 0 and a
+// fused one -2^-60. Runs where the processor has FMA.
+static int test_products_are_not_fused_into_fma(void)
+{
+#if defined(__x86_64__) && defined(__GNUC__)
+	if (!__builtin_cpu_supports("fma"))
+		return 0;
+	volatile double a = 1.0 + 0x1p-30, b = 1.0 - 0x1p-30, c = -1.0;
+	ENSURE(product_plus(a, b, c) == 0.0);
+#endif
+	return 0;
+}
+
 // The spring loop runs four springs at a time with AVX, two with SSE2 and one at a time
 // otherwise (forces.c), choosing the widest the processor has. Every width must be the same IEEE
 // operations: forces and Jacobian records equal bit for bit, for every combination of velocities,
@@ -1063,6 +1088,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_degenerate_length_gives_finite_values);
 	RUN_TEST(test_disabled_spring_exerts_no_force);
 	RUN_TEST(test_per_strain_rope_stretch_is_independent_of_discretisation);
+	RUN_TEST(test_products_are_not_fused_into_fma);
 	RUN_TEST(test_every_lane_width_gives_the_same_bits);
 	RUN_TEST(test_springs_shorter_than_the_degenerate_ratio_exert_nothing);
 	RUN_TEST(test_records_of_every_lane_width_match_closed_forms);
