@@ -213,7 +213,9 @@ static void invert_chunk(void* context, int c)
 		const double mass = m->mass[i] * damping;
 		a[0] += mass, a[4] += mass, a[8] += mass;
 		double t[9];
-		j->singular[c] = j->singular[c] || !sm_invert3(a, t);
+		// Inverted (t written) even after a singular block, so that no entry is copied unset.
+		if (!sm_invert3(a, t))
+			j->singular[c] = true;
 		// Stored by column pairs for block Jacobi: (t00, t10), (t01, t11), (t02, t12), then the
 		// last row t20, t21, t22.
 		inv[0] = t[0], inv[1] = t[3], inv[2] = t[1], inv[3] = t[4], inv[4] = t[2], inv[5] = t[5];
