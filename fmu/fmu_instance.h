@@ -101,7 +101,11 @@ typedef struct instance {
 // ---------------------------------------------------------------------------------------------
 
 // Formats a message and hands it to the importer's logger if its category is on.
-void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...);
+void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
 
 // Logs an error (category logStatusError); the arguments are those of printf.
 #define log_error(inst, ...) fmu_logf((inst), fmi2Error, LOG_ERROR, __VA_ARGS__)

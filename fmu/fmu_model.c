@@ -79,6 +79,12 @@ static char* duplicate(const char* s)
 }
 
 static char* format(const char* fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+static char* format(const char* fmt, ...)
 {
 	va_list args;
 	va_start(args, fmt);
@@ -535,6 +541,12 @@ static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 }
 
 // Sets err to prefix and the formatted message (cut to the message's capacity); returns status.
+static sm_status fail_with(sm_error* err, sm_status status, const char* prefix, const char* fmt, va_list args)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 0)))
+#endif
+    ;
+
 static sm_status fail_with(sm_error* err, sm_status status, const char* prefix, const char* fmt, va_list args)
 {
 	if (err) {
@@ -1064,6 +1076,13 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 }
 
 // Sets err to "source:line: " and the formatted message; returns status.
+static sm_status line_error(sm_error* err, sm_status status, const char* source_name, size_t line,
+                            const char* fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 5, 6)))
+#endif
+    ;
+
 static sm_status line_error(sm_error* err, sm_status status, const char* source_name, size_t line,
                             const char* fmt, ...)
 {

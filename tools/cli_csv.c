@@ -46,6 +46,12 @@ static const char* field_shown(reader* r)
 
 // A problem at `at` on the line that starts at place.start, line place.line.
 static char* problem_at(line_place place, size_t at, const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static char* problem_at(line_place place, size_t at, const char* format, ...)
 {
 	char message[400];
 	va_list args;

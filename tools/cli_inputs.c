@@ -61,6 +61,12 @@ static const char* name_column(void* context, const char* name, int32_t* id, boo
 
 // A malloc'd message from a format, or NULL when memory runs out.
 static char* message(const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+
+static char* message(const char* format, ...)
 {
 	char text[512];
 	va_list args;
