@@ -358,15 +358,11 @@ static void free_arrays(sm_model* m)
 	free(m->enabled);
 }
 
-// Grows one array to `capacity` elements of `size` bytes; on failure leaves it as it was.
-static int grow(void** array, size_t capacity, size_t size)
-{
-	void* p = realloc(*array, capacity * size);
-	if (p == NULL)
-		return 0;
-	*array = p;
-	return 1;
-}
+// Reallocates `array`, a pointer of any type, to `count` elements, by way of the caller's void*
+// `spare`; false, with the array as it was, when memory runs out. The array is assigned as its own
+// type: written through a void** it would break C's aliasing rules.
+#define GROW(array, count, spare)                                                                            \
+	(((spare) = realloc((array), (count) * sizeof *(array))) != NULL && ((array) = (spare), true))
 
 // Ensures room for `needed` particles. Arrays that already grew keep their larger size (their
 // contents are intact), so a failure changes nothing observable.
@@ -382,10 +378,9 @@ static int reserve_particles(sm_model* m, int64_t needed)
 	if (cap > SM_MODEL_MAX_ELEMENTS)
 		cap = SM_MODEL_MAX_ELEMENTS;
 	const size_t c = (size_t)cap;
-	if (!grow((void**)&m->mass, c, sizeof(double)) || !grow((void**)&m->position, 3 * c, sizeof(double)) ||
-	    !grow((void**)&m->velocity, 3 * c, sizeof(double)) ||
-	    !grow((void**)&m->motion, c, sizeof(sm_particle_motion)) ||
-	    !grow((void**)&m->load, 3 * c, sizeof(double)) || !grow((void**)&m->free_index, c, sizeof(int32_t)))
+	void* spare;
+	if (!GROW(m->mass, c, spare) || !GROW(m->position, 3 * c, spare) || !GROW(m->velocity, 3 * c, spare) ||
+	    !GROW(m->motion, c, spare) || !GROW(m->load, 3 * c, spare) || !GROW(m->free_index, c, spare))
 		return 0;
 	m->particle_capacity = (int32_t)cap;
 	return 1;
@@ -403,11 +398,10 @@ static int reserve_springs(sm_model* m, int64_t needed)
 	if (cap > SM_MODEL_MAX_ELEMENTS)
 		cap = SM_MODEL_MAX_ELEMENTS;
 	const size_t c = (size_t)cap;
-	if (!grow((void**)&m->spring_def, c, sizeof(sm_spring_def)) ||
-	    !grow((void**)&m->spring_a, c, sizeof(int32_t)) || !grow((void**)&m->spring_b, c, sizeof(int32_t)) ||
-	    !grow((void**)&m->rest_length, c, sizeof(double)) ||
-	    !grow((void**)&m->stiffness, c, sizeof(double)) || !grow((void**)&m->damping, c, sizeof(double)) ||
-	    !grow((void**)&m->zero_length, c, sizeof(uint8_t)) || !grow((void**)&m->enabled, c, sizeof(uint8_t)))
+	void* spare;
+	if (!GROW(m->spring_def, c, spare) || !GROW(m->spring_a, c, spare) || !GROW(m->spring_b, c, spare) ||
+	    !GROW(m->rest_length, c, spare) || !GROW(m->stiffness, c, spare) || !GROW(m->damping, c, spare) ||
+	    !GROW(m->zero_length, c, spare) || !GROW(m->enabled, c, spare))
 		return 0;
 	m->spring_capacity = (int32_t)cap;
 	return 1;

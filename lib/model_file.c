@@ -560,33 +560,43 @@ static void expansion_free(expansion* ex)
 	free(ex);
 }
 
-static bool grow_array(void** array, int64_t* capacity, int64_t needed, size_t size)
+// Room for `needed` elements of `size` bytes in `array` of *capacity elements, the capacity doubled
+// from 16 as needed: *grown is the array to keep (array itself when it has room), or false, with
+// both as they were, when memory runs out.
+static bool grow_array(void* array, int64_t* capacity, int64_t needed, size_t size, void** grown)
 {
+	*grown = array;
 	if (needed <= *capacity)
 		return true;
 	int64_t c = *capacity > 0 ? *capacity : 16;
 	while (c < needed)
 		c *= 2;
-	void* q = realloc(*array, (size_t)c * size);
+	void* q = realloc(array, (size_t)c * size);
 	if (q == NULL)
 		return false;
-	*array = q;
+	*grown = q;
 	*capacity = c;
 	return true;
 }
+
+// grow_array on `array`, a pointer of any type, assigned as its own type (written through a void**
+// it would break C's aliasing rules) by way of the caller's void* `spare`.
+#define GROW_ARRAY(array, capacity, needed, spare)                                                           \
+	(grow_array((array), (capacity), (needed), sizeof *(array), &(spare)) && ((array) = (spare), true))
 
 // Room for the sources and names of `particles` and `springs` in all.
 static bool reserve(parser* p, int64_t particles, int64_t springs)
 {
 	expansion* ex = p->ex;
 	int64_t pc = ex->particle_capacity;
-	if (!grow_array((void**)&ex->particle_sources, &pc, particles, sizeof(particle_source)))
+	void* spare;
+	if (!GROW_ARRAY(ex->particle_sources, &pc, particles, spare))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld particles", (long long)particles);
 	pc = ex->particle_capacity;
-	if (!grow_array((void**)&ex->name_offset, &pc, particles, sizeof(int64_t)))
+	if (!GROW_ARRAY(ex->name_offset, &pc, particles, spare))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld particles", (long long)particles);
 	ex->particle_capacity = pc;
-	if (!grow_array((void**)&ex->spring_sources, &ex->spring_capacity, springs, sizeof(spring_source)))
+	if (!GROW_ARRAY(ex->spring_sources, &ex->spring_capacity, springs, spare))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, "", "out of memory for %lld springs", (long long)springs);
 	return true;
 }
@@ -657,7 +667,8 @@ static bool name_particle(parser* p, const char* path, int32_t index, const char
 		return fail(p, SM_ERROR_SCHEMA, path, "particle name %s is already used by particle %d",
 		            sm_text_quoted(text, name), (int)other);
 	const int64_t length = (int64_t)strlen(name) + 1;
-	if (!grow_array((void**)&ex->names, &ex->names_capacity, ex->names_length + length, 1))
+	void* spare;
+	if (!GROW_ARRAY(ex->names, &ex->names_capacity, ex->names_length + length, spare))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for particle names");
 	memcpy(ex->names + ex->names_length, name, (size_t)length);
 	ex->name_offset[index] = ex->names_length;
@@ -1541,7 +1552,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 	// Record the structure, name its particles and note the sources of its springs' constants.
 	expansion* ex = p->ex;
 	int32_t holder;
-	if (!grow_array((void**)&ex->structures, &ex->structure_capacity, ex->structure_count + 1, sizeof s))
+	void* spare;
+	if (!GROW_ARRAY(ex->structures, &ex->structure_capacity, ex->structure_count + 1, spare))
 		return fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory");
 	ex->structures[ex->structure_count] = s;
 	if (!sm_name_index_insert(&ex->structure_names, s.name, strlen(s.name), ex->structure_count, &holder))
