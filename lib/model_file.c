@@ -2052,6 +2052,31 @@ static bool error_before_its_byte(const json_error_t* error, const char* text, s
 	return json_error_code(error) == json_error_invalid_syntax && c < 0x20 && control;
 }
 
+// Where the token an error names whole begins, as the offset of its first byte; `at` (the bytes the
+// parser read, up to the token's last) for any other error. A token the parser quotes whole ("'}'
+// expected near '\"name\"'", "invalid token near 'NaN'", a repeated key, a number out of range)
+// is reported at its first character, where an editor's cursor should go to mend it; an error
+// inside a string (an escape, a control character) stays at the character at fault.
+static size_t token_start(const json_error_t* error, const char* text, size_t at)
+{
+	const enum json_error_code code = json_error_code(error);
+	const bool whole =
+	    code == json_error_duplicate_key || code == json_error_numeric_overflow ||
+	    (code == json_error_invalid_syntax && (strstr(error->text, " expected near '") != NULL ||
+		                                       strncmp(error->text, "invalid token near '", 20) == 0 ||
+		                                       strncmp(error->text, "unexpected token near '", 23) == 0));
+	const char* near = strstr(error->text, " near '");
+	if (!whole || near == NULL)
+		return at;
+	const char* token = near + 7;
+	const size_t quoted = strlen(token);
+	// The quoted text is the token's bytes, unless the message was cut short.
+	if (quoted < 2 || token[quoted - 1] != '\'' || quoted - 1 > at ||
+	    memcmp(text + at - (quoted - 1), token, quoted - 1) != 0)
+		return at;
+	return at - (quoted - 1);
+}
+
 // Whether a syntax error reads as a missing comma: the parser expected the end of an array or an
 // object and found the start of another value ("']' expected near '\"springs\"'").
 static bool missing_comma(const char* message)
@@ -2127,7 +2152,8 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		// character of its own there, which sm_text_position, counting characters, does not count.
 		const size_t at = (size_t)error.position;
 		const bool before = error_before_its_byte(&error, text, length);
-		sm_text_position(text, length, before ? at + 1 : at, &line, &column);
+		const size_t start = before ? at : token_start(&error, text, at);
+		sm_text_position(text, length, before ? at + 1 : start < at ? start + 1 : at, &line, &column);
 		if (before && ((unsigned char)text[at] & 0xc0) == 0x80)
 			column++;
 		char shown[6 * JSON_ERROR_TEXT_LENGTH + 1];

@@ -839,7 +839,7 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [}", SM_ERROR_SYNTAX,
 		 "test.json:2:16: unexpected token near '}'"},
 	    {"{\"springmass\": 1, \"springmass\": 1}", SM_ERROR_SYNTAX,
-		 "test.json:1:30: duplicate object key near '\"springmass\"'"},
+		 "test.json:1:19: duplicate object key near '\"springmass\"'"},
 	    {"[1, 2]", SM_ERROR_SCHEMA, "test.json: a model file is a JSON object, not an array"},
 	    {"{\"name\": \"x\"}", SM_ERROR_SCHEMA,
 		 "test.json: missing \"springmass\": 1 (the format version; is this a springmass model file?)"},
@@ -989,9 +989,9 @@ static int test_broken_files(void)
 		 SM_ERROR_NOT_FINITE,
 		 "test.json: springs[0]: stiffness E / l0 = 1e+308 / 1e-10 is not finite (with parameter big = 1e+308)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
-		 "test.json:1:56: real number overflow near '1e400'"},
+		 "test.json:1:52: real number overflow near '1e400'"},
 	    {"\xef\xbb\xbf{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1e400}}", SM_ERROR_SYNTAX,
-		 "test.json:1:56: real number overflow near '1e400'"},
+		 "test.json:1:52: real number overflow near '1e400'"},
 	    {"{\"springmass\": 1, \"name\": \"x\\u0000y\"}", SM_ERROR_SYNTAX,
 		 "test.json:1:36: strings in a model file may not contain \\u0000"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u0000\": 1}}", SM_ERROR_SYNTAX,
@@ -1010,9 +1010,9 @@ static int test_broken_files(void)
 	    {"\xef\xbb\xbf\n", SM_ERROR_SYNTAX,
 		 "test.json: the model file is empty (a model file is one JSON object)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaN}}", SM_ERROR_SYNTAX,
-		 "test.json:1:54: invalid token near 'NaN'"},
+		 "test.json:1:52: invalid token near 'NaN'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 99999999999999999999}}",
-		 SM_ERROR_SYNTAX, "test.json:1:71: too big integer near '99999999999999999999'"},
+		 SM_ERROR_SYNTAX, "test.json:1:52: too big integer near '99999999999999999999'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"2k\": 1}}", SM_ERROR_SCHEMA,
 		 "test.json: parameters.2k: name \"2k\" must be an identifier (letters, digits and '_', not starting with a "
 		 "digit)"},
@@ -2546,10 +2546,12 @@ static int test_dropping_the_initial_state(void)
 	return 0;
 }
 
-// Line and column of a syntax error are those an editor shows: columns count characters, so
-// that a tab and a character of four UTF-8 bytes are one column each; lines end at LF or CR LF;
-// and an error at the end of a text whose last line ends is at column 0 of the line after it,
-// as in docs/model-format.md ("truncated.json:3:0: ']' expected near end of file").
+// Line and column of a syntax error are those an editor shows, at the first character of a token
+// the message quotes whole (where the cursor goes to mend it: before it for a missing comma):
+// columns count characters, so that a tab and a character of four UTF-8 bytes are one column
+// each; lines end at LF or CR LF; and an error at the end of a text whose last line ends is at
+// column 0 of the line after it, as in docs/model-format.md ("truncated.json:3:0: ']' expected
+// near end of file").
 static int test_syntax_error_positions(void)
 {
 	static const refusal cases[] = {
@@ -2557,14 +2559,14 @@ static int test_syntax_error_positions(void)
 	    {"{\"springmass\": 1, \"name\": \"\xf0\x9f\x98\x80\" @}", SM_ERROR_SYNTAX,
 		 "test.json:1:31: '}' expected near '@'"},
 	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX,
-		 "test.json:3:11: ':' expected near '\"x\"'"},
+		 "test.json:3:9: ':' expected near '\"x\"'"},
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n",
 		 SM_ERROR_SYNTAX, "test.json:3:0: ']' expected near end of file"},
 	    // Another value where the end of an array or object was expected: a missing comma?
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n \"springs\": []}",
-		 SM_ERROR_SYNTAX, "test.json:3:10: ']' expected near '\"springs\"' (or a ',' before it)"},
+		 SM_ERROR_SYNTAX, "test.json:3:2: ']' expected near '\"springs\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1 \"name\": \"x\"}", SM_ERROR_SYNTAX,
-		 "test.json:1:23: '}' expected near '\"name\"' (or a ',' before it)"},
+		 "test.json:1:18: '}' expected near '\"name\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0 0 -9.81]}", SM_ERROR_SYNTAX,
 		 "test.json:1:46: ']' expected near '0' (or a ',' before it)"},
 	    // An error at a line end is at column 0 of the next line, whichever kind the line end is.
