@@ -71,13 +71,18 @@ static void open_standard_streams(void)
 }
 
 // A report that could not be written to standard output (a full disk) fails the command, as in
-// any Unix tool; a command that failed has already said why.
+// any Unix tool; a command that failed has already said why. The cause is the flush's, or else
+// that of the write that failed before it, whose errno is still there: a report longer than
+// stdio's buffer (a help text of 4 KB) is written past the buffer and fails there, leaving nothing
+// for the flush to fail on.
 static int finish(int status)
 {
+	const int earlier = errno;
 	errno = 0;
 	if ((fflush(stdout) != 0 || ferror(stdout)) && status == 0) {
+		const int cause = errno != 0 ? errno : earlier;
 		fprintf(stderr, "springmass: cannot write standard output: %s\n",
-		        errno != 0 ? strerror(errno) : "write error");
+		        cause != 0 ? strerror(cause) : "write error");
 		return 1;
 	}
 	return status;
