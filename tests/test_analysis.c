@@ -2920,6 +2920,50 @@ static int test_statics_slack_chain_on_the_sparse_path(void)
 	return 0;
 }
 
+// A rope of 1000 segments (0.8 kg, 2 m, E = 1e4 N per strain) held at its first particle and
+// started horizontal, on the sparse path: the straight rope under gravity has no sideways
+// stiffness, so the solve passes through indefinite H + mu M, which the factorisation must refuse
+// (CHOLMOD factorises a chain simplicially, in LL' form, as its analysis finds supernodes of a
+// few columns). It ends hanging straight down, stable, with the closed-form stretch m g L / (2 E)
+// of test_hanging_rope_elongation (exact for every N; the default tolerance, 1e-6 of a particle's
+// weight, 7.8e-9 N, over the stiffness of a segment, E / l0 = 5e6 N/m, leaves 1.6e-15 m per
+// segment, 1e-12 of the stretch summed over all), and the support carries the whole weight
+// straight up (to the balance's round-off, 1e-12 of it).
+static int test_statics_swinging_chain_on_the_sparse_path(void)
+{
+	const double mass = 0.8, length = 2.0, E = 1e4, g = 9.81;
+	const int32_t segments = 1000;
+	sm_model* model = hanging_rope(length, mass, E, g, segments);
+	ENSURE(model != NULL);
+	const int32_t np = sm_model_particle_count(model);
+	for (int32_t i = 0; i < np; i++) {
+		sm_particle_def p;
+		sm_model_get_particle(model, i, &p);
+		p.position[0] = -p.position[2];  // along x instead of down
+		p.position[2] = 0.0;
+		ENSURE_STATUS(sm_model_set_particle(model, i, &p), SM_OK);
+	}
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_statics_def def = sm_default_statics_def();
+	def.solver = SM_STATICS_SPARSE;
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, &err), SM_OK);
+	printf("  %d iterations, residual %.3g N, stable %d\n", (int)res.iterations, res.residual, res.stable);
+	ENSURE(res.solver == SM_STATICS_SPARSE && res.stable);
+	ENSURE(res.iterations > 10);  // not Newton's first steps alone: measured 69
+	const double bottom = -x[3 * (size_t)(np - 1) + 2];
+	ENSURE_REL(bottom - length, mass * g * length / (2.0 * E), 1e-9, 0.0);
+	// Straight down: sideways offsets of the residual's order over the sideways stiffness.
+	for (int32_t i = 0; i < np; i++)
+		ENSURE(fabs(x[3 * (size_t)i]) <= 1e-9 && fabs(x[3 * (size_t)i + 1]) <= 1e-9);
+	ENSURE_REL(res.reaction_total[2], mass * g, 1e-12, 0.0);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The dense path's verdicts and steps do not depend on the unit of stiffness. A chain of 4
 // particles of m on zero-length springs of k between held ends, evenly spaced, is at rest with
 // the stiffness k tridiag(-1, 2, -1) (x I3), positive definite with eigenvalues
@@ -3496,6 +3540,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_iteration_budget_is_exact);
 	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
+	RUN_TEST(test_statics_swinging_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_stability_sees_mechanisms);
 	RUN_TEST(test_dense_statics_does_not_depend_on_the_unit_of_stiffness);
 	RUN_TEST(test_zero_tolerance_is_relative_to_the_largest_magnitude);
