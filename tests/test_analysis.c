@@ -2964,6 +2964,34 @@ static int test_statics_swinging_chain_on_the_sparse_path(void)
 	return 0;
 }
 
+// A stiff rope hanging under its own weight is a minimum of the potential energy at any
+// refinement. With 3000 segments of 1 m and 1 kg in all and E = 1e6 N its stiffness has
+// ||H||_inf = 1.2e10 N/m and a lowest eigenvalue about (1/3000 kg) 1.45 g / L = 4.7e-3 N/m (the
+// hanging chain's lowest pendulum mode); the sparse factor of its banded H forms inner products of
+// at most 9 terms, so its error moves that eigenvalue by about 9 eps ||H|| = 2.4e-5 N/m, and it is
+// resolved. Counting dof = 9000 terms instead (the dense bound, 2.4e-2 N/m) called it singular:
+// "not stable".
+static int test_statics_long_hanging_rope_is_stable(void)
+{
+	const double mass = 1.0, length = 1.0, E = 1e6, g = 9.81;
+	sm_model* model = hanging_rope(length, mass, E, g, 3000);
+	ENSURE(model != NULL);
+	const int32_t np = sm_model_particle_count(model);
+	double* x = malloc(3 * (size_t)np * sizeof(double));
+	ENSURE(x != NULL);
+	sm_statics_def def = sm_default_statics_def();
+	def.solver = SM_STATICS_SPARSE;
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, &err), SM_OK);
+	ENSURE(res.solver == SM_STATICS_SPARSE && res.stable);
+	// The stretch m g L / (2 E) = 4.9e-6 m, to the residual over the stiffness.
+	ENSURE_REL(-x[3 * (size_t)(np - 1) + 2] - length, mass * g * length / (2.0 * E), 1e-6, 0.0);
+	free(x);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The dense path's verdicts and steps do not depend on the unit of stiffness. A chain of 4
 // particles of m on zero-length springs of k between held ends, evenly spaced, is at rest with
 // the stiffness k tridiag(-1, 2, -1) (x I3), positive definite with eigenvalues
@@ -3541,6 +3569,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_swinging_chain_on_the_sparse_path);
+	RUN_TEST(test_statics_long_hanging_rope_is_stable);
 	RUN_TEST(test_statics_stability_sees_mechanisms);
 	RUN_TEST(test_dense_statics_does_not_depend_on_the_unit_of_stiffness);
 	RUN_TEST(test_zero_tolerance_is_relative_to_the_largest_magnitude);
