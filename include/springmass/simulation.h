@@ -44,8 +44,9 @@
 // solving the sparse statics of a 40 x 40 cloth took 3.5 - 3.9 s with one BLAS thread and 3.3 - 4.3 s with
 // OpenBLAS's default of one per core on 2 cores, which spent twice the processor time (3 s of it waiting in
 // the kernel) and, with the test suite running beside it, took 42 s against 4.2 s in one run. CHOLMOD's
-// supernodal factorisation (the reduced Cholesky solver from about 2000 unknowns on, the coarse system of
-// conjugate gradients on large models, the sparse paths of sm_statics_solve and sm_modes_compute) would run
+// supernodal factorisation (where CHOLMOD's analysis picks it: the reduced Cholesky solver and the sparse
+// statics on sheets and blocks from about 2000 unknowns on; the coarse system of conjugate gradients on large
+// models; the sparse path of sm_modes_compute) would run
 // its loops in an OpenMP team of 4 threads whatever OMP_NUM_THREADS says; springmass keeps them to the
 // calling thread (the sparse statics of a 40 x 40 cloth ran 5 times faster so on 2 cores:
 // lib/cholmod_factorize.c), and leaves the thread's OpenMP settings as they were.
