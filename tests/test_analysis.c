@@ -2114,7 +2114,9 @@ static int test_statics_balances_loads_below_the_default_tolerance(void)
 	sm_error err;
 	ENSURE_STATUS(sm_statics_solve(model, NULL, x, r, &res, &err), SM_OK);
 	ENSURE(res.iterations >= 1);
-	ENSURE(res.tolerance <= SM_STATICS_LOAD_FRACTION * m * g);
+	// The default here is 1e-6 of the weight, exactly (docs/analysis.md): the round-off floor,
+	// 8 eps times about k L = 1e-6 N, is 2e-21 N, far below it.
+	ENSURE(res.tolerance == 1e-6 * (m * g));
 	ENSURE(res.residual <= res.tolerance);
 	ENSURE(res.stable);
 	const double sag = m * g / k;
@@ -2142,6 +2144,58 @@ static int test_statics_balances_loads_below_the_default_tolerance(void)
 	x[5] = 1.0;
 	ENSURE_STATUS(sm_statics_solve(model, &given, x, r, &res, &err), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(strstr(err.message, "not below the largest load") != NULL && x[5] == 1.0);
+	// At the weight itself too: a force left as large as the load passes the unloaded start.
+	given.residual_tolerance = m * g;
+	ENSURE_STATUS(sm_statics_solve(model, &given, x, r, &res, &err), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(x[5] == 1.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
+// A model with no constant force on a free particle (no gravity, no load) has no load to scale
+// the tolerance to: the default stays SM_STATICS_DEFAULT_TOLERANCE, not 0 (analysis.h), and a
+// tolerance given is taken, not refused as at or above a load of 0. A free particle between
+// anchors at x = 0 and x = 2 on springs of rest length 0.5 m and 1 and 3 N/m, started off the
+// line at (1, 0.1, 0), rests where the tensions balance, 1 (x - 0.5) = 3 (1.5 - x): x = 1.25,
+// y = 0. The force left, at most the tolerance, moves it by at most the tolerance over the
+// stiffness along the line, 4 N/m, or across it, the tensions over the lengths (0.75 / 0.75 +
+// 0.75 / 1.25 = 1.6 N/m): 1 / 1.6 of the tolerance. The round-off floor here, 8 eps times
+// about 3 N/m x 2 m, is 1e-14 N, far below either tolerance.
+static int test_statics_without_loads_keeps_the_default_tolerance(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double start[3][3] = {{0.0, 0.0, 0.0}, {2.0, 0.0, 0.0}, {1.0, 0.1, 0.0}};
+	for (int i = 0; i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		for (int c = 0; c < 3; c++)
+			p.position[c] = start[i][c];
+		p.motion = i < 2 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	for (int i = 0; i < 2; i++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i;
+		s.b = 2;
+		s.rest_length = 0.5;
+		s.stiffness = i == 0 ? 1.0 : 3.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	double x[9];
+	sm_statics_result res;
+	sm_error err;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, &err), SM_OK);
+	ENSURE(res.tolerance == SM_STATICS_DEFAULT_TOLERANCE && res.residual <= res.tolerance);
+	ENSURE_NEAR(x[6], 1.25, 1e-9);
+	ENSURE_NEAR(x[7], 0.0, 1e-9);
+	sm_statics_def given = sm_default_statics_def();
+	given.residual_tolerance = 1e-6;
+	ENSURE_STATUS(sm_statics_solve(model, &given, x, NULL, &res, &err), SM_OK);
+	ENSURE(res.tolerance == 1e-6 && res.residual <= res.tolerance);
+	ENSURE_NEAR(x[6], 1.25, 1e-6);
+	ENSURE_NEAR(x[7], 0.0, 1e-6);
 	sm_model_destroy(model);
 	return 0;
 }
@@ -3534,6 +3588,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_stiff_rope_carries_its_whole_weight);
 	RUN_TEST(test_statics_says_when_the_continuation_gives_up);
 	RUN_TEST(test_statics_balances_loads_below_the_default_tolerance);
+	RUN_TEST(test_statics_without_loads_keeps_the_default_tolerance);
 	RUN_TEST(test_statics_reports_every_iteration);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_hanging_cloth_reactions);
