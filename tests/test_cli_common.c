@@ -6,6 +6,7 @@
 #include "test_harness.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 // Particles a (index 0), b (1) and an unnamed one (2); springs 0 (a - b) and 1 (b - 2).
 static const char model_text[] =
@@ -73,9 +74,76 @@ static int test_names_follow_whole_indices(void)
 	return failures > 0;
 }
 
+// Whether cli_warn_coarse_tolerances warns about text's model at the default tolerances (1e-8 m,
+// 1e-6 m/s), spring `disabled` (when >= 0) disabled first; what it writes goes to *written.
+static int warns(const char* text, int32_t disabled, char** written)
+{
+	sm_error err;
+	sm_document* doc = sm_document_parse(text, strlen(text), "x.json", &err);
+	sm_model* model = NULL;
+	if (doc == NULL || sm_document_build(doc, &model, &err) != SM_OK) {
+		sm_document_destroy(doc);
+		return -1;
+	}
+	if (disabled >= 0)
+		sm_model_set_spring_enabled(model, disabled, false);
+	const sm_simulation_def def = sm_default_simulation_def();
+	size_t size = 0;
+	*written = NULL;
+	FILE* f = open_memstream(written, &size);
+	const bool warned = f != NULL && cli_warn_coarse_tolerances(f, "w: ", model, &def);
+	if (f != NULL)
+		fclose(f);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return warned;
+}
+
+// The model's scales are those of its shortest enabled spring (cli_common.h): its rest length,
+// or its initial length for a zero-length one (the particles' distance, skipped where it is 0),
+// and that length times the bound of the highest angular frequency. A 1 kg bob 1 m from a fixed
+// anchor on a 1 N/m spring of rest length 1 um (omega of order 1 rad/s: speeds of order 1e-6 m/s)
+// is resolved to the default tolerances only at 1e-8 m / 1e-6 m = 1e-2 of its scale, above
+// CLI_COARSE_TOLERANCE (1e-4) for both: warned about, its length being the rest length, not the
+// 1 m the particles start apart. A zero-length spring between coincident particles beside it
+// has no length to go by and changes nothing; the same spring disabled leaves only one of 1 m
+// (1e-8 of it), and a position tolerance below 1e-4 of 1 um (1e-11 m) alone is resolved: no
+// warning in either case, as both tolerances must be coarse.
+static int test_coarse_tolerances_go_by_the_shortest_enabled_spring(void)
+{
+	static const char short_spring[] =
+	    "{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0, 0, 0], \"particles\": [{\"name\": \"a\", "
+	    "\"position\": [0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0], \"mass\": 1}, "
+	    "{\"name\": \"c\", \"position\": [1, 0, 0], \"fixed\": true}, {\"name\": \"d\", \"position\": [2, 0, 0], "
+	    "\"fixed\": true}], \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 1, \"rest_length\": 1e-6}, "
+	    "{\"a\": \"b\", \"b\": \"c\", \"stiffness\": 1, \"rest_length\": 0}, {\"a\": \"b\", \"b\": \"d\", "
+	    "\"stiffness\": 1}]}";
+	char* written = NULL;
+	ENSURE(warns(short_spring, -1, &written) == 1);
+	ENSURE(written != NULL &&
+	       strstr(written, "w: the absolute tolerances, 1e-08 m and 1e-06 m/s, are coarse for "
+	                       "this model: its shortest spring is 1e-06 m") == written);
+	free(written);
+	ENSURE(warns(short_spring, 0, &written) == 0);
+	ENSURE(written != NULL && written[0] == '\0');
+	free(written);
+	sm_error err;
+	sm_document* doc = sm_document_parse(short_spring, sizeof short_spring - 1, "x.json", &err);
+	ENSURE(doc != NULL);
+	sm_model* model = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &model, &err), SM_OK);
+	sm_simulation_def def = sm_default_simulation_def();
+	def.absolute_tolerance_position = 1e-11;
+	ENSURE(!cli_warn_coarse_tolerances(stderr, "", model, &def));
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_names_follow_whole_indices);
+	RUN_TEST(test_coarse_tolerances_go_by_the_shortest_enabled_spring);
 	return TEST_SUMMARY();
 }
