@@ -2560,6 +2560,9 @@ static int test_syntax_error_positions(void)
 		 "test.json:1:31: '}' expected near '@'"},
 	    {"{\r\n\t\"springmass\": 1,\r\n\t\"name\" \"x\"}", SM_ERROR_SYNTAX,
 		 "test.json:3:9: ':' expected near '\"x\"'"},
+	    // A token the whole text begins with: at column 1, its first character (the parser stopped
+	    // after its last, exactly as many bytes in as the token is long).
+	    {"\"x\"", SM_ERROR_SYNTAX, "test.json:1:1: '[' or '{' expected near '\"x\"'"},
 	    {"{\"springmass\": 1, \"name\": \"x\",\n \"particles\": [{\"position\": [0, 0, 0]}\n",
 		 SM_ERROR_SYNTAX, "test.json:3:0: ']' expected near end of file"},
 	    // Another value where the end of an array or object was expected: a missing comma?
