@@ -989,6 +989,21 @@ def test_a_constant_set_to_its_value_keeps_it_to_the_sign_of_a_zero(package, tmp
         assert math.copysign(1.0, inst.get("j")) == 1.0
     finally:
         inst.free()
+    # Also in a call that changes a parameter beside it, which rebuilds the model from the values set.
+    stiff = dict(REFERENCE_ONLY, parameters={"j": 0, "k": 100})
+    stiff["structures"] = [dict(REFERENCE_ONLY["structures"][0], structural={"strain_stiffness": "k"})]
+    model = tmp_path / "reference_zero_stiffness.json"
+    model.write_text(json.dumps(stiff))
+    inst = Instance(package(model))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.setReal([inst.variables["j"].valueReference, inst.variables["k"].valueReference], [-0.0, 120.0])
+        s.exitInitializationMode()
+        assert math.copysign(1.0, inst.get("j")) == 1.0 and inst.get("k") == 120.0
+    finally:
+        inst.free()
 
 
 def test_setup_without_a_tolerance_takes_the_files_after_one_with(test_fmu):
