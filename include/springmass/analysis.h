@@ -95,8 +95,10 @@ typedef struct sm_statics_result {
 	double reaction_total[3];  ///< sum of the reactions at the constrained particles [N]
 	/// True if the exact stiffness -df/dx over the free degrees of freedom is positive definite
 	/// at the equilibrium beyond round-off (a local minimum of U, not a saddle or a mechanism: its
-	/// smallest eigenvalue exceeds dof eps times its largest row sum). False for a group of
-	/// particles held by no constrained particle (gravity 0: at rest anywhere, never stable).
+	/// smallest eigenvalue exceeds k eps times its largest row sum, k the longest inner product of
+	/// its Cholesky factorisation: dof on the dense path, the longest row of the factor on the
+	/// sparse one). False for a group of particles held by no constrained particle (gravity 0:
+	/// at rest anywhere, never stable).
 	/// False also where the two particles of a rest-length spring of rest length > 0 coincide: a
 	/// force balance by convention there (model.h), but a maximum of that spring's energy.
 	bool stable;
