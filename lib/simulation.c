@@ -133,9 +133,22 @@ sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
 // State packing
 // ---------------------------------------------------------------------------------------------
 
-// A driven particle's motion has run for s = (time_origin - drive_time) + t: both differences are
-// of times near each other, so that neither loses the precision of a large time. Its position is
-// x0 + s (v0 + s a / 2), its velocity v0 + s a.
+// Driven particle i's position x and, if v is not NULL, velocity v at CVODE time t. Its motion has
+// run for s = (time_origin - drive_time) + t: both differences are of times near each other, so
+// that neither loses the precision of a large time. Its position is x0 + s (v0 + s a / 2), its
+// velocity v0 + s a.
+static void driven_state(const sm_simulation* sim, int32_t i, double t, double x[3], double v[3])
+{
+	const size_t p = 3 * (size_t)i;
+	const double s = (sim->time_origin - sim->drive_time[i]) + t;
+	for (int c = 0; c < 3; c++) {
+		const double a = sim->drive_acceleration[p + c];
+		x[c] = sim->drive_position[p + c] + s * (sim->drive_velocity[p + c] + 0.5 * s * a);
+		if (v != NULL)
+			v[c] = sim->drive_velocity[p + c] + s * a;
+	}
+}
+
 void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double* x, double* v)
 {
 	const int64_t nd = sim->dofs;
@@ -154,12 +167,7 @@ void sm_simulation_unpack(sm_simulation* sim, double t, const double* y, double*
 		const int32_t i = sim->constrained[k];
 		const size_t p = 3 * (size_t)i;
 		if (m->motion[i] == SM_PARTICLE_DRIVEN) {
-			const double dt = (sim->time_origin - sim->drive_time[i]) + t;
-			for (int c = 0; c < 3; c++) {
-				const double a = sim->drive_acceleration[p + c];
-				x[p + c] = sim->drive_position[p + c] + dt * (sim->drive_velocity[p + c] + 0.5 * dt * a);
-				v[p + c] = sim->drive_velocity[p + c] + dt * a;
-			}
+			driven_state(sim, i, t, x + p, v + p);
 		} else {
 			for (int c = 0; c < 3; c++) {
 				x[p + c] = m->position[p + c];
@@ -1597,18 +1605,13 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 static void position_now(const sm_simulation* sim, int32_t i, double x[3])
 {
 	const sm_model* m = sim->model;
-	const size_t p = 3 * (size_t)i;
 	const int32_t k = m->free_index[i];
-	if (k >= 0) {
+	if (k >= 0)
 		memcpy(x, N_VGetArrayPointer(sim->y) + 3 * (size_t)k, 3 * sizeof(double));
-	} else if (m->motion[i] == SM_PARTICLE_DRIVEN) {
-		const double dt = (sim->time_origin - sim->drive_time[i]) + sm_simulation_cvode_time(sim, sim->time);
-		for (int c = 0; c < 3; c++)
-			x[c] = sim->drive_position[p + c] +
-			       dt * (sim->drive_velocity[p + c] + 0.5 * dt * sim->drive_acceleration[p + c]);
-	} else {
-		memcpy(x, m->position + p, 3 * sizeof(double));
-	}
+	else if (m->motion[i] == SM_PARTICLE_DRIVEN)
+		driven_state(sim, i, sm_simulation_cvode_time(sim, sim->time), x, NULL);
+	else
+		memcpy(x, m->position + 3 * (size_t)i, 3 * sizeof(double));
 }
 
 // A break the caller decides on (a cut, a tear it models itself), as sm_simulation_break_springs makes one
