@@ -581,14 +581,12 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 	// A call that changes no parameter (inputs alone, or every start value written back as it is)
 	// changes nothing here, and takes a time in proportion to the values it sets, not to the
 	// parameters: a master setting each input of a model with many parameters on its own went over
-	// all of them for every value. Bit for bit, as the document tells -0 from 0.
+	// all of them for every value. Down to the sign of a zero, as the document tells -0 from 0.
 	bool changes = false;
 	for (size_t i = 0; i < nvr && !changes; ++i) {
 		const fmu_variable* v = &inst->table.variables[vr[i]];
-		if (v->source == FMU_SRC_MODEL_PARAMETER && v->variability != FMU_CONSTANT) {
-			const double now = sm_document_parameter_value(inst->doc, v->index);
-			changes = memcmp(&now, &value[i], sizeof now) != 0;
-		}
+		changes = v->source == FMU_SRC_MODEL_PARAMETER && v->variability != FMU_CONSTANT &&
+		          !fmu_same_parameter_value(sm_document_parameter_value(inst->doc, v->index), value[i]);
 	}
 	if (!changes)
 		return fmi2OK;

@@ -958,9 +958,7 @@ static void quote_line(const char* line, size_t length, char* out, size_t size)
 	out[k] = '\0';
 }
 
-// Whether a value set is the file's own: the same double, down to the sign of a zero (a parameter
-// of 0 set to -0 starts a velocity at -0, as the file giving -0.0 does: sm_document_set_parameter).
-static bool same_value(double a, double b)
+bool fmu_same_parameter_value(double a, double b)
 {
 	return a == b && signbit(a) == signbit(b);
 }
@@ -1026,7 +1024,7 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 	int32_t count = 0;
 	for (int32_t i = 0; i < np; ++i) {
 		const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
-		if (!same_value(a, b))
+		if (!fmu_same_parameter_value(a, b))
 			pending[count++] = i;
 	}
 	// Passes in file order (the same values give the same text, and GUID, whatever order they
@@ -1049,7 +1047,7 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 			if (i < 0 || i >= np)
 				continue;
 			const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
-			if (!same_value(a, b))
+			if (!fmu_same_parameter_value(a, b))
 				pending[count++] = i;
 		}
 		if (!file)

@@ -9,6 +9,7 @@
 
 #include "springmass/model_file.h"
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -145,6 +146,11 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 /// every value is accepted. Messages name `source_name` (the model file). Returns a malloc'ed
 /// NUL-terminated text and its length (0 when no value differs), or NULL with err set: out of
 /// memory, or values the model refuses in every such order (naming the parameter).
+/// Whether a parameter's value set is the one it has: the same double, down to the sign of a zero
+/// (a parameter of 0 set to -0 starts a velocity at -0, as the file giving -0.0 does:
+/// sm_document_set_parameter).
+bool fmu_same_parameter_value(double a, double b);
+
 char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, const char* source_name,
                           const int32_t* order, int32_t order_count, size_t* parameters_length,
                           sm_error* err);
