@@ -897,6 +897,24 @@ static int test_break_spring_by_the_caller(void)
 	return 0;
 }
 
+// A model of the default world with these particles and springs; NULL if any is refused.
+static sm_model* model_of(const sm_particle_def* particles, int32_t particle_count,
+                          const sm_spring_def* springs, int32_t spring_count)
+{
+	const sm_model_def world = sm_default_model_def();
+	sm_model* model = sm_model_create(&world, NULL);
+	bool ok = model != NULL;
+	for (int32_t i = 0; ok && i < particle_count; i++)
+		ok = sm_model_add_particle(model, &particles[i], NULL) == SM_OK;
+	for (int32_t k = 0; ok && k < spring_count; k++)
+		ok = sm_model_add_spring(model, &springs[k], NULL) == SM_OK;
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // Cutting a spring moves its own elastic energy, ks (L - l0)^2 / 2, to the dissipated energy,
 // whatever the rest of the model holds: a 1 N/m spring stretched by 1 mm (5e-7 J) beside one of
 // 1e6 N/m stretched by 1 m (5e5 J), cut at the start and after an advance. Taken as the model's
@@ -908,26 +926,20 @@ static int test_break_spring_by_the_caller(void)
 // moves the energy the spring holds at the positions reached.
 static int test_cutting_a_spring_dissipates_its_own_energy(void)
 {
-	const sm_model_def world = sm_default_model_def();
-	sm_model* model = sm_model_create(&world, NULL);
+	// An anchor, a heavy fixed particle on the stiff spring, a light free one on the soft.
+	sm_particle_def particles[3] = {sm_default_particle_def(), sm_default_particle_def(),
+	                                sm_default_particle_def()};
+	particles[0].motion = particles[1].motion = SM_PARTICLE_FIXED;
+	particles[1].position[0] = 2.0;
+	particles[2].position[1] = 1.001;
+	sm_spring_def springs[2] = {sm_default_spring_def(), sm_default_spring_def()};
+	springs[0].b = 1;
+	springs[1].b = 2;
+	springs[0].rest_length = springs[1].rest_length = 1.0;
+	springs[0].stiffness = 1e6;
+	springs[1].stiffness = 1.0;
+	sm_model* model = model_of(particles, 3, springs, 2);
 	ENSURE(model != NULL);
-	sm_particle_def anchor = sm_default_particle_def(), heavy = sm_default_particle_def(),
-	                light = sm_default_particle_def();
-	anchor.motion = heavy.motion = SM_PARTICLE_FIXED;
-	heavy.position[0] = 2.0;
-	light.position[1] = 1.001;
-	sm_spring_def stiff = sm_default_spring_def(), soft = sm_default_spring_def();
-	stiff.a = soft.a = 0;
-	stiff.b = 1;
-	soft.b = 2;
-	stiff.rest_length = soft.rest_length = 1.0;
-	stiff.stiffness = 1e6;
-	soft.stiffness = 1.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &anchor, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_particle(model, &heavy, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_particle(model, &light, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_spring(model, &stiff, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_spring(model, &soft, NULL), SM_OK);
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
 	for (int advanced = 0; advanced < 2; advanced++) {
@@ -962,27 +974,21 @@ static int test_cutting_a_spring_dissipates_its_own_energy(void)
 // or with a doubled or no acceleration term, misses by 1e-3 of it or more.
 static int test_cutting_a_spring_at_a_driven_particle(void)
 {
-	const sm_model_def world = sm_default_model_def();
-	sm_model* model = sm_model_create(&world, NULL);
+	// The driven particle, the fixed anchor on the spring cut, a free bob on the one held.
+	sm_particle_def particles[3] = {sm_default_particle_def(), sm_default_particle_def(),
+	                                sm_default_particle_def()};
+	particles[0].motion = SM_PARTICLE_DRIVEN;
+	particles[1].motion = SM_PARTICLE_FIXED;
+	particles[1].position[0] = 1.0;
+	particles[2].position[1] = -1.0;
+	sm_spring_def springs[2] = {sm_default_spring_def(), sm_default_spring_def()};
+	springs[0].b = 1;
+	springs[1].b = 2;
+	springs[0].rest_length = 0.5;
+	springs[1].rest_length = 1.0;
+	springs[0].stiffness = springs[1].stiffness = 10.0;
+	sm_model* model = model_of(particles, 3, springs, 2);
 	ENSURE(model != NULL);
-	sm_particle_def driven = sm_default_particle_def(), anchor = sm_default_particle_def(),
-	                bob = sm_default_particle_def();
-	driven.motion = SM_PARTICLE_DRIVEN;
-	anchor.motion = SM_PARTICLE_FIXED;
-	anchor.position[0] = 1.0;
-	bob.position[1] = -1.0;
-	sm_spring_def cut = sm_default_spring_def(), hold = sm_default_spring_def();
-	cut.a = hold.a = 0;
-	cut.b = 1;
-	hold.b = 2;
-	cut.rest_length = 0.5;
-	hold.rest_length = 1.0;
-	cut.stiffness = hold.stiffness = 10.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &driven, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_particle(model, &anchor, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_particle(model, &bob, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_spring(model, &cut, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_spring(model, &hold, NULL), SM_OK);
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
 	const double p[3] = {0.1, 0.0, 0.0}, v[3] = {0.3, 0.0, 0.0}, a[3] = {0.0, 0.4, 0.0};
