@@ -210,12 +210,12 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	const long n = model->particle_count;
 	if (def->a < 0 || def->a >= n)
 		return say(msg, SM_ERROR_PARTICLE_INDEX,
-		           "spring %ld: particle a = %ld out of range (model has %ld particles)", index, (long)def->a,
-		           n);
+		           "spring %ld: particle a = %ld out of range (model has %ld particle%s)", index,
+		           (long)def->a, n, n == 1 ? "" : "s");
 	if (def->b < 0 || def->b >= n)
 		return say(msg, SM_ERROR_PARTICLE_INDEX,
-		           "spring %ld: particle b = %ld out of range (model has %ld particles)", index, (long)def->b,
-		           n);
+		           "spring %ld: particle b = %ld out of range (model has %ld particle%s)", index,
+		           (long)def->b, n, n == 1 ? "" : "s");
 	if (def->a == def->b)
 		return say(msg, SM_ERROR_SELF_SPRING, "spring %ld: connects particle %ld to itself (a = b)", index,
 		           (long)def->a);
@@ -558,8 +558,8 @@ static sm_status check_particle_index(sm_model* model, int32_t index)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->particle_count)
 		return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
-		                     "particle %ld out of range (model has %ld particles)", (long)index,
-		                     (long)model->particle_count);
+		                     "particle %ld out of range (model has %ld particle%s)", (long)index,
+		                     (long)model->particle_count, model->particle_count == 1 ? "" : "s");
 	return SM_OK;
 }
 
@@ -670,8 +670,8 @@ static sm_status check_spring_index(sm_model* model, int32_t index)
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->spring_count)
-		return sm_model_fail(model, SM_ERROR_SPRING_INDEX, "spring %ld out of range (model has %ld springs)",
-		                     (long)index, (long)model->spring_count);
+		return sm_model_fail(model, SM_ERROR_SPRING_INDEX, "spring %ld out of range (model has %ld spring%s)",
+		                     (long)index, (long)model->spring_count, model->spring_count == 1 ? "" : "s");
 	return SM_OK;
 }
 

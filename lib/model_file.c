@@ -797,8 +797,8 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 		const json_int_t i = json_integer_value(value);
 		if (i < 0 || i >= n)
 			return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-			            "particle index %lld is out of range (the model has %d particles)", (long long)i,
-			            (int)n);
+			            "particle index %lld is out of range (the model has %d particle%s)", (long long)i,
+			            (int)n, n == 1 ? "" : "s");
 		*out = (int32_t)i;
 		return true;
 	}
@@ -811,7 +811,8 @@ static bool resolve_particle(parser* p, const json_t* value, const char* path, i
 			return fail(p, SM_ERROR_SCHEMA, path, "a particle index must be a whole number, not %s", text);
 		if (!(v >= 0.0 && v < (double)n))
 			return fail(p, SM_ERROR_PARTICLE_INDEX, path,
-			            "particle index %s is out of range (the model has %d particles)", text, (int)n);
+			            "particle index %s is out of range (the model has %d particle%s)", text, (int)n,
+			            n == 1 ? "" : "s");
 		*out = (int32_t)v;
 		return true;
 	}

@@ -776,9 +776,10 @@ sm_status sm_set_motion_of(sm_model* model, const int32_t* particles, int32_t co
 		                     (int)motion);
 	for (int32_t n = 0; n < count; n++)
 		if (particles[n] < 0 || particles[n] >= model->particle_count)
-			return sm_model_fail(model, SM_ERROR_PARTICLE_INDEX,
-			                     "selection: entry %d, particle %d, is out of range (model has %d particles)",
-			                     (int)n, (int)particles[n], (int)model->particle_count);
+			return sm_model_fail(
+			    model, SM_ERROR_PARTICLE_INDEX,
+			    "selection: entry %d, particle %d, is out of range (model has %d particle%s)", (int)n,
+			    (int)particles[n], (int)model->particle_count, model->particle_count == 1 ? "" : "s");
 	sm_model_set_motions(model, NULL, particles, count, motion);
 	model->last_error[0] = '\0';
 	return SM_OK;

@@ -255,7 +255,7 @@ static int test_invalid_springs(void)
 	ENSURE(sm_model_spring_count(m) == 1);
 	ENSURE_STATUS(sm_model_add_spring(m, NULL, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_set_spring(m, 1, &good), SM_ERROR_SPRING_INDEX);
-	ENSURE_MESSAGE(m, "spring 1", "out of range (model has 1 springs)");
+	ENSURE_MESSAGE(m, "spring 1", "out of range (model has 1 spring)");
 	ENSURE_STATUS(sm_model_set_spring_enabled(m, 5, false), SM_ERROR_SPRING_INDEX);
 	ENSURE(!sm_model_spring_enabled(m, 5));
 	sm_model_destroy(m);

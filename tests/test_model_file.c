@@ -1025,7 +1025,7 @@ static int test_broken_files(void)
 		 SM_ERROR_SCHEMA, "test.json: fixed[0]: a particle index must be a whole number, not 0.5"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}], \"fixed\": [1e300]}",
 		 SM_ERROR_PARTICLE_INDEX,
-		 "test.json: fixed[0]: particle index 1e+300 is out of range (the model has 1 particles)"},
+		 "test.json: fixed[0]: particle index 1e+300 is out of range (the model has 1 particle)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": \"m\"}}", SM_ERROR_SCHEMA,
 		 "test.json: parameters.k: a parameter's value must be a number, not a string"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"fixed\": true}],"

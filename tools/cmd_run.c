@@ -728,17 +728,19 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	if (!o.quiet) {
 		const sm_statistics s = sm_simulation_statistics(sim);
-		fprintf(stderr,
-		        "springmass run: %s to t = %g s with %s%s: %lld steps, %lld right-hand sides, %lld "
-		        "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
-		        "restarts, %d springs broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
-		        name, t_end,
-		        def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
-		        def.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(sm_simulation_solver(sim)),
-		        (long long)s.steps, (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations,
-		        (long long)s.linear_iterations, (long long)s.error_test_failures,
-		        (long long)s.convergence_failures, (long long)s.restarts, (int)sm_simulation_break_count(sim),
-		        cli_wall_clock() - start, s.force_seconds, s.jacobian_seconds, s.linear_solve_seconds);
+		fprintf(
+		    stderr,
+		    "springmass run: %s to t = %g s with %s%s: %lld steps, %lld right-hand sides, %lld "
+		    "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
+		    "restarts, %d spring%s broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
+		    name, t_end,
+		    def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
+		    def.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(sm_simulation_solver(sim)),
+		    (long long)s.steps, (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations,
+		    (long long)s.linear_iterations, (long long)s.error_test_failures,
+		    (long long)s.convergence_failures, (long long)s.restarts, (int)sm_simulation_break_count(sim),
+		    sm_simulation_break_count(sim) == 1 ? "" : "s", cli_wall_clock() - start, s.force_seconds,
+		    s.jacobian_seconds, s.linear_solve_seconds);
 		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
 			const sm_break_event e = sm_simulation_break(sim, b);
 			char line[64];

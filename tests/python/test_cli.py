@@ -460,7 +460,7 @@ def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path
     vtk = tmp_path / "vtk"
     stats = cli("run", path, "--t-end", 0.2, "--output-interval", 0.1, "-o", tmp_path / "snap.csv",
                 "--vtk", vtk).stderr
-    assert re.search(r"^springmass run: snap to t = 0\.2 s with .*, 1 springs broke; wall ", stats, re.M), stats
+    assert re.search(r"^springmass run: snap to t = 0\.2 s with .*, 1 spring broke; wall ", stats, re.M), stats
     logged = re.findall(r"^  spring 0 \(between anchor and bob\) broke at t = (\S+) s$", stats, re.M)
     omega = math.sqrt(10 / 1)
     t_break = math.acos(1 - 0.01 * omega ** 2 * 1 / 9.81) / omega
