@@ -948,6 +948,25 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 	return fmi2OK;
 }
 
+// fmi2OK, or fmi2Warning, logged, when the absolute tolerances the instance simulates with are
+// coarse for its model (sm_tolerances_coarse), as `springmass fmu` warns at packaging: the
+// tolerances and the parameters that set the model's scales are fixed from here on.
+static fmi2Status coarse_tolerance_warning(instance* inst, const char* function)
+{
+	sm_motion_scales scales;
+	if (sm_model_motion_scales(sm_simulation_model(inst->sim), &scales) != SM_OK ||
+	    !sm_tolerances_coarse(&inst->solver, &scales))
+		return fmi2OK;
+	fmu_logf(inst, fmi2Warning, LOG_WARNING,
+	         "%s: the absolute tolerances, solver.atol_position = %g m and solver.atol_velocity = %g m/s, "
+	         "are coarse for this model: its shortest spring is %.3g m and moves at up to %.3g m/s at its "
+	         "highest frequency, so its motion is resolved only to them (about 1e-8 of these scales: "
+	         "%.1g m and %.1g m/s)",
+	         function, inst->solver.absolute_tolerance_position, inst->solver.absolute_tolerance_velocity,
+	         scales.length, scales.speed, 1e-8 * scales.length, 1e-8 * scales.speed);
+	return fmi2Warning;
+}
+
 fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 {
 	instance* inst = c;
@@ -959,7 +978,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 	}
 	inst->last_successful_time = inst->time;
 	inst->state = ST_STEP_COMPLETE;
-	return fmi2OK;
+	return coarse_tolerance_warning(inst, "fmi2ExitInitializationMode");
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)

@@ -1784,6 +1784,67 @@ static sm_model* explicit_limit_chain(bool reversed)
 	return model;
 }
 
+// The motion scales (simulation.h) of a 2 kg bob 1 m from a fixed anchor on a spring of 8 N/m and
+// rest length 0.25 m, with a 2 N/m zero-length spring to a fixed particle where the bob is and a
+// 6 N/m spring to one 2 m beyond it: the shortest length is the rest length 0.25 m (not the 1 m
+// the ends are apart), the zero-length spring has none to go by, and the bob's Gershgorin row is
+// (8 + 2 + 6) / 2 = 8 1/s^2, the held ends adding nothing else: speed 0.25 sqrt(8) m/s. With the
+// first spring disabled, 2 m and 2 sqrt(4) m/s. Tolerances are coarse only above 1e-4 of both:
+// at exactly that fraction, or above it for one of the two, they are not. Closed forms evaluated
+// the same way, to 1e-15 relative.
+static int test_motion_scales(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double x[4] = {0.0, 1.0, 1.0, 3.0};
+	for (int32_t i = 0; i < 4; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 1 ? SM_PARTICLE_FREE : SM_PARTICLE_FIXED;
+		p.mass = 2.0;
+		p.position[0] = x[i];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t other[3] = {0, 2, 3};
+	const double stiffness[3] = {8.0, 2.0, 6.0};
+	for (int32_t k = 0; k < 3; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = other[k];
+		s.b = 1;
+		s.stiffness = stiffness[k];
+		s.kind = k == 1 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		s.rest_length = k == 0 ? 0.25 : k == 1 ? 0.0 : SM_REST_LENGTH_INITIAL;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_motion_scales scales;
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE_NEAR(scales.length, 0.25, 1e-15);
+	ENSURE_NEAR(scales.speed, 0.25 * sqrt(8.0), 1e-15);
+
+	sm_simulation_def def = sm_default_simulation_def();
+	def.absolute_tolerance_position = SM_COARSE_TOLERANCE * scales.length;
+	def.absolute_tolerance_velocity = 2.0 * SM_COARSE_TOLERANCE * scales.speed;
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	def.absolute_tolerance_position = nextafter(def.absolute_tolerance_position, 1.0);
+	ENSURE(sm_tolerances_coarse(&def, &scales));
+	def.absolute_tolerance_velocity = 0.5 * SM_COARSE_TOLERANCE * scales.speed;
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 0, false), SM_OK);
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE_NEAR(scales.length, 2.0, 2e-15);
+	ENSURE_NEAR(scales.speed, 2.0 * sqrt(4.0), 4e-15);
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 2, false), SM_OK);
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE(isinf(scales.length));  // only the zero-length spring between coincident particles
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	ENSURE_STATUS(sm_model_motion_scales(NULL, &scales), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_motion_scales(model, NULL), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(!sm_tolerances_coarse(NULL, &scales) && !sm_tolerances_coarse(&def, NULL));
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
 // omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
 // a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
@@ -3574,6 +3635,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_modes_refuse_a_spring_too_long_as_not_finite);
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
+	RUN_TEST(test_motion_scales);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_particles_without_springs_beside_one_spring);

@@ -99,12 +99,12 @@ static int warns(const char* text, int32_t disabled, char** written)
 	return warned;
 }
 
-// The model's scales are those of its shortest enabled spring (cli_common.h): its rest length,
+// The model's scales are those of its shortest enabled spring (sm_motion_scales): its rest length,
 // or its initial length for a zero-length one (the particles' distance, skipped where it is 0),
 // and that length times the bound of the highest angular frequency. A 1 kg bob 1 m from a fixed
 // anchor on a 1 N/m spring of rest length 1 um (omega of order 1 rad/s: speeds of order 1e-6 m/s)
 // is resolved to the default tolerances only at 1e-8 m / 1e-6 m = 1e-2 of its scale, above
-// CLI_COARSE_TOLERANCE (1e-4) for both: warned about, its length being the rest length, not the
+// SM_COARSE_TOLERANCE (1e-4) for both: warned about, its length being the rest length, not the
 // 1 m the particles start apart. A zero-length spring between coincident particles beside it
 // has no length to go by and changes nothing; the same spring disabled leaves only one of 1 m
 // (1e-8 of it), and a position tolerance below 1e-4 of 1 um (1e-11 m) alone is resolved: no

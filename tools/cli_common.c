@@ -273,40 +273,15 @@ void cli_note_dense(const char* command, size_t dof)
 bool cli_warn_coarse_tolerances(FILE* f, const char* prefix, const sm_model* model,
                                 const sm_simulation_def* def)
 {
-	const int32_t n = sm_model_particle_count(model);
-	double* x = malloc((3 * (size_t)n + 1) * sizeof(double));
-	sm_explicit_limit limit;
-	if (x == NULL || sm_model_explicit_limit(model, &limit) != SM_OK) {
-		free(x);
-		return false;
-	}
-	sm_model_initial_state(model, x, NULL);
-	double shortest = INFINITY;
-	for (int32_t k = 0; k < sm_model_spring_count(model); k++) {
-		if (!sm_model_spring_enabled(model, k))
-			continue;
-		sm_spring_def s;
-		double l0 = 0.0, ks = 0.0, kd = 0.0;
-		sm_model_get_spring(model, k, &s);
-		sm_model_spring_constants(model, k, &l0, &ks, &kd);
-		const double* a = x + 3 * (size_t)s.a;
-		const double* b = x + 3 * (size_t)s.b;
-		const double length = l0 > 0.0 ? l0 : hypot(hypot(b[0] - a[0], b[1] - a[1]), b[2] - a[2]);
-		if (length > 0.0)
-			shortest = fmin(shortest, length);
-	}
-	free(x);
-	const double speed = shortest * limit.omega_max;
-	if (!isfinite(shortest) || !(speed > 0.0) || !isfinite(speed) ||
-	    !(def->absolute_tolerance_position > CLI_COARSE_TOLERANCE * shortest) ||
-	    !(def->absolute_tolerance_velocity > CLI_COARSE_TOLERANCE * speed))
+	sm_motion_scales scales;
+	if (sm_model_motion_scales(model, &scales) != SM_OK || !sm_tolerances_coarse(def, &scales))
 		return false;
 	fprintf(f,
 	        "%sthe absolute tolerances, %g m and %g m/s, are coarse for this model: its shortest spring is "
 	        "%.3g m and moves at up to %.3g m/s at its highest frequency, so its motion is resolved only to "
 	        "them (about 1e-8 of these scales: atol_position %.1g m, atol_velocity %.1g m/s)\n",
-	        prefix, def->absolute_tolerance_position, def->absolute_tolerance_velocity, shortest, speed,
-	        1e-8 * shortest, 1e-8 * speed);
+	        prefix, def->absolute_tolerance_position, def->absolute_tolerance_velocity, scales.length,
+	        scales.speed, 1e-8 * scales.length, 1e-8 * scales.speed);
 	return true;
 }
 

@@ -53,16 +53,9 @@ int cli_load_model(const char* command, const char* path, const char* const* set
 /// dof is above CLI_DENSE_LIMIT.
 void cli_note_dense(const char* command, size_t dof);
 
-/// Fraction of the model's own scales above which both absolute tolerances count as coarse
-/// (cli_warn_coarse_tolerances) [1].
-#define CLI_COARSE_TOLERANCE 1e-4
-
 /// Prints a warning on `f` (each line starting with `prefix`) and returns true when the absolute
-/// tolerances of `def` are both above CLI_COARSE_TOLERANCE times the model's own scales: the
-/// shortest spring (its rest length, or its initial length for one of rest length 0) [m] and that
-/// length times the Gershgorin bound of its highest angular frequency [m/s]. The defaults, 1e-8 m
-/// and 1e-6 m/s, suit models of centimetres and more; a micromechanical model's motion lies below
-/// them, and CVODE then holds it to nothing.
+/// tolerances of `def` are coarse for the model (sm_tolerances_coarse: both above
+/// SM_COARSE_TOLERANCE times its sm_motion_scales).
 bool cli_warn_coarse_tolerances(FILE* f, const char* prefix, const sm_model* model,
                                 const sm_simulation_def* def);
 

@@ -167,6 +167,30 @@ typedef struct sm_simulation sm_simulation;
 /// The default options (the values documented in sm_simulation_def).
 SM_API sm_simulation_def sm_default_simulation_def(void);
 
+/// Fraction of a model's own scales (sm_motion_scales) above which both absolute tolerances
+/// count as coarse [1]: CVODE then holds the model's motion to no better than this fraction of
+/// its scales (docs/simulation.md, "Tolerances").
+#define SM_COARSE_TOLERANCE 1e-4
+
+/// The scales of a model's motion against which its absolute tolerances are judged.
+typedef struct sm_motion_scales {
+	/// The shortest enabled spring: its rest length, or its initial length for one of rest length
+	/// 0 [m]; INFINITY when no enabled spring has a length (springs between coincident particles).
+	double length;
+	/// length times the Gershgorin bound of the highest angular frequency (sm_explicit_limit's
+	/// omega_max) [m/s]: the speed of a motion of that size at that frequency.
+	double speed;
+} sm_motion_scales;
+
+/// The motion scales of a model (disabled springs left out). SM_ERROR_INVALID_ARGUMENT for NULL
+/// arguments, SM_ERROR_OUT_OF_MEMORY.
+SM_API sm_status sm_model_motion_scales(const sm_model* model, sm_motion_scales* scales);
+
+/// Whether both absolute tolerances of def are above SM_COARSE_TOLERANCE times the scales; false
+/// when either scale is 0 or not finite (nothing to judge by). The defaults, 1e-8 m and 1e-6 m/s,
+/// suit models of centimetres and more; a micromechanical model's motion lies below them.
+SM_API bool sm_tolerances_coarse(const sm_simulation_def* def, const sm_motion_scales* scales);
+
 /// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod"; "unknown" for another
 /// value) and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or
 /// NULL, *solver then unchanged.
