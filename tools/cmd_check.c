@@ -24,7 +24,8 @@ static void usage(FILE* out)
 	        "omega_max (Gershgorin's over the springs' stiffness, undamped) and, with the same bound on\n"
 	        "the modes' damping rates, a step at which explicit (symplectic Euler) integration is\n"
 	        "stable; `springmass modes MODEL -n 0` gives a closer value from every mode's own\n"
-	        "frequency and damping rate.\n"
+	        "frequency and damping rate. Warnings: absolute tolerances coarse for the model's scales,\n"
+	        "springs that start at or beyond their break strain (they break at t = 0).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -45,6 +46,54 @@ static void print_particle(const sm_document* doc, int32_t particle)
 		printf(" (particle %d)", (int)particle);
 	} else
 		printf("particle %d", (int)particle);
+}
+
+// Most springs that start beyond their break strain named one by one; the rest are counted.
+#define BROKEN_AT_START_SHOWN 3
+
+// Warns about the springs whose initial strain is at or beyond their break strain: they break at
+// once, as the first advance starts (at t = 0), and only the rows written before it show them
+// (the first of `springmass run`'s CSV). Most likely a break strain given in per cent, or a
+// rest length that is not the one meant. The test is the simulation's, on lengths: L >= l0 (1 +
+// break strain) (a strain (L - l0) / l0 can round below a limit that L reaches). False when out of
+// memory.
+static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
+{
+	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
+	double* x = malloc((3 * (size_t)n + 1) * sizeof(double));
+	double* length = malloc(2 * ((size_t)m + 1) * sizeof(double));
+	if (x == NULL || length == NULL) {
+		free(x);
+		free(length);
+		return false;
+	}
+	double* strain = length + m + 1;
+	sm_model_initial_state(model, x, NULL);
+	sm_model_spring_states(model, x, NULL, length, strain, NULL);
+	int32_t count = 0;
+	for (int32_t k = 0; k < m; k++) {
+		sm_spring_def s;
+		double l0 = 0.0;
+		sm_model_get_spring(model, k, &s);
+		sm_model_spring_constants(model, k, &l0, NULL, NULL);
+		if (!sm_model_spring_enabled(model, k) || !isfinite(s.break_strain) ||
+		    !(length[k] >= l0 * (1.0 + s.break_strain)))
+			continue;
+		if (++count > BROKEN_AT_START_SHOWN)
+			continue;
+		printf("warning      spring %d, between ", (int)k);
+		print_particle(doc, s.a);
+		printf(" and ");
+		print_particle(doc, s.b);
+		printf(", starts at strain %.6g, at or beyond its break strain %.6g: it breaks at t = 0\n", strain[k],
+		       s.break_strain);
+	}
+	if (count > BROKEN_AT_START_SHOWN)
+		printf("warning      and %d more springs start at or beyond their break strain\n",
+		       (int)(count - BROKEN_AT_START_SHOWN));
+	free(x);
+	free(length);
+	return true;
 }
 
 // One line per structure: its kind and grid, its particles and springs, and the springs of
@@ -295,6 +344,12 @@ int sm_cmd_check(int argc, char** argv)
 	       settings.output_interval, settings.solver.relative_tolerance,
 	       sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
+	if (!warn_broken_at_start(doc, model)) {
+		fprintf(stderr, "springmass check: out of memory\n");
+		sm_model_destroy(model);
+		sm_document_destroy(doc);
+		return 1;
+	}
 	printf("ok\n");
 	sm_model_destroy(model);
 	sm_document_destroy(doc);

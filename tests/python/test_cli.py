@@ -1141,6 +1141,34 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
             assert "warning" not in cli("fmu", quiet, "-o", tmp_path / "quiet.fmu").stderr
 
 
+def test_check_warns_of_springs_that_start_broken(tmp_path):
+    # A bob 1.2 m from its anchor on springs of rest length 1 m starts at strain 0.2: those with a
+    # break strain of 0.2 or less break as the run starts (at t = 0; the first row, written before,
+    # still has all six: elastic energy 6 x 10 (0.2)^2 / 2 = 1.2 J), the one of 0.3 does not. check names
+    # the first three and counts the rest.
+    strains = [0.1, 0.2, 0.3, 0.05, 0.15, 0.01]
+    model = tmp_path / "prestretched.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "prestretched", "gravity": [0, 0, 0],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [1.2, 0, 0], "mass": 1}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 10, "rest_length": 1, "break_strain": e}
+                    for e in strains]}))
+    warnings = [line for line in cli("check", model).stdout.splitlines() if line.startswith("warning")]
+    assert warnings[0] == ("warning      spring 0, between anchor (particle 0) and bob (particle 1), starts at "
+                           "strain 0.2, at or beyond its break strain 0.1: it breaks at t = 0")
+    assert [int(w.split()[2].rstrip(",")) for w in warnings[:3]] == [0, 1, 3]
+    assert warnings[3:] == ["warning      and 2 more springs start at or beyond their break strain"]
+    run = cli("run", model, "--t-end", "0.1", "--output-interval", "0.1", "-o", tmp_path / "x.csv")
+    assert sorted(int(s) for s in re.findall(r"^  spring (\d+) .* broke at t = 0 s$", run.stderr, re.M)) == [0, 1, 3, 4, 5]
+    _, rows = run_csv(tmp_path, model, "--t-end", "0.1", "--output-interval", "0.1")
+    assert rows[0, 2] == pytest.approx(6 * 10 * 0.2**2 / 2, rel=1e-12)
+    # Then the spring of break strain 0.3 alone, which held 10 (0.2)^2 / 2 = 0.2 J at the start
+    # and, without damping, holds at most that (to the tolerances of the run, far below 1e-6 J).
+    assert 0 < rows[1, 2] < 0.2 + 1e-6
+    assert "warning" not in cli("check", MODELS / "tearing_cloth.json").stdout
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
