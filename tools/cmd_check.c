@@ -340,9 +340,13 @@ int sm_cmd_check(int argc, char** argv)
 		printf(
 		    "warning      the highest frequency overflows a double (a stiffness / mass ratio above 1.8e308 "
 		    "1/s^2): no integrator can simulate the model\n");
-	printf("simulation   stop time %g s, output interval %g s, rtol %g, solver %s\n", settings.stop_time,
+	// Adams' fixed-point iteration uses no linear solver, whatever the file names: the method then
+	// takes the solver's place, as in the summary of springmass run.
+	printf("simulation   stop time %g s, output interval %g s, rtol %g, %s%s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance,
-	       sm_linear_solver_name(settings.solver.solver));
+	       settings.solver.method == SM_METHOD_ADAMS ? "method adams (fixed point, no linear solver)"
+	                                                 : "solver ",
+	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
 	if (!warn_broken_at_start(doc, model)) {
 		fprintf(stderr, "springmass check: out of memory\n");

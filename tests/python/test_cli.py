@@ -1220,6 +1220,23 @@ def test_check_summarises_the_model():
     assert "--set n=0" in err and "segments" in err
 
 
+def test_check_names_no_linear_solver_for_adams(tmp_path):
+    # A file that asks for Adams names a linear solver all the same (or keeps the default "auto");
+    # Adams' fixed-point iteration uses none, as springmass run's summary says: check must not
+    # report one as the solver the run uses.
+    model = json.loads((MODELS / "oscillator.json").read_text())
+    model["simulation"].update(method="adams", solver="klu")
+    path = tmp_path / "adams.json"
+    path.write_text(json.dumps(model))
+    line = summary_line(cli("check", path).stdout, "simulation")
+    assert line == "stop time 5 s, output interval 0.01 s, rtol 1e-08, method adams (fixed point, no linear solver)"
+    assert "Adams (fixed point, no linear solver)" in cli("run", path, "-o", tmp_path / "adams.csv", "--t-end", 0.1).stderr
+    # BDF keeps the solver it names.
+    model["simulation"].update(method="bdf")
+    path.write_text(json.dumps(model))
+    assert summary_line(cli("check", path).stdout, "simulation").endswith("rtol 1e-08, solver klu")
+
+
 def test_check_sheet_grid_and_the_row_limit(tmp_path):
     # A sheet of nu = 3 by nv = 5 points is summarised in the file's order, 3 x 5, its 15 particles
     # numbered from 0. `springmass run` writes at most 1e9 rows (docs/model-format.md): a stop time
