@@ -60,7 +60,8 @@ static void usage(FILE* out)
 	        "  --atol-position A      absolute tolerance of positions alone [m] (wins over --atol)\n"
 	        "  --atol-velocity A      absolute tolerance of velocities and of the energies\n"
 	        "                         integrated alone [m/s], [J] (wins over --atol)\n"
-	        "  --max-steps N          internal steps allowed per output interval (default 100000)\n"
+	        "  --max-steps N          internal steps allowed per output interval, or per stretch\n"
+	        "                         between --input rows within one (default 100000)\n"
 	        "  --max-step H           largest internal step [s]; 0 for no limit\n"
 	        "  --threads N            threads for the pcg solver on models of 4000 free particles or\n"
 	        "                         more (default: every processor it may run on; at most 4);\n"
@@ -72,7 +73,8 @@ static void usage(FILE* out)
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
-	        "  -h, --help             this text\n"
+	        "  -h, --help             this text\n");
+	fprintf(out,
 	        "\n"
 	        "A progress line goes to stderr for runs longer than a second, and a summary at the end:\n"
 	        "the solver's statistics, the springs that broke and the energy balance. Exit status: 0\n"

@@ -147,10 +147,14 @@ typedef struct sm_statistics {
 	int64_t linear_iterations;  ///< conjugate-gradient iterations, or one per solve for direct solvers
 	int64_t error_test_failures;
 	int64_t convergence_failures;
-	int64_t restarts;             ///< solver re-initialisations (events, state changes, jumps in inputs)
-	double force_seconds;         ///< wall time in force evaluation [s]
-	double jacobian_seconds;      ///< wall time in Jacobian evaluation and matrix setup [s]
-	double linear_solve_seconds;  ///< wall time in linear solves [s]
+	int64_t restarts;      ///< solver re-initialisations (events, state changes, jumps in inputs)
+	double force_seconds;  ///< wall time in force evaluation [s]
+	/// wall time in Jacobian evaluation: the springs' derivatives, and their assembly into the
+	/// matrices of the dense, klu and cholmod solvers [s]
+	double jacobian_seconds;
+	/// wall time in linear solves, apart from the above: factorisations (dense and klu LU,
+	/// cholmod's Cholesky), preconditioners and iterations [s]
+	double linear_solve_seconds;
 	/// Numeric factorisations of a Newton matrix: the set-ups of the dense and KLU solvers,
 	/// CHOLMOD's factorisations for the reduced Cholesky solver, none for conjugate gradients.
 	int64_t factorizations;
