@@ -5784,6 +5784,61 @@ static int test_max_steps_holds_across_breaks(void)
 	return 0;
 }
 
+// A step limit that runs out at the very step in which a spring breaks: the advance stops at the
+// break with SM_ERROR_STEP_LIMIT (simulation.h), the break recorded, and the next advance goes on
+// as if uninterrupted. The break re-initialises CVODE, whose own step count starts afresh, so the
+// rest of the advance has no step left. pulled_spring() pulled at 1 m/s breaks at 0.1 s; max_steps
+// is tried from 1 up until the advance stops with the break in its last step. A restart follows
+// every break either way, so the interrupted run and one advance to the end take the same steps
+// after it: the same bits at the end. Caught: the limit counted afresh after the break (each
+// advance took max_steps more after it).
+static int test_step_limit_reached_at_a_break(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	const double x1[3] = {1.0, 0.0, 0.0}, v1[3] = {1.0, 0.0, 0.0};
+	const double t_end = 0.3;  // [s]
+	sm_simulation* whole = sm_simulation_create(model, NULL, NULL);
+	ENSURE(whole != NULL);
+	ENSURE_STATUS(sm_simulation_set_driven(whole, 1, x1, v1), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(whole, t_end), SM_OK);
+	ENSURE(sm_simulation_break_count(whole) == 1);
+	const double break_time = sm_simulation_break(whole, 0).time;
+	ENSURE_NEAR(break_time, 0.1, 1e-8);  // strain (x - 1) / 1 reaches 0.1 at x = 1.1 m
+	const int64_t steps = sm_simulation_statistics(whole).steps;
+	bool found = false;
+	for (int32_t limit = 1; limit < steps && !found; limit++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.max_steps = limit;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL);
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x1, v1), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, t_end), SM_ERROR_STEP_LIMIT);
+		found = sm_simulation_break_count(sim) == 1;
+		if (found) {
+			ENSURE(sm_simulation_statistics(sim).steps == limit);
+			ENSURE(sm_simulation_time(sim) == break_time);
+			ENSURE(strstr(sm_simulation_last_error(sim), "CV_TOO_MUCH_WORK") != NULL);
+			sm_status st = SM_ERROR_STEP_LIMIT;
+			for (int k = 0; k < 1000 && st == SM_ERROR_STEP_LIMIT; k++) {
+				st = sm_simulation_advance(sim, t_end);
+				ENSURE(sm_simulation_statistics(sim).steps <= (int64_t)limit * (k + 2));
+			}
+			ENSURE_STATUS(st, SM_OK);
+			ENSURE(sm_simulation_break_count(sim) == 1 && sm_simulation_break(sim, 0).time == break_time);
+			ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(whole), 9 * sizeof(double)) ==
+			       0);
+			ENSURE(memcmp(sm_simulation_velocities(sim), sm_simulation_velocities(whole),
+			              9 * sizeof(double)) == 0);
+		}
+		sm_simulation_destroy(sim);
+	}
+	ENSURE(found);
+	sm_simulation_destroy(whole);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Restores the simulation's own state, of `free_count` free particles, with another dissipated energy
 // [J] (a state read back from bytes may hold any finite one).
 static sm_status restore_with_dissipated_energy(sm_simulation* sim, int free_count, double energy)
@@ -5971,5 +6026,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_reset_forgets_a_changed_input);
 	RUN_TEST(test_restore_forgets_a_changed_input);
 	RUN_TEST(test_max_steps_holds_across_breaks);
+	RUN_TEST(test_step_limit_reached_at_a_break);
 	return TEST_SUMMARY();
 }
