@@ -363,6 +363,71 @@ static int test_mesh_disc(void)
 	return 0;
 }
 
+// The mesh definition's own fields are checked before anything is built (structures.h: the
+// density > 0, at least 3 vertices and 1 triangle, both arrays given, every coordinate finite):
+// each error leaves the model as it was and names the field. A density of 0 or below would give
+// the vertices no mass (each gets a third of density x area of its triangles), and a vertex of NaN
+// coordinates a NaN area: neither may become a particle.
+static int test_mesh_definition_errors(void)
+{
+	const double v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+	const double nan_vertex[] = {0, 0, 0, 1, 0, 0, 0, NAN, 0};
+	const double inf_vertex[] = {0, 0, 0, INFINITY, 0, 0, 0, 1, 0};
+	const int32_t one[] = {0, 1, 2};
+	struct {
+		double density;
+		const double* vertices;
+		int32_t vertex_count;
+		const int32_t* triangles;
+		int32_t triangle_count;
+		sm_status status;
+		const char* message;
+	} cases[] = {
+	    {0.0, v, 3, one, 1, SM_ERROR_NONPOSITIVE_MASS, "mesh: density = 0 must be finite and > 0"},
+	    {-1.0, v, 3, one, 1, SM_ERROR_NONPOSITIVE_MASS, "mesh: density = -1 must be finite and > 0"},
+	    {NAN, v, 3, one, 1, SM_ERROR_NOT_FINITE, "mesh: density = nan must be finite and > 0"},
+	    {INFINITY, v, 3, one, 1, SM_ERROR_NOT_FINITE, "mesh: density = inf must be finite and > 0"},
+	    {1.0, v, 2, one, 1, SM_ERROR_INVALID_ARGUMENT, "mesh: 2 vertices and 1 triangles; a mesh needs"},
+	    {1.0, v, 3, one, 0, SM_ERROR_INVALID_ARGUMENT, "mesh: 3 vertices and 0 triangles; a mesh needs"},
+	    {1.0, NULL, 3, one, 1, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL"},
+	    {1.0, v, 3, NULL, 1, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL"},
+	    {1.0, nan_vertex, 3, one, 1, SM_ERROR_NOT_FINITE, "mesh: vertex 2 coordinate 1 = nan is not finite"},
+	    {1.0, inf_vertex, 3, one, 1, SM_ERROR_NOT_FINITE, "mesh: vertex 1 coordinate 0 = inf is not finite"},
+	};
+	sm_model* m = new_model();
+	ENSURE(m != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		sm_mesh_def def = sm_default_mesh_def();
+		def.density = cases[c].density;
+		def.vertices = cases[c].vertices;
+		def.vertex_count = cases[c].vertex_count;
+		def.triangles = cases[c].triangles;
+		def.triangle_count = cases[c].triangle_count;
+		ENSURE_STATUS(sm_add_mesh(m, &def, NULL), cases[c].status);
+		if (strncmp(sm_model_last_error(m), cases[c].message, strlen(cases[c].message)) != 0) {
+			printf("  case %zu: message \"%s\", expected \"%s\"\n", c, sm_model_last_error(m),
+			       cases[c].message);
+			return 1;
+		}
+		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
+	}
+	// The same definition with a valid density and vertices builds: the triangle's three particles
+	// share its mass, density x area = 2 x 0.5 kg.
+	sm_mesh_def def = sm_default_mesh_def();
+	def.density = 2.0;
+	def.vertices = v;
+	def.vertex_count = 3;
+	def.triangles = one;
+	def.triangle_count = 1;
+	ENSURE_STATUS(sm_add_mesh(m, &def, NULL), SM_OK);
+	ENSURE(sm_model_particle_count(m) == 4 && sm_model_spring_count(m) == 3);
+	ENSURE_NEAR(sm_model_total_mass(m), p.mass + 1.0, 1e-15);  // one rounding of 1/3 per vertex
+	sm_model_destroy(m);
+	return 0;
+}
+
 // Every mesh error leaves the model as it was and names the triangle or vertex.
 static int test_mesh_errors(void)
 {
@@ -2192,6 +2257,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_block_counts_and_shear_resistance);
 	RUN_TEST(test_mesh_disc);
 	RUN_TEST(test_mesh_errors);
+	RUN_TEST(test_mesh_definition_errors);
 	RUN_TEST(test_failed_builder_leaves_model_unchanged);
 	RUN_TEST(test_degenerate_geometry);
 	RUN_TEST(test_selection);
