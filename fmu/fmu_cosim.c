@@ -1682,6 +1682,15 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		          h);
 		return fmi2Error;
 	}
+	// The stop time is resolved like the communication point, 1000 ulps of max(1 s, |stop|), on
+	// either side of zero. Checked before the steps below the time resolution too: each moves the
+	// FMU's time on, and a run of them would otherwise carry it past the stop time unchecked.
+	if (inst->stop_time_defined &&
+	    t_end > inst->stop_time + 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->stop_time))) {
+		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment",
+		          t_end, inst->stop_time);
+		return fmi2Error;
+	}
 	// The simulation's time is t - start (start: the start time of its initial state), resolved to
 	// 4 eps max(1 s, |t - start|); the step it sees is the difference of the ends as they round,
 	// so that it moves with the master's clock. At t = 1.7e9 s (a Unix time) and start 1.7e9 s, a
@@ -1720,14 +1729,6 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		log_error(inst, "fmi2DoStep: the step from %s by %s s ends at %s, not after the FMU's time %s",
 		          fmu_number_text(t).text, fmu_number_text(h).text, fmu_number_text(t_end).text,
 		          fmu_number_text(inst->time).text);
-		return fmi2Error;
-	}
-	// The stop time is resolved like the communication point, 1000 ulps of max(1 s, |stop|), on
-	// either side of zero.
-	if (inst->stop_time_defined &&
-	    t_end > inst->stop_time + 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->stop_time))) {
-		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment",
-		          t_end, inst->stop_time);
 		return fmi2Error;
 	}
 	if (apply_inputs(inst, "fmi2DoStep") != fmi2OK)

@@ -3,6 +3,7 @@ import json
 import math
 import os
 import struct
+import sys
 import zipfile
 
 import pytest
@@ -607,6 +608,33 @@ def test_steps_up_to_a_negative_stop_time_and_beyond_the_largest_time(test_fmu):
         expect_error(inst, lambda: s.doStep(1e308, 1e308), "largest representable time")
         assert s.getStatus(0) == 0  # fmi2DoStepStatus: still fmi2OK
         assert s.getRealStatus(2) == 1e308
+    finally:
+        inst.free()
+
+
+def test_steps_below_the_time_resolution_do_not_pass_the_stop_time(test_fmu):
+    # A step shorter than the resolution of the master's clock, 4 eps max(1 s, |t|), is taken with
+    # nothing to integrate and moves the FMU's time to t + h. Such steps are held to the stop time
+    # as any other: at t = 1 s a step of 8e-16 s moves the time by 2 ulps (4.4e-16 s), so within the
+    # stop time's margin of 1000 ulps (2.2e-13 s) about 500 of them are taken, and the next is
+    # refused. They were never checked: 100 000 of them carried the time to 1 + 8.9e-11 s, 400
+    # margins past the stop time.
+    inst = Instance(test_fmu("driven_oscillator")).start(stop_time=1.0)
+    s = inst.slave
+    try:
+        s.doStep(0.0, 1.0)
+        margin = 1e3 * sys.float_info.epsilon
+        t = 1.0
+        for _ in range(1000):
+            if t + 8e-16 > 1.0 + margin:
+                break
+            s.doStep(t, 8e-16)
+            t = s.getRealStatus(2)  # fmi2LastSuccessfulTime
+        assert 1.0 + margin - 8e-16 < t <= 1.0 + margin
+        state = s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]])
+        expect_error(inst, lambda: s.doStep(t, 8e-16), "goes past the stop time")
+        assert s.getStatus(0) == 0 and s.getRealStatus(2) == t  # fmi2OK, fmi2LastSuccessfulTime
+        assert s.getReal([inst.vr["tip.x"], inst.vr["tip.vx"]]) == state
     finally:
         inst.free()
 
