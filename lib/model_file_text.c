@@ -71,12 +71,13 @@ int32_t sm_text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* p
 
 // Characters a message shows escaped, since a terminal would act on them or show nothing:
 // control characters, the line and paragraph separators U+2028 and U+2029, the zero-width
-// characters U+200B - U+200D and U+FEFF, and the bidirectional controls (U+061C, U+200E,
-// U+200F, U+202A - U+202E, U+2066 - U+2069), which reorder the text around them.
+// characters U+200B - U+200D, U+2060 - U+2064 (the word joiner and the invisible mathematical
+// operators) and U+FEFF, and the bidirectional controls (U+061C, U+200E, U+200F, U+202A -
+// U+202E, U+2066 - U+2069), which reorder the text around them.
 static bool shown_escaped(int32_t c)
 {
 	return is_control(c) || c == 0x061c || (c >= 0x200b && c <= 0x200f) || (c >= 0x2028 && c <= 0x202e) ||
-	       (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
+	       (c >= 0x2060 && c <= 0x2064) || (c >= 0x2066 && c <= 0x2069) || c == 0xfeff;
 }
 
 void sm_text_position(const char* text, size_t length, size_t end, int* line, int* column)

@@ -2665,6 +2665,11 @@ static int test_text_for_terminal(void)
 	    {"\x01\x02\x1b\x7f", "\\u0001\\u0002\\u001b\\u007f"},
 	    {"a\tb\nc", "a\\u0009b\\u000ac"},
 	    {"left \xe2\x80\xae right \xef\xbb\xbf", "left \\u202e right \\ufeff"},
+	    // The word joiner and the invisible operators have no width either (U+2065 is unassigned).
+	    {"a\xe2\x81\xa0"
+		 "b\xe2\x81\xa4"
+		 "c\xe2\x81\xa5",
+		 "a\\u2060b\\u2064c\xe2\x81\xa5"},
 	    {"bad \xff\xc3", "bad \\xff\\xc3"},
 	    {"\"quoted\" \\", "\"quoted\" \\"},
 	};
