@@ -42,7 +42,7 @@ sm_status sm_model_motion_scales(const sm_model* model, sm_motion_scales* scales
 	}
 	free(x);
 	scales->length = shortest;
-	scales->speed = shortest * limit.omega_max;
+	scales->speed = isfinite(shortest) ? shortest * limit.omega_max : INFINITY;
 	return SM_OK;
 }
 

@@ -1836,7 +1836,8 @@ static int test_motion_scales(void)
 	ENSURE_NEAR(scales.speed, 2.0 * sqrt(4.0), 4e-15);
 	ENSURE_STATUS(sm_model_set_spring_enabled(model, 2, false), SM_OK);
 	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
-	ENSURE(isinf(scales.length));  // only the zero-length spring between coincident particles
+	// only the zero-length spring between coincident particles
+	ENSURE(isinf(scales.length) && isinf(scales.speed));
 	ENSURE(!sm_tolerances_coarse(&def, &scales));
 	ENSURE_STATUS(sm_model_motion_scales(NULL, &scales), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_motion_scales(model, NULL), SM_ERROR_INVALID_ARGUMENT);

@@ -182,7 +182,8 @@ typedef struct sm_motion_scales {
 	/// 0 [m]; INFINITY when no enabled spring has a length (springs between coincident particles).
 	double length;
 	/// length times the Gershgorin bound of the highest angular frequency (sm_explicit_limit's
-	/// omega_max) [m/s]: the speed of a motion of that size at that frequency.
+	/// omega_max) [m/s]: the speed of a motion of that size at that frequency; INFINITY when
+	/// length is.
 	double speed;
 } sm_motion_scales;
 
