@@ -788,6 +788,7 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	sim->constrained = malloc(((size_t)sim->constrained_count + 1) * sizeof(int32_t));
 	sim->inverse_mass = malloc(((size_t)sim->free_count + 1) * sizeof(double));
 	sim->mass_dof = malloc(((size_t)sim->dofs + 1) * sizeof(double));
+	sim->origin_slot = malloc(((size_t)n + 1) * sizeof(int32_t));
 	double** arrays[] = {&sim->position,       &sim->velocity,           &sim->external_force,
 	                     &sim->force_rate,     &sim->force_time,         &sim->drive_position,
 	                     &sim->drive_velocity, &sim->drive_acceleration, &sim->drive_time,
@@ -797,8 +798,10 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		if (!(*arrays[i] = calloc(n3, sizeof(double))))
 			goto out_of_memory;
 	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass ||
-	    !sim->mass_dof)
+	    !sim->mass_dof || !sim->origin_slot)
 		goto out_of_memory;
+	for (int32_t i = 0; i < n; i++)
+		sim->origin_slot[i] = -1;
 	if (m->spring_count > 0)  // no array to copy from in a model without springs
 		memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
 	for (int32_t i = 0, kf = 0, kc = 0; i < n; i++) {
@@ -888,6 +891,8 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->drive_velocity);
 	free(sim->drive_acceleration);
 	free(sim->drive_time);
+	free(sim->origin_slot);
+	free(sim->origins);
 	free(sim->force_rate);
 	free(sim->force_time);
 	free(sim->work_external);
@@ -1142,6 +1147,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 	// To the current time: nothing, not even taking the inputs changed as seen by an advance.
 	if (!(sim->time < t_end))
 		return SM_OK;
+	sm_input_origins_forget(sim);  // the inputs now are those of this advance
 	// Inputs that changed for this advance will likely change at its end too (a co-simulation
 	// master's): CVODE then ends its last step at t_end rather than step past it.
 	const bool inputs_changed = sim->input_changed;
@@ -1473,6 +1479,33 @@ static bool on_path(double given, double value, double change, double term)
 	return fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
 }
 
+// Whether a driven particle's position, velocity and acceleration given now lie on the path
+// (x0, v0, a0) that started dt ago (on_path: however the caller summed it).
+static bool on_driven_path(const double* x0, const double* v0, const double* a0, double dt,
+                           const double* position, const double* velocity, const double* acceleration)
+{
+	for (int c = 0; c < 3; c++) {
+		const double a = a0[c];
+		if (acceleration[c] != a ||
+		    (a == 0.0 ? velocity[c] != v0[c] : !on_path(velocity[c], v0[c], a * dt, fabs(a * dt))) ||
+		    !on_path(position[c], x0[c], dt * (v0[c] + 0.5 * dt * a),
+		             fmax(fabs(v0[c] * dt), fabs(0.5 * dt * dt * a))))
+			return false;
+	}
+	return true;
+}
+
+// Whether an external force and rate given now lie on the ramp (f0, r0) that started dt ago.
+static bool on_force_ramp(const double* f0, const double* r0, double dt, const double* force,
+                          const double* rate)
+{
+	for (int c = 0; c < 3; c++)
+		if (rate[c] != r0[c] ||
+		    (r0[c] == 0.0 ? force[c] != f0[c] : !on_path(force[c], f0[c], r0[c] * dt, fabs(r0[c] * dt))))
+			return false;
+	return true;
+}
+
 // After an input changed at the current time: CVODE restarts here when the options ask for it or
 // when it has stepped past (its steps assumed the input as it was).
 static void note_input_change(sm_simulation* sim)
@@ -1516,36 +1549,41 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		                          "finite numbers each",
 		                          (int)particle);
 	const size_t p = 3 * (size_t)particle;
-	const double dt = sim->time - sim->drive_time[particle];
 	// The same acceleration with a position and a velocity on the current path is no jump, and keeps
 	// the path as it was, so that the run is that of no call, to the bit.
-	bool jump = false;
-	for (int c = 0; c < 3; c++) {
-		const double v0 = sim->drive_velocity[p + c], a = sim->drive_acceleration[p + c];
-		jump = jump || acceleration[c] != a ||
-		       (a == 0.0 ? velocity[c] != v0 : !on_path(velocity[c], v0, a * dt, fabs(a * dt))) ||
-		       !on_path(position[c], sim->drive_position[p + c], dt * (v0 + 0.5 * dt * a),
-		                fmax(fabs(v0 * dt), fabs(0.5 * dt * dt * a)));
-	}
-	if (!jump) {
+	if (on_driven_path(sim->drive_position + p, sim->drive_velocity + p, sim->drive_acceleration + p,
+	                   sim->time - sim->drive_time[particle], position, velocity, acceleration)) {
 		sm_simulation_refresh_outputs(sim);
 		return SM_OK;
 	}
+	// Back on the path it had before its first change since the last advance: that path again, to
+	// the bit, and once every input is back, no change at all (input_excursions.c).
+	const sm_input_origin* found = sm_input_origins_find(sim, particle);
+	const bool back =
+	    found != NULL && on_driven_path(found->value, found->rate, found->acceleration,
+		                                sim->time - found->time, position, velocity, acceleration);
+	sm_input_origin origin;
+	if (back)
+		origin = *found;
+	else
+		sm_input_origins_note(sim, particle, true);
 	// What moves the particle to its new position and velocity at once does the work the energy
 	// takes in the jump. An energy beyond a double is not handed on to the inputs' work.
 	const int32_t* springs = sim->driven_springs + sim->driven_spring_start[particle];
 	const int32_t count = sim->driven_spring_start[particle + 1] - sim->driven_spring_start[particle];
 	const double before =
 	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count);
-	memcpy(sim->drive_position + p, position, 3 * sizeof(double));
-	memcpy(sim->drive_velocity + p, velocity, 3 * sizeof(double));
-	memcpy(sim->drive_acceleration + p, acceleration, 3 * sizeof(double));
-	sim->drive_time[particle] = sim->time;
-	note_input_change(sim);
+	memcpy(sim->drive_position + p, back ? origin.value : position, 3 * sizeof(double));
+	memcpy(sim->drive_velocity + p, back ? origin.rate : velocity, 3 * sizeof(double));
+	memcpy(sim->drive_acceleration + p, back ? origin.acceleration : acceleration, 3 * sizeof(double));
+	sim->drive_time[particle] = back ? origin.time : sim->time;
+	const bool undone = back && sm_input_origins_settle(sim, particle);
+	if (!undone)
+		note_input_change(sim);
 	sm_simulation_refresh_outputs(sim);
 	const double work =
 	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) - before;
-	if (isfinite(work))
+	if (!undone && isfinite(work))
 		sim->jump_work += work;
 	return SM_OK;
 }
@@ -1578,14 +1616,22 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	// nothing, so it is none either (the reaction it adds is read as it is).
 	double* f = sim->external_force + 3 * (size_t)particle;
 	double* r = sim->force_rate + 3 * (size_t)particle;
-	const double dt = sim->time - sim->force_time[particle];
-	bool differs = false;
-	for (int c = 0; c < 3; c++)
-		differs = differs || rate[c] != r[c] ||
-		          (r[c] == 0.0 ? force[c] != f[c] : !on_path(force[c], f[c], r[c] * dt, fabs(r[c] * dt)));
-	if (!differs)
+	if (on_force_ramp(f, r, sim->time - sim->force_time[particle], force, rate))
 		return SM_OK;
 	const bool free = sim->model->motion[particle] == SM_PARTICLE_FREE;
+	// Back on the ramp it had before its first change since the last advance: that ramp again, to
+	// the bit, and once every input is back, no change at all (input_excursions.c).
+	const sm_input_origin* found = free ? sm_input_origins_find(sim, particle) : NULL;
+	const bool back =
+	    found != NULL && on_force_ramp(found->value, found->rate, sim->time - found->time, force, rate);
+	sm_input_origin origin;
+	if (back) {
+		origin = *found;
+		force = origin.value;
+		rate = origin.rate;
+	} else if (free) {
+		sm_input_origins_note(sim, particle, false);
+	}
 	const bool ramped = r[0] != 0.0 || r[1] != 0.0 || r[2] != 0.0;
 	const bool ramps = rate[0] != 0.0 || rate[1] != 0.0 || rate[2] != 0.0;
 	const bool forced = ramped || f[0] != 0.0 || f[1] != 0.0 || f[2] != 0.0;
@@ -1594,8 +1640,8 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	sim->forced_particles += free ? (int32_t)forces - (int32_t)forced : 0;
 	memcpy(f, force, 3 * sizeof(double));
 	memcpy(r, rate, 3 * sizeof(double));
-	sim->force_time[particle] = sim->time;
-	if (free)
+	sim->force_time[particle] = back ? origin.time : sim->time;
+	if (free && !(back && sm_input_origins_settle(sim, particle)))
 		note_input_change(sim);
 	return SM_OK;
 }
@@ -1630,6 +1676,7 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 		                          (int)sm_model_spring_count(sim->model));
 	if (!sim->model->enabled[spring])
 		return SM_OK;
+	sm_input_origins_forget(sim);  // the restart it asks for stays, whatever the inputs do
 	double xa[3], xb[3];
 	position_now(sim, sim->model->spring_a[spring], xa);
 	position_now(sim, sim->model->spring_b[spring], xb);
@@ -1728,6 +1775,7 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		    "set_state: particle %d's external force at t = %s s is not finite (its ramp)", (int)pushed, t);
 	}
 	pack(sim, x, v, N_VGetArrayPointer(sim->y));
+	sm_input_origins_forget(sim);
 	sim->time = time;
 	// CVODE restarts here, at 0 on its axis: the outputs are those of the restart already, not of
 	// an axis of the past (a driven particle's position would part from the run's in its last bit).
@@ -1743,6 +1791,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 		return SM_ERROR_INVALID_ARGUMENT;
 	sm_simulation_restore_springs(sim);
 	load_initial_state(sim);
+	sm_input_origins_forget(sim);
 	sim->break_count = 0;
 	sim->input_changed = false;  // the inputs set before the reset are gone with them
 	sim->last_error[0] = '\0';
@@ -1819,6 +1868,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		// their values and those of a break it found past the current time: it starts afresh
 		// here, from the state as it is.
 		sim->need_restart = true;
+		sm_input_origins_forget(sim);
 		return sm_simulation_fail(sim, st, "%s%s%s", failure, cause[0] ? ": " : "", cause);
 	}
 	for (int32_t b = 0; b < sim->break_count; b++)
@@ -1828,6 +1878,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sim->initial_enabled = enabled;
 	refresh_masses(sim);
 	sim->need_restart = true;
+	sm_input_origins_forget(sim);
 	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }

@@ -19,6 +19,25 @@
 // Components of CVODE's state after the particles' 6 nf: the dissipated energy and the inputs' work.
 #define SM_ENERGY_COMPONENTS 2
 
+// A particle's input as it was before its first change since the last advance (input_excursions.c):
+// a driven particle's path (position [m], velocity [m/s], acceleration [m/s^2] from `time` [s]), or
+// a free particle's external force (force [N], rate [N/s] from `time`; acceleration unused).
+typedef struct sm_input_origin {
+	int32_t particle;
+	double value[3];
+	double rate[3];
+	double acceleration[3];
+	double time;
+} sm_input_origin;
+
+// The flags an input change sets, as they were before the first change since the last advance.
+typedef struct sm_input_flags {
+	bool need_restart;
+	bool input_jumped;
+	bool input_changed;
+	double jump_work;  // [J]
+} sm_input_flags;
+
 struct sm_simulation {
 	sm_simulation_def def;
 	sm_linear_solver solver;  // resolved (never AUTO)
@@ -78,6 +97,15 @@ struct sm_simulation {
 	double* drive_velocity;      // [m/s]
 	double* drive_acceleration;  // [m/s^2]
 	double* drive_time;          // [s]
+	// The inputs changed since the last advance, as they were before (input_excursions.c): an input
+	// set back to its origin before the next advance is no change, and once every one is back the
+	// flags are as before the first.
+	int32_t* origin_slot;  // per particle: its entry in origins, or -1
+	sm_input_origin* origins;
+	int32_t origin_count;
+	int32_t origin_capacity;
+	bool origins_lost;  // a change could not be recorded (out of memory): none counts as undone
+	sm_input_flags flags_before;
 
 	// Work arrays of the right-hand side and the Jacobian (all particles).
 	double* work_position;
@@ -176,6 +204,19 @@ int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, doub
 // The first particle whose external force at time t is not finite under the given ramps, or -1.
 int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, const double* force,
                                         const double* rate, const double* start);
+
+// Input changes undone before the next advance (input_excursions.c).
+// Forgets the recorded origins: after an advance, a new state, a reset, a model update or a cut,
+// from which the inputs' earlier values are no longer "as they were".
+void sm_input_origins_forget(sm_simulation* sim);
+// Records the particle's input as it is now, before its first change since the origins were
+// forgotten (nothing if it is recorded already), and with the first one the flags as they are.
+void sm_input_origins_note(sm_simulation* sim, int32_t particle, bool driven);
+// The particle's recorded origin, or NULL.
+const sm_input_origin* sm_input_origins_find(const sm_simulation* sim, int32_t particle);
+// Drops the particle's origin, its input being back there; when no other remains and none was
+// lost, puts the flags back as they were before the first change and returns true.
+bool sm_input_origins_settle(sm_simulation* sim, int32_t particle);
 
 // Spring breaks (simulation_events.c).
 // The root functions for the model's breakable springs, given to CVODE (recomputed when the model

@@ -4537,6 +4537,66 @@ static int test_restart_only_on_a_changed_input(void)
 	return 0;
 }
 
+// A master that, before each advance, sets the inputs to trial values, reads the forces they give,
+// and sets them back to what the last advance had (the driven anchor back on its path 0.3 t m, the
+// bob's force back to 0.5 N) runs as one that never tried: the same steps and restarts, the same
+// bits of the bob's state and of the inputs' work. An input left at its trial value is a change
+// (a restart where it is kept and one where it is set back), and a cut during an excursion keeps
+// its own restart.
+static int test_an_input_set_away_and_back_before_an_advance_is_no_change(void)
+{
+	sm_model* model = oscillator_anchored(1.0, 40.0, 0.5, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const double v[3] = {0.3, 0.0, 0.0}, trial_v[3] = {0.5, 0.1, 0.0};
+	const double force[3] = {0.5, 0.0, 0.0}, trial_force[3] = {2.0, 0.0, -1.0};
+	const double h = 0.01;
+	int64_t steps[4], restarts[4];
+	double state[4][7];
+	for (int way = 0; way < 4; way++) {
+		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+		ENSURE(sim != NULL);
+		const double origin[3] = {0.0, 0.0, 0.0};
+		ENSURE_STATUS(sm_simulation_set_driven(sim, 0, origin, v), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, force), SM_OK);
+		double t = 0.0;
+		for (int k = 0; k < 100; k++) {
+			if (way > 0 && k > 0) {
+				const double x[3] = {v[0] * t, 0.0, 0.0}, away[3] = {v[0] * t + 0.05, 0.02, 0.0};
+				double f[6];
+				ENSURE_STATUS(sm_simulation_set_driven(sim, 0, away, trial_v), SM_OK);
+				ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, trial_force), SM_OK);
+				sm_simulation_forces(sim, f);
+				ENSURE(f[3] != force[0]);  // the trial inputs act
+				ENSURE_STATUS(sm_simulation_set_driven(sim, 0, x, v), SM_OK);
+				if (way == 3 && k == 50)
+					ENSURE_STATUS(sm_simulation_break_spring(sim, 0), SM_OK);
+				if (!(way == 2 && k == 50))
+					ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, force), SM_OK);
+			}
+			t += h;
+			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		}
+		const sm_statistics stats = sm_simulation_statistics(sim);
+		steps[way] = stats.steps;
+		restarts[way] = stats.restarts;
+		memcpy(state[way], sm_simulation_positions(sim) + 3, 3 * sizeof(double));
+		memcpy(state[way] + 3, sm_simulation_velocities(sim) + 3, 3 * sizeof(double));
+		state[way][6] = sm_simulation_input_work(sim);
+		sm_simulation_destroy(sim);
+	}
+	printf("  steps %lld %lld %lld %lld, restarts %lld %lld %lld %lld\n", (long long)steps[0],
+	       (long long)steps[1], (long long)steps[2], (long long)steps[3], (long long)restarts[0],
+	       (long long)restarts[1], (long long)restarts[2], (long long)restarts[3]);
+	ENSURE(steps[1] == steps[0] && restarts[1] == restarts[0]);
+	ENSURE(memcmp(state[1], state[0], sizeof state[0]) == 0);
+	// Way 2 keeps the trial force over the advance from t = 0.5 s, and sets it back before the next:
+	// two changes.
+	ENSURE(restarts[2] == restarts[0] + 2);
+	ENSURE(restarts[3] == restarts[0] + 1);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The forces include the external ones: a lone free particle of 2 kg under gravity and an
 // external force F feels m g + F, and falls as x = (g + F / m) t^2 / 2 (a quadratic, which BDF
 // follows to round-off; the default rtol 1e-6 of the 1.7 m travelled allows 1e-5 m).
@@ -6006,6 +6066,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_invalid_options_are_refused);
 	RUN_TEST(test_max_step_caps_the_internal_steps);
 	RUN_TEST(test_restart_only_on_a_changed_input);
+	RUN_TEST(test_an_input_set_away_and_back_before_an_advance_is_no_change);
 	RUN_TEST(test_forces_include_external_force);
 	RUN_TEST(test_set_state_ignores_constrained_entries);
 	RUN_TEST(test_update_model_topology_and_disabled_springs);

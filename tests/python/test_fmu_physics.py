@@ -208,6 +208,36 @@ def test_a_master_that_sets_every_input_keeps_a_change_among_unchanged_ones(test
     assert np.array_equal(x_stop, x_free)
 
 
+@pytest.mark.parametrize("name, value", [("tip.fx", 0.1), ("base.x", 0.01)])
+def test_an_input_tried_and_set_back_before_a_step_changes_nothing(test_fmu, name, value):
+    # A master that, before each step from 0.2 s on, sets an input to a trial value, reads an
+    # output that depends on it, and sets it back (probing, or iterating at a communication point)
+    # runs as one that never tried: the same internal steps and outputs, bit for bit. The input is
+    # set to `value` from 0.1 s on, so that the runs share a change first. (A motion port's velocity
+    # set alone is a change at every step whatever the master tries: its particle starts again
+    # from the position held.)
+    runs = []
+    for trying in (False, True):
+        inst = logged_driven_oscillator(test_fmu, 1.0)
+        try:
+            x = []
+            for n in range(100):
+                v = value if n >= 10 else 0.0
+                if trying and n >= 20:
+                    inst.set(name, v + 0.5)
+                    x_trial = inst.get("base.fx")
+                    assert math.isfinite(x_trial)
+                inst.set(name, v)
+                inst.slave.doStep(n * 0.01, 0.01)
+                x.append(inst.get("tip.x", "tip.vx", "base.fx", "energy.input"))
+            runs.append((np.array(x), solver_steps(inst)))
+        finally:
+            inst.free()
+    (x_plain, steps_plain), (x_tried, steps_tried) = runs
+    assert steps_tried == steps_plain
+    assert np.array_equal(x_tried, x_plain)
+
+
 def stepped_from(test_fmu, start_time):
     """The driven oscillator from start_time over 1 s in communication steps of 1/128 s, with the
     stop time start_time + 1 s given. Returns tip.x and tip.vx per step and the internal steps."""
