@@ -2078,6 +2078,63 @@ static size_t token_start(const json_error_t* error, const char* text, size_t at
 	return at - (quoted - 1);
 }
 
+// Value of the four hexadecimal digits at s (the parser checked that they are).
+static unsigned hex4(const char* s)
+{
+	unsigned v = 0;
+	for (int k = 0; k < 4; k++) {
+		const char c = s[k];
+		v = 16 * v + (unsigned)(c <= '9' ? c - '0' : (c | 0x20) - 'a' + 10);
+	}
+	return v;
+}
+
+// Where the escape at fault begins, for the errors the parser finds only once it has read a
+// string to its closing quote (a \u0000, or a \u escape of half a surrogate pair without its other
+// half): the parser's position is then past that quote, which may be far from the escape it
+// names. The escape is the first such one in the string, as the parser decodes them in order.
+// `at` (the bytes the parser read) for any other error.
+static size_t escape_at_fault(const json_error_t* error, const char* text, size_t at)
+{
+	const enum json_error_code code = json_error_code(error);
+	if (!(code == json_error_null_character || code == json_error_null_byte_in_key ||
+	      (code == json_error_invalid_syntax && strncmp(error->text, "invalid Unicode '", 17) == 0)) ||
+	    at < 2 || text[at - 1] != '"')
+		return at;
+	// The opening quote: the first '"' before the closing one that no backslash escapes.
+	size_t open = at - 1;
+	for (;;) {
+		if (open == 0)
+			return at;
+		open--;
+		size_t backslashes = 0;
+		while (backslashes < open && text[open - 1 - backslashes] == '\\')
+			backslashes++;
+		if (text[open] == '"' && backslashes % 2 == 0)
+			break;
+	}
+	for (size_t i = open + 1; i + 6 < at; i++) {
+		if (text[i] != '\\')
+			continue;
+		if (text[i + 1] != 'u') {
+			i++;  // a one-character escape
+			continue;
+		}
+		const unsigned v = hex4(text + i + 2);
+		if (v >= 0xd800 && v <= 0xdbff && i + 12 < at && text[i + 6] == '\\' && text[i + 7] == 'u') {
+			const unsigned low = hex4(text + i + 8);
+			if (low >= 0xdc00 && low <= 0xdfff) {
+				i += 11;  // a whole pair
+				continue;
+			}
+		}
+		if (v == 0 || (v >= 0xd800 && v <= 0xdfff))
+			return i;
+		i += 5;
+	}
+	return at;
+}
+
 // Whether a syntax error reads as a missing comma: the parser expected the end of an array or an
 // object and found the start of another value ("']' expected near '\"springs\"'").
 static bool missing_comma(const char* message)
@@ -2153,7 +2210,8 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		// character of its own there, which sm_text_position, counting characters, does not count.
 		const size_t at = (size_t)error.position;
 		const bool before = error_before_its_byte(&error, text, length);
-		const size_t start = before ? at : token_start(&error, text, at);
+		const size_t escape = escape_at_fault(&error, text, at);
+		const size_t start = before ? at : escape < at ? escape : token_start(&error, text, at);
 		sm_text_position(text, length, before ? at + 1 : start < at ? start + 1 : at, &line, &column);
 		if (before && ((unsigned char)text[at] & 0xc0) == 0x80)
 			column++;
