@@ -2617,6 +2617,23 @@ sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const
 		if (!isfinite(x[k]) || (v != NULL && !isfinite(v[k])))
 			return sm_error_set(err, SM_ERROR_NOT_FINITE, "%s: initial state of particle %zu is not finite",
 			                    doc->source, k / 3);
+	// A spring's length must stay a double, as the loader asks of the file's positions: a saved
+	// file with particles further apart would not load, and the model could not run.
+	const int32_t m = sm_model_spring_count(doc->current->model);
+	for (int32_t s = 0; s < m; s++) {
+		sm_spring_def def;
+		sm_model_get_spring(doc->current->model, s, &def);
+		const double* xa = x + 3 * (size_t)def.a;
+		const double* xb = x + 3 * (size_t)def.b;
+		const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
+		if (!isfinite(sqrt(dx * dx + dy * dy + dz * dz)))
+			return sm_error_set(
+			    err, SM_ERROR_NOT_FINITE,
+			    "%s: initial state: spring %ld: the distance between particles %ld and %ld is too "
+			    "large (its square overflows: particles joined by springs must be less than "
+			    "1.3e154 m apart)",
+			    doc->source, (long)s, (long)def.a, (long)def.b);
+	}
 	double* position = malloc(3 * (size_t)n * sizeof(double) + 1);
 	double* velocity = calloc(3 * (size_t)n + 1, sizeof(double));
 	if (position == NULL || velocity == NULL) {

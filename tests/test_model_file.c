@@ -2423,6 +2423,15 @@ static int test_initial_state_through_parameter_changes(void)
 		bad[c] += 1.0;
 	bad[14] = NAN;
 	ENSURE_STATUS(sm_document_set_initial_state(doc, bad, NULL, &err), SM_ERROR_NOT_FINITE);
+	// Finite positions whose spring's length is not (the square of 1e200 m overflows) are refused
+	// too: the file saved with them would not load, the loader refusing such a spring.
+	memcpy(bad, x, sizeof x);
+	bad[3] = 1e200;
+	ENSURE_STATUS(sm_document_set_initial_state(doc, bad, NULL, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(err.message,
+	              "test.json: initial state: spring 0: the distance between particles 0 and 1 is too "
+	              "large (its square overflows: particles joined by springs must be less than 1.3e154 "
+	              "m apart)") == 0);
 	ENSURE_STATUS(sm_document_set_parameter(doc, k, 30.0, &err), SM_OK);
 	sm_model* m = NULL;
 	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);

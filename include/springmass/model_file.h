@@ -172,7 +172,9 @@ SM_API sm_document_settings sm_document_get_settings(const sm_document* doc);
 /// changes, which may then not change the number of particles. x NULL with v NULL drops a state
 /// set before (nothing to do if none is): building and saving start from the file's positions
 /// and velocities with the parameters' current values again, and parameters may change the
-/// counts again; x NULL with v not NULL is SM_ERROR_INVALID_ARGUMENT.
+/// counts again; x NULL with v not NULL is SM_ERROR_INVALID_ARGUMENT. A state that is not finite, or
+/// that puts a spring's particles 1.3e154 m or more apart (the square of its length overflows, as the
+/// loader refuses in a file), is SM_ERROR_NOT_FINITE, the document unchanged.
 SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x, const double* v,
                                                sm_error* err);
 
