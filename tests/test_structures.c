@@ -1444,6 +1444,141 @@ static int test_per_section_hanging_sheet_converges_when_refined(void)
 	return 0;
 }
 
+// A rectangular membrane a x b held along its edges under a uniform tension T per unit length
+// and of mass rho per area vibrates at omega_mn^2 = (T / rho) pi^2 ((m / a)^2 + (n / b)^2),
+// u = sin(m pi x / a) sin(n pi y / b) (Kinsler, Frey et al., Fundamentals of Acoustics, 4th ed.,
+// section 4.4), and sags under its weight by w(x, y) with T lap w = -rho g, at its centre
+// w_c = rho g a^2 / (8 T) - sum over odd k of 4 rho g a^2 sin(k pi / 2) / (T pi^3 k^3 cosh(k pi b / (2 a)))
+// (the string's parabola less the correction that brings w to 0 at y = 0 and b; Timoshenko and
+// Goodier, Theory of Elasticity, 3rd ed., section 109, for the same equation).
+//
+// The sheet: a = 1 m, b = 0.6 m, square cells h, structural and shear groups per section
+// (Y = 3e6 and Ys = 1e6 N/m), lumped masses (rho h^2 on every inner particle), stretched by
+// eps = 1 % in both directions with its rest lengths kept and every boundary particle held.
+// Each spring then has the strain eps: a structural one (section h, length h (1 + eps)) pulls
+// with Y h eps and a diagonal one (section h / sqrt 2, length sqrt 2 h (1 + eps)) with
+// Ys h eps / sqrt 2, so sideways they give the inner particles the stiffnesses
+// Y eps / (1 + eps) and Ys eps / (2 (1 + eps)) towards each neighbour. The discrete modes are
+// then exactly u = sin(m pi i / (nu - 1)) sin(n pi j / (nv - 1)), with (alpha = m pi h / a,
+// beta = n pi h / b)
+//   omega^2 = eps / ((1 + eps) rho h^2) (4 Y (sin^2(alpha / 2) + sin^2(beta / 2)) + 2 Ys (1 - cos alpha cos
+//   beta)),
+// which tends to the membrane's with T = (Y + Ys) eps / (1 + eps) in the unstretched
+// coordinates (the operator is a second-order Laplacian): the frequencies and the sag converge
+// at second order, the error falling fourfold per halving of h. The in-plane modes lie about
+// sqrt(1 / eps) = 10 times higher, so the lowest six are transverse.
+static double membrane_sag(double a, double b, double load_over_tension)
+{
+	double w = load_over_tension * a * a / 8.0;
+	for (int k = 1; k < 200; k += 2)
+		w -= 4.0 * load_over_tension * a * a * sin(k * PI / 2.0) /
+		     (PI * PI * PI * k * k * k * cosh(k * PI * b / (2.0 * a)));
+	return w;
+}
+
+static int test_per_section_membrane_vibrates_and_sags_as_the_continuum(void)
+{
+	const double a = 1.0, b = 0.6, mass = 0.6, Y = 3e6, Ys = 1e6, eps = 0.01, g = 9.81;
+	const double rho = mass / (a * b), tension = (Y + Ys) * eps / (1.0 + eps);
+	const int mn[6][2] = {{1, 1}, {2, 1}, {3, 1}, {1, 2}, {2, 2}, {4, 1}};
+	double previous_omega[6] = {0}, previous_sag = 0.0;
+	for (int refinement = 2; refinement <= 16; refinement *= 2) {
+		const int32_t nu = 5 * refinement + 1, nv = 3 * refinement + 1;
+		const double h = a / (nu - 1);
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = -g;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_sheet_def sd = sm_default_sheet_def();
+		sd.edge_u[0] = a;
+		sd.edge_v[1] = b;
+		sd.nu = nu;
+		sd.nv = nv;
+		sd.mass = mass;
+		sd.mass_distribution = SM_MASS_LUMPED;
+		sd.structural = sm_default_spring_material();
+		sd.structural.stiffness = Y;
+		sd.structural.stiffness_scaling = SM_PER_SECTION;
+		sd.shear = sd.structural;
+		sd.shear.stiffness = Ys;
+		sd.bend = sm_default_spring_material();  // none
+		sm_structure st;
+		ENSURE_STATUS(sm_add_sheet(model, &sd, &st), SM_OK);
+		for (int32_t i = 0; i < nv; i++)
+			for (int32_t j = 0; j < nu; j++)
+				if (i == 0 || j == 0 || i == nv - 1 || j == nu - 1)
+					ENSURE_STATUS(sm_set_motion_at(model, &st, i, j, 0, SM_PARTICLE_FIXED), SM_OK);
+		const int32_t np = sm_model_particle_count(model);
+		double* x = malloc(3 * (size_t)np * sizeof(double));
+		double* rest = malloc(3 * (size_t)np * sizeof(double));
+		ENSURE(x != NULL && rest != NULL);
+		sm_model_initial_state(model, x, NULL);
+		for (int32_t p = 0; p < 3 * np; p++)
+			x[p] *= 1.0 + eps;
+
+		sm_modes_def mdef = sm_default_modes_def();
+		mdef.configuration = x;
+		mdef.mode_count = 6;
+		sm_modes modes;
+		sm_error err;
+		ENSURE_STATUS(sm_modes_compute(model, &mdef, &modes, &err), SM_OK);
+		ENSURE(modes.count == 6 && modes.zero_count == 0 && modes.unstable_count == 0);
+		for (int k = 0; k < 6; k++) {
+			const double alpha = mn[k][0] * PI * h / a, beta = mn[k][1] * PI * h / b;
+			const double s2a = sin(alpha / 2.0), s2b = sin(beta / 2.0);
+			const double discrete =
+			    eps / ((1.0 + eps) * rho * h * h) *
+			    (4.0 * Y * (s2a * s2a + s2b * s2b) + 2.0 * Ys * (1.0 - cos(alpha) * cos(beta)));
+			const double continuum =
+			    tension / rho * PI * PI * (mn[k][0] * mn[k][0] / (a * a) + mn[k][1] * mn[k][1] / (b * b));
+			// The eigensolvers' error is ~1e-14 of omega^2 here (1e-16 to 1e-12 residuals).
+			ENSURE_REL(modes.omega_squared[k], discrete, 1e-9, 0.0);
+			// The shape is transverse and is the product of sines: its projection on it is whole.
+			const double* phi = modes.shapes + (size_t)k * 3 * (size_t)np;
+			double dot = 0.0, norm_phi = 0.0, norm_u = 0.0;
+			for (int32_t i = 0; i < nv; i++)
+				for (int32_t j = 0; j < nu; j++) {
+					const int32_t p = sm_structure_particle(&st, i, j, 0);
+					const double u = sin(mn[k][0] * PI * j / (nu - 1)) * sin(mn[k][1] * PI * i / (nv - 1));
+					ENSURE(fabs(phi[3 * p]) < 1e-9 && fabs(phi[3 * p + 1]) < 1e-9);
+					dot += phi[3 * p + 2] * u;
+					norm_phi += phi[3 * p + 2] * phi[3 * p + 2];
+					norm_u += u * u;
+				}
+			ENSURE_NEAR(fabs(dot) / sqrt(norm_phi * norm_u), 1.0, 1e-9);
+			const double error = continuum - modes.omega_squared[k];
+			printf("  %d x %d, mode (%d, %d): f = %.6f Hz, membrane %.6f Hz, omega^2 error %.3e\n", (int)nu,
+			       (int)nv, mn[k][0], mn[k][1], modes.frequency[k], sqrt(continuum) / (2.0 * PI),
+			       error / continuum);
+			ENSURE(error > 0.0);
+			ENSURE(refinement < 8 || (previous_omega[k] / error > 3.9 && previous_omega[k] / error < 4.1));
+			previous_omega[k] = error;
+		}
+		sm_modes_release(&modes);
+
+		// Under its own weight, rho g per area, from the stretched flat shape.
+		sm_statics_def sdef = sm_default_statics_def();
+		sdef.start = x;
+		sm_statics_result res;
+		ENSURE_STATUS(sm_statics_solve(model, &sdef, rest, NULL, &res, &err), SM_OK);
+		ENSURE(res.residual <= res.tolerance && res.stable);
+		const int32_t centre = sm_structure_particle(&st, (nv - 1) / 2, (nu - 1) / 2, 0);
+		const double sag = -rest[3 * centre + 2], expected = membrane_sag(a, b, rho * g / tension);
+		// The sag, about 9.5e-6 m, is small enough that the tension it adds, ~ Y (w / b)^2, is a
+		// relative 1e-8 of the pre-tension: the linear membrane.
+		const double error = expected - sag;
+		printf("  %d x %d: sag %.6e m, membrane %.6e m, error %.3e\n", (int)nu, (int)nv, sag, expected,
+		       error / expected);
+		ENSURE(error > 0.0);
+		ENSURE(refinement < 8 || (previous_sag / error > 3.9 && previous_sag / error < 4.1));
+		previous_sag = error;
+		free(x);
+		free(rest);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // Lumped masses: a particle's share of the cells around it, a half per boundary it is on; the
 // total is the structure's mass (to round-off), and even is the default.
 static int test_lumped_masses(void)
@@ -2276,6 +2411,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_mesh_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_equilateral_mesh_moduli);
 	RUN_TEST(test_per_section_hanging_sheet_converges_when_refined);
+	RUN_TEST(test_per_section_membrane_vibrates_and_sags_as_the_continuum);
 	RUN_TEST(test_per_section_rules);
 	RUN_TEST(test_per_section_sections_by_hand);
 	RUN_TEST(test_per_section_sheet_sections_do_not_depend_on_its_direction);
