@@ -9,6 +9,7 @@
 #include "preconditioner_multilevel.h"
 #include "simulation_fixtures.h"
 #include "simulation_internal.h"
+#include "springmass/analysis.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
@@ -163,6 +164,93 @@ static int test_oscillator_critically_damped(void)
 static int test_oscillator_overdamped(void)
 {
 	return check_oscillator(3.0, SM_SOLVER_AUTO);
+}
+
+// A rope released in one of its axial modes vibrates in it alone and decays as the damped
+// oscillator of that mode (modal analysis of proportionally damped systems: Meirovitch,
+// Fundamentals of Vibrations, section 7.15). Along its own axis a rope of rest-length springs is
+// exactly linear (every L - l0 is a difference of x coordinates, and the damping kd (u . dv) u a
+// difference of x velocities) as long as its particles keep their order. Held at one end, with
+// lumped masses m / N (the free end's halved) and per-strain springs ks = E N / L, it is the
+// fixed-free chain whose modes are u_p = sin(p theta_k), theta_k = (2k - 1) pi / (2 N), at
+// omega_k = 2 sqrt(ks N / m) sin(theta_k / 2). Per-strain damping gives kd / ks = c / E for every
+// spring, so C = alpha M + (c / E) K (with mass damping alpha), Rayleigh damping, and the mode
+// decays with zeta_k = alpha / (2 omega_k) + c omega_k / (2 E):
+//   x_p(t) = p L / N + A sin(p theta_k) e^(-zeta omega t) (cos(omega_d t) + zeta / sqrt(1 - zeta^2)
+//   sin(omega_d t)),
+// omega_d = omega sqrt(1 - zeta^2), exactly, for any N. The rope: 1 m, 0.5 kg, E = 200 N,
+// c = 0.02 N s, alpha = 0.3 1/s, N = 30, in its second mode (omega = 94 rad/s, zeta = 6.3e-3)
+// with A = 1 mm, over 2 s (30 periods). At rtol 1e-10 the error allowed per step is 1e-10 of the
+// positions, up to 1 m: the 4500 steps could add up to 4.5e-7 m, and they add far less (measured
+// 5.8e-9 m): 5e-5 of the amplitude is allowed, a tenth of the sum of the steps' allowances. The
+// energy, quadratic in the amplitude, carries twice that relative error: with the dissipated
+// energy, the balance closes to 1e-4 of the initial energy (measured 1.2e-5 with dense and klu).
+static int test_rope_released_in_a_mode_decays_as_its_modal_solution(void)
+{
+	const double pi = 3.14159265358979323846;
+	const double length = 1.0, mass = 0.5, E = 200.0, c = 0.02, alpha = 0.3, amplitude = 1e-3;
+	const int32_t n = 30;
+	const int k = 2;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	md.mass_damping = alpha;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.end[0] = length;
+	rd.segments = n;
+	rd.mass = mass;
+	rd.mass_distribution = SM_MASS_LUMPED;
+	rd.structural.stiffness = E;
+	rd.structural.damping = c;
+	sm_structure st;
+	ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
+	const double theta = (2 * k - 1) * pi / (2.0 * n);
+	for (int32_t p = 0; p <= n; p++) {
+		sm_particle_def pd;
+		ENSURE_STATUS(sm_model_get_particle(model, p, &pd), SM_OK);
+		pd.position[0] += amplitude * sin(p * theta);  // rest lengths stay those of the straight rope
+		pd.motion = p == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ENSURE_STATUS(sm_model_set_particle(model, p, &pd), SM_OK);
+	}
+	const double omega = 2.0 * sqrt(E * n / length * n / mass) * sin(theta / 2.0);
+	const double zeta = alpha / (2.0 * omega) + c * omega / (2.0 * E);
+	const double omega_d = omega * sqrt(1.0 - zeta * zeta);
+	// The modes agree: the second axial mode (the 2 N transverse ones are zero at rest length).
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE_REL(sqrt(modes.omega_squared[2 * n + k - 1]), omega, 1e-9, 0.0);
+	ENSURE_REL(modes.damping_ratio[2 * n + k - 1], zeta, 1e-9, 0.0);
+	sm_modes_release(&modes);
+
+	sm_simulation_def sd = sm_default_simulation_def();
+	sd.relative_tolerance = 1e-10;
+	sd.absolute_tolerance_position = 1e-12;
+	sd.absolute_tolerance_velocity = 1e-10;
+	sm_simulation* sim = sm_simulation_create(model, &sd, NULL);
+	ENSURE(sim != NULL);
+	const sm_energies e0 = sm_simulation_energies(sim);
+	double worst = 0.0;
+	for (int i = 1; i <= 400; i++) {
+		const double t = 0.005 * i;
+		ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+		const double* x = sm_simulation_positions(sim);
+		const double decay =
+		    exp(-zeta * omega * t) * (cos(omega_d * t) + zeta / sqrt(1.0 - zeta * zeta) * sin(omega_d * t));
+		for (int32_t p = 1; p <= n; p++) {
+			worst = fmax(worst, fabs(x[3 * p] - (length * p / n + amplitude * sin(p * theta) * decay)));
+			ENSURE(x[3 * p + 1] == 0.0 && x[3 * p + 2] == 0.0);
+		}
+	}
+	printf("  largest difference from the modal solution %.3e of the amplitude, %ld steps\n",
+	       worst / amplitude, (long)sm_simulation_statistics(sim).steps);
+	ENSURE(worst < 5e-5 * amplitude);
+	const sm_energies e = sm_simulation_energies(sim);
+	ENSURE_NEAR(e.kinetic + e.elastic + sm_simulation_dissipated_energy(sim), e0.elastic, 1e-4 * e0.elastic);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
 }
 
 // Undamped springs: kinetic + elastic + gravitational energy is conserved over 10 s.
@@ -2151,6 +2239,135 @@ static int test_driven_follows_prescribed_motion(void)
 	ENSURE_NEAR(sm_simulation_positions(sim)[1], 0.0, 1e-15);
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
+	return 0;
+}
+
+// The driven end's pulse: y = A sin^4(pi t / tau) for 0 <= t <= tau, 0 otherwise (smooth to its
+// third derivative, so that its spectrum falls fast enough for the lattice's dispersion error
+// to converge at second order), and its rate.
+static double wave_pulse(double t, double tau, double amplitude, double* rate)
+{
+	const double pi = 3.14159265358979323846;
+	if (t <= 0.0 || t >= tau) {
+		*rate = 0.0;
+		return 0.0;
+	}
+	const double s = sin(pi * t / tau), c = cos(pi * t / tau);
+	*rate = amplitude * 4.0 * s * s * s * c * pi / tau;
+	return amplitude * s * s * s * s;
+}
+
+// A transverse pulse runs along a taut string at c = sqrt(T / mu) and comes back from a fixed end
+// inverted (d'Alembert; e.g. Kinsler, Frey et al., Fundamentals of Acoustics, 4th ed., sections
+// 2.4 and 2.8). The string: a rope of L = 1 m, 0.1 kg (lumped), E = 1000 N per strain,
+// stretched by eps = 1 % between its first particle, driven, and its last, fixed: T = E eps =
+// 10 N, mu = m / L', L' = (1 + eps) L, c = 10.05 m/s. The driven end moves sideways by f(t), the
+// pulse above of tau = 50 ms (0.5 m long), then stays still, as a fixed end would; so until the
+// pulse comes back from it, the middle of the string moves as
+//   y(t) = f(t - L' / (2 c)) - f(t - 3 L' / (2 c)),
+// the pulse passing on its way out and, inverted, on its way back. The chain of N segments is
+// the string with the dispersion of a lattice, omega = 2 (c / h) sin(k h / 2), whose phase error
+// (k h)^2 / 24 makes the difference fall fourfold per doubling of N (measured 4.09 and 4.05 from
+// N = 50 on, to 4.3e-3 of the amplitude at N = 200; 6 from N = 25, not yet asymptotic). The
+// drive is 200 pieces of constant acceleration, each starting on the pulse's position and rate:
+// it leaves the pulse by about 1e-5 of its amplitude (the trapezoidal rule's dt^3 f''' / 12).
+// The amplitude, 1e-4 m, keeps the string linear: the slope, at most 8e-4, changes the tension
+// by a relative slope^2 / (2 eps) = 3e-5 at most. The tolerances (rtol 1e-8, 1e-12 m) hold the
+// integration error far below the lattice's (looser ones shift the ratios by a few per cent).
+static int test_pulse_runs_along_a_taut_rope_and_comes_back_inverted(void)
+{
+	const double pi = 3.14159265358979323846;
+	const double length = 1.0, mass = 0.1, E = 1000.0, eps = 0.01, tau = 0.05, amplitude = 1e-4;
+	const double stretched = (1.0 + eps) * length;
+	const double c = sqrt(E * eps * stretched / mass);
+	const double t_end = 2.5 * stretched / c;  // the pulse's return from the driven end reaches the middle
+	const int pieces = 200;
+	double previous = 0.0, previous_work = 0.0;
+	const int32_t sizes[] = {50, 100, 200};
+	for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
+		const int32_t n = sizes[s];
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_rope_def rd = sm_default_rope_def();
+		rd.end[0] = length;
+		rd.segments = n;
+		rd.mass = mass;
+		rd.mass_distribution = SM_MASS_LUMPED;
+		rd.structural.stiffness = E;
+		sm_structure st;
+		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
+		for (int32_t p = 0; p <= n; p++) {
+			sm_particle_def pd;
+			ENSURE_STATUS(sm_model_get_particle(model, p, &pd), SM_OK);
+			pd.position[0] *= 1.0 + eps;  // rest lengths stay: the rope is stretched
+			pd.motion = p == 0 ? SM_PARTICLE_DRIVEN : p == n ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+			ENSURE_STATUS(sm_model_set_particle(model, p, &pd), SM_OK);
+		}
+		sm_simulation_def sd = sm_default_simulation_def();
+		sd.relative_tolerance = 1e-8;
+		sd.absolute_tolerance_position = 1e-12;
+		sd.absolute_tolerance_velocity = 1e-10;
+		sm_simulation* sim = sm_simulation_create(model, &sd, NULL);
+		ENSURE(sim != NULL);
+		const double elastic0 = sm_simulation_energies(sim).elastic;
+		const int32_t middle = n / 2;
+		double error = 0.0, peak = 0.0, trough = 0.0;
+		const int samples = 500;
+		int piece = 0;
+		for (int k = 1; k <= samples; k++) {
+			const double t = t_end * k / samples;
+			// Drive the end piece by piece up to t, then sample the middle.
+			while (piece < pieces && tau * piece / pieces < t) {
+				const double t0 = tau * piece / pieces, t1 = tau * (piece + 1) / pieces;
+				double v0, v1;
+				const double y0 = wave_pulse(t0, tau, amplitude, &v0);
+				wave_pulse(t1, tau, amplitude, &v1);
+				ENSURE_STATUS(sm_simulation_advance(sim, t0), SM_OK);
+				const double x[3] = {0.0, y0, 0.0}, v[3] = {0.0, v0, 0.0},
+				             a[3] = {0.0, (v1 - v0) / (t1 - t0), 0.0};
+				ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, x, v, a), SM_OK);
+				piece++;
+				if (piece == pieces) {
+					ENSURE_STATUS(sm_simulation_advance(sim, t1), SM_OK);
+					const double still[3] = {0.0, 0.0, 0.0};
+					ENSURE_STATUS(sm_simulation_set_driven(sim, 0, still, still), SM_OK);
+				}
+			}
+			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+			double rate;
+			const double y = sm_simulation_positions(sim)[3 * middle + 1];
+			const double exact = wave_pulse(t - 0.5 * stretched / c, tau, amplitude, &rate) -
+			                     wave_pulse(t - 1.5 * stretched / c, tau, amplitude, &rate);
+			error = fmax(error, fabs(y - exact));
+			peak = fmax(peak, y);
+			trough = fmin(trough, y);
+		}
+		printf(
+		    "  N=%-3d largest difference from d'Alembert's %.3e of the amplitude; peak %.4f, trough %.4f; %ld steps\n",
+		    (int)n, error / amplitude, peak / amplitude, trough / amplitude,
+		    (long)sm_simulation_statistics(sim).steps);
+		ENSURE(s == 0 || (previous / error > 3.8 && previous / error < 4.2));
+		previous = error;
+		// The driven end works against the string's impedance Z = T / c: the pulse carries
+		// Z int f'^2 dt = Z 5 pi^2 A^2 / (8 tau) away (and the fixed end gives it back to the
+		// string). The lattice's work converges to it at second order too (measured 8e-4 short
+		// at N = 200), and it is the energy the string holds: kinetic plus elastic beyond the
+		// stretch's 0.05 J, to the integration's rounding of that elastic energy (measured 3.5e-5).
+		const double work = sm_simulation_input_work(sim);
+		const double pulse_energy = E * eps / c * 5.0 * pi * pi * amplitude * amplitude / (8.0 * tau);
+		const sm_energies e = sm_simulation_energies(sim);
+		printf("  N=%-3d input work %.6e J, the pulse's %.6e J, in the string %.6e J\n", (int)n, work,
+		       pulse_energy, e.kinetic + e.elastic - elastic0);
+		ENSURE_NEAR(e.kinetic + e.elastic - elastic0, work, 1e-3 * pulse_energy);
+		ENSURE(pulse_energy - work > 0.0);
+		ENSURE(s == 0 ||
+		       (previous_work / (pulse_energy - work) > 3.8 && previous_work / (pulse_energy - work) < 4.2));
+		previous_work = pulse_energy - work;
+		sm_simulation_destroy(sim);
+		sm_model_destroy(model);
+	}
 	return 0;
 }
 
@@ -5981,6 +6198,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_oscillator_underdamped);
 	RUN_TEST(test_oscillator_critically_damped);
 	RUN_TEST(test_oscillator_overdamped);
+	RUN_TEST(test_rope_released_in_a_mode_decays_as_its_modal_solution);
 	RUN_TEST(test_energy_conserved_undamped);
 	RUN_TEST(test_momentum_conserved_free_block);
 	RUN_TEST(test_two_mass_chain_against_gsl);
@@ -6019,6 +6237,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_state_needs_the_same_free_particles_and_springs);
 	RUN_TEST(test_driven_follows_prescribed_motion);
 	RUN_TEST(test_driven_motion_continued_by_the_caller_is_no_change);
+	RUN_TEST(test_pulse_runs_along_a_taut_rope_and_comes_back_inverted);
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
 	RUN_TEST(test_overflowing_force_is_a_failure);
