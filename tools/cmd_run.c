@@ -74,13 +74,14 @@ static void usage(FILE* out)
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
 	        "  -h, --help             this text\n");
-	fprintf(out,
-	        "\n"
-	        "A progress line goes to stderr for runs longer than a second, and a summary at the end:\n"
-	        "the solver's statistics, the springs that broke and the energy balance. Exit status: 0\n"
-	        "success, 1 bad model or input signals, solver failure or output that cannot be written, 2\n"
-	        "usage error. Stopped by a signal (Ctrl-C, a kill, a closed pipe), it ends after the row it\n"
-	        "was writing, its outputs whole up to there, with the signal's status.\n");
+	fprintf(out, "\n"
+	             "A progress line goes to stderr for runs longer than a second, and a summary at the end:\n"
+	             "the solver's statistics (the pcg and cholmod solvers evaluate the forces with the\n"
+	             "Jacobians, in one pass timed as Jacobians), the springs that broke and the energy\n"
+	             "balance. Exit status: 0 success, 1 bad model or input signals, solver failure or output\n"
+	             "that cannot be written, 2 usage error. Stopped by a signal (Ctrl-C, a kill, a closed\n"
+	             "pipe), it ends after the row it was writing, its outputs whole up to there, with the\n"
+	             "signal's status.\n");
 }
 
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.

@@ -151,10 +151,14 @@ typedef struct sm_statistics {
 	int64_t linear_iterations;  ///< conjugate-gradient iterations, or one per solve for direct solvers
 	int64_t error_test_failures;
 	int64_t convergence_failures;
-	int64_t restarts;      ///< solver re-initialisations (events, state changes, jumps in inputs)
-	double force_seconds;  ///< wall time in force evaluation [s]
-	/// wall time in Jacobian evaluation: the springs' derivatives, and their assembly into the
-	/// matrices of the dense, klu and cholmod solvers [s]
+	int64_t restarts;  ///< solver re-initialisations (events, state changes, jumps in inputs)
+	/// wall time in force evaluation for the right-hand side [s]. The pcg and cholmod solvers
+	/// evaluate the forces of a right-hand side at a new time together with the springs'
+	/// Jacobian blocks, in one pass timed as Jacobian evaluation: with them this is about 0.
+	double force_seconds;
+	/// wall time in Jacobian evaluation: the springs' derivatives (for pcg and cholmod with the
+	/// forces of the same pass, above), and their assembly into the matrices of the dense, klu
+	/// and cholmod solvers [s]
 	double jacobian_seconds;
 	/// wall time in linear solves, apart from the above: factorisations (dense and klu LU,
 	/// cholmod's Cholesky), preconditioners and iterations [s]
