@@ -53,10 +53,10 @@ static void print_particle(const sm_document* doc, int32_t particle)
 
 // Warns about the springs whose initial strain is at or beyond their break strain: they break at
 // once, as the first advance starts (at t = 0), and only the rows written before it show them
-// (the first of `springmass run`'s CSV). Most likely a break strain given in per cent, or a
-// rest length that is not the one meant. The test is the simulation's, on lengths: L >= l0 (1 +
-// break strain) (a strain (L - l0) / l0 can round below a limit that L reaches). False when out of
-// memory.
+// (the first of `springmass run`'s CSV). Most likely a rest length shorter than meant, or a break
+// strain below the strain of a spring pre-stretched on purpose. The test is the simulation's, on
+// lengths: L >= l0 (1 + break strain) (a strain (L - l0) / l0 can round below a limit that L
+// reaches). False when out of memory.
 static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 {
 	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
