@@ -88,7 +88,9 @@ static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 		printf(", starts at strain %.6g, at or beyond its break strain %.6g: it breaks at t = 0\n", strain[k],
 		       s.break_strain);
 	}
-	if (count > BROKEN_AT_START_SHOWN)
+	if (count == BROKEN_AT_START_SHOWN + 1)
+		printf("warning      and 1 more spring starts at or beyond its break strain\n");
+	else if (count > BROKEN_AT_START_SHOWN)
 		printf("warning      and %d more springs start at or beyond their break strain\n",
 		       (int)(count - BROKEN_AT_START_SHOWN));
 	free(x);
@@ -108,7 +110,7 @@ static void print_structure(const sm_structure_info* s)
 	const sm_structure* r = &s->range;
 	printf("  %-12s %s ", s->name, s->type);
 	if (strcmp(s->type, "rope") == 0) {
-		printf("of %d segments", (int)r->shape[0] - 1);
+		printf("of %d segment%s", (int)r->shape[0] - 1, r->shape[0] == 2 ? "" : "s");
 	} else if (strcmp(s->type, "sheet") == 0) {
 		printf("%d x %d", (int)r->shape[0], (int)r->shape[1]);
 		groups = sheet;
@@ -119,8 +121,9 @@ static void print_structure(const sm_structure_info* s)
 		printf("of %d vertices", (int)r->shape[0]);
 		groups = mesh;
 	}
-	printf(": particles %d - %d, %d springs", (int)r->first_particle,
-	       (int)(r->first_particle + r->particle_count - 1), (int)r->spring_count);
+	printf(": particles %d - %d, %d spring%s", (int)r->first_particle,
+	       (int)(r->first_particle + r->particle_count - 1), (int)r->spring_count,
+	       r->spring_count == 1 ? "" : "s");
 	const char* separator = " (";
 	for (int g = 0; g < 3; g++)
 		if (groups[g] != NULL && r->group_spring_count[g] > 0) {

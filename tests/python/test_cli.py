@@ -1169,6 +1169,25 @@ def test_check_warns_of_springs_that_start_broken(tmp_path):
     assert "warning" not in cli("check", MODELS / "tearing_cloth.json").stdout
 
 
+def test_check_counts_one_spring_in_the_singular(tmp_path):
+    # Four springs of rest length 1 m from an anchor to a bob 1.2 m away (strain 0.2), each with a
+    # break strain of 0.1: check names three of them and counts the fourth, one spring. A rope of
+    # one segment is listed with one segment and one spring.
+    model = tmp_path / "four.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "four", "gravity": [0, 0, 0],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [1.2, 0, 0], "mass": 1}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 10, "rest_length": 1, "break_strain": 0.1}] * 4,
+        "structures": [{"type": "rope", "name": "short", "start": [0, 1, 0], "end": [1, 1, 0], "segments": 1,
+                        "structural": {"stiffness": 10}}]}))
+    out = cli("check", model).stdout
+    warnings = [line for line in out.splitlines() if line.startswith("warning")]
+    assert len(warnings) == 4
+    assert warnings[3] == "warning      and 1 more spring starts at or beyond its break strain"
+    assert "short        rope of 1 segment: particles 2 - 3, 1 spring (1 structural)" in out
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
