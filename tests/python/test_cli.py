@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from conftest import CLI, ROOT, SANITIZED
-from fmu_helpers import Instance, read_documentation
+from fmu_helpers import read_documentation
 
 MODELS = ROOT / "models"
 # Set by ctest when the build has the FMU runtime that `springmass fmu` packs.
@@ -1116,23 +1116,6 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
     scaled = ["--atol-position", 1e-8 * length, "--atol-velocity", 1e-6 * length / time]
     assert error(*scaled) < 1e-4
     assert "warning" not in cli("run", model, "-o", tmp_path / "x.csv", *scaled).stderr
-    if HAS_FMU:
-        # The instance warns too, when its initialisation ends (fmi2Warning, logged), unless its
-        # absolute tolerances were set to suit the model during it.
-        for tolerances, warned in (({}, True), ({"solver.atol_position": scaled[1],
-                                                 "solver.atol_velocity": scaled[3]}, False)):
-            inst = Instance(tmp_path / "x.fmu", logging_on=True)
-            try:
-                s = inst.slave
-                s.setupExperiment(startTime=0.0)
-                s.enterInitializationMode()
-                for name, value in tolerances.items():
-                    inst.set(name, value)
-                assert s.exitInitializationMode() == (1 if warned else 0)
-                coarse = [m for m in inst.messages if "are coarse for this model" in m[2]]
-                assert [m[1] for m in coarse] == (["logStatusWarning"] if warned else [])
-            finally:
-                inst.free()
     # The bundled oscillator, and the same at a megahertz (micrometres and microseconds: speeds of
     # metres per second, which the default velocity tolerance holds), are warned about by nothing.
     for quiet in (MODELS / "oscillator.json", oscillator_at_scale(tmp_path / "mhz.json", 1e-6, 1e-6, 1e-12)):

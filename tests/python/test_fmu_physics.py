@@ -287,6 +287,38 @@ def test_an_input_tried_and_set_back_before_a_step_changes_nothing(test_fmu, nam
     assert np.array_equal(x_tried, x_plain)
 
 
+def test_tolerances_coarse_for_the_model_are_a_warning_at_initialisation(tmp_path, package):
+    # The bundled oscillator scaled to micrometres, picograms and milliseconds: its motion (0.1 um,
+    # up to 0.6 mm/s) lies below the default absolute tolerances (1e-8 m, 1e-6 m/s), which hold it
+    # to nothing (tests/python/test_cli.py measures the error). fmi2ExitInitializationMode says so
+    # (fmi2Warning, logged under logStatusWarning), unless the absolute tolerances were set to suit
+    # the model (1e-8 of its 0.5 um spring, 1e-6 of it per millisecond) during initialisation.
+    length, time, mass = 1e-6, 1e-3, 1e-12
+    model = tmp_path / "micro.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "micro", "gravity": [0, 0, 0],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [0.6 * length, 0, 0], "mass": mass}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 40.0 * mass / time**2,
+                     "damping": 0.4 * mass / time, "rest_length": 0.5 * length}],
+        "ports": [{"name": "tip", "particle": "bob", "kind": "probe"}]}))
+    suited = {"solver.atol_position": 1e-8 * length, "solver.atol_velocity": 1e-6 * length / time}
+    for tolerances, warned in (({}, True), (suited, False)):
+        inst = Instance(package(model), logging_on=True)
+        try:
+            s = inst.slave
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            for name, value in tolerances.items():
+                inst.set(name, value)
+            assert s.exitInitializationMode() == (1 if warned else 0)  # fmi2Warning, fmi2OK
+            coarse = [m for m in inst.messages if "are coarse for this model" in m[2]]
+            assert [m[1] for m in coarse] == (["logStatusWarning"] if warned else [])
+            s.doStep(0.0, time)  # and it simulates as asked
+        finally:
+            inst.free()
+
+
 def stepped_from(test_fmu, start_time):
     """The driven oscillator from start_time over 1 s in communication steps of 1/128 s, with the
     stop time start_time + 1 s given. Returns tip.x and tip.vx per step and the internal steps."""
