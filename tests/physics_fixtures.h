@@ -3,6 +3,7 @@
 #pragma once
 
 #include "springmass/model.h"
+#include "springmass/structures.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -106,4 +107,28 @@ static inline sm_status add_degenerate_and_disabled_springs(sm_model* m, double*
 	d.damping = 1.0;
 	const sm_status status = sm_model_add_spring(m, &d, NULL);
 	return status != SM_OK ? status : sm_model_set_spring_enabled(m, 7, false);
+}
+
+// A model under gravity (0, 0, gz) [m/s^2] with mass damping alpha [1/s], holding one straight
+// rope from the origin along x: n segments over `length` [m], `mass` [kg] lumped at its particles
+// 0 .. n, structural stiffness E [N] and damping c [N s] per strain. NULL on failure.
+static inline sm_model* lumped_rope_model(double gz, double alpha, double length, int32_t n, double mass,
+                                          double E, double c)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = gz;
+	md.mass_damping = alpha;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_rope_def rd = sm_default_rope_def();
+	rd.end[0] = length;
+	rd.segments = n;
+	rd.mass = mass;
+	rd.mass_distribution = SM_MASS_LUMPED;
+	rd.structural.stiffness = E;
+	rd.structural.damping = c;
+	if (model != NULL && sm_add_rope(model, &rd, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
 }

@@ -1,4 +1,5 @@
 // Analysis tests: static equilibrium and natural frequencies against closed forms.
+#include "physics_fixtures.h"
 #include "springmass/analysis.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
@@ -812,18 +813,8 @@ static int test_elastic_catenary_between_unequal_supports(void)
 	const int32_t sizes[] = {10, 20, 40, 80, 160};  // dense statics up to 80, sparse at 160
 	for (size_t t = 0; t < sizeof sizes / sizeof sizes[0]; t++) {
 		const int32_t n = sizes[t];
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = -g;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = lumped_rope_model(-g, 0.0, L0, n, mass, E, 0.0);
 		ENSURE(model != NULL);
-		sm_rope_def rd = sm_default_rope_def();
-		rd.end[0] = L0;
-		rd.segments = n;
-		rd.mass = mass;
-		rd.mass_distribution = SM_MASS_LUMPED;
-		rd.structural.stiffness = E;
-		sm_structure st;
-		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
 		for (int32_t p = 0; p <= n; p++) {
 			sm_particle_def pd;
 			sm_model_get_particle(model, p, &pd);

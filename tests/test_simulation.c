@@ -191,20 +191,8 @@ static int test_rope_released_in_a_mode_decays_as_its_modal_solution(void)
 	const double length = 1.0, mass = 0.5, E = 200.0, c = 0.02, alpha = 0.3, amplitude = 1e-3;
 	const int32_t n = 30;
 	const int k = 2;
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	md.mass_damping = alpha;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = lumped_rope_model(0.0, alpha, length, n, mass, E, c);
 	ENSURE(model != NULL);
-	sm_rope_def rd = sm_default_rope_def();
-	rd.end[0] = length;
-	rd.segments = n;
-	rd.mass = mass;
-	rd.mass_distribution = SM_MASS_LUMPED;
-	rd.structural.stiffness = E;
-	rd.structural.damping = c;
-	sm_structure st;
-	ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
 	const double theta = (2 * k - 1) * pi / (2.0 * n);
 	for (int32_t p = 0; p <= n; p++) {
 		sm_particle_def pd;
@@ -2286,18 +2274,8 @@ static int test_pulse_runs_along_a_taut_rope_and_comes_back_inverted(void)
 	const int32_t sizes[] = {50, 100, 200};
 	for (size_t s = 0; s < sizeof sizes / sizeof sizes[0]; s++) {
 		const int32_t n = sizes[s];
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = 0.0;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = lumped_rope_model(0.0, 0.0, length, n, mass, E, 0.0);
 		ENSURE(model != NULL);
-		sm_rope_def rd = sm_default_rope_def();
-		rd.end[0] = length;
-		rd.segments = n;
-		rd.mass = mass;
-		rd.mass_distribution = SM_MASS_LUMPED;
-		rd.structural.stiffness = E;
-		sm_structure st;
-		ENSURE_STATUS(sm_add_rope(model, &rd, &st), SM_OK);
 		for (int32_t p = 0; p <= n; p++) {
 			sm_particle_def pd;
 			ENSURE_STATUS(sm_model_get_particle(model, p, &pd), SM_OK);
