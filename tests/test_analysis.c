@@ -1947,6 +1947,13 @@ static int test_motion_scales(void)
 	ENSURE(sm_tolerances_coarse(&def, &scales));
 	def.absolute_tolerance_velocity = 0.5 * SM_COARSE_TOLERANCE * scales.speed;
 	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	// The fraction is the documented 1e-4 (docs/simulation.md, "Tolerances"): of 0.25 m and
+	// 0.707 m/s, 2.5e-5 m and 7.07e-5 m/s; 3e-5 m and 1e-4 m/s are coarse, 2e-5 m is not.
+	def.absolute_tolerance_position = 3e-5;
+	def.absolute_tolerance_velocity = 1e-4;
+	ENSURE(sm_tolerances_coarse(&def, &scales));
+	def.absolute_tolerance_position = 2e-5;
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
 
 	ENSURE_STATUS(sm_model_set_spring_enabled(model, 0, false), SM_OK);
 	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
