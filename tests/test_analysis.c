@@ -1964,6 +1964,11 @@ static int test_motion_scales(void)
 	// only the zero-length spring between coincident particles
 	ENSURE(isinf(scales.length) && isinf(scales.speed));
 	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	// No spring enabled: the bound is 0 and the speed INFINITY all the same (simulation.h), not
+	// INFINITY times 0.
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE(isinf(scales.length) && isinf(scales.speed) && scales.speed > 0.0);
 	ENSURE_STATUS(sm_model_motion_scales(NULL, &scales), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_motion_scales(model, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(!sm_tolerances_coarse(NULL, &scales) && !sm_tolerances_coarse(&def, NULL));
