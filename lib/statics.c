@@ -39,6 +39,7 @@
 #include <gsl/gsl_linalg.h>
 #include <gsl/gsl_permutation.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -241,13 +242,19 @@ typedef struct statics_work {
 	double* stiffness;       // [N/m], 0 for disabled springs
 	double* constant_force;  // 3 n: m g + load + f_ext [N]
 	const double* external;  // 3 n or NULL
-	double* x;               // 3 n current positions
-	double* y;               // 3 n trial positions
-	double* f;               // 3 n forces
-	double* rhs;             // dof
-	double* step;            // dof
-	double norm;             // largest row sum of |H + mu M| at the last factorisation [N/m]
-	double dense_scale;      // dense path: the factor holds dense_scale (H + mu M) [1]
+	// Each free particle's balance is judged against its own tolerance (docs/analysis.md):
+	double* requested;     // nf: the tolerance asked for at each free particle [N]
+	double* weight;        // nf: requested_max / requested, >= 1 (1 for a uniform tolerance) [1]
+	double* scale;         // nf: round-off scale of each free particle's balance (force_scale) [N]
+	double requested_max;  // the largest of `requested` [N]
+	double load;           // the largest constant force on a free particle [N]
+	double* x;             // 3 n current positions
+	double* y;             // 3 n trial positions
+	double* f;             // 3 n forces
+	double* rhs;           // dof
+	double* step;          // dof
+	double norm;           // largest row sum of |H + mu M| at the last factorisation [N/m]
+	double dense_scale;    // dense path: the factor holds dense_scale (H + mu M) [1]
 	// The caller's progress callback (sm_statics_def.on_iteration) and the iteration it last saw.
 	bool (*on_iteration)(void* context, int32_t iterations, double residual);
 	void* on_iteration_context;
@@ -277,6 +284,9 @@ static void work_free(statics_work* w)
 	free(w->rest_length);
 	free(w->stiffness);
 	free(w->constant_force);
+	free(w->requested);
+	free(w->weight);
+	free(w->scale);
 	free(w->x);
 	free(w->y);
 	free(w->f);
@@ -313,18 +323,42 @@ static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_s
 	return false;
 }
 
-// Largest force component on a free particle [N].
-static double residual_norm(const statics_work* w, const double* f)
+// Largest force component on free particle i [N] (NaN if any is).
+static double particle_force(const statics_work* w, const double* f, int32_t i)
+{
+	const double* fi = f + 3 * (size_t)w->free_particle[i];
+	double r = 0.0;
+	for (int k = 0; k < 3; k++) {
+		const double a = fabs(fi[k]);
+		r = (a > r || isnan(a)) ? a : r;
+	}
+	return r;
+}
+
+// Largest force component on a free particle, each weighted by requested_max / its requested
+// tolerance [N]: the measure whose halving the line search and the polish ask for. With one
+// tolerance for every particle (a tolerance given, or loads of 1e-3 N and more) the weights are 1
+// and it is the largest force component on a free particle, bit for bit; otherwise a light particle's force
+// counts in proportion to how far it is from its own, smaller, tolerance.
+static double weighted_residual(const statics_work* w, const double* f)
 {
 	double r = 0.0;
 	for (int32_t i = 0; i < w->nf; i++) {
-		const double* fi = f + 3 * (size_t)w->free_particle[i];
-		for (int k = 0; k < 3; k++) {
-			const double a = fabs(fi[k]);
-			r = (a > r || isnan(a)) ? a : r;
-		}
+		const double force = particle_force(w, f, i);
+		const double a = force > 0.0 ? force * w->weight[i] : force;  // 0, or NaN, as it is
+		r = (a > r || isnan(a)) ? a : r;
 	}
 	return r;
+}
+
+// Whether every free particle's force is within the tolerance asked for at it (round-off floor
+// aside).
+static bool requested_met(const statics_work* w, const double* f)
+{
+	for (int32_t i = 0; i < w->nf; i++)
+		if (!(particle_force(w, f, i) <= w->requested[i]))
+			return false;
+	return true;
 }
 
 // Round-off scale of the force balance at each free particle: every spring force is computed as
@@ -333,10 +367,12 @@ static double residual_norm(const statics_work* w, const double* f)
 // of the positions, which are stored relative to the origin (a rope of 1 cm segments hanging
 // 1 m below it: |x| is 100 times L). So the sum over the springs at a particle of
 // ks max(L, l0, |x_a| + |x_b|), plus the constant force, bounds what round-off can leave in
-// the balance. Returns the largest over the free particles [N].
-static double force_scale(const statics_work* w, const double* x)
+// the balance there. Writes it for every free particle to w->scale [N]. It is the particle's
+// own: the springs of a stiff part elsewhere do not enter the balance of a light part, which
+// round-off resolves to its own scale (a separate block 1e9 times softer than a rope beside it).
+static void force_scale(const statics_work* w, const double* x)
 {
-	double* s = w->rhs;  // reused as scratch: one value per free particle fits in dof entries
+	double* s = w->scale;
 	for (int32_t i = 0; i < w->nf; i++) {
 		const double* c = w->constant_force + 3 * (size_t)w->free_particle[i];
 		s[i] = hypot(hypot(c[0], c[1]), c[2]);
@@ -355,10 +391,41 @@ static double force_scale(const statics_work* w, const double* x)
 		if (fb >= 0)
 			s[fb] += t;
 	}
-	double m = 0.0;
-	for (int32_t i = 0; i < w->nf; i++)
-		m = fmax(m, s[i]);
-	return m;
+}
+
+// The force balance f at x, particle by particle: free particle i is balanced when its largest
+// force component is at most its tolerance, max(requested[i], SM_STATICS_ROUNDOFF_FACTOR eps
+// scale[i]). Sets res->residual (the largest force component on a free particle), res->tolerance
+// (the largest of the particles' tolerances, at least requested_max) and res->critical_* (the
+// particle whose force is the largest fraction of its tolerance). Returns whether every free
+// particle is balanced.
+static bool assess(const statics_work* w, const double* x, const double* f, sm_statics_result* res)
+{
+	force_scale(w, x);
+	double residual = 0.0, loosest = w->requested_max, worst = 0.0;
+	bool balanced = true;
+	res->critical_particle = -1;
+	res->critical_residual = 0.0;
+	res->critical_tolerance = 0.0;
+	for (int32_t i = 0; i < w->nf; i++) {
+		const double a = particle_force(w, f, i);
+		const double tolerance =
+		    fmax(w->requested[i], SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * w->scale[i]);
+		residual = (a > residual || isnan(a)) ? a : residual;
+		loosest = (tolerance > loosest || isnan(tolerance)) ? tolerance : loosest;
+		if (!(a <= tolerance))
+			balanced = false;
+		const double ratio = a / tolerance;  // tolerance >= requested[i] > 0
+		if (res->critical_particle < 0 || ratio > worst || (isnan(ratio) && !isnan(worst))) {
+			worst = ratio;
+			res->critical_particle = w->free_particle[i];
+			res->critical_residual = a;
+			res->critical_tolerance = tolerance;
+		}
+	}
+	res->residual = residual;
+	res->tolerance = loosest;
+	return balanced;
 }
 
 // U(y) - U(x) [J], computed from differences so that it stays accurate when tiny; *roundoff
@@ -712,17 +779,18 @@ static int singular_to_round_off(statics_work* w)
 	return 1.0 / growth <= (double)longest_factor_row(w) * DBL_EPSILON * w->norm;
 }
 
-// Full Newton steps from w->x (converged to the round-off floor res->tolerance, which is above
-// the caller's `tolerance`) while each at least halves the residual, within the iterations up to
-// `last`: the floor bounds the round-off of the force balance from above, and a shape within it
-// can still carry the same unbalanced force at every particle (a stiff rope left by the stiffness
-// continuation 2.4 % off its weight at every particle, under a floor of 2.9 %). Leaves w->f the
-// forces at w->x and res->residual their norm. False on a fatal error (*st and err set).
-static bool polish(statics_work* w, double tolerance, int32_t last, sm_statics_result* res, sm_status* st,
-                   sm_error* err)
+// Full Newton steps from w->x (every particle balanced, some only to its round-off floor, above
+// the tolerance asked for there) while each at least halves the weighted residual and keeps every
+// particle balanced, within the iterations up to `last`: the floor bounds the round-off of the
+// force balance from above, and a shape within it can still carry the same unbalanced force at
+// every particle (a stiff rope left by the stiffness continuation 2.4 % off its weight at every
+// particle, under a floor of 2.9 %). Leaves w->f the forces at w->x. False on a fatal error (*st
+// and err set).
+static bool polish(statics_work* w, int32_t last, sm_statics_result* res, sm_status* st, sm_error* err)
 {
 	const size_t n3 = 3 * (size_t)w->n;
-	while (res->residual > tolerance && res->iterations < last) {
+	double weighted = weighted_residual(w, w->f);
+	while (!requested_met(w, w->f) && res->iterations < last) {
 		for (int32_t i = 0; i < w->nf; i++)
 			memcpy(w->rhs + 3 * (size_t)i, w->f + 3 * (size_t)w->free_particle[i], 3 * sizeof(double));
 		const int factored = factor_and_step(w, w->x, 0.0, SM_JACOBIAN_EXACT, w->rhs, w->step);
@@ -738,13 +806,15 @@ static bool polish(statics_work* w, double tolerance, int32_t last, sm_statics_r
 			for (int c = 0; c < 3; c++)
 				w->y[3 * (size_t)w->free_particle[i] + c] += w->step[3 * (size_t)i + c];
 		sm_model_forces(w->model, w->y, NULL, w->external, w->f);
-		const double residual = residual_norm(w, w->f);
-		if (!(residual < 0.5 * res->residual)) {
+		const double next = weighted_residual(w, w->f);
+		sm_statics_result trial = *res;
+		if (!(next < 0.5 * weighted) || !assess(w, w->y, w->f, &trial)) {
 			sm_model_forces(w->model, w->x, NULL, w->external, w->f);
 			return true;
 		}
 		memcpy(w->x, w->y, n3 * sizeof(double));
-		res->residual = residual;
+		*res = trial;
+		weighted = next;
 		res->iterations++;
 		if (!report_iteration(w, res, st, err))
 			return false;
@@ -766,8 +836,7 @@ static bool polish(statics_work* w, double tolerance, int32_t last, sm_statics_r
 // most `budget` iterations (counted in res->iterations). Returns 1 when converged, 0 when the
 // budget ran out or no descent step was found (the caller may try another way), -1 on a fatal
 // error (*st and err set).
-static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_result* res, sm_status* st,
-                  sm_error* err)
+static int newton(statics_work* w, int32_t budget, sm_statics_result* res, sm_status* st, sm_error* err)
 {
 	const sm_model* model = w->model;
 	const size_t n3 = 3 * (size_t)w->n;
@@ -795,8 +864,8 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 	const double armijo = 1e-4;
 	for (;;) {
 		sm_model_forces(model, w->x, NULL, w->external, w->f);
-		res->residual = residual_norm(w, w->f);
-		res->tolerance = fmax(tolerance, SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * force_scale(w, w->x));
+		const bool balanced = assess(w, w->x, w->f, res);
+		const double weighted = weighted_residual(w, w->f);
 		if (!isfinite(res->residual)) {
 			*st = sm_error_set(err, SM_ERROR_NOT_FINITE,
 			                   "statics: the forces became non-finite at iteration %d", (int)res->iterations);
@@ -813,10 +882,14 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 		}
 		if (!report_iteration(w, res, st, err))
 			return -1;
-		if (res->residual <= res->tolerance) {
-			if (res->residual > tolerance && !polish(w, tolerance, last, res, st, err))
+		// Where the loosest floor exceeds every load, no balance resolves the loads (the solve is
+		// refused: sm_statics_solve), and a particle's own tolerance is not worth chasing further.
+		const bool unresolvable = res->residual <= res->tolerance && res->tolerance > w->requested_max &&
+		                          w->load > 0.0 && res->tolerance > w->load;
+		if (balanced || unresolvable) {
+			if (!requested_met(w, w->f) && !polish(w, last, res, st, err))
 				return -1;
-			res->tolerance = fmax(tolerance, SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * force_scale(w, w->x));
+			assess(w, w->x, w->f, res);
 			return 1;
 		}
 		if (res->iterations >= last)
@@ -879,7 +952,7 @@ static int newton(statics_work* w, int32_t budget, double tolerance, sm_statics_
 					for (int c = 0; c < 3; c++)
 						w->y[3 * (size_t)w->free_particle[i] + c] += w->step[3 * (size_t)i + c];
 				sm_model_forces(model, w->y, NULL, w->external, w->f);
-				if (residual_norm(w, w->f) < 0.5 * res->residual) {
+				if (weighted_residual(w, w->f) < 0.5 * weighted) {
 					accepted = 1;
 					alpha = 1.0;
 				}
@@ -927,7 +1000,7 @@ static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* 
 {
 	sm_status st = SM_OK;
 	const int32_t first_budget = d->max_iterations < 100 ? d->max_iterations : 50;
-	const int r = newton(w, first_budget, d->residual_tolerance, res, &st, err);
+	const int r = newton(w, first_budget, res, &st, err);
 	if (r != 0 || w->ns == 0 || res->iterations >= d->max_iterations) {
 		*converged = r == 1;
 		return r < 0 ? st : SM_OK;
@@ -983,7 +1056,7 @@ static sm_status solve_with_continuation(statics_work* w, const sm_statics_def* 
 		// slowly is not cut short (a cap of a quarter of max_iterations made the 64 x 64 benchmark
 		// cloth fail at the default 500, which then took 386 in all; a slack chain of 2000 segments
 		// started straight, 273).
-		const int c = newton(w, remaining, d->residual_tolerance, res, &st, err);
+		const int c = newton(w, remaining, res, &st, err);
 		if (c < 0)
 			goto done;
 		if (c == 1) {
@@ -1014,7 +1087,7 @@ done:
 		memcpy(w->stiffness, original_stiffness, (size_t)w->ns * sizeof(double));
 	if (st == SM_OK && !*converged) {
 		sm_model_forces(original, w->x, NULL, w->external, w->f);
-		res->residual = residual_norm(w, w->f);
+		assess(w, w->x, w->f, res);
 	}
 	sm_model_destroy(clone);
 	free(saved);
@@ -1054,9 +1127,12 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->f = malloc((n3 + 1) * sizeof(double));
 	w->rhs = malloc(dof * sizeof(double));
 	w->step = malloc(dof * sizeof(double));
+	w->requested = malloc(((size_t)w->nf + 1) * sizeof(double));
+	w->weight = malloc(((size_t)w->nf + 1) * sizeof(double));
+	w->scale = malloc(((size_t)w->nf + 1) * sizeof(double));
 	if (w->free_particle == NULL || w->spring_a == NULL || w->spring_b == NULL || w->rest_length == NULL ||
 	    w->stiffness == NULL || w->constant_force == NULL || w->x == NULL || w->y == NULL || w->f == NULL ||
-	    w->rhs == NULL || w->step == NULL)
+	    w->rhs == NULL || w->step == NULL || w->requested == NULL || w->weight == NULL || w->scale == NULL)
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles",
 		                    (int)w->n);
 	for (int32_t p = 0; p < w->n; p++)
@@ -1123,6 +1199,74 @@ static sm_status setup_solver(statics_work* w, sm_statics_solver* solver, sm_err
 	return SM_OK;
 }
 
+// The tolerance asked for at each free particle: `given` (residual_tolerance > 0) at every one; by
+// default SM_STATICS_DEFAULT_TOLERANCE, or SM_STATICS_LOAD_FRACTION of the particle's own constant
+// force (weight, load, external force) where that is smaller, so that a light part's balance is
+// judged against its own weight, not against the heaviest particle's (a 1e-9 kg block beside a
+// 1 kg rope: 1e-6 of the rope's particles' weight is tens of times the block's particles').
+// A particle without a constant force of its own (no gravity) takes the largest of the free
+// particles joined to it by springs through free particles, whose loads its springs carry, and
+// failing any, the largest on a free particle, `load` [N]. With no load anywhere, the default.
+// `tolerance` is the one resolved for the whole model (the given one, or the default for `load`),
+// the largest of them.
+static sm_status set_requested_tolerances(statics_work* w, bool given, double tolerance, double load,
+                                          sm_error* err)
+{
+	double* own = w->scale;  // scratch, nf entries
+	for (int32_t i = 0; i < w->nf; i++) {
+		const double* c = w->constant_force + 3 * (size_t)w->free_particle[i];
+		own[i] = hypot(hypot(c[0], c[1]), c[2]);
+	}
+	bool unloaded = false;
+	for (int32_t i = 0; i < w->nf; i++)
+		unloaded = unloaded || !(own[i] > 0.0);
+	if (!given && load > 0.0 && unloaded) {
+		int32_t* parent = malloc(((size_t)w->nf + 1) * sizeof *parent);
+		double* group = malloc(((size_t)w->nf + 1) * sizeof *group);
+		if (parent == NULL || group == NULL) {
+			free(parent);
+			free(group);
+			return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles",
+			                    (int)w->n);
+		}
+		for (int32_t i = 0; i < w->nf; i++) {
+			parent[i] = i;
+			group[i] = 0.0;
+		}
+		for (int32_t k = 0; k < w->ns; k++) {
+			const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
+			if (w->stiffness[k] == 0.0 || fa < 0 || fb < 0)
+				continue;
+			const int32_t ra = find_root(parent, fa), rb = find_root(parent, fb);
+			if (ra != rb)
+				parent[ra] = rb;
+		}
+		for (int32_t i = 0; i < w->nf; i++) {
+			const int32_t r = find_root(parent, i);
+			group[r] = fmax(group[r], own[i]);
+		}
+		for (int32_t i = 0; i < w->nf; i++)
+			if (!(own[i] > 0.0)) {
+				const double g = group[find_root(parent, i)];
+				own[i] = g > 0.0 ? g : load;
+			}
+		free(parent);
+		free(group);
+	}
+	// The particle of the largest load takes `tolerance` itself: it stays the largest.
+	w->requested_max = tolerance;
+	for (int32_t i = 0; i < w->nf; i++) {
+		double t = tolerance;
+		if (!given && load > 0.0)
+			t = fmin(SM_STATICS_DEFAULT_TOLERANCE, SM_STATICS_LOAD_FRACTION * own[i]);
+		w->requested[i] = t > 0.0 ? t : DBL_TRUE_MIN;  // a load so small that its fraction underflows
+		w->requested_max = fmax(w->requested_max, w->requested[i]);
+	}
+	for (int32_t i = 0; i < w->nf; i++)
+		w->weight[i] = w->requested_max / w->requested[i];
+	return SM_OK;
+}
+
 sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x, double* reactions,
                            sm_statics_result* result, sm_error* err)
 {
@@ -1178,7 +1322,8 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		const double* c = w.constant_force + 3 * (size_t)w.free_particle[i];
 		load = fmax(load, hypot(hypot(c[0], c[1]), c[2]));
 	}
-	if (d.residual_tolerance == 0.0) {
+	const bool given = d.residual_tolerance > 0.0;
+	if (!given) {
 		d.residual_tolerance = SM_STATICS_DEFAULT_TOLERANCE;
 		if (load > 0.0)
 			d.residual_tolerance = fmin(d.residual_tolerance, SM_STATICS_LOAD_FRACTION * load);
@@ -1189,6 +1334,12 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		                    "particle, %.3g N: any shape would pass as a rest shape",
 		                    d.residual_tolerance, load);
 	}
+	if ((st = set_requested_tolerances(&w, given, d.residual_tolerance, load, err)) != SM_OK) {
+		work_free(&w);
+		return st;
+	}
+	d.residual_tolerance = w.requested_max;  // the loosest particle's
+	w.load = load;
 
 	int converged = 0;
 	st = solve_with_continuation(&w, &d, &res, &converged, err);
@@ -1196,19 +1347,30 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	// reach converged (a load far beyond what the springs carry, a model with no equilibrium). A
 	// message puts no value right after "particle", which reads as a particle's index (springmass
 	// statics adds that particle's name to "particle 20").
-	if (st == SM_OK && !converged && res.iterations >= d.max_iterations)
-		st = sm_error_set(
-		    err, SM_ERROR_NOT_CONVERGED,
-		    "statics: no equilibrium found in %d iterations (max_iterations): the largest force on a "
-		    "free particle is %.3g N > tolerance %.3g N",
-		    (int)res.iterations, res.residual, res.tolerance);
-	else if (st == SM_OK && !converged)
-		st = sm_error_set(
-		    err, SM_ERROR_NOT_CONVERGED,
-		    "statics: no equilibrium found: the stiffness continuation gave up after %d of at most %d "
-		    "iterations, no softened stage converging; the largest force on a free particle is %.3g N > "
-		    "tolerance %.3g N",
-		    (int)res.iterations, (int)d.max_iterations, res.residual, res.tolerance);
+	const bool gave_up = st == SM_OK && !converged;
+	if (gave_up) {
+		// What is left: the largest force above every tolerance, or a particle above its own,
+		// smaller, one (a light part whose balance the heavy part's tolerance does not resolve).
+		char left[200];
+		if (res.residual > res.tolerance || res.critical_particle < 0)
+			snprintf(left, sizeof left, "the largest force on a free particle is %.3g N > tolerance %.3g N",
+			         res.residual, res.tolerance);
+		else
+			snprintf(left, sizeof left,
+			         "particle %d carries %.3g N > its own tolerance %.3g N (the largest force on a free "
+			         "particle is %.3g N)",
+			         (int)res.critical_particle, res.critical_residual, res.critical_tolerance, res.residual);
+		if (res.iterations >= d.max_iterations)
+			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+			                  "statics: no equilibrium found in %d iterations (max_iterations): %s",
+			                  (int)res.iterations, left);
+		else
+			st = sm_error_set(
+			    err, SM_ERROR_NOT_CONVERGED,
+			    "statics: no equilibrium found: the stiffness continuation gave up after %d of at "
+			    "most %d iterations, no softened stage converging; %s",
+			    (int)res.iterations, (int)d.max_iterations, left);
+	}
 
 	for (int c = 0; c < 3; c++)
 		res.reaction_total[c] = 0.0;
@@ -1232,8 +1394,12 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	// the particles from the origin: an iteration carried far away (a stiffness contrast that the
 	// continuation softens until the soft springs stretch a billion times their length) meets it
 	// with any shape. A balance whose floor exceeds every load cannot tell the loads from
-	// round-off: no rest shape is resolved there, whatever the residual.
-	if (converged && load > 0.0 && res.tolerance > d.residual_tolerance && res.tolerance > load) {
+	// round-off: no rest shape is resolved there, whatever the residual; and an iteration that gave
+	// up there with every force within the loosest tolerance (some particle still above its own,
+	// smaller, one) failed for that reason.
+	const bool within_loosest = gave_up && res.residual <= res.tolerance;
+	if ((converged || within_loosest) && load > 0.0 && res.tolerance > d.residual_tolerance &&
+	    res.tolerance > load) {
 		converged = 0;
 		st = sm_error_set(
 		    err, SM_ERROR_NOT_CONVERGED,

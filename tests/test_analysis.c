@@ -3029,6 +3029,104 @@ static int test_statics_tolerance_is_the_round_off_floor(void)
 	return 0;
 }
 
+// A stiff rope and, beside it, a block 1e9 times softer and lighter, placed `offset` [m] from
+// the origin along x and z: the rope (1 kg, 10 segments of E = 1e7 N, ks = 1e8 N/m) hangs
+// straight down from its fixed top, the block (3 x 3 x 3 particles, 0.1 m, 1e-9 kg, every spring
+// E = 1e-3 N) hangs by its corner (2, 2, 2), also fixed, starting unstretched. Without the rope
+// when `rope` is false. *block gets the block's structure.
+static sm_model* rope_beside_light_block(double offset, bool rope, sm_structure* block)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	bool ok = true;
+	if (rope) {
+		sm_rope_def r = sm_default_rope_def();
+		r.start[0] = r.end[0] = offset;
+		r.start[2] = offset;
+		r.end[2] = offset - 1.0;
+		r.segments = 10;
+		r.mass = 1.0;
+		r.structural.stiffness = 1e7;
+		sm_structure s;
+		ok = sm_add_rope(model, &r, &s) == SM_OK &&
+		     sm_set_motion_at(model, &s, 0, 0, 0, SM_PARTICLE_FIXED) == SM_OK;
+	}
+	sm_block_def b = sm_default_block_def();
+	b.origin[0] = offset + 0.5;
+	b.origin[2] = offset - 0.1;
+	b.size[0] = b.size[1] = b.size[2] = 0.1;
+	b.nu = b.nv = b.nw = 3;
+	b.mass = 1e-9;
+	b.edge.stiffness = b.face_diagonal.stiffness = b.body_diagonal.stiffness = 1e-3;
+	ok = ok && sm_add_block(model, &b, block) == SM_OK &&
+	     sm_set_motion_at(model, block, 2, 2, 2, SM_PARTICLE_FIXED) == SM_OK;
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+// Every free particle is balanced to its own tolerance, not to one for the whole model: beside
+// the stiff rope (1 kg, whose default tolerance 1e-9 N and round-off floor, 6e-7 N, both exceed
+// the block's particles' weights of 3.6e-10 N) the light block comes to the same rest shape as
+// alone. Judged by one tolerance, the solve stopped once the rope balanced (4 iterations), the
+// block's particles left with forces 17 - 4300 times their weights and heights up to 0.1 m off.
+static int test_statics_balances_a_light_part_beside_a_heavy_one(void)
+{
+	const double g = 9.81, weight = 1e-9 / 27 * g;  // of a block particle [N]
+	const double offsets[] = {0.0, 1e3};
+	for (size_t k = 0; k < sizeof offsets / sizeof offsets[0]; k++) {
+		sm_structure with, alone;
+		sm_model* model = rope_beside_light_block(offsets[k], true, &with);
+		sm_model* single = rope_beside_light_block(offsets[k], false, &alone);
+		ENSURE(model != NULL && single != NULL);
+		const int32_t n = sm_model_particle_count(model), ns = sm_model_particle_count(single);
+		double* x = malloc(3 * (size_t)n * sizeof(double));
+		double* f = malloc(3 * (size_t)n * sizeof(double));
+		double* y = malloc(3 * (size_t)ns * sizeof(double));
+		ENSURE(x != NULL && f != NULL && y != NULL);
+		sm_statics_result res, single_res;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+		ENSURE_STATUS(sm_statics_solve(single, NULL, y, NULL, &single_res, NULL), SM_OK);
+		ENSURE(res.residual <= res.tolerance && res.critical_residual <= res.critical_tolerance);
+		ENSURE(res.critical_particle >= 0 && res.critical_particle < n);
+		sm_model_forces(model, x, NULL, NULL, f);
+		// Each block particle's tolerance is the larger of 1e-6 of its weight and its round-off
+		// floor, 8 eps sum ks (|x_a| + |x_b|) over its at most 26 springs of ks <= 0.02 N/m: with
+		// |x| <= 1.5 m, 2.7e-15 N = 7.6e-6 of its weight; 1e3 m out, |x| <= 1415 m, 7.1e-3 of it.
+		const double bound = (offsets[k] == 0.0 ? 1e-5 : 1e-2) * weight;
+		// A force of bound at each particle turns the block about its pin by at most 27 bound
+		// 0.17 m (its diagonal) / (27 weight 0.087 m (pin to centre of mass)) = 2 bound / weight
+		// rad, which moves a particle's height by at most 0.17 m times that: 0.35 bound / weight
+		// [m] per solve. (Its elastic stretch under such forces, bound / 0.01 N/m, is far below.)
+		const double height = 2.0 * 0.35 * bound / weight;
+		double largest = 0.0, apart = 0.0;
+		for (int32_t p = 0; p < alone.particle_count; p++) {
+			const int32_t a = with.first_particle + p, b = alone.first_particle + p;
+			if (sm_model_free_index(model, a) < 0)
+				continue;
+			for (int c = 0; c < 3; c++)
+				largest = fmax(largest, fabs(f[3 * (size_t)a + c]));
+			// The block can turn freely about the vertical through its pin: compare heights.
+			apart = fmax(apart, fabs(x[3 * (size_t)a + 2] - y[3 * (size_t)b + 2]));
+		}
+		printf("  offset %g m: %d iterations (alone %d), block forces up to %.2g of a weight, heights %.2g m "
+		       "apart\n",
+		       offsets[k], (int)res.iterations, (int)single_res.iterations, largest / weight, apart);
+		ENSURE(largest <= bound);
+		ENSURE(apart <= height);
+		free(x);
+		free(f);
+		free(y);
+		sm_model_destroy(model);
+		sm_model_destroy(single);
+	}
+	return 0;
+}
+
 // A chain hanging from its fixed top whose springs alternate between ks_even and ks_odd [N/m]
 // (rest length 0.1 m, particles of 0.01 kg), started straight down with a slight bow.
 static sm_model* contrast_chain(int32_t segments, double ks_even, double ks_odd)
@@ -3861,6 +3959,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_iteration_budget_is_exact);
 	RUN_TEST(test_statics_iteration_budget_is_exact_in_the_continuation);
 	RUN_TEST(test_statics_stiffness_contrast);
+	RUN_TEST(test_statics_balances_a_light_part_beside_a_heavy_one);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_swinging_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_long_hanging_rope_is_stable);

@@ -22,9 +22,9 @@ static void usage(FILE* out)
 	        "particles (\"fixed\": true, held at their initial positions; a motion port's particle\n"
 	        "is free here, as in springmass run): Newton's method on the force balance with the\n"
 	        "exact stiffness and a line search on the potential energy.\n"
-	        "Prints the iterations, the residual force, whether the rest shape is stable and the\n"
-	        "reaction force at every fixed particle. A progress line goes to stderr for solves longer\n"
-	        "than a second.\n"
+	        "Prints the iterations, the residual force, the particle nearest to its tolerance, whether\n"
+	        "the rest shape is stable and the reaction force at every fixed particle. A progress line\n"
+	        "goes to stderr for solves longer than a second.\n"
 	        "\n"
 	        "options:\n"
 	        "  -o, --output FILE      write the rest shape as CSV: particle, name, position [m],\n"
@@ -34,8 +34,9 @@ static void usage(FILE* out)
 	        "  --save-model FILE      save the model with the rest shape as its initial positions\n"
 	        "                         (a cloth that starts hanging at rest)\n"
 	        "  --set NAME=VALUE       change a parameter of the model file first (repeatable)\n"
-	        "  --tolerance F          largest force left on a free particle [N], below the largest\n"
-	        "                         load on one (default 1e-9, or 1e-6 of that load if smaller)\n"
+	        "  --tolerance F          largest force left on any free particle [N], below the largest\n"
+	        "                         load on one (default: at each particle 1e-9, or 1e-6 of its\n"
+	        "                         own weight and load if smaller)\n"
 	        "  --max-iterations N     Newton iterations allowed (default 500)\n"
 	        "  --solver NAME          auto (default), dense (GSL) or sparse (CHOLMOD)\n"
 	        "  -q, --quiet            print the summary only, not every reaction, and no progress line\n"
@@ -229,6 +230,16 @@ int sm_cmd_statics(int argc, char** argv)
 	       res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)" : "dense modified Cholesky (GSL)",
 	       (int)res.iterations);
 	printf("residual         %.3e N (tolerance %.3e N)\n", res.residual, res.tolerance);
+	// Each particle is balanced to its own tolerance: the line above gives the largest force and
+	// the loosest tolerance, this one the particle nearest to its own (a light part's particle in a
+	// model with heavy ones, whose tolerance is far below the loosest).
+	char line[256];
+	if (res.critical_particle >= 0) {
+		snprintf(line, sizeof line,
+		         "balance          particle %d nearest to its tolerance: %.3e N of %.3e N\n",
+		         (int)res.critical_particle, res.critical_residual, res.critical_tolerance);
+		cli_write_named(stdout, doc, model, line);
+	}
 	// Where a rest-length spring has its two particles at one point the balance holds only by the
 	// convention that such a spring exerts no force (model.h): not a saddle or a mechanism but a
 	// maximum of that spring's energy, which `modes` refuses to linearise.
@@ -248,7 +259,6 @@ int sm_cmd_statics(int argc, char** argv)
 		cli_write_named(stdout, doc, model, stable_line);
 	}
 	printf("potential energy %.9g J\n", res.potential_energy);
-	char line[256];
 	if (largest_at >= 0) {
 		snprintf(line, sizeof line, "largest motion   %.6g m at particle %d\n", largest, (int)largest_at);
 		cli_write_named(stdout, doc, model, line);

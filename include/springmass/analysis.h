@@ -51,9 +51,9 @@ typedef enum sm_statics_solver {
 /// The default residual tolerance [N], for loads of 1e-3 N and more (SM_STATICS_LOAD_FRACTION).
 #define SM_STATICS_DEFAULT_TOLERANCE 1e-9
 
-/// The default residual tolerance is never above this fraction of the largest constant force
-/// (weight, load and external force) on a free particle [1]: the loads of a micromechanical model,
-/// far below 1e-9 N, are balanced to this fraction of themselves.
+/// The default residual tolerance at a free particle is never above this fraction of its own
+/// constant force (weight, load and external force) [1]: the loads of a micromechanical model, and
+/// of a light part beside heavy ones, far below 1e-9 N, are balanced to this fraction of themselves.
 #define SM_STATICS_LOAD_FRACTION 1e-6
 
 /// Options of sm_statics_solve(); get them from sm_default_statics_def().
@@ -64,13 +64,15 @@ typedef struct sm_statics_def {
 	/// Constant external forces, 3 per particle [N]; NULL (default) = none. Entries of
 	/// constrained particles add to the force their supports must take.
 	const double* external_forces;
-	/// Convergence: largest force component on a free particle [N], below the largest constant
-	/// force on a free particle (a tolerance at or above it is refused: any shape would pass);
-	/// default 0, which stands for SM_STATICS_DEFAULT_TOLERANCE (1e-9 N) or
-	/// SM_STATICS_LOAD_FRACTION times that largest constant force where this is smaller. The
-	/// tolerance actually used is never below SM_STATICS_ROUNDOFF_FACTOR machine epsilons times
-	/// the largest sum, over a particle's springs, of ks max(L, l0, |x_a| + |x_b|) plus its
-	/// constant force: the round-off floor of the computed force balance (docs/analysis.md).
+	/// Convergence, particle by particle: every free particle's largest force component must be
+	/// at most its own tolerance [N]. Given (> 0), the same at every free particle, and below the
+	/// largest constant force on a free particle (a tolerance at or above it is refused: any shape
+	/// would pass). Default 0: at each free particle SM_STATICS_DEFAULT_TOLERANCE (1e-9 N), or
+	/// SM_STATICS_LOAD_FRACTION times its own constant force (weight, load, external force) where
+	/// that is smaller (a particle with none: the largest among the free particles joined to it by
+	/// springs, or the largest of all). A particle's tolerance is never below its round-off floor,
+	/// SM_STATICS_ROUNDOFF_FACTOR machine epsilons times the sum, over its springs, of
+	/// ks max(L, l0, |x_a| + |x_b|), plus its constant force (docs/analysis.md).
 	double residual_tolerance;
 	/// Newton iterations allowed in all, >= 1; default 500. From 100 on, the stiffness
 	/// continuation takes over after 50 (docs/analysis.md); below, Newton alone takes them all.
@@ -88,9 +90,12 @@ typedef struct sm_statics_def {
 
 /// What sm_statics_solve() found. Filled on success and, as far as it got, on failure.
 typedef struct sm_statics_result {
-	int32_t iterations;        ///< Newton iterations taken
-	double residual;           ///< largest force component on a free particle at the end [N]
-	double tolerance;          ///< residual tolerance actually used [N]
+	int32_t iterations;  ///< Newton iterations taken
+	double residual;     ///< largest force component on a free particle at the end [N]
+	/// The largest of the free particles' tolerances (the loosest; see residual_tolerance) [N]:
+	/// the tolerance of every particle when all take the same. residual <= tolerance on success;
+	/// critical_particle below tells whether each particle is within its own.
+	double tolerance;
 	double potential_energy;   ///< U at the end, as defined above [J]
 	double reaction_total[3];  ///< sum of the reactions at the constrained particles [N]
 	/// True if the exact stiffness -df/dx over the free degrees of freedom is positive definite
@@ -105,6 +110,12 @@ typedef struct sm_statics_result {
 	/// The first such spring, whose two particles coincide at the rest shape, or -1.
 	int32_t coincident_spring;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
+	/// The free particle whose largest force component is the largest fraction of its own
+	/// tolerance (see residual_tolerance), -1 without free particles: the one that decides
+	/// convergence, which holds when critical_residual <= critical_tolerance.
+	int32_t critical_particle;
+	double critical_residual;   ///< its largest force component at the end [N]
+	double critical_tolerance;  ///< its tolerance [N]
 } sm_statics_result;
 
 /// The default options (the values documented in sm_statics_def).
@@ -122,9 +133,10 @@ SM_API sm_statics_def sm_default_statics_def(void);
 ///   along the way, or spring forces whose round-off scale (stiffness x distance) does;
 /// - SM_ERROR_NOT_CONVERGED: no equilibrium exists (a group of free particles not held by any
 ///   constrained particle, with a non-zero net force on it, such as a free body under gravity),
-///   the iteration limit was reached, on_iteration returned false, or the round-off floor of the tolerance
-///   exceeds the largest constant force on a free particle where the iteration ended (no computed balance
-///   resolves the loads there); the message names the particles or gives the residual or the floor;
+///   the iteration limit was reached, on_iteration returned false, or the round-off floor of the loosest
+///   tolerance exceeds the largest constant force on a free particle where the iteration ended (no computed
+///   balance resolves the loads there); the message names the particles or gives the residual (and the
+///   particle above its own tolerance, when the largest force is within the loosest) or the floor;
 /// - SM_ERROR_SOLVER: the sparse factorisation failed;
 /// - SM_ERROR_OUT_OF_MEMORY.
 SM_API sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, double* x,
