@@ -728,6 +728,30 @@ def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_pa
     np.testing.assert_allclose(vector("reactions, sum"), [-4.0, 2.0, 44.43], rtol=0, atol=1e-9)
 
 
+def test_statics_balances_each_particle_to_its_own_tolerance(tmp_path):
+    # A 1 kg bob hanging on a stiff spring beside a separate 1 ug bob on a soft one, each under its
+    # own fixed anchor. The default tolerance is 1e-9 N at the heavy bob (1e-6 of its 9.81 N weight
+    # is more) and 1e-6 of its own 9.81e-9 N weight at the light one: the "balance" line names the
+    # particle nearest to its own tolerance, with its force within it. The light bob hangs
+    # m g / k = 9.81e-3 m below its rest length, to its tolerance over its stiffness,
+    # 9.81e-15 N / 1e-6 N/m ~ 1e-8 m.
+    model = tmp_path / "light.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "light", "gravity": [0, 0, -9.81],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "heavy", "position": [0, 0, -1], "mass": 1},
+                      {"name": "hook", "position": [1, 0, 0], "fixed": True},
+                      {"name": "light", "position": [1, 0, -1], "mass": 1e-9}],
+        "springs": [{"a": "anchor", "b": "heavy", "stiffness": 1e7, "rest_length": 1},
+                    {"a": "hook", "b": "light", "stiffness": 1e-6, "rest_length": 1}]}))
+    out = cli("statics", model, "-o", tmp_path / "shape.csv").stdout
+    match = re.search(r"^balance +particle (\d+) \((\w+)\) nearest to its tolerance: (\S+) N of (\S+) N$", out, re.M)
+    assert match, out
+    assert float(match.group(3)) <= float(match.group(4))
+    header, rows = read_csv(tmp_path / "shape.csv")
+    assert rows[3, header.index("z")] == pytest.approx(-(1 + 9.81e-9 / 1e-6), rel=0, abs=1e-8)
+
+
 def test_statics_out_of_iterations_gives_the_force_left_without_a_particle_name():
     # The bundled cloth after 2 Newton iterations (it needs 125) has 20 N left on a free particle.
     # The tool names the particle of every "particle N" in a message; the force must not read as
