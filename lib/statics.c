@@ -1273,6 +1273,7 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 	sm_statics_result res;
 	memset(&res, 0, sizeof res);
 	res.coincident_spring = -1;
+	res.critical_particle = -1;  // none until a balance is judged
 	if (result != NULL)
 		*result = res;
 	sm_statics_def d = def != NULL ? *def : sm_default_statics_def();

@@ -1158,6 +1158,9 @@ static int test_free_body_has_no_equilibrium(void)
 	ENSURE(strstr(err.message, "particle 0") != NULL);
 	for (int i = 0; i < 24; i++)
 		ENSURE(x[i] == -7.0);
+	// Refused before any balance was judged: no particle is the critical one (particle 0, which
+	// the result's zeros would name, was never assessed).
+	ENSURE(res.critical_particle == -1 && res.critical_residual == 0.0 && res.critical_tolerance == 0.0);
 
 	md.gravity[2] = 0.0;
 	ENSURE_STATUS(sm_model_set_def(model, &md), SM_OK);

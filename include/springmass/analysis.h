@@ -111,8 +111,9 @@ typedef struct sm_statics_result {
 	int32_t coincident_spring;
 	sm_statics_solver solver;  ///< the linear algebra actually used (AUTO resolved)
 	/// The free particle whose largest force component is the largest fraction of its own
-	/// tolerance (see residual_tolerance), -1 without free particles: the one that decides
-	/// convergence, which holds when critical_residual <= critical_tolerance.
+	/// tolerance (see residual_tolerance): the one that decides convergence, which holds when
+	/// critical_residual <= critical_tolerance. -1 without free particles, and when the solve
+	/// stopped before judging any balance (an invalid argument, a free body under a net force).
 	int32_t critical_particle;
 	double critical_residual;   ///< its largest force component at the end [N]
 	double critical_tolerance;  ///< its tolerance [N]
