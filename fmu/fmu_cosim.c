@@ -949,8 +949,9 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 }
 
 // fmi2OK, or fmi2Warning, logged, when the absolute tolerances the instance simulates with are
-// coarse for its model (sm_tolerances_coarse), as `springmass fmu` warns at packaging: the
-// tolerances and the parameters that set the model's scales are fixed from here on.
+// coarse for its model (sm_tolerances_coarse), as `springmass fmu` warns at packaging. The
+// tolerances are fixed from here on; the model's scales are judged as they are now: tunable
+// parameters (stiffness, masses, rest lengths) set between steps may move them, unchecked.
 static fmi2Status coarse_tolerance_warning(instance* inst, const char* function)
 {
 	sm_motion_scales scales;
