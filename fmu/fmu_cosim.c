@@ -961,8 +961,8 @@ static fmi2Status coarse_tolerance_warning(instance* inst, const char* function)
 	fmu_logf(inst, fmi2Warning, LOG_WARNING,
 	         "%s: the absolute tolerances, solver.atol_position = %g m and solver.atol_velocity = %g m/s, "
 	         "are coarse for this model: its shortest spring is %.3g m and moves at up to %.3g m/s at its "
-	         "highest frequency, so its motion is resolved only to them (about 1e-8 of these scales: "
-	         "%.1g m and %.1g m/s)",
+	         "highest frequency, so its motion is resolved only to them (suited to it: about 1e-8 of these "
+	         "scales, %.1g m and %.1g m/s, set during initialisation)",
 	         function, inst->solver.absolute_tolerance_position, inst->solver.absolute_tolerance_velocity,
 	         scales.length, scales.speed, 1e-8 * scales.length, 1e-8 * scales.speed);
 	return fmi2Warning;
