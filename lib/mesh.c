@@ -84,8 +84,9 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 	if (def->vertex_count < 3 || def->triangle_count < 1)
 		return sm_model_fail(
 		    model, SM_ERROR_INVALID_ARGUMENT,
-		    "mesh: %d vertices and %d triangles; a mesh needs at least 3 vertices and 1 triangle",
-		    (int)def->vertex_count, (int)def->triangle_count);
+		    "mesh: %d vert%s and %d triangle%s; a mesh needs at least 3 vertices and 1 triangle",
+		    (int)def->vertex_count, def->vertex_count == 1 ? "ex" : "ices", (int)def->triangle_count,
+		    def->triangle_count == 1 ? "" : "s");
 	if (def->vertices == NULL || def->triangles == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL");
 	if (def->triangle_count > SM_STRUCTURE_MAX_ELEMENTS / 3)
