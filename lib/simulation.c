@@ -1557,7 +1557,7 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		return SM_OK;
 	}
 	// Back on the path it had before its first change since the last advance: that path again, to
-	// the bit, and once every input is back, no change at all (input_excursions.c).
+	// the bit, and once every input is back, no change at all (input_origins.c).
 	const sm_input_origin* found = sm_input_origins_find(sim, particle);
 	const bool back =
 	    found != NULL && on_driven_path(found->value, found->rate, found->acceleration,
@@ -1620,7 +1620,7 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 		return SM_OK;
 	const bool free = sim->model->motion[particle] == SM_PARTICLE_FREE;
 	// Back on the ramp it had before its first change since the last advance: that ramp again, to
-	// the bit, and once every input is back, no change at all (input_excursions.c).
+	// the bit, and once every input is back, no change at all (input_origins.c).
 	const sm_input_origin* found = free ? sm_input_origins_find(sim, particle) : NULL;
 	const bool back =
 	    found != NULL && on_force_ramp(found->value, found->rate, sim->time - found->time, force, rate);

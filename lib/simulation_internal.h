@@ -19,7 +19,7 @@
 // Components of CVODE's state after the particles' 6 nf: the dissipated energy and the inputs' work.
 #define SM_ENERGY_COMPONENTS 2
 
-// A particle's input as it was before its first change since the last advance (input_excursions.c):
+// A particle's input as it was before its first change since the last advance (input_origins.c):
 // a driven particle's path (position [m], velocity [m/s], acceleration [m/s^2] from `time` [s]), or
 // a free particle's external force (force [N], rate [N/s] from `time`; acceleration unused).
 typedef struct sm_input_origin {
@@ -97,7 +97,7 @@ struct sm_simulation {
 	double* drive_velocity;      // [m/s]
 	double* drive_acceleration;  // [m/s^2]
 	double* drive_time;          // [s]
-	// The inputs changed since the last advance, as they were before (input_excursions.c): an input
+	// The inputs changed since the last advance, as they were before (input_origins.c): an input
 	// set back to its origin before the next advance is no change, and once every one is back the
 	// flags are as before the first.
 	int32_t* origin_slot;  // per particle: its entry in origins, or -1
@@ -205,7 +205,7 @@ int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, doub
 int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, const double* force,
                                         const double* rate, const double* start);
 
-// Input changes undone before the next advance (input_excursions.c).
+// Input changes undone before the next advance (input_origins.c).
 // Forgets the recorded origins: after an advance, a new state, a reset, a model update or a cut,
 // from which the inputs' earlier values are no longer "as they were".
 void sm_input_origins_forget(sm_simulation* sim);

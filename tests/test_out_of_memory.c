@@ -1235,7 +1235,7 @@ static int test_input_signals(void)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Simulation: input excursions whose records cannot be allocated (lib/input_excursions.c)
+// Simulation: input excursions whose records cannot be allocated (lib/input_origins.c)
 // ---------------------------------------------------------------------------------------------
 
 // A row of 11 particles (the first fixed) on springs of 50 N/m: 10 free particles to push.
