@@ -1975,6 +1975,17 @@ static int test_motion_scales(void)
 	ENSURE_STATUS(sm_model_motion_scales(NULL, &scales), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE_STATUS(sm_model_motion_scales(model, NULL), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(!sm_tolerances_coarse(NULL, &scales) && !sm_tolerances_coarse(&def, NULL));
+	// Scales with nothing to judge by are never coarse, whatever the tolerances (simulation.h:
+	// false when either scale is 0 or not finite): a speed of 0 (every particle held, a finite
+	// spring between them), a length of 0, or either infinite or NaN. 1 m and 1 m/s are coarse for
+	// 1 mm and 1 mm/s, the case that tells the check is reached.
+	def.absolute_tolerance_position = 1.0;
+	def.absolute_tolerance_velocity = 1.0;
+	const sm_motion_scales unjudged[6] = {{1e-3, 0.0},      {0.0, 1e-3}, {INFINITY, 1e-3},
+	                                      {1e-3, INFINITY}, {NAN, 1e-3}, {1e-3, NAN}};
+	for (int j = 0; j < 6; j++)
+		ENSURE(!sm_tolerances_coarse(&def, &unjudged[j]));
+	ENSURE(sm_tolerances_coarse(&def, &(sm_motion_scales){1e-3, 1e-3}));
 	sm_model_destroy(model);
 	return 0;
 }
