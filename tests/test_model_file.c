@@ -1006,6 +1006,16 @@ static int test_broken_files(void)
 		 "test.json:1:48: invalid Unicode '\\uDC00' near '\"\\udc00\"'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\ud800\\u0041\"}", SM_ERROR_SYNTAX,
 		 "test.json:1:48: invalid Unicode '\\uD800\\u0041' near '\"\\ud800\\u0041\"'"},
+	    // A backslash escaped is no escape of what follows it, an escaped quote does not open the
+	    // string, upper-case hexadecimal digits and the last low surrogate are found as well.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\\\\u0000 and \\u0000\"}", SM_ERROR_SYNTAX,
+		 "test.json:1:61: strings in a model file may not contain \\u0000"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a\\u0000 and \\\" then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:49: strings in a model file may not contain \\u0000"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a \\uD800 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uD800'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a \\udfff then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uDFFF'"},
 	    // Lines end at LF, CR LF or a lone CR, as editors show them (the parser counts LF only).
 	    {"{\r\"springmass\": 1,\r\n\"name\": \"x\",\r\"parameters\" {}}", SM_ERROR_SYNTAX,
 		 "test.json:4:14: ':' expected near '{'"},
