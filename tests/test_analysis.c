@@ -3141,6 +3141,64 @@ static int test_statics_balances_a_light_part_beside_a_heavy_one(void)
 	return 0;
 }
 
+// Without gravity: free particles A and C on zero-length springs of 1 N/m to a fixed anchor at
+// the origin, under loads of 1e-6 N and 1 N where their springs balance them exactly (A at 1e-6 m
+// along x, C at 1 m along -z); B without a load on one to a second anchor at A's place, 1e-10 m
+// off it, and a disabled spring of 1e-3 N/m from A to B. B takes the largest load among the free
+// particles joined to it by springs (docs/analysis.md): a disabled spring joins nothing, so B is
+// alone and takes the largest load of all, 1 N, a tolerance of 1e-9 N, which its force of
+// 1e-10 N meets: the start is the rest shape (0 iterations), B the particle nearest to its
+// tolerance, at a tenth of it. With the spring enabled B takes A's load, a tolerance of 1e-6 of
+// 1e-6 N: the start is not balanced (the spring adds only 1e-13 N to A) and B ends within
+// 1e-12 N / 1 N/m of its anchor. With B at its anchor every force is exactly 0, and the critical
+// particle is still a free one (-1 only without free particles or before judging).
+static int test_statics_unloaded_particle_and_disabled_springs(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double position[5][3] = {{0, 0, 0}, {1e-6, 0, 0}, {1e-6, 1e-10, 0}, {0, 0, -1}, {1e-6, 0, 0}};
+	const double load[5][3] = {{0, 0, 0}, {1e-6, 0, 0}, {0, 0, 0}, {0, 0, -1}, {0, 0, 0}};
+	for (int32_t i = 0; i < 5; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 0 || i == 4 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		memcpy(p.position, position[i], sizeof p.position);
+		memcpy(p.load, load[i], sizeof p.load);
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t ends[4][2] = {{0, 1}, {4, 2}, {0, 3}, {1, 2}};
+	for (int32_t k = 0; k < 4; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = ends[k][0];
+		s.b = ends[k][1];
+		s.kind = SM_SPRING_ZERO_LENGTH;
+		s.stiffness = k == 3 ? 1e-3 : 1.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 3, false), SM_OK);
+	double x[15];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.iterations == 0 && x[7] == 1e-10);
+	ENSURE(res.critical_particle == 2 && res.critical_residual == 1e-10 && res.critical_tolerance == 1e-9);
+
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 3, true), SM_OK);
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.iterations > 0 && fabs(x[7]) <= 1e-12);
+
+	sm_statics_def d = sm_default_statics_def();
+	double start[15];
+	memcpy(start, position, sizeof start);
+	start[7] = 0.0;
+	d.start = start;
+	ENSURE_STATUS(sm_statics_solve(model, &d, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.iterations == 0 && res.residual == 0.0);
+	ENSURE(res.critical_particle >= 1 && res.critical_particle <= 3 && res.critical_residual == 0.0);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A chain hanging from its fixed top whose springs alternate between ks_even and ks_odd [N/m]
 // (rest length 0.1 m, particles of 0.01 kg), started straight down with a slight bow.
 static sm_model* contrast_chain(int32_t segments, double ks_even, double ks_odd)
@@ -3974,6 +4032,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_iteration_budget_is_exact_in_the_continuation);
 	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_balances_a_light_part_beside_a_heavy_one);
+	RUN_TEST(test_statics_unloaded_particle_and_disabled_springs);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_swinging_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_long_hanging_rope_is_stable);
