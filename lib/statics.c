@@ -244,7 +244,6 @@ typedef struct statics_work {
 	const double* external;  // 3 n or NULL
 	// Each free particle's balance is judged against its own tolerance (docs/analysis.md):
 	double* requested;     // nf: the tolerance asked for at each free particle [N]
-	double* weight;        // nf: requested_max / requested, >= 1 (1 for a uniform tolerance) [1]
 	double* scale;         // nf: round-off scale of each free particle's balance (force_scale) [N]
 	double requested_max;  // the largest of `requested` [N]
 	double load;           // the largest constant force on a free particle [N]
@@ -285,7 +284,6 @@ static void work_free(statics_work* w)
 	free(w->stiffness);
 	free(w->constant_force);
 	free(w->requested);
-	free(w->weight);
 	free(w->scale);
 	free(w->x);
 	free(w->y);
@@ -345,7 +343,8 @@ static double weighted_residual(const statics_work* w, const double* f)
 	double r = 0.0;
 	for (int32_t i = 0; i < w->nf; i++) {
 		const double force = particle_force(w, f, i);
-		const double a = force > 0.0 ? force * w->weight[i] : force;  // 0, or NaN, as it is
+		const double a =
+		    force > 0.0 ? force * (w->requested_max / w->requested[i]) : force;  // 0, or NaN, as it is
 		r = (a > r || isnan(a)) ? a : r;
 	}
 	return r;
@@ -1128,11 +1127,10 @@ static sm_status work_init(statics_work* w, const sm_model* model, const sm_stat
 	w->rhs = malloc(dof * sizeof(double));
 	w->step = malloc(dof * sizeof(double));
 	w->requested = malloc(((size_t)w->nf + 1) * sizeof(double));
-	w->weight = malloc(((size_t)w->nf + 1) * sizeof(double));
 	w->scale = malloc(((size_t)w->nf + 1) * sizeof(double));
 	if (w->free_particle == NULL || w->spring_a == NULL || w->spring_b == NULL || w->rest_length == NULL ||
 	    w->stiffness == NULL || w->constant_force == NULL || w->x == NULL || w->y == NULL || w->f == NULL ||
-	    w->rhs == NULL || w->step == NULL || w->requested == NULL || w->weight == NULL || w->scale == NULL)
+	    w->rhs == NULL || w->step == NULL || w->requested == NULL || w->scale == NULL)
 		return sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "statics: out of memory for %d particles",
 		                    (int)w->n);
 	for (int32_t p = 0; p < w->n; p++)
@@ -1262,8 +1260,6 @@ static sm_status set_requested_tolerances(statics_work* w, bool given, double to
 		w->requested[i] = t > 0.0 ? t : DBL_TRUE_MIN;  // a load so small that its fraction underflows
 		w->requested_max = fmax(w->requested_max, w->requested[i]);
 	}
-	for (int32_t i = 0; i < w->nf; i++)
-		w->weight[i] = w->requested_max / w->requested[i];
 	return SM_OK;
 }
 
