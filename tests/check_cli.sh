@@ -196,6 +196,18 @@ CASES
 for f in vt5/oscillator.pvd vt6/oscillator_000001.vtp; do
   [ "$(cat "$tmp/clash/$f")" = "$(printf 'time,tip.fx\n0,1')" ] || fail "run overwrote its input signals $f"
 done
+# Nor are statics' and modes' VTK files the model file.
+mkdir -p "$tmp/clash/st" "$tmp/clash/mo"
+cp "$osc" "$tmp/clash/st/statics.vtk"
+cp "$osc" "$tmp/clash/mo/mode_2.vtk"
+check_cases << 'CASES'
+2|springmass statics: --vtk $tmp/clash/st: its file $tmp/clash/st/statics.vtk would overwrite the model file $tmp/clash/st/statics.vtk, which it reads; give another folder|statics "$tmp/clash/st/statics.vtk" -q --vtk "$tmp/clash/st"
+2|springmass modes: --vtk $tmp/clash/mo: its file $tmp/clash/mo/mode_2.vtk would overwrite the model file $tmp/clash/mo/mode_2.vtk, which it reads; give another folder|modes "$tmp/clash/mo/mode_2.vtk" --vtk "$tmp/clash/mo"
+CASES
+for f in st/statics.vtk mo/mode_2.vtk; do
+  cmp -s "$osc" "$tmp/clash/$f" || fail "statics or modes overwrote its model file $f"
+done
+[ ! -e "$tmp/clash/mo/mode_1.vtk" ] || fail "modes wrote a mode file beside a refused one"
 # statics and modes check where every output goes before solving: none is written when one of
 # them cannot be (a missing folder, a file where a folder goes).
 check_cases << 'CASES'

@@ -414,6 +414,17 @@ int cli_check_output(const char* command, const char* option, const char* output
 	return 0;
 }
 
+int cli_check_folder_file(const char* command, const char* dir, const char* file, const char* model)
+{
+	if (!cli_same_file(file, model))
+		return 0;
+	fprintf(stderr,
+	        "springmass %s: --vtk %s: its file %s would overwrite the model file %s, which it reads; give "
+	        "another folder\n",
+	        command, dir, file, model);
+	return 2;
+}
+
 // The path a file has, or would have once created: its real path if it exists, else its
 // folder's real path and its name (a folder's name may end in '/'); NULL if the folder cannot be
 // found either (malloc'd).

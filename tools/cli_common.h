@@ -112,6 +112,11 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout);
 
+/// Checks that `file`, which the folder option `--vtk dir` writes, is not the model file (the same
+/// file under any name), which the command reads and would destroy. Returns 0, or prints why and
+/// returns 2 (a usage error).
+int cli_check_folder_file(const char* command, const char* dir, const char* file, const char* model);
+
 /// Checks, before anything is computed, that an output can be made where `path` names it (NULL or
 /// "-": none): a file in a folder that exists and is no folder, or a `folder` that exists or whose
 /// parent does, where this process may write (the file, and the folder that holds it). Returns 0, or prints

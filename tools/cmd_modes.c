@@ -356,14 +356,16 @@ int sm_cmd_modes(int argc, char** argv)
 			goto done;
 	}
 	// Every output is written, then all are moved to their places: none is left half-written, or
-	// replaced, when another fails. The CSV is none of the mode files, whose count is known now
-	// (checked before the folder is made or a mode written; a refusal removes the CSV's temporary).
+	// replaced, when another fails. Neither the model file nor the CSV is one of the mode files,
+	// whose count is known now (checked before the folder is made or a mode written; a refusal
+	// removes the CSV's temporary).
 	if (vtk_dir != NULL) {
 		char path[4096];
 		for (int32_t m = 0; m < modes.count; m++) {
 			if (!mode_path(path, sizeof path, vtk_dir, m))
 				goto done;
-			if (cli_check_outputs_apart("modes", "-o", csv_path, "--vtk's file", path) != 0) {
+			if (cli_check_folder_file("modes", vtk_dir, path, model_path) != 0 ||
+			    cli_check_outputs_apart("modes", "-o", csv_path, "--vtk's file", path) != 0) {
 				status = 2;
 				goto done;
 			}
