@@ -42,6 +42,7 @@ int sm_cmd_fmu(int argc, char** argv)
 #include <fcntl.h>
 #include <ftw.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <sys/types.h>
@@ -254,6 +255,29 @@ static bool find_runtime(const char* option, char* dir, size_t size)
 		return true;
 	}
 	return false;
+}
+
+// A packaging stopped from outside (Ctrl-C, a kill, the terminal closed) removes its staging
+// folder, which holds a copy of the whole runtime, and writes no FMU: the handler only notes the
+// signal; the packaging stops after the step it is taking (zip, which gets the terminal's Ctrl-C
+// too, ends at once), cleans up and raises the signal again for its exit status.
+static volatile sig_atomic_t stop_signal;
+
+static void note_signal(int signal)
+{
+	stop_signal = signal;
+}
+
+static void catch_stop_signals(void)
+{
+	struct sigaction action;
+	memset(&action, 0, sizeof action);
+	action.sa_handler = note_signal;
+	action.sa_flags = SA_RESTART;  // waiting for zip goes on
+	sigemptyset(&action.sa_mask);
+	sigaction(SIGINT, &action, NULL);
+	sigaction(SIGTERM, &action, NULL);
+	sigaction(SIGHUP, &action, NULL);
 }
 
 static int remove_entry(const char* path, const struct stat* st, int flag, struct FTW* ftw)
@@ -573,6 +597,7 @@ static int package(const options* opt)
 		goto done;
 	}
 
+	catch_stop_signals();
 	const char* tmp = getenv("TMPDIR");
 	snprintf(staging, sizeof staging, "%s/springmass-fmu-XXXXXX", tmp && *tmp ? tmp : "/tmp");
 	if (!mkdtemp(staging)) {
@@ -617,6 +642,8 @@ static int package(const options* opt)
 	if (written_name < 0 || (size_t)written_name >= sizeof binary_name ||
 	    !join(from, sizeof from, runtime, "binaries/linux64") ||
 	    !join(path, sizeof path, staging, "binaries/linux64"))
+		goto done;
+	if (stop_signal != 0)
 		goto done;
 	if (!copy_folder(from, path, "springmass_fmu.so", binary_name)) {
 		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, strerror(errno));
@@ -672,8 +699,10 @@ static int package(const options* opt)
 		free_entries(&entries);
 		goto done;
 	}
-	const bool zipped = run_in(staging, entries.names);
+	const bool zipped = stop_signal == 0 && run_in(staging, entries.names);
 	free_entries(&entries);
+	if (stop_signal != 0)
+		goto done;
 	if (!zipped || !join(path, sizeof path, staging, "model.fmu")) {
 		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
 		goto done;
@@ -682,6 +711,10 @@ static int package(const options* opt)
 	char* archive = text_file_read(path, &archive_length, &problem);
 	if (!archive) {
 		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", problem);
+		goto done;
+	}
+	if (stop_signal != 0) {
+		free(archive);
 		goto done;
 	}
 	errno = 0;
@@ -714,6 +747,15 @@ done:
 	sm_document_destroy(doc);
 	free(parameters);
 	free(text);
+	// Stopped by a signal before the FMU was written: the staging folder is gone; the exit status
+	// is the signal's. One that came while the FMU was written lets it end as it would have.
+	if (stop_signal != 0 && result != 0) {
+		fprintf(stderr, "springmass fmu: stopped by %s; %s not written\n", strsignal(stop_signal),
+		        opt->output);
+		fflush(stdout);
+		signal(stop_signal, SIG_DFL);
+		raise(stop_signal);
+	}
 	return result;
 }
 

@@ -1444,6 +1444,31 @@ def test_fmu_packs_the_runtime_it_is_given(tmp_path):
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path):
+    # A packaging stopped while zip runs (a kill, or Ctrl-C, which zip gets too) removes its
+    # staging folder, a copy of the whole runtime, leaves an earlier FMU at the output as it was
+    # and ends with the signal's status. The zip here stands in for one that is still working when
+    # the tool is killed: it sends the signal to the tool, then finishes the archive.
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    tools = tmp_path / "tools"
+    tools.mkdir()
+    real_zip = shutil.which("zip")
+    assert real_zip is not None
+    (tools / "zip").write_text(f'#!/bin/sh\nkill -TERM $PPID\nexec "{real_zip}" "$@"\n')
+    (tools / "zip").chmod(0o755)
+    fmu = tmp_path / "oscillator.fmu"
+    fmu.write_bytes(b"an earlier FMU")
+    env = dict(os.environ, TMPDIR=str(staging), PATH=f"{tools}:{os.environ['PATH']}")
+    out = cli("fmu", MODELS / "oscillator.json", "-o", fmu, "--runtime", runtime, status=-15, env=env)
+    assert list(staging.iterdir()) == []
+    assert fmu.read_bytes() == b"an earlier FMU"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["oscillator.fmu", "runtime", "staging", "tools"]
+    assert out.stderr.endswith(f"springmass fmu: stopped by Terminated; {fmu} not written\n"), out.stderr
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 def test_fmu_documentation_page(tmp_path):
     # documentation/index.html shows the model's description as text, whatever characters it holds
     # (markup, quotes, ampersands, letters beyond ASCII; a name is an identifier), and links the licences only when the runtime
