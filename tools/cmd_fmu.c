@@ -172,19 +172,21 @@ static bool write_output(const char* output, const char* data, size_t length)
 	return ok;
 }
 
-// Copies a regular file with its mode; false on failure, with *problem (if not NULL) saying why.
-static bool copy_file(const char* from, const char* to, const char** problem)
+// Copies a regular file with its mode; false on failure, with problem (of `size` bytes) saying
+// which file could not be read or written, and why.
+static bool copy_file(const char* from, const char* to, char* problem, size_t size)
 {
 	size_t length = 0;
-	const char* unused;
-	if (problem == NULL)
-		problem = &unused;
-	char* data = text_file_read(from, &length, problem);
-	if (!data)
+	const char* why = NULL;
+	char* data = text_file_read(from, &length, &why);
+	if (!data) {
+		snprintf(problem, size, "cannot read %s: %s", from, why);
 		return false;
+	}
+	errno = 0;
 	bool ok = write_all(to, data, length);
 	if (!ok)
-		*problem = strerror(errno);
+		snprintf(problem, size, "cannot write %s: %s", to, errno != 0 ? strerror(errno) : "write error");
 	free(data);
 	if (ok) {
 		struct stat st;
@@ -289,12 +291,13 @@ static int remove_entry(const char* path, const struct stat* st, int flag, struc
 }
 
 // Runs argv in the folder dir, in UTC (zip writes its entries' times as local times), and waits
-// for it; true if it exited with status 0.
-static bool run_in(const char* dir, char* const argv[])
+// for it; returns its exit status (127 when it could not be started, as a shell has it; 128 + the
+// signal that ended it), or -1 when it could not be run or waited for.
+static int run_in(const char* dir, char* const argv[])
 {
 	pid_t pid = fork();
 	if (pid < 0)
-		return false;
+		return -1;
 	if (pid == 0) {
 		if (chdir(dir) != 0 || setenv("TZ", "UTC0", 1) != 0)
 			_exit(127);
@@ -304,18 +307,22 @@ static bool run_in(const char* dir, char* const argv[])
 	int status = 0;
 	while (waitpid(pid, &status, 0) < 0) {
 		if (errno != EINTR)
-			return false;
+			return -1;
 	}
-	return WIFEXITED(status) && WEXITSTATUS(status) == 0;
+	return WIFEXITED(status) ? WEXITSTATUS(status) : WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
 }
 
 // Copies every regular file of the folder `from` into the folder `to` (both exist), the file
-// named `rename_from` (or none: NULL) under the name `rename_to`. False on failure, with errno.
-static bool copy_folder(const char* from, const char* to, const char* rename_from, const char* rename_to)
+// named `rename_from` (or none: NULL) under the name `rename_to`. False on failure, with problem
+// (of `size` bytes) naming the file or folder that could not be read or written, and why.
+static bool copy_folder(const char* from, const char* to, const char* rename_from, const char* rename_to,
+                        char* problem, size_t size)
 {
 	DIR* d = opendir(from);
-	if (!d)
+	if (!d) {
+		snprintf(problem, size, "cannot read %s: %s", from, strerror(errno));
 		return false;
+	}
 	struct dirent* entry;
 	bool copied = true;
 	while (copied && (entry = readdir(d)) != NULL) {
@@ -325,7 +332,9 @@ static bool copy_folder(const char* from, const char* to, const char* rename_fro
 		const bool renamed = rename_from != NULL && strcmp(entry->d_name, rename_from) == 0;
 		copied = join(source, sizeof source, from, entry->d_name) &&
 		         (!is_file(source) || (join(target, sizeof target, to, renamed ? rename_to : entry->d_name) &&
-		                               copy_file(source, target, NULL)));
+		                               copy_file(source, target, problem, size)));
+		if (!copied && problem[0] == '\0')
+			snprintf(problem, size, "a path too long in %s", to);
 	}
 	closedir(d);
 	return copied;
@@ -601,7 +610,8 @@ static int package(const options* opt)
 	const char* tmp = getenv("TMPDIR");
 	snprintf(staging, sizeof staging, "%s/springmass-fmu-XXXXXX", tmp && *tmp ? tmp : "/tmp");
 	if (!mkdtemp(staging)) {
-		fprintf(stderr, "springmass fmu: cannot create a staging folder: %s\n", strerror(errno));
+		fprintf(stderr, "springmass fmu: cannot create a staging folder in %s%s: %s\n",
+		        tmp && *tmp ? tmp : "/tmp", tmp && *tmp ? " ($TMPDIR)" : "", strerror(errno));
 		staging[0] = '\0';
 		goto done;
 	}
@@ -645,8 +655,9 @@ static int package(const options* opt)
 		goto done;
 	if (stop_signal != 0)
 		goto done;
-	if (!copy_folder(from, path, "springmass_fmu.so", binary_name)) {
-		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, strerror(errno));
+	char problem_text[2 * PATH_MAX + 64] = "";
+	if (!copy_folder(from, path, "springmass_fmu.so", binary_name, problem_text, sizeof problem_text)) {
+		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, problem_text);
 		goto done;
 	}
 	// documentation/: the page written from the table and, from the runtime, the licences (a
@@ -668,8 +679,8 @@ static int package(const options* opt)
 			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
 			goto done;
 		}
-		if (!copy_folder(from, path, NULL, NULL)) {
-			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n", from, strerror(errno));
+		if (!copy_folder(from, path, NULL, NULL, problem_text, sizeof problem_text)) {
+			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n", from, problem_text);
 			goto done;
 		}
 	}
@@ -699,12 +710,18 @@ static int package(const options* opt)
 		free_entries(&entries);
 		goto done;
 	}
-	const bool zipped = stop_signal == 0 && run_in(staging, entries.names);
+	const int zip_status = stop_signal == 0 ? run_in(staging, entries.names) : -1;
 	free_entries(&entries);
-	if (stop_signal != 0)
+	if (stop_signal != 0 || !join(path, sizeof path, staging, "model.fmu"))
 		goto done;
-	if (!zipped || !join(path, sizeof path, staging, "model.fmu")) {
-		fprintf(stderr, "springmass fmu: zip failed to write the archive (is zip installed?)\n");
+	if (zip_status == 127 || zip_status < 0) {
+		fprintf(stderr, "springmass fmu: cannot run zip in %s (is zip installed?)\n", staging);
+		goto done;
+	}
+	// zip has said why on stderr (a full disk: 'zip I/O error: No space left on device').
+	if (zip_status != 0) {
+		fprintf(stderr, "springmass fmu: zip failed to write the archive %s (exit status %d)\n", path,
+		        zip_status);
 		goto done;
 	}
 	size_t archive_length = 0;

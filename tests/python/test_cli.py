@@ -8,7 +8,9 @@ import json
 import math
 import os
 import re
+import resource
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -1466,6 +1468,48 @@ def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path):
     assert fmu.read_bytes() == b"an earlier FMU"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oscillator.fmu", "runtime", "staging", "tools"]
     assert out.stderr.endswith(f"springmass fmu: stopped by Terminated; {fmu} not written\n"), out.stderr
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_names_the_staging_place_it_cannot_write(tmp_path):
+    # The FMU is assembled in a staging folder in $TMPDIR: when that cannot be written (a full
+    # disk, here a limit on the size of a file, which fails the same way), the message names the
+    # file or folder there, not the runtime it copies or zip's installation, and nothing is left.
+    # The runtime's stand-in library and licence are incompressible: the archive is as large as both.
+    osc = MODELS / "oscillator.json"
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    fmu = tmp_path / "oscillator.fmu"
+    limit = 100_000  # [bytes] the largest file the tool may write
+
+    def package(library_bytes, tmpdir=staging):
+        (runtime / "binaries" / "linux64" / "libextra.so.1").write_bytes(os.urandom(library_bytes))
+        (runtime / "documentation" / "licenses" / "license.txt").write_bytes(os.urandom(library_bytes))
+
+        def limited():
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG)
+            resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+        out = subprocess.run([str(CLI), "fmu", osc, "-o", fmu, "--runtime", runtime], capture_output=True,
+                             text=True, env=dict(os.environ, TMPDIR=str(tmpdir)), preexec_fn=limited, timeout=60)
+        assert out.returncode == 1, out.stderr
+        assert not fmu.exists() and list(staging.iterdir()) == []
+        return out.stderr
+
+    # A library larger than the limit cannot be copied into the staging folder.
+    err = package(2 * limit)
+    assert re.search(re.escape(f"cannot copy the FMU runtime from {runtime}/binaries/linux64: cannot write {staging}/")
+                     + r"springmass-fmu-[^/]+/binaries/linux64/libextra\.so\.1: File too large$", err), err
+    # Each file fits, the archive of them does not: zip fails and says why.
+    err = package(limit * 3 // 4)
+    assert re.search(re.escape(f"zip failed to write the archive {staging}/")
+                     + r"springmass-fmu-[^/]+/model\.fmu \(exit status \d+\)$", err), err
+    assert "installed" not in err
+    # A $TMPDIR that does not exist.
+    err = package(1000, tmpdir=tmp_path / "none")
+    assert err == (f"springmass fmu: cannot create a staging folder in {tmp_path / 'none'} ($TMPDIR): "
+                   "No such file or directory\n")
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
