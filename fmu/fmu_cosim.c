@@ -1771,10 +1771,26 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		inst->time = inst->start_time + sm_simulation_time(inst->sim);
 		inst->last_successful_time = inst->time;
 		inst->state = ST_STEP_FAILED;
-		fmu_logf(inst, fmi2Discard, LOG_DISCARD,
-		         "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
-		         fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
-		         sm_simulation_last_error(inst->sim));
+		// The library's message for its step limit says that the next advance goes on from the
+		// state reached, which holds for the library but not here: after a discard the FMU takes
+		// no fmi2DoStep, so the message says what the master can do instead.
+		if (st == SM_ERROR_STEP_LIMIT)
+			fmu_logf(
+			    inst, fmi2Discard, LOG_DISCARD,
+			    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): "
+			    "CVODE took the %d internal steps solver.max_steps allows a communication step "
+			    "(CV_TOO_MUCH_WORK); no fmi2DoStep follows a discard: restore a state saved before the "
+			    "step (fmi2SetFMUstate) and take it in shorter steps, or reset and raise solver.max_steps "
+			    "before fmi2ExitInitializationMode (or look for a spring much stiffer than the others "
+			    "or a huge force)",
+			    fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
+			    (int)inst->solver.max_steps);
+		else
+			fmu_logf(
+			    inst, fmi2Discard, LOG_DISCARD,
+			    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
+			    fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
+			    sm_simulation_last_error(inst->sim));
 		return fmi2Discard;
 	}
 	return end_step(inst, t, t_end);
