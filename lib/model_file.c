@@ -17,6 +17,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -2197,8 +2198,23 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		sm_document_destroy(doc);
 		return NULL;
 	}
+	// The parser reads its numbers in the C locale whatever LC_NUMERIC the calling thread has.
+	// Before each real number it asks localeconv() for the decimal point, and glibc's localeconv()
+	// fills one static structure for the whole process: a thread under a decimal comma (uselocale)
+	// and another under a '.' parsing at once read each other's point, and the parser aborted the
+	// process on "9.81" read as 9. In the C locale every parse writes and reads the same '.'.
+	// glibc's "C" locale object is static (no allocation, freelocale does nothing).
+	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+	if (c_locale == (locale_t)0) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for the C locale", source_name);
+		sm_document_destroy(doc);
+		return NULL;
+	}
+	const locale_t previous = uselocale(c_locale);
 	json_error_t error;
 	doc->root = json_loadb(text, length, JSON_REJECT_DUPLICATES, &error);
+	uselocale(previous);
+	freelocale(c_locale);
 	if (doc->root == NULL) {
 		// Line and column from the parser's byte position: the parser ends lines at LF only, so
 		// that a file with lone CRs (old Mac line ends) would be all on line 1. Its message quotes

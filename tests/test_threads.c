@@ -989,6 +989,96 @@ static int test_save_in_a_decimal_comma_locale(void)
 	return 0;
 }
 
+// Parsing where two threads' locales differ: glibc's localeconv(), which the JSON parser asks
+// for the decimal point before it reads each real number, fills one static structure for the
+// whole process, so a thread under a decimal comma read the other thread's '.' (or it the comma)
+// and the parser aborted the process on "9.81" read as 9. A thread under a decimal comma and one
+// in the C locale parse the same text of many real numbers at once, again and again; every parse
+// gives the model a lone parse gives, to the bit.
+enum { LOCALE_PARSES = 300, LOCALE_PARTICLES = 100 };
+
+typedef struct locale_parses {
+	locale_t locale;  // (locale_t)0: the thread keeps the program's
+	pthread_barrier_t* start;
+	const char* text;
+	uint64_t alone;  // the hash of the model parsed alone
+	int wrong;
+} locale_parses;
+
+// The hash of the model in text, 0 if it cannot be parsed.
+static uint64_t parsed_model_hash(const char* text)
+{
+	sm_error err;
+	sm_model* model = NULL;
+	sm_document* doc = sm_document_parse(text, strlen(text), "reals.json", &err);
+	uint64_t h = 0;
+	if (doc != NULL && sm_document_build(doc, &model, &err) == SM_OK) {
+		h = 0xcbf29ce484222325u;
+		hash_model(&h, model);
+	}
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	return h;
+}
+
+static void* parse_in_locale(void* arg)
+{
+	locale_parses* p = arg;
+	const locale_t previous = p->locale != (locale_t)0 ? uselocale(p->locale) : (locale_t)0;
+	pthread_barrier_wait(p->start);
+	for (int k = 0; k < LOCALE_PARSES; k++)
+		p->wrong += parsed_model_hash(p->text) != p->alone;
+	if (p->locale != (locale_t)0)
+		uselocale(previous);
+	return NULL;
+}
+
+static int test_parse_in_threads_of_different_locales(void)
+{
+	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
+	                                    "nl_NL.UTF-8"};
+	locale_t comma = (locale_t)0;
+	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
+		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);
+	if (comma == (locale_t)0) {
+		printf("  no locale with a decimal comma is installed: skipped\n");
+		return 0;
+	}
+	// A chain of particles at positions, with masses and velocities, of fractional metres.
+	static char text[LOCALE_PARTICLES * 120 + 200];
+	int at =
+	    snprintf(text, sizeof text,
+		         "{\"springmass\": 1, \"name\": \"reals\", \"gravity\": [0, 0, -9.81], \"particles\": [");
+	for (int i = 0; i < LOCALE_PARTICLES; i++)
+		at += snprintf(text + at, sizeof text - (size_t)at,
+		               "%s{\"position\": [%d.25, %d.125, 0.75], \"velocity\": [0.5, %d.375, 0.0625], "
+		               "\"mass\": %d.5}",
+		               i > 0 ? ", " : "", i, 2 * i, i, 1 + i % 3);
+	snprintf(text + at, sizeof text - (size_t)at, "]}");
+	const uint64_t alone = parsed_model_hash(text);
+	pthread_barrier_t start;
+	int started = 0;
+	pthread_t threads[2];
+	locale_parses runs[2] = {{.locale = comma, .text = text, .alone = alone},
+	                         {.locale = (locale_t)0, .text = text, .alone = alone}};
+	if (alone != 0 && pthread_barrier_init(&start, NULL, 2) == 0) {
+		runs[0].start = runs[1].start = &start;
+		while (started < 2 && pthread_create(&threads[started], NULL, parse_in_locale, &runs[started]) == 0)
+			started++;
+		if (started == 1)  // the barrier would never open: release the thread that waits
+			pthread_barrier_wait(&start);
+		for (int t = 0; t < started; t++)
+			pthread_join(threads[t], NULL);
+		pthread_barrier_destroy(&start);
+	}
+	freelocale(comma);
+	ENSURE(alone != 0);
+	ENSURE(started == 2);
+	ENSURE(runs[0].wrong == 0);
+	ENSURE(runs[1].wrong == 0);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1024,6 +1114,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_exceptions_raised_in_helpers_reach_the_caller);
 	RUN_TEST(test_helpers_block_signals);
 	RUN_TEST(test_save_in_a_decimal_comma_locale);
+	RUN_TEST(test_parse_in_threads_of_different_locales);
 	free_inputs();
 	return TEST_SUMMARY();
 }
