@@ -311,7 +311,7 @@ sm_multilevel* sm_multilevel_create(int32_t count, const int64_t* first, const i
 	// The coarsest matrix is small: a simplicial factorisation (the supernodal one calls BLAS).
 	const int supernodal = common->supernodal;
 	common->supernodal = CHOLMOD_SIMPLICIAL;
-	ml->factor = cholmod_l_analyze(ml->coarsest, common);
+	ml->factor = sm_cholmod_analyze(ml->coarsest, common);
 	common->supernodal = supernodal;
 	if (ml->factor == NULL)
 		goto fail;

@@ -106,7 +106,7 @@ static int factorize(sm_reduced* r)
 	assemble(r, r->gamma);
 	memcpy(r->matrix->x, r->values, (size_t)r->nonzeros * sizeof(double));
 	if (r->factor == NULL) {
-		r->factor = cholmod_l_analyze(r->matrix, &r->common);
+		r->factor = sm_cholmod_analyze(r->matrix, &r->common);
 		if (r->factor == NULL)
 			return -1;
 	}

@@ -270,7 +270,7 @@ static int refresh_coarse(sm_reduced* r, double gamma)
 			r->coarse_halves =
 			    sm_coarse_halves_create(r->coarse, r->coarse_part, &r->coarse_factor, &r->common);
 		else if (r->coarse_factor == NULL)
-			r->coarse_factor = cholmod_l_analyze(r->coarse, &r->common);
+			r->coarse_factor = sm_cholmod_analyze(r->coarse, &r->common);
 		if (r->coarse_factor == NULL)
 			status = -1;
 		else if (sm_cholmod_factorize(r->coarse, r->coarse_factor, &r->common) &&

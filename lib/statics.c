@@ -163,7 +163,7 @@ cholmod_sparse sm_analysis_cholmod_view(const sm_sparse_jacobian* pattern, size_
 int sm_analysis_cholmod_factor(cholmod_sparse* A, cholmod_factor** factor, cholmod_common* common)
 {
 	if (*factor == NULL) {
-		*factor = cholmod_l_analyze(A, common);
+		*factor = sm_cholmod_analyze(A, common);
 		if (*factor == NULL)
 			return -1;
 	}
