@@ -1659,6 +1659,33 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 	return fmi2OK;
 }
 
+// Logs why a step from t to t_end stopped at the FMU's time, where the state and the outputs are,
+// and how the master goes on: the instance is in the step-failed state, where fmi2DoStep is
+// refused. The simulation's report (st) is written for its own callers: its times run on the
+// simulation's clock, t - start (CVODE's own text on CVODE's, from its last restart), and after
+// its step limit it says that the next advance goes on. So a step limit is told here in the FMU's
+// words, and any other report comes with its clocks named.
+static void log_discard(instance* inst, sm_status st, double t, double t_end)
+{
+	char reason[SM_ERROR_MESSAGE_CAPACITY + 128];
+	if (st == SM_ERROR_STEP_LIMIT)
+		snprintf(reason, sizeof reason,
+		         "CVODE used the %d internal steps solver.max_steps allows a communication step (set a "
+		         "larger solver.max_steps before fmi2ExitInitializationMode, or look for a spring much "
+		         "stiffer than the others or a huge force)",
+		         (int)inst->solver.max_steps);
+	else
+		snprintf(
+		    reason, sizeof reason,
+		    "The solver's report (its times count from the start time %s s, CVODE's own from its last restart): %s",
+		    fmu_number_text(inst->start_time).text, sm_simulation_last_error(inst->sim));
+	fmu_logf(
+	    inst, fmi2Discard, LOG_DISCARD,
+	    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime), where the "
+	    "state and outputs are; restore a state saved before (fmi2SetFMUstate), reset or terminate. %s",
+	    fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text, reason);
+}
+
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
                       fmi2Boolean noSetFMUStatePriorToCurrentPoint)
 {
@@ -1771,26 +1798,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		inst->time = inst->start_time + sm_simulation_time(inst->sim);
 		inst->last_successful_time = inst->time;
 		inst->state = ST_STEP_FAILED;
-		// The library's message for its step limit says that the next advance goes on from the
-		// state reached, which holds for the library but not here: after a discard the FMU takes
-		// no fmi2DoStep, so the message says what the master can do instead.
-		if (st == SM_ERROR_STEP_LIMIT)
-			fmu_logf(
-			    inst, fmi2Discard, LOG_DISCARD,
-			    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): "
-			    "CVODE took the %d internal steps solver.max_steps allows a communication step "
-			    "(CV_TOO_MUCH_WORK); no fmi2DoStep follows a discard: restore a state saved before the "
-			    "step (fmi2SetFMUstate) and take it in shorter steps, or reset and raise solver.max_steps "
-			    "before fmi2ExitInitializationMode (or look for a spring much stiffer than the others "
-			    "or a huge force)",
-			    fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
-			    (int)inst->solver.max_steps);
-		else
-			fmu_logf(
-			    inst, fmi2Discard, LOG_DISCARD,
-			    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime): %s",
-			    fmu_number_text(t).text, fmu_number_text(t_end).text, fmu_number_text(inst->time).text,
-			    sm_simulation_last_error(inst->sim));
+		log_discard(inst, st, t, t_end);
 		return fmi2Discard;
 	}
 	return end_step(inst, t, t_end);
