@@ -675,11 +675,15 @@ int sm_cmd_run(int argc, char** argv)
 			cli_progress_end(&prog.line);
 			if (input_problem[0] != '\0') {
 				fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
-				goto done;
+			} else {
+				fputs("springmass run: ", stderr);
+				cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
+				fputc('\n', stderr);
 			}
-			fputs("springmass run: ", stderr);
-			cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));
-			fputc('\n', stderr);
+			// The library's message is written for a caller that may go on (after its step limit,
+			// from the state reached); the run ends here, with the rows written so far.
+			fprintf(stderr, "springmass run: stopped; the outputs hold the rows up to t = %.9g s\n",
+			        last_row);
 			goto done;
 		}
 		write_row(csv, doc, sim, forces, work_origin, o.positions);

@@ -255,8 +255,13 @@ def test_options_take_effect(tmp_path):
     _, short = read_csv(tmp_path / "short.csv")
     np.testing.assert_allclose(short[:, 1], default[:, 1], rtol=0, atol=1e-6)
     # One internal step per output interval is not enough for a second of the oscillator.
+    # The run ends there, and says so with the time of its last row, which the CSV ends with
+    # (the library's own message says that a caller's next advance could go on).
     out = cli("run", osc, "-q", "-o", tmp_path / "few.csv", "--max-steps", 1, "--output-interval", 1, status=1)
     assert "steps" in out.stderr
+    assert out.stderr.splitlines()[-1] == "springmass run: stopped; the outputs hold the rows up to t = 0 s", out.stderr
+    _, few = read_csv(tmp_path / "few.csv")
+    assert few.shape[0] == 1 and few[0, 0] == 0.0
 
 
 def test_analysis_errors_name_particles_and_springs_as_the_file_does(tmp_path):
