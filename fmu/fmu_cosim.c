@@ -1882,8 +1882,12 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boo
 	if (!fmu_allowed(inst, "fmi2GetBooleanStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
 	    !check_status_value(inst, "fmi2GetBooleanStatus", value))
 		return fmi2Error;
+	// After a discarded step the instance cannot step on from where it stopped (fmi2DoStep is
+	// refused in the step-failed state): it asks a master that cannot restore a saved state to
+	// end the simulation at fmi2LastSuccessfulTime (fmpy's simulate_fmu then returns the results
+	// up to there), rather than try a step that fails. Otherwise the model never asks to stop.
 	if (s == fmi2Terminated) {
-		*value = fmi2False;  // the model never asks to stop the simulation
+		*value = inst->state == ST_STEP_FAILED ? fmi2True : fmi2False;
 		return fmi2OK;
 	}
 	return status_not_provided(inst, "fmi2GetBooleanStatus", s);

@@ -7,6 +7,8 @@ import struct
 import sys
 import zipfile
 
+import fmpy
+import numpy as np
 import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
@@ -292,9 +294,12 @@ def test_a_step_limit_discard_says_how_to_go_on_and_going_on_so_works(test_fmu):
         for words in ("fmi2SetFMUstate", "40 internal steps solver.max_steps"):
             assert words in text, (words, text)
         reached = s.getRealStatus(2)  # fmi2LastSuccessfulTime
+        # It cannot step on from there: it asks a master that does not restore to end the run.
+        assert s.getBooleanStatus(3) == 1  # fmi2Terminated
         expect_error(inst, lambda: s.doStep(reached, 0.1), "illegal call sequence")
         s.setFMUstate(saved)
         s.freeFMUstate(saved)
+        assert s.getBooleanStatus(3) == 0  # restored: it steps on
         h = 0.05
         for n in range(20):
             s.doStep(n * h, h)
@@ -303,6 +308,23 @@ def test_a_step_limit_discard_says_how_to_go_on_and_going_on_so_works(test_fmu):
         assert inst.get("tip.x") == pytest.approx(0.5 + 0.2 * math.cos(5.0), abs=1e-8)
     finally:
         inst.free()
+
+
+def test_simulate_fmu_ends_at_a_discarded_step_with_the_results_up_to_there(test_fmu):
+    # fmpy's simulate_fmu ends the run at fmi2LastSuccessfulTime when the FMU asks to terminate
+    # after a discard; otherwise it tries the next step, which is refused, and raises, losing every
+    # row. A force of 1e300 N from t = 0.25 s on makes the forces overflow at once: the step from
+    # 0.25 s is discarded.
+    signal = np.array([(0.0, 0.0), (0.25, 0.0), (0.25, 1e300), (1.0, 1e300)],
+                      dtype=[("time", np.float64), ("tip.fx", np.float64)])
+    r = fmpy.simulate_fmu(test_fmu("driven_oscillator"), stop_time=1.0, output_interval=0.05,
+                          start_values={"solver.rtol": 1e-10, "solver.atol_position": 1e-12,
+                                        "solver.atol_velocity": 1e-10},
+                          input=signal, output=["tip.x"])
+    assert r["time"][-1] == pytest.approx(0.25, abs=1e-12) and len(r) >= 6, r
+    # Each row up to there is the closed form 0.5 + 0.2 cos(5 t) m (rtol 1e-10: 1e-8 m is a
+    # hundred times the error of such a run).
+    np.testing.assert_allclose(r["tip.x"], 0.5 + 0.2 * np.cos(5.0 * r["time"]), rtol=0, atol=1e-8)
 
 
 def numbers_in(text):
