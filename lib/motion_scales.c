@@ -3,8 +3,10 @@
 //
 // CVODE's error weight of a component is 1 / (rtol |y| + atol): where the motion itself is
 // smaller than atol, rtol no longer acts and the motion is resolved only to atol. The shortest
-// spring sets the smallest length the model's shape resolves; a motion of that length at the
-// highest frequency the model can ring at (its Gershgorin bound) sets the speed. Tolerances at
+// spring with a free end sets the smallest length the model's shape resolves (one between held
+// particles is no part of CVODE's state: its ends stay put or follow their prescribed motion); a
+// motion of that length at the highest frequency the model can ring at (its Gershgorin bound, to
+// which such a spring adds nothing either) sets the speed. Tolerances at
 // or below SM_COARSE_TOLERANCE of both resolve it; above both, even its largest motion is held
 // to little more than a ten-thousandth of its size.
 #include "springmass/analysis.h"
@@ -33,6 +35,8 @@ sm_status sm_model_motion_scales(const sm_model* model, sm_motion_scales* scales
 		sm_spring_def s;
 		double l0 = 0.0, ks = 0.0, kd = 0.0;
 		sm_model_get_spring(model, k, &s);
+		if (sm_model_free_index(model, s.a) < 0 && sm_model_free_index(model, s.b) < 0)
+			continue;
 		sm_model_spring_constants(model, k, &l0, &ks, &kd);
 		const double* a = x + 3 * (size_t)s.a;
 		const double* b = x + 3 * (size_t)s.b;

@@ -2092,6 +2092,52 @@ static int test_motion_scales(void)
 	return 0;
 }
 
+// A spring whose two ends are held (fixed, or driven: their motion is prescribed) is no part of
+// what CVODE integrates and sets no scale (simulation.h): beside a 2 kg bob on an 8 N/m spring of
+// rest length 0.5 m to a fixed anchor, a 1e-9 m spring between two fixed particles and a 1e-6 m
+// one between a fixed and a driven particle leave the scales at 0.5 m and 0.5 sqrt(8 / 2) m/s,
+// which the default tolerances (1e-8 m, 1e-6 m/s) resolve: no coarse tolerances. With the bob's
+// spring disabled only held springs remain: nothing to judge by (INFINITY, never coarse).
+// Closed forms to 1e-15 relative.
+static int test_motion_scales_leave_out_springs_between_held_particles(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double x[5] = {0.0, 1.0, 2.0, 2.0 + 1e-9, 2.0 + 1e-6};
+	const sm_particle_motion motion[5] = {SM_PARTICLE_FIXED, SM_PARTICLE_FREE, SM_PARTICLE_FIXED,
+	                                      SM_PARTICLE_FIXED, SM_PARTICLE_DRIVEN};
+	for (int32_t i = 0; i < 5; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = motion[i];
+		p.mass = 2.0;
+		p.position[0] = x[i];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t a[3] = {0, 2, 2}, b[3] = {1, 3, 4};
+	for (int32_t k = 0; k < 3; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = a[k];
+		s.b = b[k];
+		s.stiffness = k == 0 ? 8.0 : 1e6;
+		s.rest_length = k == 0 ? 0.5 : SM_REST_LENGTH_INITIAL;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_motion_scales scales;
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE_NEAR(scales.length, 0.5, 1e-15);
+	ENSURE_NEAR(scales.speed, 0.5 * sqrt(8.0 / 2.0), 1e-15);
+	const sm_simulation_def def = sm_default_simulation_def();
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 0, false), SM_OK);
+	ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+	ENSURE(isinf(scales.length) && isinf(scales.speed));
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
 // omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
 // a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
@@ -4083,6 +4129,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
 	RUN_TEST(test_motion_scales);
+	RUN_TEST(test_motion_scales_leave_out_springs_between_held_particles);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_particles_without_springs_beside_one_spring);
