@@ -1184,6 +1184,26 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 	return true;
 }
 
+// Notes the parameters that gave the vertex indices of the first triangle that repeats a vertex,
+// the one sm_add_mesh refuses (count triangles of 3 indices each, read from obj's "triangles").
+static void note_repeating_triangle(const parser* p, const json_t* obj, const int32_t* triangles,
+                                    int32_t count, noted_parameters* noted)
+{
+	const json_t* list = json_object_get(obj, "triangles");
+	for (int32_t t = 0; t < count; t++) {
+		const int32_t* tri = triangles + 3 * (size_t)t;
+		if (tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2])
+			continue;
+		for (size_t c = 0; c < 3; c++) {
+			const char* name = json_string_value(json_array_get(json_array_get(list, (size_t)t), c));
+			const int32_t k = name != NULL ? find_parameter(p->doc, name) : -1;
+			if (k >= 0)
+				note_parameter(noted, k);
+		}
+		return;
+	}
+}
+
 // Group of spring s of a structure, from the offset between its particles (see structures.h).
 static int spring_group(const document_structure* s, const sm_model* model, int32_t spring)
 {
@@ -1536,11 +1556,16 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		d.vertices = vertices;
 		d.triangles = triangles;
 		st = sm_add_mesh(model, &d, &s.range);
+		// A triangle that repeats a vertex: named with the parameters its own vertex indices came
+		// from, not with those of other triangles or of the vertices' positions, which have no part
+		// in it.
+		noted_parameters repeating = {{0}, 0, false};
+		if (st == SM_ERROR_SELF_SPRING)
+			note_repeating_triangle(p, obj, triangles, d.triangle_count, &repeating);
 		free(vertices);
 		free(triangles);
-		// A triangle that repeats a vertex: which vertices a triangle joins is no parameter's doing.
 		if (st == SM_ERROR_SELF_SPRING)
-			return fail(p, st, path, "%s", sm_model_last_error(model));
+			return fail_naming(p, st, path, sm_model_last_error(model), &repeating);
 		// The mesh's particles are within the limit; its springs are counted now.
 		if (st == SM_OK && !check_budget(p, path, 0, 0))
 			return false;

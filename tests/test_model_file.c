@@ -1459,7 +1459,7 @@ static int test_names_and_descriptions_refuse_controls_and_line_breaks(void)
 // (a block's size[1], a sheet's edge_u), a rule on several (parallel edges, a rope's ends too far
 // apart, a triangle of zero area, a stiffness E / l0 that overflows, an empty box) with the
 // parameters the element's values came from, the first four of them; a triangle that repeats a
-// vertex, which no parameter makes, with none.
+// vertex with the parameters of its own vertex indices only, none when they are numbers.
 static int test_messages_name_parameters(void)
 {
 	static const refusal cases[] = {
@@ -1497,6 +1497,13 @@ static int test_messages_name_parameters(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2}, \"structures\": [{\"type\": \"mesh\","
 		 " \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 1, 0]], \"triangles\": [[0, 1, 1]]}]}",
 		 SM_ERROR_SELF_SPRING, "test.json: structures[0]: mesh: triangle 0 (0, 1, 1) repeats a vertex"},
+	    // A triangle whose vertex index comes from a parameter repeats a vertex through it: named, as
+	    // the other triangles' parameters and the vertices' positions are not.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"x\": 2, \"k\": 1, \"j\": 2}, \"structures\":"
+		 " [{\"type\": \"mesh\", \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [\"x\", 1, 0]],"
+		 " \"triangles\": [[0, 1, \"j\"], [0, \"k\", 1]]}]}",
+		 SM_ERROR_SELF_SPRING,
+		 "test.json: structures[0]: mesh: triangle 1 (0, 1, 1) repeats a vertex (with parameter k = 1)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
 		 " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
 		 " {\"strain_stiffness\": \"big\"}}]}",
