@@ -1146,8 +1146,8 @@ static bool read_mesh_arrays(parser* p, const json_t* obj, const char* path, dou
 		snprintf(element, sizeof element, "%.100s.vertices[%zu]", path, v);
 		const json_t* vector = json_array_get(vs, v);
 		if (!json_is_array(vector) || json_array_size(vector) != 3)
-			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 numbers [x, y, z], not %s",
-			            type_name(vector));
+			return fail(p, SM_ERROR_SCHEMA, element, "must be an array of 3 numbers [x, y, z], not %s%s",
+			            type_name(vector), json_is_array(vector) ? " of another length" : "");
 		for (size_t c = 0; c < 3; c++) {
 			char coordinate[PATH_CAPACITY];
 			child_index(coordinate, element, c);
