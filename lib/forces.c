@@ -463,21 +463,27 @@ void sm_model_spring_forces_lanes(const sm_model* model, const double* x, const 
 }
 
 // Gravity, mass damping, loads and external forces on particles begin .. end - 1: the starting
-// value of their f before the springs add.
+// value of their f before the springs add. Each particle's external force is read before its f
+// is written, so that f_external may be f itself (model.h); the sums are the same either way:
+// m (g - alpha v), then the load, then the external force.
 static void body_forces_range(const sm_model* model, const double* v, const double* f_external, double* f,
                               int32_t begin, int32_t end)
 {
 	static const double zero[3] = {0.0, 0.0, 0.0};
+	const double* load = model->load_count > 0 ? model->load : NULL;
 	for (int32_t i = begin; i < end; i++) {
-		const double* vi = v != NULL ? v + 3 * (size_t)i : zero;
-		body_force(model->mass[i], model->def.gravity, model->def.mass_damping, vi, f + 3 * (size_t)i);
+		const size_t at = 3 * (size_t)i;
+		const double* vi = v != NULL ? v + at : zero;
+		double fi[3];
+		body_force(model->mass[i], model->def.gravity, model->def.mass_damping, vi, fi);
+		for (int k = 0; k < 3; k++) {
+			if (load != NULL)
+				fi[k] += load[at + k];
+			if (f_external != NULL)
+				fi[k] += f_external[at + k];
+			f[at + k] = fi[k];
+		}
 	}
-	if (model->load_count > 0)
-		for (size_t k = 3 * (size_t)begin; k < 3 * (size_t)end; k++)
-			f[k] += model->load[k];
-	if (f_external != NULL)
-		for (size_t k = 3 * (size_t)begin; k < 3 * (size_t)end; k++)
-			f[k] += f_external[k];
 }
 
 static void body_forces(const sm_model* model, const double* v, const double* f_external, double* f)

@@ -302,6 +302,46 @@ static int test_forces_and_power_match_separate_evaluations(void)
 	return 0;
 }
 
+// External forces given in the output array itself (model.h): the total force replaces them, the
+// same bits as with a separate output, for sm_model_forces and sm_model_forces_and_jacobians
+// alike, on a model with gravity, mass damping, loads on free and held particles, and springs.
+static int test_external_forces_may_be_given_in_f_itself(void)
+{
+	rng r = {4242};
+	enum { N = 9 };
+	double x[3 * N], v[3 * N], fe[3 * N], apart[3 * N], in_place[3 * N];
+	sm_model* m = random_model(&r, N, 20, 1, x, v);
+	ENSURE(m != NULL);
+	for (int32_t i = 0; i < N; i += 2) {
+		sm_particle_def p;
+		ENSURE_STATUS(sm_model_get_particle(m, i, &p), SM_OK);
+		for (int k = 0; k < 3; k++)
+			p.load[k] = rng_uniform(&r, -3, 3);
+		ENSURE_STATUS(sm_model_set_particle(m, i, &p), SM_OK);
+	}
+	for (int k = 0; k < 3 * N; k++)
+		fe[k] = rng_uniform(&r, -5, 5);
+	sm_model_forces(m, x, v, fe, apart);
+	memcpy(in_place, fe, sizeof fe);
+	sm_model_forces(m, x, v, in_place, in_place);
+	ENSURE(memcmp(in_place, apart, sizeof apart) == 0);
+
+	sm_spring_jacobians* alone = sm_spring_jacobians_create(m);
+	sm_spring_jacobians* shared = sm_spring_jacobians_create(m);
+	ENSURE(alone != NULL && shared != NULL);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, fe, SM_JACOBIAN_EXACT, apart, alone), SM_OK);
+	memcpy(in_place, fe, sizeof fe);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, in_place, SM_JACOBIAN_EXACT, in_place, shared),
+	              SM_OK);
+	ENSURE(memcmp(in_place, apart, sizeof apart) == 0);
+	ENSURE(memcmp(shared->data, alone->data,
+	              SPRING_JACOBIAN_STRIDE * (size_t)sm_model_spring_count(m) * sizeof(double)) == 0);
+	sm_spring_jacobians_destroy(alone);
+	sm_spring_jacobians_destroy(shared);
+	sm_model_destroy(m);
+	return 0;
+}
+
 #if defined(__x86_64__) && defined(__GNUC__)
 // a * b + c as the C source writes it, in a function that may use FMA instructions, as every
 // function may under -march=native or -mfma.
@@ -1082,6 +1122,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_spring_damping_ignores_rigid_motion);
 	RUN_TEST(test_damping_power_is_never_positive);
 	RUN_TEST(test_forces_and_power_match_separate_evaluations);
+	RUN_TEST(test_external_forces_may_be_given_in_f_itself);
 	RUN_TEST(test_elastic_force_is_minus_energy_gradient);
 	RUN_TEST(test_gravity_force_is_minus_energy_gradient);
 	RUN_TEST(test_zero_length_spring_is_linear);

@@ -241,7 +241,8 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 
 /// Total force [N] on every particle: springs, spring damping, mass damping, gravity, the
 /// particles' loads and the optional external forces f_external [N] (3 per particle, NULL for
-/// none), written to f.
+/// none), written to f. f_external may be f itself: the total then replaces the external forces
+/// in place. f must not overlap x or v.
 /// For constrained particles f is the force the model exerts on them (their reaction is -f).
 ///
 /// At the singular point of a rest-length spring, L < SM_DEGENERATE_LENGTH_RATIO * l0 (the two
@@ -363,7 +364,8 @@ SM_API void sm_spring_jacobians_destroy(sm_spring_jacobians* jacobians);
 
 /// Forces [N] exactly as sm_model_forces computes them (the same numbers, bit for bit) and, in
 /// the same pass, every spring's Jacobian for the variant at (x, v) into `jacobians`. v may be
-/// NULL (zero velocities), f_external too. Disabled springs store zero blocks. Errors:
+/// NULL (zero velocities), f_external too, or f itself, as there. Disabled springs store zero
+/// blocks. Errors:
 /// SM_ERROR_INVALID_ARGUMENT (NULL model, x, f or jacobians, unknown variant),
 /// SM_ERROR_TOPOLOGY (storage made for a model with other particles or springs); f and
 /// jacobians are then untouched.
