@@ -101,6 +101,9 @@ sm_status sm_model_jacobian_product(const sm_model* model, const double* x, cons
 {
 	if (model == NULL || x == NULL || out == NULL || !known_variant(variant))
 		return SM_ERROR_INVALID_ARGUMENT;
+	// out is written before the springs read dx and dv, and x and v at every spring.
+	if (out == x || out == v || out == dx || out == dv)
+		return SM_ERROR_INVALID_ARGUMENT;
 	const int32_t n = model->particle_count;
 	for (int32_t i = 0; i < n; i++) {
 		const double c = mass_damping_derivative(model->mass[i], model->def.mass_damping);
@@ -192,7 +195,7 @@ static inline void factored_product(const sm_spring_jacobians* J, const sm_model
 sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model,
                                       const double* dx, const double* dv, double* out)
 {
-	if (jacobians == NULL || model == NULL || out == NULL || !jacobians->evaluated)
+	if (jacobians == NULL || model == NULL || out == NULL || !jacobians->evaluated || out == dx || out == dv)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (jacobians->particle_count != model->particle_count || jacobians->spring_count != model->spring_count)
 		return SM_ERROR_TOPOLOGY;
@@ -218,7 +221,7 @@ sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobi
                                                double scale_k, double scale_d, const double* restrict p,
                                                double* restrict out)
 {
-	if (jacobians == NULL || model == NULL || p == NULL || out == NULL || !jacobians->evaluated)
+	if (jacobians == NULL || model == NULL || p == NULL || out == NULL || !jacobians->evaluated || out == p)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (jacobians->particle_count != model->particle_count || jacobians->spring_count != model->spring_count)
 		return SM_ERROR_TOPOLOGY;

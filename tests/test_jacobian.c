@@ -899,6 +899,42 @@ static int test_fused_errors(void)
 	return 0;
 }
 
+// The Jacobian-vector products are not formed in place (model.h): an output that is one of the
+// inputs, as in p = J p, is refused with nothing written, where the springs read entries that
+// the mass-damping term had already overwritten.
+static int test_products_refuse_an_output_that_is_an_input(void)
+{
+	rng r = {12};
+	enum { N = 6 };
+	double x[3 * N], v[3 * N], f[3 * N], p[3 * N], kept[3 * N];
+	sm_model* m = random_model(&r, N, 8, 1, x, v);
+	ENSURE(m != NULL);
+	sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+	ENSURE(sj != NULL);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
+	for (int k = 0; k < 3 * N; k++)
+		kept[k] = rng_uniform(&r, -1, 1);
+	const sm_jacobian_variant exact = SM_JACOBIAN_EXACT;
+	memcpy(p, kept, sizeof p);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, exact, p, NULL, p), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, exact, NULL, p, p), SM_ERROR_INVALID_ARGUMENT);
+	memcpy(p, kept, sizeof p);
+	ENSURE_STATUS(sm_spring_jacobians_product(sj, m, p, NULL, p), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_spring_jacobians_product(sj, m, NULL, p, p), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_spring_jacobians_combined_product(sj, m, 0.25, 0.5, p, p), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(memcmp(p, kept, sizeof p) == 0);
+	// Positions and velocities given as the output are refused too, and stay as they were.
+	double xc[3 * N], vc[3 * N];
+	memcpy(xc, x, sizeof x);
+	memcpy(vc, v, sizeof v);
+	ENSURE_STATUS(sm_model_jacobian_product(m, xc, v, exact, kept, NULL, xc), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, vc, exact, kept, NULL, vc), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(memcmp(xc, x, sizeof x) == 0 && memcmp(vc, v, sizeof v) == 0);
+	sm_spring_jacobians_destroy(sj);
+	sm_model_destroy(m);
+	return 0;
+}
+
 // The pattern belongs to the particles' motions and the springs' endpoints it was built from
 // (model.h). A model in which a constrained and a free particle swapped motions, or a spring was
 // moved to another particle at either end, keeps its counts but has another matrix: both fills
@@ -1031,6 +1067,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_degenerate_and_disabled_springs);
 	RUN_TEST(test_springs_in_groups_equal_springs_alone_bit_for_bit);
 	RUN_TEST(test_fused_errors);
+	RUN_TEST(test_products_refuse_an_output_that_is_an_input);
 	RUN_TEST(test_sparse_jacobian_rejects_changed_motions_and_endpoints);
 	return TEST_SUMMARY();
 }

@@ -237,6 +237,8 @@ SM_API int32_t sm_model_free_index(const sm_model* model, int32_t particle);
 // model and may run concurrently on the same model; given a NULL model or a NULL required array
 // they do nothing (or return 0). sm_model_energies and sm_model_dissipated_power take a NULL x
 // too, and leave out what needs positions (elastic and gravitational energy; spring damping).
+// Outputs must not overlap inputs (but for the external forces of sm_model_forces, which may be
+// its output): the Jacobian-vector products refuse an output that is one of their inputs.
 // ---------------------------------------------------------------------------------------------
 
 /// Total force [N] on every particle: springs, spring damping, mass damping, gravity, the
@@ -291,9 +293,10 @@ SM_API sm_status sm_model_jacobian_dense(const sm_model* model, const double* x,
                                          sm_jacobian_variant variant, double* dfdx, double* dfdv);
 
 /// Jacobian-vector product without assembling: out = df/dx dx + df/dv dv [N] over all particles
-/// (3 per particle). dx [m] or dv [m/s] may be NULL (treated as zero).
-/// SM_ERROR_INVALID_ARGUMENT, with nothing written, for a NULL model, x or out or an unknown
-/// variant.
+/// (3 per particle). dx [m] or dv [m/s] may be NULL (treated as zero). out must not overlap x, v,
+/// dx or dv: the product is not formed in place.
+/// SM_ERROR_INVALID_ARGUMENT, with nothing written, for a NULL model, x or out, an out that is x,
+/// v, dx or dv, or an unknown variant.
 SM_API sm_status sm_model_jacobian_product(const sm_model* model, const double* x, const double* v,
                                            sm_jacobian_variant variant, const double* dx, const double* dv,
                                            double* out);
@@ -383,8 +386,9 @@ SM_API sm_status sm_spring_jacobians_block(const sm_spring_jacobians* jacobians,
 /// Jacobian-vector product from the stored data: out = df/dx dx + df/dv dv [N] over all
 /// particles (3 per particle), mass damping -alpha m dv included from the model. dx [m] or
 /// dv [m/s] may be NULL (zero). The same numbers as sm_model_jacobian_product at the evaluated
-/// state, to rounding. SM_ERROR_TOPOLOGY if the model no longer matches the storage,
-/// SM_ERROR_INVALID_ARGUMENT if nothing was evaluated yet.
+/// state, to rounding. out must not overlap dx or dv. SM_ERROR_TOPOLOGY if the model no longer
+/// matches the storage, SM_ERROR_INVALID_ARGUMENT if nothing was evaluated yet or out is dx or dv,
+/// with nothing written.
 SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobians, const sm_model* model,
                                              const double* dx, const double* dv, double* out);
 
@@ -393,7 +397,7 @@ SM_API sm_status sm_spring_jacobians_product(const sm_spring_jacobians* jacobian
 /// consistent units), mass damping included. An implicit step of the second-order system needs
 /// it with scale_k = gamma^2, scale_d = gamma [s^2, s]: the same numbers as
 /// sm_spring_jacobians_product(gamma^2 p, gamma p) to rounding, without scaling p twice. p and
-/// out must not overlap. Errors as sm_spring_jacobians_product (and NULL p).
+/// out must not overlap. Errors as sm_spring_jacobians_product (and NULL p, or out = p).
 SM_API sm_status sm_spring_jacobians_combined_product(const sm_spring_jacobians* jacobians,
                                                       const sm_model* model, double scale_k, double scale_d,
                                                       const double* p, double* out);
