@@ -1237,13 +1237,17 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		}
 		if (flag < 0) {
 			// CVODE leaves the last state it reached in y; keep the state from before the call
-			// if that is not usable.
+			// if that is not usable. Without a step taken there is nothing newer, and y is not that
+			// state: a failure in the choice of the first step leaves a trial state there, and one in
+			// the first step the predicted state taken back, which loses the state's low bits to the
+			// prediction's, and all of them when the prediction is far larger (a velocity of 1 m/s
+			// became 0 after a trial with an acceleration of 1e100 m/s^2).
 			const double* y = N_VGetArrayPointer(sim->y);
 			bool usable = isfinite(reached) && reached >= sm_simulation_cvode_time(sim, sim->time) &&
 			              reached <= cvode_end;
 			for (int64_t i = 0; usable && i < sm_simulation_state_length(sim); i++)
 				usable = isfinite(y[i]);
-			if (usable)
+			if (usable && steps_after > steps_before)
 				sim->time = time_of(sim, reached, cvode_end, t_end);
 			else
 				N_VScale(1.0, sim->y_saved, sim->y);

@@ -2511,6 +2511,52 @@ static int test_a_failure_restarts_the_next_advance(void)
 	return 0;
 }
 
+// A failure before CVODE's first step leaves the state of the last good time, to the bit. A
+// particle of 1 kg coasts at 1 m/s to t = 1 s; then 1e100 N fail the next advance at once (the
+// inputs' work needs steps far below what CVODE tries). CVODE's failed first step took back its
+// prediction, v + h a with h a = 1.5e40 m/s, and left v = 0 m/s where the particle was at 1 m/s: the
+// simulation reported that as its state. Now it is the state of a simulation that stopped at 1 s,
+// with every solver and Adams, and the particle coasts on once the force is gone.
+static int test_a_failure_before_the_first_step_keeps_the_state(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.velocity[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	const double huge[3] = {1e100, 0.0, 0.0}, none[3] = {0.0, 0.0, 0.0};
+	for (int k = 0; k <= SM_SOLVER_REDUCED_CHOLMOD; k++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.method = k == 0 ? SM_METHOD_ADAMS : SM_METHOD_BDF;
+		d.solver = k == 0 ? SM_SOLVER_AUTO : (sm_linear_solver)k;
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		sm_simulation* stopped = sm_simulation_create(model, &d, NULL);
+		ENSURE(sim != NULL && stopped != NULL);
+		ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(stopped, 1.0), SM_OK);
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, huge), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_ERROR_SOLVER);
+		ENSURE(strstr(sm_simulation_last_error(sim), "at t = 1 s while advancing to 2 s") != NULL);
+		ENSURE(sm_simulation_time(sim) == 1.0);
+		ENSURE(memcmp(sm_simulation_positions(sim), sm_simulation_positions(stopped), 3 * sizeof(double)) ==
+		       0);
+		ENSURE(memcmp(sm_simulation_velocities(sim), sm_simulation_velocities(stopped), 3 * sizeof(double)) ==
+		       0);
+		ENSURE(sm_simulation_input_work(sim) == 0.0);
+		ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, none), SM_OK);
+		ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_OK);
+		// x = v t: BDF and Adams integrate a straight line exactly but for rounding.
+		ENSURE_REL(sm_simulation_positions(sim)[0], 2.0, 1e-12, 0.0);
+		ENSURE(sm_simulation_velocities(sim)[0] == 1.0);
+		sm_simulation_destroy(sim);
+		sm_simulation_destroy(stopped);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A force so large that the weighted norms of the accelerations overflow (1e300 N on 0.01 kg
 // against atol 1e-6 m/s) made CVODE's first step 0 s, and the advance reported success at the
 // end time with nothing moved. It is a solver failure, with and without the on_step hook, and
@@ -6422,6 +6468,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_cloth_at_rest_reactions_balance_weight);
 	RUN_TEST(test_failures_are_reported_and_recoverable);
 	RUN_TEST(test_overflowing_force_is_a_failure);
+	RUN_TEST(test_a_failure_before_the_first_step_keeps_the_state);
 	RUN_TEST(test_a_failure_restarts_the_next_advance);
 	RUN_TEST(test_advance_below_time_resolution);
 	RUN_TEST(test_reduced_solver_huge_mass);
