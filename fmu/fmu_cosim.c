@@ -1662,9 +1662,9 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 // Logs why a step from t to t_end stopped at the FMU's time, where the state and the outputs are,
 // and how the master goes on: the instance is in the step-failed state, where fmi2DoStep is
 // refused. The simulation's report (st) is written for its own callers: its times run on the
-// simulation's clock, t - start (CVODE's own text on CVODE's, from its last restart), and after
+// simulation's clock, t - start (CVODE's own text's too), and after
 // its step limit it says that the next advance goes on. So a step limit is told here in the FMU's
-// words, and any other report comes with its clocks named.
+// words, and any other report comes with its clock named.
 static void log_discard(instance* inst, sm_status st, double t, double t_end)
 {
 	char reason[SM_ERROR_MESSAGE_CAPACITY + 128];
@@ -1675,10 +1675,8 @@ static void log_discard(instance* inst, sm_status st, double t, double t_end)
 		         "stiffer than the others or a huge force)",
 		         (int)inst->solver.max_steps);
 	else
-		snprintf(
-		    reason, sizeof reason,
-		    "The solver's report (its times count from the start time %s s, CVODE's own from its last restart): %s",
-		    fmu_number_text(inst->start_time).text, sm_simulation_last_error(inst->sim));
+		snprintf(reason, sizeof reason, "The solver's report (its times count from the start time %s s): %s",
+		         fmu_number_text(inst->start_time).text, sm_simulation_last_error(inst->sim));
 	fmu_logf(
 	    inst, fmi2Discard, LOG_DISCARD,
 	    "fmi2DoStep: the step from %s to %s stopped at %s (readable as fmi2LastSuccessfulTime), where the "

@@ -26,6 +26,7 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <ctype.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
@@ -409,12 +410,55 @@ static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J,
 	return 0;
 }
 
+// CVODE's messages give times on its own axis, which starts at 0 at its last (re)initialisation
+// (set_state, a break, a changed input, a failure): a failure right after a restart at 0.5 s
+// said "At t = 0". Each time named so ("t = ", and "tout", "tstop", "tcur", "tcur - hu", "t0") is
+// rewritten on the simulation's axis, origin + t, in as many digits as CVODE gave (6) beyond
+// those the origin adds: at a restart at 0.3 s, "t = 0.0214454" reads "t = 0.3214454".
+static const char* const cvode_time_names[] = {
+    "t = ", "tout = ", "tstop = ", "tcur - hu = ", "tcur = ", "t0 = "};
+
+static void on_simulation_axis(const char* msg, double origin, char* out, size_t size)
+{
+	size_t n = 0;
+	for (const char* p = msg; *p != '\0' && n + 1 < size;) {
+		size_t name = 0;
+		const bool word_start = p == msg || !(isalnum((unsigned char)p[-1]) || p[-1] == '_');
+		for (size_t k = 0;
+		     word_start && name == 0 && k < sizeof cvode_time_names / sizeof cvode_time_names[0]; k++)
+			if (strncmp(p, cvode_time_names[k], strlen(cvode_time_names[k])) == 0)
+				name = strlen(cvode_time_names[k]);
+		char* end = NULL;
+		const double t = name > 0 ? strtod(p + name, &end) : 0.0;
+		if (name == 0 || end == p + name || !isfinite(t)) {
+			out[n++] = *p++;
+			continue;
+		}
+		const double time = origin + t;
+		char text[SM_NUMBER_TEXT_CAPACITY];
+		if (t == 0.0 || time == 0.0 || !isfinite(time)) {
+			sm_format_number(time, text);
+		} else {
+			const int extra = (int)floor(log10(fabs(time))) - (int)floor(log10(fabs(t)));
+			snprintf(text, sizeof text, "%.*g", 6 + (extra > 0 ? (extra < 11 ? extra : 11) : 0), time);
+		}
+		const int written = snprintf(out + n, size - n, "%.*s%s", (int)name, p, text);
+		if (written > 0)
+			n = n + (size_t)written < size ? n + (size_t)written : size - 1;
+		p = end;
+	}
+	out[n] = '\0';
+}
+
 static void error_handler(int error_code, const char* module, const char* function, char* msg,
                           void* user_data)
 {
 	(void)error_code, (void)module;
 	sm_simulation* sim = user_data;
-	snprintf(sim->solver_message, sizeof sim->solver_message, "%s: %s", function, msg);
+	const int prefix = snprintf(sim->solver_message, sizeof sim->solver_message, "%s: ", function);
+	if (prefix >= 0 && (size_t)prefix < sizeof sim->solver_message - 1)
+		on_simulation_axis(msg, sim->time_origin, sim->solver_message + prefix,
+		                   sizeof sim->solver_message - (size_t)prefix);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -2557,6 +2557,35 @@ static int test_a_failure_before_the_first_step_keeps_the_state(void)
 	return 0;
 }
 
+// CVODE's own report gives times on its axis, which starts at its last restart: a failure at once
+// after a restart at 1 s said "CVode: At t = 0 and h = ..." beside "at t = 1 s". Its times are now
+// the simulation's, after a restart at 1 s and one at 2.5 s (a state set there) alike.
+static int test_cvodes_report_gives_the_simulations_times(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.velocity[0] = 1.0;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
+	const double huge[3] = {1e100, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_external_force(sim, 0, huge), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 2.0), SM_ERROR_SOLVER);
+	ENSURE(strstr(sm_simulation_last_error(sim), "at t = 1 s while advancing to 2 s") != NULL);
+	ENSURE(strstr(sm_simulation_last_error(sim), "CVode: At t = 1 and h = ") != NULL);
+	const double x[3] = {0.0, 0.0, 0.0}, v[3] = {1.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_state(sim, 2.5, x, v), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 3.0), SM_ERROR_SOLVER);
+	ENSURE(strstr(sm_simulation_last_error(sim), "CVode: At t = 2.5 and h = ") != NULL);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A force so large that the weighted norms of the accelerations overflow (1e300 N on 0.01 kg
 // against atol 1e-6 m/s) made CVODE's first step 0 s, and the advance reported success at the
 // end time with nothing moved. It is a solver failure, with and without the on_step hook, and
@@ -6469,6 +6498,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_failures_are_reported_and_recoverable);
 	RUN_TEST(test_overflowing_force_is_a_failure);
 	RUN_TEST(test_a_failure_before_the_first_step_keeps_the_state);
+	RUN_TEST(test_cvodes_report_gives_the_simulations_times);
 	RUN_TEST(test_a_failure_restarts_the_next_advance);
 	RUN_TEST(test_advance_below_time_resolution);
 	RUN_TEST(test_reduced_solver_huge_mass);
