@@ -4664,6 +4664,34 @@ static int test_advance_to_the_current_time_does_nothing(void)
 	return 0;
 }
 
+// CVODE caps its steps with 1 / max_step: a max_step of 1 / DBL_MAX (5.6e-309 s) or less, whose
+// inverse overflows, made every step 0 s, and the advance failed saying that the accelerations
+// were too large to measure. It is refused; the next double up steps (to its step limit here: 5
+// steps of 5.6e-309 s).
+static int test_a_max_step_whose_inverse_overflows_is_refused(void)
+{
+	sm_model* model = oscillator(1.0, 40.0, 0.0, 0.2);
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	d.max_steps = 5;
+	const double steps[2] = {5e-324, 1.0 / DBL_MAX};
+	for (int k = 0; k < 2; k++) {
+		d.max_step = steps[k];
+		sm_error err;
+		ENSURE(sm_simulation_create(model, &d, &err) == NULL);
+		ENSURE(err.status == SM_ERROR_INVALID_ARGUMENT && strstr(err.message, "max_step = ") != NULL &&
+		       strstr(err.message, "too small") != NULL);
+	}
+	d.max_step = nextafter(1.0 / DBL_MAX, 1.0);
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_ERROR_STEP_LIMIT);
+	ENSURE(sm_simulation_time(sim) > 0.0 && sm_simulation_statistics(sim).steps == 5);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Options outside their documented ranges are refused with SM_ERROR_INVALID_ARGUMENT and a
 // message naming the option: max_steps must be > 0, max_step finite and >= 0, the relative
 // tolerance < 1 and at least the machine epsilon, the method, solver and Jacobian variant known
@@ -6541,6 +6569,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_break_takes_only_its_own_spring_energy);
 	RUN_TEST(test_advance_to_the_current_time_does_nothing);
 	RUN_TEST(test_invalid_options_are_refused);
+	RUN_TEST(test_a_max_step_whose_inverse_overflows_is_refused);
 	RUN_TEST(test_max_step_caps_the_internal_steps);
 	RUN_TEST(test_restart_only_on_a_changed_input);
 	RUN_TEST(test_an_input_set_away_and_back_before_an_advance_is_no_change);

@@ -123,7 +123,9 @@ typedef struct sm_simulation_def {
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy and the inputs' work [J]; default
 	/// 1e-6
 	double absolute_tolerance_velocity;
-	double max_step;    ///< largest internal step [s]; 0 (default) = unlimited
+	/// largest internal step [s], above 1 / DBL_MAX = 5.6e-309 s (CVODE takes its inverse), or 0
+	/// (default) = unlimited
+	double max_step;
 	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
 	/// changes an input (default true; false keeps CVODE's history over changes: faster, but not
