@@ -223,6 +223,10 @@ check_cases << 'CASES'
 2|springmass statics: -o $tmp/apart/same.json and --save-model $tmp/apart/same.json are one file, which only the last would hold; give each its own|statics "$osc" -q -o "$tmp/apart/same.json" --save-model "$tmp/apart/same.json"
 2|springmass statics: -o $tmp/apart/statics.vtk and --vtk's file $tmp/apart/statics.vtk are one file, which only the last would hold; give each its own|statics "$osc" -q -o "$tmp/apart/statics.vtk" --vtk "$tmp/apart"
 2|springmass modes: -o $tmp/apart/mode_1.vtk and --vtk's file $tmp/apart/mode_1.vtk are one file, which only the last would hold; give each its own|modes "$osc" -o "$tmp/apart/mode_1.vtk" --vtk "$tmp/apart"
+2|springmass statics: -o $tmp/apart/one and --vtk $tmp/apart/one are one file, which only the last would hold; give each its own|statics "$osc" -q -o "$tmp/apart/one" --vtk "$tmp/apart/one"
+2|springmass statics: --save-model $tmp/apart/one and --vtk $tmp/apart/./one are one file, which only the last would hold; give each its own|statics "$osc" -q --save-model "$tmp/apart/one" --vtk "$tmp/apart/./one"
+2|springmass modes: -o $tmp/apart/one and --vtk $tmp/apart/one are one file, which only the last would hold; give each its own|modes "$osc" -o "$tmp/apart/one" --vtk "$tmp/apart/one"
+2|springmass run: -o $tmp/apart/one and --vtk $tmp/apart/one are one file, which only the last would hold; give each its own|run "$osc" -q -o "$tmp/apart/one" --vtk "$tmp/apart/one"
 CASES
 # (As root the check of the place passes, and the write itself fails; otherwise the check refuses.)
 "$cli" statics "$osc" -q -o "$tmp/apart/fresh.csv" --save-model /proc/springmass_x.json > /dev/null 2>&1

@@ -257,7 +257,8 @@ int sm_cmd_modes(int argc, char** argv)
 		free(settings);
 		return 2;
 	}
-	if (cli_check_output("modes", "-o", csv_path, model_path, "the model file", false) != 0) {
+	if (cli_check_output("modes", "-o", csv_path, model_path, "the model file", false) != 0 ||
+	    cli_check_outputs_apart("modes", "-o", csv_path, "--vtk", vtk_dir) != 0) {
 		free(settings);
 		return 2;
 	}

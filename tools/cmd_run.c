@@ -620,6 +620,11 @@ int sm_cmd_run(int argc, char** argv)
 		status = 2;
 		goto done;
 	}
+	if (cli_check_outputs_apart("run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file,
+	                            "--vtk", o.vtk_dir) != 0) {
+		status = 2;
+		goto done;
+	}
 	// Where the CSV and the series go is checked before either is opened, so that a run refused
 	// for one leaves the other as it was (opening the index emptied an earlier one); the CSV may
 	// go in the series' folder, made first.

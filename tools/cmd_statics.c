@@ -167,6 +167,8 @@ int sm_cmd_statics(int argc, char** argv)
 	if ((vtk_file != NULL && cli_check_folder_file("statics", vtk_dir, vtk_file, model_path) != 0) ||
 	    cli_check_outputs_apart("statics", "-o", csv_path, "--save-model", save_path) != 0 ||
 	    cli_check_outputs_apart("statics", "-o", csv_path, "--vtk's file", vtk_file) != 0 ||
+	    cli_check_outputs_apart("statics", "-o", csv_path, "--vtk", vtk_dir) != 0 ||
+	    cli_check_outputs_apart("statics", "--save-model", save_path, "--vtk", vtk_dir) != 0 ||
 	    cli_check_outputs_apart("statics", "--save-model", save_path, "--vtk's file", vtk_file) != 0) {
 		free(settings);
 		return 2;
