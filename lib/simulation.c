@@ -418,16 +418,24 @@ static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J,
 static const char* const cvode_time_names[] = {
     "t = ", "tout = ", "tstop = ", "tcur - hu = ", "tcur = ", "t0 = "};
 
+// The length of the time's name that starts a word at p in msg, or 0 if none does.
+static size_t time_name_at(const char* msg, const char* p)
+{
+	if (p > msg && (isalnum((unsigned char)p[-1]) || p[-1] == '_'))
+		return 0;
+	for (size_t k = 0; k < sizeof cvode_time_names / sizeof cvode_time_names[0]; k++) {
+		const size_t length = strlen(cvode_time_names[k]);
+		if (strncmp(p, cvode_time_names[k], length) == 0)
+			return length;
+	}
+	return 0;
+}
+
 static void on_simulation_axis(const char* msg, double origin, char* out, size_t size)
 {
 	size_t n = 0;
 	for (const char* p = msg; *p != '\0' && n + 1 < size;) {
-		size_t name = 0;
-		const bool word_start = p == msg || !(isalnum((unsigned char)p[-1]) || p[-1] == '_');
-		for (size_t k = 0;
-		     word_start && name == 0 && k < sizeof cvode_time_names / sizeof cvode_time_names[0]; k++)
-			if (strncmp(p, cvode_time_names[k], strlen(cvode_time_names[k])) == 0)
-				name = strlen(cvode_time_names[k]);
+		const size_t name = time_name_at(msg, p);
 		char* end = NULL;
 		const double t = name > 0 ? strtod(p + name, &end) : 0.0;
 		if (name == 0 || end == p + name || !isfinite(t)) {
