@@ -2477,16 +2477,26 @@ static int test_failures_are_reported_and_recoverable(void)
 // it is, and with the force gone the particle coasts on. Only a step limit keeps CVODE's history
 // (the test above); going on from the history of a failed step instead would pass every
 // trajectory test.
-static int test_a_failure_restarts_the_next_advance(void)
+// One free particle of `mass` [kg] coasting along x at `speed` [m/s] from the origin, without gravity.
+static sm_model* coasting_particle(double mass, double speed)
 {
 	sm_model_def md = sm_default_model_def();
 	md.gravity[2] = 0.0;
 	sm_model* model = sm_model_create(&md, NULL);
-	ENSURE(model != NULL);
 	sm_particle_def p = sm_default_particle_def();
-	p.mass = 0.01;
-	p.velocity[0] = 1000.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.mass = mass;
+	p.velocity[0] = speed;
+	if (model != NULL && sm_model_add_particle(model, &p, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+static int test_a_failure_restarts_the_next_advance(void)
+{
+	sm_model* model = coasting_particle(0.01, 1000.0);
+	ENSURE(model != NULL);
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
 	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);
@@ -2519,13 +2529,8 @@ static int test_a_failure_restarts_the_next_advance(void)
 // with every solver and Adams, and the particle coasts on once the force is gone.
 static int test_a_failure_before_the_first_step_keeps_the_state(void)
 {
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = coasting_particle(1.0, 1.0);
 	ENSURE(model != NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.velocity[0] = 1.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
 	const double huge[3] = {1e100, 0.0, 0.0}, none[3] = {0.0, 0.0, 0.0};
 	for (int k = 0; k <= SM_SOLVER_REDUCED_CHOLMOD; k++) {
 		sm_simulation_def d = sm_default_simulation_def();
@@ -2562,13 +2567,8 @@ static int test_a_failure_before_the_first_step_keeps_the_state(void)
 // the simulation's, after a restart at 1 s and one at 2.5 s (a state set there) alike.
 static int test_cvodes_report_gives_the_simulations_times(void)
 {
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = coasting_particle(1.0, 1.0);
 	ENSURE(model != NULL);
-	sm_particle_def p = sm_default_particle_def();
-	p.velocity[0] = 1.0;
-	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
 	ENSURE_STATUS(sm_simulation_advance(sim, 1.0), SM_OK);

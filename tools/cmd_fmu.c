@@ -33,6 +33,7 @@ int sm_cmd_fmu(int argc, char** argv)
 #else
 
 #include "cli_common.h"
+#include "cli_signals.h"
 #include "fmu_model.h"
 #include "fmu_reference.h"
 #include "text_file.h"
@@ -42,7 +43,6 @@ int sm_cmd_fmu(int argc, char** argv)
 #include <fcntl.h>
 #include <ftw.h>
 #include <limits.h>
-#include <signal.h>
 #include <stdlib.h>
 #include <sys/stat.h>
 #include <sys/types.h>
@@ -259,28 +259,9 @@ static bool find_runtime(const char* option, char* dir, size_t size)
 	return false;
 }
 
-// A packaging stopped from outside (Ctrl-C, a kill, the terminal closed) removes its staging
-// folder, which holds a copy of the whole runtime, and writes no FMU: the handler only notes the
-// signal; the packaging stops after the step it is taking (zip, which gets the terminal's Ctrl-C
-// too, ends at once), cleans up and raises the signal again for its exit status.
-static volatile sig_atomic_t stop_signal;
-
-static void note_signal(int signal)
-{
-	stop_signal = signal;
-}
-
-static void catch_stop_signals(void)
-{
-	struct sigaction action;
-	memset(&action, 0, sizeof action);
-	action.sa_handler = note_signal;
-	action.sa_flags = SA_RESTART;  // waiting for zip goes on
-	sigemptyset(&action.sa_mask);
-	sigaction(SIGINT, &action, NULL);
-	sigaction(SIGTERM, &action, NULL);
-	sigaction(SIGHUP, &action, NULL);
-}
+// A packaging stopped from outside (Ctrl-C, a kill, the terminal closed; cli_signals.h) removes
+// its staging folder, which holds a copy of the whole runtime, and writes no FMU: it stops after
+// the step it is taking (zip, which gets the terminal's Ctrl-C too, ends at once) and cleans up.
 
 static int remove_entry(const char* path, const struct stat* st, int flag, struct FTW* ftw)
 {
@@ -606,7 +587,7 @@ static int package(const options* opt)
 		goto done;
 	}
 
-	catch_stop_signals();
+	cli_catch_stop_signals(false);
 	const char* tmp = getenv("TMPDIR");
 	snprintf(staging, sizeof staging, "%s/springmass-fmu-XXXXXX", tmp && *tmp ? tmp : "/tmp");
 	if (!mkdtemp(staging)) {
@@ -653,7 +634,7 @@ static int package(const options* opt)
 	    !join(from, sizeof from, runtime, "binaries/linux64") ||
 	    !join(path, sizeof path, staging, "binaries/linux64"))
 		goto done;
-	if (stop_signal != 0)
+	if (cli_stop_signal != 0)
 		goto done;
 	char problem_text[2 * PATH_MAX + 64] = "";
 	if (!copy_folder(from, path, "springmass_fmu.so", binary_name, problem_text, sizeof problem_text)) {
@@ -710,9 +691,9 @@ static int package(const options* opt)
 		free_entries(&entries);
 		goto done;
 	}
-	const int zip_status = stop_signal == 0 ? run_in(staging, entries.names) : -1;
+	const int zip_status = cli_stop_signal == 0 ? run_in(staging, entries.names) : -1;
 	free_entries(&entries);
-	if (stop_signal != 0 || !join(path, sizeof path, staging, "model.fmu"))
+	if (cli_stop_signal != 0 || !join(path, sizeof path, staging, "model.fmu"))
 		goto done;
 	if (zip_status == 127 || zip_status < 0) {
 		fprintf(stderr, "springmass fmu: cannot run zip in %s (is zip installed?)\n", staging);
@@ -730,7 +711,7 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: cannot read the archive zip wrote: %s\n", problem);
 		goto done;
 	}
-	if (stop_signal != 0) {
+	if (cli_stop_signal != 0) {
 		free(archive);
 		goto done;
 	}
@@ -766,12 +747,10 @@ done:
 	free(text);
 	// Stopped by a signal before the FMU was written: the staging folder is gone; the exit status
 	// is the signal's. One that came while the FMU was written lets it end as it would have.
-	if (stop_signal != 0 && result != 0) {
-		fprintf(stderr, "springmass fmu: stopped by %s; %s not written\n", strsignal(stop_signal),
+	if (cli_stop_signal != 0 && result != 0) {
+		fprintf(stderr, "springmass fmu: stopped by %s; %s not written\n", strsignal(cli_stop_signal),
 		        opt->output);
-		fflush(stdout);
-		signal(stop_signal, SIG_DFL);
-		raise(stop_signal);
+		cli_end_by_stop_signal();
 	}
 	return result;
 }

@@ -5,6 +5,7 @@
 #include "cli_common.h"
 #include "cli_inputs.h"
 #include "cli_progress.h"
+#include "cli_signals.h"
 #include "commands.h"
 
 #include "springmass/model_file.h"
@@ -298,29 +299,9 @@ static int write_vtp(const char* path, const sm_simulation* sim, double* springs
 	return cli_close("run", path, f) != 0;
 }
 
-// A run stopped from outside (Ctrl-C, a kill, the reader of a pipe gone) ends after the row being
-// written, with every file whole: the CSV's rows up to there, the series' index closed. The
-// handler only notes the signal; the run then stops, and raises it again for its exit status.
-static volatile sig_atomic_t stop_signal;
-
-static void note_signal(int signal)
-{
-	stop_signal = signal;
-}
-
-static void catch_stop_signals(void)
-{
-	struct sigaction action;
-	memset(&action, 0, sizeof action);
-	action.sa_handler = note_signal;
-	action.sa_flags = SA_RESTART;  // a write the signal interrupts goes on: no row is cut
-	sigemptyset(&action.sa_mask);
-	sigaction(SIGINT, &action, NULL);
-	sigaction(SIGTERM, &action, NULL);
-	sigaction(SIGHUP, &action, NULL);
-	sigaction(SIGPIPE, &action, NULL);  // a write to the pipe then fails with EPIPE
-}
-
+// A run stopped from outside (Ctrl-C, a kill, the reader of a pipe gone; cli_signals.h) ends after
+// the row being written, with every file whole: the CSV's rows up to there, the series' index
+// closed.
 // The progress line (cli_progress.h), shown after output rows and, through the simulation's on_step
 // hook, after internal steps, so that a long output interval does not look like a hang.
 typedef struct run_progress {
@@ -343,7 +324,7 @@ static bool on_internal_step(void* context, double t)
 {
 	if (context != NULL)
 		show_progress(context, t, false);
-	return stop_signal == 0;
+	return cli_stop_signal == 0;
 }
 
 // parse_arguments: a usage error after which the usage follows (an unknown option, a missing
@@ -664,18 +645,18 @@ int sm_cmd_run(int argc, char** argv)
 
 	cli_progress_start(&prog.line);
 	const double start = prog.line.start;
-	catch_stop_signals();
+	cli_catch_stop_signals(true);
 	double last_row = 0.0;
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		// Between changes of the inputs' course CVODE may step as in one advance up to the next
 		// change (t_end without inputs), the rows interpolated from its steps; at a change the
 		// run stops and takes the inputs' new course.
-		if (stop_signal != 0)
+		if (cli_stop_signal != 0)
 			break;
 		if (k > 0 && cli_inputs_advance(inputs, sim, t, o.stop_at_outputs ? t : t_end, input_problem,
 		                                sizeof input_problem) != SM_OK) {
-			if (stop_signal != 0)  // stopped between internal steps (on_internal_step)
+			if (cli_stop_signal != 0)  // stopped between internal steps (on_internal_step)
 				break;
 			cli_progress_end(&prog.line);
 			if (input_problem[0] != '\0') {
@@ -695,8 +676,8 @@ int sm_cmd_run(int argc, char** argv)
 		last_row = t;
 		// A full disk or a closed pipe stops the run at once, not after the last step.
 		if (ferror(csv) && errno == EPIPE)
-			stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
-		if (ferror(csv) && stop_signal == 0) {
+			cli_stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
+		if (ferror(csv) && cli_stop_signal == 0) {
 			cli_progress_end(&prog.line);
 			cli_cannot_write("run", csv_name);
 			goto done;
@@ -718,10 +699,10 @@ int sm_cmd_run(int argc, char** argv)
 			show_progress(&prog, t, k == rows);
 	}
 	cli_progress_end(&prog.line);
-	if (stop_signal != 0) {
-		if (stop_signal != SIGPIPE)
+	if (cli_stop_signal != 0) {
+		if (cli_stop_signal != SIGPIPE)
 			fprintf(stderr, "springmass run: stopped by %s; the outputs hold the rows up to t = %.9g s\n",
-			        strsignal(stop_signal), last_row);
+			        strsignal(cli_stop_signal), last_row);
 		goto done;
 	}
 	if (fflush(csv) != 0 || ferror(csv)) {
@@ -799,10 +780,6 @@ done:
 	sm_model_destroy(model);
 	sm_document_destroy(doc);
 	// Stopped by a signal: the files are whole; the exit status is the signal's, as without a handler.
-	if (stop_signal != 0) {
-		fflush(stdout);
-		signal(stop_signal, SIG_DFL);
-		raise(stop_signal);
-	}
+	cli_end_by_stop_signal();
 	return status;
 }

@@ -1,0 +1,20 @@
+// A command stopped from outside (Ctrl-C, a kill, the terminal closed): the handler only notes the
+// signal; the command stops at its next check, leaves its files whole (or removes what it had not
+// finished), and ends by the same signal, so that its exit status is the one it would have had
+// without a handler (128 + the signal's number in a shell).
+#pragma once
+
+#include <signal.h>
+#include <stdbool.h>
+
+/// The signal that asked the command to stop, 0 until one came. A command may set it itself (run
+/// sets SIGPIPE when the reader of its output has gone).
+extern volatile sig_atomic_t cli_stop_signal;
+
+/// From now on SIGINT, SIGTERM and SIGHUP (and SIGPIPE if `pipe`: a write to a pipe whose reader
+/// has gone then fails with EPIPE) are noted in cli_stop_signal instead of ending the process; a
+/// write or a wait they interrupt goes on (SA_RESTART): no row is cut, waiting for a child goes on.
+void cli_catch_stop_signals(bool pipe);
+
+/// Ends the process by the signal noted, with its default action; returns if none was noted.
+void cli_end_by_stop_signal(void);
