@@ -2088,7 +2088,36 @@ static int test_motion_scales(void)
 	for (int j = 0; j < 6; j++)
 		ENSURE(!sm_tolerances_coarse(&def, &unjudged[j]));
 	ENSURE(sm_tolerances_coarse(&def, &(sm_motion_scales){1e-3, 1e-3}));
+	// No options to judge: never coarse, even for scales the defaults are coarse for.
+	ENSURE(!sm_tolerances_coarse(NULL, &(sm_motion_scales){1e-3, 1e-3}));
 	sm_model_destroy(model);
+
+	// A spring of rest length 0, zero-length or rest-length, goes by the distance its particles
+	// start apart, in all three directions: a 1 kg bob at (0, 0.3, 0.4) m on a 100 N/m spring to a
+	// fixed anchor at the origin has the length 0.5 m and the speed 0.5 sqrt(100 / 1) = 5 m/s
+	// (hypot and sqrt round each to within an ulp or two: 1e-15 relative).
+	for (int kind = 0; kind < 2; kind++) {
+		sm_model* bob = sm_model_create(&md, NULL);
+		ENSURE(bob != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(bob, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		p.position[1] = 0.3;
+		p.position[2] = 0.4;
+		ENSURE_STATUS(sm_model_add_particle(bob, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 100.0;
+		s.kind = kind == 0 ? SM_SPRING_ZERO_LENGTH : SM_SPRING_REST_LENGTH;
+		s.rest_length = 0.0;
+		ENSURE_STATUS(sm_model_add_spring(bob, &s, NULL), SM_OK);
+		ENSURE_STATUS(sm_model_motion_scales(bob, &scales), SM_OK);
+		ENSURE_NEAR(scales.length, 0.5, 1e-15);
+		ENSURE_NEAR(scales.speed, 5.0, 1e-14);
+		sm_model_destroy(bob);
+	}
 	return 0;
 }
 
@@ -2277,6 +2306,35 @@ static int test_explicit_step_limit_edges(void)
 	ENSURE_STATUS(sm_model_explicit_limit(tiny, &a), SM_OK);
 	ENSURE(isinf(a.omega_max) && a.damping_rate == 0.0 && a.step == 0.0);
 	sm_model_destroy(tiny);
+
+	// A particle's row sums every spring at it, whichever end of them it is, and a disabled spring,
+	// however stiff, is left out (analysis.h): a 2 kg bob, end a of springs of 10 and 30 N/m and
+	// 1 and 3 N s/m to two fixed anchors and of a disabled one of 1e6 N/m and 1e3 N s/m, has
+	// omega^2 = 40 / 2 = 20 1/s^2 and gamma = 4 / 2 = 2 1/s (exact sums; sqrt rounds: 1e-15).
+	sm_model* between = sm_model_create(&md, NULL);
+	ENSURE(between != NULL);
+	for (int i = 0; i < 3; i++) {
+		p = sm_default_particle_def();
+		p.motion = i == 1 ? SM_PARTICLE_FREE : SM_PARTICLE_FIXED;
+		p.mass = 2.0;
+		p.position[0] = i;
+		ENSURE_STATUS(sm_model_add_particle(between, &p, NULL), SM_OK);
+	}
+	const double stiffness[3] = {10.0, 30.0, 1e6}, damping[3] = {1.0, 3.0, 1e3};
+	for (int k = 0; k < 3; k++) {
+		s = sm_default_spring_def();
+		s.a = 1;
+		s.b = k == 1 ? 2 : 0;
+		s.stiffness = stiffness[k];
+		s.damping = damping[k];
+		ENSURE_STATUS(sm_model_add_spring(between, &s, NULL), SM_OK);
+	}
+	ENSURE_STATUS(sm_model_set_spring_enabled(between, 2, false), SM_OK);
+	ENSURE_STATUS(sm_model_explicit_limit(between, &a), SM_OK);
+	ENSURE_NEAR(a.omega_max, sqrt(20.0), 1e-15 * sqrt(20.0));
+	ENSURE(a.damping_rate == 2.0 && a.step == sm_symplectic_euler_step(a.omega_max, 2.0));
+	ENSURE_STATUS(sm_model_explicit_limit(between, NULL), SM_ERROR_INVALID_ARGUMENT);
+	sm_model_destroy(between);
 	return 0;
 }
 
