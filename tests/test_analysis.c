@@ -3405,6 +3405,81 @@ static int test_statics_unloaded_particle_and_disabled_springs(void)
 	return 0;
 }
 
+// The critical particle is the one whose force is the largest fraction of its own tolerance, not
+// the one of the largest force, and its tolerance is its own, not the loosest (analysis.h).
+// Without gravity, on springs of 1 N/m to a fixed anchor at the origin: a light particle under
+// a load of 1e-6 N along x (its tolerance 1e-6 of that, 1e-12 N), started 9e-13 m short of its
+// balance, and after it a heavy one under 1 N along -z (1e-9 N), started 5e-10 m short. Zero-length
+// springs give these forces to the rounding of the start (half an ulp of 1 m, 1.1e-16 m, and of
+// 1e-6 m, 1e-22 m; 2e-16 and 1e-20 N allowed): both within their tolerances, the start is the
+// rest shape, and the light particle, at 0.9 of its tolerance, is critical beside the heavy one's
+// larger force at 0.5 of its own. When the iterations run out with every force below the loosest
+// tolerance, the message names the particle above its own and gives its force and tolerance: the
+// light one hung 1 m below the anchor on a rest-length spring of 1 m, at its stretched length
+// and 1e-5 m aside, has a force 5e-11 N after one iteration (between 1e-12 and 1e-9 N).
+static int test_statics_critical_particle_is_nearest_to_its_own_tolerance(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	for (int rest_length = 0; rest_length < 2; rest_length++) {
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = SM_PARTICLE_FIXED;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p.motion = SM_PARTICLE_FREE;
+		if (rest_length) {
+			p.load[2] = -1e-6;
+			p.position[1] = 1e-5;
+			p.position[2] = -(1.0 + 1e-6);
+		} else {
+			p.load[0] = 1e-6;
+			p.position[0] = 1e-6 - 9e-13;
+		}
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		p = sm_default_particle_def();
+		p.load[2] = -1.0;
+		p.position[2] = rest_length ? -1.0 : -1.0 + 5e-10;
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 1.0;
+		s.kind = rest_length ? SM_SPRING_REST_LENGTH : SM_SPRING_ZERO_LENGTH;
+		s.rest_length = rest_length ? 1.0 : 0.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		s.b = 2;
+		s.kind = SM_SPRING_ZERO_LENGTH;
+		s.rest_length = 0.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_statics_def d = sm_default_statics_def();
+		d.max_iterations = 1;
+		double x[9];
+		sm_statics_result res;
+		sm_error err;
+		const sm_status st = sm_statics_solve(model, &d, x, NULL, &res, &err);
+		ENSURE(res.critical_particle == 1 && res.critical_tolerance == SM_STATICS_LOAD_FRACTION * 1e-6);
+		if (!rest_length) {
+			ENSURE_STATUS(st, SM_OK);
+			ENSURE(res.iterations == 0 && res.tolerance == SM_STATICS_DEFAULT_TOLERANCE);
+			ENSURE_NEAR(res.critical_residual, 9e-13, 1e-20);
+			ENSURE_NEAR(res.residual, 5e-10, 2e-16);
+		} else {
+			ENSURE_STATUS(st, SM_ERROR_NOT_CONVERGED);
+			ENSURE(res.critical_residual > res.critical_tolerance && res.residual <= res.tolerance);
+			char expected[SM_ERROR_MESSAGE_CAPACITY];
+			snprintf(expected, sizeof expected,
+			         "statics: no equilibrium found in 1 iterations (max_iterations): particle 1 carries "
+			         "%.3g N > its own tolerance %.3g N (the largest force on a free particle is %.3g N)",
+			         res.critical_residual, res.critical_tolerance, res.residual);
+			printf("  %s\n", err.message);
+			ENSURE(strcmp(err.message, expected) == 0);
+		}
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // A chain hanging from its fixed top whose springs alternate between ks_even and ks_odd [N/m]
 // (rest length 0.1 m, particles of 0.01 kg), started straight down with a slight bow.
 static sm_model* contrast_chain(int32_t segments, double ks_even, double ks_odd)
@@ -4242,6 +4317,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_stiffness_contrast);
 	RUN_TEST(test_statics_balances_a_light_part_beside_a_heavy_one);
 	RUN_TEST(test_statics_unloaded_particle_and_disabled_springs);
+	RUN_TEST(test_statics_critical_particle_is_nearest_to_its_own_tolerance);
 	RUN_TEST(test_statics_slack_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_swinging_chain_on_the_sparse_path);
 	RUN_TEST(test_statics_long_hanging_rope_is_stable);
