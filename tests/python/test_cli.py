@@ -1107,6 +1107,40 @@ def test_check_bound_of_a_bob_on_a_fixed_anchor(tmp_path, ends):
     assert number_after(cli("modes", path, "-n", "0").stdout, "omega_max =") == pytest.approx(2.0, rel=1e-5)
 
 
+def test_check_fastest_spring_goes_by_its_lighter_free_end(tmp_path):
+    # The fastest spring is the largest sqrt(k / m) with m the lighter of its free ends (check's
+    # usage): a 0.5 kg particle as end a of an 8 N/m spring to a 2 kg one gives sqrt(8 / 0.5) =
+    # 4 rad/s, not the 2 rad/s of its end b; the same spring from a held anchor of 1e-6 kg to the
+    # 2 kg particle gives 2 rad/s, the anchor's mass moving nothing. 6 digits printed.
+    model = {"springmass": 1, "name": "fast", "gravity": [0, 0, 0],
+             "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True, "mass": 1e-6},
+                           {"name": "light", "position": [1, 0, 0], "mass": 0.5},
+                           {"name": "heavy", "position": [2, 0, 0], "mass": 2}],
+             "springs": [{"a": "anchor", "b": "heavy", "stiffness": 8}, {"a": "light", "b": "heavy", "stiffness": 8}]}
+    path = tmp_path / "fast.json"
+    path.write_text(json.dumps(model))
+    fastest = summary_line(cli("check", path).stdout, "fastest")
+    assert number_after(fastest, "sqrt(k/m) =") == pytest.approx(4.0, rel=1e-5)
+    assert "at spring 1, between light (particle 1) and heavy (particle 2)" in fastest
+
+
+def test_check_warns_of_a_frequency_bound_that_overflows_beyond_each_spring(tmp_path):
+    # A 1 kg bob between two held anchors on springs of 1e308 N/m: each spring's k / m is a double,
+    # their sum at the bob, omega_max^2 = 2e308 1/s^2, is not. check warns that no integrator can
+    # simulate the model and prints neither a bound nor a stable step.
+    model = {"springmass": 1, "name": "over", "gravity": [0, 0, 0],
+             "particles": [{"name": "left", "position": [0, 0, 0], "fixed": True},
+                           {"name": "bob", "position": [1, 0, 0], "mass": 1},
+                           {"name": "right", "position": [2, 0, 0], "fixed": True}],
+             "springs": [{"a": "left", "b": "bob", "stiffness": 1e308}, {"a": "bob", "b": "right", "stiffness": 1e308}]}
+    path = tmp_path / "over.json"
+    path.write_text(json.dumps(model))
+    out = cli("check", path).stdout
+    assert number_after(summary_line(out, "fastest"), "sqrt(k/m) =") == pytest.approx(1e154, rel=1e-5)
+    assert "no integrator can simulate the model" in summary_line(out, "warning")
+    assert "omega_max" not in out and "explicit" not in out and out.rstrip().endswith("ok")
+
+
 def oscillator_at_scale(path, length, time, mass):
     """The bundled damped oscillator (1 kg, 40 N/m, 0.4 N s/m, 0.5 m rest length, released 0.1 m
     out) in units of `length` [m], `time` [s] and `mass` [kg]: stiffness in mass / time^2, damping
