@@ -1485,11 +1485,13 @@ def test_fmu_packs_the_runtime_it_is_given(tmp_path):
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
-def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path):
-    # A packaging stopped while zip runs (a kill, or Ctrl-C, which zip gets too) removes its
-    # staging folder, a copy of the whole runtime, leaves an earlier FMU at the output as it was
-    # and ends with the signal's status. The zip here stands in for one that is still working when
-    # the tool is killed: it sends the signal to the tool, then finishes the archive.
+@pytest.mark.parametrize("name, text", [("TERM", "Terminated"), ("INT", "Interrupt"), ("HUP", "Hangup")])
+def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path, name, text):
+    # A packaging stopped while zip runs (a kill, Ctrl-C, which zip gets too, or the terminal
+    # closed) removes its staging folder, a copy of the whole runtime, leaves an earlier FMU at the
+    # output as it was and ends with the signal's status. The zip here stands in for one that is
+    # still working when the tool is stopped: it sends the signal to the tool, then finishes the
+    # archive.
     runtime = stand_in_runtime(tmp_path / "runtime", "binary")
     staging = tmp_path / "staging"
     staging.mkdir()
@@ -1497,16 +1499,42 @@ def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path):
     tools.mkdir()
     real_zip = shutil.which("zip")
     assert real_zip is not None
-    (tools / "zip").write_text(f'#!/bin/sh\nkill -TERM $PPID\nexec "{real_zip}" "$@"\n')
+    (tools / "zip").write_text(f'#!/bin/sh\nkill -{name} $PPID\nexec "{real_zip}" "$@"\n')
     (tools / "zip").chmod(0o755)
     fmu = tmp_path / "oscillator.fmu"
     fmu.write_bytes(b"an earlier FMU")
     env = dict(os.environ, TMPDIR=str(staging), PATH=f"{tools}:{os.environ['PATH']}")
-    out = cli("fmu", MODELS / "oscillator.json", "-o", fmu, "--runtime", runtime, status=-15, env=env)
+    status = -signal.Signals["SIG" + name].value
+    out = cli("fmu", MODELS / "oscillator.json", "-o", fmu, "--runtime", runtime, status=status, env=env)
     assert list(staging.iterdir()) == []
     assert fmu.read_bytes() == b"an earlier FMU"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oscillator.fmu", "runtime", "staging", "tools"]
-    assert out.stderr.endswith(f"springmass fmu: stopped by Terminated; {fmu} not written\n"), out.stderr
+    assert out.stderr.endswith(f"springmass fmu: stopped by {text}; {fmu} not written\n"), out.stderr
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_tells_a_zip_it_cannot_run_from_one_that_fails(tmp_path):
+    # Without a zip to run the message asks whether zip is installed; a zip that ran and ended
+    # without an archive, by an exit status of its own or by a signal (128 + its number, as a shell
+    # reports it), is named as failing with that status. Either way nothing is left behind.
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    tools = tmp_path / "tools"
+    tools.mkdir()
+    fmu = tmp_path / "oscillator.fmu"
+    env = dict(os.environ, TMPDIR=str(staging), PATH=str(tools))
+    err = cli("fmu", MODELS / "oscillator.json", "-o", fmu, "--runtime", runtime, status=1, env=env).stderr
+    assert re.fullmatch(re.escape(f"springmass fmu: cannot run zip in {staging}/") + r"springmass-fmu-[^/ ]+"
+                        + re.escape(" (is zip installed?)\n"), err), err
+    assert list(staging.iterdir()) == [] and not fmu.exists()
+    for script, status in (("exit 1", 1), ("kill -KILL $$", 128 + signal.SIGKILL)):
+        (tools / "zip").write_text(f"#!/bin/sh\n{script}\n")
+        (tools / "zip").chmod(0o755)
+        err = cli("fmu", MODELS / "oscillator.json", "-o", fmu, "--runtime", runtime, status=1, env=env).stderr
+        assert re.fullmatch(re.escape(f"springmass fmu: zip failed to write the archive {staging}/")
+                            + r"springmass-fmu-[^/ ]+/model\.fmu" + re.escape(f" (exit status {status})\n"), err), err
+        assert list(staging.iterdir()) == [] and not fmu.exists()
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
