@@ -351,6 +351,7 @@ def test_a_discard_tells_how_the_master_goes_on_with_times_on_its_clock(test_fmu
         assert "solver.max_steps" in text and "fmi2SetFMUstate" in text, text
         times = [x for x in numbers_in(text) if x != 2]  # 2: the internal steps allowed
         assert reached in times and all(100.0 <= x <= 101.0 for x in times), text
+        assert "fmi2DoStep: the step from 100 to 101 stopped at " in text, text
         expect_error(inst, lambda: s.doStep(reached, 0.1), "illegal call sequence")
     finally:
         inst.free()

@@ -314,6 +314,14 @@ def test_tolerances_coarse_for_the_model_are_a_warning_at_initialisation(tmp_pat
             assert s.exitInitializationMode() == (1 if warned else 0)  # fmi2Warning, fmi2OK
             coarse = [m for m in inst.messages if "are coarse for this model" in m[2]]
             assert [m[1] for m in coarse] == (["logStatusWarning"] if warned else [])
+            if warned:
+                # The tolerances in use, the scales (the 0.5 length spring, moving at up to that
+                # times the bob's sqrt(k / m)) and 1e-8 of these, the tolerances that suit them.
+                speed = 0.5 * length * math.sqrt(40.0 / time**2)
+                text = coarse[0][2]
+                assert "solver.atol_position = 1e-08 m and solver.atol_velocity = 1e-06 m/s" in text, text
+                assert f"shortest spring is {0.5 * length:.3g} m and moves at up to {speed:.3g} m/s" in text, text
+                assert f"scales, {5e-9 * length:.1g} m and {1e-8 * speed:.1g} m/s, set during" in text, text
             s.doStep(0.0, time)  # and it simulates as asked
         finally:
             inst.free()
