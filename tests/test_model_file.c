@@ -1016,6 +1016,21 @@ static int test_broken_files(void)
 		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uD800'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a \\udfff then a long text\"}",
 		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uDFFF'"},
+	    // A valid escape just before the one at fault, a digit 9 in it, a low surrogate before
+	    // another, and a high one before what is not a low one: a "u" that no backslash escapes, an
+	    // escape other than \u, a \u escape beyond the low surrogates.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\u0041\\u0000 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:54: strings in a model file may not contain \\u0000"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\uD9AB then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:48: invalid Unicode '\\uD9AB'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\uDC00\\uDC00 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:48: invalid Unicode '\\uDC00'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\uD800xuDC00 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:48: invalid Unicode '\\uD800'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\uD800\\nDC00 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:48: invalid Unicode '\\uD800'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\uD800\\uE000 then a long text\"}",
+		 SM_ERROR_SYNTAX, "test.json:1:48: invalid Unicode '\\uD800\\uE000'"},
 	    // Lines end at LF, CR LF or a lone CR, as editors show them (the parser counts LF only).
 	    {"{\r\"springmass\": 1,\r\n\"name\": \"x\",\r\"parameters\" {}}", SM_ERROR_SYNTAX,
 		 "test.json:4:14: ':' expected near '{'"},
@@ -2455,6 +2470,26 @@ static int test_initial_state_through_parameter_changes(void)
 	double xm[15], vm[15];
 	sm_model_initial_state(m, xm, vm);
 	ENSURE(memcmp(xm, x, sizeof x) == 0 && memcmp(vm, v, sizeof v) == 0);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
+
+	// The distance counts in every direction and for every spring: the second spring of a chain
+	// along x, its end moved 1e200 m up along z alone, is named with its own particles.
+	doc = parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": "
+	                  "[0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0]}, {\"name\": "
+	                  "\"c\", \"position\": [2, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\"}, {\"a\": "
+	                  "\"b\", \"b\": \"c\"}]}",
+	                  &err);
+	ENSURE(doc != NULL);
+	const double up[9] = {0, 0, 0, 1, 0, 0, 2, 0, 1e200};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, up, NULL, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(err.message,
+	              "test.json: initial state: spring 1: the distance between particles 1 and 2 is too "
+	              "large (its square overflows: particles joined by springs must be less than 1.3e154 "
+	              "m apart)") == 0);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_model_initial_state(m, xm, NULL);
+	ENSURE(xm[6] == 2.0 && xm[8] == 0.0);  // the file's positions, the document unchanged
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
 	return 0;
