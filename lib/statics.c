@@ -314,10 +314,11 @@ static bool report_iteration(statics_work* w, const sm_statics_result* res, sm_s
 	w->reported = res->iterations;
 	if (w->on_iteration(w->on_iteration_context, res->iterations, res->residual))
 		return true;
-	*st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-	                   "statics: stopped by the caller (on_iteration) after %d iterations; the largest force "
-	                   "on a free particle is %.3g N",
-	                   (int)res->iterations, res->residual);
+	*st =
+	    sm_error_set(err, SM_ERROR_NOT_CONVERGED,
+		             "statics: stopped by the caller (on_iteration) after %d iteration%s; the largest force "
+		             "on a free particle is %.3g N",
+		             (int)res->iterations, res->iterations == 1 ? "" : "s", res->residual);
 	return false;
 }
 
@@ -1359,8 +1360,8 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 			         (int)res.critical_particle, res.critical_residual, res.critical_tolerance, res.residual);
 		if (res.iterations >= d.max_iterations)
 			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
-			                  "statics: no equilibrium found in %d iterations (max_iterations): %s",
-			                  (int)res.iterations, left);
+			                  "statics: no equilibrium found in %d iteration%s (max_iterations): %s",
+			                  (int)res.iterations, res.iterations == 1 ? "" : "s", left);
 		else
 			st = sm_error_set(
 			    err, SM_ERROR_NOT_CONVERGED,

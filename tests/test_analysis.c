@@ -3469,7 +3469,7 @@ static int test_statics_critical_particle_is_nearest_to_its_own_tolerance(void)
 			ENSURE(res.critical_residual > res.critical_tolerance && res.residual <= res.tolerance);
 			char expected[SM_ERROR_MESSAGE_CAPACITY];
 			snprintf(expected, sizeof expected,
-			         "statics: no equilibrium found in 1 iterations (max_iterations): particle 1 carries "
+			         "statics: no equilibrium found in 1 iteration (max_iterations): particle 1 carries "
 			         "%.3g N > its own tolerance %.3g N (the largest force on a free particle is %.3g N)",
 			         res.critical_residual, res.critical_tolerance, res.residual);
 			printf("  %s\n", err.message);
