@@ -63,11 +63,15 @@ test-thread-sanitize: setup $(TSAN_DIR)/build.ninja
 
 # Clang, for the processor it runs on: the tests that the SIMD loops (forces, Jacobians, vector
 # operations) give the scalar code's bits, under a compiler that contracts a * b + c into a fused
-# multiply-add unless told not to (CMakeLists.txt). Installs clang if missing.
+# multiply-add unless told not to (CMakeLists.txt). Installs clang if missing, and clang's OpenMP
+# (libomp-14-dev), which SUNDIALS' CMake package asks for.
 test-clang: setup
-	@command -v clang > /dev/null || { sudo=; [ "$$(id -u)" = 0 ] || sudo=sudo; \
+	@need=; command -v clang > /dev/null || need=clang; \
+	    dpkg-query -W -f='$${Status}' libomp-14-dev 2>/dev/null | grep -q "install ok installed" || \
+	    need="$$need libomp-14-dev"; \
+	    [ -z "$$need" ] || { sudo=; [ "$$(id -u)" = 0 ] || sudo=sudo; \
 	    $$sudo apt-get update -qq && \
-	    DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends clang; }
+	    DEBIAN_FRONTEND=noninteractive $$sudo apt-get install -y -qq --no-install-recommends $$need; }
 	$(CMAKE) -S . -B $(CLANG_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_COMPILER=clang \
 	    -DCMAKE_C_FLAGS=-march=native -DSPRINGMASS_BUILD_FMU=OFF $(CMAKE_FLAGS)
 	$(CMAKE) --build $(CLANG_DIR) -j $(JOBS) --target test_forces test_jacobian test_vector_ops
