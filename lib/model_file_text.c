@@ -144,6 +144,10 @@ void sm_text_shown(char* out, size_t most, const char* s)
 
 void sm_text_for_terminal(char* out, const char* text)
 {
+	if (out == NULL)
+		return;
+	if (text == NULL)
+		text = "";
 	// Every byte of text becomes at most 6 (a control character's \uXXXX), so all of it fits.
 	escape(out, SM_TERMINAL_TEXT_CAPACITY(strlen(text)) - 1, text, false);
 }

@@ -2760,6 +2760,11 @@ static int test_text_for_terminal(void)
 	controls[sizeof controls - 1] = '\0';
 	sm_text_for_terminal(out, controls);
 	ENSURE(strlen(out) == sizeof out - 1 && strncmp(out + sizeof out - 7, "\\u0001", 6) == 0);
+	// No text (the name or description of no document, NULL) shows as the empty text, and no
+	// room to write to gets nothing.
+	sm_text_for_terminal(out, sm_document_description(NULL));
+	ENSURE(out[0] == '\0');
+	sm_text_for_terminal(NULL, "name");
 	return 0;
 }
 

@@ -67,7 +67,8 @@ SM_API const char* sm_document_description(const sm_document* doc);
 /// messages show them: control characters (the tab too), line breaks and the zero-width and
 /// bidirectional formatting characters, which a terminal would act on or not show, as \uXXXX; a
 /// byte that begins no well-formed UTF-8 character as \xNN; every other character as it is.
-/// `out` has room for SM_TERMINAL_TEXT_CAPACITY(strlen(text)) bytes.
+/// `out` has room for SM_TERMINAL_TEXT_CAPACITY(strlen(text)) bytes. A NULL text (the name or
+/// description of a NULL document) gives the empty text; a NULL out, nothing.
 SM_API void sm_text_for_terminal(char* out, const char* text);
 
 /// Builds the model with the parameters' current values. The caller owns the result.
