@@ -960,17 +960,24 @@ static int test_exceptions_raised_in_helpers_reach_the_caller(void)
 	return 0;
 }
 
+// A locale with a decimal comma (freelocale it), or (locale_t)0 where none is installed.
+static locale_t decimal_comma_locale(void)
+{
+	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
+	                                    "nl_NL.UTF-8"};
+	locale_t comma = (locale_t)0;
+	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
+		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);
+	return comma;
+}
+
 // The program's locale is process-wide state the library must not depend on: saving in a thread
 // whose locale has a decimal comma gives the same text (it was "9,81" for 9.81, not JSON), and
 // leaves that thread's locale as it was. Skipped where no such locale is installed.
 static int test_save_in_a_decimal_comma_locale(void)
 {
 	ENSURE(reference_failed == 0);
-	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
-	                                    "nl_NL.UTF-8"};
-	locale_t comma = (locale_t)0;
-	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
-		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);
+	const locale_t comma = decimal_comma_locale();
 	if (comma == (locale_t)0) {
 		printf("  no locale with a decimal comma is installed: skipped\n");
 		return 0;
@@ -1035,11 +1042,7 @@ static void* parse_in_locale(void* arg)
 
 static int test_parse_in_threads_of_different_locales(void)
 {
-	static const char* const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
-	                                    "nl_NL.UTF-8"};
-	locale_t comma = (locale_t)0;
-	for (size_t k = 0; k < sizeof names / sizeof names[0] && comma == (locale_t)0; k++)
-		comma = newlocale(LC_ALL_MASK, names[k], (locale_t)0);
+	const locale_t comma = decimal_comma_locale();
 	if (comma == (locale_t)0) {
 		printf("  no locale with a decimal comma is installed: skipped\n");
 		return 0;
