@@ -139,13 +139,15 @@ static bool starts_with_ci(const char* text, const char* prefix)
 }
 
 // The file-system path of a resource URI: file:///dir, file:/dir, file://localhost/dir (scheme
-// and host in any case), or a plain path; percent-escapes decoded. Returns a malloc'ed path
-// without a trailing '/', or NULL for a URI of another host or scheme and for an escaped NUL
-// (which would cut the path short), or with *out_of_memory set when the path cannot be allocated.
+// and host in any case), percent-escapes decoded, or a plain path, taken as it is (a path escapes
+// nothing: its "%41" is a folder's name, not "A"). Returns a malloc'ed path without a trailing
+// '/', or NULL for a URI of another host or scheme and for an escaped NUL (which would cut the path
+// short), or with *out_of_memory set when the path cannot be allocated.
 static char* resource_path(const char* uri, bool* out_of_memory)
 {
 	*out_of_memory = false;
 	const char* p = uri;
+	bool escaped = true;
 	if (starts_with_ci(p, "file://localhost/"))
 		p += 16;
 	else if (starts_with_ci(p, "file:///"))
@@ -156,6 +158,8 @@ static char* resource_path(const char* uri, bool* out_of_memory)
 		p += 5;
 	else if (starts_with_ci(p, "file:") || starts_with_scheme(p))
 		return NULL;  // a relative file URI, or another scheme
+	else
+		escaped = false;
 	size_t n = strlen(p);
 	char* path = malloc(n + 1);
 	if (!path) {
@@ -164,7 +168,7 @@ static char* resource_path(const char* uri, bool* out_of_memory)
 	}
 	size_t k = 0;
 	for (size_t i = 0; i < n; ++i) {
-		if (p[i] == '%' && i + 2 < n && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
+		if (escaped && p[i] == '%' && i + 2 < n && hex_value(p[i + 1]) >= 0 && hex_value(p[i + 2]) >= 0) {
 			path[k] = (char)(hex_value(p[i + 1]) * 16 + hex_value(p[i + 2]));
 			if (path[k++] == '\0') {
 				free(path);

@@ -492,6 +492,27 @@ def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
     shutil.rmtree(folder)
 
 
+def test_a_plain_path_is_taken_as_it_is(test_fmu, tmp_path):
+    # A plain path escapes nothing: a folder named "50%41" (or "a%25b") is that folder, which a
+    # plain path names as it is and a file URI with its '%' escaped as "%25". Decoded, the plain
+    # path named the folders "50A" and "a%b", which do not exist.
+    from fmpy import extract
+    fmu = test_fmu("driven_oscillator")
+    for name in ("50%41", "a%25b"):
+        folder = tmp_path / name
+        extract(str(fmu), unzipdir=str(folder))
+        resources = folder / "resources"
+        for location in (str(resources), f"{resources}/", resources.as_uri()):
+            inst = Instance(fmu, unzipdir=str(folder), instantiate=False)
+            try:
+                comp = inst.slave.fmi2Instantiate(b"path", 1, inst.md.guid.encode(), location.encode(),
+                                                  inst.callbacks, 0, 0)
+                assert comp, (location, inst.log_text())
+                inst.slave.fmi2FreeInstance(comp)
+            finally:
+                inst.slave.freeLibrary()
+
+
 def test_a_rejected_set_real_changes_nothing(test_fmu):
     # One value of a call rejected: none of the others is taken, in every state where values can be
     # set. Running on gives bit for bit what an instance that never saw the call gives (a tunable
