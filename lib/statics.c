@@ -734,6 +734,48 @@ static size_t longest_factor_row(const statics_work* w)
 	return longest;
 }
 
+// How far the round-off of the positions can move the stiffness along the unit vector v (over
+// the free degrees of freedom) [N/m]. A rest-length spring's block is
+//   K = ks u u^T + ks g (I - u u^T),   g = 1 - l0 / L,
+// whose transverse, geometric part ks g = tension / L depends on L - l0. The positions fix L only
+// to about eps max(L, l0, |x_a| + |x_b|) (force_scale: they are stored relative to the origin), so
+// g only to dg = SM_STATICS_ROUNDOFF_FACTOR eps l0 max(L, l0, |x_a| + |x_b|) / L^2, the factor of
+// the round-off floor. Where a spring's exact tension is zero (a bob on one spring without
+// gravity, free to swing about its pin) the shape found leaves it a tension of that round-off and
+// a geometric stiffness of either sign, which grows with the distance from the origin: 10 m from
+// it, in one orientation in ten, that stiffness exceeded k eps ||H|| and the swinging bob was
+// called stable. v^T K v changes by at most the sum over the springs of
+// ks dg |(I - u u^T)(v_b - v_a)|^2 (v zero at held particles). Zero-length springs (ks I) and
+// springs of rest length 0 have no such term; coincident particles are judged apart.
+static double geometric_round_off(const statics_work* w, const double* v)
+{
+	double sum = 0.0;
+	for (int32_t k = 0; k < w->ns; k++) {
+		const double l0 = w->rest_length[k], ks = w->stiffness[k];
+		const int32_t fa = w->free_index[w->spring_a[k]], fb = w->free_index[w->spring_b[k]];
+		if (!(l0 > 0.0) || !(ks > 0.0) || (fa < 0 && fb < 0))
+			continue;
+		const double* xa = w->x + 3 * (size_t)w->spring_a[k];
+		const double* xb = w->x + 3 * (size_t)w->spring_b[k];
+		const double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+		const double length = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+		if (!(length > 0.0) || !isfinite(length))
+			continue;
+		const double ra = sqrt(xa[0] * xa[0] + xa[1] * xa[1] + xa[2] * xa[2]);
+		const double rb = sqrt(xb[0] * xb[0] + xb[1] * xb[1] + xb[2] * xb[2]);
+		const double dg = SM_STATICS_ROUNDOFF_FACTOR * DBL_EPSILON * l0 * fmax(fmax(length, l0), ra + rb) /
+		                  (length * length);
+		double r[3], along = 0.0, squared = 0.0;
+		for (int c = 0; c < 3; c++) {
+			r[c] = (fb >= 0 ? v[3 * (size_t)fb + c] : 0.0) - (fa >= 0 ? v[3 * (size_t)fa + c] : 0.0);
+			along += r[c] * d[c] / length;
+			squared += r[c] * r[c];
+		}
+		sum += ks * dg * fmax(0.0, squared - along * along);
+	}
+	return sum;
+}
+
 // Whether H, just factored as positive definite (factor_and_step at mu = 0 returned 1), is
 // singular to working precision. A mechanism (a body free to turn about a pin, the sideways
 // motion of a straight unstressed chain) has exact zero eigenvalues, which round-off leaves as
@@ -745,7 +787,10 @@ static size_t longest_factor_row(const statics_work* w)
 // (longest_factor_row): below what the factor resolves (it is exact for H + E, whose error E moves
 // the eigenvalues by up to about k eps ||H||). A sparse factor's k is its band or front, not dof: a
 // 3000-segment hanging rope, with 9000 degrees of freedom and a lowest stiffness of 4e-3 N/m
-// under ||H|| = 1.2e10 N/m, is resolved. Returns 1 if singular, 0 if not, -1 on failure.
+// under ||H|| = 1.2e10 N/m, is resolved. To that threshold adds what the round-off of the
+// positions can do to the stiffness along the vector found (geometric_round_off), so that a
+// neutral motion counts as singular wherever the model sits. Returns 1 if singular, 0 if not, -1
+// on failure.
 static int singular_to_round_off(statics_work* w)
 {
 	const size_t dof = w->dof;
@@ -776,7 +821,7 @@ static int singular_to_round_off(statics_work* w)
 			v[i] = y[i] / sqrt(y_length);
 		length = 1.0;
 	}
-	return 1.0 / growth <= (double)longest_factor_row(w) * DBL_EPSILON * w->norm;
+	return 1.0 / growth <= (double)longest_factor_row(w) * DBL_EPSILON * w->norm + geometric_round_off(w, v);
 }
 
 // Full Newton steps from w->x (every particle balanced, some only to its round-off floor, above

@@ -102,7 +102,9 @@ typedef struct sm_statics_result {
 	/// at the equilibrium beyond round-off (a local minimum of U, not a saddle or a mechanism: its
 	/// smallest eigenvalue exceeds k eps times its largest row sum, k the longest inner product of
 	/// its Cholesky factorisation: dof on the dense path, the longest row of the factor on the
-	/// sparse one). False for a group of particles held by no constrained particle (gravity 0:
+	/// sparse one, plus the stiffness the round-off of the positions, relative to the origin, can
+	/// give it through the springs' tensions: docs/analysis.md). False for a group of particles
+	/// held by no constrained particle (gravity 0:
 	/// at rest anywhere, never stable).
 	/// False also where the two particles of a rest-length spring of rest length > 0 coincide: a
 	/// force balance by convention there (model.h), but a maximum of that spring's energy.
