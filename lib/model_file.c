@@ -17,6 +17,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <float.h>
 #include <locale.h>
 #include <math.h>
 #include <stdarg.h>
@@ -362,8 +363,17 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 
 // FRACTION: > 0 and < 1, and at least SM_MIN_RELATIVE_TOLERANCE (a relative tolerance: CVODE
 // cannot meet one below the machine epsilon, simulation.h); TOLERANCE: an absolute tolerance, at
-// least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least SM_MIN_MASS.
-typedef enum number_rule { ANY_FINITE, NON_NEGATIVE, POSITIVE, FRACTION, TOLERANCE, MASS } number_rule;
+// least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least SM_MIN_MASS; STEP_CAP: a
+// largest step, 0 (none) or one whose inverse, which CVODE takes, is a double (simulation.h).
+typedef enum number_rule {
+	ANY_FINITE,
+	NON_NEGATIVE,
+	POSITIVE,
+	FRACTION,
+	TOLERANCE,
+	MASS,
+	STEP_CAP
+} number_rule;
 
 // v (from parameter `source`, or -1) must be finite and obey `rule`.
 static bool check_rule(parser* p, const char* path, double v, int32_t source, number_rule rule)
@@ -372,7 +382,7 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 	if (!isfinite(v))
 		return fail(p, SM_ERROR_NOT_FINITE, path, "%s is not finite",
 		            describe(p, text, sizeof text, v, source));
-	if (rule == NON_NEGATIVE && v < 0.0)
+	if ((rule == NON_NEGATIVE || rule == STEP_CAP) && v < 0.0)
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be >= 0", describe(p, text, sizeof text, v, source));
 	if ((rule == POSITIVE || rule == FRACTION || rule == MASS) && !(v > 0.0))
 		return fail(p, SM_ERROR_NEGATIVE, path, "%s must be > 0", describe(p, text, sizeof text, v, source));
@@ -397,6 +407,12 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 	if (rule == TOLERANCE && !(v >= SM_MIN_ABSOLUTE_TOLERANCE)) {
 		sm_format_number(SM_MIN_ABSOLUTE_TOLERANCE, least);
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %s (CVODE's error norm overflows below)",
+		            describe(p, text, sizeof text, v, source), least);
+	}
+	if (rule == STEP_CAP && v > 0.0 && !isfinite(1.0 / v)) {
+		sm_format_number(1.0 / DBL_MAX, least);
+		return fail(p, SM_ERROR_SCHEMA, path,
+		            "%s must be 0 (no limit) or above %s s, 1 / DBL_MAX: CVODE takes its inverse",
 		            describe(p, text, sizeof text, v, source), least);
 	}
 	return true;
@@ -1870,7 +1886,7 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "rtol", FRACTION, &d->relative_tolerance,
 		                NULL) ||
 		    !read_field(p, FEEDS_SETTINGS, simulation, path, "atol", TOLERANCE, &atol, NULL) ||
-		    !read_field(p, FEEDS_SETTINGS, simulation, path, "max_step", NON_NEGATIVE, &d->max_step, NULL))
+		    !read_field(p, FEEDS_SETTINGS, simulation, path, "max_step", STEP_CAP, &d->max_step, NULL))
 			return false;
 		if (atol > 0.0)
 			d->absolute_tolerance_position = d->absolute_tolerance_velocity = atol;
