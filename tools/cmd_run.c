@@ -12,6 +12,7 @@
 #include "springmass/simulation.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -417,6 +418,17 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					fprintf(stderr,
 					        "springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '%s'\n",
 					        value);
+					return 2;
+				}
+				// CVODE takes the inverse of a limit, which must be a double (simulation.h).
+				if (o->max_step > 0.0 && !isfinite(1.0 / o->max_step)) {
+					char least[SM_NUMBER_TEXT_CAPACITY];
+					sm_format_number(1.0 / DBL_MAX, least);
+					fprintf(
+					    stderr,
+					    "springmass run: --max-step needs 0 (no limit) or a step above %s s (1 / DBL_MAX: "
+					    "CVODE takes its inverse), got '%s'\n",
+					    least, value);
 					return 2;
 				}
 				o->max_step_given = true;
