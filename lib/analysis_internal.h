@@ -4,6 +4,7 @@
 #include "springmass/analysis.h"
 
 #include <stddef.h>
+#include <stdint.h>
 
 // Dense symmetric stiffness K = -df/dx at (x, zero velocity) over the free degrees of freedom,
 // row-major dof x dof, assembled from the per-spring blocks of the given variant (constrained
@@ -35,6 +36,28 @@ int32_t sm_analysis_coincident_damper(const sm_model* model, const double* x);
 // overflows: particles about 1e154 m apart or more), or -1. Its direction u = d / L comes out 0
 // there, so its Jacobian blocks (the u u^T parts) are not those of the configuration.
 int32_t sm_analysis_overflowing_spring(const sm_model* model, const double* x);
+
+// One block row p of a symmetric matrix A of 3x3 blocks over the free degrees of freedom: the
+// entry (i, j) of its k-th block at values[i * stride + 3 k + j], as both the sparse Jacobian
+// (CSR: stride 3 blocks) and a dense row-major matrix (stride dof) hold it.
+typedef struct sm_block_row {
+	const double* values;  // entry (0, 0) of the row's first block
+	size_t stride;         // from one scalar row of the blocks to the next
+	size_t blocks;         // blocks in the row
+	size_t diagonal;       // which of them is A_pp
+	// The column of entry (0, j) at columns[j] (CSR), or NULL: block k is column block k.
+	const int64_t* columns;
+} sm_block_row;
+
+// An upper bound that block row p gives on |lambda| over the eigenvalues lambda of
+// M^(-1/2) A M^(-1/2), dof_mass the mass of every degree of freedom [kg], or of A itself if
+// dof_mass is NULL: with A_pp's symmetric part and the magnitudes of the other blocks (|S| + |w| I
+// for an off-diagonal block S + W, W x = w x x) added in T_p and subtracted in L_p,
+// max(lambda_max(T_p), -lambda_min(L_p)), the derivation in block_bound.c. The largest over the
+// block rows bounds |lambda| and so the spectral norm; it does not change when the model is
+// turned, and it is attained by the highest mode of a uniform chain or square lattice of springs
+// at rest (in the limit of many particles). INFINITY where an entry or the bound is not finite.
+double sm_block_row_bound(const sm_block_row* row, const double* dof_mass);
 
 // True if all count values are finite.
 int sm_analysis_all_finite(const double* values, size_t count);

@@ -40,8 +40,9 @@
 // is M-symmetric and positive, and maps the lowest lambda to its largest nu, well separated:
 // Lanczos finds them first. K - sigma M (sparse, the pattern of sm_sparse_jacobian) is factored
 // once by CHOLMOD's supernodal Cholesky; each Lanczos step is one solve. Choice of sigma: all
-// eigenvalues lie in [-G, G], G the Gershgorin bound max_i sum_j |K_ij| / sqrt(m_i m_j) of
-// M^(-1/2) K M^(-1/2). sigma = -1e-6 G is below the spectrum of any positive semi-definite K
+// eigenvalues lie in [-G, G], G the Gershgorin bound of M^(-1/2) K M^(-1/2) over whole 3x3
+// blocks (sm_block_row_bound; scalar rows, max_i sum_j |K_ij| / sqrt(m_i m_j), would change
+// when the model is turned). sigma = -1e-6 G is below the spectrum of any positive semi-definite K
 // (rigid-body modes included: they become nu = 1/|sigma|, the largest) while keeping the low
 // modes' nu apart; if the Cholesky factorisation fails, K has eigenvalues below sigma (an
 // unstable configuration) and sigma is lowered a hundredfold until it succeeds (at the latest
@@ -68,7 +69,7 @@
 // none. Finally a Rayleigh-Ritz step on the kept vectors (K_r = X^T K X, M_r = X^T M X, GSL's
 // generalised symmetric eigensolver) gives the eigenvalues as Rayleigh quotients of the exact K
 // and M-orthonormal shapes; the residual ||K phi - lambda M phi|| / (||K|| ||phi||) of every
-// kept mode is checked against residual_tolerance.
+// kept mode is checked against residual_tolerance, ||K|| bounded by sm_block_row_bound as well.
 #include "analysis_internal.h"
 #include "model_internal.h"
 
@@ -212,7 +213,7 @@ typedef struct modes_problem {
 	int32_t particle_count;
 	size_t dof;
 	size_t kept;
-	double stiffness_norm;      // ||K||: largest absolute row sum [N/m]
+	double stiffness_norm;      // ||K||: its bound by sm_block_row_bound [N/m]
 	double next_omega_squared;  // of the lowest mode not kept; NAN if unknown [1/s^2]
 } modes_problem;
 
@@ -284,13 +285,13 @@ static sm_status dense_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 		st = sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: the stiffness matrix is not finite");
 		goto done;
 	}
-	for (size_t i = 0; i < dof; i++) {
-		double row = 0.0;
-		for (size_t j = 0; j < dof; j++)
-			row += fabs(K[i * dof + j]);
-		p->stiffness_norm = fmax(p->stiffness_norm, row);
-		scale[i] = 1.0 / sqrt(p->dof_mass[i]);
+	// The bound on ||K|| (sm_block_row_bound), block row by block row.
+	for (size_t r = 0; r < dof; r += 3) {
+		const sm_block_row row = {K + r * dof, dof, dof / 3, r / 3, NULL};
+		p->stiffness_norm = fmax(p->stiffness_norm, sm_block_row_bound(&row, NULL));
 	}
+	for (size_t i = 0; i < dof; i++)
+		scale[i] = 1.0 / sqrt(p->dof_mass[i]);
 	// A = M^(-1/2) K M^(-1/2), symmetrised against round-off in the assembly.
 	for (size_t i = 0; i < dof; i++)
 		for (size_t j = 0; j <= i; j++) {
@@ -370,7 +371,7 @@ typedef struct lanczos_work {
 	double* shifted;      // nonzeros: K - sigma M
 	int64_t* diagonal;    // dof positions of the diagonal entries
 	double shift;         // sigma [1/s^2]
-	double gershgorin;    // G, the Gershgorin bound of M^(-1/2) K M^(-1/2) [1/s^2]
+	double gershgorin;    // G, the bound on |lambda| of M^(-1/2) K M^(-1/2) [1/s^2]
 	cholmod_common common;
 	int common_started;
 	cholmod_factor* factor;
@@ -641,25 +642,30 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 		return sm_error_set(err, fill, "modes: the sparse stiffness could not be assembled");
 	if (!sm_analysis_all_finite(w->stiffness, (size_t)nnz))
 		return sm_error_set(err, SM_ERROR_NOT_FINITE, "modes: the stiffness matrix is not finite");
-	// K = -df/dx; the Gershgorin bound of M^(-1/2) K M^(-1/2) and ||K|| (largest row sum).
-	*gershgorin = 0.0;
+	// K = -df/dx.
 	for (size_t r = 0; r < p->dof; r++) {
-		double row = 0.0, scaled = 0.0;
 		w->diagonal[r] = -1;
 		for (int64_t k = w->rows[r]; k < w->rows[r + 1]; k++) {
 			w->stiffness[k] = -w->stiffness[k];
-			const size_t c = (size_t)w->cols[k];
-			if (c == r)
+			if ((size_t)w->cols[k] == r)
 				w->diagonal[r] = k;
-			row += fabs(w->stiffness[k]);
-			scaled += fabs(w->stiffness[k]) / sqrt(p->dof_mass[r] * p->dof_mass[c]);
 		}
 		if (w->diagonal[r] < 0)
 			return sm_error_set(err, SM_ERROR_SOLVER, "modes: the sparse pattern lacks a diagonal entry");
+	}
+	// The bound G on |lambda| of M^(-1/2) K M^(-1/2) and the bound on ||K|| (sm_block_row_bound),
+	// block row by block row: the pattern's rows come in threes of 3 blocks entries each.
+	*gershgorin = 0.0;
+	for (size_t r = 0; r < p->dof; r += 3) {
+		const int64_t base = w->rows[r];
+		const size_t blocks = (size_t)(w->rows[r + 1] - base) / 3;
+		const sm_block_row row = {w->stiffness + base, 3 * blocks, blocks,
+		                          (size_t)(w->diagonal[r] - base) / 3, w->cols + base};
+		const double scaled = sm_block_row_bound(&row, p->dof_mass);
 		if (!isfinite(scaled))
 			return overflow_error(p, r, err);
 		*gershgorin = fmax(*gershgorin, scaled);
-		p->stiffness_norm = fmax(p->stiffness_norm, row);
+		p->stiffness_norm = fmax(p->stiffness_norm, sm_block_row_bound(&row, NULL));
 	}
 	return SM_OK;
 }

@@ -234,8 +234,9 @@ typedef struct sm_modes {
 	/// counted whenever mode_count exceeds their number).
 	int32_t unstable_count;
 	/// Highest angular frequency over all modes [rad/s]: exact (dense) or an upper bound, the
-	/// square root of the Gershgorin bound on M^(-1/2) K M^(-1/2) (sparse; exact for uniform
-	/// lattices).
+	/// square root of a Gershgorin bound on M^(-1/2) K M^(-1/2) over whole 3x3 blocks (sparse;
+	/// the same however the model is turned, and exact for a uniform chain or square lattice of
+	/// springs at rest in the limit of many particles: docs/analysis.md).
 	double omega_max;
 	/// Upper bound on every mode's damping rate phi^T C phi (2 zeta omega) [1/s]: the Gershgorin
 	/// bound of sm_model_explicit_limit.
@@ -251,7 +252,8 @@ typedef struct sm_modes {
 	double damping_coupling;
 	bool proportional;       ///< damping_coupling <= proportional_tolerance
 	sm_modes_solver solver;  ///< the eigensolver actually used (AUTO resolved)
-	/// Largest ||K phi - omega^2 M phi|| / (||K|| ||phi||) over the kept modes [1].
+	/// Largest ||K phi - omega^2 M phi|| / (||K|| ||phi||) over the kept modes, ||K|| bounded
+	/// from above as omega_max^2 is on the sparse path, without the masses [1].
 	double residual;
 	/// Sparse path: the shift sigma < 0 of the factorisation K - sigma M that gave the modes,
 	/// -1e-6 of the Gershgorin bound or, when the wanted modes lie far below that, nearer to
