@@ -34,7 +34,7 @@
 #include <stdbool.h>
 
 // Off-diagonal entries at most this fraction of a matrix's largest entry count as converged in
-// the Jacobi iteration: they move the eigenvalues by less than a thousandth of the round-off [1].
+// the Jacobi iteration: they move the eigenvalues by less than a thousandth of the round-off.
 static const double jacobi_converged = 1e-19;
 
 // Eigenvalues of the symmetric 3x3 matrix a (overwritten) by Jacobi rotations, and its
