@@ -8,8 +8,8 @@
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
 # names the build tree. A build configured as debug also gets a pkg-config file that names its
-# library, and a project to which springmass is optional goes on without it when jansson is
-# missing.
+# library, a project to which springmass is optional goes on without it when jansson is
+# missing, and a project that adds springmass's source tree links it into its shared library.
 set -euo pipefail
 build=$1 source=$2 cmake=${3:-cmake} python=${4:-}
 work=$(mktemp -d)
@@ -79,6 +79,17 @@ named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") 
 	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
 ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
+# springmass added to a project from its source tree (add_subdirectory, FetchContent): the project's
+# shared library links it as it links the installed package, and springmass's warnings stay
+# errors of its own targets only. The project sets no build type, so nothing is optimised.
+"$cmake" -S "$source/tests/consumer" -B "$work/embedded" -G Ninja -DSPRINGMASS_SOURCE_DIR="$source" \
+    -DSPRINGMASS_BUILD_FMU=OFF -DEXAMPLES_DIR="$source/examples" > /dev/null
+"$cmake" --build "$work/embedded" -j 2 --target frequency_check > "$work/embedded.log" ||
+	fail "a shared library of a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded.log")"
+"$work/embedded/frequency_check"
+commands=$("$ninja" -C "$work/embedded" -t commands frequency_check)
+! grep -q -- '-Werror.*shared/frequency\.c' <<< "$commands" ||
+	fail "springmass added with add_subdirectory makes warnings errors in the project that adds it"
 # The package links SUNDIALS's static libraries only: no shared one on a consumer's link line,
 # which a linker without --as-needed would make the program need (cmake/sundials_static.cmake).
 shared=$("$ninja" -C "$work/build" -t commands | grep -o 'libsundials_[a-z_]*\.so[.0-9]*' | sort -u | tr '\n' ' ' || true)
