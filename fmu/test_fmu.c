@@ -482,6 +482,7 @@ static int test_parameter_values(void)
 		c = instantiate(&f, "comma");
 		setlocale(LC_NUMERIC, "C");
 		ENSURE(c != NULL);
+		ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
 		ENSURE(get(c, &f, "k") == 62.5);
 		fmi2FreeInstance(c);
 	}
