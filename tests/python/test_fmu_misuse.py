@@ -233,6 +233,30 @@ def test_declared_ranges_are_the_ones_the_setters_accept(test_fmu):
         inst.free()
 
 
+def test_a_max_step_without_an_inverse_is_refused_where_it_is_set(test_fmu):
+    # CVODE takes 1 / solver.max_step, which must be a double: a limit at or below 1 / DBL_MAX is
+    # refused by fmi2SetReal with a message, as a model file's max_step is, and the instance goes on
+    # with the value it had; the next double above it is taken. Accepted, it made
+    # fmi2ExitInitializationMode fail and left the instance in the error state.
+    least = 1.0 / sys.float_info.max
+    inst = Instance(test_fmu("driven_oscillator"))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        for value in (least, 1e-310, 5e-324):
+            expect_error(inst, lambda: inst.set("solver.max_step", value), "solver.max_step", "rejected",
+                         "5.562684646268003e-309")
+        assert inst.get("solver.max_step") == 0.0
+        inst.set("solver.max_step", math.nextafter(least, 1.0))
+        inst.set("solver.max_step", 0.05)
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.1)
+        assert inst.get("solver.max_step") == 0.05
+    finally:
+        inst.free()
+
+
 def test_outputs_beyond_a_double_between_steps_are_a_warning(test_fmu):
     # A motion port set to 1e300 m: the spring's squared length overflows, and with it the reaction
     # and the elastic energy, though every input is finite. fmi2GetReal gives the values as they
