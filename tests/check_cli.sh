@@ -300,6 +300,7 @@ check_cases << 'CASES'
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '0x10'|run "$osc" -q -o - --max-steps 0x10
 2|springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '-1e-3'|run "$osc" -q -o - --max-step -1e-3
 2|springmass run: --max-step needs 0 (no limit) or a step above 5.562684646268003e-309 s (1 / DBL_MAX: CVODE takes its inverse), got '1e-309'|run "$osc" -q -o - --max-step 1e-309
+2|springmass run: --max-step needs 0 (no limit) or a step above 5.562684646268003e-309 s (1 / DBL_MAX: CVODE takes its inverse), got '5.562684646268003e-309'|run "$osc" -q -o - --max-step 5.562684646268003e-309
 0||run "$osc" -q -o - --t-end 0.01 --max-step 0
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '0'|run "$osc" -q -o - --max-steps 0
 2|springmass run: --max-steps needs a count from 1 to 2e9, got '3e9'|run "$osc" -q -o - --max-steps 3e9

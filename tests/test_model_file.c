@@ -1749,11 +1749,11 @@ static int test_hostile_input(void)
 // the value and the rule: a relative tolerance of 1 (it must be < 1) and one just under the machine
 // epsilon, times of 0 and below, an
 // absolute tolerance just under 1e-150, no internal steps (a simulation refuses max_steps 0, see
-// test_settings_and_their_defaults), a negative mass damping, a mesh of density 0, a spring's
-// rest length of -1 (a rest length is >= 0, whatever the library uses -1 for), a zero-length
-// spring with another rest length, a constant and a mass given both ways, required keys left out,
-// a vector of four numbers, structure and port names that are not identifiers, and a port of
-// another kind beside a probe on the same particle (only probes share a particle).
+// test_settings_and_their_defaults), a negative largest step, a negative mass damping, a mesh of density 0, a
+// spring's rest length of -1 (a rest length is >= 0, whatever the library uses -1 for), a zero-length spring
+// with another rest length, a constant and a mass given both ways, required keys left out, a vector of four
+// numbers, structure and port names that are not identifiers, and a port of another kind beside a probe on
+// the same particle (only probes share a particle).
 static int test_rules_at_their_edges(void)
 {
 	static const refusal cases[] = {
@@ -1775,6 +1775,8 @@ static int test_rules_at_their_edges(void)
 		 "test.json: simulation.atol_velocity: 1e-151 must be at least 1e-150 (CVODE's error norm overflows below)"},
 	    {TWO_PARTICLES ", \"simulation\": {\"max_steps\": 0}}", SM_ERROR_SCHEMA,
 		 "test.json: simulation.max_steps: 0 must be a whole number from 1 to 2147483647"},
+	    {TWO_PARTICLES ", \"simulation\": {\"max_step\": -0.001}}", SM_ERROR_NEGATIVE,
+		 "test.json: simulation.max_step: -0.001 must be >= 0"},
 	    {TWO_PARTICLES ", \"mass_damping\": -0.5}", SM_ERROR_NEGATIVE,
 		 "test.json: mass_damping: -0.5 must be >= 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\", \"density\": 0,"
