@@ -46,11 +46,11 @@
 // (rigid-body modes included: they become nu = 1/|sigma|, the largest) while keeping the low
 // modes' nu apart; if the Cholesky factorisation fails, K has eigenvalues below sigma (an
 // unstable configuration) and sigma is lowered a hundredfold until it succeeds (at the latest
-// below -G), so the unstable modes come out first, as on the dense path. Adaptive shift: modes
-// far below |sigma| (lambda << 1e-6 G, a long hanging rope's pendulum modes) have nu within a
-// few per cent of 1/|sigma| and converge slowly. If the first run has not converged after a few
-// restarts, its Ritz values theta_i <= nu_i bound the wanted eigenvalues from above,
-// lambda_i <= sigma + 1/theta_i; when the highest bound lies below |sigma| / 10, K - sigma M is
+// at -2 G, the rung that takes the place of any near -G: lowered_shift), so the unstable modes come out
+// first, as on the dense path. Adaptive shift: modes far below |sigma| (lambda << 1e-6 G, a long hanging
+// rope's pendulum modes) have nu within a few per cent of 1/|sigma| and converge slowly. If the first run has
+// not converged after a few restarts, its Ritz values theta_i <= nu_i bound the wanted eigenvalues from
+// above, lambda_i <= sigma + 1/theta_i; when the highest bound lies below |sigma| / 10, K - sigma M is
 // factored again at sigma = -max(bound, 1e-8 G), still below the (semi-definite) spectrum, and
 // the wanted nu spread out. A failure there falls back to the fixed shift.
 //
@@ -345,6 +345,18 @@ done:
 
 // sigma = -shift_fraction G to start with (see the top of the file) [1].
 static const double shift_fraction = 1e-6;
+
+// The next |sigma| after a factorisation of K - sigma M failed: a hundred times the last, but
+// never near G. The lowest eigenvalue may be -G itself (the bound is attained where no two free
+// particles share a spring), and K + G M is then singular: whether its factorisation succeeds is
+// round-off's choice, and a success gives Lanczos an operator it cannot resolve. The rung that
+// would land within a factor of 2 of G is 2 G, which leaves every eigenvalue at least G above
+// sigma.
+static double lowered_shift(double shift, double gershgorin)
+{
+	const double next = 100.0 * shift;
+	return next > 0.5 * gershgorin && next < 2.0 * gershgorin ? 2.0 * gershgorin : next;
+}
 // A Ritz pair of OP counts as converged when |beta y_m| <= lanczos_tolerance theta [1]: well
 // above the round-off of the solves, and the residual on K then comes out at 1e-12 or below
 // (1e-6 is too loose: residuals of 1e-7 on the test models).
@@ -842,7 +854,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	for (int attempt = 0; attempt < 8 && factored == 0; attempt++) {
 		factored = factor_shifted(&w, shift);
 		if (factored == 0) {
-			shift *= 100.0;
+			shift = lowered_shift(shift, gershgorin);
 			lowered = 1;
 		}
 	}
