@@ -516,6 +516,25 @@ def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
     shutil.rmtree(folder)
 
 
+def test_percent_escapes_take_hex_letters_in_either_case(test_fmu, tmp_path):
+    # A folder named "café" is "caf%C3%A9" in a file URI (RFC 3986 2.1: hex digits in either
+    # case, the same octets), so both spellings name it.
+    from fmpy import extract
+    fmu = test_fmu("driven_oscillator")
+    folder = tmp_path / "café"
+    extract(str(fmu), unzipdir=str(folder))
+    upper = (folder / "resources").as_uri()
+    assert "%C3%A9" in upper
+    for uri in (upper, upper.replace("%C3%A9", "%c3%a9"), upper.replace("%C3%A9", "%C3%a9")):
+        inst = Instance(fmu, unzipdir=str(folder), instantiate=False)
+        try:
+            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
+            assert comp, (uri, inst.log_text())
+            inst.slave.fmi2FreeInstance(comp)
+        finally:
+            inst.slave.freeLibrary()
+
+
 def test_a_plain_path_is_taken_as_it_is(test_fmu, tmp_path):
     # A plain path escapes nothing: a folder named "50%41" (or "a%25b") is that folder, which a
     # plain path names as it is and a file URI with its '%' escaped as "%25". Decoded, the plain
