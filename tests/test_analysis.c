@@ -4113,6 +4113,21 @@ static int test_repeated_frequency_modes_diagonalise_the_damping(void)
 	return 0;
 }
 
+// Makes sd the 1 m x 1 m sheet centred at the origin in the x-y plane, turned by the rotation R
+// (row-major).
+static void turn_unit_sheet(const double R[9], sm_sheet_def* sd)
+{
+	const double u[3] = {1.0, 0.0, 0.0}, v[3] = {0.0, 1.0, 0.0}, o[3] = {-0.5, -0.5, 0.0};
+	for (int c = 0; c < 3; c++) {
+		sd->edge_u[c] = sd->edge_v[c] = sd->origin[c] = 0.0;
+		for (int l = 0; l < 3; l++) {
+			sd->edge_u[c] += R[3 * c + l] * u[l];
+			sd->edge_v[c] += R[3 * c + l] * v[l];
+			sd->origin[c] += R[3 * c + l] * o[l];
+		}
+	}
+}
+
 // A square sheet held along its edges, stretched by 5 % (tension, so transverse modes too) and
 // damped non-proportionally (shear springs undamped): its symmetry gives pairs of modes of equal
 // frequency and equal damping, which stay any basis of their pair. Space is isotropic, so the
@@ -4129,15 +4144,7 @@ static sm_modes sheet_modes(const double R[9], int* failed)
 	sm_sheet_def sd = sm_default_sheet_def();
 	sd.nu = sd.nv = 6;
 	sd.shear.damping = 0.0;
-	const double u[3] = {1.0, 0.0, 0.0}, v[3] = {0.0, 1.0, 0.0}, o[3] = {-0.5, -0.5, 0.0};
-	for (int c = 0; c < 3; c++) {
-		sd.edge_u[c] = sd.edge_v[c] = sd.origin[c] = 0.0;
-		for (int l = 0; l < 3; l++) {
-			sd.edge_u[c] += R[3 * c + l] * u[l];
-			sd.edge_v[c] += R[3 * c + l] * v[l];
-			sd.origin[c] += R[3 * c + l] * o[l];
-		}
-	}
+	turn_unit_sheet(R, &sd);
 	sm_structure sheet;
 	double* x = NULL;
 	if (add_held_sheet(model, &sd, &sheet) != SM_OK)
@@ -4322,15 +4329,7 @@ static sm_model* turned_cloth(const double R[9], int32_t n, bool bend)
 	sd.nu = sd.nv = n;
 	if (!bend)
 		sd.bend.stiffness = sd.bend.damping = 0.0;
-	const double u[3] = {1.0, 0.0, 0.0}, v[3] = {0.0, 1.0, 0.0}, o[3] = {-0.5, -0.5, 0.0};
-	for (int c = 0; c < 3; c++) {
-		sd.edge_u[c] = sd.edge_v[c] = sd.origin[c] = 0.0;
-		for (int l = 0; l < 3; l++) {
-			sd.edge_u[c] += R[3 * c + l] * u[l];
-			sd.edge_v[c] += R[3 * c + l] * v[l];
-			sd.origin[c] += R[3 * c + l] * o[l];
-		}
-	}
+	turn_unit_sheet(R, &sd);
 	sm_structure sheet;
 	if (sm_add_sheet(model, &sd, &sheet) != SM_OK ||
 	    sm_set_motion_at(model, &sheet, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||

@@ -494,6 +494,19 @@ def test_reset_equals_a_fresh_instance(test_fmu):
         b.free()
 
 
+def instantiates_at(fmu, folder, location):
+    """Whether the FMU, unpacked in folder and loaded afresh, instantiates with the resource location
+    given (the instance is freed again), and its log."""
+    inst = Instance(fmu, unzipdir=str(folder), instantiate=False)
+    try:
+        comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), location.encode(), inst.callbacks, 0, 0)
+        if comp:
+            inst.slave.fmi2FreeInstance(comp)
+        return bool(comp), inst.log_text()
+    finally:
+        inst.slave.freeLibrary()
+
+
 def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
     # The resources folder in a path with a space, passed as file:/ (one slash) and with %20, and
     # as a plain path that contains "://" (a folder "a:" and a doubled slash), which is no scheme.
@@ -506,13 +519,8 @@ def test_resource_uri_forms_and_spaces(test_fmu, tmp_path):
                 f"file://localhost{str(folder).replace(' ', '%20')}/resources", f"{folder}//resources",
                 f"FILE://{folder}/resources", f"File:{folder}/resources",
                 f"file://LOCALHOST{folder}/resources", f"FILE://LocalHost{folder}/resources"):
-        inst = Instance(test_fmu("driven_oscillator"), unzipdir=str(folder), instantiate=False)
-        try:
-            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
-            assert comp, (uri, inst.log_text())
-            inst.slave.fmi2FreeInstance(comp)
-        finally:
-            inst.slave.freeLibrary()
+        ok, log = instantiates_at(test_fmu("driven_oscillator"), folder, uri)
+        assert ok, (uri, log)
     shutil.rmtree(folder)
 
 
@@ -526,13 +534,8 @@ def test_percent_escapes_take_hex_letters_in_either_case(test_fmu, tmp_path):
     upper = (folder / "resources").as_uri()
     assert "%C3%A9" in upper
     for uri in (upper, upper.replace("%C3%A9", "%c3%a9"), upper.replace("%C3%A9", "%C3%a9")):
-        inst = Instance(fmu, unzipdir=str(folder), instantiate=False)
-        try:
-            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
-            assert comp, (uri, inst.log_text())
-            inst.slave.fmi2FreeInstance(comp)
-        finally:
-            inst.slave.freeLibrary()
+        ok, log = instantiates_at(fmu, folder, uri)
+        assert ok, (uri, log)
 
 
 def test_a_plain_path_is_taken_as_it_is(test_fmu, tmp_path):
@@ -546,14 +549,8 @@ def test_a_plain_path_is_taken_as_it_is(test_fmu, tmp_path):
         extract(str(fmu), unzipdir=str(folder))
         resources = folder / "resources"
         for location in (str(resources), f"{resources}/", resources.as_uri()):
-            inst = Instance(fmu, unzipdir=str(folder), instantiate=False)
-            try:
-                comp = inst.slave.fmi2Instantiate(b"path", 1, inst.md.guid.encode(), location.encode(),
-                                                  inst.callbacks, 0, 0)
-                assert comp, (location, inst.log_text())
-                inst.slave.fmi2FreeInstance(comp)
-            finally:
-                inst.slave.freeLibrary()
+            ok, log = instantiates_at(fmu, folder, location)
+            assert ok, (location, log)
 
 
 def test_a_rejected_set_real_changes_nothing(test_fmu):
