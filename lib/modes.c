@@ -357,6 +357,7 @@ static double lowered_shift(double shift, double gershgorin)
 	const double next = 100.0 * shift;
 	return next > 0.5 * gershgorin && next < 2.0 * gershgorin ? 2.0 * gershgorin : next;
 }
+
 // A Ritz pair of OP counts as converged when |beta y_m| <= lanczos_tolerance theta [1]: well
 // above the round-off of the solves, and the residual on K then comes out at 1e-12 or below
 // (1e-6 is too loose: residuals of 1e-7 on the test models).
