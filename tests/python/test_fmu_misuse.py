@@ -257,6 +257,29 @@ def test_a_max_step_without_an_inverse_is_refused_where_it_is_set(test_fmu):
         inst.free()
 
 
+def test_a_max_step_of_zero_is_unlimited_and_a_negative_one_is_refused(test_fmu):
+    # solver.max_step = 0 lifts the limit (docs/fmu.md), also after a limit was set; a negative
+    # limit, however small, is refused with a message and the value set before stays.
+    inst = Instance(test_fmu("driven_oscillator"))
+    s = inst.slave
+    try:
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        inst.set("solver.max_step", 0.05)
+        inst.set("solver.max_step", 0.0)
+        assert inst.get("solver.max_step") == 0.0
+        inst.set("solver.max_step", 0.05)
+        for value in (-1e-3, -0.5, -2.0):
+            expect_error(inst, lambda: inst.set("solver.max_step", value), "solver.max_step", "rejected", ">= 0")
+        assert inst.get("solver.max_step") == 0.05
+        inst.set("solver.max_step", 0.0)
+        s.exitInitializationMode()
+        s.doStep(0.0, 0.1)
+        assert inst.get("solver.max_step") == 0.0
+    finally:
+        inst.free()
+
+
 def test_outputs_beyond_a_double_between_steps_are_a_warning(test_fmu):
     # A motion port set to 1e300 m: the spring's squared length overflows, and with it the reaction
     # and the elastic energy, though every input is finite. fmi2GetReal gives the values as they
@@ -538,6 +561,24 @@ def test_percent_escapes_take_hex_letters_in_either_case(test_fmu, tmp_path):
         assert ok, (uri, log)
 
 
+def test_a_percent_escape_at_the_end_of_a_file_uri_is_decoded(test_fmu, tmp_path):
+    # "%73" is "s" (RFC 3986 2.3: an escaped unreserved character is the character), also as the
+    # last three characters of the URI, with or without a trailing slash after them.
+    from fmpy import extract
+    fmu = test_fmu("driven_oscillator")
+    extract(str(fmu), unzipdir=str(tmp_path))
+    uri = (tmp_path / "resources").as_uri()
+    assert uri.endswith("/resources")
+    for location in (uri[:-1] + "%73", uri[:-1] + "%73/", uri[:-2] + "%65%73"):
+        inst = Instance(fmu, unzipdir=str(tmp_path), instantiate=False)
+        try:
+            comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), location.encode(), inst.callbacks, 0, 0)
+            assert comp, (location, inst.log_text())
+            inst.slave.fmi2FreeInstance(comp)
+        finally:
+            inst.slave.freeLibrary()
+
+
 def test_a_plain_path_is_taken_as_it_is(test_fmu, tmp_path):
     # A plain path escapes nothing: a folder named "50%41" (or "a%25b") is that folder, which a
     # plain path names as it is and a file URI with its '%' escaped as "%25". Decoded, the plain
@@ -808,11 +849,12 @@ def test_steps_below_the_time_resolution_do_not_pass_the_stop_time(test_fmu):
 
 def test_resource_locations_of_other_hosts_and_schemes_are_refused(test_fmu):
     # file://host/dir names another machine (it was read as the local path //host/dir), http://
-    # is no file at all, and an escaped NUL would cut the path short at a folder that exists.
+    # is no file at all, an escaped NUL would cut the path short at a folder that exists, and
+    # "file:resources" is a relative file URI, which names no folder (RFC 8089: the path is absolute).
     inst = Instance(test_fmu("driven_oscillator"), instantiate=False)
     try:
         for uri in ("file://otherhost/resources", "FILE://OtherHost/resources", "http://localhost/resources",
-                    f"file://{inst.unzipdir}/resources%00/elsewhere"):
+                    f"file://{inst.unzipdir}/resources%00/elsewhere", "file:resources", "File:resources/"):
             n = len(inst.messages)
             comp = inst.slave.fmi2Instantiate(b"uri", 1, inst.md.guid.encode(), uri.encode(), inst.callbacks, 0, 0)
             assert not comp, uri
