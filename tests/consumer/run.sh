@@ -9,7 +9,8 @@
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
 # names the build tree. A build configured as debug also gets a pkg-config file that names its
 # library, a project to which springmass is optional goes on without it when jansson is
-# missing, and a project that adds springmass's source tree links it into its shared library.
+# missing, and a project that adds springmass's source tree links it into its shared library and
+# its module (a plug-in).
 set -euo pipefail
 build=$1 source=$2 cmake=${3:-cmake} python=${4:-}
 work=$(mktemp -d)
@@ -42,6 +43,7 @@ names=$(names_build "$work/prefix")
 "$work/build/oscillator"
 "$work/build/trampoline"
 "$work/build/frequency_check"
+"$work/build/plugin_check"
 # The headers are C++ too (extern "C"): each compiles alone as C++11, strictly, where a C++ compiler
 # is installed.
 if command -v c++ > /dev/null; then
@@ -80,13 +82,14 @@ named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") 
 
 ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
 # springmass added to a project from its source tree (add_subdirectory, FetchContent): the project's
-# shared library links it as it links the installed package, and springmass's warnings stay
-# errors of its own targets only. The project sets no build type, so nothing is optimised.
+# shared library and module link it as they link the installed package, and springmass's warnings
+# stay errors of its own targets only. The project sets no build type, so nothing is optimised.
 "$cmake" -S "$source/tests/consumer" -B "$work/embedded" -G Ninja -DSPRINGMASS_SOURCE_DIR="$source" \
     -DSPRINGMASS_BUILD_FMU=OFF -DEXAMPLES_DIR="$source/examples" > /dev/null
-"$cmake" --build "$work/embedded" -j 2 --target frequency_check > "$work/embedded.log" ||
-	fail "a shared library of a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded.log")"
+"$cmake" --build "$work/embedded" -j 2 --target frequency_check plugin_check > "$work/embedded.log" ||
+	fail "a shared library or module of a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded.log")"
 "$work/embedded/frequency_check"
+"$work/embedded/plugin_check"
 commands=$("$ninja" -C "$work/embedded" -t commands frequency_check)
 ! grep -q -- '-Werror.*shared/frequency\.c' <<< "$commands" ||
 	fail "springmass added with add_subdirectory makes warnings errors in the project that adds it"
