@@ -192,9 +192,10 @@ typedef struct sm_modes_def {
 	double proportional_tolerance;
 	sm_modes_solver solver;  ///< default SM_MODES_AUTO
 	/// Sparse path: every kept mode must satisfy ||K phi - omega^2 M phi|| <= residual_tolerance
-	/// ||K|| ||phi|| (2-norms over the free degrees of freedom, ||K|| its largest absolute row
-	/// sum) or the call fails with SM_ERROR_NOT_CONVERGED [1]; default 1e-9. The dense path
-	/// reports the same residual without a test (it is at round-off, about 1e-14).
+	/// ||K|| ||phi|| (2-norms over the free degrees of freedom, ||K|| bounded from above as
+	/// omega_max^2 is, over whole 3x3 blocks, without the masses) or the call fails with
+	/// SM_ERROR_NOT_CONVERGED [1]; default 1e-9. The dense path reports the same residual without
+	/// a test (it is at round-off, about 1e-14).
 	double residual_tolerance;
 	/// Sparse path: called after every cycle of the Lanczos iteration (a full Krylov space, whose
 	/// Ritz pairs are then tested and kept for a thick restart) with the Lanczos steps taken so
