@@ -257,8 +257,9 @@ typedef struct sm_modes {
 	/// from above as omega_max^2 is on the sparse path, without the masses [1].
 	double residual;
 	/// Sparse path: the shift sigma < 0 of the factorisation K - sigma M that gave the modes,
-	/// -1e-6 of the Gershgorin bound or, when the wanted modes lie far below that, nearer to
-	/// them (docs/analysis.md); 0 on the dense path [1/s^2].
+	/// -1e-6 of the Gershgorin bound G or, when the wanted modes lie far below that, nearer to
+	/// them; in an unstable configuration lowered a hundredfold at a time, at the latest to -2 G
+	/// (docs/analysis.md); 0 on the dense path [1/s^2].
 	double shift;
 	/// omega^2 of the lowest mode beyond the kept ones [1/s^2]; NAN when every mode is kept, or on
 	/// the sparse path when one more mode than mode_count would not fit (see mode_count's limit).
