@@ -1221,14 +1221,13 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 		log_error(inst, "fmi2SetReal: %s = %g rejected: must be >= 0 (0: unlimited)", v->name, value);
 		return false;
 	}
-	// CVODE takes the inverse of a limit, which must be a double (simulation.h), as a model file's
-	// max_step must.
-	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value > 0.0 && !isfinite(1.0 / value)) {
+	// As a model file's max_step (SM_MAX_STEP_FLOOR, simulation.h).
+	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value > 0.0 && value <= SM_MAX_STEP_FLOOR) {
 		log_error(
 		    inst,
 		    "fmi2SetReal: %s = %s rejected: must be 0 (unlimited) or above %s s, 1 / DBL_MAX: CVODE takes "
 		    "its inverse",
-		    v->name, fmu_number_text(value).text, fmu_number_text(1.0 / DBL_MAX).text);
+		    v->name, fmu_number_text(value).text, fmu_number_text(SM_MAX_STEP_FLOOR).text);
 		return false;
 	}
 	return true;

@@ -17,7 +17,6 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <float.h>
 #include <locale.h>
 #include <math.h>
 #include <stdarg.h>
@@ -364,7 +363,7 @@ static bool fail_naming_parameters(parser* p, sm_status status, const char* path
 // FRACTION: > 0 and < 1, and at least SM_MIN_RELATIVE_TOLERANCE (a relative tolerance: CVODE
 // cannot meet one below the machine epsilon, simulation.h); TOLERANCE: an absolute tolerance, at
 // least SM_MIN_ABSOLUTE_TOLERANCE; MASS: a particle's mass, at least SM_MIN_MASS; STEP_CAP: a
-// largest step, 0 (none) or one whose inverse, which CVODE takes, is a double (simulation.h).
+// largest step, 0 (none) or one above SM_MAX_STEP_FLOOR (simulation.h).
 typedef enum number_rule {
 	ANY_FINITE,
 	NON_NEGATIVE,
@@ -409,8 +408,8 @@ static bool check_rule(parser* p, const char* path, double v, int32_t source, nu
 		return fail(p, SM_ERROR_SCHEMA, path, "%s must be at least %s (CVODE's error norm overflows below)",
 		            describe(p, text, sizeof text, v, source), least);
 	}
-	if (rule == STEP_CAP && v > 0.0 && !isfinite(1.0 / v)) {
-		sm_format_number(1.0 / DBL_MAX, least);
+	if (rule == STEP_CAP && v > 0.0 && v <= SM_MAX_STEP_FLOOR) {
+		sm_format_number(SM_MAX_STEP_FLOOR, least);
 		return fail(p, SM_ERROR_SCHEMA, path,
 		            "%s must be 0 (no limit) or above %s s, 1 / DBL_MAX: CVODE takes its inverse",
 		            describe(p, text, sizeof text, v, source), least);

@@ -611,14 +611,11 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: max_step = %g must be finite and >= 0", def->max_step);
-	// CVODE caps a step h at max_step as h / (|h| (1 / max_step)): with 1 / max_step beyond the largest
-	// double (max_step up to 1 / DBL_MAX = 5.6e-309 s) it made every step 0 s, and the advance
-	// failed saying that the accelerations were too large to measure.
-	if (def->max_step > 0.0 && !isfinite(1.0 / def->max_step))
+	if (def->max_step > 0.0 && def->max_step <= SM_MAX_STEP_FLOOR)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "simulation: max_step = %g s is too small for CVODE, whose 1 / max_step would be "
 		                    "beyond the largest double; give 0 for no limit or a step above %g s",
-		                    def->max_step, 1.0 / DBL_MAX);
+		                    def->max_step, SM_MAX_STEP_FLOOR);
 	if (def->max_steps <= 0)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_steps = %d must be > 0",
 		                    (int)def->max_steps);

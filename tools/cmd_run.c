@@ -12,7 +12,6 @@
 #include "springmass/simulation.h"
 
 #include <errno.h>
-#include <float.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -420,10 +419,9 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 					        value);
 					return 2;
 				}
-				// CVODE takes the inverse of a limit, which must be a double (simulation.h).
-				if (o->max_step > 0.0 && !isfinite(1.0 / o->max_step)) {
+				if (o->max_step > 0.0 && o->max_step <= SM_MAX_STEP_FLOOR) {
 					char least[SM_NUMBER_TEXT_CAPACITY];
-					sm_format_number(1.0 / DBL_MAX, least);
+					sm_format_number(SM_MAX_STEP_FLOOR, least);
 					fprintf(
 					    stderr,
 					    "springmass run: --max-step needs 0 (no limit) or a step above %s s (1 / DBL_MAX: "

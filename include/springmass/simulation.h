@@ -82,6 +82,12 @@ extern "C" {
 /// roundoff; this bound only refuses what cannot work.
 #define SM_MIN_RELATIVE_TOLERANCE DBL_EPSILON
 
+/// A limit on the internal step (max_step) must lie above this [s], 1 / DBL_MAX = 5.6e-309 s:
+/// CVODE caps a step h at max_step as h / (|h| (1 / max_step)), and at or below it 1 / max_step
+/// is beyond the largest double (it made every step 0 s, and the advance failed saying that the
+/// accelerations were too large to measure).
+#define SM_MAX_STEP_FLOOR (1.0 / DBL_MAX)
+
 /// Linear multistep method.
 typedef enum sm_method {
 	SM_METHOD_BDF = 0,  ///< backward differentiation formulas with Newton iteration (stiff; default)
@@ -123,8 +129,7 @@ typedef struct sm_simulation_def {
 	/// >= SM_MIN_ABSOLUTE_TOLERANCE [m/s], also for the dissipated energy and the inputs' work [J]; default
 	/// 1e-6
 	double absolute_tolerance_velocity;
-	/// largest internal step [s], above 1 / DBL_MAX = 5.6e-309 s (CVODE takes its inverse), or 0
-	/// (default) = unlimited
+	/// largest internal step [s], above SM_MAX_STEP_FLOOR = 5.6e-309 s, or 0 (default) = unlimited
 	double max_step;
 	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
