@@ -25,7 +25,8 @@ static void usage(FILE* out)
 	        "the modes' damping rates, a step at which explicit (symplectic Euler) integration is\n"
 	        "stable; `springmass modes MODEL -n 0` gives a closer value from every mode's own\n"
 	        "frequency and damping rate. Warnings: absolute tolerances coarse for the model's scales,\n"
-	        "springs that start at or beyond their break strain (they break at t = 0).\n"
+	        "springs that start at or beyond their break strain (they break at t = 0), accelerations\n"
+	        "or a dissipated power that overflow at the initial state (a run stops at t = 0).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -95,6 +96,46 @@ static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 		       (int)(count - BROKEN_AT_START_SHOWN));
 	free(x);
 	free(length);
+	return true;
+}
+
+// A model can obey every rule of the file and still have forces or accelerations that overflow
+// a double at its initial state (a weight beyond 1.8e308 N, a force over a tiny mass): `springmass
+// run` then stops at its first evaluation, at t = 0. The test is the simulation's: every free
+// particle's acceleration f / m [m/s^2] finite, and the dissipated power [W]. The first such
+// particle is named and the others counted. False when out of memory.
+static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model)
+{
+	const int32_t n = sm_model_particle_count(model);
+	double* x = malloc((9 * (size_t)n + 1) * sizeof(double));
+	if (x == NULL)
+		return false;
+	double *v = x + 3 * (size_t)n, *f = v + 3 * (size_t)n;
+	sm_model_initial_state(model, x, v);
+	sm_model_forces(model, x, v, NULL, f);
+	int32_t count = 0, first = -1;
+	for (int32_t i = 0; i < n; i++) {
+		sm_particle_def p;
+		sm_model_get_particle(model, i, &p);
+		if (p.motion != SM_PARTICLE_FREE)
+			continue;
+		const double* fi = f + 3 * (size_t)i;
+		if (isfinite(fi[0] / p.mass) && isfinite(fi[1] / p.mass) && isfinite(fi[2] / p.mass))
+			continue;
+		if (count++ == 0)
+			first = i;
+	}
+	if (count > 0) {
+		printf("warning      the acceleration of ");
+		print_particle(doc, first);
+		if (count > 1)
+			printf(" (and of %d more free particle%s)", (int)(count - 1), count > 2 ? "s" : "");
+		printf(" overflows at the initial state: springmass run stops at t = 0\n");
+	} else if (!isfinite(sm_model_dissipated_power(model, x, v))) {
+		printf(
+		    "warning      the dissipated power overflows at the initial state: springmass run stops at t = 0\n");
+	}
+	free(x);
 	return true;
 }
 
@@ -351,7 +392,7 @@ int sm_cmd_check(int argc, char** argv)
 	                                                 : "solver ",
 	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
-	if (!warn_broken_at_start(doc, model)) {
+	if (!warn_broken_at_start(doc, model) || !warn_overflow_at_start(doc, model)) {
 		fprintf(stderr, "springmass check: out of memory\n");
 		sm_model_destroy(model);
 		sm_document_destroy(doc);

@@ -1217,6 +1217,41 @@ def test_check_warns_of_springs_that_start_broken(tmp_path):
     assert "warning" not in cli("check", MODELS / "tearing_cloth.json").stdout
 
 
+def test_check_warns_of_forces_that_overflow_at_the_start(tmp_path):
+    # Files that break no rule but whose first evaluation overflows a double: run stops at t = 0,
+    # check says so and names the particle. Weights of 10 kg x 1e308 m/s^2 = 1e309 N (two bobs, then
+    # one); a damper of 1 N s/m closing at 1e200 m/s, whose force 1e200 N and acceleration are finite
+    # but whose power kd r^2 = 1e400 W is not.
+    def model(name, gravity, bobs, velocity=(0, 0, 0), damping=0):
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({
+            "springmass": 1, "name": name, "gravity": gravity,
+            "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True}] +
+                         [{"name": f"bob{i}", "position": [1 + i, 0, 0], "mass": 10, "velocity": list(velocity)}
+                          for i in range(bobs)],
+            "springs": [{"a": "anchor", "b": f"bob{i}", "stiffness": 10, "damping": damping} for i in range(bobs)]}))
+        return path
+
+    def warnings(path):
+        return [line for line in cli("check", path).stdout.splitlines() if line.startswith("warning")]
+
+    assert warnings(model("heavy2", [0, 0, -1e308], 2)) == [
+        "warning      the acceleration of bob0 (particle 1) (and of 1 more free particle) overflows at the "
+        "initial state: springmass run stops at t = 0"]
+    assert warnings(model("heavy3", [0, 0, -1e308], 3))[0].startswith(
+        "warning      the acceleration of bob0 (particle 1) (and of 2 more free particles) overflows")
+    hot = model("hot", [0, 0, 0], 1, velocity=(1e200, 0, 0), damping=1)
+    assert warnings(hot) == ["warning      the dissipated power overflows at the initial state: springmass run "
+                             "stops at t = 0"]
+    for path in (model("heavy1", [0, 0, -1e308], 1), hot):
+        run = cli("run", path, "--t-end", "0.1", "-o", tmp_path / "x.csv", status=1)
+        assert "at t = 0 s" in run.stderr
+    # The same files at ordinary scales warn of nothing.
+    assert warnings(model("ordinary", [0, 0, -9.81], 3, velocity=(1, 0, 0), damping=1)) == []
+    for bundled in sorted(MODELS.glob("*.json")):
+        assert "overflows" not in cli("check", bundled).stdout
+
+
 def test_check_counts_one_spring_in_the_singular(tmp_path):
     # Four springs of rest length 1 m from an anchor to a bob 1.2 m away (strain 0.2), each with a
     # break strain of 0.1: check names three of them and counts the fourth, one spring. A rope of
