@@ -1532,7 +1532,8 @@ static bool finite3(const double* a)
 // value + change a call at t - dt set, where change is the sum of terms of which the largest is
 // `term` in size: a caller's x0 + v t and the path's own x0 + v dt, summed over steps, part in the
 // last bits; x0 + v0 t + a t^2 / 2 and x0 + t (v0 + t a / 2) part by round-off of v0 t and a t^2 / 2,
-// however much of them cancels.
+// however much of them cancels. A constant (change and term 0) within round-off is on its path too:
+// a master that interpolates a held signal between two samples, w0 v + w1 v, is an ulp off at times.
 static bool on_path(double given, double value, double change, double term)
 {
 	const double path = value + change;
@@ -1547,8 +1548,7 @@ static bool on_driven_path(const double* x0, const double* v0, const double* a0,
 {
 	for (int c = 0; c < 3; c++) {
 		const double a = a0[c];
-		if (acceleration[c] != a ||
-		    (a == 0.0 ? velocity[c] != v0[c] : !on_path(velocity[c], v0[c], a * dt, fabs(a * dt))) ||
+		if (acceleration[c] != a || !on_path(velocity[c], v0[c], a * dt, fabs(a * dt)) ||
 		    !on_path(position[c], x0[c], dt * (v0[c] + 0.5 * dt * a),
 		             fmax(fabs(v0[c] * dt), fabs(0.5 * dt * dt * a))))
 			return false;
@@ -1561,8 +1561,7 @@ static bool on_force_ramp(const double* f0, const double* r0, double dt, const d
                           const double* rate)
 {
 	for (int c = 0; c < 3; c++)
-		if (rate[c] != r0[c] ||
-		    (r0[c] == 0.0 ? force[c] != f0[c] : !on_path(force[c], f0[c], r0[c] * dt, fabs(r0[c] * dt))))
+		if (rate[c] != r0[c] || !on_path(force[c], f0[c], r0[c] * dt, fabs(r0[c] * dt)))
 			return false;
 	return true;
 }

@@ -317,9 +317,10 @@ SM_API double sm_simulation_input_power(sm_simulation* sim);
 
 /// Prescribes a driven particle's motion from the current time t0 on: x(t) = position +
 /// velocity (t - t0) [m, m/s]. Error if the particle is not driven. The same velocity with a
-/// position on the current path, to within round-off (16 units of it, of the largest of the
-/// positions and the distance travelled since the motion was last set), continues the motion: it
-/// is no input change (restart_on_input_change, sm_simulation_advance_interpolated).
+/// position on the current path, each to within round-off (16 units of it, of the velocities, and
+/// of the largest of the positions and the distance travelled since the motion was last set),
+/// continues the motion: it is no input change (restart_on_input_change,
+/// sm_simulation_advance_interpolated).
 SM_API sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
                                           const double velocity[3]);
 
@@ -343,7 +344,7 @@ SM_API sm_status sm_simulation_set_external_force(sm_simulation* sim, int32_t pa
 /// f(t) = force + rate (t - t0) [N, N/s] (a co-simulation master's extrapolation of a force input
 /// and its derivative over a step). sm_simulation_set_external_force is this with rate 0. The
 /// same rate with a force on the current ramp, to within round-off as in
-/// sm_simulation_set_driven, is no input change.
+/// sm_simulation_set_driven (with rate 0: of the forces), is no input change.
 SM_API sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t particle,
                                                        const double force[3], const double rate[3]);
 
