@@ -11,6 +11,7 @@ import zipfile
 import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
+from fmpy.util import read_csv as read_csv_fmpy
 from fmpy.validation import validate_fmu
 
 from conftest import BUNDLED_FMUS, CLI, MODELS as TEST_MODELS, ROOT
@@ -147,13 +148,60 @@ def test_bundled_fmu_matches_springmass_run(model, set_stop_time, tmp_path):
 @pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
 def test_bundled_fmu_carries_its_model_file_alone_and_its_guid_is_the_file_hash(model):
     # Packaged without --set: resources/model.json is the file byte for byte, there is no
-    # resources/parameters.txt, and the GUID is the hash of the file alone, as before --set existed.
+    # resources/parameters.txt (beside it only the reference result, which the GUID does not hash),
+    # and the GUID is the hash of the file alone, as before --set existed.
     fmu = bundled(model)
     with zipfile.ZipFile(fmu) as z:
         assert [n for n in z.namelist() if n.startswith("resources/") and not n.endswith("/")] == \
-            ["resources/model.json"]
+            ["resources/model.json", "resources/reference.csv"]
         assert z.read("resources/model.json") == model.read_bytes()
     assert read_model_description(str(fmu)).guid == fmu_guid(model.read_bytes())
+
+
+def quantity(name, outputs):
+    """The outputs of the quantity an output is a component of: a port's position, velocity or
+    force vector (`tip.x` -> `tip.x tip.y tip.z`), or the energies."""
+    if name.startswith("energy."):
+        return [o for o in outputs if o.startswith("energy.")]
+    port, field = name.rsplit(".", 1)
+    return [f"{port}.{field[:-1]}{axis}" for axis in "xyz"]
+
+
+# The tolerances tests/references/update.sh computes the reference results at.
+REFERENCE_TOLERANCES = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-12}
+
+
+@pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
+def test_bundled_fmu_carries_its_reference_result_and_reproduces_it(model, tmp_path):
+    # A bundled model's FMU holds its reference result for regression checks: tests/references/
+    # <model>.csv without the line of the command that made it, a CSV that fmpy reads with the
+    # FMU's outputs as its columns. Simulated at the reference's tolerances, the FMU gives it back.
+    fmu = bundled(model)
+    command, table = (ROOT / "tests" / "references" / (model.stem + ".csv")).read_bytes().split(b"\n", 1)
+    assert command.startswith(b"# springmass run")
+    with zipfile.ZipFile(fmu) as z:
+        packed = z.read("resources/reference.csv")
+    assert packed == table
+    (tmp_path / "reference.csv").write_bytes(packed)
+    reference = read_csv_fmpy(tmp_path / "reference.csv")
+    md = read_model_description(str(fmu))
+    outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+    assert list(reference.dtype.names) == ["time"] + outputs
+    # Short horizon for the big models, as above: the rows up to 0.5 s.
+    rows = reference[reference["time"] <= 0.5]
+    step = float(rows["time"][1] - rows["time"][0])
+    r = simulate_fmu(str(fmu), stop_time=float(rows["time"][-1]), output_interval=step, output=outputs,
+                     start_values=REFERENCE_TOLERANCES)
+    assert len(r) == len(rows) and np.allclose(r["time"], rows["time"], rtol=0, atol=1e-12)
+    for name in outputs:
+        # The same library and tolerances as the run that wrote the reference, over a shorter
+        # horizon (other first steps): the two differ by the global error at rtol 1e-10, which a
+        # run at rtol 1e-12 puts at up to 5e-8 of a quantity's scale (tests/test_references.c;
+        # measured here: 1.3e-9, the hanging rope's middle.vx). 1e-6 of the largest component
+        # plus 1e-9, as that test allows the library, catches a changed model or solver. The scale
+        # is the quantity's, as there: the largest of the vector's components or of the energies.
+        scale = max(float(np.max(np.abs(rows[other]))) for other in quantity(name, outputs))
+        assert np.max(np.abs(r[name] - rows[name])) <= 1e-6 * scale + 1e-9, name
 
 
 # hanging_rope_n.json: a rope of n = 10 segments pinned at rope[0], E and c tunable, T the stop time.

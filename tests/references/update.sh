@@ -3,8 +3,9 @@
 # run` at tight tolerances (rtol 1e-10, atol 1e-12), 21 rows from 0 to the model's stop time (a
 # shorter time where the motion becomes too sensitive to reproduce, below), with the command that
 # made it as its first line. tests/test_references.c checks the library against these files, and
-# the files against GSL's explicit integrator and the energy balance. Run it after a change that
-# is meant to change results, and review the differences before committing them:
+# the files against GSL's explicit integrator and the energy balance; the build packs each, less
+# that line, into the model's FMU as resources/reference.csv (fmu/CMakeLists.txt). Run it after a
+# change that is meant to change results, and review the differences before committing them:
 #
 #   tests/references/update.sh build
 set -euo pipefail
