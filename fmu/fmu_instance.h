@@ -87,7 +87,8 @@ typedef struct instance {
 	double time;     // the FMU's time: start_time + the simulation's time [s]
 	double last_successful_time;
 	double dissipated_offset;  // added to the simulation's dissipated energy after a restore [J]
-	double work_offset;        // added to the simulation's input work (fmu_input_work) [J]
+	double work_origin;        // the simulation's input work that counts as none (fmu_input_work) [J]
+	double work_offset;        // added to the simulation's input work past work_origin (fmu_input_work) [J]
 	int32_t breaks_logged;
 	double* forces;  // 3 per particle, valid while forces_valid
 	bool forces_valid;

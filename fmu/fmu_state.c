@@ -362,7 +362,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 			fmu_put_back_parameters(inst, function, old);
 		} else {
 			inst->dissipated_offset = get_d(b, D_DISSIPATED) - sm_simulation_dissipated_energy(inst->sim);
-			inst->work_offset += get_d(b, D_INPUT_WORK);
+			inst->work_offset = get_d(b, D_INPUT_WORK);
 		}
 	} else if (status == fmi2OK) {
 		sm_simulation_destroy(inst->sim);
