@@ -920,10 +920,16 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fm
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2SetupExperiment", ST_INSTANTIATED))
 		return fmi2Error;
+	// The times in the digits that read back: a start a fraction of a second after the stop at a Unix
+	// time (1.7e9 s) would otherwise read as equal to it. Without a stop time there is none to name.
+	if (!isfinite(startTime) && !stopTimeDefined) {
+		log_error(inst, "fmi2SetupExperiment: start time %s must be finite", fmu_number_text(startTime).text);
+		return fmi2Error;
+	}
 	if (!isfinite(startTime) || (stopTimeDefined && (!isfinite(stopTime) || stopTime < startTime))) {
 		log_error(inst,
-		          "fmi2SetupExperiment: start time %g and stop time %g must be finite with start <= stop",
-		          startTime, stopTime);
+		          "fmi2SetupExperiment: start time %s and stop time %s must be finite with start <= stop",
+		          fmu_number_text(startTime).text, fmu_number_text(stopTime).text);
 		return fmi2Error;
 	}
 	if (toleranceDefined && !(tolerance > 0.0 && tolerance < 1.0)) {

@@ -751,6 +751,13 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	// A stop time before the start is refused; one at the start is an experiment of no length.
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 0.5), fmi2Error);
 	ENSURE(strstr(f.log.last, "start <= stop") != NULL);
+	// At a Unix time the refusal tells the two times apart: the start is the later one.
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1700000000.5, fmi2True, 1700000000.25), fmi2Error);
+	ENSURE(strstr(f.log.last, "start time 1700000000.5 and stop time 1700000000.25 must be finite with "
+	                          "start <= stop") != NULL);
+	// Without a stop time only the start time is named.
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, INFINITY, fmi2False, 0.0), fmi2Error);
+	ENSURE(strcmp(f.log.last, "fmi2SetupExperiment: start time inf must be finite") == 0);
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 1.0), fmi2OK);
 	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
 	static const struct {
