@@ -1227,9 +1227,9 @@ static bool check_real(instance* inst, const fmu_variable* v, double value)
 	}
 	if (tolerance && v->source != FMU_SRC_SOLVER_RTOL && !(value >= SM_MIN_ABSOLUTE_TOLERANCE)) {
 		log_error(inst,
-		          "fmi2SetReal: %s = %g rejected: an absolute tolerance must be at least %g (CVODE's error "
+		          "fmi2SetReal: %s = %s rejected: an absolute tolerance must be at least %s (CVODE's error "
 		          "norm overflows below)",
-		          v->name, value, SM_MIN_ABSOLUTE_TOLERANCE);
+		          v->name, fmu_number_text(value).text, fmu_number_text(SM_MIN_ABSOLUTE_TOLERANCE).text);
 		return false;
 	}
 	if (v->source == FMU_SRC_SOLVER_MAX_STEP && value < 0.0) {

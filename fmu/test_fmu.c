@@ -768,6 +768,8 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	    {"solver.atol_position", 1e-200, "solver.atol_position = 1e-200 rejected"},
 	    {"solver.atol_velocity", 1e-200, "solver.atol_velocity = 1e-200 rejected"},
 	    {"solver.atol_position", 0.0, "solver.atol_position = 0 rejected"},
+	    {"solver.atol_velocity", 9.9999999999e-151,
+		 "solver.atol_velocity = 9.9999999999e-151 rejected: an absolute tolerance must be at least 1e-150"},
 	    {"solver.rtol", 0.0, "solver.rtol = 0 rejected"},
 	    {"solver.rtol", 1.0, "solver.rtol = 1 rejected"},
 	    {"solver.rtol", 1e-17,

@@ -584,14 +584,18 @@ static sm_status check_def(const sm_simulation_def* def, sm_error* err)
 			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
 			                    positive[i].name, positive[i].value);
 	// Below SM_MIN_ABSOLUTE_TOLERANCE CVODE's error norm overflows (simulation.h).
+	// Both numbers in the digits that read back: 9.9999999999e-151 is not 1e-150.
 	const bool position_ok = def->absolute_tolerance_position >= SM_MIN_ABSOLUTE_TOLERANCE;
-	if (!position_ok || !(def->absolute_tolerance_velocity >= SM_MIN_ABSOLUTE_TOLERANCE))
+	if (!position_ok || !(def->absolute_tolerance_velocity >= SM_MIN_ABSOLUTE_TOLERANCE)) {
+		char value[SM_NUMBER_TEXT_CAPACITY], floor[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(position_ok ? def->absolute_tolerance_velocity : def->absolute_tolerance_position,
+		                 value);
+		sm_format_number(SM_MIN_ABSOLUTE_TOLERANCE, floor);
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: absolute_tolerance_%s = %g must be at least %g: CVODE's error norm "
+		                    "simulation: absolute_tolerance_%s = %s must be at least %s: CVODE's error norm "
 		                    "sums (error / atol)^2, which overflows for smaller tolerances",
-		                    position_ok ? "velocity" : "position",
-		                    position_ok ? def->absolute_tolerance_velocity : def->absolute_tolerance_position,
-		                    SM_MIN_ABSOLUTE_TOLERANCE);
+		                    position_ok ? "velocity" : "position", value, floor);
+	}
 	if (!(def->relative_tolerance < 1.0))
 		return sm_error_set(
 		    err, SM_ERROR_INVALID_ARGUMENT,

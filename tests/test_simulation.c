@@ -2422,6 +2422,11 @@ static int test_failures_are_reported_and_recoverable(void)
 	d.absolute_tolerance_position = 1e-151;
 	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
 	ENSURE(strstr(err.message, "absolute_tolerance_position = 1e-151 must be at least 1e-150") != NULL);
+	// Just below the bound, a value that 6 digits would show as the bound itself.
+	d.absolute_tolerance_position = 9.9999999999e-151;
+	ENSURE(sm_simulation_create(model, &d, &err) == NULL);
+	ENSURE(strstr(err.message, "absolute_tolerance_position = 9.9999999999e-151 must be at least 1e-150") !=
+	       NULL);
 	d.absolute_tolerance_position = d.absolute_tolerance_velocity = SM_MIN_ABSOLUTE_TOLERANCE;  // the bound
 	sm_simulation* at_bound = sm_simulation_create(model, &d, &err);
 	ENSURE(at_bound != NULL);
