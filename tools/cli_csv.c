@@ -256,9 +256,15 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 			if (c > 0 && csv->whole[c] && !(value == floor(value) && fabs(value) <= INT32_MAX))
 				return problem_at(r->field_place, start, "%s is an Integer variable: \"%s\" is no such value",
 				                  names[c], field_shown(r));
-			if (c == 0 && value < previous_time)
-				return problem_at(r->field_place, start, "time %.17g s is before the previous row's %.17g s",
-				                  value, previous_time);
+			// The times as the file gives them (0.1, not 0.10000000000000001): the fewest digits that
+			// read back to them.
+			if (c == 0 && value < previous_time) {
+				char time[SM_NUMBER_TEXT_CAPACITY], previous[SM_NUMBER_TEXT_CAPACITY];
+				sm_format_number(value, time);
+				sm_format_number(previous_time, previous);
+				return problem_at(r->field_place, start, "time %s s is before the previous row's %s s", time,
+				                  previous);
+			}
 			if (c == 0)
 				previous_time = value;
 			const bool last = c == csv->columns - 1;
