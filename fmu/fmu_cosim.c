@@ -1741,8 +1741,8 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	// FMU's time on, and a run of them would otherwise carry it past the stop time unchecked.
 	if (inst->stop_time_defined &&
 	    t_end > inst->stop_time + 1e3 * DBL_EPSILON * fmax(1.0, fabs(inst->stop_time))) {
-		log_error(inst, "fmi2DoStep: step to %.17g goes past the stop time %.17g set in fmi2SetupExperiment",
-		          t_end, inst->stop_time);
+		log_error(inst, "fmi2DoStep: step to %s goes past the stop time %s set in fmi2SetupExperiment",
+		          fmu_number_text(t_end).text, fmu_number_text(inst->stop_time).text);
 		return fmi2Error;
 	}
 	// The simulation's time is t - start (start: the start time of its initial state), resolved to

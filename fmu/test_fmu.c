@@ -902,7 +902,9 @@ static int test_state_carries_the_settings_not_the_stop_time(void)
 	ENSURE_STATUS(fmi2SetFMUstate(b, restored), fmi2OK);
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2DoStep(b, t, 0.15, fmi2True), fmi2Error);
-	ENSURE(strstr(f.log.last, "goes past the stop time 0.45000000000000001") != NULL);
+	// Both times as the master gives them (not 0.46999999999999997 and 0.45000000000000001).
+	ENSURE(strstr(f.log.last, "step to 0.47 goes past the stop time 0.45 set in fmi2SetupExperiment") !=
+	       NULL);
 	ENSURE_STATUS(fmi2DoStep(b, t, 0.04, fmi2True), fmi2OK);
 	ENSURE_STATUS(fmi2FreeFMUstate(a, &state), fmi2OK);
 	ENSURE_STATUS(fmi2FreeFMUstate(b, &restored), fmi2OK);
