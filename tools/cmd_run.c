@@ -232,16 +232,16 @@ static void write_vtp_values(FILE* f, const double* values, int32_t count, int p
 // lines with their tension [N] and, when every one has a rest length (a zero-length spring has no
 // strain), their strain; the time as the field TimeValue. springs holds 2 values per spring of
 // scratch.
-static int write_vtp(const char* path, const sm_simulation* sim, double* springs)
+// Writes the series' file of the current row. False, with errno saying why (0: a write error),
+// when it cannot be written: the caller reports it, after ending its progress line.
+static bool write_vtp(const char* path, const sm_simulation* sim, double* springs)
 {
 	const sm_model* model = sm_simulation_model(sim);
 	const double* x = sm_simulation_positions(sim);
 	const double* v = sm_simulation_velocities(sim);
 	FILE* f = fopen(path, "w");
-	if (f == NULL) {
-		cli_cannot_write("run", path);
-		return 1;
-	}
+	if (f == NULL)
+		return false;
 	const int32_t n = sm_model_particle_count(model);
 	const int32_t count = sm_model_spring_count(model);
 	double *tension = springs, *strain = springs + count;
@@ -296,7 +296,10 @@ static int write_vtp(const char* path, const sm_simulation* sim, double* springs
 		fprintf(f, "</DataArray>\n</Lines>\n");
 	}
 	fprintf(f, "</Piece>\n</PolyData>\n</VTKFile>\n");
-	return cli_close("run", path, f) != 0;
+	// As cli_close: a failed write leaves data in the buffer, so fclose fails again and sets errno.
+	const bool failed = ferror(f) != 0;
+	errno = 0;
+	return fclose(f) == 0 && !failed;
 }
 
 // A run stopped from outside (Ctrl-C, a kill, the reader of a pipe gone; cli_signals.h) ends after
@@ -699,8 +702,13 @@ int sm_cmd_run(int argc, char** argv)
 				status = 2;
 				goto done;
 			}
-			if (write_vtp(path, sim, spring_values) != 0)
+			if (!write_vtp(path, sim, spring_values)) {
+				const int error = errno;
+				cli_progress_end(&prog.line);
+				errno = error;
+				cli_cannot_write("run", path);
 				goto done;
+			}
 			char timestep[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(t, timestep);
 			fprintf(pvd, "<DataSet timestep=\"%s\" file=\"%s_%06ld.vtp\"/>\n", timestep, name, k);

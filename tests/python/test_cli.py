@@ -324,6 +324,39 @@ def vtp_sections(path):
     return points, lines, vectors, scalars
 
 
+def test_a_series_file_that_cannot_be_written_is_reported_on_a_line_of_its_own(tmp_path):
+    # On a terminal the progress line rewrites itself without a line feed; the error of a series
+    # file that cannot be written (a folder in the place of the 1001st) starts a line of its own.
+    # The run is held for over a second by its CSV's reader, which lets the pipe fill (1000 rows
+    # of the oscillator are some 200 KB, a pipe holds 64 KB), so that the line is shown first.
+    vtk = tmp_path / "series"
+    (vtk / "oscillator_001000.vtp").mkdir(parents=True)
+    master, terminal = os.openpty()
+    run = subprocess.Popen([str(CLI), "run", str(MODELS / "oscillator.json"), "--t-end", "2", "--output-interval",
+                            "0.001", "-o", "-", "--vtk", str(vtk)], stdout=subprocess.PIPE, stderr=terminal)
+    os.close(terminal)
+    try:
+        time.sleep(1.5)
+        run.stdout.read()
+        assert run.wait(timeout=60) == 1
+    finally:
+        run.stdout.close()
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:  # the terminal's other end is closed and everything read
+            break
+        if not chunk:
+            break
+        shown += chunk
+    os.close(master)
+    shown = shown.decode()
+    assert "\rspringmass run: t = " in shown, shown
+    assert re.search(rf"(^|\n)springmass run: cannot write {re.escape(str(vtk))}/oscillator_001000\.vtp: "
+                     r"Is a directory\r?\n", shown), shown
+
+
 def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     model = MODELS / "tearing_cloth.json"
     vtk = tmp_path / "vtk"
