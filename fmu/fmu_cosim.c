@@ -1801,12 +1801,16 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 		sm_break_event e = sm_simulation_break(inst->sim, inst->breaks_logged);
 		sm_spring_def s;
 		sm_model_get_spring(sm_simulation_model(inst->sim), e.spring, &s);
+		// A particle without a name by its index, as the variables' descriptions name it.
 		const char* a = sm_document_particle_name(inst->doc, s.a);
 		const char* b = sm_document_particle_name(inst->doc, s.b);
+		char a_label[32], b_label[32];
+		snprintf(a_label, sizeof a_label, "particle %d", (int)s.a);
+		snprintf(b_label, sizeof b_label, "particle %d", (int)s.b);
 		if (logging(inst, LOG_EVENTS))
 			fmu_logf(inst, fmi2OK, LOG_EVENTS, "t = %s: spring %d between %s and %s broke",
-			         fmu_number_text(e.time + inst->start_time).text, (int)e.spring, a ? a : "(unnamed)",
-			         b ? b : "(unnamed)");
+			         fmu_number_text(e.time + inst->start_time).text, (int)e.spring, a ? a : a_label,
+			         b ? b : b_label);
 	}
 	sm_statistics after = sm_simulation_statistics(inst->sim);
 	if (logging(inst, LOG_SOLVER))

@@ -1273,6 +1273,24 @@ def test_a_spring_breaks_when_its_closed_form_strain_reaches_the_limit(package, 
         inst.free()
 
 
+def test_a_break_names_a_particle_without_a_name_by_its_index(package, tmp_path):
+    # The bob of the test above without a name (referred to as particle 1): logEvents names it as
+    # the FMU's variables and `springmass run` do, by its index.
+    unnamed = json.loads(json.dumps(BREAKING))
+    del unnamed["particles"][1]["name"]
+    unnamed["springs"][0]["b"] = unnamed["ports"][0]["particle"] = 1
+    model = tmp_path / "breaking.json"
+    model.write_text(json.dumps(unnamed))
+    inst = Instance(package(model), logging_on=True).start({"tip.fx": 20.0})
+    try:
+        for n in range(20):
+            inst.slave.doStep(0.01 * n, 0.01)
+        events = [m[2] for m in inst.messages if m[1] == "logEvents" and "broke" in m[2]]
+        assert len(events) == 1 and events[0].endswith(": spring 0 between anchor and particle 1 broke"), events
+    finally:
+        inst.free()
+
+
 def test_a_break_is_logged_again_in_the_run_from_a_restored_state(package, tmp_path):
     # The bob of the test above, pulled by 20 N from rest, breaks its spring at t_b = pi/30 s. A
     # state saved at the start is the bob at rest on an intact spring: the run from it is the same
