@@ -436,7 +436,7 @@ fmi2Status fmu_ensure_simulation(instance* inst, const char* function)
 // two non-negative doubles rounds to a non-negative one, so the offset adds no sign error; but the
 // simulation's own value may dip below 0 by round-off where it is near 0: CVODE's BDF formulas
 // of order 3 and more and its interpolation between steps do not keep an integral of a
-// non-negative rate monotone, and a break adds the difference of two sums of elastic energies.
+// non-negative rate monotone.
 // (No dip was seen: over every internal step of the bundled models at three tolerances the least
 // value was 0.) Such a dip is the error of a value at 0 and is shown as 0, so that every value
 // read and every state saved is >= 0, and a restored state may require it to be (fmu_state.c).
