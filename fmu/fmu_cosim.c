@@ -14,12 +14,14 @@
 //
 // The FMU state (fmi2GetFMUstate to fmi2DeSerializeFMUstate) is in fmu_state.c; the instance and
 // the helpers both files call are declared in fmu_instance.h and defined here.
+#define _POSIX_C_SOURCE 200809L
 #include "fmu_instance.h"
 #include "text_file.h"
 
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -42,7 +44,10 @@ static const char* const category_names[] = {"logEvents", "logStatusWarning", "l
 // the importer's logger with '%' and '#' doubled: FMI 2.0 (2.1.5) loggers treat the message as a
 // printf format, and '#' as their escape character ("#r12#" names the Real variable of value
 // reference 12, "##" is a '#'), so text a message quotes (a path, a category, a string value) is
-// shown as it was given.
+// shown as it was given. Numbers are written in the C locale whatever the importer's LC_NUMERIC:
+// under a decimal comma a message's "n = 0,5, m = 2" is ambiguous and a command it suggests
+// (springmass fmu ... --set l0=0,5) is refused. uselocale() switches the calling thread only;
+// glibc's "C" locale object is static (no allocation).
 static bool logging(const instance* inst, unsigned category)
 {
 	return inst && inst->logger && (inst->log_mask & category);
@@ -54,9 +59,15 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 		return;
 	char text[1024];
 	va_list args;
+	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+	const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
 	va_start(args, fmt);
 	vsnprintf(text, sizeof text, fmt, args);
 	va_end(args);
+	if (c_locale != (locale_t)0) {
+		uselocale(previous);
+		freelocale(c_locale);
+	}
 	char escaped[2 * sizeof text];
 	size_t k = 0;
 	for (size_t i = 0; text[i] && k + 2 < sizeof escaped; ++i) {

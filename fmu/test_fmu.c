@@ -1113,6 +1113,35 @@ static int test_messages_are_printf_formats(void)
 	return 0;
 }
 
+// Messages write their numbers with a point whatever the importer's LC_NUMERIC: under a decimal
+// comma a refusal said "solver.max_step = -0,001 rejected", and a value copied from a message into
+// a model file or `springmass fmu --set` is refused. A number formatted by the logger itself and
+// one in the fewest digits that read back. Where no such locale is installed, nothing to check.
+static int test_messages_ignore_the_locale(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "locale");
+	ENSURE(c != NULL);
+	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") == NULL) {
+		printf("  no de_DE.UTF-8 locale: skipped\n");
+		fmi2FreeInstance(c);
+		teardown(&f);
+		return 0;
+	}
+	const fmi2Status step = set_real(c, &f, "solver.max_step", -1e-3);
+	char step_message[sizeof f.log.last];
+	snprintf(step_message, sizeof step_message, "%s", f.log.last);
+	const fmi2Status experiment = fmi2SetupExperiment(c, fmi2False, 0.0, 0.5, fmi2True, 0.25);
+	setlocale(LC_NUMERIC, "C");
+	ENSURE(step == fmi2Error && strstr(step_message, "solver.max_step = -0.001 rejected") != NULL);
+	ENSURE(experiment == fmi2Error &&
+	       strstr(f.log.last, "start time 0.5 and stop time 0.25 must be finite with start <= stop") != NULL);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // '#' is the logger's escape character (FMI 2.0, 2.1.5: "#r12#" names the Real variable of value
 // reference 12, and a '#' of the text is written "##"): text quoted in a message, here an unknown
 // log category "#r0# at 100%", reaches the logger escaped for both '#' and '%', and reads back as
@@ -2177,6 +2206,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_parameter_values_refused);
 	RUN_TEST(test_settings_take_effect_after_an_output_was_read);
 	RUN_TEST(test_solver_settings_are_checked_against_their_ranges);
+	RUN_TEST(test_messages_ignore_the_locale);
 	RUN_TEST(test_experiment_tolerance_yields_to_an_explicit_rtol);
 	RUN_TEST(test_state_carries_the_settings_not_the_stop_time);
 	RUN_TEST(test_a_restored_motion_continues_along_its_line);

@@ -16,7 +16,7 @@ sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, .
 	if (model != NULL) {
 		va_list args;
 		va_start(args, format);
-		vsnprintf(model->last_error, sizeof model->last_error, format, args);
+		sm_vformat_c_locale(model->last_error, sizeof model->last_error, format, args);
 		va_end(args);
 	}
 	return status;
@@ -36,7 +36,7 @@ sm_status sm_error_set(sm_error* err, sm_status status, const char* format, ...)
 		err->status = status;
 		va_list args;
 		va_start(args, format);
-		vsnprintf(err->message, sizeof err->message, format, args);
+		sm_vformat_c_locale(err->message, sizeof err->message, format, args);
 		va_end(args);
 	}
 	return status;
@@ -118,7 +118,7 @@ static sm_status say(char* buffer, sm_status status, const char* format, ...)
 	if (buffer != NULL) {
 		va_list args;
 		va_start(args, format);
-		vsnprintf(buffer, SM_ERROR_MESSAGE_CAPACITY, format, args);
+		sm_vformat_c_locale(buffer, SM_ERROR_MESSAGE_CAPACITY, format, args);
 		va_end(args);
 	}
 	return status;

@@ -76,7 +76,7 @@ static bool fail(parser* p, sm_status status, const char* path, const char* form
 	char message[SM_ERROR_MESSAGE_CAPACITY];
 	va_list args;
 	va_start(args, format);
-	vsnprintf(message, sizeof message, format, args);
+	sm_vformat_c_locale(message, sizeof message, format, args);
 	va_end(args);
 	if (path != NULL && path[0] != '\0')
 		sm_error_set(p->err, status, "%s: %s: %s", p->doc->source, path, message);

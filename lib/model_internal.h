@@ -7,6 +7,8 @@
 #include "springmass/model.h"
 
 #include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
 
 // The most particles, and the most springs, a model holds: INT32_MAX / 4 = 2^29 - 1, so that 3
 // times a particle index (its first coordinate) and the sums of counts the solvers form stay
@@ -62,6 +64,15 @@ struct sm_spring_jacobians {
 // with %g, 1.105e-16 "must be > 1.1e-16" would read as met.
 #define SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY 160
 void sm_break_strain_floor_text(double break_strain, char text[SM_BREAK_STRAIN_FLOOR_TEXT_CAPACITY]);
+
+// vsnprintf in the C locale, whatever LC_NUMERIC the program chose: the text of every message
+// (sm_model_fail, sm_error_set, ...), whose numbers then read the same in any locale.
+int sm_vformat_c_locale(char* text, size_t size, const char* format, va_list args);
+int sm_format_c_locale(char* text, size_t size, const char* format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
 
 // Formats a message into model->last_error and returns status.
 sm_status sm_model_fail(sm_model* model, sm_status status, const char* format, ...)

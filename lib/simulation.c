@@ -67,7 +67,7 @@ sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* f
 {
 	va_list args;
 	va_start(args, format);
-	vsnprintf(sim->last_error, sizeof sim->last_error, format, args);
+	sm_vformat_c_locale(sim->last_error, sizeof sim->last_error, format, args);
 	va_end(args);
 	return status;
 }
@@ -448,7 +448,8 @@ static void on_simulation_axis(const char* msg, double origin, char* out, size_t
 			sm_format_number(time, text);
 		} else {
 			const int extra = (int)floor(log10(fabs(time))) - (int)floor(log10(fabs(t)));
-			snprintf(text, sizeof text, "%.*g", 6 + (extra > 0 ? (extra < 11 ? extra : 11) : 0), time);
+			sm_format_c_locale(text, sizeof text, "%.*g", 6 + (extra > 0 ? (extra < 11 ? extra : 11) : 0),
+			                   time);
 		}
 		const int written = snprintf(out + n, size - n, "%.*s%s", (int)name, p, text);
 		if (written > 0)
@@ -1103,7 +1104,7 @@ static int check_step_size(sm_simulation* sim, int flag, double* reached)
 	if (flag < 0 || flag == CV_ROOT_RETURN || (CVodeGetLastStep(sim->cvode, &h) == CV_SUCCESS && h > 0.0))
 		return flag;
 	*reached = NAN;
-	snprintf(
+	sm_format_c_locale(
 	    sim->solver_message, sizeof sim->solver_message,
 	    "the step size is 0 s at t = %g s: the accelerations are too large to measure against the tolerances",
 	    sim->time);
@@ -1284,9 +1285,9 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		}
 		if (flag == CV_SUCCESS && reached < cvode_end) {
 			flag = CV_TOO_MUCH_WORK;
-			snprintf(sim->solver_message, sizeof sim->solver_message,
-			         "CVode: At t = %g, mxstep steps taken before reaching tout.",
-			         sim->time_origin + reached);
+			sm_format_c_locale(sim->solver_message, sizeof sim->solver_message,
+			                   "CVode: At t = %g, mxstep steps taken before reaching tout.",
+			                   sim->time_origin + reached);
 		}
 		if (flag < 0 && flag != CV_TOO_MUCH_WORK && sim->input_jumped) {
 			// An input jumped and CVODE kept its history over it, but its error control could not

@@ -1396,13 +1396,15 @@ sm_status sm_statics_solve(const sm_model* model, const sm_statics_def* def, dou
 		// smaller, one (a light part whose balance the heavy part's tolerance does not resolve).
 		char left[200];
 		if (res.residual > res.tolerance || res.critical_particle < 0)
-			snprintf(left, sizeof left, "the largest force on a free particle is %.3g N > tolerance %.3g N",
-			         res.residual, res.tolerance);
+			sm_format_c_locale(left, sizeof left,
+			                   "the largest force on a free particle is %.3g N > tolerance %.3g N",
+			                   res.residual, res.tolerance);
 		else
-			snprintf(left, sizeof left,
-			         "particle %d carries %.3g N > its own tolerance %.3g N (the largest force on a free "
-			         "particle is %.3g N)",
-			         (int)res.critical_particle, res.critical_residual, res.critical_tolerance, res.residual);
+			sm_format_c_locale(
+			    left, sizeof left,
+			    "particle %d carries %.3g N > its own tolerance %.3g N (the largest force on a free "
+			    "particle is %.3g N)",
+			    (int)res.critical_particle, res.critical_residual, res.critical_tolerance, res.residual);
 		if (res.iterations >= d.max_iterations)
 			st = sm_error_set(err, SM_ERROR_NOT_CONVERGED,
 			                  "statics: no equilibrium found in %d iteration%s (max_iterations): %s",

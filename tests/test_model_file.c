@@ -3098,6 +3098,45 @@ static int test_canonical_form_ignores_the_locale(void)
 	return 0;
 }
 
+// Messages write their numbers with a point whatever LC_NUMERIC the program chose: under a
+// decimal comma a model file's refusal said "-0,5 must be > 0", a list "n = 0,5, m = 2" is
+// ambiguous, and a value copied from a message into a model file or a command is refused. The
+// model file's, the model's and the simulation's messages, and sm_format_number. Where no such
+// locale is installed there is nothing to check.
+static int test_messages_ignore_the_locale(void)
+{
+	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") == NULL) {
+		printf("  no de_DE.UTF-8 locale: skipped\n");
+		return 0;
+	}
+	char text[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(-0.5, text);
+	const bool number_ok = strcmp(text, "-0.5") == 0;
+	sm_error file_err = {SM_OK, ""};
+	const char* bad_mass =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": -0.5}]}";
+	sm_document* doc = sm_document_parse(bad_mass, strlen(bad_mass), "bad.json", &file_err);
+	sm_error model_err = {SM_OK, ""};
+	sm_model* model = sm_model_create(&(sm_model_def){.gravity = {0, 0, -9.81}}, &model_err);
+	const sm_particle_def negative = {.mass = -0.5, .position = {0, 0, 0}};
+	const bool refused = model != NULL && sm_model_add_particle(model, &negative, NULL) != SM_OK;
+	const char* model_message = model != NULL ? sm_model_last_error(model) : "";
+	char model_text[SM_ERROR_MESSAGE_CAPACITY];
+	snprintf(model_text, sizeof model_text, "%s", model_message);
+	sm_simulation_def def = sm_default_simulation_def();
+	def.relative_tolerance = 1.5e-20;
+	sm_error sim_err = {SM_OK, ""};
+	sm_simulation* sim = model != NULL ? sm_simulation_create(model, &def, &sim_err) : NULL;
+	setlocale(LC_NUMERIC, "C");
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	ENSURE(number_ok);
+	ENSURE(doc == NULL && strstr(file_err.message, "-0.5 must be > 0") != NULL);
+	ENSURE(refused && strcmp(model_text, "particle 0: mass = -0.5 must be > 0") == 0);
+	ENSURE(sim == NULL && strstr(sim_err.message, "1.5e-20") != NULL);
+	return 0;
+}
+
 // What each parameter feeds, for the places test_parameter_uses leaves out, one parameter per
 // place (docs/model-format.md, "Parameters"): a particle's velocity, a sheet's origin, edges and
 // mass, a block's size, nw and mass, a rope's mass per length, a mesh's density, a spring's break
@@ -3590,6 +3629,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_per_section_constants_in_a_model_file);
 	RUN_TEST(test_canonical_form_reads_back);
 	RUN_TEST(test_canonical_form_ignores_the_locale);
+	RUN_TEST(test_messages_ignore_the_locale);
 	RUN_TEST(test_reference_expressions);
 	RUN_TEST(test_references_follow_their_parameters);
 	RUN_TEST(test_parameter_uses_of_every_place);

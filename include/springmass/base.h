@@ -65,7 +65,8 @@ SM_API const char* sm_status_string(sm_status status);
 
 /// Error report filled by functions that create objects (and so have no object to hold it).
 /// Pass NULL where the detail is not needed. Every function that takes one fills it, on success
-/// too (SM_OK and an empty message), so an earlier failure never stays in it.
+/// too (SM_OK and an empty message), so an earlier failure never stays in it. Messages, here and
+/// in the objects' last-error texts, write numbers with a '.' whatever the program's locale.
 typedef struct sm_error {
 	sm_status status;                         ///< same value the function returned
 	char message[SM_ERROR_MESSAGE_CAPACITY];  ///< specific message, NUL-terminated
@@ -76,9 +77,9 @@ typedef struct sm_error {
 
 /// Writes value as the shortest of 15, 16 and 17 significant digits ("%.*g") that reads back
 /// (strtod) to exactly the same double: 0.03 as "0.03", not "0.029999999999999999"; NaN and
-/// infinities as printf writes them. The decimal separator is the current locale's (the C
-/// locale's "." unless the program changed LC_NUMERIC). Used wherever springmass writes numbers
-/// meant to be read back (model files, modelDescription.xml, the CSV of `springmass run`).
+/// infinities as printf writes them. The decimal separator is "." whatever LC_NUMERIC the
+/// program chose, as the model file's parser reads it. Used wherever springmass writes numbers
+/// meant to be read back (model files, modelDescription.xml, the CSV of `springmass run`, messages).
 SM_API void sm_format_number(double value, char text[SM_NUMBER_TEXT_CAPACITY]);
 
 #ifdef __cplusplus
