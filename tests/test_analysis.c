@@ -4294,14 +4294,10 @@ static int test_modal_damping_and_coupling_do_not_depend_on_orientation(void)
 	return 0;
 }
 
-// A bob on one spring to a pin, without gravity, rests at the spring's rest length free to swing
-// about the pin: a mechanism, not stable, wherever the model sits and however it is turned. The
-// rest shape balances the spring only to the round-off of the positions, which are stored
-// relative to the origin; the tension left gives the swinging a stiffness of either sign of about
-// eps ks |x| / L, which 10 m from the origin exceeded k eps ||H|| in 19 of 200 orientations (and
-// in about half of them 1 km away), where the bob was called stable. Under gravity along the
-// spring the bob hangs below the pin, stable at every placement.
-static int test_swinging_bob_is_not_stable_anywhere(void)
+// A bob on one spring of rest length l0 to a pin, started 1.2 l0 from it: without gravity it
+// rests at the rest length free to swing about the pin, with gravity along the spring it hangs
+// below the pin (statics' verdict in test_swinging_bob_is_not_stable_anywhere).
+static int swinging_bob_verdicts(double rest_length)
 {
 	static const double offsets[] = {0.0, 10.0, 1e3};
 	for (int gravity = 0; gravity < 2; gravity++)
@@ -4324,14 +4320,14 @@ static int test_swinging_bob_is_not_stable_anywhere(void)
 				pin.motion = SM_PARTICLE_FIXED;
 				for (int c = 0; c < 3; c++) {
 					pin.position[c] = shift[c];
-					bob.position[c] = shift[c] + 0.6 * R[3 * c];  // along R e_x, stretched by 0.1 m
+					bob.position[c] = shift[c] + 1.2 * rest_length * R[3 * c];  // along R e_x
 				}
 				ENSURE_STATUS(sm_model_add_particle(model, &pin, NULL), SM_OK);
 				ENSURE_STATUS(sm_model_add_particle(model, &bob, NULL), SM_OK);
 				sm_spring_def sd = sm_default_spring_def();
 				sd.a = 0;
 				sd.b = 1;
-				sd.rest_length = 0.5;
+				sd.rest_length = rest_length;
 				sd.stiffness = 40.0;
 				ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
 				for (int dense = 0; dense < 2; dense++) {
@@ -4341,13 +4337,35 @@ static int test_swinging_bob_is_not_stable_anywhere(void)
 					sm_statics_result res;
 					ENSURE_STATUS(sm_statics_solve(model, &def, x, NULL, &res, NULL), SM_OK);
 					if (res.stable != (gravity == 1))
-						printf("  gravity %d, %g m from the origin, turn %d, %s: stable %d\n", gravity,
-						       offsets[o], turn, dense ? "dense" : "sparse", res.stable);
+						printf("  l0 %g m, gravity %d, %g m from the origin, turn %d, %s: stable %d\n",
+						       rest_length, gravity, offsets[o], turn, dense ? "dense" : "sparse",
+						       res.stable);
 					ENSURE(res.stable == (gravity == 1));
 				}
 				sm_model_destroy(model);
 			}
 	return 0;
+}
+
+// A bob on one spring to a pin, without gravity, rests at the spring's rest length free to swing
+// about the pin: a mechanism, not stable, wherever the model sits and however it is turned. The
+// rest shape balances the spring only to the round-off of the positions, which are stored
+// relative to the origin; the tension left gives the swinging a stiffness of either sign of about
+// eps ks |x| / L, which 10 m from the origin exceeded k eps ||H|| in 19 of 200 orientations (and
+// in about half of them 1 km away), where the bob was called stable. Under gravity along the
+// spring the bob hangs below the pin, stable at every placement.
+static int test_swinging_bob_is_not_stable_anywhere(void)
+{
+	return swinging_bob_verdicts(0.5);
+}
+
+// The same with a spring of 1 mm: the round-off of its length is that of the positions, about
+// eps |x| whatever the spring, but the swinging stiffness the tension left gives, tension / L, is
+// a thousand times that of a 1 m spring (geometric_round_off's dg, over L^2). A mechanism still,
+// at every placement and orientation.
+static int test_short_swinging_bob_is_not_stable_anywhere(void)
+{
+	return swinging_bob_verdicts(1e-3);
 }
 
 // A sheet of n x n particles (1 m square, 1 kg) about the origin, turned by R, held at the two
@@ -4685,6 +4703,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mode_count_inside_a_repeated_group);
 	RUN_TEST(test_modal_damping_and_coupling_do_not_depend_on_orientation);
 	RUN_TEST(test_swinging_bob_is_not_stable_anywhere);
+	RUN_TEST(test_short_swinging_bob_is_not_stable_anywhere);
 	RUN_TEST(test_sparse_omega_max_does_not_depend_on_orientation);
 	RUN_TEST(test_sparse_omega_max_bounds_every_mode);
 	RUN_TEST(test_sparse_omega_max_of_unconnected_particles_is_exact);
