@@ -1111,6 +1111,30 @@ def test_settings_named_by_parameters_are_explicit_solver_settings(package, tmp_
         inst.free()
 
 
+def test_a_max_step_set_after_an_output_was_read_in_initialisation_mode_is_taken(test_fmu):
+    # Reading an output in initialisation mode makes the simulation; a solver.max_step set after
+    # it still limits the steps: 1 ms with 50 internal steps allowed cannot cover a step of 0.1 s
+    # (at least 100 internal steps): discarded. Unlimited, 50 steps cover it.
+    for max_step, discarded in ((0.0, False), (1e-3, True)):
+        inst = Instance(test_fmu("driven_oscillator"))
+        s = inst.slave
+        try:
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            inst.set("solver.max_steps", 50)
+            inst.get("base.fx")  # an output: the simulation is made
+            inst.set("solver.max_step", max_step)
+            s.exitInitializationMode()
+            if discarded:
+                with pytest.raises(FMICallException) as info:
+                    s.doStep(0.0, 0.1)
+                assert info.value.status == 2  # fmi2Discard
+            else:
+                s.doStep(0.0, 0.1)
+        finally:
+            inst.free()
+
+
 def test_a_step_that_ends_before_the_fmus_time_is_refused(test_fmu):
     # The communication point is taken within 1000 ulps of the FMU's time, so it may lag it by more
     # than a short step: that step would end before the FMU's time. It is an fmi2Error that changes
