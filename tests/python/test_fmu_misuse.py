@@ -1135,6 +1135,32 @@ def test_a_max_step_set_after_an_output_was_read_in_initialisation_mode_is_taken
             inst.free()
 
 
+@pytest.mark.parametrize("name, value", [("solver.rtol", 1e-3), ("solver.atol_position", 1e-2),
+                                         ("solver.atol_velocity", 1e-2), ("solver.max_step", 1e-3)])
+def test_a_solver_setting_set_after_an_output_was_read_in_initialisation_mode_is_taken(test_fmu, name, value):
+    # Reading an output in initialisation mode makes the simulation; a solver setting set after it
+    # gives the run of the same setting set before any output was read, to the bit, and not the run
+    # of the default (the setting has an effect on this run: its result differs).
+    def run(read_first, setting):
+        inst = Instance(test_fmu("driven_oscillator"))
+        s = inst.slave
+        try:
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            if read_first:
+                inst.get("base.fx")  # an output: the simulation is made
+            if setting:
+                inst.set(name, value)
+            s.exitInitializationMode()
+            for k in range(10):
+                s.doStep(0.1 * k, 0.1)
+            return inst.get("base.fx", "energy.dissipated")
+        finally:
+            inst.free()
+
+    assert run(True, True) == run(False, True) != run(False, False)
+
+
 def test_a_step_that_ends_before_the_fmus_time_is_refused(test_fmu):
     # The communication point is taken within 1000 ulps of the FMU's time, so it may lag it by more
     # than a short step: that step would end before the FMU's time. It is an fmi2Error that changes
