@@ -486,6 +486,22 @@ static const char* node_kind(char kind)
 	return kind == '.' ? "a record" : kind == '[' ? "an array" : "a variable";
 }
 
+// The first `length` bytes of a name, quoted for a message as the model file's messages quote
+// names: one longer than QUOTED_NAME_BYTES is cut at a character with "..." after the quote, so
+// that a message naming three long names keeps its end. Returns out.
+#define QUOTED_NAME_BYTES 80
+static const char* quoted_name(char out[QUOTED_NAME_BYTES + 6], const char* name, size_t length)
+{
+	size_t shown = length;
+	if (length > QUOTED_NAME_BYTES) {
+		shown = QUOTED_NAME_BYTES;
+		while (shown > 0 && ((unsigned char)name[shown] & 0xc0) == 0x80)
+			--shown;  // not inside a UTF-8 character
+	}
+	snprintf(out, QUOTED_NAME_BYTES + 6, "\"%.*s\"%s", (int)shown, name, shown < length ? "..." : "");
+	return out;
+}
+
 // The names must form a tree, as modelDescription.xml declares (variableNamingConvention
 // "structured"): no name twice, and no name that is also a record or an array, or a record and an
 // array at once. A parameter "energy" beside "energy.kinetic", or a port "p" ("p.x") beside the
@@ -520,18 +536,22 @@ static sm_status check_unique_names(const fmu_table* t, sm_error* err)
 		    (a->kind == b->kind && a->kind))
 			continue;
 		if (err) {
+			char first[QUOTED_NAME_BYTES + 6], second[QUOTED_NAME_BYTES + 6], node[QUOTED_NAME_BYTES + 6];
+			quoted_name(first, a->name, strlen(a->name));
+			quoted_name(second, b->name, strlen(b->name));
+			quoted_name(node, a->name, a->length);
 			err->status = SM_ERROR_SCHEMA;
 			if (!a->kind && !b->kind)
 				snprintf(
 				    err->message, sizeof err->message,
-				    "FMU variable name \"%s\" is used twice (rename the parameter or port; names must be unique)",
-				    a->name);
+				    "FMU variable name %s is used twice (rename the parameter or port; names must be unique)",
+				    first);
 			else
 				snprintf(
 				    err->message, sizeof err->message,
-				    "FMU variable names \"%s\" and \"%s\" clash: \"%.*s\" would be both %s and %s of the "
-				    "structured names (rename the parameter or port)",
-				    a->name, b->name, (int)a->length, a->name, node_kind(a->kind), node_kind(b->kind));
+				    "FMU variable names %s and %s clash: %s would be both %s and %s of the structured names "
+				    "(rename the parameter or port)",
+				    first, second, node, node_kind(a->kind), node_kind(b->kind));
 		}
 		free(nodes);
 		return SM_ERROR_SCHEMA;

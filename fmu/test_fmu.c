@@ -2186,6 +2186,17 @@ static int test_variable_names_form_a_tree(void)
 		ENSURE(strstr(err.message, refused[i].first) != NULL &&
 		       strstr(err.message, refused[i].second) != NULL);
 	}
+	// Names of the longest length allowed (200 bytes) are cut in the message, which keeps its end.
+	char name[201], parameters[256], ports[320];
+	memset(name, 'q', 200);
+	name[200] = '\0';
+	snprintf(parameters, sizeof parameters, "\"%s\": 1", name);
+	snprintf(ports, sizeof ports, "{\"name\": \"%s\", \"particle\": \"b\", \"kind\": \"probe\"}", name);
+	ENSURE(names_of(parameters, ports, "", &err) == SM_ERROR_SCHEMA);
+	const char* end = "(rename the parameter or port)";
+	const size_t length = strlen(err.message);
+	ENSURE(length > strlen(end) && strcmp(err.message + length - strlen(end), end) == 0);
+	ENSURE(strstr(err.message, "\"...") != NULL);
 	// A record beside solver.*, a port p without particle variables.
 	ENSURE(names_of("", "{\"name\": \"solver\", \"particle\": \"b\", \"kind\": \"probe\"}", "", &err) ==
 	       SM_OK);
