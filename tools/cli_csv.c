@@ -29,18 +29,25 @@ typedef struct reader {
 	bool quoted;             // it was quoted
 	size_t field_capacity;
 	bool out_of_memory;
-	char shown[SM_TERMINAL_TEXT_CAPACITY(shown_bytes)];  // the field as a message shows it
+	char shown[SM_TERMINAL_TEXT_CAPACITY(shown_bytes) + 5];  // the field as a message shows it
 } reader;
 
-// The field as a message shows it: its first shown_bytes bytes, escaped where a terminal would
-// act on them.
+// The field as a message shows it: quoted, escaped where a terminal would act on it, and one
+// longer than shown_bytes bytes cut at a character with "..." after the quote, as the model file's
+// messages show a name.
 static const char* field_shown(reader* r)
 {
 	char start[shown_bytes + 1];
-	const size_t n = strnlen(r->field, shown_bytes);
+	size_t n = strnlen(r->field, shown_bytes + 1);
+	const bool cut = n > shown_bytes;
+	if (cut)
+		for (n = shown_bytes; n > 0 && ((unsigned char)r->field[n] & 0xc0) == 0x80;)
+			--n;  // not inside a UTF-8 character
 	memcpy(start, r->field, n);
 	start[n] = '\0';
-	sm_text_for_terminal(r->shown, start);
+	r->shown[0] = '"';
+	sm_text_for_terminal(r->shown + 1, start);
+	strcat(r->shown, cut ? "\"..." : "\"");
 	return r->shown;
 }
 
@@ -53,7 +60,7 @@ static char* problem_at(line_place place, size_t at, const char* format, ...)
 
 static char* problem_at(line_place place, size_t at, const char* format, ...)
 {
-	char message[400];
+	char message[640];  // a field as field_shown shows it (365 bytes at most), a variable and the rule
 	va_list args;
 	va_start(args, format);
 	vsnprintf(message, sizeof message, format, args);
@@ -186,16 +193,15 @@ static char* read_header(reader* r, const cli_csv_form* form, bool* named, cli_c
 		if (problem != NULL || r->out_of_memory)
 			return problem;
 		if (csv->columns == 0 && strcmp(r->field, "time") != 0)
-			return problem_at(r->field_place, start, "the first column is \"%s\", not \"time\"",
-			                  field_shown(r));
+			return problem_at(r->field_place, start, "the first column is %s, not \"time\"", field_shown(r));
 		if (csv->columns > 0) {
 			int32_t id = -1;
 			bool whole = false;
 			const char* refused = form->name_column(form->context, r->field, &id, &whole);
 			if (refused != NULL)
-				return problem_at(r->field_place, start, "\"%s\" %s", field_shown(r), refused);
+				return problem_at(r->field_place, start, "%s %s", field_shown(r), refused);
 			if (named[id])
-				return problem_at(r->field_place, start, "\"%s\" is named twice", field_shown(r));
+				return problem_at(r->field_place, start, "%s is named twice", field_shown(r));
 			named[id] = true;
 			csv->id[csv->columns] = id;
 			csv->whole[csv->columns] = whole;
@@ -247,14 +253,12 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				return problem;
 			double value;
 			if (r->quoted)
-				return problem_at(r->field_place, start,
-				                  "\"%s\" is quoted: %s writes its numbers without quotes", field_shown(r),
-				                  form->what);
+				return problem_at(r->field_place, start, "%s is quoted: %s writes its numbers without quotes",
+				                  field_shown(r), form->what);
 			if (!decimal_number(r->field, &value))
-				return problem_at(r->field_place, start, "\"%s\" is not a finite decimal number",
-				                  field_shown(r));
+				return problem_at(r->field_place, start, "%s is not a finite decimal number", field_shown(r));
 			if (c > 0 && csv->whole[c] && !(value == floor(value) && fabs(value) <= INT32_MAX))
-				return problem_at(r->field_place, start, "%s is an Integer variable: \"%s\" is no such value",
+				return problem_at(r->field_place, start, "%s is an Integer variable: %s is no such value",
 				                  names[c], field_shown(r));
 			// The times as the file gives them (0.1, not 0.10000000000000001): the fewest digits that
 			// read back to them.

@@ -636,6 +636,8 @@ def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
     ("time,tip.fx\n0,1\n0.2,1\n0.1,2\n", "4:1: time 0.1 s is before the previous row's 0.2 s\n"),
     ("time,tip.fx\n", "2:1: no rows after the header"),
     ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3: tip.fx: the slope from the row before is beyond a double"),
+    # A field longer than a message shows is cut at a character, and says so.
+    ("time,tip.fx\n0," + "2" * 59 + "\u65e5\n", '2:3: "' + "2" * 59 + '"... is not a finite decimal number'),
 ])
 def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, message):
     signals = tmp_path / "signals.csv"
@@ -1442,6 +1444,9 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
     ("time,tip.x\n", "2:1: no rows after the header"),
     ("time,tip.x\n0,\x00\n", "2:3: a NUL byte: not a text file"),
     ('time,"a\x1b[2Jb"\n0,1\n', '1:6: "a\\u001b[2Jb" is not a variable of the FMU'),
+    # A field longer than a message shows is cut at a character, and says so.
+    ("time," + "x" * 59 + "\u00e9y\n0,1\n", '1:6: "' + "x" * 59 + '"... is not a variable of the FMU'),
+    ("time,tip.x\n0," + "1" * 60 + "x\n", '2:3: "' + "1" * 60 + '"... is not a finite decimal number'),
 ])
 def test_fmu_refuses_a_reference_that_is_no_result_of_it(tmp_path, text, message):
     # Before anything is written: no FMU, and the last good one at the place stays.
