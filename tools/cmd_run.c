@@ -231,9 +231,8 @@ static void write_vtp_values(FILE* f, const double* values, int32_t count, int p
 // takes no legacy .vtk file): the particles as points with their velocities, the intact springs as
 // lines with their tension [N] and, when every one has a rest length (a zero-length spring has no
 // strain), their strain; the time as the field TimeValue. springs holds 2 values per spring of
-// scratch.
-// Writes the series' file of the current row. False, with errno saying why (0: a write error),
-// when it cannot be written: the caller reports it, after ending its progress line.
+// scratch. False, with errno saying why (0: a write error), when the file cannot be written: the
+// caller reports it, after ending its progress line.
 static bool write_vtp(const char* path, const sm_simulation* sim, double* springs)
 {
 	const sm_model* model = sm_simulation_model(sim);
