@@ -227,11 +227,12 @@ int sm_cmd_statics(int argc, char** argv)
 			largest_at = i;
 		}
 	}
-	printf("model            %s (%d particles, %d free, %d springs)\n", sm_document_name(doc), (int)n,
-	       (int)sm_model_free_count(model), (int)sm_model_spring_count(model));
-	printf("solver           %s, %d iterations\n",
+	const int32_t springs = sm_model_spring_count(model);
+	printf("model            %s (%d particle%s, %d free, %d spring%s)\n", sm_document_name(doc), (int)n,
+	       n == 1 ? "" : "s", (int)sm_model_free_count(model), (int)springs, springs == 1 ? "" : "s");
+	printf("solver           %s, %d iteration%s\n",
 	       res.solver == SM_STATICS_SPARSE ? "sparse Cholesky (CHOLMOD)" : "dense modified Cholesky (GSL)",
-	       (int)res.iterations);
+	       (int)res.iterations, res.iterations == 1 ? "" : "s");
 	printf("residual         %.3e N (tolerance %.3e N)\n", res.residual, res.tolerance);
 	// Each particle is balanced to its own tolerance: the line above gives the largest force and
 	// the loosest tolerance, this one the particle nearest to its own (a light part's particle in a

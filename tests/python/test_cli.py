@@ -770,6 +770,11 @@ def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_pa
     assert vector("loads") == [4.0, -2.0, -15.0]
     np.testing.assert_allclose(vector("weight"), [0.0, 0.0, -29.43], rtol=0, atol=1e-9)
     np.testing.assert_allclose(vector("reactions, sum"), [-4.0, 2.0, 44.43], rtol=0, atol=1e-9)
+    # The model line counts its one spring, and the solver line the oscillator's one iteration, in
+    # the singular.
+    assert "(2 particles, 1 free, 1 spring)" in out
+    assert re.search(r"^solver .*, \d+ iterations?$", out, re.M)
+    assert "1 iterations" not in cli("statics", MODELS / "oscillator.json").stdout
 
 
 def test_statics_balances_each_particle_to_its_own_tolerance(tmp_path):
