@@ -57,30 +57,59 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 {
 	if (!logging(inst, category))
 		return;
-	char text[1024];
-	va_list args;
+	// Most messages fit the buffer on the stack; a longer one (a resource path of some 500 bytes
+	// named twice) is formatted again whole on the heap. Without memory for it, it is cut at a
+	// character and marked "...".
+	char buffer[1024];
+	char* text = buffer;
+	va_list args, again;
 	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
 	const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
 	va_start(args, fmt);
-	vsnprintf(text, sizeof text, fmt, args);
+	va_copy(again, args);
+	const int length = vsnprintf(buffer, sizeof buffer, fmt, args);
+	if (length >= (int)sizeof buffer) {
+		char* whole = malloc((size_t)length + 1);
+		if (whole != NULL) {
+			vsnprintf(whole, (size_t)length + 1, fmt, again);
+			text = whole;
+		} else {
+			size_t end = sizeof buffer - 4;
+			while (end > 0 && ((unsigned char)buffer[end] & 0xc0) == 0x80)
+				--end;  // not inside a UTF-8 character
+			memcpy(buffer + end, "...", 4);
+		}
+	}
+	va_end(again);
 	va_end(args);
 	if (c_locale != (locale_t)0) {
 		uselocale(previous);
 		freelocale(c_locale);
 	}
-	char escaped[2 * sizeof text];
+	const size_t size = 2 * strlen(text) + 1;
+	char escaped_buffer[2 * sizeof buffer];
+	char* escaped = size <= sizeof escaped_buffer ? escaped_buffer : malloc(size);
+	if (escaped == NULL) {
+		if (text != buffer)
+			free(text);
+		return;
+	}
 	size_t k = 0;
-	for (size_t i = 0; text[i] && k + 2 < sizeof escaped; ++i) {
+	for (size_t i = 0; text[i]; ++i) {
 		if (text[i] == '%' || text[i] == '#')
 			escaped[k++] = text[i];
 		escaped[k++] = text[i];
 	}
 	escaped[k] = '\0';
+	if (text != buffer)
+		free(text);
 	int index = 0;
 	while (index < LOG_CATEGORY_COUNT && (1u << index) != category)
 		++index;
 	inst->logger(inst->environment, inst->name, status,
 	             index < LOG_CATEGORY_COUNT ? category_names[index] : "logAll", escaped);
+	if (escaped != escaped_buffer)
+		free(escaped);
 }
 
 // A number for a message, in the fewest digits that read back to it (0.3, not

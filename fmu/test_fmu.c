@@ -21,7 +21,7 @@
 
 typedef struct log_record {
 	int errors;
-	char last[1024];
+	char last[4096];
 	char category[32];  // of the last message
 } log_record;
 
@@ -1142,6 +1142,24 @@ static int test_messages_ignore_the_locale(void)
 	return 0;
 }
 
+// A message longer than the FMU's buffer on the stack (1024 bytes) reaches the logger whole: a
+// resource location of 1200 bytes of two-byte characters, which the refusal names, was cut at
+// 1023 bytes, inside a character.
+static int test_long_messages_reach_the_logger_whole(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	char location[1300] = "file:///nonexistent/";
+	for (int i = 0; i < 600; i++)
+		strcat(location, "\xc3\xa9");
+	strcat(location, "/resources");
+	ENSURE(fmi2Instantiate("long", fmi2CoSimulation, f.guid, location, &f.callbacks, fmi2False, fmi2False) ==
+	       NULL);
+	ENSURE(strlen(f.log.last) > strlen(location) && strstr(f.log.last, location) != NULL);
+	teardown(&f);
+	return 0;
+}
+
 // '#' is the logger's escape character (FMI 2.0, 2.1.5: "#r12#" names the Real variable of value
 // reference 12, and a '#' of the text is written "##"): text quoted in a message, here an unknown
 // log category "#r0# at 100%", reaches the logger escaped for both '#' and '%', and reads back as
@@ -2218,6 +2236,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_settings_take_effect_after_an_output_was_read);
 	RUN_TEST(test_solver_settings_are_checked_against_their_ranges);
 	RUN_TEST(test_messages_ignore_the_locale);
+	RUN_TEST(test_long_messages_reach_the_logger_whole);
 	RUN_TEST(test_experiment_tolerance_yields_to_an_explicit_rtol);
 	RUN_TEST(test_state_carries_the_settings_not_the_stop_time);
 	RUN_TEST(test_a_restored_motion_continues_along_its_line);
