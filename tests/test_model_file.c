@@ -3101,8 +3101,9 @@ static int test_canonical_form_ignores_the_locale(void)
 // Messages write their numbers with a point whatever LC_NUMERIC the program chose: under a
 // decimal comma a model file's refusal said "-0,5 must be > 0", a list "n = 0,5, m = 2" is
 // ambiguous, and a value copied from a message into a model file or a command is refused. The
-// model file's, the model's and the simulation's messages, and sm_format_number. Where no such
-// locale is installed there is nothing to check.
+// model file's, the model's and the simulation's messages, and sm_format_number. The program's own
+// text keeps its decimal comma after each: the C locale is the thread's for the call only. Where
+// no such locale is installed there is nothing to check.
 static int test_messages_ignore_the_locale(void)
 {
 	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") == NULL) {
@@ -3112,6 +3113,8 @@ static int test_messages_ignore_the_locale(void)
 	char text[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(-0.5, text);
 	const bool number_ok = strcmp(text, "-0.5") == 0;
+	char after_number[16];
+	snprintf(after_number, sizeof after_number, "%g", 0.5);
 	sm_error file_err = {SM_OK, ""};
 	const char* bad_mass =
 	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": -0.5}]}";
@@ -3127,10 +3130,13 @@ static int test_messages_ignore_the_locale(void)
 	def.relative_tolerance = 1.5e-20;
 	sm_error sim_err = {SM_OK, ""};
 	sm_simulation* sim = model != NULL ? sm_simulation_create(model, &def, &sim_err) : NULL;
+	char after_messages[16];
+	snprintf(after_messages, sizeof after_messages, "%g", 0.5);
 	setlocale(LC_NUMERIC, "C");
 	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
 	ENSURE(number_ok);
+	ENSURE(strcmp(after_number, "0,5") == 0 && strcmp(after_messages, "0,5") == 0);
 	ENSURE(doc == NULL && strstr(file_err.message, "-0.5 must be > 0") != NULL);
 	ENSURE(refused && strcmp(model_text, "particle 0: mass = -0.5 must be > 0") == 0);
 	ENSURE(sim == NULL && strstr(sim_err.message, "1.5e-20") != NULL);
