@@ -1116,7 +1116,8 @@ static int test_messages_are_printf_formats(void)
 // Messages write their numbers with a point whatever the importer's LC_NUMERIC: under a decimal
 // comma a refusal said "solver.max_step = -0,001 rejected", and a value copied from a message into
 // a model file or `springmass fmu --set` is refused. A number formatted by the logger itself and
-// one in the fewest digits that read back. Where no such locale is installed, nothing to check.
+// one in the fewest digits that read back. The importer's own text keeps its decimal comma: the C
+// locale is the thread's for the call only. Where no such locale is installed, nothing to check.
 static int test_messages_ignore_the_locale(void)
 {
 	fixture f;
@@ -1133,7 +1134,10 @@ static int test_messages_ignore_the_locale(void)
 	char step_message[sizeof f.log.last];
 	snprintf(step_message, sizeof step_message, "%s", f.log.last);
 	const fmi2Status experiment = fmi2SetupExperiment(c, fmi2False, 0.0, 0.5, fmi2True, 0.25);
+	char importer_text[16];
+	snprintf(importer_text, sizeof importer_text, "%g", 0.5);
 	setlocale(LC_NUMERIC, "C");
+	ENSURE(strcmp(importer_text, "0,5") == 0);
 	ENSURE(step == fmi2Error && strstr(step_message, "solver.max_step = -0.001 rejected") != NULL);
 	ENSURE(experiment == fmi2Error &&
 	       strstr(f.log.last, "start time 0.5 and stop time 0.25 must be finite with start <= stop") != NULL);
@@ -1156,6 +1160,33 @@ static int test_long_messages_reach_the_logger_whole(void)
 	ENSURE(fmi2Instantiate("long", fmi2CoSimulation, f.guid, location, &f.callbacks, fmi2False, fmi2False) ==
 	       NULL);
 	ENSURE(strlen(f.log.last) > strlen(location) && strstr(f.log.last, location) != NULL);
+	teardown(&f);
+	return 0;
+}
+
+// A message of about the length of the FMU's buffer on the stack (1024 bytes, its end included)
+// reaches the logger whole, one of 1024 characters too, which needs the heap: an unknown log
+// category of as many characters as bring the refusal to 1023, 1024 and 1025 bytes.
+static int test_messages_at_the_buffers_length_reach_the_logger_whole(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "boundary");
+	ENSURE(c != NULL);
+	const fmi2String one[] = {"a"};
+	ENSURE_STATUS(fmi2SetDebugLogging(c, fmi2True, 1, one), fmi2Error);
+	const size_t around = strlen(f.log.last) - 1;  // the message without the category
+	for (size_t length = 1023; length <= 1025; ++length) {
+		char category[1100], quoted[1104];
+		memset(category, 'a', length - around);
+		category[length - around] = '\0';
+		snprintf(quoted, sizeof quoted, "\"%s\"", category);
+		const fmi2String categories[] = {category};
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(fmi2SetDebugLogging(c, fmi2True, 1, categories), fmi2Error);
+		ENSURE(strlen(f.log.last) == length && strstr(f.log.last, quoted) != NULL);
+	}
+	fmi2FreeInstance(c);
 	teardown(&f);
 	return 0;
 }
@@ -2237,6 +2268,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_solver_settings_are_checked_against_their_ranges);
 	RUN_TEST(test_messages_ignore_the_locale);
 	RUN_TEST(test_long_messages_reach_the_logger_whole);
+	RUN_TEST(test_messages_at_the_buffers_length_reach_the_logger_whole);
 	RUN_TEST(test_experiment_tolerance_yields_to_an_explicit_rtol);
 	RUN_TEST(test_state_carries_the_settings_not_the_stop_time);
 	RUN_TEST(test_a_restored_motion_continues_along_its_line);
