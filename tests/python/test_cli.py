@@ -638,6 +638,8 @@ def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
     ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3: tip.fx: the slope from the row before is beyond a double"),
     # A field longer than a message shows is cut at a character, and says so.
     ("time,tip.fx\n0," + "2" * 59 + "\u65e5\n", '2:3: "' + "2" * 59 + '"... is not a finite decimal number'),
+    # One of just as many bytes as a message shows is shown whole, without the mark.
+    ("time,tip.fx\n0," + "2" * 59 + "x\n", '2:3: "' + "2" * 59 + 'x" is not a finite decimal number'),
 ])
 def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, message):
     signals = tmp_path / "signals.csv"
