@@ -1287,7 +1287,24 @@ def test_check_warns_of_forces_that_overflow_at_the_start(tmp_path):
     hot = model("hot", [0, 0, 0], 1, velocity=(1e200, 0, 0), damping=1)
     assert warnings(hot) == ["warning      the dissipated power overflows at the initial state: springmass run "
                              "stops at t = 0"]
-    for path in (model("heavy1", [0, 0, -1e308], 1), hot):
+    # A finite force over a tiny mass: 10 N/m stretched 100 m pulls 1e-307 kg at 1e310 m/s^2.
+    light = tmp_path / "light.json"
+    light.write_text(json.dumps({
+        "springmass": 1, "name": "light", "gravity": [0, 0, 0],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [101, 0, 0], "mass": 1e-307}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 10, "rest_length": 1}]}))
+    assert warnings(light) == ["warning      the acceleration of bob (particle 1) overflows at the initial state: "
+                               "springmass run stops at t = 0"]
+    # A fixed particle does not accelerate, whatever its weight (10 kg x 1e308 m/s^2).
+    fixed = tmp_path / "fixed.json"
+    fixed.write_text(json.dumps({
+        "springmass": 1, "name": "fixed", "gravity": [0, 0, -1e308],
+        "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True, "mass": 10},
+                      {"name": "bob", "position": [1, 0, 0], "mass": 1}],
+        "springs": [{"a": "anchor", "b": "bob", "stiffness": 10}]}))
+    assert warnings(fixed) == []
+    for path in (model("heavy1", [0, 0, -1e308], 1), hot, light):
         run = cli("run", path, "--t-end", "0.1", "-o", tmp_path / "x.csv", status=1)
         assert "at t = 0 s" in run.stderr
     # The same files at ordinary scales warn of nothing.
