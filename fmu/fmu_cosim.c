@@ -58,8 +58,7 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 	if (!logging(inst, category))
 		return;
 	// Most messages fit the buffer on the stack; a longer one (a resource path of some 500 bytes
-	// named twice) is formatted again whole on the heap. Without memory for it, it is cut at a
-	// character and marked "...".
+	// named twice) is formatted again whole on the heap (without memory for it, it stays cut).
 	char buffer[1024];
 	char* text = buffer;
 	va_list args, again;
@@ -73,11 +72,6 @@ void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* 
 		if (whole != NULL) {
 			vsnprintf(whole, (size_t)length + 1, fmt, again);
 			text = whole;
-		} else {
-			size_t end = sizeof buffer - 4;
-			while (end > 0 && ((unsigned char)buffer[end] & 0xc0) == 0x80)
-				--end;  // not inside a UTF-8 character
-			memcpy(buffer + end, "...", 4);
 		}
 	}
 	va_end(again);

@@ -487,17 +487,13 @@ static const char* node_kind(char kind)
 }
 
 // The first `length` bytes of a name, quoted for a message as the model file's messages quote
-// names: one longer than QUOTED_NAME_BYTES is cut at a character with "..." after the quote, so
-// that a message naming three long names keeps its end. Returns out.
+// names: one longer than QUOTED_NAME_BYTES is cut with "..." after the quote, so that a message
+// naming three long names keeps its end. The names are made of C identifiers (parameters, ports,
+// structures; docs/model-format.md) and ASCII suffixes: every byte is a character. Returns out.
 #define QUOTED_NAME_BYTES 80
 static const char* quoted_name(char out[QUOTED_NAME_BYTES + 6], const char* name, size_t length)
 {
-	size_t shown = length;
-	if (length > QUOTED_NAME_BYTES) {
-		shown = QUOTED_NAME_BYTES;
-		while (shown > 0 && ((unsigned char)name[shown] & 0xc0) == 0x80)
-			--shown;  // not inside a UTF-8 character
-	}
+	const size_t shown = length > QUOTED_NAME_BYTES ? QUOTED_NAME_BYTES : length;
 	snprintf(out, QUOTED_NAME_BYTES + 6, "\"%.*s\"%s", (int)shown, name, shown < length ? "..." : "");
 	return out;
 }

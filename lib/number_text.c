@@ -7,20 +7,36 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-// Formats in the C locale whatever LC_NUMERIC the program chose: under a decimal comma (de_DE)
+// Text in the C locale whatever LC_NUMERIC the program chose: under a decimal comma (de_DE)
 // printf writes 0.5 as "0,5", which a message's list ("n = 0,5, m = 2") makes ambiguous and a
 // command it suggests ("--set l0=0,5") wrong. uselocale() switches the calling thread only, for
 // the call; glibc's "C" locale object is static (no allocation, freelocale does nothing). Should
 // it be refused all the same, the text is the program's locale's.
+typedef struct c_locale_scope {
+	locale_t c, previous;
+} c_locale_scope;
+
+static c_locale_scope enter_c_locale(void)
+{
+	c_locale_scope scope = {newlocale(LC_ALL_MASK, "C", (locale_t)0), (locale_t)0};
+	if (scope.c != (locale_t)0)
+		scope.previous = uselocale(scope.c);
+	return scope;
+}
+
+static void leave_c_locale(c_locale_scope scope)
+{
+	if (scope.c != (locale_t)0) {
+		uselocale(scope.previous);
+		freelocale(scope.c);
+	}
+}
+
 int sm_vformat_c_locale(char* text, size_t size, const char* format, va_list args)
 {
-	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-	const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
+	const c_locale_scope scope = enter_c_locale();
 	const int written = vsnprintf(text, size, format, args);
-	if (c_locale != (locale_t)0) {
-		uselocale(previous);
-		freelocale(c_locale);
-	}
+	leave_c_locale(scope);
 	return written;
 }
 
@@ -40,8 +56,7 @@ int sm_format_c_locale(char* text, size_t size, const char* format, ...)
 // locale, as above: with a '.' whatever the program's locale, as the model file's parser reads it.
 void sm_format_number(double value, char text[SM_NUMBER_TEXT_CAPACITY])
 {
-	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-	const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
+	const c_locale_scope scope = enter_c_locale();
 	int digits = 15;
 	for (; digits < 17; digits++) {
 		snprintf(text, SM_NUMBER_TEXT_CAPACITY, "%.*g", digits, value);
@@ -50,8 +65,5 @@ void sm_format_number(double value, char text[SM_NUMBER_TEXT_CAPACITY])
 	}
 	if (digits == 17)
 		snprintf(text, SM_NUMBER_TEXT_CAPACITY, "%.17g", value);
-	if (c_locale != (locale_t)0) {
-		uselocale(previous);
-		freelocale(c_locale);
-	}
+	leave_c_locale(scope);
 }
