@@ -162,7 +162,12 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 	printf("\nhighest frequency        %s%.9g Hz (omega_max = %.9g rad/s, %s %d modes)\n",
 	       sparse ? "<= " : "", modes->omega_max / (2.0 * 3.14159265358979323846), modes->omega_max,
 	       sparse ? "Gershgorin bound over all" : "of all", (int)modes->dof);
-	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0 && modes->count == modes->dof)
+	// With every mode listed the library takes each mode's own damping rate, otherwise the bound on
+	// all of them: the line names the one the step comes from. omega_max = 0 with unstable modes is
+	// a configuration whose stiffness only pushes, not one without stiffness.
+	const bool every_mode = modes->count == modes->dof;
+	const char* no_frequency = modes->unstable_count > 0 ? "no mode of positive omega^2" : "no stiffness";
+	if (isfinite(modes->explicit_step) && modes->omega_max > 0.0 && every_mode)
 		printf("explicit stability limit %.6g s (symplectic Euler, each mode with its own damping rate; "
 		       "2/omega_max = %.6g s undamped)\n",
 		       modes->explicit_step, 2.0 / modes->omega_max);
@@ -171,10 +176,13 @@ static void print_modes(const sm_modes* modes, bool at_equilibrium, double steps
 		    "explicit stability limit %.6g s (symplectic Euler with omega_max and damping rate <= %.6g 1/s; "
 		    "2/omega_max = %.6g s undamped)\n",
 		    modes->explicit_step, modes->damping_rate_max, 2.0 / modes->omega_max);
-	else if (isfinite(modes->explicit_step))
+	else if (isfinite(modes->explicit_step) && every_mode)
 		printf(
-		    "explicit stability limit %.6g s (symplectic Euler with damping rate <= %.6g 1/s, no stiffness)\n",
-		    modes->explicit_step, modes->damping_rate_max);
+		    "explicit stability limit %.6g s (symplectic Euler, each mode with its own damping rate, %s)\n",
+		    modes->explicit_step, no_frequency);
+	else if (isfinite(modes->explicit_step))
+		printf("explicit stability limit %.6g s (symplectic Euler with damping rate <= %.6g 1/s, %s)\n",
+		       modes->explicit_step, modes->damping_rate_max, no_frequency);
 	if (highest > 0.0)
 		printf(
 		    "communication step       <= %.6g s (1/%g of the period of the highest mode listed, %.6g Hz)\n",

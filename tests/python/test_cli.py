@@ -1134,6 +1134,43 @@ def test_stability_limit_of_a_damped_oscillator(tmp_path):
     assert "explicit" not in cli("modes", path, "-n", "0").stdout
 
 
+def test_stability_limit_without_frequencies_names_the_damping_rate_it_comes_from(tmp_path):
+    # Two free particles of 1 and 4 kg joined by a dashpot of 1 N s/m without stiffness: every
+    # omega^2 is 0, and the one damped mode, the particles moving apart along the dashpot, decays
+    # at the rate d (1/m1 + 1/m2) = 1.25 1/s; undamped, symplectic Euler's limit for a damping
+    # rate gamma alone is 2 / gamma. With every mode listed the limit is that mode's own, 1.6 s;
+    # with fewer, the Gershgorin bound d (1/m1 + 1/sqrt(m1 m2)) = 1.5 1/s gives 2 / 1.5 s. The
+    # rate a line names is the one its step comes from (6 digits printed: 1e-5 allowed).
+    pair = {"springmass": 1, "name": "pair", "gravity": [0, 0, 0],
+            "particles": [{"name": "a", "position": [0, 0, 0], "mass": 1},
+                          {"name": "b", "position": [1, 0, 0], "mass": 4}],
+            "springs": [{"a": "a", "b": "b", "stiffness": 0, "damping": 1, "rest_length": 1}]}
+    path = tmp_path / "pair.json"
+    path.write_text(json.dumps(pair))
+    every = summary_line(cli("modes", path, "-n", "0").stdout, "explicit stability limit")
+    assert number_after(every, "") == pytest.approx(2 / 1.25, rel=1e-5)
+    assert "each mode with its own damping rate" in every and "<=" not in every, every
+    fewer = summary_line(cli("modes", path, "-n", "2").stdout, "explicit stability limit")
+    assert number_after(fewer, "") == pytest.approx(2 / 1.5, rel=1e-5)
+    assert number_after(fewer, "damping rate <=") == pytest.approx(1.5, rel=1e-5)
+    # A bob squeezed by six dashpot springs (10 N/m, 0.5 N s/m, rest length 3 m) to 1 m from six
+    # anchors, two along each axis: each spring pushes across itself with k (1 - 3) = -20 N/m, so
+    # omega^2 = (2 k - 4 (2 k)) / m = -60 1/s^2 along every axis. No mode has a frequency, yet the
+    # model has stiffness, and the line does not say it has none.
+    anchors = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)]
+    squeezed = {"springmass": 1, "name": "squeezed", "gravity": [0, 0, 0],
+                "particles": [{"name": "bob", "position": [0, 0, 0], "mass": 1}]
+                + [{"name": f"a{i}", "position": list(p), "fixed": True} for i, p in enumerate(anchors)],
+                "springs": [{"a": "bob", "b": f"a{i}", "stiffness": 10, "damping": 0.5, "rest_length": 3}
+                            for i in range(6)]}
+    path.write_text(json.dumps(squeezed))
+    out = cli("modes", path).stdout
+    rows = re.findall(r"^\s+\d+\s+\S+\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)
+    assert [period for period, _ in rows] == 3 * ["unstable"]
+    np.testing.assert_allclose([float(w2) for _, w2 in rows], [-60, -60, -60], rtol=1e-12)
+    assert "no stiffness" not in summary_line(out, "explicit stability limit")
+
+
 @pytest.mark.parametrize("ends", [("bob", "anchor"), ("anchor", "bob")])
 def test_check_bound_of_a_bob_on_a_fixed_anchor(tmp_path, ends):
     # A held end adds no off-diagonal term to the Gershgorin row of the free end, whichever end
