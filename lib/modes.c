@@ -134,6 +134,11 @@ static void symmv_workspace_destroy(gsl_eigen_symmv_workspace* w)
 // particles without springs, or a damper alone among 40 particles, never returned. The other
 // rows and columns, in their order, form the matrix solved; a matrix without zero rows is solved
 // as it is.
+//
+// The matrix is solved scaled by a power of two that brings its largest entry to [1, 2), the
+// eigenvalues scaled back: exact, so the eigenpairs are those of the matrix as it is. Entries of
+// the size of DBL_MIN make that test underflow just the same, and the implicit QR never returned:
+// springs of 1e-307 N/m between particles of 1 kg, or 1 N/m between particles of 1e307 kg.
 static bool symmetric_eigenpairs(double* matrix, size_t n, double* values, double* vectors,
                                  gsl_eigen_symmv_workspace* ws)
 {
@@ -149,6 +154,13 @@ static bool symmetric_eigenpairs(double* matrix, size_t n, double* values, doubl
 	for (size_t i = 0, zero = kept; i < n; i++)
 		if (place[i] == SIZE_MAX)
 			place[i] = zero++;
+	double largest = 0.0;
+	for (size_t k = 0; k < n * n; k++)
+		largest = fmax(largest, fabs(matrix[k]));
+	const int exponent = largest > 0.0 ? ilogb(largest) : 0;
+	if (exponent != 0)
+		for (size_t k = 0; k < n * n; k++)
+			matrix[k] = scalbn(matrix[k], -exponent);
 	gsl_vector_view L = gsl_vector_view_array(values, n);
 	gsl_matrix_view V = gsl_matrix_view_array(vectors, n, n);
 	bool solved;
@@ -175,6 +187,8 @@ static bool symmetric_eigenpairs(double* matrix, size_t n, double* values, doubl
 		for (size_t k = kept; k < n; k++)
 			values[k] = 0.0;
 	}
+	for (size_t k = 0; k < kept && exponent != 0; k++)
+		values[k] = scalbn(values[k], exponent);
 	return solved && gsl_eigen_symmv_sort(&L.vector, &V.matrix, GSL_EIGEN_SORT_VAL_ASC) == GSL_SUCCESS;
 }
 

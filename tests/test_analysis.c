@@ -2450,6 +2450,65 @@ static int test_particles_without_springs_beside_one_spring(void)
 	return 0;
 }
 
+// Three free particles joined by two oblique springs (rest length 0.1 m): omega^2 is proportional
+// to the stiffness over the mass, so the modes of the chain with its stiffnesses (1 and 3 N/m)
+// times 2^-1020 (about 1e-307 N/m), or its masses (1 kg) times 2^1020, are those of the chain as
+// it is, omega^2 times 2^-1020 and the same shapes (the masses scaled: times 2^-510), down to the
+// smallest doubles. Round-off is that of a 9 x 9 eigenproblem (1e-15 of the largest omega^2;
+// 1e-12 allowed).
+static int test_modes_of_springs_at_the_smallest_doubles(void)
+{
+	const double positions[3][3] = {{0.0, 0.0, 0.0}, {0.2, 0.3, 0.6}, {0.5, 0.1, 0.3}};
+	const double tiny = ldexp(1.0, -1020);
+	sm_modes modes[3];
+	for (int scaled = 0; scaled < 3; scaled++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		for (int i = 0; i < 3; i++) {
+			sm_particle_def p = sm_default_particle_def();
+			for (int c = 0; c < 3; c++)
+				p.position[c] = positions[i][c];
+			p.mass = scaled == 2 ? 1.0 / tiny : 1.0;
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		}
+		for (int i = 0; i < 2; i++) {
+			sm_spring_def s = sm_default_spring_def();
+			s.a = i;
+			s.b = i + 1;
+			s.rest_length = 0.1;
+			s.stiffness = (i == 0 ? 1.0 : 3.0) * (scaled == 1 ? tiny : 1.0);
+			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		}
+		sm_error err;
+		alarm(60);
+		const sm_status st = sm_modes_compute(model, NULL, &modes[scaled], &err);
+		alarm(0);
+		ENSURE_STATUS(st, SM_OK);
+		sm_model_destroy(model);
+	}
+	for (int scaled = 1; scaled < 3; scaled++) {
+		ENSURE(modes[scaled].count == 9 && modes[scaled].zero_count == modes[0].zero_count);
+		ENSURE(modes[scaled].unstable_count == 0);
+		const double mass_scale = scaled == 2 ? sqrt(tiny) : 1.0;  // phi scales as 1 / sqrt(m)
+		for (int32_t a = 0; a < 9; a++) {
+			ENSURE_REL(modes[scaled].omega_squared[a], tiny * modes[0].omega_squared[a], 1e-12, 0.0);
+			// The shapes of the six elastic modes, each of its own frequency (sign free).
+			if (a < modes[0].zero_count)
+				continue;
+			const double sign =
+			    modes[scaled].shapes[9 * a + 3] * modes[0].shapes[9 * a + 3] < 0.0 ? -1.0 : 1.0;
+			for (int k = 0; k < 9; k++)
+				ENSURE_REL(sign * modes[scaled].shapes[9 * a + k], mass_scale * modes[0].shapes[9 * a + k],
+				           1e-12, mass_scale);
+		}
+	}
+	for (int scaled = 0; scaled < 3; scaled++)
+		sm_modes_release(&modes[scaled]);
+	return 0;
+}
+
 // Coincident springs between two held particles act on no free degree of freedom, so they stand
 // in the way of neither modes nor statics: two fixed particles at one point joined by a damped
 // zero-length spring and a rest-length spring of l0 = 1 m, and a 1 kg bob hanging 1 m below on
@@ -4635,6 +4694,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_particles_without_springs_beside_one_spring);
+	RUN_TEST(test_modes_of_springs_at_the_smallest_doubles);
 	RUN_TEST(test_coincident_springs_between_held_particles);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
