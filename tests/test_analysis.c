@@ -529,7 +529,7 @@ static int test_hanging_rope_elongation(void)
 		for (int32_t i = 0; i <= n; i++) {
 			const double s = length * i / n;
 			const double u = mass * g / (E * length) * (length * s - 0.5 * s * s);
-			error = fmax(error, fabs(-x[3 * (size_t)i + 2] - s - u));
+			error = worst_of(error, fabs(-x[3 * (size_t)i + 2] - s - u));
 		}
 		// The discrete profile error has a closed form too (to the solution's accuracy).
 		ENSURE_REL(error, mass * g * length / (8.0 * E * (n + 1)), 1e-7, 0.0);
@@ -755,7 +755,7 @@ static int test_sagging_cable_catenary(void)
 		for (int32_t i = 0; i < np; i++) {
 			const double xi = x[3 * (size_t)i], zi = x[3 * (size_t)i + 2];
 			const double z = a * cosh((xi - 0.5 * span) / a) - a * cosh(span / (2.0 * a));
-			error = fmax(error, fabs(zi - z));
+			error = worst_of(error, fabs(zi - z));
 			ENSURE(fabs(x[3 * (size_t)i + 1]) < 1e-12);  // stays in its vertical plane
 		}
 		printf("  cable N=%-3d max distance from the catenary %.3e m, sag %.6f m, %d iterations\n", (int)n,
@@ -869,7 +869,7 @@ static int test_elastic_catenary_between_unequal_supports(void)
 		for (int32_t p = 0; p <= n; p++) {
 			double xc, zc;
 			elastic_catenary_point(H, Va, w, E, L0 * p / n, &xc, &zc);
-			shape = fmax(shape, hypot(x[3 * p] - xc, x[3 * p + 2] - zc));
+			shape = worst_of(shape, hypot(x[3 * p] - xc, x[3 * p + 2] - zc));
 			ENSURE(fabs(x[3 * p + 1]) < 1e-12);  // stays in its vertical plane
 		}
 		// The supports: the left one pulls the cable back and up with (-H, 0, Va), the right
@@ -1694,7 +1694,7 @@ static int test_statics_matches_a_long_damped_simulation(void)
 	const double* y = sm_simulation_positions(sim);
 	double difference = 0.0;
 	for (int32_t i = 0; i < 3 * np; i++)
-		difference = fmax(difference, fabs(y[i] - x[i]));
+		difference = worst_of(difference, fabs(y[i] - x[i]));
 	printf("  largest distance between the simulated rest and statics: %.3e m\n", difference);
 	// Integration error at rtol 1e-9 on positions of order 1 m, plus the decayed remainder.
 	ENSURE(difference < 1e-6);
@@ -3229,7 +3229,7 @@ static int test_damping_coupling_definition(void)
 				for (int32_t j = 0; j < i; j++) {
 					const double cij = 0.5 * (C[(size_t)i * count + j] + C[(size_t)j * count + i]);
 					const double normalised = cij / sqrt(ci * C[(size_t)j * count + j]);
-					coupling = fmax(coupling, fabs(normalised));
+					coupling = worst_of(coupling, fabs(normalised));
 				}
 			}
 			ENSURE(coupling > 1e-2);
@@ -3424,7 +3424,7 @@ static int test_statics_balances_a_light_part_beside_a_heavy_one(void)
 			for (int c = 0; c < 3; c++)
 				largest = fmax(largest, fabs(f[3 * (size_t)a + c]));
 			// The block can turn freely about the vertical through its pin: compare heights.
-			apart = fmax(apart, fabs(x[3 * (size_t)a + 2] - y[3 * (size_t)b + 2]));
+			apart = worst_of(apart, fabs(x[3 * (size_t)a + 2] - y[3 * (size_t)b + 2]));
 		}
 		printf("  offset %g m: %d iterations (alone %d), block forces up to %.2g of a weight, heights %.2g m "
 		       "apart\n",

@@ -647,7 +647,7 @@ static double rope_stretch(int32_t segments, sm_scaling scaling, double stiffnes
 	sm_model_forces(m, x, v, ext, f);
 	*residual = 0.0;
 	for (size_t i = 1; i < n; i++)
-		*residual = fmax(*residual, fabs(f[3 * i]) + fabs(f[3 * i + 1]) + fabs(f[3 * i + 2]));
+		*residual = worst_of(*residual, fabs(f[3 * i]) + fabs(f[3 * i + 1]) + fabs(f[3 * i + 2]));
 	const double stretch = x[3 * segments] - 1.0;
 	free(x);
 	free(v);

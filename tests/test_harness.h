@@ -41,6 +41,13 @@ static const char* test_filter_ = NULL;
 		}                                                                                                    \
 	} while (0)
 
+/// The larger of a running worst error and a new one, and NaN once either is NaN: fmax drops a
+/// NaN, so an error gathered with it would take a NaN state for no error at all.
+static inline double worst_of(double worst, double error)
+{
+	return isnan(error) || error > worst ? error : worst;
+}
+
 /// |a - b| <= tol, with both values printed on failure.
 #define ENSURE_NEAR(a, b, tol)                                                                               \
 	do {                                                                                                     \

@@ -63,13 +63,13 @@ static int test_a_constant_force_as_input_or_load(void)
 				const double t = 0.1 * i;
 				ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
 				const double u = f0 / k * (1.0 - cos(w * t));
-				worst_motion = fmax(worst_motion, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
-				worst_balance = fmax(worst_balance, fabs(balance(sim) - start));
+				worst_motion = worst_of(worst_motion, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
+				worst_balance = worst_of(worst_balance, fabs(balance(sim) - start));
 				// The input's work f0 u and power f0 u' (as the state gives it: round-off); a load's none.
 				const double work = as_load ? 0.0 : f0 * u;
 				const double power = as_load ? 0.0 : f0 * sm_simulation_velocities(sim)[3];
-				worst_work = fmax(worst_work, fabs(sm_simulation_input_work(sim) - work));
-				worst_power = fmax(worst_power, fabs(sm_simulation_input_power(sim) - power));
+				worst_work = worst_of(worst_work, fabs(sm_simulation_input_work(sim) - work));
+				worst_power = worst_of(worst_power, fabs(sm_simulation_input_power(sim) - power));
 			}
 			printf("  %s, %s: |u - closed form| = %.3g m, |W - closed form| = %.3g J, |balance - start| = "
 			       "%.3g J, |P - f0 u'| = %.3g W\n",
@@ -138,7 +138,7 @@ static int test_balance_holds_with_every_kind_of_input(void)
 				ENSURE_NEAR(balance(sim), before, 1e-13);
 			}
 			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
-			worst = fmax(worst, fabs(balance(sim) - start));
+			worst = worst_of(worst, fabs(balance(sim) - start));
 		}
 		const double work = sm_simulation_input_work(sim);
 		printf("  %s: |balance - start| <= %.3g J, input work %.6g J, dissipated %.6g J\n",
@@ -170,7 +170,7 @@ static int test_balance_holds_across_a_break(void)
 		double worst = 0.0;
 		for (int i = 1; i <= 15; i++) {
 			ENSURE_STATUS(sm_simulation_advance(sim, 0.1 * i), SM_OK);
-			worst = fmax(worst, fabs(balance(sim) - start));
+			worst = worst_of(worst, fabs(balance(sim) - start));
 		}
 		// Strain 0.1 at a t^2 / 2 = 0.1 m: t = 1 s. Up to it the driver's work is the spring's
 		// energy, k (0.1 m)^2 / 2 = 0.5 J, and the driven particle's kinetic energy, m (a t)^2 / 2 =

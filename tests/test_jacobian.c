@@ -326,7 +326,7 @@ static int test_definite_equals_exact_for_stretched_springs_at_rest(void)
 	sm_model_jacobian_dense(m, x, zero_v, SM_JACOBIAN_DEFINITE, kd, NULL);
 	double diff = 0.0;
 	for (size_t k = 0; k < dim * dim; k++)
-		diff = fmax(diff, fabs(ke[k] - kd[k]));
+		diff = worst_of(diff, fabs(ke[k] - kd[k]));
 	ENSURE(diff > 1.0);
 	sm_model_destroy(m);
 	free(ke);

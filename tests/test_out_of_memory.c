@@ -513,7 +513,7 @@ static double largest_difference(const double* a, const double* b, int32_t n)
 {
 	double d = 0.0;
 	for (int32_t i = 0; i < n; ++i)
-		d = fmax(d, fabs(a[i] - b[i]));
+		d = worst_of(d, fabs(a[i] - b[i]));
 	return d;
 }
 

@@ -299,7 +299,7 @@ static int check_model(const char* model_name)
 			total[0] += sign * reference.values[0][energy + q];
 			total[1] += sign * reference.values[r][energy + q];
 		}
-		worst_drift = fmax(worst_drift, fabs(total[1] - total[0]) / energy_scale);
+		worst_drift = worst_of(worst_drift, fabs(total[1] - total[0]) / energy_scale);
 		if (!(fabs(total[1] - total[0]) <= 1e-6 * energy_scale)) {
 			printf("  %s at t = %g s: the total energy changed by %.3g J (scale %.3g J)\n", model_name,
 			       reference.values[r][0], total[1] - total[0], energy_scale);

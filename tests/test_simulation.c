@@ -136,7 +136,7 @@ static int check_oscillator(double zeta, sm_linear_solver solver)
 			printf("  %s: %s\n", sm_linear_solver_name(solver), sm_simulation_last_error(sim));
 		ENSURE(sm_simulation_time(sim) == t);
 		const double u = sm_simulation_positions(sim)[3] - 1.0;
-		worst = fmax(worst, fabs(u - oscillator_closed_form(zeta, w0, u0, t)));
+		worst = worst_of(worst, fabs(u - oscillator_closed_form(zeta, w0, u0, t)));
 	}
 	// rtol 1e-10 on an amplitude of 0.2 m: the global error stays far below 1e-6 m (the issue's
 	// bound) even after the error of 50 output intervals adds up.
@@ -227,7 +227,7 @@ static int test_rope_released_in_a_mode_decays_as_its_modal_solution(void)
 		const double decay =
 		    exp(-zeta * omega * t) * (cos(omega_d * t) + zeta / sqrt(1.0 - zeta * zeta) * sin(omega_d * t));
 		for (int32_t p = 1; p <= n; p++) {
-			worst = fmax(worst, fabs(x[3 * p] - (length * p / n + amplitude * sin(p * theta) * decay)));
+			worst = worst_of(worst, fabs(x[3 * p] - (length * p / n + amplitude * sin(p * theta) * decay)));
 			ENSURE(x[3 * p + 1] == 0.0 && x[3 * p + 2] == 0.0);
 		}
 	}
@@ -257,7 +257,7 @@ static int check_energy_conserved(sm_model* model)
 		ENSURE_STATUS(sm_simulation_advance(sim, 0.5 * i), SM_OK);
 		const sm_energies e = sm_simulation_energies(sim);
 		scale = fmax(scale, e.kinetic);
-		worst = fmax(worst, fabs(e.kinetic + e.elastic + e.gravity - total0));
+		worst = worst_of(worst, fabs(e.kinetic + e.elastic + e.gravity - total0));
 	}
 	// Issue's bound: relative drift <= 1e-6 over 10 s at rtol 1e-10. BDF is not symplectic: the
 	// drift is the accumulated local error, orders of magnitude below the bound here.
@@ -374,7 +374,7 @@ static double max_difference(const double* a, const double* b, int32_t count)
 {
 	double worst = 0.0;
 	for (int32_t i = 0; i < count; i++)
-		worst = fmax(worst, fabs(a[i] - b[i]));
+		worst = worst_of(worst, fabs(a[i] - b[i]));
 	return worst;
 }
 
@@ -2115,9 +2115,9 @@ static int test_driven_anchor_drags_bob_as_closed_form(void)
 		const double decay = exp(-zeta * w0 * t);
 		const double u = -V / wd * decay * sin(wd * t);
 		const double du = -V * decay * (cos(wd * t) - zeta * w0 / wd * sin(wd * t));
-		worst_x = fmax(worst_x, fabs(sm_simulation_positions(sim)[3] - (V * t + 1.0 + u)));
+		worst_x = worst_of(worst_x, fabs(sm_simulation_positions(sim)[3] - (V * t + 1.0 + u)));
 		sm_simulation_forces(sim, f);
-		worst_f = fmax(worst_f, fabs(f[0] - (k * u + kd * du)));
+		worst_f = worst_of(worst_f, fabs(f[0] - (k * u + kd * du)));
 	}
 	printf("  max |x - closed form| = %.3g m, max |reaction - closed form| = %.3g N\n", worst_x, worst_f);
 	ENSURE(worst_x <= 1e-7);
@@ -2322,7 +2322,7 @@ static int test_pulse_runs_along_a_taut_rope_and_comes_back_inverted(void)
 			const double y = sm_simulation_positions(sim)[3 * middle + 1];
 			const double exact = wave_pulse(t - 0.5 * stretched / c, tau, amplitude, &rate) -
 			                     wave_pulse(t - 1.5 * stretched / c, tau, amplitude, &rate);
-			error = fmax(error, fabs(y - exact));
+			error = worst_of(error, fabs(y - exact));
 			peak = fmax(peak, y);
 			trough = fmin(trough, y);
 		}
@@ -2377,7 +2377,7 @@ static int test_cloth_at_rest_reactions_balance_weight(void)
 			for (int c = 0; c < 3; c++)
 				on_supports[c] += f[3 * i + c];
 		else
-			worst_free = fmax(worst_free, fabs(f[3 * i]) + fabs(f[3 * i + 1]) + fabs(f[3 * i + 2]));
+			worst_free = worst_of(worst_free, fabs(f[3 * i]) + fabs(f[3 * i + 1]) + fabs(f[3 * i + 2]));
 	}
 	const double weight = sm_model_total_mass(model) * 9.81;
 	// The supports carry the whole weight (their own particles' weight included): the
@@ -3164,7 +3164,7 @@ static int test_reduced_newton_matrix_matches_dense(void)
 					a += term * p[col];
 					size += fabs(term * p[col]);
 				}
-				worst = fmax(worst, fabs(q[row] - a));
+				worst = worst_of(worst, fabs(q[row] - a));
 				scale = fmax(scale, size);
 			}
 			ENSURE(worst <= 1e-12 * scale);
@@ -3235,7 +3235,7 @@ static int test_reduced_rhs_forces_match_the_models(void)
 	const double expected_power = sm_model_forces_and_power(model, x, v, sim->external_force, expected);
 	double worst = 0.0, scale = 0.0;
 	for (size_t k = 0; k < dim; k++) {
-		worst = fmax(worst, fabs(f[k] - expected[k]));
+		worst = worst_of(worst, fabs(f[k] - expected[k]));
 		scale = fmax(scale, fabs(expected[k]));
 	}
 	ENSURE(scale > 0.0 && expected_power > 0.0);
@@ -3827,7 +3827,7 @@ static int test_coarse_halves_solve(void)
 	const double* xr = reference->x;
 	double difference = 0.0, size = 0.0, magnitude = 0.0;
 	for (size_t i = 0; i < n; i++) {
-		difference = fmax(difference, fabs(x[i] - xr[i]));
+		difference = worst_of(difference, fabs(x[i] - xr[i]));
 		size = fmax(size, fabs(xr[i]));
 	}
 	ENSURE(difference <= 1e-9 * size);
@@ -3838,7 +3838,7 @@ static int test_coarse_halves_solve(void)
 			for (int j = 0; j < 3; j++)
 				row_size += fabs(values[sm_block_entry(first, (int32_t)(i / 3), k, (int)(i % 3), j)]) *
 				            fabs(x[3 * neighbour[first[i / 3] + k] + j]);
-		magnitude = fmax(magnitude, fabs(b[i] - work[i]) / row_size);
+		magnitude = worst_of(magnitude, fabs(b[i] - work[i]) / row_size);
 	}
 	ENSURE(magnitude <= 1e-12);
 	sm_workers* team = sm_workers_create(2);
@@ -3944,7 +3944,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 		ENSURE(y != NULL);
 		double error = 0.0;
 		for (size_t i = 0; i < n; i++)
-			error = fmax(error, fabs(y[i] - x[i]));
+			error = worst_of(error, fabs(y[i] - x[i]));
 		printf("  translation %d: max |V A t - t| = %.3g\n", c, error);
 		ENSURE(error <= 0.05);
 	}
@@ -3981,7 +3981,7 @@ static int test_multilevel_solve_is_preconditioned_conjugate_gradients(void)
 		ENSURE(y != NULL);
 		double error = 0.0, largest = 0.0;
 		for (size_t i = 0; i < n; i++) {
-			error = fmax(error, fabs(y[i] - x[i]));
+			error = worst_of(error, fabs(y[i] - x[i]));
 			largest = fmax(largest, fabs(x[i]));
 		}
 		printf("  %d iterations: %.3g of %.3g from the reference\n", counts[k], error, largest);
@@ -5594,9 +5594,9 @@ static int test_reduced_solve_matches_dense_newton_system(void)
 		double largest = 0.0, worst = 0.0, worst_x = 0.0, largest_x = 0.0;
 		for (int f = 0; f < n; f++) {
 			largest = fmax(largest, fabs(rhs[f]));
-			worst = fmax(worst, fabs(x[n + f] - rhs[f]));
+			worst = worst_of(worst, fabs(x[n + f] - rhs[f]));
 			largest_x = fmax(largest_x, fabs(b[f] + gamma * rhs[f]));
-			worst_x = fmax(worst_x, fabs(x[f] - (b[f] + gamma * rhs[f])));
+			worst_x = worst_of(worst_x, fabs(x[f] - (b[f] + gamma * rhs[f])));
 		}
 		printf("  %s: gamma %.3g, |dv - dense| = %.3g of %.3g, |dx - dense| = %.3g of %.3g\n",
 		       sm_linear_solver_name(solvers[k]), gamma, worst, largest, worst_x, largest_x);

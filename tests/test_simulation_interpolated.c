@@ -61,8 +61,8 @@ static int test_rows_follow_the_closed_form_in_fewer_steps(void)
 		ENSURE(sm_simulation_time(interpolated) == t);
 		double u, v;
 		free_motion(zeta, w0, OSC_U0, 0.0, t, &u, &v);
-		worst = fmax(worst, fabs(sm_simulation_positions(interpolated)[3] - 1.0 - u));
-		worst_velocity = fmax(worst_velocity, fabs(sm_simulation_velocities(interpolated)[3] - v));
+		worst = worst_of(worst, fabs(sm_simulation_positions(interpolated)[3] - 1.0 - u));
+		worst_velocity = worst_of(worst_velocity, fabs(sm_simulation_velocities(interpolated)[3] - v));
 	}
 	ENSURE(worst <= 1e-6 && worst_velocity <= 1e-6 * w0);
 	// The energy balance holds at an interpolated time too: the dissipated energy is part of
@@ -342,8 +342,8 @@ static int test_rows_before_a_break_found_past_them_are_at_their_own_time(void)
 			u = strain + v_b * (t - t_b);
 			v = v_b;
 		}
-		worst = fmax(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - u));
-		worst_velocity = fmax(worst_velocity, fabs(sm_simulation_velocities(sim)[3] - v));
+		worst = worst_of(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - u));
+		worst_velocity = worst_of(worst_velocity, fabs(sm_simulation_velocities(sim)[3] - v));
 	}
 	if (!(worst <= 1e-6 && worst_velocity <= 1e-6 * w0))
 		printf("  %g m, %g m/s from the closed form; %d rows with the break pending\n", worst, worst_velocity,
@@ -397,7 +397,7 @@ static int check_input_past_the_steps(bool driven)
 			ENSURE(tn > t);
 		double u, v;
 		free_motion(zeta, w0, u1 - shift, v1, t - t_force, &u, &v);
-		worst = fmax(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - (u + shift)));
+		worst = worst_of(worst, fabs(sm_simulation_positions(sim)[3] - 1.0 - (u + shift)));
 	}
 	if (!(worst <= 1e-6))
 		printf("  %s: %g m from the closed form\n", driven ? "anchor moved" : "force", worst);

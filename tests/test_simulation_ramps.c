@@ -40,9 +40,9 @@ static int test_ramped_force_pushes_oscillator_as_closed_form(void)
 			ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
 			const double push = f0 + r * t;
 			const double u = push / OSC_K - f0 / OSC_K * cos(w * t) - r / (OSC_K * w) * sin(w * t);
-			worst_x = fmax(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
+			worst_x = worst_of(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
 			sm_simulation_forces(sim, f);
-			worst_f = fmax(worst_f, fabs(f[3] - (push - OSC_K * u)));
+			worst_f = worst_of(worst_f, fabs(f[3] - (push - OSC_K * u)));
 		}
 		printf("  %s: max |x - closed form| = %.3g m, max |force - closed form| = %.3g N\n",
 		       sm_linear_solver_name(solvers[s]), worst_x, worst_f);
@@ -78,9 +78,9 @@ static int test_ramp_set_later_runs_from_its_own_time(void)
 			ENSURE_STATUS(sm_simulation_advance(sim, t_set + s), SM_OK);
 			const double push = f0 + r * s;
 			const double u = push / OSC_K - f0 / OSC_K * cos(w * s) - r / (OSC_K * w) * sin(w * s);
-			worst_x = fmax(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
+			worst_x = worst_of(worst_x, fabs(sm_simulation_positions(sim)[3] - (1.0 + u)));
 			sm_simulation_forces(sim, f);
-			worst_f = fmax(worst_f, fabs(f[3] - (push - OSC_K * u)));
+			worst_f = worst_of(worst_f, fabs(f[3] - (push - OSC_K * u)));
 		}
 		ENSURE(worst_x <= 1e-7);
 		ENSURE(worst_f <= 4e-6);
@@ -197,8 +197,8 @@ static int test_accelerating_anchor_drags_bob_as_closed_form(void)
 		const double* x = sm_simulation_positions(sim);
 		const double* v = sm_simulation_velocities(sim);
 		const double anchor = 0.5 * a * t * t, u = -a / (w * w) * (1.0 - cos(w * t));
-		worst_anchor = fmax(worst_anchor, fmax(fabs(x[0] - anchor), fabs(v[0] - a * t)));
-		worst_bob = fmax(worst_bob, fabs(x[3] - (anchor + 1.0 + u)));
+		worst_anchor = worst_of(worst_anchor, fmax(fabs(x[0] - anchor), fabs(v[0] - a * t)));
+		worst_bob = worst_of(worst_bob, fabs(x[3] - (anchor + 1.0 + u)));
 	}
 	printf("  max |anchor - path| = %.3g, max |bob - closed form| = %.3g m\n", worst_anchor, worst_bob);
 	ENSURE(worst_anchor <= 1e-15);

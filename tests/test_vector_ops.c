@@ -722,7 +722,7 @@ static int run_heat(heat_setup setup, heat_operations operations, heat_run* out)
 			out->y[k][i] = yo[i];
 			const double exact = exp(lambda1 * t) * sin(pi * (i + 1) * step) +
 			                     0.5 * exp(lambda3 * t) * sin(3.0 * pi * (i + 1) * step);
-			out->error = fmax(out->error, fabs(yo[i] - exact));
+			out->error = worst_of(out->error, fabs(yo[i] - exact));
 		}
 	}
 	// CVODE's own vectors: the prediction, the current state, f(y) and the history column.
@@ -757,7 +757,7 @@ static double largest_difference(const heat_run* a, const heat_run* b)
 	double d = 0.0;
 	for (int k = 0; k < HEAT_OUTPUTS; k++)
 		for (int i = 0; i < HEAT_LENGTH; i++)
-			d = fmax(d, fabs(a->y[k][i] - b->y[k][i]));
+			d = worst_of(d, fabs(a->y[k][i] - b->y[k][i]));
 	return d;
 }
 
