@@ -1693,6 +1693,31 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 	return overflow_warning(inst, fn, "the derivative of ", overflowing);
 }
 
+// Whether every output is finite, checked over a superset of their values: every particle's
+// position and velocity, where there are motion ports (whose reaction forces are the force
+// outputs) the forces on every particle, and the energies. False only sends end_step on to read
+// each output, to name the first that is not finite. Reading each through the table at every
+// step took half of a communication step that CVODE interpolates (the bundled two-mass chain at
+// 1e-4 s with a stop time: 2500 of 5300 instructions, for 23 outputs among 62 variables); the
+// check takes 980, 700 of them the forces and the energies.
+static bool outputs_finite(instance* inst, energy_cache* energies)
+{
+	const size_t n3 = 3 * (size_t)inst->particle_count;
+	const double* x = sm_simulation_positions(inst->sim);
+	const double* u = sm_simulation_velocities(inst->sim);
+	bool motion_ports = false;
+	for (int32_t p = 0; p < inst->port_count; ++p)
+		motion_ports = motion_ports || inst->ports[p].kind == SM_PORT_MOTION;
+	const double* f = motion_ports ? current_forces(inst) : NULL;
+	// 0 x is 0 for a finite x and NaN for an infinite or NaN one.
+	double zero = 0.0;
+	for (size_t i = 0; i < n3; ++i)
+		zero += 0.0 * x[i] + 0.0 * u[i] + (f ? 0.0 * f[i] : 0.0);
+	const sm_energies* e = cached_energies(inst, energies);
+	return zero == 0.0 && isfinite(e->kinetic) && isfinite(e->elastic) && isfinite(e->gravity) &&
+	       isfinite(fmu_dissipated_energy(inst)) && isfinite(fmu_input_work(inst));
+}
+
 // Ends a step from t that reached t_end. A finite state whose outputs overflow a double (the
 // energies of 1e218 kg at 1e98 m above the origin; the force on a driven particle, which no state
 // of the integration holds) cannot be reported: the step is then discarded at its end, like one
@@ -1704,6 +1729,8 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 	inst->last_successful_time = t_end;
 	const char* overflowing = NULL;
 	energy_cache energies = {false, {0.0, 0.0, 0.0}};
+	if (outputs_finite(inst, &energies))
+		return fmi2OK;
 	for (int32_t i = 0; i < inst->table.count && overflowing == NULL; ++i) {
 		const fmu_variable* v = &inst->table.variables[i];
 		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v, &energies)))
