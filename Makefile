@@ -10,7 +10,7 @@ CTEST         ?= /usr/bin/ctest
 PYTHON        := $(CURDIR)/.venv/bin/python
 JOBS          ?= 2
 CMAKE_FLAGS   ?=
-# make fuzz: seconds per target, and the targets (model_file simulation_state fmu_state reference inputs; all when empty).
+# make fuzz: seconds per target, and the targets (model_file mesh_file simulation_state fmu_state reference inputs; all when empty).
 FUZZ_SECONDS  ?= 60
 FUZZ_TARGETS  ?=
 

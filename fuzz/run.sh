@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Fuzzes with libFuzzer for SECONDS (default 60) each target named (default all three):
+# Fuzzes with libFuzzer for SECONDS (default 60) each target named (default all of them):
 #   model_file        the model-file loader, seeded from the bundled and test models
+#   mesh_file         the OBJ files of meshes ("file"), read and built into a mesh, seeded with
+#                     the OBJ files of tests/bad_models and two files of every form of a face
 #   simulation_state  simulation states read back from bytes and restored, seeded with states
 #                     the target writes of its own model
 #   fmu_state         the FMU's serialised states read back (fmi2DeSerializeFMUstate), set and
@@ -12,8 +14,8 @@
 # Builds the targets with clang (installed from Debian's packages if missing, with the fuzzer
 # runtime and the OpenMP runtime SUNDIALS' CMake package asks for) and runs them one after the
 # other on one core. Each keeps its corpus in fuzz/corpus-work/ (the loader's),
-# fuzz/corpus-work-simulation-state/, fuzz/corpus-work-fmu-state/, fuzz/corpus-work-reference/ or
-# fuzz/corpus-work-inputs/; inputs that crash are written to build-fuzz/artifacts/.
+# fuzz/corpus-work-mesh-file/, fuzz/corpus-work-simulation-state/, fuzz/corpus-work-fmu-state/,
+# fuzz/corpus-work-reference/ or fuzz/corpus-work-inputs/; inputs that crash are written to build-fuzz/artifacts/.
 #
 #   make fuzz FUZZ_SECONDS=600
 #   make fuzz FUZZ_SECONDS=600 FUZZ_TARGETS=simulation_state
@@ -22,15 +24,15 @@ set -euo pipefail
 seconds=${1:-60}
 shift || true
 targets=("$@")
-((${#targets[@]})) || targets=(model_file simulation_state fmu_state reference inputs)
+((${#targets[@]})) || targets=(model_file mesh_file simulation_state fmu_state reference inputs)
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build-fuzz
 
 for target in "${targets[@]}"; do
   case $target in
-  model_file | simulation_state | fmu_state | reference | inputs) ;;
+  model_file | mesh_file | simulation_state | fmu_state | reference | inputs) ;;
   *)
-    echo "fuzz: unknown target $target (model_file, simulation_state, fmu_state, reference, inputs)" >&2
+    echo "fuzz: unknown target $target (model_file, mesh_file, simulation_state, fmu_state, reference, inputs)" >&2
     exit 2
     ;;
   esac
@@ -69,6 +71,16 @@ for target in "${targets[@]}"; do
     "$build/fuzz_model_file" "$work" "$seeds" \
       -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
       -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
+    ;;
+  mesh_file)
+    work=$root/fuzz/corpus-work-mesh-file
+    cp "$root"/tests/bad_models/*.obj "$seeds"/
+    printf 'v 0 0 0\r\nv 1 0 0 1\r\nv 1 1 0 0.5 0.5 0.5\r\nvt 0 0\r\nvn 0 0 1\r\nf 1/1/1 2//1 \\\r\n 3/1 -1\r\n' > "$seeds/forms.obj"
+    printf '# hexagon\nv 0 0 0\nv 1 0 0\nv .5 .866 0\nf -3 -2 -1\nv -.5 .866 0\nf 1 -2 -1\ng rest\nusemtl m\nl 1 2\n' > "$seeds/relative.obj"
+    mkdir -p "$work"
+    "$build/fuzz_mesh_file" "$work" "$seeds" \
+      -dict="$root/fuzz/mesh_file.dict" -max_total_time="$seconds" -max_len=8192 -timeout=10 \
+      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/mesh-file-" -print_final_stats=1
     ;;
   reference)
     work=$root/fuzz/corpus-work-reference

@@ -71,7 +71,8 @@ static edge_entry* edge_find(edge_table* t, uint64_t key)
 	return e;
 }
 
-static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
+// The checks on a definition's values; *triangle or *vertex names the one a failure is about.
+static sm_status check_mesh(sm_model* model, const sm_mesh_def* def, int32_t* triangle, int32_t* vertex)
 {
 	static const char what[] = "mesh";
 	sm_status st;
@@ -99,22 +100,28 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def)
 		                     (int)def->vertex_count, SM_STRUCTURE_MAX_ELEMENTS);
 	for (int32_t v = 0; v < def->vertex_count; v++)
 		for (int c = 0; c < 3; c++)
-			if (!isfinite(def->vertices[3 * (size_t)v + c]))
+			if (!isfinite(def->vertices[3 * (size_t)v + c])) {
+				*vertex = v;
 				return sm_model_fail(model, SM_ERROR_NOT_FINITE,
 				                     "mesh: vertex %d coordinate %d = %g is not finite", (int)v, c,
 				                     def->vertices[3 * (size_t)v + c]);
+			}
 	for (int32_t t = 0; t < def->triangle_count; t++) {
 		const int32_t* tri = def->triangles + 3 * (size_t)t;
 		for (int c = 0; c < 3; c++)
-			if (tri[c] < 0 || tri[c] >= def->vertex_count)
+			if (tri[c] < 0 || tri[c] >= def->vertex_count) {
+				*triangle = t;
 				return sm_model_fail(
 				    model, SM_ERROR_PARTICLE_INDEX,
 				    "mesh: triangle %d vertex %d = %d is out of range (mesh has %d vertices)", (int)t, c,
 				    (int)tri[c], (int)def->vertex_count);
-		if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+			}
+		if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2]) {
+			*triangle = t;
 			return sm_model_fail(model, SM_ERROR_SELF_SPRING,
 			                     "mesh: triangle %d (%d, %d, %d) repeats a vertex", (int)t, (int)tri[0],
 			                     (int)tri[1], (int)tri[2]);
+		}
 	}
 	return SM_OK;
 }
@@ -192,12 +199,20 @@ static double smallest_angle_sine(const double* vertices, const int32_t* tri)
 
 sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out)
 {
+	int32_t triangle, vertex;
+	return sm_add_mesh_located(model, def, out, &triangle, &vertex);
+}
+
+sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_structure* out, int32_t* triangle,
+                              int32_t* vertex)
+{
 	static const char what[] = "mesh";
+	*triangle = *vertex = -1;
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (def == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: definition is NULL");
-	sm_status st = check_mesh(model, def);
+	sm_status st = check_mesh(model, def, triangle, vertex);
 	if (st != SM_OK)
 		return st;
 
@@ -225,6 +240,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			    sm_model_fail(model, SM_ERROR_NOT_FINITE,
 				              "mesh: the area of triangle %d (%d, %d, %d) overflows (its edges are too long)",
 				              (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			*triangle = t;
 			break;
 		}
 		// Zero area: exactly, or to rounding (collinear vertices), by the rule a sheet's edges
@@ -236,6 +252,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			    model, SM_ERROR_INVALID_ARGUMENT,
 			    "mesh: the area of triangle %d (%d, %d, %d) underflows to 0 (its edges are too short)",
 			    (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			*triangle = t;
 			break;
 		}
 		if (!(area > 0.0) || !(sine > 1e-12)) {
@@ -244,6 +261,7 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			    "mesh: triangle %d (%d, %d, %d) has zero area (to rounding: twice its area is at most "
 			    "1e-12 times the product of its two longest edges)",
 			    (int)t, (int)tri[0], (int)tri[1], (int)tri[2]);
+			*triangle = t;
 			break;
 		}
 		for (int c = 0; c < 3; c++)
@@ -267,10 +285,13 @@ sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out
 			e->opposite[e->triangles++] = opposite;
 			e->area += area;
 		}
+		if (st != SM_OK)
+			*triangle = t;
 	}
 	for (int32_t v = 0; v < nv && st == SM_OK; v++) {
 		if (mass[v] > 0.0 && isfinite(mass[v]))
 			continue;
+		*vertex = v;
 		bool in_triangle = false;
 		for (size_t k = 0; k < 3 * (size_t)nt && !in_triangle; k++)
 			in_triangle = def->triangles[k] == v;

@@ -243,6 +243,7 @@ static const char* key_unit(const parser* p, const char* key)
 	    {"edge_v", "m"},
 	    {"size", "m"},
 	    {"density", "kg/m2"},
+	    {"scale", "1"},
 	    {"min", "m"},
 	    {"max", "m"},
 	    {"gravity", "m/s2"},
@@ -1380,7 +1381,9 @@ static bool check_names_against_structure(parser* p, const named_like_references
 	            sm_text_quoted(text, name), (int)length, structure);
 }
 
-static bool read_structure(parser* p, const named_like_references* like, const json_t* obj, const char* path)
+// Structure `index` of "structures", obj, at path.
+static bool read_structure(parser* p, const named_like_references* like, size_t index, const json_t* obj,
+                           const char* path)
 {
 	static const char* const rope_keys[] = {"type",
 	                                        "name",
@@ -1410,8 +1413,8 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 	                                         "body_diagonal",
 	                                         "mass_distribution",
 	                                         NULL};
-	static const char* const mesh_keys[] = {"type",    "name", "vertices", "triangles",
-	                                        "density", "edge", "bend",     NULL};
+	static const char* const mesh_keys[] = {"type",   "name",    "vertices", "triangles", "file", "scale",
+	                                        "origin", "density", "edge",     "bend",      NULL};
 	char sub[PATH_CAPACITY];
 	forget_parameters(p);
 	if (!expect_object(p, obj, path) || !require(p, obj, path, "type") || !require(p, obj, path, "name"))
@@ -1559,28 +1562,72 @@ static bool read_structure(parser* p, const named_like_references* like, const j
 		d.edge = sm_default_spring_material();
 		double* vertices = NULL;
 		int32_t* triangles = NULL;
-		if (!require(p, obj, path, "vertices") || !require(p, obj, path, "triangles") ||
-		    !read_field(p, FEEDS_CONSTANTS, obj, path, "density", POSITIVE, &d.density, NULL) ||
-		    !read_material(p, obj, path, "edge", &d.edge, &groups[0]) ||
-		    !read_material(p, obj, path, "bend", &d.bend, &groups[1]) ||
-		    !read_mesh_arrays(p, obj, path, &vertices, &d.vertex_count, &triangles, &d.triangle_count)) {
+		// The OBJ file of a "file", read when the document was parsed (read_mesh_files).
+		const document_mesh_file* from =
+		    json_object_get(obj, "file") != NULL && index < p->doc->mesh_file_slots
+		        ? p->doc->mesh_files[index]
+		        : NULL;
+		double scale = 1.0, origin[3] = {0.0, 0.0, 0.0};
+		bool ok =
+		    (from != NULL || (require(p, obj, path, "vertices") && require(p, obj, path, "triangles"))) &&
+		    read_field(p, FEEDS_CONSTANTS, obj, path, "density", POSITIVE, &d.density, NULL) &&
+		    read_field(p, FEEDS_STATE, obj, path, "scale", POSITIVE, &scale, NULL) &&
+		    read_vector(p, FEEDS_STATE, obj, path, "origin", ANY_FINITE, origin, NULL) &&
+		    read_material(p, obj, path, "edge", &d.edge, &groups[0]) &&
+		    read_material(p, obj, path, "bend", &d.bend, &groups[1]);
+		if (ok && from != NULL) {
+			d.vertex_count = from->mesh.vertex_count;
+			d.triangle_count = from->mesh.triangle_count;
+			vertices = malloc(3 * (size_t)(d.vertex_count > 0 ? d.vertex_count : 1) * sizeof(double));
+			ok = check_budget(p, path, d.vertex_count, 0) &&
+			     (vertices != NULL || fail(p, SM_ERROR_OUT_OF_MEMORY, path, "out of memory for %d vertices",
+			                               (int)d.vertex_count));
+			if (ok)
+				memcpy(vertices, from->mesh.vertices, 3 * (size_t)d.vertex_count * sizeof(double));
+		} else if (ok)
+			ok = read_mesh_arrays(p, obj, path, &vertices, &d.vertex_count, &triangles, &d.triangle_count);
+		if (!ok) {
 			free(vertices);
 			free(triangles);
 			return false;
 		}
+		// Vertex v at origin + scale v; a scale or an origin the file leaves out changes nothing (not
+		// even the sign of a zero coordinate).
+		const bool scaled = json_object_get(obj, "scale") != NULL,
+		           moved = json_object_get(obj, "origin") != NULL;
+		for (size_t k = 0; k < 3 * (size_t)d.vertex_count; k++) {
+			if (scaled)
+				vertices[k] *= scale;
+			if (moved)
+				vertices[k] += origin[k % 3];
+		}
 		d.vertices = vertices;
-		d.triangles = triangles;
-		st = sm_add_mesh(model, &d, &s.range);
+		d.triangles = from != NULL ? from->mesh.triangles : triangles;
+		int32_t failed_triangle, failed_vertex;
+		st = sm_add_mesh_located(model, &d, &s.range, &failed_triangle, &failed_vertex);
 		// A triangle that repeats a vertex: named with the parameters its own vertex indices came
 		// from, not with those of other triangles or of the vertices' positions, which have no part
 		// in it.
 		noted_parameters repeating = {{0}, 0, false};
-		if (st == SM_ERROR_SELF_SPRING)
+		if (st == SM_ERROR_SELF_SPRING && from == NULL)
 			note_repeating_triangle(p, obj, triangles, d.triangle_count, &repeating);
 		free(vertices);
 		free(triangles);
-		if (st == SM_ERROR_SELF_SPRING)
+		if (st == SM_ERROR_SELF_SPRING && from == NULL)
 			return fail_naming(p, st, path, sm_model_last_error(model), &repeating);
+		// A failure about one triangle or vertex of an OBJ file: at the line of its face or vertex.
+		const int32_t* place = from == NULL ? NULL
+		                       : failed_triangle >= 0
+		                           ? from->mesh.triangle_place + 2 * (size_t)failed_triangle
+		                       : failed_vertex >= 0 ? from->mesh.vertex_place + 2 * (size_t)failed_vertex
+		                                            : NULL;
+		if (st != SM_OK && place != NULL) {
+			char sub_file[PATH_CAPACITY], message[SM_ERROR_MESSAGE_CAPACITY];
+			child_key(sub_file, path, "file");
+			snprintf(message, sizeof message, "%s:%d:%d: %s", from->shown, (int)place[0], (int)place[1],
+			         sm_model_last_error(model));
+			return fail_naming_parameters(p, st, sub_file, message);
+		}
 		// The mesh's particles are within the limit; its springs are counted now.
 		if (st == SM_OK && !check_budget(p, path, 0, 0))
 			return false;
@@ -1636,7 +1683,7 @@ static bool read_structures(parser* p, const json_t* list)
 	for (size_t k = 0; ok && k < json_array_size(list); k++) {
 		char path[PATH_CAPACITY];
 		child_index(path, "structures", k);
-		ok = read_structure(p, &like, json_array_get(list, k), path);
+		ok = read_structure(p, &like, k, json_array_get(list, k), path);
 	}
 	named_like_free(&like);
 	return ok;
@@ -2192,8 +2239,87 @@ static bool missing_comma(const char* message)
 	return false;
 }
 
-sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
-                                       int64_t max_elements, sm_error* err)
+static sm_status read_regular_file(const char* path, const char* shown, char** text, size_t* length,
+                                   sm_error* err);
+
+// The OBJ files of the meshes that give a "file" (a path relative to `folder`, NULL or "" for the
+// current directory, unless absolute), read once, when the document is parsed: changing a
+// parameter builds the meshes again from what was read. A list of structures that is not one, or
+// a structure that is no mesh, is left for expand() to name.
+static bool read_mesh_files(sm_document* doc, const char* folder, sm_error* err)
+{
+	parser p = {.doc = doc, .err = err};
+	const json_t* list = json_object_get(doc->root, "structures");
+	if (!json_is_array(list))
+		return true;
+	const size_t n = json_array_size(list);
+	doc->mesh_files = calloc(n > 0 ? n : 1, sizeof *doc->mesh_files);
+	if (doc->mesh_files == NULL)
+		return fail(&p, SM_ERROR_OUT_OF_MEMORY, "structures", "out of memory");
+	doc->mesh_file_slots = n;
+	// As many triangles as a closed surface of the most vertices a model may have (twice as many),
+	// within what the mesh builder takes.
+	const int64_t max_triangles = 2 * doc->max_elements < SM_STRUCTURE_MAX_ELEMENTS / 3
+	                                  ? 2 * doc->max_elements
+	                                  : SM_STRUCTURE_MAX_ELEMENTS / 3;
+	for (size_t k = 0; k < n; k++) {
+		const json_t* obj = json_array_get(list, k);
+		const json_t* type = json_object_get(obj, "type");
+		const json_t* file = json_object_get(obj, "file");
+		if (file == NULL || !json_is_string(type) || strcmp(json_string_value(type), "mesh") != 0)
+			continue;
+		char path[PATH_CAPACITY], sub[PATH_CAPACITY];
+		child_index(path, "structures", k);
+		child_key(sub, path, "file");
+		if (!json_is_string(file))
+			return fail(&p, SM_ERROR_SCHEMA, sub, "must be a string, the path of an OBJ file, not %s",
+			            type_name(file));
+		if (json_object_get(obj, "vertices") != NULL || json_object_get(obj, "triangles") != NULL)
+			return fail(&p, SM_ERROR_SCHEMA, path,
+			            "give \"file\" (an OBJ file) or \"vertices\" and \"triangles\", not both");
+		const char* name = json_string_value(file);
+		if (name[0] == '\0')
+			return fail(&p, SM_ERROR_SCHEMA, sub, "must name an OBJ file, not be empty");
+		// A relative path is the model file's folder's.
+		const size_t folder_bytes = folder != NULL && name[0] != '/' ? strlen(folder) : 0;
+		const bool slash = folder_bytes > 0 && folder[folder_bytes - 1] != '/';
+		char* joined = malloc(folder_bytes + slash + strlen(name) + 1);
+		document_mesh_file* f = calloc(1, sizeof *f);
+		if (f != NULL)
+			doc->mesh_files[k] = f;
+		if (joined == NULL || f == NULL || (f->shown = malloc(SM_ERROR_MESSAGE_CAPACITY / 2 + 1)) == NULL) {
+			free(joined);
+			return fail(&p, SM_ERROR_OUT_OF_MEMORY, sub, "out of memory");
+		}
+		if (folder_bytes > 0)
+			memcpy(joined, folder, folder_bytes);
+		if (slash)
+			joined[folder_bytes] = '/';
+		strcpy(joined + folder_bytes + slash, name);
+		sm_text_shown(f->shown, SM_ERROR_MESSAGE_CAPACITY / 2, joined);
+		char* text = NULL;
+		size_t length = 0;
+		sm_error file_err = {SM_OK, ""};
+		const sm_status read = read_regular_file(joined, f->shown, &text, &length, &file_err);
+		free(joined);
+		if (read != SM_OK)
+			return fail(&p, read, sub, "%s", file_err.message);
+		int line, column;
+		char message[MESH_FILE_MESSAGE_CAPACITY];
+		const sm_status st = sm_mesh_file_parse(text, length, doc->max_elements, max_triangles, &f->mesh,
+		                                        &line, &column, message);
+		free(text);
+		if (st != SM_OK && line > 0)
+			return fail(&p, st, sub, "%s:%d:%d: %s", f->shown, line, column, message);
+		if (st != SM_OK)
+			return fail(&p, st, sub, "%s: %s", f->shown, message);
+	}
+	return true;
+}
+
+// sm_document_parse_limited, with the OBJ files of meshes found relative to `folder`.
+static sm_document* parse_document(const char* text, size_t length, const char* source_name,
+                                   const char* folder, int64_t max_elements, sm_error* err)
 {
 	sm_error_clear(err);
 	if (source_name == NULL)
@@ -2282,16 +2408,29 @@ sm_document* sm_document_parse_limited(const char* text, size_t length, const ch
 		sm_document_destroy(doc);
 		return NULL;
 	}
-	if (!read_header(doc, err) || (doc->current = expand(doc, doc->parameter_values, err)) == NULL) {
+	if (!read_header(doc, err) || !read_mesh_files(doc, folder, err) ||
+	    (doc->current = expand(doc, doc->parameter_values, err)) == NULL) {
 		sm_document_destroy(doc);
 		return NULL;
 	}
 	return doc;
 }
 
+sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
+                                       int64_t max_elements, sm_error* err)
+{
+	return parse_document(text, length, source_name, NULL, max_elements, err);
+}
+
 sm_document* sm_document_parse(const char* text, size_t length, const char* source_name, sm_error* err)
 {
-	return sm_document_parse_limited(text, length, source_name, SM_DOCUMENT_MAX_ELEMENTS, err);
+	return parse_document(text, length, source_name, NULL, SM_DOCUMENT_MAX_ELEMENTS, err);
+}
+
+sm_document* sm_document_parse_in_folder(const char* text, size_t length, const char* source_name,
+                                         const char* folder, sm_error* err)
+{
+	return parse_document(text, length, source_name, folder, SM_DOCUMENT_MAX_ELEMENTS, err);
 }
 
 // read(), again when a signal interrupts it.
@@ -2349,7 +2488,32 @@ static sm_status read_all(int fd, off_t size, const char* path, char** text, siz
 
 // Only a regular file is read. It is opened without waiting (O_NONBLOCK), so that a FIFO
 // without a writer is refused at once rather than blocking the open for ever, and its type is
-// checked before the first read: a device such as /dev/zero would be read without end.
+// checked before the first read: a device such as /dev/zero would be read without end. Messages
+// name the file `shown`.
+static sm_status read_regular_file(const char* path, const char* shown, char** text, size_t* length,
+                                   sm_error* err)
+{
+	*text = NULL;
+	*length = 0;
+	const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	if (fd < 0)
+		return sm_error_set(err, SM_ERROR_FILE, "%s: cannot open: %s", shown, strerror(errno));
+	struct stat st;
+	sm_status status = SM_ERROR_FILE;
+	if (fstat(fd, &st) != 0)
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", shown, strerror(errno));
+	else if (S_ISDIR(st.st_mode))
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", shown, strerror(EISDIR));
+	else if (!S_ISREG(st.st_mode))
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: not a regular file", shown);
+	else if (st.st_size > MAX_FILE_BYTES)
+		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", shown, MAX_FILE_BYTES);
+	else
+		status = read_all(fd, st.st_size, shown, text, length, err);
+	close(fd);
+	return status;
+}
+
 sm_document* sm_document_load(const char* path, sm_error* err)
 {
 	sm_error_clear(err);
@@ -2357,28 +2521,23 @@ sm_document* sm_document_load(const char* path, sm_error* err)
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "no model file given");
 		return NULL;
 	}
-	const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-	if (fd < 0) {
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot open: %s", path, strerror(errno));
-		return NULL;
-	}
-	struct stat st;
 	char* text = NULL;
 	size_t length = 0;
-	if (fstat(fd, &st) != 0)
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(errno));
-	else if (S_ISDIR(st.st_mode))
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: %s", path, strerror(EISDIR));
-	else if (!S_ISREG(st.st_mode))
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: not a regular file", path);
-	else if (st.st_size > MAX_FILE_BYTES)
-		sm_error_set(err, SM_ERROR_FILE, "%s: cannot read: larger than %ld bytes", path, MAX_FILE_BYTES);
-	else
-		read_all(fd, st.st_size, path, &text, &length, err);
-	close(fd);
-	if (text == NULL)
+	if (read_regular_file(path, path, &text, &length, err) != SM_OK)
 		return NULL;
-	sm_document* doc = sm_document_parse(text, length, path, err);
+	// The OBJ files a model names are found beside it: in the folder of its path.
+	const char* slash = strrchr(path, '/');
+	const size_t folder_bytes = slash == NULL ? 0 : slash == path ? 1 : (size_t)(slash - path);
+	char* folder = malloc(folder_bytes + 1);
+	sm_document* doc = NULL;
+	if (folder == NULL)
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+	else {
+		memcpy(folder, path, folder_bytes);
+		folder[folder_bytes] = '\0';
+		doc = parse_document(text, length, path, folder, SM_DOCUMENT_MAX_ELEMENTS, err);
+	}
+	free(folder);
 	free(text);
 	return doc;
 }
@@ -2394,6 +2553,14 @@ void sm_document_destroy(sm_document* doc)
 	free(doc->parameter_values);
 	free(doc->initial_position);
 	free(doc->initial_velocity);
+	for (size_t k = 0; k < doc->mesh_file_slots; k++) {
+		if (doc->mesh_files[k] == NULL)
+			continue;
+		sm_mesh_file_free(&doc->mesh_files[k]->mesh);
+		free(doc->mesh_files[k]->shown);
+		free(doc->mesh_files[k]);
+	}
+	free(doc->mesh_files);
 	free(doc->source);
 	free(doc);
 }
@@ -2579,6 +2746,72 @@ sm_structure_info sm_document_structure(const sm_document* doc, int32_t index)
 	info.type = types[s->type];
 	info.range = s->range;
 	return info;
+}
+
+const char* sm_document_structure_file(const sm_document* doc, int32_t index)
+{
+	if (doc == NULL || index < 0 || (size_t)index >= doc->mesh_file_slots || doc->mesh_files[index] == NULL)
+		return NULL;
+	const json_t* obj = json_array_get(json_object_get(doc->root, "structures"), (size_t)index);
+	return json_string_value(json_object_get(obj, "file"));
+}
+
+// The file's tree with each "file" of a mesh replaced by the "vertices" and "triangles" read from
+// it: the OBJ file's numbers as they are (its "scale" and "origin" stay, and apply to them the
+// same way), each a JSON real, which jansson writes with 17 significant digits (exactly, -0 as
+// -0.0); the triangles' indices from 0.
+char* sm_document_to_self_contained_json(const sm_document* doc, sm_error* err)
+{
+	sm_error_clear(err);
+	if (doc == NULL) {
+		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "no document");
+		return NULL;
+	}
+	json_t* root = json_deep_copy(doc->root);
+	bool ok = root != NULL;
+	json_t* structures = json_object_get(root, "structures");
+	for (size_t k = 0; ok && k < doc->mesh_file_slots; k++) {
+		const document_mesh_file* f = doc->mesh_files[k];
+		if (f == NULL)
+			continue;
+		json_t* obj = json_array_get(structures, k);
+		json_t* vertices = json_array();
+		json_t* triangles = json_array();
+		ok = vertices != NULL && triangles != NULL;
+		for (int32_t v = 0; ok && v < f->mesh.vertex_count; v++) {
+			const double* x = f->mesh.vertices + 3 * (size_t)v;
+			json_t* vertex = json_pack("[fff]", x[0], x[1], x[2]);
+			ok = vertex != NULL && json_array_append_new(vertices, vertex) == 0;
+		}
+		for (int32_t t = 0; ok && t < f->mesh.triangle_count; t++) {
+			const int32_t* c = f->mesh.triangles + 3 * (size_t)t;
+			json_t* triangle = json_pack("[III]", (json_int_t)c[0], (json_int_t)c[1], (json_int_t)c[2]);
+			ok = triangle != NULL && json_array_append_new(triangles, triangle) == 0;
+		}
+		ok = ok && json_object_del(obj, "file") == 0 && json_object_set(obj, "vertices", vertices) == 0 &&
+		     json_object_set(obj, "triangles", triangles) == 0;
+		json_decref(vertices);
+		json_decref(triangles);
+	}
+	char* text = NULL;
+	if (ok) {
+		// In the C locale, as the file was parsed (jansson writes a real's point as the locale has it).
+		const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+		const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
+		text = c_locale != (locale_t)0 ? json_dumps(root, JSON_REAL_PRECISION(17)) : NULL;
+		if (c_locale != (locale_t)0) {
+			uselocale(previous);
+			freelocale(c_locale);
+		}
+	}
+	json_decref(root);
+	if (text == NULL) {
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for its self-contained text",
+		             doc->source);
+		return NULL;
+	}
+	// jansson allocates with malloc (the library sets no other allocator): the caller frees it.
+	return text;
 }
 
 int32_t sm_document_port_index(const sm_document* doc, const char* name)

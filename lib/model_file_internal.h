@@ -8,6 +8,7 @@
 // into a new expansion and swaps it in only if it is valid.
 #pragma once
 
+#include "mesh_file.h"
 #include "name_index.h"
 #include "springmass/model_file.h"
 #include "springmass/structures.h"
@@ -55,6 +56,13 @@ typedef struct document_structure {
 	structure_type type;
 	sm_structure range;
 } document_structure;
+
+// The OBJ file a mesh structure gives as its "file", read when the document is parsed: a
+// parameter change builds the mesh again from it, without reading the file again.
+typedef struct document_mesh_file {
+	char* shown;  // its path as messages show it: joined to the model file's folder, escaped
+	mesh_file mesh;
+} document_mesh_file;
 
 typedef struct expansion {
 	sm_model* model;
@@ -108,6 +116,10 @@ struct sm_document {
 	int32_t initial_count;
 
 	int64_t max_elements;
+
+	// Per entry of "structures": the OBJ file it reads, or NULL.
+	document_mesh_file** mesh_files;
+	size_t mesh_file_slots;
 };
 
 // sm_document_parse with a limit on particles and springs (each) other than the default, for

@@ -383,6 +383,61 @@ static int test_model_file(void)
 	return result;
 }
 
+// A model whose mesh is read from an OBJ file (a quad and a triangle, the quad cut in two): loading
+// it (the model file, the OBJ file, the document's copy of its mesh), building it and writing its
+// self-contained text, which loads again without the file.
+static int obj_scenario(void* context)
+{
+	const char* path = context;
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = sm_document_load(path, &err);
+	if (!doc) {
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		return 0;
+	}
+	sm_model* model = NULL;
+	sm_status st = sm_document_build(doc, &model, &err);
+	if (st != SM_OK)
+		ENSURE_CLEAR_FAILURE(st, err.message);
+	char* text = sm_document_to_self_contained_json(doc, &err);
+	if (!text)
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+	sm_document* again = text ? sm_document_parse(text, strlen(text), "oom.json", &err) : NULL;
+	if (text && !again)
+		ENSURE_CLEAR_FAILURE(err.status, err.message);
+	const int wrong = again && sm_document_particle_count(again) != 5;
+	sm_document_destroy(again);
+	free(text);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	ENSURE(!wrong);
+	return 0;
+}
+
+static int test_model_file_with_obj(void)
+{
+	char obj[1024], path[1024];
+	snprintf(obj, sizeof obj, "%s/oom_mesh_%ld.obj", SPRINGMASS_OOM_WORK_DIR, (long)getpid());
+	snprintf(path, sizeof path, "%s/oom_mesh_%ld.json", SPRINGMASS_OOM_WORK_DIR, (long)getpid());
+	FILE* f = fopen(obj, "w");
+	ENSURE(f != NULL);
+	fputs("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 2 0 0\nf 1 2 3 4\nf 2 5 3\n", f);
+	ENSURE(fclose(f) == 0);
+	f = fopen(path, "w");
+	ENSURE(f != NULL);
+	fprintf(
+	    f,
+	    "{\"springmass\": 1, \"name\": \"oom_obj\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+	    " \"file\": \"%s\", \"scale\": 0.5, \"edge\": {\"stiffness\": 10}, \"bend\": {\"stiffness\": 1}}]}",
+	    strrchr(obj, '/') + 1);
+	ENSURE(fclose(f) == 0);
+	ENSURE(obj_scenario(path) == 0);  // without failures
+	const int result = inject_every_failure("model file with an OBJ mesh", obj_scenario, path);
+	remove(obj);
+	remove(path);
+	return result;
+}
+
 // ---------------------------------------------------------------------------------------------
 // The model API: create, add particles and springs (arrays grow), clone, sparse Jacobian
 // ---------------------------------------------------------------------------------------------
@@ -1590,6 +1645,7 @@ int main(int argc, char** argv)
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_model_api);
 	RUN_TEST(test_model_file);
+	RUN_TEST(test_model_file_with_obj);
 	RUN_TEST(test_simulation_dense);
 	RUN_TEST(test_simulation_klu);
 	RUN_TEST(test_simulation_klu_pushed);

@@ -139,9 +139,10 @@ static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model
 	return true;
 }
 
-// One line per structure: its kind and grid, its particles and springs, and the springs of
-// each of its groups (the groups of structures.h, in the order of their materials).
-static void print_structure(const sm_structure_info* s)
+// One line per structure: its kind and grid (and the OBJ file a mesh was read from, if any: `file`,
+// or NULL), its particles and springs, and the springs of each of its groups (the groups of
+// structures.h, in the order of their materials).
+static void print_structure(const sm_structure_info* s, const char* file)
 {
 	static const char* const rope[] = {"structural", "bending", NULL};
 	static const char* const sheet[] = {"structural", "shear", "bend"};
@@ -160,6 +161,12 @@ static void print_structure(const sm_structure_info* s)
 		groups = block;
 	} else {
 		printf("of %d vertices", (int)r->shape[0]);
+		char* shown = file != NULL ? malloc(SM_TERMINAL_TEXT_CAPACITY(strlen(file))) : NULL;
+		if (shown != NULL) {
+			sm_text_for_terminal(shown, file);
+			printf(" from %s", shown);
+		}
+		free(shown);
 		groups = mesh;
 	}
 	printf(": particles %d - %d, %d spring%s", (int)r->first_particle,
@@ -299,7 +306,7 @@ int sm_cmd_check(int argc, char** argv)
 		printf("structures   %d\n", (int)structures);
 		for (int32_t k = 0; k < structures; k++) {
 			const sm_structure_info s = sm_document_structure(doc, k);
-			print_structure(&s);
+			print_structure(&s, sm_document_structure_file(doc, k));
 		}
 	}
 	printf("total mass   %.6g kg\n", sm_model_total_mass(model));

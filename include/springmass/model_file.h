@@ -49,9 +49,15 @@ typedef struct sm_document sm_document;
 /// in proportion to the file's size.
 SM_API sm_document* sm_document_load(const char* path, sm_error* err);
 
-/// Same from text in memory; `source_name` is used in messages in place of a file name.
+/// Same from text in memory; `source_name` is used in messages in place of a file name. The OBJ
+/// file of a mesh's "file" is found relative to the current directory, unless its path is absolute
+/// (sm_document_load finds it relative to the model file's folder).
 SM_API sm_document* sm_document_parse(const char* text, size_t length, const char* source_name,
                                       sm_error* err);
+/// sm_document_parse with the OBJ files of meshes found relative to `folder` (NULL or "": the
+/// current directory), as sm_document_load does for a model file in that folder.
+SM_API sm_document* sm_document_parse_in_folder(const char* text, size_t length, const char* source_name,
+                                                const char* folder, sm_error* err);
 
 /// Frees a document; accepts NULL.
 SM_API void sm_document_destroy(sm_document* doc);
@@ -148,6 +154,10 @@ typedef struct sm_structure_info {
 /// the next sm_document_set_parameter (a parameter may change counts) or destroy.
 SM_API int32_t sm_document_structure_count(const sm_document* doc);
 SM_API sm_structure_info sm_document_structure(const sm_document* doc, int32_t index);
+/// The OBJ file a mesh structure read its vertices and triangles from, as the file's "file" gives
+/// it (owned by the document); NULL for a structure that reads none or an index out of range. The
+/// file was read when the document was loaded: the document needs it no more.
+SM_API const char* sm_document_structure_file(const sm_document* doc, int32_t index);
 
 /// Number of particles and of springs of the model sm_document_build gives with the parameters'
 /// current values, without building it (0 for NULL): 3 times the particle count is the length of
@@ -189,6 +199,14 @@ SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x
 /// a device, or a file in a folder that takes no new files, is written where it is.
 SM_API sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err);
 SM_API char* sm_document_to_json(const sm_document* doc, sm_error* err);
+
+/// The model file as the document was loaded from it (its parameters, structures and references
+/// as written, with the parameters' values of the file), but with the vertices and triangles of
+/// every mesh that reads an OBJ file written inline in place of its "file", so that it loads
+/// without the OBJ files to the same model, bit for bit: a malloc'ed string the caller frees, NULL
+/// on error (out of memory). A file whose meshes read no OBJ file comes out as JSON of the same
+/// meaning, laid out anew. This is what an FMU packs (`springmass fmu`).
+SM_API char* sm_document_to_self_contained_json(const sm_document* doc, sm_error* err);
 
 #ifdef __cplusplus
 }
