@@ -4,7 +4,9 @@
 //   modelDescription.xml                       written from the FMU's variable table
 //   binaries/linux64/<modelIdentifier>.so      the generic FMU binary
 //   binaries/linux64/lib*.so*                  the shared libraries it needs (RPATH $ORIGIN)
-//   resources/model.json                       the model file, byte for byte
+//   resources/model.json                       the model file, byte for byte (a model whose meshes
+//                                              read OBJ files: its JSON with their vertices and
+//                                              triangles inline, sm_document_to_self_contained_json)
 //   resources/parameters.txt                   the values of --set that differ from the file's, if any
 //                                              (the GUID hashes this file and model.json together)
 //   resources/reference.csv                    a reference result, when one is given
@@ -58,7 +60,8 @@ static void usage(FILE* out)
 	        "\n"
 	        "Packages the model file MODEL as a self-contained FMI 2.0 Co-Simulation FMU.\n"
 	        "Parameters of the file become FMU parameters, ports become inputs and outputs; see\n"
-	        "docs/fmu.md for the variables.\n"
+	        "docs/fmu.md for the variables. The vertices and triangles of a mesh read from an OBJ\n"
+	        "file (\"file\", found beside MODEL) go in written inline: the FMU needs no OBJ file.\n"
 	        "\n"
 	        "options:\n"
 	        "  -o, --output FILE    the FMU to write (required)\n"
@@ -541,10 +544,38 @@ static int package(const options* opt)
 		goto done;
 	}
 	sm_error err = {SM_OK, ""};
-	doc = sm_document_parse(text, length, opt->model, &err);
+	// The OBJ files of its meshes are found beside the model file, as `springmass check` finds them.
+	char folder[PATH_MAX] = "";
+	const char* slash = strrchr(opt->model, '/');
+	if (slash != NULL)
+		snprintf(folder, sizeof folder, "%.*s", slash == opt->model ? 1 : (int)(slash - opt->model),
+		         opt->model);
+	doc = sm_document_parse_in_folder(text, length, opt->model, folder, &err);
 	if (!doc) {
 		fprintf(stderr, "springmass fmu: %s\n", err.message);
 		goto done;
+	}
+	// The FMU carries no OBJ file: a model whose meshes read one packs its text with their vertices
+	// and triangles written inline, which loads to the same model without them.
+	bool reads_files = false;
+	for (int32_t k = 0; k < sm_document_structure_count(doc); ++k)
+		reads_files = reads_files || sm_document_structure_file(doc, k) != NULL;
+	if (reads_files) {
+		char* self_contained = sm_document_to_self_contained_json(doc, &err);
+		sm_document_destroy(doc);
+		doc = NULL;
+		if (!self_contained) {
+			fprintf(stderr, "springmass fmu: %s\n", err.message);
+			goto done;
+		}
+		free(text);
+		text = self_contained;
+		length = strlen(text);
+		doc = sm_document_parse(text, length, opt->model, &err);
+		if (!doc) {
+			fprintf(stderr, "springmass fmu: %s: its meshes written inline: %s\n", opt->model, err.message);
+			goto done;
+		}
 	}
 	const int set_status = apply_sets(opt, text, length, &doc, &parameters, &parameters_length);
 	if (set_status != 0) {

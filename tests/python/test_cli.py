@@ -1583,6 +1583,53 @@ def test_fmu_values_set_are_those_the_fmu_starts_from(tmp_path):
         assert "resources/parameters.txt" not in z.namelist()
 
 
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_of_a_mesh_read_from_an_obj_file_runs_without_the_file(tmp_path):
+    # docs/model-format.md: a mesh's "file" is found beside the model file, wherever the tool runs;
+    # the FMU packs the model with the mesh's vertices and triangles inline (the OBJ file's numbers,
+    # its scale and origin kept as the file gives them), so that it runs where the OBJ file is not,
+    # with the same model and the same parameters.
+    (tmp_path / "meshes").mkdir()
+    obj = tmp_path / "meshes" / "flag.obj"
+    # A 3 x 3 grid of vertices 500 mm apart, in the x-z plane, as four quads.
+    vertices = [(500 * j, 0, 500 * i) for i in range(3) for j in range(3)]
+    obj.write_text("# in millimetres\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in vertices) +
+                   "vn 0 1 0\nf 1//1 2//1 5//1 4//1\nf 2//1 3//1 6//1 5//1\nf 4 5 8 7\nf 5 6 9 8\n")
+    model = {"springmass": 1, "name": "obj_flag", "parameters": {"s": 0.001, "E": 400.0},
+             "structures": [{"type": "mesh", "name": "flag", "file": "meshes/flag.obj", "scale": "s",
+                             "origin": [0, 0, 1], "density": 0.5, "edge": {"strain_stiffness": "E"}}],
+             "fixed": ["flag[0]", "flag[3]", "flag[6]"],
+             "ports": [{"name": "tip", "particle": "flag[8]", "kind": "probe"}]}
+    path = tmp_path / "flag.json"
+    path.write_text(json.dumps(model))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    summary = cli("check", path, cwd=elsewhere).stdout
+    # 16 edges (12 on the grid's lines, a diagonal in each quad), each once.
+    assert "mesh of 9 vertices from meshes/flag.obj: particles 0 - 8, 16 springs (16 edge)" in summary
+    fmu = tmp_path / "flag.fmu"
+    cli("fmu", path, "-o", fmu, cwd=elsewhere)
+    obj.unlink()
+    with zipfile.ZipFile(fmu) as z:
+        packed = json.loads(z.read("resources/model.json"))
+    mesh = packed["structures"][0]
+    assert "file" not in mesh and mesh["scale"] == "s" and mesh["origin"] == [0, 0, 1]
+    assert mesh["vertices"] == [list(v) for v in vertices]
+    assert mesh["triangles"] == [[0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [3, 4, 7], [3, 7, 6], [4, 5, 8],
+                                 [4, 8, 7]]
+    assert packed["parameters"] == model["parameters"] and packed["ports"] == model["ports"]
+    unpacked = tmp_path / "unpacked.json"
+    unpacked.write_text(json.dumps(packed))
+    # The same model: every line of the summary but the structure's, which no longer names the file.
+    again = cli("check", unpacked).stdout
+    assert again.replace("mesh of 9 vertices:", "mesh of 9 vertices from meshes/flag.obj:") == summary
+    if not SANITIZED:
+        from fmpy import simulate_fmu
+        result = simulate_fmu(str(fmu), stop_time=0.01, output_interval=0.01, output=["tip.x", "tip.z"])
+        # The free corner starts at origin + s (1000, 0, 1000) mm, exactly (1 + 1 rounds to 2).
+        assert (result["tip.x"][0], result["tip.z"][0]) == (1.0, 2.0)
+
+
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
     (its text `binary`, executable as a built one is), a library and a licence, which keep the
