@@ -10,10 +10,11 @@
 
 #include "mesh_file.h"
 
+#include "c_locale.h"
+
 #include "model_file_text.h"
 #include "springmass/model.h"
 
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
@@ -437,12 +438,11 @@ sm_status sm_mesh_file_parse(const char* text, size_t length, int64_t max_vertic
 	}
 	// Numbers are read in the C locale, whatever LC_NUMERIC the calling thread has (a decimal comma
 	// would cut "0.5" at its point).
-	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-	if (c_locale == (locale_t)0) {
+	const sm_c_locale_scope scope = sm_enter_c_locale();
+	if (!sm_c_locale_entered(scope)) {
 		snprintf(message, MESH_FILE_MESSAGE_CAPACITY, "out of memory for the C locale");
 		return SM_ERROR_OUT_OF_MEMORY;
 	}
-	const locale_t previous = uselocale(c_locale);
 	bool ok = read_statements(&r);
 	if (ok && r.triangles == 0)
 		ok = fail(&r, SM_ERROR_SCHEMA, NULL, "no face (f), so no triangle: a mesh needs at least one");
@@ -466,8 +466,7 @@ sm_status sm_mesh_file_parse(const char* text, size_t length, int64_t max_vertic
 		out->vertex_count = (int32_t)r.vertices;
 		out->triangle_count = (int32_t)r.triangles;
 	}
-	uselocale(previous);
-	freelocale(c_locale);
+	sm_leave_c_locale(scope);
 	if (!ok) {
 		sm_mesh_file_free(out);
 		return r.status;

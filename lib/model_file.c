@@ -8,6 +8,7 @@
 // Every failure frees what was made so far; nothing is left half-built.
 #define _POSIX_C_SOURCE 200809L  // open, fstat, read
 
+#include "c_locale.h"
 #include "index_expression.h"
 #include "model_file_internal.h"
 #include "model_file_text.h"
@@ -17,7 +18,6 @@
 
 #include <errno.h>
 #include <fcntl.h>
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -2369,18 +2369,15 @@ static sm_document* parse_document(const char* text, size_t length, const char* 
 	// fills one static structure for the whole process: a thread under a decimal comma (uselocale)
 	// and another under a '.' parsing at once read each other's point, and the parser aborted the
 	// process on "9.81" read as 9. In the C locale every parse writes and reads the same '.'.
-	// glibc's "C" locale object is static (no allocation, freelocale does nothing).
-	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-	if (c_locale == (locale_t)0) {
+	const sm_c_locale_scope scope = sm_enter_c_locale();
+	if (!sm_c_locale_entered(scope)) {
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory for the C locale", source_name);
 		sm_document_destroy(doc);
 		return NULL;
 	}
-	const locale_t previous = uselocale(c_locale);
 	json_error_t error;
 	doc->root = json_loadb(text, length, JSON_REJECT_DUPLICATES, &error);
-	uselocale(previous);
-	freelocale(c_locale);
+	sm_leave_c_locale(scope);
 	if (doc->root == NULL) {
 		// Line and column from the parser's byte position: the parser ends lines at LF only, so
 		// that a file with lone CRs (old Mac line ends) would be all on line 1. Its message quotes
@@ -2796,13 +2793,9 @@ char* sm_document_to_self_contained_json(const sm_document* doc, sm_error* err)
 	char* text = NULL;
 	if (ok) {
 		// In the C locale, as the file was parsed (jansson writes a real's point as the locale has it).
-		const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-		const locale_t previous = c_locale != (locale_t)0 ? uselocale(c_locale) : (locale_t)0;
-		text = c_locale != (locale_t)0 ? json_dumps(root, JSON_REAL_PRECISION(17)) : NULL;
-		if (c_locale != (locale_t)0) {
-			uselocale(previous);
-			freelocale(c_locale);
-		}
+		const sm_c_locale_scope scope = sm_enter_c_locale();
+		text = sm_c_locale_entered(scope) ? json_dumps(root, JSON_REAL_PRECISION(17)) : NULL;
+		sm_leave_c_locale(scope);
 	}
 	json_decref(root);
 	if (text == NULL) {

@@ -7,11 +7,11 @@
 
 #include "model_file_internal.h"
 
+#include "c_locale.h"
 #include "model_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -378,22 +378,18 @@ static void write_body(text* t, const sm_document* doc)
 	puts_(t, "\n}\n");
 }
 
-// The text is written in the C locale whatever LC_NUMERIC the program chose: setlocale() is
-// process-wide, and under a locale with a decimal comma (de_DE) printf wrote a gravity of
-// 9.81 m/s^2 as "9,81", which is not JSON. uselocale() switches the calling thread only, for the
-// call; glibc's "C" locale object is static (no allocation, freelocale does nothing).
+// The text is written in the C locale (c_locale.h): under a decimal comma (de_DE) printf wrote a
+// gravity of 9.81 m/s^2 as "9,81", which is not JSON.
 char* sm_document_to_json(const sm_document* doc, sm_error* err)
 {
 	sm_error_clear(err);
-	const locale_t c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-	if (c_locale == (locale_t)0) {
+	const sm_c_locale_scope scope = sm_enter_c_locale();
+	if (!sm_c_locale_entered(scope)) {
 		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "sm_document_to_json: out of memory for the C locale");
 		return NULL;
 	}
-	const locale_t previous = uselocale(c_locale);
 	char* text = document_text(doc, err);
-	uselocale(previous);
-	freelocale(c_locale);
+	sm_leave_c_locale(scope);
 	return text;
 }
 
