@@ -454,7 +454,7 @@ static bool cycle(sm_multilevel* ml, int d, cholmod_common* common)
 	level* l = &ml->level[d];
 	if (d + 1 == ml->levels) {
 		memcpy(ml->cb->x, l->b, 3 * (size_t)l->count * sizeof(double));
-		if (!cholmod_l_solve2(CHOLMOD_A, ml->factor, ml->cb, NULL, &ml->cx, NULL, &ml->cy, &ml->ce, common))
+		if (!sm_cholmod_solve(ml->factor, ml->cb, &ml->cx, &ml->cy, &ml->ce, common))
 			return false;
 		memcpy(l->x, ml->cx->x, 3 * (size_t)l->count * sizeof(double));
 		return true;

@@ -159,7 +159,7 @@ bool sm_reduced_cholesky_apply(sm_reduced* r, const double* in, double* out, dou
 	double* b = r->b->x;
 	for (int32_t k = 0; k < sim->free_count; k++)
 		memcpy(b + 3 * (size_t)k, in + 3 * (size_t)sim->free_particles[k], 3 * sizeof(double));
-	if (!cholmod_l_solve2(CHOLMOD_A, r->factor, r->b, NULL, &r->x, NULL, &r->y_work, &r->e_work, &r->common))
+	if (!sm_cholmod_solve(r->factor, r->b, &r->x, &r->y_work, &r->e_work, &r->common))
 		return false;
 	const double* x = r->x->x;
 	memset(out, 0, (size_t)r->full * sizeof(double));

@@ -428,8 +428,8 @@ bool sm_reduced_apply_preconditioner(sm_reduced* r, const double* in, double* ou
 		                       r->workers);
 		job.yc = r->coarse_solution;
 	} else {
-		if (!cholmod_l_solve2(CHOLMOD_A, r->coarse_factor, r->coarse_b, NULL, &r->coarse_x, NULL,
-		                      &r->coarse_y, &r->coarse_e, &r->common))
+		if (!sm_cholmod_solve(r->coarse_factor, r->coarse_b, &r->coarse_x, &r->coarse_y, &r->coarse_e,
+		                      &r->common))
 			return false;
 		job.yc = r->coarse_x->x;
 	}

@@ -1,0 +1,229 @@
+// Allocations while a simulation advances: once created, a simulation takes its steps and Newton
+// iterations in the memory it holds (docs/simulation.md, "Memory").
+//
+// This executable replaces the C library's malloc, calloc, realloc, aligned_alloc and free with
+// wrappers around glibc's own (__libc_malloc and its siblings) that count the allocations while a
+// test asks them to. The executable's definitions are the ones every library of the process calls,
+// so CVODE, CHOLMOD, KLU and BLAS are counted with springmass. CHOLMOD's numeric factorisations
+// allocate workspaces of their own at every call, which the reduced solvers make at most once per
+// step or every few steps: they are counted apart, through the linker's
+// --wrap=cholmod_l_factorize. The sanitizer builds put allocators of their own in place of the C
+// library's, which a program's definitions would displace: there, and without glibc, the tests say
+// they skipped.
+#include "springmass/simulation.h"
+#include "springmass/structures.h"
+#include "test_harness.h"
+
+#include <cholmod.h>
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define COUNTING 0
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
+#define COUNTING 0
+#endif
+#endif
+#if !defined(COUNTING)
+#if defined(__GLIBC__)
+#define COUNTING 1
+#else
+#define COUNTING 0
+#endif
+#endif
+
+// Counts since counting was last switched on: allocations outside CHOLMOD's factorisations, and
+// those factorisations. Atomic: BLAS and OpenMP threads may allocate at the same time.
+static atomic_bool counting_;
+static atomic_long allocations_;
+static atomic_long factorizations_;
+static _Thread_local int inside_factorization_;
+
+#if COUNTING
+static void count_allocation(void)
+{
+	if (atomic_load_explicit(&counting_, memory_order_relaxed) && inside_factorization_ == 0)
+		atomic_fetch_add_explicit(&allocations_, 1, memory_order_relaxed);
+}
+
+void* __libc_malloc(size_t size);
+void* __libc_calloc(size_t count, size_t size);
+void* __libc_realloc(void* p, size_t size);
+void* __libc_memalign(size_t alignment, size_t size);
+void __libc_free(void* p);
+
+void* malloc(size_t size)
+{
+	count_allocation();
+	return __libc_malloc(size);
+}
+
+void* calloc(size_t count, size_t size)
+{
+	count_allocation();
+	return __libc_calloc(count, size);
+}
+
+void* realloc(void* p, size_t size)
+{
+	count_allocation();
+	return __libc_realloc(p, size);
+}
+
+void* aligned_alloc(size_t alignment, size_t size)
+{
+	count_allocation();
+	return __libc_memalign(alignment, size);
+}
+
+void free(void* p)
+{
+	__libc_free(p);
+}
+#endif
+
+int __real_cholmod_l_factorize(cholmod_sparse* A, cholmod_factor* L, cholmod_common* common);
+int __wrap_cholmod_l_factorize(cholmod_sparse* A, cholmod_factor* L, cholmod_common* common);
+
+int __wrap_cholmod_l_factorize(cholmod_sparse* A, cholmod_factor* L, cholmod_common* common)
+{
+	if (atomic_load_explicit(&counting_, memory_order_relaxed))
+		atomic_fetch_add_explicit(&factorizations_, 1, memory_order_relaxed);
+	inside_factorization_++;
+	const int ok = __real_cholmod_l_factorize(A, L, common);
+	inside_factorization_--;
+	return ok;
+}
+
+static void start_counting(void)
+{
+	atomic_store(&allocations_, 0);
+	atomic_store(&factorizations_, 0);
+	atomic_store(&counting_, true);
+}
+
+static void stop_counting(void)
+{
+	atomic_store(&counting_, false);
+}
+
+// The benchmark cloth of n x n particles (1 m, 1 kg) with its corners (n - 1, 0) fixed and
+// (n - 1, n - 1) driven; the free corner (0, 0) is particle 0.
+static sm_model* hanging_cloth(int32_t n, sm_structure* st)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = sd.nv = n;
+	if (!model || sm_add_sheet(model, &sd, st) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, n - 1, 0, SM_PARTICLE_DRIVEN) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
+typedef struct window {
+	long allocations;     // outside CHOLMOD's factorisations
+	long factorizations;  // of CHOLMOD
+	int64_t steps;
+	int64_t linear_iterations;
+	double corner_z;  // the free corner's height at the end [m]
+} window;
+
+// Advances the cloth to 0.02 s, where the solver has met every kind of call it makes, then to 0.1 s
+// in communication steps of 0.01 s, counting. At each, as a co-simulation master does, the driven
+// corner continues its path (1 m/s along x from where it is: no input change) and the free corner
+// gets a new external force (a change: CVODE restarts there if restart_on_input_change).
+static int advance_counting(const sm_model* model, const sm_structure* st, sm_linear_solver solver,
+                            bool restart_on_input_change, window* out)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.solver = solver;
+	d.relative_tolerance = 1e-4;
+	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-6;
+	d.restart_on_input_change = restart_on_input_change;
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	const int32_t driven = sm_structure_particle(st, st->shape[1] - 1, st->shape[0] - 1, 0);
+	sm_statistics before = {0};
+	for (int k = 1; k <= 10; k++) {
+		if (k == 3) {
+			before = sm_simulation_statistics(sim);
+			start_counting();
+		}
+		const double t = 0.01 * (k - 1);
+		const double* x = sm_simulation_positions(sim);
+		const double position[3] = {x[3 * driven], x[3 * driven + 1], x[3 * driven + 2]};
+		const double velocity[3] = {1.0, 0.0, 0.0};
+		const double force[3] = {0.0, 0.0, 0.05 * sin(20.0 * t)};
+		if (sm_simulation_set_driven(sim, driven, position, velocity) != SM_OK ||
+		    sm_simulation_set_external_force(sim, 0, force) != SM_OK ||
+		    sm_simulation_advance(sim, 0.01 * k) != SM_OK) {
+			stop_counting();
+			printf("  %s: %s\n", sm_linear_solver_name(solver), sm_simulation_last_error(sim));
+			sm_simulation_destroy(sim);
+			return 1;
+		}
+	}
+	stop_counting();
+	const sm_statistics after = sm_simulation_statistics(sim);
+	out->allocations = atomic_load(&allocations_);
+	out->factorizations = atomic_load(&factorizations_);
+	out->steps = after.steps - before.steps;
+	out->linear_iterations = after.linear_iterations - before.linear_iterations;
+	out->corner_z = sm_simulation_positions(sim)[2];
+	sm_simulation_destroy(sim);
+	printf("  %s (restarts %s): %lld steps, %lld linear iterations, %ld allocations, %ld CHOLMOD "
+	       "factorisations\n",
+	       sm_linear_solver_name(solver), restart_on_input_change ? "on" : "off", (long long)out->steps,
+	       (long long)out->linear_iterations, out->allocations, out->factorizations);
+	return 0;
+}
+
+// The reduced solvers on a 12 x 12 cloth (142 free particles): pcg with its coarse correction
+// (from 100 free particles on), cholmod with its Cholesky preconditioner, both factorised by
+// CHOLMOD's simplicial method at this size. Every iteration solves with the factor; only the
+// factorisations may allocate.
+static int test_reduced_solvers_iterate_without_allocating(void)
+{
+	if (!COUNTING) {
+		printf("  skipped: the allocator is the sanitizer's or not glibc's\n");
+		return 0;
+	}
+	sm_structure st;
+	sm_model* model = hanging_cloth(12, &st);
+	ENSURE(model != NULL);
+	const sm_linear_solver solvers[] = {SM_SOLVER_REDUCED_PCG, SM_SOLVER_REDUCED_CHOLMOD};
+	for (size_t s = 0; s < sizeof solvers / sizeof solvers[0]; s++) {
+		for (int restart = 0; restart < 2; restart++) {
+			window w;
+			if (advance_counting(model, &st, solvers[s], restart == 1, &w) != 0) {
+				sm_model_destroy(model);
+				return 1;
+			}
+			// The window holds the work under test: steps, an iteration or more each.
+			ENSURE(w.steps > 10);
+			ENSURE(w.linear_iterations >= w.steps);
+			ENSURE(w.allocations == 0);
+			// The free corner fell under gravity (it starts at z = 0).
+			ENSURE(w.corner_z < 0.0);
+		}
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	TEST_INIT(argc, argv);
+	RUN_TEST(test_reduced_solvers_iterate_without_allocating);
+	return TEST_SUMMARY();
+}
