@@ -301,7 +301,14 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 	double* v = sim->work_velocity;
 	sm_simulation_unpack(sim, t, y, x, v);
 	const double start = sm_simulation_clock();
-	sm_status st = sm_sparse_jacobian_fill(sim->pattern, sim->model, x, v, variant, sim->dfdx, sim->dfdv);
+	// The fused pass of forces and Jacobian blocks into the simulation's records (its forces, not
+	// needed here, into the right-hand side's work array), then the assembly from them: what
+	// sm_sparse_jacobian_fill does, without allocating its scratch at every evaluation.
+	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, NULL, variant, sim->work_force,
+	                                             sim->jacobian_records);
+	if (st == SM_OK)
+		st = sm_sparse_jacobian_fill_from_springs(sim->pattern, sim->model, sim->jacobian_records, sim->dfdx,
+		                                          sim->dfdv);
 	sim->base.jacobian_seconds += sm_simulation_clock() - start;
 	sim->jacobian_evaluations++;
 	sim->jacobian_out_of_memory = st == SM_ERROR_OUT_OF_MEMORY;
@@ -888,6 +895,11 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		if (!sim->dfdx || !sim->dfdv)
 			goto out_of_memory;
 	}
+	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU) {
+		sim->jacobian_records = sm_spring_jacobians_create(m);
+		if (!sim->jacobian_records)
+			goto out_of_memory;
+	}
 	if (SUNContext_Create(NULL, &sim->context) != 0) {
 		sim->context = NULL;
 		goto out_of_memory;
@@ -941,6 +953,7 @@ void sm_simulation_destroy(sm_simulation* sim)
 	free(sim->dfdv);
 	free(sim->klu_row_pointers);
 	free(sim->klu_column_indices);
+	sm_spring_jacobians_destroy(sim->jacobian_records);
 	free(sim->initial_enabled);
 	free(sim->free_particles);
 	free(sim->constrained);

@@ -140,6 +140,9 @@ struct sm_simulation {
 	double* dfdv;               // [N s/m]
 	int64_t* klu_row_pointers;  // pattern of the (6nf + 2) KLU matrix, copied into it on every fill
 	int64_t* klu_column_indices;
+	// The springs' Jacobian blocks, from which the dense and KLU solvers' fills assemble dfdx and
+	// dfdv (the reduced solvers keep their own).
+	sm_spring_jacobians* jacobian_records;
 
 	// Counters; CVODE's own counters restart with every CVodeReInit, so what they had reached
 	// is folded into `base` first.
