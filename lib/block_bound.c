@@ -118,8 +118,14 @@ double sm_block_row_bound(const sm_block_row* row, const double* dof_mass)
 	double upper[3][3] = {{0.0}}, lower[3][3] = {{0.0}};
 	for (size_t k = 0; k < row->blocks; k++) {
 		const size_t column = row->columns != NULL ? (size_t)row->columns[3 * k] : 3 * k;
-		// The block of M^(-1/2) A M^(-1/2): entries over sqrt(m_p m_q), as for the scalar rows.
-		const double divisor = dof_mass != NULL ? sqrt(dof_mass[own] * dof_mass[column]) : 1.0;
+		// The block of M^(-1/2) A M^(-1/2): entries over sqrt(m_p m_q), as for the scalar rows. The
+		// masses are scaled by even powers of two first and the root back, exactly: m_p m_q would
+		// be 0 for masses below 1e-154 kg and infinite above 1e154 kg.
+		double divisor = 1.0;
+		if (dof_mass != NULL) {
+			const int p = ilogb(dof_mass[own]) / 2, q = ilogb(dof_mass[column]) / 2;
+			divisor = scalbn(sqrt(scalbn(dof_mass[own], -2 * p) * scalbn(dof_mass[column], -2 * q)), p + q);
+		}
 		double b[3][3];
 		bool zero = true;
 		for (int i = 0; i < 3; i++)

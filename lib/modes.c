@@ -70,6 +70,9 @@
 // generalised symmetric eigensolver) gives the eigenvalues as Rayleigh quotients of the exact K
 // and M-orthonormal shapes; the residual ||K phi - lambda M phi|| / (||K|| ||phi||) of every
 // kept mode is checked against residual_tolerance, ||K|| bounded by sm_block_row_bound as well.
+// The iteration works on K times an even power of two that brings G to [1, 4), and the
+// residuals (on both paths) are formed from sums of squares scaled by powers of two, all exactly:
+// stiffnesses and masses of any size the doubles hold give the modes of the model as it is.
 #include "analysis_internal.h"
 #include "model_internal.h"
 
@@ -262,6 +265,38 @@ static sm_status overflow_error(const modes_problem* p, size_t r, sm_error* err)
 	                    (int)particle, p->dof_mass[r], DBL_MAX);
 }
 
+// The sum of the squares of x[0, n) times 2^(-2 k), k (into *exponent) the binary exponent of
+// the largest |x_i|, so that the squares neither overflow nor underflow to 0 where the entries lie
+// near the largest or the smallest doubles (as BLAS dnrm2 scales its sum): a shape's entries of
+// 1e150 or 1e-150 (1 / sqrt(m), m = 1e-300 or 1e300 kg), a residual's of 1e-170. The scaling is
+// exact, so that the sum is the plain one times 2^(-2 k) wherever that one is finite and normal.
+static double scaled_squares(const double* x, size_t n, int* exponent)
+{
+	double largest = 0.0;
+	for (size_t i = 0; i < n; i++)
+		largest = fmax(largest, fabs(x[i]));
+	*exponent = largest > 0.0 && isfinite(largest) ? ilogb(largest) : 0;
+	double sum = 0.0;
+	for (size_t i = 0; i < n; i++) {
+		const double y = scalbn(x[i], -*exponent);
+		sum += y * y;
+	}
+	return sum;
+}
+
+// ||r|| / (norm ||phi||) over n entries, the residual of a mode phi (r = K phi - omega^2 M phi)
+// relative to the bound norm on ||K||; 0 if norm or phi is 0. Computed from scaled sums of
+// squares: sqrt(r2 / phi2) / norm, to the bit, wherever those plain sums are finite and normal.
+static double relative_residual(const double* r, const double* phi, size_t n, double norm)
+{
+	int r_exponent, phi_exponent;
+	const double r2 = scaled_squares(r, n, &r_exponent);
+	const double phi2 = scaled_squares(phi, n, &phi_exponent);
+	if (!(norm > 0.0 && phi2 > 0.0))
+		return 0.0;
+	return sqrt(r2 / phi2) / scalbn(norm, phi_exponent - r_exponent);
+}
+
 // Sets eigenvalues within zero_level of 0 to exactly 0 and counts the zero and unstable ones.
 static void classify(double* omega_squared, size_t count, double zero_level, sm_modes* modes)
 {
@@ -394,11 +429,13 @@ typedef struct lanczos_work {
 	sm_sparse_jacobian* pattern;
 	const int64_t* rows;  // CSR row pointers (symmetric pattern)
 	const int64_t* cols;  // column indices
-	double* stiffness;    // nonzeros: K = -df/dx [N/m]
-	double* shifted;      // nonzeros: K - sigma M
-	int64_t* diagonal;    // dof positions of the diagonal entries
-	double shift;         // sigma [1/s^2]
-	double gershgorin;    // G, the bound on |lambda| of M^(-1/2) K M^(-1/2) [1/s^2]
+	// K, sigma, G and the eigenvalues are held scaled by 2^-exponent (lanczos_setup).
+	int exponent;
+	double* stiffness;  // nonzeros: K = -df/dx, scaled [N/m]
+	double* shifted;    // nonzeros: K - sigma M, scaled
+	int64_t* diagonal;  // dof positions of the diagonal entries
+	double shift;       // sigma, scaled [1/s^2]
+	double gershgorin;  // G, the bound on |lambda| of M^(-1/2) K M^(-1/2), scaled [1/s^2]
 	cholmod_common common;
 	int common_started;
 	cholmod_factor* factor;
@@ -694,6 +731,25 @@ static sm_status lanczos_setup(lanczos_work* w, modes_problem* p, double* gershg
 		*gershgorin = fmax(*gershgorin, scaled);
 		p->stiffness_norm = fmax(p->stiffness_norm, sm_block_row_bound(&row, NULL));
 	}
+	// K scaled by 2^-exponent, an even power of two that brings G to [1, 4), and with it every
+	// eigenvalue, sigma and 1/nu. The Lanczos vectors are M-normalised, of the size of
+	// 1/sqrt(m), but the new ones before normalisation are of the size of nu/sqrt(m), up to
+	// 1/(|sigma| sqrt(m)) = 1e6/(G sqrt(m)): their squared M-norms overflowed for G below
+	// about 1e-148 1/s^2 (springs of 1e-150 N/m on 1 kg: beta came out infinite, the vectors 0,
+	// and the modes wrong) and underflowed for G above about 1e155 1/s^2. Scaled, they are of
+	// the size of 1e6/sqrt(m) whatever G. The scaling is exact, and even so that the Cholesky
+	// factor of K - sigma M scales exactly by its square root: the modes are those of K as it is,
+	// to the bit.
+	w->exponent = 0;
+	if (*gershgorin > 0.0) {
+		const int k = ilogb(*gershgorin);
+		w->exponent = k % 2 == 0 ? k : k - 1;
+	}
+	if (w->exponent != 0) {
+		for (int64_t k = 0; k < nnz; k++)
+			w->stiffness[k] = scalbn(w->stiffness[k], -w->exponent);
+		*gershgorin = scalbn(*gershgorin, -w->exponent);
+	}
 	return SM_OK;
 }
 
@@ -763,7 +819,7 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 			    "Gershgorin bound %.3g 1/s^2, as in a stiff model) may not converge: the dense solver "
 			    "resolves them (SM_MODES_DENSE, springmass modes --solver dense)",
 			    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts, run + 1,
-			    w->shift, w->gershgorin);
+			    scalbn(w->shift, w->exponent), scalbn(w->gershgorin, w->exponent));
 		// lambda = sigma + 1/nu. A mode is new if it lies below the highest kept one by more than
 		// the round-off of the operator (1e-9 of its scale 1/nu).
 		const double highest = count > 0 ? lambda[count - 1] : INFINITY;
@@ -821,18 +877,14 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 				phi[q] += z * xi[q];
 		}
 		const double norm = sqrt(mass_dot(w, phi, phi));
-		double phi2 = 0.0, r2 = 0.0;
-		for (size_t q = 0; q < dof; q++) {
+		for (size_t q = 0; q < dof; q++)
 			phi[q] /= norm;
-			phi2 += phi[q] * phi[q];
-		}
 		stiffness_product(w, phi, w->rhs);
-		for (size_t q = 0; q < dof; q++) {
-			const double r = w->rhs[q] - nu[j] * w->mass[q] * phi[q];
-			r2 += r * r;
-		}
-		if (p->stiffness_norm > 0.0 && phi2 > 0.0)
-			*residual = fmax(*residual, sqrt(r2 / phi2) / p->stiffness_norm);
+		for (size_t q = 0; q < dof; q++)
+			w->rhs[q] -= nu[j] * w->mass[q] * phi[q];
+		// K and its bound on ||K|| both scaled by 2^-exponent: the ratio is K's own.
+		*residual =
+		    fmax(*residual, relative_residual(w->rhs, phi, dof, scalbn(p->stiffness_norm, -w->exponent)));
 	}
 	return SM_OK;
 }
@@ -876,7 +928,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	if (factored != 1) {
 		st = sm_error_set(err, SM_ERROR_SOLVER,
 		                  "modes: CHOLMOD could not factor K - sigma M (sigma = %.3g 1/s^2; status %d)",
-		                  -shift, (int)w.common.status);
+		                  -scalbn(shift, w.exponent), (int)w.common.status);
 		goto done;
 	}
 
@@ -944,6 +996,10 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	}
 	if (st != SM_OK)
 		goto done;
+	// Back from the scaling of K (lanczos_setup).
+	for (size_t j = 0; j < want; j++)
+		pairs.nu[j] = scalbn(pairs.nu[j], w.exponent);
+	gershgorin = scalbn(gershgorin, w.exponent);
 	const size_t n3 = 3 * (size_t)p->particle_count;
 	for (size_t j = 0; j < p->kept; j++) {
 		scatter_shape(p, pairs.fresh + j * dof, 1, NULL, modes->shapes + j * n3);
@@ -954,7 +1010,7 @@ static sm_status sparse_modes(modes_problem* p, sm_modes* modes, sm_error* err)
 	p->next_omega_squared =
 	    want > p->kept ? (fabs(pairs.nu[p->kept]) <= zero_level ? 0.0 : pairs.nu[p->kept]) : NAN;
 	modes->omega_max = sqrt(fmax(gershgorin, pairs.nu[want - 1]));
-	modes->shift = w.shift;
+	modes->shift = scalbn(w.shift, w.exponent);
 
 done:
 	lanczos_free(&w);
@@ -1131,27 +1187,22 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 		free(modal);
 		return st;
 	}
-	// Residual ||K phi - omega^2 M phi|| / (||K|| ||phi||), K phi = -(df/dx) phi.
+	// Residual ||K phi - omega^2 M phi|| / (||K|| ||phi||), K phi = -(df/dx) phi, over the free
+	// degrees of freedom (phi is 0 on the others).
 	modes->residual = 0.0;
 	for (size_t a = 0; a < kept; a++) {
 		const double* phi = modes->shapes + a * n3;
 		const double w2 = modes->omega_squared[a];
 		modes->frequency[a] = w2 > 0.0 ? sqrt(w2) / two_pi : 0.0;
 		sm_model_jacobian_product(p->model, p->x0, NULL, SM_JACOBIAN_EXACT, phi, NULL, product);
-		double r2 = 0.0, phi2 = 0.0;
 		for (int32_t q = 0; q < p->particle_count; q++) {
 			const int32_t fi = p->free_index[q];
-			if (fi < 0)
-				continue;
 			for (int c = 0; c < 3; c++) {
 				const size_t k = 3 * (size_t)q + c;
-				const double r = -product[k] - w2 * p->dof_mass[3 * (size_t)fi + c] * phi[k];
-				r2 += r * r;
-				phi2 += phi[k] * phi[k];
+				product[k] = fi < 0 ? 0.0 : -product[k] - w2 * p->dof_mass[3 * (size_t)fi + c] * phi[k];
 			}
 		}
-		if (p->stiffness_norm > 0.0 && phi2 > 0.0)
-			modes->residual = fmax(modes->residual, sqrt(r2 / phi2) / p->stiffness_norm);
+		modes->residual = fmax(modes->residual, relative_residual(product, phi, n3, p->stiffness_norm));
 	}
 
 	double largest_damping = 0.0;

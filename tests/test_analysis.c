@@ -1491,6 +1491,87 @@ static int test_sparse_modes_match_dense(void)
 	return 0;
 }
 
+// The 9 x 7 cloth of test_sparse_modes_match_dense, held at its boundary and stretched unevenly
+// in its plane, undamped, with every stiffness times stiffness_factor and every mass times
+// mass_factor; its stretched configuration into *x (malloc'd).
+static sm_model* scaled_stretched_cloth(double stiffness_factor, double mass_factor, double** x)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = 9;
+	sd.nv = 7;
+	sd.mass *= mass_factor;
+	sm_spring_material* groups[3] = {&sd.structural, &sd.shear, &sd.bend};
+	for (int g = 0; g < 3; g++) {
+		groups[g]->stiffness *= stiffness_factor;
+		groups[g]->damping = 0.0;
+	}
+	sm_structure cloth;
+	const int32_t np = sd.nu * sd.nv;
+	*x = malloc(3 * (size_t)np * sizeof(double));
+	if (*x == NULL || add_held_sheet(model, &sd, &cloth) != SM_OK) {
+		free(*x);
+		sm_model_destroy(model);
+		return NULL;
+	}
+	sm_model_initial_state(model, *x, NULL);
+	for (int32_t i = 0; i < np; i++) {
+		(*x)[3 * i] *= 1.05 + 0.002 * sin(3.0 * i);
+		(*x)[3 * i + 1] *= 1.03 + 0.002 * cos(5.0 * i);
+	}
+	return model;
+}
+
+// omega^2 is proportional to the stiffness over the mass: the stretched cloth with its
+// stiffnesses times 2^-664 or 2^664 (about 1e-200 and 1e200), its masses times 2^996 (about
+// 1e300 kg) or both times 2^-996 (masses of about 1e-300 kg) has the modes of the cloth as it
+// is, omega^2 times the factor and the shapes times 1/sqrt of the mass factor. The lowest six by
+// Lanczos agree with the dense ones (compare_sparse_to_dense) at every scale, and both solvers
+// work on matrices scaled by powers of two, exactly: omega^2 scales by the factor to the bit, and
+// the residual, a pure number, is the same. Lanczos's squared norms overflowed or underflowed
+// (no rigid-body mode, yet modes of zero residual, or a failed residual test) and the Gershgorin
+// bound divided by the product of two masses, which overflowed or underflowed.
+static int test_sparse_modes_at_the_ends_of_the_doubles(void)
+{
+	const double stiffness_factor[5] = {1.0, ldexp(1.0, -664), ldexp(1.0, 664), 1.0, ldexp(1.0, -996)};
+	const double mass_factor[5] = {1.0, 1.0, 1.0, ldexp(1.0, 996), ldexp(1.0, -996)};
+	sm_modes base[2];
+	for (int c = 0; c < 5; c++) {
+		double* x = NULL;
+		sm_model* model = scaled_stretched_cloth(stiffness_factor[c], mass_factor[c], &x);
+		ENSURE(model != NULL);
+		printf("  stiffness x %g, mass x %g\n", stiffness_factor[c], mass_factor[c]);
+		if (compare_sparse_to_dense(model, x, 6, 0) != 0)
+			return 1;
+		const double omega_factor = stiffness_factor[c] / mass_factor[c];
+		for (int dense = 0; dense < 2; dense++) {
+			sm_modes_def def = sm_default_modes_def();
+			def.configuration = x;
+			def.solver = dense ? SM_MODES_DENSE : SM_MODES_SPARSE;
+			def.mode_count = 6;
+			sm_modes modes;
+			ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+			if (c == 0) {
+				base[dense] = modes;
+				continue;
+			}
+			ENSURE(modes.count == 6 && modes.residual == base[dense].residual);
+			for (int32_t i = 0; i < 6; i++)
+				ENSURE(modes.omega_squared[i] == omega_factor * base[dense].omega_squared[i]);
+			sm_modes_release(&modes);
+		}
+		free(x);
+		sm_model_destroy(model);
+	}
+	sm_modes_release(&base[0]);
+	sm_modes_release(&base[1]);
+	return 0;
+}
+
 // The lowest ten modes with the automatic choice, which must be the sparse path for the large
 // models that use this; the status and the residual test checked.
 static int lowest_ten_by_auto_choice(const sm_model* model, sm_modes* modes)
@@ -4721,6 +4802,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_invalid_arguments);
 	RUN_TEST(test_statics_matches_a_long_damped_simulation);
 	RUN_TEST(test_sparse_modes_match_dense);
+	RUN_TEST(test_sparse_modes_at_the_ends_of_the_doubles);
 	RUN_TEST(test_sparse_long_chain_closed_form);
 	RUN_TEST(test_sparse_hanging_chain_bessel);
 	RUN_TEST(test_sparse_unstable_configuration);
