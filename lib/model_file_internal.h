@@ -1,4 +1,5 @@
-// Internal layout of sm_document, shared by the loader (model_file.c) and the writer
+// Internal layout of sm_document, shared by the reader (model_file.c and the parts that
+// model_file_parser.h lists), the accessors (model_file_accessors.c) and the writer
 // (model_file_save.c).
 //
 // A document keeps the parsed JSON tree and the parameters' current values. Everything else is
@@ -126,3 +127,18 @@ struct sm_document {
 // the fuzz target, which must not spend its time building enormous grids.
 sm_document* sm_document_parse_limited(const char* text, size_t length, const char* source_name,
                                        int64_t max_elements, sm_error* err);
+
+// Steps of the reader that the accessors use too.
+
+// Evaluates the document's tree with the given parameter values into a new expansion
+// (model_file.c); NULL, with err filled, on failure.
+expansion* sm_document_expand(const sm_document* doc, const double* parameter_values, sm_error* err);
+// Frees ex and all it holds; NULL is allowed (model_file_elements.c).
+void sm_expansion_free(expansion* ex);
+// The particle that has the name, or -1 (model_file_elements.c).
+int32_t sm_expansion_lookup_name(const expansion* ex, const char* name);
+// The parameter that has the name, or -1 (model_file_values.c).
+int32_t sm_document_find_parameter(const sm_document* doc, const char* name);
+// The unit of parameters that stand for values of different units, or for counts and indices
+// (model_file_values.c).
+extern const char sm_no_single_unit[];
