@@ -247,6 +247,9 @@ static bool read_vertex(reader* r, const token* keyword)
 	return true;
 }
 
+// Most characters of a face's index shown in a message, "..." after them.
+#define INDEX_SHOWN_BYTES 24
+
 // A whole number at s[*k] (of n bytes): an optional sign and at least one digit; *k moves past it.
 // Values past 2^40, far past any index, are held as 2^40 and more, without overflow.
 static bool read_integer(const char* s, size_t n, size_t* k, int64_t* value)
@@ -272,6 +275,9 @@ static bool read_corner(reader* r, const token* t, int64_t* index)
 	size_t k = 0;
 	int64_t i, dropped;
 	bool well_formed = read_integer(s, n, &k, &i);
+	// The index as written, for a message: its value is held at 2^40 and more past that.
+	const int written = (int)(k < INDEX_SHOWN_BYTES ? k : INDEX_SHOWN_BYTES);
+	const char* cut = k > INDEX_SHOWN_BYTES ? "..." : "";
 	if (well_formed && k < n) {
 		well_formed = s[k] == '/' && k + 1 < n;
 		k++;
@@ -292,11 +298,11 @@ static bool read_corner(reader* r, const token* t, int64_t* index)
 		            "face index 0: vertices are numbered from 1, or back from -1 for the last one read");
 	if (i < 0 && -i > r->vertices)
 		return fail(r, SM_ERROR_PARTICLE_INDEX, t,
-		            "face index %lld counts back past the first vertex (%lld vertices come before it)",
-		            (long long)i, (long long)r->vertices);
+		            "face index %.*s%s counts back past the first vertex (%lld vertices come before it)",
+		            written, s, cut, (long long)r->vertices);
 	if (i > 0 && r->total_vertices >= 0 && i > r->total_vertices)
-		return fail(r, SM_ERROR_PARTICLE_INDEX, t, "face index %lld is past the %lld vertices", (long long)i,
-		            (long long)r->total_vertices);
+		return fail(r, SM_ERROR_PARTICLE_INDEX, t, "face index %.*s%s is past the %lld vertices", written, s,
+		            cut, (long long)r->total_vertices);
 	*index = i > 0 ? i - 1 : r->vertices + i;
 	return true;
 }

@@ -382,6 +382,14 @@ static int test_broken_obj_files(void)
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_PARTICLE_INDEX,
 		 "test.json: structures[0].file: bad.obj:4:3: face index 0: vertices are numbered from 1, or back from -1 "
 		 "for the last one read"},
+	    // An index past any a file may have is named as written (2^63, past a 64-bit integer, here).
+	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9223372036854775808/1\n", "\"file\": \"bad.obj\"", 0,
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: structures[0].file: bad.obj:4:7: face index 9223372036854775808 is past the 3 vertices"},
+	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1000000000000000000000000000000//1\n", "\"file\": \"bad.obj\"", 0,
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: structures[0].file: bad.obj:4:7: face index -10000000000000000000000... counts back past the "
+		 "first vertex (3 vertices come before it)"},
 	    {"f 1 2 3\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_PARTICLE_INDEX,
 		 "test.json: structures[0].file: bad.obj:1:3: face index 1 is past the 0 vertices"},
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\n  f 1 2\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
