@@ -555,6 +555,11 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: %s\n", err.message);
 		goto done;
 	}
+	const int overwrites = cli_check_output_not_mesh_file("fmu", "-o", opt->output, doc, opt->model);
+	if (overwrites != 0) {
+		result = overwrites;
+		goto done;
+	}
 	// The FMU carries no OBJ file: a model whose meshes read one packs its text with their vertices
 	// and triangles written inline, which loads to the same model without them.
 	bool reads_files = false;

@@ -594,8 +594,9 @@ int sm_cmd_run(int argc, char** argv)
 	const bool csv_to_stdout = o.output && strcmp(o.output, "-") == 0;
 	csv_name = csv_to_stdout ? "standard output" : o.output ? o.output : csv_default;
 	const char* csv_file = csv_to_stdout ? NULL : csv_name;  // the CSV's file, if it has one
-	// No file the run writes may be the model file (-o is checked with the arguments), nor the
-	// CSV one of the series' files (each frame is checked before it is written).
+	// No file the run writes may be the model file (-o is checked with the arguments) or an OBJ
+	// file its meshes read, nor the CSV one of the series' files (each frame is checked before it
+	// is written).
 	if (!o.output && o.input && cli_same_file(csv_default, o.input)) {
 		fprintf(stderr,
 		        "springmass run: the output %s (NAME.csv, without -o) would overwrite the input signals %s, "
@@ -611,6 +612,12 @@ int sm_cmd_run(int argc, char** argv)
 		    "it reads; give another name with -o\n",
 		    csv_default, o.model);
 		status = 2;
+		goto done;
+	}
+	const int overwrites = cli_check_output_not_mesh_file(
+	    "run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file, doc, o.model);
+	if (overwrites != 0) {
+		status = overwrites;
 		goto done;
 	}
 	if (cli_check_outputs_apart("run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file,

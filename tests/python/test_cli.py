@@ -1630,6 +1630,29 @@ def test_fmu_of_a_mesh_read_from_an_obj_file_runs_without_the_file(tmp_path):
         assert (result["tip.x"][0], result["tip.z"][0]) == (1.0, 2.0)
 
 
+@pytest.mark.parametrize("command, option", [("run", "-o"), ("statics", "-o"), ("statics", "--save-model"),
+                                             ("modes", "-o"), ("fmu", "-o")])
+def test_no_output_overwrites_the_obj_file_a_mesh_reads(command, option, tmp_path):
+    # An OBJ file the model's meshes read is an input like the model file: an output named as it
+    # (here under another name for it, from another folder) is a usage error, and the file is kept.
+    (tmp_path / "meshes").mkdir()
+    obj = tmp_path / "meshes" / "sail.obj"
+    text = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3 4\n"
+    obj.write_text(text)
+    model = tmp_path / "sail.json"
+    model.write_text(json.dumps({"springmass": 1, "name": "sail", "fixed": ["sail[0]", "sail[1]"],
+                                 "structures": [{"type": "mesh", "name": "sail", "file": "meshes/sail.obj",
+                                                 "edge": {"stiffness": 100}}]}))
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    runtime = ["--runtime", stand_in_runtime(tmp_path / "runtime", "binary")] if command == "fmu" else []
+    output = "../meshes/./sail.obj"
+    out = cli(command, "../sail.json", option, output, *runtime, status=2, cwd=elsewhere)
+    assert out.stderr == (f"springmass {command}: {option} {output} would overwrite the OBJ file of the mesh sail "
+                          "(structures[0].file), which it reads; give another name\n")
+    assert obj.read_text() == text
+
+
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
     (its text `binary`, executable as a built one is), a library and a licence, which keep the
