@@ -25,8 +25,10 @@ static void usage(FILE* out)
 	        "the modes' damping rates, a step at which explicit (symplectic Euler) integration is\n"
 	        "stable; `springmass modes MODEL -n 0` gives a closer value from every mode's own\n"
 	        "frequency and damping rate. Warnings: absolute tolerances coarse for the model's scales,\n"
-	        "springs that start at or beyond their break strain (they break at t = 0), accelerations\n"
-	        "or a dissipated power that overflow at the initial state (a run stops at t = 0).\n"
+	        "two vertices of a mesh at the same position (no spring joins them: the mesh is cut\n"
+	        "there), springs that start at or beyond their break strain (they break at t = 0),\n"
+	        "accelerations or a dissipated power that overflow at the initial state (a run stops at\n"
+	        "t = 0).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -137,6 +139,109 @@ static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model
 	}
 	free(x);
 	return true;
+}
+
+// A mesh's vertex where the model starts, for sorting by position.
+typedef struct placed_vertex {
+	double x[3];  // [m]
+	int32_t particle;
+} placed_vertex;
+
+static int by_position(const void* a, const void* b)
+{
+	const placed_vertex *p = a, *q = b;
+	for (int c = 0; c < 3; c++)
+		if (p->x[c] != q->x[c])
+			return p->x[c] < q->x[c] ? -1 : 1;
+	return (p->particle > q->particle) - (p->particle < q->particle);
+}
+
+// Two particles, the lower index first; `joined` once a spring is found between them.
+typedef struct particle_pair {
+	int32_t a, b;
+	bool joined;
+} particle_pair;
+
+static int by_particles(const void* a, const void* b)
+{
+	const particle_pair *p = a, *q = b;
+	return p->a != q->a ? (p->a > q->a) - (p->a < q->a) : (p->b > q->b) - (p->b < q->b);
+}
+
+// Most pairs of coinciding mesh vertices named one by one; the rest are counted.
+#define COINCIDENT_SHOWN 3
+
+// Warns about two vertices of one mesh that start at the same position, not both fixed, with no
+// spring between them. The mesh makes none there (a triangle with both would have no area), so it
+// is cut between them: most often a seam the modeller exported with its vertices duplicated (a UV
+// seam, the ends of a strip wrapped into a tube, faces split apart), which comes apart as the
+// model runs. A spring of the file's "springs" that joins them (a zero-length one stitching the
+// seam) silences it. Exact equality, as duplicated vertices are written with the same numbers.
+// False when out of memory.
+static bool warn_coincident_mesh_vertices(const sm_document* doc, const sm_model* model)
+{
+	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
+	double* x = malloc((3 * (size_t)n + 1) * sizeof(double));
+	placed_vertex* vertices = malloc(((size_t)n + 1) * sizeof *vertices);
+	particle_pair* pairs = malloc(((size_t)n + 1) * sizeof *pairs);
+	bool ok = x != NULL && vertices != NULL && pairs != NULL;
+	if (ok)
+		sm_model_initial_state(model, x, NULL);
+	for (int32_t k = 0; ok && k < sm_document_structure_count(doc); k++) {
+		const sm_structure_info s = sm_document_structure(doc, k);
+		if (strcmp(s.type, "mesh") != 0)
+			continue;
+		const int32_t first = s.range.first_particle, count = s.range.particle_count;
+		for (int32_t v = 0; v < count; v++) {
+			memcpy(vertices[v].x, x + 3 * (size_t)(first + v), sizeof vertices[v].x);
+			vertices[v].particle = first + v;
+		}
+		qsort(vertices, (size_t)count, sizeof *vertices, by_position);
+		// Neighbours in that order at the same position (a vertex repeated three times, two pairs).
+		int32_t found = 0;
+		for (int32_t v = 1; v < count; v++) {
+			const placed_vertex *a = &vertices[v - 1], *b = &vertices[v];
+			sm_particle_def pa, pb;
+			sm_model_get_particle(model, a->particle, &pa);
+			sm_model_get_particle(model, b->particle, &pb);
+			if (a->x[0] == b->x[0] && a->x[1] == b->x[1] && a->x[2] == b->x[2] &&
+			    (pa.motion == SM_PARTICLE_FREE || pb.motion == SM_PARTICLE_FREE))
+				pairs[found++] = (particle_pair){a->particle, b->particle, false};
+		}
+		if (found == 0)
+			continue;
+		qsort(pairs, (size_t)found, sizeof *pairs, by_particles);
+		for (int32_t j = 0; j < m; j++) {
+			sm_spring_def spring;
+			sm_model_get_spring(model, j, &spring);
+			particle_pair key = {spring.a < spring.b ? spring.a : spring.b,
+			                     spring.a < spring.b ? spring.b : spring.a, false};
+			particle_pair* pair = bsearch(&key, pairs, (size_t)found, sizeof *pairs, by_particles);
+			if (pair != NULL)
+				pair->joined = true;
+		}
+		int32_t cut = 0;
+		for (int32_t j = 0; j < found; j++) {
+			if (pairs[j].joined || ++cut > COINCIDENT_SHOWN)
+				continue;
+			const double* at = x + 3 * (size_t)pairs[j].a;
+			printf("warning      ");
+			print_particle(doc, pairs[j].a);
+			printf(" and ");
+			print_particle(doc, pairs[j].b);
+			printf(
+			    " start at the same position, (%g, %g, %g) m, and no spring joins them: the mesh %s is cut "
+			    "there (a seam of duplicated vertices? merge them in the modeller)\n",
+			    at[0], at[1], at[2], s.name);
+		}
+		if (cut > COINCIDENT_SHOWN)
+			printf("warning      and %d more pair%s of the mesh %s's vertices start at the same position\n",
+			       (int)(cut - COINCIDENT_SHOWN), cut - COINCIDENT_SHOWN > 1 ? "s" : "", s.name);
+	}
+	free(x);
+	free(vertices);
+	free(pairs);
+	return ok;
 }
 
 // One line per structure: its kind and grid (and the OBJ file a mesh was read from, if any: `file`,
@@ -399,7 +504,8 @@ int sm_cmd_check(int argc, char** argv)
 	                                                 : "solver ",
 	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
-	if (!warn_broken_at_start(doc, model) || !warn_overflow_at_start(doc, model)) {
+	if (!warn_coincident_mesh_vertices(doc, model) || !warn_broken_at_start(doc, model) ||
+	    !warn_overflow_at_start(doc, model)) {
 		fprintf(stderr, "springmass check: out of memory\n");
 		sm_model_destroy(model);
 		sm_document_destroy(doc);

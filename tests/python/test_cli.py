@@ -1653,6 +1653,29 @@ def test_no_output_overwrites_the_obj_file_a_mesh_reads(command, option, tmp_pat
     assert obj.read_text() == text
 
 
+def test_check_warns_of_a_mesh_cut_at_a_seam_of_duplicated_vertices(tmp_path):
+    # Two quads side by side whose common edge is written twice, as a modeller exports a seam: the
+    # mesh is two pieces that fall apart, and check says where (the vertices at (1, 0, 0) and
+    # (1, 0, 1) m). Merged, or stitched by springs of the file's own, it is one piece: no warning.
+    seam = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 1 0 0\nv 2 0 0\nv 2 0 1\nv 1 0 1\nf 1 2 3 4\nf 5 6 7 8\n"
+    merged = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nv 2 0 0\nv 2 0 1\nf 1 2 3 4\nf 2 5 6 3\n"
+    stitches = [{"a": "strip[4]", "b": "strip[1]", "kind": "zero_length", "stiffness": 1000},
+                {"a": "strip[2]", "b": "strip[7]", "kind": "zero_length", "stiffness": 1000}]
+    warned = []
+    for name, obj, springs in (("seam", seam, []), ("merged", merged, []), ("stitched", seam, stitches)):
+        (tmp_path / f"{name}.obj").write_text(obj)
+        model = tmp_path / f"{name}.json"
+        model.write_text(json.dumps({"springmass": 1, "name": name, "fixed": ["strip[0]", "strip[3]"],
+                                     "structures": [{"type": "mesh", "name": "strip", "file": f"{name}.obj",
+                                                     "edge": {"stiffness": 100}}], "springs": springs}))
+        warned.append([line for line in cli("check", model).stdout.splitlines() if line.startswith("warning")])
+    cut = ("start at the same position, ({}) m, and no spring joins them: the mesh strip is cut there (a seam of "
+           "duplicated vertices? merge them in the modeller)")
+    assert warned[0] == ["warning      strip[1] (particle 1) and strip[4] (particle 4) " + cut.format("1, 0, 0"),
+                         "warning      strip[2] (particle 2) and strip[7] (particle 7) " + cut.format("1, 0, 1")]
+    assert warned[1] == [] and warned[2] == []
+
+
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
     (its text `binary`, executable as a built one is), a library and a licence, which keep the
