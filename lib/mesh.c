@@ -82,12 +82,17 @@ static sm_status check_mesh(sm_model* model, const sm_mesh_def* def, int32_t* tr
 	if (!isfinite(def->density) || !(def->density > 0.0))
 		return sm_model_fail(model, isfinite(def->density) ? SM_ERROR_NONPOSITIVE_MASS : SM_ERROR_NOT_FINITE,
 		                     "mesh: density = %g must be finite and > 0", def->density);
-	if (def->vertex_count < 3 || def->triangle_count < 1)
+	if (def->vertex_count < 3 || def->triangle_count < 1) {
+		// Too few vertices for a triangle: the first one has to repeat a vertex or name one that
+		// is not there, and is the one this is about.
+		if (def->triangle_count >= 1)
+			*triangle = 0;
 		return sm_model_fail(
 		    model, SM_ERROR_INVALID_ARGUMENT,
 		    "mesh: %d vert%s and %d triangle%s; a mesh needs at least 3 vertices and 1 triangle",
 		    (int)def->vertex_count, def->vertex_count == 1 ? "ex" : "ices", (int)def->triangle_count,
 		    def->triangle_count == 1 ? "" : "s");
+	}
 	if (def->vertices == NULL || def->triangles == NULL)
 		return sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT, "mesh: vertex or triangle array is NULL");
 	if (def->triangle_count > SM_STRUCTURE_MAX_ELEMENTS / 3)

@@ -31,7 +31,8 @@ sm_status sm_structure_add_spring(sm_model* model, const char* what, const char*
                                   int32_t a, int32_t b, const sm_spring_material* m, double measure);
 
 // sm_add_mesh; on a failure about one triangle of the definition (a repeated vertex, zero area, an
-// edge shared by more than two triangles, a repeated triangle) *triangle is its index, on one
+// edge shared by more than two triangles, a repeated triangle; the first triangle when there are
+// fewer than 3 vertices) *triangle is its index, on one
 // about one vertex (a coordinate that is not finite, no triangle, a mass beyond a double)
 // *vertex; -1 otherwise (a model file names the line of an OBJ file that gave it).
 sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_structure* out, int32_t* triangle,

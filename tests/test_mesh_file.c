@@ -445,6 +445,9 @@ static int test_broken_obj_files(void)
 		 "(2, 1, 0)"},
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\n f 1 2 2\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SELF_SPRING,
 		 "test.json: structures[0].file: bad.obj:4:2: mesh: triangle 0 (0, 1, 1) repeats a vertex"},
+	    {"v 0 0 0\nv 1 0 0\n\nf 1 2 1\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_INVALID_ARGUMENT,
+		 "test.json: structures[0].file: bad.obj:4:1: mesh: 2 vertices and 1 triangle; a mesh needs at least 3 "
+		 "vertices and 1 triangle"},
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 1 1 1\nf 1 2 3\nf 1 2 4\nf 1 2 5\n", "\"file\": \"bad.obj\"",
 		 0, SM_ERROR_INVALID_ARGUMENT,
 		 "test.json: structures[0].file: bad.obj:8:1: mesh: edge (0, 1) of triangle 2 is shared by more than two "
