@@ -1,4 +1,5 @@
-// Helpers shared by the static equilibrium (statics.c) and the modal analysis (modes.c).
+// Helpers shared by the static equilibrium (statics.c) and the modal analysis (modes.c,
+// modes_lanczos.c).
 #pragma once
 
 #include "springmass/analysis.h"

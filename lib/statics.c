@@ -64,7 +64,7 @@ sm_statics_def sm_default_statics_def(void)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Shared helpers (also used by modes.c).
+// Shared helpers (also used by modes.c and modes_lanczos.c).
 // ---------------------------------------------------------------------------------------------
 
 int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass)
