@@ -1,14 +1,10 @@
 // Time integration of a model with SUNDIALS CVODE.
 //
-// State, right-hand side and Jacobian:
-//   y = [x; v; e; w] over the free particles, x' = v, v' = M^-1 f(x, v, t), e' = P_dissipated(x, v),
-//   w' = P_input(x, v, t) (input_power).
-//   The Newton matrix of BDF is I - gamma J with
-//     J = [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]],  K = df/dx, D = df/dv;
-//   the energies e and w feed back into nothing, so their rows and columns of J are left out
-//   (zero): Newton's iteration still converges, and they are integrated to the same tolerance.
-// Linear solvers: dense LU of the full system (SUNDenseMatrix), sparse LU (KLU) of the full
-// system in CSR form, and the reduced second-order solver of linear_solver_reduced.c.
+// This file: the state packed into CVODE's vector and out of it, advancing, access to the state
+// and its energies, and changes between calls. Creating a simulation (the definition's defaults
+// and check, the choice of the linear solver): simulation_create.c. The right-hand side, the
+// Jacobian and the other functions CVODE calls, with the derivation of the state and the
+// Jacobian: simulation_callbacks.c.
 // Breaking springs: simulation_events.c. State snapshots (save, restore, serialise):
 // simulation_state.c.
 #define _POSIX_C_SOURCE 200809L
@@ -17,16 +13,9 @@
 #include "simulation_internal.h"
 
 #include <cvode/cvode.h>
-#include <cvode/cvode_ls.h>
 #include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunlinsol/sunlinsol_klu.h>
-#include <sunmatrix/sunmatrix_dense.h>
-#include <sunmatrix/sunmatrix_sparse.h>
-#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+#include <sundials/sundials_linearsolver.h>
 
-#include <ctype.h>
 #include <float.h>
 #include <math.h>
 #include <stdarg.h>
@@ -34,16 +23,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-
-// Free degrees of freedom up to which SM_SOLVER_AUTO picks the dense solver; above, it picks
-// the reduced conjugate-gradient solver. Measured with `springmass run` on ropes, small sheets,
-// a block, a mesh and anchored sheets of 1 to 9 free particles (bench/README.md, "The linear
-// solver auto picks"): SUNDIALS' dense LU (Debian's archives are built without optimisation)
-// costs about what the reduced solver does with 1 or 2 free particles, 1.5 - 2.6 times as much
-// from 3 to 5 and 3 - 5 times from 6 on. On the benchmark cloth from n = 8 to 64
-// block-Jacobi conjugate gradients beat the CHOLMOD-preconditioned ones by 1.3 to 1.7 times and
-// KLU on the full system by more.
-#define AUTO_DENSE_MAX_DOFS 6
 
 // Time resolution relative to max(1 s, |t|) [1]. CVODE's first step after a (re)start must
 // exceed about 2 eps |t| (CV_TOO_CLOSE), and at t = 0 an interval of 1e-200 s made its initial
@@ -70,64 +49,6 @@ sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* f
 	sm_vformat_c_locale(sim->last_error, sizeof sim->last_error, format, args);
 	va_end(args);
 	return status;
-}
-
-sm_simulation_def sm_default_simulation_def(void)
-{
-	sm_simulation_def def;
-	memset(&def, 0, sizeof def);
-	def.method = SM_METHOD_BDF;
-	def.solver = SM_SOLVER_AUTO;
-	def.jacobian = SM_JACOBIAN_EXACT;
-	def.relative_tolerance = 1e-6;
-	def.absolute_tolerance_position = 1e-8;
-	def.absolute_tolerance_velocity = 1e-6;
-	def.max_step = 0.0;
-	def.max_steps = 100000;
-	def.restart_on_input_change = true;
-	def.threads = 1;
-	return def;
-}
-
-static const char* const solver_names[SM_SOLVER_COUNT] = {"auto", "dense", "klu", "pcg", "cholmod"};
-
-const char* sm_linear_solver_name(sm_linear_solver solver)
-{
-	if ((int)solver < 0 || solver >= SM_SOLVER_COUNT)
-		return "unknown";
-	return solver_names[solver];
-}
-
-const char* sm_method_name(sm_method method)
-{
-	switch (method) {
-	case SM_METHOD_BDF: return "bdf";
-	case SM_METHOD_ADAMS: return "adams";
-	}
-	return "unknown";
-}
-
-sm_status sm_method_from_name(const char* name, sm_method* method)
-{
-	if (name == NULL || method == NULL)
-		return SM_ERROR_INVALID_ARGUMENT;
-	if (strcmp(name, "bdf") == 0)
-		*method = SM_METHOD_BDF;
-	else if (strcmp(name, "adams") == 0)
-		*method = SM_METHOD_ADAMS;
-	else
-		return SM_ERROR_INVALID_ARGUMENT;
-	return SM_OK;
-}
-
-sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
-{
-	for (int i = 0; name != NULL && solver != NULL && i < SM_SOLVER_COUNT; i++)
-		if (strcmp(name, solver_names[i]) == 0) {
-			*solver = (sm_linear_solver)i;
-			return SM_OK;
-		}
-	return SM_ERROR_INVALID_ARGUMENT;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -193,7 +114,7 @@ const double* sm_simulation_external_forces(sm_simulation* sim, double t)
 }
 
 // Writes the free particles' entries of x and v into y (the energies e and w untouched).
-static void pack(const sm_simulation* sim, const double* x, const double* v, double* y)
+void sm_simulation_pack(const sm_simulation* sim, const double* x, const double* v, double* y)
 {
 	const int64_t nd = sim->dofs;
 	for (int32_t k = 0; k < sim->free_count; k++) {
@@ -210,774 +131,6 @@ void sm_simulation_refresh_outputs(sm_simulation* sim)
 {
 	sm_simulation_unpack(sim, sm_simulation_cvode_time(sim, sim->time), N_VGetArrayPointer(sim->y),
 	                     sim->position, sim->velocity);
-}
-
-// ---------------------------------------------------------------------------------------------
-// CVODE callbacks
-// ---------------------------------------------------------------------------------------------
-
-// Whether the linear solver is the reduced one (linear_solver_reduced.c). Adams' fixed-point
-// iteration has none, whatever the options name.
-static bool has_reduced_solver(const sm_simulation* sim)
-{
-	return sim->linear_solver != NULL &&
-	       (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
-}
-
-// Power the inputs deliver [W], from the velocities v and forces f of all particles (external
-// forces included) and the external forces at one time. An external force on a free particle
-// does f_ext . v. A driven particle follows its path because whatever drives it adds to the model's
-// forces (f - f_ext: springs, damping, gravity, its load) what its acceleration a needs,
-// m a - (f - f_ext); with the external force it takes, the outside does (m a - f + f_ext) . v on
-// it. With the dissipated power they balance the change of kinetic, elastic and gravitational energy.
-static double input_power(const sm_simulation* sim, const double* v, const double* f, const double* external)
-{
-	double power = 0.0;
-	if (sim->forced_particles > 0)
-		for (int32_t k = 0; k < sim->free_count; k++) {
-			const size_t p = 3 * (size_t)sim->free_particles[k];
-			power += external[p] * v[p] + external[p + 1] * v[p + 1] + external[p + 2] * v[p + 2];
-		}
-	if (sim->driven_count > 0)
-		for (int32_t k = 0; k < sim->constrained_count; k++) {
-			const int32_t i = sim->constrained[k];
-			if (sim->model->motion[i] != SM_PARTICLE_DRIVEN)
-				continue;
-			const size_t p = 3 * (size_t)i;
-			const double m = sim->model->mass[i];
-			for (int c = 0; c < 3; c++)
-				power += (m * sim->drive_acceleration[p + c] - f[p + c] + external[p + c]) * v[p + c];
-		}
-	return power;
-}
-
-// y' = [v; M^-1 f; P_dissipated; P_input]. A non-finite state, the energies included, is a
-// recoverable failure (> 0): CVODE retries with a smaller step.
-static int rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
-{
-	sm_simulation* sim = user_data;
-	const double* y = N_VGetArrayPointer(yv);
-	double* ydot = N_VGetArrayPointer(ydotv);
-	const int64_t nd = sim->dofs;
-	const int64_t length = sm_simulation_state_length(sim);
-	for (int64_t i = 0; i < length; i++)
-		if (!isfinite(y[i]))
-			return 1;
-	double* x = sim->work_position;
-	double* v = sim->work_velocity;
-	double* f = sim->work_force;
-	sm_simulation_unpack(sim, t, y, x, v);
-	const double start = sm_simulation_clock();
-	const double* external = sm_simulation_external_forces(sim, t);
-	double power;
-	if (has_reduced_solver(sim) && sm_reduced_rhs_wants_records(sim->linear_solver, t)) {
-		power = sm_reduced_rhs_forces(sim->linear_solver, t, y, x, v, external, f);
-		sim->base.jacobian_seconds += sm_simulation_clock() - start;
-	} else {
-		power = sm_model_forces_and_power(sim->model, x, v, external, f);
-		sim->base.force_seconds += sm_simulation_clock() - start;
-	}
-	sim->rhs_evaluations++;
-	memcpy(ydot, y + nd, (size_t)nd * sizeof(double));
-	for (int32_t k = 0; k < sim->free_count; k++) {
-		const size_t p = 3 * (size_t)sim->free_particles[k];
-		const size_t q = 3 * (size_t)k;
-		const double w = sim->inverse_mass[k];
-		ydot[nd + q] = f[p] * w;
-		ydot[nd + q + 1] = f[p + 1] * w;
-		ydot[nd + q + 2] = f[p + 2] * w;
-	}
-	ydot[sm_simulation_dissipated_index(sim)] = power;
-	ydot[sm_simulation_work_index(sim)] = input_power(sim, v, f, external);
-	for (int64_t i = nd; i < length; i++)
-		if (!isfinite(ydot[i]))
-			return 1;
-	return 0;
-}
-
-int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant)
-{
-	double* x = sim->work_position;
-	double* v = sim->work_velocity;
-	sm_simulation_unpack(sim, t, y, x, v);
-	const double start = sm_simulation_clock();
-	// The fused pass of forces and Jacobian blocks into the simulation's records (its forces, not
-	// needed here, into the right-hand side's work array), then the assembly from them: what
-	// sm_sparse_jacobian_fill does, without allocating its scratch at every evaluation.
-	sm_status st = sm_model_forces_and_jacobians(sim->model, x, v, NULL, variant, sim->work_force,
-	                                             sim->jacobian_records);
-	if (st == SM_OK)
-		st = sm_sparse_jacobian_fill_from_springs(sim->pattern, sim->model, sim->jacobian_records, sim->dfdx,
-		                                          sim->dfdv);
-	sim->base.jacobian_seconds += sm_simulation_clock() - start;
-	sim->jacobian_evaluations++;
-	sim->jacobian_out_of_memory = st == SM_ERROR_OUT_OF_MEMORY;
-	return st == SM_OK ? 0 : -1;
-}
-
-// Dense J: [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]], scattered from
-// the sparse fill.
-static int jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
-                          N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
-{
-	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
-	sm_simulation* sim = user_data;
-	if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(yv), sim->def.jacobian) != 0)
-		return -1;
-	const double start = sm_simulation_clock();
-	const int64_t nd = sim->dofs;
-	SUNMatZero(J);
-	for (int64_t i = 0; i < nd; i++)
-		SM_ELEMENT_D(J, i, nd + i) = 1.0;
-	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
-	const int64_t* cols = sm_sparse_jacobian_column_indices(sim->pattern);
-	for (int64_t i = 0; i < nd; i++) {
-		const double w = 1.0 / sim->mass_dof[i];
-		for (int64_t e = rows[i]; e < rows[i + 1]; e++) {
-			SM_ELEMENT_D(J, nd + i, cols[e]) = w * sim->dfdx[e];
-			SM_ELEMENT_D(J, nd + i, nd + cols[e]) = w * sim->dfdv[e];
-		}
-	}
-	sim->base.jacobian_seconds += sm_simulation_clock() - start;
-	return 0;
-}
-
-// Pattern of the (6nf + 2) CSR matrix for KLU, every diagonal entry present (CVODE adds the
-// identity in place): x row i: (i, i) = 0 and (i, nd + i) = 1; v row i: the pattern row of K
-// then the same columns shifted by nd for D; the energies' rows: their diagonal entries, 0.
-static sm_status build_klu_pattern(sm_simulation* sim)
-{
-	const int64_t nd = sim->dofs;
-	const int64_t nnz = sm_sparse_jacobian_nonzeros(sim->pattern);
-	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
-	const int64_t* cols = sm_sparse_jacobian_column_indices(sim->pattern);
-	sim->klu_row_pointers = malloc((size_t)(2 * nd + SM_ENERGY_COMPONENTS + 1) * sizeof(int64_t));
-	sim->klu_column_indices = malloc((size_t)(2 * nd + 2 * nnz + SM_ENERGY_COMPONENTS) * sizeof(int64_t));
-	if (!sim->klu_row_pointers || !sim->klu_column_indices)
-		return SM_ERROR_OUT_OF_MEMORY;
-	int64_t e = 0;
-	for (int64_t i = 0; i < nd; i++) {
-		sim->klu_row_pointers[i] = e;
-		sim->klu_column_indices[e++] = i;
-		sim->klu_column_indices[e++] = nd + i;
-	}
-	for (int64_t i = 0; i < nd; i++) {
-		sim->klu_row_pointers[nd + i] = e;
-		for (int64_t k = rows[i]; k < rows[i + 1]; k++)
-			sim->klu_column_indices[e++] = cols[k];
-		for (int64_t k = rows[i]; k < rows[i + 1]; k++)
-			sim->klu_column_indices[e++] = nd + cols[k];
-	}
-	for (int64_t i = 2 * nd; i < 2 * nd + SM_ENERGY_COMPONENTS; i++) {
-		sim->klu_row_pointers[i] = e;
-		sim->klu_column_indices[e++] = i;
-	}
-	sim->klu_row_pointers[2 * nd + SM_ENERGY_COMPONENTS] = e;
-	return SM_OK;
-}
-
-static int jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
-                           N_Vector tmp1, N_Vector tmp2, N_Vector tmp3)
-{
-	(void)fy, (void)tmp1, (void)tmp2, (void)tmp3;
-	sm_simulation* sim = user_data;
-	if (sm_simulation_fill_jacobian(sim, t, N_VGetArrayPointer(yv), sim->def.jacobian) != 0)
-		return -1;
-	const double start = sm_simulation_clock();
-	const int64_t nd = sim->dofs;
-	const int64_t* rows = sm_sparse_jacobian_row_pointers(sim->pattern);
-	const int64_t total = sim->klu_row_pointers[2 * nd + SM_ENERGY_COMPONENTS];
-	if (SUNSparseMatrix_NNZ(J) < total && SUNSparseMatrix_Reallocate(J, total) != 0)
-		return -1;
-	// CVODE zeroes the matrix, index arrays included, before each call: restore the pattern.
-	memcpy(SUNSparseMatrix_IndexPointers(J), sim->klu_row_pointers,
-	       (size_t)(2 * nd + SM_ENERGY_COMPONENTS + 1) * sizeof(int64_t));
-	memcpy(SUNSparseMatrix_IndexValues(J), sim->klu_column_indices, (size_t)total * sizeof(int64_t));
-	double* val = SUNSparseMatrix_Data(J);
-	int64_t e = 0;
-	for (int64_t i = 0; i < nd; i++) {
-		val[e++] = 0.0;
-		val[e++] = 1.0;
-	}
-	for (int64_t i = 0; i < nd; i++) {
-		const double w = 1.0 / sim->mass_dof[i];
-		const int64_t len = rows[i + 1] - rows[i];
-		const double* kx = sim->dfdx + rows[i];
-		const double* kv = sim->dfdv + rows[i];
-		for (int64_t k = 0; k < len; k++)
-			val[e + k] = w * kx[k];
-		e += len;
-		for (int64_t k = 0; k < len; k++)
-			val[e + k] = w * kv[k];
-		e += len;
-	}
-	for (int c = 0; c < SM_ENERGY_COMPONENTS; c++)
-		val[e + c] = 0.0;
-	sim->base.jacobian_seconds += sm_simulation_clock() - start;
-	return 0;
-}
-
-// CVODE's messages give times on its own axis, which starts at 0 at its last (re)initialisation
-// (set_state, a break, a changed input, a failure): a failure right after a restart at 0.5 s
-// said "At t = 0". Each time named so ("t = ", and "tout", "tstop", "tcur", "tcur - hu", "t0") is
-// rewritten on the simulation's axis, origin + t, in as many digits as CVODE gave (6) beyond
-// those the origin adds: at a restart at 0.3 s, "t = 0.0214454" reads "t = 0.3214454".
-static const char* const cvode_time_names[] = {
-    "t = ", "tout = ", "tstop = ", "tcur - hu = ", "tcur = ", "t0 = "};
-
-// The length of the time's name that starts a word at p in msg, or 0 if none does.
-static size_t time_name_at(const char* msg, const char* p)
-{
-	if (p > msg && (isalnum((unsigned char)p[-1]) || p[-1] == '_'))
-		return 0;
-	for (size_t k = 0; k < sizeof cvode_time_names / sizeof cvode_time_names[0]; k++) {
-		const size_t length = strlen(cvode_time_names[k]);
-		if (strncmp(p, cvode_time_names[k], length) == 0)
-			return length;
-	}
-	return 0;
-}
-
-static void on_simulation_axis(const char* msg, double origin, char* out, size_t size)
-{
-	size_t n = 0;
-	for (const char* p = msg; *p != '\0' && n + 1 < size;) {
-		const size_t name = time_name_at(msg, p);
-		char* end = NULL;
-		const double t = name > 0 ? strtod(p + name, &end) : 0.0;
-		if (name == 0 || end == p + name || !isfinite(t)) {
-			out[n++] = *p++;
-			continue;
-		}
-		const double time = origin + t;
-		char text[SM_NUMBER_TEXT_CAPACITY];
-		if (t == 0.0 || time == 0.0 || !isfinite(time)) {
-			sm_format_number(time, text);
-		} else {
-			const int extra = (int)floor(log10(fabs(time))) - (int)floor(log10(fabs(t)));
-			sm_format_c_locale(text, sizeof text, "%.*g", 6 + (extra > 0 ? (extra < 11 ? extra : 11) : 0),
-			                   time);
-		}
-		const int written = snprintf(out + n, size - n, "%.*s%s", (int)name, p, text);
-		if (written > 0)
-			n = n + (size_t)written < size ? n + (size_t)written : size - 1;
-		p = end;
-	}
-	out[n] = '\0';
-}
-
-static void error_handler(int error_code, const char* module, const char* function, char* msg,
-                          void* user_data)
-{
-	(void)error_code, (void)module;
-	sm_simulation* sim = user_data;
-	const int prefix = snprintf(sim->solver_message, sizeof sim->solver_message, "%s: ", function);
-	if (prefix >= 0 && (size_t)prefix < sizeof sim->solver_message - 1)
-		on_simulation_axis(msg, sim->time_origin, sim->solver_message + prefix,
-		                   sizeof sim->solver_message - (size_t)prefix);
-}
-
-// ---------------------------------------------------------------------------------------------
-// Timed wrapper around a matrix-based linear solver (dense LU, KLU)
-// ---------------------------------------------------------------------------------------------
-
-typedef struct timed_content {
-	sm_simulation* sim;
-	SUNLinearSolver inner;
-} timed_content;
-
-static SUNLinearSolver_Type timed_type(SUNLinearSolver ls)
-{
-	return SUNLinSolGetType(((timed_content*)ls->content)->inner);
-}
-
-static SUNLinearSolver_ID timed_id(SUNLinearSolver ls)
-{
-	return SUNLinSolGetID(((timed_content*)ls->content)->inner);
-}
-
-static int timed_initialize(SUNLinearSolver ls)
-{
-	return SUNLinSolInitialize(((timed_content*)ls->content)->inner);
-}
-
-static int timed_setup(SUNLinearSolver ls, SUNMatrix A)
-{
-	timed_content* c = ls->content;
-	const double start = sm_simulation_clock();
-	int r = SUNLinSolSetup(c->inner, A);
-	c->sim->base.linear_solve_seconds += sm_simulation_clock() - start;
-	c->sim->factorizations++;
-	return r;
-}
-
-static int timed_solve(SUNLinearSolver ls, SUNMatrix A, N_Vector x, N_Vector b, sunrealtype tol)
-{
-	timed_content* c = ls->content;
-	const double start = sm_simulation_clock();
-	int r = SUNLinSolSolve(c->inner, A, x, b, tol);
-	c->sim->base.linear_solve_seconds += sm_simulation_clock() - start;
-	c->sim->linear_iterations++;
-	return r;
-}
-
-static sunindextype timed_last_flag(SUNLinearSolver ls)
-{
-	return SUNLinSolLastFlag(((timed_content*)ls->content)->inner);
-}
-
-static int timed_free(SUNLinearSolver ls)
-{
-	if (ls == NULL)
-		return 0;
-	timed_content* c = ls->content;
-	if (c != NULL) {
-		SUNLinSolFree(c->inner);
-		free(c);
-		ls->content = NULL;
-	}
-	SUNLinSolFreeEmpty(ls);
-	return 0;
-}
-
-SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner)
-{
-	if (inner == NULL)
-		return NULL;
-	SUNLinearSolver ls = SUNLinSolNewEmpty(sim->context);
-	timed_content* c = malloc(sizeof *c);
-	if (ls == NULL || c == NULL) {
-		free(c);
-		if (ls)
-			SUNLinSolFreeEmpty(ls);
-		SUNLinSolFree(inner);
-		return NULL;
-	}
-	c->sim = sim;
-	c->inner = inner;
-	ls->content = c;
-	ls->ops->gettype = timed_type;
-	ls->ops->getid = timed_id;
-	ls->ops->initialize = timed_initialize;
-	ls->ops->setup = timed_setup;
-	ls->ops->solve = timed_solve;
-	ls->ops->lastflag = timed_last_flag;
-	ls->ops->free = timed_free;
-	return ls;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Creation
-// ---------------------------------------------------------------------------------------------
-
-static sm_status check_def(const sm_simulation_def* def, sm_error* err)
-{
-	if ((int)def->method < 0 || def->method > SM_METHOD_ADAMS)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown method %d",
-		                    (int)def->method);
-	if ((int)def->solver < 0 || def->solver >= SM_SOLVER_COUNT)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown linear solver %d",
-		                    (int)def->solver);
-	if ((int)def->jacobian < 0 || def->jacobian > SM_JACOBIAN_DEFINITE)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: unknown Jacobian variant %d",
-		                    (int)def->jacobian);
-	const struct {
-		const char* name;
-		double value;
-	} positive[] = {{"relative_tolerance", def->relative_tolerance},
-	                {"absolute_tolerance_position", def->absolute_tolerance_position},
-	                {"absolute_tolerance_velocity", def->absolute_tolerance_velocity}};
-	for (size_t i = 0; i < sizeof positive / sizeof positive[0]; i++)
-		if (!(isfinite(positive[i].value) && positive[i].value > 0.0))
-			return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: %s = %g must be finite and > 0",
-			                    positive[i].name, positive[i].value);
-	// Below SM_MIN_ABSOLUTE_TOLERANCE CVODE's error norm overflows (simulation.h).
-	// Both numbers in the digits that read back: 9.9999999999e-151 is not 1e-150.
-	const bool position_ok = def->absolute_tolerance_position >= SM_MIN_ABSOLUTE_TOLERANCE;
-	if (!position_ok || !(def->absolute_tolerance_velocity >= SM_MIN_ABSOLUTE_TOLERANCE)) {
-		char value[SM_NUMBER_TEXT_CAPACITY], floor[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(position_ok ? def->absolute_tolerance_velocity : def->absolute_tolerance_position,
-		                 value);
-		sm_format_number(SM_MIN_ABSOLUTE_TOLERANCE, floor);
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: absolute_tolerance_%s = %s must be at least %s: CVODE's error norm "
-		                    "sums (error / atol)^2, which overflows for smaller tolerances",
-		                    position_ok ? "velocity" : "position", value, floor);
-	}
-	if (!(def->relative_tolerance < 1.0))
-		return sm_error_set(
-		    err, SM_ERROR_INVALID_ARGUMENT,
-		    "simulation: relative_tolerance = %g must be < 1 (a relative error of 100 %% or more)",
-		    def->relative_tolerance);
-	// Below the machine epsilon CVODE cannot meet it (SM_MIN_RELATIVE_TOLERANCE, simulation.h).
-	// Both in their shortest exact digits: a value an ulp below the floor reads as below it.
-	if (!(def->relative_tolerance >= SM_MIN_RELATIVE_TOLERANCE)) {
-		char value[SM_NUMBER_TEXT_CAPACITY], floor[SM_NUMBER_TEXT_CAPACITY];
-		sm_format_number(def->relative_tolerance, value);
-		sm_format_number(SM_MIN_RELATIVE_TOLERANCE, floor);
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: relative_tolerance = %s must be at least %s, the machine epsilon: "
-		                    "CVODE cannot hold errors below the rounding of the state",
-		                    value, floor);
-	}
-	if (!(isfinite(def->max_step) && def->max_step >= 0.0))
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: max_step = %g must be finite and >= 0", def->max_step);
-	if (def->max_step > 0.0 && def->max_step <= SM_MAX_STEP_FLOOR)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
-		                    "simulation: max_step = %g s is too small for CVODE, whose 1 / max_step would be "
-		                    "beyond the largest double; give 0 for no limit or a step above %g s",
-		                    def->max_step, SM_MAX_STEP_FLOOR);
-	if (def->max_steps <= 0)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: max_steps = %d must be > 0",
-		                    (int)def->max_steps);
-	if (def->threads < 1)
-		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: threads = %d must be >= 1",
-		                    (int)def->threads);
-	return SM_OK;
-}
-
-static sm_linear_solver resolve_solver(const sm_simulation_def* def, int64_t dofs)
-{
-	if (def->solver != SM_SOLVER_AUTO)
-		return def->solver;
-	if (dofs <= AUTO_DENSE_MAX_DOFS)
-		return SM_SOLVER_DENSE;
-	return SM_SOLVER_REDUCED_PCG;
-}
-
-// Masses of the free particles, from the simulation's model.
-static void refresh_masses(sm_simulation* sim)
-{
-	for (int32_t k = 0; k < sim->free_count; k++) {
-		const double m = sim->model->mass[sim->free_particles[k]];
-		sim->inverse_mass[k] = 1.0 / m;
-		sim->mass_dof[3 * k] = sim->mass_dof[3 * k + 1] = sim->mass_dof[3 * k + 2] = m;
-	}
-}
-
-// The springs at each driven particle (driven_spring_start, driven_springs): counted, then listed.
-static sm_status build_driven_springs(sm_simulation* sim)
-{
-	const sm_model* m = sim->model;
-	int32_t* start = calloc((size_t)m->particle_count + 2, sizeof(int32_t));
-	if (start == NULL)
-		return SM_ERROR_OUT_OF_MEMORY;
-	for (int32_t s = 0; s < m->spring_count; s++) {
-		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
-		for (int e = 0; e < 2; e++)
-			start[ends[e] + 2] += m->motion[ends[e]] == SM_PARTICLE_DRIVEN;
-	}
-	for (int32_t i = 0; i < m->particle_count; i++)
-		start[i + 2] += start[i + 1];
-	int32_t* springs = malloc(((size_t)start[m->particle_count + 1] + 1) * sizeof(int32_t));
-	if (springs == NULL) {
-		free(start);
-		return SM_ERROR_OUT_OF_MEMORY;
-	}
-	// start[i + 1] is the next place of particle i's springs, and ends as the end of them.
-	for (int32_t s = 0; s < m->spring_count; s++) {
-		const int32_t ends[2] = {m->spring_a[s], m->spring_b[s]};
-		for (int e = 0; e < 2; e++)
-			if (m->motion[ends[e]] == SM_PARTICLE_DRIVEN)
-				springs[start[ends[e] + 1]++] = s;
-	}
-	sim->driven_spring_start = start;
-	sim->driven_springs = springs;
-	return SM_OK;
-}
-
-// Everything from the model's stored initial state: positions, velocities, driven motion,
-// no external forces, e = w = 0.
-static void load_initial_state(sm_simulation* sim)
-{
-	const sm_model* m = sim->model;
-	const size_t n3 = 3 * (size_t)sim->particle_count;
-	if (n3 > 0) {  // a model without particles has no arrays to copy from
-		memcpy(sim->drive_position, m->position, n3 * sizeof(double));
-		memcpy(sim->drive_velocity, m->velocity, n3 * sizeof(double));
-	}
-	for (int32_t i = 0; i < sim->particle_count; i++)
-		sim->drive_time[i] = sim->force_time[i] = 0.0;
-	memset(sim->drive_acceleration, 0, n3 * sizeof(double));
-	memset(sim->external_force, 0, n3 * sizeof(double));
-	memset(sim->force_rate, 0, n3 * sizeof(double));
-	sim->ramping_forces = 0;
-	sim->forced_particles = 0;
-	double* y = N_VGetArrayPointer(sim->y);
-	pack(sim, m->position, m->velocity, y);
-	y[sm_simulation_dissipated_index(sim)] = 0.0;
-	y[sm_simulation_work_index(sim)] = 0.0;
-	sim->jump_work = 0.0;
-	sim->time = 0.0;
-	sim->time_origin = 0.0;
-	sm_simulation_refresh_outputs(sim);
-}
-
-static sm_status attach_linear_solver(sm_simulation* sim)
-{
-	if (sim->def.method == SM_METHOD_ADAMS) {
-		SUNNonlinearSolver nls = SUNNonlinSol_FixedPoint(sim->y, 0, sim->context);
-		if (!nls)
-			return SM_ERROR_OUT_OF_MEMORY;
-		// CVODE does not take ownership of the nonlinear solver: the simulation frees it.
-		int flag = CVodeSetNonlinearSolver(sim->cvode, nls);
-		if (flag != CV_SUCCESS) {
-			SUNNonlinSolFree(nls);
-			return SM_ERROR_SOLVER;
-		}
-		sim->fixed_point = nls;
-		return SM_OK;
-	}
-	const int64_t n = sm_simulation_state_length(sim);
-	switch (sim->solver) {
-	case SM_SOLVER_DENSE: {
-		sim->matrix = SUNDenseMatrix(n, n, sim->context);
-		if (!sim->matrix)
-			return SM_ERROR_OUT_OF_MEMORY;
-		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_Dense(sim->y, sim->matrix, sim->context));
-		if (!sim->linear_solver)
-			return SM_ERROR_OUT_OF_MEMORY;
-		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, sim->matrix) != CVLS_SUCCESS ||
-		    CVodeSetJacFn(sim->cvode, jacobian_dense) != CVLS_SUCCESS)
-			return SM_ERROR_SOLVER;
-		return SM_OK;
-	}
-	case SM_SOLVER_KLU: {
-		if (build_klu_pattern(sim) != SM_OK)
-			return SM_ERROR_OUT_OF_MEMORY;
-		sim->matrix = SUNSparseMatrix(n, n, sim->klu_row_pointers[n], CSR_MAT, sim->context);
-		if (!sim->matrix)
-			return SM_ERROR_OUT_OF_MEMORY;
-		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_KLU(sim->y, sim->matrix, sim->context));
-		if (!sim->linear_solver)
-			return SM_ERROR_OUT_OF_MEMORY;
-		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, sim->matrix) != CVLS_SUCCESS ||
-		    CVodeSetJacFn(sim->cvode, jacobian_sparse) != CVLS_SUCCESS)
-			return SM_ERROR_SOLVER;
-		return SM_OK;
-	}
-	case SM_SOLVER_REDUCED_PCG:
-	case SM_SOLVER_REDUCED_CHOLMOD: {
-		sim->linear_solver = sm_reduced_solver_create(sim, sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
-		if (!sim->linear_solver)
-			return SM_ERROR_OUT_OF_MEMORY;
-		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, NULL) != CVLS_SUCCESS ||
-		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS)
-			return SM_ERROR_SOLVER;
-		return SM_OK;
-	}
-	case SM_SOLVER_AUTO:
-	case SM_SOLVER_COUNT: break;
-	}
-	return SM_ERROR_INVALID_ARGUMENT;
-}
-
-// CVODE's error weights w_i = 1 / (rtol |y_i| + atol_i), computed as CVodeSVtolerances' own
-// function computes them (the same bits), from the simulation's absolute tolerances. Given to
-// CVodeWFtolerances because CVodeSVtolerances clones the tolerance vector and SUNDIALS 6.4.1 then
-// writes into the clone without checking that it was made: out of memory, that crashes.
-static int error_weights(N_Vector yv, N_Vector wv, void* user_data)
-{
-	const sm_simulation* sim = user_data;
-	const double* y = N_VGetArrayPointer(yv);
-	const double* atol = N_VGetArrayPointer(sim->tolerances);
-	double* w = N_VGetArrayPointer(wv);
-	const double rtol = sim->def.relative_tolerance;
-	const sunindextype n = N_VGetLength(yv);
-	for (sunindextype i = 0; i < n; i++) {
-		const double t = rtol * fabs(y[i]) + atol[i];
-		if (t <= 0.0)
-			return -1;  // as CVODE: a zero or negative weight is an error
-		w[i] = 1.0 / t;
-	}
-	return 0;
-}
-
-static sm_status setup_cvode(sm_simulation* sim)
-{
-	const int64_t nd = sim->dofs;
-	double* tol = N_VGetArrayPointer(sim->tolerances);
-	for (int64_t i = 0; i < nd; i++) {
-		tol[i] = sim->def.absolute_tolerance_position;
-		tol[nd + i] = sim->def.absolute_tolerance_velocity;
-	}
-	// The energies [J] share the velocities' absolute tolerance.
-	tol[sm_simulation_dissipated_index(sim)] = sim->def.absolute_tolerance_velocity;
-	tol[sm_simulation_work_index(sim)] = sim->def.absolute_tolerance_velocity;
-	sim->cvode = CVodeCreate(sim->def.method == SM_METHOD_ADAMS ? CV_ADAMS : CV_BDF, sim->context);
-	if (!sim->cvode)
-		return SM_ERROR_OUT_OF_MEMORY;
-	if (CVodeSetErrHandlerFn(sim->cvode, error_handler, sim) != CV_SUCCESS ||
-	    CVodeInit(sim->cvode, rhs, sm_simulation_cvode_time(sim, sim->time), sim->y) != CV_SUCCESS ||
-	    CVodeWFtolerances(sim->cvode, error_weights) != CV_SUCCESS ||
-	    CVodeSetUserData(sim->cvode, sim) != CV_SUCCESS ||
-	    CVodeSetMaxNumSteps(sim->cvode, sim->def.max_steps) != CV_SUCCESS ||
-	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS)
-		return SM_ERROR_SOLVER;
-	// CVODE's warnings that t + h rounds to t are not printed (its time axis starts at every
-	// (re)initialisation, so they would come only after a long run without one).
-	CVodeSetMaxHnilWarns(sim->cvode, -1);
-	sm_status st = sm_simulation_build_events(sim);
-	if (st != SM_OK)
-		return st;
-	return attach_linear_solver(sim);
-}
-
-sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_def* def, sm_error* err)
-{
-	sm_error_clear(err);
-	if (model == NULL) {
-		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "simulation: model is NULL");
-		return NULL;
-	}
-	sm_simulation_def d = def ? *def : sm_default_simulation_def();
-	if (check_def(&d, err) != SM_OK)
-		return NULL;
-	sm_simulation* sim = calloc(1, sizeof *sim);
-	if (!sim) {
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "simulation: out of memory");
-		return NULL;
-	}
-	sim->def = d;
-	sim->model = sm_model_clone(model);
-	if (!sim->model)
-		goto out_of_memory;
-	const sm_model* m = sim->model;
-	const int32_t n = m->particle_count;
-	sim->particle_count = n;
-	sim->spring_count = m->spring_count;
-	sim->free_count = m->free_count;
-	sim->dofs = 3 * (int64_t)m->free_count;
-	sim->constrained_count = n - m->free_count;
-	sim->solver = resolve_solver(&d, sim->dofs);
-	const size_t n3 = 3 * (size_t)n + 1;
-	sim->initial_enabled = malloc((size_t)m->spring_count + 1);
-	sim->free_particles = malloc(((size_t)sim->free_count + 1) * sizeof(int32_t));
-	sim->constrained = malloc(((size_t)sim->constrained_count + 1) * sizeof(int32_t));
-	sim->inverse_mass = malloc(((size_t)sim->free_count + 1) * sizeof(double));
-	sim->mass_dof = malloc(((size_t)sim->dofs + 1) * sizeof(double));
-	sim->origin_slot = malloc(((size_t)n + 1) * sizeof(int32_t));
-	double** arrays[] = {&sim->position,       &sim->velocity,           &sim->external_force,
-	                     &sim->force_rate,     &sim->force_time,         &sim->drive_position,
-	                     &sim->drive_velocity, &sim->drive_acceleration, &sim->drive_time,
-	                     &sim->work_position,  &sim->work_velocity,      &sim->work_force,
-	                     &sim->work_external};
-	for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
-		if (!(*arrays[i] = calloc(n3, sizeof(double))))
-			goto out_of_memory;
-	if (!sim->initial_enabled || !sim->free_particles || !sim->constrained || !sim->inverse_mass ||
-	    !sim->mass_dof || !sim->origin_slot)
-		goto out_of_memory;
-	for (int32_t i = 0; i < n; i++)
-		sim->origin_slot[i] = -1;
-	if (m->spring_count > 0)  // no array to copy from in a model without springs
-		memcpy(sim->initial_enabled, m->enabled, (size_t)m->spring_count);
-	for (int32_t i = 0, kf = 0, kc = 0; i < n; i++) {
-		if (m->motion[i] == SM_PARTICLE_FREE)
-			sim->free_particles[kf++] = i;
-		else
-			sim->constrained[kc++] = i;
-		sim->driven_count += m->motion[i] == SM_PARTICLE_DRIVEN;
-	}
-	refresh_masses(sim);
-	if (build_driven_springs(sim) != SM_OK)
-		goto out_of_memory;
-	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU ||
-	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
-		sim->pattern = sm_sparse_jacobian_create(m);
-		if (!sim->pattern)
-			goto out_of_memory;
-		const size_t nnz = (size_t)sm_sparse_jacobian_nonzeros(sim->pattern) + 1;
-		sim->dfdx = malloc(nnz * sizeof(double));
-		sim->dfdv = malloc(nnz * sizeof(double));
-		if (!sim->dfdx || !sim->dfdv)
-			goto out_of_memory;
-	}
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU) {
-		sim->jacobian_records = sm_spring_jacobians_create(m);
-		if (!sim->jacobian_records)
-			goto out_of_memory;
-	}
-	if (SUNContext_Create(NULL, &sim->context) != 0) {
-		sim->context = NULL;
-		goto out_of_memory;
-	}
-	sim->y = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
-	sim->y_saved = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
-	sim->tolerances = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
-	if (!sim->y || !sim->y_saved || !sim->tolerances)
-		goto out_of_memory;
-	// Before CVodeInit: every vector CVODE and the solvers clone from y inherits the operations.
-	sm_vector_ops_install(sim->y);
-	sm_vector_ops_install(sim->y_saved);
-	sm_vector_ops_install(sim->tolerances);
-	load_initial_state(sim);
-	sm_status st = setup_cvode(sim);
-	if (st != SM_OK) {
-		sm_error_set(err, st, "simulation: cannot set up CVODE with the %s linear solver%s%s",
-		             sm_linear_solver_name(sim->solver), sim->solver_message[0] ? ": " : "",
-		             sim->solver_message);
-		sm_simulation_destroy(sim);
-		return NULL;
-	}
-	return sim;
-
-out_of_memory:
-	sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "simulation: out of memory for a model of %d particles",
-	             (int)model->particle_count);
-	sm_simulation_destroy(sim);
-	return NULL;
-}
-
-void sm_simulation_destroy(sm_simulation* sim)
-{
-	if (sim == NULL)
-		return;
-	if (sim->cvode)
-		CVodeFree(&sim->cvode);
-	SUNLinSolFree(sim->linear_solver);
-	if (sim->fixed_point)
-		SUNNonlinSolFree(sim->fixed_point);
-	SUNMatDestroy(sim->matrix);
-	N_VDestroy(sim->y);
-	N_VDestroy(sim->y_saved);
-	N_VDestroy(sim->tolerances);
-	sm_simulation_free_events(sim);  // before the context its vector belongs to
-	if (sim->context)
-		SUNContext_Free(&sim->context);
-	sm_model_destroy(sim->model);
-	sm_sparse_jacobian_destroy(sim->pattern);
-	free(sim->dfdx);
-	free(sim->dfdv);
-	free(sim->klu_row_pointers);
-	free(sim->klu_column_indices);
-	sm_spring_jacobians_destroy(sim->jacobian_records);
-	free(sim->initial_enabled);
-	free(sim->free_particles);
-	free(sim->constrained);
-	free(sim->inverse_mass);
-	free(sim->mass_dof);
-	free(sim->position);
-	free(sim->velocity);
-	free(sim->external_force);
-	free(sim->drive_position);
-	free(sim->drive_velocity);
-	free(sim->drive_acceleration);
-	free(sim->drive_time);
-	free(sim->origin_slot);
-	free(sim->origins);
-	free(sim->force_rate);
-	free(sim->force_time);
-	free(sim->work_external);
-	free(sim->driven_spring_start);
-	free(sim->driven_springs);
-	free(sim->work_position);
-	free(sim->work_velocity);
-	free(sim->work_force);
-	free(sim->breaks);
-	free(sim);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1009,7 +162,7 @@ static sm_status reinit(sm_simulation* sim, bool reset)
 	sim->need_restart = false;
 	sim->input_jumped = false;
 	sim->break_pending = false;
-	if (has_reduced_solver(sim))
+	if (sm_simulation_has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, reset || sim->forget_factor);
 	sim->forget_factor = false;
 	sim->time_origin = sim->time;
@@ -1092,9 +245,9 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	// a restore, a model update), and the reduced solver's right-hand side evaluates its copies of
 	// them, which it takes afresh at an invalidation. The restart would make one; this step comes
 	// before it.
-	if (sim->need_restart && has_reduced_solver(sim))
+	if (sim->need_restart && sm_simulation_has_reduced_solver(sim))
 		sm_reduced_solver_invalidate(sim->linear_solver, false);
-	if (rhs(sm_simulation_cvode_time(sim, sim->time), sim->y, sim->y_saved, sim) != 0) {
+	if (sm_simulation_rhs(sm_simulation_cvode_time(sim, sim->time), sim->y, sim->y_saved, sim) != 0) {
 		char t[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(sim->time, t);
 		return sm_simulation_fail(
@@ -1334,7 +487,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory evaluating the Jacobian");
 			// The reduced solver says why its solve failed in its last flag.
-			if (flag == CV_LSOLVE_FAIL && has_reduced_solver(sim) &&
+			if (flag == CV_LSOLVE_FAIL && sm_simulation_has_reduced_solver(sim) &&
 			    SUNLinSolLastFlag(sim->linear_solver) == SUNLS_MEM_FAIL)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory in the linear solve");
@@ -1485,7 +638,7 @@ double sm_simulation_input_power(sm_simulation* sim)
 		return NAN;
 	const double* external = sm_simulation_external_forces(sim, sm_simulation_cvode_time(sim, sim->time));
 	sm_model_forces(sim->model, sim->position, sim->velocity, external, sim->work_force);
-	return input_power(sim, sim->velocity, sim->work_force, external);
+	return sm_simulation_input_power_at(sim, sim->velocity, sim->work_force, external);
 }
 
 const sm_model* sm_simulation_model(const sm_simulation* sim)
@@ -1852,7 +1005,7 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		    sim, SM_ERROR_NOT_FINITE,
 		    "set_state: particle %d's external force at t = %s s is not finite (its ramp)", (int)pushed, t);
 	}
-	pack(sim, x, v, N_VGetArrayPointer(sim->y));
+	sm_simulation_pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sm_input_origins_forget(sim);
 	sim->time = time;
 	// CVODE restarts here, at 0 on its axis: the outputs are those of the restart already, not of
@@ -1868,7 +1021,7 @@ sm_status sm_simulation_reset(sm_simulation* sim)
 	if (sim == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	sm_simulation_restore_springs(sim);
-	load_initial_state(sim);
+	sm_simulation_load_initial_state(sim);
 	sm_input_origins_forget(sim);
 	sim->break_count = 0;
 	sim->input_changed = false;  // the inputs set before the reset are gone with them
@@ -1931,7 +1084,8 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sm_status st = sm_simulation_build_events(sim);
 	const char* failure = st == SM_ERROR_OUT_OF_MEMORY ? "update_model: out of memory for the break events"
 	                                                   : "update_model: cannot set up the break events";
-	if (st == SM_OK && has_reduced_solver(sim) && !sm_reduced_solver_rebuild(sim->linear_solver)) {
+	if (st == SM_OK && sm_simulation_has_reduced_solver(sim) &&
+	    !sm_reduced_solver_rebuild(sim->linear_solver)) {
 		st = SM_ERROR_OUT_OF_MEMORY;
 		failure = "update_model: out of memory rebuilding the linear solver";
 	}
@@ -1954,7 +1108,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sm_model_destroy(previous);
 	free(sim->initial_enabled);
 	sim->initial_enabled = enabled;
-	refresh_masses(sim);
+	sm_simulation_refresh_masses(sim);
 	sim->need_restart = true;
 	sm_input_origins_forget(sim);
 	sm_simulation_refresh_outputs(sim);

@@ -1,5 +1,6 @@
-// Internal layout of sm_simulation, shared by simulation.c, simulation_events.c, simulation_state.c
-// and the linear solvers (linear_solver_*.c).
+// Internal layout of sm_simulation, shared by simulation.c, simulation_create.c,
+// simulation_callbacks.c, simulation_events.c, simulation_state.c and the linear solvers
+// (linear_solver_*.c).
 //
 // The CVODE state vector holds the free particles only, followed by two energies: the dissipated
 // energy e and the work w the inputs did,
@@ -188,7 +189,18 @@ static inline int64_t sm_simulation_work_index(const sm_simulation* sim)
 	return 2 * sim->dofs + 1;
 }
 
-// Helpers of simulation.c that the snapshots (simulation_state.c) use too.
+// Whether the linear solver is the reduced one (linear_solver_reduced.c). Adams' fixed-point
+// iteration has none, whatever the options name.
+static inline bool sm_simulation_has_reduced_solver(const sm_simulation* sim)
+{
+	return sim->linear_solver != NULL &&
+	       (sim->solver == SM_SOLVER_REDUCED_PCG || sim->solver == SM_SOLVER_REDUCED_CHOLMOD);
+}
+
+// Helpers of simulation.c that creation (simulation_create.c) and the snapshots
+// (simulation_state.c) use too.
+// Writes the free particles' entries of x and v into y (the energies e and w untouched).
+void sm_simulation_pack(const sm_simulation* sim, const double* x, const double* v, double* y);
 // Writes the formatted message into sim->last_error; returns status.
 sm_status sm_simulation_fail(sm_simulation* sim, sm_status status, const char* format, ...)
 #if defined(__GNUC__)
@@ -207,6 +219,35 @@ int32_t sm_simulation_overflowing_driven_particle(const sm_simulation* sim, doub
 // The first particle whose external force at time t is not finite under the given ramps, or -1.
 int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, const double* force,
                                         const double* rate, const double* start);
+
+// Steps of creation (simulation_create.c) that a reset and a model update repeat.
+// Masses of the free particles (inverse_mass, mass_dof), from the simulation's model.
+void sm_simulation_refresh_masses(sm_simulation* sim);
+// Everything from the model's stored initial state: positions, velocities, driven motion, no
+// external forces, e = w = 0, at time 0.
+void sm_simulation_load_initial_state(sm_simulation* sim);
+
+// The functions CVODE calls, given to it at creation (simulation_callbacks.c); user data: the
+// simulation.
+// CVODE's right-hand side y' = [v; M^-1 f; P_dissipated; P_input] at CVODE's time t, also the
+// explicit step of an advance too short for CVODE: 0, or 1 (recoverable) where the state or its
+// derivative is not finite.
+int sm_simulation_rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data);
+// The power the inputs deliver [W] at the velocities v and forces f of all particles (external
+// forces included) and the external forces `external`.
+double sm_simulation_input_power_at(const sm_simulation* sim, const double* v, const double* f,
+                                    const double* external);
+// The Jacobian of the dense solver's matrix and of the KLU solver's CSR matrix (whose pattern
+// sm_simulation_build_klu_pattern builds first, SM_ERROR_OUT_OF_MEMORY if it cannot): 0, or -1.
+int sm_simulation_jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
+                                 N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+sm_status sm_simulation_build_klu_pattern(sm_simulation* sim);
+int sm_simulation_jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
+                                  N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
+// CVODE's error handler: its message into sim->solver_message, with the function's name and the
+// times on the simulation's axis.
+void sm_simulation_error_handler(int error_code, const char* module, const char* function, char* msg,
+                                 void* user_data);
 
 // Input changes undone before the next advance (input_origins.c).
 // Forgets the recorded origins: after an advance, a new state, a reset, a model update or a cut,
@@ -253,7 +294,8 @@ double sm_simulation_first_rise(const double* b, int n, double resolution);
 // Frees what sm_simulation_build_events allocated.
 void sm_simulation_free_events(sm_simulation* sim);
 
-// Fills sim->dfdx and sim->dfdv at the CVODE state y (time t) with the given variant.
+// Fills sim->dfdx and sim->dfdv at the CVODE state y (time t) with the given variant
+// (simulation_callbacks.c).
 int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, sm_jacobian_variant variant);
 
 // The reduced second-order linear solver (linear_solver_reduced.c): a SUNLinearSolver that
@@ -300,5 +342,5 @@ int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vect
 void sm_vector_ops_install(N_Vector v);
 
 // Wraps a matrix-based SUNLinearSolver so that its setup and solve are timed into the
-// simulation's statistics; takes ownership of inner.
+// simulation's statistics; takes ownership of inner (simulation_callbacks.c).
 SUNLinearSolver sm_timed_solver_create(sm_simulation* sim, SUNLinearSolver inner);
