@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `springmass check`: every bundled model is valid and summarised; every file of
+# `springmass check`: every bundled model is valid, summarised and warns of nothing; every file of
 # tests/bad_models is refused (exit status 1) with exactly the error listed in expected.txt;
 # usage errors exit with 2. Then `springmass run` at the edges of its output grid.
 # Usage: check_cli.sh CLI [FMU]: FMU 0 for a build without FMU support, whose `springmass fmu`
@@ -17,6 +17,8 @@ for model in "$root"/models/*.json; do
   [ $status -eq 0 ] || fail "check $(basename "$model") exited with $status: $out"
   grep -q "^particles " <<< "$out" && grep -q "^fastest " <<< "$out" && grep -q "^ok$" <<< "$out" ||
     fail "check $(basename "$model") printed no summary: $out"
+  # A bundled model is an example to follow: nothing in it to warn of.
+  ! grep -q "^warning" <<< "$out" || fail "check $(basename "$model") warned: $out"
 done
 
 cd "$root/tests/bad_models"

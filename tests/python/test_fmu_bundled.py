@@ -2,6 +2,7 @@
 simulating it in fmpy gives what `springmass run` gives for the same file; a model packaged with
 `springmass fmu --set` is the model with those values, as `springmass run --set` simulates it."""
 import csv
+import json
 import pathlib
 import re
 import subprocess
@@ -145,17 +146,42 @@ def test_bundled_fmu_matches_springmass_run(model, set_stop_time, tmp_path):
         assert np.max(np.abs(ours - theirs)) <= 1e-9 * scale, name
 
 
+def read_obj(path):
+    """The vertices and triangles of an OBJ file as docs/model-format.md reads them: each `v x y z`,
+    and each face `f` (indices from 1, a texture or normal index after a slash dropped) cut into a
+    fan of triangles from its first vertex, with indices from 0. Enough for the bundled files
+    (positive indices, no continued lines)."""
+    vertices, triangles = [], []
+    for line in path.read_text().splitlines():
+        words = line.split("#", 1)[0].split()
+        if words and words[0] == "v":
+            vertices.append([float(c) for c in words[1:4]])
+        elif words and words[0] == "f":
+            face = [int(word.split("/")[0]) - 1 for word in words[1:]]
+            triangles += [[face[0], face[k], face[k + 1]] for k in range(1, len(face) - 1)]
+    return vertices, triangles
+
+
 @pytest.mark.parametrize("model", MODELS, ids=[m.stem for m in MODELS])
 def test_bundled_fmu_carries_its_model_file_alone_and_its_guid_is_the_file_hash(model):
     # Packaged without --set: resources/model.json is the file byte for byte, there is no
     # resources/parameters.txt (beside it only the reference result, which the GUID does not hash),
-    # and the GUID is the hash of the file alone, as before --set existed.
+    # and the GUID is the hash of the file alone, as before --set existed. A model whose meshes read
+    # OBJ files packs the file with each such mesh's vertices and triangles, as read from its OBJ
+    # file, in place of its "file" (the FMU needs no OBJ file), and the GUID hashes what it packs.
     fmu = bundled(model)
     with zipfile.ZipFile(fmu) as z:
         assert [n for n in z.namelist() if n.startswith("resources/") and not n.endswith("/")] == \
             ["resources/model.json", "resources/reference.csv"]
-        assert z.read("resources/model.json") == model.read_bytes()
-    assert read_model_description(str(fmu)).guid == fmu_guid(model.read_bytes())
+        packed = z.read("resources/model.json")
+    expected = json.loads(model.read_bytes())
+    meshes = [s for s in expected.get("structures", []) if "file" in s]
+    if not meshes:
+        assert packed == model.read_bytes()
+    for mesh in meshes:
+        mesh["vertices"], mesh["triangles"] = read_obj(model.parent / mesh.pop("file"))
+    assert json.loads(packed) == expected
+    assert read_model_description(str(fmu)).guid == fmu_guid(packed)
 
 
 def quantity(name, outputs):
