@@ -3,6 +3,7 @@ simulating it in fmpy gives what `springmass run` gives for the same file; a mod
 `springmass fmu --set` is the model with those values, as `springmass run --set` simulates it."""
 import csv
 import json
+import os
 import pathlib
 import re
 import subprocess
@@ -15,7 +16,7 @@ from fmpy import read_model_description, simulate_fmu
 from fmpy.util import read_csv as read_csv_fmpy
 from fmpy.validation import validate_fmu
 
-from conftest import BUNDLED_FMUS, CLI, MODELS as TEST_MODELS, ROOT
+from conftest import BUILD, BUNDLED_FMUS, CLI, MODELS as TEST_MODELS, ROOT
 from fmu_helpers import fmu_guid, read_documentation
 
 MODELS = sorted((ROOT / "models").glob("*.json"))
@@ -182,6 +183,42 @@ def test_bundled_fmu_carries_its_model_file_alone_and_its_guid_is_the_file_hash(
         mesh["vertices"], mesh["triangles"] = read_obj(model.parent / mesh.pop("file"))
     assert json.loads(packed) == expected
     assert read_model_description(str(fmu)).guid == fmu_guid(packed)
+
+
+def mesh_files(model):
+    """The OBJ files a model file's meshes read ("file", relative to the model's folder)."""
+    return [(model.parent / s["file"]).resolve() for s in json.loads(model.read_bytes()).get("structures", [])
+            if "file" in s]
+
+
+def build_inputs(output):
+    """The files the build makes one of its outputs from, as Ninja has them (`ninja -t query`); None
+    for a build of another generator."""
+    cache = {}
+    for line in (BUILD / "CMakeCache.txt").read_text().splitlines():
+        if "=" in line and not line.startswith(("#", "//")):
+            key, value = line.split("=", 1)
+            cache[key.split(":")[0]] = value
+    if cache.get("CMAKE_GENERATOR") != "Ninja":
+        return None
+    out = subprocess.run([cache["CMAKE_MAKE_PROGRAM"], "-C", str(BUILD), "-t", "query",
+                          os.path.relpath(output, BUILD)], capture_output=True, text=True, check=True)
+    listed = out.stdout.split("  input:", 1)[1].split("  outputs:", 1)[0].splitlines()[1:]
+    return {(BUILD / line.strip().lstrip("|").strip()).resolve() for line in listed}
+
+
+@pytest.mark.parametrize("model", [m for m in MODELS if mesh_files(m)],
+                         ids=[m.stem for m in MODELS if mesh_files(m)])
+def test_bundled_fmu_is_packed_again_when_an_obj_file_its_model_reads_changes(model):
+    # The FMU carries the vertices and triangles of the OBJ files its model's meshes read: the build
+    # makes it from them as from the model file, so that an edited OBJ file gives a new FMU, not
+    # the one packed from the file as it was.
+    inputs = build_inputs(bundled(model))
+    if inputs is None:
+        pytest.skip("the build's dependencies are read from Ninja's")
+    assert model.resolve() in inputs
+    for obj in mesh_files(model):
+        assert obj in inputs, f"{bundled(model).name} is not made again when {obj.name} changes"
 
 
 def quantity(name, outputs):
