@@ -2,7 +2,8 @@
 # Fuzzes with libFuzzer for SECONDS (default 60) each target named (default all of them):
 #   model_file        the model-file loader, seeded from the bundled and test models
 #   mesh_file         the OBJ files of meshes ("file"), read and built into a mesh, seeded with
-#                     the OBJ files of tests/bad_models and two files of every form of a face
+#                     the OBJ files of models/ and tests/bad_models and two files of every form
+#                     of a face
 #   simulation_state  simulation states read back from bytes and restored, seeded with states
 #                     the target writes of its own model
 #   fmu_state         the FMU's serialised states read back (fmi2DeSerializeFMUstate), set and
@@ -68,13 +69,15 @@ for target in "${targets[@]}"; do
     cp "$root"/models/*.json "$seeds"/
     cp "$root"/tests/python/models/*.json "$seeds"/ 2> /dev/null || true
     mkdir -p "$work"
-    "$build/fuzz_model_file" "$work" "$seeds" \
+    # From models/, where the bundled models' OBJ files are: the target finds a mesh's "file"
+    # relative to the working folder, and a bundled model that reads one then loads whole.
+    (cd "$root/models" && "$build/fuzz_model_file" "$work" "$seeds" \
       -dict="$root/fuzz/model_file.dict" -max_total_time="$seconds" -max_len=16384 -timeout=10 \
-      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1
+      -rss_limit_mb=2048 -artifact_prefix="$build/artifacts/" -print_final_stats=1)
     ;;
   mesh_file)
     work=$root/fuzz/corpus-work-mesh-file
-    cp "$root"/tests/bad_models/*.obj "$seeds"/
+    cp "$root"/tests/bad_models/*.obj "$root"/models/*.obj "$seeds"/
     printf 'v 0 0 0\r\nv 1 0 0 1\r\nv 1 1 0 0.5 0.5 0.5\r\nvt 0 0\r\nvn 0 0 1\r\nf 1/1/1 2//1 \\\r\n 3/1 -1\r\n' > "$seeds/forms.obj"
     printf '# hexagon\nv 0 0 0\nv 1 0 0\nv .5 .866 0\nf -3 -2 -1\nv -.5 .866 0\nf 1 -2 -1\ng rest\nusemtl m\nl 1 2\n' > "$seeds/relative.obj"
     mkdir -p "$work"
