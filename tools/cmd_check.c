@@ -156,10 +156,26 @@ static int by_position(const void* a, const void* b)
 	return (p->particle > q->particle) - (p->particle < q->particle);
 }
 
-// Two particles, the lower index first; `joined` once a spring is found between them.
+// Whether two points are the same, coordinate by coordinate.
+static bool same_position(const double* a, const double* b)
+{
+	return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+// The vertex that stands for v's piece: the root of its tree in `piece` (mesh vertices from 0),
+// each link on the way pointed at its grandparent.
+static int32_t piece_of(int32_t* piece, int32_t v)
+{
+	while (piece[v] != v) {
+		piece[v] = piece[piece[v]];
+		v = piece[v];
+	}
+	return v;
+}
+
+// Two particles, the lower index first.
 typedef struct particle_pair {
 	int32_t a, b;
-	bool joined;
 } particle_pair;
 
 static int by_particles(const void* a, const void* b)
@@ -171,20 +187,23 @@ static int by_particles(const void* a, const void* b)
 // Most pairs of coinciding mesh vertices named one by one; the rest are counted.
 #define COINCIDENT_SHOWN 3
 
-// Warns about two vertices of one mesh that start at the same position, not both fixed, with no
-// spring between them. The mesh makes none there (a triangle with both would have no area), so it
-// is cut between them: most often a seam the modeller exported with its vertices duplicated (a UV
+// Warns about two vertices of one mesh that start at the same position, not both fixed, that no
+// spring joins. The mesh makes none there (a triangle with both would have no area), so it is
+// cut between them: most often a seam the modeller exported with its vertices duplicated (a UV
 // seam, the ends of a strip wrapped into a tube, faces split apart), which comes apart as the
-// model runs. A spring of the file's "springs" that joins them (a zero-length one stitching the
-// seam) silences it. Exact equality, as duplicated vertices are written with the same numbers.
-// False when out of memory.
+// model runs. Springs of the file's "springs" between vertices at the same position (zero-length
+// ones stitching the seam) join them into one piece, directly or through others there (a pole
+// whose copies are all stitched to one of them): two vertices of one piece are not warned of.
+// Exact equality, as duplicated vertices are written with the same numbers. False when out of
+// memory.
 static bool warn_coincident_mesh_vertices(const sm_document* doc, const sm_model* model)
 {
 	const int32_t n = sm_model_particle_count(model), m = sm_model_spring_count(model);
 	double* x = malloc((3 * (size_t)n + 1) * sizeof(double));
 	placed_vertex* vertices = malloc(((size_t)n + 1) * sizeof *vertices);
+	int32_t* piece = malloc(((size_t)n + 1) * sizeof *piece);
 	particle_pair* pairs = malloc(((size_t)n + 1) * sizeof *pairs);
-	bool ok = x != NULL && vertices != NULL && pairs != NULL;
+	bool ok = x != NULL && vertices != NULL && piece != NULL && pairs != NULL;
 	if (ok)
 		sm_model_initial_state(model, x, NULL);
 	for (int32_t k = 0; ok && k < sm_document_structure_count(doc); k++) {
@@ -197,33 +216,40 @@ static bool warn_coincident_mesh_vertices(const sm_document* doc, const sm_model
 			vertices[v].particle = first + v;
 		}
 		qsort(vertices, (size_t)count, sizeof *vertices, by_position);
-		// Neighbours in that order at the same position (a vertex repeated three times, two pairs).
-		int32_t found = 0;
-		for (int32_t v = 1; v < count; v++) {
-			const placed_vertex *a = &vertices[v - 1], *b = &vertices[v];
-			sm_particle_def pa, pb;
-			sm_model_get_particle(model, a->particle, &pa);
-			sm_model_get_particle(model, b->particle, &pb);
-			if (a->x[0] == b->x[0] && a->x[1] == b->x[1] && a->x[2] == b->x[2] &&
-			    (pa.motion == SM_PARTICLE_FREE || pb.motion == SM_PARTICLE_FREE))
-				pairs[found++] = (particle_pair){a->particle, b->particle, false};
-		}
-		if (found == 0)
+		// Whether neighbours in that order start at the same position (most meshes: none).
+		bool coinciding = false;
+		for (int32_t v = 1; v < count && !coinciding; v++)
+			coinciding = same_position(vertices[v - 1].x, vertices[v].x);
+		if (!coinciding)
 			continue;
-		qsort(pairs, (size_t)found, sizeof *pairs, by_particles);
+		// The pieces the springs between vertices at the same position stitch the mesh's vertices
+		// into.
+		for (int32_t v = 0; v < count; v++)
+			piece[v] = v;
 		for (int32_t j = 0; j < m; j++) {
 			sm_spring_def spring;
 			sm_model_get_spring(model, j, &spring);
-			particle_pair key = {spring.a < spring.b ? spring.a : spring.b,
-			                     spring.a < spring.b ? spring.b : spring.a, false};
-			particle_pair* pair = bsearch(&key, pairs, (size_t)found, sizeof *pairs, by_particles);
-			if (pair != NULL)
-				pair->joined = true;
+			const int32_t a = spring.a - first, b = spring.b - first;
+			if (a >= 0 && a < count && b >= 0 && b < count &&
+			    same_position(x + 3 * (size_t)spring.a, x + 3 * (size_t)spring.b))
+				piece[piece_of(piece, a)] = piece_of(piece, b);
 		}
+		// Neighbours at the same position (a vertex repeated three times, two pairs), not both
+		// fixed, in two pieces: named in the particles' order.
 		int32_t cut = 0;
-		for (int32_t j = 0; j < found; j++) {
-			if (pairs[j].joined || ++cut > COINCIDENT_SHOWN)
+		for (int32_t v = 1; v < count; v++) {
+			const placed_vertex *a = &vertices[v - 1], *b = &vertices[v];
+			if (!same_position(a->x, b->x) ||
+			    piece_of(piece, a->particle - first) == piece_of(piece, b->particle - first))
 				continue;
+			sm_particle_def pa, pb;
+			sm_model_get_particle(model, a->particle, &pa);
+			sm_model_get_particle(model, b->particle, &pb);
+			if (pa.motion == SM_PARTICLE_FREE || pb.motion == SM_PARTICLE_FREE)
+				pairs[cut++] = (particle_pair){a->particle, b->particle};
+		}
+		qsort(pairs, (size_t)cut, sizeof *pairs, by_particles);
+		for (int32_t j = 0; j < cut && j < COINCIDENT_SHOWN; j++) {
 			const double* at = x + 3 * (size_t)pairs[j].a;
 			printf("warning      ");
 			print_particle(doc, pairs[j].a);
@@ -240,6 +266,7 @@ static bool warn_coincident_mesh_vertices(const sm_document* doc, const sm_model
 	}
 	free(x);
 	free(vertices);
+	free(piece);
 	free(pairs);
 	return ok;
 }

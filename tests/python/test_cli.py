@@ -1676,6 +1676,31 @@ def test_check_warns_of_a_mesh_cut_at_a_seam_of_duplicated_vertices(tmp_path):
     assert warned[1] == [] and warned[2] == []
 
 
+def test_check_takes_copies_of_a_vertex_stitched_through_one_of_them_for_one_piece(tmp_path):
+    # Three triangles meeting at the origin, each with its own copy of the corner there (a pole as
+    # modellers export one, pole[0], pole[3] and pole[6]). Stitched to pole[0] both, the copies are
+    # one piece, though no spring joins pole[3] and pole[6] directly: no warning. Stitched only
+    # pole[0] to pole[3], pole[6] is loose: the mesh is cut there.
+    obj = tmp_path / "pole.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv -1 0 0\nv 0 -1 0\nv 0 0 0\nv 1 -1 0\nv 1 -2 0\n"
+                   "f 1 2 3\nf 4 5 6\nf 7 8 9\n")
+
+    def stitch(a, b):
+        return {"a": f"pole[{a}]", "b": f"pole[{b}]", "kind": "zero_length", "stiffness": 1000}
+
+    warned = []
+    for name, springs in (("star", [stitch(0, 3), stitch(0, 6)]), ("loose", [stitch(0, 3)])):
+        model = tmp_path / f"{name}.json"
+        model.write_text(json.dumps({"springmass": 1, "name": name, "fixed": ["pole[1]"],
+                                     "structures": [{"type": "mesh", "name": "pole", "file": "pole.obj",
+                                                     "edge": {"stiffness": 100}}], "springs": springs}))
+        warned.append([line for line in cli("check", model).stdout.splitlines() if line.startswith("warning")])
+    assert warned[0] == []
+    assert warned[1] == ["warning      pole[3] (particle 3) and pole[6] (particle 6) start at the same position, "
+                         "(0, 0, 0) m, and no spring joins them: the mesh pole is cut there (a seam of "
+                         "duplicated vertices? merge them in the modeller)"]
+
+
 def stand_in_runtime(folder, binary):
     """A runtime folder as `springmass fmu --runtime` takes it, with stand-ins for the FMU binary
     (its text `binary`, executable as a built one is), a library and a licence, which keep the
