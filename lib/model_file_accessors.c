@@ -57,7 +57,7 @@ const char* sm_document_parameter_unit(const sm_document* doc, int32_t index)
 	if (doc == NULL || index < 0 || index >= doc->parameter_count)
 		return NULL;
 	const char* unit = doc->current->parameter_units[index];
-	return unit != NULL ? unit : sm_no_single_unit;
+	return unit != NULL ? unit : sm_no_single_unit();
 }
 
 uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index)

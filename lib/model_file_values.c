@@ -133,9 +133,6 @@ void sm_parser_note_parameter(noted_parameters* noted, int32_t k)
 		noted->more = true;
 }
 
-// The unit of parameters that stand for values of different units, or for counts and indices.
-const char sm_no_single_unit[] = "";
-
 // Notes that parameter k stands for a value in `unit` (NULL: a count, an index, or a value whose
 // unit the key alone does not tell): a parameter keeps a unit while every value it stands for
 // has that one.
@@ -143,9 +140,9 @@ void sm_parser_note_unit(expansion* ex, int32_t k, const char* unit)
 {
 	const char* had = ex->parameter_units[k];
 	if (had == NULL)
-		ex->parameter_units[k] = unit != NULL ? unit : sm_no_single_unit;
+		ex->parameter_units[k] = unit != NULL ? unit : sm_no_single_unit();
 	else if (unit == NULL || strcmp(had, unit) != 0)
-		ex->parameter_units[k] = sm_no_single_unit;
+		ex->parameter_units[k] = sm_no_single_unit();
 }
 
 // The SI unit of the number at a key of the format, as docs/model-format.md gives it, for the
