@@ -878,7 +878,7 @@ static int test_elastic_catenary_between_unequal_supports(void)
 		const double right_h = fabs(r[3 * n] - H), right_v = fabs(r[3 * n + 2] - (w * L0 - Va));
 		ENSURE(fabs(r[1]) < 1e-12 && fabs(r[3 * n + 1]) < 1e-12);
 		ENSURE_REL(r[2] + r[3 * n + 2], mass * g, 1e-9, 0.0);
-		const double errors[3] = {shape, fmax(left_h, right_h), fmax(left_v, right_v)};
+		const double errors[3] = {shape, worst_of(left_h, right_h), worst_of(left_v, right_v)};
 		printf("  N=%-3d shape %.3e m, horizontal force %.3e N, vertical %.3e N (H %.6f N, Va %.6f N)\n",
 		       (int)n, errors[0], errors[1], errors[2], H, Va);
 		for (int e = 0; e < 3; e++) {
