@@ -443,12 +443,14 @@ static bool read_mesh_files(sm_document* doc, const char* folder, sm_error* err)
 		const bool slash = folder_bytes > 0 && folder[folder_bytes - 1] != '/';
 		char* joined = malloc(folder_bytes + slash + strlen(name) + 1);
 		document_mesh_file* f = calloc(1, sizeof *f);
-		if (f != NULL)
-			doc->mesh_files[k] = f;
-		if (joined == NULL || f == NULL || (f->shown = malloc(SM_ERROR_MESSAGE_CAPACITY / 2 + 1)) == NULL) {
+		if (f == NULL) {
 			free(joined);
 			return sm_parser_fail(&p, SM_ERROR_OUT_OF_MEMORY, sub, "out of memory");
 		}
+		doc->mesh_files[k] = f;  // freed with the document, as is its path
+		f->path = joined;
+		if (joined == NULL || (f->shown = malloc(SM_ERROR_MESSAGE_CAPACITY / 2 + 1)) == NULL)
+			return sm_parser_fail(&p, SM_ERROR_OUT_OF_MEMORY, sub, "out of memory");
 		if (folder_bytes > 0)
 			memcpy(joined, folder, folder_bytes);
 		if (slash)
@@ -459,7 +461,6 @@ static bool read_mesh_files(sm_document* doc, const char* folder, sm_error* err)
 		size_t length = 0;
 		sm_error file_err = {SM_OK, ""};
 		const sm_status read = read_regular_file(joined, f->shown, &text, &length, &file_err);
-		free(joined);
 		if (read != SM_OK)
 			return sm_parser_fail(&p, read, sub, "%s", file_err.message);
 		int line, column;
@@ -712,6 +713,7 @@ void sm_document_destroy(sm_document* doc)
 		if (doc->mesh_files[k] == NULL)
 			continue;
 		sm_mesh_file_free(&doc->mesh_files[k]->mesh);
+		free(doc->mesh_files[k]->path);
 		free(doc->mesh_files[k]->shown);
 		free(doc->mesh_files[k]);
 	}

@@ -200,6 +200,13 @@ const char* sm_document_structure_file(const sm_document* doc, int32_t index)
 	return json_string_value(json_object_get(obj, "file"));
 }
 
+const char* sm_document_structure_file_path(const sm_document* doc, int32_t index)
+{
+	if (doc == NULL || index < 0 || (size_t)index >= doc->mesh_file_slots || doc->mesh_files[index] == NULL)
+		return NULL;
+	return doc->mesh_files[index]->path;
+}
+
 // The file's tree with each "file" of a mesh replaced by the "vertices" and "triangles" read from
 // it: the OBJ file's numbers as they are (its "scale" and "origin" stay, and apply to them the
 // same way), each a JSON real, which jansson writes with 17 significant digits (exactly, -0 as

@@ -61,7 +61,8 @@ typedef struct document_structure {
 // The OBJ file a mesh structure gives as its "file", read when the document is parsed: a
 // parameter change builds the mesh again from it, without reading the file again.
 typedef struct document_mesh_file {
-	char* shown;  // its path as messages show it: joined to the model file's folder, escaped
+	char* path;   // the path it was read from: "file" joined to the model file's folder
+	char* shown;  // that path as messages show it, escaped
 	mesh_file mesh;
 } document_mesh_file;
 

@@ -293,9 +293,16 @@ static int test_obj_paths(void)
 	snprintf(json, sizeof json, model, "meshes/tri.obj");
 	sm_document* doc = load_model("tri.json", json, &err);
 	ENSURE(doc != NULL && sm_document_particle_count(doc) == 3);
+	// The path it was read from: the model file's folder joined to "file", as written.
+	snprintf(path, sizeof path, "%s/meshes/tri.obj", work);
+	ENSURE(strcmp(sm_document_structure_file(doc, 0), "meshes/tri.obj") == 0);
+	ENSURE(strcmp(sm_document_structure_file_path(doc, 0), path) == 0);
+	ENSURE(sm_document_structure_file_path(doc, 1) == NULL &&
+	       sm_document_structure_file_path(NULL, 0) == NULL);
 	sm_document_destroy(doc);
 	doc = sm_document_parse_in_folder(json, strlen(json), "tri.json", work, &err);
 	ENSURE(doc != NULL && sm_document_particle_count(doc) == 3);
+	ENSURE(strcmp(sm_document_structure_file_path(doc, 0), path) == 0);
 	sm_document_destroy(doc);
 	// From text, relative to the current directory: not the work folder's mesh.
 	ENSURE(sm_document_parse(json, strlen(json), "tri.json", &err) == NULL);
@@ -305,12 +312,14 @@ static int test_obj_paths(void)
 	doc = sm_document_parse(json, strlen(json), "tri.json", &err);
 	ENSURE(chdir(home) == 0);
 	ENSURE(doc != NULL && sm_document_particle_count(doc) == 3);
+	ENSURE(strcmp(sm_document_structure_file_path(doc, 0), "meshes/tri.obj") == 0);
 	sm_document_destroy(doc);
 	// An absolute path, from a model in another folder.
 	snprintf(path, sizeof path, "%s/%s/meshes/tri.obj", home, work);
 	snprintf(json, sizeof json, model, path);
 	doc = load_model("meshes/absolute.json", json, &err);
 	ENSURE(doc != NULL && sm_document_particle_count(doc) == 3);
+	ENSURE(strcmp(sm_document_structure_file_path(doc, 0), path) == 0);
 	sm_document_destroy(doc);
 	return 0;
 }

@@ -415,29 +415,13 @@ int cli_check_output(const char* command, const char* option, const char* output
 }
 
 int cli_check_output_not_mesh_file(const char* command, const char* option, const char* output,
-                                   const sm_document* doc, const char* model)
+                                   const sm_document* doc)
 {
 	if (output == NULL || strcmp(output, "-") == 0)
 		return 0;
-	// A relative "file" is the model file's folder's, an absolute one is used as it is.
-	const char* slash = strrchr(model, '/');
-	const int folder_bytes = slash == NULL ? 0 : slash == model ? 1 : (int)(slash - model);
 	for (int32_t k = 0; k < sm_document_structure_count(doc); k++) {
-		const char* file = sm_document_structure_file(doc, k);
-		if (file == NULL)
-			continue;
-		const bool relative = file[0] != '/' && folder_bytes > 0;
-		char* path = malloc((size_t)folder_bytes + strlen(file) + 2);
-		if (path == NULL) {
-			fprintf(stderr, "springmass %s: out of memory\n", command);
-			return 1;
-		}
-		if (relative)
-			sprintf(path, "%.*s/%s", folder_bytes, model, file);
-		else
-			strcpy(path, file);
-		const bool same = cli_same_file(output, path);
-		free(path);
+		const char* path = sm_document_structure_file_path(doc, k);
+		const bool same = path != NULL && cli_same_file(output, path);
 		if (same) {
 			fprintf(stderr,
 			        "springmass %s: %s %s would overwrite the OBJ file of the mesh %s (structures[%d].file), "

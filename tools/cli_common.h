@@ -112,12 +112,11 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout);
 
-/// Checks, once the model file `model` is loaded into doc, that the file an option writes (NULL or
-/// "-": none) is none of the OBJ files its meshes read (a mesh's "file", beside the model file as
-/// sm_document_load finds it), which the command would destroy. Returns 0, or prints which mesh
-/// reads it and returns 2 (a usage error); 1 when out of memory.
+/// Checks, once the model file is loaded into doc, that the file an option writes (NULL or "-":
+/// none) is none of the OBJ files its meshes read (sm_document_structure_file_path), which the
+/// command would destroy. Returns 0, or prints which mesh reads it and returns 2 (a usage error).
 int cli_check_output_not_mesh_file(const char* command, const char* option, const char* output,
-                                   const sm_document* doc, const char* model);
+                                   const sm_document* doc);
 
 /// Checks that `file`, which the folder option `--vtk dir` writes, is not the model file (the same
 /// file under any name), which the command reads and would destroy. Returns 0, or prints why and

@@ -555,7 +555,7 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: %s\n", err.message);
 		goto done;
 	}
-	const int overwrites = cli_check_output_not_mesh_file("fmu", "-o", opt->output, doc, opt->model);
+	const int overwrites = cli_check_output_not_mesh_file("fmu", "-o", opt->output, doc);
 	if (overwrites != 0) {
 		result = overwrites;
 		goto done;

@@ -285,7 +285,7 @@ int sm_cmd_modes(int argc, char** argv)
 	memset(&modes, 0, sizeof modes);
 	sm_document* doc = NULL;
 	if ((status = cli_load_model("modes", model_path, settings, setting_count, &doc, &model)) != 0 ||
-	    (status = cli_check_output_not_mesh_file("modes", "-o", csv_path, doc, model_path)) != 0)
+	    (status = cli_check_output_not_mesh_file("modes", "-o", csv_path, doc)) != 0)
 		goto done;
 	status = 1;
 	const int32_t n = sm_model_particle_count(model);

@@ -615,7 +615,7 @@ int sm_cmd_run(int argc, char** argv)
 		goto done;
 	}
 	const int overwrites = cli_check_output_not_mesh_file(
-	    "run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file, doc, o.model);
+	    "run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file, doc);
 	if (overwrites != 0) {
 		status = overwrites;
 		goto done;

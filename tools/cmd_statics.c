@@ -188,10 +188,9 @@ int sm_cmd_statics(int argc, char** argv)
 	double *x0 = NULL, *x = NULL, *reactions = NULL, *displacement = NULL;
 	sm_document* doc = NULL;
 	if ((status = cli_load_model("statics", model_path, settings, setting_count, &doc, &model)) != 0 ||
-	    (status = cli_check_output_not_mesh_file("statics", "-o", csv_path, doc, model_path)) != 0 ||
-	    (status = cli_check_output_not_mesh_file("statics", "--save-model", save_path, doc, model_path)) !=
-	        0 ||
-	    (status = cli_check_output_not_mesh_file("statics", "--vtk's file", vtk_file, doc, model_path)) != 0)
+	    (status = cli_check_output_not_mesh_file("statics", "-o", csv_path, doc)) != 0 ||
+	    (status = cli_check_output_not_mesh_file("statics", "--save-model", save_path, doc)) != 0 ||
+	    (status = cli_check_output_not_mesh_file("statics", "--vtk's file", vtk_file, doc)) != 0)
 		goto done;
 	status = 1;
 	const int32_t n = sm_model_particle_count(model);

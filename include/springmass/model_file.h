@@ -158,6 +158,10 @@ SM_API sm_structure_info sm_document_structure(const sm_document* doc, int32_t i
 /// it (owned by the document); NULL for a structure that reads none or an index out of range. The
 /// file was read when the document was loaded: the document needs it no more.
 SM_API const char* sm_document_structure_file(const sm_document* doc, int32_t index);
+/// The path that OBJ file was read from: a relative "file" joined to the folder of the model file
+/// (sm_document_load) or to the folder given (sm_document_parse_in_folder), as it is otherwise; a
+/// relative result is the current directory's at loading. Owned by the document; NULL as above.
+SM_API const char* sm_document_structure_file_path(const sm_document* doc, int32_t index);
 
 /// Number of particles and of springs of the model sm_document_build gives with the parameters'
 /// current values, without building it (0 for NULL): 3 times the particle count is the length of
