@@ -368,6 +368,9 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		goto out_of_memory;
 	const sm_model* m = sim->model;
 	const int32_t n = m->particle_count;
+	// Unchanged for the simulation's life: update_model refuses another topology, and the model's
+	// own changes (breaks) only disable springs.
+	sim->topology = sm_simulation_topology_hash(m);
 	sim->particle_count = n;
 	sim->spring_count = m->spring_count;
 	sim->free_count = m->free_count;

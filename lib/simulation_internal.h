@@ -62,6 +62,7 @@ struct sm_simulation {
 
 	sm_model* model;           // own copy; broken springs disabled in it
 	uint8_t* initial_enabled;  // per spring: enabled in the model given to create/update
+	uint64_t topology;         // sm_simulation_topology_hash of the model, which update_model keeps
 	int32_t particle_count;
 	int32_t spring_count;
 	int32_t free_count;
@@ -261,6 +262,11 @@ const sm_input_origin* sm_input_origins_find(const sm_simulation* sim, int32_t p
 // Drops the particle's origin, its input being back there; when no other remains and none was
 // lost, puts the flags back as they were before the first change and returns true.
 bool sm_input_origins_settle(sm_simulation* sim, int32_t particle);
+
+// Snapshots (simulation_state.c).
+// What sm_simulation_update_model requires to match, as one hash: the counts, each particle's
+// motion, each spring's ends and kind. A simulation takes it of its model once, at creation.
+uint64_t sm_simulation_topology_hash(const sm_model* m);
 
 // Spring breaks (simulation_events.c).
 // The root functions for the model's breakable springs, given to CVODE (recomputed when the model

@@ -19,7 +19,7 @@
 // springs it holds broken are those of its break events; which springs the model itself disables
 // is the simulation's, not the snapshot's.
 struct sm_simulation_state {
-	uint64_t topology;  // topology_hash of the model it was taken from
+	uint64_t topology;  // sm_simulation_topology_hash of the model it was taken from
 	int32_t particle_count, spring_count, free_count, break_count;
 	double time;                 // [s]
 	double* y;                   // CVODE's state: free x, free v, dissipated energy, inputs' work
@@ -43,9 +43,7 @@ static uint64_t fnv1a(uint64_t h, const void* bytes, size_t length)
 	return h;
 }
 
-// What sm_simulation_update_model requires to match, as one hash: the counts, each particle's
-// motion, each spring's ends and kind.
-static uint64_t topology_hash(const sm_model* m)
+uint64_t sm_simulation_topology_hash(const sm_model* m)
 {
 	const int32_t head[2] = {m->particle_count, m->spring_count};
 	uint64_t h = fnv1a(FNV_OFFSET, head, sizeof head);
@@ -103,7 +101,7 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	    allocate_state(sim->particle_count, sim->spring_count, sim->free_count, sim->break_count);
 	if (s == NULL)
 		return NULL;
-	s->topology = topology_hash(sim->model);
+	s->topology = sim->topology;
 	s->time = sim->time;
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
 	// A jump's work not yet in CVODE's state; none leaves the work's bits as they are (-0 + 0 would
@@ -134,7 +132,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sim->last_error[0] = '\0';
 	// The counts too: the hash is a field of the snapshot, which bytes read back may hold beside
 	// other counts, and the arrays copied below have the simulation's sizes.
-	if (s->topology != topology_hash(sim->model) || s->particle_count != sim->particle_count ||
+	if (s->topology != sim->topology || s->particle_count != sim->particle_count ||
 	    s->spring_count != sim->spring_count || s->free_count != sim->free_count)
 		return sm_simulation_fail(
 		    sim, SM_ERROR_TOPOLOGY,
