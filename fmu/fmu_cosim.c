@@ -1658,20 +1658,31 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 	const sm_model* model = sm_simulation_model(inst->sim);
 	const double* x = sm_simulation_positions(inst->sim);
 	const double* u = sm_simulation_velocities(inst->sim);
-	const double* f = current_forces(inst);
 	double* a = inst->scratch;
 	double* work = a + n3;
-	for (int32_t p = 0; p < inst->particle_count; ++p) {
-		sm_particle_def pd;
-		sm_model_get_particle(model, p, &pd);
-		for (size_t c3 = 0; c3 < 3; ++c3) {
-			const size_t i = 3 * (size_t)p + c3;
-			a[i] = pd.motion == SM_PARTICLE_FREE ? f[i] / pd.mass : 0.0;
-		}
+	// The accelerations need the forces: only a velocity's derivative and the state outputs' use
+	// them, not a position's (a velocity) or the energies the simulation integrates.
+	bool accelerations = false;
+	for (size_t k = 0; k < nvr && !accelerations; ++k) {
+		const fmu_source source = inst->table.variables[vr[k]].source;
+		accelerations = source != FMU_SRC_PORT_POSITION && source != FMU_SRC_ENERGY_DISSIPATED &&
+		                source != FMU_SRC_ENERGY_INPUT;
 	}
-	for (int32_t p = 0; p < inst->port_count; ++p)
-		if (inst->ports[p].kind == SM_PORT_MOTION)
-			memcpy(a + 3 * (size_t)inst->ports[p].particle, inst->held[p].acceleration, 3 * sizeof(double));
+	if (accelerations) {
+		const double* f = current_forces(inst);
+		for (int32_t p = 0; p < inst->particle_count; ++p) {
+			sm_particle_def pd;
+			sm_model_get_particle(model, p, &pd);
+			for (size_t c3 = 0; c3 < 3; ++c3) {
+				const size_t i = 3 * (size_t)p + c3;
+				a[i] = pd.motion == SM_PARTICLE_FREE ? f[i] / pd.mass : 0.0;
+			}
+		}
+		for (int32_t p = 0; p < inst->port_count; ++p)
+			if (inst->ports[p].kind == SM_PORT_MOTION)
+				memcpy(a + 3 * (size_t)inst->ports[p].particle, inst->held[p].acceleration,
+				       3 * sizeof(double));
+	}
 	unsigned evaluated = 0;
 	const fmu_variable* overflowing = NULL;
 	for (size_t k = 0; k < nvr; ++k) {
