@@ -367,7 +367,7 @@ static fmi2Status apply_inputs(instance* inst, const char* function)
 			return fmi2Error;
 		}
 		inst->port_dirty[p] = false;
-		inst->forces_valid = false;
+		fmu_forget_derived_values(inst);
 	}
 	// Inputs set in initialisation mode give the initial state: they do no work.
 	if (inst->state == ST_INITIALIZATION) {
@@ -438,7 +438,7 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 			inst->held[p].since = sim_time;
 		inst->port_dirty[p] = false;
 	}
-	inst->forces_valid = false;
+	fmu_forget_derived_values(inst);
 	inst->sim_dirty = false;
 	inst->breaks_logged = 0;
 	inst->dissipated_offset = 0.0;
@@ -487,6 +487,12 @@ double fmu_dissipated_energy(const instance* inst)
 double fmu_input_work(const instance* inst)
 {
 	return (sm_simulation_input_work(inst->sim) - inst->work_origin) + inst->work_offset;
+}
+
+void fmu_forget_derived_values(instance* inst)
+{
+	inst->forces_valid = false;
+	inst->energies_valid = false;
 }
 
 static const double* current_forces(instance* inst)
@@ -688,7 +694,7 @@ static fmi2Status set_model_parameters(instance* inst, const fmi2ValueReference 
 		fmu_put_back_parameters(inst, "fmi2SetReal", old);
 		return fmi2Error;
 	}
-	inst->forces_valid = false;
+	fmu_forget_derived_values(inst);
 	for (int32_t k = 0; k < np; ++k) {
 		if (values[k] != old[k] && logging(inst, LOG_EVENTS))
 			fmu_logf(inst, fmi2OK, LOG_EVENTS, "t = %s: parameter %s = %s (solver restarted)",
@@ -1070,7 +1076,7 @@ fmi2Status fmi2Reset(fmi2Component c)
 	inst->work_origin = 0.0;
 	inst->work_offset = 0.0;
 	inst->breaks_logged = 0;
-	inst->forces_valid = false;
+	fmu_forget_derived_values(inst);
 	load_start_values(inst);
 	inst->state = ST_INSTANTIATED;
 	return fmi2OK;
@@ -1080,24 +1086,19 @@ fmi2Status fmi2Reset(fmi2Component c)
 // FMI 2.0: getting and setting values
 // ---------------------------------------------------------------------------------------------
 
-// The energies, evaluated once per call that reads them: the three energy outputs share one pass
-// over the particles and springs. Valid for one call, in which the state does not change after
-// its first value that needs the simulation.
-typedef struct energy_cache {
-	bool valid;
-	sm_energies energies;
-} energy_cache;
-
-static const sm_energies* cached_energies(instance* inst, energy_cache* cache)
+// The energies, evaluated once per state: the three energy outputs share one pass over the
+// particles and springs, and the end of a step's check of the outputs and the master's reads after
+// it share that pass too.
+static const sm_energies* current_energies(instance* inst)
 {
-	if (!cache->valid) {
-		cache->energies = sm_simulation_energies(inst->sim);
-		cache->valid = true;
+	if (!inst->energies_valid) {
+		inst->energies = sm_simulation_energies(inst->sim);
+		inst->energies_valid = true;
 	}
-	return &cache->energies;
+	return &inst->energies;
 }
 
-static double real_value(instance* inst, const fmu_variable* v, energy_cache* cache)
+static double real_value(instance* inst, const fmu_variable* v)
 {
 	const double* x = inst->sim ? sm_simulation_positions(inst->sim) : NULL;
 	const double* u = inst->sim ? sm_simulation_velocities(inst->sim) : NULL;
@@ -1121,9 +1122,9 @@ static double real_value(instance* inst, const fmu_variable* v, energy_cache* ca
 		return current_forces(inst)[3 * inst->ports[v->index].particle + v->component];
 	case FMU_SRC_PARTICLE_POSITION: return x[3 * v->index + v->component];
 	case FMU_SRC_PARTICLE_VELOCITY: return u[3 * v->index + v->component];
-	case FMU_SRC_ENERGY_KINETIC: return cached_energies(inst, cache)->kinetic;
-	case FMU_SRC_ENERGY_ELASTIC: return cached_energies(inst, cache)->elastic;
-	case FMU_SRC_ENERGY_GRAVITY: return cached_energies(inst, cache)->gravity;
+	case FMU_SRC_ENERGY_KINETIC: return current_energies(inst)->kinetic;
+	case FMU_SRC_ENERGY_ELASTIC: return current_energies(inst)->elastic;
+	case FMU_SRC_ENERGY_GRAVITY: return current_energies(inst)->gravity;
 	case FMU_SRC_ENERGY_DISSIPATED: return fmu_dissipated_energy(inst);
 	case FMU_SRC_ENERGY_INPUT: return fmu_input_work(inst);
 	default: return NAN;
@@ -1155,7 +1156,6 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	instance* inst = c;
 	if (!fmu_allowed(inst, "fmi2GetReal", ST_RUNNING) || !check_arrays(inst, "fmi2GetReal", vr, nvr, value))
 		return fmi2Error;
-	energy_cache energies = {false, {0.0, 0.0, 0.0}};
 	const fmu_variable* overflowing = NULL;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
@@ -1167,7 +1167,7 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 		} else if (needs_simulation(v) && apply_inputs(inst, "fmi2GetReal") != fmi2OK) {
 			return fmi2Error;
 		}
-		value[i] = real_value(inst, v, &energies);
+		value[i] = real_value(inst, v);
 		if (!isfinite(value[i]) && overflowing == NULL)
 			overflowing = v;
 	}
@@ -1312,7 +1312,7 @@ static void set_real(instance* inst, const fmu_variable* v, double value)
 		                                                    : &h->force[v->component];
 		*slot = value;
 		inst->port_dirty[v->index] = true;
-		inst->forces_valid = false;
+		fmu_forget_derived_values(inst);
 		break;
 	}
 	default: break;
@@ -1711,7 +1711,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 // step took half of a communication step that CVODE interpolates (the bundled two-mass chain at
 // 1e-4 s with a stop time: 2500 of 5300 instructions, for 23 outputs among 62 variables); the
 // check takes 980, 700 of them the forces and the energies.
-static bool outputs_finite(instance* inst, energy_cache* energies)
+static bool outputs_finite(instance* inst)
 {
 	const size_t n3 = 3 * (size_t)inst->particle_count;
 	const double* x = sm_simulation_positions(inst->sim);
@@ -1724,7 +1724,7 @@ static bool outputs_finite(instance* inst, energy_cache* energies)
 	double zero = 0.0;
 	for (size_t i = 0; i < n3; ++i)
 		zero += 0.0 * x[i] + 0.0 * u[i] + (f ? 0.0 * f[i] : 0.0);
-	const sm_energies* e = cached_energies(inst, energies);
+	const sm_energies* e = current_energies(inst);
 	return zero == 0.0 && isfinite(e->kinetic) && isfinite(e->elastic) && isfinite(e->gravity) &&
 	       isfinite(fmu_dissipated_energy(inst)) && isfinite(fmu_input_work(inst));
 }
@@ -1739,12 +1739,11 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 	inst->time = t_end;
 	inst->last_successful_time = t_end;
 	const char* overflowing = NULL;
-	energy_cache energies = {false, {0.0, 0.0, 0.0}};
-	if (outputs_finite(inst, &energies))
+	if (outputs_finite(inst))
 		return fmi2OK;
 	for (int32_t i = 0; i < inst->table.count && overflowing == NULL; ++i) {
 		const fmu_variable* v = &inst->table.variables[i];
-		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v, &energies)))
+		if (v->type == FMU_REAL && v->causality == FMU_OUTPUT && !isfinite(real_value(inst, v)))
 			overflowing = v->name;
 	}
 	if (overflowing != NULL) {
@@ -1869,7 +1868,7 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 	const double t_stop = inst->stop_time_defined ? fmax(inst->stop_time, t_end) : t_end;
 	sm_status st =
 	    sm_simulation_advance_interpolated(inst->sim, t_end - inst->start_time, t_stop - inst->start_time);
-	inst->forces_valid = false;
+	fmu_forget_derived_values(inst);
 
 	int32_t breaks = sm_simulation_break_count(inst->sim);
 	for (; inst->breaks_logged < breaks; ++inst->breaks_logged) {

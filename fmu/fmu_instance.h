@@ -92,6 +92,8 @@ typedef struct instance {
 	int32_t breaks_logged;
 	double* forces;  // 3 per particle, valid while forces_valid
 	bool forces_valid;
+	sm_energies energies;  // kinetic, elastic and gravitational, valid while energies_valid [J]
+	bool energies_valid;
 	double* scratch;        // 5 * 3 per particle for directional and output derivatives
 	double* parameter_old;  // the model-file parameters' values before a change that may fail
 	double* parameter_new;  // the values such a change sets, one per parameter
@@ -142,6 +144,9 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 
 // Makes sure a simulation with the current settings exists and has taken the inputs set.
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function);
+
+// The state, the inputs or the model changed: the forces and energies kept for it are out of date.
+void fmu_forget_derived_values(instance* inst);
 
 // The energy dissipated since the start [J], never negative (energy.dissipated and a saved
 // state's; the reason is in fmu_cosim.c). Needs the simulation.

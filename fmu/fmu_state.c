@@ -336,7 +336,7 @@ static void mark_inputs_dirty(instance* inst)
 {
 	for (int32_t p = 0; p < inst->port_count; ++p)
 		inst->port_dirty[p] = true;
-	inst->forces_valid = false;
+	fmu_forget_derived_values(inst);
 }
 
 // Makes a checked state the instance's. All or nothing: a state the model refuses (a parameter
