@@ -13,6 +13,27 @@
 #include <string.h>
 #include <sys/stat.h>
 
+// The library's messages name the fields of sm_statics_def the options set: in place, each becomes
+// the option the user typed ("no equilibrium found in 3 iterations (--max-iterations)",
+// "--tolerance 100 N is not below the largest load ...").
+static void name_options(char message[SM_ERROR_MESSAGE_CAPACITY])
+{
+	static const char* const names[][2] = {{"max_iterations", "--max-iterations"},
+	                                       {"residual_tolerance", "--tolerance"}};
+	for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+		char* at = strstr(message, names[k][0]);
+		if (at == NULL)
+			continue;
+		const size_t field = strlen(names[k][0]), option = strlen(names[k][1]);
+		const size_t tail = strlen(at + field) + 1;
+		// The option is no longer than the field, or there is room: the text after moves.
+		if ((size_t)(at - message) + option + tail > SM_ERROR_MESSAGE_CAPACITY)
+			continue;
+		memmove(at + option, at + field, tail);
+		memcpy(at, names[k][1], option);
+	}
+}
+
 static void usage(FILE* out)
 {
 	fprintf(out,
@@ -211,6 +232,7 @@ int sm_cmd_statics(int argc, char** argv)
 	    cli_statics_solve("springmass statics", quiet, model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
 		fprintf(stderr, "springmass statics: %s: ", model_path);
+		name_options(err.message);
 		cli_write_named(stderr, doc, model, err.message);
 		fputc('\n', stderr);
 		goto done;

@@ -816,6 +816,15 @@ def test_statics_out_of_iterations_gives_the_force_left_without_a_particle_name(
     assert re.search(r"the largest force on a free particle is [0-9.e+-]+ N > tolerance 1e-09 N", err), err
 
 
+def test_statics_messages_name_the_options_not_the_library_fields():
+    # The library's messages name sm_statics_def's fields; the tool's user typed options.
+    err = cli("statics", MODELS / "cloth.json", "--max-iterations", 2, "-q", status=1).stderr
+    assert "no equilibrium found in 2 iterations (--max-iterations):" in err, err
+    err = cli("statics", MODELS / "cloth.json", "--tolerance", 100, "-q", status=1).stderr
+    assert "statics: --tolerance 100 N is not below the largest load on a free particle" in err, err
+    assert "residual_tolerance" not in err and "max_iterations" not in err
+
+
 def test_statics_names_the_springs_its_rest_shape_would_break(tmp_path):
     # Two 1 kg bobs hang in a chain from a fixed anchor on springs of 100 N/m and rest length 1 m,
     # g = 10 m/s^2: the upper spring carries 20 N, strain 0.2; the lower one 10 N, strain 0.1. With
