@@ -3,6 +3,7 @@
 
 #include "springmass/model.h"
 #include "springmass/simulation.h"
+#include "springmass/structures.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -53,6 +54,25 @@ static inline sm_model* oscillator_anchored(double m, double k, double kd, doubl
 static inline sm_model* oscillator(double m, double k, double kd, double u0)
 {
 	return oscillator_anchored(m, k, kd, u0, SM_PARTICLE_FIXED);
+}
+
+// An n x n sheet of sm_add_sheet's defaults (1 m x 1 m, 1 kg) with mass damping alpha [1/s],
+// corner (n-1, 0) fixed and corner (n-1, n-1) of the given motion.
+static inline sm_model* sheet_held_at_corners(int32_t n, double alpha, sm_particle_motion far_corner,
+                                              sm_structure* st)
+{
+	sm_model_def md = sm_default_model_def();
+	md.mass_damping = alpha;
+	sm_model* model = sm_model_create(&md, NULL);
+	sm_sheet_def sd = sm_default_sheet_def();
+	sd.nu = sd.nv = n;
+	if (!model || sm_add_sheet(model, &sd, st) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
+	    sm_set_motion_at(model, st, n - 1, n - 1, 0, far_corner) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
 }
 
 // A spring to be pulled apart: spring 0 (100 N/m, rest length the initial 1 m, break strain 0.1)

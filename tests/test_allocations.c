@@ -10,6 +10,7 @@
 // --wrap=cholmod_l_factorize. The sanitizer builds put allocators of their own in place of the C
 // library's, which a program's definitions would displace: there, and without glibc, the tests say
 // they skipped.
+#include "simulation_fixtures.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
@@ -117,17 +118,7 @@ static void stop_counting(void)
 // (n - 1, n - 1) driven; the free corner (0, 0) is particle 0.
 static sm_model* hanging_cloth(int32_t n, sm_structure* st)
 {
-	sm_model_def md = sm_default_model_def();
-	sm_model* model = sm_model_create(&md, NULL);
-	sm_sheet_def sd = sm_default_sheet_def();
-	sd.nu = sd.nv = n;
-	if (!model || sm_add_sheet(model, &sd, st) != SM_OK ||
-	    sm_set_motion_at(model, st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
-	    sm_set_motion_at(model, st, n - 1, n - 1, 0, SM_PARTICLE_DRIVEN) != SM_OK) {
-		sm_model_destroy(model);
-		return NULL;
-	}
-	return model;
+	return sheet_held_at_corners(n, 0.0, SM_PARTICLE_DRIVEN, st);
 }
 
 typedef struct window {

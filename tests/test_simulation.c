@@ -22,25 +22,6 @@
 // Fixtures
 // ---------------------------------------------------------------------------------------------
 
-// An n x n sheet of sm_add_sheet's defaults (1 m x 1 m, 1 kg) with mass damping alpha [1/s],
-// corner (n-1, 0) fixed and corner (n-1, n-1) of the given motion.
-static sm_model* sheet_held_at_corners(int32_t n, double alpha, sm_particle_motion far_corner,
-                                       sm_structure* st)
-{
-	sm_model_def md = sm_default_model_def();
-	md.mass_damping = alpha;
-	sm_model* model = sm_model_create(&md, NULL);
-	sm_sheet_def sd = sm_default_sheet_def();
-	sd.nu = sd.nv = n;
-	if (!model || sm_add_sheet(model, &sd, st) != SM_OK ||
-	    sm_set_motion_at(model, st, n - 1, 0, 0, SM_PARTICLE_FIXED) != SM_OK ||
-	    sm_set_motion_at(model, st, n - 1, n - 1, 0, far_corner) != SM_OK) {
-		sm_model_destroy(model);
-		return NULL;
-	}
-	return model;
-}
-
 // The benchmark cloth (bench/README.md): n x n, 1 kg, corners (n-1, 0) and (n-1, n-1) fixed.
 static sm_model* benchmark_cloth(int32_t n, double mass_damping)
 {
