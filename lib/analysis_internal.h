@@ -1,5 +1,5 @@
 // Helpers shared by the static equilibrium (statics.c) and the modal analysis (modes.c,
-// modes_lanczos.c).
+// modes_lanczos.c), defined in analysis_shared.c.
 #pragma once
 
 #include "springmass/analysis.h"
