@@ -250,15 +250,15 @@ static int test_bundled_model_facts(void)
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
 
-	// Shade sail: the disc of its OBJ file (radius 1 m: a centre vertex, 5 rings of 16) scaled to the
-	// radius, 1.5 m, with its centre at the origin, (0, 0, 2.5) m; its mass density x the area of
+	// Shade sail: the disc of its OBJ file (radius 1 m: a centre vertex, 5 rings of 16) scaled by its
+	// parameter scale to a radius r of 1.5 m, with its centre at the origin, (0, 0, 2.5) m; its mass density x the area of
 	// the 16-gon, 8 r^2 sin(pi / 8). The file writes 6 decimals: the area within 1e-5 of it.
 	doc = load_bundled("shade_sail", NULL);
 	ENSURE(doc != NULL);
-	const int32_t radius = sm_document_parameter_index(doc, "radius");
+	const int32_t scale = sm_document_parameter_index(doc, "scale");
 	for (int k = 0; k < 2; k++) {
 		const double r = k == 0 ? 1.5 : 3.0;
-		ENSURE_STATUS(sm_document_set_parameter(doc, radius, r, NULL), SM_OK);
+		ENSURE_STATUS(sm_document_set_parameter(doc, scale, r, NULL), SM_OK);
 		ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
 		ENSURE(sm_model_particle_count(m) == 81 && count_fixed(m) == 4);
 		ENSURE_NEAR(sm_model_total_mass(m), 0.25 * 8.0 * r * r * sin(acos(-1.0) / 8.0),
@@ -278,7 +278,7 @@ static int test_bundled_model_facts(void)
 		}
 		sm_model_destroy(m);
 	}
-	ENSURE_STATUS(sm_document_set_parameter(doc, radius, 1.5, NULL), SM_OK);
+	ENSURE_STATUS(sm_document_set_parameter(doc, scale, 1.5, NULL), SM_OK);
 	// At rest the sail hangs below its posts and each post holds a quarter of its weight: the mesh
 	// turned by 90 degrees is the same mesh (the file's coordinates are signs of the same rounded
 	// numbers), so the four reactions are equal to rounding (1e-9 of the weight).
