@@ -1709,7 +1709,7 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
 // outputs) the forces on every particle, and the energies. False only sends end_step on to read
 // each output, to name the first that is not finite. Reading each through the table at every
 // step took half of a communication step that CVODE interpolates (the bundled two-mass chain at
-// 1e-4 s with a stop time: 2500 of 5300 instructions, for 23 outputs among 62 variables); the
+// 1e-4 s with a stop time: 2500 of 5300 instructions, for 20 outputs among 62 variables); the
 // check takes 980, 700 of them the forces and the energies.
 static bool outputs_finite(instance* inst)
 {

@@ -67,7 +67,7 @@ extern "C" {
 /// Smallest absolute tolerance accepted [m], [m/s]. CVODE's error norm sums
 /// (error / (rtol |y| + atol))^2 over the N components of the state, which overflows to infinity
 /// when the errors reach 1.3e154 atol / sqrt(N) where |y| = 0: at this bound 1.3e4 / sqrt(N) m or
-/// m/s (21 for the 393 205 components of a 256 x 256 cloth), beyond any step's error, while at
+/// m/s (21 for the 393 206 components of a 256 x 256 cloth), beyond any step's error, while at
 /// 3e-308 m/s the first steps of the bundled oscillator overflowed it and every step failed.
 #define SM_MIN_ABSOLUTE_TOLERANCE 1e-150
 
