@@ -264,14 +264,6 @@ int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, 
 	return 0;
 }
 
-int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector rv, N_Vector z, sunrealtype gamma,
-                      sunrealtype delta, int lr, void* user_data)
-{
-	(void)t, (void)y, (void)fy, (void)gamma, (void)delta, (void)lr, (void)user_data;
-	N_VScale(1.0, rv, z);  // never called: the reduced solver preconditions internally
-	return 0;
-}
-
 static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Vector bv, sunrealtype tol)
 {
 	(void)unused;

@@ -285,7 +285,7 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		if (!sim->linear_solver)
 			return SM_ERROR_OUT_OF_MEMORY;
 		if (CVodeSetLinearSolver(sim->cvode, sim->linear_solver, NULL) != CVLS_SUCCESS ||
-		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, sm_reduced_psolve) != CVLS_SUCCESS)
+		    CVodeSetPreconditioner(sim->cvode, sm_reduced_pset, NULL) != CVLS_SUCCESS)
 			return SM_ERROR_SOLVER;
 		return SM_OK;
 	}

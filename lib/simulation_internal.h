@@ -309,8 +309,9 @@ int sm_simulation_fill_jacobian(sm_simulation* sim, double t, const double* y, s
 // by block Jacobi and its coarse correction (use_cholmod false) or by the Cholesky factor of an
 // earlier Newton matrix (true).
 SUNLinearSolver sm_reduced_solver_create(sm_simulation* sim, bool use_cholmod);
-// Its set-up, given to CVodeSetPreconditioner (user data: the simulation): evaluates the
-// Jacobian afresh (always, whatever CVODE allows); psolve is a formality.
+// Its set-up, given to CVodeSetPreconditioner (user data: the simulation) without a
+// preconditioner solve, which the solver does itself: evaluates the Jacobian afresh (always,
+// whatever CVODE allows).
 int sm_reduced_pset(sunrealtype t, N_Vector y, N_Vector fy, sunbooleantype jok, sunbooleantype* jcur,
                     sunrealtype gamma, void* user_data);
 // Forgets the Jacobian the reduced solver holds, so that it evaluates one at its next solve
@@ -338,8 +339,6 @@ int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p,
 bool sm_reduced_rhs_wants_records(SUNLinearSolver ls, double t);
 double sm_reduced_rhs_forces(SUNLinearSolver ls, double t, const double* y, const double* x, const double* v,
                              const double* f_external, double* f);
-int sm_reduced_psolve(sunrealtype t, N_Vector y, N_Vector fy, N_Vector r, N_Vector z, sunrealtype gamma,
-                      sunrealtype delta, int lr, void* user_data);
 
 // Replaces the arithmetic operations in a serial N_Vector's table of operations (vector_ops.c)
 // by loops compiled with the project's flags: Debian's SUNDIALS is built without optimisation.
