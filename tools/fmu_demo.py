@@ -8,6 +8,7 @@ The FMU's default experiment (stop time and communication step from the model fi
 forces) and one with the energies.
 """
 import argparse
+import math
 import sys
 
 import matplotlib
@@ -17,18 +18,26 @@ import matplotlib.pyplot as plt  # noqa: E402
 from fmpy import read_model_description, simulate_fmu  # noqa: E402
 
 
+def positive_seconds(text):
+    """A time in seconds for --stop-time and --step: a finite number above zero."""
+    value = float(text)
+    if not math.isfinite(value) or value <= 0.0:
+        raise argparse.ArgumentTypeError(f"{text} is not a time above 0 s")
+    return value
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("fmu")
     parser.add_argument("png")
-    parser.add_argument("--stop-time", type=float, default=None)
-    parser.add_argument("--step", type=float, default=None)
+    parser.add_argument("--stop-time", type=positive_seconds, default=None)
+    parser.add_argument("--step", type=positive_seconds, default=None)
     args = parser.parse_args(argv)
 
     md = read_model_description(args.fmu)
     experiment = md.defaultExperiment
-    stop = args.stop_time or (float(experiment.stopTime) if experiment and experiment.stopTime else 1.0)
-    step = args.step or (float(experiment.stepSize) if experiment and experiment.stepSize else stop / 500)
+    stop = args.stop_time if args.stop_time is not None else (float(experiment.stopTime) if experiment and experiment.stopTime else 1.0)
+    step = args.step if args.step is not None else (float(experiment.stepSize) if experiment and experiment.stepSize else stop / 500)
     outputs = [v.name for v in md.modelVariables if v.causality == "output"]
     result = simulate_fmu(args.fmu, stop_time=stop, output_interval=step, output=outputs)
 

@@ -1985,3 +1985,14 @@ def test_run_summary_names_the_solver_auto_picks(tmp_path, model, sets, solver):
     args = [x for kv in sets for x in ("--set", kv)]
     out = cli("run", MODELS / f"{model}.json", *args, "--t-end", 0.1, "-o", tmp_path / "out.csv")
     assert re.search(rf" with BDF, solver {solver}: ", out.stderr), out.stderr
+
+
+@pytest.mark.parametrize("option, value", [("--step", "0"), ("--stop-time", "-1"), ("--step", "inf"),
+                                           ("--stop-time", "nan")])
+def test_the_fmu_demo_refuses_times_that_are_not_above_zero(tmp_path, option, value):
+    # A zero step or stop time used to fall back silently to the FMU's default experiment.
+    run = subprocess.run([sys.executable, ROOT / "tools" / "fmu_demo.py", tmp_path / "absent.fmu",
+                          tmp_path / "plot.png", option, value], capture_output=True, text=True)
+    assert run.returncode == 2
+    assert f"argument {option}: {value} is not a time above 0 s" in run.stderr
+    assert not (tmp_path / "plot.png").exists()
