@@ -23,8 +23,12 @@ setup:
 
 # BUILD_TYPE or CMAKE_FLAGS given to make (on its command line or in the environment) configure
 # an existing build folder again with them; otherwise a folder configured once keeps its settings.
+# The sanitizer folders have their own build types, so only CMAKE_FLAGS configures them again.
 ifneq ($(filter-out file default undefined,$(origin BUILD_TYPE) $(origin CMAKE_FLAGS)),)
 CONFIGURE_AGAIN := configure-again
+endif
+ifneq ($(filter-out file default undefined,$(origin CMAKE_FLAGS)),)
+CONFIGURE_FLAGS_AGAIN := configure-again
 endif
 .PHONY: configure-again
 configure-again:
@@ -42,7 +46,7 @@ demo: build
 test: build
 	$(CTEST) --test-dir $(BUILD_DIR) --output-on-failure -j $(JOBS)
 
-$(SANITIZE_DIR)/build.ninja: | setup
+$(SANITIZE_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
 	$(CMAKE) -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
 	    -DSPRINGMASS_SANITIZE=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
 
@@ -53,7 +57,7 @@ test-sanitize: sanitize-build
 	$(CTEST) --test-dir $(SANITIZE_DIR) --output-on-failure -j $(JOBS)
 
 # ThreadSanitizer: only the executables of the tests that use threads are built and run.
-$(TSAN_DIR)/build.ninja: | setup
+$(TSAN_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
 	$(CMAKE) -S . -B $(TSAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 	    -DSPRINGMASS_SANITIZE_THREAD=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
 
