@@ -1,7 +1,8 @@
 // springmass FMU: what the files of the FMU binary share. The instance and the states of the FMI
-// 2.0 state machine, logging, and the model and simulation helpers that the entry points
-// (fmu_cosim.c, which defines these functions) and the FMU state (fmu_state.c) both call. Internal:
-// the binary exports the fmi2* entry points only, nothing declared here.
+// 2.0 state machine, logging, the model and simulation helpers (defined in fmu_cosim.c) and the
+// value helpers (fmu_values.c) that the entry points (fmu_cosim.c, fmu_values.c,
+// fmu_derivatives.c, fmu_step.c) and the FMU state (fmu_state.c) call. Internal: the binary
+// exports the fmi2* entry points only, nothing declared here.
 #pragma once
 
 #include "fmu_model.h"
@@ -103,6 +104,9 @@ typedef struct instance {
 // Logging
 // ---------------------------------------------------------------------------------------------
 
+// Whether the importer takes messages of a category (LOG_* bits) now.
+bool fmu_logging(const instance* inst, unsigned category);
+
 // Formats a message and hands it to the importer's logger if its category is on.
 void fmu_logf(instance* inst, fmi2Status status, unsigned category, const char* fmt, ...)
 #if defined(__GNUC__)
@@ -145,8 +149,14 @@ fmi2Status fmu_create_simulation(instance* inst, const char* function, sm_model*
 // Makes sure a simulation with the current settings exists and has taken the inputs set.
 fmi2Status fmu_ensure_simulation(instance* inst, const char* function);
 
+// Gives the inputs set since the last step to the simulation, at the current communication point.
+fmi2Status fmu_apply_inputs(instance* inst, const char* function);
+
 // The state, the inputs or the model changed: the forces and energies kept for it are out of date.
 void fmu_forget_derived_values(instance* inst);
+
+// The force on every particle at the current state [N] (3 per particle), evaluated once per state.
+const double* fmu_current_forces(instance* inst);
 
 // The energy dissipated since the start [J], never negative (energy.dissipated and a saved
 // state's; the reason is in fmu_cosim.c). Needs the simulation.
@@ -159,3 +169,24 @@ bool fmu_set_parameters(instance* inst, const char* function, const double* valu
 
 // Puts back the parameter values old[] of fmu_set_parameters (the error state if that fails).
 void fmu_put_back_parameters(instance* inst, const char* function, const double* old);
+
+// ---------------------------------------------------------------------------------------------
+// Values (fmu_values.c)
+// ---------------------------------------------------------------------------------------------
+
+// The variable of a value reference if it exists and has the type asked for; NULL, logged, if not.
+const fmu_variable* fmu_lookup(instance* inst, const char* function, fmi2ValueReference vr, fmu_type type);
+
+// False, logged, for a NULL array with nvr > 0.
+bool fmu_check_arrays(instance* inst, const char* function, const void* vr, size_t nvr, const void* value);
+
+// The kinetic, elastic and gravitational energies at the current state, evaluated once per state.
+const sm_energies* fmu_current_energies(instance* inst);
+
+// The value of a Real variable now (in SI units).
+double fmu_real_value(instance* inst, const fmu_variable* v);
+
+// fmi2OK, or fmi2Warning, logged, when a value read (`what`: "" or "the derivative of ") of
+// `overflowing` is beyond the range of a double.
+fmi2Status fmu_overflow_warning(instance* inst, const char* function, const char* what,
+                                const fmu_variable* overflowing);

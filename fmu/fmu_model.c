@@ -326,7 +326,7 @@ static void add_real_parameter(builder* b, const char* name, const char* descrip
 	}
 }
 
-// The range fmi2SetReal and fmi2SetInteger accept for a solver setting (fmu_cosim.c), declared as
+// The range fmi2SetReal and fmi2SetInteger accept for a solver setting (fmu_values.c), declared as
 // its min and max (FMI 2.0, 2.2.7; both bounds are inclusive, so a relative tolerance below 1 has
 // the double just below 1 as its max); NAN where no bound is declared.
 static void solver_range(fmu_source source, double* min, double* max)

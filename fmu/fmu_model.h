@@ -2,7 +2,7 @@
 // the parameter values an FMU carries beside the file (resources/parameters.txt).
 //
 // One table is the single source of truth for the FMU's interface: the packager writes
-// modelDescription.xml from it and the runtime (fmu_cosim.c) resolves value references with
+// modelDescription.xml from it and the runtime (fmu_values.c) resolves value references with
 // it. Value references are the indices into the table, so both sides agree by construction.
 // This layer knows only the public model-file API (sm_document), never a force law.
 #pragma once
