@@ -250,9 +250,10 @@ static int test_bundled_model_facts(void)
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
 
-	// Shade sail: the disc of its OBJ file (radius 1 m: a centre vertex, 5 rings of 16) scaled by its
-	// parameter scale to a radius r of 1.5 m, with its centre at the origin, (0, 0, 2.5) m; its mass density x the area of
-	// the 16-gon, 8 r^2 sin(pi / 8). The file writes 6 decimals: the area within 1e-5 of it.
+	// Shade sail: the disc of its OBJ file (radius 1 m: a centre vertex, 5 rings of 16) scaled by
+	// its parameter scale to a radius r of 1.5 m, with its centre at the origin, (0, 0, 2.5) m; its
+	// mass density x the area of the 16-gon, 8 r^2 sin(pi / 8). The file writes 6 decimals: the
+	// area within 1e-5 of it.
 	doc = load_bundled("shade_sail", NULL);
 	ENSURE(doc != NULL);
 	const int32_t scale = sm_document_parameter_index(doc, "scale");
