@@ -181,6 +181,7 @@ int32_t sm_document_structure_count(const sm_document* doc)
 sm_structure_info sm_document_structure(const sm_document* doc, int32_t index)
 {
 	static const char* const types[] = {"rope", "sheet", "block", "mesh"};
+	_Static_assert(sizeof types / sizeof types[0] == STRUCTURE_TYPE_COUNT, "a name for every structure type");
 	sm_structure_info info;
 	memset(&info, 0, sizeof info);
 	if (doc == NULL || index < 0 || index >= doc->current->structure_count)

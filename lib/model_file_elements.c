@@ -222,6 +222,8 @@ static bool resolve_structure_reference(parser* p, const document_structure* s, 
 		static const char* const forms[] = {
 		    "a rope takes one index, name[i]", "a sheet takes name[i] or name[row, column]",
 		    "a block takes name[i] or name[row, column, layer]", "a mesh takes one index, name[i]"};
+		_Static_assert(sizeof forms / sizeof forms[0] == STRUCTURE_TYPE_COUNT,
+		               "a form for every structure type");
 		return sm_parser_fail(p, SM_ERROR_PARTICLE_INDEX, path, "%s has %d indices: %s", text, count,
 		                      forms[s->type]);
 	}

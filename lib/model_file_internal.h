@@ -51,6 +51,9 @@ typedef enum structure_type {
 	STRUCTURE_BLOCK,
 	STRUCTURE_MESH
 } structure_type;
+// The number of types: the tables indexed by a type (its name, its keys, its index forms) have
+// this many entries, which each checks at compile time.
+#define STRUCTURE_TYPE_COUNT (STRUCTURE_MESH + 1)
 
 typedef struct document_structure {
 	const char* name;  // points into the JSON tree

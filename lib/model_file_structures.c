@@ -370,6 +370,7 @@ static bool read_structure(parser* p, const named_like_references* like, size_t 
 	else
 		return sm_parser_fail(p, SM_ERROR_SCHEMA, sub, "must be \"rope\", \"sheet\", \"block\" or \"mesh\"");
 	const char* const* keys[] = {rope_keys, sheet_keys, block_keys, mesh_keys};
+	_Static_assert(sizeof keys / sizeof keys[0] == STRUCTURE_TYPE_COUNT, "keys for every structure type");
 	if (!sm_parser_check_keys(p, obj, path, keys[s.type]))
 		return false;
 	sm_parser_child_key(sub, path, "name");
