@@ -409,9 +409,11 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 	sm_simulation_refresh_masses(sim);
 	if (build_driven_springs(sim) != SM_OK)
 		goto out_of_memory;
-	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only).
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU ||
-	    sim->solver == SM_SOLVER_REDUCED_CHOLMOD) {
+	// The assembled sparse Jacobian (conjugate gradients use the springs' factored blocks only;
+	// Adams, with fixed-point iteration, no Jacobian at all).
+	const bool newton = sim->def.method != SM_METHOD_ADAMS;
+	if (newton && (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU ||
+	               sim->solver == SM_SOLVER_REDUCED_CHOLMOD)) {
 		sim->pattern = sm_sparse_jacobian_create(m);
 		if (!sim->pattern)
 			goto out_of_memory;
@@ -421,7 +423,7 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		if (!sim->dfdx || !sim->dfdv)
 			goto out_of_memory;
 	}
-	if (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU) {
+	if (newton && (sim->solver == SM_SOLVER_DENSE || sim->solver == SM_SOLVER_KLU)) {
 		sim->jacobian_records = sm_spring_jacobians_create(m);
 		if (!sim->jacobian_records)
 			goto out_of_memory;

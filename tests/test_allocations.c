@@ -295,11 +295,46 @@ static int test_adams_and_interpolated_outputs_without_allocating(void)
 	return 0;
 }
 
+// Adams iterates without a Jacobian: a simulation created for it allocates alike whichever linear
+// solver its options name (before, dense, klu and cholmod also built the sparse Jacobian's
+// pattern and values, and dense and klu the springs' blocks, all unused).
+static int test_adams_allocates_no_jacobian(void)
+{
+	if (!COUNTING) {
+		printf("  skipped: the allocator is the sanitizer's or not glibc's\n");
+		return 0;
+	}
+	sm_structure st;
+	sm_model* model = hanging_cloth(5, &st);
+	ENSURE(model != NULL);
+	const sm_linear_solver solvers[] = {SM_SOLVER_REDUCED_PCG, SM_SOLVER_DENSE, SM_SOLVER_KLU,
+	                                    SM_SOLVER_REDUCED_CHOLMOD};
+	long counts[4];
+	for (size_t k = 0; k < 4; k++) {
+		sm_simulation_def d = sm_default_simulation_def();
+		d.method = SM_METHOD_ADAMS;
+		d.solver = solvers[k];
+		start_counting();
+		sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+		stop_counting();
+		ENSURE(sim != NULL);
+		counts[k] = atomic_load(&allocations_);
+		printf("  adams, %s named: %ld allocations to create\n", sm_linear_solver_name(solvers[k]),
+		       counts[k]);
+		sm_simulation_destroy(sim);
+	}
+	for (size_t k = 1; k < 4; k++)
+		ENSURE(counts[k] == counts[0]);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
 	RUN_TEST(test_reduced_solvers_iterate_without_allocating);
 	RUN_TEST(test_matrix_solvers_evaluate_jacobians_without_allocating);
 	RUN_TEST(test_adams_and_interpolated_outputs_without_allocating);
+	RUN_TEST(test_adams_allocates_no_jacobian);
 	return TEST_SUMMARY();
 }
