@@ -20,9 +20,12 @@ from fmpy import read_model_description, simulate_fmu  # noqa: E402
 
 def positive_seconds(text):
     """A time in seconds for --stop-time and --step: a finite number above zero."""
-    value = float(text)
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
     if not math.isfinite(value) or value <= 0.0:
-        raise argparse.ArgumentTypeError(f"{text} is not a time above 0 s")
+        raise argparse.ArgumentTypeError(f"{text} is not a finite time above 0 s")
     return value
 
 

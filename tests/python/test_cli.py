@@ -1988,11 +1988,13 @@ def test_run_summary_names_the_solver_auto_picks(tmp_path, model, sets, solver):
 
 
 @pytest.mark.parametrize("option, value", [("--step", "0"), ("--stop-time", "-1"), ("--step", "inf"),
-                                           ("--stop-time", "nan")])
+                                           ("--stop-time", "nan"), ("--step", "1e400"), ("--stop-time", "2 s")])
 def test_the_fmu_demo_refuses_times_that_are_not_above_zero(tmp_path, option, value):
-    # A zero step or stop time used to fall back silently to the FMU's default experiment.
+    # A zero step or stop time used to fall back silently to the FMU's default experiment; an
+    # infinite one (1e400 reads as inf) is above 0 but no time, and text that is no number at all
+    # gets the same message rather than one naming the demo's internal argument parser.
     run = subprocess.run([sys.executable, ROOT / "tools" / "fmu_demo.py", tmp_path / "absent.fmu",
                           tmp_path / "plot.png", option, value], capture_output=True, text=True)
     assert run.returncode == 2
-    assert f"argument {option}: {value} is not a time above 0 s" in run.stderr
+    assert f"argument {option}: {value} is not a finite time above 0 s" in run.stderr
     assert not (tmp_path / "plot.png").exists()
