@@ -103,7 +103,7 @@ static sm_model* whirling_bobs(void)
 
 // A bob launched tangentially at the speed of steady circular motion stays on its circle at the
 // angular speed the rest-length law gives: x_b(t) = c_b + r_b (cos(w_b t) e1 + sin(w_b t) e2).
-// Checked over ten turns of the slowest bob (w from 3.5 to 7.7 rad/s), every 1/16 turn of it.
+// Checked over ten turns of the slowest bob (w from 3.3 to 5.9 rad/s), every 1/16 turn of it.
 static int test_bobs_whirl_steadily_on_their_circles(void)
 {
 	sm_model* model = whirling_bobs();
@@ -139,7 +139,7 @@ static int test_bobs_whirl_steadily_on_their_circles(void)
 		       integrator_name(which), worst_radius, worst_position,
 		       (long)sm_simulation_statistics(sim).steps);
 		// About 5500 BDF steps (3000 Adams), each allowed 1e-10 of a state of positions up to 2 m and
-		// speeds up to 12 m/s, add up to about 1e-5 m of phase along the circles (measured 8e-6 m
+		// speeds up to 9.4 m/s, add up to about 1e-5 m of phase along the circles (measured 8e-6 m
 		// with BDF, 3e-7 m with Adams); the radius, held by the spring, errs far less (1.8e-7 m).
 		ENSURE(worst_radius < 1e-6);
 		ENSURE(worst_position < 5e-5);
@@ -169,7 +169,7 @@ static dumbbell dumbbell_of(int b)
 {
 	dumbbell d;
 	d.mass1 = 0.4 + 0.2 * b;
-	d.mass2 = b == 1 ? d.mass1 : 1.0 - 0.1 * b;  // dumbbell 1 has equal masses
+	d.mass2 = b == 1 ? d.mass1 : 1.0 - 0.1 * b;  // dumbbells 1 and 2 have equal masses
 	d.stiffness = 50.0 + 15.0 * b;
 	d.length = 0.9 + 0.1 * b;  // stretched by 12 % to 62 %
 	const double mu = d.mass1 * d.mass2 / (d.mass1 + d.mass2);
@@ -242,8 +242,8 @@ static void dumbbells_angular_momentum(const double* x, const double* v, double 
 
 // A free dumbbell set spinning at the angular speed its stretched spring holds keeps its length
 // and turns steadily while its centre of mass drifts at constant velocity; the angular momentum
-// of all the dumbbells about the origin stays constant. Ten turns of the slowest (w from 4.2 to
-// 8.4 rad/s), every 1/16 turn of it.
+// of all the dumbbells about the origin stays constant. Ten turns of the slowest (w from 4.4 to
+// 10.3 rad/s), every 1/16 turn of it.
 static int test_spinning_dumbbells_keep_their_length_and_angular_momentum(void)
 {
 	sm_model* model = spinning_dumbbells();
@@ -373,7 +373,8 @@ static void pendulum_invariants(const sm_model* model, const double* x, const do
 // Gravity exerts no torque about the vertical through a pivot and the spring pulls the bob
 // straight towards it, so each spherical elastic pendulum keeps the vertical component of its
 // angular momentum about its pivot, and its energy, however the resonant ones trade springing
-// for swinging. Over 10 s (some 15 swings), every 0.05 s.
+// for swinging. Over 10 s (about 4 swings and 10 oscillations of
+// the spring), every 0.05 s.
 static int test_elastic_pendulums_keep_their_energy_and_vertical_angular_momentum(void)
 {
 	sm_model* model = elastic_pendulums();
