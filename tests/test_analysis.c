@@ -2248,6 +2248,78 @@ static int test_motion_scales_leave_out_springs_between_held_particles(void)
 	return 0;
 }
 
+// The round-off of a model's forces (simulation.h): DBL_EPSILON |x| sqrt(k / m) / 2 of the spring
+// where it is largest, |x| the largest magnitude of its ends' coordinates and m its lighter free
+// end. A 1 kg bob hangs 1 m below a fixed pivot on a 1e9 N/m rod, and a 0.25 kg one 2 m below it
+// on a 1e8 N/m spring: the softer spring wins, at 3 m from the origin and with the lighter end,
+// eps 3 sqrt(4e8) / 2 = eps 3e4 m/s against the rod's eps sqrt(1e9) / 2 = eps 1.58e4 m/s. A
+// 1e12 N/m spring between two fixed particles 1000 m out is not integrated and counts for
+// nothing. The velocities' tolerance is too tight only below the documented tenth of it: the
+// rod's 3.51e-12 m/s makes 3.4e-13 m/s tight and 3.6e-13 m/s not, nor the default 1e-6 m/s.
+// Closed forms evaluated the same way: sqrt rounds within an ulp, 1e-15 relative.
+static int test_round_off(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double z[5] = {0.0, -1.0, -3.0, 0.0, 0.0}, x[5] = {0.0, 0.0, 0.0, 1000.0, 1001.0};
+	const double mass[5] = {1.0, 1.0, 0.25, 1.0, 1.0};
+	for (int32_t i = 0; i < 5; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 1 || i == 2 ? SM_PARTICLE_FREE : SM_PARTICLE_FIXED;
+		p.mass = mass[i];
+		p.position[0] = x[i];
+		p.position[2] = z[i];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t a[3] = {0, 1, 3}, b[3] = {1, 2, 4};
+	const double stiffness[3] = {1e9, 1e8, 1e12};
+	for (int32_t k = 0; k < 3; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.a = a[k];
+		s.b = b[k];
+		s.stiffness = stiffness[k];
+		s.damping = 2.0 * sqrt(stiffness[k] * mass[b[k]]);
+		s.rest_length = SM_REST_LENGTH_INITIAL;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_round_off round_off;
+	ENSURE_STATUS(sm_model_round_off(model, &round_off), SM_OK);
+	ENSURE(round_off.spring == 1 && round_off.stiffness == 1e8);
+	ENSURE_NEAR(round_off.velocity, DBL_EPSILON * 3e4, 1e-15 * DBL_EPSILON * 3e4);
+
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
+	ENSURE_STATUS(sm_model_round_off(model, &round_off), SM_OK);
+	ENSURE(round_off.spring == 0 && round_off.stiffness == 1e9);
+	const double rod = DBL_EPSILON * sqrt(1e9) / 2.0;
+	ENSURE_NEAR(round_off.velocity, rod, 1e-15 * rod);
+	sm_simulation_def def = sm_default_simulation_def();
+	ENSURE(!sm_tolerances_tight(&def, &round_off));
+	def.absolute_tolerance_velocity = SM_TIGHT_TOLERANCE * round_off.velocity;
+	ENSURE(!sm_tolerances_tight(&def, &round_off));
+	def.absolute_tolerance_velocity = nextafter(def.absolute_tolerance_velocity, 0.0);
+	ENSURE(sm_tolerances_tight(&def, &round_off));
+	def.absolute_tolerance_velocity = 3.6e-13;
+	ENSURE(!sm_tolerances_tight(&def, &round_off));
+	def.absolute_tolerance_velocity = 3.4e-13;
+	ENSURE(sm_tolerances_tight(&def, &round_off));
+	ENSURE(!sm_tolerances_tight(NULL, &round_off) && !sm_tolerances_tight(&def, NULL));
+
+	// Only the held spring left: nothing to judge by, even at the smallest tolerance allowed.
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 0, false), SM_OK);
+	ENSURE_STATUS(sm_model_round_off(model, &round_off), SM_OK);
+	ENSURE(round_off.spring == -1 && round_off.stiffness == 0.0 && round_off.velocity == 0.0);
+	def.absolute_tolerance_velocity = SM_MIN_ABSOLUTE_TOLERANCE;
+	ENSURE(!sm_tolerances_tight(&def, &round_off));
+	// A velocity that overflows (a stiffness / mass ratio beyond a double) judges nothing either.
+	ENSURE(!sm_tolerances_tight(&def, &(sm_round_off){0, 1e308, INFINITY}));
+	ENSURE(sm_tolerances_tight(&def, &(sm_round_off){0, 1e9, 1e-12}));
+	ENSURE_STATUS(sm_model_round_off(NULL, &round_off), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE_STATUS(sm_model_round_off(model, NULL), SM_ERROR_INVALID_ARGUMENT);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
 // omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
 // a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
@@ -4772,6 +4844,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_explicit_step_limit_edges);
 	RUN_TEST(test_motion_scales);
 	RUN_TEST(test_motion_scales_leave_out_springs_between_held_particles);
+	RUN_TEST(test_round_off);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_particles_without_springs_beside_one_spring);

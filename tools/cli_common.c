@@ -285,6 +285,26 @@ bool cli_warn_coarse_tolerances(FILE* f, const char* prefix, const sm_model* mod
 	return true;
 }
 
+bool cli_warn_tight_tolerances(FILE* f, const char* prefix, const sm_document* doc, const sm_model* model,
+                               const sm_simulation_def* def)
+{
+	sm_round_off round_off;
+	if (sm_model_round_off(model, &round_off) != SM_OK || !sm_tolerances_tight(def, &round_off))
+		return false;
+	char spring[32];
+	snprintf(spring, sizeof spring, "spring %d", (int)round_off.spring);
+	fprintf(f, "%sthe absolute tolerance of velocities, %g m/s, is too tight for the round-off of ", prefix,
+	        def->absolute_tolerance_velocity);
+	cli_write_named(f, doc, model, spring);
+	fprintf(
+	    f,
+	    ", %g N/m: rounding its force moves its ends' velocities by up to %.2g m/s in a step, and CVODE's "
+	    "steps fail over and over below a tenth of that (it may stop at max_steps; "
+	    "atol_velocity %.2g m/s or more)\n",
+	    round_off.stiffness, round_off.velocity, SM_TIGHT_TOLERANCE * round_off.velocity);
+	return true;
+}
+
 long cli_output_rows(double t_end, double interval)
 {
 	const double ratio = t_end / interval;

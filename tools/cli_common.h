@@ -59,6 +59,12 @@ void cli_note_dense(const char* command, size_t dof);
 bool cli_warn_coarse_tolerances(FILE* f, const char* prefix, const sm_model* model,
                                 const sm_simulation_def* def);
 
+/// Prints a warning on `f` (starting with `prefix`) and returns true when the velocities' absolute
+/// tolerance of `def` is too tight for the round-off of the model's forces (sm_tolerances_tight),
+/// naming the spring, with the particles' names of `doc`.
+bool cli_warn_tight_tolerances(FILE* f, const char* prefix, const sm_document* doc, const sm_model* model,
+                               const sm_simulation_def* def);
+
 /// Most output rows `springmass run` writes: an interval given by mistake in the wrong unit
 /// would otherwise fill the disk.
 #define CLI_MAX_ROWS 1e9

@@ -24,11 +24,11 @@ static void usage(FILE* out)
 	        "omega_max (Gershgorin's over the springs' stiffness, undamped) and, with the same bound on\n"
 	        "the modes' damping rates, a step at which explicit (symplectic Euler) integration is\n"
 	        "stable; `springmass modes MODEL -n 0` gives a closer value from every mode's own\n"
-	        "frequency and damping rate. Warnings: absolute tolerances coarse for the model's scales,\n"
-	        "two vertices of a mesh at the same position (no spring joins them: the mesh is cut\n"
-	        "there), springs that start at or beyond their break strain (they break at t = 0),\n"
-	        "accelerations or a dissipated power that overflow at the initial state (a run stops at\n"
-	        "t = 0).\n"
+	        "frequency and damping rate. Warnings: absolute tolerances coarse for the model's scales, a\n"
+	        "velocity tolerance too tight for the round-off of a stiff spring's force, two vertices of\n"
+	        "a mesh at the same position (no spring joins them: the mesh is cut there), springs that\n"
+	        "start at or beyond their break strain (they break at t = 0), accelerations or a\n"
+	        "dissipated power that overflow at the initial state (a run stops at t = 0).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -105,8 +105,9 @@ static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 // a double at its initial state (a weight beyond 1.8e308 N, a force over a tiny mass): `springmass
 // run` then stops at its first evaluation, at t = 0. The test is the simulation's: every free
 // particle's acceleration f / m [m/s^2] finite, and the dissipated power [W]. The first such
-// particle is named and the others counted. False when out of memory.
-static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model)
+// particle is named and the others counted. *overflows tells whether it warned. False when out of
+// memory.
+static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model, bool* overflows)
 {
 	const int32_t n = sm_model_particle_count(model);
 	double* x = malloc((9 * (size_t)n + 1) * sizeof(double));
@@ -127,6 +128,7 @@ static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model
 		if (count++ == 0)
 			first = i;
 	}
+	*overflows = count > 0;
 	if (count > 0) {
 		printf("warning      the acceleration of ");
 		print_particle(doc, first);
@@ -134,6 +136,7 @@ static bool warn_overflow_at_start(const sm_document* doc, const sm_model* model
 			printf(" (and of %d more free particle%s)", (int)(count - 1), count > 2 ? "s" : "");
 		printf(" overflows at the initial state: springmass run stops at t = 0\n");
 	} else if (!isfinite(sm_model_dissipated_power(model, x, v))) {
+		*overflows = true;
 		printf(
 		    "warning      the dissipated power overflows at the initial state: springmass run stops at t = 0\n");
 	}
@@ -531,13 +534,18 @@ int sm_cmd_check(int argc, char** argv)
 	                                                 : "solver ",
 	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
+	bool overflows = false;
 	if (!warn_coincident_mesh_vertices(doc, model) || !warn_broken_at_start(doc, model) ||
-	    !warn_overflow_at_start(doc, model)) {
+	    !warn_overflow_at_start(doc, model, &overflows)) {
 		fprintf(stderr, "springmass check: out of memory\n");
 		sm_model_destroy(model);
 		sm_document_destroy(doc);
 		return 1;
 	}
+	// A run that stops at t = 0 asks nothing of its tolerances (and a force over a tiny mass has
+	// a round-off beyond any).
+	if (!overflows)
+		cli_warn_tight_tolerances(stdout, "warning      ", doc, model, &settings.solver);
 	printf("ok\n");
 	sm_model_destroy(model);
 	sm_document_destroy(doc);

@@ -562,8 +562,10 @@ int sm_cmd_run(int argc, char** argv)
 		if (inputs == NULL || cli_inputs_drive(inputs, model) != SM_OK)
 			goto done;
 	}
-	if (!o.quiet)
+	if (!o.quiet) {
 		cli_warn_coarse_tolerances(stderr, "springmass run: warning: ", model, &def);
+		cli_warn_tight_tolerances(stderr, "springmass run: warning: ", doc, model, &def);
+	}
 	run_progress prog = {.t_end = t_end};
 	def.on_step = on_internal_step;
 	def.on_step_context = o.quiet ? NULL : &prog;

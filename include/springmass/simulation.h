@@ -213,6 +213,35 @@ SM_API sm_status sm_model_motion_scales(const sm_model* model, sm_motion_scales*
 /// suit models of centimetres and more; a micromechanical model's motion lies below them.
 SM_API bool sm_tolerances_coarse(const sm_simulation_def* def, const sm_motion_scales* scales);
 
+/// Fraction of a spring's round-off velocity (sm_round_off) below which the velocities' absolute
+/// tolerance counts as too tight [1]: CVODE's error and convergence tests see about this fraction
+/// of the noise the rounding of a stiff spring's force puts into its ends' velocities, and below
+/// it fail over and over (docs/simulation.md, "Tolerances").
+#define SM_TIGHT_TOLERANCE 0.1
+
+/// The spring whose force's rounding puts the largest noise into its ends' velocities.
+typedef struct sm_round_off {
+	/// The enabled spring with a free end of the largest velocity below; -1 when there is none
+	int32_t spring;
+	double stiffness;  ///< its stiffness [N/m]
+	/// DBL_EPSILON |x| sqrt(k / m) / 2, with |x| the largest magnitude of its ends' coordinates at
+	/// the initial state, k its stiffness and m the mass of its lighter free end: the largest
+	/// change of velocity the rounding of its force, about k DBL_EPSILON |x|, makes in one step
+	/// (motion_scales.c) [m/s]; 0 when spring is -1
+	double velocity;
+} sm_round_off;
+
+/// The round-off of a model's forces at its initial state (disabled springs, and springs between
+/// held particles, left out). SM_ERROR_INVALID_ARGUMENT for NULL arguments, SM_ERROR_OUT_OF_MEMORY.
+SM_API sm_status sm_model_round_off(const sm_model* model, sm_round_off* round_off);
+
+/// Whether the velocities' absolute tolerance of def is below SM_TIGHT_TOLERANCE times the
+/// round-off velocity: a particle at rest, or a velocity component passing through 0, is then
+/// held to less than the noise of its force, and CVODE's steps fail their error or convergence test
+/// over and over (and may stop at max_steps). False for NULL arguments or a round-off velocity that is 0 or
+/// not finite (nothing to judge by).
+SM_API bool sm_tolerances_tight(const sm_simulation_def* def, const sm_round_off* round_off);
+
 /// Name of a linear solver ("auto", "dense", "klu", "pcg", "cholmod"; "unknown" for another
 /// value) and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for an unknown name or
 /// NULL, *solver then unchanged.

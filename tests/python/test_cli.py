@@ -1283,6 +1283,39 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
             assert "warning" not in cli("fmu", quiet, "-o", tmp_path / "quiet.fmu").stderr
 
 
+def test_velocity_tolerances_below_the_round_off_of_a_stiff_spring_are_warned_about(tmp_path):
+    # A 1 kg bob hanging at rest 1 m below a pivot on a critically damped 1e9 N/m rod. Its force
+    # is known only to the rounding of the coordinates, 1e9 N/m x eps x 1 m, which moves the bob's
+    # velocity by up to eps sqrt(1e9) / 2 = 3.5e-12 m/s in a step (simulation.h, sm_round_off).
+    # Asked for a tenth of that or less, CVODE's steps fail over and over: at 1e-14 m/s
+    # 20 000 steps do not reach 0.5 s, where 1e-10 m/s takes a few hundred (135 to 2 s).
+    model = tmp_path / "rod.json"
+    def write(atol_velocity):
+        model.write_text(json.dumps({
+            "springmass": 1, "name": "rod", "gravity": [0, 0, -9.81],
+            "particles": [{"name": "pivot", "position": [0, 0, 0], "fixed": True},
+                          {"name": "bob", "position": [0, 0, -1], "mass": 1}],
+            "springs": [{"a": "pivot", "b": "bob", "stiffness": 1e9, "damping": 2 * math.sqrt(1e9), "rest_length": 1}],
+            "simulation": {"stop_time": 0.5, "output_interval": 0.5, "atol_velocity": atol_velocity, "max_steps": 20000}}))
+        return model
+    warning = cli("check", write(1e-14)).stdout
+    line = summary_line(warning, "warning")
+    assert line.startswith("the absolute tolerance of velocities, 1e-14 m/s, is too tight for the "
+                           "round-off of spring 0 (between pivot and bob), 1e+09 N/m")
+    # printed to 2 digits
+    assert number_after(line, "by up to") == pytest.approx(2.220446049250313e-16 * math.sqrt(1e9) / 2, rel=0.02)
+    failed = cli("run", write(1e-14), "-o", tmp_path / "x.csv", status=1).stderr
+    assert "springmass run: warning: the absolute tolerance of velocities, 1e-14 m/s, is too tight" in failed
+    assert "CV_TOO_MUCH_WORK" in failed
+    for sensible in (1e-10, 1e-6):
+        assert "warning" not in cli("check", write(sensible)).stdout
+        done = cli("run", write(sensible), "-o", tmp_path / "x.csv").stderr
+        assert "warning" not in done and number_after(done, "solver dense:") < 1000
+    # No bundled model asks for more than its round-off allows at its own settings.
+    for bundled in sorted(MODELS.glob("*.json")):
+        assert "too tight" not in cli("check", bundled).stdout, bundled
+
+
 def test_check_warns_of_springs_that_start_broken(tmp_path):
     # A bob 1.2 m from its anchor on springs of rest length 1 m starts at strain 0.2: those with a
     # break strain of 0.2 or less break as the run starts (at t = 0; the first row, written before,
