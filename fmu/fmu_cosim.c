@@ -810,14 +810,27 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
 }
 
 // fmi2OK, or fmi2Warning, logged, when the absolute tolerances the instance simulates with are
-// coarse for its model (sm_tolerances_coarse), as `springmass fmu` warns at packaging. The
+// coarse for its model (sm_tolerances_coarse), or the velocities' too tight for the round-off of
+// its stiffest spring's force (sm_tolerances_tight), as `springmass fmu` warns at packaging. The
 // tolerances are fixed from here on; the model's scales are judged as they are now: tunable
 // parameters (stiffness, masses, rest lengths) set between steps may move them, unchecked.
-static fmi2Status coarse_tolerance_warning(instance* inst, const char* function)
+static fmi2Status tolerance_warning(instance* inst, const char* function)
 {
+	const sm_model* model = sm_simulation_model(inst->sim);
+	sm_round_off round_off;
+	if (sm_model_round_off(model, &round_off) == SM_OK && sm_tolerances_tight(&inst->solver, &round_off)) {
+		fmu_logf(
+		    inst, fmi2Warning, LOG_WARNING,
+		    "%s: the absolute tolerance of velocities, solver.atol_velocity = %g m/s, is too tight for the "
+		    "round-off of spring %d, %g N/m: rounding its force moves its ends' velocities by up to %.2g m/s "
+		    "in a step, and CVODE's steps fail over and over below a tenth of that (it may stop at "
+		    "solver.max_steps; %.2g m/s or more, set during initialisation)",
+		    function, inst->solver.absolute_tolerance_velocity, (int)round_off.spring, round_off.stiffness,
+		    round_off.velocity, SM_TIGHT_TOLERANCE * round_off.velocity);
+		return fmi2Warning;
+	}
 	sm_motion_scales scales;
-	if (sm_model_motion_scales(sm_simulation_model(inst->sim), &scales) != SM_OK ||
-	    !sm_tolerances_coarse(&inst->solver, &scales))
+	if (sm_model_motion_scales(model, &scales) != SM_OK || !sm_tolerances_coarse(&inst->solver, &scales))
 		return fmi2OK;
 	fmu_logf(inst, fmi2Warning, LOG_WARNING,
 	         "%s: the absolute tolerances, solver.atol_position = %g m and solver.atol_velocity = %g m/s, "
@@ -840,7 +853,7 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
 	}
 	inst->last_successful_time = inst->time;
 	inst->state = ST_STEP_COMPLETE;
-	return coarse_tolerance_warning(inst, "fmi2ExitInitializationMode");
+	return tolerance_warning(inst, "fmi2ExitInitializationMode");
 }
 
 fmi2Status fmi2Terminate(fmi2Component c)

@@ -591,12 +591,14 @@ static int package(const options* opt)
 		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
 		goto done;
 	}
-	// The FMU starts from the file's tolerances: a model too small for them is warned about here,
-	// as `check` and `run` do, since the FMU's importer has no one to tell.
+	// The FMU starts from the file's tolerances: a model too small for them, or a spring too stiff
+	// for its velocity tolerance, is warned about here, as `check` and `run` do, since the FMU's
+	// importer has no one to tell.
 	sm_model* model = NULL;
 	if (sm_document_build(doc, &model, NULL) == SM_OK) {
 		const sm_document_settings settings = sm_document_get_settings(doc);
 		cli_warn_coarse_tolerances(stderr, "springmass fmu: warning: ", model, &settings.solver);
+		cli_warn_tight_tolerances(stderr, "springmass fmu: warning: ", doc, model, &settings.solver);
 		sm_model_destroy(model);
 	}
 	// The reference result names the FMU's variables: checked against them before anything is

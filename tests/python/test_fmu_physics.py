@@ -359,6 +359,43 @@ def test_tolerances_coarse_for_the_model_are_a_warning_at_initialisation(tmp_pat
             inst.free()
 
 
+def test_velocity_tolerances_too_tight_for_a_stiff_spring_are_a_warning_at_initialisation(tmp_path, package):
+    # A 1 kg bob at rest 1 m below a pivot on a critically damped 1e9 N/m rod: rounding its force
+    # moves the bob's velocity by up to eps sqrt(1e9) / 2 = 3.5e-12 m/s in a step
+    # (sm_model_round_off); a velocity tolerance below a tenth of that makes CVODE's steps fail
+    # over and over. `springmass fmu` warns at packaging, fmi2ExitInitializationMode with
+    # fmi2Warning, unless a tolerance above it is set during initialisation.
+    model = tmp_path / "rod.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "rod", "gravity": [0, 0, -9.81],
+        "particles": [{"name": "pivot", "position": [0, 0, 0], "fixed": True},
+                      {"name": "bob", "position": [0, 0, -1], "mass": 1}],
+        "springs": [{"a": "pivot", "b": "bob", "stiffness": 1e9, "damping": 2 * math.sqrt(1e9), "rest_length": 1}],
+        "ports": [{"name": "tip", "particle": "bob", "kind": "probe"}],
+        "simulation": {"atol_velocity": 1e-14}}))
+    packed = subprocess.run([CLI, "fmu", model, "-o", tmp_path / "rod.fmu"], capture_output=True, text=True)
+    assert packed.returncode == 0, packed.stderr
+    assert "springmass fmu: warning: the absolute tolerance of velocities, 1e-14 m/s, is too tight" in packed.stderr
+    noise = 2.220446049250313e-16 * math.sqrt(1e9) / 2
+    for tolerances, warned in (({}, True), ({"solver.atol_velocity": 1e-10}, False)):
+        inst = Instance(package(model), logging_on=True)
+        try:
+            s = inst.slave
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            for name, value in tolerances.items():
+                inst.set(name, value)
+            assert s.exitInitializationMode() == (1 if warned else 0)  # fmi2Warning, fmi2OK
+            tight = [m for m in inst.messages if "is too tight for the round-off" in m[2]]
+            assert [m[1] for m in tight] == (["logStatusWarning"] if warned else [])
+            if warned:
+                text = tight[0][2]
+                assert "solver.atol_velocity = 1e-14 m/s" in text and "spring 0, 1e+09 N/m" in text, text
+                assert f"by up to {noise:.2g} m/s" in text and f"{0.1 * noise:.2g} m/s or more" in text, text
+        finally:
+            inst.free()
+
+
 def stepped_from(test_fmu, start_time):
     """The driven oscillator from start_time over 1 s in communication steps of 1/128 s, with the
     stop time start_time + 1 s given. Returns tip.x and tip.vx per step and the internal steps."""
