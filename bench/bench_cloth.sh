@@ -14,6 +14,8 @@
 # (threads=<t>, the same results), then for the peer
 #   peer n=<n> wall_s=<v> z_corner=<v>
 #   speedup n=<n> <peer wall / springmass wall with the default solver>
+# or, when the peer fails at a size (exit status or solve_ivp status not 0), a line saying so
+# instead of those two, and the next size.
 set -euo pipefail
 
 build_dir=${1:?usage: bench_cloth.sh BUILD_DIR}
@@ -93,7 +95,15 @@ for n in "${peer_sizes[@]}"; do
 		echo "peer not found at $peer (set REFERENCE_BENCH to the folder that holds it): skipped"
 		break
 	fi
-	read -r _ _ _ _ _ wall z _ < <("$python" "$peer" "$n" 1)
+	# The peer's line: n particles springs steps rhs_evals wall_s z_of_free_corner status, where
+	# status is solve_ivp's (0: reached T_END). A peer that fails gives no time to compare with.
+	exit_status=0
+	out=$("$python" "$peer" "$n" 1) || exit_status=$?
+	read -r _ _ _ _ _ wall z status _ <<<"$out" || true
+	if [[ $exit_status != 0 || ${status:-} != 0 ]]; then
+		echo "peer n=$n failed (exit status $exit_status, solve_ivp status ${status:-none}): no speedup"
+		continue
+	fi
 	echo "peer n=$n wall_s=$wall z_corner=$z"
 	if [[ -n "${ours[$n]:-}" ]]; then
 		awk -v n="$n" -v p="$wall" -v o="${ours[$n]}" 'BEGIN { printf "speedup n=%d %.1f\n", n, p / o }'

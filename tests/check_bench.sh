@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# The benchmark scripts' own arithmetic and output, without timing anything: bench/bench_cloth.sh
+# over a stand-in bench_cloth and stand-in peers whose figures are known, so that the speedup
+# lines can be checked against them.
+# Usage: check_bench.sh SOURCE_DIR
+set -u
+root=$(cd "$1" && pwd)
+failures=0
+fail() { echo "FAILED: $*"; failures=$((failures + 1)); }
+[ -x "$root/.venv/bin/python" ] || { echo "$root/.venv/bin/python is missing (make setup)"; exit 1; }
+
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+
+# A stand-in for build/bench/bench_cloth N SOLVER REPEATS: auto (which reports the solver it
+# chose, pcg) takes n / 32 s, every other solver 100 s.
+mkdir -p "$tmp/build/bench" "$tmp/peer" "$tmp/failing_peer"
+cat > "$tmp/build/bench/bench_cloth" << 'SH'
+#!/usr/bin/env bash
+wall=100
+solver=$2
+if [ "$2" = auto ]; then
+  wall=$(awk -v n="$1" 'BEGIN { print n / 32 }')
+  solver=pcg
+fi
+echo "cloth n=$1 solver=$solver threads=${THREADS:-1} wall_s=$wall steps=1 rhs=1 jac=1 lin_iters=0 fact=0 restarts=0 etf=0 ncf=0 z_corner=-0.1 force_s=0 jacobian_s=0 linear_s=0"
+SH
+chmod +x "$tmp/build/bench/bench_cloth"
+# Stand-ins for the peer (its output: n particles springs steps rhs_evals wall_s z status): n s
+# of wall time at size n; the failing one exits with an error at n = 8.
+cat > "$tmp/peer/scipy_cloth.py" << 'PY'
+import sys
+n = int(sys.argv[1])
+print(n, n * n, 0, 1, 1, f"{n:.3f}", "-0.100000", 0)
+PY
+cat > "$tmp/failing_peer/scipy_cloth.py" << 'PY'
+import sys
+n = int(sys.argv[1])
+if n == 8:
+    sys.exit("no module named scipy")
+print(n, n * n, 0, 1, 1, f"{n:.3f}", "-0.100000", 0)
+PY
+
+# speedup = the peer's wall time / auto's at the same n: 8 / 0.25 and 16 / 0.5.
+out=$(REFERENCE_BENCH="$tmp/peer" "$root/bench/bench_cloth.sh" "$tmp/build" 2> /dev/null)
+status=$?
+[ $status -eq 0 ] || fail "bench_cloth.sh exited with $status: $out"
+for expected in "peer n=8 wall_s=8.000 z_corner=-0.100000" "speedup n=8 32.0" \
+                "peer n=16 wall_s=16.000 z_corner=-0.100000" "speedup n=16 32.0"; do
+  grep -qxF "$expected" <<< "$out" || fail "bench_cloth.sh printed no '$expected': $out"
+done
+
+# A peer that fails at one size: a line says so, no speedup for it, and the next size still runs.
+out=$(REFERENCE_BENCH="$tmp/failing_peer" "$root/bench/bench_cloth.sh" "$tmp/build" 2> /dev/null)
+status=$?
+[ $status -eq 0 ] || fail "bench_cloth.sh with a failing peer exited with $status: $out"
+grep -q "^peer n=8 failed" <<< "$out" || fail "bench_cloth.sh did not say that the peer failed at n = 8: $out"
+! grep -q "^speedup n=8 " <<< "$out" || fail "bench_cloth.sh printed a speedup for a failed peer: $out"
+grep -qxF "speedup n=16 32.0" <<< "$out" || fail "bench_cloth.sh did not go on to n = 16 after the peer failed: $out"
+
+[ $failures -eq 0 ] || exit 1
+echo "bench scripts: ok"
