@@ -7,7 +7,7 @@
 #
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
-#   cloth n=<n> solver=<name> threads=1 wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> ...
+#   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> threads=1 ...
 # a `skip` line for the combinations that would take too long, a `same` line for the solver auto
 # chose (measured once, on auto's line), from n = 64 on (4000 free particles, from which the pcg
 # solver's loops can run on several threads) auto again on as many threads as processors

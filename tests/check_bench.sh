@@ -2,9 +2,12 @@
 # The benchmark scripts' own arithmetic and output, without timing anything: bench/bench_cloth.sh
 # over a stand-in bench_cloth and stand-in peers whose figures are known, so that the speedup
 # lines can be checked against them.
-# Usage: check_bench.sh SOURCE_DIR
+# The line of the real bench_cloth, on a cloth small and short enough to take milliseconds, holds
+# the benchmark's agreed fields first and in their agreed order.
+# Usage: check_bench.sh SOURCE_DIR BENCH_CLOTH
 set -u
 root=$(cd "$1" && pwd)
+bench_cloth=$2
 failures=0
 fail() { echo "FAILED: $*"; failures=$((failures + 1)); }
 [ -x "$root/.venv/bin/python" ] || { echo "$root/.venv/bin/python is missing (make setup)"; exit 1; }
@@ -23,7 +26,7 @@ if [ "$2" = auto ]; then
   wall=$(awk -v n="$1" 'BEGIN { print n / 32 }')
   solver=pcg
 fi
-echo "cloth n=$1 solver=$solver threads=${THREADS:-1} wall_s=$wall steps=1 rhs=1 jac=1 lin_iters=0 fact=0 restarts=0 etf=0 ncf=0 z_corner=-0.1 force_s=0 jacobian_s=0 linear_s=0"
+echo "cloth n=$1 solver=$solver wall_s=$wall steps=1 rhs=1 jac=1 z_corner=-0.1 threads=${THREADS:-1} lin_iters=0 fact=0 restarts=0 etf=0 ncf=0 force_s=0 jacobian_s=0 linear_s=0"
 SH
 chmod +x "$tmp/build/bench/bench_cloth"
 # Stand-ins for the peer (its output: n particles springs steps rhs_evals wall_s z status): n s
@@ -57,6 +60,12 @@ status=$?
 grep -q "^peer n=8 failed" <<< "$out" || fail "bench_cloth.sh did not say that the peer failed at n = 8: $out"
 ! grep -q "^speedup n=8 " <<< "$out" || fail "bench_cloth.sh printed a speedup for a failed peer: $out"
 grep -qxF "speedup n=16 32.0" <<< "$out" || fail "bench_cloth.sh did not go on to n = 16 after the peer failed: $out"
+
+# The issue's format: cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v>,
+# then the driver's further fields.
+line=$("$bench_cloth" 4 pcg 1 0.01)
+grep -qE '^cloth n=4 solver=pcg wall_s=[0-9.e+-]+ steps=[0-9]+ rhs=[0-9]+ jac=[0-9]+ z_corner=-?[0-9.]+( |$)' <<< "$line" ||
+  fail "bench_cloth printed '$line', not the agreed fields first and in their order"
 
 [ $failures -eq 0 ] || exit 1
 echo "bench scripts: ok"
