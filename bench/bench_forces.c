@@ -155,8 +155,10 @@ int main(int argc, char** argv)
 	for (int k = 0; k < KINDS; k++) {
 		double* tk = times + k * trials;
 		qsort(tk, (size_t)trials, sizeof(double), compare_double);
+		// The median time: the middle one, or the mean of the two middle ones for an even count.
+		const double median = trials % 2 ? tk[trials / 2] : 0.5 * (tk[trials / 2 - 1] + tk[trials / 2]);
 		printf("%s n=%d springs=%d springs_per_s=%.4e best_springs_per_s=%.4e\n", kind_name[k], n, S,
-		       S / tk[trials / 2], S / tk[0]);
+		       S / median, S / tk[0]);
 	}
 	fprintf(stderr, "checksum %.6e\n", checksum);
 	free(x);
