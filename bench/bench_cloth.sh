@@ -20,7 +20,7 @@ set -euo pipefail
 
 build_dir=${1:?usage: bench_cloth.sh BUILD_DIR}
 repeats=${REPEATS:-3}
-top=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
+top=$(cd "$(dirname "$0")/.." && pwd)
 # The peer: in REFERENCE_BENCH, or the shared benchmark folder beside the checkout.
 peer="${REFERENCE_BENCH:-$top/../shared/bench}/scipy_cloth.py"
 bench="$build_dir/bench/bench_cloth"

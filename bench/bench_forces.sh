@@ -15,7 +15,7 @@ set -euo pipefail
 
 build_dir=${1:?usage: bench_forces.sh BUILD_DIR [REPEATS]}
 repeats=${2:-3}
-top=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
+top=$(cd "$(dirname "$0")/.." && pwd)
 # The reference programs: REFERENCE_BENCH, or the shared benchmark folder beside the checkout.
 shared_bench="${REFERENCE_BENCH:-$top/../shared/bench}"
 bench="$build_dir/bench/bench_forces"
