@@ -33,12 +33,6 @@ static double now(void)
 	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int compare(const void* a, const void* b)
-{
-	const double x = *(const double*)a, y = *(const double*)b;
-	return (x > y) - (x < y);
-}
-
 static sm_model* benchmark_cloth(int32_t n)
 {
 	sm_model_def md = sm_default_model_def();
@@ -113,22 +107,32 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	return 0;
 }
 
+static int compare_wall(const void* a, const void* b)
+{
+	const double x = ((const run_result*)a)->wall, y = ((const run_result*)b)->wall;
+	return (x > y) - (x < y);
+}
+
+// The median wall time of `repeats` runs (the mean of the two middle ones for an even count), with
+// the statistics of the median run (the faster middle one for an even count): the times on a
+// line belong to one run, one whose wall time is at most the median.
 static int measure(const sm_model* model, sm_linear_solver solver, int repeats, double t_end, double interval,
                    bool restart, run_result* result)
 {
-	double* walls = malloc(sizeof(double) * (size_t)repeats);
-	if (!walls)
+	run_result* runs = malloc(sizeof(run_result) * (size_t)repeats);
+	if (!runs)
 		return 1;
 	for (int r = 0; r < repeats; r++) {
-		if (run(model, solver, t_end, interval, restart, result) != 0) {
-			free(walls);
+		if (run(model, solver, t_end, interval, restart, &runs[r]) != 0) {
+			free(runs);
 			return 1;
 		}
-		walls[r] = result->wall;
 	}
-	qsort(walls, (size_t)repeats, sizeof(double), compare);
-	result->wall = repeats % 2 ? walls[repeats / 2] : 0.5 * (walls[repeats / 2 - 1] + walls[repeats / 2]);
-	free(walls);
+	qsort(runs, (size_t)repeats, sizeof(run_result), compare_wall);
+	*result = runs[(repeats - 1) / 2];
+	result->wall =
+	    repeats % 2 ? runs[repeats / 2].wall : 0.5 * (runs[repeats / 2 - 1].wall + runs[repeats / 2].wall);
+	free(runs);
 	return 0;
 }
 
