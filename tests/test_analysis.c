@@ -2320,6 +2320,49 @@ static int test_round_off(void)
 	return 0;
 }
 
+// The round-off of one 1e8 N/m spring from particle a to particle b on the x axis (each end's
+// motion, mass [kg] and x [m]) [m/s]; -1 when the model has no spring to judge by, NAN on failure.
+static double round_off_between(sm_particle_motion motion_a, double mass_a, double x_a,
+                                sm_particle_motion motion_b, double mass_b, double x_b)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NAN;
+	const sm_particle_motion motion[2] = {motion_a, motion_b};
+	const double mass[2] = {mass_a, mass_b}, x[2] = {x_a, x_b};
+	for (int i = 0; i < 2; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = motion[i];
+		p.mass = mass[i];
+		p.position[0] = x[i];
+		sm_model_add_particle(model, &p, NULL);
+	}
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.stiffness = 1e8;
+	s.rest_length = SM_REST_LENGTH_INITIAL;
+	sm_round_off round_off;
+	const bool ok =
+	    sm_model_add_spring(model, &s, NULL) == SM_OK && sm_model_round_off(model, &round_off) == SM_OK;
+	sm_model_destroy(model);
+	if (!ok)
+		return NAN;
+	return round_off.spring < 0 ? -1.0 : round_off.velocity;
+}
+
+// The round-off reads either end of a spring alike (simulation.h, sm_round_off): |x| is the
+// larger magnitude of both ends' coordinates, here end a's 1000 m against end b's 1 m, giving
+// eps 1000 sqrt(1e8) / 2 = eps 5e6 m/s. Closed forms evaluated the same way, 1e-15 relative.
+static int test_round_off_of_either_end(void)
+{
+	const double far_a = DBL_EPSILON * 1000.0 * 1e4 / 2.0;
+	ENSURE_NEAR(round_off_between(SM_PARTICLE_FREE, 1.0, 1000.0, SM_PARTICLE_FIXED, 1.0, 1.0), far_a,
+	            1e-15 * far_a);
+	return 0;
+}
+
 // The explicit step limit (analysis.h): symplectic Euler's 2 / (gamma/2 + sqrt(gamma^2/4 +
 // omega^2)) is 2/omega undamped, 2/gamma without stiffness and none for neither; and the bounds of
 // a chain of two 1 kg and 0.5 kg particles under a fixed one (springs of 40 and 25 N/m, 0.2 and
@@ -4845,6 +4888,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_motion_scales);
 	RUN_TEST(test_motion_scales_leave_out_springs_between_held_particles);
 	RUN_TEST(test_round_off);
+	RUN_TEST(test_round_off_of_either_end);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);
 	RUN_TEST(test_coincident_undamped_zero_length_spring_has_modes);
 	RUN_TEST(test_particles_without_springs_beside_one_spring);
