@@ -2354,12 +2354,17 @@ static double round_off_between(sm_particle_motion motion_a, double mass_a, doub
 
 // The round-off reads either end of a spring alike (simulation.h, sm_round_off): |x| is the
 // larger magnitude of both ends' coordinates, here end a's 1000 m against end b's 1 m, giving
-// eps 1000 sqrt(1e8) / 2 = eps 5e6 m/s. Closed forms evaluated the same way, 1e-15 relative.
+// eps 1000 sqrt(1e8) / 2 = eps 5e6 m/s; m is the lighter free end's mass, here end a's 0.25 kg
+// against end b's 1 kg (at 1 m and 2 m), giving eps 2 sqrt(4e8) / 2 = eps 2e4 m/s. Closed forms
+// evaluated the same way, 1e-15 relative.
 static int test_round_off_of_either_end(void)
 {
 	const double far_a = DBL_EPSILON * 1000.0 * 1e4 / 2.0;
 	ENSURE_NEAR(round_off_between(SM_PARTICLE_FREE, 1.0, 1000.0, SM_PARTICLE_FIXED, 1.0, 1.0), far_a,
 	            1e-15 * far_a);
+	const double light_a = DBL_EPSILON * 2.0 * 2e4 / 2.0;
+	ENSURE_NEAR(round_off_between(SM_PARTICLE_FREE, 0.25, 1.0, SM_PARTICLE_FREE, 1.0, 2.0), light_a,
+	            1e-15 * light_a);
 	return 0;
 }
 
