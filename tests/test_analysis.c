@@ -2356,7 +2356,9 @@ static double round_off_between(sm_particle_motion motion_a, double mass_a, doub
 // larger magnitude of both ends' coordinates, here end a's 1000 m against end b's 1 m, giving
 // eps 1000 sqrt(1e8) / 2 = eps 5e6 m/s; m is the lighter free end's mass, here end a's 0.25 kg
 // against end b's 1 kg (at 1 m and 2 m), giving eps 2 sqrt(4e8) / 2 = eps 2e4 m/s. Closed forms
-// evaluated the same way, 1e-15 relative.
+// evaluated the same way, 1e-15 relative. A driven end is held, as a fixed one is: its 1e-6 kg
+// does not count (eps 2 sqrt(1e8) / 2 = eps 1e4 m/s with the free 1 kg end), and a spring between
+// a driven and a fixed particle has no round-off to judge by.
 static int test_round_off_of_either_end(void)
 {
 	const double far_a = DBL_EPSILON * 1000.0 * 1e4 / 2.0;
@@ -2365,6 +2367,12 @@ static int test_round_off_of_either_end(void)
 	const double light_a = DBL_EPSILON * 2.0 * 2e4 / 2.0;
 	ENSURE_NEAR(round_off_between(SM_PARTICLE_FREE, 0.25, 1.0, SM_PARTICLE_FREE, 1.0, 2.0), light_a,
 	            1e-15 * light_a);
+	const double driven_a = DBL_EPSILON * 2.0 * 1e4 / 2.0;
+	ENSURE_NEAR(round_off_between(SM_PARTICLE_DRIVEN, 1e-6, 1.0, SM_PARTICLE_FREE, 1.0, 2.0), driven_a,
+	            1e-15 * driven_a);
+	ENSURE_NEAR(round_off_between(SM_PARTICLE_FREE, 1.0, 2.0, SM_PARTICLE_DRIVEN, 1e-6, 1.0), driven_a,
+	            1e-15 * driven_a);
+	ENSURE(round_off_between(SM_PARTICLE_DRIVEN, 1e-6, 1.0, SM_PARTICLE_FIXED, 1.0, 2.0) == -1.0);
 	return 0;
 }
 
