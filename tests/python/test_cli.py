@@ -1303,7 +1303,11 @@ def test_velocity_tolerances_below_the_round_off_of_a_stiff_spring_are_warned_ab
     assert line.startswith("the absolute tolerance of velocities, 1e-14 m/s, is too tight for the "
                            "round-off of spring 0 (between pivot and bob), 1e+09 N/m")
     # printed to 2 digits
-    assert number_after(line, "by up to") == pytest.approx(2.220446049250313e-16 * math.sqrt(1e9) / 2, rel=0.02)
+    noise = 2.220446049250313e-16 * math.sqrt(1e9) / 2
+    assert number_after(line, "by up to") == pytest.approx(noise, rel=0.02)
+    # with its unit, and the tolerance to use: a tenth of the noise
+    assert f"by up to {noise:.2g} m/s in a step" in line, line
+    assert line.endswith(f"(it may stop at max_steps; atol_velocity {0.1 * noise:.2g} m/s or more)"), line
     failed = cli("run", write(1e-14), "-o", tmp_path / "x.csv", status=1).stderr
     assert "springmass run: warning: the absolute tolerance of velocities, 1e-14 m/s, is too tight" in failed
     assert "CV_TOO_MUCH_WORK" in failed
