@@ -1311,6 +1311,9 @@ def test_velocity_tolerances_below_the_round_off_of_a_stiff_spring_are_warned_ab
     failed = cli("run", write(1e-14), "-o", tmp_path / "x.csv", status=1).stderr
     assert "springmass run: warning: the absolute tolerance of velocities, 1e-14 m/s, is too tight" in failed
     assert "CV_TOO_MUCH_WORK" in failed
+    # -q prints errors only: the error, not the warning
+    quiet = cli("run", write(1e-14), "-q", "-o", tmp_path / "x.csv", status=1).stderr
+    assert "warning" not in quiet and "CV_TOO_MUCH_WORK" in quiet, quiet
     for sensible in (1e-10, 1e-6):
         assert "warning" not in cli("check", write(sensible)).stdout
         done = cli("run", write(sensible), "-o", tmp_path / "x.csv").stderr
