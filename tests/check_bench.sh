@@ -17,7 +17,7 @@ trap 'rm -rf "$tmp"' EXIT
 
 # A stand-in for build/bench/bench_cloth N SOLVER REPEATS: auto (which reports the solver it
 # chose, pcg) takes n / 32 s, every other solver 100 s.
-mkdir -p "$tmp/build/bench" "$tmp/peer" "$tmp/failing_peer"
+mkdir -p "$tmp/build/bench" "$tmp/peer" "$tmp/failing_peer" "$tmp/unfinished_peer"
 cat > "$tmp/build/bench/bench_cloth" << 'SH'
 #!/usr/bin/env bash
 wall=100
@@ -30,7 +30,8 @@ echo "cloth n=$1 solver=$solver wall_s=$wall steps=1 rhs=1 jac=1 z_corner=-0.1 t
 SH
 chmod +x "$tmp/build/bench/bench_cloth"
 # Stand-ins for the peer (its output: n particles springs steps rhs_evals wall_s z status): n s
-# of wall time at size n; the failing one exits with an error at n = 8.
+# of wall time at size n; the failing one exits with an error at n = 8, the unfinished one exits
+# normally at n = 8 but with solve_ivp's status -1 (the integration stopped before T_END).
 cat > "$tmp/peer/scipy_cloth.py" << 'PY'
 import sys
 n = int(sys.argv[1])
@@ -42,6 +43,11 @@ n = int(sys.argv[1])
 if n == 8:
     sys.exit("no module named scipy")
 print(n, n * n, 0, 1, 1, f"{n:.3f}", "-0.100000", 0)
+PY
+cat > "$tmp/unfinished_peer/scipy_cloth.py" << 'PY'
+import sys
+n = int(sys.argv[1])
+print(n, n * n, 0, 1, 1, f"{n:.3f}", "-0.100000", -1 if n == 8 else 0)
 PY
 
 # speedup = the peer's wall time / auto's at the same n: 8 / 0.25 and 16 / 0.5.
@@ -60,6 +66,15 @@ status=$?
 grep -q "^peer n=8 failed" <<< "$out" || fail "bench_cloth.sh did not say that the peer failed at n = 8: $out"
 ! grep -q "^speedup n=8 " <<< "$out" || fail "bench_cloth.sh printed a speedup for a failed peer: $out"
 grep -qxF "speedup n=16 32.0" <<< "$out" || fail "bench_cloth.sh did not go on to n = 16 after the peer failed: $out"
+
+# A peer that exits normally but whose solve_ivp did not reach T_END failed as well.
+out=$(REFERENCE_BENCH="$tmp/unfinished_peer" "$root/bench/bench_cloth.sh" "$tmp/build" 2> /dev/null)
+status=$?
+[ $status -eq 0 ] || fail "bench_cloth.sh with an unfinished peer exited with $status: $out"
+grep -qF "peer n=8 failed (exit status 0, solve_ivp status -1)" <<< "$out" ||
+  fail "bench_cloth.sh did not say that solve_ivp did not finish at n = 8: $out"
+! grep -q "^speedup n=8 " <<< "$out" || fail "bench_cloth.sh printed a speedup for an unfinished peer: $out"
+grep -qxF "speedup n=16 32.0" <<< "$out" || fail "bench_cloth.sh did not go on to n = 16 after solve_ivp failed: $out"
 
 # The issue's format: cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v>,
 # then the driver's further fields.
