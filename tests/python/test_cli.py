@@ -1377,6 +1377,11 @@ def test_check_warns_of_forces_that_overflow_at_the_start(tmp_path):
     hot = model("hot", [0, 0, 0], 1, velocity=(1e200, 0, 0), damping=1)
     assert warnings(hot) == ["warning      the dissipated power overflows at the initial state: springmass run "
                              "stops at t = 0"]
+    # A run that stops at t = 0 asks nothing of its tolerances: no tight-tolerance warning beside
+    # it, even at 1e-20 m/s, far below a tenth of the spring's round-off eps 1 m sqrt(10 / 10) / 2.
+    hot_tight = tmp_path / "hot_tight.json"
+    hot_tight.write_text(json.dumps(dict(json.loads(hot.read_text()), simulation={"atol_velocity": 1e-20})))
+    assert warnings(hot_tight) == warnings(hot)
     # A finite force over a tiny mass: 10 N/m stretched 100 m pulls 1e-307 kg at 1e310 m/s^2.
     light = tmp_path / "light.json"
     light.write_text(json.dumps({
