@@ -5369,8 +5369,9 @@ static int test_global_error_falls_with_the_tolerances(void)
 // linear solver and one linear solve per Newton iteration. The timings are positive and within
 // the wall time of the calls. Then a restart (set_state) must not lose what the counters had
 // reached: they never go back before a reset. The 4 x 4 benchmark cloth falling for 1 s has
-// error test failures and convergence failures to keep (measured 10 and 3 with dense LU, 9 and 3
-// with KLU).
+// error test failures to keep with both, and with KLU, whose Newton matrix is kept over steps,
+// convergence failures (measured 9 and 3); dense forms its matrix at every step (a set-up per step
+// attempt, none failing to converge here).
 static int test_direct_solver_statistics(void)
 {
 	sm_model* model = benchmark_cloth(4, 0.0);
@@ -5397,7 +5398,14 @@ static int test_direct_solver_statistics(void)
 		ENSURE(st.steps > 0 && st.factorizations > 0 && st.jacobian_evaluations > 0);
 		ENSURE(st.force_seconds > 0.0 && st.jacobian_seconds > 0.0 && st.linear_solve_seconds > 0.0);
 		ENSURE(st.force_seconds + st.jacobian_seconds + st.linear_solve_seconds <= wall);
-		ENSURE(st.error_test_failures > 0 && st.convergence_failures > 0);
+		printf("  %s: %ld steps, %ld set-ups, %lld error-test and %lld convergence failures\n",
+		       sm_linear_solver_name(solvers[k]), steps, setups, (long long)st.error_test_failures,
+		       (long long)st.convergence_failures);
+		ENSURE(st.error_test_failures > 0);
+		if (solvers[k] == SM_SOLVER_KLU)
+			ENSURE(st.convergence_failures > 0);
+		else
+			ENSURE(setups >= steps);
 		ENSURE_STATUS(
 		    sm_simulation_set_state(sim, 1.0, sm_simulation_positions(sim), sm_simulation_velocities(sim)),
 		    SM_OK);

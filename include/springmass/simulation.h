@@ -96,10 +96,15 @@ typedef enum sm_method {
 
 /// Linear solver for Newton's method (BDF only).
 typedef enum sm_linear_solver {
-	SM_SOLVER_AUTO =
-	    0,            ///< dense up to 2 free particles, reduced conjugate gradients above (bench/README.md)
-	SM_SOLVER_DENSE,  ///< dense LU of the full 6n system with the analytic Jacobian (small models)
-	SM_SOLVER_KLU,    ///< sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian
+	/// Dense up to 2 free particles, reduced conjugate gradients above (bench/README.md).
+	SM_SOLVER_AUTO = 0,
+	/// Dense LU of the full 6n system with the analytic Jacobian, the Newton matrix formed at every
+	/// step (small models).
+	SM_SOLVER_DENSE,
+	/// Sparse direct LU (KLU) of the full 6n system with the analytic sparse Jacobian, the Newton
+	/// matrix kept over several steps as CVODE keeps it by default, which fails where a stiff
+	/// spring turns fast (a pendulum on a stiff rod: tests/test_large_motions.c).
+	SM_SOLVER_KLU,
 	/// Second-order reduction to the 3n system (M - gamma D - gamma^2 K) dv = M bv + gamma K bx,
 	/// symmetric positive definite with the definiteness-preserving Jacobian (always used by the
 	/// reduced solvers), solved by conjugate gradients with a 3x3 block-Jacobi preconditioner
