@@ -7,8 +7,12 @@
 // excursion, to the bit. So the first change of a particle's input since the last advance records
 // the input as it was (its path or ramp); an input set back onto that path is given those exact
 // values again, and once every changed input is back, the flags the changes set (restart due,
-// inputs changed, jump work) are put back as they were. Anything else that restarts CVODE or
-// moves the time (an advance, a new state, a reset, a model update, a cut) forgets the records.
+// inputs changed, jump work) are put back as they were. An advance, a reset or a restore forgets
+// the records: the inputs are then those of the new start. A new state, a model update or a cut
+// keeps them, spanned: the restart it asks for stays, so an input set back after it is a change,
+// yet onto the recorded path or ramp, to the bit, as in a run that never moved it (a ramp set
+// anew from now, f0 + r t0 + r (t - t0), is f0 + r t only to round-off, and an iterative linear
+// solver turns that last bit into differences within the tolerances).
 #include "simulation_internal.h"
 
 #include <stdbool.h>
@@ -21,6 +25,12 @@ void sm_input_origins_forget(sm_simulation* sim)
 		sim->origin_slot[sim->origins[k].particle] = -1;
 	sim->origin_count = 0;
 	sim->origins_lost = false;
+	sim->origins_spanned = false;
+}
+
+void sm_input_origins_span(sm_simulation* sim)
+{
+	sim->origins_spanned = sim->origin_count > 0;
 }
 
 const sm_input_origin* sm_input_origins_find(const sm_simulation* sim, int32_t particle)
@@ -81,6 +91,10 @@ bool sm_input_origins_settle(sm_simulation* sim, int32_t particle)
 	sim->origin_slot[particle] = -1;
 	if (sim->origin_count > 0 || sim->origins_lost)
 		return false;
+	if (sim->origins_spanned) {
+		sim->origins_spanned = false;  // the next input changed starts records of its own
+		return false;
+	}
 	sim->need_restart = sim->flags_before.need_restart;
 	sim->input_jumped = sim->flags_before.input_jumped;
 	sim->input_changed = sim->flags_before.input_changed;

@@ -907,7 +907,7 @@ sm_status sm_simulation_break_spring(sm_simulation* sim, int32_t spring)
 		                          (int)sm_model_spring_count(sim->model));
 	if (!sim->model->enabled[spring])
 		return SM_OK;
-	sm_input_origins_forget(sim);  // the restart it asks for stays, whatever the inputs do
+	sm_input_origins_span(sim);  // the restart it asks for stays, whatever the inputs do
 	double xa[3], xb[3];
 	position_now(sim, sim->model->spring_a[spring], xa);
 	position_now(sim, sim->model->spring_b[spring], xb);
@@ -1006,7 +1006,7 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 		    "set_state: particle %d's external force at t = %s s is not finite (its ramp)", (int)pushed, t);
 	}
 	sm_simulation_pack(sim, x, v, N_VGetArrayPointer(sim->y));
-	sm_input_origins_forget(sim);
+	sm_input_origins_span(sim);  // the restart it asks for stays; inputs set back take their paths
 	sim->time = time;
 	// CVODE restarts here, at 0 on its axis: the outputs are those of the restart already, not of
 	// an axis of the past (a driven particle's position would part from the run's in its last bit).
@@ -1110,7 +1110,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sim->initial_enabled = enabled;
 	sm_simulation_refresh_masses(sim);
 	sim->need_restart = true;
-	sm_input_origins_forget(sim);
+	sm_input_origins_span(sim);  // the restart it asks for stays; inputs set back take their paths
 	sm_simulation_refresh_outputs(sim);
 	return SM_OK;
 }

@@ -107,6 +107,9 @@ struct sm_simulation {
 	int32_t origin_count;
 	int32_t origin_capacity;
 	bool origins_lost;  // a change could not be recorded (out of memory): none counts as undone
+	// A new state, a model update or a cut came after the records were made: an input set back
+	// takes its recorded values, but counts as a change (the restart it asked for stays).
+	bool origins_spanned;
 	sm_input_flags flags_before;
 
 	// Work arrays of the right-hand side and the Jacobian (all particles).
@@ -251,16 +254,20 @@ void sm_simulation_error_handler(int error_code, const char* module, const char*
                                  void* user_data);
 
 // Input changes undone before the next advance (input_origins.c).
-// Forgets the recorded origins: after an advance, a new state, a reset, a model update or a cut,
-// from which the inputs' earlier values are no longer "as they were".
+// Forgets the recorded origins: after an advance, a reset or a restore, from which the inputs'
+// earlier values are no longer "as they were".
 void sm_input_origins_forget(sm_simulation* sim);
+// Keeps the recorded origins over a new state, a model update or a cut, which restart CVODE but
+// leave the inputs as they are: an input set back to its origin then takes the origin's values, to
+// the bit, and is a change still (sm_input_origins_settle returns false once for them).
+void sm_input_origins_span(sm_simulation* sim);
 // Records the particle's input as it is now, before its first change since the origins were
 // forgotten (nothing if it is recorded already), and with the first one the flags as they are.
 void sm_input_origins_note(sm_simulation* sim, int32_t particle, bool driven);
 // The particle's recorded origin, or NULL.
 const sm_input_origin* sm_input_origins_find(const sm_simulation* sim, int32_t particle);
 // Drops the particle's origin, its input being back there; when no other remains and none was
-// lost, puts the flags back as they were before the first change and returns true.
+// lost or spanned, puts the flags back as they were before the first change and returns true.
 bool sm_input_origins_settle(sm_simulation* sim, int32_t particle);
 
 // Snapshots (simulation_state.c).

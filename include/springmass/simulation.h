@@ -14,8 +14,10 @@
 // which moves nothing, keeps the history. So does an input set to another value and back before
 // the next advance (a master that tries a value and reads the outputs it gives): once every input
 // changed since the last advance is back on the path or ramp it had there, those are its values
-// again, to the bit, and nothing changed (the inputs' work included). A cut, a new state, a
-// reset or a model update in between ends that. Keeping the history (step size, order) over
+// again, to the bit, and nothing changed (the inputs' work included). A cut, a new state or a
+// model update in between keeps the restart it asks for, and an input set back after it is a
+// change (its jump's work counted), yet onto the path or ramp it had at the last advance, to the
+// bit; a reset or a restore forgets those paths. Keeping the history (step size, order) over
 // changes too is faster but not accurate when inputs change at every call, as a co-simulation
 // master's do: a base excitation sampled every 1 ms missed its steady-state amplitude by 9e-4
 // (relative) at rtol 1e-6 and 1e-8 alike, against 2e-5 with restarts (the steps that straddle the
