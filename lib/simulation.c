@@ -705,11 +705,13 @@ static bool finite3(const double* a)
 // last bits; x0 + v0 t + a t^2 / 2 and x0 + t (v0 + t a / 2) part by round-off of v0 t and a t^2 / 2,
 // however much of them cancels. A constant (change and term 0) within round-off is on its path too:
 // a master that interpolates a held signal between two samples, w0 v + w1 v, is an ulp off at times.
+// A path whose terms overflow at t holds no value given there (an infinite scale would take any):
+// an old path kept over a new state at a far time may.
 static bool on_path(double given, double value, double change, double term)
 {
 	const double path = value + change;
 	const double scale = fmax(fmax(fabs(given), fabs(value)), fmax(fabs(change), term));
-	return fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
+	return isfinite(scale) && fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
 }
 
 // Whether a driven particle's position, velocity and acceleration given now lie on the path

@@ -5097,6 +5097,46 @@ static int test_inputs_tried_in_any_order_and_set_back_change_nothing(void)
 	return 0;
 }
 
+// An input set back after a new state is on its old path only where that path is finite at the new
+// time. pulled_spring()'s driven particle moving at 1e10 m/s and its free one pushed by a ramp of
+// 1e10 N/s since t = 0 (set_state refuses a time where they overflow: test_restore_and_set_state_
+// refuse_a_driven_motion_that_overflows), both stopped, the state set at 1e300 s, where the
+// stopped inputs are finite and the old ones are not, then the old rates given again with finite
+// values: those are new inputs from 1e300 s on, at the position and force given. They were taken
+// for the old path and ramp, whose infinite values matched anything, and the driven particle's
+// position and the free one's force became infinite.
+static int test_an_input_set_back_onto_a_path_that_overflowed_is_a_new_one(void)
+{
+	sm_model* model = pulled_spring();
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	const double at[3] = {1.0, 0.0, 0.0}, fast[3] = {1e10, 0.0, 0.0}, none[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, at, fast), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 2, none, fast), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 1e-6), SM_OK);
+	double x[9], v[9];
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	memcpy(v, sm_simulation_velocities(sim), sizeof v);
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, x + 3, none), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_external_force(sim, 2, none), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_state(sim, 1e300, x, v), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, at, fast), SM_OK);
+	ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 2, none, fast), SM_OK);
+	const double* position = sm_simulation_positions(sim);
+	ENSURE(position[3] == 1.0 && position[4] == 0.0 && position[5] == 0.0);
+	ENSURE(sm_simulation_velocities(sim)[3] == 1e10);
+	// The free particle's force is then its springs' and gravity's alone (no external force yet).
+	double f[9], g[9];
+	sm_simulation_forces(sim, f);
+	ENSURE_STATUS(sm_simulation_set_external_force(sim, 2, none), SM_OK);
+	sm_simulation_forces(sim, g);
+	ENSURE(memcmp(f + 6, g + 6, 3 * sizeof(double)) == 0);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The forces include the external ones: a lone free particle of 2 kg under gravity and an
 // external force F feels m g + F, and falls as x = (g + F / m) t^2 / 2 (a quadratic, which BDF
 // follows to round-off; the default rtol 1e-6 of the 1.7 m travelled allows 1e-5 m).
@@ -6589,6 +6629,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_restart_only_on_a_changed_input);
 	RUN_TEST(test_an_input_set_away_and_back_before_an_advance_is_no_change);
 	RUN_TEST(test_inputs_tried_in_any_order_and_set_back_change_nothing);
+	RUN_TEST(test_an_input_set_back_onto_a_path_that_overflowed_is_a_new_one);
 	RUN_TEST(test_forces_include_external_force);
 	RUN_TEST(test_set_state_ignores_constrained_entries);
 	RUN_TEST(test_update_model_topology_and_disabled_springs);
