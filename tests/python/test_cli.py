@@ -226,7 +226,7 @@ def test_options_take_effect(tmp_path):
         assert not np.array_equal(loose, default), option
         # tip.x: the file's tolerances keep it within ~1e-8 m. The rows are interpolated from the
         # solver's steps, which the 0.01 s rows no longer cut short: each step errs by about the
-        # tolerance and the errors add up over the two periods (measured: 7.5e-4 m at rtol 1e-3,
+        # tolerance and the errors add up over the two periods (measured: 7.6e-4 m at rtol 1e-3,
         # 1.6e-4 m at atol 1e-5; 1.1e-2 m at atol 1e-3, which is why that one is not used).
         # 2e-3 m, a fiftieth of the amplitude, bounds them with a margin of 2.5 (the step sequences,
         # and with them the largest, move with the last bits of the error estimates).
@@ -1259,7 +1259,7 @@ def test_tolerances_coarse_for_the_model_are_warned_about(tmp_path, length, time
     # units of length and time; g = 0.2, wd^2 = 40 - g^2) is missed by over a tenth of the
     # amplitude. check and run say so. With both absolute tolerances scaled like the model (1e-8
     # length, 1e-6 length / time) the error is, in units of length, within a factor 2 of the
-    # bundled oscillator's at its default tolerances (2.6e-5): below 1e-4 here, and no warning.
+    # bundled oscillator's at its default tolerances (2.7e-5): below 1e-4 here, and no warning.
     model = oscillator_at_scale(tmp_path / "scaled.json", length, time, mass)
     g, wd = 0.2, math.sqrt(40.0 - 0.04)
     def error(*options):
