@@ -293,19 +293,13 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	const double start = sm_simulation_clock(), jacobian_start = sim->base.jacobian_seconds;
 	r->gamma = gamma;
 	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the residual's weights (p and
-	// weight stay zero at constrained particles from their allocation on). An error e in dv is an
-	// error gamma e in dx = bx + gamma dv: the residual's component, about M e, is weighted by the
-	// error weights of both, sqrt(w_v^2 + (gamma w_x)^2) / m, so that a solve also meets positions
-	// held far tighter than velocities over a step (CVODE's weights alone, as SUNDIALS' iterative
-	// solvers take them over the full system, whose position rows hold exactly, let the error in
-	// dx through: the bob of a zero-length spring at 1e-10 m and 1e-5 m/s took 910 steps, 51 of
-	// them failing the error test, where a direct solve takes 390).
-	const double* w = r->weights ? N_VGetArrayPointer(r->weights) : NULL;
+	// weight stay zero at constrained particles from their allocation on).
+	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + n : NULL;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++) {
 			r->p[i + c] = b[f + c];
-			r->weight[i + c] = (w ? hypot(w[n + f + c], gamma * w[f + c]) : 1.0) / r->mass[i + c];
+			r->weight[i + c] = (w ? w[f + c] : 1.0) / r->mass[i + c];
 		}
 	}
 	sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
