@@ -80,22 +80,22 @@ bool sm_tolerances_coarse(const sm_simulation_def* def, const sm_motion_scales* 
 // rest, or a component passing through 0, is held to atol_velocity alone; CVODE's error test and
 // its Newton iteration's convergence test see a part of dv_max (its error constants, 1/2 to 1/6,
 // and the root mean square over the components), and below about a tenth of it
-// (SM_TIGHT_TOLERANCE) fail over and over: with 1e9 N/m at 1 m, 1e-13 m/s took 83 504 steps and
-// 109 459 failed Newton iterations to 2 s, 1e-14 m/s 2.3 million steps, half of them failing the
-// error test. A 1 kg bob hanging at rest on a critically damped rest-length rod of 1 m for 2 s
-// (rtol 1e-6, at most 20 000 steps per 0.5 s, "stop" when reached), the rod at |x| = 1 m and
-// 1000 m from the origin:
+// (SM_TIGHT_TOLERANCE) fail over and over: with 1e9 N/m at 1 m, 1e-13 m/s took 83 521 steps and
+// 69 036 failed Newton iterations to 2 s, 1e-14 m/s 922 587 steps, nearly all failing the error
+// test. A 1 kg bob hanging at rest on a critically damped rest-length rod of 1 m for 2 s (rtol
+// 1e-6, at most 20 000 steps per 0.5 s, "stop" when reached; the default solver, dense), the rod
+// along z at |x| = 1 m and 1000 m from the origin:
 //   k [N/m]  |x| [m]  dv_max [m/s]   steps at atol_velocity 1e-8 1e-10 1e-12 1e-13 1e-14 1e-15 m/s
-//   1e5      1        3.5e-14                               120    205   225   248   253  1702
-//   1e5      1000     3.5e-11                               122    165   612  3103 23548  stop
-//   1e7      1        3.5e-13                               120    135   187   245  4598  stop
-//   1e7      1000     3.5e-10                                94    141  stop  stop  stop  stop
-//   1e9      1        3.5e-12                                75    135   189  stop  stop  stop
-//   1e9      1000     3.5e-9                                 82    263  stop  stop  stop  stop
-//   1e11     1        3.5e-11                                48    100   169  stop  stop  stop
-//   1e11     1000     3.5e-8                                 52   stop  stop  stop  stop  stop
-// Below a tenth of dv_max every run slows down or stops but one (1e11 N/m at 1e-12 m/s), above it
-// none does.
+//   1e5      1        3.5e-14                               141    195   256   241   309   324
+//   1e5      1000     3.5e-11                               146    173   646  1832 10953  stop
+//   1e7      1        3.5e-13                                97    150   180   767 13518 32407
+//   1e7      1000     3.5e-10                                89    153 44962  stop  stop  stop
+//   1e9      1        3.5e-12                                89    113   154  stop  stop  stop
+//   1e9      1000     3.5e-9                                 94   stop  stop  stop  stop  stop
+//   1e11     1        3.5e-11                                47    104  stop  stop  stop  stop
+//   1e11     1000     3.5e-8                                 50   stop  stop  stop  stop  stop
+// Below a tenth of dv_max every run slows down or stops but one (1e5 N/m at 1 m, 1e-15 m/s);
+// above it one slows down (1e7 N/m at 1 m, 1e-13 m/s: 767 steps against 180), none stops.
 sm_status sm_model_round_off(const sm_model* model, sm_round_off* round_off)
 {
 	if (model == NULL || round_off == NULL)

@@ -1288,7 +1288,7 @@ def test_velocity_tolerances_below_the_round_off_of_a_stiff_spring_are_warned_ab
     # is known only to the rounding of the coordinates, 1e9 N/m x eps x 1 m, which moves the bob's
     # velocity by up to eps sqrt(1e9) / 2 = 3.5e-12 m/s in a step (simulation.h, sm_round_off).
     # Asked for a tenth of that or less, CVODE's steps fail over and over: at 1e-14 m/s
-    # 20 000 steps do not reach 0.5 s, where 1e-10 m/s takes a few hundred (135 to 2 s).
+    # 20 000 steps do not reach 0.5 s, where 1e-10 m/s takes about a hundred (113 to 2 s).
     model = tmp_path / "rod.json"
     def write(atol_velocity):
         model.write_text(json.dumps({
