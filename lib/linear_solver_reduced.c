@@ -18,9 +18,13 @@
 // -alpha m v, adds -alpha M to D: A's mass term is M (1 + gamma alpha).)
 //
 // Residuals. The residual of the full system's velocity rows is M^-1 (M bv + gamma K bx - A dv)
-// (the position rows hold exactly), so conjugate gradients stop when the error-weighted norm of
-// M^-1 r falls below the tolerance CVODE passes, the same test SUNDIALS' own iterative solvers
-// make.
+// (the position rows hold exactly), and the error-weighted norm of M^-1 r is the test SUNDIALS'
+// own iterative solvers make. It sees the velocities only: an error e = A^-1 r left in dv is an
+// error gamma e in dx = bx + gamma dv, which it lets through where the positions are held far
+// tighter than the velocities. So conjugate gradients stop when the error-weighted norm of both,
+// the velocity rows' residual and gamma z with z = B^-1 r the preconditioned residual (B
+// approximating A, z the iteration's own estimate of e), is below the tolerance CVODE passes
+// (reduced_conjugate_gradients.c).
 //
 // Both solvers use the Newton matrix of the current step exactly: the Jacobian is that of the
 // predicted state of every step attempt (evaluated by the right-hand side there, or else at the
@@ -292,14 +296,15 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	// Jacobian evaluation: that share is taken out of the solve's time, so the two do not overlap.
 	const double start = sm_simulation_clock(), jacobian_start = sim->base.jacobian_seconds;
 	r->gamma = gamma;
-	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the residual's weights (p and
-	// weight stay zero at constrained particles from their allocation on).
-	const double* w = r->weights ? N_VGetArrayPointer(r->weights) + n : NULL;
+	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the weights of the stopping test
+	// (p and both weights stay zero at constrained particles from their allocation on).
+	const double* w = r->weights ? N_VGetArrayPointer(r->weights) : NULL;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++) {
 			r->p[i + c] = b[f + c];
-			r->weight[i + c] = (w ? w[f + c] : 1.0) / r->mass[i + c];
+			r->weight[i + c] = (w ? w[n + f + c] : 1.0) / r->mass[i + c];
+			r->position_weight[i + c] = gamma * (w ? w[f + c] : 1.0) / r->mass[i + c];
 		}
 	}
 	sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
@@ -411,6 +416,7 @@ static void reduced_content_free(sm_reduced* r)
 	free(r->spring_coarse);
 	free(r->mass);
 	free(r->weight);
+	free(r->position_weight);
 	free(r->dv);
 	free(r->coarse_mass);
 	free(r);
@@ -445,6 +451,7 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->block_inverse = calloc(6 * full, sizeof(double));  // inverses, then the sums (9 each)
 	r->mass = calloc(full, sizeof(double));
 	r->weight = calloc(full, sizeof(double));
+	r->position_weight = calloc(full, sizeof(double));
 	r->r = calloc(full, sizeof(double));
 	r->z = calloc(full, sizeof(double));
 	r->p = calloc(full, sizeof(double));
@@ -454,8 +461,9 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->rhs_state = malloc(2 * n * sizeof(double));
 	if (!use_cholmod)
 		r->scaled = malloc(SCALED_STRIDE * ((size_t)sim->model->spring_count + 1) * sizeof(double));
-	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->r || !r->z ||
-	    !r->p || !r->q || !r->rhs || !r->dv || !r->rhs_state || (!use_cholmod && !r->scaled)) {
+	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->position_weight ||
+	    !r->r || !r->z || !r->p || !r->q || !r->rhs || !r->dv || !r->rhs_state ||
+	    (!use_cholmod && !r->scaled)) {
 		reduced_content_free(r);
 		return NULL;
 	}

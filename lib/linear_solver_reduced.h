@@ -76,7 +76,9 @@ typedef struct sm_reduced {
 	// then the last row t20, t21, t22 (invert_chunk, for block Jacobi's pairs); then their sums
 	// before the inversion, 9 per particle, row-major),
 	// and 3 doubles each: mass [kg], weight (CVODE's error weight over the mass, the residual's
-	// weight) and the conjugate gradients' vectors r, z, p, q, rhs, dv.
+	// weight), position_weight (gamma times the positions' error weight over the mass: the error
+	// an iterate leaves in dx = bx + gamma dv, reduced_conjugate_gradients.c) and the conjugate
+	// gradients' vectors r, z, p, q, rhs, dv.
 	double* block_inverse;
 	// pcg: every spring's share of A at the preconditioner's gamma, SCALED_STRIDE doubles each,
 	// u[3], w[3], gamma^2 beta (reduced_preconditioner.c), written in the same pass as the
@@ -84,6 +86,7 @@ typedef struct sm_reduced {
 	double* scaled;
 	double* mass;
 	double* weight;
+	double* position_weight;
 	double *r, *z, *p, *q, *rhs, *dv;
 	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
 	// at every step, in chunk order; products with A are formed from it without assembling A.
