@@ -437,6 +437,44 @@ static double elliptic_k(double k)
 	return pi / (a + b);
 }
 
+#define PENDULUM_G 9.81         // [m/s^2]
+#define PENDULUM_LENGTH 1.0     // [m]
+#define PENDULUM_MASS 1.0       // [kg]
+#define PENDULUM_STIFFNESS 1e8  // [N/m]
+
+// The pendulum of the tests below: a bob of PENDULUM_MASS at rest at theta0 from the downward
+// vertical under a fixed pivot (particle 0), on a rest-length spring of PENDULUM_STIFFNESS and rest
+// length PENDULUM_LENGTH, critically damped along it, stretched to carry the bob's weight across
+// it; gravity PENDULUM_G along -z. NULL if the model cannot be built.
+static sm_model* stiff_pendulum(double theta0)
+{
+	const double g = PENDULUM_G, length = PENDULUM_LENGTH, m = PENDULUM_MASS, k = PENDULUM_STIFFNESS;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = -g;
+	sm_model* model = sm_model_create(&md, NULL);
+	if (model == NULL)
+		return NULL;
+	sm_particle_def pivot = sm_default_particle_def();
+	pivot.motion = SM_PARTICLE_FIXED;
+	sm_particle_def bob = sm_default_particle_def();
+	bob.mass = m;
+	const double r0 = length + m * g * cos(theta0) / k;
+	bob.position[0] = r0 * sin(theta0);
+	bob.position[2] = -r0 * cos(theta0);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.rest_length = length;
+	s.stiffness = k;
+	s.damping = 2.0 * sqrt(k * m);
+	if (sm_model_add_particle(model, &pivot, NULL) != SM_OK ||
+	    sm_model_add_particle(model, &bob, NULL) != SM_OK || sm_model_add_spring(model, &s, NULL) != SM_OK) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 // A simple pendulum released from rest at theta0 from the downward vertical swings with the period
 // T = 4 sqrt(L / g) K(sin(theta0 / 2)) (Landau and Lifshitz, Mechanics, section 11, problem 1):
 // it passes below its pivot at T / 4 + j T / 2 and comes to rest at j T / 2, alternately at
@@ -451,31 +489,13 @@ static double elliptic_k(double k)
 // Jacobian drops its negative geometric stiffness. Two periods at 60, 120 and 150 degrees.
 static int test_a_stiff_pendulum_swings_with_the_elliptic_integral_period(void)
 {
-	const double g = 9.81, length = 1.0, k = 1e8, m = 1.0;
+	const double g = PENDULUM_G, length = PENDULUM_LENGTH;
 	const double degrees[] = {60.0, 120.0, 150.0};
 	for (size_t a = 0; a < sizeof degrees / sizeof degrees[0]; a++) {
 		const double theta0 = degrees[a] * pi / 180.0;
 		const double period = 4.0 * sqrt(length / g) * elliptic_k(sin(theta0 / 2.0));
-		sm_model_def md = sm_default_model_def();
-		md.gravity[2] = -g;
-		sm_model* model = sm_model_create(&md, NULL);
+		sm_model* model = stiff_pendulum(theta0);
 		ENSURE(model != NULL);
-		sm_particle_def pivot = sm_default_particle_def();
-		pivot.motion = SM_PARTICLE_FIXED;
-		sm_particle_def bob = sm_default_particle_def();
-		bob.mass = m;
-		const double r0 = length + m * g * cos(theta0) / k;
-		bob.position[0] = r0 * sin(theta0);
-		bob.position[2] = -r0 * cos(theta0);
-		sm_spring_def s = sm_default_spring_def();
-		s.a = 0;
-		s.b = 1;
-		s.rest_length = length;
-		s.stiffness = k;
-		s.damping = 2.0 * sqrt(k * m);
-		ENSURE_STATUS(sm_model_add_particle(model, &pivot, NULL), SM_OK);
-		ENSURE_STATUS(sm_model_add_particle(model, &bob, NULL), SM_OK);
-		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 		// The fastest the bob moves, at the bottom, and its tangential acceleration at rest.
 		const double fastest = sqrt(2.0 * g * length * (1.0 - cos(theta0)));
 		const double turning = g * sin(theta0);
@@ -526,28 +546,10 @@ static int test_a_stiff_pendulum_swings_with_the_elliptic_integral_period(void)
 // up to 5.4 m/s.
 static int test_a_stiff_pendulum_keeps_time_at_the_default_options(void)
 {
-	const double g = 9.81, length = 1.0, k = 1e8, m = 1.0, theta0 = 120.0 * pi / 180.0;
+	const double g = PENDULUM_G, length = PENDULUM_LENGTH, theta0 = 120.0 * pi / 180.0;
 	const double period = 4.0 * sqrt(length / g) * elliptic_k(sin(theta0 / 2.0));
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = -g;
-	sm_model* model = sm_model_create(&md, NULL);
+	sm_model* model = stiff_pendulum(theta0);
 	ENSURE(model != NULL);
-	sm_particle_def pivot = sm_default_particle_def();
-	pivot.motion = SM_PARTICLE_FIXED;
-	sm_particle_def bob = sm_default_particle_def();
-	bob.mass = m;
-	const double r0 = length + m * g * cos(theta0) / k;
-	bob.position[0] = r0 * sin(theta0);
-	bob.position[2] = -r0 * cos(theta0);
-	sm_spring_def s = sm_default_spring_def();
-	s.a = 0;
-	s.b = 1;
-	s.rest_length = length;
-	s.stiffness = k;
-	s.damping = 2.0 * sqrt(k * m);
-	ENSURE_STATUS(sm_model_add_particle(model, &pivot, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_particle(model, &bob, NULL), SM_OK);
-	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
 	const double fastest = sqrt(2.0 * g * length * (1.0 - cos(theta0)));
 	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
 	ENSURE(sim != NULL);
