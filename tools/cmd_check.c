@@ -28,7 +28,9 @@ static void usage(FILE* out)
 	        "velocity tolerance too tight for the round-off of a stiff spring's force, two vertices of\n"
 	        "a mesh at the same position (no spring joins them: the mesh is cut there), springs that\n"
 	        "start at or beyond their break strain (they break at t = 0), accelerations or a\n"
-	        "dissipated power that overflow at the initial state (a run stops at t = 0).\n"
+	        "dissipated power that overflow at the initial state (a run stops at t = 0). Notes:\n"
+	        "springs of the file's \"springs\" that join the same two particles as another spring (their\n"
+	        "forces add: a spring listed twice?).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
 	        "\n"
@@ -98,6 +100,73 @@ static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 		       (int)(count - BROKEN_AT_START_SHOWN));
 	free(x);
 	free(length);
+	return true;
+}
+
+// Most pairs of springs that join the same two particles named one by one; the rest are counted.
+#define PARALLEL_SHOWN 3
+
+// A spring and the particles it joins, for sorting by them.
+typedef struct joined_pair {
+	int32_t a, b;  // the particles, the lower index first
+	int32_t spring;
+	int32_t structure;  // the structure that made it, or -1 for the file's "springs"
+} joined_pair;
+
+static int by_joined_pair(const void* a, const void* b)
+{
+	const joined_pair *p = a, *q = b;
+	if (p->a != q->a)
+		return (p->a > q->a) - (p->a < q->a);
+	if (p->b != q->b)
+		return (p->b > q->b) - (p->b < q->b);
+	return (p->spring > q->spring) - (p->spring < q->spring);
+}
+
+// Notes the springs of the file's "springs" that join the same two particles as an earlier spring:
+// one listed twice, or one that a structure already has. Legitimate physics (parallel springs add
+// their forces; a spring beside a damper of its own), but more often a slip that makes the pair
+// twice as stiff as meant. A structure's own springs on one pair are its design (a mesh's bending
+// springs across two edges with the same opposite vertices) and are not noted. Each spring noted is
+// paired with the first spring on its particles. False when out of memory.
+static bool note_parallel_springs(const sm_document* doc, const sm_model* model)
+{
+	const int32_t m = sm_model_spring_count(model);
+	joined_pair* pairs = malloc(((size_t)m + 1) * sizeof *pairs);
+	if (pairs == NULL)
+		return false;
+	for (int32_t k = 0; k < m; k++) {
+		sm_spring_def s;
+		sm_model_get_spring(model, k, &s);
+		pairs[k] = (joined_pair){s.a < s.b ? s.a : s.b, s.a < s.b ? s.b : s.a, k, -1};
+	}
+	for (int32_t j = 0; j < sm_document_structure_count(doc); j++) {
+		const sm_structure r = sm_document_structure(doc, j).range;
+		for (int32_t k = r.first_spring; k < r.first_spring + r.spring_count; k++)
+			pairs[k].structure = j;
+	}
+	qsort(pairs, (size_t)m, sizeof *pairs, by_joined_pair);
+	int32_t count = 0;
+	for (int32_t k = 1, first = 0; k < m; k++) {
+		if (pairs[k].a != pairs[first].a || pairs[k].b != pairs[first].b) {
+			first = k;
+			continue;
+		}
+		if (pairs[k].structure >= 0 && pairs[k].structure == pairs[first].structure)
+			continue;
+		if (++count > PARALLEL_SHOWN)
+			continue;
+		printf("note         springs %d and %d both join ", (int)pairs[first].spring, (int)pairs[k].spring);
+		print_particle(doc, pairs[k].a);
+		printf(" and ");
+		print_particle(doc, pairs[k].b);
+		printf(": they act in parallel, their forces add (a spring listed twice?)\n");
+	}
+	if (count > PARALLEL_SHOWN)
+		printf("note         and %d more spring%s join%s the same particles as an earlier one\n",
+		       (int)(count - PARALLEL_SHOWN), count - PARALLEL_SHOWN > 1 ? "s" : "",
+		       count - PARALLEL_SHOWN > 1 ? "" : "s");
+	free(pairs);
 	return true;
 }
 
@@ -546,6 +615,12 @@ int sm_cmd_check(int argc, char** argv)
 	// a round-off beyond any).
 	if (!overflows)
 		cli_warn_tight_tolerances(stdout, "warning      ", doc, model, &settings.solver);
+	if (!note_parallel_springs(doc, model)) {
+		fprintf(stderr, "springmass check: out of memory\n");
+		sm_model_destroy(model);
+		sm_document_destroy(doc);
+		return 1;
+	}
 	printf("ok\n");
 	sm_model_destroy(model);
 	sm_document_destroy(doc);

@@ -1427,6 +1427,39 @@ def test_check_counts_one_spring_in_the_singular(tmp_path):
     assert "short        rope of 1 segment: particles 2 - 3, 1 spring (1 structural)" in out
 
 
+def test_check_notes_springs_of_the_file_on_a_pair_another_spring_joins(tmp_path):
+    # A rope of three segments (springs 0, 2, 4 structural, 1 and 3 bending, in the order of their
+    # first particle) and the file's springs 5 - 9: spring 5 on the rope's segment 1 - 2, spring 6
+    # between the two bobs, spring 7 again between them (listed twice, the ends swapped), spring 8
+    # alone on its pair, spring 9 on the bobs a third time. Noted: 5 (with the rope's 2), 7 and 9
+    # (with 6); not 8, nor the rope's own springs. A mesh whose bending springs share a pair by
+    # design (the bundled flag: 14 such springs) has no note.
+    model = tmp_path / "twice.json"
+    spring = {"stiffness": 10}
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "twice",
+        "particles": [{"name": "b1", "position": [0, 0, -1], "mass": 1},
+                      {"name": "b2", "position": [0, 0, -2], "mass": 1}],
+        "structures": [{"type": "rope", "name": "r", "start": [0, 0, 0], "end": [3, 0, 0], "segments": 3,
+                        "structural": {"stiffness": 100}, "bending": {"stiffness": 1}}],
+        "fixed": ["r[0]"],
+        "springs": [dict(spring, a="r[2]", b="r[1]"), dict(spring, a="b1", b="b2"), dict(spring, a="b2", b="b1"),
+                    dict(spring, a="r[3]", b="b1"), dict(spring, a="b1", b="b2")]}))
+    notes = [line for line in cli("check", model).stdout.splitlines() if line.startswith("note")]
+    parallel = ": they act in parallel, their forces add (a spring listed twice?)"
+    # In the order of the particles they join.
+    assert notes == ["note         springs 6 and 7 both join b1 (particle 0) and b2 (particle 1)" + parallel,
+                     "note         springs 6 and 9 both join b1 (particle 0) and b2 (particle 1)" + parallel,
+                     "note         springs 2 and 5 both join r[1] (particle 3) and r[2] (particle 4)" + parallel]
+    # Beyond three, the rest are counted.
+    text = json.loads(model.read_text())
+    text["springs"] += [dict(spring, a="b1", b="b2")] * 2
+    model.write_text(json.dumps(text))
+    notes = [line for line in cli("check", model).stdout.splitlines() if line.startswith("note")]
+    assert notes[3:] == ["note         and 2 more springs join the same particles as an earlier one"]
+    assert not [line for line in cli("check", MODELS / "flag.json").stdout.splitlines() if line.startswith("note")]
+
+
 def test_check_summarises_the_model():
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
