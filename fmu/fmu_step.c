@@ -11,12 +11,12 @@
 // ---------------------------------------------------------------------------------------------
 
 // Whether every output is finite, checked over a superset of their values: every particle's
-// position and velocity, where there are motion ports (whose reaction forces are the force
-// outputs) the forces on every particle, and the energies. False only sends end_step on to read
-// each output, to name the first that is not finite. Reading each through the table at every
-// step took half of a communication step that CVODE interpolates (the bundled two-mass chain at
-// 1e-4 s with a stop time: 2500 of 5300 instructions, for 20 outputs among 62 variables); the
-// check takes 980, 700 of them the forces and the energies.
+// position and velocity, where there are motion ports (whose force outputs are the forces the
+// model exerts on their particles) the forces on every particle, and the energies. False only
+// sends end_step on to read each output, to name the first that is not finite. Reading each
+// through the table at every step took half of a communication step that CVODE interpolates (the
+// bundled two-mass chain at 1e-4 s with a stop time: 2500 of 5300 instructions, for 20 outputs
+// among 62 variables); the check takes 980, 700 of them the forces and the energies.
 static bool outputs_finite(instance* inst)
 {
 	const size_t n3 = 3 * (size_t)inst->particle_count;

@@ -20,8 +20,11 @@ extern "C" {
 /// How a port meets the outside world.
 typedef enum sm_port_kind {
 	SM_PORT_FORCE = 0,  ///< the outside applies a force [N]; reads position [m] and velocity [m/s]
-	SM_PORT_MOTION,     ///< the outside prescribes position and velocity; reads the reaction force [N]
-	SM_PORT_PROBE,      ///< read only: position and velocity
+	/// the outside prescribes position [m] and velocity [m/s]; reads the force the model (springs,
+	/// damping, gravity, loads) exerts on the particle [N], not its reaction, which is minus that
+	/// (model.h)
+	SM_PORT_MOTION,
+	SM_PORT_PROBE,  ///< read only: position [m] and velocity [m/s]
 } sm_port_kind;
 
 /// A named particle through which the model meets the outside world.
