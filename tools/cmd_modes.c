@@ -61,12 +61,17 @@ static void usage(FILE* out)
 }
 
 // Legacy VTK polydata of one mode: particles at the linearisation point, springs as lines, the
-// mode shape as a vector field.
+// mode shape as a vector field. The title gives the mode's frequency [Hz], or for an unstable mode
+// (omega^2 < 0 [1/s^2], no frequency) its omega^2, as the table does.
 static int write_mode_vtk(cli_outputs* outputs, const char* path, const sm_model* model, const double* x,
-                          const double* shape, int index, double frequency)
+                          const double* shape, int index, double frequency, double omega_squared)
 {
 	char title[128];
-	snprintf(title, sizeof title, "springmass mode %d, %.9g Hz", index, frequency);
+	if (omega_squared < 0.0)
+		snprintf(title, sizeof title, "springmass mode %d, unstable: omega^2 = %.9g 1/s^2", index,
+		         omega_squared);
+	else
+		snprintf(title, sizeof title, "springmass mode %d, %.9g Hz", index, frequency);
 	FILE* f = cli_vtk_open(outputs, "modes", path, title, model, x);
 	if (f == NULL)
 		return -1;
@@ -385,7 +390,7 @@ int sm_cmd_modes(int argc, char** argv)
 		for (int32_t m = 0; m < modes.count; m++)
 			if (!mode_path(path, sizeof path, vtk_dir, m) ||
 			    write_mode_vtk(&outputs, path, model, x, modes.shapes + (size_t)m * 3 * (size_t)n, (int)m + 1,
-			                   modes.frequency[m]) != 0)
+			                   modes.frequency[m], modes.omega_squared[m]) != 0)
 				goto done;
 	}
 	if (cli_outputs_commit(&outputs) != 0)

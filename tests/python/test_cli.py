@@ -1020,8 +1020,12 @@ def test_modes_count_unstable_and_zero_modes(tmp_path):
                          {"name": "bob", "position": [1, 0, 0], "mass": 2}],
            "springs": [{"a": "anchor", "b": "bob", "stiffness": 8, "rest_length": 2}]}
     (tmp_path / "bob.json").write_text(json.dumps(bob))
-    out = cli("modes", tmp_path / "bob.json").stdout
+    out = cli("modes", tmp_path / "bob.json", "--vtk", tmp_path / "vtk").stdout
     assert summary_line(out, "zero modes").startswith("0 (") and summary_line(out, "unstable modes").startswith("2 (")
+    # The VTK files' titles (their second line) say the same, not a frequency of 0 Hz.
+    titles = [(tmp_path / "vtk" / f"mode_{m}.vtk").read_text().split("\n")[1] for m in (1, 2, 3)]
+    assert titles[0].startswith("springmass mode 1, unstable: omega^2 = -4") and titles[0].endswith(" 1/s^2")
+    assert titles[2] == "springmass mode 3, 0.318309886 Hz"  # 2 / (2 pi), 9 digits
     rows = re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)
     assert [period for _, period, _ in rows] == ["unstable", "unstable", "3.14159265"]  # 9 digits
     np.testing.assert_allclose([float(w2) for _, _, w2 in rows], [-4, -4, 4], rtol=1e-12)
