@@ -12,7 +12,16 @@ install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
 # The tool (and the FMU runtime, fmu/CMakeLists.txt) come from the optimised configurations only:
 # a Debug build installed into the same prefix adds its library (libspringmassd.a) and its
 # pkg-config file (springmassd.pc) and leaves the Release tool, runtime and springmass.pc alone.
+# A build type other than Debug counts as optimised: "None", with which Debian's packages are
+# built (their own compiler flags alone), or a project's own.
 set(SPRINGMASS_OPTIMISED_CONFIGURATIONS Release RelWithDebInfo MinSizeRel)
+foreach(_config IN LISTS CMAKE_BUILD_TYPE CMAKE_CONFIGURATION_TYPES)
+  string(TOLOWER "${_config}" _config_lower)
+  if(NOT _config_lower STREQUAL "debug")
+    list(APPEND SPRINGMASS_OPTIMISED_CONFIGURATIONS "${_config}")
+  endif()
+endforeach()
+list(REMOVE_DUPLICATES SPRINGMASS_OPTIMISED_CONFIGURATIONS)
 install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         CONFIGURATIONS ${SPRINGMASS_OPTIMISED_CONFIGURATIONS})
 

@@ -80,6 +80,15 @@ named=$(PKG_CONFIG_PATH=$(dirname "$(find "$work/debug" -name springmassd.pc)") 
 [ "${exported%\"}" = "libspringmassd.a" ] && [[ " $named " == *" -lspringmassd "* ]] ||
 	fail "a debug build's package exports ${exported%\"} and its pkg-config file links: $named"
 
+# A build of another type than Debug installs the tool too: "None" (any case), the type Debian's
+# packages are built with, their compiler flags given alone. Unoptimised here, which is quick.
+"$cmake" -S "$source" -B "$work/none" -G Ninja -DCMAKE_BUILD_TYPE=none -DSPRINGMASS_BUILD_TESTS=OFF \
+    -DSPRINGMASS_BUILD_FMU=OFF > /dev/null
+"$cmake" --build "$work/none" -j 2 --target springmass_cli > /dev/null
+"$cmake" --install "$work/none" --prefix "$work/none-prefix" > /dev/null
+[ -x "$work/none-prefix/bin/springmass" ] || fail "a build of type None installs no springmass tool"
+"$work/none-prefix/bin/springmass" --version > /dev/null
+
 ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
 # springmass added to a project from its source tree (add_subdirectory, FetchContent): the project's
 # shared library and module link it as they link the installed package, and springmass's warnings
