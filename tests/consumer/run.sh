@@ -151,6 +151,11 @@ for config in RelWithDebInfo MinSizeRel; do
 	got=$(linked "$work/noconfig" "$config")
 	[ "$got" = "libspringmass.a " ] || fail "with the install of a build without a build type, build type '$config' links $got"
 done
+# The install of a build of type None (above) serves a consumer of any build type.
+for config in "" Release RelWithDebInfo MinSizeRel Debug; do
+	got=$(linked "$work/none-prefix" "$config")
+	[ "$got" = "libspringmass.a " ] || fail "with the install of a build of type None, build type '$config' links $got"
+done
 # A Debug and a RelWithDebInfo install, no Release: a Release consumer links the optimised one.
 cp -R "$work/prefix" "$work/optimised"
 rm "$work/optimised${targets#"$work/prefix"}" "$work/optimised${library#"$work/prefix"}"
