@@ -36,6 +36,10 @@ static bool known_variant(sm_jacobian_variant variant)
 sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x, const double* v,
                                    sm_jacobian_variant variant, double K[9], double D[9])
 {
+	if (K != NULL)
+		memset(K, 0, 9 * sizeof(double));
+	if (D != NULL)
+		memset(D, 0, 9 * sizeof(double));
 	if (model == NULL || x == NULL || !known_variant(variant))
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (spring < 0 || spring >= model->spring_count)

@@ -201,10 +201,12 @@ typedef struct resolved_spring {
 
 // Validates a spring definition against the model; `current_rest_length` is used for
 // SM_REST_LENGTH_INITIAL when >= 0 (sm_model_set_spring keeps the current rest length),
-// otherwise the distance between the particles' initial positions.
+// otherwise the distance between the particles' initial positions. *out is zero unless the
+// definition is valid (so that no caller reads it unset, whatever a compiler sees of the paths).
 static sm_status check_spring_def(const sm_model* model, const sm_spring_def* def, long index,
                                   double current_rest_length, resolved_spring* out, char* msg)
 {
+	*out = (resolved_spring){0};
 	if (def == NULL)
 		return say(msg, SM_ERROR_INVALID_ARGUMENT, "spring %ld: definition is NULL", index);
 	const long n = model->particle_count;
@@ -524,6 +526,8 @@ static void store_particle(sm_model* m, int32_t i, const sm_particle_def* def)
 
 sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int32_t* index)
 {
+	if (index != NULL)
+		*index = -1;
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	model->last_error[0] = '\0';
@@ -565,6 +569,8 @@ static sm_status check_particle_index(sm_model* model, int32_t index)
 
 sm_status sm_model_get_particle(const sm_model* model, int32_t index, sm_particle_def* def)
 {
+	if (def != NULL)
+		*def = (sm_particle_def){0};
 	if (model == NULL || def == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->particle_count)
@@ -646,6 +652,8 @@ static void store_spring(sm_model* m, int32_t s, const sm_spring_def* def, const
 
 sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index)
 {
+	if (index != NULL)
+		*index = -1;
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	model->last_error[0] = '\0';
@@ -677,6 +685,8 @@ static sm_status check_spring_index(sm_model* model, int32_t index)
 
 sm_status sm_model_get_spring(const sm_model* model, int32_t index, sm_spring_def* def)
 {
+	if (def != NULL)
+		*def = (sm_spring_def){0};
 	if (model == NULL || def == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->spring_count)
@@ -702,6 +712,10 @@ sm_status sm_model_set_spring(sm_model* model, int32_t index, const sm_spring_de
 sm_status sm_model_spring_constants(const sm_model* model, int32_t index, double* rest_length,
                                     double* stiffness, double* damping)
 {
+	double* const outputs[3] = {rest_length, stiffness, damping};
+	for (int k = 0; k < 3; k++)
+		if (outputs[k] != NULL)
+			*outputs[k] = 0.0;
 	if (model == NULL)
 		return SM_ERROR_INVALID_ARGUMENT;
 	if (index < 0 || index >= model->spring_count)

@@ -389,7 +389,16 @@ static int test_disabled_spring_has_zero_blocks(void)
 	ENSURE_STATUS(sm_model_spring_jacobian(m, 2, x, v, SM_JACOBIAN_EXACT, K, D), SM_OK);
 	for (int k = 0; k < 9; k++)
 		ENSURE(K[k] == K0[k] && D[k] == D0[k]);
+	// An error gives zero blocks, as a disabled spring does, not what the caller's memory held.
 	ENSURE_STATUS(sm_model_spring_jacobian(m, 4, x, v, SM_JACOBIAN_EXACT, K, D), SM_ERROR_SPRING_INDEX);
+	for (int k = 0; k < 9; k++)
+		ENSURE(K[k] == 0.0 && D[k] == 0.0);
+	for (int k = 0; k < 9; k++)
+		K[k] = D[k] = NAN;
+	ENSURE_STATUS(sm_model_spring_jacobian(m, 2, NULL, v, SM_JACOBIAN_EXACT, K, D),
+	              SM_ERROR_INVALID_ARGUMENT);
+	for (int k = 0; k < 9; k++)
+		ENSURE(K[k] == 0.0 && D[k] == 0.0);
 	sm_model_destroy(m);
 	return 0;
 }

@@ -123,7 +123,7 @@ static int test_invalid_particles(void)
 	for (int i = 0; i < 9; i++) {
 		int32_t index = -5;
 		ENSURE_STATUS(sm_model_add_particle(m, &cases[i].def, &index), cases[i].status);
-		ENSURE(index == -5);
+		ENSURE(index == -1);  // no particle's index, whatever the caller does with it
 		ENSURE(sm_model_particle_count(m) == 3);
 		ENSURE_MESSAGE(m, "particle 3", cases[i].rule);
 		// Replacing particle 1 with the same bad definition fails the same way, changing nothing.
@@ -139,8 +139,12 @@ static int test_invalid_particles(void)
 	ENSURE_MESSAGE(m, "particle 3", "out of range (model has 3 particles)");
 	ENSURE_STATUS(sm_model_set_particle_motion(m, -1, SM_PARTICLE_FIXED), SM_ERROR_PARTICLE_INDEX);
 	ENSURE_STATUS(sm_model_set_particle_motion(m, 0, (sm_particle_motion)-3), SM_ERROR_INVALID_ARGUMENT);
-	sm_particle_def out;
+	// An index out of range gives a definition of zeros, not what the caller's memory held.
+	sm_particle_def out = cases[0].def;
+	out.mass = NAN;
 	ENSURE_STATUS(sm_model_get_particle(m, 3, &out), SM_ERROR_PARTICLE_INDEX);
+	ENSURE(out.mass == 0.0 && out.position[0] == 0.0 && out.velocity[2] == 0.0 && out.load[1] == 0.0 &&
+	       out.motion == SM_PARTICLE_FREE);
 	sm_model_destroy(m);
 	return 0;
 }
@@ -199,7 +203,7 @@ static int test_invalid_springs(void)
 	for (int i = 0; i < CASES; i++) {
 		int32_t index = -5;
 		ENSURE_STATUS(sm_model_add_spring(m, &c[i].def, &index), c[i].status);
-		ENSURE(index == -5 && sm_model_spring_count(m) == 1);
+		ENSURE(index == -1 && sm_model_spring_count(m) == 1);
 		ENSURE_MESSAGE(m, "spring 1", c[i].rule);
 		ENSURE_STATUS(sm_model_set_spring(m, 0, &c[i].def), c[i].status);
 		ENSURE_MESSAGE(m, "spring 0", c[i].rule);
@@ -258,6 +262,19 @@ static int test_invalid_springs(void)
 	ENSURE_MESSAGE(m, "spring 1", "out of range (model has 1 spring)");
 	ENSURE_STATUS(sm_model_set_spring_enabled(m, 5, false), SM_ERROR_SPRING_INDEX);
 	ENSURE(!sm_model_spring_enabled(m, 5));
+	// A failed addition gives no spring's index; an index out of range a definition of zeros.
+	int32_t index = 7;
+	sm_spring_def out = good;
+	out.stiffness = NAN;
+	ENSURE_STATUS(sm_model_add_spring(m, &close, &index), SM_ERROR_INVALID_ARGUMENT);
+	ENSURE(index == -1);
+	ENSURE_STATUS(sm_model_get_spring(m, 1, &out), SM_ERROR_SPRING_INDEX);
+	ENSURE(out.a == 0 && out.b == 0 && out.stiffness == 0.0 && out.rest_length == 0.0 &&
+	       out.break_strain == 0.0);
+	double constants[3] = {1.0, 2.0, 3.0};
+	ENSURE_STATUS(sm_model_spring_constants(m, -1, &constants[0], &constants[1], &constants[2]),
+	              SM_ERROR_SPRING_INDEX);
+	ENSURE(constants[0] == 0.0 && constants[1] == 0.0 && constants[2] == 0.0);
 	sm_model_destroy(m);
 	return 0;
 }

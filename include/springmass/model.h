@@ -165,22 +165,24 @@ SM_API sm_model* sm_model_clone(const sm_model* model);
 /// modifies the model.
 SM_API const char* sm_model_last_error(const sm_model* model);
 
-/// Adds a particle. On success writes its index to *index (may be NULL). On error the model
-/// is unchanged and the status says which rule the definition broke.
+/// Adds a particle. On success writes its index to *index (may be NULL), on error -1. On error
+/// the model is unchanged and the status says which rule the definition broke.
 SM_API sm_status sm_model_add_particle(sm_model* model, const sm_particle_def* def, int32_t* index);
 
 /// Adds a spring. A rest length of SM_REST_LENGTH_INITIAL is resolved to the current distance
 /// between the particles, which must be 0 or from sqrt(DBL_MIN) = 1.5e-154 m to sqrt(DBL_MAX) =
 /// 1.3e154 m (its square a normal double; else SM_ERROR_INVALID_ARGUMENT or
 /// SM_ERROR_NOT_FINITE). The particles of a spring of either kind, whatever its rest length, must
-/// be less than 1.3e154 m apart (SM_ERROR_NOT_FINITE). On error the model is unchanged.
+/// be less than 1.3e154 m apart (SM_ERROR_NOT_FINITE). Writes the spring's index to *index (may be
+/// NULL), -1 on error. On error the model is unchanged.
 SM_API sm_status sm_model_add_spring(sm_model* model, const sm_spring_def* def, int32_t* index);
 
 /// Numbers of particles and springs (disabled springs included); 0 for a NULL model.
 SM_API int32_t sm_model_particle_count(const sm_model* model);
 SM_API int32_t sm_model_spring_count(const sm_model* model);
 
-/// The particle's definition as stored (current initial position and velocity).
+/// The particle's definition as stored (current initial position and velocity); all zero on
+/// an error (an index out of range).
 SM_API sm_status sm_model_get_particle(const sm_model* model, int32_t index, sm_particle_def* def);
 
 /// Replaces a particle's definition (same validation as adding). Rest lengths of springs
@@ -195,7 +197,8 @@ SM_API sm_status sm_model_set_particle(sm_model* model, int32_t index, const sm_
 /// cloth took 2 s, growing with the square of the count).
 SM_API sm_status sm_model_set_particle_motion(sm_model* model, int32_t index, sm_particle_motion motion);
 
-/// The spring's definition as stored, with rest_length resolved to metres.
+/// The spring's definition as stored, with rest_length resolved to metres; all zero on an error
+/// (an index out of range).
 SM_API sm_status sm_model_get_spring(const sm_model* model, int32_t index, sm_spring_def* def);
 
 /// Replaces a spring's definition (same validation as adding; a rest length of
@@ -203,6 +206,7 @@ SM_API sm_status sm_model_get_spring(const sm_model* model, int32_t index, sm_sp
 SM_API sm_status sm_model_set_spring(sm_model* model, int32_t index, const sm_spring_def* def);
 
 /// The constants the force law uses: rest length l0 [m], stiffness ks [N/m], damping kd [N s/m].
+/// Any output may be NULL; each is 0 on an error (an index out of range).
 SM_API sm_status sm_model_spring_constants(const sm_model* model, int32_t index, double* rest_length,
                                            double* stiffness, double* damping);
 
@@ -280,8 +284,8 @@ SM_API void sm_model_spring_states(const sm_model* model, const double* x, const
 
 /// Per-spring 3x3 blocks (row-major): K = d f_a / d x_b [N/m] and D = d f_a / d v_b [N s/m].
 /// Since f depends on x_b - x_a and v_b - v_a and f_b = -f_a: d f_a/d x_a = -K,
-/// d f_b/d x_b = -K, d f_b/d x_a = K, and likewise for D. Disabled springs give zero blocks.
-/// Either output may be NULL.
+/// d f_b/d x_b = -K, d f_b/d x_a = K, and likewise for D. Disabled springs give zero blocks, and
+/// so does an error (an index out of range, a NULL model or x). Either output may be NULL.
 SM_API sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x,
                                           const double* v, sm_jacobian_variant variant, double K[9],
                                           double D[9]);
