@@ -22,8 +22,16 @@ foreach(_config IN LISTS CMAKE_BUILD_TYPE CMAKE_CONFIGURATION_TYPES)
   endif()
 endforeach()
 list(REMOVE_DUPLICATES SPRINGMASS_OPTIMISED_CONFIGURATIONS)
-install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
-        CONFIGURATIONS ${SPRINGMASS_OPTIMISED_CONFIGURATIONS})
+# As install()'s argument: the configurations, or, for a build without a build type (springmass
+# added with add_subdirectory to a project that sets none), no restriction, which is the only way
+# to name that build's one configuration.
+get_property(_multi_config GLOBAL PROPERTY GENERATOR_IS_MULTI_CONFIG)
+if(NOT _multi_config AND NOT CMAKE_BUILD_TYPE)
+  set(SPRINGMASS_OPTIMISED_ONLY "")
+else()
+  set(SPRINGMASS_OPTIMISED_ONLY CONFIGURATIONS ${SPRINGMASS_OPTIMISED_CONFIGURATIONS})
+endif()
+install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} ${SPRINGMASS_OPTIMISED_ONLY})
 
 set(SPRINGMASS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/springmass)
 install(EXPORT springmassTargets NAMESPACE springmass:: DESTINATION ${SPRINGMASS_CMAKE_DIR})

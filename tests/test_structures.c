@@ -1616,7 +1616,7 @@ static int test_per_section_block_column_converges_when_refined(void)
 
 	// Each change under a stated fraction of the one before. The shortening converges at first
 	// order (0.62, then 0.49 of the change before: 0.5 is the order's), asserted 0.7; the deflection
-	// a little faster (0.48, 0.33), asserted 0.6; the axial frequency faster still (0.11, 0.22),
+	// a little faster (0.48, 0.34), asserted 0.6; the axial frequency faster still (0.11, 0.22),
 	// asserted 0.3 (a 17 x 17 x 33 column, too slow for this test, moves it by 0.011 Hz more, as
 	// much as the last change: a first-order part remains, at 0.03 %). The bending frequency
 	// changes by 0.056 Hz from one cell across to two and by 0.073 Hz from two to four, before it

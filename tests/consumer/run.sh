@@ -99,6 +99,12 @@ ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
 	fail "a shared library or module of a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded.log")"
 "$work/embedded/frequency_check"
 "$work/embedded/plugin_check"
+# Installed with the project, springmass's tool comes along: a build without a build type is not
+# a Debug one.
+"$cmake" --build "$work/embedded" -j 2 --target springmass_cli > /dev/null
+"$cmake" --install "$work/embedded" --prefix "$work/embedded-prefix" > "$work/embedded-install.log" 2>&1 ||
+	fail "installing a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded-install.log")"
+[ -x "$work/embedded-prefix/bin/springmass" ] || fail "a build without a build type installs no springmass tool"
 commands=$("$ninja" -C "$work/embedded" -t commands frequency_check)
 ! grep -q -- '-Werror.*shared/frequency\.c' <<< "$commands" ||
 	fail "springmass added with add_subdirectory makes warnings errors in the project that adds it"
