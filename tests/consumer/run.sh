@@ -145,7 +145,7 @@ if [ "${installed,,}" = debug ]; then
 else
 	stand_in "$work/both" Debug DEBUG libspringmassd.a
 fi
-for config in "" RelWithDebInfo Debug; do
+for config in "" RelWithDebInfo None Debug; do
 	expected="libspringmass.a "
 	[ "$config" != Debug ] || expected="libspringmassd.a "
 	got=$(linked "$work/both" "$config")
