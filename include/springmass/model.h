@@ -285,7 +285,8 @@ SM_API void sm_model_spring_states(const sm_model* model, const double* x, const
 /// Per-spring 3x3 blocks (row-major): K = d f_a / d x_b [N/m] and D = d f_a / d v_b [N s/m].
 /// Since f depends on x_b - x_a and v_b - v_a and f_b = -f_a: d f_a/d x_a = -K,
 /// d f_b/d x_b = -K, d f_b/d x_a = K, and likewise for D. Disabled springs give zero blocks, and
-/// so does an error (an index out of range, a NULL model or x). Either output may be NULL.
+/// so does an error (an index out of range, a NULL model or x, an unknown variant). Either
+/// output may be NULL.
 SM_API sm_status sm_model_spring_jacobian(const sm_model* model, int32_t spring, const double* x,
                                           const double* v, sm_jacobian_variant variant, double K[9],
                                           double D[9]);
