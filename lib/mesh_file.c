@@ -117,12 +117,12 @@ static void finish_line(reader* r)
 }
 
 // The column of a token's first character: the characters (bytes that begin a UTF-8 character)
-// before it on its line, plus 1.
+// before it on its line, plus 1. It reads the line up to the token: once per statement, not once
+// per triangle of a face, or a face of many vertices after a long run of blanks would read them
+// again for each of its triangles.
 static int32_t column_of(const reader* r, const token* t)
 {
-	int64_t column = 1;
-	for (size_t k = t->line_start; k < t->start; k++)
-		column += ((unsigned char)r->text[k] & 0xc0) != 0x80;
+	const int64_t column = sm_text_column(r->text + t->line_start, t->start - t->line_start);
 	return column > INT32_MAX ? INT32_MAX : (int32_t)column;
 }
 
@@ -312,6 +312,8 @@ static bool read_corner(reader* r, const token* t, int64_t* index)
 static bool read_face(reader* r, const token* keyword)
 {
 	int64_t corners = 0, first = -1, previous = -1;
+	// Where each of its triangles is in the file (second pass).
+	const int32_t column = r->fill != NULL ? column_of(r, keyword) : 0;
 	token t;
 	while (next_token(r, &t)) {
 		int64_t index = 0;
@@ -327,7 +329,7 @@ static bool read_face(reader* r, const token* keyword)
 			triangle[1] = (int32_t)previous;
 			triangle[2] = (int32_t)index;
 			r->fill->triangle_place[2 * r->triangles] = keyword->line;
-			r->fill->triangle_place[2 * r->triangles + 1] = column_of(r, keyword);
+			r->fill->triangle_place[2 * r->triangles + 1] = column;
 		}
 		if (corners >= 2)
 			r->triangles++;

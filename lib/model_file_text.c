@@ -98,6 +98,14 @@ void sm_text_position(const char* text, size_t length, size_t end, int* line, in
 	}
 }
 
+int64_t sm_text_column(const char* line, size_t bytes)
+{
+	int64_t column = 1;
+	for (size_t k = 0; k < bytes; k++)
+		column += ((unsigned char)line[k] & 0xc0) != 0x80;
+	return column;
+}
+
 // sm_text_escape, or with quotes false sm_text_shown.
 static bool escape(char* out, size_t most, const char* s, bool quotes)
 {

@@ -34,6 +34,11 @@ int32_t sm_text_find_refused(const char* s, bool (*refused)(int32_t), int64_t* p
 // kind, is at column 0 of the next line.
 void sm_text_position(const char* text, size_t length, size_t end, int* line, int* column);
 
+// The column, from 1, of the character that begins at line[bytes], where line is the start of its
+// line: the characters (bytes that begin a UTF-8 character) before it, plus 1. Reads the `bytes`
+// bytes before it, so a caller placing many things on one line finds the line's columns once.
+int64_t sm_text_column(const char* line, size_t bytes);
+
 // Writes s into out as a JSON string's contents would hold it (`"` and `\` escaped; control
 // characters, line separators and the zero-width and bidirectional characters, which a terminal
 // would act on or not show, as \uXXXX; a malformed byte as \xNN), at most `most` bytes and whole

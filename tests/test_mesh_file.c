@@ -602,6 +602,58 @@ static int test_polygon_of_many_vertices_is_a_fan(void)
 	return 0;
 }
 
+// The bytes the library has read to find columns (sm_text_column, wrapped by the linker: see
+// tests/CMakeLists.txt).
+static size_t column_bytes = 0;
+
+int64_t __real_sm_text_column(const char* line, size_t bytes);
+int64_t __wrap_sm_text_column(const char* line, size_t bytes);
+
+int64_t __wrap_sm_text_column(const char* line, size_t bytes)
+{
+	column_bytes += bytes;
+	return __real_sm_text_column(line, bytes);
+}
+
+// A face of many vertices after a long run of blanks (as a hostile file may write it): the line
+// is read for the columns of its triangles once, not once per triangle, so that loading takes
+// time in proportion to the file. Read once per triangle, the 4000 triangles would read the
+// 100 000 blanks 4000 times: 4e8 bytes where the file has 1.6e5.
+static int test_face_after_many_blanks_reads_its_line_once(void)
+{
+	enum { N = 4002, BLANKS = 100000 };
+	size_t capacity = 64 * N + BLANKS;
+	char* obj = malloc(capacity);
+	ENSURE(obj != NULL);
+	size_t used = 0;
+	for (int k = 0; k < N; k++)
+		used += (size_t)snprintf(obj + used, capacity - used, "v %.17g %.17g 0\n", cos(2 * M_PI * k / N),
+		                         sin(2 * M_PI * k / N));
+	memset(obj + used, ' ', BLANKS);
+	used += BLANKS;
+	used += (size_t)snprintf(obj + used, capacity - used, "f");
+	for (int k = 0; k < N; k++)
+		used += (size_t)snprintf(obj + used, capacity - used, " %d", k + 1);
+	snprintf(obj + used, capacity - used, "\n");
+	const size_t length = strlen(obj);
+	ENSURE(write_file("blanks.obj", obj) == 0);
+	free(obj);
+	sm_error err = {SM_OK, ""};
+	column_bytes = 0;
+	sm_document* doc =
+	    load_model("blanks.json",
+		           "{\"springmass\": 1, \"name\": \"blanks\", \"structures\": [{\"type\": \"mesh\","
+		           " \"name\": \"p\", \"file\": \"blanks.obj\", \"edge\": {\"stiffness\": 1}}]}",
+		           &err);
+	ENSURE(doc != NULL);
+	ENSURE(sm_document_particle_count(doc) == N && sm_document_spring_count(doc) == 2 * N - 3);
+	sm_document_destroy(doc);
+	// Each statement's line read up to its keyword once, for the places of what it makes.
+	printf("  %zu bytes read for columns, file of %zu bytes\n", column_bytes, length);
+	ENSURE(column_bytes <= length);
+	return 0;
+}
+
 static int remove_entry(const char* path, const struct stat* st, int type, struct FTW* walk)
 {
 	(void)st;
@@ -627,6 +679,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_models_need_no_obj_file);
 	RUN_TEST(test_broken_obj_files);
 	RUN_TEST(test_polygon_of_many_vertices_is_a_fan);
+	RUN_TEST(test_face_after_many_blanks_reads_its_line_once);
 	if (nftw(work, remove_entry, 16, FTW_DEPTH | FTW_PHYS) != 0)
 		printf("could not remove %s\n", work);
 	return TEST_SUMMARY();
