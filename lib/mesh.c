@@ -5,9 +5,10 @@
 // mass rho A; each of its three vertices takes a third, so the total mass is rho times the
 // mesh's area exactly, and a uniformly refined mesh keeps the same mass distribution.
 //
-// Edges are found with an open-addressing hash table keyed by the sorted vertex pair; each
-// entry remembers how many triangles share the edge and the vertex opposite it in the first
-// two, which are the ends of the bending spring across an interior edge.
+// Edges are found in a hash table keyed by the sorted vertex pair (mesh_edges.h); each entry
+// remembers how many triangles share the edge and the vertex opposite it in the first two, which
+// are the ends of the bending spring across an interior edge.
+#include "mesh_edges.h"
 #include "structures_internal.h"
 
 #include <float.h>
@@ -23,52 +24,6 @@ sm_mesh_def sm_default_mesh_def(void)
 	d.edge.stiffness = 1000.0;
 	d.bend = sm_default_spring_material();
 	return d;
-}
-
-typedef struct edge_entry {
-	uint64_t key;         // (low vertex << 32) | high vertex, or UINT64_MAX when empty
-	int32_t triangles;    // triangles sharing the edge
-	int32_t opposite[2];  // the vertex opposite the edge in the first two triangles
-	int32_t order;        // order of first appearance
-	double area;          // of the triangles sharing the edge [m^2]
-} edge_entry;
-
-typedef struct edge_table {
-	edge_entry* slots;
-	size_t mask;
-	int32_t* in_order;  // slot index of each edge in order of first appearance
-	int32_t count;
-} edge_table;
-
-static uint64_t edge_key(int32_t a, int32_t b)
-{
-	const uint32_t lo = (uint32_t)(a < b ? a : b), hi = (uint32_t)(a < b ? b : a);
-	return ((uint64_t)lo << 32) | hi;
-}
-
-static size_t edge_hash(uint64_t key, size_t mask)
-{
-	key ^= key >> 33;
-	key *= 0xff51afd7ed558ccdULL;
-	key ^= key >> 33;
-	return (size_t)key & mask;
-}
-
-// Finds or inserts the edge; returns its entry.
-static edge_entry* edge_find(edge_table* t, uint64_t key)
-{
-	size_t s = edge_hash(key, t->mask);
-	while (t->slots[s].key != UINT64_MAX && t->slots[s].key != key)
-		s = (s + 1) & t->mask;
-	edge_entry* e = &t->slots[s];
-	if (e->key == UINT64_MAX) {
-		e->key = key;
-		e->triangles = 0;
-		e->area = 0.0;
-		e->order = t->count;
-		t->in_order[t->count++] = (int32_t)s;
-	}
-	return e;
 }
 
 // The checks on a definition's values; *triangle or *vertex names the one a failure is about.
@@ -222,18 +177,13 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 		return st;
 
 	const int32_t nv = def->vertex_count, nt = def->triangle_count;
-	size_t capacity = 16;
-	while (capacity < 6 * (size_t)nt)
-		capacity *= 2;
-	edge_table table = {malloc(capacity * sizeof(edge_entry)), capacity - 1,
-	                    malloc(3 * (size_t)nt * sizeof(int32_t)), 0};
+	mesh_edges table;
+	const bool room = sm_mesh_edges_init(&table, nt);
 	double* mass = calloc((size_t)nv, sizeof(double));
-	if (table.slots == NULL || table.in_order == NULL || mass == NULL) {
+	if (!room || mass == NULL) {
 		st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "mesh: out of memory for %d triangles", (int)nt);
 		goto done;
 	}
-	for (size_t s = 0; s < capacity; s++)
-		table.slots[s].key = UINT64_MAX;
 
 	for (int32_t t = 0; t < nt && st == SM_OK; t++) {
 		const int32_t* tri = def->triangles + 3 * (size_t)t;
@@ -273,7 +223,7 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 			mass[tri[c]] += def->density * area / 3.0;
 		for (int c = 0; c < 3; c++) {
 			const int32_t a = tri[c], b = tri[(c + 1) % 3], opposite = tri[(c + 2) % 3];
-			edge_entry* e = edge_find(&table, edge_key(a, b));
+			mesh_edge* e = sm_mesh_edges_find(&table, a, b);
 			if (e->triangles >= 2) {
 				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
 				                   "mesh: edge (%d, %d) of triangle %d is shared by more than two triangles",
@@ -323,7 +273,7 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 	           has_bend = sm_structure_material_present(&def->bend);
 	int64_t interior = 0;
 	for (int32_t e = 0; e < table.count; e++) {
-		const edge_entry* entry = &table.slots[table.in_order[e]];
+		const mesh_edge* entry = sm_mesh_edges_at(&table, e);
 		if (entry->triangles != 2)
 			continue;
 		interior++;
@@ -350,12 +300,12 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 	for (int32_t v = 0; v < nv && st == SM_OK; v++)
 		st = sm_structure_add_particle(model, what, mass[v], def->vertices + 3 * (size_t)v);
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_edge; e++) {
-		const edge_entry* entry = &table.slots[table.in_order[e]];
+		const mesh_edge* entry = sm_mesh_edges_at(&table, e);
 		st = sm_structure_add_spring(model, what, "the vertices", "edge", p0 + (int32_t)(entry->key >> 32),
 		                             p0 + (int32_t)(entry->key & 0xffffffffu), &def->edge, entry->area);
 	}
 	for (int32_t e = 0; e < table.count && st == SM_OK && has_bend; e++) {
-		const edge_entry* entry = &table.slots[table.in_order[e]];
+		const mesh_edge* entry = sm_mesh_edges_at(&table, e);
 		if (entry->triangles == 2)
 			st = sm_structure_add_spring(model, what, "the vertices", "bend", p0 + entry->opposite[0],
 			                             p0 + entry->opposite[1], &def->bend, entry->area);
@@ -367,8 +317,7 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 	const int32_t made[3] = {has_edge ? table.count : 0, has_bend ? (int32_t)interior : 0, 0};
 	sm_structure_fill_out(out, p0, s0, model, nv, 1, 1, made);
 done:
-	free(table.slots);
-	free(table.in_order);
+	sm_mesh_edges_free(&table);
 	free(mass);
 	return st;
 }

@@ -1,73 +1,14 @@
 // An index from names to numbers: open addressing with linear probing, at most half full.
 //
-// Names come from model files, which may be hostile. With a fixed hash function a file can be
-// made of names that all fall into one run of slots (finding them takes a few hours of
-// computing, once), and every lookup then walks the run: loading becomes quadratic again. The
-// hash is therefore SipHash-1-3 (Aumasson and Bernstein, "SipHash: a fast short-input PRF",
-// 2012; the variant Rust's HashMap uses for the same reason) with a key drawn for each index from
-// the operating system's random source, which a file cannot know in advance. The key changes
-// where names sit, never what a lookup finds, so loading gives the same results every time.
-#define _DEFAULT_SOURCE  // getentropy
-
+// Names come from model files, which may be hostile: the hash is keyed (keyed_hash.h), with a key
+// drawn for each index at its first insertion, so that a file cannot make its names fall into one
+// run of slots.
 #include "name_index.h"
+
+#include "keyed_hash.h"
 
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
-
-static uint64_t rotate(uint64_t x, int bits)
-{
-	return (x << bits) | (x >> (64 - bits));
-}
-
-// One SipRound of the state v.
-static void sip_round(uint64_t v[4])
-{
-	v[0] += v[1];
-	v[1] = rotate(v[1], 13) ^ v[0];
-	v[0] = rotate(v[0], 32);
-	v[2] += v[3];
-	v[3] = rotate(v[3], 16) ^ v[2];
-	v[0] += v[3];
-	v[3] = rotate(v[3], 21) ^ v[0];
-	v[2] += v[1];
-	v[1] = rotate(v[1], 17) ^ v[2];
-	v[2] = rotate(v[2], 32);
-}
-
-// SipHash-1-3 of data[0, length): one round per 8-byte word, three to finish. The last word
-// holds the remaining bytes and, in its top byte, the length mod 256 (little-endian words).
-static uint64_t siphash13(const uint64_t key[2], const unsigned char* data, size_t length)
-{
-	uint64_t v[4] = {0x736f6d6570736575ULL ^ key[0], 0x646f72616e646f6dULL ^ key[1],
-	                 0x6c7967656e657261ULL ^ key[0], 0x7465646279746573ULL ^ key[1]};
-	const size_t whole = length - length % 8;
-	for (size_t at = 0; at <= whole; at += 8) {
-		const size_t bytes = at < whole ? 8 : length - whole;
-		uint64_t word = at < whole ? 0 : (uint64_t)length << 56;
-		for (size_t b = 0; b < bytes; b++)
-			word |= (uint64_t)data[at + b] << (8 * b);
-		v[3] ^= word;
-		sip_round(v);
-		v[0] ^= word;
-	}
-	v[2] ^= 0xff;
-	for (int r = 0; r < 3; r++)
-		sip_round(v);
-	return v[0] ^ v[1] ^ v[2] ^ v[3];
-}
-
-// A key nobody can predict: getentropy, or where that fails (a sandbox without the system
-// call) the addresses the system randomises and the clock.
-static void draw_key(name_index* index)
-{
-	if (getentropy(index->key, sizeof index->key) == 0)
-		return;
-	int local = 0;
-	index->key[0] = (uint64_t)(uintptr_t)index ^ ((uint64_t)(uintptr_t)&local << 17) ^ (uint64_t)time(NULL);
-	index->key[1] = (uint64_t)(uintptr_t)&draw_key ^ ((uint64_t)clock() << 29) ^ 0x9e3779b97f4a7c15ULL;
-}
 
 void sm_name_index_init(name_index* index, name_index_name_fn name_of, const void* owner)
 {
@@ -78,7 +19,7 @@ void sm_name_index_init(name_index* index, name_index_name_fn name_of, const voi
 
 static uint32_t tag_of(const name_index* index, const char* name, size_t length)
 {
-	return (uint32_t)(siphash13(index->key, (const unsigned char*)name, length) >> 32);
+	return (uint32_t)(sm_keyed_hash_bytes(index->key, (const unsigned char*)name, length) >> 32);
 }
 
 // The slot holding name (tag `tag`), or the empty slot where it would go.
@@ -124,7 +65,7 @@ static bool grow(name_index* index)
 		slots[t] = slot;
 	}
 	if (index->size == 0)
-		draw_key(index);
+		sm_keyed_hash_draw_key(index->key);
 	free(index->slots);
 	index->slots = slots;
 	index->size = size;

@@ -2,6 +2,7 @@
 // rest lengths and masses, the exact match with the benchmark cloth, the shear resistance of a
 // block (only rigid-body modes have zero stiffness), edges of a mesh counted once, roll-back
 // on error, and the selection helpers.
+#include "mesh_edges.h"
 #include "springmass/analysis.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
@@ -2710,6 +2711,56 @@ static int test_absurd_sizes_named(void)
 	return 0;
 }
 
+// MurmurHash3's 64-bit finaliser, a fixed mixer of the kind a hash table of edges might use: a file
+// can choose vertex pairs it sends into a few slots.
+static uint64_t fixed_mixer(uint64_t key)
+{
+	key ^= key >> 33;
+	key *= 0xff51afd7ed558ccdULL;
+	key ^= key >> 33;
+	return key;
+}
+
+// Vertex pairs chosen, as a hostile OBJ file's faces can choose them, so that a fixed mixer sends
+// them all into the first 256 of the table's 131 072 slots: with it, each pair entered would walk
+// the run of those before it, 2e8 slots for the 20 000. The table's hash is keyed, so they scatter
+// and are entered in a number of probes proportional to their number; each is found again.
+static int test_mesh_edges_scatter_crafted_vertex_pairs(void)
+{
+	enum { PAIRS = 20000, WINDOW = 256 };
+	mesh_edges edges;
+	ENSURE(sm_mesh_edges_init(&edges, PAIRS));  // room for 3 * PAIRS edges: 131 072 slots
+	int32_t (*pairs)[2] = malloc(PAIRS * sizeof *pairs);
+	ENSURE(pairs != NULL);
+	int32_t n = 0;
+	for (int32_t low = 0; n < PAIRS; low++)
+		for (int32_t high = low + 1; high <= low + 4096 && n < PAIRS; high++)
+			if ((fixed_mixer(((uint64_t)low << 32) | (uint64_t)high) & edges.mask) < WINDOW) {
+				pairs[n][0] = high;  // either order: an edge is its sorted pair
+				pairs[n][1] = low;
+				n++;
+			}
+	for (int32_t k = 0; k < PAIRS; k++) {
+		mesh_edge* e = sm_mesh_edges_find(&edges, pairs[k][0], pairs[k][1]);
+		ENSURE(e->triangles == 0);
+		e->triangles = 1;
+	}
+	// Scattered at random into a table at most 15 % full, an entry looks at 1.1 slots on average
+	// (Knuth's (1 + 1 / (1 - a)^2) / 2 for linear probing at load a); 2 per pair leaves room for
+	// chance, and is 5000 times fewer than the run would take.
+	printf("  %lld probes for %d pairs\n", (long long)edges.probes, (int)PAIRS);
+	ENSURE(edges.probes <= 2 * PAIRS);
+	ENSURE(edges.count == PAIRS);
+	for (int32_t k = 0; k < PAIRS; k++) {
+		const mesh_edge* e = sm_mesh_edges_find(&edges, pairs[k][1], pairs[k][0]);
+		ENSURE(e == sm_mesh_edges_at(&edges, k) && e->triangles == 1);
+	}
+	ENSURE(edges.count == PAIRS);
+	free(pairs);
+	sm_mesh_edges_free(&edges);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2732,6 +2783,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sheet_diagonal_neighbours_distinct);
 	RUN_TEST(test_box_selection_closed);
 	RUN_TEST(test_mesh_edge_order);
+	RUN_TEST(test_mesh_edges_scatter_crafted_vertex_pairs);
 	RUN_TEST(test_zero_size_and_break_strain);
 	RUN_TEST(test_per_section_sheet_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
