@@ -548,17 +548,29 @@ bool sm_parser_read_springs(parser* p, const json_t* list)
 // Fixed particles, loads, ports.
 // ---------------------------------------------------------------------------------------------
 
+// Most boxes "fixed" may hold. Each box tests every particle, so that their work is at most this
+// many times the model's size: a short file of many boxes on a large structure would otherwise
+// take minutes (40 000 boxes on a rope of a million particles: 4e10 tests).
+#define MAX_FIXED_BOXES 256
+
 // "fixed": [reference, ..., {"min": [x, y, z], "max": [x, y, z]}, ...]; marks the particles
 // in fix[].
 static bool read_fixed_to(parser* p, const json_t* list, bool* fix)
 {
 	static const char* const box_keys[] = {"min", "max", NULL};
 	const sm_model* model = p->ex->model;
+	int boxes = 0;
 	for (size_t k = 0; k < json_array_size(list); k++) {
 		char path[PATH_CAPACITY];
 		sm_parser_child_index(path, "fixed", k);
 		const json_t* item = json_array_get(list, k);
 		if (json_is_object(item)) {
+			if (++boxes > MAX_FIXED_BOXES)
+				return sm_parser_fail(
+				    p, SM_ERROR_SCHEMA, path,
+				    "more than %d boxes (each box tests every particle): name the particles "
+				    "by reference",
+				    MAX_FIXED_BOXES);
 			double lo[3], hi[3];
 			int32_t lo_sources[3], hi_sources[3];
 			if (!sm_parser_check_keys(p, item, path, box_keys) || !sm_parser_require(p, item, path, "min") ||

@@ -1177,6 +1177,40 @@ static void append(text* t, const char* format, ...)
 	}
 }
 
+// Each box of "fixed" tests every particle, so a file holds at most 256 of them: 256 load, and the
+// 257th is refused by its path, before it is tested, so that a short file cannot make loading
+// test a box per few bytes against a large structure's every particle.
+static int test_fixed_boxes_are_limited(void)
+{
+	for (int boxes = 256; boxes <= 257; boxes++) {
+		text t = {NULL, 0, 0};
+		append(&t, "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": "
+		           "\"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 1000}], \"fixed\": [");
+		for (int k = 0; k < boxes; k++)
+			append(&t, "%s{\"min\": [%.4f, -1, -1], \"max\": [%.4f, 1, 1]}", k > 0 ? ", " : "",
+			       (k - 0.4) * 1e-3, (k + 0.4) * 1e-3);
+		append(&t, "]}");
+		sm_error err = {SM_OK, ""};
+		sm_document* doc = parse(t.data, &err);
+		free(t.data);
+		if (boxes == 256) {
+			ENSURE(doc != NULL);
+			sm_model* m = NULL;
+			ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+			ENSURE(count_fixed(m) == 256);  // the rope's first 256 particles, 1 mm apart, one per box
+			sm_model_destroy(m);
+			sm_document_destroy(doc);
+		} else {
+			ENSURE(doc == NULL);
+			ENSURE_STATUS(err.status, SM_ERROR_SCHEMA);
+			printf("  %s\n", err.message);
+			ENSURE(strcmp(err.message, "test.json: fixed[256]: more than 256 boxes (each box tests every "
+			                           "particle): name the particles by reference") == 0);
+		}
+	}
+	return 0;
+}
+
 // Saving keeps what the file says, for every kind of value the writer treats apart: a
 // rest-length spring of rest length 0 (which a file without "kind" reads as zero-length),
 // per-strain stiffness beside absolute damping and the reverse, a literal break strain, parameters
@@ -3661,6 +3695,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_initial_state_and_save_to_file);
 	RUN_TEST(test_references);
 	RUN_TEST(test_broken_files);
+	RUN_TEST(test_fixed_boxes_are_limited);
 	RUN_TEST(test_messages_quote_text);
 	RUN_TEST(test_messages_name_parameters);
 	RUN_TEST(test_names_and_descriptions_refuse_controls_and_line_breaks);
