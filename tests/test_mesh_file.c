@@ -570,31 +570,51 @@ static int test_broken_obj_files(void)
 	return 0;
 }
 
+// Writes a polygon of n vertices on the unit circle to `path`, as one face of n corners after
+// `blanks` blanks on its line; false if it cannot. Returns the file's length in *length.
+static bool write_polygon(const char* path, int n, int blanks, size_t* length)
+{
+	const size_t capacity = 64 * (size_t)n + (size_t)blanks;
+	char* obj = malloc(capacity);
+	if (obj == NULL)
+		return false;
+	size_t used = 0;
+	for (int k = 0; k < n; k++)
+		used += (size_t)snprintf(obj + used, capacity - used, "v %.17g %.17g 0\n", cos(2 * M_PI * k / n),
+		                         sin(2 * M_PI * k / n));
+	memset(obj + used, ' ', (size_t)blanks);
+	used += (size_t)blanks;
+	used += (size_t)snprintf(obj + used, capacity - used, "f");
+	for (int k = 0; k < n; k++)
+		used += (size_t)snprintf(obj + used, capacity - used, " %d", k + 1);
+	snprintf(obj + used, capacity - used, "\n");
+	*length = strlen(obj);
+	const bool written = write_file(path, obj) == 0;
+	free(obj);
+	return written;
+}
+
+// A model of one mesh, p, read from the OBJ file `obj`.
+static sm_document* load_mesh_of(const char* obj, sm_error* err)
+{
+	char text[256];
+	snprintf(text, sizeof text,
+	         "{\"springmass\": 1, \"name\": \"m\", \"structures\": [{\"type\": \"mesh\", \"name\": \"p\","
+	         " \"file\": \"%s\", \"edge\": {\"stiffness\": 1}}]}",
+	         obj);
+	return load_model("mesh.json", text, err);
+}
+
 // A hostile face of many vertices within the limits: cut into one triangle per vertex past the
 // second, a fan whose triangles all share the fan's first vertex; a sliver-free fan over a circle
 // loads.
 static int test_polygon_of_many_vertices_is_a_fan(void)
 {
 	enum { N = 2000 };
-	size_t capacity = 64 * N;
-	char* obj = malloc(capacity);
-	ENSURE(obj != NULL);
-	size_t used = 0;
-	for (int k = 0; k < N; k++)
-		used += (size_t)snprintf(obj + used, capacity - used, "v %.17g %.17g 0\n", cos(2 * M_PI * k / N),
-		                         sin(2 * M_PI * k / N));
-	used += (size_t)snprintf(obj + used, capacity - used, "f");
-	for (int k = 0; k < N; k++)
-		used += (size_t)snprintf(obj + used, capacity - used, " %d", k + 1);
-	snprintf(obj + used, capacity - used, "\n");
-	ENSURE(write_file("polygon.obj", obj) == 0);
-	free(obj);
+	size_t length = 0;
+	ENSURE(write_polygon("polygon.obj", N, 0, &length));
 	sm_error err = {SM_OK, ""};
-	sm_document* doc =
-	    load_model("polygon.json",
-		           "{\"springmass\": 1, \"name\": \"polygon\", \"structures\": [{\"type\": \"mesh\","
-		           " \"name\": \"p\", \"file\": \"polygon.obj\", \"edge\": {\"stiffness\": 1}}]}",
-		           &err);
+	sm_document* doc = load_mesh_of("polygon.obj", &err);
 	ENSURE(doc != NULL);
 	// N - 2 triangles: N rim edges and N - 3 diagonals from the first vertex.
 	ENSURE(sm_document_particle_count(doc) == N && sm_document_spring_count(doc) == 2 * N - 3);
@@ -622,29 +642,11 @@ int64_t __wrap_sm_text_column(const char* line, size_t bytes)
 static int test_face_after_many_blanks_reads_its_line_once(void)
 {
 	enum { N = 4002, BLANKS = 100000 };
-	size_t capacity = 64 * N + BLANKS;
-	char* obj = malloc(capacity);
-	ENSURE(obj != NULL);
-	size_t used = 0;
-	for (int k = 0; k < N; k++)
-		used += (size_t)snprintf(obj + used, capacity - used, "v %.17g %.17g 0\n", cos(2 * M_PI * k / N),
-		                         sin(2 * M_PI * k / N));
-	memset(obj + used, ' ', BLANKS);
-	used += BLANKS;
-	used += (size_t)snprintf(obj + used, capacity - used, "f");
-	for (int k = 0; k < N; k++)
-		used += (size_t)snprintf(obj + used, capacity - used, " %d", k + 1);
-	snprintf(obj + used, capacity - used, "\n");
-	const size_t length = strlen(obj);
-	ENSURE(write_file("blanks.obj", obj) == 0);
-	free(obj);
+	size_t length = 0;
+	ENSURE(write_polygon("blanks.obj", N, BLANKS, &length));
 	sm_error err = {SM_OK, ""};
 	column_bytes = 0;
-	sm_document* doc =
-	    load_model("blanks.json",
-		           "{\"springmass\": 1, \"name\": \"blanks\", \"structures\": [{\"type\": \"mesh\","
-		           " \"name\": \"p\", \"file\": \"blanks.obj\", \"edge\": {\"stiffness\": 1}}]}",
-		           &err);
+	sm_document* doc = load_mesh_of("blanks.obj", &err);
 	ENSURE(doc != NULL);
 	ENSURE(sm_document_particle_count(doc) == N && sm_document_spring_count(doc) == 2 * N - 3);
 	sm_document_destroy(doc);
