@@ -106,9 +106,20 @@ static bool warn_broken_at_start(const sm_document* doc, const sm_model* model)
 // Most pairs of springs that join the same two particles named one by one; the rest are counted.
 #define PARALLEL_SHOWN 3
 
+// Two particles, the lower index first.
+typedef struct particle_pair {
+	int32_t a, b;
+} particle_pair;
+
+static int by_particles(const void* a, const void* b)
+{
+	const particle_pair *p = a, *q = b;
+	return p->a != q->a ? (p->a > q->a) - (p->a < q->a) : (p->b > q->b) - (p->b < q->b);
+}
+
 // A spring and the particles it joins, for sorting by them.
 typedef struct joined_pair {
-	int32_t a, b;  // the particles, the lower index first
+	particle_pair ends;
 	int32_t spring;
 	int32_t structure;  // the structure that made it, or -1 for the file's "springs"
 } joined_pair;
@@ -116,11 +127,8 @@ typedef struct joined_pair {
 static int by_joined_pair(const void* a, const void* b)
 {
 	const joined_pair *p = a, *q = b;
-	if (p->a != q->a)
-		return (p->a > q->a) - (p->a < q->a);
-	if (p->b != q->b)
-		return (p->b > q->b) - (p->b < q->b);
-	return (p->spring > q->spring) - (p->spring < q->spring);
+	const int ends = by_particles(&p->ends, &q->ends);
+	return ends != 0 ? ends : (p->spring > q->spring) - (p->spring < q->spring);
 }
 
 // Notes the springs of the file's "springs" that join the same two particles as an earlier spring:
@@ -138,7 +146,7 @@ static bool note_parallel_springs(const sm_document* doc, const sm_model* model)
 	for (int32_t k = 0; k < m; k++) {
 		sm_spring_def s;
 		sm_model_get_spring(model, k, &s);
-		pairs[k] = (joined_pair){s.a < s.b ? s.a : s.b, s.a < s.b ? s.b : s.a, k, -1};
+		pairs[k] = (joined_pair){{s.a < s.b ? s.a : s.b, s.a < s.b ? s.b : s.a}, k, -1};
 	}
 	for (int32_t j = 0; j < sm_document_structure_count(doc); j++) {
 		const sm_structure r = sm_document_structure(doc, j).range;
@@ -148,7 +156,7 @@ static bool note_parallel_springs(const sm_document* doc, const sm_model* model)
 	qsort(pairs, (size_t)m, sizeof *pairs, by_joined_pair);
 	int32_t count = 0;
 	for (int32_t k = 1, first = 0; k < m; k++) {
-		if (pairs[k].a != pairs[first].a || pairs[k].b != pairs[first].b) {
+		if (by_particles(&pairs[k].ends, &pairs[first].ends) != 0) {
 			first = k;
 			continue;
 		}
@@ -157,9 +165,9 @@ static bool note_parallel_springs(const sm_document* doc, const sm_model* model)
 		if (++count > PARALLEL_SHOWN)
 			continue;
 		printf("note         springs %d and %d both join ", (int)pairs[first].spring, (int)pairs[k].spring);
-		print_particle(doc, pairs[k].a);
+		print_particle(doc, pairs[k].ends.a);
 		printf(" and ");
-		print_particle(doc, pairs[k].b);
+		print_particle(doc, pairs[k].ends.b);
 		printf(": they act in parallel, their forces add (a spring listed twice?)\n");
 	}
 	if (count > PARALLEL_SHOWN)
@@ -243,17 +251,6 @@ static int32_t piece_of(int32_t* piece, int32_t v)
 		v = piece[v];
 	}
 	return v;
-}
-
-// Two particles, the lower index first.
-typedef struct particle_pair {
-	int32_t a, b;
-} particle_pair;
-
-static int by_particles(const void* a, const void* b)
-{
-	const particle_pair *p = a, *q = b;
-	return p->a != q->a ? (p->a > q->a) - (p->a < q->a) : (p->b > q->b) - (p->b < q->b);
 }
 
 // Most pairs of coinciding mesh vertices named one by one; the rest are counted.
@@ -604,18 +601,15 @@ int sm_cmd_check(int argc, char** argv)
 	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver));
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
 	bool overflows = false;
-	if (!warn_coincident_mesh_vertices(doc, model) || !warn_broken_at_start(doc, model) ||
-	    !warn_overflow_at_start(doc, model, &overflows)) {
-		fprintf(stderr, "springmass check: out of memory\n");
-		sm_model_destroy(model);
-		sm_document_destroy(doc);
-		return 1;
-	}
+	bool memory = warn_coincident_mesh_vertices(doc, model) && warn_broken_at_start(doc, model) &&
+	              warn_overflow_at_start(doc, model, &overflows);
 	// A run that stops at t = 0 asks nothing of its tolerances (and a force over a tiny mass has
 	// a round-off beyond any).
-	if (!overflows)
+	if (memory && !overflows)
 		cli_warn_tight_tolerances(stdout, "warning      ", doc, model, &settings.solver);
-	if (!note_parallel_springs(doc, model)) {
+	// The notes after every warning.
+	memory = memory && note_parallel_springs(doc, model);
+	if (!memory) {
 		fprintf(stderr, "springmass check: out of memory\n");
 		sm_model_destroy(model);
 		sm_document_destroy(doc);
