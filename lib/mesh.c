@@ -178,10 +178,10 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 
 	const int32_t nv = def->vertex_count, nt = def->triangle_count;
 	mesh_edges table;
-	const bool room = sm_mesh_edges_init(&table, nt);
+	const bool room = sm_mesh_edges_init(&table);
 	double* mass = calloc((size_t)nv, sizeof(double));
 	if (!room || mass == NULL) {
-		st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "mesh: out of memory for %d triangles", (int)nt);
+		st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY, "mesh: out of memory for %d vertices", (int)nv);
 		goto done;
 	}
 
@@ -224,6 +224,11 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 		for (int c = 0; c < 3; c++) {
 			const int32_t a = tri[c], b = tri[(c + 1) % 3], opposite = tri[(c + 2) % 3];
 			mesh_edge* e = sm_mesh_edges_find(&table, a, b);
+			if (e == NULL) {
+				st = sm_model_fail(model, SM_ERROR_OUT_OF_MEMORY,
+				                   "mesh: out of memory for the edges of %d triangles", (int)nt);
+				break;
+			}
 			if (e->triangles >= 2) {
 				st = sm_model_fail(model, SM_ERROR_INVALID_ARGUMENT,
 				                   "mesh: edge (%d, %d) of triangle %d is shared by more than two triangles",
@@ -240,7 +245,7 @@ sm_status sm_add_mesh_located(sm_model* model, const sm_mesh_def* def, sm_struct
 			e->opposite[e->triangles++] = opposite;
 			e->area += area;
 		}
-		if (st != SM_OK)
+		if (st != SM_OK && st != SM_ERROR_OUT_OF_MEMORY)
 			*triangle = t;
 	}
 	for (int32_t v = 0; v < nv && st == SM_OK; v++) {

@@ -24,15 +24,18 @@ typedef struct mesh_edges {
 	int32_t* in_order;  // slot of each edge in order of first appearance
 	int32_t count;      // edges found
 	uint64_t key[2];    // the hash's key
-	int64_t probes;     // slots looked at by every sm_mesh_edges_find so far
+	int64_t probes;     // slots looked at by every sm_mesh_edges_find so far, growing included
 } mesh_edges;
 
-// An empty table with room for the edges of `triangles` triangles (3 each, 0 < triangles <=
-// INT32_MAX / 3). False when memory runs out; sm_mesh_edges_free frees what it holds either way.
-bool sm_mesh_edges_init(mesh_edges* edges, int32_t triangles);
+// An empty table. It grows as edges are found, so that its memory follows the edges a mesh has
+// (about 1.5 per triangle for a closed surface), not the triangles a file announces before one of
+// them is refused. False when memory runs out; sm_mesh_edges_free frees what it holds either way.
+bool sm_mesh_edges_init(mesh_edges* edges);
 
 // The edge between vertices a and b (a != b, both >= 0): found, or entered with no triangles and
-// no area if it is new (at most as many edges as sm_mesh_edges_init made room for).
+// no area if it is new (at most INT32_MAX edges). The entry stays where it is until the next call,
+// which may move the table. NULL when the table had to grow and memory ran out (the table is then
+// unchanged).
 mesh_edge* sm_mesh_edges_find(mesh_edges* edges, int32_t a, int32_t b);
 
 // The k-th edge found, in order of first appearance (0 <= k < edges->count).
