@@ -1722,7 +1722,9 @@ def test_fmu_of_a_mesh_read_from_an_obj_file_runs_without_the_file(tmp_path):
 
 
 @pytest.mark.parametrize("command, option", [("run", "-o"), ("statics", "-o"), ("statics", "--save-model"),
-                                             ("modes", "-o"), ("fmu", "-o")])
+                                             ("modes", "-o"),
+                                             pytest.param("fmu", "-o", marks=pytest.mark.skipif(
+                                                 not HAS_FMU, reason="a build without the FMU runtime"))])
 def test_no_output_overwrites_the_obj_file_a_mesh_reads(command, option, tmp_path):
     # An OBJ file the model's meshes read is an input like the model file: an output named as it
     # (here under another name for it, from another folder) is a usage error, and the file is kept.
