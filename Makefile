@@ -4,6 +4,7 @@ BUILD_DIR     ?= build
 SANITIZE_DIR  ?= build-sanitize
 TSAN_DIR      ?= build-tsan
 CLANG_DIR     ?= build-clang
+LTO_DIR       ?= build-lto
 BUILD_TYPE    ?= Release
 CMAKE         ?= /usr/bin/cmake
 CTEST         ?= /usr/bin/ctest
@@ -14,7 +15,7 @@ CMAKE_FLAGS   ?=
 FUZZ_SECONDS  ?= 60
 FUZZ_TARGETS  ?=
 
-.PHONY: all setup build demo test sanitize-build test-sanitize test-thread-sanitize test-clang bench-forces bench-cloth fuzz install clean
+.PHONY: all setup build demo test sanitize-build test-sanitize test-thread-sanitize test-clang test-lto bench-forces bench-cloth fuzz install clean
 
 all: build
 
@@ -81,6 +82,19 @@ test-clang: setup
 	$(CMAKE) --build $(CLANG_DIR) -j $(JOBS) --target test_forces test_jacobian test_vector_ops
 	$(CTEST) --test-dir $(CLANG_DIR) --output-on-failure -j $(JOBS) -R '^(forces|jacobian|vector_ops)$$'
 
+# The library, the tool, the tests and the examples with link-time optimisation, as distributions
+# build C libraries (-flto=auto -ffat-lto-objects), and without the FMU runtime (the library and
+# the tool alone, as the README builds them for embedding): every link with -Wall -Wextra -Werror,
+# where GCC reports the warnings of code it inlines across files, then the whole suite.
+$(LTO_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
+	$(CMAKE) -S . -B $(LTO_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DSPRINGMASS_BUILD_FMU=OFF \
+	    "-DCMAKE_C_FLAGS=-flto=auto -ffat-lto-objects" "-DCMAKE_EXE_LINKER_FLAGS=-Wall -Wextra -Werror" \
+	    -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+
+test-lto: setup $(LTO_DIR)/build.ninja
+	$(CMAKE) --build $(LTO_DIR) -j $(JOBS)
+	$(CTEST) --test-dir $(LTO_DIR) --output-on-failure -j $(JOBS)
+
 bench-forces: build
 	bench/bench_forces.sh $(BUILD_DIR)
 
@@ -96,4 +110,4 @@ install: build
 	$(CMAKE) --install $(BUILD_DIR) --prefix $(PREFIX)
 
 clean:
-	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(TSAN_DIR) $(CLANG_DIR)
+	rm -rf $(BUILD_DIR) $(SANITIZE_DIR) $(TSAN_DIR) $(CLANG_DIR) $(LTO_DIR)
