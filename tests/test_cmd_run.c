@@ -155,8 +155,9 @@ static int check_summary(const char* path, double t_end, double interval)
 	int progress = 0;
 	while (fgets(line, sizeof line, log) != NULL && strncmp(line, "springmass run: t = ", 20) == 0)
 		progress++;
-	char start[512];
-	snprintf(start, sizeof start, "springmass run: %s to t = %g s with ", sm_document_name(doc), t_end);
+	char start[512], end_time[SM_NUMBER_TEXT_CAPACITY];
+	sm_format_number(t_end, end_time);  // as the CSV's last row gives it
+	snprintf(start, sizeof start, "springmass run: %s to t = %s s with ", sm_document_name(doc), end_time);
 	if (strncmp(line, start, strlen(start)) != 0)
 		printf("  summary '%s', expected to start with '%s'\n", line, start);
 	ENSURE(strncmp(line, start, strlen(start)) == 0);

@@ -667,7 +667,9 @@ int sm_cmd_run(int argc, char** argv)
 	cli_progress_start(&prog.line);
 	const double start = prog.line.start;
 	cli_catch_stop_signals(true);
-	double last_row = 0.0;
+	// The time of the last row written, as its row gives it, for the messages of a run that ends
+	// early: the reader finds that row by it.
+	char last_row_text[SM_NUMBER_TEXT_CAPACITY] = "0";
 	for (long k = 0; k <= rows; k++) {
 		const double t = k == rows ? t_end : (double)k * interval;
 		// Between changes of the inputs' course CVODE may step as in one advance up to the next
@@ -689,12 +691,12 @@ int sm_cmd_run(int argc, char** argv)
 			}
 			// The library's message is written for a caller that may go on (after its step limit,
 			// from the state reached); the run ends here, with the rows written so far.
-			fprintf(stderr, "springmass run: stopped; the outputs hold the rows up to t = %.9g s\n",
-			        last_row);
+			fprintf(stderr, "springmass run: stopped; the outputs hold the rows up to t = %s s\n",
+			        last_row_text);
 			goto done;
 		}
 		write_row(csv, doc, sim, forces, work_origin, o.positions);
-		last_row = t;
+		sm_format_number(t, last_row_text);
 		// A full disk or a closed pipe stops the run at once, not after the last step.
 		if (ferror(csv) && errno == EPIPE)
 			cli_stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
@@ -727,8 +729,8 @@ int sm_cmd_run(int argc, char** argv)
 	cli_progress_end(&prog.line);
 	if (cli_stop_signal != 0) {
 		if (cli_stop_signal != SIGPIPE)
-			fprintf(stderr, "springmass run: stopped by %s; the outputs hold the rows up to t = %.9g s\n",
-			        strsignal(cli_stop_signal), last_row);
+			fprintf(stderr, "springmass run: stopped by %s; the outputs hold the rows up to t = %s s\n",
+			        strsignal(cli_stop_signal), last_row_text);
 		goto done;
 	}
 	if (fflush(csv) != 0 || ferror(csv)) {
@@ -747,12 +749,14 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	if (!o.quiet) {
 		const sm_statistics s = sm_simulation_statistics(sim);
+		char end[SM_NUMBER_TEXT_CAPACITY];  // as the last row gives it
+		sm_format_number(t_end, end);
 		fprintf(
 		    stderr,
-		    "springmass run: %s to t = %g s with %s%s: %lld steps, %lld right-hand sides, %lld "
+		    "springmass run: %s to t = %s s with %s%s: %lld steps, %lld right-hand sides, %lld "
 		    "Jacobians, %lld linear iterations, %lld error-test and %lld convergence failures, %lld "
 		    "restarts, %d spring%s broke; wall %.3f s (forces %.3f, Jacobians %.3f, linear solves %.3f)\n",
-		    name, t_end,
+		    name, end,
 		    def.method == SM_METHOD_ADAMS ? "Adams (fixed point, no linear solver)" : "BDF, solver ",
 		    def.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(sm_simulation_solver(sim)),
 		    (long long)s.steps, (long long)s.rhs_evaluations, (long long)s.jacobian_evaluations,

@@ -147,6 +147,26 @@ def test_rows_run_from_zero_to_exactly_the_end_time(tmp_path):
     assert list(rows[:, 0]) == [0.0, 0.3, 0.6, 0.8999999999999999, 1.0]
 
 
+def test_run_messages_give_the_times_of_rows_as_the_csv_writes_them(tmp_path):
+    # The summary names the end time, which is the last row's, with all of its eight digits.
+    path = tmp_path / "end.csv"
+    summary = cli("run", MODELS / "oscillator.json", "--t-end", "1.2345678", "-o", path).stderr
+    assert re.search(r"^springmass run: oscillator to t = 1\.2345678 s with ", summary, re.M), summary
+    with open(path, newline="") as f:
+        assert list(csv.reader(f))[-1][0] == "1.2345678"
+    # A force beyond what the solver can follow from 0.35 s on stops the run after the row at
+    # 3 x 0.1 = 0.30000000000000004 s (in doubles); the message names that row as the CSV does.
+    signals = tmp_path / "blow.csv"
+    signals.write_text("time,tip.fx\n0,0\n0.35,0\n0.35,1e308\n")
+    path = tmp_path / "stopped.csv"
+    out = cli("run", MODELS / "oscillator.json", "-q", "--input", signals, "--output-interval", 0.1,
+              "--t-end", 1, "-o", path, status=1)
+    with open(path, newline="") as f:
+        last = list(csv.reader(f))[-1][0]
+    assert last == "0.30000000000000004"
+    assert out.stderr.splitlines()[-1] == f"springmass run: stopped; the outputs hold the rows up to t = {last} s"
+
+
 def test_default_output_is_the_model_name_with_the_files_settings(tmp_path):
     cli("run", MODELS / "oscillator.json", "-q", cwd=tmp_path)
     _, rows = read_csv(tmp_path / "oscillator.csv")
