@@ -22,6 +22,7 @@ struct cli_inputs {
 	int32_t port_count;
 	cli_csv csv;
 	int32_t* column;  // per port and input (INPUTS_PER_PORT each): its column in the file, or -1
+	int64_t* turn;    // per row k: the first row at or after it where the inputs' course changes
 	char why[256];    // a refused column's reason, while reading
 };
 
@@ -76,6 +77,47 @@ static char* message(const char* format, ...)
 	return strdup(text);
 }
 
+// Whether the inputs go on through row k as they came to it: every signal at the same slope on
+// both sides (held before the first row and after the last: slope 0 there), no jump (a repeated
+// time), and no particle component given both a position and a velocity (the positions given
+// would set it back at every row from where the velocities have taken it). CVODE then need not
+// stop at the row: a table sampled finely where its signals are constant or linear costs no
+// more steps than its changes do.
+static bool course_kept(const cli_inputs* in, int64_t k)
+{
+	const int64_t n = in->csv.columns, rows = in->csv.rows;
+	const double* v = in->csv.values;
+	if ((k > 0 && !(v[k * n] > v[(k - 1) * n])) || (k + 1 < rows && !(v[(k + 1) * n] > v[k * n])))
+		return false;
+	for (int64_t c = 1; c < n; c++) {
+		const double before = k > 0 ? (v[k * n + c] - v[(k - 1) * n + c]) / (v[k * n] - v[(k - 1) * n]) : 0.0;
+		const double after =
+		    k + 1 < rows ? (v[(k + 1) * n + c] - v[k * n + c]) / (v[(k + 1) * n] - v[k * n]) : 0.0;
+		if (before != after)
+			return false;
+	}
+	return true;
+}
+
+// The rows where the inputs' course changes (course_kept), each row's next one at or after it
+// (rows when none is left). False when memory runs out.
+static bool find_turns(cli_inputs* in)
+{
+	const int64_t rows = in->csv.rows;
+	in->turn = malloc(((size_t)rows + 1) * sizeof *in->turn);
+	if (in->turn == NULL)
+		return false;
+	bool both = false;  // a component given as a position and as a velocity
+	for (int32_t p = 0; p < in->port_count; p++)
+		for (int c = 0; c < 3; c++)
+			both = both ||
+			       (in->column[INPUTS_PER_PORT * p + c] >= 0 && in->column[INPUTS_PER_PORT * p + 3 + c] >= 0);
+	in->turn[rows] = rows;
+	for (int64_t k = rows - 1; k >= 0; k--)
+		in->turn[k] = !both && course_kept(in, k) ? in->turn[k + 1] : k;
+	return true;
+}
+
 cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document* doc, char** problem)
 {
 	*problem = NULL;
@@ -116,6 +158,10 @@ cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document*
 				cli_inputs_destroy(in);
 				return NULL;
 			}
+	if (!find_turns(in)) {
+		cli_inputs_destroy(in);
+		return NULL;
+	}
 	return in;
 }
 
@@ -214,10 +260,10 @@ static int64_t row_at(const cli_inputs* in, double t)
 	return lo - 1;
 }
 
-// The time of the first row after t [s], or INFINITY: the inputs change their course there.
+// The time of the first row after t [s] where the inputs change their course, or INFINITY.
 static double next_change(const cli_inputs* in, double t)
 {
-	const int64_t k = row_at(in, t) + 1;
+	const int64_t k = in->turn[row_at(in, t) + 1];
 	return k < in->csv.rows ? in->csv.values[k * in->csv.columns] : INFINITY;
 }
 
@@ -306,5 +352,6 @@ void cli_inputs_destroy(cli_inputs* in)
 		return;
 	cli_csv_free(&in->csv);
 	free(in->column);
+	free(in->turn);
 	free(in);
 }

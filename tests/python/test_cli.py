@@ -583,6 +583,36 @@ def test_run_takes_input_signals_as_closed_forms(tmp_path):
     assert np.max(np.abs(f - OSC_K * u)) < OSC_K * 1e-6
 
 
+def test_run_takes_rows_that_keep_the_inputs_course_as_no_change(tmp_path):
+    # A force 3 t up to 1 s, then held at 3 N: by superposition the ramp's response of
+    # test_run_takes_input_signals_as_closed_forms less that of a ramp starting at 1 s. Given by
+    # three rows or sampled every 1/64 s (binary fractions: every slope exactly 3 or 0), it is the
+    # same signal, and the rows within its straight stretches change nothing: the same file to the
+    # bit (each row used to end a step, the results then different within the tolerances). The
+    # row at 1 s, where the slope changes, is still where the run takes the new course: carried on
+    # at 3 N/s the force would leave the bob 3 / K (t - 1) off, up to 0.06 m at 2 s. Tolerance as in
+    # that test.
+    w, r = math.sqrt(OSC_K / OSC_M), 3.0
+    (tmp_path / "coarse.csv").write_text("time,tip.fx\n0,0\n1,3\n2,3\n")
+    fine = [f"{k / 64!r},{min(3 * k / 64, 3.0)!r}" for k in range(129)]
+    (tmp_path / "fine.csv").write_text("time,tip.fx\n" + "\n".join(fine) + "\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "coarse.csv", *TIGHT_RUN, name="coarse_run.csv")
+    run_csv(tmp_path, OSC, "--input", tmp_path / "fine.csv", *TIGHT_RUN, name="fine_run.csv")
+    assert (tmp_path / "fine_run.csv").read_bytes() == (tmp_path / "coarse_run.csv").read_bytes()
+    t, x = rows[:, 0], rows[:, header.index("tip.x")]
+    s = np.maximum(t - 1.0, 0.0)
+    u = (OSC_X0 - OSC_L0) * np.cos(w * t) + r / OSC_K * (t - np.sin(w * t) / w - (s - np.sin(w * s) / w))
+    assert len(t) == 21 and np.max(np.abs(x - (OSC_L0 + u))) < 1e-6
+    # The anchor given a constant position and a constant velocity, 0 m and 1 m/s: every row sets it
+    # back to 0 m (--help: "with the velocities given ... from the positions given"), so the rows
+    # count though no signal's slope changes. Rows every 0.25 s, outputs every 0.1 s: at 0.5 s
+    # (a row) the anchor is back at 0; at 0.7 s it has moved 0.2 m from there.
+    (tmp_path / "both.csv").write_text("time,base.x,base.vx\n" + "".join(f"{k / 4},0,1\n" for k in range(9)))
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "both.csv", "--positions", *TIGHT_RUN)
+    anchor = dict(zip(np.round(rows[:, 0], 9), rows[:, header.index("particle.anchor.x")]))
+    assert anchor[0.5] == 0.0 and anchor[0.7] == pytest.approx(0.2, abs=1e-12)
+
+
 def test_run_shows_the_state_after_a_jump_at_its_output_row(tmp_path):
     # The anchor jumps from 0 to 0.1 m at t = 0.5 s, an output time: that row's base.fx is the
     # spring's K (tip.x - 0.1 - l0), after the jump, as --help says (fmpy records the one before: README).
