@@ -2,7 +2,9 @@
 // rest lengths and masses, the exact match with the benchmark cloth, the shear resistance of a
 // block (only rigid-body modes have zero stiffness), edges of a mesh counted once, roll-back
 // on error, and the selection helpers.
+#include "keyed_hash.h"
 #include "mesh_edges.h"
+#include "name_index.h"
 #include "springmass/analysis.h"
 #include "springmass/structures.h"
 #include "test_harness.h"
@@ -2768,6 +2770,51 @@ static int test_mesh_edges_scatter_crafted_vertex_pairs(void)
 	return 0;
 }
 
+// The tables of edges and names are safe from hostile files only if their hash is keyed: SipHash-1-3
+// under a key drawn for each table. The values are those of an independent implementation, CPython
+// 3.11's hash of bytes (SipHash-1-3: with PYTHONHASHSEED=0 its key is zero, with PYTHONHASHSEED=1
+// the 16 bytes its generator x = 214013 x + 2531011 gives from 1, bits 16 - 23 of each x); a word is
+// hashed as its 8 bytes, least significant first. Two tables of edges, and two indices of names at
+// their first insertion, draw different keys (equal by chance with probability 2^-128).
+static const char* name_of_one(const void* owner, int32_t value)
+{
+	(void)value;
+	return owner;
+}
+
+static int test_keyed_hash_is_siphash13_with_a_key_per_table(void)
+{
+	static const uint64_t keys[2][2] = {{0, 0}, {0xaed66ce184be2329ULL, 0xebe9bbf1f1499052ULL}};
+	static const char* const texts[3] = {"a", "springmass", "0123456789abcdef!"};
+	static const uint64_t expected[2][4] = {
+	    {0x407448d2b89b1813ULL, 0x8b0984578221cea2ULL, 0x9463628f6c8882caULL, 0x20c31e26955eb0deULL},
+	    {0xd6300bc9f7cc0e73ULL, 0xac31d4d6be7954e3ULL, 0xaea3197cc62acfe7ULL, 0x9411e4fa9573eeaaULL}};
+	const unsigned char word[8] = {7, 0, 0, 0, 5, 0, 0, 0};
+	for (int k = 0; k < 2; k++) {
+		for (int i = 0; i < 3; i++)
+			ENSURE(sm_keyed_hash_bytes(keys[k], (const unsigned char*)texts[i], strlen(texts[i])) ==
+			       expected[k][i]);
+		ENSURE(sm_keyed_hash_bytes(keys[k], word, 8) == expected[k][3]);
+		ENSURE(sm_keyed_hash_word(keys[k], 0x0000000500000007ULL) == expected[k][3]);
+	}
+	mesh_edges first, second;
+	ENSURE(sm_mesh_edges_init(&first) && sm_mesh_edges_init(&second));
+	ENSURE(first.key[0] != second.key[0] || first.key[1] != second.key[1]);
+	sm_mesh_edges_free(&first);
+	sm_mesh_edges_free(&second);
+	name_index names[2];
+	for (int k = 0; k < 2; k++) {
+		sm_name_index_init(&names[k], name_of_one, "bob");
+		int32_t holder;
+		ENSURE(sm_name_index_insert(&names[k], "bob", 3, 0, &holder) && holder == -1);
+		ENSURE(sm_name_index_find(&names[k], "bob", 3) == 0);
+	}
+	ENSURE(names[0].key[0] != names[1].key[0] || names[0].key[1] != names[1].key[1]);
+	sm_name_index_free(&names[0]);
+	sm_name_index_free(&names[1]);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2791,6 +2838,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_box_selection_closed);
 	RUN_TEST(test_mesh_edge_order);
 	RUN_TEST(test_mesh_edges_scatter_crafted_vertex_pairs);
+	RUN_TEST(test_keyed_hash_is_siphash13_with_a_key_per_table);
 	RUN_TEST(test_zero_size_and_break_strain);
 	RUN_TEST(test_per_section_sheet_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
