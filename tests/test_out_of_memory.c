@@ -28,6 +28,7 @@
 #include <sundials/sundials_matrix.h>
 #include <sundials/sundials_nvector.h>
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -387,6 +388,14 @@ static int test_model_file(void)
 // edges, more than the edge table's first 16 slots hold at most half full, so it grows): loading
 // it (the model file, the OBJ file, the document's copy of its mesh), building it and writing its
 // self-contained text, which loads again without the file.
+// Memory running out while a mesh's edges are entered is no fault of the face being read: the
+// message names no line and column of the OBJ file.
+static bool blames_an_obj_line(sm_status status, const char* message)
+{
+	const char* place = strstr(message, ".obj:");
+	return status == SM_ERROR_OUT_OF_MEMORY && place != NULL && isdigit((unsigned char)place[5]);
+}
+
 static int obj_scenario(void* context)
 {
 	const char* path = context;
@@ -394,12 +403,15 @@ static int obj_scenario(void* context)
 	sm_document* doc = sm_document_load(path, &err);
 	if (!doc) {
 		ENSURE_CLEAR_FAILURE(err.status, err.message);
+		ENSURE(!blames_an_obj_line(err.status, err.message));
 		return 0;
 	}
 	sm_model* model = NULL;
 	sm_status st = sm_document_build(doc, &model, &err);
-	if (st != SM_OK)
+	if (st != SM_OK) {
 		ENSURE_CLEAR_FAILURE(st, err.message);
+		ENSURE(!blames_an_obj_line(st, err.message));
+	}
 	char* text = sm_document_to_self_contained_json(doc, &err);
 	if (!text)
 		ENSURE_CLEAR_FAILURE(err.status, err.message);
