@@ -1505,12 +1505,12 @@ def test_check_notes_springs_of_the_file_on_a_pair_another_spring_joins(tmp_path
     assert notes == ["note         springs 6 and 7 both join b1 (particle 0) and b2 (particle 1)" + parallel,
                      "note         springs 6 and 9 both join b1 (particle 0) and b2 (particle 1)" + parallel,
                      "note         springs 2 and 5 both join r[1] (particle 3) and r[2] (particle 4)" + parallel]
-    # Beyond three, the rest are counted.
+    # Beyond three, the rest are counted, in the singular for one.
     text = json.loads(model.read_text())
-    text["springs"] += [dict(spring, a="b1", b="b2")] * 2
-    model.write_text(json.dumps(text))
-    notes = [line for line in cli("check", model).stdout.splitlines() if line.startswith("note")]
-    assert notes[3:] == ["note         and 2 more springs join the same particles as an earlier one"]
+    for more, counted in ((1, "and 1 more spring joins"), (2, "and 2 more springs join")):
+        model.write_text(json.dumps(dict(text, springs=text["springs"] + [dict(spring, a="b1", b="b2")] * more)))
+        notes = [line for line in cli("check", model).stdout.splitlines() if line.startswith("note")]
+        assert notes[3:] == [f"note         {counted} the same particles as an earlier one"]
     assert not [line for line in cli("check", MODELS / "flag.json").stdout.splitlines() if line.startswith("note")]
 
 
