@@ -2386,9 +2386,10 @@ static int test_mesh_collinear_triangle_refused(void)
 		ENSURE(strstr(sm_model_last_error(m), "(to rounding: twice its area is at most 1e-12 times") != NULL);
 		ENSURE(sm_model_particle_count(m) == 1 && sm_model_spring_count(m) == 0);
 	}
-	// Thin triangles: a smallest angle of 1e-11 rad (its sine 1e-11) is a triangle, one of 1e-13
-	// rad is not (here with the angle at the last vertex listed).
-	const double thin[] = {0, 0, 0, 1, 0, 0, 1, 1e-11, 0, 1, 1e-13, 0};
+	// Thin triangles, a factor 2 either side of the rule's 1e-12: a smallest angle of 2e-12 rad (its
+	// sine 2e-12) is a triangle, one of 5e-13 rad is not (here with the angle at the last vertex
+	// listed).
+	const double thin[] = {0, 0, 0, 1, 0, 0, 1, 2e-12, 0, 1, 5e-13, 0};
 	const int32_t kept[3] = {0, 1, 2}, flat[3] = {1, 3, 0};
 	sm_mesh_def def = sm_default_mesh_def();
 	def.vertices = thin;
