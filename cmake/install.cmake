@@ -64,7 +64,21 @@ else()
 endif()
 set(SPRINGMASS_PC_LIBS "-lsundials_cvode -lsundials_nvecserial -lsundials_sunmatrixdense")
 string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunmatrixsparse -lsundials_sunlinsoldense -lsundials_sunlinsolklu")
-string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg -lklu -lcholmod -ldl -lm")
+string(APPEND SPRINGMASS_PC_LIBS " -lsundials_sunlinsolpcg")
+# SUNDIALS 7 has the parts its libraries share in a library of their own.
+if(SPRINGMASS_SUNDIALS_MAJOR GREATER_EQUAL 7)
+  string(APPEND SPRINGMASS_PC_LIBS " -lsundials_core")
+endif()
+# A SUNDIALS outside the linker's own folders (SUNDIALS_DIR, CMAKE_PREFIX_PATH) is named with its
+# folder, for the linker and for the loader.
+get_target_property(_pc_sundials_configs SUNDIALS::cvode_shared IMPORTED_CONFIGURATIONS)
+list(GET _pc_sundials_configs 0 _pc_sundials_config)
+get_target_property(_pc_sundials_dir SUNDIALS::cvode_shared IMPORTED_LOCATION_${_pc_sundials_config})
+get_filename_component(_pc_sundials_dir "${_pc_sundials_dir}" DIRECTORY)
+if(_pc_sundials_dir AND NOT _pc_sundials_dir IN_LIST CMAKE_C_IMPLICIT_LINK_DIRECTORIES)
+  string(APPEND SPRINGMASS_PC_LIBS " -L${_pc_sundials_dir} -Wl,-rpath,${_pc_sundials_dir}")
+endif()
+string(APPEND SPRINGMASS_PC_LIBS " -lklu -lcholmod -ldl -lm")
 # The library of this build: libspringmassd in a Debug build (DEBUG_POSTFIX, lib/CMakeLists.txt),
 # whatever the case of its name ("debug" too), and for each configuration of a multi-config
 # generator: the name comes from the target itself, when the file is generated.

@@ -2,10 +2,13 @@
 # shared sunmatrixdense, sunlinsolklu_static the shared sunmatrixsparse. Where the linker keeps
 # every library it is given (no --as-needed: the sanitizer builds, other compilers or systems),
 # the tool, the FMU and every program linking the installed library would then need those shared
-# libraries beside the static copies they carry. The static targets link their static twins
-# instead. Included after find_package(SUNDIALS) by this project's CMakeLists.txt and by the
-# installed package configuration (springmassConfig.cmake), whose callers link these targets too.
-foreach(_springmass_target IN ITEMS sunlinsoldense_static sunlinsolklu_static)
+# libraries beside the static copies they carry. SUNDIALS 7 has every static target link the
+# shared core library (sundials_core), the only core they name: every such program would need it.
+# The static targets link their static twins instead. Included after find_package(SUNDIALS) by
+# this project's CMakeLists.txt and by the installed package configuration
+# (springmassConfig.cmake), whose callers link these targets too.
+foreach(_springmass_target IN ITEMS cvode_static nvecserial_static sunmatrixdense_static sunmatrixsparse_static
+                                   sunlinsoldense_static sunlinsolklu_static sunlinsolpcg_static)
   if(TARGET SUNDIALS::${_springmass_target})
     get_target_property(_springmass_links SUNDIALS::${_springmass_target} INTERFACE_LINK_LIBRARIES)
     if(_springmass_links)

@@ -123,7 +123,7 @@ static SUNLinearSolver_Type reduced_type(SUNLinearSolver ls)
 static int reduced_set_atimes(SUNLinearSolver ls, void* data, SUNATimesFn atimes)
 {
 	(void)ls, (void)data, (void)atimes;  // products are formed from the reduced matrix
-	return SUNLS_SUCCESS;
+	return SM_LS_SUCCESS;
 }
 
 static int reduced_set_preconditioner(SUNLinearSolver ls, void* data, SUNPSetupFn setup, SUNPSolveFn solve)
@@ -132,7 +132,7 @@ static int reduced_set_preconditioner(SUNLinearSolver ls, void* data, SUNPSetupF
 	sm_reduced* r = ls->content;
 	r->psetup = setup;
 	r->psetup_data = data;
-	return SUNLS_SUCCESS;
+	return SM_LS_SUCCESS;
 }
 
 static int reduced_num_iterations(SUNLinearSolver ls)
@@ -148,15 +148,15 @@ static SUNLinearSolver_ID reduced_id(SUNLinearSolver ls)
 
 static int reduced_initialize(SUNLinearSolver ls)
 {
-	((sm_reduced*)ls->content)->last_flag = SUNLS_SUCCESS;
-	return SUNLS_SUCCESS;
+	((sm_reduced*)ls->content)->last_flag = SM_LS_SUCCESS;
+	return SM_LS_SUCCESS;
 }
 
 static int reduced_set_scaling(SUNLinearSolver ls, N_Vector s1, N_Vector s2)
 {
 	(void)s2;
 	((sm_reduced*)ls->content)->weights = s1;
-	return SUNLS_SUCCESS;
+	return SM_LS_SUCCESS;
 }
 
 static sunindextype reduced_last_flag(SUNLinearSolver ls)
@@ -169,9 +169,9 @@ static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
 	(void)unused;
 	sm_reduced* r = ls->content;
 	if (r->psetup == NULL)
-		return r->last_flag = SUNLS_SUCCESS;
+		return r->last_flag = SM_LS_SUCCESS;
 	int flag = r->psetup(r->psetup_data);
-	r->last_flag = flag == 0 ? SUNLS_SUCCESS : flag > 0 ? SUNLS_PSET_FAIL_REC : SUNLS_PSET_FAIL_UNREC;
+	r->last_flag = flag == 0 ? SM_LS_SUCCESS : flag > 0 ? SUNLS_PSET_FAIL_REC : SUNLS_PSET_FAIL_UNREC;
 	return (int)r->last_flag;
 }
 
@@ -278,18 +278,18 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	double* x = N_VGetArrayPointer(xv);
 	double gamma;
 	if (CVodeGetCurrentGamma(sim->cvode, &gamma) != CV_SUCCESS)
-		return r->last_flag = SUNLS_MEM_FAIL;
+		return r->last_flag = SM_LS_MEM_FAIL;
 	for (int c = 0; c < SM_ENERGY_COMPONENTS; c++)
 		x[2 * n + c] = b[2 * n + c];  // the energies' rows: de = be, dw = bw
 	if (n == 0)
-		return r->last_flag = SUNLS_SUCCESS;
+		return r->last_flag = SM_LS_SUCCESS;
 	// A new step (or a new attempt at one) since the Jacobian was evaluated: evaluate it at the
 	// current iterate, the predicted state at the first Newton iteration.
 	double t_current;
 	N_Vector y_current;
 	if (CVodeGetCurrentTime(sim->cvode, &t_current) != CV_SUCCESS ||
 	    CVodeGetCurrentState(sim->cvode, &y_current) != CV_SUCCESS)
-		return r->last_flag = SUNLS_MEM_FAIL;
+		return r->last_flag = SM_LS_MEM_FAIL;
 	if (!(t_current == r->jacobian_time))
 		current_jacobian(r, t_current, N_VGetArrayPointer(y_current));
 	// The cholmod solver's factorisation assembles the matrices inside the solve, timed as
@@ -328,11 +328,11 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (r->use_cholmod)
 		flag = sm_reduced_cholesky_solve(r, r->dv, tol);
 	else if (prepared < 0)
-		flag = SUNLS_MEM_FAIL;
+		flag = SM_LS_MEM_FAIL;
 	else
 		flag = r->blocks_valid ? sm_reduced_conjugate_gradients(r, r->dv, tol, PCG_MAX_ITERATIONS)
 		                       : SUNLS_PACKAGE_FAIL_REC;
-	if (flag == SUNLS_SUCCESS || flag == SUNLS_RES_REDUCED)
+	if (flag == SM_LS_SUCCESS || flag == SUNLS_RES_REDUCED)
 		for (int32_t k = 0; k < sim->free_count; k++) {
 			const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 			for (int c = 0; c < 3; c++) {

@@ -136,10 +136,10 @@ int sm_reduced_cholesky_solve(sm_reduced* r, double* dv, double tol)
 	int flag = SUNLS_CONV_FAIL;
 	if (r->factor_valid && !r->refactor)
 		flag = sm_reduced_conjugate_gradients(r, dv, tol, CHOLESKY_MAX_ITERATIONS);
-	if (r->refactor || (flag != SUNLS_SUCCESS && flag != SUNLS_MEM_FAIL)) {
+	if (r->refactor || (flag != SM_LS_SUCCESS && flag != SM_LS_MEM_FAIL)) {
 		const int f = factorize(r);
 		if (f != 0)
-			return f > 0 ? SUNLS_PACKAGE_FAIL_REC : SUNLS_MEM_FAIL;
+			return f > 0 ? SUNLS_PACKAGE_FAIL_REC : SM_LS_MEM_FAIL;
 		flag = sm_reduced_conjugate_gradients(r, dv, tol, CHOLESKY_MAX_ITERATIONS);
 	}
 	if (r->last_iterations > 1)

@@ -108,9 +108,9 @@ static bool apply_preconditioner(sm_reduced* r, const double* in, double* out, d
 
 // Preconditioned conjugate gradients on A dv = rhs (r->rhs) from dv = 0, at most max_iterations,
 // over all particles (the constrained entries stay zero), flexible with the multilevel coarse
-// solve. Returns SUNLS_SUCCESS once the stopping test's norm (above) is at most tol, else
+// solve. Returns SM_LS_SUCCESS once the stopping test's norm (above) is at most tol, else
 // SUNLS_RES_REDUCED or SUNLS_CONV_FAIL after max_iterations, SUNLS_PACKAGE_FAIL_REC if A p . p is
-// not positive (A not positive definite: a state far from any physical one), SUNLS_MEM_FAIL if the
+// not positive (A not positive definite: a state far from any physical one), SM_LS_MEM_FAIL if the
 // preconditioner fails.
 int sm_reduced_conjugate_gradients(sm_reduced* r, double* dv, double tol, int max_iterations)
 {
@@ -123,12 +123,12 @@ int sm_reduced_conjugate_gradients(sm_reduced* r, double* dv, double tol, int ma
 	const double initial = sqrt(squares);
 	double norm = initial;
 	if (norm <= tol && sqrt(squares + position_squares(r, res, true)) <= tol)
-		return SUNLS_SUCCESS;
+		return SM_LS_SUCCESS;
 	double rz;
 	if (!apply_preconditioner(r, res, z, &rz))
-		return SUNLS_MEM_FAIL;
+		return SM_LS_MEM_FAIL;
 	if (norm <= tol && sqrt(squares + position_squares(r, z, false)) <= tol)
-		return SUNLS_SUCCESS;
+		return SM_LS_SUCCESS;
 	memcpy(p, z, (size_t)n * sizeof(double));
 	for (int iteration = 1; iteration <= max_iterations; iteration++) {
 		const double pq = sm_reduced_multiply(r, p, q);
@@ -142,12 +142,12 @@ int sm_reduced_conjugate_gradients(sm_reduced* r, double* dv, double tol, int ma
 		const double velocity_squares = sm_reduced_sum_partials(r);
 		norm = sqrt(velocity_squares);
 		if (norm <= tol && sqrt(velocity_squares + position_squares(r, res, true)) <= tol)
-			return SUNLS_SUCCESS;
+			return SM_LS_SUCCESS;
 		double rz_next;
 		if (!apply_preconditioner(r, res, z, &rz_next))
-			return SUNLS_MEM_FAIL;
+			return SM_LS_MEM_FAIL;
 		if (norm <= tol && sqrt(velocity_squares + position_squares(r, z, false)) <= tol)
-			return SUNLS_SUCCESS;
+			return SM_LS_SUCCESS;
 		// Flexible (Polak-Ribiere) when the preconditioner is not linear: beta = z' (r' - r) / (z r)
 		// with r' - r = -alpha q.
 		job.step = r->multilevel != NULL ? -alpha * sm_reduced_dot(r, z, q) / rz : rz_next / rz;

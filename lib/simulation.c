@@ -488,7 +488,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 				         "out of memory evaluating the Jacobian");
 			// The reduced solver says why its solve failed in its last flag.
 			if (flag == CV_LSOLVE_FAIL && sm_simulation_has_reduced_solver(sim) &&
-			    SUNLinSolLastFlag(sim->linear_solver) == SUNLS_MEM_FAIL)
+			    SUNLinSolLastFlag(sim->linear_solver) == SM_LS_MEM_FAIL)
 				snprintf(sim->solver_message, sizeof sim->solver_message,
 				         "out of memory in the linear solve");
 			char now[SM_NUMBER_TEXT_CAPACITY], end[SM_NUMBER_TEXT_CAPACITY];

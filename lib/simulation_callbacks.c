@@ -229,8 +229,9 @@ int sm_simulation_jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMa
 // CVODE's messages give times on its own axis, which starts at 0 at its last (re)initialisation
 // (set_state, a break, a changed input, a failure): a failure right after a restart at 0.5 s
 // said "At t = 0". Each time named so ("t = ", and "tout", "tstop", "tcur", "tcur - hu", "t0") is
-// rewritten on the simulation's axis, origin + t, in as many digits as CVODE gave (6) beyond
-// those the origin adds: at a restart at 0.3 s, "t = 0.0214454" reads "t = 0.3214454".
+// rewritten on the simulation's axis, origin + t, in as many digits as CVODE gave (6 with SUNDIALS
+// 6, 15 with 7) beyond those the origin adds: at a restart at 0.3 s, "t = 0.0214454" reads
+// "t = 0.3214454".
 static const char* const cvode_time_names[] = {
     "t = ", "tout = ", "tstop = ", "tcur - hu = ", "tcur = ", "t0 = "};
 
@@ -263,9 +264,10 @@ static void on_simulation_axis(const char* msg, double origin, char* out, size_t
 		if (t == 0.0 || time == 0.0 || !isfinite(time)) {
 			sm_format_number(time, text);
 		} else {
+			// CVODE's digits and those the origin adds, up to the 17 that tell any two doubles apart.
 			const int extra = (int)floor(log10(fabs(time))) - (int)floor(log10(fabs(t)));
-			sm_format_c_locale(text, sizeof text, "%.*g", 6 + (extra > 0 ? (extra < 11 ? extra : 11) : 0),
-			                   time);
+			const int digits = SM_CVODE_MESSAGE_DIGITS + (extra > 0 ? extra : 0);
+			sm_format_c_locale(text, sizeof text, "%.*g", digits < 17 ? digits : 17, time);
 		}
 		const int written = snprintf(out + n, size - n, "%.*s%s", (int)name, p, text);
 		if (written > 0)
@@ -275,16 +277,33 @@ static void on_simulation_axis(const char* msg, double origin, char* out, size_t
 	out[n] = '\0';
 }
 
-void sm_simulation_error_handler(int error_code, const char* module, const char* function, char* msg,
-                                 void* user_data)
+static void record_solver_message(sm_simulation* sim, const char* function, const char* msg)
 {
-	(void)error_code, (void)module;
-	sm_simulation* sim = user_data;
 	const int prefix = snprintf(sim->solver_message, sizeof sim->solver_message, "%s: ", function);
 	if (prefix >= 0 && (size_t)prefix < sizeof sim->solver_message - 1)
 		on_simulation_axis(msg, sim->time_origin, sim->solver_message + prefix,
 		                   sizeof sim->solver_message - (size_t)prefix);
 }
+
+#if SUNDIALS_VERSION_MAJOR >= 7
+void sm_simulation_error_handler(int line, const char* function, const char* file, const char* msg,
+                                 SUNErrCode code, void* user_data, SUNContext context)
+{
+	(void)line, (void)file, (void)context;
+	// SUNDIALS 7 names the function an error arose in, 6 the one called: a failed step of CVode,
+	// which 6 reported as CVode's, 7 reports from cvHandleFailure. A module's error without a
+	// message of its own has the text of its code.
+	record_solver_message(user_data, strcmp(function, "cvHandleFailure") == 0 ? "CVode" : function,
+	                      msg ? msg : SUNGetErrMsg(code));
+}
+#else
+void sm_simulation_error_handler(int error_code, const char* module, const char* function, char* msg,
+                                 void* user_data)
+{
+	(void)error_code, (void)module;
+	record_solver_message(user_data, function, msg);
+}
+#endif
 
 // ---------------------------------------------------------------------------------------------
 // Timed wrapper around a matrix-based linear solver (dense LU, KLU)

@@ -255,7 +255,9 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 	switch (sim->solver) {
 	case SM_SOLVER_DENSE: {
 		sim->matrix = SUNDenseMatrix(n, n, sim->context);
-		if (!sim->matrix)
+		// SUNDIALS 7 built without its error checks returns the matrix without its entries when
+		// their allocation fails.
+		if (!sim->matrix || !SUNDenseMatrix_Data(sim->matrix))
 			return SM_ERROR_OUT_OF_MEMORY;
 		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_Dense(sim->y, sim->matrix, sim->context));
 		if (!sim->linear_solver)
@@ -280,7 +282,8 @@ static sm_status attach_linear_solver(sm_simulation* sim)
 		if (sm_simulation_build_klu_pattern(sim) != SM_OK)
 			return SM_ERROR_OUT_OF_MEMORY;
 		sim->matrix = SUNSparseMatrix(n, n, sim->klu_row_pointers[n], CSR_MAT, sim->context);
-		if (!sim->matrix)
+		if (!sim->matrix || !SUNSparseMatrix_Data(sim->matrix) || !SUNSparseMatrix_IndexValues(sim->matrix) ||
+		    !SUNSparseMatrix_IndexPointers(sim->matrix))  // as the dense matrix's entries
 			return SM_ERROR_OUT_OF_MEMORY;
 		sim->linear_solver = sm_timed_solver_create(sim, SUNLinSol_KLU(sim->y, sim->matrix, sim->context));
 		if (!sim->linear_solver)
@@ -327,6 +330,22 @@ static int error_weights(N_Vector yv, N_Vector wv, void* user_data)
 	return 0;
 }
 
+// CVODE's errors go to sm_simulation_error_handler, which keeps their text for the simulation's
+// error, and are not printed. SUNDIALS 7 has the handlers in the context, which starts with one
+// that prints to stderr: the simulation's own context has its handler instead. SUNDIALS 6 has it
+// in the CVODE memory.
+static int capture_errors(sm_simulation* sim)
+{
+#if SUNDIALS_VERSION_MAJOR >= 7
+	if (SUNContext_ClearErrHandlers(sim->context) != SUN_SUCCESS ||
+	    SUNContext_PushErrHandler(sim->context, sm_simulation_error_handler, sim) != SUN_SUCCESS)
+		return CV_MEM_FAIL;
+	return CV_SUCCESS;
+#else
+	return CVodeSetErrHandlerFn(sim->cvode, sm_simulation_error_handler, sim);
+#endif
+}
+
 static sm_status setup_cvode(sm_simulation* sim)
 {
 	const int64_t nd = sim->dofs;
@@ -341,7 +360,7 @@ static sm_status setup_cvode(sm_simulation* sim)
 	sim->cvode = CVodeCreate(sim->def.method == SM_METHOD_ADAMS ? CV_ADAMS : CV_BDF, sim->context);
 	if (!sim->cvode)
 		return SM_ERROR_OUT_OF_MEMORY;
-	if (CVodeSetErrHandlerFn(sim->cvode, sm_simulation_error_handler, sim) != CV_SUCCESS ||
+	if (capture_errors(sim) != CV_SUCCESS ||
 	    CVodeInit(sim->cvode, sm_simulation_rhs, sm_simulation_cvode_time(sim, sim->time), sim->y) !=
 	        CV_SUCCESS ||
 	    CVodeWFtolerances(sim->cvode, error_weights) != CV_SUCCESS ||
@@ -439,14 +458,17 @@ sm_simulation* sm_simulation_create(const sm_model* model, const sm_simulation_d
 		if (!sim->jacobian_records)
 			goto out_of_memory;
 	}
-	if (SUNContext_Create(NULL, &sim->context) != 0) {
+	if (SUNContext_Create(SM_SUNDIALS_COMM_NULL, &sim->context) != 0) {
 		sim->context = NULL;
 		goto out_of_memory;
 	}
 	sim->y = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
 	sim->y_saved = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
 	sim->tolerances = N_VNew_Serial(sm_simulation_state_length(sim), sim->context);
-	if (!sim->y || !sim->y_saved || !sim->tolerances)
+	// As the dense matrix's entries (attach_linear_solver), those of a vector: SUNDIALS 7 without
+	// its error checks leaves them NULL when their allocation fails.
+	if (!sim->y || !sim->y_saved || !sim->tolerances || !N_VGetArrayPointer(sim->y) ||
+	    !N_VGetArrayPointer(sim->y_saved) || !N_VGetArrayPointer(sim->tolerances))
 		goto out_of_memory;
 	// Before CVodeInit: every vector CVODE and the solvers clone from y inherits the operations.
 	sm_vector_ops_install(sim->y);

@@ -11,6 +11,7 @@
 #pragma once
 
 #include "springmass/simulation.h"
+#include "sundials_compat.h"
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
@@ -249,9 +250,15 @@ sm_status sm_simulation_build_klu_pattern(sm_simulation* sim);
 int sm_simulation_jacobian_sparse(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
                                   N_Vector tmp1, N_Vector tmp2, N_Vector tmp3);
 // CVODE's error handler: its message into sim->solver_message, with the function's name and the
-// times on the simulation's axis.
+// times on the simulation's axis. SUNDIALS 7 calls the handlers of the context (for CVODE and the
+// modules it uses), 6 the one of the CVODE memory.
+#if SUNDIALS_VERSION_MAJOR >= 7
+void sm_simulation_error_handler(int line, const char* function, const char* file, const char* msg,
+                                 SUNErrCode code, void* user_data, SUNContext context);
+#else
 void sm_simulation_error_handler(int error_code, const char* module, const char* function, char* msg,
                                  void* user_data);
+#endif
 
 // Input changes undone before the next advance (input_origins.c).
 // Forgets the recorded origins: after an advance, a reset or a restore, from which the inputs'

@@ -325,7 +325,8 @@ static sunrealtype min_quotient(N_Vector numv, N_Vector denomv)
 
 // ---------------------------------------------------------------------------------------------
 // Fused operations (SUNDIALS' serial vectors leave them out by default: CVODE then calls one
-// linear sum per vector instead). They return 0, or -1 for nvec < 1.
+// linear sum per vector instead). They return 0, or SM_NVEC_OUT_OF_RANGE for nvec < 1, as
+// SUNDIALS' own do.
 // ---------------------------------------------------------------------------------------------
 
 // z = sum_j c_j X_j. z may be X[0] (only). Element by element the terms are added in the order
@@ -334,7 +335,7 @@ static sunrealtype min_quotient(N_Vector numv, N_Vector denomv)
 static int linear_combination(int nvec, sunrealtype* c, N_Vector* X, N_Vector zv)
 {
 	if (nvec < 1)
-		return -1;
+		return SM_NVEC_OUT_OF_RANGE;
 	if (nvec == 1) {
 		scale(c[0], X[0], zv);
 		return 0;
@@ -365,7 +366,7 @@ static int linear_combination(int nvec, sunrealtype* c, N_Vector* X, N_Vector zv
 static int scale_add_multi(int nvec, sunrealtype* c, N_Vector xv, N_Vector* Y, N_Vector* Z)
 {
 	if (nvec < 1)
-		return -1;
+		return SM_NVEC_OUT_OF_RANGE;
 	const double* x = NV_DATA_S(xv);
 	const sunindextype n = NV_LENGTH_S(xv);
 	for (sunindextype start = 0; start < n; start += BLOCK_LENGTH) {
@@ -385,7 +386,7 @@ static int scale_add_multi(int nvec, sunrealtype* c, N_Vector xv, N_Vector* Y, N
 static int dot_product_multi(int nvec, N_Vector xv, N_Vector* Y, sunrealtype* d)
 {
 	if (nvec < 1)
-		return -1;
+		return SM_NVEC_OUT_OF_RANGE;
 	for (int j = 0; j < nvec; j++)
 		d[j] = dot_product(xv, Y[j]);
 	return 0;
@@ -395,7 +396,7 @@ static int dot_product_multi(int nvec, N_Vector xv, N_Vector* Y, sunrealtype* d)
 static int scale_vector_array(int nvec, sunrealtype* c, N_Vector* X, N_Vector* Z)
 {
 	if (nvec < 1)
-		return -1;
+		return SM_NVEC_OUT_OF_RANGE;
 	for (int j = 0; j < nvec; j++)
 		scale(c[j], X[j], Z[j]);
 	return 0;

@@ -16,6 +16,7 @@
 #include "cli_inputs.h"
 #include "simulation_fixtures.h"
 #include "springmass/springmass.h"
+#include "sundials_compat.h"
 #include "test_harness.h"
 
 #ifdef SPRINGMASS_OOM_FMU
@@ -118,7 +119,7 @@ static long suspend_failures(void)
 		return result_;                                                                                      \
 	}
 
-AS_ONE_ALLOCATION(int, SUNContext_Create, (*context = NULL, -1), (void* comm, SUNContext* context),
+AS_ONE_ALLOCATION(int, SUNContext_Create, (*context = NULL, -1), (sm_sundials_comm comm, SUNContext* context),
                   (comm, context))
 AS_ONE_ALLOCATION(N_Vector, N_VClone, NULL, (N_Vector w), (w))
 AS_ONE_ALLOCATION(SUNMatrix, SUNMatClone, NULL, (SUNMatrix A), (A))

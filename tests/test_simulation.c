@@ -5738,7 +5738,7 @@ static int test_reduced_solve_matches_dense_newton_system(void)
 		// CVODE scales the 2-norm tolerance by sqrt(length) for its own solves; here the solver's
 		// own test (weighted 2-norm of M^-1 r) is asked for 1e-10 of the right-hand side's.
 		const int flag = SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-10 * sqrt(rhs_norm));
-		ENSURE(flag == SUNLS_SUCCESS);
+		ENSURE(flag == SM_LS_SUCCESS);
 		// cholmod: the invalidation forgot the factor, so this solve factorised A at this very
 		// Jacobian and gamma, and its first iterate is the exact correction: one iteration, the
 		// residual left being rounding (about 1e-16 times A's condition number, far below 1e-10).
@@ -5892,7 +5892,7 @@ static int test_exact_block_preconditioner_takes_one_iteration(void)
 		ENSURE(bv && xv);
 		const double norm = velocity_right_hand_side(sim, &r, bv);
 		ENSURE(norm > 0.0);
-		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * norm) == SUNLS_SUCCESS);
+		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * norm) == SM_LS_SUCCESS);
 		const int iterations = SUNLinSolNumIters(sim->linear_solver);
 		printf("  %d free particles, gamma %.3g: %d iteration(s)\n", (int)counts[k], gamma, iterations);
 		ENSURE(iterations == 1);
@@ -5960,7 +5960,7 @@ static int test_update_model_refreshes_the_coarse_matrix(void)
 		rng r = {31};
 		const double norm = velocity_right_hand_side(sim, &r, bv);
 		ENSURE(norm > 0.0);
-		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, solutions[k], bv, 1e-10 * norm) == SUNLS_SUCCESS);
+		ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, solutions[k], bv, 1e-10 * norm) == SM_LS_SUCCESS);
 		iterations[k] = SUNLinSolNumIters(sim->linear_solver);
 		N_VDestroy(bv);
 	}
@@ -6010,7 +6010,7 @@ static int test_translation_of_a_flat_free_cloth_takes_one_iteration(void)
 		b[i] = i >= n && i < 2 * n && (i - n) % 3 == 2 ? 1e-2 : 0.0;  // [m/s] along z, the normal
 	const double norm = velocity_norm(sim, bv);
 	ENSURE(norm > 0.0);
-	ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * norm) == SUNLS_SUCCESS);
+	ENSURE(SUNLinSolSolve(sim->linear_solver, NULL, xv, bv, 1e-6 * norm) == SM_LS_SUCCESS);
 	const int iterations = SUNLinSolNumIters(sim->linear_solver);
 	printf("  %d iteration(s)\n", iterations);
 	ENSURE(iterations == 1);

@@ -52,7 +52,7 @@ static void sets_destroy(vector_sets* s)
 static bool sets_create(vector_sets* s, sunindextype n, uint64_t seed)
 {
 	*s = (vector_sets){.length = n, .random = {seed}};
-	if (SUNContext_Create(NULL, &s->context) != 0)
+	if (SUNContext_Create(SM_SUNDIALS_COMM_NULL, &s->context) != 0)
 		return false;
 	N_Vector model = N_VNew_Serial(n, s->context);
 	if (!model)
@@ -357,8 +357,13 @@ static int check_linear_combination(vector_sets* s)
 				ENSURE(N_VLinearCombination(nvec, c, s->theirs, s->theirs[z]) == 0);
 				ENSURE(same_elements(s, z));
 			}
+#if SUNDIALS_VERSION_MAJOR >= 7 && !defined(SUNDIALS_ENABLE_ERROR_CHECKS)
+	// SUNDIALS 7 built without its error checks does not check nvec: ours return the code its checks do.
+	ENSURE(N_VLinearCombination(0, c, s->ours, s->ours[0]) == SUN_ERR_ARG_OUTOFRANGE);
+#else
 	ENSURE(N_VLinearCombination(0, c, s->ours, s->ours[0]) ==
 	       N_VLinearCombination(0, c, s->theirs, s->theirs[0]));
+#endif
 	return 0;
 }
 
@@ -449,7 +454,7 @@ static bool same_operations(N_Vector a, N_Vector b)
 static int test_installed_operations_and_clones(void)
 {
 	SUNContext context;
-	ENSURE(SUNContext_Create(NULL, &context) == 0);
+	ENSURE(SUNContext_Create(SM_SUNDIALS_COMM_NULL, &context) == 0);
 	N_Vector plain = N_VNew_Serial(5, context);
 	N_Vector v = N_VNew_Serial(5, context);
 	ENSURE(plain && v);
@@ -665,7 +670,7 @@ static int run_heat(heat_setup setup, heat_operations operations, heat_run* out)
 	SUNNonlinearSolver nonlinear = NULL;
 	N_Vector y = NULL;
 	int result = 1;
-	if (SUNContext_Create(NULL, &context) != 0 || !(y = N_VNew_Serial(HEAT_LENGTH, context)))
+	if (SUNContext_Create(SM_SUNDIALS_COMM_NULL, &context) != 0 || !(y = N_VNew_Serial(HEAT_LENGTH, context)))
 		goto done;
 	if (operations != OPERATIONS_SUNDIALS)
 		sm_vector_ops_install(y);
