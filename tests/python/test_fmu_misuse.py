@@ -183,6 +183,10 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
             assert info.value.status == 2  # fmi2Discard
             assert s.getRealStatus(2) == h  # fmi2LastSuccessfulTime
             assert "energy.gravity overflows" in inst.messages[-1][2] and inst.messages[-1][1] == "logStatusDiscard"
+            # The instance is in the step-failed state (FMI 2.0, 4.2.3): fmi2GetStatus tells of the
+            # discard, and a further step is refused.
+            assert s.getStatus(0) == 2  # fmi2DoStepStatus: fmi2Discard
+            expect_error(inst, lambda: s.doStep(h, 0.1), "fmi2DoStep", "illegal call sequence")
             s.reset()
             inst.start()
     finally:
