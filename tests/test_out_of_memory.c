@@ -385,10 +385,6 @@ static int test_model_file(void)
 	return result;
 }
 
-// A model whose mesh is read from an OBJ file (a quad and two triangles, the quad cut in two: 9
-// edges, more than the edge table's first 16 slots hold at most half full, so it grows): loading
-// it (the model file, the OBJ file, the document's copy of its mesh), building it and writing its
-// self-contained text, which loads again without the file.
 // Memory running out while a mesh's edges are entered is no fault of the face being read: the
 // message names no line and column of the OBJ file.
 static bool blames_an_obj_line(sm_status status, const char* message)
@@ -397,6 +393,10 @@ static bool blames_an_obj_line(sm_status status, const char* message)
 	return status == SM_ERROR_OUT_OF_MEMORY && place != NULL && isdigit((unsigned char)place[5]);
 }
 
+// A model whose mesh is read from an OBJ file (a quad and two triangles, the quad cut in two: 9
+// edges, more than the edge table's first 16 slots hold at most half full, so it grows): loading
+// it (the model file, the OBJ file, the document's copy of its mesh), building it and writing its
+// self-contained text, which loads again without the file.
 static int obj_scenario(void* context)
 {
 	const char* path = context;
