@@ -515,7 +515,9 @@ static sm_status finish_modes(const modes_problem* p, sm_modes* modes, sm_error*
 	for (size_t i = 0; i < kept; i++)
 		largest_damping = fmax(largest_damping, fabs(modal[i * kept + i]));
 	for (size_t i = 0; i < kept; i++) {
-		const double ci = modal[i * kept + i];
+		// A mode the damping does not act on (the transverse modes of a taut string whose springs
+		// damp only along themselves) is undamped, whatever round-off its entry picked up.
+		const double ci = fabs(modal[i * kept + i]) <= damping_round_off ? 0.0 : modal[i * kept + i];
 		modes->modal_damping[i] = ci;
 		const double omega = modes->omega_squared[i] > 0.0 ? sqrt(modes->omega_squared[i]) : 0.0;
 		// An unstable mode grows (or, damped, creeps away) whatever its damping: it has no ratio.

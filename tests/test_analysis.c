@@ -4415,6 +4415,60 @@ static int test_repeated_frequency_modes_diagonalise_the_damping(void)
 	return 0;
 }
 
+// A taut chain along a direction off the axes, damped by its springs only: spring damping acts
+// along the springs, so the chain's transverse modes are exactly undamped (C phi = 0 for phi
+// across the line) and the axial ones are damped. Three 0.5 kg beads between two anchors, springs
+// of 0.8 of their length at rest, whose tension ks (l - l0) gives the transverse modes their
+// stiffness.
+static int test_modes_the_damping_does_not_reach_are_undamped(void)
+{
+	const double axis[3] = {0.6, 0.48, 0.64};  // a unit vector
+	const double spacing = 0.5, m = 0.5, ks = 200.0, kd = 0.7;
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	for (int32_t i = 0; i <= 4; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = m;
+		p.motion = i == 0 || i == 4 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		for (int c = 0; c < 3; c++)
+			p.position[c] = i * spacing * axis[c];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		if (i == 0)
+			continue;
+		sm_spring_def s = sm_default_spring_def();
+		s.a = i - 1;
+		s.b = i;
+		s.stiffness = ks;
+		s.damping = kd;
+		s.rest_length = 0.8 * spacing;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.count == 9 && modes.zero_count == 0 && modes.unstable_count == 0);
+	int across = 0;
+	for (int32_t a = 0; a < 9; a++) {
+		double along = 0.0;  // the shape's largest component along the line, per unit norm
+		for (int32_t i = 1; i <= 3; i++) {
+			const double* phi = modes.shapes + (size_t)a * 15 + 3 * (size_t)i;
+			along = fmax(along, fabs(phi[0] * axis[0] + phi[1] * axis[1] + phi[2] * axis[2]) * sqrt(m));
+		}
+		if (along < 1e-12) {  // across the line, to round-off: exactly undamped, not 1e-33
+			across++;
+			ENSURE(modes.modal_damping[a] == 0.0 && modes.damping_ratio[a] == 0.0);
+		} else {
+			ENSURE(along > 0.1);
+			ENSURE(modes.damping_ratio[a] > 1e-3);
+		}
+	}
+	ENSURE(across == 6);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Makes sd the 1 m x 1 m sheet centred at the origin in the x-y plane, turned by the rotation R
 // (row-major).
 static void turn_unit_sheet(const double R[9], sm_sheet_def* sd)
@@ -4972,6 +5026,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_undamped_is_proportional_at_zero_tolerance);
 	RUN_TEST(test_sparse_shift_is_lowered_a_hundredfold);
 	RUN_TEST(test_repeated_frequency_modes_diagonalise_the_damping);
+	RUN_TEST(test_modes_the_damping_does_not_reach_are_undamped);
 	RUN_TEST(test_mode_count_inside_a_repeated_group);
 	RUN_TEST(test_modal_damping_and_coupling_do_not_depend_on_orientation);
 	RUN_TEST(test_swinging_bob_is_not_stable_anywhere);
