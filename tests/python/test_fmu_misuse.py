@@ -193,6 +193,26 @@ def test_a_step_whose_energies_overflow_is_a_discard(package, tmp_path):
         inst.free()
 
 
+def test_a_step_whose_reaction_alone_overflows_is_a_discard(package):
+    # The reaction at a driven particle is no state of the integration, and it can overflow while
+    # every energy stays finite: the motion port's 1e150 m/s through a damper of 1e160 N s/m is
+    # 1e310 N, where the anchor's 1 kg has 5e299 J. A step too short to integrate (below the
+    # clock's resolution) takes no solver step that could fail on it: the step's end is where the
+    # output is checked, fmi2Discard naming it.
+    inst = Instance(package(MODELS / "driven_oscillator.json", sets=("d=1e160",))).start()
+    s = inst.slave
+    try:
+        s.doStep(0.0, 0.01)
+        inst.set("base.vx", 1e150)
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.01, 1e-17)
+        assert info.value.status == 2  # fmi2Discard
+        assert "output base.fx overflows" in inst.messages[-1][2] and inst.messages[-1][1] == "logStatusDiscard"
+        assert math.isfinite(inst.get("energy.kinetic")) and math.isfinite(inst.get("energy.elastic"))
+    finally:
+        inst.free()
+
+
 def test_outputs_after_an_overflow_discard_are_at_the_last_successful_time(package, tmp_path):
     # 1e300 kg falling from rest: at 1000 s its kinetic energy, m (g t)^2 / 2 = 4.8e307 J, is
     # finite; at 3000 s, 4.3e308 J, it is not. The step from 1000 to 3000 s is discarded, and what
