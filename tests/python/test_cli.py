@@ -1060,6 +1060,41 @@ def test_modes_about_the_rest_shape_are_those_of_a_hanging_chain(tmp_path):
     np.testing.assert_allclose(mode_table(sparse)[:, 3], table[:4, 3], rtol=1e-8)
 
 
+def test_modes_of_a_membrane_pretensioned_by_its_rest_lengths_are_a_taut_grids(tmp_path):
+    # docs/model-format.md: a sheet without spring groups keeps its particles and masses, and its
+    # springs listed in `springs` with rest lengths l0 shorter than the spacing h pre-tension it:
+    # per section (section h, h / 2 along an edge), the tension is Y (h / l0 - 1) per unit width.
+    # Held along its edges, flat, the 1 m square of 1 kg/m^2 (lumped: h^2 per inner particle)
+    # vibrates across its plane as a taut grid, each inner particle pulled towards its four
+    # neighbours with T / h per metre of their offset: omega^2 = T / (rho h^2) (4 sin^2(i pi /
+    # (2 N)) + 4 sin^2(j pi / (2 N))), N = 8 cells a side, modes (i, j) and (j, i) alike; its
+    # in-plane modes, stiffened by the springs' own Y h / l0, lie far above the six lowest. The
+    # table prints 9 digits.
+    n, cells, Y, l0 = 9, 8, 1000.0, 0.95 / 8
+    h = 1.0 / cells
+    springs = []
+    for i in range(n):
+        for j in range(n):
+            if j + 1 < n:
+                springs.append({"a": f"membrane[{i},{j}]", "b": f"membrane[{i},{j + 1}]", "section_stiffness": "Y",
+                                "section": h / 2 if i in (0, n - 1) else h, "rest_length": l0})
+            if i + 1 < n:
+                springs.append({"a": f"membrane[{i},{j}]", "b": f"membrane[{i + 1},{j}]", "section_stiffness": "Y",
+                                "section": h / 2 if j in (0, n - 1) else h, "rest_length": l0})
+    edges = [([-0.01, -0.01, -0.01], [0.01, 1.01, 0.01]), ([0.99, -0.01, -0.01], [1.01, 1.01, 0.01]),
+             ([-0.01, -0.01, -0.01], [1.01, 0.01, 0.01]), ([-0.01, 0.99, -0.01], [1.01, 1.01, 0.01])]
+    model = {"springmass": 1, "name": "membrane", "parameters": {"Y": Y}, "gravity": [0, 0, 0],
+             "structures": [{"type": "sheet", "name": "membrane", "nu": n, "nv": n, "mass": 1.0,
+                             "mass_distribution": "lumped"}],
+             "springs": springs, "fixed": [{"min": a, "max": b} for a, b in edges]}
+    (tmp_path / "membrane.json").write_text(json.dumps(model))
+    table = mode_table(cli("modes", tmp_path / "membrane.json", "-n", 6).stdout)
+    tension = Y * (h / l0 - 1)
+    s = [4 * math.sin(k * math.pi / (2 * cells)) ** 2 for k in range(1, cells)]
+    omega2 = sorted(tension / h**2 * (s[i] + s[j]) for i in range(cells - 1) for j in range(cells - 1))[:6]
+    np.testing.assert_allclose(table[:, 3], omega2, rtol=1e-8)
+
+
 def test_modes_count_unstable_and_zero_modes(tmp_path):
     # A 2 kg bob held by an 8 N/m spring of rest length 2 m compressed to 1 m: along the spring
     # omega^2 = k / m = 4 1/s^2 (period pi s); across it the spring pushes, omega^2 = k (1 - l0 / L) / m
