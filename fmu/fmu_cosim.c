@@ -230,13 +230,12 @@ static char* resource_path(const char* uri, bool* out_of_memory)
 static void load_start_values(instance* inst)
 {
 	sm_document_settings settings = sm_document_get_settings(inst->doc);
+	// solver.input_changes (the model file's "input_changes", "restart" unless it says "keep"): an
+	// input set is a jump of the right-hand side when its value changes (a force switched on, a drive
+	// that moves off its extrapolated path; the simulation compares), where CVODE restarts by
+	// default instead of stepping its high-order history across the discontinuity (docs/fmu.md,
+	// "Measured: when to restart CVODE"). Inputs set to what they were keep the history.
 	inst->solver = settings.solver;
-	// An input set is a jump of the right-hand side when its value changes (a force switched on,
-	// a drive that moves off its extrapolated path; the simulation compares): CVODE restarts then
-	// instead of stepping its high-order history across the discontinuity, which at tight
-	// tolerances fails with repeated error-test failures. Inputs set to what they were keep the
-	// history.
-	inst->solver.restart_on_input_change = true;
 	inst->rtol_set = false;
 	for (int32_t p = 0; p < inst->port_count; ++p) {
 		memset(&inst->held[p], 0, sizeof inst->held[p]);

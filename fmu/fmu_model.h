@@ -52,6 +52,7 @@ typedef enum fmu_source {
 	FMU_SRC_SOLVER_METHOD,         ///< "bdf" or "adams"
 	FMU_SRC_SOLVER_LINEAR_SOLVER,  ///< "auto", "dense", "klu", "pcg", "cholmod"
 	FMU_SRC_SOLVER_JACOBIAN,       ///< "exact" or "definite"
+	FMU_SRC_SOLVER_INPUT_CHANGES,  ///< "restart" or "keep": what an input that changes does
 	FMU_SRC_PORT_POSITION,         ///< index = port, component 0..2 [m]
 	FMU_SRC_PORT_VELOCITY,         ///< index = port, component 0..2 [m/s]
 	FMU_SRC_PORT_FORCE,            ///< index = port, component 0..2 [N]

@@ -346,6 +346,9 @@ fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 		switch (v->source) {
 		case FMU_SRC_SOLVER_METHOD: value[i] = sm_method_name(inst->solver.method); break;
 		case FMU_SRC_SOLVER_LINEAR_SOLVER: value[i] = sm_linear_solver_name(inst->solver.solver); break;
+		case FMU_SRC_SOLVER_INPUT_CHANGES:
+			value[i] = sm_input_changes_name(inst->solver.restart_on_input_change);
+			break;
 		default: value[i] = sm_jacobian_variant_name(inst->solver.jacobian); break;
 		}
 	}
@@ -523,6 +526,8 @@ fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t 
 			bad = sm_method_from_name(value[i], &solver.method) != SM_OK;
 		} else if (v->source == FMU_SRC_SOLVER_LINEAR_SOLVER) {
 			bad = sm_linear_solver_from_name(value[i], &solver.solver) != SM_OK;
+		} else if (v->source == FMU_SRC_SOLVER_INPUT_CHANGES) {
+			bad = sm_input_changes_from_name(value[i], &solver.restart_on_input_change) != SM_OK;
 		} else {
 			bad = sm_jacobian_variant_from_name(value[i], &solver.jacobian) != SM_OK;
 		}

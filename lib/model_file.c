@@ -60,9 +60,10 @@ static bool read_choice(parser* p, const json_t* obj, const char* path, const ch
 
 static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu)
 {
-	static const char* const keys[] = {"stop_time",     "output_interval", "rtol",      "atol",
-	                                   "atol_position", "atol_velocity",   "method",    "solver",
-	                                   "jacobian",      "max_step",        "max_steps", NULL};
+	static const char* const keys[] = {
+	    "stop_time",     "output_interval", "rtol",   "atol",     "atol_position",
+	    "atol_velocity", "method",          "solver", "jacobian", "max_step",
+	    "max_steps",     "input_changes",   NULL};
 	static const char* const fmu_keys[] = {"particle_variables", NULL};
 	sm_document_settings* s = &p->ex->settings;
 	s->stop_time = 1.0;
@@ -105,11 +106,15 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		const char* solvers[SM_SOLVER_COUNT];
 		for (int k = 0; k < SM_SOLVER_COUNT; k++)
 			solvers[k] = sm_linear_solver_name((sm_linear_solver)k);
+		const char* const input_changes[] = {sm_input_changes_name(true), sm_input_changes_name(false)};
 		int method = (int)d->method, jacobian = (int)d->jacobian, solver = (int)d->solver;
+		int restart = d->restart_on_input_change ? 0 : 1;
 		if (!read_choice(p, simulation, path, "method", methods, 2, &method) ||
 		    !read_choice(p, simulation, path, "jacobian", jacobians, 2, &jacobian) ||
-		    !read_choice(p, simulation, path, "solver", solvers, SM_SOLVER_COUNT, &solver))
+		    !read_choice(p, simulation, path, "solver", solvers, SM_SOLVER_COUNT, &solver) ||
+		    !read_choice(p, simulation, path, "input_changes", input_changes, 2, &restart))
 			return false;
+		d->restart_on_input_change = restart == 0;
 		d->method = (sm_method)method;
 		d->jacobian = (sm_jacobian_variant)jacobian;
 		d->solver = (sm_linear_solver)solver;

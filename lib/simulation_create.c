@@ -78,6 +78,24 @@ sm_status sm_method_from_name(const char* name, sm_method* method)
 	return SM_OK;
 }
 
+const char* sm_input_changes_name(bool restart)
+{
+	return restart ? "restart" : "keep";
+}
+
+sm_status sm_input_changes_from_name(const char* name, bool* restart)
+{
+	if (name == NULL || restart == NULL)
+		return SM_ERROR_INVALID_ARGUMENT;
+	if (strcmp(name, "restart") == 0)
+		*restart = true;
+	else if (strcmp(name, "keep") == 0)
+		*restart = false;
+	else
+		return SM_ERROR_INVALID_ARGUMENT;
+	return SM_OK;
+}
+
 sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* solver)
 {
 	for (int i = 0; name != NULL && solver != NULL && i < SM_SOLVER_COUNT; i++)

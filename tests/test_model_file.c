@@ -1138,6 +1138,9 @@ static int test_broken_files(void)
 		 SM_ERROR_SCHEMA,
 		 "test.json: simulation.solver: must be one of \"auto\", \"dense\", \"klu\", \"pcg\", \"cholmod\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+		 " \"simulation\": {\"input_changes\": true}}",
+		 SM_ERROR_SCHEMA, "test.json: simulation.input_changes: must be one of \"restart\", \"keep\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
 		 " \"simulation\": {\"rtol\": 0}}",
 		 SM_ERROR_NEGATIVE, "test.json: simulation.rtol: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
@@ -2366,14 +2369,15 @@ static int test_settings_and_their_defaults(void)
 	       s.solver.absolute_tolerance_velocity == 1e-6);
 	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.solver == SM_SOLVER_AUTO &&
 	       s.solver.jacobian == SM_JACOBIAN_EXACT);
-	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000 && s.solver.restart_on_input_change);
 	sm_document_destroy(doc);
 
 	doc = parse_valid(
 	    TWO_PARTICLES
 	    ", \"simulation\": {\"stop_time\": 3, \"output_interval\": 0.5, \"rtol\": 0.001,"
 	    " \"atol\": 1e-150, \"method\": \"adams\", \"solver\": \"klu\", \"jacobian\": \"definite\","
-	    " \"max_step\": 0, \"max_steps\": 7}, \"fmu\": {\"particle_variables\": true}}",
+	    " \"max_step\": 0, \"max_steps\": 7, \"input_changes\": \"keep\"}, \"fmu\": {\"particle_variables\": "
+	    "true}}",
 	    &err);
 	ENSURE(doc != NULL);
 	s = sm_document_get_settings(doc);
@@ -2382,7 +2386,7 @@ static int test_settings_and_their_defaults(void)
 	       s.solver.absolute_tolerance_velocity == 1e-150);
 	ENSURE(s.solver.method == SM_METHOD_ADAMS && s.solver.solver == SM_SOLVER_KLU &&
 	       s.solver.jacobian == SM_JACOBIAN_DEFINITE);
-	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7 && !s.solver.restart_on_input_change);
 	sm_document_destroy(doc);
 
 	doc = parse(TWO_PARTICLES
@@ -3629,7 +3633,7 @@ static int test_unknown_keys_are_refused_everywhere(void)
 	    {2, "knd", "test.json: ports[0]: unknown key \"knd\" (allowed here: name, particle, kind)"},
 	    {3, "stop_tme",
 		 "test.json: simulation: unknown key \"stop_tme\" (allowed here: stop_time, output_interval, rtol, "
-		 "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps)"},
+		 "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps, input_changes)"},
 	    {4, "particle_variable",
 		 "test.json: fmu: unknown key \"particle_variable\" (allowed here: particle_variables)"},
 	};

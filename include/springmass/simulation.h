@@ -18,17 +18,22 @@
 // model update in between keeps the restart it asks for, and an input set back after it is a
 // change (its jump's work counted), yet onto the path or ramp it had at the last advance, to the
 // bit; a reset or a restore forgets those paths. Keeping the history (step size, order) over
-// changes too is faster but not accurate when inputs change at every call, as a co-simulation
-// master's do: a base excitation sampled every 1 ms missed its steady-state amplitude by 9e-4
-// (relative) at rtol 1e-6 and 1e-8 alike, against 2e-5 with restarts (the steps that straddle the
-// changes carry an error CVODE's error test does not see; tests/test_simulation.c,
-// test_base_excitation_sampled_at_every_step). Restarting cost 5.9 times the steps and 6.2 times
-// the wall time per simulated second on the 8 x 8 benchmark cloth with a force changed every 1 ms,
-// 2.3 and 2.1 times every 10 ms (bench_cloth with RESTART_EVERY, bench/README.md): keep the
-// history (restart_on_input_change = false) where inputs change rarely and by little. A jump
-// the error control cannot absorb then (a step force large against the model's, a driven particle
-// moved far) makes CVODE fail; the advance restarts at the jump and tries once more, so the
-// caller sees a restart in the statistics rather than an error.
+// changes too is faster, and which is more accurate when inputs change at every call, as a
+// co-simulation master's do, depends on the model and the run. Each restart starts BDF again at
+// first order and costs about rtol of the motion: an undamped oscillator forced by a sine set
+// every 1 ms lost 6 % of its energy in 10 s and 47 % in 100 s at rtol 1e-6, against 6e-7 with the
+// history kept (docs/fmu.md, "Measured: when to restart CVODE"). Kept history errs where the inputs
+// change by much at every call: a damped base excitation sampled every 1 ms missed its
+// steady-state amplitude by 9e-4 (relative) at rtol 1e-6 and 1e-8 alike, against 2e-5 with
+// restarts (the steps that straddle the changes carry an error CVODE's error test does not see;
+// tests/test_simulation.c, test_base_excitation_sampled_at_every_step). Restarting cost 5.9 times
+// the steps and 6.2 times the wall time per simulated second on the 8 x 8 benchmark cloth with a
+// force changed every 1 ms, 2.3 and 2.1 times every 10 ms (bench_cloth with RESTART_EVERY,
+// bench/README.md): keep the history (restart_on_input_change = false) for long runs of lightly
+// damped models and where inputs change rarely or by little. A jump the error control cannot
+// absorb then (a step force large against the model's, a driven particle moved far) makes CVODE
+// fail; the advance restarts at the jump and tries once more, so the caller sees a restart in the
+// statistics rather than an error.
 //
 // Reproducibility. On one machine the same model, options and calls give the same trajectory
 // bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced
@@ -140,8 +145,9 @@ typedef struct sm_simulation_def {
 	double max_step;
 	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
 	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
-	/// changes an input (default true; false keeps CVODE's history over changes: faster, but not
-	/// accurate when inputs change at every call; see "Inputs between calls" above).
+	/// changes an input (default true; false keeps CVODE's history over changes: faster, more
+	/// accurate over long runs of lightly damped models, less where inputs change by much at every
+	/// call; see "Inputs between calls" above). Model files: "input_changes", "restart" or "keep".
 	bool restart_on_input_change;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
 	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
@@ -260,6 +266,13 @@ SM_API sm_status sm_linear_solver_from_name(const char* name, sm_linear_solver* 
 /// unchanged.
 SM_API const char* sm_method_name(sm_method method);
 SM_API sm_status sm_method_from_name(const char* name, sm_method* method);
+
+/// Name of what an input that changes does (restart_on_input_change): "restart" for true,
+/// "keep" (the history) for false, as model files and the FMU's solver.input_changes write
+/// them; and the reverse lookup: SM_OK, or SM_ERROR_INVALID_ARGUMENT for another name, a NULL
+/// name or a NULL restart, *restart then unchanged.
+SM_API const char* sm_input_changes_name(bool restart);
+SM_API sm_status sm_input_changes_from_name(const char* name, bool* restart);
 
 /// Creates a simulation of a copy of the model, starting at time 0 from the model's initial
 /// state; def NULL means the defaults. Returns NULL with err filled on invalid options or

@@ -212,6 +212,17 @@ inst.free()
     assert np.array_equal(here, there)
 
 
+def test_a_state_carries_what_input_changes_do(test_fmu):
+    # solver.input_changes is part of the state: an instance that keeps CVODE's history at input
+    # changes hands that to one that restarts (the default), which then reads "keep" and steps on
+    # through changing inputs exactly as the first does.
+    with state_and_receiver(test_fmu("driven_oscillator"), {"solver.input_changes": "keep"}) as (a, b, blob):
+        assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"restart"]
+        b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
+        assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"keep"]
+        assert np.array_equal(run(a, 0.1, 10, force=force), run(b, 0.1, 10, force=force))
+
+
 def test_state_of_another_model_is_refused(test_fmu):
     a = Instance(test_fmu("driven_oscillator")).start()
     b = Instance(test_fmu("hanging")).start()
@@ -324,7 +335,8 @@ def test_state_with_values_out_of_range_is_refused_and_changes_nothing(test_fmu)
     with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0, "m": 2.5}) as (a, b, blob):
         assert checksummed(blob) == blob
         # Words: magic 0, GUID 1-5, size 6, checksum 7, FMU state 8, ..., method 14; time 21;
-        # then positions from word 30; the parameters follow the positions, velocities and springs.
+        # then positions from word 30; the parameters follow the positions, velocities and springs
+        # (the layout is below, at W_WORDS).
         params = blob.index(struct.pack("<d", 2.5)) // 8
         assert struct.unpack_from("<d", blob, 8 * params + 8)[0] == 60.0
         cases = [edited(blob, 8, "<q", 0), edited(blob, 8, "<q", 32), edited(blob, 8, "<q", 3),
@@ -541,13 +553,14 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # The words (8 bytes each) of a serialised state of driven_oscillator (2 particles, 1 spring,
 # parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
-# linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19; the doubles time 20,
-# start 21, last successful time 22, dissipated 23, rtol 24, atol of positions 25 and of
-# velocities 26, max_step 27, input work 28; then x (29-34), v (35-40), the spring's enabled flag
-# 41, the parameters 42-44, the held inputs of base (45-60) and tip (61-76: position, velocity,
-# force, acceleration, force rate, since; fmu_instance.h's port_values) and the pending flags 77-78.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_INPUT_WORK, \
-    W_ENABLED, W_M, W_TIP_FX, W_WORDS = 13, 14, 17, 18, 23, 24, 25, 27, 28, 41, 42, 67, 79
+# linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19, restart on input change
+# 20; the doubles time 21, start 22, last successful time 23, dissipated 24, rtol 25, atol of
+# positions 26 and of velocities 27, max_step 28, input work 29; then x (30-35), v (36-41), the
+# spring's enabled flag 42, the parameters 43-45, the held inputs of base (46-61) and tip (62-77:
+# position, velocity, force, acceleration, force rate, since; fmu_instance.h's port_values) and the
+# pending flags 78-79.
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_RESTART, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, \
+    W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_WORDS = 13, 14, 17, 18, 20, 24, 25, 26, 28, 29, 42, 43, 68, 80
 
 
 def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
@@ -595,6 +608,7 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "rtol 1e-17": edited(state, W_RTOL, "<d", 1e-17),
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
+                     "restart on input change 2": edited(state, W_RESTART, "<q", 2),
                      "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
                      "dissipated energy inf": edited(state, W_DISSIPATED, "<d", math.inf),
                      "dissipated energy -inf": edited(state, W_DISSIPATED, "<d", -math.inf),
