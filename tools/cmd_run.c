@@ -73,6 +73,9 @@ static void usage(FILE* out)
 	        "                         default the rows are interpolated from the solver's steps\n"
 	        "  --jacobian NAME        exact or definite (the definiteness-preserving variant; the pcg\n"
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
+	        "  --input-changes NAME   restart (default) or keep: whether an --input row where a signal\n"
+	        "                         jumps re-initialises CVODE or keeps its history (where one only\n"
+	        "                         turns, a new slope from the value reached, CVODE keeps it)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
 	        "  -h, --help             this text\n");
@@ -118,6 +121,7 @@ typedef struct run_options {
 	double max_step;
 	bool max_step_given;
 	const char* jacobian;
+	const char* input_changes;
 	const char* solver;
 	const char* method;
 	bool positions;
@@ -354,7 +358,7 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 			    "--atol-position", "--atol-velocity",   "--max-steps", "--max-step",
 			    "--jacobian",      "--output",          "-o",          "--vtk",
 			    "--solver",        "--method",          "--set",       "--threads",
-			    "--input"};
+			    "--input",         "--input-changes"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -435,6 +439,8 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->max_step_given = true;
 			} else if (strcmp(a, "--jacobian") == 0) {
 				o->jacobian = value;
+			} else if (strcmp(a, "--input-changes") == 0) {
+				o->input_changes = value;
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
 			} else if (strcmp(a, "--vtk") == 0) {
@@ -555,6 +561,12 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	if (o.jacobian && sm_jacobian_variant_from_name(o.jacobian, &def.jacobian) != SM_OK) {
 		fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n", o.jacobian);
+		status = 2;
+		goto done;
+	}
+	if (o.input_changes &&
+	    sm_input_changes_from_name(o.input_changes, &def.restart_on_input_change) != SM_OK) {
+		fprintf(stderr, "springmass run: unknown --input-changes '%s' (restart, keep)\n", o.input_changes);
 		status = 2;
 		goto done;
 	}
