@@ -1995,7 +1995,8 @@ static sm_model* bob_on_its_anchor(sm_spring_kind kind, double damping)
 // not finite, naming the spring as too long, not as a spring whose particles are at one point
 // (they are as far apart as a double allows); an undamped zero-length spring, whose blocks ks I
 // and 0 need no direction, still has its modes there: omega^2 = ks / m = 100 1/s^2 in every
-// direction (to round-off, 1e-12).
+// direction (to round-off, 1e-12). A damped zero-length spring is refused as too long: its damping
+// block kd u u^T needs the direction u, which has come out 0 (undamped modes would be reported).
 static int test_modes_refuse_a_spring_too_long_as_not_finite(void)
 {
 	const double far[6] = {0.0, 0.0, 0.0, 1e200, 0.0, 0.0};
@@ -2016,6 +2017,12 @@ static int test_modes_refuse_a_spring_too_long_as_not_finite(void)
 	for (int32_t k = 0; k < 3; k++)
 		ENSURE_NEAR(modes.omega_squared[k], 100.0, 1e-12);
 	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	model = bob_on_its_anchor(SM_SPRING_ZERO_LENGTH, 4.0);
+	ENSURE(model != NULL);
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strstr(err.message, "spring 0") != NULL && strstr(err.message, "too long") != NULL);
+	ENSURE(modes.count == 0);
 	sm_model_destroy(model);
 	return 0;
 }
