@@ -2725,6 +2725,47 @@ static int test_modes_of_springs_at_the_smallest_doubles(void)
 	return 0;
 }
 
+// A 1 kg bob at rest on its fixed anchor (no gravity), held by a zero-length spring of 100 N/m,
+// with a disabled rest-length spring of l0 = 1 m beside it from the anchor to the bob, its
+// particles at one point. A disabled spring acts on nothing, so it stands in the way of neither
+// modes nor statics: the modes are those of the first spring alone, omega^2 = 100 1/s^2 in every
+// direction (to round-off, 1e-12), and the statics take the start as a stable rest shape at once,
+// with no coincident spring.
+static int test_a_disabled_spring_whose_particles_coincide_is_no_obstacle(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	sm_particle_def p = sm_default_particle_def();
+	p.motion = SM_PARTICLE_FIXED;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	p.motion = SM_PARTICLE_FREE;
+	ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	sm_spring_def s = sm_default_spring_def();
+	s.a = 0;
+	s.b = 1;
+	s.kind = SM_SPRING_ZERO_LENGTH;
+	s.stiffness = 100.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	s.kind = SM_SPRING_REST_LENGTH;
+	s.rest_length = 1.0;
+	ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(model, 1, false), SM_OK);
+	sm_modes modes;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, NULL), SM_OK);
+	ENSURE(modes.count == 3);
+	for (int32_t k = 0; k < 3; k++)
+		ENSURE_NEAR(modes.omega_squared[k], 100.0, 1e-12);
+	sm_modes_release(&modes);
+	double x[6];
+	sm_statics_result res;
+	ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+	ENSURE(res.iterations == 0 && res.stable && res.coincident_spring == -1);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Coincident springs between two held particles act on no free degree of freedom, so they stand
 // in the way of neither modes nor statics: two fixed particles at one point joined by a damped
 // zero-length spring and a rest-length spring of l0 = 1 m, and a 1 kg bob hanging 1 m below on
@@ -4968,6 +5009,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_particles_without_springs_beside_one_spring);
 	RUN_TEST(test_modes_of_springs_at_the_smallest_doubles);
 	RUN_TEST(test_coincident_springs_between_held_particles);
+	RUN_TEST(test_a_disabled_spring_whose_particles_coincide_is_no_obstacle);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);
