@@ -1576,7 +1576,7 @@ def test_check_notes_springs_of_the_file_on_a_pair_another_spring_joins(tmp_path
     assert not [line for line in cli("check", MODELS / "flag.json").stdout.splitlines() if line.startswith("note")]
 
 
-def test_check_summarises_the_model():
+def test_check_summarises_the_model(tmp_path):
     out = cli("check", MODELS / "two_mass_chain.json").stdout
     assert summary_line(out, "particles") == "3: 2 free, 1 fixed"
     assert summary_line(out, "held") == "base (particle 0)"
@@ -1612,6 +1612,12 @@ def test_check_summarises_the_model():
     # The file's settings (stop time 5 s, output interval 0.01 s; rtol and solver their defaults)
     # and its gravity and mass damping.
     assert summary_line(out, "simulation") == "stop time 5 s, output interval 0.01 s, rtol 1e-06, solver auto"
+    # A file that keeps CVODE's history where inputs jump says so.
+    keep = json.loads((MODELS / "two_mass_chain.json").read_text())
+    keep["simulation"]["input_changes"] = "keep"
+    (tmp_path / "keep.json").write_text(json.dumps(keep))
+    assert summary_line(cli("check", tmp_path / "keep.json").stdout, "simulation") == \
+        "stop time 5 s, output interval 0.01 s, rtol 1e-06, solver auto, history kept where inputs jump"
     assert summary_line(out, "gravity") == "(0, 0, 0) m/s^2, mass damping 0 1/s"
     rope = cli("check", MODELS / "hanging_rope.json").stdout
     assert summary_line(rope, "gravity") == "(0, 0, -9.81) m/s^2, mass damping 0.1 1/s"
