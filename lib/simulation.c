@@ -751,10 +751,16 @@ static bool force_continues(const double* f0, const double* r0, double dt, doubl
 	return true;
 }
 
-// The same for a drive (x0, v0, a0): the position and the velocity given continue its path.
+// The same for a drive (x0, v0, a0): the position and the velocity given continue its path, and
+// the new acceleration does not change the power its driver delivers. That power, (m a - f + f_ext)
+// . v (sm_simulation_input_power_at), is the right-hand side of the inputs' work, part of CVODE's
+// state: a new acceleration along the velocity makes it jump by m (a - a0) . v, and BDF's history
+// stepped over such jumps at every call (a path through samples every 1 ms) left the energy
+// balance off by the same 2.8e-4 J at rtol 1e-6, 1e-8 and 1e-10 (tests/test_input_work.c).
 static bool drive_continues(const double* x0, const double* v0, const double* a0, double dt, double t,
-                            const double* position, const double* velocity)
+                            const double* position, const double* velocity, const double* acceleration)
 {
+	double power_jump = 0.0, power_scale = 0.0;
 	for (int c = 0; c < 3; c++) {
 		const double a = a0[c];
 		if (!on_path(velocity[c], v0[c], a * dt, fmax(fabs(a * dt), fabs(a * t))) ||
@@ -762,19 +768,21 @@ static bool drive_continues(const double* x0, const double* v0, const double* a0
 		        position[c], x0[c], dt * (v0[c] + 0.5 * dt * a),
 		        fmax(fmax(fabs(v0[c] * dt), fabs(0.5 * dt * dt * a)), fabs(v0[c] * t) + fabs(a * dt * t))))
 			return false;
+		power_jump += (acceleration[c] - a) * velocity[c];
+		power_scale += (fabs(acceleration[c]) + fabs(a)) * fabs(velocity[c]);
 	}
-	return true;
+	return fabs(power_jump) <= 16.0 * DBL_EPSILON * power_scale;
 }
 
 // After an input changed at the current time: CVODE restarts here when the options ask for it
 // and the right-hand side jumps, or when CVODE has stepped past (its steps assumed the input as it
 // was). An input that turns (a new rate or acceleration from the value, and for a drive the
-// velocity, it had reached: `continuous`) leaves the right-hand side continuous, only its slope
-// changes: BDF's history holds across such a kink (within its error control, which rejects steps
-// where the kink is sharp), while a restart would start again at first order and lose about rtol
-// of the motion each time (a sine force ramped through samples every 1 ms: 10 000 restarts over
-// 10 s put the undamped oscillator of tests/test_simulation_ramps.c 4.5e-3 m off, the history kept
-// 5.4e-8 m).
+// velocity, it had reached, delivering the same power: `continuous`) leaves the right-hand side
+// continuous, only its slope changes: BDF's history holds across such a kink (within its error
+// control, which rejects steps where the kink is sharp), while a restart would start again at
+// first order and lose about rtol of the motion each time (a sine force ramped through samples
+// every 1 ms: 10 000 restarts over 10 s put the undamped oscillator of
+// tests/test_simulation_ramps.c 4.5e-3 m off, the history kept 5.4e-8 m).
 static void note_input_change(sm_simulation* sim, bool continuous)
 {
 	sim->input_jumped = true;
@@ -824,9 +832,11 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 		sm_simulation_refresh_outputs(sim);
 		return SM_OK;
 	}
-	// The position and velocity where the path has them, a new acceleration: the path turns.
-	const bool turns = drive_continues(sim->drive_position + p, sim->drive_velocity + p,
-	                                   sim->drive_acceleration + p, dt, sim->time, position, velocity);
+	// The position and velocity where the path has them, a new acceleration that delivers the same
+	// power (at rest, or across the velocity): the path turns.
+	const bool turns =
+	    drive_continues(sim->drive_position + p, sim->drive_velocity + p, sim->drive_acceleration + p, dt,
+		                sim->time, position, velocity, acceleration);
 	// Back on the path it had before its first change since the last advance: that path again, to
 	// the bit, and once every input is back, no change at all (input_origins.c).
 	const sm_input_origin* found = sm_input_origins_find(sim, particle);

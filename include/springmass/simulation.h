@@ -12,15 +12,17 @@
 // or a failure do; an input set to what it was (the same force, a motion on its path, which then
 // stays the path it was) or a force on a held particle, which moves nothing, keeps the history, and
 // so does one that turns (a force at the value its ramp reached with a new rate, a drive at the
-// position and velocity its path reached with a new acceleration): the right-hand side stays
-// continuous, and a restart would only start BDF again at first order (docs/simulation.md, "Inputs
-// between calls"). So does an input set to another value and back before the next advance (a master
-// that tries a value and reads the outputs it gives): once every input changed since the last
-// advance is back on the path or ramp it had there, those are its values again, to the bit, and
-// nothing changed (the inputs' work included). A cut, a new state or a model update in between
-// keeps the restart it asks for, and an input set back after it is a change (its jump's work
-// counted), yet onto the path or ramp it had at the last advance, to the bit; a reset or a restore
-// forgets those paths. Keeping the history (step size, order) over changes too is faster, and which
+// position and velocity its path reached with a new acceleration across its velocity, or at rest):
+// the right-hand side stays continuous, and a restart would only start BDF again at first order
+// (docs/simulation.md, "Inputs between calls"; a new acceleration along a drive's velocity changes
+// the power its driver delivers, m a . v, which the inputs' work integrates: a jump). So does an
+// input set to another value and back before the next advance (a master that tries a value and
+// reads the outputs it gives): once every input changed since the last advance is back on the path
+// or ramp it had there, those are its values again, to the bit, and nothing changed (the inputs'
+// work included). A cut, a new state or a model update in between keeps the restart it asks for,
+// and an input set back after it is a change (its jump's work counted), yet onto the path or ramp
+// it had at the last advance, to the bit; a reset or a restore forgets those paths. Keeping the
+// history (step size, order) over changes too is faster, and which
 // is more accurate when inputs change at every call, as a co-simulation master's do, depends on the
 // model and the run. Each restart starts BDF again at first order and costs about rtol of the
 // motion: an undamped oscillator forced by a sine set every 1 ms lost 6 % of its energy in 10 s and
