@@ -233,7 +233,7 @@ static void load_start_values(instance* inst)
 	// solver.input_changes (the model file's "input_changes", "restart" unless it says "keep"): an
 	// input set is a jump of the right-hand side when its value changes (a force switched on, a drive
 	// that moves off its extrapolated path; the simulation compares), where CVODE restarts by
-	// default instead of stepping its high-order history across the discontinuity (docs/fmu.md,
+	// default if its high-order history cannot carry the jump within the tolerances (docs/fmu.md,
 	// "Measured: when to restart CVODE"). Inputs set to what they were keep the history.
 	inst->solver = settings.solver;
 	inst->rtol_set = false;

@@ -660,9 +660,11 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	                     FMU_SRC_SOLVER_LINEAR_SOLVER, sm_linear_solver_name(s->solver));
 	add_string_parameter(&b, "solver.jacobian", "Jacobian: exact or definite (definiteness-preserving)",
 	                     FMU_SRC_SOLVER_JACOBIAN, sm_jacobian_variant_name(s->jacobian));
-	add_string_parameter(&b, "solver.input_changes",
-	                     "an input that changes: restart (re-initialise CVODE) or keep (its history)",
-	                     FMU_SRC_SOLVER_INPUT_CHANGES, sm_input_changes_name(s->restart_on_input_change));
+	add_string_parameter(
+	    &b, "solver.input_changes",
+	    "an input that jumps: restart (re-initialise CVODE where its history cannot carry the "
+	    "jump within the tolerances) or keep (its history)",
+	    FMU_SRC_SOLVER_INPUT_CHANGES, sm_input_changes_name(s->restart_on_input_change));
 
 	// Ports.
 	int32_t nports = sm_document_port_count(doc);

@@ -38,6 +38,7 @@ typedef struct sm_input_flags {
 	bool input_jumped;
 	bool input_changed;
 	double jump_work;  // [J]
+	double jump_rate;  // [1/s]
 } sm_input_flags;
 
 struct sm_simulation {
@@ -121,6 +122,10 @@ struct sm_simulation {
 	// The inputs' work at jumps of driven particles (the energy each jump added), which CVODE's
 	// state does not hold until it restarts [J].
 	double jump_work;
+	// The largest velocity change per second the external forces' jumps since the last advance make
+	// at a free particle (|jump| / m), over that velocity's error tolerance [1/s]: the advance
+	// restarts CVODE if its interval times this exceeds 1 (note_input_change in simulation.c).
+	double jump_rate;
 
 	// Breakable springs: one root function each.
 	int32_t root_count;

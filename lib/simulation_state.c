@@ -200,6 +200,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sim->need_restart = true;
 	sim->forget_factor = true;
 	sim->input_changed = false;
+	sim->jump_rate = 0.0;
 	sm_input_origins_forget(sim);
 	sm_simulation_refresh_outputs(sim);
 	return SM_OK;

@@ -62,8 +62,9 @@ static int test_ramped_force_pushes_oscillator_as_closed_form(void)
 // 30 015 steps: each restart starts BDF again at first order and costs about rtol of the motion.
 // With the history kept: 5.4e-8 m in 10 004 steps at rtol 1e-6 (measured; 5e-7 m). On each
 // stretch the exact response is u = F(t) / k + A cos(w s) + B sin(w s), F linear in s. The same
-// samples held (a jump at every call but the first, whose 0 N is the force there already) still
-// restart it at each.
+// samples held jump at every call, by at most 1e-4 N: over the 1 ms to the next call 1e-7 m/s on
+// the 1 kg bob, within the velocity tolerance of 1e-6 m/s, so the history carries them too:
+// 2.2e-6 m off (measured; 2e-5 m), where a restart at each left it 4.5e-3 m off as well.
 static int test_a_force_that_turns_at_every_call_keeps_the_history(void)
 {
 	const double w = sqrt(OSC_K / OSC_M), h = 1e-3;
@@ -88,10 +89,7 @@ static int test_a_force_that_turns_at_every_call_keeps_the_history(void)
 		const sm_statistics stats = sm_simulation_statistics(sim);
 		printf("  %s: |x - exact| = %.3g m after %d calls, %lld steps, %lld restarts\n",
 		       held ? "held" : "ramped", off, calls, (long long)stats.steps, (long long)stats.restarts);
-		if (held)
-			ENSURE(stats.restarts == calls - 1);
-		else
-			ENSURE(stats.restarts == 0 && off < 5e-7);
+		ENSURE(stats.restarts == 0 && off < (held ? 2e-5 : 5e-7));
 		sm_simulation_destroy(sim);
 	}
 	sm_model_destroy(model);
@@ -137,8 +135,10 @@ static int test_ramp_set_later_runs_from_its_own_time(void)
 // A caller that sets the ramp again before every advance, as an FMU master sets an input and its
 // derivative at every communication point, with the force computed its own way (f0 + r t, or a
 // sum of r h over the steps), continues it: no input change, so with restart_on_input_change
-// CVODE takes the steps of the ramp set once. A force off the ramp by 1e-9 N restarts it, and so
-// does a new rate.
+// CVODE takes the steps of the ramp set once. A force off the ramp by 1e-3 N restarts it (over the
+// 0.01 s to the next call it changes the 1 kg bob's velocity by 1e-5 m/s, beyond the tolerance of
+// 1e-6 m/s + rtol |v|); one off by 1e-9 N (1e-11 m/s) keeps the history, as a new rate from the
+// force reached does.
 static int test_ramp_continued_by_the_caller_is_no_change(void)
 {
 	sm_model* model = oscillator(OSC_M, OSC_K, 0.5, 0.1);
@@ -147,9 +147,9 @@ static int test_ramp_continued_by_the_caller_is_no_change(void)
 	def.restart_on_input_change = true;
 	const double f0[3] = {0.3, -0.2, 0.1}, r[3] = {1.5, 0.25, -0.75};
 	const double h = 0.01;
-	int64_t steps[5];
-	double bob_x[5];
-	for (int way = 0; way < 5; way++) {
+	int64_t steps[6];
+	double bob_x[6];
+	for (int way = 0; way < 6; way++) {
 		sm_simulation* sim = sm_simulation_create(model, &def, NULL);
 		ENSURE(sim != NULL);
 		ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, f0, r), SM_OK);
@@ -159,8 +159,8 @@ static int test_ramp_continued_by_the_caller_is_no_change(void)
 				double f[3], rate[3] = {r[0], r[1], r[2]};
 				for (int c = 0; c < 3; c++)
 					f[c] = way == 1 ? f0[c] + r[c] * t : way == 2 ? summed[c] : f0[c] + r[c] * t;
-				if (k == 50 && way == 3)
-					f[0] += 1e-9;
+				if (k == 50 && (way == 3 || way == 5))
+					f[0] += way == 3 ? 1e-3 : 1e-9;
 				if (k == 50 && way == 4)
 					rate[0] *= 2.0;
 				ENSURE_STATUS(sm_simulation_set_external_force_ramp(sim, 1, f, rate), SM_OK);
@@ -173,10 +173,10 @@ static int test_ramp_continued_by_the_caller_is_no_change(void)
 		const sm_statistics stats = sm_simulation_statistics(sim);
 		steps[way] = stats.steps;
 		bob_x[way] = sm_simulation_positions(sim)[3];
-		// One restart for the ramp set at t = 0; off the ramp at k = 50 one more and then, back on
-		// the first ramp, one more again. A new rate at k = 50 from the force reached turns the ramp
-		// and keeps the history; the caller then gives the first ramp's values, off the new one: a
-		// jump, one restart, and on that ramp from there.
+		// One restart for the ramp set at t = 0; off the ramp by 1e-3 N at k = 50 one more and then,
+		// back on the first ramp, one more again; off by 1e-9 N none. A new rate at k = 50 from the
+		// force reached turns the ramp and keeps the history; the caller then gives the first ramp's
+		// values, off the new one by 0.015 N: a jump, one restart, and on that ramp from there.
 		ENSURE(stats.restarts == (way == 3 ? 3 : way == 4 ? 2 : 1));
 		sm_simulation_destroy(sim);
 	}
@@ -186,6 +186,7 @@ static int test_ramp_continued_by_the_caller_is_no_change(void)
 	ENSURE_NEAR(bob_x[1], bob_x[0], 1e-12);
 	ENSURE_NEAR(bob_x[2], bob_x[0], 1e-12);
 	ENSURE(fabs(bob_x[3] - bob_x[0]) > 0.0 || steps[3] != steps[0]);
+	ENSURE(fabs(bob_x[5] - bob_x[0]) > 0.0 || steps[5] != steps[0]);
 	sm_model_destroy(model);
 	return 0;
 }

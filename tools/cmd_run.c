@@ -73,9 +73,8 @@ static void usage(FILE* out)
 	        "                         default the rows are interpolated from the solver's steps\n"
 	        "  --jacobian NAME        exact or definite (the definiteness-preserving variant; the pcg\n"
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
-	        "  --input-changes NAME   restart (default) or keep: whether an --input row where a signal\n"
-	        "                         jumps re-initialises CVODE or keeps its history (where a force\n"
-	        "                         only turns, a new slope from the value reached, CVODE keeps it)\n"
+	        "  --input-changes NAME   restart (default): CVODE restarts at an --input jump its\n"
+	        "                         history cannot carry; keep: never\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
 	        "  -h, --help             this text\n");

@@ -7,37 +7,35 @@
 //
 // Inputs between calls. sm_simulation_set_driven and sm_simulation_set_external_force (and their
 // forms that change along a step: _accelerating, _ramp) change what the right-hand side sees from
-// the current time on. By default (restart_on_input_change) an input that jumps re-initialises
-// CVODE there, as a state set with sm_simulation_set_state, a spring break, a model update, a reset
-// or a failure do; an input set to what it was (the same force, a motion on its path, which then
-// stays the path it was) or a force on a held particle, which moves nothing, keeps the history, and
-// so does one that turns (a force at the value its ramp reached with a new rate, a drive at the
-// position and velocity its path reached with a new acceleration across its velocity, or at rest):
-// the right-hand side stays continuous, and a restart would only start BDF again at first order
-// (docs/simulation.md, "Inputs between calls"; a new acceleration along a drive's velocity changes
-// the power its driver delivers, m a . v, which the inputs' work integrates: a jump). So does an
-// input set to another value and back before the next advance (a master that tries a value and
-// reads the outputs it gives): once every input changed since the last advance is back on the path
-// or ramp it had there, those are its values again, to the bit, and nothing changed (the inputs'
-// work included). A cut, a new state or a model update in between keeps the restart it asks for,
-// and an input set back after it is a change (its jump's work counted), yet onto the path or ramp
-// it had at the last advance, to the bit; a reset or a restore forgets those paths. Keeping the
-// history (step size, order) over changes too is faster, and which
-// is more accurate when inputs change at every call, as a co-simulation master's do, depends on the
-// model and the run. Each restart starts BDF again at first order and costs about rtol of the
-// motion: an undamped oscillator forced by a sine set every 1 ms lost 6 % of its energy in 10 s and
-// 47 % in 100 s at rtol 1e-6, against 6e-7 with the history kept (docs/fmu.md, "Measured: when to
-// restart CVODE"). Kept history errs where the inputs change by much at every call: a damped base
-// excitation sampled every 1 ms missed its steady-state amplitude by 9e-4 (relative) at rtol 1e-6
-// and 1e-8 alike, against 2e-5 with restarts (the steps that straddle the changes carry an error
-// CVODE's error test does not see; tests/test_simulation.c,
-// test_base_excitation_sampled_at_every_step). Restarting cost 5.9 times the steps and 6.2 times
+// the current time on. A restart of CVODE (as a state set with sm_simulation_set_state, a spring
+// break, a model update, a reset or a failure make) starts BDF again at first order, which costs
+// about rtol of the motion each time, so by default (restart_on_input_change) a changed input
+// restarts it only where BDF's history cannot carry the change (docs/simulation.md, "Inputs between
+// calls"). An input set to what it was (the same force, a motion on its path, which then stays the
+// path it was) or a force on a held particle, which moves nothing, keeps the history. So does one
+// that turns (a force at the value its ramp reached with a new rate, a drive at the position and
+// velocity its path reached with a new acceleration across its velocity, or at rest): the
+// right-hand side stays continuous. So does a force that jumps by little: the advance restarts only
+// if its interval (or max_step) times |jump| / m exceeds the velocity's tolerance rtol |v| +
+// atol_velocity at some particle (an undamped oscillator under a sine force held over each 1 ms,
+// restarted at every jump, was 4.5e-3 m off after 10 s; kept, 2.2e-6 m). A drive that jumps, or
+// turns along its velocity (which changes the power its driver delivers, m a . v, integrated into
+// the inputs' work), restarts it (a damped base excitation sampled every 1 ms missed its
+// steady-state amplitude by 9e-4 with the history kept, 2e-5 with restarts: the steps that straddle
+// the changes carry an error CVODE's error test does not see; tests/test_simulation.c,
+// test_base_excitation_sampled_at_every_step). An input set to another value and back before the
+// next advance (a master that tries a value and reads the outputs it gives) changes nothing: once
+// every input changed since the last advance is back on the path or ramp it had there, those are
+// its values again, to the bit (the inputs' work included). A cut, a new state or a model update in
+// between keeps the restart it asks for, and an input set back after it is a change (its jump's
+// work counted), yet onto the path or ramp it had at the last advance, to the bit; a reset or a
+// restore forgets those paths. restart_on_input_change = false keeps the history over every change:
+// faster where inputs jump by much at every call (restarting cost 5.9 times the steps and 6.2 times
 // the wall time per simulated second on the 8 x 8 benchmark cloth with a force changed every 1 ms,
-// 2.3 and 2.1 times every 10 ms (bench_cloth with RESTART_EVERY, bench/README.md): keep the history
-// (restart_on_input_change = false) for long runs of lightly damped models and where inputs change
-// rarely or by little. A jump the error control cannot absorb then (a step force large against the
-// model's, a driven particle moved far) makes CVODE fail; the advance restarts at the jump and
-// tries once more, so the caller sees a restart in the statistics rather than an error.
+// 2.3 and 2.1 times every 10 ms; bench_cloth with RESTART_EVERY, bench/README.md), less accurate
+// there. A jump the error control cannot absorb then (a step force large against the model's, a
+// driven particle moved far) makes CVODE fail; the advance restarts at the jump and tries once
+// more, so the caller sees a restart in the statistics rather than an error.
 //
 // Reproducibility. On one machine the same model, options and calls give the same trajectory
 // bit for bit, also in concurrent threads, with one exception: the CHOLMOD factorisations (the reduced
@@ -148,10 +146,10 @@ typedef struct sm_simulation_def {
 	/// largest internal step [s], above SM_MAX_STEP_FLOOR = 5.6e-309 s, or 0 (default) = unlimited
 	double max_step;
 	int32_t max_steps;  ///< internal steps allowed per sm_simulation_advance, breaks included; default 100000
-	/// Re-initialise CVODE when sm_simulation_set_driven or sm_simulation_set_external_force
-	/// changes an input (default true; false keeps CVODE's history over changes: faster, more
-	/// accurate over long runs of lightly damped models, less where inputs change by much at every
-	/// call; see "Inputs between calls" above). Model files: "input_changes", "restart" or "keep".
+	/// Re-initialise CVODE where sm_simulation_set_driven or sm_simulation_set_external_force
+	/// changes an input by more than its history can carry (default true; false keeps CVODE's
+	/// history over every change: faster, less accurate where inputs jump by much at every call;
+	/// see "Inputs between calls" above). Model files: "input_changes", "restart" or "keep".
 	bool restart_on_input_change;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
 	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
