@@ -7,6 +7,8 @@ import pathlib
 import subprocess
 import sys
 
+import fmpy
+import fmpy.fmi2
 import pytest
 
 HERE = pathlib.Path(__file__).resolve().parent
@@ -17,6 +19,24 @@ CLI = BUILD / "tools" / "springmass"
 BUNDLED_FMUS = BUILD / "fmus"
 MODELS = HERE / "models"
 SANITIZED = os.environ.get("SPRINGMASS_SANITIZE", "") not in ("", "0", "OFF")
+
+# fmpy 0.3.32's simulate_fmu gives a logger it is handed to its native message formatter
+# (fmpy.logging.addLoggerProxy), which keeps it in one slot for the whole process; the default
+# callbacks, which a call without a logger uses, log through that slot too, so a call without one
+# after a call with one logs through a callback freed when that call returned (a segmentation fault
+# when the FMU logs, seen with the files of this folder run in one process). Every simulate_fmu of
+# the tests therefore gives a logger, by default fmpy's own printer, so that the slot holds the
+# current call's.
+_simulate_fmu = fmpy.simulate_fmu
+
+
+def _simulate_fmu_with_a_logger(*args, **kwargs):
+    if kwargs.get("logger") is None:
+        kwargs["logger"] = fmpy.fmi2.printLogMessage
+    return _simulate_fmu(*args, **kwargs)
+
+
+fmpy.simulate_fmu = _simulate_fmu_with_a_logger
 
 
 @pytest.fixture(scope="session")
