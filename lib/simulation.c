@@ -721,55 +721,11 @@ static bool on_path(double given, double value, double change, double term)
 	return isfinite(scale) && fabs(given - path) <= 16.0 * DBL_EPSILON * scale;
 }
 
-// Whether a driven particle's position, velocity and acceleration given now lie on the path
-// (x0, v0, a0) that started dt ago (on_path: however the caller summed it).
-static bool on_driven_path(const double* x0, const double* v0, const double* a0, double dt,
-                           const double* position, const double* velocity, const double* acceleration)
-{
-	for (int c = 0; c < 3; c++) {
-		const double a = a0[c];
-		if (acceleration[c] != a || !on_path(velocity[c], v0[c], a * dt, fabs(a * dt)) ||
-		    !on_path(position[c], x0[c], dt * (v0[c] + 0.5 * dt * a),
-		             fmax(fabs(v0[c] * dt), fabs(0.5 * dt * dt * a))))
-			return false;
-	}
-	return true;
-}
-
-// Whether an external force and rate given now lie on the ramp (f0, r0) that started dt ago.
-static bool on_force_ramp(const double* f0, const double* r0, double dt, const double* force,
-                          const double* rate)
-{
-	for (int c = 0; c < 3; c++)
-		if (rate[c] != r0[c] || !on_path(force[c], f0[c], r0[c] * dt, fabs(r0[c] * dt)))
-			return false;
-	return true;
-}
-
-// The velocity change per second a free particle's external force given now makes against the one
-// its ramp has, |jump| / m, over the velocity's error tolerance rtol |v| + atol (per component, the
-// largest) [1/s]: note_input_change.
-static double force_jump_rate(const sm_simulation* sim, int32_t particle, const double* force)
-{
-	const int32_t k = sim->model->free_index[particle];
-	if (k < 0)
-		return 0.0;
-	const size_t p = 3 * (size_t)particle;
-	const double dt = sim->time - sim->force_time[particle];
-	const double* atol = N_VGetArrayPointer(sim->tolerances) + sim->dofs + 3 * (size_t)k;
-	double rate = 0.0;
-	for (int c = 0; c < 3; c++) {
-		const double jump = force[c] - (sim->external_force[p + c] + sim->force_rate[p + c] * dt);
-		const double tolerance = sim->def.relative_tolerance * fabs(sim->velocity[p + c]) + atol[c];
-		rate = fmax(rate, fabs(jump) / sim->model->mass[particle] / tolerance);
-	}
-	return isnan(rate) ? INFINITY : rate;
-}
-
 // Whether a force given at time t continues the ramp (f0, r0) that started dt ago, whatever rate
-// comes with it: on the ramp as on_force_ramp has it, or off it by no more than the ramp moves in
-// 16 units of round-off of t (a caller's times and the ramp's start are rounded each: a ramp through
-// samples every 1 ms is off by a few of them at 10 s where the force crosses 0).
+// comes with it: within on_path's round-off, and beyond it by no more than the ramp moves in 16
+// units of round-off of t (a caller's times and the ramp's start are rounded each: a ramp through
+// samples every 1 ms is off by a few of them at 10 s where the force crosses 0). t = 0 allows
+// on_path's round-off alone.
 static bool force_continues(const double* f0, const double* r0, double dt, double t, const double* force)
 {
 	for (int c = 0; c < 3; c++)
@@ -778,16 +734,10 @@ static bool force_continues(const double* f0, const double* r0, double dt, doubl
 	return true;
 }
 
-// The same for a drive (x0, v0, a0): the position and the velocity given continue its path, and
-// the new acceleration does not change the power its driver delivers. That power, (m a - f + f_ext)
-// . v (sm_simulation_input_power_at), is the right-hand side of the inputs' work, part of CVODE's
-// state: a new acceleration along the velocity makes it jump by m (a - a0) . v, and BDF's history
-// stepped over such jumps at every call (a path through samples every 1 ms) left the energy
-// balance off by the same 2.8e-4 J at rtol 1e-6, 1e-8 and 1e-10 (tests/test_input_work.c).
+// The same for a drive (x0, v0, a0): the position and the velocity given continue its path.
 static bool drive_continues(const double* x0, const double* v0, const double* a0, double dt, double t,
-                            const double* position, const double* velocity, const double* acceleration)
+                            const double* position, const double* velocity)
 {
-	double power_jump = 0.0, power_scale = 0.0;
 	for (int c = 0; c < 3; c++) {
 		const double a = a0[c];
 		if (!on_path(velocity[c], v0[c], a * dt, fmax(fabs(a * dt), fabs(a * t))) ||
@@ -795,10 +745,64 @@ static bool drive_continues(const double* x0, const double* v0, const double* a0
 		        position[c], x0[c], dt * (v0[c] + 0.5 * dt * a),
 		        fmax(fmax(fabs(v0[c] * dt), fabs(0.5 * dt * dt * a)), fabs(v0[c] * t) + fabs(a * dt * t))))
 			return false;
-		power_jump += (acceleration[c] - a) * velocity[c];
-		power_scale += (fabs(acceleration[c]) + fabs(a)) * fabs(velocity[c]);
+	}
+	return true;
+}
+
+// Whether a driven particle's position, velocity and acceleration given now lie on the path
+// (x0, v0, a0) that started dt ago (on_path: however the caller summed it).
+static bool on_driven_path(const double* x0, const double* v0, const double* a0, double dt,
+                           const double* position, const double* velocity, const double* acceleration)
+{
+	for (int c = 0; c < 3; c++)
+		if (acceleration[c] != a0[c])
+			return false;
+	return drive_continues(x0, v0, a0, dt, 0.0, position, velocity);
+}
+
+// Whether an external force and rate given now lie on the ramp (f0, r0) that started dt ago.
+static bool on_force_ramp(const double* f0, const double* r0, double dt, const double* force,
+                          const double* rate)
+{
+	for (int c = 0; c < 3; c++)
+		if (rate[c] != r0[c])
+			return false;
+	return force_continues(f0, r0, dt, 0.0, force);
+}
+
+// Whether a drive's new acceleration leaves the power its driver delivers as it was. That power,
+// (m a - f + f_ext) . v (sm_simulation_input_power_at), is the right-hand side of the inputs'
+// work, part of CVODE's state: a new acceleration along the velocity makes it jump by
+// m (a - a0) . v, and BDF's history stepped over such jumps at every call (a path through samples
+// every 1 ms) left the energy balance off by the same 2.8e-4 J at rtol 1e-6, 1e-8 and 1e-10
+// (tests/test_input_work.c).
+static bool same_driver_power(const double* a0, const double* acceleration, const double* velocity)
+{
+	double power_jump = 0.0, power_scale = 0.0;
+	for (int c = 0; c < 3; c++) {
+		power_jump += (acceleration[c] - a0[c]) * velocity[c];
+		power_scale += (fabs(acceleration[c]) + fabs(a0[c])) * fabs(velocity[c]);
 	}
 	return fabs(power_jump) <= 16.0 * DBL_EPSILON * power_scale;
+}
+
+// The velocity change per second a free particle's external force given now makes against the
+// value its ramp (started dt ago) has, |jump| / m, over the velocity's error tolerance
+// rtol |v| + atol (per component, the largest) [1/s]: note_input_change.
+static double force_jump_rate(const sm_simulation* sim, int32_t particle, double dt, const double* force)
+{
+	const int32_t k = sim->model->free_index[particle];
+	if (k < 0)
+		return 0.0;
+	const size_t p = 3 * (size_t)particle;
+	const double* atol = N_VGetArrayPointer(sim->tolerances) + sim->dofs + 3 * (size_t)k;
+	double rate = 0.0;
+	for (int c = 0; c < 3; c++) {
+		const double jump = force[c] - (sim->external_force[p + c] + sim->force_rate[p + c] * dt);
+		const double tolerance = sim->def.relative_tolerance * fabs(sim->velocity[p + c]) + atol[c];
+		rate = fmax(rate, fabs(jump) / sim->model->mass[particle] / tolerance);
+	}
+	return isnan(rate) ? INFINITY : rate;
 }
 
 // After an input changed at the current time: CVODE restarts here when the options ask for it
@@ -873,9 +877,9 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	}
 	// The position and velocity where the path has them, a new acceleration that delivers the same
 	// power (at rest, or across the velocity): the path turns.
-	const bool turns =
-	    drive_continues(sim->drive_position + p, sim->drive_velocity + p, sim->drive_acceleration + p, dt,
-		                sim->time, position, velocity, acceleration);
+	const bool turns = drive_continues(sim->drive_position + p, sim->drive_velocity + p,
+	                                   sim->drive_acceleration + p, dt, sim->time, position, velocity) &&
+	                   same_driver_power(sim->drive_acceleration + p, acceleration, velocity);
 	// Back on the path it had before its first change since the last advance: that path again, to
 	// the bit, and once every input is back, no change at all (input_origins.c).
 	const sm_input_origin* found = sm_input_origins_find(sim, particle);
@@ -940,7 +944,7 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	if (on_force_ramp(f, r, dt, force, rate))
 		return SM_OK;
 	const bool turns = force_continues(f, r, dt, sim->time, force);  // the force the ramp has, a new rate
-	const double jump_rate = turns ? 0.0 : force_jump_rate(sim, particle, force);
+	const double jump_rate = turns ? 0.0 : force_jump_rate(sim, particle, dt, force);
 	const bool free = sim->model->motion[particle] == SM_PARTICLE_FREE;
 	// Back on the ramp it had before its first change since the last advance: that ramp again, to
 	// the bit, and once every input is back, no change at all (input_origins.c).

@@ -2,6 +2,7 @@
 
 The build directory comes from SPRINGMASS_BUILD_DIR (ctest sets it), else <checkout>/build.
 """
+import math
 import os
 import pathlib
 import subprocess
@@ -37,6 +38,18 @@ def _simulate_fmu_with_a_logger(*args, **kwargs):
 
 
 fmpy.simulate_fmu = _simulate_fmu_with_a_logger
+
+
+def undamped_response_to_held_forces(forces, h, x=0.7, v=0.0):
+    """(x [m], v [m/s]) of the bob of models/driven_oscillator.json with d = 0 (2 kg on 50 N/m,
+    rest length 0.5 m, anchor at 0) after forces[k] [N] held over the k-th of len(forces) steps of
+    h [s] each, from x and v: exactly, each step a rotation about its rest point 0.5 + F / 50."""
+    w = math.sqrt(50.0 / 2.0)
+    c, s = math.cos(w * h), math.sin(w * h)
+    for f in forces:
+        rest = 0.5 + f / 50.0
+        x, v = rest + (x - rest) * c + v / w * s, -(x - rest) * w * s + v * c
+    return x, v
 
 
 @pytest.fixture(scope="session")

@@ -20,7 +20,7 @@ import zipfile
 import numpy as np
 import pytest
 
-from conftest import CLI, ROOT, SANITIZED
+from conftest import CLI, ROOT, SANITIZED, undamped_response_to_held_forces
 from fmu_helpers import read_documentation
 
 MODELS = ROOT / "models"
@@ -613,17 +613,6 @@ def test_run_takes_rows_that_keep_the_inputs_course_as_no_change(tmp_path):
     assert anchor[0.5] == 0.0 and anchor[0.7] == pytest.approx(0.2, abs=1e-12)
 
 
-def held_response(forces, h):
-    """The undamped bob's position after forces[k] [N] held over the k-th stretch of h [s] each,
-    exactly: on each stretch a rotation about the held force's rest point."""
-    w, x, v = math.sqrt(OSC_K / OSC_M), OSC_X0, 0.0
-    for f in forces:
-        rest = OSC_L0 + f / OSC_K
-        x, v = rest + (x - rest) * math.cos(w * h) + v / w * math.sin(w * h), \
-            -(x - rest) * w * math.sin(w * h) + v * math.cos(w * h)
-    return x
-
-
 @pytest.mark.parametrize("input_changes", ["restart", "keep"])
 def test_run_restarts_where_a_held_input_jumps_by_much_unless_told_to_keep_the_history(tmp_path, input_changes):
     # Held inputs on the undamped bob over 10 s, against its exact response. 0.1 sin(t) N held over
@@ -640,7 +629,7 @@ def test_run_restarts_where_a_held_input_jumps_by_much_unless_told_to_keep_the_h
         err = cli("run", OSC, "--input", tmp_path / f"{name}.csv", "--input-changes", input_changes, "--t-end",
                   "10", "--output-interval", "10", "-o", out).stderr
         header, result = read_csv(out)
-        off = abs(result[-1, header.index("tip.x")] - held_response(forces, h))
+        off = abs(result[-1, header.index("tip.x")] - undamped_response_to_held_forces(forces, h)[0])
         return off, int(re.search(r"(\d+) restarts", err).group(1))
 
     off, restarts = run("sine", [0.1 * math.sin(k * 1e-3) for k in range(10000)], 1e-3)

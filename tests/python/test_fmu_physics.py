@@ -12,7 +12,7 @@ import scipy.special
 from fmpy import read_model_description, simulate_fmu
 from fmpy.fmi1 import FMICallException
 
-from conftest import BUNDLED_FMUS, CLI, MODELS, ROOT
+from conftest import BUNDLED_FMUS, CLI, MODELS, ROOT, undamped_response_to_held_forces
 from fmu_helpers import Instance
 
 # driven_oscillator.json: bob of mass m = 2 kg on a spring k = 50 N/m, rest length 0.5 m,
@@ -771,19 +771,6 @@ def test_a_harmonic_force_held_over_each_step_gives_the_closed_form_response_hal
         assert work == pytest.approx(dissipated, rel=1e-6), (r, steps)
 
 
-def held_force_response(x, v, force, h, steps):
-    """Position and velocity of the undamped driven oscillator (M = 2 kg, K = 50 N/m, rest length
-    0.5 m, anchor at 0) after `steps` steps of h [s] under force(t) [N] held over each: exactly,
-    a rotation about each step's equilibrium 0.5 + F / K."""
-    w = math.sqrt(50.0 / 2.0)
-    c, s = math.cos(w * h), math.sin(w * h)
-    for k in range(steps):
-        rest = 0.5 + force(k * h) / 50.0
-        u = x - rest
-        x, v = rest + u * c + v / w * s, -u * w * s + v * c
-    return x, v
-
-
 @pytest.mark.parametrize("input_changes", ["restart", "keep"])
 def test_an_undamped_oscillator_forced_at_every_point_keeps_its_energy(test_fmu, input_changes):
     # The undamped driven oscillator (d = 0) under 0.1 sin(t) N set at every 1 ms point for 10 s,
@@ -803,7 +790,7 @@ def test_an_undamped_oscillator_forced_at_every_point_keeps_its_energy(test_fmu,
         for k in range(steps):
             inst.set("tip.fx", 0.1 * math.sin(k * h))
             s.doStep(k * h, h)
-        x, v = held_force_response(0.7, 0.0, lambda t: 0.1 * math.sin(t), h, steps)
+        x, _ = undamped_response_to_held_forces([0.1 * math.sin(k * h) for k in range(steps)], h)
         kinetic, elastic, work = inst.get("energy.kinetic", "energy.elastic", "energy.input")
         restarts = [int(re.search(r"(\d+) restarts", m[2]).group(1)) for m in inst.messages if m[1] == "logSolver"]
         assert abs(inst.get("tip.x") - x) < 2e-5 and abs(kinetic + elastic - work - 1.0) < 1e-5
