@@ -6,7 +6,7 @@
 //
 // State, right-hand side and Jacobian:
 //   y = [x; v; e; w] over the free particles, x' = v, v' = M^-1 f(x, v, t), e' = P_dissipated(x, v),
-//   w' = P_input(x, v, t) (sm_simulation_input_power_at).
+//   w' = P_input(x, v, t) - the driven particles' m a . v (sm_simulation_driving_power_at).
 //   The Newton matrix of BDF is I - gamma J with
 //     J = [[0, I, 0, 0], [M^-1 K, M^-1 D, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0]],  K = df/dx, D = df/dv;
 //   the energies e and w feed back into nothing, so their rows and columns of J are left out
@@ -38,8 +38,14 @@
 // forces (f - f_ext: springs, damping, gravity, its load) what its acceleration a needs,
 // m a - (f - f_ext); with the external force it takes, the outside does (m a - f + f_ext) . v on
 // it. With the dissipated power they balance the change of kinetic, elastic and gravitational energy.
-double sm_simulation_input_power_at(const sm_simulation* sim, const double* v, const double* f,
-                                    const double* external)
+//
+// CVODE integrates this power without the part m a . v, which is the rate of the driven particles'
+// kinetic energy along their paths (sm_simulation_input_work adds that energy as the paths have it):
+// a drive given a new acceleration along its velocity makes m a . v jump, and the rest of the power
+// stays continuous, so CVODE's history can step over the change. with_kinetic_rate: the whole
+// power; without it, the part CVODE integrates.
+static double input_power(const sm_simulation* sim, const double* v, const double* f, const double* external,
+                          bool with_kinetic_rate)
 {
 	double power = 0.0;
 	if (sim->forced_particles > 0)
@@ -53,14 +59,40 @@ double sm_simulation_input_power_at(const sm_simulation* sim, const double* v, c
 			if (sim->model->motion[i] != SM_PARTICLE_DRIVEN)
 				continue;
 			const size_t p = 3 * (size_t)i;
-			const double m = sim->model->mass[i];
+			const double m = with_kinetic_rate ? sim->model->mass[i] : 0.0;
 			for (int c = 0; c < 3; c++)
 				power += (m * sim->drive_acceleration[p + c] - f[p + c] + external[p + c]) * v[p + c];
 		}
 	return power;
 }
 
-// y' = [v; M^-1 f; P_dissipated; P_input]. A non-finite state, the energies included, is a
+double sm_simulation_input_power_at(const sm_simulation* sim, const double* v, const double* f,
+                                    const double* external)
+{
+	return input_power(sim, v, f, external, true);
+}
+
+double sm_simulation_driving_power_at(const sm_simulation* sim, const double* v, const double* f,
+                                      const double* external)
+{
+	return input_power(sim, v, f, external, false);
+}
+
+// The driven particles' kinetic energy [J] at the velocities v of all particles.
+double sm_simulation_driven_kinetic_energy(const sm_simulation* sim, const double* v)
+{
+	double energy = 0.0;
+	if (sim->driven_count > 0)
+		for (int32_t k = 0; k < sim->constrained_count; k++) {
+			const int32_t i = sim->constrained[k];
+			if (sim->model->motion[i] == SM_PARTICLE_DRIVEN)
+				energy += 0.5 * sim->model->mass[i] *
+				          (v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
+		}
+	return energy;
+}
+
+// y' = [v; M^-1 f; P_dissipated; P_input - m a . v]. A non-finite state, the energies included, is a
 // recoverable failure (> 0): CVODE retries with a smaller step.
 int sm_simulation_rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data)
 {
@@ -97,7 +129,7 @@ int sm_simulation_rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_dat
 		ydot[nd + q + 2] = f[p + 2] * w;
 	}
 	ydot[sm_simulation_dissipated_index(sim)] = power;
-	ydot[sm_simulation_work_index(sim)] = sm_simulation_input_power_at(sim, v, f, external);
+	ydot[sm_simulation_work_index(sim)] = sm_simulation_driving_power_at(sim, v, f, external);
 	for (int64_t i = nd; i < length; i++)
 		if (!isfinite(ydot[i]))
 			return 1;

@@ -3,8 +3,10 @@
 // (linear_solver_*.c).
 //
 // The CVODE state vector holds the free particles only, followed by two energies: the dissipated
-// energy e and the work w the inputs did,
-//   y = [x_free (3 nf) ; v_free (3 nf) ; e ; w],  y' = [v ; M^-1 f(x, v) ; P_dissipated ; P_input].
+// energy e and the work w the inputs did, less the driven particles' kinetic energy K_d,
+//   y = [x_free (3 nf) ; v_free (3 nf) ; e ; w - K_d],
+//   y' = [v ; M^-1 f(x, v) ; P_dissipated ; P_input - sum m a . v over the driven particles]
+// (the inputs' work is w - K_d + K_d, the latter from the paths: sm_simulation_input_work).
 // Constrained particles take their positions from the simulation's own arrays: fixed ones
 // from the model, driven ones from x(t) = drive_position + drive_velocity s + drive_acceleration
 // s^2 / 2, s = t - drive_time.
@@ -119,8 +121,10 @@ struct sm_simulation {
 	double* work_velocity;
 	double* work_force;
 	double* work_external;  // the external forces at one time, when some ramp [N]
-	// The inputs' work at jumps of driven particles (the energy each jump added), which CVODE's
-	// state does not hold until it restarts [J].
+	// The inputs' work at jumps of driven particles (the energy each jump added beyond their
+	// kinetic energy), and at changes of time or mass of the driven particles (what keeps the work
+	// as it was while their kinetic energy changes), kept beside CVODE's state (a snapshot adds it
+	// in) [J].
 	double jump_work;
 	// The largest velocity change per second the external forces' jumps since the last advance make
 	// at a free particle (|jump| / m), over that velocity's error tolerance [1/s]: the advance
@@ -239,14 +243,18 @@ void sm_simulation_load_initial_state(sm_simulation* sim);
 
 // The functions CVODE calls, given to it at creation (simulation_callbacks.c); user data: the
 // simulation.
-// CVODE's right-hand side y' = [v; M^-1 f; P_dissipated; P_input] at CVODE's time t, also the
+// CVODE's right-hand side y' = [v; M^-1 f; P_dissipated; P_input - m a . v] at CVODE's time t, also the
 // explicit step of an advance too short for CVODE: 0, or 1 (recoverable) where the state or its
 // derivative is not finite.
 int sm_simulation_rhs(sunrealtype t, N_Vector yv, N_Vector ydotv, void* user_data);
 // The power the inputs deliver [W] at the velocities v and forces f of all particles (external
-// forces included) and the external forces `external`.
+// forces included) and the external forces `external`; the part of it CVODE integrates, without
+// the rate m a . v of the driven particles' kinetic energy; and that energy [J].
 double sm_simulation_input_power_at(const sm_simulation* sim, const double* v, const double* f,
                                     const double* external);
+double sm_simulation_driving_power_at(const sm_simulation* sim, const double* v, const double* f,
+                                      const double* external);
+double sm_simulation_driven_kinetic_energy(const sm_simulation* sim, const double* v);
 // The Jacobian of the dense solver's matrix and of the KLU solver's CSR matrix (whose pattern
 // sm_simulation_build_klu_pattern builds first, SM_ERROR_OUT_OF_MEMORY if it cannot): 0, or -1.
 int sm_simulation_jacobian_dense(sunrealtype t, N_Vector yv, N_Vector fy, SUNMatrix J, void* user_data,
