@@ -44,7 +44,11 @@ sm_status sm_model_explicit_limit(const sm_model* model, sm_explicit_limit* limi
 			continue;
 		const int32_t a = model->spring_a[k], b = model->spring_b[k];
 		const bool free_a = model->free_index[a] >= 0, free_b = model->free_index[b] >= 0;
-		const double between = free_a && free_b ? 1.0 / sqrt(model->mass[a] * model->mass[b]) : 0.0;
+		// 1/sqrt(m_a m_b) as the product of the roots' reciprocals, each within 7e-155 to 7e153 for
+		// the masses a model holds: m_a m_b itself underflows below 1e-154 kg and overflows above
+		// 1e154 kg, and the bound would be infinite or leave the term out.
+		const double between =
+		    free_a && free_b ? (1.0 / sqrt(model->mass[a])) * (1.0 / sqrt(model->mass[b])) : 0.0;
 		const double ks = fabs(model->stiffness[k]), kd = fabs(model->damping[k]);
 		if (free_a) {
 			row[a] += row_term(ks, 1.0 / model->mass[a], between);

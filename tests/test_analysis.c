@@ -2554,6 +2554,45 @@ static int test_explicit_step_limit_edges(void)
 	return 0;
 }
 
+// The explicit step limit does not depend on the unit of mass. Two free particles of m kg joined by
+// a spring of k = 3 m N/m and c = 0.5 m N s/m at rest have the highest angular frequency
+// sqrt(2 k / m) = sqrt(6) rad/s and damping rate 2 c / m = 1 1/s (the relative motion, of reduced
+// mass m / 2), which the Gershgorin rows k (1/m + 1/sqrt(m m)) give exactly. At 1e-170 kg and
+// 1e170 kg the product m m is below the smallest double and above the largest: the bounds must
+// still be those, not infinite (no stable step) nor those of 1/m alone (sqrt(3) rad/s and 0.5 1/s:
+// a step of 1 s, 1.5 times the stable 2/3 s, on which symplectic Euler grows without bound).
+// 1e-15 relative: a few roundings of the row sums and the root.
+static int test_explicit_step_limit_does_not_depend_on_the_unit_of_mass(void)
+{
+	const double masses[3] = {1.0, 1e-170, 1e170};
+	for (int n = 0; n < 3; n++) {
+		const sm_model_def md = sm_default_model_def();
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		sm_particle_def p = sm_default_particle_def();
+		p.mass = masses[n];
+		for (int i = 0; i < 2; i++) {
+			p.position[0] = i;
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		}
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 3.0 * masses[n];
+		s.damping = 0.5 * masses[n];
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_explicit_limit limit;
+		ENSURE_STATUS(sm_model_explicit_limit(model, &limit), SM_OK);
+		printf("  %g kg: omega_max %.17g rad/s, damping rate %.17g 1/s\n", masses[n], limit.omega_max,
+		       limit.damping_rate);
+		ENSURE_NEAR(limit.omega_max, sqrt(6.0), 1e-15 * sqrt(6.0));
+		ENSURE_NEAR(limit.damping_rate, 1.0, 1e-15);
+		ENSURE(limit.step == sm_symplectic_euler_step(limit.omega_max, limit.damping_rate));
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // A model with no free particle has no modes (analysis.h), whichever eigensolver is asked for and
 // however many modes: success with count = 0 and dof = 0, not a refusal of the sparse solver for
 // having fewer than SM_MODES_SPARSE_MARGIN + 4 degrees of freedom.
@@ -5000,6 +5039,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_modes_refuse_a_spring_too_long_as_not_finite);
 	RUN_TEST(test_explicit_step_limit);
 	RUN_TEST(test_explicit_step_limit_edges);
+	RUN_TEST(test_explicit_step_limit_does_not_depend_on_the_unit_of_mass);
 	RUN_TEST(test_motion_scales);
 	RUN_TEST(test_motion_scales_leave_out_springs_between_held_particles);
 	RUN_TEST(test_round_off);
