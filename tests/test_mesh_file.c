@@ -120,7 +120,8 @@ static sm_document* load_square(const char* obj_name, const char* obj_text, sm_e
 
 // A unit square as two triangles, as one quad (cut into the same two triangles, a fan from its first
 // vertex), with every form of a face's vertex, relative indices, comments, blank lines, CR LF and
-// lone CR line ends, a line continued with a backslash, a weight and a colour after a vertex, and
+// lone CR line ends, a line continued with a backslash (and one ending the text), form feeds and
+// vertical tabs between words, a weight and a colour after a vertex, and
 // the statements that carry no geometry: each loads to exactly the inline square's model (masses
 // from the areas, springs once per edge, rest lengths, sections).
 static int test_obj_square_is_the_inline_square(void)
@@ -133,6 +134,7 @@ static int test_obj_square_is_the_inline_square(void)
 	    "f 1/1/1 2/2/1 3/1/1\r\nf 1//1 \\\r\n 3//1 4//1 # the second\r\nl 1 2\r\np 4\r\n",
 	    "v 0 0 0\rv 1 0 0\rv 1 1 0\rf -3 -2 -1\rv 0 1 0\rf -4/1 -2/2 -1/3\r",
 	    "\xef\xbb\xbf\tv\t0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4",
+	    "v 0\f0\v0\nv 1\f0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\n3 4 \\",
 	};
 	sm_error err = {SM_OK, ""};
 	sm_document* inline_square = parse_text(square_inline, &err);
@@ -269,6 +271,21 @@ static int test_scale_and_origin_place_the_mesh(void)
 		ENSURE(l0 == (pass == 0 ? 500.0 : 2000.0));
 		sm_model_destroy(m);
 	}
+	// Without "scale" and "origin" a vertex is the file's own, to the sign of a zero coordinate.
+	ENSURE(write_file("zero.obj", "v -0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n") == 0);
+	sm_document* zero =
+	    load_model("zero.json",
+		           "{\"springmass\": 1, \"name\": \"z\", \"structures\": [{\"type\": \"mesh\", "
+		           "\"name\": \"t\", \"file\": \"zero.obj\", \"edge\": {\"stiffness\": 10}}]}",
+		           &err);
+	ENSURE(zero != NULL);
+	sm_model* m = NULL;
+	ENSURE_STATUS(sm_document_build(zero, &m, NULL), SM_OK);
+	sm_particle_def p;
+	sm_model_get_particle(m, 0, &p);
+	ENSURE(p.position[0] == 0.0 && signbit(p.position[0]));
+	sm_model_destroy(m);
+	sm_document_destroy(zero);
 	// A scale must be > 0.
 	ENSURE_STATUS(sm_document_set_parameter(doc, 0, 0.0, &err), SM_ERROR_NEGATIVE);
 	ENSURE(strstr(err.message, "structures[0].scale: parameter s = 0 must be > 0") != NULL);
@@ -420,6 +437,8 @@ static int test_broken_obj_files(void)
 		 "test.json: structures[0].file: bad.obj:4:3: \"0x1\" is not a number"},
 	    {"v 0 0 é\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
 		 "test.json: structures[0].file: bad.obj:1:7: \"é\" is not a number"},
+	    {"v 0 1e 0\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
+		 "test.json: structures[0].file: bad.obj:1:5: \"1e\" is not a number"},
 	    {"v 0 0 inf\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
 		 "test.json: structures[0].file: bad.obj:1:7: \"inf\" is not a number"},
 	    {"v 0 1e999 0\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_NOT_FINITE,
@@ -464,6 +483,9 @@ static int test_broken_obj_files(void)
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n", "\"file\": \"bad.obj\"", 0,
 		 SM_ERROR_NONPOSITIVE_MASS,
 		 "test.json: structures[0].file: bad.obj:4:1: mesh: vertex 3 belongs to no triangle"},
+	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\t v 5 5 5\n", "\"file\": \"bad.obj\"", 0,
+		 SM_ERROR_NONPOSITIVE_MASS,
+		 "test.json: structures[0].file: bad.obj:5:3: mesh: vertex 3 belongs to no triangle"},
 	    {"v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", "\"file\": \"bad.obj\", \"scale\": \"s\"", 0,
 		 SM_ERROR_NOT_FINITE,
 		 "test.json: structures[0].file: bad.obj:2:1: mesh: vertex 1 coordinate 0 = inf is not finite (with "
