@@ -732,6 +732,15 @@ def test_run_refuses_input_signals_that_are_not_the_models(tmp_path, text, messa
     assert signals.read_text() == text
 
 
+def test_run_refuses_input_signals_of_a_probe(tmp_path):
+    # A probe's column is refused, not read and then left unapplied.
+    signals = tmp_path / "signals.csv"
+    signals.write_text("time,tip.x\n0,1\n")
+    err = cli("run", MODELS / "hanging_rope.json", "-q", "-o", tmp_path / "out.csv", "--input", signals, status=1).stderr
+    assert err.startswith(f'springmass run: --input {signals}:1:6: "tip.x" is a probe\'s: a probe takes no input'), err
+    assert not (tmp_path / "out.csv").exists()
+
+
 def test_run_reads_input_signals_from_a_regular_file_only(tmp_path):
     # As the model file: a FIFO without a writer is refused at once (it blocked the open for ever),
     # and so is a device, which would be read without end (/dev/zero filled the memory).
@@ -1702,6 +1711,8 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
     ("time,tip.x\n0,2e\n", '2:3: "2e" is not a finite decimal number'),
     ('time,tip.x\n0,"1"\n', '2:3: "1" is quoted: a result writes its numbers without quotes'),
     ("time,solver.max_steps\n0,1.5\n", '2:3: solver.max_steps is an Integer variable: "1.5" is no such value'),
+    ("time,solver.max_steps\n0,2147483648\n",
+     '2:3: solver.max_steps is an Integer variable: "2147483648" is no such value'),
     ("\ufefftime,tip.x\n0,1\n", "1:1: a byte-order mark before the header: write the file without one"),
     ("time,tip.x\r0,1\n", "1:11: a carriage return without a line feed: lines end in LF or CRLF"),
     ("time,tip.x\r\n0,1\r\n0.5\r\n", "3:4: fewer fields than columns: the header names 2 columns"),
@@ -1711,6 +1722,10 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
     ("time,tip.x\n0,1\n\n", "3:1: an empty line: a result has none"),
     ('time,"tip.x\n0,1\n', "1:6: a quoted field is not closed"),
     ('time,"tip.x"y\n0,1\n', "1:13: text after the closing quote of a field"),
+    # A doubled quote in a quoted field is one quote of it (RFC 4180); a quoted field's line ends
+    # are lines of the file, counted in the places after it.
+    ('time,"tip"".x"\n0,1\n', '1:6: "tip".x" is not a variable of the FMU'),
+    ('time,tip.x\n0,1\n0.5,"2\n"x\n', "4:2: text after the closing quote of a field"),
     ('time,"tip\n.q"\n0,1\n', '1:6: "tip\\u000a.q" is not a variable of the FMU'),
     ('time,tip.x\n0,"1\n2"\n', '2:3: "1\\u000a2" is quoted: a result writes its numbers without quotes'),
     ("time,tip.x\n", "2:1: no rows after the header"),
