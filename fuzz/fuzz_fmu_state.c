@@ -4,7 +4,7 @@
 // unchanged, or be accepted; an accepted state is then set (fmi2SetFMUstate, which may refuse it
 // the same way) and stepped, which must end with fmi2OK and finite outputs or with fmi2Error or
 // fmi2Discard and a logged message; either way the instance must take a known-good state again
-// and step from it.
+// and step from it to where it got from that state before any input, bit for bit.
 //
 // The input is one control byte and then the bytes of a serialised state:
 //   bit 0  keep the checksum as given (else it is recomputed over the mutated bytes, since random
@@ -101,6 +101,9 @@ typedef struct fixture {
 	fmi2Component instance;
 	fmi2FMUstate good;  // the instance after a few steps
 	double good_time;   // [s]
+	// Every real after a step of STEP from the known-good state, before any input: every restore
+	// of a state continues alike (fmu_state.c), so no input may change what the next one sees.
+	double* good_step;
 } fixture;
 
 static fixture* the_fixture;
@@ -337,6 +340,11 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 		fail("the FMU state's layout or checksum is no longer what the target reads; update the target",
 		     NULL);
 	free(bytes);
+	f->good_step = malloc((f->real_count + 1) * sizeof *f->good_step);
+	if (f->good_step == NULL || fmi2SetFMUstate(f->instance, f->good) != fmi2OK ||
+	    fmi2DoStep(f->instance, f->good_time, STEP, fmi2True) != fmi2OK ||
+	    fmi2GetReal(f->instance, f->reals, f->real_count, f->good_step) != fmi2OK)
+		fail("no step from the known-good state", f->log.last);
 	the_fixture = f;
 	return 0;
 }
@@ -450,10 +458,19 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 				fail("a step from a set state failed without fmi2Error or fmi2Discard and a message", NULL);
 			}
 		}
-		// Whatever happened, the instance takes the known-good state again and steps from it.
+		// Whatever happened, the instance takes the known-good state again and steps from it to
+		// where it got before any input, bit for bit.
 		if (fmi2SetFMUstate(f->instance, f->good) != fmi2OK ||
 		    fmi2DoStep(f->instance, f->good_time, STEP, fmi2True) != fmi2OK)
 			fail("the instance is no longer usable after a state was set", f->log.last);
+		observed again = observe(f);
+		if (again.status != fmi2OK)
+			fail("the outputs after a step from the known-good state cannot be read", f->log.last);
+		for (size_t k = 0; k < f->real_count; ++k)
+			if (memcmp(&again.reals[k], &f->good_step[k], sizeof again.reals[k]) != 0)
+				fail("after a state was set, a step from the known-good state ends elsewhere than before",
+				     f->table.variables[f->reals[k]].name);
+		forget(&again);
 	}
 	if (fmi2FreeFMUstate(f->instance, &state) != fmi2OK || state != NULL)
 		fail("fmi2FreeFMUstate failed", f->log.last);
