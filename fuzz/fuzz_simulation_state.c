@@ -4,6 +4,8 @@
 // a message, or read back to a snapshot that writes the same bytes again; a restore must either
 // be refused with a message and the simulation unchanged, or take the snapshot as it is, after
 // which a short advance ends with finite positions and velocities or with an error that says why.
+// Either way, restored to a known state afterwards, the simulation advances from it bit for bit as
+// it did before any input: a restore starts afresh, so nothing of an input reaches the next.
 //
 // The input is one control byte and then the bytes of a state:
 //   bit 0     keep the checksum as given (else it is recomputed over the mutated bytes, since
@@ -12,7 +14,7 @@
 //   bit 4     advance with sm_simulation_advance_interpolated rather than sm_simulation_advance
 //
 // With SPRINGMASS_FUZZ_WRITE_SEEDS set to a folder, the target writes real states of its own model
-// there as seeds (fuzz/run.sh does) and exits.
+// and of a model of other sizes there as seeds (fuzz/run.sh does) and exits.
 #include "springmass/springmass.h"
 
 #include <math.h>
@@ -38,10 +40,12 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 // the same path is reached with fewer steps, and the fuzzer keeps its pace.
 #define MAX_STEPS 2000
 // The serialised header (serialized_header in lib/simulation_state.c): 48 bytes, of which bytes
-// 28 to 31 are reserved (written as 0, not read); the 8-byte checksum ends the state.
+// 28 to 31 are reserved (written as 0, not read) and 32 to 39 the model's topology hash; the
+// 8-byte checksum ends the state.
 #define HEADER_BYTES 48
 #define RESERVED_OFFSET 28
 #define RESERVED_END 32
+#define TOPOLOGY_OFFSET 32
 #define CHECKSUM_BYTES 8
 
 // What every input runs against: the model, one simulation per linear solver, and the state each
@@ -54,6 +58,10 @@ typedef struct fixture {
 	sm_simulation* simulations[SIMULATIONS];
 	unsigned char* baseline;  // a serialised state of the model at 0.05 s
 	size_t baseline_size;
+	// Where each simulation got in an advance of ADVANCE from the baseline, before any input:
+	// every restore continues alike, so an input leaves nothing behind that changes the next.
+	double reference_position[SIMULATIONS][3 * PARTICLES], reference_velocity[SIMULATIONS][3 * PARTICLES];
+	double reference_dissipated[SIMULATIONS];
 } fixture;
 
 static fixture* the_fixture;
@@ -119,6 +127,32 @@ static sm_model* build_model(void)
 	return model;
 }
 
+// A model of other sizes for seeds: a chain of 3 particles from a fixed one, 2 springs.
+static sm_model* build_other_model(void)
+{
+	sm_model_def md = sm_default_model_def();
+	sm_model* model = sm_model_create(&md, NULL);
+	bool ok = model != NULL;
+	for (int i = 0; ok && i < 3; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.position[0] = 0.5 * i;
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		ok = sm_model_add_particle(model, &p, NULL) == SM_OK;
+	}
+	for (int s = 0; ok && s < 2; s++) {
+		sm_spring_def d = sm_default_spring_def();
+		d.a = s;
+		d.b = s + 1;
+		d.stiffness = 50.0;
+		ok = sm_model_add_spring(model, &d, NULL) == SM_OK;
+	}
+	if (!ok) {
+		sm_model_destroy(model);
+		return NULL;
+	}
+	return model;
+}
+
 static sm_simulation* build_simulation(const sm_model* model, int which)
 {
 	sm_simulation_def d = sm_default_simulation_def();
@@ -152,11 +186,18 @@ static unsigned char* serialized_state(const sm_simulation* sim, size_t* size)
 }
 
 // A state of the simulation at each stage of a run, as a seed file in `folder` with the given
-// control byte.
-static void write_seed(const sm_simulation* sim, const char* folder, int number, unsigned control)
+// control byte; with `topology` given, the state claims it for its model's (its checksum written
+// again).
+static void write_seed(const sm_simulation* sim, const char* folder, int number, unsigned control,
+                       const unsigned char* topology)
 {
 	size_t size = 0;
 	unsigned char* bytes = serialized_state(sim, &size);
+	if (bytes != NULL && topology != NULL) {
+		memcpy(bytes + TOPOLOGY_OFFSET, topology, 8);
+		const uint64_t h = state_checksum(bytes, size);
+		memcpy(bytes + size - CHECKSUM_BYTES, &h, CHECKSUM_BYTES);
+	}
 	char path[4096];
 	snprintf(path, sizeof path, "%s/state-%d", folder, number);
 	const unsigned char first = (unsigned char)control;
@@ -178,18 +219,32 @@ static void write_seeds(const sm_model* model, const char* folder)
 	if (sim == NULL)
 		exit(1);
 	const double position[3] = {1.05, 0.0, 0.0}, velocity[3] = {0.6, 0.0, 0.1};
-	write_seed(sim, folder, 0, CONTROL_SIMULATION(0));
+	write_seed(sim, folder, 0, CONTROL_SIMULATION(0), NULL);
 	bool ok = sm_simulation_advance(sim, 0.05) == SM_OK;
-	write_seed(sim, folder, 1, CONTROL_SIMULATION(1));
-	write_seed(sim, folder, 2, CONTROL_SIMULATION(0) | CONTROL_KEEP_CHECKSUM);
+	write_seed(sim, folder, 1, CONTROL_SIMULATION(1), NULL);
+	write_seed(sim, folder, 2, CONTROL_SIMULATION(0) | CONTROL_KEEP_CHECKSUM, NULL);
 	ok = ok && sm_simulation_set_driven(sim, 1, position, velocity) == SM_OK &&
 	     sm_simulation_advance(sim, 0.12) == SM_OK;
-	write_seed(sim, folder, 3, CONTROL_SIMULATION(2) | CONTROL_INTERPOLATED);
+	write_seed(sim, folder, 3, CONTROL_SIMULATION(2) | CONTROL_INTERPOLATED, NULL);
 	ok = ok && sm_simulation_advance(sim, 0.3) == SM_OK && sm_simulation_break_count(sim) > 0;
-	write_seed(sim, folder, 4, CONTROL_SIMULATION(3));
+	write_seed(sim, folder, 4, CONTROL_SIMULATION(3), NULL);
 	ok = ok && sm_simulation_break_spring(sim, 3) == SM_OK && sm_simulation_advance(sim, 0.35) == SM_OK;
-	write_seed(sim, folder, 5, CONTROL_SIMULATION(4) | CONTROL_INTERPOLATED);
+	write_seed(sim, folder, 5, CONTROL_SIMULATION(4) | CONTROL_INTERPOLATED, NULL);
+	// A state of a model of other sizes (3 particles, 2 springs) under way, as it is and claiming
+	// the topology of the target's model: a restore must refuse either, by the hash or by the counts.
+	size_t size = 0;
+	unsigned char* own = serialized_state(sim, &size);
 	sm_simulation_destroy(sim);
+	sm_model* other = build_other_model();
+	sim = other != NULL && own != NULL ? sm_simulation_create(other, NULL, NULL) : NULL;
+	ok = ok && sim != NULL && sm_simulation_advance(sim, 0.05) == SM_OK;
+	if (ok) {
+		write_seed(sim, folder, 6, CONTROL_SIMULATION(0), NULL);
+		write_seed(sim, folder, 7, CONTROL_SIMULATION(1), own + TOPOLOGY_OFFSET);
+	}
+	free(own);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(other);
 	if (!ok) {
 		fprintf(stderr, "fuzz_simulation_state: the seed run failed\n");
 		exit(1);
@@ -224,6 +279,17 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 		fprintf(stderr,
 		        "fuzz_simulation_state: the state's checksum is no longer FNV-1a; update the target\n");
 		abort();
+	}
+	for (int k = 0; k < SIMULATIONS; k++) {
+		sm_simulation* sim = f->simulations[k];
+		sm_simulation_state* s = sm_simulation_state_deserialize(f->baseline, f->baseline_size, NULL);
+		if (s == NULL || sm_simulation_restore_state(sim, s) != SM_OK ||
+		    sm_simulation_advance(sim, sm_simulation_time(sim) + ADVANCE) != SM_OK)
+			abort();
+		sm_simulation_state_destroy(s);
+		memcpy(f->reference_position[k], sm_simulation_positions(sim), sizeof f->reference_position[k]);
+		memcpy(f->reference_velocity[k], sm_simulation_velocities(sim), sizeof f->reference_velocity[k]);
+		f->reference_dissipated[k] = sm_simulation_dissipated_energy(sim);
 	}
 	the_fixture = f;
 	return 0;
@@ -312,7 +378,8 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 		fail("a state read back writes other bytes", NULL);
 	free(again);
 
-	sm_simulation* sim = f->simulations[(control >> 1 & 7u) % SIMULATIONS];
+	const int which = (int)((control >> 1 & 7u) % SIMULATIONS);
+	sm_simulation* sim = f->simulations[which];
 	sm_simulation_state* baseline = sm_simulation_state_deserialize(f->baseline, f->baseline_size, &err);
 	if (baseline == NULL || sm_simulation_restore_state(sim, baseline) != SM_OK)
 		fail("the baseline state does not restore", err.message);
@@ -356,6 +423,20 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 			     sm_simulation_last_error(sim));
 		}
 	}
+	// Whatever the input did, the simulation restored to the baseline again advances as it did
+	// before any input, bit for bit.
+	baseline = sm_simulation_state_deserialize(f->baseline, f->baseline_size, &err);
+	if (baseline == NULL || sm_simulation_restore_state(sim, baseline) != SM_OK ||
+	    sm_simulation_advance(sim, sm_simulation_time(sim) + ADVANCE) != SM_OK)
+		fail("the baseline state does not restore and advance after an input", sm_simulation_last_error(sim));
+	sm_simulation_state_destroy(baseline);
+	const double dissipated = sm_simulation_dissipated_energy(sim);
+	if (memcmp(sm_simulation_positions(sim), f->reference_position[which],
+	           sizeof f->reference_position[which]) != 0 ||
+	    memcmp(sm_simulation_velocities(sim), f->reference_velocity[which],
+	           sizeof f->reference_velocity[which]) != 0 ||
+	    memcmp(&dissipated, &f->reference_dissipated[which], sizeof dissipated) != 0)
+		fail("after an input, the baseline state advances otherwise than before any", NULL);
 	free(after.state);
 	free(before.state);
 	sm_simulation_state_destroy(state);

@@ -5,7 +5,7 @@
 #                     the OBJ files of models/ and tests/bad_models and two files of every form
 #                     of a face
 #   simulation_state  simulation states read back from bytes and restored, seeded with states
-#                     the target writes of its own model
+#                     the target writes of its own model and of one of other sizes
 #   fmu_state         the FMU's serialised states read back (fmi2DeSerializeFMUstate), set and
 #                     stepped, seeded with states the target writes of its own FMU instance
 #   reference         the reference results `springmass fmu --reference` checks, seeded with
