@@ -635,13 +635,16 @@ double sm_simulation_dissipated_energy(const sm_simulation* sim)
 }
 
 // CVODE integrates the inputs' work less the driven particles' kinetic energy (simulation_callbacks.c),
-// which is added here as their paths have it.
+// which is added here as their paths have it, before jump_work: where CVODE's part starts at minus
+// that energy (sm_simulation_start_input_work) the two cancel to +0 exactly and the work reads
+// jump_work itself, to the bit (-0 included).
 double sm_simulation_input_work(const sm_simulation* sim)
 {
 	if (sim == NULL)
 		return NAN;
-	return N_VGetArrayPointer(sim->y)[sm_simulation_work_index(sim)] + sim->jump_work +
-	       sm_simulation_driven_kinetic_energy(sim, sim->velocity);
+	const double integrated = N_VGetArrayPointer(sim->y)[sm_simulation_work_index(sim)] +
+	                          sm_simulation_driven_kinetic_energy(sim, sim->velocity);
+	return integrated == 0.0 ? sim->jump_work : integrated + sim->jump_work;
 }
 
 double sm_simulation_input_power(sm_simulation* sim)

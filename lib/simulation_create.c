@@ -253,11 +253,18 @@ void sm_simulation_load_initial_state(sm_simulation* sim)
 	sim->time = 0.0;
 	sim->time_origin = 0.0;
 	sm_simulation_refresh_outputs(sim);
-	// No work yet: CVODE's part of it is less the driven particles' kinetic energy
-	// (sm_simulation_input_work), unless that energy overflows; +0 at rest.
+	sm_simulation_start_input_work(sim, 0.0);  // no work yet
+}
+
+// CVODE's part of the work is less the driven particles' kinetic energy, which
+// sm_simulation_input_work adds back before jump_work: -K + K is +0 exactly, and the work reads
+// as given, to the bit.
+void sm_simulation_start_input_work(sm_simulation* sim, double work)
+{
 	const double driven_kinetic = sm_simulation_driven_kinetic_energy(sim, sim->velocity);
-	y[sm_simulation_work_index(sim)] =
+	N_VGetArrayPointer(sim->y)[sm_simulation_work_index(sim)] =
 	    isfinite(driven_kinetic) && driven_kinetic > 0.0 ? -driven_kinetic : 0.0;
+	sim->jump_work = work;
 }
 
 static sm_status attach_linear_solver(sm_simulation* sim)

@@ -123,8 +123,8 @@ struct sm_simulation {
 	double* work_external;  // the external forces at one time, when some ramp [N]
 	// The inputs' work at jumps of driven particles (the energy each jump added beyond their
 	// kinetic energy), and at changes of time or mass of the driven particles (what keeps the work
-	// as it was while their kinetic energy changes), kept beside CVODE's state (a snapshot adds it
-	// in) [J].
+	// as it was while their kinetic energy changes), kept beside CVODE's state; after a restore, the
+	// snapshot's work (sm_simulation_start_input_work) [J].
 	double jump_work;
 	// The largest velocity change per second the external forces' jumps since the last advance make
 	// at a free particle (|jump| / m), over that velocity's error tolerance [1/s]: the advance
@@ -240,6 +240,10 @@ void sm_simulation_refresh_masses(sm_simulation* sim);
 // Everything from the model's stored initial state: positions, velocities, driven motion, no
 // external forces, e = w = 0, at time 0.
 void sm_simulation_load_initial_state(sm_simulation* sim);
+// Makes the inputs' work read `work` [J] exactly at the current state (its outputs refreshed):
+// CVODE's part minus the driven particles' kinetic energy (+0 at rest, or when that energy
+// overflows), the rest in jump_work.
+void sm_simulation_start_input_work(sm_simulation* sim, double work);
 
 // The functions CVODE calls, given to it at creation (simulation_callbacks.c); user data: the
 // simulation.

@@ -104,10 +104,13 @@ sm_simulation_state* sm_simulation_save_state(const sm_simulation* sim)
 	s->topology = sim->topology;
 	s->time = sim->time;
 	memcpy(s->y, N_VGetArrayPointer(sim->y), ny * sizeof(double));
-	// A jump's work not yet in CVODE's state; none leaves the work's bits as they are (-0 + 0 would
-	// be +0: a snapshot read back and restored saves the bytes it came from).
-	if (sim->jump_work != 0.0)
-		s->y[sm_simulation_work_index(sim)] += sim->jump_work;
+	// The inputs' work itself, not CVODE's part of it, which is less the driven particles' kinetic
+	// energy: a simulation whose driven particles have other masses restores the work saved. Where
+	// that energy overflows (and the work reads infinite) CVODE's part holds none of it
+	// (sm_simulation_start_input_work), and the finite rest is saved: bytes that read back.
+	const double work = sm_simulation_input_work(sim);
+	s->y[sm_simulation_work_index(sim)] =
+	    isfinite(work) ? work : s->y[sm_simulation_work_index(sim)] + sim->jump_work;
 	memcpy(s->external_force, sim->external_force, 3 * n * sizeof(double));
 	memcpy(s->force_rate, sim->force_rate, 3 * n * sizeof(double));
 	memcpy(s->force_time, sim->force_time, n * sizeof(double));
@@ -172,7 +175,6 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	const size_t n = (size_t)sim->particle_count;
 	sim->time = s->time;
 	memcpy(N_VGetArrayPointer(sim->y), s->y, (size_t)sm_simulation_state_length(sim) * sizeof(double));
-	sim->jump_work = 0.0;  // the snapshot's work holds it
 	memcpy(sim->external_force, s->external_force, 3 * n * sizeof(double));
 	memcpy(sim->force_rate, s->force_rate, 3 * n * sizeof(double));
 	memcpy(sim->force_time, s->force_time, n * sizeof(double));
@@ -203,6 +205,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sim->jump_rate = 0.0;
 	sm_input_origins_forget(sim);
 	sm_simulation_refresh_outputs(sim);
+	sm_simulation_start_input_work(sim, s->y[sm_simulation_work_index(sim)]);  // as saved, to the bit
 	return SM_OK;
 }
 
