@@ -19,10 +19,11 @@
 // 2.8e-4 m off after 2 s at rtol 1e-6; kept, 2.6e-8 m). So does a force that jumps by little: the
 // advance restarts only if its interval (or max_step) times |jump| / m exceeds the velocity's
 // tolerance rtol |v| + atol_velocity at some particle (an undamped oscillator under a sine force
-// held over each 1 ms, restarted at every jump, was 4.5e-3 m off after 10 s; kept, 2.2e-6 m). A
-// drive that jumps restarts it (a damped base excitation sampled every 1 ms missed its
-// steady-state amplitude by 9e-4 with the history kept, 2e-5 with restarts: the steps that straddle
-// the changes carry an error CVODE's error test does not see; tests/test_simulation.c,
+// held over each 1 ms, restarted at every jump, was 4.5e-3 m off after 10 s; kept, 2.2e-6 m). So
+// does a drive that jumps by little, by the same measure applied to the jump of its springs' forces
+// at the free particles around it (a damped base excitation sampled every 1 ms jumps by much and
+// restarts: its steady-state amplitude 2e-5 off, 9e-4 with the history kept, the steps that
+// straddle the changes carrying an error CVODE's error test does not see; tests/test_simulation.c,
 // test_base_excitation_sampled_at_every_step). An input set to another value and back before the
 // next advance (a master that tries a value and reads the outputs it gives) changes nothing: once
 // every input changed since the last advance is back on the path or ramp it had there, those are
