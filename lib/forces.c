@@ -649,8 +649,8 @@ double sm_model_spring_energy(const sm_model* model, int32_t s, const double xa[
 	return rest_length_energy(model->stiffness[s], model->rest_length[s], geo.length);
 }
 
-void sm_model_spring_force(const sm_model* model, int32_t s, const double xa[3], const double xb[3],
-                           const double va[3], const double vb[3], double f_a[3])
+double sm_model_spring_force(const sm_model* model, int32_t s, const double xa[3], const double xb[3],
+                             const double va[3], const double vb[3], double f_a[3])
 {
 	const double x[6] = {xa[0], xa[1], xa[2], xb[0], xb[1], xb[2]};
 	const double v[6] = {va[0], va[1], va[2], vb[0], vb[1], vb[2]};
@@ -660,6 +660,7 @@ void sm_model_spring_force(const sm_model* model, int32_t s, const double xa[3],
 	                         spring_damping_magnitude(model->damping[s], geo.rate);
 	for (int c = 0; c < 3; c++)
 		f_a[c] = magnitude * geo.u[c];
+	return spring_damping_dissipation(model->damping[s], geo.rate);
 }
 
 double sm_model_dissipated_power(const sm_model* model, const double* x, const double* v)

@@ -165,9 +165,10 @@ double sm_model_particle_energy(const sm_model* model, const double* x, const do
 double sm_model_spring_energy(const sm_model* model, int32_t s, const double xa[3], const double xb[3]);
 
 // The force spring s exerts on its particle a with a at xa, va and b at xb, vb (m, m/s), f_a =
-// (ks (L - l0) + kd r) u [N] as the spring loop has it (f_b = -f_a), enabled or not. Defined in forces.c.
-void sm_model_spring_force(const sm_model* model, int32_t s, const double xa[3], const double xb[3],
-                           const double va[3], const double vb[3], double f_a[3]);
+// (ks (L - l0) + kd r) u [N] as the spring loop has it (f_b = -f_a), enabled or not; returns the
+// power its damping dissipates, kd r^2 [W]. Defined in forces.c.
+double sm_model_spring_force(const sm_model* model, int32_t s, const double xa[3], const double xb[3],
+                             const double va[3], const double vb[3], double f_a[3]);
 
 // The springs' share of the forces, added to f, with at most `lanes` springs at a time (1, 2 or 4;
 // fewer where the processor lacks SSE2 or AVX): damping if v is given, every spring's record of
