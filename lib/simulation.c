@@ -1148,13 +1148,13 @@ int32_t sm_simulation_overflowing_force(const sm_simulation* sim, double t, cons
 	return -1;
 }
 
-// The inputs' work stays as it was across a new time or new masses, which change the driven
-// particles' kinetic energy from `before` [J] to what it is now (sm_simulation_input_work adds it).
-static void keep_input_work(sm_simulation* sim, double before)
+// The inputs' work `work` [J] as it was before a new time or new masses, which change the driven
+// particles' kinetic energy that sm_simulation_input_work adds: started again from it (CVODE
+// restarts there). A work beyond a double is left as it reads.
+static void keep_input_work(sm_simulation* sim, double work)
 {
-	const double now = sm_simulation_driven_kinetic_energy(sim, sim->velocity);
-	if (now != before && isfinite(now - before))
-		sim->jump_work += before - now;
+	if (isfinite(work))
+		sm_simulation_start_input_work(sim, work);
 }
 
 sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double* x, const double* v)
@@ -1193,14 +1193,14 @@ sm_status sm_simulation_set_state(sm_simulation* sim, double time, const double*
 	}
 	sm_simulation_pack(sim, x, v, N_VGetArrayPointer(sim->y));
 	sm_input_origins_span(sim);  // the restart it asks for stays; inputs set back take their paths
-	const double driven_before = sm_simulation_driven_kinetic_energy(sim, sim->velocity);
+	const double work = sm_simulation_input_work(sim);
 	sim->time = time;
 	// CVODE restarts here, at 0 on its axis: the outputs are those of the restart already, not of
 	// an axis of the past (a driven particle's position would part from the run's in its last bit).
 	sim->time_origin = time;
 	sim->need_restart = true;
 	sm_simulation_refresh_outputs(sim);
-	keep_input_work(sim, driven_before);
+	keep_input_work(sim, work);
 	return SM_OK;
 }
 
@@ -1266,7 +1266,7 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 		enabled[s] = sim->initial_enabled[s];
 		sm_model_set_spring_enabled(copy, s, enabled[s] != 0);
 	}
-	const double driven_before = sm_simulation_driven_kinetic_energy(sim, sim->velocity);  // the old masses
+	const double work = sm_simulation_input_work(sim);  // with the old masses
 	sm_model* previous = sim->model;
 	sim->model = copy;
 	sim->solver_message[0] = '\0';
@@ -1301,6 +1301,6 @@ sm_status sm_simulation_update_model(sm_simulation* sim, const sm_model* model)
 	sim->need_restart = true;
 	sm_input_origins_span(sim);  // the restart it asks for stays; inputs set back take their paths
 	sm_simulation_refresh_outputs(sim);
-	keep_input_work(sim, driven_before);
+	keep_input_work(sim, work);
 	return SM_OK;
 }

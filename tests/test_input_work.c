@@ -437,7 +437,7 @@ static int test_snapshots_and_resets_keep_the_work(void)
 // caller accounts for the energy such a call adds); from there on the balance holds again. The
 // work before and after to round-off of the energies summed in it (1e-15 J of about 1 J); the
 // balance over the next 0.5 s to 5e-6 J, rtol 1e-8 of the 10 - 20 J of kinetic energy and work
-// that move (measured 6.6e-7 and 1.6e-7 J; 6.3e-7 and 8.5e-7 J when the whole driver's power was
+// that move (measured 2.5e-7 and 2.3e-7 J; 6.3e-7 and 8.5e-7 J when the whole driver's power was
 // integrated).
 static int test_a_new_time_or_mass_keeps_the_work(void)
 {

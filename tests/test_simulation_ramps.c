@@ -226,6 +226,19 @@ static int test_accelerating_path_continued_near_its_start_is_no_change(void)
 	return 0;
 }
 
+// A simulation of the model under the default options, restart_on_input_change set, or at
+// rtol 1e-12 and absolute tolerances 1e-14 (m, m/s, J), the reference of the tests below.
+static sm_simulation* restarting_simulation(const sm_model* model, bool tight)
+{
+	sm_simulation_def d = sm_default_simulation_def();
+	d.restart_on_input_change = true;
+	if (tight) {
+		d.relative_tolerance = 1e-12;
+		d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-14;
+	}
+	return sm_simulation_create(model, &d, NULL);
+}
+
 // A drive set off its path restarts CVODE as a force's jump does, by the jump of its springs'
 // forces on the free particles around it: the damped oscillator's anchor moving at 0.3 m/s, called
 // every 0.01 s, set off its path once at 0.2 s and continued on the new path after. Off by 1e-3 m
@@ -244,13 +257,7 @@ static int test_a_drive_off_its_path_restarts_by_the_jump_of_its_springs_forces(
 		double bob[2];
 		int64_t restarts = 0;
 		for (int tight = 0; tight < 2; tight++) {
-			sm_simulation_def d = sm_default_simulation_def();
-			d.restart_on_input_change = true;
-			if (tight) {
-				d.relative_tolerance = 1e-12;
-				d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-14;
-			}
-			sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+			sm_simulation* sim = restarting_simulation(model, tight);
 			ENSURE(sim != NULL);
 			const double h = 0.01, v0 = 0.3;
 			for (int k = 0; k < 50; k++) {
@@ -293,13 +300,7 @@ static int test_a_drive_velocity_jump_restarts_by_the_jump_of_its_drivers_power(
 		double work[2];
 		int64_t restarts = 0;
 		for (int tight = 0; tight < 2; tight++) {
-			sm_simulation_def d = sm_default_simulation_def();
-			d.restart_on_input_change = true;
-			if (tight) {
-				d.relative_tolerance = 1e-12;
-				d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-14;
-			}
-			sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+			sm_simulation* sim = restarting_simulation(model, tight);
 			ENSURE(sim != NULL);
 			const double h = 0.01;
 			for (int k = 0; k < 100; k++) {
