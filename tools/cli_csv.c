@@ -257,7 +257,8 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				                  field_shown(r), form->what);
 			if (!decimal_number(r->field, &value))
 				return problem_at(r->field_place, start, "%s is not a finite decimal number", field_shown(r));
-			if (c > 0 && csv->whole[c] && !(value == floor(value) && fabs(value) <= INT32_MAX))
+			if (c > 0 && csv->whole[c] &&
+			    !(value == floor(value) && value >= INT32_MIN && value <= INT32_MAX))
 				return problem_at(r->field_place, start, "%s is an Integer variable: %s is no such value",
 				                  names[c], field_shown(r));
 			// The times as the file gives them (0.1, not 0.10000000000000001): the fewest digits that
