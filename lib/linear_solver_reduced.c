@@ -175,15 +175,20 @@ static int reduced_setup(SUNLinearSolver ls, SUNMatrix unused)
 	return (int)r->last_flag;
 }
 
-// The masses per degree of freedom, zero at constrained particles: at creation and at every
-// re-initialisation, which follows sm_simulation_update_model (the only way they change). Mass
-// damping enters A as M (1 + gamma alpha) in the products (reduced_products.c).
+// The masses per degree of freedom and their inverses (finite: masses are at least SM_MIN_MASS),
+// zero at constrained particles: at creation and at every re-initialisation, which follows
+// sm_simulation_update_model (the only way they change). Mass damping enters A as
+// M (1 + gamma alpha) in the products (reduced_products.c).
 static void load_masses(sm_reduced* r)
 {
 	const sm_model* m = r->sim->model;
-	for (int32_t i = 0; i < m->particle_count; i++)
-		for (int c = 0; c < 3; c++)
-			r->mass[3 * (size_t)i + c] = m->free_index[i] >= 0 ? m->mass[i] : 0.0;
+	for (int32_t i = 0; i < m->particle_count; i++) {
+		const bool free_particle = m->free_index[i] >= 0;
+		for (int c = 0; c < 3; c++) {
+			r->mass[3 * (size_t)i + c] = free_particle ? m->mass[i] : 0.0;
+			r->inverse_mass[3 * (size_t)i + c] = free_particle ? 1.0 / m->mass[i] : 0.0;
+		}
+	}
 }
 
 // Makes the Jacobian current at CVODE's state y (time t): adopts the records the right-hand side
@@ -303,8 +308,8 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++) {
 			r->p[i + c] = b[f + c];
-			r->weight[i + c] = (w ? w[n + f + c] : 1.0) / r->mass[i + c];
-			r->position_weight[i + c] = gamma * (w ? w[f + c] : 1.0) / r->mass[i + c];
+			r->weight[i + c] = w ? w[n + f + c] : 1.0;
+			r->position_weight[i + c] = gamma * (w ? w[f + c] : 1.0);
 		}
 	}
 	sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
@@ -415,6 +420,7 @@ static void reduced_content_free(sm_reduced* r)
 	free(r->coarse_self);
 	free(r->spring_coarse);
 	free(r->mass);
+	free(r->inverse_mass);
 	free(r->weight);
 	free(r->position_weight);
 	free(r->dv);
@@ -450,6 +456,7 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->full_force = calloc(full, sizeof(double));
 	r->block_inverse = calloc(6 * full, sizeof(double));  // inverses, then the sums (9 each)
 	r->mass = calloc(full, sizeof(double));
+	r->inverse_mass = calloc(full, sizeof(double));
 	r->weight = calloc(full, sizeof(double));
 	r->position_weight = calloc(full, sizeof(double));
 	r->r = calloc(full, sizeof(double));
@@ -461,8 +468,8 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->rhs_state = malloc(2 * n * sizeof(double));
 	if (!use_cholmod)
 		r->scaled = malloc(SCALED_STRIDE * ((size_t)sim->model->spring_count + 1) * sizeof(double));
-	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->weight || !r->position_weight ||
-	    !r->r || !r->z || !r->p || !r->q || !r->rhs || !r->dv || !r->rhs_state ||
+	if (!r->springs || !r->full_force || !r->block_inverse || !r->mass || !r->inverse_mass || !r->weight ||
+	    !r->position_weight || !r->r || !r->z || !r->p || !r->q || !r->rhs || !r->dv || !r->rhs_state ||
 	    (!use_cholmod && !r->scaled)) {
 		reduced_content_free(r);
 		return NULL;

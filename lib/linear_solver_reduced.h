@@ -75,16 +75,19 @@ typedef struct sm_reduced {
 	// 3x3 diagonal blocks, 9 per particle, stored by column pairs (t00, t10), (t01, t11), (t02, t12),
 	// then the last row t20, t21, t22 (invert_chunk, for block Jacobi's pairs); then their sums
 	// before the inversion, 9 per particle, row-major),
-	// and 3 doubles each: mass [kg], weight (CVODE's error weight over the mass, the residual's
-	// weight), position_weight (gamma times the positions' error weight over the mass: the error
-	// an iterate leaves in dx = bx + gamma dv, reduced_conjugate_gradients.c) and the conjugate
-	// gradients' vectors r, z, p, q, rhs, dv.
+	// and 3 doubles each: mass [kg], inverse_mass [1/kg], weight (CVODE's error weight of the
+	// velocities, for the residual M^-1 r), position_weight (gamma times the positions' error weight:
+	// the error an iterate leaves in dx = bx + gamma dv, reduced_conjugate_gradients.c) and the
+	// conjugate gradients' vectors r, z, p, q, rhs, dv. The weights are kept apart from the inverse
+	// masses: a weight of up to 1e150 s/m (atol_velocity down to 1e-150 m/s) over a mass down to
+	// SM_MIN_MASS would overflow, where 1 / SM_MIN_MASS = 4.5e307 does not.
 	double* block_inverse;
 	// pcg: every spring's share of A at the preconditioner's gamma, SCALED_STRIDE doubles each,
 	// u[3], w[3], gamma^2 beta (reduced_preconditioner.c), written in the same pass as the
 	// diagonal blocks, so that each product with A computes one dot product per spring.
 	double* scaled;
 	double* mass;
+	double* inverse_mass;
 	double* weight;
 	double* position_weight;
 	double *r, *z, *p, *q, *rhs, *dv;

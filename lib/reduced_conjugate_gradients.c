@@ -40,12 +40,12 @@
 #include <string.h>
 
 // Sum of squares of the error-weighted velocity rows' residual M^-1 res (weight = CVODE's error
-// weight over the mass, zero at constrained particles).
+// weight, inverse_mass zero at constrained particles).
 static double residual_squares(const sm_reduced* r, const double* res)
 {
 	double s = 0.0;
 	for (int64_t i = 0; i < r->full; i++) {
-		const double t = res[i] * r->weight[i];
+		const double t = res[i] * r->inverse_mass[i] * r->weight[i];
 		s += t * t;
 	}
 	return s;
@@ -53,12 +53,12 @@ static double residual_squares(const sm_reduced* r, const double* res)
 
 // Sum of squares of the error-weighted position error gamma e, with e estimated as M^-1 res
 // (bound, res) or as the preconditioned residual z (position_weight = gamma times CVODE's error
-// weight over the mass, zero at constrained particles).
+// weight, zero at constrained particles).
 static double position_squares(const sm_reduced* r, const double* e, bool bound)
 {
 	double s = 0.0;
 	for (int64_t i = 0; i < r->full; i++) {
-		const double t = e[i] * r->position_weight[i] * (bound ? 1.0 : r->mass[i]);
+		const double t = (bound ? e[i] * r->inverse_mass[i] : e[i]) * r->position_weight[i];
 		s += t * t;
 	}
 	return s;
@@ -81,12 +81,13 @@ static void update_chunk(void* context, int c)
 	const double* restrict p = j->p;
 	const double* restrict q = j->q;
 	const double* restrict weight = r->weight;
+	const double* restrict inverse_mass = r->inverse_mass;
 	const double alpha = j->step;
 	double squares = 0.0;
 	for (int64_t i = 3 * (int64_t)r->chunk_particle[c]; i < 3 * (int64_t)r->chunk_particle[c + 1]; i++) {
 		dv[i] += alpha * p[i];
 		res[i] -= alpha * q[i];
-		const double t = res[i] * weight[i];
+		const double t = res[i] * inverse_mass[i] * weight[i];
 		squares += t * t;
 	}
 	r->partial[c] = squares;
