@@ -778,8 +778,11 @@ int sm_cmd_run(int argc, char** argv)
 		    s.jacobian_seconds, s.linear_solve_seconds);
 		for (int32_t b = 0; b < sm_simulation_break_count(sim); b++) {
 			const sm_break_event e = sm_simulation_break(sim, b);
-			char line[64];
-			snprintf(line, sizeof line, "  spring %d broke at t = %.9g s\n", (int)e.spring, e.time);
+			// The time as the library has it, to the digit that reads it back: breaks close together
+			// (springs that cross their limits some 1e-10 s apart) are told apart, as in an FMU's log.
+			char time[SM_NUMBER_TEXT_CAPACITY], line[96];
+			sm_format_number(e.time, time);
+			snprintf(line, sizeof line, "  spring %d broke at t = %s s\n", (int)e.spring, time);
 			cli_write_named(stderr, doc, model, line);
 		}
 		const double balance_at_end = energy_balance(sim, work_origin);

@@ -505,6 +505,28 @@ def test_vtk_points_are_the_csv_positions_exactly_far_from_the_origin(tmp_path):
     assert np.array_equal(points, rest[:, header.index("x"):header.index("x") + 3])
 
 
+def test_breaks_close_together_are_logged_at_their_own_times(tmp_path):
+    # A bob drifts at 1 m/s from a fixed anchor, no force on it (two springs of stiffness 0, rest
+    # length 1 m): its distance is 1 + t, and the springs, of break strains 0.5 and 0.5 + 2e-10,
+    # break at t = 0.5 s and 2e-10 s later, in two events. CVODE follows the straight line
+    # exactly and locates each crossing to its time resolution, 100 eps (|t| + |h|), about 1e-13 s
+    # here: the log gives each break's time to 1e-13 s, so the two differ by 2e-10 s to 2e-13 s.
+    drift = {"springmass": 1, "name": "drift", "gravity": [0, 0, 0],
+             "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                           {"name": "bob", "position": [1, 0, 0], "velocity": [1, 0, 0], "mass": 1}],
+             "springs": [{"a": "anchor", "b": "bob", "stiffness": 0, "rest_length": 1, "break_strain": 0.5},
+                         {"a": "anchor", "b": "bob", "stiffness": 0, "rest_length": 1,
+                          "break_strain": 0.5000000002}]}
+    path = tmp_path / "drift.json"
+    path.write_text(json.dumps(drift))
+    stats = cli("run", path, "--t-end", 1, "-o", "-").stderr
+    logged = re.findall(r"^  spring (\d) \(between anchor and bob\) broke at t = (\S+) s$", stats, re.M)
+    assert [int(s) for s, _ in logged] == [0, 1], stats
+    first, second = (float(t) for _, t in logged)
+    assert first == pytest.approx(0.5, abs=1e-13) and second == pytest.approx(0.5000000002, abs=1e-13), stats
+    assert second - first == pytest.approx(2e-10, abs=2e-13), stats
+
+
 def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path):
     # A 1 kg bob hangs from a fixed anchor on a 10 N/m spring at its rest length, 1 m, and is let
     # go: z(t) = -1 - (g / omega^2) (1 - cos(omega t)) with omega^2 = k / m, until the spring's
