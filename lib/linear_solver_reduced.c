@@ -17,6 +17,18 @@
 // system, and conjugate gradients or a Cholesky factorisation apply. (Mass damping, a force
 // -alpha m v, adds -alpha M to D: A's mass term is M (1 + gamma alpha).)
 //
+// Long steps. From gamma = LARGE_GAMMA on (an advance "until it settles") the system is solved
+// for dx instead: with dv = (dx - bx) / gamma the velocity rows times gamma M read
+//     (M - gamma D - gamma^2 K) dx = gamma M bv + (M - gamma D) bx,    dv = (dx - bx) / gamma,
+// the same matrix. dx = bx + gamma dv cancels to DBL_EPSILON |bx| where the predicted state is far
+// off (gamma times the velocities' round-off), which made the Newton iteration fail near 4e62 s
+// on a damped bob; dv = (dx - bx) / gamma carries that error over gamma. Both sides are then
+// multiplied by scale = 2^-floor(log2 gamma) (sm_reduced_scale), so that gamma^2 K, which
+// overflowed from gamma = 1.3e154 s on, enters as (scale gamma) gamma K; products, block Jacobi,
+// the coarse matrix and the Cholesky factor all carry the scale, and the stopping test unscales
+// the residual (a power of two: exact). Below LARGE_GAMMA the scale is 1 and every number is as
+// before, bit for bit.
+//
 // Residuals. The residual of the full system's velocity rows is M^-1 (M bv + gamma K bx - A dv)
 // (the position rows hold exactly), and the error-weighted norm of M^-1 r is the test SUNDIALS'
 // own iterative solvers make. It sees the velocities only: an error e = A^-1 r left in dv is an
@@ -223,11 +235,16 @@ int sm_reduced_solver_product(SUNLinearSolver ls, double gamma, const double* p,
 	sm_reduced_load_spring_order(r);  // the model may have changed since the last invalidation
 	current_jacobian(r, sm_simulation_cvode_time(sim, sim->time), N_VGetArrayPointer(sim->y));
 	r->gamma = gamma;
+	r->scale = sm_reduced_scale(gamma);
+	r->unscale = 1.0 / r->scale;
 	int status = 0;
 	if (!r->use_cholmod && sm_reduced_prepare_preconditioner(r, gamma) != 0)
 		status = -1;
-	else
+	else {
 		sm_reduced_multiply(r, p, q);
+		for (int64_t i = 0; i < r->full; i++)
+			q[i] *= r->unscale;  // A p itself
+	}
 	sm_reduced_solver_invalidate(ls, false);  // the next solve evaluates and prepares afresh
 	return status;
 }
@@ -301,8 +318,15 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	// Jacobian evaluation: that share is taken out of the solve's time, so the two do not overlap.
 	const double start = sm_simulation_clock(), jacobian_start = sim->base.jacobian_seconds;
 	r->gamma = gamma;
-	// Over all particles: p = bx, rhs = M bv + gamma K bx, and the weights of the stopping test
-	// (p and both weights stay zero at constrained particles from their allocation on).
+	r->scale = sm_reduced_scale(gamma);
+	r->unscale = 1.0 / r->scale;
+	r->solve_positions = r->scale != 1.0;
+	const double scaled = r->scale * gamma;  // gamma below LARGE_GAMMA, in [1, 2) from it on
+	// Over all particles: p = bx, the right-hand side and the weights of the stopping test (p and
+	// both weights stay zero at constrained particles from their allocation on): rhs = M bv +
+	// gamma K bx; for long steps, rhs = scale (gamma M bv + M (1 + gamma alpha) bx - gamma D_s bx),
+	// the velocity rows' weights divided by scale gamma (their residual is M^-1 res / gamma) and the
+	// positions' weights CVODE's own.
 	const double* w = r->weights ? N_VGetArrayPointer(r->weights) : NULL;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
@@ -310,15 +334,27 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 			r->p[i + c] = b[f + c];
 			r->weight[i + c] = w ? w[n + f + c] : 1.0;
 			r->position_weight[i + c] = gamma * (w ? w[f + c] : 1.0);
+			if (r->solve_positions) {
+				r->weight[i + c] /= scaled;
+				r->position_weight[i + c] = w ? w[f + c] : 1.0;
+			}
 		}
 	}
-	sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
+	if (r->solve_positions)
+		sm_reduced_damping_product(r, r->p, r->rhs);  // rhs = -D_s bx first
+	else
+		sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
 	for (int32_t k = 0; k < sim->constrained_count; k++)
 		memset(r->rhs + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
+	const double damping = r->scale + scaled * sim->model->def.mass_damping;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++)
-			r->rhs[i + c] = r->mass[i + c] * b[n + f + c] - gamma * r->rhs[i + c];
+			if (r->solve_positions)
+				r->rhs[i + c] = scaled * (r->mass[i + c] * b[n + f + c] + r->rhs[i + c]) +
+				                damping * r->mass[i + c] * b[f + c];
+			else
+				r->rhs[i + c] = r->mass[i + c] * b[n + f + c] - gamma * r->rhs[i + c];
 	}
 	// pcg: the preconditioner, and with it the scaled records the products read, at this gamma,
 	// unless prepared for it since the last Jacobian evaluation (which sets blocks_gamma to NAN).
@@ -340,10 +376,14 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	if (flag == SM_LS_SUCCESS || flag == SUNLS_RES_REDUCED)
 		for (int32_t k = 0; k < sim->free_count; k++) {
 			const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
-			for (int c = 0; c < 3; c++) {
-				x[n + f + c] = r->dv[i + c];
-				x[f + c] = b[f + c] + gamma * r->dv[i + c];
-			}
+			for (int c = 0; c < 3; c++)
+				if (r->solve_positions) {  // the solution is dx
+					x[f + c] = r->dv[i + c];
+					x[n + f + c] = (r->dv[i + c] - b[f + c]) / gamma;
+				} else {
+					x[n + f + c] = r->dv[i + c];
+					x[f + c] = b[f + c] + gamma * r->dv[i + c];
+				}
 		}
 	sim->base.linear_solve_seconds +=
 	    sm_simulation_clock() - start - (sim->base.jacobian_seconds - jacobian_start);
@@ -449,6 +489,7 @@ static sm_reduced* reduced_content_create(sm_simulation* sim, bool use_cholmod)
 	r->n = sim->dofs;
 	r->blocks_gamma = NAN;
 	r->jacobian_time = NAN;
+	r->scale = r->unscale = r->factor_scale = 1.0;
 	const size_t n = (size_t)r->n + 1;
 	r->full = 3 * (int64_t)sim->particle_count;
 	const size_t full = (size_t)r->full + 1;

@@ -27,6 +27,7 @@
 
 #include <suitesparse/cholmod.h>
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -94,7 +95,16 @@ typedef struct sm_reduced {
 	// The Jacobian as every spring's factored blocks (sm_model_forces_and_jacobians), refreshed
 	// at every step, in chunk order; products with A are formed from it without assembling A.
 	sm_spring_jacobians* springs;
-	double gamma;         // of the current solve [s]
+	double gamma;  // of the current solve [s]
+	// The factor, a power of two, by which the current solve's system is multiplied, and whether it
+	// solves for dx rather than dv: 1 and false below LARGE_GAMMA, about 1 / gamma and true from it
+	// on (sm_reduced_scale, linear_solver_reduced.c). Every product, the preconditioner, the coarse
+	// matrix and the Cholesky factor carry it; unscale = 1 / scale.
+	double scale;
+	double unscale;
+	bool solve_positions;
+	double factor_scale;  // scale of the Cholesky factor (cholmod)
+	double coarse_scale;  // scale of the coarse factorisation (pcg)
 	double* full_force;   // forces of the fused pass (unused)
 	double blocks_gamma;  // gamma of block_inverse; NAN after a Jacobian refresh [s]
 	// Two-level block-Jacobi preconditioner (pcg): aggregates of neighbouring free particles,
@@ -166,6 +176,17 @@ typedef struct sm_reduced {
 	cholmod_dense *b, *x, *y_work, *e_work;
 } sm_reduced;
 
+// The step (CVODE's gamma) from which the reduced system is solved for the positions' correction
+// and scaled by about 1 / gamma [s] (linear_solver_reduced.c, "Long steps").
+#define LARGE_GAMMA 2.0
+
+// The factor by which the reduced system at gamma is multiplied: 1 below LARGE_GAMMA, else the
+// power of two 2^-floor(log2 gamma), so that scale gamma lies in [1, 2).
+static inline double sm_reduced_scale(double gamma)
+{
+	return gamma >= LARGE_GAMMA ? ldexp(1.0, -ilogb(gamma)) : 1.0;
+}
+
 // The chunks' partial sums (partial), added in chunk order (with one chunk: the sum in order).
 static inline double sm_reduced_sum_partials(const sm_reduced* r)
 {
@@ -206,6 +227,9 @@ double sm_reduced_dot(sm_reduced* r, const double* a, const double* b);
 double sm_reduced_multiply(sm_reduced* r, const double* p, double* restrict q);
 // q = -K p from the Jacobian's records over all particles (constrained entries not cleared).
 void sm_reduced_stiffness_product(sm_reduced* r, const double* p, double* q);
+// q = -D_s p, D_s the springs' share of D (mass damping left out), from the Jacobian's records over
+// all particles (constrained entries not cleared).
+void sm_reduced_damping_product(sm_reduced* r, const double* p, double* q);
 
 // reduced_conjugate_gradients.c
 

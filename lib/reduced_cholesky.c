@@ -77,18 +77,18 @@ bool sm_reduced_cholesky_allocate(sm_reduced* r)
 	return true;
 }
 
-// values = M - gamma D - gamma^2 K in the pattern's order (the simulation's df/dx and df/dv,
-// filled from the springs' records; M on the diagonal, entry (i, i) being i % 3 entries after
-// the first of its diagonal block).
+// values = M - gamma D - gamma^2 K, times the scale at gamma (sm_reduced_scale), in the pattern's order (the
+// simulation's df/dx and df/dv, filled from the springs' records; M on the diagonal, entry (i, i) being i % 3
+// entries after the first of its diagonal block).
 static void assemble(sm_reduced* r, double gamma)
 {
 	const double* K = r->sim->dfdx;
 	const double* D = r->sim->dfdv;
-	const double g2 = gamma * gamma;
+	const double scale = sm_reduced_scale(gamma), g1 = scale * gamma, g2 = g1 * gamma;
 	for (int64_t e = 0; e < r->nonzeros; e++)
-		r->values[e] = -gamma * D[e] - g2 * K[e];
+		r->values[e] = -g1 * D[e] - g2 * K[e];
 	for (int64_t i = 0; i < r->n; i++)
-		r->values[r->diagonal[i] + (i % 3)] += r->sim->mass_dof[i];
+		r->values[r->diagonal[i] + (i % 3)] += r->sim->mass_dof[i] * scale;
 }
 
 // Assembles A at the current Jacobian and gamma and factorises it. Returns 0, > 0 if A is not
@@ -111,6 +111,7 @@ static int factorize(sm_reduced* r)
 			return -1;
 	}
 	r->factor_valid = false;
+	r->factor_scale = sm_reduced_scale(r->gamma);
 	const int ok = sm_cholmod_factorize(r->matrix, r->factor, &r->common);
 	if (!ok || r->common.status == CHOLMOD_OUT_OF_MEMORY)
 		return -1;
@@ -163,9 +164,15 @@ bool sm_reduced_cholesky_apply(sm_reduced* r, const double* in, double* out, dou
 		return false;
 	const double* x = r->x->x;
 	memset(out, 0, (size_t)r->full * sizeof(double));
+	// A factor of another scale than the solve's (a power of two, sm_reduced_scale): out scaled by
+	// their ratio, so that it estimates the error as one of the solve's scale would.
+	const double ratio = r->factor_scale * r->unscale;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k];
 		memcpy(out + i, x + 3 * (size_t)k, 3 * sizeof(double));
+		if (ratio != 1.0)
+			for (int c = 0; c < 3; c++)
+				out[i + c] *= ratio;
 		sum += in[i] * out[i] + in[i + 1] * out[i + 1] + in[i + 2] * out[i + 2];
 	}
 	*dot = sum;

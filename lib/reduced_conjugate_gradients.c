@@ -52,13 +52,14 @@ static double residual_squares(const sm_reduced* r, const double* res)
 }
 
 // Sum of squares of the error-weighted position error gamma e, with e estimated as M^-1 res
-// (bound, res) or as the preconditioned residual z (position_weight = gamma times CVODE's error
-// weight, zero at constrained particles).
+// (bound, res, unscaled) or as the preconditioned residual z (position_weight = gamma times CVODE's
+// error weight, zero at constrained particles). Solving for dx (long steps: linear_solver_reduced.c),
+// e is the position error itself and position_weight CVODE's weight.
 static double position_squares(const sm_reduced* r, const double* e, bool bound)
 {
 	double s = 0.0;
 	for (int64_t i = 0; i < r->full; i++) {
-		const double t = (bound ? e[i] * r->inverse_mass[i] : e[i]) * r->position_weight[i];
+		const double t = (bound ? e[i] * r->inverse_mass[i] * r->unscale : e[i]) * r->position_weight[i];
 		s += t * t;
 	}
 	return s;

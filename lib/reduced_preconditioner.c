@@ -87,7 +87,8 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 	const int32_t* restrict second = r->entry_b;
 	const double* restrict data = r->springs->data;
 	double* restrict scaled = r->scaled;
-	const double g2 = gamma * gamma;
+	// gamma and gamma^2 times the solve's scale (the same numbers at scale 1)
+	const double g1 = sm_reduced_scale(gamma) * gamma, g2 = g1 * gamma;
 	double* restrict diag = block_sums(r);
 	if (begin >= end)
 		return;
@@ -119,7 +120,7 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 				h[i] = _mm_loadu_pd(in + 2 * i);
 			h8 = in[8];
 		}
-		const double gk = gamma * q[7];
+		const double gk = g1 * q[7];
 		const __m128d u01 = _mm_loadu_pd(q);
 		const __m128d w01 =
 		    _mm_add_pd(_mm_mul_pd(g2v, _mm_loadu_pd(q + 3)), _mm_mul_pd(_mm_set1_pd(gk), u01));
@@ -163,8 +164,8 @@ static void add_spring_shares(sm_reduced* r, double gamma, int32_t begin, int32_
 			held = a;
 			memcpy(h, diag + 3 * (size_t)held, sizeof h);
 		}
-		const double w[3] = {g2 * q[3] + gamma * q[7] * q[0], g2 * q[4] + gamma * q[7] * q[1],
-		                     g2 * q[5] + gamma * q[7] * q[2]};
+		const double w[3] = {g2 * q[3] + g1 * q[7] * q[0], g2 * q[4] + g1 * q[7] * q[1],
+		                     g2 * q[5] + g1 * q[7] * q[2]};
 		const double d = g2 * q[6];
 		double* restrict record = scaled + SCALED_STRIDE * (size_t)k;
 		record[0] = q[0], record[1] = q[1], record[2] = q[2];
@@ -200,7 +201,8 @@ static void invert_chunk(void* context, int c)
 	preconditioner_job* j = context;
 	sm_reduced* r = j->r;
 	const sm_model* m = r->sim->model;
-	const double damping = 1.0 + j->gamma * m->def.mass_damping;
+	const double scale = sm_reduced_scale(j->gamma);
+	const double damping = scale + scale * j->gamma * m->def.mass_damping;
 	double* diag = block_sums(r);
 	j->singular[c] = false;
 	for (int32_t i = r->chunk_particle[c]; i < r->chunk_particle[c + 1]; i++) {
@@ -229,10 +231,12 @@ static void invert_chunk(void* context, int c)
 static int refresh_coarse(sm_reduced* r, double gamma)
 {
 	const sm_model* m = r->sim->model;
-	const double damping = 1.0 + gamma * m->def.mass_damping;
+	const double scale = sm_reduced_scale(gamma);
+	const double damping = scale + scale * gamma * m->def.mass_damping;
 	double* coarse = r->coarse->x;
 	memset(coarse, 0, 9 * (size_t)r->coarse_first[r->aggregate_count] * sizeof(double));
 	r->coarse_gamma = gamma;
+	r->coarse_scale = scale;
 	for (int32_t s = 0; s < m->spring_count; s++) {
 		const int64_t* entry = r->spring_coarse + 4 * (size_t)s;
 		if (entry[0] < 0 && entry[1] < 0)
@@ -286,7 +290,8 @@ static int refresh_coarse(sm_reduced* r, double gamma)
 
 // The scaled records and the inverted diagonal blocks, chunk by chunk (the springs between
 // chunks on the caller's thread in between), then the coarse matrix if it is due (before the first
-// refresh coarse_gamma is 0, so the ratio of the gammas is infinite and the test fails). Returns
+// refresh coarse_gamma is 0, so the ratio of the gammas is infinite and the test fails), or if the
+// scale (sm_reduced_scale) differs from the coarse matrix's: all of them times the scale at gamma. Returns
 // 0, 1 if a block is singular or the coarse matrix is not positive definite, -1 if out of memory.
 int sm_reduced_prepare_preconditioner(sm_reduced* r, double gamma)
 {
@@ -299,7 +304,8 @@ int sm_reduced_prepare_preconditioner(sm_reduced* r, double gamma)
 			return 1;
 	if (!r->two_level)
 		return 0;
-	if (r->coarse_age >= COARSE_MAX_AGE || !(fabs(gamma / r->coarse_gamma - 1.0) <= COARSE_GAMMA_CHANGE))
+	if (r->coarse_age >= COARSE_MAX_AGE || !(fabs(gamma / r->coarse_gamma - 1.0) <= COARSE_GAMMA_CHANGE) ||
+	    r->coarse_scale != sm_reduced_scale(gamma))
 		return refresh_coarse(r, gamma);
 	r->coarse_age++;
 	return 0;

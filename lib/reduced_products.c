@@ -160,7 +160,7 @@ static void product_chunk(void* context, int c)
 {
 	const product_job* j = context;
 	const sm_reduced* r = j->r;
-	const double damping = 1.0 + r->gamma * r->sim->model->def.mass_damping;
+	const double damping = r->scale + r->scale * r->gamma * r->sim->model->def.mass_damping;
 	const double* restrict p = j->p;
 	const double* restrict mass = r->mass;
 	double* restrict q = j->q;
@@ -204,8 +204,8 @@ double sm_reduced_dot(sm_reduced* r, const double* a, const double* b)
 	return sm_reduced_sum_partials(r);
 }
 
-// q = A p = M (1 + gamma alpha) p - gamma D p - gamma^2 K p over all particles (p is zero at the
-// constrained ones, whose entries of q are set to zero); returns p . q.
+// q = A p = M (1 + gamma alpha) p - gamma D p - gamma^2 K p over all particles, times the solve's
+// scale (p is zero at the constrained ones, whose entries of q are set to zero); returns p . q.
 //
 // With pcg, each spring's share comes from its scaled record (u, w, gamma^2 beta, written by the
 // preconditioner's preparation at the same gamma, which must precede the product,
@@ -217,12 +217,12 @@ double sm_reduced_dot(sm_reduced* r, const double* a, const double* b)
 // preconditioner pass) the unscaled records serve.
 double sm_reduced_multiply(sm_reduced* r, const double* p, double* restrict q)
 {
-	const double g = r->gamma;
+	const double g = r->gamma, scaled = r->scale * g;
 	const sm_simulation* sim = r->sim;
 	if (r->use_cholmod) {
-		sm_spring_jacobians_combined_product(r->springs, sim->model, g * g, g, p, q);
+		sm_spring_jacobians_combined_product(r->springs, sim->model, scaled * g, scaled, p, q);
 		for (int64_t i = 0; i < r->full; i++)
-			q[i] = r->mass[i] * p[i] - q[i];
+			q[i] = r->mass[i] * r->scale * p[i] - q[i];
 	} else {
 		product_job job = {r, p, q};
 		sm_workers_run(r->workers, product_chunk, &job, r->chunks);
@@ -241,4 +241,23 @@ void sm_reduced_stiffness_product(sm_reduced* r, const double* p, double* q)
 	product_job job = {r, p, q};
 	sm_workers_run(r->workers, stiffness_chunk, &job, r->chunks);
 	add_spring_products(r, r->springs->data, p, q, r->chunk_spring[r->chunks], r->sim->model->spring_count);
+}
+
+// q = -D_s p over all particles from the Jacobian's records (D_s = kd u u^T for each spring: the
+// loop of add_spring_products with w = kd u and no diagonal term), in chunk order on the caller's
+// thread: only the solves of long steps (linear_solver_reduced.c) form it, once per solve.
+void sm_reduced_damping_product(sm_reduced* r, const double* p, double* q)
+{
+	const double* data = r->springs->data;
+	memset(q, 0, (size_t)r->full * sizeof(double));
+	for (int32_t s = 0; s < r->sim->model->spring_count; s++) {
+		const double* e = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
+		const int32_t a = r->entry_a[s], b = r->entry_b[s];
+		const double c =
+		    e[7] * (e[0] * (p[b] - p[a]) + e[1] * (p[b + 1] - p[a + 1]) + e[2] * (p[b + 2] - p[a + 2]));
+		for (int k = 0; k < 3; k++) {
+			q[a + k] -= e[k] * c;
+			q[b + k] += e[k] * c;
+		}
+	}
 }

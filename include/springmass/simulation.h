@@ -299,7 +299,11 @@ SM_API void sm_simulation_destroy(sm_simulation* sim);
 /// CVODE's axis, 4 eps max(1 s, |t - the last initialisation's t|) (about 9e-16 s in the first
 /// second), too short for CVODE, is one explicit Euler step (exact to round-off). CVODE sizes its
 /// first step after a (re)initialisation from the interval ahead, up to 1e9 s of it: an end far
-/// beyond (1e300 s, "until it settles") is reached by steps that grow as the motion allows.
+/// beyond (1e300 s, "until it settles") is reached by steps that grow as the motion allows: a
+/// damped bob settling on its spring reaches 1e300 s in about 400 steps with the dense, pcg and
+/// cholmod solvers, and a damped 8 x 8 cloth hanging from two corners with dense, klu (about 700
+/// steps) and cholmod (2345); klu stopped at its step limit near 5e61 s on the bob hanging under
+/// gravity, and pcg near 3e255 s on the cloth (docs/simulation.md, "Advancing until it settles").
 /// SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that is not finite or lies before
 /// t.
 /// When the advance used its max_steps internal steps, or on_step returned false, before t_end:
