@@ -18,10 +18,8 @@
 // anchor driven through samples every 1 ms, a new acceleration at each, restarted at each: the bob
 // 2.8e-4 m off after 2 s at rtol 1e-6; kept, 2.6e-8 m). So does a force that jumps by little: the
 // advance restarts only if its interval (or max_step) times |jump| / m exceeds the velocity's
-// tolerance rtol |v| + atol_velocity at some particle, or its interval times the jump of the power
-// the force delivers, |jump . v|, exceeds the inputs' work's tolerance rtol |W| + atol_velocity (an
-// undamped oscillator under a sine force held over each 1 ms, restarted at every jump, was
-// 4.5e-3 m off after 10 s; kept, 2.2e-6 m). So
+// tolerance rtol |v| + atol_velocity at some particle (an undamped oscillator under a sine force
+// held over each 1 ms, restarted at every jump, was 4.5e-3 m off after 10 s; kept, 2.2e-6 m). So
 // does a drive that jumps by little, by the same measure applied to the jump of its springs' forces
 // at the free particles around it, and by its interval times the jump of the inputs' or the
 // dissipated power against the energies' tolerance rtol |E| + atol_velocity (a damped base
