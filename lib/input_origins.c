@@ -62,7 +62,7 @@ void sm_input_origins_note(sm_simulation* sim, int32_t particle, bool driven)
 		sim->flags_before.input_jumped = sim->input_jumped;
 		sim->flags_before.input_changed = sim->input_changed;
 		sim->flags_before.jump_work = sim->jump_work;
-		sim->flags_before.jump_rate = sim->jump_rate;
+		sim->flags_before.jumps = sim->jumps;
 	}
 	sm_input_origin* o = &sim->origins[sim->origin_count];
 	const size_t p = 3 * (size_t)particle;
@@ -100,6 +100,6 @@ bool sm_input_origins_settle(sm_simulation* sim, int32_t particle)
 	sim->input_jumped = sim->flags_before.input_jumped;
 	sim->input_changed = sim->flags_before.input_changed;
 	sim->jump_work = sim->flags_before.jump_work;
-	sim->jump_rate = sim->flags_before.jump_rate;
+	sim->jumps = sim->flags_before.jumps;
 	return true;
 }

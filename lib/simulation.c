@@ -370,6 +370,24 @@ static sm_status stopped_by_caller(sm_simulation* sim, double t_end)
 	                          "stopped by on_step at t = %s s while advancing to %s s", now, end);
 }
 
+// The rate of the inputs' jumps since the last advance [1/s]: the largest of their velocity
+// measure (sim->jumps.rate) and the jumps of the inputs' and the dissipated power, summed over the
+// inputs, over the work's and the dissipated energy's tolerances rtol |E| + atol (the energies
+// integrate the sums: jumps that cancel leave them continuous, jumps within the tolerance each
+// add up). Infinite where a sum is not a number.
+static double input_jumps_rate(const sm_simulation* sim)
+{
+	const sm_input_jumps* j = &sim->jumps;
+	if (isnan(j->input_power) || isnan(j->dissipated_power))
+		return INFINITY;
+	const double* atol = N_VGetArrayPointer(sim->tolerances);
+	const double* y = N_VGetArrayPointer(sim->y);
+	const double rtol = sim->def.relative_tolerance;
+	const int64_t e = sm_simulation_dissipated_index(sim), w = sm_simulation_work_index(sim);
+	const double rate = fmax(j->rate, fabs(j->input_power) / (rtol * fabs(y[w]) + atol[w]));
+	return fmax(rate, fabs(j->dissipated_power) / (rtol * fabs(y[e]) + atol[e]));
+}
+
 static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 {
 	sim->last_error[0] = '\0';
@@ -381,13 +399,14 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 	// master's): CVODE then ends its last step at t_end rather than step past it.
 	const bool inputs_changed = sim->input_changed;
 	sim->input_changed = false;
-	// Forces that jumped since the last advance restart CVODE unless the history carries their
-	// jumps over the interval: its length (or the largest step) times jump_rate at most 1.
+	// Inputs that jumped since the last advance restart CVODE unless the history carries their
+	// jumps over the interval: its length (or the largest step) times their rate at most 1.
 	const double interval =
 	    sim->def.max_step > 0.0 ? fmin(t_end - sim->time, sim->def.max_step) : t_end - sim->time;
-	if (sim->jump_rate > 0.0 && !(interval * sim->jump_rate <= 1.0))
+	const double rate = input_jumps_rate(sim);
+	if (rate > 0.0 && !(interval * rate <= 1.0))
 		sim->need_restart = true;
-	sim->jump_rate = 0.0;
+	sim->jumps = (sm_input_jumps){0.0, 0.0, 0.0};
 	// Where CVODE is past the current time, it has looked for roots beyond it already, on the
 	// same trajectory: springs are checked afresh only where it starts or restarts.
 	if (!cvode_ahead(sim) && sm_simulation_break_overstretched_springs(sim) != SM_OK)
@@ -805,22 +824,21 @@ static double force_jump_rate(const sm_simulation* sim, int32_t particle, double
 	return isnan(rate) ? INFINITY : rate;
 }
 
-// The same for a drive's jump from the position and velocity it has now to those given [1/s], the
-// largest of: the velocity change per second the jump of its springs' forces makes at each free
-// particle at their other ends, over that velocity's tolerance; and the jumps of the energies'
-// rates, over their tolerances rtol |E| + atol: the inputs' power in the driven particle's own
-// term -(m (g - alpha v) + load + its springs' forces) . v and in that of a driven particle at a
+// What a drive's jump from the position and velocity it has now to those given leaves to CVODE's
+// history (note_input_change): the largest velocity change per second the jump of its springs'
+// forces makes at a free particle at their other ends, over that velocity's tolerance [1/s]; and
+// the jumps of the energies' rates [W]: the inputs' power in the driven particle's own term
+// -(m (g - alpha v) + load + its springs' forces) . v and in that of a driven particle at a
 // spring's other end, and the power its springs' dampers and its mass damping dissipate. A jump
 // of the driven particle reaches CVODE's state through these only (a velocity jump at an undamped
 // spring through the powers alone: the driver's power jumps by the spring's force times it).
-static double drive_jump_rate(const sm_simulation* sim, int32_t particle, const double* position,
-                              const double* velocity)
+static sm_input_jumps drive_jumps(const sm_simulation* sim, int32_t particle, const double* position,
+                                  const double* velocity)
 {
 	const sm_model* m = sim->model;
 	const size_t p = 3 * (size_t)particle;
 	const double *x0 = sim->position + p, *v0 = sim->velocity + p;
 	const double* atol = N_VGetArrayPointer(sim->tolerances);
-	const double* y = N_VGetArrayPointer(sim->y);
 	const double rtol = sim->def.relative_tolerance;
 	const double mass = m->mass[particle];
 	double body_before[3], body_after[3];
@@ -870,10 +888,8 @@ static double drive_jump_rate(const sm_simulation* sim, int32_t particle, const 
 			rate = fmax(rate, fabs(after[c] - before[c]) / m->mass[other] / tolerance);
 		}
 	}
-	const int64_t e = sm_simulation_dissipated_index(sim), w = sm_simulation_work_index(sim);
-	rate = fmax(rate, fabs(dissipation_jump) / (rtol * fabs(y[e]) + atol[e]));
-	rate = fmax(rate, fabs(input_jump) / (rtol * fabs(y[w]) + atol[w]));
-	return isnan(rate) ? INFINITY : rate;
+	const sm_input_jumps jumps = {isnan(rate) ? INFINITY : rate, input_jump, dissipation_jump};
+	return jumps;
 }
 
 // After an input changed at the current time: CVODE restarts here when the options ask for it
@@ -887,33 +903,39 @@ static double drive_jump_rate(const sm_simulation* sim, int32_t particle, const 
 //   (within its error control, which rejects steps where the kink is sharp). A sine force ramped through
 //   samples every 1 ms: 10 000 restarts over 10 s put the undamped oscillator of
 //   tests/test_simulation_ramps.c 4.5e-3 m off, the history kept 5.4e-8 m.
-// - A force that jumps by little (`jump_rate`, the velocity change per second its jump makes over
-//   the velocity's tolerance, sim->jump_rate): the steps after a jump carry an error of about the
-//   step times the jump's acceleration in the velocity, which the history keeps within the
-//   tolerance if the advance's interval times jump_rate is at most 1; the advance decides. The
-//   same oscillator under the samples held over each step (a jump at every call) ends 4.5e-3 m off
-//   with a restart at each, 2.2e-6 m without. The power the force delivers jumps by jump . v, which
+// - A force that jumps by little (`jumps.rate`, the velocity change per second its jump makes over
+//   the velocity's tolerance): the steps after a jump carry an error of about the step times the
+//   jump's acceleration in the velocity, which the history keeps within the tolerance if the
+//   advance's interval times the rate is at most 1; the advance decides. The same oscillator
+//   under the samples held over each step (a jump at every call) ends 4.5e-3 m off with a restart
+//   at each, 2.2e-6 m without. The power the force delivers jumps by jump . v, which
 //   restarts nothing: held samples on a fast particle jump in it at every call, and a restart at
 //   each costs the motion without sparing the inputs' work (a bob at up to 100 m/s under 0.01 N
 //   sin(2 pi t) held over each 1 ms: kept, 4.2e-7 m and 3.1e-4 J off after 2 s; restarted where
 //   the power's jump over the interval exceeded the work's tolerance, 1.4e-2 m and 2.9e-4 J).
 // - A drive that jumps, by the same measure: its jump reaches CVODE's state only through its
 //   springs' forces on the free particles at their other ends and through the energies' rates
-//   (drive_jump_rate; an anchor of an undamped oscillator under 10 N set moving at 1e-3 m/s left
-//   the inputs' work 2.2e-5 J off with the history kept, 5.8e-7 J restarted). A base excitation
+//   (drive_jumps; an anchor of an undamped oscillator under 10 N set moving at 1e-3 m/s left
+//   the inputs' work 2.2e-5 J off with the history kept, 5.8e-7 J restarted). The energies are
+//   sums, so the power's jumps are summed over the drives that jump before they are measured
+//   (sim->jumps; 200 such anchors each set moving at 5e-6 m/s, each jump within the tolerance,
+//   left the work 1.3e-5 J off kept, 1.3e-6 J restarted). A base excitation
 //   sampled every 1 ms jumps by much (its damper feels each new velocity): 9e-4 of the amplitude
 //   off with the history kept, 2e-5 with restarts (tests/test_simulation.c); a motion port given
 //   another FMU's position, velocity and acceleration at every 1 ms point (the coupled chain of
 //   the README) leaves its path by little: 2 restarts in 2000 points, 7.5e-6 m from the monolithic
 //   chain, 4.8e-4 m with a restart at each.
-static void note_input_change(sm_simulation* sim, bool continuous, double jump_rate)
+static void note_input_change(sm_simulation* sim, bool continuous, sm_input_jumps jumps)
 {
 	sim->input_jumped = true;
 	sim->input_changed = true;
-	if (cvode_ahead(sim))
+	if (cvode_ahead(sim)) {
 		sim->need_restart = true;
-	else if (sim->def.restart_on_input_change && !continuous)
-		sim->jump_rate = fmax(sim->jump_rate, jump_rate);
+	} else if (sim->def.restart_on_input_change && !continuous) {
+		sim->jumps.rate = fmax(sim->jumps.rate, jumps.rate);
+		sim->jumps.input_power += jumps.input_power;
+		sim->jumps.dissipated_power += jumps.dissipated_power;
+	}
 }
 
 sm_status sm_simulation_set_driven(sm_simulation* sim, int32_t particle, const double position[3],
@@ -962,7 +984,8 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	// kinetic energy, which CVODE does not integrate (sm_simulation_driving_power_at).
 	const bool turns = drive_continues(sim->drive_position + p, sim->drive_velocity + p,
 	                                   sim->drive_acceleration + p, dt, sim->time, position, velocity);
-	const double jump_rate = turns ? 0.0 : drive_jump_rate(sim, particle, position, velocity);
+	const sm_input_jumps jumps =
+	    turns ? (sm_input_jumps){0.0, 0.0, 0.0} : drive_jumps(sim, particle, position, velocity);
 	// Back on the path it had before its first change since the last advance: that path again, to
 	// the bit, and once every input is back, no change at all (input_origins.c).
 	const sm_input_origin* found = sm_input_origins_find(sim, particle);
@@ -988,7 +1011,7 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	sim->drive_time[particle] = back ? origin.time : sim->time;
 	const bool undone = back && sm_input_origins_settle(sim, particle);
 	if (!undone)
-		note_input_change(sim, turns, jump_rate);
+		note_input_change(sim, turns, jumps);
 	sm_simulation_refresh_outputs(sim);
 	const double work =
 	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) -
@@ -1030,7 +1053,7 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	if (on_force_ramp(f, r, dt, force, rate))
 		return SM_OK;
 	const bool turns = force_continues(f, r, dt, sim->time, force);  // the force the ramp has, a new rate
-	const double jump_rate = turns ? 0.0 : force_jump_rate(sim, particle, dt, force);
+	const sm_input_jumps jumps = {turns ? 0.0 : force_jump_rate(sim, particle, dt, force), 0.0, 0.0};
 	const bool free = sim->model->motion[particle] == SM_PARTICLE_FREE;
 	// Back on the ramp it had before its first change since the last advance: that ramp again, to
 	// the bit, and once every input is back, no change at all (input_origins.c).
@@ -1055,7 +1078,7 @@ sm_status sm_simulation_set_external_force_ramp(sm_simulation* sim, int32_t part
 	memcpy(r, rate, 3 * sizeof(double));
 	sim->force_time[particle] = back ? origin.time : sim->time;
 	if (free && !(back && sm_input_origins_settle(sim, particle)))
-		note_input_change(sim, turns, jump_rate);
+		note_input_change(sim, turns, jumps);
 	return SM_OK;
 }
 

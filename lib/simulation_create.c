@@ -249,7 +249,7 @@ void sm_simulation_load_initial_state(sm_simulation* sim)
 	y[sm_simulation_dissipated_index(sim)] = 0.0;
 	y[sm_simulation_work_index(sim)] = 0.0;
 	sim->jump_work = 0.0;
-	sim->jump_rate = 0.0;
+	sim->jumps = (sm_input_jumps){0.0, 0.0, 0.0};
 	sim->time = 0.0;
 	sim->time_origin = 0.0;
 	sm_simulation_refresh_outputs(sim);

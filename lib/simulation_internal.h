@@ -34,13 +34,25 @@ typedef struct sm_input_origin {
 	double time;
 } sm_input_origin;
 
+// What the inputs' jumps since the last advance leave to CVODE's history, which the advance
+// restarts if its interval times the rate this makes exceeds 1 (note_input_change in simulation.c):
+// the largest velocity change per second a jump makes at a free particle (|jump| / m), over that
+// velocity's error tolerance [1/s], and the jumps of the inputs' power and of the dissipated power
+// that the drives make, summed over every drive that jumped, as they jump the energies' rates
+// together [W].
+typedef struct sm_input_jumps {
+	double rate;              // [1/s]
+	double input_power;       // [W]
+	double dissipated_power;  // [W]
+} sm_input_jumps;
+
 // The flags an input change sets, as they were before the first change since the last advance.
 typedef struct sm_input_flags {
 	bool need_restart;
 	bool input_jumped;
 	bool input_changed;
 	double jump_work;  // [J]
-	double jump_rate;  // [1/s]
+	sm_input_jumps jumps;
 } sm_input_flags;
 
 struct sm_simulation {
@@ -126,10 +138,7 @@ struct sm_simulation {
 	// as it was while their kinetic energy changes), kept beside CVODE's state; after a restore, the
 	// snapshot's work (sm_simulation_start_input_work) [J].
 	double jump_work;
-	// The largest velocity change per second the external forces' jumps since the last advance make
-	// at a free particle (|jump| / m), over that velocity's error tolerance [1/s]: the advance
-	// restarts CVODE if its interval times this exceeds 1 (note_input_change in simulation.c).
-	double jump_rate;
+	sm_input_jumps jumps;  // the inputs' jumps since the last advance
 
 	// Breakable springs: one root function each.
 	int32_t root_count;

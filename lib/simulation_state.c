@@ -202,7 +202,7 @@ sm_status sm_simulation_restore_state(sm_simulation* sim, const sm_simulation_st
 	sim->need_restart = true;
 	sim->forget_factor = true;
 	sim->input_changed = false;
-	sim->jump_rate = 0.0;
+	sim->jumps = (sm_input_jumps){0.0, 0.0, 0.0};
 	sm_input_origins_forget(sim);
 	sm_simulation_refresh_outputs(sim);
 	sm_simulation_start_input_work(sim, s->y[sm_simulation_work_index(sim)]);  // as saved, to the bit

@@ -22,10 +22,11 @@
 // held over each 1 ms, restarted at every jump, was 4.5e-3 m off after 10 s; kept, 2.2e-6 m). So
 // does a drive that jumps by little, by the same measure applied to the jump of its springs' forces
 // at the free particles around it, and by its interval times the jump of the inputs' or the
-// dissipated power against the energies' tolerance rtol |E| + atol_velocity (a damped base
-// excitation sampled every 1 ms jumps by much and restarts: its steady-state amplitude 2e-5 off,
-// 9e-4 with the history kept, the steps that straddle the changes carrying an error CVODE's error
-// test does not see; tests/test_simulation.c, test_base_excitation_sampled_at_every_step). An
+// dissipated power, summed over the drives that jump before the advance, against the energies'
+// tolerance rtol |E| + atol_velocity (a damped base excitation sampled every 1 ms jumps by much and
+// restarts: its steady-state amplitude 2e-5 off, 9e-4 with the history kept, the steps that
+// straddle the changes carrying an error CVODE's error test does not see; tests/test_simulation.c,
+// test_base_excitation_sampled_at_every_step). An
 // input set to another value and back before the next advance (a master that tries a value and
 // reads the outputs it gives) changes nothing: once every input changed since the last advance is
 // back on the path or ramp it had there, those are its values again, to the bit (the inputs' work
