@@ -43,6 +43,7 @@ sm_simulation_def sm_default_simulation_def(void)
 	def.max_step = 0.0;
 	def.max_steps = 100000;
 	def.restart_on_input_change = true;
+	def.stability_limit_detection = true;
 	def.threads = 1;
 	return def;
 }
@@ -397,7 +398,9 @@ static sm_status setup_cvode(sm_simulation* sim)
 	    CVodeWFtolerances(sim->cvode, error_weights) != CV_SUCCESS ||
 	    CVodeSetUserData(sim->cvode, sim) != CV_SUCCESS ||
 	    CVodeSetMaxNumSteps(sim->cvode, sim->def.max_steps) != CV_SUCCESS ||
-	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS)
+	    CVodeSetMaxStep(sim->cvode, sim->def.max_step) != CV_SUCCESS ||
+	    (sim->def.method == SM_METHOD_BDF &&
+	     CVodeSetStabLimDet(sim->cvode, sim->def.stability_limit_detection) != CV_SUCCESS))
 		return SM_ERROR_SOLVER;
 	// CVODE's warnings that t + h rounds to t are not printed (its time axis starts at every
 	// (re)initialisation, so they would come only after a long run without one).

@@ -155,6 +155,13 @@ typedef struct sm_simulation_def {
 	/// history over every change: faster, less accurate where inputs jump by much at every call;
 	/// see "Inputs between calls" above). Model files: "input_changes", "restart" or "keep".
 	bool restart_on_input_change;
+	/// BDF only: let CVODE lower the order where orders 3 to 5 turn unstable at the step its error
+	/// test allows (CVODE's stability limit detection, CVodeSetStabLimDet). Lightly damped stiff
+	/// modes, the fast vibrations of springs, lie near the imaginary axis, where those orders are
+	/// not stable; without it such a mode's round-off grows until the error test cuts the step, and
+	/// the steps stay short long after the motion has settled (docs/simulation.md, "Stability
+	/// limit detection"). Default true.
+	bool stability_limit_detection;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
 	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
 	/// may run on).
@@ -300,9 +307,10 @@ SM_API void sm_simulation_destroy(sm_simulation* sim);
 /// first step after a (re)initialisation from the interval ahead, up to 1e9 s of it: an end far
 /// beyond (1e300 s, "until it settles") is reached by steps that grow as the motion allows: a
 /// damped bob settling on its spring reaches 1e300 s in about 400 steps with the dense, pcg and
-/// cholmod solvers, and a damped 8 x 8 cloth hanging from two corners with dense, klu (about 700
-/// steps) and cholmod (2345); klu stopped at its step limit near 5e61 s on the bob hanging under
-/// gravity, and pcg near 3e255 s on the cloth (docs/simulation.md, "Advancing until it settles").
+/// cholmod solvers, a damped hanging rope of 10 segments in about 5000, and a damped 8 x 8 cloth
+/// hanging from two corners with dense, klu and cholmod (629 to 669 steps); klu stopped at its
+/// step limit near 5e61 s on the bob hanging under gravity and near 5e55 s on the rope, and pcg
+/// near 1.2e257 s on the cloth (docs/simulation.md, "Advancing until it settles").
 /// SM_ERROR_INVALID_ARGUMENT, with nothing changed, for a t_end that is not finite or lies before
 /// t.
 /// When the advance used its max_steps internal steps, or on_step returned false, before t_end:
