@@ -320,13 +320,13 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 	r->gamma = gamma;
 	r->scale = sm_reduced_scale(gamma);
 	r->unscale = 1.0 / r->scale;
-	r->solve_positions = r->scale != 1.0;
+	const bool solve_positions = r->scale != 1.0;
 	const double scaled = r->scale * gamma;  // gamma below LARGE_GAMMA, in [1, 2) from it on
 	// Over all particles: p = bx, the right-hand side and the weights of the stopping test (p and
 	// both weights stay zero at constrained particles from their allocation on): rhs = M bv +
-	// gamma K bx; for long steps, rhs = scale (gamma M bv + M (1 + gamma alpha) bx - gamma D_s bx),
-	// the velocity rows' weights divided by scale gamma (their residual is M^-1 res / gamma) and the
-	// positions' weights CVODE's own.
+	// gamma K bx; for long steps, rhs = scale (gamma M bv + M bx - gamma D bx) (D = df/dv, mass
+	// damping included: M (1 + gamma alpha) bx - gamma D_s bx), the velocity rows' weights divided by scale
+	// gamma (their residual is M^-1 res / gamma) and the positions' weights CVODE's own.
 	const double* w = r->weights ? N_VGetArrayPointer(r->weights) : NULL;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
@@ -334,25 +334,24 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 			r->p[i + c] = b[f + c];
 			r->weight[i + c] = w ? w[n + f + c] : 1.0;
 			r->position_weight[i + c] = gamma * (w ? w[f + c] : 1.0);
-			if (r->solve_positions) {
+			if (solve_positions) {
 				r->weight[i + c] /= scaled;
 				r->position_weight[i + c] = w ? w[f + c] : 1.0;
 			}
 		}
 	}
-	if (r->solve_positions)
-		sm_reduced_damping_product(r, r->p, r->rhs);  // rhs = -D_s bx first
+	if (solve_positions)
+		sm_spring_jacobians_combined_product(r->springs, sim->model, 0.0, 1.0, r->p, r->rhs);  // D bx first
 	else
 		sm_reduced_stiffness_product(r, r->p, r->rhs);  // rhs = -K bx first
 	for (int32_t k = 0; k < sim->constrained_count; k++)
 		memset(r->rhs + 3 * (size_t)sim->constrained[k], 0, 3 * sizeof(double));
-	const double damping = r->scale + scaled * sim->model->def.mass_damping;
 	for (int32_t k = 0; k < sim->free_count; k++) {
 		const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 		for (int c = 0; c < 3; c++)
-			if (r->solve_positions)
-				r->rhs[i + c] = scaled * (r->mass[i + c] * b[n + f + c] + r->rhs[i + c]) +
-				                damping * r->mass[i + c] * b[f + c];
+			if (solve_positions)
+				r->rhs[i + c] = scaled * (r->mass[i + c] * b[n + f + c] - r->rhs[i + c]) +
+				                r->scale * r->mass[i + c] * b[f + c];
 			else
 				r->rhs[i + c] = r->mass[i + c] * b[n + f + c] - gamma * r->rhs[i + c];
 	}
@@ -377,7 +376,7 @@ static int reduced_solve(SUNLinearSolver ls, SUNMatrix unused, N_Vector xv, N_Ve
 		for (int32_t k = 0; k < sim->free_count; k++) {
 			const size_t i = 3 * (size_t)sim->free_particles[k], f = 3 * (size_t)k;
 			for (int c = 0; c < 3; c++)
-				if (r->solve_positions) {  // the solution is dx
+				if (solve_positions) {  // the solution is dx
 					x[f + c] = r->dv[i + c];
 					x[n + f + c] = (r->dv[i + c] - b[f + c]) / gamma;
 				} else {

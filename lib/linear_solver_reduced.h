@@ -96,13 +96,12 @@ typedef struct sm_reduced {
 	// at every step, in chunk order; products with A are formed from it without assembling A.
 	sm_spring_jacobians* springs;
 	double gamma;  // of the current solve [s]
-	// The factor, a power of two, by which the current solve's system is multiplied, and whether it
-	// solves for dx rather than dv: 1 and false below LARGE_GAMMA, about 1 / gamma and true from it
-	// on (sm_reduced_scale, linear_solver_reduced.c). Every product, the preconditioner, the coarse
+	// The factor, a power of two, by which the current solve's system is multiplied: 1 below
+	// LARGE_GAMMA, about 1 / gamma from it on, where the solve is for dx rather than dv
+	// (sm_reduced_scale, linear_solver_reduced.c). Every product, the preconditioner, the coarse
 	// matrix and the Cholesky factor carry it; unscale = 1 / scale.
 	double scale;
 	double unscale;
-	bool solve_positions;
 	double factor_scale;  // scale of the Cholesky factor (cholmod)
 	double coarse_scale;  // scale of the coarse factorisation (pcg)
 	double* full_force;   // forces of the fused pass (unused)
@@ -227,9 +226,6 @@ double sm_reduced_dot(sm_reduced* r, const double* a, const double* b);
 double sm_reduced_multiply(sm_reduced* r, const double* p, double* restrict q);
 // q = -K p from the Jacobian's records over all particles (constrained entries not cleared).
 void sm_reduced_stiffness_product(sm_reduced* r, const double* p, double* q);
-// q = -D_s p, D_s the springs' share of D (mass damping left out), from the Jacobian's records over
-// all particles (constrained entries not cleared).
-void sm_reduced_damping_product(sm_reduced* r, const double* p, double* q);
 
 // reduced_conjugate_gradients.c
 

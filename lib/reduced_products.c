@@ -242,22 +242,3 @@ void sm_reduced_stiffness_product(sm_reduced* r, const double* p, double* q)
 	sm_workers_run(r->workers, stiffness_chunk, &job, r->chunks);
 	add_spring_products(r, r->springs->data, p, q, r->chunk_spring[r->chunks], r->sim->model->spring_count);
 }
-
-// q = -D_s p over all particles from the Jacobian's records (D_s = kd u u^T for each spring: the
-// loop of add_spring_products with w = kd u and no diagonal term), in chunk order on the caller's
-// thread: only the solves of long steps (linear_solver_reduced.c) form it, once per solve.
-void sm_reduced_damping_product(sm_reduced* r, const double* p, double* q)
-{
-	const double* data = r->springs->data;
-	memset(q, 0, (size_t)r->full * sizeof(double));
-	for (int32_t s = 0; s < r->sim->model->spring_count; s++) {
-		const double* e = data + SPRING_JACOBIAN_STRIDE * (size_t)s;
-		const int32_t a = r->entry_a[s], b = r->entry_b[s];
-		const double c =
-		    e[7] * (e[0] * (p[b] - p[a]) + e[1] * (p[b + 1] - p[a + 1]) + e[2] * (p[b + 2] - p[a + 2]));
-		for (int k = 0; k < 3; k++) {
-			q[a + k] -= e[k] * c;
-			q[b + k] += e[k] * c;
-		}
-	}
-}
