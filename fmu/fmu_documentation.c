@@ -21,6 +21,7 @@ static void append_start(fmu_text* out, const fmu_variable* v)
 		break;
 	}
 	case FMU_INTEGER: fmu_text_appendf(out, "%d", (int)v->start_integer); break;
+	case FMU_BOOLEAN: fmu_text_append_string(out, v->start_boolean ? "true" : "false"); break;
 	case FMU_STRING: fmu_text_append_escaped(out, v->start_string); break;
 	}
 }

@@ -665,6 +665,15 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	    "an input that jumps: restart (re-initialise CVODE where its history cannot carry the "
 	    "jump within the tolerances) or keep (its history)",
 	    FMU_SRC_SOLVER_INPUT_CHANGES, sm_input_changes_name(s->restart_on_input_change));
+	fmu_variable* detection =
+	    add(&b, duplicate("solver.stability_limit_detection"),
+		    duplicate("BDF lowers its order where its steps would go unstable on lightly damped vibrations "
+		              "(CVODE's stability limit detection; Adams ignores it)"),
+		    FMU_BOOLEAN, FMU_PARAMETER, FMU_FIXED, NULL, FMU_SRC_SOLVER_STABILITY, 0, 0);
+	if (detection) {
+		detection->has_start = true;
+		detection->start_boolean = s->stability_limit_detection;
+	}
 
 	// Ports.
 	int32_t nports = sm_document_port_count(doc);
@@ -892,6 +901,11 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 			append_range(&out, v);
 			if (v->has_start)
 				fmu_text_appendf(&out, " start=\"%d\"", (int)v->start_integer);
+			break;
+		case FMU_BOOLEAN:
+			fmu_text_append_string(&out, "<Boolean");
+			if (v->has_start)
+				fmu_text_appendf(&out, " start=\"%s\"", v->start_boolean ? "true" : "false");
 			break;
 		case FMU_STRING:
 			fmu_text_append_string(&out, "<String");

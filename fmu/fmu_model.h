@@ -21,6 +21,7 @@ extern "C" {
 typedef enum fmu_type {
 	FMU_REAL = 0,
 	FMU_INTEGER,
+	FMU_BOOLEAN,
 	FMU_STRING,
 } fmu_type;
 
@@ -53,6 +54,7 @@ typedef enum fmu_source {
 	FMU_SRC_SOLVER_LINEAR_SOLVER,  ///< "auto", "dense", "klu", "pcg", "cholmod"
 	FMU_SRC_SOLVER_JACOBIAN,       ///< "exact" or "definite"
 	FMU_SRC_SOLVER_INPUT_CHANGES,  ///< "restart" or "keep": what an input that changes does
+	FMU_SRC_SOLVER_STABILITY,      ///< BDF's stability limit detection: on or off
 	FMU_SRC_PORT_POSITION,         ///< index = port, component 0..2 [m]
 	FMU_SRC_PORT_VELOCITY,         ///< index = port, component 0..2 [m/s]
 	FMU_SRC_PORT_FORCE,            ///< index = port, component 0..2 [N]
@@ -79,6 +81,7 @@ typedef struct fmu_variable {
 	bool has_start;     ///< parameters and inputs have a start value
 	double start_real;
 	int32_t start_integer;
+	bool start_boolean;
 	const char* start_string;  ///< static string
 } fmu_variable;
 

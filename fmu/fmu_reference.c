@@ -17,7 +17,8 @@ static int compare_names(const void* a, const void* b)
 	return strcmp((*(const fmu_variable* const*)a)->name, (*(const fmu_variable* const*)b)->name);
 }
 
-// A result's column: a Real or Integer variable of the FMU (whole values for an Integer one).
+// A result's column: a Real, Integer or Boolean variable of the FMU (whole values for an Integer
+// one, 0 or 1 as fmpy writes them for a Boolean one).
 static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
 {
 	const table_names* names = context;
@@ -30,7 +31,7 @@ static const char* name_column(void* context, const char* name, int32_t* id, boo
 	if ((*found)->type == FMU_STRING)
 		return "is a String variable: a result holds numbers";
 	*id = (int32_t)(*found - names->table->variables);
-	*whole = (*found)->type == FMU_INTEGER;
+	*whole = (*found)->type == FMU_INTEGER || (*found)->type == FMU_BOOLEAN;
 	return NULL;
 }
 

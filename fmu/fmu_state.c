@@ -20,7 +20,7 @@
 // history and goes on as if no state had been saved.
 // ---------------------------------------------------------------------------------------------
 
-#define STATE_MAGIC "SMFMUST8"
+#define STATE_MAGIC "SMFMUST9"
 
 // Serialised layout: magic[8], guid[40], then int64 and double fields in the order below, then
 // x[3n], v[3n], enabled[m] (as doubles 0/1), parameters[np], held ports[PORT_DOUBLES nports], pending
@@ -44,6 +44,7 @@ enum {
 	I_THREADS,
 	I_RTOL_SET,
 	I_RESTART_ON_INPUT_CHANGE,
+	I_STABILITY_LIMIT_DETECTION,
 	I_COUNT
 };
 enum {
@@ -160,6 +161,7 @@ static saved_state* save_state(instance* inst, saved_state* reuse)
 	put_i(b, I_THREADS, inst->solver.threads);
 	put_i(b, I_RTOL_SET, inst->rtol_set);
 	put_i(b, I_RESTART_ON_INPUT_CHANGE, inst->solver.restart_on_input_change);
+	put_i(b, I_STABILITY_LIMIT_DETECTION, inst->solver.stability_limit_detection);
 	put_d(b, D_TIME, inst->time);
 	put_d(b, D_START, inst->start_time);
 	put_d(b, D_LAST_SUCCESSFUL, inst->last_successful_time);
@@ -271,7 +273,7 @@ static bool valid_state(instance* inst, const char* function, const unsigned cha
 	     get_i(b, I_JACOBIAN) >= 0 && get_i(b, I_JACOBIAN) <= SM_JACOBIAN_DEFINITE &&
 	     get_i(b, I_MAX_STEPS) >= 1 && get_i(b, I_MAX_STEPS) <= INT32_MAX && get_i(b, I_THREADS) >= 1 &&
 	     get_i(b, I_THREADS) <= INT32_MAX && (get_i(b, I_RTOL_SET) & ~1) == 0 &&
-	     (get_i(b, I_RESTART_ON_INPUT_CHANGE) & ~1) == 0;
+	     (get_i(b, I_RESTART_ON_INPUT_CHANGE) & ~1) == 0 && (get_i(b, I_STABILITY_LIMIT_DETECTION) & ~1) == 0;
 	double rtol = get_d(b, D_RTOL), atol_x = get_d(b, D_ATOL_POSITION), atol_v = get_d(b, D_ATOL_VELOCITY);
 	double max_step = get_d(b, D_MAX_STEP);
 	// The tolerances as fmi2SetReal takes them: the relative one at least SM_MIN_RELATIVE_TOLERANCE
@@ -367,6 +369,7 @@ static fmi2Status restore_state(instance* inst, const char* function, const unsi
 	solver.max_steps = (int32_t)get_i(b, I_MAX_STEPS);
 	solver.threads = (int32_t)get_i(b, I_THREADS);
 	solver.restart_on_input_change = get_i(b, I_RESTART_ON_INPUT_CHANGE) != 0;
+	solver.stability_limit_detection = get_i(b, I_STABILITY_LIMIT_DETECTION) != 0;
 	solver.relative_tolerance = get_d(b, D_RTOL);
 	solver.absolute_tolerance_position = get_d(b, D_ATOL_POSITION);
 	solver.absolute_tolerance_velocity = get_d(b, D_ATOL_VELOCITY);

@@ -14,7 +14,7 @@
 
 static const char* type_name(fmu_type t)
 {
-	return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : "String";
+	return t == FMU_REAL ? "Real" : t == FMU_INTEGER ? "Integer" : t == FMU_BOOLEAN ? "Boolean" : "String";
 }
 
 // The variable of a value reference if it exists and has the type asked for.
@@ -325,10 +325,10 @@ fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 	if (!fmu_allowed(inst, "fmi2GetBoolean", ST_RUNNING) ||
 	    !fmu_check_arrays(inst, "fmi2GetBoolean", vr, nvr, value))
 		return fmi2Error;
-	if (nvr > 0) {
-		log_error(inst, "fmi2GetBoolean: value reference %u: this FMU has no Boolean variables",
-		          (unsigned)vr[0]);
-		return fmi2Error;
+	for (size_t i = 0; i < nvr; ++i) {
+		if (!fmu_lookup(inst, "fmi2GetBoolean", vr[i], FMU_BOOLEAN))
+			return fmi2Error;
+		value[i] = inst->solver.stability_limit_detection ? fmi2True : fmi2False;
 	}
 	return fmi2OK;
 }
@@ -500,10 +500,21 @@ fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t
 	if (!fmu_allowed(inst, "fmi2SetBoolean", ST_INSTANTIATED | ST_INITIALIZATION | ST_STEP_COMPLETE) ||
 	    !fmu_check_arrays(inst, "fmi2SetBoolean", vr, nvr, value))
 		return fmi2Error;
-	if (nvr > 0) {
-		log_error(inst, "fmi2SetBoolean: value reference %u: this FMU has no Boolean variables",
-		          (unsigned)vr[0]);
-		return fmi2Error;
+	// The only Boolean variable is solver.stability_limit_detection. A value other than fmi2True
+	// and fmi2False is refused, and a refused call changes nothing.
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = fmu_lookup(inst, "fmi2SetBoolean", vr[i], FMU_BOOLEAN);
+		if (!v || !settable(inst, "fmi2SetBoolean", v))
+			return fmi2Error;
+		if (value[i] != fmi2True && value[i] != fmi2False) {
+			log_error(inst, "fmi2SetBoolean: %s = %d rejected: must be fmi2True (1) or fmi2False (0)",
+			          v->name, (int)value[i]);
+			return fmi2Error;
+		}
+	}
+	for (size_t i = 0; i < nvr; ++i) {
+		inst->solver.stability_limit_detection = value[i] == fmi2True;
+		inst->sim_dirty = true;
 	}
 	return fmi2OK;
 }

@@ -207,8 +207,8 @@ static int test_misuse(void)
 }
 
 // Where a serialised state's header keeps its times (fmu_state.c): the first doubles after the
-// magic, the GUID and 15 integers.
-enum { STATE_TIME_AT = 168, STATE_START_AT = 176, STATE_LAST_SUCCESSFUL_AT = 184 };
+// magic, the GUID and 16 integers.
+enum { STATE_TIME_AT = 176, STATE_START_AT = 184, STATE_LAST_SUCCESSFUL_AT = 192 };
 
 // The bytes of state as fmi2SerializeFMUstate writes them, in a malloc'ed buffer of *size bytes;
 // NULL on failure.

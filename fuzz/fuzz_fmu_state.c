@@ -43,7 +43,7 @@ int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size);
 #define HEADER_START 48
 #define CHECKSUM_OFFSET (HEADER_START + 8 * 1)
 #define MAX_STEPS_OFFSET (HEADER_START + 8 * 11)
-#define TIME_OFFSET (HEADER_START + 8 * 15)
+#define TIME_OFFSET (HEADER_START + 8 * 16)
 #define MIN_STATE_BYTES (TIME_OFFSET + 8)
 
 // A rope of n = 3 segments (n sets the structure: a constant of the FMU) hung from a motion port;

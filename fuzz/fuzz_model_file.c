@@ -84,7 +84,8 @@ static void compare(const sm_document* d1, const sm_model* m1, const sm_document
 	    !same(e.solver.absolute_tolerance_position, f.solver.absolute_tolerance_position) ||
 	    !same(e.solver.absolute_tolerance_velocity, f.solver.absolute_tolerance_velocity) ||
 	    !same(e.solver.max_step, f.solver.max_step) || e.solver.max_steps != f.solver.max_steps ||
-	    e.solver.restart_on_input_change != f.solver.restart_on_input_change)
+	    e.solver.restart_on_input_change != f.solver.restart_on_input_change ||
+	    e.solver.stability_limit_detection != f.solver.stability_limit_detection)
 		differ("settings", 0);
 	// The parameters kept are the file's, with their values, and feed no more than they did.
 	for (int32_t j = 0; j < sm_document_parameter_count(d2); j++) {

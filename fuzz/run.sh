@@ -69,7 +69,7 @@ for target in "${targets[@]}"; do
     cp "$root"/models/*.json "$seeds"/
     cp "$root"/tests/python/models/*.json "$seeds"/ 2> /dev/null || true
     # Every setting of the simulation and fmu sections, which no bundled or test model gives.
-    printf '{ "springmass": 1, "name": "settings",\n  "particles": [ { "name": "a", "position": [0, 0, 0], "fixed": true }, { "name": "b", "position": [0, 0, -1] } ],\n  "springs": [ { "a": "a", "b": "b", "stiffness": 10 } ],\n  "simulation": { "stop_time": 1, "output_interval": 0.1, "rtol": 1e-5, "atol": 1e-7, "atol_velocity": 1e-5,\n    "method": "adams", "solver": "klu", "jacobian": "definite", "max_step": 0.01, "max_steps": 500, "input_changes": "keep" },\n  "fmu": { "particle_variables": false } }\n' > "$seeds/settings.json"
+    printf '{ "springmass": 1, "name": "settings",\n  "particles": [ { "name": "a", "position": [0, 0, 0], "fixed": true }, { "name": "b", "position": [0, 0, -1] } ],\n  "springs": [ { "a": "a", "b": "b", "stiffness": 10 } ],\n  "simulation": { "stop_time": 1, "output_interval": 0.1, "rtol": 1e-5, "atol": 1e-7, "atol_velocity": 1e-5,\n    "method": "adams", "solver": "klu", "jacobian": "definite", "max_step": 0.01, "max_steps": 500, "input_changes": "keep",\n    "stability_limit_detection": false },\n  "fmu": { "particle_variables": false } }\n' > "$seeds/settings.json"
     mkdir -p "$work"
     # From models/, where the bundled models' OBJ files are: the target finds a mesh's "file"
     # relative to the working folder, and a bundled model that reads one then loads whole.

@@ -60,10 +60,20 @@ static bool read_choice(parser* p, const json_t* obj, const char* path, const ch
 
 static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu)
 {
-	static const char* const keys[] = {
-	    "stop_time",     "output_interval", "rtol",   "atol",     "atol_position",
-	    "atol_velocity", "method",          "solver", "jacobian", "max_step",
-	    "max_steps",     "input_changes",   NULL};
+	static const char* const keys[] = {"stop_time",
+	                                   "output_interval",
+	                                   "rtol",
+	                                   "atol",
+	                                   "atol_position",
+	                                   "atol_velocity",
+	                                   "method",
+	                                   "solver",
+	                                   "jacobian",
+	                                   "max_step",
+	                                   "max_steps",
+	                                   "input_changes",
+	                                   "stability_limit_detection",
+	                                   NULL};
 	static const char* const fmu_keys[] = {"particle_variables", NULL};
 	sm_document_settings* s = &p->ex->settings;
 	s->stop_time = 1.0;
@@ -113,6 +123,9 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 		    !read_choice(p, simulation, path, "jacobian", jacobians, 2, &jacobian) ||
 		    !read_choice(p, simulation, path, "solver", solvers, SM_SOLVER_COUNT, &solver) ||
 		    !read_choice(p, simulation, path, "input_changes", input_changes, 2, &restart))
+			return false;
+		if (!sm_parser_read_bool(p, simulation, path, "stability_limit_detection",
+		                         &d->stability_limit_detection))
 			return false;
 		d->restart_on_input_change = restart == 0;
 		d->method = (sm_method)method;

@@ -1141,6 +1141,10 @@ static int test_broken_files(void)
 		 " \"simulation\": {\"input_changes\": true}}",
 		 SM_ERROR_SCHEMA, "test.json: simulation.input_changes: must be one of \"restart\", \"keep\""},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
+		 " \"simulation\": {\"stability_limit_detection\": \"off\"}}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: simulation.stability_limit_detection: must be true or false, not a string"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
 		 " \"simulation\": {\"rtol\": 0}}",
 		 SM_ERROR_NEGATIVE, "test.json: simulation.rtol: 0 must be > 0"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}],"
@@ -2369,15 +2373,16 @@ static int test_settings_and_their_defaults(void)
 	       s.solver.absolute_tolerance_velocity == 1e-6);
 	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.solver == SM_SOLVER_AUTO &&
 	       s.solver.jacobian == SM_JACOBIAN_EXACT);
-	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000 && s.solver.restart_on_input_change);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 100000 && s.solver.restart_on_input_change &&
+	       s.solver.stability_limit_detection);
 	sm_document_destroy(doc);
 
 	doc = parse_valid(
 	    TWO_PARTICLES
 	    ", \"simulation\": {\"stop_time\": 3, \"output_interval\": 0.5, \"rtol\": 0.001,"
 	    " \"atol\": 1e-150, \"method\": \"adams\", \"solver\": \"klu\", \"jacobian\": \"definite\","
-	    " \"max_step\": 0, \"max_steps\": 7, \"input_changes\": \"keep\"}, \"fmu\": {\"particle_variables\": "
-	    "true}}",
+	    " \"max_step\": 0, \"max_steps\": 7, \"input_changes\": \"keep\", \"stability_limit_detection\": false},"
+	    " \"fmu\": {\"particle_variables\": true}}",
 	    &err);
 	ENSURE(doc != NULL);
 	s = sm_document_get_settings(doc);
@@ -2386,7 +2391,8 @@ static int test_settings_and_their_defaults(void)
 	       s.solver.absolute_tolerance_velocity == 1e-150);
 	ENSURE(s.solver.method == SM_METHOD_ADAMS && s.solver.solver == SM_SOLVER_KLU &&
 	       s.solver.jacobian == SM_JACOBIAN_DEFINITE);
-	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7 && !s.solver.restart_on_input_change);
+	ENSURE(s.solver.max_step == 0.0 && s.solver.max_steps == 7 && !s.solver.restart_on_input_change &&
+	       !s.solver.stability_limit_detection);
 	sm_document_destroy(doc);
 
 	doc = parse(TWO_PARTICLES
@@ -3633,7 +3639,8 @@ static int test_unknown_keys_are_refused_everywhere(void)
 	    {2, "knd", "test.json: ports[0]: unknown key \"knd\" (allowed here: name, particle, kind)"},
 	    {3, "stop_tme",
 		 "test.json: simulation: unknown key \"stop_tme\" (allowed here: stop_time, output_interval, rtol, "
-		 "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps, input_changes)"},
+		 "atol, atol_position, atol_velocity, method, solver, jacobian, max_step, max_steps, input_changes, "
+		 "stability_limit_detection)"},
 	    {4, "particle_variable",
 		 "test.json: fmu: unknown key \"particle_variable\" (allowed here: particle_variables)"},
 	};

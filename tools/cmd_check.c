@@ -594,13 +594,17 @@ int sm_cmd_check(int argc, char** argv)
 		    "1/s^2): no integrator can simulate the model\n");
 	// Adams' fixed-point iteration uses no linear solver, whatever the file names: the method then
 	// takes the solver's place, as in the summary of springmass run.
-	// CVODE's history kept where inputs jump is named; restarting there is the default.
-	printf("simulation   stop time %g s, output interval %g s, rtol %g, %s%s%s\n", settings.stop_time,
+	// CVODE's history kept where inputs jump is named; restarting there is the default. So is
+	// BDF's stability limit detection switched off.
+	printf("simulation   stop time %g s, output interval %g s, rtol %g, %s%s%s%s\n", settings.stop_time,
 	       settings.output_interval, settings.solver.relative_tolerance,
 	       settings.solver.method == SM_METHOD_ADAMS ? "method adams (fixed point, no linear solver)"
 	                                                 : "solver ",
 	       settings.solver.method == SM_METHOD_ADAMS ? "" : sm_linear_solver_name(settings.solver.solver),
-	       settings.solver.restart_on_input_change ? "" : ", history kept where inputs jump");
+	       settings.solver.restart_on_input_change ? "" : ", history kept where inputs jump",
+	       settings.solver.method == SM_METHOD_BDF && !settings.solver.stability_limit_detection
+	           ? ", stability limit detection off"
+			   : "");
 	cli_warn_coarse_tolerances(stdout, "warning      ", model, &settings.solver);
 	bool overflows = false;
 	bool memory = warn_coincident_mesh_vertices(doc, model) && warn_broken_at_start(doc, model) &&

@@ -31,7 +31,8 @@ static void usage(FILE* out)
 	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity, energy.dissipated and\n"
 	        "energy.input (the inputs' work) [J].\n"
 	        "Without --input, force ports get no force, and a motion port's particle moves as the file\n"
-	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n"
+	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n");
+	fprintf(out,
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
@@ -75,6 +76,9 @@ static void usage(FILE* out)
 	        "                         and cholmod solvers use it for their matrix whatever is chosen)\n"
 	        "  --input-changes NAME   restart (default): CVODE restarts at an --input jump its\n"
 	        "                         history cannot carry; keep: never\n"
+	        "  --stability-limit-detection on|off\n"
+	        "                         BDF lowers its order where its steps would go unstable on\n"
+	        "                         lightly damped vibrations (default on)\n"
 	        "  --set PARAM=VALUE      changes a named parameter (repeatable)\n"
 	        "  -q, --quiet            no progress line and no summary on stderr (errors only)\n"
 	        "  -h, --help             this text\n");
@@ -121,6 +125,7 @@ typedef struct run_options {
 	bool max_step_given;
 	const char* jacobian;
 	const char* input_changes;
+	int stability_limit_detection;  // 1 on, 0 off, -1 the file's setting
 	const char* solver;
 	const char* method;
 	bool positions;
@@ -352,12 +357,25 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 		} else if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
 			o->quiet = true;
 		} else if (a[0] == '-' && a[1] != '\0') {
-			static const char* const with_value[] = {
-			    "--t-end",         "--output-interval", "--rtol",      "--atol",
-			    "--atol-position", "--atol-velocity",   "--max-steps", "--max-step",
-			    "--jacobian",      "--output",          "-o",          "--vtk",
-			    "--solver",        "--method",          "--set",       "--threads",
-			    "--input",         "--input-changes"};
+			static const char* const with_value[] = {"--t-end",
+			                                         "--output-interval",
+			                                         "--rtol",
+			                                         "--atol",
+			                                         "--atol-position",
+			                                         "--atol-velocity",
+			                                         "--max-steps",
+			                                         "--max-step",
+			                                         "--jacobian",
+			                                         "--output",
+			                                         "-o",
+			                                         "--vtk",
+			                                         "--solver",
+			                                         "--method",
+			                                         "--set",
+			                                         "--threads",
+			                                         "--input",
+			                                         "--input-changes",
+			                                         "--stability-limit-detection"};
 			bool known = false;
 			for (size_t k = 0; k < sizeof with_value / sizeof with_value[0]; k++)
 				known = known || strcmp(a, with_value[k]) == 0;
@@ -440,6 +458,13 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->jacobian = value;
 			} else if (strcmp(a, "--input-changes") == 0) {
 				o->input_changes = value;
+			} else if (strcmp(a, "--stability-limit-detection") == 0) {
+				if (strcmp(value, "on") != 0 && strcmp(value, "off") != 0) {
+					fprintf(stderr, "springmass run: --stability-limit-detection takes on or off, got '%s'\n",
+					        value);
+					return 2;
+				}
+				o->stability_limit_detection = strcmp(value, "on") == 0;
 			} else if (strcmp(a, "--output") == 0 || strcmp(a, "-o") == 0) {
 				o->output = value;
 			} else if (strcmp(a, "--vtk") == 0) {
@@ -487,6 +512,7 @@ int sm_cmd_run(int argc, char** argv)
 {
 	run_options o;
 	memset(&o, 0, sizeof o);
+	o.stability_limit_detection = -1;
 	o.sets = calloc((size_t)argc + 1, sizeof(char*));
 	if (!o.sets)
 		return 1;
@@ -542,6 +568,8 @@ int sm_cmd_run(int argc, char** argv)
 		def.max_steps = (int32_t)o.max_steps;
 	if (o.max_step_given)
 		def.max_step = o.max_step;
+	if (o.stability_limit_detection >= 0)
+		def.stability_limit_detection = o.stability_limit_detection == 1;
 	// The tool owns its process: every processor, unless told otherwise.
 	const long online = sysconf(_SC_NPROCESSORS_ONLN);
 	def.threads = (int32_t)(o.threads > 0 ? o.threads : online > 0 ? (online < 1024 ? online : 1024) : 1);

@@ -57,6 +57,8 @@ class Instance:
             self.slave.setReal([v.valueReference], [float(value)])
         elif v.type == "Integer":
             self.slave.setInteger([v.valueReference], [int(value)])
+        elif v.type == "Boolean":
+            self.slave.setBoolean([v.valueReference], [bool(value)])
         else:
             self.slave.setString([v.valueReference], [value])
 

@@ -84,7 +84,7 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         expect_error(inst, lambda: s.getReal([100000]), "unknown value reference 100000")
         expect_error(inst, lambda: s.setReal([100000], [1.0]), "unknown value reference 100000")
         expect_error(inst, lambda: s.getInteger([vr["tip.x"]]), "is a Real variable")
-        expect_error(inst, lambda: s.getBoolean([0]), "no Boolean variables")
+        expect_error(inst, lambda: s.getBoolean([vr["tip.x"]]), "is a Real variable, not Boolean")
         expect_error(inst, lambda: s.setReal([vr["tip.x"]], [1.0]), "tip.x", "output")
         expect_error(inst, lambda: s.setReal([vr["solver.rtol"]], [1e-3]), "fixed parameter")
         expect_error(inst, lambda: s.setReal([vr["m"]], [-1.0]), "m = -1")
@@ -93,6 +93,8 @@ def test_call_sequence_and_arguments_are_checked(test_fmu):
         # initialisation any value of it is refused.
         assert all(v.variability == "fixed" for v in inst.md.modelVariables if v.name.startswith("solver."))
         expect_error(inst, lambda: s.setInteger([vr["solver.max_steps"]], [10]), "solver.max_steps", "fixed parameter")
+        expect_error(inst, lambda: s.setBoolean([vr["solver.stability_limit_detection"]], [False]),
+                     "solver.stability_limit_detection", "fixed parameter")
         expect_error(inst, lambda: s.getDirectionalDerivative([vr["base.fx"]], [vr["m"]], [1.0]), "not an input")
         expect_error(inst, lambda: s.setDebugLogging(True, ["logNothing"]), "unknown log category")
         expect_error(inst, lambda: s.cancelStep() if hasattr(s, "cancelStep") else s.fmi2CancelStep(s.component),
@@ -1071,7 +1073,7 @@ SETTINGS = {
               {"name": "tip", "particle": "bob", "kind": "force"}],
     "simulation": {"stop_time": 3.0, "output_interval": 0.02, "rtol": "tol", "atol_position": 1e-9,
                    "atol_velocity": 1e-7, "max_step": "hmax", "max_steps": 777, "method": "adams", "solver": "klu",
-                   "jacobian": "definite"},
+                   "jacobian": "definite", "input_changes": "keep", "stability_limit_detection": False},
     "fmu": {"particle_variables": False}}
 
 
@@ -1100,12 +1102,15 @@ def test_the_description_declares_what_the_fmu_holds(package, tmp_path):
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         parameters = [v for v in md.modelVariables if v.causality == "parameter"]
-        assert {v.name for v in parameters} >= {"solver.max_step", "solver.max_steps", "solver.method", "hmax"}
+        assert {v.name for v in parameters} >= {"solver.max_step", "solver.max_steps", "solver.method", "hmax",
+                                                "solver.input_changes", "solver.stability_limit_detection"}
         for v in parameters:
             if v.type == "Real":
                 value, start = s.getReal([v.valueReference])[0], float(v.start)
             elif v.type == "Integer":
                 value, start = s.getInteger([v.valueReference])[0], int(v.start)
+            elif v.type == "Boolean":
+                value, start = s.getBoolean([v.valueReference])[0], v.start == "true"
             else:
                 value, start = s.getString([v.valueReference])[0], v.start
                 value = value.decode() if isinstance(value, bytes) else value

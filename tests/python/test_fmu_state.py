@@ -215,11 +215,15 @@ inst.free()
 def test_a_state_carries_what_input_changes_do(test_fmu):
     # solver.input_changes is part of the state: an instance that keeps CVODE's history at input
     # changes hands that to one that restarts (the default), which then reads "keep" and steps on
-    # through changing inputs exactly as the first does.
-    with state_and_receiver(test_fmu("driven_oscillator"), {"solver.input_changes": "keep"}) as (a, b, blob):
+    # through changing inputs exactly as the first does. So is solver.stability_limit_detection.
+    parameters = {"solver.input_changes": "keep", "solver.stability_limit_detection": False}
+    with state_and_receiver(test_fmu("driven_oscillator"), parameters) as (a, b, blob):
+        detection = [b.vr["solver.stability_limit_detection"]]
         assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"restart"]
+        assert b.slave.getBoolean(detection) == [True]
         b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
         assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"keep"]
+        assert b.slave.getBoolean(detection) == [False]
         assert np.array_equal(run(a, 0.1, 10, force=force), run(b, 0.1, 10, force=force))
 
 
@@ -554,13 +558,14 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # parameters m, k, d, ports base and tip), fmu/fmu_state.c: magic 0, GUID 1-5, size 6, checksum 7,
 # then the FMU state 8, particles 9, springs 10, parameters 11, ports 12, has_sim 13, method 14,
 # linear solver 15, Jacobian 16, max_steps 17, threads 18, rtol_set 19, restart on input change
-# 20; the doubles time 21, start 22, last successful time 23, dissipated 24, rtol 25, atol of
-# positions 26 and of velocities 27, max_step 28, input work 29; then x (30-35), v (36-41), the
-# spring's enabled flag 42, the parameters 43-45, the held inputs of base (46-61) and tip (62-77:
-# position, velocity, force, acceleration, force rate, since; fmu_instance.h's port_values) and the
-# pending flags 78-79.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_RESTART, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, \
-    W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_WORDS = 13, 14, 17, 18, 20, 24, 25, 26, 28, 29, 42, 43, 68, 80
+# 20, stability limit detection 21; the doubles time 22, start 23, last successful time 24,
+# dissipated 25, rtol 26, atol of positions 27 and of velocities 28, max_step 29, input work 30;
+# then x (31-36), v (37-42), the spring's enabled flag 43, the parameters 44-46, the held inputs of
+# base (47-62) and tip (63-78: position, velocity, force, acceleration, force rate, since;
+# fmu_instance.h's port_values) and the pending flags 79-80.
+W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_RESTART, W_STABILITY, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, \
+    W_MAX_STEP, W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_WORDS = \
+    13, 14, 17, 18, 20, 21, 25, 26, 27, 29, 30, 43, 44, 69, 81
 
 
 def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
@@ -609,6 +614,7 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
                      "restart on input change 2": edited(state, W_RESTART, "<q", 2),
+                     "stability limit detection 2": edited(state, W_STABILITY, "<q", 2),
                      "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
                      "dissipated energy inf": edited(state, W_DISSIPATED, "<d", math.inf),
                      "dissipated energy -inf": edited(state, W_DISSIPATED, "<d", -math.inf),
