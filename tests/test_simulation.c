@@ -5806,13 +5806,13 @@ static int test_global_error_falls_with_the_tolerances(void)
 		       sm_linear_solver_name(runs[i].solver), loose, tight);
 		// Measured 5e-5 to 2.4e-4 m at rtol 1e-4 and 1.8e-10 to 1.4e-9 m at rtol 1e-10 (amplitude
 		// 0.2 m): a global error of a few hundred local ones at most, and a million times less rtol
-		// taking it down by 1.4e5 to 3e5 times; the bounds leave 10 to 100 times of margin.
+		// taking it down by 1.8e5 to 3e5 times; the bounds leave 10 to 100 times of margin.
 		ENSURE(loose <= 1e3 * 1e-4 * 0.2 && tight <= 1e3 * 1e-10 * 0.2);
 		ENSURE(tight <= 1e-4 * loose);
 	}
 	// The default absolute tolerances (1e-8 m, 1e-6 m/s, against velocities up to 1.3 m/s) bound
-	// rtol |y| + atol from below: rtol 1e-12 then does no better than rtol 1e-8 (measured 2.7e-6 m
-	// and 4.2e-6 m), and an atol that falls with rtol does 80 times better at rtol 1e-8 (5.3e-8 m).
+	// rtol |y| + atol from below: rtol 1e-12 then does no better than rtol 1e-8 (measured 3.0e-6 m
+	// and 4.0e-6 m), and an atol that falls with rtol does 48 times better at rtol 1e-8 (8.3e-8 m).
 	const double plateau = oscillator_error_at_10s(SM_METHOD_BDF, SM_SOLVER_DENSE, 1e-12, 0.0);
 	const double at_1e8 = oscillator_error_at_10s(SM_METHOD_BDF, SM_SOLVER_DENSE, 1e-8, 0.0);
 	const double scaled = oscillator_error_at_10s(SM_METHOD_BDF, SM_SOLVER_DENSE, 1e-8, 1e-11);
