@@ -73,7 +73,15 @@ static fmi2Status end_step(instance* inst, double t, double t_end)
 static void log_discard(instance* inst, sm_status st, double t, double t_end)
 {
 	char reason[SM_ERROR_MESSAGE_CAPACITY + 128];
-	if (st == SM_ERROR_STEP_LIMIT)
+	// Adams keeps its steps below the stability limit of the model's fastest modes: on a stiff
+	// model the cure is the method (simulation.c's hints say the same).
+	if (st == SM_ERROR_STEP_LIMIT && inst->solver.method == SM_METHOD_ADAMS)
+		snprintf(reason, sizeof reason,
+		         "CVODE used the %d internal steps solver.max_steps allows a communication step (for a stiff "
+		         "model set solver.method bdf, as Adams keeps its steps below the stability limit of the "
+		         "fastest modes, or a larger solver.max_steps, before fmi2ExitInitializationMode)",
+		         (int)inst->solver.max_steps);
+	else if (st == SM_ERROR_STEP_LIMIT)
 		snprintf(reason, sizeof reason,
 		         "CVODE used the %d internal steps solver.max_steps allows a communication step (set a "
 		         "larger solver.max_steps before fmi2ExitInitializationMode, or look for a spring much "

@@ -213,10 +213,20 @@ static const char* failure_name(int flag)
 #undef FLAG_CASE
 
 // What a failure of CVODE means for the model, in its terms.
-static const char* failure_hint(int flag)
+// Adams' fixed-point iteration converges only for steps below about the inverse of the largest
+// rate of the model's modes, its explicit stability limit: on a stiff model its steps run out or
+// shrink to round-off where BDF steps over those modes. Its hints name the method first (raising
+// max_steps alone pays for every step below that limit).
+static const char* failure_hint(const sm_simulation* sim, int flag)
 {
+	const bool adams = sim->def.method == SM_METHOD_ADAMS;
 	switch (flag) {
 	case CV_TOO_MUCH_WORK:
+		if (adams)
+			return " (the max_steps internal steps allowed per advance were not enough: for a stiff model use "
+			       "method bdf, as Adams keeps its steps below the stability limit of the fastest modes "
+			       "(springmass modes), or raise max_steps (a model file's \"max_steps\", springmass run "
+			       "--max-steps, an FMU's solver.max_steps))";
 		return " (the max_steps internal steps allowed per advance were not enough: raise max_steps (a model "
 		       "file's \"max_steps\", springmass run --max-steps, an FMU's solver.max_steps), or look for a spring "
 		       "much stiffer than the others or a huge force)";
@@ -228,6 +238,10 @@ static const char* failure_hint(int flag)
 		       "velocities, positions or inputs)";
 	case CV_ERR_FAILURE:
 	case CV_CONV_FAILURE:
+		if (adams)
+			return " (the step size fell to round-off: for a stiff model use method bdf, which steps over the "
+			       "fast modes Adams must follow; or the model moves faster than the tolerances can follow, or "
+			       "its forces jump)";
 		return " (the step size fell to round-off: the model moves faster than the tolerances can follow, or "
 		       "its forces jump)";
 	default: return "";
@@ -528,18 +542,18 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 				    sim, SM_ERROR_STEP_LIMIT,
 				    "CVODE stopped at its step limit (CV_TOO_MUCH_WORK) at t = %s s while advancing to %s s; "
 				    "the state there is good and the next advance goes on from it%s",
-				    now, end, failure_hint(flag));
+				    now, end, failure_hint(sim, flag));
 			if (usable)
 				return sm_simulation_fail(sim, SM_ERROR_SOLVER,
 				                          "CVODE failed with %s at t = %s s while advancing to %s s%s%s%s",
-				                          failure_name(flag), now, end, failure_hint(flag),
+				                          failure_name(flag), now, end, failure_hint(sim, flag),
 				                          sim->solver_message[0] ? ": " : "", sim->solver_message);
 			// CVODE's last state is not finite: the message gives the time the simulation stays at.
 			return sm_simulation_fail(
 			    sim, SM_ERROR_SOLVER,
 			    "CVODE failed with %s while advancing to %s s; the state it reached is not usable, so the "
 			    "simulation stays at its last good state, t = %s s%s%s%s",
-			    failure_name(flag), end, now, failure_hint(flag), sim->solver_message[0] ? ": " : "",
+			    failure_name(flag), end, now, failure_hint(sim, flag), sim->solver_message[0] ? ": " : "",
 			    sim->solver_message);
 		}
 		if (flag == CV_ROOT_RETURN && reached > cvode_end) {

@@ -3596,6 +3596,48 @@ static int test_adams_method(void)
 	return 0;
 }
 
+// Adams on a stiff model: a 1 g bob on a 1e6 N/m spring damped by 100 N s/m, overdamped with
+// decay rates s1 = -11 270 /s and s2 = -88 730 /s. Adams' fixed-point iteration converges only for
+// steps of about 1 / |s2| (the explicit stability limit, springmass modes: 1.8e-5 s), so its
+// 100 000 steps end near 0.9 s, short of 10 s: the step limit, with a state that is good, and a
+// message that names the cure, the method (raising max_steps alone would take a million steps),
+// which BDF confirms: it reaches 10 s in a few hundred steps. After a reset the simulation follows
+// the closed form u = (s2 e^(s1 t) - s1 e^(s2 t)) u0 / (s2 - s1).
+static int test_adams_on_a_stiff_model_stops_and_names_the_method(void)
+{
+	const double m = 1e-3, k = 1e6, kd = 100.0, u0 = 0.2;
+	sm_model* model = oscillator(m, k, kd, u0);
+	ENSURE(model != NULL);
+	sm_simulation_def d = sm_default_simulation_def();
+	d.method = SM_METHOD_ADAMS;
+	sm_simulation* sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_STEP_LIMIT);
+	printf("  adams: %s\n", sm_simulation_last_error(sim));
+	ENSURE(sm_simulation_time(sim) > 0.0 && sm_simulation_time(sim) < 10.0);
+	ENSURE(isfinite(sm_simulation_positions(sim)[3]));
+	ENSURE(strstr(sm_simulation_last_error(sim), "method bdf") != NULL);
+	ENSURE_STATUS(sm_simulation_reset(sim), SM_OK);
+	const double root = sqrt(kd * kd - 4.0 * m * k);
+	const double s1 = (-kd + root) / (2.0 * m), s2 = (-kd - root) / (2.0 * m), t = 2e-4;
+	const double u = (s2 * exp(s1 * t) - s1 * exp(s2 * t)) * u0 / (s2 - s1);
+	ENSURE_STATUS(sm_simulation_advance(sim, t), SM_OK);
+	// u(t) = 0.024 m after 0.2 ms: the default tolerances (rtol 1e-6, atol 1e-8 m) hold each step's
+	// error to about 2e-8 m, and the steps of a decaying motion to no more (measured 1.2e-8 m);
+	// 1e-6 m leaves room for other step sequences.
+	ENSURE_NEAR(sm_simulation_positions(sim)[3] - 1.0, u, 1e-6);
+	sm_simulation_destroy(sim);
+	d.method = SM_METHOD_BDF;
+	sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_OK);
+	printf("  bdf: %lld steps to 10 s\n", (long long)sm_simulation_statistics(sim).steps);
+	ENSURE(sm_simulation_statistics(sim).steps < 10000);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // The statistics of the reduced solvers (sm_statistics) count what they do. On the oscillator's
 // one free particle, block Jacobi is the inverse of the 3x3 Newton matrix, so conjugate
 // gradients take at most one iteration per Newton solve (none where the residual starts below
@@ -7019,6 +7061,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_update_model_then_reset_is_a_fresh_run);
 	RUN_TEST(test_update_model_after_a_cut_then_reset_is_a_fresh_run);
 	RUN_TEST(test_adams_method);
+	RUN_TEST(test_adams_on_a_stiff_model_stops_and_names_the_method);
 	RUN_TEST(test_random_calls_leave_no_trace);
 	RUN_TEST(test_reduced_solver_statistics);
 	RUN_TEST(test_block_jacobi_includes_mass_damping);

@@ -383,6 +383,31 @@ def test_a_step_limit_discard_says_how_to_go_on_and_going_on_so_works(test_fmu):
         inst.free()
 
 
+def test_a_step_limit_discard_with_adams_on_a_stiff_model_names_the_method(test_fmu):
+    # A 1 g bob on a 1e6 N/m spring damped by 100 N s/m, overdamped with decay rates 11 270 /s and
+    # 88 730 /s: Adams holds its steps below about 1 / (88 730 /s), and its 100 000 steps end far
+    # short of the 2 s step (measured 0.08 s). The discard says to take BDF, and BDF, after a
+    # reset, takes the step and leaves the bob at rest at the spring's rest length, 0.5 m (the
+    # slower decay has left e^-22540 of the 0.2 m it started from).
+    stiff = {"m": 1e-3, "k": 1e6, "d": 100.0}
+    inst = Instance(test_fmu("driven_oscillator")).start({**stiff, "solver.method": "adams"})
+    s = inst.slave
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.doStep(0.0, 2.0)
+        assert info.value.status == 2  # fmi2Discard
+        text = "\n".join(m[2] for m in inst.messages if m[1] == "logStatusDiscard")
+        assert "solver.method bdf" in text, text
+        assert 0.0 < s.getRealStatus(2) < 2.0  # fmi2LastSuccessfulTime
+        s.reset()
+        inst.start({**stiff, "solver.method": "bdf"})
+        s.doStep(0.0, 2.0)
+        # At rest to the default tolerances (atol 1e-8 m).
+        assert inst.get("tip.x") == pytest.approx(0.5, abs=1e-7)
+    finally:
+        inst.free()
+
+
 def test_simulate_fmu_ends_at_a_discarded_step_with_the_results_up_to_there(test_fmu):
     # fmpy's simulate_fmu ends the run at fmi2LastSuccessfulTime when the FMU asks to terminate
     # after a discard; otherwise it tries the next step, which is refused, and raises, losing every
