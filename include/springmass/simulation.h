@@ -160,7 +160,7 @@ typedef struct sm_simulation_def {
 	/// modes, the fast vibrations of springs, lie near the imaginary axis, where those orders are
 	/// not stable; without it such a mode's round-off grows until the error test cuts the step, and
 	/// the steps stay short long after the motion has settled (docs/simulation.md, "Stability
-	/// limit detection"). Default true.
+	/// limit detection"). Default true. Model files: "stability_limit_detection", true or false.
 	bool stability_limit_detection;
 	/// Threads for the pcg solver's loops on models of 4000 free particles or more, the caller's
 	/// included, >= 1 (default 1; at most 4 are used, and no more than the processors the process
