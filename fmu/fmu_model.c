@@ -433,6 +433,77 @@ static void add_port(builder* b, const sm_document* doc, const sm_model* model, 
 	free(part);
 }
 
+static int compare_indices(const void* left, const void* right)
+{
+	const int32_t a = *(const int32_t*)left, b = *(const int32_t*)right;
+	return (a > b) - (a < b);
+}
+
+// The table's port_neighbours: for each motion port, the other motion ports whose particles a
+// spring joins to its particle. A motion port's force is that of the springs at its particle, of
+// gravity, the loads and mass damping on it: it depends on the prescribed positions and
+// velocities of its own port and of these, and on no other input. Which springs exist and which
+// particle each port is at do not change in the FMU (springs that break only remove dependencies).
+// False when out of memory.
+static bool find_port_neighbours(const sm_document* doc, const sm_model* model, fmu_table* t)
+{
+	const int32_t ports = sm_document_port_count(doc);
+	const int32_t particles = sm_model_particle_count(model);
+	const int32_t springs = sm_model_spring_count(model);
+	t->port_count = ports;
+	t->port_neighbour_start = calloc((size_t)ports + 1, sizeof *t->port_neighbour_start);
+	int32_t* motion_port = malloc(((size_t)particles + 1) * sizeof *motion_port);
+	int32_t* next = malloc(((size_t)ports + 1) * sizeof *next);
+	bool ok = t->port_neighbour_start && motion_port && next;
+	int32_t* start = t->port_neighbour_start;
+	for (int32_t i = 0; ok && i < particles; ++i)
+		motion_port[i] = -1;
+	for (int32_t p = 0; ok && p < ports; ++p) {
+		const sm_port port = sm_document_port(doc, p);
+		if (port.kind == SM_PORT_MOTION)
+			motion_port[port.particle] = p;
+	}
+	// Counted, then filled, each spring between two motion ports' particles adding each port to
+	// the other's list.
+	for (int pass = 0; ok && pass < 2; ++pass) {
+		for (int32_t k = 0; k < springs; ++k) {
+			sm_spring_def spring = sm_default_spring_def();
+			sm_model_get_spring(model, k, &spring);
+			const int32_t a = motion_port[spring.a], b = motion_port[spring.b];
+			if (a < 0 || b < 0)
+				continue;
+			if (pass == 0) {
+				++start[a + 1];
+				++start[b + 1];
+			} else {
+				t->port_neighbours[next[a]++] = b;
+				t->port_neighbours[next[b]++] = a;
+			}
+		}
+		if (pass == 0) {
+			for (int32_t p = 0; p < ports; ++p)
+				start[p + 1] += start[p];
+			memcpy(next, start, ((size_t)ports + 1) * sizeof *next);
+			t->port_neighbours = malloc(((size_t)start[ports] + 1) * sizeof *t->port_neighbours);
+			ok = t->port_neighbours != NULL;
+		}
+	}
+	// Each list in order, a port joined by several springs once.
+	for (int32_t p = 0, kept = 0; ok && p < ports; ++p) {
+		const int32_t first = start[p], end = start[p + 1];
+		qsort(t->port_neighbours + first, (size_t)(end - first), sizeof *t->port_neighbours, compare_indices);
+		start[p] = kept;
+		for (int32_t k = first; k < end; ++k)
+			if (k == first || t->port_neighbours[k] != t->port_neighbours[k - 1])
+				t->port_neighbours[kept++] = t->port_neighbours[k];
+		if (p + 1 == ports)
+			start[ports] = kept;
+	}
+	free(motion_port);
+	free(next);
+	return ok;
+}
+
 static sm_status fail(sm_error* err, sm_status status, const char* message)
 {
 	if (err) {
@@ -680,6 +751,9 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	for (int32_t i = 0; i < nports && !b.failed; ++i)
 		add_port(&b, doc, model, i);
 
+	if (!b.failed && !find_port_neighbours(doc, model, table))
+		b.failed = true;
+
 	// Energies.
 	add(&b, duplicate("energy.kinetic"), duplicate("kinetic energy of all particles"), FMU_REAL, FMU_OUTPUT,
 	    FMU_CONTINUOUS, "J", FMU_SRC_ENERGY_KINETIC, 0, 0);
@@ -738,6 +812,8 @@ void fmu_table_destroy(fmu_table* table)
 		free(table->variables[i].description);
 	}
 	free(table->variables);
+	free(table->port_neighbour_start);
+	free(table->port_neighbours);
 	free(table->model_identifier);
 	free(table->model_name);
 	free(table->description);
@@ -782,14 +858,16 @@ static bool unit_used(const fmu_table* t, const char* unit)
 // Indices (1-based, as in ModelVariables) of the inputs an output depends on directly at a
 // communication point. Positions and velocities of force and probe ports and the dissipated
 // energy are states: no direct dependence. A motion port's force depends on the prescribed
-// positions and velocities of the motion ports; kinetic energy on their velocities; elastic and
-// gravitational energy on their positions; the inputs' work on both (a motion set elsewhere does
-// the work of the energy it adds at once).
-static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_variable* v)
+// positions and velocities of its own port and of the motion ports a spring joins it to
+// (port_neighbours); kinetic energy on the motion ports' velocities; elastic and gravitational
+// energy on their positions; the inputs' work on both (a motion set elsewhere does the work of the
+// energy it adds at once). `first` holds each port's first variable, its x (a motion port's six
+// inputs x, y, z, vx, vy, vz follow each other, and ports' variables follow the ports' order).
+static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_variable* v,
+                                const int32_t* first)
 {
 	bool position = false, velocity = false;
 	switch (v->source) {
-	case FMU_SRC_PORT_FORCE:
 	case FMU_SRC_ENERGY_INPUT: position = velocity = true; break;
 	case FMU_SRC_ENERGY_KINETIC: velocity = true; break;
 	case FMU_SRC_ENERGY_ELASTIC:
@@ -797,7 +875,27 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 	default: break;
 	}
 	fmu_text_append_string(out, " dependencies=\"");
-	bool first = true;
+	bool separator = false;
+	if (v->source == FMU_SRC_PORT_FORCE) {
+		// Its own port among its neighbours, in ascending order.
+		const int32_t own = v->index;
+		const int32_t* neighbour = t->port_neighbours + t->port_neighbour_start[own];
+		const int32_t* end = t->port_neighbours + t->port_neighbour_start[own + 1];
+		bool own_done = false;
+		while (neighbour < end || !own_done) {
+			int32_t port;
+			if (!own_done && (neighbour == end || own < *neighbour)) {
+				port = own;
+				own_done = true;
+			} else {
+				port = *neighbour++;
+			}
+			for (int32_t k = 0; k < 6; ++k) {
+				fmu_text_appendf(out, separator ? " %d" : "%d", (int)(first[port] + k) + 1);
+				separator = true;
+			}
+		}
+	}
 	// States alone (a port's position and velocity, the dissipated energy): no input to look for.
 	for (int32_t i = 0; (position || velocity) && i < t->count; ++i) {
 		const fmu_variable* w = &t->variables[i];
@@ -805,8 +903,8 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 			continue;
 		if ((position && w->source == FMU_SRC_PORT_POSITION) ||
 		    (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
-			fmu_text_appendf(out, first ? "%d" : " %d", (int)i + 1);
-			first = false;
+			fmu_text_appendf(out, separator ? " %d" : "%d", (int)i + 1);
+			separator = true;
 		}
 	}
 	fmu_text_append_string(out, "\"");
@@ -920,14 +1018,21 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	}
 	fmu_text_append_string(&out, "  </ModelVariables>\n");
 
+	int32_t* first = malloc(((size_t)t->port_count + 1) * sizeof *first);
+	if (!first)
+		out.failed = true;
+	for (int32_t i = 0; first && i < t->count; ++i)
+		if (t->variables[i].source == FMU_SRC_PORT_POSITION && t->variables[i].component == 0)
+			first[t->variables[i].index] = i;
 	fmu_text_append_string(&out, "  <ModelStructure>\n    <Outputs>\n");
-	for (int32_t i = 0; i < t->count; ++i) {
+	for (int32_t i = 0; first && i < t->count; ++i) {
 		if (t->variables[i].causality != FMU_OUTPUT)
 			continue;
 		fmu_text_appendf(&out, "      <Unknown index=\"%d\"", (int)i + 1);
-		append_dependencies(&out, t, &t->variables[i]);
+		append_dependencies(&out, t, &t->variables[i], first);
 		fmu_text_append_string(&out, "/>\n");
 	}
+	free(first);
 	fmu_text_append_string(&out, "    </Outputs>\n    <InitialUnknowns>\n");
 	for (int32_t i = 0; i < t->count; ++i) {
 		if (t->variables[i].causality == FMU_OUTPUT)

@@ -96,6 +96,12 @@ typedef struct fmu_table {
 	double stop_time;  ///< default experiment [s]
 	double step_size;  ///< default communication step [s]
 	double tolerance;  ///< default relative tolerance [1]
+	/// The motion ports whose particles a spring joins to each port's particle, the inputs its force
+	/// outputs depend on besides its own: port p's are port_neighbours[port_neighbour_start[p]] up
+	/// to port_neighbours[port_neighbour_start[p + 1]], ascending, none for a force or probe port.
+	int32_t port_count;
+	int32_t* port_neighbour_start;  ///< port_count + 1 offsets into port_neighbours
+	int32_t* port_neighbours;
 } fmu_table;
 
 /// Builds the table of a parsed model file. `text`/`length` are the file's bytes and `parameters`

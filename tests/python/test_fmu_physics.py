@@ -1587,8 +1587,8 @@ def test_solver_threads_change_nothing_in_the_results(package):
 def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
     # FMI 2.0 (2.2.8): an output's `dependencies` are the knowns it depends on directly, in
     # Co-Simulation its inputs, each named by its index in ModelVariables (1-based). docs/fmu.md
-    # names them: a motion port's force depends on the motion ports' prescribed positions and
-    # velocities, the kinetic energy on their velocities, the elastic and gravitational energies
+    # names them: a motion port's force depends on the prescribed positions and velocities of its
+    # port and of the motion ports a spring joins it to, the kinetic energy on their velocities, the elastic and gravitational energies
     # on their positions, the inputs' work on both; a port's position and velocity and the
     # dissipated energy are states, with none. In driven_oscillator the motion port is "base"
     # (the anchor, mass 1 kg) and the force port "tip".
@@ -1625,6 +1625,62 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
             for known in sorted(inputs):
                 d = s.getDirectionalDerivative([vr[output]], [vr[known]], [1.0])[0]
                 assert d == 0.0 or known in names, (output, known, d)
+    finally:
+        inst.free()
+
+
+def test_a_motion_ports_force_depends_on_the_motion_ports_its_springs_join_it_to(test_fmu):
+    # joined_hooks: motion ports a, b and c on particles n0, n1 and n4 of a line of six; a and b
+    # are joined by two springs, a and c by one across the line, b and c by none (n2 and n3, free,
+    # lie between them). A port's force is the pull of the springs at its particle (and gravity and
+    # mass damping on it): it changes with its own inputs and with those of the motion ports at the
+    # springs' other ends, and with no other input, so the ModelStructure lists exactly these (a's
+    # force: a, b and c; b's: a and b; c's: a and c), each port's six inputs in ascending order.
+    # Listing every motion port for every port's force made the Outputs grow with the square of the
+    # motion ports: 2 886 000 indices for 400 of them along a chain, where 13 200 are dependencies.
+    fmu = test_fmu("joined_hooks")
+    md = read_model_description(str(fmu))
+    variables = md.modelVariables
+    motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
+    expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
+                "c": motions["a"] + motions["c"]}
+    with zipfile.ZipFile(fmu) as archive:
+        xml = archive.read("modelDescription.xml").decode("utf-8")
+    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
+    listed = {}
+    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
+        indices = [int(k) for k in dependencies.split()]
+        assert indices == sorted(set(indices)), (index, indices)
+        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
+    for port in "abc":
+        for c in "xyz":
+            assert listed[f"{port}.f{c}"] == expected[port], (port, c, listed[f"{port}.f{c}"])
+    # At a displaced, moving state (every spring stretched and turning in 3D, so that no derivative
+    # vanishes by symmetry), the analytic derivative of each port's force is nonzero for every
+    # listed input and exactly zero for every other, and setting an input that is not listed leaves
+    # the force as it was, to the bit.
+    inst = Instance(fmu).start()
+    try:
+        s, vr = inst.slave, inst.vr
+        moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (1.1, -0.1, 0.2, -0.1, 0.2, 0.3),
+                 "c": (3.9, 0.3, 0.1, 0.2, 0.1, -0.3)}
+        for port, values in moved.items():
+            s.setReal([vr[n] for n in motions[port]], list(values))
+        s.doStep(0.0, 0.01)
+        inputs = [v.name for v in variables if v.causality == "input"]
+        for port in "abc":
+            forces = [vr[f"{port}.f{c}"] for c in "xyz"]
+            before = s.getReal(forces)
+            for known in inputs:
+                d = s.getDirectionalDerivative(forces, [vr[known]], [1.0])
+                if known in expected[port]:
+                    assert all(x != 0.0 for x in d), (port, known, d)
+                else:
+                    assert d == [0.0, 0.0, 0.0], (port, known, d)
+                    value = s.getReal([vr[known]])[0]
+                    s.setReal([vr[known]], [value + 0.5])
+                    assert s.getReal(forces) == before, (port, known)
+                    s.setReal([vr[known]], [value])
     finally:
         inst.free()
 
