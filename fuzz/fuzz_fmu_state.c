@@ -94,6 +94,8 @@ typedef struct fixture {
 	size_t real_count;
 	fmi2ValueReference* integers;
 	size_t integer_count;
+	fmi2ValueReference* booleans;
+	size_t boolean_count;
 	fmi2ValueReference* strings;
 	size_t string_count;
 	log_record log;
@@ -234,14 +236,17 @@ static void instantiate(fixture* f)
 		fail("fmi2Instantiate failed", f->log.last);
 	f->reals = malloc((size_t)f->table.count * sizeof *f->reals);
 	f->integers = malloc((size_t)f->table.count * sizeof *f->integers);
+	f->booleans = malloc((size_t)f->table.count * sizeof *f->booleans);
 	f->strings = malloc((size_t)f->table.count * sizeof *f->strings);
-	if (f->reals == NULL || f->integers == NULL || f->strings == NULL)
+	if (f->reals == NULL || f->integers == NULL || f->booleans == NULL || f->strings == NULL)
 		abort();
 	for (int32_t i = 0; i < f->table.count; ++i) {
 		if (f->table.variables[i].type == FMU_REAL)
 			f->reals[f->real_count++] = (fmi2ValueReference)i;
 		else if (f->table.variables[i].type == FMU_INTEGER)
 			f->integers[f->integer_count++] = (fmi2ValueReference)i;
+		else if (f->table.variables[i].type == FMU_BOOLEAN)
+			f->booleans[f->boolean_count++] = (fmi2ValueReference)i;
 		else
 			f->strings[f->string_count++] = (fmi2ValueReference)i;
 	}
@@ -287,10 +292,13 @@ static void run(fixture* f, const char* seeds)
 	// Again from the start with other solver settings (fixed parameters: set in initialisation).
 	const fmi2ValueReference method = reference(f, "solver.method");
 	const fmi2ValueReference solver = reference(f, "solver.linear_solver");
+	const fmi2ValueReference detection = reference(f, "solver.stability_limit_detection");
 	const fmi2String adams = "adams", klu = "klu";
+	const fmi2Boolean off = fmi2False;
 	if (fmi2Reset(f->instance) != fmi2OK || fmi2EnterInitializationMode(f->instance) != fmi2OK ||
 	    fmi2SetString(f->instance, &method, 1, &adams) != fmi2OK ||
-	    fmi2SetString(f->instance, &solver, 1, &klu) != fmi2OK)
+	    fmi2SetString(f->instance, &solver, 1, &klu) != fmi2OK ||
+	    fmi2SetBoolean(f->instance, &detection, 1, &off) != fmi2OK)
 		fail("cannot change the solver", f->log.last);
 	set_real(f, "solver.max_step", 0.002);
 	if (fmi2ExitInitializationMode(f->instance) != fmi2OK)
@@ -316,6 +324,7 @@ int LLVMFuzzerInitialize(int* argc, char*** argv)
 		fmu_table_destroy(&f->table);
 		free(f->reals);
 		free(f->integers);
+		free(f->booleans);
 		free(f->strings);
 		free(f);
 		exit(0);
@@ -355,6 +364,7 @@ typedef struct observed {
 	fmi2Status status;
 	double* reals;
 	fmi2Integer* integers;
+	fmi2Boolean* booleans;
 	fmi2String* strings;
 } observed;
 
@@ -363,12 +373,15 @@ static observed observe(fixture* f)
 	observed o;
 	o.reals = malloc((f->real_count + 1) * sizeof *o.reals);
 	o.integers = malloc((f->integer_count + 1) * sizeof *o.integers);
+	o.booleans = malloc((f->boolean_count + 1) * sizeof *o.booleans);
 	o.strings = malloc((f->string_count + 1) * sizeof *o.strings);
-	if (o.reals == NULL || o.integers == NULL || o.strings == NULL)
+	if (o.reals == NULL || o.integers == NULL || o.booleans == NULL || o.strings == NULL)
 		abort();
 	o.status = fmi2GetReal(f->instance, f->reals, f->real_count, o.reals);
 	if (o.status == fmi2OK)
 		o.status = fmi2GetInteger(f->instance, f->integers, f->integer_count, o.integers);
+	if (o.status == fmi2OK)
+		o.status = fmi2GetBoolean(f->instance, f->booleans, f->boolean_count, o.booleans);
 	if (o.status == fmi2OK)
 		o.status = fmi2GetString(f->instance, f->strings, f->string_count, o.strings);
 	return o;
@@ -379,6 +392,7 @@ static bool same(const fixture* f, const observed* a, const observed* b)
 	return a->status == fmi2OK && b->status == fmi2OK &&
 	       memcmp(a->reals, b->reals, f->real_count * sizeof *a->reals) == 0 &&
 	       memcmp(a->integers, b->integers, f->integer_count * sizeof *a->integers) == 0 &&
+	       memcmp(a->booleans, b->booleans, f->boolean_count * sizeof *a->booleans) == 0 &&
 	       memcmp(a->strings, b->strings, f->string_count * sizeof *a->strings) == 0;
 }
 
@@ -386,6 +400,7 @@ static void forget(observed* o)
 {
 	free(o->reals);
 	free(o->integers);
+	free(o->booleans);
 	free(o->strings);
 }
 
