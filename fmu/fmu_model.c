@@ -727,7 +727,8 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	}
 	add_string_parameter(&b, "solver.method", "multistep method: bdf or adams", FMU_SRC_SOLVER_METHOD,
 	                     sm_method_name(s->method));
-	add_string_parameter(&b, "solver.linear_solver", "linear solver: auto, dense, klu, pcg or cholmod",
+	add_string_parameter(&b, "solver.linear_solver",
+	                     "linear solver of BDF: auto, dense, klu, pcg or cholmod (Adams uses none)",
 	                     FMU_SRC_SOLVER_LINEAR_SOLVER, sm_linear_solver_name(s->solver));
 	add_string_parameter(&b, "solver.jacobian", "Jacobian: exact or definite (definiteness-preserving)",
 	                     FMU_SRC_SOLVER_JACOBIAN, sm_jacobian_variant_name(s->jacobian));
