@@ -1,0 +1,234 @@
+// A co-simulation host's calls at scale (bench/README.md, "Inputs and outputs at scale"): what
+// each call costs against a model with many ports, through the FMU's entry points (linked in, as
+// the FMU's C test does).
+//
+//   bench_ports N [TRIALS] [STEPS]
+//
+// The model: an n x n sheet (1 m square, 1 kg, the benchmark cloth's springs), no gravity, mass
+// damping c = 1 1/s (a tunable parameter), at rest; every particle of its boundary a motion port
+// (4 (n - 1) of them), 100 force ports and 100 probes among the inner particles. The host holds
+// every input where it starts, as a master that writes all of them at every communication point
+// does, with steps of 1 ms: the sheet stays at rest and CVODE takes one internal step per
+// communication step, so that the calls' own costs are not hidden behind the integration. Prints
+//   ports n=<n> particles=<P> motion=<M> inputs=<I> outputs=<O> set_us=<v> step_us=<v> get_us=<v>
+//     step_alone_us=<v> init_ms=<v> retune_ms=<v> derivative_ms=<v>
+// each the median over TRIALS trials (default 5) of the mean per call over STEPS communication
+// steps (default 50): fmi2SetReal of every input, fmi2DoStep, fmi2GetReal of every output; a
+// fmi2DoStep with no input set since the last (the integration alone); instantiation to the end
+// of initialisation; fmi2SetReal of c (the model built again and taken by the simulation, the
+// mean of 5); and fmi2GetDirectionalDerivative of every output along a seed of 1e-3 on every
+// input (the mean of 5).
+#define _XOPEN_SOURCE 700
+#include "fmu_model.h"
+
+#include "fmi2Functions.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now(void)
+{
+	struct timespec t;
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static int compare_double(const void* a, const void* b)
+{
+	const double x = *(const double*)a, y = *(const double*)b;
+	return (x > y) - (x < y);
+}
+
+static double median(double* v, int n)
+{
+	qsort(v, (size_t)n, sizeof *v, compare_double);
+	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
+                   fmi2String message, ...)
+{
+	(void)env;
+	(void)name;
+	(void)category;
+	if (status >= fmi2Warning)
+		fprintf(stderr, "bench_ports: %s\n", message);
+}
+
+// The model file's text, malloc'ed.
+static char* model_text(int n)
+{
+	size_t capacity = 4096 + 96 * (size_t)(4 * n + 200), k = 0;
+	char* t = malloc(capacity);
+	if (t == NULL)
+		return NULL;
+	k += (size_t)snprintf(
+	    t + k, capacity - k,
+	    "{\"springmass\": 1, \"name\": \"ports\", \"gravity\": [0, 0, 0], \"mass_damping\": \"c\",\n"
+	    " \"parameters\": {\"c\": 1.0}, \"fmu\": {\"particle_variables\": false},\n"
+	    " \"structures\": [{\"type\": \"sheet\", \"name\": \"s\", \"nu\": %d, \"nv\": %d, \"mass\": 1,\n"
+	    "   \"structural\": {\"strain_stiffness\": 1000, \"strain_damping\": 2},\n"
+	    "   \"shear\": {\"strain_stiffness\": 1000, \"strain_damping\": 2},\n"
+	    "   \"bend\": {\"strain_stiffness\": 50, \"strain_damping\": 2}}],\n"
+	    " \"ports\": [",
+	    n, n);
+	int ports = 0;
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < n; j++)
+			if (i == 0 || j == 0 || i == n - 1 || j == n - 1) {
+				k += (size_t)snprintf(
+				    t + k, capacity - k,
+				    "%s\n  {\"name\": \"m%d\", \"particle\": \"s[%d,%d]\", \"kind\": \"motion\"}",
+				    ports > 0 ? "," : "", ports, i, j);
+				ports++;
+			}
+	// 200 inner particles spread over the sheet, the first half force ports, the rest probes.
+	const int inner = (n - 2) * (n - 2);
+	for (int q = 0; q < 200 && q < inner; q++) {
+		const int at = (int)((long)q * inner / 200), i = 1 + at / (n - 2), j = 1 + at % (n - 2);
+		k += (size_t)snprintf(t + k, capacity - k,
+		                      ",\n  {\"name\": \"%c%d\", \"particle\": \"s[%d,%d]\", \"kind\": \"%s\"}",
+		                      q < 100 ? 'f' : 'q', q, i, j, q < 100 ? "force" : "probe");
+	}
+	snprintf(t + k, capacity - k, "]}\n");
+	return t;
+}
+
+typedef struct figures {
+	double set, step, get, alone, init, retune, derivative;  // [s]
+} figures;
+
+static int trial(const char* guid, const char* location, const fmi2ValueReference* in, const double* start,
+                 int ni, const fmi2ValueReference* out, int no, fmi2ValueReference c, int steps, figures* f)
+{
+	fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
+	double t0 = now();
+	fmi2Component fmu =
+	    fmi2Instantiate("bench", fmi2CoSimulation, guid, location, &callbacks, fmi2False, fmi2False);
+	if (fmu == NULL || fmi2SetupExperiment(fmu, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK ||
+	    fmi2EnterInitializationMode(fmu) != fmi2OK || fmi2ExitInitializationMode(fmu) != fmi2OK)
+		return 1;
+	f->init = now() - t0;
+	const double h = 1e-3;
+	double t = 0.0, *values = malloc(((size_t)no + 1) * sizeof *values);
+	if (values == NULL)
+		return 1;
+	*f = (figures){0.0, 0.0, 0.0, 0.0, f->init, 0.0, 0.0};
+	// A few steps first: CVODE's first steps from rest are short.
+	for (int k = -5; k < steps; k++, t += h) {
+		const double a = now();
+		if (fmi2SetReal(fmu, in, (size_t)ni, start) != fmi2OK)
+			return 1;
+		const double b = now();
+		if (fmi2DoStep(fmu, t, h, fmi2True) != fmi2OK)
+			return 1;
+		const double d = now();
+		if (fmi2GetReal(fmu, out, (size_t)no, values) != fmi2OK)
+			return 1;
+		const double e = now();
+		if (k >= 0) {
+			f->set += (b - a) / steps;
+			f->step += (d - b) / steps;
+			f->get += (e - d) / steps;
+		}
+	}
+	for (int k = 0; k < steps; k++, t += h) {
+		const double a = now();
+		if (fmi2DoStep(fmu, t, h, fmi2True) != fmi2OK)
+			return 1;
+		f->alone += (now() - a) / steps;
+	}
+	double* seeds = malloc((size_t)ni * sizeof *seeds);
+	if (seeds == NULL)
+		return 1;
+	for (int i = 0; i < ni; i++)
+		seeds[i] = 1e-3;
+	for (int k = 0; k < 5; k++) {
+		const double a = now();
+		if (fmi2GetDirectionalDerivative(fmu, out, (size_t)no, in, (size_t)ni, seeds, values) != fmi2OK)
+			return 1;
+		f->derivative += (now() - a) / 5;
+	}
+	free(seeds);
+	for (int k = 0; k < 5; k++) {
+		const double value = k % 2 ? 1.0 : 1.0 + 1e-6, a = now();
+		if (fmi2SetReal(fmu, &c, 1, &value) != fmi2OK)
+			return 1;
+		f->retune += (now() - a) / 5;
+	}
+	free(values);
+	fmi2FreeInstance(fmu);
+	return 0;
+}
+
+int main(int argc, char** argv)
+{
+	const int n = argc > 1 ? atoi(argv[1]) : 64;
+	const int trials = argc > 2 ? atoi(argv[2]) : 5;
+	const int steps = argc > 3 ? atoi(argv[3]) : 50;
+	if (n < 16 || trials < 1 || steps < 1) {
+		fprintf(stderr, "usage: bench_ports N [TRIALS] [STEPS] (N >= 16)\n");
+		return 2;
+	}
+	char* text = model_text(n);
+	char dir[] = "/tmp/springmass-bench-ports-XXXXXX";
+	if (text == NULL || mkdtemp(dir) == NULL)
+		return 1;
+	char path[1100], location[1100];
+	snprintf(path, sizeof path, "%s/model.json", dir);
+	snprintf(location, sizeof location, "file://%s", dir);
+	FILE* file = fopen(path, "wb");
+	if (file == NULL)
+		return 1;
+	fputs(text, file);
+	fclose(file);
+	sm_error err;
+	sm_document* doc = sm_document_parse(text, strlen(text), "ports", &err);
+	fmu_table table;
+	if (doc == NULL || fmu_table_create(doc, text, strlen(text), NULL, 0, &table, &err) != SM_OK) {
+		fprintf(stderr, "bench_ports: %s\n", err.message);
+		return 1;
+	}
+	const int particles = (int)sm_document_particle_count(doc);
+	sm_document_destroy(doc);
+	fmi2ValueReference* in = malloc((size_t)table.count * sizeof *in);
+	fmi2ValueReference* out = malloc((size_t)table.count * sizeof *out);
+	double* start = malloc((size_t)table.count * sizeof *start);
+	fmi2ValueReference c = 0;
+	int ni = 0, no = 0;
+	for (int32_t i = 0; i < table.count; i++) {
+		const fmu_variable* v = &table.variables[i];
+		if (v->type == FMU_REAL && v->causality == FMU_INPUT) {
+			start[ni] = v->start_real;
+			in[ni++] = (fmi2ValueReference)i;
+		} else if (v->type == FMU_REAL && v->causality == FMU_OUTPUT) {
+			out[no++] = (fmi2ValueReference)i;
+		} else if (strcmp(v->name, "c") == 0) {
+			c = (fmi2ValueReference)i;
+		}
+	}
+	double *set = malloc((size_t)trials * 7 * sizeof *set), *step = set + trials, *get = step + trials,
+	       *alone = get + trials, *init = alone + trials, *retune = init + trials,
+	       *derivative = retune + trials;
+	for (int r = 0; r < trials; r++) {
+		figures f = {0};
+		if (trial(table.guid, location, in, start, ni, out, no, c, steps, &f) != 0) {
+			fprintf(stderr, "bench_ports: a call failed\n");
+			return 1;
+		}
+		set[r] = f.set, step[r] = f.step, get[r] = f.get, alone[r] = f.alone, init[r] = f.init,
+		retune[r] = f.retune, derivative[r] = f.derivative;
+	}
+	printf("ports n=%d particles=%d motion=%d inputs=%d outputs=%d set_us=%.1f step_us=%.1f get_us=%.1f "
+	       "step_alone_us=%.1f init_ms=%.2f retune_ms=%.2f derivative_ms=%.2f\n",
+	       n, particles, 4 * (n - 1), ni, no, 1e6 * median(set, trials), 1e6 * median(step, trials),
+	       1e6 * median(get, trials), 1e6 * median(alone, trials), 1e3 * median(init, trials),
+	       1e3 * median(retune, trials), 1e3 * median(derivative, trials));
+	remove(path);
+	remove(dir);
+	fmu_table_destroy(&table);
+	free(text), free(in), free(out), free(start), free(set);
+	return 0;
+}
