@@ -989,10 +989,8 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	// the path as it was, so that the run is that of no call, to the bit.
 	const double dt = sim->time - sim->drive_time[particle];
 	if (on_driven_path(sim->drive_position + p, sim->drive_velocity + p, sim->drive_acceleration + p, dt,
-	                   position, velocity, acceleration)) {
-		sm_simulation_refresh_outputs(sim);
+	                   position, velocity, acceleration))
 		return SM_OK;
-	}
 	// The position and velocity where the path has them, a new acceleration: the path turns. The
 	// driver's power jumps by m (a - a0) . v, but only in the part that changes the particle's
 	// kinetic energy, which CVODE does not integrate (sm_simulation_driving_power_at).
@@ -1026,7 +1024,11 @@ sm_status sm_simulation_set_driven_accelerating(sm_simulation* sim, int32_t part
 	const bool undone = back && sm_input_origins_settle(sim, particle);
 	if (!undone)
 		note_input_change(sim, turns, jumps);
-	sm_simulation_refresh_outputs(sim);
+	// Only this particle's position and velocity change: written as sm_simulation_refresh_outputs
+	// writes them, which every call that moves the state or the time has done for the rest, so that
+	// a call costs the same whatever the model's size (a host drives many ports at every step).
+	driven_state(sim, particle, sm_simulation_cvode_time(sim, sim->time), sim->position + p,
+	             sim->velocity + p);
 	const double work =
 	    sm_model_particle_energy(sim->model, sim->position, sim->velocity, particle, springs, count) -
 	    kinetic_energy(sim->model->mass[particle], sim->velocity + p) - before;

@@ -1183,6 +1183,68 @@ static int test_cutting_a_spring_at_a_driven_particle(void)
 	return 0;
 }
 
+// A driven particle's new motion moves only that particle's outputs: at the time it is set it is
+// exactly at the position and velocity given, and every other particle's position and velocity,
+// those of the other driven particles along their own paths included, keep their bits. Set back
+// onto its path, the particle has its bits from before too, and a call on a path it follows
+// changes nothing. A chain driven at both ends and in the middle, free particles between, whose
+// drives move and accelerate from t = 0, with a restart at 0.1 s (a force on a free particle),
+// so that the drives' times and CVODE's axis differ where they are set at 0.3 s.
+static int test_setting_a_drive_moves_only_its_particle(void)
+{
+	sm_particle_def particles[5];
+	sm_spring_def springs[4];
+	for (int32_t i = 0; i < 5; i++) {
+		particles[i] = sm_default_particle_def();
+		particles[i].position[0] = (double)i;
+		particles[i].motion = i % 2 == 0 ? SM_PARTICLE_DRIVEN : SM_PARTICLE_FREE;
+	}
+	for (int32_t k = 0; k < 4; k++) {
+		springs[k] = sm_default_spring_def();
+		springs[k].a = k;
+		springs[k].b = k + 1;
+		springs[k].rest_length = 1.0;
+		springs[k].stiffness = 50.0;
+		springs[k].damping = 0.5;
+	}
+	sm_model* model = model_of(particles, 5, springs, 4);
+	ENSURE(model != NULL);
+	sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+	ENSURE(sim != NULL);
+	for (int32_t i = 0; i < 5; i += 2) {
+		const double p[3] = {(double)i, 0.0, 0.0}, v[3] = {0.1 * i, 0.2, 0.0}, a[3] = {0.0, -0.3, 0.1 * i};
+		ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, i, p, v, a), SM_OK);
+	}
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
+	const double push[3] = {0.0, 0.0, 1.0};
+	ENSURE_STATUS(sm_simulation_set_external_force(sim, 1, push), SM_OK);
+	ENSURE_STATUS(sm_simulation_advance(sim, 0.3), SM_OK);
+	double x[15], v[15];
+	memcpy(x, sm_simulation_positions(sim), sizeof x);
+	memcpy(v, sm_simulation_velocities(sim), sizeof v);
+	const double p[3] = {2.5, 0.25, -0.5}, u[3] = {-1.0, 0.5, 2.0}, none[3] = {0.0, 0.0, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 2, p, u, none), SM_OK);
+	const double* xs = sm_simulation_positions(sim);
+	const double* vs = sm_simulation_velocities(sim);
+	for (int c = 0; c < 3; c++)
+		ENSURE(xs[6 + c] == p[c] && vs[6 + c] == u[c]);
+	for (int32_t i = 0; i < 5; i++)
+		if (i != 2)
+			ENSURE(memcmp(xs + 3 * i, x + 3 * i, 3 * sizeof(double)) == 0 &&
+			       memcmp(vs + 3 * i, v + 3 * i, 3 * sizeof(double)) == 0);
+	// Back onto its path (its position and velocity there, as read before), and particle 0 given
+	// the path it has: the outputs from before, bit for bit.
+	const double a2[3] = {0.0, -0.3, 0.2};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 2, x + 6, v + 6, a2), SM_OK);
+	const double a0[3] = {0.0, -0.3, 0.0};
+	ENSURE_STATUS(sm_simulation_set_driven_accelerating(sim, 0, x, v, a0), SM_OK);
+	ENSURE(memcmp(sm_simulation_positions(sim), x, sizeof x) == 0);
+	ENSURE(memcmp(sm_simulation_velocities(sim), v, sizeof v) == 0);
+	sm_simulation_destroy(sim);
+	sm_model_destroy(model);
+	return 0;
+}
+
 // A saved state brings everything back: the 12 x 12 cloth that tears (every spring breaks past
 // 0.2 % strain), with a force on a free corner, saved at 0.1 s and run on to 0.2 s (more springs
 // break, the force changes), then restored: the time, positions and velocities bit for bit, the
@@ -7019,6 +7081,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_break_spring_by_the_caller);
 	RUN_TEST(test_cutting_a_spring_dissipates_its_own_energy);
 	RUN_TEST(test_cutting_a_spring_at_a_driven_particle);
+	RUN_TEST(test_setting_a_drive_moves_only_its_particle);
 	RUN_TEST(test_saved_state_is_restored);
 	RUN_TEST(test_restore_keeps_the_models_springs_and_topology);
 	RUN_TEST(test_saved_state_as_bytes);
