@@ -283,17 +283,23 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 	if (!fmu_allowed(inst, "fmi2GetReal", ST_RUNNING) ||
 	    !fmu_check_arrays(inst, "fmi2GetReal", vr, nvr, value))
 		return fmi2Error;
-	const fmu_variable* overflowing = NULL;
+	// The simulation, with the inputs set, is made ready once for the whole call: once per variable,
+	// each output read went over every port (fmu_apply_inputs), and reading all the outputs of a model
+	// with many ports took a time in proportion to their product.
+	bool simulation = false;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = fmu_lookup(inst, "fmi2GetReal", vr[i], FMU_REAL);
 		if (!v)
 			return fmi2Error;
-		if (needs_simulation(v) && (!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)) {
-			if (fmu_ensure_simulation(inst, "fmi2GetReal") != fmi2OK)
-				return fmi2Error;
-		} else if (needs_simulation(v) && fmu_apply_inputs(inst, "fmi2GetReal") != fmi2OK) {
-			return fmi2Error;
-		}
+		simulation = simulation || needs_simulation(v);
+	}
+	if (simulation && ((!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)
+	                       ? fmu_ensure_simulation(inst, "fmi2GetReal") != fmi2OK
+						   : fmu_apply_inputs(inst, "fmi2GetReal") != fmi2OK))
+		return fmi2Error;
+	const fmu_variable* overflowing = NULL;
+	for (size_t i = 0; i < nvr; ++i) {
+		const fmu_variable* v = &inst->table.variables[vr[i]];
 		value[i] = fmu_real_value(inst, v);
 		if (!isfinite(value[i]) && overflowing == NULL)
 			overflowing = v;
