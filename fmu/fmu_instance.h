@@ -71,7 +71,9 @@ typedef struct instance {
 	int32_t particle_count;
 	int32_t spring_count;
 	int32_t port_count;
-	sm_port* ports;  // particle indices of the ports (names stay in doc)
+	sm_port* ports;   // particle indices of the ports (names stay in doc)
+	int32_t* driven;  // the particles of the motion ports, driven_count of them
+	int32_t driven_count;
 
 	// Settings and inputs.
 	sm_simulation_def solver;
