@@ -12,7 +12,8 @@
 // FMI 2.0: directional derivatives of outputs with respect to inputs at the current
 // communication point (the direct feed-through a master needs). With dx and dv the seeds of the
 // motion ports' prescribed positions and velocities and g the seeds of the force inputs:
-//   d(force on a driven particle)  = (df/dx dx + df/dv dv)_p + g_p   (analytic Jacobian product)
+//   d(force on a driven particle)  = (df/dx dx + df/dv dv)_p + g_p   (analytic Jacobian product;
+//                                    g_p = 0, as no force port is at a motion port's particle)
 //   d(kinetic energy)              = sum m_i v_i . dv_i
 //   d(gravitational energy)        = -sum (m_i g + F_i) . dx_i (F_i the particle's load)
 //   d(elastic energy)              = -sum f_el,i . dx_i with f_el = f(x, 0) - m g - F (the forces
@@ -139,14 +140,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 		const fmu_variable* v = &inst->table.variables[vUnknown_ref[k]];
 		double result = 0.0;
 		if (v->source == FMU_SRC_PORT_FORCE) {
-			int32_t particle = inst->ports[v->index].particle;
+			// g_p is 0: no force port shares a motion port's particle (the model file lets only
+			// probes share one). Looking for one went over every known for every unknown.
 			result = state_output_change(inst, v, dx, dv, work, &evaluated);
-			for (size_t j = 0; j < nKnown; ++j) {
-				const fmu_variable* w = &inst->table.variables[vKnown_ref[j]];
-				if (w->source == FMU_SRC_PORT_FORCE && inst->ports[w->index].particle == particle &&
-				    w->component == v->component)
-					result += dvKnown[j];
-			}
 		} else if (v->source == FMU_SRC_PARTICLE_POSITION || v->source == FMU_SRC_PARTICLE_VELOCITY) {
 			const size_t i = 3 * (size_t)v->index + (size_t)v->component;
 			result = v->source == FMU_SRC_PARTICLE_POSITION ? dx[i] : dv[i];
