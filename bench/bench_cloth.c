@@ -17,6 +17,7 @@
 // THREADS=<t> sets sm_simulation_def.threads (default 1), which changes the time, not the results.
 #define _POSIX_C_SOURCE 200809L
 
+#include "bench_clock.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 
@@ -24,14 +25,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-static double now(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static sm_model* benchmark_cloth(int32_t n)
 {
@@ -73,7 +66,7 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	if (threads && atoi(threads) > 0)
 		d.threads = atoi(threads);
 	d.restart_on_input_change = restart;
-	const double start = now();
+	const double start = bench_now();
 	sm_error err;
 	sm_simulation* sim = sm_simulation_create(model, &d, &err);
 	if (!sim) {
@@ -93,7 +86,7 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	} else {
 		st = sm_simulation_advance(sim, t_end);
 	}
-	out->wall = now() - start;
+	out->wall = bench_now() - start;
 	if (st != SM_OK) {
 		fprintf(stderr, "bench_cloth: %s\n", sm_simulation_last_error(sim));
 		sm_simulation_destroy(sim);

@@ -18,26 +18,13 @@
 // The state is the one the reference kernel uses: the flat cloth perturbed by 1e-3 m, with
 // small velocities, so that no spring sits exactly at rest.
 #define _POSIX_C_SOURCE 199309L
+#include "bench_clock.h"
 #include "springmass/model.h"
 #include "springmass/structures.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
-
-static double now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int compare_double(const void* a, const void* b)
-{
-	const double x = *(const double*)a, y = *(const double*)b;
-	return (x > y) - (x < y);
-}
 
 // The benchmark cloth: sm_add_sheet's defaults are its constants (per-strain E = 1000 N for
 // structural and shear springs, 50 N for bend springs, c = 2 N s, 1 kg), and its particles and
@@ -95,10 +82,10 @@ static void evaluate(const workload* w, int kind)
 // Seconds per evaluation over `reps` repetitions.
 static double time_kind(const workload* w, int kind, long reps)
 {
-	const double t0 = now();
+	const double t0 = bench_now();
 	for (long r = 0; r < reps; r++)
 		evaluate(w, kind);
-	return (now() - t0) / (double)reps;
+	return (bench_now() - t0) / (double)reps;
 }
 
 int main(int argc, char** argv)
@@ -154,9 +141,7 @@ int main(int argc, char** argv)
 		}
 	for (int k = 0; k < KINDS; k++) {
 		double* tk = times + k * trials;
-		qsort(tk, (size_t)trials, sizeof(double), compare_double);
-		// The median time: the middle one, or the mean of the two middle ones for an even count.
-		const double median = trials % 2 ? tk[trials / 2] : 0.5 * (tk[trials / 2 - 1] + tk[trials / 2]);
+		const double median = bench_median(tk, trials);  // tk sorted: tk[0] is the best
 		printf("%s n=%d springs=%d springs_per_s=%.4e best_springs_per_s=%.4e\n", kind_name[k], n, S,
 		       S / median, S / tk[0]);
 	}

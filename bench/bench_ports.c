@@ -19,6 +19,7 @@
 // mean of 5); and fmi2GetDirectionalDerivative of every output along a seed of 1e-3 on every
 // input (the mean of 5).
 #define _XOPEN_SOURCE 700
+#include "bench_clock.h"
 #include "fmu_model.h"
 
 #include "fmi2Functions.h"
@@ -26,26 +27,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-static double now(void)
-{
-	struct timespec t;
-	clock_gettime(CLOCK_MONOTONIC, &t);
-	return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-static int compare_double(const void* a, const void* b)
-{
-	const double x = *(const double*)a, y = *(const double*)b;
-	return (x > y) - (x < y);
-}
-
-static double median(double* v, int n)
-{
-	qsort(v, (size_t)n, sizeof *v, compare_double);
-	return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...)
@@ -84,13 +65,14 @@ static char* model_text(int n)
 				    ports > 0 ? "," : "", ports, i, j);
 				ports++;
 			}
-	// 200 inner particles spread over the sheet, the first half force ports, the rest probes.
-	const int inner = (n - 2) * (n - 2);
-	for (int q = 0; q < 200 && q < inner; q++) {
-		const int at = (int)((long)q * inner / 200), i = 1 + at / (n - 2), j = 1 + at % (n - 2);
+	// 200 inner particles (all of them on a smaller sheet) spread over the sheet, the first half
+	// force ports, the rest probes.
+	const int inner = (n - 2) * (n - 2), count = inner < 200 ? inner : 200;
+	for (int q = 0; q < count; q++) {
+		const int at = (int)((long)q * inner / count), i = 1 + at / (n - 2), j = 1 + at % (n - 2);
 		k += (size_t)snprintf(t + k, capacity - k,
 		                      ",\n  {\"name\": \"%c%d\", \"particle\": \"s[%d,%d]\", \"kind\": \"%s\"}",
-		                      q < 100 ? 'f' : 'q', q, i, j, q < 100 ? "force" : "probe");
+		                      2 * q < count ? 'f' : 'q', q, i, j, 2 * q < count ? "force" : "probe");
 	}
 	snprintf(t + k, capacity - k, "]}\n");
 	return t;
@@ -104,13 +86,13 @@ static int trial(const char* guid, const char* location, const fmi2ValueReferenc
                  int ni, const fmi2ValueReference* out, int no, fmi2ValueReference c, int steps, figures* f)
 {
 	fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-	double t0 = now();
+	double t0 = bench_now();
 	fmi2Component fmu =
 	    fmi2Instantiate("bench", fmi2CoSimulation, guid, location, &callbacks, fmi2False, fmi2False);
 	if (fmu == NULL || fmi2SetupExperiment(fmu, fmi2False, 0.0, 0.0, fmi2False, 0.0) != fmi2OK ||
 	    fmi2EnterInitializationMode(fmu) != fmi2OK || fmi2ExitInitializationMode(fmu) != fmi2OK)
 		return 1;
-	f->init = now() - t0;
+	f->init = bench_now() - t0;
 	const double h = 1e-3;
 	double t = 0.0, *values = malloc(((size_t)no + 1) * sizeof *values);
 	if (values == NULL)
@@ -118,16 +100,16 @@ static int trial(const char* guid, const char* location, const fmi2ValueReferenc
 	*f = (figures){0.0, 0.0, 0.0, 0.0, f->init, 0.0, 0.0};
 	// A few steps first: CVODE's first steps from rest are short.
 	for (int k = -5; k < steps; k++, t += h) {
-		const double a = now();
+		const double a = bench_now();
 		if (fmi2SetReal(fmu, in, (size_t)ni, start) != fmi2OK)
 			return 1;
-		const double b = now();
+		const double b = bench_now();
 		if (fmi2DoStep(fmu, t, h, fmi2True) != fmi2OK)
 			return 1;
-		const double d = now();
+		const double d = bench_now();
 		if (fmi2GetReal(fmu, out, (size_t)no, values) != fmi2OK)
 			return 1;
-		const double e = now();
+		const double e = bench_now();
 		if (k >= 0) {
 			f->set += (b - a) / steps;
 			f->step += (d - b) / steps;
@@ -135,10 +117,10 @@ static int trial(const char* guid, const char* location, const fmi2ValueReferenc
 		}
 	}
 	for (int k = 0; k < steps; k++, t += h) {
-		const double a = now();
+		const double a = bench_now();
 		if (fmi2DoStep(fmu, t, h, fmi2True) != fmi2OK)
 			return 1;
-		f->alone += (now() - a) / steps;
+		f->alone += (bench_now() - a) / steps;
 	}
 	double* seeds = malloc((size_t)ni * sizeof *seeds);
 	if (seeds == NULL)
@@ -146,17 +128,17 @@ static int trial(const char* guid, const char* location, const fmi2ValueReferenc
 	for (int i = 0; i < ni; i++)
 		seeds[i] = 1e-3;
 	for (int k = 0; k < 5; k++) {
-		const double a = now();
+		const double a = bench_now();
 		if (fmi2GetDirectionalDerivative(fmu, out, (size_t)no, in, (size_t)ni, seeds, values) != fmi2OK)
 			return 1;
-		f->derivative += (now() - a) / 5;
+		f->derivative += (bench_now() - a) / 5;
 	}
 	free(seeds);
 	for (int k = 0; k < 5; k++) {
-		const double value = k % 2 ? 1.0 : 1.0 + 1e-6, a = now();
+		const double value = k % 2 ? 1.0 : 1.0 + 1e-6, a = bench_now();
 		if (fmi2SetReal(fmu, &c, 1, &value) != fmi2OK)
 			return 1;
-		f->retune += (now() - a) / 5;
+		f->retune += (bench_now() - a) / 5;
 	}
 	free(values);
 	fmi2FreeInstance(fmu);
@@ -223,9 +205,10 @@ int main(int argc, char** argv)
 	}
 	printf("ports n=%d particles=%d motion=%d inputs=%d outputs=%d set_us=%.1f step_us=%.1f get_us=%.1f "
 	       "step_alone_us=%.1f init_ms=%.2f retune_ms=%.2f derivative_ms=%.2f\n",
-	       n, particles, 4 * (n - 1), ni, no, 1e6 * median(set, trials), 1e6 * median(step, trials),
-	       1e6 * median(get, trials), 1e6 * median(alone, trials), 1e3 * median(init, trials),
-	       1e3 * median(retune, trials), 1e3 * median(derivative, trials));
+	       n, particles, 4 * (n - 1), ni, no, 1e6 * bench_median(set, trials),
+	       1e6 * bench_median(step, trials), 1e6 * bench_median(get, trials),
+	       1e6 * bench_median(alone, trials), 1e3 * bench_median(init, trials),
+	       1e3 * bench_median(retune, trials), 1e3 * bench_median(derivative, trials));
 	remove(path);
 	remove(dir);
 	fmu_table_destroy(&table);
