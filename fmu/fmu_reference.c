@@ -18,8 +18,9 @@ static int compare_names(const void* a, const void* b)
 }
 
 // A result's column: a Real, Integer or Boolean variable of the FMU (whole values for an Integer
-// one, 0 or 1 as fmpy writes them for a Boolean one).
-static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
+// one; 0 or 1, false and true as numbers, for a Boolean one: fmpy's read_csv reads those back,
+// not the True and False its write_csv writes).
+static const char* name_column(void* context, const char* name, int32_t* id, cli_csv_values* values)
 {
 	const table_names* names = context;
 	const fmu_variable key = {.name = (char*)name};
@@ -31,7 +32,9 @@ static const char* name_column(void* context, const char* name, int32_t* id, boo
 	if ((*found)->type == FMU_STRING)
 		return "is a String variable: a result holds numbers";
 	*id = (int32_t)(*found - names->table->variables);
-	*whole = (*found)->type == FMU_INTEGER || (*found)->type == FMU_BOOLEAN;
+	*values = (*found)->type == FMU_INTEGER   ? CLI_CSV_INTEGER
+	          : (*found)->type == FMU_BOOLEAN ? CLI_CSV_BOOLEAN
+	                                          : CLI_CSV_REAL;
 	return NULL;
 }
 

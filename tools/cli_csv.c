@@ -196,15 +196,15 @@ static char* read_header(reader* r, const cli_csv_form* form, bool* named, cli_c
 			return problem_at(r->field_place, start, "the first column is %s, not \"time\"", field_shown(r));
 		if (csv->columns > 0) {
 			int32_t id = -1;
-			bool whole = false;
-			const char* refused = form->name_column(form->context, r->field, &id, &whole);
+			cli_csv_values values = CLI_CSV_REAL;
+			const char* refused = form->name_column(form->context, r->field, &id, &values);
 			if (refused != NULL)
 				return problem_at(r->field_place, start, "%s %s", field_shown(r), refused);
 			if (named[id])
 				return problem_at(r->field_place, start, "%s is named twice", field_shown(r));
 			named[id] = true;
 			csv->id[csv->columns] = id;
-			csv->whole[csv->columns] = whole;
+			csv->values_of[csv->columns] = values;
 			names[csv->columns] = strdup(r->field);
 			if (names[csv->columns] == NULL) {
 				r->out_of_memory = true;
@@ -236,8 +236,8 @@ static bool append_value(reader* r, cli_csv* csv, size_t* capacity, size_t count
 	return true;
 }
 
-// The rows: a number per column (a whole one where the namer said so), time never decreasing; no
-// empty line (fmpy's read_csv takes none).
+// The rows: a number per column (a whole one, or 0 or 1, where the namer said so), time never
+// decreasing; no empty line (fmpy's read_csv takes none).
 static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* const* names)
 {
 	double previous_time = -INFINITY;
@@ -257,9 +257,12 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				                  field_shown(r), form->what);
 			if (!decimal_number(r->field, &value))
 				return problem_at(r->field_place, start, "%s is not a finite decimal number", field_shown(r));
-			if (c > 0 && csv->whole[c] &&
+			if (c > 0 && csv->values_of[c] == CLI_CSV_INTEGER &&
 			    !(value == floor(value) && value >= INT32_MIN && value <= INT32_MAX))
 				return problem_at(r->field_place, start, "%s is an Integer variable: %s is no such value",
+				                  names[c], field_shown(r));
+			if (c > 0 && csv->values_of[c] == CLI_CSV_BOOLEAN && value != 0.0 && value != 1.0)
+				return problem_at(r->field_place, start, "%s is a Boolean variable: %s is neither 0 nor 1",
 				                  names[c], field_shown(r));
 			// The times as the file gives them (0.1, not 0.10000000000000001): the fewest digits that
 			// read back to them.
@@ -293,7 +296,7 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 void cli_csv_free(cli_csv* csv)
 {
 	free(csv->id);
-	free(csv->whole);
+	free(csv->values_of);
 	free(csv->values);
 	memset(csv, 0, sizeof *csv);
 }
@@ -322,9 +325,9 @@ char* cli_csv_read(const char* text, size_t length, const cli_csv_form* form, cl
 	bool* named = calloc(most, sizeof *named);
 	char** names = calloc(most, sizeof *names);
 	csv->id = calloc(most, sizeof *csv->id);
-	csv->whole = calloc(most, sizeof *csv->whole);
+	csv->values_of = calloc(most, sizeof *csv->values_of);
 	char* problem = NULL;
-	if (named == NULL || names == NULL || csv->id == NULL || csv->whole == NULL) {
+	if (named == NULL || names == NULL || csv->id == NULL || csv->values_of == NULL) {
 		r.out_of_memory = true;
 	} else {
 		csv->id[0] = -1;

@@ -27,7 +27,7 @@ struct cli_inputs {
 };
 
 // A column of the file: "PORT.SUFFIX", an input of a force or motion port.
-static const char* name_column(void* context, const char* name, int32_t* id, bool* whole)
+static const char* name_column(void* context, const char* name, int32_t* id, cli_csv_values* values)
 {
 	cli_inputs* in = context;
 	const char* dot = strrchr(name, '.');
@@ -56,7 +56,7 @@ static const char* name_column(void* context, const char* name, int32_t* id, boo
 		return in->why;
 	}
 	*id = INPUTS_PER_PORT * port + q;
-	*whole = false;
+	*values = CLI_CSV_REAL;
 	return NULL;
 }
 

@@ -1761,6 +1761,14 @@ def test_fmu_carries_the_reference_and_the_values_set(tmp_path):
      '2:3: solver.max_steps is an Integer variable: "2147483648" is no such value'),
     ("time,solver.max_steps\n0,-2147483649\n",
      '2:3: solver.max_steps is an Integer variable: "-2147483649" is no such value'),
+    # A Boolean variable holds false and true as 0 and 1 (fmpy's read_csv reads no True or False).
+    ("time,solver.stability_limit_detection\n0,2\n",
+     '2:3: solver.stability_limit_detection is a Boolean variable: "2" is neither 0 nor 1'),
+    ("time,solver.stability_limit_detection\n0,1\n0.5,-1\n",
+     '3:5: solver.stability_limit_detection is a Boolean variable: "-1" is neither 0 nor 1'),
+    ("time,solver.stability_limit_detection\n0,0.5\n",
+     '2:3: solver.stability_limit_detection is a Boolean variable: "0.5" is neither 0 nor 1'),
+    ("time,solver.stability_limit_detection\n0,True\n", '2:3: "True" is not a finite decimal number'),
     ("\ufefftime,tip.x\n0,1\n", "1:1: a byte-order mark before the header: write the file without one"),
     ("time,tip.x\r0,1\n", "1:11: a carriage return without a line feed: lines end in LF or CRLF"),
     ("time,tip.x\r\n0,1\r\n0.5\r\n", "3:4: fewer fields than columns: the header names 2 columns"),
@@ -1798,10 +1806,11 @@ def test_fmu_refuses_a_reference_that_is_no_result_of_it(tmp_path, text, message
 def test_fmu_takes_a_reference_with_events_and_without_a_last_line_end(tmp_path):
     # A time repeated at an event, CRLF line ends, names quoted or not, numbers in every form a
     # decimal takes, whole numbers of an Integer variable (down to -2^31 and up to 2^31 - 1, its
-    # 32 bits), and no line end after the last row.
+    # 32 bits), 0 and 1 for a Boolean one, and no line end after the last row.
     reference = tmp_path / "reference.csv"
-    text = (b'"time",tip.x,"energy.kinetic",solver.max_steps\r\n0,1,0,7\r\n0.5,1e-3,-2.5E+2,+8.0\r\n'
-            b'0.5,.5,3,-9e2\r\n0.75,1,1,-2147483648\r\n0.75,1,1,2147483647\r\n1,2.,+3,10')
+    text = (b'"time",tip.x,"energy.kinetic",solver.max_steps,solver.stability_limit_detection\r\n'
+            b'0,1,0,7,1\r\n0.5,1e-3,-2.5E+2,+8.0,0\r\n0.5,.5,3,-9e2,1.0\r\n0.75,1,1,-2147483648,0\r\n'
+            b'0.75,1,1,2147483647,-0\r\n1,2.,+3,10,1e0')
     for ending in (b"", b"\n", b"\r\n"):
         reference.write_bytes(text + ending)
         fmu = tmp_path / "rope.fmu"
