@@ -272,7 +272,7 @@ def test_options_take_effect(tmp_path):
     # BDF's stability limit detection (on by default) lets the hanging rope of 10 segments with
     # mass damping 1 1/s take longer steps as it settles: 13 090 steps over 100 s with it, 24 868
     # without (measured). Either way its tip hangs within 1e-10 m of the rest shape statics finds
-    # after those 100 s, which decay every mode at least like exp(-t / 2) (measured 3e-13 m and
+    # after those 100 s, which decay every mode at least like exp(-t / 2) (measured 1.8e-13 m and
     # 3e-14 m; 1e-10 m is a hundredth of the position tolerance, 1e-8 m).
     settle = [MODELS / "hanging_rope.json", "--set", "alpha=1", "--set", "n=10"]
     cli("statics", *settle, "-q", "-o", tmp_path / "rest.csv")
