@@ -5908,7 +5908,7 @@ static int test_global_error_falls_with_the_tolerances(void)
 		const double tight = oscillator_error_at_10s(runs[i].method, runs[i].solver, 1e-10, 1e-13);
 		printf("  %s %s: %.3g m at rtol 1e-4, %.3g m at rtol 1e-10\n", sm_method_name(runs[i].method),
 		       sm_linear_solver_name(runs[i].solver), loose, tight);
-		// Measured 5e-5 to 2.4e-4 m at rtol 1e-4 and 1.8e-10 to 1.4e-9 m at rtol 1e-10 (amplitude
+		// Measured 5e-5 to 2.4e-4 m at rtol 1e-4 and 1.8e-10 to 1.3e-9 m at rtol 1e-10 (amplitude
 		// 0.2 m): a global error of a few hundred local ones at most, and a million times less rtol
 		// taking it down by 1.8e5 to 3e5 times; the bounds leave 10 to 100 times of margin.
 		ENSURE(loose <= 1e3 * 1e-4 * 0.2 && tight <= 1e3 * 1e-10 * 0.2);
