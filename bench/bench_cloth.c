@@ -15,6 +15,8 @@
 // and prints both. ATOL_VELOCITY=<a> sets the velocities' absolute tolerance alone [m/s]
 // (positions keep 1e-6 m), to measure what it does to the steps.
 // THREADS=<t> sets sm_simulation_def.threads (default 1), which changes the time, not the results.
+// STABILITY_LIMIT_DETECTION=off switches BDF's stability limit detection off (default on), to
+// measure what it changes (docs/simulation.md, "Stability limit detection").
 #define _POSIX_C_SOURCE 200809L
 
 #include "bench_clock.h"
@@ -65,6 +67,9 @@ static int run(const sm_model* model, sm_linear_solver solver, double t_end, dou
 	const char* threads = getenv("THREADS");
 	if (threads && atoi(threads) > 0)
 		d.threads = atoi(threads);
+	const char* detection = getenv("STABILITY_LIMIT_DETECTION");
+	if (detection && strcmp(detection, "off") == 0)
+		d.stability_limit_detection = false;
 	d.restart_on_input_change = restart;
 	const double start = bench_now();
 	sm_error err;
