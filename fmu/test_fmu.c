@@ -209,6 +209,15 @@ static int test_one_read_takes_the_inputs_set_for_every_output(void)
 	ENSURE_NEAR(values[4], 25.0 * stretch * stretch, 1e-12);
 	for (int i = 0; i < 6; i++)
 		ENSURE(get(c, &f, names[i]) == values[i]);
+	// An output read before a parameter in one call: the port moved once more, by 0.05 m, pulls the
+	// spring 0.05 m shorter, 2.5 N less on the port.
+	x = 0.2;
+	ENSURE_STATUS(fmi2SetReal(c, &base, 1, &x), fmi2OK);
+	const fmi2ValueReference force_then_k[2] = {r[2], r[0]};
+	ENSURE_STATUS(fmi2GetReal(c, force_then_k, 2, values), fmi2OK);
+	ENSURE(values[1] == 50.0);
+	ENSURE_NEAR(values[0], 50.0 * (stretch - 0.05), 1e-12);
+	ENSURE(get(c, &f, "base.fx") == values[0]);
 	fmi2FreeInstance(c);
 	teardown(&f);
 	return 0;
