@@ -3696,6 +3696,15 @@ static int test_adams_on_a_stiff_model_stops_and_names_the_method(void)
 	printf("  bdf: %lld steps to 10 s\n", (long long)sm_simulation_statistics(sim).steps);
 	ENSURE(sm_simulation_statistics(sim).steps < 10000);
 	sm_simulation_destroy(sim);
+	// BDF held to 20 steps stops at its step limit too, but the method is already the cure: its
+	// message says to raise max_steps, and names no other method.
+	d.max_steps = 20;
+	sim = sm_simulation_create(model, &d, NULL);
+	ENSURE(sim != NULL);
+	ENSURE_STATUS(sm_simulation_advance(sim, 10.0), SM_ERROR_STEP_LIMIT);
+	ENSURE(strstr(sm_simulation_last_error(sim), "raise max_steps") != NULL);
+	ENSURE(strstr(sm_simulation_last_error(sim), "method bdf") == NULL);
+	sm_simulation_destroy(sim);
 	sm_model_destroy(model);
 	return 0;
 }
