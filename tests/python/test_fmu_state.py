@@ -221,10 +221,16 @@ def test_a_state_carries_what_input_changes_do(test_fmu):
         detection = [b.vr["solver.stability_limit_detection"]]
         assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"restart"]
         assert b.slave.getBoolean(detection) == [True]
+        own = b.slave.getFMUstate()
         b.slave.setFMUstate(b.slave.deSerializeFMUstate(blob))
         assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"keep"]
         assert b.slave.getBoolean(detection) == [False]
         assert np.array_equal(run(a, 0.1, 10, force=force), run(b, 0.1, 10, force=force))
+        # b's own state from before, with the defaults, switches both back.
+        b.slave.setFMUstate(own)
+        assert b.slave.getString([b.vr["solver.input_changes"]]) == [b"restart"]
+        assert b.slave.getBoolean(detection) == [True]
+        b.slave.freeFMUstate(own)
 
 
 def test_state_of_another_model_is_refused(test_fmu):
