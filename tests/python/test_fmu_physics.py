@@ -439,6 +439,10 @@ def test_stability_limit_detection_is_a_parameter_and_either_way_the_rope_settle
             with pytest.raises(FMICallException):
                 s.setBoolean(vr, [2])
             assert "must be fmi2True (1) or fmi2False (0)" in inst.log_text()
+            # A refused call changes nothing, a good value before the bad one included.
+            with pytest.raises(FMICallException):
+                s.setBoolean(vr * 2, [False, 2])
+            assert s.getBoolean(vr) == [True]
             s.setBoolean(vr, [detection])
             s.exitInitializationMode()
             assert s.getBoolean(vr) == [detection]
