@@ -458,6 +458,36 @@ def test_stability_limit_detection_is_a_parameter_and_either_way_the_rope_settle
     assert steps[False] >= 1.5 * steps[True], steps
 
 
+def test_stability_limit_detection_set_after_an_output_was_read_takes_effect(package):
+    # In initialisation mode an output read builds the simulation; solver.stability_limit_detection
+    # switched off after that must reach CVODE as it does when set before any read. The hanging rope
+    # of 10 segments with mass damping 1 1/s over one step of 2 s: 2234 internal steps with the
+    # detection, 2300 without (measured, as `springmass run` takes them), so the runs with it off,
+    # the output read first or not, are the same run to the bit, and not the run with it on.
+    rope = package(ROOT / "models" / "hanging_rope.json", ("alpha=1", "n=10"))
+    runs = {}
+    for case in ("on", "off", "off after a read"):
+        inst = Instance(rope, logging_on=True)
+        try:
+            s = inst.slave
+            s.setupExperiment(startTime=0.0)
+            s.enterInitializationMode()
+            if case == "off after a read":
+                inst.get("tip.x")
+            if case != "on":
+                s.setBoolean([inst.vr["solver.stability_limit_detection"]], [False])
+            s.exitInitializationMode()
+            s.setDebugLogging(True, ["logSolver"])
+            s.doStep(0.0, 2.0)
+            steps = sum(int(re.search(r"(\d+) internal steps", m[2]).group(1))
+                        for m in inst.messages if m[1] == "logSolver")
+            runs[case] = (steps, inst.get("tip.x", "tip.z", "middle.x", "middle.z"))
+        finally:
+            inst.free()
+    assert runs["off after a read"] == runs["off"], runs
+    assert runs["off"][0] != runs["on"][0], runs
+
+
 def test_with_a_stop_time_the_run_does_not_depend_on_the_start_time(test_fmu):
     # The model knows no absolute time: started at 4 s with the stop time 5 s, the run is the one
     # started at 0 s with the stop time 1 s, bit for bit (the same internal steps, the same
