@@ -1671,6 +1671,12 @@ def test_check_summarises_the_model(tmp_path):
     assert summary_line(cli("check", tmp_path / "keep.json").stdout, "simulation") == \
         "stop time 5 s, output interval 0.01 s, rtol 1e-06, solver auto, history kept where inputs jump, " \
         "stability limit detection off"
+    # Adams has no such detection: with its method the setting goes unnamed.
+    keep["simulation"]["method"] = "adams"
+    (tmp_path / "keep.json").write_text(json.dumps(keep))
+    assert summary_line(cli("check", tmp_path / "keep.json").stdout, "simulation") == \
+        "stop time 5 s, output interval 0.01 s, rtol 1e-06, method adams (fixed point, no linear solver), " \
+        "history kept where inputs jump"
     assert summary_line(out, "gravity") == "(0, 0, 0) m/s^2, mass damping 0 1/s"
     rope = cli("check", MODELS / "hanging_rope.json").stdout
     assert summary_line(rope, "gravity") == "(0, 0, -9.81) m/s^2, mass damping 0.1 1/s"
