@@ -1719,6 +1719,27 @@ def test_a_motion_ports_force_depends_on_the_motion_ports_its_springs_join_it_to
         inst.free()
 
 
+def test_the_listed_motion_ports_are_in_order_once_whatever_the_springs_order(test_fmu):
+    # crossed_hooks: motion ports a, b and c on particles n0, n1 and n2, c the last port, with the
+    # springs a-c, a-b and c-a in that order, so that the springs name a's neighbours c, b, c and
+    # c's a twice. Each port's force still lists its own inputs and those of the ports a spring
+    # joins it to, each port's six once, in ascending order (a's force: a, b and c; b's: a and b;
+    # c's: a and c); c, the last port, has the list the table's last offset ends.
+    fmu = test_fmu("crossed_hooks")
+    variables = read_model_description(str(fmu)).modelVariables
+    motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
+    expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
+                "c": motions["a"] + motions["c"]}
+    with zipfile.ZipFile(fmu) as archive:
+        xml = archive.read("modelDescription.xml").decode("utf-8")
+    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
+    listed = {variables[int(index) - 1].name: [variables[int(k) - 1].name for k in dependencies.split()]
+              for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs)}
+    for port in "abc":
+        for c in "xyz":
+            assert listed[f"{port}.f{c}"] == expected[port], (port, c, listed[f"{port}.f{c}"])
+
+
 def test_every_variable_has_the_unit_of_its_quantity(test_fmu):
     # docs/fmu.md's table of variables: positions in m, velocities in m/s, forces in N, energies in
     # J, the tolerances of positions and velocities in m and m/s, the largest step in s, the
