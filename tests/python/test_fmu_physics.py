@@ -1663,18 +1663,12 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
         inst.free()
 
 
-def test_a_motion_ports_force_depends_on_the_motion_ports_its_springs_join_it_to(test_fmu):
-    # joined_hooks: motion ports a, b and c on particles n0, n1 and n4 of a line of six; a and b
-    # are joined by two springs, a and c by one across the line, b and c by none (n2 and n3, free,
-    # lie between them). A port's force is the pull of the springs at its particle (and gravity and
-    # mass damping on it): it changes with its own inputs and with those of the motion ports at the
-    # springs' other ends, and with no other input, so the ModelStructure lists exactly these (a's
-    # force: a, b and c; b's: a and b; c's: a and c), each port's six inputs in ascending order.
-    # Listing every motion port for every port's force made the Outputs grow with the square of the
-    # motion ports: 2 886 000 indices for 400 of them along a chain, where 13 200 are dependencies.
-    fmu = test_fmu("joined_hooks")
-    md = read_model_description(str(fmu))
-    variables = md.modelVariables
+def check_hooks_dependencies(fmu):
+    """The ModelStructure of joined_hooks or crossed_hooks (motion ports a, b and c; springs join a
+    to b and a to c, not b to c): every output's dependencies in ascending order, each once, and a
+    port's force listing its own six inputs and those of the ports a spring joins it to (a's force:
+    a, b and c; b's: a and b; c's: a and c). Returns (each port's inputs, each port's expected list)."""
+    variables = read_model_description(str(fmu)).modelVariables
     motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
     expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
                 "c": motions["a"] + motions["c"]}
@@ -1689,6 +1683,21 @@ def test_a_motion_ports_force_depends_on_the_motion_ports_its_springs_join_it_to
     for port in "abc":
         for c in "xyz":
             assert listed[f"{port}.f{c}"] == expected[port], (port, c, listed[f"{port}.f{c}"])
+    return motions, expected
+
+
+def test_a_motion_ports_force_depends_on_the_motion_ports_its_springs_join_it_to(test_fmu):
+    # joined_hooks: motion ports a, b and c on particles n0, n1 and n4 of a line of six; a and b
+    # are joined by two springs, a and c by one across the line, b and c by none (n2 and n3, free,
+    # lie between them). A port's force is the pull of the springs at its particle (and gravity and
+    # mass damping on it): it changes with its own inputs and with those of the motion ports at the
+    # springs' other ends, and with no other input, so the ModelStructure lists exactly these (a's
+    # force: a, b and c; b's: a and b; c's: a and c), each port's six inputs in ascending order.
+    # Listing every motion port for every port's force made the Outputs grow with the square of the
+    # motion ports: 2 886 000 indices for 400 of them along a chain, where 13 200 are dependencies.
+    fmu = test_fmu("joined_hooks")
+    variables = read_model_description(str(fmu)).modelVariables
+    motions, expected = check_hooks_dependencies(fmu)
     # At a displaced, moving state (every spring stretched and turning in 3D, so that no derivative
     # vanishes by symmetry), the analytic derivative of each port's force is nonzero for every
     # listed input and exactly zero for every other, and setting an input that is not listed leaves
@@ -1725,19 +1734,7 @@ def test_the_listed_motion_ports_are_in_order_once_whatever_the_springs_order(te
     # c's a twice. Each port's force still lists its own inputs and those of the ports a spring
     # joins it to, each port's six once, in ascending order (a's force: a, b and c; b's: a and b;
     # c's: a and c); c, the last port, has the list the table's last offset ends.
-    fmu = test_fmu("crossed_hooks")
-    variables = read_model_description(str(fmu)).modelVariables
-    motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
-    expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
-                "c": motions["a"] + motions["c"]}
-    with zipfile.ZipFile(fmu) as archive:
-        xml = archive.read("modelDescription.xml").decode("utf-8")
-    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
-    listed = {variables[int(index) - 1].name: [variables[int(k) - 1].name for k in dependencies.split()]
-              for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs)}
-    for port in "abc":
-        for c in "xyz":
-            assert listed[f"{port}.f{c}"] == expected[port], (port, c, listed[f"{port}.f{c}"])
+    check_hooks_dependencies(test_fmu("crossed_hooks"))
 
 
 def test_every_variable_has_the_unit_of_its_quantity(test_fmu):
