@@ -293,10 +293,13 @@ fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
 			return fmi2Error;
 		simulation = simulation || needs_simulation(v);
 	}
-	if (simulation && ((!inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION)
-	                       ? fmu_ensure_simulation(inst, "fmi2GetReal") != fmi2OK
-						   : fmu_apply_inputs(inst, "fmi2GetReal") != fmi2OK))
-		return fmi2Error;
+	if (simulation) {
+		const bool rebuild = !inst->sim || inst->sim_dirty || inst->state == ST_INITIALIZATION;
+		const fmi2Status ready =
+		    rebuild ? fmu_ensure_simulation(inst, "fmi2GetReal") : fmu_apply_inputs(inst, "fmi2GetReal");
+		if (ready != fmi2OK)
+			return fmi2Error;
+	}
 	const fmu_variable* overflowing = NULL;
 	for (size_t i = 0; i < nvr; ++i) {
 		const fmu_variable* v = &inst->table.variables[vr[i]];
