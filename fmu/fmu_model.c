@@ -504,6 +504,23 @@ static bool find_port_neighbours(const sm_document* doc, const sm_model* model, 
 	return ok;
 }
 
+// The table's port_potential_terms: the terms of the potential energy each port's particle
+// enters (sm_document_potential_terms). False when out of memory.
+static bool find_port_potential_terms(const sm_document* doc, fmu_table* t)
+{
+	const int32_t ports = sm_document_port_count(doc);
+	uint8_t* terms = malloc((size_t)sm_document_particle_count(doc) + 1);
+	t->port_potential_terms = malloc((size_t)ports + 1);
+	const bool ok = terms && t->port_potential_terms;
+	if (ok) {
+		sm_document_potential_terms(doc, terms);
+		for (int32_t p = 0; p < ports; ++p)
+			t->port_potential_terms[p] = terms[sm_document_port(doc, p).particle];
+	}
+	free(terms);
+	return ok;
+}
+
 static sm_status fail(sm_error* err, sm_status status, const char* message)
 {
 	if (err) {
@@ -752,7 +769,7 @@ sm_status fmu_table_create(const sm_document* doc, const char* text, size_t leng
 	for (int32_t i = 0; i < nports && !b.failed; ++i)
 		add_port(&b, doc, model, i);
 
-	if (!b.failed && !find_port_neighbours(doc, model, table))
+	if (!b.failed && (!find_port_neighbours(doc, model, table) || !find_port_potential_terms(doc, table)))
 		b.failed = true;
 
 	// Energies.
@@ -815,6 +832,7 @@ void fmu_table_destroy(fmu_table* table)
 	free(table->variables);
 	free(table->port_neighbour_start);
 	free(table->port_neighbours);
+	free(table->port_potential_terms);
 	free(table->model_identifier);
 	free(table->model_name);
 	free(table->description);
@@ -860,19 +878,28 @@ static bool unit_used(const fmu_table* t, const char* unit)
 // communication point. Positions and velocities of force and probe ports and the dissipated
 // energy are states: no direct dependence. A motion port's force depends on the prescribed
 // positions and velocities of its own port and of the motion ports a spring joins it to
-// (port_neighbours); kinetic energy on the motion ports' velocities; elastic and gravitational
-// energy on their positions; the inputs' work on both (a motion set elsewhere does the work of the
-// energy it adds at once). `first` holds each port's first variable, its x (a motion port's six
-// inputs x, y, z, vx, vy, vz follow each other, and ports' variables follow the ports' order).
+// (port_neighbours); kinetic energy on the motion ports' velocities (every mass is > 0); the
+// elastic energy on the position of a motion port a spring of some stiffness ends at; the
+// gravitational energy on a motion port's position along each axis the weight or a load on its
+// particle can have a component (port_potential_terms); the inputs' work on all these (a motion
+// set elsewhere does the work of the energy it adds at once). `first` holds each port's first
+// variable, its x (a motion port's six inputs x, y, z, vx, vy, vz follow each other, and ports'
+// variables follow the ports' order).
 static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_variable* v,
                                 const int32_t* first)
 {
-	bool position = false, velocity = false;
+	// Which terms of the energy of a motion port's particle a position enters for the output.
+	unsigned position = 0;
+	bool velocity = false;
+	const unsigned constant = SM_POTENTIAL_CONSTANT_X | SM_POTENTIAL_CONSTANT_Y | SM_POTENTIAL_CONSTANT_Z;
 	switch (v->source) {
-	case FMU_SRC_ENERGY_INPUT: position = velocity = true; break;
+	case FMU_SRC_ENERGY_INPUT:
+		position = constant | SM_POTENTIAL_ELASTIC;
+		velocity = true;
+		break;
 	case FMU_SRC_ENERGY_KINETIC: velocity = true; break;
-	case FMU_SRC_ENERGY_ELASTIC:
-	case FMU_SRC_ENERGY_GRAVITY: position = true; break;
+	case FMU_SRC_ENERGY_ELASTIC: position = SM_POTENTIAL_ELASTIC; break;
+	case FMU_SRC_ENERGY_GRAVITY: position = constant; break;
 	default: break;
 	}
 	fmu_text_append_string(out, " dependencies=\"");
@@ -902,8 +929,13 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 		const fmu_variable* w = &t->variables[i];
 		if (w->causality != FMU_INPUT)
 			continue;
-		if ((position && w->source == FMU_SRC_PORT_POSITION) ||
-		    (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
+		// A position enters the elastic energy through all its components, the constant forces'
+		// potential through those the force has.
+		const unsigned terms = w->source == FMU_SRC_PORT_POSITION
+		                           ? t->port_potential_terms[w->index] &
+		                                 (SM_POTENTIAL_ELASTIC | (SM_POTENTIAL_CONSTANT_X << w->component))
+		                           : 0;
+		if ((position & terms) || (velocity && w->source == FMU_SRC_PORT_VELOCITY)) {
 			fmu_text_appendf(out, separator ? " %d" : "%d", (int)i + 1);
 			separator = true;
 		}

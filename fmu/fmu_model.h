@@ -102,6 +102,9 @@ typedef struct fmu_table {
 	int32_t port_count;
 	int32_t* port_neighbour_start;  ///< port_count + 1 offsets into port_neighbours
 	int32_t* port_neighbours;
+	/// Per port, the sm_potential_term flags of its particle: which components of a motion port's
+	/// position the gravitational energy depends on, and whether the elastic energy does.
+	uint8_t* port_potential_terms;
 } fmu_table;
 
 /// Builds the table of a parsed model file. `text`/`length` are the file's bytes and `parameters`

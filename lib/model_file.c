@@ -173,6 +173,7 @@ expansion* sm_document_expand(const sm_document* doc, const double* parameter_va
 	                                gravity_source) &&
 	          sm_parser_read_field(&p, FEEDS_CONSTANTS, root, "", "mass_damping", NON_NEGATIVE,
 	                               &def.mass_damping, NULL);
+	memcpy(p.ex->gravity_source, gravity_source, sizeof gravity_source);
 	if (ok) {
 		sm_error model_err;
 		p.ex->model = sm_model_create(&def, &model_err);

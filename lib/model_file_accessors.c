@@ -279,6 +279,33 @@ int32_t sm_document_spring_count(const sm_document* doc)
 	return doc != NULL ? sm_model_spring_count(doc->current->model) : 0;
 }
 
+void sm_document_potential_terms(const sm_document* doc, uint8_t* terms)
+{
+	if (doc == NULL || terms == NULL)
+		return;
+	const expansion* ex = doc->current;
+	const sm_model* model = ex->model;
+	// Every particle has a mass > 0: its weight has the components gravity has.
+	uint8_t weight = 0;
+	for (int c = 0; c < 3; c++)
+		if (model->def.gravity[c] != 0.0 || ex->gravity_source[c] >= 0)
+			weight |= (uint8_t)(SM_POTENTIAL_CONSTANT_X << c);
+	for (int32_t i = 0; i < model->particle_count; i++)
+		terms[i] = weight;
+	for (int32_t k = 0; k < ex->load_count; k++) {
+		const document_load* load = &ex->loads[k];
+		for (int c = 0; c < 3; c++)
+			if (load->force[c] != 0.0 || load->source[c] >= 0)
+				terms[load->particle] |= (uint8_t)(SM_POTENTIAL_CONSTANT_X << c);
+	}
+	for (int32_t s = 0; s < model->spring_count; s++) {
+		if (model->stiffness[s] != 0.0 || ex->spring_sources[s].stiffness >= 0) {
+			terms[model->spring_a[s]] |= SM_POTENTIAL_ELASTIC;
+			terms[model->spring_b[s]] |= SM_POTENTIAL_ELASTIC;
+		}
+	}
+}
+
 const char* sm_document_particle_name(const sm_document* doc, int32_t particle)
 {
 	if (doc == NULL || particle < 0 || particle >= sm_model_particle_count(doc->current->model))

@@ -569,6 +569,55 @@ static int test_parameter_uses(void)
 	return 0;
 }
 
+// The terms of the potential energy each particle's position enters for some values of the
+// parameters: gravity's and the loads' components that are parameters or numbers other than 0, and
+// the springs whose stiffness is (a parameter at 0 included, a number 0 not: a damper alone).
+static int test_potential_terms(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"t\", \"parameters\": {\"gy\": 0, \"fx\": 0, \"kd\": 0, \"E\": 0},"
+	    " \"gravity\": [0, \"gy\", -9.81],"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]}, {\"name\": \"b\", \"position\": [1, 0, 0]},"
+	    "   {\"name\": \"c\", \"position\": [2, 0, 0]}, {\"name\": \"d\", \"position\": [3, 0, 0]},"
+	    "   {\"name\": \"e\", \"position\": [4, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 40},"
+	    "   {\"a\": \"b\", \"b\": \"c\", \"damping\": 0.3}, {\"a\": \"d\", \"b\": \"e\", \"stiffness\": \"kd\"}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 1, 0], \"end\": [1, 1, 0],"
+	    "   \"segments\": 2, \"structural\": {\"strain_stiffness\": \"E\"}},"
+	    "  {\"type\": \"rope\", \"name\": \"s\", \"start\": [0, 2, 0], \"end\": [1, 2, 0],"
+	    "   \"segments\": 2, \"structural\": {\"strain_stiffness\": 0, \"strain_damping\": 0.1}}],"
+	    " \"loads\": [{\"particle\": \"c\", \"force\": [2, 0, 0]}, {\"particle\": \"d\", \"force\": [\"fx\", 0, 0]},"
+	    "   {\"particle\": \"e\", \"force\": [0, 0, 0]}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	const uint8_t weight = SM_POTENTIAL_CONSTANT_Y | SM_POTENTIAL_CONSTANT_Z, x = SM_POTENTIAL_CONSTANT_X;
+	const uint8_t elastic = SM_POTENTIAL_ELASTIC;
+	const struct {
+		const char* name;
+		uint8_t terms;
+	} expected[] = {
+	    {"a", weight | elastic},     {"b", weight | elastic}, {"c", weight | x},
+	    {"d", weight | x | elastic}, {"e", weight | elastic}, {"r[0]", weight | elastic},
+	    {"r[2]", weight | elastic},  {"s[0]", weight},        {"s[1]", weight},
+	};
+	const int32_t n = sm_document_particle_count(doc);
+	ENSURE(n == 11);
+	uint8_t terms[11];
+	sm_document_potential_terms(doc, terms);
+	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
+		const int32_t i = sm_document_particle_index(doc, expected[e].name);
+		ENSURE(i >= 0);
+		if (terms[i] != expected[e].terms)
+			printf("  particle %s: terms %u, expected %u\n", expected[e].name, (unsigned)terms[i],
+			       (unsigned)expected[e].terms);
+		ENSURE(terms[i] == expected[e].terms);
+	}
+	sm_document_potential_terms(NULL, terms);  // nothing to fill
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // The unit of what each parameter stands for, from the keys naming it: one unit per kind of key
 // (a per-section constant in the unit its structure's section gives it: a sheet's width, a
 // block's area); none for a count, an index, atol (positions and velocities), a single spring's
@@ -3695,6 +3744,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_bundled_models_round_trip);
 	RUN_TEST(test_oscillator);
 	RUN_TEST(test_parameter_uses);
+	RUN_TEST(test_potential_terms);
 	RUN_TEST(test_parameter_units);
 	RUN_TEST(test_loads);
 	RUN_TEST(test_parameters_set_together);

@@ -173,6 +173,25 @@ SM_API const char* sm_document_structure_file_path(const sm_document* doc, int32
 SM_API int32_t sm_document_particle_count(const sm_document* doc);
 SM_API int32_t sm_document_spring_count(const sm_document* doc);
 
+/// The terms of the potential energy (sm_model_energies) a particle's position enters for some
+/// values of the parameters, whatever their current ones: a term whose constants the file gives as
+/// numbers 0 is left out.
+typedef enum sm_potential_term {
+	/// the potential of the constant force on the particle, its weight m g plus its loads [N],
+	/// along x, y or z: gravity's or a load's component there is a parameter or a number other than 0
+	SM_POTENTIAL_CONSTANT_X = 1 << 0,
+	SM_POTENTIAL_CONSTANT_Y = 1 << 1,
+	SM_POTENTIAL_CONSTANT_Z = 1 << 2,
+	/// the elastic energy: a spring ends at the particle whose stiffness is a parameter or a number
+	/// other than 0 (a spring of stiffness 0 is a damper alone)
+	SM_POTENTIAL_ELASTIC = 1 << 3,
+} sm_potential_term;
+
+/// Fills terms[i] with the sm_potential_term flags of particle i, for the sm_document_particle_count
+/// particles. A program that declares what the energies depend on (the FMU's ModelStructure) reads
+/// them; they hold until the next sm_document_set_parameter changes the counts.
+SM_API void sm_document_potential_terms(const sm_document* doc, uint8_t* terms);
+
 /// Name of a particle ("anchor", or "cloth[3,4]" for structure particles: "name[row,column]"
 /// for a sheet, "name[row,column,layer]" for a block, "name[i]" for a rope or a mesh), NULL if
 /// unnamed or out of range. Valid until the next sm_document_set_parameter or destroy.
