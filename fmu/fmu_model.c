@@ -433,18 +433,22 @@ static void add_port(builder* b, const sm_document* doc, const sm_model* model, 
 	free(part);
 }
 
-static int compare_indices(const void* left, const void* right)
+static int compare_neighbours(const void* left, const void* right)
 {
-	const int32_t a = *(const int32_t*)left, b = *(const int32_t*)right;
+	const int32_t a = ((const fmu_neighbour*)left)->port, b = ((const fmu_neighbour*)right)->port;
 	return (a > b) - (a < b);
 }
 
-// The table's port_neighbours: for each motion port, the other motion ports whose particles a
-// spring joins to its particle. A motion port's force is that of the springs at its particle, of
-// gravity, the loads and mass damping on it: it depends on the prescribed positions and
-// velocities of its own port and of these, and on no other input. Which springs exist and which
-// particle each port is at do not change in the FMU (springs that break only remove dependencies).
-// False when out of memory.
+// The table's port_neighbours, port_force_terms and mass_damping. A motion port's force is that
+// of the springs at its particle, of gravity, the loads and mass damping on it: each spring's
+// elastic force ks (L - l0) u depends on the positions of both its ends, its damping force
+// kd (u . dv) u on their positions (through u) and velocities; mass damping -alpha m v along x on
+// the particle's own velocity along x (and so on); gravity and the loads on nothing. A spring
+// whose stiffness and damping are both the number 0 (sm_document_force_terms) adds no
+// dependency, and a zero-length spring's force, evaluated as ks L u, changes in its last bits with
+// every component of the positions: a position is listed whole. Which springs exist and which
+// particle each port is at do not change in the FMU (springs that break only remove
+// dependencies). False when out of memory.
 static bool find_port_neighbours(const sm_document* doc, const sm_model* model, fmu_table* t)
 {
 	const int32_t ports = sm_document_port_count(doc);
@@ -452,10 +456,14 @@ static bool find_port_neighbours(const sm_document* doc, const sm_model* model, 
 	const int32_t springs = sm_model_spring_count(model);
 	t->port_count = ports;
 	t->port_neighbour_start = calloc((size_t)ports + 1, sizeof *t->port_neighbour_start);
+	t->port_force_terms = calloc((size_t)ports + 1, sizeof *t->port_force_terms);
 	int32_t* motion_port = malloc(((size_t)particles + 1) * sizeof *motion_port);
 	int32_t* next = malloc(((size_t)ports + 1) * sizeof *next);
-	bool ok = t->port_neighbour_start && motion_port && next;
+	uint8_t* terms = malloc((size_t)springs + 1);
+	bool ok = t->port_neighbour_start && t->port_force_terms && motion_port && next && terms;
 	int32_t* start = t->port_neighbour_start;
+	if (ok)
+		t->mass_damping = sm_document_force_terms(doc, terms);
 	for (int32_t i = 0; ok && i < particles; ++i)
 		motion_port[i] = -1;
 	for (int32_t p = 0; ok && p < ports; ++p) {
@@ -463,21 +471,30 @@ static bool find_port_neighbours(const sm_document* doc, const sm_model* model, 
 		if (port.kind == SM_PORT_MOTION)
 			motion_port[port.particle] = p;
 	}
-	// Counted, then filled, each spring between two motion ports' particles adding each port to
-	// the other's list.
+	// Counted, then filled, each spring of some force at a motion port's particle adding its terms
+	// to the port's own, and each such spring between two motion ports' particles adding each port
+	// to the other's list.
 	for (int pass = 0; ok && pass < 2; ++pass) {
 		for (int32_t k = 0; k < springs; ++k) {
 			sm_spring_def spring = sm_default_spring_def();
 			sm_model_get_spring(model, k, &spring);
 			const int32_t a = motion_port[spring.a], b = motion_port[spring.b];
+			if (terms[k] == 0)
+				continue;
+			if (pass == 0) {
+				if (a >= 0)
+					t->port_force_terms[a] |= terms[k];
+				if (b >= 0)
+					t->port_force_terms[b] |= terms[k];
+			}
 			if (a < 0 || b < 0)
 				continue;
 			if (pass == 0) {
 				++start[a + 1];
 				++start[b + 1];
 			} else {
-				t->port_neighbours[next[a]++] = b;
-				t->port_neighbours[next[b]++] = a;
+				t->port_neighbours[next[a]++] = (fmu_neighbour){b, terms[k]};
+				t->port_neighbours[next[b]++] = (fmu_neighbour){a, terms[k]};
 			}
 		}
 		if (pass == 0) {
@@ -488,19 +505,24 @@ static bool find_port_neighbours(const sm_document* doc, const sm_model* model, 
 			ok = t->port_neighbours != NULL;
 		}
 	}
-	// Each list in order, a port joined by several springs once.
+	// Each list in order, a port joined by several springs once, with all their terms.
 	for (int32_t p = 0, kept = 0; ok && p < ports; ++p) {
 		const int32_t first = start[p], end = start[p + 1];
-		qsort(t->port_neighbours + first, (size_t)(end - first), sizeof *t->port_neighbours, compare_indices);
+		fmu_neighbour* list = t->port_neighbours;
+		qsort(list + first, (size_t)(end - first), sizeof *list, compare_neighbours);
 		start[p] = kept;
-		for (int32_t k = first; k < end; ++k)
-			if (k == first || t->port_neighbours[k] != t->port_neighbours[k - 1])
-				t->port_neighbours[kept++] = t->port_neighbours[k];
+		for (int32_t k = first; k < end; ++k) {
+			if (k == first || list[k].port != list[kept - 1].port)
+				list[kept++] = list[k];
+			else
+				list[kept - 1].terms |= list[k].terms;
+		}
 		if (p + 1 == ports)
 			start[ports] = kept;
 	}
 	free(motion_port);
 	free(next);
+	free(terms);
 	return ok;
 }
 
@@ -832,6 +854,7 @@ void fmu_table_destroy(fmu_table* table)
 	free(table->variables);
 	free(table->port_neighbour_start);
 	free(table->port_neighbours);
+	free(table->port_force_terms);
 	free(table->port_potential_terms);
 	free(table->model_identifier);
 	free(table->model_name);
@@ -877,8 +900,10 @@ static bool unit_used(const fmu_table* t, const char* unit)
 // Indices (1-based, as in ModelVariables) of the inputs an output depends on directly at a
 // communication point. Positions and velocities of force and probe ports and the dissipated
 // energy are states: no direct dependence. A motion port's force depends on the prescribed
-// positions and velocities of its own port and of the motion ports a spring joins it to
-// (port_neighbours); kinetic energy on the motion ports' velocities (every mass is > 0); the
+// positions of its own port and of the motion ports a spring joins it to, if the springs have some
+// stiffness or damping, on their velocities if the springs have some damping, and on its own
+// velocity along the force's axis if mass damping can act (port_neighbours, port_force_terms,
+// find_port_neighbours); kinetic energy on the motion ports' velocities (every mass is > 0); the
 // elastic energy on the position of a motion port a spring of some stiffness ends at; the
 // gravitational energy on a motion port's position along each axis the weight or a load on its
 // particle can have a component (port_potential_terms); the inputs' work on all these (a motion
@@ -907,20 +932,27 @@ static void append_dependencies(fmu_text* out, const fmu_table* t, const fmu_var
 	if (v->source == FMU_SRC_PORT_FORCE) {
 		// Its own port among its neighbours, in ascending order.
 		const int32_t own = v->index;
-		const int32_t* neighbour = t->port_neighbours + t->port_neighbour_start[own];
-		const int32_t* end = t->port_neighbours + t->port_neighbour_start[own + 1];
+		const fmu_neighbour* neighbour = t->port_neighbours + t->port_neighbour_start[own];
+		const fmu_neighbour* end = t->port_neighbours + t->port_neighbour_start[own + 1];
 		bool own_done = false;
 		while (neighbour < end || !own_done) {
-			int32_t port;
-			if (!own_done && (neighbour == end || own < *neighbour)) {
-				port = own;
+			fmu_neighbour port;
+			if (!own_done && (neighbour == end || own < neighbour->port)) {
+				port = (fmu_neighbour){own, t->port_force_terms[own]};
 				own_done = true;
 			} else {
 				port = *neighbour++;
 			}
+			// Inputs x, y, z, then vx, vy, vz.
 			for (int32_t k = 0; k < 6; ++k) {
-				fmu_text_appendf(out, separator ? " %d" : "%d", (int)(first[port] + k) + 1);
-				separator = true;
+				const bool listed = k < 3
+				                        ? port.terms != 0
+				                        : (port.terms & SM_FORCE_DAMPING) ||
+				                              (port.port == own && t->mass_damping && k - 3 == v->component);
+				if (listed) {
+					fmu_text_appendf(out, separator ? " %d" : "%d", (int)(first[port.port] + k) + 1);
+					separator = true;
+				}
 			}
 		}
 	}

@@ -86,6 +86,14 @@ typedef struct fmu_variable {
 } fmu_variable;
 
 /// The interface of one model file.
+/// A motion port a spring joins to another's particle, with the sm_force_term flags of the springs
+/// joining them: its position enters the other's force if any is set, its velocity if
+/// SM_FORCE_DAMPING is.
+typedef struct fmu_neighbour {
+	int32_t port;
+	uint8_t terms;
+} fmu_neighbour;
+
 typedef struct fmu_table {
 	fmu_variable* variables;
 	int32_t count;
@@ -96,12 +104,17 @@ typedef struct fmu_table {
 	double stop_time;  ///< default experiment [s]
 	double step_size;  ///< default communication step [s]
 	double tolerance;  ///< default relative tolerance [1]
-	/// The motion ports whose particles a spring joins to each port's particle, the inputs its force
-	/// outputs depend on besides its own: port p's are port_neighbours[port_neighbour_start[p]] up
-	/// to port_neighbours[port_neighbour_start[p + 1]], ascending, none for a force or probe port.
+	/// The motion ports whose particles a spring of some force joins to each port's particle, the
+	/// ports whose inputs its force outputs depend on besides its own: port p's are
+	/// port_neighbours[port_neighbour_start[p]] up to port_neighbours[port_neighbour_start[p + 1]],
+	/// ascending, none for a force or probe port.
 	int32_t port_count;
 	int32_t* port_neighbour_start;  ///< port_count + 1 offsets into port_neighbours
-	int32_t* port_neighbours;
+	fmu_neighbour* port_neighbours;
+	/// Per port, the sm_force_term flags of the springs at its particle (its force's dependencies
+	/// on its own position and velocity), and whether mass damping can act (on its own velocity).
+	uint8_t* port_force_terms;
+	bool mass_damping;
 	/// Per port, the sm_potential_term flags of its particle: which components of a motion port's
 	/// position the gravitational energy depends on, and whether the elastic energy does.
 	uint8_t* port_potential_terms;

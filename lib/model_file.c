@@ -172,7 +172,7 @@ expansion* sm_document_expand(const sm_document* doc, const double* parameter_va
 	bool ok = sm_parser_read_vector(&p, FEEDS_CONSTANTS, root, "", "gravity", ANY_FINITE, def.gravity,
 	                                gravity_source) &&
 	          sm_parser_read_field(&p, FEEDS_CONSTANTS, root, "", "mass_damping", NON_NEGATIVE,
-	                               &def.mass_damping, NULL);
+	                               &def.mass_damping, &p.ex->mass_damping_source);
 	memcpy(p.ex->gravity_source, gravity_source, sizeof gravity_source);
 	if (ok) {
 		sm_error model_err;

@@ -306,6 +306,20 @@ void sm_document_potential_terms(const sm_document* doc, uint8_t* terms)
 	}
 }
 
+bool sm_document_force_terms(const sm_document* doc, uint8_t* terms)
+{
+	if (doc == NULL)
+		return false;
+	const expansion* ex = doc->current;
+	const sm_model* model = ex->model;
+	for (int32_t s = 0; terms != NULL && s < model->spring_count; s++) {
+		const spring_source* src = &ex->spring_sources[s];
+		terms[s] = (uint8_t)(((model->stiffness[s] != 0.0 || src->stiffness >= 0) ? SM_FORCE_ELASTIC : 0) |
+		                     ((model->damping[s] != 0.0 || src->damping >= 0) ? SM_FORCE_DAMPING : 0));
+	}
+	return model->def.mass_damping != 0.0 || ex->mass_damping_source >= 0;
+}
+
 const char* sm_document_particle_name(const sm_document* doc, int32_t particle)
 {
 	if (doc == NULL || particle < 0 || particle >= sm_model_particle_count(doc->current->model))

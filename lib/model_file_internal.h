@@ -89,7 +89,8 @@ typedef struct expansion {
 
 	document_load* loads;  // as the file gives them, for the canonical writer
 	int32_t load_count;
-	int32_t gravity_source[3];  // each component's parameter, or -1 for a number
+	int32_t gravity_source[3];    // each component's parameter, or -1 for a number
+	int32_t mass_damping_source;  // mass_damping's parameter, or -1 for a number
 
 	sm_port* ports;  // names point into the JSON tree
 	int32_t port_count;

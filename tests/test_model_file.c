@@ -618,6 +618,51 @@ static int test_potential_terms(void)
 	return 0;
 }
 
+// The forces each spring can exert for some values of the parameters, and whether mass damping
+// can: a stiffness or damping that is a parameter (at 0 included) or a number other than 0, per
+// strain too, not a number 0; mass damping likewise, absent meaning 0.
+static int test_force_terms(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"t\", \"parameters\": {\"k\": 0, \"d\": 0, \"c\": 0, \"alpha\": 0},"
+	    " \"mass_damping\": \"alpha\","
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]}, {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 40},"
+	    "   {\"a\": \"a\", \"b\": \"b\", \"damping\": 0.3}, {\"a\": \"a\", \"b\": \"b\"},"
+	    "   {\"a\": \"a\", \"b\": \"b\", \"stiffness\": \"k\", \"damping\": \"d\"},"
+	    "   {\"a\": \"a\", \"b\": \"b\", \"stiffness\": 0, \"strain_damping\": \"c\"},"
+	    "   {\"a\": \"a\", \"b\": \"b\", \"strain_stiffness\": 20, \"strain_damping\": 0}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	const uint8_t elastic = SM_FORCE_ELASTIC, damping = SM_FORCE_DAMPING;
+	const uint8_t expected[] = {elastic, damping, 0, elastic | damping, damping, elastic};
+	ENSURE(sm_document_spring_count(doc) == 6);
+	uint8_t terms[6];
+	ENSURE(sm_document_force_terms(doc, terms));  // alpha, a parameter at 0
+	for (int s = 0; s < 6; s++) {
+		if (terms[s] != expected[s])
+			printf("  spring %d: terms %u, expected %u\n", s, (unsigned)terms[s], (unsigned)expected[s]);
+		ENSURE(terms[s] == expected[s]);
+	}
+	sm_document_destroy(doc);
+	// Mass damping a number: other than 0, 0, or absent (0). terms may be NULL.
+	const char* cases[] = {"\"mass_damping\": 0.1,", "\"mass_damping\": 0,", ""};
+	const bool damped[] = {true, false, false};
+	for (int k = 0; k < 3; k++) {
+		char model[256];
+		snprintf(model, sizeof model,
+		         "{\"springmass\": 1, \"name\": \"t\", %s \"particles\": [{\"position\": [0, 0, 0]}]}",
+		         cases[k]);
+		doc = parse_valid(model, &err);
+		ENSURE(doc != NULL);
+		ENSURE(sm_document_force_terms(doc, NULL) == damped[k]);
+		sm_document_destroy(doc);
+	}
+	ENSURE(!sm_document_force_terms(NULL, terms));
+	return 0;
+}
+
 // The unit of what each parameter stands for, from the keys naming it: one unit per kind of key
 // (a per-section constant in the unit its structure's section gives it: a sheet's width, a
 // block's area); none for a count, an index, atol (positions and velocities), a single spring's
@@ -3745,6 +3790,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_oscillator);
 	RUN_TEST(test_parameter_uses);
 	RUN_TEST(test_potential_terms);
+	RUN_TEST(test_force_terms);
 	RUN_TEST(test_parameter_units);
 	RUN_TEST(test_loads);
 	RUN_TEST(test_parameters_set_together);

@@ -192,6 +192,23 @@ typedef enum sm_potential_term {
 /// them; they hold until the next sm_document_set_parameter changes the counts.
 SM_API void sm_document_potential_terms(const sm_document* doc, uint8_t* terms);
 
+/// The forces (sm_model_forces) a spring can exert for some values of the parameters, whatever
+/// their current ones: a constant the file gives as the number 0 exerts none.
+typedef enum sm_force_term {
+	/// the elastic force ks (L - l0) u [N]: its stiffness is a parameter or a number other than 0
+	SM_FORCE_ELASTIC = 1 << 0,
+	/// the damping force kd (u . dv) u [N], along the spring: its damping is a parameter or a number
+	/// other than 0
+	SM_FORCE_DAMPING = 1 << 1,
+} sm_force_term;
+
+/// Fills terms[s] with the sm_force_term flags of spring s, for the sm_document_spring_count
+/// springs (terms may be NULL), and returns whether mass damping, -alpha m v on every particle
+/// [N], can act: alpha is a parameter or a number other than 0. A program that declares what the
+/// forces depend on (the FMU's ModelStructure) reads them; they hold until the next
+/// sm_document_set_parameter changes the counts. False for NULL.
+SM_API bool sm_document_force_terms(const sm_document* doc, uint8_t* terms);
+
 /// Name of a particle ("anchor", or "cloth[3,4]" for structure particles: "name[row,column]"
 /// for a sheet, "name[row,column,layer]" for a block, "name[i]" for a rope or a mesh), NULL if
 /// unnamed or out of range. Valid until the next sm_document_set_parameter or destroy.

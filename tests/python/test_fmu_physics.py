@@ -1667,8 +1667,8 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
 def check_hooks_dependencies(fmu):
     """The ModelStructure of joined_hooks or crossed_hooks (motion ports a, b and c; springs join a
     to b and a to c, not b to c): every output's dependencies in ascending order, each once, and a
-    port's force listing its own six inputs and those of the ports a spring joins it to (a's force:
-    a, b and c; b's: a and b; c's: a and c). Returns (each port's inputs, each port's expected list)."""
+    port's force listing its own six inputs and those of the ports a spring joins it to, every
+    spring having stiffness and damping (a's force: a, b and c; b's: a and b; c's: a and c). Returns (each port's inputs, each port's expected list)."""
     variables = read_model_description(str(fmu)).modelVariables
     motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
     expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
@@ -1805,6 +1805,89 @@ def test_the_energies_list_exactly_the_inputs_they_change_with_at_once(test_fmu)
         finally:
             inst.free()
     assert real == {name: set(names) for name, names in expected.items()}
+
+
+def check_force_dependencies(fmu, expected, moved, parameter_sets):
+    """The ModelStructure lists exactly expected[port][c], the inputs port.f{c} of each motion port
+    depends on at once, in ascending order, each once; at the state `moved` (each port's x, y, z,
+    vx, vy, vz) with each of parameter_sets, setting an input that is not listed leaves the force
+    as it was, to the bit, with a directional derivative of exactly 0, and every listed input
+    changes the force at once, with a derivative other than 0, for at least one of them."""
+    variables = read_model_description(str(fmu)).modelVariables
+    inputs = [v.name for v in variables if v.causality == "input"]
+    with zipfile.ZipFile(fmu) as archive:
+        xml = archive.read("modelDescription.xml").decode("utf-8")
+    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
+    listed = {}
+    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
+        indices = [int(k) for k in dependencies.split()]
+        assert indices == sorted(set(indices)), (index, indices)
+        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
+    forces = {f"{port}.f{c}": sorted(names, key=inputs.index)
+              for port, by_component in expected.items() for c, names in zip("xyz", by_component)}
+    assert {name: listed[name] for name in forces} == forces
+    real = {name: set() for name in forces}
+    for start_values in parameter_sets:
+        inst = Instance(fmu).start(start_values=start_values)
+        try:
+            s, vr = inst.slave, inst.vr
+            for port, values in moved.items():
+                s.setReal([vr[f"{port}.{c}"] for c in ("x", "y", "z", "vx", "vy", "vz")], list(values))
+            s.doStep(0.0, 0.01)
+            for name in forces:
+                for known in inputs:
+                    before = s.getReal([vr[name]])[0]
+                    d = s.getDirectionalDerivative([vr[name]], [vr[known]], [1.0])[0]
+                    value = s.getReal([vr[known]])[0]
+                    s.setReal([vr[known]], [value + 0.37])
+                    after = s.getReal([vr[name]])[0]
+                    s.setReal([vr[known]], [value])
+                    if known in forces[name]:
+                        if after != before and d != 0.0:
+                            real[name].add(known)
+                    else:
+                        assert after == before and d == 0.0, (name, known, before, after, d)
+        finally:
+            inst.free()
+    assert real == {name: set(names) for name, names in forces.items()}
+
+
+def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(test_fmu):
+    # A motion port's force is m (g - alpha v) + F at its particle plus, for each spring there,
+    # [ks (L - l0) + kd (u . dv)] u: a spring's stiffness makes it change with the positions of
+    # both ends, its damping with their positions (u turns) and velocities, mass damping with the
+    # port's own velocity along the force alone; gravity and the loads are constant. force_ports
+    # (alpha, ks and kd tunable parameters at 0): a at a spring of 40 N/m without damping, b at a
+    # damper alone (0.3 N s/m), c at a load and no spring, d and e joined by a spring of 30 N/m
+    # without damping, e also at a spring of stiffness ks and damping kd, f and g joined by a
+    # spring of neither. Listing the six inputs of the port and of every port a spring joins it to
+    # claimed that d's force changes with e's velocity, c's with its position, and so on:
+    # feed-through that no physics has, which makes a master see algebraic loops (126 inputs
+    # listed for the 21 forces, 69 of them real). energy_ports (mass damping the number 0, every
+    # spring damped): a, b and d list their six inputs, c, at a load and no spring, none.
+    position = {p: [f"{p}.{c}" for c in "xyz"] for p in "abcdefg"}
+    velocity = {p: [f"{p}.v{c}" for c in "xyz"] for p in "abcdefg"}
+
+    def own_velocity(port, extra=()):
+        return [[*extra, v] for v in velocity[port]]
+
+    expected = {"a": own_velocity("a", position["a"]), "b": [position["b"] + velocity["b"]] * 3,
+                "c": own_velocity("c"), "d": own_velocity("d", position["d"] + position["e"]),
+                "e": [position["d"] + position["e"] + velocity["e"]] * 3, "f": own_velocity("f"),
+                "g": own_velocity("g")}
+    # Every port displaced and moving, off the line of the springs, so that no derivative vanishes
+    # by symmetry; 0.37 m or m/s moves each force by far more than its round-off.
+    moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (2.1, -0.1, 0.2, -0.1, 0.2, 0.3),
+             "c": (4.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (5.1, -0.2, 0.3, -0.3, 0.1, 0.2),
+             "e": (5.9, 0.1, -0.2, 0.2, -0.3, 0.1), "f": (8.1, 0.2, 0.1, 0.1, 0.3, -0.2),
+             "g": (9.1, -0.3, 0.2, -0.2, 0.1, 0.3)}
+    check_force_dependencies(test_fmu("force_ports"), expected, moved,
+                             ({}, {"alpha": 0.5, "ks": 25.0, "kd": 0.4}))
+    whole = {p: [position[p] + velocity[p]] * 3 for p in "abd"}
+    moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (2.1, -0.1, 0.2, -0.1, 0.2, 0.3),
+             "c": (3.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (3.9, -0.2, 0.3, -0.3, 0.1, 0.2)}
+    check_force_dependencies(test_fmu("energy_ports"), {**whole, "c": [[]] * 3}, moved,
+                             ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}))
 
 
 def test_every_variable_has_the_unit_of_its_quantity(test_fmu):
