@@ -1738,6 +1738,51 @@ def test_the_listed_motion_ports_are_in_order_once_whatever_the_springs_order(te
     check_hooks_dependencies(test_fmu("crossed_hooks"))
 
 
+def check_exact_dependencies(fmu, expected, moved, parameter_sets):
+    """The ModelStructure lists for each output named in `expected` exactly the inputs given there,
+    in ascending order, each once; at the state `moved` (each motion port's x, y, z, vx, vy, vz)
+    with each of parameter_sets, setting an input that is not listed leaves the output as it was,
+    to the bit, with a directional derivative of exactly 0, and every listed input changes the
+    output at once, with a derivative other than 0, for at least one of them. 0.37 m or m/s moves
+    each output by far more than its round-off."""
+    variables = read_model_description(str(fmu)).modelVariables
+    inputs = [v.name for v in variables if v.causality == "input"]
+    with zipfile.ZipFile(fmu) as archive:
+        xml = archive.read("modelDescription.xml").decode("utf-8")
+    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
+    listed = {}
+    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
+        indices = [int(k) for k in dependencies.split()]
+        assert indices == sorted(set(indices)), (index, indices)
+        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
+    wanted = {name: sorted(set(names), key=inputs.index) for name, names in expected.items()}
+    assert {name: listed[name] for name in wanted} == wanted
+    real = {name: set() for name in wanted}
+    for start_values in parameter_sets:
+        inst = Instance(fmu).start(start_values=start_values)
+        try:
+            s, vr = inst.slave, inst.vr
+            for port, values in moved.items():
+                s.setReal([vr[f"{port}.{c}"] for c in ("x", "y", "z", "vx", "vy", "vz")], list(values))
+            s.doStep(0.0, 0.01)
+            for name in wanted:
+                for known in inputs:
+                    before = s.getReal([vr[name]])[0]
+                    d = s.getDirectionalDerivative([vr[name]], [vr[known]], [1.0])[0]
+                    value = s.getReal([vr[known]])[0]
+                    s.setReal([vr[known]], [value + 0.37])
+                    after = s.getReal([vr[name]])[0]
+                    s.setReal([vr[known]], [value])
+                    if known in wanted[name]:
+                        if after != before and d != 0.0:
+                            real[name].add(known)
+                    else:
+                        assert after == before and d == 0.0, (name, known, before, after, d)
+        finally:
+            inst.free()
+    assert real == {name: set(names) for name, names in wanted.items()}
+
+
 def test_the_energies_list_exactly_the_inputs_they_change_with_at_once(test_fmu):
     # energy_ports: motion ports a (a spring of 40 N/m), b (a damper alone: stiffness 0), c (a
     # load of (2, 0, 0) N, no spring) and d (a spring of stiffness kd and a load (fx, 0, 0)), under
@@ -1751,105 +1796,17 @@ def test_the_energies_list_exactly_the_inputs_they_change_with_at_once(test_fmu)
     # for the elastic and gravitational energies (and for the inputs' work) claimed feed-through
     # from b.x to the elastic energy, from a.x to gravity's, and so on, algebraic loops of a master
     # that no physics has.
-    fmu = test_fmu("energy_ports")
-    variables = read_model_description(str(fmu)).modelVariables
-    inputs = [v.name for v in variables if v.causality == "input"]
     position = {p: [f"{p}.{c}" for c in "xyz"] for p in "abcd"}
     velocity = [f"{p}.v{c}" for p in "abcd" for c in "xyz"]
     gravity = ["a.y", "a.z", "b.y", "b.z"] + position["c"] + position["d"]
     elastic = position["a"] + position["d"]
     expected = {"energy.kinetic": velocity, "energy.elastic": elastic, "energy.gravity": gravity,
-                "energy.dissipated": [], "energy.input": sorted(set(velocity + elastic + gravity), key=inputs.index)}
-    with zipfile.ZipFile(fmu) as archive:
-        xml = archive.read("modelDescription.xml").decode("utf-8")
-    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
-    listed = {}
-    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
-        indices = [int(k) for k in dependencies.split()]
-        assert indices == sorted(set(indices)), (index, indices)
-        name = variables[int(index) - 1].name
-        if name.startswith("energy."):
-            listed[name] = [variables[k - 1].name for k in indices]
-    assert listed == {name: sorted(names, key=inputs.index) for name, names in expected.items()}
+                "energy.dissipated": [], "energy.input": velocity + elastic + gravity}
     # At the packaged parameters (kd, fx and gy 0) and with them set (the dependencies they open
-    # then real), at a state where every port is displaced and moving: setting an input that is
-    # not listed leaves the energy as it was, to the bit, and its directional derivative is 0;
-    # every listed input changes the energy at once, and its derivative is not 0, in at least one
-    # of the two (all of them in the second). 0.37 m or m/s moves each energy by far more than
-    # its round-off.
+    # then real), at a state where every port is displaced and moving.
     moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (2.1, -0.1, 0.2, -0.1, 0.2, 0.3),
              "c": (3.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (3.9, -0.2, 0.3, -0.3, 0.1, 0.2)}
-    real = {name: set() for name in expected}
-    for start_values in ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}):
-        inst = Instance(fmu).start(start_values=start_values)
-        try:
-            s, vr = inst.slave, inst.vr
-            for port, values in moved.items():
-                s.setReal([vr[f"{port}.{c}"] for c in ("x", "y", "z", "vx", "vy", "vz")], list(values))
-            s.doStep(0.0, 0.01)
-            for name in expected:
-                for known in inputs:
-                    before = s.getReal([vr[name]])[0]
-                    d = s.getDirectionalDerivative([vr[name]], [vr[known]], [1.0])[0]
-                    value = s.getReal([vr[known]])[0]
-                    s.setReal([vr[known]], [value + 0.37])
-                    after = s.getReal([vr[name]])[0]
-                    s.setReal([vr[known]], [value])
-                    if known in expected[name]:
-                        if after != before and d != 0.0:
-                            real[name].add(known)
-                        else:
-                            assert not start_values, (name, known, before, after, d)
-                    else:
-                        assert after == before and d == 0.0, (name, known, before, after, d)
-        finally:
-            inst.free()
-    assert real == {name: set(names) for name, names in expected.items()}
-
-
-def check_force_dependencies(fmu, expected, moved, parameter_sets):
-    """The ModelStructure lists exactly expected[port][c], the inputs port.f{c} of each motion port
-    depends on at once, in ascending order, each once; at the state `moved` (each port's x, y, z,
-    vx, vy, vz) with each of parameter_sets, setting an input that is not listed leaves the force
-    as it was, to the bit, with a directional derivative of exactly 0, and every listed input
-    changes the force at once, with a derivative other than 0, for at least one of them."""
-    variables = read_model_description(str(fmu)).modelVariables
-    inputs = [v.name for v in variables if v.causality == "input"]
-    with zipfile.ZipFile(fmu) as archive:
-        xml = archive.read("modelDescription.xml").decode("utf-8")
-    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
-    listed = {}
-    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
-        indices = [int(k) for k in dependencies.split()]
-        assert indices == sorted(set(indices)), (index, indices)
-        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
-    forces = {f"{port}.f{c}": sorted(names, key=inputs.index)
-              for port, by_component in expected.items() for c, names in zip("xyz", by_component)}
-    assert {name: listed[name] for name in forces} == forces
-    real = {name: set() for name in forces}
-    for start_values in parameter_sets:
-        inst = Instance(fmu).start(start_values=start_values)
-        try:
-            s, vr = inst.slave, inst.vr
-            for port, values in moved.items():
-                s.setReal([vr[f"{port}.{c}"] for c in ("x", "y", "z", "vx", "vy", "vz")], list(values))
-            s.doStep(0.0, 0.01)
-            for name in forces:
-                for known in inputs:
-                    before = s.getReal([vr[name]])[0]
-                    d = s.getDirectionalDerivative([vr[name]], [vr[known]], [1.0])[0]
-                    value = s.getReal([vr[known]])[0]
-                    s.setReal([vr[known]], [value + 0.37])
-                    after = s.getReal([vr[name]])[0]
-                    s.setReal([vr[known]], [value])
-                    if known in forces[name]:
-                        if after != before and d != 0.0:
-                            real[name].add(known)
-                    else:
-                        assert after == before and d == 0.0, (name, known, before, after, d)
-        finally:
-            inst.free()
-    assert real == {name: set(names) for name, names in forces.items()}
+    check_exact_dependencies(test_fmu("energy_ports"), expected, moved, ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}))
 
 
 def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(test_fmu):
@@ -1868,6 +1825,9 @@ def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(t
     position = {p: [f"{p}.{c}" for c in "xyz"] for p in "abcdefg"}
     velocity = {p: [f"{p}.v{c}" for c in "xyz"] for p in "abcdefg"}
 
+    def by_force(lists):  # port: the lists of its fx, fy, fz
+        return {f"{port}.f{c}": names for port, by_component in lists.items() for c, names in zip("xyz", by_component)}
+
     def own_velocity(port, extra=()):
         return [[*extra, v] for v in velocity[port]]
 
@@ -1881,12 +1841,12 @@ def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(t
              "c": (4.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (5.1, -0.2, 0.3, -0.3, 0.1, 0.2),
              "e": (5.9, 0.1, -0.2, 0.2, -0.3, 0.1), "f": (8.1, 0.2, 0.1, 0.1, 0.3, -0.2),
              "g": (9.1, -0.3, 0.2, -0.2, 0.1, 0.3)}
-    check_force_dependencies(test_fmu("force_ports"), expected, moved,
+    check_exact_dependencies(test_fmu("force_ports"), by_force(expected), moved,
                              ({}, {"alpha": 0.5, "ks": 25.0, "kd": 0.4}))
     whole = {p: [position[p] + velocity[p]] * 3 for p in "abd"}
     moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (2.1, -0.1, 0.2, -0.1, 0.2, 0.3),
              "c": (3.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (3.9, -0.2, 0.3, -0.3, 0.1, 0.2)}
-    check_force_dependencies(test_fmu("energy_ports"), {**whole, "c": [[]] * 3}, moved,
+    check_exact_dependencies(test_fmu("energy_ports"), by_force({**whole, "c": [[]] * 3}), moved,
                              ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}))
 
 
