@@ -1809,6 +1809,11 @@ def test_the_energies_list_exactly_the_inputs_they_change_with_at_once(test_fmu)
     check_exact_dependencies(test_fmu("energy_ports"), expected, moved, ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}))
 
 
+def force_lists(lists):
+    """{port: [inputs of its fx, of its fy, of its fz]} as {"port.fx": inputs, ...}."""
+    return {f"{port}.f{c}": names for port, by_component in lists.items() for c, names in zip("xyz", by_component)}
+
+
 def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(test_fmu):
     # A motion port's force is m (g - alpha v) + F at its particle plus, for each spring there,
     # [ks (L - l0) + kd (u . dv)] u: a spring's stiffness makes it change with the positions of
@@ -1825,9 +1830,6 @@ def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(t
     position = {p: [f"{p}.{c}" for c in "xyz"] for p in "abcdefg"}
     velocity = {p: [f"{p}.v{c}" for c in "xyz"] for p in "abcdefg"}
 
-    def by_force(lists):  # port: the lists of its fx, fy, fz
-        return {f"{port}.f{c}": names for port, by_component in lists.items() for c, names in zip("xyz", by_component)}
-
     def own_velocity(port, extra=()):
         return [[*extra, v] for v in velocity[port]]
 
@@ -1841,13 +1843,36 @@ def test_a_motion_ports_force_lists_exactly_the_inputs_it_changes_with_at_once(t
              "c": (4.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (5.1, -0.2, 0.3, -0.3, 0.1, 0.2),
              "e": (5.9, 0.1, -0.2, 0.2, -0.3, 0.1), "f": (8.1, 0.2, 0.1, 0.1, 0.3, -0.2),
              "g": (9.1, -0.3, 0.2, -0.2, 0.1, 0.3)}
-    check_exact_dependencies(test_fmu("force_ports"), by_force(expected), moved,
+    check_exact_dependencies(test_fmu("force_ports"), force_lists(expected), moved,
                              ({}, {"alpha": 0.5, "ks": 25.0, "kd": 0.4}))
     whole = {p: [position[p] + velocity[p]] * 3 for p in "abd"}
     moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (2.1, -0.1, 0.2, -0.1, 0.2, 0.3),
              "c": (3.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (3.9, -0.2, 0.3, -0.3, 0.1, 0.2)}
-    check_exact_dependencies(test_fmu("energy_ports"), by_force({**whole, "c": [[]] * 3}), moved,
+    check_exact_dependencies(test_fmu("energy_ports"), force_lists({**whole, "c": [[]] * 3}), moved,
                              ({}, {"kd": 30.0, "fx": 1.5, "gy": 2.0}))
+
+
+def test_a_motion_ports_force_lists_the_terms_of_every_spring_at_it_together(test_fmu):
+    # merged_ports: motion ports a and b joined by three springs, a spring of 40 N/m, a damper of
+    # 0.3 N s/m and a spring of strain stiffness 20 N, in that order, each spring with one of the
+    # two forces: a's and b's forces change with the positions and velocities of both, the
+    # damper's terms merged with the others' whether the port is the springs' first end (a) or
+    # their second (b), and whichever spring comes last; c at a spring of strain stiffness E alone
+    # and d at a damper of section damping cs alone (E and cs tunable parameters at 0, the forms
+    # per strain and per section): c's force changes with its position, d's with its position and
+    # velocity; mass damping, the number 0.05 1/s, adds each port's own velocity along the force.
+    # Keeping a port's own terms or a neighbour's from the last spring alone, or from the first,
+    # left out the damper's velocities; keeping those common to the springs left out everything.
+    position = {p: [f"{p}.{c}" for c in "xyz"] for p in "abcd"}
+    velocity = {p: [f"{p}.v{c}" for c in "xyz"] for p in "abcd"}
+    pair = position["a"] + velocity["a"] + position["b"] + velocity["b"]
+    expected = {"a": [pair] * 3, "b": [pair] * 3, "c": [position["c"] + [v] for v in velocity["c"]],
+                "d": [position["d"] + velocity["d"]] * 3}
+    # Every port displaced and moving, off the line of the springs, so that no derivative vanishes
+    # by symmetry; 0.37 m or m/s moves each force by far more than its round-off.
+    moved = {"a": (0.1, 0.2, -0.1, 0.3, -0.2, 0.1), "b": (1.1, -0.1, 0.2, -0.1, 0.2, 0.3),
+             "c": (3.1, 0.3, 0.1, 0.2, 0.1, -0.3), "d": (6.1, -0.2, 0.3, -0.3, 0.1, 0.2)}
+    check_exact_dependencies(test_fmu("merged_ports"), force_lists(expected), moved, ({}, {"E": 25.0, "cs": 40.0}))
 
 
 def test_every_variable_has_the_unit_of_its_quantity(test_fmu):
