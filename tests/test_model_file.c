@@ -615,6 +615,25 @@ static int test_potential_terms(void)
 	}
 	sm_document_potential_terms(NULL, terms);  // nothing to fill
 	sm_document_destroy(doc);
+	// Gravity (0, 0, 0), the numbers: no weight term; a load's potential along the axes of its
+	// components, a parameter at 0 along y included, none along x, which no load has.
+	const char* zero_gravity =
+	    "{\"springmass\": 1, \"name\": \"t\", \"parameters\": {\"fy\": 0}, \"gravity\": [0, 0, 0],"
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]}, {\"name\": \"b\", \"position\": [1, 0, 0]},"
+	    "   {\"name\": \"c\", \"position\": [2, 0, 0]}],"
+	    " \"loads\": [{\"particle\": \"a\", \"force\": [0, 0, 1.5]}, {\"particle\": \"b\", \"force\": [0, \"fy\", 0]}]}";
+	doc = parse_valid(zero_gravity, &err);
+	ENSURE(doc != NULL);
+	ENSURE(sm_document_particle_count(doc) == 3);
+	sm_document_potential_terms(doc, terms);
+	const uint8_t loaded[] = {SM_POTENTIAL_CONSTANT_Z, SM_POTENTIAL_CONSTANT_Y, 0};
+	for (int i = 0; i < 3; i++) {
+		if (terms[i] != loaded[i])
+			printf("  zero gravity, particle %d: terms %u, expected %u\n", i, (unsigned)terms[i],
+			       (unsigned)loaded[i]);
+		ENSURE(terms[i] == loaded[i]);
+	}
+	sm_document_destroy(doc);
 	return 0;
 }
 
