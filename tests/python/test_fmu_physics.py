@@ -1637,16 +1637,7 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
     expected.update({f"tip.{c}": [] for c in ("x", "y", "z", "vx", "vy", "vz")})
     expected.update({"energy.kinetic": velocity, "energy.elastic": position, "energy.gravity": [],
                      "energy.dissipated": [], "energy.input": position + velocity})
-    with zipfile.ZipFile(fmu) as archive:
-        xml = archive.read("modelDescription.xml").decode("utf-8")
-    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
-    listed = {}
-    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
-        output = variables[int(index) - 1]
-        assert output.causality == "output", (index, output.name)
-        names = [variables[int(k) - 1].name for k in dependencies.split()]
-        assert set(names) <= inputs, (output.name, names)
-        listed[output.name] = names
+    listed = listed_dependencies(fmu)
     assert listed == expected
     # The analytic derivatives at a moving, displaced anchor with spring damping d = 0.3 N s/m:
     # every input an output changes with is among its dependencies.
@@ -1664,15 +1655,11 @@ def test_model_structure_lists_the_inputs_each_output_depends_on(test_fmu):
         inst.free()
 
 
-def check_hooks_dependencies(fmu):
-    """The ModelStructure of joined_hooks or crossed_hooks (motion ports a, b and c; springs join a
-    to b and a to c, not b to c): every output's dependencies in ascending order, each once, and a
-    port's force listing its own six inputs and those of the ports a spring joins it to, every
-    spring having stiffness and damping (a's force: a, b and c; b's: a and b; c's: a and c). Returns (each port's inputs, each port's expected list)."""
+def listed_dependencies(fmu):
+    """{output name: [input names]}, the Outputs' dependencies in the modelDescription.xml of fmu as
+    written, after checking that each list is in ascending order, names each index once, and names
+    inputs only."""
     variables = read_model_description(str(fmu)).modelVariables
-    motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
-    expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
-                "c": motions["a"] + motions["c"]}
     with zipfile.ZipFile(fmu) as archive:
         xml = archive.read("modelDescription.xml").decode("utf-8")
     outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
@@ -1680,7 +1667,22 @@ def check_hooks_dependencies(fmu):
     for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
         indices = [int(k) for k in dependencies.split()]
         assert indices == sorted(set(indices)), (index, indices)
-        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
+        output = variables[int(index) - 1]
+        assert output.causality == "output", (index, output.name)
+        assert all(variables[k - 1].causality == "input" for k in indices), (output.name, indices)
+        listed[output.name] = [variables[k - 1].name for k in indices]
+    return listed
+
+
+def check_hooks_dependencies(fmu):
+    """The ModelStructure of joined_hooks or crossed_hooks (motion ports a, b and c; springs join a
+    to b and a to c, not b to c): every output's dependencies in ascending order, each once, and a
+    port's force listing its own six inputs and those of the ports a spring joins it to, every
+    spring having stiffness and damping (a's force: a, b and c; b's: a and b; c's: a and c). Returns (each port's inputs, each port's expected list)."""
+    motions = {port: [f"{port}.{c}" for c in ("x", "y", "z", "vx", "vy", "vz")] for port in "abc"}
+    expected = {"a": motions["a"] + motions["b"] + motions["c"], "b": motions["a"] + motions["b"],
+                "c": motions["a"] + motions["c"]}
+    listed = listed_dependencies(fmu)
     for port in "abc":
         for c in "xyz":
             assert listed[f"{port}.f{c}"] == expected[port], (port, c, listed[f"{port}.f{c}"])
@@ -1747,14 +1749,7 @@ def check_exact_dependencies(fmu, expected, moved, parameter_sets):
     each output by far more than its round-off."""
     variables = read_model_description(str(fmu)).modelVariables
     inputs = [v.name for v in variables if v.causality == "input"]
-    with zipfile.ZipFile(fmu) as archive:
-        xml = archive.read("modelDescription.xml").decode("utf-8")
-    outputs = re.search(r"<Outputs>(.*?)</Outputs>", xml, re.S).group(1)
-    listed = {}
-    for index, dependencies in re.findall(r'<Unknown index="(\d+)" dependencies="([\d ]*)"/>', outputs):
-        indices = [int(k) for k in dependencies.split()]
-        assert indices == sorted(set(indices)), (index, indices)
-        listed[variables[int(index) - 1].name] = [variables[k - 1].name for k in indices]
+    listed = listed_dependencies(fmu)
     wanted = {name: sorted(set(names), key=inputs.index) for name, names in expected.items()}
     assert {name: listed[name] for name in wanted} == wanted
     real = {name: set() for name in wanted}
