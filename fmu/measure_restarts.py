@@ -12,7 +12,6 @@ second, the internal steps and right-hand-side evaluations (from the logSolver m
 median wall time of several runs, and the ratios.
 """
 import argparse
-import re
 import statistics
 import sys
 import time
@@ -20,8 +19,6 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "python"))
 from fmu_helpers import Instance  # noqa: E402
-
-STEP_LINE = re.compile(r"(\d+) internal steps, (\d+) right-hand sides")
 
 
 def run(fmu, step, stop, restart, stop_time_defined):
@@ -37,12 +34,8 @@ def run(fmu, step, stop, restart, stop_time_defined):
             inst.slave.freeFMUstate(state)
         inst.slave.doStep(k * step, step)
     wall = time.perf_counter() - begin
-    steps = rhs = 0
-    for _, category, text in inst.messages:
-        m = STEP_LINE.search(text)
-        if category == "logSolver" and m:
-            steps += int(m.group(1))
-            rhs += int(m.group(2))
+    reports = inst.solver_reports()
+    steps, rhs = sum(r.steps for r in reports), sum(r.rhs for r in reports)
     inst.free()
     return steps / stop, rhs / stop, wall / stop
 

@@ -20,7 +20,6 @@ runs with and without detection gave the same outputs to the bit, and for severa
 """
 import argparse
 import math
-import re
 import statistics
 import sys
 from pathlib import Path
@@ -30,7 +29,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "python"))
 from fmu_helpers import Instance  # noqa: E402
 
-STEP_LINE = re.compile(r"(\d+) internal steps, \d+ right-hand sides, \d+ Jacobians, (\d+) restarts")
 TIGHT = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
 
 
@@ -69,12 +67,8 @@ def run(fmu, points, args, settings, restore_at):
             s.doStep(t, end - t)
             outputs.append(inst.get(*names) if len(names) > 1 else [inst.get(*names)])
             t = end
-        steps = restarts = 0
-        for _, category, text in inst.messages:
-            m = STEP_LINE.search(text)
-            if category == "logSolver" and m:
-                steps += int(m.group(1))
-                restarts += int(m.group(2))
+        reports = inst.solver_reports()
+        steps, restarts = sum(r.steps for r in reports), sum(r.restarts for r in reports)
         return steps, restarts, np.array(outputs)
     finally:
         inst.free()

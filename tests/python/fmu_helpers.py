@@ -1,4 +1,5 @@
 """Low-level access to an FMU with fmpy's FMU2Slave, with the log messages collected."""
+import collections
 import ctypes
 import html.parser
 import pathlib
@@ -15,6 +16,12 @@ _libc = ctypes.CDLL(None)
 _libc.calloc.restype = ctypes.c_void_p
 _libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
 _libc.free.argtypes = [ctypes.c_void_p]
+
+
+# What fmi2DoStep logs in the logSolver category: the internal steps, right-hand sides, Jacobian
+# evaluations and restarts of CVODE over the communication step.
+_SOLVER_LINE = re.compile(r"(\d+) internal steps, (\d+) right-hand sides, (\d+) Jacobians, (\d+) restarts")
+SolverReport = collections.namedtuple("SolverReport", "steps rhs jacobians restarts")
 
 
 class Instance:
@@ -41,6 +48,12 @@ class Instance:
 
     def log_text(self):
         return "\n".join(m[2] for m in self.messages)
+
+    def solver_reports(self):
+        """The solver statistics of each communication step so far, from the logSolver messages
+        (the category must be on): [SolverReport(steps, rhs, jacobians, restarts)]."""
+        return [SolverReport(*map(int, m.groups())) for _, category, text in self.messages
+                if category == "logSolver" and (m := _SOLVER_LINE.search(text))]
 
     def start(self, start_values=None, start_time=0.0, stop_time=None):
         s = self.slave

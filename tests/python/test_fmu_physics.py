@@ -183,9 +183,7 @@ def test_force_step_changes_result_from_that_point(test_fmu, stop_time):
 
 def solver_steps(inst):
     """Internal steps of every communication step so far, from the logSolver messages."""
-    pattern = re.compile(r"(\d+) internal steps")
-    return [int(pattern.search(text).group(1)) for _, category, text in inst.messages
-            if category == "logSolver" and pattern.search(text)]
+    return [r.steps for r in inst.solver_reports()]
 
 
 def logged_driven_oscillator(test_fmu, stop_time):
@@ -448,8 +446,7 @@ def test_stability_limit_detection_is_a_parameter_and_either_way_the_rope_settle
             assert s.getBoolean(vr) == [detection]
             s.setDebugLogging(True, ["logSolver"])
             s.doStep(0.0, 100.0)
-            steps[detection] = sum(int(re.search(r"(\d+) internal steps", m[2]).group(1))
-                                   for m in inst.messages if m[1] == "logSolver")
+            steps[detection] = sum(r.steps for r in inst.solver_reports())
             for probe, particle in (("tip", 10), ("middle", 5)):
                 position = inst.get(f"{probe}.x", f"{probe}.y", f"{probe}.z")
                 assert np.max(np.abs(np.array(position) - rest[particle])) <= 1e-10, (detection, probe)
@@ -479,8 +476,7 @@ def test_stability_limit_detection_set_after_an_output_was_read_takes_effect(pac
             s.exitInitializationMode()
             s.setDebugLogging(True, ["logSolver"])
             s.doStep(0.0, 2.0)
-            steps = sum(int(re.search(r"(\d+) internal steps", m[2]).group(1))
-                        for m in inst.messages if m[1] == "logSolver")
+            steps = sum(r.steps for r in inst.solver_reports())
             runs[case] = (steps, inst.get("tip.x", "tip.z", "middle.x", "middle.z"))
         finally:
             inst.free()
