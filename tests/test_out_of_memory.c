@@ -1303,6 +1303,59 @@ static int test_input_signals(void)
 	return result;
 }
 
+// Input files with a mistake (tools/cli_csv.c): each is refused whatever allocation fails, with
+// its message, or with none when memory ran out, and never taken for signals. (Caught: a message
+// that could not be allocated passed for no mistake at all, so that an empty file, or one without
+// rows, gave signals of no row, which the run then read through NULL, and a file with a bad row
+// gave the rows before it.)
+typedef struct refused_inputs_case {
+	const sm_document* doc;
+	const char* label;
+	const char* text;
+} refused_inputs_case;
+
+static int refused_inputs_scenario(void* context)
+{
+	const refused_inputs_case* c = context;
+	char* problem = NULL;
+	cli_inputs* in = cli_inputs_parse(c->text, strlen(c->text), c->doc, &problem);
+	if (in != NULL) {
+		printf("  input signals, %s: taken for signals\n", c->label);
+		cli_inputs_destroy(in);
+		return 1;
+	}
+	const bool messaged = problem != NULL;
+	free(problem);
+	if (!messaged && !oom_.reached) {
+		printf("  input signals, %s: refused without a message and without an injected failure\n", c->label);
+		return 1;
+	}
+	return 0;
+}
+
+static int test_refused_input_signals(void)
+{
+	sm_error err;
+	sm_document* doc = sm_document_parse(model_ported, strlen(model_ported), "oom_inputs.json", &err);
+	ENSURE(doc != NULL);
+	static const char* const files[][2] = {
+	    {"an empty file", ""},
+	    {"no rows", "time,tip.fx\n"},
+	    {"an unknown column", "time,tip.fx,nowhere.x\n0,0,0\n"},
+	    {"a bad number", "time,tip.fx\n0,0\n0.01,1\n0.02,one\n"},
+	    {"time going back", "time,tip.fx\n0,0\n0.02,1\n0.01,0\n"},
+	};
+	int result = 0;
+	for (size_t k = 0; k < sizeof files / sizeof files[0] && result == 0; k++) {
+		refused_inputs_case c = {doc, files[k][0], files[k][1]};
+		char label[64];
+		snprintf(label, sizeof label, "input signals, %s", files[k][0]);
+		result = refused_inputs_scenario(&c) != 0 || inject_every_failure(label, refused_inputs_scenario, &c);
+	}
+	sm_document_destroy(doc);
+	return result;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Simulation: input excursions whose records cannot be allocated (lib/input_origins.c)
 // ---------------------------------------------------------------------------------------------
@@ -1678,6 +1731,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_analysis_sparse);
 	RUN_TEST(test_statics_continuation);
 	RUN_TEST(test_input_signals);
+	RUN_TEST(test_refused_input_signals);
 	RUN_TEST(test_input_excursions);
 #ifdef SPRINGMASS_OOM_FMU
 	RUN_TEST(test_fmu);

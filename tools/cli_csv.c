@@ -51,14 +51,15 @@ static const char* field_shown(reader* r)
 	return r->shown;
 }
 
-// A problem at `at` on the line that starts at place.start, line place.line.
-static char* problem_at(line_place place, size_t at, const char* format, ...)
+// A problem at `at` on the line that starts at place.start, line place.line; NULL, with
+// r->out_of_memory set, when its message cannot be allocated (a NULL problem is no problem).
+static char* problem_at(reader* r, line_place place, size_t at, const char* format, ...)
 #if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
+    __attribute__((format(printf, 4, 5)))
 #endif
     ;
 
-static char* problem_at(line_place place, size_t at, const char* format, ...)
+static char* problem_at(reader* r, line_place place, size_t at, const char* format, ...)
 {
 	char message[640];  // a field as field_shown shows it (365 bytes at most), a variable and the rule
 	va_list args;
@@ -68,6 +69,8 @@ static char* problem_at(line_place place, size_t at, const char* format, ...)
 	char* text = malloc(strlen(message) + 48);
 	if (text != NULL)
 		sprintf(text, "%zu:%zu: %s", place.line, at - place.start + 1, message);
+	else
+		r->out_of_memory = true;
 	return text;
 }
 
@@ -108,7 +111,7 @@ static char* read_field(reader* r)
 		const size_t open = r->at++;
 		for (;;) {
 			if (r->at >= r->length)
-				return problem_at(r->field_place, open, "a quoted field is not closed");
+				return problem_at(r, r->field_place, open, "a quoted field is not closed");
 			const char c = r->text[r->at++];
 			if (c == '"' && (r->at >= r->length || r->text[r->at] != '"'))
 				break;
@@ -122,12 +125,12 @@ static char* read_field(reader* r)
 				return NULL;
 		}
 		if (!at_line_end(r) && r->text[r->at] != ',')
-			return problem_at(r->here, r->at, "text after the closing quote of a field");
+			return problem_at(r, r->here, r->at, "text after the closing quote of a field");
 		return NULL;
 	}
 	while (!at_line_end(r) && r->text[r->at] != ',') {
 		if (r->text[r->at] == '\r')
-			return problem_at(r->here, r->at,
+			return problem_at(r, r->here, r->at,
 			                  "a carriage return without a line feed: lines end in LF or CRLF");
 		if (!field_append(r, n++, r->text[r->at++]))
 			return NULL;
@@ -193,15 +196,16 @@ static char* read_header(reader* r, const cli_csv_form* form, bool* named, cli_c
 		if (problem != NULL || r->out_of_memory)
 			return problem;
 		if (csv->columns == 0 && strcmp(r->field, "time") != 0)
-			return problem_at(r->field_place, start, "the first column is %s, not \"time\"", field_shown(r));
+			return problem_at(r, r->field_place, start, "the first column is %s, not \"time\"",
+			                  field_shown(r));
 		if (csv->columns > 0) {
 			int32_t id = -1;
 			cli_csv_values values = CLI_CSV_REAL;
 			const char* refused = form->name_column(form->context, r->field, &id, &values);
 			if (refused != NULL)
-				return problem_at(r->field_place, start, "%s %s", field_shown(r), refused);
+				return problem_at(r, r->field_place, start, "%s %s", field_shown(r), refused);
 			if (named[id])
-				return problem_at(r->field_place, start, "%s is named twice", field_shown(r));
+				return problem_at(r, r->field_place, start, "%s is named twice", field_shown(r));
 			named[id] = true;
 			csv->id[csv->columns] = id;
 			csv->values_of[csv->columns] = values;
@@ -245,7 +249,7 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 	csv->rows = 0;
 	while (r->at < r->length) {
 		if (at_line_end(r))
-			return problem_at(r->here, r->at, "an empty line: %s has none", form->what);
+			return problem_at(r, r->here, r->at, "an empty line: %s has none", form->what);
 		for (int32_t c = 0; c < csv->columns; c++) {
 			const size_t start = r->at;
 			char* problem = read_field(r);
@@ -253,16 +257,18 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				return problem;
 			double value;
 			if (r->quoted)
-				return problem_at(r->field_place, start, "%s is quoted: %s writes its numbers without quotes",
-				                  field_shown(r), form->what);
+				return problem_at(r, r->field_place, start,
+				                  "%s is quoted: %s writes its numbers without quotes", field_shown(r),
+				                  form->what);
 			if (!decimal_number(r->field, &value))
-				return problem_at(r->field_place, start, "%s is not a finite decimal number", field_shown(r));
+				return problem_at(r, r->field_place, start, "%s is not a finite decimal number",
+				                  field_shown(r));
 			if (c > 0 && csv->values_of[c] == CLI_CSV_INTEGER &&
 			    !(value == floor(value) && value >= INT32_MIN && value <= INT32_MAX))
-				return problem_at(r->field_place, start, "%s is an Integer variable: %s is no such value",
+				return problem_at(r, r->field_place, start, "%s is an Integer variable: %s is no such value",
 				                  names[c], field_shown(r));
 			if (c > 0 && csv->values_of[c] == CLI_CSV_BOOLEAN && value != 0.0 && value != 1.0)
-				return problem_at(r->field_place, start, "%s is a Boolean variable: %s is neither 0 nor 1",
+				return problem_at(r, r->field_place, start, "%s is a Boolean variable: %s is neither 0 nor 1",
 				                  names[c], field_shown(r));
 			// The times as the file gives them (0.1, not 0.10000000000000001): the fewest digits that
 			// read back to them.
@@ -270,14 +276,14 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 				char time[SM_NUMBER_TEXT_CAPACITY], previous[SM_NUMBER_TEXT_CAPACITY];
 				sm_format_number(value, time);
 				sm_format_number(previous_time, previous);
-				return problem_at(r->field_place, start, "time %s s is before the previous row's %s s", time,
-				                  previous);
+				return problem_at(r, r->field_place, start, "time %s s is before the previous row's %s s",
+				                  time, previous);
 			}
 			if (c == 0)
 				previous_time = value;
 			const bool last = c == csv->columns - 1;
 			if (at_line_end(r) != last)
-				return problem_at(r->here, r->at, "%s: the header names %d columns",
+				return problem_at(r, r->here, r->at, "%s: the header names %d columns",
 				                  last ? "more fields than columns" : "fewer fields than columns",
 				                  (int)csv->columns);
 			if (!last)
@@ -289,7 +295,7 @@ static char* read_rows(reader* r, const cli_csv_form* form, cli_csv* csv, char* 
 		next_line(r);
 	}
 	if (csv->rows == 0)
-		return problem_at(r->here, r->at, "no rows after the header");
+		return problem_at(r, r->here, r->at, "no rows after the header");
 	return NULL;
 }
 
@@ -301,25 +307,34 @@ void cli_csv_free(cli_csv* csv)
 	memset(csv, 0, sizeof *csv);
 }
 
+// What is wrong with the text as a whole: empty, not text, or with a byte-order mark.
+static char* whole_text_problem(reader* r)
+{
+	if (r->length == 0)
+		return problem_at(r, r->here, 0, "an empty file");
+	const char* nul = memchr(r->text, '\0', r->length);
+	if (nul != NULL) {
+		for (const char* c = r->text; c < nul; c++)
+			if (*c == '\n') {
+				r->here.line++;
+				r->here.start = (size_t)(c + 1 - r->text);
+			}
+		return problem_at(r, r->here, (size_t)(nul - r->text), "a NUL byte: not a text file");
+	}
+	if (r->length >= 3 && memcmp(r->text, "\xEF\xBB\xBF", 3) == 0)
+		return problem_at(r, r->here, 0, "a byte-order mark before the header: write the file without one");
+	return NULL;
+}
+
 char* cli_csv_read(const char* text, size_t length, const cli_csv_form* form, cli_csv* csv,
                    bool* out_of_memory)
 {
 	reader r = {.text = text, .length = length, .here = {1, 0}};
 	memset(csv, 0, sizeof *csv);
-	*out_of_memory = false;
-	if (length == 0)
-		return problem_at(r.here, 0, "an empty file");
-	const char* nul = memchr(text, '\0', length);
-	if (nul != NULL) {
-		for (const char* c = text; c < nul; c++)
-			if (*c == '\n') {
-				r.here.line++;
-				r.here.start = (size_t)(c + 1 - text);
-			}
-		return problem_at(r.here, (size_t)(nul - text), "a NUL byte: not a text file");
-	}
-	if (length >= 3 && memcmp(text, "\xEF\xBB\xBF", 3) == 0)
-		return problem_at(r.here, 0, "a byte-order mark before the header: write the file without one");
+	char* refused = whole_text_problem(&r);
+	*out_of_memory = r.out_of_memory;
+	if (refused != NULL || r.out_of_memory)
+		return refused;
 	// At most one column per id, and time.
 	const size_t most = (size_t)form->id_count + 1;
 	bool* named = calloc(most, sizeof *named);
