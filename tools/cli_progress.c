@@ -71,16 +71,18 @@ static bool on_statics_iteration(void* context, int32_t iterations, double resid
 	return true;
 }
 
-sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, sm_statics_def* def,
+sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, const sm_statics_def* def,
                             double* x, double* reactions, sm_statics_result* res, sm_error* err)
 {
+	// The callback goes into a copy: the caller's definition never points at this frame.
+	sm_statics_def shown = *def;
 	statics_progress progress = {.label = label, .max_iterations = def->max_iterations};
 	if (!quiet) {
-		def->on_iteration = on_statics_iteration;
-		def->on_iteration_context = &progress;
+		shown.on_iteration = on_statics_iteration;
+		shown.on_iteration_context = &progress;
 	}
 	cli_progress_start(&progress.line);
-	const sm_status st = sm_statics_solve(model, def, x, reactions, res, err);
+	const sm_status st = sm_statics_solve(model, &shown, x, reactions, res, err);
 	if (!quiet)
 		show_statics_progress(&progress, res->iterations, res->residual, true);
 	cli_progress_end(&progress.line);
@@ -116,14 +118,15 @@ static bool on_lanczos_cycle(void* context, int64_t steps, int32_t converged, in
 	return true;
 }
 
-sm_status cli_modes_compute(const char* label, const sm_model* model, sm_modes_def* def, sm_modes* modes,
-                            sm_error* err)
+sm_status cli_modes_compute(const char* label, const sm_model* model, const sm_modes_def* def,
+                            sm_modes* modes, sm_error* err)
 {
+	sm_modes_def shown = *def;  // as in cli_statics_solve
 	modes_progress progress = {.label = label};
-	def->on_iteration = on_lanczos_cycle;
-	def->on_iteration_context = &progress;
+	shown.on_iteration = on_lanczos_cycle;
+	shown.on_iteration_context = &progress;
 	cli_progress_start(&progress.line);
-	const sm_status st = sm_modes_compute(model, def, modes, err);
+	const sm_status st = sm_modes_compute(model, &shown, modes, err);
 	show_modes_progress(&progress, true);
 	cli_progress_end(&progress.line);
 	return st;

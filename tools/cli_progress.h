@@ -33,12 +33,12 @@ void cli_progress_show(cli_progress* p, const char* line);
 void cli_progress_end(const cli_progress* p);
 
 /// sm_statics_solve with the progress line of a static equilibrium (springmass statics, modes
-/// --at-equilibrium), unless `quiet`: a line after Newton iterations (def->on_iteration, which
-/// this sets) and the last one after the solve, each starting with `label`.
-sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, sm_statics_def* def,
+/// --at-equilibrium), unless `quiet`: a line after Newton iterations (through on_iteration, set in
+/// a copy of `def`) and the last one after the solve, each starting with `label`.
+sm_status cli_statics_solve(const char* label, bool quiet, const sm_model* model, const sm_statics_def* def,
                             double* x, double* reactions, sm_statics_result* res, sm_error* err);
 
 /// sm_modes_compute with a progress line of its Lanczos iteration (sparse path), each line
-/// starting with `label`, and the last one after it.
-sm_status cli_modes_compute(const char* label, const sm_model* model, sm_modes_def* def, sm_modes* modes,
-                            sm_error* err);
+/// starting with `label`, and the last one after it (through on_iteration, set in a copy of `def`).
+sm_status cli_modes_compute(const char* label, const sm_model* model, const sm_modes_def* def,
+                            sm_modes* modes, sm_error* err);
