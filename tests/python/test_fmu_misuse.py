@@ -40,7 +40,7 @@ def test_wrong_guid_is_refused_with_a_message(test_fmu):
             inst.slave.instantiate(callbacks=inst.callbacks)
         assert "does not match the model file" in inst.log_text()
     finally:
-        inst.slave.freeLibrary()
+        inst.free()
 
 
 def test_changed_model_file_is_refused(test_fmu, tmp_path):

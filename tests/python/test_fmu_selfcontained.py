@@ -71,7 +71,7 @@ def test_libraries_resolve_from_the_fmu(test_fmu, tmp_path, library_path):
 
 
 @pytest.mark.skipif(SANITIZED, reason="an instrumented FMU needs the sanitizer runtimes of the machine")
-def test_the_fmu_starts_no_threads_and_is_unloaded_whole(package):
+def test_the_fmu_starts_no_threads_and_is_unloaded_whole(package, tmp_path):
     """The cholmod solver on 6144 unknowns factorises supernodally, whose loops CHOLMOD would run in
     an OpenMP team of 4 threads that outlived the instance: fmpy unloads the FMU after
     fmi2FreeInstance, and with it went libgomp, under those idle threads, which crashed the
@@ -84,7 +84,7 @@ def test_the_fmu_starts_no_threads_and_is_unloaded_whole(package):
               "from fmpy import extract, read_model_description\n"
               "from fmpy.fmi2 import FMU2Slave\n"
               "md = read_model_description(sys.argv[1])\n"
-              "s = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1]),\n"
+              "s = FMU2Slave(guid=md.guid, unzipDirectory=extract(sys.argv[1], sys.argv[2]),\n"
               "              modelIdentifier=md.coSimulation.modelIdentifier, instanceName='x')\n"
               "vr = {v.name: v.valueReference for v in md.modelVariables}\n"
               "threads = lambda: len(os.listdir('/proc/self/task'))\n"
@@ -99,7 +99,8 @@ def test_the_fmu_starts_no_threads_and_is_unloaded_whole(package):
               "      'binary', md.coSimulation.modelIdentifier + '.so' in maps)\n")
     env = dict(os.environ, OMP_THREAD_LIMIT="4")
     env.pop("LD_LIBRARY_PATH", None)
-    out = subprocess.run([sys.executable, "-c", script, str(fmu)], env=env, capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-c", script, str(fmu), str(tmp_path / "unzipped")], env=env,
+                         capture_output=True, text=True)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.split() == ["started", "0", "libgomp", "False", "binary", "False"], out.stdout
 
