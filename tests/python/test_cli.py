@@ -1087,7 +1087,7 @@ def test_modes_show_the_progress_of_a_long_lanczos_iteration():
                        r"([0-9.]+) s", out.stderr)
     if wall > 1.5:
         step, converged, sought, seconds = lines[-1]
-        assert int(step) > 0 and converged == sought == "11" and 1.0 < float(seconds) <= wall + 0.05  # printed to 0.1 s
+        assert int(step) > 0 and converged == sought == "11" and 1.0 <= float(seconds) <= wall + 0.05  # printed to 0.1 s: 1.04 s is 1.0
     elif wall < 0.9:
         assert lines == []
 
