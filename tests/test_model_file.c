@@ -1284,7 +1284,9 @@ static void append(text* t, const char* format, ...)
 	for (;;) {
 		va_list args;
 		va_start(args, format);
-		const int n = vsnprintf(t->data + t->length, t->capacity - t->length, format, args);
+		// An empty text has no buffer yet: NULL + 0 is undefined, so nothing is formatted into it.
+		const int n =
+		    t->data != NULL ? vsnprintf(t->data + t->length, t->capacity - t->length, format, args) : -1;
 		va_end(args);
 		if (n >= 0 && (size_t)n < t->capacity - t->length) {
 			t->length += (size_t)n;
