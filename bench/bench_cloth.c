@@ -154,6 +154,11 @@ int main(int argc, char** argv)
 		return 1;
 	const char* every = getenv("RESTART_EVERY");
 	const double interval = every ? atof(every) : 0.0;
+	// Its count of advances, t_end / interval, must be an int.
+	if (interval < 0.0 || (interval > 0.0 && !(t_end / interval < 1e9))) {
+		fprintf(stderr, "bench_cloth: RESTART_EVERY=%s: give a time step above T_END / 1e9\n", every);
+		return 2;
+	}
 	for (int pass = 0; pass < (interval > 0.0 ? 2 : 1); pass++) {
 		run_result r;
 		if (measure(model, solver, repeats, t_end, interval, pass == 1, &r) != 0) {
