@@ -590,8 +590,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 {
 	if (modes == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: result pointer must not be NULL");
-	memset(modes, 0, sizeof *modes);
-	modes->next_omega_squared = NAN;
+	memset(modes, 0, sizeof *modes);  // zeroed on every error (sm_modes_release zeroes the later ones)
 	if (model == NULL)
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "modes: model must not be NULL");
 	const sm_modes_def d = def != NULL ? *def : sm_default_modes_def();
@@ -610,6 +609,7 @@ sm_status sm_modes_compute(const sm_model* model, const sm_modes_def* def, sm_mo
 	if (!(d.residual_tolerance > 0.0 && d.residual_tolerance < 1.0))
 		return sm_error_set(err, SM_ERROR_INVALID_ARGUMENT,
 		                    "modes: residual_tolerance must lie in (0, 1), got %g", d.residual_tolerance);
+	modes->next_omega_squared = NAN;  // every mode kept until a solver says otherwise
 
 	const int32_t n = sm_model_particle_count(model);
 	const size_t n3 = 3 * (size_t)n;
