@@ -32,7 +32,9 @@ SM_API const char* sm_version(void);
 /// specific message. Functions that return a pointer return NULL on failure (those that take an
 /// sm_error say why; sm_model_clone, sm_sparse_jacobian_create and sm_spring_jacobians_create
 /// fail only for a NULL argument or a lack of memory); evaluation functions that return void or
-/// a value do nothing, or return 0, for a NULL object or a NULL required array.
+/// a value do nothing, or return 0, for a NULL object or a NULL required array (NaN where their
+/// comments say so: a NULL simulation's time, energies, dissipated energy, inputs' work and
+/// inputs' power).
 typedef enum sm_status {
 	SM_OK = 0,
 	SM_ERROR_INVALID_ARGUMENT,  ///< NULL pointer, unknown enum value or inconsistent option

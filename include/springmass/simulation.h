@@ -346,13 +346,13 @@ SM_API sm_status sm_simulation_advance(sm_simulation* sim, double t_end);
 /// before t_end; failures as for sm_simulation_advance.
 SM_API sm_status sm_simulation_advance_interpolated(sm_simulation* sim, double t_end, double t_stop);
 
-/// Current time [s].
+/// Current time [s]; NaN for a NULL simulation.
 SM_API double sm_simulation_time(const sm_simulation* sim);
 
 /// Positions [m] and velocities [m/s] of all particles (3 per particle) at the current time.
 /// The pointer stays valid until the simulation is destroyed; its contents change with every
 /// call that changes the state: advance, set_driven (the driven particle), set_state, reset and
-/// update_model.
+/// update_model. NULL for a NULL simulation.
 SM_API const double* sm_simulation_positions(const sm_simulation* sim);
 SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
 
@@ -360,13 +360,14 @@ SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
 /// constrained particles, the force the model exerts on them.
 SM_API void sm_simulation_forces(const sm_simulation* sim, double* f);
 
-/// Kinetic, elastic and gravitational energy at the current state [J].
+/// Kinetic, elastic and gravitational energy at the current state [J] (each NaN for a NULL
+/// simulation).
 SM_API sm_energies sm_simulation_energies(const sm_simulation* sim);
 /// Energy dissipated since the start [J]: by damping (integrated with the state) and by broken
 /// springs (the elastic energy each held when it broke), so that kinetic + elastic +
 /// gravitational + dissipated energy is constant without external forces or driven particles,
 /// and kinetic + elastic + gravitational + dissipated - input work (sm_simulation_input_work)
-/// with them.
+/// with them. NaN for a NULL simulation.
 SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 
 /// Work the inputs have done on the model since the start [J] (negative when they took energy
@@ -374,7 +375,8 @@ SM_API double sm_simulation_dissipated_energy(const sm_simulation* sim);
 /// drives each driven particle along its prescribed motion, the force m a - f_model its path
 /// needs beyond the model's forces (springs, damping, gravity, its load; an external force on it
 /// goes to whatever drives it), times its velocity, plus the energy a motion that jumps (a new position
-/// or velocity, sm_simulation_set_driven) adds at once. Fixed particles do none.
+/// or velocity, sm_simulation_set_driven) adds at once. Fixed particles do none. NaN for a NULL
+/// simulation.
 SM_API double sm_simulation_input_work(const sm_simulation* sim);
 
 /// Power the inputs deliver at the current state [W]: the rate of sm_simulation_input_work
@@ -512,7 +514,7 @@ SM_API int32_t sm_simulation_break_count(const sm_simulation* sim);
 SM_API sm_break_event sm_simulation_break(const sm_simulation* sim, int32_t index);
 
 /// Linear solver actually in use (AUTO resolved). With SM_METHOD_ADAMS, which uses none, the
-/// one the options name, resolved as for BDF.
+/// one the options name, resolved as for BDF. SM_SOLVER_COUNT for a NULL simulation.
 SM_API sm_linear_solver sm_simulation_solver(const sm_simulation* sim);
 
 /// Message of the last failed call that modifies the simulation (advance, set_driven,
