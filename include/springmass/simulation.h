@@ -351,8 +351,8 @@ SM_API double sm_simulation_time(const sm_simulation* sim);
 
 /// Positions [m] and velocities [m/s] of all particles (3 per particle) at the current time.
 /// The pointer stays valid until the simulation is destroyed; its contents change with every
-/// call that changes the state: advance, set_driven (the driven particle), set_state, reset and
-/// update_model. NULL for a NULL simulation.
+/// call that changes the state: advance (either form), set_driven (either form; the driven
+/// particle), set_state, restore_state, reset and update_model. NULL for a NULL simulation.
 SM_API const double* sm_simulation_positions(const sm_simulation* sim);
 SM_API const double* sm_simulation_velocities(const sm_simulation* sim);
 
