@@ -140,7 +140,8 @@ SM_API sm_status sm_document_set_parameter(sm_document* doc, int32_t index, doub
 /// message names the parameters that changed.
 SM_API sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_error* err);
 
-/// Ports, in file order. A port's name stays valid as long as the document.
+/// Ports, in file order. A port's name stays valid as long as the document. An index out of range
+/// (or a NULL document) gives a port with a NULL name and particle -1 (kind SM_PORT_PROBE).
 SM_API int32_t sm_document_port_count(const sm_document* doc);
 SM_API sm_port sm_document_port(const sm_document* doc, int32_t index);
 /// Index of a port by name, or -1.
