@@ -206,7 +206,9 @@ SM_API sm_status sm_model_get_spring(const sm_model* model, int32_t index, sm_sp
 SM_API sm_status sm_model_set_spring(sm_model* model, int32_t index, const sm_spring_def* def);
 
 /// The constants the force law uses: rest length l0 [m], stiffness ks [N/m], damping kd [N s/m].
-/// Any output may be NULL; each is 0 on an error (an index out of range).
+/// A disabled spring gives those of its definition, which it takes up again when enabled, though
+/// it exerts no force meanwhile. Any output may be NULL; each is 0 on an error (an index out of
+/// range).
 SM_API sm_status sm_model_spring_constants(const sm_model* model, int32_t index, double* rest_length,
                                            double* stiffness, double* damping);
 
