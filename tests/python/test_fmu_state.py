@@ -444,6 +444,21 @@ def test_serialised_state_restores_from_any_address(test_fmu):
             assert np.array_equal(run(b, 0.1, 5, force=force), expected), offset
 
 
+def test_deserialising_reuses_the_state_given(test_fmu):
+    # fmpy's deSerializeFMUstate(bytes, state) hands a previous state over for re-use (docs/fmu.md):
+    # the call replaces it, and the state it returns restores the run as a new one does, bit for
+    # bit, again and again into the same variable (fmu/test_fmu.c checks that the replaced state
+    # is freed).
+    with state_and_receiver(test_fmu("driven_oscillator"), {"k": 60.0}) as (a, b, blob):
+        expected = run(a, 0.1, 5, force=force)
+        state = b.slave.deSerializeFMUstate(blob)
+        for _ in range(3):
+            state = b.slave.deSerializeFMUstate(blob, state)
+            b.slave.setFMUstate(state)
+            assert np.array_equal(run(b, 0.1, 5, force=force), expected)
+        b.slave.freeFMUstate(state)
+
+
 def run_in_the_error_state(then, done):
     """Runs the Python text `then` in a process of its own, where instance `a` of the bundled cloth
     (its slave `s`, and `saved`, a state got right after instantiation) is in FMI's error state,
