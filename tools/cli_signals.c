@@ -13,6 +13,19 @@ static void note_signal(int signal)
 	cli_stop_signal = signal;
 }
 
+bool cli_signal_ignored(int signal)
+{
+	struct sigaction current;
+	return sigaction(signal, NULL, &current) == 0 && current.sa_handler == SIG_IGN;
+}
+
+// Catches `signal` unless the process was started with it ignored.
+static void catch_signal(int signal, const struct sigaction* action)
+{
+	if (!cli_signal_ignored(signal))
+		sigaction(signal, action, NULL);
+}
+
 void cli_catch_stop_signals(bool pipe)
 {
 	struct sigaction action;
@@ -20,11 +33,11 @@ void cli_catch_stop_signals(bool pipe)
 	action.sa_handler = note_signal;
 	action.sa_flags = SA_RESTART;
 	sigemptyset(&action.sa_mask);
-	sigaction(SIGINT, &action, NULL);
-	sigaction(SIGTERM, &action, NULL);
-	sigaction(SIGHUP, &action, NULL);
+	catch_signal(SIGINT, &action);
+	catch_signal(SIGTERM, &action);
+	catch_signal(SIGHUP, &action);
 	if (pipe)
-		sigaction(SIGPIPE, &action, NULL);
+		catch_signal(SIGPIPE, &action);
 }
 
 void cli_end_by_stop_signal(void)

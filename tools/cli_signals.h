@@ -14,7 +14,13 @@ extern volatile sig_atomic_t cli_stop_signal;
 /// From now on SIGINT, SIGTERM and SIGHUP (and SIGPIPE if `pipe`: a write to a pipe whose reader
 /// has gone then fails with EPIPE) are noted in cli_stop_signal instead of ending the process; a
 /// write or a wait they interrupt goes on (SA_RESTART): no row is cut, waiting for a child goes on.
+/// A signal the process was started with ignored stays ignored, as the one who started it asked
+/// (SIGHUP under nohup, SIGINT in a shell script's background job; SIGPIPE ignored makes a write
+/// to a pipe without a reader an error like any other).
 void cli_catch_stop_signals(bool pipe);
+
+/// Whether `signal` is ignored now (SIG_IGN).
+bool cli_signal_ignored(int signal);
 
 /// Ends the process by the signal noted, with its default action; returns if none was noted.
 void cli_end_by_stop_signal(void);

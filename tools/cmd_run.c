@@ -739,7 +739,7 @@ int sm_cmd_run(int argc, char** argv)
 		write_row(csv, doc, sim, forces, work_origin, o.positions);
 		sm_format_number(t, last_row_text);
 		// A full disk or a closed pipe stops the run at once, not after the last step.
-		if (ferror(csv) && errno == EPIPE)
+		if (ferror(csv) && errno == EPIPE && !cli_signal_ignored(SIGPIPE))
 			cli_stop_signal = SIGPIPE;  // the reader has gone: nothing to report to it
 		if (ferror(csv) && cli_stop_signal == 0) {
 			cli_progress_end(&prog.line);

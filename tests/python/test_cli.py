@@ -400,6 +400,46 @@ def test_a_series_file_that_cannot_be_written_is_reported_on_a_line_of_its_own(t
                      r"Is a directory\r?\n", shown), shown
 
 
+@pytest.mark.parametrize("name", ["HUP", "INT", "TERM"])
+def test_run_goes_on_through_a_signal_it_was_started_with_ignored(name):
+    # nohup starts a command with SIGHUP ignored, a shell script its background jobs with SIGINT
+    # ignored: the one who started the run asked that such a signal leave it running, so the run
+    # goes on to its last row and succeeds. The signal is sent while the run is writing: its
+    # first rows have been read (the 163-byte header alone fills no buffer, so they come from the
+    # loop over the rows, after the tool has set up its signals) and the rest, some 200 KB, cannot
+    # fit in the pipe (64 KB) until it is read.
+    sig = signal.Signals["SIG" + name]
+    run = subprocess.Popen([str(CLI), "run", str(MODELS / "oscillator.json"), "-q", "--t-end", "2", "--output-interval",
+                            "0.001", "-o", "-"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           preexec_fn=lambda: signal.signal(sig, signal.SIG_IGN))
+    try:
+        first = run.stdout.read(1)
+        run.send_signal(sig)
+        rows = (first + run.stdout.read()).decode().splitlines()
+        err = run.stderr.read()  # -q: nothing on stderr unless the run fails
+        assert run.wait(timeout=60) == 0 and err == b"", (run.returncode, err)
+    finally:
+        run.stdout.close()
+        run.stderr.close()
+    assert len(rows) == 2002 and rows[-1].split(",")[0] == "2", rows[-1]
+
+
+def test_run_into_a_pipe_without_a_reader_with_sigpipe_ignored_fails_to_write():
+    # SIGPIPE ignored, as by a program that starts the tool to handle a reader that goes away
+    # itself: a write to the pipe fails (EPIPE), which is an output that cannot be written (exit
+    # status 1, named with the reason), as for statics, modes and check, not a death by SIGPIPE.
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        out = subprocess.run([str(CLI), "run", str(MODELS / "oscillator.json"), "-q", "-o", "-"], stdout=write_end,
+                             stderr=subprocess.PIPE, text=True, timeout=60, restore_signals=False,
+                             preexec_fn=lambda: signal.signal(signal.SIGPIPE, signal.SIG_IGN))
+    finally:
+        os.close(write_end)
+    assert out.returncode == 1 and out.stderr == "springmass run: cannot write standard output: Broken pipe\n", (
+        out.returncode, out.stderr)
+
+
 def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     model = MODELS / "tearing_cloth.json"
     vtk = tmp_path / "vtk"
@@ -2061,6 +2101,28 @@ def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path, name, text):
     assert fmu.read_bytes() == b"an earlier FMU"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oscillator.fmu", "runtime", "staging", "tools"]
     assert out.stderr.endswith(f"springmass fmu: stopped by {text}; {fmu} not written\n"), out.stderr
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_goes_on_through_a_hangup_under_nohup(tmp_path):
+    # Started with SIGHUP ignored (nohup), the packaging goes on through one, as asked, and
+    # writes the FMU. The stand-in zip sends it while the tool waits for zip, as in
+    # test_fmu_stopped_by_a_signal_leaves_nothing_behind.
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    tools = tmp_path / "tools"
+    tools.mkdir()
+    real_zip = shutil.which("zip")
+    assert real_zip is not None
+    (tools / "zip").write_text(f'#!/bin/sh\nkill -HUP $PPID\nexec "{real_zip}" "$@"\n')
+    (tools / "zip").chmod(0o755)
+    fmu = tmp_path / "oscillator.fmu"
+    env = dict(os.environ, PATH=f"{tools}:{os.environ['PATH']}")
+    out = subprocess.run([str(CLI), "fmu", str(MODELS / "oscillator.json"), "-o", str(fmu), "--runtime", str(runtime)],
+                         capture_output=True, text=True, env=env, timeout=60,
+                         preexec_fn=lambda: signal.signal(signal.SIGHUP, signal.SIG_IGN))
+    assert out.returncode == 0, out.stderr
+    with zipfile.ZipFile(fmu) as z:
+        assert z.read("resources/model.json") == (MODELS / "oscillator.json").read_bytes()
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
