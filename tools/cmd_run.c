@@ -693,6 +693,12 @@ int sm_cmd_run(int argc, char** argv)
 		}
 		fprintf(pvd,
 		        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n");
+		// The index is written through at every row: one that cannot be is reported at its row, and
+		// a run that fails or is stopped leaves on disk an index of every frame written before.
+		if (fflush(pvd) != 0) {
+			cli_cannot_write("run", pvd_path);
+			goto done;
+		}
 	}
 	if (csv_to_stdout) {
 		csv = stdout;
@@ -763,6 +769,13 @@ int sm_cmd_run(int argc, char** argv)
 			char timestep[SM_NUMBER_TEXT_CAPACITY];
 			sm_format_number(t, timestep);
 			fprintf(pvd, "<DataSet timestep=\"%s\" file=\"%s_%06ld.vtp\"/>\n", timestep, name, k);
+			if (fflush(pvd) != 0) {
+				const int error = errno;
+				cli_progress_end(&prog.line);
+				errno = error;
+				cli_cannot_write("run", pvd_path);
+				goto done;
+			}
 		}
 		if (!o.quiet)
 			show_progress(&prog, t, k == rows);

@@ -400,6 +400,31 @@ def test_a_series_file_that_cannot_be_written_is_reported_on_a_line_of_its_own(t
                      r"Is a directory\r?\n", shown), shown
 
 
+def test_a_series_index_that_cannot_be_written_stops_the_run_at_its_row(tmp_path):
+    # A full disk, here a limit on the size of a file (which fails the same way) of 2 KB: each of
+    # the oscillator's frames (some 1000 bytes) fits, its index (a line of some 60 bytes a row)
+    # outgrows it after some 30 of the 501 rows. The run stops at the row whose index entry fails,
+    # naming the index, and the index on disk names every frame written before that row: it was
+    # written through at every row, not kept in a buffer that a failure (a full disk: no room for
+    # the buffer at the end) or a kill loses.
+    vtk = tmp_path / "series"
+    limit = 2048  # [bytes]
+
+    def limited():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    out = subprocess.run([str(CLI), "run", str(MODELS / "oscillator.json"), "-q", "-o", "-", "--vtk", str(vtk)],
+                         capture_output=True, text=True, preexec_fn=limited, timeout=60)
+    assert out.returncode == 1 and out.stderr == f"springmass run: cannot write {vtk}/oscillator.pvd: File too large\n", (
+        out.returncode, out.stderr)
+    frames = sorted(p.name for p in vtk.glob("oscillator_*.vtp"))
+    rows = out.stdout.splitlines()[1:]
+    assert 10 < len(frames) < 50 and len(rows) == len(frames), (len(frames), len(rows))
+    entries = re.findall(r'<DataSet timestep="[^"]*" file="([^"]*)"/>\n', (vtk / "oscillator.pvd").read_text())
+    assert entries == frames[:-1]
+
+
 @pytest.mark.parametrize("name", ["HUP", "INT", "TERM"])
 def test_run_goes_on_through_a_signal_it_was_started_with_ignored(name):
     # nohup starts a command with SIGHUP ignored, a shell script its background jobs with SIGINT
