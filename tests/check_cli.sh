@@ -263,9 +263,27 @@ status=${PIPESTATUS[0]}
 # A closed standard stream is no file the tool writes: its reports go nowhere, not into the CSV or
 # the series' index, which would take the closed stream's descriptor.
 "$cli" run "$osc" -o "$tmp/closed_err.csv" --t-end 0.05 2>&-
-"$cli" run "$osc" -q -o - --t-end 0.05 --vtk "$tmp/closed_out" >&-
+"$cli" run "$osc" -q -o - --t-end 0.05 --vtk "$tmp/closed_out" >&- 2> /dev/null
 ! grep -q springmass "$tmp/closed_err.csv" && [ "$(head -c 5 "$tmp/closed_out/oscillator.pvd")" = "<?xml" ] ||
   fail "a report written into an output through a closed standard stream: $(tail -1 "$tmp/closed_err.csv")"
+# What a command writes to a closed standard output cannot be written, as in any Unix tool (exit
+# status 1, the reason named), not thrown away with success; what it reads from a closed standard
+# input cannot be read (not an empty file). Diagnostics to a closed standard error go nowhere, the
+# command succeeding.
+"$cli" run "$osc" -q -o - --t-end 0.05 >&- 2> "$tmp/closed.err"
+status=$?
+[ $status -eq 1 ] && [ "$(cat "$tmp/closed.err")" = "springmass run: cannot write standard output: Bad file descriptor" ] ||
+  fail "run -o - into a closed standard output: exit status $status, $(cat "$tmp/closed.err")"
+"$cli" check "$osc" >&- 2> "$tmp/closed.err"
+status=$?
+[ $status -eq 1 ] && [ "$(cat "$tmp/closed.err")" = "springmass: cannot write standard output: Bad file descriptor" ] ||
+  fail "check into a closed standard output: exit status $status, $(cat "$tmp/closed.err")"
+"$cli" run "$osc" -q -o "$tmp/closed_in.csv" --input - <&- 2> "$tmp/closed.err"
+status=$?
+[ $status -eq 1 ] &&
+  [ "$(cat "$tmp/closed.err")" = "springmass run: cannot read the input signals from standard input: Bad file descriptor" ] ||
+  fail "run --input - from a closed standard input: exit status $status, $(cat "$tmp/closed.err")"
+"$cli" run "$osc" -o "$tmp/closed_err.csv" --t-end 0.05 2>&- >&- || fail "run -o FILE with closed standard streams failed"
 # An output that is standard output under another name, where that is a file, would be
 # overwritten by the report: refused. /dev/null stays an output like any other.
 "$cli" statics "$osc" -q -o /dev/stdout > "$tmp/stdout.txt" 2> "$tmp/stdout.err"

@@ -58,13 +58,17 @@ static void single_threaded_blas(void)
 
 // Standard input, output and error are open, if only on /dev/null: a stream the caller closed
 // (`2>&-`) would otherwise be the descriptor the next file opened gets, and the reports written
-// to it would land in the CSV or the series' index.
+// to it would land in the CSV or the series' index. A closed standard output is opened for
+// reading only and a closed standard input for writing only, so that what the command writes to
+// the one or reads from the other fails (EBADF) as on the closed stream: a report or a CSV written
+// to a closed standard output is an output that cannot be written, not one silently thrown away.
+// Diagnostics to a closed standard error go nowhere, without failing the command.
 static void open_standard_streams(void)
 {
 	for (int fd = 0; fd <= 2; fd++)
 		if (fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
 			// The lowest free descriptor, fd itself (without /dev/null, as in a bare chroot, none).
-			const int opened = open("/dev/null", fd == 0 ? O_RDONLY : O_WRONLY);
+			const int opened = open("/dev/null", fd == 1 ? O_RDONLY : O_WRONLY);
 			if (opened >= 0 && opened != fd)
 				close(opened);
 		}
