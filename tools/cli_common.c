@@ -601,10 +601,15 @@ void cli_cannot_write(const char* command, const char* path)
 
 int cli_close(const char* command, const char* path, FILE* f)
 {
-	// A failed write leaves data in the buffer, so fclose fails again and sets errno afresh.
+	// A failed write leaves data in the buffer, so fclose fails again and sets errno afresh. A
+	// write larger than the buffer (a saved model of 200 KB) goes past it and leaves nothing for
+	// fclose to fail on: the reason is then that of the failed write, whose errno is still there.
 	const int failed = ferror(f);
+	const int earlier = errno;
 	errno = 0;
 	if (fclose(f) != 0 || failed) {
+		if (errno == 0)
+			errno = earlier;
 		cli_cannot_write(command, path);
 		return -1;
 	}
