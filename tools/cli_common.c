@@ -2,6 +2,7 @@
 #define _XOPEN_SOURCE 700  // realpath
 
 #include "cli_common.h"
+#include "cli_signals.h"
 
 #include "springmass/analysis.h"
 
@@ -595,6 +596,8 @@ int cli_check_outputs_apart(const char* command, const char* option_a, const cha
 
 void cli_cannot_write(const char* command, const char* path)
 {
+	if (errno == EPIPE && cli_pipe_signal_waiting())
+		return;  // the reader has gone, and the signal held back ends the command quietly
 	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,
 	        errno != 0 ? strerror(errno) : "write error");
 }

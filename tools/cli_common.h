@@ -167,7 +167,8 @@ long cli_remove_series_tail(const char* prefix, int digits, long first, const ch
 #define CLI_VTP_HEADER "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\""
 
 /// Prints "springmass COMMAND: cannot write PATH: reason", the reason from errno (set by the
-/// failed call just before).
+/// failed call just before); nothing for a pipe whose reader has gone while SIGPIPE is held back
+/// (cli_hold_pipe_signal), which ends the command once released, quietly as at the write.
 void cli_cannot_write(const char* command, const char* path);
 
 /// Closes a file written by a subcommand; prints the error and returns -1 if anything failed.

@@ -3,6 +3,7 @@
 #include "cli_outputs.h"
 
 #include "cli_common.h"
+#include "cli_signals.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -49,6 +50,10 @@ static FILE* open_temporary(const char* temporary, const char* path)
 
 FILE* cli_outputs_open(cli_outputs* outputs, const char* path)
 {
+	// A write to an output or to standard output that is a pipe without a reader fails instead of
+	// ending the command before it has removed its temporaries (cli_outputs_discard).
+	if (outputs->count == 0 && !outputs->pipe_held)
+		outputs->pipe_held = cli_hold_pipe_signal();
 	if (outputs->count == outputs->capacity) {
 		const int capacity = 2 * outputs->capacity + 4;
 		cli_output* items = realloc(outputs->items, (size_t)capacity * sizeof *items);
@@ -121,4 +126,6 @@ void cli_outputs_discard(cli_outputs* outputs)
 	free(outputs->items);
 	outputs->items = NULL;
 	outputs->count = outputs->capacity = 0;
+	cli_release_pipe_signal(outputs->pipe_held);
+	outputs->pipe_held = false;
 }

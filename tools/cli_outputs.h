@@ -4,9 +4,11 @@
 // then, whole, and keeps its permissions; only a rename that fails after others, which a folder
 // that took a new file does not refuse but on a fault of the file system, leaves those before it
 // moved). A command killed while writing (Ctrl-C) leaves its temporaries, hidden files named
-// .springmass-<pid>-<k>.partial, and every place as it was.
+// .springmass-<pid>-<k>.partial, and every place as it was; one whose output is a pipe whose
+// reader has gone (-o /dev/stdout) removes them first: SIGPIPE is held back while outputs are open.
 #pragma once
 
+#include <stdbool.h>
 #include <stdio.h>
 
 typedef struct cli_output {
@@ -18,6 +20,7 @@ typedef struct cli_outputs {
 	const char* command;  ///< the subcommand, for messages
 	int count, capacity;
 	cli_output* items;
+	bool pipe_held;  ///< SIGPIPE held back since the first output was opened (cli_hold_pipe_signal)
 } cli_outputs;
 
 /// Opens a new output at `path` for writing, to be closed with cli_close (which reports write
@@ -30,6 +33,6 @@ FILE* cli_outputs_open(cli_outputs* outputs, const char* path);
 /// (the outputs not moved yet are removed).
 int cli_outputs_commit(cli_outputs* outputs);
 
-/// Removes the temporaries of the outputs not committed and frees the list; call it always, after a
-/// commit too.
+/// Removes the temporaries of the outputs not committed, frees the list and lets a SIGPIPE held
+/// back take effect; call it always, after a commit too.
 void cli_outputs_discard(cli_outputs* outputs);

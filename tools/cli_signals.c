@@ -3,6 +3,7 @@
 
 #include "cli_signals.h"
 
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -47,4 +48,28 @@ void cli_end_by_stop_signal(void)
 	fflush(stdout);
 	signal(cli_stop_signal, SIG_DFL);
 	raise(cli_stop_signal);
+}
+
+bool cli_hold_pipe_signal(void)
+{
+	sigset_t pipe, before;
+	sigemptyset(&pipe);
+	sigaddset(&pipe, SIGPIPE);
+	return pthread_sigmask(SIG_BLOCK, &pipe, &before) == 0 && !sigismember(&before, SIGPIPE);
+}
+
+void cli_release_pipe_signal(bool held)
+{
+	if (!held)
+		return;
+	sigset_t pipe;
+	sigemptyset(&pipe);
+	sigaddset(&pipe, SIGPIPE);
+	pthread_sigmask(SIG_UNBLOCK, &pipe, NULL);
+}
+
+bool cli_pipe_signal_waiting(void)
+{
+	sigset_t waiting;
+	return sigpending(&waiting) == 0 && sigismember(&waiting, SIGPIPE) && !cli_signal_ignored(SIGPIPE);
 }

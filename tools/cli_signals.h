@@ -24,3 +24,17 @@ bool cli_signal_ignored(int signal);
 
 /// Ends the process by the signal noted, with its default action; returns if none was noted.
 void cli_end_by_stop_signal(void);
+
+/// Holds SIGPIPE back in the calling thread while a command has files to remove before it ends
+/// (temporaries of its outputs, the FMU's staging folder): a write to a pipe whose reader has gone
+/// fails with EPIPE instead of ending the process at once, and the signal waits. Returns whether it
+/// was held here (false: it was blocked already), to be given to cli_release_pipe_signal.
+bool cli_hold_pipe_signal(void);
+
+/// Lets a SIGPIPE held back by cli_hold_pipe_signal (if `held`) take effect: a reader gone ends the
+/// process now, as it would have at the write (unless SIGPIPE is ignored or caught).
+void cli_release_pipe_signal(bool held);
+
+/// Whether a SIGPIPE held back is waiting, the process to end by it once released (and it is not
+/// ignored): a failed write to that pipe needs no message, the reader being gone.
+bool cli_pipe_signal_waiting(void);

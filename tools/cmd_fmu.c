@@ -515,6 +515,7 @@ static int package(const options* opt)
 	fmu_table table;
 	memset(&table, 0, sizeof table);
 	char staging[PATH_MAX] = "";
+	bool pipe_held = false;  // SIGPIPE held back while the FMU is written (cli_hold_pipe_signal)
 	char path[PATH_MAX], runtime[PATH_MAX];
 
 	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
@@ -753,6 +754,9 @@ static int package(const options* opt)
 		free(archive);
 		goto done;
 	}
+	// An output that is a pipe whose reader has gone (-o /dev/stdout) fails the write; the signal
+	// ends the command once the staging folder is removed, not before.
+	pipe_held = cli_hold_pipe_signal();
 	errno = 0;
 	const bool written = write_output(opt->output, archive, archive_length);
 	free(archive);
@@ -776,6 +780,7 @@ write_failed:
 done:
 	if (staging[0])
 		nftw(staging, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+	cli_release_pipe_signal(pipe_held);
 	free(xml);
 	free(html);
 	free(reference);

@@ -283,7 +283,7 @@ int sm_cmd_modes(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
-	cli_outputs outputs = {"modes", 0, 0, NULL};
+	cli_outputs outputs = {"modes", 0, 0, NULL, false};
 	sm_model* model = NULL;
 	double* x = NULL;
 	sm_modes modes;

@@ -203,7 +203,7 @@ int sm_cmd_statics(int argc, char** argv)
 
 	int status = 1;
 	sm_error err;
-	cli_outputs outputs = {"statics", 0, 0, NULL};
+	cli_outputs outputs = {"statics", 0, 0, NULL, false};
 	char* saved_model = NULL;
 	sm_model* model = NULL;
 	double *x0 = NULL, *x = NULL, *reactions = NULL, *displacement = NULL;

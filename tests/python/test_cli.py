@@ -948,6 +948,29 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     assert len(quiet.splitlines()) < len(out.splitlines()) and "rope[0]" not in quiet and "rope[0]" in out
 
 
+def run_into_a_pipe_without_a_reader(*args, env=None):
+    """Runs the tool with its standard output a pipe whose reader has gone (SIGPIPE at its
+    default, as a shell leaves it); returns the finished process (text)."""
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        return subprocess.run([str(CLI), *map(str, args)], stdout=write_end, stderr=subprocess.PIPE, text=True,
+                              env=env, timeout=60)
+    finally:
+        os.close(write_end)
+
+
+def test_statics_into_a_pipe_without_a_reader_leaves_no_temporary(tmp_path):
+    # The saved model goes to standard output (/dev/stdout), whose reader has gone, after the CSV
+    # and the VTK file were written under temporary names: the command ends by SIGPIPE, quietly
+    # as at any write to such a pipe, and without leaving those temporaries behind (nor writing
+    # the outputs, which are written all or none).
+    out = run_into_a_pipe_without_a_reader("statics", MODELS / "two_mass_chain.json", "-q", "-o", tmp_path / "rest.csv",
+                                           "--vtk", tmp_path / "vtk", "--save-model", "/dev/stdout")
+    assert out.returncode == -signal.SIGPIPE and out.stderr == "", (out.returncode, out.stderr)
+    assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == ["vtk"]
+
+
 def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_path):
     # Two loads on one particle, (3, -4, 5) N and (1, 2, -20) N: the "loads" line is their sum,
     # every component, and the reaction at the anchor balances it with the weight of both
@@ -2126,6 +2149,19 @@ def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path, name, text):
     assert fmu.read_bytes() == b"an earlier FMU"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["oscillator.fmu", "runtime", "staging", "tools"]
     assert out.stderr.endswith(f"springmass fmu: stopped by {text}; {fmu} not written\n"), out.stderr
+
+
+@pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
+def test_fmu_into_a_pipe_without_a_reader_removes_its_staging_folder(tmp_path):
+    # Written to standard output (/dev/stdout) whose reader has gone, the FMU ends the command by
+    # SIGPIPE, quietly, once its staging folder (a copy of the whole runtime) is removed.
+    runtime = stand_in_runtime(tmp_path / "runtime", "binary")
+    staging = tmp_path / "staging"
+    staging.mkdir()
+    out = run_into_a_pipe_without_a_reader("fmu", MODELS / "oscillator.json", "-o", "/dev/stdout", "--runtime", runtime,
+                                           env=dict(os.environ, TMPDIR=str(staging)))
+    assert out.returncode == -signal.SIGPIPE and out.stderr == "", (out.returncode, out.stderr)
+    assert list(staging.iterdir()) == []
 
 
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
