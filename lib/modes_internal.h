@@ -46,3 +46,14 @@ void sm_modes_classify(double* omega_squared, size_t count, double zero_level, s
 // omega_max and the shift), p->stiffness_norm and p->next_omega_squared set.
 sm_status sm_modes_sparse(modes_problem* p, sm_modes* modes, sm_error* err);
 #endif
+
+// The sparse path's re-orthogonalisation (modes_lanczos.c, built with CHOLMOD): M-orthogonalises
+// v (dof entries; M = diag(mass)) against the `locked_count` locked vectors and the `count` basis
+// vectors (stride dof; each set M-orthonormal, the two M-orthogonal to round-off) by classical
+// Gram-Schmidt twice (CGS2: each pass takes every coefficient q_i^T M v from the same v, then
+// subtracts them all), both sets in every pass, so that v leaves orthogonal to both to round-off.
+// Adds the basis coefficients of both passes to coefficients[] (count entries) if not NULL.
+// scratch: dof + locked_count + count doubles.
+void sm_modes_orthogonalise(const double* mass, size_t dof, double* v, const double* locked,
+                            size_t locked_count, const double* basis, size_t count, double* coefficients,
+                            double* scratch);

@@ -1,4 +1,5 @@
 // Analysis tests: static equilibrium and natural frequencies against closed forms.
+#include "modes_internal.h"
 #include "physics_fixtures.h"
 #include "springmass/analysis.h"
 #include "springmass/simulation.h"
@@ -1757,6 +1758,68 @@ static int test_sparse_unstable_configuration(void)
 	sm_modes_release(&modes);
 	free(x);
 	sm_model_destroy(model);
+	return 0;
+}
+
+// The Lanczos re-orthogonalisation leaves a new vector orthogonal to the locked modes and to
+// the basis at once. The basis vectors carry a share of the locked ones (round-off that grows
+// over a run; here 1e-8 each, to stand above round-off), and the new vector large components
+// along the basis (1e3, as OP v_j has along v_j). Orthogonalising against the locked vectors
+// first and the basis after left 1e3 x 1e-8 of the locked ones back in it (5e-6 of its norm
+// here), which the next step divides by a small norm again; both sets in every pass leave the
+// round-off of the 1e3 components subtracted, about 1e3 eps = 2e-13 of the norm (bound 1e-11).
+// The coefficients returned are the basis components of the vector given, up to the basis'
+// share of the locked vectors times the vector's locked components (1e-8 x a few units).
+static int test_lanczos_orthogonalises_against_locked_and_basis_at_once(void)
+{
+	enum { dof = 40, locked_count = 3, count = 6, total = locked_count + count };
+	double mass[dof], q[total][dof], v[dof], given[dof], c[count] = {0};
+	double scratch[dof + total];
+	for (int k = 0; k < dof; k++)
+		mass[k] = 0.5 + 0.3 * (k % 7);
+	// M-orthonormal vectors from fixed pseudo-random ones, modified Gram-Schmidt twice.
+	for (int i = 0; i < total; i++) {
+		for (int k = 0; k < dof; k++)
+			q[i][k] = sin(1.7 * (i + 1) * (k + 1) + 0.3 * i);
+		for (int pass = 0; pass < 2; pass++)
+			for (int j = 0; j < i; j++) {
+				double d = 0.0;
+				for (int k = 0; k < dof; k++)
+					d += q[j][k] * mass[k] * q[i][k];
+				for (int k = 0; k < dof; k++)
+					q[i][k] -= d * q[j][k];
+			}
+		double norm = 0.0;
+		for (int k = 0; k < dof; k++)
+			norm += q[i][k] * mass[k] * q[i][k];
+		for (int k = 0; k < dof; k++)
+			q[i][k] /= sqrt(norm);
+	}
+	for (int i = locked_count; i < total; i++)
+		for (int k = 0; k < dof; k++)
+			q[i][k] += 1e-8 * q[i % locked_count][k];
+	for (int k = 0; k < dof; k++) {
+		v[k] = cos(0.9 * k * k + 0.1);
+		for (int i = locked_count; i < total; i++)
+			v[k] += 1e3 * q[i][k];
+		given[k] = v[k];
+	}
+	sm_modes_orthogonalise(mass, dof, v, &q[0][0], locked_count, &q[locked_count][0], count, c, scratch);
+	double norm = 0.0;
+	for (int k = 0; k < dof; k++)
+		norm += v[k] * mass[k] * v[k];
+	norm = sqrt(norm);
+	ENSURE(norm > 1.0);  // the pseudo-random part, about sqrt(dof) x 0.7 x mean mass
+	for (int i = 0; i < total; i++) {
+		double d = 0.0, of_given = 0.0;
+		for (int k = 0; k < dof; k++) {
+			d += q[i][k] * mass[k] * v[k];
+			of_given += q[i][k] * mass[k] * given[k];
+		}
+		ENSURE(fabs(d) <= 1e-11 * norm);
+		if (i >= locked_count)
+			ENSURE_NEAR(c[i - locked_count], of_given, 1e-7);
+	}
 	return 0;
 }
 
@@ -5150,6 +5213,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sparse_long_chain_closed_form);
 	RUN_TEST(test_sparse_hanging_chain_bessel);
 	RUN_TEST(test_sparse_modes_factorise_as_the_statics);
+	RUN_TEST(test_lanczos_orthogonalises_against_locked_and_basis_at_once);
 	RUN_TEST(test_sparse_unstable_configuration);
 	RUN_TEST(test_sparse_free_block_zero_modes);
 	RUN_TEST(test_sparse_adaptive_shift_hanging_rope);
