@@ -51,9 +51,9 @@ static void usage(FILE* out)
 	        "                         particle.NAME.y, particle.NAME.z [m])\n"
 	        "  --vtk DIR              also a ParaView series: DIR/NAME_<k>.vtp per row (XML polydata:\n"
 	        "                         particles as points with their velocity [m/s], intact springs\n"
-	        "                         as lines with their tension [N] and, if all have a rest length,\n"
-	        "                         strain [1]) and the index DIR/NAME.pvd (files NAME_<k>.vtp of\n"
-	        "                         an earlier, longer run there are removed)\n"
+	        "                         as lines with their tension [N], number (spring) and, if all\n"
+	        "                         have a rest length, strain [1]) and the index DIR/NAME.pvd\n"
+	        "                         (files NAME_<k>.vtp of an earlier, longer run there are removed)\n"
 	        "  --solver NAME          linear solver of BDF: auto, dense, klu, pcg, cholmod (Adams\n"
 	        "                         uses none)\n"
 	        "  --method NAME          bdf (default) or adams\n"
@@ -239,10 +239,10 @@ static void write_vtp_values(FILE* f, const double* values, int32_t count, int p
 
 // One VTK XML polydata file (.vtp, the format of the files a ParaView .pvd index names: its reader
 // takes no legacy .vtk file): the particles as points with their velocities, the intact springs as
-// lines with their tension [N] and, when every one has a rest length (a zero-length spring has no
-// strain), their strain; the time as the field TimeValue. springs holds 2 values per spring of
-// scratch. False, with errno saying why (0: a write error), when the file cannot be written: the
-// caller reports it, after ending its progress line.
+// lines with their tension [N], when every one has a rest length (a zero-length spring has no
+// strain) their strain, and their spring numbers; the time as the field TimeValue. springs holds 2
+// values per spring of scratch. False, with errno saying why (0: a write error), when the file
+// cannot be written: the caller reports it, after ending its progress line.
 static bool write_vtp(const char* path, const sm_simulation* sim, double* springs)
 {
 	const sm_model* model = sm_simulation_model(sim);
@@ -285,7 +285,13 @@ static bool write_vtp(const char* path, const sm_simulation* sim, double* spring
 			write_vtp_values(f, strain, count, 1, model);
 			fprintf(f, "</DataArray>\n");
 		}
-		fprintf(f, "</CellData>\n");
+		// Each line's spring number, as messages give it: once a spring has broken, the lines after
+		// its own are no longer at their springs' numbers.
+		fprintf(f, "<DataArray type=\"Int32\" Name=\"spring\" format=\"ascii\">\n");
+		for (int32_t s = 0; s < count; s++)
+			if (sm_model_spring_enabled(model, s))
+				fprintf(f, "%d\n", (int)s);
+		fprintf(f, "</DataArray>\n</CellData>\n");
 	}
 	fprintf(f, "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
 	cli_vtk_points(f, n, x);

@@ -527,7 +527,8 @@ def test_the_series_index_names_vtk_xml_polydata_files(tmp_path):
         assert float(time.text) == float(d.get("timestep"))
         points, lines, vectors, scalars = vtp_sections(vtk / d.get("file"))
         assert points.shape == (3, 3) and lines == [(0, 1), (1, 2)]
-        assert set(vectors) == {"velocity"} and set(scalars) == {"tension", "strain"}
+        assert set(vectors) == {"velocity"} and set(scalars) == {"tension", "strain", "spring"}
+        assert list(scalars["spring"]) == [0, 1]
 
 
 def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
@@ -543,7 +544,7 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     vx = header.index("tip.vx")
     for k, row in enumerate(rows):
         points, lines, vectors, scalars = vtp_sections(vtk / f"oscillator_{k:06d}.vtp")
-        assert lines == [(0, 1)] and set(scalars) == {"tension", "strain"}
+        assert lines == [(0, 1)] and set(scalars) == {"tension", "strain", "spring"}
         np.testing.assert_allclose(vectors["velocity"][1], row[vx:vx + 3], rtol=1e-8, atol=1e-12)
         d = points[1] - points[0]
         length = np.linalg.norm(d)
@@ -559,7 +560,7 @@ def test_vtk_files_carry_velocities_tensions_and_strains(tmp_path):
     path.write_text(json.dumps(pair))
     cli("run", path, "-q", "--t-end", 0.1, "--output-interval", 0.1, "-o", tmp_path / "pair.csv", "--vtk", vtk)
     points, _, _, scalars = vtp_sections(vtk / "pair_000000.vtp")
-    assert set(scalars) == {"tension"} and scalars["tension"][0] == pytest.approx(10.0)
+    assert set(scalars) == {"tension", "spring"} and scalars["tension"][0] == pytest.approx(10.0)
 
 
 def test_vtk_points_are_the_csv_positions_exactly_far_from_the_origin(tmp_path):
@@ -613,6 +614,39 @@ def test_breaks_close_together_are_logged_at_their_own_times(tmp_path):
     first, second = (float(t) for _, t in logged)
     assert first == pytest.approx(0.5, abs=1e-13) and second == pytest.approx(0.5000000002, abs=1e-13), stats
     assert second - first == pytest.approx(2e-10, abs=2e-13), stats
+
+
+def test_each_line_of_a_series_gives_its_spring_number_after_a_break(tmp_path):
+    # Three bobs drift away from a fixed anchor at 1 m/s along x, y and z, from 1 m, each on a
+    # spring of stiffness 0 (no force: their distances are 1 + t) and rest length 1 m; the middle
+    # spring, 1, breaks at strain 0.5, at t = 0.5 s. Its line is left out of the frames after that:
+    # the second line is then spring 2's, which the message calls "spring 2", and the cell array
+    # `spring` says so, where the line's place alone would say spring 1.
+    drift = {"springmass": 1, "name": "drift3", "gravity": [0, 0, 0],
+             "particles": [{"name": "anchor", "position": [0, 0, 0], "fixed": True},
+                           {"name": "b0", "position": [1, 0, 0], "velocity": [1, 0, 0]},
+                           {"name": "b1", "position": [0, 1, 0], "velocity": [0, 1, 0]},
+                           {"name": "b2", "position": [0, 0, 1], "velocity": [0, 0, 1]}],
+             "springs": [{"a": "anchor", "b": "b0", "stiffness": 0},
+                         {"a": "anchor", "b": "b1", "stiffness": 0, "break_strain": 0.5},
+                         {"a": "anchor", "b": "b2", "stiffness": 0}]}
+    path = tmp_path / "drift3.json"
+    path.write_text(json.dumps(drift))
+    vtk = tmp_path / "vtk"
+    stats = cli("run", path, "--t-end", 1, "--output-interval", 0.25, "-o", tmp_path / "drift3.csv",
+                "--vtk", vtk).stderr
+    logged = re.findall(r"^  spring (\d) \(between anchor and (\w+)\) broke at t = (\S+) s$", stats, re.M)
+    assert len(logged) == 1 and logged[0][:2] == ("1", "b1") and float(logged[0][2]) == pytest.approx(0.5), stats
+    for k in range(5):
+        _, lines, _, scalars = vtp_sections(vtk / f"drift3_{k:06d}.vtp")
+        # Rows at 0, 0.25 s hold every spring; the row at 0.5 s is taken just after the break (the
+        # break is found within 1e-13 s of 0.5 s, before or after: checked by the line's absence
+        # from 0.75 s on only).
+        if k < 2:
+            assert lines == [(0, 1), (0, 2), (0, 3)] and list(scalars["spring"]) == [0, 1, 2]
+        elif k > 2:
+            assert lines == [(0, 1), (0, 3)] and list(scalars["spring"]) == [0, 2]
+        assert len(scalars["spring"]) == len(lines)
 
 
 def test_a_spring_that_breaks_is_logged_at_its_time_and_leaves_no_lines(tmp_path):
