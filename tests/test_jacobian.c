@@ -489,6 +489,106 @@ static int test_fused_spring_blocks_match_finite_differences(void)
 	return 0;
 }
 
+// The blocks of one spring at states where finite differences fail (lengths from 1e-9 to 1e3
+// times the rest length, an axis missed by 1e-15, stiffness 1e-12 and 1e12, particles 1e6 m from
+// the origin, damping far above the elastic force) against the closed form, evaluated in long
+// double from the same coordinates. With d = x_b - x_a, L = |d|, u = d / L, w = v_b - v_a,
+// r = u.w and P = I - u u^T, f_a = ks (L - l0) u + kd r u gives
+//   K = d f_a / d x_b = ks ((1 - l0/L) I + (l0/L) u u^T) + (kd / L) (r P + u (P w)^T),
+//   D = d f_a / d v_b = kd u u^T
+// (a zero-length spring: l0 = 0). Both the direct blocks and the fused records are held to 1e-13
+// of the block's largest entry: the forms differ only in rounding order (a few eps of each term,
+// 6e-16 measured at worst), while a term dropped or mis-signed at these states (the l0 / L
+// factor, the damping's position derivative) is of the order of the block.
+static int test_spring_blocks_at_hard_states_match_the_closed_form(void)
+{
+	typedef struct hard_state {
+		sm_spring_kind kind;
+		double stiffness, damping, rest_length, offset;
+		double d[3], w[3];
+	} hard_state;
+	const hard_state cases[] = {
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 0.0, {1e-9, 0.0, 0.0}, {0.3, -0.2, 0.1}},
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 0.0, {6e-4, -8e-4, 0.0}, {0.3, -0.2, 0.1}},
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 0.0, {0.6, 0.0, 0.8}, {0.0, 1.0, 0.0}},
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 0.0, {600.0, 0.0, 800.0}, {1.0, 1.0, 1.0}},
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 0.0, {1.0, 1e-15, -1e-15}, {0.0, 2.0, -1.0}},
+	    {SM_SPRING_REST_LENGTH, 1e12, 0.0, 0.5, 0.0, {0.3, 0.2, 0.1}, {0.0, 0.0, 0.0}},
+	    {SM_SPRING_REST_LENGTH, 1e-12, 1e-12, 0.5, 0.0, {0.3, 0.2, 0.1}, {1.0, 0.0, 0.0}},
+	    {SM_SPRING_REST_LENGTH, 100.0, 2.0, 1.0, 1e6, {0.7, -0.4, 0.5}, {0.2, 0.1, -0.3}},
+	    {SM_SPRING_REST_LENGTH, 1.0, 50.0, 1.0, 0.0, {0.9, 0.1, -0.2}, {370.0, -20.0, 5.0}},
+	    {SM_SPRING_ZERO_LENGTH, 100.0, 2.0, 0.0, 0.0, {1e-9, 2e-9, 0.0}, {0.3, -0.2, 0.1}},
+	    {SM_SPRING_ZERO_LENGTH, 100.0, 2.0, 0.0, 1e6, {0.7, -0.4, 0.5}, {0.2, 0.1, -0.3}},
+	};
+	for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+		const hard_state* h = &cases[c];
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* m = sm_model_create(&md, NULL);
+		ENSURE(m != NULL);
+		double x[6], v[6] = {0}, f[6];
+		for (int e = 0; e < 2; e++) {
+			sm_particle_def p = sm_default_particle_def();
+			for (int k = 0; k < 3; k++) {
+				p.position[k] = x[3 * e + k] = h->offset + (e == 1 ? h->d[k] : 0.0);
+				p.velocity[k] = v[3 * e + k] = e == 1 ? h->w[k] : 0.0;
+			}
+			ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+		}
+		sm_spring_def sd = sm_default_spring_def();
+		sd.a = 0;
+		sd.b = 1;
+		sd.kind = h->kind;
+		sd.rest_length = h->rest_length;
+		sd.stiffness = h->stiffness;
+		sd.damping = h->damping;
+		ENSURE_STATUS(sm_model_add_spring(m, &sd, NULL), SM_OK);
+
+		long double d[3], w[3], L2 = 0.0L, r = 0.0L;
+		for (int k = 0; k < 3; k++) {
+			d[k] = (long double)x[3 + k] - (long double)x[k];
+			w[k] = (long double)v[3 + k] - (long double)v[k];
+			L2 += d[k] * d[k];
+		}
+		const long double L = sqrtl(L2), ratio = h->rest_length / L;
+		long double u[3], Pw[3];
+		for (int k = 0; k < 3; k++)
+			r += (u[k] = d[k] / L) * w[k];
+		for (int k = 0; k < 3; k++)
+			Pw[k] = w[k] - r * u[k];
+		double K_ref[9], D_ref[9];
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++) {
+				const long double delta = i == j ? 1.0L : 0.0L;
+				K_ref[3 * i + j] = (double)(h->stiffness * ((1.0L - ratio) * delta + ratio * u[i] * u[j]) +
+				                            h->damping / L * (r * (delta - u[i] * u[j]) + u[i] * Pw[j]));
+				D_ref[3 * i + j] = (double)(h->damping * u[i] * u[j]);
+			}
+
+		double K[9], D[9];
+		ENSURE_STATUS(sm_model_spring_jacobian(m, 0, x, v, SM_JACOBIAN_EXACT, K, D), SM_OK);
+		sm_spring_jacobians* sj = sm_spring_jacobians_create(m);
+		ENSURE(sj != NULL);
+		ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_EXACT, f, sj), SM_OK);
+		double K_fused[9], D_fused[9];
+		ENSURE_STATUS(sm_spring_jacobians_block(sj, 0, K_fused, D_fused), SM_OK);
+		double scale_k = 0.0, scale_d = 0.0;  // not max_abs's floor of 1: stiffness 1e-12 is here
+		for (int k = 0; k < 9; k++) {
+			scale_k = fmax(scale_k, fabs(K_ref[k]));
+			scale_d = fmax(scale_d, fabs(D_ref[k]));
+		}
+		for (int k = 0; k < 9; k++) {
+			ENSURE_NEAR(K[k], K_ref[k], 1e-13 * scale_k);
+			ENSURE_NEAR(K_fused[k], K_ref[k], 1e-13 * scale_k);
+			ENSURE_NEAR(D[k], D_ref[k], 1e-13 * scale_d);
+			ENSURE_NEAR(D_fused[k], D_ref[k], 1e-13 * scale_d);
+		}
+		sm_spring_jacobians_destroy(sj);
+		sm_model_destroy(m);
+	}
+	return 0;
+}
+
 // The product from the records against a central difference of the forces along the direction
 // itself: (f(x + h dx, v + h dv) - f(x - h dx, v - h dv)) / 2h. Each spring sees a relative
 // displacement of at most 2 sqrt(3) per unit h, which multiplies the single-column truncation
@@ -1068,6 +1168,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_disabled_spring_has_zero_blocks);
 	RUN_TEST(test_fused_forces_equal_forces_exactly);
 	RUN_TEST(test_fused_spring_blocks_match_finite_differences);
+	RUN_TEST(test_spring_blocks_at_hard_states_match_the_closed_form);
 	RUN_TEST(test_fused_product_matches_finite_differences);
 	RUN_TEST(test_combined_product_matches_dense);
 	RUN_TEST(test_combined_product_of_a_single_spring);
