@@ -35,6 +35,8 @@ install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} ${SPR
 
 set(SPRINGMASS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/springmass)
 install(EXPORT springmassTargets NAMESPACE springmass:: DESTINATION ${SPRINGMASS_CMAKE_DIR})
+# The package takes the major version of SUNDIALS it was built with, and no later one.
+math(EXPR SPRINGMASS_SUNDIALS_NEXT_MAJOR "${SPRINGMASS_SUNDIALS_MAJOR} + 1")
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/springmassConfig.cmake.in
     ${PROJECT_BINARY_DIR}/springmassConfig.cmake INSTALL_DESTINATION ${SPRINGMASS_CMAKE_DIR})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/springmassConfigVersion.cmake

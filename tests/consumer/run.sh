@@ -7,7 +7,8 @@
 # builds and runs the examples again with a plain compiler call and pkg-config, as a
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
 # installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
-# names the build tree. A build configured as debug also gets a pkg-config file that names its
+# names the build tree. The package passes over a SUNDIALS of the next major version found first.
+# A build configured as debug also gets a pkg-config file that names its
 # library, a project to which springmass is optional goes on without it when jansson is
 # missing, and a project that adds springmass's source tree links it into its shared library and
 # its module (a plug-in).
@@ -44,6 +45,40 @@ names=$(names_build "$work/prefix")
 "$work/build/trampoline"
 "$work/build/frequency_check"
 "$work/build/plugin_check"
+# A SUNDIALS of the next major version found first (a project's own SUNDIALS 7 on its
+# CMAKE_PREFIX_PATH, for a springmass built with 6): the package passes it over for the major
+# version springmass was built with, whose interface the library calls. The stand-in's version file
+# accepts any older version, as SUNDIALS 7's does; its configuration must not be loaded.
+sundials_dir=$(sed -n 's/^SUNDIALS_DIR:PATH=//p' "$build/CMakeCache.txt")
+sundials_version=$(sed -n 's/^set(PACKAGE_VERSION "\([0-9.]*\)")$/\1/p' "$sundials_dir/SUNDIALSConfigVersion.cmake")
+[ -n "$sundials_version" ] || fail "no SUNDIALS version in $sundials_dir"
+later=$work/later-sundials/lib/cmake/sundials
+mkdir -p "$later"
+cat > "$later/SUNDIALSConfigVersion.cmake" << EOF
+set(PACKAGE_VERSION "$((${sundials_version%%.*} + 1)).0.0")
+if(PACKAGE_FIND_VERSION_RANGE)
+  if(PACKAGE_VERSION VERSION_LESS PACKAGE_FIND_VERSION_MIN
+     OR (PACKAGE_FIND_VERSION_RANGE_MAX STREQUAL "INCLUDE" AND PACKAGE_VERSION VERSION_GREATER PACKAGE_FIND_VERSION_MAX)
+     OR (PACKAGE_FIND_VERSION_RANGE_MAX STREQUAL "EXCLUDE" AND PACKAGE_VERSION VERSION_GREATER_EQUAL PACKAGE_FIND_VERSION_MAX))
+    set(PACKAGE_VERSION_COMPATIBLE FALSE)
+  else()
+    set(PACKAGE_VERSION_COMPATIBLE TRUE)
+  endif()
+else()
+  if(PACKAGE_VERSION VERSION_LESS PACKAGE_FIND_VERSION)
+    set(PACKAGE_VERSION_COMPATIBLE FALSE)
+  else()
+    set(PACKAGE_VERSION_COMPATIBLE TRUE)
+  endif()
+endif()
+EOF
+echo 'message(FATAL_ERROR "the SUNDIALS of the next major version was taken")' > "$later/SUNDIALSConfig.cmake"
+if ! "$cmake" -S "$source/tests/consumer" -B "$work/later" -G Ninja -DCMAKE_PREFIX_PATH="$work/later-sundials;$work/prefix" \
+    -DEXAMPLES_DIR="$source/examples" > "$work/later.log" 2>&1; then
+	fail "with a SUNDIALS of the next major version first on the path: $(grep -A2 'Error' "$work/later.log")"
+fi
+"$cmake" --build "$work/later" --target oscillator > /dev/null
+"$work/later/oscillator" > /dev/null
 # The headers are C++ too (extern "C"): each compiles alone as C++11, strictly, where a C++ compiler
 # is installed.
 if command -v c++ > /dev/null; then
