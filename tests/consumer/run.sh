@@ -6,10 +6,10 @@
 # balance), and a shared library that links it with the program that checks it (shared/); then
 # builds and runs the examples again with a plain compiler call and pkg-config, as a
 # project without CMake would. In a build with FMUs, the installed tool packs an FMU from the
-# installed runtime, which PYTHON (when given) simulates with fmpy. No installed file, and no FMU,
-# names the build tree. The package passes over a SUNDIALS of the next major version found first.
-# A build configured as debug also gets a pkg-config file that names its
-# library, a project to which springmass is optional goes on without it when jansson is
+# installed runtime, which PYTHON (when given) simulates with fmpy; installing again replaces that
+# runtime. No installed file, and no FMU, names the build tree. The package passes over a SUNDIALS
+# of the next major version found first. A build configured as debug also gets a pkg-config file
+# that names its library, a project to which springmass is optional goes on without it when jansson is
 # missing, and a project that adds springmass's source tree links it into its shared library and
 # its module (a plug-in).
 set -euo pipefail
@@ -207,6 +207,14 @@ got=$(linked "$work/optimised" Release)
 
 runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
 [ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
+# Installing again replaces the runtime rather than adding to it: the libraries and licences an
+# earlier install bundled (here a library under another soname, as after a system upgrade) are not
+# packed into the FMUs made after it. Installed through DESTDIR, into the same folder.
+cp "$runtime/binaries/linux64/springmass_fmu.so" "$runtime/binaries/linux64/libearlier.so.1"
+echo "an earlier install's licence" > "$runtime/documentation/licenses/libearlier1.txt"
+DESTDIR=$work "$cmake" --install "$build" --prefix /prefix > /dev/null
+earlier=$(find "$runtime" -name '*earlier*')
+[ -z "$earlier" ] || fail "installing again kept what an earlier install put into the runtime: $earlier"
 fmu=$work/oscillator.fmu
 env -u SPRINGMASS_FMU_RUNTIME "$work/prefix/bin/springmass" fmu "$source/models/oscillator.json" -o "$fmu" > /dev/null
 mkdir "$work/fmu"
