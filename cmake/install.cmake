@@ -8,7 +8,15 @@ install(TARGETS springmass EXPORT springmassTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/springmass DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
-install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# The licence in springmass's own documentation folder: CMAKE_INSTALL_DOCDIR is named after the
+# project that first included GNUInstallDirs, which for springmass added with add_subdirectory is
+# the project that adds it, whose own LICENSE there would replace springmass's or be replaced.
+if(_sm_top_level)
+  set(SPRINGMASS_DOCDIR ${CMAKE_INSTALL_DOCDIR})
+else()
+  set(SPRINGMASS_DOCDIR ${CMAKE_INSTALL_DATAROOTDIR}/doc/springmass)
+endif()
+install(FILES ${PROJECT_SOURCE_DIR}/LICENSE DESTINATION ${SPRINGMASS_DOCDIR})
 # The tool (and the FMU runtime, fmu/CMakeLists.txt) come from the optimised configurations only:
 # a Debug build installed into the same prefix adds its library (libspringmassd.a) and its
 # pkg-config file (springmassd.pc) and leaves the Release tool, runtime and springmass.pc alone.

@@ -140,6 +140,10 @@ ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$work/build/CMakeCache.txt")
 "$cmake" --install "$work/embedded" --prefix "$work/embedded-prefix" > "$work/embedded-install.log" 2>&1 ||
 	fail "installing a project that adds springmass with add_subdirectory: $(tail -n 5 "$work/embedded-install.log")"
 [ -x "$work/embedded-prefix/bin/springmass" ] || fail "a build without a build type installs no springmass tool"
+# springmass's licence goes to its own documentation folder, beside the project's own licence.
+cmp -s "$source/LICENSE" "$work/embedded-prefix/share/doc/springmass/LICENSE" &&
+	grep -qx 'The licence of springmass_consumer' "$work/embedded-prefix/share/doc/springmass_consumer/LICENSE" ||
+	fail "installed with a project that adds it, springmass's licence is not in share/doc/springmass beside the project's own: $(cd "$work/embedded-prefix" && find . -name LICENSE)"
 commands=$("$ninja" -C "$work/embedded" -t commands frequency_check)
 ! grep -q -- '-Werror.*shared/frequency\.c' <<< "$commands" ||
 	fail "springmass added with add_subdirectory makes warnings errors in the project that adds it"
