@@ -40,6 +40,14 @@ else()
   set(SPRINGMASS_OPTIMISED_ONLY CONFIGURATIONS ${SPRINGMASS_OPTIMISED_CONFIGURATIONS})
 endif()
 install(TARGETS springmass_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} ${SPRINGMASS_OPTIMISED_ONLY})
+# With the tool, what its help refers to and what it runs: the README and docs/ beside the licence
+# (`springmass --help` names docs/model-format.md, docs/fmu.md, docs/analysis.md), and the bundled
+# models (with the mesh they read) to start from.
+install(FILES ${PROJECT_SOURCE_DIR}/README.md DESTINATION ${SPRINGMASS_DOCDIR} ${SPRINGMASS_OPTIMISED_ONLY})
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs/ DESTINATION ${SPRINGMASS_DOCDIR}/docs ${SPRINGMASS_OPTIMISED_ONLY}
+        FILES_MATCHING PATTERN "*.md")
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/models/ DESTINATION ${CMAKE_INSTALL_DATADIR}/springmass/models
+        ${SPRINGMASS_OPTIMISED_ONLY})
 
 set(SPRINGMASS_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/springmass)
 install(EXPORT springmassTargets NAMESPACE springmass:: DESTINATION ${SPRINGMASS_CMAKE_DIR})

@@ -209,6 +209,20 @@ add_config "$work/optimised" Debug DEBUG libspringmassd.a
 got=$(linked "$work/optimised" Release)
 [ "$got" = "libspringmass.a " ] || fail "with a Debug and a RelWithDebInfo install, build type Release links $got"
 
+# The tool comes with what its help refers to (docs/) and with the bundled models, which it takes
+# from where they are installed (the sail's mesh beside its model).
+for doc in README.md docs/model-format.md docs/fmu.md docs/analysis.md docs/simulation.md; do
+	[ -f "$work/prefix/share/doc/springmass/$doc" ] || fail "$doc is not installed beside the licence"
+done
+models=0
+for model in "$work"/prefix/share/springmass/models/*.json; do
+	[ -f "$model" ] || break
+	"$work/prefix/bin/springmass" check "$model" > /dev/null ||
+		fail "the installed tool refuses the installed model $model"
+	models=$((models + 1))
+done
+[ "$models" = "$(ls "$source"/models/*.json | wc -l)" ] ||
+	fail "$models bundled models installed in share/springmass/models, not every one"
 runtime=$(find "$work/prefix" -path '*/springmass/fmu' -type d)
 [ -n "$runtime" ] || exit 0  # a build without FMUs installs no runtime
 # Installing again replaces the runtime rather than adding to it: the libraries and licences an
