@@ -81,6 +81,9 @@ static const double lanczos_tolerance = 1e-10;
 // A new Lanczos vector shorter than this fraction of the step's diagonal entry means an
 // invariant subspace: the space continues from a fresh start vector [1].
 static const double breakdown_fraction = 1e-13;
+// Frequencies count as repeated within this fraction of the largest |omega^2| (repeated_tolerance
+// in modes.c, which groups the modes by it) [1].
+static const double repeated_tolerance = 1e-12;
 // Restarts per Lanczos run and runs with locked modes, both bounds on the work.
 static const int max_restarts = 400;
 static const int max_runs = 12;
@@ -574,12 +577,18 @@ static sm_status lowest_pairs(lanczos_work* w, const modes_problem* p, lanczos_p
 			    want, want > p->kept ? " (those asked for and the next one)" : "", max_restarts, run + 1,
 			    scalbn(w->shift, w->exponent), scalbn(w->gershgorin, w->exponent));
 		// lambda = sigma + 1/nu. A mode is new if it lies below the highest kept one by more than
-		// the round-off of the operator (1e-9 of its scale 1/nu).
+		// the lesser of the round-off of the operator (1e-9 of its scale 1/nu) and the
+		// repeated_tolerance G within which modes.c counts frequencies as repeated: with the first
+		// alone, higher up (lambda above 1e-3 G) a copy of a frequency distinct by that measure but
+		// within 1e-9 of the highest was dropped, and the next frequency's mode kept in its place
+		// (two blocks, one 1e-10 heavier: 3e-12 G apart at 3e-2 G). Lambda's own round-off is
+		// about eps G.
 		const double highest = count > 0 ? lambda[count - 1] : INFINITY;
+		const double margin = fmin(1e-9 * (highest - w->shift), repeated_tolerance * w->gershgorin);
 		size_t added = 0;
 		for (size_t i = 0; i < want; i++) {
 			const double l = w->shift + 1.0 / nu[i];
-			if (count < want || l < highest - 1e-9 * (highest - w->shift)) {
+			if (count < want || l < highest - margin) {
 				lambda[count + added] = l;
 				memcpy(found + (count + added) * dof, fresh + i * dof, dof * sizeof(double));
 				added++;
