@@ -342,8 +342,8 @@ done:
 // repeated_tolerance times the largest |omega^2|, the eigensolvers' round-off (about 1e-15 of
 // it, dense or sparse), and they are all zero, all unstable or all positive. The rotation
 // applies to the rows and columns of the modal damping matrix as well (modal' = Q^T modal Q on
-// the group).
-static const double repeated_tolerance = 1e-12;
+// the group). repeated_tolerance: SM_MODES_REPEATED_TOLERANCE (modes_internal.h).
+static const double repeated_tolerance = SM_MODES_REPEATED_TOLERANCE;
 
 // How far apart the omega^2 of one repeated frequency may lie: repeated_tolerance times the
 // largest |omega^2| [1/s^2].

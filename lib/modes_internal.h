@@ -7,6 +7,11 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// The fraction of the largest |omega^2| within which two omega^2 count as one repeated frequency
+// (the eigensolvers' round-off is about 1e-15 of it) [1]: modes.c groups the modes by it, and the
+// sparse path keeps a later run's mode that lies this far below the highest kept one.
+#define SM_MODES_REPEATED_TOLERANCE 1e-12
+
 // What both eigensolvers share: the configuration, the free map and the results' shape.
 typedef struct modes_problem {
 	const sm_model* model;

@@ -81,9 +81,9 @@ static const double lanczos_tolerance = 1e-10;
 // A new Lanczos vector shorter than this fraction of the step's diagonal entry means an
 // invariant subspace: the space continues from a fresh start vector [1].
 static const double breakdown_fraction = 1e-13;
-// Frequencies count as repeated within this fraction of the largest |omega^2| (repeated_tolerance
-// in modes.c, which groups the modes by it) [1].
-static const double repeated_tolerance = 1e-12;
+// Frequencies count as repeated within this fraction of the largest |omega^2| (modes.c groups the
+// modes by it) [1].
+static const double repeated_tolerance = SM_MODES_REPEATED_TOLERANCE;
 // Restarts per Lanczos run and runs with locked modes, both bounds on the work.
 static const int max_restarts = 400;
 static const int max_runs = 12;
