@@ -9,7 +9,14 @@ case "$build" in /*) ;; *) build=$root/$build ;; esac
 springmass=$build/tools/springmass
 python=$root/.venv/bin/python
 out=$root/out/demo
+# out/demo/ holds one run's results: what an earlier run left there goes first, so that a run
+# that stops part way (a build without FMU support stops at the FMU) leaves no older FMU or plot
+# beside its cloth as if it had made them. A folder that cannot be changed is told in one line.
 mkdir -p "$out"
+if ! problem=$(rm -rf "$out/cloth.csv" "$out/cloth_vtk" "$out/oscillator.fmu" "$out/oscillator.png" 2>&1); then
+  echo "demo: cannot remove the results of an earlier run from $out: ${problem%%$'\n'*}" >&2
+  exit 1
+fi
 
 echo "== springmass check models/cloth.json"
 "$springmass" check "$root/models/cloth.json"

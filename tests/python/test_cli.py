@@ -2439,3 +2439,42 @@ def test_the_fmu_demo_refuses_times_that_are_not_above_zero(tmp_path, option, va
     assert run.returncode == 2
     assert f"argument {option}: {value} is not a finite time above 0 s" in run.stderr
     assert not (tmp_path / "plot.png").exists()
+
+
+def demo_copy(tmp_path):
+    """A copy of tools/demo.sh beside the bundled models, as in a checkout: the script finds the
+    models, the plotting script and the Python environment (.venv, here the tests' own when they run
+    in one) from its own place and writes into out/demo/ there, not into this checkout."""
+    root = tmp_path / "checkout"
+    (root / "tools").mkdir(parents=True)
+    for name in ("demo.sh", "fmu_demo.py"):
+        shutil.copy2(ROOT / "tools" / name, root / "tools" / name)
+    (root / "models").symlink_to(ROOT / "models")
+    if sys.prefix != sys.base_prefix:
+        (root / ".venv").symlink_to(sys.prefix)
+    return root
+
+
+def test_the_demo_leaves_no_earlier_results_when_a_step_fails(tmp_path):
+    """A build without FMU support stops the demo at `springmass fmu`, with the tool's message. The
+    FMU and the plot that an earlier run (of a build with FMUs) left in out/demo/ are gone, not left
+    beside this run's cloth as if this run had made them. The build here is the tool behind a
+    script that refuses `fmu` as a build without the FMU runtime does."""
+    root = demo_copy(tmp_path)
+    build = tmp_path / "build"
+    (build / "tools").mkdir(parents=True)
+    tool = build / "tools" / "springmass"
+    tool.write_text('#!/bin/sh\n[ "$1" != fmu ] || { echo "springmass fmu: this build has no FMU support" >&2; '
+                    f'exit 1; }}\nexec "{CLI}" "$@"\n')
+    tool.chmod(0o755)
+    out = root / "out" / "demo"
+    out.mkdir(parents=True)
+    for name in ("oscillator.fmu", "oscillator.png"):
+        (out / name).write_bytes(b"an earlier run's")
+    run = subprocess.run([root / "tools" / "demo.sh", build], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1, run.stderr
+    assert "springmass fmu: this build has no FMU support" in run.stderr
+    assert "Results in" not in run.stdout
+    assert sorted(p.name for p in out.iterdir()) == ["cloth.csv", "cloth_vtk"]
+    header, rows = read_csv(out / "cloth.csv")
+    assert rows[-1, 0] == 2.0  # the demo's cloth runs to 2 s
