@@ -31,9 +31,13 @@ echo "== springmass fmu models/oscillator.json, simulated in fmpy"
 "$springmass" fmu "$root/models/oscillator.json" -o "$out/oscillator.fmu"
 "$python" "$root/tools/fmu_demo.py" "$out/oscillator.fmu" "$out/oscillator.png"
 
+# The folder as the reader finds it from where the demo runs: out/demo/ from the checkout's top
+# (where make runs it), its full path from any other folder.
+shown=$out
+[ "$(pwd -P)" != "$(cd "$root" && pwd -P)" ] || shown=out/demo
 cat <<TXT
 
-Results in out/demo/:
+Results in $shown/:
   cloth.csv          time, port positions, velocities and energies of the cloth (any spreadsheet, or pandas)
   cloth_vtk/cloth.pvd  the cloth's motion: open it in ParaView and press play; colour the
                      springs by "tension" [N] or "strain", the particles by "velocity" [m/s]

@@ -2478,3 +2478,29 @@ def test_the_demo_leaves_no_earlier_results_when_a_step_fails(tmp_path):
     assert sorted(p.name for p in out.iterdir()) == ["cloth.csv", "cloth_vtk"]
     header, rows = read_csv(out / "cloth.csv")
     assert rows[-1, 0] == 2.0  # the demo's cloth runs to 2 s
+
+
+@pytest.mark.skipif(not HAS_FMU or SANITIZED, reason="a build without the FMU runtime; a sanitizer's shadow memory")
+def test_the_demo_names_where_its_results_are_from_any_folder(tmp_path):
+    """The demo run from another folder than the checkout's: the folder its closing text names,
+    taken from where it was run, holds every file the text lists, and they are what it says they
+    are: the CSV's columns, a series that indexes a frame per CSV row, an FMU and a PNG."""
+    root = demo_copy(tmp_path)
+    if not (root / ".venv").exists():
+        pytest.skip("the tests' Python is no virtual environment to stand for .venv")
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    run = subprocess.run([root / "tools" / "demo.sh", CLI.parent.parent], cwd=elsewhere, capture_output=True,
+                         text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    folder = elsewhere / re.search(r"^Results in (.+):$", run.stdout, re.M).group(1)
+    listed = re.findall(r"^  (\S+) ", run.stdout.split("Results in", 1)[1], re.M)
+    assert listed == ["cloth.csv", "cloth_vtk/cloth.pvd", "oscillator.fmu", "oscillator.png"]
+    assert all((folder / name).is_file() for name in listed)
+    header, rows = read_csv(folder / "cloth.csv")
+    assert header[0] == "time" and "corner.z" in header and "energy.kinetic" in header
+    frames = ET.parse(folder / "cloth_vtk" / "cloth.pvd").getroot().findall(".//DataSet")
+    assert [float(f.get("timestep")) for f in frames] == list(rows[:, 0])
+    assert all((folder / "cloth_vtk" / f.get("file")).is_file() for f in frames)
+    assert zipfile.is_zipfile(folder / "oscillator.fmu")
+    assert (folder / "oscillator.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
