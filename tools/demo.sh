@@ -9,6 +9,15 @@ case "$build" in /*) ;; *) build=$root/$build ;; esac
 springmass=$build/tools/springmass
 python=$root/.venv/bin/python
 out=$root/out/demo
+# What the demo needs, checked before it removes or writes anything.
+if [ ! -x "$springmass" ]; then
+  echo "demo: no springmass tool in $build: build it first (make build)" >&2
+  exit 1
+fi
+if [ ! -x "$python" ]; then
+  echo "demo: no Python environment in $root/.venv: make it with tools/setup.sh" >&2
+  exit 1
+fi
 # out/demo/ holds one run's results: what an earlier run left there goes first, so that a run
 # that stops part way (a build without FMU support stops at the FMU) leaves no older FMU or plot
 # beside its cloth as if it had made them. A folder that cannot be changed is told in one line.

@@ -2504,3 +2504,27 @@ def test_the_demo_names_where_its_results_are_from_any_folder(tmp_path):
     assert all((folder / "cloth_vtk" / f.get("file")).is_file() for f in frames)
     assert zipfile.is_zipfile(folder / "oscillator.fmu")
     assert (folder / "oscillator.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("missing", ["build", ".venv"])
+def test_the_demo_says_what_is_missing_before_it_starts(tmp_path, missing):
+    """A build folder without the tool (not built yet) or a checkout without the Python environment
+    (tools/setup.sh not run) stops the demo before it removes or writes anything, with a message
+    that names what is missing and what makes it."""
+    root = demo_copy(tmp_path)
+    build = CLI.parent.parent
+    if missing == "build":
+        build = tmp_path / "build"
+        build.mkdir()
+    elif (root / ".venv").exists() or (root / ".venv").is_symlink():
+        (root / ".venv").unlink()
+    out = root / "out" / "demo"
+    out.mkdir(parents=True)
+    (out / "cloth.csv").write_text("an earlier run's")
+    run = subprocess.run([root / "tools" / "demo.sh", build], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1, run.stderr
+    assert run.stdout == ""
+    said = {"build": f"no springmass tool in {build}: build it first (make build)",
+            ".venv": f"no Python environment in {root / '.venv'}: make it with tools/setup.sh"}[missing]
+    assert run.stderr == f"demo: {said}\n"
+    assert (out / "cloth.csv").read_text() == "an earlier run's"
