@@ -912,6 +912,126 @@ static int test_elastic_catenary_between_unequal_supports(void)
 	return 0;
 }
 
+// The exact equilibrium of a discrete hanging chain: n springs of stiffness ks and rest length l0
+// between two supports, n - 1 free particles of weight w between them. Every spring carries the
+// same horizontal force H, and the vertical force steps by w at each particle: segment i (from
+// particle i to i + 1) carries (H, V0 + i w), of tension T_i = hypot(H, V0 + i w), and so has the
+// length l0 + T_i / ks along that force. H and V0 solve the two closure conditions
+//   sum_i H (l0 / T_i + 1 / ks) = span,   sum_i V_i (l0 / T_i + 1 / ks) = rise,
+// here by Newton's method with their exact derivatives, to the rounding of the end point (SciPy's
+// root finder on the same equations gives the same H and V0 to the last bit).
+static void discrete_chain(int32_t n, double l0, double ks, double w, double span, double rise, double* H,
+                           double* V0)
+{
+	double h = n * w, v = -0.5 * (n - 1) * w;
+	for (int it = 0; it < 100; it++) {
+		double x = -span, z = -rise, J[2][2] = {{0.0, 0.0}, {0.0, 0.0}};
+		for (int32_t i = 0; i < n; i++) {
+			const double V = v + i * w, T = hypot(h, V), c = l0 / (T * T * T);
+			x += h * (l0 / T + 1.0 / ks);
+			z += V * (l0 / T + 1.0 / ks);
+			J[0][0] += c * V * V + 1.0 / ks;
+			J[0][1] -= c * h * V;
+			J[1][0] -= c * h * V;
+			J[1][1] += c * h * h + 1.0 / ks;
+		}
+		const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+		double dh = (J[1][1] * x - J[0][1] * z) / det, dv = (J[0][0] * z - J[1][0] * x) / det;
+		// Keep H positive: halve a step that would cross 0.
+		while (h - dh <= 0.0) {
+			dh *= 0.5;
+			dv *= 0.5;
+		}
+		h -= dh;
+		v -= dv;
+		if (fabs(dh) + fabs(dv) <= 1e-15 * (h + fabs(v)))
+			break;
+	}
+	*H = h;
+	*V0 = v;
+}
+
+// A chain of 12 springs (l0 = 0.125 m, ks = 150 N/m) and 13 particles of 80 g, held at its ends
+// (0, 0, 0) and (0.6, 0.8, 0.4) m, starts straight between them (every spring compressed: 1.08 m
+// for 1.5 m of rest length) and hangs in the exact equilibrium of the discrete chain
+// (discrete_chain: H = 1.50084 N, V0 = -3.27189 N), in the vertical plane through the supports,
+// on the dense and the sparse path. Solved to 1e-11 N (above the round-off floor, 8 eps x
+// 150 N/m x 2 springs x 1.5 m = 8e-13 N): the stiffness' smallest eigenvalue there is 1.56 N/m,
+// so the positions are within sqrt(33) x 1e-11 / 1.56 = 3.7e-11 m of the exact ones, and a
+// support's reaction, its one spring's force (150 N/m along it) and the particle's weight, within
+// 150 N/m x 2 x 3.7e-11 m = 1.1e-8 N. The reactions sum to the weight of the 13 particles less the
+// forces left on the 11 free ones, at most 11 x 1e-11 N per component.
+static int test_statics_discrete_hanging_chain_is_exact(void)
+{
+	const int32_t n = 12;
+	const double l0 = 0.125, ks = 150.0, m = 0.08, g = 9.81;
+	const double span = 1.0, rise = 0.4, e[2] = {0.6, 0.8};  // horizontal distance, its direction
+	double H, V0;
+	discrete_chain(n, l0, ks, m * g, span, rise, &H, &V0);
+	double exact[13][3] = {{0.0, 0.0, 0.0}};
+	for (int32_t i = 0; i < n; i++) {
+		const double V = V0 + i * m * g, T = hypot(H, V), s = l0 / T + 1.0 / ks;
+		exact[i + 1][0] = exact[i][0] + H * s * e[0];
+		exact[i + 1][1] = exact[i][1] + H * s * e[1];
+		exact[i + 1][2] = exact[i][2] + V * s;
+	}
+	ENSURE_NEAR(exact[n][0], span * e[0], 1e-15);
+	ENSURE_NEAR(exact[n][1], span * e[1], 1e-15);
+	ENSURE_NEAR(exact[n][2], rise, 1e-15);
+	for (int solver = SM_STATICS_DENSE; solver <= SM_STATICS_SPARSE; solver++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = -g;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		for (int32_t i = 0; i <= n; i++) {
+			sm_particle_def pd = sm_default_particle_def();
+			pd.mass = m;
+			pd.position[0] = span * e[0] * i / n;
+			pd.position[1] = span * e[1] * i / n;
+			pd.position[2] = rise * i / n;
+			pd.motion = i == 0 || i == n ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+			ENSURE_STATUS(sm_model_add_particle(model, &pd, NULL), SM_OK);
+		}
+		for (int32_t i = 0; i < n; i++) {
+			sm_spring_def sd = sm_default_spring_def();
+			sd.a = i;
+			sd.b = i + 1;
+			sd.stiffness = ks;
+			sd.rest_length = l0;
+			ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+		}
+		sm_statics_def def = sm_default_statics_def();
+		def.solver = (sm_statics_solver)solver;
+		def.residual_tolerance = 1e-11;
+		double x[3 * 13], r[3 * 13];
+		sm_statics_result res;
+		sm_error err;
+		ENSURE_STATUS(sm_statics_solve(model, &def, x, r, &res, &err), SM_OK);
+		ENSURE(res.residual <= 1e-11 && res.tolerance == 1e-11 && res.stable);
+		double distance = 0.0;
+		for (int32_t i = 0; i <= n; i++)
+			for (int c = 0; c < 3; c++)
+				distance = worst_of(distance, fabs(x[3 * i + c] - exact[i][c]));
+		const double left[3] = {-H * e[0], -H * e[1], -V0 + m * g};
+		const double Vn = V0 + (n - 1) * m * g, right[3] = {H * e[0], H * e[1], Vn + m * g};
+		double reaction = 0.0;
+		for (int c = 0; c < 3; c++) {
+			reaction = worst_of(reaction, fabs(r[c] - left[c]));
+			reaction = worst_of(reaction, fabs(r[3 * n + c] - right[c]));
+		}
+		printf("  %s: %d iterations, residual %.3e N, positions within %.3e m, reactions within %.3e N\n",
+		       solver == SM_STATICS_DENSE ? "dense" : "sparse", (int)res.iterations, res.residual, distance,
+		       reaction);
+		ENSURE(distance <= 3.7e-11);
+		ENSURE(reaction <= 1.1e-8);
+		ENSURE_NEAR(res.reaction_total[0], 0.0, 11 * 1e-11);
+		ENSURE_NEAR(res.reaction_total[1], 0.0, 11 * 1e-11);
+		ENSURE_NEAR(res.reaction_total[2], (n + 1) * m * g, 11 * 1e-11);
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // An n x n cloth of 0.4 kg (structural, shear and bend springs of 2000, 500 and 100 N/m) held at
 // the two corners of its first row.
 static sm_model* hanging_cloth(int32_t n)
@@ -5272,6 +5392,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_statics_reports_every_iteration);
 	RUN_TEST(test_sagging_cable_catenary);
 	RUN_TEST(test_elastic_catenary_between_unequal_supports);
+	RUN_TEST(test_statics_discrete_hanging_chain_is_exact);
 	RUN_TEST(test_hanging_cloth_reactions);
 	RUN_TEST(test_sparse_analysis_starts_no_threads);
 	RUN_TEST(test_sparse_analyses_leave_the_programs_random_numbers_alone);
