@@ -1206,6 +1206,19 @@ static int32_t write_values(sm_document* file, const sm_document* set, int32_t* 
 	return count;
 }
 
+// Writes the line of each parameter of `pending` (count indices) in that order, unchecked: the
+// FMU takes them together (fmu_apply_parameters), as `set`, a valid document, has them. Returns 0.
+static int32_t write_together(const sm_document* file, const sm_document* set, const int32_t* pending,
+                              int32_t count, fmu_text* out)
+{
+	for (int32_t k = 0; k < count; ++k) {
+		char number[SM_NUMBER_TEXT_CAPACITY];
+		sm_format_number(sm_document_parameter_value(set, pending[k]), number);
+		fmu_text_appendf(out, "%s=%s\n", sm_document_parameter_name(file, pending[k]), number);
+	}
+	return 0;
+}
+
 char* fmu_parameters_text(const sm_document* set, const char* text, size_t length, const char* source_name,
                           const int32_t* order, int32_t order_count, size_t* parameters_length, sm_error* err)
 {
@@ -1235,20 +1248,21 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 	// Passes in file order (the same values give the same text, and GUID, whatever order they
 	// were given in): each value the model takes is written; one it refuses now is tried again
 	// after the others, until all are written or a pass takes none. If some are left, the order
-	// the caller set them in, which the model took, is written instead.
+	// the caller set them in, if the model takes it; without one (order NULL), every value in file
+	// order, which the FMU takes together (fmu_apply_parameters).
 	fmu_text out = {NULL, 0, 0, false};
 	fmu_text_append(&out, "", 0);
 	sm_error refusal = {SM_OK, ""};
 	count = write_values(file, set, pending, count, true, &out, &refusal);
-	if (count > 0 && order != NULL && !out.failed) {
+	if (count > 0 && !out.failed) {
 		sm_document_destroy(file);
 		file = sm_document_parse(text, length, source_name, err);
 		out.length = 0;
 		if (out.data)
 			out.data[0] = '\0';
 		count = 0;
-		for (int32_t k = 0; k < order_count && file && count < np; ++k) {
-			const int32_t i = order[k];
+		for (int32_t k = 0; k < (order != NULL ? order_count : np) && file && count < np; ++k) {
+			const int32_t i = order != NULL ? order[k] : k;
 			if (i < 0 || i >= np)
 				continue;
 			const double a = sm_document_parameter_value(file, i), b = sm_document_parameter_value(set, i);
@@ -1257,8 +1271,10 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 		}
 		if (!file)
 			out.failed = true;
-		else
+		else if (order != NULL)
 			count = write_values(file, set, pending, count, false, &out, &refusal);
+		else
+			count = write_together(file, set, pending, count, &out);
 	}
 	c_numbers_end(&numbers);
 	free(pending);
@@ -1299,9 +1315,12 @@ static sm_status line_error(sm_error* err, sm_status status, const char* source_
 }
 
 // Applies one line "NAME=VALUE" (line_length bytes, no line feed); first_line[i] is the line that
-// set parameter i before (0 for none).
+// set parameter i before (0 for none). The value goes into values[i] too; one the model refuses
+// after the lines before, and every one after such a refusal, is left to be taken with all the
+// others at the end (values valid only together), the first refusal's message in *refusal.
 static sm_status apply_line(sm_document* doc, const char* line, size_t line_length, size_t number,
-                            size_t* first_line, const char* source_name, sm_error* err)
+                            size_t* first_line, double* values, sm_error* refusal, const char* source_name,
+                            sm_error* err)
 {
 	char quoted[QUOTED_LINE_CAPACITY];
 	quote_line(line, line_length, quoted, sizeof quoted);
@@ -1347,10 +1366,15 @@ static sm_status apply_line(sm_document* doc, const char* line, size_t line_leng
 		return line_error(err, SM_ERROR_SCHEMA, source_name, number,
 		                  "parameter %s is set again (first on line %zu)", name, first_line[index]);
 	first_line[index] = number;
-	sm_error refusal = {SM_OK, ""};
-	const sm_status st = sm_document_set_parameter(doc, index, value, &refusal);
+	values[index] = value;
+	if (refusal->status != SM_OK)
+		return SM_OK;
+	sm_error e = {SM_OK, ""};
+	const sm_status st = sm_document_set_parameter(doc, index, value, &e);
+	if (st == SM_ERROR_OUT_OF_MEMORY)
+		return line_error(err, st, source_name, number, "\"%s\": %s", quoted, e.message);
 	if (st != SM_OK)
-		return line_error(err, st, source_name, number, "\"%s\": %s", quoted, refusal.message);
+		line_error(refusal, st, source_name, number, "\"%s\": %s", quoted, e.message);
 	return SM_OK;
 }
 
@@ -1363,22 +1387,42 @@ sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t 
 		return line_error(err, SM_ERROR_SYNTAX, source_name, 1,
 		                  "empty: the file lists the parameter values set at "
 		                  "packaging, one NAME=VALUE a line, and is left out when there are none");
-	size_t* first_line = calloc((size_t)sm_document_parameter_count(doc) + 1, sizeof *first_line);
+	const int32_t np = sm_document_parameter_count(doc);
+	size_t* first_line = calloc((size_t)np + 1, sizeof *first_line);
+	double* values = malloc(((size_t)np + 1) * sizeof *values);
 	c_numbers numbers;
-	if (!first_line || !c_numbers_begin(&numbers)) {
+	if (!first_line || !values || !c_numbers_begin(&numbers)) {
 		free(first_line);
+		free(values);
 		return fail(err, SM_ERROR_OUT_OF_MEMORY, "out of memory while reading the parameter values");
 	}
+	for (int32_t i = 0; i < np; ++i)
+		values[i] = sm_document_parameter_value(doc, i);
+	// The lines one after the other, as the packager writes them where the model takes them so;
+	// values that no order takes one at a time (a rope's start and end swapped) are taken together
+	// at the end, as `springmass run --set` takes them. A refusal is reported before a malformed
+	// line after it, and when the values are refused together too.
 	sm_status st = SM_OK;
+	sm_error refusal = {SM_OK, ""};
 	size_t number = 1;
 	for (size_t start = 0; start < parameters_length && st == SM_OK; ++number) {
 		const char* feed = memchr(parameters + start, '\n', parameters_length - start);
 		const size_t line_length = feed ? (size_t)(feed - (parameters + start)) : parameters_length - start;
-		st = apply_line(doc, parameters + start, line_length, number, first_line, source_name, err);
+		st = apply_line(doc, parameters + start, line_length, number, first_line, values, &refusal,
+		                source_name, err);
 		start += line_length + 1;
+	}
+	if (refusal.status != SM_OK && st != SM_ERROR_OUT_OF_MEMORY) {
+		sm_error together = {SM_OK, ""};
+		st = st == SM_OK ? sm_document_set_parameters(doc, values, &together) : st;
+		if (st == SM_ERROR_OUT_OF_MEMORY)
+			fail(err, st, together.message);
+		else if (st != SM_OK && err)
+			*err = refusal;
 	}
 	c_numbers_end(&numbers);
 	free(first_line);
+	free(values);
 	return st;
 }
 

@@ -168,10 +168,12 @@ void fmu_package_guid(const char* text, size_t length, const char* parameters, s
 /// The lines are in the file's order of parameters, except that a value the model refuses before
 /// others are set (a rope's end moved onto its start before the start moves away) comes after
 /// them; if no such order is found, they are in `order` (order_count distinct parameter indices,
-/// an order the caller set them in; NULL for none): applied one at a time in the order written,
-/// every value is accepted. Messages name `source_name` (the model file). Returns a malloc'ed
-/// NUL-terminated text and its length (0 when no value differs), or NULL with err set: out of
-/// memory, or values the model refuses in every such order (naming the parameter).
+/// an order the caller set them in): applied one at a time in the order written, every value is
+/// accepted. With `order` NULL, values that no such order takes (a rope's start and end swapped)
+/// are written in the file's order, unchecked: fmu_apply_parameters takes them together, as `set`
+/// has them. Messages name `source_name` (the model file). Returns a malloc'ed NUL-terminated text
+/// and its length (0 when no value differs), or NULL with err set: out of memory, or values the
+/// model refuses in every such order (naming the parameter).
 /// Whether a parameter's value set is the one it has: the same double, down to the sign of a zero
 /// (a parameter of 0 set to -0 starts a velocity at -0, as the file giving -0.0 does:
 /// sm_document_set_parameter).
@@ -184,9 +186,12 @@ char* fmu_parameters_text(const sm_document* set, const char* text, size_t lengt
 /// Applies the text of resources/parameters.txt to a document parsed from the model file: one
 /// "NAME=VALUE" a line (the last line's line feed may be missing), each a parameter of the model
 /// named once with a finite number (read in the C locale whatever the importer's), set in the order
-/// of the lines. Refuses an empty text, a malformed line, an unknown or repeated parameter and a
-/// value the model refuses, with a message "SOURCE:LINE: ..." naming it (source_name, e.g.
-/// "resources/parameters.txt"); the document may then hold the values of the lines before.
+/// of the lines; from a value the model refuses after the lines before on, the rest are set with
+/// all the others at the end, together (values valid only together, which no order takes one at a
+/// time). Refuses an empty text, a malformed line, an unknown or repeated parameter and values the
+/// model refuses, with a message "SOURCE:LINE: ..." naming the line (source_name, e.g.
+/// "resources/parameters.txt"; for values refused together too, the first line refused); the
+/// document may then hold the values of the lines before.
 sm_status fmu_apply_parameters(sm_document* doc, const char* parameters, size_t parameters_length,
                                const char* source_name, sm_error* err);
 

@@ -723,6 +723,12 @@ static int test_parameter_values_refused(void)
 	    {TEXT("k=60\nm=1\nk=70"), "parameters.txt:3: parameter k is set again (first on line 1)"},
 	    {TEXT("d=1\nm=-1\n"),
 		 "parameters.txt:2: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
+	    // Values refused one at a time are taken together at the end: refused so too, the first
+	    // line refused is named, also before a malformed line after it.
+	    {TEXT("m=-1\nk=60\n"),
+		 "parameters.txt:1: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
+	    {TEXT("m=-1\nk200\n"),
+		 "parameters.txt:1: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
 	};
 #undef TEXT
 #undef BYTES_FF_10

@@ -456,8 +456,9 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	const int status = cli_set_parameters("fmu", *doc, opt->sets, opt->set_count);
 	if (status != 0 || opt->set_count == 0)
 		return status;
-	// For values the file's order cannot take: the parameters in the order of the --set options,
-	// which the model took one at a time (set_order), last set and failing that first set.
+	// For values the file's order cannot take: the parameters in the order of the --set options
+	// (set_order), last set and failing that first set, if the model takes them one at a time in
+	// that order; failing both, the file's order, which the FMU takes together, as they were set.
 	const int32_t np = sm_document_parameter_count(*doc);
 	int32_t* order = malloc(((size_t)np + 1) * sizeof *order);
 	bool* seen = malloc(((size_t)np + 1) * sizeof *seen);
@@ -469,22 +470,19 @@ static int apply_sets(const options* opt, const char* text, size_t length, sm_do
 	}
 	sm_error err = {SM_OK, ""};
 	bool repeated = false;
-	for (int pass = 0; pass < 2 && !*parameters && !(pass == 1 && !repeated); ++pass) {
-		const int32_t order_count = set_order(opt, *doc, pass == 0, order, seen, &repeated);
-		*parameters =
-		    fmu_parameters_text(*doc, text, length, opt->model, order, order_count, parameters_length, &err);
+	for (int pass = 0; pass < 3 && !*parameters; ++pass) {
+		if (pass == 1 && !repeated)
+			continue;
+		const int32_t order_count = pass < 2 ? set_order(opt, *doc, pass == 0, order, seen, &repeated) : 0;
+		*parameters = fmu_parameters_text(*doc, text, length, opt->model, pass < 2 ? order : NULL,
+		                                  order_count, parameters_length, &err);
 		if (!*parameters && err.status == SM_ERROR_OUT_OF_MEMORY)
 			break;
 	}
 	free(order);
 	free(seen);
 	if (!*parameters) {
-		fprintf(
-		    stderr, "springmass fmu: --set: %s%s\n", err.message,
-		    repeated && err.status != SM_ERROR_OUT_OF_MEMORY
-		        ? " (a parameter is set more than once: the FMU holds each value once; give each parameter once, "
-		          "in an order the model takes)"
-				: "");
+		fprintf(stderr, "springmass fmu: --set: %s\n", err.message);
 		return 1;
 	}
 	if (*parameters_length == 0) {

@@ -4,6 +4,7 @@ import math
 import os
 import re
 import struct
+import subprocess
 import sys
 import zipfile
 
@@ -14,7 +15,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conftest import MODELS
+from conftest import CLI, MODELS
 from fmu_helpers import Instance, fmu_guid
 
 FMI2_ERROR = 3
@@ -1032,6 +1033,36 @@ def test_set_values_the_file_order_cannot_take_keep_the_order_given(package, tmp
     try:
         inst.start()
         assert inst.get("p[0].x", "p[0].y", "p[0].z", "p[2].y", "p[2].z") == [1.0, 1.0, 5.0, 5.0, 1.0]
+    finally:
+        inst.free()
+
+
+def test_set_values_no_order_takes_one_at_a_time_are_taken_together(package, tmp_path):
+    # A rope from xa = 0 to xb = 1 turned round: --set xa=1 --set xb=0. Either value alone puts the
+    # start on the end (a rope of no length, which its per-strain springs refuse), so no order
+    # takes them one at a time; together they are a rope of length 1, as `springmass run --set`
+    # takes them. The FMU starts from the rope turned round, its particles at 1, 0.5 and 0 m: the
+    # midpoint (xa + xb) / 2 and the ends are exact in binary, so the positions are compared
+    # exactly, with those `springmass run --positions` gives at t = 0.
+    model = tmp_path / "ends.json"
+    model.write_text('{"springmass": 1, "name": "ends", "parameters": {"xa": 0, "xb": 1}, "structures": '
+                     '[{"type": "rope", "name": "r", "start": ["xa", 0, 0], "end": ["xb", 0, 0], "segments": 2, '
+                     '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
+    run = subprocess.run([str(CLI), "run", str(model), "-q", "-o", "-", "--t-end", "0.1", "--positions",
+                          "--set", "xa=1", "--set", "xb=0"], capture_output=True, text=True, check=True)
+    header, first = run.stdout.splitlines()[:2]
+    row = dict(zip(header.split(","), map(float, first.split(","))))
+    assert [row[f"particle.r[{i}].x"] for i in range(3)] == [1.0, 0.5, 0.0]
+    # They are written in the file's order, whatever the order given: the same FMU either way.
+    fmu = package(model, ("xa=1", "xb=0"))
+    for sets in (("xa=1", "xb=0"), ("xb=0", "xa=1")):
+        with zipfile.ZipFile(package(model, sets)) as z:
+            assert z.read("resources/parameters.txt") == b"xa=1\nxb=0\n"
+    inst = Instance(fmu)
+    try:
+        inst.start()
+        assert inst.get("p[0].x", "p[1].x", "p[2].x") == [1.0, 0.5, 0.0]
+        assert [inst.slave.getReal([inst.vr[n]])[0] for n in ("xa", "xb")] == [1.0, 0.0]
     finally:
         inst.free()
 
