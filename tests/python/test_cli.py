@@ -2157,6 +2157,17 @@ def test_fmu_packs_the_runtime_it_is_given(tmp_path):
     assert list(staging.iterdir()) == []
 
 
+def signalling_zip(tools, name):
+    """A folder `tools` holding a zip that sends the signal `name` (INT, TERM, HUP, ...) to the
+    process that runs it, then makes the archive with the real zip; put it first on PATH."""
+    tools.mkdir()
+    real_zip = shutil.which("zip")
+    assert real_zip is not None
+    (tools / "zip").write_text(f'#!/bin/sh\nkill -{name} $PPID\nexec "{real_zip}" "$@"\n')
+    (tools / "zip").chmod(0o755)
+    return tools
+
+
 @pytest.mark.skipif(not HAS_FMU, reason="a build without the FMU runtime")
 @pytest.mark.parametrize("name, text", [("TERM", "Terminated"), ("INT", "Interrupt"), ("HUP", "Hangup")])
 def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path, name, text):
@@ -2168,12 +2179,7 @@ def test_fmu_stopped_by_a_signal_leaves_nothing_behind(tmp_path, name, text):
     runtime = stand_in_runtime(tmp_path / "runtime", "binary")
     staging = tmp_path / "staging"
     staging.mkdir()
-    tools = tmp_path / "tools"
-    tools.mkdir()
-    real_zip = shutil.which("zip")
-    assert real_zip is not None
-    (tools / "zip").write_text(f'#!/bin/sh\nkill -{name} $PPID\nexec "{real_zip}" "$@"\n')
-    (tools / "zip").chmod(0o755)
+    tools = signalling_zip(tmp_path / "tools", name)
     fmu = tmp_path / "oscillator.fmu"
     fmu.write_bytes(b"an earlier FMU")
     env = dict(os.environ, TMPDIR=str(staging), PATH=f"{tools}:{os.environ['PATH']}")
@@ -2204,12 +2210,7 @@ def test_fmu_goes_on_through_a_hangup_under_nohup(tmp_path):
     # writes the FMU. The stand-in zip sends it while the tool waits for zip, as in
     # test_fmu_stopped_by_a_signal_leaves_nothing_behind.
     runtime = stand_in_runtime(tmp_path / "runtime", "binary")
-    tools = tmp_path / "tools"
-    tools.mkdir()
-    real_zip = shutil.which("zip")
-    assert real_zip is not None
-    (tools / "zip").write_text(f'#!/bin/sh\nkill -HUP $PPID\nexec "{real_zip}" "$@"\n')
-    (tools / "zip").chmod(0o755)
+    tools = signalling_zip(tmp_path / "tools", "HUP")
     fmu = tmp_path / "oscillator.fmu"
     env = dict(os.environ, PATH=f"{tools}:{os.environ['PATH']}")
     out = subprocess.run([str(CLI), "fmu", str(MODELS / "oscillator.json"), "-o", str(fmu), "--runtime", str(runtime)],
