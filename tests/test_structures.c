@@ -1114,7 +1114,7 @@ static sm_spring_material section_material(double stiffness)
 static double pull_of_stretched(const sm_model* model, double e, double x_edge)
 {
 	const int32_t n = sm_model_particle_count(model);
-	double* x = malloc(3 * (size_t)n * sizeof(double));
+	double* x = calloc(3 * (size_t)n, sizeof(double));  // zeros, should the model give no state
 	double* f = malloc(3 * (size_t)n * sizeof(double));
 	if (x == NULL || f == NULL) {
 		free(x);
