@@ -795,6 +795,22 @@ static int test_sagging_cable_catenary(void)
 	return 0;
 }
 
+// One Newton step of a hanging cable's two closure conditions in its support's horizontal and
+// vertical forces (h, v): residual (rx, rz), Jacobian J. A step that would take h to 0 or below
+// is halved until h stays positive. Returns |dh| + |dv|, the step taken [N].
+static double closure_step(double J[2][2], double rx, double rz, double* h, double* v)
+{
+	const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+	double dh = (J[1][1] * rx - J[0][1] * rz) / det, dv = (J[0][0] * rz - J[1][0] * rx) / det;
+	while (*h - dh <= 0.0) {
+		dh *= 0.5;
+		dv *= 0.5;
+	}
+	*h -= dh;
+	*v -= dv;
+	return fabs(dh) + fabs(dv);
+}
+
 // Irvine's elastic catenary (H. M. Irvine, Cable Structures, MIT Press 1981, section 2.3): a
 // cable of unstretched length L0, weight w per unstretched length and axial stiffness E
 // (T = E strain), hung from its end s = 0 at the origin, where the support pulls it with the
@@ -827,16 +843,7 @@ static void elastic_catenary(double span, double rise, double L0, double w, doub
 			J[0][c] = (xp - xm) / (2.0 * d);
 			J[1][c] = (zp - zm) / (2.0 * d);
 		}
-		const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-		double dh = (J[1][1] * rx - J[0][1] * rz) / det, dv = (J[0][0] * rz - J[1][0] * rx) / det;
-		// Keep H positive: halve a step that would cross 0.
-		while (h - dh <= 0.0) {
-			dh *= 0.5;
-			dv *= 0.5;
-		}
-		h -= dh;
-		v -= dv;
-		if (fabs(dh) + fabs(dv) < 1e-15 * w * L0)
+		if (closure_step(J, rx, rz, &h, &v) < 1e-15 * w * L0)
 			break;
 	}
 	*H = h;
@@ -935,16 +942,8 @@ static void discrete_chain(int32_t n, double l0, double ks, double w, double spa
 			J[1][0] -= c * h * V;
 			J[1][1] += c * h * h + 1.0 / ks;
 		}
-		const double det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-		double dh = (J[1][1] * x - J[0][1] * z) / det, dv = (J[0][0] * z - J[1][0] * x) / det;
-		// Keep H positive: halve a step that would cross 0.
-		while (h - dh <= 0.0) {
-			dh *= 0.5;
-			dv *= 0.5;
-		}
-		h -= dh;
-		v -= dv;
-		if (fabs(dh) + fabs(dv) <= 1e-15 * (h + fabs(v)))
+		const double step = closure_step(J, x, z, &h, &v);
+		if (step <= 1e-15 * (h + fabs(v)))
 			break;
 	}
 	*H = h;

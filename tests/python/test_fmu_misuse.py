@@ -987,14 +987,19 @@ def test_edited_parameter_values_are_refused_at_instantiation(package):
         inst.free()
 
 
+# A rope of two segments from (xa, 0, 0) to (xb, 0, 0), xa = 0 and xb = 1 by default, fixed at its
+# start, its springs of stiffness per strain: a rope of no length (xa = xb) is refused.
+ROPE_BETWEEN_XA_AND_XB = ('{"springmass": 1, "name": "ends", "parameters": {"xa": 0, "xb": 1}, "structures": '
+                          '[{"type": "rope", "name": "r", "start": ["xa", 0, 0], "end": ["xb", 0, 0], "segments": 2, '
+                          '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
+
+
 def test_set_values_are_written_in_an_order_the_model_takes(package, tmp_path):
     # A rope from xa = 0 to xb = 1 with per-strain springs: --set xb=3 --set xa=1 ends at 1..3, but
     # xa = 1 before xb moves would give the rope zero length, which the model refuses. The values
     # are written in the file's order where the model takes them there, after the others where not.
     model = tmp_path / "ends.json"
-    model.write_text('{"springmass": 1, "name": "ends", "parameters": {"xa": 0, "xb": 1}, "structures": '
-                     '[{"type": "rope", "name": "r", "start": ["xa", 0, 0], "end": ["xb", 0, 0], "segments": 2, '
-                     '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
+    model.write_text(ROPE_BETWEEN_XA_AND_XB)
     fmu = package(model, ("xb=3", "xa=1"))
     with zipfile.ZipFile(fmu) as z:
         assert z.read("resources/parameters.txt") == b"xb=3\nxa=1\n"
@@ -1045,9 +1050,7 @@ def test_set_values_no_order_takes_one_at_a_time_are_taken_together(package, tmp
     # midpoint (xa + xb) / 2 and the ends are exact in binary, so the positions are compared
     # exactly, with those `springmass run --positions` gives at t = 0.
     model = tmp_path / "ends.json"
-    model.write_text('{"springmass": 1, "name": "ends", "parameters": {"xa": 0, "xb": 1}, "structures": '
-                     '[{"type": "rope", "name": "r", "start": ["xa", 0, 0], "end": ["xb", 0, 0], "segments": 2, '
-                     '"structural": {"strain_stiffness": 100}}], "fixed": ["r[0]"]}')
+    model.write_text(ROPE_BETWEEN_XA_AND_XB)
     run = subprocess.run([str(CLI), "run", str(model), "-q", "-o", "-", "--t-end", "0.1", "--positions",
                           "--set", "xa=1", "--set", "xb=0"], capture_output=True, text=True, check=True)
     header, first = run.stdout.splitlines()[:2]
