@@ -20,6 +20,18 @@ bool cli_signal_ignored(int signal)
 	return sigaction(signal, NULL, &current) == 0 && current.sa_handler == SIG_IGN;
 }
 
+void cli_settle_blocked_pipe_signal(void)
+{
+	sigset_t mask;
+	if (pthread_sigmask(SIG_BLOCK, NULL, &mask) != 0 || !sigismember(&mask, SIGPIPE))
+		return;
+	struct sigaction ignore;
+	memset(&ignore, 0, sizeof ignore);
+	ignore.sa_handler = SIG_IGN;
+	sigemptyset(&ignore.sa_mask);
+	sigaction(SIGPIPE, &ignore, NULL);
+}
+
 // Catches `signal` unless the process was started with it ignored.
 static void catch_signal(int signal, const struct sigaction* action)
 {

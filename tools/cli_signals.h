@@ -22,6 +22,14 @@ void cli_catch_stop_signals(bool pipe);
 /// Whether `signal` is ignored now (SIG_IGN).
 bool cli_signal_ignored(int signal);
 
+/// Takes a SIGPIPE blocked in the signal mask the tool was started with as ignored, which it
+/// amounts to: the tool unblocks no signal it did not block itself, so such a signal never ends
+/// it, and a write to a pipe whose reader has gone is then an output that cannot be written,
+/// reported with its reason as with SIGPIPE ignored (not a failure without a word, the signal
+/// waiting in vain to end the command). Called once, at the start (the disposition is the
+/// process's, whatever threads a library has started).
+void cli_settle_blocked_pipe_signal(void);
+
 /// Ends the process by the signal noted, with its default action; returns if none was noted.
 void cli_end_by_stop_signal(void);
 

@@ -1,6 +1,7 @@
 // springmass: the command-line tool. Dispatches to one subcommand per file.
 #define _GNU_SOURCE  // RTLD_DEFAULT
 
+#include "cli_signals.h"
 #include "commands.h"
 
 #include "springmass/base.h"
@@ -95,6 +96,7 @@ static int finish(int status)
 int main(int argc, char** argv)
 {
 	open_standard_streams();
+	cli_settle_blocked_pipe_signal();
 	single_threaded_blas();
 	// Failures inside GSL come back as status codes, reported like any other error, instead of
 	// GSL's default abort (include/springmass/analysis.h).

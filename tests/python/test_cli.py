@@ -982,14 +982,16 @@ def test_statics_files_agree_and_the_rest_shape_is_an_equilibrium(tmp_path):
     assert len(quiet.splitlines()) < len(out.splitlines()) and "rope[0]" not in quiet and "rope[0]" in out
 
 
-def run_into_a_pipe_without_a_reader(*args, env=None):
+def run_into_a_pipe_without_a_reader(*args, env=None, pipe_signal_blocked=False):
     """Runs the tool with its standard output a pipe whose reader has gone (SIGPIPE at its
-    default, as a shell leaves it); returns the finished process (text)."""
+    default, as a shell leaves it, and blocked in the signal mask it starts with if
+    pipe_signal_blocked); returns the finished process (text)."""
     read_end, write_end = os.pipe()
     os.close(read_end)
+    block = (lambda: signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGPIPE})) if pipe_signal_blocked else None
     try:
         return subprocess.run([str(CLI), *map(str, args)], stdout=write_end, stderr=subprocess.PIPE, text=True,
-                              env=env, timeout=60)
+                              env=env, timeout=60, preexec_fn=block)
     finally:
         os.close(write_end)
 
@@ -1003,6 +1005,24 @@ def test_statics_into_a_pipe_without_a_reader_leaves_no_temporary(tmp_path):
                                            "--vtk", tmp_path / "vtk", "--save-model", "/dev/stdout")
     assert out.returncode == -signal.SIGPIPE and out.stderr == "", (out.returncode, out.stderr)
     assert sorted(str(p.relative_to(tmp_path)) for p in tmp_path.rglob("*")) == ["vtk"]
+
+
+def test_a_pipe_signal_blocked_from_the_start_makes_a_reader_gone_a_write_error(tmp_path):
+    # Started with SIGPIPE blocked (a signal mask is inherited: a program that blocks it in the
+    # thread that starts the tool passes it on), the tool is never ended by it: a write to a pipe
+    # whose reader has gone is an output that cannot be written, named with the reason (exit
+    # status 1), as with SIGPIPE ignored. It was a failure without a word: the failed write was
+    # left to the signal to end the command quietly, and that signal, blocked, never came.
+    out = run_into_a_pipe_without_a_reader("run", MODELS / "oscillator.json", "-q", "-o", "-", pipe_signal_blocked=True)
+    assert out.returncode == 1 and out.stderr == "springmass run: cannot write standard output: Broken pipe\n", (
+        out.returncode, out.stderr)
+    # statics writes its outputs all or none: the saved model failing, the CSV is not written
+    # either, and no temporary is left.
+    out = run_into_a_pipe_without_a_reader("statics", MODELS / "two_mass_chain.json", "-q", "-o", tmp_path / "rest.csv",
+                                           "--save-model", "/dev/stdout", pipe_signal_blocked=True)
+    assert out.returncode == 1 and out.stderr == "springmass statics: cannot write /dev/stdout: Broken pipe\n", (
+        out.returncode, out.stderr)
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_path):
@@ -2201,6 +2221,13 @@ def test_fmu_into_a_pipe_without_a_reader_removes_its_staging_folder(tmp_path):
     out = run_into_a_pipe_without_a_reader("fmu", MODELS / "oscillator.json", "-o", "/dev/stdout", "--runtime", runtime,
                                            env=dict(os.environ, TMPDIR=str(staging)))
     assert out.returncode == -signal.SIGPIPE and out.stderr == "", (out.returncode, out.stderr)
+    assert list(staging.iterdir()) == []
+    # With SIGPIPE blocked from the start, which never ends the tool, the write fails with its
+    # reason (exit status 1), the staging folder removed all the same.
+    out = run_into_a_pipe_without_a_reader("fmu", MODELS / "oscillator.json", "-o", "/dev/stdout", "--runtime", runtime,
+                                           env=dict(os.environ, TMPDIR=str(staging)), pipe_signal_blocked=True)
+    assert out.returncode == 1 and out.stderr == "springmass fmu: cannot write /dev/stdout: Broken pipe\n", (
+        out.returncode, out.stderr)
     assert list(staging.iterdir()) == []
 
 
