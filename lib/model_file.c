@@ -317,22 +317,61 @@ static bool error_before_its_byte(const json_error_t* error, const char* text, s
 	return json_error_code(error) == json_error_invalid_syntax && c < 0x20 && control;
 }
 
+// The opening quote of the string whose closing quote is text[close]: the first '"' before it
+// that no backslash escapes (inside a string every '"' is escaped). `close` itself if there is none.
+static size_t opening_quote(const char* text, size_t close)
+{
+	for (size_t open = close; open > 0;) {
+		open--;
+		size_t backslashes = 0;
+		while (backslashes < open && text[open - 1 - backslashes] == '\\')
+			backslashes++;
+		if (text[open] == '"' && backslashes % 2 == 0)
+			return open;
+	}
+	return close;
+}
+
+// The parser quotes the token an error names only up to this many bytes: a longer one it names
+// not at all ("duplicate object key", "real number overflow").
+#define PARSER_QUOTED_TOKEN_BYTES 20
+
 // Where the token an error names whole begins, as the offset of its first byte; `at` (the bytes the
 // parser read, up to the token's last) for any other error. A token the parser quotes whole ("'}'
 // expected near '\"name\"'", "invalid token near 'NaN'", a repeated key, a number out of range)
 // is reported at its first character, where an editor's cursor should go to mend it; an error
-// inside a string (an escape, a control character) stays at the character at fault.
-static size_t token_start(const json_error_t* error, const char* text, size_t at)
+// inside a string (an escape, a control character) stays at the character at fault. A token
+// longer than the parser quotes is found in the text, ending at `at`: a string from its opening
+// quote, a number or a word back to the white space or punctuation before it; *unquoted then gets
+// its length, for the message to quote it (0 otherwise).
+static size_t token_start(const json_error_t* error, const char* text, size_t at, size_t* unquoted)
 {
+	*unquoted = 0;
 	const enum json_error_code code = json_error_code(error);
-	const bool whole =
-	    code == json_error_duplicate_key || code == json_error_numeric_overflow ||
-	    (code == json_error_invalid_syntax && (strstr(error->text, " expected near '") != NULL ||
-		                                       strncmp(error->text, "invalid token near '", 20) == 0 ||
-		                                       strncmp(error->text, "unexpected token near '", 23) == 0));
 	const char* near = strstr(error->text, " near '");
-	if (!whole || near == NULL)
+	const size_t length = strlen(error->text);
+	const bool expected = length > 9 && strcmp(error->text + length - 9, " expected") == 0;
+	const bool whole = code == json_error_duplicate_key || code == json_error_numeric_overflow ||
+	                   (code == json_error_invalid_syntax &&
+	                    (strstr(error->text, " expected near '") != NULL ||
+	                     strncmp(error->text, "invalid token near '", 20) == 0 ||
+	                     strncmp(error->text, "unexpected token near '", 23) == 0 ||
+	                     (near == NULL && (expected || strcmp(error->text, "invalid token") == 0 ||
+	                                       strcmp(error->text, "unexpected token") == 0))));
+	if (!whole || at == 0)
 		return at;
+	if (near == NULL) {
+		size_t start = at;
+		if (text[at - 1] == '"')
+			start = opening_quote(text, at - 1);
+		else
+			while (start > 0 && strchr(" \t\r\n{}[],:\"", text[start - 1]) == NULL)
+				start--;
+		if (at - start <= PARSER_QUOTED_TOKEN_BYTES)
+			return at;  // a token the parser would have quoted: not the one the error is on
+		*unquoted = at - start;
+		return start;
+	}
 	const char* token = near + 7;
 	const size_t quoted = strlen(token);
 	// The quoted text is the token's bytes, unless the message was cut short.
@@ -365,18 +404,9 @@ static size_t escape_at_fault(const json_error_t* error, const char* text, size_
 	      (code == json_error_invalid_syntax && strncmp(error->text, "invalid Unicode '", 17) == 0)) ||
 	    at < 2 || text[at - 1] != '"')
 		return at;
-	// The opening quote: the first '"' before the closing one that no backslash escapes.
-	size_t open = at - 1;
-	for (;;) {
-		if (open == 0)
-			return at;
-		open--;
-		size_t backslashes = 0;
-		while (backslashes < open && text[open - 1 - backslashes] == '\\')
-			backslashes++;
-		if (text[open] == '"' && backslashes % 2 == 0)
-			break;
-	}
+	const size_t open = opening_quote(text, at - 1);
+	if (open == at - 1)
+		return at;
 	for (size_t i = open + 1; i + 6 < at; i++) {
 		if (text[i] != '\\')
 			continue;
@@ -568,18 +598,30 @@ static sm_document* parse_document(const char* text, size_t length, const char* 
 		const size_t at = (size_t)error.position;
 		const bool before = error_before_its_byte(&error, text, length);
 		const size_t escape = escape_at_fault(&error, text, at);
-		const size_t start = before ? at : escape < at ? escape : token_start(&error, text, at);
+		size_t unquoted = 0;
+		const size_t start = before ? at : escape < at ? escape : token_start(&error, text, at, &unquoted);
 		sm_text_position(text, length, before ? at + 1 : start < at ? start + 1 : at, &line, &column);
 		if (before && ((unsigned char)text[at] & 0xc0) == 0x80)
 			column++;
-		char shown[6 * JSON_ERROR_TEXT_LENGTH + 1];
-		sm_text_shown(shown, sizeof shown - 1, error.text);
+		// A token too long for the parser to quote is quoted here, as a name in a message is: up to
+		// QUOTE_TEXT_BYTES, cut at a character with "..." after the quote.
+		char message[JSON_ERROR_TEXT_LENGTH + QUOTE_TEXT_BYTES + 16];
+		size_t cut = unquoted < QUOTE_TEXT_BYTES ? unquoted : QUOTE_TEXT_BYTES;
+		while (cut < unquoted && cut > 0 && ((unsigned char)text[start + cut] & 0xc0) == 0x80)
+			cut--;
+		if (unquoted > 0)
+			snprintf(message, sizeof message, "%s near '%.*s'%s", error.text, (int)cut, text + start,
+			         cut < unquoted ? "..." : "");
+		else
+			snprintf(message, sizeof message, "%s", error.text);
+		char shown[6 * sizeof message + 1];
+		sm_text_shown(shown, sizeof shown - 1, message);
 		if (code == json_error_null_character || code == json_error_null_byte_in_key)
 			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: strings in a model file may not contain \\u0000",
 			             source_name, line, column);
 		else
 			sm_error_set(err, SM_ERROR_SYNTAX, "%s:%d:%d: %s%s", source_name, line, column, shown,
-			             missing_comma(error.text) ? " (or a ',' before it)" : "");
+			             missing_comma(message) ? " (or a ',' before it)" : "");
 		sm_document_destroy(doc);
 		return NULL;
 	}

@@ -2885,6 +2885,34 @@ static int test_syntax_error_positions(void)
 		 "test.json:1:29: unable to decode byte 0x80 near '\"x'"},
 	    {"{\"springmass\": 1,\n\xe2\x82\"name\": \"x\"}", SM_ERROR_SYNTAX,
 		 "test.json:2:1: unable to decode byte 0xe2"},
+	    // A token longer than the 20 bytes the parser quotes is named and placed all the same: a
+	    // repeated key, a number out of range, an invalid word, and a missing comma before a key,
+	    // which is quoted up to 80 bytes and cut there with "..." after the quote.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a_rather_long_parameter_name\": 1,"
+		 " \"a_rather_long_parameter_name\": 3}}",
+		 SM_ERROR_SYNTAX, "test.json:1:82: duplicate object key near '\"a_rather_long_parameter_name\"'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1.7976931348623159e308}}",
+		 SM_ERROR_SYNTAX, "test.json:1:52: real number overflow near '1.7976931348623159e308'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": -999999999999999999999}}",
+		 SM_ERROR_SYNTAX, "test.json:1:52: too big negative integer near '-999999999999999999999'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": NaNaNaNaNaNaNaNaNaNaNaN}}",
+		 SM_ERROR_SYNTAX, "test.json:1:52: invalid token near 'NaNaNaNaNaNaNaNaNaNaNaN'"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1 \"a_rather_long_parameter_name\": 2}}",
+		 SM_ERROR_SYNTAX,
+		 "test.json:1:54: '}' expected near '\"a_rather_long_parameter_name\"' (or a ',' before it)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1\n \"pq"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\": 2}}",
+		 SM_ERROR_SYNTAX,
+		 "test.json:2:2: '}' expected near '\"pq"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9\xc3\xa9"
+		 "'... (or a ',' before it)"},
 	};
 	return count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) > 0;
 }
