@@ -196,6 +196,33 @@ static const char* key_unit(const parser* p, const char* key)
 	return NULL;
 }
 
+// Whether text is a decimal number, white space around it allowed: a sign, digits with a '.'
+// among or before them, and an exponent ("-1.5", ".5", "1e-3"; not "2k", "1,5" or "2 * k").
+static bool reads_as_number(const char* text)
+{
+	const char* c = text + strspn(text, " \t\n\r");
+	c += *c == '-' || *c == '+';
+	const size_t whole = strspn(c, "0123456789");
+	c += whole;
+	size_t fraction = 0;
+	if (*c == '.') {
+		fraction = strspn(c + 1, "0123456789");
+		c += 1 + fraction;
+	}
+	if (whole + fraction == 0)
+		return false;
+	if (*c == 'e' || *c == 'E') {
+		c++;
+		c += *c == '-' || *c == '+';
+		const size_t exponent = strspn(c, "0123456789");
+		if (exponent == 0)
+			return false;
+		c += exponent;
+	}
+	c += strspn(c, " \t\n\r");
+	return *c == '\0';
+}
+
 // A number, or the name of a parameter standing for one, which feeds `use` and is in `unit` (NULL:
 // a count, an index, or a unit not known here). *source gets the parameter's index or -1 (source
 // may be NULL).
@@ -213,14 +240,16 @@ bool sm_parser_read_number(parser* p, feeds use, const char* unit, const json_t*
 		char text[TEXT_QUOTED_CAPACITY];
 		if (k < 0) {
 			// "10" or "-1.5" is no parameter's name (names start with a letter or '_'): a number
-			// in quotes.
+			// in quotes. "2 * k" or "-k" is an expression, which only a structure reference's
+			// indices take.
 			const char* name = json_string_value(value);
-			const char* digit = name + (name[0] == '-' || name[0] == '+');
-			digit += digit[0] == '.';
-			const bool numeric = digit[0] >= '0' && digit[0] <= '9';
+			const bool expression = strpbrk(name, "+-*/()") != NULL;
 			return sm_parser_fail(p, SM_ERROR_NOT_FOUND, path, "no parameter named %s%s",
 			                      sm_text_quoted(text, name),
-			                      numeric ? " (a number is written without quotes)" : "");
+			                      reads_as_number(name) ? " (a number is written without quotes)"
+			                      : expression ? " (a value is a number or a parameter's name: only the "
+			                                     "indices of a structure reference take expressions)"
+			                                   : "");
 		}
 		*out = p->parameter_values[k];
 		p->ex->parameter_uses[k] |= (uint8_t)use;

@@ -1058,6 +1058,37 @@ static int test_broken_files(void)
 		 " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"-.5\"}]}",
 		 SM_ERROR_NOT_FOUND,
 		 "test.json: springs[0].stiffness: no parameter named \"-.5\" (a number is written without quotes)"},
+	    // Only text that reads as a number whole is said to be one; an expression is said to be
+	    // none a value takes (docs/model-format.md, "Parameters"); other text is just no name.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"2 * k\"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"2 * k\" (a value is a number or a parameter's name: only the indices of a structure reference take "
+		 "expressions)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"-k\"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"-k\" (a value is a number or a parameter's name: only the indices of a structure reference take "
+		 "expressions)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"(k)\"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"(k)\" (a value is a number or a parameter's name: only the indices of a structure reference take "
+		 "expressions)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"1e-3\"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"1e-3\" (a number is written without quotes)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"2k\"}]}",
+		 SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"2k\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"1,5\"}]}",
+		 SM_ERROR_NOT_FOUND, "test.json: springs[0].stiffness: no parameter named \"1,5\""},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 5}, \"particles\": [{\"position\": [0, 0, 0]},"
+		 " {\"position\": [1, 0, 0]}], \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \" 1 \"}]}",
+		 SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \" 1 \" (a number is written without quotes)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}],"
 		 " \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": 1, \"strain_stiffness\": 1}]}",
 		 SM_ERROR_SCHEMA,
