@@ -5,6 +5,7 @@
 
 #include "c_locale.h"
 #include "model_file_internal.h"
+#include "model_file_text.h"
 
 #include "model_internal.h"
 
@@ -109,8 +110,8 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 		for (int32_t k = 0; k < doc->parameter_count; k++) {
 			if (same_value(copy[k], doc->parameter_values[k]))
 				continue;
-			char name[300];
-			snprintf(name, sizeof name, "parameter %s = ", doc->parameter_names[k]);
+			char name[TEXT_QUOTED_CAPACITY + 16], cut[TEXT_QUOTED_CAPACITY];
+			snprintf(name, sizeof name, "parameter %s = ", sm_text_cut(cut, doc->parameter_names[k]));
 			named = named || strstr(local.message, name) != NULL;
 			last = k;
 		}
@@ -120,10 +121,11 @@ sm_status sm_document_set_parameters(sm_document* doc, const double* values, sm_
 			if (same_value(copy[k], doc->parameter_values[k]))
 				continue;
 			const char* joint = n++ == 0 ? " (with " : k == last ? " and " : ", ";
-			char value[SM_NUMBER_TEXT_CAPACITY];
+			char value[SM_NUMBER_TEXT_CAPACITY], cut[TEXT_QUOTED_CAPACITY];
 			sm_format_number(copy[k], value);
-			const int written = snprintf(with + used, sizeof with - used, "%sparameter %s = %s%s", joint,
-			                             doc->parameter_names[k], value, k == last ? ")" : "");
+			const int written =
+			    snprintf(with + used, sizeof with - used, "%sparameter %s = %s%s", joint,
+				         sm_text_cut(cut, doc->parameter_names[k]), value, k == last ? ")" : "");
 			used += written > 0 ? (size_t)written : 0;
 		}
 		free(copy);

@@ -167,3 +167,10 @@ const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s)
 	strcat(out, whole ? "\"" : "\"...");
 	return out;
 }
+
+const char* sm_text_cut(char out[TEXT_QUOTED_CAPACITY], const char* s)
+{
+	if (!escape(out, QUOTE_TEXT_BYTES, s, false))
+		strcat(out, "...");
+	return out;
+}

@@ -52,3 +52,8 @@ void sm_text_shown(char* out, size_t most, const char* s);
 // "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
 // after the closing quote. Returns out.
 const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s);
+
+// s for a message without quotes around it, as a parameter's name is shown ("parameter k = 5"):
+// escaped as sm_text_shown does, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
+// after it, as sm_text_quoted cuts. Returns out.
+const char* sm_text_cut(char out[TEXT_QUOTED_CAPACITY], const char* s);

@@ -263,13 +263,15 @@ bool sm_parser_read_number(parser* p, feeds use, const char* unit, const json_t*
 	                      sm_parser_type_name(value));
 }
 
-// Describes where a value came from, for messages: "5" or "parameter k = 5".
+// Describes where a value came from, for messages: "5" or "parameter k = 5" (a name longer than
+// QUOTE_TEXT_BYTES cut there, as a quoted name is).
 const char* sm_parser_describe(parser* p, char* buffer, size_t size, double value, int32_t source)
 {
 	char text[SM_NUMBER_TEXT_CAPACITY];
 	sm_format_number(value, text);
+	char name[TEXT_QUOTED_CAPACITY];
 	if (source >= 0)
-		snprintf(buffer, size, "parameter %s = %s", p->doc->parameter_names[source], text);
+		snprintf(buffer, size, "parameter %s = %s", sm_text_cut(name, p->doc->parameter_names[source]), text);
 	else
 		snprintf(buffer, size, "%s", text);
 	return buffer;

@@ -2391,6 +2391,37 @@ static int test_reference_expressions(void)
 	         "test.json: fixed[0]: \"r[%s\"...: parameter %.80s... = 0.5 is not a whole number within 2^31",
 	         h78, h90);
 	ENSURE(refused_as(long_text, "r[h90]", SM_ERROR_SCHEMA, long_expected));
+	// Parameters of 200 bytes, the longest name, are cut as well where a message lists them
+	// after the reference, on loading and on a change refused, which names them once: the
+	// message stays whole (its closing parenthesis) within SM_ERROR_MESSAGE_CAPACITY.
+	char names[3][201], cut[3][81], many_text[2048], many_expected[SM_ERROR_MESSAGE_CAPACITY];
+	for (int k = 0; k < 3; k++) {
+		memset(names[k], 'a' + k, 200);
+		names[k][200] = '\0';
+		memcpy(cut[k], names[k], 80);
+		cut[k][80] = '\0';
+	}
+	snprintf(
+	    many_text, sizeof many_text,
+	    "{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"%s\": 1, \"%s\": 1, \"%s\": %d},"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0],"
+	    " \"segments\": 3}], \"fixed\": [\"r[%s * %s * %s]\"]}",
+	    names[0], names[1], names[2], 5, names[0], names[1], names[2]);
+	snprintf(
+	    many_expected, sizeof many_expected,
+	    "test.json: fixed[0]: \"r[%.78s\"... is outside structure r ([0] to [3]) (with parameter %s... = 1, "
+	    "parameter %s... = 1 and parameter %s... = 5)",
+	    names[0], cut[0], cut[1], cut[2]);
+	ENSURE(refused_as(many_text, "r[a200 * b200 * c200]", SM_ERROR_PARTICLE_INDEX, many_expected));
+	many_text[strstr(many_text, ": 5}") - many_text + 2] = '1';
+	sm_error err = {SM_OK, ""};
+	sm_document* many = parse_valid(many_text, &err);
+	ENSURE(many != NULL);
+	ENSURE_STATUS(sm_document_set_parameter(many, 2, 5, &err), SM_ERROR_PARTICLE_INDEX);
+	if (strcmp(err.message, many_expected) != 0)
+		printf("  \"%s\"\n  expected \"%s\"\n", err.message, many_expected);
+	ENSURE(strcmp(err.message, many_expected) == 0);
+	sm_document_destroy(many);
 	// Later messages on the element name the parameters of its references too: z puts the
 	// spring's end a on p, j both ends on one particle.
 	static const char* const later =
