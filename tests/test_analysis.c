@@ -5105,6 +5105,17 @@ static int test_mode_count_inside_a_repeated_group(void)
 	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
 	ENSURE(modes.count == def.mode_count && isnan(modes.next_omega_squared) && !modes.group_cut);
 	sm_modes_release(&modes);
+	// One mode fewer leaves room for the next one, which it gives as the dense path does (1e-8
+	// relative, as above), and whether the count cuts a group as the dense path says it.
+	def.mode_count = (all.dof - SM_MODES_SPARSE_MARGIN) / 4 - 1;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &modes, NULL), SM_OK);
+	def.solver = SM_MODES_DENSE;
+	sm_modes dense;
+	ENSURE_STATUS(sm_modes_compute(model, &def, &dense, NULL), SM_OK);
+	ENSURE(modes.count == def.mode_count && modes.group_cut == dense.group_cut);
+	ENSURE_REL(modes.next_omega_squared, all.omega_squared[def.mode_count], 1e-8, 0.0);
+	sm_modes_release(&dense);
+	sm_modes_release(&modes);
 	sm_modes_release(&all);
 	free(x);
 	sm_model_destroy(model);
