@@ -1025,6 +1025,27 @@ def test_a_pipe_signal_blocked_from_the_start_makes_a_reader_gone_a_write_error(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("command, options", [("statics", ["-q", "--save-model"]), ("modes", ["-o"])])
+def test_outputs_into_a_pipe_without_a_reader_with_sigpipe_ignored_fail_to_write(tmp_path, command, options):
+    # SIGPIPE ignored (by a program that starts the tool and handles a reader that goes away
+    # itself): the write to standard output (/dev/stdout) whose reader has gone fails (EPIPE) and
+    # ends nothing, so it is an output that cannot be written, named with its reason (exit status
+    # 1), as run says it, not a failure without a word. The other outputs are not written (nor left
+    # under temporary names).
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    try:
+        out = subprocess.run([str(CLI), command, str(MODELS / "two_mass_chain.json"), "--vtk", str(tmp_path / "vtk"),
+                              *options, "/dev/stdout"], stdout=write_end, stderr=subprocess.PIPE, text=True,
+                             timeout=60, restore_signals=False,
+                             preexec_fn=lambda: signal.signal(signal.SIGPIPE, signal.SIG_IGN))
+    finally:
+        os.close(write_end)
+    assert out.returncode == 1 and out.stderr == f"springmass {command}: cannot write /dev/stdout: Broken pipe\n", (
+        out.returncode, out.stderr)
+    assert [p for p in tmp_path.rglob("*") if not p.is_dir()] == []
+
+
 def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_path):
     # Two loads on one particle, (3, -4, 5) N and (1, 2, -20) N: the "loads" line is their sum,
     # every component, and the reaction at the anchor balances it with the weight of both
