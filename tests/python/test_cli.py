@@ -1046,6 +1046,22 @@ def test_outputs_into_a_pipe_without_a_reader_with_sigpipe_ignored_fail_to_write
     assert [p for p in tmp_path.rglob("*") if not p.is_dir()] == []
 
 
+def test_outputs_replaced_keep_their_permissions(tmp_path):
+    # statics writes its outputs beside the files they replace and renames them over those: each
+    # keeps the permissions of the file it replaced (0640 and 0600 here), as fopen's rewriting in
+    # place would, not those of a new file (0644 under the umask 022 the tool is given here).
+    csv_path, saved = tmp_path / "rest.csv", tmp_path / "saved.json"
+    for path, mode in ((csv_path, 0o640), (saved, 0o600)):
+        path.write_text("earlier\n")
+        path.chmod(mode)
+    out = subprocess.run([str(CLI), "statics", str(MODELS / "two_mass_chain.json"), "-q", "-o", str(csv_path),
+                          "--save-model", str(saved)], capture_output=True, text=True, timeout=60,
+                         preexec_fn=lambda: os.umask(0o022))
+    assert out.returncode == 0, out.stderr
+    assert read_csv(csv_path)[0][:2] == ["particle", "name"] and json.loads(saved.read_text())["name"] == "two_mass_chain"
+    assert (csv_path.stat().st_mode & 0o7777, saved.stat().st_mode & 0o7777) == (0o640, 0o600)
+
+
 def test_statics_prints_the_sum_of_the_loads_and_the_reactions_balance_it(tmp_path):
     # Two loads on one particle, (3, -4, 5) N and (1, 2, -20) N: the "loads" line is their sum,
     # every component, and the reaction at the anchor balances it with the weight of both
