@@ -465,6 +465,38 @@ def test_run_into_a_pipe_without_a_reader_with_sigpipe_ignored_fails_to_write():
         out.returncode, out.stderr)
 
 
+def test_run_stopped_within_a_long_advance_ends_there(tmp_path):
+    # Between two rows the run steps as in one advance, checking for a stop after every internal
+    # step: a run stopped there ends at once with the rows written before, not after the advance
+    # (here the only one, to t = 0.5 s, some 10 s of work on a stiff hanging sheet). The signal
+    # is sent while row 0 is written: the header and the first bytes of row 0, whose 1728
+    # positions do not fit the 4 kB buffer of a pipe, have been read.
+    model = tmp_path / "slow.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "slow", "gravity": [0, 0, -9.81],
+        "structures": [{"type": "sheet", "name": "s", "edge_u": [1, 0, 0], "edge_v": [0, 1, 0], "nu": 24, "nv": 24,
+                        "mass": 1, "structural": {"strain_stiffness": 1000}, "shear": {"strain_stiffness": 1000}}],
+        "fixed": ["s[0,0]", "s[0,23]"]}))
+    run = subprocess.Popen([str(CLI), "run", str(model), "-q", "--t-end", "0.5", "--output-interval", "0.5",
+                            "--positions", "-o", "-"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        text = b""
+        while b"\n" not in text[:-1]:
+            chunk = run.stdout.read1(65536)
+            assert chunk, text[-80:]
+            text += chunk
+        run.send_signal(signal.SIGTERM)
+        text += run.stdout.read()
+        err = run.stderr.read().decode()
+        assert run.wait(timeout=60) == -signal.SIGTERM, err
+    finally:
+        run.stdout.close()
+        run.stderr.close()
+    rows = text.decode().splitlines()
+    assert len(rows) == 2 and rows[1].split(",")[0] == "0", [r[:20] for r in rows]
+    assert err == "springmass run: stopped by Terminated; the outputs hold the rows up to t = 0 s\n", err
+
+
 def test_vtk_series_matches_the_csv_and_drops_broken_springs(tmp_path):
     model = MODELS / "tearing_cloth.json"
     vtk = tmp_path / "vtk"
