@@ -1070,6 +1070,36 @@ def test_set_values_no_order_takes_one_at_a_time_are_taken_together(package, tmp
         inst.free()
 
 
+def test_values_taken_together_do_not_pass_over_a_malformed_line_after_them(package, tmp_path):
+    # The rope turned round (xa=1, xb=0: either value alone is refused, so they are taken together
+    # at the end), its resources/parameters.txt edited to hold a malformed line after the values
+    # and the GUID made to match: the file is refused as any malformed one is. Taking the values
+    # together does not make the FMU pass over the line. The same file without it is taken.
+    model = tmp_path / "ends.json"
+    model.write_text(ROPE_BETWEEN_XA_AND_XB)
+    inst = Instance(package(model, ("xa=1", "xb=0")), instantiate=False)
+    resources = f"{inst.unzipdir}/resources"
+    model_text = open(f"{resources}/model.json", "rb").read()
+
+    def instantiate(text):
+        with open(f"{resources}/parameters.txt", "wb") as f:
+            f.write(text)
+        before = len(inst.messages)
+        comp = inst.slave.fmi2Instantiate(b"edited", 1, fmu_guid(model_text, text).encode(),
+                                         f"file://{resources}".encode(), inst.callbacks, 0, 0)
+        if comp:
+            inst.slave.fmi2FreeInstance(comp)
+        return comp, "\n".join(m[2] for m in inst.messages[before:])
+
+    try:
+        comp, log = instantiate(b"xa=1\nxb=0\n")
+        assert comp and log == ""
+        comp, log = instantiate(b"xa=1\nxb=0\nxa 2\n")
+        assert not comp and "parameters.txt:" in log, log
+    finally:
+        inst.free()
+
+
 def test_an_absolute_tolerance_below_the_bound_is_refused_when_set(test_fmu):
     # Below 1e-150 CVODE's error norm overflows (simulation.h): the value is refused when it is
     # set, not at fmi2ExitInitializationMode; the bound itself is taken through initialisation.
