@@ -729,6 +729,9 @@ static int test_parameter_values_refused(void)
 		 "parameters.txt:1: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
 	    {TEXT("m=-1\nk200\n"),
 		 "parameters.txt:1: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
+	    // A second value refused after the first leaves the first named.
+	    {TEXT("m=-1\nd=-1\n"),
+		 "parameters.txt:1: \"m=-1\": resources/model.json: particles[1].mass: parameter m = -1 must be > 0"},
 	};
 #undef TEXT
 #undef BYTES_FF_10
