@@ -118,6 +118,20 @@ static bool find_turns(cli_inputs* in)
 	return true;
 }
 
+// The column (from 1, in bytes, as cli_csv_read counts them) where field `field` (from 0) of line
+// `line` (from 1) of a text cli_csv_read took starts: its rows are a line each, their fields
+// unquoted, so the line's commas part them.
+static size_t field_column(const char* text, size_t length, int64_t line, int64_t field)
+{
+	size_t at = 0;
+	for (int64_t l = 1; l < line; l++)
+		at = (size_t)((const char*)memchr(text + at, '\n', length - at) - text) + 1;
+	const size_t start = at;
+	for (int64_t c = 0; c < field; c++)
+		at = (size_t)((const char*)memchr(text + at, ',', length - at) - text) + 1;
+	return at - start + 1;
+}
+
 cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document* doc, char** problem)
 {
 	*problem = NULL;
@@ -151,10 +165,11 @@ cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document*
 		for (int64_t c = 1; c < n && v[k * n] > v[(k - 1) * n]; c++)
 			if (!isfinite((v[k * n + c] - v[(k - 1) * n + c]) / (v[k * n] - v[(k - 1) * n]))) {
 				const int32_t id = in->csv.id[c];
-				*problem = message("%lld: %s.%s: the slope from the row before is beyond a double (rows too "
-				                   "close in time for their values)",
-				                   (long long)k + 2, sm_document_port(doc, id / INPUTS_PER_PORT).name,
-				                   suffixes[id % INPUTS_PER_PORT]);
+				*problem =
+				    message("%lld:%zu: %s.%s: the slope from the row before is beyond a double (rows "
+					        "too close in time for their values)",
+					        (long long)k + 2, field_column(text, length, k + 2, c),
+					        sm_document_port(doc, id / INPUTS_PER_PORT).name, suffixes[id % INPUTS_PER_PORT]);
 				cli_inputs_destroy(in);
 				return NULL;
 			}

@@ -22,8 +22,8 @@ typedef struct cli_inputs cli_inputs;
 // what is wrong, naming the file, the line and the column ("springmass run: --input F:3:7: ...").
 cli_inputs* cli_inputs_read(const char* path, const sm_document* doc);
 
-// The same from the file's text: NULL with *problem a malloc'd "LINE:COLUMN: what is wrong" (or
-// "LINE: signal: ..." for a slope beyond a double), or NULL with *problem NULL when memory runs out.
+// The same from the file's text: NULL with *problem a malloc'd "LINE:COLUMN: what is wrong", or
+// NULL with *problem NULL when memory runs out.
 cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document* doc, char** problem);
 
 // Drives the particles of the motion ports the signals name, at rest if the file holds them.

@@ -890,7 +890,10 @@ def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
     # The times as the file writes them, not 0.10000000000000001 and 0.20000000000000001.
     ("time,tip.fx\n0,1\n0.2,1\n0.1,2\n", "4:1: time 0.1 s is before the previous row's 0.2 s\n"),
     ("time,tip.fx\n", "2:1: no rows after the header"),
-    ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3: tip.fx: the slope from the row before is beyond a double"),
+    ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3:8: tip.fx: the slope from the row before is beyond a double"),
+    # The column of the signal at fault, past one whose slope is finite.
+    ("time,base.x,tip.fx\n0,0,-1e308\n1e-300,1,1e308\n",
+     "3:10: tip.fx: the slope from the row before is beyond a double"),
     # A field longer than a message shows is cut at a character, and says so.
     ("time,tip.fx\n0," + "2" * 59 + "\u65e5\n", '2:3: "' + "2" * 59 + '"... is not a finite decimal number'),
     # One of just as many bytes as a message shows is shown whole, without the mark.
