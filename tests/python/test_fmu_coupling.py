@@ -143,7 +143,7 @@ def test_the_energy_the_coupling_creates_falls_with_the_order_of_the_scheme(chai
     # step, and the explicit scheme puts energy in (the coupled chain ends 1.6 % above at
     # h = 1 ms): first order, halving h halves it (ratio 2 +- 30 %; measured 2.15e-2, 1.04e-2 and
     # 5.1e-3 J). With the inputs' derivatives it is of second order (ratio 4 +- 25 %; measured
-    # 4.3e-5, 1.13e-5 and 2.8e-6 J), below 1e-5 J at h = 1 ms.
+    # 4.3e-5, 1.15e-5 and 3.3e-6 J), below 1e-5 J at h = 1 ms.
     for extrapolate, low, high in ((False, 1.4, 2.6), (True, 3.0, 5.0)):
         created = []
         for h in (0.004, 0.002, 0.001):
