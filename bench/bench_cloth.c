@@ -16,14 +16,18 @@
 // (positions keep 1e-6 m), to measure what it does to the steps.
 // THREADS=<t> sets sm_simulation_def.threads (default 1), which changes the time, not the results.
 // STABILITY_LIMIT_DETECTION=off switches BDF's stability limit detection off (default on), to
-// measure what it changes (docs/simulation.md, "Stability limit detection").
+// measure what it changes (docs/simulation.md, "Stability limit detection"). An argument or a
+// setting that is not one (a mistyped number, "of") stops it with exit status 2 before anything
+// is measured; a setting left empty is as if unset.
 #define _POSIX_C_SOURCE 200809L
 
 #include "bench_clock.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
 
+#include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,6 +48,74 @@ static sm_model* benchmark_cloth(int32_t n)
 	return model;
 }
 
+// What the environment sets (above), read once before anything is measured.
+typedef struct settings {
+	double interval;       // RESTART_EVERY [s]; 0: one advance to T_END
+	double atol_velocity;  // ATOL_VELOCITY [m/s]; 0: that of the positions
+	int threads;           // THREADS
+	bool detection;        // STABILITY_LIMIT_DETECTION
+} settings;
+
+// The number `text` reads as whole, in *value: false for anything else (trailing characters, out
+// of range, not finite), so that a mistyped setting stops the benchmark instead of measuring
+// something else under its name.
+static bool read_number(const char* text, double* value)
+{
+	char* end = NULL;
+	errno = 0;
+	*value = strtod(text, &end);
+	return end != text && *end == '\0' && errno == 0 && isfinite(*value);
+}
+
+// A whole number from lo to hi that `text` reads as, in *value; false for anything else.
+static bool read_count(const char* text, long lo, long hi, int* value)
+{
+	char* end = NULL;
+	errno = 0;
+	const long v = strtol(text, &end, 10);
+	*value = (int)v;
+	return end != text && *end == '\0' && errno == 0 && v >= lo && v <= hi;
+}
+
+// The value of environment variable `name`; NULL if it is unset or empty.
+static const char* setting(const char* name)
+{
+	const char* value = getenv(name);
+	return value && value[0] ? value : NULL;
+}
+
+// The settings of the environment for a run to t_end [s]; false, with a message, for a value that
+// is not one (a variable unset or empty keeps its default).
+static bool read_settings(double t_end, settings* s)
+{
+	*s = (settings){0.0, 0.0, 1, true};
+	const char* every = setting("RESTART_EVERY");
+	// Its count of advances, t_end / interval, must be an int.
+	if (every && !(read_number(every, &s->interval) && s->interval >= 0.0 &&
+	               (s->interval == 0.0 || t_end / s->interval < 1e9))) {
+		fprintf(stderr, "bench_cloth: RESTART_EVERY=%s: give a time step of 0 (none) or above T_END / 1e9\n",
+		        every);
+		return false;
+	}
+	const char* atol_velocity = setting("ATOL_VELOCITY");
+	if (atol_velocity && !(read_number(atol_velocity, &s->atol_velocity) && s->atol_velocity > 0.0)) {
+		fprintf(stderr, "bench_cloth: ATOL_VELOCITY=%s: give a tolerance above 0 [m/s]\n", atol_velocity);
+		return false;
+	}
+	const char* threads = setting("THREADS");
+	if (threads && !read_count(threads, 1, 1024, &s->threads)) {
+		fprintf(stderr, "bench_cloth: THREADS=%s: give a count from 1 to 1024\n", threads);
+		return false;
+	}
+	const char* detection = setting("STABILITY_LIMIT_DETECTION");
+	if (detection && strcmp(detection, "on") != 0 && strcmp(detection, "off") != 0) {
+		fprintf(stderr, "bench_cloth: STABILITY_LIMIT_DETECTION=%s: give on or off\n", detection);
+		return false;
+	}
+	s->detection = !(detection && strcmp(detection, "off") == 0);
+	return true;
+}
+
 typedef struct run_result {
 	double wall;
 	sm_statistics stats;
@@ -52,24 +124,20 @@ typedef struct run_result {
 	int threads;  // sm_simulation_def.threads asked for
 } run_result;
 
-// One run; interval > 0 advances in steps of `interval` with a force on the free corner that
+// One run; set->interval > 0 advances in steps of it with a force on the free corner that
 // changes at every step.
-static int run(const sm_model* model, sm_linear_solver solver, double t_end, double interval, bool restart,
-               run_result* out)
+static int run(const sm_model* model, sm_linear_solver solver, double t_end, const settings* set,
+               bool restart, run_result* out)
 {
+	const double interval = set->interval;
 	sm_simulation_def d = sm_default_simulation_def();
 	d.solver = solver;
 	d.relative_tolerance = 1e-4;
 	d.absolute_tolerance_position = d.absolute_tolerance_velocity = 1e-6;
-	const char* atol_velocity = getenv("ATOL_VELOCITY");
-	if (atol_velocity && atof(atol_velocity) > 0.0)
-		d.absolute_tolerance_velocity = atof(atol_velocity);
-	const char* threads = getenv("THREADS");
-	if (threads && atoi(threads) > 0)
-		d.threads = atoi(threads);
-	const char* detection = getenv("STABILITY_LIMIT_DETECTION");
-	if (detection && strcmp(detection, "off") == 0)
-		d.stability_limit_detection = false;
+	if (set->atol_velocity > 0.0)
+		d.absolute_tolerance_velocity = set->atol_velocity;
+	d.threads = set->threads;
+	d.stability_limit_detection = set->detection;
 	d.restart_on_input_change = restart;
 	const double start = bench_now();
 	sm_error err;
@@ -114,14 +182,14 @@ static int compare_wall(const void* a, const void* b)
 // The median wall time of `repeats` runs (the mean of the two middle ones for an even count), with
 // the statistics of the median run (the faster middle one for an even count): the times on a
 // line belong to one run, one whose wall time is at most the median.
-static int measure(const sm_model* model, sm_linear_solver solver, int repeats, double t_end, double interval,
-                   bool restart, run_result* result)
+static int measure(const sm_model* model, sm_linear_solver solver, int repeats, double t_end,
+                   const settings* set, bool restart, run_result* result)
 {
 	run_result* runs = malloc(sizeof(run_result) * (size_t)repeats);
 	if (!runs)
 		return 1;
 	for (int r = 0; r < repeats; r++) {
-		if (run(model, solver, t_end, interval, restart, &runs[r]) != 0) {
+		if (run(model, solver, t_end, set, restart, &runs[r]) != 0) {
 			free(runs);
 			return 1;
 		}
@@ -140,28 +208,27 @@ int main(int argc, char** argv)
 		fprintf(stderr, "usage: bench_cloth N SOLVER [REPEATS] [T_END]\n");
 		return 2;
 	}
-	const int32_t n = (int32_t)atoi(argv[1]);
+	int n = 0, repeats = 3;
+	double t_end = 1.0;
 	sm_linear_solver solver = SM_SOLVER_AUTO;
-	const bool known = sm_linear_solver_from_name(argv[2], &solver) == SM_OK;
-	const int repeats = argc > 3 ? atoi(argv[3]) : 3;
-	const double t_end = argc > 4 ? atof(argv[4]) : 1.0;
-	if (n < 2 || !known || repeats < 1 || !(t_end > 0.0)) {
-		fprintf(stderr, "bench_cloth: bad arguments\n");
+	if (!read_count(argv[1], 2, 4096, &n) || sm_linear_solver_from_name(argv[2], &solver) != SM_OK ||
+	    (argc > 3 && !read_count(argv[3], 1, 1000, &repeats)) ||
+	    (argc > 4 && !(read_number(argv[4], &t_end) && t_end > 0.0))) {
+		fprintf(stderr,
+		        "bench_cloth: bad arguments: N from 2 to 4096, SOLVER a linear solver's name, REPEATS "
+		        "from 1 to 1000, T_END above 0 [s]\n");
 		return 2;
 	}
+	settings set;
+	if (!read_settings(t_end, &set))
+		return 2;
+	const double interval = set.interval;
 	sm_model* model = benchmark_cloth(n);
 	if (!model)
 		return 1;
-	const char* every = getenv("RESTART_EVERY");
-	const double interval = every ? atof(every) : 0.0;
-	// Its count of advances, t_end / interval, must be an int.
-	if (interval < 0.0 || (interval > 0.0 && !(t_end / interval < 1e9))) {
-		fprintf(stderr, "bench_cloth: RESTART_EVERY=%s: give a time step above T_END / 1e9\n", every);
-		return 2;
-	}
 	for (int pass = 0; pass < (interval > 0.0 ? 2 : 1); pass++) {
 		run_result r;
-		if (measure(model, solver, repeats, t_end, interval, pass == 1, &r) != 0) {
+		if (measure(model, solver, repeats, t_end, &set, pass == 1, &r) != 0) {
 			sm_model_destroy(model);
 			return 1;
 		}

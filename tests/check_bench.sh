@@ -82,5 +82,25 @@ line=$("$bench_cloth" 4 pcg 1 0.01)
 grep -qE '^cloth n=4 solver=pcg wall_s=[0-9.e+-]+ steps=[0-9]+ rhs=[0-9]+ jac=[0-9]+ z_corner=-?[0-9.]+( |$)' <<< "$line" ||
   fail "bench_cloth printed '$line', not the agreed fields first and in their order"
 
+# A setting or argument that is not one stops it (exit status 2, naming what was given) instead of
+# measuring something else under its name: atof would read "1e-4x" as 1e-4 and "abc" as 0 (the
+# default), and a mistyped "of" would leave the detection on.
+for setting in RESTART_EVERY=abc RESTART_EVERY=nan RESTART_EVERY=-1 ATOL_VELOCITY=1e-4x ATOL_VELOCITY=0 THREADS=2.5 \
+               THREADS=0 STABILITY_LIMIT_DETECTION=of; do
+  err=$(env "$setting" "$bench_cloth" 4 pcg 1 0.01 2>&1 > /dev/null)
+  status=$?
+  [ $status -eq 2 ] && grep -qF "bench_cloth: $setting: " <<< "$err" ||
+    fail "bench_cloth with $setting: exit status $status, '$err'"
+done
+for args in "4x pcg" "4 nosuch" "4 pcg 0" "4 pcg 1 0.01s" "4 pcg 1 0"; do
+  # $args unquoted: split into its arguments on purpose.
+  "$bench_cloth" $args > /dev/null 2>&1
+  status=$?
+  [ $status -eq 2 ] || fail "bench_cloth $args: exit status $status, not 2"
+done
+# Settings given (or left empty, as unset) run and are reported.
+line=$(THREADS=2 STABILITY_LIMIT_DETECTION=off RESTART_EVERY= "$bench_cloth" 4 pcg 1 0.01)
+grep -qE '^cloth n=4 solver=pcg .* threads=2 ' <<< "$line" || fail "bench_cloth with THREADS=2 printed '$line'"
+
 [ $failures -eq 0 ] || exit 1
 echo "bench scripts: ok"
