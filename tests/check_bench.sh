@@ -76,7 +76,7 @@ grep -qF "peer n=8 failed (exit status 0, solve_ivp status -1)" <<< "$out" ||
 ! grep -q "^speedup n=8 " <<< "$out" || fail "bench_cloth.sh printed a speedup for an unfinished peer: $out"
 grep -qxF "speedup n=16 32.0" <<< "$out" || fail "bench_cloth.sh did not go on to n = 16 after solve_ivp failed: $out"
 
-# The issue's format: cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v>,
+# The benchmark's agreed format: cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v>,
 # then the driver's further fields.
 line=$("$bench_cloth" 4 pcg 1 0.01)
 grep -qE '^cloth n=4 solver=pcg wall_s=[0-9.e+-]+ steps=[0-9]+ rhs=[0-9]+ jac=[0-9]+ z_corner=-?[0-9.]+( |$)' <<< "$line" ||
