@@ -1608,7 +1608,7 @@ static int fmu_scenario(void* context)
 	fmi2FMUstate state = NULL, copy = NULL;
 	fmi2Byte* bytes = NULL;
 	fmi2ValueReference force = fmu_reference(c, "tip.fx"), k = fmu_reference(c, "k");
-	double one = 1.0, stiffer = 450.0, stiffest = 480.0;
+	double one = 1.0, stiffer = 450.0, since = 465.0, stiffest = 480.0;
 	int errors_before = c->errors;
 	FMU_CALL(fmi2SetupExperiment(inst, fmi2False, 0.0, 0.0, fmi2False, 0.0));
 	FMU_CALL(fmi2EnterInitializationMode(inst));
@@ -1625,7 +1625,10 @@ static int fmu_scenario(void* context)
 	FMU_CALL(fmi2SerializeFMUstate(inst, state, bytes, size));
 	FMU_CALL(fmi2DeSerializeFMUstate(inst, bytes, size, &copy));
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
-	// A state that cannot be taken leaves the instance as it was.
+	// A state that cannot be taken leaves the instance as it was, its parameters included: k, set
+	// since the state was saved (which holds k = 450 N/m), keeps its value; or, when memory stays
+	// exhausted so that the value cannot be put back, the instance is in the error state.
+	FMU_CALL(fmi2SetReal(inst, &k, 1, &since));
 	fmi2ValueReference tip_x = fmu_reference(c, "tip.x");
 	double x_before = 0.0, x_after = 0.0;
 	ENSURE_STATUS(fmi2GetReal(inst, &tip_x, 1, &x_before), fmi2OK);
@@ -1635,6 +1638,13 @@ static int fmu_scenario(void* context)
 		ENSURE_FMU_FAILURE(restored, c, errors_before);
 		ENSURE_STATUS(fmi2GetReal(inst, &tip_x, 1, &x_after), fmi2OK);
 		ENSURE(x_after == x_before);
+		double now = 0.0;
+		ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
+		if (now != since) {
+			ENSURE(oom_.persistent);
+			ENSURE_STATUS(fmi2DoStep(inst, 0.08, 0.02, fmi2True), fmi2Error);
+			ENSURE(strstr(c->last, "illegal call sequence") != NULL);
+		}
 		goto end;
 	}
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
