@@ -317,6 +317,30 @@ def test_an_input_tried_and_set_back_before_a_step_changes_nothing(test_fmu, nam
     assert np.array_equal(x_tried, x_plain)
 
 
+def test_a_parameter_set_away_and_back_in_one_call_changes_nothing(test_fmu):
+    # One fmi2SetReal that gives the tunable k another value and then its own again (the same value
+    # reference twice: the last value counts) leaves k as it was: the run goes on as one that made
+    # no such call, with the same internal steps and outputs, bit for bit (no new model for the
+    # simulation, whose CVODE would start afresh).
+    runs = []
+    for calling in (False, True):
+        inst = logged_driven_oscillator(test_fmu, 1.0)
+        try:
+            x = []
+            for n in range(40):
+                if calling and n >= 20:
+                    inst.slave.setReal([inst.vr["k"], inst.vr["k"]], [60.0, 50.0])
+                inst.slave.doStep(n * 0.01, 0.01)
+                x.append(inst.get("tip.x", "tip.vx", "base.fx", "energy.input"))
+            assert inst.get("k") == 50.0
+            runs.append((np.array(x), solver_steps(inst)))
+        finally:
+            inst.free()
+    (x_plain, steps_plain), (x_called, steps_called) = runs
+    assert steps_called == steps_plain
+    assert np.array_equal(x_called, x_plain)
+
+
 def test_tolerances_coarse_for_the_model_are_a_warning_at_initialisation(tmp_path, package):
     # The bundled oscillator scaled to micrometres, picograms and milliseconds: its motion (0.1 um,
     # up to 0.6 mm/s) lies below the default absolute tolerances (1e-8 m, 1e-6 m/s), which hold it
