@@ -716,6 +716,35 @@ def test_a_state_sets_the_dissipated_energy_it_carries(test_fmu):
                    for m in b.messages[n:]), b.messages[n:]
 
 
+def test_a_state_saved_before_initialisation_restored_after_a_later_one_starts_from_nothing(test_fmu):
+    # A master that reruns from the start restores the state it saved right after instantiation.
+    # After a state that carried dissipated energy (d = 0.3 N s/m damps the oscillation) was
+    # restored, that run is a fresh instance's, bit for bit, the energy dissipated included: it
+    # counts from 0 again, not from what the state restored before carried.
+    names = ("tip.x", "tip.vx", "energy.dissipated", "energy.input")
+    fmu = test_fmu("driven_oscillator")
+    inst, fresh = Instance(fmu, "rerun"), Instance(fmu, "fresh")
+    try:
+        s = inst.slave
+        initial = s.getFMUstate()
+        inst.start({"d": 0.3})
+        run(inst, 0.0, 30, force=force)
+        later = s.getFMUstate()
+        s.setFMUstate(later)
+        assert inst.get("energy.dissipated") > 0.0
+        s.setFMUstate(initial)
+        for instance in (inst, fresh):
+            instance.start({"d": 0.3})
+        assert inst.get(*names) == fresh.get(*names) and inst.get("energy.dissipated") == 0.0
+        assert np.array_equal(run(inst, 0.0, 10, force=force), run(fresh, 0.0, 10, force=force))
+        assert inst.get(*names) == fresh.get(*names)
+        s.freeFMUstate(initial)
+        s.freeFMUstate(later)
+    finally:
+        inst.free()
+        fresh.free()
+
+
 def test_a_state_saved_after_a_restore_carries_all_the_dissipated_energy_and_work(test_fmu):
     # The dissipated energy is the integral of the damping power from the start (d = 0.3 N s/m),
     # and the inputs' work that of the power the force input delivers, however many restores the
