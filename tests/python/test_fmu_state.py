@@ -624,8 +624,8 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # base (47-62) and tip (63-78: position, velocity, force, acceleration, force rate, since;
 # fmu_instance.h's port_values) and the pending flags 79-80.
 W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_RESTART, W_STABILITY, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, \
-    W_MAX_STEP, W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_WORDS = \
-    13, 14, 17, 18, 20, 21, 25, 26, 27, 29, 30, 43, 44, 69, 81
+    W_MAX_STEP, W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_TIP_PENDING, W_WORDS = \
+    13, 14, 17, 18, 20, 21, 25, 26, 27, 29, 30, 43, 44, 69, 80, 81
 
 
 def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
@@ -645,7 +645,8 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
     # read it from then on; the FMU writes it >= 0, round-off included), a simulation
     # flagged where the FMU state has none or missing where it has one, a relative tolerance below
     # the machine epsilon and an absolute tolerance below the smallest one fmi2SetReal takes, an
-    # unknown method, a non-finite held input. The states are those of an instance that has run (the
+    # unknown method, a non-finite held input, a pending flag (an input set since the last step)
+    # neither 0 nor 1. The states are those of an instance that has run (the
     # solver would refuse some of the values only at fmi2SetFMUstate) and of one saved before
     # initialisation (whose values the FMU would take without a solver, and fail with at
     # fmi2ExitInitializationMode, in the error state). The receiving instance goes on unchanged.
@@ -686,7 +687,10 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      # simulation before it: a state no instance is in
                      "has_sim flipped": edited(state, W_HAS_SIM, "<q", 1 - has_sim),
                      "tip.fx NaN": edited(state, W_TIP_FX, "<d", math.nan),
-                     "tip.fx inf": edited(state, W_TIP_FX, "<d", math.inf)}
+                     "tip.fx inf": edited(state, W_TIP_FX, "<d", math.inf),
+                     # an input neither set since the last step nor not
+                     "tip pending 0.5": edited(state, W_TIP_PENDING, "<d", 0.5),
+                     "tip pending 2": edited(state, W_TIP_PENDING, "<d", 2.0)}
             for what, bad in cases.items():
                 n = len(b.messages)
                 with pytest.raises(FMICallException) as info:
