@@ -153,7 +153,8 @@ check_cases() {
 touch "$tmp/a_file"
 osc="$root/models/oscillator.json"
 # No output overwrites a file the command reads, under its own name or another (a link); "-" is
-# standard output only for run's CSV. Each refusal comes before anything is written.
+# standard output only for run's CSV (and no folder: --vtk - made one called -). Each refusal
+# comes before anything is written.
 cp "$osc" "$tmp/own.json"
 ln -s "$tmp/own.json" "$tmp/own_link.json"
 check_cases << 'CASES'
@@ -167,6 +168,9 @@ check_cases << 'CASES'
 2|springmass fmu: -o -: this output is a file, not standard output; give its name|fmu "$tmp/own.json" -o -
 2|springmass statics: -o -: this output is a file, not standard output; give its name|statics "$tmp/own.json" -q -o -
 2|springmass modes: -o -: this output is a file, not standard output; give its name|modes "$tmp/own.json" -o -
+2|springmass run: --vtk -: this output is a folder of files, not standard output; give its name (./- for a folder called -)|run "$tmp/own.json" -q -o "$tmp/fresh.csv" --vtk -
+2|springmass statics: --vtk -: this output is a folder of files, not standard output; give its name (./- for a folder called -)|statics "$tmp/own.json" -q --vtk -
+2|springmass modes: --vtk -: this output is a folder of files, not standard output; give its name (./- for a folder called -)|modes "$tmp/own.json" --vtk -
 CASES
 cmp -s "$osc" "$tmp/own.json" && [ ! -e ./- ] || fail "a refused output was written"
 # run's other outputs: the default CSV (NAME.csv in the working folder) and the ParaView series

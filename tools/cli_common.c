@@ -404,6 +404,18 @@ void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* val
 		fprintf(f, "%.9g %.9g %.9g\n", values[3 * i], values[3 * i + 1], values[3 * i + 2]);
 }
 
+int cli_check_folder_option(const char* command, const char* option, const char* dir)
+{
+	if (dir == NULL || strcmp(dir, "-") != 0)
+		return 0;
+	fprintf(
+	    stderr,
+	    "springmass %s: %s -: this output is a folder of files, not standard output; give its name (./- for "
+	    "a folder called -)\n",
+	    command, option);
+	return 2;
+}
+
 int cli_check_output(const char* command, const char* option, const char* output, const char* input,
                      const char* input_what, bool dash_is_stdout)
 {

@@ -111,6 +111,11 @@ FILE* cli_vtk_open(cli_outputs* outputs, const char* command, const char* path, 
 /// Writes one vector field of point data (3 values per particle); `first` for the first field.
 void cli_vtk_vectors(FILE* f, const char* name, int32_t count, const double* values, bool first);
 
+/// Checks the folder an option writes (NULL: none given) before anything runs: "-", standard
+/// output for a file, holds no folder of files (and is not taken for a folder of that name, which
+/// "./-" names). Returns 0, or prints why and returns 2 (a usage error).
+int cli_check_folder_option(const char* command, const char* option, const char* dir);
+
 /// Checks the file an option writes (NULL: none given) before anything runs: "-" is standard
 /// output where `dash_is_stdout`, a file name everywhere else; a file that is `input` itself (the
 /// same file under any name), which the command reads and `input_what` names ("the model file"),

@@ -271,6 +271,7 @@ int sm_cmd_modes(int argc, char** argv)
 		return 2;
 	}
 	if (cli_check_output("modes", "-o", csv_path, model_path, "the model file", false) != 0 ||
+	    cli_check_folder_option("modes", "--vtk", vtk_dir) != 0 ||
 	    cli_check_outputs_apart("modes", "-o", csv_path, "--vtk", vtk_dir) != 0) {
 		free(settings);
 		return 2;

@@ -669,7 +669,8 @@ int sm_cmd_run(int argc, char** argv)
 		status = overwrites;
 		goto done;
 	}
-	if (cli_check_outputs_apart("run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file,
+	if (cli_check_folder_option("run", "--vtk", o.vtk_dir) != 0 ||
+	    cli_check_outputs_apart("run", o.output ? "-o" : "the output (NAME.csv, without -o)", csv_file,
 	                            "--vtk", o.vtk_dir) != 0) {
 		status = 2;
 		goto done;

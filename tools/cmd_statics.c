@@ -172,7 +172,8 @@ int sm_cmd_statics(int argc, char** argv)
 		return 2;
 	}
 	if (cli_check_output("statics", "-o", csv_path, model_path, "the model file", false) != 0 ||
-	    cli_check_output("statics", "--save-model", save_path, model_path, "the model file", false) != 0) {
+	    cli_check_output("statics", "--save-model", save_path, model_path, "the model file", false) != 0 ||
+	    cli_check_folder_option("statics", "--vtk", vtk_dir) != 0) {
 		free(settings);
 		return 2;
 	}
