@@ -73,8 +73,10 @@ static bool read_count(const char* text, long lo, long hi, int* value)
 	char* end = NULL;
 	errno = 0;
 	const long v = strtol(text, &end, 10);
+	if (end == text || *end != '\0' || errno != 0 || v < lo || v > hi)
+		return false;
 	*value = (int)v;
-	return end != text && *end == '\0' && errno == 0 && v >= lo && v <= hi;
+	return true;
 }
 
 // The value of environment variable `name`; NULL if it is unset or empty.
