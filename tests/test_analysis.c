@@ -1047,9 +1047,27 @@ static int test_statics_discrete_hanging_chain_is_exact(void)
 // particle's vertical reaction, but at a corner, is its own weight less the pull of its one spring
 // across the boundary, ks z of its interior neighbour; the reactions sum to the whole weight and
 // the load, to the forces round-off leaves on the 169 free particles (2.5e-14 N each at most).
+enum { MEMBRANE_SIDE = 15, MEMBRANE_INNER = MEMBRANE_SIDE - 2 };
+
+// out_ij = sum_pq s_ip s_jq in_pq over the membrane's interior (indices from 1): the 2-D sine
+// transform, its own inverse (s is symmetric and orthogonal).
+static void membrane_sine_transform(double s[MEMBRANE_INNER + 1][MEMBRANE_INNER + 1],
+                                    double in[MEMBRANE_INNER + 1][MEMBRANE_INNER + 1],
+                                    double out[MEMBRANE_INNER + 1][MEMBRANE_INNER + 1])
+{
+	for (int i = 1; i <= MEMBRANE_INNER; i++)
+		for (int j = 1; j <= MEMBRANE_INNER; j++) {
+			double sum = 0.0;
+			for (int p = 1; p <= MEMBRANE_INNER; p++)
+				for (int q = 1; q <= MEMBRANE_INNER; q++)
+					sum += s[i][p] * s[j][q] * in[p][q];
+			out[i][j] = sum;
+		}
+}
+
 static int test_statics_zero_length_membrane_is_exact(void)
 {
-	enum { side = 15, inner = side - 2 };
+	enum { side = MEMBRANE_SIDE, inner = MEMBRANE_INNER };
 	const double spacing = 0.1, ks = 100.0, m = 0.01, g = 9.81, load = 2.0;
 	// The exact heights of the interior particles [m], by the sine transform.
 	static double s[inner + 1][inner + 1], b[inner + 1][inner + 1], z[inner + 1][inner + 1];
@@ -1060,23 +1078,12 @@ static int test_statics_zero_length_membrane_is_exact(void)
 	for (int k = 1; k <= inner; k++)
 		for (int l = 1; l <= inner; l++)
 			b[k][l] = -m * g - (k == side / 2 && l == side / 2 ? load : 0.0);
+	membrane_sine_transform(s, b, transformed);
 	for (int p = 1; p <= inner; p++)
-		for (int q = 1; q <= inner; q++) {
-			double sum = 0.0;
-			for (int k = 1; k <= inner; k++)
-				for (int l = 1; l <= inner; l++)
-					sum += s[k][p] * s[l][q] * b[k][l];
-			const double lambda = 4.0 - 2.0 * cos(p * pi / (inner + 1)) - 2.0 * cos(q * pi / (inner + 1));
-			transformed[p][q] = sum / (ks * lambda);
-		}
-	for (int i = 1; i <= inner; i++)
-		for (int j = 1; j <= inner; j++) {
-			double sum = 0.0;
-			for (int p = 1; p <= inner; p++)
-				for (int q = 1; q <= inner; q++)
-					sum += s[i][p] * s[j][q] * transformed[p][q];
-			z[i][j] = sum;
-		}
+		for (int q = 1; q <= inner; q++)
+			transformed[p][q] /=
+			    ks * (4.0 - 2.0 * cos(p * pi / (inner + 1)) - 2.0 * cos(q * pi / (inner + 1)));
+	membrane_sine_transform(s, transformed, z);
 	for (int solver = SM_STATICS_DENSE; solver <= SM_STATICS_SPARSE; solver++) {
 		sm_model_def md = sm_default_model_def();
 		md.gravity[2] = -g;

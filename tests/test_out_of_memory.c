@@ -1594,6 +1594,22 @@ static fmi2ValueReference fmu_reference(const fmu_case* c, const char* name)
 		}                                                                                                    \
 	} while (0)
 
+// After a call that memory refused, the FMU's parameter k reads `kept` [N/m], the value it had
+// before; or, when memory stays exhausted so that the value cannot be put back, the instance is in
+// the error state. Returns 0, or 1 on a failed check.
+static int ensure_k_kept_or_error_state(const fmu_case* c, fmi2Component inst, fmi2ValueReference k,
+                                        double kept)
+{
+	double now = 0.0;
+	ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
+	if (now != kept) {
+		ENSURE(oom_.persistent);
+		ENSURE_STATUS(fmi2DoStep(inst, 0.08, 0.02, fmi2True), fmi2Error);
+		ENSURE(strstr(c->last, "illegal call sequence") != NULL);
+	}
+	return 0;
+}
+
 static int fmu_scenario(void* context)
 {
 	fmu_case* c = context;
@@ -1626,8 +1642,8 @@ static int fmu_scenario(void* context)
 	FMU_CALL(fmi2DeSerializeFMUstate(inst, bytes, size, &copy));
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
 	// A state that cannot be taken leaves the instance as it was, its parameters included: k, set
-	// since the state was saved (which holds k = 450 N/m), keeps its value; or, when memory stays
-	// exhausted so that the value cannot be put back, the instance is in the error state.
+	// since the state was saved (which holds k = 450 N/m), keeps its value (or the instance is in
+	// the error state: ensure_k_kept_or_error_state).
 	FMU_CALL(fmi2SetReal(inst, &k, 1, &since));
 	fmi2ValueReference tip_x = fmu_reference(c, "tip.x");
 	double x_before = 0.0, x_after = 0.0;
@@ -1638,29 +1654,19 @@ static int fmu_scenario(void* context)
 		ENSURE_FMU_FAILURE(restored, c, errors_before);
 		ENSURE_STATUS(fmi2GetReal(inst, &tip_x, 1, &x_after), fmi2OK);
 		ENSURE(x_after == x_before);
-		double now = 0.0;
-		ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
-		if (now != since) {
-			ENSURE(oom_.persistent);
-			ENSURE_STATUS(fmi2DoStep(inst, 0.08, 0.02, fmi2True), fmi2Error);
-			ENSURE(strstr(c->last, "illegal call sequence") != NULL);
-		}
+		if (ensure_k_kept_or_error_state(c, inst, k, since) != 0)
+			return 1;
 		goto end;
 	}
 	FMU_CALL(fmi2DoStep(inst, 0.06, 0.02, fmi2True));
-	// A parameter the simulation cannot take is undone: k keeps its value; or, when memory stays
-	// exhausted so that the old value cannot be put back, the instance is in the error state.
+	// A parameter the simulation cannot take is undone: k keeps its value (or the instance is in the
+	// error state).
 	errors_before = c->errors;
 	fmi2Status set = fmi2SetReal(inst, &k, 1, &stiffest);
 	if (set != fmi2OK) {
 		ENSURE_FMU_FAILURE(set, c, errors_before);
-		double now = 0.0;
-		ENSURE_STATUS(fmi2GetReal(inst, &k, 1, &now), fmi2OK);
-		if (now != stiffer) {
-			ENSURE(oom_.persistent);
-			ENSURE_STATUS(fmi2DoStep(inst, 0.08, 0.02, fmi2True), fmi2Error);
-			ENSURE(strstr(c->last, "illegal call sequence") != NULL);
-		}
+		if (ensure_k_kept_or_error_state(c, inst, k, stiffer) != 0)
+			return 1;
 		goto end;
 	}
 	FMU_CALL(fmi2DoStep(inst, 0.08, 0.02, fmi2True));

@@ -942,33 +942,37 @@ def test_values_set_at_packaging_are_the_constants_and_the_start_after_reset(pac
         inst.free()
 
 
+def instantiate_edited(inst, text, guid=None):
+    """Instantiates inst's unzipped FMU (made with instantiate=False) anew, its
+    resources/parameters.txt replaced by `text` (bytes; None: removed) and the GUID given (by
+    default the one that matches the edited resources), and frees what it made. Returns whether
+    an instance was made and the messages logged meanwhile."""
+    resources = f"{inst.unzipdir}/resources"
+    if text is None:
+        os.remove(f"{resources}/parameters.txt")
+    else:
+        with open(f"{resources}/parameters.txt", "wb") as f:
+            f.write(text)
+    model = open(f"{resources}/model.json", "rb").read()
+    guid = guid or (fmu_guid(model) if text is None else fmu_guid(model, text))
+    before = len(inst.messages)
+    comp = inst.slave.fmi2Instantiate(b"edited", 1, guid.encode(), f"file://{resources}".encode(), inst.callbacks,
+                                     0, 0)
+    if comp:
+        inst.slave.fmi2FreeInstance(comp)
+    return comp, "\n".join(m[2] for m in inst.messages[before:])
+
+
 def test_edited_parameter_values_are_refused_at_instantiation(package):
     # resources/parameters.txt is part of the GUID: edited, removed or added by hand, the FMU is
     # refused as one whose resources changed after packaging. With the GUID made to match, each
     # malformed or inconsistent file is refused naming its line; nothing is ever taken in part.
     fmu = package(MODELS / "hanging_rope_n.json", ("n=40", "E=3000"))
     inst = Instance(fmu, instantiate=False)
-    resources = f"{inst.unzipdir}/resources"
-    model = open(f"{resources}/model.json", "rb").read()
-
-    def instantiate(text, guid=None):
-        if text is None:
-            os.remove(f"{resources}/parameters.txt")
-        else:
-            with open(f"{resources}/parameters.txt", "wb") as f:
-                f.write(text)
-        guid = guid or (fmu_guid(model) if text is None else fmu_guid(model, text))
-        before = len(inst.messages)
-        comp = inst.slave.fmi2Instantiate(b"edited", 1, guid.encode(), f"file://{resources}".encode(),
-                                         inst.callbacks, 0, 0)
-        if comp:
-            inst.slave.fmi2FreeInstance(comp)
-        return comp, "\n".join(m[2] for m in inst.messages[before:])
-
     try:
-        comp, log = instantiate(b"n=40\nE=3000\n")
+        comp, log = instantiate_edited(inst, b"n=40\nE=3000\n")
         assert comp and log == ""
-        comp, log = instantiate(b"n=40\nE=3001\n", guid=inst.md.guid)
+        comp, log = instantiate_edited(inst, b"n=40\nE=3001\n", guid=inst.md.guid)
         assert not comp and "does not match the model file resources/model.json with its parameter values" in log
         for text, message in [
                 (b"n=40\nE=3000\nn=41\n", "parameters.txt:3: parameter n is set again (first on line 1)"),
@@ -979,9 +983,9 @@ def test_edited_parameter_values_are_refused_at_instantiation(package):
                 (b"", "parameters.txt:1: empty"),
                 (b"n=0\n", 'parameters.txt:1: "n=0": resources/model.json: structures[0].segments: parameter n = 0'),
                 (b"n=\xff\x1b[31m\n", 'parameters.txt:1: "n=\\xff\\x1b[31m": the value is not a finite number')]:
-            comp, log = instantiate(text)
+            comp, log = instantiate_edited(inst, text)
             assert not comp and message in log, (text, log)
-        comp, log = instantiate(None, guid=inst.md.guid)
+        comp, log = instantiate_edited(inst, None, guid=inst.md.guid)
         assert not comp and "does not match the model file resources/model.json, whose GUID is" in log
     finally:
         inst.free()
@@ -1078,23 +1082,10 @@ def test_values_taken_together_do_not_pass_over_a_malformed_line_after_them(pack
     model = tmp_path / "ends.json"
     model.write_text(ROPE_BETWEEN_XA_AND_XB)
     inst = Instance(package(model, ("xa=1", "xb=0")), instantiate=False)
-    resources = f"{inst.unzipdir}/resources"
-    model_text = open(f"{resources}/model.json", "rb").read()
-
-    def instantiate(text):
-        with open(f"{resources}/parameters.txt", "wb") as f:
-            f.write(text)
-        before = len(inst.messages)
-        comp = inst.slave.fmi2Instantiate(b"edited", 1, fmu_guid(model_text, text).encode(),
-                                         f"file://{resources}".encode(), inst.callbacks, 0, 0)
-        if comp:
-            inst.slave.fmi2FreeInstance(comp)
-        return comp, "\n".join(m[2] for m in inst.messages[before:])
-
     try:
-        comp, log = instantiate(b"xa=1\nxb=0\n")
+        comp, log = instantiate_edited(inst, b"xa=1\nxb=0\n")
         assert comp and log == ""
-        comp, log = instantiate(b"xa=1\nxb=0\nxa 2\n")
+        comp, log = instantiate_edited(inst, b"xa=1\nxb=0\nxa 2\n")
         assert not comp and "parameters.txt:" in log, log
     finally:
         inst.free()

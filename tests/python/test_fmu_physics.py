@@ -195,6 +195,22 @@ def logged_driven_oscillator(test_fmu, stop_time):
                       stop_time=stop_time)
 
 
+def stepped_driven_oscillator(test_fmu, stop_time, steps, h, before_step, outputs):
+    """logged_driven_oscillator advanced `steps` communication steps of h seconds from 0, with
+    before_step(inst, n) called before step n: the outputs named after every step (a row per step)
+    and the internal steps of each (solver_steps)."""
+    inst = logged_driven_oscillator(test_fmu, stop_time)
+    try:
+        x = []
+        for n in range(steps):
+            before_step(inst, n)
+            inst.slave.doStep(n * h, h)
+            x.append(inst.get(*outputs))
+        return np.array(x), solver_steps(inst)
+    finally:
+        inst.free()
+
+
 def held_or_changing_force(test_fmu, stop_time, changing):
     """The driven oscillator over 1 s in 1 ms communication steps; tip.fx held at 0 or changed
     at every step (1e-3 N, alternating in sign). Returns tip.x per step and the internal steps."""
@@ -269,20 +285,13 @@ def test_a_master_that_sets_every_input_keeps_a_change_among_unchanged_ones(test
     # by 1e-6 m, alternating in sign, and tip.fx set again to 0 N, unchanged. The changed input
     # ends the step at the point whatever unchanged one is applied after it, so with the stop
     # time or without, the same computation, bit for bit (as for the changing force above).
-    runs = []
-    for stop_time in (1.0, None):
-        inst = logged_driven_oscillator(test_fmu, stop_time)
-        try:
-            x = []
-            for n in range(1000):
-                inst.set("base.x", 1e-6 * (-1) ** n)
-                inst.set("tip.fx", 0.0)
-                inst.slave.doStep(n * 1e-3, 1e-3)
-                x.append(inst.get("tip.x"))
-            runs.append((np.array(x), solver_steps(inst)))
-        finally:
-            inst.free()
-    (x_stop, steps_stop), (x_free, steps_free) = runs
+    def set_every_input(inst, n):
+        inst.set("base.x", 1e-6 * (-1) ** n)
+        inst.set("tip.fx", 0.0)
+
+    (x_stop, steps_stop), (x_free, steps_free) = (
+        stepped_driven_oscillator(test_fmu, stop_time, 1000, 1e-3, set_every_input, ["tip.x"])
+        for stop_time in (1.0, None))
     assert steps_stop == steps_free and min(steps_stop) >= 1
     assert np.array_equal(x_stop, x_free)
 
@@ -295,24 +304,20 @@ def test_an_input_tried_and_set_back_before_a_step_changes_nothing(test_fmu, nam
     # set to `value` from 0.1 s on, so that the runs share a change first. (A motion port's velocity
     # set alone is a change at every step whatever the master tries: its particle starts again
     # from the position held.)
-    runs = []
-    for trying in (False, True):
-        inst = logged_driven_oscillator(test_fmu, 1.0)
-        try:
-            x = []
-            for n in range(100):
-                v = value if n >= 10 else 0.0
-                if trying and n >= 20:
-                    inst.set(name, v + 0.5)
-                    x_trial = inst.get("base.fx")
-                    assert math.isfinite(x_trial)
-                inst.set(name, v)
-                inst.slave.doStep(n * 0.01, 0.01)
-                x.append(inst.get("tip.x", "tip.vx", "base.fx", "energy.input"))
-            runs.append((np.array(x), solver_steps(inst)))
-        finally:
-            inst.free()
-    (x_plain, steps_plain), (x_tried, steps_tried) = runs
+    def set_input(trying):
+        def before_step(inst, n):
+            v = value if n >= 10 else 0.0
+            if trying and n >= 20:
+                inst.set(name, v + 0.5)
+                x_trial = inst.get("base.fx")
+                assert math.isfinite(x_trial)
+            inst.set(name, v)
+        return before_step
+
+    (x_plain, steps_plain), (x_tried, steps_tried) = (
+        stepped_driven_oscillator(test_fmu, 1.0, 100, 0.01, set_input(trying),
+                                  ["tip.x", "tip.vx", "base.fx", "energy.input"])
+        for trying in (False, True))
     assert steps_tried == steps_plain
     assert np.array_equal(x_tried, x_plain)
 
@@ -322,21 +327,17 @@ def test_a_parameter_set_away_and_back_in_one_call_changes_nothing(test_fmu):
     # reference twice: the last value counts) leaves k as it was: the run goes on as one that made
     # no such call, with the same internal steps and outputs, bit for bit (no new model for the
     # simulation, whose CVODE would start afresh).
-    runs = []
-    for calling in (False, True):
-        inst = logged_driven_oscillator(test_fmu, 1.0)
-        try:
-            x = []
-            for n in range(40):
-                if calling and n >= 20:
-                    inst.slave.setReal([inst.vr["k"], inst.vr["k"]], [60.0, 50.0])
-                inst.slave.doStep(n * 0.01, 0.01)
-                x.append(inst.get("tip.x", "tip.vx", "base.fx", "energy.input"))
-            assert inst.get("k") == 50.0
-            runs.append((np.array(x), solver_steps(inst)))
-        finally:
-            inst.free()
-    (x_plain, steps_plain), (x_called, steps_called) = runs
+    def set_k_away_and_back(calling):
+        def before_step(inst, n):
+            if calling and n >= 20:
+                inst.slave.setReal([inst.vr["k"], inst.vr["k"]], [60.0, 50.0])
+                assert inst.get("k") == 50.0
+        return before_step
+
+    (x_plain, steps_plain), (x_called, steps_called) = (
+        stepped_driven_oscillator(test_fmu, 1.0, 40, 0.01, set_k_away_and_back(calling),
+                                  ["tip.x", "tip.vx", "base.fx", "energy.input"])
+        for calling in (False, True))
     assert steps_called == steps_plain
     assert np.array_equal(x_called, x_plain)
 
