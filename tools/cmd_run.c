@@ -31,12 +31,13 @@ static void usage(FILE* out)
 	        "P.x .. P.vz), energy.kinetic, energy.elastic, energy.gravity, energy.dissipated and\n"
 	        "energy.input (the inputs' work) [J].\n"
 	        "Without --input, force ports get no force, and a motion port's particle moves as the file\n"
-	        "says (mark it fixed to hold it). Defaults come from the file's \"simulation\" settings.\n");
+	        "says (mark it fixed to hold it). An option not given takes the file's \"simulation\"\n"
+	        "setting; the defaults below are those of a file that gives none.\n");
 	fprintf(out,
 	        "\n"
 	        "options:\n"
 	        "  --t-end T              end time [s]\n"
-	        "  --output-interval DT   time between rows [s]\n"
+	        "  --output-interval DT   time between rows [s]; T / DT at most 1e9\n"
 	        "  -o, --output FILE      CSV file (default NAME.csv, NAME the model's name; - for stdout)\n"
 	        "  --input FILE           the ports' inputs over time (- for stdin): a CSV as fmpy writes,\n"
 	        "                         \"time\" and then any of force port P's P.fx P.fy P.fz [N] and motion\n"
@@ -87,10 +88,10 @@ static void usage(FILE* out)
 	             "A progress line goes to stderr for runs longer than a second, and a summary at the end:\n"
 	             "the solver's statistics (the pcg and cholmod solvers evaluate the forces with the\n"
 	             "Jacobians, in one pass timed as Jacobians), the springs that broke and the energy\n"
-	             "balance. Exit status: 0 success, 1 bad model or input signals, solver failure or output\n"
-	             "that cannot be written, 2 usage error. Stopped by a signal (Ctrl-C, a kill, a closed\n"
-	             "pipe), it ends after the row it was writing, its outputs whole up to there, with the\n"
-	             "signal's status.\n");
+	             "balance. Exit status: 0 success, 1 bad model or input signals, T / DT above 1e9,\n"
+	             "solver failure or output that cannot be written, 2 usage error. Stopped by a signal\n"
+	             "(Ctrl-C, a kill, a closed pipe), it ends after the row it was writing, its outputs whole\n"
+	             "up to there, with the signal's status.\n");
 }
 
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.
