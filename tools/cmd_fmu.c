@@ -75,12 +75,14 @@ static void usage(FILE* out)
 	        "                       its columns, a row of decimal numbers per time (checked, then packed\n"
 	        "                       as it is)\n"
 	        "  --runtime DIR        folder holding binaries/linux64/springmass_fmu.so and its libraries\n"
-	        "                       (default: the one of this build or installation)\n"
+	        "                       (default: $SPRINGMASS_FMU_RUNTIME if set, else the one of this\n"
+	        "                       installation or build)\n"
 	        "  -h, --help           this text\n"
 	        "\n"
 	        "Exit status: 0 success, 1 for a bad model, a reference that cannot be read or is no such\n"
 	        "result, a missing runtime or an FMU that cannot be written, 2 for a usage error (a\n"
-	        "malformed --set, an output that would overwrite an input or go into the runtime).\n");
+	        "malformed --set, an output that would overwrite an input or go into the runtime, a\n"
+	        "SOURCE_DATE_EPOCH that is not a count of seconds).\n");
 }
 
 static bool write_all(const char* path, const char* data, size_t length)
