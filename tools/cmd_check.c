@@ -33,6 +33,7 @@ static void usage(FILE* out)
 	        "forces add: a spring listed twice?).\n"
 	        "\n"
 	        "  --set NAME=VALUE   a parameter's value (repeatable), checked as a whole with the others\n"
+	        "  -h, --help         this text\n"
 	        "\n"
 	        "Exit status: 0 if the file is valid, 1 if not (the error names the line and column or the\n"
 	        "element of the file and the rule it breaks), 2 on a usage error.\n");
