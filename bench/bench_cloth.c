@@ -11,8 +11,9 @@
 // (one line, the benchmark's agreed fields first and in their agreed order; the free corner is
 // particle 0). With RESTART_EVERY=<dt> in the environment the run advances in steps of dt with
 // an external force on the free corner that changes at every step (what an FMU sees with small
-// communication steps), once keeping CVODE's history and once re-initialising at every change,
-// and prints both. ATOL_VELOCITY=<a> sets the velocities' absolute tolerance alone [m/s]
+// communication steps), once keeping CVODE's history (restart_on_input_change false) and once
+// under the default rule (true: a restart only where a change jumps by more than the history
+// carries), and prints both. ATOL_VELOCITY=<a> sets the velocities' absolute tolerance alone [m/s]
 // (positions keep 1e-6 m), to measure what it does to the steps.
 // THREADS=<t> sets sm_simulation_def.threads (default 1), which changes the time, not the results.
 // STABILITY_LIMIT_DETECTION=off switches BDF's stability limit detection off (default on), to
