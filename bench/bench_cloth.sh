@@ -3,13 +3,14 @@
 # peer (../shared/bench/scipy_cloth.py, SciPy solve_ivp BDF) in the same run.
 #
 #   bench/bench_cloth.sh BUILD_DIR          (QUICK=1: up to n = 64, peer for n = 8 only;
-#                                            LONG=1: also n = 256 with auto, about 1 hour)
+#                                            LONG=1: also n = 256 with auto, on one thread
+#                                            and on every processor: 1.2 - 1.5 hours)
 #
 # Prints, for n = 16, 32, 64, 128, 256 and each linear solver (1 s simulated, rtol 1e-4,
 # atol 1e-6, median of REPEATS runs, default 3; 1 run from n = 64):
 #   cloth n=<n> solver=<name> wall_s=<median> steps=<v> rhs=<v> jac=<v> z_corner=<v> threads=1 ...
 # a `skip` line for the combinations that would take too long, a `same` line for the solver auto
-# chose (measured once, on auto's line), from n = 64 on (4000 free particles, from which the pcg
+# chose (measured once, on auto's line, which names it: solver=auto:<choice>), from n = 64 on (4000 free particles, from which the pcg
 # solver's loops can run on several threads) auto again on as many threads as processors
 # (threads=<t>, the same results), then for the peer
 #   peer n=<n> wall_s=<v> z_corner=<v>
