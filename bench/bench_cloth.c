@@ -22,6 +22,7 @@
 // is measured; a setting left empty is as if unset.
 #define _POSIX_C_SOURCE 200809L
 
+#include "bench_args.h"
 #include "bench_clock.h"
 #include "springmass/simulation.h"
 #include "springmass/structures.h"
@@ -68,18 +69,6 @@ static bool read_number(const char* text, double* value)
 	return end != text && *end == '\0' && errno == 0 && isfinite(*value);
 }
 
-// A whole number from lo to hi that `text` reads as, in *value; false for anything else.
-static bool read_count(const char* text, long lo, long hi, int* value)
-{
-	char* end = NULL;
-	errno = 0;
-	const long v = strtol(text, &end, 10);
-	if (end == text || *end != '\0' || errno != 0 || v < lo || v > hi)
-		return false;
-	*value = (int)v;
-	return true;
-}
-
 // The value of environment variable `name`; NULL if it is unset or empty.
 static const char* setting(const char* name)
 {
@@ -106,7 +95,7 @@ static bool read_settings(double t_end, settings* s)
 		return false;
 	}
 	const char* threads = setting("THREADS");
-	if (threads && !read_count(threads, 1, 1024, &s->threads)) {
+	if (threads && !bench_read_count(threads, 1, 1024, &s->threads)) {
 		fprintf(stderr, "bench_cloth: THREADS=%s: give a count from 1 to 1024\n", threads);
 		return false;
 	}
@@ -214,8 +203,8 @@ int main(int argc, char** argv)
 	int n = 0, repeats = 3;
 	double t_end = 1.0;
 	sm_linear_solver solver = SM_SOLVER_AUTO;
-	if (!read_count(argv[1], 2, 4096, &n) || sm_linear_solver_from_name(argv[2], &solver) != SM_OK ||
-	    (argc > 3 && !read_count(argv[3], 1, 1000, &repeats)) ||
+	if (!bench_read_count(argv[1], 2, 4096, &n) || sm_linear_solver_from_name(argv[2], &solver) != SM_OK ||
+	    (argc > 3 && !bench_read_count(argv[3], 1, 1000, &repeats)) ||
 	    (argc > 4 && !(read_number(argv[4], &t_end) && t_end > 0.0))) {
 		fprintf(stderr,
 		        "bench_cloth: bad arguments: N from 2 to 4096, SOLVER a linear solver's name, REPEATS "

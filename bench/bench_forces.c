@@ -18,6 +18,7 @@
 // The state is the one the reference kernel uses: the flat cloth perturbed by 1e-3 m, with
 // small velocities, so that no spring sits exactly at rest.
 #define _POSIX_C_SOURCE 199309L
+#include "bench_args.h"
 #include "bench_clock.h"
 #include "springmass/model.h"
 #include "springmass/structures.h"
@@ -90,10 +91,10 @@ static double time_kind(const workload* w, int kind, long reps)
 
 int main(int argc, char** argv)
 {
-	const int n = argc > 1 ? atoi(argv[1]) : 128;
-	const int trials = argc > 2 ? atoi(argv[2]) : 7;
-	if (n < 3 || trials < 1) {
-		fprintf(stderr, "usage: bench_forces N [TRIALS] (N >= 3)\n");
+	int n = 128, trials = 7;
+	if ((argc > 1 && !bench_read_count(argv[1], 3, 4096, &n)) ||
+	    (argc > 2 && !bench_read_count(argv[2], 1, 1000, &trials))) {
+		fprintf(stderr, "usage: bench_forces N [TRIALS] (N from 3 to 4096, TRIALS from 1 to 1000)\n");
 		return 2;
 	}
 	workload w = {0};

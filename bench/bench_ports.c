@@ -19,6 +19,7 @@
 // mean of 5); and fmi2GetDirectionalDerivative of every output along a seed of 1e-3 on every
 // input (the mean of 5).
 #define _XOPEN_SOURCE 700
+#include "bench_args.h"
 #include "bench_clock.h"
 #include "fmu_model.h"
 
@@ -147,11 +148,12 @@ static int trial(const char* guid, const char* location, const fmi2ValueReferenc
 
 int main(int argc, char** argv)
 {
-	const int n = argc > 1 ? atoi(argv[1]) : 64;
-	const int trials = argc > 2 ? atoi(argv[2]) : 5;
-	const int steps = argc > 3 ? atoi(argv[3]) : 50;
-	if (n < 16 || trials < 1 || steps < 1) {
-		fprintf(stderr, "usage: bench_ports N [TRIALS] [STEPS] (N >= 16)\n");
+	int n = 64, trials = 5, steps = 50;
+	if ((argc > 1 && !bench_read_count(argv[1], 16, 4096, &n)) ||
+	    (argc > 2 && !bench_read_count(argv[2], 1, 1000, &trials)) ||
+	    (argc > 3 && !bench_read_count(argv[3], 1, 1000000, &steps))) {
+		fprintf(stderr, "usage: bench_ports N [TRIALS] [STEPS] (N from 16 to 4096, TRIALS from 1 to 1000, "
+		                "STEPS from 1 to 1000000)\n");
 		return 2;
 	}
 	char* text = model_text(n);

@@ -4,10 +4,13 @@
 # lines can be checked against them.
 # The line of the real bench_cloth, on a cloth small and short enough to take milliseconds, holds
 # the benchmark's agreed fields first and in their agreed order.
-# Usage: check_bench.sh SOURCE_DIR BENCH_CLOTH
+# The force and port benchmarks refuse an argument that is not a count in range, as bench_cloth does.
+# Usage: check_bench.sh SOURCE_DIR BENCH_CLOTH BENCH_FORCES [BENCH_PORTS]
 set -u
 root=$(cd "$1" && pwd)
 bench_cloth=$2
+bench_forces=$3
+bench_ports=${4:-}
 failures=0
 fail() { echo "FAILED: $*"; failures=$((failures + 1)); }
 [ -x "$root/.venv/bin/python" ] || { echo "$root/.venv/bin/python is missing (make setup)"; exit 1; }
@@ -101,6 +104,25 @@ done
 # Settings given (or left empty, as unset) run and are reported.
 line=$(THREADS=2 STABILITY_LIMIT_DETECTION=off RESTART_EVERY= "$bench_cloth" 4 pcg 1 0.01)
 grep -qE '^cloth n=4 solver=pcg .* threads=2 ' <<< "$line" || fail "bench_cloth with THREADS=2 printed '$line'"
+
+# bench_forces N [TRIALS] and bench_ports N [TRIALS] [STEPS]: atoi read "4x" as 4 and "7.5" as 7,
+# and a huge N overflowed n * n; each is refused now (exit status 2) before anything is measured.
+for args in "4x" "4 1x" "4 7.5" "2" "5000" "4 0" "1e3"; do
+  "$bench_forces" $args > /dev/null 2>&1
+  status=$?
+  [ $status -eq 2 ] || fail "bench_forces $args: exit status $status, not 2"
+done
+line=$("$bench_forces" 4 1 2> /dev/null | head -n 1)
+grep -qE '^forces n=4 springs=[0-9]+ springs_per_s=' <<< "$line" || fail "bench_forces 4 1 printed '$line'"
+if [ -n "$bench_ports" ]; then
+  for args in "16x" "16 1x" "16 1 1x" "15" "5000" "16 0" "16 1 0" "16 1 2.5"; do
+    "$bench_ports" $args > /dev/null 2>&1
+    status=$?
+    [ $status -eq 2 ] || fail "bench_ports $args: exit status $status, not 2"
+  done
+  line=$("$bench_ports" 16 1 1 2> /dev/null)
+  grep -qE '^ports n=16 particles=256 motion=60 ' <<< "$line" || fail "bench_ports 16 1 1 printed '$line'"
+fi
 
 [ $failures -eq 0 ] || exit 1
 echo "bench scripts: ok"
