@@ -163,23 +163,35 @@ int main(int argc, char** argv)
 	char path[1100], location[1100];
 	snprintf(path, sizeof path, "%s/model.json", dir);
 	snprintf(location, sizeof location, "file://%s", dir);
+	// From here on every way out removes the model file and its folder (done:).
+	int status = 1;
+	fmi2ValueReference *in = NULL, *out = NULL;
+	double *start = NULL, *set = NULL;
+	bool have_table = false;
+	fmu_table table;
 	FILE* file = fopen(path, "wb");
-	if (file == NULL)
-		return 1;
-	fputs(text, file);
-	fclose(file);
+	if (file == NULL || fputs(text, file) == EOF || fclose(file) != 0) {
+		fprintf(stderr, "bench_ports: cannot write %s\n", path);
+		goto done;
+	}
 	sm_error err;
 	sm_document* doc = sm_document_parse(text, strlen(text), "ports", &err);
-	fmu_table table;
 	if (doc == NULL || fmu_table_create(doc, text, strlen(text), NULL, 0, &table, &err) != SM_OK) {
 		fprintf(stderr, "bench_ports: %s\n", err.message);
-		return 1;
+		sm_document_destroy(doc);
+		goto done;
 	}
+	have_table = true;
 	const int particles = (int)sm_document_particle_count(doc);
 	sm_document_destroy(doc);
-	fmi2ValueReference* in = malloc((size_t)table.count * sizeof *in);
-	fmi2ValueReference* out = malloc((size_t)table.count * sizeof *out);
-	double* start = malloc((size_t)table.count * sizeof *start);
+	in = malloc((size_t)table.count * sizeof *in);
+	out = malloc((size_t)table.count * sizeof *out);
+	start = malloc((size_t)table.count * sizeof *start);
+	set = malloc((size_t)trials * 7 * sizeof *set);
+	if (in == NULL || out == NULL || start == NULL || set == NULL) {
+		fprintf(stderr, "bench_ports: out of memory\n");
+		goto done;
+	}
 	fmi2ValueReference c = 0;
 	int ni = 0, no = 0;
 	for (int32_t i = 0; i < table.count; i++) {
@@ -193,14 +205,13 @@ int main(int argc, char** argv)
 			c = (fmi2ValueReference)i;
 		}
 	}
-	double *set = malloc((size_t)trials * 7 * sizeof *set), *step = set + trials, *get = step + trials,
-	       *alone = get + trials, *init = alone + trials, *retune = init + trials,
-	       *derivative = retune + trials;
+	double *step = set + trials, *get = step + trials, *alone = get + trials, *init = alone + trials,
+	       *retune = init + trials, *derivative = retune + trials;
 	for (int r = 0; r < trials; r++) {
 		figures f = {0};
 		if (trial(table.guid, location, in, start, ni, out, no, c, steps, &f) != 0) {
 			fprintf(stderr, "bench_ports: a call failed\n");
-			return 1;
+			goto done;
 		}
 		set[r] = f.set, step[r] = f.step, get[r] = f.get, alone[r] = f.alone, init[r] = f.init,
 		retune[r] = f.retune, derivative[r] = f.derivative;
@@ -211,9 +222,12 @@ int main(int argc, char** argv)
 	       1e6 * bench_median(step, trials), 1e6 * bench_median(get, trials),
 	       1e6 * bench_median(alone, trials), 1e3 * bench_median(init, trials),
 	       1e3 * bench_median(retune, trials), 1e3 * bench_median(derivative, trials));
+	status = 0;
+done:
 	remove(path);
 	remove(dir);
-	fmu_table_destroy(&table);
+	if (have_table)
+		fmu_table_destroy(&table);
 	free(text), free(in), free(out), free(start), free(set);
-	return 0;
+	return status;
 }
