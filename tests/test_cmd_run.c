@@ -10,6 +10,8 @@
 #include "test_harness.h"
 
 #include <dirent.h>
+#include <fcntl.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -25,6 +27,41 @@
 #define T_END 0.2
 #define INTERVAL 0.05
 
+// Runs the springmass executable with the arguments given (up to 15, then NULL), its standard
+// output and error written to the files named ("/dev/null" to drop them; NULL: left as they are).
+// No shell reads the command, so a path is passed as it is, whatever its folders' names hold (a
+// quote, '$', '&'). Returns the status as waitpid gives it (0: exit status 0), or -1.
+static int run_cli(const char* out_path, const char* err_path, ...)
+{
+	char* args[17] = {(char*)SPRINGMASS_CLI};
+	va_list list;
+	va_start(list, err_path);
+	int n = 1;
+	for (const char* arg; n < 16 && (arg = va_arg(list, const char*)) != NULL;)
+		args[n++] = (char*)arg;
+	va_end(list);
+	args[n] = NULL;
+	fflush(NULL);
+	const pid_t child = fork();
+	if (child < 0)
+		return -1;
+	if (child == 0) {
+		const char* paths[2] = {out_path, err_path};
+		for (int k = 0; k < 2; k++) {
+			if (paths[k] == NULL)
+				continue;
+			const int fd = open(paths[k], O_WRONLY | O_CREAT | O_TRUNC, 0666);
+			if (fd < 0 || dup2(fd, k + 1) < 0)
+				_exit(127);
+			close(fd);
+		}
+		execv(SPRINGMASS_CLI, args);
+		_exit(127);
+	}
+	int status;
+	return waitpid(child, &status, 0) == child ? status : -1;
+}
+
 static int check_model(const char* path, bool stop_at_outputs)
 {
 	char csv_path[] = "/tmp/springmass_run_XXXXXX";
@@ -34,11 +71,12 @@ static int check_model(const char* path, bool stop_at_outputs)
 	int err_fd = mkstemp(err_path);
 	ENSURE(err_fd >= 0);
 	close(err_fd);
-	char command[4096];
-	snprintf(command, sizeof command,
-	         "'%s' run '%s' --t-end %g --output-interval %g --output '%s' --quiet%s 2> '%s'", SPRINGMASS_CLI,
-	         path, T_END, INTERVAL, csv_path, stop_at_outputs ? " --stop-at-outputs" : "", err_path);
-	const int rc = system(command);
+	char t_end[32], interval[32];
+	snprintf(t_end, sizeof t_end, "%g", T_END);
+	snprintf(interval, sizeof interval, "%g", INTERVAL);
+	const int rc =
+	    run_cli(NULL, err_path, "run", path, "--t-end", t_end, "--output-interval", interval, "--output",
+		        csv_path, "--quiet", stop_at_outputs ? "--stop-at-outputs" : NULL, NULL);
 	if (rc != 0)
 		printf("  %s: exit status %d\n", path, rc);
 	ENSURE(rc == 0);
@@ -125,11 +163,11 @@ static int check_summary(const char* path, double t_end, double interval)
 	fd = mkstemp(err_path);
 	ENSURE(fd >= 0);
 	close(fd);
-	char command[4096];
-	snprintf(command, sizeof command,
-	         "'%s' run '%s' --t-end %.17g --output-interval %.17g --output '%s' 2> '%s'", SPRINGMASS_CLI,
-	         path, t_end, interval, csv_path, err_path);
-	ENSURE(system(command) == 0);
+	char t_end_text[32], interval_text[32];
+	snprintf(t_end_text, sizeof t_end_text, "%.17g", t_end);
+	snprintf(interval_text, sizeof interval_text, "%.17g", interval);
+	ENSURE(run_cli(NULL, err_path, "run", path, "--t-end", t_end_text, "--output-interval", interval_text,
+	               "--output", csv_path, NULL) == 0);
 
 	sm_error err;
 	sm_document* doc = sm_document_load(path, &err);
@@ -284,10 +322,11 @@ static int test_summary_lists_the_breaks(void)
 }
 
 // A model with loads (the bundled ones have none): its CSV is the library's, and its summary's
-// balance counts the loads' potential with gravity's, and says so.
+// balance counts the loads' potential with gravity's, and says so. The file's name holds what a
+// shell would read (quotes, '$', '&', parentheses), which the command is given as it is.
 static int test_a_model_with_loads(void)
 {
-	const char* path = "test_cmd_run_loads.json";
+	const char* path = "test_cmd_run 'loads' \"$HOME\" (1) & `x`.json";
 	FILE* f = fopen(path, "w");
 	ENSURE(f != NULL);
 	fputs("{\"springmass\": 1, \"name\": \"loaded\", \"parameters\": {\"F\": 2},"
@@ -307,20 +346,14 @@ static int test_a_model_with_loads(void)
 // Usage errors exit with status 2, a bad model file with 1.
 static int test_errors(void)
 {
-	char command[4096];
-	snprintf(command, sizeof command, "'%s' run --no-such-option >/dev/null 2>&1", SPRINGMASS_CLI);
-	int rc = system(command);
+	int rc = run_cli("/dev/null", "/dev/null", "run", "--no-such-option", NULL);
 	ENSURE(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
-	snprintf(command, sizeof command,
-	         "'%s' run '%s/oscillator.json' --set nothere=1 --output /dev/null 2>/dev/null", SPRINGMASS_CLI,
-	         SPRINGMASS_MODELS_DIR);
-	rc = system(command);
+	rc = run_cli(NULL, "/dev/null", "run", SPRINGMASS_MODELS_DIR "/oscillator.json", "--set", "nothere=1",
+	             "--output", "/dev/null", NULL);
 	ENSURE(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
-	snprintf(command, sizeof command, "'%s' run /nonexistent/model.json 2>/dev/null", SPRINGMASS_CLI);
-	rc = system(command);
+	rc = run_cli(NULL, "/dev/null", "run", "/nonexistent/model.json", NULL);
 	ENSURE(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
-	snprintf(command, sizeof command, "'%s' run --help >/dev/null", SPRINGMASS_CLI);
-	ENSURE(system(command) == 0);
+	ENSURE(run_cli("/dev/null", NULL, "run", "--help", NULL) == 0);
 	return 0;
 }
 
