@@ -498,14 +498,14 @@ static bool read_mesh_files(sm_document* doc, const char* folder, sm_error* err)
 		}
 		doc->mesh_files[k] = f;  // freed with the document, as is its path
 		f->path = joined;
-		if (joined == NULL || (f->shown = malloc(SM_ERROR_MESSAGE_CAPACITY / 2 + 1)) == NULL)
+		if (joined == NULL || (f->shown = malloc(SM_TEXT_SHOWN_PATH_BYTES + 1)) == NULL)
 			return sm_parser_fail(&p, SM_ERROR_OUT_OF_MEMORY, sub, "out of memory");
 		if (folder_bytes > 0)
 			memcpy(joined, folder, folder_bytes);
 		if (slash)
 			joined[folder_bytes] = '/';
 		strcpy(joined + folder_bytes + slash, name);
-		sm_text_shown(f->shown, SM_ERROR_MESSAGE_CAPACITY / 2, joined);
+		sm_text_shown_path(f->shown, joined);
 		char* text = NULL;
 		size_t length = 0;
 		sm_error file_err = {SM_OK, ""};
@@ -532,6 +532,10 @@ static sm_document* parse_document(const char* text, size_t length, const char* 
 	sm_error_clear(err);
 	if (source_name == NULL)
 		source_name = "<model>";
+	// Messages name the model as they name an OBJ file: escaped, a long path by its end.
+	char shown_source[SM_TEXT_SHOWN_PATH_BYTES + 1];
+	sm_text_shown_path(shown_source, source_name);
+	source_name = shown_source;
 	if (text == NULL) {
 		sm_error_set(err, SM_ERROR_INVALID_ARGUMENT, "%s: no text to parse", source_name);
 		return NULL;
@@ -740,7 +744,9 @@ sm_document* sm_document_load(const char* path, sm_error* err)
 	}
 	char* text = NULL;
 	size_t length = 0;
-	if (read_regular_file(path, path, &text, &length, err) != SM_OK)
+	char shown[SM_TEXT_SHOWN_PATH_BYTES + 1];
+	sm_text_shown_path(shown, path);
+	if (read_regular_file(path, shown, &text, &length, err) != SM_OK)
 		return NULL;
 	// The OBJ files a model names are found beside it: in the folder of its path.
 	const char* slash = strrchr(path, '/');
@@ -748,7 +754,7 @@ sm_document* sm_document_load(const char* path, sm_error* err)
 	char* folder = malloc(folder_bytes + 1);
 	sm_document* doc = NULL;
 	if (folder == NULL)
-		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", path);
+		sm_error_set(err, SM_ERROR_OUT_OF_MEMORY, "%s: out of memory", shown);
 	else {
 		memcpy(folder, path, folder_bytes);
 		folder[folder_bytes] = '\0';

@@ -65,7 +65,7 @@ typedef struct document_structure {
 // parameter change builds the mesh again from it, without reading the file again.
 typedef struct document_mesh_file {
 	char* path;   // the path it was read from: "file" joined to the model file's folder
-	char* shown;  // that path as messages show it, escaped
+	char* shown;  // that path as messages show it, escaped, a long one by its end
 	mesh_file mesh;
 } document_mesh_file;
 

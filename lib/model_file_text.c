@@ -150,6 +150,32 @@ void sm_text_shown(char* out, size_t most, const char* s)
 	escape(out, most, s, false);
 }
 
+// The bytes of the character at u (of n bytes) as sm_text_shown writes it; *bytes, its own.
+static size_t shown_bytes(const unsigned char* u, size_t n, size_t* bytes)
+{
+	const int32_t c = decode_utf8(u, n, bytes);
+	return c < 0 ? 4 : shown_escaped(c) ? 6 : *bytes;
+}
+
+void sm_text_shown_path(char out[SM_TEXT_SHOWN_PATH_BYTES + 1], const char* path)
+{
+	const unsigned char* u = (const unsigned char*)path;
+	const size_t n = strlen(path);
+	size_t total = 0, bytes;
+	for (size_t at = 0; at < n; at += bytes)
+		total += shown_bytes(u + at, n - at, &bytes);
+	if (total <= SM_TEXT_SHOWN_PATH_BYTES) {
+		escape(out, SM_TEXT_SHOWN_PATH_BYTES, path, false);
+		return;
+	}
+	// Characters dropped from the start until the rest fits after "...".
+	size_t at = 0;
+	for (; at < n && total > SM_TEXT_SHOWN_PATH_BYTES - 3; at += bytes)
+		total -= shown_bytes(u + at, n - at, &bytes);
+	memcpy(out, "...", 3);
+	escape(out + 3, SM_TEXT_SHOWN_PATH_BYTES - 3, path + at, false);
+}
+
 void sm_text_for_terminal(char* out, const char* text)
 {
 	if (out == NULL)

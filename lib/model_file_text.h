@@ -49,6 +49,17 @@ bool sm_text_escape(char* out, size_t most, const char* s);
 // show escaped (as sm_text_escape does them), at most `most` bytes, NUL-terminated.
 void sm_text_shown(char* out, size_t most, const char* s);
 
+// The most bytes a file's name takes in a message (sm_text_shown_path), "..." included: a model
+// file's and an OBJ file's together leave 231 of a message's SM_ERROR_MESSAGE_CAPACITY - 1 bytes
+// to say where and what is wrong (an element's path, a line and column, and the longest reason: an
+// OBJ file's unknown statement quoted up to 80 bytes, about 200 bytes in all).
+#define SM_TEXT_SHOWN_PATH_BYTES 140
+
+// A file's path for a message: escaped as sm_text_shown does, and one longer than
+// SM_TEXT_SHOWN_PATH_BYTES shown by its end ("..." and the longest tail of whole characters that
+// fits, the file's own name last), NUL-terminated.
+void sm_text_shown_path(char out[SM_TEXT_SHOWN_PATH_BYTES + 1], const char* path);
+
 // "s" for a message: escaped, and cut after QUOTE_TEXT_BYTES at a character boundary with "..."
 // after the closing quote. Returns out.
 const char* sm_text_quoted(char out[TEXT_QUOTED_CAPACITY], const char* s);

@@ -10,6 +10,7 @@
 #include "test_harness.h"
 
 #include <dirent.h>
+#include <errno.h>
 #include <locale.h>
 #include <math.h>
 #include <signal.h>
@@ -1987,6 +1988,78 @@ static int test_hostile_input(void)
 	return 0;
 }
 
+// Writes text to the file at path; 0 on success.
+static int write_text_file(const char* path, const char* text)
+{
+	FILE* f = fopen(path, "w");
+	ENSURE(f != NULL);
+	ENSURE(fputs(text, f) >= 0);
+	ENSURE(fclose(f) == 0);
+	return 0;
+}
+
+// A model file in folders whose path is longer than a message (four folders of 100 'é', 806 bytes
+// before the file's name): messages name it, and the OBJ file beside it, by the end of the path
+// ("..." and the last whole characters of the path that fit in 140 bytes with it), so that they
+// end with what is wrong. The path was written whole: the message was cut at its 511th byte, inside
+// the path and inside a character, and said nothing of the error. A control character in a model
+// file's path is shown escaped, as in an OBJ file's path, rather than written to a terminal.
+static int test_long_and_control_character_paths_in_messages(void)
+{
+	char folder[1024] = "";
+	char component[201];
+	for (int k = 0; k < 100; k++)
+		memcpy(component + 2 * k, "\xc3\xa9", 2);
+	component[200] = '\0';
+	for (int k = 0; k < 4; k++) {
+		if (k > 0)
+			strcat(folder, "/");
+		strcat(folder, component);
+		ENSURE(mkdir(folder, 0700) == 0 || errno == EEXIST);
+	}
+	char bad[1100], meshed[1100];
+	snprintf(bad, sizeof bad, "%s/bad.json", folder);
+	snprintf(meshed, sizeof meshed, "%s/meshed.json", folder);
+	ENSURE(write_text_file(bad, "{\"springmass\": 1,\n \"name\": \"x\" \"y\"}\n") == 0);
+	ENSURE(write_text_file(meshed,
+	                       "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", "
+	                       "\"name\": \"m\", \"file\": \"missing.obj\", \"density\": 1}]}\n") == 0);
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = sm_document_load(bad, &err);
+	// 137 bytes after "...": the name and 64 'é' (128 bytes) of its folder.
+	char expected[SM_ERROR_MESSAGE_CAPACITY];
+	snprintf(expected, sizeof expected, "...%s/bad.json:2:14: '}' expected near '\"y\"' (or a ',' before it)",
+	         component + 200 - 128);
+	const bool syntax_shown =
+	    doc == NULL && err.status == SM_ERROR_SYNTAX && strcmp(err.message, expected) == 0;
+	if (!syntax_shown)
+		printf("  %s\n", err.message);
+	sm_document_destroy(doc);
+	doc = sm_document_load(meshed, &err);
+	// Names of 12 bytes: 62 'é' (124 bytes) of the folder fit before them, not 62.5.
+	snprintf(
+	    expected, sizeof expected,
+	    "...%s/meshed.json: structures[0].file: ...%s/missing.obj: cannot open: No such file or directory",
+	    component + 200 - 124, component + 200 - 124);
+	const bool mesh_shown = doc == NULL && err.status == SM_ERROR_FILE && strcmp(err.message, expected) == 0;
+	if (!mesh_shown)
+		printf("  %s\n", err.message);
+	sm_document_destroy(doc);
+	remove(bad);
+	remove(meshed);
+	for (int k = 3; k >= 0; k--) {
+		rmdir(folder);
+		char* slash = strrchr(folder, '/');
+		if (slash != NULL)
+			*slash = '\0';
+	}
+	ENSURE(syntax_shown && mesh_shown);
+	ENSURE(sm_document_load("no/such/\x1b[31mred.json", &err) == NULL);
+	ENSURE(err.status == SM_ERROR_FILE &&
+	       strcmp(err.message, "no/such/\\u001b[31mred.json: cannot open: No such file or directory") == 0);
+	return 0;
+}
+
 // Two free particles 1 m apart, the start of the files below.
 #define TWO_PARTICLES                                                                                        \
 	"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0]}, {\"position\": [1, 0, 0]}]"
@@ -3918,6 +3991,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_messages_name_parameters);
 	RUN_TEST(test_names_and_descriptions_refuse_controls_and_line_breaks);
 	RUN_TEST(test_hostile_input);
+	RUN_TEST(test_long_and_control_character_paths_in_messages);
 	RUN_TEST(test_byte_order_mark_and_directories);
 	RUN_TEST(test_special_files_and_nul_bytes);
 	RUN_TEST(test_whole_real_index);

@@ -47,6 +47,8 @@ typedef struct sm_document sm_document;
 /// Loads and validates a model file. On error returns NULL and fills err: a syntax error names
 /// the file, line and column (`model.json:3:14: ...`); a rule broken names the path in the
 /// document, the value and the rule (`model.json: springs[3].b: no particle named "bobb"`).
+/// Messages show the file's path, and an OBJ file's, with control characters escaped and, past
+/// 140 bytes, by its end (`...` and its last characters), so that they end with what is wrong.
 /// Only regular files are read (a directory, a device or a FIFO is refused at once); files larger
 /// than 1 GiB, and models of more than 2^22 particles or springs, are refused. Loading takes time
 /// in proportion to the file's size.
