@@ -9,6 +9,9 @@ BUILD_TYPE    ?= Release
 CMAKE         ?= /usr/bin/cmake
 CTEST         ?= /usr/bin/ctest
 PYTHON        := $(CURDIR)/.venv/bin/python
+# The same for the shell, in single quotes (each ' of it as '\''): a checkout's folder may hold
+# spaces, '&', '$', parentheses or quotes, which the shell would otherwise split or act on.
+PYTHON_ARG     = '$(subst ','\'',$(PYTHON))'
 JOBS          ?= 2
 CMAKE_FLAGS   ?=
 # make fuzz: seconds per target, and the targets (model_file mesh_file simulation_state fmu_state reference inputs; all when empty).
@@ -36,7 +39,7 @@ configure-again:
 
 $(BUILD_DIR)/build.ninja: $(CONFIGURE_AGAIN) | setup
 	$(CMAKE) -S . -B $(BUILD_DIR) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) \
-	    -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+	    -DSPRINGMASS_PYTHON=$(PYTHON_ARG) $(CMAKE_FLAGS)
 
 build: setup $(BUILD_DIR)/build.ninja
 	$(CMAKE) --build $(BUILD_DIR) -j $(JOBS)
@@ -49,7 +52,7 @@ test: build
 
 $(SANITIZE_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
 	$(CMAKE) -S . -B $(SANITIZE_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Debug \
-	    -DSPRINGMASS_SANITIZE=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+	    -DSPRINGMASS_SANITIZE=ON -DSPRINGMASS_PYTHON=$(PYTHON_ARG) $(CMAKE_FLAGS)
 
 sanitize-build: setup $(SANITIZE_DIR)/build.ninja
 	$(CMAKE) --build $(SANITIZE_DIR) -j $(JOBS)
@@ -60,7 +63,7 @@ test-sanitize: sanitize-build
 # ThreadSanitizer: only the executables of the tests that use threads are built and run.
 $(TSAN_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
 	$(CMAKE) -S . -B $(TSAN_DIR) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-	    -DSPRINGMASS_SANITIZE_THREAD=ON -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+	    -DSPRINGMASS_SANITIZE_THREAD=ON -DSPRINGMASS_PYTHON=$(PYTHON_ARG) $(CMAKE_FLAGS)
 
 test-thread-sanitize: setup $(TSAN_DIR)/build.ninja
 	$(CMAKE) --build $(TSAN_DIR) -j $(JOBS) --target test_threads test_simulation test_fmu
@@ -89,7 +92,7 @@ test-clang: setup
 $(LTO_DIR)/build.ninja: $(CONFIGURE_FLAGS_AGAIN) | setup
 	$(CMAKE) -S . -B $(LTO_DIR) -G Ninja -DCMAKE_BUILD_TYPE=Release -DSPRINGMASS_BUILD_FMU=OFF \
 	    "-DCMAKE_C_FLAGS=-flto=auto -ffat-lto-objects" "-DCMAKE_EXE_LINKER_FLAGS=-Wall -Wextra -Werror" \
-	    -DSPRINGMASS_PYTHON=$(PYTHON) $(CMAKE_FLAGS)
+	    -DSPRINGMASS_PYTHON=$(PYTHON_ARG) $(CMAKE_FLAGS)
 
 test-lto: setup $(LTO_DIR)/build.ninja
 	$(CMAKE) --build $(LTO_DIR) -j $(JOBS)
