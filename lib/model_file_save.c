@@ -221,10 +221,11 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 	static const char* const damping_keys[3] = {
 	    ", \"damping\": ", ", \"strain_damping\": ", ", \"section_damping\": "};
 	// A constant of 0 is the default, left out, unless it comes from a parameter or has a scaling
-	// (and a section) of its own to keep.
-	const bool stiffness =
-	    def.stiffness != 0.0 || src->stiffness >= 0 || def.stiffness_scaling != SM_ABSOLUTE;
-	const bool damping = def.damping != 0.0 || src->damping >= 0 || def.damping_scaling != SM_ABSOLUTE;
+	// (and a section) of its own to keep; -0, which would reload as +0, is written too.
+	const bool stiffness = def.stiffness != 0.0 || signbit(def.stiffness) || src->stiffness >= 0 ||
+	                       def.stiffness_scaling != SM_ABSOLUTE;
+	const bool damping =
+	    def.damping != 0.0 || signbit(def.damping) || src->damping >= 0 || def.damping_scaling != SM_ABSOLUTE;
 	if (stiffness) {
 		puts_(t, stiffness_keys[def.stiffness_scaling]);
 		put_value(t, doc, def.stiffness, src->stiffness);

@@ -3894,6 +3894,46 @@ static int test_saved_zero_constants_keep_their_scaling(void)
 	return 0;
 }
 
+// A spring constant of -0 given as a number (an explicit spring's, a structure group's) reloads
+// as -0: the loader keeps the sign of the zero in the model, and the canonical form, which leaves
+// out a constant of 0, writes this one, so that the saved file builds the same model bit for bit,
+// as it does for a position or velocity of -0 (same_model compares constants with ==, which takes
+// -0 for 0: the sign is checked here).
+static int test_saved_negative_zero_constants_keep_their_sign(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"nz\","
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 1, 0], \"end\": [1, 1, 0], \"segments\": 1,"
+	    "  \"structural\": {\"stiffness\": -0.0, \"damping\": 1}}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"stiffness\": 2, \"damping\": -0.0},"
+	    "  {\"a\": \"a\", \"b\": \"r[0]\", \"stiffness\": -0.0, \"damping\": -0.0}]}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	sm_model *a = NULL, *b = NULL;
+	ENSURE_STATUS(sm_document_build(doc, &a, NULL), SM_OK);
+	ENSURE_STATUS(sm_document_build(again, &b, NULL), SM_OK);
+	// The rope's spring (0), then the file's two: the zeros of the file, signs and all.
+	const bool negative[3][2] = {{true, false}, {false, true}, {true, true}};
+	ENSURE(sm_model_spring_count(a) == 3);
+	for (int32_t s = 0; s < 3; s++) {
+		double ka, da, kb, db;
+		sm_model_spring_constants(a, s, NULL, &ka, &da);
+		sm_model_spring_constants(b, s, NULL, &kb, &db);
+		ENSURE(!!signbit(ka) == negative[s][0] && !!signbit(da) == negative[s][1]);
+		ENSURE(memcmp(&ka, &kb, sizeof ka) == 0 && memcmp(&da, &db, sizeof da) == 0);
+	}
+	sm_model_destroy(a);
+	sm_model_destroy(b);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // A key that is not listed is an error wherever it stands (docs: "The format is strict"), named
 // with the keys allowed there: in a structure, a fixed box, a port and the simulation and FMU
 // settings too, beside keys that are all valid.
@@ -4029,6 +4069,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_saved_springs_keep_their_kind);
 	RUN_TEST(test_messages_show_values_of_long_parameters);
 	RUN_TEST(test_saved_zero_constants_keep_their_scaling);
+	RUN_TEST(test_saved_negative_zero_constants_keep_their_sign);
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_parameters_keep_the_sign_of_a_zero);
 	RUN_TEST(test_limits_at_their_edges);
