@@ -90,24 +90,36 @@ static void put_string(text* t, const char* s)
 	puts_(t, "\"");
 }
 
+// Whether a key of the simulation settings takes the name of a choice ("method": "bdf"), not a
+// number or the parameter that stands for one.
+static bool takes_a_choice(const char* key)
+{
+	static const char* const keys[] = {"method", "solver", "jacobian", "input_changes"};
+	for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
+		if (strcmp(key, keys[k]) == 0)
+			return true;
+	return false;
+}
+
 // A JSON value copied from the file (gravity, mass damping, simulation and FMU settings, all
 // validated and shallow), with numbers written like every other number; a string that names a
-// parameter counts as naming it.
-static void put_json(text* t, const sm_document* doc, const json_t* value)
+// parameter counts as naming it, unless it is the value of a key that takes a choice (a
+// parameter called "bdf" is not what "method": "bdf" names).
+static void put_json(text* t, const sm_document* doc, const json_t* value, bool choice)
 {
 	if (json_is_number(value)) {
 		put_number(t, json_number_value(value));
 	} else if (json_is_string(value)) {
 		const char* s = json_string_value(value);
 		put_string(t, s);
-		const int32_t k = sm_name_index_find(&doc->parameter_index, s, strlen(s));
+		const int32_t k = choice ? -1 : sm_name_index_find(&doc->parameter_index, s, strlen(s));
 		if (k >= 0 && t->named != NULL)
 			t->named[k] = 1;
 	} else if (json_is_array(value)) {
 		puts_(t, "[");
 		for (size_t k = 0; k < json_array_size(value); k++) {
 			puts_(t, k > 0 ? ", " : "");
-			put_json(t, doc, json_array_get(value, k));
+			put_json(t, doc, json_array_get(value, k), false);
 		}
 		puts_(t, "]");
 	} else if (json_is_object(value)) {
@@ -121,7 +133,7 @@ static void put_json(text* t, const sm_document* doc, const json_t* value)
 			first = false;
 			put_string(t, key);
 			puts_(t, ": ");
-			put_json(t, doc, item);
+			put_json(t, doc, item, takes_a_choice(key));
 		}
 		puts_(t, "}");
 	} else {
@@ -317,13 +329,13 @@ static void write_body(text* t, const sm_document* doc)
 	puts_(t, ",\n  \"gravity\": ");
 	const json_t* gravity = json_object_get(doc->root, "gravity");
 	if (gravity != NULL)
-		put_json(t, doc, gravity);
+		put_json(t, doc, gravity, false);
 	else
 		put_vector(t, doc, def.gravity, NULL);
 	puts_(t, ",\n  \"mass_damping\": ");
 	const json_t* mass_damping = json_object_get(doc->root, "mass_damping");
 	if (mass_damping != NULL)
-		put_json(t, doc, mass_damping);
+		put_json(t, doc, mass_damping, false);
 	else
 		put_number(t, def.mass_damping);
 
@@ -374,7 +386,7 @@ static void write_body(text* t, const sm_document* doc)
 		puts_(t, ",\n  \"");
 		puts_(t, copied[k]);
 		puts_(t, "\": ");
-		put_json(t, doc, value);
+		put_json(t, doc, value, false);
 	}
 	puts_(t, "\n}\n");
 }

@@ -3934,6 +3934,39 @@ static int test_saved_negative_zero_constants_keep_their_sign(void)
 	return 0;
 }
 
+// The canonical form lists only the parameters it names, and a choice of the simulation settings
+// names none: a parameter that feeds nothing, called as a method, solver, Jacobian or input change
+// is ("bdf", "klu", "definite", "keep"), is left out of the saved file, as one of any other name
+// is; one that a number of the settings names ("stop_time": "adams") is kept.
+static int test_saved_choices_name_no_parameters(void)
+{
+	const char* text =
+	    "{\"springmass\": 1, \"name\": \"ch\","
+	    " \"parameters\": {\"bdf\": 1, \"klu\": 2, \"definite\": 3, \"keep\": 4, \"adams\": 2.5, \"other\": 5},"
+	    " \"particles\": [{\"position\": [0, 0, 0]}],"
+	    " \"simulation\": {\"method\": \"bdf\", \"solver\": \"klu\", \"jacobian\": \"definite\","
+	    "  \"input_changes\": \"keep\", \"stop_time\": \"adams\"}}";
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	static const char* const unused[] = {"bdf", "klu", "definite", "keep", "other"};
+	for (size_t k = 0; k < sizeof unused / sizeof unused[0]; k++)
+		ENSURE(sm_document_parameter_uses(doc, sm_document_parameter_index(doc, unused[k])) == 0);
+	sm_document* again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(sm_document_parameter_count(again) == 1);
+	ENSURE(strcmp(sm_document_parameter_name(again, 0), "adams") == 0);
+	ENSURE(sm_document_parameter_uses(again, 0) == SM_PARAMETER_SETTINGS);
+	const sm_document_settings settings = sm_document_get_settings(again);
+	ENSURE(settings.stop_time == 2.5 && settings.solver.method == SM_METHOD_BDF &&
+	       settings.solver.solver == SM_SOLVER_KLU && settings.solver.jacobian == SM_JACOBIAN_DEFINITE &&
+	       !settings.solver.restart_on_input_change);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+	return 0;
+}
+
 // A key that is not listed is an error wherever it stands (docs: "The format is strict"), named
 // with the keys allowed there: in a structure, a fixed box, a port and the simulation and FMU
 // settings too, beside keys that are all valid.
@@ -4070,6 +4103,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_messages_show_values_of_long_parameters);
 	RUN_TEST(test_saved_zero_constants_keep_their_scaling);
 	RUN_TEST(test_saved_negative_zero_constants_keep_their_sign);
+	RUN_TEST(test_saved_choices_name_no_parameters);
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_parameters_keep_the_sign_of_a_zero);
 	RUN_TEST(test_limits_at_their_edges);
