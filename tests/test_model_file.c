@@ -1120,6 +1120,16 @@ static int test_broken_files(void)
 		 SM_ERROR_SCHEMA,
 		 "test.json: particles[0].name: name \"c[0,0]\" reads as a reference to a particle of structure \"c\": give "
 		 "the particle another name"},
+	    // Two particles named like references to c and one to d: c's name is indexed once, for the
+	    // first of its particles, and the second leaves it so (a second insertion that stored its
+	    // entry took the name over from c to d, and c loaded beside them).
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"c[0]\", \"position\": [0, 0, 0]},"
+		 " {\"name\": \"c[1]\", \"position\": [1, 0, 0]}, {\"name\": \"d[0]\", \"position\": [2, 0, 0]}],"
+		 " \"structures\": [{\"type\": \"rope\", \"name\": \"c\", \"start\": [0, 1, 0], \"end\": [1, 1, 0],"
+		 " \"segments\": 1}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: particles[0].name: name \"c[0]\" reads as a reference to a particle of structure \"c\": give "
+		 "the particle another name"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"cube\", \"name\": \"c\"}]}",
 		 SM_ERROR_SCHEMA,
 		 "test.json: structures[0].type: must be \"rope\", \"sheet\", \"block\" or \"mesh\""},
