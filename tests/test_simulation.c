@@ -1397,7 +1397,8 @@ static sm_model* chain_of_three(int32_t fixed, bool extra_spring)
 // A snapshot goes only into a simulation of its layout: of as many particles and springs, and as
 // many free particles, is not enough. The chain with particle 0 fixed refuses a snapshot of the
 // chain with particle 1 fixed (other free particles, whose states would be swapped) and one of
-// the chain with a third spring, with nothing changed; its own snapshot it takes.
+// the chain with a third spring, with nothing changed, and one of the chain whose first spring is
+// of zero length (the same particles and springs, another force law); its own snapshot it takes.
 static int test_saved_state_needs_the_same_free_particles_and_springs(void)
 {
 	sm_model* held_at_0 = chain_of_three(0, false);
@@ -1417,6 +1418,22 @@ static int test_saved_state_needs_the_same_free_particles_and_springs(void)
 	ENSURE_STATUS(sm_simulation_restore_state(sim, wrong_free), SM_ERROR_TOPOLOGY);
 	ENSURE(strstr(sm_simulation_last_error(sim), "restore_state") != NULL);
 	ENSURE_STATUS(sm_simulation_restore_state(sim, wrong_springs), SM_ERROR_TOPOLOGY);
+	sm_model* zero_length = sm_model_clone(held_at_0);
+	ENSURE(zero_length != NULL);
+	sm_spring_def first;
+	ENSURE_STATUS(sm_model_get_spring(zero_length, 0, &first), SM_OK);
+	first.kind = SM_SPRING_ZERO_LENGTH;
+	first.rest_length = 0.0;
+	ENSURE_STATUS(sm_model_set_spring(zero_length, 0, &first), SM_OK);
+	sm_simulation* other_law = sm_simulation_create(zero_length, &d, NULL);
+	ENSURE(other_law != NULL);
+	ENSURE_STATUS(sm_simulation_advance(other_law, 0.1), SM_OK);
+	sm_simulation_state* wrong_law = sm_simulation_save_state(other_law);
+	ENSURE(wrong_law != NULL);
+	ENSURE_STATUS(sm_simulation_restore_state(sim, wrong_law), SM_ERROR_TOPOLOGY);
+	sm_simulation_state_destroy(wrong_law);
+	sm_simulation_destroy(other_law);
+	sm_model_destroy(zero_length);
 	ENSURE(sm_simulation_time(sim) == 0.0);
 	ENSURE(sm_model_spring_count(sm_simulation_model(sim)) == 2);
 	ENSURE_STATUS(sm_simulation_advance(sim, 0.1), SM_OK);
