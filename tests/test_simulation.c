@@ -1485,7 +1485,8 @@ static sm_simulation_state* relabelled_snapshot(const sm_simulation* own, const 
 // count is the same) and one free particle fewer (its arrays shorter than the simulation's), each
 // under the chain's own hash, are refused with nothing changed; the chain's own snapshot relabelled
 // the same way (its hash unchanged) is taken. Deserialize refuses two break events of one spring
-// also when they are the only two.
+// also when they are the only two, a break of a spring past the model's, and a value that is no
+// number in the last of the arrays.
 static int test_restore_checks_every_count(void)
 {
 	sm_model* chain = chain_of_three(0, false);
@@ -1548,6 +1549,19 @@ static int test_restore_checks_every_count(void)
 	fix_checksum(bytes, size);
 	ENSURE(sm_simulation_state_deserialize(bytes, size, &err) == NULL &&
 	       strstr(err.message, "spring 0 breaks twice") != NULL);
+	// The first spring past the model's (spring 2 of two) and a time that is no number in the last
+	// of the arrays (the last particle's driven-motion time) are out of range, at the ends of what
+	// deserialize checks.
+	second.spring = 2;
+	memcpy(bytes + size - 8 - sizeof second, &second, sizeof second);
+	fix_checksum(bytes, size);
+	ENSURE(sm_simulation_state_deserialize(bytes, size, &err) == NULL && err.status == SM_ERROR_NOT_FINITE);
+	second.spring = 1;
+	memcpy(bytes + size - 8 - sizeof second, &second, sizeof second);
+	const double not_a_number = NAN;
+	memcpy(bytes + size - 8 - 2 * sizeof second - sizeof not_a_number, &not_a_number, sizeof not_a_number);
+	fix_checksum(bytes, size);
+	ENSURE(sm_simulation_state_deserialize(bytes, size, &err) == NULL && err.status == SM_ERROR_NOT_FINITE);
 	free(bytes);
 	sm_simulation_state_destroy(cut);
 	sm_simulation_destroy(twin);
