@@ -2232,6 +2232,22 @@ static int test_break_search_of_coefficients_near_the_largest_double(void)
 	return 0;
 }
 
+// The search counts the limit itself as reached (simulation_internal.h: "rises from below 0 to 0
+// or above ... 0 if it is >= 0 at s = 0"): a spring exactly at its limit at the start of the step,
+// P(s) = -s (2 - s) (Bernstein coefficients 0, -1, -1), breaks at s = 0; one whose length rises to
+// its limit exactly at the end, P(s) = s^2 - 1 (-1, -1, 0), breaks at s = 1, the right end of the
+// last interval of the resolution, 1 - 2^-46 + 2^-46, exact. A zero coefficient between negative
+// ends is no crossing: P(s) = -(1 - s)^2 - s^2 <= -1/2 (-1, 0, -1).
+static int test_break_search_counts_the_limit_as_reached(void)
+{
+	const double resolution = 100.0 * DBL_EPSILON;
+	const double at_start[3] = {0.0, -1.0, -1.0}, at_end[3] = {-1.0, -1.0, 0.0}, below[3] = {-1.0, 0.0, -1.0};
+	ENSURE(sm_simulation_first_rise(at_start, 2, resolution) == 0.0);
+	ENSURE(sm_simulation_first_rise(at_end, 2, resolution) == 1.0);
+	ENSURE(sm_simulation_first_rise(below, 2, resolution) == -1.0);
+	return 0;
+}
+
 // A root CVODE finds later in the step of an excursion comes after it: beside the grazing tethered
 // mass, a spring from a fixed particle to a driven one pulled at V breaks at 10 % strain at
 // t_2 = 0.1 / V, chosen 5e-4 s after t_b: after the excursion (2.8e-4 s long) and inside the step
@@ -7107,6 +7123,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_break_inside_one_step);
 	RUN_TEST(test_break_search_of_an_overflowing_polynomial);
 	RUN_TEST(test_break_search_of_coefficients_near_the_largest_double);
+	RUN_TEST(test_break_search_counts_the_limit_as_reached);
 	RUN_TEST(test_break_inside_one_step_on_every_path);
 	RUN_TEST(test_springs_grazing_together_break_together);
 	RUN_TEST(test_break_inside_a_step_before_a_root_in_it);
