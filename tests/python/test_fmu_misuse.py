@@ -216,6 +216,30 @@ def test_a_step_whose_reaction_alone_overflows_is_a_discard(package):
         inst.free()
 
 
+def test_a_step_whose_input_work_alone_overflows_is_a_discard(package):
+    # The inputs' work is no state of the integration either: the work of a driven particle's jumps
+    # and its kinetic energy, each finite, may sum beyond the largest double. The motion port moved
+    # to -2.45e153 m stretches the spring (50 N/m) to 25 (2.45e153)^2 = 1.5e308 J, the work of that
+    # jump (a step); then set moving at 1.2e154 m/s, it gives the anchor's 1 kg 7.2e307 J: the
+    # inputs' work, 2.2e308 J, overflows while the kinetic and the elastic energy are finite. Steps
+    # too short to integrate check their outputs at their ends: fmi2Discard naming energy.input.
+    inst = Instance(package(MODELS / "driven_oscillator.json")).start()
+    s = inst.slave
+    try:
+        s.doStep(0.0, 0.01)
+        inst.set("base.x", -2.45e153)
+        s.doStep(0.01, 1e-17)
+        assert inst.get("energy.input") == inst.get("energy.elastic") > 1.5e308
+        inst.set("base.vx", 1.2e154)
+        with pytest.raises(FMICallException) as info:
+            s.doStep(s.getRealStatus(2), 1e-17)
+        assert info.value.status == 2  # fmi2Discard
+        assert "output energy.input overflows" in inst.messages[-1][2] and inst.messages[-1][1] == "logStatusDiscard"
+        assert math.isfinite(inst.get("energy.kinetic")) and math.isfinite(inst.get("energy.elastic"))
+    finally:
+        inst.free()
+
+
 def test_outputs_after_an_overflow_discard_are_at_the_last_successful_time(package, tmp_path):
     # 1e300 kg falling from rest: at 1000 s its kinetic energy, m (g t)^2 / 2 = 4.8e307 J, is
     # finite; at 3000 s, 4.3e308 J, it is not. The step from 1000 to 3000 s is discarded, and what
