@@ -1557,6 +1557,12 @@ static int test_short_steps_on_a_large_clock_are_integrated(void)
 	const double ulp = nextafter(t, INFINITY) - t, before = get(c, &f, "tip.vx");
 	ENSURE_STATUS(fmi2DoStep(c, t - ulp, ulp, fmi2True), fmi2OK);
 	ENSURE(get(c, &f, "tip.vx") == before);
+	// Two ulps behind, stepped by one: the step ends before the FMU's time, which stays where it
+	// is (fmi2LastSuccessfulTime): the time does not go back.
+	ENSURE_STATUS(fmi2DoStep(c, t - 2.0 * ulp, ulp, fmi2True), fmi2OK);
+	fmi2Real reached = 0.0;
+	ENSURE_STATUS(fmi2GetRealStatus(c, fmi2LastSuccessfulTime, &reached), fmi2OK);
+	ENSURE(reached == t && get(c, &f, "tip.vx") == before);
 	fmi2FreeInstance(c);
 	teardown(&f);
 	return 0;
