@@ -2816,6 +2816,33 @@ static int test_keyed_hash_is_siphash13_with_a_key_per_table(void)
 	return 0;
 }
 
+// The index stores 32 bits of each name's hash and compares the names themselves where those
+// agree: two names share them with probability 2^-32, and a lookup must then tell them apart by
+// every byte and by the length. A collision is made here by an owner that names the values
+// otherwise than they were inserted: "m" stored as value 0, which the owner calls "mass", and "q"
+// as value 1, which it calls "z". Neither is found under the name it was inserted with, and an
+// insertion of "m" stores it again (holder -1): the stored name only begins with "m", and "z"
+// differs from "q".
+static const char* name_of_listed(const void* owner, int32_t value)
+{
+	return ((const char* const*)owner)[value];
+}
+
+static int test_name_index_compares_whole_names(void)
+{
+	static const char* const names[3] = {"mass", "z", "m"};
+	name_index index;
+	sm_name_index_init(&index, name_of_listed, names);
+	int32_t holder;
+	ENSURE(sm_name_index_insert(&index, "m", 1, 0, &holder) && holder == -1);
+	ENSURE(sm_name_index_insert(&index, "q", 1, 1, &holder) && holder == -1);
+	ENSURE(sm_name_index_find(&index, "m", 1) == -1 && sm_name_index_find(&index, "q", 1) == -1);
+	ENSURE(sm_name_index_insert(&index, "m", 1, 2, &holder) && holder == -1);
+	ENSURE(sm_name_index_find(&index, "m", 1) == 2 && index.count == 3);
+	sm_name_index_free(&index);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2840,6 +2867,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mesh_edge_order);
 	RUN_TEST(test_mesh_edges_scatter_crafted_vertex_pairs);
 	RUN_TEST(test_keyed_hash_is_siphash13_with_a_key_per_table);
+	RUN_TEST(test_name_index_compares_whole_names);
 	RUN_TEST(test_zero_size_and_break_strain);
 	RUN_TEST(test_per_section_sheet_keeps_its_stiffness_when_refined);
 	RUN_TEST(test_per_section_block_keeps_its_stiffness_when_refined);
