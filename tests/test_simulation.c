@@ -19,6 +19,8 @@
 #include <float.h>
 #include <gsl/gsl_complex_math.h>
 #include <gsl/gsl_poly.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 
 // ---------------------------------------------------------------------------------------------
@@ -4227,11 +4229,15 @@ static int test_multilevel_solve_same_bits_on_threads(void)
 // A team's helpers compute in the floating-point environment of the thread that runs the job,
 // not in the one they inherited when the team was created: a host may change its rounding (or
 // flush subnormals) after creating a simulation, or advance it from another thread, and the
-// chunks must still give the bits the caller's thread alone would give.
+// chunks must still give the bits the caller's thread alone would give. Chunk 0 waits until the
+// five others are done, so that whichever thread claims it, another runs at least one of them:
+// without the wait the caller, free first, often ran all six chunks itself, and helpers left in
+// the environment they inherited went unnoticed.
 typedef struct rounding_job {
 	volatile double one, three;
 	int rounding[8];
 	double third[8];
+	atomic_int finished;
 } rounding_job;
 
 static void rounding_chunk(void* context, int c)
@@ -4239,6 +4245,11 @@ static void rounding_chunk(void* context, int c)
 	rounding_job* j = context;
 	j->rounding[c] = fegetround();
 	j->third[c] = j->one / j->three;
+	if (c == 0)
+		while (atomic_load(&j->finished) < 5)
+			sched_yield();
+	else
+		atomic_fetch_add(&j->finished, 1);
 }
 
 static int test_workers_take_the_callers_floating_point_environment(void)
@@ -4252,6 +4263,7 @@ static int test_workers_take_the_callers_floating_point_environment(void)
 		// Stored through volatile, so that the division is made here, under the mode just set:
 		// without FENV_ACCESS a compiler may move it past the next fesetround (Clang does).
 		const volatile double third = job.one / job.three;
+		atomic_init(&job.finished, 0);
 		sm_workers_run(team, rounding_chunk, &job, 6);
 		fesetround(FE_TONEAREST);
 		for (int c = 0; c < 6; c++)
