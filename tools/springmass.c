@@ -35,9 +35,8 @@ static void usage(FILE* out)
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
 		fprintf(out, "  %-9s %s\n", commands[i].name, commands[i].summary);
 	}
-	fprintf(
-	    out,
-	    "\n`springmass <command> --help` explains a command; `springmass --version` prints the version.\n");
+	fprintf(out, "\n`springmass <command> --help` (or `springmass help <command>`) explains a command; "
+	             "`springmass --version` prints the version.\n");
 }
 
 // CHOLMOD's supernodal factorisations call BLAS, and Debian's OpenBLAS starts a thread per core
@@ -105,20 +104,30 @@ int main(int argc, char** argv)
 		usage(stderr);
 		return 2;
 	}
-	if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 || strcmp(argv[1], "help") == 0) {
+	if (strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0 ||
+	    (strcmp(argv[1], "help") == 0 && argc == 2)) {
 		usage(stdout);
 		return finish(0);
+	}
+	// `springmass help COMMAND` is `springmass COMMAND --help`.
+	char* help_args[] = {argc > 2 ? argv[2] : NULL, "--help", NULL};
+	const bool help = strcmp(argv[1], "help") == 0;
+	if (help && argc > 3) {
+		fprintf(stderr, "springmass help: one command at most\n\n");
+		usage(stderr);
+		return 2;
 	}
 	if (strcmp(argv[1], "--version") == 0) {
 		printf("springmass %s\n", sm_version());
 		return finish(0);
 	}
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; ++i) {
-		if (strcmp(argv[1], commands[i].name) == 0) {
+		if (help && strcmp(argv[2], commands[i].name) == 0)
+			return finish(commands[i].run(2, help_args));
+		if (!help && strcmp(argv[1], commands[i].name) == 0)
 			return finish(commands[i].run(argc - 1, argv + 1));
-		}
 	}
-	fprintf(stderr, "springmass: unknown command '%s'\n\n", argv[1]);
+	fprintf(stderr, "springmass: unknown command '%s'\n\n", help ? argv[2] : argv[1]);
 	usage(stderr);
 	return 2;
 }

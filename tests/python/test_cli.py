@@ -101,6 +101,10 @@ def test_usage_errors_exit_with_2_and_help_goes_to_standard_output(tmp_path):
     for command in ("run", "check", "statics", "modes") + (("fmu",) if HAS_FMU else ()):
         out = cli(command, "--help")
         assert out.stdout.startswith("usage: springmass " + command) and out.stderr == ""
+        # `springmass help COMMAND` prints the same help (git's convention).
+        assert cli("help", command).stdout == out.stdout
+    assert "unknown command 'frob'" in cli("help", "frob", status=2).stderr
+    assert "one command at most" in cli("help", "run", "check", status=2).stderr
     if not HAS_FMU:
         # A build without FMUs has the command, which refuses whatever it is given: it cannot run.
         for args in (["--help"], [], [osc, "-o", tmp_path / "x.fmu"]):
