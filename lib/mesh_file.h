@@ -10,7 +10,7 @@
 #include <stdint.h>
 
 // Most bytes of a message from sm_mesh_file_parse, NUL included.
-#define MESH_FILE_MESSAGE_CAPACITY 192
+#define MESH_FILE_MESSAGE_CAPACITY 256
 
 // A mesh as an OBJ file gives it, with where each vertex and triangle is in the file.
 typedef struct mesh_file {

@@ -458,6 +458,12 @@ static int test_broken_obj_files(void)
 	    {"v 0 0 0\rvv 1 0 0\r", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
 		 "test.json: structures[0].file: bad.obj:2:1: unknown statement \"vv\" (a mesh is read from v and f; vt, vn, "
 		 "o, g, s, usemtl, mtllib, l and the like are skipped)"},
+	    // A statement of 100 bytes, quoted by its first 80: the reason is whole after it.
+	    {"v 0 0 0\nxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx 1\n",
+		 "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
+		 "test.json: structures[0].file: bad.obj:2:1: unknown statement "
+		 "\"xxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxxx\"... "
+		 "(a mesh is read from v and f; vt, vn, o, g, s, usemtl, mtllib, l and the like are skipped)"},
 	    {"# only points\nv 0 0 0\nv 1 0 0\nv 0 1 0\np 1 2 3\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SCHEMA,
 		 "test.json: structures[0].file: bad.obj: no face (f), so no triangle: a mesh needs at least one"},
 	    {"v 0 0 0\nv 1 0 0\n\x00v 0 1 0\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
