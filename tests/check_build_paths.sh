@@ -8,9 +8,11 @@
 # CMake itself in a build folder's name, whatever the project.) And the Makefile, in a checkout
 # whose folder has such a name (and '#'), gives CMake the path of the checkout's Python as one
 # argument, as it is.
-# Usage: check_build_paths.sh SOURCE_DIR CMAKE PYTHON
+# Usage: check_build_paths.sh SOURCE_DIR CMAKE PYTHON [CMAKE_ARGUMENT ...] (where the build found
+# its dependencies, e.g. -DSUNDIALS_DIR=...)
 set -euo pipefail
 source=$1 cmake=$2 python=$3
+shift 3
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 fail() {
@@ -18,7 +20,7 @@ fail() {
 	exit 1
 }
 build="$work/build 'a' (b) & é \$HOME \`c\` 50%41"
-"$cmake" -S "$source" -B "$build" -G Ninja -DSPRINGMASS_BUILD_TESTS=OFF -DSPRINGMASS_PYTHON="$python" \
+"$cmake" -S "$source" -B "$build" -G Ninja -DSPRINGMASS_BUILD_TESTS=OFF -DSPRINGMASS_PYTHON="$python" "$@" \
     > "$work/configure.log" 2>&1 || fail "configuring in $build: $(tail -n 5 "$work/configure.log")"
 ninja=$(sed -n 's/^CMAKE_MAKE_PROGRAM:[A-Z]*=//p' "$build/CMakeCache.txt")
 # Custom commands start by going to their folder; compilers and linkers are called otherwise.
