@@ -87,11 +87,14 @@ static void compare(const sm_document* d1, const sm_model* m1, const sm_document
 	    e.solver.restart_on_input_change != f.solver.restart_on_input_change ||
 	    e.solver.stability_limit_detection != f.solver.stability_limit_detection)
 		differ("settings", 0);
-	// The parameters kept are the file's, with their values, and feed no more than they did.
+	// The parameters kept are the file's, with their values, feed no more than they did and keep
+	// the unit they had (one of several may become the only one).
 	for (int32_t j = 0; j < sm_document_parameter_count(d2); j++) {
 		const int32_t i = sm_document_parameter_index(d1, sm_document_parameter_name(d2, j));
 		if (i < 0 || !same(sm_document_parameter_value(d1, i), sm_document_parameter_value(d2, j)) ||
-		    (sm_document_parameter_uses(d2, j) & ~sm_document_parameter_uses(d1, i)) != 0)
+		    (sm_document_parameter_uses(d2, j) & ~sm_document_parameter_uses(d1, i)) != 0 ||
+		    (sm_document_parameter_unit(d1, i)[0] != '\0' &&
+		     strcmp(sm_document_parameter_unit(d1, i), sm_document_parameter_unit(d2, j)) != 0))
 			differ("parameter", j);
 	}
 }

@@ -187,6 +187,24 @@ expansion* sm_document_expand(const sm_document* doc, const double* parameter_va
 	     sm_parser_read_loads(&p, json_object_get(root, "loads")) &&
 	     sm_parser_read_ports(&p, json_object_get(root, "ports")) &&
 	     read_settings(&p, json_object_get(root, "simulation"), json_object_get(root, "fmu"));
+	// A unit "parameter_units" gives is the parameter's, where the values naming it agreed with it
+	// (sm_parser_read_number): an index has none.
+	for (int32_t k = 0; ok && k < doc->parameter_count; k++) {
+		const char* declared = sm_parser_declared_unit(&p, k);
+		if (declared == NULL)
+			continue;
+		if (p.ex->parameter_uses[k] & FEEDS_REFERENCES) {
+			char path[PATH_CAPACITY], escaped[50], text[TEXT_QUOTED_CAPACITY];
+			if (!sm_text_escape(escaped, sizeof escaped - 4, doc->parameter_names[k]))
+				strcat(escaped, "...");
+			sm_parser_child_key(path, "parameter_units", escaped);
+			ok = sm_parser_fail(&p, SM_ERROR_SCHEMA, path,
+			                    "parameter %s stands for an index of a structure reference, which has no "
+			                    "unit, not %s",
+			                    sm_text_quoted(text, doc->parameter_names[k]), declared);
+		}
+		p.ex->parameter_units[k] = declared;
+	}
 	if (ok && sm_model_particle_count(p.ex->model) == 0)
 		ok = sm_parser_fail(&p, SM_ERROR_SCHEMA, "",
 		                    "the model has no particles (give \"particles\" or \"structures\")");
@@ -214,11 +232,64 @@ expansion* sm_document_expand(const sm_document* doc, const double* parameter_va
 	return p.ex;
 }
 
+// "parameter_units": the units of parameters whose keys do not tell them (a single spring's
+// per-section constant: its section is a width or an area), each a unit a key can give; a saved
+// file keeps with it the units a structure gave its per-section constants. sm_parser_read_number
+// checks that every value naming the parameter whose key tells a unit is in the one given.
+static bool read_parameter_units(parser* p, const json_t* units)
+{
+	static const char* const known[] = {"kg",   "N",     "m",    "m/s", "1", "N/m",  "N.s/m", "N.s",
+	                                    "kg/m", "kg/m2", "m/s2", "1/s", "s", "N/m2", "N.s/m2"};
+	if (units == NULL)
+		return true;
+	if (!sm_parser_expect_object(p, units, "parameter_units"))
+		return false;
+	sm_document* doc = (sm_document*)p->doc;
+	doc->parameter_declared_units =
+	    calloc(doc->parameter_count > 0 ? (size_t)doc->parameter_count : 1, sizeof(const char*));
+	if (doc->parameter_declared_units == NULL)
+		return sm_parser_fail(p, SM_ERROR_OUT_OF_MEMORY, "parameter_units", "out of memory");
+	const char* key;
+	json_t* value;
+	json_object_foreach((json_t*)units, key, value)
+	{
+		char path[PATH_CAPACITY], escaped[50], text[TEXT_QUOTED_CAPACITY];
+		if (!sm_text_escape(escaped, sizeof escaped - 4, key))
+			strcat(escaped, "...");
+		sm_parser_child_key(path, "parameter_units", escaped);
+		const int32_t k = sm_document_find_parameter(doc, key);
+		if (k < 0)
+			return sm_parser_fail(p, SM_ERROR_NOT_FOUND, path,
+			                      "no parameter named %s (\"parameter_units\" gives units to the "
+			                      "\"parameters\")",
+			                      sm_text_quoted(text, key));
+		const char* unit = json_is_string(value) ? json_string_value(value) : NULL;
+		for (size_t u = 0; unit != NULL && u < sizeof known / sizeof known[0]; u++)
+			if (strcmp(known[u], unit) == 0)
+				doc->parameter_declared_units[k] = known[u];
+		if (doc->parameter_declared_units[k] == NULL) {
+			char list[160] = "";
+			size_t used = 0;
+			for (size_t u = 0; u < sizeof known / sizeof known[0]; u++)
+				used += (size_t)snprintf(list + used, sizeof list - used, "%s\"%s\"", u > 0 ? ", " : "",
+				                         known[u]);
+			if (unit == NULL)
+				return sm_parser_fail(p, SM_ERROR_SCHEMA, path,
+				                      "must be the name of a unit, one of %s, not %s", list,
+				                      sm_parser_type_name(value));
+			return sm_parser_fail(p, SM_ERROR_SCHEMA, path, "%s is no unit a value can have: one of %s",
+			                      sm_text_quoted(text, unit), list);
+		}
+	}
+	return true;
+}
+
 static bool read_header(sm_document* doc, sm_error* err)
 {
-	static const char* const keys[] = {"springmass",   "name",      "description", "parameters", "gravity",
-	                                   "mass_damping", "particles", "springs",     "structures", "fixed",
-	                                   "loads",        "ports",     "simulation",  "fmu",        NULL};
+	static const char* const keys[] = {"springmass",      "name",       "description",  "parameters",
+	                                   "parameter_units", "gravity",    "mass_damping", "particles",
+	                                   "springs",         "structures", "fixed",        "loads",
+	                                   "ports",           "simulation", "fmu",          NULL};
 	parser p = {.doc = doc, .err = err};
 	const json_t* root = doc->root;
 	if (!json_is_object(root))
@@ -266,7 +337,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 	}
 	const json_t* parameters = json_object_get(root, "parameters");
 	if (parameters == NULL)
-		return true;
+		return read_parameter_units(&p, json_object_get(root, "parameter_units"));
 	if (!sm_parser_expect_object(&p, parameters, "parameters"))
 		return false;
 	const size_t n = json_object_size(parameters);
@@ -299,7 +370,7 @@ static bool read_header(sm_document* doc, sm_error* err)
 			return sm_parser_fail(&p, SM_ERROR_OUT_OF_MEMORY, "parameters", "out of memory");
 		doc->parameter_count++;
 	}
-	return true;
+	return read_parameter_units(&p, json_object_get(root, "parameter_units"));
 }
 
 // Whether the parser stopped before the byte its error is about (error.position: bytes read),
@@ -772,6 +843,7 @@ void sm_document_destroy(sm_document* doc)
 	sm_expansion_free(doc->current);
 	json_decref(doc->root);
 	free(doc->parameter_names);
+	free(doc->parameter_declared_units);
 	sm_name_index_free(&doc->parameter_index);
 	free(doc->parameter_values);
 	free(doc->initial_position);

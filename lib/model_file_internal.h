@@ -114,6 +114,9 @@ struct sm_document {
 	const char** parameter_names;  // point into the JSON tree
 	double* parameter_values;
 	name_index parameter_index;  // name to parameter
+	// Per parameter: the unit "parameter_units" gives it (a static string), NULL if none. It is
+	// the parameter's unit: every value naming it whose key tells a unit must be in that one.
+	const char** parameter_declared_units;
 
 	expansion* current;
 

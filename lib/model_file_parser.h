@@ -93,6 +93,7 @@ bool sm_parser_expect_object(parser* p, const json_t* value, const char* path);
 bool sm_parser_check_keys(parser* p, const json_t* obj, const char* path, const char* const* allowed);
 void sm_parser_note_parameter(noted_parameters* noted, int32_t k);
 void sm_parser_note_unit(expansion* ex, int32_t k, const char* unit);
+const char* sm_parser_declared_unit(const parser* p, int32_t k);
 bool sm_parser_read_number(parser* p, feeds use, const char* unit, const json_t* value, const char* path,
                            double* out, int32_t* source);
 const char* sm_parser_describe(parser* p, char* buffer, size_t size, double value, int32_t source);

@@ -25,8 +25,12 @@ typedef struct text {
 	char* data;
 	size_t length, capacity;
 	bool failed;
-	uint8_t* named;  // per parameter: 1 once the text names it (NULL: not tracked)
+	// Per parameter: NAMED once the text names it, with UNTOLD once it names it where the key does
+	// not tell the unit (NULL: not tracked).
+	uint8_t* named;
 } text;
+
+enum { NAMED = 1, UNTOLD = 2 };
 
 static void put(text* t, const char* s, size_t n)
 {
@@ -90,50 +94,64 @@ static void put_string(text* t, const char* s)
 	puts_(t, "\"");
 }
 
-// Whether a key of the simulation settings takes the name of a choice ("method": "bdf"), not a
-// number or the parameter that stands for one.
-static bool takes_a_choice(const char* key)
+// Whether a key is one of `keys` (NULL-terminated).
+static bool key_among(const char* key, const char* const* keys)
 {
-	static const char* const keys[] = {"method", "solver", "jacobian", "input_changes"};
-	for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++)
-		if (strcmp(key, keys[k]) == 0)
+	for (; *keys != NULL; keys++)
+		if (strcmp(key, *keys) == 0)
 			return true;
 	return false;
 }
 
+// Whether a key of the simulation settings takes the name of a choice ("method": "bdf"), not a
+// number or the parameter that stands for one.
+static bool takes_a_choice(const char* key)
+{
+	static const char* const keys[] = {"method", "solver", "jacobian", "input_changes", NULL};
+	return key_among(key, keys);
+}
+
+// Whether a parameter at a key copied from the file takes no unit from the key: "atol" sets the
+// tolerances of positions [m] and velocities [m/s], "max_steps" is a count.
+static bool tells_no_unit(const char* key)
+{
+	static const char* const keys[] = {"atol", "max_steps", NULL};
+	return key_among(key, keys);
+}
+
 // A JSON value copied from the file (gravity, mass damping, simulation and FMU settings, all
-// validated and shallow), with numbers written like every other number; a string that names a
-// parameter counts as naming it, unless it is the value of a key that takes a choice (a
+// validated and shallow) at `key`, with numbers written like every other number; a string that
+// names a parameter counts as naming it, unless it is the value of a key that takes a choice (a
 // parameter called "bdf" is not what "method": "bdf" names).
-static void put_json(text* t, const sm_document* doc, const json_t* value, bool choice)
+static void put_json(text* t, const sm_document* doc, const json_t* value, const char* key)
 {
 	if (json_is_number(value)) {
 		put_number(t, json_number_value(value));
 	} else if (json_is_string(value)) {
 		const char* s = json_string_value(value);
 		put_string(t, s);
-		const int32_t k = choice ? -1 : sm_name_index_find(&doc->parameter_index, s, strlen(s));
+		const int32_t k = takes_a_choice(key) ? -1 : sm_name_index_find(&doc->parameter_index, s, strlen(s));
 		if (k >= 0 && t->named != NULL)
-			t->named[k] = 1;
+			t->named[k] |= (uint8_t)(NAMED | (tells_no_unit(key) ? UNTOLD : 0));
 	} else if (json_is_array(value)) {
 		puts_(t, "[");
 		for (size_t k = 0; k < json_array_size(value); k++) {
 			puts_(t, k > 0 ? ", " : "");
-			put_json(t, doc, json_array_get(value, k), false);
+			put_json(t, doc, json_array_get(value, k), key);
 		}
 		puts_(t, "]");
 	} else if (json_is_object(value)) {
-		const char* key;
+		const char* item_key;
 		json_t* item;
 		bool first = true;
 		puts_(t, "{");
-		json_object_foreach((json_t*)value, key, item)
+		json_object_foreach((json_t*)value, item_key, item)
 		{
 			puts_(t, first ? "" : ", ");
 			first = false;
-			put_string(t, key);
+			put_string(t, item_key);
 			puts_(t, ": ");
-			put_json(t, doc, item, takes_a_choice(key));
+			put_json(t, doc, item, item_key);
 		}
 		puts_(t, "}");
 	} else {
@@ -141,16 +159,22 @@ static void put_json(text* t, const sm_document* doc, const json_t* value, bool 
 	}
 }
 
-// A number, or the parameter it came from.
-static void put_value(text* t, const sm_document* doc, double x, int32_t source)
+// A number, or the parameter it came from, at a key that tells its unit or not (`untold`).
+static void put_value_at(text* t, const sm_document* doc, double x, int32_t source, bool untold)
 {
 	if (source >= 0) {
 		put_string(t, doc->parameter_names[source]);
 		if (t->named != NULL)
-			t->named[source] = 1;
+			t->named[source] |= (uint8_t)(NAMED | (untold ? UNTOLD : 0));
 	} else {
 		put_number(t, x);
 	}
+}
+
+// A number, or the parameter it came from, at a key that tells its unit.
+static void put_value(text* t, const sm_document* doc, double x, int32_t source)
+{
+	put_value_at(t, doc, x, source, false);
 }
 
 static void put_vector(text* t, const sm_document* doc, const double x[3], const int32_t sources[3])
@@ -238,19 +262,21 @@ static void put_spring(text* t, const sm_document* doc, int32_t s)
 	                       def.stiffness_scaling != SM_ABSOLUTE;
 	const bool damping =
 	    def.damping != 0.0 || signbit(def.damping) || src->damping >= 0 || def.damping_scaling != SM_ABSOLUTE;
+	// A single spring's section is a width or an area: its per-section constants and its section
+	// have no unit the key tells, where a structure's had.
 	if (stiffness) {
 		puts_(t, stiffness_keys[def.stiffness_scaling]);
-		put_value(t, doc, def.stiffness, src->stiffness);
+		put_value_at(t, doc, def.stiffness, src->stiffness, def.stiffness_scaling == SM_PER_SECTION);
 	}
 	if (damping) {
 		puts_(t, damping_keys[def.damping_scaling]);
-		put_value(t, doc, def.damping, src->damping);
+		put_value_at(t, doc, def.damping, src->damping, def.damping_scaling == SM_PER_SECTION);
 	}
 	// A structure's spring gets its section from the grid; saved as one spring, it keeps it.
 	if ((stiffness && def.stiffness_scaling == SM_PER_SECTION) ||
 	    (damping && def.damping_scaling == SM_PER_SECTION)) {
 		puts_(t, ", \"section\": ");
-		put_value(t, doc, def.section, src->section);
+		put_value_at(t, doc, def.section, src->section, true);
 	}
 	if (isfinite(def.break_strain) || src->break_strain >= 0) {
 		puts_(t, ", \"break_strain\": ");
@@ -306,6 +332,23 @@ static char* document_text(const sm_document* doc, sm_error* err)
 		}
 		if (any)
 			puts_(&t, "}");
+		// The units the text would lose: a parameter it names where the key does not tell the unit
+		// (a single spring's per-section constant, its section is a width or an area) has none
+		// when loaded, unless "parameter_units" gives it the one it has here (from a structure's
+		// per-section constant, or from the file's own "parameter_units").
+		any = false;
+		for (int32_t k = 0; k < doc->parameter_count; k++) {
+			const char* unit = sm_document_parameter_unit(doc, k);
+			if (!(body.named[k] & UNTOLD) || unit[0] == '\0')
+				continue;
+			puts_(&t, any ? ", " : ",\n  \"parameter_units\": {");
+			any = true;
+			put_string(&t, doc->parameter_names[k]);
+			puts_(&t, ": ");
+			put_string(&t, unit);
+		}
+		if (any)
+			puts_(&t, "}");
 	}
 	if (body.data != NULL)
 		puts_(&t, body.data);
@@ -329,13 +372,13 @@ static void write_body(text* t, const sm_document* doc)
 	puts_(t, ",\n  \"gravity\": ");
 	const json_t* gravity = json_object_get(doc->root, "gravity");
 	if (gravity != NULL)
-		put_json(t, doc, gravity, false);
+		put_json(t, doc, gravity, "gravity");
 	else
 		put_vector(t, doc, def.gravity, NULL);
 	puts_(t, ",\n  \"mass_damping\": ");
 	const json_t* mass_damping = json_object_get(doc->root, "mass_damping");
 	if (mass_damping != NULL)
-		put_json(t, doc, mass_damping, false);
+		put_json(t, doc, mass_damping, "mass_damping");
 	else
 		put_number(t, def.mass_damping);
 
@@ -386,7 +429,7 @@ static void write_body(text* t, const sm_document* doc)
 		puts_(t, ",\n  \"");
 		puts_(t, copied[k]);
 		puts_(t, "\": ");
-		put_json(t, doc, value, false);
+		put_json(t, doc, value, copied[k]);
 	}
 	puts_(t, "\n}\n");
 }

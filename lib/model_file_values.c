@@ -145,6 +145,12 @@ void sm_parser_note_unit(expansion* ex, int32_t k, const char* unit)
 		ex->parameter_units[k] = sm_no_single_unit();
 }
 
+// The unit "parameter_units" gives parameter k, or NULL.
+const char* sm_parser_declared_unit(const parser* p, int32_t k)
+{
+	return p->doc->parameter_declared_units != NULL ? p->doc->parameter_declared_units[k] : NULL;
+}
+
 // The SI unit of the number at a key of the format, as docs/model-format.md gives it, for the
 // parameters that stand for it; NULL where the key alone does not tell (atol sets both
 // tolerances, m and m/s; a single spring's section is a width or an area).
@@ -254,6 +260,12 @@ bool sm_parser_read_number(parser* p, feeds use, const char* unit, const json_t*
 		*out = p->parameter_values[k];
 		p->ex->parameter_uses[k] |= (uint8_t)use;
 		sm_parser_note_unit(p->ex, k, unit);
+		const char* declared = sm_parser_declared_unit(p, k);
+		if (unit != NULL && declared != NULL && strcmp(unit, declared) != 0)
+			return sm_parser_fail(p, SM_ERROR_SCHEMA, path,
+			                      "parameter %s stands for a value in %s here, but \"parameter_units\" "
+			                      "gives it %s",
+			                      sm_text_quoted(text, json_string_value(value)), unit, declared);
 		if (source != NULL)
 			*source = k;
 		sm_parser_note_parameter(&p->noted, k);
@@ -406,6 +418,14 @@ bool sm_parser_read_count(parser* p, feeds use, const json_t* value, const char*
 	if (!sm_parser_read_number(p, use, NULL, value, path, &v, &source))
 		return false;
 	char text[DESCRIPTION_CAPACITY];
+	const char* declared = source >= 0 ? sm_parser_declared_unit(p, source) : NULL;
+	if (declared != NULL) {
+		char name[TEXT_QUOTED_CAPACITY];
+		return sm_parser_fail(p, SM_ERROR_SCHEMA, path,
+		                      "parameter %s stands for a count or an index here, which has no unit, but "
+		                      "\"parameter_units\" gives it %s",
+		                      sm_text_quoted(name, p->doc->parameter_names[source]), declared);
+	}
 	if (!(v == floor(v)) || !(v >= (double)lo) || !(v <= (double)hi))
 		return sm_parser_fail(p, SM_ERROR_SCHEMA, path, "%s must be a whole number from %lld to %lld",
 		                      sm_parser_describe(p, text, sizeof text, v, source), (long long)lo,

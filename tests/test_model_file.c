@@ -1023,8 +1023,9 @@ static int test_broken_files(void)
 	    {"{\"springmass\": 1.0, \"name\": \"x\"}", SM_ERROR_SCHEMA,
 		 "test.json: springmass: format version must be the integer 1, not a real number"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravty\": [0, 0, 0]}", SM_ERROR_SCHEMA,
-		 "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, gravity, "
-		 "mass_damping, particles, springs, structures, fixed, loads, ports, simulation, fmu)"},
+		 "test.json: unknown key \"gravty\" (allowed here: springmass, name, description, parameters, "
+		 "parameter_units, gravity, mass_damping, particles, springs, structures, fixed, loads, ports, simulation, "
+		 "fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"my model\"}", SM_ERROR_SCHEMA,
 		 "test.json: name: name \"my model\" must be an identifier (letters, digits and '_', not starting with a "
 		 "digit)"},
@@ -1648,8 +1649,9 @@ static int test_messages_quote_text(void)
 		 SM_ERROR_SCHEMA,
 		 "test.json: particles[0].name: name \"\\u001b[31mred\" has a control character, U+001B, at character 1"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gra\\u202evity\": [0, 0, 0]}", SM_ERROR_SCHEMA,
-		 "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, gravity, "
-		 "mass_damping, particles, springs, structures, fixed, loads, ports, simulation, fmu)"},
+		 "test.json: unknown key \"gra\\u202evity\" (allowed here: springmass, name, description, parameters, "
+		 "parameter_units, gravity, mass_damping, particles, springs, structures, fixed, loads, ports, simulation, "
+		 "fmu)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\\u001b\": 1}}", SM_ERROR_SCHEMA,
 		 "test.json: parameters.k\\u001b: name \"k\\u001b\" has a control character, U+001B, at character 2"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": \"a\\\"b\\\\c\"}]}",
@@ -3977,6 +3979,185 @@ static int test_saved_choices_name_no_parameters(void)
 	return 0;
 }
 
+// A saved file keeps the units its parameters had: a structure's per-section constant, written as
+// a single spring's (whose section is a width or an area, so the key tells no unit), keeps the
+// unit its structure gave it through "parameter_units", for the trampoline's sheet (N/m, N s/m)
+// and a block (N/m^2, N s/m^2); parameters the saved text names where the key tells the unit get
+// no entry, and saving the saved file gives the same bytes.
+static int test_saved_structures_keep_parameter_units(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc = load_bundled("trampoline", &err);
+	ENSURE(doc != NULL);
+	char* text = sm_document_to_json(doc, &err);
+	ENSURE(text != NULL);
+	ENSURE(strstr(text, "\n  \"parameters\": {\"Y\": 40000, \"eta\": 20},\n"
+	                    "  \"parameter_units\": {\"Y\": \"N/m\", \"eta\": \"N.s/m\"},\n") != NULL);
+	sm_document* again = sm_document_parse(text, strlen(text), "saved.json", &err);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(strcmp(sm_document_parameter_unit(again, sm_document_parameter_index(again, "Y")), "N/m") == 0);
+	ENSURE(strcmp(sm_document_parameter_unit(again, sm_document_parameter_index(again, "eta")), "N.s/m") ==
+	       0);
+	char* text_again = sm_document_to_json(again, &err);
+	ENSURE(text_again != NULL && strcmp(text, text_again) == 0);
+	free(text_again);
+	free(text);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	const char* block =
+	    "{\"springmass\": 1, \"name\": \"b\", \"parameters\": {\"Y\": 1000, \"D\": 2, \"k\": 50, \"g\": -9.81, \"tol\": 1e-6},"
+	    " \"gravity\": [0, 0, \"g\"],"
+	    " \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 2, \"nw\": 2,"
+	    "   \"edge\": {\"section_stiffness\": \"Y\", \"section_damping\": \"D\"}, \"body_diagonal\": {\"stiffness\": \"k\"}}],"
+	    " \"simulation\": {\"rtol\": \"tol\"}}";
+	doc = parse_valid(block, &err);
+	ENSURE(doc != NULL);
+	text = sm_document_to_json(doc, &err);
+	ENSURE(text != NULL);
+	ENSURE(strstr(text, "\"parameter_units\": {\"Y\": \"N/m2\", \"D\": \"N.s/m2\"},\n") != NULL);
+	again = sm_document_parse(text, strlen(text), "saved.json", &err);
+	ENSURE(again != NULL);
+	static const char* const names[] = {"Y", "D", "k", "g", "tol"};
+	for (size_t k = 0; k < sizeof names / sizeof names[0]; k++)
+		ENSURE(strcmp(sm_document_parameter_unit(doc, sm_document_parameter_index(doc, names[k])),
+		              sm_document_parameter_unit(again, sm_document_parameter_index(again, names[k]))) == 0);
+	text_again = sm_document_to_json(again, &err);
+	ENSURE(text_again != NULL && strcmp(text, text_again) == 0);
+	free(text_again);
+	free(text);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
+
+	// Without per-section constants, and with structures whose constants keep their unit in a
+	// single spring, the saved file has no "parameter_units", as before.
+	static const char* const plain[] = {"oscillator", "two_mass_chain", "hanging_rope", "cloth",
+	                                    "jelly_block"};
+	for (size_t k = 0; k < sizeof plain / sizeof plain[0]; k++) {
+		doc = load_bundled(plain[k], &err);
+		ENSURE(doc != NULL);
+		text = sm_document_to_json(doc, &err);
+		ENSURE(text != NULL);
+		ENSURE(strstr(text, "parameter_units") == NULL);
+		free(text);
+		sm_document_destroy(doc);
+	}
+	return 0;
+}
+
+// "parameter_units" gives a unit to a parameter whose keys do not tell one (a single spring's
+// per-section constant and section, atol, or nothing), which the document then reports and its
+// saved and self-contained texts keep; a unit that disagrees with a key naming the parameter, a
+// count or an index, a unit no value has, or a parameter not declared are refused.
+static int test_declared_parameter_units(void)
+{
+	const char* head =
+	    "{\"springmass\": 1, \"name\": \"d\", \"parameters\": {\"Y\": 100, \"w\": 0.1, \"k\": 5, \"n\": 2,"
+	    " \"atol\": 1e-8, \"spare\": 3},";
+	const char* body =
+	    " \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0], \"fixed\": true}, {\"name\": \"b\", \"position\": [1, 0, 0]}],"
+	    " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 1, 0], \"end\": [1, 1, 0], \"segments\": \"n\"}],"
+	    " \"springs\": [{\"a\": \"a\", \"b\": \"b\", \"section_stiffness\": \"Y\", \"section\": \"w\"},"
+	    "             {\"a\": \"a\", \"b\": \"r[n - 1]\", \"stiffness\": \"k\"}],"
+	    " \"simulation\": {\"atol\": \"atol\"}}";
+	char text[2048];
+	snprintf(text, sizeof text,
+	         "%s \"parameter_units\": {\"Y\": \"N/m2\", \"w\": \"m2\", \"atol\": \"m\","
+	         " \"spare\": \"kg\", \"k\": \"N/m\"},%s",
+	         head, body);
+	// "m2" is no unit a key gives.
+	sm_error err = {SM_OK, ""};
+	ENSURE(parse(text, &err) == NULL);
+	ENSURE(strcmp(err.message,
+	              "test.json: parameter_units.w: \"m2\" is no unit a value can have: one of \"kg\", "
+	              "\"N\", \"m\", \"m/s\", \"1\", \"N/m\", \"N.s/m\", \"N.s\", \"kg/m\", \"kg/m2\", "
+	              "\"m/s2\", \"1/s\", \"s\", \"N/m2\", \"N.s/m2\"") == 0);
+	ENSURE(err.status == SM_ERROR_SCHEMA);
+	snprintf(text, sizeof text,
+	         "%s \"parameter_units\": {\"Y\": \"N/m2\", \"w\": \"m\", \"atol\": \"m\","
+	         " \"spare\": \"kg\", \"k\": \"N/m\"},%s",
+	         head, body);
+	sm_document* doc = parse_valid(text, &err);
+	ENSURE(doc != NULL);
+	static const struct {
+		const char* name;
+		const char* unit;
+	} expected[] = {{"Y", "N/m2"}, {"w", "m"}, {"k", "N/m"}, {"n", ""}, {"atol", "m"}, {"spare", "kg"}};
+	for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++)
+		ENSURE(strcmp(sm_document_parameter_unit(doc, sm_document_parameter_index(doc, expected[e].name)),
+		              expected[e].unit) == 0);
+	// The units stay through a change of the counts.
+	ENSURE_STATUS(sm_document_set_parameter(doc, sm_document_parameter_index(doc, "n"), 3.0, &err), SM_OK);
+	ENSURE(strcmp(sm_document_parameter_unit(doc, sm_document_parameter_index(doc, "Y")), "N/m2") == 0);
+	// Saved: the parameters named where no key tells their unit keep it ("k" needs no entry; "spare"
+	// feeds nothing and is left out with its unit); self-contained: the file as it was.
+	char* saved = sm_document_to_json(doc, &err);
+	ENSURE(saved != NULL);
+	ENSURE(strstr(saved, "\"parameter_units\": {\"Y\": \"N/m2\", \"w\": \"m\", \"atol\": \"m\"},\n") != NULL);
+	char* whole = sm_document_to_self_contained_json(doc, &err);
+	ENSURE(whole != NULL);
+	const char* const texts[2] = {saved, whole};
+	for (int t = 0; t < 2; t++) {
+		sm_document* again = sm_document_parse(texts[t], strlen(texts[t]), "again.json", &err);
+		ENSURE(again != NULL);
+		for (size_t e = 0; e < sizeof expected / sizeof expected[0]; e++) {
+			const int32_t k = sm_document_parameter_index(again, expected[e].name);
+			ENSURE(k >= 0 || t == 0);
+			ENSURE(k < 0 || strcmp(sm_document_parameter_unit(again, k), expected[e].unit) == 0);
+		}
+		sm_document_destroy(again);
+	}
+	free(whole);
+	free(saved);
+	sm_document_destroy(doc);
+
+	const struct {
+		const char* units;
+		sm_status status;
+		const char* message;
+	} refused[] = {
+	    {"{\"k\": \"N/m2\"}", SM_ERROR_SCHEMA,
+		 "test.json: springs[1].stiffness: parameter \"k\" stands for a value in N/m here, but "
+		 "\"parameter_units\" gives it N/m2"},
+	    {"{\"n\": \"1\"}", SM_ERROR_SCHEMA,
+		 "test.json: structures[0].segments: parameter \"n\" stands for a count or an index here, which has "
+		 "no unit, but \"parameter_units\" gives it 1"},
+	    {"{\"q\": \"N\"}", SM_ERROR_NOT_FOUND,
+		 "test.json: parameter_units.q: no parameter named \"q\" (\"parameter_units\" gives units to the "
+		 "\"parameters\")"},
+	    {"{\"k\": 3}", SM_ERROR_SCHEMA,
+		 "test.json: parameter_units.k: must be the name of a unit, one of \"kg\", \"N\", \"m\", \"m/s\", \"1\", "
+		 "\"N/m\", \"N.s/m\", \"N.s\", \"kg/m\", \"kg/m2\", \"m/s2\", \"1/s\", \"s\", \"N/m2\", \"N.s/m2\", not a "
+		 "number"},
+	    {"[\"k\"]", SM_ERROR_SCHEMA, "test.json: parameter_units: must be an object, not an array"},
+	};
+	for (size_t r = 0; r < sizeof refused / sizeof refused[0]; r++) {
+		snprintf(text, sizeof text, "%s \"parameter_units\": %s,%s", head, refused[r].units, body);
+		ENSURE(parse(text, &err) == NULL);
+		if (err.status != refused[r].status || strcmp(err.message, refused[r].message) != 0)
+			printf("  %s\n  expected %s\n", err.message, refused[r].message);
+		ENSURE(err.status == refused[r].status && strcmp(err.message, refused[r].message) == 0);
+	}
+	// An index of a structure reference has no unit either; nor is a parameter of a file without
+	// "parameters" there to take one.
+	ENSURE(
+	    parse(
+	        "{\"springmass\": 1, \"name\": \"i\", \"parameters\": {\"i\": 1}, \"parameter_units\": {\"i\": \"m\"},"
+	        " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 2}],"
+	        " \"ports\": [{\"name\": \"p\", \"particle\": \"r[i]\", \"kind\": \"probe\"}]}",
+	        &err) == NULL);
+	ENSURE(strcmp(err.message,
+	              "test.json: parameter_units.i: parameter \"i\" stands for an index of a structure "
+	              "reference, which has no unit, not m") == 0);
+	ENSURE(parse("{\"springmass\": 1, \"name\": \"i\", \"parameter_units\": {\"i\": \"m\"},"
+	             " \"particles\": [{\"position\": [0, 0, 0]}]}",
+	             &err) == NULL);
+	ENSURE(err.status == SM_ERROR_NOT_FOUND &&
+	       strstr(err.message, "parameter_units.i: no parameter named") != NULL);
+	return 0;
+}
+
 // A key that is not listed is an error wherever it stands (docs: "The format is strict"), named
 // with the keys allowed there: in a structure, a fixed box, a port and the simulation and FMU
 // settings too, beside keys that are all valid.
@@ -4118,6 +4299,8 @@ int main(int argc, char** argv)
 	RUN_TEST(test_parameters_keep_the_sign_of_a_zero);
 	RUN_TEST(test_limits_at_their_edges);
 	RUN_TEST(test_unknown_keys_are_refused_everywhere);
+	RUN_TEST(test_saved_structures_keep_parameter_units);
+	RUN_TEST(test_declared_parameter_units);
 	RUN_TEST(test_parameter_indices_out_of_range);
 	RUN_TEST(test_springs_are_numbered_structures_first);
 	return TEST_SUMMARY();

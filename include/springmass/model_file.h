@@ -127,8 +127,9 @@ SM_API uint32_t sm_document_parameter_uses(const sm_document* doc, int32_t index
 /// that stands for values of different units, for a count or an index, for a value whose unit its
 /// key alone does not tell (`atol`, which sets the tolerances of positions [m] and velocities
 /// [m/s]; a single spring's `section`, a width [m] or an area [m^2], and its per-section
-/// constants), or for nothing. NULL for an index out of range. Like the uses, it depends on where
-/// the file names the parameter, not on its value.
+/// constants), or for nothing, unless the file's "parameter_units" gives it one: then that one
+/// (the loader checked that every value whose key tells a unit has it). NULL for an index out of
+/// range. Like the uses, it depends on where the file names the parameter, not on its value.
 SM_API const char* sm_document_parameter_unit(const sm_document* doc, int32_t index);
 /// Sets a parameter's value; fails (document unchanged) if the model built with it would be
 /// invalid, with the message naming the element that breaks a rule. A parameter may feed any
@@ -239,10 +240,13 @@ SM_API sm_status sm_document_set_initial_state(sm_document* doc, const double* x
 /// (NULL on error). Structures are expanded into explicit particles and springs (keeping their
 /// particles' names), rest lengths are written out, and every value that was a parameter
 /// reference stays one (values a structure derives from a parameter, such as a particle's share
-/// of a total mass, are written as numbers). Loading the result builds the same model. The file is
-/// written whole or not at all: beside the one it replaces, then renamed over it (keeping its
-/// permissions), so that a failed save (a full disk) leaves an earlier file as it was; a link or
-/// a device, or a file in a folder that takes no new files, is written where it is.
+/// of a total mass, are written as numbers). Loading the result builds the same model, with the
+/// same sm_document_parameter_unit for every parameter it keeps that has one: "parameter_units"
+/// gives the units of those the text names where a key tells none (a structure's per-section
+/// constants, saved as single springs'). The file is written whole or not at all: beside the one
+/// it replaces, then renamed over it (keeping its permissions), so that a failed save (a full
+/// disk) leaves an earlier file as it was; a link or a device, or a file in a folder that takes no
+/// new files, is written where it is.
 SM_API sm_status sm_document_save(const sm_document* doc, const char* path, sm_error* err);
 SM_API char* sm_document_to_json(const sm_document* doc, sm_error* err);
 

@@ -15,7 +15,7 @@ from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from conftest import CLI, MODELS
+from conftest import CLI, MODELS, ROOT
 from fmu_helpers import Instance, fmu_guid
 
 FMI2_ERROR = 3
@@ -1179,6 +1179,22 @@ SETTINGS = {
                    "atol_velocity": 1e-7, "max_step": "hmax", "max_steps": 777, "method": "adams", "solver": "klu",
                    "jacobian": "definite", "input_changes": "keep", "stability_limit_detection": False},
     "fmu": {"particle_variables": False}}
+
+
+def test_a_saved_model_declares_the_units_of_the_original(package, tmp_path):
+    # The trampoline's sheet gives its per-section stiffness Y and damping eta per unit width, in
+    # N/m and N s/m; its saved form writes them as single springs' constants, whose section may be
+    # a width or an area, and keeps the units in "parameter_units": the FMU packaged from the saved
+    # file declares the units the original's does.
+    saved = tmp_path / "trampoline_saved.json"
+    subprocess.run([str(CLI), "statics", str(ROOT / "models" / "trampoline.json"), "-q", "--save-model", str(saved)],
+                   check=True, capture_output=True)
+    for model in (ROOT / "models" / "trampoline.json", saved):
+        md = read_model_description(str(package(model)))
+        units = {v.name: v.unit for v in md.modelVariables}
+        assert (units["Y"], units["eta"]) == ("N/m", "N.s/m"), model
+        base = {u.name: (u.baseUnit.kg, u.baseUnit.m, u.baseUnit.s) for u in md.unitDefinitions}
+        assert base["N/m"] == (1, 0, -2) and base["N.s/m"] == (1, 0, -1)
 
 
 def test_the_description_declares_what_the_fmu_holds(package, tmp_path):
