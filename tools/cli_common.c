@@ -322,11 +322,14 @@ int cli_make_directory(const char* command, const char* dir)
 	struct stat st;
 	if (error == EEXIST && stat(dir, &st) == 0 && S_ISDIR(st.st_mode))
 		return 0;
+	cli_shown shown = {0};
 	if (error == EEXIST)
 		fprintf(stderr, "springmass %s: cannot create directory %s: a file of that name exists\n", command,
-		        dir);
+		        cli_shown_path(&shown, dir));
 	else
-		fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command, dir, strerror(error));
+		fprintf(stderr, "springmass %s: cannot create directory %s: %s\n", command,
+		        cli_shown_path(&shown, dir), strerror(error));
+	cli_shown_free(&shown);
 	return -1;
 }
 
@@ -433,15 +436,19 @@ int cli_check_output(const char* command, const char* option, const char* output
 	struct stat out, st;
 	if (!dash_is_stdout && fstat(STDOUT_FILENO, &out) == 0 && S_ISREG(out.st_mode) &&
 	    stat(output, &st) == 0 && st.st_dev == out.st_dev && st.st_ino == out.st_ino) {
+		cli_shown shown = {0};
 		fprintf(
 		    stderr,
 		    "springmass %s: %s %s is standard output, where the report goes; give the output its own file\n",
-		    command, option, output);
+		    command, option, cli_shown_path(&shown, output));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	if (input != NULL && cli_same_file(output, input)) {
+		cli_shown shown = {0};
 		fprintf(stderr, "springmass %s: %s %s would overwrite %s %s, which it reads; give another name\n",
-		        command, option, output, input_what, input);
+		        command, option, cli_shown_path(&shown, output), input_what, cli_shown_path(&shown, input));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	return 0;
@@ -456,10 +463,13 @@ int cli_check_output_not_mesh_file(const char* command, const char* option, cons
 		const char* path = sm_document_structure_file_path(doc, k);
 		const bool same = path != NULL && cli_same_file(output, path);
 		if (same) {
+			cli_shown shown = {0};
 			fprintf(stderr,
 			        "springmass %s: %s %s would overwrite the OBJ file of the mesh %s (structures[%d].file), "
 			        "which it reads; give another name\n",
-			        command, option, output, sm_document_structure(doc, k).name, (int)k);
+			        command, option, cli_shown_path(&shown, output), sm_document_structure(doc, k).name,
+			        (int)k);
+			cli_shown_free(&shown);
 			return 2;
 		}
 	}
@@ -470,10 +480,13 @@ int cli_check_folder_file(const char* command, const char* dir, const char* file
 {
 	if (!cli_same_file(file, model))
 		return 0;
+	cli_shown shown = {0};
 	fprintf(stderr,
 	        "springmass %s: --vtk %s: its file %s would overwrite the model file %s, which it reads; give "
 	        "another folder\n",
-	        command, dir, file, model);
+	        command, cli_shown_path(&shown, dir), cli_shown_path(&shown, file),
+	        cli_shown_path(&shown, model));
+	cli_shown_free(&shown);
 	return 2;
 }
 
@@ -590,7 +603,10 @@ int cli_check_output_place(const char* command, const char* option, const char* 
 	free(place);
 	if (wrong == NULL)
 		return 0;
-	fprintf(stderr, "springmass %s: %s %s: cannot write there: %s\n", command, option, path, wrong);
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass %s: %s %s: cannot write there: %s\n", command, option,
+	        cli_shown_path(&shown, path), wrong);
+	cli_shown_free(&shown);
 	return 1;
 }
 
@@ -599,10 +615,12 @@ int cli_check_outputs_apart(const char* command, const char* option_a, const cha
 {
 	if (a == NULL || b == NULL || !cli_same_file(a, b))
 		return 0;
+	cli_shown shown = {0};
 	fprintf(
 	    stderr,
 	    "springmass %s: %s %s and %s %s are one file, which only the last would hold; give each its own\n",
-	    command, option_a, a, option_b, b);
+	    command, option_a, cli_shown_path(&shown, a), option_b, cli_shown_path(&shown, b));
+	cli_shown_free(&shown);
 	return 2;
 }
 
@@ -610,8 +628,10 @@ void cli_cannot_write(const char* command, const char* path)
 {
 	if (errno == EPIPE && cli_pipe_signal_waiting())
 		return;  // the reader has gone, and the signal held back ends the command quietly
-	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, path,
-	        errno != 0 ? strerror(errno) : "write error");
+	const char* reason = errno != 0 ? strerror(errno) : "write error";
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass %s: cannot write %s: %s\n", command, cli_shown_path(&shown, path), reason);
+	cli_shown_free(&shown);
 }
 
 int cli_close(const char* command, const char* path, FILE* f)
@@ -638,8 +658,10 @@ int cli_model_argument(const char* command, const char* arg, const char** model)
 		return 2;
 	}
 	if (*model != NULL) {
-		fprintf(stderr, "springmass %s: one model file at a time ('%s' and '%s' given)\n\n", command, *model,
-		        arg);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass %s: one model file at a time ('%s' and '%s' given)\n\n", command,
+		        cli_shown_path(&shown, *model), cli_shown_path(&shown, arg));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	*model = arg;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cli_outputs.h"
+#include "cli_shown.h"
 
 #include "springmass/model_file.h"
 

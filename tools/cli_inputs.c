@@ -4,6 +4,7 @@
 #include "cli_inputs.h"
 
 #include "cli_csv.h"
+#include "cli_shown.h"
 #include "text_file.h"
 
 #include <errno.h>
@@ -218,17 +219,20 @@ cli_inputs* cli_inputs_read(const char* path, const sm_document* doc)
 	const bool standard = strcmp(path, "-") == 0;
 	char* text =
 	    standard ? read_standard_input(&length, &unreadable) : text_file_read(path, &length, &unreadable);
+	cli_shown shown = {0};
 	if (text == NULL) {
 		fprintf(stderr, "springmass run: cannot read the input signals %s: %s\n",
-		        standard ? "from standard input" : path, unreadable);
+		        standard ? "from standard input" : cli_shown_path(&shown, path), unreadable);
+		cli_shown_free(&shown);
 		return NULL;
 	}
 	char* problem = NULL;
 	cli_inputs* in = cli_inputs_parse(text, length, doc, &problem);
 	free(text);
 	if (in == NULL)
-		fprintf(stderr, "springmass run: --input %s:%s\n", path,
+		fprintf(stderr, "springmass run: --input %s:%s\n", cli_shown_path(&shown, path),
 		        problem != NULL ? problem : " out of memory");
+	cli_shown_free(&shown);
 	free(problem);
 	return in;
 }

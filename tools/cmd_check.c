@@ -425,11 +425,13 @@ int sm_cmd_check(int argc, char** argv)
 		char end[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(settings.stop_time, end);
 		sm_format_number(settings.output_interval, step);
+		cli_shown shown = {0};
 		fprintf(
 		    stderr,
 		    "springmass check: %s: simulation: stop_time / output_interval = %s s / %s s would make more than %g "
 		    "output rows in springmass run\n",
-		    path, end, step, CLI_MAX_ROWS);
+		    cli_shown_path(&shown, path), end, step, CLI_MAX_ROWS);
+		cli_shown_free(&shown);
 		sm_model_destroy(model);
 		sm_document_destroy(doc);
 		return 1;

@@ -206,10 +206,22 @@ static bool join(char* out, size_t size, const char* a, const char* b)
 {
 	int n = snprintf(out, size, "%s/%s", a, b);
 	if (n < 0 || (size_t)n >= size) {
-		fprintf(stderr, "springmass fmu: path too long: %s/%s\n", a, b);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: path too long: %s/%s\n", cli_shown_path(&shown, a),
+		        cli_shown_path(&shown, b));
+		cli_shown_free(&shown);
 		return false;
 	}
 	return true;
+}
+
+// Says that the folder at path could not be made, the reason from errno.
+static void cannot_create(const char* path)
+{
+	const char* reason = strerror(errno);
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass fmu: cannot create %s: %s\n", cli_shown_path(&shown, path), reason);
+	cli_shown_free(&shown);
 }
 
 static bool is_file(const char* path)
@@ -519,29 +531,35 @@ static int package(const options* opt)
 	char path[PATH_MAX], runtime[PATH_MAX];
 
 	if (!find_runtime(opt->runtime, runtime, sizeof runtime)) {
+		cli_shown shown = {0};
 		fprintf(stderr,
 		        "springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in %s%s; give one with "
 		        "--runtime\n",
-		        runtime,
+		        cli_shown_path(&shown, runtime),
 		        opt->runtime == NULL && getenv("SPRINGMASS_FMU_RUNTIME") != NULL &&
 		                *getenv("SPRINGMASS_FMU_RUNTIME")
 		            ? " (from $SPRINGMASS_FMU_RUNTIME)"
 					: "");
+		cli_shown_free(&shown);
 		return 1;
 	}
 	// The runtime is read as the FMU is packed: no output goes into it (it would replace the binary
 	// the next FMU packs, or a licence).
 	if (cli_inside(opt->output, runtime)) {
+		cli_shown shown = {0};
 		fprintf(stderr,
 		        "springmass fmu: -o %s is inside the FMU runtime %s, which it reads; give another name\n",
-		        opt->output, runtime);
+		        cli_shown_path(&shown, opt->output), cli_shown_path(&shown, runtime));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	size_t length = 0;
 	const char* problem = NULL;
 	text = text_file_read(opt->model, &length, &problem);
 	if (!text) {
-		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", opt->model, problem);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: cannot read %s: %s\n", cli_shown_path(&shown, opt->model), problem);
+		cli_shown_free(&shown);
 		goto done;
 	}
 	sm_error err = {SM_OK, ""};
@@ -579,7 +597,10 @@ static int package(const options* opt)
 		length = strlen(text);
 		doc = sm_document_parse(text, length, opt->model, &err);
 		if (!doc) {
-			fprintf(stderr, "springmass fmu: %s: its meshes written inline: %s\n", opt->model, err.message);
+			cli_shown shown = {0};
+			fprintf(stderr, "springmass fmu: %s: its meshes written inline: %s\n",
+			        cli_shown_path(&shown, opt->model), err.message);
+			cli_shown_free(&shown);
 			goto done;
 		}
 	}
@@ -589,7 +610,9 @@ static int package(const options* opt)
 		goto done;
 	}
 	if (fmu_table_create(doc, text, length, parameters, parameters_length, &table, &err) != SM_OK) {
-		fprintf(stderr, "springmass fmu: %s: %s\n", opt->model, err.message);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: %s: %s\n", cli_shown_path(&shown, opt->model), err.message);
+		cli_shown_free(&shown);
 		goto done;
 	}
 	// The FMU starts from the file's tolerances: a model too small for them, or a spring too stiff
@@ -607,15 +630,19 @@ static int package(const options* opt)
 	if (opt->reference) {
 		reference = text_file_read(opt->reference, &reference_length, &problem);
 		if (!reference) {
-			fprintf(stderr, "springmass fmu: cannot read the reference result %s: %s\n", opt->reference,
-			        problem);
+			cli_shown shown = {0};
+			fprintf(stderr, "springmass fmu: cannot read the reference result %s: %s\n",
+			        cli_shown_path(&shown, opt->reference), problem);
+			cli_shown_free(&shown);
 			goto done;
 		}
 		bool out_of_memory = false;
 		char* wrong = fmu_reference_problem(reference, reference_length, &table, &out_of_memory);
 		if (wrong != NULL || out_of_memory) {
-			fprintf(stderr, "springmass fmu: --reference %s:%s\n", opt->reference,
+			cli_shown shown = {0};
+			fprintf(stderr, "springmass fmu: --reference %s:%s\n", cli_shown_path(&shown, opt->reference),
 			        wrong != NULL ? wrong : " out of memory");
+			cli_shown_free(&shown);
 			free(wrong);
 			goto done;
 		}
@@ -630,8 +657,11 @@ static int package(const options* opt)
 	const char* tmp = getenv("TMPDIR");
 	snprintf(staging, sizeof staging, "%s/springmass-fmu-XXXXXX", tmp && *tmp ? tmp : "/tmp");
 	if (!mkdtemp(staging)) {
+		const char* reason = strerror(errno);
+		cli_shown shown = {0};
 		fprintf(stderr, "springmass fmu: cannot create a staging folder in %s%s: %s\n",
-		        tmp && *tmp ? tmp : "/tmp", tmp && *tmp ? " ($TMPDIR)" : "", strerror(errno));
+		        tmp && *tmp ? cli_shown_path(&shown, tmp) : "/tmp", tmp && *tmp ? " ($TMPDIR)" : "", reason);
+		cli_shown_free(&shown);
 		staging[0] = '\0';
 		goto done;
 	}
@@ -640,7 +670,7 @@ static int package(const options* opt)
 		if (!join(path, sizeof path, staging, folders[i]))
 			goto done;
 		if (mkdir(path, 0755) != 0) {
-			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+			cannot_create(path);
 			goto done;
 		}
 	}
@@ -677,7 +707,10 @@ static int package(const options* opt)
 		goto done;
 	char problem_text[2 * PATH_MAX + 64] = "";
 	if (!copy_folder(from, path, "springmass_fmu.so", binary_name, problem_text, sizeof problem_text)) {
-		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n", from, problem_text);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: cannot copy the FMU runtime from %s: %s\n",
+		        cli_shown_path(&shown, from), cli_shown_path(&shown, problem_text));
+		cli_shown_free(&shown);
 		goto done;
 	}
 	// documentation/: the page written from the table and, from the runtime, the licences (a
@@ -685,7 +718,7 @@ static int package(const options* opt)
 	if (!join(path, sizeof path, staging, "documentation"))
 		goto done;
 	if (mkdir(path, 0755) != 0) {
-		fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+		cannot_create(path);
 		goto done;
 	}
 	if (!join(from, sizeof from, runtime, "documentation/licenses"))
@@ -696,11 +729,14 @@ static int package(const options* opt)
 		if (!join(path, sizeof path, staging, "documentation/licenses"))
 			goto done;
 		if (mkdir(path, 0755) != 0) {
-			fprintf(stderr, "springmass fmu: cannot create %s: %s\n", path, strerror(errno));
+			cannot_create(path);
 			goto done;
 		}
 		if (!copy_folder(from, path, NULL, NULL, problem_text, sizeof problem_text)) {
-			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n", from, problem_text);
+			cli_shown shown = {0};
+			fprintf(stderr, "springmass fmu: cannot copy the licences from %s: %s\n",
+			        cli_shown_path(&shown, from), cli_shown_path(&shown, problem_text));
+			cli_shown_free(&shown);
 			goto done;
 		}
 	}
@@ -725,8 +761,11 @@ static int package(const options* opt)
 	if (!add_entry(&entries, "zip") || !add_entry(&entries, "-q") || !add_entry(&entries, "-X") ||
 	    !add_entry(&entries, "model.fmu") || !stage_entries(staging, "", times, &entries) ||
 	    !add_entry(&entries, NULL)) {
-		fprintf(stderr, "springmass fmu: cannot prepare the files to archive in %s: %s\n", staging,
-		        errno != 0 ? strerror(errno) : "out of memory");
+		const char* reason = errno != 0 ? strerror(errno) : "out of memory";
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: cannot prepare the files to archive in %s: %s\n",
+		        cli_shown_path(&shown, staging), reason);
+		cli_shown_free(&shown);
 		free_entries(&entries);
 		goto done;
 	}
@@ -735,13 +774,18 @@ static int package(const options* opt)
 	if (cli_stop_signal != 0 || !join(path, sizeof path, staging, "model.fmu"))
 		goto done;
 	if (zip_status == 127 || zip_status < 0) {
-		fprintf(stderr, "springmass fmu: cannot run zip in %s (is zip installed?)\n", staging);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: cannot run zip in %s (is zip installed?)\n",
+		        cli_shown_path(&shown, staging));
+		cli_shown_free(&shown);
 		goto done;
 	}
 	// zip has said why on stderr (a full disk: 'zip I/O error: No space left on device').
 	if (zip_status != 0) {
-		fprintf(stderr, "springmass fmu: zip failed to write the archive %s (exit status %d)\n", path,
-		        zip_status);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass fmu: zip failed to write the archive %s (exit status %d)\n",
+		        cli_shown_path(&shown, path), zip_status);
+		cli_shown_free(&shown);
 		goto done;
 	}
 	size_t archive_length = 0;
@@ -764,8 +808,12 @@ static int package(const options* opt)
 		cli_cannot_write("fmu", opt->output);
 		goto done;
 	}
-	printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n", opt->output,
-	       table.model_identifier, (int)table.count, table.guid);
+	{
+		cli_shown shown = {0};
+		printf("springmass fmu: wrote %s (model %s, %d variables, GUID %s)\n",
+		       cli_shown_path(&shown, opt->output), table.model_identifier, (int)table.count, table.guid);
+		cli_shown_free(&shown);
+	}
 	if (parameters) {
 		printf("springmass fmu: parameter values of resources/" FMU_PARAMETERS_RESOURCE ":");
 		for (const char* line = parameters; *line; line = strchr(line, '\n') + 1)
@@ -791,8 +839,10 @@ done:
 	// Stopped by a signal before the FMU was written: the staging folder is gone; the exit status
 	// is the signal's. One that came while the FMU was written lets it end as it would have.
 	if (cli_stop_signal != 0 && result != 0) {
+		cli_shown shown = {0};
 		fprintf(stderr, "springmass fmu: stopped by %s; %s not written\n", strsignal(cli_stop_signal),
-		        opt->output);
+		        cli_shown_path(&shown, opt->output));
+		cli_shown_free(&shown);
 		cli_end_by_stop_signal();
 	}
 	return result;

@@ -84,7 +84,9 @@ static bool mode_path(char* path, size_t size, const char* vtk_dir, int32_t m)
 {
 	if ((size_t)snprintf(path, size, "%s/mode_%d.vtk", vtk_dir, (int)m + 1) < size)
 		return true;
-	fprintf(stderr, "springmass modes: path too long: %s\n", vtk_dir);
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass modes: path too long: %s\n", cli_shown_path(&shown, vtk_dir));
+	cli_shown_free(&shown);
 	return false;
 }
 
@@ -339,7 +341,9 @@ int sm_cmd_modes(int argc, char** argv)
 		sm_statics_result res;
 		if (cli_statics_solve("springmass modes: static equilibrium", false, model, &statics, x, NULL, &res,
 		                      &err) != SM_OK) {
-			fprintf(stderr, "springmass modes: %s: ", model_path);
+			cli_shown shown = {0};
+			fprintf(stderr, "springmass modes: %s: ", cli_shown_path(&shown, model_path));
+			cli_shown_free(&shown);
 			cli_write_named(stderr, doc, model, err.message);
 			fputc('\n', stderr);
 			goto done;
@@ -356,7 +360,9 @@ int sm_cmd_modes(int argc, char** argv)
 	def.solver = solver;
 	def.zero_tolerance = zero_tolerance;
 	if (cli_modes_compute("springmass modes", model, &def, &modes, &err) != SM_OK) {
-		fprintf(stderr, "springmass modes: %s: ", model_path);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass modes: %s: ", cli_shown_path(&shown, model_path));
+		cli_shown_free(&shown);
 		cli_write_named(stderr, doc, model, err.message);
 		fputc('\n', stderr);
 		goto done;

@@ -511,8 +511,11 @@ static int series_file_clashes(const char* path, const run_options* o, const cha
 				return 0;
 		}
 	}
+	cli_shown shown = {0};
 	fprintf(stderr, "springmass run: --vtk %s: the series' file %s would overwrite %s %s; give another %s\n",
-	        o->vtk_dir, path, what, file, instead);
+	        cli_shown_path(&shown, o->vtk_dir), cli_shown_path(&shown, path), what,
+	        cli_shown_path(&shown, file), instead);
+	cli_shown_free(&shown);
 	return 2;
 }
 
@@ -626,7 +629,9 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	char input_problem[SM_ERROR_MESSAGE_CAPACITY + 128] = "";
 	if (inputs != NULL && cli_inputs_apply(inputs, sim, input_problem, sizeof input_problem) != SM_OK) {
-		fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass run: --input %s: %s\n", cli_shown_path(&shown, o.input), input_problem);
+		cli_shown_free(&shown);
 		goto done;
 	}
 	const double work_origin = sm_simulation_input_work(sim);
@@ -648,19 +653,23 @@ int sm_cmd_run(int argc, char** argv)
 	// file its meshes read, nor the CSV one of the series' files (each frame is checked before it
 	// is written).
 	if (!o.output && o.input && cli_same_file(csv_default, o.input)) {
+		cli_shown shown = {0};
 		fprintf(stderr,
 		        "springmass run: the output %s (NAME.csv, without -o) would overwrite the input signals %s, "
 		        "which it reads; give another name with -o\n",
-		        csv_default, o.input);
+		        csv_default, cli_shown_path(&shown, o.input));
+		cli_shown_free(&shown);
 		status = 2;
 		goto done;
 	}
 	if (!o.output && cli_same_file(csv_default, o.model)) {
+		cli_shown shown = {0};
 		fprintf(
 		    stderr,
 		    "springmass run: the output %s (NAME.csv, without -o) would overwrite the model file %s, which "
 		    "it reads; give another name with -o\n",
-		    csv_default, o.model);
+		    csv_default, cli_shown_path(&shown, o.model));
+		cli_shown_free(&shown);
 		status = 2;
 		goto done;
 	}
@@ -738,7 +747,10 @@ int sm_cmd_run(int argc, char** argv)
 				break;
 			cli_progress_end(&prog.line);
 			if (input_problem[0] != '\0') {
-				fprintf(stderr, "springmass run: --input %s: %s\n", o.input, input_problem);
+				cli_shown shown = {0};
+				fprintf(stderr, "springmass run: --input %s: %s\n", cli_shown_path(&shown, o.input),
+				        input_problem);
+				cli_shown_free(&shown);
 			} else {
 				fputs("springmass run: ", stderr);
 				cli_write_named(stderr, doc, model, sm_simulation_last_error(sim));

@@ -181,7 +181,9 @@ int sm_cmd_statics(int argc, char** argv)
 	char vtk_path[4096];
 	if (vtk_dir != NULL &&
 	    (size_t)snprintf(vtk_path, sizeof vtk_path, "%s/statics.vtk", vtk_dir) >= sizeof vtk_path) {
-		fprintf(stderr, "springmass statics: path too long: %s\n", vtk_dir);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass statics: path too long: %s\n", cli_shown_path(&shown, vtk_dir));
+		cli_shown_free(&shown);
 		free(settings);
 		return 2;
 	}
@@ -232,7 +234,9 @@ int sm_cmd_statics(int argc, char** argv)
 	const sm_status st =
 	    cli_statics_solve("springmass statics", quiet, model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
-		fprintf(stderr, "springmass statics: %s: ", model_path);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass statics: %s: ", cli_shown_path(&shown, model_path));
+		cli_shown_free(&shown);
 		name_options(err.message);
 		cli_write_named(stderr, doc, model, err.message);
 		fputc('\n', stderr);

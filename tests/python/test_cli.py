@@ -2632,3 +2632,78 @@ def test_the_demo_says_what_is_missing_before_it_starts(tmp_path, missing):
             ".venv": f"no Python environment in {root / '.venv'}: make it with tools/setup.sh"}[missing]
     assert run.stderr == f"demo: {said}\n"
     assert (out / "cloth.csv").read_text() == "an earlier run's"
+
+
+# A name holding what a terminal acts on (ESC [31m turns the text red), a line break, and a byte
+# that begins no UTF-8 character (passed to the tool as the byte 0xff), and how messages show it:
+# escaped as the library shows a model file's path, so that every message stays one plain line.
+TERMINAL_NAME = "x\x1b[31mred\nline\udcff"
+TERMINAL_NAME_SHOWN = "x\\u001b[31mred\\u000aline\\xff"
+
+
+def messages_naming_paths(tmp_path):
+    """(arguments, exit status, message) for each kind of message that names a path the user gave,
+    each path holding TERMINAL_NAME."""
+    model = tmp_path / f"model{TERMINAL_NAME}.json"
+    shutil.copy(MODELS / "oscillator.json", model)
+    shown = str(tmp_path) + "/model" + TERMINAL_NAME_SHOWN + ".json"
+    a_file = tmp_path / f"file{TERMINAL_NAME}"
+    a_file.write_text("")
+    file_shown = f"{tmp_path}/file{TERMINAL_NAME_SHOWN}"
+    full = tmp_path / f"full{TERMINAL_NAME}"
+    full.symlink_to("/dev/full")
+    malformed = tmp_path / f"signals{TERMINAL_NAME}.csv"
+    malformed.write_text("time,tip.x\n0,1\n")
+    cases = [
+        # An output that cannot be written: checked before the run, and failed at the write.
+        (["run", OSC, "-q", "-o", a_file / "out.csv"], 1,
+         f"springmass run: -o {file_shown}/out.csv: cannot write there: the folder it would go in is a file"),
+        (["run", OSC, "-q", "-o", full], 1,
+         f"springmass run: cannot write {tmp_path}/full{TERMINAL_NAME_SHOWN}: No space left on device"),
+        (["statics", OSC, "-q", "--save-model", tmp_path / f"none{TERMINAL_NAME}" / "x.json"], 1,
+         f"springmass statics: --save-model {tmp_path}/none{TERMINAL_NAME_SHOWN}/x.json: cannot write there: "
+         "the folder it would go in does not exist"),
+        # Input signals refused: missing, and read but wrong.
+        (["run", OSC, "-q", "-o", "-", "--input", tmp_path / f"none{TERMINAL_NAME}.csv"], 1,
+         f"springmass run: cannot read the input signals {tmp_path}/none{TERMINAL_NAME_SHOWN}.csv: "
+         "No such file or directory"),
+        (["run", MODELS / "hanging_rope.json", "-q", "-o", "-", "--input", malformed], 1,
+         f"springmass run: --input {tmp_path}/signals{TERMINAL_NAME_SHOWN}.csv:1:6: \"tip.x\" is a probe's: "
+         "a probe takes no input"),
+        # A --vtk folder refused.
+        (["run", OSC, "-q", "-o", "-", "--vtk", a_file], 1,
+         f"springmass run: --vtk {file_shown}: cannot write there: a file of that name exists"),
+        (["modes", OSC, "-o", tmp_path / "modes.csv", "--vtk", a_file], 1,
+         f"springmass modes: --vtk {file_shown}: cannot write there: a file of that name exists"),
+        # The model file: missing (the library's message), an output onto it, or two given.
+        (["check", tmp_path / f"none{TERMINAL_NAME}.json"], 1,
+         f"springmass check: {tmp_path}/none{TERMINAL_NAME_SHOWN}.json: cannot open: No such file or directory"),
+        (["run", model, "-q", "-o", model], 2,
+         f"springmass run: -o {shown} would overwrite the model file {shown}, which it reads; give another name"),
+        (["check", model, model], 2,
+         f"springmass check: one model file at a time ('{shown}' and '{shown}' given)\n"),
+    ]
+    if HAS_FMU:
+        cases += [
+            (["fmu", tmp_path / f"none{TERMINAL_NAME}.json", "-o", tmp_path / "out.fmu"], 1,
+             f"springmass fmu: cannot read {tmp_path}/none{TERMINAL_NAME_SHOWN}.json: No such file or directory"),
+            (["fmu", OSC, "-o", tmp_path / "out.fmu", "--runtime", tmp_path / f"runtime{TERMINAL_NAME}"], 1,
+             f"springmass fmu: no FMU runtime (binaries/linux64/springmass_fmu.so) in "
+             f"{tmp_path}/runtime{TERMINAL_NAME_SHOWN}; give one with --runtime"),
+        ]
+    return cases
+
+
+def test_messages_show_the_paths_they_name_escaped_on_one_line(tmp_path):
+    # Each message is one line, the whole of standard error but for a usage error's help, which
+    # follows it after a blank line (a message ending in "\n" here): the name's ESC and line break
+    # would otherwise split it.
+    for args, status, message in messages_naming_paths(tmp_path):
+        # Bytes that are not UTF-8 in the message (the name's 0xff written as it is) replaced.
+        out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, errors="replace", timeout=60)
+        assert out.returncode == status, (args, out.stderr)
+        err = out.stderr
+        line, _, rest = err.partition("\n")
+        assert line == message.rstrip("\n"), (args, err)
+        assert rest == "" if not message.endswith("\n") else rest.startswith("\nusage: "), (args, err)
+        assert "\x1b" not in err
