@@ -302,6 +302,31 @@ static int check_extremes(vector_sets* s)
 
 LENGTH_TEST(extremes, 51)
 
+// Random values leave the extremes where the random numbers put them, which is at the first or
+// last element only by chance: each element in turn holds the minimum, the largest magnitude and
+// the smallest quotient (the others are 1, their quotients 1), so that a loop passing over any
+// element (starting one late, ending one early) gives another answer.
+static int check_extremes_at_every_position(vector_sets* s)
+{
+	for (sunindextype k = 0; k < s->length; k++) {
+		N_VConst(1.0, s->ours[0]);
+		N_VConst(1.0, s->theirs[0]);
+		N_VConst(1.0, s->ours[1]);
+		N_VConst(1.0, s->theirs[1]);
+		N_VGetArrayPointer(s->ours[0])[k] = N_VGetArrayPointer(s->theirs[0])[k] = -3.0;
+		N_VGetArrayPointer(s->ours[1])[k] = N_VGetArrayPointer(s->theirs[1])[k] = 0.5;
+		ENSURE(N_VMin(s->ours[0]) == -3.0);
+		ENSURE(N_VMin(s->theirs[0]) == -3.0);
+		ENSURE(N_VMaxNorm(s->ours[0]) == 3.0);
+		ENSURE(N_VMaxNorm(s->theirs[0]) == 3.0);
+		ENSURE(N_VMinQuotient(s->ours[0], s->ours[1]) == -6.0);
+		ENSURE(N_VMinQuotient(s->theirs[0], s->theirs[1]) == -6.0);
+	}
+	return 0;
+}
+
+LENGTH_TEST(extremes_at_every_position, 52)
+
 static int check_sums_and_norms(vector_sets* s)
 {
 	fill(s, 0, FILL_SIGNED);
@@ -803,6 +828,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_products_quotients_abs_inverse);
 	RUN_TEST(test_inverse_test_and_constraints);
 	RUN_TEST(test_extremes);
+	RUN_TEST(test_extremes_at_every_position);
 	RUN_TEST(test_sums_and_norms);
 	RUN_TEST(test_linear_combination);
 	RUN_TEST(test_scale_add_multi_and_scale_array);
