@@ -6227,10 +6227,11 @@ static int test_direct_solver_statistics(void)
 }
 
 // CVODE's error weights, 1 / (rtol |y_i| + atol_i), follow the documented tolerances
-// (docs/simulation.md): positions get atol_position, velocities atol_velocity, and so does the
-// dissipated energy [J]. The damped oscillator moves along x only, so its y and z positions and
-// velocities are exactly 0 and their weights exactly 1 / atol; after 1 ms it has dissipated about
-// 1e-8 J, which rtol 1e-7 turns into 1e-15 beside an atol of at least 1e-9: 1e-5 relative.
+// (docs/simulation.md): positions get atol_position, velocities atol_velocity, and so do the
+// dissipated energy and the inputs' work [J]. The damped oscillator moves along x only, so its y and
+// z positions and velocities are exactly 0 and their weights exactly 1 / atol, as is the work's
+// (no inputs: exactly 0); after 1 ms it has dissipated about 1e-8 J, which rtol 1e-7 turns into
+// 1e-15 beside an atol of at least 1e-9: 1e-5 relative.
 // Both ways round, so that the energy's tolerance cannot be taken for the positions'.
 static int test_error_weights_follow_the_tolerances(void)
 {
@@ -6253,6 +6254,7 @@ static int test_error_weights_follow_the_tolerances(void)
 		ENSURE(w[1] == 1.0 / tolerances[k][0] && w[2] == 1.0 / tolerances[k][0]);
 		ENSURE(w[4] == 1.0 / tolerances[k][1] && w[5] == 1.0 / tolerances[k][1]);
 		ENSURE_REL(w[6], 1.0 / tolerances[k][1], 1e-5, 0.0);
+		ENSURE(sm_simulation_work_index(sim) == 7 && w[7] == 1.0 / tolerances[k][1]);
 		N_VDestroy(weights);
 		sm_simulation_destroy(sim);
 	}
