@@ -3416,7 +3416,7 @@ static int test_statics_without_loads_keeps_the_default_tolerance(void)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Gaps found by mutation review: behaviour of statics.c and modes.c no other test pinned down.
+// Gaps found by mutation testing: behaviour of statics.c and modes.c no other test pinned down.
 
 // A vertical column of three 1 kg particles 1 m apart, springs of 100 N/m at their rest length
 // 1 m: the top one fixed at the origin, the middle one DRIVEN at z = -1, the bottom one free at
@@ -3991,7 +3991,7 @@ static int test_damping_coupling_definition(void)
 }
 
 // ---------------------------------------------------------------------------------------------
-// Tests from a review that planted bugs in statics.c and modes.c.
+// Tests from mutation testing (bugs planted in statics.c and modes.c).
 
 // Option checks: an unknown solver, a non-finite residual tolerance; x untouched.
 static int test_statics_refuses_unknown_solver_and_non_finite_tolerance(void)

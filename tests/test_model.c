@@ -532,7 +532,7 @@ static int test_format_number(void)
 	return 0;
 }
 
-// From a review that planted bugs in model.c (each test catches one that passed).
+// From mutation testing, bugs planted in model.c (each test catches one that passed).
 
 // A clone has the original's settings, free numbering and springs: the same definition, free
 // count and indices, spring constants, and forces bit for bit (also where the zero-length

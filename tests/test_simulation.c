@@ -6262,7 +6262,7 @@ static int test_error_weights_follow_the_tolerances(void)
 	return 0;
 }
 
-// From a review of the reduced solvers: a wrong but convergent Newton correction passed every
+// From mutation testing of the reduced solvers: a wrong but convergent Newton correction passed every
 // trajectory test.
 // Solves a x = b by Gaussian elimination with partial pivoting (a n x n row-major, b overwritten
 // by x); 1 if a is singular.
@@ -6777,7 +6777,7 @@ static int test_translation_of_a_flat_free_cloth_takes_one_iteration(void)
 }
 
 // ---------------------------------------------------------------------------------------------
-// From a review that planted 61 bugs in simulation.c (46 caught; 11 real gaps, each caught here)
+// From mutation testing, 61 bugs planted in simulation.c (46 caught; 11 real gaps, each caught here)
 // and found two defects (the last two tests).
 
 // update_model gives fixed particles the new model's positions and keeps the free particles' state

@@ -2170,7 +2170,7 @@ static int test_per_section_sheet_sections_do_not_depend_on_its_direction(void)
 	return 0;
 }
 
-// From a review that planted bugs in structures.c and mesh.c (each test catches one that passed).
+// From mutation testing, bugs planted in structures.c and mesh.c (each test catches one that passed).
 
 // A block with a different count along each axis: particle (i, j, k) sits at
 // origin + (j/(nu-1) size[0], i/(nv-1) size[1], k/(nw-1) size[2]), each axis divided by its own
