@@ -144,6 +144,17 @@ static bool read_settings(parser* p, const json_t* simulation, const json_t* fmu
 // Evaluation of the whole document.
 // ---------------------------------------------------------------------------------------------
 
+// The path of a parameter's name as a key of `object` ("parameters", "parameter_units"): the
+// name escaped as in the messages about it, and cut at a character before the 50 bytes
+// sm_parser_child_key keeps of it.
+static void parameter_key_path(char path[PATH_CAPACITY], const char* object, const char* name)
+{
+	char escaped[50];
+	if (!sm_text_escape(escaped, sizeof escaped - 4, name))
+		strcat(escaped, "...");
+	sm_parser_child_key(path, object, escaped);
+}
+
 // Evaluates the document's tree with the given parameter values into a new expansion.
 expansion* sm_document_expand(const sm_document* doc, const double* parameter_values, sm_error* err)
 {
@@ -194,10 +205,8 @@ expansion* sm_document_expand(const sm_document* doc, const double* parameter_va
 		if (declared == NULL)
 			continue;
 		if (p.ex->parameter_uses[k] & FEEDS_REFERENCES) {
-			char path[PATH_CAPACITY], escaped[50], text[TEXT_QUOTED_CAPACITY];
-			if (!sm_text_escape(escaped, sizeof escaped - 4, doc->parameter_names[k]))
-				strcat(escaped, "...");
-			sm_parser_child_key(path, "parameter_units", escaped);
+			char path[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
+			parameter_key_path(path, "parameter_units", doc->parameter_names[k]);
 			ok = sm_parser_fail(&p, SM_ERROR_SCHEMA, path,
 			                    "parameter %s stands for an index of a structure reference, which has no "
 			                    "unit, not %s",
@@ -253,10 +262,8 @@ static bool read_parameter_units(parser* p, const json_t* units)
 	json_t* value;
 	json_object_foreach((json_t*)units, key, value)
 	{
-		char path[PATH_CAPACITY], escaped[50], text[TEXT_QUOTED_CAPACITY];
-		if (!sm_text_escape(escaped, sizeof escaped - 4, key))
-			strcat(escaped, "...");
-		sm_parser_child_key(path, "parameter_units", escaped);
+		char path[PATH_CAPACITY], text[TEXT_QUOTED_CAPACITY];
+		parameter_key_path(path, "parameter_units", key);
 		const int32_t k = sm_document_find_parameter(doc, key);
 		if (k < 0)
 			return sm_parser_fail(p, SM_ERROR_NOT_FOUND, path,
@@ -349,12 +356,8 @@ static bool read_header(sm_document* doc, sm_error* err)
 	json_t* value;
 	json_object_foreach((json_t*)parameters, key, value)
 	{
-		// The key is escaped in the path as in the messages about it, and cut at a character
-		// before the 50 bytes sm_parser_child_key keeps of it.
-		char path[PATH_CAPACITY], escaped[50];
-		if (!sm_text_escape(escaped, sizeof escaped - 4, key))
-			strcat(escaped, "...");
-		sm_parser_child_key(path, "parameters", escaped);
+		char path[PATH_CAPACITY];
+		parameter_key_path(path, "parameters", key);
 		if (!sm_parser_check_name_text(&p, key, strlen(key), path, true))
 			return false;
 		if (!json_is_number(value))
