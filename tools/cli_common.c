@@ -86,23 +86,31 @@ static int parse_setting(const char* command, const sm_document* doc, const char
 {
 	char name[256];
 	const size_t length = setting_name(setting, name, sizeof name);
+	cli_shown shown = {0};
 	if (length == 0) {
-		fprintf(stderr, "springmass %s: --set expects NAME=VALUE, got '%s'\n", command, setting);
+		fprintf(stderr, "springmass %s: --set expects NAME=VALUE, got '%s'\n", command,
+		        cli_shown_text(&shown, setting));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	if (length == sizeof name) {
-		fprintf(stderr, "springmass %s: parameter name too long in '%s'\n", command, setting);
+		fprintf(stderr, "springmass %s: parameter name too long in '%s'\n", command,
+		        cli_shown_text(&shown, setting));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	const char* eq = setting + length;
 	if (!cli_parse_number(eq + 1, value)) {
-		fprintf(stderr, "springmass %s: --set %s: '%s' is not a finite number\n", command, setting, eq + 1);
+		fprintf(stderr, "springmass %s: --set %s: '%s' is not a finite number\n", command,
+		        cli_shown_text(&shown, setting), cli_shown_text(&shown, eq + 1));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	*index = sm_document_parameter_index(doc, name);
 	if (*index < 0) {
 		fprintf(stderr, "springmass %s: --set %s: the model has no parameter named \"%s\"\n", command,
-		        setting, name);
+		        cli_shown_text(&shown, setting), cli_shown_text(&shown, name));
+		cli_shown_free(&shown);
 		return 1;
 	}
 	return 0;
@@ -654,7 +662,10 @@ int cli_close(const char* command, const char* path, FILE* f)
 int cli_model_argument(const char* command, const char* arg, const char** model)
 {
 	if (arg[0] == '-' && arg[1] != '\0') {
-		fprintf(stderr, "springmass %s: unknown option or missing value: %s\n\n", command, arg);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass %s: unknown option or missing value: %s\n\n", command,
+		        cli_shown_text(&shown, arg));
+		cli_shown_free(&shown);
 		return 2;
 	}
 	if (*model != NULL) {

@@ -1,4 +1,4 @@
-// Paths in the tool's messages (see cli_shown.h).
+// Paths and other text of the command line in the tool's messages (see cli_shown.h).
 #include "cli_shown.h"
 
 #include "springmass/model_file.h"
@@ -6,14 +6,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+const char* cli_shown_text(cli_shown* shown, const char* text)
+{
+	char* out = shown->count < CLI_SHOWN_PATHS ? malloc(SM_TERMINAL_TEXT_CAPACITY(strlen(text))) : NULL;
+	if (out == NULL)
+		return "(out of memory)";
+	sm_text_for_terminal(out, text);
+	shown->text[shown->count++] = out;
+	return out;
+}
+
 const char* cli_shown_path(cli_shown* shown, const char* path)
 {
-	char* text = shown->count < CLI_SHOWN_PATHS ? malloc(SM_TERMINAL_TEXT_CAPACITY(strlen(path))) : NULL;
-	if (text == NULL)
-		return "(out of memory)";
-	sm_text_for_terminal(text, path);
-	shown->text[shown->count++] = text;
-	return text;
+	return cli_shown_text(shown, path);
 }
 
 void cli_shown_free(cli_shown* shown)

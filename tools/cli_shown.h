@@ -1,10 +1,11 @@
-// Paths in the tool's messages.
+// Paths and other text of the command line in the tool's messages.
 #pragma once
 
-/// Most paths one message names (cli_shown_path).
+/// Most texts one message shows (cli_shown_path, cli_shown_text).
 #define CLI_SHOWN_PATHS 4
 
-/// The paths of one message as cli_shown_path shows them, kept until cli_shown_free. Starts as {0}.
+/// The texts of one message as cli_shown_path and cli_shown_text show them, kept until
+/// cli_shown_free. Starts as {0}.
 typedef struct cli_shown {
 	char* text[CLI_SHOWN_PATHS];
 	int count;
@@ -18,5 +19,10 @@ typedef struct cli_shown {
 /// stays in `shown` until cli_shown_free; "(out of memory)" when there is no room for it.
 const char* cli_shown_path(cli_shown* shown, const char* path);
 
-/// Frees the texts cli_shown_path kept in `shown`, which is then empty.
+/// Any other text of the command line or the environment for a message (an unknown option or
+/// command, an option's refused value, a --set NAME=VALUE, a parameter's name), shown as
+/// cli_shown_path shows a path: escaped, whole, kept in `shown` until cli_shown_free.
+const char* cli_shown_text(cli_shown* shown, const char* text);
+
+/// Frees the texts cli_shown_path and cli_shown_text kept in `shown`, which is then empty.
 void cli_shown_free(cli_shown* shown);

@@ -383,8 +383,10 @@ static bool archive_time(struct timespec* when)
 	char* end = NULL;
 	const long long seconds = strtoll(epoch, &end, 10);  // beyond the range: LLONG_MAX, the last
 	if (*epoch < '0' || *epoch > '9' || *end != '\0') {
+		cli_shown shown = {0};
 		fprintf(stderr, "springmass fmu: SOURCE_DATE_EPOCH '%s' is not a count of seconds since 1970\n",
-		        epoch);
+		        cli_shown_text(&shown, epoch));
+		cli_shown_free(&shown);
 		return false;
 	}
 	when->tv_sec = seconds < earliest ? earliest : seconds > latest ? latest : (time_t)seconds;

@@ -222,7 +222,10 @@ int sm_cmd_modes(int argc, char** argv)
 			return 0;
 		} else if ((strcmp(a, "-n") == 0 || strcmp(a, "--count") == 0) && has_value) {
 			if (!cli_parse_count(argv[++i], 0, 100000000, &count)) {
-				fprintf(stderr, "springmass modes: %s needs a count from 0 to 1e8, got '%s'\n", a, argv[i]);
+				cli_shown shown = {0};
+				fprintf(stderr, "springmass modes: %s needs a count from 0 to 1e8, got '%s'\n", a,
+				        cli_shown_text(&shown, argv[i]));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}
@@ -231,8 +234,10 @@ int sm_cmd_modes(int argc, char** argv)
 		} else if (strcmp(a, "--zero-tolerance") == 0 && has_value) {
 			if (!cli_parse_number(argv[++i], &zero_tolerance) ||
 			    !(zero_tolerance >= 0.0 && zero_tolerance < 1.0)) {
+				cli_shown shown = {0};
 				fprintf(stderr, "springmass modes: --zero-tolerance needs a number in [0, 1), got '%s'\n",
-				        argv[i]);
+				        cli_shown_text(&shown, argv[i]));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}
@@ -255,7 +260,10 @@ int sm_cmd_modes(int argc, char** argv)
 			} else if (strcmp(name, "sparse") == 0) {
 				solver = SM_MODES_SPARSE;
 			} else {
-				fprintf(stderr, "springmass modes: unknown solver '%s' (auto, dense, sparse)\n", name);
+				cli_shown shown = {0};
+				fprintf(stderr, "springmass modes: unknown solver '%s' (auto, dense, sparse)\n",
+				        cli_shown_text(&shown, name));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}

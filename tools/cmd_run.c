@@ -94,12 +94,24 @@ static void usage(FILE* out)
 	             "up to there, with the signal's status.\n");
 }
 
+// Prints that an option's value is refused, why (`what`, naming the option) and the value as
+// given, escaped (cli_shown_text).
+static void refuse_value(const char* what, const char* value)
+{
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass run: %s, got '%s'\n", what, cli_shown_text(&shown, value));
+	cli_shown_free(&shown);
+}
+
 // A finite decimal number > 0 (cli_parse_number); prints what is wrong and returns 1 if not.
 static int parse_positive(const char* option, const char* text, double* value)
 {
 	double v;
 	if (!cli_parse_number(text, &v)) {
-		fprintf(stderr, "springmass run: %s expects a finite number, got '%s'\n", option, text);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass run: %s expects a finite number, got '%s'\n", option,
+		        cli_shown_text(&shown, text));
+		cli_shown_free(&shown);
 		return 1;
 	}
 	if (!(v > 0.0)) {
@@ -419,15 +431,13 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				}
 			} else if (strcmp(a, "--threads") == 0) {
 				if (!cli_parse_count(value, 1, 1024, &o->threads)) {
-					fprintf(stderr, "springmass run: --threads needs a count from 1 to 1024, got '%s'\n",
-					        value);
+					refuse_value("--threads needs a count from 1 to 1024", value);
 					return 2;
 				}
 			} else if (strcmp(a, "--max-steps") == 0) {
 				long steps;
 				if (!cli_parse_count(value, 1, 2e9, &steps)) {
-					fprintf(stderr, "springmass run: --max-steps needs a count from 1 to 2e9, got '%s'\n",
-					        value);
+					refuse_value("--max-steps needs a count from 1 to 2e9", value);
 					return 2;
 				}
 				o->max_steps = (double)steps;
@@ -446,9 +456,7 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				}
 			} else if (strcmp(a, "--max-step") == 0) {
 				if (!cli_parse_number(value, &o->max_step) || !(o->max_step >= 0.0)) {
-					fprintf(stderr,
-					        "springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '%s'\n",
-					        value);
+					refuse_value("--max-step needs a step >= 0 [s] (0: no limit)", value);
 					return 2;
 				}
 				if (o->max_step > 0.0 && o->max_step <= SM_MAX_STEP_FLOOR) {
@@ -468,8 +476,7 @@ static int parse_arguments(int argc, char** argv, run_options* o)
 				o->input_changes = value;
 			} else if (strcmp(a, "--stability-limit-detection") == 0) {
 				if (strcmp(value, "on") != 0 && strcmp(value, "off") != 0) {
-					fprintf(stderr, "springmass run: --stability-limit-detection takes on or off, got '%s'\n",
-					        value);
+					refuse_value("--stability-limit-detection takes on or off", value);
 					return 2;
 				}
 				o->stability_limit_detection = strcmp(value, "on") == 0;
@@ -586,25 +593,36 @@ int sm_cmd_run(int argc, char** argv)
 	def.threads = (int32_t)(o.threads > 0 ? o.threads : online > 0 ? (online < 1024 ? online : 1024) : 1);
 	if (o.solver) {
 		if (sm_linear_solver_from_name(o.solver, &def.solver) != SM_OK) {
+			cli_shown shown = {0};
 			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n",
-			        o.solver);
+			        cli_shown_text(&shown, o.solver));
+			cli_shown_free(&shown);
 			status = 2;
 			goto done;
 		}
 	}
 	if (o.method && sm_method_from_name(o.method, &def.method) != SM_OK) {
-		fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n", o.method);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n",
+		        cli_shown_text(&shown, o.method));
+		cli_shown_free(&shown);
 		status = 2;
 		goto done;
 	}
 	if (o.jacobian && sm_jacobian_variant_from_name(o.jacobian, &def.jacobian) != SM_OK) {
-		fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n", o.jacobian);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n",
+		        cli_shown_text(&shown, o.jacobian));
+		cli_shown_free(&shown);
 		status = 2;
 		goto done;
 	}
 	if (o.input_changes &&
 	    sm_input_changes_from_name(o.input_changes, &def.restart_on_input_change) != SM_OK) {
-		fprintf(stderr, "springmass run: unknown --input-changes '%s' (restart, keep)\n", o.input_changes);
+		cli_shown shown = {0};
+		fprintf(stderr, "springmass run: unknown --input-changes '%s' (restart, keep)\n",
+		        cli_shown_text(&shown, o.input_changes));
+		cli_shown_free(&shown);
 		status = 2;
 		goto done;
 	}

@@ -138,9 +138,11 @@ int sm_cmd_statics(int argc, char** argv)
 		} else if (strcmp(a, "--max-iterations") == 0 && has_value) {
 			long v;
 			if (!cli_parse_count(argv[++i], 1, 1000000, &v)) {
+				cli_shown shown = {0};
 				fprintf(stderr,
 				        "springmass statics: --max-iterations needs a count from 1 to 1000000, got '%s'\n",
-				        argv[i]);
+				        cli_shown_text(&shown, argv[i]));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}
@@ -154,7 +156,10 @@ int sm_cmd_statics(int argc, char** argv)
 			else if (strcmp(s, "sparse") == 0)
 				def.solver = SM_STATICS_SPARSE;
 			else {
-				fprintf(stderr, "springmass statics: unknown solver '%s' (auto, dense, sparse)\n", s);
+				cli_shown shown = {0};
+				fprintf(stderr, "springmass statics: unknown solver '%s' (auto, dense, sparse)\n",
+				        cli_shown_text(&shown, s));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}

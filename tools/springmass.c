@@ -1,6 +1,7 @@
 // springmass: the command-line tool. Dispatches to one subcommand per file.
 #define _GNU_SOURCE  // RTLD_DEFAULT
 
+#include "cli_shown.h"
 #include "cli_signals.h"
 #include "commands.h"
 
@@ -127,7 +128,9 @@ int main(int argc, char** argv)
 		if (!help && strcmp(argv[1], commands[i].name) == 0)
 			return finish(commands[i].run(argc - 1, argv + 1));
 	}
-	fprintf(stderr, "springmass: unknown command '%s'\n\n", help ? argv[2] : argv[1]);
+	cli_shown shown = {0};
+	fprintf(stderr, "springmass: unknown command '%s'\n\n", cli_shown_text(&shown, help ? argv[2] : argv[1]));
+	cli_shown_free(&shown);
 	usage(stderr);
 	return 2;
 }

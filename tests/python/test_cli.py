@@ -2707,3 +2707,68 @@ def test_messages_show_the_paths_they_name_escaped_on_one_line(tmp_path):
         assert line == message.rstrip("\n"), (args, err)
         assert rest == "" if not message.endswith("\n") else rest.startswith("\nusage: "), (args, err)
         assert "\x1b" not in err
+
+
+def messages_echoing_arguments():
+    """(arguments, environment, exit status, message) for each kind of message that repeats other
+    text of the command line than a path (an unknown command or option, a refused value, a --set
+    and its parameter's name) or of the environment, each text holding TERMINAL_NAME."""
+    t, shown = TERMINAL_NAME, TERMINAL_NAME_SHOWN
+    cases = [
+        (["bogus" + t], None, 2, f"springmass: unknown command 'bogus{shown}'\n"),
+        (["help", "bogus" + t], None, 2, f"springmass: unknown command 'bogus{shown}'\n"),
+        (["check", OSC, "--bogus" + t], None, 2, f"springmass check: unknown option or missing value: --bogus{shown}\n"),
+        # --set: no NAME=, a name too long, a value that is no number, a parameter the model lacks.
+        (["check", OSC, "--set", t], None, 2, f"springmass check: --set expects NAME=VALUE, got '{shown}'"),
+        (["check", OSC, "--set", t + "a" * 300 + "=1"], None, 2,
+         f"springmass check: parameter name too long in '{shown}{'a' * 300}=1'"),
+        (["check", OSC, "--set", "k=" + t], None, 2,
+         f"springmass check: --set k={shown}: '{shown}' is not a finite number"),
+        (["check", OSC, "--set", t + "=1"], None, 1,
+         f"springmass check: --set {shown}=1: the model has no parameter named \"{shown}\""),
+        # Values refused by run, statics and modes.
+        (["run", OSC, "--t-end", t], None, 2, f"springmass run: --t-end expects a finite number, got '{shown}'"),
+        (["run", OSC, "--threads", t], None, 2, f"springmass run: --threads needs a count from 1 to 1024, got '{shown}'"),
+        (["run", OSC, "--max-steps", t], None, 2,
+         f"springmass run: --max-steps needs a count from 1 to 2e9, got '{shown}'"),
+        (["run", OSC, "--max-step", t], None, 2,
+         f"springmass run: --max-step needs a step >= 0 [s] (0: no limit), got '{shown}'"),
+        (["run", OSC, "--stability-limit-detection", t], None, 2,
+         f"springmass run: --stability-limit-detection takes on or off, got '{shown}'"),
+        (["run", OSC, "-q", "-o", "-", "--solver", t], None, 2,
+         f"springmass run: unknown linear solver '{shown}' (auto, dense, klu, pcg, cholmod)"),
+        (["run", OSC, "-q", "-o", "-", "--method", t], None, 2, f"springmass run: unknown method '{shown}' (bdf, adams)"),
+        (["run", OSC, "-q", "-o", "-", "--jacobian", t], None, 2,
+         f"springmass run: unknown Jacobian '{shown}' (exact, definite)"),
+        (["run", OSC, "-q", "-o", "-", "--input-changes", t], None, 2,
+         f"springmass run: unknown --input-changes '{shown}' (restart, keep)"),
+        (["statics", OSC, "--max-iterations", t], None, 2,
+         f"springmass statics: --max-iterations needs a count from 1 to 1000000, got '{shown}'"),
+        (["statics", OSC, "--solver", t], None, 2, f"springmass statics: unknown solver '{shown}' (auto, dense, sparse)"),
+        (["modes", OSC, "-n", t], None, 2, f"springmass modes: -n needs a count from 0 to 1e8, got '{shown}'"),
+        (["modes", OSC, "--zero-tolerance", t], None, 2,
+         f"springmass modes: --zero-tolerance needs a number in [0, 1), got '{shown}'"),
+        (["modes", OSC, "--solver", t], None, 2, f"springmass modes: unknown solver '{shown}' (auto, dense, sparse)"),
+    ]
+    if HAS_FMU:
+        cases += [
+            (["fmu", OSC, "-o", "out.fmu"], {**os.environ, "SOURCE_DATE_EPOCH": "1" + t}, 2,
+             f"springmass fmu: SOURCE_DATE_EPOCH '1{shown}' is not a count of seconds since 1970"),
+        ]
+    return cases
+
+
+def test_messages_show_the_arguments_they_repeat_escaped_on_one_line(tmp_path):
+    # As the paths above: each message one line (a usage error's help after a blank line), the
+    # argument's ESC, line break and stray byte escaped; an ordinary argument is shown as it is.
+    for args, env, status, message in messages_echoing_arguments():
+        out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, errors="replace",
+                             env=env, cwd=tmp_path, timeout=60)
+        assert out.returncode == status, (args, out.stderr)
+        err = out.stderr
+        line, _, rest = err.partition("\n")
+        assert line == message.rstrip("\n"), (args, err)
+        assert rest == "" if not message.endswith("\n") else rest.startswith("\nusage: "), (args, err)
+        assert "\x1b" not in err
+    plain = cli("run", OSC, "--solver", "fast", status=2).stderr
+    assert plain == "springmass run: unknown linear solver 'fast' (auto, dense, klu, pcg, cholmod)\n", plain
