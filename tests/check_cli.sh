@@ -341,7 +341,7 @@ check_cases << 'CASES'
 2|springmass modes: -n needs a count from 0 to 1e8, got '100000001'|modes "$osc" -n 100000001
 2|springmass statics: --max-iterations needs a count from 1 to 1000000, got '1000001'|statics "$osc" -q --max-iterations 1000001
 2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end
-2|springmass run: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
+2|springmass run: --jacobian: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
 2|springmass run: --rtol must be at least 2.220446049250313e-16, the machine epsilon (CVODE cannot meet a smaller relative tolerance), got '1e-17'|run "$osc" -q -o - --rtol 1e-17
@@ -376,7 +376,7 @@ status=$?
   fail "--set with a name of 255 characters: exit status $status, printed '$out'"
 out=$("$cli" run "$osc" -q -o /dev/null --set "${long}n=1" 2>&1)
 status=$?
-[ $status -eq 2 ] && [ "$out" = "springmass run: parameter name too long in '${long}n=1'" ] ||
+[ $status -eq 2 ] && [ "$out" = "springmass run: --set ${long}n=1: the parameter's name is too long (255 bytes at most)" ] ||
   fail "--set with a name of 256 characters: exit status $status, printed '$out'"
 # An absolute tolerance the simulation would refuse is refused by the loader already.
 printf '{"springmass": 1, "name": "t", "particles": [{"name": "a", "position": [0, 0, 0]}], "simulation": {"atol_velocity": 1e-200}}' > "$tmp/tiny_atol.json"

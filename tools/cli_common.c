@@ -94,8 +94,8 @@ static int parse_setting(const char* command, const sm_document* doc, const char
 		return 2;
 	}
 	if (length == sizeof name) {
-		fprintf(stderr, "springmass %s: parameter name too long in '%s'\n", command,
-		        cli_shown_text(&shown, setting));
+		fprintf(stderr, "springmass %s: --set %s: the parameter's name is too long (255 bytes at most)\n",
+		        command, cli_shown_text(&shown, setting));
 		cli_shown_free(&shown);
 		return 2;
 	}

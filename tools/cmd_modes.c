@@ -261,7 +261,7 @@ int sm_cmd_modes(int argc, char** argv)
 				solver = SM_MODES_SPARSE;
 			} else {
 				cli_shown shown = {0};
-				fprintf(stderr, "springmass modes: unknown solver '%s' (auto, dense, sparse)\n",
+				fprintf(stderr, "springmass modes: --solver: unknown solver '%s' (auto, dense, sparse)\n",
 				        cli_shown_text(&shown, name));
 				cli_shown_free(&shown);
 				free(settings);

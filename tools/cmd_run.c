@@ -594,7 +594,8 @@ int sm_cmd_run(int argc, char** argv)
 	if (o.solver) {
 		if (sm_linear_solver_from_name(o.solver, &def.solver) != SM_OK) {
 			cli_shown shown = {0};
-			fprintf(stderr, "springmass run: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n",
+			fprintf(stderr,
+			        "springmass run: --solver: unknown linear solver '%s' (auto, dense, klu, pcg, cholmod)\n",
 			        cli_shown_text(&shown, o.solver));
 			cli_shown_free(&shown);
 			status = 2;
@@ -603,7 +604,7 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	if (o.method && sm_method_from_name(o.method, &def.method) != SM_OK) {
 		cli_shown shown = {0};
-		fprintf(stderr, "springmass run: unknown method '%s' (bdf, adams)\n",
+		fprintf(stderr, "springmass run: --method: unknown method '%s' (bdf, adams)\n",
 		        cli_shown_text(&shown, o.method));
 		cli_shown_free(&shown);
 		status = 2;
@@ -611,7 +612,7 @@ int sm_cmd_run(int argc, char** argv)
 	}
 	if (o.jacobian && sm_jacobian_variant_from_name(o.jacobian, &def.jacobian) != SM_OK) {
 		cli_shown shown = {0};
-		fprintf(stderr, "springmass run: unknown Jacobian '%s' (exact, definite)\n",
+		fprintf(stderr, "springmass run: --jacobian: unknown Jacobian '%s' (exact, definite)\n",
 		        cli_shown_text(&shown, o.jacobian));
 		cli_shown_free(&shown);
 		status = 2;

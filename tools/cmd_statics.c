@@ -157,7 +157,7 @@ int sm_cmd_statics(int argc, char** argv)
 				def.solver = SM_STATICS_SPARSE;
 			else {
 				cli_shown shown = {0};
-				fprintf(stderr, "springmass statics: unknown solver '%s' (auto, dense, sparse)\n",
+				fprintf(stderr, "springmass statics: --solver: unknown solver '%s' (auto, dense, sparse)\n",
 				        cli_shown_text(&shown, s));
 				cli_shown_free(&shown);
 				free(settings);

@@ -2721,7 +2721,7 @@ def messages_echoing_arguments():
         # --set: no NAME=, a name too long, a value that is no number, a parameter the model lacks.
         (["check", OSC, "--set", t], None, 2, f"springmass check: --set expects NAME=VALUE, got '{shown}'"),
         (["check", OSC, "--set", t + "a" * 300 + "=1"], None, 2,
-         f"springmass check: parameter name too long in '{shown}{'a' * 300}=1'"),
+         f"springmass check: --set {shown}{'a' * 300}=1: the parameter's name is too long (255 bytes at most)"),
         (["check", OSC, "--set", "k=" + t], None, 2,
          f"springmass check: --set k={shown}: '{shown}' is not a finite number"),
         (["check", OSC, "--set", t + "=1"], None, 1,
@@ -2736,19 +2736,19 @@ def messages_echoing_arguments():
         (["run", OSC, "--stability-limit-detection", t], None, 2,
          f"springmass run: --stability-limit-detection takes on or off, got '{shown}'"),
         (["run", OSC, "-q", "-o", "-", "--solver", t], None, 2,
-         f"springmass run: unknown linear solver '{shown}' (auto, dense, klu, pcg, cholmod)"),
-        (["run", OSC, "-q", "-o", "-", "--method", t], None, 2, f"springmass run: unknown method '{shown}' (bdf, adams)"),
+         f"springmass run: --solver: unknown linear solver '{shown}' (auto, dense, klu, pcg, cholmod)"),
+        (["run", OSC, "-q", "-o", "-", "--method", t], None, 2, f"springmass run: --method: unknown method '{shown}' (bdf, adams)"),
         (["run", OSC, "-q", "-o", "-", "--jacobian", t], None, 2,
-         f"springmass run: unknown Jacobian '{shown}' (exact, definite)"),
+         f"springmass run: --jacobian: unknown Jacobian '{shown}' (exact, definite)"),
         (["run", OSC, "-q", "-o", "-", "--input-changes", t], None, 2,
          f"springmass run: unknown --input-changes '{shown}' (restart, keep)"),
         (["statics", OSC, "--max-iterations", t], None, 2,
          f"springmass statics: --max-iterations needs a count from 1 to 1000000, got '{shown}'"),
-        (["statics", OSC, "--solver", t], None, 2, f"springmass statics: unknown solver '{shown}' (auto, dense, sparse)"),
+        (["statics", OSC, "--solver", t], None, 2, f"springmass statics: --solver: unknown solver '{shown}' (auto, dense, sparse)"),
         (["modes", OSC, "-n", t], None, 2, f"springmass modes: -n needs a count from 0 to 1e8, got '{shown}'"),
         (["modes", OSC, "--zero-tolerance", t], None, 2,
          f"springmass modes: --zero-tolerance needs a number in [0, 1), got '{shown}'"),
-        (["modes", OSC, "--solver", t], None, 2, f"springmass modes: unknown solver '{shown}' (auto, dense, sparse)"),
+        (["modes", OSC, "--solver", t], None, 2, f"springmass modes: --solver: unknown solver '{shown}' (auto, dense, sparse)"),
     ]
     if HAS_FMU:
         cases += [
@@ -2771,4 +2771,22 @@ def test_messages_show_the_arguments_they_repeat_escaped_on_one_line(tmp_path):
         assert rest == "" if not message.endswith("\n") else rest.startswith("\nusage: "), (args, err)
         assert "\x1b" not in err
     plain = cli("run", OSC, "--solver", "fast", status=2).stderr
-    assert plain == "springmass run: unknown linear solver 'fast' (auto, dense, klu, pcg, cholmod)\n", plain
+    assert plain == "springmass run: --solver: unknown linear solver 'fast' (auto, dense, klu, pcg, cholmod)\n", plain
+
+
+def test_a_refused_value_names_the_option_it_came_from():
+    # Every value refused says which option gave it: a name such as "sparse" or "bdf" alone does
+    # not tell which of the command's options took it (run has --solver, --method, --jacobian and
+    # --input-changes, each with its own names).
+    long_name = "n" * 256
+    for args, message in [
+            (["run", OSC, "-q", "-o", "-", "--solver", "fast"],
+             "springmass run: --solver: unknown linear solver 'fast' (auto, dense, klu, pcg, cholmod)"),
+            (["run", OSC, "-q", "-o", "-", "--method", "rk4"], "springmass run: --method: unknown method 'rk4' (bdf, adams)"),
+            (["run", OSC, "-q", "-o", "-", "--jacobian", "bdf"],
+             "springmass run: --jacobian: unknown Jacobian 'bdf' (exact, definite)"),
+            (["statics", OSC, "--solver", "klu"], "springmass statics: --solver: unknown solver 'klu' (auto, dense, sparse)"),
+            (["modes", OSC, "--solver", "klu"], "springmass modes: --solver: unknown solver 'klu' (auto, dense, sparse)"),
+            (["check", OSC, "--set", long_name + "=1"],
+             f"springmass check: --set {long_name}=1: the parameter's name is too long (255 bytes at most)")]:
+        assert cli(*args, status=2).stderr == message + "\n", args
