@@ -64,7 +64,8 @@ static void usage(FILE* out)
 	        "  -h, --help             this text\n"
 	        "\n"
 	        "Exit status: 0 when an equilibrium is found (stable or not, as printed), 1 for a bad model,\n"
-	        "no equilibrium or an output that cannot be written, 2 for a usage error.\n");
+	        "no equilibrium or an output that cannot be written, 2 for a usage error (also a --tolerance\n"
+	        "at or above the largest load on a free particle).\n");
 }
 
 // Legacy VTK polydata: particles as points, springs as lines, displacement and reaction fields.
@@ -239,6 +240,11 @@ int sm_cmd_statics(int argc, char** argv)
 	const sm_status st =
 	    cli_statics_solve("springmass statics", quiet, model, &def, x, reactions, &res, &err);
 	if (st != SM_OK) {
+		// The options are checked above: the one value the library still refuses is a --tolerance
+		// at or above the largest load, which any shape would meet. Like every other value refused,
+		// it is a usage error.
+		if (st == SM_ERROR_INVALID_ARGUMENT)
+			status = 2;
 		cli_shown shown = {0};
 		fprintf(stderr, "springmass statics: %s: ", cli_shown_path(&shown, model_path));
 		cli_shown_free(&shown);

@@ -1167,7 +1167,9 @@ def test_statics_messages_name_the_options_not_the_library_fields():
     # The library's messages name sm_statics_def's fields; the tool's user typed options.
     err = cli("statics", MODELS / "cloth.json", "--max-iterations", 2, "-q", status=1).stderr
     assert "no equilibrium found in 2 iterations (--max-iterations):" in err, err
-    err = cli("statics", MODELS / "cloth.json", "--tolerance", 100, "-q", status=1).stderr
+    # A tolerance at or above the largest load is refused as any other value outside what the help
+    # allows ("below the largest load on one"): a usage error, status 2, not a bad model's 1.
+    err = cli("statics", MODELS / "cloth.json", "--tolerance", 100, "-q", status=2).stderr
     assert "statics: --tolerance 100 N is not below the largest load on a free particle" in err, err
     assert "residual_tolerance" not in err and "max_iterations" not in err
 
