@@ -416,20 +416,25 @@ int sm_cmd_modes(int argc, char** argv)
 		if ((size_t)snprintf(prefix, sizeof prefix, "%s/mode_", vtk_dir) < sizeof prefix)
 			removed = cli_remove_series_tail(prefix, 0, (long)modes.count + 1, ".vtk", CLI_LEGACY_VTK_HEADER);
 	}
-	if (csv_path != NULL)
-		printf("mode shapes written to %s%s\n", csv_path,
-		       modes.count > 0 ? "" : " (no modes: the particles only)");
-	if (vtk_dir != NULL && modes.count > 0)
-		printf("mode shapes written to %s/mode_<k>.vtk, k = 1 to %d (open them in ParaView)\n", vtk_dir,
-		       (int)modes.count);
-	else if (vtk_dir != NULL)
-		printf("no mode shapes to write to %s\n", vtk_dir);
-	if (removed == 1)
-		printf("removed %s/mode_%d.vtk, left there by an earlier run with more modes\n", vtk_dir,
-		       (int)modes.count + 1);
-	else if (removed > 1)
-		printf("removed %s/mode_%d.vtk to mode_%ld.vtk, left there by an earlier run with more modes\n",
-		       vtk_dir, (int)modes.count + 1, (long)modes.count + removed);
+	{
+		cli_shown shown = {0};
+		const char* vtk_shown = vtk_dir != NULL ? cli_shown_path(&shown, vtk_dir) : NULL;
+		if (csv_path != NULL)
+			printf("mode shapes written to %s%s\n", cli_shown_path(&shown, csv_path),
+			       modes.count > 0 ? "" : " (no modes: the particles only)");
+		if (vtk_dir != NULL && modes.count > 0)
+			printf("mode shapes written to %s/mode_<k>.vtk, k = 1 to %d (open them in ParaView)\n", vtk_shown,
+			       (int)modes.count);
+		else if (vtk_dir != NULL)
+			printf("no mode shapes to write to %s\n", vtk_shown);
+		if (removed == 1)
+			printf("removed %s/mode_%d.vtk, left there by an earlier run with more modes\n", vtk_shown,
+			       (int)modes.count + 1);
+		else if (removed > 1)
+			printf("removed %s/mode_%d.vtk to mode_%ld.vtk, left there by an earlier run with more modes\n",
+			       vtk_shown, (int)modes.count + 1, (long)modes.count + removed);
+		cli_shown_free(&shown);
+	}
 	status = 0;
 done:
 	cli_outputs_discard(&outputs);

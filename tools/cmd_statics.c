@@ -384,12 +384,16 @@ int sm_cmd_statics(int argc, char** argv)
 	}
 	if (cli_outputs_commit(&outputs) != 0)
 		goto done;
-	if (csv_path != NULL)
-		printf("\nrest shape written to %s\n", csv_path);
-	if (vtk_dir != NULL)
-		printf("rest shape written to %s (open it in ParaView)\n", vtk_path);
-	if (save_path != NULL)
-		printf("model starting at rest saved to %s\n", save_path);
+	{
+		cli_shown shown = {0};
+		if (csv_path != NULL)
+			printf("\nrest shape written to %s\n", cli_shown_path(&shown, csv_path));
+		if (vtk_dir != NULL)
+			printf("rest shape written to %s (open it in ParaView)\n", cli_shown_path(&shown, vtk_path));
+		if (save_path != NULL)
+			printf("model starting at rest saved to %s\n", cli_shown_path(&shown, save_path));
+		cli_shown_free(&shown);
+	}
 	status = 0;
 done:
 	cli_outputs_discard(&outputs);

@@ -2792,3 +2792,33 @@ def test_a_refused_value_names_the_option_it_came_from():
             (["check", OSC, "--set", long_name + "=1"],
              f"springmass check: --set {long_name}=1: the parameter's name is too long (255 bytes at most)")]:
         assert cli(*args, status=2).stderr == message + "\n", args
+
+
+def test_reports_show_the_paths_of_their_outputs_escaped(tmp_path):
+    # What statics and modes print on standard output after writing: the paths named as in the
+    # messages (the folder's ESC, line break and stray byte escaped), each report line one line.
+    folder = tmp_path / f"out{TERMINAL_NAME}"
+    folder.mkdir()
+    shown = f"{tmp_path}/out{TERMINAL_NAME_SHOWN}"
+
+    def report(*args):
+        out = subprocess.run([str(CLI), *map(str, args)], capture_output=True, text=True, errors="replace", timeout=60)
+        assert out.returncode == 0, (args, out.stderr)
+        assert "\x1b" not in out.stdout
+        return out.stdout.splitlines()
+
+    lines = report("statics", OSC, "-q", "-o", folder / "shape.csv", "--vtk", folder / "vtk", "--save-model",
+                   folder / "rest.json")
+    assert lines[-3:] == [f"rest shape written to {shown}/shape.csv",
+                          f"rest shape written to {shown}/vtk/statics.vtk (open it in ParaView)",
+                          f"model starting at rest saved to {shown}/rest.json"], lines
+    # The oscillator's one free particle has 3 modes; then 1 of them, and the 2 files beyond removed.
+    lines = report("modes", OSC, "-o", folder / "modes.csv", "--vtk", folder / "modes")
+    assert lines[-2:] == [f"mode shapes written to {shown}/modes.csv",
+                          f"mode shapes written to {shown}/modes/mode_<k>.vtk, k = 1 to 3 (open them in ParaView)"], lines
+    lines = report("modes", OSC, "-n", 1, "--vtk", folder / "modes")
+    assert lines[-2:] == [f"mode shapes written to {shown}/modes/mode_<k>.vtk, k = 1 to 1 (open them in ParaView)",
+                          f"removed {shown}/modes/mode_2.vtk to mode_3.vtk, left there by an earlier run with more modes"], lines
+    report("modes", OSC, "--vtk", folder / "modes")
+    lines = report("modes", OSC, "-n", 2, "--vtk", folder / "modes")
+    assert lines[-1] == f"removed {shown}/modes/mode_3.vtk, left there by an earlier run with more modes", lines
