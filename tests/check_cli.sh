@@ -342,7 +342,7 @@ check_cases << 'CASES'
 2|springmass statics: --max-iterations needs a count from 1 to 1000000, got '1000001'|statics "$osc" -q --max-iterations 1000001
 2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end
 2|springmass run: --jacobian: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
-2|springmass modes: --steps-per-period needs a number >= 1|modes "$osc" --steps-per-period infinity
+2|springmass modes: --steps-per-period needs a finite number >= 1, got 'infinity'|modes "$osc" --steps-per-period infinity
 2|springmass run: --rtol must be > 0, got '0'|run "$osc" -q -o - --rtol 0
 2|springmass run: --rtol must be at least 2.220446049250313e-16, the machine epsilon (CVODE cannot meet a smaller relative tolerance), got '1e-17'|run "$osc" -q -o - --rtol 1e-17
 0||run "$osc" -q -o - --t-end 1e-3 --rtol 2.220446049250313e-16
@@ -364,9 +364,9 @@ check_cases << 'CASES'
 1|springmass modes: --set zz=1: the model has no parameter named "zz"|modes "$osc" --set k=1 --set zz=1
 0||run "$ends" -q -o - --t-end 0.01 --set xa=1 --set xb=3
 1|springmass run: --set xa=2 --set xb=2: $tmp/rope_ends.json: structures[0]: rope: start = end = (2, 0, 0) m: its springs have rest length 0, and the structural group's per-strain stiffness (E / l0) needs a rest length > 0: give it an absolute stiffness, or the rope a length (with parameter xa = 2 and parameter xb = 2)|run "$ends" -q -o - --set xa=2 --set xb=2
-2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance inf
-2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0x1p-20
-2|springmass statics: --tolerance needs a positive number of newtons|statics "$osc" --tolerance 0
+2|springmass statics: --tolerance needs a positive finite number of newtons, got 'inf'|statics "$osc" --tolerance inf
+2|springmass statics: --tolerance needs a positive finite number of newtons, got '0x1p-20'|statics "$osc" --tolerance 0x1p-20
+2|springmass statics: --tolerance needs a positive finite number of newtons, got '0'|statics "$osc" --tolerance 0
 CASES
 # A parameter name of up to 255 characters is looked up; a longer one is a usage error.
 long=$(printf 'n%.0s' $(seq 255))

@@ -243,7 +243,10 @@ int sm_cmd_modes(int argc, char** argv)
 			}
 		} else if (strcmp(a, "--steps-per-period") == 0 && has_value) {
 			if (!cli_parse_number(argv[++i], &steps_per_period) || !(steps_per_period >= 1.0)) {
-				fprintf(stderr, "springmass modes: --steps-per-period needs a number >= 1\n");
+				cli_shown shown = {0};
+				fprintf(stderr, "springmass modes: --steps-per-period needs a finite number >= 1, got '%s'\n",
+				        cli_shown_text(&shown, argv[i]));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}

@@ -132,7 +132,12 @@ int sm_cmd_statics(int argc, char** argv)
 			settings[setting_count++] = argv[++i];
 		} else if (strcmp(a, "--tolerance") == 0 && has_value) {
 			if (!cli_parse_number(argv[++i], &def.residual_tolerance) || !(def.residual_tolerance > 0.0)) {
-				fprintf(stderr, "springmass statics: --tolerance needs a positive number of newtons\n");
+				cli_shown shown = {0};
+				fprintf(
+				    stderr,
+				    "springmass statics: --tolerance needs a positive finite number of newtons, got '%s'\n",
+				    cli_shown_text(&shown, argv[i]));
+				cli_shown_free(&shown);
 				free(settings);
 				return 2;
 			}

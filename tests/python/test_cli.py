@@ -2750,6 +2750,10 @@ def messages_echoing_arguments():
         (["modes", OSC, "-n", t], None, 2, f"springmass modes: -n needs a count from 0 to 1e8, got '{shown}'"),
         (["modes", OSC, "--zero-tolerance", t], None, 2,
          f"springmass modes: --zero-tolerance needs a number in [0, 1), got '{shown}'"),
+        (["modes", OSC, "--steps-per-period", t], None, 2,
+         f"springmass modes: --steps-per-period needs a finite number >= 1, got '{shown}'"),
+        (["statics", OSC, "--tolerance", t], None, 2,
+         f"springmass statics: --tolerance needs a positive finite number of newtons, got '{shown}'"),
         (["modes", OSC, "--solver", t], None, 2, f"springmass modes: --solver: unknown solver '{shown}' (auto, dense, sparse)"),
     ]
     if HAS_FMU:
