@@ -1291,6 +1291,39 @@ static int test_messages_ignore_the_locale(void)
 	return 0;
 }
 
+// The solver's report in a discard writes its numbers with a point under a decimal comma too:
+// CVODE's own text quoted the step size it failed at as "h = 4,01933e-166". Adams on the
+// oscillator pushed by 1e300 N fails its corrector with the step at round-off (the forces
+// overflow), a message that names the step size. No digit of the message is followed by a comma
+// and another digit.
+static int test_solver_reports_ignore_the_locale(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "solver_locale");
+	ENSURE(c != NULL);
+	if (setlocale(LC_NUMERIC, "de_DE.UTF-8") == NULL) {
+		printf("  no de_DE.UTF-8 locale: skipped\n");
+		fmi2FreeInstance(c);
+		teardown(&f);
+		return 0;
+	}
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(set_string(c, &f, "solver.method", "adams"), fmi2OK);
+	ENSURE_STATUS(fmi2ExitInitializationMode(c), fmi2OK);
+	ENSURE_STATUS(set_real(c, &f, "tip.fx", 1e300), fmi2OK);
+	const fmi2Status step = fmi2DoStep(c, 0.0, 0.25, fmi2True);
+	setlocale(LC_NUMERIC, "C");
+	ENSURE(step == fmi2Discard && strcmp(f.log.category, "logStatusDiscard") == 0);
+	ENSURE(strstr(f.log.last, "CVode: At t = ") != NULL && strstr(f.log.last, " and h = ") != NULL);
+	for (const char* p = f.log.last; p[0] != '\0' && p[1] != '\0' && p[2] != '\0'; ++p)
+		ENSURE(!(p[0] >= '0' && p[0] <= '9' && p[1] == ',' && p[2] >= '0' && p[2] <= '9'));
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // A message longer than the FMU's buffer on the stack (1024 bytes) reaches the logger whole: a
 // resource location of 1200 bytes of two-byte characters, which the refusal names, was cut at
 // 1023 bytes, inside a character.
@@ -2423,6 +2456,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_settings_take_effect_after_an_output_was_read);
 	RUN_TEST(test_solver_settings_are_checked_against_their_ranges);
 	RUN_TEST(test_messages_ignore_the_locale);
+	RUN_TEST(test_solver_reports_ignore_the_locale);
 	RUN_TEST(test_long_messages_reach_the_logger_whole);
 	RUN_TEST(test_messages_at_the_buffers_length_reach_the_logger_whole);
 	RUN_TEST(test_experiment_tolerance_yields_to_an_explicit_rtol);

@@ -9,6 +9,7 @@
 // simulation_state.c.
 #define _POSIX_C_SOURCE 200809L
 
+#include "c_locale.h"
 #include "law_body_forces.h"
 #include "model_internal.h"
 #include "simulation_internal.h"
@@ -276,6 +277,19 @@ static sm_status short_step(sm_simulation* sim, double t_end)
 	return SM_OK;
 }
 
+// CVode in the C locale. CVODE writes its messages (kept by sm_simulation_error_handler for
+// sm_simulation_last_error) with printf in the calling thread's locale: under a decimal comma a
+// failure read "At t = 0.25 and h = 2,91762e-166" (the time, which the handler rewrites, came out
+// with a point). In the C locale the step size reads as the library's own numbers do, in any
+// locale (base.h).
+static int cvode_in_c_locale(sm_simulation* sim, double tout, double* reached, int task)
+{
+	const sm_c_locale_scope scope = sm_enter_c_locale();
+	const int flag = CVode(sim->cvode, tout, sim->y, reached, task);
+	sm_leave_c_locale(scope);
+	return flag;
+}
+
 // CVODE's first step comes out as 0 when the weighted norms of the accelerations overflow
 // (about 1e302 m/s^2 at atol 1e-6 m/s); CVODE then reports success at the stop time, having
 // moved nothing (it interpolates with h = 0). A step of size 0 is a failure; *reached becomes
@@ -345,7 +359,7 @@ static int step_one_at_a_time(sm_simulation* sim, double t_end, double t_stop, l
 	while (flag == CV_SUCCESS && *reached < t_end && steps < allowed && !sim->stopped) {
 		long steps_before = 0, steps_after = 0;
 		CVodeGetNumSteps(sim->cvode, &steps_before);
-		flag = check_step_size(sim, CVode(sim->cvode, tout, sim->y, reached, CV_ONE_STEP), reached);
+		flag = check_step_size(sim, cvode_in_c_locale(sim, tout, reached, CV_ONE_STEP), reached);
 		CVodeGetNumSteps(sim->cvode, &steps_after);
 		// A spring that reached its break strain inside the step ends it there, as a root does.
 		flag = sm_simulation_search_step(sim, flag, steps_after > steps_before, reached);
@@ -477,7 +491,7 @@ static sm_status advance(sm_simulation* sim, double t_end, double t_stop)
 		           cvode_end - reached <= STOP_HORIZON) {
 			CVodeSetStopTime(sim->cvode, cvode_end);
 			CVodeSetMaxNumSteps(sim->cvode, allowed);
-			flag = check_step_size(sim, CVode(sim->cvode, cvode_end, sim->y, &reached, CV_NORMAL), &reached);
+			flag = check_step_size(sim, cvode_in_c_locale(sim, cvode_end, &reached, CV_NORMAL), &reached);
 		} else {
 			flag = step_one_at_a_time(sim, cvode_end, past_end ? cvode_stop : cvode_end, allowed, &reached);
 		}
