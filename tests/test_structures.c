@@ -681,6 +681,10 @@ static int test_selection(void)
 	int32_t count = 0;
 	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
 	ENSURE(count == 5 && sm_model_free_count(m) == 20);
+	// Again: the count is of the particles in the box, those already fixed included.
+	count = 0;
+	ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+	ENSURE(count == 5 && sm_model_free_count(m) == 20);
 	for (int32_t j = 0; j < 5; j++)
 		ENSURE(sm_model_free_index(m, sm_structure_particle(&s, 4, j, 0)) == -1);
 	// By grid coordinate, and outside the grid.

@@ -191,7 +191,8 @@ SM_API sm_status sm_add_block(sm_model* model, const sm_block_def* def, sm_struc
 SM_API sm_status sm_add_mesh(sm_model* model, const sm_mesh_def* def, sm_structure* out);
 
 /// Sets the motion of every particle whose initial position lies in the closed box [lo, hi]
-/// [m]; writes how many were changed to *count (may be NULL). An empty box is not an error.
+/// [m]; writes how many particles lie in the box to *count (may be NULL), those that had that
+/// motion already included. An empty box is not an error.
 SM_API sm_status sm_set_motion_in_box(sm_model* model, const double lo[3], const double hi[3],
                                       sm_particle_motion motion, int32_t* count);
 
