@@ -1018,9 +1018,12 @@ char* fmu_model_description(const fmu_table* t, const char* generation_date)
 	    &out,
 	    "  <LogCategories>\n"
 	    "    <Category name=\"logEvents\"\n"
-	    "      description=\"springs that break, tunable parameters changed (each restarts the solver)\"/>\n"
+	    "      description=\"springs that break, tunable parameters changed (each restarts the solver), input "
+	    "derivatives not used\"/>\n"
 	    "    <Category name=\"logStatusWarning\" description=\"calls that return fmi2Warning\"/>\n"
-	    "    <Category name=\"logStatusDiscard\" description=\"steps the solver could not complete\"/>\n"
+	    "    <Category name=\"logStatusDiscard\"\n"
+	    "      description=\"calls that return fmi2Discard: steps the solver could not complete or whose outputs "
+	    "overflow, status kinds not delivered\"/>\n"
 	    "    <Category name=\"logStatusError\" description=\"calls that return fmi2Error\"/>\n"
 	    "    <Category name=\"logSolver\" description=\"integrator statistics after each step\"/>\n"
 	    "  </LogCategories>\n");
