@@ -2588,6 +2588,13 @@ static int test_motion_scales(void)
 	ENSURE(sm_tolerances_coarse(&def, &scales));
 	def.absolute_tolerance_velocity = 0.5 * SM_COARSE_TOLERANCE * scales.speed;
 	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	// From mutation testing: the velocities' bound is the same fraction of the speed, and as
+	// sharp: at exactly that fraction not coarse, one ulp above it coarse (a bound at half the
+	// fraction passed the checks around it).
+	def.absolute_tolerance_velocity = SM_COARSE_TOLERANCE * scales.speed;
+	ENSURE(!sm_tolerances_coarse(&def, &scales));
+	def.absolute_tolerance_velocity = nextafter(def.absolute_tolerance_velocity, 1.0);
+	ENSURE(sm_tolerances_coarse(&def, &scales));
 	// The fraction is the documented 1e-4 (docs/simulation.md, "Tolerances"): of 0.25 m and
 	// 0.707 m/s, 2.5e-5 m and 7.07e-5 m/s; 3e-5 m and 1e-4 m/s are coarse, 2e-5 m is not.
 	def.absolute_tolerance_position = 3e-5;
