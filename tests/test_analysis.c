@@ -5496,6 +5496,49 @@ static int test_sparse_omega_max_of_unconnected_particles_is_exact(void)
 	return 0;
 }
 
+// From mutation testing: the bound of a block whose eigenvectors lie in one coordinate plane is
+// exact as well. Sixteen particles of 2 kg, each held by one spring stretched from its rest length
+// 0.5 m to 0.6 sqrt(2) m along (1, 0, 1) / sqrt(2), the n-th of 100 (1 + n / 20) N/m, have the
+// block K_pp = k (u u^T + g (I - u u^T)), g = 1 - l0 / L: its x-y and y-z entries are 0 and its
+// x-z entry is not, with eigenvalues k along the spring and k g across it. The highest omega^2 is
+// that of the stiffest spring along itself, 100 (1 + 15 / 20) / 2 = 87.5 1/s^2, which the sparse
+// path's omega_max^2 is (a diagonalisation that took the zero x-y entry for convergence gave the
+// diagonal k (1 + g) / 2, 71 % of it) and the dense path's highest omega^2 too. Tolerance 1e-12:
+// eigenvalues of 3x3 blocks and of the dense matrix, exact to a few eps of their largest entries.
+static int test_sparse_omega_max_of_a_block_in_a_coordinate_plane_is_exact(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	for (int n = 0; n < 16; n++) {
+		sm_particle_def bob = sm_default_particle_def();
+		bob.mass = 2.0;
+		bob.position[0] = 3.0 * n;
+		sm_spring_def sd = sm_default_spring_def();
+		ENSURE_STATUS(sm_model_add_particle(model, &bob, &sd.a), SM_OK);
+		sm_particle_def pin = sm_default_particle_def();
+		pin.motion = SM_PARTICLE_FIXED;
+		pin.position[0] = 3.0 * n + 0.6;
+		pin.position[2] = 0.6;
+		ENSURE_STATUS(sm_model_add_particle(model, &pin, &sd.b), SM_OK);
+		sd.rest_length = 0.5;
+		sd.stiffness = 100.0 * (1.0 + n / 20.0);
+		ENSURE_STATUS(sm_model_add_spring(model, &sd, NULL), SM_OK);
+	}
+	sm_modes sparse, dense;
+	if (sparse_and_dense(model, NULL, 2, &sparse, &dense) != 0)
+		return 1;
+	printf("  omega_max^2 %.17g 1/s^2, highest omega^2 %.17g 1/s^2\n", sparse.omega_max * sparse.omega_max,
+	       dense.omega_squared[dense.count - 1]);
+	ENSURE_REL(dense.omega_squared[dense.count - 1], 87.5, 1e-12, 0.0);
+	ENSURE_REL(sparse.omega_max * sparse.omega_max, 87.5, 1e-12, 0.0);
+	sm_modes_release(&sparse);
+	sm_modes_release(&dense);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -5594,5 +5637,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_sparse_omega_max_does_not_depend_on_orientation);
 	RUN_TEST(test_sparse_omega_max_bounds_every_mode);
 	RUN_TEST(test_sparse_omega_max_of_unconnected_particles_is_exact);
+	RUN_TEST(test_sparse_omega_max_of_a_block_in_a_coordinate_plane_is_exact);
 	return TEST_SUMMARY();
 }
