@@ -5539,6 +5539,68 @@ static int test_sparse_omega_max_of_a_block_in_a_coordinate_plane_is_exact(void)
 	return 0;
 }
 
+// From mutation testing: a weak damping is kept beside a strong one. Along x from a fixed anchor at
+// the origin, bob A (1 kg) at x = 1 m on a zero-length spring of 100 N/m and 1 N s/m, bob B (1 kg)
+// at x = -1 m on one of 400 N/m and 1e-10 N s/m, and a free pair (1 kg each) at x = 5 m and 6 m
+// joined by a damper of 1e-8 N s/m and no stiffness. Spring damping acts along the spring only:
+// B's mode along x has the modal damping phi^T C phi = 1e-10 1/s and the damping ratio
+// 1e-10 / (2 sqrt(400)) = 2.5e-12; the pair's stretching, of zero frequency, 2 x 1e-8 / 1 =
+// 2e-8 1/s and no ratio (INFINITY: it creeps). Both lie far above the round-off of Phi^T C Phi
+// (about n3 eps times the largest damping rate, 1 1/s: 1e-14 1/s) and far below the largest
+// damping: a threshold of 1e-6 of it took B's mode for undamped and the pair's for not damped at
+// all. Tolerance 1e-6 relative: the shapes' round-off outside B's and the pair's degrees of
+// freedom (1e-16) adds at most its square times the other dampings.
+static int test_modes_keep_a_weak_damping_beside_a_strong_one(void)
+{
+	sm_model_def md = sm_default_model_def();
+	md.gravity[2] = 0.0;
+	sm_model* model = sm_model_create(&md, NULL);
+	ENSURE(model != NULL);
+	const double x[5] = {0.0, 1.0, -1.0, 5.0, 6.0};
+	for (int i = 0; i < 5; i++) {
+		sm_particle_def p = sm_default_particle_def();
+		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+		p.position[0] = x[i];
+		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	}
+	const int32_t a[3] = {0, 0, 3}, b[3] = {1, 2, 4};
+	const double stiffness[3] = {100.0, 400.0, 0.0}, damping[3] = {1.0, 1e-10, 1e-8};
+	for (int k = 0; k < 3; k++) {
+		sm_spring_def s = sm_default_spring_def();
+		s.kind = SM_SPRING_ZERO_LENGTH;
+		s.a = a[k];
+		s.b = b[k];
+		s.stiffness = stiffness[k];
+		s.damping = damping[k];
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+	}
+	sm_modes modes;
+	sm_error err;
+	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+	ENSURE(modes.count == 12);
+	double weak = 0.0, weak_ratio = 0.0, creeping = 0.0;
+	int infinite = 0;
+	for (int32_t i = 0; i < modes.count; i++) {
+		printf("  omega^2 %.17g 1/s^2: modal damping %.6g 1/s, ratio %.6g\n", modes.omega_squared[i],
+		       modes.modal_damping[i], modes.damping_ratio[i]);
+		if (fabs(modes.omega_squared[i] - 400.0) <= 1e-9 && modes.modal_damping[i] > weak) {
+			weak = modes.modal_damping[i];
+			weak_ratio = modes.damping_ratio[i];
+		}
+		if (isinf(modes.damping_ratio[i])) {
+			infinite++;
+			creeping = modes.modal_damping[i];
+		}
+	}
+	ENSURE_REL(weak, 1e-10, 1e-6, 0.0);
+	ENSURE_REL(weak_ratio, 2.5e-12, 1e-6, 0.0);
+	ENSURE(infinite == 1);
+	ENSURE_REL(creeping, 2e-8, 1e-6, 0.0);
+	sm_modes_release(&modes);
+	sm_model_destroy(model);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -5563,6 +5625,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);
 	RUN_TEST(test_proportional_damping_ratios);
+	RUN_TEST(test_modes_keep_a_weak_damping_beside_a_strong_one);
 	RUN_TEST(test_hanging_rope_elongation);
 	RUN_TEST(test_hanging_rope_with_bending_springs);
 	RUN_TEST(test_rope_modes_converge_when_refined);
