@@ -5602,46 +5602,54 @@ static int test_modes_keep_a_weak_damping_beside_a_strong_one(void)
 }
 
 // From mutation testing: within a repeated frequency, modes damped differently are blocks of their
-// own for the coupling. Along x from a fixed anchor at the origin, bob A (1 kg) at x = 1 m on a
-// zero-length spring of 100 N/m and 1 N s/m and bob B (1 kg) at x = 2 m on one of 400 N/m and
-// 1 N s/m, joined by a damper of 0.1 N s/m and no stiffness. Spring damping acts along x only, so
-// A's three modes share omega^2 = 100 1/s^2 with the modal dampings 0, 0 and 1.1 1/s, and the
-// modal damping matrix of the modes along x is [[1.1, -0.1], [-0.1, 1.1]] 1/s: the coupling is
-// 0.1 / sqrt(1.1 x 1.1) = 1 / 11. Taken as one block, A's three modes were normalised by the
-// damping of their first, 0, and the coupling came out as 0.1 / (1e-12 x 1.1), 9e10. Tolerance
-// 1e-12: the shapes' round-off moves the entries of Phi^T C Phi by a few eps.
+// own for the coupling, and a coupling of weakly damped modes is measured against their own
+// damping. Along x from a fixed anchor at the origin, bob A (1 kg) at x = 1 m on a zero-length
+// spring of 100 N/m and s N s/m and bob B (1 kg) at x = 2 m on one of 400 N/m and s N s/m, joined
+// by a damper of 0.1 s N s/m and no stiffness, and bob C (1 kg) at x = -1 m on one of 900 N/m and
+// 1 N s/m. Spring damping acts along x only, so A's three modes share omega^2 = 100 1/s^2 with
+// the modal dampings 0, 0 and 1.1 s 1/s, and the modal damping matrix of A's and B's modes along x
+// is s [[1.1, -0.1], [-0.1, 1.1]] 1/s: the coupling is 0.1 / sqrt(1.1 x 1.1) = 1 / 11 at s = 1
+// and at s = 1e-8 alike. Taken as one block, A's three modes were normalised by the damping of
+// their first, 0, and the coupling came out as 0.1 / (1e-12 x 1.1), 9e10; with the normalisation
+// floored at 1e-6 of C's damping instead of 1e-12, 1e-3 at s = 1e-8. Tolerance 1e-12: the shapes'
+// round-off moves the entries of Phi^T C Phi by a few eps of them.
 static int test_modes_coupling_tells_modes_of_a_repeated_frequency_apart_by_their_damping(void)
 {
-	sm_model_def md = sm_default_model_def();
-	md.gravity[2] = 0.0;
-	sm_model* model = sm_model_create(&md, NULL);
-	ENSURE(model != NULL);
-	for (int i = 0; i < 3; i++) {
-		sm_particle_def p = sm_default_particle_def();
-		p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
-		p.position[0] = i;
-		ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+	const double scales[2] = {1.0, 1e-8};
+	for (int n = 0; n < 2; n++) {
+		sm_model_def md = sm_default_model_def();
+		md.gravity[2] = 0.0;
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		const double x[4] = {0.0, 1.0, 2.0, -1.0};
+		for (int i = 0; i < 4; i++) {
+			sm_particle_def p = sm_default_particle_def();
+			p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+			p.position[0] = x[i];
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		}
+		const int32_t a[4] = {0, 0, 1, 0}, b[4] = {1, 2, 2, 3};
+		const double stiffness[4] = {100.0, 400.0, 0.0, 900.0};
+		const double damping[4] = {scales[n], scales[n], 0.1 * scales[n], 1.0};
+		for (int k = 0; k < 4; k++) {
+			sm_spring_def s = sm_default_spring_def();
+			s.kind = SM_SPRING_ZERO_LENGTH;
+			s.a = a[k];
+			s.b = b[k];
+			s.stiffness = stiffness[k];
+			s.damping = damping[k];
+			ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		}
+		sm_modes modes;
+		sm_error err;
+		ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+		ENSURE(modes.count == 9);
+		printf("  s = %g: damping coupling %.17g\n", scales[n], modes.damping_coupling);
+		ENSURE_REL(modes.damping_coupling, 1.0 / 11.0, 1e-12, 0.0);
+		ENSURE(!modes.proportional);
+		sm_modes_release(&modes);
+		sm_model_destroy(model);
 	}
-	const int32_t a[3] = {0, 0, 1}, b[3] = {1, 2, 2};
-	const double stiffness[3] = {100.0, 400.0, 0.0}, damping[3] = {1.0, 1.0, 0.1};
-	for (int k = 0; k < 3; k++) {
-		sm_spring_def s = sm_default_spring_def();
-		s.kind = SM_SPRING_ZERO_LENGTH;
-		s.a = a[k];
-		s.b = b[k];
-		s.stiffness = stiffness[k];
-		s.damping = damping[k];
-		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
-	}
-	sm_modes modes;
-	sm_error err;
-	ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
-	ENSURE(modes.count == 6);
-	printf("  damping coupling %.17g\n", modes.damping_coupling);
-	ENSURE_REL(modes.damping_coupling, 1.0 / 11.0, 1e-12, 0.0);
-	ENSURE(!modes.proportional);
-	sm_modes_release(&modes);
-	sm_model_destroy(model);
 	return 0;
 }
 
