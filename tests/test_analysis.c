@@ -4202,7 +4202,7 @@ static int test_statics_balances_a_light_part_beside_a_heavy_one(void)
 // 1e-6 N: the start is not balanced (the spring adds only 1e-13 N to A) and B ends within
 // 1e-12 N / 1 N/m of its anchor. With B at its anchor every force is exactly 0, and the critical
 // particle is still a free one (-1 only without free particles or before judging).
-static int test_statics_unloaded_particle_and_disabled_springs(void)
+static int unloaded_particle_and_disabled_springs(bool anchor_second)
 {
 	sm_model_def md = sm_default_model_def();
 	md.gravity[2] = 0.0;
@@ -4220,8 +4220,9 @@ static int test_statics_unloaded_particle_and_disabled_springs(void)
 	const int32_t ends[4][2] = {{0, 1}, {4, 2}, {0, 3}, {1, 2}};
 	for (int32_t k = 0; k < 4; k++) {
 		sm_spring_def s = sm_default_spring_def();
-		s.a = ends[k][0];
-		s.b = ends[k][1];
+		const bool swap = anchor_second && k < 3;  // the three springs with an anchor
+		s.a = ends[k][swap ? 1 : 0];
+		s.b = ends[k][swap ? 0 : 1];
 		s.kind = SM_SPRING_ZERO_LENGTH;
 		s.stiffness = k == 3 ? 1e-3 : 1.0;
 		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
@@ -4246,6 +4247,16 @@ static int test_statics_unloaded_particle_and_disabled_springs(void)
 	ENSURE(res.iterations == 0 && res.residual == 0.0);
 	ENSURE(res.critical_particle >= 1 && res.critical_particle <= 3 && res.critical_residual == 0.0);
 	sm_model_destroy(model);
+	return 0;
+}
+
+static int test_statics_unloaded_particle_and_disabled_springs(void)
+{
+	// From mutation testing: and again with each anchor listed as its spring's second end (the
+	// grouping of free particles by springs passes over a spring with a held end either way).
+	for (int anchor_second = 0; anchor_second < 2; anchor_second++)
+		if (unloaded_particle_and_disabled_springs(anchor_second != 0) != 0)
+			return 1;
 	return 0;
 }
 
