@@ -1155,6 +1155,64 @@ static int test_variant_from_name_refuses_null(void)
 	return 0;
 }
 
+// From mutation testing: the definiteness-preserving variant clamps the transverse stiffness
+// ks (1 - l0/L) of a compressed spring at zero however slight the compression (law_rest_length.h),
+// in the product of jacobian.c as in the stored records. A spring compressed to L = (1 - 1e-6) l0 along
+// (1, 2, 2)/3, its far end moved across it by (2, -1, 0): the definite product is zero, the exact
+// one the negative stiffness ks (1 - l0/L) times the move, on a and opposite on b. A clamp that
+// began at 1 - l0/L < -1e-3 went unnoticed by the tests of the physics core (their random models
+// compress their springs further).
+// Tolerances: zero up to the rounding of u . r, a few ulps of ks |r| (1e-14 ks |r| allowed, where
+// the missing clamp gives 1e-6 ks |r|); the exact product to 1e-9 of its size, 1 - l0/L = -1e-6
+// being computed from a length that carries about 1e-16 relative error.
+static int test_definite_product_clamps_a_slight_compression(void)
+{
+	const sm_model_def md = sm_default_model_def();  // gravity has no derivative
+	sm_model* m = sm_model_create(&md, NULL);
+	ENSURE(m != NULL);
+	const double l0 = 1.5, ks = 60.0, shrink = 1.0 - 1e-6;
+	const double scale = shrink * l0 / 3.0;  // d = scale (1, 2, 2), |d| = (1 - 1e-6) l0
+	double x[6] = {0.1, 0.2, 0.3, 0.1 + scale, 0.2 + 2.0 * scale, 0.3 + 2.0 * scale};
+	const double v[6] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+	for (int e = 0; e < 2; e++) {
+		sm_particle_def p = sm_default_particle_def();
+		for (int c = 0; c < 3; c++)
+			p.position[c] = x[3 * e + c];
+		ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);
+	}
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0;
+	d.b = 1;
+	d.rest_length = l0;
+	d.stiffness = ks;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	const double move[6] = {0.0, 0.0, 0.0, 2.0, -1.0, 0.0};  // across the spring: (1, 2, 2) . (2, -1, 0) = 0
+	const double length =
+	    sqrt((x[3] - x[0]) * (x[3] - x[0]) + (x[4] - x[1]) * (x[4] - x[1]) + (x[5] - x[2]) * (x[5] - x[2]));
+	const double geometric = 1.0 - l0 / length;
+	ENSURE(geometric < -0.9e-6 && geometric > -1.1e-6);
+	const double bound = 1e-14 * ks * sqrt(5.0);
+	double out[6], fused[6], f[6];
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_DEFINITE, move, NULL, out), SM_OK);
+	sm_spring_jacobians* records = sm_spring_jacobians_create(m);
+	ENSURE(records != NULL);
+	ENSURE_STATUS(sm_model_forces_and_jacobians(m, x, v, NULL, SM_JACOBIAN_DEFINITE, f, records), SM_OK);
+	ENSURE_STATUS(sm_spring_jacobians_product(records, m, move, NULL, fused), SM_OK);
+	for (int k = 0; k < 6; k++) {
+		ENSURE_NEAR(out[k], 0.0, bound);
+		ENSURE_NEAR(fused[k], 0.0, bound);
+	}
+	ENSURE_STATUS(sm_model_jacobian_product(m, x, v, SM_JACOBIAN_EXACT, move, NULL, out), SM_OK);
+	const double allowed = 1e-9 * ks * fabs(geometric) * sqrt(5.0) + bound;
+	for (int c = 0; c < 3; c++) {
+		ENSURE_NEAR(out[c], ks * geometric * move[3 + c], allowed);
+		ENSURE_NEAR(out[3 + c], -ks * geometric * move[3 + c], allowed);
+	}
+	sm_spring_jacobians_destroy(records);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -1179,5 +1237,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_fused_errors);
 	RUN_TEST(test_products_refuse_an_output_that_is_an_input);
 	RUN_TEST(test_sparse_jacobian_rejects_changed_motions_and_endpoints);
+	RUN_TEST(test_definite_product_clamps_a_slight_compression);
 	return TEST_SUMMARY();
 }
