@@ -754,6 +754,40 @@ static int test_last_error_follows_the_modifying_calls(void)
 	return 0;
 }
 
+// From mutation testing: a clone keeps a disabled spring disabled (a broken spring stays broken in
+// a copy): it reports the spring so and exerts nothing with it, enabling it in the clone brings
+// back its constants, and the original's spring stays off. Particles at x = 0, 0.5 and 1 m, springs
+// (0, 1) with ks = 4 N/m, disabled, and (1, 2) with ks = 2 N/m, both l0 = 0.25 m: the forces along
+// x are ks (L - l0) = 1 N and 0.5 N, exact in binary. A clone that marked spring 0 enabled whatever
+// it was, its zero constants kept, passed the tests of the model and of the physics core.
+static int test_clone_keeps_a_disabled_spring_disabled(void)
+{
+	sm_model* m = three_particles();
+	ENSURE(m != NULL);
+	sm_spring_def d = sm_default_spring_def();
+	d.a = 0, d.b = 1, d.stiffness = 4.0, d.rest_length = 0.25;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	d.a = 1, d.b = 2, d.stiffness = 2.0;
+	ENSURE_STATUS(sm_model_add_spring(m, &d, NULL), SM_OK);
+	ENSURE_STATUS(sm_model_set_spring_enabled(m, 0, false), SM_OK);
+	sm_model* c = sm_model_clone(m);
+	ENSURE(c != NULL);
+	ENSURE(!sm_model_spring_enabled(c, 0) && sm_model_spring_enabled(c, 1));
+	const double x[9] = {0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.0, 0.0};
+	double f[9];
+	sm_model_forces(c, x, NULL, NULL, f);
+	ENSURE(f[0] == 0.0 && f[3] == 0.5 && f[6] == -0.5);
+	ENSURE_STATUS(sm_model_set_spring_enabled(c, 0, true), SM_OK);
+	sm_model_forces(c, x, NULL, NULL, f);
+	ENSURE(f[0] == 1.0 && f[3] == -0.5 && f[6] == -0.5);
+	ENSURE(!sm_model_spring_enabled(m, 0));
+	sm_model_forces(m, x, NULL, NULL, f);
+	ENSURE(f[0] == 0.0 && f[3] == 0.5 && f[6] == -0.5);
+	sm_model_destroy(c);
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -777,5 +811,6 @@ int main(int argc, char** argv)
 	RUN_TEST(test_the_smallest_normal_mass_is_accepted);
 	RUN_TEST(test_per_section_damping_needs_a_rest_length);
 	RUN_TEST(test_every_axis_of_gravity_and_velocity_is_checked);
+	RUN_TEST(test_clone_keeps_a_disabled_spring_disabled);
 	return TEST_SUMMARY();
 }
