@@ -2847,6 +2847,41 @@ static int test_name_index_compares_whole_names(void)
 	return 0;
 }
 
+// From mutation testing: the box of sm_set_motion_in_box is no wider than [lo, hi]: on the unit
+// cube of a 2 x 2 x 2 block, a box one ulp inside one face of [0, 1]^3 (lo[c] the double after 0,
+// or hi[c] the one before 1), along each axis in turn, leaves out the four particles on that face
+// and selects the other four. A box whose lower z face reached 1e-9 m below lo passed every test
+// of the structures (test_box_selection_closed tests the faces themselves).
+static int test_box_selection_ends_at_its_faces(void)
+{
+	sm_model* m = new_model();
+	sm_block_def def = sm_default_block_def();
+	def.nu = def.nv = def.nw = 2;
+	sm_structure s;
+	ENSURE_STATUS(sm_add_block(m, &def, &s), SM_OK);
+	for (int c = 0; c < 3; c++)
+		for (int side = 0; side < 2; side++) {
+			double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+			if (side == 0)
+				lo[c] = nextafter(0.0, 1.0);
+			else
+				hi[c] = nextafter(1.0, 0.0);
+			int32_t count = -1;
+			ENSURE_STATUS(sm_set_motion_in_box(m, lo, hi, SM_PARTICLE_FIXED, &count), SM_OK);
+			ENSURE(count == 4 && sm_model_free_count(m) == 4);
+			for (int32_t p = 0; p < 8; p++) {
+				sm_particle_def pd;
+				ENSURE_STATUS(sm_model_get_particle(m, p, &pd), SM_OK);
+				const bool kept = side == 0 ? pd.position[c] == 1.0 : pd.position[c] == 0.0;
+				ENSURE((sm_model_free_index(m, p) == -1) == kept);
+			}
+			const double all_lo[3] = {0, 0, 0}, all_hi[3] = {1, 1, 1};
+			ENSURE_STATUS(sm_set_motion_in_box(m, all_lo, all_hi, SM_PARTICLE_FREE, NULL), SM_OK);
+		}
+	sm_model_destroy(m);
+	return 0;
+}
+
 int main(int argc, char** argv)
 {
 	TEST_INIT(argc, argv);
@@ -2868,6 +2903,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_grid_last_pair_distinct);
 	RUN_TEST(test_sheet_diagonal_neighbours_distinct);
 	RUN_TEST(test_box_selection_closed);
+	RUN_TEST(test_box_selection_ends_at_its_faces);
 	RUN_TEST(test_mesh_edge_order);
 	RUN_TEST(test_mesh_edges_scatter_crafted_vertex_pairs);
 	RUN_TEST(test_keyed_hash_is_siphash13_with_a_key_per_table);
