@@ -1916,9 +1916,10 @@ static int test_a_step_below_the_resolution_of_the_simulation_time_is_refused(vo
 	return 0;
 }
 
-// A state's times run forward from the experiment's start: a forged state whose time lies before
-// its start, or whose last successful time lies after its time, is refused as out of range, with
-// the instance unchanged (both were taken, and fmi2GetRealStatus then read a last successful time
+// A state's times run forward from the experiment's start: a forged state whose time or last
+// successful time lies before its start, or whose last successful time lies after its time, is
+// refused as out of range, with the instance unchanged (a time before the start and a last
+// successful time past the time were taken, and fmi2GetRealStatus then read a last successful time
 // the instance had not reached).
 static int test_a_state_with_times_out_of_order_is_refused(void)
 {
@@ -1932,11 +1933,13 @@ static int test_a_state_with_times_out_of_order_is_refused(void)
 	size_t size = 0;
 	fmi2Byte* bytes = serialized_state(c, state, &size);
 	ENSURE(bytes != NULL);
-	// A time before the start (0 s), a last successful time past the time (0.01 s).
+	// A time before the start (0 s), a last successful time past the time (0.01 s) and, from
+	// mutation testing, one before the start (-1 s, the time after both): with the check that it
+	// comes after the start left out, that state was taken.
 	const struct {
 		size_t offset;
 		double value;
-	} cases[] = {{STATE_TIME_AT, -1.0}, {STATE_LAST_SUCCESSFUL_AT, 0.02}};
+	} cases[] = {{STATE_TIME_AT, -1.0}, {STATE_LAST_SUCCESSFUL_AT, 0.02}, {STATE_LAST_SUCCESSFUL_AT, -1.0}};
 	const double x = get(c, &f, "tip.x");
 	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
 		ENSURE_STATUS(fmi2SerializeFMUstate(c, state, bytes, size), fmi2OK);
@@ -1947,6 +1950,31 @@ static int test_a_state_with_times_out_of_order_is_refused(void)
 		ENSURE(forged == NULL && strstr(f.log.last, "out of range") != NULL);
 		ENSURE(get(c, &f, "tip.x") == x);
 	}
+	// From mutation testing: a time before the start alone. Above it comes with a last successful
+	// time after it, refused for that; before the end of initialisation there is no last
+	// successful time to check, and a state saved in initialisation mode at 0 s whose time reads
+	// -1 s was taken with the check of the time left out.
+	fmi2Component early = instantiate(&f, "times_early");
+	ENSURE(early != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(early, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(early), fmi2OK);
+	fmi2FMUstate initial = NULL;
+	ENSURE_STATUS(fmi2GetFMUstate(early, &initial), fmi2OK);
+	size_t initial_size = 0;
+	fmi2Byte* initial_bytes = serialized_state(early, initial, &initial_size);
+	ENSURE(initial_bytes != NULL);
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(c, initial_bytes, initial_size, &forged), fmi2OK);
+	ENSURE_STATUS(fmi2FreeFMUstate(c, &forged), fmi2OK);
+	const double before_start = -1.0;
+	memcpy(initial_bytes + STATE_TIME_AT, &before_start, 8);
+	fix_state_checksum(initial_bytes, initial_size);
+	f.log.last[0] = '\0';
+	ENSURE_STATUS(fmi2DeSerializeFMUstate(c, initial_bytes, initial_size, &forged), fmi2Error);
+	ENSURE(forged == NULL && strstr(f.log.last, "out of range") != NULL);
+	ENSURE(get(c, &f, "tip.x") == x);
+	ENSURE_STATUS(fmi2FreeFMUstate(early, &initial), fmi2OK);
+	free(initial_bytes);
+	fmi2FreeInstance(early);
 	ENSURE_STATUS(fmi2FreeFMUstate(c, &state), fmi2OK);
 	free(bytes);
 	fmi2FreeInstance(c);
