@@ -623,9 +623,9 @@ def test_values_and_derivatives_can_be_read_in_the_error_state():
 # then x (31-36), v (37-42), the spring's enabled flag 43, the parameters 44-46, the held inputs of
 # base (47-62) and tip (63-78: position, velocity, force, acceleration, force rate, since;
 # fmu_instance.h's port_values) and the pending flags 79-80.
-W_HAS_SIM, W_METHOD, W_MAX_STEPS, W_THREADS, W_RESTART, W_STABILITY, W_DISSIPATED, W_RTOL, W_ATOL_POSITION, \
-    W_MAX_STEP, W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_TIP_PENDING, W_WORDS = \
-    13, 14, 17, 18, 20, 21, 25, 26, 27, 29, 30, 43, 44, 69, 80, 81
+W_HAS_SIM, W_METHOD, W_LINEAR_SOLVER, W_JACOBIAN, W_MAX_STEPS, W_THREADS, W_RTOL_SET, W_RESTART, W_STABILITY, \
+    W_DISSIPATED, W_RTOL, W_ATOL_POSITION, W_MAX_STEP, W_INPUT_WORK, W_ENABLED, W_M, W_TIP_FX, W_TIP_PENDING, \
+    W_WORDS = 13, 14, 15, 16, 17, 18, 19, 20, 21, 25, 26, 27, 29, 30, 43, 44, 69, 80, 81
 
 
 def test_the_words_of_a_state_are_where_the_tests_edit_them(test_fmu):
@@ -674,6 +674,18 @@ def test_crafted_states_with_values_out_of_range_are_refused_when_deserialised(t
                      "rtol 1e-17": edited(state, W_RTOL, "<d", 1e-17),
                      "atol_position 1e-200": edited(state, W_ATOL_POSITION, "<d", 1e-200),
                      "method 7": edited(state, W_METHOD, "<q", 7),
+                     # From mutation testing: the first values past each end of the method's, the
+                     # linear solver's and the Jacobian's ranges (bdf and adams 0 and 1; auto, dense,
+                     # klu, pcg and cholmod 0 to 4; exact and definite 0 and 1), and a flag of an rtol
+                     # set explicitly neither 0 nor 1. The method was tried with 7 alone, the others
+                     # not at all: a check that took 2, or none, passed.
+                     "method 2": edited(state, W_METHOD, "<q", 2),
+                     "method -1": edited(state, W_METHOD, "<q", -1),
+                     "linear solver 5": edited(state, W_LINEAR_SOLVER, "<q", 5),
+                     "linear solver -1": edited(state, W_LINEAR_SOLVER, "<q", -1),
+                     "jacobian 2": edited(state, W_JACOBIAN, "<q", 2),
+                     "jacobian -1": edited(state, W_JACOBIAN, "<q", -1),
+                     "rtol set 2": edited(state, W_RTOL_SET, "<q", 2),
                      "restart on input change 2": edited(state, W_RESTART, "<q", 2),
                      "stability limit detection 2": edited(state, W_STABILITY, "<q", 2),
                      "dissipated energy NaN": edited(state, W_DISSIPATED, "<d", math.nan),
