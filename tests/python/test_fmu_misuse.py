@@ -151,6 +151,9 @@ def test_relative_tolerance_of_one_or_more_is_refused(test_fmu):
     s, vr = inst.slave, inst.vr
     try:
         expect_error(inst, lambda: s.setupExperiment(tolerance=10.0, startTime=0.0), "tolerance 10", "(0, 1)")
+        # From mutation testing: 1 itself, the bound, is refused at set-up as well; a check that took
+        # (0, 1] passed with 10 alone.
+        expect_error(inst, lambda: s.setupExperiment(tolerance=1.0, startTime=0.0), "tolerance 1 ", "(0, 1)")
         s.setupExperiment(startTime=0.0)
         s.enterInitializationMode()
         expect_error(inst, lambda: s.setReal([vr["solver.rtol"]], [1.0]), "solver.rtol = 1", "< 1")
