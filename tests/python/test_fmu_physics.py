@@ -734,6 +734,37 @@ def test_output_derivatives_of_the_oscillator_follow_its_equation(test_fmu):
         inst.free()
 
 
+def test_output_derivatives_keep_a_held_particle_still(package, tmp_path):
+    # From mutation testing: a held particle does not accelerate, whatever the springs pull it with.
+    # A wall held at the origin (probe w, 2 kg) and the motion port hook, joined by a spring of
+    # 100 N/m and 5 N s/m, rest length 0.4 m, the hook moving away along x at 0.2 m/s from 0.5 m.
+    # The rates of w's velocity are 0, and the hook's force -k (L - l0) - d (vx_hook - vx_wall) along
+    # x changes at -k vx_hook = -20 N/s, neither end accelerating (the spring stays along x). Taking
+    # f / m as the held wall's acceleration too (13 N / 2 kg at 0.1 s) gave w.vx the rate
+    # 6.5 m/s^2 and the hook's force 12.5 N/s, and no test failed.
+    model = tmp_path / "held_wall.json"
+    model.write_text(json.dumps({
+        "springmass": 1, "name": "held_wall", "gravity": [0, 0, -9.81],
+        "particles": [{"name": "wall", "position": [0, 0, 0], "mass": 2.0, "fixed": True},
+                      {"name": "hook", "position": [0.5, 0, 0], "mass": 1.0, "fixed": True}],
+        "springs": [{"a": "wall", "b": "hook", "stiffness": 100.0, "damping": 5.0, "rest_length": 0.4}],
+        "ports": [{"name": "w", "particle": "wall", "kind": "probe"},
+                  {"name": "hook", "particle": "hook", "kind": "motion"}]}))
+    inst = Instance(package(model)).start({"hook.vx": 0.2})
+    try:
+        s, vr = inst.slave, inst.vr
+        s.doStep(0.0, 0.1)
+        assert inst.get("w.x") == 0.0
+        names = ["w.x", "w.y", "w.z", "w.vx", "w.vy", "w.vz", "hook.fx", "hook.fy", "hook.fz"]
+        rates = s.getRealOutputDerivatives([vr[n] for n in names], [1] * len(names))
+        assert rates[:6] == [0.0] * 6, list(zip(names, rates))
+        # Rounding only: the Jacobian's product adds terms of order k L and d.
+        assert rates[6] == pytest.approx(-100.0 * 0.2, rel=1e-12, abs=1e-12)
+        assert rates[7:] == pytest.approx([0.0, 0.0], abs=1e-12)
+    finally:
+        inst.free()
+
+
 TIGHT = {"solver.rtol": 1e-10, "solver.atol_position": 1e-12, "solver.atol_velocity": 1e-10}
 
 
