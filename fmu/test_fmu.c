@@ -893,6 +893,8 @@ static int test_solver_settings_are_checked_against_their_ranges(void)
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, 1e-17, 0.0, fmi2False, 0.0), fmi2Error);
 	ENSURE(strstr(f.log.last,
 	              "tolerance 1e-17 must be at least 2.220446049250313e-16, the machine epsilon") != NULL);
+	// From mutation testing: the machine epsilon itself is taken (a check that refused it passed).
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2True, DBL_EPSILON, 0.0, fmi2False, 0.0), fmi2OK);
 	// A stop time before the start is refused; one at the start is an experiment of no length.
 	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 1.0, fmi2True, 0.5), fmi2Error);
 	ENSURE(strstr(f.log.last, "start <= stop") != NULL);
@@ -1105,6 +1107,12 @@ static int test_bounds_of_references_arrays_and_buffers(void)
 	f.log.last[0] = '\0';
 	ENSURE(instantiate(&f, " \t\n") == NULL);
 	ENSURE(strstr(f.log.last, "missing instance name") != NULL);
+	// From mutation testing: no GUID (compared as a string, it was read through NULL, and no test
+	// failed).
+	f.log.last[0] = '\0';
+	ENSURE(fmi2Instantiate("no_guid", fmi2CoSimulation, NULL, f.resources, &f.callbacks, fmi2False,
+	                       fmi2False) == NULL);
+	ENSURE(strstr(f.log.last, "missing GUID") != NULL);
 	fmi2Component c = start(&f, "bounds");
 	ENSURE(c != NULL);
 	const fmi2ValueReference past = (fmi2ValueReference)f.table.count, x = vr(&f, "tip.x"),
@@ -1139,6 +1147,13 @@ static int test_bounds_of_references_arrays_and_buffers(void)
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2SetReal(c, &fx, 1, NULL), fmi2Error);
 	ENSURE(strstr(f.log.last, "NULL array") != NULL);
+	// From mutation testing: log categories counted but not given, with logging on or off (a call
+	// that read them through NULL passed every test).
+	for (int on = 0; on < 2; ++on) {
+		f.log.last[0] = '\0';
+		ENSURE_STATUS(fmi2SetDebugLogging(c, on ? fmi2True : fmi2False, 2, NULL), fmi2Error);
+		ENSURE(strstr(f.log.last, "NULL categories") != NULL);
+	}
 	// A serialised state needs all its bytes.
 	fmi2FMUstate state = NULL;
 	ENSURE_STATUS(fmi2GetFMUstate(c, &state), fmi2OK);
