@@ -1494,6 +1494,33 @@ static int test_calls_without_values_still_check_the_state(void)
 	return 0;
 }
 
+// From mutation testing: fmi2GetDirectionalDerivative in initialisation mode takes the parameters
+// set there, as fmi2GetReal does, also after an output was read, which made the simulation with the
+// values before. The spring along x pulls the motion port base with k (x_tip - x_base - l0), which
+// changes with x_base at -k: -50 N/m as packaged, -80 N/m once k = 80 N/m is set. Derivatives of
+// the simulation made before the change gave -50 N/m again, and no test failed.
+static int test_directional_derivative_takes_the_parameters_set_in_initialisation(void)
+{
+	fixture f;
+	ENSURE(setup(&f) == 0);
+	fmi2Component c = instantiate(&f, "derivative_after_set");
+	ENSURE(c != NULL);
+	ENSURE_STATUS(fmi2SetupExperiment(c, fmi2False, 0.0, 0.0, fmi2False, 0.0), fmi2OK);
+	ENSURE_STATUS(fmi2EnterInitializationMode(c), fmi2OK);
+	const fmi2ValueReference force = vr(&f, "base.fx"), position = vr(&f, "base.x");
+	const double seed = 1.0;
+	double stiffness = 0.0;
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, &stiffness), fmi2OK);
+	ENSURE_NEAR(stiffness, -50.0, 1e-12);  // round-off of the spring's direction and length only
+	ENSURE(isfinite(get(c, &f, "base.fx")));
+	ENSURE_STATUS(set_real(c, &f, "k", 80.0), fmi2OK);
+	ENSURE_STATUS(fmi2GetDirectionalDerivative(c, &force, 1, &position, 1, &seed, &stiffness), fmi2OK);
+	ENSURE_NEAR(stiffness, -80.0, 1e-12);
+	fmi2FreeInstance(c);
+	teardown(&f);
+	return 0;
+}
+
 // fmi2GetDirectionalDerivative checks its seeds as fmi2SetReal checks values: a non-finite seed is
 // an fmi2Error naming the input, and a NULL seed or result array with values to read or write is
 // an fmi2Error, never a read through NULL.
@@ -2514,6 +2541,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_random_call_sequences_follow_the_state_machine);
 	RUN_TEST(test_calls_without_values_still_check_the_state);
 	RUN_TEST(test_directional_derivative_seeds_are_checked);
+	RUN_TEST(test_directional_derivative_takes_the_parameters_set_in_initialisation);
 	RUN_TEST(test_values_of_another_type_are_refused);
 	RUN_TEST(test_communication_point_and_step_size_at_their_bounds);
 	RUN_TEST(test_stop_time_margin_at_its_bounds);
