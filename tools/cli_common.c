@@ -196,6 +196,12 @@ static bool read_index(const char** text, int32_t count, int32_t* index)
 	return true;
 }
 
+const char* cli_without_prefix(const char* message, const char* prefix)
+{
+	const size_t length = strlen(prefix);
+	return strncmp(message, prefix, length) == 0 ? message + length : message;
+}
+
 void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, const char* message)
 {
 	const int32_t particles = sm_model_particle_count(model), springs = sm_model_spring_count(model);

@@ -84,6 +84,10 @@ int cli_make_directory(const char* command, const char* dir);
 /// (cloth[0,12])", "spring 30 (between cloth[2,6] and cloth[2,7])"; the rest as it is.
 void cli_write_named(FILE* f, const sm_document* doc, const sm_model* model, const char* message);
 
+/// A library message without the name of the analysis that begins it ("statics: no equilibrium
+/// ..." gives "no equilibrium ..."): the tool's own message already names its command and model.
+const char* cli_without_prefix(const char* message, const char* prefix);
+
 /// Writes a particle's name or the description of a model file as sm_text_for_terminal shows it:
 /// what a terminal would act on or not show, escaped; then spaces up to `width` characters.
 void cli_write_text(FILE* f, const char* text, int width);

@@ -374,7 +374,7 @@ int sm_cmd_modes(int argc, char** argv)
 		cli_shown shown = {0};
 		fprintf(stderr, "springmass modes: %s: ", cli_shown_path(&shown, model_path));
 		cli_shown_free(&shown);
-		cli_write_named(stderr, doc, model, err.message);
+		cli_write_named(stderr, doc, model, cli_without_prefix(err.message, "modes: "));
 		fputc('\n', stderr);
 		goto done;
 	}

@@ -254,7 +254,7 @@ int sm_cmd_statics(int argc, char** argv)
 		fprintf(stderr, "springmass statics: %s: ", cli_shown_path(&shown, model_path));
 		cli_shown_free(&shown);
 		name_options(err.message);
-		cli_write_named(stderr, doc, model, err.message);
+		cli_write_named(stderr, doc, model, cli_without_prefix(err.message, "statics: "));
 		fputc('\n', stderr);
 		goto done;
 	}

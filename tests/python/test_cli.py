@@ -315,6 +315,9 @@ def test_analysis_errors_name_particles_and_springs_as_the_file_does(tmp_path):
     (tmp_path / "free.json").write_text(json.dumps(free))
     err = cli("statics", tmp_path / "free.json", status=1).stderr
     assert "particle 0 (a) and the 2 other particle(s)" in err and "fix one of them" in err, err
+    # The tool's message names its command and the file once; the library's own "statics: " that
+    # began the reason is not repeated after them.
+    assert err.startswith(f"springmass statics: {tmp_path / 'free.json'}: no static equilibrium: "), err
     coincident = {"springmass": 1, "name": "coincident", "gravity": [0, 0, 0],
                   "particles": [{"name": "a", "position": [0, 0, 0], "fixed": True},
                                 {"name": "b", "position": [0, 0, 0]}, {"position": [1, 0, 0]}],
@@ -324,6 +327,7 @@ def test_analysis_errors_name_particles_and_springs_as_the_file_does(tmp_path):
     err = cli("modes", tmp_path / "coincident.json", status=1).stderr
     # An unnamed particle keeps its index; "particles 0 and 1" names both.
     assert "spring 1 (between a and b) (rest length 1 m) has its particles 0 (a) and 1 (b) at one point" in err, err
+    assert err.startswith(f"springmass modes: {tmp_path / 'coincident.json'}: spring 1 "), err
     bad = dict(coincident, springs=coincident["springs"][::-1])
     (tmp_path / "bad.json").write_text(json.dumps(bad))
     err = cli("modes", tmp_path / "bad.json", status=1).stderr
@@ -1170,7 +1174,7 @@ def test_statics_messages_name_the_options_not_the_library_fields():
     # A tolerance at or above the largest load is refused as any other value outside what the help
     # allows ("below the largest load on one"): a usage error, status 2, not a bad model's 1.
     err = cli("statics", MODELS / "cloth.json", "--tolerance", 100, "-q", status=2).stderr
-    assert "statics: --tolerance 100 N is not below the largest load on a free particle" in err, err
+    assert f"springmass statics: {MODELS / 'cloth.json'}: --tolerance 100 N is not below the largest load on a free particle" in err, err
     assert "residual_tolerance" not in err and "max_iterations" not in err
 
 
