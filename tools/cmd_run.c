@@ -568,9 +568,13 @@ int sm_cmd_run(int argc, char** argv)
 		char end[SM_NUMBER_TEXT_CAPACITY], step[SM_NUMBER_TEXT_CAPACITY];
 		sm_format_number(t_end, end);
 		sm_format_number(interval, step);
+		// Either number may come from the model file: the message says which did.
 		fprintf(stderr,
-		        "springmass run: %s s / %s s would make more than %g output rows: give a larger interval\n",
-		        end, step, CLI_MAX_ROWS);
+		        "springmass run: %s s (%s) / %s s (%s) would make more than %g output rows: give a larger "
+		        "interval\n",
+		        end, o.t_end > 0.0 ? "--t-end" : "the model's simulation.stop_time", step,
+		        o.interval > 0.0 ? "--output-interval" : "the model's simulation.output_interval",
+		        CLI_MAX_ROWS);
 		goto done;
 	}
 	sm_simulation_def def = settings.solver;

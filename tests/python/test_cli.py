@@ -182,7 +182,13 @@ def test_more_rows_than_the_limit_are_refused_before_anything_is_written(tmp_pat
     # 2e9 rows, twice the limit of 1e9. Written to /dev/null: a tool that took them would write
     # until cli()'s timeout, not fill the disk.
     out = cli("run", MODELS / "oscillator.json", "--t-end", 200, "--output-interval", 1e-7, "-o", "/dev/null", status=1)
-    assert "would make more than 1e+09 output rows" in out.stderr
+    assert out.stderr == ("springmass run: 200 s (--t-end) / 1e-07 s (--output-interval) would make more than "
+                          "1e+09 output rows: give a larger interval\n"), out.stderr
+    # The oscillator's file gives 5 s: the message says that the end time came from it.
+    out = cli("run", MODELS / "oscillator.json", "--output-interval", 1e-9, "-o", "/dev/null", status=1)
+    assert out.stderr.startswith("springmass run: 5 s (the model's simulation.stop_time) / 1e-09 s (--output-interval)"), out.stderr
+    out = cli("run", MODELS / "oscillator.json", "--t-end", 1e8, "-o", "/dev/null", status=1)
+    assert out.stderr.startswith("springmass run: 100000000 s (--t-end) / 0.01 s (the model's simulation.output_interval)"), out.stderr
     # Far beyond the limit, with files asked for: none is created.
     cli("run", MODELS / "oscillator.json", "--t-end", 1e3, "--output-interval", 1e-300,
         "-o", tmp_path / "many.csv", "--vtk", tmp_path / "vtk", status=1)
