@@ -3828,6 +3828,59 @@ static int test_limits_at_their_edges(void)
 	return 0;
 }
 
+// Numbers at the ends of what a double and a JSON integer hold (docs/model-format.md, "Limits"):
+// one too small for a double reads as 0 with the sign strtod gives it, the smallest subnormal
+// reads as itself, integers reach -2^63 and 2^63 - 1 (2^63 - 1 rounding to the double 2^63) and
+// 9.3e18 is a real number; one too large for a double and an integer past either end are syntax
+// errors at their line and column. The comparisons are exact: each value is a double's own.
+static int test_numbers_at_the_ends_of_a_double(void)
+{
+	sm_error err = {SM_OK, ""};
+	sm_document* doc =
+	    parse_valid("{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [1e-400, -1e-400,"
+		            " 4.94065645841247e-324], \"velocity\": [9223372036854775807,"
+		            " -9223372036854775808, 9.3e18]}]}",
+		            &err);
+	ENSURE(doc != NULL);
+	sm_model* model = NULL;
+	ENSURE(sm_document_build(doc, &model, &err) == SM_OK);
+	sm_particle_def pa;
+	sm_model_get_particle(model, 0, &pa);
+	ENSURE(pa.position[0] == 0.0 && !signbit(pa.position[0]));
+	ENSURE(pa.position[1] == 0.0 && signbit(pa.position[1]));
+	ENSURE(pa.position[2] == 0x1p-1074);
+	ENSURE(pa.velocity[0] == 0x1p63 && pa.velocity[1] == -0x1p63 && pa.velocity[2] == 9.3e18);
+	sm_model_destroy(model);
+	sm_document_destroy(doc);
+	// A mass too small for a double is a mass of 0.
+	ENSURE(
+	    parse(
+	        "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": 1e-400}]}",
+	        &err) == NULL);
+	ENSURE(strcmp(err.message, "test.json: particles[0].mass: 0 must be > 0") == 0);
+	static const struct {
+		const char* number;
+		const char* message;
+	} refused[] = {
+	    {"1e400", "test.json:1:66: real number overflow near '1e400'"},
+	    {"-1e400", "test.json:1:66: real number overflow near '-1e400'"},
+	    {"9223372036854775808", "test.json:1:66: too big integer near '9223372036854775808'"},
+	    {"-9223372036854775809", "test.json:1:66: too big negative integer near '-9223372036854775809'"},
+	};
+	for (size_t k = 0; k < sizeof refused / sizeof refused[0]; k++) {
+		char text[200];
+		snprintf(text, sizeof text,
+		         "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, %s]}]}",
+		         refused[k].number);
+		ENSURE(parse(text, &err) == NULL && err.status == SM_ERROR_SYNTAX);
+		if (strcmp(err.message, refused[k].message) != 0) {
+			printf("  %s\n", err.message);
+			return 1;
+		}
+	}
+	return 0;
+}
+
 // A spring's explicit "kind" stays in the saved file when its rest length is a parameter, so that
 // the parameter feeds the same (constants, not spring kinds) and a new value acts alike: l = 0
 // keeps spring 0 a rest-length spring, and z = 0.3 is refused by both documents. Without a kind
@@ -4298,6 +4351,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_canonical_form_keeps_parameters_and_ports);
 	RUN_TEST(test_parameters_keep_the_sign_of_a_zero);
 	RUN_TEST(test_limits_at_their_edges);
+	RUN_TEST(test_numbers_at_the_ends_of_a_double);
 	RUN_TEST(test_unknown_keys_are_refused_everywhere);
 	RUN_TEST(test_saved_structures_keep_parameter_units);
 	RUN_TEST(test_declared_parameter_units);
