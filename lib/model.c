@@ -266,11 +266,17 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	const double* xb = model->position + 3 * (size_t)def->b;
 	const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
 	const double squared = dx * dx + dy * dy + dz * dz;
-	if (!isfinite(sqrt(squared)))
+	// The distance itself, for the messages, without the square's overflow or underflow.
+	const double distance = hypot(hypot(dx, dy), dz);
+	if (!isfinite(sqrt(squared))) {
+		char shown[32] = "more than 1.8e+308";
+		if (isfinite(distance))
+			snprintf(shown, sizeof shown, "%.3g", distance);
 		return say(msg, SM_ERROR_NOT_FINITE,
-		           "spring %ld: the initial distance between particles %ld and %ld is too large (its square "
-		           "overflows: particles joined by springs must be less than 1.3e154 m apart)",
-		           index, (long)def->a, (long)def->b);
+		           "spring %ld: the initial distance between particles %ld and %ld, %s m, is too large (its "
+		           "square overflows: particles joined by springs must be less than 1.3e154 m apart)",
+		           index, (long)def->a, (long)def->b, shown);
+	}
 	double l0;
 	if (def->rest_length == SM_REST_LENGTH_INITIAL) {
 		if (def->kind == SM_SPRING_ZERO_LENGTH) {
@@ -282,16 +288,13 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			// A square below DBL_MIN has lost digits or all of them (1e-170 m gives l0 = 0): the
 			// rest length would not be the distance. Structures refuse such springs too; particles
 			// at one point keep l0 = 0.
-			if (squared < DBL_MIN && (dx != 0.0 || dy != 0.0 || dz != 0.0)) {
-				const double largest = fmax(fabs(dx), fmax(fabs(dy), fabs(dz)));
-				const double ux = dx / largest, uy = dy / largest, uz = dz / largest;
+			if (squared < DBL_MIN && distance > 0.0)
 				return say(
 				    msg, SM_ERROR_INVALID_ARGUMENT,
 				    "spring %ld: the initial distance between particles %ld and %ld, %.3g m, is too small (its "
 				    "square underflows: particles joined by springs must be at one point or more than about "
 				    "1.5e-154 m apart)",
-				    index, (long)def->a, (long)def->b, largest * sqrt(ux * ux + uy * uy + uz * uz));
-			}
+				    index, (long)def->a, (long)def->b, distance);
 		}
 	} else {
 		l0 = def->rest_length;

@@ -229,31 +229,44 @@ static int test_invalid_springs(void)
 	sm_spring_def far = good;
 	far.a = 4;
 	far.b = 5;
+	// The message gives the distance where a double holds it, as it does for one too small.
 	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE_MESSAGE(m, "spring 1",
-	               "initial distance between particles 4 and 5 is too large (its square overflows");
+	ENSURE_MESSAGE(
+	    m, "spring 1",
+	    "initial distance between particles 4 and 5, more than 1.8e+308 m, is too large (its square "
+	    "overflows");
 	far.kind = SM_SPRING_ZERO_LENGTH;
 	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
-	ENSURE_MESSAGE(m, "spring 1",
-	               "initial distance between particles 4 and 5 is too large (its square overflows");
+	ENSURE_MESSAGE(
+	    m, "spring 1",
+	    "initial distance between particles 4 and 5, more than 1.8e+308 m, is too large (its square "
+	    "overflows");
+	// 9e153 m along each axis: each square is finite, their sum is not; the distance is 1.56e154 m.
+	p.position[0] = p.position[1] = p.position[2] = 9e153;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 6
+	far.a = 3;
+	far.b = 6;
+	ENSURE_STATUS(sm_model_add_spring(m, &far, NULL), SM_ERROR_NOT_FINITE);
+	ENSURE_MESSAGE(m, "spring 1", "initial distance between particles 3 and 6, 1.56e+154 m, is too large");
+	p.position[1] = p.position[2] = 0.0;
 	// Particles 1e-170 m apart, whose squared distance underflows to 0: the initial rest length
 	// would be 0, not their distance, and per-strain constants refused as "rest length is 0".
 	// Refused for what it is, as a structure's spring of that length, also with absolute
 	// stiffness; so is 1e-155 m, whose square is subnormal (its root imprecise, the more so below).
 	p.position[0] = 1e-170;
-	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 6
-	p.position[0] = 1e-155;
 	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 7
+	p.position[0] = 1e-155;
+	ENSURE_STATUS(sm_model_add_particle(m, &p, NULL), SM_OK);  // particle 8
 	sm_spring_def close = good;
 	close.a = 3;
-	for (int k = 6; k <= 7; k++) {
+	for (int k = 7; k <= 8; k++) {
 		close.b = k;
 		for (int scaling = SM_ABSOLUTE; scaling <= SM_PER_STRAIN; scaling++) {
 			close.stiffness_scaling = (sm_scaling)scaling;
 			ENSURE_STATUS(sm_model_add_spring(m, &close, NULL), SM_ERROR_INVALID_ARGUMENT);
 			ENSURE_MESSAGE(m, "spring 1",
-			               k == 6 ? "initial distance between particles 3 and 6, 1e-170 m, is too small"
-			                      : "initial distance between particles 3 and 7, 1e-155 m, is too small");
+			               k == 7 ? "initial distance between particles 3 and 7, 1e-170 m, is too small"
+			                      : "initial distance between particles 3 and 8, 1e-155 m, is too small");
 		}
 	}
 	ENSURE(sm_model_spring_count(m) == 1);

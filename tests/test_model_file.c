@@ -1191,7 +1191,8 @@ static int test_broken_files(void)
 		 " {\"name\": \"b\", \"position\": [1e200, 0, 0]}], \"springs\": [{\"a\": \"a\", \"b\": \"b\","
 		 " \"rest_length\": 1, \"stiffness\": 1}]}",
 		 SM_ERROR_NOT_FINITE,
-		 "test.json: springs[0]: the initial distance between particles 0 and 1 is too large (its square overflows: "
+		 "test.json: springs[0]: the initial distance between particles 0 and 1, 1e+200 m, is too large (its square "
+		 "overflows: "
 		 "particles joined by springs must be less than 1.3e154 m apart)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
 		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [2, 0, 0]], \"triangles\": [[0, 1, 2]]}]}",
