@@ -2,7 +2,8 @@
 # docs/model-format.md documents every key that a model file may hold: each string of the key
 # lists the loader checks objects against (the `static const char* const ...keys[]` arrays of
 # lib/model_file*.c, which refuse any other key; model_file_save.c, which writes them, apart)
-# appears there as `key` or "key". Prints the keys it does not find.
+# appears there as `key` or "key", and in the fuzzer's dictionary (fuzz/model_file.dict) as "\"key\"".
+# Prints the keys it does not find.
 # Usage: check_model_keys.sh SOURCE_DIR
 set -u
 cd "$1" || exit 1
@@ -21,4 +22,14 @@ if [ ${#missing[@]} -gt 0 ]; then
   printf '  %s\n' "${missing[@]}"
   exit 1
 fi
-echo "check_model_keys: the $(echo "$keys" | wc -l) keys of model files are documented in $doc"
+dict=fuzz/model_file.dict
+[ -f "$dict" ] || { echo "$dict is missing"; exit 1; }
+for k in $keys; do
+  grep -qxF "\"\\\"$k\\\"\"" "$dict" || missing+=("$k")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "keys of lib/model_file*.c that the fuzzer's $dict lacks:"
+  printf '  %s\n' "${missing[@]}"
+  exit 1
+fi
+echo "check_model_keys: the $(echo "$keys" | wc -l) keys of model files are documented in $doc and in $dict"
