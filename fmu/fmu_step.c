@@ -289,8 +289,8 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real* 
 fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer* value)
 {
 	instance* inst = c;
-	(void)value;
-	if (!fmu_allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED))
+	if (!fmu_allowed(inst, "fmi2GetIntegerStatus", ST_STEP_COMPLETE | ST_STEP_FAILED | ST_TERMINATED) ||
+	    !check_status_value(inst, "fmi2GetIntegerStatus", value))
 		return fmi2Error;
 	return status_not_provided(inst, "fmi2GetIntegerStatus", s);
 }

@@ -1214,6 +1214,13 @@ static int test_status_after_terminate(void)
 		ENSURE(strstr(f.log.last, "not delivered here") != NULL);                                            \
 	} while (0)
 
+#define ENSURE_NULL_VALUE_REFUSED(call)                                                                      \
+	do {                                                                                                     \
+		f.log.last[0] = '\0';                                                                                \
+		ENSURE_STATUS(call, fmi2Error);                                                                      \
+		ENSURE(strstr(f.log.last, "NULL value") != NULL);                                                    \
+	} while (0)
+
 static int test_status_kinds_not_delivered_are_discarded(void)
 {
 	fixture f;
@@ -1239,6 +1246,16 @@ static int test_status_kinds_not_delivered_are_discarded(void)
 			ENSURE_DISCARDED(fmi2GetStringStatus(c, kind, &string));
 	}
 	ENSURE(status == fmi2Fatal && time == -1.0 && integer == -1 && boolean == 7 && string == NULL);
+	// No place for the value is an error of the call, whatever the kind asked for and whether it
+	// is delivered, in each function alike (fmi2GetIntegerStatus, which delivers none, included).
+	for (int k = fmi2DoStepStatus; k <= fmi2Terminated; ++k) {
+		const fmi2StatusKind kind = (fmi2StatusKind)k;
+		ENSURE_NULL_VALUE_REFUSED(fmi2GetStatus(c, kind, NULL));
+		ENSURE_NULL_VALUE_REFUSED(fmi2GetRealStatus(c, kind, NULL));
+		ENSURE_NULL_VALUE_REFUSED(fmi2GetIntegerStatus(c, kind, NULL));
+		ENSURE_NULL_VALUE_REFUSED(fmi2GetBooleanStatus(c, kind, NULL));
+		ENSURE_NULL_VALUE_REFUSED(fmi2GetStringStatus(c, kind, NULL));
+	}
 	f.log.last[0] = '\0';
 	ENSURE_STATUS(fmi2GetRealStatus(c, (fmi2StatusKind)4, &time), fmi2Error);
 	ENSURE(strstr(f.log.last, "not an fmi2StatusKind") != NULL && time == -1.0);
