@@ -16,7 +16,9 @@ static int32_t decode_utf8(const unsigned char* s, size_t n, size_t* bytes)
 	*bytes = 1;
 	if (s[0] < 0x80)
 		return s[0];
-	const size_t length = s[0] >= 0xf0 ? 4 : s[0] >= 0xe0 ? 3 : s[0] >= 0xc0 ? 2 : 0;
+	// F8 - FF begin no character (RFC 3629 ends at F4): a four-byte form keeps only the low three
+	// bits of its first byte, so that F8 80 80 80 and above would pass for F0 80 80 80.
+	const size_t length = s[0] >= 0xf8 ? 0 : s[0] >= 0xf0 ? 4 : s[0] >= 0xe0 ? 3 : s[0] >= 0xc0 ? 2 : 0;
 	static const int32_t least[5] = {0, 0, 0x80, 0x800, 0x10000};
 	if (length == 0 || length > n)
 		return -1;

@@ -3138,6 +3138,12 @@ static int test_text_for_terminal(void)
 		 "c\xe2\x81\xa5",
 		 "a\\u2060b\\u2064c\xe2\x81\xa5"},
 	    {"bad \xff\xc3", "bad \\xff\\xc3"},
+	    // Characters of each length at the ends of their ranges stay as they are; a surrogate, a
+	    // code point past U+10FFFF and a first byte of F8 (no character begins so) are \xNN.
+	    {"\xc2\x80 \xe0\xa0\x80 \xf0\x90\x80\x80 \xf4\x8f\xbf\xbf",
+		 "\\u0080 \xe0\xa0\x80 \xf0\x90\x80\x80 \xf4\x8f\xbf\xbf"},
+	    {"\xed\xbf\xbf \xf4\x90\x80\x80 \xf8\x90\x80\x80",
+		 "\\xed\\xbf\\xbf \\xf4\\x90\\x80\\x80 \\xf8\\x90\\x80\\x80"},
 	    {"\"quoted\" \\", "\"quoted\" \\"},
 	};
 	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
