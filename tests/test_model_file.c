@@ -2070,6 +2070,34 @@ static int test_long_and_control_character_paths_in_messages(void)
 	ENSURE(sm_document_load("no/such/\x1b[31mred.json", &err) == NULL);
 	ENSURE(err.status == SM_ERROR_FILE &&
 	       strcmp(err.message, "no/such/\\u001b[31mred.json: cannot open: No such file or directory") == 0);
+	// The 140 bytes are those shown: a name of exactly 140 is shown whole, and one that passes them
+	// only once its control characters (\u0001, 6 bytes each) or stray bytes (\xff, 4) are escaped
+	// loses its start, keeping its end whole.
+	static const char broken[] = "{\"springmass\": 1, \"name\": \"x\" \"y\"}";
+	static const struct {
+		const char* escaped;  // after 120 'a'
+		const char* raw;
+		int kept;  // of the 'a', after "..." (0: the name shown whole)
+	} names[] = {
+	    {"aaaaaaaaaaa/bad.json", "aaaaaaaaaaa/bad.json", 0},
+	    {"\\u0001\\u0001\\u0001\\u0001/b.json", "\x01\x01\x01\x01/b.json", 106},
+	    {"\\xff\\xff\\xff\\xff/b.json", "\xff\xff\xff\xff/b.json", 114},
+	};
+	for (size_t k = 0; k < sizeof names / sizeof names[0]; k++) {
+		char name[200], shown[400];
+		memset(name, 'a', 120);
+		strcpy(name + 120, names[k].raw);
+		if (names[k].kept == 0)
+			snprintf(shown, sizeof shown, "%s:1:", name);
+		else
+			snprintf(shown, sizeof shown, "...%.*s%s:1:", names[k].kept, name, names[k].escaped);
+		ENSURE(names[k].kept > 0 || strlen(name) == 140);
+		doc = sm_document_parse(broken, strlen(broken), name, &err);
+		const bool cut_shown = doc == NULL && strncmp(err.message, shown, strlen(shown)) == 0;
+		if (!cut_shown)
+			printf("  %s\n", err.message);
+		ENSURE(cut_shown);
+	}
 	return 0;
 }
 
