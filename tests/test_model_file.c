@@ -1232,6 +1232,9 @@ static int test_broken_files(void)
 		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uD800'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"a \\udfff then a long text\"}",
 		 SM_ERROR_SYNTAX, "test.json:1:50: invalid Unicode '\\uDFFF'"},
+	    // The last pair of surrogates is a character like any other: the escape at fault is after it.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"description\": \"\\udbff\\udfff\\u0000\"}", SM_ERROR_SYNTAX,
+		 "test.json:1:60: strings in a model file may not contain \\u0000"},
 	    // A valid escape just before the one at fault, a digit 9 in it, a low surrogate before
 	    // another, and a high one before what is not a low one: a "u" that no backslash escapes, an
 	    // escape other than \u, a \u escape beyond the low surrogates.
@@ -3067,6 +3070,10 @@ static int test_syntax_error_positions(void)
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a_rather_long_parameter_name\": 1,"
 		 " \"a_rather_long_parameter_name\": 3}}",
 		 SM_ERROR_SYNTAX, "test.json:1:82: duplicate object key near '\"a_rather_long_parameter_name\"'"},
+	    // 21 bytes, one more than the parser quotes.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"abcdefghijklmnopqrs\": 1,"
+		 " \"abcdefghijklmnopqrs\": 3}}",
+		 SM_ERROR_SYNTAX, "test.json:1:73: duplicate object key near '\"abcdefghijklmnopqrs\"'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 1.7976931348623159e308}}",
 		 SM_ERROR_SYNTAX, "test.json:1:52: real number overflow near '1.7976931348623159e308'"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": -999999999999999999999}}",
