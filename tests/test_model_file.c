@@ -3638,8 +3638,10 @@ static int test_parameter_uses_of_every_place(void)
 // the element and the rule: a block's nw of 1 (each count >= 2), a break strain of 0 (> 0), a
 // rope's mass per length of 0 (> 0), a number in quotes starting with 0, a spring from a particle
 // to itself given by indices, a particle name given twice, a mesh vertex of two numbers (the path
-// names that vertex), and a block whose particle count overflows 64 bits (2^21 x 2^21 x 2^22 =
-// 2^64) refused by its first two counts.
+// names that vertex), a block whose particle count overflows 64 bits (2^21 x 2^21 x 2^22 =
+// 2^64) refused by its first two counts, a format version of 0 (below the 1 it must be), a mass
+// just below DBL_MIN and a largest step of 1 / DBL_MAX itself (a limit is above it). The limits
+// that are "at least" take their own value: a mass of DBL_MIN and an rtol of the machine epsilon.
 static int test_more_rules_at_their_edges(void)
 {
 	static const refusal cases[] = {
@@ -3686,6 +3688,15 @@ static int test_more_rules_at_their_edges(void)
 		 SM_ERROR_SCHEMA,
 		 "test.json: particles[0].name: name \"c[]\" reads as a reference to a particle of structure \"c\": "
 		 "give the particle another name"},
+	    {"{\"springmass\": 0, \"name\": \"x\"}", SM_ERROR_SCHEMA,
+		 "test.json: springmass: format version must be 1 (this build reads version 1)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0], \"mass\": 2.225073858507201e-308}]}",
+		 SM_ERROR_NONPOSITIVE_MASS,
+		 "test.json: particles[0].mass: 2.225073858507201e-308 must be at least 2.2250738585072014e-308, the "
+		 "smallest normal double (1 / mass would overflow)"},
+	    {TWO_PARTICLES ", \"simulation\": {\"max_step\": 5.562684646268003e-309}}", SM_ERROR_SCHEMA,
+		 "test.json: simulation.max_step: 5.562684646268003e-309 must be 0 (no limit) or above "
+		 "5.562684646268003e-309 s, 1 / DBL_MAX: CVODE takes its inverse"},
 	};
 	ENSURE(count_wrong_refusals(cases, sizeof cases / sizeof cases[0]) == 0);
 	// Only a name of the form S[...] reads as a reference to structure S: "c[" and "c[1" do not.
@@ -3697,6 +3708,13 @@ static int test_more_rules_at_their_edges(void)
 		            &err);
 	ENSURE(doc != NULL);
 	ENSURE(sm_document_particle_index(doc, "c[") == 0 && sm_document_particle_index(doc, "c[1") == 1);
+	sm_document_destroy(doc);
+	doc = parse_valid(
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 0, 0],"
+	    " \"mass\": 2.2250738585072014e-308}], \"simulation\": {\"rtol\": 2.220446049250313e-16}}",
+	    &err);
+	ENSURE(doc != NULL);
+	ENSURE(sm_document_get_settings(doc).solver.relative_tolerance == 2.220446049250313e-16);
 	sm_document_destroy(doc);
 	return 0;
 }
