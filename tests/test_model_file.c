@@ -2282,6 +2282,30 @@ static int test_references_stay_inside_their_structures(void)
 		ENSURE(sm_model_free_index(m, held[k]) == -1);
 	sm_model_destroy(m);
 	sm_document_destroy(doc);
+	// The ranges a message gives are the structure's own, rows along edge_v and columns along
+	// edge_u, on grids longer one way than another: a sheet of 3 columns and 2 rows, a block of 2
+	// columns, 3 rows and 4 layers.
+	ENSURE(refused_as(
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\","
+	    " \"nu\": 3, \"nv\": 2}], \"fixed\": [\"c[2,0]\"]}",
+	    "sheet", SM_ERROR_PARTICLE_INDEX,
+	    "test.json: fixed[0]: \"c[2,0]\" is outside structure c (rows 0 to 1, columns 0 to 2, or [0] "
+	    "to [5])"));
+	ENSURE(refused_as(
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\","
+	    " \"size\": [1, 1, 1], \"nu\": 2, \"nv\": 3, \"nw\": 4}], \"fixed\": [\"b[0,2,0]\"]}",
+	    "block", SM_ERROR_PARTICLE_INDEX,
+	    "test.json: fixed[0]: \"b[0,2,0]\" is outside structure b (rows 0 to 2, columns 0 to 1, "
+	    "layers 0 to 3, or [0] to [23])"));
+	// Index 0 written as a real is the first particle, as 3.0 is index 3.
+	doc = parse_valid(TWO_PARTICLES ", \"springs\": [{\"a\": 0.0, \"b\": 1, \"stiffness\": 1}]}", &err);
+	ENSURE(doc != NULL);
+	ENSURE_STATUS(sm_document_build(doc, &m, NULL), SM_OK);
+	sm_spring_def spring;
+	sm_model_get_spring(m, 0, &spring);
+	ENSURE(spring.a == 0 && spring.b == 1);
+	sm_model_destroy(m);
+	sm_document_destroy(doc);
 	return 0;
 }
 
