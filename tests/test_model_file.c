@@ -3801,6 +3801,25 @@ static int test_canonical_form_keeps_parameters_and_ports(void)
 	sm_model_destroy(m);
 	sm_document_destroy(again);
 	sm_document_destroy(doc);
+	// A name holding a backslash and a quote is written escaped, and a velocity whose only
+	// parameter is its last component, at 0, keeps that parameter: setting it moves the particle.
+	doc = parse_valid("{\"springmass\": 1, \"name\": \"k\", \"parameters\": {\"w\": 0}, \"particles\":"
+	                  " [{\"name\": \"a\\\\b\\\"c\", \"position\": [0, 0, 0], \"velocity\": [0, 0, \"w\"]}]}",
+	                  &err);
+	ENSURE(doc != NULL);
+	again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(same_document(doc, again) == 0);
+	ENSURE(sm_document_particle_index(again, "a\\b\"c") == 0);
+	ENSURE(sm_document_parameter_index(again, "w") == 0);
+	ENSURE_STATUS(sm_document_set_parameter(again, 0, 2.0, &err), SM_OK);
+	ENSURE_STATUS(sm_document_build(again, &m, NULL), SM_OK);
+	sm_particle_def a;
+	sm_model_get_particle(m, 0, &a);
+	ENSURE(a.velocity[0] == 0.0 && a.velocity[1] == 0.0 && a.velocity[2] == 2.0);
+	sm_model_destroy(m);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
 	return 0;
 }
 
