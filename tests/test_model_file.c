@@ -2427,6 +2427,10 @@ static int test_reference_expressions(void)
 	    {"r[a - a/2*2]", 1},
 	    {"r[-(b)*(-b)]", 9},
 	    {"r[((((((((((((((((((((((((((((((((1))))))))))))))))))))))))))))))))]", 1},  // 32 deep
+		// Only parentheses and unary signs nest: a second term or factor at the deepest level is
+		// no deeper than the first.
+	    {"r[((((((((((((((((((((((((((((((((1+2))))))))))))))))))))))))))))))))]", 3},
+	    {"r[((((((((((((((((((((((((((((((((2*3))))))))))))))))))))))))))))))))]", 6},
 	};
 	int failures = 0;
 	for (size_t c = 0; c < sizeof values / sizeof values[0]; c++) {
