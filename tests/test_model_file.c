@@ -766,6 +766,18 @@ static int test_initial_state_and_save_to_file(void)
 	sm_document* again = sm_document_load(path, &err);
 	ENSURE(again != NULL);
 	ENSURE(same_document(doc, again) == 0);
+	// The file holds the canonical text to its last byte, the line end after the closing brace.
+	char* canonical = sm_document_to_json(doc, &err);
+	FILE* saved = fopen(path, "rb");
+	ENSURE(canonical != NULL && saved != NULL);
+	const size_t length = strlen(canonical);
+	char* read_back = malloc(length + 2);
+	const size_t got = read_back != NULL ? fread(read_back, 1, length + 2, saved) : 0;
+	fclose(saved);
+	const bool whole = got == length && memcmp(read_back, canonical, length) == 0;
+	free(read_back);
+	free(canonical);
+	ENSURE(whole);
 	// The parameters of the rope's total mass and its segment count fed only what the saved file
 	// writes out as numbers (each particle's mass, the particles): they are left out; those of its
 	// springs' constants and of the mass damping stay, feeding what they fed.
