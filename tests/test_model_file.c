@@ -3923,6 +3923,17 @@ static int test_limits_at_their_edges(void)
 	ENSURE(strcmp(err.message,
 	              "test.json: structures[0]: the model would have 11 springs, more than the limit of 10") ==
 	       0);
+	// Past the limit in both at once, by one each: 4 particles and a rope of 6 segments with both
+	// groups make 11 particles and 11 springs.
+	static const char both[] =
+	    "{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"position\": [0, 1, 0]}, {\"position\": [0, 2, 0]},"
+	    " {\"position\": [0, 3, 0]}, {\"position\": [0, 4, 0]}], \"structures\": [{\"type\": \"rope\", \"name\": \"r\","
+	    " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 6, \"structural\": {\"stiffness\": 1},"
+	    " \"bending\": {\"stiffness\": 1}}]}";
+	ENSURE(sm_document_parse_limited(both, strlen(both), "test.json", 10, &err) == NULL);
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0]: the model would have 11 particles and 11 springs, more "
+	              "than the limit of 10 of each") == 0);
 	// Explicit springs count after a structure's: a rope of 5 springs leaves room for 5 more, not 6.
 	for (int n = 5; n <= 6; n++) {
 		t.data = NULL;
