@@ -1794,6 +1794,12 @@ static int test_messages_name_parameters(void)
 		 " \"triangles\": [[0, 1, \"j\"], [0, \"k\", 1]]}]}",
 		 SM_ERROR_SELF_SPRING,
 		 "test.json: structures[0]: mesh: triangle 1 (0, 1, 1) repeats a vertex (with parameter k = 1)"},
+	    // Its first and last vertices alike.
+	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"k\": 0, \"j\": 2}, \"structures\":"
+		 " [{\"type\": \"mesh\", \"name\": \"m\", \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]],"
+		 " \"triangles\": [[0, 1, \"j\"], [\"k\", 1, 0]]}]}",
+		 SM_ERROR_SELF_SPRING,
+		 "test.json: structures[0]: mesh: triangle 1 (0, 1, 0) repeats a vertex (with parameter k = 0)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"big\": 1e308}, \"structures\": [{\"type\": \"rope\","
 		 " \"name\": \"r\", \"start\": [0, 0, 0], \"end\": [1e-10, 0, 0], \"segments\": 1, \"structural\":"
 		 " {\"strain_stiffness\": \"big\"}}]}",
