@@ -3929,6 +3929,18 @@ static int test_limits_at_their_edges(void)
 	ENSURE(strcmp(err.message,
 	              "test.json: structures[0]: the model would have 11 springs, more than the limit of 10") ==
 	       0);
+	// A sheet's springs are counted as it makes them: 3 x 3 particles with structural and bend
+	// groups make 12 + 6 springs, which a limit of 18 takes and one of 17 does not.
+	static const char sheet[] =
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"sheet\", \"name\": \"c\", \"nu\": 3,"
+	    " \"nv\": 3, \"structural\": {\"stiffness\": 1}, \"bend\": {\"stiffness\": 1}}]}";
+	doc = sm_document_parse_limited(sheet, strlen(sheet), "test.json", 18, &err);
+	ENSURE(doc != NULL && sm_document_spring_count(doc) == 18);
+	sm_document_destroy(doc);
+	ENSURE(sm_document_parse_limited(sheet, strlen(sheet), "test.json", 17, &err) == NULL);
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0]: the model would have 18 springs, more than the limit of 17") ==
+	       0);
 	// Past the limit in both at once, by one each: 4 particles and a rope of 6 segments with both
 	// groups make 11 particles and 11 springs.
 	static const char both[] =
