@@ -507,6 +507,10 @@ static int test_broken_obj_files(void)
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n\t v 5 5 5\n", "\"file\": \"bad.obj\"", 0,
 		 SM_ERROR_NONPOSITIVE_MASS,
 		 "test.json: structures[0].file: bad.obj:5:3: mesh: vertex 3 belongs to no triangle"},
+	    // The first vertex too: at the line of its v.
+	    {"  v 5 5 5\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 2 3 4\n", "\"file\": \"bad.obj\"", 0,
+		 SM_ERROR_NONPOSITIVE_MASS,
+		 "test.json: structures[0].file: bad.obj:1:3: mesh: vertex 0 belongs to no triangle"},
 	    {"v 0 0 0\nv 1e300 0 0\nv 0 1 0\nf 1 2 3\n", "\"file\": \"bad.obj\", \"scale\": \"s\"", 0,
 		 SM_ERROR_NOT_FINITE,
 		 "test.json: structures[0].file: bad.obj:2:1: mesh: vertex 1 coordinate 0 = inf is not finite (with "
