@@ -429,6 +429,10 @@ static int test_broken_obj_files(void)
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9223372036854775808/1\n", "\"file\": \"bad.obj\"", 0,
 		 SM_ERROR_PARTICLE_INDEX,
 		 "test.json: structures[0].file: bad.obj:4:7: face index 9223372036854775808 is past the 3 vertices"},
+	    // 24 characters, the most shown whole.
+	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 100000000000000000000000\n", "\"file\": \"bad.obj\"", 0,
+		 SM_ERROR_PARTICLE_INDEX,
+		 "test.json: structures[0].file: bad.obj:4:7: face index 100000000000000000000000 is past the 3 vertices"},
 	    {"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -1000000000000000000000000000000//1\n", "\"file\": \"bad.obj\"", 0,
 		 SM_ERROR_PARTICLE_INDEX,
 		 "test.json: structures[0].file: bad.obj:4:7: face index -10000000000000000000000... counts back past the "
