@@ -462,6 +462,9 @@ static int test_broken_obj_files(void)
 		 "test.json: structures[0].file: bad.obj:1:5: \"1e\" is not a number"},
 	    {"v 0 .e5 0\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
 		 "test.json: structures[0].file: bad.obj:1:5: \".e5\" is not a number"},
+	    // A byte-order mark takes no column, as an editor shows none.
+	    {"\xef\xbb\xbfv 0 0 x\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
+		 "test.json: structures[0].file: bad.obj:1:7: \"x\" is not a number"},
 	    {"v 0 0 inf\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_SYNTAX,
 		 "test.json: structures[0].file: bad.obj:1:7: \"inf\" is not a number"},
 	    {"v 0 1e999 0\n", "\"file\": \"bad.obj\"", 0, SM_ERROR_NOT_FINITE,
