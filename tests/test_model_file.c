@@ -3710,6 +3710,11 @@ static int test_more_rules_at_their_edges(void)
 		 SM_ERROR_NEGATIVE, "test.json: structures[0].mass_per_length: 0 must be > 0"},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"0.5\"}]}", SM_ERROR_NOT_FOUND,
 		 "test.json: springs[0].stiffness: no parameter named \"0.5\" (a number is written without quotes)"},
+	    // Signs before the number and its exponent make a number too; an exponent without digits does not.
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"+1e+3\"}]}", SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"+1e+3\" (a number is written without quotes)"},
+	    {TWO_PARTICLES ", \"springs\": [{\"a\": 0, \"b\": 1, \"stiffness\": \"1e\"}]}", SM_ERROR_NOT_FOUND,
+		 "test.json: springs[0].stiffness: no parameter named \"1e\""},
 	    {TWO_PARTICLES ", \"springs\": [{\"a\": 1, \"b\": 1.0, \"stiffness\": 1}]}", SM_ERROR_SELF_SPRING,
 		 "test.json: springs[0]: connects particle 1 to itself (a and b are the same particle)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"particles\": [{\"name\": \"a\", \"position\": [0, 0, 0]},"
