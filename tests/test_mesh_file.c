@@ -360,10 +360,12 @@ static int test_obj_paths(void)
 
 // The canonical form writes the mesh's particles and springs, and the self-contained text its
 // vertices and triangles: both load without the OBJ file to the same model, and the self-contained
-// text keeps the parameters (a scale), which change it as they change the original.
+// text keeps the parameters (a scale), which change it as they change the original. A coordinate
+// that needs 17 significant digits (0.30000000000000004, the double after 0.3) keeps them.
 static int test_saved_models_need_no_obj_file(void)
 {
-	static const char obj[] = "v -0.0 0 0\nv 0.1 0 0\nv 0.1 0.3 0\nv 0 0.3 1e-300\nf 1 2 3 4\n";
+	static const char obj[] =
+	    "v -0.0 0 0\nv 0.1 0 0\nv 0.1 0.30000000000000004 0\nv 0 0.3 1e-300\nf 1 2 3 4\n";
 	static const char model[] =
 	    "{\"springmass\": 1, \"name\": \"saved\", \"parameters\": {\"s\": 3, \"E\": 40}, \"structures\": [{\"type\":"
 	    " \"mesh\", \"name\": \"q\", \"file\": \"saved.obj\", \"scale\": \"s\", \"edge\": {\"strain_stiffness\": \"E\"}}],"
