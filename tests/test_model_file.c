@@ -2900,6 +2900,11 @@ static int test_initial_state_through_parameter_changes(void)
 		bad[c] += 1.0;
 	bad[14] = NAN;
 	ENSURE_STATUS(sm_document_set_initial_state(doc, bad, NULL, &err), SM_ERROR_NOT_FINITE);
+	// So are velocities, named by their particle.
+	double fast[15] = {0.0};
+	fast[7] = INFINITY;
+	ENSURE_STATUS(sm_document_set_initial_state(doc, x, fast, &err), SM_ERROR_NOT_FINITE);
+	ENSURE(strcmp(err.message, "test.json: initial state of particle 2 is not finite") == 0);
 	// Finite positions whose spring's length is not (the square of 1e200 m overflows) are refused
 	// too: the file saved with them would not load, the loader refusing such a spring.
 	memcpy(bad, x, sizeof x);
