@@ -1863,6 +1863,20 @@ static int test_parameters_set_together(void)
 	ENSURE_STATUS(sm_document_set_parameters(NULL, moved, &err), SM_ERROR_INVALID_ARGUMENT);
 	ENSURE(sm_document_parameter_value(doc, 0) == 1.0 && sm_document_parameter_value(doc, 1) == 3.0);
 	sm_document_destroy(doc);
+	// A message that names none of the parameters that changed gets them after it, the last after
+	// "and": here the count of a rope's segments, with an initial state set for its 3 particles.
+	doc = parse("{\"springmass\": 1, \"name\": \"x\", \"parameters\": {\"a\": 1, \"b\": 2, \"n\": 2},"
+	            " \"structures\": [{\"type\": \"rope\", \"name\": \"r\", \"start\": [0, 0, 0],"
+	            " \"end\": [\"b\", 0, 0], \"segments\": \"n\", \"mass\": \"a\"}]}",
+	            &err);
+	ENSURE(doc != NULL);
+	const double state[9] = {0, 0, 0, 1, 0, 0, 2, 0, 0};
+	ENSURE_STATUS(sm_document_set_initial_state(doc, state, NULL, &err), SM_OK);
+	const double three[3] = {2.0, 3.0, 3.0};
+	ENSURE_STATUS(sm_document_set_parameters(doc, three, &err), SM_ERROR_TOPOLOGY);
+	ENSURE(strcmp(err.message, "test.json: the model now has 4 particles but its initial state was set for 3 "
+	                           "(with parameter a = 2, parameter b = 3 and parameter n = 3)") == 0);
+	sm_document_destroy(doc);
 	return 0;
 }
 
