@@ -2756,6 +2756,9 @@ static int test_settings_and_their_defaults(void)
 	s = sm_document_get_settings(doc);
 	ENSURE(s.solver.method == SM_METHOD_BDF && s.solver.jacobian == SM_JACOBIAN_EXACT &&
 	       s.solver.max_step == 0.25);
+	// The settings the object leaves out keep their defaults.
+	ENSURE(s.solver.restart_on_input_change && s.solver.stability_limit_detection &&
+	       s.solver.solver == SM_SOLVER_AUTO && s.solver.max_steps == 100000);
 	sm_document_destroy(doc);
 
 	// atol_position or atol_velocity beside atol wins for its own tolerance, in either order.
