@@ -3110,6 +3110,10 @@ static int test_syntax_error_positions(void)
 		 "test.json:1:18: '}' expected near '\"name\"' (or a ',' before it)"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0 0 -9.81]}", SM_ERROR_SYNTAX,
 		 "test.json:1:46: ']' expected near '0' (or a ',' before it)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0, 0 -9.81]}", SM_ERROR_SYNTAX,
+		 "test.json:1:49: ']' expected near '-9.81' (or a ',' before it)"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"gravity\": [0, 0, 0] null}", SM_ERROR_SYNTAX,
+		 "test.json:1:53: '}' expected near 'null' (or a ',' before it)"},
 	    // An error at a line end is at column 0 of the next line, whichever kind the line end is.
 	    {"{\"springmass\": 1, \"name\": \"x\\\n\"}", SM_ERROR_SYNTAX,
 		 "test.json:2:0: invalid escape near '\"x\\\\u000a'"},
