@@ -4208,6 +4208,16 @@ static int test_saved_choices_name_no_parameters(void)
 	       !settings.solver.restart_on_input_change);
 	sm_document_destroy(again);
 	sm_document_destroy(doc);
+	// The file's first parameter, named by a setting alone, is kept too.
+	doc = parse_valid("{\"springmass\": 1, \"name\": \"first\", \"parameters\": {\"T\": 3},"
+	                  " \"particles\": [{\"position\": [0, 0, 0]}], \"simulation\": {\"stop_time\": \"T\"}}",
+	                  &err);
+	ENSURE(doc != NULL);
+	again = save_and_load(doc);
+	ENSURE(again != NULL);
+	ENSURE(sm_document_parameter_index(again, "T") == 0 && sm_document_get_settings(again).stop_time == 3.0);
+	sm_document_destroy(again);
+	sm_document_destroy(doc);
 	return 0;
 }
 
