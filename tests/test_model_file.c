@@ -3960,6 +3960,15 @@ static int test_limits_at_their_edges(void)
 	ENSURE(strcmp(err.message,
 	              "test.json: structures[0]: the model would have 11 springs, more than the limit of 10") ==
 	       0);
+	// Past the limit in particles alone, by one: a rope of 10 segments has 11 particles and 10 springs.
+	snprintf(
+	    text, sizeof text,
+	    "{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"rope\", \"name\": \"r\","
+	    " \"start\": [0, 0, 0], \"end\": [1, 0, 0], \"segments\": 10, \"structural\": {\"stiffness\": 1}}]}");
+	ENSURE(sm_document_parse_limited(text, strlen(text), "test.json", 10, &err) == NULL);
+	ENSURE(strcmp(err.message,
+	              "test.json: structures[0]: the model would have 11 particles, more than the limit of 10") ==
+	       0);
 	// A sheet's springs are counted as it makes them: 3 x 3 particles with structural and bend
 	// groups make 12 + 6 springs, which a limit of 18 takes and one of 17 does not.
 	static const char sheet[] =
