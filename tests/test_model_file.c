@@ -3755,6 +3755,10 @@ static int test_more_rules_at_their_edges(void)
 		 " \"vertices\": [[0, 0, 0], [1, 0, 0], 5], \"triangles\": [[0, 1, 2]]}]}",
 		 SM_ERROR_SCHEMA,
 		 "test.json: structures[0].vertices[2]: must be an array of 3 numbers [x, y, z], not a number"},
+	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"mesh\", \"name\": \"m\","
+		 " \"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], \"triangles\": [[0, 1, 2, 0]]}]}",
+		 SM_ERROR_SCHEMA,
+		 "test.json: structures[0].triangles[0]: must be an array of 3 vertex indices, not of 4"},
 	    {"{\"springmass\": 1, \"name\": \"x\", \"structures\": [{\"type\": \"block\", \"name\": \"b\", \"size\": [1, 1, 1],"
 		 " \"nu\": 2097152, \"nv\": 2097152, \"nw\": 4194304}]}",
 		 SM_ERROR_SCHEMA,
