@@ -121,9 +121,10 @@ static sm_document* load_square(const char* obj_name, const char* obj_text, sm_e
 // A unit square as two triangles, as one quad (cut into the same two triangles, a fan from its first
 // vertex), with every form of a face's vertex, relative indices, comments, blank lines, CR LF and
 // lone CR line ends, a line continued with a backslash (and one ending the text), form feeds and
-// vertical tabs between words, a weight and a colour after a vertex, an exponent after E, a
-// number of 64 characters, and the statements that carry no geometry: each loads to exactly the inline
-// square's model (masses from the areas, springs once per edge, rest lengths, sections).
+// vertical tabs between words, a backslash right after a word, a weight and a colour after a
+// vertex, an exponent after E, a number of 64 characters, and the statements that carry no geometry: each
+// loads to exactly the inline square's model (masses from the areas, springs once per edge, rest lengths,
+// sections).
 static int test_obj_square_is_the_inline_square(void)
 {
 	static const char* const files[] = {
@@ -135,6 +136,8 @@ static int test_obj_square_is_the_inline_square(void)
 	    "v 0 0 0\rv 1 0 0\rv 1 1 0\rf -3 -2 -1\rv 0 1 0\rf -4/1 -2/2 -1/3\r",
 	    "\xef\xbb\xbf\tv\t0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4",
 	    "v 0\f0\v0\nv 1\f0 0\nv 1 1 0\nv 0 1 0\nf 1 2 \\\n3 4 \\",
+	    // A backslash just after a word continues the statement too.
+	    "v 0 0 0\nv 1 0 0\nv 1 1\\\n0\nv 0 1 0\nf 1 2 3 4\n",
 	    // An exponent after an upper-case E, and a number of 64 characters.
 	    "v 0 0 0\nv 1E0 0 0\nv 1 1 0\nv 0 1.00000000000000000000000000000000000000000000000000000000000000 0\nf 1 2 3 4\n",
 	};
