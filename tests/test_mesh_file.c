@@ -122,9 +122,9 @@ static sm_document* load_square(const char* obj_name, const char* obj_text, sm_e
 // vertex), with every form of a face's vertex, relative indices, comments, blank lines, CR LF and
 // lone CR line ends, a line continued with a backslash (and one ending the text), form feeds and
 // vertical tabs between words, a backslash right after a word, a weight and a colour after a
-// vertex, an exponent after E, a number of 64 characters, and the statements that carry no geometry: each
-// loads to exactly the inline square's model (masses from the areas, springs once per edge, rest lengths,
-// sections).
+// vertex (also beyond the largest double: they are dropped), an exponent after E, a number of 64 characters,
+// and the statements that carry no geometry: each loads to exactly the inline square's model (masses from the
+// areas, springs once per edge, rest lengths, sections).
 static int test_obj_square_is_the_inline_square(void)
 {
 	static const char* const files[] = {
@@ -140,6 +140,8 @@ static int test_obj_square_is_the_inline_square(void)
 	    "v 0 0 0\nv 1 0 0\nv 1 1\\\n0\nv 0 1 0\nf 1 2 3 4\n",
 	    // An exponent after an upper-case E, and a number of 64 characters.
 	    "v 0 0 0\nv 1E0 0 0\nv 1 1 0\nv 0 1.00000000000000000000000000000000000000000000000000000000000000 0\nf 1 2 3 4\n",
+	    // A weight or a colour is dropped, so only a number: one beyond the largest double is taken.
+	    "v 0 0 0 1e999\nv 1 0 0 -1e999 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n",
 	};
 	sm_error err = {SM_OK, ""};
 	sm_document* inline_square = parse_text(square_inline, &err);
