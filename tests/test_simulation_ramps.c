@@ -737,6 +737,53 @@ static int test_restore_and_set_state_refuse_a_ramp_that_overflows(void)
 	return 0;
 }
 
+// The same for the first particle, whose index 0 the checks report as the one that overflows: the
+// driven anchor of an oscillator set moving at 1e10 m/s, or given a ramp of 1e10 N/s (a held
+// particle's force moves nothing, but it reads infinite in its reaction), both at t = 0. The
+// snapshot's time made 1e300 s and set_state to that time are refused, naming particle 0, with
+// nothing changed.
+static int test_restore_and_set_state_refuse_the_first_particles_overflowing_input(void)
+{
+	sm_model* model = oscillator_anchored(OSC_M, OSC_K, 0.0, 0.1, SM_PARTICLE_DRIVEN);
+	ENSURE(model != NULL);
+	const double zero[3] = {0.0, 0.0, 0.0}, steep[3] = {1e10, 0.0, 0.0}, huge_time = 1e300;
+	for (int ramp = 0; ramp < 2; ramp++) {
+		sm_simulation* sim = sm_simulation_create(model, NULL, NULL);
+		sm_simulation* other = sm_simulation_create(model, NULL, NULL);
+		ENSURE(sim != NULL && other != NULL);
+		ENSURE_STATUS(ramp ? sm_simulation_set_external_force_ramp(sim, 0, zero, steep)
+		                   : sm_simulation_set_driven(sim, 0, zero, steep),
+		              SM_OK);
+		sm_simulation_state* saved = sm_simulation_save_state(sim);
+		ENSURE(saved != NULL);
+		const size_t size = sm_simulation_state_size(saved);
+		unsigned char* bytes = malloc(size);
+		ENSURE(bytes != NULL);
+		ENSURE_STATUS(sm_simulation_state_serialize(saved, bytes, size), SM_OK);
+		memcpy(bytes + 40, &huge_time, sizeof huge_time);  // the time, the header's last field
+		fix_checksum(bytes, size);
+		sm_simulation_state* forged = sm_simulation_state_deserialize(bytes, size, NULL);
+		ENSURE(forged != NULL);
+		ENSURE_STATUS(sm_simulation_advance(other, 0.01), SM_OK);
+		double x[6], v[6] = {0};
+		memcpy(x, sm_simulation_positions(other), sizeof x);
+		ENSURE_STATUS(sm_simulation_restore_state(other, forged), SM_ERROR_NOT_FINITE);
+		ENSURE(strstr(sm_simulation_last_error(other), "particle 0") != NULL);
+		ENSURE(sm_simulation_time(other) == 0.01 && memcmp(sm_simulation_positions(other), x, sizeof x) == 0);
+		memcpy(x, sm_simulation_positions(sim), sizeof x);
+		ENSURE_STATUS(sm_simulation_set_state(sim, huge_time, x, v), SM_ERROR_NOT_FINITE);
+		ENSURE(strstr(sm_simulation_last_error(sim), "particle 0") != NULL);
+		ENSURE(sm_simulation_time(sim) == 0.0);
+		sm_simulation_state_destroy(forged);
+		free(bytes);
+		sm_simulation_state_destroy(saved);
+		sm_simulation_destroy(other);
+		sm_simulation_destroy(sim);
+	}
+	sm_model_destroy(model);
+	return 0;
+}
+
 // Bad arguments change nothing: non-finite rates and accelerations are refused with a message
 // naming the particle, and a ramp on a held particle moves nothing.
 static int test_bad_ramps_are_refused(void)
@@ -784,6 +831,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_decelerating_pull_in_loose_first_order_steps_breaks_nothing);
 	RUN_TEST(test_ramps_are_part_of_the_state);
 	RUN_TEST(test_restore_and_set_state_refuse_a_ramp_that_overflows);
+	RUN_TEST(test_restore_and_set_state_refuse_the_first_particles_overflowing_input);
 	RUN_TEST(test_bad_ramps_are_refused);
 	return TEST_SUMMARY();
 }
