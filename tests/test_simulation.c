@@ -5323,12 +5323,12 @@ static int test_a_max_step_whose_inverse_overflows_is_refused(void)
 // Options outside their documented ranges are refused with SM_ERROR_INVALID_ARGUMENT and a
 // message naming the option: max_steps must be > 0, max_step finite and >= 0, the relative
 // tolerance < 1 and at least the machine epsilon, the method, solver and Jacobian variant known
-// ones.
+// ones, threads at least 1.
 static int test_invalid_options_are_refused(void)
 {
 	sm_model* model = oscillator(1.0, 40.0, 0.0, 0.2);
 	ENSURE(model != NULL);
-	for (int k = 0; k < 10; k++) {
+	for (int k = 0; k < 12; k++) {
 		sm_simulation_def d = sm_default_simulation_def();
 		const char* name = NULL;
 		switch (k) {
@@ -5368,9 +5368,17 @@ static int test_invalid_options_are_refused(void)
 			d.relative_tolerance = 0.5 * DBL_EPSILON;
 			name = "relative_tolerance";
 			break;
-		default:
+		case 9:
 			d.jacobian = (sm_jacobian_variant)-1;
 			name = "Jacobian";
+			break;
+		case 10:
+			d.threads = 0;
+			name = "threads";
+			break;
+		default:
+			d.threads = -2;
+			name = "threads";
 			break;
 		}
 		sm_error err;
