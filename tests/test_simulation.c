@@ -5320,6 +5320,22 @@ static int test_a_max_step_whose_inverse_overflows_is_refused(void)
 	return 0;
 }
 
+// The default options are those sm_simulation_def documents: BDF, the solver chosen by the model's
+// size, the exact Jacobian, rtol 1e-6, atol 1e-8 m and 1e-6 m/s, no largest step, 100 000 steps
+// per advance, a restart where an input jumps by much, stability limit detection, one thread and
+// no on_step.
+static int test_default_options_are_the_documented_ones(void)
+{
+	const sm_simulation_def d = sm_default_simulation_def();
+	ENSURE(d.method == SM_METHOD_BDF && d.solver == SM_SOLVER_AUTO && d.jacobian == SM_JACOBIAN_EXACT);
+	ENSURE(d.relative_tolerance == 1e-6 && d.absolute_tolerance_position == 1e-8 &&
+	       d.absolute_tolerance_velocity == 1e-6);
+	ENSURE(d.max_step == 0.0 && d.max_steps == 100000 && d.restart_on_input_change &&
+	       d.stability_limit_detection);
+	ENSURE(d.threads == 1 && d.on_step == NULL && d.on_step_context == NULL);
+	return 0;
+}
+
 // Options outside their documented ranges are refused with SM_ERROR_INVALID_ARGUMENT and a
 // message naming the option: max_steps must be > 0, max_step finite and >= 0, the relative
 // tolerance < 1 and at least the machine epsilon, the method, solver and Jacobian variant known
@@ -7515,6 +7531,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_a_spring_breaks_once_at_any_length_scale);
 	RUN_TEST(test_break_takes_only_its_own_spring_energy);
 	RUN_TEST(test_advance_to_the_current_time_does_nothing);
+	RUN_TEST(test_default_options_are_the_documented_ones);
 	RUN_TEST(test_invalid_options_are_refused);
 	RUN_TEST(test_a_max_step_whose_inverse_overflows_is_refused);
 	RUN_TEST(test_max_step_caps_the_internal_steps);
