@@ -47,10 +47,10 @@ shown=$out
 cat <<TXT
 
 Results in $shown/:
-  cloth.csv          time [s], port positions [m], velocities [m/s] and energies [J] of the
-                     cloth (any spreadsheet, or numpy.genfromtxt with the Python of .venv/)
+  cloth.csv            time [s], port positions [m], velocities [m/s] and energies [J] of the
+                       cloth (any spreadsheet, or numpy.genfromtxt with the Python of .venv/)
   cloth_vtk/cloth.pvd  the cloth's motion: open it in ParaView and press play; colour the
-                     springs by "tension" [N] or "strain", the particles by "velocity" [m/s]
-  oscillator.fmu     the oscillator as an FMI 2.0 Co-Simulation FMU (fmpy, or any FMI importer)
-  oscillator.png     the FMU's outputs simulated in fmpy: look at it with any image viewer
+                       springs by "tension" [N] or "strain", the particles by "velocity" [m/s]
+  oscillator.fmu       the oscillator as an FMI 2.0 Co-Simulation FMU (fmpy, or any FMI importer)
+  oscillator.png       the FMU's outputs simulated in fmpy: look at it with any image viewer
 TXT
