@@ -924,6 +924,8 @@ static int test_helpers_block_signals(void)
 // Floating-point exceptions raised in a helper's chunk reach the caller's flags, as they would
 // if the caller had run the chunk: chunk 0 divides by zero and waits for chunk 1, which
 // overflows, so that each of the two threads runs one chunk; both flags must be set afterwards.
+// They belong to that job alone: the next job, whose chunks raise nothing, leaves the caller's
+// flags clear, as it would run alone.
 typedef struct raising_job {
 	waiting_job wait;
 	volatile double zero, huge;
@@ -954,6 +956,10 @@ static int test_exceptions_raised_in_helpers_reach_the_caller(void)
 		sm_workers_run(team, raising_chunk, &job, 2);
 		ENSURE(fetestexcept(FE_DIVBYZERO) && fetestexcept(FE_OVERFLOW));
 		ENSURE(isinf(job.result[0]) && isinf(job.result[1]));
+		feclearexcept(FE_ALL_EXCEPT);
+		count_job quiet = {{0}};
+		sm_workers_run(team, count_chunk, &quiet, 8);
+		ENSURE(!fetestexcept(FE_DIVBYZERO | FE_OVERFLOW) && quiet.done[7] == 1);
 	}
 	feclearexcept(FE_ALL_EXCEPT);
 	sm_workers_destroy(team);
