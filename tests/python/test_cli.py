@@ -903,6 +903,8 @@ def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
     ("time,tip.fx\n1,1\n0,2\n", "3:1: time 0 s is before the previous row's 1 s"),
     # The times as the file writes them, not 0.10000000000000001 and 0.20000000000000001.
     ("time,tip.fx\n0,1\n0.2,1\n0.1,2\n", "4:1: time 0.1 s is before the previous row's 0.2 s\n"),
+    # A byte-order mark is refused even with nothing after it.
+    ("\ufeff", "1:1: a byte-order mark before the header: write the file without one"),
     ("time,tip.fx\n", "2:1: no rows after the header"),
     ("time,tip.fx\n0,-1e308\n1e-300,1e308\n", "3:8: tip.fx: the slope from the row before is beyond a double"),
     # The column of the signal at fault, past one whose slope is finite.
