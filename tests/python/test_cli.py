@@ -876,6 +876,18 @@ def test_run_leaves_a_motion_port_the_input_file_does_not_name_free(tmp_path):
     assert len(t) == 21 and np.max(np.abs(anchor - expected)) < 1e-6
 
 
+def test_run_holds_input_signals_after_their_last_row(tmp_path):
+    # The anchor's x from 0 to 0.2 m over the table's one second, then held there to the end
+    # (--help: "held before the first and after the last"), where it would go on at its slope of
+    # 0.2 m/s to 0.4 m at 2 s if the last row did not stop it. The driven anchor is where the ramp
+    # puts it to round-off of its position's arithmetic (1e-12 m against the 0.1 m of the error).
+    (tmp_path / "ramp.csv").write_text("time,base.x\n0,0\n1,0.2\n")
+    header, rows = run_csv(tmp_path, OSC, "--input", tmp_path / "ramp.csv", "--positions", "--t-end", "2",
+                           "--output-interval", "0.5")
+    x = rows[:, header.index("particle.anchor.x")]
+    assert np.max(np.abs(x - [0, 0.1, 0.2, 0.2, 0.2])) < 1e-12, x
+
+
 def test_run_moves_a_motion_port_at_the_slope_of_its_positions(tmp_path):
     # The anchor's x from 0 to 0.4 m over 2 s, no velocities given: it moves at the positions'
     # slope, v = 0.2 m/s (--help: "along the positions given (at their slope)"). In its frame the bob
