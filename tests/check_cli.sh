@@ -350,6 +350,7 @@ check_cases << 'CASES'
 2|springmass run: --atol-velocity must be > 0, got '0'|run "$osc" -q -o - --atol-velocity 0
 2|springmass run: --atol must be at least 1e-150 (CVODE's error norm overflows below), got '1e-200'|run "$osc" -q -o - --atol 1e-200
 2|springmass run: --atol-position must be at least 1e-150 (CVODE's error norm overflows below), got '1e-151'|run "$osc" -q -o - --atol-position 1e-151
+0||run "$osc" -q -o - --t-end 1e-3 --atol 1e-150
 2|springmass run: --atol-position expects a finite number, got 'x'|run "$osc" -q -o - --atol-position x
 0||run "$osc" -q -o - --t-end 1e-320
 0||run "$osc" -q -o - --t-end 0.01 --set k=1e-400
