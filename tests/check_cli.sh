@@ -202,6 +202,14 @@ CASES
 for f in vt5/oscillator.pvd vt6/oscillator_000001.vtp; do
   [ "$(cat "$tmp/clash/$f")" = "$(printf 'time,tip.fx\n0,1')" ] || fail "run overwrote its input signals $f"
 done
+# Nor is the CSV by its default name, NAME.csv in the working folder.
+mkdir -p "$tmp/clash/in"
+printf 'time,tip.fx\n0,1\n' > "$tmp/clash/in/oscillator.csv"
+out=$(cd "$tmp/clash/in" && "$cli" run "$osc" -q --t-end 0.02 --input oscillator.csv 2>&1)
+status=$?
+[ $status -eq 2 ] && [ "$out" = "springmass run: the output oscillator.csv (NAME.csv, without -o) would overwrite the input signals oscillator.csv, which it reads; give another name with -o" ] &&
+  [ "$(cat "$tmp/clash/in/oscillator.csv")" = "$(printf 'time,tip.fx\n0,1')" ] ||
+  fail "run onto its input signals by the default output: exit status $status, printed '$out'"
 # Nor are statics' and modes' VTK files the model file.
 mkdir -p "$tmp/clash/st" "$tmp/clash/mo"
 cp "$osc" "$tmp/clash/st/statics.vtk"
