@@ -296,6 +296,18 @@ status=$?
   [ "$(cat "$tmp/closed.err")" = "springmass run: cannot read the input signals from standard input: Bad file descriptor" ] ||
   fail "run --input - from a closed standard input: exit status $status, $(cat "$tmp/closed.err")"
 "$cli" run "$osc" -o "$tmp/closed_err.csv" --t-end 0.05 2>&- >&- || fail "run -o FILE with closed standard streams failed"
+# Input signals from standard input are held to a file's limit: 1 GiB is read whole (these zeros
+# are then refused as no text), one byte more is refused as too large. Standard input filled its
+# buffer to 1 GiB before it saw the end, and took that for a byte past the limit.
+for bytes in $((1 << 30)) $(((1 << 30) + 1)); do
+  out=$(head -c $bytes /dev/zero | "$cli" run "$osc" -q -o "$tmp/large_in.csv" --input - 2>&1)
+  status=$?
+  expected="springmass run: --input -:1:1: a NUL byte: not a text file"
+  [ $bytes -eq $((1 << 30)) ] ||
+    expected="springmass run: cannot read the input signals from standard input: larger than 1 GiB"
+  [ $status -eq 1 ] && [ "$out" = "$expected" ] ||
+    fail "run --input - of $bytes bytes: exit status $status, $out"
+done
 # An output that is standard output under another name, where that is a file, would be
 # overwritten by the report: refused. /dev/null stays an output like any other.
 "$cli" statics "$osc" -q -o /dev/stdout > "$tmp/stdout.txt" 2> "$tmp/stdout.err"

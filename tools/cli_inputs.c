@@ -181,17 +181,25 @@ cli_inputs* cli_inputs_parse(const char* text, size_t length, const sm_document*
 	return in;
 }
 
-// Standard input to its end, at most TEXT_FILE_MAX_BYTES; NULL with *problem set if it cannot.
+// Standard input to its end, at most TEXT_FILE_MAX_BYTES as a file; NULL with *problem set if it
+// cannot. The buffer grows to one byte past the limit (and one for the final NUL): a text of the
+// limit leaves it one short of full when the end is seen, a byte more fills it.
 static char* read_standard_input(size_t* length, const char** problem)
 {
+	const size_t most = (size_t)TEXT_FILE_MAX_BYTES;
 	size_t size = 0, capacity = 0;
 	char* text = NULL;
 	for (;;) {
-		if (size + 1 >= capacity) {
-			capacity = capacity ? 2 * capacity : 65536;
-			char* grown = size < (size_t)TEXT_FILE_MAX_BYTES ? realloc(text, capacity + 1) : NULL;
+		if (size == capacity) {
+			char* grown = NULL;
+			if (capacity <= most) {
+				capacity = capacity ? 2 * capacity : 65536;
+				if (capacity > most + 1)
+					capacity = most + 1;
+				grown = realloc(text, capacity + 1);
+			}
 			if (grown == NULL) {
-				*problem = size < (size_t)TEXT_FILE_MAX_BYTES ? "out of memory" : "larger than 1 GiB";
+				*problem = size <= most ? "out of memory" : "larger than 1 GiB";
 				free(text);
 				return NULL;
 			}
