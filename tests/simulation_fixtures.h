@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 // Tight tolerances (rtol 1e-10, atol 1e-12 m and m/s) with the given linear solver: the closed forms
@@ -119,4 +120,21 @@ static inline void fix_checksum(unsigned char* bytes, size_t size)
 	for (size_t k = 0; k + 8 < size; k++)
 		h = (h ^ bytes[k]) * 1099511628211ull;
 	memcpy(bytes + size - 8, &h, 8);
+}
+
+// A copy of a saved state whose time is `time` [s] (the serialised header's last field, 40 bytes
+// in), its checksum made to match: a state as if saved then, for what restoring it checks. NULL if
+// the state cannot be serialised or the copy is refused.
+static inline sm_simulation_state* state_at_time(const sm_simulation_state* saved, double time)
+{
+	const size_t size = sm_simulation_state_size(saved);
+	unsigned char* bytes = malloc(size);
+	sm_simulation_state* copy = NULL;
+	if (bytes != NULL && sm_simulation_state_serialize(saved, bytes, size) == SM_OK) {
+		memcpy(bytes + 40, &time, sizeof time);
+		fix_checksum(bytes, size);
+		copy = sm_simulation_state_deserialize(bytes, size, NULL);
+	}
+	free(bytes);
+	return copy;
 }

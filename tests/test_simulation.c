@@ -1760,19 +1760,12 @@ static int test_restore_and_set_state_refuse_a_driven_motion_that_overflows(void
 	ENSURE_STATUS(sm_simulation_set_driven(sim, 1, at, fast), SM_OK);
 	sm_simulation_state* saved = sm_simulation_save_state(sim);
 	ENSURE(saved != NULL);
-	const size_t size = sm_simulation_state_size(saved);
-	unsigned char* bytes = malloc(size);
-	ENSURE(bytes != NULL);
-	ENSURE_STATUS(sm_simulation_state_serialize(saved, bytes, size), SM_OK);
 	ENSURE_STATUS(sm_simulation_advance(other, 0.01), SM_OK);
 	double x[9];
 	memcpy(x, sm_simulation_positions(other), sizeof x);
 	const double times[2] = {1e300, 1.0};
 	for (int k = 0; k < 2; k++) {
-		memcpy(bytes + 40, &times[k], sizeof times[k]);  // the time, the header's last field
-		fix_checksum(bytes, size);
-		sm_error err;
-		sm_simulation_state* forged = sm_simulation_state_deserialize(bytes, size, &err);
+		sm_simulation_state* forged = state_at_time(saved, times[k]);
 		ENSURE(forged != NULL);
 		const sm_status st = sm_simulation_restore_state(other, forged);
 		sm_simulation_state_destroy(forged);
@@ -1794,7 +1787,6 @@ static int test_restore_and_set_state_refuse_a_driven_motion_that_overflows(void
 	ENSURE(sm_simulation_time(sim) == 0.0 && memcmp(sm_simulation_positions(sim), x, sizeof x) == 0);
 	ENSURE_STATUS(sm_simulation_set_state(sim, 1.0, x, v), SM_OK);
 	ENSURE(sm_simulation_positions(sim)[3] == 1.0 + 1e10);
-	free(bytes);
 	sm_simulation_state_destroy(saved);
 	sm_simulation_destroy(other);
 	sm_simulation_destroy(sim);
