@@ -199,6 +199,13 @@ typedef struct resolved_spring {
 	double damping;      // [N s/m]
 } resolved_spring;
 
+// The length of (dx, dy, dz) [m] without the overflow or underflow of its square, for the messages
+// of springs too long or too short for that square.
+static double distance_of(double dx, double dy, double dz)
+{
+	return hypot(hypot(dx, dy), dz);
+}
+
 // Validates a spring definition against the model; `current_rest_length` is used for
 // SM_REST_LENGTH_INITIAL when >= 0 (sm_model_set_spring keeps the current rest length),
 // otherwise the distance between the particles' initial positions. *out is zero unless the
@@ -266,9 +273,8 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 	const double* xb = model->position + 3 * (size_t)def->b;
 	const double dx = xb[0] - xa[0], dy = xb[1] - xa[1], dz = xb[2] - xa[2];
 	const double squared = dx * dx + dy * dy + dz * dz;
-	// The distance itself, for the messages, without the square's overflow or underflow.
-	const double distance = hypot(hypot(dx, dy), dz);
 	if (!isfinite(sqrt(squared))) {
+		const double distance = distance_of(dx, dy, dz);
 		char shown[32] = "more than 1.8e+308";
 		if (isfinite(distance))
 			snprintf(shown, sizeof shown, "%.3g", distance);
@@ -288,13 +294,13 @@ static sm_status check_spring_def(const sm_model* model, const sm_spring_def* de
 			// A square below DBL_MIN has lost digits or all of them (1e-170 m gives l0 = 0): the
 			// rest length would not be the distance. Structures refuse such springs too; particles
 			// at one point keep l0 = 0.
-			if (squared < DBL_MIN && distance > 0.0)
+			if (squared < DBL_MIN && (dx != 0.0 || dy != 0.0 || dz != 0.0))
 				return say(
 				    msg, SM_ERROR_INVALID_ARGUMENT,
 				    "spring %ld: the initial distance between particles %ld and %ld, %.3g m, is too small (its "
 				    "square underflows: particles joined by springs must be at one point or more than about "
 				    "1.5e-154 m apart)",
-				    index, (long)def->a, (long)def->b, distance);
+				    index, (long)def->a, (long)def->b, distance_of(dx, dy, dz));
 		}
 	} else {
 		l0 = def->rest_length;
