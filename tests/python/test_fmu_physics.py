@@ -2,6 +2,7 @@
 import ctypes
 import json
 import math
+import os
 import re
 import subprocess
 import zipfile
@@ -1653,16 +1654,22 @@ def test_solver_threads_change_nothing_in_the_results(package):
     # loops run in chunks): solver.threads = 2 runs them on two threads, and every output and the
     # energies are the same, bit for bit, as with the default of one (the chunks, and the order of
     # every sum, depend on the model alone: docs/simulation.md). Inputs: none; three steps of 2 ms.
+    # The two threads are there while the instance steps: the caller's and one started for it
+    # (no more than the processors the process may run on), counted in /proc/self/task.
     fmu = package(ROOT / "models" / "cloth.json", ["n=64"])
     names = ["corner.x", "corner.z", "center.vz", "energy.elastic", "energy.dissipated"]
+    process_threads = lambda: len(os.listdir("/proc/self/task"))
     results = []
     for threads in (1, 2):
+        before = process_threads()
         inst = Instance(fmu, f"threads{threads}").start({"solver.threads": threads, "solver.linear_solver": "pcg"})
         try:
             assert inst.slave.getInteger([inst.vr["solver.threads"]]) == [threads]
             for k in range(3):
                 inst.slave.doStep(0.002 * k, 0.002)
             results.append(inst.get(*names))
+            started = min(threads, len(os.sched_getaffinity(0))) - 1
+            assert process_threads() == before + started, (threads, before, process_threads())
         finally:
             inst.free()
     assert results[0] == results[1]
