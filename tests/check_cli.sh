@@ -360,6 +360,8 @@ check_cases << 'CASES'
 0||modes "$osc" -n 0e5
 2|springmass modes: -n needs a count from 0 to 1e8, got '100000001'|modes "$osc" -n 100000001
 2|springmass statics: --max-iterations needs a count from 1 to 1000000, got '1000001'|statics "$osc" -q --max-iterations 1000001
+0||statics "$osc" -q --max-iterations 1000000
+0||modes "$osc" -n 100000000
 2|springmass run: --t-end needs a value|run "$osc" -q -o - --t-end
 2|springmass run: --jacobian: unknown Jacobian 'positive' (exact, definite)|run "$osc" -q -o - --jacobian positive
 2|springmass modes: --steps-per-period needs a finite number >= 1, got 'infinity'|modes "$osc" --steps-per-period infinity

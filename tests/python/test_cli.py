@@ -1459,6 +1459,22 @@ def test_modes_say_what_their_zero_level_is_relative_to(tmp_path):
     assert sparse.startswith("6 among the modes listed (|omega^2| <= 1e-12 of the Gershgorin bound"), sparse
 
 
+def test_modes_take_the_ends_of_the_ranges_their_options_allow():
+    # --zero-tolerance takes [0, 1): 0 itself, where only an omega^2 of exactly 0 is a zero mode,
+    # and not 1. --steps-per-period takes any finite number >= 1: 1 itself suggests a communication
+    # step of the highest listed mode's whole period (6 digits printed; the frequency 9).
+    osc = MODELS / "oscillator.json"
+    out = cli("modes", osc, "--zero-tolerance", 0).stdout
+    assert summary_line(out, "zero modes").startswith("0 (|omega^2| <= 0 of the largest:"), out
+    err = cli("modes", osc, "--zero-tolerance", 1, status=2).stderr
+    assert err == "springmass modes: --zero-tolerance needs a number in [0, 1), got '1'\n"
+    out = cli("modes", osc, "--steps-per-period", 1).stdout
+    highest = number_after(out, "highest frequency")
+    assert summary_line(out, "communication step").endswith(
+        f"(1/1 of the period of the highest mode listed, {highest:.6g} Hz)")
+    assert number_after(out, "communication step       <=") == pytest.approx(1 / highest, rel=1e-5)
+
+
 def test_modes_that_lanczos_cannot_converge_point_to_the_dense_solver():
     # A cloth 1e6 times stiffer than the bundled one, at its equilibrium: its lowest modes lie at
     # about 1e-13 of the Gershgorin bound, at the round-off of the stiffness, where shift-invert
