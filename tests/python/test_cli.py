@@ -1430,6 +1430,11 @@ def test_modes_count_unstable_and_zero_modes(tmp_path):
     (tmp_path / "bob.json").write_text(json.dumps(bob))
     out = cli("modes", tmp_path / "bob.json", "--vtk", tmp_path / "vtk").stdout
     assert summary_line(out, "zero modes").startswith("0 (") and summary_line(out, "unstable modes").startswith("2 (")
+    # Linearised about its initial configuration, which is no rest shape: the unstable modes send to
+    # --at-equilibrium, and with no zero mode the zero modes' line has no word on mechanisms.
+    assert summary_line(out, "unstable modes") == \
+        "2 (omega^2 < 0: the configuration is not a stable rest shape; try --at-equilibrium)"
+    assert summary_line(out, "zero modes").endswith("soft to resolve, see --zero-tolerance)")
     # The VTK files' titles (their second line) say the same, not a frequency of 0 Hz.
     titles = [(tmp_path / "vtk" / f"mode_{m}.vtk").read_text().split("\n")[1] for m in (1, 2, 3)]
     assert titles[0].startswith("springmass mode 1, unstable: omega^2 = -4") and titles[0].endswith(" 1/s^2")
@@ -1437,10 +1442,17 @@ def test_modes_count_unstable_and_zero_modes(tmp_path):
     rows = re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)
     assert [period for _, period, _ in rows] == ["unstable", "unstable", "3.14159265"]  # 9 digits
     np.testing.assert_allclose([float(w2) for _, _, w2 in rows], [-4, -4, 4], rtol=1e-12)
+    # An unstable mode has no damping ratio ("-"); the undamped axial one's is 0.
+    assert re.findall(r"^\s+\d+\s+\S+\s+\S+\s+\S+\s+(\S+)\s*$", out, re.M) == ["-", "-", "0"]
     free = {"springmass": 1, "name": "free", "gravity": [0, 0, 0], "particles": [{"name": "p", "position": [0, 0, 0]}]}
     (tmp_path / "free.json").write_text(json.dumps(free))
-    out = cli("modes", tmp_path / "free.json").stdout
+    out = cli("modes", tmp_path / "free.json", "--vtk", tmp_path / "free_vtk").stdout
     assert summary_line(out, "zero modes").startswith("3 (") and "unstable modes" not in out
+    assert summary_line(out, "zero modes").endswith(
+        "see --zero-tolerance; where the rest shape is stretched, --at-equilibrium gives mechanisms their stiffness)")
+    # A zero mode is not unstable: its file's title gives its frequency, 0 Hz.
+    titles = [(tmp_path / "free_vtk" / f"mode_{m}.vtk").read_text().split("\n")[1] for m in (1, 2, 3)]
+    assert titles == [f"springmass mode {m}, 0 Hz" for m in (1, 2, 3)]
     assert [period for _, period, _ in re.findall(r"^\s+\d+\s+(\S+)\s+(\S+)\s+(\S+)\s+\S+\s*$", out, re.M)] == 3 * ["inf"]
 
 
