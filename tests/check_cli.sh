@@ -95,8 +95,15 @@ cat > "$tmp/held.json" << 'JSON'
 {"springmass": 1, "name": "held", "particles": [{"name": "a", "position": [0, 0, 0], "fixed": true}]}
 JSON
 echo stale > "$tmp/held.csv"
-"$cli" modes "$tmp/held.json" -o "$tmp/held.csv" > /dev/null 2>&1 &&
-  [ "$(paste -sd ' ' "$tmp/held.csv")" = "particle,name 0,a" ] || fail "modes without free particles: $(cat "$tmp/held.csv")"
+# The report says that the CSV holds the particles only.
+out=$("$cli" modes "$tmp/held.json" -o "$tmp/held.csv" 2>&1) &&
+  [ "$(paste -sd ' ' "$tmp/held.csv")" = "particle,name 0,a" ] &&
+  [ "$(tail -1 <<< "$out")" = "mode shapes written to $tmp/held.csv (no modes: the particles only)" ] ||
+  fail "modes without free particles: $(cat "$tmp/held.csv"), printed '$out'"
+# With --vtk the folder is made, no mode file in it, and the report says so.
+out=$("$cli" modes "$tmp/held.json" --vtk "$tmp/held_vtk" 2>&1) && [ -d "$tmp/held_vtk" ] &&
+  [ -z "$(ls "$tmp/held_vtk")" ] && [ "$(tail -1 <<< "$out")" = "no mode shapes to write to $tmp/held_vtk" ] ||
+  fail "modes --vtk without free particles: $(ls "$tmp/held_vtk"), printed '$out'"
 # ... and so does the sparse solver, asked for explicitly: nothing to solve is not too few degrees
 # of freedom for it.
 for n in 0 10; do
