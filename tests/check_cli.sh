@@ -607,6 +607,11 @@ resources/ resources/model.json" ] && unzip -Z -T "$tmp/again" | grep -q " 19800
     [ -L "$tmp/chained.fmu" ] && [ -L "$tmp/chain/first.fmu" ] && [ "$(head -c 2 "$tmp/chain/sub/last.fmu")" = PK ] &&
     ! ls -R "$tmp" | grep -q partial ||
     fail "fmu -o through a chain of links to no file: not the file at its end, or a partial file left"
+  # An absolute link to no file names it from the root, not from the link's folder.
+  ln -s "$tmp/absolute_target.fmu" "$tmp/absolute.fmu"
+  out=$("$cli" fmu "$root/models/oscillator.json" --runtime "$tmp/runtime" -o "$tmp/absolute.fmu" 2>&1) &&
+    [ -L "$tmp/absolute.fmu" ] && [ "$(head -c 2 "$tmp/absolute_target.fmu")" = PK ] && ! ls "$tmp" | grep -q partial ||
+    fail "fmu -o an absolute link to no file: the file it names not written ($out)"
   # A name as long as a file system takes (255 bytes) is written too: the temporary name beside
   # it must not be longer.
   long="$(printf '%0251d' 0 | tr 0 f).fmu"
