@@ -474,6 +474,12 @@ out=$("$cli" run "$tmp/comma.json" --t-end 0.01 --positions -q -o - 2>&1 | head 
   fail "run --positions with a comma in a particle's name: $out"
 out=$("$cli" statics "$tmp/comma.json" -q -o "$tmp/comma.csv" 2>&1 > /dev/null; tail -1 "$tmp/comma.csv")
 [ "$out" = '0,"a,""b""",0,0,0,0,0,0,0,0,9.81' ] || fail "statics -o with a comma in a particle's name: $out"
+# So is a name with a quote and no comma, its quote doubled.
+cat > "$tmp/quote.json" << 'JSON'
+{"springmass": 1, "name": "quote", "particles": [{"name": "a\"b", "position": [0, 0, 0], "fixed": true}]}
+JSON
+out=$("$cli" statics "$tmp/quote.json" -q -o "$tmp/quote.csv" 2>&1 > /dev/null; tail -1 "$tmp/quote.csv")
+[ "$out" = '0,"a""b",0,0,0,0,0,0,0,0,9.81' ] || fail "statics -o with a quote in a particle's name: $out"
 
 # Column names are unique: the bundled chain names its ports after their particles.
 header=$("$cli" run "$root/models/two_mass_chain.json" --t-end 0.01 --positions -q -o - 2>&1 | head -1)
