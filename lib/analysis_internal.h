@@ -19,11 +19,12 @@ void sm_analysis_dense_stiffness(const sm_model* model, const int32_t* free_inde
 // dof_mass 3 * free count (may be NULL).
 int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double* dof_mass);
 
-// The first intact rest-length spring (l0 > 0) with a free end whose two particles coincide at x (its
-// degenerate point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy ks (L - l0)^2 / 2
-// is a maximum there, falling as the particles part in any direction with a force of about
-// ks l0 that has no derivative at the point: the model.h convention (no force, K = ks I) makes it
-// a force balance, never a stable one, and it has no linearisation.
+// The first intact rest-length spring (l0 > 0, ks > 0) with a free end whose two particles coincide
+// at x (its degenerate point, L < SM_DEGENERATE_LENGTH_RATIO l0), or -1 if there is none. Its energy
+// ks (L - l0)^2 / 2 is a maximum there, falling as the particles part in any direction with a force
+// of about ks l0 that has no derivative at the point: the model.h convention (no force, K = ks I)
+// makes it a force balance, never a stable one, and it has no linearisation. One without stiffness
+// has no force and no energy anywhere (its damping is sm_analysis_coincident_damper's).
 int32_t sm_analysis_coincident_spring(const sm_model* model, const double* x);
 
 // The first intact spring with damping and a free end whose two particles coincide at x (a spring of rest

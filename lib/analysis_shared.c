@@ -35,7 +35,7 @@ int32_t sm_analysis_free_map(const sm_model* model, int32_t* free_index, double*
 
 // What first_spring looks for.
 typedef enum spring_question {
-	COINCIDENT_SPRING,   // a rest-length spring of l0 > 0 whose particles coincide at x
+	COINCIDENT_SPRING,   // a rest-length spring of l0 > 0 and ks > 0 whose particles coincide at x
 	COINCIDENT_DAMPER,   // a damped spring whose particles coincide at x
 	OVERFLOWING_SPRING,  // a rest-length or damped spring whose length at x is not a double
 } spring_question;
@@ -49,7 +49,8 @@ static int32_t first_spring(const sm_model* model, const double* x, spring_quest
 {
 	for (int32_t s = 0; s < model->spring_count; s++) {
 		const bool zero_length = model->zero_length[s], damped = model->damping[s] > 0.0;
-		const bool concerned = question == COINCIDENT_SPRING   ? !zero_length && model->rest_length[s] > 0.0
+		const bool concerned = question == COINCIDENT_SPRING
+		                           ? !zero_length && model->rest_length[s] > 0.0 && model->stiffness[s] > 0.0
 		                       : question == COINCIDENT_DAMPER ? damped
 		                                                       : !zero_length || damped;
 		const bool held =

@@ -3260,6 +3260,47 @@ static int test_a_disabled_spring_whose_particles_coincide_is_no_obstacle(void)
 	return 0;
 }
 
+// A rest-length spring of l0 = 1 m but no stiffness (a damper with a rest length, or a spring
+// whose stiffness is set to 0) beside a zero-length spring of 100 N/m, a 1 kg bob on its fixed
+// anchor (no gravity). Its force ks (L - l0) u is 0 wherever the particles are, and its energy
+// 0, no maximum: where they coincide it stands in the way of neither statics (a stable rest
+// shape at once, no coincident spring) nor, undamped, of modes: those of the zero-length spring
+// alone, omega^2 = 100 1/s^2 in every direction (dense eigenvalues of a diagonal matrix: 1e-12).
+// With 4 N s/m of damping it is refused as the damper it is, its damping force having no
+// derivative there, not as a spring whose energy is a maximum.
+static int test_a_coincident_spring_without_stiffness_has_no_maximum(void)
+{
+	for (int damped = 0; damped <= 1; damped++) {
+		sm_model* model = bob_on_its_anchor(SM_SPRING_ZERO_LENGTH, 0.0);
+		ENSURE(model != NULL);
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.rest_length = 1.0;
+		s.damping = damped ? 4.0 : 0.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		double x[6];
+		sm_statics_result res;
+		ENSURE_STATUS(sm_statics_solve(model, NULL, x, NULL, &res, NULL), SM_OK);
+		ENSURE(res.iterations == 0 && res.stable && res.coincident_spring == -1);
+		sm_modes modes;
+		sm_error err;
+		if (damped) {
+			ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_ERROR_INVALID_ARGUMENT);
+			ENSURE(strstr(err.message, "spring 1") != NULL && strstr(err.message, "damping force") != NULL);
+			ENSURE(strstr(err.message, "maximum") == NULL && modes.count == 0);
+		} else {
+			ENSURE_STATUS(sm_modes_compute(model, NULL, &modes, &err), SM_OK);
+			ENSURE(modes.count == 3);
+			for (int32_t k = 0; k < 3; k++)
+				ENSURE_NEAR(modes.omega_squared[k], 100.0, 1e-12);
+			sm_modes_release(&modes);
+		}
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // Coincident springs between two held particles act on no free degree of freedom, so they stand
 // in the way of neither modes nor statics: two fixed particles at one point joined by a damped
 // zero-length spring and a rest-length spring of l0 = 1 m, and a 1 kg bob hanging 1 m below on
@@ -5684,6 +5725,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_modes_of_springs_at_the_smallest_doubles);
 	RUN_TEST(test_coincident_springs_between_held_particles);
 	RUN_TEST(test_a_disabled_spring_whose_particles_coincide_is_no_obstacle);
+	RUN_TEST(test_a_coincident_spring_without_stiffness_has_no_maximum);
 	RUN_TEST(test_chain_zero_length_frequencies);
 	RUN_TEST(test_mode_shapes_solve_the_eigenproblem);
 	RUN_TEST(test_free_block_six_zero_frequencies);

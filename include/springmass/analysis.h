@@ -106,8 +106,9 @@ typedef struct sm_statics_result {
 	/// give it through the springs' tensions: docs/analysis.md). False for a group of particles
 	/// held by no constrained particle (gravity 0:
 	/// at rest anywhere, never stable).
-	/// False also where the two particles of a rest-length spring of rest length > 0 coincide: a
-	/// force balance by convention there (model.h), but a maximum of that spring's energy.
+	/// False also where the two particles of a rest-length spring of rest length > 0 and stiffness
+	/// > 0 coincide: a force balance by convention there (model.h), but a maximum of that spring's
+	/// energy.
 	bool stable;
 	/// The first such spring, whose two particles coincide at the rest shape, or -1.
 	int32_t coincident_spring;
