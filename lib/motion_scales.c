@@ -4,7 +4,8 @@
 // CVODE's error weight of a component is 1 / (rtol |y| + atol): where the motion itself is
 // smaller than atol, rtol no longer acts and the motion is resolved only to atol. The shortest
 // spring with a free end sets the smallest length the model's shape resolves (one between held
-// particles is no part of CVODE's state: its ends stay put or follow their prescribed motion); a
+// particles is no part of CVODE's state: its ends stay put or follow their prescribed motion; one
+// of neither stiffness nor damping, as a group's whose parameters are 0, exerts no force); a
 // motion of that length at the highest frequency the model can ring at (its Gershgorin bound, to
 // which such a spring adds nothing either) sets the speed. Tolerances at
 // or below SM_COARSE_TOLERANCE of both resolve it; above both, even its largest motion is held
@@ -39,6 +40,8 @@ sm_status sm_model_motion_scales(const sm_model* model, sm_motion_scales* scales
 		if (sm_model_free_index(model, s.a) < 0 && sm_model_free_index(model, s.b) < 0)
 			continue;
 		sm_model_spring_constants(model, k, &l0, &ks, &kd);
+		if (ks == 0.0 && kd == 0.0)
+			continue;  // no force: nothing of the shape turns on its length
 		const double* a = x + 3 * (size_t)s.a;
 		const double* b = x + 3 * (size_t)s.b;
 		const double length = l0 > 0.0 ? l0 : hypot(hypot(b[0] - a[0], b[1] - a[1]), b[2] - a[2]);

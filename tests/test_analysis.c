@@ -2710,6 +2710,51 @@ static int test_motion_scales_leave_out_springs_between_held_particles(void)
 	return 0;
 }
 
+// A spring of neither stiffness nor damping exerts no force (a group's springs, which exist
+// whatever values its parameters take, with both set to 0): the shape resolves nothing over its
+// length, and it sets no scale. Beside a 2 kg bob on an 8 N/m spring of rest length 0.5 m to a
+// fixed anchor, such a spring of 1e-9 m from the bob to a second free particle leaves the scales
+// at 0.5 m and 0.5 sqrt(8 / 2) m/s, which the default tolerances (1e-8 m, 1e-6 m/s) resolve: no
+// coarse tolerances, where taking it for the shortest spring asked for 1e-17 m. A damper of that
+// length (1 N s/m, no stiffness) does act, along a direction that turns over its length, and
+// sets the length 1e-9 m (to its rounding, 1e-15 relative). Closed forms to 1e-15 relative.
+static int test_motion_scales_leave_out_springs_that_exert_no_force(void)
+{
+	for (int damper = 0; damper <= 1; damper++) {
+		sm_model_def md = sm_default_model_def();
+		sm_model* model = sm_model_create(&md, NULL);
+		ENSURE(model != NULL);
+		const double x[3] = {0.0, 1.0, 1.0 + 1e-9};
+		for (int32_t i = 0; i < 3; i++) {
+			sm_particle_def p = sm_default_particle_def();
+			p.motion = i == 0 ? SM_PARTICLE_FIXED : SM_PARTICLE_FREE;
+			p.mass = 2.0;
+			p.position[0] = x[i];
+			ENSURE_STATUS(sm_model_add_particle(model, &p, NULL), SM_OK);
+		}
+		sm_spring_def s = sm_default_spring_def();
+		s.a = 0;
+		s.b = 1;
+		s.stiffness = 8.0;
+		s.rest_length = 0.5;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		s = sm_default_spring_def();
+		s.a = 1;
+		s.b = 2;
+		s.damping = damper ? 1.0 : 0.0;
+		ENSURE_STATUS(sm_model_add_spring(model, &s, NULL), SM_OK);
+		sm_motion_scales scales;
+		ENSURE_STATUS(sm_model_motion_scales(model, &scales), SM_OK);
+		const double length = damper ? (1.0 + 1e-9) - 1.0 : 0.5;
+		ENSURE_NEAR(scales.length, length, 1e-15 * length);
+		ENSURE_NEAR(scales.speed, length * sqrt(8.0 / 2.0), 1e-15 * length);
+		const sm_simulation_def def = sm_default_simulation_def();
+		ENSURE(sm_tolerances_coarse(&def, &scales) == (damper == 1));
+		sm_model_destroy(model);
+	}
+	return 0;
+}
+
 // The round-off of a model's forces (simulation.h): DBL_EPSILON |x| sqrt(k / m) / 2 of the spring
 // where it is largest, |x| the largest magnitude of its ends' coordinates and m its lighter free
 // end. A 1 kg bob hangs 1 m below a fixed pivot on a 1e9 N/m rod, and a 0.25 kg one 2 m below it
@@ -5717,6 +5762,7 @@ int main(int argc, char** argv)
 	RUN_TEST(test_explicit_step_limit_does_not_depend_on_the_unit_of_mass);
 	RUN_TEST(test_motion_scales);
 	RUN_TEST(test_motion_scales_leave_out_springs_between_held_particles);
+	RUN_TEST(test_motion_scales_leave_out_springs_that_exert_no_force);
 	RUN_TEST(test_round_off);
 	RUN_TEST(test_round_off_of_either_end);
 	RUN_TEST(test_modes_without_free_particles_under_every_solver);

@@ -221,9 +221,9 @@ SM_API sm_simulation_def sm_default_simulation_def(void);
 /// The scales of a model's motion against which its absolute tolerances are judged.
 typedef struct sm_motion_scales {
 	/// The shortest enabled spring with a free end (one between fixed or driven particles is not
-	/// integrated): its rest length, or its initial length for one of rest length 0 [m]; INFINITY
-	/// when no such spring has a length (springs between coincident particles, or none with a free
-	/// end).
+	/// integrated) and a stiffness or a damping (one of neither exerts no force): its rest length,
+	/// or its initial length for one of rest length 0 [m]; INFINITY when no such spring has a
+	/// length (springs between coincident particles, or none with a free end).
 	double length;
 	/// length times the Gershgorin bound of the highest angular frequency (sm_explicit_limit's
 	/// omega_max) [m/s]: the speed of a motion of that size at that frequency; INFINITY when
